@@ -1,0 +1,43 @@
+"""Shared fixtures: the rig, a seeded generator, and a kernel that runs this very interpreter."""
+
+from __future__ import annotations
+
+import json
+import pathlib
+import sys
+
+import numpy as np
+import pytest
+
+from vo_lib.camera import StereoCamera
+
+ROOT = pathlib.Path(__file__).resolve().parents[1]
+
+
+@pytest.fixture
+def camera() -> StereoCamera:
+    return StereoCamera.bumblebee2()
+
+
+@pytest.fixture
+def rng() -> np.random.Generator:
+    return np.random.default_rng(12345)
+
+
+@pytest.fixture(scope="session")
+def kernel_dir(tmp_path_factory) -> pathlib.Path:
+    """A kernelspec folder whose only kernel starts ``sys.executable``: the tests' own environment,
+    whatever kernels the user has registered elsewhere."""
+    kernels = tmp_path_factory.mktemp("jupyter") / "kernels"
+    spec = kernels / "vo-notebooks-test"
+    spec.mkdir(parents=True)
+    spec.joinpath("kernel.json").write_text(
+        json.dumps(
+            {
+                "argv": [sys.executable, "-m", "ipykernel_launcher", "-f", "{connection_file}"],
+                "display_name": "vo-notebooks (tests)",
+                "language": "python",
+            }
+        )
+    )
+    return kernels

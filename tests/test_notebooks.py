@@ -1,0 +1,88 @@
+"""Every notebook is a test: read the jupytext .py, execute it in a fresh kernel, fail on any error.
+
+Each cell runs under a timeout; kernels talk over IPC sockets rather than TCP ports, which stall
+when several start at once; and an exception inside any cell fails the test with its traceback.
+"""
+
+from __future__ import annotations
+
+import os
+import pathlib
+import re
+import subprocess
+import sys
+
+import jupytext
+import pytest
+from jupyter_client.kernelspec import KernelSpecManager
+from jupyter_client.manager import KernelManager
+from nbclient import NotebookClient
+from nbclient.exceptions import CellExecutionError, CellTimeoutError
+
+ROOT = pathlib.Path(__file__).resolve().parents[1]
+NOTEBOOK_DIR = ROOT / "notebooks"
+NOTEBOOKS = sorted(NOTEBOOK_DIR.glob("[0-9][0-9]_*.py"))
+CELL_TIMEOUT_S = 300
+
+
+def test_there_are_notebooks():
+    assert len(NOTEBOOKS) >= 3, f"expected notebooks under {NOTEBOOK_DIR}"
+
+
+@pytest.mark.notebook
+@pytest.mark.parametrize("path", NOTEBOOKS, ids=[p.stem for p in NOTEBOOKS])
+def test_notebook_executes(path, kernel_dir, tmp_path):
+    nb = jupytext.read(path)
+    ksm = KernelSpecManager(kernel_dirs=[str(kernel_dir)], ensure_native_kernel=False)
+    km = KernelManager(
+        kernel_name="vo-notebooks-test",
+        kernel_spec_manager=ksm,
+        transport="ipc",
+        ip=str(tmp_path / "kernel"),
+    )
+    client = NotebookClient(
+        nb,
+        km=km,
+        timeout=CELL_TIMEOUT_S,
+        allow_errors=False,
+        resources={"metadata": {"path": str(NOTEBOOK_DIR)}},
+    )
+    try:
+        client.execute()
+    except CellTimeoutError as exc:
+        pytest.fail(f"{path.name}: a cell ran longer than {CELL_TIMEOUT_S} s\n{exc}")
+    except CellExecutionError as exc:
+        pytest.fail(f"{path.name} failed:\n{exc}")
+    codes = [c for c in nb.cells if c.cell_type == "code"]
+    assert codes and all(c.get("execution_count") for c in codes), "some code cells did not run"
+
+
+@pytest.mark.parametrize("path", NOTEBOOKS, ids=[p.stem for p in NOTEBOOKS])
+def test_notebook_conventions(path):
+    """Header cell, a seed in the first code cell, no IPython magics, a summary with exercises."""
+    nb = jupytext.read(path)
+    cells = nb.cells
+    assert cells[0].cell_type == "markdown" and cells[0].source.startswith("# "), "first cell: title"
+    header = cells[0].source.lower()
+    for word in ("you will learn", "prerequisites", "run time"):
+        assert word in header, f"first markdown cell must say {word!r}"
+    first_code = next(c for c in cells if c.cell_type == "code")
+    assert re.search(r"default_rng\(|SEED\s*=", first_code.source), "first code cell must seed"
+    for c in cells:
+        if c.cell_type == "code":
+            assert not re.search(r"^\s*[%!]", c.source, re.M), f"magic in {path.name}: {c.source[:60]}"
+    assert "exercise" in cells[-1].source.lower(), "last cell must hold the exercises"
+
+
+def test_derivation_notebook_runs_as_plain_script(tmp_path):
+    env = dict(os.environ, MPLBACKEND="Agg")
+    script = NOTEBOOK_DIR / "02_circular_motion_derivation.py"
+    proc = subprocess.run(
+        [sys.executable, str(script)],
+        cwd=tmp_path,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
+    assert proc.returncode == 0, proc.stderr[-3000:]

@@ -1,0 +1,189 @@
+"""A rectified stereo camera: pixels plus disparity to 3-D points and back (seed 000, eq. 13).
+
+The left camera is the reference. The right camera sits ``baseline`` metres along the left
+camera's +x axis, both share the intrinsics, and rows are aligned, so a point at depth ``z``
+appears in both images on the same row with disparity ``d = u_left - u_right = fx * B / z``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from vo_lib.geometry import as_match_array
+
+#: The paper's rig is a Bumblebee2 stereo head: 12 cm baseline and about 66 degrees of
+#: horizontal field of view at 640x480.
+BUMBLEBEE2_BASELINE = 0.12
+BUMBLEBEE2_HFOV_DEG = 66.0
+
+
+def _positive(name: str, value) -> float:
+    value = float(value)
+    if not math.isfinite(value) or value <= 0.0:
+        raise ValueError(f"{name} must be a finite number > 0; got {value!r}")
+    return value
+
+
+@dataclass(frozen=True)
+class StereoCamera:
+    """Pinhole intrinsics shared by a rectified stereo pair, and its baseline.
+
+    Parameters
+    ----------
+    fx, fy : float
+        Focal lengths in pixels, > 0.
+    cx, cy : float
+        Principal point ``(u0, v0)`` in pixels.
+    baseline : float
+        Distance between the optical centres in metres, > 0.
+    width, height : int, optional
+        Image size in pixels, used by :meth:`in_image` and by renderers.
+    """
+
+    fx: float
+    fy: float
+    cx: float
+    cy: float
+    baseline: float
+    width: int | None = None
+    height: int | None = None
+
+    def __post_init__(self):
+        _positive("fx (focal length in pixels)", self.fx)
+        _positive("fy (focal length in pixels)", self.fy)
+        _positive("baseline (metres)", self.baseline)
+        for name in ("cx", "cy"):
+            if not math.isfinite(float(getattr(self, name))):
+                raise ValueError(f"{name} (principal point) must be finite; got {getattr(self, name)!r}")
+        for name in ("width", "height"):
+            value = getattr(self, name)
+            if value is not None and (int(value) != value or value <= 0):
+                raise ValueError(f"{name} must be a positive whole number of pixels; got {value!r}")
+
+    # ------------------------------------------------------------------ constructors
+    @classmethod
+    def from_fov(cls, width: int, height: int, hfov_deg: float, baseline: float) -> StereoCamera:
+        """Square pixels, principal point at the image centre, given horizontal field of view."""
+        _positive("hfov_deg", hfov_deg)
+        if hfov_deg >= 180.0:
+            raise ValueError(f"hfov_deg must be below 180 degrees; got {hfov_deg!r}")
+        f = (width / 2.0) / math.tan(math.radians(hfov_deg) / 2.0)
+        return cls(f, f, (width - 1) / 2.0, (height - 1) / 2.0, baseline, width, height)
+
+    @classmethod
+    def bumblebee2(cls, width: int = 640, height: int = 480) -> StereoCamera:
+        """A rig like the paper's Bumblebee2: 66 degrees horizontal field of view, 12 cm baseline."""
+        return cls.from_fov(width, height, BUMBLEBEE2_HFOV_DEG, BUMBLEBEE2_BASELINE)
+
+    @classmethod
+    def from_projection_matrices(cls, P0, P1, width=None, height=None) -> StereoCamera:
+        """Read a rectified pair from its 3x4 projection matrices (KITTI ``calib.txt`` layout).
+
+        ``P1 = K [I | -B e_x]`` up to the translation of ``P0``, so ``B = (P0[0,3] - P1[0,3]) / fx``.
+        """
+        P0 = np.asarray(P0, dtype=float).reshape(3, 4)
+        P1 = np.asarray(P1, dtype=float).reshape(3, 4)
+        fx = P0[0, 0]
+        _positive("P0[0,0] (fx)", fx)
+        baseline = (P0[0, 3] - P1[0, 3]) / fx
+        if not baseline > 0:
+            raise ValueError(
+                f"P1 must place the right camera at +x of the left (P1[0,3] < P0[0,3]); "
+                f"got P0[0,3]={P0[0, 3]!r}, P1[0,3]={P1[0, 3]!r}"
+            )
+        return cls(fx, P0[1, 1], P0[0, 2], P0[1, 2], baseline, width, height)
+
+    def scaled(self, width: int, height: int) -> StereoCamera:
+        """The same optics sampled at another resolution (the paper's Table 1 resolutions)."""
+        if self.width is None or self.height is None:
+            raise ValueError("scaled() needs a camera with width and height")
+        sx, sy = width / self.width, height / self.height
+        return StereoCamera(
+            self.fx * sx,
+            self.fy * sy,
+            (self.cx + 0.5) * sx - 0.5,
+            (self.cy + 0.5) * sy - 0.5,
+            self.baseline,
+            width,
+            height,
+        )
+
+    # ------------------------------------------------------------------ matrices
+    @property
+    def K(self) -> np.ndarray:
+        """3x3 intrinsic matrix."""
+        return np.array([[self.fx, 0.0, self.cx], [0.0, self.fy, self.cy], [0.0, 0.0, 1.0]])
+
+    def projection_matrices(self) -> tuple[np.ndarray, np.ndarray]:
+        """``(P0, P1)``: 3x4 projection matrices of the left and right cameras."""
+        P0 = np.hstack([self.K, np.zeros((3, 1))])
+        P1 = P0.copy()
+        P1[0, 3] = -self.fx * self.baseline
+        return P0, P1
+
+    # ------------------------------------------------------------------ eq. 13 and its inverse
+    def project(self, points) -> np.ndarray:
+        """Project left-camera points ``(N, 3)`` to ``w = (u, v, d)`` ``(N, 3)``.
+
+        Raises
+        ------
+        ValueError
+            If a point is not in front of the camera (``z <= 0``).
+        """
+        P = as_match_array("points", points)
+        z = P[:, 2]
+        if np.any(z <= 0):
+            bad = int(np.flatnonzero(z <= 0)[0])
+            raise ValueError(
+                f"points must lie in front of the camera (z > 0); row {bad} has z={float(z[bad])}"
+            )
+        w = np.empty_like(P)
+        w[:, 0] = self.cx + self.fx * P[:, 0] / z
+        w[:, 1] = self.cy + self.fy * P[:, 1] / z
+        w[:, 2] = self.fx * self.baseline / z
+        return w
+
+    def backproject(self, w) -> np.ndarray:
+        """Points ``(N, 3)`` in the left camera frame from ``w = (u, v, d)`` (seed 000, eq. 13).
+
+        With ``fx == fy == f`` this is the paper's ``x = B(u-u0)/d, y = B(v-v0)/d, z = Bf/d``;
+        with unequal focal lengths ``y`` carries the factor ``fx / fy``.
+
+        Raises
+        ------
+        ValueError
+            If a disparity is not > 0 (a point at infinity or behind the rig has no 3-D position).
+        """
+        w = as_match_array("w", w)
+        d = w[:, 2]
+        if np.any(d <= 0):
+            bad = int(np.flatnonzero(d <= 0)[0])
+            raise ValueError(
+                f"w[:, 2] (disparity) must be > 0 to back-project; row {bad} has d={float(d[bad])}"
+            )
+        scale = self.baseline / d
+        P = np.empty_like(w)
+        P[:, 0] = scale * (w[:, 0] - self.cx)
+        P[:, 1] = scale * (w[:, 1] - self.cy) * (self.fx / self.fy)
+        P[:, 2] = scale * self.fx
+        return P
+
+    def depth_from_disparity(self, d):
+        """Depth ``z = fx * B / d`` of disparities ``d`` in pixels; ``d`` must be > 0."""
+        d = np.asarray(d, dtype=float)
+        if np.any(d <= 0):
+            raise ValueError("d (disparity) must be > 0 to give a depth")
+        return self.fx * self.baseline / d
+
+    def in_image(self, w, margin: float = 0.0) -> np.ndarray:
+        """Boolean mask of ``w`` rows whose left pixel lies ``margin`` pixels inside the image."""
+        if self.width is None or self.height is None:
+            raise ValueError("in_image() needs a camera with width and height")
+        w = np.asarray(w, dtype=float)
+        u, v = w[:, 0], w[:, 1]
+        return (
+            (u >= margin) & (u <= self.width - 1 - margin) & (v >= margin) & (v <= self.height - 1 - margin)
+        )

@@ -1,0 +1,111 @@
+"""Frames, planar poses and angles: the conventions every other module relies on.
+
+Conventions (``shared/DESIGN.md``)
+----------------------------------
+* Units are metres and radians.
+* Camera frame (OpenCV): x right, y down, z forward.
+* Robot and world frames: x forward, y left, z up; yaw is counter-clockwise positive
+  seen from above.
+* A planar pose is ``(x, y, yaw)``; a full pose is a 4x4 homogeneous matrix.
+* Angles are wrapped into ``[-pi, pi)`` by :func:`wrap_angle`, and only there.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+#: Rotation taking camera-frame coordinates to robot-frame coordinates for a camera that
+#: looks along the robot's x axis: camera z -> robot x, camera x -> robot -y, camera y -> robot -z.
+R_ROBOT_FROM_CAMERA = np.array(
+    [
+        [0.0, 0.0, 1.0],
+        [-1.0, 0.0, 0.0],
+        [0.0, -1.0, 0.0],
+    ]
+)
+
+
+def wrap_angle(angle):
+    """Wrap angles into ``[-pi, pi)``.
+
+    Parameters
+    ----------
+    angle : float or array_like
+        Angles in radians.
+
+    Returns
+    -------
+    float or numpy.ndarray
+        The same angles, shifted by whole turns into ``[-pi, pi)``.
+    """
+    wrapped = np.mod(np.asarray(angle, dtype=float) + np.pi, 2.0 * np.pi) - np.pi
+    return float(wrapped) if wrapped.ndim == 0 else wrapped
+
+
+def yaw_matrix(yaw: float) -> np.ndarray:
+    """3x3 rotation about the z axis (up) by ``yaw``, counter-clockwise positive."""
+    return Rotation.from_euler("z", yaw).as_matrix()
+
+
+def planar_to_matrix(pose, z: float = 0.0) -> np.ndarray:
+    """4x4 homogeneous matrix of a planar pose ``(x, y, yaw)`` lifted to height ``z``."""
+    x, y, yaw = np.asarray(pose, dtype=float)
+    T = np.eye(4)
+    T[:3, :3] = yaw_matrix(yaw)
+    T[:3, 3] = (x, y, z)
+    return T
+
+
+def matrix_to_planar(T) -> np.ndarray:
+    """Planar pose ``(x, y, yaw)`` of a 4x4 matrix whose rotation is about the z axis."""
+    T = np.asarray(T, dtype=float)
+    return np.array([T[0, 3], T[1, 3], np.arctan2(T[1, 0], T[0, 0])])
+
+
+def compose_planar(pose, increment) -> np.ndarray:
+    """Apply ``increment`` ``(dx, dy, dyaw)``, expressed in the frame of ``pose``, to ``pose``.
+
+    Both arguments may carry leading batch dimensions; the last axis has length 3.
+    """
+    pose = np.asarray(pose, dtype=float)
+    inc = np.asarray(increment, dtype=float)
+    c, s = np.cos(pose[..., 2]), np.sin(pose[..., 2])
+    out = np.empty(np.broadcast_shapes(pose.shape, inc.shape))
+    out[..., 0] = pose[..., 0] + c * inc[..., 0] - s * inc[..., 1]
+    out[..., 1] = pose[..., 1] + s * inc[..., 0] + c * inc[..., 1]
+    out[..., 2] = wrap_angle(pose[..., 2] + inc[..., 2])
+    return out
+
+
+def relative_planar(pose_from, pose_to) -> np.ndarray:
+    """Increment ``(dx, dy, dyaw)`` in the frame of ``pose_from`` that leads to ``pose_to``.
+
+    The inverse of :func:`compose_planar`: ``compose_planar(a, relative_planar(a, b)) == b``.
+    """
+    a = np.asarray(pose_from, dtype=float)
+    b = np.asarray(pose_to, dtype=float)
+    c, s = np.cos(a[..., 2]), np.sin(a[..., 2])
+    dx, dy = b[..., 0] - a[..., 0], b[..., 1] - a[..., 1]
+    out = np.empty(np.broadcast_shapes(a.shape, b.shape))
+    out[..., 0] = c * dx + s * dy
+    out[..., 1] = -s * dx + c * dy
+    out[..., 2] = wrap_angle(b[..., 2] - a[..., 2])
+    return out
+
+
+def as_match_array(name: str, w, columns: int = 3) -> np.ndarray:
+    """Check that ``w`` is a finite float array of shape ``(N, columns)`` and return it.
+
+    Raises
+    ------
+    ValueError
+        Naming ``name``, when the shape is wrong or a value is not finite.
+    """
+    arr = np.asarray(w, dtype=float)
+    if arr.ndim != 2 or arr.shape[1] != columns:
+        raise ValueError(f"{name} must have shape (N, {columns}) with columns u, v, d; got shape {arr.shape}")
+    if not np.all(np.isfinite(arr)):
+        bad = int(np.argwhere(~np.isfinite(arr))[0, 0])
+        raise ValueError(f"{name} must be finite; row {bad} holds {arr[bad].tolist()}")
+    return arr
