@@ -1,0 +1,41 @@
+"""Figures the notebooks share, kept out of the reader's way. Nothing here computes results."""
+
+from __future__ import annotations
+
+import matplotlib.pyplot as plt
+import numpy as np
+from matplotlib.patches import Ellipse
+
+
+def new_axes(ncols: int = 1, width: float = 5.0, height: float = 4.0, **kw):
+    """A row of ``ncols`` axes with a sensible size; returns ``(fig, axes)``."""
+    fig, axes = plt.subplots(1, ncols, figsize=(width * ncols, height), constrained_layout=True, **kw)
+    return fig, axes
+
+
+def covariance_ellipse(ax, mean, cov, n_sigma: float = 2.0, **style):
+    """Draw the ``n_sigma`` ellipse of a 2x2 covariance centred on ``mean``."""
+    vals, vecs = np.linalg.eigh(np.asarray(cov, dtype=float)[:2, :2])
+    vals = np.clip(vals, 0.0, None)
+    angle = np.degrees(np.arctan2(vecs[1, 1], vecs[0, 1]))
+    width, height = 2 * n_sigma * np.sqrt(vals[::-1])
+    style = {"fill": False, "lw": 1.2, **style}
+    ax.add_patch(Ellipse(mean[:2], width, height, angle=angle, **style))
+
+
+def plot_paths(ax, paths: dict, title: str = "", every: int = 0):
+    """Plan view of planar paths ``{label: (K, 3) poses}``; arrows every ``every`` poses."""
+    for label, poses in paths.items():
+        poses = np.asarray(poses)
+        (line,) = ax.plot(poses[:, 0], poses[:, 1], label=label)
+        if every:
+            p = poses[::every]
+            ax.quiver(p[:, 0], p[:, 1], np.cos(p[:, 2]), np.sin(p[:, 2]), color=line.get_color(),
+                      angles="xy", scale=25, width=0.004)
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("y [m]")
+    ax.grid(True, alpha=0.3)
+    if title:
+        ax.set_title(title)
+    ax.legend(loc="best", fontsize="small")
