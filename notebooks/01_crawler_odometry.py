@@ -175,8 +175,10 @@ fig, ax = new_axes(width=7, height=4)
 plot_paths(ax, paths, "Straight-line commands, one slipping track")
 final = paths["true, left slip 5%"][-1, 2]
 expected = 0.05 * speed * seconds / odo.gauge
-print(f"heading error after {speed * seconds:.0f} m with 5 % left slip: {np.degrees(final):.2f}° "
-      f"(s·L/(D+2b) = {np.degrees(expected):.2f}°)")
+print(
+    f"heading error after {speed * seconds:.0f} m with 5 % left slip: {np.degrees(final):.2f}° "
+    f"(s·L/(D+2b) = {np.degrees(expected):.2f}°)"
+)
 assert np.isclose(final, expected, rtol=1e-9)
 
 # %% [markdown]
@@ -219,8 +221,10 @@ ax.set_title("Dead-reckoning uncertainty after 1, 2 and 3 m")
 
 mc_cov = np.cov(samples.T)
 rel_full = np.linalg.norm(P_full - mc_cov) / np.linalg.norm(mc_cov)
-print(f"after 3 m: lateral σ  Monte Carlo {np.sqrt(mc_cov[1, 1]) * 100:.2f} cm, "
-      f"full {np.sqrt(P_full[1, 1]) * 100:.2f} cm, F=I {np.sqrt(P_eq9[1, 1]) * 100:.2f} cm")
+print(
+    f"after 3 m: lateral σ  Monte Carlo {np.sqrt(mc_cov[1, 1]) * 100:.2f} cm, "
+    f"full {np.sqrt(P_full[1, 1]) * 100:.2f} cm, F=I {np.sqrt(P_eq9[1, 1]) * 100:.2f} cm"
+)
 print(f"relative covariance error, full Jacobians: {rel_full:.1%}")
 assert rel_full < 0.10
 assert P_eq9[1, 1] < 0.3 * mc_cov[1, 1]  # eq. 9 badly under-states the lateral uncertainty
@@ -252,8 +256,10 @@ def drive(v_left=0.25, v_right=0.30, seconds=20.0, slip_left=0.0):
         if k % max(1, n // 5) == 0:
             covariance_ellipse(ax, state, P, color="C0")
     err = np.hypot(*(believed[-1, :2] - truth[-1, :2]))
-    print(f"final position error {err * 1e3:.3f} mm, heading error "
-          f"{np.degrees(wrap_angle(believed[-1, 2] - truth[-1, 2])):.2f}°")
+    print(
+        f"final position error {err * 1e3:.3f} mm, heading error "
+        f"{np.degrees(wrap_angle(believed[-1, 2] - truth[-1, 2])):.2f}°"
+    )
     plt.show()
     return err
 
@@ -262,13 +268,13 @@ err = drive()
 assert err < 1e-4  # without slip only the midpoint form separates them: ~dθ²/24 per step
 
 # %%
-offer(
+drive_widget = offer(
     drive,
     v_left=slider(0.25, -0.5, 0.5, 0.01, "left track [m/s]"),
     v_right=slider(0.30, -0.5, 0.5, 0.01, "right track [m/s]"),
     seconds=slider(20.0, 1.0, 60.0, 1.0, "duration [s]"),
     slip_left=slider(0.0, 0.0, 0.3, 0.01, "left slip"),
-);
+)
 
 # %% [markdown]
 # ## Summary

@@ -27,7 +27,8 @@
 # **Prerequisites**: notebook 01 (the crawler turns about an instantaneous centre); rotation
 # matrices; the stereo relation depth = f·B/disparity.
 #
-# **Run time**: about 15 seconds. Runs as a plain script too: `python notebooks/02_circular_motion_derivation.py`.
+# **Run time**: about 5 seconds. It also runs as a plain script:
+# `python notebooks/02_circular_motion_derivation.py`.
 
 # %%
 import numpy as np
@@ -200,9 +201,14 @@ for theta_true, rho_true in [(0.0, 0.10), (np.radians(3.0), 0.08), (np.radians(-
     err_theta = np.abs(th[usable] - theta_true).max()
     err_ours = np.abs(cm.rho_from_pixels(m.w_prev, m.w_curr, theta_true, camera) - rho_true).max()
     a, b = m.w_prev, m.w_curr
-    printed = eq17_printed_fn(a[:, 0], a[:, 2], b[:, 0], b[:, 2], theta_true / 2, camera.cx, camera.baseline, camera.fx)
+    printed = eq17_printed_fn(
+        a[:, 0], a[:, 2], b[:, 0], b[:, 2], theta_true / 2, camera.cx, camera.baseline, camera.fx
+    )
     err_printed = np.median(np.abs(printed - rho_true))
-    print(f"{np.degrees(theta_true):10.2f} {rho_true:7.2f} {err_theta:19.1e} {err_ours:21.1e} {err_printed:24.2f}")
+    print(
+        f"{np.degrees(theta_true):10.2f} {rho_true:7.2f} {err_theta:19.1e} "
+        f"{err_ours:21.1e} {err_printed:24.2f}"
+    )
     assert err_theta <= 1e-9 and err_ours <= 1e-9
     assert err_printed > 1.0  # metres: the printed sign returns about twice the depth
 

@@ -5,7 +5,7 @@ from hypothesis import strategies as st
 
 from vo_lib import circular_motion as cm
 from vo_lib.camera import StereoCamera
-from vo_lib.geometry import R_ROBOT_FROM_CAMERA, compose_planar, planar_to_matrix
+from vo_lib.geometry import camera_motion, camera_mount, compose_planar
 from vo_lib.synthetic import synthetic_matches
 
 
@@ -43,17 +43,11 @@ def test_printed_eq17_sign_is_wrong_for_straight_motion(camera, rng):
 
 def test_theta_is_the_robot_yaw_increment(camera, rng):
     """Drive a robot a planar step, render with a forward camera on its turning axis, recover."""
-    height = 0.6
-    T_robot_camera = np.eye(4)
-    T_robot_camera[:3, :3] = R_ROBOT_FROM_CAMERA
-    T_robot_camera[2, 3] = height
+    mount = camera_mount(height=0.6)
     for dyaw in (-0.2, -0.01, 0.0, 0.05, 0.3):
         start = np.array([2.0, -1.0, 0.7])
-        inc = cm.robot_increment(dyaw, 0.12)
-        end = compose_planar(start, inc)
-        W_c0 = planar_to_matrix(start) @ T_robot_camera
-        W_c1 = planar_to_matrix(end) @ T_robot_camera
-        T = np.linalg.inv(W_c1) @ W_c0  # maps points of camera 0 into camera 1
+        end = compose_planar(start, cm.robot_increment(dyaw, 0.12))
+        T = camera_motion(start, end, mount)  # maps points of camera 0 into camera 1
         theta, rho = cm.circular_motion_from_transform(T)
         assert theta == pytest.approx(dyaw, abs=1e-12) and rho == pytest.approx(0.12, abs=1e-12)
         R, t = cm.motion_matrices(theta, rho)
@@ -118,3 +112,24 @@ def test_motion_residuals_zero_for_truth(camera, rng):
     res = cm.motion_residuals(m.w_prev, m.w_curr, 0.05, 0.1, camera)
     assert np.max(res[m.inliers]) < 1e-12
     assert np.median(res[~m.inliers]) > 0.5
+
+
+def test_theta_standard_deviation_matches_monte_carlo(camera, rng):
+    m = synthetic_matches(camera, 1, 0.03, 0.1, rng, depth_range=(4.0, 4.1))
+    base_prev, base_curr = np.repeat(m.w_prev, 20000, 0), np.repeat(m.w_curr, 20000, 0)
+    sigma = 0.5
+    noisy_prev, noisy_curr = base_prev.copy(), base_curr.copy()
+    noisy_prev[:, :2] += rng.normal(0, sigma, (20000, 2))
+    noisy_curr[:, :2] += rng.normal(0, sigma, (20000, 2))
+    spread = np.std(cm.theta_from_pixels(noisy_prev, noisy_curr, camera))
+    predicted = cm.theta_standard_deviation(m.w_prev, m.w_curr, camera, sigma)[0]
+    assert spread == pytest.approx(predicted, rel=0.05)
+
+
+def test_matches_under_transform_validates_and_reports_motion(camera, rng):
+    with pytest.raises(ValueError, match=r"T_curr_from_prev must be a 4x4 matrix"):
+        from vo_lib.synthetic import matches_under_transform
+
+        matches_under_transform(camera, 5, np.eye(3), rng)
+    m = synthetic_matches(camera, 5, 0.1, 0.2, rng)
+    assert (m.theta, m.rho) == pytest.approx((0.1, 0.2))

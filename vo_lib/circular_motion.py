@@ -83,6 +83,23 @@ def theta_from_pixels(w_prev, w_curr, camera: StereoCamera) -> np.ndarray:
     return theta
 
 
+def theta_standard_deviation(w_prev, w_curr, camera: StereoCamera, sigma_px: float) -> np.ndarray:
+    """First-order standard deviation of eq. 14's theta when u, v, u', v' carry noise ``sigma_px``.
+
+    With ``tan phi = N / (fx D)``, ``N = (u'-u0)(v-v0) - (u-u0)(v'-v0)``, ``D = v + v' - 2 v0``:
+    ``dphi = (fx D dN - fx N dD) / (fx^2 D^2 + N^2)``, and ``theta = 2 phi``. The error grows as
+    ``1 / |D|`` near the camera's height and with the distance of the match from the image centre.
+    """
+    a, b = _pair(w_prev, w_curr)
+    num, den = _eq14_terms(a, b, camera)  # den = fx * D
+    q = den**2 + num**2
+    g_n, g_d = den / q, camera.fx * num / q  # dphi/dN and -dphi/dD
+    du, dv = a[:, 0] - camera.cx, a[:, 1] - camera.cy
+    du2, dv2 = b[:, 0] - camera.cx, b[:, 1] - camera.cy
+    grads = np.stack([-dv2 * g_n, dv * g_n, du2 * g_n - g_d, -du * g_n - g_d])  # u, u', v, v'
+    return 2.0 * sigma_px * np.sqrt(np.sum(grads**2, axis=0))
+
+
 def rho_from_pixels(w_prev, w_curr, theta, camera: StereoCamera) -> np.ndarray:
     """Chord length ``rho`` of every match given ``theta`` (seed 000, eq. 16-17, sign corrected).
 

@@ -109,3 +109,23 @@ def as_match_array(name: str, w, columns: int = 3) -> np.ndarray:
         bad = int(np.argwhere(~np.isfinite(arr))[0, 0])
         raise ValueError(f"{name} must be finite; row {bad} holds {arr[bad].tolist()}")
     return arr
+
+
+def camera_mount(forward: float = 0.0, height: float = 0.5, left: float = 0.0) -> np.ndarray:
+    """4x4 pose of a forward-looking camera in the robot frame (``T_robot_camera``).
+
+    ``forward``, ``left`` and ``height`` place its optical centre; with ``forward = left = 0`` it
+    sits above the turning axis, where the circular-motion model of seed 000 is exact.
+    """
+    T = np.eye(4)
+    T[:3, :3] = R_ROBOT_FROM_CAMERA
+    T[:3, 3] = (forward, left, height)
+    return T
+
+
+def camera_motion(pose_prev, pose_curr, T_robot_camera) -> np.ndarray:
+    """4x4 ``T_curr_from_prev`` mapping points of the previous camera frame into the current one,
+    for a camera mounted at ``T_robot_camera`` on a robot moving between two planar poses."""
+    W0 = planar_to_matrix(pose_prev) @ T_robot_camera
+    W1 = planar_to_matrix(pose_curr) @ T_robot_camera
+    return np.linalg.solve(W1, W0)

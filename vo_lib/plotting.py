@@ -30,8 +30,16 @@ def plot_paths(ax, paths: dict, title: str = "", every: int = 0):
         (line,) = ax.plot(poses[:, 0], poses[:, 1], label=label)
         if every:
             p = poses[::every]
-            ax.quiver(p[:, 0], p[:, 1], np.cos(p[:, 2]), np.sin(p[:, 2]), color=line.get_color(),
-                      angles="xy", scale=25, width=0.004)
+            ax.quiver(
+                p[:, 0],
+                p[:, 1],
+                np.cos(p[:, 2]),
+                np.sin(p[:, 2]),
+                color=line.get_color(),
+                angles="xy",
+                scale=25,
+                width=0.004,
+            )
     ax.set_aspect("equal", adjustable="datalim")
     ax.set_xlabel("x [m]")
     ax.set_ylabel("y [m]")

@@ -11,7 +11,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from vo_lib.camera import StereoCamera
-from vo_lib.circular_motion import apply_motion
+from vo_lib.circular_motion import circular_motion_from_transform, motion_matrices
 
 #: Nearest depth a point may have in either view, metres.
 MIN_DEPTH = 0.3
@@ -39,7 +39,26 @@ def synthetic_matches(
     noise_px: float = 0.0,
     outlier_ratio: float = 0.0,
 ) -> SyntheticMatches:
-    """Draw ``n`` matches of points seen before and after the motion ``(theta, rho)``.
+    """Draw ``n`` matches of points seen before and after the circular motion ``(theta, rho)``.
+
+    See :func:`matches_under_transform` for the parameters; the motion is eq. 15.
+    """
+    R, T = motion_matrices(theta, rho)
+    M = np.eye(4)
+    M[:3, :3], M[:3, 3] = R, T
+    return matches_under_transform(camera, n, M, rng, depth_range, noise_px, outlier_ratio)
+
+
+def matches_under_transform(
+    camera: StereoCamera,
+    n: int,
+    T_curr_from_prev: np.ndarray,
+    rng: np.random.Generator,
+    depth_range: tuple[float, float] = (1.5, 15.0),
+    noise_px: float = 0.0,
+    outlier_ratio: float = 0.0,
+) -> SyntheticMatches:
+    """Draw ``n`` matches of points seen before and after any rigid camera motion.
 
     Parameters
     ----------
@@ -47,8 +66,9 @@ def synthetic_matches(
         Must have ``width`` and ``height``.
     n : int
         Number of matches.
-    theta, rho : float
-        The circular motion (eq. 15).
+    T_curr_from_prev : array_like, shape (4, 4)
+        Maps a point of the previous camera frame into the current one. ``theta`` and ``rho`` of
+        the result are those of :func:`~vo_lib.circular_motion.circular_motion_from_transform`.
     rng : numpy.random.Generator
         Source of every random draw.
     depth_range : (float, float)
@@ -65,6 +85,10 @@ def synthetic_matches(
         raise ValueError(f"n must be >= 0; got {n}")
     if not 0.0 <= outlier_ratio <= 1.0:
         raise ValueError(f"outlier_ratio must lie in [0, 1]; got {outlier_ratio}")
+    M = np.asarray(T_curr_from_prev, dtype=float)
+    if M.shape != (4, 4):
+        raise ValueError(f"T_curr_from_prev must be a 4x4 matrix; got shape {M.shape}")
+    theta, rho = circular_motion_from_transform(M)
     near, far = depth_range
     if not 0 < near < far:
         raise ValueError(f"depth_range must satisfy 0 < near < far; got {depth_range}")
@@ -83,7 +107,7 @@ def synthetic_matches(
         z = 1.0 / rng.uniform(1.0 / far, 1.0 / near, m)
         d = camera.fx * camera.baseline / z
         P = camera.backproject(np.column_stack([u, v, d]))
-        P2 = apply_motion(P, theta, rho)
+        P2 = P @ M[:3, :3].T + M[:3, 3]
         ok = P2[:, 2] > MIN_DEPTH
         w2 = np.full_like(P2, np.nan)
         w2[ok] = camera.project(P2[ok])
