@@ -1,0 +1,259 @@
+"""A rectified stereo pair rendered from a :class:`~vo_lib.world.World`.
+
+Every surface of the world is a planar quad with a texture. For a plane, the map from texels to
+pixels is one homography, ``H = K [R^T e1, R^T e2, R^T (O - c)]``, so OpenCV's
+``warpPerspective`` draws a quad over its screen bounding box in one call; the texture level
+(mipmap) is chosen from the quad's texel footprint so that far surfaces do not alias. Visibility
+is a z-buffer of *inverse* depth, which on a plane is affine in the pixel coordinates:
+``1/z = n . K^-1 [u, v, 1] / (n . O_c)``. Ground-truth depth comes from the same buffer.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from vo_lib.camera import StereoCamera
+from vo_lib.textures import cached_mipmaps
+from vo_lib.world import World
+
+#: Nearest depth drawn, metres.
+NEAR_PLANE = 0.05
+#: Longest side of a quad; longer walls and the floor are cut into tiles of this size, so that
+#: each tile gets a texture level suited to its distance.
+TILE_SIZE = 3.0
+#: Direction the light comes from (world frame) for the flat shading of walls.
+LIGHT_DIRECTION = np.array([0.5, 0.3, 0.8]) / np.linalg.norm([0.5, 0.3, 0.8])
+#: Grey level of the empty background (sky), top and bottom of the image.
+SKY_GREY = (205, 180)
+
+
+@dataclass(frozen=True)
+class _Quad:
+    corners: np.ndarray  # (4, 3) world corners, in order
+    origin: np.ndarray  # world point of texel (0, 0)
+    e1: np.ndarray  # world step of one texel along the texture's columns
+    e2: np.ndarray  # world step of one texel along the texture's rows
+    normal: np.ndarray
+    texture: tuple  # mipmaps
+    shade: float
+
+
+@dataclass
+class SensorEffects:
+    """Optional imperfections of a real camera, applied after rendering.
+
+    Parameters
+    ----------
+    noise_sigma : float
+        Standard deviation of additive Gaussian noise, grey levels.
+    exposure_gain : float
+        Multiplies every grey level (auto-exposure change between frames).
+    blur_px : float
+        Length of a horizontal motion-blur kernel in pixels (0: none).
+    """
+
+    noise_sigma: float = 0.0
+    exposure_gain: float = 1.0
+    blur_px: float = 0.0
+
+    def apply(self, image: np.ndarray, rng: np.random.Generator | None) -> np.ndarray:
+        out = image
+        if self.blur_px >= 1.0:
+            n = int(round(self.blur_px))
+            out = cv2.blur(out, (n, 1))
+        if self.exposure_gain != 1.0 or self.noise_sigma > 0:
+            f = out.astype(np.float32) * self.exposure_gain
+            if self.noise_sigma > 0:
+                if rng is None:
+                    raise ValueError("sensor noise needs an rng (numpy.random.Generator)")
+                f += rng.normal(0.0, self.noise_sigma, f.shape).astype(np.float32)
+            out = np.clip(f + 0.5, 0, 255).astype(np.uint8)
+        return out
+
+
+def _tiles(length: float) -> np.ndarray:
+    n = max(1, int(np.ceil(length / TILE_SIZE - 1e-9)))
+    return np.linspace(0.0, length, n + 1)
+
+
+def _shade(normal: np.ndarray) -> float:
+    return float(0.7 + 0.3 * abs(normal @ LIGHT_DIRECTION))
+
+
+def build_quads(world: World) -> list[_Quad]:
+    """Cut the world's segments, floor and ceiling into textured quads."""
+    texel = world.floor_texel
+    quads = []
+    for seg in world.segments:
+        a, b = np.array(seg.start, float), np.array(seg.end, float)
+        direction = (b - a) / seg.length
+        cols, rows = int(np.ceil(seg.length / texel)) + 1, int(np.ceil(seg.height / texel)) + 1
+        tex = cached_mipmaps(rows, cols, seg.texture_seed + 1000 * world.seed)
+        origin = np.array([a[0], a[1], 0.0])
+        e1 = np.array([direction[0], direction[1], 0.0]) * texel
+        e2 = np.array([0.0, 0.0, texel])
+        normal = np.array([-direction[1], direction[0], 0.0])
+        for s0, s1 in zip(_tiles(seg.length)[:-1], _tiles(seg.length)[1:], strict=True):
+            p0, p1 = a + s0 * direction, a + s1 * direction
+            corners = np.array(
+                [
+                    [p0[0], p0[1], 0.0],
+                    [p1[0], p1[1], 0.0],
+                    [p1[0], p1[1], seg.height],
+                    [p0[0], p0[1], seg.height],
+                ]
+            )
+            quads.append(_Quad(corners, origin, e1, e2, normal, tex, _shade(normal)))
+    xmin, xmax, ymin, ymax = world.floor_extent
+    cols, rows = int(np.ceil((xmax - xmin) / texel)) + 1, int(np.ceil((ymax - ymin) / texel)) + 1
+    planes = [(0.0, world.seed * 7 + 1, 0.95)]
+    if world.ceiling_height is not None:
+        planes.append((world.ceiling_height, world.seed * 7 + 2, 0.8))
+    for z, tex_seed, shade in planes:
+        tex = cached_mipmaps(rows, cols, tex_seed, 0.8)
+        origin = np.array([xmin, ymin, z])
+        e1, e2 = np.array([texel, 0.0, 0.0]), np.array([0.0, texel, 0.0])
+        for x0, x1 in zip(_tiles(xmax - xmin)[:-1], _tiles(xmax - xmin)[1:], strict=True):
+            for y0, y1 in zip(_tiles(ymax - ymin)[:-1], _tiles(ymax - ymin)[1:], strict=True):
+                corners = np.array(
+                    [
+                        [xmin + x0, ymin + y0, z],
+                        [xmin + x1, ymin + y0, z],
+                        [xmin + x1, ymin + y1, z],
+                        [xmin + x0, ymin + y1, z],
+                    ]
+                )
+                quads.append(_Quad(corners, origin, e1, e2, np.array([0.0, 0.0, 1.0]), tex, shade))
+    return quads
+
+
+def _clip_near(points: np.ndarray, near: float) -> np.ndarray:
+    """Sutherland-Hodgman clipping of a convex polygon (camera frame) to ``z >= near``."""
+    out = []
+    n = len(points)
+    for i in range(n):
+        p, q = points[i], points[(i + 1) % n]
+        p_in, q_in = p[2] >= near, q[2] >= near
+        if p_in:
+            out.append(p)
+        if p_in != q_in:
+            t = (near - p[2]) / (q[2] - p[2])
+            out.append(p + t * (q - p))
+    return np.array(out).reshape(-1, 3)
+
+
+class StereoRenderer:
+    """Render rectified stereo pairs of a world, with ground-truth depth on request.
+
+    Parameters
+    ----------
+    world : World
+    camera : StereoCamera
+        Must have ``width`` and ``height``.
+    effects : SensorEffects, optional
+    """
+
+    def __init__(self, world: World, camera: StereoCamera, effects: SensorEffects | None = None):
+        if camera.width is None or camera.height is None:
+            raise ValueError("the renderer needs a camera with width and height")
+        self.world = world
+        self.camera = camera
+        self.effects = effects or SensorEffects()
+        self.quads = build_quads(world)
+        self._corners = np.stack([q.corners for q in self.quads])  # (Q, 4, 3)
+        w, h = camera.width, camera.height
+        self._u = np.arange(w, dtype=np.float32)
+        self._v = np.arange(h, dtype=np.float32)
+        sky = np.linspace(SKY_GREY[0], SKY_GREY[1], h, dtype=np.float32)
+        self._sky = np.repeat(sky[:, None], w, axis=1).astype(np.uint8)
+        self._Kinv = np.linalg.inv(camera.K)
+        # inward normals of the four side planes of the view frustum (through the optical centre)
+        fx, fy, cx, cy = camera.fx, camera.fy, camera.cx, camera.cy
+        self._frustum = np.array(
+            [[fx, 0, cx + 0.5], [-fx, 0, w - 0.5 - cx], [0, fy, cy + 0.5], [0, -fy, h - 0.5 - cy]]
+        )
+
+    def render(self, T_world_camera, with_depth: bool = False):
+        """Grey image (uint8) seen by a camera at ``T_world_camera`` (4x4, camera to world).
+
+        Returns ``image`` or ``(image, depth)`` with depth in metres (``inf`` where nothing is).
+        """
+        T = np.asarray(T_world_camera, dtype=float)
+        R, c = T[:3, :3], T[:3, 3]
+        cam = self.camera
+        w, h = cam.width, cam.height
+        K = cam.K
+        image = self._sky.copy()
+        inv_depth = np.zeros((h, w), np.float32)
+        corners_c = (self._corners - c) @ R  # (Q, 4, 3), camera frame
+        # a quad is culled when all its corners lie outside one plane of the frustum
+        outside = (corners_c @ self._frustum.T < 0).all(axis=1).any(axis=1)
+        outside |= corners_c[..., 2].max(axis=1) <= NEAR_PLANE
+        candidates = np.flatnonzero(~outside)
+        for qi in candidates:
+            quad = self.quads[qi]
+            poly = _clip_near(corners_c[qi], NEAR_PLANE)
+            if len(poly) < 3:
+                continue
+            uv = (poly[:, :2] / poly[:, 2:3]) * (cam.fx, cam.fy) + (cam.cx, cam.cy)
+            x0 = max(int(np.floor(uv[:, 0].min())), 0)
+            x1 = min(int(np.ceil(uv[:, 0].max())) + 1, w)
+            y0 = max(int(np.floor(uv[:, 1].min())), 0)
+            y1 = min(int(np.ceil(uv[:, 1].max())) + 1, h)
+            if x1 <= x0 or y1 <= y0:
+                continue
+            # texel -> pixel homography of the quad's plane
+            H = K @ np.column_stack([R.T @ quad.e1, R.T @ quad.e2, R.T @ (quad.origin - c)])
+            # texture level from the texel footprint at the nearest visible depth
+            texel_len = np.linalg.norm(quad.e1)
+            pixels_per_texel = cam.fx * texel_len / max(poly[:, 2].min(), NEAR_PLANE)
+            level = int(np.clip(np.floor(np.log2(1.0 / pixels_per_texel)), 0, len(quad.texture) - 1))
+            scale = 2.0**level
+            # level-L texel (s, t) sits at base texel 2^L (s + 0.5) - 0.5
+            S = np.array([[scale, 0, 0.5 * scale - 0.5], [0, scale, 0.5 * scale - 0.5], [0, 0, 1.0]])
+            shift = np.array([[1, 0, -x0], [0, 1, -y0], [0, 0, 1.0]])
+            M = shift @ H @ S
+            warped = cv2.warpPerspective(
+                quad.texture[level],
+                M,
+                (x1 - x0, y1 - y0),
+                flags=cv2.INTER_LINEAR,
+                borderMode=cv2.BORDER_REPLICATE,
+            )
+            mask = np.zeros((y1 - y0, x1 - x0), np.uint8)
+            pts = np.round((uv - (x0, y0)) * 16).astype(np.int32)
+            cv2.fillConvexPoly(mask, pts, 1, lineType=cv2.LINE_8, shift=4)
+            # inverse depth on the plane, affine in (u, v)
+            n_c = R.T @ quad.normal
+            dist = n_c @ (R.T @ (quad.origin - c))
+            if abs(dist) < 1e-9:
+                continue  # seen edge-on
+            a, b, e = (n_c @ self._Kinv) / dist
+            plane = (a * self._u[x0:x1])[None, :] + (b * self._v[y0:y1, None] + e)
+            roi = inv_depth[y0:y1, x0:x1]
+            closer = (mask > 0) & (plane > roi)
+            roi[closer] = plane[closer]
+            if quad.shade != 1.0:
+                warped = cv2.convertScaleAbs(warped, alpha=quad.shade)
+            image[y0:y1, x0:x1][closer] = warped[closer]
+        if not with_depth:
+            return image
+        with np.errstate(divide="ignore"):
+            depth = np.where(inv_depth > 0, 1.0 / inv_depth, np.inf).astype(np.float32)
+        return image, depth
+
+    def render_pair(self, T_world_camera, rng: np.random.Generator | None = None, with_depth: bool = False):
+        """Left and right images (and the left depth) of the rig whose left camera is at ``T_world_camera``."""
+        T_left = np.asarray(T_world_camera, dtype=float)
+        T_right = T_left.copy()
+        T_right[:3, 3] = T_left[:3, 3] + T_left[:3, 0] * self.camera.baseline
+        if with_depth:
+            left, depth = self.render(T_left, with_depth=True)
+        else:
+            left = self.render(T_left)
+        right = self.render(T_right)
+        left, right = self.effects.apply(left, rng), self.effects.apply(right, rng)
+        return (left, right, depth) if with_depth else (left, right)
