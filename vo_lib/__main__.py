@@ -2,6 +2,7 @@
 
 Commands
 --------
+generate NAME  render a named sample sequence (KITTI layout, with ground truth and odometry)
 bench NAME     time one part of the library against its baseline (``bench --help`` lists them)
 """
 
@@ -11,19 +12,49 @@ import argparse
 import sys
 
 
+def _resolution(text: str) -> tuple[int, int]:
+    try:
+        w, h = (int(x) for x in text.lower().split("x"))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected WIDTHxHEIGHT, e.g. 640x480; got {text!r}") from None
+    if w < 32 or h < 32:
+        raise argparse.ArgumentTypeError(f"resolution must be at least 32x32; got {text!r}")
+    return w, h
+
+
 def build_parser() -> argparse.ArgumentParser:
     from vo_lib.bench import BENCHES
 
     parser = argparse.ArgumentParser(prog="python -m vo_lib", description=__doc__.split("\n")[0])
     sub = parser.add_subparsers(dest="command", required=True)
+    from vo_lib.samples import SAMPLES
+
+    gen = sub.add_parser("generate", help="render a named sample sequence")
+    gen.add_argument("name", choices=sorted(SAMPLES), help="which sample")
+    gen.add_argument("--out", help="output folder (default: data/NAME)")
+    gen.add_argument("--frames", type=int, help="keep only the first N frames")
+    gen.add_argument(
+        "--resolution", type=_resolution, default="640x480", help="WIDTHxHEIGHT (default 640x480)"
+    )
     bench = sub.add_parser("bench", help="time a part of the library against a baseline")
     bench.add_argument("name", choices=sorted(BENCHES), help="which benchmark")
     return parser
 
 
 def main(argv: list[str] | None = None) -> int:
-    args = build_parser().parse_args(argv)
-    if args.command == "bench":
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    if args.command == "generate":
+        from vo_lib.data import sample_path
+        from vo_lib.samples import generate
+
+        out = args.out or sample_path(args.name, args.frames, args.resolution)
+        try:
+            path = generate(args.name, out, args.frames, args.resolution)
+        except (ValueError, OSError) as exc:
+            parser.exit(2, f"python -m vo_lib generate: error: {exc}\n")
+        print(f"wrote {path}")
+    elif args.command == "bench":
         from vo_lib.bench import BENCHES
 
         BENCHES[args.name]()

@@ -52,6 +52,8 @@ class StereoCamera:
     height: int | None = None
 
     def __post_init__(self):
+        for name in ("fx", "fy", "cx", "cy", "baseline"):  # plain floats, whatever array type came in
+            object.__setattr__(self, name, float(getattr(self, name)))
         _positive("fx (focal length in pixels)", self.fx)
         _positive("fy (focal length in pixels)", self.fy)
         _positive("baseline (metres)", self.baseline)

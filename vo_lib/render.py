@@ -21,9 +21,9 @@ from vo_lib.world import World
 
 #: Nearest depth drawn, metres.
 NEAR_PLANE = 0.05
-#: Longest side of a quad; longer walls and the floor are cut into tiles of this size, so that
-#: each tile gets a texture level suited to its distance.
-TILE_SIZE = 3.0
+#: Longest side of a quad, in texels; longer walls and the floor are cut into tiles of this size,
+#: so that each tile gets a texture level suited to its distance.
+TILE_TEXELS = 300
 #: Direction the light comes from (world frame) for the flat shading of walls.
 LIGHT_DIRECTION = np.array([0.5, 0.3, 0.8]) / np.linalg.norm([0.5, 0.3, 0.8])
 #: Grey level of the empty background (sky), top and bottom of the image.
@@ -74,8 +74,8 @@ class SensorEffects:
         return out
 
 
-def _tiles(length: float) -> np.ndarray:
-    n = max(1, int(np.ceil(length / TILE_SIZE - 1e-9)))
+def _tiles(length: float, texel: float) -> np.ndarray:
+    n = max(1, int(np.ceil(length / (TILE_TEXELS * texel) - 1e-9)))
     return np.linspace(0.0, length, n + 1)
 
 
@@ -96,7 +96,7 @@ def build_quads(world: World) -> list[_Quad]:
         e1 = np.array([direction[0], direction[1], 0.0]) * texel
         e2 = np.array([0.0, 0.0, texel])
         normal = np.array([-direction[1], direction[0], 0.0])
-        for s0, s1 in zip(_tiles(seg.length)[:-1], _tiles(seg.length)[1:], strict=True):
+        for s0, s1 in zip(_tiles(seg.length, texel)[:-1], _tiles(seg.length, texel)[1:], strict=True):
             p0, p1 = a + s0 * direction, a + s1 * direction
             corners = np.array(
                 [
@@ -116,8 +116,8 @@ def build_quads(world: World) -> list[_Quad]:
         tex = cached_mipmaps(rows, cols, tex_seed, 0.8)
         origin = np.array([xmin, ymin, z])
         e1, e2 = np.array([texel, 0.0, 0.0]), np.array([0.0, texel, 0.0])
-        for x0, x1 in zip(_tiles(xmax - xmin)[:-1], _tiles(xmax - xmin)[1:], strict=True):
-            for y0, y1 in zip(_tiles(ymax - ymin)[:-1], _tiles(ymax - ymin)[1:], strict=True):
+        for x0, x1 in zip(_tiles(xmax - xmin, texel)[:-1], _tiles(xmax - xmin, texel)[1:], strict=True):
+            for y0, y1 in zip(_tiles(ymax - ymin, texel)[:-1], _tiles(ymax - ymin, texel)[1:], strict=True):
                 corners = np.array(
                     [
                         [xmin + x0, ymin + y0, z],
@@ -246,7 +246,7 @@ class StereoRenderer:
         return image, depth
 
     def render_pair(self, T_world_camera, rng: np.random.Generator | None = None, with_depth: bool = False):
-        """Left and right images (and the left depth) of the rig whose left camera is at ``T_world_camera``."""
+        """Left and right images (and left depth) of the rig whose left camera is at ``T_world_camera``."""
         T_left = np.asarray(T_world_camera, dtype=float)
         T_right = T_left.copy()
         T_right[:3, 3] = T_left[:3, 3] + T_left[:3, 0] * self.camera.baseline

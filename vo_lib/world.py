@@ -91,7 +91,8 @@ def polyline(
     pts = [tuple(map(float, p)) for p in points]
     if closed:
         pts.append(pts[0])
-    return [Segment(a, b, height, kind, mapped, seed + i) for i, (a, b) in enumerate(zip(pts[:-1], pts[1:]))]
+    pairs = zip(pts[:-1], pts[1:], strict=True)
+    return [Segment(a, b, height, kind, mapped, seed + i) for i, (a, b) in enumerate(pairs)]
 
 
 def box(
@@ -147,7 +148,7 @@ def corridor(seed: int = 30, length: float = 30.0, width: float = 3.0) -> World:
     segs += polyline([(19.0, half), (19.0, half - 0.6)], h, seed + 30, "cross wall")
     segs += polyline([(22.0, -half), (22.0, -half + 0.6)], h, seed + 31, "cross wall")
     segs += box((25.0, half - 0.2), (0.5, 0.4), 0.0, h, seed + 40, "pillar")
-    segs += polyline([(23.6, 0.2), (24.6, 0.7)], 1.6, seed + 50, "umbrella", mapped=False)
+    segs += polyline([(23.8, 0.75), (24.8, 1.0)], 1.6, seed + 50, "umbrella", mapped=False)
     return World(
         "corridor",
         tuple(segs),

@@ -1,0 +1,41 @@
+"""Sample sequences on demand: generated into ``data/`` on first use, reused afterwards.
+
+``load_sequence("indoor_linear")`` renders the named sample once (deterministically) into the data
+folder and loads it; ``load_sequence("/path/to/kitti/00")`` loads any folder in the KITTI layout.
+The data folder is ``$VO_LIB_DATA`` if set, else the repository's ``data/``.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+from vo_lib.samples import DEFAULT_RESOLUTION, SAMPLES, generate
+from vo_lib.sequence import Sequence, read_sequence
+
+
+def data_dir() -> Path:
+    env = os.environ.get("VO_LIB_DATA")
+    return Path(env) if env else Path(__file__).resolve().parents[1] / "data"
+
+
+def sample_path(name: str, frames: int | None = None, resolution=DEFAULT_RESOLUTION) -> Path:
+    """Folder of a generated sample: the full sample at the default size keeps its plain name."""
+    full = frames is None or frames == SAMPLES[name].frames
+    tag = name if full else f"{name}_{frames}f"
+    if tuple(resolution) != DEFAULT_RESOLUTION:
+        tag += f"_{resolution[0]}x{resolution[1]}"
+    return data_dir() / tag
+
+
+def load_sequence(
+    name_or_path, frames: int | None = None, resolution=DEFAULT_RESOLUTION, progress: bool = True
+) -> Sequence:
+    """Load a named sample (generating it on first use) or a KITTI-layout folder."""
+    key = str(name_or_path)
+    if key in SAMPLES and not Path(key).exists():
+        path = sample_path(key, frames, resolution)
+        if not (path / "manifest.json").is_file():
+            generate(key, path, frames, tuple(resolution), progress)
+        return read_sequence(path)
+    return read_sequence(Path(key))

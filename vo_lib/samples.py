@@ -1,0 +1,203 @@
+"""Named sample sequences that mirror the experiments of seed 000 (and the corridor of seed 004).
+
+Each sample is a world, a rig, a drive and a rate. :func:`generate` renders it in the KITTI layout
+with ground truth (``poses.txt``), track odometry (``odometry.txt``) and a ``manifest.json`` that
+states everything needed to make it again.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+
+import numpy as np
+from tqdm.auto import tqdm
+
+from vo_lib.camera import StereoCamera
+from vo_lib.geometry import camera_motion, camera_mount, planar_to_matrix
+from vo_lib.odometry import TrackOdometry
+from vo_lib.render import SensorEffects, StereoRenderer
+from vo_lib.sequence import SequenceWriter
+from vo_lib.trajectories import Leg, SlipModel, simulate_drive
+from vo_lib.world import WORLDS
+
+#: Height of the camera above the floor; it sits above the crawler's turning axis (notebook 03).
+CAMERA_HEIGHT = 0.5
+DEFAULT_RESOLUTION = (640, 480)
+
+
+@dataclass(frozen=True)
+class Sample:
+    """Everything that defines a sample sequence."""
+
+    name: str
+    purpose: str
+    mirrors: str
+    world: str
+    start: tuple[float, float, float]
+    rate: float
+    legs: tuple[Leg, ...]
+    seed: int
+    slip: SlipModel = field(default_factory=SlipModel)
+    sensor_noise: float = 1.0
+
+    @property
+    def frames(self) -> int:
+        return sum(leg.frames for leg in self.legs) + 1
+
+
+def _turns(n: int, frames: int, speed: float, rate_deg: float) -> tuple[Leg, ...]:
+    """Alternate straight stretches and left/right arcs."""
+    legs = []
+    for i in range(n):
+        legs.append(Leg(frames, speed, 0.0))
+        legs.append(Leg(frames, speed, np.radians(rate_deg) * (1 if i % 2 == 0 else -1)))
+    return tuple(legs)
+
+
+SAMPLES: dict[str, Sample] = {
+    s.name: s
+    for s in (
+        Sample(
+            "indoor_linear",
+            "straight forward and back: relative error of linear motion",
+            "seed 000, IV.A.2 (200 frames forward, 200 back)",
+            "indoor_lab",
+            (-3.5, 0.5, 0.0),
+            30.0,
+            (Leg(200, 0.3), Leg(200, -0.3)),
+            seed=101,
+        ),
+        Sample(
+            "indoor_free",
+            "arcs and straights in the lab: heading and position at key positions",
+            "seed 000, IV.A.3 (free motion)",
+            "indoor_lab",
+            (-4.5, -0.8, 0.0),
+            30.0,
+            (
+                Leg(120, 0.3),
+                Leg(150, 0.3, np.radians(30)),
+                Leg(150, 0.3),
+                Leg(150, 0.3, np.radians(30)),
+                Leg(100, 0.3),
+                Leg(130, 0.3, np.radians(-20)),
+            ),
+            seed=102,
+        ),
+        Sample(
+            "outdoor_linear",
+            "long straight forward and back in an open yard: low parallax",
+            "seed 000, IV.B.1 (600 frames forward, 600 back)",
+            "outdoor_yard",
+            (-6.0, -2.0, 0.0),
+            30.0,
+            (Leg(600, 0.5), Leg(600, -0.5)),
+            seed=103,
+        ),
+        Sample(
+            "spot_turn",
+            "turning on the spot, with strong unequal track slip",
+            "seed 000, IV.B.2 (1800 frames of spot turns)",
+            "outdoor_yard",
+            (0.0, 0.0, 0.0),
+            30.0,
+            (Leg(1800, 0.0, np.radians(18)),),
+            seed=104,
+        ),
+        Sample(
+            "outdoor_free",
+            "free driving in the yard: errors at key positions (Table 2)",
+            "seed 000, IV.B.3 (about 1400 frames)",
+            "outdoor_yard",
+            (-10.0, -4.0, 0.3),
+            30.0,
+            _turns(3, 200, 0.5, 12) + (Leg(200, 0.5),),
+            seed=105,
+        ),
+        Sample(
+            "corridor",
+            "along a corridor whose cross features are hidden over a stretch",
+            "seed 004, corridor experiment",
+            "corridor",
+            (1.0, 0.0, 0.0),
+            10.0,
+            (Leg(540, 0.5),),
+            seed=106,
+        ),
+    )
+}
+
+
+def get_sample(name: str) -> Sample:
+    if name not in SAMPLES:
+        raise KeyError(f"unknown sample {name!r}; known samples: {', '.join(SAMPLES)}")
+    return SAMPLES[name]
+
+
+def generate(
+    name: str,
+    out,
+    frames: int | None = None,
+    resolution: tuple[int, int] = DEFAULT_RESOLUTION,
+    progress: bool = True,
+) -> Path:
+    """Render sample ``name`` into folder ``out``; returns the folder.
+
+    ``frames`` keeps only the first frames of the drive; ``resolution`` is ``(width, height)``.
+    """
+    sample = get_sample(name)
+    n = sample.frames if frames is None else int(frames)
+    if not 1 <= n <= sample.frames:
+        raise ValueError(f"frames must lie in 1..{sample.frames} for {name}; got {frames}")
+    width, height = resolution
+    camera = StereoCamera.bumblebee2(width, height)
+    world = WORLDS[sample.world]()
+    rng = np.random.default_rng(sample.seed)
+    odometry = TrackOdometry()
+    drive = simulate_drive(sample.legs, sample.rate, sample.start, rng, odometry, sample.slip)
+    mount = camera_mount(height=CAMERA_HEIGHT)
+    renderer = StereoRenderer(world, camera, SensorEffects(noise_sigma=sample.sensor_noise))
+    image_rng = np.random.default_rng(sample.seed + 1)
+    W0 = planar_to_matrix(drive.poses[0]) @ mount
+    poses = []
+    with SequenceWriter(out, camera) as writer:
+        for k in tqdm(range(n), desc=f"rendering {name}", unit="frame", disable=not progress):
+            W = planar_to_matrix(drive.poses[k]) @ mount
+            left, right = renderer.render_pair(W, image_rng)
+            writer.add(left, right)
+            poses.append(np.linalg.solve(W0, W))  # camera k in the frame of camera 0
+        manifest = {
+            "sample": name,
+            "purpose": sample.purpose,
+            "mirrors": sample.mirrors,
+            "world": sample.world,
+            "frames": n,
+            "frames_full": sample.frames,
+            "rate_hz": sample.rate,
+            "resolution": [width, height],
+            "legs": [asdict(leg) for leg in sample.legs],
+            "start_pose": list(sample.start),
+            "camera": {
+                "fx": camera.fx,
+                "fy": camera.fy,
+                "cx": camera.cx,
+                "cy": camera.cy,
+                "baseline": camera.baseline,
+                "height_m": CAMERA_HEIGHT,
+                "mount": "above turning axis",
+            },
+            "track_odometry": asdict(odometry),
+            "slip": asdict(sample.slip),
+            "sensor_noise_grey": sample.sensor_noise,
+            "seed": sample.seed,
+            "robot_poses": drive.poses[:n].tolist(),
+        }
+        return writer.close(drive.times[:n], np.array(poses), drive.odometry[:n], manifest)
+
+
+def camera_poses_from_robot(robot_poses, mount=None) -> np.ndarray:
+    """KITTI-style camera poses ``(N, 4, 4)`` (in the first camera's frame) of planar robot poses."""
+    mount = camera_mount(height=CAMERA_HEIGHT) if mount is None else mount
+    robot_poses = np.asarray(robot_poses, dtype=float)
+    return np.stack([np.linalg.inv(camera_motion(robot_poses[0], p, mount)) for p in robot_poses])
