@@ -113,7 +113,7 @@ def build_quads(world: World) -> list[_Quad]:
     if world.ceiling_height is not None:
         planes.append((world.ceiling_height, world.seed * 7 + 2, 0.8))
     for z, tex_seed, shade in planes:
-        tex = cached_mipmaps(rows, cols, tex_seed, 0.8)
+        tex = cached_mipmaps(rows, cols, tex_seed)
         origin = np.array([xmin, ymin, z])
         e1, e2 = np.array([texel, 0.0, 0.0]), np.array([0.0, texel, 0.0])
         for x0, x1 in zip(_tiles(xmax - xmin, texel)[:-1], _tiles(xmax - xmin, texel)[1:], strict=True):

@@ -15,7 +15,7 @@ import cv2
 import numpy as np
 
 #: Block sizes (texels) and weights of the blocky noise layers.
-BLOCK_LAYERS = ((96, 0.30), (24, 0.30), (6, 0.22))
+BLOCK_LAYERS = ((96, 0.25), (24, 0.30), (6, 0.30), (2, 0.15))
 #: Polygons per million texels.
 SHAPES_PER_MEGATEXEL = 400
 #: Grey levels the texture is stretched to, leaving room for shading and exposure.

@@ -1,0 +1,78 @@
+import os
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from vo_lib.data import load_sequence, sample_path
+from vo_lib.samples import SAMPLES, camera_poses_from_robot, generate
+
+
+@pytest.fixture
+def data_home(tmp_path, monkeypatch):
+    monkeypatch.setenv("VO_LIB_DATA", str(tmp_path / "data"))
+    return tmp_path / "data"
+
+
+def test_named_sample_is_generated_once_then_reused(data_home):
+    seq = load_sequence("indoor_linear", frames=3, resolution=(160, 120), progress=False)
+    assert seq.path == data_home / "indoor_linear_3f_160x120"
+    assert len(seq) == 3 and seq.camera.width == 160 and seq.odometry.shape == (3, 2)
+    assert seq.manifest["rate_hz"] == 30.0 and seq.manifest["mirrors"].startswith("seed 000")
+    stamp = (seq.path / "manifest.json").stat().st_mtime_ns
+    again = load_sequence("indoor_linear", frames=3, resolution=(160, 120), progress=False)
+    assert (again.path / "manifest.json").stat().st_mtime_ns == stamp
+    np.testing.assert_array_equal(again.pair(2)[0], seq.pair(2)[0])
+
+
+def test_generation_is_deterministic(tmp_path):
+    a = generate("spot_turn", tmp_path / "a", frames=2, resolution=(96, 72), progress=False)
+    b = generate("spot_turn", tmp_path / "b", frames=2, resolution=(96, 72), progress=False)
+    for name in ("image_0/000001.png", "image_1/000001.png", "poses.txt", "odometry.txt", "times.txt"):
+        assert (a / name).read_bytes() == (b / name).read_bytes()
+
+
+def test_ground_truth_poses_match_the_robot_poses(tmp_path):
+    seq = load_sequence(generate("indoor_free", tmp_path / "s", frames=5, resolution=(96, 72), progress=False))
+    robot = np.array(seq.manifest["robot_poses"])
+    np.testing.assert_allclose(seq.poses_4x4(), camera_poses_from_robot(robot), atol=1e-12)
+    # the camera looks along the robot's x axis: its z axis moves forward
+    assert seq.poses[-1, 2, 3] > 0
+
+
+def test_sample_path_names():
+    assert sample_path("corridor").name == "corridor"
+    assert sample_path("corridor", SAMPLES["corridor"].frames).name == "corridor"
+    assert sample_path("corridor", 10, (320, 240)).name == "corridor_10f_320x240"
+
+
+def run_cli(*args, cwd=None):
+    env = dict(os.environ)
+    return subprocess.run([sys.executable, "-m", "vo_lib", *args], capture_output=True, text=True, cwd=cwd, env=env)
+
+
+def test_generate_command(tmp_path):
+    out = tmp_path / "gen"
+    proc = run_cli("generate", "corridor", "--out", str(out), "--frames", "2", "--resolution", "80x60")
+    assert proc.returncode == 0, proc.stderr
+    assert f"wrote {out}" in proc.stdout
+    assert sorted(p.name for p in out.iterdir()) == [
+        "calib.txt", "image_0", "image_1", "manifest.json", "odometry.txt", "poses.txt", "times.txt"]
+
+
+@pytest.mark.parametrize(
+    "args, message",
+    [
+        (["generate", "nope"], "invalid choice: 'nope'"),
+        (["generate", "corridor", "--resolution", "big"], "expected WIDTHxHEIGHT"),
+        (["generate", "corridor", "--frames", "100000"], "frames must lie in 1..541 for corridor"),
+    ],
+)
+def test_generate_bad_arguments_exit_2_and_leave_nothing(tmp_path, args, message):
+    out = tmp_path / "gen"
+    proc = run_cli(*args, "--out", str(out))
+    assert proc.returncode == 2
+    assert message in proc.stderr
+    assert len(proc.stderr.strip().splitlines()[-1]) < 200
+    assert not out.exists() and list(tmp_path.iterdir()) == []

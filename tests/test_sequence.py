@@ -1,0 +1,160 @@
+import shutil
+from pathlib import Path
+
+import cv2
+import numpy as np
+import pytest
+
+from vo_lib.camera import StereoCamera
+from vo_lib.sequence import SequenceError, SequenceWriter, read_sequence, write_sequence
+
+FIXTURE = Path(__file__).resolve().parents[1] / "data" / "fixtures" / "kitti_tiny"
+
+
+@pytest.fixture
+def seq_dir(tmp_path, rng):
+    """A valid 4-frame sequence with every optional file."""
+    cam = StereoCamera(100.0, 100.0, 31.5, 23.5, 0.12, 64, 48)
+    left = [rng.integers(0, 256, (48, 64), dtype=np.uint8) for _ in range(4)]
+    right = [rng.integers(0, 256, (48, 64), dtype=np.uint8) for _ in range(4)]
+    poses = np.tile(np.eye(4), (4, 1, 1))
+    poses[:, 2, 3] = rng.normal(size=4)
+    odo = rng.normal(size=(4, 2)) * 0.01
+    path = write_sequence(tmp_path / "seq", cam, left, right, np.arange(4) / 30.0, poses, odo, {"k": 1})
+    return path, cam, left, right, poses, odo
+
+
+def test_round_trip_is_exact(seq_dir):
+    path, cam, left, right, poses, odo = seq_dir
+    seq = read_sequence(path)
+    assert len(seq) == 4 and seq.camera == cam
+    for k, (l_img, r_img) in enumerate(seq):
+        np.testing.assert_array_equal(l_img, left[k])
+        np.testing.assert_array_equal(r_img, right[k])
+    np.testing.assert_array_equal(seq.times, np.arange(4) / 30.0)
+    np.testing.assert_array_equal(seq.poses_4x4(), poses)
+    np.testing.assert_array_equal(seq.odometry, odo)
+    assert seq.manifest == {"k": 1}
+    assert [p.name for p in path.parent.iterdir()] == ["seq"]  # no temporary folder left
+
+
+def test_real_kitti_layout_loads_unchanged():
+    seq = read_sequence(FIXTURE)
+    assert len(seq) == 3 and seq.odometry is None
+    assert seq.camera.fx == pytest.approx(718.856) and seq.camera.cx == pytest.approx(607.1928)
+    assert seq.camera.baseline == pytest.approx(386.1448 / 718.856)
+    assert (seq.camera.width, seq.camera.height) == (62, 19)
+    np.testing.assert_allclose(seq.times, [0.0, 0.10364, 0.20728])
+    assert seq.poses.shape == (3, 3, 4) and seq.poses[2, 2, 3] == pytest.approx(1.716275)
+    assert seq.pair(1)[0].shape == (19, 62)
+
+
+def copy_fixture(tmp_path) -> Path:
+    dst = tmp_path / "kitti"
+    shutil.copytree(FIXTURE, dst)
+    return dst
+
+
+def edit_line(path: Path, line_no: int, text: str):
+    lines = path.read_text().splitlines()
+    lines[line_no - 1] = text
+    path.write_text("\n".join(lines) + "\n")
+
+
+def test_missing_folder(tmp_path):
+    with pytest.raises(SequenceError, match=r"nowhere: sequence folder not found"):
+        read_sequence(tmp_path / "nowhere")
+
+
+def test_unequal_image_counts(tmp_path):
+    d = copy_fixture(tmp_path)
+    (d / "image_1" / "000002.png").unlink()
+    with pytest.raises(SequenceError, match=r"image_0 has 3 images but image_1 has 2"):
+        read_sequence(d)
+
+
+def test_unreadable_and_empty_images(tmp_path):
+    d = copy_fixture(tmp_path)
+    (d / "image_0" / "000000.png").write_bytes(b"")
+    with pytest.raises(SequenceError, match=r"image_0/000000.png: cannot read the image"):
+        read_sequence(d)
+    d2 = copy_fixture(tmp_path / "b")
+    (d2 / "image_1" / "000002.png").write_bytes(b"not a png at all")
+    seq = read_sequence(d2)  # only the first frame is read up front
+    with pytest.raises(SequenceError, match=r"image_1/000002.png: cannot read the image"):
+        seq.pair(2)
+
+
+def test_left_and_right_of_different_sizes(tmp_path):
+    d = copy_fixture(tmp_path)
+    cv2.imwrite(str(d / "image_1" / "000000.png"), np.zeros((19, 60), np.uint8))
+    with pytest.raises(SequenceError, match=r"image_1/000000.png is 60x19 but .*image_0/000000.png is 62x19"):
+        read_sequence(d)
+
+
+def test_colour_is_converted_and_16_bit_is_refused(tmp_path):
+    d = copy_fixture(tmp_path)
+    colour = np.zeros((19, 62, 3), np.uint8)
+    colour[..., 1] = 200  # green
+    cv2.imwrite(str(d / "image_0" / "000001.png"), colour)
+    left, _ = read_sequence(d).pair(1)
+    assert left.shape == (19, 62) and 100 < left.mean() < 150  # grey of pure green
+    cv2.imwrite(str(d / "image_0" / "000000.png"), np.zeros((19, 62), np.uint16))
+    with pytest.raises(SequenceError, match=r"000000.png: uint16 image; expected 8-bit grey"):
+        read_sequence(d)
+
+
+def test_calib_with_wrong_count_and_missing_p1(tmp_path):
+    d = copy_fixture(tmp_path)
+    edit_line(d / "calib.txt", 2, "P1: 1 2 3")
+    with pytest.raises(SequenceError, match=r"calib.txt, line 2: P1 needs 12 numbers, got 3"):
+        read_sequence(d)
+    lines = (FIXTURE / "calib.txt").read_text().splitlines()
+    (d / "calib.txt").write_text("\n".join(x for x in lines if not x.startswith("P1")) + "\n")
+    with pytest.raises(SequenceError, match=r"calib.txt: no P1 line \(right camera projection"):
+        read_sequence(d)
+
+
+def test_non_monotonic_times(tmp_path):
+    d = copy_fixture(tmp_path)
+    edit_line(d / "times.txt", 3, "0.05")
+    with pytest.raises(SequenceError, match=r"times.txt, line 3: time 0.05 is not after 0.10364"):
+        read_sequence(d)
+
+
+def test_pose_count_differs_from_images(tmp_path):
+    d = copy_fixture(tmp_path)
+    lines = (d / "poses.txt").read_text().splitlines()
+    (d / "poses.txt").write_text("\n".join(lines[:2]) + "\n")
+    with pytest.raises(SequenceError, match=r"poses.txt has 2 poses but there are 3 images"):
+        read_sequence(d)
+
+
+@pytest.mark.parametrize(
+    "content, message",
+    [
+        ("0 0\n0.01 nan\n0.01 0.01\n", r"odometry.txt, line 2: delta_u_left delta_u_right holds a NaN"),
+        ("0 0\n0.01\n0.01 0.01\n", r"odometry.txt, line 2: delta_u_left delta_u_right needs 2 numbers, got 1"),
+        ("0 0\n0.01 0.01\n", r"odometry.txt has 2 lines but there are 3 images"),
+    ],
+)
+def test_bad_odometry(tmp_path, content, message):
+    d = copy_fixture(tmp_path)
+    (d / "odometry.txt").write_text(content)
+    with pytest.raises(SequenceError, match=message):
+        read_sequence(d)
+
+
+def test_failed_write_leaves_nothing_and_keeps_the_old_sequence(seq_dir):
+    path, cam, left, right, poses, odo = seq_dir
+    before = sorted(p.name for p in path.iterdir())
+    with pytest.raises(RuntimeError, match="interrupted"):
+        with SequenceWriter(path, cam) as writer:
+            writer.add(left[0], right[0])
+            raise RuntimeError("interrupted")
+    assert sorted(p.name for p in path.parent.iterdir()) == ["seq"]
+    assert sorted(p.name for p in path.iterdir()) == before
+    with pytest.raises(ValueError, match="images must be 2-D uint8 grey"):
+        with SequenceWriter(path.parent / "other", cam) as writer:
+            writer.add(np.zeros((4, 4), np.float32), np.zeros((4, 4), np.float32))
+    assert not (path.parent / "other").exists()
