@@ -34,7 +34,9 @@ def test_generation_is_deterministic(tmp_path):
 
 
 def test_ground_truth_poses_match_the_robot_poses(tmp_path):
-    seq = load_sequence(generate("indoor_free", tmp_path / "s", frames=5, resolution=(96, 72), progress=False))
+    seq = load_sequence(
+        generate("indoor_free", tmp_path / "s", frames=5, resolution=(96, 72), progress=False)
+    )
     robot = np.array(seq.manifest["robot_poses"])
     np.testing.assert_allclose(seq.poses_4x4(), camera_poses_from_robot(robot), atol=1e-12)
     # the camera looks along the robot's x axis: its z axis moves forward
@@ -49,7 +51,9 @@ def test_sample_path_names():
 
 def run_cli(*args, cwd=None):
     env = dict(os.environ)
-    return subprocess.run([sys.executable, "-m", "vo_lib", *args], capture_output=True, text=True, cwd=cwd, env=env)
+    return subprocess.run(
+        [sys.executable, "-m", "vo_lib", *args], capture_output=True, text=True, cwd=cwd, env=env
+    )
 
 
 def test_generate_command(tmp_path):
@@ -58,7 +62,14 @@ def test_generate_command(tmp_path):
     assert proc.returncode == 0, proc.stderr
     assert f"wrote {out}" in proc.stdout
     assert sorted(p.name for p in out.iterdir()) == [
-        "calib.txt", "image_0", "image_1", "manifest.json", "odometry.txt", "poses.txt", "times.txt"]
+        "calib.txt",
+        "image_0",
+        "image_1",
+        "manifest.json",
+        "odometry.txt",
+        "poses.txt",
+        "times.txt",
+    ]
 
 
 @pytest.mark.parametrize(

@@ -8,7 +8,9 @@ SQUARE = np.array([[-2, -2, 2, -2], [2, -2, 2, 2], [2, 2, -2, 2], [-2, 2, -2, -2
 
 
 def test_ranges_in_a_square_room_are_exact():
-    scanner = LaserScanner(fov=np.radians(360) - 1e-9, angular_step=np.radians(1), max_range=10, range_sigma=0)
+    scanner = LaserScanner(
+        fov=np.radians(360) - 1e-9, angular_step=np.radians(1), max_range=10, range_sigma=0
+    )
     scan = scanner.scan(SQUARE, (0.0, 0.0, 0.0))
     b = scan.bearings
     expected = 2.0 / np.maximum(np.abs(np.cos(b)), np.abs(np.sin(b)))

@@ -22,7 +22,9 @@ def test_drive_follows_the_plan_and_encoders_over_read():
 def test_spot_turn_slip_makes_odometry_over_turn():
     odo = TrackOdometry(encoder_sigma=0.0)
     slip = SlipModel(spot_turn_mean=0.06, spot_turn_difference=0.0, sigma=0.0)
-    drive = simulate_drive([Leg(600, 0.0, np.radians(18))], 30.0, (0, 0, 0), np.random.default_rng(2), odo, slip)
+    drive = simulate_drive(
+        [Leg(600, 0.0, np.radians(18))], 30.0, (0, 0, 0), np.random.default_rng(2), odo, slip
+    )
     truth = np.sum(np.diff(np.unwrap(drive.poses[:, 2])))
     believed = np.sum(odo.increment(drive.odometry)[1])
     assert believed == pytest.approx(truth / 0.94, rel=1e-9)

@@ -11,8 +11,12 @@ from vo_lib.world import WORLDS, Segment, World, box, corridor
 
 def plane_world(distance=3.0, slant=(2.0,)):
     """One textured wall ahead of the origin, slanted by moving its right end ``slant`` metres."""
-    return World("plane", (Segment((distance, -6.0), (distance + slant[0], 6.0), 6.0, texture_seed=5),),
-                 (-1, 8, -8, 8), 1)
+    return World(
+        "plane",
+        (Segment((distance, -6.0), (distance + slant[0], 6.0), 6.0, texture_seed=5),),
+        (-1, 8, -8, 8),
+        1,
+    )
 
 
 def test_texture_is_deterministic_by_seed():
@@ -46,8 +50,9 @@ def test_depth_of_a_frontal_wall_and_of_the_floor():
     cam = StereoCamera.bumblebee2()
     world = World("wall", (Segment((4.0, -10.0), (4.0, 10.0), 1.0, texture_seed=1),), (-5, 20, -20, 20), 2)
     height = 0.5
-    image, depth = StereoRenderer(world, cam).render(planar_to_matrix((0, 0, 0)) @ camera_mount(height=height),
-                                                     with_depth=True)
+    image, depth = StereoRenderer(world, cam).render(
+        planar_to_matrix((0, 0, 0)) @ camera_mount(height=height), with_depth=True
+    )
     # rows above the wall top (1.0 m) show the sky; rows of the wall read 4 m everywhere
     row_wall = int(cam.cy) - 20
     np.testing.assert_allclose(depth[row_wall], 4.0, rtol=1e-5)
@@ -62,8 +67,9 @@ def test_depth_of_a_frontal_wall_and_of_the_floor():
 def test_block_matching_agrees_with_ground_truth_disparity():
     cam = StereoCamera.bumblebee2()
     renderer = StereoRenderer(plane_world(), cam)
-    left, right, depth = renderer.render_pair(planar_to_matrix((0, 0, 0)) @ camera_mount(height=1.0),
-                                              with_depth=True)
+    left, right, depth = renderer.render_pair(
+        planar_to_matrix((0, 0, 0)) @ camera_mount(height=1.0), with_depth=True
+    )
     truth = cam.fx * cam.baseline / depth
     sgbm = cv2.StereoSGBM_create(0, 64, 5, P1=200, P2=800, uniquenessRatio=5, mode=cv2.STEREO_SGBM_MODE_HH)
     measured = sgbm.compute(left, right).astype(np.float32) / 16

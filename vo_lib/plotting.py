@@ -47,3 +47,47 @@ def plot_paths(ax, paths: dict, title: str = "", every: int = 0):
     if title:
         ax.set_title(title)
     ax.legend(loc="best", fontsize="small")
+
+
+KIND_COLOURS = {
+    "wall": "0.2",
+    "end wall": "0.2",
+    "building": "0.35",
+    "pillar": "C0",
+    "box": "C2",
+    "crate": "C2",
+    "cabinet": "C2",
+    "fire hydrant": "C3",
+    "cross wall": "C4",
+    "umbrella": "C1",
+}
+
+
+def plot_world(ax, world, title: str = ""):
+    """Plan view of a world's segments, coloured by kind; unmapped ones dashed."""
+    seen = set()
+    for seg in world.segments:
+        colour = KIND_COLOURS.get(seg.kind, "0.4")
+        label = seg.kind if seg.kind not in seen else None
+        seen.add(seg.kind)
+        ax.plot(
+            [seg.start[0], seg.end[0]],
+            [seg.start[1], seg.end[1]],
+            color=colour,
+            lw=2,
+            ls="--" if not seg.mapped else "-",
+            label=label,
+        )
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("y [m]")
+    ax.set_title(title or world.name)
+
+
+def plot_robot(ax, pose, size: float = 0.4, colour: str = "k"):
+    """A triangle at a planar pose, pointing along its heading."""
+    x, y, yaw = pose
+    pts = np.array([[size, 0], [-size / 2, size / 2.5], [-size / 2, -size / 2.5]])
+    c, s = np.cos(yaw), np.sin(yaw)
+    pts = pts @ np.array([[c, s], [-s, c]]) + (x, y)
+    ax.fill(pts[:, 0], pts[:, 1], color=colour, alpha=0.8)
