@@ -1,0 +1,275 @@
+"""Stereo front end: FAST corners, binary descriptors, matching along rows by Hamming distance.
+
+Per stereo pair (seed 000, III.A.1):
+
+1. FAST corners in the left image, spread by grid bucketing (the strongest few per cell) and
+   capped in number; FAST corners in the right image near the rows of the kept left ones.
+2. Binary descriptors (ORB's rBRIEF) at those corners.
+3. Left-right matching on the same row (within a row tolerance) and a disparity range, by
+   Hamming distance, with a distance ceiling, a ratio test and mutual (left-right) consistency.
+4. Sub-pixel disparity from a parabola through the block-matching cost at d-1, d, d+1.
+
+Output per frame: ``w = (u, v, d)`` per feature and its descriptor (:class:`StereoFeatures`).
+Hamming distances are computed only for candidate pairs, 64 bits at a time with
+``numpy.bitwise_count``; the same :func:`best_matches` serves the temporal matcher.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import cv2
+import numpy as np
+
+from vo_lib.camera import StereoCamera
+
+FAST_THRESHOLD = 40
+GRID = (8, 6)  # cells across, down
+MAX_FEATURES = 600
+RIGHT_FACTOR = 2.0  # right-image corners kept per left feature (the candidates for stereo matching)
+MAX_DISPARITY = 64.0  # pixels at 640 px width: about 0.9 m for the default rig
+ROW_TOLERANCE = 1.0  # pixels between left and right rows
+MAX_HAMMING = 60  # of 256 bits
+RATIO = 0.85  # best / second-best distance
+PATCH_HALF = 3  # 7x7 patches for sub-pixel refinement
+ORB_BORDER = 16  # ORB cannot describe corners closer than this to the border
+
+
+@dataclass
+class StereoFeatures:
+    """Stereo-matched features of one frame: ``w`` ``(N, 3)`` as u, v, d and ``descriptors`` ``(N, 32)``."""
+
+    w: np.ndarray
+    descriptors: np.ndarray
+    timings: dict = field(default_factory=dict)
+
+    def __len__(self) -> int:
+        return len(self.w)
+
+    @classmethod
+    def empty(cls) -> StereoFeatures:
+        return cls(np.zeros((0, 3)), np.zeros((0, 32), np.uint8))
+
+
+def hamming(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Hamming distances between paired rows of 32-byte descriptors."""
+    x = np.bitwise_xor(a.view(np.uint64), b.view(np.uint64))
+    return np.bitwise_count(x).sum(axis=1, dtype=np.int32)
+
+
+def best_matches(
+    ia,
+    ib,
+    dist,
+    n_a: int,
+    n_b: int,
+    max_distance: int = MAX_HAMMING,
+    ratio: float = RATIO,
+    mutual: bool = True,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Pick matches from candidate pairs ``(ia[k], ib[k])`` with Hamming distance ``dist[k]``.
+
+    For each ``a`` the nearest ``b`` is kept if it is within ``max_distance``, if the second
+    nearest is farther by the ``ratio`` test, and (with ``mutual``) if no other ``a`` is nearer
+    to that ``b``. Returns ``(index_a, index_b, distance)``.
+    """
+    ia, ib, dist = np.asarray(ia), np.asarray(ib), np.asarray(dist)
+    if len(dist) == 0:
+        empty = np.zeros(0, int)
+        return empty, empty, empty
+    order = np.lexsort((dist, ia))  # by a, then by distance
+    ia_s, ib_s, d_s = ia[order], ib[order], dist[order]
+    first = np.r_[True, ia_s[1:] != ia_s[:-1]]
+    starts = np.flatnonzero(first)
+    best_a, best_b, best_d = ia_s[starts], ib_s[starts], d_s[starts]
+    second = np.full(len(starts), np.iinfo(np.int32).max, dtype=np.int64)
+    has_second = np.r_[starts[1:], len(ia_s)] - starts > 1
+    second[has_second] = d_s[starts[has_second] + 1]
+    keep = (best_d <= max_distance) & (best_d < ratio * second)
+    best_a, best_b, best_d = best_a[keep], best_b[keep], best_d[keep]
+    if mutual and len(best_b):
+        # a b claimed by several a keeps the nearest; and that a must be b's nearest over all candidates
+        nearest_for_b = np.full(n_b, np.iinfo(np.int32).max, dtype=np.int64)
+        np.minimum.at(nearest_for_b, ib, dist)
+        keep = best_d <= nearest_for_b[best_b]
+        best_a, best_b, best_d = best_a[keep], best_b[keep], best_d[keep]
+        order = np.lexsort((best_d, best_b))
+        first_b = np.r_[True, best_b[order][1:] != best_b[order][:-1]]
+        sel = order[first_b]
+        best_a, best_b, best_d = best_a[sel], best_b[sel], best_d[sel]
+    return best_a, best_b, best_d
+
+
+def bucket(
+    points: np.ndarray,
+    response: np.ndarray,
+    width: int,
+    height: int,
+    grid=GRID,
+    max_features: int = MAX_FEATURES,
+) -> np.ndarray:
+    """Indices of at most ``max_features`` points, the strongest ones of each grid cell first."""
+    if len(points) == 0:
+        return np.zeros(0, int)
+    cx = np.minimum((points[:, 0] * grid[0] / width).astype(int), grid[0] - 1)
+    cy = np.minimum((points[:, 1] * grid[1] / height).astype(int), grid[1] - 1)
+    cell = cy * grid[0] + cx
+    order = np.lexsort((-response, cell))
+    cell_sorted = cell[order]
+    starts = np.searchsorted(cell_sorted, cell_sorted, side="left")
+    rank = np.arange(len(order)) - starts  # rank within the cell by response
+    per_cell = int(np.ceil(max_features / (grid[0] * grid[1])))
+    chosen = order[rank < per_cell]
+    if len(chosen) > max_features:
+        chosen = chosen[np.argsort(-response[chosen])[:max_features]]
+    return np.sort(chosen)
+
+
+def _subpixel_disparity(
+    left: np.ndarray, right: np.ndarray, u: np.ndarray, v: np.ndarray, d: np.ndarray
+) -> np.ndarray:
+    """Refine integer disparities by a parabola through the SAD cost at d-1, d, d+1 (7x7 patches)."""
+    h, w = left.shape
+    r = PATCH_HALF
+    offs = np.arange(-r, r + 1)
+    ui, vi, di = np.rint(u).astype(int), np.rint(v).astype(int), np.rint(d).astype(int)
+    ok = (
+        (vi - r >= 0)
+        & (vi + r < h)
+        & (ui - r >= 0)
+        & (ui + r < w)
+        & (ui - di - r - 1 >= 0)
+        & (ui - di + r + 1 < w)
+    )
+    out = d.astype(float).copy()
+    if not ok.any():
+        return out
+    rows = (vi[ok, None, None] + offs[None, :, None]).repeat(2 * r + 1, axis=2)
+    cols = ui[ok, None, None] + offs[None, None, :]
+    patch = left[rows, cols].astype(np.int32)
+    costs = [
+        np.abs(patch - right[rows, cols - di[ok, None, None] - k].astype(np.int32)).sum(axis=(1, 2))
+        for k in (-1, 0, 1)
+    ]
+    c_m, c_0, c_p = (c.astype(float) for c in costs)
+    denom = c_m - 2 * c_0 + c_p
+    shift = np.where(
+        (denom > 0) & (c_0 <= c_m) & (c_0 <= c_p), 0.5 * (c_m - c_p) / np.maximum(denom, 1e-9), 0.0
+    )
+    # cost index k corresponds to disparity d + k
+    out[ok] = di[ok] + np.clip(shift, -0.5, 0.5)
+    return out
+
+
+class StereoFrontEnd:
+    """Detect, describe and stereo-match features of rectified pairs.
+
+    Parameters
+    ----------
+    camera : StereoCamera
+    max_features : int
+        Cap on left features after bucketing.
+    fast_threshold : int
+        FAST intensity threshold.
+    max_disparity : float, optional
+        Largest disparity searched, pixels; defaults to :data:`MAX_DISPARITY` scaled to the image width.
+    """
+
+    def __init__(
+        self,
+        camera: StereoCamera,
+        max_features: int = MAX_FEATURES,
+        fast_threshold: int = FAST_THRESHOLD,
+        max_disparity: float | None = None,
+        grid=GRID,
+    ):
+        if camera.width is None or camera.height is None:
+            raise ValueError("the front end needs a camera with width and height")
+        if max_features <= 0:
+            raise ValueError(f"max_features must be > 0; got {max_features}")
+        self.camera = camera
+        self.max_features = max_features
+        self.grid = grid
+        self.max_disparity = (
+            MAX_DISPARITY * camera.width / 640 if max_disparity is None else float(max_disparity)
+        )
+        self.fast = cv2.FastFeatureDetector_create(fast_threshold, True)
+        self.orb = cv2.ORB_create(
+            nfeatures=int(RIGHT_FACTOR * max_features) + 1, nlevels=1, edgeThreshold=ORB_BORDER, patchSize=31
+        )
+
+    def _detect(self, image: np.ndarray):
+        kps = self.fast.detect(image)
+        if not kps:
+            return np.zeros((0, 2), np.float32), np.zeros(0, np.float32)
+        pts = cv2.KeyPoint_convert(kps).reshape(-1, 2)
+        resp = np.fromiter((k.response for k in kps), np.float32, len(kps))
+        h, w = image.shape
+        inside = (
+            (pts[:, 0] >= ORB_BORDER)
+            & (pts[:, 0] < w - ORB_BORDER)
+            & (pts[:, 1] >= ORB_BORDER)
+            & (pts[:, 1] < h - ORB_BORDER)
+        )
+        return pts[inside], resp[inside]
+
+    def _describe(self, image: np.ndarray, pts: np.ndarray):
+        if len(pts) == 0:
+            return np.zeros((0, 2), np.float32), np.zeros((0, 32), np.uint8)
+        kps, des = self.orb.compute(image, cv2.KeyPoint_convert(np.ascontiguousarray(pts, np.float32), 31.0))
+        if des is None or not kps:
+            return np.zeros((0, 2), np.float32), np.zeros((0, 32), np.uint8)
+        return cv2.KeyPoint_convert(kps).reshape(-1, 2), des
+
+    def process(self, left: np.ndarray, right: np.ndarray) -> StereoFeatures:
+        """Stereo features of one rectified pair, with per-stage timings in milliseconds."""
+        if left.shape != right.shape or left.ndim != 2:
+            raise ValueError(
+                f"left and right must be 2-D grey images of one size; got {left.shape}, {right.shape}"
+            )
+        h, w = left.shape
+        timings = {}
+        t0 = time.perf_counter()
+        pl, rl = self._detect(left)
+        keep = bucket(pl, rl, w, h, self.grid, self.max_features)
+        pl = pl[keep]
+        pr, rr = self._detect(right)
+        if len(pl) and len(pr):
+            # right corners only near the rows of the kept left corners
+            row_has_left = np.zeros(h + 2, bool)
+            rows = np.rint(pl[:, 1]).astype(int)
+            for k in range(-int(ROW_TOLERANCE), int(ROW_TOLERANCE) + 1):
+                row_has_left[np.clip(rows + k, 0, h - 1)] = True
+            near = row_has_left[np.rint(pr[:, 1]).astype(int)]
+            pr, rr = pr[near], rr[near]
+            pr = pr[bucket(pr, rr, w, h, self.grid, int(RIGHT_FACTOR * len(pl)))]
+        t1 = time.perf_counter()
+        pl, dl = self._describe(left, pl)
+        pr, dr = self._describe(right, pr)
+        t2 = time.perf_counter()
+        if len(pl) == 0 or len(pr) == 0:
+            timings.update(detect=(t1 - t0) * 1e3, describe=(t2 - t1) * 1e3, stereo_match=0.0)
+            return StereoFeatures(np.zeros((0, 3)), np.zeros((0, 32), np.uint8), timings)
+        ia, ib = self._row_candidates(pl, pr)
+        a, b, _ = best_matches(ia, ib, hamming(dl[ia], dr[ib]), len(pl), len(pr))
+        u, v = pl[a, 0].astype(float), pl[a, 1].astype(float)
+        d = _subpixel_disparity(left, right, u, v, (pl[a, 0] - pr[b, 0]).astype(float))
+        ok = d > 0
+        t3 = time.perf_counter()
+        timings.update(detect=(t1 - t0) * 1e3, describe=(t2 - t1) * 1e3, stereo_match=(t3 - t2) * 1e3)
+        return StereoFeatures(np.column_stack([u, v, d])[ok], dl[a][ok], timings)
+
+    def _row_candidates(self, pl: np.ndarray, pr: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """All (left, right) pairs on rows within the tolerance and disparities within the range."""
+        order = np.argsort(pr[:, 1], kind="stable")
+        vr = pr[order, 1]
+        lo = np.searchsorted(vr, pl[:, 1] - ROW_TOLERANCE, side="left")
+        hi = np.searchsorted(vr, pl[:, 1] + ROW_TOLERANCE, side="right")
+        counts = hi - lo
+        ia = np.repeat(np.arange(len(pl)), counts)
+        offsets = np.arange(counts.sum()) - np.repeat(np.cumsum(counts) - counts, counts)
+        ib = order[np.repeat(lo, counts) + offsets]
+        disp = pl[ia, 0] - pr[ib, 0]
+        ok = (disp >= 0.5) & (disp <= self.max_disparity)
+        return ia[ok], ib[ok]
