@@ -1,0 +1,102 @@
+"""Temporal matching between consecutive frames, guided by the filter's motion prediction.
+
+The Kalman filter predicts the circular motion ``(theta, rho)`` with a covariance ``C``. Every
+previous feature is moved by the predicted motion (eq. 15) and projected, giving a predicted
+``(u, v, d)``; its uncertainty is ``J C J^T`` with ``J`` the derivative of the prediction with
+respect to ``(theta, rho)``, plus the pixel noise. Current features are candidates only inside
+that window, and the nearest descriptor wins (ratio test, mutual check). Seed 000 matches "in
+the observation-prediction period" of the filter; this is that step. Without a prediction the
+matcher falls back to comparing every pair (brute force).
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from vo_lib.camera import StereoCamera
+from vo_lib.circular_motion import apply_motion
+from vo_lib.features import StereoFeatures, best_matches, hamming
+
+N_SIGMA = 3.0  # window half-width in standard deviations
+PIXEL_SIGMA = 1.0  # pixel noise of a feature position, added to the prediction's uncertainty
+MIN_RADIUS = 4.0  # pixels
+MAX_RADIUS = 120.0  # pixels
+NEAR = 0.1  # metres: predicted points nearer than this are not matched
+
+
+@dataclass(frozen=True)
+class MotionPrior:
+    """A predicted circular motion and its 2x2 covariance (theta, rho)."""
+
+    theta: float
+    rho: float
+    covariance: np.ndarray
+
+
+@dataclass
+class TemporalMatches:
+    """Index pairs into the previous and current features, their ``w``, and diagnostics."""
+
+    idx_prev: np.ndarray
+    idx_curr: np.ndarray
+    w_prev: np.ndarray
+    w_curr: np.ndarray
+    candidates: int
+    timings: dict = field(default_factory=dict)
+
+    def __len__(self) -> int:
+        return len(self.idx_prev)
+
+
+def predict_features(w_prev: np.ndarray, camera: StereoCamera, theta: float, rho: float):
+    """Predicted ``(u, v, d)`` of previous features after the motion, and which are in front."""
+    P = camera.backproject(w_prev)
+    Q = apply_motion(P, theta, rho)
+    ok = Q[:, 2] > NEAR
+    w = np.full_like(Q, np.nan)
+    w[ok] = camera.project(Q[ok])
+    return w, ok
+
+
+def prediction_sigma(w_prev: np.ndarray, camera: StereoCamera, prior: MotionPrior) -> np.ndarray:
+    """Standard deviation ``(N, 3)`` of each predicted ``(u, v, d)``: sqrt(diag(J C J^T)) + pixel noise."""
+    base, _ = predict_features(w_prev, camera, prior.theta, prior.rho)
+    h_theta, h_rho = 1e-5, 1e-5
+    d_theta = (predict_features(w_prev, camera, prior.theta + h_theta, prior.rho)[0] - base) / h_theta
+    d_rho = (predict_features(w_prev, camera, prior.theta, prior.rho + h_rho)[0] - base) / h_rho
+    C = np.asarray(prior.covariance, dtype=float)
+    var = d_theta**2 * C[0, 0] + 2 * d_theta * d_rho * C[0, 1] + d_rho**2 * C[1, 1]
+    return np.sqrt(np.nan_to_num(var, nan=np.inf) + PIXEL_SIGMA**2)
+
+
+def match_temporal(
+    prev: StereoFeatures, curr: StereoFeatures, camera: StereoCamera, prior: MotionPrior | None = None
+) -> TemporalMatches:
+    """Match features of the previous frame to the current one.
+
+    With a ``prior`` only candidates inside each feature's predicted window are compared;
+    without one, every pair is (brute force).
+    """
+    t0 = time.perf_counter()
+    n_prev, n_curr = len(prev), len(curr)
+    if n_prev == 0 or n_curr == 0:
+        empty = np.zeros(0, int)
+        return TemporalMatches(empty, empty, np.zeros((0, 3)), np.zeros((0, 3)), 0, {"temporal_match": 0.0})
+    if prior is None:
+        ia = np.repeat(np.arange(n_prev), n_curr)
+        ib = np.tile(np.arange(n_curr), n_prev)
+    else:
+        pred, _ = predict_features(prev.w, camera, prior.theta, prior.rho)
+        radius = np.clip(N_SIGMA * prediction_sigma(prev.w, camera, prior), MIN_RADIUS, MAX_RADIUS)
+        du = np.abs(curr.w[None, :, 0] - pred[:, None, 0])
+        inside = du <= radius[:, None, 0]
+        inside &= np.abs(curr.w[None, :, 1] - pred[:, None, 1]) <= radius[:, None, 1]
+        inside &= np.abs(curr.w[None, :, 2] - pred[:, None, 2]) <= radius[:, None, 2]
+        ia, ib = np.nonzero(inside)
+    dist = hamming(prev.descriptors[ia], curr.descriptors[ib])
+    a, b, _ = best_matches(ia, ib, dist, n_prev, n_curr)
+    elapsed = (time.perf_counter() - t0) * 1e3
+    return TemporalMatches(a, b, prev.w[a], curr.w[b], len(ia), {"temporal_match": elapsed})
