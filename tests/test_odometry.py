@@ -147,3 +147,14 @@ def test_bad_arguments():
         ODO.predict([0.0, 0.0], [0.1, 0.1])
     with pytest.raises(ValueError, match=r"controls must have shape \(K, 2\)"):
         ODO.integrate(np.zeros(4))
+
+
+def test_scalar_step_equals_the_vectorised_methods(rng):
+    for _ in range(20):
+        x = np.array([*rng.normal(size=2), rng.uniform(-3, 3)])
+        u = rng.uniform(-0.2, 0.2, 2)
+        new, F_x, F_u = ODO.step(x, u)
+        np.testing.assert_allclose(new, ODO.predict(x, u), atol=1e-15)
+        J_x, J_u = ODO.jacobians(x, u)
+        np.testing.assert_allclose(F_x, J_x, atol=1e-15)
+        np.testing.assert_allclose(F_u, J_u, atol=1e-15)

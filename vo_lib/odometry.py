@@ -164,6 +164,26 @@ class TrackOdometry:
         F_u[..., 2, 1] = 1.0 / g
         return F_x, F_u
 
+    def step(self, state, u) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """One pose, one control pair: ``(predicted state, F_x, F_u)`` in a single pass.
+
+        The same quantities as :meth:`predict` and :meth:`jacobians`, computed with scalar
+        arithmetic for the one-pose-per-frame use of a Kalman filter, where array overhead dominates.
+        """
+        x, y, theta = (float(v) for v in state)
+        du_left, du_right = float(u[0]), float(u[1])
+        g = self.gauge
+        du, dtheta = 0.5 * (du_right + du_left), (du_right - du_left) / g
+        a = theta + 0.5 * dtheta
+        c, s = math.cos(a), math.sin(a)
+        new = np.array([x + du * c, y + du * s, float(wrap_angle(theta + dtheta))])
+        F_x = np.array([[1.0, 0.0, -du * s], [0.0, 1.0, du * c], [0.0, 0.0, 1.0]])
+        k = du / (2.0 * g)
+        F_u = np.array(
+            [[0.5 * c + k * s, 0.5 * c - k * s], [0.5 * s - k * c, 0.5 * s + k * c], [-1.0 / g, 1.0 / g]]
+        )
+        return new, F_x, F_u
+
     def control_covariance(self, u) -> np.ndarray:
         """Covariance ``M`` of the measured track distances: independent, variance ``sigma^2 |du_i|``."""
         du_left, du_right = _controls(u)

@@ -1,0 +1,159 @@
+"""General-purpose motion estimators, run on the same matches as the 1-point method.
+
+* :func:`rigid_ransac`: 3-point RANSAC on 3-D to 3-D matches (Kabsch/Umeyama fit, 6 DoF).
+* :func:`pnp_ransac`: OpenCV ``solvePnPRansac``, previous 3-D points to current pixels (6 DoF).
+* :func:`essential_ransac`: OpenCV's 5-point essential-matrix RANSAC (monocular: rotation and the
+  direction of translation, no scale).
+
+Each returns a :class:`MotionEstimate` whose ``theta`` and ``rho`` are those of the planar
+circular motion closest to its rigid motion, so all estimators compare on one footing.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from vo_lib.camera import StereoCamera
+from vo_lib.circular_motion import circular_motion_from_transform
+from vo_lib.ransac import CONFIDENCE, hypotheses_needed
+
+REPROJECTION_THRESHOLD = (
+    3.0  # pixels, in (u, v, d) for the rigid fit and (u, v) for PnP: ~99 % of two noisy views
+)
+MAX_ITERATIONS = 1000
+
+
+@dataclass
+class MotionEstimate:
+    """A rigid motion ``P' = R P + t`` with its planar ``(theta, rho)`` and inlier mask."""
+
+    R: np.ndarray
+    t: np.ndarray
+    inliers: np.ndarray
+    success: bool
+
+    @property
+    def transform(self) -> np.ndarray:
+        T = np.eye(4)
+        T[:3, :3], T[:3, 3] = self.R, self.t
+        return T
+
+    @property
+    def theta(self) -> float:
+        return circular_motion_from_transform(self.transform)[0]
+
+    @property
+    def rho(self) -> float:
+        return circular_motion_from_transform(self.transform)[1]
+
+
+def kabsch(P: np.ndarray, Q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Least-squares rotation and translation with ``Q ~ R P + t``; batched over leading axes."""
+    mp, mq = P.mean(axis=-2, keepdims=True), Q.mean(axis=-2, keepdims=True)
+    H = np.swapaxes(P - mp, -1, -2) @ (Q - mq)
+    U, _, Vt = np.linalg.svd(H)
+    D = np.ones(H.shape[:-1])
+    D[..., -1] = np.sign(np.linalg.det(np.swapaxes(Vt, -1, -2) @ np.swapaxes(U, -1, -2)))
+    R = np.swapaxes(Vt, -1, -2) @ (D[..., :, None] * np.swapaxes(U, -1, -2))
+    t = mq[..., 0, :] - (R @ mp[..., 0, :, None])[..., 0]
+    return R, t
+
+
+def _reprojection_error(P, w_curr, R, t, camera):
+    """Distance in (u, v, d) between ``w_curr`` and the projection of ``R P + t``; batched over R, t."""
+    Q = P @ np.swapaxes(R, -1, -2) + t[..., None, :]
+    z = np.where(Q[..., 2] > 1e-6, Q[..., 2], np.nan)
+    du = camera.cx + camera.fx * Q[..., 0] / z - w_curr[:, 0]
+    dv = camera.cy + camera.fy * Q[..., 1] / z - w_curr[:, 1]
+    dd = camera.fx * camera.baseline / z - w_curr[:, 2]
+    return np.nan_to_num(np.sqrt(du * du + dv * dv + dd * dd), nan=np.inf)
+
+
+def rigid_ransac(
+    w_prev,
+    w_curr,
+    camera: StereoCamera,
+    rng=None,
+    threshold: float = REPROJECTION_THRESHOLD,
+    confidence: float = CONFIDENCE,
+    max_iterations: int = MAX_ITERATIONS,
+) -> MotionEstimate:
+    """3-point RANSAC on back-projected points; hypotheses scored in batches, refit on all inliers."""
+    rng = np.random.default_rng(rng)
+    a, b = np.asarray(w_prev, float), np.asarray(w_curr, float)
+    P, Q = camera.backproject(a), camera.backproject(b)
+    n = len(P)
+    best_count, best = -1, None
+    tried, limit = 0, min(hypotheses_needed(0.5, confidence, 3), max_iterations)
+    while tried < limit:
+        k = limit - tried
+        idx = np.stack([rng.choice(n, 3, replace=False) for _ in range(k)])
+        R, t = kabsch(P[idx], Q[idx])
+        counts = (_reprojection_error(P, b, R, t, camera) <= threshold).sum(axis=1)
+        j = int(np.argmax(counts))
+        if counts[j] > best_count:
+            best_count, best = int(counts[j]), (R[j], t[j])
+        tried += k
+        limit = min(hypotheses_needed(max(best_count, 1) / n, confidence, 3), max_iterations)
+    inliers = _reprojection_error(P, b, best[0], best[1], camera) <= threshold
+    if inliers.sum() >= 3:
+        R, t = kabsch(P[inliers], Q[inliers])
+        inliers = _reprojection_error(P, b, R, t, camera) <= threshold
+        best = (R, t)
+    return MotionEstimate(best[0], best[1], inliers, bool(inliers.sum() >= 3))
+
+
+def pnp_ransac(
+    w_prev,
+    w_curr,
+    camera: StereoCamera,
+    threshold: float = REPROJECTION_THRESHOLD,
+    confidence: float = CONFIDENCE,
+    max_iterations: int = 100,
+    seed: int = 0,
+) -> MotionEstimate:
+    """OpenCV ``solvePnPRansac`` from previous 3-D points to current pixels (EPnP hypotheses,
+    iterative refinement on the inliers)."""
+    a, b = np.asarray(w_prev, float), np.asarray(w_curr, float)
+    P = camera.backproject(a)
+    cv2.setRNGSeed(seed)
+    ok, rvec, tvec, idx = cv2.solvePnPRansac(
+        P.astype(np.float64),
+        b[:, :2].astype(np.float64),
+        camera.K,
+        None,
+        iterationsCount=max_iterations,
+        reprojectionError=threshold,
+        confidence=confidence,
+        flags=cv2.SOLVEPNP_EPNP,
+    )
+    inliers = np.zeros(len(a), bool)
+    if not ok or idx is None:
+        return MotionEstimate(np.eye(3), np.zeros(3), inliers, False)
+    inliers[idx.ravel()] = True
+    rvec, tvec = cv2.solvePnPRefineLM(P[inliers], b[inliers, :2], camera.K, None, rvec, tvec)
+    return MotionEstimate(cv2.Rodrigues(rvec)[0], tvec.ravel(), inliers, True)
+
+
+def essential_ransac(
+    w_prev,
+    w_curr,
+    camera: StereoCamera,
+    threshold: float = 1.0,
+    confidence: float = CONFIDENCE,
+    seed: int = 0,
+) -> MotionEstimate:
+    """OpenCV 5-point essential-matrix RANSAC and ``recoverPose``: rotation, and translation of unit
+    length (a monocular camera cannot see scale)."""
+    a, b = np.asarray(w_prev, float), np.asarray(w_curr, float)
+    cv2.setRNGSeed(seed)
+    E, mask = cv2.findEssentialMat(a[:, :2], b[:, :2], camera.K, cv2.RANSAC, confidence, threshold)
+    inliers = np.zeros(len(a), bool)
+    if E is None or E.shape != (3, 3):
+        return MotionEstimate(np.eye(3), np.zeros(3), inliers, False)
+    _, R, t, mask = cv2.recoverPose(E, a[:, :2], b[:, :2], camera.K, mask=mask)
+    inliers = mask.ravel() > 0
+    return MotionEstimate(R, t.ravel(), inliers, True)

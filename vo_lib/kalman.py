@@ -1,0 +1,180 @@
+"""Kalman filter fusing crawler track odometry with visual odometry (seed 000, eq. 1-11, III.A.2-4).
+
+The state is the planar pose ``(x, y, yaw)``. Visual odometry measures the *relative* motion
+between two frames, ``(theta, rho)`` of the circular-motion model, which depends on the current
+pose and on the previous one. To update the current pose with it consistently, the filter keeps a
+copy of the previous pose in the state while the frame is processed (stochastic cloning): a
+6-dimensional state ``[pose_k, pose_k-1]`` whose cross-covariance records how the two are tied.
+
+* **predict** clones the pose and moves the first copy with the track odometry (eq. 6-11, full
+  Jacobians, encoder noise plus slip), or, without odometry, with the last motion repeated
+  (constant velocity) and a wider process noise;
+* **motion_prior** is the predicted ``(theta, rho)`` with its covariance, the prior that guides
+  temporal matching and is scored by the 1-point RANSAC;
+* **update** applies the VO measurement through filterpy's ``ExtendedKalmanFilter.update``
+  (Joseph-form covariance update);
+* a frame without a VO measurement keeps the prediction (covariance grows) and is flagged.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from filterpy.kalman import ExtendedKalmanFilter
+
+from vo_lib.geometry import compose_planar, wrap_angle
+from vo_lib.odometry import TrackOdometry
+from vo_lib.temporal import MotionPrior
+
+#: Slip as a standard deviation per metre a track travels (on top of the encoder noise).
+SLIP_SIGMA = 0.01
+#: Constant-velocity process noise per frame: (along, across, yaw) standard deviations.
+CV_SIGMA = (0.01, 0.005, math.radians(0.3))
+
+
+def _increment(state6: np.ndarray) -> tuple[float, float, float]:
+    """``(dx, dy, dyaw)`` from the cloned previous pose to the current one, in the previous frame."""
+    x, y, yaw, xp, yp, yawp = (float(v) for v in state6)
+    c, s = math.cos(yawp), math.sin(yawp)
+    return c * (x - xp) + s * (y - yp), -s * (x - xp) + c * (y - yp), float(wrap_angle(yaw - yawp))
+
+
+def measurement(state6: np.ndarray) -> np.ndarray:
+    """``(theta, rho)`` of the motion from the cloned previous pose to the current one."""
+    dx, dy, theta = _increment(state6)
+    return np.array([theta, dx * math.cos(0.5 * theta) + dy * math.sin(0.5 * theta)])
+
+
+def measurement_jacobian(state6: np.ndarray) -> np.ndarray:
+    """Analytic 2x6 derivative of :func:`measurement` with respect to ``[pose_k, pose_k-1]``:
+    ``rho = dx cos(theta/2) + dy sin(theta/2)`` with ``(dx, dy)`` the increment in the old frame."""
+    dx, dy, theta = _increment(state6)
+    sp, cp = math.sin(0.5 * theta), math.cos(0.5 * theta)
+    a = float(state6[5]) + 0.5 * theta
+    ca, sa = math.cos(a), math.sin(a)
+    d_yaw = 0.5 * (dy * cp - dx * sp)
+    return np.array([[0.0, 0.0, 1.0, 0.0, 0.0, -1.0], [ca, sa, d_yaw, -ca, -sa, d_yaw]])
+
+
+def _residual(z, hx):
+    y = np.asarray(z, float) - hx
+    y[0] = wrap_angle(y[0])
+    return y
+
+
+@dataclass
+class StepFlags:
+    """What the last frame used: ``odometry`` or constant velocity, and whether VO updated it."""
+
+    odometry: bool = False
+    vo_update: bool = False
+
+
+class VoKalmanFilter:
+    """Planar pose filter: track odometry predicts, visual odometry corrects.
+
+    Parameters
+    ----------
+    odometry : TrackOdometry
+        The crawler's odometry model (eq. 2-11) and encoder noise.
+    pose : (x, y, yaw)
+        Initial pose.
+    covariance : 3x3, optional
+        Initial covariance (default: nearly certain).
+    slip_sigma : float
+        Slip uncertainty per metre of track travel, added to the encoder noise.
+    cv_sigma : (float, float, float)
+        Constant-velocity process noise per frame when no odometry is given.
+    """
+
+    def __init__(
+        self,
+        odometry: TrackOdometry | None = None,
+        pose=(0.0, 0.0, 0.0),
+        covariance=None,
+        slip_sigma: float = SLIP_SIGMA,
+        cv_sigma=CV_SIGMA,
+    ):
+        self.odometry = odometry or TrackOdometry()
+        self.slip_sigma = float(slip_sigma)
+        self.cv_sigma = np.asarray(cv_sigma, float)
+        self.ekf = ExtendedKalmanFilter(dim_x=6, dim_z=2)
+        P = np.diag([1e-8, 1e-8, 1e-10]) if covariance is None else np.asarray(covariance, float)
+        self.ekf.x = np.concatenate([np.asarray(pose, float), np.asarray(pose, float)])
+        self.ekf.P = np.block([[P, P], [P, P]])
+        self.last_increment = np.zeros(3)
+        self.flags = StepFlags()
+
+    # ------------------------------------------------------------------ state
+    @property
+    def pose(self) -> np.ndarray:
+        return self.ekf.x[:3].copy()
+
+    @property
+    def covariance(self) -> np.ndarray:
+        return self.ekf.P[:3, :3].copy()
+
+    def control_covariance(self, u) -> np.ndarray:
+        """Encoder noise (random walk) plus slip, independent per track."""
+        enc, slip = self.odometry.encoder_sigma**2, self.slip_sigma**2
+        return np.diag([enc * abs(u[0]) + slip * u[0] ** 2, enc * abs(u[1]) + slip * u[1] ** 2])
+
+    # ------------------------------------------------------------------ predict
+    def predict(self, u=None) -> None:
+        """Clone the pose and move the clone's twin with odometry ``u`` (or constant velocity)."""
+        x = self.ekf.x[:3].copy()
+        P = self.ekf.P[:3, :3]
+        if u is not None:
+            u = np.asarray(u, float)
+            x_new, F, G = self.odometry.step(x, u)  # eq. 6-11 and their full Jacobians (notebook 01)
+            Q = G @ self.control_covariance(u) @ G.T
+            self.flags = StepFlags(odometry=True)
+        else:
+            inc = self.last_increment
+            x_new = compose_planar(x, inc)
+            c, s = math.cos(x[2]), math.sin(x[2])
+            F = np.array(
+                [[1.0, 0.0, -s * inc[0] - c * inc[1]], [0.0, 1.0, c * inc[0] - s * inc[1]], [0, 0, 1.0]]
+            )
+            Rw = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+            Q = Rw @ np.diag(self.cv_sigma**2) @ Rw.T
+            self.flags = StepFlags(odometry=False)
+        FP = F @ P
+        self.ekf.x = np.concatenate([x_new, x])
+        P6 = np.empty((6, 6))
+        P6[:3, :3] = FP @ F.T + Q
+        P6[:3, 3:] = FP
+        P6[3:, :3] = FP.T
+        P6[3:, 3:] = P
+        self.ekf.P = P6
+
+    def motion_prior(self) -> MotionPrior:
+        """Predicted ``(theta, rho)`` of this frame and its covariance ``H P H^T``."""
+        H = measurement_jacobian(self.ekf.x)
+        z = measurement(self.ekf.x)
+        return MotionPrior(float(z[0]), float(z[1]), H @ self.ekf.P @ H.T)
+
+    # ------------------------------------------------------------------ update
+    def update(self, theta: float, rho: float, covariance) -> None:
+        """Correct with a VO measurement ``(theta, rho)`` of this frame's motion."""
+        self.ekf.update(
+            np.array([theta, rho]),
+            measurement_jacobian,
+            measurement,
+            R=np.asarray(covariance, float),
+            residual=_residual,
+        )
+        self.ekf.x[2] = wrap_angle(self.ekf.x[2])
+        self.flags.vo_update = True
+
+    def finish_frame(self) -> None:
+        """Remember this frame's motion (for constant velocity) before the next predict."""
+        self.last_increment = np.array(_increment(self.ekf.x))
+
+    def nees(self, true_pose) -> float:
+        """Normalised estimation error squared of the pose against ``true_pose``."""
+        e = np.asarray(true_pose, float) - self.pose
+        e[2] = wrap_angle(e[2])
+        return float(e @ np.linalg.solve(self.covariance, e))
