@@ -50,10 +50,15 @@ class MotionEstimate:
         return circular_motion_from_transform(self.transform)[1]
 
 
-def kabsch(P: np.ndarray, Q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Least-squares rotation and translation with ``Q ~ R P + t``; batched over leading axes."""
-    mp, mq = P.mean(axis=-2, keepdims=True), Q.mean(axis=-2, keepdims=True)
-    H = np.swapaxes(P - mp, -1, -2) @ (Q - mq)
+def kabsch(P: np.ndarray, Q: np.ndarray, weights=None) -> tuple[np.ndarray, np.ndarray]:
+    """Least-squares rotation and translation with ``Q ~ R P + t``; batched over leading axes.
+
+    ``weights`` (one per point) weigh the squared residuals, e.g. by inverse depth variance.
+    """
+    wts = np.ones(P.shape[:-1]) if weights is None else np.broadcast_to(weights, P.shape[:-1])
+    wn = (wts / wts.sum(axis=-1, keepdims=True))[..., None]
+    mp, mq = (wn * P).sum(axis=-2, keepdims=True), (wn * Q).sum(axis=-2, keepdims=True)
+    H = np.swapaxes(wn * (P - mp), -1, -2) @ (Q - mq)
     U, _, Vt = np.linalg.svd(H)
     D = np.ones(H.shape[:-1])
     D[..., -1] = np.sign(np.linalg.det(np.swapaxes(Vt, -1, -2) @ np.swapaxes(U, -1, -2)))
@@ -100,7 +105,9 @@ def rigid_ransac(
         limit = min(hypotheses_needed(max(best_count, 1) / n, confidence, 3), max_iterations)
     inliers = _reprojection_error(P, b, best[0], best[1], camera) <= threshold
     if inliers.sum() >= 3:
-        R, t = kabsch(P[inliers], Q[inliers])
+        # refit on all inliers, each weighted by its inverse depth variance (z^2 grows as 1/d^4)
+        weights = 1.0 / (1.0 / a[inliers, 2] ** 4 + 1.0 / b[inliers, 2] ** 4)
+        R, t = kabsch(P[inliers], Q[inliers], weights)
         inliers = _reprojection_error(P, b, R, t, camera) <= threshold
         best = (R, t)
     return MotionEstimate(best[0], best[1], inliers, bool(inliers.sum() >= 3))

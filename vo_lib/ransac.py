@@ -28,7 +28,10 @@ grows as ``z^2``, so again per match, plus the hypothesis' own uncertainty).
 Hypotheses are drawn from the best-conditioned half of the matches, scored all at once, and
 drawn until ``log(1 - p) / log(1 - w)`` of them have been tried for the best inlier ratio ``w``
 found. The winner is refined on all inliers by Gauss-Newton least squares on the reprojection
-errors in disparity space, both ways, where pixel noise is uniform.
+errors in disparity space, both ways, where pixel noise is uniform; the refined motion then
+decides the final inliers with the theta gate and with eq. 21 *whitened*: a back-projected
+point is uncertain mostly along its ray (metres, far away) and little across it (millimetres),
+so the residual is compared in (u, v, d), where its noise is the same in every direction.
 """
 
 from __future__ import annotations
@@ -44,6 +47,8 @@ from vo_lib.circular_motion import motion_matrices, rho_from_pixels, theta_from_
 from vo_lib.geometry import as_match_array
 
 GATE_SIGMAS = 3.0  # a match is an inlier within this many standard deviations of each gate
+#: Final gate on the whitened eq. 21 residual, a 3-vector: sqrt of chi-square(3) at 99.7 %.
+WHITENED_GATE = 3.76
 PIXEL_SIGMA = 0.5  # pixel noise of u, v and d assumed by the gates
 CONFIDENCE = 0.999  # probability of drawing at least one all-inlier hypothesis
 MAX_HYPOTHESES = 200
@@ -378,9 +383,18 @@ def one_point_ransac(
         e = _theta_gate(ta, beta_a, tb, beta_b, 0.5 * theta)
         slope = (_theta_gate(ta, beta_a, tb, beta_b, 0.5 * (theta + h)) - e) / h
         new = theta_gate_pass(e, slope, theta, covariance[0, 0])
+        # eq. 21 whitened: a point's noise is long along its ray and short across it, so the residual
+        # P' - (R P + T) is tested where its noise is uniform, projected into (u, v, d)
         R, T = motion_matrices(theta, rho)
-        res = Q - P @ R.T - T  # eq. 21
-        new &= np.einsum("nk,nk->n", res, res) <= k2 * (var_point + covariance[1, 1])
+        moved = P @ R.T + T
+        with np.errstate(divide="ignore", invalid="ignore"):
+            iz = 1.0 / moved[:, 2]
+            r2 = (
+                (fx * moved[:, 0] * iz - du2) ** 2
+                + (fy * moved[:, 1] * iz - dv2) ** 2
+                + (fx * B * iz - bu[:, 2]) ** 2
+            )
+        new &= (moved[:, 2] > 0) & (r2 <= WHITENED_GATE**2 * 2.0 * pixel_sigma**2)
         changed = not np.array_equal(new, keep)
         keep = new
         if not changed:

@@ -1,0 +1,94 @@
+import math
+
+import numpy as np
+import pytest
+from scipy.stats import chi2
+
+from vo_lib.kalman import VoKalmanFilter, measurement, measurement_jacobian
+from vo_lib.odometry import TrackOdometry
+
+ODO = TrackOdometry()
+R_VO = np.diag([math.radians(0.05) ** 2, 0.002**2])
+
+
+P0 = np.diag([0.01**2, 0.01**2, math.radians(0.5) ** 2])
+
+
+def simulate(kf, rng, steps, vo_every=1, odometry=True):
+    truth, nees = kf.pose + rng.multivariate_normal(np.zeros(3), kf.covariance), []
+    for k in range(steps):
+        u_true = ODO.controls_for(0.02 + 0.01 * math.sin(k / 20), math.radians(1.0) * math.sin(k / 30))
+        u_meas = u_true + rng.multivariate_normal(np.zeros(2), kf.control_covariance(u_true))
+        prev, truth = truth, ODO.predict(truth, u_true)
+        kf.predict(u_meas if odometry else None)
+        if vo_every and k % vo_every == 0:
+            z = measurement(np.concatenate([truth, prev])) + rng.multivariate_normal(np.zeros(2), R_VO)
+            kf.update(z[0], z[1], R_VO)
+        kf.finish_frame()
+        nees.append(kf.nees(truth))
+    return np.array(nees)
+
+
+def test_nees_of_fused_filter_lies_in_the_95_percent_band():
+    runs, steps = 50, 200
+    # the initial truth is drawn from the initial covariance, so NEES is chi-square(3) from the start
+    nees = np.array(
+        [
+            simulate(VoKalmanFilter(ODO, covariance=P0), np.random.default_rng(1000 + r), steps)
+            for r in range(runs)
+        ]
+    )
+    avg = nees.mean(axis=0)
+    lo, hi = chi2.ppf([0.025, 0.975], 3 * runs) / runs
+    assert lo < avg.mean() < hi
+    assert np.mean((avg > lo) & (avg < hi)) >= 0.9
+
+
+def test_odometry_only_covariance_grows_and_frames_are_flagged():
+    kf = VoKalmanFilter(ODO)
+    rng = np.random.default_rng(3)
+    simulate(kf, rng, 50, vo_every=0)
+    first = kf.covariance.trace()
+    assert not kf.flags.vo_update and kf.flags.odometry
+    simulate(kf, rng, 50, vo_every=0)
+    assert kf.covariance.trace() > first
+
+
+def test_vo_update_shrinks_the_uncertainty():
+    kf_odo, kf_fused = VoKalmanFilter(ODO), VoKalmanFilter(ODO)
+    simulate(kf_odo, np.random.default_rng(4), 100, vo_every=0)
+    simulate(kf_fused, np.random.default_rng(4), 100, vo_every=1)
+    assert kf_fused.covariance[2, 2] < 0.2 * kf_odo.covariance[2, 2]
+
+
+def test_constant_velocity_without_odometry():
+    kf = VoKalmanFilter(ODO)
+    kf.predict(None)
+    kf.update(0.01, 0.05, R_VO)
+    kf.finish_frame()
+    kf.predict(None)  # repeats the last motion
+    prior = kf.motion_prior()
+    assert prior.theta == pytest.approx(0.01, abs=1e-3) and prior.rho == pytest.approx(0.05, abs=2e-3)
+    assert not kf.flags.odometry
+
+
+def test_measurement_jacobian_matches_finite_differences(rng):
+    for _ in range(20):
+        x = np.concatenate(
+            [rng.normal(size=2), [rng.uniform(-3, 3)], rng.normal(size=2), [rng.uniform(-3, 3)]]
+        )
+        J = measurement_jacobian(x)
+        num = np.column_stack(
+            [(measurement(x + 1e-6 * e) - measurement(x - 1e-6 * e)) / 2e-6 for e in np.eye(6)]
+        )
+        np.testing.assert_allclose(J, num, atol=1e-6)
+
+
+def test_prior_matches_odometry_prediction():
+    kf = VoKalmanFilter(ODO)
+    u = ODO.controls_for(0.05, 0.02)
+    kf.predict(u)
+    prior = kf.motion_prior()
+    # eq. 2-3 move the centre by du along the midpoint heading: the chord of eq. 15 is du itself
+    assert prior.theta == pytest.approx(0.02) and prior.rho == pytest.approx(0.05, rel=1e-9)
+    assert prior.covariance[0, 0] > 0 and prior.covariance[1, 1] > 0

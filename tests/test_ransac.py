@@ -1,0 +1,119 @@
+import math
+
+import numpy as np
+import pytest
+
+from vo_lib.baselines import essential_ransac, kabsch, pnp_ransac, rigid_ransac
+from vo_lib.circular_motion import motion_matrices
+from vo_lib.ransac import (
+    histogram_voting,
+    hypotheses_needed,
+    one_point_ransac,
+    refine_motion,
+    rho_gate_error,
+    theta_gate_error,
+)
+from vo_lib.synthetic import synthetic_matches
+from vo_lib.temporal import MotionPrior
+
+
+def test_hypotheses_formula():
+    # log(1 - p) / log(1 - w^s)
+    assert hypotheses_needed(0.6, 0.99, 1) == math.ceil(math.log(0.01) / math.log(0.4))
+    assert hypotheses_needed(0.6, 0.99, 3) == math.ceil(math.log(0.01) / math.log(1 - 0.216))
+    assert hypotheses_needed(0.6, 0.99, 5) > hypotheses_needed(0.6, 0.99, 3) > hypotheses_needed(0.6, 0.99, 1)
+    assert hypotheses_needed(1.0) == 1
+
+
+def test_gates_are_zero_for_true_matches(camera, rng):
+    m = synthetic_matches(camera, 400, 0.07, -0.1, rng, outlier_ratio=0.3)
+    e_theta = theta_gate_error(m.w_prev, m.w_curr, 0.07, camera)
+    assert np.nanmax(e_theta[m.inliers]) < 1e-9
+    assert np.nanmedian(e_theta[~m.inliers]) > 1e-2
+    P, Q = camera.backproject(m.w_prev), camera.backproject(m.w_curr)
+    e_rho = rho_gate_error(P, Q, 0.07, -0.1)
+    assert e_rho[m.inliers].max() < 1e-12 and np.median(e_rho[~m.inliers]) > 0.3
+    # under a wrong theta the gate of eq. 20 no longer vanishes
+    assert np.nanmedian(theta_gate_error(m.w_prev, m.w_curr, 0.09, camera)[m.inliers]) > 1e-3
+
+
+def test_acceptance_synthetic_matches_over_many_seeds(camera):
+    """300 matches, 40 % outliers, 0.5 px noise on u, v, d of both views, depths 1.5-15 m,
+    steps 3-12 cm and up to 5 degrees."""
+    recall, theta_err, rho_err, ls_theta, ls_rho = [], [], [], [], []
+    for seed in range(80):
+        rng = np.random.default_rng(seed)
+        theta, rho = math.radians(rng.uniform(-5, 5)), rng.uniform(0.03, 0.12)
+        m = synthetic_matches(
+            camera, 300, theta, rho, rng, depth_range=(1.5, 15.0), noise_px=0.5, outlier_ratio=0.4
+        )
+        r = one_point_ransac(m.w_prev, m.w_curr, camera, rng=rng)
+        assert r.success
+        recall.append((r.inliers & m.inliers).sum() / m.inliers.sum())
+        theta_err.append(abs(r.theta - theta))
+        rho_err.append(abs(r.rho - rho) / rho)
+        t_ls, r_ls, _ = refine_motion(m.w_prev[m.inliers], m.w_curr[m.inliers], theta, rho, camera)
+        ls_theta.append(abs(t_ls - theta))
+        ls_rho.append(abs(r_ls - rho) / rho)
+    assert min(recall) >= 0.95
+    assert math.degrees(max(theta_err)) <= 0.03
+    assert np.median(rho_err) <= 0.015 and max(rho_err) <= 0.05
+    assert max(theta_err) <= 1.5 * max(ls_theta)
+    assert np.median(rho_err) <= 1.5 * np.median(ls_rho) and max(rho_err) <= 1.5 * max(ls_rho)
+
+
+def test_prior_is_used_and_failure_falls_back(camera, rng):
+    m = synthetic_matches(camera, 200, 0.02, 0.05, rng, noise_px=0.5, outlier_ratio=0.3)
+    prior = MotionPrior(0.021, 0.049, np.diag([1e-6, 1e-5]))
+    r = one_point_ransac(m.w_prev, m.w_curr, camera, prior=prior, rng=1)
+    assert r.success and abs(r.theta - 0.02) < 5e-4
+    few = one_point_ransac(m.w_prev[:2], m.w_curr[:2], camera, prior=prior, rng=1)
+    assert not few.success and few.theta == 0.021 and not few.inliers.any()
+    assert "fewer than 3" in few.diagnostics["reason"]
+
+
+def test_same_seed_same_result(camera, rng):
+    m = synthetic_matches(camera, 300, 0.02, 0.05, rng, noise_px=0.5, outlier_ratio=0.5)
+    a = one_point_ransac(m.w_prev, m.w_curr, camera, rng=7)
+    b = one_point_ransac(m.w_prev, m.w_curr, camera, rng=7)
+    assert (a.theta, a.rho) == (b.theta, b.rho) and np.array_equal(a.inliers, b.inliers)
+
+
+def test_bad_input(camera):
+    with pytest.raises(ValueError, match=r"w_prev must have shape \(N, 3\)"):
+        one_point_ransac(np.zeros((4, 2)), np.zeros((4, 3)), camera)
+    with pytest.raises(ValueError, match="same shape"):
+        one_point_ransac(np.ones((4, 3)), np.ones((5, 3)), camera)
+
+
+def test_histogram_voting(camera, rng):
+    m = synthetic_matches(camera, 300, 0.03, 0.08, rng, noise_px=0.3, outlier_ratio=0.3)
+    theta, rho, votes = histogram_voting(m.w_prev, m.w_curr, camera)
+    assert abs(theta - 0.03) < math.radians(0.1) and abs(rho - 0.08) < 0.02
+    assert votes[m.inliers].mean() > votes[~m.inliers].mean()
+
+
+def test_kabsch_recovers_a_rigid_motion(rng):
+    P = rng.normal(size=(20, 3))
+    R, t = motion_matrices(0.3, 0.5)
+    R2, t2 = kabsch(P, P @ R.T + t)
+    np.testing.assert_allclose(R2, R, atol=1e-12)
+    np.testing.assert_allclose(t2, t, atol=1e-12)
+
+
+@pytest.mark.parametrize("estimator", [rigid_ransac, pnp_ransac])
+def test_six_dof_baselines_recover_the_motion(camera, rng, estimator):
+    m = synthetic_matches(camera, 300, 0.05, 0.1, rng, noise_px=0.3, outlier_ratio=0.3)
+    kwargs = {"rng": 1} if estimator is rigid_ransac else {}
+    est = estimator(m.w_prev, m.w_curr, camera, **kwargs)
+    assert est.success
+    # general-purpose 6-DoF fits on noisy 3-D points: a few tenths of a degree
+    assert abs(est.theta - 0.05) < math.radians(0.5) and abs(est.rho - 0.1) < 0.02
+    assert est.inliers[~m.inliers].mean() < 0.05
+
+
+def test_essential_matrix_gives_rotation_and_direction(camera, rng):
+    m = synthetic_matches(camera, 300, 0.05, 0.1, rng, noise_px=0.3, outlier_ratio=0.3)
+    est = essential_ransac(m.w_prev, m.w_curr, camera)
+    assert est.success and abs(est.theta - 0.05) < math.radians(0.5)
+    assert np.linalg.norm(est.t) == pytest.approx(1.0)  # no scale from one camera
