@@ -101,6 +101,22 @@ def best_matches(
     return best_a, best_b, best_d
 
 
+def window_pairs(keys_a: np.ndarray, keys_b: np.ndarray, half_width) -> tuple[np.ndarray, np.ndarray]:
+    """All pairs ``(i, j)`` with ``|keys_b[j] - keys_a[i]| <= half_width[i]``, by sorting ``keys_b``.
+
+    Costs a sort and two binary searches instead of comparing every pair.
+    """
+    order = np.argsort(keys_b, kind="stable")
+    sorted_b = keys_b[order]
+    half = np.broadcast_to(np.asarray(half_width, dtype=float), keys_a.shape)
+    lo = np.searchsorted(sorted_b, keys_a - half, side="left")
+    hi = np.searchsorted(sorted_b, keys_a + half, side="right")
+    counts = hi - lo
+    ia = np.repeat(np.arange(len(keys_a)), counts)
+    offsets = np.arange(counts.sum()) - np.repeat(np.cumsum(counts) - counts, counts)
+    return ia, order[np.repeat(lo, counts) + offsets]
+
+
 def bucket(
     points: np.ndarray,
     response: np.ndarray,
@@ -262,14 +278,7 @@ class StereoFrontEnd:
 
     def _row_candidates(self, pl: np.ndarray, pr: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """All (left, right) pairs on rows within the tolerance and disparities within the range."""
-        order = np.argsort(pr[:, 1], kind="stable")
-        vr = pr[order, 1]
-        lo = np.searchsorted(vr, pl[:, 1] - ROW_TOLERANCE, side="left")
-        hi = np.searchsorted(vr, pl[:, 1] + ROW_TOLERANCE, side="right")
-        counts = hi - lo
-        ia = np.repeat(np.arange(len(pl)), counts)
-        offsets = np.arange(counts.sum()) - np.repeat(np.cumsum(counts) - counts, counts)
-        ib = order[np.repeat(lo, counts) + offsets]
+        ia, ib = window_pairs(pl[:, 1], pr[:, 1], ROW_TOLERANCE)
         disp = pl[ia, 0] - pr[ib, 0]
         ok = (disp >= 0.5) & (disp <= self.max_disparity)
         return ia[ok], ib[ok]

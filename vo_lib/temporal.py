@@ -18,7 +18,7 @@ import numpy as np
 
 from vo_lib.camera import StereoCamera
 from vo_lib.circular_motion import apply_motion
-from vo_lib.features import StereoFeatures, best_matches, hamming
+from vo_lib.features import StereoFeatures, best_matches, hamming, window_pairs
 
 N_SIGMA = 3.0  # window half-width in standard deviations
 PIXEL_SIGMA = 1.0  # pixel noise of a feature position, added to the prediction's uncertainty
@@ -61,9 +61,13 @@ def predict_features(w_prev: np.ndarray, camera: StereoCamera, theta: float, rho
     return w, ok
 
 
-def prediction_sigma(w_prev: np.ndarray, camera: StereoCamera, prior: MotionPrior) -> np.ndarray:
-    """Standard deviation ``(N, 3)`` of each predicted ``(u, v, d)``: sqrt(diag(J C J^T)) + pixel noise."""
-    base, _ = predict_features(w_prev, camera, prior.theta, prior.rho)
+def prediction_sigma(w_prev: np.ndarray, camera: StereoCamera, prior: MotionPrior, base=None) -> np.ndarray:
+    """Standard deviation ``(N, 3)`` of each predicted ``(u, v, d)``: sqrt(diag(J C J^T)) + pixel noise.
+
+    ``J`` is taken by finite differences in theta and rho; ``base`` is the prediction, if already known.
+    """
+    if base is None:
+        base, _ = predict_features(w_prev, camera, prior.theta, prior.rho)
     h_theta, h_rho = 1e-5, 1e-5
     d_theta = (predict_features(w_prev, camera, prior.theta + h_theta, prior.rho)[0] - base) / h_theta
     d_rho = (predict_features(w_prev, camera, prior.theta, prior.rho + h_rho)[0] - base) / h_rho
@@ -89,13 +93,15 @@ def match_temporal(
         ia = np.repeat(np.arange(n_prev), n_curr)
         ib = np.tile(np.arange(n_curr), n_prev)
     else:
-        pred, _ = predict_features(prev.w, camera, prior.theta, prior.rho)
-        radius = np.clip(N_SIGMA * prediction_sigma(prev.w, camera, prior), MIN_RADIUS, MAX_RADIUS)
-        du = np.abs(curr.w[None, :, 0] - pred[:, None, 0])
-        inside = du <= radius[:, None, 0]
-        inside &= np.abs(curr.w[None, :, 1] - pred[:, None, 1]) <= radius[:, None, 1]
-        inside &= np.abs(curr.w[None, :, 2] - pred[:, None, 2]) <= radius[:, None, 2]
-        ia, ib = np.nonzero(inside)
+        pred, ok = predict_features(prev.w, camera, prior.theta, prior.rho)
+        radius = np.clip(N_SIGMA * prediction_sigma(prev.w, camera, prior, pred), MIN_RADIUS, MAX_RADIUS)
+        keep = np.flatnonzero(ok)
+        # candidates in the row window first (the narrowest), then the column and disparity windows
+        ia, ib = window_pairs(pred[keep, 1], curr.w[:, 1], radius[keep, 1])
+        ia = keep[ia]
+        inside = np.abs(curr.w[ib, 0] - pred[ia, 0]) <= radius[ia, 0]
+        inside &= np.abs(curr.w[ib, 2] - pred[ia, 2]) <= radius[ia, 2]
+        ia, ib = ia[inside], ib[inside]
     dist = hamming(prev.descriptors[ia], curr.descriptors[ib])
     a, b, _ = best_matches(ia, ib, dist, n_prev, n_curr)
     elapsed = (time.perf_counter() - t0) * 1e3

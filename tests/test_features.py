@@ -1,0 +1,99 @@
+import numpy as np
+import pytest
+
+from vo_lib.camera import StereoCamera
+from vo_lib.circular_motion import apply_motion, circular_motion_from_transform
+from vo_lib.features import StereoFrontEnd, best_matches, bucket, hamming, window_pairs
+from vo_lib.geometry import camera_motion, camera_mount, planar_to_matrix
+from vo_lib.render import SensorEffects, StereoRenderer
+from vo_lib.temporal import MotionPrior, match_temporal, prediction_sigma
+from vo_lib.world import indoor_lab
+
+CAM = StereoCamera.bumblebee2()
+MOUNT = camera_mount(height=0.5)
+
+
+@pytest.fixture(scope="module")
+def frames():
+    """Two consecutive rendered stereo frames in the lab, with depth, and the motion between them."""
+    renderer = StereoRenderer(indoor_lab(), CAM, SensorEffects(noise_sigma=1.0))
+    rng = np.random.default_rng(5)
+    p0, p1 = np.array([-3.0, 0.3, 0.2]), np.array([-2.97, 0.305, 0.215])
+    l0, r0, d0 = renderer.render_pair(planar_to_matrix(p0) @ MOUNT, rng, with_depth=True)
+    l1, r1, d1 = renderer.render_pair(planar_to_matrix(p1) @ MOUNT, rng, with_depth=True)
+    theta, rho = circular_motion_from_transform(camera_motion(p0, p1, MOUNT))
+    front = StereoFrontEnd(CAM)
+    return front.process(l0, r0), front.process(l1, r1), d0, theta, rho
+
+
+def test_stereo_features_match_ground_truth_disparity(frames):
+    f0, _, depth, _, _ = frames
+    assert 300 <= len(f0) <= 600
+    u, v = np.rint(f0.w[:, 0]).astype(int), np.rint(f0.w[:, 1]).astype(int)
+    err = np.abs(f0.w[:, 2] - CAM.fx * CAM.baseline / depth[v, u])
+    assert np.median(err) < 0.2 and np.mean(err > 2.0) < 0.02
+    assert set(f0.timings) == {"detect", "describe", "stereo_match"}
+    assert f0.descriptors.shape == (len(f0), 32) and f0.descriptors.dtype == np.uint8
+
+
+def test_features_are_spread_over_the_image(frames):
+    f0 = frames[0]
+    cells = np.unique((f0.w[:, 0] // 80).astype(int) * 10 + (f0.w[:, 1] // 80).astype(int))
+    assert len(cells) >= 40  # of the 8 x 6 bucketing grid
+
+
+def ground_truth_inliers(f0, f1, m, theta, rho):
+    moved = CAM.project(apply_motion(CAM.backproject(f0.w[m.idx_prev]), theta, rho))
+    return np.linalg.norm(moved[:, :2] - f1.w[m.idx_curr, :2], axis=1) < 3.0
+
+
+def test_guided_matching_has_fewer_outliers_than_brute_force(frames):
+    f0, f1, _, theta, rho = frames
+    prior = MotionPrior(theta + 0.002, rho + 0.005, np.diag([np.radians(0.5) ** 2, 0.01**2]))
+    guided = match_temporal(f0, f1, CAM, prior)
+    brute = match_temporal(f0, f1, CAM, None)
+    good_guided = ground_truth_inliers(f0, f1, guided, theta, rho)
+    good_brute = ground_truth_inliers(f0, f1, brute, theta, rho)
+    assert len(guided) >= 200 and good_guided.mean() > 0.95
+    assert good_guided.sum() >= 0.9 * good_brute.sum()
+    # inside a small window the ratio test meets fewer rivals: outliers stay as rare as brute force's
+    assert 1 - good_guided.mean() <= (1 - good_brute.mean()) + 0.02
+    assert guided.candidates < 0.05 * brute.candidates
+
+
+def test_prediction_window_grows_with_prior_uncertainty(frames):
+    f0 = frames[0]
+    tight = prediction_sigma(f0.w, CAM, MotionPrior(0.0, 0.05, np.diag([1e-8, 1e-8])))
+    loose = prediction_sigma(f0.w, CAM, MotionPrior(0.0, 0.05, np.diag([1e-4, 1e-3])))
+    assert np.all(loose >= tight) and np.median(loose[:, 0]) > 5 * np.median(tight[:, 0])
+
+
+def test_hamming_and_best_matches():
+    rng = np.random.default_rng(0)
+    a = rng.integers(0, 256, (3, 32), dtype=np.uint8)
+    b = a.copy()
+    b[0, 0] ^= 0b1011  # three bits
+    assert hamming(a, b).tolist() == [3, 0, 0]
+    # a0 -> b1 (distance 1) beats b0 (distance 10); a1 has no clear winner (ratio); b2 taken by a2
+    ia, ib = np.array([0, 0, 1, 1, 2]), np.array([0, 1, 0, 2, 2])
+    dist = np.array([10, 1, 5, 5, 2])
+    ma, mb, _ = best_matches(ia, ib, dist, 3, 3)
+    assert list(zip(ma.tolist(), mb.tolist(), strict=True)) == [(0, 1), (2, 2)]
+
+
+def test_window_pairs_and_bucket():
+    ia, ib = window_pairs(np.array([0.0, 10.0]), np.array([9.0, 0.5, 30.0, 11.0]), np.array([1.0, 1.5]))
+    assert sorted(zip(ia.tolist(), ib.tolist(), strict=True)) == [(0, 1), (1, 0), (1, 3)]
+    pts = np.array([[1, 1], [2, 2], [3, 3], [600, 400]], float)
+    keep = bucket(pts, np.array([1.0, 5.0, 3.0, 1.0]), 640, 480, grid=(2, 2), max_features=4)
+    assert keep.tolist() == [1, 3]  # one per cell: the strongest of the three in the first cell
+
+
+def test_front_end_bad_input_and_blank_images():
+    front = StereoFrontEnd(CAM)
+    with pytest.raises(ValueError, match="2-D grey images of one size"):
+        front.process(np.zeros((480, 640), np.uint8), np.zeros((240, 320), np.uint8))
+    blank = np.full((480, 640), 128, np.uint8)
+    assert len(front.process(blank, blank)) == 0
+    with pytest.raises(ValueError, match="max_features must be > 0"):
+        StereoFrontEnd(CAM, max_features=0)
