@@ -91,3 +91,36 @@ def plot_robot(ax, pose, size: float = 0.4, colour: str = "k"):
     c, s = np.cos(yaw), np.sin(yaw)
     pts = pts @ np.array([[c, s], [-s, c]]) + (x, y)
     ax.fill(pts[:, 0], pts[:, 1], color=colour, alpha=0.8)
+
+
+def draw_chord_geometry(ax, theta: float = 0.5, rho: float = 1.0, point=(1.2, 3.0)):
+    """Plan view of the reconstructed Fig. 5 of seed 000: the camera moves from C to C' along a
+    chord at phi = theta/2; a point X is seen at angle gamma from the chord at C and gamma' at C',
+    at ranges r and r'. Coordinates: x right, z forward of the first camera."""
+    phi = theta / 2
+    C = np.array([0.0, 0.0])
+    C2 = rho * np.array([-np.sin(phi), np.cos(phi)])
+    X = np.asarray(point, float)
+    ax.plot(*zip(C, C2, strict=True), "k-", lw=2, label="chord, length ρ")
+    ext = C2 + 0.8 * (C2 - C) / rho
+    ax.plot(*zip(C2, ext, strict=True), "k:", lw=1)
+    for P, name in ((C, "C"), (C2, "C'")):
+        ax.plot(*zip(P, X, strict=True), "C0-", lw=1)
+        ax.plot(*P, "ko")
+        ax.annotate(name, P, textcoords="offset points", xytext=(-14, -4))
+    ax.plot(*X, "C3o")
+    ax.annotate("X", X, textcoords="offset points", xytext=(6, 0))
+    # optical axes
+    for P, yaw in ((C, 0.0), (C2, -theta)):
+        d = np.array([np.sin(yaw), np.cos(yaw)])
+        ax.annotate("", P + 0.7 * d, P, arrowprops={"arrowstyle": "->", "color": "0.5"})
+    # foot of the perpendicular from X to the chord line: the distance both ends share
+    u = (C2 - C) / rho
+    foot = C + ((X - C) @ u) * u
+    ax.plot(*zip(X, foot, strict=True), "C2--", lw=1, label="h = r sin γ = r' sin γ'")
+    ax.text(*(0.5 * (C + X) + (0.1, -0.1)), "r")
+    ax.text(*(0.5 * (C2 + X) + (-0.25, 0.05)), "r'")
+    ax.set_aspect("equal")
+    ax.set_xlabel("x (right) [m]")
+    ax.set_ylabel("z (forward) [m]")
+    ax.legend(fontsize="x-small", loc="lower right")
