@@ -168,14 +168,16 @@ for s in (1, 3, 5):
         draws.append(k)
     measured[s] = np.mean(draws)
     print(
-        f"s = {s}: mean draws to the first all-inlier sample {measured[s]:6.2f}  (theory 1/w^s = {1 / w**s:6.2f})"
+        f"s = {s}: mean draws to the first all-inlier sample {measured[s]:6.2f}  "
+        f"(theory 1/w^s = {1 / w**s:6.2f})"
     )
     assert abs(measured[s] * w**s - 1) < 0.1
 
 # %% [markdown]
-# At 60 % inliers the 1-point method needs 8 hypotheses where 3 points need 29 and 5 points 86. Our implementation
-# draws hypotheses from the best-conditioned half of the matches, scores a whole batch as one array
-# operation, and stops when N for the best inlier ratio found so far has been tried.
+# At 60 % inliers the 1-point method needs 8 hypotheses where 3 points need 29 and 5 points 86.
+# Our implementation draws hypotheses from the best-conditioned half of the matches, scores a
+# whole batch as one array operation, and stops when N for the best inlier ratio found so far
+# has been tried.
 #
 # ## 4 · The full estimator, and how good it is
 #
