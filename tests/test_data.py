@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 
 from vo_lib.data import load_sequence, sample_path
-from vo_lib.samples import SAMPLES, camera_poses_from_robot, generate
+from vo_lib.geometry import camera_mount, camera_poses_from_planar, planar_from_camera_poses
+from vo_lib.samples import CAMERA_HEIGHT, SAMPLES, generate
 
 
 @pytest.fixture
@@ -38,7 +39,13 @@ def test_ground_truth_poses_match_the_robot_poses(tmp_path):
         generate("indoor_free", tmp_path / "s", frames=5, resolution=(96, 72), progress=False)
     )
     robot = np.array(seq.manifest["robot_poses"])
-    np.testing.assert_allclose(seq.poses_4x4(), camera_poses_from_robot(robot), atol=1e-12)
+    mount = camera_mount(height=CAMERA_HEIGHT)
+    np.testing.assert_allclose(seq.poses_4x4(), camera_poses_from_planar(robot, mount), atol=1e-12)
+    back = planar_from_camera_poses(seq.poses, mount)
+    # relative to the start, the planar poses come back exactly
+    from vo_lib.geometry import relative_planar
+
+    np.testing.assert_allclose(back, relative_planar(robot[0], robot), atol=1e-12)
     # the camera looks along the robot's x axis: its z axis moves forward
     assert seq.poses[-1, 2, 3] > 0
 

@@ -92,3 +92,26 @@ def test_prior_matches_odometry_prediction():
     # eq. 2-3 move the centre by du along the midpoint heading: the chord of eq. 15 is du itself
     assert prior.theta == pytest.approx(0.02) and prior.rho == pytest.approx(0.05, rel=1e-9)
     assert prior.covariance[0, 0] > 0 and prior.covariance[1, 1] > 0
+
+
+def test_reference_kept_across_frames_without_vision():
+    """Three frames without VO, then a measurement of the motion from the last seen frame."""
+    rng = np.random.default_rng(8)
+    kf = VoKalmanFilter(ODO, covariance=P0)
+    truth = kf.pose.copy()
+    reference = truth.copy()
+    for k in range(4):
+        u = ODO.controls_for(0.03, 0.01)
+        truth = ODO.predict(truth, u)
+        kf.predict(u + rng.normal(0, 1e-4, 2), keep_reference=k > 0)
+        kf.finish_frame()
+    assert np.allclose(kf.ekf.x[3:], reference)  # the clone is still the reference frame's pose
+    before = kf.covariance[2, 2]
+    z = measurement(np.concatenate([truth, reference]))  # the motion over all four frames
+    kf.update(z[0], z[1], R_VO)
+    assert kf.covariance[2, 2] < before
+    assert abs(wrap_angle_deg(kf.pose[2] - truth[2])) < 0.05
+
+
+def wrap_angle_deg(a):
+    return math.degrees((a + math.pi) % (2 * math.pi) - math.pi)

@@ -129,3 +129,24 @@ def camera_motion(pose_prev, pose_curr, T_robot_camera) -> np.ndarray:
     W0 = planar_to_matrix(pose_prev) @ T_robot_camera
     W1 = planar_to_matrix(pose_curr) @ T_robot_camera
     return np.linalg.solve(W1, W0)
+
+
+def camera_poses_from_planar(planar_poses, T_robot_camera) -> np.ndarray:
+    """KITTI-style camera poses ``(N, 4, 4)``, each in the first camera's frame, of planar robot poses."""
+    poses = np.asarray(planar_poses, dtype=float)
+    first = np.linalg.inv(planar_to_matrix(poses[0]) @ T_robot_camera)
+    return np.stack([first @ planar_to_matrix(p) @ T_robot_camera for p in poses])
+
+
+def planar_from_camera_poses(camera_poses, T_robot_camera) -> np.ndarray:
+    """Planar robot poses ``(N, 3)``, starting at the origin, of KITTI-style camera poses.
+
+    The inverse of :func:`camera_poses_from_planar` for planar motion; for a camera that also
+    pitches and rolls (a car on a real road) it keeps the yaw and the ground-plane position.
+    """
+    T = np.asarray(camera_poses, dtype=float)
+    if T.shape[-2:] == (3, 4):
+        T = np.concatenate([T, np.broadcast_to([0.0, 0.0, 0.0, 1.0], T.shape[:-2] + (1, 4))], axis=-2)
+    inv_mount = np.linalg.inv(T_robot_camera)
+    robot = T_robot_camera @ T @ inv_mount
+    return np.stack([matrix_to_planar(M) for M in robot])

@@ -122,10 +122,19 @@ class VoKalmanFilter:
         return np.diag([enc * abs(u[0]) + slip * u[0] ** 2, enc * abs(u[1]) + slip * u[1] ** 2])
 
     # ------------------------------------------------------------------ predict
-    def predict(self, u=None) -> None:
-        """Clone the pose and move the clone's twin with odometry ``u`` (or constant velocity)."""
+    def predict(self, u=None, keep_reference: bool = False) -> None:
+        """Clone the pose and move the clone's twin with odometry ``u`` (or constant velocity).
+
+        With ``keep_reference`` the clone of an earlier frame is kept (it was not updated since):
+        the current pose moves on, its cross-covariance with the reference is carried along, and
+        the next VO measurement is the motion from that reference frame to the current one.
+        """
         x = self.ekf.x[:3].copy()
         P = self.ekf.P[:3, :3]
+        if keep_reference:
+            reference, P_ref, P_cross = self.ekf.x[3:].copy(), self.ekf.P[3:, 3:].copy(), self.ekf.P[:3, 3:].copy()
+        else:
+            reference, P_ref, P_cross = x, P, P
         if u is not None:
             u = np.asarray(u, float)
             x_new, F, G = self.odometry.step(x, u)  # eq. 6-11 and their full Jacobians (notebook 01)
@@ -141,13 +150,12 @@ class VoKalmanFilter:
             Rw = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
             Q = Rw @ np.diag(self.cv_sigma**2) @ Rw.T
             self.flags = StepFlags(odometry=False)
-        FP = F @ P
-        self.ekf.x = np.concatenate([x_new, x])
+        self.ekf.x = np.concatenate([x_new, reference])
         P6 = np.empty((6, 6))
-        P6[:3, :3] = FP @ F.T + Q
-        P6[:3, 3:] = FP
-        P6[3:, :3] = FP.T
-        P6[3:, 3:] = P
+        P6[:3, :3] = F @ P @ F.T + Q
+        P6[:3, 3:] = F @ P_cross
+        P6[3:, :3] = P6[:3, 3:].T
+        P6[3:, 3:] = P_ref
         self.ekf.P = P6
 
     def motion_prior(self) -> MotionPrior:
@@ -169,9 +177,10 @@ class VoKalmanFilter:
         self.ekf.x[2] = wrap_angle(self.ekf.x[2])
         self.flags.vo_update = True
 
-    def finish_frame(self) -> None:
-        """Remember this frame's motion (for constant velocity) before the next predict."""
-        self.last_increment = np.array(_increment(self.ekf.x))
+    def finish_frame(self, frames_since_reference: int = 1) -> None:
+        """Remember the motion per frame (for constant velocity) before the next predict."""
+        if self.flags.vo_update or self.flags.odometry:
+            self.last_increment = np.array(_increment(self.ekf.x)) / max(frames_since_reference, 1)
 
     def nees(self, true_pose) -> float:
         """Normalised estimation error squared of the pose against ``true_pose``."""

@@ -194,10 +194,3 @@ def generate(
             "robot_poses": drive.poses[:n].tolist(),
         }
         return writer.close(drive.times[:n], np.array(poses), drive.odometry[:n], manifest)
-
-
-def camera_poses_from_robot(robot_poses, mount=None) -> np.ndarray:
-    """KITTI-style camera poses ``(N, 4, 4)`` (in the first camera's frame) of planar robot poses."""
-    mount = camera_mount(height=CAMERA_HEIGHT) if mount is None else mount
-    robot_poses = np.asarray(robot_poses, dtype=float)
-    return np.stack([np.linalg.inv(camera_motion(robot_poses[0], p, mount)) for p in robot_poses])

@@ -1,0 +1,222 @@
+"""The stereo visual odometry pipeline of seed 000, frame by frame (Fig. 3 of the paper).
+
+Per frame:
+
+1. **stereo processing**: features with disparity, ``w = (u, v, d)`` (``vo_lib.features``);
+2. **prediction**: the Kalman filter moves the pose with the track odometry, or with constant
+   velocity when the sequence has none (``vo_lib.kalman``);
+3. **guided temporal matching** against the reference frame inside the predicted windows
+   (``vo_lib.temporal``);
+4. **1-point RANSAC** for ``(theta, rho)``, with the prediction as a prior (``vo_lib.ransac``);
+5. **Kalman update** with the VO motion.
+
+A frame whose VO motion cannot be trusted (no features, too few matches or inliers, a low inlier
+ratio as when a large object moves through the view, or a motion that contradicts the prediction)
+never stops the run: the filter keeps its prediction, and the frame is flagged. The last good
+frame stays the reference, so the next good frame is matched against it and its measurement spans
+the gap. Exactly one pose is produced per input frame.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Iterable
+from dataclasses import asdict, dataclass, field
+
+import numpy as np
+from scipy.stats import chi2
+
+from vo_lib.camera import StereoCamera
+from vo_lib.features import StereoFeatures, StereoFrontEnd
+from vo_lib.geometry import camera_mount
+from vo_lib.kalman import VoKalmanFilter
+from vo_lib.odometry import TrackOdometry
+from vo_lib.ransac import one_point_ransac
+from vo_lib.temporal import match_temporal
+
+MIN_FEATURES = 20  # stereo features a frame needs to be matched
+MIN_INLIERS = 15
+MIN_INLIER_RATIO = 0.7  # of the temporal matches; a large moving object drags it down
+PRIOR_GATE = float(chi2.ppf(0.9999, 2))  # VO motion against the prediction (Mahalanobis^2)
+MAX_GAP = 90  # frames; after this long without a good frame, start again from the current one
+
+
+@dataclass
+class FrameDiagnostics:
+    """What happened to one frame."""
+
+    frame: int
+    features: int = 0
+    temporal_matches: int = 0
+    inliers: int = 0
+    inlier_ratio: float = 0.0
+    theta: float = float("nan")
+    rho: float = float("nan")
+    odometry: bool = False
+    fallback: bool = False
+    reason: str = ""
+
+
+@dataclass
+class FrameTimings:
+    """Milliseconds per stage (the columns of the paper's Table 1, plus matching)."""
+
+    stereo: float = 0.0
+    prediction: float = 0.0
+    matching: float = 0.0
+    estimation: float = 0.0
+    kalman: float = 0.0
+    total: float = 0.0
+
+
+@dataclass
+class PipelineResult:
+    """One planar pose (and covariance) per frame, with diagnostics and timings."""
+
+    poses: np.ndarray
+    covariances: np.ndarray
+    diagnostics: list[FrameDiagnostics] = field(default_factory=list)
+    timings: list[FrameTimings] = field(default_factory=list)
+
+    @property
+    def flagged(self) -> np.ndarray:
+        """Indices of frames whose VO motion was not used."""
+        return np.array([d.frame for d in self.diagnostics if d.fallback], dtype=int)
+
+    def timing_table(self) -> dict[str, float]:
+        """Median milliseconds of each stage over the frames after the first."""
+        rows = self.timings[1:] or self.timings
+        return {k: float(np.median([asdict(t)[k] for t in rows])) for k in asdict(rows[0])}
+
+
+class StereoVisualOdometry:
+    """Seed 000's pipeline: stereo front end, Kalman prediction, guided matching, 1-point RANSAC.
+
+    Parameters
+    ----------
+    camera : StereoCamera
+    odometry : TrackOdometry, optional
+        The crawler's odometry model; used when frames come with track distances.
+    seed : int
+        Seed of the RANSAC draws.
+    front_end : StereoFrontEnd, optional
+        Defaults to ``StereoFrontEnd(camera)``.
+    """
+
+    def __init__(self, camera: StereoCamera, odometry: TrackOdometry | None = None, seed: int = 0,
+                 front_end: StereoFrontEnd | None = None):
+        self.camera = camera
+        self.front = front_end or StereoFrontEnd(camera)
+        self.kf = VoKalmanFilter(odometry or TrackOdometry())
+        self.rng = np.random.default_rng(seed)
+        self.reference: StereoFeatures | None = None
+        self.gap = 0  # frames since the reference frame
+        self.frame = 0
+
+    def process(self, left: np.ndarray, right: np.ndarray, odometry=None):
+        """Process one stereo pair (and the track distances since the previous frame, if any).
+
+        Returns ``(pose, covariance, FrameDiagnostics, FrameTimings)``.
+        """
+        t0 = time.perf_counter()
+        features = self.front.process(left, right)
+        t1 = time.perf_counter()
+        diag = FrameDiagnostics(self.frame, features=len(features), odometry=odometry is not None)
+        timing = FrameTimings(stereo=(t1 - t0) * 1e3)
+        if self.frame == 0:
+            self._new_reference(features)
+            self.frame += 1
+            timing.total = timing.stereo
+            return self.kf.pose, self.kf.covariance, diag, timing
+        u = None if odometry is None else np.asarray(odometry, float)
+        if u is not None and not np.all(np.isfinite(u)):
+            u, diag.odometry = None, False
+        self.kf.predict(u, keep_reference=self.gap > 1)
+        prior = self.kf.motion_prior()
+        t2 = time.perf_counter()
+        timing.prediction = (t2 - t1) * 1e3
+        reason, t3, t4 = "", t2, t2
+        if self.reference is None or len(self.reference) < MIN_FEATURES:
+            reason = "no reference frame with features"
+        elif len(features) < MIN_FEATURES:
+            reason = "too few stereo features"
+        else:
+            matches = match_temporal(self.reference, features, self.camera, prior)
+            t3 = time.perf_counter()
+            diag.temporal_matches = len(matches)
+            if len(matches) < MIN_INLIERS:
+                reason = "too few temporal matches"
+            else:
+                est = one_point_ransac(matches.w_prev, matches.w_curr, self.camera, prior=prior, rng=self.rng)
+                t4 = time.perf_counter()
+                diag.inliers = int(est.inliers.sum())
+                diag.inlier_ratio = diag.inliers / len(matches)
+                diag.theta, diag.rho = est.theta, est.rho
+                innovation = np.array([est.theta - prior.theta, est.rho - prior.rho])
+                if not est.success or diag.inliers < MIN_INLIERS:
+                    reason = "too few inliers"
+                elif diag.inlier_ratio < MIN_INLIER_RATIO:
+                    reason = "low inlier ratio"
+                elif innovation @ np.linalg.solve(prior.covariance + est.covariance, innovation) > PRIOR_GATE:
+                    reason = "motion contradicts the prediction"
+                else:
+                    self.kf.update(est.theta, est.rho, est.covariance)
+        timing.matching = (t3 - t2) * 1e3
+        timing.estimation = (t4 - t3) * 1e3
+        t5 = time.perf_counter()
+        self.kf.finish_frame(self.gap + 1)
+        if reason:
+            diag.fallback, diag.reason = True, reason
+            self.gap += 1
+            if (self.reference is None or self.gap > MAX_GAP) and len(features) >= MIN_FEATURES:
+                self._new_reference(features)
+        else:
+            self._new_reference(features)
+        t6 = time.perf_counter()
+        timing.kalman = (t6 - t5) * 1e3 + timing.prediction
+        timing.total = (t6 - t0) * 1e3
+        self.frame += 1
+        return self.kf.pose, self.kf.covariance, diag, timing
+
+    def _new_reference(self, features: StereoFeatures) -> None:
+        self.reference = features if len(features) >= MIN_FEATURES else None
+        self.gap = 1 if self.reference is not None else self.gap + 1
+
+
+def run_frames(frames: Iterable, camera: StereoCamera, odometry_model: TrackOdometry | None = None,
+               seed: int = 0, progress=None, front_end: StereoFrontEnd | None = None) -> PipelineResult:
+    """Run the pipeline over ``(left, right, odometry_or_None)`` triples."""
+    vo = StereoVisualOdometry(camera, odometry_model, seed, front_end)
+    poses, covs, diags, timings = [], [], [], []
+    for left, right, odo in frames:
+        pose, cov, diag, timing = vo.process(left, right, odo)
+        poses.append(pose)
+        covs.append(cov)
+        diags.append(diag)
+        timings.append(timing)
+        if progress is not None:
+            progress.update(1)
+    return PipelineResult(np.array(poses).reshape(-1, 3), np.array(covs).reshape(-1, 3, 3), diags, timings)
+
+
+def run_sequence(sequence, frames: int | None = None, use_odometry: bool = True, seed: int = 0,
+                 progress: bool = False) -> PipelineResult:
+    """Run the pipeline on a :class:`~vo_lib.sequence.Sequence` (its first ``frames`` frames)."""
+    n = len(sequence) if frames is None else min(int(frames), len(sequence))
+    odo = sequence.odometry if (use_odometry and sequence.odometry is not None) else None
+
+    def frame_iter():
+        for k in range(n):
+            left, right = sequence.pair(k)
+            yield left, right, (None if odo is None or k == 0 else odo[k])
+
+    bar = None
+    if progress:
+        from tqdm.auto import tqdm
+
+        bar = tqdm(total=n, desc=f"VO {sequence.path.name}", unit="frame")
+    try:
+        return run_frames(frame_iter(), sequence.camera, seed=seed, progress=bar)
+    finally:
+        if bar is not None:
+            bar.close()
