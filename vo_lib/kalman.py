@@ -132,7 +132,11 @@ class VoKalmanFilter:
         x = self.ekf.x[:3].copy()
         P = self.ekf.P[:3, :3]
         if keep_reference:
-            reference, P_ref, P_cross = self.ekf.x[3:].copy(), self.ekf.P[3:, 3:].copy(), self.ekf.P[:3, 3:].copy()
+            reference, P_ref, P_cross = (
+                self.ekf.x[3:].copy(),
+                self.ekf.P[3:, 3:].copy(),
+                self.ekf.P[:3, 3:].copy(),
+            )
         else:
             reference, P_ref, P_cross = x, P, P
         if u is not None:

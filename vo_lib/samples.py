@@ -14,7 +14,7 @@ import numpy as np
 from tqdm.auto import tqdm
 
 from vo_lib.camera import StereoCamera
-from vo_lib.geometry import camera_motion, camera_mount, planar_to_matrix
+from vo_lib.geometry import camera_mount, planar_to_matrix
 from vo_lib.odometry import TrackOdometry
 from vo_lib.render import SensorEffects, StereoRenderer
 from vo_lib.sequence import SequenceWriter

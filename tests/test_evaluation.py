@@ -1,0 +1,125 @@
+import numpy as np
+import pytest
+from scipy.spatial.transform import Rotation
+
+from vo_lib.evaluation import (
+    ate,
+    ate_planar,
+    key_position_errors,
+    kitti_segment_errors,
+    read_trajectory,
+    rpe,
+    umeyama,
+    write_kitti_poses,
+    write_tum,
+)
+
+
+def random_trajectory(rng, n=200):
+    T = np.tile(np.eye(4), (n, 1, 1))
+    yaw = np.cumsum(rng.normal(0, 0.02, n))
+    T[:, :3, :3] = Rotation.from_euler("zyx", np.column_stack([yaw, rng.normal(0, 0.01, (n, 2))])).as_matrix()
+    T[:, :3, 3] = np.cumsum(rng.normal(0, 0.1, (n, 3)) + [0.5, 0, 0], axis=0)
+    return T
+
+
+def perturb(rng, T):
+    E = T.copy()
+    E[:, :3, 3] += rng.normal(0, 0.05, (len(T), 3))
+    E[:, :3, :3] = Rotation.from_rotvec(rng.normal(0, 0.01, (len(T), 3))).as_matrix() @ T[:, :3, :3]
+    return E
+
+
+def evo_trajectory(T):
+    from evo.core.trajectory import PoseTrajectory3D
+
+    return PoseTrajectory3D(poses_se3=list(T), timestamps=np.arange(len(T), dtype=float))
+
+
+def test_ate_equals_evo(rng):
+    from evo.core import metrics
+
+    gt, est = random_trajectory(rng), None
+    est = perturb(rng, gt)
+    moved = est.copy()
+    moved[:, :3, 3] = est[:, :3, 3] @ Rotation.from_euler("z", 0.7).as_matrix().T + [3, -2, 1]
+    ours, _ = ate(gt, moved)
+    traj_ref, traj_est = evo_trajectory(gt), evo_trajectory(moved)
+    traj_est.align(traj_ref)
+    ape = metrics.APE(metrics.PoseRelation.translation_part)
+    ape.process_data((traj_ref, traj_est))
+    stats = ape.get_all_statistics()
+    assert ours.rmse == pytest.approx(stats["rmse"], abs=1e-9)
+    assert ours.max == pytest.approx(stats["max"], abs=1e-9)
+    assert ours.median == pytest.approx(stats["median"], abs=1e-9)
+
+
+@pytest.mark.parametrize("delta", [1, 10])
+@pytest.mark.parametrize("rotation", [False, True])
+def test_rpe_equals_evo(rng, delta, rotation):
+    from evo.core import metrics
+
+    gt = random_trajectory(rng)
+    est = perturb(rng, gt)
+    ours, _ = rpe(gt, est, delta=delta, rotation=rotation)
+    relation = metrics.PoseRelation.rotation_angle_deg if rotation else metrics.PoseRelation.translation_part
+    m = metrics.RPE(relation, delta=delta, delta_unit=metrics.Unit.frames, all_pairs=False)
+    m.process_data((evo_trajectory(gt), evo_trajectory(est)))
+    stats = m.get_all_statistics()
+    assert ours.rmse == pytest.approx(stats["rmse"], abs=1e-9)
+    assert ours.mean == pytest.approx(stats["mean"], abs=1e-9)
+
+
+def test_perfect_estimate_has_zero_errors(rng):
+    gt = random_trajectory(rng, 120)
+    assert ate(gt, gt)[0].max < 1e-9 and rpe(gt, gt)[0].max < 1e-9
+    seg = kitti_segment_errors(gt, gt, lengths=(5, 10), step=5)
+    assert set(seg) == {5, 10} and all(v[0] < 1e-9 and v[1] < 1e-6 for v in seg.values())
+
+
+def test_kitti_segments_scale_error():
+    n = 101
+    gt = np.tile(np.eye(4), (n, 1, 1))
+    gt[:, 0, 3] = np.linspace(0, 10, n)  # 10 m straight
+    est = gt.copy()
+    est[:, 0, 3] *= 1.02  # 2 % too long
+    seg = kitti_segment_errors(gt, est, lengths=(2, 5, 20))
+    assert seg[2][0] == pytest.approx(2.0, rel=1e-6) and seg[5][0] == pytest.approx(2.0, rel=1e-6)
+    assert 20 not in seg  # no segment that long
+
+
+def test_planar_ate_and_key_positions():
+    g = np.column_stack([np.linspace(0, 5, 50), np.zeros(50), np.zeros(50)])
+    e = g.copy()
+    e[:, 1] += 0.01
+    e[:, 2] += np.radians(0.5)
+    assert ate_planar(g, e, align=False)[0].mean == pytest.approx(0.01)
+    assert ate_planar(g, e)[0].max < 1e-9
+    stats = key_position_errors(g, e, [10, 20, 30])
+    assert stats["y_mm"] == pytest.approx((10.0, 0.0)) and stats["theta_deg"] == pytest.approx((0.5, 0.0))
+
+
+def test_umeyama_recovers_similarity(rng):
+    src = rng.normal(size=(30, 3))
+    R = Rotation.from_euler("xyz", [0.3, -0.2, 1.0]).as_matrix()
+    R2, t2, s2 = umeyama(src, 2.5 * src @ R.T + [1, 2, 3], with_scale=True)
+    np.testing.assert_allclose(R2, R, atol=1e-12)
+    assert s2 == pytest.approx(2.5) and t2 == pytest.approx([1, 2, 3])
+
+
+def test_files_round_trip(tmp_path, rng):
+    T = random_trajectory(rng, 10)
+    write_kitti_poses(tmp_path / "a.txt", T)
+    write_tum(tmp_path / "a.tum", np.arange(10) * 0.1, T)
+    _, k = read_trajectory(tmp_path / "a.txt")
+    times, t = read_trajectory(tmp_path / "a.tum")
+    np.testing.assert_allclose(k, T, atol=1e-8)
+    np.testing.assert_allclose(t, T, atol=1e-8)
+    assert times[3] == pytest.approx(0.3)
+    (tmp_path / "bad.txt").write_text("1 2 3\n")
+    with pytest.raises(
+        ValueError, match=r"bad.txt, line 1: expected 12 numbers \(KITTI\) or 8 \(TUM\), got 3"
+    ):
+        read_trajectory(tmp_path / "bad.txt")
+    with pytest.raises(ValueError, match="ground truth has 10 poses but the estimate has 9"):
+        ate(T, T[:9])

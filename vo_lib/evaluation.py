@@ -1,0 +1,217 @@
+"""Trajectory errors: ATE, RPE, KITTI segment errors, and the statistics seed 000 reports.
+
+Poses are ``(N, 4, 4)`` camera-to-world matrices (or ``(N, 3, 4)``), estimate and ground truth
+frame by frame, or planar ``(x, y, yaw)`` rows for the planar variants.
+
+* **ATE** (absolute trajectory error): align the estimated positions to the true ones with the
+  least-squares rigid motion (Umeyama), then take the position differences.
+* **RPE** (relative pose error): compare motions over ``delta`` frames,
+  ``E_i = (Q_i^-1 Q_{i+d})^-1 (P_i^-1 P_{i+d})``, by their translation (or rotation angle).
+* **KITTI segment errors**: for segments of given path lengths starting every ``step`` frames,
+  translation error in percent of the length and rotation error in degrees per metre.
+* **Key-position statistics** (seed 000, IV): mean and standard deviation of the x, y and
+  heading errors at chosen frames.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from vo_lib.geometry import wrap_angle
+
+
+@dataclass(frozen=True)
+class ErrorStats:
+    """Summary of a set of errors (metres or degrees)."""
+
+    rmse: float
+    mean: float
+    median: float
+    std: float
+    max: float
+    count: int
+
+    @classmethod
+    def of(cls, errors) -> ErrorStats:
+        e = np.asarray(errors, dtype=float)
+        if e.size == 0:
+            nan = float("nan")
+            return cls(nan, nan, nan, nan, nan, 0)
+        return cls(
+            float(np.sqrt(np.mean(e**2))),
+            float(e.mean()),
+            float(np.median(e)),
+            float(e.std()),
+            float(e.max()),
+            int(e.size),
+        )
+
+
+def as_4x4(poses) -> np.ndarray:
+    """``(N, 4, 4)`` from ``(N, 4, 4)`` or ``(N, 3, 4)`` poses."""
+    T = np.asarray(poses, dtype=float)
+    if T.ndim != 3 or T.shape[1:] not in ((3, 4), (4, 4)):
+        raise ValueError(f"poses must have shape (N, 3, 4) or (N, 4, 4); got {T.shape}")
+    if T.shape[1] == 3:
+        T = np.concatenate([T, np.broadcast_to([0.0, 0.0, 0.0, 1.0], (len(T), 1, 4))], axis=1)
+    return T
+
+
+def umeyama(source: np.ndarray, target: np.ndarray, with_scale: bool = False):
+    """Least-squares ``(R, t, s)`` with ``target ~ s R source + t`` (Umeyama 1991), any dimension."""
+    mu_s, mu_t = source.mean(axis=0), target.mean(axis=0)
+    xs, xt = source - mu_s, target - mu_t
+    cov = xt.T @ xs / len(source)
+    U, d, Vt = np.linalg.svd(cov)
+    S = np.eye(source.shape[1])
+    if np.linalg.det(U) * np.linalg.det(Vt) < 0:
+        S[-1, -1] = -1.0
+    R = U @ S @ Vt
+    s = float(np.trace(np.diag(d) @ S) / np.mean(np.sum(xs**2, axis=1))) if with_scale else 1.0
+    return R, mu_t - s * R @ mu_s, s
+
+
+def _check_pair(gt, est):
+    if len(gt) != len(est):
+        raise ValueError(f"ground truth has {len(gt)} poses but the estimate has {len(est)}; expected equal")
+    if len(gt) < 2:
+        raise ValueError("at least two poses are needed")
+
+
+def ate(gt, est, align: bool = True) -> tuple[ErrorStats, np.ndarray]:
+    """Absolute trajectory error of positions after SE(3) alignment; ``(stats, per-pose errors)``."""
+    G, E = as_4x4(gt), as_4x4(est)
+    _check_pair(G, E)
+    p_gt, p_est = G[:, :3, 3], E[:, :3, 3]
+    if align:
+        R, t, _ = umeyama(p_est, p_gt)
+        p_est = p_est @ R.T + t
+    errors = np.linalg.norm(p_est - p_gt, axis=1)
+    return ErrorStats.of(errors), errors
+
+
+def ate_planar(gt_planar, est_planar, align: bool = True) -> tuple[ErrorStats, np.ndarray]:
+    """ATE of planar ``(x, y, yaw)`` trajectories after a rotation and translation in the plane."""
+    g, e = np.asarray(gt_planar, float), np.asarray(est_planar, float)
+    _check_pair(g, e)
+    p_est = e[:, :2]
+    if align:
+        R, t, _ = umeyama(p_est, g[:, :2])
+        p_est = p_est @ R.T + t
+    errors = np.linalg.norm(p_est - g[:, :2], axis=1)
+    return ErrorStats.of(errors), errors
+
+
+def rpe(
+    gt, est, delta: int = 1, rotation: bool = False, all_pairs: bool = False
+) -> tuple[ErrorStats, np.ndarray]:
+    """Relative pose error over ``delta`` frames: translation norm (m) or rotation angle (deg).
+
+    Pairs start every ``delta`` frames (0-d, d-2d, ...), as evo counts them by default; with
+    ``all_pairs`` every frame starts one.
+    """
+    G, E = as_4x4(gt), as_4x4(est)
+    _check_pair(G, E)
+    if not 1 <= delta < len(G):
+        raise ValueError(f"delta must lie in 1..{len(G) - 1}; got {delta}")
+    first = np.arange(0, len(G) - delta, 1 if all_pairs else delta)
+    rel_gt = np.linalg.inv(G[first]) @ G[first + delta]
+    rel_est = np.linalg.inv(E[first]) @ E[first + delta]
+    err = np.linalg.inv(rel_gt) @ rel_est
+    if rotation:
+        cos = np.clip((np.trace(err[:, :3, :3], axis1=1, axis2=2) - 1) / 2, -1.0, 1.0)
+        errors = np.degrees(np.arccos(cos))
+    else:
+        errors = np.linalg.norm(err[:, :3, 3], axis=1)
+    return ErrorStats.of(errors), errors
+
+
+def path_lengths(poses) -> np.ndarray:
+    """Cumulative distance travelled at each pose."""
+    p = as_4x4(poses)[:, :3, 3]
+    return np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(p, axis=0), axis=1))])
+
+
+def kitti_segment_errors(gt, est, lengths=(100, 200, 300, 400, 500, 600, 700, 800), step: int = 10) -> dict:
+    """KITTI odometry errors per segment length: ``{length: (translation %, rotation deg/m, count)}``.
+
+    Short sequences have no long segments; pass lengths that fit (e.g. 1, 2, 5 m).
+    """
+    G, E = as_4x4(gt), as_4x4(est)
+    _check_pair(G, E)
+    dist = path_lengths(G)
+    out = {}
+    for length in lengths:
+        t_err, r_err = [], []
+        for first in range(0, len(G), step):
+            last = int(np.searchsorted(dist, dist[first] + length))
+            if last >= len(G):
+                break
+            rel_gt = np.linalg.inv(G[first]) @ G[last]
+            rel_est = np.linalg.inv(E[first]) @ E[last]
+            err = np.linalg.inv(rel_est) @ rel_gt
+            t_err.append(np.linalg.norm(err[:3, 3]) / length)
+            cos = np.clip((np.trace(err[:3, :3]) - 1) / 2, -1.0, 1.0)
+            r_err.append(np.degrees(np.arccos(cos)) / length)
+        if t_err:
+            out[length] = (100.0 * float(np.mean(t_err)), float(np.mean(r_err)), len(t_err))
+    return out
+
+
+def key_position_errors(gt_planar, est_planar, frames) -> dict:
+    """Seed 000's statistics: mean and standard deviation of x, y (mm) and heading (deg) errors at
+    the key ``frames``, estimate minus truth, in the frame of the start."""
+    g, e = np.asarray(gt_planar, float), np.asarray(est_planar, float)
+    idx = np.asarray(frames, dtype=int)
+    dx, dy = 1000 * (e[idx, 0] - g[idx, 0]), 1000 * (e[idx, 1] - g[idx, 1])
+    dth = np.degrees(wrap_angle(e[idx, 2] - g[idx, 2]))
+    return {
+        name: (float(np.mean(v)), float(np.std(v)))
+        for name, v in (("x_mm", dx), ("y_mm", dy), ("theta_deg", dth))
+    }
+
+
+# ---------------------------------------------------------------------- files
+def write_kitti_poses(path, poses) -> None:
+    """12 numbers per line: the top three rows of each pose."""
+    T = as_4x4(poses)[:, :3, :].reshape(-1, 12)
+    Path(path).write_text("".join(" ".join(f"{v:.9e}" for v in row) + "\n" for row in T))
+
+
+def write_tum(path, times, poses) -> None:
+    """TUM trajectory format, as evo reads it: ``timestamp tx ty tz qx qy qz qw`` per line."""
+    T = as_4x4(poses)
+    q = Rotation.from_matrix(T[:, :3, :3]).as_quat()  # x, y, z, w
+    rows = np.column_stack([np.asarray(times, float), T[:, :3, 3], q])
+    Path(path).write_text("".join(" ".join(f"{v:.9f}" for v in row) + "\n" for row in rows))
+
+
+def read_trajectory(path) -> tuple[np.ndarray | None, np.ndarray]:
+    """Read a KITTI pose file (12 numbers a line) or a TUM file (8); returns ``(times, poses)``."""
+    path = Path(path)
+    if not path.is_file():
+        raise FileNotFoundError(f"{path}: no such trajectory file")
+    rows = []
+    for n, line in enumerate(path.read_text().splitlines(), start=1):
+        if not line.strip() or line.lstrip().startswith("#"):
+            continue
+        try:
+            values = [float(v) for v in line.split()]
+        except ValueError:
+            raise ValueError(f"{path}, line {n}: not a row of numbers") from None
+        if len(values) not in (8, 12) or (rows and len(values) != len(rows[0])):
+            raise ValueError(f"{path}, line {n}: expected 12 numbers (KITTI) or 8 (TUM), got {len(values)}")
+        rows.append(values)
+    if not rows:
+        raise ValueError(f"{path}: no poses")
+    a = np.array(rows)
+    if a.shape[1] == 12:
+        return None, as_4x4(a.reshape(-1, 3, 4))
+    T = np.tile(np.eye(4), (len(a), 1, 1))
+    T[:, :3, :3] = Rotation.from_quat(a[:, 4:8]).as_matrix()
+    T[:, :3, 3] = a[:, 1:4]
+    return a[:, 0], T
