@@ -2,6 +2,8 @@
 
 Commands
 --------
+run            the stereo VO pipeline on a sample or a KITTI-layout folder (default: indoor_linear)
+evaluate       trajectory errors of an estimate against ground truth (KITTI or TUM files)
 generate NAME  render a named sample sequence (KITTI layout, with ground truth and odometry)
 bench NAME     time one part of the library against its baseline (``bench --help`` lists them)
 """
@@ -29,6 +31,20 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", required=True)
     from vo_lib.samples import SAMPLES
 
+    run = sub.add_parser("run", help="run the stereo visual odometry pipeline")
+    run.add_argument("--sequence", help="sample name or KITTI-layout folder (default: indoor_linear)")
+    run.add_argument("--out", help="output folder (default: runs/NAME)")
+    run.add_argument("--frames", type=int, help="process only the first N frames")
+    run.add_argument(
+        "--no-odometry", action="store_true", help="ignore odometry.txt (constant-velocity prediction)"
+    )
+    run.add_argument("--seed", type=int, default=0, help="seed of the RANSAC draws")
+    ev = sub.add_parser("evaluate", help="ATE, RPE and KITTI segment errors of an estimate")
+    ev.add_argument("--gt", required=True, help="ground-truth poses (KITTI poses.txt or TUM)")
+    ev.add_argument("--est", required=True, help="estimated poses (KITTI or TUM)")
+    ev.add_argument(
+        "--segments", help="comma-separated segment lengths in metres (default: KITTI's 100..800)"
+    )
     gen = sub.add_parser("generate", help="render a named sample sequence")
     gen.add_argument("name", choices=sorted(SAMPLES), help="which sample")
     gen.add_argument("--out", help="output folder (default: data/NAME)")
@@ -44,7 +60,17 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
-    if args.command == "generate":
+    if args.command in ("run", "evaluate"):
+        from vo_lib.run import UsageError, evaluate_command, run_command
+
+        try:
+            if args.command == "run":
+                run_command(args.sequence, args.out, args.frames, args.no_odometry, args.seed)
+            else:
+                evaluate_command(args.gt, args.est, args.segments)
+        except UsageError as exc:
+            parser.exit(2, f"python -m vo_lib {args.command}: error: {exc}\n")
+    elif args.command == "generate":
         from vo_lib.data import sample_path
         from vo_lib.samples import generate
 

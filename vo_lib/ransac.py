@@ -211,18 +211,24 @@ def _search(
     Returns ``(value, variance, count, tried)`` of the best hypothesis; ``extra`` is one more
     ``(value, variance)`` scored first (the filter's prediction).
     """
+    # a hypothesis is tested as if no less certain than a typical one of the pool: a very uncertain
+    # hypothesis would otherwise open every gate and out-count the precise ones
+    cap = float(np.median(variances[pool]))
     best = (None, None, -1)
     if extra is not None:
-        count = int(passes(np.array([extra[0]]), np.array([extra[1]]))[0].sum())
-        best = (float(extra[0]), float(extra[1]), count)
+        var_extra = min(float(extra[1]), cap)
+        count = int(passes(np.array([extra[0]]), np.array([var_extra]))[0].sum())
+        best = (float(extra[0]), var_extra, count)
     tried, limit = 0, min(hypotheses_needed(INITIAL_INLIER_RATIO, confidence), max_hypotheses)
     n_total = max(len(pool), 1)
     while tried < limit:
         idx = pool[rng.integers(0, len(pool), limit - tried)]
-        counts = passes(values[idx], variances[idx]).sum(axis=1)
-        k = int(np.argmax(counts))
+        var = np.minimum(variances[idx], cap)
+        counts = passes(values[idx], var).sum(axis=1)
+        # among equal counts the more precise hypothesis wins
+        k = int(np.argmax(counts - 0.5 * var / (var.max() + 1e-300)))
         if counts[k] > best[2]:
-            best = (float(values[idx[k]]), float(variances[idx[k]]), int(counts[k]))
+            best = (float(values[idx[k]]), float(var[k]), int(counts[k]))
         tried += len(idx)
         ratio = best[2] / n_total if best[2] > 0 else 1e-9
         limit = min(hypotheses_needed(min(ratio, 1.0), confidence), max_hypotheses)
@@ -365,6 +371,10 @@ def one_point_ransac(
     rho_hat, var_rho, _, tried_rho = _search(
         pool2, rho_j, var_pt, rho_pass, rng, confidence, max_hypotheses, extra
     )
+    rho_in = rho_pass(np.array([rho_hat]), np.array([var_rho]))[0]
+    # refine rho on its inliers, like theta: inverse-variance weighted mean of the per-match rhos
+    w_rho = 1.0 / var_pt[rho_in]
+    rho_hat, var_rho = float(np.sum(w_rho * rho_j[rho_in]) / np.sum(w_rho)), float(1.0 / np.sum(w_rho))
     keep = np.zeros(len(iu), bool)
     keep[it[rho_pass(np.array([rho_hat]), np.array([var_rho]))[0]]] = True
     theta, rho = theta_hat, rho_hat

@@ -1,0 +1,233 @@
+"""``python -m vo_lib run`` and ``python -m vo_lib evaluate``: the pipeline as a command.
+
+``run`` writes, into ``--out`` (default ``runs/NAME``): ``poses.txt`` (KITTI), ``trajectory.tum``
+(TUM, readable by evo), ``timings.csv``, ``diagnostics.csv`` and ``trajectory.png``, and prints a
+timing table like the paper's Table 1 and, where the sequence has ground truth, the errors. All
+files go to a temporary folder first, renamed into place at the end, so a failed or interrupted
+run leaves nothing half-written. Bad arguments print one line and exit with status 2.
+"""
+
+from __future__ import annotations
+
+import csv
+import os
+import shutil
+import sys
+import tempfile
+from dataclasses import asdict, fields
+from pathlib import Path
+
+import numpy as np
+
+from vo_lib.evaluation import (
+    ate_planar,
+    kitti_segment_errors,
+    read_trajectory,
+    rpe,
+    write_kitti_poses,
+    write_tum,
+)
+from vo_lib.geometry import camera_mount, camera_poses_from_planar, planar_from_camera_poses, wrap_angle
+from vo_lib.pipeline import FrameDiagnostics, FrameTimings, PipelineResult, run_sequence
+from vo_lib.samples import CAMERA_HEIGHT, SAMPLES
+
+DEFAULT_SEQUENCE = "indoor_linear"
+#: Seed 000, Table 1, 640x480 row: stereo processing, parameter estimation, Kalman filtering (ms).
+PAPER_TABLE1_640 = (48.969, 0.874, 0.161)
+
+
+class UsageError(Exception):
+    """A bad argument: reported in one line, exit status 2."""
+
+
+def resolve_sequence(name_or_path: str, frames: int | None):
+    """A loaded sequence for a sample name (generated on first use) or a KITTI-layout folder."""
+    from vo_lib.data import load_sequence
+    from vo_lib.sequence import SequenceError
+
+    if name_or_path not in SAMPLES and not Path(name_or_path).exists():
+        raise UsageError(
+            f"--sequence {name_or_path!r}: neither a sample name ({', '.join(SAMPLES)}) "
+            "nor an existing folder"
+        )
+    try:
+        return load_sequence(name_or_path)
+    except SequenceError as exc:
+        raise UsageError(f"--sequence {name_or_path}: {exc}") from None
+
+
+def prepare_output(out: Path) -> Path:
+    """Check that ``out`` can be written and return a fresh temporary folder beside it."""
+    if out.exists() and not out.is_dir():
+        raise UsageError(f"--out {out}: exists and is not a folder")
+    try:
+        out.parent.mkdir(parents=True, exist_ok=True)
+        return Path(tempfile.mkdtemp(prefix=f".{out.name}.", suffix=".tmp", dir=out.parent))
+    except OSError as exc:
+        raise UsageError(f"--out {out}: cannot write there ({exc.strerror or exc})") from None
+
+
+def _write_csv(path: Path, rows, cls) -> None:
+    names = [f.name for f in fields(cls)]
+    with path.open("w", newline="") as fh:
+        writer = csv.DictWriter(fh, fieldnames=names)
+        writer.writeheader()
+        for row in rows:
+            writer.writerow(asdict(row))
+
+
+def _plot(
+    path: Path, estimate: np.ndarray, truth: np.ndarray | None, odometry: np.ndarray | None, title: str
+):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from vo_lib.plotting import plot_paths
+
+    paths = {}
+    if truth is not None:
+        paths["ground truth"] = truth
+    if odometry is not None:
+        paths["track odometry"] = odometry
+    paths["visual odometry (fused)"] = estimate
+    fig, ax = plt.subplots(figsize=(7, 5), constrained_layout=True)
+    plot_paths(ax, paths, title)
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def print_timing_table(result: PipelineResult, camera, frames: int) -> None:
+    t = result.timing_table()
+    fps = 1000.0 / t["total"] if t["total"] > 0 else float("inf")
+    print(f"\nAverage time per frame (median, ms) at {camera.width}x{camera.height}, {frames} frames")
+    print(f"  {'stage':<44s}{'this run':>10s}  {'paper, 640x480':<s}")
+    rows = [
+        ("binocular stereo vision processing", t["stereo"], f"{PAPER_TABLE1_640[0]:.3f}"),
+        ("prediction and guided temporal matching", t["prediction"] + t["matching"], "-"),
+        ("parameter estimation (1-point RANSAC)", t["estimation"], f"{PAPER_TABLE1_640[1]:.3f}"),
+        ("Kalman filtering", t["kalman"], f"{PAPER_TABLE1_640[2]:.3f}"),
+        ("whole frame", t["total"], "26.551 (mean of 10,000)"),
+    ]
+    for name, value, paper in rows:
+        print(f"  {name:<44s}{value:10.3f}  {paper}")
+    print(f"  frames per second: {fps:.0f}")
+
+
+def error_report(result: PipelineResult, truth_planar: np.ndarray, odometry_planar=None) -> dict:
+    """Errors of the estimate (and of odometry alone) against the ground truth."""
+    est = result.poses
+    dist = float(np.sum(np.linalg.norm(np.diff(truth_planar[:, :2], axis=0), axis=1)))
+    report = {"distance_m": dist}
+    for label, traj in (("vo", est), ("odometry", odometry_planar)):
+        if traj is None:
+            continue
+        final = float(np.linalg.norm(traj[-1, :2] - truth_planar[-1, :2]))
+        heading = np.degrees(np.abs(wrap_angle(traj[:, 2] - truth_planar[:, 2])))
+        report[label] = {
+            "final_position_error_m": final,
+            "final_position_error_pct": 100 * final / dist if dist > 0 else float("nan"),
+            "ate_rmse_m": ate_planar(truth_planar, traj)[0].rmse,
+            "heading_error_mean_deg": float(heading.mean()),
+            "heading_error_max_deg": float(heading.max()),
+            "final_heading_error_deg": float(heading[-1]),
+        }
+    return report
+
+
+def print_error_table(report: dict, flagged: int, rpe_m: float) -> None:
+    print(f"\nErrors against ground truth ({report['distance_m']:.2f} m travelled)")
+    cols = [k for k in ("vo", "odometry") if k in report]
+    names = {"vo": "visual odometry", "odometry": "track odometry"}
+    print(f"  {'':<34s}" + "".join(f"{names[c]:>18s}" for c in cols))
+    for key, label, fmt in (
+        ("final_position_error_m", "final position error [m]", "{:.4f}"),
+        ("final_position_error_pct", "  of distance travelled [%]", "{:.2f}"),
+        ("ate_rmse_m", "ATE RMSE, planar alignment [m]", "{:.4f}"),
+        ("heading_error_mean_deg", "mean heading error [deg]", "{:.3f}"),
+        ("heading_error_max_deg", "max heading error [deg]", "{:.3f}"),
+        ("final_heading_error_deg", "final heading error [deg]", "{:.3f}"),
+    ):
+        print(f"  {label:<34s}" + "".join(f"{fmt.format(report[c][key]):>18s}" for c in cols))
+    print(f"  relative pose error, 1 frame [m]  {rpe_m:>16.5f}")
+    print(f"  frames flagged (VO not used)      {flagged:>16d}")
+
+
+def run_command(
+    sequence: str | None, out: str | None, frames: int | None, no_odometry: bool, seed: int = 0
+) -> dict:
+    """Run the pipeline and write its outputs; returns the error report (empty without truth)."""
+    name = sequence or DEFAULT_SEQUENCE
+    if frames is not None and frames < 2:
+        raise UsageError(f"--frames {frames}: need at least 2 frames")
+    out_dir = Path(out) if out else Path("runs") / Path(name).name
+    tmp = prepare_output(out_dir)
+    try:
+        seq = resolve_sequence(name, frames)
+        n = len(seq) if frames is None else min(frames, len(seq))
+        mount = camera_mount(height=CAMERA_HEIGHT)
+        result = run_sequence(
+            seq, frames=n, use_odometry=not no_odometry, seed=seed, progress=sys.stderr.isatty()
+        )
+        poses = camera_poses_from_planar(result.poses, mount)
+        write_kitti_poses(tmp / "poses.txt", poses)
+        write_tum(tmp / "trajectory.tum", seq.times[:n], poses)
+        _write_csv(tmp / "timings.csv", result.timings, FrameTimings)
+        _write_csv(tmp / "diagnostics.csv", result.diagnostics, FrameDiagnostics)
+        truth = planar_from_camera_poses(seq.poses[:n], mount) if seq.poses is not None else None
+        odo = None
+        if seq.odometry is not None:
+            from vo_lib.odometry import TrackOdometry
+
+            odo = TrackOdometry().integrate(seq.odometry[1:n])
+        _plot(tmp / "trajectory.png", result.poses, truth, odo, f"{Path(name).name}: {n} frames")
+        print_timing_table(result, seq.camera, n)
+        report = {}
+        if truth is not None:
+            report = error_report(result, truth, odo)
+            rpe_m = rpe(seq.poses[:n], poses)[0].rmse
+            print_error_table(report, len(result.flagged), rpe_m)
+        if out_dir.exists():
+            old = out_dir.with_name(f".{out_dir.name}.old-{os.getpid()}")
+            os.replace(out_dir, old)
+            os.replace(tmp, out_dir)
+            shutil.rmtree(old, ignore_errors=True)
+        else:
+            os.replace(tmp, out_dir)
+        print(f"\nwrote {out_dir}/: poses.txt trajectory.tum timings.csv diagnostics.csv trajectory.png")
+        return report
+    finally:
+        if tmp.exists():
+            shutil.rmtree(tmp, ignore_errors=True)
+
+
+def evaluate_command(gt: str, est: str, segments: str | None) -> None:
+    """Print ATE, RPE and segment errors of two trajectory files (KITTI or TUM)."""
+    from vo_lib.evaluation import ate
+
+    try:
+        _, G = read_trajectory(gt)
+        _, E = read_trajectory(est)
+        if len(G) != len(E):
+            raise ValueError(f"--gt has {len(G)} poses but --est has {len(E)}")
+    except (OSError, ValueError) as exc:
+        raise UsageError(str(exc)) from None
+    lengths = (
+        tuple(float(x) for x in segments.split(",")) if segments else (100, 200, 300, 400, 500, 600, 700, 800)
+    )
+    a, _ = ate(G, E)
+    r, _ = rpe(G, E)
+    ra, _ = rpe(G, E, rotation=True)
+    print(
+        f"ATE (SE(3) alignment): rmse {a.rmse:.4f} m, mean {a.mean:.4f}, "
+        f"median {a.median:.4f}, max {a.max:.4f}"
+    )
+    print(f"RPE (1 frame): translation rmse {r.rmse:.5f} m, rotation rmse {ra.rmse:.4f} deg")
+    seg = kitti_segment_errors(G, E, lengths)
+    if not seg:
+        print("no KITTI segments of the requested lengths fit this trajectory (try --segments 1,2,5)")
+    for length, (t_pct, r_deg, count) in seg.items():
+        print(
+            f"segment {length:g} m: translation {t_pct:.2f} %, rotation {r_deg:.4f} deg/m ({count} segments)"
+        )
