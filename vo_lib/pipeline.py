@@ -20,8 +20,9 @@ the gap. Exactly one pose is produced per input frame.
 from __future__ import annotations
 
 import time
+from collections import deque
 from collections.abc import Iterable
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 
 import numpy as np
 from scipy.stats import chi2
@@ -38,6 +39,16 @@ MIN_INLIERS = 15
 MIN_INLIER_RATIO = 0.7  # of the temporal matches; a large moving object drags it down
 PRIOR_GATE = float(chi2.ppf(0.9999, 2))  # VO motion against the prediction (Mahalanobis^2)
 MAX_GAP = 90  # frames; after this long without a good frame, start again from the current one
+#: A frame whose inliers fall below this fraction of the recent median has lost part of its view
+#: to something that does not move with the world (an occluder, a large moving object)...
+LOST_VIEW_FRACTION = 0.6
+#: ...unless the drop lasts this many frames: then it is the new normal (a changed scene).
+LOST_VIEW_PATIENCE = 15
+RECENT_FRAMES = 15  # good frames whose inlier counts make the recent median
+LOST_VIEW = "part of the view lost (occluder or moving object)"
+#: Guided matching that finds fewer than this fraction of the recent median is retried with a
+#: window four times wider (a prediction more than three sigma off, e.g. as a turn begins).
+RETRY_FRACTION = 0.8
 #: Scale of the least-squares covariance of (theta, rho) before it enters the filter. The
 #: least-squares covariance assumes independent pixel noise, but corners sit on whole pixels and
 #: motion between frames is often below a pixel, so the errors are correlated with the motion;
@@ -122,6 +133,10 @@ class StereoVisualOdometry:
         self.reference: StereoFeatures | None = None
         self.gap = 0  # frames since the reference frame
         self.frame = 0
+        self.recent_inliers: deque[int] = deque(maxlen=RECENT_FRAMES)
+        self.recent_matches: deque[int] = deque(maxlen=RECENT_FRAMES)
+        self.lost_view_frames = 0
+        self.last_reason = ""
 
     def process(self, left: np.ndarray, right: np.ndarray, odometry=None):
         """Process one stereo pair (and the track distances since the previous frame, if any).
@@ -152,6 +167,16 @@ class StereoVisualOdometry:
             reason = "too few stereo features"
         else:
             matches = match_temporal(self.reference, features, self.camera, prior)
+            if len(self.recent_matches) >= 5 and len(matches) < RETRY_FRACTION * np.median(
+                self.recent_matches
+            ):
+                wider = match_temporal(
+                    self.reference,
+                    features,
+                    self.camera,
+                    replace(prior, covariance=16.0 * np.asarray(prior.covariance)),
+                )
+                matches = wider if len(wider) > len(matches) else matches
             t3 = time.perf_counter()
             diag.temporal_matches = len(matches)
             if len(matches) < MIN_INLIERS:
@@ -170,12 +195,18 @@ class StereoVisualOdometry:
                     reason = "low inlier ratio"
                 elif innovation @ np.linalg.solve(prior.covariance + r_vo, innovation) > PRIOR_GATE:
                     reason = "motion contradicts the prediction"
+                elif self._view_lost(diag.inliers):
+                    reason = LOST_VIEW
                 else:
                     self.kf.update(est.theta, est.rho, r_vo)
+                    if self.gap == 1:  # counts after a gap are not typical of the next frames
+                        self.recent_inliers.append(diag.inliers)
+                        self.recent_matches.append(len(matches))
         timing.matching = (t3 - t2) * 1e3
         timing.estimation = (t4 - t3) * 1e3
         t5 = time.perf_counter()
         self.kf.finish_frame(self.gap + 1)
+        self.last_reason = reason
         if reason:
             diag.fallback, diag.reason = True, reason
             self.gap += 1
@@ -188,6 +219,28 @@ class StereoVisualOdometry:
         timing.total = (t6 - t0) * 1e3
         self.frame += 1
         return self.kf.pose, self.kf.covariance, diag, timing
+
+    def _view_lost(self, inliers: int) -> bool:
+        """A sudden drop of the inliers below the recent median; a lasting one becomes the norm.
+
+        Judged only against the previous frame, or while a loss is going on: after frames without
+        vision the reference is older and fewer matches are expected.
+        """
+        judged = self.gap == 1 or self.last_reason == LOST_VIEW
+        if (
+            not judged
+            or len(self.recent_inliers) < 5
+            or inliers >= LOST_VIEW_FRACTION * np.median(self.recent_inliers)
+        ):
+            self.lost_view_frames = 0
+            return False
+        self.lost_view_frames += 1
+        if self.lost_view_frames > LOST_VIEW_PATIENCE:
+            self.recent_inliers.clear()
+            self.recent_matches.clear()
+            self.lost_view_frames = 0
+            return False
+        return True
 
     def _new_reference(self, features: StereoFeatures) -> None:
         self.reference = features if len(features) >= MIN_FEATURES else None
