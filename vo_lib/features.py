@@ -43,6 +43,7 @@ class StereoFeatures:
     w: np.ndarray
     descriptors: np.ndarray
     timings: dict = field(default_factory=dict)
+    image: np.ndarray | None = None  # the left image, for sub-pixel refinement of temporal matches
 
     def __len__(self) -> int:
         return len(self.w)
@@ -142,6 +143,19 @@ def bucket(
     return np.sort(chosen)
 
 
+def parabola_offset(c_minus: np.ndarray, c_zero: np.ndarray, c_plus: np.ndarray) -> np.ndarray:
+    """Sub-pixel position of the minimum of a SAD cost sampled at -1, 0, +1 (0 where 0 is no minimum).
+
+    A sum of absolute differences is V-shaped around its minimum, so the fit is equiangular: two
+    lines of equal and opposite slope through the samples. A parabola would pull the minimum
+    towards whole pixels ("pixel locking") and under-measure sub-pixel motion.
+    """
+    c_minus, c_zero, c_plus = (np.asarray(c, float) for c in (c_minus, c_zero, c_plus))
+    rise = np.maximum(c_minus, c_plus) - c_zero
+    ok = (rise > 0) & (c_zero <= c_minus) & (c_zero <= c_plus)
+    return np.where(ok, np.clip(0.5 * (c_minus - c_plus) / np.where(ok, rise, 1.0), -0.5, 0.5), 0.0)
+
+
 def _subpixel_disparity(
     left: np.ndarray, right: np.ndarray, u: np.ndarray, v: np.ndarray, d: np.ndarray
 ) -> np.ndarray:
@@ -168,13 +182,8 @@ def _subpixel_disparity(
         np.abs(patch - right[rows, cols - di[ok, None, None] - k].astype(np.int32)).sum(axis=(1, 2))
         for k in (-1, 0, 1)
     ]
-    c_m, c_0, c_p = (c.astype(float) for c in costs)
-    denom = c_m - 2 * c_0 + c_p
-    shift = np.where(
-        (denom > 0) & (c_0 <= c_m) & (c_0 <= c_p), 0.5 * (c_m - c_p) / np.maximum(denom, 1e-9), 0.0
-    )
     # cost index k corresponds to disparity d + k
-    out[ok] = di[ok] + np.clip(shift, -0.5, 0.5)
+    out[ok] = di[ok] + parabola_offset(*costs)
     return out
 
 
@@ -266,7 +275,7 @@ class StereoFrontEnd:
         t2 = time.perf_counter()
         if len(pl) == 0 or len(pr) == 0:
             timings.update(detect=(t1 - t0) * 1e3, describe=(t2 - t1) * 1e3, stereo_match=0.0)
-            return StereoFeatures(np.zeros((0, 3)), np.zeros((0, 32), np.uint8), timings)
+            return StereoFeatures(np.zeros((0, 3)), np.zeros((0, 32), np.uint8), timings, left)
         ia, ib = self._row_candidates(pl, pr)
         a, b, _ = best_matches(ia, ib, hamming(dl[ia], dr[ib]), len(pl), len(pr))
         u, v = pl[a, 0].astype(float), pl[a, 1].astype(float)
@@ -274,7 +283,7 @@ class StereoFrontEnd:
         ok = d > 0
         t3 = time.perf_counter()
         timings.update(detect=(t1 - t0) * 1e3, describe=(t2 - t1) * 1e3, stereo_match=(t3 - t2) * 1e3)
-        return StereoFeatures(np.column_stack([u, v, d])[ok], dl[a][ok], timings)
+        return StereoFeatures(np.column_stack([u, v, d])[ok], dl[a][ok], timings, left)
 
     def _row_candidates(self, pl: np.ndarray, pr: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """All (left, right) pairs on rows within the tolerance and disparities within the range."""

@@ -135,6 +135,48 @@ def get_sample(name: str) -> Sample:
     return SAMPLES[name]
 
 
+@dataclass(frozen=True)
+class RenderedSample:
+    """A sample's rig, truth and an iterator of ``(left, right, odometry_or_None)`` frames."""
+
+    camera: StereoCamera
+    mount: np.ndarray
+    drive: object
+    frames: int
+
+    def truth(self) -> np.ndarray:
+        """True planar robot poses of the frames."""
+        return self.drive.poses[: self.frames]
+
+
+def render_sample(name: str, frames: int | None = None, resolution=DEFAULT_RESOLUTION):
+    """Render a sample in memory: ``(RenderedSample, iterator of frames)``; nothing is written."""
+    sample = get_sample(name)
+    n = sample.frames if frames is None else int(frames)
+    if not 1 <= n <= sample.frames:
+        raise ValueError(f"frames must lie in 1..{sample.frames} for {name}; got {frames}")
+    width, height = resolution
+    camera = StereoCamera.bumblebee2(width, height)
+    drive = simulate_drive(
+        sample.legs,
+        sample.rate,
+        sample.start,
+        np.random.default_rng(sample.seed),
+        TrackOdometry(),
+        sample.slip,
+    )
+    mount = camera_mount(height=CAMERA_HEIGHT)
+    renderer = StereoRenderer(WORLDS[sample.world](), camera, SensorEffects(noise_sigma=sample.sensor_noise))
+    image_rng = np.random.default_rng(sample.seed + 1)
+
+    def frame_iter():
+        for k in range(n):
+            left, right = renderer.render_pair(planar_to_matrix(drive.poses[k]) @ mount, image_rng)
+            yield left, right, (None if k == 0 else drive.odometry[k])
+
+    return RenderedSample(camera, mount, drive, n), frame_iter()
+
+
 def generate(
     name: str,
     out,
@@ -147,26 +189,17 @@ def generate(
     ``frames`` keeps only the first frames of the drive; ``resolution`` is ``(width, height)``.
     """
     sample = get_sample(name)
-    n = sample.frames if frames is None else int(frames)
-    if not 1 <= n <= sample.frames:
-        raise ValueError(f"frames must lie in 1..{sample.frames} for {name}; got {frames}")
+    rendered, frame_iter = render_sample(name, frames, resolution)
+    camera, drive, n = rendered.camera, rendered.drive, rendered.frames
     width, height = resolution
-    camera = StereoCamera.bumblebee2(width, height)
-    world = WORLDS[sample.world]()
-    rng = np.random.default_rng(sample.seed)
-    odometry = TrackOdometry()
-    drive = simulate_drive(sample.legs, sample.rate, sample.start, rng, odometry, sample.slip)
-    mount = camera_mount(height=CAMERA_HEIGHT)
-    renderer = StereoRenderer(world, camera, SensorEffects(noise_sigma=sample.sensor_noise))
-    image_rng = np.random.default_rng(sample.seed + 1)
-    W0 = planar_to_matrix(drive.poses[0]) @ mount
+    W0 = planar_to_matrix(drive.poses[0]) @ rendered.mount
     poses = []
     with SequenceWriter(out, camera) as writer:
-        for k in tqdm(range(n), desc=f"rendering {name}", unit="frame", disable=not progress):
-            W = planar_to_matrix(drive.poses[k]) @ mount
-            left, right = renderer.render_pair(W, image_rng)
+        for k, (left, right, _) in enumerate(
+            tqdm(frame_iter, total=n, desc=f"rendering {name}", unit="frame", disable=not progress)
+        ):
             writer.add(left, right)
-            poses.append(np.linalg.solve(W0, W))  # camera k in the frame of camera 0
+            poses.append(np.linalg.solve(W0, planar_to_matrix(drive.poses[k]) @ rendered.mount))
         manifest = {
             "sample": name,
             "purpose": sample.purpose,
@@ -187,7 +220,7 @@ def generate(
                 "height_m": CAMERA_HEIGHT,
                 "mount": "above turning axis",
             },
-            "track_odometry": asdict(odometry),
+            "track_odometry": asdict(TrackOdometry()),
             "slip": asdict(sample.slip),
             "sensor_noise_grey": sample.sensor_noise,
             "seed": sample.seed,

@@ -18,12 +18,13 @@ import numpy as np
 
 from vo_lib.camera import StereoCamera
 from vo_lib.circular_motion import apply_motion
-from vo_lib.features import StereoFeatures, best_matches, hamming, window_pairs
+from vo_lib.features import StereoFeatures, best_matches, hamming, parabola_offset, window_pairs
 
 N_SIGMA = 3.0  # window half-width in standard deviations
 PIXEL_SIGMA = 1.0  # pixel noise of a feature position, added to the prediction's uncertainty
 MIN_RADIUS = 4.0  # pixels
 MAX_RADIUS = 120.0  # pixels
+PATCH_HALF = 3  # 7x7 patches for the sub-pixel refinement of matches
 NEAR = 0.1  # metres: predicted points nearer than this are not matched
 
 
@@ -76,6 +77,47 @@ def prediction_sigma(w_prev: np.ndarray, camera: StereoCamera, prior: MotionPrio
     return np.sqrt(np.nan_to_num(var, nan=np.inf) + PIXEL_SIGMA**2)
 
 
+def refine_positions(
+    prev_image: np.ndarray,
+    curr_image: np.ndarray,
+    w_prev: np.ndarray,
+    w_curr: np.ndarray,
+    half: int = PATCH_HALF,
+) -> np.ndarray:
+    """Sub-pixel position in the current image of each previous feature's patch.
+
+    Corners sit on whole pixels, and motion between frames is often a fraction of a pixel, so
+    whole-pixel matches under-measure it. For each match the previous feature's patch is compared
+    (sum of absolute differences) with the current image at the matched pixel and one pixel
+    around it; parabolas through the costs along u and along v give the sub-pixel position.
+    Returns ``w_curr`` with refined u, v (the disparity is kept).
+    """
+    out = np.array(w_curr, dtype=float, copy=True)
+    if len(out) == 0:
+        return out
+    h, w = curr_image.shape
+    offs = np.arange(-half, half + 1)
+    up, vp = np.rint(w_prev[:, 0]).astype(int), np.rint(w_prev[:, 1]).astype(int)
+    uc, vc = np.rint(w_curr[:, 0]).astype(int), np.rint(w_curr[:, 1]).astype(int)
+    r = half + 1
+    ok = (up >= half) & (up < w - half) & (vp >= half) & (vp < h - half)
+    ok &= (uc >= r) & (uc < w - r) & (vc >= r) & (vc < h - r)
+    if not ok.any():
+        return out
+    rows = vp[ok, None, None] + offs[None, :, None]
+    cols = up[ok, None, None] + offs[None, None, :]
+    patch = prev_image[rows, cols].astype(np.int32)
+    rc, cc = vc[ok, None, None] + offs[None, :, None], uc[ok, None, None] + offs[None, None, :]
+
+    def sad(du, dv):
+        return np.abs(patch - curr_image[rc + dv, cc + du].astype(np.int32)).sum(axis=(1, 2))
+
+    c0 = sad(0, 0)
+    out[ok, 0] = uc[ok] + parabola_offset(sad(-1, 0), c0, sad(1, 0))
+    out[ok, 1] = vc[ok] + parabola_offset(sad(0, -1), c0, sad(0, 1))
+    return out
+
+
 def match_temporal(
     prev: StereoFeatures, curr: StereoFeatures, camera: StereoCamera, prior: MotionPrior | None = None
 ) -> TemporalMatches:
@@ -104,5 +146,8 @@ def match_temporal(
         ia, ib = ia[inside], ib[inside]
     dist = hamming(prev.descriptors[ia], curr.descriptors[ib])
     a, b, _ = best_matches(ia, ib, dist, n_prev, n_curr)
+    w_curr = curr.w[b]
+    if prev.image is not None and curr.image is not None:
+        w_curr = refine_positions(prev.image, curr.image, prev.w[a], w_curr)
     elapsed = (time.perf_counter() - t0) * 1e3
-    return TemporalMatches(a, b, prev.w[a], curr.w[b], len(ia), {"temporal_match": elapsed})
+    return TemporalMatches(a, b, prev.w[a], w_curr, len(ia), {"temporal_match": elapsed})

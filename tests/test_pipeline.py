@@ -1,0 +1,110 @@
+"""The pipeline on rendered samples (in memory): the acceptance figures of the pipeline issue."""
+
+import math
+
+import numpy as np
+import pytest
+
+from vo_lib.disturbances import MovingObject, blank_pair, noise_pair
+from vo_lib.geometry import relative_planar, wrap_angle
+from vo_lib.odometry import TrackOdometry
+from vo_lib.pipeline import run_frames
+from vo_lib.samples import render_sample
+
+
+def run_sample(name, frames=None, use_odometry=True):
+    rendered, frames_iter = render_sample(name, frames)
+    if not use_odometry:
+        frames_iter = ((left, right, None) for left, right, _ in frames_iter)
+    result = run_frames(frames_iter, rendered.camera)
+    truth = relative_planar(rendered.truth()[0], rendered.truth())  # the pipeline starts at the origin
+    return rendered, result, truth
+
+
+def heading_errors(poses, truth):
+    return np.degrees(np.abs(wrap_angle(poses[:, 2] - truth[:, 2])))
+
+
+def test_indoor_linear_final_error_within_one_percent_of_distance():
+    _, result, truth = run_sample("indoor_linear")
+    assert len(result.poses) == len(truth) == 401
+    distance = np.sum(np.linalg.norm(np.diff(truth[:, :2], axis=0), axis=1))
+    final = np.linalg.norm(result.poses[-1, :2] - truth[-1, :2])
+    assert final <= 0.01 * distance
+    assert np.median([d.inliers for d in result.diagnostics[1:]]) >= 200
+    assert len(result.flagged) == 0
+
+
+def test_free_motion_mean_heading_error():
+    _, result, truth = run_sample("indoor_free")
+    assert heading_errors(result.poses, truth).mean() <= 0.2
+    assert np.median([d.inliers for d in result.diagnostics[1:]]) >= 200
+
+
+def test_spot_turn_fused_heading_holds_where_odometry_drifts():
+    rendered, result, truth = run_sample("spot_turn", 600)
+    odometry = TrackOdometry().integrate(rendered.drive.odometry[1:600])
+    assert heading_errors(odometry[-1:], truth[-1:])[0] >= 5.0
+    assert heading_errors(result.poses, truth).max() <= 1.0
+
+
+def test_without_odometry_constant_velocity_still_tracks():
+    _, result, truth = run_sample("indoor_linear", 120, use_odometry=False)
+    assert not any(d.odometry for d in result.diagnostics)
+    assert np.linalg.norm(result.poses[-1, :2] - truth[-1, :2]) < 0.02
+    assert heading_errors(result.poses, truth).max() < 0.5
+
+
+def test_blank_noise_and_moving_object_frames_are_flagged_exactly():
+    """10 blank frames, 10 frames of noise, and an object covering half the view for 10 frames."""
+    rendered, frames_iter = render_sample("indoor_free", 100)
+    rng = np.random.default_rng(1)
+    board = MovingObject(rendered.camera, depth=1.5, fraction=0.5)
+    blank, noisy, moving = range(30, 40), range(40, 50), range(60, 70)
+
+    def disturbed():
+        for k, (left, right, odo) in enumerate(frames_iter):
+            if k in blank:
+                left, right = blank_pair(left.shape)
+            elif k in noisy:
+                left, right = noise_pair(left.shape, rng)
+            elif k in moving:
+                left, right = board.occlude(left, right, k - moving.start)
+            yield left, right, odo
+
+    result = run_frames(disturbed(), rendered.camera)
+    assert len(result.poses) == 100
+    assert result.flagged.tolist() == sorted([*blank, *noisy, *moving])
+    truth = relative_planar(rendered.truth()[0], rendered.truth())
+    assert heading_errors(result.poses, truth).max() <= 2.0
+    reasons = {d.reason for d in result.diagnostics if d.fallback}
+    assert any("view lost" in r for r in reasons) and "too few stereo features" in reasons
+
+
+def test_pipeline_is_deterministic():
+    a = run_sample("indoor_linear", 40)[1]
+    b = run_sample("indoor_linear", 40)[1]
+    np.testing.assert_array_equal(a.poses, b.poses)
+
+
+def test_timing_table_has_the_paper_columns():
+    _, result, _ = run_sample("indoor_linear", 20)
+    table = result.timing_table()
+    assert set(table) == {"stereo", "prediction", "matching", "estimation", "kalman", "total"}
+    assert table["total"] >= table["stereo"] > 0
+    assert math.isfinite(table["estimation"])
+
+
+@pytest.mark.parametrize("bad", ["nan", "missing"])
+def test_missing_or_bad_odometry_falls_back_to_constant_velocity(bad):
+    rendered, frames_iter = render_sample("indoor_linear", 30)
+
+    def frames():
+        for k, (left, right, odo) in enumerate(frames_iter):
+            if 10 <= k < 20:
+                odo = np.array([np.nan, 0.01]) if bad == "nan" else None
+            yield left, right, odo
+
+    result = run_frames(frames(), rendered.camera)
+    assert [d.odometry for d in result.diagnostics[10:20]] == [False] * 10
+    assert len(result.flagged) == 0
