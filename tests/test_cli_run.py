@@ -12,7 +12,8 @@ from vo_lib.evaluation import read_trajectory
 
 def cli(*args, cwd, data):
     env = dict(os.environ, VO_LIB_DATA=str(data))
-    return subprocess.run([sys.executable, "-m", "vo_lib", *args], capture_output=True, text=True, cwd=cwd, env=env)
+    command = [sys.executable, "-m", "vo_lib", *args]
+    return subprocess.run(command, capture_output=True, text=True, cwd=cwd, env=env)
 
 
 @pytest.fixture(scope="module")
@@ -26,7 +27,12 @@ def test_run_writes_every_output(workdir):
     assert proc.returncode == 0, proc.stderr
     out = workdir / "out"
     assert sorted(p.name for p in out.iterdir()) == [
-        "diagnostics.csv", "poses.txt", "timings.csv", "trajectory.png", "trajectory.tum"]
+        "diagnostics.csv",
+        "poses.txt",
+        "timings.csv",
+        "trajectory.png",
+        "trajectory.tum",
+    ]
     _, kitti = read_trajectory(out / "poses.txt")
     times, tum = read_trajectory(out / "trajectory.tum")
     assert len(kitti) == len(tum) == 25 and times[1] == pytest.approx(1 / 30)
@@ -42,7 +48,8 @@ def test_evaluate_command(workdir):
     gt = data / "indoor_linear_25f" / "poses.txt"
     if not gt.exists():
         cli("run", "--sequence", "indoor_linear", "--frames", "25", "--out", "out", cwd=workdir, data=data)
-    proc = cli("evaluate", "--gt", str(gt), "--est", "out/poses.txt", "--segments", "0.1,0.2", cwd=workdir, data=data)
+    args = ["evaluate", "--gt", str(gt), "--est", "out/poses.txt", "--segments", "0.1,0.2"]
+    proc = cli(*args, cwd=workdir, data=data)
     assert proc.returncode == 0, proc.stderr
     assert "ATE (SE(3) alignment): rmse" in proc.stdout and "segment 0.1 m" in proc.stdout
 

@@ -212,8 +212,8 @@ class StereoRenderer:
             pixels_per_texel = cam.fx * texel_len / max(poly[:, 2].min(), NEAR_PLANE)
             level = int(np.clip(np.floor(np.log2(1.0 / pixels_per_texel)), 0, len(quad.texture) - 1))
             scale = 2.0**level
-            # level-L texel (s, t) sits at base texel 2^L (s + 0.5) - 0.5
-            S = np.array([[scale, 0, 0.5 * scale - 0.5], [0, scale, 0.5 * scale - 0.5], [0, 0, 1.0]])
+            # cv2.pyrDown centres level-L texel (s, t) on base texel (2^L s, 2^L t)
+            S = np.diag([scale, scale, 1.0])
             shift = np.array([[1, 0, -x0], [0, 1, -y0], [0, 0, 1.0]])
             M = shift @ H @ S
             warped = cv2.warpPerspective(

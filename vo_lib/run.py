@@ -51,18 +51,23 @@ def resolve_sequence(name_or_path: str, frames: int | None):
             "nor an existing folder"
         )
     try:
-        return load_sequence(name_or_path)
+        return load_sequence(name_or_path, frames=frames if name_or_path in SAMPLES else None)
     except SequenceError as exc:
         raise UsageError(f"--sequence {name_or_path}: {exc}") from None
 
 
-def prepare_output(out: Path) -> Path:
-    """Check that ``out`` can be written and return a fresh temporary folder beside it."""
+def prepare_output(out: Path) -> tuple[Path, Path | None]:
+    """Check that ``out`` can be written; return a fresh temporary folder beside it and the first
+    folder this created (to remove if the run fails), or None."""
     if out.exists() and not out.is_dir():
         raise UsageError(f"--out {out}: exists and is not a folder")
+    created = out.parent
+    while not created.parent.exists() and created.parent != created:
+        created = created.parent
+    created = None if created.exists() else created
     try:
         out.parent.mkdir(parents=True, exist_ok=True)
-        return Path(tempfile.mkdtemp(prefix=f".{out.name}.", suffix=".tmp", dir=out.parent))
+        return Path(tempfile.mkdtemp(prefix=f".{out.name}.", suffix=".tmp", dir=out.parent)), created
     except OSError as exc:
         raise UsageError(f"--out {out}: cannot write there ({exc.strerror or exc})") from None
 
@@ -162,7 +167,8 @@ def run_command(
     if frames is not None and frames < 2:
         raise UsageError(f"--frames {frames}: need at least 2 frames")
     out_dir = Path(out) if out else Path("runs") / Path(name).name
-    tmp = prepare_output(out_dir)
+    tmp, created = prepare_output(out_dir)
+    finished = False
     try:
         seq = resolve_sequence(name, frames)
         n = len(seq) if frames is None else min(frames, len(seq))
@@ -196,10 +202,13 @@ def run_command(
         else:
             os.replace(tmp, out_dir)
         print(f"\nwrote {out_dir}/: poses.txt trajectory.tum timings.csv diagnostics.csv trajectory.png")
+        finished = True
         return report
     finally:
         if tmp.exists():
             shutil.rmtree(tmp, ignore_errors=True)
+        if not finished and created is not None:
+            shutil.rmtree(created, ignore_errors=True)
 
 
 def evaluate_command(gt: str, est: str, segments: str | None) -> None:
