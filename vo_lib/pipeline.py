@@ -49,6 +49,12 @@ LOST_VIEW = "part of the view lost (occluder or moving object)"
 #: Guided matching that finds fewer than this fraction of the recent median is retried with a
 #: window four times wider (a prediction more than three sigma off, e.g. as a turn begins).
 RETRY_FRACTION = 0.8
+#: Keyframes: frames are measured against a reference frame until the motion since it is large
+#: enough, so that the sub-pixel errors of feature positions are small against the motion.
+KEY_DISTANCE = 0.04  # metres of chord
+KEY_ANGLE = np.radians(1.5)
+KEY_INLIER_FRACTION = 0.75  # of the inliers of the first frame measured against this reference
+KEY_MAX_GAP = 12  # frames
 #: Scale of the least-squares covariance of (theta, rho) before it enters the filter. The
 #: least-squares covariance assumes independent pixel noise, but corners sit on whole pixels and
 #: motion between frames is often below a pixel, so the errors are correlated with the motion;
@@ -137,6 +143,8 @@ class StereoVisualOdometry:
         self.recent_matches: deque[int] = deque(maxlen=RECENT_FRAMES)
         self.lost_view_frames = 0
         self.last_reason = ""
+        self.reference_inliers = 0  # inliers of the first good frame against this reference
+        self.previous_reason = ""
 
     def process(self, left: np.ndarray, right: np.ndarray, odometry=None):
         """Process one stereo pair (and the track distances since the previous frame, if any).
@@ -153,6 +161,7 @@ class StereoVisualOdometry:
             self.frame += 1
             timing.total = timing.stereo
             return self.kf.pose, self.kf.covariance, diag, timing
+        self.previous_reason = self.last_reason
         u = None if odometry is None else np.asarray(odometry, float)
         if u is not None and not np.all(np.isfinite(u)):
             u, diag.odometry = None, False
@@ -160,7 +169,7 @@ class StereoVisualOdometry:
         prior = self.kf.motion_prior()
         t2 = time.perf_counter()
         timing.prediction = (t2 - t1) * 1e3
-        reason, t3, t4 = "", t2, t2
+        reason, t3, t4, accepted = "", t2, t2, None
         if self.reference is None or len(self.reference) < MIN_FEATURES:
             reason = "no reference frame with features"
         elif len(features) < MIN_FEATURES:
@@ -198,27 +207,55 @@ class StereoVisualOdometry:
                 elif self._view_lost(diag.inliers):
                     reason = LOST_VIEW
                 else:
-                    self.kf.update(est.theta, est.rho, r_vo)
-                    if self.gap == 1:  # counts after a gap are not typical of the next frames
-                        self.recent_inliers.append(diag.inliers)
-                        self.recent_matches.append(len(matches))
+                    accepted = (est.theta, est.rho, r_vo, diag.inliers, len(matches))
         timing.matching = (t3 - t2) * 1e3
         timing.estimation = (t4 - t3) * 1e3
         t5 = time.perf_counter()
-        self.kf.finish_frame(self.gap + 1)
         self.last_reason = reason
+        pose, covariance = self.kf.pose, self.kf.covariance
         if reason:
             diag.fallback, diag.reason = True, reason
             self.gap += 1
             if (self.reference is None or self.gap > MAX_GAP) and len(features) >= MIN_FEATURES:
-                self._new_reference(features)
+                self._commit(features)
         else:
-            self._new_reference(features)
+            theta, rho, r_vo, inliers, n_matches = accepted
+            # the update goes to a copy: until the keyframe changes, the filter keeps only its
+            # prediction, so the reference frame's errors are never counted twice
+            saved_x, saved_P = self.kf.ekf.x.copy(), self.kf.ekf.P.copy()
+            self.kf.update(theta, rho, r_vo)
+            pose, covariance = self.kf.pose, self.kf.covariance
+            if self.reference_inliers == 0:
+                self.reference_inliers = inliers
+            if self.last_good_gap_was_normal():
+                self.recent_inliers.append(inliers)
+                self.recent_matches.append(n_matches)
+            new_key = (
+                abs(rho) >= KEY_DISTANCE
+                or abs(theta) >= KEY_ANGLE
+                or inliers < KEY_INLIER_FRACTION * self.reference_inliers
+                or self.gap >= KEY_MAX_GAP
+            )
+            if new_key:
+                self._commit(features)
+            else:
+                self.kf.ekf.x, self.kf.ekf.P = saved_x, saved_P
+                self.gap += 1
         t6 = time.perf_counter()
         timing.kalman = (t6 - t5) * 1e3 + timing.prediction
         timing.total = (t6 - t0) * 1e3
         self.frame += 1
-        return self.kf.pose, self.kf.covariance, diag, timing
+        return pose, covariance, diag, timing
+
+    def last_good_gap_was_normal(self) -> bool:
+        """Counts measured right after frames without vision are not typical of the next ones."""
+        return self.previous_reason in ("", LOST_VIEW)
+
+    def _commit(self, features: StereoFeatures) -> None:
+        """Make this frame the reference (keyframe): its filter state becomes the prior's base."""
+        self.kf.finish_frame(max(self.gap, 1))
+        self._new_reference(features)
+        self.reference_inliers = 0
 
     def _view_lost(self, inliers: int) -> bool:
         """A sudden drop of the inliers below the recent median; a lasting one becomes the norm.
@@ -226,7 +263,7 @@ class StereoVisualOdometry:
         Judged only against the previous frame, or while a loss is going on: after frames without
         vision the reference is older and fewer matches are expected.
         """
-        judged = self.gap == 1 or self.last_reason == LOST_VIEW
+        judged = self.last_reason in ("", LOST_VIEW)
         if (
             not judged
             or len(self.recent_inliers) < 5
