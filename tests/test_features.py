@@ -97,3 +97,12 @@ def test_front_end_bad_input_and_blank_images():
     assert len(front.process(blank, blank)) == 0
     with pytest.raises(ValueError, match="max_features must be > 0"):
         StereoFrontEnd(CAM, max_features=0)
+
+
+def test_best_matches_with_no_survivor():
+    # one candidate pair whose distance fails the mutual check against a nearer rival for b
+    ia, ib, dist = np.array([0, 1]), np.array([0, 0]), np.array([30, 5])
+    a, b, d = best_matches(ia[:1], ib[:1], dist[:1], 2, 1, max_distance=10)
+    assert len(a) == len(b) == len(d) == 0
+    a, b, _ = best_matches(ia, ib, dist, 2, 1)
+    assert a.tolist() == [1] and b.tolist() == [0]

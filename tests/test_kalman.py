@@ -115,3 +115,19 @@ def test_reference_kept_across_frames_without_vision():
 
 def wrap_angle_deg(a):
     return math.degrees((a + math.pi) % (2 * math.pi) - math.pi)
+
+
+def test_constrained_jacobian_matches_finite_differences(rng):
+    from vo_lib.kalman import constrained_jacobian, constrained_measurement
+
+    for _ in range(20):
+        x = np.concatenate(
+            [rng.normal(size=2), [rng.uniform(-3, 3)], rng.normal(size=2), [rng.uniform(-3, 3)]]
+        )
+        num = np.column_stack(
+            [
+                (constrained_measurement(x + 1e-6 * e) - constrained_measurement(x - 1e-6 * e)) / 2e-6
+                for e in np.eye(6)
+            ]
+        )
+        np.testing.assert_allclose(constrained_jacobian(x), num, atol=1e-6)

@@ -95,6 +95,8 @@ def best_matches(
         np.minimum.at(nearest_for_b, ib, dist)
         keep = best_d <= nearest_for_b[best_b]
         best_a, best_b, best_d = best_a[keep], best_b[keep], best_d[keep]
+        if len(best_b) == 0:
+            return best_a, best_b, best_d
         order = np.lexsort((best_d, best_b))
         first_b = np.r_[True, best_b[order][1:] != best_b[order][:-1]]
         sel = order[first_b]

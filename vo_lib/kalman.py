@@ -30,6 +30,9 @@ from vo_lib.temporal import MotionPrior
 
 #: Slip as a standard deviation per metre a track travels (on top of the encoder noise).
 SLIP_SIGMA = 0.01
+#: How far (metres) a motion may stray from the chord of the circular-motion model: skid and
+#: model error of the crawler, observed as a zero pseudo-measurement in every VO update.
+SIDEWAYS_SIGMA = 0.002
 #: Constant-velocity process noise per frame: (along, across, yaw) standard deviations.
 CV_SIGMA = (0.01, 0.005, math.radians(0.3))
 
@@ -56,6 +59,35 @@ def measurement_jacobian(state6: np.ndarray) -> np.ndarray:
     ca, sa = math.cos(a), math.sin(a)
     d_yaw = 0.5 * (dy * cp - dx * sp)
     return np.array([[0.0, 0.0, 1.0, 0.0, 0.0, -1.0], [ca, sa, d_yaw, -ca, -sa, d_yaw]])
+
+
+def constrained_measurement(state6: np.ndarray) -> np.ndarray:
+    """``(theta, rho, sideways)``: the VO measurement and the deviation of the motion from its chord.
+
+    The circular-motion model (seed 000, eq. 15) puts the motion on the chord at ``theta / 2``; the
+    third component measures how far the increment strays from it, and the update observes it as
+    zero: the nonholonomic constraint of a crawler, which (theta, rho) alone leave unobserved.
+    """
+    dx, dy, theta = _increment(state6)
+    sp, cp = math.sin(0.5 * theta), math.cos(0.5 * theta)
+    return np.array([theta, dx * cp + dy * sp, -dx * sp + dy * cp])
+
+
+def constrained_jacobian(state6: np.ndarray) -> np.ndarray:
+    """Analytic 3x6 derivative of :func:`constrained_measurement`."""
+    dx, dy, theta = _increment(state6)
+    sp, cp = math.sin(0.5 * theta), math.cos(0.5 * theta)
+    a = float(state6[5]) + 0.5 * theta
+    ca, sa = math.cos(a), math.sin(a)
+    d_rho = 0.5 * (dy * cp - dx * sp)
+    d_side = -0.5 * (dx * cp + dy * sp)
+    return np.array(
+        [
+            [0.0, 0.0, 1.0, 0.0, 0.0, -1.0],
+            [ca, sa, d_rho, -ca, -sa, d_rho],
+            [-sa, ca, d_side, sa, -ca, d_side],
+        ]
+    )
 
 
 def _residual(z, hx):
@@ -96,9 +128,11 @@ class VoKalmanFilter:
         covariance=None,
         slip_sigma: float = SLIP_SIGMA,
         cv_sigma=CV_SIGMA,
+        sideways_sigma: float = SIDEWAYS_SIGMA,
     ):
         self.odometry = odometry or TrackOdometry()
         self.slip_sigma = float(slip_sigma)
+        self.sideways_sigma = float(sideways_sigma)
         self.cv_sigma = np.asarray(cv_sigma, float)
         self.ekf = ExtendedKalmanFilter(dim_x=6, dim_z=2)
         P = np.diag([1e-8, 1e-8, 1e-10]) if covariance is None else np.asarray(covariance, float)
@@ -170,12 +204,16 @@ class VoKalmanFilter:
 
     # ------------------------------------------------------------------ update
     def update(self, theta: float, rho: float, covariance) -> None:
-        """Correct with a VO measurement ``(theta, rho)`` of this frame's motion."""
+        """Correct with a VO measurement ``(theta, rho)`` of the motion since the reference, and the
+        circular-motion constraint that the motion lies on its chord (sideways deviation zero)."""
+        R = np.zeros((3, 3))
+        R[:2, :2] = np.asarray(covariance, float)
+        R[2, 2] = self.sideways_sigma**2
         self.ekf.update(
-            np.array([theta, rho]),
-            measurement_jacobian,
-            measurement,
-            R=np.asarray(covariance, float),
+            np.array([theta, rho, 0.0]),
+            constrained_jacobian,
+            constrained_measurement,
+            R=R,
             residual=_residual,
         )
         self.ekf.x[2] = wrap_angle(self.ekf.x[2])
