@@ -239,7 +239,36 @@ def bench_frontend(frames: int = 30) -> dict[str, float]:
     return {"front_end": total / 1e3, "kalman": t_kf}
 
 
+def bench_pipeline(frames: int = 200) -> dict[str, float]:
+    """The whole pipeline per frame at 640x480 on a rendered indoor drive (images in memory)."""
+    from vo_lib.pipeline import run_frames
+    from vo_lib.samples import render_sample
+
+    rendered, frame_iter = render_sample("indoor_free", frames)
+    images = list(frame_iter)  # render first: only the pipeline is timed
+    result = run_frames(iter(images), rendered.camera)
+    table = result.timing_table()
+    print(f"stereo VO pipeline, {frames} frames of indoor_free at 640x480 (median ms per frame)")
+    for key, label in (
+        ("stereo", "stereo processing"),
+        ("prediction", "prediction"),
+        ("matching", "guided temporal matching"),
+        ("estimation", "1-point RANSAC"),
+        ("kalman", "Kalman filtering"),
+        ("total", "whole frame"),
+    ):
+        print(f"  {label:<28s}{table[key]:8.2f} ms")
+    fps = 1000.0 / table["total"]
+    inliers = float(np.median([d.inliers for d in result.diagnostics[1:]]))
+    print(
+        f"  frames per second {fps:.0f} (target >= 60: {'met' if fps >= 60 else 'NOT met'}); "
+        f"median inliers {inliers:.0f} (target >= 200: {'met' if inliers >= 200 else 'NOT met'})"
+    )
+    return {"frame": table["total"] / 1e3}
+
+
 BENCHES: dict[str, Callable[[], dict[str, float]]] = {
+    "pipeline": bench_pipeline,
     "ransac": bench_ransac,
     "frontend": bench_frontend,
     "geometry": bench_geometry,
