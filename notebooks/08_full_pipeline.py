@@ -1,0 +1,263 @@
+# ---
+# jupyter:
+#   jupytext:
+#     formats: py:percent
+#   kernelspec:
+#     display_name: Python 3
+#     language: python
+#     name: python3
+# ---
+
+# %% [markdown]
+# # 08 · The full pipeline, and the paper's experiments beside ours
+#
+# Everything so far comes together: stereo front end (05), 1-point RANSAC (06) and the Kalman
+# filter fed by track odometry (07), frame after frame (`vo_lib.pipeline`). We rerun seed 000's
+# experiments on the sample sequences that mirror them — processing time per resolution
+# (Table 1), linear motion, free motion, spot turns with slip, outdoor free motion (Table 2) — and
+# put the paper's figures beside ours.
+#
+# **You will learn**
+# - what the pipeline does per frame, and what it does with a frame it cannot trust;
+# - why it measures motion against a *keyframe* rather than the previous frame;
+# - how its errors and times compare with the paper's, and why they differ.
+#
+# **Prerequisites**: notebooks 04–07.
+#
+# **Run time**: about 1–2 minutes in quick mode (the default). Set the environment variable
+# `VO_NOTEBOOKS_FULL=1` for the full sequences (several minutes); the checks hold in both.
+
+# %%
+import math
+import os
+
+import matplotlib.pyplot as plt
+import numpy as np
+
+from vo_lib.evaluation import key_position_errors
+from vo_lib.geometry import relative_planar, wrap_angle
+from vo_lib.odometry import TrackOdometry
+from vo_lib.pipeline import KEY_ANGLE, KEY_DISTANCE, run_frames
+from vo_lib.plotting import new_axes, plot_paths
+from vo_lib.samples import SAMPLES, render_sample
+
+SEED = 8
+rng = np.random.default_rng(SEED)
+np.set_printoptions(precision=3, suppress=True)
+FULL = os.environ.get("VO_NOTEBOOKS_FULL") == "1"
+print("full run" if FULL else "quick mode: shortened sequences (VO_NOTEBOOKS_FULL=1 for the full ones)")
+
+
+def frames_for(name, quick):
+    return SAMPLES[name].frames if FULL else quick
+
+
+def run(name, frames, use_odometry=True, resolution=(640, 480)):
+    """Render a sample in memory and run the pipeline; returns (result, truth from the start, odometry)."""
+    rendered, frame_iter = render_sample(name, frames, resolution)
+    if not use_odometry:
+        frame_iter = ((left, right, None) for left, right, _ in frame_iter)
+    result = run_frames(frame_iter, rendered.camera, seed=SEED)
+    truth = relative_planar(rendered.truth()[0], rendered.truth())
+    odometry = TrackOdometry().integrate(rendered.drive.odometry[1:frames])
+    return result, truth, odometry
+
+
+def heading_error(poses, truth):
+    return np.degrees(wrap_angle(poses[:, 2] - truth[:, 2]))
+
+
+# %% [markdown]
+# ## 1 · One frame, and the frames it cannot trust
+#
+# Per frame: stereo features → prediction from track odometry (or constant velocity) → guided
+# matching against the reference frame → 1-point RANSAC → Kalman update. A frame is flagged, and
+# the filter keeps its prediction, when it has too few features, matches or inliers, when the
+# inliers are too small a share of the matches, when its motion contradicts the prediction, or
+# when half its view suddenly stops agreeing (an occluder, a large moving object).
+#
+# **Keyframes.** Our crawler moves a centimetre per frame: the disparity of a point 3 m away
+# changes by 0.07 px, and most image motion is below a pixel. Measured frame to frame, such
+# motions are dominated by sub-pixel errors of the feature positions, which do not average out:
+# in our first version they shortened the measured motion by several per cent. The pipeline
+# therefore measures each frame against a *keyframe* until the motion since it exceeds
+# `KEY_DISTANCE` or `KEY_ANGLE`, applying each frame's update to a copy of the filter so that
+# the keyframe's own errors are counted once.
+
+# %%
+print(f"new keyframe after {KEY_DISTANCE * 100:.0f} cm or {math.degrees(KEY_ANGLE):.1f}° of motion")
+result, truth, _ = run("indoor_linear", 60)
+reasons = {d.reason for d in result.diagnostics if d.fallback}
+print(
+    f"{len(result.poses)} frames in, {len(result.poses)} poses out; "
+    f"flagged: {len(result.flagged)} {reasons or ''}"
+)
+assert len(result.poses) == 60
+
+# %% [markdown]
+# ## 2 · Table 1: time per stage at five resolutions
+#
+# The paper times its sub-procedures on 640×480 down to 256×192 images. We render the same drive
+# at each resolution (same field of view) and time ours. Our "stereo processing" starts from
+# rendered, rectified grey images; the paper's includes grabbing, colour conversion, smoothing,
+# rectification and edge detection on its robot's computer.
+
+# %%
+paper_table1 = {  # stereo processing, parameter estimation, Kalman filtering (ms)
+    (640, 480): (48.969, 0.874, 0.161),
+    (512, 384): (39.851, 0.664, 0.157),
+    (400, 300): (31.970, 0.754, 0.158),
+    (320, 240): (22.165, 0.662, 0.168),
+    (256, 192): (22.460, 0.610, 0.153),
+}
+n_table = frames_for("indoor_linear", 40)
+rows, features = [], {}
+for res in paper_table1:
+    r, _, _ = run("indoor_linear", n_table, resolution=res)
+    t = r.timing_table()
+    features[res] = np.median([d.features for d in r.diagnostics])
+    rows.append((res, t, paper_table1[res]))
+print(
+    " resolution   stereo [ms] (paper)   matching [ms]   estimation [ms] (paper)"
+    "   Kalman [ms] (paper)   features"
+)
+for (w, h), t, p in rows:
+    print(
+        f" {w:4d}x{h:<4d} {t['stereo']:8.2f} ({p[0]:6.2f}) {t['matching']:12.2f}"
+        f" {t['estimation']:12.2f} ({p[1]:5.3f})"
+        f" {t['kalman']:12.2f} ({p[2]:5.3f}) {features[(w, h)]:10.0f}"
+    )
+counts = [features[res] for res in paper_table1]
+assert counts[0] > counts[-1]  # fewer stereo features at lower resolution (the paper's Fig. 6)
+
+# %% [markdown]
+# Our front end is several times faster than the paper's stereo processing (different work,
+# different computer, and our images need no rectification); our parameter estimation is about as
+# fast as theirs, and our Kalman step, with a 6-dimensional state for the keyframe, costs a little
+# more. Timings here are single runs of a notebook; `python -m vo_lib bench pipeline` measures them.
+#
+# ## 3 · Linear motion (seed 000, IV.A.2)
+#
+# 200 frames forward, 200 back. The paper reports a relative error under 5 %, and mean x and y
+# errors of −31.5 mm (s.d. 22.6) and −65.2 mm (s.d. 16.0).
+
+# %%
+n_lin = SAMPLES["indoor_linear"].frames  # forward and back needs the whole drive
+result, truth, odo = run("indoor_linear", n_lin)
+fig, axes = new_axes(2, width=5.5, height=3.4)
+frames_axis = np.arange(n_lin)
+for ax, col, name in ((axes[0], 0, "x"), (axes[1], 1, "y")):
+    ax.plot(frames_axis, truth[:, col] * 1000, label="truth")
+    ax.plot(frames_axis, result.poses[:, col] * 1000, "--", label="visual odometry")
+    ax.set_xlabel("frame")
+    ax.set_ylabel(f"{name} [mm]")
+axes[0].legend(fontsize="small")
+plt.show()
+keys = np.arange(20, n_lin, 20)
+stats = key_position_errors(truth, result.poses, keys)
+travelled = np.sum(np.linalg.norm(np.diff(truth[:, :2], axis=0), axis=1))
+relative = np.linalg.norm(result.poses[-1, :2] - truth[-1, :2]) / travelled
+print(
+    f"errors at key positions: x {stats['x_mm'][0]:.1f} mm (s.d. {stats['x_mm'][1]:.1f}), "
+    f"y {stats['y_mm'][0]:.1f} mm (s.d. {stats['y_mm'][1]:.1f}); paper: x -31.5 (22.6), y -65.2 (16.0)"
+)
+print(f"final position error {relative:.2%} of the {travelled:.2f} m travelled; paper: under 5 %")
+assert relative <= 0.01
+
+# %% [markdown]
+# ## 4 · Spot turns with slip (seed 000, IV.B.2)
+#
+# Turning on the spot, the tracks scrub and slip unequally; the paper reports heading errors of
+# 6.38° (s.d. 6.38°) and 4.09° (s.d. 8.17°) and blames unequal track grip. Our sample slips 6 % on
+# average, strongly and unequally; we compare odometry alone, vision alone and the fusion.
+
+# %%
+n_spot = frames_for("spot_turn", 300)
+fused, truth_s, odo_s = run("spot_turn", n_spot)
+vision, _, _ = run("spot_turn", n_spot, use_odometry=False)
+t = np.arange(n_spot) / SAMPLES["spot_turn"].rate
+fig, ax = new_axes(width=7, height=3.4)
+ax.plot(t, heading_error(odo_s, truth_s), label="track odometry only")
+ax.plot(t, heading_error(vision.poses, truth_s), label="visual odometry only")
+ax.plot(t, heading_error(fused.poses, truth_s), label="fused")
+ax.set_xlabel("time [s]")
+ax.set_ylabel("heading error [deg]")
+ax.legend(fontsize="small")
+plt.show()
+err_odo = abs(heading_error(odo_s[-1:], truth_s[-1:])[0])
+err_fused = np.abs(heading_error(fused.poses, truth_s))
+turned = math.degrees(np.sum(np.abs(np.diff(np.unwrap(truth_s[:, 2])))))
+print(
+    f"after {turned:.0f}° of turning: odometry "
+    f"{err_odo:.1f}°, fused mean {err_fused.mean():.2f}° (s.d. {err_fused.std():.2f}°), "
+    f"max {err_fused.max():.2f}°; "
+    "paper: 6.38° (6.38°) and 4.09° (8.17°)"
+)
+assert err_odo >= 5.0 and err_fused.max() <= 1.0
+
+# %% [markdown]
+# ## 5 · Free motion indoors (IV.A.3) and outdoors (IV.B.3, Table 2)
+#
+# Statistics of the x, y and heading errors at key positions, beside the paper's.
+
+# %%
+paper_free = {
+    "indoor_free": {"x_mm": (-1.5, 47.4), "y_mm": (7.4, 8.5), "theta_deg": (0.05, 0.56)},
+    "outdoor_free": {"x_mm": (47.1, 36.4), "y_mm": (268.4, 287.7), "theta_deg": (2.32, 2.57)},
+}
+fig, axes = new_axes(2, width=5.5, height=4.4)
+table = {}
+for ax, name in zip(axes, paper_free, strict=True):
+    n = frames_for(name, 400)
+    res_f, truth_f, odo_f = run(name, n)
+    plot_paths(
+        ax, {"truth": truth_f, "track odometry": odo_f, "visual odometry": res_f.poses}, f"{name}, {n} frames"
+    )
+    table[name] = key_position_errors(truth_f, res_f.poses, np.arange(50, n, 50))
+    table[name]["mean_heading"] = float(np.abs(heading_error(res_f.poses, truth_f)).mean())
+plt.show()
+print(f" {'':14s}{'x [mm] AVG / S.D.':>22s}{'y [mm] AVG / S.D.':>22s}{'θ [deg] AVG / S.D.':>22s}")
+for name, ours in table.items():
+    for label, vals in (("ours", ours), ("paper", paper_free[name])):
+        print(
+            f" {name if label == 'ours' else '':14s}"
+            + "".join(
+                f"{vals[k][0]:12.1f} /{vals[k][1]:7.1f}"
+                if k != "theta_deg"
+                else f"{vals[k][0]:12.2f} /{vals[k][1]:7.2f}"
+                for k in ("x_mm", "y_mm", "theta_deg")
+            )
+            + f"   ({label})"
+        )
+assert table["indoor_free"]["mean_heading"] <= 0.2
+
+# %% [markdown]
+# ## 6 · Where we are better, and why that is not the whole story
+#
+# Most of our figures are smaller than the paper's, several times over. One is not: the mean
+# heading error of indoor free motion (see the table), although its spread is a tenth of the
+# paper's. Neither is a verdict on the method: our images are rendered from an exact pinhole
+# model with a known calibration, no lens distortion, perfectly rectified pairs, a camera
+# exactly above the turning axis (notebook 03 shows what an offset costs), static rich
+# texture, no lighting change, and slip that follows our own statistical model. Every one of
+# those is a source of error on a real robot. What the comparison does show is that the
+# pipeline itself — front end, 1-point RANSAC with the corrected eq. 17, and the filter — adds
+# little error of its own, and that fusing odometry and vision removes the drift each has alone.
+#
+# ## Summary
+#
+# - The pipeline gives one pose per frame, flags the frames whose vision it cannot trust, and runs
+#   at about 100 frames per second at 640×480 on two cores.
+# - Measuring against keyframes, not the previous frame, is what makes centimetre-per-frame motion
+#   measurable.
+# - Linear, free and spot-turn motion all stay within the accuracy targets; odometry alone drifts
+#   by the slip.
+#
+# ## Exercises
+#
+# 1. Set `vo_lib.pipeline.KEY_DISTANCE` to 0 (a new keyframe every frame) and rerun section 3.
+#    How large is the final error now, and in which direction?
+# 2. Move the camera 0.3 m ahead of the turning axis in `vo_lib.samples` and rerun section 4.
+# 3. Run `python -m vo_lib run --sequence outdoor_free --no-odometry` and compare with section 5.
+# 4. If you have KITTI odometry data, run the pipeline on sequence 00 (README). Which assumption
+#    of the circular-motion model does a car break first?
