@@ -109,3 +109,32 @@ def test_missing_or_bad_odometry_falls_back_to_constant_velocity(bad):
     result = run_frames(frames(), rendered.camera)
     assert [d.odometry for d in result.diagnostics[10:20]] == [False] * 10
     assert len(result.flagged) == 0
+
+
+def test_kitti_like_rig_without_odometry():
+    """A car-like drive seen by KITTI's rig: 1241x376, 0.54 m baseline, 1 m per frame, no odometry."""
+    from vo_lib.camera import StereoCamera
+    from vo_lib.geometry import camera_mount, planar_to_matrix
+    from vo_lib.render import SensorEffects, StereoRenderer
+    from vo_lib.trajectories import Leg, SlipModel, simulate_drive
+    from vo_lib.world import outdoor_yard
+
+    camera = StereoCamera(718.856, 718.856, 607.1928, 185.2157, 0.5371657, 1241, 376)
+    mount = camera_mount(height=1.65)
+    no_slip = SlipModel(mean=0, difference=0, sigma=0, spot_turn_mean=0, spot_turn_difference=0)
+    drive = simulate_drive(
+        [Leg(20, 10.0), Leg(20, 10.0, math.radians(20))],
+        10.0,
+        (-30.0, -10.0, 0.0),
+        np.random.default_rng(0),
+        slip=no_slip,
+    )
+    renderer = StereoRenderer(outdoor_yard(), camera, SensorEffects(noise_sigma=1.0))
+    rng = np.random.default_rng(1)
+    frames = ((*renderer.render_pair(planar_to_matrix(p) @ mount, rng), None) for p in drive.poses)
+    result = run_frames(frames, camera)
+    truth = relative_planar(drive.poses[0], drive.poses)
+    distance = np.sum(np.linalg.norm(np.diff(truth[:, :2], axis=0), axis=1))
+    assert len(result.flagged) == 0
+    assert np.linalg.norm(result.poses[-1, :2] - truth[-1, :2]) < 0.03 * distance
+    assert heading_errors(result.poses, truth).max() < 0.5

@@ -33,6 +33,10 @@ SLIP_SIGMA = 0.01
 #: How far (metres) a motion may stray from the chord of the circular-motion model: skid and
 #: model error of the crawler, observed as a zero pseudo-measurement in every VO update.
 SIDEWAYS_SIGMA = 0.002
+#: Constant-velocity process noise grows by this fraction of the last motion per frame...
+CV_RELATIVE = 0.2
+#: ...and the heading may change by this much per metre travelled (radians).
+CV_TURN_PER_METRE = 0.05
 #: Constant-velocity process noise per frame: (along, across, yaw) standard deviations.
 CV_SIGMA = (0.01, 0.005, math.radians(0.3))
 
@@ -186,7 +190,12 @@ class VoKalmanFilter:
                 [[1.0, 0.0, -s * inc[0] - c * inc[1]], [0.0, 1.0, c * inc[0] - s * inc[1]], [0, 0, 1.0]]
             )
             Rw = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
-            Q = Rw @ np.diag(self.cv_sigma**2) @ Rw.T
+            # velocity changes scale with the velocity: a fraction of each component, plus the floor
+            step = math.hypot(inc[0], inc[1])
+            sigma = self.cv_sigma + CV_RELATIVE * np.array(
+                [step, step, abs(inc[2]) + CV_TURN_PER_METRE * step]
+            )
+            Q = Rw @ np.diag(sigma**2) @ Rw.T
             self.flags = StepFlags(odometry=False)
         self.ekf.x = np.concatenate([x_new, reference])
         P6 = np.empty((6, 6))

@@ -145,6 +145,7 @@ class StereoVisualOdometry:
         self.last_reason = ""
         self.reference_inliers = 0  # inliers of the first good frame against this reference
         self.previous_reason = ""
+        self.velocity_known = False
 
     def process(self, left: np.ndarray, right: np.ndarray, odometry=None):
         """Process one stereo pair (and the track distances since the previous frame, if any).
@@ -167,6 +168,8 @@ class StereoVisualOdometry:
             u, diag.odometry = None, False
         self.kf.predict(u, keep_reference=self.gap > 1)
         prior = self.kf.motion_prior()
+        # without odometry, the prediction means something only once a motion has been measured
+        informative = u is not None or self.velocity_known
         t2 = time.perf_counter()
         timing.prediction = (t2 - t1) * 1e3
         reason, t3, t4, accepted = "", t2, t2, None
@@ -175,7 +178,7 @@ class StereoVisualOdometry:
         elif len(features) < MIN_FEATURES:
             reason = "too few stereo features"
         else:
-            matches = match_temporal(self.reference, features, self.camera, prior)
+            matches = match_temporal(self.reference, features, self.camera, prior if informative else None)
             if len(self.recent_matches) >= 5 and len(matches) < RETRY_FRACTION * np.median(
                 self.recent_matches
             ):
@@ -191,7 +194,13 @@ class StereoVisualOdometry:
             if len(matches) < MIN_INLIERS:
                 reason = "too few temporal matches"
             else:
-                est = one_point_ransac(matches.w_prev, matches.w_curr, self.camera, prior=prior, rng=self.rng)
+                est = one_point_ransac(
+                    matches.w_prev,
+                    matches.w_curr,
+                    self.camera,
+                    prior=prior if informative else None,
+                    rng=self.rng,
+                )
                 t4 = time.perf_counter()
                 diag.inliers = int(est.inliers.sum())
                 diag.inlier_ratio = diag.inliers / len(matches)
@@ -202,7 +211,10 @@ class StereoVisualOdometry:
                     reason = "too few inliers"
                 elif diag.inlier_ratio < MIN_INLIER_RATIO:
                     reason = "low inlier ratio"
-                elif innovation @ np.linalg.solve(prior.covariance + r_vo, innovation) > PRIOR_GATE:
+                elif (
+                    informative
+                    and innovation @ np.linalg.solve(prior.covariance + r_vo, innovation) > PRIOR_GATE
+                ):
                     reason = "motion contradicts the prediction"
                 elif self._view_lost(diag.inliers):
                     reason = LOST_VIEW
@@ -253,6 +265,7 @@ class StereoVisualOdometry:
 
     def _commit(self, features: StereoFeatures) -> None:
         """Make this frame the reference (keyframe): its filter state becomes the prior's base."""
+        self.velocity_known = self.velocity_known or self.kf.flags.vo_update
         self.kf.finish_frame(max(self.gap, 1))
         self._new_reference(features)
         self.reference_inliers = 0
