@@ -8,6 +8,20 @@ plotting; each does one job and cites the paper equations it implements.
 ``odometry``         crawler track odometry and its covariance (seed 000, eq. 2-11)
 ``circular_motion``  planar circular-motion model (seed 000, eq. 12-17)
 ``synthetic``        matches with known truth, for checks
+``textures``, ``world``   corner-rich textures; floor plans of segments shared by every sensor
+``render``           rectified stereo pairs with ground-truth depth
+``laser``            2-D laser scanner
+``trajectories``     crawler drives with track slip
+``sequence``, ``samples``, ``data``   KITTI-layout I/O, the named samples, load_sequence
+``features``         stereo front end (FAST, ORB descriptors, row matching)
+``temporal``         frame-to-frame matching guided by the filter's prediction
+``ransac``           1-point RANSAC (seed 000, eq. 18-21)
+``baselines``        3-point rigid RANSAC, solvePnPRansac, 5-point essential matrix
+``kalman``           odometry + VO Kalman filter on filterpy
+``pipeline``         the whole stereo VO of seed 000, frame by frame
+``evaluation``       ATE, RPE, KITTI segment errors, the paper's statistics
+``run``, ``bench``   the command line: run, evaluate, generate, bench
+``disturbances``     blank, noisy and occluded frames
 ``plotting``         figures for the notebooks
 ``widgets``          interactive wrappers for the notebooks
 """

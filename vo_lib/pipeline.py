@@ -239,7 +239,7 @@ class StereoVisualOdometry:
             pose, covariance = self.kf.pose, self.kf.covariance
             if self.reference_inliers == 0:
                 self.reference_inliers = inliers
-            if self.last_good_gap_was_normal():
+            if self._counts_are_typical():
                 self.recent_inliers.append(inliers)
                 self.recent_matches.append(n_matches)
             new_key = (
@@ -259,7 +259,7 @@ class StereoVisualOdometry:
         self.frame += 1
         return pose, covariance, diag, timing
 
-    def last_good_gap_was_normal(self) -> bool:
+    def _counts_are_typical(self) -> bool:
         """Counts measured right after frames without vision are not typical of the next ones."""
         return self.previous_reason in ("", LOST_VIEW)
 

@@ -111,14 +111,6 @@ def rho_gate_error(P, Q, theta, rho) -> np.ndarray:
     return np.linalg.norm(np.asarray(Q) - moved - T[..., None, :], axis=-1)
 
 
-def _point_sigma(w: np.ndarray, camera: StereoCamera, sigma: float) -> np.ndarray:
-    """First-order standard deviation of a back-projected point, metres (disparity noise dominates)."""
-    B, d = camera.baseline, w[:, 2]
-    dv = (w[:, 1] - camera.cy) * camera.fx / camera.fy
-    ray = np.sqrt((w[:, 0] - camera.cx) ** 2 + dv**2 + camera.fx**2)
-    return sigma * B / d * np.sqrt((ray / d) ** 2 + 2.0)
-
-
 # ---------------------------------------------------------------------- refinement
 def _gauss_newton(P, Q, wa, wb, theta, rho, camera, iterations):
     """Gauss-Newton on forward and backward reprojection errors in disparity space.
