@@ -91,13 +91,23 @@ def theta_standard_deviation(w_prev, w_curr, camera: StereoCamera, sigma_px: flo
     ``1 / |D|`` near the camera's height and with the distance of the match from the image centre.
     """
     a, b = _pair(w_prev, w_curr)
-    num, den = _eq14_terms(a, b, camera)  # den = fx * D
-    q = den**2 + num**2
-    g_n, g_d = den / q, camera.fx * num / q  # dphi/dN and -dphi/dD
     du, dv = a[:, 0] - camera.cx, a[:, 1] - camera.cy
     du2, dv2 = b[:, 0] - camera.cx, b[:, 1] - camera.cy
-    grads = np.stack([-dv2 * g_n, dv * g_n, du2 * g_n - g_d, -du * g_n - g_d])  # u, u', v, v'
-    return 2.0 * sigma_px * np.sqrt(np.sum(grads**2, axis=0))
+    num, den = du2 * dv - du * dv2, camera.fx * (dv + dv2)
+    return np.sqrt(theta_variance(du, dv, du2, dv2, num, den, camera.fx, sigma_px))
+
+
+def theta_variance(du, dv, du2, dv2, num, den, fx: float, sigma_px: float) -> np.ndarray:
+    """First-order variance of eq. 14's theta from its centred pixels and terms (``tan phi = num / den``).
+
+    ``dphi = (den dN - fx num dD) / (den^2 + num^2)`` with ``dN/d(u, u', v, v') = (-dv', dv, du', -du)``
+    and ``dD/dv = dD/dv' = 1``; theta = 2 phi. Shared with the RANSAC, which has the terms at hand.
+    """
+    q = den * den + num * num
+    g_n, g_d = den / q, fx * num / q
+    return (4.0 * sigma_px**2) * (
+        (dv2 * g_n) ** 2 + (dv * g_n) ** 2 + (du2 * g_n - g_d) ** 2 + (du * g_n + g_d) ** 2
+    )
 
 
 def rho_from_pixels(w_prev, w_curr, theta, camera: StereoCamera) -> np.ndarray:

@@ -21,7 +21,7 @@ from pathlib import Path
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from vo_lib.geometry import wrap_angle
+from vo_lib.geometry import as_homogeneous, wrap_angle
 
 
 @dataclass(frozen=True)
@@ -56,9 +56,7 @@ def as_4x4(poses) -> np.ndarray:
     T = np.asarray(poses, dtype=float)
     if T.ndim != 3 or T.shape[1:] not in ((3, 4), (4, 4)):
         raise ValueError(f"poses must have shape (N, 3, 4) or (N, 4, 4); got {T.shape}")
-    if T.shape[1] == 3:
-        T = np.concatenate([T, np.broadcast_to([0.0, 0.0, 0.0, 1.0], (len(T), 1, 4))], axis=1)
-    return T
+    return as_homogeneous(T)
 
 
 def umeyama(source: np.ndarray, target: np.ndarray, with_scale: bool = False):

@@ -131,6 +131,14 @@ def camera_motion(pose_prev, pose_curr, T_robot_camera) -> np.ndarray:
     return np.linalg.solve(W1, W0)
 
 
+def as_homogeneous(poses) -> np.ndarray:
+    """``(..., 4, 4)`` matrices from ``(..., 3, 4)`` or ``(..., 4, 4)`` poses."""
+    T = np.asarray(poses, dtype=float)
+    if T.shape[-2:] == (3, 4):
+        T = np.concatenate([T, np.broadcast_to([0.0, 0.0, 0.0, 1.0], T.shape[:-2] + (1, 4))], axis=-2)
+    return T
+
+
 def camera_poses_from_planar(planar_poses, T_robot_camera) -> np.ndarray:
     """KITTI-style camera poses ``(N, 4, 4)``, each in the first camera's frame, of planar robot poses."""
     poses = np.asarray(planar_poses, dtype=float)
@@ -144,9 +152,7 @@ def planar_from_camera_poses(camera_poses, T_robot_camera) -> np.ndarray:
     The inverse of :func:`camera_poses_from_planar` for planar motion; for a camera that also
     pitches and rolls (a car on a real road) it keeps the yaw and the ground-plane position.
     """
-    T = np.asarray(camera_poses, dtype=float)
-    if T.shape[-2:] == (3, 4):
-        T = np.concatenate([T, np.broadcast_to([0.0, 0.0, 0.0, 1.0], T.shape[:-2] + (1, 4))], axis=-2)
+    T = as_homogeneous(camera_poses)
     inv_mount = np.linalg.inv(T_robot_camera)
     robot = T_robot_camera @ T @ inv_mount
     return np.stack([matrix_to_planar(M) for M in robot])

@@ -48,23 +48,6 @@ def _increment(state6: np.ndarray) -> tuple[float, float, float]:
     return c * (x - xp) + s * (y - yp), -s * (x - xp) + c * (y - yp), float(wrap_angle(yaw - yawp))
 
 
-def measurement(state6: np.ndarray) -> np.ndarray:
-    """``(theta, rho)`` of the motion from the cloned previous pose to the current one."""
-    dx, dy, theta = _increment(state6)
-    return np.array([theta, dx * math.cos(0.5 * theta) + dy * math.sin(0.5 * theta)])
-
-
-def measurement_jacobian(state6: np.ndarray) -> np.ndarray:
-    """Analytic 2x6 derivative of :func:`measurement` with respect to ``[pose_k, pose_k-1]``:
-    ``rho = dx cos(theta/2) + dy sin(theta/2)`` with ``(dx, dy)`` the increment in the old frame."""
-    dx, dy, theta = _increment(state6)
-    sp, cp = math.sin(0.5 * theta), math.cos(0.5 * theta)
-    a = float(state6[5]) + 0.5 * theta
-    ca, sa = math.cos(a), math.sin(a)
-    d_yaw = 0.5 * (dy * cp - dx * sp)
-    return np.array([[0.0, 0.0, 1.0, 0.0, 0.0, -1.0], [ca, sa, d_yaw, -ca, -sa, d_yaw]])
-
-
 def constrained_measurement(state6: np.ndarray) -> np.ndarray:
     """``(theta, rho, sideways)``: the VO measurement and the deviation of the motion from its chord.
 
@@ -92,6 +75,16 @@ def constrained_jacobian(state6: np.ndarray) -> np.ndarray:
             [-sa, ca, d_side, sa, -ca, d_side],
         ]
     )
+
+
+def measurement(state6: np.ndarray) -> np.ndarray:
+    """``(theta, rho)`` of the motion from the cloned previous pose to the current one."""
+    return constrained_measurement(state6)[:2]
+
+
+def measurement_jacobian(state6: np.ndarray) -> np.ndarray:
+    """2x6 derivative of :func:`measurement` with respect to ``[pose_k, pose_k-1]``."""
+    return constrained_jacobian(state6)[:2]
 
 
 def _residual(z, hx):

@@ -144,7 +144,6 @@ class StereoVisualOdometry:
         self.lost_view_frames = 0
         self.last_reason = ""
         self.reference_inliers = 0  # inliers of the first good frame against this reference
-        self.previous_reason = ""
         self.velocity_known = False
 
     def process(self, left: np.ndarray, right: np.ndarray, odometry=None):
@@ -162,7 +161,6 @@ class StereoVisualOdometry:
             self.frame += 1
             timing.total = timing.stereo
             return self.kf.pose, self.kf.covariance, diag, timing
-        self.previous_reason = self.last_reason
         u = None if odometry is None else np.asarray(odometry, float)
         if u is not None and not np.all(np.isfinite(u)):
             u, diag.odometry = None, False
@@ -223,7 +221,6 @@ class StereoVisualOdometry:
         timing.matching = (t3 - t2) * 1e3
         timing.estimation = (t4 - t3) * 1e3
         t5 = time.perf_counter()
-        self.last_reason = reason
         pose, covariance = self.kf.pose, self.kf.covariance
         if reason:
             diag.fallback, diag.reason = True, reason
@@ -253,6 +250,7 @@ class StereoVisualOdometry:
             else:
                 self.kf.ekf.x, self.kf.ekf.P = saved_x, saved_P
                 self.gap += 1
+        self.last_reason = reason
         t6 = time.perf_counter()
         timing.kalman = (t6 - t5) * 1e3 + timing.prediction
         timing.total = (t6 - t0) * 1e3
@@ -261,7 +259,7 @@ class StereoVisualOdometry:
 
     def _counts_are_typical(self) -> bool:
         """Counts measured right after frames without vision are not typical of the next ones."""
-        return self.previous_reason in ("", LOST_VIEW)
+        return self.last_reason in ("", LOST_VIEW)  # still the previous frame's
 
     def _commit(self, features: StereoFeatures) -> None:
         """Make this frame the reference (keyframe): its filter state becomes the prior's base."""

@@ -43,7 +43,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from vo_lib.camera import StereoCamera
-from vo_lib.circular_motion import motion_matrices, rho_from_pixels, theta_from_pixels
+from vo_lib.circular_motion import motion_matrices, rho_from_pixels, theta_from_pixels, theta_variance
 from vo_lib.geometry import as_match_array
 
 GATE_SIGMAS = 3.0  # a match is an inlier within this many standard deviations of each gate
@@ -299,11 +299,7 @@ def one_point_ransac(
     du, dv, du2, dv2, num, den = du[iu], dv[iu], du2[iu], dv2[iu], num[iu], den[iu]
     au, bu = a[iu], b[iu]
     theta_j = 2.0 * np.arctan(num / den)
-    q = den * den + num * num  # first-order spread of eq. 14 (circular_motion.theta_standard_deviation)
-    g_n, g_d = den / q, fx * num / q
-    var_theta = (4.0 * pixel_sigma**2) * (
-        (dv2 * g_n) ** 2 + (dv * g_n) ** 2 + (du2 * g_n - g_d) ** 2 + (du * g_n + g_d) ** 2
-    )
+    var_theta = theta_variance(du, dv, du2, dv2, num, den, fx, pixel_sigma)
 
     # ------------------------------------------------------------ phase 1: theta, eq. 14 and 18-20
     def theta_consistent(theta_h, var_h):

@@ -10,7 +10,6 @@ run leaves nothing half-written. Bad arguments print one line and exit with stat
 from __future__ import annotations
 
 import csv
-import os
 import shutil
 import sys
 import tempfile
@@ -30,6 +29,7 @@ from vo_lib.evaluation import (
 from vo_lib.geometry import camera_mount, camera_poses_from_planar, planar_from_camera_poses, wrap_angle
 from vo_lib.pipeline import FrameDiagnostics, FrameTimings, PipelineResult, run_sequence
 from vo_lib.samples import CAMERA_HEIGHT, SAMPLES
+from vo_lib.sequence import replace_folder
 
 DEFAULT_SEQUENCE = "indoor_linear"
 #: Seed 000, Table 1, 640x480 row: stereo processing, parameter estimation, Kalman filtering (ms).
@@ -194,13 +194,7 @@ def run_command(
             report = error_report(result, truth, odo)
             rpe_m = rpe(seq.poses[:n], poses)[0].rmse
             print_error_table(report, len(result.flagged), rpe_m)
-        if out_dir.exists():
-            old = out_dir.with_name(f".{out_dir.name}.old-{os.getpid()}")
-            os.replace(out_dir, old)
-            os.replace(tmp, out_dir)
-            shutil.rmtree(old, ignore_errors=True)
-        else:
-            os.replace(tmp, out_dir)
+        replace_folder(tmp, out_dir)
         print(f"\nwrote {out_dir}/: poses.txt trajectory.tum timings.csv diagnostics.csv trajectory.png")
         finished = True
         return report

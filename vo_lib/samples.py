@@ -14,7 +14,7 @@ import numpy as np
 from tqdm.auto import tqdm
 
 from vo_lib.camera import StereoCamera
-from vo_lib.geometry import camera_mount, planar_to_matrix
+from vo_lib.geometry import camera_mount, camera_poses_from_planar, planar_to_matrix
 from vo_lib.odometry import TrackOdometry
 from vo_lib.render import SensorEffects, StereoRenderer
 from vo_lib.sequence import SequenceWriter
@@ -192,14 +192,11 @@ def generate(
     rendered, frame_iter = render_sample(name, frames, resolution)
     camera, drive, n = rendered.camera, rendered.drive, rendered.frames
     width, height = resolution
-    W0 = planar_to_matrix(drive.poses[0]) @ rendered.mount
-    poses = []
     with SequenceWriter(out, camera) as writer:
-        for k, (left, right, _) in enumerate(
-            tqdm(frame_iter, total=n, desc=f"rendering {name}", unit="frame", disable=not progress)
+        for left, right, _ in tqdm(
+            frame_iter, total=n, desc=f"rendering {name}", unit="frame", disable=not progress
         ):
             writer.add(left, right)
-            poses.append(np.linalg.solve(W0, planar_to_matrix(drive.poses[k]) @ rendered.mount))
         manifest = {
             "sample": name,
             "purpose": sample.purpose,
@@ -226,4 +223,5 @@ def generate(
             "seed": sample.seed,
             "robot_poses": drive.poses[:n].tolist(),
         }
-        return writer.close(drive.times[:n], np.array(poses), drive.odometry[:n], manifest)
+        poses = camera_poses_from_planar(drive.poses[:n], rendered.mount)  # camera k in camera 0's frame
+        return writer.close(drive.times[:n], poses, drive.odometry[:n], manifest)

@@ -28,6 +28,7 @@ import cv2
 import numpy as np
 
 from vo_lib.camera import StereoCamera
+from vo_lib.geometry import as_homogeneous
 
 IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".pgm", ".bmp", ".tif", ".tiff")
 
@@ -140,11 +141,7 @@ class Sequence:
 
     def poses_4x4(self) -> np.ndarray | None:
         """Ground-truth camera poses as ``(N, 4, 4)`` matrices, or None."""
-        if self.poses is None:
-            return None
-        out = np.tile(np.eye(4), (len(self.poses), 1, 1))
-        out[:, :3, :] = self.poses
-        return out
+        return None if self.poses is None else as_homogeneous(self.poses)
 
 
 def _image_files(folder: Path) -> list[Path]:
@@ -206,6 +203,18 @@ def _format_row(values) -> str:
     return " ".join(repr(float(v)) for v in values)
 
 
+def replace_folder(complete: Path, target: Path) -> Path:
+    """Rename the finished folder ``complete`` to ``target``, replacing any folder there."""
+    if target.exists():
+        old = target.with_name(f".{target.name}.old-{os.getpid()}")
+        os.replace(target, old)
+        os.replace(complete, target)
+        shutil.rmtree(old, ignore_errors=True)
+    else:
+        os.replace(complete, target)
+    return target
+
+
 class SequenceWriter:
     """Write a sequence frame by frame into a temporary folder, renamed on :meth:`close`.
 
@@ -246,14 +255,7 @@ class SequenceWriter:
             (self._tmp / "odometry.txt").write_text("".join(_format_row(o) + "\n" for o in odometry))
         if manifest is not None:
             (self._tmp / "manifest.json").write_text(json.dumps(manifest, indent=2, sort_keys=True) + "\n")
-        if self.path.exists():
-            old = self.path.with_name(f".{self.path.name}.old-{os.getpid()}")
-            os.replace(self.path, old)
-            os.replace(self._tmp, self.path)
-            shutil.rmtree(old, ignore_errors=True)
-        else:
-            os.replace(self._tmp, self.path)
-        return self.path
+        return replace_folder(self._tmp, self.path)
 
     def abort(self) -> None:
         shutil.rmtree(self._tmp, ignore_errors=True)
