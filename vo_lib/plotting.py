@@ -124,3 +124,69 @@ def draw_chord_geometry(ax, theta: float = 0.5, rho: float = 1.0, point=(1.2, 3.
     ax.set_xlabel("x (right) [m]")
     ax.set_ylabel("z (forward) [m]")
     ax.legend(fontsize="x-small", loc="lower right")
+
+
+def plot_line_slam(ax, run, world, title: str = ""):
+    """Seed 002's Fig. 6/8: true path and segments, estimated path, feature points and segments."""
+    for i, seg in enumerate(world.segments):
+        ax.plot(
+            *np.transpose([seg.start, seg.end]), color="C3", lw=2.5, label="true lines" if i == 0 else None
+        )
+        ax.annotate(str(i + 1), np.mean([seg.start, seg.end], axis=0), color="C3", fontsize=11)
+    ax.plot(run.truth[:, 0], run.truth[:, 1], color="C3", lw=1, ls="--", label="true path")
+    ax.plot(run.estimate[:, 0], run.estimate[:, 1], color="C0", lw=1, label="estimated path")
+    ax.plot(run.dead_reckoning[:, 0], run.dead_reckoning[:, 1], color="0.6", lw=1, label="dead reckoning")
+    for n, seg in enumerate(run.landmark_of_segment):
+        ends = run.estimated_segment(seg)
+        ax.plot(ends[:, 0], ends[:, 1], color="C0", lw=1.5, label="estimated lines" if n == 0 else None)
+        j = run.landmark_of_segment[seg]
+        ax.plot(*run.true_landmarks[seg], "o", color="C3", ms=5)
+        ax.plot(*run.landmarks[j], "x", color="C0", ms=7)
+        covariance_ellipse(ax, run.landmarks[j], run.landmark_cov[j], 2.0, color="C0")
+    ax.plot(0, 0, "k+", ms=10)
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("y [m]")
+    ax.grid(True, alpha=0.3)
+    ax.legend(loc="upper left", fontsize="small")
+    if title:
+        ax.set_title(title)
+
+
+def plot_pose_errors(axes, run, heading_errors):
+    """Seed 002's Fig. 7/9: x, y and heading errors over time with the filter's 2-sigma bounds."""
+    t = np.arange(len(run.truth)) * run.scenario.period
+    errors = [run.estimate[:, 0] - run.truth[:, 0], run.estimate[:, 1] - run.truth[:, 1], heading_errors]
+    sigmas = np.sqrt(np.stack([run.pose_cov[:, i, i] for i in range(3)]))
+    labels = ["x error [m]", "y error [m]", "heading error [deg]"]
+    for i, ax in enumerate(axes):
+        scale = np.degrees(1.0) if i == 2 else 1.0
+        ax.plot(t, scale * errors[i], color="C0", lw=1, label="error")
+        ax.fill_between(t, -2 * scale * sigmas[i], 2 * scale * sigmas[i], color="C0", alpha=0.15, label="±2σ")
+        ax.set_ylabel(labels[i])
+        ax.set_xlabel("time [s]")
+        ax.grid(True, alpha=0.3)
+    axes[0].legend(loc="upper left", fontsize="small")
+
+
+def draw_observer_case(ax, a, b, centre, max_range: float, part, title: str = ""):
+    """A segment, the laser's range circle, the foot of the perpendicular and the visible part."""
+    a, b, centre = (np.asarray(v, dtype=float) for v in (a, b, centre))
+    d = b - a
+    t_foot = (centre - a) @ d / (d @ d)
+    foot = a + t_foot * d
+    ang = np.linspace(0, 2 * np.pi, 200)
+    ax.plot(centre[0] + max_range * np.cos(ang), centre[1] + max_range * np.sin(ang), color="0.7", lw=1)
+    ax.plot(*np.transpose([a, b]), color="0.3", lw=2)
+    ax.plot(*np.transpose([a - 0.3 * d, b + 0.3 * d]), color="0.3", lw=0.5, ls=":")
+    ax.plot(*np.transpose([centre, foot]), color="C2", lw=1, ls="--")
+    if part is not None:
+        seen = a + np.outer(part, d)
+        ax.plot(seen[:, 0], seen[:, 1], color="C1", lw=4, alpha=0.8, label="visible part")
+    for name, p in (("A", a), ("B", b), ("G", centre), ("O", foot)):
+        ax.annotate(name, p, xytext=(4, 4), textcoords="offset points")
+    ax.plot(*centre, "k^")
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.grid(True, alpha=0.3)
+    if title:
+        ax.set_title(title)
