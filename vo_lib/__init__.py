@@ -22,6 +22,9 @@ plotting; each does one job and cites the paper equations it implements.
 ``evaluation``       ATE, RPE, KITTI segment errors, the paper's statistics
 ``run``, ``bench``   the command line: run, evaluate, generate, bench
 ``disturbances``     blank, noisy and occluded frames
+``bicycle``, ``range_bearing``   seed 002's car (eq. 4-7) and laser observation (eq. 8-12)
+``line_landmarks``, ``segment_observers``   walls as feature points; their visible parts
+``ekf_slam``, ``line_slam``   EKF-SLAM with Mahalanobis association (eq. 13); the paper's lap
 ``plotting``         figures for the notebooks
 ``widgets``          interactive wrappers for the notebooks
 """
