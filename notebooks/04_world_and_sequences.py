@@ -237,12 +237,12 @@ assert first_left.shape == (240, 320) and len(seq) == 5
 # ## 7 · Walk through the world
 #
 # `view_from` renders the left image and the depth at any pose of any world, and draws the laser
-# scan there. Try the corridor near the umbrella (x ≈ 22, y = 0): the camera sees it, and the laser
+# scan there. Try the corridor near the umbrella (x ≈ 11, y = 0): the camera sees it, and the laser
 # loses the second pillar behind it.
 
 
 # %%
-def view_from(world_name="corridor", x=21.0, y=0.0, yaw_deg=0.0):
+def view_from(world_name="corridor", x=11.0, y=0.0, yaw_deg=0.0):
     """Left image, ground-truth depth and laser scan of a robot at ``(x, y, yaw)`` in a world."""
     world = worlds[world_name]
     robot = np.array([x, y, np.radians(yaw_deg)])
@@ -271,7 +271,7 @@ assert beams > 400
 walk_widget = offer(
     view_from,
     world_name=list(worlds),
-    x=slider(21.0, -40.0, 40.0, 0.25, "x [m]"),
+    x=slider(11.0, -40.0, 40.0, 0.25, "x [m]"),
     y=slider(0.0, -40.0, 40.0, 0.25, "y [m]"),
     yaw_deg=slider(0.0, -180.0, 180.0, 5.0, "yaw [deg]"),
 )

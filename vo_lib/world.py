@@ -133,22 +133,30 @@ def outdoor_yard(seed: int = 20) -> World:
 
 def corridor(seed: int = 30, length: float = 30.0, width: float = 3.0) -> World:
     """The corridor of seed 004: two long walls, two pillars, two cross walls, a fire hydrant,
-    and an unmapped umbrella that hides the second pillar from part of the corridor.
+    and an unmapped umbrella that hides the second pillar from the stretch before it.
 
     The corridor runs along +x from x = 0; its axis is y = 0. Pillars, hydrant and cross walls
-    are the "radial" features that fix the robot's position along the axis.
+    are the "radial" features that fix the robot's position along the axis. With a 10 m laser
+    that sees 135 degrees to either side, a robot on the axis sees the first pillar and the
+    hydrant up to x = 6.4 and the cross walls from x = 12; in between only the second pillar
+    (x = 15) could fix it, and the umbrella (x = 13.7, open, 1 m wide, standing against the
+    wall) hides that pillar up to x = 12.8.
     """
     h, half = 2.8, width / 2
     segs = polyline([(0, -half), (length, -half)], h, seed, "wall")
     segs += polyline([(0, half), (length, half)], h, seed + 1, "wall")
     segs += polyline([(0, -half), (0, half)], h, seed + 2, "end wall")
     segs += polyline([(length, -half), (length, half)], h, seed + 3, "end wall")
-    segs += box((6.0, half - 0.2), (0.5, 0.4), 0.0, h, seed + 10, "pillar")
-    segs += box((8.5, -half + 0.15), (0.4, 0.3), 0.0, 0.9, seed + 20, "fire hydrant")
-    segs += polyline([(19.0, half), (19.0, half - 0.6)], h, seed + 30, "cross wall")
-    segs += polyline([(22.0, -half), (22.0, -half + 0.6)], h, seed + 31, "cross wall")
-    segs += box((25.0, half - 0.2), (0.5, 0.4), 0.0, h, seed + 40, "pillar")
-    segs += polyline([(23.8, 0.75), (24.8, 1.0)], 1.6, seed + 50, "umbrella", mapped=False)
+    segs += box((3.5, half - 0.2), (0.5, 0.4), 0.0, h, seed + 10, "pillar")
+    segs += box((5.0, -half + 0.15), (0.4, 0.3), 0.0, 0.9, seed + 20, "fire hydrant")
+    segs += box((15.0, half - 0.2), (0.5, 0.4), 0.0, h, seed + 40, "pillar")
+    segs += polyline([(22.0, half), (22.0, half - 0.6)], h, seed + 30, "cross wall")
+    segs += polyline([(24.5, -half), (24.5, -half + 0.6)], h, seed + 31, "cross wall")
+    # An open umbrella standing against the wall: at the laser's height its canopy is a half
+    # circle of radius 0.55 m facing the robot's side of the corridor.
+    angles = np.radians(np.linspace(90.0, 270.0, 7))
+    canopy = [(13.9 + 0.55 * np.cos(a), half - 0.55 + 0.55 * np.sin(a)) for a in angles]
+    segs += polyline(canopy, 1.6, seed + 50, "umbrella", mapped=False)
     return World(
         "corridor",
         tuple(segs),

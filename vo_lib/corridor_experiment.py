@@ -1,0 +1,166 @@
+"""Seed 004's corridor experiment: LBPT alone against VOAPT along the occluded corridor.
+
+The robot drives the ``corridor`` sample's path (1 m to 28 m along the axis at 0.5 m/s). Each
+seed draws its own encoder noise and slip (the odometry), laser noise and pose samples; the
+visual odometer's increments come from a VO run on the rendered corridor (or any other source of
+per-frame increments). The laser tracker updates every ``every`` frames.
+Run ``python -m vo_lib.corridor_experiment`` for one seed.
+"""
+
+from __future__ import annotations
+
+import functools
+import time
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from vo_lib.geometry import compose_planar, planar_from_camera_poses, relative_planar
+from vo_lib.laser import LaserScanner
+from vo_lib.likelihood_field import LikelihoodField
+from vo_lib.odometry import TrackOdometry
+from vo_lib.pose_tracking import Calibration, ControlLimits, PoseTracker, ScoreStatistics, Thresholds
+from vo_lib.pnp_odometry import PnpVisualOdometry
+from vo_lib.samples import get_sample, render_sample
+from vo_lib.trajectories import simulate_drive
+from vo_lib.world import World, corridor
+
+#: The SICK TIM551 of the paper: 270 degrees at 1 degree (271 beams), 10 m, 1 cm noise.
+TIM551 = LaserScanner(fov=np.radians(270.0), angular_step=np.radians(1.0), max_range=10.0, range_sigma=0.01)
+#: LBPT's error above which a frame counts as lost, metres (the acceptance criterion's 0.2 m).
+LOST_ERROR = 0.2
+#: Stretches where radial features are in view of the 10 m laser (x along the corridor, metres).
+UNOCCLUDED = ((1.0, 6.0), (18.0, 28.5))
+
+
+def corridor_drive(seed: int):
+    """``(truth, odometry)`` planar poses per frame of the corridor sample, the odometry
+    integrated from encoder readings drawn with ``seed``."""
+    sample = get_sample("corridor")
+    odo = TrackOdometry()
+    drive = simulate_drive(
+        sample.legs, sample.rate, sample.start, np.random.default_rng(seed), odo, sample.slip
+    )
+    return drive.poses, odo.integrate(drive.odometry[1:], start=drive.poses[0])
+
+
+@functools.lru_cache(maxsize=2)
+def corridor_visual_odometry(
+    frames: int | None = None, resolution=(640, 480)
+) -> tuple[np.ndarray, np.ndarray]:
+    """Run seed 004's PnP visual odometer on the rendered corridor sample (in memory).
+
+    Returns ``(planar robot poses in the world frame (K, 3), seconds per frame)``; the renderer
+    is not timed.
+    """
+    rendered, frame_iter = render_sample("corridor", frames, resolution)
+    odometer = PnpVisualOdometry(rendered.camera)
+    poses, seconds = [], []
+    for left, right, _ in frame_iter:
+        t0 = time.perf_counter()
+        poses.append(odometer.process(left, right))
+        seconds.append(time.perf_counter() - t0)
+    planar = planar_from_camera_poses(np.stack(poses), rendered.mount)
+    start = rendered.truth()[0]
+    return np.array([compose_planar(start, p) for p in planar]), np.array(seconds)
+
+
+def without_umbrella(world: World) -> World:
+    """The same corridor with its unmapped obstacle removed: the "normal run" of calibration."""
+    return replace(world, segments=tuple(s for s in world.segments if s.mapped))
+
+
+@dataclass
+class TrackingRun:
+    """One drive: frame indices of the updates, true and estimated poses there, each update's record."""
+
+    frames: np.ndarray
+    truth: np.ndarray
+    estimate: np.ndarray
+    steps: list
+
+    @property
+    def errors(self) -> np.ndarray:
+        """``(N, 2)`` x (along the corridor) and y errors, metres."""
+        return self.estimate[:, :2] - self.truth[:, :2]
+
+
+def run_tracking(
+    world: World,
+    truth: np.ndarray,
+    odometry: np.ndarray,
+    vo: np.ndarray | None,
+    seed: int,
+    calibration: Calibration | None = None,
+    compensate: bool = True,
+    every: int = 2,
+    field: LikelihoodField | None = None,
+    scanner: LaserScanner = TIM551,
+) -> TrackingRun:
+    """Track ``truth`` from the odometry's and the visual odometer's poses (``(K, 3)`` each, any
+    frame; only their increments are used): VOAPT with a calibration, LBPT with
+    ``compensate=False`` (then the calibration only judges) or without a calibration."""
+    field = field or LikelihoodField.from_world(world)
+    segments = world.segments_array()
+    tracker = PoseTracker(field, truth[0], calibration, compensate, rng=np.random.default_rng(seed))
+    scan_rng = np.random.default_rng(seed + 1_000_003)
+    frames = np.arange(every, len(truth), every)
+    estimate, steps = [], []
+    for k in frames:
+        odo_inc = relative_planar(odometry[k - every], odometry[k])
+        vo_inc = None if vo is None else relative_planar(vo[k - every], vo[k])
+        scan = scanner.scan(segments, truth[k], scan_rng)
+        steps.append(tracker.update(odo_inc, scan.points(), vo_inc))
+        estimate.append(tracker.pose.copy())
+    return TrackingRun(frames, truth[frames], np.array(estimate), steps)
+
+
+def calibrate(
+    world: World, truth, odometry, vo, seed: int, every: int = 2, quantile: float = 1.0
+) -> Calibration:
+    """Thresholds and control limits from a normal run (the corridor without its obstacle).
+
+    Each threshold of eq. 13 is the ``quantile`` per cent point of its indicator over the run;
+    the control limits (eq. 14-15) come from the corrections of the frames where ``C_s`` holds.
+    """
+    normal = without_umbrella(world)
+    run = run_tracking(normal, truth, odometry, vo, seed, None, every=every)
+    stats = [s.stats for s in run.steps]
+    thresholds = Thresholds(
+        float(np.percentile([s.v_max for s in stats], quantile)),
+        float(np.percentile([s.d_s for s in stats], quantile)),
+        float(np.percentile([s.r_s for s in stats], quantile)),
+    )
+    ok = [thresholds.composite(s) for s in stats]
+    laser = [st.laser_correction for st, good in zip(run.steps, ok, strict=True) if good]
+    vo_corr = [st.vo_correction for st, good in zip(run.steps, ok, strict=True) if good]
+    return Calibration(
+        thresholds, ControlLimits.from_corrections(laser), ControlLimits.from_corrections(vo_corr)
+    )
+
+
+def statistics_table(errors: np.ndarray) -> dict[str, float]:
+    """Table III's statistics of absolute errors: maximum, mean, median, standard deviation."""
+    a = np.abs(errors)
+    return {
+        "max": float(a.max()),
+        "mean": float(a.mean()),
+        "median": float(np.median(a)),
+        "std": float(a.std()),
+    }
+
+
+__all__ = [
+    "TIM551",
+    "LOST_ERROR",
+    "UNOCCLUDED",
+    "TrackingRun",
+    "ScoreStatistics",
+    "calibrate",
+    "corridor",
+    "corridor_drive",
+    "corridor_visual_odometry",
+    "run_tracking",
+    "statistics_table",
+    "without_umbrella",
+]

@@ -1,0 +1,215 @@
+"""Seed 004's visual odometer (section II): ORB landmarks, motion-model matching, PnP with
+RANSAC, and a local map of key frames.
+
+* Landmarks are ORB features with a 3-D position; similarity is the Hamming distance (eq. 1).
+  Depth comes from our stereo pair where the paper used a Kinect.
+* Matching: brute force at the start and after a loss; afterwards the velocity
+  ``T_vel = T_prev^-1 T_curr`` (eq. 2) predicts the next pose (eq. 3), every map landmark is
+  projected with it (eq. 4-5) and matched only to features within ``search_radius`` pixels.
+* The pose: OpenCV ``solvePnPRansac`` on map landmarks (world) against current pixels,
+  started from the prediction.
+* The local map holds at most ``max_keyframes`` key frames. A key frame is dropped when fewer
+  than ``min_seen_ratio`` of its landmarks are "properly observed" from the current pose: they
+  project inside the image (eq. 6) and are seen within ``view_limit`` of the direction the key
+  frame saw them from (eq. 7). Eq. 7 as printed compares a world-frame vector with a
+  camera-frame one; we read it as the angle between the two viewing rays of the landmark, the
+  current one and the key frame's, which must stay small.
+
+Poses are camera-to-world 4x4 matrices in the first camera's frame (KITTI convention).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from vo_lib.features import StereoFrontEnd, best_matches, hamming
+
+SEARCH_RADIUS = 15.0  # pixels around the predicted position (eq. 5)
+MAX_KEYFRAMES = 5
+MIN_SEEN_RATIO = 0.3
+VIEW_LIMIT = math.radians(45.0)
+MIN_INLIERS = 20
+REPROJECTION_THRESHOLD = 2.0  # pixels
+NEW_KEYFRAME_TRACKED = 0.6  # add a key frame when fewer than this share of features is tracked
+NEW_KEYFRAME_DISTANCE = 0.5  # ... or when the camera moved this far from the newest key frame, metres
+
+
+@dataclass
+class KeyFrame:
+    """A key frame: its camera-to-world pose, landmarks (world) and their descriptors."""
+
+    pose: np.ndarray
+    points: np.ndarray
+    descriptors: np.ndarray
+
+    @property
+    def centre(self) -> np.ndarray:
+        return self.pose[:3, 3]
+
+
+@dataclass
+class PnpStep:
+    """One frame: matches used, PnP inliers, whether the frame was matched by brute force."""
+
+    matches: int
+    inliers: int
+    brute_force: bool
+    lost: bool
+    keyframes: int
+
+
+class PnpVisualOdometry:
+    """Frame-by-frame 6-DoF visual odometry of seed 004 on a rectified stereo pair."""
+
+    def __init__(
+        self,
+        camera,
+        search_radius: float = SEARCH_RADIUS,
+        max_keyframes: int = MAX_KEYFRAMES,
+        min_seen_ratio: float = MIN_SEEN_RATIO,
+        view_limit: float = VIEW_LIMIT,
+        seed: int = 0,
+    ):
+        self.camera = camera
+        self.front_end = StereoFrontEnd(camera)
+        self.search_radius = search_radius
+        self.max_keyframes = max_keyframes
+        self.min_seen_ratio = min_seen_ratio
+        self.view_limit = view_limit
+        self.seed = seed
+        self.pose = np.eye(4)
+        self.velocity = np.eye(4)
+        self.keyframes: list[KeyFrame] = []
+        self.lost = True
+        self.steps: list[PnpStep] = []
+
+    # ------------------------------------------------------------------ the local map
+    def _map(self):
+        points = np.vstack([k.points for k in self.keyframes])
+        descriptors = np.vstack([k.descriptors for k in self.keyframes])
+        return points, descriptors
+
+    def _project(self, points_w: np.ndarray, pose: np.ndarray):
+        """Pixels of world points seen from camera pose ``pose`` (eq. 4-6), and their depth."""
+        T_cw = np.linalg.inv(pose)
+        pc = points_w @ T_cw[:3, :3].T + T_cw[:3, 3]
+        z = pc[:, 2]
+        safe = np.where(z > 1e-6, z, 1e-6)
+        u = self.camera.fx * pc[:, 0] / safe + self.camera.cx
+        v = self.camera.fy * pc[:, 1] / safe + self.camera.cy
+        return u, v, z
+
+    def properly_observed(self, keyframe: KeyFrame, pose: np.ndarray) -> np.ndarray:
+        """Eq. 6-7: landmarks of ``keyframe`` inside the current image and seen within
+        ``view_limit`` of the key frame's viewing direction."""
+        u, v, z = self._project(keyframe.points, pose)
+        inside = (z > 0) & (u >= 0) & (u < self.camera.width) & (v >= 0) & (v < self.camera.height)
+        ray_now = keyframe.points - pose[:3, 3]
+        ray_then = keyframe.points - keyframe.centre
+        cos = np.einsum("ij,ij->i", ray_now, ray_then) / (
+            np.linalg.norm(ray_now, axis=1) * np.linalg.norm(ray_then, axis=1) + 1e-12
+        )
+        return inside & (cos >= math.cos(self.view_limit))
+
+    def _cull(self) -> None:
+        keep = [
+            k
+            for i, k in enumerate(self.keyframes)
+            if i == len(self.keyframes) - 1
+            or self.properly_observed(k, self.pose).mean() >= self.min_seen_ratio
+        ]
+        self.keyframes = keep[-self.max_keyframes :]
+
+    # ------------------------------------------------------------------ matching
+    def _match_guided(self, points_w, desc_w, feats, prediction):
+        """Motion-model matching: map landmarks projected with the prediction, features within
+        ``search_radius`` pixels (eq. 4-5), nearest by Hamming distance with ratio and mutual tests."""
+        u, v, z = self._project(points_w, prediction)
+        r = self.search_radius
+        du = feats.w[None, :, 0] - u[:, None]
+        dv = feats.w[None, :, 1] - v[:, None]
+        ia, ib = np.nonzero((np.abs(du) <= r) & (np.abs(dv) <= r) & (z[:, None] > 0))
+        dist = hamming(desc_w[ia], feats.descriptors[ib])
+        a, b, _ = best_matches(ia, ib, dist, len(points_w), len(feats))
+        return a, b
+
+    def _match_brute_force(self, desc_w, feats):
+        """Every landmark against every feature (OpenCV's brute-force Hamming matcher, cross-checked)."""
+        matcher = cv2.BFMatcher(cv2.NORM_HAMMING, crossCheck=True)
+        matches = matcher.match(desc_w, feats.descriptors)
+        a = np.array([m.queryIdx for m in matches], int)
+        b = np.array([m.trainIdx for m in matches], int)
+        return a, b
+
+    # ------------------------------------------------------------------ one frame
+    def process(self, left: np.ndarray, right: np.ndarray) -> np.ndarray:
+        """Track one stereo pair; returns the camera-to-world pose of this frame."""
+        feats = self.front_end.process(left, right)
+        points_c = self.camera.backproject(feats.w) if len(feats) else np.zeros((0, 3))
+        if not self.keyframes:
+            self.keyframes.append(KeyFrame(self.pose.copy(), points_c.copy(), feats.descriptors.copy()))
+            self.lost = False
+            self.steps.append(PnpStep(0, 0, False, False, 1))
+            return self.pose.copy()
+        prediction = self.pose @ self.velocity  # eq. 2-3
+        points_w, desc_w = self._map()
+        brute = self.lost
+        a, b = (
+            self._match_brute_force if brute else lambda d, f: self._match_guided(points_w, d, f, prediction)
+        )(desc_w, feats)
+        inliers = 0
+        new_pose = prediction
+        if len(a) >= MIN_INLIERS:
+            T_cw = np.linalg.inv(prediction)
+            rvec, _ = cv2.Rodrigues(T_cw[:3, :3])
+            tvec = T_cw[:3, 3].reshape(3, 1).copy()
+            cv2.setRNGSeed(self.seed)
+            ok, rvec, tvec, idx = cv2.solvePnPRansac(
+                points_w[a].astype(np.float64),
+                feats.w[b, :2].astype(np.float64),
+                self.camera.K,
+                None,
+                rvec,
+                tvec,
+                useExtrinsicGuess=not brute,
+                iterationsCount=100,
+                reprojectionError=REPROJECTION_THRESHOLD,
+                confidence=0.99,
+                flags=cv2.SOLVEPNP_ITERATIVE,
+            )
+            if ok and idx is not None and len(idx) >= MIN_INLIERS:
+                inliers = len(idx)
+                sel = idx.ravel()
+                rvec, tvec = cv2.solvePnPRefineLM(
+                    points_w[a[sel]].astype(np.float64),
+                    feats.w[b[sel], :2].astype(np.float64),
+                    self.camera.K,
+                    None,
+                    rvec,
+                    tvec,
+                )
+                T_cw = np.eye(4)
+                T_cw[:3, :3] = cv2.Rodrigues(rvec)[0]
+                T_cw[:3, 3] = tvec.ravel()
+                new_pose = np.linalg.inv(T_cw)
+        self.lost = inliers == 0
+        self.velocity = np.linalg.inv(self.pose) @ new_pose if not self.lost else self.velocity
+        self.pose = new_pose
+        moved = np.linalg.norm(self.pose[:3, 3] - self.keyframes[-1].centre)
+        if not self.lost and (inliers < NEW_KEYFRAME_TRACKED * len(feats) or moved > NEW_KEYFRAME_DISTANCE):
+            pw = points_c @ self.pose[:3, :3].T + self.pose[:3, 3]
+            self.keyframes.append(KeyFrame(self.pose.copy(), pw, feats.descriptors.copy()))
+        self._cull()
+        self.steps.append(PnpStep(len(a), inliers, brute, self.lost, len(self.keyframes)))
+        return self.pose.copy()
+
+
+def run_pnp_odometry(camera, frames, seed: int = 0):
+    """Run over ``(left, right, ...)`` frames; returns ``(camera poses (N, 4, 4), odometer)``."""
+    vo = PnpVisualOdometry(camera, seed=seed)
+    poses = [vo.process(f[0], f[1]) for f in frames]
+    return np.stack(poses), vo
