@@ -19,8 +19,8 @@ from vo_lib.geometry import compose_planar, planar_from_camera_poses, relative_p
 from vo_lib.laser import LaserScanner
 from vo_lib.likelihood_field import LikelihoodField
 from vo_lib.odometry import TrackOdometry
-from vo_lib.pose_tracking import Calibration, ControlLimits, PoseTracker, ScoreStatistics, Thresholds
 from vo_lib.pnp_odometry import PnpVisualOdometry
+from vo_lib.pose_tracking import Calibration, ControlLimits, PoseTracker, ScoreStatistics, Thresholds
 from vo_lib.samples import get_sample, render_sample
 from vo_lib.trajectories import simulate_drive
 from vo_lib.world import World, corridor
