@@ -200,6 +200,8 @@ class TrackingStep:
     c_s: bool
     laser_correction: float
     vo_correction: float
+    laser_ok: bool
+    vo_ok: bool
     credible: bool
     compensated: bool
     direction: np.ndarray | None
@@ -260,7 +262,9 @@ class PoseTracker:
         cal = self.calibration
         c_s = cal.thresholds.composite(stats) if cal else True
         n = self.updates_since_credible
-        ok = cal is None or credible(c_s, cal.laser.contains(laser_len, n), cal.vo.contains(vo_len, n))
+        laser_ok = cal is None or cal.laser.contains(laser_len, n)
+        vo_ok = cal is None or cal.vo.contains(vo_len, n)
+        ok = credible(c_s, laser_ok, vo_ok)
         direction = None
         correction = best.copy()
         if not ok and self.compensate_errors and vo_increment is not None:
@@ -274,4 +278,4 @@ class PoseTracker:
         if ok:
             self.vo_pose = self.pose.copy()
             self.updates_since_credible = 0
-        return TrackingStep(stats, c_s, laser_len, vo_len, ok, direction is not None, direction)
+        return TrackingStep(stats, c_s, laser_len, vo_len, laser_ok, vo_ok, ok, direction is not None, direction)

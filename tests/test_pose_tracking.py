@@ -1,0 +1,142 @@
+"""Seed 004: likelihood field, score statistics and their readings, principal error direction,
+the PnP visual odometer, and the corridor experiment's acceptance over 20 seeds."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from vo_lib.corridor_experiment import (
+    TIM551,
+    corridor_visual_odometry,
+    run_experiment,
+    without_umbrella,
+)
+from vo_lib.likelihood_field import LikelihoodField
+from vo_lib.pose_tracking import (
+    ControlLimits,
+    ScoreStatistics,
+    Thresholds,
+    compensate,
+    credible,
+    posterior,
+    principal_error_direction,
+    sample_poses,
+)
+from vo_lib.world import corridor
+
+SEEDS = range(20)
+
+
+@pytest.fixture(scope="module")
+def world():
+    return corridor()
+
+
+@pytest.fixture(scope="module")
+def field(world):
+    return LikelihoodField.from_world(world)
+
+
+def test_likelihood_field_peaks_on_mapped_walls_only(world, field):
+    on_wall = np.array([[10.0, 1.5], [10.0, -1.5]])
+    assert np.allclose(field.lookup(on_wall), 1.0, atol=0.05)
+    assert field.lookup(np.array([[10.0, 0.0]]))[0] < 1e-6  # the corridor's axis is 1.5 m from walls
+    umbrella_tip = np.array([[13.35, 0.95]])  # unmapped: only the field of the nearby wall
+    assert field.lookup(umbrella_tip)[0] < 0.01
+    # The true pose scores higher than poses beside it.
+    scan = TIM551.scan(world.segments_array(), (3.0, 0.0, 0.0), np.random.default_rng(0))
+    poses = np.array([[3.0, 0.0, 0.0], [3.0, 0.1, 0.0], [3.0, 0.0, 0.05], [3.2, 0.0, 0.0]])
+    s = field.score(poses, scan.points())
+    assert np.argmax(s) == 0 and s[0] > 0.9 * scan.valid.sum()
+
+
+def test_posterior_and_statistics():
+    p = posterior([0.0, 1.0, 2.0])
+    assert p.sum() == pytest.approx(1.0) and p[2] / p[1] == pytest.approx(math.e)
+    st = ScoreStatistics.from_scores(np.log(np.arange(1, 101)))  # posterior proportional to 1..100
+    scaled = np.arange(1, 101) / np.arange(1, 101).sum() * 100
+    assert st.v_max == pytest.approx(scaled.max()) and st.v_med == pytest.approx(np.median(scaled))
+    assert st.d_s == pytest.approx(st.v_max - st.v_med)
+    assert st.d_s_printed == pytest.approx(st.v_max - st.v_lq - st.v_med)
+    assert st.r_s == pytest.approx((st.v_max - st.v_lq) / (st.v_uq - st.v_lq))
+    # Eq. 12 as printed can never fall below 1: the paper's threshold of 0.7 could never fail.
+    rng = np.random.default_rng(1)
+    assert min(ScoreStatistics.from_scores(rng.normal(0, 3, 200)).r_s for _ in range(50)) >= 1.0
+    assert Thresholds(1.0, 0.5, 1.0).composite(st) and not Thresholds(1e9, 0.0, 0.0).composite(st)
+
+
+def test_control_limits_follow_table_two():
+    # Table II (a): mean 0.0228 m, standard deviation 0.0319 m -> UCL 0.1185 m, LCL 0 m.
+    lim = ControlLimits(0.0228, 0.0319)
+    assert lim.upper == pytest.approx(0.1185) and lim.lower == 0.0 and lim.centre == 0.0228
+    assert lim.contains(0.1) and not lim.contains(0.2) and lim.contains(0.2, updates=4)
+    with pytest.raises(ValueError, match="at least 2 corrections"):
+        ControlLimits.from_corrections([0.1])
+    assert credible(True, True, True)
+    assert not credible(False, True, True) and not credible(True, False, True) and not credible(True, True, False)
+
+
+def test_principal_direction_and_compensation():
+    rng = np.random.default_rng(2)
+    corr = np.column_stack([rng.normal(0, 0.3, 400), rng.normal(0, 0.02, 400), rng.normal(0, 0.001, 400)])
+    scores = -np.abs(corr[:, 1]) * 100  # the score cares about y only: x is unobservable
+    v = principal_error_direction(corr, scores)
+    assert abs(v[0]) > 0.99
+    # The heading gate (eq. 18) refuses samples whose headings scatter.
+    corr_bad = corr.copy()
+    corr_bad[:, 2] = rng.normal(0, 0.2, 400)
+    assert principal_error_direction(corr_bad, scores) is None
+    # Eq. 21-22: keep the across part of the laser's correction, take the along part from VO.
+    t = compensate([0.5, 0.03], [1.0, 0.0], [0.05, -0.2])
+    np.testing.assert_allclose(t, [0.05, 0.03])
+
+
+def test_samples_spread_along_the_robot_heading():
+    s = sample_poses(np.array([1.0, 2.0, math.pi / 2]), 4000, np.random.default_rng(3))
+    assert np.allclose(s[0], [1.0, 2.0, math.pi / 2])
+    assert np.std(s[:, 1]) > 2.5 * np.std(s[:, 0])  # heading +y: along-track spread lies in y
+
+
+def test_without_umbrella_removes_only_unmapped(world):
+    normal = without_umbrella(world)
+    assert all(s.mapped for s in normal.segments)
+    assert len(normal.segments) == sum(s.mapped for s in world.segments)
+
+
+@pytest.fixture(scope="module")
+def visual_odometry():
+    return corridor_visual_odometry()
+
+
+@pytest.fixture(scope="module")
+def experiment(visual_odometry):
+    return run_experiment(SEEDS, visual_odometry[0])
+
+
+def test_pnp_odometer_on_the_corridor(visual_odometry):
+    from vo_lib.corridor_experiment import corridor_drive
+
+    vo, seconds = visual_odometry
+    truth, _ = corridor_drive(0)
+    travelled = np.hypot(*(truth[-1, :2] - truth[0, :2]))
+    # Measured: 1.5 cm after 27 m.
+    assert np.hypot(*(vo[-1, :2] - truth[-1, :2])) < 0.005 * travelled
+    assert abs(vo[-1, 2] - truth[-1, 2]) < math.radians(0.5)
+
+
+def test_voapt_beats_lbpt_along_the_corridor(experiment):
+    max_ratio = experiment.spread("max")["VOAPT"][0] / experiment.spread("max")["LBPT"][0]
+    mean_ratio = experiment.spread("mean")["VOAPT"][0] / experiment.spread("mean")["LBPT"][0]
+    print(f"max ratio {max_ratio:.3f}, mean ratio {mean_ratio:.3f}")
+    assert max_ratio <= 0.3
+    assert mean_ratio <= 0.2
+    # The LBPT really loses its way: an along-corridor error beyond 1 m in some seeds.
+    assert max(np.abs(r.errors[:, 0]).max() for r in experiment.lbpt) > 1.0
+
+
+def test_credibility_flags_lost_frames_and_few_others(experiment):
+    assert experiment.flagged_when_lost() >= 0.9
+    assert experiment.false_alarms() <= 0.1
