@@ -27,6 +27,17 @@ def test_named_sample_is_generated_once_then_reused(data_home):
     np.testing.assert_array_equal(again.pair(2)[0], seq.pair(2)[0])
 
 
+def test_out_of_date_sample_is_generated_again(data_home):
+    seq = load_sequence("corridor", frames=2, resolution=(80, 60), progress=False)
+    manifest = seq.path / "manifest.json"
+    text = manifest.read_text()
+    assert seq.manifest["fingerprint"] in text
+    manifest.write_text(text.replace(seq.manifest["fingerprint"], "0" * 16))  # as if the world had changed
+    again = load_sequence("corridor", frames=2, resolution=(80, 60), progress=False)
+    assert again.manifest["fingerprint"] == seq.manifest["fingerprint"]
+    assert "0" * 16 not in manifest.read_text()
+
+
 def test_generation_is_deterministic(tmp_path):
     a = generate("spot_turn", tmp_path / "a", frames=2, resolution=(96, 72), progress=False)
     b = generate("spot_turn", tmp_path / "b", frames=2, resolution=(96, 72), progress=False)

@@ -76,7 +76,8 @@ def test_control_limits_follow_table_two():
     with pytest.raises(ValueError, match="at least 2 corrections"):
         ControlLimits.from_corrections([0.1])
     assert credible(True, True, True)
-    assert not credible(False, True, True) and not credible(True, False, True) and not credible(True, True, False)
+    for flags in [(False, True, True), (True, False, True), (True, True, False)]:
+        assert not credible(*flags)
 
 
 def test_principal_direction_and_compensation():

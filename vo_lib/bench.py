@@ -329,7 +329,7 @@ def bench_tracking() -> dict[str, float]:
     samples = sample_poses(np.array([9.0, 0.0, 0.0]), 500, rng)
     vectorised = median_seconds(lambda: field.score(samples, points), repeat=15, min_time=0.3)
     loop = median_seconds(lambda: [field.score(p[None], points) for p in samples], repeat=5, min_time=0.3)
-    print(f"LBPT scoring: 500 samples x {len(scan.bearings)} beams ({len(points)} echoes) on a likelihood field")
+    print(f"LBPT scoring: 500 samples x {len(scan.bearings)} beams ({len(points)} echoes), likelihood field")
     print(format_row("pose by pose (baseline)", loop, loop))
     print(format_row("vectorised LikelihoodField.score", vectorised, loop))
     print(f"  target <= 10 ms: {'met' if vectorised <= 0.01 else 'NOT met'}")

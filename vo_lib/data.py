@@ -7,10 +7,11 @@ The data folder is ``$VO_LIB_DATA`` if set, else the repository's ``data/``.
 
 from __future__ import annotations
 
+import json
 import os
 from pathlib import Path
 
-from vo_lib.samples import DEFAULT_RESOLUTION, SAMPLES, generate
+from vo_lib.samples import DEFAULT_RESOLUTION, SAMPLES, fingerprint, generate
 from vo_lib.sequence import Sequence, read_sequence
 
 
@@ -28,6 +29,15 @@ def sample_path(name: str, frames: int | None = None, resolution=DEFAULT_RESOLUT
     return data_dir() / tag
 
 
+def _up_to_date(path: Path, name: str) -> bool:
+    """A cached sample is reused only if its manifest carries the sample's current fingerprint."""
+    try:
+        manifest = json.loads((path / "manifest.json").read_text())
+    except (OSError, ValueError):
+        return False
+    return manifest.get("fingerprint") == fingerprint(name)
+
+
 def load_sequence(
     name_or_path, frames: int | None = None, resolution=DEFAULT_RESOLUTION, progress: bool = True
 ) -> Sequence:
@@ -35,7 +45,7 @@ def load_sequence(
     key = str(name_or_path)
     if key in SAMPLES and not Path(key).exists():
         path = sample_path(key, frames, resolution)
-        if not (path / "manifest.json").is_file():
+        if not _up_to_date(path, key):
             generate(key, path, frames, tuple(resolution), progress)
         return read_sequence(path)
     return read_sequence(Path(key))

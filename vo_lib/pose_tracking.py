@@ -278,4 +278,5 @@ class PoseTracker:
         if ok:
             self.vo_pose = self.pose.copy()
             self.updates_since_credible = 0
-        return TrackingStep(stats, c_s, laser_len, vo_len, laser_ok, vo_ok, ok, direction is not None, direction)
+        compensated = direction is not None
+        return TrackingStep(stats, c_s, laser_len, vo_len, laser_ok, vo_ok, ok, compensated, direction)

@@ -7,6 +7,7 @@ states everything needed to make it again.
 
 from __future__ import annotations
 
+import hashlib
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
@@ -129,6 +130,16 @@ SAMPLES: dict[str, Sample] = {
 }
 
 
+def fingerprint(name: str) -> str:
+    """A short hash of everything that shapes a sample's images: its definition and its world.
+
+    A cached sample whose manifest carries another fingerprint is out of date.
+    """
+    sample = get_sample(name)
+    text = repr(sample) + repr(WORLDS[sample.world]().segments)
+    return hashlib.sha1(text.encode()).hexdigest()[:16]
+
+
 def get_sample(name: str) -> Sample:
     if name not in SAMPLES:
         raise KeyError(f"unknown sample {name!r}; known samples: {', '.join(SAMPLES)}")
@@ -199,6 +210,7 @@ def generate(
             writer.add(left, right)
         manifest = {
             "sample": name,
+            "fingerprint": fingerprint(name),
             "purpose": sample.purpose,
             "mirrors": sample.mirrors,
             "world": sample.world,
