@@ -25,6 +25,9 @@ plotting; each does one job and cites the paper equations it implements.
 ``bicycle``, ``range_bearing``   seed 002's car (eq. 4-7) and laser observation (eq. 8-12)
 ``line_landmarks``, ``segment_observers``   walls as feature points; their visible parts
 ``ekf_slam``, ``line_slam``   EKF-SLAM with Mahalanobis association (eq. 13); the paper's lap
+``likelihood_field``, ``pose_tracking``   laser scoring; LBPT and VOAPT (seed 004, eq. 8-23)
+``pnp_odometry``     seed 004's visual odometer (eq. 1-7)
+``corridor_experiment``   the occluded corridor, LBPT against VOAPT (Table III)
 ``plotting``         figures for the notebooks
 ``widgets``          interactive wrappers for the notebooks
 """
