@@ -121,17 +121,21 @@ def finite_difference(fn, at, eps=1e-6):
 num_F_x = finite_difference(lambda p: bicycle_step(p, speed0, steer0, period, wheelbase), pose0)
 num_F_u = finite_difference(lambda u: bicycle_step(pose0, u[0], u[1], period, wheelbase), [speed0, steer0])
 subs = {x: pose0[0], y: pose0[1], phi: pose0[2], V: speed0, a: steer0, T: period, L: wheelbase}
-for name, numeric, derived, printed in (
-    ("F_x", num_F_x, F_x, printed_F_x),
-    ("F_u", num_F_u, F_u, printed_F_u),
-):
-    d = np.array(derived.subs(subs), dtype=float)
-    p = np.array(printed.subs(subs), dtype=float)
+
+
+def judge(name, numeric, derived, printed, values):
+    """Finite differences against the derived and the printed Jacobian at ``values``."""
+    d = np.array(derived.subs(values), dtype=float)
+    p = np.array(printed.subs(values), dtype=float)
     print(
         f"{name}: |finite diff - derived| = {abs(numeric - d).max():.1e}, "
         f"|finite diff - printed| = {abs(numeric - p).max():.1e}"
     )
     assert abs(numeric - d).max() < 1e-8 < 1e-3 < abs(numeric - p).max()
+
+
+judge("F_x", num_F_x, F_x, printed_F_x, subs)
+judge("F_u", num_F_u, F_u, printed_F_u, subs)
 ours_F_x, ours_F_u = bicycle_jacobians(pose0, speed0, steer0, period, wheelbase)
 assert np.allclose(ours_F_x, num_F_x, atol=1e-8) and np.allclose(ours_F_u, num_F_u, atol=1e-8)
 
@@ -167,13 +171,7 @@ assert [(i, j) for i, j, *_ in differing_entries(H, printed_H)] == [(1, 3), (1, 
 pose1, point1 = np.array([2.0, -1.0, 0.7]), np.array([-5.0, 8.0])
 num_H = finite_difference(lambda s: observe_point(s[:3], s[3:]), np.r_[pose1, point1])
 subs_h = {x: pose1[0], y: pose1[1], phi: pose1[2], xi: point1[0], yi: point1[1]}
-d_H = np.array(H.subs(subs_h), dtype=float)
-p_H = np.array(printed_H.subs(subs_h), dtype=float)
-print(
-    f"|finite diff - derived| = {abs(num_H - d_H).max():.1e}, "
-    f"|finite diff - printed| = {abs(num_H - p_H).max():.1e}"
-)
-assert abs(num_H - d_H).max() < 1e-8 < 1e-3 < abs(num_H - p_H).max()
+judge("H", num_H, H, printed_H, subs_h)
 assert np.allclose(np.hstack(observation_jacobians(pose1, point1)), num_H, atol=1e-8)
 
 # %% [markdown]

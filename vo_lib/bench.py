@@ -340,20 +340,15 @@ def bench_odometers(frames: int | None = None) -> dict[str, float]:
     """Seed 004's PnP visual odometer beside seed 000's 1-point pipeline on the rendered corridor."""
     from vo_lib.geometry import planar_from_camera_poses
     from vo_lib.pipeline import run_frames
-    from vo_lib.pnp_odometry import PnpVisualOdometry
+    from vo_lib.pnp_odometry import run_pnp_odometry
     from vo_lib.samples import render_sample
 
     rendered, frame_iter = render_sample("corridor", frames)
     images = list(frame_iter)  # render first: only the odometers are timed
     truth = rendered.truth() - rendered.truth()[0]
     travelled = float(np.hypot(*truth[-1, :2]))
-    pnp = PnpVisualOdometry(rendered.camera)
-    times, poses = [], []
-    for left, right, _ in images:
-        t0 = time.perf_counter()
-        poses.append(pnp.process(left, right))
-        times.append(time.perf_counter() - t0)
-    pnp_planar = planar_from_camera_poses(np.stack(poses), rendered.mount)
+    poses, times, _ = run_pnp_odometry(rendered.camera, images)
+    pnp_planar = planar_from_camera_poses(poses, rendered.mount)
     one = run_frames(iter([(a, b, None) for a, b, _ in images]), rendered.camera)
     one_planar = one.poses - one.poses[0]
     print(f"corridor sample, {len(images)} frames, {travelled:.1f} m, 640x480, no wheel odometry")

@@ -10,7 +10,6 @@ Run ``python -m vo_lib.corridor_experiment`` for one seed.
 from __future__ import annotations
 
 import functools
-import time
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -19,7 +18,7 @@ from vo_lib.geometry import compose_planar, planar_from_camera_poses, relative_p
 from vo_lib.laser import LaserScanner
 from vo_lib.likelihood_field import LikelihoodField
 from vo_lib.odometry import TrackOdometry
-from vo_lib.pnp_odometry import PnpVisualOdometry
+from vo_lib.pnp_odometry import run_pnp_odometry
 from vo_lib.pose_tracking import Calibration, ControlLimits, PoseTracker, Thresholds
 from vo_lib.samples import get_sample, render_sample
 from vo_lib.trajectories import simulate_drive
@@ -54,15 +53,10 @@ def corridor_visual_odometry(
     is not timed.
     """
     rendered, frame_iter = render_sample("corridor", frames, resolution)
-    odometer = PnpVisualOdometry(rendered.camera)
-    poses, seconds = [], []
-    for left, right, _ in frame_iter:
-        t0 = time.perf_counter()
-        poses.append(odometer.process(left, right))
-        seconds.append(time.perf_counter() - t0)
-    planar = planar_from_camera_poses(np.stack(poses), rendered.mount)
+    poses, seconds, _ = run_pnp_odometry(rendered.camera, frame_iter)
+    planar = planar_from_camera_poses(poses, rendered.mount)
     start = rendered.truth()[0]
-    return np.array([compose_planar(start, p) for p in planar]), np.array(seconds)
+    return np.array([compose_planar(start, p) for p in planar]), seconds
 
 
 def without_umbrella(world: World) -> World:

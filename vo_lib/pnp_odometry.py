@@ -21,6 +21,7 @@ Poses are camera-to-world 4x4 matrices in the first camera's frame (KITTI conven
 from __future__ import annotations
 
 import math
+import time
 from dataclasses import dataclass
 
 import cv2
@@ -209,7 +210,15 @@ class PnpVisualOdometry:
 
 
 def run_pnp_odometry(camera, frames, seed: int = 0):
-    """Run over ``(left, right, ...)`` frames; returns ``(camera poses (N, 4, 4), odometer)``."""
+    """Run over ``(left, right, ...)`` frames.
+
+    Returns ``(camera poses (N, 4, 4), seconds per frame (N,), odometer)``; only
+    :meth:`PnpVisualOdometry.process` is timed.
+    """
     vo = PnpVisualOdometry(camera, seed=seed)
-    poses = [vo.process(f[0], f[1]) for f in frames]
-    return np.stack(poses), vo
+    poses, seconds = [], []
+    for f in frames:
+        t0 = time.perf_counter()
+        poses.append(vo.process(f[0], f[1]))
+        seconds.append(time.perf_counter() - t0)
+    return np.stack(poses), np.array(seconds), vo
