@@ -4,7 +4,7 @@ The robot drives the ``corridor`` sample's path (1 m to 28 m along the axis at 0
 seed draws its own encoder noise and slip (the odometry), laser noise and pose samples; the
 visual odometer's increments come from a VO run on the rendered corridor (or any other source of
 per-frame increments). The laser tracker updates every ``every`` frames.
-Run ``python -m vo_lib.corridor_experiment`` for one seed.
+Run ``python -m vo_lib.corridor_experiment`` for five seeds.
 """
 
 from __future__ import annotations

@@ -212,8 +212,8 @@ class PoseTracker:
 
     The visual odometer runs alongside: its pose ``P_vo`` is the last credible pose carried
     forward by the visual increments, and is re-aligned with the tracker at every credible
-    update. Without a calibration the tracker is plain LBPT (the best sample always wins); it
-    still reports ``C_s`` and ``T_s`` when given ``thresholds`` and a calibration to judge by.
+    update. Without a calibration the tracker is plain LBPT (the best sample always wins); with
+    one and ``compensate_errors=False`` it is LBPT whose every update is judged by ``T_s``.
 
     Parameters
     ----------
@@ -267,7 +267,8 @@ class PoseTracker:
         ok = credible(c_s, laser_ok, vo_ok)
         direction = None
         correction = best.copy()
-        if not ok and self.compensate_errors and vo_increment is not None:
+        compensated = not ok and self.compensate_errors and vo_increment is not None
+        if compensated:
             direction = principal_error_direction(corrections, scores)
             if direction is not None:
                 correction[:2] = compensate(best[:2], direction, t_vo)  # eq. 21-22
@@ -278,5 +279,4 @@ class PoseTracker:
         if ok:
             self.vo_pose = self.pose.copy()
             self.updates_since_credible = 0
-        compensated = direction is not None
         return TrackingStep(stats, c_s, laser_len, vo_len, laser_ok, vo_ok, ok, compensated, direction)
