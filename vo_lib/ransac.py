@@ -42,8 +42,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from vo_lib import ransac_core as core
 from vo_lib.camera import StereoCamera
-from vo_lib.circular_motion import motion_matrices, rho_from_pixels, theta_from_pixels, theta_variance
+from vo_lib.circular_motion import motion_matrices, rho_from_pixels, theta_from_pixels
 from vo_lib.geometry import as_match_array
 
 GATE_SIGMAS = 3.0  # a match is an inlier within this many standard deviations of each gate
@@ -122,57 +123,16 @@ def _gauss_newton(P, Q, wa, wb, theta, rho, camera, iterations):
     is analytic. Returns ``(theta, rho, normal_matrix, residual_sum_of_squares, count)``; the normal
     matrix and residuals are those of the last iterate before its update.
     """
-    fx, fy, cx, cy, fb = camera.fx, camera.fy, camera.cx, camera.cy, camera.fx * camera.baseline
-    x = np.concatenate([P[:, 0], Q[:, 0]])
-    y = np.concatenate([P[:, 1], Q[:, 1]])
-    z = np.concatenate([P[:, 2], Q[:, 2]])
-    g = np.concatenate([np.ones(len(P)), -np.ones(len(Q))])
-    obs = np.concatenate([wb, wa])
-    ou, ov, od = obs[:, 0] - cx, obs[:, 1] - cy, obs[:, 2]
-    gx, gz = g * x, g * z
-    A = np.zeros((2, 2))
-    rss = 0.0
-    for _ in range(max(iterations, 1)):
-        c, s = math.cos(theta), math.sin(theta)
-        sp, cp = math.sin(0.5 * theta), math.cos(0.5 * theta)
-        xm = c * x + s * gz - rho * sp
-        zm = c * z - s * gx - (rho * cp) * g
-        dx_t = c * gz - s * x - 0.5 * rho * cp
-        dz_t = (0.5 * rho * sp) * g - c * gx - s * z
-        dz_r = -cp * g
-        iz = 1.0 / zm
-        iz2 = iz * iz
-        ru, rv, rd = fx * xm * iz - ou, fy * y * iz - ov, fb * iz - od
-        fz = fx * iz2
-        ju_t, ju_r = fz * (dx_t * zm - xm * dz_t), fz * (-sp * zm - xm * dz_r)
-        yz = -fy * y * iz2
-        jv_t, jv_r = yz * dz_t, yz * dz_r
-        jd_t, jd_r = (-fb * iz2) * dz_t, (-fb * iz2) * dz_r
-        A[0, 0] = ju_t @ ju_t + jv_t @ jv_t + jd_t @ jd_t
-        A[0, 1] = A[1, 0] = ju_t @ ju_r + jv_t @ jv_r + jd_t @ jd_r
-        A[1, 1] = ju_r @ ju_r + jv_r @ jv_r + jd_r @ jd_r
-        b0 = ju_t @ ru + jv_t @ rv + jd_t @ rd
-        b1 = ju_r @ ru + jv_r @ rv + jd_r @ rd
-        rss = ru @ ru + rv @ rv + rd @ rd
-        det = A[0, 0] * A[1, 1] - A[0, 1] ** 2
-        if not det > 0:
-            break
-        d_theta = -(A[1, 1] * b0 - A[0, 1] * b1) / det
-        d_rho = -(A[0, 0] * b1 - A[0, 1] * b0) / det
-        theta, rho = theta + d_theta, rho + d_rho
-        if abs(d_theta) < 1e-10 and abs(d_rho) < 1e-9:
-            break
-    return theta, rho, A.copy(), float(rss), 6 * len(P)
+    fb = camera.fx * camera.baseline
+    theta, rho, a00, a01, a11, rss = core.gauss_newton(
+        P, Q, wa, wb, theta, rho, camera.fx, camera.fy, camera.cx, camera.cy, fb, iterations
+    )
+    return theta, rho, np.array([[a00, a01], [a01, a11]]), float(rss), 6 * len(P)
 
 
 def _covariance(A, rss, count):
-    sigma2 = rss / max(count - 2, 1)
-    det = A[0, 0] * A[1, 1] - A[0, 1] * A[1, 0]
-    if not det > 0:
-        return np.diag([np.inf, np.inf])
-    inverse = np.array([[A[1, 1], -A[0, 1]], [-A[1, 0], A[0, 0]]]) / det
-    # forward and backward residuals carry the same noise, so their information counts once
-    return 2.0 * sigma2 * inverse
+    """Covariance of ``(theta, rho)`` from the normal matrix ``A`` and the residuals."""
+    return core.covariance(A[0, 0], A[0, 1], A[1, 1], rss, count)
 
 
 def refine_motion(
@@ -186,47 +146,7 @@ def refine_motion(
     return float(theta), float(rho), _covariance(A, rss, count)
 
 
-# ---------------------------------------------------------------------- the search
-def _search(
-    pool: np.ndarray,
-    values: np.ndarray,
-    variances: np.ndarray,
-    passes,
-    rng,
-    confidence: float,
-    max_hypotheses: int,
-    extra=None,
-):
-    """Adaptive single-match RANSAC: draw batches of hypotheses from ``pool``, score each batch at
-    once with ``passes(values, variances) -> (H, N) bool``, stop after ``hypotheses_needed``.
-
-    Returns ``(value, variance, count, tried)`` of the best hypothesis; ``extra`` is one more
-    ``(value, variance)`` scored first (the filter's prediction).
-    """
-    # a hypothesis is tested as if no less certain than a typical one of the pool: a very uncertain
-    # hypothesis would otherwise open every gate and out-count the precise ones
-    cap = float(np.median(variances[pool]))
-    best = (None, None, -1)
-    if extra is not None:
-        var_extra = min(float(extra[1]), cap)
-        count = int(passes(np.array([extra[0]]), np.array([var_extra]))[0].sum())
-        best = (float(extra[0]), var_extra, count)
-    tried, limit = 0, min(hypotheses_needed(INITIAL_INLIER_RATIO, confidence), max_hypotheses)
-    n_total = max(len(pool), 1)
-    while tried < limit:
-        idx = pool[rng.integers(0, len(pool), limit - tried)]
-        var = np.minimum(variances[idx], cap)
-        counts = passes(values[idx], var).sum(axis=1)
-        # among equal counts the more precise hypothesis wins
-        k = int(np.argmax(counts - 0.5 * var / (var.max() + 1e-300)))
-        if counts[k] > best[2]:
-            best = (float(values[idx[k]]), float(var[k]), int(counts[k]))
-        tried += len(idx)
-        ratio = best[2] / n_total if best[2] > 0 else 1e-9
-        limit = min(hypotheses_needed(min(ratio, 1.0), confidence), max_hypotheses)
-    return best[0], best[1], best[2], tried
-
-
+# ---------------------------------------------------------------------- the estimator
 def one_point_ransac(
     w_prev,
     w_curr,
@@ -287,128 +207,51 @@ def one_point_ransac(
             )
         return RansacResult(0.0, 0.0, inliers, np.diag([np.inf, np.inf]), False, diagnostics)
 
-    k2 = gate_sigmas**2
-    fx, fy, cx, cy, B = camera.fx, camera.fy, camera.cx, camera.cy, camera.baseline
-    # ------------------------------------------------------------ per match, once
-    du, dv, du2, dv2 = a[:, 0] - cx, a[:, 1] - cy, b[:, 0] - cx, b[:, 1] - cy
-    num, den = du2 * dv - du * dv2, fx * (dv + dv2)  # eq. 14: tan(phi) = num / den
-    usable = (a[:, 2] > 0) & (b[:, 2] > 0) & (np.abs(den) > 1e-9 * fx)
-    if usable.sum() < 3:
+    no_prior = np.array([np.nan, np.nan])
+    prior_theta = np.array([prior.theta, prior.covariance[0][0]], float) if prior is not None else no_prior
+    prior_rho = np.array([prior.rho, prior.covariance[1][1]], float) if prior is not None else no_prior
+    # the hypotheses' draws: one uniform number per hypothesis, at most max_hypotheses per phase
+    uniforms = rng.random(2 * max_hypotheses)
+    status, theta, rho, covariance, inliers, tried_theta, tried_rho, theta_in, rounds = core.one_point_core(
+        np.ascontiguousarray(a),
+        np.ascontiguousarray(b),
+        camera.fx,
+        camera.fy,
+        camera.cx,
+        camera.cy,
+        camera.baseline,
+        prior_theta,
+        prior_rho,
+        float(pixel_sigma),
+        float(gate_sigmas),
+        float(confidence),
+        int(max_hypotheses),
+        bool(refine),
+        uniforms[:max_hypotheses],
+        uniforms[max_hypotheses:],
+        MIN_POOL,
+        POOL_FRACTION,
+        REFINE_ITERATIONS,
+        REFINE_ROUNDS,
+        WHITENED_GATE,
+    )
+    if status == core.FEW_USABLE:
         return failure("fewer than 3 matches with positive disparities off the camera's height")
-    iu = np.flatnonzero(usable)
-    du, dv, du2, dv2, num, den = du[iu], dv[iu], du2[iu], dv2[iu], num[iu], den[iu]
-    au, bu = a[iu], b[iu]
-    theta_j = 2.0 * np.arctan(num / den)
-    var_theta = theta_variance(du, dv, du2, dv2, num, den, fx, pixel_sigma)
-
-    # ------------------------------------------------------------ phase 1: theta, eq. 14 and 18-20
-    def theta_consistent(theta_h, var_h):
-        # first-order form of the eq. 20 gate: the match's own theta agrees with the hypothesis
-        return (theta_j - theta_h[:, None]) ** 2 <= k2 * (var_theta + var_h[:, None])
-
-    pool = np.argsort(var_theta)[: max(MIN_POOL, int(POOL_FRACTION * len(iu)))]
-    extra = (prior.theta, prior.covariance[0][0]) if prior is not None else None
-    theta_h, var_h, _, tried_theta = _search(
-        pool, theta_j, var_theta, theta_consistent, rng, confidence, max_hypotheses, extra
-    )
-    passes = theta_consistent(np.array([theta_h]), np.array([var_h]))[0]
-    wts = 1.0 / var_theta[passes]  # refine theta: inverse-variance weighted mean of its inliers
-    theta_hat = float(np.sum(wts * theta_j[passes]) / np.sum(wts))
-    var_theta_hat = float(1.0 / np.sum(wts))
-    # the paper's gate (eq. 18-20) decides the theta inliers of the refined theta
-    beta_a, beta_b = np.arctan(du / fx), np.arctan(du2 / fx)
-    ta, tb = dv * np.cos(beta_a) / fy, dv2 * np.cos(beta_b) / fy
-    h = 1e-4
-    e0 = _theta_gate(ta, beta_a, tb, beta_b, 0.5 * theta_hat)
-    slope = (_theta_gate(ta, beta_a, tb, beta_b, 0.5 * (theta_hat + h)) - e0) / h
-
-    def theta_gate_pass(e, slope_, theta_ref, var_ref):
-        var = var_theta + var_ref
-        with np.errstate(invalid="ignore"):
-            return (e * e <= k2 * slope_ * slope_ * var) & ((theta_j - theta_ref) ** 2 <= k2 * var)
-
-    theta_in = theta_gate_pass(e0, slope, theta_hat, var_theta_hat)
-    if theta_in.sum() < 3:
+    if status == core.FEW_THETA_INLIERS:
+        diagnostics.update(hypotheses_theta=tried_theta, theta_inliers=theta_in)
         return failure("fewer than 3 theta inliers")
-
-    # ------------------------------------------------------------ phase 2: rho, eq. 17 and 21
-    sa, sb = B / au[:, 2], B / bu[:, 2]
-    P = np.column_stack([sa * du, sa * dv * (fx / fy), sa * fx])  # eq. 13
-    Q = np.column_stack([sb * du2, sb * dv2 * (fx / fy), sb * fx])
-    ray_a = np.sqrt(du * du + (dv * fx / fy) ** 2 + fx * fx) / au[:, 2]
-    ray_b = np.sqrt(du2 * du2 + (dv2 * fx / fy) ** 2 + fx * fx) / bu[:, 2]
-    var_point = pixel_sigma**2 * (sa * sa * (ray_a * ray_a + 2.0) + sb * sb * (ray_b * ray_b + 2.0))
-    phi = 0.5 * theta_hat
-    sphi, cphi = math.sin(phi), math.cos(phi)
-    it = np.flatnonzero(theta_in)
-    rho_j = (-sphi * P[it, 0] + cphi * P[it, 2]) - (sphi * Q[it, 0] + cphi * Q[it, 2])  # eq. 16, corrected
-    c, s = math.cos(theta_hat), math.sin(theta_hat)
-    # residual of eq. 21 without T: Q - R P; then the gate subtracts rho * (-sin phi, 0, -cos phi)
-    base_x = Q[it, 0] - (c * P[it, 0] + s * P[it, 2])
-    base_y = Q[it, 1] - P[it, 1]
-    base_z = Q[it, 2] - (-s * P[it, 0] + c * P[it, 2])
-    var_pt = var_point[it]
-
-    def rho_pass(rho_h, var_h):
-        rx = base_x + (rho_h * sphi)[:, None]
-        rz = base_z + (rho_h * cphi)[:, None]
-        return rx * rx + base_y * base_y + rz * rz <= k2 * (var_pt + var_h[:, None])
-
-    pool2 = np.argsort(var_pt)[: max(MIN_POOL, int(POOL_FRACTION * len(it)))]
-    extra = (prior.rho, prior.covariance[1][1]) if prior is not None else None
-    rho_hat, var_rho, _, tried_rho = _search(
-        pool2, rho_j, var_pt, rho_pass, rng, confidence, max_hypotheses, extra
-    )
-    rho_in = rho_pass(np.array([rho_hat]), np.array([var_rho]))[0]
-    # refine rho on its inliers, like theta: inverse-variance weighted mean of the per-match rhos
-    w_rho = 1.0 / var_pt[rho_in]
-    rho_hat, var_rho = float(np.sum(w_rho * rho_j[rho_in]) / np.sum(w_rho)), float(1.0 / np.sum(w_rho))
-    keep = np.zeros(len(iu), bool)
-    keep[it[rho_pass(np.array([rho_hat]), np.array([var_rho]))[0]]] = True
-    theta, rho = theta_hat, rho_hat
-    covariance = np.diag([var_theta_hat, var_rho])
-
-    # ------------------------------------------------------------ refinement on all inliers
-    rounds = 0
-    while refine and keep.sum() >= 3 and rounds < REFINE_ROUNDS:
-        rounds += 1
-        theta, rho, A, rss, count = _gauss_newton(
-            P[keep], Q[keep], au[keep], bu[keep], theta, rho, camera, REFINE_ITERATIONS if rounds == 1 else 1
-        )
-        covariance = _covariance(A, rss, count)
-        # the refined motion decides the inliers again, through both gates, with its own small
-        # uncertainty; a far outlier that slipped through the hypotheses' wide gates drops out
-        e = _theta_gate(ta, beta_a, tb, beta_b, 0.5 * theta)
-        slope = (_theta_gate(ta, beta_a, tb, beta_b, 0.5 * (theta + h)) - e) / h
-        new = theta_gate_pass(e, slope, theta, covariance[0, 0])
-        # eq. 21 whitened: a point's noise is long along its ray and short across it, so the residual
-        # P' - (R P + T) is tested where its noise is uniform, projected into (u, v, d)
-        R, T = motion_matrices(theta, rho)
-        moved = P @ R.T + T
-        with np.errstate(divide="ignore", invalid="ignore"):
-            iz = 1.0 / moved[:, 2]
-            r2 = (
-                (fx * moved[:, 0] * iz - du2) ** 2
-                + (fy * moved[:, 1] * iz - dv2) ** 2
-                + (fx * B * iz - bu[:, 2]) ** 2
-            )
-        new &= (moved[:, 2] > 0) & (r2 <= WHITENED_GATE**2 * 2.0 * pixel_sigma**2)
-        changed = not np.array_equal(new, keep)
-        keep = new
-        if not changed:
-            break
-    inliers[iu[keep]] = True
+    count = int(inliers.sum())
     diagnostics.update(
         hypotheses_theta=tried_theta,
         hypotheses_rho=tried_rho,
-        theta_inliers=int(theta_in.sum()),
-        inliers=int(keep.sum()),
-        inlier_ratio=float(keep.sum() / n),
+        theta_inliers=theta_in,
+        inliers=count,
+        inlier_ratio=float(count / n),
         refined=bool(refine),
         refine_rounds=rounds,
         time_ms=(time.perf_counter() - t_start) * 1e3,
     )
-    if keep.sum() < 3:
+    if status == core.FEW_INLIERS:
         return failure("fewer than 3 inliers after refinement")
     return RansacResult(float(theta), float(rho), inliers, covariance, True, diagnostics)
 
