@@ -144,8 +144,8 @@ assert np.hypot(*(pnp_poses[-1, :2] - truth_200[-1, :2])) < 0.05
 
 # %% [markdown]
 # `python -m vo_lib bench odometers` times both on the whole corridor (541 frames, 27 m): the PnP
-# odometer takes about 15 ms per frame and ends 1.5 cm off (0.06 %); the 1-point pipeline takes
-# about 8 ms and ends 3.5 cm off (0.13 %). Along a straight corridor the general 6-DoF solution
+# odometer takes about 15–16 ms per frame and ends 1.5 cm off (0.06 %); the 1-point pipeline takes
+# about 7–8 ms and ends 3.5 cm off (0.13 %). Along a straight corridor the general 6-DoF solution
 # is the more accurate one here; the 1-point model is the faster, and (notebook 08) shines where
 # its motion model holds and matches are few.
 #

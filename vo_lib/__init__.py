@@ -16,6 +16,7 @@ plotting; each does one job and cites the paper equations it implements.
 ``features``         stereo front end (FAST, ORB descriptors, row matching)
 ``temporal``         frame-to-frame matching guided by the filter's prediction
 ``ransac``           1-point RANSAC (seed 000, eq. 18-21)
+``ransac_core``      its compiled core (Numba)
 ``baselines``        3-point rigid RANSAC, solvePnPRansac, 5-point essential matrix
 ``kalman``           odometry + VO Kalman filter on filterpy
 ``pipeline``         the whole stereo VO of seed 000, frame by frame
