@@ -177,10 +177,28 @@ def _theta_gate_pass(ta, ba, tb, bb, theta_j, var_theta, theta, var_ref, k2, out
 
 @_jit
 def one_point_core(
-    a, b, fx, fy, cx, cy, baseline, prior_theta, prior_rho, pixel_sigma, gate_sigmas, confidence,
-    max_hypotheses, refine, uniforms_theta, uniforms_rho, min_pool, pool_fraction, refine_iterations,
-    refine_rounds, whitened_gate,
-):  # fmt: skip
+    a,
+    b,
+    fx,
+    fy,
+    cx,
+    cy,
+    baseline,
+    prior_theta,
+    prior_rho,
+    pixel_sigma,
+    gate_sigmas,
+    confidence,
+    max_hypotheses,
+    refine,
+    uniforms_theta,
+    uniforms_rho,
+    min_pool,
+    pool_fraction,
+    refine_iterations,
+    refine_rounds,
+    whitened_gate,
+):
     """Everything numeric of ``one_point_ransac``. ``prior_theta`` / ``prior_rho`` are
     ``(value, variance)`` pairs, NaN when there is no prior. Returns ``(status, theta, rho,
     covariance, inlier mask over all matches, hypotheses tried in each phase, theta inliers,
@@ -212,9 +230,21 @@ def one_point_core(
     empty = np.empty(0)
     pool = np.argsort(var_theta)[: max(min_pool, int(pool_fraction * m))]
     theta_h, var_h, _, tried_theta = search(
-        1, pool, theta_j, var_theta, uniforms_theta, confidence, max_hypotheses, prior_theta, k2,
-        empty, empty, empty, 0.0, 0.0,
-    )  # fmt: skip
+        1,
+        pool,
+        theta_j,
+        var_theta,
+        uniforms_theta,
+        confidence,
+        max_hypotheses,
+        prior_theta,
+        k2,
+        empty,
+        empty,
+        empty,
+        0.0,
+        0.0,
+    )
     sw = swt = 0.0  # refine theta: inverse-variance weighted mean of the hypothesis' inliers
     for i in range(m):
         if (theta_j[i] - theta_h) ** 2 <= k2 * (var_theta[i] + var_h):
@@ -245,13 +275,8 @@ def one_point_core(
     sphi, cphi = math.sin(phi), math.cos(phi)
     c, s = math.cos(theta_hat), math.sin(theta_hat)
     it = np.flatnonzero(theta_in)
-    rho_j, bx, by, bz, var_pt = (
-        np.empty(n_theta_in),
-        np.empty(n_theta_in),
-        np.empty(n_theta_in),
-        np.empty(n_theta_in),
-        np.empty(n_theta_in),
-    )  # noqa: E501
+    rho_j, var_pt = np.empty(n_theta_in), np.empty(n_theta_in)
+    bx, by, bz = np.empty(n_theta_in), np.empty(n_theta_in), np.empty(n_theta_in)
     for k in range(n_theta_in):
         i = it[k]
         rho_j[k] = (-sphi * P[i, 0] + cphi * P[i, 2]) - (sphi * Q[i, 0] + cphi * Q[i, 2])  # eq. 16, corrected
@@ -298,9 +323,19 @@ def one_point_core(
         rounds += 1
         sel = np.flatnonzero(keep)
         theta, rho, a00, a01, a11, rss = gauss_newton(
-            P[sel], Q[sel], au[sel], bu[sel], theta, rho, fx, fy, cx, cy, fb,
+            P[sel],
+            Q[sel],
+            au[sel],
+            bu[sel],
+            theta,
+            rho,
+            fx,
+            fy,
+            cx,
+            cy,
+            fb,
             refine_iterations if rounds == 1 else 1,
-        )  # fmt: skip
+        )
         cov = covariance(a00, a01, a11, rss, 6 * len(sel))
         # the refined motion decides the inliers again: the theta gate, and eq. 21 whitened in (u, v, d)
         _theta_gate_pass(ta, beta_a, tb, beta_b, theta_j, var_theta, theta, cov[0, 0], k2, new)
