@@ -26,7 +26,6 @@ class LikelihoodField:
     """A likelihood field on a grid: ``field[row, col]``, row = y, col = x."""
 
     field: np.ndarray
-    occupied: np.ndarray
     origin: tuple[float, float]
     resolution: float
     sigma: float
@@ -47,7 +46,7 @@ class LikelihoodField:
             cv2.line(occupied, p0, p1, 1, 1)
         distance = cv2.distanceTransform(1 - occupied, cv2.DIST_L2, cv2.DIST_MASK_PRECISE) * resolution
         field = np.exp(-0.5 * (distance / sigma) ** 2).astype(np.float32)
-        return cls(field, occupied.astype(bool), origin, resolution, sigma)
+        return cls(field, origin, resolution, sigma)
 
     def lookup(self, points: np.ndarray) -> np.ndarray:
         """Field values at world points ``(..., 2)`` (nearest cell; 0 outside the grid)."""

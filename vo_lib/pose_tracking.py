@@ -99,9 +99,9 @@ class ScoreStatistics:
 class Thresholds:
     """``V_th1, V_th2, V_th3`` of eq. 13 on our normalised scores (calibrated in notebook 10)."""
 
-    v_max: float = 25.0
-    d_s: float = 25.0
-    r_s: float = 10.0
+    v_max: float
+    d_s: float
+    r_s: float
 
     def composite(self, stats: ScoreStatistics) -> bool:
         """``C_s`` (eq. 13): all three indicators at or above their thresholds."""

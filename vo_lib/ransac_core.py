@@ -100,29 +100,61 @@ def covariance(a00, a01, a11, rss, count):
 
 
 @_jit
+def _passes(phase, j, h, vh, values, variances, k2, bx, by, bz, sphi, cphi):
+    """Does match ``j`` pass hypothesis ``h`` (variance ``vh``)? Phase 1: ``(theta_j - h)^2 <=
+    k2 (var_j + vh)`` (first-order eq. 20); phase 2: eq. 21, ``|Q - R P - T(h)|^2 <= k2 (var_j + vh)``."""
+    if phase == 1:
+        r2 = (values[j] - h) ** 2
+    else:
+        rx, rz = bx[j] + h * sphi, bz[j] + h * cphi
+        r2 = rx * rx + by[j] * by[j] + rz * rz
+    return r2 <= k2 * (variances[j] + vh)
+
+
+@_jit
 def _count(phase, h, vh, values, variances, k2, bx, by, bz, sphi, cphi):
-    """Matches passing a hypothesis: phase 1 ``(theta_j - h)^2 <= k2 (var_j + vh)`` (first-order
-    eq. 20); phase 2 eq. 21, ``|Q - R P - T(h)|^2 <= k2 (var_j + vh)``."""
+    """Matches passing a hypothesis."""
     count = 0
     for j in range(values.shape[0]):
-        if phase == 1:
-            r2 = (values[j] - h) ** 2
-        else:
-            rx, rz = bx[j] + h * sphi, bz[j] + h * cphi
-            r2 = rx * rx + by[j] * by[j] + rz * rz
-        if r2 <= k2 * (variances[j] + vh):
-            count += 1
+        count += _passes(phase, j, h, vh, values, variances, k2, bx, by, bz, sphi, cphi)
     return count
 
 
 @_jit
+def _reestimate(phase, h, vh, values, variances, k2, bx, by, bz, sphi, cphi):
+    """Inverse-variance weighted mean of the per-match values of a hypothesis' inliers, and its variance."""
+    sw = swv = 0.0
+    for j in range(values.shape[0]):
+        if _passes(phase, j, h, vh, values, variances, k2, bx, by, bz, sphi, cphi):
+            sw += 1.0 / variances[j]
+            swv += values[j] / variances[j]
+    return swv / sw, 1.0 / sw
+
+
+@_jit
 def search(
-    phase, pool, values, variances, uniforms, confidence, max_hypotheses, extra, k2, bx, by, bz, sphi, cphi
+    phase,
+    values,
+    variances,
+    uniforms,
+    confidence,
+    max_hypotheses,
+    extra,
+    k2,
+    bx,
+    by,
+    bz,
+    sphi,
+    cphi,
+    min_pool,
+    pool_fraction,
 ):
-    """Adaptive single-match RANSAC over ``pool`` (``ransac._search`` explains the rules):
+    """Adaptive single-match RANSAC (the rules are in ``vo_lib.ransac``'s module text):
     batches of hypotheses, the most-supported (then most precise) wins, the batch size follows
     the best inlier ratio. ``extra = (value, variance)`` is scored first when finite.
+    Hypotheses come from the ``pool_fraction`` best-conditioned matches (at least ``min_pool``).
     Returns ``(value, variance, count, tried)``."""
+    pool = np.argsort(variances)[: max(min_pool, int(pool_fraction * values.shape[0]))]
     # a hypothesis is tested as if no less certain than a typical one of the pool
     cap = np.median(variances[pool])
     best_v, best_var, best_c = np.nan, np.nan, -1
@@ -227,11 +259,9 @@ def one_point_core(
         theta_j[i] = 2.0 * math.atan(num[i] / den[i])
     var_theta = _theta_variance(du, dv, du2, dv2, num, den, fx, pixel_sigma)
     # ------------------------------------------------------------ phase 1: theta (eq. 14, 18-20)
-    empty = np.empty(0)
-    pool = np.argsort(var_theta)[: max(min_pool, int(pool_fraction * m))]
+    e = np.empty(0)
     theta_h, var_h, _, tried_theta = search(
         1,
-        pool,
         theta_j,
         var_theta,
         uniforms_theta,
@@ -239,18 +269,16 @@ def one_point_core(
         max_hypotheses,
         prior_theta,
         k2,
-        empty,
-        empty,
-        empty,
+        e,
+        e,
+        e,
         0.0,
         0.0,
+        min_pool,
+        pool_fraction,
     )
-    sw = swt = 0.0  # refine theta: inverse-variance weighted mean of the hypothesis' inliers
-    for i in range(m):
-        if (theta_j[i] - theta_h) ** 2 <= k2 * (var_theta[i] + var_h):
-            sw += 1.0 / var_theta[i]
-            swt += theta_j[i] / var_theta[i]
-    theta_hat, var_theta_hat = swt / sw, 1.0 / sw
+    # refine theta: inverse-variance weighted mean of the hypothesis' inliers
+    theta_hat, var_theta_hat = _reestimate(1, theta_h, var_h, theta_j, var_theta, k2, e, e, e, 0.0, 0.0)
     beta_a, beta_b = np.arctan(du / fx), np.arctan(du2 / fx)
     ta, tb = dv * np.cos(beta_a) / fy, dv2 * np.cos(beta_b) / fy
     theta_in = np.empty(m, np.bool_)
@@ -284,10 +312,8 @@ def one_point_core(
         by[k] = Q[i, 1] - P[i, 1]
         bz[k] = Q[i, 2] - (-s * P[i, 0] + c * P[i, 2])
         var_pt[k] = var_point[i]
-    pool2 = np.argsort(var_pt)[: max(min_pool, int(pool_fraction * n_theta_in))]
     rho_h, var_rho, _, tried_rho = search(
         2,
-        pool2,
         rho_j,
         var_pt,
         uniforms_rho,
@@ -300,18 +326,13 @@ def one_point_core(
         bz,
         sphi,
         cphi,
+        min_pool,
+        pool_fraction,
     )
-    sw = swr = 0.0  # refine rho like theta
-    for k in range(n_theta_in):
-        rx, rz = bx[k] + rho_h * sphi, bz[k] + rho_h * cphi
-        if rx * rx + by[k] * by[k] + rz * rz <= k2 * (var_pt[k] + var_rho):
-            sw += 1.0 / var_pt[k]
-            swr += rho_j[k] / var_pt[k]
-    rho_hat, var_rho = swr / sw, 1.0 / sw
+    rho_hat, var_rho = _reestimate(2, rho_h, var_rho, rho_j, var_pt, k2, bx, by, bz, sphi, cphi)  # like theta
     keep = np.zeros(m, np.bool_)
     for k in range(n_theta_in):
-        rx, rz = bx[k] + rho_hat * sphi, bz[k] + rho_hat * cphi
-        keep[it[k]] = rx * rx + by[k] * by[k] + rz * rz <= k2 * (var_pt[k] + var_rho)
+        keep[it[k]] = _passes(2, k, rho_hat, var_rho, rho_j, var_pt, k2, bx, by, bz, sphi, cphi)
     theta, rho = theta_hat, rho_hat
     cov = np.zeros((2, 2))
     cov[0, 0], cov[1, 1] = var_theta_hat, var_rho
