@@ -35,9 +35,9 @@ import numpy as np
 import sympy as sp
 
 from vo_lib.geometry import wrap_angle
-from vo_lib.odometry import TrackOdometry, apply_slip
-from vo_lib.plotting import covariance_ellipse, new_axes, plot_paths
-from vo_lib.widgets import offer, show_math, slider
+from vo_lib.models.track_odometry import TrackOdometry, apply_slip
+from vo_lib.viz.plotting import covariance_ellipse, new_axes, plot_paths
+from vo_lib.viz.widgets import offer, show_math, slider
 
 SEED = 1
 rng = np.random.default_rng(SEED)
@@ -99,7 +99,7 @@ show_math(r"F_u - B_k", sp.simplify(F_u - B_k))
 # * **F_u ≠ B_k**: because φ_k itself depends on the controls, F_u has the extra terms
 #   ±Δu sin(θ+φ)/(2(D+2b)) and ∓Δu cos(θ+φ)/(2(D+2b)). They are small for short steps.
 #
-# `vo_lib.odometry.TrackOdometry.jacobians` implements the full derivatives; we check it
+# `vo_lib.models.track_odometry.TrackOdometry.jacobians` implements the full derivatives; we check it
 # against the sympy expressions at random points.
 
 # %%

@@ -34,10 +34,10 @@
 import numpy as np
 import sympy as sp
 
-from vo_lib import circular_motion as cm
 from vo_lib.camera import StereoCamera
-from vo_lib.synthetic import synthetic_matches
-from vo_lib.widgets import show_math
+from vo_lib.stereo_vo import circular_motion as cm
+from vo_lib.stereo_vo.synthetic import synthetic_matches
+from vo_lib.viz.widgets import show_math
 
 SEED = 2
 rng = np.random.default_rng(SEED)
@@ -223,7 +223,7 @@ for theta_true, rho_true in [(0.0, 0.10), (np.radians(3.0), 0.08), (np.radians(-
 # straight ahead to **+x**, i.e. to the right in the new image: the camera turned **left**. In
 # the robot frame (x forward, y left, z up, yaw counter-clockwise) that is a positive yaw, so
 # **Δyaw = θ**, and the camera, if it sits above the turning axis, moves by
-# (ρ cos φ, ρ sin φ) in the previous robot frame. `vo_lib.circular_motion.yaw_increment` and
+# (ρ cos φ, ρ sin φ) in the previous robot frame. `vo_lib.stereo_vo.circular_motion.yaw_increment` and
 # `robot_increment` encode this; notebook 03 checks it against a simulated robot.
 
 # %%

@@ -31,12 +31,12 @@
 import matplotlib.pyplot as plt
 import numpy as np
 
-from vo_lib import circular_motion as cm
 from vo_lib.camera import StereoCamera
 from vo_lib.geometry import camera_motion, camera_mount, compose_planar, wrap_angle
-from vo_lib.plotting import new_axes
-from vo_lib.synthetic import matches_under_transform, synthetic_matches
-from vo_lib.widgets import offer, slider
+from vo_lib.stereo_vo import circular_motion as cm
+from vo_lib.stereo_vo.synthetic import matches_under_transform, synthetic_matches
+from vo_lib.viz.plotting import new_axes
+from vo_lib.viz.widgets import offer, slider
 
 SEED = 3
 rng = np.random.default_rng(SEED)

@@ -39,16 +39,16 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from vo_lib.camera import StereoCamera
+from vo_lib.formats.sequence import read_sequence
 from vo_lib.geometry import camera_mount, planar_to_matrix, wrap_angle
-from vo_lib.laser import LaserScanner
-from vo_lib.odometry import TrackOdometry
-from vo_lib.plotting import new_axes, plot_robot, plot_world
-from vo_lib.render import StereoRenderer
-from vo_lib.samples import CAMERA_HEIGHT, SAMPLES, generate
-from vo_lib.sequence import read_sequence
-from vo_lib.trajectories import simulate_drive
-from vo_lib.widgets import offer, slider
-from vo_lib.world import WORLDS
+from vo_lib.models.track_odometry import TrackOdometry
+from vo_lib.sim.laser import LaserScanner
+from vo_lib.sim.render import StereoRenderer
+from vo_lib.sim.samples import CAMERA_HEIGHT, SAMPLES, generate
+from vo_lib.sim.trajectories import simulate_drive
+from vo_lib.sim.world import WORLDS
+from vo_lib.viz.plotting import new_axes, plot_robot, plot_world
+from vo_lib.viz.widgets import offer, slider
 
 SEED = 4
 rng = np.random.default_rng(SEED)
@@ -288,7 +288,7 @@ walk_widget = offer(
 #
 # ## Exercises
 #
-# 1. Raise the texture's block sizes (`vo_lib.textures.BLOCK_LAYERS`) and count FAST corners on a
+# 1. Raise the texture's block sizes (`vo_lib.sim.textures.BLOCK_LAYERS`) and count FAST corners on a
 #    wall at 1, 5 and 15 m. Which block size serves which distance?
 # 2. Add motion blur (`SensorEffects(blur_px=5)`) and repeat the disparity check of section 2.
 #    How does the error distribution change?

@@ -36,12 +36,12 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from vo_lib.camera import StereoCamera
-from vo_lib.features import StereoFrontEnd, bucket, hamming
 from vo_lib.geometry import camera_mount, planar_to_matrix
-from vo_lib.plotting import new_axes
-from vo_lib.render import SensorEffects, StereoRenderer
-from vo_lib.widgets import offer, slider
-from vo_lib.world import indoor_lab
+from vo_lib.sim.render import SensorEffects, StereoRenderer
+from vo_lib.sim.world import indoor_lab
+from vo_lib.stereo_vo.features import StereoFrontEnd, bucket, hamming
+from vo_lib.viz.plotting import new_axes
+from vo_lib.viz.widgets import offer, slider
 
 SEED = 5
 rng = np.random.default_rng(SEED)
@@ -192,9 +192,9 @@ print(f"  features      {np.median([t['features'] for t in timings]):7.0f}")
 # off by 0.1° and 5 mm, and judge each match by the true motion.
 
 # %%
-from vo_lib.circular_motion import apply_motion, circular_motion_from_transform
 from vo_lib.geometry import camera_motion
-from vo_lib.temporal import MotionPrior, match_temporal
+from vo_lib.stereo_vo.circular_motion import apply_motion, circular_motion_from_transform
+from vo_lib.stereo_vo.temporal import MotionPrior, match_temporal
 
 mount = camera_mount(height=0.5)
 drive = [np.array([-3.0 + 0.012 * k, 0.3 + 0.001 * k, 0.2 + 0.003 * k]) for k in range(11)]

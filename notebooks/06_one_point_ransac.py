@@ -37,11 +37,10 @@ import time
 import matplotlib.pyplot as plt
 import numpy as np
 
-from vo_lib import circular_motion as cm
-from vo_lib.baselines import essential_ransac, pnp_ransac, rigid_ransac
 from vo_lib.camera import StereoCamera
-from vo_lib.plotting import draw_chord_geometry, new_axes
-from vo_lib.ransac import (
+from vo_lib.stereo_vo import circular_motion as cm
+from vo_lib.stereo_vo.baselines import essential_ransac, pnp_ransac, rigid_ransac
+from vo_lib.stereo_vo.ransac import (
     gate_angles,
     histogram_voting,
     hypotheses_needed,
@@ -49,8 +48,9 @@ from vo_lib.ransac import (
     refine_motion,
     theta_gate_error,
 )
-from vo_lib.synthetic import synthetic_matches
-from vo_lib.widgets import offer, slider
+from vo_lib.stereo_vo.synthetic import synthetic_matches
+from vo_lib.viz.plotting import draw_chord_geometry, new_axes
+from vo_lib.viz.widgets import offer, slider
 
 SEED = 6
 rng = np.random.default_rng(SEED)

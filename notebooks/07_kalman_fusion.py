@@ -35,17 +35,17 @@ import matplotlib.pyplot as plt
 import numpy as np
 from scipy.stats import chi2
 
-from vo_lib import circular_motion as cm
 from vo_lib.camera import StereoCamera
 from vo_lib.geometry import compose_planar, relative_planar, wrap_angle
-from vo_lib.kalman import VoKalmanFilter, measurement
-from vo_lib.odometry import TrackOdometry
-from vo_lib.plotting import new_axes, plot_paths
-from vo_lib.ransac import one_point_ransac
-from vo_lib.samples import SAMPLES
-from vo_lib.synthetic import synthetic_matches
-from vo_lib.trajectories import simulate_drive
-from vo_lib.widgets import offer, slider
+from vo_lib.models.track_odometry import TrackOdometry
+from vo_lib.sim.samples import SAMPLES
+from vo_lib.sim.trajectories import simulate_drive
+from vo_lib.stereo_vo import circular_motion as cm
+from vo_lib.stereo_vo.kalman import VoKalmanFilter, measurement
+from vo_lib.stereo_vo.ransac import one_point_ransac
+from vo_lib.stereo_vo.synthetic import synthetic_matches
+from vo_lib.viz.plotting import new_axes, plot_paths
+from vo_lib.viz.widgets import offer, slider
 
 SEED = 7
 rng = np.random.default_rng(SEED)

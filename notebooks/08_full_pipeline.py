@@ -12,7 +12,7 @@
 # # 08 · The full pipeline, and the paper's experiments beside ours
 #
 # Everything so far comes together: stereo front end (05), 1-point RANSAC (06) and the Kalman
-# filter fed by track odometry (07), frame after frame (`vo_lib.pipeline`). We rerun seed 000's
+# filter fed by track odometry (07), frame after frame (`vo_lib.stereo_vo.pipeline`). We rerun seed 000's
 # experiments on the sample sequences that mirror them — processing time per resolution
 # (Table 1), linear motion, free motion, spot turns with slip, outdoor free motion (Table 2) — and
 # put the paper's figures beside ours.
@@ -36,10 +36,10 @@ import numpy as np
 
 from vo_lib.evaluation import key_position_errors
 from vo_lib.geometry import relative_planar, wrap_angle
-from vo_lib.odometry import TrackOdometry
-from vo_lib.pipeline import KEY_ANGLE, KEY_DISTANCE, run_frames
-from vo_lib.plotting import new_axes, plot_paths
-from vo_lib.samples import SAMPLES, render_sample
+from vo_lib.models.track_odometry import TrackOdometry
+from vo_lib.sim.samples import SAMPLES, render_sample
+from vo_lib.stereo_vo.pipeline import KEY_ANGLE, KEY_DISTANCE, run_frames
+from vo_lib.viz.plotting import new_axes, plot_paths
 
 SEED = 8
 rng = np.random.default_rng(SEED)
@@ -255,9 +255,9 @@ assert table["indoor_free"]["mean_heading"] <= 0.2
 #
 # ## Exercises
 #
-# 1. Set `vo_lib.pipeline.KEY_DISTANCE` to 0 (a new keyframe every frame) and rerun section 3.
+# 1. Set `vo_lib.stereo_vo.pipeline.KEY_DISTANCE` to 0 (a new keyframe every frame) and rerun section 3.
 #    How large is the final error now, and in which direction?
-# 2. Move the camera 0.3 m ahead of the turning axis in `vo_lib.samples` and rerun section 4.
+# 2. Move the camera 0.3 m ahead of the turning axis in `vo_lib.sim.samples` and rerun section 4.
 # 3. Run `python -m vo_lib run --sequence outdoor_free --no-odometry` and compare with section 5.
 # 4. If you have KITTI odometry data, run the pipeline on sequence 00 (README). Which assumption
 #    of the circular-motion model does a car break first?

@@ -41,19 +41,30 @@ import numpy as np
 import sympy as sp
 from scipy.stats import chi2
 
-from vo_lib.bicycle import bicycle_jacobians, bicycle_step
-from vo_lib.laser import LaserScanner
-from vo_lib.line_landmarks import PAPER_EXTENDED_RIGHT_END, PAPER_LANDMARKS, feature_point, paper_world
-from vo_lib.line_slam import (
+from vo_lib.line_slam.lap import (
     LineSlamScenario,
     association_example,
     heading_errors,
     simulate_lap,
     true_visible_extent,
 )
-from vo_lib.plotting import covariance_ellipse, draw_observer_case, new_axes, plot_line_slam, plot_pose_errors
-from vo_lib.range_bearing import observation_jacobians, observe_point, point_from_observation
-from vo_lib.segment_observers import DEFAULT_TOLERANCE, OBSERVERS, visible_segment
+from vo_lib.line_slam.line_landmarks import (
+    PAPER_EXTENDED_RIGHT_END,
+    PAPER_LANDMARKS,
+    feature_point,
+    paper_world,
+)
+from vo_lib.line_slam.range_bearing import observation_jacobians, observe_point, point_from_observation
+from vo_lib.line_slam.segment_observers import DEFAULT_TOLERANCE, OBSERVERS, visible_segment
+from vo_lib.models.bicycle import bicycle_jacobians, bicycle_step
+from vo_lib.sim.laser import LaserScanner
+from vo_lib.viz.plotting import (
+    covariance_ellipse,
+    draw_observer_case,
+    new_axes,
+    plot_line_slam,
+    plot_pose_errors,
+)
 
 SEED = 2
 rng = np.random.default_rng(SEED)
@@ -141,7 +152,7 @@ assert np.allclose(ours_F_x, num_F_x, atol=1e-8) and np.allclose(ours_F_u, num_F
 
 # %% [markdown]
 # The derived Jacobians agree with the finite differences to rounding; the printed ones miss by
-# $2TV|\cos(\Phi+a)|$ and $2T|\sin(\Phi+a)|$. `vo_lib.bicycle` uses the derived ones. With the
+# $2TV|\cos(\Phi+a)|$ and $2T|\sin(\Phi+a)|$. `vo_lib.models.bicycle` uses the derived ones. With the
 # printed $F_x$ the filter would couple a heading error into $y$ with the wrong sign: its
 # covariance would stop describing where the car can be whenever it drives with a component
 # along $x$.

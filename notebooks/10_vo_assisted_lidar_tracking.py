@@ -37,7 +37,8 @@
 import matplotlib.pyplot as plt
 import numpy as np
 
-from vo_lib.corridor_experiment import (
+from vo_lib.geometry import planar_from_camera_poses
+from vo_lib.lidar_tracking.corridor_experiment import (
     LOST_ERROR,
     TIM551,
     UNOCCLUDED,
@@ -48,14 +49,13 @@ from vo_lib.corridor_experiment import (
     run_tracking,
     unoccluded,
 )
-from vo_lib.geometry import planar_from_camera_poses
-from vo_lib.likelihood_field import LikelihoodField
-from vo_lib.pipeline import run_frames
-from vo_lib.plotting import new_axes, plot_world
-from vo_lib.pnp_odometry import PnpVisualOdometry
-from vo_lib.pose_tracking import ScoreStatistics, posterior, sample_poses
-from vo_lib.samples import render_sample
-from vo_lib.world import corridor
+from vo_lib.lidar_tracking.likelihood_field import LikelihoodField
+from vo_lib.lidar_tracking.pnp_odometry import PnpVisualOdometry
+from vo_lib.lidar_tracking.pose_tracking import ScoreStatistics, posterior, sample_poses
+from vo_lib.sim.samples import render_sample
+from vo_lib.sim.world import corridor
+from vo_lib.stereo_vo.pipeline import run_frames
+from vo_lib.viz.plotting import new_axes, plot_world
 
 SEED = 4
 rng = np.random.default_rng(SEED)
@@ -112,8 +112,8 @@ for x in (3.0, 16.0, 23.0):
 #
 # ## 2. The paper's visual odometer and seed 000's, side by side
 #
-# `vo_lib.pnp_odometry` follows section II: ORB landmarks (Hamming distance, eq. 1), brute-force
-# matching at the start and after a loss, motion-model matching afterwards (the velocity of
+# `vo_lib.lidar_tracking.pnp_odometry` follows section II: ORB landmarks (Hamming distance, eq. 1),
+# brute-force matching at the start and after a loss, motion-model matching afterwards (the velocity of
 # eq. 2–3 predicts the pose; landmarks are projected with it and matched within 15 px,
 # eq. 4–5), `solvePnPRansac`, and a local map of up to five key frames, culled by the share of
 # their landmarks still properly observed (eq. 6–7). Eq. 7 as printed takes the angle between a

@@ -3,10 +3,10 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from vo_lib import circular_motion as cm
 from vo_lib.camera import StereoCamera
 from vo_lib.geometry import camera_motion, camera_mount, compose_planar
-from vo_lib.synthetic import synthetic_matches
+from vo_lib.stereo_vo import circular_motion as cm
+from vo_lib.stereo_vo.synthetic import synthetic_matches
 
 
 def test_noise_free_recovery_of_1000_matches(camera, rng):
@@ -128,7 +128,7 @@ def test_theta_standard_deviation_matches_monte_carlo(camera, rng):
 
 def test_matches_under_transform_validates_and_reports_motion(camera, rng):
     with pytest.raises(ValueError, match=r"T_curr_from_prev must be a 4x4 matrix"):
-        from vo_lib.synthetic import matches_under_transform
+        from vo_lib.stereo_vo.synthetic import matches_under_transform
 
         matches_under_transform(camera, 5, np.eye(3), rng)
     m = synthetic_matches(camera, 5, 0.1, 0.2, rng)

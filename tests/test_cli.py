@@ -1,7 +1,7 @@
 import subprocess
 import sys
 
-from vo_lib.__main__ import main
+from vo_lib.cli.main import main
 
 
 def test_bench_geometry_prints_table(capsys):

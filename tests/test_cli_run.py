@@ -7,7 +7,7 @@ import sys
 import numpy as np
 import pytest
 
-from vo_lib.evaluation import read_trajectory
+from vo_lib.formats.poses import read_trajectory
 
 
 def cli(*args, cwd, data):

@@ -7,7 +7,7 @@ import pytest
 
 from vo_lib.data import load_sequence, sample_path
 from vo_lib.geometry import camera_mount, camera_poses_from_planar, planar_from_camera_poses
-from vo_lib.samples import CAMERA_HEIGHT, SAMPLES, generate
+from vo_lib.sim.samples import CAMERA_HEIGHT, SAMPLES, generate
 
 
 @pytest.fixture

@@ -2,17 +2,8 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from vo_lib.evaluation import (
-    ate,
-    ate_planar,
-    key_position_errors,
-    kitti_segment_errors,
-    read_trajectory,
-    rpe,
-    umeyama,
-    write_kitti_poses,
-    write_tum,
-)
+from vo_lib.evaluation import ate, ate_planar, key_position_errors, kitti_segment_errors, rpe, umeyama
+from vo_lib.formats.poses import read_trajectory, write_kitti_poses, write_tum
 
 
 def random_trajectory(rng, n=200):

@@ -2,12 +2,12 @@ import numpy as np
 import pytest
 
 from vo_lib.camera import StereoCamera
-from vo_lib.circular_motion import apply_motion, circular_motion_from_transform
-from vo_lib.features import StereoFrontEnd, best_matches, bucket, hamming, window_pairs
 from vo_lib.geometry import camera_motion, camera_mount, planar_to_matrix
-from vo_lib.render import SensorEffects, StereoRenderer
-from vo_lib.temporal import MotionPrior, match_temporal, prediction_sigma
-from vo_lib.world import indoor_lab
+from vo_lib.sim.render import SensorEffects, StereoRenderer
+from vo_lib.sim.world import indoor_lab
+from vo_lib.stereo_vo.circular_motion import apply_motion, circular_motion_from_transform
+from vo_lib.stereo_vo.features import StereoFrontEnd, best_matches, bucket, hamming, window_pairs
+from vo_lib.stereo_vo.temporal import MotionPrior, match_temporal, prediction_sigma
 
 CAM = StereoCamera.bumblebee2()
 MOUNT = camera_mount(height=0.5)

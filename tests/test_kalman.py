@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 from scipy.stats import chi2
 
-from vo_lib.kalman import VoKalmanFilter, measurement, measurement_jacobian
-from vo_lib.odometry import TrackOdometry
+from vo_lib.models.track_odometry import TrackOdometry
+from vo_lib.stereo_vo.kalman import VoKalmanFilter, measurement, measurement_jacobian
 
 ODO = TrackOdometry()
 R_VO = np.diag([math.radians(0.05) ** 2, 0.002**2])
@@ -118,7 +118,7 @@ def wrap_angle_deg(a):
 
 
 def test_constrained_jacobian_matches_finite_differences(rng):
-    from vo_lib.kalman import constrained_jacobian, constrained_measurement
+    from vo_lib.stereo_vo.kalman import constrained_jacobian, constrained_measurement
 
     for _ in range(20):
         x = np.concatenate(

@@ -1,8 +1,8 @@
 import numpy as np
 import pytest
 
-from vo_lib.laser import LaserScanner, cast_rays
-from vo_lib.world import corridor
+from vo_lib.sim.laser import LaserScanner, cast_rays
+from vo_lib.sim.world import corridor
 
 SQUARE = np.array([[-2, -2, 2, -2], [2, -2, 2, 2], [2, 2, -2, 2], [-2, 2, -2, -2]], float)
 

@@ -9,9 +9,14 @@ import numpy as np
 import pytest
 from scipy.stats import chi2
 
-from vo_lib.bicycle import bicycle_jacobians, bicycle_step, steer_towards
-from vo_lib.ekf_slam import DROPPED, NEW
-from vo_lib.line_landmarks import (
+from vo_lib.line_slam.ekf_slam import DROPPED, NEW
+from vo_lib.line_slam.lap import (
+    LineSlamScenario,
+    association_example,
+    simulate_lap,
+    true_visible_extent,
+)
+from vo_lib.line_slam.line_landmarks import (
     PAPER_EXTENDED_RIGHT_END,
     along_line,
     feature_point,
@@ -19,20 +24,15 @@ from vo_lib.line_landmarks import (
     paper_world,
     segment_from_slope,
 )
-from vo_lib.line_slam import (
-    LineSlamScenario,
-    association_example,
-    simulate_lap,
-    true_visible_extent,
-)
-from vo_lib.range_bearing import observation_jacobians, observe_point, point_from_observation
-from vo_lib.segment_observers import (
+from vo_lib.line_slam.range_bearing import observation_jacobians, observe_point, point_from_observation
+from vo_lib.line_slam.segment_observers import (
     DEFAULT_TOLERANCE,
     OBSERVERS,
     visible_segment,
     visible_segment_bisection,
     visible_segment_point_by_point,
 )
+from vo_lib.models.bicycle import bicycle_jacobians, bicycle_step, steer_towards
 
 SEEDS = range(20)
 

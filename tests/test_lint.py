@@ -15,3 +15,15 @@ def test_ruff_check_is_clean():
         cwd=ROOT,
     )
     assert proc.returncode == 0, proc.stdout + proc.stderr
+
+
+def test_import_contracts_are_kept():
+    """Layers, independence of the wings, viz importing no wing: the contracts in pyproject.toml."""
+    lint_imports = pathlib.Path(sys.executable).with_name("lint-imports")
+    proc = subprocess.run(
+        [str(lint_imports) if lint_imports.exists() else "lint-imports", "--no-cache"],
+        capture_output=True,
+        text=True,
+        cwd=ROOT,
+    )
+    assert proc.returncode == 0, proc.stdout + proc.stderr

@@ -3,7 +3,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from vo_lib.odometry import TrackOdometry, apply_slip
+from vo_lib.models.track_odometry import TrackOdometry, apply_slip
 
 ODO = TrackOdometry(track_distance=0.4, track_width=0.1, encoder_sigma=0.01)
 small = st.floats(-0.2, 0.2, allow_nan=False)

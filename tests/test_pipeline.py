@@ -5,11 +5,11 @@ import math
 import numpy as np
 import pytest
 
-from vo_lib.disturbances import MovingObject, blank_pair, noise_pair
 from vo_lib.geometry import relative_planar, wrap_angle
-from vo_lib.odometry import TrackOdometry
-from vo_lib.pipeline import run_frames
-from vo_lib.samples import render_sample
+from vo_lib.models.track_odometry import TrackOdometry
+from vo_lib.sim.disturbances import MovingObject, blank_pair, noise_pair
+from vo_lib.sim.samples import render_sample
+from vo_lib.stereo_vo.pipeline import run_frames
 
 
 def run_sample(name, frames=None, use_odometry=True):
@@ -115,9 +115,9 @@ def test_kitti_like_rig_without_odometry():
     """A car-like drive seen by KITTI's rig: 1241x376, 0.54 m baseline, 1 m per frame, no odometry."""
     from vo_lib.camera import StereoCamera
     from vo_lib.geometry import camera_mount, planar_to_matrix
-    from vo_lib.render import SensorEffects, StereoRenderer
-    from vo_lib.trajectories import Leg, SlipModel, simulate_drive
-    from vo_lib.world import outdoor_yard
+    from vo_lib.sim.render import SensorEffects, StereoRenderer
+    from vo_lib.sim.trajectories import Leg, SlipModel, simulate_drive
+    from vo_lib.sim.world import outdoor_yard
 
     camera = StereoCamera(718.856, 718.856, 607.1928, 185.2157, 0.5371657, 1241, 376)
     mount = camera_mount(height=1.65)

@@ -8,14 +8,14 @@ import math
 import numpy as np
 import pytest
 
-from vo_lib.corridor_experiment import (
+from vo_lib.lidar_tracking.corridor_experiment import (
     TIM551,
     corridor_visual_odometry,
     run_experiment,
     without_umbrella,
 )
-from vo_lib.likelihood_field import LikelihoodField
-from vo_lib.pose_tracking import (
+from vo_lib.lidar_tracking.likelihood_field import LikelihoodField
+from vo_lib.lidar_tracking.pose_tracking import (
     ControlLimits,
     ScoreStatistics,
     Thresholds,
@@ -25,7 +25,7 @@ from vo_lib.pose_tracking import (
     principal_error_direction,
     sample_poses,
 )
-from vo_lib.world import corridor
+from vo_lib.sim.world import corridor
 
 SEEDS = range(20)
 
@@ -118,7 +118,7 @@ def experiment(visual_odometry):
 
 
 def test_pnp_odometer_on_the_corridor(visual_odometry):
-    from vo_lib.corridor_experiment import corridor_drive
+    from vo_lib.lidar_tracking.corridor_experiment import corridor_drive
 
     vo, seconds = visual_odometry
     truth, _ = corridor_drive(0)

@@ -3,9 +3,9 @@ import math
 import numpy as np
 import pytest
 
-from vo_lib.baselines import essential_ransac, kabsch, pnp_ransac, rigid_ransac
-from vo_lib.circular_motion import motion_matrices
-from vo_lib.ransac import (
+from vo_lib.stereo_vo.baselines import essential_ransac, kabsch, pnp_ransac, rigid_ransac
+from vo_lib.stereo_vo.circular_motion import motion_matrices
+from vo_lib.stereo_vo.ransac import (
     histogram_voting,
     hypotheses_needed,
     one_point_ransac,
@@ -13,8 +13,8 @@ from vo_lib.ransac import (
     rho_gate_error,
     theta_gate_error,
 )
-from vo_lib.synthetic import synthetic_matches
-from vo_lib.temporal import MotionPrior
+from vo_lib.stereo_vo.synthetic import synthetic_matches
+from vo_lib.stereo_vo.temporal import MotionPrior
 
 
 def test_hypotheses_formula():

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from vo_lib.camera import StereoCamera
-from vo_lib.sequence import SequenceError, SequenceWriter, read_sequence, write_sequence
+from vo_lib.formats.sequence import SequenceError, SequenceWriter, read_sequence, write_sequence
 
 FIXTURE = Path(__file__).resolve().parents[1] / "data" / "fixtures" / "kitti_tiny"
 

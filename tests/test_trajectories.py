@@ -2,10 +2,10 @@ import numpy as np
 import pytest
 
 from vo_lib.geometry import wrap_angle
-from vo_lib.odometry import TrackOdometry
-from vo_lib.samples import SAMPLES
-from vo_lib.trajectories import Leg, SlipModel, simulate_drive
-from vo_lib.world import WORLDS
+from vo_lib.models.track_odometry import TrackOdometry
+from vo_lib.sim.samples import SAMPLES
+from vo_lib.sim.trajectories import Leg, SlipModel, simulate_drive
+from vo_lib.sim.world import WORLDS
 
 
 def test_drive_follows_the_plan_and_encoders_over_read():

@@ -4,9 +4,9 @@ import pytest
 
 from vo_lib.camera import StereoCamera
 from vo_lib.geometry import camera_mount, planar_to_matrix
-from vo_lib.render import SensorEffects, StereoRenderer
-from vo_lib.textures import corner_texture
-from vo_lib.world import WORLDS, Segment, World, box, corridor
+from vo_lib.sim.render import SensorEffects, StereoRenderer
+from vo_lib.sim.textures import corner_texture
+from vo_lib.sim.world import WORLDS, Segment, World, box, corridor
 
 
 def plane_world(distance=3.0, slant=(2.0,)):

@@ -1,36 +1,34 @@
 """vo_lib: the tested algorithms behind the vo-notebooks collection.
 
-Modules follow the flow of data, world -> sensors -> front end -> estimators -> evaluation ->
-plotting; each does one job and cites the paper equations it implements.
+One folder per idea; imports run downwards only (import-linter contracts in ``pyproject.toml``)::
 
-``geometry``         frames, planar poses, angle wrapping (the conventions)
-``camera``           rectified stereo camera, pixels + disparity <-> points (seed 000, eq. 13)
-``odometry``         crawler track odometry and its covariance (seed 000, eq. 2-11)
-``circular_motion``  planar circular-motion model (seed 000, eq. 12-17)
-``synthetic``        matches with known truth, for checks
-``textures``, ``world``   corner-rich textures; floor plans of segments shared by every sensor
-``render``           rectified stereo pairs with ground-truth depth
-``laser``            2-D laser scanner
-``trajectories``     crawler drives with track slip
-``sequence``, ``samples``, ``data``   KITTI-layout I/O, the named samples, load_sequence
-``features``         stereo front end (FAST, ORB descriptors, row matching)
-``temporal``         frame-to-frame matching guided by the filter's prediction
-``ransac``           1-point RANSAC (seed 000, eq. 18-21)
-``ransac_core``      its compiled core (Numba)
-``baselines``        3-point rigid RANSAC, solvePnPRansac, 5-point essential matrix
-``kalman``           odometry + VO Kalman filter on filterpy
-``pipeline``         the whole stereo VO of seed 000, frame by frame
-``evaluation``       ATE, RPE, KITTI segment errors, the paper's statistics
-``run``, ``bench``   the command line: run, evaluate, generate, bench
-``disturbances``     blank, noisy and occluded frames
-``bicycle``, ``range_bearing``   seed 002's car (eq. 4-7) and laser observation (eq. 8-12)
-``line_landmarks``, ``segment_observers``   walls as feature points; their visible parts
-``ekf_slam``, ``line_slam``   EKF-SLAM with Mahalanobis association (eq. 13); the paper's lap
-``likelihood_field``, ``pose_tracking``   laser scoring; LBPT and VOAPT (seed 004, eq. 8-23)
-``pnp_odometry``     seed 004's visual odometer (eq. 1-7)
-``corridor_experiment``   the occluded corridor, LBPT against VOAPT (Table III)
-``plotting``         figures for the notebooks
-``widgets``          interactive wrappers for the notebooks
+    cli/              python -m vo_lib run | evaluate | generate | bench      (top layer)
+    data.py           a sequence by name or path (renders a named sample on first use)
+    stereo_vo/        seed 000: stereo VO, 1-point RANSAC, Kalman filter      (the three wings;
+    line_slam/        seed 002: line-feature EKF-SLAM, bisection observer      independent, but
+    lidar_tracking/   seed 004: VO-assisted LIDAR pose tracking                it may use stereo_vo)
+    sim/              world, renderer, laser, drives with slip, disturbances, named samples
+    models/ formats/ viz/   crawler tracks and bicycle; KITTI sequences and pose files; figures
+    camera.py geometry.py evaluation.py   shared: stereo rig, frames and poses, trajectory errors
+
+Each folder's ``__init__`` says which equations live where and where to start reading.
+Re-exported here, imported on first use: ``load_sequence`` (``data``), ``StereoCamera``
+(``camera``), ``TrackOdometry`` (``models.track_odometry``), ``theta_from_pixels`` and
+``rho_from_pixels`` (``stereo_vo.circular_motion``), ``one_point_ransac`` (``stereo_vo.ransac``),
+``VoKalmanFilter`` (``stereo_vo.kalman``).
 """
 
+import importlib
+
 __version__ = "0.1.0"
+
+_EXPORTS = {"load_sequence": "data", "StereoCamera": "camera", "TrackOdometry": "models.track_odometry"}
+_EXPORTS |= dict.fromkeys(("theta_from_pixels", "rho_from_pixels"), "stereo_vo.circular_motion")
+_EXPORTS |= {"one_point_ransac": "stereo_vo.ransac", "VoKalmanFilter": "stereo_vo.kalman"}
+__all__ = sorted(_EXPORTS)
+
+
+def __getattr__(name: str):
+    if name in _EXPORTS:
+        return getattr(importlib.import_module(f"vo_lib.{_EXPORTS[name]}"), name)
+    raise AttributeError(f"module 'vo_lib' has no attribute {name!r}")

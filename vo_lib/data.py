@@ -11,8 +11,8 @@ import json
 import os
 from pathlib import Path
 
-from vo_lib.samples import DEFAULT_RESOLUTION, SAMPLES, fingerprint, generate
-from vo_lib.sequence import Sequence, read_sequence
+from vo_lib.formats.sequence import Sequence, read_sequence
+from vo_lib.sim.samples import DEFAULT_RESOLUTION, SAMPLES, fingerprint, generate
 
 
 def data_dir() -> Path:

@@ -2,12 +2,12 @@
 
 Per frame:
 
-1. **stereo processing**: features with disparity, ``w = (u, v, d)`` (``vo_lib.features``);
+1. **stereo processing**: features with disparity, ``w = (u, v, d)`` (``vo_lib.stereo_vo.features``);
 2. **prediction**: the Kalman filter moves the pose with the track odometry, or with constant
-   velocity when the sequence has none (``vo_lib.kalman``);
+   velocity when the sequence has none (``vo_lib.stereo_vo.kalman``);
 3. **guided temporal matching** against the reference frame inside the predicted windows
-   (``vo_lib.temporal``);
-4. **1-point RANSAC** for ``(theta, rho)``, with the prediction as a prior (``vo_lib.ransac``);
+   (``vo_lib.stereo_vo.temporal``);
+4. **1-point RANSAC** for ``(theta, rho)``, with the prediction as a prior (``vo_lib.stereo_vo.ransac``);
 5. **Kalman update** with the VO motion.
 
 A frame whose VO motion cannot be trusted (no features, too few matches or inliers, a low inlier
@@ -28,11 +28,11 @@ import numpy as np
 from scipy.stats import chi2
 
 from vo_lib.camera import StereoCamera
-from vo_lib.features import StereoFeatures, StereoFrontEnd
-from vo_lib.kalman import VoKalmanFilter
-from vo_lib.odometry import TrackOdometry
-from vo_lib.ransac import one_point_ransac
-from vo_lib.temporal import match_temporal
+from vo_lib.models.track_odometry import TrackOdometry
+from vo_lib.stereo_vo.features import StereoFeatures, StereoFrontEnd
+from vo_lib.stereo_vo.kalman import VoKalmanFilter
+from vo_lib.stereo_vo.ransac import one_point_ransac
+from vo_lib.stereo_vo.temporal import match_temporal
 
 MIN_FEATURES = 20  # stereo features a frame needs to be matched
 MIN_INLIERS = 15
@@ -320,7 +320,7 @@ def run_frames(
 def run_sequence(
     sequence, frames: int | None = None, use_odometry: bool = True, seed: int = 0, progress: bool = False
 ) -> PipelineResult:
-    """Run the pipeline on a :class:`~vo_lib.sequence.Sequence` (its first ``frames`` frames)."""
+    """Run the pipeline on a :class:`~vo_lib.formats.sequence.Sequence` (its first ``frames`` frames)."""
     n = len(sequence) if frames is None else min(int(frames), len(sequence))
     odo = sequence.odometry if (use_odometry and sequence.odometry is not None) else None
 

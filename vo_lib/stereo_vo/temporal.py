@@ -17,8 +17,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from vo_lib.camera import StereoCamera
-from vo_lib.circular_motion import apply_motion
-from vo_lib.features import StereoFeatures, best_matches, hamming, parabola_offset, window_pairs
+from vo_lib.stereo_vo.circular_motion import apply_motion
+from vo_lib.stereo_vo.features import StereoFeatures, best_matches, hamming, parabola_offset, window_pairs
 
 N_SIGMA = 3.0  # window half-width in standard deviations
 PIXEL_SIGMA = 1.0  # pixel noise of a feature position, added to the prediction's uncertainty

@@ -4,7 +4,7 @@ The robot drives the ``corridor`` sample's path (1 m to 28 m along the axis at 0
 seed draws its own encoder noise and slip (the odometry), laser noise and pose samples; the
 visual odometer's increments come from a VO run on the rendered corridor (or any other source of
 per-frame increments). The laser tracker updates every ``every`` frames.
-Run ``python -m vo_lib.corridor_experiment`` for five seeds.
+Run ``python -m vo_lib.lidar_tracking.corridor_experiment`` for five seeds.
 """
 
 from __future__ import annotations
@@ -15,14 +15,14 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from vo_lib.geometry import compose_planar, planar_from_camera_poses, relative_planar
-from vo_lib.laser import LaserScanner
-from vo_lib.likelihood_field import LikelihoodField
-from vo_lib.odometry import TrackOdometry
-from vo_lib.pnp_odometry import run_pnp_odometry
-from vo_lib.pose_tracking import Calibration, ControlLimits, PoseTracker, Thresholds
-from vo_lib.samples import get_sample, render_sample
-from vo_lib.trajectories import simulate_drive
-from vo_lib.world import World, corridor
+from vo_lib.lidar_tracking.likelihood_field import LikelihoodField
+from vo_lib.lidar_tracking.pnp_odometry import run_pnp_odometry
+from vo_lib.lidar_tracking.pose_tracking import Calibration, ControlLimits, PoseTracker, Thresholds
+from vo_lib.models.track_odometry import TrackOdometry
+from vo_lib.sim.laser import LaserScanner
+from vo_lib.sim.samples import get_sample, render_sample
+from vo_lib.sim.trajectories import simulate_drive
+from vo_lib.sim.world import World, corridor
 
 #: The SICK TIM551 of the paper: 270 degrees at 1 degree (271 beams), 10 m, 1 cm noise.
 TIM551 = LaserScanner(fov=np.radians(270.0), angular_step=np.radians(1.0), max_range=10.0, range_sigma=0.01)

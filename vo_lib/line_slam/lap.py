@@ -3,7 +3,7 @@ laser whose visible part of each segment comes from one of the three observers, 
 localised by EKF-SLAM.
 
 Parameters are the paper's (section 3); what it does not print is stated in
-:class:`LineSlamScenario`. Run ``python -m vo_lib.line_slam`` for one lap.
+:class:`LineSlamScenario`. Run ``python -m vo_lib.line_slam.lap`` for one lap.
 """
 
 from __future__ import annotations
@@ -14,7 +14,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from vo_lib.bicycle import (
+from vo_lib.geometry import wrap_angle
+from vo_lib.line_slam.ekf_slam import DROPPED, EkfSlam, control_cov, range_bearing_cov
+from vo_lib.line_slam.line_landmarks import along_line, feature_point, line_points, paper_world
+from vo_lib.line_slam.range_bearing import observe_point, point_from_observation
+from vo_lib.line_slam.segment_observers import DEFAULT_TOLERANCE, OBSERVERS
+from vo_lib.models.bicycle import (
     DEFAULT_WHEELBASE,
     PAPER_MAX_STEER,
     PAPER_MAX_STEER_RATE,
@@ -22,11 +27,6 @@ from vo_lib.bicycle import (
     bicycle_step,
     steer_towards,
 )
-from vo_lib.ekf_slam import DROPPED, EkfSlam, control_cov, range_bearing_cov
-from vo_lib.geometry import wrap_angle
-from vo_lib.line_landmarks import along_line, feature_point, line_points, paper_world
-from vo_lib.range_bearing import observe_point, point_from_observation
-from vo_lib.segment_observers import DEFAULT_TOLERANCE, OBSERVERS
 
 #: The lap: start at (0, 35), then these waypoints in turn, back to the start.
 PAPER_START = (0.0, 35.0)

@@ -15,12 +15,12 @@ import numpy as np
 from tqdm.auto import tqdm
 
 from vo_lib.camera import StereoCamera
+from vo_lib.formats.sequence import SequenceWriter
 from vo_lib.geometry import camera_mount, camera_poses_from_planar, planar_to_matrix
-from vo_lib.odometry import TrackOdometry
-from vo_lib.render import SensorEffects, StereoRenderer
-from vo_lib.sequence import SequenceWriter
-from vo_lib.trajectories import Leg, SlipModel, simulate_drive
-from vo_lib.world import WORLDS
+from vo_lib.models.track_odometry import TrackOdometry
+from vo_lib.sim.render import SensorEffects, StereoRenderer
+from vo_lib.sim.trajectories import Leg, SlipModel, simulate_drive
+from vo_lib.sim.world import WORLDS
 
 #: Height of the camera above the floor; it sits above the crawler's turning axis (notebook 03).
 CAMERA_HEIGHT = 0.5

@@ -1,6 +1,6 @@
 """Line-segment landmarks of seed 002 and their "landmark feature point".
 
-A landmark is a wall segment of the shared :class:`~vo_lib.world.World`. The filter does not carry
+A landmark is a wall segment of the shared :class:`~vo_lib.sim.world.World`. The filter does not carry
 the segment itself: it carries the foot of the perpendicular from the world origin to the
 segment's line (seed 002, section 1.3), a point that fixes the infinite line. For drawing, the
 segment's visible end points are projected onto the line through that point.
@@ -12,7 +12,7 @@ import math
 
 import numpy as np
 
-from vo_lib.world import Segment, World
+from vo_lib.sim.world import Segment, World
 
 #: Seed 002's four landmarks as printed: (left x, right x, slope, intercept).
 PAPER_LANDMARKS = (

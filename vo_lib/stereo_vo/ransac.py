@@ -42,10 +42,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from vo_lib import ransac_core as core
 from vo_lib.camera import StereoCamera
-from vo_lib.circular_motion import motion_matrices, rho_from_pixels, theta_from_pixels
 from vo_lib.geometry import as_match_array
+from vo_lib.stereo_vo import ransac_core as core
+from vo_lib.stereo_vo.circular_motion import motion_matrices, rho_from_pixels, theta_from_pixels
 
 GATE_SIGMAS = 3.0  # a match is an inlier within this many standard deviations of each gate
 #: Final gate on the whitened eq. 21 residual, a 3-vector: sqrt of chi-square(3) at 99.7 %.

@@ -1,9 +1,9 @@
-"""The compiled core of :func:`vo_lib.ransac.one_point_ransac` (Numba).
+"""The compiled core of :func:`vo_lib.stereo_vo.ransac.one_point_ransac` (Numba).
 
 The estimator is a few hundred small steps over a few hundred matches: two hypothesis searches,
 their gates, Gauss-Newton and re-selection. As NumPy calls each step costs microseconds of
 overhead whatever its size; compiled, the loops below run the same arithmetic in one pass per
-step. The algorithm, its equations and its constants are documented in ``vo_lib.ransac``; this
+step. The algorithm, its equations and its constants are documented in ``vo_lib.stereo_vo.ransac``; this
 module only computes. Compiled code is cached beside the module, so only the first call in a
 fresh environment pays for compilation.
 """
@@ -15,7 +15,7 @@ import math
 import numpy as np
 from numba import njit
 
-from vo_lib.circular_motion import theta_variance
+from vo_lib.stereo_vo.circular_motion import theta_variance
 
 # NumPy semantics for division by zero (inf / nan, no exception): the gates then fail as in NumPy.
 _jit = njit(cache=True, error_model="numpy")
@@ -149,7 +149,7 @@ def search(
     min_pool,
     pool_fraction,
 ):
-    """Adaptive single-match RANSAC (the rules are in ``vo_lib.ransac``'s module text):
+    """Adaptive single-match RANSAC (the rules are in ``vo_lib.stereo_vo.ransac``'s module text):
     batches of hypotheses, the most-supported (then most precise) wins, the batch size follows
     the best inlier ratio. ``extra = (value, variance)`` is scored first when finite.
     Hypotheses come from the ``pool_fraction`` best-conditioned matches (at least ``min_pool``).

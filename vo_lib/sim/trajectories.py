@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from vo_lib.odometry import TrackOdometry
+from vo_lib.models.track_odometry import TrackOdometry
 
 #: Seconds over which speed changes between legs are smoothed (the crawler's acceleration).
 RAMP_SECONDS = 0.4

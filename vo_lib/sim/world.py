@@ -1,7 +1,7 @@
 """One world for every sensor: a 2-D floor plan of line segments extruded to textured planes.
 
-The same :class:`World` feeds the stereo renderer (``vo_lib.render``), the laser scanner
-(``vo_lib.laser``), the line landmarks of the EKF-SLAM notebook and the corridor of the
+The same :class:`World` feeds the stereo renderer (``vo_lib.sim.render``), the laser scanner
+(``vo_lib.sim.laser``), the line landmarks of the EKF-SLAM notebook and the corridor of the
 pose-tracking notebook. A segment is a vertical rectangle standing on the floor (z = 0) between
 two plan points, with a height and a texture seed; ``mapped=False`` marks an obstacle the robot's
 map does not know (the umbrella of seed 004).

@@ -17,8 +17,8 @@ import cv2
 import numpy as np
 
 from vo_lib.camera import StereoCamera
-from vo_lib.circular_motion import circular_motion_from_transform
-from vo_lib.ransac import CONFIDENCE, hypotheses_needed
+from vo_lib.stereo_vo.circular_motion import circular_motion_from_transform
+from vo_lib.stereo_vo.ransac import CONFIDENCE, hypotheses_needed
 
 REPROJECTION_THRESHOLD = (
     3.0  # pixels, in (u, v, d) for the rigid fit and (u, v) for PnP: ~99 % of two noisy views

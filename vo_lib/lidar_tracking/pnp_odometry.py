@@ -27,7 +27,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from vo_lib.features import StereoFrontEnd, best_matches, hamming
+from vo_lib.stereo_vo.features import StereoFrontEnd, best_matches, hamming
 
 SEARCH_RADIUS = 15.0  # pixels around the predicted position (eq. 5)
 MAX_KEYFRAMES = 5

@@ -11,9 +11,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from vo_lib.bicycle import DEFAULT_WHEELBASE, bicycle_jacobians, bicycle_step
 from vo_lib.geometry import wrap_angle
-from vo_lib.range_bearing import observation_jacobians, observe_point, point_from_observation
+from vo_lib.line_slam.range_bearing import observation_jacobians, observe_point, point_from_observation
+from vo_lib.models.bicycle import DEFAULT_WHEELBASE, bicycle_jacobians, bicycle_step
 
 #: Associate when the squared Mahalanobis distance (eq. 13) is below the chi-square 99 % point
 #: for 2 degrees of freedom; add a new landmark only when it exceeds 25 (p < 4e-6). Between the

@@ -11,7 +11,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from vo_lib.camera import StereoCamera
-from vo_lib.circular_motion import circular_motion_from_transform, motion_matrices
+from vo_lib.stereo_vo.circular_motion import circular_motion_from_transform, motion_matrices
 
 #: Nearest depth a point may have in either view, metres.
 MIN_DEPTH = 0.3
@@ -68,7 +68,7 @@ def matches_under_transform(
         Number of matches.
     T_curr_from_prev : array_like, shape (4, 4)
         Maps a point of the previous camera frame into the current one. ``theta`` and ``rho`` of
-        the result are those of :func:`~vo_lib.circular_motion.circular_motion_from_transform`.
+        the result are those of :func:`~vo_lib.stereo_vo.circular_motion.circular_motion_from_transform`.
     rng : numpy.random.Generator
         Source of every random draw.
     depth_range : (float, float)

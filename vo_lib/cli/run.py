@@ -18,18 +18,12 @@ from pathlib import Path
 
 import numpy as np
 
-from vo_lib.evaluation import (
-    ate_planar,
-    kitti_segment_errors,
-    read_trajectory,
-    rpe,
-    write_kitti_poses,
-    write_tum,
-)
+from vo_lib.evaluation import ate_planar, kitti_segment_errors, rpe
+from vo_lib.formats.poses import read_trajectory, write_kitti_poses, write_tum
+from vo_lib.formats.sequence import replace_folder
 from vo_lib.geometry import camera_mount, camera_poses_from_planar, planar_from_camera_poses, wrap_angle
-from vo_lib.pipeline import FrameDiagnostics, FrameTimings, PipelineResult, run_sequence
-from vo_lib.samples import CAMERA_HEIGHT, SAMPLES
-from vo_lib.sequence import replace_folder
+from vo_lib.sim.samples import CAMERA_HEIGHT, SAMPLES
+from vo_lib.stereo_vo.pipeline import FrameDiagnostics, FrameTimings, PipelineResult, run_sequence
 
 DEFAULT_SEQUENCE = "indoor_linear"
 #: Seed 000, Table 1, 640x480 row: stereo processing, parameter estimation, Kalman filtering (ms).
@@ -43,7 +37,7 @@ class UsageError(Exception):
 def resolve_sequence(name_or_path: str, frames: int | None):
     """A loaded sequence for a sample name (generated on first use) or a KITTI-layout folder."""
     from vo_lib.data import load_sequence
-    from vo_lib.sequence import SequenceError
+    from vo_lib.formats.sequence import SequenceError
 
     if name_or_path not in SAMPLES and not Path(name_or_path).exists():
         raise UsageError(
@@ -89,7 +83,7 @@ def _plot(
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from vo_lib.plotting import plot_paths
+    from vo_lib.viz.plotting import plot_paths
 
     paths = {}
     if truth is not None:
@@ -184,7 +178,7 @@ def run_command(
         truth = planar_from_camera_poses(seq.poses[:n], mount) if seq.poses is not None else None
         odo = None
         if seq.odometry is not None:
-            from vo_lib.odometry import TrackOdometry
+            from vo_lib.models.track_odometry import TrackOdometry
 
             odo = TrackOdometry().integrate(seq.odometry[1:n])
         _plot(tmp / "trajectory.png", result.poses, truth, odo, f"{Path(name).name}: {n} frames")

@@ -40,8 +40,8 @@ def format_row(name: str, seconds: float, baseline: float | None = None) -> str:
 def bench_geometry(n: int = 10_000) -> dict[str, float]:
     """theta (eq. 14) and rho (eq. 17) for ``n`` matches: vectorised, 3-D route, pure-Python loop."""
     from vo_lib.camera import StereoCamera
-    from vo_lib.circular_motion import rho_from_pixels, theta_from_pixels
-    from vo_lib.synthetic import synthetic_matches
+    from vo_lib.stereo_vo.circular_motion import rho_from_pixels, theta_from_pixels
+    from vo_lib.stereo_vo.synthetic import synthetic_matches
 
     cam = StereoCamera.bumblebee2()
     m = synthetic_matches(cam, n, 0.04, 0.08, np.random.default_rng(BENCH_SEED))
@@ -88,9 +88,9 @@ def bench_sensors() -> dict[str, float]:
     """Stereo pairs per second of the renderer in each world; time of one 811-beam laser scan."""
     from vo_lib.camera import StereoCamera
     from vo_lib.geometry import camera_mount, planar_to_matrix
-    from vo_lib.laser import LaserScanner
-    from vo_lib.render import StereoRenderer
-    from vo_lib.world import WORLDS
+    from vo_lib.sim.laser import LaserScanner
+    from vo_lib.sim.render import StereoRenderer
+    from vo_lib.sim.world import WORLDS
 
     cam = StereoCamera.bumblebee2()
     mount = camera_mount(height=0.5)
@@ -110,7 +110,7 @@ def bench_sensors() -> dict[str, float]:
 
     def loop_scan():
         # baseline: one ray at a time against all segments
-        from vo_lib.laser import cast_rays
+        from vo_lib.sim.laser import cast_rays
 
         return [cast_rays(segments, (0.0, 0.0), np.array([b])) for b in scanner.bearings]
 
@@ -128,10 +128,10 @@ def bench_ransac(sets: int = 15, n: int = 300) -> dict[str, float]:
     """1-point RANSAC against 3-point rigid RANSAC and solvePnPRansac on the same matches."""
     import math
 
-    from vo_lib.baselines import pnp_ransac, rigid_ransac
     from vo_lib.camera import StereoCamera
-    from vo_lib.ransac import one_point_ransac
-    from vo_lib.synthetic import synthetic_matches
+    from vo_lib.stereo_vo.baselines import pnp_ransac, rigid_ransac
+    from vo_lib.stereo_vo.ransac import one_point_ransac
+    from vo_lib.stereo_vo.synthetic import synthetic_matches
 
     cam = StereoCamera.bumblebee2()
     rng = np.random.default_rng(BENCH_SEED)
@@ -178,15 +178,15 @@ def bench_ransac(sets: int = 15, n: int = 300) -> dict[str, float]:
 def bench_frontend(frames: int = 30) -> dict[str, float]:
     """Per-stage medians of the stereo front end at 640x480 along a rendered drive, and one Kalman step."""
     from vo_lib.camera import StereoCamera
-    from vo_lib.circular_motion import circular_motion_from_transform
-    from vo_lib.features import StereoFrontEnd
     from vo_lib.geometry import camera_motion, camera_mount, planar_to_matrix
-    from vo_lib.kalman import VoKalmanFilter
-    from vo_lib.render import SensorEffects, StereoRenderer
-    from vo_lib.samples import SAMPLES
-    from vo_lib.temporal import MotionPrior, match_temporal
-    from vo_lib.trajectories import simulate_drive
-    from vo_lib.world import WORLDS
+    from vo_lib.sim.render import SensorEffects, StereoRenderer
+    from vo_lib.sim.samples import SAMPLES
+    from vo_lib.sim.trajectories import simulate_drive
+    from vo_lib.sim.world import WORLDS
+    from vo_lib.stereo_vo.circular_motion import circular_motion_from_transform
+    from vo_lib.stereo_vo.features import StereoFrontEnd
+    from vo_lib.stereo_vo.kalman import VoKalmanFilter
+    from vo_lib.stereo_vo.temporal import MotionPrior, match_temporal
 
     cam = StereoCamera.bumblebee2()
     sample = SAMPLES["indoor_free"]
@@ -241,8 +241,8 @@ def bench_frontend(frames: int = 30) -> dict[str, float]:
 
 def bench_pipeline(frames: int = 200) -> dict[str, float]:
     """The whole pipeline per frame at 640x480 on a rendered indoor drive (images in memory)."""
-    from vo_lib.pipeline import run_frames
-    from vo_lib.samples import render_sample
+    from vo_lib.sim.samples import render_sample
+    from vo_lib.stereo_vo.pipeline import run_frames
 
     rendered, frame_iter = render_sample("indoor_free", frames)
     images = list(frame_iter)  # render first: only the pipeline is timed
@@ -269,9 +269,9 @@ def bench_pipeline(frames: int = 200) -> dict[str, float]:
 
 def bench_observers(laps: int = 3) -> dict[str, float]:
     """Seed 002's observers on every (segment, pose) call of one simulated lap, and whole laps."""
-    from vo_lib.line_landmarks import paper_world
-    from vo_lib.line_slam import LineSlamScenario, simulate_lap
-    from vo_lib.segment_observers import DEFAULT_TOLERANCE, OBSERVERS
+    from vo_lib.line_slam.lap import LineSlamScenario, simulate_lap
+    from vo_lib.line_slam.line_landmarks import paper_world
+    from vo_lib.line_slam.segment_observers import DEFAULT_TOLERANCE, OBSERVERS
 
     calls = []
     for extended in (False, True):
@@ -316,10 +316,10 @@ def bench_observers(laps: int = 3) -> dict[str, float]:
 
 def bench_tracking() -> dict[str, float]:
     """Seed 004: scoring 500 sample poses against a 271-beam scan, vectorised and pose by pose."""
-    from vo_lib.corridor_experiment import TIM551
-    from vo_lib.likelihood_field import LikelihoodField
-    from vo_lib.pose_tracking import sample_poses
-    from vo_lib.world import corridor
+    from vo_lib.lidar_tracking.corridor_experiment import TIM551
+    from vo_lib.lidar_tracking.likelihood_field import LikelihoodField
+    from vo_lib.lidar_tracking.pose_tracking import sample_poses
+    from vo_lib.sim.world import corridor
 
     world = corridor()
     field = LikelihoodField.from_world(world)
@@ -339,9 +339,9 @@ def bench_tracking() -> dict[str, float]:
 def bench_odometers(frames: int | None = None) -> dict[str, float]:
     """Seed 004's PnP visual odometer beside seed 000's 1-point pipeline on the rendered corridor."""
     from vo_lib.geometry import planar_from_camera_poses
-    from vo_lib.pipeline import run_frames
-    from vo_lib.pnp_odometry import run_pnp_odometry
-    from vo_lib.samples import render_sample
+    from vo_lib.lidar_tracking.pnp_odometry import run_pnp_odometry
+    from vo_lib.sim.samples import render_sample
+    from vo_lib.stereo_vo.pipeline import run_frames
 
     rendered, frame_iter = render_sample("corridor", frames)
     images = list(frame_iter)  # render first: only the odometers are timed

@@ -1,4 +1,4 @@
-"""A rectified stereo pair rendered from a :class:`~vo_lib.world.World`.
+"""A rectified stereo pair rendered from a :class:`~vo_lib.sim.world.World`.
 
 Every surface of the world is a planar quad with a texture. For a plane, the map from texels to
 pixels is one homography, ``H = K [R^T e1, R^T e2, R^T (O - c)]``, so OpenCV's
@@ -16,8 +16,8 @@ import cv2
 import numpy as np
 
 from vo_lib.camera import StereoCamera
-from vo_lib.textures import cached_mipmaps
-from vo_lib.world import World
+from vo_lib.sim.textures import cached_mipmaps
+from vo_lib.sim.world import World
 
 #: Nearest depth drawn, metres.
 NEAR_PLANE = 0.05

@@ -8,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 
 from vo_lib.camera import StereoCamera
-from vo_lib.textures import corner_texture
+from vo_lib.sim.textures import corner_texture
 
 BLANK_GREY = 128
 

@@ -25,8 +25,8 @@ import numpy as np
 from filterpy.kalman import ExtendedKalmanFilter
 
 from vo_lib.geometry import compose_planar, wrap_angle
-from vo_lib.odometry import TrackOdometry
-from vo_lib.temporal import MotionPrior
+from vo_lib.models.track_odometry import TrackOdometry
+from vo_lib.stereo_vo.temporal import MotionPrior
 
 #: Slip as a standard deviation per metre a track travels (on top of the encoder noise).
 SLIP_SIGMA = 0.01

@@ -1,0 +1,14 @@
+"""Seed 004: LIDAR pose tracking assisted by visual odometry (VOAPT).
+
+``likelihood_field``      occupancy grid, likelihood field, scoring of sample poses (III.A)
+``pose_tracking``         LBPT and VOAPT: score statistics and ``C_s`` (eq. 11-13), control
+                          limits (eq. 14-16), PCA error direction (eq. 17-20), compensation with
+                          the visual displacement (eq. 21-23)
+``pnp_odometry``          the paper's visual odometer: ORB landmarks, PnP, local map (eq. 1-7)
+``corridor_experiment``   the occluded corridor, LBPT against VOAPT (Table III); start here;
+                          ``python -m vo_lib.lidar_tracking.corridor_experiment`` runs it
+
+The one exception to the independence of the wings: this paper builds on a stereo visual
+odometer, so this wing may import ``vo_lib.stereo_vo`` (``pnp_odometry`` detects and matches with
+seed 000's stereo front end). The independence contract in ``pyproject.toml`` states the same.
+"""

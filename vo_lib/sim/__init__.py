@@ -1,0 +1,14 @@
+"""The simulated world and its sensors: where every sample sequence and laser scan comes from.
+
+``world``          one 2-D floor plan of line segments, extruded to textured planes (start here)
+``textures``       corner-rich procedural textures
+``render``         rectified stereo pairs of a world, with sensor effects
+``laser``          a 2-D laser scanner ray-cast against the same segments
+``trajectories``   crawler drives with slipping tracks: truth and what the encoders report
+``disturbances``   blank, noisy and occluded frames
+``samples``        the named samples (seed 000's experiments, seed 004's corridor), rendered
+                   to the KITTI layout of ``vo_lib.formats``
+
+The simulation uses the motion models (``vo_lib.models``) and the file formats, never an
+estimator: the wings build on it, not the other way round.
+"""

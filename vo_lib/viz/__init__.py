@@ -1,0 +1,7 @@
+"""Figures and widgets for the notebooks, apart from the algorithms so that these run headless.
+
+``plotting``   figures the notebooks share; nothing here computes results
+``widgets``    interactive wrappers around plain ``f(**params)`` functions
+
+Imports no wing: a figure takes arrays and results, not estimators.
+"""
