@@ -1,0 +1,200 @@
+"""Seed 000's stereo visual odometry: ``python -m vo_lib bench geometry|ransac|frontend|pipeline``."""
+
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+
+from vo_lib.cli.bench.common import BENCH_SEED, format_row, median_seconds
+
+
+def bench_geometry(n: int = 10_000) -> dict[str, float]:
+    """theta (eq. 14) and rho (eq. 17) for ``n`` matches: vectorised, 3-D route, pure-Python loop."""
+    from vo_lib.camera import StereoCamera
+    from vo_lib.stereo_vo.circular_motion import rho_from_pixels, theta_from_pixels
+    from vo_lib.stereo_vo.synthetic import synthetic_matches
+
+    cam = StereoCamera.bumblebee2()
+    m = synthetic_matches(cam, n, 0.04, 0.08, np.random.default_rng(BENCH_SEED))
+    a, b = m.w_prev, m.w_curr
+
+    def vectorised():
+        theta = theta_from_pixels(a, b, cam)
+        return rho_from_pixels(a, b, theta, cam)
+
+    def via_points():
+        # eq. 12 on back-projected points, then eq. 16 on the same points
+        P, Q = cam.backproject(a), cam.backproject(b)
+        phi = np.arctan((Q[:, 0] * P[:, 1] - P[:, 0] * Q[:, 1]) / (P[:, 1] * Q[:, 2] + Q[:, 1] * P[:, 2]))
+        s, c = np.sin(phi), np.cos(phi)
+        return -s * P[:, 0] + c * P[:, 2] - s * Q[:, 0] - c * Q[:, 2]
+
+    rows = [tuple(r) for r in np.column_stack([a, b]).tolist()]
+    u0, v0, f, B = cam.cx, cam.cy, cam.fx, cam.baseline
+
+    def python_loop():
+        out = []
+        for u, v, d, u2, v2, d2 in rows:
+            phi = math.atan(((u2 - u0) * (v - v0) - (u - u0) * (v2 - v0)) / (f * (v + v2 - 2 * v0)))
+            s, c = math.sin(phi), math.cos(phi)
+            out.append(B / d * (-s * (u - u0) + c * f) - B / d2 * (s * (u2 - u0) + c * f))
+        return out
+
+    loop = median_seconds(python_loop, repeat=7)
+    times = {
+        "python loop (baseline)": loop,
+        "3-D points, eq. 12 + 16": median_seconds(via_points),
+        "vo_lib theta_from_pixels + rho_from_pixels": median_seconds(vectorised),
+    }
+    print(f"theta and rho for {n} matches (median time per call; speed-up over the loop)")
+    for name, t in times.items():
+        print(format_row(name, t, loop))
+    target = 1e-3
+    t = times["vo_lib theta_from_pixels + rho_from_pixels"]
+    print(f"  target < {target * 1e3:.1f} ms: {'met' if t < target else 'NOT met'} ({t / target:.2f} of it)")
+    return times
+
+
+def bench_ransac(sets: int = 15, n: int = 300) -> dict[str, float]:
+    """1-point RANSAC against 3-point rigid RANSAC and solvePnPRansac on the same matches."""
+    import math
+
+    from vo_lib.camera import StereoCamera
+    from vo_lib.stereo_vo.baselines import pnp_ransac, rigid_ransac
+    from vo_lib.stereo_vo.ransac import one_point_ransac
+    from vo_lib.stereo_vo.synthetic import synthetic_matches
+
+    cam = StereoCamera.bumblebee2()
+    rng = np.random.default_rng(BENCH_SEED)
+    cases = []
+    for _ in range(sets):
+        theta, rho = math.radians(rng.uniform(-5, 5)), rng.uniform(0.03, 0.12)
+        cases.append(
+            (theta, rho, synthetic_matches(cam, n, theta, rho, rng, noise_px=0.5, outlier_ratio=0.4))
+        )
+    methods = {
+        "1-point RANSAC + refinement": lambda m: one_point_ransac(m.w_prev, m.w_curr, cam, rng=1),
+        "3-point rigid RANSAC (3-D to 3-D)": lambda m: rigid_ransac(m.w_prev, m.w_curr, cam, rng=1),
+        "OpenCV solvePnPRansac (6 DoF)": lambda m: pnp_ransac(m.w_prev, m.w_curr, cam),
+    }
+    results = {}
+    for name, fn in methods.items():
+        times, t_err, r_err = [], [], []
+        for theta, rho, m in cases:
+            times.append(median_seconds(lambda fn=fn, m=m: fn(m), repeat=7, min_time=0.05))
+            est = fn(m)
+            t_err.append(abs(est.theta - theta))
+            r_err.append(abs(est.rho - rho) / rho)
+        results[name] = (
+            float(np.median(times)),
+            math.degrees(float(np.median(t_err))),
+            math.degrees(float(np.max(t_err))),
+            float(np.median(r_err)),
+        )
+    base = results["1-point RANSAC + refinement"][0]
+    print(f"{sets} sets of {n} matches, 40 % outliers, 0.5 px noise (median over sets, same matches)")
+    print(
+        f"  {'method':<38s}{'time':>10s}{'x 1-point':>11s}{'med |dθ|':>11s}"
+        f"{'max |dθ|':>11s}{'med |dρ|/ρ':>12s}"
+    )
+    for name, (t, tm, tx, rm) in results.items():
+        print(f"  {name:<38s}{t * 1e3:8.3f} ms{t / base:10.1f}x{tm:10.4f}°{tx:10.4f}°{100 * rm:10.2f} %")
+    print(
+        f"  target: 1-point <= 0.3 ms ({'met' if base <= 3e-4 else 'NOT met'}: {base * 1e3:.3f} ms); "
+        f"solvePnPRansac / 1-point >= 10 ({results['OpenCV solvePnPRansac (6 DoF)'][0] / base:.1f})"
+    )
+    return {name: r[0] for name, r in results.items()}
+
+
+def bench_frontend(frames: int = 30) -> dict[str, float]:
+    """Per-stage medians of the stereo front end at 640x480 along a rendered drive, and one Kalman step."""
+    from vo_lib.camera import StereoCamera
+    from vo_lib.geometry import camera_motion, camera_mount, planar_to_matrix
+    from vo_lib.sim.render import SensorEffects, StereoRenderer
+    from vo_lib.sim.samples import SAMPLES
+    from vo_lib.sim.trajectories import simulate_drive
+    from vo_lib.sim.world import WORLDS
+    from vo_lib.stereo_vo.circular_motion import circular_motion_from_transform
+    from vo_lib.stereo_vo.features import StereoFrontEnd
+    from vo_lib.stereo_vo.kalman import VoKalmanFilter
+    from vo_lib.stereo_vo.temporal import MotionPrior, match_temporal
+
+    cam = StereoCamera.bumblebee2()
+    sample = SAMPLES["indoor_free"]
+    drive = simulate_drive(sample.legs, sample.rate, sample.start, np.random.default_rng(sample.seed))
+    renderer = StereoRenderer(WORLDS[sample.world](), cam, SensorEffects(noise_sigma=1.0))
+    mount = camera_mount(height=0.5)
+    rng = np.random.default_rng(BENCH_SEED)
+    poses = drive.poses[100 : 100 + frames]
+    pairs = [renderer.render_pair(planar_to_matrix(p) @ mount, rng) for p in poses]
+    front = StereoFrontEnd(cam)
+    stages = {"detect": [], "describe": [], "stereo_match": [], "total": []}
+    feats = []
+    for left, right in pairs:
+        for _ in range(3):  # repeated, the median of three is the frame's time
+            t0 = time.perf_counter()
+            f = front.process(left, right)
+            stages["total"].append((time.perf_counter() - t0) * 1e3)
+            for k in ("detect", "describe", "stereo_match"):
+                stages[k].append(f.timings[k])
+        feats.append(f)
+    guided, brute = [], []
+    for k in range(1, len(feats)):
+        T = camera_motion(poses[k - 1], poses[k], mount)
+        theta, rho = circular_motion_from_transform(T)
+        prior = MotionPrior(theta, rho, np.diag([np.radians(0.5) ** 2, 0.01**2]))
+        guided.append(match_temporal(feats[k - 1], feats[k], cam, prior).timings["temporal_match"])
+        brute.append(match_temporal(feats[k - 1], feats[k], cam, None).timings["temporal_match"])
+    kf = VoKalmanFilter()
+    u, R = np.array([0.01, 0.011]), np.diag([1e-6, 1e-6])
+
+    def kalman_step():
+        kf.predict(u)
+        kf.update(0.002, 0.01, R)
+        kf.finish_frame()
+
+    t_kf = median_seconds(kalman_step)
+    print(f"stereo front end at 640x480, {frames} rendered frames of indoor_free (median ms)")
+    for k, v in stages.items():
+        print(f"  {k:<28s}{np.median(v):8.2f} ms")
+    print(f"  stereo features per frame   {np.median([len(f) for f in feats]):8.0f}")
+    print(
+        f"  temporal matching, guided   {np.median(guided):8.2f} ms   (brute force {np.median(brute):.2f} ms)"
+    )
+    print(f"  Kalman step (predict+update) {t_kf * 1e3:7.3f} ms")
+    total = float(np.median(stages["total"]))
+    print(
+        f"  targets: front end <= 8 ms ({'met' if total <= 8 else 'NOT met'}: {total:.2f}); "
+        f"Kalman <= 0.1 ms ({'met' if t_kf <= 1e-4 else 'NOT met'}: {t_kf * 1e3:.3f})"
+    )
+    return {"front_end": total / 1e3, "kalman": t_kf}
+
+
+def bench_pipeline(frames: int = 200) -> dict[str, float]:
+    """The whole pipeline per frame at 640x480 on a rendered indoor drive (images in memory)."""
+    from vo_lib.sim.samples import render_sample
+    from vo_lib.stereo_vo.pipeline import run_frames
+
+    rendered, frame_iter = render_sample("indoor_free", frames)
+    images = list(frame_iter)  # render first: only the pipeline is timed
+    result = run_frames(iter(images), rendered.camera)
+    table = result.timing_table()
+    print(f"stereo VO pipeline, {frames} frames of indoor_free at 640x480 (median ms per frame)")
+    for key, label in (
+        ("stereo", "stereo processing"),
+        ("prediction", "prediction"),
+        ("matching", "guided temporal matching"),
+        ("estimation", "1-point RANSAC"),
+        ("kalman", "Kalman filtering"),
+        ("total", "whole frame"),
+    ):
+        print(f"  {label:<28s}{table[key]:8.2f} ms")
+    fps = 1000.0 / table["total"]
+    inliers = float(np.median([d.inliers for d in result.diagnostics[1:]]))
+    print(
+        f"  frames per second {fps:.0f} (target >= 60: {'met' if fps >= 60 else 'NOT met'}); "
+        f"median inliers {inliers:.0f} (target >= 200: {'met' if inliers >= 200 else 'NOT met'})"
+    )
+    return {"frame": table["total"] / 1e3}

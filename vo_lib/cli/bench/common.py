@@ -1,0 +1,32 @@
+"""Timing helpers shared by the benchmarks: median wall times, table rows, one seed."""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+
+import numpy as np
+
+BENCH_SEED = 20261121
+
+
+def median_seconds(fn: Callable[[], object], repeat: int = 50, min_time: float = 0.2) -> float:
+    """Median wall time of one call of ``fn`` over ``repeat`` batches lasting about ``min_time`` in all."""
+    fn()  # warm caches and lazy imports
+    t0 = time.perf_counter()
+    fn()
+    once = max(time.perf_counter() - t0, 1e-7)
+    number = max(1, int(min_time / repeat / once))
+    samples = []
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        for _ in range(number):
+            fn()
+        samples.append((time.perf_counter() - t0) / number)
+    return float(np.median(samples))
+
+
+def format_row(name: str, seconds: float, baseline: float | None = None) -> str:
+    """One table row: name, time in milliseconds and the speed-up over the baseline."""
+    ratio = "" if baseline is None else f"{baseline / seconds:10.1f}x"
+    return f"  {name:<46s}{seconds * 1e3:12.4f} ms{ratio}"
