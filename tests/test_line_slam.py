@@ -24,6 +24,15 @@ from vo_lib.line_slam.line_landmarks import (
     paper_world,
     segment_from_slope,
 )
+from vo_lib.line_slam.line_observation import (
+    LINE,
+    line_from_points,
+    line_jacobians,
+    measure_line,
+    paper_line_triple,
+    point_from_line,
+    predict_line,
+)
 from vo_lib.line_slam.range_bearing import observation_jacobians, observe_point, point_from_observation
 from vo_lib.line_slam.segment_observers import (
     DEFAULT_TOLERANCE,
@@ -81,6 +90,55 @@ def test_observation_jacobians_and_inverse():
     np.testing.assert_allclose(
         g_pose, numeric_jacobian(lambda p: point_from_observation(p, z)[0], pose), atol=1e-7
     )
+
+
+@pytest.mark.parametrize("pose", [(2.0, -1.0, 0.7), (-20.0, 5.0, -2.5), (30.0, 30.0, 3.0)])
+def test_line_observation_jacobians_and_inverse(pose):
+    pose, point = np.array(pose), np.array([16.96, -21.81])
+    h_pose, h_point = line_jacobians(pose, point)
+    np.testing.assert_allclose(h_pose, numeric_jacobian(lambda p: predict_line(p, point), pose), atol=1e-8)
+    np.testing.assert_allclose(h_point, numeric_jacobian(lambda m: predict_line(pose, m), point), atol=1e-8)
+    z = predict_line(pose, point)
+    back, g_pose, g_z = point_from_line(pose, z)
+    np.testing.assert_allclose(back, point, atol=1e-9)
+    np.testing.assert_allclose(g_z, numeric_jacobian(lambda q: point_from_line(pose, q)[0], z), atol=1e-6)
+    np.testing.assert_allclose(g_pose, numeric_jacobian(lambda p: point_from_line(p, z)[0], pose), atol=1e-6)
+    # The other description of the same line gives the same feature point, and align undoes it.
+    other = np.array([-z[0], z[1] + math.pi])
+    np.testing.assert_allclose(point_from_line(pose, other)[0], point, atol=1e-9)
+    cov = np.array([[0.01, 0.002], [0.002, 0.001]])
+    aligned, cov_aligned = LINE.align(other, cov, z)
+    np.testing.assert_allclose(aligned, z, atol=1e-12)
+    assert cov_aligned[0, 1] == pytest.approx(-0.002)
+
+
+def test_measured_line_matches_the_wall_and_its_covariance_monte_carlo():
+    rng = np.random.default_rng(5)
+    pose = np.array([3.0, 4.0, 0.4])
+    a, b = np.array([0.0, 20.0]), np.array([20.0, 0.0])
+    truth = predict_line(pose, feature_point(a, b))
+    ends = np.array([observe_point(pose, a), observe_point(pose, b)])
+    line, cov = measure_line(ends, 0.1, math.radians(1.0))
+    np.testing.assert_allclose(LINE.align(line, cov, truth)[0], truth, atol=1e-9)
+    draws = []
+    for _ in range(4000):
+        noisy = ends + rng.standard_normal((2, 2)) * [0.1, math.radians(1.0)]
+        draws.append(LINE.align(measure_line(noisy, 0.1, math.radians(1.0))[0], cov, truth)[0])
+    mc = np.cov(np.array(draws).T)
+    np.testing.assert_allclose(np.diag(mc), np.diag(cov), rtol=0.1)
+    scale = np.sqrt(np.diag(cov)[0] * np.diag(cov)[1])
+    assert abs(mc[0, 1] - cov[0, 1]) / scale < 0.05  # correlations agree within sampling noise
+
+
+def test_the_paper_triple_does_not_fix_the_line():
+    # Two lines at the same distance d from the robot, crossing the same two bearings.
+    d, bearings = 5.0, np.radians([-20.0, 30.0])
+    triples = []
+    for psi in np.radians([0.0, 10.0]):
+        q = (d / np.cos(bearings - psi))[:, None] * np.column_stack([np.cos(bearings), np.sin(bearings)])
+        triples.append(paper_line_triple(q))
+        assert line_from_points(q) == pytest.approx([d, psi])
+    np.testing.assert_allclose(triples[0], triples[1], atol=1e-12)
 
 
 def test_feature_point_is_the_foot_of_the_perpendicular():
@@ -210,3 +268,16 @@ def test_out_of_range_case_reports_the_right_end():
 def test_unknown_observer_is_named():
     with pytest.raises(ValueError, match="observer must be one of"):
         simulate_lap(observer="raycast")
+    with pytest.raises(ValueError, match="observation must be one of"):
+        simulate_lap(scenario=LineSlamScenario(observation="corner"))
+
+
+def test_line_observation_maps_the_walls_and_beats_dead_reckoning():
+    runs = [simulate_lap(seed=s, scenario=LineSlamScenario(observation="line")) for s in range(5)]
+    for run in runs:
+        assert len(run.landmarks) == 4
+        for seg, j in run.landmark_of_segment.items():
+            assert np.hypot(*(run.landmarks[j] - run.true_landmarks[seg])) < 1.0
+    slam = np.mean([r.final_error() for r in runs])
+    dead = np.mean([r.final_dead_reckoning_error() for r in runs])
+    assert dead > 8 * slam

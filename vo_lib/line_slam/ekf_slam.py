@@ -1,10 +1,18 @@
-"""EKF-SLAM with point landmarks (seed 002, eq. 1-13): bicycle prediction, range-bearing
+"""EKF-SLAM with one feature point per line landmark (seed 002, eq. 1-13): bicycle prediction,
 updates, Mahalanobis data association and state augmentation.
 
 The state is ``X = [x_v, y_v, phi, x_1, y_1, ..., x_N, y_N]`` (eq. 1-3): the vehicle pose and one
 feature point per line landmark. The state grows as landmarks are found, which is why this
 filter is written out with NumPy rather than on filterpy's fixed-size filters; the equations are
 the same ones, in the same order.
+
+What a wall's observation is depends on the observation model: the range and bearing of its
+feature point (``range_bearing.POINT``, eq. 10, the paper's filter) or the line itself seen from
+the robot (``line_observation.LINE``, built from the visible part's two end points). Eq. 13's
+``V`` is taken as the innovation covariance ``S = H P H^T + R``: the paper names it "the variance
+caused by the observation", but the distance between a mapped and an observed feature point is
+also uncertain through the pose and the map, and ``S`` is the covariance of exactly that
+difference.
 """
 
 from __future__ import annotations
@@ -12,7 +20,7 @@ from __future__ import annotations
 import numpy as np
 
 from vo_lib.geometry import wrap_angle
-from vo_lib.line_slam.range_bearing import observation_jacobians, observe_point, point_from_observation
+from vo_lib.line_slam.range_bearing import POINT
 from vo_lib.models.bicycle import DEFAULT_WHEELBASE, bicycle_jacobians, bicycle_step
 
 #: Associate when the squared Mahalanobis distance (eq. 13) is below the chi-square 99 % point
@@ -44,10 +52,20 @@ class EkfSlam:
     wheelbase : float
         ``L``, metres.
     pose_cov : (3, 3) array_like, optional
+    model : observation model, optional
+        ``range_bearing.POINT`` (default) or ``line_observation.LINE``; ``observation_cov`` is the
+        default covariance of one observation, which :meth:`observe` may override per observation.
     """
 
     def __init__(
-        self, pose, control_cov, observation_cov, period, wheelbase=DEFAULT_WHEELBASE, pose_cov=None
+        self,
+        pose,
+        control_cov,
+        observation_cov,
+        period,
+        wheelbase=DEFAULT_WHEELBASE,
+        pose_cov=None,
+        model=POINT,
     ):
         self.x = np.asarray(pose, dtype=float).copy()
         self.P = np.zeros((3, 3)) if pose_cov is None else np.asarray(pose_cov, dtype=float).copy()
@@ -55,6 +73,7 @@ class EkfSlam:
         self.R = np.asarray(observation_cov, dtype=float)
         self.period = float(period)
         self.wheelbase = float(wheelbase)
+        self.model = model
 
     # ------------------------------------------------------------------ state access
     @property
@@ -91,46 +110,50 @@ class EkfSlam:
             P[3:, :3] = P[:3, 3:].T
 
     # ------------------------------------------------------------------ observation, eq. 8-12
-    def _innovation(self, z, j: int):
-        """Innovation, its Jacobian rows (2 x n) and covariance ``S = H P H^T + R`` for landmark ``j``."""
+    def _innovation(self, z, j: int, R=None):
+        """Innovation, its Jacobian rows (2 x 5), their state indices, ``S = H P H^T + R`` and the
+        observation's covariance ``R`` (aligned with the prediction) for landmark ``j``."""
         k = 3 + 2 * j
         point = self.x[k : k + 2]
-        h_pose, h_point = observation_jacobians(self.x[:3], point)
-        nu = np.asarray(z, dtype=float) - observe_point(self.x[:3], point)
+        predicted = self.model.predict(self.x[:3], point)
+        z, R = self.model.align(z, self.R if R is None else np.asarray(R, dtype=float), predicted)
+        h_pose, h_point = self.model.jacobians(self.x[:3], point)
+        nu = z - predicted
         nu[1] = wrap_angle(nu[1])
         # Only five columns of H are non-zero: use the matching blocks of P.
         idx = np.r_[0:3, k : k + 2]
         h_small = np.hstack([h_pose, h_point])
-        S = h_small @ self.P[np.ix_(idx, idx)] @ h_small.T + self.R
-        return nu, h_small, idx, S
+        S = h_small @ self.P[np.ix_(idx, idx)] @ h_small.T + R
+        return nu, h_small, idx, S, R
 
-    def mahalanobis(self, z) -> np.ndarray:
+    def mahalanobis(self, z, R=None) -> np.ndarray:
         """Squared Mahalanobis distance (eq. 13) of observation ``z`` to every landmark:
         ``D^2 = nu^T S^-1 nu`` with ``S`` the innovation covariance."""
         out = np.empty(self.n_landmarks)
         for j in range(self.n_landmarks):
-            nu, _, _, S = self._innovation(z, j)
+            nu, _, _, S, _ = self._innovation(z, j, R)
             out[j] = nu @ np.linalg.solve(S, nu)
         return out
 
     def euclidean(self, z) -> np.ndarray:
-        """Plain distance, in metres, from the observed point (placed with the estimated pose) to
-        every landmark's feature point: the association seed 002 argues against."""
-        point, _, _ = point_from_observation(self.x[:3], z)
+        """Plain distance, in metres, from the observed feature point (placed with the estimated
+        pose) to every landmark's: the association seed 002 argues against."""
+        point, _, _ = self.model.invert(self.x[:3], z)
         marks = self.x[3:].reshape(-1, 2)
         return np.hypot(marks[:, 0] - point[0], marks[:, 1] - point[1])
 
-    def associate(self, observations, method: str = "mahalanobis") -> list[int]:
+    def associate(self, observations, method: str = "mahalanobis", covariances=None) -> list[int]:
         """For each observation: a landmark index, :data:`NEW` or :data:`DROPPED`."""
         if method not in ("mahalanobis", "euclidean"):
             raise ValueError(f"method must be 'mahalanobis' or 'euclidean'; got {method!r}")
+        covariances = covariances if covariances is not None else [None] * len(observations)
         out = []
-        for z in observations:
+        for z, R in zip(observations, covariances, strict=True):
             if self.n_landmarks == 0:
                 out.append(NEW)
                 continue
             if method == "mahalanobis":
-                dist = self.mahalanobis(z)
+                dist = self.mahalanobis(z, R)
                 near, far = GATE_ASSOCIATE, GATE_AUGMENT
             else:
                 dist = self.euclidean(z)
@@ -139,18 +162,20 @@ class EkfSlam:
             out.append(j if dist[j] < near else NEW if dist[j] > far else DROPPED)
         return out
 
-    def update(self, observations, indices) -> None:
+    def update(self, observations, indices, covariances=None) -> None:
         """EKF update with every observation associated to a known landmark, all at once."""
-        pairs = [(z, j) for z, j in zip(observations, indices, strict=True) if j >= 0]
-        if not pairs:
+        covariances = covariances if covariances is not None else [None] * len(observations)
+        triples = [(z, j, c) for z, j, c in zip(observations, indices, covariances, strict=True) if j >= 0]
+        if not triples:
             return
         n = self.x.size
-        H = np.zeros((2 * len(pairs), n))
-        nu = np.empty(2 * len(pairs))
-        for i, (z, j) in enumerate(pairs):
-            nu[2 * i : 2 * i + 2], h_small, idx, _ = self._innovation(z, j)
-            H[2 * i : 2 * i + 2, idx] = h_small
-        R = np.kron(np.eye(len(pairs)), self.R)
+        H = np.zeros((2 * len(triples), n))
+        nu = np.empty(2 * len(triples))
+        R = np.zeros((2 * len(triples), 2 * len(triples)))
+        for i, (z, j, c) in enumerate(triples):
+            rows = slice(2 * i, 2 * i + 2)
+            nu[rows], h_small, idx, _, R[rows, rows] = self._innovation(z, j, c)
+            H[rows, idx] = h_small
         PHt = self.P @ H.T
         S = H @ PHt + R
         K = np.linalg.solve(S, PHt.T).T
@@ -160,29 +185,32 @@ class EkfSlam:
         I_KH = np.eye(n) - K @ H
         self.P = I_KH @ self.P @ I_KH.T + K @ R @ K.T
 
-    def augment(self, z) -> int:
+    def augment(self, z, R=None) -> int:
         """Add the landmark seen at ``z``; its covariance follows from the inverse observation
         model: ``P_mm = G_v P_vv G_v^T + G_z R G_z^T``, ``P_mX = G_v P_vX``."""
-        point, g_pose, g_z = point_from_observation(self.x[:3], z)
+        R = self.R if R is None else np.asarray(R, dtype=float)
+        point, g_pose, g_z = self.model.invert(self.x[:3], z)
         n = self.x.size
         P = np.zeros((n + 2, n + 2))
         P[:n, :n] = self.P
         cross = g_pose @ self.P[:3, :]
         P[n:, :n] = cross
         P[:n, n:] = cross.T
-        P[n:, n:] = g_pose @ self.P[:3, :3] @ g_pose.T + g_z @ self.R @ g_z.T
+        P[n:, n:] = g_pose @ self.P[:3, :3] @ g_pose.T + g_z @ R @ g_z.T
         self.x = np.concatenate([self.x, point])
         self.P = P
         return self.n_landmarks - 1
 
-    def observe(self, observations, method: str = "mahalanobis") -> list[int]:
+    def observe(self, observations, method: str = "mahalanobis", covariances=None) -> list[int]:
         """Associate, update with the known landmarks, then add the new ones; returns the
-        landmark index of each observation (new ones included) or :data:`DROPPED`."""
-        indices = self.associate(observations, method)
-        self.update(observations, indices)
-        for i, (z, j) in enumerate(zip(observations, indices, strict=True)):
+        landmark index of each observation (new ones included) or :data:`DROPPED`.
+        ``covariances`` (one 2x2 per observation) default to the filter's ``R``."""
+        covariances = covariances if covariances is not None else [None] * len(observations)
+        indices = self.associate(observations, method, covariances)
+        self.update(observations, indices, covariances)
+        for i, (z, j, c) in enumerate(zip(observations, indices, covariances, strict=True)):
             if j == NEW:
-                indices[i] = self.augment(z)
+                indices[i] = self.augment(z, c)
         return indices
 
     def pose_nees(self, true_pose) -> float:

@@ -17,7 +17,8 @@ import numpy as np
 from vo_lib.geometry import wrap_angle
 from vo_lib.line_slam.ekf_slam import DROPPED, EkfSlam, control_cov, range_bearing_cov
 from vo_lib.line_slam.line_landmarks import along_line, feature_point, line_points, paper_world
-from vo_lib.line_slam.range_bearing import observe_point, point_from_observation
+from vo_lib.line_slam.line_observation import LINE, measure_line
+from vo_lib.line_slam.range_bearing import POINT, observe_point, point_from_observation
 from vo_lib.line_slam.segment_observers import DEFAULT_TOLERANCE, OBSERVERS
 from vo_lib.models.bicycle import (
     DEFAULT_WHEELBASE,
@@ -41,6 +42,12 @@ class LineSlamScenario:
     laser's range and noise, landmarks and waypoints. Our choices (not printed): the wheelbase
     (4 m), an observation every 8 control periods (0.2 s), a waypoint counts as reached within
     1 m, the start heading points at the first waypoint, the laser sees all round.
+
+    ``observation`` chooses what the filter is given for a wall with a visible part:
+    ``"feature_point"`` (the paper's filter, section 1.3: range and bearing of the wall's feature
+    point, eq. 10, with the laser's point noise) or ``"line"`` (the line through the visible
+    part's two measured end points, ``line_observation.LINE``; parts shorter than
+    ``min_line_length`` are not used, their direction being noise).
     """
 
     speed: float = PAPER_SPEED
@@ -59,6 +66,8 @@ class LineSlamScenario:
     waypoints: tuple[tuple[float, float], ...] = PAPER_WAYPOINTS
     extended: bool = False
     max_steps: int = 10_000
+    observation: str = "feature_point"
+    max_line_direction_sigma: float = math.radians(2.0)
 
 
 @dataclass
@@ -125,12 +134,16 @@ def simulate_lap(
     The true vehicle follows the commanded speed and steering; the filter and dead reckoning
     receive them with Gaussian noise of the scenario's sigmas (eq. 4's ``w``). Every
     ``observe_every`` control periods each segment is passed to ``observer``; a segment with a
-    visible part yields a noisy range-bearing observation of its feature point (eq. 10) and of
-    the visible part's two end points (for drawing).
+    visible part yields noisy range-bearing observations of the visible part's two end points
+    (for drawing, and for the line observation) and, in the feature-point form, of its feature
+    point (eq. 10).
     """
     if observer not in OBSERVERS:
         raise ValueError(f"observer must be one of {sorted(OBSERVERS)}; got {observer!r}")
     sc = scenario or LineSlamScenario()
+    models = {"feature_point": POINT, "line": LINE}
+    if sc.observation not in models:
+        raise ValueError(f"observation must be one of {sorted(models)}; got {sc.observation!r}")
     rng = np.random.default_rng(seed)
     world = paper_world(sc.extended)
     segs = [(np.array(s.start), np.array(s.end)) for s in world.segments]
@@ -145,6 +158,7 @@ def simulate_lap(
         range_bearing_cov(sc.range_sigma, sc.bearing_sigma),
         sc.period,
         sc.wheelbase,
+        model=models[sc.observation],
     )
     dr = pose.copy()
     steer, target = 0.0, 0
@@ -174,20 +188,25 @@ def simulate_lap(
         ekf.predict(speed_m, steer_m)
         dr = bicycle_step(dr, speed_m, steer_m, sc.period, sc.wheelbase)
         if k % sc.observe_every == 0:
-            zs, which, ends = [], [], []
+            zs, obs_covs, which, ends = [], [], [], []
             for i, (a, b) in enumerate(segs):
                 t0 = time.perf_counter()
                 part = observe_part(a, b, pose[:2], sc.max_range, tolerance)
                 observer_seconds += time.perf_counter() - t0
                 if part is None:
                     continue
-                z = observe_point(pose, features[i]) + obs_sigma * rng.standard_normal(2)
+                if sc.observation == "feature_point":
+                    z = observe_point(pose, features[i]) + obs_sigma * rng.standard_normal(2)
+                e = [observe_point(pose, a + t * (b - a)) + obs_sigma * rng.standard_normal(2) for t in part]
+                if sc.observation == "line":
+                    z, cov = measure_line(e, sc.range_sigma, sc.bearing_sigma)
+                    if cov[1, 1] > sc.max_line_direction_sigma**2:
+                        continue
+                    obs_covs.append(cov)
                 zs.append(z)
                 which.append(i)
-                ends.append(
-                    [observe_point(pose, a + t * (b - a)) + obs_sigma * rng.standard_normal(2) for t in part]
-                )
-            indices = ekf.observe(zs, association)
+                ends.append(e)
+            indices = ekf.observe(zs, association, obs_covs if sc.observation == "line" else None)
             for i, j, e in zip(which, indices, ends, strict=True):
                 if j == DROPPED:
                     dropped += 1

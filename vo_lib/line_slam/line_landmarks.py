@@ -14,14 +14,18 @@ import numpy as np
 
 from vo_lib.sim.world import Segment, World
 
-#: Seed 002's four landmarks as printed: (left x, right x, slope, intercept).
+#: Seed 002's four landmarks: (left x, right x, slope, intercept). The parameter list of section 3
+#: prints landmark 3 as (0, 60, 7/9, -35); its text on the out-of-range case says that case moves
+#: landmark 3's right end "from 45 to 60". We read the list as giving the extended landmark and
+#: take x = 45 for the normal case, as the text implies (the paper's Fig. 6 is not available to
+#: settle it). The other three rows are as printed.
 PAPER_LANDMARKS = (
     (-30.0, 0.0, 2.0 / 3.0, 30.0),
     (0.0, 20.0, -1.0, 20.0),
     (0.0, 45.0, 7.0 / 9.0, -35.0),
     (-60.0, 0.0, -0.7, -35.0),
 )
-#: The out-of-range case: landmark 3's right end moved from x = 45 to x = 60.
+#: The out-of-range case: landmark 3's right end moved from x = 45 to x = 60 (the printed list's 60).
 EXTENDED_RIGHT_X = 60.0
 #: The paper's observed right end of the extended landmark 3.
 PAPER_EXTENDED_RIGHT_END = 54.4412

@@ -51,3 +51,29 @@ def point_from_observation(pose, z) -> tuple[np.ndarray, np.ndarray, np.ndarray]
     g_pose = np.array([[1.0, 0.0, -r * s], [0.0, 1.0, r * c]])
     g_z = np.array([[c, -r * s], [s, r * c]])
     return point, g_pose, g_z
+
+
+class PointModel:
+    """Range and bearing of a wall's feature point (eq. 10): the observation of the paper's filter."""
+
+    name = "feature_point"
+
+    @staticmethod
+    def predict(pose, point) -> np.ndarray:
+        return observe_point(pose, point)
+
+    @staticmethod
+    def jacobians(pose, point):
+        return observation_jacobians(pose, point)
+
+    @staticmethod
+    def invert(pose, z):
+        return point_from_observation(pose, z)
+
+    @staticmethod
+    def align(z, cov, predicted):
+        """A point has one description: ``z`` and ``cov`` unchanged."""
+        return np.asarray(z, dtype=float), cov
+
+
+POINT = PointModel()

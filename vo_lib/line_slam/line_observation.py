@@ -1,0 +1,144 @@
+"""Seed 002's observation of a line segment, and the line measurement a filter can use.
+
+Section 1 of the paper describes a line feature seen by the laser by "the distance from the robot
+to the line and the start and end angles of the observed segment": the triple ``(d, a_s, a_e)``
+of :func:`paper_line_triple`. The triple alone does not fix the line: every line tangent to the
+circle of radius ``d`` about the robot that crosses both rays is consistent with it (notebook 09
+builds two). The laser measures the ranges of the two ends as well, and with them the line is
+fixed. This module turns the two measured end points of the visible part into the line in the
+robot's frame,
+
+    z = (rho, psi):  the line is {q : (cos psi, sin psi) . q = rho} in robot coordinates,
+
+and predicts the same pair from the filter's state, where the wall is carried by its feature
+point ``p`` (the foot of the perpendicular from the world origin, section 1.3):
+
+    c = |p|,  n = p / c,  rho = c - n . (x_v, y_v),  psi = atan2(p_y, p_x) - phi.
+
+A line has two descriptions, ``(rho, psi)`` and ``(-rho, psi + pi)``; :meth:`LineModel.align`
+picks the one nearest a prediction. :data:`LINE` is the observation model for
+:class:`~vo_lib.line_slam.ekf_slam.EkfSlam`; :data:`~vo_lib.line_slam.range_bearing.POINT` is
+the feature-point form the paper's filter uses (section 1.3: "the observed landmark feature point
+is the observation").
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from vo_lib.geometry import wrap_angle
+
+
+def paper_line_triple(end_points_robot) -> np.ndarray:
+    """``(d, a_s, a_e)``: distance from the robot to the line through two points given in the
+    robot's frame (2 x 2, one point a row), and the bearings of the two points."""
+    q = np.asarray(end_points_robot, dtype=float).reshape(2, 2)
+    e = q[1] - q[0]
+    d = abs(q[0, 0] * e[1] - q[0, 1] * e[0]) / math.hypot(*e)
+    return np.array([d, math.atan2(q[0, 1], q[0, 0]), math.atan2(q[1, 1], q[1, 0])])
+
+
+def line_from_points(end_points_robot) -> np.ndarray:
+    """``(rho, psi)`` of the line through two points in the robot's frame, with ``rho >= 0``."""
+    q = np.asarray(end_points_robot, dtype=float).reshape(2, 2)
+    e = q[1] - q[0]
+    m = np.array([-e[1], e[0]]) / math.hypot(*e)
+    rho = float(m @ q[0])
+    if rho < 0:
+        m, rho = -m, -rho
+    return np.array([rho, math.atan2(m[1], m[0])])
+
+
+def line_from_range_bearing(z_ends) -> np.ndarray:
+    """``(rho, psi)`` from the two end points measured as ``(r, b)`` rows (2 x 2)."""
+    z = np.asarray(z_ends, dtype=float).reshape(2, 2)
+    q = z[:, :1] * np.column_stack([np.cos(z[:, 1]), np.sin(z[:, 1])])
+    return line_from_points(q)
+
+
+def measure_line(z_ends, range_sigma: float, bearing_sigma: float, eps: float = 1e-6):
+    """The line measurement ``(rho, psi)`` from the two measured end points ``(r, b)`` of the
+    visible part, and its covariance: the end points' noise (``range_sigma``,
+    ``bearing_sigma``, independent) propagated to first order."""
+    z = np.asarray(z_ends, dtype=float).reshape(4)
+    line = line_from_range_bearing(z)
+    J = np.empty((2, 4))
+    for i in range(4):
+        dz = np.zeros(4)
+        dz[i] = eps
+        hi, lo = line_from_range_bearing(z + dz), line_from_range_bearing(z - dz)
+        diff = hi - lo
+        diff[1] = wrap_angle(diff[1])
+        J[:, i] = diff / (2 * eps)
+    noise = np.diag([range_sigma**2, bearing_sigma**2, range_sigma**2, bearing_sigma**2])
+    return line, J @ noise @ J.T
+
+
+def predict_line(pose, point) -> np.ndarray:
+    """``(rho, psi)`` of the line of feature point ``point`` seen from ``pose``."""
+    c = math.hypot(point[0], point[1])
+    rho = c - (point[0] * pose[0] + point[1] * pose[1]) / c
+    return np.array([rho, wrap_angle(math.atan2(point[1], point[0]) - pose[2])])
+
+
+def line_jacobians(pose, point) -> tuple[np.ndarray, np.ndarray]:
+    """``(H_pose, H_point)``: :func:`predict_line` differentiated by the pose (2x3) and by the
+    feature point (2x2)."""
+    p = np.asarray(point, dtype=float)
+    pos = np.asarray(pose[:2], dtype=float)
+    c = math.hypot(*p)
+    n = p / c
+    h_pose = np.array([[-n[0], -n[1], 0.0], [0.0, 0.0, -1.0]])
+    h_point = np.empty((2, 2))
+    h_point[0] = n - (pos - (n @ pos) * n) / c
+    h_point[1] = np.array([-p[1], p[0]]) / (c * c)
+    return h_pose, h_point
+
+
+def point_from_line(pose, z) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Invert :func:`predict_line`: the feature point of the line seen at ``z = (rho, psi)`` from
+    ``pose``, with its Jacobians ``G_pose`` (2x3) and ``G_z`` (2x2)."""
+    rho, psi = z
+    beta = pose[2] + psi
+    n = np.array([math.cos(beta), math.sin(beta)])
+    n_perp = np.array([-n[1], n[0]])
+    pos = np.asarray(pose[:2], dtype=float)
+    c = rho + n @ pos
+    point = c * n
+    d_angle = (n_perp @ pos) * n + c * n_perp
+    g_pose = np.column_stack([n[0] * n, n[1] * n, d_angle])
+    g_z = np.column_stack([n, d_angle])
+    return point, g_pose, g_z
+
+
+class LineModel:
+    """The line ``(rho, psi)`` as the observation of a wall's feature point."""
+
+    name = "line"
+
+    @staticmethod
+    def predict(pose, point) -> np.ndarray:
+        return predict_line(pose, point)
+
+    @staticmethod
+    def jacobians(pose, point):
+        return line_jacobians(pose, point)
+
+    @staticmethod
+    def invert(pose, z):
+        return point_from_line(pose, z)
+
+    @staticmethod
+    def align(z, cov, predicted):
+        """The description of the measured line, ``(rho, psi)`` or ``(-rho, psi + pi)``, whose
+        normal lies within 90 degrees of the prediction's, and its covariance."""
+        z = np.asarray(z, dtype=float)
+        if abs(wrap_angle(z[1] - predicted[1])) <= math.pi / 2:
+            return z, cov
+        flip = np.diag([-1.0, 1.0])
+        return np.array([-z[0], wrap_angle(z[1] + math.pi)]), flip @ cov @ flip
+
+
+LINE = LineModel()
