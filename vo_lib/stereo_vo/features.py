@@ -158,7 +158,7 @@ def parabola_offset(c_minus: np.ndarray, c_zero: np.ndarray, c_plus: np.ndarray)
     return np.where(ok, np.clip(0.5 * (c_minus - c_plus) / np.where(ok, rise, 1.0), -0.5, 0.5), 0.0)
 
 
-def _subpixel_disparity(
+def subpixel_disparity(
     left: np.ndarray, right: np.ndarray, u: np.ndarray, v: np.ndarray, d: np.ndarray
 ) -> np.ndarray:
     """Refine integer disparities by a parabola through the SAD cost at d-1, d, d+1 (7x7 patches)."""
@@ -281,7 +281,7 @@ class StereoFrontEnd:
         ia, ib = self._row_candidates(pl, pr)
         a, b, _ = best_matches(ia, ib, hamming(dl[ia], dr[ib]), len(pl), len(pr))
         u, v = pl[a, 0].astype(float), pl[a, 1].astype(float)
-        d = _subpixel_disparity(left, right, u, v, (pl[a, 0] - pr[b, 0]).astype(float))
+        d = subpixel_disparity(left, right, u, v, (pl[a, 0] - pr[b, 0]).astype(float))
         ok = d > 0
         t3 = time.perf_counter()
         timings.update(detect=(t1 - t0) * 1e3, describe=(t2 - t1) * 1e3, stereo_match=(t3 - t2) * 1e3)

@@ -114,6 +114,10 @@ class VoKalmanFilter:
         Initial covariance (default: nearly certain).
     slip_sigma : float
         Slip uncertainty per metre of track travel, added to the encoder noise.
+    lateral_sigma : float
+        Sideways motion per metre travelled that the odometry cannot see, as process noise across
+        the chord (0 for the crawler, whose tracks hold it on the chord; a car's odometry frame is
+        aligned with its direction of travel only to a fraction of a degree).
     cv_sigma : (float, float, float)
         Constant-velocity process noise per frame when no odometry is given.
     """
@@ -126,9 +130,11 @@ class VoKalmanFilter:
         slip_sigma: float = SLIP_SIGMA,
         cv_sigma=CV_SIGMA,
         sideways_sigma: float = SIDEWAYS_SIGMA,
+        lateral_sigma: float = 0.0,
     ):
         self.odometry = odometry or TrackOdometry()
         self.slip_sigma = float(slip_sigma)
+        self.lateral_sigma = float(lateral_sigma)
         self.sideways_sigma = float(sideways_sigma)
         self.cv_sigma = np.asarray(cv_sigma, float)
         self.ekf = ExtendedKalmanFilter(dim_x=6, dim_z=2)
@@ -174,6 +180,9 @@ class VoKalmanFilter:
             u = np.asarray(u, float)
             x_new, F, G = self.odometry.step(x, u)  # eq. 6-11 and their full Jacobians (notebook 01)
             Q = G @ self.control_covariance(u) @ G.T
+            if self.lateral_sigma > 0:
+                across = np.array([-math.sin(x_new[2]), math.cos(x_new[2]), 0.0])
+                Q = Q + (self.lateral_sigma * 0.5 * abs(u[0] + u[1])) ** 2 * np.outer(across, across)
             self.flags = StepFlags(odometry=True)
         else:
             inc = self.last_increment
@@ -205,14 +214,22 @@ class VoKalmanFilter:
         return MotionPrior(float(z[0]), float(z[1]), H @ self.ekf.P @ H.T)
 
     # ------------------------------------------------------------------ update
-    def update(self, theta: float, rho: float, covariance) -> None:
+    def update(self, theta: float, rho: float, covariance, sideways: float = 0.0) -> None:
         """Correct with a VO measurement ``(theta, rho)`` of the motion since the reference, and the
-        circular-motion constraint that the motion lies on its chord (sideways deviation zero)."""
+        circular-motion constraint that the motion lies on its chord (sideways deviation zero).
+
+        A 3x3 ``covariance`` means the vision measured the sideways deviation too (6-DoF motion):
+        then ``(theta, rho, sideways)`` is the measurement and the constraint is not applied.
+        """
+        covariance = np.asarray(covariance, float)
         R = np.zeros((3, 3))
-        R[:2, :2] = np.asarray(covariance, float)
-        R[2, 2] = self.sideways_sigma**2
+        if covariance.shape == (3, 3):
+            R[:] = covariance
+        else:
+            R[:2, :2] = covariance
+            R[2, 2] = self.sideways_sigma**2
         self.ekf.update(
-            np.array([theta, rho, 0.0]),
+            np.array([theta, rho, sideways]),
             constrained_jacobian,
             constrained_measurement,
             R=R,

@@ -87,18 +87,21 @@ class FrameTimings:
     prediction: float = 0.0
     matching: float = 0.0
     estimation: float = 0.0
+    refinement: float = 0.0  # 6-DoF refinement (rigid pipeline only)
     kalman: float = 0.0
     total: float = 0.0
 
 
 @dataclass
 class PipelineResult:
-    """One planar pose (and covariance) per frame, with diagnostics and timings."""
+    """One planar pose (and covariance) per frame, with diagnostics and timings; the rigid
+    pipeline also gives each frame's 6-DoF camera pose (``camera_poses``, in frame 0's camera)."""
 
     poses: np.ndarray
     covariances: np.ndarray
     diagnostics: list[FrameDiagnostics] = field(default_factory=list)
     timings: list[FrameTimings] = field(default_factory=list)
+    camera_poses: np.ndarray | None = None
 
     @property
     def flagged(self) -> np.ndarray:
@@ -302,40 +305,78 @@ def run_frames(
     seed: int = 0,
     progress=None,
     front_end: StereoFrontEnd | None = None,
+    odometer=None,
 ) -> PipelineResult:
-    """Run the pipeline over ``(left, right, odometry_or_None)`` triples."""
-    vo = StereoVisualOdometry(camera, odometry_model, seed, front_end)
-    poses, covs, diags, timings = [], [], [], []
+    """Run the pipeline over ``(left, right, odometry_or_None)`` triples.
+
+    ``odometer`` is any object with this module's ``process`` method (default: the planar
+    :class:`StereoVisualOdometry`); one that has a ``camera_pose`` gives 6-DoF poses too.
+    """
+    vo = odometer or StereoVisualOdometry(camera, odometry_model, seed, front_end)
+    poses, covs, diags, timings, cameras = [], [], [], [], []
     for left, right, odo in frames:
         pose, cov, diag, timing = vo.process(left, right, odo)
         poses.append(pose)
         covs.append(cov)
         diags.append(diag)
         timings.append(timing)
+        if hasattr(vo, "camera_pose"):
+            cameras.append(vo.camera_pose.copy())
         if progress is not None:
             progress.update(1)
-    return PipelineResult(np.array(poses).reshape(-1, 3), np.array(covs).reshape(-1, 3, 3), diags, timings)
+    return PipelineResult(
+        np.array(poses).reshape(-1, 3),
+        np.array(covs).reshape(-1, 3, 3),
+        diags,
+        timings,
+        np.array(cameras) if cameras else None,
+    )
+
+
+MOTION_MODELS = ("auto", "planar", "full")
 
 
 def run_sequence(
-    sequence, frames: int | None = None, use_odometry: bool = True, seed: int = 0, progress: bool = False
+    sequence,
+    frames: int | None = None,
+    use_odometry: bool = True,
+    seed: int = 0,
+    progress: bool = False,
+    motion: str = "auto",
 ) -> PipelineResult:
-    """Run the pipeline on a :class:`~vo_lib.formats.sequence.Sequence` (its first ``frames`` frames)."""
+    """Run the pipeline on a :class:`~vo_lib.formats.sequence.Sequence` (its first ``frames`` frames).
+
+    ``motion`` is ``"planar"`` (the circular-motion model, for a camera above the turning axis on
+    a flat floor: the crawler of the samples), ``"full"`` (6-DoF, :mod:`.rigid_pipeline`: a car on
+    a real road), or ``"auto"``: the one that fits the sequence's vehicle (:mod:`.vehicle`).
+    """
+    from vo_lib.stereo_vo.rigid_pipeline import RigidStereoOdometry
+    from vo_lib.stereo_vo.vehicle import vehicle_of
+
+    if motion not in MOTION_MODELS:
+        raise ValueError(f"motion must be one of {', '.join(MOTION_MODELS)}; got {motion!r}")
+    vehicle = vehicle_of(sequence)
+    model = vehicle.motion if motion == "auto" else motion
     n = len(sequence) if frames is None else min(int(frames), len(sequence))
-    odo = sequence.odometry if (use_odometry and sequence.odometry is not None) else None
+    odo = vehicle.odometry if use_odometry else None
 
     def frame_iter():
         for k in range(n):
             left, right = sequence.pair(k)
             yield left, right, (None if odo is None or k == 0 else odo[k])
 
+    odometer = None
+    if model == "full":
+        odometer = RigidStereoOdometry(sequence.camera, vehicle.mount, vehicle.odometry_model, seed)
     bar = None
     if progress:
         from tqdm.auto import tqdm
 
         bar = tqdm(total=n, desc=f"VO {sequence.path.name}", unit="frame")
     try:
-        return run_frames(frame_iter(), sequence.camera, seed=seed, progress=bar)
+        return run_frames(
+            frame_iter(), sequence.camera, vehicle.odometry_model, seed=seed, progress=bar, odometer=odometer
+        )
     finally:
         if bar is not None:
             bar.close()

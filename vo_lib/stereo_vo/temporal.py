@@ -26,6 +26,7 @@ MIN_RADIUS = 4.0  # pixels
 MAX_RADIUS = 120.0  # pixels
 PATCH_HALF = 3  # 7x7 patches for the sub-pixel refinement of matches
 NEAR = 0.1  # metres: predicted points nearer than this are not matched
+PREDICTED_RATIO = 0.9  # ratio test of match_to_prediction (pyramid features, larger motions)
 
 
 @dataclass(frozen=True)
@@ -151,3 +152,34 @@ def match_temporal(
         w_curr = refine_positions(prev.image, curr.image, prev.w[a], w_curr)
     elapsed = (time.perf_counter() - t0) * 1e3
     return TemporalMatches(a, b, prev.w[a], w_curr, len(ia), {"temporal_match": elapsed})
+
+
+def match_to_prediction(
+    prev: StereoFeatures, curr: StereoFeatures, predicted: np.ndarray | None, radius=None
+) -> TemporalMatches:
+    """Match previous features to current ones near their predicted ``(u, v)``.
+
+    ``predicted`` ``(N_prev, 3)`` holds each previous feature's predicted ``(u, v, d)`` (NaN where
+    it is not expected in view) and ``radius`` ``(N_prev,)`` the half-width of its square window in
+    pixels. Without a prediction every pair is compared (brute force). Used with the 6-DoF
+    prediction of :mod:`vo_lib.stereo_vo.rigid_motion`.
+    """
+    t0 = time.perf_counter()
+    n_prev, n_curr = len(prev), len(curr)
+    if n_prev == 0 or n_curr == 0:
+        empty = np.zeros(0, int)
+        return TemporalMatches(empty, empty, np.zeros((0, 3)), np.zeros((0, 3)), 0, {"temporal_match": 0.0})
+    if predicted is None:
+        ia = np.repeat(np.arange(n_prev), n_curr)
+        ib = np.tile(np.arange(n_curr), n_prev)
+    else:
+        keep = np.flatnonzero(np.isfinite(predicted[:, 0]))
+        radius = np.broadcast_to(np.asarray(radius, float), (n_prev,))
+        ia, ib = window_pairs(predicted[keep, 1], curr.w[:, 1], radius[keep])
+        ia = keep[ia]
+        inside = np.abs(curr.w[ib, 0] - predicted[ia, 0]) <= radius[ia]
+        ia, ib = ia[inside], ib[inside]
+    dist = hamming(prev.descriptors[ia], curr.descriptors[ib])
+    a, b, _ = best_matches(ia, ib, dist, n_prev, n_curr, ratio=PREDICTED_RATIO)
+    elapsed = (time.perf_counter() - t0) * 1e3
+    return TemporalMatches(a, b, prev.w[a], curr.w[b], len(ia), {"temporal_match": elapsed})

@@ -1,0 +1,97 @@
+"""Files of KITTI's raw recordings that a sequence folder may carry beside the odometry layout.
+
+``oxts.txt``
+    one GPS/IMU packet per image, 30 numbers per line (KITTI's ``oxts_dataformat.txt``). Two of
+    them stand in for a car's wheel odometry: the forward speed ``vf`` (field 9) and the yaw rate
+    ``wz`` (field 20).
+``raw_calib/calib_imu_to_velo.txt``, ``calib_velo_to_cam.txt``, ``calib_cam_to_cam.txt``
+    the chain that places the left rectified camera in the IMU's frame (x forward, y left, z up):
+    ``T_imu_cam = inv(R_rect_00 . T_velo_to_cam . T_imu_to_velo)``.
+
+Bad files raise :class:`~vo_lib.formats.sequence.SequenceError` naming the file and line.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from vo_lib.formats.sequence import SequenceError
+
+OXTS_FIELDS = 30
+VF, WZ = 8, 19  # zero-based columns of forward speed (m/s) and yaw rate (rad/s)
+
+
+def read_oxts(path) -> np.ndarray:
+    """``(N, 30)`` OXTS packets; every number must be finite."""
+    path = Path(path)
+    rows = []
+    for line_no, line in enumerate(path.read_text().splitlines(), 1):
+        if not line.strip():
+            continue
+        parts = line.split()
+        if len(parts) != OXTS_FIELDS:
+            raise SequenceError(f"{path}, line {line_no}: expected {OXTS_FIELDS} numbers; got {len(parts)}")
+        try:
+            values = [float(p) for p in parts]
+        except ValueError:
+            raise SequenceError(f"{path}, line {line_no}: expected {OXTS_FIELDS} numbers") from None
+        if not np.all(np.isfinite(values)):
+            raise SequenceError(f"{path}, line {line_no}: not every number is finite")
+        rows.append(values)
+    if not rows:
+        raise SequenceError(f"{path}: no OXTS packets")
+    return np.array(rows)
+
+
+def wheel_distances_from_oxts(oxts: np.ndarray, times: np.ndarray, gauge: float) -> np.ndarray:
+    """Left and right wheel distances per frame ``(N, 2)`` (row 0 is zero) from speed and yaw rate.
+
+    Between frames ``k-1`` and ``k`` the car travels ``s = mean(vf) dt`` and turns by
+    ``dpsi = mean(wz) dt`` (trapezoidal rule); wheels ``gauge`` apart then travel
+    ``s -/+ gauge dpsi / 2``, which the track-odometry model (seed 000, eq. 4) turns back into the
+    same ``s`` and ``dpsi``.
+    """
+    times = np.asarray(times, float)
+    if len(times) != len(oxts):
+        raise ValueError(f"{len(oxts)} OXTS packets but {len(times)} timestamps")
+    dt = np.diff(times)
+    s = 0.5 * (oxts[1:, VF] + oxts[:-1, VF]) * dt
+    dpsi = 0.5 * (oxts[1:, WZ] + oxts[:-1, WZ]) * dt
+    out = np.zeros((len(oxts), 2))
+    out[1:, 0] = s - 0.5 * gauge * dpsi
+    out[1:, 1] = s + 0.5 * gauge * dpsi
+    return out
+
+
+def _calib_values(path: Path, key: str, count: int) -> np.ndarray:
+    if not path.is_file():
+        raise SequenceError(f"{path}: missing")
+    for line_no, line in enumerate(path.read_text().splitlines(), 1):
+        if line.startswith(key + ":"):
+            try:
+                values = np.array([float(x) for x in line.split(":", 1)[1].split()])
+            except ValueError:
+                raise SequenceError(f"{path}, line {line_no}: {key} must be {count} numbers") from None
+            if values.shape != (count,) or not np.all(np.isfinite(values)):
+                raise SequenceError(f"{path}, line {line_no}: {key} must be {count} finite numbers")
+            return values
+    raise SequenceError(f"{path}: no line starting with '{key}:'")
+
+
+def _rigid(path: Path) -> np.ndarray:
+    T = np.eye(4)
+    T[:3, :3] = _calib_values(path, "R", 9).reshape(3, 3)
+    T[:3, 3] = _calib_values(path, "T", 3)
+    return T
+
+
+def camera_in_imu_frame(raw_calib) -> np.ndarray:
+    """4x4 pose of the left rectified camera in the IMU frame (x forward, y left, z up)."""
+    folder = Path(raw_calib)
+    imu_to_velo = _rigid(folder / "calib_imu_to_velo.txt")
+    velo_to_cam = _rigid(folder / "calib_velo_to_cam.txt")
+    rect = np.eye(4)
+    rect[:3, :3] = _calib_values(folder / "calib_cam_to_cam.txt", "R_rect_00", 9).reshape(3, 3)
+    return np.linalg.inv(rect @ velo_to_cam @ imu_to_velo)

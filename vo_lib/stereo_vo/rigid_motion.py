@@ -1,0 +1,199 @@
+"""The general motion of a stereo camera: six degrees of freedom, refined on reprojection errors.
+
+The circular-motion model (eq. 12-17) holds for a camera above the turning axis of a robot on a
+flat floor. A car breaks all three assumptions: the camera sits ahead of the rear axle, the road
+climbs and banks, and the body pitches as the car brakes. The pipeline therefore keeps 1-point
+RANSAC (theta from eq. 14 alone, then rho) as the *outlier filter*, which is why it is fast, and
+refines the motion of its inliers here with all six degrees of freedom.
+
+A motion ``T = (R, t)`` maps a point of the previous camera frame into the current one,
+``Q = R P + t``. Its residual for one match is the reprojection error in disparity space,
+
+    r = pi(R P + t) - w',    pi(X, Y, Z) = (fx X / Z + cx,  fy Y / Z + cy,  fx b / Z),
+
+that is the error in the left image (u, v) and, through the disparity, in the right one. The
+refinement is Gauss-Newton with a rotation update on the left, ``R <- exp([dw]x) R``,
+``t <- exp([dw]x) t + dt``, and the analytic Jacobian ``dr/d(dw, dt) = dpi/dQ [-[Q]x | I]``.
+Large residuals are down-weighted (Huber), and the inliers are chosen again with the refined
+motion, so matches that the approximate planar model rejected or admitted are judged by the
+general one.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from vo_lib.camera import StereoCamera
+
+#: Huber threshold of the refinement, pixels (of the 3-vector residual's norm).
+HUBER_PIXELS = 1.0
+#: A match is an inlier of the refined motion when its reprojection error is below this (pixels).
+INLIER_PIXELS = 1.0
+ITERATIONS = 5
+ROUNDS = 3  # refine, choose the inliers again, refine again while they change
+NEAR = 0.1  # metres: points closer than this to the camera after the motion are not used
+
+
+@dataclass
+class RigidMotion:
+    """A refined 6-DoF motion ``Q = R P + t`` with its 6x6 covariance (rotation vector, t)."""
+
+    R: np.ndarray
+    t: np.ndarray
+    covariance: np.ndarray
+    inliers: np.ndarray
+    rms_pixels: float
+    success: bool = True
+
+    @property
+    def matrix(self) -> np.ndarray:
+        """4x4 ``T_curr_from_prev``."""
+        T = np.eye(4)
+        T[:3, :3], T[:3, 3] = self.R, self.t
+        return T
+
+
+def project(Q: np.ndarray, camera: StereoCamera) -> np.ndarray:
+    """``(u, v, d)`` of camera-frame points ``Q`` ``(N, 3)``."""
+    iz = 1.0 / Q[:, 2]
+    return np.column_stack(
+        [
+            camera.fx * Q[:, 0] * iz + camera.cx,
+            camera.fy * Q[:, 1] * iz + camera.cy,
+            camera.fx * camera.baseline * iz,
+        ]
+    )
+
+
+def reprojection_errors(P: np.ndarray, w_curr: np.ndarray, R, t, camera: StereoCamera) -> np.ndarray:
+    """Norm of the disparity-space residual of every match (inf behind the camera)."""
+    Q = P @ np.asarray(R).T + np.asarray(t)
+    err = np.full(len(P), np.inf)
+    ok = Q[:, 2] > NEAR
+    err[ok] = np.linalg.norm(project(Q[ok], camera) - w_curr[ok], axis=1)
+    return err
+
+
+def _normal_equations(P, w, R, t, camera, huber):
+    """``(J^T W J, J^T W r, sum of weighted squares)`` of the Huber-weighted residuals."""
+    Q = P @ R.T + t
+    X, Y, Z = Q[:, 0], Q[:, 1], Q[:, 2]
+    iz = 1.0 / Z
+    fx, fy, fb = camera.fx, camera.fy, camera.fx * camera.baseline
+    r = project(Q, camera) - w
+    e = np.linalg.norm(r, axis=1)
+    wgt = np.where(e <= huber, 1.0, huber / np.maximum(e, 1e-12))
+    # rows of dpi/dQ @ [-[Q]x | I]: d(u, v, d) / d(dw_x, dw_y, dw_z, dt_x, dt_y, dt_z)
+    ju = np.column_stack(
+        [-fx * X * Y * iz**2, fx * (1 + X * X * iz**2), -fx * Y * iz, fx * iz, 0 * iz, -fx * X * iz**2]
+    )
+    jv = np.column_stack(
+        [-fy * (1 + Y * Y * iz**2), fy * X * Y * iz**2, fy * X * iz, 0 * iz, fy * iz, -fy * Y * iz**2]
+    )
+    jd = np.column_stack([-fb * Y * iz**2, fb * X * iz**2, 0 * iz, 0 * iz, 0 * iz, -fb * iz**2])
+    A = np.zeros((6, 6))
+    g = np.zeros(6)
+    for J, res in ((ju, r[:, 0]), (jv, r[:, 1]), (jd, r[:, 2])):
+        Jw = J * wgt[:, None]
+        A += Jw.T @ J
+        g += Jw.T @ res
+    return A, g, float(np.sum(wgt * e**2))
+
+
+def _gauss_newton(P, w, R, t, camera, iterations, huber):
+    A = np.eye(6)
+    for _ in range(iterations):
+        A, g, _ = _normal_equations(P, w, R, t, camera, huber)
+        try:
+            dx = -np.linalg.solve(A, g)
+        except np.linalg.LinAlgError:
+            break
+        dR = Rotation.from_rotvec(dx[:3]).as_matrix()
+        R, t = dR @ R, dR @ t + dx[3:]
+        if np.abs(dx).max() < 1e-10:
+            break
+    return R, t
+
+
+def refine_rigid_motion(
+    w_prev,
+    w_curr,
+    camera: StereoCamera,
+    T0,
+    inliers=None,
+    *,
+    inlier_pixels: float = INLIER_PIXELS,
+    huber: float = HUBER_PIXELS,
+    iterations: int = ITERATIONS,
+    rounds: int = ROUNDS,
+    min_inliers: int = 6,
+) -> RigidMotion:
+    """Refine a motion on matches ``w_prev -> w_curr`` (disparity space) from the guess ``T0``.
+
+    Parameters
+    ----------
+    w_prev, w_curr : array_like, shape (N, 3)
+        Matches ``(u, v, d)``; ``w_prev`` is back-projected with its disparity.
+    camera : StereoCamera
+    T0 : array_like, 4x4
+        Initial ``T_curr_from_prev`` (e.g. the 1-point RANSAC motion, or the prediction).
+    inliers : array_like of bool, optional
+        The matches to start from (default: all with positive disparity).
+    inlier_pixels, huber : float
+        Reprojection error that makes an inlier; Huber threshold of the refinement.
+
+    Returns
+    -------
+    RigidMotion
+        ``success`` is False (and the guess returned) when fewer than ``min_inliers`` remain.
+    """
+    wa, wb = np.asarray(w_prev, float), np.asarray(w_curr, float)
+    T0 = np.asarray(T0, float)
+    R, t = T0[:3, :3].copy(), T0[:3, 3].copy()
+    usable = (wa[:, 2] > 0) & (wb[:, 2] > 0)
+    P = np.zeros_like(wa)
+    P[usable] = camera.backproject(wa[usable])
+    inl = usable.copy() if inliers is None else (np.asarray(inliers, bool) & usable)
+    for _ in range(max(rounds, 1)):
+        if inl.sum() < min_inliers:
+            return RigidMotion(T0[:3, :3], T0[:3, 3], np.full((6, 6), np.inf), inl, np.inf, False)
+        R, t = _gauss_newton(P[inl], wb[inl], R, t, camera, iterations, huber)
+        err = reprojection_errors(P, wb, R, t, camera)
+        new = usable & (err < inlier_pixels)
+        if np.array_equal(new, inl):
+            break
+        inl = new
+    if inl.sum() < min_inliers:
+        return RigidMotion(T0[:3, :3], T0[:3, 3], np.full((6, 6), np.inf), inl, np.inf, False)
+    A, _, _ = _normal_equations(P[inl], wb[inl], R, t, camera, np.inf)
+    res = reprojection_errors(P[inl], wb[inl], R, t, camera)
+    dof = max(3 * int(inl.sum()) - 6, 1)
+    sigma2 = float(np.sum(res**2)) / dof
+    try:
+        cov = sigma2 * np.linalg.inv(A)
+    except np.linalg.LinAlgError:
+        cov = np.full((6, 6), np.inf)
+    return RigidMotion(R, t, cov, inl, float(np.sqrt(np.mean(res**2))), True)
+
+
+def predict_features(w_prev: np.ndarray, camera: StereoCamera, T) -> tuple[np.ndarray, np.ndarray]:
+    """Predicted ``(u, v, d)`` of previous features after the motion ``T``, and which are in front."""
+    T = np.asarray(T, float)
+    Q = camera.backproject(w_prev) @ T[:3, :3].T + T[:3, 3]
+    ok = Q[:, 2] > NEAR
+    w = np.full_like(Q, np.nan)
+    w[ok] = project(Q[ok], camera)
+    return w, ok
+
+
+def scaled_motion(T, factor: float) -> np.ndarray:
+    """The motion ``T`` repeated ``factor`` times (a real power of the rigid transform)."""
+    T = np.asarray(T, float)
+    rotvec = Rotation.from_matrix(T[:3, :3]).as_rotvec()
+    out = np.eye(4)
+    out[:3, :3] = Rotation.from_rotvec(factor * rotvec).as_matrix()
+    out[:3, 3] = factor * T[:3, 3]
+    return out

@@ -1,0 +1,104 @@
+"""What carries the camera: where it is mounted, which odometry it has, which motion model fits.
+
+Two kinds of vehicle reach the pipeline:
+
+* **the crawler** of the rendered samples (seed 000): the camera sits above the turning axis and
+  the floor is flat, so the planar circular-motion model (eq. 12-17) is exact; track distances
+  come from ``odometry.txt``.
+* **a car** (KITTI): the camera is 1.6 m above the road and about a metre ahead of the axis it
+  turns about, the road climbs and banks. The motion is refined with six degrees of freedom
+  (:mod:`vo_lib.stereo_vo.rigid_motion`). Odometry comes from ``odometry.txt`` if there is one,
+  else from the GPS/IMU packets of a KITTI raw recording (``oxts.txt``: forward speed and yaw
+  rate, turned into the distances of two wheels :data:`CAR_GAUGE` apart).
+
+The vehicle's frame is x forward, y left, z up (DESIGN conventions); for a KITTI raw recording its
+origin is the IMU, which sits near the rear axle, and ``raw_calib/`` places the camera in it.
+Without ``raw_calib/`` (KITTI's odometry set) :data:`KITTI_CAMERA_IN_IMU` is used: the same
+rig's calibration rounded to centimetres.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from vo_lib.formats.kitti_raw import camera_in_imu_frame, read_oxts, wheel_distances_from_oxts
+from vo_lib.geometry import camera_mount
+from vo_lib.models.track_odometry import TrackOdometry
+
+#: Distance between the two wheels that turn speed and yaw rate into wheel distances, metres.
+#: Any positive value gives back the same speed and yaw rate; this is a mid-size car's track.
+CAR_GAUGE = 1.6
+#: Noise of a wheel distance derived from the GPS/IMU speed, per square-root metre: the OXTS
+#: unit's speed is good to a few cm/s, far better than a crawler's slipping tracks.
+CAR_DISTANCE_SIGMA = 0.005
+#: Camera position in the vehicle frame (forward, left, up), metres, for KITTI without raw_calib.
+KITTI_CAMERA_IN_IMU = (1.08, -0.31, 0.73)
+
+
+@dataclass
+class Vehicle:
+    """The rig around the camera.
+
+    Attributes
+    ----------
+    kind : str
+        ``"crawler"`` or ``"car"``.
+    mount : ndarray, 4x4
+        ``T_vehicle_camera``: the left camera's pose in the vehicle frame.
+    odometry_model : TrackOdometry
+        Gauge and noise of the odometry (seed 000, eq. 2-11).
+    odometry : ndarray (N, 2) or None
+        Left and right distances per frame (row 0 unused).
+    odometry_source : str
+        Where the odometry came from, for reports.
+    motion : str
+        The motion model that fits: ``"planar"`` (circular motion, eq. 12-17) or ``"full"`` (6-DoF).
+    """
+
+    kind: str
+    mount: np.ndarray
+    odometry_model: TrackOdometry
+    odometry: np.ndarray | None
+    odometry_source: str
+    motion: str
+
+
+def car_odometry_model() -> TrackOdometry:
+    """Two wheels :data:`CAR_GAUGE` apart: ``D + 2b`` with ``b = 0``."""
+    return TrackOdometry(track_distance=CAR_GAUGE, track_width=0.0, encoder_sigma=CAR_DISTANCE_SIGMA)
+
+
+def vehicle_of(sequence) -> Vehicle:
+    """The vehicle of a :class:`~vo_lib.formats.sequence.Sequence`, from its manifest and files."""
+    camera = sequence.manifest.get("camera", {}) if isinstance(sequence.manifest, dict) else {}
+    if "height_m" in camera:  # a rendered sample: the crawler of seed 000
+        mount = camera_mount(forward=float(camera.get("forward_m", 0.0)), height=float(camera["height_m"]))
+        model = TrackOdometry(**sequence.manifest.get("track_odometry", {}))
+        planar = camera.get("mount", "above turning axis") == "above turning axis"
+        return Vehicle(
+            "crawler", mount, model, sequence.odometry, "odometry.txt", "planar" if planar else "full"
+        )
+    root = sequence.path
+    raw_calib = root / "raw_calib"
+    if raw_calib.is_dir():
+        mount = camera_in_imu_frame(raw_calib)
+    else:
+        mount = camera_mount(
+            *KITTI_CAMERA_IN_IMU[:1], height=KITTI_CAMERA_IN_IMU[2], left=KITTI_CAMERA_IN_IMU[1]
+        )
+    model = car_odometry_model()
+    odometry, source = sequence.odometry, "odometry.txt"
+    oxts = root / "oxts.txt"
+    if odometry is None and oxts.is_file():
+        packets = read_oxts(oxts)
+        if len(packets) != len(sequence):
+            from vo_lib.formats.sequence import SequenceError
+
+            raise SequenceError(f"{oxts} has {len(packets)} packets but there are {len(sequence)} images")
+        odometry = wheel_distances_from_oxts(packets, sequence.times, CAR_GAUGE)
+        source = "oxts.txt (speed and yaw rate)"
+    elif odometry is None:
+        source = "none"
+    return Vehicle("car", mount, model, odometry, source, "full")
