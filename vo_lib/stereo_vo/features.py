@@ -73,8 +73,29 @@ def best_matches(
 
     For each ``a`` the nearest ``b`` is kept if it is within ``max_distance``, if the second
     nearest is farther by the ``ratio`` test, and (with ``mutual``) if no other ``a`` is nearer
-    to that ``b``. Returns ``(index_a, index_b, distance)``.
+    to that ``b``. Returns ``(index_a, index_b, distance)``, ordered by ``b`` with ``mutual``,
+    else by ``a``. Runs compiled (:mod:`.matching_core`); :func:`best_matches_reference` is the
+    same rule in NumPy, which the tests hold it to.
     """
+    from vo_lib.stereo_vo.matching_core import best_matches_core
+
+    ia, ib, dist = np.asarray(ia, np.int64), np.asarray(ib, np.int64), np.asarray(dist)
+    return best_matches_core(
+        ia, ib, dist, int(n_a), int(n_b), float(max_distance), float(ratio), bool(mutual)
+    )
+
+
+def best_matches_reference(
+    ia,
+    ib,
+    dist,
+    n_a: int,
+    n_b: int,
+    max_distance: int = MAX_HAMMING,
+    ratio: float = RATIO,
+    mutual: bool = True,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`best_matches` written with NumPy sorts: the rule, readable, and the tests' reference."""
     ia, ib, dist = np.asarray(ia), np.asarray(ib), np.asarray(dist)
     if len(dist) == 0:
         empty = np.zeros(0, int)
@@ -159,9 +180,15 @@ def parabola_offset(c_minus: np.ndarray, c_zero: np.ndarray, c_plus: np.ndarray)
 
 
 def subpixel_disparity(
-    left: np.ndarray, right: np.ndarray, u: np.ndarray, v: np.ndarray, d: np.ndarray
+    left: np.ndarray, right: np.ndarray, u: np.ndarray, v: np.ndarray, d: np.ndarray, search: int = 1
 ) -> np.ndarray:
-    """Refine integer disparities by a parabola through the SAD cost at d-1, d, d+1 (7x7 patches)."""
+    """Refine disparities by the equiangular fit of the SAD cost (7x7 patches) around its minimum.
+
+    The costs are taken at ``d - search ... d + search`` (whole pixels about the rounded ``d``);
+    the fit uses the lowest inner one and its two neighbours. ``search = 1`` refines within half a
+    pixel; a larger search also corrects a coarse disparity (from corners found on an upper pyramid
+    level, whose positions sit on a coarser grid).
+    """
     h, w = left.shape
     r = PATCH_HALF
     offs = np.arange(-r, r + 1)
@@ -171,8 +198,8 @@ def subpixel_disparity(
         & (vi + r < h)
         & (ui - r >= 0)
         & (ui + r < w)
-        & (ui - di - r - 1 >= 0)
-        & (ui - di + r + 1 < w)
+        & (ui - di - r - search >= 0)
+        & (ui - di + r + search < w)
     )
     out = d.astype(float).copy()
     if not ok.any():
@@ -180,12 +207,17 @@ def subpixel_disparity(
     rows = (vi[ok, None, None] + offs[None, :, None]).repeat(2 * r + 1, axis=2)
     cols = ui[ok, None, None] + offs[None, None, :]
     patch = left[rows, cols].astype(np.int32)
-    costs = [
-        np.abs(patch - right[rows, cols - di[ok, None, None] - k].astype(np.int32)).sum(axis=(1, 2))
-        for k in (-1, 0, 1)
-    ]
-    # cost index k corresponds to disparity d + k
-    out[ok] = di[ok] + parabola_offset(*costs)
+    # costs[k + search] belongs to disparity d + k
+    costs = np.stack(
+        [
+            np.abs(patch - right[rows, cols - di[ok, None, None] - k].astype(np.int32)).sum(axis=(1, 2))
+            for k in range(-search, search + 1)
+        ]
+    )
+    best = 1 + np.argmin(costs[1:-1], axis=0)  # the lowest inner cost
+    pick = np.arange(costs.shape[1])
+    offset = parabola_offset(costs[best - 1, pick], costs[best, pick], costs[best + 1, pick])
+    out[ok] = di[ok] + (best - search) + offset
     return out
 
 

@@ -44,6 +44,9 @@ ROW_TOLERANCE = 1.5  # pixels: ORB keypoints of upper levels sit on a coarser gr
 MAX_DISPARITY_FRACTION = 0.13  # of the image width: 160 px at 1242, about 2 m for KITTI's rig
 MAX_HAMMING = 64
 RATIO = 0.9
+#: Whole pixels searched either side of a match's disparity before the sub-pixel fit: corners of
+#: the upper pyramid levels sit on a grid 1.2-1.44 px wide.
+DISPARITY_SEARCH = 2
 
 
 class PyramidFrontEnd:
@@ -113,7 +116,7 @@ class PyramidFrontEnd:
             ia, ib, hamming(dl[ia], dr[ib]), len(pl), len(pr), max_distance=MAX_HAMMING, ratio=RATIO
         )
         u, v = pl[a, 0].astype(float), pl[a, 1].astype(float)
-        d = subpixel_disparity(left, right, u, v, (pl[a, 0] - pr[b, 0]).astype(float))
+        d = subpixel_disparity(left, right, u, v, (pl[a, 0] - pr[b, 0]).astype(float), DISPARITY_SEARCH)
         keep = d > 0.3
         timings["stereo_match"] = (time.perf_counter() - t1) * 1e3
         return StereoFeatures(np.column_stack([u, v, d])[keep], dl[a][keep], timings, left)

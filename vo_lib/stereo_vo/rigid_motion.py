@@ -23,6 +23,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import cv2
 import numpy as np
 from scipy.spatial.transform import Rotation
 
@@ -32,9 +33,16 @@ from vo_lib.camera import StereoCamera
 HUBER_PIXELS = 1.0
 #: A match is an inlier of the refined motion when its reprojection error is below this (pixels).
 INLIER_PIXELS = 1.0
-ITERATIONS = 5
+ITERATIONS = 4
 ROUNDS = 3  # refine, choose the inliers again, refine again while they change
 NEAR = 0.1  # metres: points closer than this to the camera after the motion are not used
+CONVERGED = 1e-8  # radians and metres: an update smaller than this ends the iterations
+
+
+def rotation_matrix(rotvec) -> np.ndarray:
+    """``exp([w]x)`` of a rotation vector (Rodrigues' formula, OpenCV's: far cheaper per call
+    than SciPy's for the single small rotations of an iteration)."""
+    return cv2.Rodrigues(np.asarray(rotvec, dtype=np.float64).reshape(3, 1))[0]
 
 
 @dataclass
@@ -111,9 +119,9 @@ def _gauss_newton(P, w, R, t, camera, iterations, huber):
             dx = -np.linalg.solve(A, g)
         except np.linalg.LinAlgError:
             break
-        dR = Rotation.from_rotvec(dx[:3]).as_matrix()
+        dR = rotation_matrix(dx[:3])
         R, t = dR @ R, dR @ t + dx[3:]
-        if np.abs(dx).max() < 1e-10:
+        if np.abs(dx).max() < CONVERGED:
             break
     return R, t
 

@@ -48,7 +48,12 @@ from vo_lib.stereo_vo.kalman import VoKalmanFilter
 from vo_lib.stereo_vo.pipeline import FrameDiagnostics, FrameTimings
 from vo_lib.stereo_vo.pyramid_features import PyramidFrontEnd
 from vo_lib.stereo_vo.ransac import one_point_ransac
-from vo_lib.stereo_vo.rigid_motion import predict_features, refine_rigid_motion, scaled_motion
+from vo_lib.stereo_vo.rigid_motion import (
+    predict_features,
+    refine_rigid_motion,
+    rotation_matrix,
+    scaled_motion,
+)
 from vo_lib.stereo_vo.temporal import match_to_prediction
 
 MIN_FEATURES = 20
@@ -111,8 +116,6 @@ def chord_covariance(T_cam: np.ndarray, covariance6: np.ndarray, mount: np.ndarr
     """3x3 covariance of ``(theta, rho, sideways)`` of the vehicle, propagated from the 6x6
     covariance of the camera motion (rotation vector on the left, translation) by central
     differences."""
-    from scipy.spatial.transform import Rotation
-
     J = np.zeros((3, 6))
     h = 1e-6
     for k in range(6):
@@ -120,7 +123,7 @@ def chord_covariance(T_cam: np.ndarray, covariance6: np.ndarray, mount: np.ndarr
         delta[k] = h
         out = []
         for sign in (1.0, -1.0):
-            dR = Rotation.from_rotvec(sign * delta[:3]).as_matrix()
+            dR = rotation_matrix(sign * delta[:3])
             T = np.eye(4)
             T[:3, :3] = dR @ T_cam[:3, :3]
             T[:3, 3] = dR @ T_cam[:3, 3] + sign * delta[3:]

@@ -27,6 +27,7 @@ MAX_RADIUS = 120.0  # pixels
 PATCH_HALF = 3  # 7x7 patches for the sub-pixel refinement of matches
 NEAR = 0.1  # metres: predicted points nearer than this are not matched
 PREDICTED_RATIO = 0.9  # ratio test of match_to_prediction (pyramid features, larger motions)
+DISPARITY_WINDOW = 0.3  # of the predicted disparity, plus 2 px
 
 
 @dataclass(frozen=True)
@@ -178,6 +179,8 @@ def match_to_prediction(
         ia, ib = window_pairs(predicted[keep, 1], curr.w[:, 1], radius[keep])
         ia = keep[ia]
         inside = np.abs(curr.w[ib, 0] - predicted[ia, 0]) <= radius[ia]
+        # and a disparity window: the disparity is predicted as well as the position, relatively
+        inside &= np.abs(curr.w[ib, 2] - predicted[ia, 2]) <= 2.0 + DISPARITY_WINDOW * predicted[ia, 2]
         ia, ib = ia[inside], ib[inside]
     dist = hamming(prev.descriptors[ia], curr.descriptors[ib])
     a, b, _ = best_matches(ia, ib, dist, n_prev, n_curr, ratio=PREDICTED_RATIO)
