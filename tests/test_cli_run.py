@@ -27,6 +27,7 @@ def test_run_writes_every_output(workdir):
     assert proc.returncode == 0, proc.stderr
     out = workdir / "out"
     assert sorted(p.name for p in out.iterdir()) == [
+        ".vo_lib_output.json",
         "diagnostics.csv",
         "poses.txt",
         "timings.csv",

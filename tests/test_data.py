@@ -80,6 +80,7 @@ def test_generate_command(tmp_path):
     assert proc.returncode == 0, proc.stderr
     assert f"wrote {out}" in proc.stdout
     assert sorted(p.name for p in out.iterdir()) == [
+        ".vo_lib_output.json",
         "calib.txt",
         "image_0",
         "image_1",

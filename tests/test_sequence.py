@@ -76,19 +76,21 @@ def test_unequal_image_counts(tmp_path):
 def test_unreadable_and_empty_images(tmp_path):
     d = copy_fixture(tmp_path)
     (d / "image_0" / "000000.png").write_bytes(b"")
-    with pytest.raises(SequenceError, match=r"image_0/000000.png: cannot read the image"):
+    with pytest.raises(SequenceError, match=r"image_0/000000.png, frame 0: empty file"):
         read_sequence(d)
     d2 = copy_fixture(tmp_path / "b")
     (d2 / "image_1" / "000002.png").write_bytes(b"not a png at all")
-    seq = read_sequence(d2)  # only the first frame is read up front
-    with pytest.raises(SequenceError, match=r"image_1/000002.png: cannot read the image"):
-        seq.pair(2)
+    # every header is checked when the sequence opens, not when the frame is reached
+    with pytest.raises(SequenceError, match=r"image_1/000002.png, frame 2: cannot read the image"):
+        read_sequence(d2)
 
 
 def test_left_and_right_of_different_sizes(tmp_path):
     d = copy_fixture(tmp_path)
     cv2.imwrite(str(d / "image_1" / "000000.png"), np.zeros((19, 60), np.uint8))
-    with pytest.raises(SequenceError, match=r"image_1/000000.png is 60x19 but .*image_0/000000.png is 62x19"):
+    with pytest.raises(
+        SequenceError, match=r"image_1/000000.png, frame 0: 60x19 image, but .*image_0/000000.png is 62x19"
+    ):
         read_sequence(d)
 
 
@@ -100,7 +102,7 @@ def test_colour_is_converted_and_16_bit_is_refused(tmp_path):
     left, _ = read_sequence(d).pair(1)
     assert left.shape == (19, 62) and 100 < left.mean() < 150  # grey of pure green
     cv2.imwrite(str(d / "image_0" / "000000.png"), np.zeros((19, 62), np.uint16))
-    with pytest.raises(SequenceError, match=r"000000.png: uint16 image; expected 8-bit grey"):
+    with pytest.raises(SequenceError, match=r"000000.png, frame 0: 16-bit image; expected 8-bit grey"):
         read_sequence(d)
 
 

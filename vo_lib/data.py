@@ -2,7 +2,10 @@
 
 ``load_sequence("indoor_linear")`` renders the named sample once (deterministically) into the data
 folder and loads it; ``load_sequence("/path/to/kitti/00")`` loads any folder in the KITTI layout.
-The data folder is ``$VO_LIB_DATA`` if set, else the repository's ``data/``.
+The data folder is ``$VO_LIB_DATA`` if set, else the repository's ``data/`` (in a checkout), else
+``vo_lib/data`` in the user's cache folder (an installed package). A sample is written there
+under the rules of :mod:`vo_lib.formats.outputs`: a folder of that name that this package did not
+write is never replaced.
 """
 
 from __future__ import annotations
@@ -17,7 +20,13 @@ from vo_lib.sim.samples import DEFAULT_RESOLUTION, SAMPLES, fingerprint, generat
 
 def data_dir() -> Path:
     env = os.environ.get("VO_LIB_DATA")
-    return Path(env) if env else Path(__file__).resolve().parents[1] / "data"
+    if env:
+        return Path(env)
+    checkout = Path(__file__).resolve().parents[1] / "data"
+    if checkout.is_dir():
+        return checkout
+    cache = os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache"
+    return Path(cache) / "vo_lib" / "data"
 
 
 def sample_path(name: str, frames: int | None = None, resolution=DEFAULT_RESOLUTION) -> Path:
@@ -39,13 +48,20 @@ def _up_to_date(path: Path, name: str) -> bool:
 
 
 def load_sequence(
-    name_or_path, frames: int | None = None, resolution=DEFAULT_RESOLUTION, progress: bool = True
+    name_or_path,
+    frames: int | None = None,
+    resolution=DEFAULT_RESOLUTION,
+    progress: bool = True,
+    odometry: bool = True,
 ) -> Sequence:
-    """Load a named sample (generating it on first use) or a KITTI-layout folder."""
+    """Load a named sample (generating it on first use) or a KITTI-layout folder.
+
+    ``odometry=False`` ignores the sequence's ``odometry.txt`` (it is not read at all).
+    """
     key = str(name_or_path)
     if key in SAMPLES and not Path(key).exists():
         path = sample_path(key, frames, resolution)
         if not _up_to_date(path, key):
             generate(key, path, frames, tuple(resolution), progress)
-        return read_sequence(path)
-    return read_sequence(Path(key))
+        return read_sequence(path, odometry=odometry)
+    return read_sequence(Path(key), odometry=odometry)

@@ -6,12 +6,29 @@ run            the stereo VO pipeline on a sample or a KITTI-layout folder (defa
 evaluate       trajectory errors of an estimate against ground truth (KITTI or TUM files)
 generate NAME  render a named sample sequence (KITTI layout, with ground truth and odometry)
 bench NAME     time one part of the library against its baseline (``bench --help`` lists them)
+
+Every problem with the input or the arguments prints one line on stderr and exits with status 2;
+Ctrl-C (SIGINT) or SIGTERM removes what was half-written, prints one line and exits with 130 or
+143. Output folders follow the rules of :mod:`vo_lib.formats.outputs` (``--out``, ``--force``).
 """
 
 from __future__ import annotations
 
 import argparse
+import math
+import signal
 import sys
+
+#: Bounds of ``generate --resolution`` (each side, pixels): 32 keeps a few FAST corners in view,
+#: 4096 keeps a rendered frame pair and its buffers within a few hundred MB.
+MIN_SIDE, MAX_SIDE = 32, 4096
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse with errors in one line (no usage block): ``PROG: error: MESSAGE``."""
+
+    def error(self, message: str):
+        self.exit(2, f"{self.prog}: error: {message}\n")
 
 
 def _resolution(text: str) -> tuple[int, int]:
@@ -19,72 +36,175 @@ def _resolution(text: str) -> tuple[int, int]:
         w, h = (int(x) for x in text.lower().split("x"))
     except ValueError:
         raise argparse.ArgumentTypeError(f"expected WIDTHxHEIGHT, e.g. 640x480; got {text!r}") from None
-    if w < 32 or h < 32:
-        raise argparse.ArgumentTypeError(f"resolution must be at least 32x32; got {text!r}")
+    if not (MIN_SIDE <= w <= MAX_SIDE and MIN_SIDE <= h <= MAX_SIDE):
+        raise argparse.ArgumentTypeError(f"each side must lie in {MIN_SIDE}..{MAX_SIDE} pixels; got {text!r}")
     return w, h
+
+
+def _count(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number; got {text!r}") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"expected a number of frames of at least 1; got {text!r}")
+    return value
+
+
+def _seed(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number >= 0; got {text!r}") from None
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"expected a whole number >= 0; got {text!r}")
+    return value
+
+
+def _segments(text: str) -> tuple[float, ...]:
+    try:
+        lengths = tuple(float(x) for x in text.split(","))
+    except ValueError:
+        lengths = ()
+    if not lengths or not all(math.isfinite(x) and x > 0 for x in lengths):
+        raise argparse.ArgumentTypeError(
+            f"expected comma-separated positive lengths in metres, e.g. 1,2,5; got {text!r}"
+        )
+    return lengths
 
 
 def build_parser() -> argparse.ArgumentParser:
     from vo_lib.cli.bench import BENCHES
 
-    parser = argparse.ArgumentParser(prog="python -m vo_lib", description=__doc__.split("\n")[0])
+    parser = _Parser(prog="python -m vo_lib", description=__doc__.split("\n")[0])
     sub = parser.add_subparsers(dest="command", required=True)
     from vo_lib.sim.samples import SAMPLES
 
     run = sub.add_parser("run", help="run the stereo visual odometry pipeline")
     run.add_argument("--sequence", help="sample name or KITTI-layout folder (default: indoor_linear)")
-    run.add_argument("--out", help="output folder (default: runs/NAME)")
-    run.add_argument("--frames", type=int, help="process only the first N frames")
+    run.add_argument(
+        "--out", help="output folder (default: runs/NAME); new, empty, or written by an earlier run"
+    )
+    run.add_argument(
+        "--force", action="store_true", help="replace --out even if this program did not write it"
+    )
+    run.add_argument("--frames", type=_count, help="process only the first N frames")
     run.add_argument(
         "--no-odometry", action="store_true", help="ignore odometry.txt (constant-velocity prediction)"
     )
-    run.add_argument("--seed", type=int, default=0, help="seed of the RANSAC draws")
+    run.add_argument("--seed", type=_seed, default=0, help="seed of the RANSAC draws (>= 0)")
     ev = sub.add_parser("evaluate", help="ATE, RPE and KITTI segment errors of an estimate")
     ev.add_argument("--gt", required=True, help="ground-truth poses (KITTI poses.txt or TUM)")
     ev.add_argument("--est", required=True, help="estimated poses (KITTI or TUM)")
     ev.add_argument(
-        "--segments", help="comma-separated segment lengths in metres (default: KITTI's 100..800)"
+        "--segments",
+        type=_segments,
+        help="comma-separated segment lengths in metres (default: KITTI's 100..800)",
     )
     gen = sub.add_parser("generate", help="render a named sample sequence")
     gen.add_argument("name", choices=sorted(SAMPLES), help="which sample")
     gen.add_argument("--out", help="output folder (default: data/NAME)")
-    gen.add_argument("--frames", type=int, help="keep only the first N frames")
     gen.add_argument(
-        "--resolution", type=_resolution, default="640x480", help="WIDTHxHEIGHT (default 640x480)"
+        "--force", action="store_true", help="replace --out even if this program did not write it"
+    )
+    gen.add_argument("--frames", type=_count, help="keep only the first N frames")
+    gen.add_argument(
+        "--resolution",
+        type=_resolution,
+        default="640x480",
+        help=f"WIDTHxHEIGHT, each side {MIN_SIDE}..{MAX_SIDE} (default 640x480)",
     )
     bench = sub.add_parser("bench", help="time a part of the library against a baseline")
     bench.add_argument("name", choices=sorted(BENCHES), help="which benchmark")
     return parser
 
 
-def main(argv: list[str] | None = None) -> int:
-    parser = build_parser()
-    args = parser.parse_args(argv)
-    if args.command in ("run", "evaluate"):
-        from vo_lib.cli.run import UsageError, evaluate_command, run_command
+class _Stopped(BaseException):
+    """Raised by the SIGTERM handler, so that ``finally`` blocks remove half-written output."""
 
-        try:
-            if args.command == "run":
-                run_command(args.sequence, args.out, args.frames, args.no_odometry, args.seed)
-            else:
-                evaluate_command(args.gt, args.est, args.segments)
-        except UsageError as exc:
-            parser.exit(2, f"python -m vo_lib {args.command}: error: {exc}\n")
+    def __init__(self, signum: int):
+        super().__init__(signum)
+        self.signum = signum
+
+
+def _stop(signum, frame):
+    raise _Stopped(signum)
+
+
+def _one_line(text: str) -> str:
+    return " ".join(str(text).splitlines())
+
+
+def _generate(args) -> None:
+    from vo_lib.cli.run import UsageError
+    from vo_lib.data import sample_path
+    from vo_lib.formats.outputs import check_target
+    from vo_lib.sim.samples import generate
+
+    out = args.out or sample_path(args.name, args.frames, args.resolution)
+    check_target(out, force=args.force, option="--out")  # before rendering anything
+    try:
+        path = generate(
+            args.name, out, args.frames, args.resolution, progress=sys.stderr.isatty(), force=args.force
+        )
+    except ValueError as exc:  # frames beyond the sample
+        raise UsageError(str(exc)) from None
+    print(f"wrote {path}")
+
+
+def _dispatch(args) -> None:
+    if args.command == "run":
+        from vo_lib.cli.run import run_command
+
+        run_command(args.sequence, args.out, args.frames, args.no_odometry, args.seed, args.force)
+    elif args.command == "evaluate":
+        from vo_lib.cli.run import evaluate_command
+
+        evaluate_command(args.gt, args.est, args.segments)
     elif args.command == "generate":
-        from vo_lib.data import sample_path
-        from vo_lib.sim.samples import generate
-
-        out = args.out or sample_path(args.name, args.frames, args.resolution)
-        try:
-            path = generate(args.name, out, args.frames, args.resolution)
-        except (ValueError, OSError) as exc:
-            parser.exit(2, f"python -m vo_lib generate: error: {exc}\n")
-        print(f"wrote {path}")
+        _generate(args)
     elif args.command == "bench":
         from vo_lib.cli.bench import BENCHES
 
         BENCHES[args.name]()
-    return 0
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Parse ``argv`` and run the command; returns the exit status (argparse exits with 2 itself)."""
+    import threading
+
+    handle_term = threading.current_thread() is threading.main_thread()
+    previous = signal.signal(signal.SIGTERM, _stop) if handle_term else None
+    command = "python -m vo_lib"
+    try:
+        parser = build_parser()
+        args = parser.parse_args(argv)
+        command = f"{parser.prog} {args.command}"
+        from vo_lib.cli.run import UsageError
+        from vo_lib.formats.outputs import OutputError
+        from vo_lib.formats.poses import TrajectoryError
+        from vo_lib.formats.sequence import SequenceError
+
+        try:
+            _dispatch(args)
+        except (UsageError, OutputError, SequenceError, TrajectoryError) as exc:
+            print(f"{command}: error: {_one_line(exc)}", file=sys.stderr)
+            return 2
+        except OSError as exc:  # e.g. a full disk while writing: the output was not put in place
+            where = f"{exc.filename}: " if exc.filename else ""
+            print(f"{command}: error: {_one_line(where + (exc.strerror or str(exc)))}", file=sys.stderr)
+            return 2
+        return 0
+    except KeyboardInterrupt:
+        print(f"{command}: interrupted (Ctrl-C); nothing half-written is left", file=sys.stderr)
+        return 130
+    except _Stopped as stop:
+        name = signal.Signals(stop.signum).name
+        print(f"{command}: stopped by {name}; nothing half-written is left", file=sys.stderr)
+        return 128 + stop.signum
+    finally:
+        if handle_term:
+            signal.signal(signal.SIGTERM, previous if previous is not None else signal.SIG_DFL)
 
 
 if __name__ == "__main__":

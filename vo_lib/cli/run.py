@@ -1,26 +1,31 @@
 """``python -m vo_lib run`` and ``python -m vo_lib evaluate``: the pipeline as a command.
 
 ``run`` writes, into ``--out`` (default ``runs/NAME``): ``poses.txt`` (KITTI), ``trajectory.tum``
-(TUM, readable by evo), ``timings.csv``, ``diagnostics.csv`` and ``trajectory.png``, and prints a
-timing table like the paper's Table 1 and, where the sequence has ground truth, the errors. All
-files go to a temporary folder first, renamed into place at the end, so a failed or interrupted
-run leaves nothing half-written. Bad arguments print one line and exit with status 2.
+(TUM, readable by evo), ``timings.csv``, ``diagnostics.csv``, ``trajectory.png`` and the marker
+``.vo_lib_output.json`` (how the run was made), and prints a timing table like the paper's Table 1
+and, where the sequence has ground truth, the errors.
+
+Outputs follow :mod:`vo_lib.formats.outputs`: ``--out`` must be new, empty or an earlier output
+of this program (``--force`` replaces any other folder, but never the input sequence, a folder
+above or inside it, the current or the home folder); every file goes to a temporary folder first,
+renamed into place at the end, so a failed or interrupted run leaves nothing half-written and the
+previous output untouched. An image that cannot be decoded mid-sequence stops the run the same
+way: one line naming the file and frame, nothing written. Bad arguments and bad input print one
+line and exit with status 2.
 """
 
 from __future__ import annotations
 
 import csv
-import shutil
 import sys
-import tempfile
 from dataclasses import asdict, fields
 from pathlib import Path
 
 import numpy as np
 
 from vo_lib.evaluation import ate_planar, kitti_segment_errors, rpe
+from vo_lib.formats.outputs import OutputFolder, notice
 from vo_lib.formats.poses import read_trajectory, write_kitti_poses, write_tum
-from vo_lib.formats.sequence import replace_folder
 from vo_lib.geometry import camera_mount, camera_poses_from_planar, planar_from_camera_poses, wrap_angle
 from vo_lib.sim.samples import CAMERA_HEIGHT, SAMPLES
 from vo_lib.stereo_vo.pipeline import FrameDiagnostics, FrameTimings, PipelineResult, run_sequence
@@ -34,36 +39,37 @@ class UsageError(Exception):
     """A bad argument: reported in one line, exit status 2."""
 
 
-def resolve_sequence(name_or_path: str, frames: int | None):
-    """A loaded sequence for a sample name (generated on first use) or a KITTI-layout folder."""
-    from vo_lib.data import load_sequence
-    from vo_lib.formats.sequence import SequenceError
+def input_path(name_or_path: str, frames: int | None) -> tuple[Path, int | None]:
+    """The folder a run reads (a sample's cache folder, or the given folder) and the frame count
+    to ask for (``--frames`` beyond a sample's length asks for the whole sample, with a notice)."""
+    from vo_lib.data import sample_path
+    from vo_lib.sim.samples import get_sample
 
-    if name_or_path not in SAMPLES and not Path(name_or_path).exists():
+    if name_or_path in SAMPLES and not Path(name_or_path).exists():
+        full = get_sample(name_or_path).frames
+        if frames is not None and frames > full:
+            notice(f"--frames {frames}: sample {name_or_path} has {full} frames; running all {full}")
+            frames = None
+        return sample_path(name_or_path, frames), frames
+    if not Path(name_or_path).exists():
         raise UsageError(
             f"--sequence {name_or_path!r}: neither a sample name ({', '.join(SAMPLES)}) "
             "nor an existing folder"
         )
-    try:
-        return load_sequence(name_or_path, frames=frames if name_or_path in SAMPLES else None)
-    except SequenceError as exc:
-        raise UsageError(f"--sequence {name_or_path}: {exc}") from None
+    return Path(name_or_path), frames
 
 
-def prepare_output(out: Path) -> tuple[Path, Path | None]:
-    """Check that ``out`` can be written; return a fresh temporary folder beside it and the first
-    folder this created (to remove if the run fails), or None."""
-    if out.exists() and not out.is_dir():
-        raise UsageError(f"--out {out}: exists and is not a folder")
-    created = out.parent
-    while not created.parent.exists() and created.parent != created:
-        created = created.parent
-    created = None if created.exists() else created
-    try:
-        out.parent.mkdir(parents=True, exist_ok=True)
-        return Path(tempfile.mkdtemp(prefix=f".{out.name}.", suffix=".tmp", dir=out.parent)), created
-    except OSError as exc:
-        raise UsageError(f"--out {out}: cannot write there ({exc.strerror or exc})") from None
+def resolve_sequence(name_or_path: str, frames: int | None, odometry: bool = True):
+    """A loaded sequence for a sample name (generated on first use) or a KITTI-layout folder."""
+    from vo_lib.data import load_sequence
+
+    _, frames = input_path(name_or_path, frames)
+    return load_sequence(
+        name_or_path,
+        frames=frames if name_or_path in SAMPLES else None,
+        odometry=odometry,
+        progress=sys.stderr.isatty(),
+    )
 
 
 def _write_csv(path: Path, rows, cls) -> None:
@@ -154,17 +160,31 @@ def print_error_table(report: dict, flagged: int, rpe_m: float) -> None:
 
 
 def run_command(
-    sequence: str | None, out: str | None, frames: int | None, no_odometry: bool, seed: int = 0
+    sequence: str | None,
+    out: str | None,
+    frames: int | None,
+    no_odometry: bool,
+    seed: int = 0,
+    force: bool = False,
 ) -> dict:
     """Run the pipeline and write its outputs; returns the error report (empty without truth)."""
     name = sequence or DEFAULT_SEQUENCE
     if frames is not None and frames < 2:
         raise UsageError(f"--frames {frames}: need at least 2 frames")
+    if seed < 0:
+        raise UsageError(f"--seed {seed}: expected a whole number >= 0")
+    source, _ = input_path(name, frames)
     out_dir = Path(out) if out else Path("runs") / Path(name).name
-    tmp, created = prepare_output(out_dir)
-    finished = False
-    try:
-        seq = resolve_sequence(name, frames)
+    from vo_lib.data import data_dir
+
+    keep = {data_dir(): "the sample data folder"}
+    with OutputFolder(
+        out_dir, "vo_lib run", force=force, inputs=[source], keep=keep, option="--out"
+    ) as output:
+        tmp = output.path
+        seq = resolve_sequence(name, frames, odometry=not no_odometry)
+        if frames is not None and frames > len(seq):
+            notice(f"--frames {frames}: {seq.path} has {len(seq)} frames; running all {len(seq)}")
         n = len(seq) if frames is None else min(frames, len(seq))
         mount = camera_mount(height=CAMERA_HEIGHT)
         result = run_sequence(
@@ -188,31 +208,33 @@ def run_command(
             report = error_report(result, truth, odo)
             rpe_m = rpe(seq.poses[:n], poses)[0].rmse
             print_error_table(report, len(result.flagged), rpe_m)
-        replace_folder(tmp, out_dir)
-        print(f"\nwrote {out_dir}/: poses.txt trajectory.tum timings.csv diagnostics.csv trajectory.png")
-        finished = True
-        return report
-    finally:
-        if tmp.exists():
-            shutil.rmtree(tmp, ignore_errors=True)
-        if not finished and created is not None:
-            shutil.rmtree(created, ignore_errors=True)
+        output.commit(sequence=str(seq.path.resolve()), frames=n, seed=seed, odometry=not no_odometry)
+    print(f"\nwrote {out_dir}/: poses.txt trajectory.tum timings.csv diagnostics.csv trajectory.png")
+    return report
 
 
-def evaluate_command(gt: str, est: str, segments: str | None) -> None:
-    """Print ATE, RPE and segment errors of two trajectory files (KITTI or TUM)."""
+def evaluate_command(gt: str, est: str, segments=None) -> None:
+    """Print ATE, RPE and segment errors of two trajectory files (KITTI or TUM).
+
+    ``segments`` are lengths in metres (a comma-separated string or numbers), each positive.
+    """
     from vo_lib.evaluation import ate
 
-    try:
-        _, G = read_trajectory(gt)
-        _, E = read_trajectory(est)
-        if len(G) != len(E):
-            raise ValueError(f"--gt has {len(G)} poses but --est has {len(E)}")
-    except (OSError, ValueError) as exc:
-        raise UsageError(str(exc)) from None
-    lengths = (
-        tuple(float(x) for x in segments.split(",")) if segments else (100, 200, 300, 400, 500, 600, 700, 800)
-    )
+    _, G = read_trajectory(gt, min_poses=2)
+    _, E = read_trajectory(est, min_poses=2)
+    if len(G) != len(E):
+        raise UsageError(f"--gt {gt} has {len(G)} poses but --est {est} has {len(E)}; expected equal counts")
+    if segments is None:
+        lengths = (100, 200, 300, 400, 500, 600, 700, 800)
+    else:
+        try:
+            lengths = tuple(
+                float(x) for x in (segments.split(",") if isinstance(segments, str) else segments)
+            )
+        except ValueError:
+            lengths = ()
+        if not lengths or not all(np.isfinite(x) and x > 0 for x in lengths):
+            raise UsageError(f"--segments {segments}: expected comma-separated positive lengths in metres")
     a, _ = ate(G, E)
     r, _ = rpe(G, E)
     ra, _ = rpe(G, E, rotation=True)

@@ -26,28 +26,83 @@ def write_tum(path, times, poses) -> None:
     Path(path).write_text("".join(" ".join(f"{v:.9f}" for v in row) + "\n" for row in rows))
 
 
-def read_trajectory(path) -> tuple[np.ndarray | None, np.ndarray]:
-    """Read a KITTI pose file (12 numbers a line) or a TUM file (8); returns ``(times, poses)``."""
+class TrajectoryError(ValueError):
+    """A trajectory file that cannot be read: missing, not text, or a malformed line (named)."""
+
+
+#: Largest entry of ``R^T R - I`` accepted for the rotation part of a pose (files round numbers).
+ROTATION_TOLERANCE = 1e-2
+#: Largest coordinate accepted (m): beyond it, squared distances overflow in the alignment.
+MAX_POSITION = 1e9
+
+
+def rotation_problem(R: np.ndarray) -> str | None:
+    """None if the 3x3 ``R`` is a rotation within :data:`ROTATION_TOLERANCE`, else what is wrong."""
+    with np.errstate(all="ignore"):  # huge entries overflow: not a rotation either
+        off = float(np.max(np.abs(R.T @ R - np.eye(3))))
+    if not off <= ROTATION_TOLERANCE:
+        return f"the first three columns are not a rotation matrix (R^T R differs from I by {off:.3g})"
+    if np.linalg.det(R) < 0:
+        return "the first three columns are a reflection, not a rotation (determinant -1)"
+    return None
+
+
+def read_trajectory(path, min_poses: int = 1) -> tuple[np.ndarray | None, np.ndarray]:
+    """Read a KITTI pose file (12 numbers a line) or a TUM file (8); returns ``(times, poses)``.
+
+    Empty lines and lines starting with ``#`` are skipped. Every other line must hold finite
+    numbers, a rotation (KITTI) or a non-zero quaternion (TUM), and a position within
+    :data:`MAX_POSITION`; any problem, and a file of fewer
+    than ``min_poses`` poses, raises one :class:`TrajectoryError` naming the file and line.
+    """
     path = Path(path)
     if not path.is_file():
-        raise FileNotFoundError(f"{path}: no such trajectory file")
-    rows = []
-    for n, line in enumerate(path.read_text().splitlines(), start=1):
+        what = "a folder, not a trajectory file" if path.is_dir() else "no such trajectory file"
+        raise TrajectoryError(f"{path}: {what}")
+    try:
+        text = path.read_bytes().decode("utf-8-sig")
+    except OSError as exc:
+        raise TrajectoryError(f"{path}: cannot read ({exc.strerror or exc})") from None
+    except UnicodeDecodeError as exc:
+        raise TrajectoryError(f"{path}: not a text file (byte {exc.start} is not UTF-8)") from None
+    rows, lines = [], []
+    for n, line in enumerate(text.split("\n"), start=1):
         if not line.strip() or line.lstrip().startswith("#"):
             continue
         try:
             values = [float(v) for v in line.split()]
         except ValueError:
-            raise ValueError(f"{path}, line {n}: not a row of numbers") from None
+            raise TrajectoryError(f"{path}, line {n}: not a row of numbers") from None
         if len(values) not in (8, 12) or (rows and len(values) != len(rows[0])):
-            raise ValueError(f"{path}, line {n}: expected 12 numbers (KITTI) or 8 (TUM), got {len(values)}")
+            expected = (
+                f"{len(rows[0])} numbers like line {lines[0]}" if rows else "12 numbers (KITTI) or 8 (TUM)"
+            )
+            raise TrajectoryError(f"{path}, line {n}: expected {expected}, got {len(values)}")
+        if not np.all(np.isfinite(values)):
+            raise TrajectoryError(f"{path}, line {n}: holds a NaN or infinite value")
+        position = values[3::4] if len(values) == 12 else values[1:4]
+        if len(values) == 12:
+            problem = rotation_problem(np.reshape(values, (3, 4))[:, :3])
+        else:
+            problem = None if np.max(np.abs(values[4:8])) > 1e-6 else "the quaternion qx qy qz qw is zero"
+        if not problem and np.max(np.abs(position)) > MAX_POSITION:
+            problem = f"a position beyond {MAX_POSITION:g} m"
+        if problem:
+            raise TrajectoryError(f"{path}, line {n}: {problem}")
         rows.append(values)
-    if not rows:
-        raise ValueError(f"{path}: no poses")
+        lines.append(n)
+    if len(rows) < max(min_poses, 1):
+        if not rows:
+            raise TrajectoryError(f"{path}: no poses")
+        raise TrajectoryError(
+            f"{path}: {len(rows)} pose{'s' * (len(rows) != 1)} (last on line {lines[-1]}); "
+            f"need at least {min_poses}"
+        )
     a = np.array(rows)
     if a.shape[1] == 12:
         return None, as_4x4(a.reshape(-1, 3, 4))
     T = np.tile(np.eye(4), (len(a), 1, 1))
-    T[:, :3, :3] = Rotation.from_quat(a[:, 4:8]).as_matrix()
+    q = a[:, 4:8] / np.max(np.abs(a[:, 4:8]), axis=1, keepdims=True)  # no overflow in the norm
+    T[:, :3, :3] = Rotation.from_quat(q).as_matrix()
     T[:, :3, 3] = a[:, 1:4]
     return a[:, 0], T

@@ -10,17 +10,30 @@
     SEQ/odometry.txt            optional: "delta_u_left delta_u_right" per frame, metres
     SEQ/manifest.json           optional: how a sample was made (rate, speeds, rig, world)
 
-A real KITTI odometry sequence loads unchanged. Every problem raises one
-:class:`SequenceError` naming the file (and line) and what was expected. Writing goes to a
-temporary folder that is renamed when complete, so a failed write leaves nothing behind.
+A real KITTI odometry sequence loads unchanged. The rules of reading:
+
+* **Frames are paired by file name, in numeric order.** ``image_0`` and ``image_1`` must hold the
+  same names; a name on one side only is an error that names it. Names sort by the numbers in
+  them, whatever their padding (``2.png`` before ``10.png``); two names of one number on one side
+  (``1.png`` and ``01.png``) are an error. Hidden files (``._000001.png`` and the like) are ignored.
+* **Every image header is checked when the sequence is opened**, cheaply (PNG headers and end
+  markers are read without decoding; other formats through Pillow's lazy open): size equal to
+  the first image's, 8 bits per channel, one to four channels, PNG files complete. What can only
+  be found by decoding (damaged compressed data) raises when the frame is read.
+* Every problem raises one :class:`SequenceError` naming the file (and line or frame) and what
+  was expected; the number of timestamps, poses and odometry rows must equal the frame count.
+
+Writing (:class:`SequenceWriter`) goes to a temporary folder renamed when complete, under the
+rules of :mod:`vo_lib.formats.outputs`: nothing is written over a folder this package did not
+write, and a failed write leaves nothing behind.
 """
 
 from __future__ import annotations
 
 import json
 import os
-import shutil
-import tempfile
+import re
+import struct
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -28,9 +41,17 @@ import cv2
 import numpy as np
 
 from vo_lib.camera import StereoCamera
+from vo_lib.formats.outputs import OutputFolder, check_target, swap_in
+from vo_lib.formats.poses import rotation_problem
 from vo_lib.geometry import as_homogeneous
 
 IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".pgm", ".bmp", ".tif", ".tiff")
+PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
+PNG_END = b"\x00\x00\x00\x00IEND\xaeB`\x82"
+#: Channels of each PNG colour type as OpenCV decodes it (palette images become BGR).
+PNG_CHANNELS = {0: 1, 2: 3, 3: 3, 4: 4, 6: 4}
+#: Pillow modes of 8 bits per channel (or fewer, widened to 8 when decoded).
+EIGHT_BIT_MODES = {"1", "L", "P", "LA", "La", "PA", "RGB", "RGBA", "RGBa", "RGBX", "CMYK", "YCbCr"}
 
 
 class SequenceError(ValueError):
@@ -40,7 +61,8 @@ class SequenceError(ValueError):
 def _numbers(path: Path, line_no: int, text: str, count: int, what: str) -> np.ndarray:
     parts = text.split()
     if len(parts) != count:
-        raise SequenceError(f"{path}, line {line_no}: {what} needs {count} numbers, got {len(parts)}")
+        plural = "s" if count != 1 else ""
+        raise SequenceError(f"{path}, line {line_no}: {what} needs {count} number{plural}, got {len(parts)}")
     try:
         values = np.array([float(p) for p in parts])
     except ValueError as exc:
@@ -50,21 +72,39 @@ def _numbers(path: Path, line_no: int, text: str, count: int, what: str) -> np.n
     return values
 
 
+def read_text(path: Path) -> str:
+    """The text of a small file (UTF-8, an initial byte-order mark dropped); any problem is a
+    :class:`SequenceError` naming the file."""
+    try:
+        data = Path(path).read_bytes()
+    except OSError as exc:
+        raise SequenceError(f"{path}: cannot read ({exc.strerror or exc})") from None
+    try:
+        return data.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        raise SequenceError(f"{path}: not a text file (byte {exc.start} is not UTF-8)") from None
+
+
 def _lines(path: Path) -> list[tuple[int, str]]:
-    """Non-empty lines with their 1-based numbers."""
-    return [(i, s.strip()) for i, s in enumerate(path.read_text().splitlines(), start=1) if s.strip()]
+    """Non-empty lines with their 1-based numbers (lines end at newlines only)."""
+    return [(i, s.strip()) for i, s in enumerate(read_text(path).split("\n"), start=1) if s.strip()]
 
 
 def read_calib(path: Path) -> tuple[np.ndarray, np.ndarray]:
-    """``(P0, P1)`` 3x4 matrices from a KITTI ``calib.txt``."""
-    found = {}
+    """``(P0, P1)`` 3x4 matrices from a KITTI ``calib.txt``; raises :class:`SequenceError`."""
+    found, where = {}, {}
     for line_no, text in _lines(path):
         key, sep, rest = text.partition(":")
         if not sep:
             raise SequenceError(f"{path}, line {line_no}: expected 'NAME: numbers', got {text[:40]!r}")
         key = key.strip()
         if key in ("P0", "P1", "P2", "P3"):
+            if key in found:
+                raise SequenceError(
+                    f"{path}, line {line_no}: a second {key} line (the first is line {where[key]})"
+                )
             found[key] = _numbers(path, line_no, rest, 12, key).reshape(3, 4)
+            where[key] = line_no
     for key in ("P0", "P1"):
         if key not in found:
             side = "left" if key == "P0" else "right"
@@ -73,6 +113,7 @@ def read_calib(path: Path) -> tuple[np.ndarray, np.ndarray]:
 
 
 def read_times(path: Path) -> np.ndarray:
+    """Timestamps in seconds, one a line, strictly increasing; raises :class:`SequenceError`."""
     times, previous = [], None
     for line_no, text in _lines(path):
         t = _numbers(path, line_no, text, 1, "a timestamp")[0]
@@ -86,22 +127,104 @@ def read_times(path: Path) -> np.ndarray:
 
 
 def read_rows(path: Path, count: int, what: str) -> np.ndarray:
+    """``(N, count)`` finite numbers, one row a line; raises :class:`SequenceError`."""
     return np.array([_numbers(path, n, text, count, what) for n, text in _lines(path)]).reshape(-1, count)
 
 
-def load_image(path: Path) -> np.ndarray:
-    """An 8-bit grey image; colour is converted to grey, 16-bit images are refused."""
-    img = cv2.imread(str(path), cv2.IMREAD_UNCHANGED)
+def read_poses(path: Path) -> np.ndarray:
+    """``(N, 3, 4)`` poses of a KITTI ``poses.txt`` (12 numbers a line, a rotation then a
+    translation); raises :class:`SequenceError`."""
+    rows = []
+    for line_no, text in _lines(path):
+        pose = _numbers(path, line_no, text, 12, "a 3x4 pose").reshape(3, 4)
+        problem = rotation_problem(pose[:, :3])
+        if problem:
+            raise SequenceError(f"{path}, line {line_no}: {problem}")
+        rows.append(pose)
+    return np.array(rows).reshape(-1, 3, 4)
+
+
+_DEVNULL: int | None = None  # a descriptor of os.devnull, opened on first use
+
+
+def _imread_quietly(path: Path) -> np.ndarray | None:
+    """``cv2.imread`` with the process's stderr muted meanwhile: libpng prints its own message for
+    a damaged file there, and ours (one line, naming the file and frame) says it better."""
+    global _DEVNULL
+    try:
+        if _DEVNULL is None:
+            _DEVNULL = os.open(os.devnull, os.O_WRONLY)
+        saved = os.dup(2)
+    except OSError:
+        return cv2.imread(str(path), cv2.IMREAD_UNCHANGED)
+    try:
+        os.dup2(_DEVNULL, 2)
+        return cv2.imread(str(path), cv2.IMREAD_UNCHANGED)
+    finally:
+        os.dup2(saved, 2)
+        os.close(saved)
+
+
+def load_image(path: Path, frame: int | None = None) -> np.ndarray:
+    """An 8-bit grey image; colour is converted to grey, 16-bit images are refused. A file that
+    cannot be decoded raises one :class:`SequenceError` naming it (and ``frame``)."""
+    where = f"{path}, frame {frame}" if frame is not None else f"{path}"
+    img = _imread_quietly(path)
     if img is None or img.size == 0:
-        raise SequenceError(f"{path}: cannot read the image (empty, truncated or not an image)")
+        raise SequenceError(f"{where}: cannot read the image (empty, truncated, damaged or not an image)")
     if img.dtype != np.uint8:
         raise SequenceError(
-            f"{path}: {img.dtype} image; expected 8-bit grey (convert it, e.g. scale 16-bit values to 0-255)"
+            f"{where}: {img.dtype} image; expected 8-bit grey (convert it, e.g. scale 16-bit values to 0-255)"
         )
     if img.ndim == 3:
         code = cv2.COLOR_BGRA2GRAY if img.shape[2] == 4 else cv2.COLOR_BGR2GRAY
         img = cv2.cvtColor(img, code)
     return img
+
+
+def image_header(path: Path, frame: int | None = None) -> tuple[int, int, int]:
+    """``(width, height, bits per channel)`` of an image file, read without decoding the pixels
+    where possible; raises :class:`SequenceError` naming the file (and ``frame``)."""
+    where = f"{path}, frame {frame}" if frame is not None else f"{path}"
+    try:
+        with open(path, "rb") as fh:
+            head = fh.read(33)
+            size = fh.seek(0, 2)
+            if size == 0:
+                raise SequenceError(f"{where}: empty file; expected an image")
+            if head.startswith(PNG_SIGNATURE):
+                if len(head) < 33 or head[12:16] != b"IHDR":
+                    raise SequenceError(f"{where}: damaged PNG header (no IHDR chunk)")
+                width, height = struct.unpack(">II", head[16:24])
+                depth, colour = head[24], head[25]
+                if colour not in PNG_CHANNELS:
+                    raise SequenceError(f"{where}: damaged PNG header (colour type {colour})")
+                fh.seek(max(0, size - 12))
+                if fh.read(12) != PNG_END:
+                    fh.seek(max(0, size - 65536))
+                    if PNG_END not in fh.read():
+                        raise SequenceError(
+                            f"{where}: truncated PNG (no end chunk); expected a complete image"
+                        )
+                return width, height, depth
+    except OSError as exc:
+        raise SequenceError(f"{where}: cannot open the image ({exc.strerror or exc})") from None
+    return _header_other(path, where)
+
+
+def _header_other(path: Path, where: str) -> tuple[int, int, int]:
+    """Header of a non-PNG image through Pillow's lazy open, else by decoding it with OpenCV."""
+    try:
+        from PIL import Image
+
+        with Image.open(path) as im:
+            width, height = im.size
+            return width, height, 8 if im.mode in EIGHT_BIT_MODES else 16
+    except Exception:  # Pillow missing, or a file it cannot read: let OpenCV try
+        img = cv2.imread(str(path), cv2.IMREAD_UNCHANGED)
+        if img is None or img.size == 0:
+            raise SequenceError(f"{where}: cannot read the image (damaged or not an image)") from None
+        return img.shape[1], img.shape[0], 8 * img.dtype.itemsize
 
 
 @dataclass
@@ -121,18 +244,15 @@ class Sequence:
         return len(self.left_files)
 
     def pair(self, k: int) -> tuple[np.ndarray, np.ndarray]:
-        """Left and right images of frame ``k``."""
-        left, right = load_image(self.left_files[k]), load_image(self.right_files[k])
-        if left.shape != right.shape:
-            raise SequenceError(
-                f"{self.right_files[k]} is {right.shape[1]}x{right.shape[0]} but "
-                f"{self.left_files[k]} is {left.shape[1]}x{left.shape[0]}"
-            )
-        if left.shape != (self.camera.height, self.camera.width):
-            raise SequenceError(
-                f"{self.left_files[k]} is {left.shape[1]}x{left.shape[0]}; the sequence's first image is "
-                f"{self.camera.width}x{self.camera.height}"
-            )
+        """Left and right images of frame ``k``; a file that cannot be decoded raises one
+        :class:`SequenceError` naming it and the frame."""
+        left, right = load_image(self.left_files[k], k), load_image(self.right_files[k], k)
+        for path, img in ((self.left_files[k], left), (self.right_files[k], right)):
+            if img.shape != (self.camera.height, self.camera.width):
+                raise SequenceError(
+                    f"{path}, frame {k}: {img.shape[1]}x{img.shape[0]} image; the sequence's images are "
+                    f"{self.camera.width}x{self.camera.height}"
+                )
         return left, right
 
     def __iter__(self):
@@ -144,34 +264,98 @@ class Sequence:
         return None if self.poses is None else as_homogeneous(self.poses)
 
 
+def frame_order(name: str) -> tuple:
+    """Sort key of an image name: the numbers in it compared as numbers (``2.png`` < ``10.png``)."""
+    parts = re.split(r"([0-9]+)", name)  # text, number, text, number, ..., text
+    return tuple(int(part) if k % 2 else part for k, part in enumerate(parts))
+
+
 def _image_files(folder: Path) -> list[Path]:
     if not folder.is_dir():
         raise SequenceError(f"{folder}: missing image folder")
-    return sorted(p for p in folder.iterdir() if p.suffix.lower() in IMAGE_SUFFIXES)
+    try:
+        files = [
+            p
+            for p in folder.iterdir()
+            if p.suffix.lower() in IMAGE_SUFFIXES and not p.name.startswith(".") and p.is_file()
+        ]
+    except OSError as exc:
+        raise SequenceError(f"{folder}: cannot list the images ({exc.strerror or exc})") from None
+    files.sort(key=lambda p: (frame_order(p.name), p.name))
+    for a, b in zip(files, files[1:], strict=False):
+        if frame_order(a.name) == frame_order(b.name):
+            raise SequenceError(
+                f"{folder}: {a.name} and {b.name} carry the same frame number; keep one file per frame"
+            )
+    return files
 
 
-def read_sequence(path) -> Sequence:
-    """Read and check a sequence folder (KITTI layout plus ``odometry.txt``)."""
+def _one_side_only(root: Path, left: list[Path], right: list[Path]) -> str:
+    names_l, names_r = {p.name for p in left}, {p.name for p in right}
+    lonely = [f"image_0/{n}" for n in names_l - names_r] + [f"image_1/{n}" for n in names_r - names_l]
+    lonely.sort(key=lambda s: frame_order(s.split("/")[1]))
+    listed = ", ".join(lonely[:4]) + (f" and {len(lonely) - 4} more" if len(lonely) > 4 else "")
+    return f"{len(lonely)} image(s) without a partner of the same name on the other side: {listed}"
+
+
+def _check_headers(left: list[Path], right: list[Path]) -> tuple[int, int]:
+    """Width and height shared by every image, checked from the headers; raises on the first
+    file that is unreadable, not 8-bit or of another size."""
+    size = None
+    for k, (lpath, rpath) in enumerate(zip(left, right, strict=True)):
+        for path in (lpath, rpath):
+            width, height, depth = image_header(path, k)
+            if depth > 8:
+                raise SequenceError(
+                    f"{path}, frame {k}: {depth}-bit image; expected 8-bit grey "
+                    "(convert it, e.g. scale 16-bit values to 0-255)"
+                )
+            if size is None:
+                size = (width, height)
+            elif (width, height) != size:
+                raise SequenceError(
+                    f"{path}, frame {k}: {width}x{height} image, but {left[0]} is {size[0]}x{size[1]}; "
+                    "every image of a sequence must have one size"
+                )
+    return size
+
+
+def read_manifest(path: Path) -> dict:
+    """The JSON object of a ``manifest.json``; raises :class:`SequenceError`."""
+    try:
+        manifest = json.loads(read_text(path))
+    except json.JSONDecodeError as exc:
+        raise SequenceError(
+            f"{path}: not valid JSON ({exc.msg} at line {exc.lineno}, column {exc.colno})"
+        ) from None
+    if not isinstance(manifest, dict):
+        raise SequenceError(f"{path}: expected a JSON object {{...}}, got a {type(manifest).__name__}")
+    return manifest
+
+
+def read_sequence(path, odometry: bool = True) -> Sequence:
+    """Read and check a sequence folder (KITTI layout plus ``odometry.txt``).
+
+    ``odometry=False`` ignores ``odometry.txt`` entirely (it is not even read).
+    """
     root = Path(path)
     if not root.is_dir():
-        raise SequenceError(f"{root}: sequence folder not found")
+        what = "a file, not a sequence folder" if root.exists() else "sequence folder not found"
+        raise SequenceError(f"{root}: {what}")
     left, right = _image_files(root / "image_0"), _image_files(root / "image_1")
     if not left:
         raise SequenceError(f"{root / 'image_0'}: no images")
-    if len(left) != len(right):
-        raise SequenceError(
-            f"{root}: image_0 has {len(left)} images but image_1 has {len(right)}; expected equal counts"
+    if [p.name for p in left] != [p.name for p in right]:
+        counts = (
+            f"image_0 has {len(left)} images but image_1 has {len(right)}; "
+            if len(left) != len(right)
+            else ""
         )
+        raise SequenceError(f"{root}: {counts}{_one_side_only(root, left, right)}")
     calib = root / "calib.txt"
     if not calib.is_file():
         raise SequenceError(f"{calib}: missing (needs P0 and P1 lines)")
-    first_left, first_right = load_image(left[0]), load_image(right[0])
-    if first_left.shape != first_right.shape:
-        raise SequenceError(
-            f"{right[0]} is {first_right.shape[1]}x{first_right.shape[0]} but {left[0]} is "
-            f"{first_left.shape[1]}x{first_left.shape[0]}; left and right must have the same size"
-        )
-    h, w = first_left.shape
+    w, h = _check_headers(left, right)
     P0, P1 = read_calib(calib)
     try:
         camera = StereoCamera.from_projection_matrices(P0, P1, w, h)
@@ -184,49 +368,47 @@ def read_sequence(path) -> Sequence:
     n = len(left)
     if len(times) != n:
         raise SequenceError(f"{times_path} has {len(times)} timestamps but there are {n} images")
-    poses = odometry = None
+    poses = odo = None
     poses_path, odo_path = root / "poses.txt", root / "odometry.txt"
     if poses_path.is_file():
-        poses = read_rows(poses_path, 12, "a 3x4 pose").reshape(-1, 3, 4)
+        poses = read_poses(poses_path)
         if len(poses) != n:
             raise SequenceError(f"{poses_path} has {len(poses)} poses but there are {n} images")
-    if odo_path.is_file():
-        odometry = read_rows(odo_path, 2, "delta_u_left delta_u_right")
-        if len(odometry) != n:
-            raise SequenceError(f"{odo_path} has {len(odometry)} lines but there are {n} images")
+    if odometry and odo_path.is_file():
+        odo = read_rows(odo_path, 2, "delta_u_left delta_u_right")
+        if len(odo) != n:
+            raise SequenceError(f"{odo_path} has {len(odo)} lines but there are {n} images")
     manifest_path = root / "manifest.json"
-    manifest = json.loads(manifest_path.read_text()) if manifest_path.is_file() else {}
-    return Sequence(root, camera, times, left, right, poses, odometry, manifest)
+    manifest = read_manifest(manifest_path) if manifest_path.is_file() else {}
+    return Sequence(root, camera, times, left, right, poses, odo, manifest)
 
 
 def _format_row(values) -> str:
     return " ".join(repr(float(v)) for v in values)
 
 
-def replace_folder(complete: Path, target: Path) -> Path:
-    """Rename the finished folder ``complete`` to ``target``, replacing any folder there."""
-    if target.exists():
-        old = target.with_name(f".{target.name}.old-{os.getpid()}")
-        os.replace(target, old)
-        os.replace(complete, target)
-        shutil.rmtree(old, ignore_errors=True)
-    else:
-        os.replace(complete, target)
-    return target
+def replace_folder(complete: Path, target: Path, force: bool = False) -> Path:
+    """Rename the finished folder ``complete`` to ``target``; a folder already there is replaced
+    only if this package wrote it (or ``force``), under :func:`vo_lib.formats.outputs.check_target`."""
+    check_target(target, force=force)
+    swap_in(Path(complete), Path(target).resolve())
+    return Path(target)
 
 
 class SequenceWriter:
     """Write a sequence frame by frame into a temporary folder, renamed on :meth:`close`.
 
     Use as a context manager; if the block raises, the temporary folder is removed and any
-    existing sequence at ``path`` is left untouched.
+    existing sequence at ``path`` is left untouched. ``path`` must be new, empty or a sequence this
+    package wrote; ``force`` replaces any other folder (see :mod:`vo_lib.formats.outputs`, whose
+    :class:`~vo_lib.formats.outputs.OutputError` is raised otherwise, before anything is written).
     """
 
-    def __init__(self, path, camera: StereoCamera):
+    def __init__(self, path, camera: StereoCamera, force: bool = False, option: str | None = None):
         self.path = Path(path)
         self.camera = camera
-        self.path.parent.mkdir(parents=True, exist_ok=True)
-        self._tmp = Path(tempfile.mkdtemp(prefix=f".{self.path.name}.", suffix=".tmp", dir=self.path.parent))
+        self._out = OutputFolder(self.path, "vo_lib generate", force=force, option=option)
+        self._tmp = self._out.path
         (self._tmp / "image_0").mkdir()
         (self._tmp / "image_1").mkdir()
         self.count = 0
@@ -235,7 +417,9 @@ class SequenceWriter:
         for folder, img in (("image_0", left), ("image_1", right)):
             if img.dtype != np.uint8 or img.ndim != 2:
                 raise ValueError(f"{folder} images must be 2-D uint8 grey; got {img.dtype} {img.shape}")
-            cv2.imwrite(str(self._tmp / folder / f"{self.count:06d}.png"), img)
+            target = self._tmp / folder / f"{self.count:06d}.png"
+            if not cv2.imwrite(str(target), img):
+                raise OSError(f"cannot write {target}")
         self.count += 1
 
     def close(self, times, poses=None, odometry=None, manifest: dict | None = None) -> Path:
@@ -255,25 +439,26 @@ class SequenceWriter:
             (self._tmp / "odometry.txt").write_text("".join(_format_row(o) + "\n" for o in odometry))
         if manifest is not None:
             (self._tmp / "manifest.json").write_text(json.dumps(manifest, indent=2, sort_keys=True) + "\n")
-        return replace_folder(self._tmp, self.path)
+        return self._out.commit(frames=self.count)
 
     def abort(self) -> None:
-        shutil.rmtree(self._tmp, ignore_errors=True)
+        self._out.discard()
 
     def __enter__(self):
         return self
 
     def __exit__(self, exc_type, exc, tb):
-        if exc_type is not None or self._tmp.exists():
-            self.abort()
+        self.abort()
         return False
 
 
-def write_sequence(path, camera, left_images, right_images, times, poses=None, odometry=None, manifest=None):
+def write_sequence(
+    path, camera, left_images, right_images, times, poses=None, odometry=None, manifest=None, force=False
+):
     """Write a whole sequence at once (see :class:`SequenceWriter`)."""
     if len(left_images) != len(right_images):
         raise ValueError(f"{len(left_images)} left images but {len(right_images)} right images")
-    with SequenceWriter(path, camera) as writer:
+    with SequenceWriter(path, camera, force=force) as writer:
         for left, right in zip(left_images, right_images, strict=True):
             writer.add(left, right)
         return writer.close(times, poses, odometry, manifest)

@@ -194,16 +194,19 @@ def generate(
     frames: int | None = None,
     resolution: tuple[int, int] = DEFAULT_RESOLUTION,
     progress: bool = True,
+    force: bool = False,
 ) -> Path:
     """Render sample ``name`` into folder ``out``; returns the folder.
 
     ``frames`` keeps only the first frames of the drive; ``resolution`` is ``(width, height)``.
+    ``out`` must be new, empty or a folder this package wrote; ``force`` replaces any other
+    (see :class:`~vo_lib.formats.sequence.SequenceWriter`).
     """
     sample = get_sample(name)
     rendered, frame_iter = render_sample(name, frames, resolution)
     camera, drive, n = rendered.camera, rendered.drive, rendered.frames
     width, height = resolution
-    with SequenceWriter(out, camera) as writer:
+    with SequenceWriter(out, camera, force=force) as writer:
         for left, right, _ in tqdm(
             frame_iter, total=n, desc=f"rendering {name}", unit="frame", disable=not progress
         ):

@@ -1,0 +1,880 @@
+"""The command line against bad or awkward input: it exits 0 or 2 with one line, never a traceback,
+and never changes a byte of a file it did not write.
+
+Every case of the table runs ``python -m vo_lib ...`` in-process (``vo_lib.cli.main.main``) in a
+fresh workspace holding a tiny user sequence ``seq/`` (4 frames of 64x48, no marker: not written
+by us), a decoy ``important.txt``, a user folder ``thesis/``, an ``empty/`` folder and two
+trajectory files. The checksums of every file the case does not mean to replace are compared
+before and after. Signals and a read-only install run in a subprocess; the parsers of calib,
+times, poses and TUM files meet random text (hypothesis).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import shutil
+import signal
+import stat
+import subprocess
+import sys
+import tempfile
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+import cv2
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from vo_lib.camera import StereoCamera
+from vo_lib.cli.main import main
+from vo_lib.formats.outputs import MARKER, _host
+from vo_lib.formats.poses import TrajectoryError, read_trajectory
+from vo_lib.formats.sequence import (
+    SequenceError,
+    read_calib,
+    read_poses,
+    read_sequence,
+    read_times,
+    write_sequence,
+)
+
+ROOT = Path(__file__).resolve().parents[1]
+W, H, FRAMES = 64, 48, 4
+CAMERA = StereoCamera(50.0, 50.0, 31.5, 23.5, 0.12, W, H)
+
+
+def make_sequence(path: Path, frames: int = FRAMES, size=(W, H), seed: int = 0) -> Path:
+    """A user's sequence: textured images shifted a little each frame, poses and odometry; the
+    marker is removed so that it counts as not written by this program."""
+    rng = np.random.default_rng(seed)
+    w, h = size
+    base = cv2.GaussianBlur(rng.integers(0, 256, (h, w + 16), dtype=np.uint8), (3, 3), 0)
+    left = [np.ascontiguousarray(base[:, k % 8 : k % 8 + w]) for k in range(frames)]
+    right = [np.ascontiguousarray(base[:, k % 8 + 3 : k % 8 + 3 + w]) for k in range(frames)]
+    poses = np.tile(np.eye(4), (frames, 1, 1))
+    poses[:, 2, 3] = 0.01 * np.arange(frames)
+    camera = CAMERA if size == (W, H) else StereoCamera(50.0, 50.0, (w - 1) / 2, (h - 1) / 2, 0.12, w, h)
+    write_sequence(path, camera, left, right, np.arange(frames) / 30.0, poses, np.full((frames, 2), 0.01))
+    (path / MARKER).unlink()
+    return path
+
+
+def kitti_rows(n: int, step: float = 0.1) -> str:
+    return "".join(f"1 0 0 {step * k:.3f} 0 1 0 0 0 0 1 {0.5 * step * k:.3f}\n" for k in range(n))
+
+
+@pytest.fixture(scope="module")
+def template(tmp_path_factory) -> Path:
+    ws = tmp_path_factory.mktemp("template")
+    make_sequence(ws / "seq")
+    (ws / "important.txt").write_text("years of work\n")
+    (ws / "thesis").mkdir()
+    (ws / "thesis" / "important.txt").write_text("chapter 1\n")
+    (ws / "thesis" / "figures").mkdir()
+    (ws / "thesis" / "figures" / "plot.png").write_bytes(b"\x89PNG not really")
+    (ws / "empty").mkdir()
+    (ws / "gt.txt").write_text(kitti_rows(5))
+    (ws / "est.txt").write_text(kitti_rows(5, 0.11))
+    (ws / "home").mkdir()
+    (ws / "home" / "notes.txt").write_text("mine\n")
+    (ws / "data").mkdir()
+    (ws / "data" / "README.md").write_text("samples\n")
+    return ws
+
+
+def checksums(ws: Path, skip: tuple[str, ...]) -> dict[str, str]:
+    """sha256 of every file of the workspace (symbolic links by their target's name), except
+    under the paths a case may write (a path ending in "-" is a prefix)."""
+    sums = {}
+    for path in sorted(ws.rglob("*")):
+        rel = path.relative_to(ws).as_posix()
+        if any(rel == s or rel.startswith(s + "/") or (s.endswith("-") and rel.startswith(s)) for s in skip):
+            continue
+        if path.is_symlink():
+            sums[rel] = "link:" + os.readlink(path)
+        elif path.is_file():
+            sums[rel] = hashlib.sha256(path.read_bytes()).hexdigest()
+    return sums
+
+
+def invoke(argv: list[str], capsys) -> tuple[int, str, str]:
+    try:
+        code = main(argv)
+    except SystemExit as exc:  # argparse
+        code = exc.code
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def temporaries(ws: Path) -> list[Path]:
+    return [p for p in ws.rglob("*") if ".vo_lib-" in p.name and p.name.endswith((".tmp", ".old"))]
+
+
+# ---- setups: each shapes a fresh copy of the template ---------------------------------------------
+
+
+def image(ws, side, k) -> Path:
+    return ws / "seq" / f"image_{side}" / f"{k:06d}.png"
+
+
+def unpadded(ws):
+    """12 frames named 0.png .. 11.png: text order would run 0, 1, 10, 11, 2 ..."""
+    shutil.rmtree(ws / "seq", ignore_errors=True)
+    make_sequence(ws / "seq", frames=12)
+    for side in (0, 1):
+        for k in range(12):
+            image(ws, side, k).rename(ws / "seq" / f"image_{side}" / f"{k}.png")
+
+
+def write_png(path: Path, img: np.ndarray):
+    assert cv2.imwrite(str(path), img)
+
+
+def damaged_png_data(ws):
+    """Header and end chunk intact, compressed data damaged: found only when decoded."""
+    path = image(ws, 0, 2)
+    data = bytearray(path.read_bytes())
+    start = data.index(b"IDAT") + 8
+    for k in range(start, start + 40):
+        data[k] ^= 0x5A
+    path.write_bytes(bytes(data))
+
+
+def run_once(out: str):
+    def setup(ws):
+        assert main(["run", "--sequence", "seq", "--out", out]) == 0
+
+    return setup
+
+
+def stale_temporary(ws):
+    dead = subprocess.Popen([sys.executable, "-c", "pass"])
+    dead.wait()
+    stale = ws / f".out.vo_lib-{dead.pid}-{_host()}-abcd1234.tmp"
+    stale.mkdir()
+    (stale / "poses.txt").write_text("half\n")
+    foreign = ws / ".out.someone-else.tmp"  # not ours: must survive
+    foreign.mkdir()
+    (foreign / "keep.txt").write_text("keep\n")
+
+
+def edit(rel: str, text: str | bytes):
+    def setup(ws):
+        path = ws / rel
+        path.write_bytes(text if isinstance(text, bytes) else text.encode())
+
+    return setup
+
+
+def do(*steps):
+    def setup(ws):
+        for step in steps:
+            step(ws)
+
+    return setup
+
+
+@dataclass
+class Case:
+    id: str
+    argv: list[str]
+    code: int
+    phrase: str
+    setup: Callable | None = None
+    writes: tuple[str, ...] = ()  # paths the case may write or replace
+    cwd: str = "."
+    check: Callable | None = None
+
+
+def gone(rel):
+    return lambda ws: not (ws / rel).exists()
+
+
+def has_marker(rel):
+    return lambda ws: (ws / rel / MARKER).is_file() and (ws / rel / "poses.txt").is_file()
+
+
+RUN = ["run", "--sequence", "seq"]
+GEN = ["generate", "corridor", "--frames", "2", "--resolution", "64x48"]
+EVAL = ["evaluate", "--gt", "gt.txt", "--est", "est.txt"]
+
+CASES = [
+    # --- outputs: never over what the program did not write ---------------------------------------
+    Case("out-new", [*RUN, "--out", "out"], 0, "wrote out/", writes=("out",), check=has_marker("out")),
+    Case(
+        "out-nested-new", [*RUN, "--out", "a/b/out"], 0, "wrote", writes=("a",), check=has_marker("a/b/out")
+    ),
+    Case(
+        "out-ours-again",
+        [*RUN, "--out", "out"],
+        0,
+        "wrote",
+        run_once("out"),
+        ("out",),
+        check=has_marker("out"),
+    ),
+    Case("out-empty", [*RUN, "--out", "empty"], 0, "wrote", writes=("empty",), check=has_marker("empty")),
+    Case("out-user-folder", [*RUN, "--out", "thesis"], 2, "--force"),
+    Case(
+        "out-user-folder-force",
+        [*RUN, "--out", "thesis", "--force"],
+        0,
+        "replacing",
+        writes=("thesis",),
+        check=has_marker("thesis"),
+    ),
+    Case(
+        "out-ours-plus-user-file",
+        [*RUN, "--out", "out"],
+        2,
+        "notes.txt",
+        do(run_once("out"), edit("out/notes.txt", "mine")),
+        writes=("out",),
+        check=lambda ws: (ws / "out" / "notes.txt").read_text() == "mine",
+    ),
+    Case("out-is-input", [*RUN, "--out", "seq"], 2, "is the input sequence"),
+    Case("out-is-input-force", [*RUN, "--out", "seq", "--force"], 2, "is the input sequence"),
+    Case("out-above-input-force", [*RUN, "--out", ".", "--force"], 2, "holds the input sequence"),
+    Case("out-inside-input", [*RUN, "--out", "seq/results"], 2, "inside the input sequence"),
+    Case(
+        "out-is-cwd-force",
+        ["run", "--sequence", "../seq", "--out", ".", "--force"],
+        2,
+        "is the current folder",
+        cwd="thesis",
+    ),
+    Case(
+        "out-above-cwd-force",
+        ["run", "--sequence", "../seq", "--out", "..", "--force"],
+        2,
+        "holds the input sequence",
+        cwd="thesis",
+    ),
+    Case("out-home-force", [*RUN, "--out", "home", "--force"], 2, "your home folder"),
+    Case("out-data-folder-force", [*RUN, "--out", "data", "--force"], 2, "sample data folder"),
+    Case("out-is-a-file", [*RUN, "--out", "important.txt"], 2, "is a file"),
+    Case("out-is-a-file-force", [*RUN, "--out", "important.txt", "--force"], 2, "is a file"),
+    Case("out-under-a-file", [*RUN, "--out", "important.txt/sub"], 2, "cannot write there"),
+    Case(
+        "out-symlink-to-ours",
+        [*RUN, "--out", "link"],
+        0,
+        "wrote",
+        do(run_once("real"), lambda ws: (ws / "link").symlink_to("real")),
+        ("real", "link"),
+        check=lambda ws: (ws / "link").is_symlink() and (ws / "real" / MARKER).is_file(),
+    ),
+    Case(
+        "out-symlink-to-user-folder",
+        [*RUN, "--out", "link"],
+        2,
+        "--force",
+        lambda ws: (ws / "link").symlink_to("thesis"),
+    ),
+    Case(
+        "out-dangling-symlink",
+        [*RUN, "--out", "link"],
+        2,
+        "does not exist",
+        lambda ws: (ws / "link").symlink_to("nowhere"),
+    ),
+    Case(
+        "stale-temporary-removed",
+        [*RUN, "--out", "out"],
+        0,
+        "removed 1 temporary folder",
+        stale_temporary,
+        writes=("out", ".out.vo_lib-"),
+        check=lambda ws: (ws / ".out.someone-else.tmp" / "keep.txt").exists(),
+    ),
+    # --- the sequence: paired by name, numeric order, headers checked ----------------------------
+    Case("sequence-missing", ["run", "--sequence", "nowhere"], 2, "neither a sample name"),
+    Case("sequence-is-a-file", ["run", "--sequence", "important.txt"], 2, "not a sequence folder"),
+    Case("unpadded-names", [*RUN, "--out", "out"], 0, "wrote", unpadded, ("out",)),
+    Case("right-image-missing", [*RUN], 2, "image_0/000002.png", lambda ws: image(ws, 1, 2).unlink()),
+    Case("names-differ", [*RUN], 2, "image_1/000009.png", lambda ws: image(ws, 1, 3).rename(image(ws, 1, 9))),
+    Case(
+        "same-number-twice",
+        [*RUN],
+        2,
+        "same frame number",
+        lambda ws: shutil.copy(image(ws, 0, 1), ws / "seq" / "image_0" / "1.png"),
+    ),
+    Case(
+        "hidden-files-ignored",
+        [*RUN, "--out", "out"],
+        0,
+        "wrote",
+        edit("seq/image_0/._000001.png", b"\x00\x05\x16\x07 resource fork"),
+        ("out",),
+    ),
+    Case(
+        "zero-byte-image", [*RUN], 2, "000002.png, frame 2: empty file", edit("seq/image_0/000002.png", b"")
+    ),
+    Case(
+        "truncated-image",
+        [*RUN],
+        2,
+        "frame 2: truncated PNG",
+        lambda ws: image(ws, 1, 2).write_bytes(image(ws, 1, 2).read_bytes()[:300]),
+    ),
+    Case(
+        "not-an-image", [*RUN], 2, "frame 1: cannot read the image", edit("seq/image_0/000001.png", b"hello")
+    ),
+    Case(
+        "16-bit-image",
+        [*RUN],
+        2,
+        "frame 3: 16-bit image",
+        lambda ws: write_png(image(ws, 0, 3), np.zeros((H, W), np.uint16)),
+    ),
+    Case(
+        "size-changes",
+        [*RUN],
+        2,
+        "frame 2: 60x48 image",
+        lambda ws: write_png(image(ws, 1, 2), np.zeros((H, 60), np.uint8)),
+    ),
+    Case(
+        "colour-image-is-converted",
+        [*RUN, "--out", "out"],
+        0,
+        "wrote",
+        lambda ws: write_png(image(ws, 0, 1), np.full((H, W, 3), 90, np.uint8)),
+        ("out",),
+    ),
+    Case(
+        "damaged-image-data",
+        [*RUN, "--out", "out"],
+        2,
+        "000002.png, frame 2: cannot read the image",
+        damaged_png_data,
+        check=gone("out"),
+    ),
+    Case("corrupt-manifest", [*RUN], 2, "manifest.json: not valid JSON", edit("seq/manifest.json", "{oops")),
+    Case("calib-no-p1", [*RUN], 2, "no P1 line", edit("seq/calib.txt", "P0: " + "1 " * 12 + "\n")),
+    Case(
+        "calib-short-line",
+        [*RUN],
+        2,
+        "calib.txt, line 2: P1 needs 12 numbers",
+        edit("seq/calib.txt", "P0: 50 0 31.5 0 0 50 23.5 0 0 0 1 0\nP1: 1 2 3\n"),
+    ),
+    Case("calib-binary", [*RUN], 2, "calib.txt: not a text file", edit("seq/calib.txt", b"\xff\xfe\x00P0")),
+    Case(
+        "times-short",
+        [*RUN],
+        2,
+        "has 3 timestamps but there are 4 images",
+        edit("seq/times.txt", "0\n1\n2\n"),
+    ),
+    Case("times-backwards", [*RUN], 2, "times.txt, line 3", edit("seq/times.txt", "0\n1\n0.5\n2\n")),
+    Case(
+        "poses-nan",
+        [*RUN],
+        2,
+        "poses.txt, line 2",
+        edit("seq/poses.txt", kitti_rows(1) + "1 0 0 nan 0 1 0 0 0 0 1 0\n" + kitti_rows(2)),
+    ),
+    Case(
+        "poses-not-rotation",
+        [*RUN],
+        2,
+        "not a rotation matrix",
+        edit("seq/poses.txt", "0 " * 12 + "\n" * 1 + kitti_rows(3)),
+    ),
+    Case(
+        "odometry-malformed",
+        [*RUN],
+        2,
+        "odometry.txt, line 2",
+        edit("seq/odometry.txt", "0 0\n0.01\n0 0\n0 0\n"),
+    ),
+    Case(
+        "no-odometry-ignores-it",
+        [*RUN, "--no-odometry", "--out", "out"],
+        0,
+        "wrote",
+        edit("seq/odometry.txt", b"\xff garbage"),
+        ("out",),
+    ),
+    Case(
+        "no-right-folder",
+        [*RUN],
+        2,
+        "image_1: missing image folder",
+        lambda ws: shutil.rmtree(ws / "seq" / "image_1"),
+    ),
+    Case(
+        "no-images",
+        [*RUN],
+        2,
+        "image_0: no images",
+        lambda ws: [p.unlink() for p in (ws / "seq").glob("image_*/*.png")],
+    ),
+    # --- bounds ----------------------------------------------------------------------------------
+    Case("seed-negative", [*RUN, "--seed", "-5"], 2, "--seed"),
+    Case("seed-not-a-number", [*RUN, "--seed", "abc"], 2, "--seed"),
+    Case("frames-one", [*RUN, "--frames", "1"], 2, "need at least 2 frames"),
+    Case("frames-zero", [*RUN, "--frames", "0"], 2, "at least 1"),
+    Case("frames-not-a-number", [*RUN, "--frames", "many"], 2, "expected a whole number"),
+    Case(
+        "frames-beyond-sequence",
+        [*RUN, "--frames", "99", "--out", "out"],
+        0,
+        "has 4 frames; running all 4",
+        writes=("out",),
+    ),
+    Case("unknown-option", [*RUN, "--fast"], 2, "unrecognized arguments"),
+    # --- generate --------------------------------------------------------------------------------
+    Case(
+        "generate-new",
+        [*GEN, "--out", "gen"],
+        0,
+        "wrote gen",
+        writes=("gen",),
+        check=lambda ws: read_sequence(ws / "gen").camera.width == 64,
+    ),
+    Case(
+        "generate-ours-again",
+        [*GEN, "--out", "gen"],
+        0,
+        "wrote gen",
+        lambda ws: main([*GEN, "--out", "gen"]),
+        ("gen",),
+    ),
+    Case("generate-over-user-sequence", [*GEN, "--out", "seq"], 2, "--force"),
+    Case("generate-over-user-folder", [*GEN, "--out", "thesis"], 2, "--force"),
+    Case(
+        "generate-over-user-folder-force",
+        [*GEN, "--out", "thesis", "--force"],
+        0,
+        "replacing",
+        writes=("thesis",),
+        check=lambda ws: not (ws / "thesis" / "important.txt").exists(),
+    ),
+    Case("generate-over-a-file", [*GEN, "--out", "important.txt"], 2, "is a file"),
+    Case(
+        "generate-huge-resolution", ["generate", "corridor", "--resolution", "100000x100000"], 2, "32..4096"
+    ),
+    Case("generate-tiny-resolution", ["generate", "corridor", "--resolution", "10x10"], 2, "32..4096"),
+    Case(
+        "generate-bad-resolution", ["generate", "corridor", "--resolution", "big"], 2, "expected WIDTHxHEIGHT"
+    ),
+    Case("generate-unknown-sample", ["generate", "nope"], 2, "invalid choice: 'nope'"),
+    Case(
+        "generate-too-many-frames",
+        ["generate", "corridor", "--frames", "100000", "--out", "gen"],
+        2,
+        "frames must lie in 1..541",
+        check=gone("gen"),
+    ),
+    # --- evaluate --------------------------------------------------------------------------------
+    Case("evaluate-ok", [*EVAL, "--segments", "0.1,0.2"], 0, "ATE (SE(3) alignment)"),
+    Case(
+        "evaluate-nan-row",
+        EVAL,
+        2,
+        "est.txt, line 3: holds a NaN",
+        edit("est.txt", kitti_rows(2) + "1 0 0 nan 0 1 0 0 0 0 1 0\n" + kitti_rows(2)),
+    ),
+    Case(
+        "evaluate-inf-row",
+        EVAL,
+        2,
+        "gt.txt, line 1: holds a NaN or infinite",
+        edit("gt.txt", "1 0 0 inf 0 1 0 0 0 0 1 0\n" + kitti_rows(4)),
+    ),
+    Case(
+        "evaluate-one-pose",
+        EVAL,
+        2,
+        "gt.txt: 1 pose (last on line 2); need at least 2",
+        edit("gt.txt", "# one pose\n" + kitti_rows(1)),
+    ),
+    Case("evaluate-empty", EVAL, 2, "est.txt: no poses", edit("est.txt", "")),
+    Case(
+        "evaluate-count-mismatch",
+        EVAL,
+        2,
+        "has 5 poses but --est est.txt has 4",
+        edit("est.txt", kitti_rows(4)),
+    ),
+    Case("evaluate-segments-text", [*EVAL, "--segments", "abc"], 2, "positive lengths"),
+    Case("evaluate-segments-negative", [*EVAL, "--segments", "0,-1"], 2, "positive lengths"),
+    Case("evaluate-segments-nan", [*EVAL, "--segments", "nan"], 2, "positive lengths"),
+    Case(
+        "evaluate-missing-file",
+        ["evaluate", "--gt", "missing.txt", "--est", "est.txt"],
+        2,
+        "no such trajectory file",
+    ),
+    Case(
+        "evaluate-folder", ["evaluate", "--gt", "thesis", "--est", "est.txt"], 2, "a folder, not a trajectory"
+    ),
+    Case(
+        "evaluate-zero-quaternion",
+        EVAL,
+        2,
+        "line 2: the quaternion",
+        edit("est.txt", "0 0 0 0 0 0 0 1\n0.1 0 0 0 0 0 0 0\n" + "0.2 0 0 0 0 0 0 1\n" * 3),
+    ),
+    Case(
+        "evaluate-not-rotation",
+        EVAL,
+        2,
+        "est.txt, line 1: the first three columns are not a rotation",
+        edit("est.txt", "2 0 0 0 0 1 0 0 0 0 1 0\n" + kitti_rows(4)),
+    ),
+    Case("evaluate-binary", EVAL, 2, "gt.txt: not a text file", edit("gt.txt", b"\x89PNG\r\n\x1a\n\xff\xff")),
+    Case(
+        "evaluate-mixed-formats",
+        EVAL,
+        2,
+        "line 2: expected 12 numbers like line 1, got 8",
+        edit("est.txt", kitti_rows(1) + "0 0 0 0 0 0 0 1\n"),
+    ),
+    Case(
+        "evaluate-huge-position",
+        EVAL,
+        2,
+        "beyond",
+        edit("est.txt", "1 0 0 1e300 0 1 0 0 0 0 1 0\n" + kitti_rows(4)),
+    ),
+]
+
+
+def test_the_table_is_large_and_ids_are_unique():
+    assert len(CASES) >= 40
+    assert len({c.id for c in CASES}) == len(CASES)
+
+
+@pytest.mark.parametrize("case", CASES, ids=[c.id for c in CASES])
+def test_case(case: Case, template, tmp_path, monkeypatch, capsys):
+    ws = tmp_path / "ws"
+    shutil.copytree(template, ws, symlinks=True)
+    monkeypatch.setenv("VO_LIB_DATA", str(ws / "data"))
+    monkeypatch.setenv("HOME", str(ws / "home"))
+    monkeypatch.setenv("MPLCONFIGDIR", str(tmp_path / "mpl"))  # matplotlib's cache: not in the workspace
+    monkeypatch.chdir(ws)
+    if case.setup:
+        case.setup(ws)
+    capsys.readouterr()
+    before = checksums(ws, case.writes)
+    monkeypatch.chdir(ws / case.cwd)
+    code, out, err = invoke(case.argv, capsys)
+    assert code == case.code, f"exit {code}\nstdout: {out}\nstderr: {err}"
+    assert "Traceback" not in err
+    lines = err.strip().splitlines()
+    if case.code == 2:
+        assert len(lines) == 1, err
+        assert case.phrase in lines[0]
+    else:
+        assert len(lines) <= 1, err  # at most one notice
+        assert case.phrase in out + err
+    assert checksums(ws, case.writes) == before  # not a byte of anything else changed
+    assert temporaries(ws) == []  # nothing half-written left
+    if case.check:
+        assert case.check(ws)
+
+
+# ---- reading: numeric order and pairing, as a library -----------------------------------------------
+
+
+def test_unpadded_names_are_read_in_numeric_order_and_paired_by_name(tmp_path):
+    ws = tmp_path
+    unpadded(ws)
+    seq = read_sequence(ws / "seq")
+    assert [p.name for p in seq.left_files] == [f"{k}.png" for k in range(12)]
+    assert [p.name for p in seq.right_files] == [f"{k}.png" for k in range(12)]
+    reference = read_sequence(make_sequence(tmp_path / "padded", frames=12))
+    for k in (2, 10):
+        np.testing.assert_array_equal(seq.pair(k)[0], reference.pair(k)[0])
+
+
+def test_mixed_padding_sorts_numerically(tmp_path):
+    seq = make_sequence(tmp_path / "seq", frames=3)
+    for side in (0, 1):
+        folder = seq / f"image_{side}"
+        for old, new in (("000000.png", "8.png"), ("000001.png", "9.png"), ("000002.png", "0010.png")):
+            (folder / old).rename(folder / new)
+    assert [p.name for p in read_sequence(seq).left_files] == ["8.png", "9.png", "0010.png"]
+
+
+def test_header_check_reads_no_pixels(tmp_path, monkeypatch):
+    seq = make_sequence(tmp_path / "seq")
+    calls = []
+    monkeypatch.setattr(cv2, "imread", lambda *a: calls.append(a))
+    read_sequence(seq)
+    assert calls == []
+
+
+# ---- signals, a read-only install, the real entry point --------------------------------------------
+
+
+def cli_env(**extra) -> dict:
+    env = dict(os.environ, PYTHONDONTWRITEBYTECODE="1", **extra)
+    env.pop("NUMBA_CACHE_DIR", None)
+    return env
+
+
+def wait_for_temporary(folder: Path, proc: subprocess.Popen, timeout=60.0) -> None:
+    end = time.monotonic() + timeout
+    while time.monotonic() < end and proc.poll() is None:
+        if temporaries(folder):
+            time.sleep(0.3)  # well inside the work
+            return
+        time.sleep(0.02)
+    raise AssertionError(f"no temporary folder appeared (exit {proc.poll()})")
+
+
+@pytest.mark.parametrize(
+    "args, signum, code, phrase",
+    [
+        (["generate", "corridor", "--resolution", "320x240", "--out", "gen"], signal.SIGTERM, 143, "SIGTERM"),
+        (["generate", "corridor", "--resolution", "320x240", "--out", "gen"], signal.SIGINT, 130, "Ctrl-C"),
+        (["run", "--sequence", "long", "--out", "out"], signal.SIGINT, 130, "Ctrl-C"),
+    ],
+    ids=["generate-sigterm", "generate-sigint", "run-sigint"],
+)
+def test_signals_leave_nothing_and_print_one_line(tmp_path, args, signum, code, phrase):
+    if "long" in args:
+        make_sequence(tmp_path / "long", frames=150, size=(320, 240))
+    (tmp_path / "important.txt").write_text("keep\n")
+    before = checksums(tmp_path, ())
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "vo_lib", *args],
+        cwd=tmp_path,
+        env=cli_env(VO_LIB_DATA=str(tmp_path / "data")),
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    wait_for_temporary(tmp_path, proc)
+    proc.send_signal(signum)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == code, err
+    assert len(err.strip().splitlines()) == 1 and phrase in err, err
+    assert temporaries(tmp_path) == [] and not (tmp_path / args[args.index("--out") + 1]).exists()
+    assert checksums(tmp_path, ()) == before
+
+
+def test_runs_from_a_read_only_install(tmp_path):
+    """The package copied to a read-only folder, with a home whose cache cannot be written
+    either: Numba finds no cache folder, and the run compiles uncached instead of failing."""
+    pkg = tmp_path / "site"
+    shutil.copytree(ROOT / "vo_lib", pkg / "vo_lib", ignore=shutil.ignore_patterns("__pycache__"))
+    home = tmp_path / "home"
+    home.mkdir()
+    (home / ".cache").write_text("a file where the cache folder would go\n")
+    if os.geteuid() == 0:  # permissions do not bind root: a file where each __pycache__ would go
+        for folder in [pkg / "vo_lib", *(pkg / "vo_lib").rglob("*")]:
+            if folder.is_dir():
+                (folder / "__pycache__").write_text("")
+    for path in [pkg, *pkg.rglob("*")]:
+        path.chmod(path.stat().st_mode & ~(stat.S_IWUSR | stat.S_IWGRP | stat.S_IWOTH))
+    make_sequence(tmp_path / "seq")
+    script = (
+        "import sys, vo_lib; assert vo_lib.__file__.startswith(sys.argv[1]), vo_lib.__file__; "
+        "from vo_lib.cli.main import main; sys.exit(main(sys.argv[2:]))"
+    )
+    env = cli_env(PYTHONPATH=str(pkg), HOME=str(home), MPLCONFIGDIR=str(tmp_path / "mpl"))
+    env.pop("XDG_CACHE_HOME", None)
+    try:
+        proc = subprocess.run(
+            [sys.executable, "-c", script, str(pkg), "run", "--sequence", "seq", "--out", "out"],
+            cwd=tmp_path,
+            env=env,
+            capture_output=True,
+            text=True,
+            timeout=300,
+        )
+    finally:
+        for path in [pkg, *pkg.rglob("*")]:
+            path.chmod(path.stat().st_mode | stat.S_IWUSR)
+    assert proc.returncode == 0, proc.stderr
+    assert "wrote out/" in proc.stdout and "cannot cache" not in proc.stderr
+    assert (tmp_path / "out" / "poses.txt").is_file()
+    assert not [p for p in pkg.rglob("*") if p.suffix in (".nbi", ".nbc")]
+
+
+def test_numba_without_any_cache_folder_compiles_uncached(monkeypatch):
+    from numba.core import caching
+
+    from vo_lib.stereo_vo import ransac_core
+
+    impl = getattr(caching, "CacheImpl", None) or caching._CacheImpl
+    monkeypatch.setattr(impl, "_locator_classes", [])
+
+    def twice(x):
+        return 2 * x
+
+    compiled = ransac_core._jit(twice)
+    assert compiled(21) == 42 and type(compiled._cache).__name__ == "NullCache"  # no cache behind it
+
+
+def test_output_follows_the_umask(template, tmp_path, monkeypatch, capsys):
+    ws = tmp_path / "ws"
+    shutil.copytree(template, ws)
+    monkeypatch.chdir(ws)
+    old = os.umask(0o027)
+    try:
+        assert invoke([*RUN, "--out", "out"], capsys)[0] == 0
+        assert invoke([*GEN, "--out", "gen"], capsys)[0] == 0
+    finally:
+        os.umask(old)
+    for folder in (ws / "out", ws / "gen", ws / "gen" / "image_0"):
+        assert stat.S_IMODE(folder.stat().st_mode) == 0o750, folder
+    assert stat.S_IMODE((ws / "out" / "poses.txt").stat().st_mode) == 0o640
+
+
+def test_real_entry_point_prints_one_line(template, tmp_path):
+    ws = tmp_path / "ws"
+    shutil.copytree(template, ws)
+    damaged_png_data(ws)
+    env = cli_env(VO_LIB_DATA=str(ws / "data"))
+    for args, phrase in (
+        (["run", "--sequence", "seq", "--out", "out"], "frame 2: cannot read the image"),
+        (["run", "--seed", "-5"], "--seed"),
+    ):
+        proc = subprocess.run(
+            [sys.executable, "-m", "vo_lib", *args], cwd=ws, env=env, capture_output=True, text=True
+        )
+        assert proc.returncode == 2
+        assert len(proc.stderr.strip().splitlines()) == 1 and phrase in proc.stderr, proc.stderr
+    assert not (ws / "out").exists() and temporaries(ws) == []
+
+
+# ---- the parsers against random text ------------------------------------------------------------------
+
+TOKENS = [
+    "P0:",
+    "P1:",
+    "P2:",
+    "Tr:",
+    "0",
+    "1",
+    "-1",
+    "0.5",
+    "1e-3",
+    "nan",
+    "inf",
+    "-inf",
+    "1e400",
+    "abc",
+    ":",
+    "#",
+    "",
+    "0x1",
+    "1_0",
+    "\t",
+    "\u00a0",
+    "\r",
+    "٣",
+]
+numbers = st.floats(allow_nan=True, allow_infinity=True).map(repr)
+token = st.one_of(st.sampled_from(TOKENS), numbers, st.text(max_size=4))
+line = st.lists(token, max_size=14).map(" ".join)
+text_files = st.one_of(
+    st.lists(line, max_size=8).map("\n".join),
+    st.text(max_size=200),
+    st.binary(max_size=100),
+)
+PROPERTY = settings(
+    max_examples=150, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture]
+)
+
+
+def write(folder: Path, content) -> Path:
+    fd, name = tempfile.mkstemp(dir=folder, suffix=".txt")
+    with os.fdopen(fd, "wb") as fh:
+        fh.write(content if isinstance(content, bytes) else content.encode("utf-8", "surrogatepass"))
+    return Path(name)
+
+
+@pytest.fixture(scope="module")
+def scratch(tmp_path_factory) -> Path:
+    return tmp_path_factory.mktemp("parsers")
+
+
+def parses_or_raises(parser, path, error):
+    try:
+        return parser(path)
+    except error:
+        return None  # the documented error; anything else fails the test
+
+
+@PROPERTY
+@given(content=text_files)
+def test_calib_parser_on_random_text(scratch, content):
+    result = parses_or_raises(read_calib, write(scratch, content), SequenceError)
+    if result is not None:
+        assert all(P.shape == (3, 4) and np.all(np.isfinite(P)) for P in result)
+
+
+@PROPERTY
+@given(
+    content=st.one_of(
+        text_files,
+        st.lists(st.sampled_from(["P0:", "P1:"]), min_size=1).flatmap(
+            lambda keys: st.lists(
+                st.lists(numbers, min_size=12, max_size=12), min_size=len(keys), max_size=len(keys)
+            ).map(lambda rows: "\n".join(f"{k} {' '.join(r)}" for k, r in zip(keys, rows, strict=True)))
+        ),
+    )
+)
+def test_calib_parser_on_nearly_valid_text(scratch, content):
+    parses_or_raises(read_calib, write(scratch, content), SequenceError)
+
+
+@PROPERTY
+@given(content=st.one_of(text_files, st.lists(numbers, max_size=10).map("\n".join)))
+def test_times_parser_on_random_text(scratch, content):
+    times = parses_or_raises(read_times, write(scratch, content), SequenceError)
+    if times is not None:
+        assert times.ndim == 1 and np.all(np.isfinite(times)) and np.all(np.diff(times) > 0)
+
+
+pose_rows = st.lists(
+    st.lists(st.one_of(numbers, st.sampled_from(["0", "1", "-1"])), min_size=12, max_size=12), max_size=4
+).map(lambda rows: "\n".join(" ".join(r) for r in rows))
+
+
+@PROPERTY
+@given(content=st.one_of(text_files, pose_rows, st.integers(1, 5).map(kitti_rows)))
+def test_poses_parsers_on_random_text(scratch, content):
+    path = write(scratch, content)
+    poses = parses_or_raises(read_poses, path, SequenceError)
+    if poses is not None:
+        assert poses.shape[1:] == (3, 4) and np.all(np.isfinite(poses))
+    trajectory = parses_or_raises(read_trajectory, path, TrajectoryError)
+    if trajectory is not None:
+        assert trajectory[0] is None and trajectory[1].shape[1:] == (4, 4)
+
+
+tum_rows = st.lists(
+    st.lists(st.one_of(numbers, st.sampled_from(["0", "1", "0.5"])), min_size=8, max_size=8),
+    min_size=1,
+    max_size=4,
+).map(lambda rows: "\n".join(" ".join(r) for r in rows))
+
+
+@PROPERTY
+@given(
+    content=st.one_of(
+        text_files, tum_rows, st.just("# t x y z qx qy qz qw\n0 0 0 0 0 0 0 1\n1 1 0 0 0 0 0 1")
+    )
+)
+def test_tum_parser_on_random_text(scratch, content):
+    result = parses_or_raises(read_trajectory, write(scratch, content), TrajectoryError)
+    if result is not None:
+        times, T = result
+        assert times is not None and len(times) == len(T) and np.all(np.isfinite(T))
+        np.testing.assert_allclose(
+            T[:, :3, :3] @ T[:, :3, :3].transpose(0, 2, 1), np.tile(np.eye(3), (len(T), 1, 1)), atol=1e-9
+        )

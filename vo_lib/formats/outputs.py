@@ -1,0 +1,320 @@
+"""Output folders that never cost a user a file: checked first, written whole or not at all.
+
+The rules (every command that writes follows them):
+
+* **Only new, empty or our own folders are written.** A folder this package wrote carries the
+  marker file ``.vo_lib_output.json`` (which command wrote it, and the names it wrote) and holds
+  nothing else; folders written before markers existed are known by their contents (a sample's
+  ``manifest.json``, a run's five files). Any other folder is refused with :class:`OutputError`
+  unless the caller passes ``force``; even then a folder is never replaced if it is, holds or
+  lies inside an input sequence, or if it is or holds the current folder, the home folder or this
+  package.
+* **Atomic.** Everything is written into a temporary sibling, ``.NAME.vo_lib-PID-HOST-XXXX.tmp``,
+  renamed to ``NAME`` when complete; the folder it replaces is removed only after that. A failed
+  or interrupted write removes its temporary folder (the command line turns SIGINT and SIGTERM
+  into exceptions so that this happens), and a temporary folder left by a process that no longer
+  runs (killed, power cut) is removed by the next write beside it, with a notice.
+* **Permissions follow the umask**, for folders as for files.
+"""
+
+from __future__ import annotations
+
+import errno
+import hashlib
+import json
+import os
+import re
+import shutil
+import socket
+import sys
+import tempfile
+from pathlib import Path
+
+MARKER = ".vo_lib_output.json"
+#: What a sample sequence written before markers existed holds (its ``manifest.json`` names the sample).
+_LEGACY_SEQUENCE = {
+    "image_0",
+    "image_1",
+    "calib.txt",
+    "times.txt",
+    "poses.txt",
+    "odometry.txt",
+    "manifest.json",
+}
+#: What a run wrote before markers existed.
+_LEGACY_RUN = {"poses.txt", "trajectory.tum", "timings.csv", "diagnostics.csv", "trajectory.png"}
+_FRAME_FILE = re.compile(r"\d+\.png")
+_TEMPORARY = re.compile(r"\..+\.vo_lib-(\d+)-([0-9a-f]{8})-[^/]*\.(?:tmp|old)")
+
+
+class OutputError(ValueError):
+    """An output folder that may not be written (it holds files this package did not write)."""
+
+
+def notice(message: str) -> None:
+    """One line on stderr for something the user should know that is not an error."""
+    print(f"notice: {message}", file=sys.stderr)
+
+
+def _host() -> str:
+    return hashlib.sha1(socket.gethostname().encode()).hexdigest()[:8]
+
+
+def _temporary_prefix(name: str) -> str:
+    return f".{name}.vo_lib-{os.getpid()}-{_host()}-"
+
+
+def umask() -> int:
+    """The process's umask, read without changing it where the system allows."""
+    try:
+        with open("/proc/self/status") as fh:
+            for line in fh:
+                if line.startswith("Umask:"):
+                    return int(line.split()[1], 8)
+    except (OSError, ValueError, IndexError):
+        pass
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
+
+
+def _contains(outer: Path, inner: Path) -> bool:
+    """``outer`` is ``inner`` or one of its parents."""
+    return outer == inner or outer in inner.parents
+
+
+def _describe(folder: Path) -> str:
+    files = folders = size = 0
+    for root, dirs, names in os.walk(folder):
+        folders += len(dirs)
+        files += len(names)
+        for name in names:
+            try:
+                size += os.lstat(os.path.join(root, name)).st_size
+            except OSError:
+                pass
+    amount = f"{size / 1e6:.1f} MB" if size >= 1e5 else f"{size / 1e3:.1f} kB"
+    return f"{files} file{'s' * (files != 1)} in {folders + 1} folder{'s' * (folders > 0)}, {amount}"
+
+
+def foreign_content(folder: Path) -> str | None:
+    """None if ``folder`` is empty or holds only what this package wrote there; else why not."""
+    try:
+        entries = {e.name: e for e in os.scandir(folder)}
+    except OSError as exc:
+        return f"cannot be listed ({exc.strerror or exc})"
+    if not entries:
+        return None
+    marker = folder / MARKER
+    if MARKER in entries:
+        try:
+            data = json.loads(marker.read_text(encoding="utf-8"))
+            contents = set(data["contents"])
+            if not str(data["written_by"]).startswith("vo_lib"):
+                raise ValueError
+        except (OSError, ValueError, KeyError, TypeError):
+            return f"its marker {MARKER} is damaged"
+    else:
+        try:
+            manifest = json.loads((folder / "manifest.json").read_text(encoding="utf-8"))
+            legacy = isinstance(manifest, dict) and {"sample", "fingerprint"} <= manifest.keys()
+        except (OSError, ValueError):
+            legacy = False
+        if legacy:
+            contents = _LEGACY_SEQUENCE
+        elif set(entries) <= _LEGACY_RUN and {"poses.txt", "timings.csv", "diagnostics.csv"} <= set(entries):
+            contents = _LEGACY_RUN
+        else:
+            return "it was not written by this program"
+    for name, entry in sorted(entries.items()):
+        if name == MARKER:
+            continue
+        if name not in contents:
+            return f"it holds {name}, which this program did not write"
+        if entry.is_dir(follow_symlinks=False):
+            for inner in os.scandir(entry.path):
+                if not (inner.is_file(follow_symlinks=False) and _FRAME_FILE.fullmatch(inner.name)):
+                    return f"it holds {name}/{inner.name}, which this program did not write"
+    return None
+
+
+def check_target(
+    target,
+    *,
+    force: bool = False,
+    inputs=(),
+    keep: dict | None = None,
+    option: str | None = None,
+) -> str | None:
+    """Raise :class:`OutputError` unless folder ``target`` may be (re)written.
+
+    ``inputs`` are folders read by the command: ``target`` may not be one of them, above one, or
+    inside one. ``keep`` maps folders never replaced, even with ``force``, to what they are (the
+    current folder, the home folder and this package are always among them). Returns, when
+    ``force`` replaces a folder this package did not write, a sentence saying what is replaced;
+    otherwise None.
+    """
+    label = f"{option} {target}" if option else str(target)
+    path = Path(target)
+    if path.is_symlink() and not path.exists():
+        raise OutputError(f"{label}: a symbolic link to {os.readlink(path)}, which does not exist")
+    real = path.resolve()
+    for given in inputs:
+        source = Path(given).resolve()
+        if real == source:
+            raise OutputError(f"{label}: is the input sequence; choose another output folder")
+        if _contains(real, source):
+            raise OutputError(f"{label}: holds the input sequence {source}; choose another output folder")
+        if _contains(source, real):
+            raise OutputError(
+                f"{label}: lies inside the input sequence {source}; choose another output folder"
+            )
+    guarded = {Path.cwd().resolve(): "the current folder", Path.home().resolve(): "your home folder"}
+    guarded[Path(__file__).resolve().parents[1]] = "this package"
+    for folder, what in (keep or {}).items():
+        guarded.setdefault(Path(folder).resolve(), what)
+    for folder, what in guarded.items():
+        if _contains(real, folder):
+            is_or_holds = "is" if real == folder else "holds"
+            raise OutputError(f"{label}: {is_or_holds} {what}; choose another output folder")
+    if not real.exists():
+        above = real.parent
+        while not above.exists() and above != above.parent:
+            above = above.parent
+        if not above.is_dir():
+            raise OutputError(f"{label}: cannot write there ({above} is a file)")
+        return None
+    if not real.is_dir():
+        raise OutputError(
+            f"{label}: is a file, not a folder; choose another output folder (--force replaces folders only)"
+        )
+    why = foreign_content(real)
+    if why is None:
+        return None
+    if not force:
+        raise OutputError(
+            f"{label}: the folder exists and {why}; choose another folder, or add --force to replace it"
+        )
+    return f"--force: replacing {real} ({_describe(real)}; {why})"
+
+
+def remove_stale_temporaries(parent: Path) -> list[Path]:
+    """Remove the temporary folders in ``parent`` left by processes of this machine that no longer
+    run; returns them."""
+    removed = []
+    try:
+        entries = list(os.scandir(parent))
+    except OSError:
+        return removed
+    host = _host()
+    for entry in entries:
+        match = _TEMPORARY.fullmatch(entry.name)
+        if not match or match.group(2) != host or not entry.is_dir(follow_symlinks=False):
+            continue
+        pid = int(match.group(1))
+        if pid == os.getpid():
+            continue
+        try:
+            os.kill(pid, 0)
+            continue  # still running
+        except ProcessLookupError:
+            pass
+        except (PermissionError, OverflowError, OSError):
+            continue
+        shutil.rmtree(entry.path, ignore_errors=True)
+        removed.append(Path(entry.path))
+    return removed
+
+
+def swap_in(complete: Path, target: Path) -> None:
+    """Rename ``complete`` to ``target``; an existing ``target`` is removed once that is done."""
+    try:
+        os.rename(complete, target)  # no target, or an empty folder
+        return
+    except OSError as exc:
+        if exc.errno not in (errno.ENOTEMPTY, errno.EEXIST):
+            raise
+    aside = Path(tempfile.mkdtemp(prefix=_temporary_prefix(target.name), suffix=".old", dir=target.parent))
+    os.rename(target, aside / "old")
+    try:
+        os.rename(complete, target)
+    except BaseException:
+        os.rename(aside / "old", target)
+        shutil.rmtree(aside, ignore_errors=True)
+        raise
+    shutil.rmtree(aside, ignore_errors=True)
+
+
+class OutputFolder:
+    """A folder written whole: checked on entry, filled in :attr:`path` (a temporary sibling), put
+    in place by :meth:`commit`; on any exception (or without a commit) nothing is left behind.
+
+    ::
+
+        with OutputFolder("runs/x", "vo_lib run", inputs=[sequence_path]) as out:
+            (out.path / "poses.txt").write_text(...)
+            out.commit(seed=0)
+    """
+
+    def __init__(self, target, written_by: str, *, force=False, inputs=(), keep=None, option=None):
+        self.target = Path(target)
+        self.written_by = written_by
+        self.committed = False
+        self._check = dict(force=force, inputs=tuple(inputs), keep=keep, option=option)
+        self.replacing = check_target(self.target, **self._check)
+        self.real = self.target.resolve()
+        if self.replacing:
+            notice(self.replacing)
+        self._created: list[Path] = []
+        above = self.real.parent
+        while not above.exists():
+            self._created.insert(0, above)
+            above = above.parent
+        label = f"{option} {target}" if option else str(target)
+        try:
+            for folder in self._created:
+                folder.mkdir()
+            stale = remove_stale_temporaries(self.real.parent)
+            if stale:
+                names = ", ".join(p.name for p in stale)
+                notice(f"removed {len(stale)} temporary folder(s) left by interrupted runs: {names}")
+            self.path = Path(
+                tempfile.mkdtemp(
+                    prefix=_temporary_prefix(self.real.name), suffix=".tmp", dir=self.real.parent
+                )
+            )
+            os.chmod(self.path, 0o777 & ~umask())
+        except OSError as exc:
+            self._remove_created()
+            raise OutputError(f"{label}: cannot write there ({exc.strerror or exc})") from None
+
+    def commit(self, **details) -> Path:
+        """Mark the folder as ours, check the target again (it may have changed meanwhile) and
+        rename the folder into place; returns the target."""
+        names = sorted(p.name for p in self.path.iterdir())
+        marker = {"written_by": self.written_by, "contents": names, **details}
+        (self.path / MARKER).write_text(json.dumps(marker, indent=2, sort_keys=True) + "\n", encoding="utf-8")
+        check_target(self.target, **self._check)
+        swap_in(self.path, self.real)
+        self.committed = True
+        return self.target
+
+    def discard(self) -> None:
+        if not self.committed:
+            shutil.rmtree(self.path, ignore_errors=True)
+            self._remove_created()
+
+    def _remove_created(self) -> None:
+        for folder in reversed(self._created):
+            try:
+                folder.rmdir()  # only if still empty
+            except OSError:
+                break
+        self._created = []
+
+    def __enter__(self) -> OutputFolder:
+        return self
+
+    def __exit__(self, exc_type, exc, tb) -> bool:
+        self.discard()
+        return False
