@@ -202,6 +202,8 @@ def remove_stale_temporaries(parent: Path) -> list[Path]:
     """Remove the temporary folders in ``parent`` left by processes of this machine that no longer
     run; returns them."""
     removed = []
+    if os.name == "nt":  # os.kill(pid, 0) would not test but stop the process there
+        return removed
     try:
         entries = list(os.scandir(parent))
     except OSError:
