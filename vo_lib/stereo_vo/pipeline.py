@@ -72,6 +72,7 @@ class FrameDiagnostics:
     temporal_matches: int = 0
     inliers: int = 0
     inlier_ratio: float = 0.0
+    ransac_inliers: int = 0  # rigid pipeline: 1-point RANSAC's, before the 6-DoF refinement
     theta: float = float("nan")
     rho: float = float("nan")
     odometry: bool = False

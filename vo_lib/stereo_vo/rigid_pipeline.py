@@ -254,6 +254,7 @@ class RigidStereoOdometry:
                 t5 = time.perf_counter()
                 diag.inliers = int(motion.inliers.sum())
                 diag.inlier_ratio = float(est.inliers.mean()) if est.success else 0.0
+                diag.ransac_inliers = int(est.inliers.sum()) if est.success else 0
                 increment = vehicle_increment(motion.matrix, self.mount)
                 z = chord_measurement(increment)
                 diag.theta, diag.rho = float(z[0]), float(z[1])
