@@ -191,7 +191,7 @@ class StereoVisualOdometry:
                     replace(prior, covariance=16.0 * np.asarray(prior.covariance)),
                 )
                 matches = wider if len(wider) > len(matches) else matches
-            t3 = time.perf_counter()
+            t3 = t4 = time.perf_counter()  # no estimation time unless it runs
             diag.temporal_matches = len(matches)
             if len(matches) < MIN_INLIERS:
                 reason = "too few temporal matches"

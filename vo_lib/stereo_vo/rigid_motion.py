@@ -25,7 +25,7 @@ from dataclasses import dataclass
 
 import cv2
 import numpy as np
-from scipy.spatial.transform import Rotation
+from scipy.linalg import expm, logm
 
 from vo_lib.camera import StereoCamera
 
@@ -198,10 +198,9 @@ def predict_features(w_prev: np.ndarray, camera: StereoCamera, T) -> tuple[np.nd
 
 
 def scaled_motion(T, factor: float) -> np.ndarray:
-    """The motion ``T`` repeated ``factor`` times (a real power of the rigid transform)."""
+    """The motion ``T`` repeated ``factor`` times: ``exp(factor log T)`` in SE(3), the same screw
+    motion run for ``factor`` times as long (``factor = 2`` gives ``T @ T``)."""
     T = np.asarray(T, float)
-    rotvec = Rotation.from_matrix(T[:3, :3]).as_rotvec()
-    out = np.eye(4)
-    out[:3, :3] = Rotation.from_rotvec(factor * rotvec).as_matrix()
-    out[:3, 3] = factor * T[:3, 3]
-    return out
+    if factor == 1.0:
+        return T.copy()
+    return np.real(expm(factor * np.real(logm(T))))

@@ -234,7 +234,7 @@ class RigidStereoOdometry:
             reason = "too few stereo features"
         else:
             matches = self._match(features, T_pred)
-            t3 = time.perf_counter()
+            t3 = t4 = t5 = time.perf_counter()  # stages that do not run take no time
             diag.temporal_matches = len(matches)
             if len(matches) < MIN_INLIERS:
                 reason = "too few temporal matches"
@@ -242,7 +242,7 @@ class RigidStereoOdometry:
                 est = one_point_ransac(
                     matches.w_prev, matches.w_curr, self.camera, rng=self.rng, pixel_sigma=1.0
                 )
-                t4 = time.perf_counter()
+                t4 = t5 = time.perf_counter()
                 if est.success:
                     R0, T0 = motion_matrices(est.theta, est.rho)
                     guess = np.eye(4)

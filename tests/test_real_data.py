@@ -1,0 +1,115 @@
+"""The stereo VO on real camera images: every sequence under ../shared/realdata, and the
+Middlebury Motorcycle pair that ships with scikit-image.
+
+Acceptance on each real sequence, without odometry: final position error at most 0.5 % of the
+distance travelled, final heading error at most 0.3 deg, at most 2 frames (or 2 %) flagged. With
+the odometry of the sequence (KITTI raw: speed and yaw rate from oxts.txt), the fused estimate
+meets the same position bound and beats odometry alone.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import cv2
+import numpy as np
+import pytest
+
+from vo_lib.formats.sequence import read_sequence
+from vo_lib.geometry import planar_from_camera_poses, wrap_angle
+from vo_lib.stereo_vo.pipeline import run_sequence
+from vo_lib.stereo_vo.vehicle import vehicle_of
+
+ROOT = Path(__file__).resolve().parents[1]
+REALDATA = ROOT.parent / "shared" / "realdata"
+SEQUENCES = (
+    sorted(p for p in REALDATA.iterdir() if (p / "image_0").is_dir() and (p / "poses.txt").is_file())
+    if REALDATA.is_dir()
+    else []
+)
+needs_real = pytest.mark.skipif(
+    not SEQUENCES, reason=f"no real stereo sequences with ground truth under {REALDATA}"
+)
+
+MAX_FINAL_PERCENT = 0.5
+MAX_FINAL_HEADING_DEG = 0.3
+
+
+def final_errors(seq, camera_poses) -> tuple[float, float, float]:
+    """Final position error (% of the distance travelled) and heading error (deg) against truth."""
+    truth = seq.poses_4x4()
+    distance = float(np.sum(np.linalg.norm(np.diff(truth[:, :3, 3], axis=0), axis=1)))
+    position = float(np.linalg.norm(camera_poses[-1, :3, 3] - truth[-1, :3, 3]))
+    mount = vehicle_of(seq).mount
+    yaw_est = planar_from_camera_poses(camera_poses, mount)[-1, 2]
+    yaw_true = planar_from_camera_poses(truth, mount)[-1, 2]
+    return 100 * position / distance, abs(np.degrees(wrap_angle(yaw_est - yaw_true))), distance
+
+
+@pytest.fixture(scope="module", params=SEQUENCES, ids=[p.name for p in SEQUENCES])
+def real_run(request):
+    seq = read_sequence(request.param)
+    return seq, run_sequence(seq, use_odometry=False)
+
+
+@needs_real
+def test_vo_alone_meets_the_acceptance_figures(real_run):
+    seq, result = real_run
+    assert result.camera_poses is not None and result.camera_poses.shape == (len(seq), 4, 4)
+    percent, heading, distance = final_errors(seq, result.camera_poses)
+    print(f"{seq.path.name}: {percent:.3f} % of {distance:.1f} m, heading {heading:.3f} deg")
+    assert percent <= MAX_FINAL_PERCENT
+    assert heading <= MAX_FINAL_HEADING_DEG
+    assert len(result.flagged) <= max(2, int(0.02 * len(seq)))
+
+
+@needs_real
+def test_refinement_keeps_most_of_the_ransac_inliers(real_run):
+    _, result = real_run
+    kept = [d.inliers / d.ransac_inliers for d in result.diagnostics[1:] if d.ransac_inliers]
+    assert len(kept) >= 0.9 * (len(result.diagnostics) - 1)
+    assert 0.2 < np.median(kept) <= 1.5  # the refined model may also win back matches
+
+
+@needs_real
+@pytest.mark.parametrize("path", SEQUENCES, ids=[p.name for p in SEQUENCES])
+def test_fusion_with_odometry_beats_odometry_alone(path):
+    seq = read_sequence(path)
+    vehicle = vehicle_of(seq)
+    if vehicle.odometry is None:
+        pytest.skip(f"{path.name} has neither odometry.txt nor oxts.txt")
+    fused = run_sequence(seq, use_odometry=True)
+    percent, _, distance = final_errors(seq, fused.camera_poses)
+    truth = planar_from_camera_poses(seq.poses, vehicle.mount)
+    odometry = vehicle.odometry_model.integrate(vehicle.odometry[1:])
+    odometry_percent = 100 * np.linalg.norm(odometry[-1, :2] - truth[-1, :2]) / distance
+    print(f"{path.name}: fused {percent:.3f} %, odometry alone {odometry_percent:.3f} %")
+    assert percent <= MAX_FINAL_PERCENT
+    assert percent < odometry_percent
+
+
+def test_motorcycle_disparities_at_least_as_good_as_sgbm():
+    """Sub-pixel disparity of our matched features against the Middlebury ground truth, beside
+    OpenCV's semi-global matcher sampled at the same pixels."""
+    skdata = pytest.importorskip("skimage.data")
+    from vo_lib.camera import StereoCamera
+    from vo_lib.stereo_vo.pyramid_features import PyramidFrontEnd
+
+    left_rgb, right_rgb, truth = skdata.stereo_motorcycle()
+    left = cv2.cvtColor(left_rgb, cv2.COLOR_RGB2GRAY)
+    right = cv2.cvtColor(right_rgb, cv2.COLOR_RGB2GRAY)
+    h, w = left.shape
+    camera = StereoCamera(fx=700.0, fy=700.0, cx=w / 2, cy=h / 2, baseline=0.2, width=w, height=h)
+    features = PyramidFrontEnd(camera, max_disparity=70).process(left, right)
+    sgbm = cv2.StereoSGBM_create(
+        0, 64, 5, P1=8 * 25, P2=32 * 25, uniquenessRatio=10, mode=cv2.STEREO_SGBM_MODE_HH
+    )
+    semi_global = sgbm.compute(left, right).astype(np.float32) / 16
+    u, v, d = features.w.T
+    ui, vi = np.rint(u).astype(int), np.rint(v).astype(int)
+    g, s = truth[vi, ui], semi_global[vi, ui]
+    ok = np.isfinite(g) & (s > 0)
+    ours, theirs = np.median(np.abs(d[ok] - g[ok])), np.median(np.abs(s[ok] - g[ok]))
+    print(f"median |error|: ours {ours:.3f} px, StereoSGBM {theirs:.3f} px at {ok.sum()} features")
+    assert ok.sum() >= 200
+    assert ours <= theirs

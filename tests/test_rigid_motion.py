@@ -1,0 +1,148 @@
+"""6-DoF refinement, the vehicle frame, compiled matching, KITTI raw files and the rigid pipeline."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from vo_lib.camera import StereoCamera
+from vo_lib.formats.kitti_raw import camera_in_imu_frame, read_oxts, wheel_distances_from_oxts
+from vo_lib.formats.sequence import SequenceError
+from vo_lib.geometry import camera_mount
+from vo_lib.stereo_vo.features import best_matches, best_matches_reference
+from vo_lib.stereo_vo.rigid_motion import (
+    predict_features,
+    project,
+    refine_rigid_motion,
+    rotation_matrix,
+    scaled_motion,
+)
+from vo_lib.stereo_vo.rigid_pipeline import (
+    chord_measurement,
+    vehicle_increment,
+    with_planar_increment,
+)
+from vo_lib.stereo_vo.vehicle import CAR_GAUGE, car_odometry_model
+
+
+@pytest.fixture
+def kitti_camera() -> StereoCamera:
+    return StereoCamera(fx=721.5, fy=721.5, cx=609.6, cy=172.9, baseline=0.537, width=1242, height=375)
+
+
+def motion(rotvec, t) -> np.ndarray:
+    T = np.eye(4)
+    T[:3, :3], T[:3, 3] = rotation_matrix(rotvec), t
+    return T
+
+
+def scene(rng, n=300) -> np.ndarray:
+    return np.column_stack([rng.uniform(-15, 15, n), rng.uniform(-3, 1.6, n), rng.uniform(4, 60, n)])
+
+
+def test_refinement_recovers_a_known_motion_and_rejects_outliers(kitti_camera, rng):
+    P = scene(rng)
+    T = motion([0.004, -0.03, 0.002], [0.05, -0.02, -1.2])
+    w_prev = project(P, kitti_camera)
+    w_curr = project(P @ T[:3, :3].T + T[:3, 3], kitti_camera)
+    w_curr[:, :2] += rng.normal(0, 0.2, (len(P), 2))
+    bad = rng.choice(len(P), 60, replace=False)
+    w_curr[bad, :2] += rng.uniform(5, 40, (60, 2)) * rng.choice([-1, 1], (60, 2))
+    guess = motion([0, -0.02, 0], [0, 0, -1.0])  # roughly what 1-point RANSAC gives
+    result = refine_rigid_motion(w_prev, w_curr, kitti_camera, guess)
+    assert result.success
+    assert np.allclose(result.R, T[:3, :3], atol=2e-4)
+    assert np.allclose(result.t, T[:3, 3], atol=0.01)
+    assert not result.inliers[bad].any()
+    assert result.inliers.sum() >= 0.9 * (len(P) - 60)
+    assert 0.1 < result.rms_pixels < 0.5
+    sd = np.sqrt(np.diag(result.covariance))
+    assert np.all(sd > 0) and sd[5] < 0.01  # forward translation known to centimetres
+
+
+def test_refinement_fails_cleanly_with_too_few_matches(kitti_camera, rng):
+    P = scene(rng, 4)
+    w = project(P, kitti_camera)
+    result = refine_rigid_motion(w, w, kitti_camera, np.eye(4))
+    assert not result.success and np.isinf(result.covariance).all()
+
+
+def test_prediction_and_scaled_motion(kitti_camera, rng):
+    P = scene(rng, 50)
+    T = motion([0.0, 0.02, 0.0], [0.0, 0.0, -1.0])
+    twice = scaled_motion(T, 2.0)
+    pred, ok = predict_features(project(P, kitti_camera), kitti_camera, twice)
+    assert ok.all()
+    assert np.allclose(pred, project(P @ (T @ T)[:3, :3].T + (T @ T)[:3, 3], kitti_camera), atol=1e-6)
+
+
+def test_vehicle_increment_of_a_camera_ahead_of_the_axis():
+    mount = camera_mount(forward=1.2, height=1.6)
+    # the vehicle turns by 0.1 rad about its origin, moving 1 m along the chord
+    theta = 0.1
+    inc = np.array([np.cos(theta / 2), np.sin(theta / 2), theta])
+    V = np.eye(4)
+    c, s = np.cos(theta), np.sin(theta)
+    V[:2, :2] = [[c, -s], [s, c]]
+    V[:2, 3] = inc[:2]
+    T_cam = np.linalg.inv(np.linalg.inv(mount) @ V @ mount)  # curr-from-prev of the camera
+    assert np.allclose(vehicle_increment(T_cam, mount), inc)
+    assert np.allclose(chord_measurement(inc), [theta, 1.0, 0.0])
+    # replacing the planar part by itself changes nothing; by another, gives that one back
+    assert np.allclose(with_planar_increment(T_cam, mount, inc), T_cam)
+    other = np.array([0.8, 0.01, -0.05])
+    assert np.allclose(vehicle_increment(with_planar_increment(T_cam, mount, other), mount), other)
+
+
+def test_compiled_best_matches_equal_the_numpy_rule():
+    rng = np.random.default_rng(7)
+    for _ in range(200):
+        n_a, n_b = rng.integers(1, 50, 2)
+        m = int(rng.integers(0, 300))
+        ia, ib = rng.integers(0, n_a, m), rng.integers(0, n_b, m)
+        dist = rng.integers(0, 25, m).astype(np.int32)
+        for mutual in (True, False):
+            for ratio in (0.8, 1.0):
+                fast = best_matches(ia, ib, dist, n_a, n_b, 18, ratio, mutual)
+                slow = best_matches_reference(ia, ib, dist, n_a, n_b, 18, ratio, mutual)
+                for x, y in zip(fast, slow, strict=True):
+                    assert np.array_equal(x, y)
+
+
+def test_oxts_reader_names_file_and_line(tmp_path):
+    path = tmp_path / "oxts.txt"
+    path.write_text(" ".join(["1"] * 30) + "\n" + " ".join(["1"] * 29) + "\n")
+    with pytest.raises(SequenceError, match=r"oxts.txt, line 2: expected 30 numbers; got 29"):
+        read_oxts(path)
+    path.write_text(" ".join(["1"] * 29 + ["nan"]) + "\n")
+    with pytest.raises(SequenceError, match="line 1: not every number is finite"):
+        read_oxts(path)
+    path.write_text(" ".join(["x"] * 30) + "\n")
+    with pytest.raises(SequenceError, match="line 1: expected 30 numbers"):
+        read_oxts(path)
+
+
+def test_wheel_distances_give_back_speed_and_yaw_rate():
+    times = np.arange(5) * 0.1
+    oxts = np.zeros((5, 30))
+    oxts[:, 8] = [10, 10, 12, 12, 12]  # forward speed
+    oxts[:, 19] = [0.0, 0.1, 0.1, -0.2, -0.2]  # yaw rate
+    u = wheel_distances_from_oxts(oxts, times, CAR_GAUGE)
+    assert np.allclose(u[0], 0)
+    model = car_odometry_model()
+    s, dpsi = model.increment(u[1:])
+    assert np.allclose(s, [1.0, 1.1, 1.2, 1.2])
+    assert np.allclose(dpsi, [0.005, 0.01, -0.005, -0.02])
+
+
+def test_camera_in_imu_frame_from_raw_calibration(tmp_path):
+    (tmp_path / "calib_imu_to_velo.txt").write_text("R: 1 0 0 0 1 0 0 0 1\nT: -0.8 0.3 -0.8\n")
+    # velodyne (x fwd, y left, z up) to camera (x right, y down, z fwd)
+    (tmp_path / "calib_velo_to_cam.txt").write_text("R: 0 -1 0 0 0 -1 1 0 0\nT: 0 -0.08 -0.27\n")
+    (tmp_path / "calib_cam_to_cam.txt").write_text("R_rect_00: 1 0 0 0 1 0 0 0 1\n")
+    T = camera_in_imu_frame(tmp_path)
+    assert np.allclose(T[:3, :3], [[0, 0, 1], [-1, 0, 0], [0, -1, 0]])
+    assert np.allclose(T[:3, 3], [0.8 + 0.27, -0.3, 0.8 - 0.08])  # velodyne in IMU, plus camera in velodyne
+    (tmp_path / "calib_cam_to_cam.txt").write_text("R_rect_01: 1 0 0 0 1 0 0 0 1\n")
+    with pytest.raises(SequenceError, match="no line starting with 'R_rect_00:'"):
+        camera_in_imu_frame(tmp_path)
