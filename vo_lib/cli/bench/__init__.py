@@ -13,6 +13,7 @@ from collections.abc import Callable
 
 from vo_lib.cli.bench.bench_lidar_tracking import bench_odometers, bench_tracking
 from vo_lib.cli.bench.bench_line_slam import bench_observers
+from vo_lib.cli.bench.bench_real import bench_real
 from vo_lib.cli.bench.bench_sim import bench_sensors
 from vo_lib.cli.bench.bench_stereo_vo import bench_frontend, bench_geometry, bench_pipeline, bench_ransac
 
@@ -25,4 +26,5 @@ BENCHES: dict[str, Callable[[], dict[str, float]]] = {
     "observers": bench_observers,
     "tracking": bench_tracking,
     "odometers": bench_odometers,
+    "real": bench_real,
 }
