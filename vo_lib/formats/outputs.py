@@ -151,8 +151,8 @@ def check_target(
     ``inputs`` are folders read by the command: ``target`` may not be one of them, above one, or
     inside one. ``keep`` maps folders never replaced, even with ``force``, to what they are (the
     current folder, the home folder and this package are always among them). Returns, when
-    ``force`` replaces a folder this package did not write, a sentence saying what is replaced;
-    otherwise None.
+    ``force`` replaces a folder this package did not write, what is replaced (path, size and
+    why); otherwise None.
     """
     label = f"{option} {target}" if option else str(target)
     path = Path(target)
@@ -169,8 +169,12 @@ def check_target(
             raise OutputError(
                 f"{label}: lies inside the input sequence {source}; choose another output folder"
             )
-    guarded = {Path.cwd().resolve(): "the current folder", Path.home().resolve(): "your home folder"}
-    guarded[Path(__file__).resolve().parents[1]] = "this package"
+    guarded = {Path(__file__).resolve().parents[1]: "this package"}
+    for where, what in ((Path.cwd, "the current folder"), (Path.home, "your home folder")):
+        try:
+            guarded[where().resolve()] = what
+        except (OSError, RuntimeError):  # no current folder (deleted) or no home
+            pass
     for folder, what in (keep or {}).items():
         guarded.setdefault(Path(folder).resolve(), what)
     for folder, what in guarded.items():
@@ -195,7 +199,7 @@ def check_target(
         raise OutputError(
             f"{label}: the folder exists and {why}; choose another folder, or add --force to replace it"
         )
-    return f"--force: replacing {real} ({_describe(real)}; {why})"
+    return f"{real} ({_describe(real)}; {why})"
 
 
 def remove_stale_temporaries(parent: Path) -> list[Path]:
@@ -224,7 +228,8 @@ def remove_stale_temporaries(parent: Path) -> list[Path]:
         except (PermissionError, OverflowError, OSError):
             continue
         shutil.rmtree(entry.path, ignore_errors=True)
-        removed.append(Path(entry.path))
+        if not os.path.lexists(entry.path):
+            removed.append(Path(entry.path))
     return removed
 
 
@@ -265,8 +270,6 @@ class OutputFolder:
         self._check = dict(force=force, inputs=tuple(inputs), keep=keep, option=option)
         self.replacing = check_target(self.target, **self._check)
         self.real = self.target.resolve()
-        if self.replacing:
-            notice(self.replacing)
         self._created: list[Path] = []
         above = self.real.parent
         while not above.exists():
@@ -296,9 +299,11 @@ class OutputFolder:
         names = sorted(p.name for p in self.path.iterdir())
         marker = {"written_by": self.written_by, "contents": names, **details}
         (self.path / MARKER).write_text(json.dumps(marker, indent=2, sort_keys=True) + "\n", encoding="utf-8")
-        check_target(self.target, **self._check)
+        replacing = check_target(self.target, **self._check)
         swap_in(self.path, self.real)
         self.committed = True
+        if replacing:
+            notice(f"--force: replaced {replacing}")
         return self.target
 
     def discard(self) -> None:

@@ -42,7 +42,7 @@ import numpy as np
 
 from vo_lib.camera import StereoCamera
 from vo_lib.formats.outputs import OutputFolder, check_target, swap_in
-from vo_lib.formats.poses import rotation_problem
+from vo_lib.formats.poses import ROTATION_TOLERANCE, rotation_problem
 from vo_lib.geometry import as_homogeneous
 
 IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".pgm", ".bmp", ".tif", ".tiff")
@@ -134,14 +134,16 @@ def read_rows(path: Path, count: int, what: str) -> np.ndarray:
 def read_poses(path: Path) -> np.ndarray:
     """``(N, 3, 4)`` poses of a KITTI ``poses.txt`` (12 numbers a line, a rotation then a
     translation); raises :class:`SequenceError`."""
-    rows = []
-    for line_no, text in _lines(path):
-        pose = _numbers(path, line_no, text, 12, "a 3x4 pose").reshape(3, 4)
-        problem = rotation_problem(pose[:, :3])
-        if problem:
-            raise SequenceError(f"{path}, line {line_no}: {problem}")
-        rows.append(pose)
-    return np.array(rows).reshape(-1, 3, 4)
+    lines = _lines(path)
+    poses = np.array([_numbers(path, n, text, 12, "a 3x4 pose") for n, text in lines]).reshape(-1, 3, 4)
+    R = poses[:, :, :3]
+    with np.errstate(all="ignore"):  # huge entries overflow: not rotations either
+        off = np.max(np.abs(R.transpose(0, 2, 1) @ R - np.eye(3)), axis=(1, 2), initial=0.0)
+        bad = ~(off <= ROTATION_TOLERANCE) | (np.linalg.det(R) < 0) if len(R) else off > 0
+    if np.any(bad):
+        k = int(np.argmax(bad))
+        raise SequenceError(f"{path}, line {lines[k][0]}: {rotation_problem(R[k])}")
+    return poses
 
 
 _DEVNULL: int | None = None  # a descriptor of os.devnull, opened on first use
@@ -274,20 +276,21 @@ def _image_files(folder: Path) -> list[Path]:
     if not folder.is_dir():
         raise SequenceError(f"{folder}: missing image folder")
     try:
-        files = [
-            p
-            for p in folder.iterdir()
-            if p.suffix.lower() in IMAGE_SUFFIXES and not p.name.startswith(".") and p.is_file()
-        ]
+        with os.scandir(folder) as entries:
+            names = [
+                e.name
+                for e in entries
+                if os.path.splitext(e.name)[1].lower() in IMAGE_SUFFIXES
+                and not e.name.startswith(".")
+                and e.is_file()
+            ]
     except OSError as exc:
         raise SequenceError(f"{folder}: cannot list the images ({exc.strerror or exc})") from None
-    files.sort(key=lambda p: (frame_order(p.name), p.name))
-    for a, b in zip(files, files[1:], strict=False):
-        if frame_order(a.name) == frame_order(b.name):
-            raise SequenceError(
-                f"{folder}: {a.name} and {b.name} carry the same frame number; keep one file per frame"
-            )
-    return files
+    keyed = sorted((frame_order(name), name) for name in names)
+    for (key_a, a), (key_b, b) in zip(keyed, keyed[1:], strict=False):
+        if key_a == key_b:
+            raise SequenceError(f"{folder}: {a} and {b} carry the same frame number; keep one file per frame")
+    return [folder / name for _, name in keyed]
 
 
 def _one_side_only(root: Path, left: list[Path], right: list[Path]) -> str:
