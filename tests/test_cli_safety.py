@@ -145,6 +145,18 @@ def damaged_png_data(ws):
     path.write_bytes(bytes(data))
 
 
+def as_jpeg(ws):
+    for path in (ws / "seq").glob("image_*/*.png"):
+        assert cv2.imwrite(str(path.with_suffix(".jpg")), cv2.imread(str(path), cv2.IMREAD_UNCHANGED))
+        path.unlink()
+
+
+def truncated_jpeg(ws):
+    as_jpeg(ws)
+    path = ws / "seq" / "image_0" / "000001.jpg"
+    path.write_bytes(path.read_bytes()[:-200])
+
+
 def run_once(out: str):
     def setup(ws):
         assert main(["run", "--sequence", "seq", "--out", out]) == 0
@@ -326,6 +338,8 @@ CASES = [
     Case(
         "not-an-image", [*RUN], 2, "frame 1: cannot read the image", edit("seq/image_0/000001.png", b"hello")
     ),
+    Case("jpeg-sequence", [*RUN, "--out", "out"], 0, "wrote", as_jpeg, ("out",)),
+    Case("truncated-jpeg", [*RUN], 2, "000001.jpg, frame 1: truncated JPEG", truncated_jpeg),
     Case(
         "16-bit-image",
         [*RUN],

@@ -18,7 +18,8 @@ A real KITTI odometry sequence loads unchanged. The rules of reading:
   (``1.png`` and ``01.png``) are an error. Hidden files (``._000001.png`` and the like) are ignored.
 * **Every image header is checked when the sequence is opened**, cheaply (PNG headers and end
   markers are read without decoding; other formats through Pillow's lazy open): size equal to
-  the first image's, 8 bits per channel, one to four channels, PNG files complete. What can only
+  the first image's, 8 bits per channel, one to four channels, PNG and JPEG files complete (their
+  end marker present). What can only
   be found by decoding (damaged compressed data) raises when the frame is read.
 * Every problem raises one :class:`SequenceError` naming the file (and line or frame) and what
   was expected; the number of timestamps, poses and odometry rows must equal the frame count.
@@ -48,6 +49,7 @@ from vo_lib.geometry import as_homogeneous
 IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".pgm", ".bmp", ".tif", ".tiff")
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 PNG_END = b"\x00\x00\x00\x00IEND\xaeB`\x82"
+JPEG_START, JPEG_END = b"\xff\xd8", b"\xff\xd9"
 #: Channels of each PNG colour type as OpenCV decodes it (palette images become BGR).
 PNG_CHANNELS = {0: 1, 2: 3, 3: 3, 4: 4, 6: 4}
 #: Pillow modes of 8 bits per channel (or fewer, widened to 8 when decoded).
@@ -209,6 +211,10 @@ def image_header(path: Path, frame: int | None = None) -> tuple[int, int, int]:
                             f"{where}: truncated PNG (no end chunk); expected a complete image"
                         )
                 return width, height, depth
+            if head.startswith(JPEG_START):
+                fh.seek(max(0, size - 65536))
+                if JPEG_END not in fh.read():
+                    raise SequenceError(f"{where}: truncated JPEG (no end marker); expected a complete image")
     except OSError as exc:
         raise SequenceError(f"{where}: cannot open the image ({exc.strerror or exc})") from None
     return _header_other(path, where)
@@ -223,7 +229,7 @@ def _header_other(path: Path, where: str) -> tuple[int, int, int]:
             width, height = im.size
             return width, height, 8 if im.mode in EIGHT_BIT_MODES else 16
     except Exception:  # Pillow missing, or a file it cannot read: let OpenCV try
-        img = cv2.imread(str(path), cv2.IMREAD_UNCHANGED)
+        img = _imread_quietly(path)
         if img is None or img.size == 0:
             raise SequenceError(f"{where}: cannot read the image (damaged or not an image)") from None
         return img.shape[1], img.shape[0], 8 * img.dtype.itemsize
