@@ -3,7 +3,7 @@
 The steps are those of :mod:`vo_lib.stereo_vo.pipeline` (Fig. 3 of the paper); what changes is
 the model of the motion between two frames:
 
-1. **stereo processing** at three scales (:mod:`~vo_lib.stereo_vo.pyramid_features`);
+1. **stereo processing** at two scales (:mod:`~vo_lib.stereo_vo.pyramid_features`);
 2. **prediction**: the last measured 6-DoF motion, repeated (constant velocity), with its planar
    part (yaw and ground-plane translation of the vehicle) taken from the Kalman filter, which
    moves it with the odometry when the sequence has some;
