@@ -814,7 +814,7 @@ text_files = st.one_of(
     st.binary(max_size=100),
 )
 PROPERTY = settings(
-    max_examples=150, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture]
+    max_examples=100, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture]
 )
 
 
@@ -906,3 +906,14 @@ def test_tum_parser_on_random_text(scratch, content):
         np.testing.assert_allclose(
             T[:, :3, :3] @ T[:, :3, :3].transpose(0, 2, 1), np.tile(np.eye(3), (len(T), 1, 1)), atol=1e-9
         )
+
+
+def test_frames_beyond_a_sample_ask_for_the_whole_sample_with_a_notice(tmp_path, monkeypatch, capsys):
+    from vo_lib.cli.run import input_path
+    from vo_lib.data import sample_path
+
+    monkeypatch.setenv("VO_LIB_DATA", str(tmp_path))
+    assert input_path("corridor", 10) == (sample_path("corridor", 10), 10)
+    assert input_path("corridor", 10_000) == (sample_path("corridor"), None)
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == ["notice: --frames 10000: sample corridor has 541 frames; running all 541"]

@@ -45,7 +45,7 @@ def input_path(name_or_path: str, frames: int | None) -> tuple[Path, int | None]
     from vo_lib.data import sample_path
     from vo_lib.sim.samples import get_sample
 
-    if name_or_path in SAMPLES and not Path(name_or_path).exists():
+    if is_sample(name_or_path):
         full = get_sample(name_or_path).frames
         if frames is not None and frames > full:
             notice(f"--frames {frames}: sample {name_or_path} has {full} frames; running all {full}")
@@ -59,14 +59,22 @@ def input_path(name_or_path: str, frames: int | None) -> tuple[Path, int | None]
     return Path(name_or_path), frames
 
 
-def resolve_sequence(name_or_path: str, frames: int | None, odometry: bool = True):
-    """A loaded sequence for a sample name (generated on first use) or a KITTI-layout folder."""
+def is_sample(name_or_path: str) -> bool:
+    return name_or_path in SAMPLES and not Path(name_or_path).exists()
+
+
+def resolve_sequence(name_or_path: str, frames: int | None, odometry: bool = True, checked: bool = False):
+    """A loaded sequence for a sample name (generated on first use) or a KITTI-layout folder.
+
+    ``checked``: ``frames`` already went through :func:`input_path`.
+    """
     from vo_lib.data import load_sequence
 
-    _, frames = input_path(name_or_path, frames)
+    if not checked:
+        _, frames = input_path(name_or_path, frames)
     return load_sequence(
         name_or_path,
-        frames=frames if name_or_path in SAMPLES else None,
+        frames=frames if is_sample(name_or_path) else None,
         odometry=odometry,
         progress=sys.stderr.isatty(),
     )
@@ -173,7 +181,7 @@ def run_command(
         raise UsageError(f"--frames {frames}: need at least 2 frames")
     if seed < 0:
         raise UsageError(f"--seed {seed}: expected a whole number >= 0")
-    source, _ = input_path(name, frames)
+    source, load_frames = input_path(name, frames)
     out_dir = Path(out) if out else Path("runs") / Path(name).name
     from vo_lib.data import data_dir
 
@@ -182,8 +190,8 @@ def run_command(
         out_dir, "vo_lib run", force=force, inputs=[source], keep=keep, option="--out"
     ) as output:
         tmp = output.path
-        seq = resolve_sequence(name, frames, odometry=not no_odometry)
-        if frames is not None and frames > len(seq):
+        seq = resolve_sequence(name, load_frames, odometry=not no_odometry, checked=True)
+        if frames is not None and frames > len(seq) and not is_sample(name):  # samples: said above
             notice(f"--frames {frames}: {seq.path} has {len(seq)} frames; running all {len(seq)}")
         n = len(seq) if frames is None else min(frames, len(seq))
         mount = camera_mount(height=CAMERA_HEIGHT)
