@@ -26,7 +26,8 @@
 #   and how to read equations that were printed garbled;
 # - how PCA of the best samples finds the direction of largest error, and how a second sensor
 #   fixes just that direction;
-# - how seed 004's 6-DoF PnP odometer compares with seed 000's 1-point method.
+# - how seed 004's 6-DoF PnP odometer compares with seed 000's 1-point method;
+# - how to check that an indicator can fail before trusting a test that it passes.
 #
 # **Prerequisites**: notebooks 04 (world, laser), 05 (stereo front end), 08 (the 1-point pipeline).
 #
@@ -48,6 +49,7 @@ from vo_lib.lidar_tracking.corridor_experiment import (
     run_experiment,
     run_tracking,
     unoccluded,
+    without_umbrella,
 )
 from vo_lib.lidar_tracking.likelihood_field import LikelihoodField
 from vo_lib.lidar_tracking.pnp_odometry import PnpVisualOdometry
@@ -80,6 +82,7 @@ for ax, x in zip(axes, (3.0, 9.0, 16.0), strict=True):
     pts = scan.points() + (x, 0.0)
     ax.plot(pts[:, 0], pts[:, 1], ".", ms=2, color="C3")
     ax.plot(x, 0, "k>")
+    ax.set_aspect("equal", adjustable="box")  # keep the limits below; the box takes the aspect
     ax.set_xlim(x - 6, x + 10.5)
     ax.set_ylim(-2, 2)
 axes[0].legend(fontsize="x-small", loc="lower right")
@@ -100,15 +103,34 @@ for x in (3.0, 9.0, 11.0, 16.0, 23.0):
 ax.set_xlabel("pose offset along the corridor [m]")
 ax.set_ylabel("score - best score")
 ax.legend(fontsize="small")
+ax.set_title("Score of poses shifted along the corridor")
 for x in (9.0, 11.0):
     assert np.ptp(profiles[x]) < 0.5  # flat: nothing fixes the position along the corridor
 for x in (3.0, 16.0, 23.0):
     assert np.ptp(profiles[x]) > 10 and abs(offsets[np.argmax(profiles[x])]) <= 0.03
 
+
+def flat_positions(world_):
+    """Positions (3-18 m) whose noise-free score profile along the corridor varies by less than 0.5."""
+    xs = np.arange(3.0, 18.0, 0.1)
+    flat = []
+    for x in xs:
+        pts = TIM551.scan(world_.segments_array(), (x, 0.0, 0.0)).points()
+        poses = np.column_stack([x + offsets, np.zeros_like(offsets), np.zeros_like(offsets)])
+        flat.append(np.ptp(field.score(poses, pts)) < 0.5)
+    return xs[np.array(flat)]
+
+
+flat_here = flat_positions(world)
+print(f"flat along the corridor from x = {flat_here.min():.1f} to {flat_here.max():.1f} m")
+assert np.all(np.diff(flat_here) < 0.15)  # one stretch
+assert flat_positions(without_umbrella(world)).size == 0
+
 # %% [markdown]
-# Between x ≈ 6.4 (the hydrant leaves the 270° field of view) and x ≈ 13 (the cross walls come
-# within 10 m, the second pillar shows past the umbrella) the score is flat along the corridor.
-# Without the umbrella the second pillar would be visible from x = 5 on.
+# Between the stretch's ends (printed) the score is flat along the corridor: behind the robot the
+# hydrant has left the 270° field of view, ahead the cross walls are beyond 10 m and the second
+# pillar hides behind the umbrella. Without the umbrella no position is flat: the second pillar
+# is in view all along.
 #
 # ## 2. The paper's visual odometer and seed 000's, side by side
 #
@@ -128,36 +150,54 @@ truth_200 = rendered.truth() - rendered.truth()[0]
 pnp = PnpVisualOdometry(rendered.camera)
 pnp_poses = planar_from_camera_poses(np.stack([pnp.process(a, b) for a, b, _ in images]), rendered.mount)
 one = run_frames(iter([(a, b, None) for a, b, _ in images]), rendered.camera)
+final_200 = {}
 for name, poses in (
     ("PnP + local map (seed 004)", pnp_poses),
     ("1-point (seed 000)", one.poses - one.poses[0]),
 ):
-    err = np.hypot(*(poses[-1, :2] - truth_200[-1, :2]))
-    print(f"{name:28s} final error {100 * err:.2f} cm after {np.hypot(*truth_200[-1, :2]):.1f} m")
+    final_200[name] = np.hypot(*(poses[-1, :2] - truth_200[-1, :2]))
+    print(f"{name:28s} final error {100 * final_200[name]:.2f} cm after {np.hypot(*truth_200[-1, :2]):.1f} m")
 print(
     "PnP: key frames in the local map at the end:",
     pnp.steps[-1].keyframes,
     "; brute-force frames:",
     sum(s.brute_force for s in pnp.steps),
 )
-assert np.hypot(*(pnp_poses[-1, :2] - truth_200[-1, :2])) < 0.05
+best = min(final_200, key=final_200.get)
+print(f"closer to the truth after 200 frames: {best}")
+assert max(final_200.values()) < 0.03  # both within 3 cm after 10 m
 
 # %% [markdown]
-# `python -m vo_lib bench odometers` times both on the whole corridor (541 frames, 27 m): the PnP
-# odometer takes about 15–16 ms per frame and ends 1.5 cm off (0.06 %); the 1-point pipeline takes
-# about 7–8 ms and ends 3.5 cm off (0.13 %). Along a straight corridor the general 6-DoF solution
-# is the more accurate one here; the 1-point model is the faster, and (notebook 08) shines where
-# its motion model holds and matches are few.
+# On this stretch both odometers end within centimetres of the truth; which one ends closer
+# (printed) changes with the stretch and the seed, so one run does not rank them.
+# `python -m vo_lib bench odometers` runs both over the whole corridor with their times per
+# frame. The 1-point model needs fewer matches and less work per frame, and (notebook 08) shines
+# where its motion model holds; the 6-DoF PnP odometer assumes nothing about the motion.
 #
-# For the tracking experiment the PnP odometer runs on the whole rendered corridor:
+# For the tracking experiment the PnP odometer runs on the whole rendered corridor. Its errors
+# against the ground truth, with the statistics of the paper's Table I (the paper's visual
+# odometer was a Kinect-based one on a real robot; ours sees rendered images):
 
 # %%
 vo, vo_seconds = corridor_visual_odometry()
 truth0, _ = corridor_drive(0)
+vo_err = np.abs(vo[:, :2] - truth0[:, :2])
+paper_table1 = {"X": (0.050, 0.041, 0.042, 0.149), "Y": (0.045, 0.035, 0.036, 0.130), "ms": (40.3, 41, 6.2)}
+print(f"{'':22s}{'mean':>9s}{'median':>9s}{'std':>9s}{'max':>9s}   paper: mean / median / std / max")
+for axis, name in ((0, "X"), (1, "Y")):
+    e = vo_err[:, axis]
+    p = paper_table1[name]
+    print(
+        f"{name + ' deviation [m]':22s}{e.mean():9.4f}{np.median(e):9.4f}{e.std():9.4f}{e.max():9.4f}"
+        f"   {p[0]:.3f} / {p[1]:.3f} / {p[2]:.3f} / {p[3]:.3f}"
+    )
+ms = np.asarray(vo_seconds) * 1e3
 print(
-    f"PnP odometer: {np.median(vo_seconds) * 1e3:.1f} ms per frame, final error "
-    f"{100 * np.hypot(*(vo[-1, :2] - truth0[-1, :2])):.1f} cm after 27 m"
+    f"{'time per frame [ms]':22s}{ms.mean():9.1f}{np.median(ms):9.1f}{ms.std():9.1f}{'':9s}"
+    f"   {paper_table1['ms'][0]} / {paper_table1['ms'][1]} / {paper_table1['ms'][2]} / -"
 )
+assert vo_err.max() < 0.149  # every deviation below the paper's largest
+assert np.hypot(*(vo[-1, :2] - truth0[-1, :2])) < 0.005 * np.hypot(*(truth0[-1, :2] - truth0[0, :2]))
 
 # %% [markdown]
 # ## 3. Sample scores and their statistics (eq. 8–13)
@@ -179,19 +219,27 @@ def scores_at(x, world_=world):
 
 
 fig, axes = new_axes(2, width=5.5, height=3.4)
+frame_stats = {}
 for ax, x, title in ((axes[0], 3.0, "normal (x = 3 m)"), (axes[1], 9.0, "occluded stretch (x = 9 m)")):
     samples, scores = scores_at(x)
     ax.boxplot(posterior(scores) * len(scores), whis=(0, 100))
-    ax.set_yscale("log")
     ax.set_title(title)
-    ax.set_ylabel("posterior × n")
-    st = ScoreStatistics.from_scores(scores)
-    print(f"{title:28s} V_max {st.v_max:7.1f}  D_s {st.d_s:7.1f}  R_s {st.r_s:10.1f}")
+    ax.set_ylabel("posterior × n (box: quartiles, whiskers: min and max)")
+    ax.set_xticks([])
+    st = frame_stats[title] = ScoreStatistics.from_scores(scores)
+    print(f"{title:28s} V_max {st.v_max:7.1f}  V_uq {st.v_uq:.1e}  D_s {st.d_s:7.1f}  R_s {st.r_s:10.1f}")
+top = max(st.v_max for st in frame_stats.values())
+for ax in axes:
+    ax.set_ylim(-0.03 * top, 1.05 * top)
+normal_frame, occluded_frame = frame_stats.values()
+assert normal_frame.v_max > 2 * occluded_frame.v_max
+assert max(st.v_uq for st in frame_stats.values()) < 0.01 * occluded_frame.v_max
 
 # %% [markdown]
 # In the normal frame one small group of samples takes most of the probability; in the occluded
 # stretch it is shared among all samples along the corridor, so the best sample's posterior
-# ($V_{max}$) drops. Three printed forms need reading:
+# ($V_{max}$, the top whisker) drops. The box itself is flattened at zero: three quarters of the
+# samples hold almost none of the probability. Three printed forms need reading:
 #
 # * **Eq. 11**, $D_s = V_{max} - V_{lq} - V_{med}$, subtracts two location statistics at once. Its
 #   name ("range-median difference") and purpose (how far the best sample stands out) give
@@ -199,10 +247,13 @@ for ax, x, title in ((axes[0], 3.0, "normal (x = 3 m)"), (axes[1], 9.0, "occlude
 # * **Eq. 12**, $R_s = (V_{max} - V_{lq})/(V_{uq} - V_{lq})$, is never below 1, so the paper's
 #   threshold 0.7 cannot fail; we keep the form and calibrate the threshold.
 # * The thresholds (paper: 10, 15, 0.7 on its own score scale) are calibrated on our posterior:
-#   the 10th percentile of each indicator over a normal run (the corridor without the umbrella).
+#   the 1st percentile of each indicator over a normal run (the corridor without the umbrella).
 #
 # Which reading of eq. 11 separates normal frames from the occluded stretch better? Over frames
-# along the whole corridor, the area under the ROC curve of each form (1 = perfect, 0.5 = chance):
+# along the whole corridor, the area under the ROC curve of each form (1 = perfect, 0.5 = chance).
+# A comparison is only worth something if it can come out either way, so we run it on three
+# scales: our posterior, the printed eq. 10 ($S_i' = S_i / \sum_j S_j$, times $n$), and the raw
+# scores $S_i$ (sums of the likelihood field).
 
 
 # %%
@@ -214,21 +265,78 @@ def auc(positive, negative):
     )
 
 
-normal_stats, occluded_stats = [], []
+def box_statistics(values):
+    """V_max, D_s (ours and printed) and R_s of any set of sample values."""
+    v_lq, v_med, v_uq, v_max = np.percentile(values, [25, 50, 75, 100])
+    return {
+        "v_max": v_max,
+        "d_s": v_max - v_med,
+        "d_s_printed": v_max - v_lq - v_med,
+        "r_s": (v_max - v_lq) / max(v_uq - v_lq, 1e-12),
+    }
+
+
+scales = {
+    "posterior × n (ours)": lambda s: posterior(s) * len(s),
+    "printed eq. 10 × n": lambda s: s / s.sum() * len(s),
+    "raw score": lambda s: s,
+}
+normal_stats, occluded_stats = {k: [] for k in scales}, {k: [] for k in scales}
 for x in np.linspace(1.5, 27.5, 120):
-    st = ScoreStatistics.from_scores(scores_at(x)[1])
-    (occluded_stats if 7.0 <= x <= 12.5 else normal_stats if unoccluded(np.array([x]))[0] else []).append(st)
-for name in ("v_max", "d_s", "d_s_printed", "r_s"):
-    a = auc([getattr(s, name) for s in normal_stats], [getattr(s, name) for s in occluded_stats])
-    print(f"{name:12s} AUC {a:.3f}")
-auc_ours = auc([s.d_s for s in normal_stats], [s.d_s for s in occluded_stats])
-auc_printed = auc([s.d_s_printed for s in normal_stats], [s.d_s_printed for s in occluded_stats])
-assert auc_ours >= auc_printed and auc_ours > 0.9
+    raw = scores_at(x)[1]
+    group = occluded_stats if 7.0 <= x <= 12.5 else normal_stats if unoccluded(np.array([x]))[0] else None
+    if group is not None:
+        for scale, fn in scales.items():
+            group[scale].append(box_statistics(fn(raw)))
+aucs = {}
+print(f"{'AUC':22s}" + "".join(f"{k:>13s}" for k in ("v_max", "d_s", "d_s_printed", "r_s")))
+for scale in scales:
+    aucs[scale] = {
+        k: auc([s[k] for s in normal_stats[scale]], [s[k] for s in occluded_stats[scale]])
+        for k in ("v_max", "d_s", "d_s_printed", "r_s")
+    }
+    print(f"{scale:22s}" + "".join(f"{v:13.3f}" for v in aucs[scale].values()))
+post = normal_stats["posterior × n (ours)"] + occluded_stats["posterior × n (ours)"]
+print(f"posterior scale: largest |D_s / V_max - 1| = {max(abs(s['d_s'] / s['v_max'] - 1) for s in post):.1e}")
+assert all(abs(s["d_s"] / s["v_max"] - 1) < 1e-3 for s in post)  # D_s is V_max on our scale
+assert aucs["raw score"]["d_s"] > 0.95 and aucs["raw score"]["d_s_printed"] < 0.5
+ours = aucs["posterior × n (ours)"]
+assert ours["v_max"] == ours["d_s"] == ours["d_s_printed"]
+printed10 = {
+    kind: np.median([s["v_max"] for s in group["printed eq. 10 × n"]])
+    for kind, group in (("normal", normal_stats), ("occluded", occluded_stats))
+}
+posterior_vmax = {
+    kind: np.median([s["v_max"] for s in group["posterior × n (ours)"]])
+    for kind, group in (("normal", normal_stats), ("occluded", occluded_stats))
+}
+print(
+    f"median V_max × n, normal / occluded: printed eq. 10 {printed10['normal']:.3f} / "
+    f"{printed10['occluded']:.3f}; "
+    f"posterior {posterior_vmax['normal']:.1f} / {posterior_vmax['occluded']:.1f}"
+)
+every_printed10 = [s["v_max"] for g in (normal_stats, occluded_stats) for s in g["printed eq. 10 × n"]]
+assert max(every_printed10) < 1.25 and printed10["normal"] / printed10["occluded"] < 1.1
+assert posterior_vmax["normal"] / posterior_vmax["occluded"] > 3
 
 # %% [markdown]
-# On the posterior scale the quartiles are tiny, so the printed eq. 11 and ours separate the two
-# kinds of frame equally well (and nearly perfectly); ours keeps the meaning of its name and never
-# goes below zero.
+# Three findings, each of which could have come out otherwise:
+#
+# * **On our posterior scale the comparison is empty.** The quartiles are so small that $D_s$
+#   equals $V_{max}$ to the printed precision, in both readings; the AUCs of $V_{max}$ and of both
+#   $D_s$ in that row are one and the same number, and $C_s$ (eq. 13) reduces to
+#   $V_{max} \wedge R_s$: its $D_s$ test repeats its $V_{max}$ test (see the calibrated
+#   thresholds below). The library keeps the posterior scale, where $V_{max}$ separates well.
+# * **On the raw scores the two readings part.** There the quartiles are of the same size as the
+#   maximum, and the printed $V_{max} - V_{lq} - V_{med}$ separates normal from occluded frames
+#   worse than chance, while $V_{max} - V_{med}$ still separates them almost perfectly: our
+#   reading of eq. 11 is the one that works.
+# * **The printed eq. 10 is a normalisation, not a posterior.** $S_i / \sum_j S_j$ does satisfy
+#   eq. 9 and keeps the samples' order (its $V_{max}$ AUC is high), but it squeezes every
+#   frame's best sample to barely above $1/n$, by about a tenth, in normal and occluded frames
+#   alike (printed). Any threshold on it would sit on a knife's edge. Reading the
+#   score as a log-likelihood, $e^{S_i}/\sum_j e^{S_j}$, spreads the normal and the occluded
+#   frames several-fold apart.
 #
 # ## 4. Control limits and credibility (eq. 14–16)
 #
@@ -247,20 +355,45 @@ assert auc_ours >= auc_printed and auc_ours > 0.9
 truth_c, odo_c = corridor_drive(1000)
 cal = calibrate(world, truth_c, odo_c, vo, 1000)
 print("thresholds on our posterior:", cal.thresholds)
+assert abs(cal.thresholds.d_s - cal.thresholds.v_max) < 1e-3 * cal.thresholds.v_max  # C_s: D_s repeats V_max
+paper_table2 = {"LBPT": (0.0228, 0.0319, 0.1184), "visual odometer": (0.0288, 0.0332, 0.1283)}
 print(f"{'':16s}{'ours':>10s}{'paper':>10s}")
-for label, lim, paper in (
-    ("LBPT", cal.laser, (0.0228, 0.0319, 0.1184)),
-    ("visual odometer", cal.vo, (0.0288, 0.0332, 0.1283)),
-):
+for label, lim in (("LBPT", cal.laser), ("visual odometer", cal.vo)):
+    paper = paper_table2[label]
     print(
         f"{label:16s}μ {lim.mean:.4f} m  σ {lim.std:.4f} m  UCL {lim.upper:.4f} m  LCL {lim.lower:.1f} m"
         f"   paper μ {paper[0]} σ {paper[1]} UCL {paper[2]} LCL 0"
     )
-assert cal.laser.lower == 0.0 and cal.laser.upper == cal.laser.mean + 3 * cal.laser.std
+
+# The corrections of the normal run (the paper's Fig. 1(c) and Fig. 5) against their limits
+normal_run = run_tracking(without_umbrella(world), truth_c, odo_c, vo, 1000, field=field)
+used = np.array([cal.thresholds.composite(st.stats) for st in normal_run.steps])
+r_lo = np.array([st.laser_correction for st in normal_run.steps])
+r_vo = np.array([st.vo_correction for st in normal_run.steps])
+fig, ax = new_axes(width=8, height=3)
+ax.plot(normal_run.truth[:, 0], 100 * r_lo, lw=0.8, label="R_lo: laser's correction")
+ax.plot(normal_run.truth[:, 0], 100 * r_vo, lw=0.8, label="R_vo: visual odometer's correction")
+ax.axhline(100 * cal.laser.upper, color="C0", ls="--", lw=0.8, label="UCL_lo")
+ax.axhline(100 * cal.vo.upper, color="C1", ls="--", lw=0.8, label="UCL_vo")
+ax.set_xlabel("true x along the corridor [m]")
+ax.set_ylabel("correction to the odometry [cm]")
+ax.set_title("Corrections in the normal run (Fig. 1(c), Fig. 5)")
+ax.legend(fontsize="x-small", ncol=2)
+coverage = {
+    "laser": np.mean([cal.laser.contains(v) for v in r_lo[used]]),
+    "visual odometer": np.mean([cal.vo.contains(v) for v in r_vo[used]]),
+}
+print(
+    "share of the normal run's corrections inside their limits:", {k: f"{v:.1%}" for k, v in coverage.items()}
+)
+assert min(coverage.values()) > 0.97  # 3σ limits hold what they summarise
+assert cal.laser.mean < paper_table2["LBPT"][0] and cal.vo.mean < paper_table2["visual odometer"][0]
 
 # %% [markdown]
-# Our corrections are smaller than the paper's: our odometry is better per update (0.1 m of travel
-# between laser updates) and our visual odometer is rendered, not a Kinect.
+# The 3σ limits hold nearly all of the normal run's corrections (printed), as a Shewhart chart
+# should; a correction outside them is rare enough to mean something. Our corrections are smaller
+# than the paper's: our odometry is better per update (0.1 m of travel between laser updates) and
+# our visual odometer is rendered, not a Kinect.
 #
 # ## 5. One drive: LBPT against VOAPT
 #
@@ -274,18 +407,24 @@ truth, odo = corridor_drive(SEED)
 lbpt = run_tracking(world, truth, odo, vo, SEED, cal, compensate=False, field=field)
 voapt = run_tracking(world, truth, odo, vo, SEED, cal, field=field)
 x = lbpt.truth[:, 0]
-fig, axes = plt.subplots(3, 1, figsize=(9, 7), sharex=True, constrained_layout=True)
+fig, axes = plt.subplots(4, 1, figsize=(9, 8.5), sharex=True, constrained_layout=True)
 axes[0].plot(x, lbpt.errors[:, 0], label="LBPT")
 axes[0].plot(x, voapt.errors[:, 0], label="VOAPT")
-axes[0].set_ylabel("x error [m]")
+axes[0].set_ylabel("X error [m]")
+axes[0].set_title("Errors along (X) and across (Y) the corridor (the paper's Fig. 7), one drive")
 axes[0].legend(fontsize="small")
-axes[1].semilogy(x, [s.stats.v_max for s in lbpt.steps], lw=0.8, label="V_max (LBPT's samples)")
-axes[1].axhline(cal.thresholds.v_max, color="k", lw=0.8, ls="--", label="threshold")
-axes[1].legend(fontsize="small")
-axes[2].plot(x, [s.c_s for s in lbpt.steps], lw=0.8, label="C_s")
-axes[2].plot(x, [0.5 * s.credible for s in lbpt.steps], lw=0.8, label="T_s / 2 (LBPT)")
-axes[2].set_xlabel("true x along the corridor [m]")
+axes[1].plot(x, 100 * lbpt.errors[:, 1], label="LBPT")
+axes[1].plot(x, 100 * voapt.errors[:, 1], label="VOAPT")
+axes[1].set_ylabel("Y error [cm]")
+axes[2].semilogy(x, [s.stats.v_max for s in lbpt.steps], lw=0.8, label="V_max (LBPT's samples)")
+axes[2].axhline(cal.thresholds.v_max, color="k", lw=0.8, ls="--", label="threshold")
+axes[2].set_ylabel("V_max")
 axes[2].legend(fontsize="small")
+axes[3].plot(x, [s.c_s for s in lbpt.steps], lw=0.8, label="C_s")
+axes[3].plot(x, [0.5 * s.credible for s in lbpt.steps], lw=0.8, label="T_s / 2 (LBPT)")
+axes[3].set_ylabel("indicator")
+axes[3].set_xlabel("true x along the corridor [m]")
+axes[3].legend(fontsize="small")
 for ax in axes:
     for lo, hi in UNOCCLUDED:
         ax.axvspan(lo, hi, color="C2", alpha=0.08)
@@ -293,7 +432,8 @@ for ax in axes:
 # %% [markdown]
 # Green: the stretches where radial features are in view. In between, LBPT's error wanders along
 # the corridor, and can lock onto the wrong place once features return; $T_s$ flags those frames,
-# and VOAPT's error stays small. The principal error direction at the frames VOAPT compensated:
+# and VOAPT's error stays small. Across the corridor (Y) both stay within centimetres: the walls
+# fix it. The principal error direction at the frames VOAPT compensated:
 
 # %%
 dirs = np.array([s.direction for s in voapt.steps if s.direction is not None])
@@ -306,6 +446,7 @@ plot_world(ax, world, "principal error directions (arrows) where VOAPT compensat
 for s, pose in zip(voapt.steps, voapt.estimate, strict=True):
     if s.direction is not None:
         ax.arrow(pose[0], pose[1], 0.6 * s.direction[0], 0.6 * s.direction[1], head_width=0.08, color="C1")
+ax.set_aspect("equal", adjustable="box")
 ax.set_ylim(-1.8, 1.8)
 assert np.mean(np.abs(dirs[:, 0])) > 0.95
 
@@ -354,20 +495,66 @@ print(
 assert mx["VOAPT"][0] <= 0.3 * mx["LBPT"][0] and mn["VOAPT"][0] <= 0.2 * mn["LBPT"][0]
 assert result.flagged_when_lost() >= 0.9 and result.false_alarms() <= 0.1
 
+print(
+    f"VOAPT cuts the maximum X error {mx['LBPT'][0] / mx['VOAPT'][0]:.1f}-fold "
+    f"({mx['LBPT'][0]:.2f} -> {mx['VOAPT'][0]:.2f} m; paper {paper[('LBPT', 0)][0]:.2f} -> "
+    f"{paper[('VOAPT', 0)][0]:.2f} m) and the mean {mn['LBPT'][0] / mn['VOAPT'][0]:.1f}-fold "
+    f"({mn['LBPT'][0]:.2f} -> {mn['VOAPT'][0]:.3f} m; paper {paper[('LBPT', 0)][1]:.3f} -> "
+    f"{paper[('VOAPT', 0)][1]:.3f} m)"
+)
+voapt_max = np.array([np.abs(r.errors[:, 0]).max() for r in result.voapt])
+occluded_updates = [
+    (s.credible, s.c_s)
+    for r in result.voapt
+    for s, x_ in zip(r.steps, r.truth[:, 0], strict=True)
+    if 7.0 <= x_ <= 12.0
+]
+credible_in_occlusion = np.mean([c for c, _ in occluded_updates])
+print(
+    f"VOAPT's max X error exceeds the paper's {paper[('VOAPT', 0)][0]} m in {np.sum(voapt_max > 0.148)} of "
+    f"{len(voapt_max)} seeds; in the occluded stretch (x 7-12 m) C_s passes at "
+    f"{np.mean([c for _, c in occluded_updates]):.0%} and T_s at {credible_in_occlusion:.0%} "
+    "of VOAPT's updates"
+)
+lbpt_y, voapt_y = result.table(1)["LBPT"]["max"], result.table(1)["VOAPT"]["max"]
+assert 0.5 < mx["LBPT"][0] / paper[("LBPT", 0)][0] < 2  # our LBPT fails about as badly as the paper's
+assert mx["VOAPT"][0] > paper[("VOAPT", 0)][0] and credible_in_occlusion > 0.05
+assert max(lbpt_y, voapt_y) < paper[("VOAPT", 1)][1]  # our worst Y below the paper's mean VOAPT Y
+
 # %% [markdown]
-# Along the corridor VOAPT cuts the maximum error about fourfold (1.31 → 0.29 m; paper 1.06 →
-# 0.15 m) and the mean about fivefold (0.32 → 0.06 m; paper 0.33 → 0.045 m). Our LBPT fails as
-# badly as the paper's; our VOAPT is less good than the paper's in a few seeds where a spurious
-# credible update in the occluded stretch moves it before the visual odometer takes over.
-# Across the corridor both trackers are good: the walls fix $y$, which is why
-# our Y errors are far smaller than the paper's (its corridor and robot were real).
+# Along the corridor VOAPT cuts the maximum and the mean error severalfold (the sentence above is
+# printed from the run; the paper's factor is about seven for both). Our LBPT fails about as
+# badly as the paper's. Our VOAPT is less good than the paper's: in the occluded stretch the
+# composite indicator $C_s$ still passes at some updates, because the calibrated $V_{max}$
+# threshold lies inside the occluded frames' spread, and at a share of those the control tests
+# pass too (printed). Each such spurious credible update lets the laser's wandering
+# along-corridor correction in and re-anchors the visual odometer's pose to it. A stricter
+# threshold trades this for more false alarms in the normal stretches (exercise 6).
+# Across the corridor both trackers are good: the walls fix $y$, which is why our Y errors are
+# far smaller than the paper's (its corridor and robot were real).
 #
 # Two honest caveats. When LBPT alone recovers by itself, its pose has drifted from the visual
 # odometer's anchor, so $T_s$ keeps flagging some correct frames until the widening band admits
-# them (the last line above). And the umbrella can *create* a false match: seen from 1 m behind,
-# its canopy lines up with the second pillar, and LBPT locks there with a confident score; only
-# the comparison with the visual odometer reveals it, which is why our $T_s$ needs both control
-# tests.
+# them (the share is printed above). And the umbrella can *create* a false match: seen from
+# behind, its canopy can line up with the second pillar, and LBPT locks there with a confident
+# score; only the comparison with the visual odometer reveals it, which is why our $T_s$ needs
+# both control tests.
+#
+# ## Summary
+#
+# - In a corridor the laser fixes the robot across the corridor and in heading; only radial
+#   features fix it along. Where they are hidden, the score of a pose is flat along the corridor
+#   and the laser tracker (LBPT) wanders, by a metre or more in some seeds.
+# - Seed 004's visual odometer (PnP with a local map) stays within centimetres over the whole
+#   corridor, which is what VOAPT needs.
+# - The sample scores' box-plot statistics judge a tracker's output once the score is read as a
+#   log-likelihood (eq. 10 as a posterior); the printed eq. 11 fails where the quartiles matter,
+#   and on the posterior scale $D_s$ adds nothing to $V_{max}$. Eq. 12's threshold cannot fail as
+#   printed, eq. 14 swaps two names, eq. 16's "or" cannot flag a jumping laser: each is read and
+#   tested.
+# - Replacing the laser's correction along the principal error direction by the visual
+#   odometer's cuts the along-corridor error severalfold over 20 seeds; spurious credible updates
+#   in the occluded stretch are what keeps ours above the paper's.
 #
 # ## Exercises
 #
@@ -379,3 +566,6 @@ assert result.flagged_when_lost() >= 0.9 and result.false_alarms() <= 0.1
 # 4. Replace the PnP odometer by the 1-point pipeline's poses as the visual odometer. Does VOAPT
 #    care which one it gets?
 # 5. The laser updates every 0.1 m. Update every frame (0.05 m) instead: does LBPT wander faster?
+# 6. Calibrate the thresholds at the 10th instead of the 1st percentile (`calibrate(..., quantile=10)`).
+#    How often does $T_s$ pass in the occluded stretch now, what happens to VOAPT's error, and how
+#    many false alarms does it cost in the normal stretches?

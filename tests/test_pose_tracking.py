@@ -4,6 +4,8 @@ the PnP visual odometer, and the corridor experiment's acceptance over 20 seeds.
 from __future__ import annotations
 
 import math
+import pathlib
+import re
 
 import numpy as np
 import pytest
@@ -51,6 +53,30 @@ def test_likelihood_field_peaks_on_mapped_walls_only(world, field):
     poses = np.array([[3.0, 0.0, 0.0], [3.0, 0.1, 0.0], [3.0, 0.0, 0.05], [3.2, 0.0, 0.0]])
     s = field.score(poses, scan.points())
     assert np.argmax(s) == 0 and s[0] > 0.9 * scan.valid.sum()
+
+
+def test_score_reads_the_field_like_lookup(world, field):
+    rng = np.random.default_rng(7)
+    for x in (0.5, 9.0, 40.0, -5.0):  # the last two put many end points off the grid
+        pts = TIM551.scan(world.segments_array(), (x, 0.0, 0.0), rng).points()
+        poses = np.column_stack([x + rng.normal(0, 3, 200), rng.normal(0, 3, 200), rng.normal(0, 1, 200)])
+        c, s = np.cos(poses[:, 2:3]), np.sin(poses[:, 2:3])
+        placed = np.stack(
+            [poses[:, :1] + c * pts[:, 0] - s * pts[:, 1], poses[:, 1:2] + s * pts[:, 0] + c * pts[:, 1]], -1
+        )
+        np.testing.assert_array_equal(
+            field.score(poses, pts), field.lookup(placed).sum(axis=1, dtype=np.float64)
+        )
+
+
+def test_printed_eq10_is_nearly_uniform_where_the_posterior_is_not(world, field):
+    """Eq. 10 as printed (S_i / sum S_j) keeps every sample within a few tens of per cent of 1/n."""
+    rng = np.random.default_rng(8)
+    pts = TIM551.scan(world.segments_array(), (3.0, 0.0, 0.0), rng).points()
+    scores = field.score(sample_poses(np.array([3.03, 0.0, 0.0]), 500, rng), pts)
+    printed = scores / scores.sum() * len(scores)
+    assert printed.max() < 1.25 and abs(printed.sum() - len(scores)) < 1e-9
+    assert posterior(scores).max() * len(scores) > 10
 
 
 def test_posterior_and_statistics():
@@ -141,3 +167,23 @@ def test_voapt_beats_lbpt_along_the_corridor(experiment):
 def test_credibility_flags_lost_frames_and_few_others(experiment):
     assert experiment.flagged_when_lost() >= 0.9
     assert experiment.false_alarms() <= 0.1
+
+
+README = pathlib.Path(__file__).resolve().parents[1] / "README.md"
+
+
+def test_readme_quotes_the_experiment(experiment):
+    """The README's Table III rows and T_s shares are this experiment's, to their printed precision
+    (with a margin for small changes of the visual odometer)."""
+    text = README.read_text(encoding="utf-8")
+    for method in ("LBPT", "VOAPT"):
+        row = re.search(rf"\| {method} X, ours \(paper\) \|(.*)\|", text)
+        assert row, f"README: no Table III row for {method}"
+        quoted = [float(v) for v in re.findall(r"([0-9.]+) m \(", row.group(1))]
+        ours = experiment.table(0)[method]
+        for value, key in zip(quoted, ("max", "mean", "median", "std"), strict=True):
+            assert abs(value - ours[key]) <= 0.003 + 0.05 * ours[key], (method, key, value, ours[key])
+    shares = re.search(r"T_s flags ([0-9.]+) % of LBPT's updates.*? and ([0-9.]+) % of VOAPT's", text, re.S)
+    assert shares, "README: no T_s sentence"
+    assert abs(float(shares.group(1)) - 100 * experiment.flagged_when_lost()) <= 0.5
+    assert abs(float(shares.group(2)) - 100 * experiment.false_alarms()) <= 0.5

@@ -9,6 +9,7 @@ with that pose: between 0 and the number of beams.
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import cv2
@@ -58,13 +59,21 @@ class LikelihoodField:
         out[inside] = self.field[row[inside], col[inside]]
         return out
 
+    @functools.cached_property
+    def _padded(self) -> np.ndarray:
+        """The field with a border of zero cells, flattened: every clipped index reads a value."""
+        return np.pad(self.field, 1).ravel()
+
     def score(self, poses: np.ndarray, scan_points: np.ndarray) -> np.ndarray:
         """Score of each pose ``(n, 3)`` for end points ``(K, 2)`` in the sensor frame:
-        the sum over beams of the field at the end point placed with that pose."""
+        the sum over beams of the field at the end point placed with that pose (the same values
+        as :meth:`lookup`, read through a zero border instead of a mask: about twice as fast)."""
         poses = np.atleast_2d(np.asarray(poses, dtype=float))
         c, s = np.cos(poses[:, 2:3]), np.sin(poses[:, 2:3])
         px, py = scan_points[:, 0], scan_points[:, 1]
-        world = np.empty((len(poses), len(px), 2))
-        world[..., 0] = poses[:, 0:1] + c * px - s * py
-        world[..., 1] = poses[:, 1:2] + s * px + c * py
-        return self.lookup(world).sum(axis=1, dtype=np.float64)
+        col = np.rint((poses[:, 0:1] + c * px - s * py - self.origin[0]) / self.resolution).astype(np.intp)
+        row = np.rint((poses[:, 1:2] + s * px + c * py - self.origin[1]) / self.resolution).astype(np.intp)
+        rows, cols = self.field.shape
+        np.clip(col, -1, cols, out=col)
+        np.clip(row, -1, rows, out=row)
+        return self._padded.take((row + 1) * (cols + 2) + (col + 1)).sum(axis=1, dtype=np.float64)
