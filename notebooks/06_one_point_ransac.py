@@ -49,7 +49,7 @@ from vo_lib.stereo_vo.ransac import (
     theta_gate_error,
 )
 from vo_lib.stereo_vo.synthetic import synthetic_matches
-from vo_lib.viz.plotting import draw_chord_geometry, new_axes
+from vo_lib.viz.plotting import draw_chord_geometry, draw_depression_geometry, new_axes
 from vo_lib.viz.widgets import offer, slider
 
 SEED = 6
@@ -74,6 +74,8 @@ ax.hist(np.clip(np.degrees(theta_each[m.inliers]), -10, 15), bins=bins, alpha=0.
 ax.hist(np.clip(np.degrees(theta_each[~m.inliers]), -10, 15), bins=bins, alpha=0.7, label="outliers")
 ax.axvline(3.0, color="k", lw=1)
 ax.set_xlabel("θ proposed by one match [deg]")
+ax.set_ylabel("matches")
+ax.set_title("One hypothesis per match (true θ = 3°)")
 ax.legend(fontsize="small")
 plt.show()
 
@@ -97,10 +99,15 @@ plt.show()
 # tan α = (v − v₀)cos β / f_y and β = atan((u − u₀)/f_x): like eq. 14, the gate needs no depth.
 
 # %%
-fig, ax = new_axes(width=5.5, height=4.5)
-draw_chord_geometry(ax, theta=0.6, rho=1.2, point=(1.4, 3.2))
-ax.set_title("our reconstruction of Fig. 5 (plan view)")
+fig, axes = new_axes(2, width=5.5, height=4.5)
+plan = draw_chord_geometry(axes[0], theta=0.6, rho=1.2, point=(1.4, 3.2))
+axes[0].set_title("our reconstruction of Fig. 5: plan view (γ)")
+side = draw_depression_geometry(axes[1], plan["r"], plan["r2"], drop=0.5)
+axes[1].set_title("side view, each ray in its own vertical plane (α)")
 plt.show()
+# eq. 18 holds for the drawn angles, with d read as the horizontal range
+assert np.isclose(plan["r"] * math.tan(side["alpha"]), plan["r2"] * math.tan(side["alpha2"]))
+assert np.isclose(plan["r"] * math.sin(plan["gamma"]), plan["r2"] * math.sin(plan["gamma2"]))
 
 exact = synthetic_matches(camera, 300, theta_true, rho_true, rng, outlier_ratio=0.4)
 gate_true = theta_gate_error(exact.w_prev, exact.w_curr, theta_true, camera)
@@ -118,7 +125,9 @@ assert np.nanmedian(gate_wrong[exact.inliers]) > 1e-3
 # spread differs by orders of magnitude between matches: tan α → 0 near the camera's height and
 # sin γ → 0 towards the direction of travel. We therefore test each match against k = 3 of its own
 # standard deviations: to first order, |∂error_θ/∂θ|·√(σ²_θ,match + σ²_θ,hypothesis), with σ_θ from
-# notebook 03. Below: the raw gate of true matches spans decades; normalised, it is a unit normal.
+# notebook 03. Below: the raw gate of true matches spans decades; normalised by its own σ it
+# follows the half-normal distribution, the law of |z| for a unit normal z (the gate is an
+# absolute value), whatever the match.
 
 # %%
 ta, ba = gate_angles(m.w_prev, camera)
@@ -132,15 +141,25 @@ ok = m.inliers & np.isfinite(normalised)
 fig, axes = new_axes(2, width=5.2, height=3.4)
 axes[0].hist(np.log10(raw[ok]), bins=50)
 axes[0].set_xlabel("log10 error_θ of true matches")
-axes[1].hist(np.clip(normalised[ok], 0, 5), bins=50)
+axes[0].set_ylabel("matches")
+axes[0].set_title("The raw θ gate")
+axes[1].hist(np.clip(normalised[ok], 0, 5), bins=50, density=True, label="true matches")
+zs = np.linspace(0, 5, 200)
+axes[1].plot(zs, 2 * np.exp(-0.5 * zs**2) / math.sqrt(2 * math.pi), "C1", label="half-normal")
 axes[1].set_xlabel("error_θ / its own σ")
+axes[1].set_ylabel("density")
+axes[1].set_title("Normalised by each match's σ")
+axes[1].legend(fontsize="small")
 plt.show()
 within = np.mean(normalised[ok] <= 3)
+median_norm = np.median(normalised[ok])
 print(
     f"raw gate spans {np.log10(np.nanmax(raw[ok]) / np.nanmin(raw[ok])):.1f} decades; "
-    f"{within:.1%} of true matches within 3 of their own σ"
+    f"{within:.1%} of true matches within 3 of their own σ; median {median_norm:.3f} "
+    "(half-normal: 0.674)"
 )
 assert within > 0.97
+assert abs(median_norm - 0.674) < 0.1  # the half-normal's median, not a unit normal's 0
 
 # %% [markdown]
 # ## 3 · How many hypotheses?
@@ -157,6 +176,7 @@ for w in (0.9, 0.7, 0.6, 0.5, 0.3):
         f"   {w:10.1f}   {'':14s}{hypotheses_needed(w, 0.999, 1):8d} {hypotheses_needed(w, 0.999, 3):10d}"
         f" {hypotheses_needed(w, 0.999, 5):10d}"
     )
+assert [hypotheses_needed(0.6, 0.999, k) for k in (1, 3, 5)] == [8, 29, 86]  # the sentence below
 w = 0.6
 measured = {}
 for s in (1, 3, 5):
@@ -257,13 +277,17 @@ for name, (t, te, re) in table.items():
     print(f" {name:<22s}{t:10.2f}{te:22.4f}{rho_text:>14s}")
 assert table["1-point RANSAC"][1] <= table["solvePnPRansac"][1]
 assert table["1-point RANSAC"][1] <= table["3-point rigid RANSAC"][1]
+assert table["1-point RANSAC"][1] <= table["5-point essential"][1]
+assert 3 * table["1-point RANSAC"][1] <= table["3-point rigid RANSAC"][1]  # "by a wide margin"
+assert table["solvePnPRansac"][2] <= 1.2 * table["1-point RANSAC"][2]  # PnP's rho: as good or better
 
 # %% [markdown]
 # The planar model pays off in θ: knowing that roll, pitch and height do not change, the 1-point
 # method's θ is better than every 6-DoF estimate from the same matches, by a wide margin over the
-# 3-D rigid fit (whose far points carry metres of depth noise). For ρ, `solvePnPRansac` is as good:
-# like our refinement it minimises reprojection errors in the image. The times above are single
-# runs; `python -m vo_lib bench ransac` measures them side by side over repeated runs.
+# 3-D rigid fit (whose far points carry metres of depth noise). For ρ, `solvePnPRansac` is as good
+# or better (printed): like our refinement it minimises reprojection errors in the image. The
+# times above are single runs; `python -m vo_lib bench ransac` measures them side by side over
+# repeated runs.
 #
 # ## 6 · Outliers and noise
 #

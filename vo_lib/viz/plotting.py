@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import matplotlib.pyplot as plt
 import numpy as np
-from matplotlib.patches import Ellipse
+from matplotlib.patches import Arc, Ellipse
 
 
 def new_axes(ncols: int = 1, width: float = 5.0, height: float = 4.0, **kw):
@@ -93,10 +93,29 @@ def plot_robot(ax, pose, size: float = 0.4, colour: str = "k"):
     ax.fill(pts[:, 0], pts[:, 1], color=colour, alpha=0.8)
 
 
-def draw_chord_geometry(ax, theta: float = 0.5, rho: float = 1.0, point=(1.2, 3.0)):
+def _angle_arc(ax, centre, start_dir, end_dir, radius: float, label: str, colour: str = "C1"):
+    """An arc at ``centre`` from direction ``start_dir`` to ``end_dir`` (the smaller angle), labelled."""
+    a0 = np.degrees(np.arctan2(start_dir[1], start_dir[0]))
+    a1 = np.degrees(np.arctan2(end_dir[1], end_dir[0]))
+    if (a1 - a0) % 360 > 180:
+        a0, a1 = a1, a0
+    ax.add_patch(Arc(centre, 2 * radius, 2 * radius, theta1=a0, theta2=a1, color=colour, lw=1.2))
+    mid = np.radians(a0 + ((a1 - a0) % 360) / 2)
+    ax.text(
+        *(np.asarray(centre) + 1.35 * radius * np.array([np.cos(mid), np.sin(mid)])),
+        label,
+        color=colour,
+        ha="center",
+        va="center",
+    )
+
+
+def draw_chord_geometry(ax, theta: float = 0.5, rho: float = 1.0, point=(1.2, 3.0)) -> dict:
     """Plan view of the reconstructed Fig. 5 of seed 000: the camera moves from C to C' along a
     chord at phi = theta/2; a point X is seen at angle gamma from the chord at C and gamma' at C',
-    at ranges r and r'. Coordinates: x right, z forward of the first camera."""
+    at horizontal ranges r and r'. Coordinates: x right, z forward of the first camera.
+
+    Returns the drawn ``gamma``, ``gamma2`` (radians), ``r`` and ``r2``."""
     phi = theta / 2
     C = np.array([0.0, 0.0])
     C2 = rho * np.array([-np.sin(phi), np.cos(phi)])
@@ -114,8 +133,11 @@ def draw_chord_geometry(ax, theta: float = 0.5, rho: float = 1.0, point=(1.2, 3.
     for P, yaw in ((C, 0.0), (C2, -theta)):
         d = np.array([np.sin(yaw), np.cos(yaw)])
         ax.annotate("", P + 0.7 * d, P, arrowprops={"arrowstyle": "->", "color": "0.5"})
-    # foot of the perpendicular from X to the chord line: the distance both ends share
+    # the angles between the chord's direction and the rays to X
     u = (C2 - C) / rho
+    _angle_arc(ax, C, u, X - C, 0.35 * rho, "γ")
+    _angle_arc(ax, C2, u, X - C2, 0.25 * rho, "γ'")
+    # foot of the perpendicular from X to the chord line: the distance both ends share
     foot = C + ((X - C) @ u) * u
     ax.plot(*zip(X, foot, strict=True), "C2--", lw=1, label="h = r sin γ = r' sin γ'")
     ax.text(*(0.5 * (C + X) + (0.1, -0.1)), "r")
@@ -124,6 +146,40 @@ def draw_chord_geometry(ax, theta: float = 0.5, rho: float = 1.0, point=(1.2, 3.
     ax.set_xlabel("x (right) [m]")
     ax.set_ylabel("z (forward) [m]")
     ax.legend(fontsize="x-small", loc="lower right")
+
+    def angle(v):
+        return float(np.arccos(np.clip(u @ v / np.linalg.norm(v), -1.0, 1.0)))
+
+    return {
+        "gamma": angle(X - C),
+        "gamma2": angle(X - C2),
+        "r": float(np.linalg.norm(X - C)),
+        "r2": float(np.linalg.norm(X - C2)),
+    }
+
+
+def draw_depression_geometry(ax, r: float, r2: float, drop: float = 0.5) -> dict:
+    """Side view of the reconstructed Fig. 5 of seed 000: the two rays to X, each unfolded into its
+    own vertical plane, leave C and C' at the camera's height and fall by ``drop`` to the point
+    at horizontal ranges ``r`` and ``r2``: depression angles alpha and alpha'.
+
+    Returns the drawn ``alpha`` and ``alpha2`` (radians)."""
+    X = np.array([0.0, -drop])
+    for rng_, name, colour, radius in ((r, "C", "C0", 0.3 * r), (r2, "C'", "C1", 0.3 * r2)):
+        P = np.array([-rng_, 0.0])
+        ax.plot(*zip(P, X, strict=True), "-", color=colour, lw=1)
+        ax.plot(*P, "ko")
+        ax.annotate(name, P, textcoords="offset points", xytext=(-6, 6))
+        _angle_arc(ax, P, (1.0, 0.0), X - P, radius, "α" if name == "C" else "α'", colour)
+    ax.axhline(0.0, color="0.5", lw=0.8, ls=":", label="camera height (planar motion keeps it)")
+    ax.plot(*zip(X, (0.0, 0.0), strict=True), "C2--", lw=1, label="r tan α = r' tan α'")
+    ax.plot(*X, "C3o")
+    ax.annotate("X", X, textcoords="offset points", xytext=(6, 0))
+    ax.set_aspect("equal")
+    ax.set_xlabel("horizontal range from X [m]")
+    ax.set_ylabel("height [m]")
+    ax.legend(fontsize="x-small", loc="lower left")
+    return {"alpha": float(np.arctan2(drop, r)), "alpha2": float(np.arctan2(drop, r2))}
 
 
 def plot_line_slam(ax, run, world, title: str = ""):
