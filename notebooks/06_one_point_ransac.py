@@ -102,7 +102,7 @@ plt.show()
 fig, axes = new_axes(2, width=5.5, height=4.5)
 plan = draw_chord_geometry(axes[0], theta=0.6, rho=1.2, point=(1.4, 3.2))
 axes[0].set_title("our reconstruction of Fig. 5: plan view (γ)")
-side = draw_depression_geometry(axes[1], plan["r"], plan["r2"], drop=0.5)
+side = draw_depression_geometry(axes[1], plan["r"], plan["r2"], drop=1.0)
 axes[1].set_title("side view, each ray in its own vertical plane (α)")
 plt.show()
 # eq. 18 holds for the drawn angles, with d read as the horizontal range
