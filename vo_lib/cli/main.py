@@ -93,6 +93,13 @@ def build_parser() -> argparse.ArgumentParser:
         "--no-odometry", action="store_true", help="ignore odometry.txt (constant-velocity prediction)"
     )
     run.add_argument("--seed", type=_seed, default=0, help="seed of the RANSAC draws (>= 0)")
+    run.add_argument(
+        "--motion",
+        choices=("auto", "planar", "full"),
+        default="auto",
+        help="motion model: planar circular motion (the crawler), full 6-DoF (a car), or auto (default:"
+        " the one that fits the sequence's vehicle)",
+    )
     ev = sub.add_parser("evaluate", help="ATE, RPE and KITTI segment errors of an estimate")
     ev.add_argument("--gt", required=True, help="ground-truth poses (KITTI poses.txt or TUM)")
     ev.add_argument("--est", required=True, help="estimated poses (KITTI or TUM)")
@@ -156,7 +163,9 @@ def _dispatch(args) -> None:
     if args.command == "run":
         from vo_lib.cli.run import run_command
 
-        run_command(args.sequence, args.out, args.frames, args.no_odometry, args.seed, args.force)
+        run_command(
+            args.sequence, args.out, args.frames, args.no_odometry, args.seed, args.force, args.motion
+        )
     elif args.command == "evaluate":
         from vo_lib.cli.run import evaluate_command
 

@@ -26,9 +26,10 @@ import numpy as np
 from vo_lib.evaluation import ate_planar, kitti_segment_errors, rpe
 from vo_lib.formats.outputs import OutputFolder, notice
 from vo_lib.formats.poses import read_trajectory, write_kitti_poses, write_tum
-from vo_lib.geometry import camera_mount, camera_poses_from_planar, planar_from_camera_poses, wrap_angle
-from vo_lib.sim.samples import CAMERA_HEIGHT, SAMPLES
+from vo_lib.geometry import camera_poses_from_planar, planar_from_camera_poses, wrap_angle
+from vo_lib.sim.samples import SAMPLES
 from vo_lib.stereo_vo.pipeline import FrameDiagnostics, FrameTimings, PipelineResult, run_sequence
+from vo_lib.stereo_vo.vehicle import vehicle_of
 
 DEFAULT_SEQUENCE = "indoor_linear"
 #: Seed 000, Table 1, 640x480 row: stereo processing, parameter estimation, Kalman filtering (ms).
@@ -120,6 +121,7 @@ def print_timing_table(result: PipelineResult, camera, frames: int) -> None:
         ("binocular stereo vision processing", t["stereo"], f"{PAPER_TABLE1_640[0]:.3f}"),
         ("prediction and guided temporal matching", t["prediction"] + t["matching"], "-"),
         ("parameter estimation (1-point RANSAC)", t["estimation"], f"{PAPER_TABLE1_640[1]:.3f}"),
+        *([("6-DoF refinement", t["refinement"], "-")] if t["refinement"] > 0 else []),
         ("Kalman filtering", t["kalman"], f"{PAPER_TABLE1_640[2]:.3f}"),
         ("whole frame", t["total"], "26.551 (mean of 10,000)"),
     ]
@@ -174,8 +176,14 @@ def run_command(
     no_odometry: bool,
     seed: int = 0,
     force: bool = False,
+    motion: str = "auto",
 ) -> dict:
-    """Run the pipeline and write its outputs; returns the error report (empty without truth)."""
+    """Run the pipeline and write its outputs; returns the error report (empty without truth).
+
+    ``motion`` picks the model (``auto``: planar for the crawler samples, 6-DoF for a car); the
+    written poses are the 6-DoF camera poses where the model has them, else the planar poses
+    carried to the camera through its mount.
+    """
     name = sequence or DEFAULT_SEQUENCE
     if frames is not None and frames < 2:
         raise UsageError(f"--frames {frames}: need at least 2 frames")
@@ -194,21 +202,28 @@ def run_command(
         if frames is not None and frames > len(seq) and not is_sample(name):  # samples: said above
             notice(f"--frames {frames}: {seq.path} has {len(seq)} frames; running all {len(seq)}")
         n = len(seq) if frames is None else min(frames, len(seq))
-        mount = camera_mount(height=CAMERA_HEIGHT)
+        vehicle = vehicle_of(seq, use_odometry=not no_odometry)
+        mount = vehicle.mount
         result = run_sequence(
-            seq, frames=n, use_odometry=not no_odometry, seed=seed, progress=sys.stderr.isatty()
+            seq,
+            frames=n,
+            use_odometry=not no_odometry,
+            seed=seed,
+            progress=sys.stderr.isatty(),
+            motion=motion,
         )
-        poses = camera_poses_from_planar(result.poses, mount)
+        if result.camera_poses is not None:
+            poses = result.camera_poses
+        else:
+            poses = camera_poses_from_planar(result.poses, mount)
         write_kitti_poses(tmp / "poses.txt", poses)
         write_tum(tmp / "trajectory.tum", seq.times[:n], poses)
         _write_csv(tmp / "timings.csv", result.timings, FrameTimings)
         _write_csv(tmp / "diagnostics.csv", result.diagnostics, FrameDiagnostics)
         truth = planar_from_camera_poses(seq.poses[:n], mount) if seq.poses is not None else None
         odo = None
-        if seq.odometry is not None:
-            from vo_lib.models.track_odometry import TrackOdometry
-
-            odo = TrackOdometry().integrate(seq.odometry[1:n])
+        if vehicle.odometry is not None:
+            odo = vehicle.odometry_model.integrate(vehicle.odometry[1:n])
         _plot(tmp / "trajectory.png", result.poses, truth, odo, f"{Path(name).name}: {n} frames")
         print_timing_table(result, seq.camera, n)
         report = {}

@@ -26,8 +26,12 @@ VF, WZ = 8, 19  # zero-based columns of forward speed (m/s) and yaw rate (rad/s)
 def read_oxts(path) -> np.ndarray:
     """``(N, 30)`` OXTS packets; every number must be finite."""
     path = Path(path)
+    try:
+        text = path.read_text()
+    except UnicodeDecodeError:
+        raise SequenceError(f"{path}: not a text file (expected {OXTS_FIELDS} numbers per line)") from None
     rows = []
-    for line_no, line in enumerate(path.read_text().splitlines(), 1):
+    for line_no, line in enumerate(text.splitlines(), 1):
         if not line.strip():
             continue
         parts = line.split()
@@ -68,7 +72,11 @@ def wheel_distances_from_oxts(oxts: np.ndarray, times: np.ndarray, gauge: float)
 def _calib_values(path: Path, key: str, count: int) -> np.ndarray:
     if not path.is_file():
         raise SequenceError(f"{path}: missing")
-    for line_no, line in enumerate(path.read_text().splitlines(), 1):
+    try:
+        text = path.read_text()
+    except UnicodeDecodeError:
+        raise SequenceError(f"{path}: not a text file") from None
+    for line_no, line in enumerate(text.splitlines(), 1):
         if line.startswith(key + ":"):
             try:
                 values = np.array([float(x) for x in line.split(":", 1)[1].split()])

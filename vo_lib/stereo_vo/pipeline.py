@@ -356,10 +356,10 @@ def run_sequence(
 
     if motion not in MOTION_MODELS:
         raise ValueError(f"motion must be one of {', '.join(MOTION_MODELS)}; got {motion!r}")
-    vehicle = vehicle_of(sequence)
+    vehicle = vehicle_of(sequence, use_odometry)
     model = vehicle.motion if motion == "auto" else motion
     n = len(sequence) if frames is None else min(int(frames), len(sequence))
-    odo = vehicle.odometry if use_odometry else None
+    odo = vehicle.odometry
 
     def frame_iter():
         for k in range(n):

@@ -24,6 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from vo_lib.formats.kitti_raw import camera_in_imu_frame, read_oxts, wheel_distances_from_oxts
+from vo_lib.formats.sequence import SequenceError
 from vo_lib.geometry import camera_mount
 from vo_lib.models.track_odometry import TrackOdometry
 
@@ -70,32 +71,33 @@ def car_odometry_model() -> TrackOdometry:
     return TrackOdometry(track_distance=CAR_GAUGE, track_width=0.0, encoder_sigma=CAR_DISTANCE_SIGMA)
 
 
-def vehicle_of(sequence) -> Vehicle:
-    """The vehicle of a :class:`~vo_lib.formats.sequence.Sequence`, from its manifest and files."""
+def vehicle_of(sequence, use_odometry: bool = True) -> Vehicle:
+    """The vehicle of a :class:`~vo_lib.formats.sequence.Sequence`, from its manifest and files.
+
+    With ``use_odometry=False`` no odometry file is read (``odometry`` is None).
+    """
     camera = sequence.manifest.get("camera", {}) if isinstance(sequence.manifest, dict) else {}
     if "height_m" in camera:  # a rendered sample: the crawler of seed 000
         mount = camera_mount(forward=float(camera.get("forward_m", 0.0)), height=float(camera["height_m"]))
         model = TrackOdometry(**sequence.manifest.get("track_odometry", {}))
         planar = camera.get("mount", "above turning axis") == "above turning axis"
-        return Vehicle(
-            "crawler", mount, model, sequence.odometry, "odometry.txt", "planar" if planar else "full"
-        )
+        odometry = sequence.odometry if use_odometry else None
+        source = "odometry.txt" if odometry is not None else "none"
+        return Vehicle("crawler", mount, model, odometry, source, "planar" if planar else "full")
     root = sequence.path
     raw_calib = root / "raw_calib"
     if raw_calib.is_dir():
         mount = camera_in_imu_frame(raw_calib)
     else:
-        mount = camera_mount(
-            *KITTI_CAMERA_IN_IMU[:1], height=KITTI_CAMERA_IN_IMU[2], left=KITTI_CAMERA_IN_IMU[1]
-        )
+        forward, left, up = KITTI_CAMERA_IN_IMU
+        mount = camera_mount(forward=forward, height=up, left=left)
     model = car_odometry_model()
-    odometry, source = sequence.odometry, "odometry.txt"
+    odometry = sequence.odometry if use_odometry else None
+    source = "odometry.txt"
     oxts = root / "oxts.txt"
-    if odometry is None and oxts.is_file():
+    if odometry is None and use_odometry and oxts.is_file():
         packets = read_oxts(oxts)
         if len(packets) != len(sequence):
-            from vo_lib.formats.sequence import SequenceError
-
             raise SequenceError(f"{oxts} has {len(packets)} packets but there are {len(sequence)} images")
         odometry = wheel_distances_from_oxts(packets, sequence.times, CAR_GAUGE)
         source = "oxts.txt (speed and yaw rate)"
