@@ -44,7 +44,7 @@ from vo_lib.geometry import camera_mount, planar_to_matrix, wrap_angle
 from vo_lib.models.track_odometry import TrackOdometry
 from vo_lib.sim.laser import LaserScanner
 from vo_lib.sim.render import StereoRenderer
-from vo_lib.sim.samples import CAMERA_HEIGHT, SAMPLES, generate
+from vo_lib.sim.samples import CAMERA_HEIGHT, SAMPLES, generate, render_sample
 from vo_lib.sim.trajectories import simulate_drive
 from vo_lib.sim.world import WORLDS
 from vo_lib.viz.plotting import new_axes, plot_robot, plot_world
@@ -105,7 +105,9 @@ im = axes[1].imshow(true_disparity, cmap="magma", vmin=0, vmax=40)
 axes[1].set_title("ground-truth disparity [px]")
 fig.colorbar(im, ax=axes[1], shrink=0.7)
 axes[2].hist(np.clip(measured - true_disparity, -2, 2)[textured], bins=80)
-axes[2].set_title("semi-global matching − truth [px]")
+axes[2].set_title("semi-global matching − truth")
+axes[2].set_xlabel("disparity error [px]")
+axes[2].set_ylabel("pixels")
 for ax in axes[:2]:
     ax.axis("off")
 plt.show()
@@ -184,6 +186,7 @@ print(" sample           frames   odometry end error [m]   heading error [deg]")
 for name, frames, pos_err, head_err in rows:
     print(f" {name:15s} {frames:6d}   {pos_err:22.2f}   {head_err:19.1f}")
 assert abs(dict((r[0], r[3]) for r in rows)["spot_turn"]) > 5.0  # slip ruins spot-turn heading
+assert dict((r[0], r[2]) for r in rows)["corridor"] > 1.0  # metres off after the corridor (section 5)
 
 # %% [markdown]
 # ## 5 · Track slip, made visible
@@ -231,7 +234,15 @@ with tempfile.TemporaryDirectory() as tmp:
     print(f"{len(seq)} frames, camera {seq.camera}, rate {seq.manifest['rate_hz']} Hz")
     print("first odometry rows (left, right track distance, m):\n", seq.odometry[:3])
     first_left, first_right = seq.pair(0)
-assert first_left.shape == (240, 320) and len(seq) == 5
+    read_odometry, read_camera = seq.odometry.copy(), seq.camera
+# what was read back is what the simulation made: the encoders' readings, the rig, the images
+corridor_drive = drives["corridor"][0]
+assert np.allclose(read_odometry, corridor_drive.odometry[:5], atol=1e-9)
+assert np.isclose(read_camera.baseline, camera.baseline) and np.isclose(read_camera.fx, camera.fx / 2)
+_, frames_again = render_sample("corridor", 1, (320, 240))
+left_again, right_again, _ = next(iter(frames_again))
+assert np.array_equal(first_left, left_again) and np.array_equal(first_right, right_again)
+print("read back: odometry, calibration and the first pair equal what was rendered")
 
 # %% [markdown]
 # ## 7 · Walk through the world
