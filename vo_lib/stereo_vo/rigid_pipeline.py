@@ -75,9 +75,11 @@ KEY_MAX_GAP = 10
 #: Scale of the least-squares covariance before it enters the filter (the residuals of real
 #: matches are neither independent nor Gaussian).
 VO_COVARIANCE_SCALE = 2.0**2
-#: Sideways motion per metre travelled that wheel odometry cannot see (a car's odometry frame is
-#: aligned with its direction of travel only to a fraction of a degree): 1 %, or 0.6 deg.
-LATERAL_SIGMA = 0.01
+#: Sideways motion per metre travelled that wheel odometry cannot see, as process noise: a car's
+#: odometry frame is aligned with its direction of travel only to a fraction of a degree, and a
+#: tight value lets the odometry's zero sideways motion overrule the vision's heading through
+#: their correlation. At 5 % the sideways motion is the vision's.
+LATERAL_SIGMA = 0.05
 #: Uncertainty (x, y metres; yaw radians) added to the prediction while nothing predicts the motion.
 UNKNOWN_MOTION_SIGMA = (10.0, 10.0, 1.0)
 
