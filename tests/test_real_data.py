@@ -33,6 +33,21 @@ needs_real = pytest.mark.skipif(
 
 MAX_FINAL_PERCENT = 0.5
 MAX_FINAL_HEADING_DEG = 0.3
+README_TOLERANCE = 0.02  # % and degrees: the README's figures are rounded to 0.01
+
+
+def readme_row(name: str) -> list[str] | None:
+    """The cells of the README's real-data table row for a sequence, if it has one."""
+    for line in (ROOT / "README.md").read_text().splitlines():
+        if line.startswith(f"| `{name}` |"):
+            return [cell.strip() for cell in line.strip().strip("|").split("|")]
+    return None
+
+
+def numbers(cell: str) -> list[float]:
+    return [
+        float(x) for x in cell.replace("%", " ").replace("°", " ").replace(",", " ").replace("m", " ").split()
+    ]
 
 
 def final_errors(seq, camera_poses) -> tuple[float, float, float]:
@@ -61,6 +76,12 @@ def test_vo_alone_meets_the_acceptance_figures(real_run):
     assert percent <= MAX_FINAL_PERCENT
     assert heading <= MAX_FINAL_HEADING_DEG
     assert len(result.flagged) <= max(2, int(0.02 * len(seq)))
+    row = readme_row(seq.path.name)
+    if row is not None:  # the README's figures still hold
+        assert int(row[1]) == len(seq) and abs(numbers(row[2])[0] - distance) < 0.05
+        assert abs(numbers(row[3])[0] - percent) <= README_TOLERANCE
+        assert abs(numbers(row[4])[0] - heading) <= README_TOLERANCE
+        assert int(row[5]) == len(result.flagged)
 
 
 @needs_real
@@ -86,6 +107,15 @@ def test_fusion_with_odometry_beats_odometry_alone(path):
     print(f"{path.name}: fused {percent:.3f} %, odometry alone {odometry_percent:.3f} %")
     assert percent <= MAX_FINAL_PERCENT
     assert percent < odometry_percent
+    row = readme_row(path.name)
+    if row is not None:
+        fused_heading = final_errors(seq, fused.camera_poses)[1]
+        odometry_heading = abs(np.degrees(wrap_angle(odometry[-1, 2] - truth[-1, 2])))
+        for cell, figures in (
+            (row[6], (percent, fused_heading)),
+            (row[7], (odometry_percent, odometry_heading)),
+        ):
+            assert np.allclose(numbers(cell), figures, atol=README_TOLERANCE), (cell, figures)
 
 
 def test_motorcycle_disparities_at_least_as_good_as_sgbm():
