@@ -1,7 +1,6 @@
 """Benchmark on real stereo: our pipeline beside the OpenCV PnP baseline, same frames, same process.
 
-``python -m vo_lib bench real`` runs on every sequence folder under ``$VO_LIB_REALDATA``, by default
-``../shared/realdata`` beside the repository. Per
+``VO_LIB_REALDATA=FOLDER python -m vo_lib bench real`` runs on every sequence folder in FOLDER. Per
 sequence it prints the per-stage median milliseconds and frames per second of our pipeline
 (without odometry), the final and segment errors of both, and the speed ratio.
 """
@@ -18,11 +17,9 @@ SEGMENTS = (25.0, 50.0, 100.0)  # metres: short sequences have no KITTI-length s
 
 
 def realdata_folders() -> list[Path]:
-    """Sequence folders under ``$VO_LIB_REALDATA`` or ``../shared/realdata`` beside the repository."""
-    root = Path(
-        os.environ.get("VO_LIB_REALDATA", Path(__file__).resolve().parents[4] / "shared" / "realdata")
-    )
-    if not root.is_dir():
+    """Sequence folders (holding ``image_0/``) in the folder named by ``$VO_LIB_REALDATA``."""
+    root = Path(os.environ.get("VO_LIB_REALDATA", ""))
+    if not os.environ.get("VO_LIB_REALDATA") or not root.is_dir():
         return []
     return sorted(p for p in root.iterdir() if (p / "image_0").is_dir())
 
