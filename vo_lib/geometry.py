@@ -1,7 +1,7 @@
 """Frames, planar poses and angles: the conventions every other module relies on.
 
-Conventions (``shared/DESIGN.md``)
-----------------------------------
+Conventions
+-----------
 * Units are metres and radians.
 * Camera frame (OpenCV): x right, y down, z forward.
 * Robot and world frames: x forward, y left, z up; yaw is counter-clockwise positive

@@ -1,6 +1,6 @@
 """Interactive wrappers for the notebooks; plain functions do the work and are tested directly.
 
-The notebook pattern (``shared/DESIGN.md``): a pure ``f(**params)`` computes and draws; the notebook
+The notebook pattern: a pure ``f(**params)`` computes and draws; the notebook
 calls it once with its defaults, so that static renders and CI show the figure and any error
 fails the run (ipywidgets swallows exceptions raised inside ``interact``), and then offers it here.
 """
