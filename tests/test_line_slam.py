@@ -281,3 +281,45 @@ def test_line_observation_maps_the_walls_and_beats_dead_reckoning():
     slam = np.mean([r.final_error() for r in runs])
     dead = np.mean([r.final_dead_reckoning_error() for r in runs])
     assert dead > 8 * slam
+
+
+def test_readme_quotes_the_laps(laps):
+    """The README's seed 002 figures are those of these 20 laps (and of the notebook's ten
+    extended laps), to their printed precision."""
+    import pathlib
+    import re
+
+    text = (pathlib.Path(__file__).resolve().parents[1] / "README.md").read_text(encoding="utf-8")
+    text = re.sub(r"\s+", " ", text)
+    m = re.search(
+        r"ends ([0-9.]+) ± ([0-9.]+) m from the truth where dead reckoning ends ([0-9.]+) ± ([0-9.]+) m off "
+        r"\(([0-9]+)×\); the pose NEES averages ([0-9.]+), inside its 95 % band \[([0-9.]+), ([0-9.]+)\], "
+        r"but lies above the band at ([0-9]+) % of the steps",
+        text,
+    )
+    assert m, "README: seed 002 sentence not found"
+    slam = np.array([r.final_error() for r in laps])
+    dead = np.array([r.final_dead_reckoning_error() for r in laps])
+    n = min(len(r.nees) for r in laps)
+    mean_nees = np.mean([r.nees[:n] for r in laps], axis=0)
+    low, high = chi2.ppf([0.025, 0.975], 3 * len(laps)) / len(laps)
+    ours = [
+        f"{slam.mean():.3f}",
+        f"{slam.std():.3f}",
+        f"{dead.mean():.2f}",
+        f"{dead.std():.2f}",
+        f"{dead.mean() / slam.mean():.0f}",
+        f"{mean_nees.mean():.2f}",
+        f"{low:.2f}",
+        f"{high:.2f}",
+        f"{100 * np.mean(mean_nees > high):.0f}",
+    ]
+    assert list(m.groups()) == ours
+    m = re.search(
+        r"mapped up to x = ([0-9.]+) ± ([0-9.]+) \(visible from the true path up to ([0-9.]+);", text
+    )
+    assert m, "README: out-of-range sentence not found"
+    extended = LineSlamScenario(extended=True)
+    rights = [simulate_lap(seed=s, scenario=extended).estimated_segment(2)[:, 0].max() for s in range(10)]
+    visible = true_visible_extent(paper_world(True), simulate_lap(seed=2, scenario=extended).truth)[2][1]
+    assert list(m.groups()) == [f"{np.mean(rights):.2f}", f"{np.std(rights):.2f}", f"{visible:.2f}"]

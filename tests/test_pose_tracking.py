@@ -79,6 +79,23 @@ def test_printed_eq10_is_nearly_uniform_where_the_posterior_is_not(world, field)
     assert posterior(scores).max() * len(scores) > 10
 
 
+def test_constant_velocity_prediction_either_way():
+    """Eq. 2-3: T_vel = T_curr T_prev^-1 (world frame), T_next = T_vel T_curr, is what the odometer
+    predicts with its body-frame velocity."""
+    from vo_lib.camera import StereoCamera
+    from vo_lib.geometry import planar_to_matrix
+    from vo_lib.lidar_tracking.pnp_odometry import PnpVisualOdometry
+
+    t_prev = planar_to_matrix(np.array([1.0, 2.0, 0.3]))
+    t_curr = planar_to_matrix(np.array([1.4, 2.3, 0.5]))
+    t_curr[:3, 3] += (0.0, 0.0, 0.02)  # not only planar
+    vo = PnpVisualOdometry(StereoCamera.bumblebee2())
+    vo.pose, vo.velocity = t_curr, np.linalg.inv(t_prev) @ t_curr
+    printed = (t_curr @ np.linalg.inv(t_prev)) @ t_curr
+    np.testing.assert_allclose(vo.predicted_pose(), printed, atol=1e-12)
+    assert not np.allclose(vo.predicted_pose(), t_curr @ t_curr @ np.linalg.inv(t_prev), atol=1e-3)
+
+
 def test_posterior_and_statistics():
     p = posterior([0.0, 1.0, 2.0])
     assert p.sum() == pytest.approx(1.0) and p[2] / p[1] == pytest.approx(math.e)

@@ -147,6 +147,12 @@ class PnpVisualOdometry:
         return a, b
 
     # ------------------------------------------------------------------ one frame
+    def predicted_pose(self) -> np.ndarray:
+        """Eq. 2-3: the last motion repeated. The paper's world-frame velocity
+        ``T_curr T_prev^-1`` composed on the left of ``T_curr`` is the same matrix as our
+        body-frame velocity ``T_prev^-1 T_curr`` composed on the right."""
+        return self.pose @ self.velocity
+
     def process(self, left: np.ndarray, right: np.ndarray) -> np.ndarray:
         """Track one stereo pair; returns the camera-to-world pose of this frame."""
         feats = self.front_end.process(left, right)
@@ -156,7 +162,7 @@ class PnpVisualOdometry:
             self.lost = False
             self.steps.append(PnpStep(0, 0, False, False, 1))
             return self.pose.copy()
-        prediction = self.pose @ self.velocity  # eq. 2-3
+        prediction = self.predicted_pose()  # eq. 2-3
         points_w, desc_w = self._map()
         brute = self.lost
         a, b = (
