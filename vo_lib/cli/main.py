@@ -6,6 +6,8 @@ run            the stereo VO pipeline on a sample or a KITTI-layout folder (defa
 evaluate       trajectory errors of an estimate against ground truth (KITTI or TUM files)
 generate NAME  render a named sample sequence (KITTI layout, with ground truth and odometry)
 bench NAME     time one part of the library against its baseline (``bench --help`` lists them)
+sweep NAME     a paper's statistic over many seeds, in this process or on Dask (corridor, lap, nees, table1)
+evaluate-all   the stereo pipeline on every sequence under a folder, KITTI-style error table
 
 Every problem with the input or the arguments prints one line on stderr and exits with status 2;
 Ctrl-C (SIGINT) or SIGTERM removes what was half-written, prints one line and exits with 130 or
@@ -59,6 +61,19 @@ def _seed(text: str) -> int:
     if value < 0:
         raise argparse.ArgumentTypeError(f"expected a whole number >= 0; got {text!r}")
     return value
+
+
+def _positive(what: str):
+    def parse(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"expected a whole number >= 1; got {text!r}") from None
+        if value < 1:
+            raise argparse.ArgumentTypeError(f"expected a number of {what} of at least 1; got {text!r}")
+        return value
+
+    return parse
 
 
 def _segments(text: str) -> tuple[float, ...]:
@@ -123,6 +138,36 @@ def build_parser() -> argparse.ArgumentParser:
     )
     bench = sub.add_parser("bench", help="time a part of the library against a baseline")
     bench.add_argument("name", choices=sorted(BENCHES), help="which benchmark")
+    from vo_lib.cli.experiments import SWEEPS
+
+    sweep = sub.add_parser("sweep", help="a paper's statistic over many seeds, serially or on Dask")
+    sweep.add_argument("name", choices=SWEEPS, help="which experiment")
+    sweep.add_argument("--seeds", type=_positive("seeds"), default=20, help="number of seeds (default 20)")
+    ev_all = sub.add_parser(
+        "evaluate-all", help="the pipeline on every sequence under a folder, KITTI-style errors"
+    )
+    ev_all.add_argument(
+        "root", help="folder of sequences (KITTI's sequences/NN, or folders holding image_0/)"
+    )
+    ev_all.add_argument("--frames", type=_count, help="only the first N frames of each sequence")
+    for p, default in ((sweep, "sweeps/NAME"), (ev_all, "sweeps/evaluate-all-ROOTNAME")):
+        p.add_argument(
+            "--workers",
+            type=_positive("workers"),
+            help="local worker processes (default: one per core; 1 runs in this process)",
+        )
+        p.add_argument(
+            "--scheduler",
+            help="address of a running Dask scheduler, e.g. tcp://host:8786 (default: "
+            "$DASK_SCHEDULER_ADDRESS, else a local cluster)",
+        )
+        p.add_argument(
+            "--out",
+            help=f"sweep folder (default: {default}); finished rows there are kept and not run again",
+        )
+        p.add_argument(
+            "--force", action="store_true", help="replace --out even if this program did not write it"
+        )
     return parser
 
 
@@ -176,6 +221,14 @@ def _dispatch(args) -> None:
         from vo_lib.cli.bench import BENCHES
 
         BENCHES[args.name]()
+    elif args.command == "sweep":
+        from vo_lib.cli.experiments import sweep_command
+
+        sweep_command(args.name, args.seeds, args.workers, args.scheduler, args.out, args.force)
+    elif args.command == "evaluate-all":
+        from vo_lib.cli.evaluate_all import evaluate_all_command
+
+        evaluate_all_command(args.root, args.frames, args.workers, args.scheduler, args.out, args.force)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -190,13 +243,14 @@ def main(argv: list[str] | None = None) -> int:
         args = parser.parse_args(argv)
         command = f"{parser.prog} {args.command}"
         from vo_lib.cli.run import UsageError
+        from vo_lib.cli.sweep import SweepError
         from vo_lib.formats.outputs import OutputError
         from vo_lib.formats.poses import TrajectoryError
         from vo_lib.formats.sequence import SequenceError
 
         try:
             _dispatch(args)
-        except (UsageError, OutputError, SequenceError, TrajectoryError) as exc:
+        except (UsageError, SweepError, OutputError, SequenceError, TrajectoryError) as exc:
             print(f"{command}: error: {_one_line(exc)}", file=sys.stderr)
             return 2
         except OSError as exc:  # e.g. a full disk while writing: the output was not put in place

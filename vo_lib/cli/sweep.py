@@ -1,0 +1,526 @@
+"""A grid of experiments (seeds x parameters x sequences), run in this process or on Dask.
+
+One *task* is one point of the grid: a dict of JSON-able parameters (``seed`` among them where
+the experiment draws random numbers) given to the experiment's ``run(params, context)``, which
+returns a dict of figures. Each task draws its random numbers from its own parameters, never from
+the worker it lands on, so a sweep gives the same figures serially and on any cluster.
+
+Where tasks run
+    ``workers=1`` and no scheduler: one after the other in this process. ``workers=N > 1``: a
+    ``dask.distributed`` LocalCluster of N worker processes with one thread each. ``scheduler``
+    (``tcp://host:8786``), or the ``DASK_SCHEDULER_ADDRESS`` environment variable when none is
+    given: an existing Dask cluster, whose workers must have ``vo_lib`` installed.
+
+What is written
+    The output folder (rules of :mod:`vo_lib.formats.outputs`: new, empty or written by this
+    program; marker ``.vo_lib_output.json``) holds ``rows.jsonl``, one finished task per line,
+    appended as each task finishes and keyed by a hash of the experiment's name and the task's
+    parameters, and ``results.csv``, the table of the whole grid (one row per task: parameters,
+    figures, wall seconds, error text), replaced atomically when the sweep ends or stops. Running
+    the same sweep into the same folder again skips the rows already finished, so an interrupted
+    sweep finishes only the missing ones; rows that failed are run again.
+
+A task that raises becomes a row with its error; the sweep goes on.
+"""
+
+from __future__ import annotations
+
+import csv
+import hashlib
+import io
+import json
+import math
+import os
+import re
+import sys
+import tempfile
+import time
+import traceback
+from collections.abc import Callable, Iterable, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from vo_lib.formats.outputs import (
+    MARKER,
+    OutputFolder,
+    check_target,
+    umask,
+)
+
+ROWS = "rows.jsonl"
+TABLE = "results.csv"
+#: Columns every row has after its parameters and figures.
+SECONDS, ERROR = "seconds", "error"
+#: Seconds allowed to reach an existing scheduler.
+CONNECT_TIMEOUT = 10.0
+_ADDRESS = re.compile(r"(?:(tcp|tls|ws|wss|ucx)://)?(\[[0-9a-fA-F:]+\]|[A-Za-z0-9_.\-]+):(\d{1,5})")
+
+
+class SweepError(ValueError):
+    """A bad argument or folder for a sweep: reported in one line, exit status 2."""
+
+
+@dataclass(frozen=True)
+class Experiment:
+    """What a sweep runs: ``run(params, context) -> {figure: number}`` once per task.
+
+    ``setup()`` (optional) computes what every task shares (e.g. one visual-odometry run); it
+    runs once per sweep, only when some task is still missing, on a worker when there is a
+    cluster. ``written_by`` names the experiment in the folder's marker.
+    """
+
+    name: str
+    run: Callable[[dict, object], dict]
+    setup: Callable[[], object] | None = None
+    describe: str = ""
+
+
+@dataclass
+class SweepResult:
+    """The rows of the grid in grid order, and which keys ran now (the others came from disk)."""
+
+    experiment: str
+    rows: list[dict]
+    ran: list[str] = field(default_factory=list)
+    reused: list[str] = field(default_factory=list)
+    path: Path | None = None
+    workers: str = ""
+
+    @property
+    def failed(self) -> list[dict]:
+        return [r for r in self.rows if r.get(ERROR)]
+
+
+def task_key(experiment: str, params: dict) -> str:
+    """The key of a task on disk: a hash of the experiment's name and its parameters."""
+    text = json.dumps({"experiment": experiment, "params": params}, sort_keys=True, separators=(",", ":"))
+    return hashlib.sha1(text.encode()).hexdigest()[:16]
+
+
+def grid(**axes) -> list[dict]:
+    """Every combination of the given axes, in order (the first axis varies slowest)::
+
+    grid(resolution=["640x480", "320x240"], seed=range(3))  # 6 tasks
+    """
+    tasks: list[dict] = [{}]
+    for name, values in axes.items():
+        tasks = [{**t, name: _plain(v)} for t in tasks for v in values]
+    return tasks
+
+
+def _plain(value):
+    """A parameter as JSON sees it (NumPy numbers and tuples become Python numbers and lists)."""
+    if isinstance(value, np.generic):
+        return value.item()
+    if isinstance(value, tuple):
+        return [_plain(v) for v in value]
+    return value
+
+
+def _one_line(text: str) -> str:
+    return " ".join(str(text).split())
+
+
+def execute(run: Callable[[dict, object], dict], params: dict, context=None) -> dict:
+    """Run one task: ``{"figures": ..., "seconds": wall time, "error": "" or one line}``."""
+    t0 = time.perf_counter()
+    try:
+        figures = {str(k): _plain(v) for k, v in dict(run(params, context)).items()}
+        error = ""
+    except Exception as exc:  # a failed run is a row, not a lost sweep
+        figures = {}
+        where = traceback.extract_tb(exc.__traceback__)[-1]
+        error = _one_line(f"{type(exc).__name__}: {exc} ({Path(where.filename).name}:{where.lineno})")
+    return {"figures": figures, SECONDS: time.perf_counter() - t0, ERROR: error}
+
+
+# --------------------------------------------------------------------------- the folder on disk
+
+
+def _write_atomic(path: Path, text: str) -> None:
+    """Replace ``path`` with ``text`` via a temporary file beside it (named as the package's
+    temporaries are, so that one left by a killed process is recognised and removed)."""
+    from vo_lib.formats.outputs import _temporary_prefix
+
+    fd, tmp = tempfile.mkstemp(prefix=_temporary_prefix(path.name), suffix=".tmp", dir=path.parent)
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8", newline="") as fh:
+            fh.write(text)
+            fh.flush()
+            os.fsync(fh.fileno())
+        os.chmod(tmp, 0o666 & ~umask())
+        os.replace(tmp, path)
+    except BaseException:
+        try:
+            os.unlink(tmp)
+        except OSError:
+            pass
+        raise
+
+
+def _remove_stale_files(folder: Path) -> None:
+    """Temporary files in ``folder`` left by processes of this machine that no longer run."""
+    from vo_lib.formats.outputs import _TEMPORARY, _host
+
+    if os.name == "nt":
+        return
+    for entry in os.scandir(folder):
+        match = _TEMPORARY.fullmatch(entry.name)
+        if not match or match.group(2) != _host() or not entry.is_file(follow_symlinks=False):
+            continue
+        try:
+            os.kill(int(match.group(1)), 0)
+            continue
+        except ProcessLookupError:
+            pass
+        except (PermissionError, OverflowError, OSError):
+            continue
+        try:
+            os.unlink(entry.path)
+        except OSError:
+            pass
+
+
+def _marker(folder: Path) -> dict | None:
+    try:
+        data = json.loads((folder / MARKER).read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return None
+    return data if isinstance(data, dict) else None
+
+
+class SweepFolder:
+    """The folder of one experiment's sweep: opened (created, or resumed when it holds a sweep of
+    the same experiment), appended to row by row, its table replaced at the end."""
+
+    def __init__(self, target, experiment: str, *, force: bool = False, inputs=(), option="--out"):
+        self.target = Path(target)
+        self.experiment = experiment
+        self.written_by = f"vo_lib sweep {experiment}"
+        label = f"{option} {target}" if option else str(target)
+        marker = _marker(self.target) if self.target.is_dir() else None
+        if marker is not None and str(marker.get("written_by", "")).startswith("vo_lib sweep"):
+            if marker["written_by"] != self.written_by and not force:
+                raise SweepError(
+                    f"{label}: holds a sweep written by {marker['written_by']!r}; choose another folder, "
+                    "or add --force to replace it"
+                )
+            if marker["written_by"] == self.written_by:
+                _remove_stale_files(self.target)
+                check_target(self.target, inputs=inputs, option=option)  # still ours alone
+                self.path = self.target
+                self._lock()
+                return
+        with OutputFolder(self.target, self.written_by, force=force, inputs=inputs, option=option) as out:
+            (out.path / ROWS).touch()
+            (out.path / TABLE).touch()
+            out.commit(experiment=experiment)
+        self.path = self.target
+        self._lock()
+
+    def _lock(self) -> None:
+        """Hold an exclusive lock on the rows file: two sweeps never write one folder at once."""
+        self._fh = open(self.path / ROWS, "a+b")  # noqa: SIM115 (held for the sweep's life)
+        try:
+            import fcntl
+        except ImportError:  # Windows: no advisory lock
+            return
+        try:
+            fcntl.flock(self._fh.fileno(), fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            self._fh.close()
+            raise SweepError(f"{self.target}: another sweep is writing to this folder") from None
+
+    def close(self) -> None:
+        self._fh.close()
+
+    def finished(self) -> dict[str, dict]:
+        """The rows on disk by key, the last one of a key winning; a line cut short by a kill is
+        ignored."""
+        rows = {}
+        self._fh.seek(0)
+        for line in self._fh.read().decode("utf-8", "replace").splitlines():
+            try:
+                row = json.loads(line)
+                rows[row["key"]] = row
+            except (ValueError, KeyError, TypeError):
+                continue
+        return rows
+
+    def append(self, row: dict) -> None:
+        """Add one finished row: one write of one line, flushed to disk."""
+        self._fh.seek(0, os.SEEK_END)
+        size = self._fh.tell()
+        prefix = b""
+        if size:
+            self._fh.seek(size - 1)
+            if self._fh.read(1) != b"\n":  # the cut-short line of a killed sweep stays apart
+                prefix = b"\n"
+        self._fh.write(prefix + (json.dumps(row) + "\n").encode())
+        self._fh.flush()
+        os.fsync(self._fh.fileno())
+
+    def write_table(self, rows: list[dict]) -> Path:
+        _write_atomic(self.path / TABLE, table_csv(rows))
+        return self.path / TABLE
+
+
+def flatten(row: dict) -> dict:
+    """A stored row as one table row: parameters, figures, seconds, error."""
+    return {**row["params"], **row["figures"], SECONDS: row[SECONDS], ERROR: row[ERROR]}
+
+
+def table_csv(rows: list[dict]) -> str:
+    """The CSV text of ``rows`` (stored rows): parameters first, then figures, seconds, error."""
+    params, figures = [], []
+    for row in rows:
+        params += [k for k in row["params"] if k not in params]
+        figures += [k for k in row["figures"] if k not in figures and k not in params]
+    columns = params + figures + [SECONDS, ERROR]
+    buffer = io.StringIO()
+    writer = csv.DictWriter(buffer, fieldnames=columns, lineterminator="\n")
+    writer.writeheader()
+    for row in rows:
+        flat = flatten(row)
+        writer.writerow({k: _cell(flat.get(k, "")) for k in columns})
+    return buffer.getvalue()
+
+
+def _cell(value):
+    if isinstance(value, float):
+        return repr(value)  # all digits: the table reads back to the same numbers
+    if isinstance(value, list | dict):
+        return json.dumps(value)
+    return value
+
+
+# --------------------------------------------------------------------------- where tasks run
+
+
+def scheduler_address(given: str | None) -> str | None:
+    """The scheduler to use: ``given``, else ``DASK_SCHEDULER_ADDRESS``, else None (local)."""
+    address = given if given is not None else os.environ.get("DASK_SCHEDULER_ADDRESS") or None
+    if address is None:
+        return None
+    option = "--scheduler" if given is not None else "DASK_SCHEDULER_ADDRESS"
+    match = _ADDRESS.fullmatch(address.strip())
+    if not match or not 0 < int(match.group(3)) < 65536:
+        raise SweepError(f"{option} {address!r}: expected a scheduler address like tcp://host:8786")
+    return address.strip() if match.group(1) else f"tcp://{address.strip()}"
+
+
+def default_workers() -> int:
+    """One worker per core this process may use."""
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except AttributeError:
+        return max(1, os.cpu_count() or 1)
+
+
+class _Serial:
+    """Tasks one after the other in this process."""
+
+    label = "serial, in this process"
+
+    def run(self, experiment: Experiment, tasks: list[dict], context, need_setup: bool):
+        if need_setup:
+            context = experiment.setup()
+        for params in tasks:
+            yield params, execute(experiment.run, params, context)
+
+    def close(self):
+        pass
+
+
+class _Dask:
+    """Tasks on a dask.distributed cluster: a new LocalCluster, or an existing scheduler."""
+
+    def __init__(self, workers: int, address: str | None):
+        import logging
+
+        from distributed import Client, LocalCluster
+
+        self.cluster = None
+        if address is None:
+            self.cluster = LocalCluster(
+                n_workers=workers,
+                threads_per_worker=1,
+                processes=True,
+                dashboard_address=None,
+                silence_logs=logging.ERROR,
+            )
+            self.client = Client(self.cluster)
+            self.label = f"Dask LocalCluster, {workers} worker processes"
+        else:
+            try:
+                self.client = Client(address, timeout=CONNECT_TIMEOUT)
+            except (OSError, TimeoutError) as exc:
+                raise SweepError(
+                    f"--scheduler {address}: cannot reach the scheduler ({_one_line(exc)})"
+                ) from None
+            n = len(self.client.scheduler_info().get("workers", {}))
+            self.label = f"Dask scheduler {address}, {n} workers"
+
+    def run(self, experiment: Experiment, tasks: list[dict], context, need_setup: bool):
+        from distributed import as_completed
+
+        if need_setup:
+            context = self.client.submit(experiment.setup, pure=False)
+        elif context is not None:
+            [context] = self.client.scatter([context], broadcast=True)
+        futures = {
+            self.client.submit(execute, experiment.run, params, context, pure=False): params
+            for params in tasks
+        }
+        for future in as_completed(futures):
+            params = futures.pop(future)
+            try:
+                outcome = future.result()
+            except Exception as exc:  # the setup failed, or a worker died
+                outcome = {
+                    "figures": {},
+                    SECONDS: float("nan"),
+                    ERROR: _one_line(f"{type(exc).__name__}: {exc}"),
+                }
+            future.release()
+            yield params, outcome
+
+    def close(self):
+        self.client.close()
+        if self.cluster is not None:
+            self.cluster.close()
+
+
+def run_sweep(
+    experiment: Experiment,
+    tasks: Sequence[dict],
+    out,
+    workers: int | None = None,
+    scheduler: str | None = None,
+    *,
+    force: bool = False,
+    inputs: Iterable = (),
+    context=None,
+    progress: bool | None = None,
+) -> SweepResult:
+    """Run every task of ``tasks`` not already finished in ``out``; returns all rows of the grid.
+
+    ``context`` given: passed to every task instead of running ``experiment.setup``.
+    ``progress``: a tqdm bar on stderr (default: when stderr is a terminal).
+    """
+    from tqdm import tqdm
+
+    tasks = [{k: _plain(v) for k, v in t.items()} for t in tasks]
+    keys = [task_key(experiment.name, t) for t in tasks]
+    if len(set(keys)) != len(keys):
+        raise SweepError("the sweep repeats a task (two identical parameter sets)")
+    workers = default_workers() if workers is None else int(workers)
+    if workers < 1:
+        raise SweepError(f"--workers {workers}: expected at least 1")
+    address = scheduler_address(scheduler)
+    folder = SweepFolder(out, experiment.name, force=force, inputs=inputs)
+    result = SweepResult(experiment.name, [], path=folder.path / TABLE)
+    try:
+        done = {k: r for k, r in folder.finished().items() if not r.get(ERROR)}
+        todo = [t for t, k in zip(tasks, keys, strict=True) if k not in done]
+        result.reused = [k for k in keys if k in done]
+        if todo:
+            runner = _Serial() if address is None and workers == 1 else _Dask(workers, address)
+            result.workers = runner.label
+            need_setup = context is None and experiment.setup is not None
+            bar = tqdm(
+                total=len(tasks),
+                initial=len(tasks) - len(todo),
+                desc=f"sweep {experiment.name}",
+                unit="run",
+                disable=(not sys.stderr.isatty()) if progress is None else not progress,
+                file=sys.stderr,
+            )
+            try:
+                for params, outcome in runner.run(experiment, todo, context, need_setup):
+                    key = task_key(experiment.name, params)
+                    row = {"key": key, "params": params, **outcome}
+                    folder.append(row)
+                    done[key] = row
+                    result.ran.append(key)
+                    bar.update()
+                    if outcome[ERROR]:
+                        bar.write(f"failed: {params}: {outcome[ERROR]}", file=sys.stderr)
+            finally:
+                bar.close()
+                runner.close()
+    finally:
+        result.rows = [done[k] for k in keys if k in done]
+        try:
+            folder.write_table(result.rows)
+        finally:
+            folder.close()
+    return result
+
+
+# --------------------------------------------------------------------------- the aggregate table
+
+
+def numeric_figures(rows: list[dict]) -> list[str]:
+    names: list[str] = []
+    for row in rows:
+        for k, v in row["figures"].items():
+            if k not in names and isinstance(v, int | float) and not isinstance(v, bool):
+                names.append(k)
+    return names
+
+
+def aggregate(rows: list[dict], over: str = "seed") -> dict[tuple, dict[str, tuple[float, float, int]]]:
+    """Mean, standard deviation and count of every numeric figure over ``over`` (successful rows),
+    per combination of the other parameters: ``{group: {figure: (mean, std, n)}}``."""
+    groups: dict[tuple, list[dict]] = {}
+    for row in rows:
+        if row.get(ERROR):
+            continue
+        group = tuple((k, json.dumps(v)) for k, v in row["params"].items() if k != over)
+        groups.setdefault(group, []).append(row)
+    out = {}
+    for group, members in groups.items():
+        stats = {}
+        for name in numeric_figures(members):
+            v = np.array([m["figures"].get(name, math.nan) for m in members], float)
+            v = v[np.isfinite(v)]
+            stats[name] = (float(v.mean()), float(v.std()), len(v)) if len(v) else (math.nan, math.nan, 0)
+        out[group] = stats
+    return out
+
+
+def print_aggregate(result: SweepResult, over: str = "seed", digits: int = 4) -> None:
+    """Print mean +- std over ``over`` of every figure, one column per other parameter set."""
+    table = aggregate(result.rows, over)
+    failed = len(result.failed)
+    print(
+        f"\n{result.experiment}: {len(result.rows)} rows ({len(result.ran)} run now, "
+        f"{len(result.reused)} from earlier runs{f', {failed} failed' if failed else ''}); "
+        f"mean ± std over {over}s"
+    )
+    if not table:
+        print("  no successful row")
+        return
+    groups = list(table)
+    width = 26
+    if any(groups):
+        header = "".join(
+            f"{', '.join(f'{k}={json.loads(v)}' for k, v in g) or '-':>{width}s}" for g in groups
+        )
+        print(f"  {'figure':<24s}{header}")
+    names = []
+    for g in groups:
+        names += [n for n in table[g] if n not in names]
+    for name in names:
+        cells = ""
+        for g in groups:
+            m, s, n = table[g].get(name, (math.nan, math.nan, 0))
+            cells += f"{f'{m:.{digits}g} ± {s:.{digits}g} (n={n})':>{width}s}"
+        print(f"  {name:<24s}{cells}")
+    for row in result.failed[:5]:
+        print(f"  failed {row['params']}: {row[ERROR]}")
+    if failed > 5:
+        print(f"  ... and {failed - 5} more failed rows (see {result.path})")
