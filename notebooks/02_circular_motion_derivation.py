@@ -31,12 +31,14 @@
 # `python notebooks/02_circular_motion_derivation.py`.
 
 # %%
+import matplotlib.pyplot as plt
 import numpy as np
 import sympy as sp
 
 from vo_lib.camera import StereoCamera
 from vo_lib.stereo_vo import circular_motion as cm
 from vo_lib.stereo_vo.synthetic import synthetic_matches
+from vo_lib.viz.plotting import draw_circular_motion, new_axes
 from vo_lib.viz.widgets import show_math
 
 SEED = 2
@@ -71,6 +73,25 @@ P = sp.Matrix([x, y, z])
 xp, yp, zp = R * P + T  # P' = (x', y', z'), eq. 15
 show_math("P'", sp.Matrix([xp, yp, zp]))
 assert sp.simplify(yp - y) == 0  # planar motion: a point keeps its height, y' = y
+
+# %% [markdown]
+# The paper's Fig. 2 draws this geometry; the figure is not in our copy of the paper, so we draw
+# it from the description: the camera turns by θ about the instantaneous centre of rotation (ICR)
+# at distance R_ICR on its left, perpendicular to its optical axis z, and moves from C to C′
+# along the chord. The second camera centre, seen from the first, is where P′ = 0, that is
+# P = −RᵀT; the drawn C′ must be that point, the chord must be 2 R_ICR sin(θ/2) long, and it must
+# make φ = θ/2 with the optical axis:
+
+# %%
+fig, ax = new_axes(width=5.5, height=4.5)
+turn, radius_icr = 0.6, 2.0
+drawn = draw_circular_motion(ax, theta=turn, radius=radius_icr)
+ax.set_title("Fig. 2 as described: relative camera positions in circular motion")
+plt.show()
+R_num, T_num = cm.motion_matrices(turn, drawn["rho"])
+centre_2 = -R_num.T @ T_num  # the second camera centre in the first camera's frame (x, y, z)
+assert np.allclose(centre_2[[0, 2]], drawn["C2"]) and abs(centre_2[1]) < 1e-15
+assert np.isclose(drawn["rho"], 2 * radius_icr * np.sin(turn / 2)) and np.isclose(drawn["phi"], turn / 2)
 
 # %% [markdown]
 # ## 2 · Eliminating ρ: eq. 12

@@ -246,3 +246,69 @@ def draw_observer_case(ax, a, b, centre, max_range: float, part, title: str = ""
     ax.grid(True, alpha=0.3)
     if title:
         ax.set_title(title)
+
+
+def draw_circular_motion(ax, theta: float = 0.6, radius: float = 2.0) -> dict:
+    """Seed 000's Fig. 2, plan view of the first camera frame (x right, z forward): a camera above
+    the turning axis turns by ``theta`` (left positive) about the instantaneous centre of
+    rotation at ``radius`` to its left, moving from C to C' along a chord of length rho at the
+    angle phi from its optical axis.
+
+    Returns ``C2`` (the second centre, (x, z)), ``rho`` and ``phi`` as drawn."""
+    icr = np.array([-radius, 0.0])
+    C = np.array([0.0, 0.0])
+    C2 = icr + radius * np.array([np.cos(theta), np.sin(theta)])
+    arc = np.linspace(0.0, theta, 50)
+    ax.plot(icr[0] + radius * np.cos(arc), icr[1] + radius * np.sin(arc), color="0.6", lw=1, ls="--")
+    ax.plot(*zip(icr, C, strict=True), color="0.5", lw=1)
+    ax.plot(*zip(icr, C2, strict=True), color="0.5", lw=1, label="R_ICR")
+    ax.plot(*icr, "k+", ms=10)
+    ax.annotate("ICR", icr, textcoords="offset points", xytext=(4, -12))
+    ax.plot(*zip(C, C2, strict=True), "k-", lw=2, label="chord, length ρ")
+    for P, yaw, name in ((C, 0.0, "C"), (C2, theta, "C'")):
+        axis = np.array([-np.sin(yaw), np.cos(yaw)])  # the optical axis z, turned left by yaw
+        tip = P + 0.45 * radius * axis
+        ax.annotate("", tip, P, arrowprops={"arrowstyle": "->", "color": "C0"})
+        ax.plot(*tip, linestyle="none")  # keeps the arrow inside the axes' limits
+        ax.plot(*P, "ko")
+        ax.annotate(name, P, textcoords="offset points", xytext=(6, -6))
+    chord = C2 - C
+    rho = float(np.hypot(*chord))
+    _angle_arc(ax, C, (0.0, 1.0), chord, 0.25 * radius, "φ")
+    _angle_arc(ax, icr, (1.0, 0.0), C2 - icr, 0.3 * radius, "θ")
+    ax.set_aspect("equal")
+    ax.set_xlabel("x (right) [m]")
+    ax.set_ylabel("z (forward) [m]")
+    ax.legend(fontsize="x-small", loc="upper left")
+    phi = float(np.arccos(chord[1] / rho))
+    return {"C2": C2, "rho": rho, "phi": phi}
+
+
+def draw_flowchart(ax, stages, side=None):
+    """Boxes for ``stages`` top to bottom, joined by arrows; ``side`` is an optional list of
+    ``(from, to, label)`` stage indices for arrows drawn to the right (feedback, priors)."""
+    n = len(stages)
+    ys = np.linspace(0.95, 0.05, n)
+    for i, (y, text) in enumerate(zip(ys, stages, strict=True)):
+        ax.text(
+            0.4,
+            y,
+            text,
+            ha="center",
+            va="center",
+            fontsize="small",
+            bbox={"boxstyle": "round,pad=0.4", "fc": "white", "ec": "0.3"},
+        )
+        if i:
+            ax.annotate("", (0.4, y + 0.045), (0.4, ys[i - 1] - 0.045), arrowprops={"arrowstyle": "->"})
+    for a, b, label in side or []:
+        ax.annotate(
+            "",
+            (0.78, ys[b]),
+            (0.78, ys[a]),
+            arrowprops={"arrowstyle": "->", "color": "C1", "connectionstyle": "arc3,rad=-0.4"},
+        )
+        ax.text(0.86, 0.5 * (ys[a] + ys[b]), label, color="C1", fontsize="x-small", va="center")
+    ax.set_xlim(0, 1)
+    ax.set_ylim(0, 1)
+    ax.axis("off")
