@@ -337,18 +337,24 @@ class _Serial:
 class _Dask:
     """Tasks on a dask.distributed cluster: a new LocalCluster, or an existing scheduler."""
 
-    def __init__(self, workers: int, address: str | None):
+    def __init__(self, workers: int, address: str | None, client=None):
         import logging
 
         from distributed import Client, LocalCluster
 
         self.cluster = None
-        if address is None:
+        self.owned = client is None
+        if client is not None:
+            self.client = client
+            self.label = (
+                f"Dask client {client.scheduler.address}, {len(client.scheduler_info()['workers'])} workers"
+            )
+        elif address is None:
             self.cluster = LocalCluster(
                 n_workers=workers,
                 threads_per_worker=1,
                 processes=True,
-                dashboard_address=None,
+                dashboard_address=":0",
                 silence_logs=logging.ERROR,
             )
             self.client = Client(self.cluster)
@@ -388,7 +394,8 @@ class _Dask:
             yield params, outcome
 
     def close(self):
-        self.client.close()
+        if self.owned:
+            self.client.close()
         if self.cluster is not None:
             self.cluster.close()
 
@@ -404,11 +411,13 @@ def run_sweep(
     inputs: Iterable = (),
     context=None,
     progress: bool | None = None,
+    client=None,
 ) -> SweepResult:
     """Run every task of ``tasks`` not already finished in ``out``; returns all rows of the grid.
 
     ``context`` given: passed to every task instead of running ``experiment.setup``.
     ``progress``: a tqdm bar on stderr (default: when stderr is a terminal).
+    ``client``: a ``distributed.Client`` to use (left open) instead of ``workers``/``scheduler``.
     """
     from tqdm import tqdm
 
@@ -427,7 +436,12 @@ def run_sweep(
         todo = [t for t, k in zip(tasks, keys, strict=True) if k not in done]
         result.reused = [k for k in keys if k in done]
         if todo:
-            runner = _Serial() if address is None and workers == 1 else _Dask(workers, address)
+            if client is not None:
+                runner = _Dask(workers, None, client)
+            elif address is None and workers == 1:
+                runner = _Serial()
+            else:
+                runner = _Dask(workers, address)
             result.workers = runner.label
             need_setup = context is None and experiment.setup is not None
             bar = tqdm(

@@ -2,9 +2,10 @@
 
 Times are medians of repeated runs on data drawn once with a fixed seed, so a run compares
 like with like; they are measurements to read, never assertions. One module per wing
-(``bench_stereo_vo``, ``bench_line_slam``, ``bench_lidar_tracking``) and one for the simulated
-sensors (``bench_sim``); the timing helpers are in ``common``. Each benchmark imports what it
-times when it runs, so listing them stays fast.
+(``bench_stereo_vo``, ``bench_line_slam``, ``bench_lidar_tracking``), one for the simulated
+sensors (``bench_sim``) and one for the sweep machinery on Dask (``bench_sweep``); the timing
+helpers are in ``common``. Each benchmark imports what it times when it runs, so listing them
+stays fast.
 """
 
 from __future__ import annotations
@@ -16,6 +17,7 @@ from vo_lib.cli.bench.bench_line_slam import bench_observers
 from vo_lib.cli.bench.bench_real import bench_real
 from vo_lib.cli.bench.bench_sim import bench_sensors
 from vo_lib.cli.bench.bench_stereo_vo import bench_frontend, bench_geometry, bench_pipeline, bench_ransac
+from vo_lib.cli.bench.bench_sweep import bench_sweep
 
 BENCHES: dict[str, Callable[[], dict[str, float]]] = {
     "pipeline": bench_pipeline,
@@ -27,4 +29,5 @@ BENCHES: dict[str, Callable[[], dict[str, float]]] = {
     "tracking": bench_tracking,
     "odometers": bench_odometers,
     "real": bench_real,
+    "sweep": bench_sweep,
 }

@@ -1,0 +1,177 @@
+"""Sweeps (vo_lib.cli.sweep): the same figures serially and on a 2-worker Dask LocalCluster, a
+re-run finishes only the missing rows, a failing task is a row, the folder follows the output
+rules, command-line errors are one line; evaluate-all on the real sequence."""
+
+from __future__ import annotations
+
+import csv
+import json
+import logging
+import sys
+from pathlib import Path
+
+import cloudpickle
+import pytest
+
+from vo_lib.cli.evaluate_all import find_sequences
+from vo_lib.cli.experiments import LAP, NEES, lap_tasks, nees_tasks
+from vo_lib.cli.main import main
+from vo_lib.cli.sweep import ROWS, TABLE, Experiment, SweepError, run_sweep, scheduler_address, task_key
+
+REAL = Path(__file__).resolve().parents[2] / "shared" / "realdata"
+
+# the toy tasks below travel to the workers by value (the test module is not importable there)
+cloudpickle.register_pickle_by_value(sys.modules[__name__])
+
+
+@pytest.fixture(scope="module")
+def client():
+    """One 2-worker LocalCluster for the module (starting one costs seconds)."""
+    from distributed import Client, LocalCluster
+
+    cluster = LocalCluster(
+        n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0", silence_logs=logging.ERROR
+    )
+    c = Client(cluster)
+    yield c
+    c.close()
+    cluster.close()
+
+
+def square(params, context=None):
+    if params["seed"] == 2 and params.get("fail"):
+        raise RuntimeError("seed 2 refuses")
+    return {"square": params["seed"] ** 2, "offset": params["seed"] + (context or 0)}
+
+
+TOY = Experiment("toy", square)
+
+
+def figures(result):
+    return [(r["params"], r["figures"]) for r in result.rows]
+
+
+def test_same_figures_serially_and_on_the_cluster(tmp_path, client):
+    for experiment, tasks in ((NEES, nees_tasks(4, steps=60)), (LAP, lap_tasks(2))):
+        serial = run_sweep(experiment, tasks, tmp_path / f"{experiment.name}-serial", workers=1)
+        dask = run_sweep(experiment, tasks, tmp_path / f"{experiment.name}-dask", client=client)
+        assert dask.workers.startswith("Dask") and serial.workers.startswith("serial")
+        assert not serial.failed and not dask.failed
+        assert figures(serial) == figures(dask)  # exactly, not approximately
+        assert [r["params"]["seed"] for r in dask.rows] == [t["seed"] for t in tasks]  # grid order
+
+
+def test_rerun_finishes_only_the_missing_rows(tmp_path, client):
+    tasks = [{"seed": s} for s in range(5)]
+    out = tmp_path / "toy"
+    first = run_sweep(TOY, tasks[:2], out, workers=1)  # the sweep "interrupted" after two rows
+    assert len(first.ran) == 2
+    with open(out / ROWS, "a") as fh:  # and a row cut short by a kill
+        fh.write('{"key": "abc", "params": {"se')
+    again = run_sweep(TOY, tasks, out, client=client)
+    keys = [task_key("toy", t) for t in tasks]
+    assert sorted(again.ran) == sorted(keys[2:]) and again.reused == keys[:2]
+    assert [r["figures"]["square"] for r in again.rows] == [0, 1, 4, 9, 16]
+    with open(out / TABLE, newline="") as fh:
+        table = list(csv.DictReader(fh))
+    assert [int(r["seed"]) for r in table] == list(range(5))
+    assert [float(r["square"]) for r in table] == [0, 1, 4, 9, 16]
+    assert all(float(r["seconds"]) >= 0 and r["error"] == "" for r in table)
+    nothing = run_sweep(TOY, tasks, out, workers=2)  # all done: no cluster is even started
+    assert nothing.ran == [] and len(nothing.reused) == 5 and nothing.workers == ""
+    marker = json.loads((out / ".vo_lib_output.json").read_text())
+    assert marker["written_by"] == "vo_lib sweep toy" and set(marker["contents"]) == {ROWS, TABLE}
+    assert sorted(p.name for p in out.iterdir()) == sorted([".vo_lib_output.json", ROWS, TABLE])
+
+
+def test_a_failing_task_is_a_row_and_runs_again(tmp_path, client):
+    tasks = [{"seed": s, "fail": True} for s in range(4)]
+    for where, kw in (("serial", {"workers": 1}), ("dask", {"client": client})):
+        result = run_sweep(TOY, tasks, tmp_path / where, context=10, **kw)
+        assert len(result.rows) == 4 and len(result.failed) == 1
+        bad = result.failed[0]
+        assert bad["params"]["seed"] == 2 and bad["error"].startswith("RuntimeError: seed 2 refuses")
+        assert [r["figures"].get("offset") for r in result.rows] == [10, 11, None, 13]
+        again = run_sweep(TOY, tasks, tmp_path / where, workers=1, context=10)
+        assert again.ran == [task_key("toy", tasks[2])] and len(again.failed) == 1
+
+
+def test_folder_rules(tmp_path):
+    foreign = tmp_path / "mine"
+    foreign.mkdir()
+    (foreign / "notes.txt").write_text("keep me")
+    with pytest.raises(ValueError, match="not written by this program"):
+        run_sweep(TOY, [{"seed": 0}], foreign, workers=1)
+    assert sorted(p.name for p in foreign.iterdir()) == ["notes.txt"]
+    run_sweep(TOY, [{"seed": 0}], tmp_path / "toy", workers=1)
+    other = Experiment("other", square)
+    with pytest.raises(SweepError, match="holds a sweep written by 'vo_lib sweep toy'"):
+        run_sweep(other, [{"seed": 0}], tmp_path / "toy", workers=1)
+    with pytest.raises(SweepError, match="repeats a task"):
+        run_sweep(TOY, [{"seed": 0}, {"seed": 0}], tmp_path / "twice", workers=1)
+    assert not (tmp_path / "twice").exists()
+
+
+def test_scheduler_address(monkeypatch):
+    monkeypatch.delenv("DASK_SCHEDULER_ADDRESS", raising=False)
+    assert scheduler_address(None) is None
+    assert scheduler_address("tcp://10.0.0.5:8786") == "tcp://10.0.0.5:8786"
+    assert scheduler_address("node7:8786") == "tcp://node7:8786"
+    monkeypatch.setenv("DASK_SCHEDULER_ADDRESS", "tcp://head:8786")
+    assert scheduler_address(None) == "tcp://head:8786"
+    for bad in ("nonsense", "tcp://host", "tcp://host:99999", "http://host:80/x"):
+        with pytest.raises(SweepError, match="expected a scheduler address"):
+            scheduler_address(bad)
+
+
+@pytest.mark.parametrize(
+    "argv, message",
+    [
+        (["sweep", "lap", "--seeds", "0"], "--seeds: expected a number of seeds of at least 1"),
+        (["sweep", "lap", "--seeds", "x"], "--seeds: expected a whole number >= 1"),
+        (["sweep", "lap", "--workers", "0"], "--workers: expected a number of workers of at least 1"),
+        (["sweep", "lap", "--scheduler", "not an address"], "expected a scheduler address"),
+        (["sweep", "nothing"], "invalid choice"),
+        (["evaluate-all", "no/such/folder"], "folder not found"),
+    ],
+)
+def test_command_line_errors(argv, message, capsys, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.delenv("DASK_SCHEDULER_ADDRESS", raising=False)
+    try:
+        status = main(argv)
+    except SystemExit as exc:  # argparse's own errors
+        status = exc.code
+    assert status == 2
+    err = capsys.readouterr().err
+    assert message in err and len(err.strip().splitlines()) == 1
+    assert list(tmp_path.iterdir()) == []  # nothing written
+
+
+def test_sweep_command_prints_the_aggregate(tmp_path, capsys):
+    assert main(["sweep", "nees", "--seeds", "3", "--workers", "1", "--out", str(tmp_path / "n")]) == 0
+    out = capsys.readouterr().out
+    assert "nees_mean" in out and "±" in out and "NEES averaged over 3 runs" in out
+    assert len(list(csv.DictReader(open(tmp_path / "n" / TABLE)))) == 3
+
+
+def test_find_sequences(tmp_path):
+    for name in ("sequences/00", "sequences/10", "sequences/02", ".hidden/x", "other/deep/seq"):
+        (tmp_path / name / "image_0").mkdir(parents=True)
+    (tmp_path / "sequences/00/image_0/inner/image_0").mkdir(parents=True)  # inside a sequence: not one
+    found = [p.relative_to(tmp_path).as_posix() for p in find_sequences(tmp_path)]
+    assert found == ["other/deep/seq", "sequences/00", "sequences/02", "sequences/10"]
+    assert find_sequences(tmp_path / "sequences/02") == [tmp_path / "sequences/02"]
+
+
+@pytest.mark.skipif(not REAL.is_dir(), reason=f"real data not found at {REAL} (see DESIGN.md, Real data)")
+def test_evaluate_all_on_the_real_sequence(tmp_path, capsys):
+    out = tmp_path / "ev"
+    assert main(["evaluate-all", str(REAL), "--frames", "30", "--workers", "1", "--out", str(out)]) == 0
+    text = capsys.readouterr().out
+    rows = list(csv.DictReader(open(out / TABLE)))
+    assert [r["sequence"] for r in rows] == ["kitti_raw_2011_09_26_drive_0001"]
+    row = rows[0]
+    assert row["error"] == "" and row["lengths"] == "short" and int(row["segments"]) > 0
+    assert 0 < float(row["t_pct"]) < 3 and 0 <= float(row["r_deg_100m"]) < 3
+    assert "overall" in text and "short 25/50/100 m" in text
