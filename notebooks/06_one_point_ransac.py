@@ -311,6 +311,7 @@ def ransac_trial(outlier_ratio=0.4, noise_px=0.5):
     fig, ax = new_axes(width=5.5, height=3.2)
     ax.hist(errs, bins=20)
     ax.set_xlabel("|θ error| [deg]")
+    ax.set_ylabel("match sets")
     ax.set_title(
         f"{outlier_ratio:.0%} outliers, {noise_px} px: {hits}/20 within 0.05° and 5 %, "
         f"{np.median(times):.2f} ms"

@@ -39,7 +39,7 @@ from vo_lib.geometry import relative_planar, wrap_angle
 from vo_lib.models.track_odometry import TrackOdometry
 from vo_lib.sim.samples import SAMPLES, render_sample
 from vo_lib.stereo_vo.pipeline import KEY_ANGLE, KEY_DISTANCE, run_frames
-from vo_lib.viz.plotting import new_axes, plot_paths
+from vo_lib.viz.plotting import draw_flowchart, new_axes, plot_paths
 
 SEED = 8
 rng = np.random.default_rng(SEED)
@@ -88,11 +88,34 @@ def heading_error(poses, truth):
 print(f"new keyframe after {KEY_DISTANCE * 100:.0f} cm or {math.degrees(KEY_ANGLE):.1f}° of motion")
 result, truth, _ = run("indoor_linear", 60)
 reasons = {d.reason for d in result.diagnostics if d.fallback}
+end_error = np.hypot(*(result.poses[-1, :2] - truth[-1, :2]))
+travelled_60 = np.sum(np.hypot(*np.diff(truth[:, :2], axis=0).T))
 print(
     f"{len(result.poses)} frames in, {len(result.poses)} poses out; "
-    f"flagged: {len(result.flagged)} {reasons or ''}"
+    f"flagged: {len(result.flagged)} {reasons or ''}; "
+    f"error after {travelled_60 * 100:.0f} cm: {end_error * 1000:.2f} mm"
 )
-assert len(result.poses) == 60
+# a clean, well-textured start: no frame needs the fallback, and the pose stays on the truth
+assert len(result.flagged) == 0 and end_error < 0.01 * travelled_60
+
+# the paper's Fig. 3 (the procedure), as our pipeline runs it; the timed stages are its boxes
+fig, ax = new_axes(width=7, height=5)
+draw_flowchart(
+    ax,
+    [
+        "stereo pair k (rectified)",
+        "stereo processing: FAST, descriptors, row matching, disparity  [stereo]",
+        "Kalman prediction: track odometry (eq. 6-11) or constant velocity",
+        "observation prediction: matching against the keyframe in predicted windows  [matching]",
+        "1-point RANSAC: θ (eq. 14, gate eq. 20), then ρ (eq. 17, gate eq. 21)  [estimation]",
+        "Kalman update with (θ, ρ) and the chord constraint  [kalman]",
+        "pose k; a new keyframe after enough motion",
+    ],
+    side=[(2, 4, "prior (θ, ρ)\nand its covariance")],
+)
+ax.set_title("Fig. 3: the VO procedure, per frame")
+plt.show()
+assert {"stereo", "matching", "estimation", "kalman"} <= set(result.timing_table())
 
 # %% [markdown]
 # ## 2 · Table 1: time per stage at five resolutions
@@ -127,14 +150,39 @@ for (w, h), t, p in rows:
         f" {t['estimation']:12.2f} ({p[1]:5.3f})"
         f" {t['kalman']:12.2f} ({p[2]:5.3f}) {features[(w, h)]:10.0f}"
     )
-counts = [features[res] for res in paper_table1]
-assert counts[0] > counts[-1]  # fewer stereo features at lower resolution (the paper's Fig. 6)
+counts = np.array([features[res] for res in paper_table1])
+pixels = np.array([w * h for w, h in paper_table1])
+fig, ax = new_axes(width=5.5, height=3.4)
+ax.plot(pixels / 1e3, counts, "o-")
+for (w, h), p_, c_ in zip(paper_table1, pixels, counts, strict=True):
+    ax.annotate(f"{w}×{h}", (p_ / 1e3, c_), fontsize="x-small", xytext=(3, 3), textcoords="offset points")
+ax.set_xlabel("pixels per image [thousands]")
+ax.set_ylabel("stereo features (median per frame)")
+ax.set_title("Fig. 6: stereo features against resolution")
+ax.set_ylim(0, 1.1 * counts.max())
+plt.show()
+frame_ms = sum(rows[0][1][k] for k in ("stereo", "matching", "estimation", "kalman"))
+print(f"640x480: {frame_ms:.1f} ms per frame for the four stages, {1000 / frame_ms:.0f} frames per second")
+print(
+    "paper's time / ours, stereo processing: "
+    + ", ".join(f"{w}x{h} {p[0] / t['stereo']:.1f}" for (w, h), t, p in rows)
+    + "; parameter estimation: "
+    + ", ".join(f"{p[1] / t['estimation']:.1f}" for _, t, p in rows)
+)
+# bucketing caps the features: nearly flat down to 320x240, fewer only at the smallest size
+assert np.ptp(counts[:4]) < 0.15 * counts[:4].mean() and counts[-1] < 0.95 * counts[:4].min()
 
 # %% [markdown]
-# Our front end is several times faster than the paper's stereo processing (different work,
-# different computer, and our images need no rectification); our parameter estimation is about as
-# fast as theirs, and our Kalman step, with a 6-dimensional state for the keyframe, costs a little
-# more. Timings here are single runs of a notebook; `python -m vo_lib bench pipeline` measures them.
+# The paper's Fig. 6 shows fewer stereo features at lower resolutions. Ours stay nearly flat down
+# to 320×240 and drop only at 256×192: our front end keeps the strongest few corners per cell of
+# a grid and caps their number, so the count is set by the cap until the image is too small to
+# fill it.
+#
+# The ratios of the paper's times to ours are printed above (different work, different computer,
+# and our images need no rectification); our Kalman column, with a 6-dimensional state for the
+# keyframe, is printed beside the paper's. Timings here are single runs of a notebook, and on a
+# busy or shared machine they inflate; `python -m vo_lib bench pipeline` measures them with
+# repeats.
 #
 # ## 3 · Linear motion (seed 000, IV.A.2)
 #
@@ -163,6 +211,40 @@ print(
 )
 print(f"final position error {relative:.2%} of the {travelled:.2f} m travelled; paper: under 5 %")
 assert relative <= 0.01
+
+# %% [markdown]
+# Outdoors (IV.B.1, Fig. 9) the paper drove 600 frames forward and 600 back, five times, with
+# mean x and y errors of 15.8 mm (s.d. 53.0) and 124.5 mm (s.d. 40.3). Our `outdoor_linear` sample
+# drives the same in the yard, whose far buildings give the low parallax of an open site; quick
+# mode runs its first 200 frames (forward only), the full mode all of it.
+
+# %%
+n_out = frames_for("outdoor_linear", 200)
+result_o, truth_o, _ = run("outdoor_linear", n_out)
+fig, ax = new_axes(width=7, height=3.2)
+for col, name in ((0, "x"), (1, "y")):
+    ax.plot(np.arange(n_out), (result_o.poses[:, col] - truth_o[:, col]) * 1000, label=f"{name} error")
+ax.set_xlabel("frame")
+ax.set_ylabel("error [mm]")
+ax.set_title(f"Fig. 9: outdoor linear motion, {n_out} frames")
+ax.legend(fontsize="small")
+plt.show()
+stats_o = key_position_errors(truth_o, result_o.poses, np.arange(20, n_out, 20))
+travelled_o = np.sum(np.linalg.norm(np.diff(truth_o[:, :2], axis=0), axis=1))
+relative_o = np.linalg.norm(result_o.poses[-1, :2] - truth_o[-1, :2]) / travelled_o
+print(
+    f"errors at key positions: x {stats_o['x_mm'][0]:.1f} mm (s.d. {stats_o['x_mm'][1]:.1f}), "
+    f"y {stats_o['y_mm'][0]:.1f} mm (s.d. {stats_o['y_mm'][1]:.1f}); paper: x 15.8 (53.0), y 124.5 (40.3)"
+)
+print(f"final position error {relative_o:.2%} of the {travelled_o:.2f} m travelled; paper: under 5 %")
+assert relative_o < 0.05
+
+# %% [markdown]
+# Outdoors the x error grows with the distance driven: in the open yard most matches are far,
+# their disparities small, and the distance per frame is measured a little short or long, a
+# scale error of a fraction of the distance (printed). A pure scale error cancels over a drive
+# forward and back by the same distance, as the paper's sets were, so their end-point errors
+# hide it; the error plot above shows it. It stays well within the paper's 5 %.
 
 # %% [markdown]
 # ## 4 · Spot turns with slip (seed 000, IV.B.2)
@@ -213,7 +295,11 @@ for ax, name in zip(axes, paper_free, strict=True):
     plot_paths(
         ax, {"truth": truth_f, "track odometry": odo_f, "visual odometry": res_f.poses}, f"{name}, {n} frames"
     )
-    table[name] = key_position_errors(truth_f, res_f.poses, np.arange(50, n, 50))
+    keys_f = np.arange(50, n, 50)
+    ax.plot(*truth_f[keys_f, :2].T, "ko", ms=4, mfc="none", label="key positions (truth)")
+    ax.plot(*res_f.poses[keys_f, :2].T, "k+", ms=6, label="key positions (VO)")
+    ax.legend(fontsize="x-small")
+    table[name] = key_position_errors(truth_f, res_f.poses, keys_f)
     table[name]["mean_heading"] = float(np.abs(heading_error(res_f.poses, truth_f)).mean())
 plt.show()
 print(f" {'':14s}{'x [mm] AVG / S.D.':>22s}{'y [mm] AVG / S.D.':>22s}{'θ [deg] AVG / S.D.':>22s}")
@@ -230,12 +316,15 @@ for name, ours in table.items():
             + f"   ({label})"
         )
 assert table["indoor_free"]["mean_heading"] <= 0.2
+# section 6: indoors our mean heading error is not below the paper's, but its spread is a tenth
+assert table["indoor_free"]["theta_deg"][0] > paper_free["indoor_free"]["theta_deg"][0]
+assert table["indoor_free"]["theta_deg"][1] < 0.2 * paper_free["indoor_free"]["theta_deg"][1]
 
 # %% [markdown]
 # ## 6 · Where we are better, and why that is not the whole story
 #
 # Most of our figures are smaller than the paper's, several times over. One is not: the mean
-# heading error of indoor free motion (see the table), although its spread is a tenth of the
+# heading error of indoor free motion (see the table), although its spread is a fraction of the
 # paper's. Neither is a verdict on the method: our images are rendered from an exact pinhole
 # model with a known calibration, no lens distortion, perfectly rectified pairs, a camera
 # exactly above the turning axis (notebook 03 shows what an offset costs), static rich
@@ -247,7 +336,7 @@ assert table["indoor_free"]["mean_heading"] <= 0.2
 # ## Summary
 #
 # - The pipeline gives one pose per frame, flags the frames whose vision it cannot trust, and runs
-#   at about 100 frames per second at 640×480 on two cores.
+#   at a speed per frame printed in section 2 (`python -m vo_lib bench pipeline` for a measurement).
 # - Measuring against keyframes, not the previous frame, is what makes centimetre-per-frame motion
 #   measurable.
 # - Linear, free and spot-turn motion all stay within the accuracy targets; odometry alone drifts
