@@ -91,9 +91,11 @@ def test_pipeline_is_deterministic():
 def test_timing_table_has_the_paper_columns():
     _, result, _ = run_sample("indoor_linear", 20)
     table = result.timing_table()
-    assert set(table) == {"stereo", "prediction", "matching", "estimation", "kalman", "total"}
+    assert set(table) == {"stereo", "prediction", "matching", "estimation", "refinement", "kalman", "total"}
     assert table["total"] >= table["stereo"] > 0
     assert math.isfinite(table["estimation"])
+    assert table["refinement"] == 0.0  # the planar pipeline has no 6-DoF refinement
+    assert all(v >= 0 for t in result.timings for v in vars(t).values())  # no negative stage times
 
 
 @pytest.mark.parametrize("bad", ["nan", "missing"])
