@@ -146,3 +146,58 @@ def test_camera_in_imu_frame_from_raw_calibration(tmp_path):
     (tmp_path / "calib_cam_to_cam.txt").write_text("R_rect_01: 1 0 0 0 1 0 0 0 1\n")
     with pytest.raises(SequenceError, match="no line starting with 'R_rect_00:'"):
         camera_in_imu_frame(tmp_path)
+
+
+def test_compiled_normal_equations_equal_the_numpy_ones(kitti_camera, rng):
+    from vo_lib.stereo_vo.rigid_motion import _normal_equations, _normal_equations_numpy
+
+    P = scene(rng, 200)
+    T = motion([0.01, -0.02, 0.003], [0.1, 0.0, -1.0])
+    w = project(P @ T[:3, :3].T + T[:3, 3], kitti_camera) + rng.normal(0, 2.0, (200, 3))
+    for huber in (1.0, np.inf):
+        fast = _normal_equations(P, w, np.eye(3), np.zeros(3), kitti_camera, huber)
+        slow = _normal_equations_numpy(P, w, np.eye(3), np.zeros(3), kitti_camera, huber)
+        for a, b in zip(fast, slow, strict=True):
+            np.testing.assert_allclose(a, b, rtol=1e-9, atol=1e-9)
+
+
+def test_compiled_windows_give_the_pairs_of_the_numpy_windows():
+    from vo_lib.stereo_vo.features import StereoFeatures, hamming, window_pairs
+    from vo_lib.stereo_vo.matching_core import window_candidates
+    from vo_lib.stereo_vo.temporal import DISPARITY_WINDOW
+
+    rng = np.random.default_rng(3)
+    n, m = 300, 350
+    prev = StereoFeatures(
+        np.column_stack([rng.uniform(0, 600, n), rng.uniform(0, 300, n), rng.uniform(1, 60, n)]),
+        rng.integers(0, 256, (n, 32), dtype=np.uint8),
+    )
+    curr = StereoFeatures(
+        np.column_stack([rng.uniform(0, 600, m), rng.uniform(0, 300, m), rng.uniform(1, 60, m)]),
+        rng.integers(0, 256, (m, 32), dtype=np.uint8),
+    )
+    predicted = prev.w + rng.normal(0, 5, (n, 3))
+    predicted[::17] = np.nan  # out of view
+    radius = rng.uniform(5, 40, n)
+    order = np.argsort(curr.w[:, 1], kind="stable")
+    ia, ib, dist = window_candidates(
+        predicted,
+        radius,
+        curr.w,
+        order,
+        curr.w[order, 1].copy(),
+        2.0,
+        DISPARITY_WINDOW,
+        prev.descriptors.view(np.uint64),
+        curr.descriptors.view(np.uint64),
+    )
+    keep = np.flatnonzero(np.isfinite(predicted[:, 0]))
+    ja, jb = window_pairs(predicted[keep, 1], curr.w[:, 1], radius[keep])
+    ja = keep[ja]
+    inside = np.abs(curr.w[jb, 0] - predicted[ja, 0]) <= radius[ja]
+    inside &= np.abs(curr.w[jb, 2] - predicted[ja, 2]) <= 2.0 + DISPARITY_WINDOW * predicted[ja, 2]
+    ja, jb = ja[inside], jb[inside]
+    assert len(ja) > 100
+    np.testing.assert_array_equal(ia, ja)
+    np.testing.assert_array_equal(ib, jb)
+    np.testing.assert_array_equal(dist, hamming(prev.descriptors[ja], curr.descriptors[jb]))

@@ -70,3 +70,49 @@ def best_matches_core(ia, ib, dist, n_a, n_b, max_distance, ratio, mutual):
             out_a[j], out_b[j], out_d[j] = a, best_b[a], best[a]
             j += 1
     return out_a, out_b, out_d
+
+
+@_jit
+def _popcount64(x):
+    x = x - ((x >> np.uint64(1)) & np.uint64(0x5555555555555555))
+    x = (x & np.uint64(0x3333333333333333)) + ((x >> np.uint64(2)) & np.uint64(0x3333333333333333))
+    x = (x + (x >> np.uint64(4))) & np.uint64(0x0F0F0F0F0F0F0F0F)
+    return (x * np.uint64(0x0101010101010101)) >> np.uint64(56)
+
+
+@_jit
+def window_candidates(predicted, radius, w_curr, order_v, sorted_v, d_floor, d_fraction, des_prev, des_curr):
+    """Pairs ``(i, j)`` whose current feature ``j`` lies in the square window of radius
+    ``radius[i]`` around previous feature ``i``'s predicted ``(u, v)`` and within
+    ``d_floor + d_fraction * d`` of its predicted disparity, with their Hamming distances.
+
+    ``order_v`` sorts the current features by row and ``sorted_v`` holds their rows in that order;
+    pairs come ordered by ``i``, then by row, as from ``features.window_pairs``."""
+    n = predicted.shape[0]
+    cap = 64
+    ia = np.empty(n * cap, np.int64)
+    ib = np.empty(n * cap, np.int64)
+    dist = np.empty(n * cap, np.int64)
+    count = 0
+    for i in range(n):
+        u, v, d = predicted[i, 0], predicted[i, 1], predicted[i, 2]
+        if not (np.isfinite(u) and np.isfinite(v) and np.isfinite(d)):
+            continue
+        r = radius[i]
+        lo = np.searchsorted(sorted_v, v - r, side="left")
+        hi = np.searchsorted(sorted_v, v + r, side="right")
+        d_window = d_floor + d_fraction * d
+        for s in range(lo, hi):
+            j = order_v[s]
+            if abs(w_curr[j, 0] - u) > r or abs(w_curr[j, 2] - d) > d_window:
+                continue
+            if count == ia.shape[0]:  # grow
+                ia = np.concatenate((ia, np.empty_like(ia)))
+                ib = np.concatenate((ib, np.empty_like(ib)))
+                dist = np.concatenate((dist, np.empty_like(dist)))
+            h = 0
+            for k in range(des_prev.shape[1]):
+                h += _popcount64(des_prev[i, k] ^ des_curr[j, k])
+            ia[count], ib[count], dist[count] = i, j, h
+            count += 1
+    return ia[:count], ib[:count], dist[:count]

@@ -86,6 +86,26 @@ def reprojection_errors(P: np.ndarray, w_curr: np.ndarray, R, t, camera: StereoC
 
 
 def _normal_equations(P, w, R, t, camera, huber):
+    """``(J^T W J, J^T W r, sum of weighted squares)`` of the Huber-weighted residuals, compiled
+    (:mod:`.rigid_core`); :func:`_normal_equations_numpy` is the same written out."""
+    from vo_lib.stereo_vo.rigid_core import normal_equations
+
+    A, g, cost = normal_equations(
+        np.ascontiguousarray(P, dtype=float),
+        np.ascontiguousarray(w, dtype=float),
+        np.ascontiguousarray(R, dtype=float),
+        np.ascontiguousarray(t, dtype=float),
+        camera.fx,
+        camera.fy,
+        camera.cx,
+        camera.cy,
+        camera.fx * camera.baseline,
+        float(huber),
+    )
+    return A, g, float(cost)
+
+
+def _normal_equations_numpy(P, w, R, t, camera, huber):
     """``(J^T W J, J^T W r, sum of weighted squares)`` of the Huber-weighted residuals."""
     Q = P @ R.T + t
     X, Y, Z = Q[:, 0], Q[:, 1], Q[:, 2]

@@ -158,13 +158,17 @@ def match_temporal(
 def match_to_prediction(
     prev: StereoFeatures, curr: StereoFeatures, predicted: np.ndarray | None, radius=None
 ) -> TemporalMatches:
-    """Match previous features to current ones near their predicted ``(u, v)``.
+    """Match previous features to current ones near their predicted ``(u, v, d)``.
 
     ``predicted`` ``(N_prev, 3)`` holds each previous feature's predicted ``(u, v, d)`` (NaN where
     it is not expected in view) and ``radius`` ``(N_prev,)`` the half-width of its square window in
-    pixels. Without a prediction every pair is compared (brute force). Used with the 6-DoF
-    prediction of :mod:`vo_lib.stereo_vo.rigid_motion`.
+    pixels; the disparity must also fall within ``2 px + DISPARITY_WINDOW * d`` of its prediction.
+    Without a prediction every pair is compared (brute force). The windows and their Hamming
+    distances are found in one compiled pass (:func:`.matching_core.window_candidates`). Used with
+    the 6-DoF prediction of :mod:`vo_lib.stereo_vo.rigid_motion`.
     """
+    from vo_lib.stereo_vo.matching_core import window_candidates
+
     t0 = time.perf_counter()
     n_prev, n_curr = len(prev), len(curr)
     if n_prev == 0 or n_curr == 0:
@@ -173,16 +177,20 @@ def match_to_prediction(
     if predicted is None:
         ia = np.repeat(np.arange(n_prev), n_curr)
         ib = np.tile(np.arange(n_curr), n_prev)
+        dist = hamming(prev.descriptors[ia], curr.descriptors[ib])
     else:
-        keep = np.flatnonzero(np.isfinite(predicted[:, 0]))
-        radius = np.broadcast_to(np.asarray(radius, float), (n_prev,))
-        ia, ib = window_pairs(predicted[keep, 1], curr.w[:, 1], radius[keep])
-        ia = keep[ia]
-        inside = np.abs(curr.w[ib, 0] - predicted[ia, 0]) <= radius[ia]
-        # and a disparity window: the disparity is predicted as well as the position, relatively
-        inside &= np.abs(curr.w[ib, 2] - predicted[ia, 2]) <= 2.0 + DISPARITY_WINDOW * predicted[ia, 2]
-        ia, ib = ia[inside], ib[inside]
-    dist = hamming(prev.descriptors[ia], curr.descriptors[ib])
+        order = np.argsort(curr.w[:, 1], kind="stable")
+        ia, ib, dist = window_candidates(
+            np.ascontiguousarray(predicted, dtype=float),
+            np.ascontiguousarray(np.broadcast_to(np.asarray(radius, float), (n_prev,))),
+            np.ascontiguousarray(curr.w, dtype=float),
+            order,
+            np.ascontiguousarray(curr.w[order, 1]),
+            2.0,
+            DISPARITY_WINDOW,
+            np.ascontiguousarray(prev.descriptors).view(np.uint64),
+            np.ascontiguousarray(curr.descriptors).view(np.uint64),
+        )
     a, b, _ = best_matches(ia, ib, dist, n_prev, n_curr, ratio=PREDICTED_RATIO)
     elapsed = (time.perf_counter() - t0) * 1e3
     return TemporalMatches(a, b, prev.w[a], curr.w[b], len(ia), {"temporal_match": elapsed})
