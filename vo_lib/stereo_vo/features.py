@@ -191,8 +191,7 @@ def subpixel_disparity(
     """
     h, w = left.shape
     r = PATCH_HALF
-    offs = np.arange(-r, r + 1)
-    ui, vi, di = np.rint(u).astype(int), np.rint(v).astype(int), np.rint(d).astype(int)
+    ui, vi, di = np.rint(u).astype(np.int64), np.rint(v).astype(np.int64), np.rint(d).astype(np.int64)
     ok = (
         (vi - r >= 0)
         & (vi + r < h)
@@ -204,16 +203,10 @@ def subpixel_disparity(
     out = d.astype(float).copy()
     if not ok.any():
         return out
-    rows = (vi[ok, None, None] + offs[None, :, None]).repeat(2 * r + 1, axis=2)
-    cols = ui[ok, None, None] + offs[None, None, :]
-    patch = left[rows, cols].astype(np.int32)
-    # costs[k + search] belongs to disparity d + k
-    costs = np.stack(
-        [
-            np.abs(patch - right[rows, cols - di[ok, None, None] - k].astype(np.int32)).sum(axis=(1, 2))
-            for k in range(-search, search + 1)
-        ]
-    )
+    from vo_lib.stereo_vo.matching_core import sad_costs
+
+    # costs[k + search] belongs to disparity d + k (one compiled pass over the patches)
+    costs = sad_costs(left, right, ui[ok], vi[ok], di[ok], r, search)
     best = 1 + np.argmin(costs[1:-1], axis=0)  # the lowest inner cost
     pick = np.arange(costs.shape[1])
     offset = parabola_offset(costs[best - 1, pick], costs[best, pick], costs[best + 1, pick])

@@ -116,3 +116,22 @@ def window_candidates(predicted, radius, w_curr, order_v, sorted_v, d_floor, d_f
             ia[count], ib[count], dist[count] = i, j, h
             count += 1
     return ia[:count], ib[:count], dist[:count]
+
+
+@_jit
+def sad_costs(left, right, ui, vi, di, half, search):
+    """``costs[k + search, n]``: sum of absolute differences between the left patch of half-width
+    ``half`` at ``(ui[n], vi[n])`` and the right patch at disparity ``di[n] + k``."""
+    n = ui.shape[0]
+    costs = np.zeros((2 * search + 1, n), np.int64)
+    for m in range(n):
+        for s in range(2 * search + 1):
+            shift = di[m] + s - search
+            total = 0
+            for dv in range(-half, half + 1):
+                row = vi[m] + dv
+                for du in range(-half, half + 1):
+                    col = ui[m] + du
+                    total += abs(np.int64(left[row, col]) - np.int64(right[row, col - shift]))
+            costs[s, m] = total
+    return costs

@@ -89,22 +89,30 @@ def _rz(yaw: float) -> np.ndarray:
     return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
 
 
+def rigid_inverse(T: np.ndarray) -> np.ndarray:
+    """Inverse of a 4x4 rigid transform: ``(R^T, -R^T t)``."""
+    out = np.eye(4)
+    out[:3, :3] = T[:3, :3].T
+    out[:3, 3] = -T[:3, :3].T @ T[:3, 3]
+    return out
+
+
 def vehicle_increment(T_cam: np.ndarray, mount: np.ndarray) -> np.ndarray:
     """``(dx, dy, dyaw)`` of the vehicle, in its previous frame, for a camera motion ``T_cam``
     (``T_curr_from_prev`` of the camera mounted at ``mount`` = ``T_vehicle_camera``)."""
-    V = mount @ np.linalg.inv(T_cam) @ np.linalg.inv(mount)
+    V = mount @ rigid_inverse(T_cam) @ rigid_inverse(mount)
     return np.array([V[0, 3], V[1, 3], math.atan2(V[1, 0], V[0, 0])])
 
 
 def with_planar_increment(T_cam: np.ndarray, mount: np.ndarray, increment) -> np.ndarray:
     """``T_cam`` with the vehicle's yaw and ground-plane translation replaced by ``increment``;
     height, pitch and roll are kept."""
-    V = mount @ np.linalg.inv(T_cam) @ np.linalg.inv(mount)
+    V = mount @ rigid_inverse(T_cam) @ rigid_inverse(mount)
     yaw = math.atan2(V[1, 0], V[0, 0])
     dx, dy, dyaw = (float(v) for v in increment)
     V[:3, :3] = _rz(dyaw) @ _rz(-yaw) @ V[:3, :3]
     V[0, 3], V[1, 3] = dx, dy
-    return np.linalg.inv(np.linalg.inv(mount) @ V @ mount)
+    return rigid_inverse(rigid_inverse(mount) @ V @ mount)
 
 
 def chord_measurement(increment) -> np.ndarray:
