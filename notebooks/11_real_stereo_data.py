@@ -1,0 +1,961 @@
+# ---
+# jupyter:
+#   jupytext:
+#     formats: py:percent
+#   kernelspec:
+#     display_name: Python 3
+#     language: python
+#     name: python3
+# ---
+
+# %% [markdown]
+# # 11 · Seed 000's stereo odometry on real images
+#
+# Everything so far ran on images that `vo_lib` renders itself. Here the pipeline meets a real
+# recording: KITTI raw drive 2011_09_26_0001, a car in a Karlsruhe suburb, with ground truth from
+# its GPS/IMU, and the Middlebury *Motorcycle* pair with ground-truth disparity (shipped by
+# scikit-image). We look at what is different about real images, at the front end built for them,
+# at what the planar circular-motion model of the paper gets wrong on a car, and at how the 6-DoF
+# refinement that follows 1-point RANSAC repairs it. We then write that refinement ourselves and
+# compare the pipeline with wheel odometry, with the fusion of both, and with a plain OpenCV
+# stereo odometry.
+#
+# **You will learn**
+# - how real images differ from rendered ones, in numbers (empty cells, corners, flat regions);
+# - how accurate our sub-pixel disparities are on real images, beside OpenCV's semi-global matcher;
+# - what the circular-motion model leaves out on a car (camera offset, slope, bank, pitch when
+#   braking), measured in pixels and in metres;
+# - why 1-point RANSAC stays as the outlier filter and how many of its inliers the 6-DoF fit keeps;
+# - how to write the 6-DoF Gauss–Newton step (residual, analytic Jacobian, rotation update);
+# - odometry against vision against their fusion on real data, and where we stand against PnP.
+#
+# **Prerequisites**: notebooks 03, 05, 06 and 08.
+#
+# **Run time**: about 1.5 minutes of computing on two cores, most of it the OpenCV PnP baseline of
+# section 7 (longer on a busy machine).
+# Without the real recording (it lives beside the repository, in `../shared/realdata/`), the
+# notebook says so and runs the same sections on the Motorcycle pair and a short rendered sample
+# (rendered on first use).
+
+# %%
+import math
+import time
+from pathlib import Path
+
+import cv2
+import matplotlib.pyplot as plt
+import numpy as np
+import skimage.data
+from scipy.ndimage import maximum_filter, minimum_filter
+from scipy.spatial.transform import Rotation
+
+import vo_lib
+from vo_lib.camera import StereoCamera
+from vo_lib.data import load_sequence
+from vo_lib.formats.kitti_raw import read_oxts
+from vo_lib.geometry import (
+    camera_motion,
+    compose_planar,
+    planar_from_camera_poses,
+    relative_planar,
+    wrap_angle,
+)
+from vo_lib.stereo_vo import rigid_motion
+from vo_lib.stereo_vo.circular_motion import circular_motion_from_increment, motion_matrices, robot_increment
+from vo_lib.stereo_vo.features import PATCH_HALF, StereoFrontEnd
+from vo_lib.stereo_vo.pipeline import run_frames, run_sequence
+from vo_lib.stereo_vo.pnp_baseline import run_pnp_baseline
+from vo_lib.stereo_vo.pyramid_features import LEVELS, SCALE_FACTOR, PyramidFrontEnd
+from vo_lib.stereo_vo.ransac import GATE_SIGMAS, one_point_ransac
+from vo_lib.stereo_vo.rigid_pipeline import MIN_INLIERS, WINDOW_PIXELS, RigidStereoOdometry, vehicle_increment
+from vo_lib.stereo_vo.temporal import match_to_prediction
+from vo_lib.stereo_vo.vehicle import vehicle_of
+from vo_lib.viz.plotting import new_axes, plot_paths
+
+SEED = 0
+rng = np.random.default_rng(SEED)
+cv2.setRNGSeed(SEED)
+np.set_printoptions(precision=4, suppress=True)
+
+
+def find_repo(start: Path) -> Path:
+    """The folder holding ``vo_lib`` (the notebook runs in notebooks/, a script may run anywhere)."""
+    for folder in (start, *start.parents):
+        if (folder / "vo_lib").is_dir():
+            return folder
+    return Path(vo_lib.__file__).resolve().parents[1]
+
+
+REPO = find_repo(Path.cwd())
+REAL_DIR = REPO.parent / "shared" / "realdata" / "kitti_raw_2011_09_26_drive_0001"
+REAL = (REAL_DIR / "poses.txt").is_file()
+rendered = load_sequence("indoor_linear", frames=60, progress=False)
+if REAL:
+    seq = load_sequence(REAL_DIR)
+    print(f"real data: {REAL_DIR.name}, {len(seq)} frames of {seq.camera.width}x{seq.camera.height}")
+else:
+    seq = rendered
+    print(
+        f"real data not found ({REAL_DIR}): the sections that need it run on the rendered sample "
+        f"{rendered.path.name} and on the Motorcycle pair instead"
+    )
+vehicle = vehicle_of(seq)
+truth = planar_from_camera_poses(seq.poses, vehicle.mount)  # vehicle (x, y, yaw), frame 0 at the origin
+travelled = float(np.sum(np.linalg.norm(np.diff(truth[:, :2], axis=0), axis=1)))
+print(f"{vehicle.kind}: {travelled:.1f} m travelled; odometry from {vehicle.odometry_source}")
+
+
+def final_errors(poses):
+    """Final position error (m, and % of the distance so far) and heading error (deg) of planar poses."""
+    n = len(poses)
+    metres = float(np.linalg.norm(poses[-1, :2] - truth[n - 1, :2]))
+    heading = math.degrees(wrap_angle(poses[-1, 2] - truth[n - 1, 2]))
+    distance = float(np.sum(np.linalg.norm(np.diff(truth[:n, :2], axis=0), axis=1)))
+    return metres, 100 * metres / distance, heading
+
+
+# %% [markdown]
+# ## 1 · Real images are emptier than ours
+#
+# Three numbers per image: the share of 16×16 cells without a single FAST corner at threshold 20,
+# the number of corners scaled to a 640×480 image, and the share of pixels whose intensity
+# gradient is below 8 grey levels per pixel (sky, road, plain walls, where no corner can be).
+
+# %%
+CELL = 16
+
+
+def image_statistics(image, threshold=20, low_gradient=8.0):
+    """Empty-cell share, corners per 640x480, low-gradient share and the occupancy grid."""
+    h, w = image.shape
+    keypoints = cv2.FastFeatureDetector_create(threshold, True).detect(image)
+    corners = np.array([k.pt for k in keypoints]).reshape(-1, 2)
+    occupied = np.zeros((h // CELL, w // CELL), bool)
+    col, row = (corners // CELL).astype(int).T
+    inside = (row < occupied.shape[0]) & (col < occupied.shape[1])
+    occupied[row[inside], col[inside]] = True
+    gradient = np.hypot(cv2.Sobel(image, cv2.CV_32F, 1, 0), cv2.Sobel(image, cv2.CV_32F, 0, 1)) / 8
+    return {
+        "empty": 1 - occupied.mean(),
+        "per_vga": len(corners) * 640 * 480 / (h * w),
+        "flat": float(np.mean(gradient < low_gradient)),
+        "corners": corners,
+        "occupied": occupied,
+    }
+
+
+moto_left, moto_right, moto_truth = skimage.data.stereo_motorcycle()
+moto_left, moto_right = (cv2.cvtColor(x, cv2.COLOR_RGB2GRAY) for x in (moto_left, moto_right))
+if REAL:
+    real_name, real_images = "KITTI drive 0001", [seq.pair(k)[0] for k in range(0, len(seq), 10)]
+else:
+    real_name, real_images = "Motorcycle (left)", [moto_left]
+rendered_images = [rendered.pair(k)[0] for k in range(0, len(rendered), 10)]
+stats = {}
+print(f" {'images':22s} {'empty 16x16 cells':>18s} {'corners per 640x480':>20s} {'low-gradient pixels':>20s}")
+for name, images in ((real_name, real_images), ("rendered indoor_linear", rendered_images)):
+    rows = [image_statistics(img) for img in images]
+    stats[name] = {k: float(np.mean([r[k] for r in rows])) for k in ("empty", "per_vga", "flat")}
+    s = stats[name]
+    print(f" {name:22s} {s['empty']:18.1%} {s['per_vga']:20.0f} {s['flat']:20.1%}")
+assert stats[real_name]["empty"] > 3 * stats["rendered indoor_linear"]["empty"]
+assert stats[real_name]["flat"] > stats["rendered indoor_linear"]["flat"]
+
+
+def show_corners(ax, image, title):
+    """An image with its FAST corners and, shaded, the cells that have none."""
+    st = image_statistics(image)
+    ny, nx = st["occupied"].shape
+    ax.imshow(image, cmap="gray")
+    ax.imshow(~st["occupied"], cmap="Reds", alpha=0.35, vmin=0, vmax=1.5, extent=(0, nx * CELL, ny * CELL, 0))
+    ax.plot(st["corners"][:, 0], st["corners"][:, 1], ".", ms=1, color="yellow")
+    ax.set_xlim(0, image.shape[1])
+    ax.set_ylim(image.shape[0], 0)
+    ax.set_xlabel("u [px]")
+    ax.set_ylabel("v [px]")
+    ax.set_title(f"{title}: {st['empty']:.0%} of cells without a corner")
+
+
+ratios = [img.shape[1] / img.shape[0] for img in (real_images[0], rendered_images[0])]
+fig, axes = plt.subplots(1, 2, figsize=(3.2 * sum(ratios), 3.8), width_ratios=ratios, constrained_layout=True)
+show_corners(axes[0], real_images[0], real_name)
+show_corners(axes[1], rendered_images[0], "rendered")
+plt.show()
+
+# %% [markdown]
+# A real frame leaves several times more of its cells empty than a rendered one, and most of its
+# pixels are flat. A front end that takes the strongest corners of the whole image then crowds
+# them into the textured parts (parked cars, trees), and one that takes a fixed number per cell
+# gets none from the sky and the road. The pyramid front end
+# (`vo_lib.stereo_vo.pyramid_features`) adapts instead: its FAST threshold is lowered from frame
+# to frame while an image gives fewer corners than its budget, and the budget scales with the
+# image area.
+#
+# ## 2 · The front end on real images: ORB in a pyramid, disparity to a fraction of a pixel
+#
+# The crawler's camera moves centimetres per frame; a car's moves a metre, so a wall ahead grows
+# by several per cent between frames. `PyramidFrontEnd` finds FAST corners in an image pyramid
+# (OpenCV's ORB; its levels and scale step are printed below), matches them along rows by Hamming
+# distance with a ratio and a mutual check, and refines each disparity on the SAD cost of 7×7
+# patches. Corners of an upper level sit on that level's coarser grid, so the whole-pixel
+# disparity is searched ±2 px before the sub-pixel fit.
+#
+# The Motorcycle pair has ground-truth disparity (inf where unknown). We measure the error of
+# every matched feature and, at the same pixels, that of OpenCV's semi-global block matcher.
+
+# %%
+h, w = moto_left.shape
+moto_cam = StereoCamera(fx=700.0, fy=700.0, cx=w / 2, cy=h / 2, baseline=0.2, width=w, height=h)
+sgbm = cv2.StereoSGBM_create(
+    0, 64, 5, P1=8 * 25, P2=32 * 25, uniquenessRatio=10, mode=cv2.STEREO_SGBM_MODE_HH
+)
+sgbm_disp = sgbm.compute(moto_left, moto_right).astype(np.float64) / 16  # fixed point, 4 fraction bits
+
+
+def disparity_errors(front_end):
+    """Our |disparity error| and SGBM's at the same pixels, where both the truth and SGBM have one."""
+    fw = front_end.process(moto_left, moto_right).w
+    ui, vi = np.rint(fw[:, 0]).astype(int), np.rint(fw[:, 1]).astype(int)
+    gt, sg = moto_truth[vi, ui], sgbm_disp[vi, ui]
+    both = np.isfinite(gt) & (sg > 0)
+    return len(fw), np.abs(fw[both, 2] - gt[both]), np.abs(sg[both] - gt[both]), fw[both]
+
+
+print(f"pyramid: {LEVELS} levels, each {SCALE_FACTOR} times smaller than the one below")
+front_ends = {
+    "pyramid (ORB)": PyramidFrontEnd(moto_cam, max_disparity=70),
+    "single scale (FAST)": StereoFrontEnd(moto_cam, max_disparity=70),
+}
+errors = {}
+print(f" {'front end':24s} {'features':>8s} {'scored':>7s} {'ours: median':>13s} {'> 1 px':>7s}", end="")
+print(f" {'SGBM: median':>13s}")
+for name, fe in front_ends.items():
+    n, ours, theirs, where = disparity_errors(fe)
+    errors[name] = (ours, theirs, where)
+    print(
+        f" {name:24s} {n:8d} {len(ours):7d} {np.median(ours):10.3f} px {np.mean(ours > 1):7.1%}"
+        f" {np.median(theirs):10.3f} px"
+    )
+ours, theirs, where = errors["pyramid (ORB)"]
+assert len(ours) >= 100
+assert np.median(ours) <= np.median(theirs)  # the issue's acceptance figure
+assert np.median(ours) <= np.median(errors["single scale (FAST)"][0])
+
+fig, axes = new_axes(2, width=6, height=4)
+axes[0].imshow(moto_left, cmap="gray")
+sc = axes[0].scatter(where[:, 0], where[:, 1], c=np.minimum(ours, 1.0), s=8, cmap="viridis")
+fig.colorbar(sc, ax=axes[0], label="|disparity error| [px] (clipped at 1)")
+axes[0].set_xlabel("u [px]")
+axes[0].set_ylabel("v [px]")
+axes[0].set_title("Motorcycle: our matched features")
+bins = np.linspace(0, 1.5, 31)
+axes[1].hist(ours, bins, alpha=0.6, label=f"ours, median {np.median(ours):.2f} px")
+axes[1].hist(theirs, bins, alpha=0.6, label=f"SGBM at the same pixels, median {np.median(theirs):.2f} px")
+axes[1].set_xlabel("|disparity error| [px]")
+axes[1].set_ylabel("features")
+axes[1].set_title("Disparity error against ground truth")
+axes[1].legend(fontsize="small")
+plt.show()
+
+# %% [markdown]
+# Where is the tail of the histogram (the share above 1 px is printed)? A disparity is measured on
+# a 7×7 patch; where the true disparity changes by more than 2 px inside that patch, the feature
+# sits on a depth edge (the outline of the bike), and the patch mixes two depths.
+
+# %%
+known = np.isfinite(moto_truth)
+size = 2 * PATCH_HALF + 1
+spread = maximum_filter(np.where(known, moto_truth, -np.inf), size) - minimum_filter(
+    np.where(known, moto_truth, np.inf), size
+)
+on_edge = spread[np.rint(where[:, 1]).astype(int), np.rint(where[:, 0]).astype(int)] > 2
+for name, sel_edge in (("on depth edges", on_edge), ("elsewhere", ~on_edge)):
+    e = ours[sel_edge]
+    print(f"{name:15s}: {sel_edge.sum():4d} features, median {np.median(e):.3f} px, ", end="")
+    print(f"{np.mean(e > 1):5.1%} above 1 px")
+tail = ours > 1
+print(f"of the {tail.sum()} features off by more than 1 px, {np.mean(on_edge[tail]):.0%} are on depth edges")
+assert np.mean(on_edge[tail]) >= 0.8 and np.median(ours[~on_edge]) < 0.15
+
+# %% [markdown]
+# Nearly all of the tail is on depth edges, where a patch cannot have one disparity; elsewhere our
+# disparities are good to about a tenth of a pixel. Such features give wrong 3-D points, which the
+# temporal checks (1-point RANSAC, the 6-DoF refinement) must remove later.
+#
+# On the sequence itself, both front ends inside the same 6-DoF pipeline: the number of stereo
+# features per frame, and what the single-scale corners do to the heading. A corner found at one
+# scale only drifts with the growth of the texture around it as the car approaches, and that
+# drift has a sign.
+
+# %%
+counts = {name: [] for name in ("pyramid", "single scale")}
+pyramid_fe, single_fe = PyramidFrontEnd(seq.camera), StereoFrontEnd(seq.camera)
+for k in range(0, len(seq), max(1, len(seq) // 6)):
+    left, right = seq.pair(k)
+    counts["pyramid"].append(len(pyramid_fe.process(left, right)))
+    counts["single scale"].append(len(single_fe.process(left, right)))
+for name, c in counts.items():
+    print(f"{name:13s} stereo features per frame: median {np.median(c):.0f} (min {min(c)}, max {max(c)})")
+if REAL:
+    assert np.median(counts["pyramid"]) > 2 * np.median(counts["single scale"])
+
+vo_full = run_sequence(seq, use_odometry=False, motion="full")  # the pyramid front end
+single_odometer = RigidStereoOdometry(
+    seq.camera, vehicle.mount, seed=SEED, front_end=StereoFrontEnd(seq.camera)
+)
+vo_single = run_frames(((left, right, None) for left, right in seq), seq.camera, odometer=single_odometer)
+heading_error = {
+    name: np.degrees(wrap_angle(res.poses[:, 2] - truth[:, 2]))
+    for name, res in (("pyramid", vo_full), ("single scale", vo_single))
+}
+for name, res in (("pyramid", vo_full), ("single scale", vo_single)):
+    m, pct, hd = final_errors(res.poses)
+    print(f"6-DoF pipeline, {name:12s} front end: final error {m:.3f} m ({pct:.2f} %), heading {hd:+.3f} deg")
+if REAL:
+    assert abs(heading_error["single scale"][-1]) > 3 * abs(heading_error["pyramid"][-1])
+
+fig, ax = new_axes(width=7, height=3.4)
+for name, err in heading_error.items():
+    ax.plot(err, label=f"{name} front end")
+ax.set_xlabel("frame")
+ax.set_ylabel("heading error [deg]")
+ax.set_title("The same 6-DoF pipeline, two front ends, no odometry")
+ax.legend(fontsize="small")
+plt.show()
+
+# %% [markdown]
+# ## 3 · What the circular-motion model gets wrong on a car
+#
+# Seed 000's model (eq. 12–17) describes a camera that turns about its own vertical axis on a
+# flat floor: one angle θ, one chord ρ. A car breaks it three ways:
+#
+# - **offset**: the camera sits ahead of (and above) the axis the car turns about, so a turn also
+#   moves the camera sideways (notebook 03 measured the bias this causes);
+# - **slope and bank**: the road climbs and tilts, so the camera also moves up and rolls;
+# - **pitch**: the body dips as the car brakes, which moves every image row.
+#
+# The ground truth gives the vehicle's pose in 6 DoF: `mount @ T_k @ inv(mount)` for the camera
+# poses `T_k` and the camera's mount `T_vehicle_camera` (vehicle frame: x forward, y left, z up,
+# origin at the IMU). Angles are `R = Rz(yaw) Ry(pitch) Rx(roll)`; positive pitch is nose down.
+
+# %%
+print("camera in the vehicle frame (forward, left, up) [m]:", vehicle.mount[:3, 3])
+T_cam = seq.poses_4x4()
+V = vehicle.mount @ T_cam @ np.linalg.inv(vehicle.mount)
+yaw_pitch_roll = np.degrees(Rotation.from_matrix(V[:, :3, :3]).as_euler("ZYX"))
+step = np.linalg.inv(V[:-1]) @ V[1:]  # vehicle motion per frame, in its previous frame
+step_ypr = np.degrees(Rotation.from_matrix(step[:, :3, :3]).as_euler("ZYX"))
+row_shift = seq.camera.fy * np.tan(np.radians(np.abs(step_ypr[:, 1])))
+print(
+    f"per frame: |d pitch| median {np.median(np.abs(step_ypr[:, 1])):.3f} deg (max "
+    f"{np.abs(step_ypr[:, 1]).max():.3f}), |d roll| median {np.median(np.abs(step_ypr[:, 2])):.3f} deg "
+    f"(max {np.abs(step_ypr[:, 2]).max():.3f}), |d height| median "
+    f"{100 * np.median(np.abs(step[:, 2, 3])):.2f} cm (max {100 * np.abs(step[:, 2, 3]).max():.2f})"
+)
+print(
+    f"a pitch change moves every image row by fy tan(d pitch): median {np.median(row_shift):.2f} px, "
+    f"max {row_shift.max():.2f} px; the refinement's inlier threshold is {rigid_motion.INLIER_PIXELS} px"
+)
+print(
+    f"over the drive: climbed {V[-1, 2, 3]:.2f} m; pitch {yaw_pitch_roll[:, 1].min():.2f}..."
+    f"{yaw_pitch_roll[:, 1].max():.2f} deg, roll {yaw_pitch_roll[:, 2].min():.2f}..."
+    f"{yaw_pitch_roll[:, 2].max():.2f} deg"
+)
+if REAL:
+    assert vehicle.mount[0, 3] > 0.5  # the camera is well ahead of the axis
+    assert np.abs(step_ypr[:, 1]).max() > 0.1 and V[-1, 2, 3] > 0.5  # the body pitches, the road climbs
+else:
+    assert np.abs(step_ypr[:, 1:]).max() < 1e-6  # the rendered floor is flat
+
+# %% [markdown]
+# The OXTS unit also gives the forward acceleration. The body's pitch *relative to the road*
+# (pitch minus the road's slope, taken from the heights over ±5 frames) follows the braking:
+
+# %%
+if REAL:
+    oxts = read_oxts(REAL_DIR / "oxts.txt")
+    forward_accel, speed = oxts[:, 14], oxts[:, 8]  # OXTS fields af and vf
+    s = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(V[:, :2, 3], axis=0), axis=1))])
+    k = np.arange(len(V))
+    lo, hi = np.clip(k - 5, 0, len(V) - 1), np.clip(k + 5, 0, len(V) - 1)
+    slope = np.degrees(np.arctan((V[hi, 2, 3] - V[lo, 2, 3]) / (s[hi] - s[lo])))
+    body_nose_up = -yaw_pitch_roll[:, 1] - slope  # relative to frame 0's attitude on its road
+    gain, offset = np.polyfit(forward_accel, body_nose_up, 1)
+    corr = np.corrcoef(forward_accel, body_nose_up)[0, 1]
+    print(
+        f"speed {speed[0]:.1f} -> {speed[-1]:.1f} m/s, acceleration {forward_accel.min():.2f}..."
+        f"{forward_accel.max():.2f} m/s^2; the nose dips {gain:.2f} deg per m/s^2 of braking "
+        f"(correlation {corr:.2f}), i.e. {seq.camera.fy * math.tan(math.radians(gain)):.1f} px of rows"
+    )
+    assert gain > 0 and corr > 0.3
+else:
+    print("skipped: the rendered crawler has no suspension (no real data)")
+
+fig, axes = new_axes(3 if REAL else 2, width=4.6, height=3.4)
+axes[0].plot(yaw_pitch_roll[:, 1], label="pitch (nose down +)")
+axes[0].plot(yaw_pitch_roll[:, 2], label="roll")
+axes[0].set_xlabel("frame")
+axes[0].set_ylabel("angle from frame 0 [deg]")
+axes[0].set_title("Vehicle attitude (ground truth)")
+axes[0].legend(fontsize="small")
+axes[1].plot(V[:, 2, 3])
+axes[1].set_xlabel("frame")
+axes[1].set_ylabel("height above frame 0 [m]")
+axes[1].set_title("The road climbs")
+if REAL:
+    axes[2].plot(forward_accel, body_nose_up, ".", label="frames")
+    aa = np.linspace(forward_accel.min(), forward_accel.max(), 2)
+    axes[2].plot(aa, offset + gain * aa, label=f"fit: {gain:.2f} deg per m/s^2")
+    axes[2].set_xlabel("forward acceleration [m/s^2]")
+    axes[2].set_ylabel("nose up minus road slope [deg]")
+    axes[2].set_title("The body dips as the car brakes")
+    axes[2].legend(fontsize="small")
+plt.show()
+
+# %% [markdown]
+# **The model error in pixels.** For each pair of frames we take the true camera motion, its
+# planar part (the vehicle's yaw and ground-plane step seen through the mount, with no pitch,
+# roll or climb), and the circular motion a camera *on* the turning axis would make with the same
+# yaw and chord. Moving the points of one real frame by each and projecting, the differences are
+# what the circular-motion model cannot explain: first the slope, bank and pitch, then the offset.
+
+# %%
+scene = pyramid_fe.process(*seq.pair(0)).w
+scene_points = seq.camera.backproject(scene)
+scene_points = scene_points[scene_points[:, 2] < 60]
+
+
+def pixel_gap(Ta, Tb):
+    """Median distance in (u, v, d) between the points moved by two camera motions."""
+    a, b = (rigid_motion.project(scene_points @ T[:3, :3].T + T[:3, 3], seq.camera) for T in (Ta, Tb))
+    return float(np.median(np.linalg.norm(a - b, axis=1)))
+
+
+def as_4x4(R, t):
+    T = np.eye(4)
+    T[:3, :3], T[:3, 3] = R, t
+    return T
+
+
+gaps = []
+for k in range(1, len(seq)):
+    true_motion = np.linalg.inv(T_cam[k]) @ T_cam[k - 1]  # T_curr_from_prev of the camera
+    inc = vehicle_increment(true_motion, vehicle.mount)
+    planar = camera_motion(np.zeros(3), inc, vehicle.mount)
+    circular = as_4x4(*motion_matrices(*circular_motion_from_increment(inc)))
+    gaps.append((pixel_gap(true_motion, planar), pixel_gap(planar, circular)))
+gaps = np.array(gaps)
+for j, what in enumerate(("slope, bank and pitch (6-DoF vs planar)", "offset (planar vs on-axis circular)")):
+    g = gaps[:, j]
+    print(f"{what:42s}: median {np.median(g):.2f} px, 90th percentile {np.percentile(g, 90):.2f} px")
+if REAL:
+    assert np.percentile(gaps[:, 0], 90) > rigid_motion.INLIER_PIXELS
+
+# %% [markdown]
+# On the real drive the first term exceeds the refinement's 1-px inlier threshold on a tenth of
+# the frames or more (asserted); it is not noise but a bias shared by all points of a frame, so
+# averaging over matches does not remove it.
+#
+# Now the pipelines. `motion="planar"` is seed 000's pipeline as notebook 08 ran it (single-scale
+# front end, matching windows sized for a crawler, circular motion, camera assumed on the axis);
+# `motion="full"` keeps 1-point RANSAC as the outlier filter and refines the
+# inliers in 6 DoF, with the pyramid front end and windows for a car.
+
+# %%
+start = time.perf_counter()
+runs = {"planar": run_sequence(seq, use_odometry=False, motion="planar"), "full": vo_full}
+print(f"motion=planar ran in {time.perf_counter() - start:.1f} s; motion=full is section 2's run")
+for model, res in runs.items():
+    m, pct, hd = final_errors(res.poses)
+    reasons = sorted({d.reason for d in res.diagnostics if d.fallback})
+    print(
+        f"motion={model:6s}: final error {m:6.2f} m ({pct:5.2f} % of {travelled:.1f} m), "
+        f"heading {hd:+.2f} deg, "
+        f"{len(res.flagged)} of {len(res.poses)} frames flagged {reasons or ''}"
+    )
+if REAL:
+    assert final_errors(runs["full"].poses)[0] < 0.1 * final_errors(runs["planar"].poses)[0]
+else:
+    assert final_errors(runs["planar"].poses)[1] <= 1.0  # where its assumptions hold, the paper's model works
+
+# %% [markdown]
+# On the car the planar pipeline flags most frames and coasts, but that is the crawler's matching
+# failing at a car's speed as much as the model. To judge the *model* alone, we give all three
+# readings the same matches: every pair of consecutive frames, matched in windows around the
+# motion the full pipeline measured, then 1-point RANSAC. We chain the frame-to-frame vehicle
+# motions that (a) the circular model gives for a camera on the axis, as `motion="planar"`
+# assumes, (b) the same circular camera motion carried through the real mount, and (c) the 6-DoF
+# refinement of RANSAC's inliers carried through the mount.
+
+
+# %%
+def chain_models(camera_path):
+    """Planar vehicle poses from frame-to-frame motions read three ways (section 3's list)."""
+    names = ("circular, camera on the axis", "circular, through the mount", "6-DoF, through the mount")
+    chains = {name: [np.zeros(3)] for name in names}
+    prev = pyramid_fe.process(*seq.pair(0))
+    for k in range(1, len(seq)):
+        curr = pyramid_fe.process(*seq.pair(k))
+        T_pred = np.linalg.inv(camera_path[k]) @ camera_path[k - 1]
+        predicted, _ = rigid_motion.predict_features(prev.w, seq.camera, T_pred)
+        mt = match_to_prediction(prev, curr, predicted, WINDOW_PIXELS)
+        est = one_point_ransac(mt.w_prev, mt.w_curr, seq.camera, rng=rng, pixel_sigma=1.0)
+        guess = as_4x4(*motion_matrices(est.theta, est.rho))
+        refined = rigid_motion.refine_rigid_motion(mt.w_prev, mt.w_curr, seq.camera, guess, est.inliers)
+        increments = (
+            robot_increment(est.theta, est.rho),
+            vehicle_increment(guess, vehicle.mount),
+            vehicle_increment(refined.matrix, vehicle.mount),
+        )
+        for name, inc in zip(names, increments, strict=True):
+            chains[name].append(compose_planar(chains[name][-1], inc))
+        prev = curr
+    return {name: np.array(poses) for name, poses in chains.items()}
+
+
+if REAL:
+    start = time.perf_counter()
+    chained = chain_models(vo_full.camera_poses)
+    print(f"{len(seq) - 1} frame pairs matched and estimated in {time.perf_counter() - start:.1f} s")
+    for name, poses in chained.items():
+        m, pct, hd = final_errors(poses)
+        print(f"{name:30s}: final error {m:.3f} m ({pct:.2f} %), heading {hd:+.3f} deg")
+    circular, mounted, full6 = (final_errors(p) for p in chained.values())
+    assert mounted[0] < circular[0]  # the offset costs position
+    assert abs(full6[2]) < 0.5 * abs(mounted[2])  # pitch, slope and bank cost heading
+
+    fig, axes = new_axes(2, width=5.5, height=3.4)
+    for name, poses in chained.items():
+        axes[0].plot(np.linalg.norm(poses[:, :2] - truth[:, :2], axis=1), label=name)
+        axes[1].plot(np.degrees(wrap_angle(poses[:, 2] - truth[:, 2])), label=name)
+    axes[0].set_xlabel("frame")
+    axes[0].set_ylabel("position error [m]")
+    axes[0].set_title("Frame-to-frame motions chained: position")
+    axes[1].set_xlabel("frame")
+    axes[1].set_ylabel("heading error [deg]")
+    axes[1].set_title("... and heading")
+    axes[0].legend(fontsize="small")
+    plt.show()
+else:
+    print(
+        "skipped: the rendered crawler moves a centimetre per frame, below what frame-to-frame matches "
+        "resolve (notebook 08 measures against keyframes), and its camera is on the axis of a flat floor"
+    )
+
+# %% [markdown]
+# Fed good matches, the circular model is not lost on this gently curving road, but it is biased
+# two ways (both asserted on the real drive): reading a camera ahead of the axis as if it were on
+# it costs position, and ignoring pitch, slope and bank costs heading, frame after frame; the 6-DoF
+# refinement removes most of the heading drift. A sharper turn makes the offset term grow with the
+# yaw rate, and a hillier road the pitch term.
+#
+# ## 4 · How many of 1-point RANSAC's inliers survive the 6-DoF refinement
+#
+# The pipeline runs 1-point RANSAC with gates of `GATE_SIGMAS` standard deviations of 1 px noise,
+# wide enough for the circular model's own error, then chooses the inliers again with the refined
+# motion, at 1 px of reprojection error in (u, v, d). `FrameDiagnostics` keeps both counts.
+
+# %%
+diag = [d for d in vo_full.diagnostics if d.ransac_inliers > 0]
+frames = np.array([d.frame for d in diag])
+ransac_in = np.array([d.ransac_inliers for d in diag])
+refined_in = np.array([d.inliers for d in diag])
+share = refined_in / ransac_in
+print(
+    f"gates of {GATE_SIGMAS:.0f} sigma; {len(diag)} frames estimated: RANSAC keeps a median of "
+    f"{np.median(ransac_in):.0f} matches, the refinement {np.median(refined_in):.0f}; median share "
+    f"kept {np.median(share):.0%} (range {share.min():.0%}..{share.max():.0%})"
+)
+assert np.median(share) < 1.0  # the general model is stricter than the gates
+assert np.all(refined_in[[not d.fallback for d in diag]] >= MIN_INLIERS)
+
+fig, axes = new_axes(2, width=5.5, height=3.4)
+axes[0].plot(frames, ransac_in, label="1-point RANSAC inliers")
+axes[0].plot(frames, refined_in, label="after the 6-DoF refinement")
+axes[0].set_xlabel("frame")
+axes[0].set_ylabel("matches")
+axes[0].set_title("Inliers per frame")
+axes[0].legend(fontsize="small")
+axes[1].plot(frames, share, ".-")
+axes[1].set_ylim(0, 1.05)
+axes[1].set_xlabel("frame")
+axes[1].set_ylabel("refined / RANSAC inliers")
+axes[1].set_title("Share of RANSAC's inliers the refinement keeps")
+plt.show()
+
+# %% [markdown]
+# Which ones go? One pair of frames, matched without any prediction (every pair of descriptors),
+# then 1-point RANSAC and the refinement: the reprojection errors of RANSAC's inliers under the
+# refined motion.
+
+# %%
+k0, k1 = (40, 41) if REAL else (0, 30)  # the crawler moves a centimetre per frame
+feat0, feat1 = pyramid_fe.process(*seq.pair(k0)), pyramid_fe.process(*seq.pair(k1))
+one = match_to_prediction(feat0, feat1, None)
+est = one_point_ransac(one.w_prev, one.w_curr, seq.camera, rng=rng, pixel_sigma=1.0)
+guess = as_4x4(*motion_matrices(est.theta, est.rho))
+lib = rigid_motion.refine_rigid_motion(one.w_prev, one.w_curr, seq.camera, guess, est.inliers)
+err_planar = rigid_motion.reprojection_errors(
+    seq.camera.backproject(one.w_prev), one.w_curr, guess[:3, :3], guess[:3, 3], seq.camera
+)
+err_refined = rigid_motion.reprojection_errors(
+    seq.camera.backproject(one.w_prev), one.w_curr, lib.R, lib.t, seq.camera
+)
+within = {
+    name: float(np.mean(e[est.inliers] < rigid_motion.INLIER_PIXELS))
+    for name, e in (("circular", err_planar), ("refined", err_refined))
+}
+print(
+    f"frames {k0}->{k1}: {len(one)} matches, {est.inliers.sum()} RANSAC inliers, {lib.inliers.sum()} after "
+    f"the refinement; RANSAC inliers within {rigid_motion.INLIER_PIXELS} px: {within['circular']:.0%} under "
+    f"the circular motion, {within['refined']:.0%} under the refined one (medians "
+    f"{np.median(err_planar[est.inliers]):.2f} and {np.median(err_refined[est.inliers]):.2f} px)"
+)
+if REAL:
+    assert within["refined"] > within["circular"]
+else:  # the circular model is exact for the rendered crawler: nothing for the refinement to add
+    assert abs(within["refined"] - within["circular"]) < 0.05
+
+fig, ax = new_axes(width=7, height=3.4)
+bins = np.linspace(0, 4, 41)
+ax.hist(np.minimum(err_planar[est.inliers], 4), bins, alpha=0.6, label="under RANSAC's circular motion")
+ax.hist(np.minimum(err_refined[est.inliers], 4), bins, alpha=0.6, label="under the refined 6-DoF motion")
+ax.axvline(rigid_motion.INLIER_PIXELS, color="k", ls="--", label="inlier threshold")
+ax.set_xlabel("reprojection error in (u, v, d) [px] (clipped at 4)")
+ax.set_ylabel("RANSAC inliers")
+ax.set_title(f"Frames {k0}->{k1}: RANSAC's inliers judged by each model")
+ax.legend(fontsize="small")
+plt.show()
+
+# %% [markdown]
+# The refined motion brings more of RANSAC's inliers within a pixel than the circular one does
+# (the part the model could not explain), but even under the best motion a share stays above:
+# corners of an upper pyramid level sit on a coarser grid, some points are on moving objects, some
+# matches are slightly wrong. RANSAC's gates must be wide enough for the circular model's own error,
+# so they let these through; the 6-DoF fit, with no model error left to allow for, keeps only the
+# matches that agree to a pixel. RANSAC removes the gross outliers cheaply; the refinement, the
+# fine ones.
+#
+# ## 5 · Build, then use: the 6-DoF Gauss–Newton step
+#
+# A motion `(R, t)` maps a point of the previous camera frame into the current one, `Q = R P + t`
+# (the convention of `vo_lib.stereo_vo.rigid_motion`). `P` is back-projected from the previous
+# match `w = (u, v, d)`; the residual compares the projection of `Q` with the current match `w'`
+# in disparity space, which is the error in the left image and, through `d`, in the right one:
+#
+# $$ r = \pi(RP + t) - w', \qquad
+#    \pi(X, Y, Z) = \Big(\tfrac{f_x X}{Z} + c_x,\; \tfrac{f_y Y}{Z} + c_y,\; \tfrac{f_x b}{Z}\Big). $$
+#
+# The update is applied on the left, `R ← exp([δω]×) R`, `t ← exp([δω]×) t + δt`, so that
+# `Q ← Q + δω × Q + δt` to first order, and the Jacobian of one residual is
+#
+# $$ \frac{\partial r}{\partial(\delta\omega, \delta t)}
+#    = \frac{\partial \pi}{\partial Q}\,\big[\,-[Q]_\times \;\big|\; I\,\big], \qquad
+#    \frac{\partial \pi}{\partial Q} = \begin{pmatrix} f_x/Z & 0 & -f_x X/Z^2 \\
+#    0 & f_y/Z & -f_y Y/Z^2 \\ 0 & 0 & -f_x b/Z^2 \end{pmatrix}. $$
+#
+# Gauss–Newton solves $(J^\top J)\,\delta = -J^\top r$ and repeats.
+
+# %%
+cam = seq.camera
+
+
+def project_uvd(Q):
+    """pi(Q) = (u, v, d) of camera-frame points."""
+    X, Y, Z = Q.T
+    return np.column_stack([cam.fx * X / Z + cam.cx, cam.fy * Y / Z + cam.cy, cam.fx * cam.baseline / Z])
+
+
+def skew(q):
+    """[q]x for each row of q: (N, 3, 3)."""
+    S = np.zeros((len(q), 3, 3))
+    S[:, 0, 1], S[:, 0, 2], S[:, 1, 2] = -q[:, 2], q[:, 1], -q[:, 0]
+    return S - S.transpose(0, 2, 1)
+
+
+def jacobian(Q):
+    """d r / d(dw, dt) of every residual: (N, 3, 6)."""
+    X, Y, Z = Q.T
+    dpi = np.zeros((len(Q), 3, 3))
+    dpi[:, 0, 0], dpi[:, 0, 2] = cam.fx / Z, -cam.fx * X / Z**2
+    dpi[:, 1, 1], dpi[:, 1, 2] = cam.fy / Z, -cam.fy * Y / Z**2
+    dpi[:, 2, 2] = -cam.fx * cam.baseline / Z**2
+    return dpi @ np.concatenate([-skew(Q), np.broadcast_to(np.eye(3), (len(Q), 3, 3))], axis=2)
+
+
+def exp_rotation(w):
+    """exp([w]x) by Rodrigues' formula."""
+    angle = np.linalg.norm(w)
+    if angle < 1e-15:
+        return np.eye(3)
+    K = skew((w / angle)[None])[0]
+    return np.eye(3) + math.sin(angle) * K + (1 - math.cos(angle)) * K @ K
+
+
+def gauss_newton(P, w_curr, R, t, iterations=rigid_motion.ITERATIONS, tol=rigid_motion.CONVERGED):
+    """Least-squares (R, t) of Q = R P + t on disparity-space residuals; returns R, t, steps."""
+    steps = 0
+    while steps < iterations:
+        Q = P @ R.T + t
+        r = (project_uvd(Q) - w_curr).reshape(-1)
+        J = jacobian(Q).reshape(-1, 6)
+        delta = -np.linalg.solve(J.T @ J, J.T @ r)
+        dR = exp_rotation(delta[:3])
+        R, t, steps = dR @ R, dR @ t + delta[3:], steps + 1
+        if np.abs(delta).max() < tol:
+            break
+    return R, t, steps
+
+
+# the analytic Jacobian against central differences of the residual, at RANSAC's guess
+P_in = cam.backproject(one.w_prev[est.inliers])
+w_in = one.w_curr[est.inliers]
+R0, t0 = guess[:3, :3], guess[:3, 3]
+numeric = np.zeros((len(P_in), 3, 6))
+for j in range(6):
+    d = np.zeros(6)
+    d[j] = 1e-6
+    plus = project_uvd(P_in @ (exp_rotation(d[:3]) @ R0).T + exp_rotation(d[:3]) @ t0 + d[3:])
+    minus = project_uvd(P_in @ (exp_rotation(-d[:3]) @ R0).T + exp_rotation(-d[:3]) @ t0 - d[3:])
+    numeric[:, :, j] = (plus - minus) / 2e-6
+analytic = jacobian(P_in @ R0.T + t0)
+jac_err = np.abs(analytic - numeric).max() / np.abs(analytic).max()
+print(f"Jacobian: largest difference from central differences {jac_err:.1e} (relative)")
+assert jac_err < 1e-6
+
+R_ours, t_ours, steps = gauss_newton(P_in, w_in, R0, t0)
+ref = rigid_motion.refine_rigid_motion(
+    one.w_prev, one.w_curr, cam, guess, est.inliers, huber=np.inf, rounds=1
+)
+dR_max, dt_max = np.abs(R_ours - ref.R).max(), np.abs(t_ours - ref.t).max()
+print(
+    f"ours: {steps} Gauss-Newton steps from RANSAC's guess; against refine_rigid_motion (no Huber, one "
+    f"round): largest difference {dR_max:.1e} in R, {dt_max:.1e} m in t"
+)
+print(f"t = {t_ours} m, rotation {np.degrees(Rotation.from_matrix(R_ours).as_rotvec())} deg")
+assert dR_max < 1e-9 and dt_max < 1e-9
+
+# %% [markdown]
+# The library's version adds two things to this step: Huber weights (a residual above 1 px counts
+# linearly, not quadratically) and rounds of re-selection (refine, choose the inliers again with
+# the refined motion, refine again). Its default result is what the pipeline uses.
+#
+# **Cross-check with OpenCV.** `cv2.solvePnPRefineLM` refines the same motion by
+# Levenberg–Marquardt on the *left* image only, `(u, v)`, with the 3-D points fixed. On the
+# refined inliers it should land close to ours, but not on it: the disparity row is missing.
+
+# %%
+sel = lib.inliers
+rvec, tvec = cv2.solvePnPRefineLM(
+    cam.backproject(one.w_prev[sel]),
+    one.w_curr[sel, :2].copy(),
+    cam.K,
+    None,
+    cv2.Rodrigues(R0)[0],
+    t0.reshape(3, 1).copy(),
+)
+R_cv = cv2.Rodrigues(rvec)[0]
+angle_cv = np.degrees(np.linalg.norm(Rotation.from_matrix(R_cv @ lib.R.T).as_rotvec()))
+shift_cv = float(np.linalg.norm(tvec.ravel() - lib.t))
+print(
+    f"solvePnPRefineLM against refine_rigid_motion on {sel.sum()} inliers: {angle_cv:.4f} deg apart, "
+    f"{1000 * shift_cv:.2f} mm apart (motion {np.linalg.norm(lib.t):.3f} m)"
+)
+assert angle_cv < 0.05 and shift_cv < 0.005
+
+# %% [markdown]
+# ## 6 · Odometry, vision, and both, on real data
+#
+# The OXTS packets' forward speed and yaw rate, integrated between frames, stand in for wheel
+# odometry: two wheels a gauge apart (`vo_lib.stereo_vo.vehicle`) travel `s ∓ gauge·Δψ/2`, and the
+# crawler's odometry model of seed 000 (eq. 2–11) turns them back into a path. The pipeline fuses
+# them in its Kalman filter exactly as it fuses a crawler's tracks.
+
+# %%
+odometry_only = vehicle.odometry_model.integrate(vehicle.odometry[1:])
+vision_only = runs[vehicle.motion]  # run_sequence(seq, use_odometry=False) chooses this model
+fused = run_sequence(seq, use_odometry=True)
+paths = {"odometry only": odometry_only, "VO only": vision_only.poses, "fused": fused.poses}
+final, along = {}, {}
+for name, poses in paths.items():
+    final[name] = final_errors(poses)
+    m, pct, hd = final[name]
+    # the final error in the true final vehicle frame: along the track (distance) and across it
+    along[name], across, _ = relative_planar(truth[-1], poses[-1])
+    length = np.sum(np.linalg.norm(np.diff(poses[:, :2], axis=0), axis=1))
+    print(
+        f"{name:13s}: final position error {m:6.3f} m ({pct:5.2f} %): {along[name]:+.3f} m along the track, "
+        f"{across:+.3f} m across; heading {hd:+.3f} deg; path {length:.2f} m (truth {travelled:.2f} m)"
+    )
+assert final["fused"][0] < final["odometry only"][0]
+assert final["VO only"][0] < final["odometry only"][0]
+if REAL:  # the fused distance leans towards the odometry's
+    assert np.sign(along["fused"]) == np.sign(along["odometry only"])
+    assert abs(along["fused"]) > abs(along["VO only"])
+
+model = vehicle.odometry_model
+u = vehicle.odometry[1:]
+yaw_sigma = np.degrees(np.sqrt(np.trace(model.control_covariance(u), axis1=-2, axis2=-1)) / model.gauge)
+true_step = np.diff(truth[:, 2])
+odo_step_error = np.degrees(wrap_angle(np.diff(odometry_only[:, 2]) - true_step))
+print(
+    f"odometry's yaw per frame: sigma {np.median(yaw_sigma):.4f} deg in the filter's model, actual error "
+    f"{odo_step_error.mean():+.4f} deg mean, {odo_step_error.std():.4f} deg sd"
+)
+
+fig, axes = new_axes(2, width=6, height=3.8)
+plot_paths(axes[0], {"truth": truth, **paths}, "Plan view (vehicle frame at frame 0)")
+for colour, (name, poses) in zip(("C1", "C2", "C3"), paths.items(), strict=True):  # as in the plan view
+    axes[1].plot(np.linalg.norm(poses[:, :2] - truth[:, :2], axis=1), colour, label=name)
+axes[1].set_xlabel("frame")
+axes[1].set_ylabel("position error [m]")
+axes[1].set_title("Error over time")
+axes[1].legend(fontsize="small")
+plt.show()
+
+# %% [markdown]
+# Split along and across the track, the final errors say what went wrong. The odometry's heading,
+# integrated from the yaw rate, drifts, and a heading error becomes an across-track error that
+# grows with the distance; its distance, integrated from the speed, carries any scale error of the
+# speed (and of the timestamps it is integrated over) as an along-track error.
+#
+# The filter weighs odometry and vision by their covariances. The odometry's comes from a noise
+# per wheel distance, which over the gauge becomes the yaw sigma printed above: where that sigma is
+# far above the odometry's actual yaw error, the filter takes the heading from vision almost alone.
+# The distance it takes from both, so on the real drive the fused distance leans towards the
+# odometry's (asserted): fusion helps only as far as each sensor's error model is right. Whether
+# it beats vision alone is an empirical matter; compare the printed figures.
+#
+# ## 7 · Where we stand against a plain OpenCV stereo odometry
+#
+# `vo_lib.stereo_vo.pnp_baseline` is the stereo odometry one writes first with OpenCV: ORB (3000
+# features), brute-force cross-checked matching, `solvePnPRansac` from frame to frame. It runs
+# once here, on the same frames; timings of a single run vary with the machine and its load.
+
+# %%
+n_pnp = len(seq) if REAL else 20  # the rendered sample only shows the timing
+start = time.perf_counter()
+pnp = run_pnp_baseline(seq, frames=n_pnp, seed=SEED)
+print(f"PnP baseline: {n_pnp} frames in {time.perf_counter() - start:.1f} s")
+ours = vo_full
+rows = {
+    "ours (1-point RANSAC + 6-DoF)": (ours.camera_poses[:n_pnp], ours.timing_table()["total"]),
+    "OpenCV PnP baseline": (pnp.camera_poses, float(np.median(pnp.milliseconds[1:]))),
+}
+print(f" {'':30s} {'planar error':>13s} {'camera error':>13s} {'heading':>9s} {'ms per frame':>13s}")
+for name, (poses, ms) in rows.items():
+    m, pct, hd = final_errors(planar_from_camera_poses(poses, vehicle.mount))
+    cam_err = np.linalg.norm(poses[-1, :3, 3] - T_cam[n_pnp - 1, :3, 3])
+    print(f" {name:30s} {m:8.3f} m ({pct:4.2f} %) {cam_err:9.3f} m {hd:+8.3f}° {ms:10.1f}")
+ratio = rows["OpenCV PnP baseline"][1] / rows["ours (1-point RANSAC + 6-DoF)"][1]
+print(
+    f"ours is {ratio:.1f}x the speed of the baseline in this run (median ms per frame, image loading apart)"
+)
+assert np.all(np.isfinite(pnp.camera_poses)) and len(pnp.milliseconds) == n_pnp
+if REAL:  # the issue's acceptance figures, without odometry
+    assert final_errors(ours.poses)[1] <= 0.5 and abs(final_errors(ours.poses)[2]) <= 0.3
+    assert len(ours.flagged) <= 2
+
+# %% [markdown]
+# ## Summary
+#
+# - Real frames leave a large share of their cells without a corner and most of their pixels flat;
+#   a front end with a fixed threshold or a fixed grid either starves or crowds. The pyramid front
+#   end adapts its threshold and finds corners at three scales, and its sub-pixel disparities on
+#   the Motorcycle pair are at least as accurate as OpenCV's semi-global matcher at the same pixels.
+# - Single-scale corners drift as the scene grows towards a car, and the heading drifts with them.
+# - On a car the circular-motion model misses the camera's offset from the turning axis, the
+#   road's slope and bank, and the body's pitch under braking; they move features by pixels in
+#   some frames, all the same way, which costs position (offset) and heading (pitch, slope, bank).
+# - 1-point RANSAC remains the outlier filter (cheap, one match per hypothesis); a 6-DoF
+#   Gauss–Newton fit on reprojection errors in both images then keeps a share of its inliers
+#   and measures the motion the model cannot. We wrote that step in a few lines of NumPy and
+#   matched the library to machine precision, and OpenCV's left-image LM closely.
+# - With the real odometry fused or not, vision beats the odometry alone; how much the fusion
+#   adds depends on the odometry's noise model. The OpenCV PnP baseline is the yardstick for
+#   accuracy and speed (the printed ratio is one run's).
+#
+# ## Exercises
+#
+# Each exercise has a worked solution in the cell after it (between `### BEGIN SOLUTION` and
+# `### END SOLUTION`), which runs and checks its answer.
+#
+# 1. *(easy)* Lower the FAST threshold from 20 to 10 on the first real image of section 1. What
+#    share of the cells is still without a corner?
+
+# %%
+# Exercise 1, worked solution
+### BEGIN SOLUTION
+at_20 = image_statistics(real_images[0], threshold=20)["empty"]
+at_10 = image_statistics(real_images[0], threshold=10)["empty"]
+print(f"cells without a corner: {at_20:.1%} at threshold 20, {at_10:.1%} at threshold 10")
+assert at_10 < at_20  # a lower threshold fills some cells, but the flat ones stay empty
+### END SOLUTION
+
+# %% [markdown]
+# 2. *(easy)* The car pitches by 0.1° between two frames. How far does the image of a point 20 m
+#    straight ahead move, and is that inside the refinement's inlier threshold
+#    (`rigid_motion.INLIER_PIXELS`)? Compute it by moving the point and projecting it with
+#    `rigid_motion.project`, and check it against `fy tan(0.1°)`.
+
+# %%
+# Exercise 2, worked solution
+### BEGIN SOLUTION
+pitch = math.radians(0.1)
+point = np.array([[0.0, 0.0, 20.0]])  # on the optical axis
+Rx = Rotation.from_euler("x", pitch).as_matrix()  # about the camera's x axis (right)
+moved = rigid_motion.project(point @ Rx.T, cam) - rigid_motion.project(point, cam)
+shift = float(np.hypot(moved[0, 0], moved[0, 1]))
+print(
+    f"0.1 deg of pitch moves the point by {shift:.3f} px (fy = {cam.fy:.1f} px); the inlier threshold is "
+    f"{rigid_motion.INLIER_PIXELS} px: {'outside' if shift > rigid_motion.INLIER_PIXELS else 'inside'}"
+)
+assert abs(shift - cam.fy * math.tan(pitch)) < 1e-9
+### END SOLUTION
+
+# %% [markdown]
+# 3. *(medium)* Start the Gauss–Newton of section 5 from no motion at all (`R = I`, `t = 0`)
+#    instead of 1-point RANSAC's guess. Does it reach the same motion, and in how many steps?
+
+# %%
+# Exercise 3, worked solution
+### BEGIN SOLUTION
+R_id, t_id, steps_id = gauss_newton(P_in, w_in, np.eye(3), np.zeros(3), iterations=30, tol=1e-10)
+gap_R, gap_t = np.abs(R_id - R_ours).max(), np.abs(t_id - t_ours).max()
+print(
+    f"from the identity: {steps_id} steps (from RANSAC's guess: {steps}); apart by {gap_R:.1e}, {gap_t:.1e} m"
+)
+assert gap_R < 1e-8 and gap_t < 1e-8
+### END SOLUTION
+
+# %% [markdown]
+# 4. *(hard)* Write the left-image-only refinement: keep the `(u, v)` rows of the residual and of
+#    the Jacobian, and iterate to convergence on the refined inliers of section 5. Show that it
+#    agrees with `cv2.solvePnPRefineLM` to a micrometre, and measure how far its translation is
+#    from the stereo fit's (no Huber, same inliers). Which component differs most, and why?
+
+# %%
+# Exercise 4, worked solution: the left image alone
+### BEGIN SOLUTION
+P_sel, w_sel = cam.backproject(one.w_prev[sel]), one.w_curr[sel]
+R4, t4 = R0.copy(), t0.copy()
+for _ in range(50):
+    Q = P_sel @ R4.T + t4
+    r = (project_uvd(Q) - w_sel)[:, :2].reshape(-1)
+    J = jacobian(Q)[:, :2].reshape(-1, 6)
+    delta = -np.linalg.solve(J.T @ J, J.T @ r)
+    dR = exp_rotation(delta[:3])
+    R4, t4 = dR @ R4, dR @ t4 + delta[3:]
+    if np.abs(delta).max() < 1e-12:
+        break
+R_st, t_st, _ = gauss_newton(P_sel, w_sel, R0, t0, iterations=50, tol=1e-12)
+to_opencv = float(np.abs(t4 - tvec.ravel()).max())
+print(f"left-only GN against solvePnPRefineLM: {to_opencv * 1e6:.3f} micrometres apart")
+print(f"left-only minus stereo translation (x, y, z): {1000 * (t4 - t_st)} mm")
+assert to_opencv < 1e-6
+# The 3-D points are fixed, so both fits know depth; but the stereo fit also asks the *current*
+# disparities to agree, which pins the forward component (z), the one the left image sees worst:
+# a step along the optical axis moves the points near the image centre hardly at all.
+if REAL:
+    assert np.argmax(np.abs(t4 - t_st)) == 2
+### END SOLUTION
