@@ -53,6 +53,16 @@ class TemporalMatches:
     def __len__(self) -> int:
         return len(self.idx_prev)
 
+    @classmethod
+    def empty(cls) -> TemporalMatches:
+        none = np.zeros(0, int)
+        return cls(none, none, np.zeros((0, 3)), np.zeros((0, 3)), 0, {"temporal_match": 0.0})
+
+
+def all_pairs(n_prev: int, n_curr: int) -> tuple[np.ndarray, np.ndarray]:
+    """Every ``(i, j)`` pair, ordered by ``i``: the candidates of brute-force matching."""
+    return np.repeat(np.arange(n_prev), n_curr), np.tile(np.arange(n_curr), n_prev)
+
 
 def predict_features(w_prev: np.ndarray, camera: StereoCamera, theta: float, rho: float):
     """Predicted ``(u, v, d)`` of previous features after the motion, and which are in front."""
@@ -131,11 +141,9 @@ def match_temporal(
     t0 = time.perf_counter()
     n_prev, n_curr = len(prev), len(curr)
     if n_prev == 0 or n_curr == 0:
-        empty = np.zeros(0, int)
-        return TemporalMatches(empty, empty, np.zeros((0, 3)), np.zeros((0, 3)), 0, {"temporal_match": 0.0})
+        return TemporalMatches.empty()
     if prior is None:
-        ia = np.repeat(np.arange(n_prev), n_curr)
-        ib = np.tile(np.arange(n_curr), n_prev)
+        ia, ib = all_pairs(n_prev, n_curr)
     else:
         pred, ok = predict_features(prev.w, camera, prior.theta, prior.rho)
         radius = np.clip(N_SIGMA * prediction_sigma(prev.w, camera, prior, pred), MIN_RADIUS, MAX_RADIUS)
@@ -172,11 +180,9 @@ def match_to_prediction(
     t0 = time.perf_counter()
     n_prev, n_curr = len(prev), len(curr)
     if n_prev == 0 or n_curr == 0:
-        empty = np.zeros(0, int)
-        return TemporalMatches(empty, empty, np.zeros((0, 3)), np.zeros((0, 3)), 0, {"temporal_match": 0.0})
+        return TemporalMatches.empty()
     if predicted is None:
-        ia = np.repeat(np.arange(n_prev), n_curr)
-        ib = np.tile(np.arange(n_curr), n_prev)
+        ia, ib = all_pairs(n_prev, n_curr)
         dist = hamming(prev.descriptors[ia], curr.descriptors[ib])
     else:
         order = np.argsort(curr.w[:, 1], kind="stable")
