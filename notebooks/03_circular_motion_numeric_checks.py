@@ -25,7 +25,7 @@
 #
 # **Prerequisites**: notebook 02.
 #
-# **Run time**: about 15 seconds.
+# **Run time**: about 20 seconds.
 
 # %%
 import matplotlib.pyplot as plt

@@ -28,7 +28,7 @@
 #
 # **Prerequisites**: notebooks 02 and 03 (θ and ρ from pixels, and their noise).
 #
-# **Run time**: about 30 seconds.
+# **Run time**: about 15 seconds.
 
 # %%
 import math

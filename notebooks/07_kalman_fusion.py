@@ -27,7 +27,7 @@
 #
 # **Prerequisites**: notebooks 01 (odometry, its Jacobians), 06 (the VO measurement).
 #
-# **Run time**: about 30 seconds.
+# **Run time**: about 25 seconds.
 
 # %%
 import math

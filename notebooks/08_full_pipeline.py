@@ -24,7 +24,7 @@
 #
 # **Prerequisites**: notebooks 04–07.
 #
-# **Run time**: about 1–2 minutes in quick mode (the default). Set the environment variable
+# **Run time**: about 2 minutes in quick mode (the default). Set the environment variable
 # `VO_NOTEBOOKS_FULL=1` for the full sequences (several minutes); the checks hold in both.
 
 # %%

@@ -32,7 +32,7 @@
 # **Prerequisites**: notebook 07 (a Kalman filter, NEES). Notebook 04 shows the shared world and
 # laser scanner used here.
 #
-# **Run time**: about 50 seconds.
+# **Run time**: about a minute.
 
 # %%
 import timeit
