@@ -6,7 +6,6 @@ from __future__ import annotations
 
 import csv
 import json
-import logging
 import sys
 from pathlib import Path
 
@@ -16,7 +15,16 @@ import pytest
 from vo_lib.cli.evaluate_all import find_sequences
 from vo_lib.cli.experiments import LAP, NEES, lap_tasks, nees_tasks
 from vo_lib.cli.main import main
-from vo_lib.cli.sweep import ROWS, TABLE, Experiment, SweepError, run_sweep, scheduler_address, task_key
+from vo_lib.cli.sweep import (
+    ROWS,
+    TABLE,
+    Experiment,
+    SweepError,
+    local_cluster,
+    run_sweep,
+    scheduler_address,
+    task_key,
+)
 
 REAL = Path(__file__).resolve().parents[2] / "shared" / "realdata"
 
@@ -27,11 +35,9 @@ cloudpickle.register_pickle_by_value(sys.modules[__name__])
 @pytest.fixture(scope="module")
 def client():
     """One 2-worker LocalCluster for the module (starting one costs seconds)."""
-    from distributed import Client, LocalCluster
+    from distributed import Client
 
-    cluster = LocalCluster(
-        n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0", silence_logs=logging.ERROR
-    )
+    cluster = local_cluster(2)
     c = Client(cluster)
     yield c
     c.close()

@@ -334,13 +334,38 @@ class _Serial:
         pass
 
 
+#: Dask settings of the local cluster. Dask sets ``MALLOC_TRIM_THRESHOLD_`` in its workers, which
+#: also turns off glibc's adaptive mmap threshold: every large NumPy temporary (the tracker scores
+#: a thousand poses at once) is then mapped and unmapped afresh, and a corridor task ran 3-4 times
+#: slower on a worker than in this process. The statistical profiler is off too (10 ms samples).
+LOCAL_CLUSTER_CONFIG = {
+    "distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": None,
+    "distributed.worker.profile.enabled": False,
+}
+
+
+def local_cluster(workers: int):
+    """A LocalCluster of ``workers`` processes, one thread each, quiet, dashboard on a free port."""
+    import logging
+
+    import dask
+    from distributed import LocalCluster
+
+    with dask.config.set(LOCAL_CLUSTER_CONFIG):
+        return LocalCluster(
+            n_workers=workers,
+            threads_per_worker=1,
+            processes=True,
+            dashboard_address=":0",
+            silence_logs=logging.ERROR,
+        )
+
+
 class _Dask:
     """Tasks on a dask.distributed cluster: a new LocalCluster, or an existing scheduler."""
 
     def __init__(self, workers: int, address: str | None, client=None):
-        import logging
-
-        from distributed import Client, LocalCluster
+        from distributed import Client
 
         self.cluster = None
         self.owned = client is None
@@ -350,13 +375,7 @@ class _Dask:
                 f"Dask client {client.scheduler.address}, {len(client.scheduler_info()['workers'])} workers"
             )
         elif address is None:
-            self.cluster = LocalCluster(
-                n_workers=workers,
-                threads_per_worker=1,
-                processes=True,
-                dashboard_address=":0",
-                silence_logs=logging.ERROR,
-            )
+            self.cluster = local_cluster(workers)
             self.client = Client(self.cluster)
             self.label = f"Dask LocalCluster, {workers} worker processes"
         else:

@@ -24,12 +24,10 @@ def _load() -> str:
 
 def bench_sweep(seeds: int = 20, workers: int = 2) -> dict[str, float]:
     """Wall time of a ``seeds``-seed corridor sweep serially and on ``workers`` local workers."""
-    import logging
-
-    from distributed import Client, LocalCluster
+    from distributed import Client
 
     from vo_lib.cli.experiments import corridor_experiment, corridor_setup, corridor_tasks
-    from vo_lib.cli.sweep import run_sweep
+    from vo_lib.cli.sweep import local_cluster, run_sweep
 
     experiment, tasks = corridor_experiment(), corridor_tasks(seeds)
     t0 = time.perf_counter()
@@ -45,13 +43,7 @@ def bench_sweep(seeds: int = 20, workers: int = 2) -> dict[str, float]:
         t_serial = time.perf_counter() - t0
         load_serial = _load()
         t0 = time.perf_counter()
-        cluster = LocalCluster(
-            n_workers=workers,
-            threads_per_worker=1,
-            processes=True,
-            dashboard_address=":0",
-            silence_logs=logging.ERROR,
-        )
+        cluster = local_cluster(workers)
         client = Client(cluster)
         t_start = time.perf_counter() - t0
         try:
