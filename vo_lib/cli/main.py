@@ -183,6 +183,25 @@ def _stop(signum, frame):
     raise _Stopped(signum)
 
 
+def _interrupt(signum, frame):
+    """Ctrl-C: remember it (it may land where it is dropped, see ``outputs.INTERRUPTED``), raise it."""
+    from vo_lib.formats.outputs import INTERRUPTED
+
+    INTERRUPTED.set()
+    raise KeyboardInterrupt
+
+
+def _quiet_unraisable(hook):
+    """An unraisable-exception hook that drops our interrupts (reported, not raised, where they
+    land inside a callback from compiled code) and passes anything else on to ``hook``."""
+
+    def unraisable(info):
+        if not isinstance(info.exc_value, (KeyboardInterrupt, _Stopped)):
+            hook(info)
+
+    return unraisable
+
+
 def _one_line(text: str) -> str:
     return " ".join(str(text).splitlines())
 
@@ -237,6 +256,11 @@ def main(argv: list[str] | None = None) -> int:
 
     handle_term = threading.current_thread() is threading.main_thread()
     previous = signal.signal(signal.SIGTERM, _stop) if handle_term else None
+    previous_int = signal.signal(signal.SIGINT, _interrupt) if handle_term else None
+    from vo_lib.formats.outputs import INTERRUPTED
+
+    INTERRUPTED.clear()
+    previous_hook, sys.unraisablehook = sys.unraisablehook, _quiet_unraisable(sys.unraisablehook)
     command = "python -m vo_lib"
     try:
         parser = build_parser()
@@ -266,8 +290,11 @@ def main(argv: list[str] | None = None) -> int:
         print(f"{command}: stopped by {name}; nothing half-written is left", file=sys.stderr)
         return 128 + stop.signum
     finally:
+        sys.unraisablehook = previous_hook
         if handle_term:
             signal.signal(signal.SIGTERM, previous if previous is not None else signal.SIG_DFL)
+            restore = previous_int if previous_int is not None else signal.default_int_handler
+            signal.signal(signal.SIGINT, restore)
 
 
 if __name__ == "__main__":

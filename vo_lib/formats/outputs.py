@@ -28,7 +28,13 @@ import shutil
 import socket
 import sys
 import tempfile
+import threading
 from pathlib import Path
+
+#: Set by the command line's Ctrl-C handler. Python raises KeyboardInterrupt where the signal
+#: lands, but inside a callback from compiled code (Numba compiling its cache) the exception is
+#: only reported and dropped; the flag keeps the interrupt, so that no output is committed.
+INTERRUPTED = threading.Event()
 
 MARKER = ".vo_lib_output.json"
 #: What a sample sequence written before markers existed holds (its ``manifest.json`` names the sample).
@@ -295,7 +301,12 @@ class OutputFolder:
 
     def commit(self, **details) -> Path:
         """Mark the folder as ours, check the target again (it may have changed meanwhile) and
-        rename the folder into place; returns the target."""
+        rename the folder into place; returns the target.
+
+        An interrupt that arrived while compiled code held the interpreter (and so was swallowed,
+        see :data:`INTERRUPTED`) is raised here, before anything is put in place."""
+        if INTERRUPTED.is_set():
+            raise KeyboardInterrupt
         names = sorted(p.name for p in self.path.iterdir())
         marker = {"written_by": self.written_by, "contents": names, **details}
         (self.path / MARKER).write_text(json.dumps(marker, indent=2, sort_keys=True) + "\n", encoding="utf-8")
