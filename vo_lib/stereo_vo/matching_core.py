@@ -135,3 +135,36 @@ def sad_costs(left, right, ui, vi, di, half, search):
                     total += abs(np.int64(left[row, col]) - np.int64(right[row, col - shift]))
             costs[s, m] = total
     return costs
+
+
+@_jit
+def row_candidates(
+    left, left_level, right, right_level, order_v, sorted_v, row_tolerance, d_min, d_max, des_left, des_right
+):
+    """Stereo candidates: pairs ``(i, j)`` of a left and a right corner within ``row_tolerance``
+    rows, with a disparity ``left_u - right_u`` in ``[d_min, d_max]`` and pyramid levels at most
+    one apart, with their Hamming distances; ordered by ``i``, then by right row."""
+    n = left.shape[0]
+    cap = 64
+    ia = np.empty(n * cap, np.int64)
+    ib = np.empty(n * cap, np.int64)
+    dist = np.empty(n * cap, np.int64)
+    count = 0
+    for i in range(n):
+        lo = np.searchsorted(sorted_v, left[i, 1] - row_tolerance, side="left")
+        hi = np.searchsorted(sorted_v, left[i, 1] + row_tolerance, side="right")
+        for s in range(lo, hi):
+            j = order_v[s]
+            d = left[i, 0] - right[j, 0]
+            if d < d_min or d > d_max or abs(left_level[i] - right_level[j]) > 1:
+                continue
+            if count == ia.shape[0]:
+                ia = np.concatenate((ia, np.empty_like(ia)))
+                ib = np.concatenate((ib, np.empty_like(ib)))
+                dist = np.concatenate((dist, np.empty_like(dist)))
+            h = 0
+            for k in range(des_left.shape[1]):
+                h += _popcount64(des_left[i, k] ^ des_right[j, k])
+            ia[count], ib[count], dist[count] = i, j, h
+            count += 1
+    return ia[:count], ib[:count], dist[:count]

@@ -31,7 +31,7 @@ import cv2
 import numpy as np
 
 from vo_lib.camera import StereoCamera
-from vo_lib.stereo_vo.features import StereoFeatures, best_matches, hamming, subpixel_disparity, window_pairs
+from vo_lib.stereo_vo.features import StereoFeatures, best_matches, subpixel_disparity
 
 #: Features per image pixel: 1,500 at KITTI's 1242x375, 950 at 640x480.
 FEATURES_PER_PIXEL = 1500 / (1242 * 375)
@@ -95,6 +95,27 @@ class PyramidFrontEnd:
         octave = np.fromiter((k.octave for k in kps), int, len(kps))
         return pts, octave, des
 
+    def _row_candidates(self, pl, ol, dl, pr, orr, dr):
+        """Left-right pairs on rows within ``ROW_TOLERANCE``, a disparity from 0.5 px to the largest
+        searched and levels at most one apart, with their Hamming distances (one compiled pass)."""
+        from vo_lib.stereo_vo.matching_core import row_candidates
+
+        pl, pr = np.ascontiguousarray(pl, dtype=float), np.ascontiguousarray(pr, dtype=float)
+        order = np.argsort(pr[:, 1], kind="stable")
+        return row_candidates(
+            pl,
+            ol,
+            pr,
+            orr,
+            order,
+            np.ascontiguousarray(pr[order, 1]),
+            ROW_TOLERANCE,
+            0.5,
+            self.max_disparity,
+            np.ascontiguousarray(dl).view(np.uint64),
+            np.ascontiguousarray(dr).view(np.uint64),
+        )
+
     def process(self, left: np.ndarray, right: np.ndarray) -> StereoFeatures:
         """Stereo features ``w = (u, v, d)`` of one rectified pair, with timings in milliseconds."""
         if left.shape != right.shape or left.ndim != 2:
@@ -108,13 +129,8 @@ class PyramidFrontEnd:
         if len(pl) == 0 or len(pr) == 0:
             timings["stereo_match"] = 0.0
             return StereoFeatures(np.zeros((0, 3)), np.zeros((0, 32), np.uint8), timings, left)
-        ia, ib = window_pairs(pl[:, 1], pr[:, 1], ROW_TOLERANCE)
-        disp = pl[ia, 0] - pr[ib, 0]
-        ok = (disp >= 0.5) & (disp <= self.max_disparity) & (np.abs(ol[ia] - orr[ib]) <= 1)
-        ia, ib = ia[ok], ib[ok]
-        a, b, _ = best_matches(
-            ia, ib, hamming(dl[ia], dr[ib]), len(pl), len(pr), max_distance=MAX_HAMMING, ratio=RATIO
-        )
+        ia, ib, dist = self._row_candidates(pl, ol, dl, pr, orr, dr)
+        a, b, _ = best_matches(ia, ib, dist, len(pl), len(pr), max_distance=MAX_HAMMING, ratio=RATIO)
         u, v = pl[a, 0].astype(float), pl[a, 1].astype(float)
         d = subpixel_disparity(left, right, u, v, (pl[a, 0] - pr[b, 0]).astype(float), DISPARITY_SEARCH)
         keep = d > 0.3

@@ -34,7 +34,7 @@ HUBER_PIXELS = 1.0
 #: A match is an inlier of the refined motion when its reprojection error is below this (pixels).
 INLIER_PIXELS = 1.0
 ITERATIONS = 4
-ROUNDS = 3  # refine, choose the inliers again, refine again while they change
+ROUNDS = 2  # refine, choose the inliers again, refine again while they change
 NEAR = 0.1  # metres: points closer than this to the camera after the motion are not used
 CONVERGED = 1e-8  # radians and metres: an update smaller than this ends the iterations
 
