@@ -53,6 +53,9 @@ def test_notebook_executes(path, kernel_dir, tmp_path):
         pytest.fail(f"{path.name}: a cell ran longer than {CELL_TIMEOUT_S} s\n{exc}")
     except CellExecutionError as exc:
         pytest.fail(f"{path.name} failed:\n{exc}")
+    finally:
+        if km.has_kernel:  # the client does not own a kernel manager it is given: stop the kernel here
+            km.shutdown_kernel(now=True)
     codes = [c for c in nb.cells if c.cell_type == "code"]
     assert codes and all(c.get("execution_count") for c in codes), "some code cells did not run"
 
