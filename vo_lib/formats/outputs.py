@@ -9,7 +9,7 @@ The rules (every command that writes follows them):
   unless the caller passes ``force``; even then a folder is never replaced if it is, holds or
   lies inside an input sequence, or if it is or holds the current folder, the home folder or this
   package.
-* **Atomic.** Everything is written into a temporary sibling, ``.NAME.vo_lib-PID-HOST-XXXX.tmp``,
+* **Atomic.** Everything is written into a temporary sibling, ``.NAME.vo_lib-PID-HOST-<random>.tmp``,
   renamed to ``NAME`` when complete; the folder it replaces is removed only after that. A failed
   or interrupted write removes its temporary folder (the command line turns SIGINT and SIGTERM
   into exceptions so that this happens), and a temporary folder left by a process that no longer
