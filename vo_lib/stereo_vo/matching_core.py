@@ -81,26 +81,6 @@ def _popcount64(x):
 
 
 @_jit
-def _hamming(a, b):
-    """Hamming distance of two descriptors held as rows of 64-bit words."""
-    h = 0
-    for k in range(a.shape[0]):
-        h += _popcount64(a[k] ^ b[k])
-    return h
-
-
-@_jit
-def _append(ia, ib, dist, count, i, j, h):
-    """Append the pair ``(i, j)`` at distance ``h``, doubling the arrays when full."""
-    if count == ia.shape[0]:
-        ia = np.concatenate((ia, np.empty_like(ia)))
-        ib = np.concatenate((ib, np.empty_like(ib)))
-        dist = np.concatenate((dist, np.empty_like(dist)))
-    ia[count], ib[count], dist[count] = i, j, h
-    return ia, ib, dist, count + 1
-
-
-@_jit
 def window_candidates(predicted, radius, w_curr, order_v, sorted_v, d_floor, d_fraction, des_prev, des_curr):
     """Pairs ``(i, j)`` whose current feature ``j`` lies in the square window of radius
     ``radius[i]`` around previous feature ``i``'s predicted ``(u, v)`` and within
@@ -126,7 +106,15 @@ def window_candidates(predicted, radius, w_curr, order_v, sorted_v, d_floor, d_f
             j = order_v[s]
             if abs(w_curr[j, 0] - u) > r or abs(w_curr[j, 2] - d) > d_window:
                 continue
-            ia, ib, dist, count = _append(ia, ib, dist, count, i, j, _hamming(des_prev[i], des_curr[j]))
+            if count == ia.shape[0]:  # grow
+                ia = np.concatenate((ia, np.empty_like(ia)))
+                ib = np.concatenate((ib, np.empty_like(ib)))
+                dist = np.concatenate((dist, np.empty_like(dist)))
+            h = 0
+            for k in range(des_prev.shape[1]):
+                h += _popcount64(des_prev[i, k] ^ des_curr[j, k])
+            ia[count], ib[count], dist[count] = i, j, h
+            count += 1
     return ia[:count], ib[:count], dist[:count]
 
 
@@ -170,5 +158,13 @@ def row_candidates(
             d = left[i, 0] - right[j, 0]
             if d < d_min or d > d_max or abs(left_level[i] - right_level[j]) > 1:
                 continue
-            ia, ib, dist, count = _append(ia, ib, dist, count, i, j, _hamming(des_left[i], des_right[j]))
+            if count == ia.shape[0]:
+                ia = np.concatenate((ia, np.empty_like(ia)))
+                ib = np.concatenate((ib, np.empty_like(ib)))
+                dist = np.concatenate((dist, np.empty_like(dist)))
+            h = 0
+            for k in range(des_left.shape[1]):
+                h += _popcount64(des_left[i, k] ^ des_right[j, k])
+            ia[count], ib[count], dist[count] = i, j, h
+            count += 1
     return ia[:count], ib[:count], dist[:count]
