@@ -179,6 +179,7 @@ def test_compiled_windows_give_the_pairs_of_the_numpy_windows():
     predicted = prev.w + rng.normal(0, 5, (n, 3))
     predicted[::17] = np.nan  # out of view
     radius = rng.uniform(5, 40, n)
+    radius[:60] = 1e4  # windows over the whole image: more pairs than first reserved (64 each)
     order = np.argsort(curr.w[:, 1], kind="stable")
     ia, ib, dist = window_candidates(
         predicted,
