@@ -20,6 +20,7 @@ import argparse
 import math
 import signal
 import sys
+from pathlib import Path
 
 #: Bounds of ``generate --resolution`` (each side, pixels): 32 keeps a few FAST corners in view,
 #: 4096 keeps a rendered frame pair and its buffers within a few hundred MB.
@@ -91,7 +92,9 @@ def _segments(text: str) -> tuple[float, ...]:
 def build_parser() -> argparse.ArgumentParser:
     from vo_lib.cli.bench import BENCHES
 
-    parser = _Parser(prog="python -m vo_lib", description=__doc__.split("\n")[0])
+    # named as it was started: the ``vo-lib`` script or ``python -m vo_lib``
+    prog = "vo-lib" if Path(sys.argv[0]).name == "vo-lib" else "python -m vo_lib"
+    parser = _Parser(prog=prog, description=__doc__.split("\n")[0])
     sub = parser.add_subparsers(dest="command", required=True)
     from vo_lib.sim.samples import SAMPLES
 
