@@ -10,6 +10,7 @@ from vo_lib.formats.kitti_raw import camera_in_imu_frame, read_oxts, wheel_dista
 from vo_lib.formats.sequence import SequenceError
 from vo_lib.geometry import camera_mount
 from vo_lib.stereo_vo.features import best_matches, best_matches_reference
+from vo_lib.stereo_vo.kalman import chord_measurement
 from vo_lib.stereo_vo.rigid_motion import (
     predict_features,
     project,
@@ -17,11 +18,7 @@ from vo_lib.stereo_vo.rigid_motion import (
     rotation_matrix,
     scaled_motion,
 )
-from vo_lib.stereo_vo.rigid_pipeline import (
-    chord_measurement,
-    vehicle_increment,
-    with_planar_increment,
-)
+from vo_lib.stereo_vo.rigid_pipeline import vehicle_increment, with_planar_increment
 from vo_lib.stereo_vo.vehicle import CAR_GAUGE, car_odometry_model
 
 

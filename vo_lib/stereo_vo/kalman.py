@@ -55,7 +55,13 @@ def constrained_measurement(state6: np.ndarray) -> np.ndarray:
     third component measures how far the increment strays from it, and the update observes it as
     zero: the nonholonomic constraint of a crawler, which (theta, rho) alone leave unobserved.
     """
-    dx, dy, theta = _increment(state6)
+    return chord_measurement(_increment(state6))
+
+
+def chord_measurement(increment) -> np.ndarray:
+    """``(theta, rho, sideways)`` of a planar increment ``(dx, dy, dyaw)``: its yaw, its length
+    along the chord at ``theta / 2`` (eq. 15) and its deviation across that chord."""
+    dx, dy, theta = (float(v) for v in increment)
     sp, cp = math.sin(0.5 * theta), math.cos(0.5 * theta)
     return np.array([theta, dx * cp + dy * sp, -dx * sp + dy * cp])
 
@@ -152,6 +158,11 @@ class VoKalmanFilter:
     @property
     def covariance(self) -> np.ndarray:
         return self.ekf.P[:3, :3].copy()
+
+    @property
+    def increment(self) -> np.ndarray:
+        """``(dx, dy, dyaw)`` from the cloned reference pose to the current one, in its frame."""
+        return np.array(_increment(self.ekf.x))
 
     def control_covariance(self, u) -> np.ndarray:
         """Encoder noise (random walk) plus slip, independent per track."""

@@ -44,7 +44,7 @@ from vo_lib.camera import StereoCamera
 from vo_lib.geometry import wrap_angle
 from vo_lib.models.track_odometry import TrackOdometry
 from vo_lib.stereo_vo.circular_motion import motion_matrices
-from vo_lib.stereo_vo.kalman import VoKalmanFilter
+from vo_lib.stereo_vo.kalman import VoKalmanFilter, chord_measurement
 from vo_lib.stereo_vo.pipeline import FrameDiagnostics, FrameTimings
 from vo_lib.stereo_vo.pyramid_features import PyramidFrontEnd
 from vo_lib.stereo_vo.ransac import one_point_ransac
@@ -115,13 +115,6 @@ def with_planar_increment(T_cam: np.ndarray, mount: np.ndarray, increment) -> np
     return rigid_inverse(rigid_inverse(mount) @ V @ mount)
 
 
-def chord_measurement(increment) -> np.ndarray:
-    """``(theta, rho, sideways)`` of a planar increment (the circular-motion chord of eq. 15)."""
-    dx, dy, theta = (float(v) for v in increment)
-    sp, cp = math.sin(0.5 * theta), math.cos(0.5 * theta)
-    return np.array([theta, dx * cp + dy * sp, -dx * sp + dy * cp])
-
-
 def chord_covariance(T_cam: np.ndarray, covariance6: np.ndarray, mount: np.ndarray) -> np.ndarray:
     """3x3 covariance of ``(theta, rho, sideways)`` of the vehicle, propagated from the 6x6
     covariance of the camera motion (rotation vector on the left, translation) by central
@@ -186,12 +179,7 @@ class RigidStereoOdometry:
         if self.velocity is None and not self.kf.flags.odometry:
             return None
         T = np.eye(4) if self.velocity is None else scaled_motion(self.velocity, self.gap)
-        return with_planar_increment(T, self.mount, self._filter_increment())
-
-    def _filter_increment(self) -> np.ndarray:
-        x, y, yaw, xr, yr, yawr = (float(v) for v in self.kf.ekf.x)
-        c, s = math.cos(yawr), math.sin(yawr)
-        return np.array([c * (x - xr) + s * (y - yr), -s * (x - xr) + c * (y - yr), wrap_angle(yaw - yawr)])
+        return with_planar_increment(T, self.mount, self.kf.increment)
 
     def _match(self, features, T_pred):
         if T_pred is None:
@@ -291,7 +279,7 @@ class RigidStereoOdometry:
             diag.fallback, diag.reason = True, reason
             motion_since_reference = T_pred if T_pred is not None else np.eye(4)
             self.camera_pose = self.reference_pose @ np.linalg.inv(
-                with_planar_increment(motion_since_reference, self.mount, self._filter_increment())
+                with_planar_increment(motion_since_reference, self.mount, self.kf.increment)
             )
             pose, covariance = self.kf.pose, self.kf.covariance
             self.gap += 1
@@ -301,7 +289,7 @@ class RigidStereoOdometry:
             motion, z, r_vo, n_matches = accepted
             saved_x, saved_P = self.kf.ekf.x.copy(), self.kf.ekf.P.copy()
             self.kf.update(float(z[0]), float(z[1]), r_vo, sideways=float(z[2]))
-            fused = with_planar_increment(motion.matrix, self.mount, self._filter_increment())
+            fused = with_planar_increment(motion.matrix, self.mount, self.kf.increment)
             self.camera_pose = self.reference_pose @ np.linalg.inv(fused)
             pose, covariance = self.kf.pose, self.kf.covariance
             self.recent_matches.append(n_matches)
