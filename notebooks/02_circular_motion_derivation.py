@@ -30,6 +30,13 @@
 # **Run time**: about 20 seconds. It also runs as a plain script:
 # `python notebooks/02_circular_motion_derivation.py`.
 
+# %% [markdown]
+# **References**
+#
+# - X. Zhao, J. Kan, C. Zhan, *1-Point RANSAC Application: an Independent Positioning Method for
+#   Crawler Mobile Robots Based on Binocular Stereo Vision* (seed 000): §II, planar circular
+#   motion, eq. 12–17 and Fig. 2.
+
 # %%
 import matplotlib.pyplot as plt
 import numpy as np

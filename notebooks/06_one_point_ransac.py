@@ -32,6 +32,13 @@
 #
 # **Run time**: about 15 seconds.
 
+# %% [markdown]
+# **References**
+#
+# - X. Zhao, J. Kan, C. Zhan, *1-Point RANSAC Application: an Independent Positioning Method for
+#   Crawler Mobile Robots Based on Binocular Stereo Vision* (seed 000): §II, eq. 14–17, and
+#   §III.A.3, parameter estimation by 1-point RANSAC, eq. 18–21 and the missing Fig. 5.
+
 # %%
 import math
 import time

@@ -32,6 +32,14 @@
 #
 # **Run time**: about 25 seconds.
 
+# %% [markdown]
+# **References**
+#
+# - X. Zhao, J. Kan, C. Zhan, *1-Point RANSAC Application: an Independent Positioning Method for
+#   Crawler Mobile Robots Based on Binocular Stereo Vision* (seed 000): §II, eq. 1–11 (the
+#   odometry the filter predicts with), and §III.A.2, the Kalman filter's prediction and
+#   observation matching.
+
 # %%
 import math
 
