@@ -29,6 +29,13 @@
 #
 # **Run time**: about 25 seconds.
 
+# %% [markdown]
+# **References**
+#
+# - X. Zhao, J. Kan, C. Zhan, *1-Point RANSAC Application: an Independent Positioning Method for
+#   Crawler Mobile Robots Based on Binocular Stereo Vision* (seed 000): §II, the crawler's motion
+#   model, eq. 1–11.
+
 # %%
 import matplotlib.pyplot as plt
 import numpy as np

@@ -30,6 +30,13 @@
 # **Run time**: about 20 seconds. It also runs as a plain script:
 # `python notebooks/02_circular_motion_derivation.py`.
 
+# %% [markdown]
+# **References**
+#
+# - X. Zhao, J. Kan, C. Zhan, *1-Point RANSAC Application: an Independent Positioning Method for
+#   Crawler Mobile Robots Based on Binocular Stereo Vision* (seed 000): §II, planar circular
+#   motion, eq. 12–17 and Fig. 2.
+
 # %%
 import matplotlib.pyplot as plt
 import numpy as np
@@ -80,18 +87,25 @@ assert sp.simplify(yp - y) == 0  # planar motion: a point keeps its height, y' =
 # at distance R_ICR on its left, perpendicular to its optical axis z, and moves from C to C′
 # along the chord. The second camera centre, seen from the first, is where P′ = 0, that is
 # P = −RᵀT; the drawn C′ must be that point, the chord must be 2 R_ICR sin(θ/2) long, and it must
-# make φ = θ/2 with the optical axis:
+# make φ = θ/2 with the optical axis. On the right, the same turn with the camera mounted ahead
+# of the turning axis (the paper assumes it is not): the camera then runs on a wider circle and
+# its chord leans by more than θ/2, which is what eq. 15 cannot express.
 
 # %%
-fig, ax = new_axes(width=5.5, height=4.5)
-turn, radius_icr = 0.6, 2.0
-drawn = draw_circular_motion(ax, theta=turn, radius=radius_icr)
-ax.set_title("Fig. 2 as described: relative camera positions in circular motion")
+fig, axes = new_axes(2, width=5.5, height=4.5)
+turn, radius_icr, camera_offset = 0.6, 2.0, 0.5
+drawn = draw_circular_motion(axes[0], theta=turn, radius=radius_icr)
+axes[0].set_title("Fig. 2 as described: camera on the turning axis")
+drawn_offset = draw_circular_motion(axes[1], theta=turn, radius=radius_icr, offset=camera_offset)
+axes[1].set_title(f"the camera {camera_offset} m ahead of the turning axis")
 plt.show()
 R_num, T_num = cm.motion_matrices(turn, drawn["rho"])
 centre_2 = -R_num.T @ T_num  # the second camera centre in the first camera's frame (x, y, z)
 assert np.allclose(centre_2[[0, 2]], drawn["C2"]) and abs(centre_2[1]) < 1e-15
 assert np.isclose(drawn["rho"], 2 * radius_icr * np.sin(turn / 2)) and np.isclose(drawn["phi"], turn / 2)
+lean = np.degrees(drawn_offset["phi"] - turn / 2)
+print(f"with the offset the chord leans {lean:.1f}° beyond θ/2: eq. 15's T no longer fits (notebook 03)")
+assert lean > 1.0
 
 # %% [markdown]
 # ## 2 · Eliminating ρ: eq. 12

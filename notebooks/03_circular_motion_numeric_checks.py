@@ -27,6 +27,13 @@
 #
 # **Run time**: about 20 seconds.
 
+# %% [markdown]
+# **References**
+#
+# - X. Zhao, J. Kan, C. Zhan, *1-Point RANSAC Application: an Independent Positioning Method for
+#   Crawler Mobile Robots Based on Binocular Stereo Vision* (seed 000): §II, eq. 12–17, and
+#   §III.A, how θ and ρ are used.
+
 # %%
 import matplotlib.pyplot as plt
 import numpy as np

@@ -30,6 +30,17 @@
 #
 # **Run time**: about 15 seconds.
 
+# %% [markdown]
+# **References**
+#
+# - X. Zhao, J. Kan, C. Zhan, *1-Point RANSAC Application: an Independent Positioning Method for
+#   Crawler Mobile Robots Based on Binocular Stereo Vision* (seed 000): §IV, the indoor and
+#   outdoor experiments the sample drives mirror.
+# - R. Yuan, F. Zhang, Y. Zhu, Y. Fu, *A Novel Visual Odometer Assisted Pose Tracking Method for
+#   Mobile Robots* (seed 004): §IV, the occluded corridor.
+# - A. Geiger, P. Lenz, C. Stiller, R. Urtasun, *Vision meets Robotics: The KITTI Dataset*,
+#   International Journal of Robotics Research, 2013: the raw drives and the odometry layout.
+
 # %%
 import tempfile
 from pathlib import Path

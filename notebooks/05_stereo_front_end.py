@@ -27,6 +27,13 @@
 #
 # **Run time**: about 15 seconds.
 
+# %% [markdown]
+# **References**
+#
+# - X. Zhao, J. Kan, C. Zhan, *1-Point RANSAC Application: an Independent Positioning Method for
+#   Crawler Mobile Robots Based on Binocular Stereo Vision* (seed 000): §III.A.1, binocular stereo
+#   processing (FAST corners, Hamming matching).
+
 # %%
 import math
 import time

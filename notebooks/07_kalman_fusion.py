@@ -14,10 +14,13 @@
 # Track odometry is smooth but drifts with slip; visual odometry does not drift with slip but is
 # noisy frame to frame and fails where the camera sees nothing. Seed 000 lets a Kalman filter
 # predict with the odometry and correct with the visual motion, and uses the prediction to guide
-# matching and RANSAC. This notebook runs that filter (built on filterpy) step by step, then on
-# drives with slip, and checks that its covariance tells the truth.
+# matching and RANSAC. This notebook writes that filter out in NumPy, from a one-dimensional one
+# up, checks it against filterpy and `vo_lib`, runs it on drives with slip, and checks that its
+# covariance tells the truth.
 #
 # **You will learn**
+# - the Kalman filter's predict and update, written out: first in one dimension, then for the
+#   planar pose (F, B, Q, H, K, the Joseph form), checked against filterpy and `vo_lib`;
 # - how a *relative* measurement (the motion between two frames) updates an *absolute* pose,
 #   consistently, by keeping a copy of the previous pose in the state (stochastic cloning);
 # - how the prediction becomes the prior (θ, ρ) that guides matching and RANSAC;
@@ -28,6 +31,14 @@
 # **Prerequisites**: notebooks 01 (odometry, its Jacobians), 06 (the VO measurement).
 #
 # **Run time**: about 25 seconds.
+
+# %% [markdown]
+# **References**
+#
+# - X. Zhao, J. Kan, C. Zhan, *1-Point RANSAC Application: an Independent Positioning Method for
+#   Crawler Mobile Robots Based on Binocular Stereo Vision* (seed 000): §II, eq. 1–11 (the
+#   odometry the filter predicts with), and §III.A.2, the Kalman filter's prediction and
+#   observation matching.
 
 # %%
 import math
@@ -44,6 +55,7 @@ from vo_lib.sim.trajectories import simulate_drive
 from vo_lib.stereo_vo import circular_motion as cm
 from vo_lib.stereo_vo.kalman import (
     SIDEWAYS_SIGMA,
+    SLIP_SIGMA,
     VoKalmanFilter,
     constrained_jacobian,
     constrained_measurement,
@@ -61,12 +73,204 @@ camera = StereoCamera.bumblebee2()
 odometry = TrackOdometry()
 
 # %% [markdown]
-# ## 1 · One step, by hand
+# ## 1 · A Kalman filter in one dimension
 #
-# The state is the pose (x, y, yaw). For each frame the filter (1) copies the pose, (2) moves the
-# copy with the track odometry of eq. 6–11 — using the full Jacobians of notebook 01, with encoder
-# noise plus 1 % slip per metre as process noise — and (3) corrects it with the VO measurement
-# (θ, ρ) of the motion between the two copies. The 6×6 covariance keeps the two copies tied.
+# Before the pose filter, the smallest one: a robot on a rail at position x. Odometry reports the
+# distance u it moved, with variance q; a sensor measures the position z, with variance r.
+#
+# * **predict**: x⁻ = F x + B u and P⁻ = F P Fᵀ + Q, here with F = B = 1 and Q = q;
+# * **update**: the innovation y = z − H x⁻ has variance S = H P⁻ Hᵀ + R (H = 1, R = r), the gain
+#   is K = P⁻Hᵀ/S, and x = x⁻ + K y. The covariance in Joseph form,
+#   P = (1 − KH) P⁻ (1 − KH)ᵀ + K R Kᵀ, equals the shorter (1 − KH)P⁻ for the optimal K, but stays
+#   symmetric and positive when K is off by rounding.
+#
+# We write both steps out, run them for 30 steps beside filterpy's `KalmanFilter`, and compare.
+
+# %%
+from filterpy.kalman import ExtendedKalmanFilter, KalmanFilter
+
+RAIL_Q, RAIL_R = 0.02**2, 0.05**2  # odometry and position-sensor variances [m^2]
+rail_rng = np.random.default_rng(SEED + 1)
+true_x, x_hat, P_hat = 0.0, 0.0, 0.1**2
+rail = KalmanFilter(dim_x=1, dim_z=1)
+rail.x, rail.P = np.array([[x_hat]]), np.array([[P_hat]])
+rail.F, rail.B, rail.H = np.eye(1), np.eye(1), np.eye(1)
+rail.Q, rail.R = np.array([[RAIL_Q]]), np.array([[RAIL_R]])
+rail_log = []
+for _ in range(30):
+    moved = 0.1
+    true_x += moved
+    u_rail = moved + rail_rng.normal(scale=math.sqrt(RAIL_Q))  # odometry
+    z_rail = true_x + rail_rng.normal(scale=math.sqrt(RAIL_R))  # position sensor
+    x_hat, P_hat = x_hat + u_rail, P_hat + RAIL_Q  # predict
+    K_rail = P_hat / (P_hat + RAIL_R)  # update
+    x_hat = x_hat + K_rail * (z_rail - x_hat)
+    P_hat = (1 - K_rail) * P_hat * (1 - K_rail) + K_rail * RAIL_R * K_rail
+    rail.predict(u=np.array([[u_rail]]))
+    rail.update(np.array([[z_rail]]))
+    rail_log.append((true_x, x_hat, P_hat))
+    assert abs(x_hat - rail.x[0, 0]) < 1e-12 and abs(P_hat - rail.P[0, 0]) < 1e-12
+rail_log = np.array(rail_log)
+steady = RAIL_Q / 2 * (math.sqrt(1 + 4 * RAIL_R / RAIL_Q) - 1)  # fixed point of P = (P + q) r / (P + q + r)
+print(f"after 30 steps: error {rail_log[-1, 1] - rail_log[-1, 0]:+.4f} m, sigma {math.sqrt(P_hat):.4f} m")
+print(f"steady-state variance (P + q) r / (P + q + r) = P: {steady:.3e} m^2; reached {P_hat:.3e}")
+assert abs(P_hat - steady) < 1e-6 * steady
+
+# %% [markdown]
+# The variance settles where what the prediction adds (q) is what the update removes: P solves
+# P = (P + q)r/(P + q + r), printed above. The pose filter has the same two steps, with matrices.
+#
+# ## 2 · The pose filter, written out
+#
+# The state is the pose (x, y, yaw) **and a copy of the previous pose**, because the VO measures
+# the motion between two frames (stochastic cloning). For one frame:
+#
+# * **predict** (eq. 6–11): copy the pose, then move the first copy with the track distances
+#   u = (Δs_L, Δs_R). With F = ∂f/∂pose and B = ∂f/∂u of eq. 6 (notebook 01), the 6-state moves by
+#   x⁻ = [f(pose, u), pose] and its Jacobian is F₆ = [[F, 0], [I, 0]]; the process noise is
+#   Q₆ = [[B M Bᵀ, 0], [0, 0]], with M the encoder noise plus slip of each track
+#   (σ²_enc|Δs| + σ²_slip Δs²).
+# * **update** with z = (θ, ρ, 0): h(x) is the increment from the copy to the pose, expressed as the
+#   circular-motion model sees it: its yaw θ, its length along the chord at θ/2 (ρ), and its
+#   deviation across that chord, which the crawler's tracks hold at zero (the *sideways*
+#   pseudo-measurement, variance σ²_side). Then S = HPHᵀ + R, K = PHᵀS⁻¹, x = x⁻ + K(z − h(x⁻))
+#   with the θ residual wrapped to (−π, π], and the Joseph form for P.
+
+
+# %%
+def predict_by_hand(x6, P6, u):
+    """Clone the pose and move it with the track distances u (eq. 6-11): (x6, P6)."""
+    pose = x6[:3]
+    ds = 0.5 * (u[0] + u[1])
+    dyaw = (u[1] - u[0]) / odometry.gauge
+    a = pose[2] + dyaw / 2
+    moved = np.array([pose[0] + ds * math.cos(a), pose[1] + ds * math.sin(a), wrap_angle(pose[2] + dyaw)])
+    F = np.array([[1, 0, -ds * math.sin(a)], [0, 1, ds * math.cos(a)], [0, 0, 1]])
+    k = ds / (2 * odometry.gauge)
+    B = np.array(
+        [
+            [math.cos(a) / 2 + k * math.sin(a), math.cos(a) / 2 - k * math.sin(a)],
+            [math.sin(a) / 2 - k * math.cos(a), math.sin(a) / 2 + k * math.cos(a)],
+            [-1 / odometry.gauge, 1 / odometry.gauge],
+        ]
+    )
+    M = np.diag(odometry.encoder_sigma**2 * np.abs(u) + SLIP_SIGMA**2 * np.asarray(u) ** 2)
+    F6 = np.block([[F, np.zeros((3, 3))], [np.eye(3), np.zeros((3, 3))]])
+    Q6 = np.zeros((6, 6))
+    Q6[:3, :3] = B @ M @ B.T
+    return np.concatenate([moved, pose]), F6 @ P6 @ F6.T + Q6, F6, Q6
+
+
+def chord_h(x6):
+    """h(x): (theta, rho, sideways) of the increment from the copy (x6[3:]) to the pose (x6[:3])."""
+    c, s = math.cos(x6[5]), math.sin(x6[5])
+    dx = c * (x6[0] - x6[3]) + s * (x6[1] - x6[4])  # the increment in the previous robot frame
+    dy = -s * (x6[0] - x6[3]) + c * (x6[1] - x6[4])
+    theta = wrap_angle(x6[2] - x6[5])
+    sp, cp = math.sin(theta / 2), math.cos(theta / 2)
+    return np.array([theta, dx * cp + dy * sp, -dx * sp + dy * cp]), (dx, dy, theta)
+
+
+def chord_H(x6):
+    """Jacobian of chord_h: rows theta, rho, sideways; columns the pose, then its copy."""
+    _, (dx, dy, theta) = chord_h(x6)
+    sp, cp = math.sin(theta / 2), math.cos(theta / 2)
+    ca, sa = math.cos(x6[5] + theta / 2), math.sin(x6[5] + theta / 2)  # the chord's world direction
+    d_rho, d_side = (dy * cp - dx * sp) / 2, -(dx * cp + dy * sp) / 2  # through theta = yaw - yaw'
+    return np.array(
+        [
+            [0, 0, 1, 0, 0, -1],
+            [ca, sa, d_rho, -ca, -sa, d_rho],
+            [-sa, ca, d_side, sa, -ca, d_side],
+        ]
+    )
+
+
+def update_by_hand(x6, P6, theta, rho, cov2):
+    """Correct with the VO's (theta, rho) and the zero sideways deviation: (x6, P6)."""
+    R = np.zeros((3, 3))
+    R[:2, :2], R[2, 2] = cov2, SIDEWAYS_SIGMA**2
+    H = chord_H(x6)
+    y = np.array([theta, rho, 0.0]) - chord_h(x6)[0]
+    y[0] = wrap_angle(y[0])
+    S = H @ P6 @ H.T + R
+    K = P6 @ H.T @ np.linalg.inv(S)
+    x6 = x6 + K @ y
+    x6[2] = wrap_angle(x6[2])
+    I_KH = np.eye(6) - K @ H
+    return x6, I_KH @ P6 @ I_KH.T + K @ R @ K.T
+
+
+probe = np.array([0.3, -0.2, 0.4, 0.25, -0.22, 0.35])
+numeric = np.column_stack([(chord_h(probe + e)[0] - chord_h(probe - e)[0]) / 2e-7 for e in 1e-7 * np.eye(6)])
+assert np.allclose(chord_H(probe), numeric, atol=1e-8)  # the Jacobian, by central differences
+assert np.allclose(chord_H(probe), constrained_jacobian(probe), rtol=0, atol=1e-15)
+
+# %% [markdown]
+# Now a few frames of a run: the first frames of the `indoor_free` sample, its encoder readings
+# for the prediction and 1-point RANSAC on matches of the true motion for the update. Three
+# filters take the same inputs: ours above, filterpy's `ExtendedKalmanFilter` given our F₆, Q₆, h
+# and H, and `VoKalmanFilter`. They must agree in state and covariance to 1e-12.
+
+# %%
+sample = SAMPLES["indoor_free"]
+drive = simulate_drive(
+    sample.legs, sample.rate, sample.start, np.random.default_rng(sample.seed), odometry, sample.slip
+)
+start = drive.poses[0]
+library_kf = VoKalmanFilter(odometry, pose=start)
+x6, P6 = library_kf.ekf.x.copy(), library_kf.ekf.P.copy()
+
+
+class ClonedPoseEKF(ExtendedKalmanFilter):
+    """filterpy's EKF, its state prediction the cloning motion (filterpy's default is F x + B u)."""
+
+    predicted = None
+
+    def predict_x(self, u=0):
+        self.x = self.predicted.copy()
+
+
+reference_ekf = ClonedPoseEKF(dim_x=6, dim_z=3)
+reference_ekf.x, reference_ekf.P = x6.copy(), P6.copy()
+match_rng = np.random.default_rng(SEED + 2)
+worst_x = worst_P = 0.0
+for k in range(1, 6):
+    u = drive.odometry[k]
+    x6, P6, F6, Q6 = predict_by_hand(x6, P6, u)
+    reference_ekf.F, reference_ekf.Q = F6, Q6
+    reference_ekf.predicted = x6
+    reference_ekf.predict()
+    library_kf.predict(u)
+    prior = library_kf.motion_prior()
+    th, rh = cm.circular_motion_from_increment(relative_planar(drive.poses[k - 1], drive.poses[k]))
+    m = synthetic_matches(camera, 300, th, rh, match_rng, noise_px=0.5, outlier_ratio=0.3)
+    vo = one_point_ransac(m.w_prev, m.w_curr, camera, prior=prior, rng=match_rng)
+    x6, P6 = update_by_hand(x6, P6, vo.theta, vo.rho, vo.covariance)
+    R3 = np.zeros((3, 3))
+    R3[:2, :2], R3[2, 2] = vo.covariance, SIDEWAYS_SIGMA**2
+    reference_ekf.update(
+        np.array([vo.theta, vo.rho, 0.0]), chord_H, lambda x: chord_h(x)[0], R=R3,
+        residual=lambda a, b: np.array([wrap_angle(a[0] - b[0]), a[1] - b[1], a[2] - b[2]]),
+    )
+    reference_ekf.x[2] = wrap_angle(reference_ekf.x[2])
+    library_kf.update(vo.theta, vo.rho, vo.covariance)
+    library_kf.finish_frame()
+    for other in (reference_ekf, library_kf.ekf):
+        worst_x = max(worst_x, np.max(np.abs(other.x - x6)))
+        worst_P = max(worst_P, np.max(np.abs(other.P - P6)))
+print(f"pose after 5 frames {x6[:3]} (truth {drive.poses[5]})")
+print(f"largest difference to filterpy and to VoKalmanFilter: state {worst_x:.1e}, covariance {worst_P:.1e}")
+assert worst_x <= 1e-12 and worst_P <= 1e-12
+
+# %% [markdown]
+# ## 3 · One step with `VoKalmanFilter`
+#
+# The same step through the library's filter, built on filterpy. For each frame it (1) copies the
+# pose, (2) moves the copy with the track odometry of eq. 6–11 — using the full Jacobians of
+# notebook 01, with encoder noise plus 1 % slip per metre as process noise — and (3) corrects it
+# with the VO measurement (θ, ρ) of the motion between the two copies. The 6×6 covariance keeps
+# the two copies tied.
 
 # %%
 kf = VoKalmanFilter(odometry)
@@ -101,7 +305,7 @@ assert abs(measurement(kf.ekf.x)[0] - vo_theta) < abs(prior.theta - vo_theta)
 # the odometry about the turn; the covariance shrank in every direction. filterpy performs the
 # update with the Joseph form, (I − KH)P(I − KH)ᵀ + KRKᵀ, which stays symmetric and positive.
 #
-# ## 2 · A drive with slip: odometry vs VO vs fused
+# ## 4 · A drive with slip: odometry vs VO vs fused
 #
 # We take the first 600 frames of the `spot_turn` sample (18°/s on the spot, 6 % slip that the
 # encoders over-count) and the first 400 of `indoor_free`. For every frame we draw 300 matches of
@@ -287,7 +491,7 @@ assert without[("without", False)] > 2 * without[("with", False)]
 # place.
 
 # %% [markdown]
-# ## 3 · When vision goes blind
+# ## 5 · When vision goes blind
 #
 # Frames 200–260 of the spot turn have no usable matches (a blank wall, darkness). The filter
 # carries on with odometry alone, flags those frames, and its heading uncertainty grows. When
@@ -314,7 +518,7 @@ assert len(flagged) == 61 and yaw_sigma[260] > 5 * yaw_sigma[199]
 assert yaw_sigma[300] - yaw_sigma[260] < 0.1 * (yaw_sigma[260] - yaw_sigma[199])
 
 # %% [markdown]
-# ## 4 · Does the filter believe its own covariance? NEES
+# ## 6 · Does the filter believe its own covariance? NEES
 #
 # If the filter is consistent, the normalised estimation error squared, NEES = eᵀP⁻¹e for the 3-D
 # pose error e, follows a χ² distribution with 3 degrees of freedom. Averaged over N independent
@@ -356,7 +560,7 @@ print(f"mean NEES {avg.mean():.2f} (band {lo:.2f}–{hi:.2f}); {inside:.0%} of s
 assert lo < avg.mean() < hi and inside >= 0.9
 
 # %% [markdown]
-# ## 5 · Play with slip, noise and outages
+# ## 7 · Play with slip, noise and outages
 #
 # `fuse(slip_scale, vo_noise_px, outage_frames)` reruns 300 frames of the spot turn.
 

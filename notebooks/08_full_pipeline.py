@@ -27,6 +27,13 @@
 # **Run time**: about 2 minutes in quick mode (the default). Set the environment variable
 # `VO_NOTEBOOKS_FULL=1` for the full sequences (several minutes); the checks hold in both.
 
+# %% [markdown]
+# **References**
+#
+# - X. Zhao, J. Kan, C. Zhan, *1-Point RANSAC Application: an Independent Positioning Method for
+#   Crawler Mobile Robots Based on Binocular Stereo Vision* (seed 000): §III.A, the procedure
+#   (Fig. 3), and §IV, Table 1, Table 2, Fig. 6 and Fig. 9.
+
 # %%
 import math
 import os

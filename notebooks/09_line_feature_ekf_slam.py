@@ -34,6 +34,13 @@
 #
 # **Run time**: about a minute.
 
+# %% [markdown]
+# **References**
+#
+# - X. Yan, G. Yang, L. Wang, *EKF-SLAM Algorithm Based on Dichotomy*, 2020,
+#   doi:10.19306/j.cnki.2095-8110.2020.03.011 (seed 002): §1, EKF-SLAM (eq. 1–13); §2, the
+#   observers of a line feature (Fig. 3–4); §3, the simulation (Fig. 5–9, Table 1).
+
 # %%
 import timeit
 
@@ -332,6 +339,91 @@ ax.set_xlabel("x [m] (along the line of sight)")
 ax.set_ylabel("y [m]")
 ax.legend(fontsize="small", loc="lower left")
 ax.set_title("Nearest in metres is B; nearest in σ is A")
+# %% [markdown]
+# ### The update and the augmentation, written out
+#
+# `EkfSlam` does two things with an observation z = (r, θ), range and bearing: if it is a mapped
+# wall j, it **updates** the whole state; if it is new, it **augments** the state with a
+# landmark. Both are a few lines of NumPy; we write them out on the case above (after one
+# prediction step, so that the pose and the map are correlated) and compare with `EkfSlam` to
+# 1e-12.
+#
+# **Update.** With Φ the heading, Δ = (x_j − x_v, y_j − y_v) and q = |Δ|², the predicted
+# observation is h = (√q, atan2(Δ_y, Δ_x) − Φ) (eq. 10), and its Jacobian has two non-zero blocks
+# (eq. 11, with the corrected landmark columns):
+# ∂h/∂(x_v, y_v, Φ) = [[−Δ_x/√q, −Δ_y/√q, 0], [Δ_y/q, −Δ_x/q, −1]] and
+# ∂h/∂(x_j, y_j) = [[Δ_x/√q, Δ_y/√q], [−Δ_y/q, Δ_x/q]]. Placed in a 2 × n matrix H (zeros
+# elsewhere): S = HPHᵀ + R, K = PHᵀS⁻¹, x ← x + K(z − h) with the bearing residual wrapped, and
+# P ← (I − KH)P(I − KH)ᵀ + KRKᵀ (Joseph form).
+#
+# **Augmentation.** The new point is m = (x_v + r cos(Φ + θ), y_v + r sin(Φ + θ)), with
+# G_v = ∂m/∂(x_v, y_v, Φ) = [[1, 0, −r sin(Φ + θ)], [0, 1, r cos(Φ + θ)]] and
+# G_z = ∂m/∂(r, θ) = [[cos(Φ + θ), −r sin(Φ + θ)], [sin(Φ + θ), r cos(Φ + θ)]]. The state grows by
+# m; the covariance grows by a row and a column: P_mm = G_v P_vv G_vᵀ + G_z R G_zᵀ and
+# P_mX = G_v P_vX (the new point is as uncertain as the pose it was seen from, plus the sensor).
+
+# %%
+import copy
+import math
+
+from vo_lib.geometry import wrap_angle
+
+slam = copy.deepcopy(ekf)
+slam.predict(3.0, 0.05)  # one control step: the pose's doubt now reaches into the map
+before_x, before_P = slam.x.copy(), slam.P.copy()
+
+
+def slam_update_by_hand(x, P, z, j, R):
+    """EKF update of state x, covariance P with a range-bearing observation z of landmark j."""
+    k = 3 + 2 * j
+    d = x[k : k + 2] - x[:2]
+    q = d @ d
+    h = np.array([math.sqrt(q), math.atan2(d[1], d[0]) - x[2]])
+    H = np.zeros((2, x.size))
+    H[:, :3] = [[-d[0] / math.sqrt(q), -d[1] / math.sqrt(q), 0.0], [d[1] / q, -d[0] / q, -1.0]]
+    H[:, k : k + 2] = [[d[0] / math.sqrt(q), d[1] / math.sqrt(q)], [-d[1] / q, d[0] / q]]
+    nu = z - h
+    nu[1] = wrap_angle(nu[1])
+    S = H @ P @ H.T + R
+    K = P @ H.T @ np.linalg.inv(S)
+    x = x + K @ nu
+    x[2] = wrap_angle(x[2])
+    I_KH = np.eye(x.size) - K @ H
+    return x, I_KH @ P @ I_KH.T + K @ R @ K.T
+
+
+def slam_augment_by_hand(x, P, z, R):
+    """State and covariance with the landmark seen at z = (range r, bearing b) appended."""
+    r, b = z
+    c, s = math.cos(x[2] + b), math.sin(x[2] + b)
+    m = x[:2] + r * np.array([c, s])
+    G_v = np.array([[1.0, 0.0, -r * s], [0.0, 1.0, r * c]])
+    G_z = np.array([[c, -r * s], [s, r * c]])
+    n = x.size
+    P_new = np.zeros((n + 2, n + 2))
+    P_new[:n, :n] = P
+    P_new[n:, :n] = G_v @ P[:3, :]
+    P_new[:n, n:] = P_new[n:, :n].T
+    P_new[n:, n:] = G_v @ P[:3, :3] @ G_v.T + G_z @ R @ G_z.T
+    return np.concatenate([x, m]), P_new
+
+
+x_hand, P_hand = slam_update_by_hand(before_x, before_P, z, true_index, slam.R)
+slam.update([z], [true_index])
+print(
+    f"update with wall A: pose {before_x[:3]} -> {x_hand[:3]}; "
+    f"|dx| {np.max(np.abs(x_hand - slam.x)):.1e}, |dP| {np.max(np.abs(P_hand - slam.P)):.1e}"
+)
+assert np.max(np.abs(x_hand - slam.x)) <= 1e-12 and np.max(np.abs(P_hand - slam.P)) <= 1e-12
+
+z_new = np.array([12.0, math.radians(35.0)])  # a third wall, not on the map
+x_aug, P_aug = slam_augment_by_hand(slam.x, slam.P, z_new, slam.R)
+slam.augment(z_new)
+print(f"augmented: {slam.n_landmarks} landmarks, the new one at {slam.landmark(2)}, state size {slam.x.size}")
+assert x_aug.shape == slam.x.shape and np.max(np.abs(x_aug - slam.x)) <= 1e-12
+assert np.max(np.abs(P_aug - slam.P)) <= 1e-12
+assert np.all(np.linalg.eigvalsh(P_aug) > -1e-12)  # still a covariance
+
 # %% [markdown]
 # The observation's uncertainty is a thin ellipse across the line of sight (σ printed above: the
 # 5° heading doubt at 20 m) and narrow along it (the 0.1 m range noise). B lies along the line of

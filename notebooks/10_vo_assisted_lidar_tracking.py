@@ -33,6 +33,16 @@
 #
 # **Run time**: 2–3 minutes (rendering the corridor and 20 seeds of both trackers).
 
+# %% [markdown]
+# **References**
+#
+# - R. Yuan, F. Zhang, Y. Zhu, Y. Fu, *A Novel Visual Odometer Assisted Pose Tracking Method for
+#   Mobile Robots* (seed 004): §II, the visual odometer (eq. 1–7); §III, sample statistics,
+#   control limits and compensation (eq. 8–23); §IV, Tables I–III and Fig. 1, 5, 7.
+# - X. Zhao, J. Kan, C. Zhan, *1-Point RANSAC Application: an Independent Positioning Method for
+#   Crawler Mobile Robots Based on Binocular Stereo Vision* (seed 000): §III.A, the 1-point
+#   odometer run beside it.
+
 # %%
 
 import matplotlib.pyplot as plt
@@ -53,7 +63,7 @@ from vo_lib.lidar_tracking.corridor_experiment import (
 )
 from vo_lib.lidar_tracking.likelihood_field import LikelihoodField
 from vo_lib.lidar_tracking.pnp_odometry import PnpVisualOdometry
-from vo_lib.lidar_tracking.pose_tracking import ScoreStatistics, posterior, sample_poses
+from vo_lib.lidar_tracking.pose_tracking import ScoreStatistics, Thresholds, posterior, sample_poses
 from vo_lib.sim.samples import render_sample
 from vo_lib.sim.world import corridor
 from vo_lib.stereo_vo.pipeline import run_frames
@@ -219,9 +229,10 @@ def scores_at(x, world_=world):
 
 
 fig, axes = new_axes(2, width=5.5, height=3.4)
-frame_stats = {}
+frame_stats, raw_scores = {}, {}
 for ax, x, title in ((axes[0], 3.0, "normal (x = 3 m)"), (axes[1], 9.0, "occluded stretch (x = 9 m)")):
     samples, scores = scores_at(x)
+    raw_scores[title] = scores
     ax.boxplot(posterior(scores) * len(scores), whis=(0, 100))
     ax.set_title(title)
     ax.set_ylabel("posterior × n (box: quartiles, whiskers: min and max)")
@@ -234,6 +245,66 @@ for ax in axes:
 normal_frame, occluded_frame = frame_stats.values()
 assert normal_frame.v_max > 2 * occluded_frame.v_max
 assert max(st.v_uq for st in frame_stats.values()) < 0.01 * occluded_frame.v_max
+
+# %% [markdown]
+# **The statistics, written out.** What `ScoreStatistics.from_scores` computes, in a few lines:
+# the posterior × n of eq. 8–10 (subtracting the largest score first, so that no exponential
+# overflows), the quartiles by linear interpolation between the sorted values (the value at
+# position p·(n − 1) of the sorted list, for p = 0.25, 0.5, 0.75), the whiskers at the minimum and
+# the maximum, and the indicators D_s = V_max − V_med (eq. 11, as read below),
+# R_s = (V_max − V_lq)/(V_uq − V_lq) (eq. 12) and C_s (eq. 13: all three at or above their
+# thresholds). They must equal the library's, and the quartiles and whiskers must be those the box
+# plots above drew.
+
+# %%
+from matplotlib.cbook import boxplot_stats
+
+
+def quantile_by_hand(values, p):
+    """The p-quantile by linear interpolation between the sorted values."""
+    v = np.sort(values)
+    position = p * (len(v) - 1)
+    below = int(np.floor(position))
+    above = min(below + 1, len(v) - 1)
+    return v[below] + (position - below) * (v[above] - v[below])
+
+
+def box_by_hand(raw_scores):
+    """V_min, V_lq, V_med, V_uq, V_max of the posterior x n, and D_s and R_s."""
+    e = np.exp(raw_scores - raw_scores.max())
+    values = e / e.sum() * len(raw_scores)
+    v_min, v_lq, v_med, v_uq, v_max = (quantile_by_hand(values, p) for p in (0, 0.25, 0.5, 0.75, 1))
+    d_s, r_s = v_max - v_med, (v_max - v_lq) / max(v_uq - v_lq, 1e-12)
+    return values, {
+        "v_min": v_min,
+        "v_lq": v_lq,
+        "v_med": v_med,
+        "v_uq": v_uq,
+        "v_max": v_max,
+        "d_s": d_s,
+        "r_s": r_s,
+    }
+
+
+example_thresholds = Thresholds(v_max=5.0, d_s=5.0, r_s=2.0)  # for the comparison only: calibrated below
+for title, raw in raw_scores.items():
+    values, ours = box_by_hand(raw)
+    library = ScoreStatistics.from_scores(raw)
+    drawn = boxplot_stats(values, whis=(0, 100))[0]
+    for key, value in ours.items():
+        assert abs(value - getattr(library, key)) <= 1e-12 * max(1.0, abs(value)), (title, key)
+    assert np.allclose(
+        [drawn["whislo"], drawn["q1"], drawn["med"], drawn["q3"], drawn["whishi"]],
+        [ours[k] for k in ("v_min", "v_lq", "v_med", "v_uq", "v_max")],
+        rtol=1e-12,
+        atol=0,
+    )
+    c_s = ours["v_max"] >= 5.0 and ours["d_s"] >= 5.0 and ours["r_s"] >= 2.0
+    assert c_s == example_thresholds.composite(library)
+    print(
+        f"{title:28s} by hand: V_lq {ours['v_lq']:.2e}, V_med {ours['v_med']:.2e}, "
+        f"D_s {ours['d_s']:.2f}, C_s {c_s}"
+    )
 
 # %% [markdown]
 # In the normal frame one small group of samples takes most of the probability; in the occluded

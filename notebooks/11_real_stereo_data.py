@@ -37,6 +37,17 @@
 # notebook says so and runs the same sections on the Motorcycle pair and a short rendered sample
 # (rendered on first use).
 
+# %% [markdown]
+# **References**
+#
+# - X. Zhao, J. Kan, C. Zhan, *1-Point RANSAC Application: an Independent Positioning Method for
+#   Crawler Mobile Robots Based on Binocular Stereo Vision* (seed 000): §II and §III.A, applied to
+#   real images.
+# - A. Geiger, P. Lenz, C. Stiller, R. Urtasun, *Vision meets Robotics: The KITTI Dataset*,
+#   International Journal of Robotics Research, 2013: the raw drives and the odometry layout.
+# - D. Scharstein et al., *High-Resolution Stereo Datasets with Subpixel-Accurate Ground Truth*,
+#   GCPR 2014: the Motorcycle pair.
+
 # %%
 import math
 import time

@@ -1,6 +1,7 @@
 """python -m vo_lib run / evaluate: outputs, tables, and bad arguments."""
 
 import os
+import re
 import subprocess
 import sys
 
@@ -41,6 +42,8 @@ def test_run_writes_every_output(workdir):
     assert len((out / "timings.csv").read_text().splitlines()) == 26
     assert "binocular stereo vision processing" in proc.stdout and "48.969" in proc.stdout
     assert "final position error [m]" in proc.stdout
+    warm_up_line = proc.stdout.index("warm-up: 3 frames run untimed first")
+    assert warm_up_line < proc.stdout.index("Average time per frame")
     assert not [p for p in workdir.iterdir() if p.name.startswith(".out")]  # no temporary left
 
 
@@ -72,3 +75,47 @@ def test_bad_arguments_exit_2_with_one_line_and_leave_nothing(tmp_path, args, me
     lines = proc.stderr.strip().splitlines()
     assert len(lines) == 1 and message in lines[0]
     assert sorted(p.name for p in tmp_path.iterdir()) == before
+
+
+def test_warm_up_runs_before_the_first_timed_frame(workdir, monkeypatch):
+    """Compiling happens in the untimed warm-up: the timed run starts only after it has finished."""
+    from vo_lib.cli import run as run_module
+    from vo_lib.stereo_vo import pipeline
+
+    calls = []
+    real_warm_up, real_run_frames = run_module.warm_up, pipeline.run_frames
+
+    def warm_up(*args, **kwargs):
+        calls.append("warm-up starts")
+        seconds = real_warm_up(*args, **kwargs)
+        calls.append("warm-up ends")
+        return seconds
+
+    def run_frames(frames, *args, **kwargs):
+        calls.append("frames")
+        return real_run_frames(frames, *args, **kwargs)
+
+    monkeypatch.setenv("VO_LIB_DATA", str(workdir / "data"))
+    monkeypatch.setattr(run_module, "warm_up", warm_up)
+    monkeypatch.setattr(pipeline, "run_frames", run_frames)
+    report = run_module.run_command("indoor_linear", str(workdir / "order"), 6, False)
+    # the warm-up's own run of the pipeline, then the timed one
+    assert calls == ["warm-up starts", "frames", "warm-up ends", "frames"]
+    assert report["vo"]["final_position_error_m"] < 0.01 and not report["spot_turn"]
+
+
+def test_error_table_of_a_spot_turn_reports_the_turn_not_a_percentage(capsys):
+    from vo_lib.cli.run import error_report, print_error_table
+    from vo_lib.stereo_vo.pipeline import PipelineResult
+
+    yaw = np.radians(np.linspace(0.0, 400.0, 41))
+    truth = np.column_stack([np.zeros(41), np.zeros(41), yaw])
+    estimate = truth + [0.002, -0.001, np.radians(0.5)]
+    result = PipelineResult(estimate, np.zeros((41, 3, 3)), [], [], None)
+    report = error_report(result, truth, truth + [0.0, 0.0, np.radians(3.0)])
+    assert report["spot_turn"] and report["turned_deg"] == pytest.approx(400.0)
+    print_error_table(report, 0, 0.0)
+    out = capsys.readouterr().out
+    assert "Errors against ground truth (400° turned on the spot)" in out
+    assert "m travelled" not in out and "nan" not in out and "of distance travelled" not in out
+    assert re.search(r"final heading error \[deg\]\s+0\.500\s+3\.000", out)

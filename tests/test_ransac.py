@@ -8,6 +8,7 @@ from vo_lib.stereo_vo.circular_motion import motion_matrices
 from vo_lib.stereo_vo.ransac import (
     histogram_voting,
     hypotheses_needed,
+    hypothesis_draws,
     one_point_ransac,
     refine_motion,
     rho_gate_error,
@@ -77,6 +78,21 @@ def test_same_seed_same_result(camera, rng):
     a = one_point_ransac(m.w_prev, m.w_curr, camera, rng=7)
     b = one_point_ransac(m.w_prev, m.w_curr, camera, rng=7)
     assert (a.theta, a.rho) == (b.theta, b.rho) and np.array_equal(a.inliers, b.inliers)
+
+
+def test_draws_given_explicitly_make_the_same_estimate_as_the_seed(camera, rng):
+    m = synthetic_matches(camera, 200, 0.03, 0.08, rng, noise_px=0.5, outlier_ratio=0.4)
+    by_seed = one_point_ransac(m.w_prev, m.w_curr, camera, rng=11)
+    draws = hypothesis_draws(11)
+    assert draws.shape == (2, 200) and np.all((draws >= 0) & (draws < 1))
+    by_draws = one_point_ransac(m.w_prev, m.w_curr, camera, rng=999, draws=draws)
+    assert np.array_equal(by_seed.inliers, by_draws.inliers)
+    assert (by_seed.theta, by_seed.rho) == (by_draws.theta, by_draws.rho)
+    # other draws are other hypotheses: the phase-1 pick changes when every draw points at one match
+    stuck = one_point_ransac(m.w_prev, m.w_curr, camera, draws=np.zeros((2, 200)), refine=False)
+    assert stuck.theta != by_seed.theta
+    with pytest.raises(ValueError, match=r"draws must have shape \(2, max_hypotheses\) = \(2, 200\)"):
+        one_point_ransac(m.w_prev, m.w_curr, camera, draws=np.zeros(400))
 
 
 def test_bad_input(camera):

@@ -132,6 +132,32 @@ def path_lengths(poses) -> np.ndarray:
     return np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(p, axis=0), axis=1))])
 
 
+#: A drive counts as turning on the spot when its path is shorter than this (metres) while it
+#: turns by more than SPOT_TURN_MIN_DEGREES: position errors then say little, heading errors all.
+SPOT_TURN_MAX_METRES = 0.1
+SPOT_TURN_MIN_DEGREES = 45.0
+
+
+def planar_path_length(poses_planar) -> float:
+    """Length in metres of a planar path ``(K, 3)``: the sum of its steps in x and y."""
+    p = np.asarray(poses_planar, float)
+    return float(np.sum(np.hypot(*np.diff(p[:, :2], axis=0).T)))
+
+
+def turned_degrees(poses_planar) -> float:
+    """Total heading change in degrees, counting every turn, left and right: ``sum |d yaw|``."""
+    yaw = np.asarray(poses_planar, float)[:, 2]
+    return float(np.degrees(np.sum(np.abs(wrap_angle(np.diff(yaw))))))
+
+
+def is_spot_turn(poses_planar) -> bool:
+    """Does the path turn on the spot (see ``SPOT_TURN_MAX_METRES``, ``SPOT_TURN_MIN_DEGREES``)?"""
+    return (
+        planar_path_length(poses_planar) < SPOT_TURN_MAX_METRES
+        and turned_degrees(poses_planar) > SPOT_TURN_MIN_DEGREES
+    )
+
+
 def kitti_segment_errors(gt, est, lengths=(100, 200, 300, 400, 500, 600, 700, 800), step: int = 10) -> dict:
     """KITTI odometry errors per segment length: ``{length: (translation %, rotation deg/m, count)}``.
 

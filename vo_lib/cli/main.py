@@ -22,16 +22,14 @@ import signal
 import sys
 from pathlib import Path
 
+from vo_lib.formats.arguments import OneLineParser
+
 #: Bounds of ``generate --resolution`` (each side, pixels): 32 keeps a few FAST corners in view,
 #: 4096 keeps a rendered frame pair and its buffers within a few hundred MB.
 MIN_SIDE, MAX_SIDE = 32, 4096
 
 
-class _Parser(argparse.ArgumentParser):
-    """argparse with errors in one line (no usage block): ``PROG: error: MESSAGE``."""
-
-    def error(self, message: str):
-        self.exit(2, f"{self.prog}: error: {message}\n")
+_Parser = OneLineParser  # errors in one line, exit 2
 
 
 def _resolution(text: str) -> tuple[int, int]:

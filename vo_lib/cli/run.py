@@ -23,12 +23,19 @@ from pathlib import Path
 
 import numpy as np
 
-from vo_lib.evaluation import ate_planar, kitti_segment_errors, rpe
+from vo_lib.evaluation import ate_planar, is_spot_turn, kitti_segment_errors, rpe, turned_degrees
 from vo_lib.formats.outputs import OutputFolder, notice
 from vo_lib.formats.poses import read_trajectory, write_kitti_poses, write_tum
 from vo_lib.geometry import camera_poses_from_planar, planar_from_camera_poses, wrap_angle
 from vo_lib.sim.samples import SAMPLES
-from vo_lib.stereo_vo.pipeline import FrameDiagnostics, FrameTimings, PipelineResult, run_sequence
+from vo_lib.stereo_vo.pipeline import (
+    WARM_UP_FRAMES,
+    FrameDiagnostics,
+    FrameTimings,
+    PipelineResult,
+    run_sequence,
+    warm_up,
+)
 from vo_lib.stereo_vo.vehicle import vehicle_of
 
 DEFAULT_SEQUENCE = "indoor_linear"
@@ -90,24 +97,16 @@ def _write_csv(path: Path, rows, cls) -> None:
             writer.writerow(asdict(row))
 
 
-def _plot(
-    path: Path, estimate: np.ndarray, truth: np.ndarray | None, odometry: np.ndarray | None, title: str
-):
+def _plot(path: Path, times, estimate, truth, odometry, title: str) -> None:
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from vo_lib.viz.plotting import plot_paths
+    from vo_lib.viz.run_figure import plot_run
 
-    paths = {}
-    if truth is not None:
-        paths["ground truth"] = truth
-    if odometry is not None:
-        paths["track odometry"] = odometry
-    paths["visual odometry (fused)"] = estimate
-    fig, ax = plt.subplots(figsize=(7, 5), constrained_layout=True)
-    plot_paths(ax, paths, title)
+    fig = plt.figure(figsize=(11, 5), constrained_layout=True)
+    plot_run(fig, times, estimate, truth, odometry, title)
     fig.savefig(path, dpi=110)
     plt.close(fig)
 
@@ -134,7 +133,11 @@ def error_report(result: PipelineResult, truth_planar: np.ndarray, odometry_plan
     """Errors of the estimate (and of odometry alone) against the ground truth."""
     est = result.poses
     dist = float(np.sum(np.linalg.norm(np.diff(truth_planar[:, :2], axis=0), axis=1)))
-    report = {"distance_m": dist}
+    report = {
+        "distance_m": dist,
+        "turned_deg": turned_degrees(truth_planar),
+        "spot_turn": is_spot_turn(truth_planar),
+    }
     for label, traj in (("vo", est), ("odometry", odometry_planar)):
         if traj is None:
             continue
@@ -142,7 +145,7 @@ def error_report(result: PipelineResult, truth_planar: np.ndarray, odometry_plan
         heading = np.degrees(np.abs(wrap_angle(traj[:, 2] - truth_planar[:, 2])))
         report[label] = {
             "final_position_error_m": final,
-            "final_position_error_pct": 100 * final / dist if dist > 0 else float("nan"),
+            "final_position_error_pct": 100 * final / dist if not report["spot_turn"] and dist > 0 else None,
             "ate_rmse_m": ate_planar(truth_planar, traj)[0].rmse,
             "heading_error_mean_deg": float(heading.mean()),
             "heading_error_max_deg": float(heading.max()),
@@ -152,7 +155,10 @@ def error_report(result: PipelineResult, truth_planar: np.ndarray, odometry_plan
 
 
 def print_error_table(report: dict, flagged: int, rpe_m: float) -> None:
-    print(f"\nErrors against ground truth ({report['distance_m']:.2f} m travelled)")
+    if report["spot_turn"]:
+        print(f"\nErrors against ground truth ({report['turned_deg']:.0f}° turned on the spot)")
+    else:
+        print(f"\nErrors against ground truth ({report['distance_m']:.2f} m travelled)")
     cols = [k for k in ("vo", "odometry") if k in report]
     names = {"vo": "visual odometry", "odometry": "track odometry"}
     print(f"  {'':<34s}" + "".join(f"{names[c]:>18s}" for c in cols))
@@ -164,6 +170,8 @@ def print_error_table(report: dict, flagged: int, rpe_m: float) -> None:
         ("heading_error_max_deg", "max heading error [deg]", "{:.3f}"),
         ("final_heading_error_deg", "final heading error [deg]", "{:.3f}"),
     ):
+        if report[cols[0]][key] is None:  # no distance to relate a position error to
+            continue
         print(f"  {label:<34s}" + "".join(f"{fmt.format(report[c][key]):>18s}" for c in cols))
     print(f"  relative pose error, 1 frame [m]  {rpe_m:>16.5f}")
     print(f"  frames flagged (VO not used)      {flagged:>16d}")
@@ -204,6 +212,11 @@ def run_command(
         n = len(seq) if frames is None else min(frames, len(seq))
         vehicle = vehicle_of(seq, use_odometry=not no_odometry)
         mount = vehicle.mount
+        seconds = warm_up(seq, use_odometry=not no_odometry, seed=seed, motion=motion)
+        print(
+            f"warm-up: {WARM_UP_FRAMES} frames run untimed first, {seconds:.1f} s (compiling the Numba "
+            "kernels in a fresh environment, loading them from the cache after); not in timings.csv"
+        )
         result = run_sequence(
             seq,
             frames=n,
@@ -224,7 +237,8 @@ def run_command(
         odo = None
         if vehicle.odometry is not None:
             odo = vehicle.odometry_model.integrate(vehicle.odometry[1:n])
-        _plot(tmp / "trajectory.png", result.poses, truth, odo, f"{Path(name).name}: {n} frames")
+        title = f"{Path(name).name}: {n} frames"
+        _plot(tmp / "trajectory.png", seq.times[:n], result.poses, truth, odo, title)
         print_timing_table(result, seq.camera, n)
         report = {}
         if truth is not None:

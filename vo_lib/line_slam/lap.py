@@ -3,7 +3,8 @@ laser whose visible part of each segment comes from one of the three observers, 
 localised by EKF-SLAM.
 
 Parameters are the paper's (section 3); what it does not print is stated in
-:class:`LineSlamScenario`. Run ``python -m vo_lib.line_slam.lap`` for one lap.
+:class:`LineSlamScenario`. Run ``python -m vo_lib.line_slam.lap`` for the README's figures (20
+laps, 10 with landmark 3 extended; ``--seeds`` and ``--extended-seeds`` change the counts).
 """
 
 from __future__ import annotations
@@ -247,8 +248,65 @@ def heading_errors(run: LineSlamRun) -> np.ndarray:
     return wrap_angle(run.estimate[:, 2] - run.truth[:, 2])
 
 
-def main() -> None:
-    """One lap with each observer, and the out-of-range case."""
+#: The README's seed 002 figures: laps over this many seeds, and extended-landmark laps over this many.
+README_SEEDS, README_EXTENDED_SEEDS = 20, 10
+
+
+def lap_statistics(seeds) -> dict[str, float]:
+    """The README's seed 002 figures over laps of ``seeds`` (closed-form observer).
+
+    Final position error of EKF-SLAM and of dead reckoning (mean and standard deviation over the
+    laps), the pose NEES averaged over laps and steps, its 95 % band for that many laps (chi-square
+    with ``3 * laps`` degrees of freedom, divided by the laps), and the share of steps whose
+    lap-averaged NEES lies above the band.
+    """
+    from scipy.stats import chi2
+
+    runs = [simulate_lap(seed=s) for s in seeds]
+    slam = np.array([r.final_error() for r in runs])
+    dead = np.array([r.final_dead_reckoning_error() for r in runs])
+    steps = min(len(r.nees) for r in runs)
+    mean_nees = np.mean([r.nees[:steps] for r in runs], axis=0)
+    low, high = chi2.ppf([0.025, 0.975], 3 * len(runs)) / len(runs)
+    return {
+        "laps": len(runs),
+        "slam_mean": float(slam.mean()),
+        "slam_std": float(slam.std()),
+        "dead_mean": float(dead.mean()),
+        "dead_std": float(dead.std()),
+        "nees_mean": float(mean_nees.mean()),
+        "nees_low": float(low),
+        "nees_high": float(high),
+        "above_band": float(np.mean(mean_nees > high)),
+    }
+
+
+def _arguments(argv=None):
+    from vo_lib.formats.arguments import OneLineParser, count_at_least
+
+    parser = OneLineParser(
+        prog="python -m vo_lib.line_slam.lap",
+        description="Seed 002's lap with EKF-SLAM: the README's figures over many seeds.",
+    )
+    parser.add_argument(
+        "--seeds",
+        type=count_at_least(1, "seeds"),
+        default=README_SEEDS,
+        help=f"laps (seeds 0..N-1) for the error and NEES figures (default {README_SEEDS}, as the README)",
+    )
+    parser.add_argument(
+        "--extended-seeds",
+        type=count_at_least(0, "seeds"),
+        default=README_EXTENDED_SEEDS,
+        help="laps with landmark 3 extended to x = 60, the out-of-range case "
+        f"(default {README_EXTENDED_SEEDS}, as the README; 0 skips it)",
+    )
+    return parser.parse_args(argv)
+
+
+def main(argv=None) -> None:
+    """One lap with each observer, then the README's statistics over ``--seeds`` laps."""
+    args = _arguments(argv)
     for name in OBSERVERS:
         run = simulate_lap(seed=1, observer=name)
         print(
@@ -256,10 +314,25 @@ def main() -> None:
             f"{len(run.landmarks)} landmarks, final error {run.final_error():.3f} m "
             f"(dead reckoning {run.final_dead_reckoning_error():.2f} m), mean NEES {run.nees.mean():.2f}"
         )
-    run = simulate_lap(seed=1, scenario=LineSlamScenario(extended=True))
-    right = run.estimated_segment(2)[:, 0].max()
-    truth = true_visible_extent(paper_world(True), run.truth)[2][1]
-    print(f"extended landmark 3: right end seen to x = {right:.4f} (true visible {truth:.4f}; paper 54.4412)")
+    st = lap_statistics(range(args.seeds))
+    print(
+        f"over {st['laps']} laps: EKF-SLAM ends {st['slam_mean']:.3f} ± {st['slam_std']:.3f} m "
+        f"from the truth, dead reckoning {st['dead_mean']:.2f} ± {st['dead_std']:.2f} m "
+        f"({st['dead_mean'] / st['slam_mean']:.0f}x); pose NEES {st['nees_mean']:.2f}, 95 % band "
+        f"[{st['nees_low']:.2f}, {st['nees_high']:.2f}], "
+        f"above it at {100 * st['above_band']:.0f} % of the steps"
+    )
+    if args.extended_seeds:
+        extended = LineSlamScenario(extended=True)
+        rights = [
+            simulate_lap(seed=s, scenario=extended).estimated_segment(2)[:, 0].max()
+            for s in range(args.extended_seeds)
+        ]
+        visible = true_visible_extent(paper_world(True), simulate_lap(seed=2, scenario=extended).truth)[2][1]
+        print(
+            f"extended landmark 3 over {len(rights)} laps: mapped up to x = {np.mean(rights):.2f} ± "
+            f"{np.std(rights):.2f} (visible from the true path up to {visible:.2f}; paper 54.4412)"
+        )
 
 
 if __name__ == "__main__":

@@ -82,6 +82,29 @@ def hypotheses_needed(inlier_ratio: float, confidence: float = CONFIDENCE, sampl
     return max(1, math.ceil(math.log(1.0 - confidence) / math.log(1.0 - good)))
 
 
+def hypothesis_draws(rng=None, max_hypotheses: int = MAX_HYPOTHESES) -> np.ndarray:
+    """The random numbers :func:`one_point_ransac` draws: one uniform number in [0, 1) per hypothesis.
+
+    Row 0 serves the theta search, row 1 the rho search; hypothesis ``k`` of a phase is match
+    ``pool[min(int(u_k * len(pool)), len(pool) - 1)]`` of that phase's pool (its best-conditioned
+    matches, ordered by variance). ``one_point_ransac(..., rng=r)`` and
+    ``one_point_ransac(..., draws=hypothesis_draws(r))`` make the same draws, so another
+    implementation given these numbers can be compared with it hypothesis by hypothesis.
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator or int, optional
+        Source of the draws (seeded, for repeatable results).
+    max_hypotheses : int
+        Hypotheses per phase at most.
+
+    Returns
+    -------
+    numpy.ndarray, shape (2, max_hypotheses)
+    """
+    return np.random.default_rng(rng).random(2 * int(max_hypotheses)).reshape(2, -1)
+
+
 # ---------------------------------------------------------------------- eq. 18-20
 def gate_angles(w: np.ndarray, camera: StereoCamera) -> tuple[np.ndarray, np.ndarray]:
     """``(tan(alpha), beta)`` of Fig. 5 for matches ``w``: depression and bearing of each ray."""
@@ -159,6 +182,7 @@ def one_point_ransac(
     confidence: float = CONFIDENCE,
     max_hypotheses: int = MAX_HYPOTHESES,
     refine: bool = True,
+    draws=None,
 ) -> RansacResult:
     """Estimate ``(theta, rho)`` from matches with 1-point RANSAC and the two gates of the paper.
 
@@ -177,6 +201,8 @@ def one_point_ransac(
         Stopping rule of the adaptive hypothesis count.
     refine : bool
         Refine on all inliers by least squares.
+    draws : array_like, shape (2, max_hypotheses), optional
+        The hypotheses' random numbers (:func:`hypothesis_draws`); when given, ``rng`` is not used.
 
     Returns
     -------
@@ -189,7 +215,13 @@ def one_point_ransac(
     a, b = as_match_array("w_prev", w_prev), as_match_array("w_curr", w_curr)
     if a.shape != b.shape:
         raise ValueError(f"w_prev and w_curr must have the same shape; got {a.shape} and {b.shape}")
-    rng = np.random.default_rng(rng)
+    if draws is None:
+        draws = hypothesis_draws(rng, max_hypotheses)
+    draws = np.asarray(draws, dtype=float)
+    if draws.shape != (2, int(max_hypotheses)):
+        raise ValueError(
+            f"draws must have shape (2, max_hypotheses) = (2, {int(max_hypotheses)}); got {draws.shape}"
+        )
     n = len(a)
     inliers = np.zeros(n, bool)
     diagnostics = {"matches": n}
@@ -210,8 +242,6 @@ def one_point_ransac(
     no_prior = np.array([np.nan, np.nan])
     prior_theta = np.array([prior.theta, prior.covariance[0][0]], float) if prior is not None else no_prior
     prior_rho = np.array([prior.rho, prior.covariance[1][1]], float) if prior is not None else no_prior
-    # the hypotheses' draws: one uniform number per hypothesis, at most max_hypotheses per phase
-    uniforms = rng.random(2 * max_hypotheses)
     status, theta, rho, covariance, inliers, tried_theta, tried_rho, theta_in, rounds = core.one_point_core(
         np.ascontiguousarray(a),
         np.ascontiguousarray(b),
@@ -227,8 +257,8 @@ def one_point_ransac(
         float(confidence),
         int(max_hypotheses),
         bool(refine),
-        uniforms[:max_hypotheses],
-        uniforms[max_hypotheses:],
+        np.ascontiguousarray(draws[0]),
+        np.ascontiguousarray(draws[1]),
         MIN_POOL,
         POOL_FRACTION,
         REFINE_ITERATIONS,

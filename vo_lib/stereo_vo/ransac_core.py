@@ -133,7 +133,7 @@ def _count(phase, h, vh, values, variances, k2, bx, by, bz, sphi, cphi):
 
 
 @_jit
-def _reestimate(phase, h, vh, values, variances, k2, bx, by, bz, sphi, cphi):
+def reestimate(phase, h, vh, values, variances, k2, bx, by, bz, sphi, cphi):
     """Inverse-variance weighted mean of the per-match values of a hypothesis' inliers, and its variance."""
     sw = swv = 0.0
     for j in range(values.shape[0]):
@@ -208,7 +208,7 @@ def _gate(ta, ba, tb, bb, phi):
 
 
 @_jit
-def _theta_gate_pass(ta, ba, tb, bb, theta_j, var_theta, theta, var_ref, k2, out):
+def theta_gate_pass(ta, ba, tb, bb, theta_j, var_theta, theta, var_ref, k2, out):
     """The eq. 20 gate of every match at ``theta`` against ``k`` first-order standard deviations,
     and the match's own theta consistent with it."""
     h = 1e-4
@@ -290,11 +290,11 @@ def one_point_core(
         pool_fraction,
     )
     # refine theta: inverse-variance weighted mean of the hypothesis' inliers
-    theta_hat, var_theta_hat = _reestimate(1, theta_h, var_h, theta_j, var_theta, k2, e, e, e, 0.0, 0.0)
+    theta_hat, var_theta_hat = reestimate(1, theta_h, var_h, theta_j, var_theta, k2, e, e, e, 0.0, 0.0)
     beta_a, beta_b = np.arctan(du / fx), np.arctan(du2 / fx)
     ta, tb = dv * np.cos(beta_a) / fy, dv2 * np.cos(beta_b) / fy
     theta_in = np.empty(m, np.bool_)
-    _theta_gate_pass(ta, beta_a, tb, beta_b, theta_j, var_theta, theta_hat, var_theta_hat, k2, theta_in)
+    theta_gate_pass(ta, beta_a, tb, beta_b, theta_j, var_theta, theta_hat, var_theta_hat, k2, theta_in)
     n_theta_in = int(theta_in.sum())
     if n_theta_in < 3:
         return FEW_THETA_INLIERS, np.nan, np.nan, cov, inliers, tried_theta, 0, n_theta_in, 0
@@ -341,7 +341,7 @@ def one_point_core(
         min_pool,
         pool_fraction,
     )
-    rho_hat, var_rho = _reestimate(2, rho_h, var_rho, rho_j, var_pt, k2, bx, by, bz, sphi, cphi)  # like theta
+    rho_hat, var_rho = reestimate(2, rho_h, var_rho, rho_j, var_pt, k2, bx, by, bz, sphi, cphi)  # like theta
     keep = np.zeros(m, np.bool_)
     for k in range(n_theta_in):
         keep[it[k]] = _passes(2, k, rho_hat, var_rho, rho_j, var_pt, k2, bx, by, bz, sphi, cphi)
@@ -371,7 +371,7 @@ def one_point_core(
         )
         cov = covariance(a00, a01, a11, rss, 6 * len(sel))
         # the refined motion decides the inliers again: the theta gate, and eq. 21 whitened in (u, v, d)
-        _theta_gate_pass(ta, beta_a, tb, beta_b, theta_j, var_theta, theta, cov[0, 0], k2, new)
+        theta_gate_pass(ta, beta_a, tb, beta_b, theta_j, var_theta, theta, cov[0, 0], k2, new)
         c, s = math.cos(theta), math.sin(theta)
         tx, tz = -rho * math.sin(0.5 * theta), -rho * math.cos(0.5 * theta)
         limit = whitened_gate * whitened_gate * 2.0 * ps2

@@ -248,23 +248,37 @@ def draw_observer_case(ax, a, b, centre, max_range: float, part, title: str = ""
         ax.set_title(title)
 
 
-def draw_circular_motion(ax, theta: float = 0.6, radius: float = 2.0) -> dict:
-    """Seed 000's Fig. 2, plan view of the first camera frame (x right, z forward): a camera above
-    the turning axis turns by ``theta`` (left positive) about the instantaneous centre of
-    rotation at ``radius`` to its left, moving from C to C' along a chord of length rho at the
-    angle phi from its optical axis.
+def draw_circular_motion(ax, theta: float = 0.6, radius: float = 2.0, offset: float = 0.0) -> dict:
+    """Seed 000's Fig. 2, plan view of the first camera frame (x right, z forward): the robot
+    turns by ``theta`` (left positive) about the instantaneous centre of rotation (ICR) at
+    ``radius`` to the left of its turning axis, and the camera, ``offset`` ahead of that axis,
+    moves from C to C' along a chord of length rho at the angle phi from its optical axis.
 
-    Returns ``C2`` (the second centre, (x, z)), ``rho`` and ``phi`` as drawn."""
-    icr = np.array([-radius, 0.0])
+    With ``offset = 0`` (the paper's assumption) the camera is on the turning axis, rho is
+    ``2 radius sin(theta / 2)`` and phi is ``theta / 2``; with an offset the camera runs on a wider
+    circle and the chord leans by more than ``theta / 2``.
+
+    Returns ``C2`` (the second camera centre, (x, z)), ``rho`` and ``phi`` as drawn, and
+    ``labels``, the texts of the drawn angles and lengths."""
     C = np.array([0.0, 0.0])
-    C2 = icr + radius * np.array([np.cos(theta), np.sin(theta)])
+    A = C - offset * np.array([0.0, 1.0])  # the robot's turning axis, behind the camera
+    icr = A + np.array([-radius, 0.0])
+    A2 = icr + radius * np.array([np.cos(theta), np.sin(theta)])
+    C2 = A2 + offset * np.array([-np.sin(theta), np.cos(theta)])
     arc = np.linspace(0.0, theta, 50)
     ax.plot(icr[0] + radius * np.cos(arc), icr[1] + radius * np.sin(arc), color="0.6", lw=1, ls="--")
-    ax.plot(*zip(icr, C, strict=True), color="0.5", lw=1)
-    ax.plot(*zip(icr, C2, strict=True), color="0.5", lw=1, label="R_ICR")
+    ax.plot(*zip(icr, A, strict=True), color="0.5", lw=1)
+    ax.plot(*zip(icr, A2, strict=True), color="0.5", lw=1, label="R_ICR")
     ax.plot(*icr, "k+", ms=10)
     ax.annotate("ICR", icr, textcoords="offset points", xytext=(4, -12))
     ax.plot(*zip(C, C2, strict=True), "k-", lw=2, label="chord, length ρ")
+    ax.text(*(0.5 * (C + C2) + (0.06 * radius, -0.06 * radius)), "ρ", ha="center", va="center")
+    if offset:
+        for P, Pa in ((C, A), (C2, A2)):
+            ax.plot(*zip(Pa, P, strict=True), color="C2", lw=1.5, ls=":")
+            ax.plot(*Pa, "s", color="C2", ms=5)
+        ax.plot([], [], color="C2", ls=":", label="camera offset from the turning axis")
+        ax.text(*(0.5 * (A + C) + (0.05 * radius, 0.0)), "offset", color="C2", fontsize="small")
     for P, yaw, name in ((C, 0.0, "C"), (C2, theta, "C'")):
         axis = np.array([-np.sin(yaw), np.cos(yaw)])  # the optical axis z, turned left by yaw
         tip = P + 0.45 * radius * axis
@@ -275,22 +289,26 @@ def draw_circular_motion(ax, theta: float = 0.6, radius: float = 2.0) -> dict:
     chord = C2 - C
     rho = float(np.hypot(*chord))
     _angle_arc(ax, C, (0.0, 1.0), chord, 0.25 * radius, "φ")
-    _angle_arc(ax, icr, (1.0, 0.0), C2 - icr, 0.3 * radius, "θ")
+    _angle_arc(ax, icr, (1.0, 0.0), A2 - icr, 0.3 * radius, "θ")
     ax.set_aspect("equal")
     ax.set_xlabel("x (right) [m]")
     ax.set_ylabel("z (forward) [m]")
     ax.legend(fontsize="x-small", loc="upper left")
     phi = float(np.arccos(chord[1] / rho))
-    return {"C2": C2, "rho": rho, "phi": phi}
+    labels = [t.get_text() for t in ax.texts]
+    return {"C2": C2, "rho": rho, "phi": phi, "labels": labels}
 
 
-def draw_flowchart(ax, stages, side=None):
+def draw_flowchart(ax, stages, side=None) -> dict:
     """Boxes for ``stages`` top to bottom, joined by arrows; ``side`` is an optional list of
-    ``(from, to, label)`` stage indices for arrows drawn to the right (feedback, priors)."""
+    ``(from, to, label)`` stage indices for arrows drawn to the right (feedback, priors).
+
+    Returns ``boxes`` (the stage texts, top to bottom) and ``arrows`` (the arrow annotations)."""
+    boxes, arrows = [], []
     n = len(stages)
     ys = np.linspace(0.95, 0.05, n)
     for i, (y, text) in enumerate(zip(ys, stages, strict=True)):
-        ax.text(
+        box = ax.text(
             0.4,
             y,
             text,
@@ -299,16 +317,21 @@ def draw_flowchart(ax, stages, side=None):
             fontsize="small",
             bbox={"boxstyle": "round,pad=0.4", "fc": "white", "ec": "0.3"},
         )
+        boxes.append(box)
         if i:
-            ax.annotate("", (0.4, y + 0.045), (0.4, ys[i - 1] - 0.045), arrowprops={"arrowstyle": "->"})
+            arrows.append(
+                ax.annotate("", (0.4, y + 0.045), (0.4, ys[i - 1] - 0.045), arrowprops={"arrowstyle": "->"})
+            )
     for a, b, label in side or []:
-        ax.annotate(
+        arrow = ax.annotate(
             "",
             (0.78, ys[b]),
             (0.78, ys[a]),
             arrowprops={"arrowstyle": "->", "color": "C1", "connectionstyle": "arc3,rad=-0.4"},
         )
+        arrows.append(arrow)
         ax.text(0.86, 0.5 * (ys[a] + ys[b]), label, color="C1", fontsize="x-small", va="center")
     ax.set_xlim(0, 1)
     ax.set_ylim(0, 1)
     ax.axis("off")
+    return {"boxes": boxes, "arrows": arrows}

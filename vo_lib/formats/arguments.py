@@ -1,0 +1,32 @@
+"""Command-line arguments for every entry point: errors in one line, counts checked as they parse.
+
+``python -m vo_lib``, ``python -m vo_lib.line_slam.lap`` and
+``python -m vo_lib.lidar_tracking.corridor_experiment`` all report a bad argument as one line
+(``PROG: error: MESSAGE``) and exit with status 2, without argparse's usage block.
+"""
+
+from __future__ import annotations
+
+import argparse
+
+
+class OneLineParser(argparse.ArgumentParser):
+    """argparse with errors in one line (no usage block): ``PROG: error: MESSAGE``, exit 2."""
+
+    def error(self, message: str):
+        self.exit(2, f"{self.prog}: error: {message}\n")
+
+
+def count_at_least(minimum: int, what: str):
+    """An argparse ``type`` reading a whole number ``>= minimum``; ``what`` names it in errors."""
+
+    def parse(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"expected a whole number ({what}); got {text!r}") from None
+        if value < minimum:
+            raise argparse.ArgumentTypeError(f"expected a whole number >= {minimum} ({what}); got {text!r}")
+        return value
+
+    return parse

@@ -1,0 +1,110 @@
+"""The figure ``python -m vo_lib run`` writes: what the run did, against the truth where known.
+
+Left, the run itself: the plan view of the path (ground truth drawn wide and pale underneath, the
+estimate thin and dashed on top, odometry beside them, start and end marked), or, for a drive
+that turns on the spot, the heading against time, since its centimetres of wander say nothing.
+Right, with ground truth, the errors over time: position (centimetres) and heading (degrees).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from vo_lib.evaluation import is_spot_turn, turned_degrees
+from vo_lib.geometry import wrap_angle
+
+TRUTH_STYLE = {"color": "0.55", "lw": 5.0, "alpha": 0.45, "solid_capstyle": "round", "zorder": 1}
+ESTIMATE_STYLE = {"color": "C0", "lw": 1.3, "ls": "--", "zorder": 3}
+ODOMETRY_STYLE = {"color": "C1", "lw": 1.0, "zorder": 2}
+
+
+def _paths(estimate, truth, odometry):
+    paths = [("visual odometry (fused)", estimate, ESTIMATE_STYLE)]
+    if odometry is not None:
+        paths.insert(0, ("track odometry", odometry, ODOMETRY_STYLE))
+    if truth is not None:
+        paths.insert(0, ("ground truth", truth, TRUTH_STYLE))
+    return paths
+
+
+def _mark_ends(ax, xs, ys, colour, end_label):
+    ax.plot(xs[0], ys[0], "o", color="green", ms=8, zorder=5, label="start" if end_label else None)
+    ax.plot(xs[-1], ys[-1], "s", mfc="none", mec=colour, ms=9, mew=1.5, zorder=5, label=end_label)
+
+
+def _plan_view(ax, paths, title):
+    for label, poses, style in paths:
+        ax.plot(poses[:, 0], poses[:, 1], label=label, **style)
+    ends = paths[0][1]
+    _mark_ends(ax, ends[:, 0], ends[:, 1], "k", f"end ({paths[0][0]})")
+    estimate = paths[-1][1]
+    ax.plot(estimate[-1, 0], estimate[-1, 1], "x", color="C0", ms=9, mew=2, zorder=6, label="end (estimate)")
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("y [m]")
+    ax.set_title(title)
+
+
+def _heading_view(ax, times, paths, title):
+    for label, poses, style in paths:
+        ax.plot(times, np.degrees(np.unwrap(poses[:, 2])), label=label, **style)
+    truth = np.degrees(np.unwrap(paths[0][1][:, 2]))
+    _mark_ends(ax, times, truth, "k", f"end ({paths[0][0]})")
+    ax.set_xlabel("time [s]")
+    ax.set_ylabel("heading, unwrapped [deg]")
+    ax.set_title(title)
+
+
+def plot_run(fig, times, estimate, truth=None, odometry=None, title: str = "") -> dict:
+    """Draw a run's figure on ``fig``.
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+    times : array_like, shape (K,)
+        Time of each frame in seconds.
+    estimate, truth, odometry : array_like, shape (K, 3)
+        Planar poses ``(x, y, yaw)``; ``truth`` and ``odometry`` may be None.
+    title : str
+
+    Returns
+    -------
+    dict
+        ``main`` (the path or heading axes), ``errors`` (the list of error axes, empty without
+        truth) and ``spot_turn`` (whether the heading view was drawn).
+    """
+    times = np.asarray(times, float)
+    estimate = np.asarray(estimate, float)
+    truth = None if truth is None else np.asarray(truth, float)
+    odometry = None if odometry is None else np.asarray(odometry, float)
+    paths = _paths(estimate, truth, odometry)
+    spot = truth is not None and is_spot_turn(truth)
+    if truth is None:
+        main, errors = fig.add_subplot(1, 1, 1), []
+    else:
+        grid = fig.add_gridspec(2, 2, width_ratios=(1.25, 1.0))
+        main = fig.add_subplot(grid[:, 0])
+        errors = [fig.add_subplot(grid[0, 1])]
+        errors.append(fig.add_subplot(grid[1, 1], sharex=errors[0]))
+    if spot:
+        _heading_view(main, times, paths, f"{title}: {turned_degrees(truth):.0f}° turned on the spot")
+    else:
+        _plan_view(main, paths, title)
+    main.grid(True, alpha=0.3)
+    main.legend(loc="best", fontsize="x-small")
+    for label, poses, style in paths[1:] if truth is not None else []:
+        line = {k: v for k, v in style.items() if k != "zorder"}
+        position = 100 * np.hypot(*(poses[:, :2] - truth[:, :2]).T)
+        heading = np.degrees(wrap_angle(poses[:, 2] - truth[:, 2]))
+        errors[0].plot(times, position, label=label, **line)
+        errors[1].plot(times, heading, label=label, **line)
+    if errors:
+        errors[0].set_ylabel("position error [cm]")
+        errors[0].set_title("errors against ground truth")
+        errors[1].set_ylabel("heading error [deg]")
+        errors[1].set_xlabel("time [s]")
+        errors[1].axhline(0.0, color="0.5", lw=0.8)
+        for ax in errors:
+            ax.grid(True, alpha=0.3)
+        errors[0].legend(loc="best", fontsize="x-small")
+    return {"main": main, "errors": errors, "spot_turn": spot}
