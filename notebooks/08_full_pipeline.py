@@ -369,6 +369,13 @@ for name in ("outdoor_free", "outdoor_free_2", "outdoor_free_3"):  # outdoors, e
 # pipeline itself — front end, 1-point RANSAC with the corrected eq. 17, and the filter — adds
 # little error of its own, and that fusing odometry and vision removes the drift each has alone.
 #
+# ### Scaling up
+#
+# Table 1 here is one run per resolution in this process. `python -m vo_lib sweep table1 --seeds 20`
+# repeats it over seeds on a local Dask cluster (or `--scheduler tcp://host:8786`), and
+# `python -m vo_lib evaluate-all ROOT` runs the pipeline on every sequence of a KITTI-style folder
+# and prints the KITTI table (README, "Sweeps").
+#
 # ## Summary
 #
 # - The pipeline gives one pose per frame, flags the frames whose vision it cannot trust, and runs

@@ -865,6 +865,13 @@ assert in_band["line"] > 0.9 and in_band["line"] > in_band["feature point"]
 # the figures use the feature point, as the paper's filter does; the line form is the one to
 # carry to real scans.
 # %% [markdown]
+# ### Scaling up
+#
+# The laps above run in this process. `python -m vo_lib sweep lap --seeds 1000` runs one lap per seed
+# on a local Dask cluster (one worker process per core), or on a lab's cluster with
+# `--scheduler tcp://host:8786`, one row per lap in `sweeps/lap/results.csv`, with the same figures
+# as a serial run (README, "Sweeps").
+#
 # ## Summary
 #
 # - Seed 002's Jacobians print four wrong entries: two flipped signs (eq. 6 and eq. 7, row 2)

@@ -611,6 +611,13 @@ assert max(lbpt_y, voapt_y) < paper[("VOAPT", 1)][1]  # our worst Y below the pa
 # score; only the comparison with the visual odometer reveals it, which is why our $T_s$ needs
 # both control tests.
 #
+# ### Scaling up
+#
+# Table III above averages 20 seeds in this process. `python -m vo_lib sweep corridor --seeds 1000`
+# runs one seed per task on a local Dask cluster, or on a lab's cluster with
+# `--scheduler tcp://host:8786`; finished rows are kept on disk, so an interrupted sweep re-runs
+# only the missing ones (README, "Sweeps").
+#
 # ## Summary
 #
 # - In a corridor the laser fixes the robot across the corridor and in heading; only radial

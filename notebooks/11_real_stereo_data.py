@@ -33,9 +33,10 @@
 #
 # **Run time**: about 1.5 minutes of computing on two cores, most of it the OpenCV PnP baseline of
 # section 7 (longer on a busy machine).
-# Without the real recording (it lives beside the repository, in `../shared/realdata/`), the
-# notebook says so and runs the same sections on the Motorcycle pair and a short rendered sample
-# (rendered on first use).
+# The real recording is KITTI raw drive 2011_09_26_drive_0001 in the KITTI odometry layout with
+# its `oxts.txt` and `raw_calib/` (see the README's "Real data"); it is not part of the repository:
+# set `VO_LIB_REALDATA` to the folder that holds it. Without it the notebook says so and runs the
+# same sections on the Motorcycle pair and a short rendered sample (rendered on first use).
 
 # %% [markdown]
 # **References**
@@ -50,6 +51,7 @@
 
 # %%
 import math
+import os
 import time
 from pathlib import Path
 
@@ -106,8 +108,9 @@ def find_repo(start: Path) -> Path:
 
 
 REPO = find_repo(Path.cwd())
-REAL_DIR = REPO.parent / "shared" / "realdata" / "kitti_raw_2011_09_26_drive_0001"
-REAL = (REAL_DIR / "poses.txt").is_file()
+REAL_ROOT = os.environ.get("VO_LIB_REALDATA", "")  # the folder of real sequences, if any
+REAL_DIR = Path(REAL_ROOT) / "kitti_raw_2011_09_26_drive_0001"
+REAL = bool(REAL_ROOT) and (REAL_DIR / "poses.txt").is_file()
 rendered = load_sequence("indoor_linear", frames=60, progress=False)
 if REAL:
     seq = load_sequence(REAL_DIR)
@@ -115,7 +118,8 @@ if REAL:
 else:
     seq = rendered
     print(
-        f"real data not found ({REAL_DIR}): the sections that need it run on the rendered sample "
+        f"real data not found (VO_LIB_REALDATA={REAL_ROOT!r} holds no {REAL_DIR.name}): the sections that "
+        f"need it run on the rendered sample "
         f"{rendered.path.name} and on the Motorcycle pair instead"
     )
 vehicle = vehicle_of(seq)

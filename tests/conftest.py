@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import os
 import pathlib
 import sys
 
@@ -12,6 +13,9 @@ import pytest
 from vo_lib.camera import StereoCamera
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
+#: Real sequences beside the repository (CI has them); the notebooks find them through
+#: ``VO_LIB_REALDATA``, which the test kernel gets when the folder exists and it is not set.
+REALDATA = ROOT.parent / "shared" / "realdata"
 
 
 @pytest.fixture
@@ -31,13 +35,12 @@ def kernel_dir(tmp_path_factory) -> pathlib.Path:
     kernels = tmp_path_factory.mktemp("jupyter") / "kernels"
     spec = kernels / "vo-notebooks-test"
     spec.mkdir(parents=True)
-    spec.joinpath("kernel.json").write_text(
-        json.dumps(
-            {
-                "argv": [sys.executable, "-m", "ipykernel_launcher", "-f", "{connection_file}"],
-                "display_name": "vo-notebooks (tests)",
-                "language": "python",
-            }
-        )
-    )
+    kernel = {
+        "argv": [sys.executable, "-m", "ipykernel_launcher", "-f", "{connection_file}"],
+        "display_name": "vo-notebooks (tests)",
+        "language": "python",
+    }
+    if "VO_LIB_REALDATA" not in os.environ and REALDATA.is_dir():
+        kernel["env"] = {"VO_LIB_REALDATA": str(REALDATA)}
+    spec.joinpath("kernel.json").write_text(json.dumps(kernel))
     return kernels

@@ -260,9 +260,7 @@ def main(argv=None) -> None:
     for axis, name in ((0, "X"), (1, "Y")):
         for method, row in result.table(axis).items():
             paper = PAPER_TABLE3_X[method] if axis == 0 else {}
-            cells = [
-                f"{k} {v:.3f} m" + (f" ({paper[k]:.3f})" if k in paper else "") for k, v in row.items()
-            ]
+            cells = [f"{k} {v:.3f} m" + (f" ({paper[k]:.3f})" if k in paper else "") for k, v in row.items()]
             print(f"{method:>6s} {name}: " + ", ".join(cells))
     print(
         f"T_s flags {100 * result.flagged_when_lost():.1f} % of LBPT's updates whose error exceeds "
