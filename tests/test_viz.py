@@ -67,13 +67,16 @@ def test_run_figure_plan_view_marks_start_and_end_above_a_visible_truth(fig):
     drawn = plot_run(fig, t, estimate, truth, odometry, "drive")
     assert not drawn["spot_turn"] and len(drawn["errors"]) == 2
     lines = {line.get_label(): line for line in drawn["main"].get_lines()}
-    assert {"ground truth", "track odometry", "visual odometry (fused)", "start"} <= set(lines)
-    assert lines["ground truth"].get_linewidth() > 2 * lines["visual odometry (fused)"].get_linewidth()
-    assert lines["visual odometry (fused)"].get_linestyle() == "--"
-    assert lines["ground truth"].get_zorder() < lines["visual odometry (fused)"].get_zorder()
+    assert {"ground truth", "track odometry", "visual odometry (fused with odometry)", "start"} <= set(lines)
+    assert (
+        lines["ground truth"].get_linewidth()
+        > 2 * lines["visual odometry (fused with odometry)"].get_linewidth()
+    )
+    assert lines["visual odometry (fused with odometry)"].get_linestyle() == "--"
+    assert lines["ground truth"].get_zorder() < lines["visual odometry (fused with odometry)"].get_zorder()
     np.testing.assert_allclose(lines["start"].get_xydata(), [truth[0, :2]])
     errors = {line.get_label(): line.get_ydata() for line in drawn["errors"][0].get_lines()}
-    np.testing.assert_allclose(errors["visual odometry (fused)"], 100 * math.hypot(0.01, 0.005))
+    np.testing.assert_allclose(errors["visual odometry (fused with odometry)"], 100 * math.hypot(0.01, 0.005))
     assert drawn["errors"][1].get_ylabel() == "heading error [deg]"
 
 

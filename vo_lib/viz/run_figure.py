@@ -19,7 +19,8 @@ ODOMETRY_STYLE = {"color": "C1", "lw": 1.0, "zorder": 2}
 
 
 def _paths(estimate, truth, odometry):
-    paths = [("visual odometry (fused)", estimate, ESTIMATE_STYLE)]
+    fused = "visual odometry (fused with odometry)" if odometry is not None else "visual odometry"
+    paths = [(fused, estimate, ESTIMATE_STYLE)]
     if odometry is not None:
         paths.insert(0, ("track odometry", odometry, ODOMETRY_STYLE))
     if truth is not None:
