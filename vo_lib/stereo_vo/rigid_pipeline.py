@@ -69,6 +69,10 @@ MIN_FEATURES = 20
 MIN_INLIERS = 15
 MIN_RANSAC_RATIO = 0.5  # of the temporal matches that 1-point RANSAC keeps
 PRIOR_GATE = float(chi2.ppf(0.9999, 2))
+#: Frames that fail for want of matches against a reference this many frames old or more make
+#: the current frame the new reference (its pose predicted): the view may have left the old one.
+LOST_GAP = 2
+LOST_REASONS = ("too few temporal matches", "too few inliers", "low inlier ratio")
 #: Consecutive frames the prior gate may reject before the vision is believed over the prediction.
 MAX_CONTRADICTIONS = 2
 #: Window half-width around a predicted position: a floor, plus a share of the predicted image
@@ -340,7 +344,11 @@ class RigidStereoOdometry:
             )
             pose, covariance = self.kf.pose, self.kf.covariance
             self.gap += 1
-            if self.reference is None and len(features) >= MIN_FEATURES:
+            lost = reason in LOST_REASONS and self.gap > LOST_GAP
+            if (self.reference is None or lost) and len(features) >= MIN_FEATURES:
+                # start again from this frame, placed where the prediction puts it: a reference
+                # the view has left behind (a sharp turn, a truck across the view) would never
+                # match again
                 self._commit(features)
         else:
             motion, z, r_vo, n_matches = accepted
