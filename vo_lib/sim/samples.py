@@ -188,6 +188,29 @@ def render_sample(name: str, frames: int | None = None, resolution=DEFAULT_RESOL
     return RenderedSample(camera, mount, drive, n), frame_iter()
 
 
+def is_indoor(name: str) -> bool:
+    """Whether a sample's world has a ceiling (indoor) or open sky."""
+    return WORLDS[get_sample(name).world]().ceiling_height is not None
+
+
+def render_left_images(name: str, indices, resolution=DEFAULT_RESOLUTION) -> list[np.ndarray]:
+    """Left images of frames ``indices`` of a sample, rendered in memory (for image statistics).
+
+    The drive and the sensor effects are the sample's; the sensor noise is drawn afresh for
+    these frames (seeded), so the images differ from the written sample's by the noise only.
+    """
+    sample = get_sample(name)
+    rendered, _ = render_sample(name, None, resolution)
+    effects = SensorEffects(noise_sigma=sample.sensor_noise)
+    renderer = StereoRenderer(WORLDS[sample.world](), rendered.camera, effects)
+    rng = np.random.default_rng(sample.seed + 2)
+    poses = rendered.drive.poses
+    return [
+        renderer.effects.apply(renderer.render(planar_to_matrix(poses[int(k)]) @ rendered.mount), rng)
+        for k in indices
+    ]
+
+
 def generate(
     name: str,
     out,
