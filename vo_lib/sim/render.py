@@ -16,7 +16,7 @@ import cv2
 import numpy as np
 
 from vo_lib.camera import StereoCamera
-from vo_lib.sim.textures import cached_mipmaps
+from vo_lib.sim.textures import cached_surface
 from vo_lib.sim.world import World
 
 #: Nearest depth drawn, metres.
@@ -91,7 +91,7 @@ def build_quads(world: World) -> list[_Quad]:
         a, b = np.array(seg.start, float), np.array(seg.end, float)
         direction = (b - a) / seg.length
         cols, rows = int(np.ceil(seg.length / texel)) + 1, int(np.ceil(seg.height / texel)) + 1
-        tex = cached_mipmaps(rows, cols, seg.texture_seed + 1000 * world.seed)
+        tex = cached_surface(seg.style, rows, cols, texel, seg.texture_seed + 1000 * world.seed)
         origin = np.array([a[0], a[1], 0.0])
         e1 = np.array([direction[0], direction[1], 0.0]) * texel
         e2 = np.array([0.0, 0.0, texel])
@@ -109,11 +109,11 @@ def build_quads(world: World) -> list[_Quad]:
             quads.append(_Quad(corners, origin, e1, e2, normal, tex, _shade(normal)))
     xmin, xmax, ymin, ymax = world.floor_extent
     cols, rows = int(np.ceil((xmax - xmin) / texel)) + 1, int(np.ceil((ymax - ymin) / texel)) + 1
-    planes = [(0.0, world.seed * 7 + 1, 0.95)]
+    planes = [(0.0, world.seed * 7 + 1, 0.95, world.floor_style)]
     if world.ceiling_height is not None:
-        planes.append((world.ceiling_height, world.seed * 7 + 2, 0.8))
-    for z, tex_seed, shade in planes:
-        tex = cached_mipmaps(rows, cols, tex_seed)
+        planes.append((world.ceiling_height, world.seed * 7 + 2, 0.8, world.ceiling_style))
+    for z, tex_seed, shade, style in planes:
+        tex = cached_surface(style, rows, cols, texel, tex_seed)
         origin = np.array([xmin, ymin, z])
         e1, e2 = np.array([texel, 0.0, 0.0]), np.array([0.0, texel, 0.0])
         for x0, x1 in zip(_tiles(xmax - xmin, texel)[:-1], _tiles(xmax - xmin, texel)[1:], strict=True):

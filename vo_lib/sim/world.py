@@ -27,6 +27,7 @@ class Segment:
     kind: str = "wall"
     mapped: bool = True
     texture_seed: int = 0
+    style: str = "corners"  # texture style, see vo_lib.sim.textures.surface_texture
 
     def __post_init__(self):
         if self.length <= 0:
@@ -55,6 +56,8 @@ class World:
         Height of a textured ceiling, metres; ``None`` for open sky.
     floor_texel : float
         Texel size of floor and ceiling (outdoor floors use coarser texels).
+    floor_style, ceiling_style : str
+        Texture styles of floor and ceiling (:func:`vo_lib.sim.textures.surface_texture`).
     """
 
     name: str
@@ -64,6 +67,8 @@ class World:
     ceiling_height: float | None = None
     floor_texel: float = TEXEL_SIZE
     notes: dict = field(default_factory=dict, compare=False)
+    floor_style: str = "corners"
+    ceiling_style: str = "corners"
 
     def segments_array(self, mapped_only: bool = False) -> np.ndarray:
         """``(M, 4)`` array of ``x0, y0, x1, y1`` rows, for vectorised ray casting."""
@@ -80,42 +85,78 @@ class World:
             self.ceiling_height,
             self.floor_texel,
             dict(self.notes),
+            self.floor_style,
+            self.ceiling_style,
         )
 
 
 # ---------------------------------------------------------------------- building blocks
 def polyline(
-    points, height: float, seed: int, kind: str = "wall", closed: bool = False, mapped: bool = True
+    points,
+    height: float,
+    seed: int,
+    kind: str = "wall",
+    closed: bool = False,
+    mapped: bool = True,
+    style: str = "corners",
 ) -> list[Segment]:
     """Segments joining consecutive plan points; texture seeds count up from ``seed``."""
     pts = [tuple(map(float, p)) for p in points]
     if closed:
         pts.append(pts[0])
     pairs = zip(pts[:-1], pts[1:], strict=True)
-    return [Segment(a, b, height, kind, mapped, seed + i) for i, (a, b) in enumerate(pairs)]
+    return [Segment(a, b, height, kind, mapped, seed + i, style) for i, (a, b) in enumerate(pairs)]
 
 
 def box(
-    centre, size, yaw: float, height: float, seed: int, kind: str = "box", mapped: bool = True
+    centre,
+    size,
+    yaw: float,
+    height: float,
+    seed: int,
+    kind: str = "box",
+    mapped: bool = True,
+    style: str = "corners",
 ) -> list[Segment]:
     """Four outward-facing sides of a rectangular block centred at ``centre`` with plan ``size``."""
     c, s = np.cos(yaw), np.sin(yaw)
     hx, hy = size[0] / 2, size[1] / 2
     corners = [(-hx, -hy), (hx, -hy), (hx, hy), (-hx, hy)]
     pts = [(centre[0] + c * x - s * y, centre[1] + s * x + c * y) for x, y in corners]
-    return polyline(pts, height, seed, kind, closed=True, mapped=mapped)
+    return polyline(pts, height, seed, kind, closed=True, mapped=mapped, style=style)
 
 
 # ---------------------------------------------------------------------- ready-made worlds
 def indoor_lab(seed: int = 10) -> World:
-    """A 14 m x 9 m lab: textured walls 2.6 m high, two pillars, boxes and a cabinet, a ceiling."""
-    segs = polyline([(-7, -4.5), (7, -4.5), (7, 4.5), (-7, 4.5)], 2.6, seed, closed=True)
-    segs += box((2.5, 2.0), (0.5, 0.5), 0.0, 2.6, seed + 10, "pillar")
-    segs += box((-2.0, -2.2), (0.5, 0.5), 0.0, 2.6, seed + 20, "pillar")
+    """A 14 m x 9 m lab: painted walls 2.6 m high with doors and posters, two plain pillars,
+    boxes (corner-rich clutter) and a plain cabinet, a tiled floor and a ceiling of panels."""
+    segs = polyline([(-7, -4.5), (7, -4.5), (7, 4.5), (-7, 4.5)], 2.6, seed, closed=True, style="wall")
+    segs += box((2.5, 2.0), (0.5, 0.5), 0.0, 2.6, seed + 10, "pillar", style="plain")
+    segs += box((-2.0, -2.2), (0.5, 0.5), 0.0, 2.6, seed + 20, "pillar", style="plain")
     segs += box((4.8, -1.8), (1.2, 0.8), 0.3, 0.9, seed + 30)
     segs += box((-4.5, 2.6), (1.0, 1.4), -0.2, 1.2, seed + 40)
-    segs += box((0.5, -3.6), (2.0, 0.6), 0.0, 1.8, seed + 50, "cabinet")
-    return World("indoor_lab", tuple(segs), (-7.0, 7.0, -4.5, 4.5), seed, ceiling_height=2.6)
+    segs += box((0.5, -3.6), (2.0, 0.6), 0.0, 1.8, seed + 50, "cabinet", style="plain")
+    # shelves of equipment and clutter along the walls: the lab's corner-rich parts
+    for i, (x, y, yaw, w) in enumerate(
+        [
+            (-5.5, -4.2, 0.0, 2.0),
+            (4.0, 4.2, 0.0, 2.5),
+            (6.7, 1.5, 1.5708, 2.0),
+            (-6.7, -1.0, 1.5708, 2.5),
+            (-1.5, 4.2, 0.0, 1.8),
+            (3.5, -4.2, 0.0, 1.6),
+        ]
+    ):
+        segs += box((x, y), (w, 0.5), yaw, 1.9, seed + 60 + 4 * i, "shelf")
+    return World(
+        "indoor_lab",
+        tuple(segs),
+        (-7.0, 7.0, -4.5, 4.5),
+        seed,
+        ceiling_height=2.6,
+        floor_style="tiles",
+        ceiling_style="panels",
+    )
 
 
 def outdoor_yard(seed: int = 20) -> World:
@@ -124,11 +165,23 @@ def outdoor_yard(seed: int = 20) -> World:
     Most structure is 15-40 m away: low parallax for a 12 cm baseline, as in the paper's
     outdoor experiments.
     """
-    segs = polyline([(-40, -40), (40, -40), (40, 40), (-40, 40)], 8.0, seed, "building", closed=True)
-    segs += polyline([(18, -12), (18, 12)], 6.0, seed + 10, "building")
+    square = [(-40, -40), (40, -40), (40, 40), (-40, 40)]
+    segs = polyline(square, 8.0, seed, "building", closed=True, style="brick")
+    segs += polyline([(18, -12), (18, 12)], 6.0, seed + 10, "building", style="brick")
+    segs += polyline([(-20, 25), (5, 25)], 1.4, seed + 12, "fence", style="fence")
+    segs += polyline([(-25, -16), (15, -16)], 1.4, seed + 14, "fence", style="fence")
+    segs += box((8.0, 12.0), (4.0, 3.0), 0.1, 2.6, seed + 16, "shed", style="brick")
     for i, (x, y) in enumerate([(9, 5), (12, -7), (-8, 9), (-10, -6), (4, -13)]):
         segs += box((x, y), (1.2, 1.2), 0.4 * i, 1.2, seed + 20 + 4 * i, "crate")
-    return World("outdoor_yard", tuple(segs), (-40.0, 40.0, -40.0, 40.0), seed, None, floor_texel=0.02)
+    return World(
+        "outdoor_yard",
+        tuple(segs),
+        (-40.0, 40.0, -40.0, 40.0),
+        seed,
+        None,
+        floor_texel=0.02,
+        floor_style="gravel",
+    )
 
 
 def corridor(seed: int = 30, length: float = 30.0, width: float = 3.0) -> World:
