@@ -199,3 +199,71 @@ def test_compiled_windows_give_the_pairs_of_the_numpy_windows():
     np.testing.assert_array_equal(ia, ja)
     np.testing.assert_array_equal(ib, jb)
     np.testing.assert_array_equal(dist, hamming(prev.descriptors[ja], curr.descriptors[jb]))
+
+
+@pytest.mark.parametrize("yaw_deg", [0.0, 4.0, 9.0])
+def test_one_point_ransac_seen_from_the_turning_axis_keeps_every_match_in_a_sharp_turn(kitti_camera, yaw_deg):
+    """A car's camera a metre ahead of the axis slides sideways in a turn: seen from the camera
+    itself the circular-motion gates lose true matches (more, the sharper the turn); seen from
+    the virtual camera on the axis they keep them all, and theta and rho are the vehicle's."""
+    from scipy.spatial.transform import Rotation
+
+    from vo_lib.geometry import camera_motion
+    from vo_lib.stereo_vo.ransac import one_point_ransac
+    from vo_lib.stereo_vo.rigid_pipeline import turning_axis_transform, turning_axis_view
+    from vo_lib.stereo_vo.synthetic import matches_under_transform
+
+    mount = camera_mount(forward=1.08, height=1.73, left=-0.31)
+    mount[:3, :3] = Rotation.from_euler("y", 0.5, degrees=True).as_matrix() @ mount[:3, :3]  # tilted
+    theta, rho = np.radians(yaw_deg), 1.0
+    T = camera_motion(np.zeros(3), [rho * np.cos(theta / 2), rho * np.sin(theta / 2), theta], mount)
+    to_axis = turning_axis_transform(mount)
+    recall = {}
+    for view in ("camera", "axis"):
+        found = []
+        for seed in range(3):
+            rng = np.random.default_rng(seed)
+            m = matches_under_transform(kitti_camera, 300, T, rng, (4.0, 60.0), 0.5, 0.2)
+            a, b = m.w_prev, m.w_curr
+            if view == "axis":
+                a, b = (turning_axis_view(w, kitti_camera, to_axis) for w in (a, b))
+            est = one_point_ransac(a, b, kitti_camera, rng=rng, pixel_sigma=1.0)
+            found.append((est.inliers & m.inliers).sum() / m.inliers.sum())
+            assert not (est.inliers & ~m.inliers).any()
+            if view == "axis":
+                assert est.theta == pytest.approx(theta, abs=2e-4)
+                assert est.rho == pytest.approx(rho, abs=5e-3)
+        recall[view] = np.mean(found)
+    assert recall["axis"] >= 0.98
+    if yaw_deg >= 4.0:
+        assert recall["camera"] < 0.8  # what the virtual camera is for
+
+
+@pytest.mark.parametrize("pitch_deg", [0.0, 1.0])
+def test_a_pitching_car_still_gets_a_hypothesis_with_its_inliers(kitti_camera, pitch_deg):
+    """Over a bump the vehicle pitches: the planar 1-point model keeps no match (at 1 deg), the
+    general 3-point RANSAC takes over, and the refinement recovers the true 6-DoF motion."""
+    from scipy.spatial.transform import Rotation
+
+    from vo_lib.geometry import camera_motion
+    from vo_lib.stereo_vo.rigid_pipeline import MIN_RANSAC_RATIO, RigidStereoOdometry
+    from vo_lib.stereo_vo.synthetic import matches_under_transform
+
+    mount = camera_mount(forward=1.08, height=1.73, left=-0.31)
+    theta = np.radians(3.0)
+    T = camera_motion(np.zeros(3), [np.cos(theta / 2), np.sin(theta / 2), theta], mount)
+    D = np.eye(4)
+    D[:3, :3] = Rotation.from_euler("y", pitch_deg, degrees=True).as_matrix()  # the vehicle pitches
+    T = np.linalg.inv(mount) @ D @ mount @ T
+    m = matches_under_transform(kitti_camera, 300, T, np.random.default_rng(3), (4.0, 60.0), 0.5, 0.2)
+    odometer = RigidStereoOdometry(kitti_camera, mount, seed=5)
+    guess, start, ratio = odometer.hypothesis(m.w_prev, m.w_curr, None)
+    assert ratio >= MIN_RANSAC_RATIO
+    assert start is not None and (start & m.inliers).sum() >= 0.7 * m.inliers.sum()
+    assert (start & ~m.inliers).sum() <= 2
+    motion = refine_rigid_motion(m.w_prev, m.w_curr, kitti_camera, guess, start)
+    assert np.allclose(motion.matrix, T, atol=2e-3)
+    assert not (motion.inliers & ~m.inliers).any()
+    # the same draws give the same answer
+    again = RigidStereoOdometry(kitti_camera, mount, seed=5).hypothesis(m.w_prev, m.w_curr, None)
+    assert np.array_equal(again[0], guess) and np.array_equal(again[1], start)

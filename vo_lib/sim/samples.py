@@ -75,6 +75,24 @@ def _turns(n: int, frames: int, speed: float, rate_deg: float) -> tuple[Leg, ...
     return tuple(legs)
 
 
+def _turns_pattern(signs, frames: int, speed: float, rate_deg: float) -> tuple[Leg, ...]:
+    """A straight stretch, then an arc turning the way of each sign."""
+    return tuple(
+        leg for sign in signs for leg in (Leg(frames, speed), Leg(frames, speed, np.radians(rate_deg) * sign))
+    )
+
+
+def _quarter_turns(signs) -> tuple[Leg, ...]:
+    """Straights of 200 frames, each followed by a quarter turn (90 deg) the way of its sign."""
+    return _turns_pattern(signs, 200, 0.5, 13.5)
+
+
+def _oval_laps(laps: int) -> tuple[Leg, ...]:
+    """Laps of an oval: 5 m straights joined by half turns of 1 m radius."""
+    one = (Leg(300, 0.5), Leg(180, 0.5, np.radians(30)))
+    return one * (2 * laps)
+
+
 SAMPLES: dict[str, Sample] = {
     s.name: s
     for s in (
@@ -134,6 +152,48 @@ SAMPLES: dict[str, Sample] = {
             30.0,
             _turns(3, 200, 0.5, 12) + (Leg(200, 0.5),),
             seed=105,
+        ),
+        Sample(
+            "spot_turn_2",
+            "turning on the spot the other way, for longer: the paper's second set",
+            "seed 000, IV.B.2 (2400 frames of spot turns, second set)",
+            "outdoor_yard",
+            (0.0, 0.0, 0.0),
+            30.0,
+            (Leg(2400, 0.0, np.radians(-15)),),
+            seed=107,
+        ),
+        Sample(
+            "outdoor_free_2",
+            "a longer tour of the yard, quarter turns both ways: Table 2, set 2",
+            "seed 000, IV.B.3 (2419 frames, second set)",
+            "outdoor_yard",
+            (-6.0, -20.0, 0.2),
+            30.0,
+            (Leg(218, 0.5),)
+            + _quarter_turns((1, 1, -1, -1))
+            + (Leg(200, 0.5), Leg(200, 0.5, np.radians(-13.5)), Leg(200, 0.5, np.radians(13.5))),
+            seed=108,
+        ),
+        Sample(
+            "outdoor_free_3",
+            "the longest tour, at the far end of the yard: Table 2, set 3",
+            "seed 000, IV.B.3 (2670 frames, third set)",
+            "outdoor_yard",
+            (-32.0, 28.0, -0.3),
+            30.0,
+            (Leg(269, 0.5),) + _turns_pattern((-1, 1, 1, -1, 1, 1), 200, 0.5, 15),
+            seed=109,
+        ),
+        Sample(
+            "long_run",
+            "ten laps of an oval, 10,000 frames: the timing run (render it in memory: bench long)",
+            "seed 000, IV.A.1 (10000 frames, elapsed time per frame)",
+            "outdoor_yard",
+            (-25.0, 25.0, 0.0),
+            30.0,
+            _oval_laps(10) + (Leg(399, 0.5),),
+            seed=110,
         ),
         Sample(
             "corridor",

@@ -37,6 +37,10 @@ ITERATIONS = 4
 ROUNDS = 2  # refine, choose the inliers again, refine again while they change
 NEAR = 0.1  # metres: points closer than this to the camera after the motion are not used
 CONVERGED = 1e-8  # radians and metres: an update smaller than this ends the iterations
+#: The general (3-point) RANSAC that stands in when the planar model does not hold between two
+#: frames: hypotheses drawn, and the reprojection error (left image) of an inlier, pixels.
+GENERAL_ITERATIONS = 200
+GENERAL_PIXELS = 2.0
 
 
 def rotation_matrix(rotvec) -> np.ndarray:
@@ -224,3 +228,35 @@ def scaled_motion(T, factor: float) -> np.ndarray:
     if factor == 1.0:
         return T.copy()
     return np.real(expm(factor * np.real(logm(T))))
+
+
+def general_ransac(
+    w_prev: np.ndarray, w_curr: np.ndarray, camera: StereoCamera, seed: int
+) -> tuple[np.ndarray, np.ndarray] | None:
+    """A 6-DoF motion ``T_curr_from_prev`` and its inlier mask from 3-point RANSAC, or ``None``.
+
+    The previous frame's triangulated points and the current left-image pixels go to OpenCV's
+    ``solvePnPRansac`` (AP3P hypotheses, seeded with ``cv2.setRNGSeed``): the hypothesis generator
+    for frames where the vehicle pitches or rolls (a bump, a kerb, the start of a slope), which
+    the 1-point model of eq. 14-17 cannot describe.
+    """
+    if len(w_prev) < 6:
+        return None
+    cv2.setRNGSeed(int(seed))
+    ok, rvec, tvec, idx = cv2.solvePnPRansac(
+        camera.backproject(w_prev),
+        np.ascontiguousarray(w_curr[:, :2], dtype=np.float64),
+        camera.K,
+        None,
+        iterationsCount=GENERAL_ITERATIONS,
+        reprojectionError=GENERAL_PIXELS,
+        confidence=0.999,
+        flags=cv2.SOLVEPNP_AP3P,
+    )
+    if not ok or idx is None or len(idx) < 6:
+        return None
+    T = np.eye(4)
+    T[:3, :3], T[:3, 3] = cv2.Rodrigues(rvec)[0], tvec.ravel()
+    inliers = np.zeros(len(w_prev), bool)
+    inliers[idx.ravel()] = True
+    return T, inliers

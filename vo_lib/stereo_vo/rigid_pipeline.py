@@ -10,7 +10,15 @@ the model of the motion between two frames:
 3. **temporal matching** inside windows around each feature's predicted position; a window grows
    when the prediction proves poor (braking, the start of a turn) and the matcher falls back to
    comparing every pair, so that no frame is left unmatched while the images overlap;
-4. **1-point RANSAC** (theta from eq. 14, rho from eq. 17): the outlier filter;
+4. **1-point RANSAC** (theta from eq. 14, rho from eq. 17): the outlier filter. The circular-motion
+   model holds for a camera above the axis the vehicle turns about; a car's camera is a metre
+   ahead of it, and in a turn it also slides sideways by that metre times the turned angle
+   (7 cm in a 4 deg frame: several pixels at 10 m, so that the model's gates reject true
+   matches). The matches are therefore seen from a *virtual camera on the turning axis*: each
+   stereo match is triangulated, moved into that camera's frame through the mount and projected
+   again (:func:`turning_axis_view`); the model is exact there, whatever the turn. Where it
+   keeps too few matches, the vehicle pitched or rolled between the frames (a bump, the start of
+   a slope), and a general 3-point RANSAC (OpenCV's P3P) gives the hypothesis instead;
 5. **6-DoF refinement** of the inliers on reprojection errors in both images
    (:mod:`~vo_lib.stereo_vo.rigid_motion`), which also chooses the inliers again;
 6. **Kalman update**: the filter keeps the vehicle's *planar* pose, ``(x, y, yaw)`` of the axis it
@@ -41,7 +49,7 @@ import numpy as np
 from scipy.stats import chi2
 
 from vo_lib.camera import StereoCamera
-from vo_lib.geometry import wrap_angle
+from vo_lib.geometry import camera_mount, wrap_angle
 from vo_lib.models.track_odometry import TrackOdometry
 from vo_lib.stereo_vo.circular_motion import motion_matrices
 from vo_lib.stereo_vo.kalman import VoKalmanFilter, chord_measurement
@@ -49,6 +57,7 @@ from vo_lib.stereo_vo.pipeline import FrameDiagnostics, FrameTimings
 from vo_lib.stereo_vo.pyramid_features import PyramidFrontEnd
 from vo_lib.stereo_vo.ransac import one_point_ransac
 from vo_lib.stereo_vo.rigid_motion import (
+    general_ransac,
     predict_features,
     refine_rigid_motion,
     rotation_matrix,
@@ -60,6 +69,8 @@ MIN_FEATURES = 20
 MIN_INLIERS = 15
 MIN_RANSAC_RATIO = 0.5  # of the temporal matches that 1-point RANSAC keeps
 PRIOR_GATE = float(chi2.ppf(0.9999, 2))
+#: Consecutive frames the prior gate may reject before the vision is believed over the prediction.
+MAX_CONTRADICTIONS = 2
 #: Window half-width around a predicted position: a floor, plus a share of the predicted image
 #: motion (a near point moving 100 px between frames is predicted less well than a far one).
 WINDOW_PIXELS = 12.0
@@ -115,6 +126,24 @@ def with_planar_increment(T_cam: np.ndarray, mount: np.ndarray, increment) -> np
     return rigid_inverse(rigid_inverse(mount) @ V @ mount)
 
 
+def turning_axis_transform(mount: np.ndarray) -> np.ndarray:
+    """4x4 map from the camera's frame to a virtual camera's on the vehicle's turning axis.
+
+    The virtual camera has the real one's height, looks along the vehicle's x axis with its y axis
+    down the vehicle's z axis (``camera_mount(0, height, 0)``), so that a planar motion of the
+    vehicle is exactly the circular motion of eq. 15 in its frame.
+    """
+    axis_camera = camera_mount(0.0, float(mount[2, 3]), 0.0)
+    return rigid_inverse(axis_camera) @ np.asarray(mount, float)
+
+
+def turning_axis_view(w: np.ndarray, camera: StereoCamera, to_axis: np.ndarray) -> np.ndarray:
+    """Matches ``(u, v, d)`` as the virtual camera of :func:`turning_axis_transform` sees them
+    (same intrinsics): triangulate, move, project."""
+    X = camera.backproject(w)
+    return camera.project(X @ to_axis[:3, :3].T + to_axis[:3, 3])
+
+
 def chord_covariance(T_cam: np.ndarray, covariance6: np.ndarray, mount: np.ndarray) -> np.ndarray:
     """3x3 covariance of ``(theta, rho, sideways)`` of the vehicle, propagated from the 6x6
     covariance of the camera motion (rotation vector on the left, translation) by central
@@ -161,6 +190,7 @@ class RigidStereoOdometry:
     ):
         self.camera = camera
         self.mount = np.asarray(mount, float)
+        self.to_axis = turning_axis_transform(self.mount)
         self.front = front_end or PyramidFrontEnd(camera)
         self.kf = VoKalmanFilter(odometry or TrackOdometry(), lateral_sigma=LATERAL_SIGMA)
         self.rng = np.random.default_rng(seed)
@@ -170,6 +200,7 @@ class RigidStereoOdometry:
         self.velocity: np.ndarray | None = None  # camera motion per frame, T_curr_from_prev
         self.gap = 0
         self.frame = 0
+        self.contradicted = 0  # consecutive frames whose vision contradicted the prediction
         self.recent_matches: deque[int] = deque(maxlen=RECENT_FRAMES)
 
     # ------------------------------------------------------------------ prediction
@@ -196,6 +227,35 @@ class RigidStereoOdometry:
             brute = match_to_prediction(self.reference, features, None)
             matches = brute if len(brute) > len(matches) else matches
         return matches
+
+    def hypothesis(self, w_prev, w_curr, T_pred):
+        """The outlier filter: ``(motion guess, inlier mask or None, inlier ratio)`` of matches.
+
+        1-point RANSAC on the matches seen from the turning axis (eq. 14-17); when it keeps fewer
+        than :data:`MIN_RANSAC_RATIO` of them (the vehicle pitched or rolled, or most matches
+        are wrong) a general 3-point RANSAC is tried and the better of the two is kept.
+        """
+        est = one_point_ransac(
+            turning_axis_view(w_prev, self.camera, self.to_axis),
+            turning_axis_view(w_curr, self.camera, self.to_axis),
+            self.camera,
+            rng=self.rng,
+            pixel_sigma=1.0,
+        )
+        ratio = float(est.inliers.mean()) if est.success else 0.0
+        if est.success:
+            on_axis = np.eye(4)
+            on_axis[:3, :3], on_axis[:3, 3] = motion_matrices(est.theta, est.rho)
+            # the virtual camera's motion, seen from the real camera
+            guess, start = rigid_inverse(self.to_axis) @ on_axis @ self.to_axis, est.inliers
+        else:
+            guess, start = (np.eye(4) if T_pred is None else T_pred), None
+        if ratio < MIN_RANSAC_RATIO:
+            general = general_ransac(w_prev, w_curr, self.camera, int(self.rng.integers(2**31)))
+            if general is not None and general[1].mean() > ratio:
+                guess, start = general
+                ratio = float(start.mean())
+        return guess, start, ratio
 
     # ------------------------------------------------------------------ one frame
     def process(self, left: np.ndarray, right: np.ndarray, odometry=None):
@@ -237,22 +297,13 @@ class RigidStereoOdometry:
             if len(matches) < MIN_INLIERS:
                 reason = "too few temporal matches"
             else:
-                est = one_point_ransac(
-                    matches.w_prev, matches.w_curr, self.camera, rng=self.rng, pixel_sigma=1.0
-                )
+                guess, start, ratio = self.hypothesis(matches.w_prev, matches.w_curr, T_pred)
                 t4 = t5 = time.perf_counter()
-                if est.success:
-                    R0, T0 = motion_matrices(est.theta, est.rho)
-                    guess = np.eye(4)
-                    guess[:3, :3], guess[:3, 3] = R0, T0
-                    start = est.inliers
-                else:
-                    guess, start = (np.eye(4) if T_pred is None else T_pred), None
                 motion = refine_rigid_motion(matches.w_prev, matches.w_curr, self.camera, guess, start)
                 t5 = time.perf_counter()
                 diag.inliers = int(motion.inliers.sum())
-                diag.inlier_ratio = float(est.inliers.mean()) if est.success else 0.0
-                diag.ransac_inliers = int(est.inliers.sum()) if est.success else 0
+                diag.inlier_ratio = ratio
+                diag.ransac_inliers = int(round(ratio * len(matches)))
                 increment = vehicle_increment(motion.matrix, self.mount)
                 z = chord_measurement(increment)
                 diag.theta, diag.rho = float(z[0]), float(z[1])
@@ -267,10 +318,16 @@ class RigidStereoOdometry:
                     prior = self.kf.motion_prior()
                     innovation = np.array([wrap_angle(z[0] - prior.theta), z[1] - prior.rho])
                     gate = prior.covariance + r_vo[:2, :2]
-                    if informative and innovation @ np.linalg.solve(gate, innovation) > PRIOR_GATE:
+                    contradicts = innovation @ np.linalg.solve(gate, innovation) > PRIOR_GATE
+                    # a vision that keeps contradicting the prediction frame after frame, with
+                    # enough inliers to be sure, means the prediction is wrong (wheels slipping,
+                    # a speed that lags when braking): it is believed, not rejected for ever
+                    if informative and contradicts and self.contradicted < MAX_CONTRADICTIONS:
                         reason = "motion contradicts the prediction"
+                        self.contradicted += 1
                     else:
                         accepted = (motion, z, r_vo, len(matches))
+                        self.contradicted = 0
         timing.matching = (t3 - t2) * 1e3
         timing.estimation = (t4 - t3) * 1e3
         timing.refinement = (t5 - t4) * 1e3

@@ -19,11 +19,18 @@ from vo_lib.cli.bench.bench_line_slam import bench_observers
 from vo_lib.cli.bench.bench_real import bench_real
 from vo_lib.cli.bench.bench_realism import bench_realism
 from vo_lib.cli.bench.bench_sim import bench_sensors
-from vo_lib.cli.bench.bench_stereo_vo import bench_frontend, bench_geometry, bench_pipeline, bench_ransac
+from vo_lib.cli.bench.bench_stereo_vo import (
+    bench_frontend,
+    bench_geometry,
+    bench_long,
+    bench_pipeline,
+    bench_ransac,
+)
 from vo_lib.cli.bench.bench_sweep import bench_sweep
 
 BENCHES: dict[str, Callable[[], dict[str, float]]] = {
     "pipeline": bench_pipeline,
+    "long": bench_long,
     "ransac": bench_ransac,
     "frontend": bench_frontend,
     "geometry": bench_geometry,
