@@ -12,8 +12,10 @@ Real surfaces are mostly poorer in corners: :func:`surface_texture` makes a text
 scale), ``"asphalt"`` (the gravel photograph, finer and flatter), ``"plain"`` (painted: a uniform
 grey with a faint wash), ``"wall"`` (a painted wall with a door and posters), ``"tiles"`` (floor
 tiles with grout lines), ``"panels"`` (a ceiling of plain panels and lights), ``"fence"`` (a
-repetitive fence of posts before a plain background) and ``"far"`` (distant structure of low
-contrast, blurred).
+repetitive fence of posts before a plain background), ``"far"`` (distant structure of low
+contrast, blurred), ``"road"`` (a two-lane road's cross-section: gravel verges, kerbs, edge lines,
+asphalt and a dashed centre line; columns run along the road) and ``"vehicle"`` (a car's side:
+paint, a dark window band and wheels).
 """
 
 from __future__ import annotations
@@ -219,6 +221,68 @@ def far_structure(height: int, width: int, texel: float, seed: int) -> np.ndarra
     return cv2.GaussianBlur(img, (0, 0), max(1.0, 0.3 / texel))
 
 
+#: Cross-section of the ``"road"`` texture from its left edge, metres: verge, kerb, edge line,
+#: lane, centre line, lane, edge line, kerb, verge (10 m in all).
+ROAD_BANDS = (
+    ("gravel", 0.8),
+    ("kerb", 0.2),
+    ("line", 0.15),
+    ("asphalt", 3.7),
+    ("dashes", 0.3),
+    ("asphalt", 3.7),
+    ("line", 0.15),
+    ("kerb", 0.2),
+    ("gravel", 0.8),
+)
+ROAD_WIDTH = sum(w for _, w in ROAD_BANDS)
+#: Centre-line dashes: painted length and period along the road, metres.
+DASH = (3.0, 9.0)
+#: Contrast of a road's asphalt against the ``"asphalt"`` style (worn, patched road surface).
+ROAD_GRAIN = 5.0
+#: Grey levels of paint and kerb stone.
+LINE_GREY, KERB_GREY = 200.0, 165.0
+
+
+def road_surface(height: int, width: int, texel: float, seed: int) -> np.ndarray:
+    """A two-lane road: rows across it (row 0 at the left verge), columns along it."""
+    asphalt = photo_texture("asphalt", height, width, texel, seed)
+    grey = PHOTO_TONE["asphalt"][0]
+    img = grey + ROAD_GRAIN * (asphalt - grey)
+    gravel = photo_texture("gravel", height, width, texel, seed + 1)
+    wash = smooth_wash(height, width, texel, np.random.default_rng(seed + 2), 4.0)
+    along = np.arange(width) * texel
+    edge = 0.0
+    for band, w in ROAD_BANDS:
+        r0, r1 = int(round(edge / texel)), int(round((edge + w) / texel))
+        if band == "gravel":
+            img[r0:r1] = gravel[r0:r1]
+        elif band == "kerb":
+            img[r0:r1] = KERB_GREY + 0.3 * (gravel[r0:r1] - PHOTO_TONE["gravel"][0])
+        elif band == "line":
+            img[r0:r1] = LINE_GREY
+        elif band == "dashes":
+            painted = np.mod(along, DASH[1]) < DASH[0]
+            c0, c1 = r0 + (r1 - r0) // 3, r1 - (r1 - r0) // 3
+            img[c0:c1, painted] = LINE_GREY
+        edge += w
+    return img + wash
+
+
+def vehicle_side(height: int, width: int, texel: float, seed: int) -> np.ndarray:
+    """A car body seen from one side: paint, a dark window band above the waist, two wheels."""
+    rng = np.random.default_rng(seed)
+    paint = rng.uniform(60, 200)
+    img = paint + smooth_wash(height, width, texel, rng, 6.0)
+    waist, roof = int(0.9 / texel), int(1.35 / texel)
+    img[waist:roof, int(0.15 * width) : int(0.85 * width)] = rng.uniform(30, 55)
+    img[roof:] = paint * 0.85
+    radius = max(1, int(0.33 / texel))
+    for x in (0.18, 0.82):
+        cv2.circle(img, (int(x * width), radius), radius, 25.0, -1)
+        cv2.circle(img, (int(x * width), radius), radius // 2, 120.0, -1)
+    return img
+
+
 def surface_texture(style: str, height: int, width: int, texel: float, seed: int) -> np.ndarray:
     """A ``(height, width)`` uint8 texture of ``style`` with texels of ``texel`` metres.
 
@@ -243,12 +307,16 @@ def surface_texture(style: str, height: int, width: int, texel: float, seed: int
         img = fence(height, width, texel, seed)
     elif style == "far":
         img = far_structure(height, width, texel, seed)
+    elif style == "road":
+        img = road_surface(height, width, texel, seed)
+    elif style == "vehicle":
+        img = vehicle_side(height, width, texel, seed)
     else:
         raise ValueError(f"unknown texture style {style!r}; known: {', '.join(STYLES)}")
     return np.clip(img + 0.5, 0, 255).astype(np.uint8)
 
 
-STYLES = ("corners", *PHOTO_METRES, "plain", "wall", "tiles", "panels", "fence", "far")
+STYLES = ("corners", *PHOTO_METRES, "plain", "wall", "tiles", "panels", "fence", "far", "road", "vehicle")
 
 
 @lru_cache(maxsize=256)

@@ -1,7 +1,7 @@
 """How close the samples' images are to real ones: ``python -m vo_lib bench realism``.
 
-For every named sample and every real sequence found (the folder named by ``$VO_LIB_REALDATA``,
-else ``../shared/realdata`` beside the repository), the means over 20 left images spread evenly
+For every named sample and every real sequence found in the folder named by ``$VO_LIB_REALDATA``
+(KITTI-layout sequence folders, each holding ``image_0/``), the means over 20 left images spread evenly
 over the sequence of the three statistics of :mod:`vo_lib.sim.realism`. Samples are rendered in
 memory (only those 20 frames), so nothing is written. The last column says whether a sample
 meets its range: outdoor samples and the road 0.35-0.65 of cells without a corner and 0.3-0.5
@@ -15,17 +15,17 @@ from pathlib import Path
 
 #: Frames measured per sequence, spread evenly over it.
 FRAMES = 20
-#: Real sequences beside the repository, used when ``$VO_LIB_REALDATA`` is not set.
-REPO_REALDATA = Path(__file__).resolve().parents[4] / "shared" / "realdata"
 #: Ranges the samples must meet: (empty cells low, high), (low-gradient low, high).
 OUTDOOR_RANGE = ((0.35, 0.65), (0.30, 0.50))
 INDOOR_RANGE = ((0.25, 1.0), (0.0, 1.0))
 
 
 def realdata_root() -> Path | None:
-    """``$VO_LIB_REALDATA`` if set, else ``../shared/realdata`` beside the repository, if it exists."""
+    """The folder named by ``$VO_LIB_REALDATA``, if the variable is set and the folder exists."""
     env = os.environ.get("VO_LIB_REALDATA")
-    root = Path(env) if env else REPO_REALDATA
+    if not env:
+        return None
+    root = Path(env)
     return root if root.is_dir() else None
 
 
@@ -56,7 +56,9 @@ def bench_realism(frames: int = FRAMES) -> dict[str, float]:
         "suppression; gradient: 3x3 Sobel magnitude"
     )
     if not folders:
-        print("  (no real sequences: set VO_LIB_REALDATA to a folder of KITTI-layout sequences)")
+        env = os.environ.get("VO_LIB_REALDATA")
+        where = f"VO_LIB_REALDATA={env} holds none" if env else "VO_LIB_REALDATA is not set"
+        print(f"  (no real sequences: {where}; set it to a folder of KITTI-layout sequences)")
     header = f"{'cells without a corner':>24s}{'corners per 640x480':>21s}{'low-gradient pixels':>21s}"
     print(f"  {'sequence':<46s}{header}")
     out = {}
