@@ -47,12 +47,12 @@ ROAD_RAISE = 0.1
 #: Climb: grade and the arc lengths (metres along the car's path) where it starts and ends;
 #: the grade changes over :data:`VERTICAL_CURVE` metres at either end.
 CLIMB_GRADE = 0.04
-CLIMB = (125.0, 200.0)
-VERTICAL_CURVE = 20.0
+CLIMB = (95.0, 150.0)
+VERTICAL_CURVE = 15.0
 #: Bank: crossfall (rise per metre to the left) through the second bend, reached over
 #: :data:`VERTICAL_CURVE` metres.
 BANK_CROSSFALL = 0.05
-BANK = (210.0, 265.0)
+BANK = (140.0, 180.0)
 #: Height of the car's origin (rear axle, IMU) above the road, metres: puts the camera 1.65 m up.
 VEHICLE_ORIGIN_HEIGHT = 0.92
 #: Camera (left) in the car's frame, forward, left, up, metres: KITTI's calibration rounded to

@@ -114,8 +114,8 @@ SAMPLES: dict[str, Sample] = {
         Sample(
             "indoor_free",
             "arcs and straights in the lab: heading and position at key positions",
-            "seed 000, IV.A.3 (free motion)",
-            "indoor_lab",
+            "seed 000, IV.A.3 (free motion), with a trolley pushed through the lab",
+            "indoor_lab_cart",
             (-4.5, -0.8, 0.0),
             30.0,
             (

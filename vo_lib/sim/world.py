@@ -350,7 +350,7 @@ def road_traffic(seed: int) -> tuple[Mover, ...]:
     ego_s = road.arc_length(path)
     movers = []
     oncoming_s, oncoming = _lane(2 * road.LANE_OFFSET, reverse=True)
-    for i, (frame, speed) in enumerate(((35, 10.0), (195, 13.0))):
+    for i, (frame, speed) in enumerate(((35, 10.0), (185, 8.0))):
         meet = ego_s[frame]  # where the driven car is when they pass each other
         along = float(np.sum(np.linalg.norm(np.diff(oncoming[oncoming_s >= meet], axis=0), axis=1)))
         movers.append(
@@ -425,4 +425,18 @@ def road_world(seed: int = 40) -> World:
     )
 
 
-WORLDS = {"indoor_lab": indoor_lab, "outdoor_yard": outdoor_yard, "corridor": corridor, "road": road_world}
+def indoor_lab_cart(seed: int = 10) -> World:
+    """The lab with a trolley of boxes (1.0 m x 0.6 m, 1.1 m high) pushed back and forth along
+    its north side at walking pace: an independently moving object."""
+    path = ((-5.0, 3.0, 0.0), (5.0, 3.0, 0.0)) * 3
+    cart = Mover(path, 0.7, (1.0, 0.6), 1.1, "corners", seed + 90, kind="cart")
+    return replace(indoor_lab(seed), name="indoor_lab_cart", movers=(cart,))
+
+
+WORLDS = {
+    "indoor_lab_cart": indoor_lab_cart,
+    "indoor_lab": indoor_lab,
+    "outdoor_yard": outdoor_yard,
+    "corridor": corridor,
+    "road": road_world,
+}
