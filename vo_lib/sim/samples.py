@@ -260,14 +260,15 @@ class RenderedSample:
     drive: object
     frames: int
     vehicle_poses: np.ndarray
+    first: int = 0  # the drive's frame the rendered frames start at
 
     def truth(self) -> np.ndarray:
         """True planar vehicle poses of the frames."""
-        return self.drive.poses[: self.frames]
+        return self.drive.poses[self.first : self.first + self.frames]
 
     def camera_poses(self) -> np.ndarray:
         """World poses ``(N, 4, 4)`` of the left camera."""
-        return self.vehicle_poses[: self.frames] @ self.mount
+        return self.vehicle_poses[self.first : self.first + self.frames] @ self.mount
 
 
 def sample_camera(sample: Sample, resolution=None) -> StereoCamera:
@@ -286,15 +287,20 @@ def _world_poses(sample: Sample, drive) -> np.ndarray:
     return np.stack([planar_to_matrix(p) for p in drive.poses])
 
 
-def render_sample(name: str, frames: int | None = None, resolution=None):
+def render_sample(name: str, frames: int | None = None, resolution=None, first: int = 0):
     """Render a sample in memory: ``(RenderedSample, iterator of frames)``; nothing is written.
 
-    ``resolution`` is ``(width, height)``, by default the sample's own.
+    ``resolution`` is ``(width, height)``, by default the sample's own. ``first`` starts at a later
+    frame of the drive (the first rendered frame then has no odometry, as frame 0).
     """
     sample = get_sample(name)
-    n = sample.frames if frames is None else int(frames)
-    if not 1 <= n <= sample.frames:
-        raise ValueError(f"frames must lie in 1..{sample.frames} for {name}; got {frames}")
+    if not 0 <= first < sample.frames:
+        raise ValueError(f"first must lie in 0..{sample.frames - 1} for {name}; got {first}")
+    n = sample.frames - first if frames is None else int(frames)
+    if not 1 <= n <= sample.frames - first:
+        raise ValueError(
+            f"frames must lie in 1..{sample.frames - first} for {name} from frame {first}; got {frames}"
+        )
     camera = sample_camera(sample, resolution)
     car = sample.rig == "car"
     drive = simulate_drive(
@@ -309,15 +315,15 @@ def render_sample(name: str, frames: int | None = None, resolution=None):
     poses = _world_poses(sample, drive)
     renderer = StereoRenderer(WORLDS[sample.world](), camera, SensorEffects(noise_sigma=sample.sensor_noise))
     image_rng = np.random.default_rng(sample.seed + 1)
-    gains = exposure_gains(n, sample.exposure_sigma, np.random.default_rng(sample.seed + 3))
+    gains = exposure_gains(first + n, sample.exposure_sigma, np.random.default_rng(sample.seed + 3))
 
     def frame_iter():
-        for k in range(n):
+        for k in range(first, first + n):
             renderer.effects = SensorEffects(noise_sigma=sample.sensor_noise, exposure_gain=float(gains[k]))
             left, right = renderer.render_pair(poses[k] @ mount, image_rng, time=k / sample.rate)
-            yield left, right, (None if k == 0 else drive.odometry[k])
+            yield left, right, (None if k == first else drive.odometry[k])
 
-    return RenderedSample(camera, mount, drive, n, poses), frame_iter()
+    return RenderedSample(camera, mount, drive, n, poses, first), frame_iter()
 
 
 def is_indoor(name: str) -> bool:
