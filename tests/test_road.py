@@ -75,3 +75,17 @@ def test_full_pipeline_through_the_banked_bend():
     assert len(result.flagged) <= 2
     assert error < 0.01 * distance
     assert heading < 1.0
+
+
+def test_road_images_are_as_hard_as_real_road_images():
+    """Six frames spread over the drive fall within the real road sequences' range (the outdoor
+    range of ``bench realism``). Measured: 0.60 of cells without a corner, 0.49 low-gradient pixels."""
+    from vo_lib.cli.bench.bench_realism import OUTDOOR_RANGE
+    from vo_lib.sim.realism import ImageStatistics, image_statistics, spread_frames
+    from vo_lib.sim.samples import render_left_images
+
+    images = render_left_images("road_drive", spread_frames(SAMPLES["road_drive"].frames, 6))
+    stats = ImageStatistics.mean(image_statistics(img) for img in images)
+    (e0, e1), (g0, g1) = OUTDOOR_RANGE
+    assert e0 <= stats.empty_cells <= e1
+    assert g0 <= stats.low_gradient <= g1
