@@ -261,7 +261,9 @@ def front_end(threshold=40, max_features=600):
 
 
 count = front_end()
-assert count > 300
+# the lab's painted walls and tiled floor leave part of the view without corners, so fewer
+# matches than when every surface was corner texture
+assert count > 250
 
 # %%
 knobs = offer(

@@ -23,6 +23,8 @@ ROOT = pathlib.Path(__file__).resolve().parents[1]
 NOTEBOOK_DIR = ROOT / "notebooks"
 NOTEBOOKS = sorted(NOTEBOOK_DIR.glob("[0-9][0-9]_*.py"))
 CELL_TIMEOUT_S = 300
+#: Real KITTI-layout sequences beside the repository: notebooks read them through VO_LIB_REALDATA.
+REALDATA = ROOT.parent / "shared" / "realdata"
 
 
 def test_there_are_notebooks():
@@ -31,7 +33,9 @@ def test_there_are_notebooks():
 
 @pytest.mark.notebook
 @pytest.mark.parametrize("path", NOTEBOOKS, ids=[p.stem for p in NOTEBOOKS])
-def test_notebook_executes(path, kernel_dir, tmp_path):
+def test_notebook_executes(path, kernel_dir, tmp_path, monkeypatch):
+    if REALDATA.is_dir() and not os.environ.get("VO_LIB_REALDATA"):
+        monkeypatch.setenv("VO_LIB_REALDATA", str(REALDATA))  # the kernel inherits it
     nb = jupytext.read(path)
     ksm = KernelSpecManager(kernel_dirs=[str(kernel_dir)], ensure_native_kernel=False)
     km = KernelManager(

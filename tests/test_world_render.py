@@ -104,7 +104,7 @@ def test_sensor_effects():
 
 
 def test_worlds_and_building_blocks():
-    assert set(WORLDS) == {"indoor_lab", "outdoor_yard", "corridor"}
+    assert set(WORLDS) == {"indoor_lab", "indoor_lab_cart", "outdoor_yard", "corridor", "road"}
     c = corridor()
     kinds = [s.kind for s in c.segments]
     assert kinds.count("pillar") == 8 and "fire hydrant" in kinds and "umbrella" in kinds
@@ -117,3 +117,26 @@ def test_worlds_and_building_blocks():
         Segment((1, 1), (1, 1))
     with pytest.raises(ValueError, match="height must be > 0"):
         Segment((0, 0), (1, 1), height=0)
+
+
+def test_movers_move_and_nothing_else_does():
+    """The lab's trolley is where its path says at each time; the static lab renders the same."""
+    from vo_lib.sim.world import indoor_lab_cart
+
+    world = indoor_lab_cart()
+    cart = world.movers[0]
+    (p0, yaw0), (p1, _) = cart.pose(0.0), cart.pose(2.0)
+    np.testing.assert_allclose(p1 - p0, [2 * cart.speed, 0.0, 0.0], atol=1e-9)
+    assert yaw0 == 0.0
+    cam = StereoCamera.bumblebee2(160, 120)
+    T = planar_to_matrix((-3.0, 0.0, np.pi / 2)) @ camera_mount(height=0.5)  # facing the north side
+    moving = StereoRenderer(world, cam)
+    _, d0 = moving.render(T, with_depth=True, time=0.0)
+    _, d1 = moving.render(T, with_depth=True, time=2.0)
+    still = StereoRenderer(WORLDS["indoor_lab"](), cam)
+    np.testing.assert_array_equal(still.render(T, time=0.0), still.render(T, time=2.0))
+    changed = np.abs(d1 - d0) > 0.1
+    assert 0.01 < changed.mean() < 0.5  # the trolley's pixels, not the whole view
+    # where the trolley is in view, it stands 3.0 m away (the path's y) less half its width
+    near = np.minimum(d0, d1)[changed]
+    assert abs(np.percentile(near, 5) - (3.0 - cart.size[1] / 2)) < 0.3

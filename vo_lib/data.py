@@ -15,7 +15,7 @@ import os
 from pathlib import Path
 
 from vo_lib.formats.sequence import Sequence, read_sequence
-from vo_lib.sim.samples import DEFAULT_RESOLUTION, SAMPLES, fingerprint, generate
+from vo_lib.sim.samples import SAMPLES, fingerprint, generate
 
 
 def data_dir() -> Path:
@@ -29,11 +29,11 @@ def data_dir() -> Path:
     return Path(cache) / "vo_lib" / "data"
 
 
-def sample_path(name: str, frames: int | None = None, resolution=DEFAULT_RESOLUTION) -> Path:
-    """Folder of a generated sample: the full sample at the default size keeps its plain name."""
+def sample_path(name: str, frames: int | None = None, resolution=None) -> Path:
+    """Folder of a generated sample: the full sample at its own size keeps its plain name."""
     full = frames is None or frames == SAMPLES[name].frames
     tag = name if full else f"{name}_{frames}f"
-    if tuple(resolution) != DEFAULT_RESOLUTION:
+    if resolution is not None and tuple(resolution) != SAMPLES[name].resolution:
         tag += f"_{resolution[0]}x{resolution[1]}"
     return data_dir() / tag
 
@@ -50,7 +50,7 @@ def _up_to_date(path: Path, name: str) -> bool:
 def load_sequence(
     name_or_path,
     frames: int | None = None,
-    resolution=DEFAULT_RESOLUTION,
+    resolution=None,
     progress: bool = True,
     odometry: bool = True,
 ) -> Sequence:
@@ -62,6 +62,6 @@ def load_sequence(
     if key in SAMPLES and not Path(key).exists():
         path = sample_path(key, frames, resolution)
         if not _up_to_date(path, key):
-            generate(key, path, frames, tuple(resolution), progress)
+            generate(key, path, frames, None if resolution is None else tuple(resolution), progress)
         return read_sequence(path, odometry=odometry)
     return read_sequence(Path(key), odometry=odometry)

@@ -134,8 +134,9 @@ def build_parser() -> argparse.ArgumentParser:
     gen.add_argument(
         "--resolution",
         type=_resolution,
-        default="640x480",
-        help=f"WIDTHxHEIGHT, each side {MIN_SIDE}..{MAX_SIDE} (default 640x480)",
+        default=None,
+        help=f"WIDTHxHEIGHT, each side {MIN_SIDE}..{MAX_SIDE} (default: the sample's own, 640x480; "
+        "1242x375 for road_drive)",
     )
     bench = sub.add_parser("bench", help="time a part of the library against a baseline")
     bench.add_argument("name", choices=sorted(BENCHES), help="which benchmark")

@@ -1,10 +1,11 @@
 """The simulated world and its sensors: where every sample sequence and laser scan comes from.
 
 ``world``          one 2-D floor plan of line segments, extruded to textured planes (start here)
-``textures``       corner-rich procedural textures
+``textures``       procedural, photographic and painted textures
 ``render``         rectified stereo pairs of a world, with sensor effects
 ``laser``          a 2-D laser scanner ray-cast against the same segments
 ``trajectories``   crawler drives with slipping tracks: truth and what the encoders report
+``road``           the road drive: a car's path, the road's climb and bank, the car's 6-DoF poses
 ``disturbances``   blank, noisy and occluded frames
 ``samples``        the named samples (seed 000's experiments, seed 004's corridor), rendered
                    to the KITTI layout of ``vo_lib.formats``

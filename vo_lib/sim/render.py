@@ -16,8 +16,8 @@ import cv2
 import numpy as np
 
 from vo_lib.camera import StereoCamera
-from vo_lib.sim.textures import cached_mipmaps
-from vo_lib.sim.world import World
+from vo_lib.sim.textures import cached_surface
+from vo_lib.sim.world import Patch, World
 
 #: Nearest depth drawn, metres.
 NEAR_PLANE = 0.05
@@ -28,6 +28,8 @@ TILE_TEXELS = 300
 LIGHT_DIRECTION = np.array([0.5, 0.3, 0.8]) / np.linalg.norm([0.5, 0.3, 0.8])
 #: Grey level of the empty background (sky), top and bottom of the image.
 SKY_GREY = (205, 180)
+#: Texel size of the moving boxes' textures, metres.
+MOVER_TEXEL = 0.02
 
 
 @dataclass(frozen=True)
@@ -90,13 +92,14 @@ def build_quads(world: World) -> list[_Quad]:
     for seg in world.segments:
         a, b = np.array(seg.start, float), np.array(seg.end, float)
         direction = (b - a) / seg.length
-        cols, rows = int(np.ceil(seg.length / texel)) + 1, int(np.ceil(seg.height / texel)) + 1
-        tex = cached_mipmaps(rows, cols, seg.texture_seed + 1000 * world.seed)
+        step = seg.texel or texel
+        cols, rows = int(np.ceil(seg.length / step)) + 1, int(np.ceil(seg.height / step)) + 1
+        tex = cached_surface(seg.style, rows, cols, step, seg.texture_seed + 1000 * world.seed)
         origin = np.array([a[0], a[1], 0.0])
-        e1 = np.array([direction[0], direction[1], 0.0]) * texel
-        e2 = np.array([0.0, 0.0, texel])
+        e1 = np.array([direction[0], direction[1], 0.0]) * step
+        e2 = np.array([0.0, 0.0, step])
         normal = np.array([-direction[1], direction[0], 0.0])
-        for s0, s1 in zip(_tiles(seg.length, texel)[:-1], _tiles(seg.length, texel)[1:], strict=True):
+        for s0, s1 in zip(_tiles(seg.length, step)[:-1], _tiles(seg.length, step)[1:], strict=True):
             p0, p1 = a + s0 * direction, a + s1 * direction
             corners = np.array(
                 [
@@ -109,11 +112,11 @@ def build_quads(world: World) -> list[_Quad]:
             quads.append(_Quad(corners, origin, e1, e2, normal, tex, _shade(normal)))
     xmin, xmax, ymin, ymax = world.floor_extent
     cols, rows = int(np.ceil((xmax - xmin) / texel)) + 1, int(np.ceil((ymax - ymin) / texel)) + 1
-    planes = [(0.0, world.seed * 7 + 1, 0.95)]
+    planes = [(0.0, world.seed * 7 + 1, 0.95, world.floor_style)]
     if world.ceiling_height is not None:
-        planes.append((world.ceiling_height, world.seed * 7 + 2, 0.8))
-    for z, tex_seed, shade in planes:
-        tex = cached_mipmaps(rows, cols, tex_seed)
+        planes.append((world.ceiling_height, world.seed * 7 + 2, 0.8, world.ceiling_style))
+    for z, tex_seed, shade, style in planes:
+        tex = cached_surface(style, rows, cols, texel, tex_seed)
         origin = np.array([xmin, ymin, z])
         e1, e2 = np.array([texel, 0.0, 0.0]), np.array([0.0, texel, 0.0])
         for x0, x1 in zip(_tiles(xmax - xmin, texel)[:-1], _tiles(xmax - xmin, texel)[1:], strict=True):
@@ -127,7 +130,74 @@ def build_quads(world: World) -> list[_Quad]:
                     ]
                 )
                 quads.append(_Quad(corners, origin, e1, e2, np.array([0.0, 0.0, 1.0]), tex, shade))
+    for patch in world.patches:
+        quads += _patch_quads(patch, texel)
     return quads
+
+
+def _patch_quads(patch, texel: float) -> list[_Quad]:
+    """Quads of a :class:`~vo_lib.sim.world.Patch`, cut into tiles of at most TILE_TEXELS."""
+    along, across = np.asarray(patch.along, float), np.asarray(patch.across, float)
+    origin = np.asarray(patch.origin, float)
+    total = max(patch.texture_length, patch.offset + patch.length)
+    cols, rows = int(np.ceil(total / texel)) + 1, int(np.ceil(patch.width / texel)) + 1
+    tex = cached_surface(patch.style, rows, cols, texel, patch.texture_seed)
+    normal = np.cross(along, across)
+    normal /= np.linalg.norm(normal)
+    tex_origin = origin - patch.offset * along
+    if patch.outline:
+        return [
+            _Quad(
+                np.asarray(patch.outline, float),
+                tex_origin,
+                along * texel,
+                across * texel,
+                normal,
+                tex,
+                _shade(normal),
+            )
+        ]
+    quads = []
+    for a0, a1 in zip(_tiles(patch.length, texel)[:-1], _tiles(patch.length, texel)[1:], strict=True):
+        for b0, b1 in zip(_tiles(patch.width, texel)[:-1], _tiles(patch.width, texel)[1:], strict=True):
+            corners = origin + np.array([[a0, b0], [a1, b0], [a1, b1], [a0, b1]]) @ np.stack([along, across])
+            quads.append(
+                _Quad(corners, tex_origin, along * texel, across * texel, normal, tex, _shade(normal))
+            )
+    return quads
+
+
+def _mover_quads(mover) -> list[_Quad]:
+    """Four sides and the top of a :class:`~vo_lib.sim.world.Mover`, in its body frame
+    (x forward, y left, z up, origin at the bottom centre)."""
+    hl, hw, h = mover.size[0] / 2, mover.size[1] / 2, mover.height
+    plan = [(-hl, -hw), (hl, -hw), (hl, hw), (-hl, hw)]
+    quads = []
+    for i in range(4):
+        a, b = np.array([*plan[i], 0.0]), np.array([*plan[(i + 1) % 4], 0.0])
+        length = float(np.linalg.norm(b - a))
+        side = Patch(
+            tuple(a), tuple((b - a) / length), (0.0, 0.0, 1.0), length, h, mover.style, mover.texture_seed + i
+        )
+        quads += _patch_quads(side, MOVER_TEXEL)
+    top = Patch(
+        (-hl, hw, h), (1.0, 0.0, 0.0), (0.0, -1.0, 0.0), 2 * hl, 2 * hw, "plain", mover.texture_seed + 4
+    )
+    return quads + _patch_quads(top, MOVER_TEXEL)
+
+
+def _moved(quad: _Quad, R: np.ndarray, t: np.ndarray) -> _Quad:
+    """A body-frame quad carried to the world by rotation ``R`` and translation ``t``."""
+    normal = R @ quad.normal
+    return _Quad(
+        quad.corners @ R.T + t,
+        R @ quad.origin + t,
+        R @ quad.e1,
+        R @ quad.e2,
+        normal,
+        quad.texture,
+        _shade(normal),
+    )
 
 
 def _clip_near(points: np.ndarray, near: float) -> np.ndarray:
@@ -164,6 +234,7 @@ class StereoRenderer:
         self.effects = effects or SensorEffects()
         self.quads = build_quads(world)
         self._corners = np.stack([q.corners for q in self.quads])  # (Q, 4, 3)
+        self._movers = [(m, _mover_quads(m)) for m in world.movers]
         w, h = camera.width, camera.height
         self._u = np.arange(w, dtype=np.float32)
         self._v = np.arange(h, dtype=np.float32)
@@ -176,10 +247,23 @@ class StereoRenderer:
             [[fx, 0, cx + 0.5], [-fx, 0, w - 0.5 - cx], [0, fy, cy + 0.5], [0, -fy, h - 0.5 - cy]]
         )
 
-    def render(self, T_world_camera, with_depth: bool = False):
+    def quads_at(self, time: float) -> tuple[list[_Quad], np.ndarray]:
+        """The world's quads and their corners ``(Q, 4, 3)`` with the movers where they are at ``time``."""
+        if not self._movers:
+            return self.quads, self._corners
+        moving = []
+        for mover, body in self._movers:
+            position, yaw = mover.pose(time)
+            c, s = np.cos(yaw), np.sin(yaw)
+            R = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+            moving += [_moved(q, R, position) for q in body]
+        return self.quads + moving, np.concatenate([self._corners, np.stack([q.corners for q in moving])])
+
+    def render(self, T_world_camera, with_depth: bool = False, time: float = 0.0):
         """Grey image (uint8) seen by a camera at ``T_world_camera`` (4x4, camera to world).
 
-        Returns ``image`` or ``(image, depth)`` with depth in metres (``inf`` where nothing is).
+        ``time`` (seconds) places the world's movers. Returns ``image`` or ``(image, depth)`` with
+        depth in metres (``inf`` where nothing is).
         """
         T = np.asarray(T_world_camera, dtype=float)
         R, c = T[:3, :3], T[:3, 3]
@@ -188,13 +272,14 @@ class StereoRenderer:
         K = cam.K
         image = self._sky.copy()
         inv_depth = np.zeros((h, w), np.float32)
-        corners_c = (self._corners - c) @ R  # (Q, 4, 3), camera frame
+        quads, corners = self.quads_at(time)
+        corners_c = (corners - c) @ R  # (Q, 4, 3), camera frame
         # a quad is culled when all its corners lie outside one plane of the frustum
         outside = (corners_c @ self._frustum.T < 0).all(axis=1).any(axis=1)
         outside |= corners_c[..., 2].max(axis=1) <= NEAR_PLANE
         candidates = np.flatnonzero(~outside)
         for qi in candidates:
-            quad = self.quads[qi]
+            quad = quads[qi]
             poly = _clip_near(corners_c[qi], NEAR_PLANE)
             if len(poly) < 3:
                 continue
@@ -245,15 +330,22 @@ class StereoRenderer:
             depth = np.where(inv_depth > 0, 1.0 / inv_depth, np.inf).astype(np.float32)
         return image, depth
 
-    def render_pair(self, T_world_camera, rng: np.random.Generator | None = None, with_depth: bool = False):
-        """Left and right images (and left depth) of the rig whose left camera is at ``T_world_camera``."""
+    def render_pair(
+        self,
+        T_world_camera,
+        rng: np.random.Generator | None = None,
+        with_depth: bool = False,
+        time: float = 0.0,
+    ):
+        """Left and right images (and left depth) of the rig whose left camera is at ``T_world_camera``,
+        with the movers where they are at ``time`` (seconds)."""
         T_left = np.asarray(T_world_camera, dtype=float)
         T_right = T_left.copy()
         T_right[:3, 3] = T_left[:3, 3] + T_left[:3, 0] * self.camera.baseline
         if with_depth:
-            left, depth = self.render(T_left, with_depth=True)
+            left, depth = self.render(T_left, with_depth=True, time=time)
         else:
-            left = self.render(T_left)
-        right = self.render(T_right)
+            left = self.render(T_left, time=time)
+        right = self.render(T_right, time=time)
         left, right = self.effects.apply(left, rng), self.effects.apply(right, rng)
         return (left, right, depth) if with_depth else (left, right)

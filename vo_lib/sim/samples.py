@@ -16,15 +16,36 @@ from tqdm.auto import tqdm
 
 from vo_lib.camera import StereoCamera
 from vo_lib.formats.sequence import SequenceWriter
-from vo_lib.geometry import camera_mount, camera_poses_from_planar, planar_to_matrix
+from vo_lib.geometry import camera_mount, planar_to_matrix
 from vo_lib.models.track_odometry import TrackOdometry
+from vo_lib.sim import road
 from vo_lib.sim.render import SensorEffects, StereoRenderer
+from vo_lib.sim.textures import TEXTURE_VERSION
 from vo_lib.sim.trajectories import Leg, SlipModel, simulate_drive
 from vo_lib.sim.world import WORLDS
 
 #: Height of the camera above the floor; it sits above the crawler's turning axis (notebook 03).
 CAMERA_HEIGHT = 0.5
 DEFAULT_RESOLUTION = (640, 480)
+#: Sensor noise, grey levels: what :func:`vo_lib.sim.realism.noise_sigma` measures on the flat parts
+#: of KITTI's images (1.0-1.4 over drive 0001); rendered images carry no noise of their own.
+SENSOR_NOISE = 1.2
+#: Auto-exposure: the gain of frame k is ``exp(g_k)``, ``g`` a slowly varying random walk pulled
+#: back to 0 (AR(1) with this stationary deviation and :data:`EXPOSURE_FRAMES` correlation).
+EXPOSURE_SIGMA = 0.04
+EXPOSURE_FRAMES = 20.0
+#: Wheel slip of a car on dry asphalt: small and nearly equal on both sides.
+CAR_SLIP = SlipModel(mean=0.003, difference=0.001, sigma=0.002, spot_turn_mean=0.0, spot_turn_difference=0.0)
+
+
+def exposure_gains(n: int, sigma: float, rng: np.random.Generator) -> np.ndarray:
+    """Per-frame exposure gains of an auto-exposure camera: ``exp`` of an AR(1) series, frame 0 at 1."""
+    a = np.exp(-1.0 / EXPOSURE_FRAMES)
+    steps = rng.normal(0.0, sigma * np.sqrt(1 - a * a), n)
+    g = np.zeros(n)
+    for k in range(1, n):
+        g[k] = a * g[k - 1] + steps[k]
+    return np.exp(g)
 
 
 @dataclass(frozen=True)
@@ -40,7 +61,10 @@ class Sample:
     legs: tuple[Leg, ...]
     seed: int
     slip: SlipModel = field(default_factory=SlipModel)
-    sensor_noise: float = 1.0
+    sensor_noise: float = SENSOR_NOISE
+    exposure_sigma: float = EXPOSURE_SIGMA
+    rig: str = "crawler"  # or "car": KITTI's rig on a car (vo_lib.sim.road)
+    resolution: tuple[int, int] = DEFAULT_RESOLUTION
 
     @property
     def frames(self) -> int:
@@ -90,8 +114,8 @@ SAMPLES: dict[str, Sample] = {
         Sample(
             "indoor_free",
             "arcs and straights in the lab: heading and position at key positions",
-            "seed 000, IV.A.3 (free motion)",
-            "indoor_lab",
+            "seed 000, IV.A.3 (free motion), with a trolley pushed through the lab",
+            "indoor_lab_cart",
             (-4.5, -0.8, 0.0),
             30.0,
             (
@@ -177,6 +201,19 @@ SAMPLES: dict[str, Sample] = {
             seed=110,
         ),
         Sample(
+            "road_drive",
+            "a car on a road: two sharp bends, a climb, a banked bend, passing traffic",
+            "the real road sequences (KITTI's rig, 10 Hz, 5-12 m/s)",
+            "road",
+            road.START,
+            road.RATE,
+            road.LEGS,
+            seed=111,
+            slip=CAR_SLIP,
+            rig="car",
+            resolution=(road.KITTI_RIG[4], road.KITTI_RIG[5]),
+        ),
+        Sample(
             "corridor",
             "along a corridor whose cross features are hidden over a stretch",
             "seed 004, corridor experiment",
@@ -185,6 +222,10 @@ SAMPLES: dict[str, Sample] = {
             10.0,
             (Leg(540, 0.5),),
             seed=106,
+            # seed 004's corridor keeps its corner texture and the sensor its figures were
+            # measured with (README, Table III): noise of 1 grey level, fixed exposure
+            sensor_noise=1.0,
+            exposure_sigma=0.0,
         ),
     )
 }
@@ -196,7 +237,7 @@ def fingerprint(name: str) -> str:
     A cached sample whose manifest carries another fingerprint is out of date.
     """
     sample = get_sample(name)
-    text = repr(sample) + repr(WORLDS[sample.world]().segments)
+    text = repr(sample) + repr(WORLDS[sample.world]()) + f"textures {TEXTURE_VERSION}"
     return hashlib.sha1(text.encode()).hexdigest()[:16]
 
 
@@ -208,64 +249,126 @@ def get_sample(name: str) -> Sample:
 
 @dataclass(frozen=True)
 class RenderedSample:
-    """A sample's rig, truth and an iterator of ``(left, right, odometry_or_None)`` frames."""
+    """A sample's rig, truth and an iterator of ``(left, right, odometry_or_None)`` frames.
+
+    ``vehicle_poses`` are the world poses ``(N, 4, 4)`` of the vehicle (for the crawler, its planar
+    poses on the floor; for the car, on the road's surface); ``mount`` places the left camera on it.
+    """
 
     camera: StereoCamera
     mount: np.ndarray
     drive: object
     frames: int
+    vehicle_poses: np.ndarray
+    first: int = 0  # the drive's frame the rendered frames start at
 
     def truth(self) -> np.ndarray:
-        """True planar robot poses of the frames."""
-        return self.drive.poses[: self.frames]
+        """True planar vehicle poses of the frames."""
+        return self.drive.poses[self.first : self.first + self.frames]
+
+    def camera_poses(self) -> np.ndarray:
+        """World poses ``(N, 4, 4)`` of the left camera."""
+        return self.vehicle_poses[self.first : self.first + self.frames] @ self.mount
 
 
-def render_sample(name: str, frames: int | None = None, resolution=DEFAULT_RESOLUTION):
-    """Render a sample in memory: ``(RenderedSample, iterator of frames)``; nothing is written."""
+def sample_camera(sample: Sample, resolution=None) -> StereoCamera:
+    """The sample's rig at ``resolution`` (default: the sample's own)."""
+    width, height = sample.resolution if resolution is None else resolution
+    if sample.rig == "car":
+        f, cx, cy, baseline, w0, h0 = road.KITTI_RIG
+        native = StereoCamera(f, f, cx, cy, baseline, w0, h0)
+        return native if (width, height) == (w0, h0) else native.scaled(width, height)
+    return StereoCamera.bumblebee2(width, height)
+
+
+def _world_poses(sample: Sample, drive) -> np.ndarray:
+    if sample.rig == "car":
+        return road.vehicle_poses(drive.poses)
+    return np.stack([planar_to_matrix(p) for p in drive.poses])
+
+
+def render_sample(name: str, frames: int | None = None, resolution=None, first: int = 0):
+    """Render a sample in memory: ``(RenderedSample, iterator of frames)``; nothing is written.
+
+    ``resolution`` is ``(width, height)``, by default the sample's own. ``first`` starts at a later
+    frame of the drive (the first rendered frame then has no odometry, as frame 0).
+    """
     sample = get_sample(name)
-    n = sample.frames if frames is None else int(frames)
-    if not 1 <= n <= sample.frames:
-        raise ValueError(f"frames must lie in 1..{sample.frames} for {name}; got {frames}")
-    width, height = resolution
-    camera = StereoCamera.bumblebee2(width, height)
+    if not 0 <= first < sample.frames:
+        raise ValueError(f"first must lie in 0..{sample.frames - 1} for {name}; got {first}")
+    n = sample.frames - first if frames is None else int(frames)
+    if not 1 <= n <= sample.frames - first:
+        raise ValueError(
+            f"frames must lie in 1..{sample.frames - first} for {name} from frame {first}; got {frames}"
+        )
+    camera = sample_camera(sample, resolution)
+    car = sample.rig == "car"
     drive = simulate_drive(
         sample.legs,
         sample.rate,
         sample.start,
         np.random.default_rng(sample.seed),
-        TrackOdometry(),
+        road.CAR_ODOMETRY if car else TrackOdometry(),
         sample.slip,
     )
-    mount = camera_mount(height=CAMERA_HEIGHT)
+    mount = road.camera_in_vehicle() if car else camera_mount(height=CAMERA_HEIGHT)
+    poses = _world_poses(sample, drive)
     renderer = StereoRenderer(WORLDS[sample.world](), camera, SensorEffects(noise_sigma=sample.sensor_noise))
     image_rng = np.random.default_rng(sample.seed + 1)
+    gains = exposure_gains(first + n, sample.exposure_sigma, np.random.default_rng(sample.seed + 3))
 
     def frame_iter():
-        for k in range(n):
-            left, right = renderer.render_pair(planar_to_matrix(drive.poses[k]) @ mount, image_rng)
-            yield left, right, (None if k == 0 else drive.odometry[k])
+        for k in range(first, first + n):
+            renderer.effects = SensorEffects(noise_sigma=sample.sensor_noise, exposure_gain=float(gains[k]))
+            left, right = renderer.render_pair(poses[k] @ mount, image_rng, time=k / sample.rate)
+            yield left, right, (None if k == first else drive.odometry[k])
 
-    return RenderedSample(camera, mount, drive, n), frame_iter()
+    return RenderedSample(camera, mount, drive, n, poses, first), frame_iter()
+
+
+def is_indoor(name: str) -> bool:
+    """Whether a sample's world has a ceiling (indoor) or open sky."""
+    return WORLDS[get_sample(name).world]().ceiling_height is not None
+
+
+def render_left_images(name: str, indices, resolution=None) -> list[np.ndarray]:
+    """Left images of frames ``indices`` of a sample, rendered in memory (for image statistics).
+
+    The drive and the sensor effects are the sample's; the sensor noise is drawn afresh for
+    these frames (seeded), so the images differ from the written sample's by the noise only.
+    """
+    sample = get_sample(name)
+    rendered, _ = render_sample(name, None, resolution)
+    renderer = StereoRenderer(WORLDS[sample.world](), rendered.camera)
+    rng = np.random.default_rng(sample.seed + 2)
+    gains = exposure_gains(sample.frames, sample.exposure_sigma, np.random.default_rng(sample.seed + 3))
+    cameras = rendered.camera_poses()
+    images = []
+    for k in map(int, indices):
+        effects = SensorEffects(noise_sigma=sample.sensor_noise, exposure_gain=float(gains[k]))
+        images.append(effects.apply(renderer.render(cameras[k], time=k / sample.rate), rng))
+    return images
 
 
 def generate(
     name: str,
     out,
     frames: int | None = None,
-    resolution: tuple[int, int] = DEFAULT_RESOLUTION,
+    resolution: tuple[int, int] | None = None,
     progress: bool = True,
     force: bool = False,
 ) -> Path:
     """Render sample ``name`` into folder ``out``; returns the folder.
 
-    ``frames`` keeps only the first frames of the drive; ``resolution`` is ``(width, height)``.
+    ``frames`` keeps only the first frames of the drive; ``resolution`` is ``(width, height)``,
+    by default the sample's own.
     ``out`` must be new, empty or a folder this package wrote; ``force`` replaces any other
     (see :class:`~vo_lib.formats.sequence.SequenceWriter`).
     """
     sample = get_sample(name)
     rendered, frame_iter = render_sample(name, frames, resolution)
     camera, drive, n = rendered.camera, rendered.drive, rendered.frames
-    width, height = resolution
+    width, height = camera.width, camera.height
     with SequenceWriter(out, camera, force=force) as writer:
         for left, right, _ in tqdm(
             frame_iter, total=n, desc=f"rendering {name}", unit="frame", disable=not progress
@@ -283,20 +386,27 @@ def generate(
             "resolution": [width, height],
             "legs": [asdict(leg) for leg in sample.legs],
             "start_pose": list(sample.start),
-            "camera": {
-                "fx": camera.fx,
-                "fy": camera.fy,
-                "cx": camera.cx,
-                "cy": camera.cy,
-                "baseline": camera.baseline,
-                "height_m": CAMERA_HEIGHT,
-                "mount": "above turning axis",
-            },
-            "track_odometry": asdict(TrackOdometry()),
+            "camera": _camera_entry(sample, camera),
+            "track_odometry": asdict(road.CAR_ODOMETRY if sample.rig == "car" else TrackOdometry()),
             "slip": asdict(sample.slip),
             "sensor_noise_grey": sample.sensor_noise,
+            "exposure_sigma": sample.exposure_sigma,
             "seed": sample.seed,
             "robot_poses": drive.poses[:n].tolist(),
         }
-        poses = camera_poses_from_planar(drive.poses[:n], rendered.mount)  # camera k in camera 0's frame
+        cameras = rendered.camera_poses()
+        poses = np.linalg.inv(cameras[0]) @ cameras  # camera k in camera 0's frame
         return writer.close(drive.times[:n], poses, drive.odometry[:n], manifest)
+
+
+def _camera_entry(sample: Sample, camera: StereoCamera) -> dict:
+    """The manifest's camera: a crawler's states its height (the pipeline reads it as the
+    crawler's); a car's states where it sits in the car, without ``height_m`` (read as a car)."""
+    entry = {"fx": camera.fx, "fy": camera.fy, "cx": camera.cx, "cy": camera.cy, "baseline": camera.baseline}
+    if sample.rig == "car":
+        entry["in_vehicle_m"] = list(road.CAMERA_IN_VEHICLE)
+        entry["mount"] = "car: ahead of the rear axle (vo_lib.sim.road)"
+    else:
+        entry["height_m"] = CAMERA_HEIGHT
+        entry["mount"] = "above turning axis"
+    return entry

@@ -1,10 +1,21 @@
-"""Procedural grey-level textures, rich in corners, deterministic by seed.
+"""Grey-level textures, deterministic by seed: procedural corner-rich ones, photographs, paint.
 
 A texture is a sum of blocky noise at several scales (nearest-neighbour upsampled random grids,
 each offset by a random shift, so block corners do not line up across scales) plus random
 filled polygons and discs. Blocks give FAST its corners at every viewing distance; the polygons
 add corners at arbitrary angles. Mipmaps (Gaussian pyramids) let the renderer sample far surfaces
 without aliasing.
+
+Real surfaces are mostly poorer in corners: :func:`surface_texture` makes a texture of a named
+*style*: ``"corners"`` (the procedural one), photographs of ``"brick"``, ``"grass"`` and
+``"gravel"`` (scikit-image's bundled ones, tiled mirrored so that no seam shows, at a physical
+scale), ``"asphalt"`` (the gravel photograph, finer and flatter), ``"plain"`` (painted: a uniform
+grey with a faint wash), ``"wall"`` (a painted wall with a door and posters), ``"tiles"`` (floor
+tiles with grout lines), ``"panels"`` (a ceiling of plain panels and lights), ``"fence"`` (a
+repetitive fence of posts before a plain background), ``"far"`` (distant structure of low
+contrast, blurred), ``"road"`` (a two-lane road's cross-section: gravel verges, kerbs, edge lines,
+asphalt and a dashed centre line; columns run along the road) and ``"vehicle"`` (a car's side:
+paint, a dark window band and wheels).
 """
 
 from __future__ import annotations
@@ -13,6 +24,7 @@ from functools import lru_cache
 
 import cv2
 import numpy as np
+import skimage.data
 
 #: Block sizes (texels) and weights of the blocky noise layers.
 BLOCK_LAYERS = ((96, 0.25), (24, 0.30), (6, 0.30), (2, 0.15))
@@ -68,3 +80,246 @@ def mipmaps(texture: np.ndarray) -> list[np.ndarray]:
 def cached_mipmaps(height: int, width: int, seed: int, contrast: float = 1.0) -> tuple[np.ndarray, ...]:
     """Mipmaps of :func:`corner_texture`, computed once per process for each argument set."""
     return tuple(mipmaps(corner_texture(height, width, seed, contrast)))
+
+
+#: Changed whenever a texture's texels change for the same arguments: it enters the samples'
+#: fingerprints, so that cached samples are rendered again.
+TEXTURE_VERSION = 2
+#: Metres covered by the 512 pixels of each photograph (a brick is about 0.22 m long, a pebble of
+#: the gravel a few centimetres across; asphalt is the gravel photograph, finer and flatter).
+PHOTO_METRES = {"brick": 1.6, "grass": 1.0, "gravel": 2.0, "asphalt": 0.5}
+#: Grey level and contrast (multiplies the photograph's deviation from its mean) of each style.
+PHOTO_TONE = {"brick": (120.0, 1.0), "grass": (95.0, 1.2), "gravel": (130.0, 1.5), "asphalt": (105.0, 0.4)}
+
+
+@lru_cache(maxsize=4)
+def photograph(name: str) -> np.ndarray:
+    """A grey scikit-image photograph (``"brick"``, ``"grass"``, ``"gravel"``), float32."""
+    return getattr(skimage.data, name)().astype(np.float32)
+
+
+def mirrored_tiling(tile: np.ndarray, height: int, width: int, rng: np.random.Generator) -> np.ndarray:
+    """``tile`` repeated over ``(height, width)``, every other copy mirrored, from a random offset.
+
+    A mirrored copy meets its neighbour in the same pixels, so the tiling has no seams.
+    """
+    h, w = tile.shape
+    cell = np.block([[tile, tile[:, ::-1]], [tile[::-1], tile[::-1, ::-1]]])  # period 2h x 2w
+    oy, ox = rng.integers(0, 2 * h), rng.integers(0, 2 * w)
+    reps = ((height + oy) // (2 * h) + 1, (width + ox) // (2 * w) + 1)
+    return np.tile(cell, reps)[oy : oy + height, ox : ox + width]
+
+
+def photo_texture(style: str, height: int, width: int, texel: float, seed: int) -> np.ndarray:
+    """A photograph of ``style`` tiled over ``(height, width)`` texels of ``texel`` metres, float32."""
+    source = "gravel" if style == "asphalt" else style
+    photo = photograph(source)
+    side = max(4, int(round(PHOTO_METRES[style] / texel)))
+    tile = cv2.resize(photo, (side, side), interpolation=cv2.INTER_AREA)
+    grey, contrast = PHOTO_TONE[style]
+    tile = grey + contrast * (tile - tile.mean())
+    return mirrored_tiling(tile, height, width, np.random.default_rng(seed))
+
+
+def smooth_wash(
+    height: int, width: int, texel: float, rng: np.random.Generator, amplitude: float
+) -> np.ndarray:
+    """Slow shading of ``amplitude`` grey levels over metres: light falling unevenly on paint."""
+    step = max(1, int(round(1.0 / texel)))  # one random value per metre
+    grid = rng.normal(0.0, amplitude, (height // step + 2, width // step + 2)).astype(np.float32)
+    up = cv2.resize(grid, (grid.shape[1] * step, grid.shape[0] * step), interpolation=cv2.INTER_CUBIC)
+    return up[:height, :width]
+
+
+def _rect(img, x0, y0, x1, y1, texel, value):
+    a = (int(x0 / texel), int(y0 / texel))
+    b = (int(x1 / texel), int(y1 / texel))
+    cv2.rectangle(img, a, b, float(value), -1)
+
+
+def painted_wall(height: int, width: int, texel: float, seed: int) -> np.ndarray:
+    """Plain paint with a door and posters (pictures of corner texture) at eye height.
+
+    Row 0 of a wall texture is the floor line; doors stand on it, posters hang 1.2-1.9 m high.
+    """
+    rng = np.random.default_rng(seed)
+    grey = rng.uniform(150, 200)
+    img = grey + smooth_wash(height, width, texel, rng, 3.0)
+    length = width * texel
+    x = rng.uniform(0.3, 2.0)
+    while x < length - 1.0:
+        if rng.random() < 0.35:  # a door with its frame
+            _rect(img, x - 0.06, 0.0, x + 0.96, 2.06, texel, grey - 60)
+            _rect(img, x, 0.0, x + 0.9, 2.0, texel, rng.uniform(70, 120))
+            _rect(img, x + 0.75, 0.95, x + 0.85, 1.0, texel, 40)  # handle
+            x += rng.uniform(2.5, 5.0)
+        else:  # a poster
+            w, h = rng.uniform(0.4, 0.8), rng.uniform(0.5, 0.9)
+            y0 = 1.15
+            c0, r0 = int(x / texel), int(y0 / texel)
+            pw, ph = int(w / texel), int(h / texel)
+            pw, ph = min(pw, width - c0), min(ph, height - r0)
+            if pw > 4 and ph > 4:
+                img[r0 : r0 + ph, c0 : c0 + pw] = corner_texture(ph, pw, int(rng.integers(1 << 30)))
+            x += w + rng.uniform(2.0, 5.0)
+    return img
+
+
+def floor_tiles(height: int, width: int, texel: float, seed: int, side: float = 0.4) -> np.ndarray:
+    """Square tiles of ``side`` metres, each its own grey, with dark grout lines and a fine speckle."""
+    rng = np.random.default_rng(seed)
+    n = max(1, int(round(side / texel)))
+    greys = rng.uniform(140, 160, (height // n + 2, width // n + 2)).astype(np.float32)
+    img = cv2.resize(greys, (greys.shape[1] * n, greys.shape[0] * n), interpolation=cv2.INTER_NEAREST)
+    img = img[:height, :width].copy()
+    grout = max(1, int(round(0.006 / texel)))
+    for k in range(0, height, n):
+        img[k : k + grout] = 95
+    for k in range(0, width, n):
+        img[:, k : k + grout] = 95
+    speckle = photo_texture("asphalt", height, width, texel, seed + 1) - PHOTO_TONE["asphalt"][0]
+    return img + 3.0 * speckle
+
+
+def ceiling_panels(height: int, width: int, texel: float, seed: int) -> np.ndarray:
+    """Plain 0.6 m panels in a thin grid, with a bright light every few panels."""
+    rng = np.random.default_rng(seed)
+    n = max(1, int(round(0.6 / texel)))
+    img = np.full((height, width), 175.0, np.float32) + smooth_wash(height, width, texel, rng, 2.0)
+    for k in range(0, height, n):
+        img[k : k + 2] = 150
+    for k in range(0, width, n):
+        img[:, k : k + 2] = 150
+    for r in range(n, height - n, 4 * n):
+        for c in range(n, width - n, 3 * n):
+            img[r + 4 : r + n - 4, c + 4 : c + 2 * n - 4] = 245
+    return img
+
+
+def fence(height: int, width: int, texel: float, seed: int) -> np.ndarray:
+    """A fence: dark posts every 0.25 m and two rails, before a plain pale background."""
+    rng = np.random.default_rng(seed)
+    img = np.full((height, width), 170.0, np.float32) + smooth_wash(height, width, texel, rng, 4.0)
+    pitch, post = int(round(0.25 / texel)), max(1, int(round(0.05 / texel)))
+    for c in range(0, width, pitch):
+        img[:, c : c + post] = 70
+    for y in (0.3, 1.1):
+        img[int(y / texel) : int((y + 0.06) / texel) + 1] = 80
+    return img
+
+
+def far_structure(height: int, width: int, texel: float, seed: int) -> np.ndarray:
+    """Distant buildings and trees seen through haze: blurred blocks of low contrast."""
+    rng = np.random.default_rng(seed)
+    img = np.full((height, width), 165.0, np.float32)
+    x = 0
+    while x < width:
+        w = int(rng.uniform(3.0, 15.0) / texel)
+        top = int(rng.uniform(0.3, 1.0) * height)
+        img[:top, x : x + w] = rng.uniform(145, 175)
+        x += w
+    return cv2.GaussianBlur(img, (0, 0), max(1.0, 0.3 / texel))
+
+
+#: Cross-section of the ``"road"`` texture from its left edge, metres: verge, kerb, edge line,
+#: lane, centre line, lane, edge line, kerb, verge (10 m in all).
+ROAD_BANDS = (
+    ("gravel", 0.8),
+    ("kerb", 0.2),
+    ("line", 0.15),
+    ("asphalt", 3.7),
+    ("dashes", 0.3),
+    ("asphalt", 3.7),
+    ("line", 0.15),
+    ("kerb", 0.2),
+    ("gravel", 0.8),
+)
+ROAD_WIDTH = sum(w for _, w in ROAD_BANDS)
+#: Centre-line dashes: painted length and period along the road, metres.
+DASH = (3.0, 9.0)
+#: Contrast of a road's asphalt against the ``"asphalt"`` style (worn, patched road surface).
+ROAD_GRAIN = 5.0
+#: Grey levels of paint and kerb stone.
+LINE_GREY, KERB_GREY = 200.0, 165.0
+
+
+def road_surface(height: int, width: int, texel: float, seed: int) -> np.ndarray:
+    """A two-lane road: rows across it (row 0 at the left verge), columns along it."""
+    asphalt = photo_texture("asphalt", height, width, texel, seed)
+    grey = PHOTO_TONE["asphalt"][0]
+    img = grey + ROAD_GRAIN * (asphalt - grey)
+    gravel = photo_texture("gravel", height, width, texel, seed + 1)
+    wash = smooth_wash(height, width, texel, np.random.default_rng(seed + 2), 4.0)
+    along = np.arange(width) * texel
+    edge = 0.0
+    for band, w in ROAD_BANDS:
+        r0, r1 = int(round(edge / texel)), int(round((edge + w) / texel))
+        if band == "gravel":
+            img[r0:r1] = gravel[r0:r1]
+        elif band == "kerb":
+            img[r0:r1] = KERB_GREY + 0.3 * (gravel[r0:r1] - PHOTO_TONE["gravel"][0])
+        elif band == "line":
+            img[r0:r1] = LINE_GREY
+        elif band == "dashes":
+            painted = np.mod(along, DASH[1]) < DASH[0]
+            c0, c1 = r0 + (r1 - r0) // 3, r1 - (r1 - r0) // 3
+            img[c0:c1, painted] = LINE_GREY
+        edge += w
+    return img + wash
+
+
+def vehicle_side(height: int, width: int, texel: float, seed: int) -> np.ndarray:
+    """A car body seen from one side: paint, a dark window band above the waist, two wheels."""
+    rng = np.random.default_rng(seed)
+    paint = rng.uniform(60, 200)
+    img = paint + smooth_wash(height, width, texel, rng, 6.0)
+    waist, roof = int(0.9 / texel), int(1.35 / texel)
+    img[waist:roof, int(0.15 * width) : int(0.85 * width)] = rng.uniform(30, 55)
+    img[roof:] = paint * 0.85
+    radius = max(1, int(0.33 / texel))
+    for x in (0.18, 0.82):
+        cv2.circle(img, (int(x * width), radius), radius, 25.0, -1)
+        cv2.circle(img, (int(x * width), radius), radius // 2, 120.0, -1)
+    return img
+
+
+def surface_texture(style: str, height: int, width: int, texel: float, seed: int) -> np.ndarray:
+    """A ``(height, width)`` uint8 texture of ``style`` with texels of ``texel`` metres.
+
+    Row 0 is the floor line of a wall (z = 0) and the ``xmin, ymin`` corner of a floor.
+    """
+    if height <= 0 or width <= 0:
+        raise ValueError(f"texture size must be positive; got {height}x{width}")
+    rng = np.random.default_rng(seed)
+    if style == "corners":
+        return corner_texture(height, width, seed)
+    if style in PHOTO_METRES:
+        img = photo_texture(style, height, width, texel, seed)
+    elif style == "plain":
+        img = rng.uniform(150, 200) + smooth_wash(height, width, texel, rng, 3.0)
+    elif style == "wall":
+        img = painted_wall(height, width, texel, seed)
+    elif style == "tiles":
+        img = floor_tiles(height, width, texel, seed)
+    elif style == "panels":
+        img = ceiling_panels(height, width, texel, seed)
+    elif style == "fence":
+        img = fence(height, width, texel, seed)
+    elif style == "far":
+        img = far_structure(height, width, texel, seed)
+    elif style == "road":
+        img = road_surface(height, width, texel, seed)
+    elif style == "vehicle":
+        img = vehicle_side(height, width, texel, seed)
+    else:
+        raise ValueError(f"unknown texture style {style!r}; known: {', '.join(STYLES)}")
+    return np.clip(img + 0.5, 0, 255).astype(np.uint8)
+
+
+STYLES = ("corners", *PHOTO_METRES, "plain", "wall", "tiles", "panels", "fence", "far", "road", "vehicle")
+
+
+@lru_cache(maxsize=256)
+def cached_surface(style: str, height: int, width: int, texel: float, seed: int) -> tuple[np.ndarray, ...]:
+    """Mipmaps of :func:`surface_texture`, computed once per process for each argument set."""
+    return tuple(mipmaps(surface_texture(style, height, width, texel, seed)))

@@ -4,14 +4,19 @@ The same :class:`World` feeds the stereo renderer (``vo_lib.sim.render``), the l
 (``vo_lib.sim.laser``), the line landmarks of the EKF-SLAM notebook and the corridor of the
 pose-tracking notebook. A segment is a vertical rectangle standing on the floor (z = 0) between
 two plan points, with a height and a texture seed; ``mapped=False`` marks an obstacle the robot's
-map does not know (the umbrella of seed 004).
+map does not know (the umbrella of seed 004). Two additions only the camera sees: *patches*,
+flat textured quads in any orientation (a road that climbs and banks above the floor), and
+*movers*, textured boxes that drive along a path (traffic, a cart).
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
+
+from vo_lib.sim import road
+from vo_lib.sim.textures import ROAD_WIDTH
 
 #: World-space size of one texel, metres.
 TEXEL_SIZE = 0.01
@@ -27,6 +32,8 @@ class Segment:
     kind: str = "wall"
     mapped: bool = True
     texture_seed: int = 0
+    style: str = "corners"  # texture style, see vo_lib.sim.textures.surface_texture
+    texel: float | None = None  # texel size, metres; None: the world's floor_texel
 
     def __post_init__(self):
         if self.length <= 0:
@@ -37,6 +44,61 @@ class Segment:
     @property
     def length(self) -> float:
         return float(np.hypot(self.end[0] - self.start[0], self.end[1] - self.start[1]))
+
+
+@dataclass(frozen=True)
+class Patch:
+    """A flat textured quad: the points ``origin + a * along + b * across`` for ``a`` in
+    ``[0, length]`` and ``b`` in ``[0, width]`` (metres; ``along`` and ``across`` unit vectors).
+
+    Texture columns run along ``along`` and rows along ``across``; column 0 lies ``offset`` metres
+    before ``origin``, so that consecutive patches of one ribbon (a road) continue one texture of
+    ``texture_length`` metres.
+    """
+
+    origin: tuple[float, float, float]
+    along: tuple[float, float, float]
+    across: tuple[float, float, float]
+    length: float
+    width: float
+    style: str
+    texture_seed: int
+    offset: float = 0.0
+    texture_length: float = 0.0
+    outline: tuple = ()  # four 3-D corners drawn instead of the parallelogram, if given
+
+    def __post_init__(self):
+        if not (self.length > 0 and self.width > 0):
+            raise ValueError(f"patch sides must be > 0 metres; got {self.length!r} x {self.width!r}")
+
+
+@dataclass(frozen=True)
+class Mover:
+    """A textured box (four sides and a top) driving at ``speed`` along a 3-D ``path``.
+
+    At time ``t`` (seconds) its bottom centre is ``start + speed * t`` metres along the path
+    (held at the path's end after it), facing along the path.
+    """
+
+    path: tuple[tuple[float, float, float], ...]
+    speed: float
+    size: tuple[float, float]  # length, width, metres
+    height: float
+    style: str
+    texture_seed: int
+    start: float = 0.0
+    kind: str = "car"
+
+    def pose(self, time: float) -> tuple[np.ndarray, float]:
+        """Bottom centre ``(x, y, z)`` and yaw at ``time``."""
+        pts = np.asarray(self.path, float)
+        steps = np.linalg.norm(np.diff(pts, axis=0), axis=1)
+        s = np.concatenate([[0.0], np.cumsum(steps)])
+        at = float(np.clip(self.start + self.speed * time, 0.0, s[-1]))
+        i = int(np.clip(np.searchsorted(s, at, side="right") - 1, 0, len(steps) - 1))
+        f = (at - s[i]) / steps[i]
+        d = pts[i + 1] - pts[i]
+        return pts[i] + f * d, float(np.arctan2(d[1], d[0]))
 
 
 @dataclass(frozen=True)
@@ -55,6 +117,12 @@ class World:
         Height of a textured ceiling, metres; ``None`` for open sky.
     floor_texel : float
         Texel size of floor and ceiling (outdoor floors use coarser texels).
+    floor_style, ceiling_style : str
+        Texture styles of floor and ceiling (:func:`vo_lib.sim.textures.surface_texture`).
+    patches : tuple of Patch
+        Flat textured quads besides the floor (seen by the camera only).
+    movers : tuple of Mover
+        Moving boxes (seen by the camera only).
     """
 
     name: str
@@ -64,6 +132,10 @@ class World:
     ceiling_height: float | None = None
     floor_texel: float = TEXEL_SIZE
     notes: dict = field(default_factory=dict, compare=False)
+    floor_style: str = "corners"
+    ceiling_style: str = "corners"
+    patches: tuple[Patch, ...] = ()
+    movers: tuple[Mover, ...] = ()
 
     def segments_array(self, mapped_only: bool = False) -> np.ndarray:
         """``(M, 4)`` array of ``x0, y0, x1, y1`` rows, for vectorised ray casting."""
@@ -72,50 +144,76 @@ class World:
 
     def with_segments(self, extra) -> World:
         """A copy of this world with more segments."""
-        return World(
-            self.name,
-            self.segments + tuple(extra),
-            self.floor_extent,
-            self.seed,
-            self.ceiling_height,
-            self.floor_texel,
-            dict(self.notes),
-        )
+        return replace(self, segments=self.segments + tuple(extra), notes=dict(self.notes))
 
 
 # ---------------------------------------------------------------------- building blocks
 def polyline(
-    points, height: float, seed: int, kind: str = "wall", closed: bool = False, mapped: bool = True
+    points,
+    height: float,
+    seed: int,
+    kind: str = "wall",
+    closed: bool = False,
+    mapped: bool = True,
+    style: str = "corners",
 ) -> list[Segment]:
     """Segments joining consecutive plan points; texture seeds count up from ``seed``."""
     pts = [tuple(map(float, p)) for p in points]
     if closed:
         pts.append(pts[0])
     pairs = zip(pts[:-1], pts[1:], strict=True)
-    return [Segment(a, b, height, kind, mapped, seed + i) for i, (a, b) in enumerate(pairs)]
+    return [Segment(a, b, height, kind, mapped, seed + i, style) for i, (a, b) in enumerate(pairs)]
 
 
 def box(
-    centre, size, yaw: float, height: float, seed: int, kind: str = "box", mapped: bool = True
+    centre,
+    size,
+    yaw: float,
+    height: float,
+    seed: int,
+    kind: str = "box",
+    mapped: bool = True,
+    style: str = "corners",
 ) -> list[Segment]:
     """Four outward-facing sides of a rectangular block centred at ``centre`` with plan ``size``."""
     c, s = np.cos(yaw), np.sin(yaw)
     hx, hy = size[0] / 2, size[1] / 2
     corners = [(-hx, -hy), (hx, -hy), (hx, hy), (-hx, hy)]
     pts = [(centre[0] + c * x - s * y, centre[1] + s * x + c * y) for x, y in corners]
-    return polyline(pts, height, seed, kind, closed=True, mapped=mapped)
+    return polyline(pts, height, seed, kind, closed=True, mapped=mapped, style=style)
 
 
 # ---------------------------------------------------------------------- ready-made worlds
 def indoor_lab(seed: int = 10) -> World:
-    """A 14 m x 9 m lab: textured walls 2.6 m high, two pillars, boxes and a cabinet, a ceiling."""
-    segs = polyline([(-7, -4.5), (7, -4.5), (7, 4.5), (-7, 4.5)], 2.6, seed, closed=True)
-    segs += box((2.5, 2.0), (0.5, 0.5), 0.0, 2.6, seed + 10, "pillar")
-    segs += box((-2.0, -2.2), (0.5, 0.5), 0.0, 2.6, seed + 20, "pillar")
+    """A 14 m x 9 m lab: painted walls 2.6 m high with doors and posters, two plain pillars,
+    boxes (corner-rich clutter) and a plain cabinet, a tiled floor and a ceiling of panels."""
+    segs = polyline([(-7, -4.5), (7, -4.5), (7, 4.5), (-7, 4.5)], 2.6, seed, closed=True, style="wall")
+    segs += box((2.5, 2.0), (0.5, 0.5), 0.0, 2.6, seed + 10, "pillar", style="plain")
+    segs += box((-2.0, -2.2), (0.5, 0.5), 0.0, 2.6, seed + 20, "pillar", style="plain")
     segs += box((4.8, -1.8), (1.2, 0.8), 0.3, 0.9, seed + 30)
     segs += box((-4.5, 2.6), (1.0, 1.4), -0.2, 1.2, seed + 40)
-    segs += box((0.5, -3.6), (2.0, 0.6), 0.0, 1.8, seed + 50, "cabinet")
-    return World("indoor_lab", tuple(segs), (-7.0, 7.0, -4.5, 4.5), seed, ceiling_height=2.6)
+    segs += box((0.5, -3.6), (2.0, 0.6), 0.0, 1.8, seed + 50, "cabinet", style="plain")
+    # shelves of equipment and clutter along the walls: the lab's corner-rich parts
+    for i, (x, y, yaw, w) in enumerate(
+        [
+            (-5.5, -4.2, 0.0, 2.0),
+            (4.0, 4.2, 0.0, 2.5),
+            (6.7, 1.5, 1.5708, 2.0),
+            (-6.7, -1.0, 1.5708, 2.5),
+            (-1.5, 4.2, 0.0, 1.8),
+            (3.5, -4.2, 0.0, 1.6),
+        ]
+    ):
+        segs += box((x, y), (w, 0.5), yaw, 1.9, seed + 60 + 4 * i, "shelf")
+    return World(
+        "indoor_lab",
+        tuple(segs),
+        (-7.0, 7.0, -4.5, 4.5),
+        seed,
+        ceiling_height=2.6,
+        floor_style="tiles",
+        ceiling_style="panels",
+    )
 
 
 def outdoor_yard(seed: int = 20) -> World:
@@ -124,11 +222,23 @@ def outdoor_yard(seed: int = 20) -> World:
     Most structure is 15-40 m away: low parallax for a 12 cm baseline, as in the paper's
     outdoor experiments.
     """
-    segs = polyline([(-40, -40), (40, -40), (40, 40), (-40, 40)], 8.0, seed, "building", closed=True)
-    segs += polyline([(18, -12), (18, 12)], 6.0, seed + 10, "building")
+    square = [(-40, -40), (40, -40), (40, 40), (-40, 40)]
+    segs = polyline(square, 8.0, seed, "building", closed=True, style="brick")
+    segs += polyline([(18, -12), (18, 12)], 6.0, seed + 10, "building", style="brick")
+    segs += polyline([(-20, 25), (5, 25)], 1.4, seed + 12, "fence", style="fence")
+    segs += polyline([(-25, -16), (15, -16)], 1.4, seed + 14, "fence", style="fence")
+    segs += box((8.0, 12.0), (4.0, 3.0), 0.1, 2.6, seed + 16, "shed", style="brick")
     for i, (x, y) in enumerate([(9, 5), (12, -7), (-8, 9), (-10, -6), (4, -13)]):
         segs += box((x, y), (1.2, 1.2), 0.4 * i, 1.2, seed + 20 + 4 * i, "crate")
-    return World("outdoor_yard", tuple(segs), (-40.0, 40.0, -40.0, 40.0), seed, None, floor_texel=0.02)
+    return World(
+        "outdoor_yard",
+        tuple(segs),
+        (-40.0, 40.0, -40.0, 40.0),
+        seed,
+        None,
+        floor_texel=0.02,
+        floor_style="gravel",
+    )
 
 
 def corridor(seed: int = 30, length: float = 30.0, width: float = 3.0) -> World:
@@ -167,4 +277,166 @@ def corridor(seed: int = 30, length: float = 30.0, width: float = 3.0) -> World:
     )
 
 
-WORLDS = {"indoor_lab": indoor_lab, "outdoor_yard": outdoor_yard, "corridor": corridor}
+#: Texel size of the objects beside the road (seen from a few metres), metres.
+NEAR_TEXEL = 0.02
+#: Far structure: how far beyond the road's extent it stands and how high, metres.
+FAR_DISTANCE, FAR_HEIGHT = 80.0, 14.0
+
+
+def _ribbon_breaks(s, poses, most: float = 6.0) -> list[int]:
+    """Indices cutting a centre line into pieces that are nearly flat, straight and even."""
+    breaks, first = [0], 0
+    g, c = road.grade(s), road.crossfall(s)
+    for i in range(1, len(s)):
+        bent = abs(poses[i, 2] - poses[first, 2]) > np.radians(1.0)
+        changed = abs(g[i] - g[first]) > 0.004 or abs(c[i] - c[first]) > 0.004
+        if bent or changed or s[i] - s[first] > most or i == len(s) - 1:
+            breaks.append(i)
+            first = i
+    return breaks
+
+
+def road_ribbon(seed: int) -> tuple[Patch, ...]:
+    """The road surface along :func:`vo_lib.sim.road.centre_line`: one patch per piece, each a
+    quad whose ends stand square to the road (so that pieces meet without gaps in the bends)."""
+    s, poses = road.centre_line()
+    poses = poses.copy()
+    poses[:, :2] += road.LANE_OFFSET * np.column_stack([-np.sin(poses[:, 2]), np.cos(poses[:, 2])])
+    z, c = road.elevation(s), road.crossfall(s)
+    half = ROAD_WIDTH / 2
+    left = np.column_stack([-np.sin(poses[:, 2]), np.cos(poses[:, 2]), c])  # per metre to the left
+    centre = np.column_stack([poses[:, :2], z])
+    total = s[-1] - s[0]
+    patches = []
+    breaks = _ribbon_breaks(s, poses)
+    for i, j in zip(breaks[:-1], breaks[1:], strict=True):
+        along = centre[j] - centre[i]
+        length = float(np.linalg.norm(along))
+        along /= length
+        mid = left[i] + left[j]
+        across = -mid / np.linalg.norm(mid)
+        outline = (centre[i] + half * left[i], centre[j] + half * left[j], centre[j] - half * left[j])
+        outline += (centre[i] - half * left[i],)
+        patches.append(
+            Patch(
+                tuple(outline[0]),
+                tuple(along),
+                tuple(across),
+                length,
+                ROAD_WIDTH,
+                "road",
+                seed,
+                offset=float(s[i] - s[0]),
+                texture_length=float(total),
+                outline=tuple(tuple(p) for p in outline),
+            )
+        )
+    return tuple(patches)
+
+
+def _lane(offset: float, reverse: bool = False) -> tuple[np.ndarray, np.ndarray]:
+    """Arc lengths of the centre line and 3-D points ``offset`` metres left of the car's lane."""
+    s, poses = road.centre_line(2.0)
+    left = np.column_stack([-np.sin(poses[:, 2]), np.cos(poses[:, 2])])
+    pts = np.column_stack(
+        [poses[:, :2] + offset * left, road.elevation(s) + road.crossfall(s) * (offset - road.LANE_OFFSET)]
+    )
+    return (s[::-1], pts[::-1]) if reverse else (s, pts)
+
+
+def road_traffic(seed: int) -> tuple[Mover, ...]:
+    """Two oncoming cars that pass the driven car on the first and last straights, one ahead."""
+    path = road.planned_path()
+    ego_s = road.arc_length(path)
+    movers = []
+    oncoming_s, oncoming = _lane(2 * road.LANE_OFFSET, reverse=True)
+    for i, (frame, speed) in enumerate(((35, 10.0), (185, 8.0))):
+        meet = ego_s[frame]  # where the driven car is when they pass each other
+        along = float(np.sum(np.linalg.norm(np.diff(oncoming[oncoming_s >= meet], axis=0), axis=1)))
+        movers.append(
+            Mover(
+                tuple(map(tuple, oncoming)),
+                speed,
+                (4.3, 1.8),
+                1.5,
+                "vehicle",
+                seed + 10 * i,
+                along - speed * frame / road.RATE,
+            )
+        )
+    ahead_s, ahead = _lane(0.0)
+    start = float(np.sum(np.linalg.norm(np.diff(ahead[ahead_s <= 40.0], axis=0), axis=1)))
+    movers.append(Mover(tuple(map(tuple, ahead)), 11.0, (4.5, 1.8), 1.6, "vehicle", seed + 30, start))
+    return tuple(movers)
+
+
+def road_side(seed: int) -> list[Segment]:
+    """Buildings, trees, fences and parked cars beside the road, and far low-contrast structure."""
+    rng = np.random.default_rng(seed)
+    s, poses = road.centre_line(2.0)
+    road_xy = poses[:, :2] + road.LANE_OFFSET * np.column_stack([-np.sin(poses[:, 2]), np.cos(poses[:, 2])])
+    segs: list[Segment] = []
+    kinds = ("building", "tree", "fence", "parked car", "building", "tree")
+    for k in range(0, len(s), 4):
+        x, y, h = *road_xy[k], poses[k, 2]
+        normal = np.array([-np.sin(h), np.cos(h)])
+        for side in (1.0, -1.0):
+            kind = kinds[int(rng.integers(len(kinds)))]
+            size, height, style, gap = {
+                "building": ((rng.uniform(8, 15), rng.uniform(6, 10)), rng.uniform(6, 14), "brick", 4.0),
+                "tree": ((1.2, 1.2), rng.uniform(4, 7), "grass", 2.0),
+                "fence": ((rng.uniform(8, 14), 0.1), 1.5, "fence", 2.5),
+                "parked car": ((4.3, 1.8), 1.5, "vehicle", 0.6),
+            }[kind]
+            if kind == "building" and rng.random() < 0.3:
+                style = "wall"
+            centre = np.array([x, y]) + side * normal * (
+                ROAD_WIDTH / 2 + gap + size[1] / 2 + rng.uniform(0, 4)
+            )
+            reach = np.hypot(*size) / 2 + ROAD_WIDTH / 2 + 0.3
+            if np.min(np.linalg.norm(road_xy - centre, axis=1)) < reach:
+                continue  # would stand on the road (inside a bend)
+            near = box(tuple(centre), size, h, height, seed + 100 + len(segs), kind, style=style)
+            segs += [replace(seg, texel=NEAR_TEXEL) for seg in near]
+    lo, hi = road_xy.min(axis=0) - FAR_DISTANCE, road_xy.max(axis=0) + FAR_DISTANCE
+    ring = [(lo[0], lo[1]), (hi[0], lo[1]), (hi[0], hi[1]), (lo[0], hi[1])]
+    segs += polyline(ring, FAR_HEIGHT, seed + 5000, "far structure", closed=True, style="far")
+    return segs
+
+
+def road_world(seed: int = 40) -> World:
+    """A road drive's world (:mod:`vo_lib.sim.road`): a two-lane road along the car's path that
+    climbs and banks, on rough ground; buildings, trees, fences and parked cars beside it; far structure
+    of low contrast beyond (:data:`FAR_DISTANCE`); the sky; and traffic."""
+    segs = road_side(seed)
+    s, poses = road.centre_line(5.0)
+    # grass up to the far structure (whose ring is measured from the road's edge points)
+    lo, hi = poses[:, :2].min(axis=0) - FAR_DISTANCE - 5.0, poses[:, :2].max(axis=0) + FAR_DISTANCE + 5.0
+    return World(
+        "road",
+        tuple(segs),
+        (float(lo[0]), float(hi[0]), float(lo[1]), float(hi[1])),
+        seed,
+        None,
+        floor_texel=0.06,
+        floor_style="gravel",
+        patches=road_ribbon(seed + 1),
+        movers=road_traffic(seed + 2),
+    )
+
+
+def indoor_lab_cart(seed: int = 10) -> World:
+    """The lab with a trolley of boxes (1.0 m x 0.6 m, 1.1 m high) pushed back and forth along
+    its north side at walking pace: an independently moving object."""
+    path = ((-5.0, 3.0, 0.0), (5.0, 3.0, 0.0)) * 3
+    cart = Mover(path, 0.7, (1.0, 0.6), 1.1, "corners", seed + 90, kind="cart")
+    return replace(indoor_lab(seed), name="indoor_lab_cart", movers=(cart,))
+
+
+WORLDS = {
+    "indoor_lab_cart": indoor_lab_cart,
+    "indoor_lab": indoor_lab,
+    "outdoor_yard": outdoor_yard,
+    "corridor": corridor,
+    "road": road_world,
+}

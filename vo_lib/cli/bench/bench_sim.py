@@ -16,13 +16,18 @@ def bench_sensors() -> dict[str, float]:
     from vo_lib.sim.world import WORLDS
 
     cam = StereoCamera.bumblebee2()
-    mount = camera_mount(height=0.5)
-    views = {"indoor_lab": (-3.0, 0.0, 0.2), "outdoor_yard": (0.0, 0.0, 0.3), "corridor": (2.0, 0.0, 0.0)}
+    # pose (x, y, yaw) and camera height: the crawler's 0.5 m, a car's 1.65 m on the road
+    views = {
+        "indoor_lab": ((-3.0, 0.0, 0.2), 0.5),
+        "outdoor_yard": ((0.0, 0.0, 0.3), 0.5),
+        "corridor": ((2.0, 0.0, 0.0), 0.5),
+        "road": ((20.0, 0.0, 0.0), 1.75),
+    }
     times = {}
     print("stereo renderer, 640x480 pairs (median over repeated renders)")
-    for name, pose in views.items():
+    for name, (pose, height) in views.items():
         renderer = StereoRenderer(WORLDS[name](), cam)
-        T = planar_to_matrix(pose) @ mount
+        T = planar_to_matrix(pose) @ camera_mount(height=height)
         t = median_seconds(lambda r=renderer, T=T: r.render_pair(T), repeat=15, min_time=1.0)
         times[f"render {name}"] = t
         print(f"  {name:<14s}{t * 1e3:9.2f} ms per pair {1 / t:8.1f} pairs/s (target >= 20)")
