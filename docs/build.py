@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import argparse
 import asyncio
+import hashlib
 import json
 import os
 import pathlib
@@ -44,6 +45,7 @@ DEFAULT_OUT = DOCS / "_build"
 STUDENT_SUBFOLDER = "student"
 NOTEBOOK_GLOB = "[0-9][0-9]_*.py"  # the notebooks tests/test_notebooks.py executes
 MARKER = ".vo_notebooks_site"
+CONF_STAMP = "conf.py.sha256"  # in doctrees/: the conf.py the pages were read with
 # Pages of the site that are files of the repository: path in the site's source tree -> file.
 PAGES = {
     "index.md": DOCS / "index.md",
@@ -282,9 +284,18 @@ def execute_missing(
 
 
 def run_sphinx(out: pathlib.Path, tree: pathlib.Path, jobs: int, title: str) -> pathlib.Path:
-    """Sphinx, nitpicky, warnings as errors, into html.tmp; renamed to html when it succeeded."""
+    """Sphinx, nitpicky, warnings as errors, into html.tmp; renamed to html when it succeeded.
+
+    Sphinx re-reads only pages whose files changed; after a change to conf.py (whose code, such
+    as the widget transform, Sphinx does not track) it re-reads all of them (``-E``), from the
+    cache.
+    """
     staging = out / "html.tmp"
     shutil.rmtree(staging, ignore_errors=True)
+    doctrees = out / "doctrees"
+    conf_stamp = doctrees / CONF_STAMP
+    conf_hash = hashlib.sha256((DOCS / "conf.py").read_bytes()).hexdigest()
+    conf_changed = not conf_stamp.is_file() or conf_stamp.read_text() != conf_hash
     command = [
         sys.executable,
         "-m",
@@ -299,8 +310,9 @@ def run_sphinx(out: pathlib.Path, tree: pathlib.Path, jobs: int, title: str) -> 
         str(jobs),
         "-c",
         str(DOCS),
+        *(["-E"] if conf_changed else []),
         "-d",
-        str(out / "doctrees"),
+        str(doctrees),
         "-D",
         f"nb_execution_cache_path={out / '.jupyter_cache'}",
         "-D",
@@ -316,6 +328,7 @@ def run_sphinx(out: pathlib.Path, tree: pathlib.Path, jobs: int, title: str) -> 
             shutil.rmtree(staging, ignore_errors=True)
     if returncode != 0:
         raise BuildError(f"Sphinx reported errors or warnings (exit {returncode}; see above)")
+    conf_stamp.write_text(conf_hash)
     site = out / "html"
     replace_folder(staging, site)
     return site
