@@ -47,12 +47,12 @@ def test_every_notebook_is_in_the_toctree_and_every_page_exists(build_script):
     index = (DOCS / "index.md").read_text(encoding="utf-8")
     entries = toctree_entries(index)
     assert "notebooks/*" in entries and ":glob:" in index  # every notebook of the folder, by name
-    assert all(nb.name.endswith(".py") and nb.name[:2].isdigit() for nb in NOTEBOOKS)
+    # The glob takes every notebook build.py copies into the tree: those tests/test_notebooks.py runs.
+    assert build_script.find_notebooks(ROOT / "notebooks") == NOTEBOOKS
     pages = {name.removesuffix(".md") for name in build_script.PAGES if name not in ("index.md", "README.md")}
     assert pages == {e for e in entries if e != "notebooks/*"}, "a page of the site outside the toctree"
     for name, path in build_script.PAGES.items():
         assert path.is_file(), f"{name}: {path} is missing"
-    assert build_script.NOTEBOOK_GLOB == "[0-9][0-9]_*.py"  # the notebooks tests/test_notebooks.py runs
 
 
 def test_landing_page_and_benchmarks_split_the_readme_at_one_heading():
@@ -105,3 +105,19 @@ def test_a_folder_that_is_not_a_build_folder_is_refused_untouched(build_script, 
     err = capsys.readouterr().err
     assert "not a site build folder" in err and err.count("\n") == 1, err
     assert [p.name for p in precious.iterdir()] == ["chapter1.tex"]
+
+
+def test_an_exception_in_a_notebook_fails_the_build_in_one_line(build_script, tmp_path, capsys):
+    """The notebook runs in a kernel of its own; its error is the last line, its traceback a report."""
+    notebooks = tmp_path / "notebooks"
+    notebooks.mkdir()
+    (notebooks / "01_broken.py").write_text(
+        '# %%\nraise ValueError("a deliberate error")\n', encoding="utf-8"
+    )
+    out = tmp_path / "site"
+    assert build_script.main(["--notebooks", str(notebooks), "--out", str(out), "--jobs", "1"]) == 1
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1, err
+    assert "01_broken.py: ValueError: a deliberate error" in err
+    assert "a deliberate error" in (out / "reports" / "01_broken.err.log").read_text(encoding="utf-8")
+    assert not (out / "html").exists() and not (out / "executing").exists()
