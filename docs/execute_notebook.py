@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import os
 import pathlib
+import re
 import sys
 import tempfile
 import traceback
@@ -20,6 +21,7 @@ import traceback
 NOTEBOOK_FORMAT = "py:percent"  # as nb_custom_formats in conf.py: the cache keys must agree
 KERNEL_NAME = "vo-notebooks-site"
 CELL_TIMEOUT_S = 300  # as in tests/test_notebooks.py
+ANSI_ESCAPE = re.compile(r"\x1b\[[0-9;]*m")  # the colours of IPython's tracebacks
 
 
 def read_notebook(path: pathlib.Path):
@@ -59,6 +61,17 @@ def execute(path: pathlib.Path, kernels: pathlib.Path):
     return nb
 
 
+def summary(exc) -> str:
+    """One line for a cell's error: its name and message, and the line of the cell that raised it
+    (a bare ``assert`` has no message)."""
+    arrows = [line for line in ANSI_ESCAPE.sub("", exc.traceback).splitlines() if "--->" in line]
+    head = f"{exc.ename}: {exc.evalue}" if exc.evalue else exc.ename
+    if not arrows:
+        return head
+    number, _, code = arrows[-1].split("--->", 1)[1].strip().partition(" ")
+    return f"{head}, at line {number} of the cell: {code.strip()}"
+
+
 def main(argv: list[str]) -> int:
     import nbformat
     from nbclient.exceptions import CellExecutionError, CellTimeoutError
@@ -73,7 +86,7 @@ def main(argv: list[str]) -> int:
         print(f"CellTimeoutError: a cell ran longer than {CELL_TIMEOUT_S} s\n{exc}", file=sys.stderr)
         return 1
     except CellExecutionError as exc:
-        print(f"{exc.ename}: {exc.evalue}\n{exc}", file=sys.stderr)
+        print(f"{summary(exc)}\n{ANSI_ESCAPE.sub('', str(exc))}", file=sys.stderr)
         return 1
     except Exception as exc:  # the kernel or its client failing
         print(f"{type(exc).__name__}: {exc}\n{traceback.format_exc()}", file=sys.stderr)
