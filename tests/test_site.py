@@ -163,6 +163,28 @@ def test_notebook_page_shows_figures_maths_and_outputs(browser, base_url, screen
     page.close()
 
 
+@pytest.mark.parametrize(
+    "path",
+    [
+        "benchmarks.html",
+        "docs/errata.html",
+        "data/README.html",
+        *(f"notebooks/{nb.stem}.html" for nb in NOTEBOOKS),
+    ],
+)
+def test_every_page_reads_well(browser, base_url, path):
+    """Every other page too: images loaded, maths parsed, no traceback, nothing from outside."""
+    page = browser.new_page()
+    requested = []
+    page.on("request", lambda request: requested.append(request.url))
+    response = page.goto(base_url + path, wait_until="load", timeout=PAGE_TIMEOUT_MS)
+    assert response is not None and response.ok, (path, response and response.status)
+    page.evaluate("() => window.MathJax ? MathJax.startup.promise.then(() => true) : true")
+    assert_reads_well(page, requested, base_url)
+    assert page.locator("mjx-merror").count() == 0, f"{path}: a formula MathJax could not parse"
+    page.close()
+
+
 def test_every_link_of_the_checked_pages_resolves(browser, base_url):
     """Internal links of the landing page and both notebook pages answer 200 (no broken link)."""
     request = browser.request
