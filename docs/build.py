@@ -78,10 +78,11 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
         prog="python docs/build.py",
         description="Build the notebooks, executed, as a website under --out (html/index.html).",
     )
-    parser.add_argument("--out", type=pathlib.Path, help="build folder (default docs/_build)")
+    parser.add_argument("--out", type=pathlib.Path, metavar="DIR", help="build folder (default docs/_build)")
     parser.add_argument(
         "--notebooks",
         type=pathlib.Path,
+        metavar="DIR",
         help="folder of jupytext notebooks NN_topic.py (default notebooks/)",
     )
     parser.add_argument(
@@ -89,7 +90,13 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
         action="store_true",
         help="the student edition: needs --notebooks; default --out docs/_build/student",
     )
-    parser.add_argument("--jobs", type=int, default=os.cpu_count() or 1, help="notebooks run at once")
+    parser.add_argument(
+        "--jobs",
+        type=int,
+        metavar="N",
+        default=os.cpu_count() or 1,
+        help="notebooks run at once (default: cores)",
+    )
     parser.add_argument("--rerun", action="store_true", help="execute every notebook, cached or not")
     args = parser.parse_args(argv)
     if args.student and args.notebooks is None:
