@@ -201,10 +201,12 @@ def check(course: pathlib.Path, paths: list[pathlib.Path]) -> list[str]:
             run_nbgrader(work, "autograde", path.stem, "--force")
         with Gradebook(f"sqlite:///{work / 'gradebook.db'}") as gradebook:
             for path in paths:
-                scores = {}
+                auto_points = {}  # autograded points scored, of those that can be autograded
                 for student in (SOLUTIONS_STUDENT, UNANSWERED_STUDENT):
                     sub = gradebook.find_submission_notebook(path.stem, path.stem, student)
-                    scores[student] = (sub.score, sub.max_score)
+                    auto = [g for g in sub.grades if g.auto_score is not None]
+                    auto_points[student] = (sum(g.auto_score for g in auto), sum(g.max_score for g in auto))
+                    by_hand = sub.max_score - auto_points[student][1]
                     graded = nbformat.read(
                         work / "autograded" / student / path.stem / f"{path.stem}.ipynb", as_version=4
                     )
@@ -214,14 +216,14 @@ def check(course: pathlib.Path, paths: list[pathlib.Path]) -> list[str]:
                             head = cell.source[:60]
                             problems.append(f"{path.name} ({student}): cell {index} fails: {head!r}")
                     if student == UNANSWERED_STUDENT:
-                        passed = [g.name for g in sub.grades if g.auto_score]
+                        passed = [g.name for g in auto if g.auto_score > 0]
                         problems += [f"{path.name}: unanswered {g!r} passes its test" for g in passed]
-                got, top = scores[SOLUTIONS_STUDENT]
+                got, top = auto_points[SOLUTIONS_STUDENT]
                 if top == 0 or got != top:
-                    problems.append(f"{path.name}: the solutions score {got:g} of {top:g} points")
+                    problems.append(f"{path.name}: the solutions score {got:g} of {top:g} autograded points")
                 report.append(
-                    f"{path.stem}: solutions {got:g}/{top:g} points, "
-                    f"unanswered {scores[UNANSWERED_STUDENT][0]:g}/{top:g}"
+                    f"{path.stem}: autograded points: solutions {got:g}/{top:g}, "
+                    f"unanswered {auto_points[UNANSWERED_STUDENT][0]:g}/{top:g}; {by_hand:g} graded by hand"
                 )
     if problems:
         raise BuildError("\n".join(problems))
