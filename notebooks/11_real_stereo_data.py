@@ -890,14 +890,14 @@ if REAL:  # the issue's acceptance figures, without odometry
 #
 # *Hint:* `image_statistics(image, threshold=...)["empty"]`.
 
-# % nbgrader={"grade": false, "grade_id": "ex1", "locked": false, "schema_version": 3, "solution": true}
+# %% nbgrader={"grade": false, "grade_id": "ex1", "locked": false, "schema_version": 3, "solution": true}
 ### BEGIN SOLUTION
 at_20 = image_statistics(real_images[0], threshold=20)["empty"]
 at_10 = image_statistics(real_images[0], threshold=10)["empty"]
 print(f"cells without a corner: {at_20:.1%} at threshold 20, {at_10:.1%} at threshold 10")
 ### END SOLUTION
 
-# % nbgrader={"grade": true, "grade_id": "ex1_test", "locked": true, "points": 2, "schema_version": 3, "solution": false}
+# %% nbgrader={"grade": true, "grade_id": "ex1_test", "locked": true, "points": 2, "schema_version": 3, "solution": false}
 # Exercise 1: autograder test
 assert 0 <= at_10 < at_20 <= 1, "a lower threshold fills some cells, but the flat ones stay empty"
 ### BEGIN HIDDEN TESTS
@@ -914,7 +914,7 @@ assert np.isclose(at_10, image_statistics(real_images[0], threshold=10)["empty"]
 #
 # *Hint:* `Rotation.from_euler("x", angle)`.
 
-# % nbgrader={"grade": false, "grade_id": "ex2", "locked": false, "schema_version": 3, "solution": true}
+# %% nbgrader={"grade": false, "grade_id": "ex2", "locked": false, "schema_version": 3, "solution": true}
 ### BEGIN SOLUTION
 pitch = math.radians(0.1)
 point = np.array([[0.0, 0.0, 20.0]])  # on the optical axis
@@ -927,7 +927,7 @@ print(
 )
 ### END SOLUTION
 
-# % nbgrader={"grade": true, "grade_id": "ex2_test", "locked": true, "points": 2, "schema_version": 3, "solution": false}
+# %% nbgrader={"grade": true, "grade_id": "ex2_test", "locked": true, "points": 2, "schema_version": 3, "solution": false}
 # Exercise 2: autograder test
 assert abs(shift - cam.fy * math.tan(math.radians(0.1))) < 1e-9
 
@@ -940,13 +940,13 @@ assert abs(shift - cam.fy * math.tan(math.radians(0.1))) < 1e-9
 #
 # *Hint:* `gauss_newton(P_in, w_in, R, t, iterations=30, tol=1e-10)`.
 
-# % nbgrader={"grade": false, "grade_id": "ex3", "locked": false, "schema_version": 3, "solution": true}
+# %% nbgrader={"grade": false, "grade_id": "ex3", "locked": false, "schema_version": 3, "solution": true}
 ### BEGIN SOLUTION
 R_id, t_id, steps_id = gauss_newton(P_in, w_in, np.eye(3), np.zeros(3), iterations=30, tol=1e-10)
 print(f"from the identity: {steps_id} steps (from RANSAC's guess: {steps})")
 ### END SOLUTION
 
-# % nbgrader={"grade": true, "grade_id": "ex3_test", "locked": true, "points": 3, "schema_version": 3, "solution": false}
+# %% nbgrader={"grade": true, "grade_id": "ex3_test", "locked": true, "points": 3, "schema_version": 3, "solution": false}
 # Exercise 3: autograder test
 assert np.abs(R_id - R_ours).max() < 1e-8 and np.abs(t_id - t_ours).max() < 1e-8, "the same motion"
 assert steps_id >= steps
@@ -962,7 +962,7 @@ assert steps_id >= steps
 #
 # *Hint:* section 5's `project_uvd`, `jacobian` and `exp_rotation`.
 
-# % nbgrader={"grade": false, "grade_id": "ex4", "locked": false, "schema_version": 3, "solution": true}
+# %% nbgrader={"grade": false, "grade_id": "ex4", "locked": false, "schema_version": 3, "solution": true}
 ### BEGIN SOLUTION
 P_sel, w_sel = cam.backproject(one.w_prev[sel]), one.w_curr[sel]
 R4, t4 = R0.copy(), t0.copy()
@@ -982,7 +982,7 @@ print(f"left-only minus stereo translation (x, y, z): {1000 * (t4 - t_st)} mm")
 # a step along the optical axis moves the points near the image centre hardly at all.
 ### END SOLUTION
 
-# % nbgrader={"grade": true, "grade_id": "ex4_test", "locked": true, "points": 4, "schema_version": 3, "solution": false}
+# %% nbgrader={"grade": true, "grade_id": "ex4_test", "locked": true, "points": 4, "schema_version": 3, "solution": false}
 # Exercise 4: autograder test
 P_sel, w_sel = cam.backproject(one.w_prev[sel]), one.w_curr[sel]
 to_opencv = float(np.abs(t4 - tvec.ravel()).max())
