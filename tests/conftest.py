@@ -12,6 +12,7 @@ import pytest
 from vo_lib.camera import StereoCamera
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
+NOTEBOOK_KERNEL = "python3"  # the kernel every notebook names (tests/test_kernel_name.py)
 
 
 @pytest.fixture
@@ -26,10 +27,10 @@ def rng() -> np.random.Generator:
 
 @pytest.fixture(scope="session")
 def kernel_dir(tmp_path_factory) -> pathlib.Path:
-    """A kernelspec folder whose only kernel starts ``sys.executable``: the tests' own environment,
-    whatever kernels the user has registered elsewhere."""
+    """A kernelspec folder whose only kernel, named ``python3`` as the notebooks name it, starts
+    ``sys.executable``: the tests' own environment, whatever kernels the user has registered."""
     kernels = tmp_path_factory.mktemp("jupyter") / "kernels"
-    spec = kernels / "vo-notebooks-test"
+    spec = kernels / NOTEBOOK_KERNEL
     spec.mkdir(parents=True)
     spec.joinpath("kernel.json").write_text(
         json.dumps(
