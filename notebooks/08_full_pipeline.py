@@ -438,7 +438,8 @@ def sideways_error(s, eps, n):
 
 drifting = drive_steps(np.array([ex_step_length, 0.0, ex_drift]), ex_steps)
 print(
-    f"sideways after {ex_steps} steps: {drifting[-1, 1] * 100:.3f} cm, first order {sideways_error(ex_step_length, ex_drift, ex_steps) * 100:.3f} cm"
+    f"sideways after {ex_steps} steps: {drifting[-1, 1] * 100:.3f} cm, "
+    f"first order {sideways_error(ex_step_length, ex_drift, ex_steps) * 100:.3f} cm"
 )
 ### END SOLUTION
 

@@ -609,7 +609,8 @@ spread = float(corrections.std(ddof=1))
 upper_limit, lower_limit = centre_line + 3 * spread, max(0.0, centre_line - 3 * spread)
 out_of_control = int(np.sum(later > upper_limit))
 print(
-    f"LCL {lower_limit:.3f} m, centre {centre_line:.3f} m, UCL {upper_limit:.3f} m; {out_of_control} out of control"
+    f"LCL {lower_limit:.3f} m, centre {centre_line:.3f} m, UCL {upper_limit:.3f} m; "
+    f"{out_of_control} out of control"
 )
 ### END SOLUTION
 
@@ -643,7 +644,8 @@ inside = box_scores[(box_scores >= q1 - 1.5 * iqr) & (box_scores <= q3 + 1.5 * i
 whisker_low, whisker_high = inside.min(), inside.max()
 n_fliers = int(np.sum((box_scores < whisker_low) | (box_scores > whisker_high)))
 print(
-    f"box {q1:.1f}–{q3:.1f} (median {median_score:.1f}), whiskers {whisker_low:.1f}–{whisker_high:.1f}, {n_fliers} fliers"
+    f"box {q1:.1f}–{q3:.1f} (median {median_score:.1f}), "
+    f"whiskers {whisker_low:.1f}–{whisker_high:.1f}, {n_fliers} fliers"
 )
 ### END SOLUTION
 
