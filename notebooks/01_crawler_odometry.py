@@ -310,14 +310,140 @@ drive_widget = offer(
 #   heading column of F_x matters most, and leaving it out under-states lateral uncertainty.
 # - Slip of one track bends the true path while the odometry drives straight: heading error
 #   s·L/(D+2b) grows with the distance, position error with its square.
-#
+
+# %% [markdown]
 # ## Exercises
 #
-# 1. Derive the covariance of the *exact-arc* step with sympy. When does it differ noticeably
-#    from the midpoint form's?
-# 2. Encoder noise here grows with √distance. Replace it by noise proportional to distance
-#    (a wrong wheel radius). How do the ellipses change, and why is such an error not zero-mean?
-# 3. A spot turn has Δu_L = −Δu_R. Show that eq. 2–3 give no translation, and compute how a slip
-#    of 10 % on one track during a full spot turn displaces the robot.
-# 4. Fit the effective gauge D + 2b from a recorded spot turn whose true angle you know. Why
-#    might the fitted gauge differ from the measured distance between the tracks?
+# Easy to hard, with the points each is worth. Write your answer in the cell under each
+# exercise (it names the variables to set), then run the test cell after it, which checks them.
+
+# %% [markdown]
+# ### Exercise 1 · a spot turn *(easy, 2 points)*
+#
+# In a spot turn the tracks run in opposite directions, Δu_L = −Δu_R. With steps of
+# Δu_R = 1 cm, how many steps `n_full_turn` does `odo` need for one full turn (the smallest
+# number that reaches 360°)? Integrate them with the exact arc into `spot_poses` and store the
+# largest distance of the centre from its start in `spot_translation`.
+#
+# *Hint:* eq. 4 gives the heading per step; `odo.integrate(controls, exact=True)`.
+
+# %% nbgrader={"grade": false, "grade_id": "ex1", "locked": false, "schema_version": 3, "solution": true}
+### BEGIN SOLUTION
+spot_step = np.array([-0.01, 0.01])
+n_full_turn = int(np.ceil(2 * np.pi * odo.gauge / (spot_step[1] - spot_step[0])))
+spot_poses = odo.integrate(np.tile(spot_step, (n_full_turn, 1)), exact=True)
+spot_translation = float(np.hypot(*spot_poses[:, :2].T).max())
+print(f"{n_full_turn} steps for a full turn; the centre moves at most {spot_translation:.1e} m")
+### END SOLUTION
+
+# %% nbgrader={"grade": true, "grade_id": "ex1_test", "locked": true, "points": 2, "schema_version": 3, "solution": false}
+# Exercise 1: autograder test
+turned = np.cumsum(np.diff(np.unwrap(spot_poses[:, 2])))
+assert len(spot_poses) == n_full_turn + 1
+assert turned[-1] >= 2 * np.pi - 1e-9 > turned[-2], "the smallest number of steps reaching 360°"
+assert spot_translation < 1e-12, "eq. 2-3: a spot turn does not translate"
+
+# %% [markdown]
+# ### Exercise 2 · slip in a spot turn *(medium, 3 points)*
+#
+# Repeat the full spot turn of exercise 1, but the left track slips by 10 %. Store the true
+# poses (exact arc) in `slip_poses`, the distance between the true final position and the
+# start in `slip_displacement` (metres), and the heading the odometry misses at the end in
+# `slip_heading_error` (radians, odometry minus truth).
+#
+# *Hint:* `apply_slip`; with slip the tracks no longer move by equal and opposite distances, so
+# the robot drives a small circle. Which radius?
+
+# %% nbgrader={"grade": false, "grade_id": "ex2", "locked": false, "schema_version": 3, "solution": true}
+### BEGIN SOLUTION
+spot_controls = np.tile(spot_step, (n_full_turn, 1))
+slip_poses = odo.integrate(apply_slip(spot_controls, slip_left=0.10), exact=True)
+slip_displacement = float(np.hypot(*slip_poses[-1, :2]))
+believed_heading = np.sum(odo.increment(spot_controls)[1])
+true_heading = np.sum(odo.increment(apply_slip(spot_controls, slip_left=0.10))[1])
+slip_heading_error = float(believed_heading - true_heading)
+print(
+    f"10 % slip: {slip_displacement * 100:.2f} cm away, "
+    f"{np.degrees(slip_heading_error):.1f}° of heading missed"
+)
+### END SOLUTION
+
+# %% nbgrader={"grade": true, "grade_id": "ex2_test", "locked": true, "points": 3, "schema_version": 3, "solution": false}
+# Exercise 2: autograder test
+assert slip_poses.shape == (n_full_turn + 1, 3)
+assert 0 < slip_displacement < 0.05 and 0 < slip_heading_error < np.pi
+### BEGIN HIDDEN TESTS
+# every step moves 0.1 * 1 cm / 2 forward and turns 1.9 cm / gauge: an arc of radius R, whose
+# chord after the whole turn is 2 R sin(turn / 2)
+step_forward, step_turn = 0.5 * (0.01 - 0.9 * 0.01), (0.01 + 0.9 * 0.01) / odo.gauge
+R_slip, turn = step_forward / step_turn, n_full_turn * step_turn
+assert np.isclose(slip_displacement, 2 * R_slip * abs(np.sin(turn / 2)), rtol=1e-9)
+assert np.isclose(slip_heading_error, n_full_turn * 0.1 * 0.01 / odo.gauge, rtol=1e-9)
+### END HIDDEN TESTS
+
+# %% [markdown]
+# ### Exercise 3 · calibrate the gauge *(hard, 4 points)*
+#
+# The cell below records the encoder readings `recorded` of three spot turns (1,080°, known
+# from a turntable) of a crawler whose *effective* gauge is not the 0.60 m of `odo`, with encoder
+# noise. Estimate the effective gauge `fitted_gauge` from them and build `calibrated`, a
+# `TrackOdometry` with that gauge (keep `track_distance`, change `track_width`), whose heading
+# after the recording misses 1,080° by less than 0.1°.
+#
+# *Hint:* eq. 4 summed over all steps is linear in 1 / (D + 2b).
+
+# %%
+true_turn = np.radians(1080.0)
+hidden_gauge = 0.6 + rng.uniform(0.02, 0.06)  # tracks grip over part of their width only
+per_step = true_turn / 3000
+recorded = np.tile([-0.5 * hidden_gauge * per_step, 0.5 * hidden_gauge * per_step], (3000, 1))
+recorded += rng.normal(scale=odo.encoder_sigma * np.sqrt(np.abs(recorded)))
+nominal_turn = np.degrees(np.sum(odo.increment(recorded)[1]))
+print(
+    f"{len(recorded)} steps recorded; with the nominal gauge {odo.gauge:.2f} m they turn {nominal_turn:.1f}°"
+)
+
+# %% nbgrader={"grade": false, "grade_id": "ex3", "locked": false, "schema_version": 3, "solution": true}
+### BEGIN SOLUTION
+fitted_gauge = float(np.sum(recorded[:, 1] - recorded[:, 0]) / true_turn)  # eq. 4 summed
+calibrated = TrackOdometry(
+    track_distance=odo.track_distance,
+    track_width=(fitted_gauge - odo.track_distance) / 2,
+    encoder_sigma=odo.encoder_sigma,
+)
+print(f"fitted gauge {fitted_gauge:.4f} m (nominal {odo.gauge:.2f} m)")
+### END SOLUTION
+
+# %% nbgrader={"grade": true, "grade_id": "ex3_test", "locked": true, "points": 4, "schema_version": 3, "solution": false}
+# Exercise 3: autograder test
+assert isinstance(calibrated, TrackOdometry) and calibrated.track_distance == odo.track_distance
+assert np.isclose(calibrated.gauge, fitted_gauge)
+final_turn = np.sum(calibrated.increment(recorded)[1])
+assert abs(np.degrees(final_turn - true_turn)) < 0.1
+### BEGIN HIDDEN TESTS
+# the noise of the summed encoder readings, carried through eq. 4: within 4 sigma of the truth
+sigma_fit = odo.encoder_sigma * np.sqrt(np.abs(recorded).sum()) / true_turn
+assert abs(fitted_gauge - hidden_gauge) < 4 * sigma_fit
+### END HIDDEN TESTS
+
+# %% [markdown] nbgrader={"grade": true, "grade_id": "ex3_why", "locked": false, "points": 1, "schema_version": 3, "solution": true}
+# **Exercise 3, written part (1 point):** why might the fitted gauge differ from the distance you
+# measure between the tracks with a tape?
+#
+# === BEGIN MARK SCHEME ===
+#
+# A skid-steered crawler turns by dragging its tracks sideways over the ground; how far the
+# turn is resisted depends on where along and across each track the ground pushes back, not on
+# the tracks' geometry alone. The fitted gauge lumps that contact (and any systematic slip in a
+# turn) into one number, so it changes with the floor; the tape measures only the geometry.
+#
+# === END MARK SCHEME ===
+
+# %% [markdown]
+# ### Stretch goals (not graded)
+#
+# - Derive the covariance of the *exact-arc* step with sympy. When does it differ noticeably
+#   from the midpoint form's?
+# - Make the encoder noise proportional to distance (a wrong wheel radius) instead of to its
+#   square root. How do the ellipses of section 5 change, and why is such an error not
+#   zero-mean?

@@ -276,15 +276,111 @@ print("theta > 0: a point ahead moves right in the image -> the camera turned le
 # | eq. 14, θ from pixels | f | correct, with f = f_x; disparities cancel |
 # | eq. 16, ρ from points | + [sin φ, 0, cos φ] P′ | **sign error**: − [sin φ, 0, cos φ] P′ |
 # | eq. 17, ρ from pixels | + B/d′ (…) | **sign error**: − B/d′ (…) |
-#
+
+# %% [markdown]
 # ## Exercises
 #
-# 1. Eliminate ρ differently: solve the x′ equation for ρ and substitute into the z′ equation.
-#    Do you reach eq. 12 again? Which form is better conditioned when φ is small?
-# 2. Mount the camera 0.3 m ahead of the turning axis. Write P′ = R P + T for that camera and
-#    show with sympy that its chord no longer makes the angle θ/2 with its optical axis. What
-#    does eq. 14 then return for a far point, and for a near one?
-# 3. Derive the first-order standard deviation of θ from eq. 14 when u, v, u′, v′ carry
-#    independent pixel noise σ. Where in the image are the best matches for θ?
-# 4. Eq. 17 uses only the x and z rows of eq. 15. Use the y row (y′ = y) to write a check that
-#    a match is consistent with *any* planar motion, before θ is known.
+# Easy to hard, with the points each is worth. Write your answer in the cell under each
+# exercise (it names the variables to set), then run the test cell after it, which checks them.
+
+# %% [markdown]
+# ### Exercise 1 · ρ from one row *(easy, 2 points)*
+#
+# Eq. 15's x′ row alone also fixes ρ once φ is known. Solve it for ρ with sympy and store the
+# expression in `rho_from_x`: it may contain `x`, `z`, `xq` (x′) and `phi`, but not `rho`.
+#
+# *Hint:* `xq - xp` is zero on the motion; `sp.solve(..., rho)` returns a list.
+
+# %% nbgrader={"grade": false, "grade_id": "ex1", "locked": false, "schema_version": 3, "solution": true}
+### BEGIN SOLUTION
+rho_from_x = sp.solve(sp.Eq(xq, xp), rho)[0]
+show_math(r"\rho\ \text{from}\ x'", rho_from_x)
+### END SOLUTION
+
+# %% nbgrader={"grade": true, "grade_id": "ex1_test", "locked": true, "points": 2, "schema_version": 3, "solution": false}
+# Exercise 1: autograder test
+assert rho not in rho_from_x.free_symbols, "ρ must be eliminated"
+assert rho_from_x.free_symbols <= {x, z, xq, phi}
+assert is_zero(rho_from_x.subs(xq, xp) - rho), "on the motion the expression must return ρ"
+
+# %% [markdown]
+# ### Exercise 2 · how noisy is θ? *(medium, 3 points)*
+#
+# Each of u, v, u′, v′ carries independent pixel noise σ. Derive with sympy the gradient of
+# θ = 2 tan⁻¹(N / (f_x D)) (eq. 14, with N and D as in section 4) with respect to the four
+# pixel coordinates, and write `theta_sigma(w_prev, w_curr, sigma_px)` returning the
+# first-order standard deviation of θ of every match (arrays `(N, 3)` of u, v, d, as elsewhere),
+# for the `camera` of section 6.
+#
+# *Hint:* σ_θ = σ·‖∇θ‖; `sp.lambdify` turns the gradient into a NumPy function.
+
+# %% nbgrader={"grade": false, "grade_id": "ex2", "locked": false, "schema_version": 3, "solution": true}
+### BEGIN SOLUTION
+theta_eq14 = 2 * sp.atan(((u2 - u0) * (v - v0) - (u - u0) * (v2 - v0)) / (fx * (v + v2 - 2 * v0)))
+gradient = sp.Matrix([theta_eq14]).jacobian([u, v, u2, v2])
+gradient_fn = sp.lambdify((u, v, u2, v2, u0, v0, fx), list(gradient), "numpy")
+
+
+def theta_sigma(w_prev, w_curr, sigma_px):
+    """First-order standard deviation of eq. 14's θ under pixel noise ``sigma_px``."""
+    a, b = np.asarray(w_prev, float), np.asarray(w_curr, float)
+    parts = gradient_fn(a[:, 0], a[:, 1], b[:, 0], b[:, 1], camera.cx, camera.cy, camera.fx)
+    return sigma_px * np.sqrt(sum(np.square(p) for p in parts))
+
+
+### END SOLUTION
+
+# %% nbgrader={"grade": true, "grade_id": "ex2_test", "locked": true, "points": 3, "schema_version": 3, "solution": false}
+# Exercise 2: autograder test
+check = synthetic_matches(camera, 300, np.radians(4.0), 0.1, rng)
+ours = theta_sigma(check.w_prev, check.w_curr, 0.5)
+assert ours.shape == (300,) and np.all(ours > 0)
+assert np.allclose(ours, cm.theta_standard_deviation(check.w_prev, check.w_curr, camera, 0.5), rtol=1e-9)
+
+# %% [markdown]
+# ### Exercise 3 · planar or not, before θ is known *(hard, 4 points)*
+#
+# Eq. 17 uses only the x and z rows of eq. 15; the y row says y′ = y: a point keeps its height
+# under *any* planar motion. Write `height_change(w_prev, w_curr)` that returns y′ − y in metres
+# for every match, from pixels and disparities only (eq. 13), so that a match can be checked
+# before θ is estimated. Then count in `flagged` the matches of `mixed` (below) whose height
+# changes by more than 5 cm.
+#
+# *Hint:* eq. 13 gives y = B (v − v₀) f_x / (f_y d).
+
+# %%
+mixed = synthetic_matches(camera, 400, np.radians(-5.0), 0.12, rng, outlier_ratio=0.3)
+
+
+# %% nbgrader={"grade": false, "grade_id": "ex3", "locked": false, "schema_version": 3, "solution": true}
+### BEGIN SOLUTION
+def height_change(w_prev, w_curr):
+    """y' - y in metres (eq. 13): zero for every match of a planar motion."""
+    a, b = np.asarray(w_prev, float), np.asarray(w_curr, float)
+    scale = camera.baseline * camera.fx / camera.fy
+    return scale * ((b[:, 1] - camera.cy) / b[:, 2] - (a[:, 1] - camera.cy) / a[:, 2])
+
+
+flagged = int(np.sum(np.abs(height_change(mixed.w_prev, mixed.w_curr)) > 0.05))
+print(f"{flagged} of {len(mixed.inliers)} matches change height by more than 5 cm")
+### END SOLUTION
+
+# %% nbgrader={"grade": true, "grade_id": "ex3_test", "locked": true, "points": 4, "schema_version": 3, "solution": false}
+# Exercise 3: autograder test
+change = height_change(mixed.w_prev, mixed.w_curr)
+assert change.shape == (400,)
+assert np.abs(change[mixed.inliers]).max() < 1e-9, "a planar motion keeps every height"
+### BEGIN HIDDEN TESTS
+heights = camera.backproject(mixed.w_curr)[:, 1] - camera.backproject(mixed.w_prev)[:, 1]
+assert np.allclose(change, heights, atol=1e-9)
+assert flagged == np.sum(np.abs(heights) > 0.05)
+### END HIDDEN TESTS
+
+# %% [markdown]
+# ### Stretch goals (not graded)
+#
+# - Eliminate ρ the other way round: solve the x′ equation for ρ and substitute it into the z′
+#   equation. Do you reach eq. 12 again? Which form is better conditioned when φ is small?
+# - Mount the camera 0.3 m ahead of the turning axis, write P′ = R P + T for it, and show with
+#   sympy that its chord no longer makes the angle θ/2 with its optical axis (notebook 03
+#   measures what that costs).

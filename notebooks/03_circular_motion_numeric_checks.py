@@ -348,14 +348,102 @@ print(
 # - θ equals the robot's yaw increment, checked on a simulated robot; a camera ahead of the
 #   turning axis breaks the model, most of all in spot turns, by a share of the turn close to
 #   the offset over the scene's typical depth.
-#
+
+# %% [markdown]
 # ## Exercises
 #
-# 1. Weight each match's θ by 1/σ²θ from `theta_standard_deviation` and average. How does the
-#    weighted mean compare with the median over all matches at 0.5 px noise?
-# 2. Generalise eq. 15 to a camera a metres ahead of the turning axis: T becomes
-#    −ρ[sin φ, 0, cos φ] plus a term in a. Derive the new θ equation. Is it still depth-free?
-# 3. Tilt the camera down by 10°. Which rows of the image are now "at the camera's height"?
-#    Repeat section 2 and find where θ degenerates.
-# 4. Show that in a pure spot turn (ρ = 0) with the camera on the axis, every match moves along a
-#    row only if the point is at infinity. What happens to v for near points?
+# Easy to hard, with the points each is worth. Write your answer in the cell under each
+# exercise (it names the variables to set), then run the test cell after it, which checks them.
+
+# %% [markdown]
+# ### Exercise 1 · weight the matches *(easy, 2 points)*
+#
+# Section 2's 20,000 matches `m` (0.5 px noise) each give a θ. Average them with weights
+# 1/σ²_θ from `cm.theta_standard_deviation` into `theta_weighted`, and take their plain median
+# into `theta_median`. Which is closer to `theta_true`?
+#
+# *Hint:* `np.average(..., weights=...)`.
+
+# %% nbgrader={"grade": false, "grade_id": "ex1", "locked": false, "schema_version": 3, "solution": true}
+### BEGIN SOLUTION
+th_each = cm.theta_from_pixels(m.w_prev, m.w_curr, camera)
+sigma_each = cm.theta_standard_deviation(m.w_prev, m.w_curr, camera, noise)
+theta_weighted = float(np.average(th_each, weights=1.0 / sigma_each**2))
+theta_median = float(np.median(th_each))
+print(
+    f"error of the weighted mean {np.degrees(theta_weighted - theta_true):+.5f}°, "
+    f"of the median {np.degrees(theta_median - theta_true):+.5f}°"
+)
+### END SOLUTION
+
+# %% nbgrader={"grade": true, "grade_id": "ex1_test", "locked": true, "points": 2, "schema_version": 3, "solution": false}
+# Exercise 1: autograder test
+sigma_of_mean = 1.0 / np.sqrt(np.sum(cm.theta_standard_deviation(m.w_prev, m.w_curr, camera, noise) ** -2.0))
+assert abs(theta_weighted - theta_true) < 4 * sigma_of_mean, "the weighted mean is within 4σ of the truth"
+assert np.isclose(theta_median, np.median(cm.theta_from_pixels(m.w_prev, m.w_curr, camera)))
+assert abs(theta_weighted - theta_true) < abs(theta_median - theta_true)
+
+# %% [markdown]
+# ### Exercise 2 · a spot turn needs no depth *(medium, 3 points)*
+#
+# With the camera on the turning axis, a spot turn (ρ = 0) is a pure rotation R, and the image
+# moves by the homography H = K R K⁻¹: every pixel moves the same way whatever the depth of its
+# point. Build `H_spot` for θ = 3° and predict `predicted_uv` (shape `(N, 2)`) of `spot.w_curr`
+# from `spot.w_prev` alone.
+#
+# *Hint:* `cm.motion_matrices(theta, 0.0)` and `camera.K`; homogeneous pixels (u, v, 1).
+
+# %%
+spot = synthetic_matches(camera, 300, np.radians(3.0), 0.0, rng, depth_range=(1.0, 50.0))
+
+# %% nbgrader={"grade": false, "grade_id": "ex2", "locked": false, "schema_version": 3, "solution": true}
+### BEGIN SOLUTION
+R_spot, _ = cm.motion_matrices(np.radians(3.0), 0.0)
+H_spot = camera.K @ R_spot @ np.linalg.inv(camera.K)
+homogeneous = np.column_stack([spot.w_prev[:, :2], np.ones(len(spot.w_prev))]) @ H_spot.T
+predicted_uv = homogeneous[:, :2] / homogeneous[:, 2:]
+### END SOLUTION
+
+# %% nbgrader={"grade": true, "grade_id": "ex2_test", "locked": true, "points": 3, "schema_version": 3, "solution": false}
+# Exercise 2: autograder test
+assert H_spot.shape == (3, 3) and predicted_uv.shape == (300, 2)
+assert np.abs(predicted_uv - spot.w_curr[:, :2]).max() < 1e-6, "pixels, whatever the depth"
+
+# %% [markdown]
+# ### Exercise 3 · correct a camera ahead of the axis *(hard, 4 points)*
+#
+# Section 5 found that a camera `a` metres ahead of the turning axis loses a share of the turn
+# close to a / z, z the depth of the match. Each match knows its own depth (from its disparity),
+# so each can be corrected. For the spot turn `ahead` below (2°, camera 0.3 m ahead, depths
+# 1.5–15 m), find the form of the per-match correction (which sign?) and store the median of
+# the corrected θ in `theta_corrected` (radians), using only the matches in `usable`.
+#
+# *Hint:* compare `th_ahead` with 2° first; `camera.depth_from_disparity`.
+
+# %%
+a_ahead = 0.3
+T_ahead = camera_motion(np.zeros(3), cm.robot_increment(np.radians(2), 0.0), camera_mount(forward=a_ahead))
+ahead = matches_under_transform(camera, 2000, T_ahead, rng, depth_range=(1.5, 15.0))
+usable = ~cm.degenerate_theta_mask(ahead.w_prev, ahead.w_curr, camera, min_pixels=20)
+th_ahead = cm.theta_from_pixels(ahead.w_prev, ahead.w_curr, camera)[usable]
+print(f"uncorrected: median θ {np.degrees(np.median(th_ahead)):.3f}° for a 2° turn")
+
+# %% nbgrader={"grade": false, "grade_id": "ex3", "locked": false, "schema_version": 3, "solution": true}
+### BEGIN SOLUTION
+z_each = camera.depth_from_disparity(ahead.w_prev[usable, 2])
+theta_corrected = float(np.median(th_ahead / (1.0 + a_ahead / z_each)))  # the turn looks larger by a/z
+print(f"corrected: median θ {np.degrees(theta_corrected):.4f}°")
+### END SOLUTION
+
+# %% nbgrader={"grade": true, "grade_id": "ex3_test", "locked": true, "points": 4, "schema_version": 3, "solution": false}
+# Exercise 3: autograder test
+before = abs(np.median(th_ahead) - np.radians(2))
+assert abs(theta_corrected - np.radians(2)) < 0.05 * before, "the correction removes most of the error"
+
+# %% [markdown]
+# ### Stretch goals (not graded)
+#
+# - Generalise eq. 15 to a camera a metres ahead of the turning axis (T gains a term in a) and
+#   derive the new θ equation. Is it still free of depth?
+# - Tilt the camera down by 10°. Which image rows now look at points at the camera's height,
+#   and where does eq. 14's θ degenerate?

@@ -372,13 +372,100 @@ assert 0.35 <= road_stats.empty_cells <= 0.75 and 0.3 <= road_stats.low_gradient
 # - The samples mirror the paper's experiments; track slip makes odometry drift in every one of
 #   them, most in the spot turn — the error vision must correct.
 # - Sequences are stored in the KITTI layout, so the same code reads real KITTI data.
-#
+
+# %% [markdown]
 # ## Exercises
 #
-# 1. Raise the texture's block sizes (`vo_lib.sim.textures.BLOCK_LAYERS`) and count FAST corners on a
-#    wall at 1, 5 and 15 m. Which block size serves which distance?
-# 2. Add motion blur (`SensorEffects(blur_px=5)`) and repeat the disparity check of section 2.
-#    How does the error distribution change?
-# 3. Write a sample of your own: a figure-eight in the lab. Check that it stays clear of the walls.
-# 4. Place the laser 0.3 m ahead of the turning axis (`LaserScanner(mount=(0.3, 0, 0))`). What
-#    changes in section 3's comparison, and how would you correct for it?
+# Easy to hard, with the points each is worth. Write your answer in the cell under each
+# exercise (it names the variables to set), then run the test cell after it, which checks them.
+
+# %% [markdown]
+# ### Exercise 1 · depth from disparity *(easy, 2 points)*
+#
+# A stereo matcher is off by 0.25 px of disparity. How large is the resulting depth error of
+# the `camera` of section 2 for a wall 2 m away, and for one 10 m away? Store them (metres,
+# positive) in `depth_error_2m` and `depth_error_10m`.
+#
+# *Hint:* z = f_x B / d; `camera.depth_from_disparity`.
+
+
+# %% nbgrader={"grade": false, "grade_id": "ex1", "locked": false, "schema_version": 3, "solution": true}
+### BEGIN SOLUTION
+def depth_error(z, disparity_error=0.25):
+    d = camera.fx * camera.baseline / z
+    return float(camera.depth_from_disparity(d - disparity_error) - z)
+
+
+depth_error_2m, depth_error_10m = depth_error(2.0), depth_error(10.0)
+print(f"0.25 px of disparity: {depth_error_2m * 100:.2f} cm at 2 m, {depth_error_10m * 100:.1f} cm at 10 m")
+### END SOLUTION
+
+# %% nbgrader={"grade": true, "grade_id": "ex1_test", "locked": true, "points": 2, "schema_version": 3, "solution": false}
+# Exercise 1: autograder test
+first_order = 0.25 / (camera.fx * camera.baseline)  # dz = z^2 dd / (f B)
+assert np.isclose(depth_error_2m, 4 * first_order, rtol=0.05)
+assert np.isclose(depth_error_10m, 100 * first_order, rtol=0.15), "the error grows with z²"
+
+# %% [markdown]
+# ### Exercise 2 · a laser ahead of the axis *(medium, 3 points)*
+#
+# Mount the scanner 0.3 m ahead of the robot's centre (`LaserScanner(range_sigma=0.0,
+# max_range=30.0, mount=(0.3, 0.0, 0.0))`), scan the lab from `pose`, and express every echo in
+# the **robot** frame (x forward, y left, origin at the robot's centre): an array `robot_points`
+# of shape `(K, 2)`.
+#
+# *Hint:* `scan.points()` are in the sensor's frame.
+
+# %% nbgrader={"grade": false, "grade_id": "ex2", "locked": false, "schema_version": 3, "solution": true}
+### BEGIN SOLUTION
+front_scan = LaserScanner(range_sigma=0.0, max_range=30.0, mount=(0.3, 0.0, 0.0)).scan(
+    worlds["indoor_lab"].segments_array(), pose
+)
+robot_points = front_scan.points() + np.array([0.3, 0.0])
+### END SOLUTION
+
+# %% nbgrader={"grade": true, "grade_id": "ex2_test", "locked": true, "points": 3, "schema_version": 3, "solution": false}
+# Exercise 2: autograder test: every echo, carried into the world, lies on a wall
+cos_yaw, sin_yaw = np.cos(pose[2]), np.sin(pose[2])
+on_map = robot_points @ np.array([[cos_yaw, sin_yaw], [-sin_yaw, cos_yaw]]) + pose[:2]
+walls = worlds["indoor_lab"].segments_array()  # rows (x1, y1, x2, y2)
+wall_start, wall_end = walls[None, :, :2], walls[None, :, 2:]
+span = wall_end - wall_start
+along = np.clip(np.sum((on_map[:, None] - wall_start) * span, -1) / np.sum(span**2, -1), 0, 1)
+gap = np.linalg.norm(on_map[:, None] - (wall_start + along[..., None] * span), axis=-1).min(axis=1)
+assert robot_points.shape[1] == 2 and len(robot_points) > 400
+assert gap.max() < 1e-6
+
+# %% [markdown]
+# ### Exercise 3 · the laser and the camera agree everywhere *(hard, 4 points)*
+#
+# Section 3 compared one beam with one pixel. Compare every beam of `scan` (the on-axis scanner)
+# that falls inside the image: convert its range to the camera's depth z, find the column it
+# falls on at the row of the camera's height, and store the absolute differences from the
+# rendered `depth` there in `depth_gaps` (metres, one per such beam).
+#
+# *Hint:* a beam's bearing is counter-clockwise (to the left), the image's u grows to the right;
+# z = r cos(bearing).
+
+# %% nbgrader={"grade": false, "grade_id": "ex3", "locked": false, "schema_version": 3, "solution": true}
+### BEGIN SOLUTION
+u_beam = camera.cx - camera.fx * np.tan(scan.bearings)
+in_view = (np.abs(scan.bearings) < np.radians(80)) & (u_beam >= 0) & (u_beam <= camera.width - 1) & scan.valid
+z_beam = scan.ranges[in_view] * np.cos(scan.bearings[in_view])
+depth_gaps = np.abs(z_beam - depth[int(round(camera.cy)), np.round(u_beam[in_view]).astype(int)])
+print(f"{len(depth_gaps)} beams in view: median gap {np.median(depth_gaps) * 1000:.1f} mm")
+### END SOLUTION
+
+# %% nbgrader={"grade": true, "grade_id": "ex3_test", "locked": true, "points": 4, "schema_version": 3, "solution": false}
+# Exercise 3: autograder test
+field_of_view = 2 * np.arctan(camera.width / 2 / camera.fx)
+assert abs(len(depth_gaps) - field_of_view / np.radians(1 / 3)) < 5, "every beam in view, once"
+assert np.median(depth_gaps) < 0.005 and np.percentile(depth_gaps, 90) < 0.03
+
+# %% [markdown]
+# ### Stretch goals (not graded)
+#
+# - Raise the texture's block sizes (`vo_lib.sim.textures.BLOCK_LAYERS`) and count FAST corners
+#   on a wall at 1, 5 and 15 m. Which block size serves which distance?
+# - Write a sample of your own, a figure-eight in the lab, and check that it stays clear of the
+#   walls.

@@ -281,13 +281,118 @@ knobs = offer(
 #   ones (~128 bits) cleanly; a ceiling, a ratio test and a mutual check remove most errors.
 # - Row-constrained matching plus sub-pixel refinement gives disparities within about 0.1 px of
 #   the truth, with under 1 % wrong matches, in a few milliseconds per pair.
-#
+
+# %% [markdown]
 # ## Exercises
 #
-# 1. Lower the FAST threshold to 15 and raise the cap to 1,500. What happens to time and to the
-#    wrong-match rate? Why does the ratio test matter more then?
-# 2. Add motion blur (`SensorEffects(blur_px=6)`) and repeat section 3. Which stage suffers?
-# 3. Replace the parabola by an equiangular (V-shaped) fit of the cost. Which fits a SAD cost
-#    better, and why?
-# 4. The front end keeps corners on whole pixels. How would sub-pixel corner positions
-#    (`cv2.cornerSubPix`) change the disparity error — and the cost?
+# Easy to hard, with the points each is worth. Write your answer in the cell under each
+# exercise (it names the variables to set), then run the test cell after it, which checks them.
+
+# %% [markdown]
+# ### Exercise 1 · the Hamming distance *(easy, 2 points)*
+#
+# Write `hamming_distance(a, b)` for two arrays of binary descriptors (`(N, 32)` bytes each, as
+# `features.descriptors`), returning the number of differing bits of each row pair.
+#
+# *Hint:* `np.bitwise_xor` and `np.unpackbits`.
+
+
+# %% nbgrader={"grade": false, "grade_id": "ex1", "locked": false, "schema_version": 3, "solution": true}
+### BEGIN SOLUTION
+def hamming_distance(a, b):
+    """Differing bits of each pair of rows of two uint8 descriptor arrays."""
+    return np.unpackbits(np.bitwise_xor(a, b), axis=1).sum(axis=1)
+
+
+### END SOLUTION
+
+# %% nbgrader={"grade": true, "grade_id": "ex1_test", "locked": true, "points": 2, "schema_version": 3, "solution": false}
+# Exercise 1: autograder test
+other = features.descriptors[rng.permutation(len(features.descriptors))]
+assert np.array_equal(hamming_distance(features.descriptors, other), hamming(features.descriptors, other))
+assert np.all(hamming_distance(other, other) == 0)
+
+# %% [markdown]
+# ### Exercise 2 · parabola or V? *(medium, 3 points)*
+#
+# Write `quadratic_offset(c_minus, c_zero, c_plus)`: the position of the vertex of the parabola
+# through the costs sampled at −1, 0 and +1. Then sample a V-shaped (absolute-difference) cost
+# |x − s| at x = −1, 0, 1 for true minima s in `true_minima` below, and store the largest error
+# of your parabola in `parabola_worst` and that of `vo_lib`'s `parabola_offset` (the
+# front end's fit) in `library_worst`. Which fits a SAD cost, and what does the other do?
+#
+# *Hint:* solve a x² + b x + c through the three samples; the vertex is −b / (2a).
+
+# %%
+from vo_lib.stereo_vo.features import parabola_offset
+
+true_minima = np.linspace(-0.45, 0.45, 19)
+
+
+# %% nbgrader={"grade": false, "grade_id": "ex2", "locked": false, "schema_version": 3, "solution": true}
+### BEGIN SOLUTION
+def quadratic_offset(c_minus, c_zero, c_plus):
+    """Vertex of the parabola through costs at -1, 0, +1."""
+    return 0.5 * (c_minus - c_plus) / (c_minus - 2.0 * c_zero + c_plus)
+
+
+v_costs = [np.abs(x - true_minima) for x in (-1.0, 0.0, 1.0)]
+parabola_worst = float(np.abs(quadratic_offset(*v_costs) - true_minima).max())
+library_worst = float(np.abs(parabola_offset(*v_costs) - true_minima).max())
+print(
+    f"worst error on a V-shaped cost: parabola {parabola_worst:.3f} px, vo_lib's fit {library_worst:.1e} px"
+)
+### END SOLUTION
+
+# %% nbgrader={"grade": true, "grade_id": "ex2_test", "locked": true, "points": 3, "schema_version": 3, "solution": false}
+# Exercise 2: autograder test
+squares = [(x - true_minima) ** 2 for x in (-1.0, 0.0, 1.0)]
+assert np.allclose(quadratic_offset(*squares), true_minima), "exact on a parabola"
+assert library_worst < 1e-9 < 0.05 < parabola_worst, "the V fit is exact on a SAD cost; a parabola is not"
+### BEGIN HIDDEN TESTS
+v_check = [np.abs(x - true_minima) for x in (-1.0, 0.0, 1.0)]
+assert np.isclose(parabola_worst, np.abs(quadratic_offset(*v_check) - true_minima).max())
+### END HIDDEN TESTS
+
+# %% [markdown]
+# ### Exercise 3 · bucketing by hand *(hard, 4 points)*
+#
+# Write `strongest_per_cell(points, response, grid, per_cell)`: the sorted indices of the
+# `per_cell` strongest corners of each cell of a `grid = (columns, rows)` over the image (a
+# corner belongs to the cell its pixel position falls in). Check it on section 1's FAST corners.
+#
+# *Hint:* give each corner a cell number, then sort by cell and, within a cell, by response.
+
+
+# %% nbgrader={"grade": false, "grade_id": "ex3", "locked": false, "schema_version": 3, "solution": true}
+### BEGIN SOLUTION
+def strongest_per_cell(points, response, grid, per_cell):
+    """Sorted indices of the ``per_cell`` strongest points of every grid cell."""
+    column = np.minimum((points[:, 0] * grid[0] / camera.width).astype(int), grid[0] - 1)
+    row = np.minimum((points[:, 1] * grid[1] / camera.height).astype(int), grid[1] - 1)
+    cell = row * grid[0] + column
+    keep = []
+    for c in np.unique(cell):
+        members = np.flatnonzero(cell == c)
+        keep.extend(members[np.argsort(-response[members], kind="stable")[:per_cell]])
+    return np.sort(np.array(keep, dtype=int))
+
+
+### END SOLUTION
+
+# %% nbgrader={"grade": true, "grade_id": "ex3_test", "locked": true, "points": 4, "schema_version": 3, "solution": false}
+# Exercise 3: autograder test
+for grid, per_cell in (((8, 6), 12), ((4, 3), 5), ((16, 12), 1)):
+    mine = strongest_per_cell(points, response, grid, per_cell)
+    assert np.array_equal(
+        mine, bucket(points, response, camera.width, camera.height, grid, per_cell * grid[0] * grid[1])
+    )
+
+# %% [markdown]
+# ### Stretch goals (not graded)
+#
+# - Lower the FAST threshold to 15 and raise the cap to 1,500. What happens to the time and to
+#   the share of wrong matches? Why does the ratio test matter more then?
+# - Add motion blur (`SensorEffects(blur_px=6)`) and repeat section 3. Which stage suffers?
+# - Refine corner positions to sub-pixel (`cv2.cornerSubPix`): how does the disparity error
+#   change, and what does it cost?

@@ -712,12 +712,137 @@ trial_widget = offer(
 #   hold exactly. Each match's gate gets its own threshold from first-order noise propagation.
 # - With refinement, the 1-point estimate equals a least-squares fit on the true inliers and
 #   gives a better θ than general 6-DoF estimators on the same matches.
-#
+
+# %% [markdown]
 # ## Exercises
 #
-# 1. Replace the per-match thresholds by one fixed threshold on error_θ. Find the value that
-#    maximises the inliers found at 0.5 px, then change the noise to 1 px. What goes wrong?
-# 2. Push the outlier ratio to 80 %. How many hypotheses does the adaptive rule draw, and when does
-#    the method fail? Would drawing hypotheses only near the filter's prediction help?
-# 3. Histogram voting needs no random numbers at all. When is it worse than RANSAC, and why?
-# 4. Give 10 % of the inliers a common extra motion (a moving object). Which estimator notices?
+# Easy to hard, with the points each is worth. Write your answer in the cell under each
+# exercise (it names the variables to set), then run the test cell after it, which checks them.
+# The cell below draws the matches they share: 400 matches of a 3° turn, 30 % outliers, at
+# 0.5 px and at 1 px of noise.
+
+# %%
+from vo_lib.stereo_vo.synthetic import synthetic_matches
+
+ex_camera = StereoCamera.bumblebee2()
+ex_theta = math.radians(3.0)
+ex_rng = np.random.default_rng(SEED + 100)
+half_px = synthetic_matches(ex_camera, 400, ex_theta, 0.1, ex_rng, noise_px=0.5, outlier_ratio=0.3)
+one_px = synthetic_matches(ex_camera, 400, ex_theta, 0.1, ex_rng, noise_px=1.0, outlier_ratio=0.3)
+
+# %% [markdown]
+# ### Exercise 1 · hypotheses for 80 % outliers *(easy, 2 points)*
+#
+# With 80 % outliers, how many hypotheses does RANSAC need to draw at least one all-inlier
+# sample with probability 0.999, for samples of 1, 3 and 5 matches? Store them in a dict
+# `needed = {1: ..., 3: ..., 5: ...}`, computed from the formula, not from `vo_lib`.
+#
+# *Hint:* the chance that one draw of s matches is all inliers is w^s.
+
+# %% nbgrader={"grade": false, "grade_id": "ex1", "locked": false, "schema_version": 3, "solution": true}
+### BEGIN SOLUTION
+needed = {s: math.ceil(math.log(1 - 0.999) / math.log(1 - 0.2**s)) for s in (1, 3, 5)}
+print(needed)
+### END SOLUTION
+
+# %% nbgrader={"grade": true, "grade_id": "ex1_test", "locked": true, "points": 2, "schema_version": 3, "solution": false}
+# Exercise 1: autograder test
+assert set(needed) == {1, 3, 5}
+for s, count in needed.items():
+    assert count == hypotheses_needed(0.2, 0.999, sample_size=s)
+
+# %% [markdown]
+# ### Exercise 2 · gates that assume the wrong noise *(medium, 3 points)*
+#
+# The gates assume 0.5 px of pixel noise (`pixel_sigma`). Run `one_point_ransac` (with
+# `rng=1`) on `one_px`, once with the default and once with `pixel_sigma=1.0`, and store the
+# share of the true inliers (`one_px.inliers`) each finds in `recall_default` and
+# `recall_matched`, and the number of outliers each accepts in `false_default` and
+# `false_matched`.
+#
+# *Hint:* the result's `inliers` is a boolean mask like `one_px.inliers`.
+
+# %% nbgrader={"grade": false, "grade_id": "ex2", "locked": false, "schema_version": 3, "solution": true}
+### BEGIN SOLUTION
+found = {
+    sigma: one_point_ransac(one_px.w_prev, one_px.w_curr, ex_camera, rng=1, pixel_sigma=sigma).inliers
+    for sigma in (0.5, 1.0)
+}
+truth_count = one_px.inliers.sum()
+recall_default, recall_matched = (float(np.sum(found[s] & one_px.inliers) / truth_count) for s in (0.5, 1.0))
+false_default, false_matched = (int(np.sum(found[s] & ~one_px.inliers)) for s in (0.5, 1.0))
+print(f"inliers found: {recall_default:.0%} assuming 0.5 px, {recall_matched:.0%} assuming 1 px")
+### END SOLUTION
+
+# %% nbgrader={"grade": true, "grade_id": "ex2_test", "locked": true, "points": 3, "schema_version": 3, "solution": false}
+# Exercise 2: autograder test
+assert recall_default < 0.8 < 0.95 < recall_matched, "gates too narrow for the noise drop inliers"
+assert false_matched <= 0.02 * np.sum(~one_px.inliers)
+### BEGIN HIDDEN TESTS
+check_default = one_point_ransac(one_px.w_prev, one_px.w_curr, ex_camera, rng=1).inliers
+assert np.isclose(recall_default, np.sum(check_default & one_px.inliers) / one_px.inliers.sum())
+assert false_default == np.sum(check_default & ~one_px.inliers)
+### END HIDDEN TESTS
+
+# %% [markdown]
+# ### Exercise 3 · one fixed threshold *(hard, 4 points)*
+#
+# Replace the per-match gates by one fixed threshold t on |θ_i − θ|, θ_i being each match's own
+# θ (eq. 14) and θ the true turn `ex_theta`. On `half_px`, find among 0.01°, 0.02°, …, 1.00° the t
+# that classifies the most matches correctly (inlier or not, against `half_px.inliers`) and store
+# it in `best_threshold_deg`. Then keep that t for `one_px` and store the share of its true
+# inliers it accepts in `fixed_recall_1px`. Why does a threshold tuned at one noise level fail at
+# another, and why do the per-match gates not have this problem?
+#
+# *Hint:* `cm.theta_from_pixels`; compare a boolean mask with the truth and count.
+
+# %% nbgrader={"grade": false, "grade_id": "ex3", "locked": false, "schema_version": 3, "solution": true}
+### BEGIN SOLUTION
+thresholds = np.round(np.arange(1, 101) * 0.01, 2)
+theta_half = cm.theta_from_pixels(half_px.w_prev, half_px.w_curr, ex_camera)
+correct = [np.sum((np.abs(theta_half - ex_theta) < np.radians(t)) == half_px.inliers) for t in thresholds]
+best_threshold_deg = float(thresholds[int(np.argmax(correct))])
+theta_one = cm.theta_from_pixels(one_px.w_prev, one_px.w_curr, ex_camera)
+accepted = np.abs(theta_one - ex_theta) < np.radians(best_threshold_deg)
+fixed_recall_1px = float(np.sum(accepted & one_px.inliers) / one_px.inliers.sum())
+print(
+    f"best fixed threshold {best_threshold_deg:.2f}°; at 1 px it keeps {fixed_recall_1px:.0%} of the inliers"
+)
+### END SOLUTION
+
+# %% nbgrader={"grade": true, "grade_id": "ex3_test", "locked": true, "points": 4, "schema_version": 3, "solution": false}
+# Exercise 3: autograder test
+assert 0.01 <= best_threshold_deg <= 1.0
+theta_check = cm.theta_from_pixels(one_px.w_prev, one_px.w_curr, ex_camera)
+keeps = np.sum((np.abs(theta_check - ex_theta) < np.radians(best_threshold_deg)) & one_px.inliers)
+assert np.isclose(fixed_recall_1px, keeps / one_px.inliers.sum())
+### BEGIN HIDDEN TESTS
+theta_check = cm.theta_from_pixels(half_px.w_prev, half_px.w_curr, ex_camera)
+correct_at = [
+    np.sum((np.abs(theta_check - ex_theta) < np.radians(t)) == half_px.inliers)
+    for t in np.arange(1, 101) * 0.01
+]
+assert correct_at[round(best_threshold_deg * 100) - 1] == max(correct_at), "the best of the grid"
+### END HIDDEN TESTS
+
+# %% [markdown] nbgrader={"grade": true, "grade_id": "ex3_why", "locked": false, "points": 1, "schema_version": 3, "solution": true}
+# **Exercise 3, written part (1 point):** why does the fixed threshold fail when the noise
+# changes, and why do the per-match gates not?
+#
+# === BEGIN MARK SCHEME ===
+#
+# A match's θ is noisy in proportion to 1/|v − v₀| (notebook 03): one threshold is too wide for
+# matches far from the camera's height and too narrow for those near it, and tuned at one noise
+# level it drops inliers at a higher one. The gates divide each error by that match's own
+# first-order σ, so their width follows the geometry of each match; they still need the right
+# pixel noise (exercise 2), which is one number to calibrate instead of one per match.
+#
+# === END MARK SCHEME ===
+
+# %% [markdown]
+# ### Stretch goals (not graded)
+#
+# - Push the outlier ratio to 80 %: when does the method fail? Would drawing hypotheses only near
+#   the filter's prediction help?
+# - Histogram voting needs no random numbers at all. When is it worse than RANSAC, and why?
+# - Give 10 % of the inliers a common extra motion (a moving object). Which estimator notices?

@@ -618,14 +618,130 @@ fuse_widget = offer(
 #   filter stays within a fraction of a degree, closer than VO alone, and keeps going on odometry
 #   when vision fails.
 # - The NEES of the fused filter lies in its 95 % χ² band: its covariance can be trusted.
-#
+
+# %% [markdown]
 # ## Exercises
 #
-# 1. Replace the full Jacobians in the prediction by eq. 9's F = I. Repeat section 4: what happens
-#    to the NEES, and why?
-# 2. Feed the filter the VO covariance multiplied by 10. Is the filter still consistent? Which
-#    estimate does it now follow?
-# 3. The slip in our drives has a mean, not only noise. Add the slip fraction to the state
-#    (augment it to 4-D) and estimate it online. How fast does it converge in the spot turn?
-# 4. Without odometry the filter predicts with constant velocity. Run section 2 with
-#    `kf.predict(None)` and compare the guided matching windows.
+# Easy to hard, with the points each is worth. Write your answer in the cell under each
+# exercise (it names the variables to set), then run the test cell after it, which checks them.
+
+# %% [markdown]
+# ### Exercise 1 · one update in one dimension *(easy, 2 points)*
+#
+# A filter believes a robot is 2.0 m along a corridor with variance 0.5 m²; a measurement says
+# 2.6 m with variance 0.25 m². Compute the gain `gain_1d`, the updated mean `mean_1d` and the
+# updated variance `var_1d` by hand (no library).
+#
+# *Hint:* K = P / (P + R).
+
+# %% nbgrader={"grade": false, "grade_id": "ex1", "locked": false, "schema_version": 3, "solution": true}
+### BEGIN SOLUTION
+gain_1d = 0.5 / (0.5 + 0.25)
+mean_1d = 2.0 + gain_1d * (2.6 - 2.0)
+var_1d = (1 - gain_1d) * 0.5
+print(f"K = {gain_1d:.3f}, mean {mean_1d:.3f} m, variance {var_1d:.4f} m²")
+### END SOLUTION
+
+# %% nbgrader={"grade": true, "grade_id": "ex1_test", "locked": true, "points": 2, "schema_version": 3, "solution": false}
+# Exercise 1: autograder test
+from filterpy.kalman import update as filterpy_update
+
+mean_ref, var_ref = filterpy_update(
+    np.array([2.0]), np.array([[0.5]]), np.array([2.6]), np.array([[0.25]]), np.eye(1)
+)
+assert np.isclose(mean_1d, mean_ref[0]) and np.isclose(var_1d, var_ref[0, 0])
+assert 0 < gain_1d < 1 and var_1d < min(0.5, 0.25), "fusing two estimates beats both"
+
+# %% [markdown]
+# ### Exercise 2 · the NEES band *(medium, 3 points)*
+#
+# Section 5 judges the filter by its NEES averaged over N runs against a 95 % χ² band. Write
+# `nees_band(n_runs, dim)` returning the band's (lower, upper) limits for the average NEES of a
+# `dim`-dimensional state over `n_runs` runs. Then draw 2,000 experiments, each averaging the
+# NEES of 50 runs of a *consistent* 3-D estimator (errors drawn from the covariance it reports),
+# with `np.random.default_rng(7)`, and store the share of experiments inside the band in
+# `share_inside`.
+#
+# *Hint:* the sum of N independent χ²(d) values is χ²(N·d); `scipy.stats.chi2.ppf`.
+
+
+# %% nbgrader={"grade": false, "grade_id": "ex2", "locked": false, "schema_version": 3, "solution": true}
+### BEGIN SOLUTION
+def nees_band(n_runs, dim):
+    """95 % band of the NEES of a ``dim``-state averaged over ``n_runs`` runs."""
+    return tuple(chi2.ppf([0.025, 0.975], n_runs * dim) / n_runs)
+
+
+band_rng = np.random.default_rng(7)
+reported = np.diag([0.04, 0.01, 0.003])
+errors = band_rng.multivariate_normal(np.zeros(3), reported, size=(2000, 50))
+average_nees = np.einsum("eri,ij,erj->er", errors, np.linalg.inv(reported), errors).mean(axis=1)
+low, high = nees_band(50, 3)
+share_inside = float(np.mean((average_nees > low) & (average_nees < high)))
+print(f"band [{low:.2f}, {high:.2f}]; {share_inside:.1%} of the experiments inside")
+### END SOLUTION
+
+# %% nbgrader={"grade": true, "grade_id": "ex2_test", "locked": true, "points": 3, "schema_version": 3, "solution": false}
+# Exercise 2: autograder test
+low_check, high_check = nees_band(50, 3)
+assert low_check < 3 < high_check and np.isclose(
+    np.mean(chi2.cdf([low_check * 50, high_check * 50], 150)), 0.5
+)
+assert abs(share_inside - 0.95) < 0.02
+assert nees_band(1000, 3)[1] - nees_band(1000, 3)[0] < high_check - low_check, "more runs, a narrower band"
+
+# %% [markdown]
+# ### Exercise 3 · the covariance of a relative measurement *(hard, 4 points)*
+#
+# Stochastic cloning keeps two poses, a (the reference) and b (now), with a joint 6×6
+# covariance, because visual odometry measures b relative to a. For the poses and covariance
+# below, write the 3×6 Jacobian `J_rel` of `relative_planar(a, b)` with respect to (a, b) at
+# the mean, and the first-order covariance `cov_rel` of the relative pose. A Monte Carlo test
+# checks both.
+#
+# *Hint:* d = Rᵀ(a_yaw) (b_xy − a_xy); differentiate by hand or with sympy.
+
+# %%
+pose_a, pose_b = np.array([1.0, 2.0, 0.4]), np.array([1.6, 2.5, 0.7])
+joint_cov = np.diag([0.02, 0.03, 0.01, 0.025, 0.02, 0.012]) ** 2
+joint_cov[2, 5] = joint_cov[5, 2] = 0.8 * 0.01 * 0.012  # the clone shares the heading error
+
+# %% nbgrader={"grade": false, "grade_id": "ex3", "locked": false, "schema_version": 3, "solution": true}
+### BEGIN SOLUTION
+c_a, s_a = math.cos(pose_a[2]), math.sin(pose_a[2])
+delta = pose_b[:2] - pose_a[:2]
+R_t = np.array([[c_a, s_a], [-s_a, c_a]])  # rotates world into a's frame
+dR_t = np.array([[-s_a, c_a], [-c_a, -s_a]])  # its derivative in a's yaw
+J_rel = np.zeros((3, 6))
+J_rel[:2, :2], J_rel[:2, 2], J_rel[:2, 3:5] = -R_t, dR_t @ delta, R_t
+J_rel[2, 2], J_rel[2, 5] = -1.0, 1.0
+cov_rel = J_rel @ joint_cov @ J_rel.T
+### END SOLUTION
+
+# %% nbgrader={"grade": true, "grade_id": "ex3_test", "locked": true, "points": 4, "schema_version": 3, "solution": false}
+# Exercise 3: autograder test
+mc_rng = np.random.default_rng(11)
+draws = mc_rng.multivariate_normal(np.r_[pose_a, pose_b], joint_cov, size=200_000)
+rel = relative_planar(draws[:, :3], draws[:, 3:])
+assert J_rel.shape == (3, 6) and np.allclose(cov_rel, cov_rel.T)
+mc_cov = np.cov(rel.T)
+assert np.linalg.norm(cov_rel - mc_cov) < 0.02 * np.linalg.norm(mc_cov), "first order, against Monte Carlo"
+eps = 1e-6
+numeric = np.column_stack(
+    [
+        (relative_planar(*np.split(np.r_[pose_a, pose_b] + eps * e, 2)) - relative_planar(pose_a, pose_b))
+        / eps
+        for e in np.eye(6)
+    ]
+)
+assert np.allclose(J_rel, numeric, atol=1e-5)
+
+# %% [markdown]
+# ### Stretch goals (not graded)
+#
+# - Replace the full Jacobians of the prediction by eq. 9's F = I and repeat section 5: what
+#   happens to the NEES, and why?
+# - The slip in our drives has a mean, not only noise. Augment the state with the slip fraction
+#   and estimate it online. How fast does it converge in the spot turn?
+# - Without odometry the filter predicts with constant velocity: run section 2 with
+#   `kf.predict(None)` and compare the guided matching windows.

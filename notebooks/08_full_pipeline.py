@@ -386,12 +386,121 @@ for name in ("outdoor_free", "outdoor_free_2", "outdoor_free_3"):  # outdoors, e
 #   measurable.
 # - Linear, free and spot-turn motion all stay within the accuracy targets; odometry alone drifts
 #   by the slip.
-#
+
+# %% [markdown]
 # ## Exercises
 #
-# 1. Set `vo_lib.stereo_vo.pipeline.KEY_DISTANCE` to 0 (a new keyframe every frame) and rerun section 3.
-#    How large is the final error now, and in which direction?
-# 2. Move the camera 0.3 m ahead of the turning axis in `vo_lib.sim.samples` and rerun section 4.
-# 3. Run `python -m vo_lib run --sequence outdoor_free --no-odometry` and compare with section 5.
-# 4. If you have KITTI odometry data, run the pipeline on sequence 00 (README). Which assumption
-#    of the circular-motion model does a car break first?
+# Easy to hard, with the points each is worth. Write your answer in the cell under each
+# exercise (it names the variables to set), then run the test cell after it, which checks them.
+# The cell below makes the trajectories they share: a drive of 400 steps of 1 cm with a gentle
+# curve, and an estimate of it whose heading drifts by 0.01° per step.
+
+# %%
+from vo_lib.evaluation import ate_planar, path_lengths
+from vo_lib.geometry import compose_planar
+
+ex_steps, ex_step_length, ex_drift = 400, 0.01, np.radians(0.01)
+
+
+def drive_steps(increment, n):
+    """Poses (n + 1, 3) of n equal planar increments from the origin."""
+    poses = [np.zeros(3)]
+    for _ in range(n):
+        poses.append(compose_planar(poses[-1], increment))
+    return np.array(poses)
+
+
+ex_truth = drive_steps(np.array([ex_step_length, 0.0, np.radians(0.05)]), ex_steps)
+ex_estimate = drive_steps(np.array([ex_step_length, 0.0, np.radians(0.05) + ex_drift]), ex_steps)
+
+# %% [markdown]
+# ### Exercise 1 · final error as a share of the distance *(easy, 2 points)*
+#
+# The README and Table 2 report the error at the last frame as a share of the distance
+# travelled. Compute it for `ex_estimate` against `ex_truth` in per cent: `final_error_pct`.
+#
+# *Hint:* the distance travelled is the length of the true path, not the start-to-end distance.
+
+# %% nbgrader={"grade": false, "grade_id": "ex1", "locked": false, "schema_version": 3, "solution": true}
+### BEGIN SOLUTION
+travelled = np.sum(np.linalg.norm(np.diff(ex_truth[:, :2], axis=0), axis=1))
+final_error_pct = float(100 * np.linalg.norm(ex_estimate[-1, :2] - ex_truth[-1, :2]) / travelled)
+print(f"final error {final_error_pct:.2f} % of {travelled:.2f} m")
+### END SOLUTION
+
+# %% nbgrader={"grade": true, "grade_id": "ex1_test", "locked": true, "points": 2, "schema_version": 3, "solution": false}
+# Exercise 1: autograder test
+gap = np.linalg.norm(ex_estimate[-1, :2] - ex_truth[-1, :2])
+from vo_lib.geometry import planar_to_matrix
+
+length = path_lengths(np.array([planar_to_matrix(p) for p in ex_truth]))[-1]
+assert np.isclose(final_error_pct, 100 * gap / length)
+
+# %% [markdown]
+# ### Exercise 2 · the absolute trajectory error *(medium, 3 points)*
+#
+# The ATE first moves the whole estimate by the rotation and translation in the plane that fit
+# it best to the truth (least squares), then takes the RMS of the position errors. Write that
+# alignment yourself (2-D Kabsch: centre both, SVD of the cross-covariance, mind the sign of the
+# determinant) and store the RMS error in `ate_rmse`.
+#
+# *Hint:* R = V diag(1, det(V Uᵀ)) Uᵀ for the SVD U S Vᵀ of Σ (p_est − mean)(p_true − mean)ᵀ.
+
+# %% nbgrader={"grade": false, "grade_id": "ex2", "locked": false, "schema_version": 3, "solution": true}
+### BEGIN SOLUTION
+est_xy, true_xy = ex_estimate[:, :2], ex_truth[:, :2]
+est_mean, true_mean = est_xy.mean(axis=0), true_xy.mean(axis=0)
+U, _, Vt = np.linalg.svd((est_xy - est_mean).T @ (true_xy - true_mean))
+R_fit = Vt.T @ np.diag([1.0, np.linalg.det(Vt.T @ U.T)]) @ U.T
+aligned = (est_xy - est_mean) @ R_fit.T + true_mean
+ate_rmse = float(np.sqrt(np.mean(np.sum((aligned - true_xy) ** 2, axis=1))))
+print(f"ATE {ate_rmse * 100:.3f} cm (final error {np.linalg.norm(est_xy[-1] - true_xy[-1]) * 100:.2f} cm)")
+### END SOLUTION
+
+# %% nbgrader={"grade": true, "grade_id": "ex2_test", "locked": true, "points": 3, "schema_version": 3, "solution": false}
+# Exercise 2: autograder test
+assert np.isclose(ate_rmse, ate_planar(ex_truth, ex_estimate)[0].rmse, rtol=1e-9)
+assert ate_rmse < np.linalg.norm(ex_estimate[-1, :2] - ex_truth[-1, :2]), "alignment spreads the drift"
+
+# %% [markdown]
+# ### Exercise 3 · how heading drift becomes position error *(hard, 4 points)*
+#
+# On a straight drive of n steps of length s, a heading error growing by ε per step leaves the
+# end of the path off sideways by about s ε n(n + 1)/2 ... or is it n(n − 1)/2? Derive the
+# first-order sideways error of the last pose from compose_planar's midpoint-free step (each
+# step goes straight along the heading *before* it turns), write `sideways_error(s, eps, n)`,
+# and show that it matches a drive with `drive_steps` to 1 % for s = 1 cm, ε = 0.01°, n = 400.
+#
+# *Hint:* after k steps the heading is off by k ε; which heading does step k + 1 use?
+
+
+# %% nbgrader={"grade": false, "grade_id": "ex3", "locked": false, "schema_version": 3, "solution": true}
+### BEGIN SOLUTION
+def sideways_error(s, eps, n):
+    """First-order lateral offset after n steps whose heading drifts by eps per step."""
+    return s * eps * n * (n - 1) / 2  # step k + 1 goes along heading k eps, k = 0 .. n - 1
+
+
+drifting = drive_steps(np.array([ex_step_length, 0.0, ex_drift]), ex_steps)
+print(
+    f"sideways after {ex_steps} steps: {drifting[-1, 1] * 100:.3f} cm, "
+    f"first order {sideways_error(ex_step_length, ex_drift, ex_steps) * 100:.3f} cm"
+)
+### END SOLUTION
+
+# %% nbgrader={"grade": true, "grade_id": "ex3_test", "locked": true, "points": 4, "schema_version": 3, "solution": false}
+# Exercise 3: autograder test
+for n in (50, 400):
+    straight_drift = drive_steps(np.array([0.01, 0.0, np.radians(0.01)]), n)
+    assert np.isclose(sideways_error(0.01, np.radians(0.01), n), straight_drift[-1, 1], rtol=0.01)
+assert np.isclose(sideways_error(0.01, 1e-4, 2), 0.01 * 1e-4), "two steps: only the second is off"
+
+# %% [markdown]
+# ### Stretch goals (not graded)
+#
+# - Set `vo_lib.stereo_vo.pipeline.KEY_DISTANCE` to 0 (a new keyframe every frame) and rerun
+#   section 3. How large is the final error now, and in which direction?
+# - Move the camera 0.3 m ahead of the turning axis in `vo_lib.sim.samples` and rerun section 4.
+# - Run `python -m vo_lib run --sequence outdoor_free --no-odometry` and compare with section 5.
+# - With KITTI odometry data, run the pipeline on sequence 00 (README). Which assumption of the
+#   circular-motion model does a car break first?

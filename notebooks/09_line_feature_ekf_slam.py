@@ -889,20 +889,94 @@ assert in_band["line"] > 0.9 and in_band["line"] > in_band["feature point"]
 #   NEES averages inside the band but is above it at a good share of steps, a heading
 #   over-confidence known for EKF-SLAM. In the out-of-range case it maps wall 3 to within one σ
 #   of the paper's 54.4412.
-#
+
+# %% [markdown]
 # ## Exercises
 #
-# 1. Put the printed eq. 6 into `EkfSlam.predict` (swap the sign of `f_x[1, 2]`) and rerun
-#    section 7. What happens to the NEES, and on which legs of the lap first?
-# 2. The feature point of a wall through the origin is the origin itself, and its direction is
-#    undefined. Which real walls are close to that case, and what parametrisation would avoid it?
-# 3. Observe every control period instead of every eighth. How do the final error, the NEES and
-#    the lap time change? Which observer's cost now matters?
-# 4. Move the world origin to (100, 100) (shift every wall and waypoint). The feature points are
-#    now ~100 m away. What happens to consistency, and why?
-# 5. Give the bisection the paper's stopping rule on $|F|$ instead of the bracket width. How does
-#    the error of the visible end now depend on the angle between the wall and the line of sight?
-# 6. Evaluate the Jacobians of the prediction at the *first* estimate of each landmark instead of
-#    the current one (first-estimate Jacobians). Does the share of steps above the NEES band fall?
-# 7. Lower `max_line_direction_sigma` to 1° in the line form. Which walls are no longer used, and
-#    where on the lap? What happens to the final error?
+# Easy to hard, with the points each is worth. Write your answer in the cell under each
+# exercise (it names the variables to set), then run the test cell after it, which checks them.
+
+# %% [markdown]
+# ### Exercise 1 · a wall's feature point *(easy, 2 points)*
+#
+# A wall runs through (4, 1) and (1, 5). Compute its feature point, the foot of the
+# perpendicular from the world origin to its line, into `wall_point`, and the wall's distance
+# from the origin into `wall_distance`.
+#
+# *Hint:* project the origin onto the line: a + t (b − a) with t chosen so that the result is
+# perpendicular to b − a.
+
+# %% nbgrader={"grade": false, "grade_id": "ex1", "locked": false, "schema_version": 3, "solution": true}
+### BEGIN SOLUTION
+wall_a, wall_b = np.array([4.0, 1.0]), np.array([1.0, 5.0])
+along_wall = wall_b - wall_a
+wall_point = wall_a - along_wall * (wall_a @ along_wall) / (along_wall @ along_wall)
+wall_distance = float(np.hypot(*wall_point))
+print(f"feature point {wall_point}, {wall_distance:.3f} m from the origin")
+### END SOLUTION
+
+# %% nbgrader={"grade": true, "grade_id": "ex1_test", "locked": true, "points": 2, "schema_version": 3, "solution": false}
+# Exercise 1: autograder test
+from vo_lib.line_slam.line_landmarks import feature_point
+
+assert np.allclose(wall_point, feature_point([4.0, 1.0], [1.0, 5.0]))
+assert np.isclose(wall_distance, abs(4.0 * 5.0 - 1.0 * 1.0) / 5.0), "|a × b| / |b − a|"
+
+# %% [markdown]
+# ### Exercise 2 · the range–bearing Jacobians *(medium, 3 points)*
+#
+# Write `range_bearing_jacobians(pose, point)` returning the 2×3 Jacobian of (range, bearing)
+# by the pose (x, y, Φ) and the 2×2 Jacobian by the landmark (x_l, y_l), derived by hand from
+# r = √(Δx² + Δy²), b = atan2(Δy, Δx) − Φ. Mind the bearing row: it is where the paper's eq. 11
+# prints the wrong variables.
+#
+# *Hint:* ∂atan2(Δy, Δx)/∂Δx = −Δy / r².
+
+
+# %% nbgrader={"grade": false, "grade_id": "ex2", "locked": false, "schema_version": 3, "solution": true}
+### BEGIN SOLUTION
+def range_bearing_jacobians(pose, point):
+    """Jacobians of (range, bearing) by the pose (2x3) and by the landmark (2x2)."""
+    dx, dy = point[0] - pose[0], point[1] - pose[1]
+    q = dx * dx + dy * dy
+    r = np.sqrt(q)
+    by_point = np.array([[dx / r, dy / r], [-dy / q, dx / q]])
+    by_pose = np.column_stack([-by_point, [0.0, -1.0]])
+    return by_pose, by_point
+
+
+### END SOLUTION
+
+# %% nbgrader={"grade": true, "grade_id": "ex2_test", "locked": true, "points": 3, "schema_version": 3, "solution": false}
+# Exercise 2: autograder test: central differences at random poses and landmarks
+from vo_lib.line_slam.range_bearing import observe_point
+
+jac_rng = np.random.default_rng(9)
+for _ in range(20):
+    pose_j, point_j = jac_rng.uniform(-5, 5, 3), jac_rng.uniform(-20, 20, 2)
+    by_pose, by_point = range_bearing_jacobians(pose_j, point_j)
+    for matrix, base, size in ((by_pose, pose_j, 3), (by_point, point_j, 2)):
+        for k in range(size):
+            step = np.zeros(size)
+            step[k] = 1e-6
+            plus, minus = (base + step, base - step)
+            if size == 3:
+                diff = observe_point(plus, point_j) - observe_point(minus, point_j)
+            else:
+                diff = observe_point(pose_j, plus) - observe_point(pose_j, minus)
+            diff[1] = (diff[1] + np.pi) % (2 * np.pi) - np.pi
+            assert np.allclose(matrix[:, k], diff / 2e-6, atol=1e-6)
+
+# %% [markdown]
+# ### Stretch goals (not graded)
+#
+# - Put the printed eq. 6 into `EkfSlam.predict` (swap the sign of `f_x[1, 2]`) and rerun
+#   section 7. What happens to the NEES, and on which legs of the lap first?
+# - The feature point of a wall through the origin is the origin itself, and its direction is
+#   undefined. Which parametrisation would avoid it?
+# - Observe every control period instead of every eighth: how do the final error, the NEES and
+#   the lap time change? Which observer's cost now matters?
+# - Move the world origin to (100, 100). The feature points are now ~100 m away: what happens to
+#   consistency, and why?
+# - Evaluate the Jacobians at the *first* estimate of each landmark (first-estimate Jacobians).
+#   Does the share of steps above the NEES band fall?

@@ -633,17 +633,116 @@ assert max(lbpt_y, voapt_y) < paper[("VOAPT", 1)][1]  # our worst Y below the pa
 # - Replacing the laser's correction along the principal error direction by the visual
 #   odometer's cuts the along-corridor error severalfold over 20 seeds; spurious credible updates
 #   in the occluded stretch are what keeps ours above the paper's.
-#
+
+# %% [markdown]
 # ## Exercises
 #
-# 1. Set $T_s$ to the printed eq. 16 (`credible = c_s and (laser_ok or vo_ok)`) and rerun
-#    section 6. Which frames are no longer flagged, and what happens to VOAPT's error?
-# 2. Remove the umbrella (`without_umbrella(world)`) and rerun LBPT. How large is its error now?
-# 3. Spread the samples equally in all directions (`SAMPLE_SIGMA = (0.08, 0.08, 1.5°)`): what
-#    happens to the separation of $V_{max}$ between normal and occluded frames, and why?
-# 4. Replace the PnP odometer by the 1-point pipeline's poses as the visual odometer. Does VOAPT
-#    care which one it gets?
-# 5. The laser updates every 0.1 m. Update every frame (0.05 m) instead: does LBPT wander faster?
-# 6. Calibrate the thresholds at the 10th instead of the 1st percentile (`calibrate(..., quantile=10)`).
-#    How often does $T_s$ pass in the occluded stretch now, what happens to VOAPT's error, and how
-#    many false alarms does it cost in the normal stretches?
+# Easy to hard, with the points each is worth. Write your answer in the cell under each
+# exercise (it names the variables to set), then run the test cell after it, which checks them.
+
+# %% [markdown]
+# ### Exercise 1 · scores as a posterior *(easy, 2 points)*
+#
+# Five sampled poses score S = (812.0, 815.5, 809.0, 815.0, 790.0). Read each score as a
+# log-likelihood and compute the posterior of every sample, `sample_posterior`, without
+# overflowing (exp(815) is not a float).
+#
+# *Hint:* subtracting the largest score from all of them changes nothing after normalising.
+
+# %% nbgrader={"grade": false, "grade_id": "ex1", "locked": false, "schema_version": 3, "solution": true}
+### BEGIN SOLUTION
+sample_scores = np.array([812.0, 815.5, 809.0, 815.0, 790.0])
+weights = np.exp(sample_scores - sample_scores.max())
+sample_posterior = weights / weights.sum()
+print(np.round(sample_posterior, 4))
+### END SOLUTION
+
+# %% nbgrader={"grade": true, "grade_id": "ex1_test", "locked": true, "points": 2, "schema_version": 3, "solution": false}
+# Exercise 1: autograder test
+from vo_lib.lidar_tracking.pose_tracking import posterior
+
+assert np.all(np.isfinite(sample_posterior)) and np.isclose(sample_posterior.sum(), 1.0)
+assert np.allclose(sample_posterior, posterior([812.0, 815.5, 809.0, 815.0, 790.0]))
+
+# %% [markdown]
+# ### Exercise 2 · control limits *(medium, 3 points)*
+#
+# Table II's control chart puts the centre line at the mean correction length, the upper limit
+# three standard deviations above it, and the lower limit at zero where the mean minus three
+# standard deviations would be negative. From the 60 correction lengths `corrections` below
+# (metres, of a normal stretch), compute `centre_line`, `upper_limit` and `lower_limit`, and
+# count in `out_of_control` the lengths of `later` (a stretch that follows) above the upper limit.
+#
+# *Hint:* the sample standard deviation (`ddof=1`).
+
+# %%
+chart_rng = np.random.default_rng(SEED + 10)
+corrections = np.abs(chart_rng.normal(0.0, 0.02, 60))
+later = np.r_[np.abs(chart_rng.normal(0.0, 0.02, 30)), [0.15, 0.22, 0.09]]
+
+# %% nbgrader={"grade": false, "grade_id": "ex2", "locked": false, "schema_version": 3, "solution": true}
+### BEGIN SOLUTION
+centre_line = float(corrections.mean())
+spread = float(corrections.std(ddof=1))
+upper_limit, lower_limit = centre_line + 3 * spread, max(0.0, centre_line - 3 * spread)
+out_of_control = int(np.sum(later > upper_limit))
+print(
+    f"LCL {lower_limit:.3f} m, centre {centre_line:.3f} m, UCL {upper_limit:.3f} m; "
+    f"{out_of_control} out of control"
+)
+### END SOLUTION
+
+# %% nbgrader={"grade": true, "grade_id": "ex2_test", "locked": true, "points": 3, "schema_version": 3, "solution": false}
+# Exercise 2: autograder test
+from vo_lib.lidar_tracking.pose_tracking import ControlLimits
+
+limits = ControlLimits.from_corrections(corrections)
+assert np.isclose(centre_line, limits.centre) and np.isclose(upper_limit, limits.upper)
+assert lower_limit == limits.lower == 0.0, "lengths are positive: the lower limit is zero"
+assert out_of_control == sum(not limits.contains(x) and x > limits.upper for x in later) >= 3
+
+# %% [markdown]
+# ### Exercise 3 · box-plot statistics *(hard, 4 points)*
+#
+# Section 3 draws the samples' scores as box plots. Compute, without matplotlib, the statistics a
+# box plot draws for the 200 scores `box_scores` below: the quartiles `q1`, `median_score`, `q3`,
+# the whiskers `whisker_low` and `whisker_high` (the most extreme scores within 1.5 IQR of the
+# box) and the number of fliers `n_fliers` beyond them.
+#
+# *Hint:* `np.percentile` with its default (linear) interpolation, as matplotlib uses.
+
+# %%
+box_scores = np.r_[chart_rng.normal(400.0, 25.0, 190), chart_rng.uniform(150.0, 250.0, 10)]
+
+# %% nbgrader={"grade": false, "grade_id": "ex3", "locked": false, "schema_version": 3, "solution": true}
+### BEGIN SOLUTION
+q1, median_score, q3 = np.percentile(box_scores, [25, 50, 75])
+iqr = q3 - q1
+inside = box_scores[(box_scores >= q1 - 1.5 * iqr) & (box_scores <= q3 + 1.5 * iqr)]
+whisker_low, whisker_high = inside.min(), inside.max()
+n_fliers = int(np.sum((box_scores < whisker_low) | (box_scores > whisker_high)))
+print(
+    f"box {q1:.1f}–{q3:.1f} (median {median_score:.1f}), "
+    f"whiskers {whisker_low:.1f}–{whisker_high:.1f}, {n_fliers} fliers"
+)
+### END SOLUTION
+
+# %% nbgrader={"grade": true, "grade_id": "ex3_test", "locked": true, "points": 4, "schema_version": 3, "solution": false}
+# Exercise 3: autograder test
+from matplotlib.cbook import boxplot_stats
+
+reference = boxplot_stats(box_scores)[0]
+assert np.allclose([q1, median_score, q3], [reference["q1"], reference["med"], reference["q3"]])
+assert np.allclose([whisker_low, whisker_high], [reference["whislo"], reference["whishi"]])
+assert n_fliers == len(reference["fliers"]) >= 10
+
+# %% [markdown]
+# ### Stretch goals (not graded)
+#
+# - Set T_s to the printed eq. 16 (`credible = c_s and (laser_ok or vo_ok)`) and rerun section
+#   6. Which frames are no longer flagged, and what happens to VOAPT's error?
+# - Remove the umbrella (`without_umbrella(world)`) and rerun LBPT. How large is its error now?
+# - Spread the samples equally in all directions: what happens to the separation of V_max
+#   between normal and occluded frames, and why?
+# - Calibrate the thresholds at the 10th instead of the 1st percentile. How often does T_s pass
+#   in the occluded stretch now, and how many false alarms does it cost?

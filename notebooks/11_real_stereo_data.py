@@ -955,32 +955,47 @@ if REAL:  # the issue's acceptance figures, without odometry
 # - With the real odometry fused or not, vision beats the odometry alone; how much the fusion
 #   adds depends on the odometry's noise model. The OpenCV PnP baseline is the yardstick for
 #   accuracy and speed (the printed ratio is one run's).
-#
+
+
+# %% [markdown]
 # ## Exercises
 #
-# Each exercise has a worked solution in the cell after it (between `### BEGIN SOLUTION` and
-# `### END SOLUTION`), which runs and checks its answer.
-#
-# 1. *(easy)* Lower the FAST threshold from 20 to 10 on the first real image of section 1. What
-#    share of the cells is still without a corner?
+# Easy to hard, with the points each is worth. Write your answer in the cell under each
+# exercise (it names the variables to set), then run the test cell after it, which checks them.
 
-# %%
-# Exercise 1, worked solution
+# %% [markdown]
+# ### Exercise 1 · a lower threshold *(easy, 2 points)*
+#
+# Lower the FAST threshold from 20 to 10 on the first real image of section 1. Store the share
+# of the cells without a corner at each threshold in `at_20` and `at_10`.
+#
+# *Hint:* `image_statistics(image, threshold=...)["empty"]`.
+
+# %% nbgrader={"grade": false, "grade_id": "ex1", "locked": false, "schema_version": 3, "solution": true}
 ### BEGIN SOLUTION
 at_20 = image_statistics(real_images[0], threshold=20)["empty"]
 at_10 = image_statistics(real_images[0], threshold=10)["empty"]
 print(f"cells without a corner: {at_20:.1%} at threshold 20, {at_10:.1%} at threshold 10")
-assert at_10 < at_20  # a lower threshold fills some cells, but the flat ones stay empty
 ### END SOLUTION
 
-# %% [markdown]
-# 2. *(easy)* The car pitches by 0.1° between two frames. How far does the image of a point 20 m
-#    straight ahead move, and is that inside the refinement's inlier threshold
-#    (`rigid_motion.INLIER_PIXELS`)? Compute it by moving the point and projecting it with
-#    `rigid_motion.project`, and check it against `fy tan(0.1°)`.
+# %% nbgrader={"grade": true, "grade_id": "ex1_test", "locked": true, "points": 2, "schema_version": 3, "solution": false}
+# Exercise 1: autograder test
+assert 0 <= at_10 < at_20 <= 1, "a lower threshold fills some cells, but the flat ones stay empty"
+### BEGIN HIDDEN TESTS
+assert np.isclose(at_10, image_statistics(real_images[0], threshold=10)["empty"])
+### END HIDDEN TESTS
 
-# %%
-# Exercise 2, worked solution
+# %% [markdown]
+# ### Exercise 2 · pitch in pixels *(easy, 2 points)*
+#
+# The car pitches by 0.1° between two frames. How far (`shift`, pixels) does the image of a point
+# 20 m straight ahead move? Compute it by rotating the point about the camera's x axis and
+# projecting it with `rigid_motion.project`. Is that inside the refinement's inlier threshold
+# (`rigid_motion.INLIER_PIXELS`)?
+#
+# *Hint:* `Rotation.from_euler("x", angle)`.
+
+# %% nbgrader={"grade": false, "grade_id": "ex2", "locked": false, "schema_version": 3, "solution": true}
 ### BEGIN SOLUTION
 pitch = math.radians(0.1)
 point = np.array([[0.0, 0.0, 20.0]])  # on the optical axis
@@ -991,32 +1006,44 @@ print(
     f"0.1 deg of pitch moves the point by {shift:.3f} px (fy = {cam.fy:.1f} px); the inlier threshold is "
     f"{rigid_motion.INLIER_PIXELS} px: {'outside' if shift > rigid_motion.INLIER_PIXELS else 'inside'}"
 )
-assert abs(shift - cam.fy * math.tan(pitch)) < 1e-9
 ### END SOLUTION
 
-# %% [markdown]
-# 3. *(medium)* Start the Gauss–Newton of section 5 from no motion at all (`R = I`, `t = 0`)
-#    instead of 1-point RANSAC's guess. Does it reach the same motion, and in how many steps?
+# %% nbgrader={"grade": true, "grade_id": "ex2_test", "locked": true, "points": 2, "schema_version": 3, "solution": false}
+# Exercise 2: autograder test
+assert abs(shift - cam.fy * math.tan(math.radians(0.1))) < 1e-9
 
-# %%
-# Exercise 3, worked solution
+# %% [markdown]
+# ### Exercise 3 · start from nothing *(medium, 3 points)*
+#
+# Start the Gauss–Newton of section 5 from no motion at all (`R = I`, `t = 0`) instead of
+# 1-point RANSAC's guess: store the result in `R_id`, `t_id` and its number of steps in
+# `steps_id`. Does it reach the same motion, and in how many steps?
+#
+# *Hint:* `gauss_newton(P_in, w_in, R, t, iterations=30, tol=1e-10)`.
+
+# %% nbgrader={"grade": false, "grade_id": "ex3", "locked": false, "schema_version": 3, "solution": true}
 ### BEGIN SOLUTION
 R_id, t_id, steps_id = gauss_newton(P_in, w_in, np.eye(3), np.zeros(3), iterations=30, tol=1e-10)
-gap_R, gap_t = np.abs(R_id - R_ours).max(), np.abs(t_id - t_ours).max()
-print(
-    f"from the identity: {steps_id} steps (from RANSAC's guess: {steps}); apart by {gap_R:.1e}, {gap_t:.1e} m"
-)
-assert gap_R < 1e-8 and gap_t < 1e-8
+print(f"from the identity: {steps_id} steps (from RANSAC's guess: {steps})")
 ### END SOLUTION
 
-# %% [markdown]
-# 4. *(hard)* Write the left-image-only refinement: keep the `(u, v)` rows of the residual and of
-#    the Jacobian, and iterate to convergence on the refined inliers of section 5. Show that it
-#    agrees with `cv2.solvePnPRefineLM` to a micrometre, and measure how far its translation is
-#    from the stereo fit's (no Huber, same inliers). Which component differs most, and why?
+# %% nbgrader={"grade": true, "grade_id": "ex3_test", "locked": true, "points": 3, "schema_version": 3, "solution": false}
+# Exercise 3: autograder test
+assert np.abs(R_id - R_ours).max() < 1e-8 and np.abs(t_id - t_ours).max() < 1e-8, "the same motion"
+assert steps_id >= steps
 
-# %%
-# Exercise 4, worked solution: the left image alone
+# %% [markdown]
+# ### Exercise 4 · the left image alone *(hard, 4 points)*
+#
+# Write the left-image-only refinement: keep the `(u, v)` rows of the residual and of the
+# Jacobian, and iterate to convergence on the refined inliers of section 5 (`one.w_prev[sel]`,
+# `one.w_curr[sel]`, from `R0`, `t0`); store the result in `R4`, `t4`. It should agree with
+# `cv2.solvePnPRefineLM` (`tvec`) to a micrometre. How far is its translation from the stereo
+# fit's (no Huber, same inliers), which component differs most, and why?
+#
+# *Hint:* section 5's `project_uvd`, `jacobian` and `exp_rotation`.
+
+# %% nbgrader={"grade": false, "grade_id": "ex4", "locked": false, "schema_version": 3, "solution": true}
 ### BEGIN SOLUTION
 P_sel, w_sel = cam.backproject(one.w_prev[sel]), one.w_curr[sel]
 R4, t4 = R0.copy(), t0.copy()
@@ -1030,13 +1057,18 @@ for _ in range(50):
     if np.abs(delta).max() < 1e-12:
         break
 R_st, t_st, _ = gauss_newton(P_sel, w_sel, R0, t0, iterations=50, tol=1e-12)
-to_opencv = float(np.abs(t4 - tvec.ravel()).max())
-print(f"left-only GN against solvePnPRefineLM: {to_opencv * 1e6:.3f} micrometres apart")
 print(f"left-only minus stereo translation (x, y, z): {1000 * (t4 - t_st)} mm")
-assert to_opencv < 1e-6
 # The 3-D points are fixed, so both fits know depth; but the stereo fit also asks the *current*
 # disparities to agree, which pins the forward component (z), the one the left image sees worst:
 # a step along the optical axis moves the points near the image centre hardly at all.
-if REAL:
-    assert np.argmax(np.abs(t4 - t_st)) == 2
 ### END SOLUTION
+
+# %% nbgrader={"grade": true, "grade_id": "ex4_test", "locked": true, "points": 4, "schema_version": 3, "solution": false}
+# Exercise 4: autograder test
+P_sel, w_sel = cam.backproject(one.w_prev[sel]), one.w_curr[sel]
+to_opencv = float(np.abs(t4 - tvec.ravel()).max())
+print(f"left-only GN against solvePnPRefineLM: {to_opencv * 1e6:.3f} micrometres apart")
+assert to_opencv < 1e-6
+if REAL:  # on the real drive the forward component differs most
+    R_stereo, t_stereo, _ = gauss_newton(P_sel, w_sel, R0, t0, iterations=50, tol=1e-12)
+    assert np.argmax(np.abs(t4 - t_stereo)) == 2

@@ -16,6 +16,7 @@ ROOT = pathlib.Path(__file__).resolve().parents[1]
 #: Real sequences beside the repository (CI has them); the notebooks find them through
 #: ``VO_LIB_REALDATA``, which the test kernel gets when the folder exists and it is not set.
 REALDATA = ROOT.parent / "shared" / "realdata"
+NOTEBOOK_KERNEL = "python3"  # the kernel every notebook names (tests/test_kernel_name.py)
 
 
 @pytest.fixture
@@ -30,10 +31,10 @@ def rng() -> np.random.Generator:
 
 @pytest.fixture(scope="session")
 def kernel_dir(tmp_path_factory) -> pathlib.Path:
-    """A kernelspec folder whose only kernel starts ``sys.executable``: the tests' own environment,
-    whatever kernels the user has registered elsewhere."""
+    """A kernelspec folder whose only kernel, named ``python3`` as the notebooks name it, starts
+    ``sys.executable``: the tests' own environment, whatever kernels the user has registered."""
     kernels = tmp_path_factory.mktemp("jupyter") / "kernels"
-    spec = kernels / "vo-notebooks-test"
+    spec = kernels / NOTEBOOK_KERNEL
     spec.mkdir(parents=True)
     kernel = {
         "argv": [sys.executable, "-m", "ipykernel_launcher", "-f", "{connection_file}"],

@@ -1,0 +1,303 @@
+"""Write the student edition of the notebooks, and the nbgrader course folder that grades it.
+
+    python coursework/build.py [--out DIR] [--check [NN ...]]
+
+The jupytext sources in ``notebooks/`` carry nbgrader's cell metadata: solution cells (code
+between ``### BEGIN SOLUTION`` and ``### END SOLUTION``) and locked autograder test cells. This
+script converts them to ``.ipynb`` in a course folder and lets ``nbgrader generate_assignment``
+strip the solutions, one assignment per notebook. It writes, under ``--out`` (default: the
+repository):
+
+- ``student/NN_topic/NN_topic.ipynb``: the release, without solutions or hidden tests;
+- ``grading/``: nbgrader's course folder (``source/`` with solutions and tests, ``release/``,
+  ``gradebook.db``, ``nbgrader_config.py``), where ``nbgrader autograde`` grades submissions.
+
+Each is built under a temporary name beside its destination and renamed when complete. A
+destination is replaced only if it holds exactly the files an earlier build wrote (its marker
+lists them with their checksums), so submissions copied into ``grading/`` or notebooks a student
+edited in ``student/`` are never overwritten.
+
+``--check`` then autogrades, in a temporary copy of the course folder, the solutions (every test
+must pass) and the unanswered student edition (every exercise must score zero while every cell
+outside the exercises runs without error).
+"""
+
+from __future__ import annotations
+
+import argparse
+import hashlib
+import json
+import os
+import pathlib
+import re
+import shutil
+import signal
+import subprocess
+import sys
+import tempfile
+
+import jupytext
+import nbformat
+
+ROOT = pathlib.Path(__file__).resolve().parents[1]
+NOTEBOOK_DIR = ROOT / "notebooks"
+NOTEBOOK_GLOB = "[0-9][0-9]_*.py"
+CONFIG = pathlib.Path(__file__).with_name("nbgrader_config.py")
+STUDENT_DIR, GRADING_DIR = "student", "grading"
+MARKER = ".coursework_build.json"
+SOLUTIONS_STUDENT, UNANSWERED_STUDENT = "solutions", "unanswered"
+REGIONS = [  # nbgrader's markers: solution code, and tests kept from the student edition
+    re.compile(rf"^\s*### BEGIN {what}\s*$(.*?)^\s*### END {what}\s*$", re.M | re.S)
+    for what in ("SOLUTION", "HIDDEN TESTS")
+]
+EXIT_FAILED, EXIT_USAGE = 1, 2
+
+
+class UsageError(Exception):
+    """Bad input: reported in one line, exit status 2."""
+
+
+class BuildError(Exception):
+    """nbgrader failed, or a check found a problem: exit status 1."""
+
+
+def notebook_paths(numbers: list[str] | None = None) -> list[pathlib.Path]:
+    """The notebooks' jupytext sources, all of them or those whose two-digit number is given."""
+    paths = sorted(NOTEBOOK_DIR.glob(NOTEBOOK_GLOB))
+    if not numbers:
+        return paths
+    by_number = {p.name[:2]: p for p in paths}
+    unknown = [n for n in numbers if n.zfill(2) not in by_number]
+    if unknown:
+        raise UsageError(f"no notebook numbered {unknown[0]!r}: expected one of {', '.join(by_number)}")
+    return [by_number[n.zfill(2)] for n in numbers]
+
+
+def solution_lines(nb: nbformat.NotebookNode) -> set[str]:
+    """Lines of solution text in ``nb`` that a student edition must not contain.
+
+    Every line of a solution region or of a hidden-test region, and every line of a written
+    (markdown) solution cell, stripped; lines that also occur elsewhere in the notebook (a blank,
+    an ``else:``, a print shared with the body) are left out, since finding them proves nothing.
+    """
+    hidden: list[str] = []
+    for cell in nb.cells:
+        meta = cell.metadata.get("nbgrader", {})
+        if cell.cell_type == "markdown" and meta.get("solution"):
+            hidden.append(cell.source)
+            continue
+        for pattern in REGIONS:
+            hidden.extend(m.group(1) for m in pattern.finditer(cell.source))
+    visible = "\n".join(cell.source for cell in nb.cells)
+    for text in hidden:
+        visible = visible.replace(text, "\n")
+    elsewhere = {line.strip() for line in visible.splitlines()}
+    return {
+        line.strip() for text in hidden for line in text.splitlines() if line.strip() not in elsewhere
+    } - {""}
+
+
+def leftover_solution_text(source: nbformat.NotebookNode, student: nbformat.NotebookNode) -> list[str]:
+    """Solution lines of ``source`` still present in the student edition ``student``."""
+    released = {line.strip() for cell in student.cells for line in cell.source.splitlines()}
+    return sorted(solution_lines(source) & released)
+
+
+def run_nbgrader(course: pathlib.Path, *args: str) -> None:
+    """Run one nbgrader command in the course folder ``course``; raise BuildError if it fails."""
+    proc = subprocess.run(
+        [sys.executable, "-m", "nbgrader", *args],
+        cwd=course,
+        capture_output=True,
+        text=True,
+        env=dict(os.environ, MPLBACKEND="Agg"),
+    )
+    errors = [line for line in proc.stderr.splitlines() if "| ERROR]" in line or "Error" in line]
+    if proc.returncode != 0:
+        raise BuildError(f"nbgrader {args[0]} failed: " + " / ".join(errors[-3:] or [proc.stderr[-500:]]))
+
+
+def write_course(course: pathlib.Path, paths: list[pathlib.Path]) -> None:
+    """Fill ``course`` (an empty folder) with nbgrader's course layout and generate the release."""
+    shutil.copy2(CONFIG, course / "nbgrader_config.py")
+    for path in paths:
+        folder = course / "source" / path.stem
+        folder.mkdir(parents=True)
+        nbformat.write(jupytext.read(path), folder / f"{path.stem}.ipynb")
+    run_nbgrader(course, "generate_assignment", "*", "--force")
+    for path in paths:
+        source = nbformat.read(course / "source" / path.stem / f"{path.stem}.ipynb", as_version=4)
+        student = nbformat.read(course / "release" / path.stem / f"{path.stem}.ipynb", as_version=4)
+        left = leftover_solution_text(source, student)
+        if left:
+            raise BuildError(f"{path.name}: the student edition still holds solution text: {left[0]!r}")
+
+
+def file_checksums(folder: pathlib.Path) -> dict[str, str]:
+    """sha256 of every file under ``folder`` but the marker, by path relative to it."""
+    return {
+        p.relative_to(folder).as_posix(): hashlib.sha256(p.read_bytes()).hexdigest()
+        for p in sorted(folder.rglob("*"))
+        if p.is_file() and p.name != MARKER
+    }
+
+
+def refuse_unless_replaceable(dest: pathlib.Path) -> None:
+    """Raise UsageError unless ``dest`` is absent or holds exactly what an earlier build wrote."""
+    if not dest.exists():
+        return
+    marker = dest / MARKER
+    if not marker.is_file():
+        raise UsageError(f"{dest}: exists and was not written by coursework/build.py; move it or use --out")
+    written = json.loads(marker.read_text())["files"]
+    now = file_checksums(dest)
+    changed = sorted(
+        (set(written) ^ set(now)) | {k for k in written.keys() & now.keys() if written[k] != now[k]}
+    )
+    if changed:
+        raise UsageError(f"{dest}: {changed[0]} was added or changed since the build; move it or use --out")
+
+
+def publish(built: pathlib.Path, dest: pathlib.Path) -> None:
+    """Rename the finished folder ``built`` to ``dest``, replacing an earlier, unchanged build."""
+    refuse_unless_replaceable(dest)
+    if not dest.exists():
+        os.replace(built, dest)
+        return
+    old = pathlib.Path(tempfile.mkdtemp(prefix=f".{dest.name}.old-", dir=dest.parent))
+    os.replace(dest, old / dest.name)
+    try:
+        os.replace(built, dest)
+    except OSError:
+        os.replace(old / dest.name, dest)
+        raise
+    finally:
+        shutil.rmtree(old, ignore_errors=True)
+
+
+def exercise_cell(cell: nbformat.NotebookNode) -> bool:
+    """True for nbgrader's solution and autograder cells: the ones an unanswered exercise may fail."""
+    meta = cell.metadata.get("nbgrader", {})
+    return bool(meta.get("solution") or meta.get("grade"))
+
+
+def check(course: pathlib.Path, paths: list[pathlib.Path]) -> list[str]:
+    """Autograde solutions and unanswered student notebooks in a copy of ``course``.
+
+    Returns one line per notebook; raises BuildError naming every problem found.
+    """
+    from nbgrader.api import Gradebook  # only the check needs nbgrader's database layer
+
+    problems, report = [], []
+    with tempfile.TemporaryDirectory(prefix="vo-coursework-check-") as tmp:
+        work = pathlib.Path(tmp) / "course"
+        shutil.copytree(course, work)
+        for path in paths:
+            name = f"{path.stem}.ipynb"
+            for student, edition in ((SOLUTIONS_STUDENT, "source"), (UNANSWERED_STUDENT, "release")):
+                folder = work / "submitted" / student / path.stem
+                folder.mkdir(parents=True)
+                shutil.copy2(work / edition / path.stem / name, folder / name)
+            run_nbgrader(work, "autograde", path.stem, "--force")
+        with Gradebook(f"sqlite:///{work / 'gradebook.db'}") as gradebook:
+            for path in paths:
+                auto_points = {}  # autograded points scored, of those that can be autograded
+                for student in (SOLUTIONS_STUDENT, UNANSWERED_STUDENT):
+                    sub = gradebook.find_submission_notebook(path.stem, path.stem, student)
+                    auto = [g for g in sub.grades if g.auto_score is not None]
+                    auto_points[student] = (sum(g.auto_score for g in auto), sum(g.max_score for g in auto))
+                    by_hand = sub.max_score - auto_points[student][1]
+                    graded = nbformat.read(
+                        work / "autograded" / student / path.stem / f"{path.stem}.ipynb", as_version=4
+                    )
+                    for index, cell in enumerate(graded.cells):
+                        failed = any(o.get("output_type") == "error" for o in cell.get("outputs", []))
+                        if failed and (student == SOLUTIONS_STUDENT or not exercise_cell(cell)):
+                            head = cell.source[:60]
+                            problems.append(f"{path.name} ({student}): cell {index} fails: {head!r}")
+                    if student == UNANSWERED_STUDENT:
+                        passed = [g.name for g in auto if g.auto_score > 0]
+                        problems += [f"{path.name}: unanswered {g!r} passes its test" for g in passed]
+                got, top = auto_points[SOLUTIONS_STUDENT]
+                if top == 0 or got != top:
+                    problems.append(f"{path.name}: the solutions score {got:g} of {top:g} autograded points")
+                report.append(
+                    f"{path.stem}: autograded points: solutions {got:g}/{top:g}, "
+                    f"unanswered {auto_points[UNANSWERED_STUDENT][0]:g}/{top:g}; {by_hand:g} graded by hand"
+                )
+    if problems:
+        raise BuildError("\n".join(problems))
+    return report
+
+
+def build(out: pathlib.Path, paths: list[pathlib.Path], check_paths: list[pathlib.Path]) -> None:
+    """Write ``out/grading`` and ``out/student``; autograde ``check_paths`` both ways first."""
+    for name in (GRADING_DIR, STUDENT_DIR):  # refuse before an hour of work, not after it
+        refuse_unless_replaceable(out / name)
+    temporaries = []
+    try:
+        course = pathlib.Path(tempfile.mkdtemp(prefix=f".{GRADING_DIR}.build-", suffix=".tmp", dir=out))
+        temporaries.append(course)
+        write_course(course, paths)
+        if check_paths:
+            for line in check(course, check_paths):
+                print(line)
+        student = pathlib.Path(tempfile.mkdtemp(prefix=f".{STUDENT_DIR}.build-", suffix=".tmp", dir=out))
+        temporaries.append(student)
+        shutil.rmtree(student)
+        shutil.copytree(course / "release", student)
+        for name, built in ((GRADING_DIR, course), (STUDENT_DIR, student)):
+            built.joinpath(MARKER).write_text(json.dumps({"files": file_checksums(built)}, indent=1))
+            refuse_unless_replaceable(out / name)
+        publish(course, out / GRADING_DIR)
+        publish(student, out / STUDENT_DIR)
+    finally:
+        for folder in temporaries:
+            shutil.rmtree(folder, ignore_errors=True)
+
+
+def parse_args(argv: list[str] | None) -> argparse.Namespace:
+    parser = argparse.ArgumentParser(
+        prog="python coursework/build.py",
+        description="Write student/ (notebooks without solutions) and grading/ (nbgrader's course folder).",
+    )
+    parser.add_argument("notebooks", nargs="*", metavar="NN", help="only these notebooks (default: all)")
+    parser.add_argument(
+        "--out", type=pathlib.Path, default=ROOT, help="where to write (default: the repository)"
+    )
+    parser.add_argument(
+        "--check",
+        nargs="*",
+        metavar="NN",
+        help="autograde the solutions and the unanswered edition (of these notebooks; default: all built)",
+    )
+    return parser.parse_args(argv)
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = parse_args(argv)
+    signal.signal(signal.SIGTERM, lambda *_: sys.exit(128 + signal.SIGTERM))
+    try:
+        if not args.out.is_dir():
+            raise UsageError(f"--out {args.out}: expected an existing folder")
+        paths = notebook_paths(args.notebooks)
+        check_paths = [] if args.check is None else notebook_paths(args.check) if args.check else paths
+        missing = [p.name for p in check_paths if p not in paths]
+        if missing:
+            raise UsageError(f"--check {missing[0][:2]}: that notebook is not among those built")
+        build(args.out.resolve(), paths, check_paths)
+    except UsageError as exc:
+        print(f"coursework/build.py: {exc}", file=sys.stderr)
+        return EXIT_USAGE
+    except BuildError as exc:
+        print(f"coursework/build.py: {exc}", file=sys.stderr)
+        return EXIT_FAILED
+    except KeyboardInterrupt:
+        print("coursework/build.py: interrupted; nothing written", file=sys.stderr)
+        return 130
+    print(f"wrote {args.out / STUDENT_DIR} and {args.out / GRADING_DIR} ({len(paths)} notebooks)")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,146 @@
+"""Coursework: nbgrader's cell metadata in the jupytext sources, the student edition, the autograder.
+
+The student edition of every notebook is generated once per session (``coursework/build.py``)
+and searched for solution text. Autograding both ways (solutions score full marks; the
+unanswered edition runs and fails only its exercises) executes notebooks, so the suite does it
+for one small notebook; ``.ci/run`` does it for all of them.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import json
+import pathlib
+import subprocess
+import sys
+
+import jupytext
+import nbformat
+import pytest
+
+ROOT = pathlib.Path(__file__).resolve().parents[1]
+NOTEBOOKS = sorted((ROOT / "notebooks").glob("[0-9][0-9]_*.py"))
+AUTOGRADED_IN_SUITE = ("03",)  # a small, quick notebook; .ci/run autogrades every one
+DIFFICULTIES = ("easy", "medium", "hard")
+
+
+def load_build():
+    spec = importlib.util.spec_from_file_location("coursework_build", ROOT / "coursework" / "build.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+build = load_build()
+
+
+def grading_cells(nb):
+    return [c for c in nb.cells if "nbgrader" in c.metadata]
+
+
+@pytest.mark.parametrize("path", NOTEBOOKS, ids=[p.stem for p in NOTEBOOKS])
+def test_nbgrader_metadata_survives_the_round_trip(path):
+    """.py -> notebook -> .py -> notebook and -> .ipynb keep every cell's nbgrader metadata."""
+    nb = jupytext.read(path)
+    again = jupytext.reads(jupytext.writes(nb, "py:percent"), "py:percent")
+    ipynb = nbformat.reads(nbformat.writes(nb), as_version=4)
+    expected = [c.metadata.get("nbgrader") for c in nb.cells]
+    assert [c.metadata.get("nbgrader") for c in again.cells] == expected
+    assert [c.metadata.get("nbgrader") for c in ipynb.cells] == expected
+    assert any(expected), f"{path.name} has no nbgrader cells"
+
+
+@pytest.mark.parametrize("path", NOTEBOOKS, ids=[p.stem for p in NOTEBOOKS])
+def test_exercises_are_graded_easy_to_hard(path):
+    """Exercises last: each a heading with difficulty, points and a hint, its solution, its test."""
+    cells = jupytext.read(path).cells
+    start = max(i for i, c in enumerate(cells) if c.source.startswith("## Exercises"))
+    assert all("nbgrader" not in c.metadata for c in cells[:start]), "the body carries no grading cells"
+    headings = [c.source for c in cells[start:] if c.source.startswith("### Exercise")]
+    levels = [next(d for d in DIFFICULTIES if f"*({d}," in h) for h in headings]
+    assert len(headings) >= 2 and levels == sorted(levels, key=DIFFICULTIES.index), headings
+    assert all("*Hint:*" in h for h in headings)
+    heading, total = None, 0
+    for i, cell in enumerate(cells[start:], start):
+        meta = cell.metadata.get("nbgrader", {})
+        if cell.source.startswith("### Exercise"):
+            heading = cell.source.splitlines()[0]
+        if cell.cell_type == "code" and meta.get("solution"):
+            assert "### BEGIN SOLUTION" in cell.source and "### END SOLUTION" in cell.source
+            test = cells[i + 1].metadata.get("nbgrader", {})
+            assert test.get("grade_id") == meta["grade_id"] + "_test", (
+                f"the test of {meta['grade_id']} follows it"
+            )
+        if cell.cell_type == "code" and meta.get("grade"):
+            assert meta["locked"] and not meta["solution"]
+            assert f"{meta['points']} point" in heading, f"{heading!r} must state {meta['points']} points"
+            total += meta["points"]
+    assert total >= 5
+
+
+@pytest.fixture(scope="session")
+def built(tmp_path_factory) -> pathlib.Path:
+    out = tmp_path_factory.mktemp("coursework")
+    proc = subprocess.run(
+        [sys.executable, str(ROOT / "coursework" / "build.py"), "--out", str(out)],
+        capture_output=True,
+        text=True,
+        timeout=900,
+    )
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    return out
+
+
+def test_student_edition_holds_no_solution_text(built):
+    released = sorted((built / "student").glob("*/*.ipynb"))
+    assert [p.stem for p in released] == [p.stem for p in NOTEBOOKS]
+    for path in NOTEBOOKS:
+        source = jupytext.read(path)
+        student = nbformat.read(built / "student" / path.stem / f"{path.stem}.ipynb", as_version=4)
+        lines = build.solution_lines(source)
+        assert len(lines) >= 5, f"{path.name}: too little solution text to check"
+        assert build.leftover_solution_text(source, student) == []
+        text = "\n".join(c.source for c in student.cells)
+        assert "BEGIN SOLUTION" not in text and "BEGIN HIDDEN TESTS" not in text and "MARK SCHEME" not in text
+        stubs = [c for c in student.cells if c.metadata.get("nbgrader", {}).get("solution")]
+        assert stubs and all(
+            "NotImplementedError" in c.source or "YOUR ANSWER HERE" in c.source for c in stubs
+        )
+
+
+def test_solution_lines_skip_text_shared_with_the_body():
+    nb = nbformat.v4.new_notebook()
+    nb.cells = [
+        nbformat.v4.new_code_cell("print(x)\nanswer = 6 * 7"),
+        nbformat.v4.new_code_cell("### BEGIN SOLUTION\nprint(x)\nanswer = 2 * 21\n### END SOLUTION"),
+    ]
+    assert build.solution_lines(nb) == {"answer = 2 * 21"}
+
+
+def test_build_refuses_a_folder_it_did_not_write_or_that_changed(tmp_path):
+    folder = tmp_path / "student"
+    folder.mkdir()
+    (folder / "notes.txt").write_text("mine")
+    with pytest.raises(build.UsageError, match="not written by coursework/build.py"):
+        build.refuse_unless_replaceable(folder)
+    (folder / build.MARKER).write_text(json.dumps({"files": build.file_checksums(folder)}))
+    build.refuse_unless_replaceable(folder)  # unchanged: may be replaced
+    (folder / "notes.txt").write_text("edited")
+    with pytest.raises(build.UsageError, match="notes.txt was added or changed"):
+        build.refuse_unless_replaceable(folder)
+
+
+def test_bad_arguments_exit_2_with_one_line(tmp_path):
+    for args in (["99"], ["--out", str(tmp_path / "missing")]):
+        proc = subprocess.run(
+            [sys.executable, str(ROOT / "coursework" / "build.py"), *args], capture_output=True, text=True
+        )
+        assert proc.returncode == 2 and len(proc.stderr.strip().splitlines()) == 1, proc.stderr
+
+
+@pytest.mark.notebook
+def test_autograder_both_ways_on_a_small_notebook(built):
+    """Solutions score every autograded point; the unanswered edition runs, failing only exercises."""
+    paths = [p for p in NOTEBOOKS if p.name[:2] in AUTOGRADED_IN_SUITE]
+    report = build.check(built / "grading", paths)  # raises BuildError naming each problem
+    assert len(report) == len(paths)
