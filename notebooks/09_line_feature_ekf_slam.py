@@ -747,7 +747,8 @@ for name in OBSERVERS:
     print(f"{name:16s}{call_seconds[name] * 1e6:12.2f} µs{ratio:13.1f}x{lap_seconds[name]:9.2f} s{paper}")
 print(f"paper ratio point / bisection: {np.mean(paper_point) / np.mean(paper_bisection):.1f}x")
 assert call_seconds["point_by_point"] > 2 * call_seconds["bisection"] > 2 * call_seconds["closed_form"]
-assert max(lap_seconds.values()) < 0.2 * min(paper_bisection)  # "far shorter"
+# absolute times depend on the machine and its load: printed, not asserted
+print(f"slowest lap here {max(lap_seconds.values()):.2f} s, fastest paper run {min(paper_bisection):.2f} s")
 i_cm = tolerances.index(0.01)
 assert table["point_by_point"][i_cm] > 10 * table["closed_form"][i_cm]  # "tens of times" at 1 cm
 
