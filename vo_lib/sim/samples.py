@@ -173,7 +173,7 @@ SAMPLES: dict[str, Sample] = {
             "a longer tour of the yard, quarter turns both ways: Table 2, set 2",
             "seed 000, IV.B.3 (2419 frames, second set)",
             "outdoor_yard",
-            (-6.0, -20.0, 0.2),
+            (-18.0, 14.0, 3.14),
             30.0,
             (Leg(218, 0.5),)
             + _quarter_turns((1, 1, -1, -1))
@@ -185,7 +185,7 @@ SAMPLES: dict[str, Sample] = {
             "the longest tour, at the far end of the yard: Table 2, set 3",
             "seed 000, IV.B.3 (2670 frames, third set)",
             "outdoor_yard",
-            (-32.0, 28.0, -0.3),
+            (10.0, -26.0, 0.2),
             30.0,
             (Leg(269, 0.5),) + _turns_pattern((-1, 1, 1, -1, 1, 1), 200, 0.5, 15),
             seed=109,
@@ -195,7 +195,7 @@ SAMPLES: dict[str, Sample] = {
             "ten laps of an oval, 10,000 frames: the timing run (render it in memory: bench long)",
             "seed 000, IV.A.1 (10000 frames, elapsed time per frame)",
             "outdoor_yard",
-            (-25.0, 25.0, 0.0),
+            (-22.0, 2.0, 1.57),
             30.0,
             _oval_laps(10) + (Leg(399, 0.5),),
             seed=110,
