@@ -52,6 +52,7 @@ PAGES = {
     "benchmarks.md": DOCS / "benchmarks.md",
     "README.md": ROOT / "README.md",
     "docs/errata.md": DOCS / "errata.md",
+    "docs/notation.md": DOCS / "notation.md",
     "data/README.md": ROOT / "data" / "README.md",
 }
 TITLE = "vo-notebooks"
@@ -348,6 +349,8 @@ def build(args: argparse.Namespace) -> pathlib.Path:
     kernels = write_kernel_spec(args.out)
     # The kernels import this checkout's vo_lib, whatever copy is installed.
     os.environ["PYTHONPATH"] = os.pathsep.join(filter(None, [str(ROOT), os.environ.get("PYTHONPATH")]))
+    # A backend chosen for scripts (MPLBACKEND=Agg) would keep every figure out of the pages.
+    os.environ.pop("MPLBACKEND", None)
     execute_missing(
         args.out / ".jupyter_cache",
         sorted(tree.joinpath("notebooks").glob("*.py")),
