@@ -31,7 +31,7 @@
 #
 # **Prerequisites**: notebooks 03, 05, 06 and 08.
 #
-# **Run time**: about 1.5 minutes of computing on two cores, most of it the OpenCV PnP baseline of
+# **Run time**: about a minute of computing on two cores, most of it the OpenCV PnP baseline of
 # section 7 (longer on a busy machine).
 # The real recording is KITTI raw drive 2011_09_26_drive_0001 in the KITTI odometry layout with
 # its `oxts.txt` and `raw_calib/` (see the README's "Real data"); it is not part of the repository:

@@ -143,3 +143,66 @@ def test_motorcycle_disparities_at_least_as_good_as_sgbm():
     print(f"median |error|: ours {ours:.3f} px, StereoSGBM {theirs:.3f} px at {ok.sum()} features")
     assert ok.sum() >= 200
     assert ours <= theirs
+
+
+# ---------------------------------------------------------------------------------------------
+# Harder versions of every real sequence: what a faster car, a car driving the other way, and an
+# auto-exposure camera give, made from the same recorded images (links and re-exposed copies in a
+# temporary folder, never in the repository). The truth of a variant is the recorded truth of the
+# frames it keeps, re-expressed in its first frame.
+
+MAX_VARIANT_PERCENT = 1.0
+
+
+def variant(src: Path, out: Path, frames: list[int], exposure_seed: int | None = None) -> Path:
+    """A KITTI-layout folder holding ``frames`` of ``src`` in that order (re-exposed if a seed is
+    given: a gain and gamma per image, as left and right auto-exposure give, and sensor noise)."""
+    seq = read_sequence(src)
+    names = sorted((src / "image_0").iterdir(), key=lambda p: int(p.stem))
+    rng = np.random.default_rng(exposure_seed)
+    for cam in ("image_0", "image_1"):
+        (out / cam).mkdir(parents=True)
+        for j, i in enumerate(frames):
+            target = out / cam / f"{j:06d}.png"
+            if exposure_seed is None:
+                target.symlink_to(src / cam / names[i].name)
+                continue
+            image = cv2.imread(str(src / cam / names[i].name), cv2.IMREAD_GRAYSCALE) / 255.0
+            gain, gamma = 1 + 0.35 * np.sin(j / 4.0) + rng.normal(0, 0.08), 0.8 + 0.4 * rng.random()
+            image = 255 * np.clip(gain, 0.45, 1.6) * image ** (1 / gamma) + rng.normal(0, 2.0, image.shape)
+            cv2.imwrite(str(target), np.clip(image, 0, 255).astype(np.uint8))
+    (out / "calib.txt").write_text((src / "calib.txt").read_text())
+    if (src / "raw_calib").is_dir():
+        (out / "raw_calib").symlink_to(src / "raw_calib")
+    poses = seq.poses_4x4()
+    first = np.linalg.inv(poses[frames[0]])
+    kept = np.array([first @ poses[i] for i in frames])
+    np.savetxt(out / "poses.txt", kept[:, :3, :].reshape(len(frames), 12), fmt="%.9e")
+    np.savetxt(out / "times.txt", np.abs(seq.times[frames] - seq.times[frames[0]]), fmt="%.6e")
+    return out
+
+
+VARIANTS = {
+    "every 2nd frame": lambda n: (list(range(0, n, 2)), None),
+    "every 3rd frame": lambda n: (list(range(0, n, 3)), None),
+    "driven backwards": lambda n: (list(range(n - 1, -1, -1)), None),
+    "auto-exposure and noise": lambda n: (list(range(n)), 7),
+}
+
+
+@needs_real
+@pytest.mark.parametrize("kind", VARIANTS)
+@pytest.mark.parametrize("path", SEQUENCES, ids=[p.name for p in SEQUENCES])
+def test_vo_holds_on_harder_versions_of_the_real_sequence(path, kind, tmp_path):
+    """Measured on kitti_raw_2011_09_26_drive_0001 (106.9 m): every 2nd frame 0.30 %, every 3rd
+    0.63 % (3-4 m between frames), backwards 0.68 %, re-exposed 0.20 %; the OpenCV PnP baseline
+    0.32 % on the drive as recorded, 0.44 % on every 3rd frame and 1.95 % backwards."""
+    n = len(read_sequence(path))
+    frames, seed = VARIANTS[kind](n)
+    seq = read_sequence(variant(path, tmp_path / path.name, frames, seed))
+    result = run_sequence(seq, use_odometry=False)
+    percent, heading, distance = final_errors(seq, result.camera_poses)
+    print(f"{path.name}, {kind}: {percent:.3f} % of {distance:.1f} m, heading {heading:.3f} deg")
+    assert percent <= MAX_VARIANT_PERCENT
+    assert heading <= MAX_FINAL_HEADING_DEG
+    assert len(result.flagged) <= max(2, int(0.02 * len(seq)))
