@@ -129,6 +129,16 @@ def print_timing_table(result: PipelineResult, camera, frames: int) -> None:
     print(f"  frames per second: {fps:.0f}")
 
 
+def truth_and_odometry(seq, vehicle, frames: int):
+    """Planar vehicle poses of the ground truth and of odometry alone over the first ``frames``
+    frames (each None where the sequence has none): what :func:`error_report` compares."""
+    truth = None if seq.poses is None else planar_from_camera_poses(seq.poses[:frames], vehicle.mount)
+    odometry = None
+    if vehicle.odometry is not None:
+        odometry = vehicle.odometry_model.integrate(vehicle.odometry[1:frames])
+    return truth, odometry
+
+
 def error_report(result: PipelineResult, truth_planar: np.ndarray, odometry_planar=None) -> dict:
     """Errors of the estimate (and of odometry alone) against the ground truth."""
     est = result.poses
@@ -233,10 +243,7 @@ def run_command(
         write_tum(tmp / "trajectory.tum", seq.times[:n], poses)
         _write_csv(tmp / "timings.csv", result.timings, FrameTimings)
         _write_csv(tmp / "diagnostics.csv", result.diagnostics, FrameDiagnostics)
-        truth = planar_from_camera_poses(seq.poses[:n], mount) if seq.poses is not None else None
-        odo = None
-        if vehicle.odometry is not None:
-            odo = vehicle.odometry_model.integrate(vehicle.odometry[1:n])
+        truth, odo = truth_and_odometry(seq, vehicle, n)
         title = f"{Path(name).name}: {n} frames"
         _plot(tmp / "trajectory.png", seq.times[:n], result.poses, truth, odo, title)
         print_timing_table(result, seq.camera, n)
