@@ -10,7 +10,7 @@ is a z-buffer of *inverse* depth, which on a plane is affine in the pixel coordi
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 
 import cv2
 import numpy as np
@@ -74,6 +74,35 @@ class SensorEffects:
                 f += rng.normal(0.0, self.noise_sigma, f.shape).astype(np.float32)
             out = np.clip(f + 0.5, 0, 255).astype(np.uint8)
         return out
+
+
+@dataclass(frozen=True)
+class _QuadArrays:
+    """The few numbers of every quad the renderer needs, as arrays over the quads."""
+
+    e1: np.ndarray  # (Q, 3)
+    e2: np.ndarray
+    origin: np.ndarray
+    normal: np.ndarray
+    texel: np.ndarray  # (Q,) length of e1
+    levels: np.ndarray  # (Q,) number of texture levels
+
+    @staticmethod
+    def of(quads) -> _QuadArrays:
+        e1 = np.array([q.e1 for q in quads], float).reshape(-1, 3)
+        return _QuadArrays(
+            e1,
+            np.array([q.e2 for q in quads], float).reshape(-1, 3),
+            np.array([q.origin for q in quads], float).reshape(-1, 3),
+            np.array([q.normal for q in quads], float).reshape(-1, 3),
+            np.linalg.norm(e1, axis=1),
+            np.array([len(q.texture) for q in quads], int),
+        )
+
+    @staticmethod
+    def join(first: _QuadArrays, second: _QuadArrays) -> _QuadArrays:
+        names = [f.name for f in fields(_QuadArrays)]
+        return _QuadArrays(*(np.concatenate([getattr(first, n), getattr(second, n)]) for n in names))
 
 
 def _tiles(length: float, texel: float) -> np.ndarray:
@@ -235,6 +264,7 @@ class StereoRenderer:
         self.quads = build_quads(world)
         self._corners = np.stack([q.corners for q in self.quads])  # (Q, 4, 3)
         self._movers = [(m, _mover_quads(m)) for m in world.movers]
+        self._frame = _QuadArrays.of(self.quads)
         w, h = camera.width, camera.height
         self._u = np.arange(w, dtype=np.float32)
         self._v = np.arange(h, dtype=np.float32)
@@ -249,15 +279,24 @@ class StereoRenderer:
 
     def quads_at(self, time: float) -> tuple[list[_Quad], np.ndarray]:
         """The world's quads and their corners ``(Q, 4, 3)`` with the movers where they are at ``time``."""
+        quads, corners, _ = self._quads_at(time)
+        return quads, corners
+
+    def _quads_at(self, time: float) -> tuple[list[_Quad], np.ndarray, _QuadArrays]:
         if not self._movers:
-            return self.quads, self._corners
+            return self.quads, self._corners, self._frame
+        moving = self._moving_quads(time)
+        corners = np.concatenate([self._corners, np.stack([q.corners for q in moving])])
+        return self.quads + moving, corners, _QuadArrays.join(self._frame, _QuadArrays.of(moving))
+
+    def _moving_quads(self, time: float) -> list[_Quad]:
         moving = []
         for mover, body in self._movers:
             position, yaw = mover.pose(time)
             c, s = np.cos(yaw), np.sin(yaw)
             R = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
             moving += [_moved(q, R, position) for q in body]
-        return self.quads + moving, np.concatenate([self._corners, np.stack([q.corners for q in moving])])
+        return moving
 
     def render(self, T_world_camera, with_depth: bool = False, time: float = 0.0):
         """Grey image (uint8) seen by a camera at ``T_world_camera`` (4x4, camera to world).
@@ -269,61 +308,77 @@ class StereoRenderer:
         R, c = T[:3, :3], T[:3, 3]
         cam = self.camera
         w, h = cam.width, cam.height
-        K = cam.K
         image = self._sky.copy()
         inv_depth = np.zeros((h, w), np.float32)
-        quads, corners = self.quads_at(time)
+        quads, corners, frame = self._quads_at(time)
         corners_c = (corners - c) @ R  # (Q, 4, 3), camera frame
         # a quad is culled when all its corners lie outside one plane of the frustum
         outside = (corners_c @ self._frustum.T < 0).all(axis=1).any(axis=1)
         outside |= corners_c[..., 2].max(axis=1) <= NEAR_PLANE
-        candidates = np.flatnonzero(~outside)
-        for qi in candidates:
-            quad = quads[qi]
-            poly = _clip_near(corners_c[qi], NEAR_PLANE)
-            if len(poly) < 3:
-                continue
-            uv = (poly[:, :2] / poly[:, 2:3]) * (cam.fx, cam.fy) + (cam.cx, cam.cy)
-            x0 = max(int(np.floor(uv[:, 0].min())), 0)
-            x1 = min(int(np.ceil(uv[:, 0].max())) + 1, w)
-            y0 = max(int(np.floor(uv[:, 1].min())), 0)
-            y1 = min(int(np.ceil(uv[:, 1].max())) + 1, h)
-            if x1 <= x0 or y1 <= y0:
-                continue
-            # texel -> pixel homography of the quad's plane
-            H = K @ np.column_stack([R.T @ quad.e1, R.T @ quad.e2, R.T @ (quad.origin - c)])
-            # texture level from the texel footprint at the nearest visible depth
-            texel_len = np.linalg.norm(quad.e1)
-            pixels_per_texel = cam.fx * texel_len / max(poly[:, 2].min(), NEAR_PLANE)
-            level = int(np.clip(np.floor(np.log2(1.0 / pixels_per_texel)), 0, len(quad.texture) - 1))
-            scale = 2.0**level
-            # cv2.pyrDown centres level-L texel (s, t) on base texel (2^L s, 2^L t)
-            S = np.diag([scale, scale, 1.0])
-            shift = np.array([[1, 0, -x0], [0, 1, -y0], [0, 0, 1.0]])
-            M = shift @ H @ S
+        todo = np.flatnonzero(~outside)
+        # Everything per quad that is a few numbers is computed for all quads at once; the loop
+        # below only draws. Quads crossing the near plane are clipped one by one (there are few).
+        cc = corners_c[todo]
+        f, pp = np.array([cam.fx, cam.fy]), np.array([cam.cx, cam.cy])
+        with np.errstate(divide="ignore", invalid="ignore"):
+            uv4 = (cc[..., :2] / cc[..., 2:3]) * f + pp  # (N, 4, 2) pixel corners
+        lo, hi = uv4.min(axis=1), uv4.max(axis=1)
+        z_near = np.maximum(cc[..., 2].min(axis=1), NEAR_PLANE)
+        clipped = {}
+        for i in np.flatnonzero(cc[:, :, 2].min(axis=1) < NEAR_PLANE):
+            poly = _clip_near(cc[i], NEAR_PLANE)
+            uv = (poly[:, :2] / poly[:, 2:3]) * f + pp if len(poly) >= 3 else np.full((1, 2), np.nan)
+            clipped[i] = uv
+            lo[i], hi[i] = uv.min(axis=0), uv.max(axis=0)
+        ok = np.isfinite(lo).all(axis=1)
+        lo, hi = np.where(ok[:, None], lo, 0), np.where(ok[:, None], hi, -1)
+        x0y0 = np.maximum(np.floor(lo).astype(int), 0)
+        x1y1 = np.minimum(np.ceil(hi).astype(int) + 1, (w, h))
+        # corners in 1/16 pixel from the box's corner, for fillConvexPoly (clipped quads: below)
+        with np.errstate(invalid="ignore", over="ignore"):
+            pts4 = np.round((uv4 - x0y0[:, None, :]) * 16).astype(np.int32)
+        # texel -> pixel homography of each quad's plane: K [R^T e1, R^T e2, R^T (O - c)]
+        e1_c, e2_c, o_c = frame.e1[todo] @ R, frame.e2[todo] @ R, (frame.origin[todo] - c) @ R
+        H = cam.K @ np.stack([e1_c, e2_c, o_c], axis=2)  # (N, 3, 3)
+        # texture level from the texel footprint at the nearest visible depth
+        pixels_per_texel = cam.fx * frame.texel[todo] / z_near
+        with np.errstate(divide="ignore"):
+            level = np.clip(np.floor(np.log2(1.0 / pixels_per_texel)), 0, frame.levels[todo] - 1).astype(int)
+        # cv2.pyrDown centres level-L texel (s, t) on base texel (2^L s, 2^L t)
+        H[:, :, :2] *= (2.0**level)[:, None, None]
+        # inverse depth on each plane, affine in (u, v): n . K^-1 [u, v, 1] / (n . O_c)
+        n_c = frame.normal[todo] @ R
+        dist = np.einsum("ij,ij->i", n_c, o_c)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            abe = (n_c @ self._Kinv) / dist[:, None]
+        drawn = ok & (np.abs(dist) >= 1e-9) & (x1y1 > x0y0).all(axis=1)  # not clipped away nor edge-on
+        # each quad is warped into its screen box: the box's corner (x0, y0) becomes pixel (0, 0)
+        H[:, 0] -= x0y0[:, :1] * H[:, 2]
+        H[:, 1] -= x0y0[:, 1:] * H[:, 2]
+        boxes, planes = np.hstack([x0y0, x1y1]).tolist(), list(abe)  # float64 scalars: keep
+        for i in np.flatnonzero(drawn).tolist():
+            x0, y0, x1, y1 = boxes[i]
+            M = H[i]
+            quad = quads[todo[i]]
             warped = cv2.warpPerspective(
-                quad.texture[level],
+                quad.texture[level[i]],
                 M,
                 (x1 - x0, y1 - y0),
                 flags=cv2.INTER_LINEAR,
                 borderMode=cv2.BORDER_REPLICATE,
             )
             mask = np.zeros((y1 - y0, x1 - x0), np.uint8)
-            pts = np.round((uv - (x0, y0)) * 16).astype(np.int32)
+            pts = pts4[i] if i not in clipped else np.round((clipped[i] - (x0, y0)) * 16).astype(np.int32)
             cv2.fillConvexPoly(mask, pts, 1, lineType=cv2.LINE_8, shift=4)
-            # inverse depth on the plane, affine in (u, v)
-            n_c = R.T @ quad.normal
-            dist = n_c @ (R.T @ (quad.origin - c))
-            if abs(dist) < 1e-9:
-                continue  # seen edge-on
-            a, b, e = (n_c @ self._Kinv) / dist
+            a, b, e = planes[i]
             plane = (a * self._u[x0:x1])[None, :] + (b * self._v[y0:y1, None] + e)
             roi = inv_depth[y0:y1, x0:x1]
-            closer = (mask > 0) & (plane > roi)
-            roi[closer] = plane[closer]
+            closer = mask.view(bool) & (plane > roi)
+            # copyto with a mask writes in place, several times faster than boolean indexing
+            np.copyto(roi, plane, where=closer)
             if quad.shade != 1.0:
                 warped = cv2.convertScaleAbs(warped, alpha=quad.shade)
-            image[y0:y1, x0:x1][closer] = warped[closer]
+            np.copyto(image[y0:y1, x0:x1], warped, where=closer)
         if not with_depth:
             return image
         with np.errstate(divide="ignore"):
