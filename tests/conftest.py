@@ -5,7 +5,9 @@ from __future__ import annotations
 import json
 import os
 import pathlib
+import pickle
 import sys
+import time
 
 import numpy as np
 import pytest
@@ -45,3 +47,46 @@ def kernel_dir(tmp_path_factory) -> pathlib.Path:
         kernel["env"] = {"VO_LIB_REALDATA": str(REALDATA)}
     spec.joinpath("kernel.json").write_text(json.dumps(kernel))
     return kernels
+
+
+#: How long a worker waits for another to compute a shared result before computing it itself.
+SHARED_WAIT_S = 900.0
+
+
+@pytest.fixture(scope="session")
+def shared(tmp_path_factory):
+    """``shared(name, compute)``: the result of ``compute()``, computed once per test session.
+
+    The test workers (pytest-xdist) share a temporary folder: the first worker to ask computes
+    the result and pickles it there (written under a temporary name, then renamed), and the
+    others wait for it and read it. ``compute`` may take a folder inside that shared one to write
+    into: ``shared(name, compute, folder=True)`` calls ``compute(folder)``.
+    """
+    base = tmp_path_factory.getbasetemp()
+    if os.environ.get("PYTEST_XDIST_WORKER"):
+        base = base.parent  # the folder every worker's temporary folder is in
+
+    def get(name: str, compute, folder: bool = False):
+        result, lock = base / f"shared-{name}.pickle", base / f"shared-{name}.lock"
+        deadline = time.monotonic() + SHARED_WAIT_S
+        while not result.exists():
+            try:
+                os.close(os.open(lock, os.O_CREAT | os.O_EXCL))  # exactly one worker gets it
+            except FileExistsError:
+                if time.monotonic() < deadline:
+                    time.sleep(0.2)
+                    continue
+            try:
+                if folder:
+                    (base / f"shared-{name}").mkdir()
+                value = compute(base / f"shared-{name}") if folder else compute()
+            except BaseException:
+                lock.unlink(missing_ok=True)  # a waiting worker tries, and fails, on its own
+                raise
+            partial = result.with_suffix(f".{os.getpid()}.partial")
+            partial.write_bytes(pickle.dumps(value))
+            partial.replace(result)
+            return value
+        return pickle.loads(result.read_bytes())
+
+    return get

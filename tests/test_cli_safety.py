@@ -692,6 +692,39 @@ def test_signals_leave_nothing_and_print_one_line(tmp_path, args, signum, code, 
     assert checksums(tmp_path, ()) == before
 
 
+@pytest.mark.parametrize(
+    "signum, code, phrase", [(signal.SIGINT, 130, "Ctrl-C"), (signal.SIGTERM, 143, "SIGTERM")]
+)
+def test_a_signal_wrapped_by_compiled_code_still_exits_as_it(monkeypatch, capsys, signum, code, phrase):
+    """A Ctrl-C that lands inside a callback from compiled code (Numba unpickling its cache)
+    surfaces as a SystemError caused by it: the run still stops as interrupted, in one line."""
+    import vo_lib.cli.main as cli
+
+    inner = KeyboardInterrupt() if signum == signal.SIGINT else cli._Stopped(signum)
+
+    def dispatch(args):
+        try:
+            raise inner
+        except BaseException as exc:
+            raise SystemError("CPUDispatcher(...) returned a result with an exception set") from exc
+
+    monkeypatch.setattr(cli, "_dispatch", dispatch)
+    assert main(["run", "--frames", "2"]) == code
+    err = capsys.readouterr().err
+    assert len(err.strip().splitlines()) == 1 and phrase in err, err
+
+
+def test_a_system_error_of_our_own_is_not_taken_for_a_signal(monkeypatch):
+    import vo_lib.cli.main as cli
+
+    def dispatch(args):
+        raise SystemError("a real bug")
+
+    monkeypatch.setattr(cli, "_dispatch", dispatch)
+    with pytest.raises(SystemError, match="a real bug"):
+        main(["run", "--frames", "2"])
+
+
 def test_runs_from_a_read_only_install(tmp_path):
     """The package copied to a read-only folder, with a home whose cache cannot be written
     either: Numba finds no cache folder, and the run compiles uncached instead of failing."""

@@ -78,9 +78,7 @@ def test_exercises_are_graded_easy_to_hard(path):
     assert total >= 5
 
 
-@pytest.fixture(scope="session")
-def built(tmp_path_factory) -> pathlib.Path:
-    out = tmp_path_factory.mktemp("coursework")
+def build_coursework(out: pathlib.Path) -> pathlib.Path:
     proc = subprocess.run(
         [sys.executable, str(ROOT / "coursework" / "build.py"), "--out", str(out)],
         capture_output=True,
@@ -89,6 +87,11 @@ def built(tmp_path_factory) -> pathlib.Path:
     )
     assert proc.returncode == 0, proc.stderr[-3000:]
     return out
+
+
+@pytest.fixture(scope="session")
+def built(shared) -> pathlib.Path:
+    return shared("coursework", build_coursework, folder=True)
 
 
 def test_student_edition_holds_no_solution_text(built):

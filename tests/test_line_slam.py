@@ -202,8 +202,8 @@ def test_three_observers_agree_on_every_segment_and_pose_of_the_lap(extended):
 
 
 @pytest.fixture(scope="module")
-def laps():
-    return [simulate_lap(seed=s) for s in SEEDS]
+def laps(shared):
+    return shared("laps", lambda: [simulate_lap(seed=s) for s in SEEDS])
 
 
 def test_every_lap_maps_the_four_landmarks(laps):

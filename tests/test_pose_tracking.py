@@ -151,13 +151,13 @@ def test_without_umbrella_removes_only_unmapped(world):
 
 
 @pytest.fixture(scope="module")
-def visual_odometry():
-    return corridor_visual_odometry()
+def visual_odometry(shared):
+    return shared("corridor-visual-odometry", corridor_visual_odometry)
 
 
 @pytest.fixture(scope="module")
-def experiment(visual_odometry):
-    return run_experiment(SEEDS, visual_odometry[0])
+def experiment(shared, visual_odometry):
+    return shared("corridor-experiment", lambda: run_experiment(SEEDS, visual_odometry[0]))
 
 
 def test_pnp_odometer_on_the_corridor(visual_odometry):

@@ -204,6 +204,18 @@ def _quiet_unraisable(hook):
     return unraisable
 
 
+def _signal_inside(exc: BaseException) -> BaseException | None:
+    """Our interrupt or stop, if ``exc`` wraps one: a signal that lands inside a callback from
+    compiled code (Numba loading its cache) comes out as a SystemError caused by it."""
+    seen = set()
+    while exc is not None and id(exc) not in seen:
+        if isinstance(exc, (KeyboardInterrupt, _Stopped)):
+            return exc
+        seen.add(id(exc))
+        exc = exc.__cause__ or exc.__context__
+    return None
+
+
 def _one_line(text: str) -> str:
     return " ".join(str(text).splitlines())
 
@@ -275,7 +287,12 @@ def main(argv: list[str] | None = None) -> int:
         from vo_lib.formats.sequence import SequenceError
 
         try:
-            _dispatch(args)
+            try:
+                _dispatch(args)
+            except SystemError as exc:
+                if (signal_exc := _signal_inside(exc)) is None:
+                    raise
+                raise signal_exc from None
         except (UsageError, SweepError, OutputError, SequenceError, TrajectoryError) as exc:
             print(f"{command}: error: {_one_line(exc)}", file=sys.stderr)
             return 2
