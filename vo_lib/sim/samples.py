@@ -222,8 +222,8 @@ SAMPLES: dict[str, Sample] = {
             10.0,
             (Leg(540, 0.5),),
             seed=106,
-            # seed 004's corridor keeps its corner texture and the sensor its figures were
-            # measured with (README, Table III): noise of 1 grey level, fixed exposure
+            # the sensor seed 004's figures were measured with (README, Table III): noise of
+            # 1 grey level, fixed exposure
             sensor_noise=1.0,
             exposure_sigma=0.0,
         ),

@@ -245,6 +245,10 @@ def corridor(seed: int = 30, length: float = 30.0, width: float = 3.0) -> World:
     """The corridor of seed 004: two long walls, two pillars, two cross walls, a fire hydrant,
     and an unmapped umbrella that hides the second pillar from the stretch before it.
 
+    Walls are painted, with doors and posters; pillars are plain, the floor tiled, the ceiling
+    panelled: most of the camera's view holds no corner, as in a real corridor. The hydrant and
+    the umbrella keep a busy pattern.
+
     The corridor runs along +x from x = 0; its axis is y = 0. Pillars, hydrant and cross walls
     are the "radial" features that fix the robot's position along the axis. With a 10 m laser
     that sees 135 degrees to either side, a robot on the axis sees the first pillar and the
@@ -253,15 +257,15 @@ def corridor(seed: int = 30, length: float = 30.0, width: float = 3.0) -> World:
     wall) hides that pillar up to x = 12.8.
     """
     h, half = 2.8, width / 2
-    segs = polyline([(0, -half), (length, -half)], h, seed, "wall")
-    segs += polyline([(0, half), (length, half)], h, seed + 1, "wall")
-    segs += polyline([(0, -half), (0, half)], h, seed + 2, "end wall")
-    segs += polyline([(length, -half), (length, half)], h, seed + 3, "end wall")
-    segs += box((3.5, half - 0.2), (0.5, 0.4), 0.0, h, seed + 10, "pillar")
+    segs = polyline([(0, -half), (length, -half)], h, seed, "wall", style="wall")
+    segs += polyline([(0, half), (length, half)], h, seed + 1, "wall", style="wall")
+    segs += polyline([(0, -half), (0, half)], h, seed + 2, "end wall", style="wall")
+    segs += polyline([(length, -half), (length, half)], h, seed + 3, "end wall", style="wall")
+    segs += box((3.5, half - 0.2), (0.5, 0.4), 0.0, h, seed + 10, "pillar", style="plain")
     segs += box((5.0, -half + 0.15), (0.4, 0.3), 0.0, 0.9, seed + 20, "fire hydrant")
-    segs += box((15.0, half - 0.2), (0.5, 0.4), 0.0, h, seed + 40, "pillar")
-    segs += polyline([(22.0, half), (22.0, half - 0.6)], h, seed + 30, "cross wall")
-    segs += polyline([(24.5, -half), (24.5, -half + 0.6)], h, seed + 31, "cross wall")
+    segs += box((15.0, half - 0.2), (0.5, 0.4), 0.0, h, seed + 40, "pillar", style="plain")
+    segs += polyline([(22.0, half), (22.0, half - 0.6)], h, seed + 30, "cross wall", style="wall")
+    segs += polyline([(24.5, -half), (24.5, -half + 0.6)], h, seed + 31, "cross wall", style="wall")
     # An open umbrella standing against the wall: at the laser's height its canopy is a half
     # circle of radius 0.55 m facing the robot's side of the corridor.
     angles = np.radians(np.linspace(90.0, 270.0, 7))
@@ -274,6 +278,8 @@ def corridor(seed: int = 30, length: float = 30.0, width: float = 3.0) -> World:
         seed,
         ceiling_height=h,
         notes={"length": length, "width": width},
+        floor_style="tiles",
+        ceiling_style="panels",
     )
 
 
