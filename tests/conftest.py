@@ -78,7 +78,7 @@ def shared(tmp_path_factory):
                     continue
             try:
                 if folder:
-                    (base / f"shared-{name}").mkdir()
+                    (base / f"shared-{name}").mkdir(exist_ok=True)
                 value = compute(base / f"shared-{name}") if folder else compute()
             except BaseException:
                 lock.unlink(missing_ok=True)  # a waiting worker tries, and fails, on its own
