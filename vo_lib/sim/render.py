@@ -277,12 +277,9 @@ class StereoRenderer:
             [[fx, 0, cx + 0.5], [-fx, 0, w - 0.5 - cx], [0, fy, cy + 0.5], [0, -fy, h - 0.5 - cy]]
         )
 
-    def quads_at(self, time: float) -> tuple[list[_Quad], np.ndarray]:
-        """The world's quads and their corners ``(Q, 4, 3)`` with the movers where they are at ``time``."""
-        quads, corners, _ = self._quads_at(time)
-        return quads, corners
-
-    def _quads_at(self, time: float) -> tuple[list[_Quad], np.ndarray, _QuadArrays]:
+    def quads_at(self, time: float) -> tuple[list[_Quad], np.ndarray, _QuadArrays]:
+        """The world's quads, their corners ``(Q, 4, 3)`` and their numbers as arrays, with the
+        movers where they are at ``time``."""
         if not self._movers:
             return self.quads, self._corners, self._frame
         moving = self._moving_quads(time)
@@ -310,7 +307,7 @@ class StereoRenderer:
         w, h = cam.width, cam.height
         image = self._sky.copy()
         inv_depth = np.zeros((h, w), np.float32)
-        quads, corners, frame = self._quads_at(time)
+        quads, corners, frame = self.quads_at(time)
         corners_c = (corners - c) @ R  # (Q, 4, 3), camera frame
         # a quad is culled when all its corners lie outside one plane of the frustum
         outside = (corners_c @ self._frustum.T < 0).all(axis=1).any(axis=1)
