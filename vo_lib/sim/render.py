@@ -16,6 +16,7 @@ import cv2
 import numpy as np
 
 from vo_lib.camera import StereoCamera
+from vo_lib.sim.composite import draw_nearer
 from vo_lib.sim.textures import cached_surface
 from vo_lib.sim.world import Patch, World
 
@@ -368,14 +369,7 @@ class StereoRenderer:
             pts = pts4[i] if i not in clipped else np.round((clipped[i] - (x0, y0)) * 16).astype(np.int32)
             cv2.fillConvexPoly(mask, pts, 1, lineType=cv2.LINE_8, shift=4)
             a, b, e = planes[i]
-            plane = (a * self._u[x0:x1])[None, :] + (b * self._v[y0:y1, None] + e)
-            roi = inv_depth[y0:y1, x0:x1]
-            closer = mask.view(bool) & (plane > roi)
-            # copyto with a mask writes in place, several times faster than boolean indexing
-            np.copyto(roi, plane, where=closer)
-            if quad.shade != 1.0:
-                warped = cv2.convertScaleAbs(warped, alpha=quad.shade)
-            np.copyto(image[y0:y1, x0:x1], warped, where=closer)
+            draw_nearer(image, inv_depth, warped, mask, x0, y0, a, b, e, quad.shade)
         if not with_depth:
             return image
         with np.errstate(divide="ignore"):

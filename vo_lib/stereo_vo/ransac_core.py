@@ -4,10 +4,7 @@ The estimator is a few hundred small steps over a few hundred matches: two hypot
 their gates, Gauss-Newton and re-selection. As NumPy calls each step costs microseconds of
 overhead whatever its size; compiled, the loops below run the same arithmetic in one pass per
 step. The algorithm, its equations and its constants are documented in ``vo_lib.stereo_vo.ransac``; this
-module only computes. Compiled code is cached where it can be written (Numba's choice: in
-``NUMBA_CACHE_DIR`` if set, else beside the module, else in the user's cache folder), so only the
-first call in a fresh environment pays for compilation. Where no cache folder can be written (a read-only
-install and home) the functions are compiled afresh in each process instead of failing.
+module only computes (compiled and cached as :mod:`vo_lib.compiled` says).
 """
 
 from __future__ import annotations
@@ -15,21 +12,9 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
 
+from vo_lib.compiled import jit as _jit
 from vo_lib.stereo_vo.circular_motion import theta_variance
-
-
-def _jit(function):
-    """Compile with NumPy semantics for division by zero (inf / nan, no exception: the gates then
-    fail as in NumPy), cached where a cache folder can be written, uncached otherwise."""
-    try:
-        return njit(cache=True, error_model="numpy")(function)
-    except RuntimeError as exc:  # Numba found no writable cache folder
-        if "cannot cache" not in str(exc):
-            raise
-        return njit(error_model="numpy")(function)
-
 
 _theta_variance = _jit(theta_variance)
 

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from vo_lib.stereo_vo.ransac_core import _jit
+from vo_lib.compiled import jit as _jit
 
 
 @_jit
