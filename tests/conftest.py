@@ -6,19 +6,39 @@ import json
 import os
 import pathlib
 import pickle
+import shutil
 import sys
+import tempfile
 import time
 
 import numpy as np
 import pytest
 
 from vo_lib.camera import StereoCamera
+from vo_lib.sim.frame_store import ENVIRONMENT as FRAME_STORE
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 #: Real sequences beside the repository (CI has them); the notebooks find them through
 #: ``VO_LIB_REALDATA``, which the test kernel gets when the folder exists and it is not set.
 REALDATA = ROOT.parent / "shared" / "realdata"
 NOTEBOOK_KERNEL = "python3"  # the kernel every notebook names (tests/test_kernel_name.py)
+
+
+def pytest_configure(config):
+    """One frame store for the session, made before the workers start: they, the notebook kernels
+    and the command-line runs they start inherit ``VO_LIB_FRAME_STORE``, so each frame of a sample
+    that several tests render is rendered once (``vo_lib.sim.frame_store``)."""
+    if hasattr(config, "workerinput") or os.environ.get(FRAME_STORE):
+        return  # a worker (it inherits the store), or a store the caller chose
+    config.frame_store = tempfile.mkdtemp(prefix="vo_lib_frames_")
+    os.environ[FRAME_STORE] = config.frame_store
+
+
+def pytest_unconfigure(config):
+    folder = getattr(config, "frame_store", None)
+    if folder:
+        shutil.rmtree(folder, ignore_errors=True)
+        os.environ.pop(FRAME_STORE, None)
 
 
 @pytest.fixture

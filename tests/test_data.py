@@ -7,7 +7,8 @@ import pytest
 
 from vo_lib.data import load_sequence, sample_path
 from vo_lib.geometry import camera_mount, camera_poses_from_planar, planar_from_camera_poses
-from vo_lib.sim.samples import CAMERA_HEIGHT, SAMPLES, generate
+from vo_lib.sim.frame_store import ENVIRONMENT as FRAME_STORE
+from vo_lib.sim.samples import CAMERA_HEIGHT, SAMPLES, generate, render_sample
 
 
 @pytest.fixture
@@ -38,11 +39,38 @@ def test_out_of_date_sample_is_generated_again(data_home):
     assert "0" * 16 not in manifest.read_text()
 
 
-def test_generation_is_deterministic(tmp_path):
+def test_generation_is_deterministic(tmp_path, monkeypatch):
+    monkeypatch.delenv(FRAME_STORE, raising=False)  # both rendered, not the second read back
     a = generate("spot_turn", tmp_path / "a", frames=2, resolution=(96, 72), progress=False)
     b = generate("spot_turn", tmp_path / "b", frames=2, resolution=(96, 72), progress=False)
     for name in ("image_0/000001.png", "image_1/000001.png", "poses.txt", "odometry.txt", "times.txt"):
         assert (a / name).read_bytes() == (b / name).read_bytes()
+
+
+def test_frame_store_gives_the_frames_one_render_gives(tmp_path, monkeypatch):
+    """Frames read back from the store, and frames rendered after them from the stored noise
+    state, are those of one uninterrupted render; a stored frame is read, not rendered again."""
+
+    def frames(n, first=0):
+        return [(left, right) for left, right, _ in render_sample("outdoor_free", n, (96, 72), first)[1]]
+
+    monkeypatch.delenv(FRAME_STORE, raising=False)
+    plain = frames(6)
+    monkeypatch.setenv(FRAME_STORE, str(tmp_path))
+    assert all(np.array_equal(a, b) for a, b in zip(sum(frames(3), ()), sum(plain[:3], ()), strict=True))
+    (folder,) = tmp_path.iterdir()
+    assert sorted(p.name for p in folder.iterdir()) == ["000000.npz", "000001.npz", "000002.npz"]
+    with np.load(folder / "000002.npz") as stored:
+        marked = {name: stored[name] for name in stored.files}
+    marked["left"] = np.zeros_like(marked["left"])
+    np.savez(folder / "000002.npz", **marked)
+    again = frames(6)  # frames 0-2 read (2 as marked), 3-5 rendered from the stored noise state
+    assert not again[2][0].any()
+    for k in (0, 1, 3, 4, 5):
+        assert np.array_equal(again[k][0], plain[k][0]) and np.array_equal(again[k][1], plain[k][1]), k
+    assert len(list(folder.iterdir())) == 6
+    later = frames(2, first=3)  # another first frame, another noise stream: stored apart
+    assert len(list(tmp_path.iterdir())) == 2 and not np.array_equal(later[0][0], plain[3][0])
 
 
 def test_ground_truth_poses_match_the_robot_poses(tmp_path):

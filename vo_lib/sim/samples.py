@@ -19,6 +19,7 @@ from vo_lib.formats.sequence import SequenceWriter
 from vo_lib.geometry import camera_mount, planar_to_matrix
 from vo_lib.models.track_odometry import TrackOdometry
 from vo_lib.sim import road
+from vo_lib.sim.frame_store import FrameStore
 from vo_lib.sim.render import SensorEffects, StereoRenderer
 from vo_lib.sim.textures import TEXTURE_VERSION
 from vo_lib.sim.trajectories import Leg, SlipModel, simulate_drive
@@ -288,7 +289,8 @@ def _world_poses(sample: Sample, drive) -> np.ndarray:
 
 
 def render_sample(name: str, frames: int | None = None, resolution=None, first: int = 0):
-    """Render a sample in memory: ``(RenderedSample, iterator of frames)``; nothing is written.
+    """Render a sample in memory: ``(RenderedSample, iterator of frames)``; nothing is written
+    (but to the frame store, when ``VO_LIB_FRAME_STORE`` names one: :mod:`vo_lib.sim.frame_store`).
 
     ``resolution`` is ``(width, height)``, by default the sample's own. ``first`` starts at a later
     frame of the drive (the first rendered frame then has no odometry, as frame 0).
@@ -317,10 +319,22 @@ def render_sample(name: str, frames: int | None = None, resolution=None, first: 
     image_rng = np.random.default_rng(sample.seed + 1)
     gains = exposure_gains(first + n, sample.exposure_sigma, np.random.default_rng(sample.seed + 3))
 
+    store = FrameStore.from_environment(
+        lambda: f"{name}-{fingerprint(name)}-{camera.width}x{camera.height}-from{first}"
+    )
+
     def frame_iter():
         for k in range(first, first + n):
-            renderer.effects = SensorEffects(noise_sigma=sample.sensor_noise, exposure_gain=float(gains[k]))
-            left, right = renderer.render_pair(poses[k] @ mount, image_rng, time=k / sample.rate)
+            stored = store.get(k) if store else None
+            if stored:
+                left, right, state = stored
+                image_rng.bit_generator.state = state  # as if this frame had been rendered here
+            else:
+                gain = float(gains[k])
+                renderer.effects = SensorEffects(noise_sigma=sample.sensor_noise, exposure_gain=gain)
+                left, right = renderer.render_pair(poses[k] @ mount, image_rng, time=k / sample.rate)
+                if store:
+                    store.put(k, left, right, image_rng.bit_generator.state)
             yield left, right, (None if k == first else drive.odometry[k])
 
     return RenderedSample(camera, mount, drive, n, poses, first), frame_iter()
