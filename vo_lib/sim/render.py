@@ -5,7 +5,8 @@ pixels is one homography, ``H = K [R^T e1, R^T e2, R^T (O - c)]``, so OpenCV's
 ``warpPerspective`` draws a quad over its screen bounding box in one call; the texture level
 (mipmap) is chosen from the quad's texel footprint so that far surfaces do not alias. Visibility
 is a z-buffer of *inverse* depth, which on a plane is affine in the pixel coordinates:
-``1/z = n . K^-1 [u, v, 1] / (n . O_c)``. Ground-truth depth comes from the same buffer.
+``1/z = n . K^-1 [u, v, 1] / (n . O_c)`` (the compiled step of :mod:`vo_lib.sim.composite`).
+Ground-truth depth comes from the same buffer.
 """
 
 from __future__ import annotations
@@ -267,8 +268,6 @@ class StereoRenderer:
         self._movers = [(m, _mover_quads(m)) for m in world.movers]
         self._frame = _QuadArrays.of(self.quads)
         w, h = camera.width, camera.height
-        self._u = np.arange(w, dtype=np.float32)
-        self._v = np.arange(h, dtype=np.float32)
         sky = np.linspace(SKY_GREY[0], SKY_GREY[1], h, dtype=np.float32)
         self._sky = np.repeat(sky[:, None], w, axis=1).astype(np.uint8)
         self._Kinv = np.linalg.inv(camera.K)
