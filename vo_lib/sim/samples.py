@@ -186,7 +186,8 @@ SAMPLES: dict[str, Sample] = {
             "the longest tour, at the far end of the yard: Table 2, set 3",
             "seed 000, IV.B.3 (2670 frames, third set)",
             "outdoor_yard",
-            (10.0, -26.0, 0.2),
+            # from the open south end: the tour sees sky and far fronts (bench realism in range)
+            (0.0, -35.0, 0.524),
             30.0,
             (Leg(269, 0.5),) + _turns_pattern((-1, 1, 1, -1, 1, 1), 200, 0.5, 15),
             seed=109,
