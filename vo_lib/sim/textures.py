@@ -7,9 +7,11 @@ add corners at arbitrary angles. Mipmaps (Gaussian pyramids) let the renderer sa
 without aliasing.
 
 Real surfaces are mostly poorer in corners: :func:`surface_texture` makes a texture of a named
-*style*: ``"corners"`` (the procedural one), photographs of ``"brick"``, ``"grass"`` and
-``"gravel"`` (scikit-image's bundled ones, tiled mirrored so that no seam shows, at a physical
-scale), ``"asphalt"`` (the gravel photograph, finer and flatter), ``"plain"`` (painted: a uniform
+*style*: ``"corners"`` (the procedural one), photographs of ``"grass"`` and ``"gravel"``
+(scikit-image's bundled ones, tiled mirrored so that no seam shows, at a physical scale),
+``"asphalt"`` (the gravel photograph, finer and flatter), ``"brick"`` (bricks in running bond with
+the gravel photograph's grain, and windows; scikit-image's brick photograph is taken at a slant,
+and its courses, mirrored, meet in zigzags), ``"plain"`` (painted: a uniform
 grey with a faint wash), ``"wall"`` (a painted wall with a door and posters), ``"tiles"`` (floor
 tiles with grout lines), ``"panels"`` (a ceiling of plain panels and lights), ``"fence"`` (a
 repetitive fence of posts before a plain background), ``"far"`` (distant structure of low
@@ -84,17 +86,23 @@ def cached_mipmaps(height: int, width: int, seed: int, contrast: float = 1.0) ->
 
 #: Changed whenever a texture's texels change for the same arguments: it enters the samples'
 #: fingerprints, so that cached samples are rendered again.
-TEXTURE_VERSION = 2
-#: Metres covered by the 512 pixels of each photograph (a brick is about 0.22 m long, a pebble of
-#: the gravel a few centimetres across; asphalt is the gravel photograph, finer and flatter).
-PHOTO_METRES = {"brick": 1.6, "grass": 1.0, "gravel": 2.0, "asphalt": 0.5}
+TEXTURE_VERSION = 3
+#: Metres covered by the 512 pixels of each photograph (a pebble of the gravel is a few
+#: centimetres across; asphalt is the gravel photograph, finer and flatter).
+PHOTO_METRES = {"grass": 1.0, "gravel": 2.0, "asphalt": 0.5}
 #: Grey level and contrast (multiplies the photograph's deviation from its mean) of each style.
-PHOTO_TONE = {"brick": (120.0, 1.0), "grass": (95.0, 1.2), "gravel": (130.0, 1.5), "asphalt": (105.0, 0.4)}
+PHOTO_TONE = {"grass": (95.0, 1.2), "gravel": (130.0, 1.5), "asphalt": (105.0, 0.4)}
+#: A brick's face and the mortar joint, metres (a common metric brick, 215 x 65 mm, 10 mm joints).
+BRICK_SIZE, MORTAR = (0.215, 0.065), 0.010
+#: Grey of the bricks (mean, spread from brick to brick) and of the mortar.
+BRICK_GREY, MORTAR_GREY = (115.0, 8.0), 140.0
+#: Height of a storey, metres: brick walls taller than a window get a row of windows per storey.
+STOREY = 3.0
 
 
 @lru_cache(maxsize=4)
 def photograph(name: str) -> np.ndarray:
-    """A grey scikit-image photograph (``"brick"``, ``"grass"``, ``"gravel"``), float32."""
+    """A grey scikit-image photograph (``"grass"``, ``"gravel"``), float32."""
     return getattr(skimage.data, name)().astype(np.float32)
 
 
@@ -135,6 +143,42 @@ def _rect(img, x0, y0, x1, y1, texel, value):
     a = (int(x0 / texel), int(y0 / texel))
     b = (int(x1 / texel), int(y1 / texel))
     cv2.rectangle(img, a, b, float(value), -1)
+
+
+def brick_wall(height: int, width: int, texel: float, seed: int) -> np.ndarray:
+    """Bricks in running bond: courses of bricks, each its own grey, every other course shifted by
+    half a brick, in light mortar joints, with the fine grain of the gravel photograph; framed
+    windows on every storey the wall is tall enough for.
+
+    The bond is drawn at a quarter of the texel (joints are thinner than a texel) and averaged
+    down. Row 0 is the floor line.
+    """
+    rng = np.random.default_rng(seed)
+    fine = min(4, max(1, int(np.ceil(texel / 0.005))))
+    step = texel / fine
+    pitch, course = BRICK_SIZE[0] + MORTAR, BRICK_SIZE[1] + MORTAR  # brick plus one joint
+    y = (np.arange(height * fine) + 0.5) * step
+    x = (np.arange(width * fine) + 0.5) * step
+    row = (y // course).astype(int)
+    shifted = x[None, :] + 0.5 * pitch * (row[:, None] % 2)  # running bond
+    col = (shifted // pitch).astype(int)
+    greys = rng.normal(*BRICK_GREY, (row.max() + 1, col.max() + 1)).astype(np.float32)
+    img = greys[row[:, None], col]
+    joint = ((y % course) < MORTAR)[:, None] | ((shifted % pitch) < MORTAR)
+    img[joint] = MORTAR_GREY
+    img = cv2.resize(img, (width, height), interpolation=cv2.INTER_AREA) if fine > 1 else img
+    grain = photo_texture("asphalt", height, width, texel, seed + 1) - PHOTO_TONE["asphalt"][0]
+    img = img + 2.0 * grain + smooth_wash(height, width, texel, rng, 4.0)
+    for floor in range(int((height * texel - 0.9) // STOREY)):  # windows on every storey
+        sill = 0.9 + floor * STOREY
+        x = rng.uniform(0.5, 2.0)
+        while x < width * texel - 1.5:
+            if rng.random() < 0.75:
+                _rect(img, x - 0.08, sill - 0.08, x + 1.28, sill + 1.58, texel, 200.0)  # frame
+                _rect(img, x, sill, x + 1.2, sill + 1.5, texel, rng.uniform(45, 85))  # glass
+                _rect(img, x + 0.57, sill, x + 0.63, sill + 1.5, texel, 200.0)  # mullion
+            x += rng.uniform(2.6, 4.0)
+    return img
 
 
 def painted_wall(height: int, width: int, texel: float, seed: int) -> np.ndarray:
@@ -297,6 +341,8 @@ def surface_texture(style: str, height: int, width: int, texel: float, seed: int
         img = photo_texture(style, height, width, texel, seed)
     elif style == "plain":
         img = rng.uniform(150, 200) + smooth_wash(height, width, texel, rng, 3.0)
+    elif style == "brick":
+        img = brick_wall(height, width, texel, seed)
     elif style == "wall":
         img = painted_wall(height, width, texel, seed)
     elif style == "tiles":
@@ -316,7 +362,19 @@ def surface_texture(style: str, height: int, width: int, texel: float, seed: int
     return np.clip(img + 0.5, 0, 255).astype(np.uint8)
 
 
-STYLES = ("corners", *PHOTO_METRES, "plain", "wall", "tiles", "panels", "fence", "far", "road", "vehicle")
+STYLES = (
+    "corners",
+    "brick",
+    *PHOTO_METRES,
+    "plain",
+    "wall",
+    "tiles",
+    "panels",
+    "fence",
+    "far",
+    "road",
+    "vehicle",
+)
 
 
 @lru_cache(maxsize=256)
