@@ -86,7 +86,7 @@ def cached_mipmaps(height: int, width: int, seed: int, contrast: float = 1.0) ->
 
 #: Changed whenever a texture's texels change for the same arguments: it enters the samples'
 #: fingerprints, so that cached samples are rendered again.
-TEXTURE_VERSION = 3
+TEXTURE_VERSION = 4
 #: Metres covered by the 512 pixels of each photograph (a pebble of the gravel is a few
 #: centimetres across; asphalt is the gravel photograph, finer and flatter).
 PHOTO_METRES = {"grass": 1.0, "gravel": 2.0, "asphalt": 0.5}
@@ -145,28 +145,37 @@ def _rect(img, x0, y0, x1, y1, texel, value):
     cv2.rectangle(img, a, b, float(value), -1)
 
 
+def _joint_share(centre: np.ndarray, texel: float, period: float) -> np.ndarray:
+    """Share of each texel (``centre`` +- texel/2) that joints of width :data:`MORTAR`, one at the
+    start of every ``period``, cover: the difference of the joints' running length at its edges."""
+
+    def covered(p):  # length of joint in [0, p]
+        return np.floor(p / period) * MORTAR + np.minimum(np.mod(p, period), MORTAR)
+
+    return ((covered(centre + texel / 2) - covered(centre - texel / 2)) / texel).astype(np.float32)
+
+
 def brick_wall(height: int, width: int, texel: float, seed: int) -> np.ndarray:
     """Bricks in running bond: courses of bricks, each its own grey, every other course shifted by
     half a brick, in light mortar joints, with the fine grain of the gravel photograph; framed
     windows on every storey the wall is tall enough for.
 
-    The bond is drawn at a quarter of the texel (joints are thinner than a texel) and averaged
-    down. Row 0 is the floor line.
+    Joints are thinner than a texel: each texel is given the share of its area that joints cover
+    (a box filter of the bond, exact for the joints), and the grey of the brick at its centre.
+    Row 0 is the floor line.
     """
     rng = np.random.default_rng(seed)
-    fine = min(4, max(1, int(np.ceil(texel / 0.005))))
-    step = texel / fine
     pitch, course = BRICK_SIZE[0] + MORTAR, BRICK_SIZE[1] + MORTAR  # brick plus one joint
-    y = (np.arange(height * fine) + 0.5) * step
-    x = (np.arange(width * fine) + 0.5) * step
+    y = (np.arange(height) + 0.5) * texel
+    x = (np.arange(width) + 0.5) * texel
     row = (y // course).astype(int)
-    shifted = x[None, :] + 0.5 * pitch * (row[:, None] % 2)  # running bond
-    col = (shifted // pitch).astype(int)
+    shifted = np.stack([x, x + 0.5 * pitch])  # running bond: odd courses shifted by half a brick
+    col = (shifted // pitch).astype(int)[row % 2]  # (height, width)
     greys = rng.normal(*BRICK_GREY, (row.max() + 1, col.max() + 1)).astype(np.float32)
-    img = greys[row[:, None], col]
-    joint = ((y % course) < MORTAR)[:, None] | ((shifted % pitch) < MORTAR)
-    img[joint] = MORTAR_GREY
-    img = cv2.resize(img, (width, height), interpolation=cv2.INTER_AREA) if fine > 1 else img
+    bed = _joint_share(y, texel, course)[:, None]  # horizontal joints
+    head = _joint_share(shifted, texel, pitch)[row % 2]  # vertical joints
+    joint = 1.0 - (1.0 - bed) * (1.0 - head)
+    img = greys[row[:, None], col] * (1.0 - joint) + MORTAR_GREY * joint
     grain = photo_texture("asphalt", height, width, texel, seed + 1) - PHOTO_TONE["asphalt"][0]
     img = img + 2.0 * grain + smooth_wash(height, width, texel, rng, 4.0)
     for floor in range(int((height * texel - 0.9) // STOREY)):  # windows on every storey
