@@ -180,13 +180,13 @@ def brick_wall(height: int, width: int, texel: float, seed: int) -> np.ndarray:
     img = img + 2.0 * grain + smooth_wash(height, width, texel, rng, 4.0)
     for floor in range(int((height * texel - 0.9) // STOREY)):  # windows on every storey
         sill = 0.9 + floor * STOREY
-        x = rng.uniform(0.5, 2.0)
-        while x < width * texel - 1.5:
+        side = rng.uniform(0.5, 2.0)  # a window's left side, metres along the wall
+        while side < width * texel - 1.5:
             if rng.random() < 0.75:
-                _rect(img, x - 0.08, sill - 0.08, x + 1.28, sill + 1.58, texel, 200.0)  # frame
-                _rect(img, x, sill, x + 1.2, sill + 1.5, texel, rng.uniform(45, 85))  # glass
-                _rect(img, x + 0.57, sill, x + 0.63, sill + 1.5, texel, 200.0)  # mullion
-            x += rng.uniform(2.6, 4.0)
+                _rect(img, side - 0.08, sill - 0.08, side + 1.28, sill + 1.58, texel, 200.0)  # frame
+                _rect(img, side, sill, side + 1.2, sill + 1.5, texel, rng.uniform(45, 85))  # glass
+                _rect(img, side + 0.57, sill, side + 0.63, sill + 1.5, texel, 200.0)  # mullion
+            side += rng.uniform(2.6, 4.0)
     return img
 
 
