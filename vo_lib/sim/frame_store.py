@@ -49,7 +49,7 @@ class FrameStore:
         try:
             with np.load(self._path(k)) as data:
                 return data["left"], data["right"], json.loads(str(data["rng_state"]))
-        except (FileNotFoundError, OSError, KeyError, ValueError):
+        except (OSError, KeyError, ValueError):
             return None  # not stored (or unreadable): render it
 
     def put(self, k: int, left: np.ndarray, right: np.ndarray, rng_state: dict) -> None:
@@ -61,8 +61,7 @@ class FrameStore:
             with open(tmp, "wb") as f:
                 np.savez(f, left=left, right=right, rng_state=np.array(json.dumps(rng_state)))
             os.replace(tmp, path)
-        except OSError:
+        except BaseException as exc:  # unwritable or interrupted: no temporary left behind
             tmp.unlink(missing_ok=True)
-        except BaseException:  # interrupted: no temporary left behind
-            tmp.unlink(missing_ok=True)
-            raise
+            if not isinstance(exc, OSError):
+                raise

@@ -316,7 +316,6 @@ def render_sample(name: str, frames: int | None = None, resolution=None, first: 
     )
     mount = road.camera_in_vehicle() if car else camera_mount(height=CAMERA_HEIGHT)
     poses = _world_poses(sample, drive)
-    renderer = StereoRenderer(WORLDS[sample.world](), camera, SensorEffects(noise_sigma=sample.sensor_noise))
     image_rng = np.random.default_rng(sample.seed + 1)
     gains = exposure_gains(first + n, sample.exposure_sigma, np.random.default_rng(sample.seed + 3))
 
@@ -325,12 +324,14 @@ def render_sample(name: str, frames: int | None = None, resolution=None, first: 
     )
 
     def frame_iter():
+        renderer = None  # built at the first frame the store does not hold (textures take a second)
         for k in range(first, first + n):
             stored = store.get(k) if store else None
             if stored:
                 left, right, state = stored
                 image_rng.bit_generator.state = state  # as if this frame had been rendered here
             else:
+                renderer = renderer or StereoRenderer(WORLDS[sample.world](), camera)
                 gain = float(gains[k])
                 renderer.effects = SensorEffects(noise_sigma=sample.sensor_noise, exposure_gain=gain)
                 left, right = renderer.render_pair(poses[k] @ mount, image_rng, time=k / sample.rate)

@@ -33,11 +33,21 @@ def sample_range(indoor: bool):
     return INDOOR_RANGE if indoor else OUTDOOR_RANGE
 
 
+def sample_statistics(name: str, frames: int = FRAMES):
+    """Mean :class:`~vo_lib.sim.realism.ImageStatistics` of ``frames`` left images spread over
+    sample ``name``, rendered in memory."""
+    from vo_lib.sim.realism import ImageStatistics, image_statistics, spread_frames
+    from vo_lib.sim.samples import SAMPLES, render_left_images
+
+    images = render_left_images(name, spread_frames(SAMPLES[name].frames, frames))
+    return ImageStatistics.mean(image_statistics(img) for img in images)
+
+
 def bench_realism(frames: int = FRAMES) -> dict[str, float]:
     """Print the realism table of every sample and real sequence; returns its figures by name."""
     from vo_lib.formats.sequence import read_sequence
     from vo_lib.sim.realism import ImageStatistics, image_statistics, spread_frames
-    from vo_lib.sim.samples import SAMPLES, is_indoor, render_left_images
+    from vo_lib.sim.samples import SAMPLES, is_indoor
 
     rows = []
     root = realdata_root()
@@ -47,10 +57,8 @@ def bench_realism(frames: int = FRAMES) -> dict[str, float]:
         picked = spread_frames(len(seq), frames)
         stats = ImageStatistics.mean(image_statistics(seq.pair(int(k))[0]) for k in picked)
         rows.append((f"real: {folder.name}", stats, None))
-    for name, sample in SAMPLES.items():
-        images = render_left_images(name, spread_frames(sample.frames, frames))
-        stats = ImageStatistics.mean(image_statistics(img) for img in images)
-        rows.append((f"sample {name}", stats, sample_range(is_indoor(name))))
+    for name in SAMPLES:
+        rows.append((f"sample {name}", sample_statistics(name, frames), sample_range(is_indoor(name))))
     print(
         f"{frames} left images spread over each sequence; FAST-9/16 at threshold 20 with non-maximum "
         "suppression; gradient: 3x3 Sobel magnitude"
