@@ -32,7 +32,6 @@ from hypothesis import strategies as st
 
 from vo_lib.camera import StereoCamera
 from vo_lib.cli.main import main
-from vo_lib.formats.outputs import MARKER, _host
 from vo_lib.formats.poses import TrajectoryError, read_trajectory
 from vo_lib.formats.sequence import (
     SequenceError,
@@ -42,6 +41,7 @@ from vo_lib.formats.sequence import (
     read_times,
     write_sequence,
 )
+from vo_lib.outputs import MARKER, _host
 
 ROOT = Path(__file__).resolve().parents[1]
 W, H, FRAMES = 64, 48, 4
@@ -449,7 +449,7 @@ CASES = [
     Case("seed-negative", [*RUN, "--seed", "-5"], 2, "--seed"),
     Case("seed-not-a-number", [*RUN, "--seed", "abc"], 2, "--seed"),
     Case("frames-one", [*RUN, "--frames", "1"], 2, "need at least 2 frames"),
-    Case("frames-zero", [*RUN, "--frames", "0"], 2, "at least 1"),
+    Case("frames-zero", [*RUN, "--frames", "0"], 2, "expected a whole number >= 1 (frames)"),
     Case("frames-not-a-number", [*RUN, "--frames", "many"], 2, "expected a whole number"),
     Case(
         "frames-beyond-sequence",
@@ -577,6 +577,145 @@ CASES = [
 ]
 
 
+def user_kitti_files(ws):
+    """A folder of the user's own holding KITTI's file names (what a run writes, too)."""
+    (ws / "u").mkdir()
+    (ws / "u" / "poses.txt").write_text("my own poses\n")
+    (ws / "u" / "timings.csv").write_text("t\n")
+    (ws / "u" / "diagnostics.csv").write_text("d\n")
+
+
+def finished_sweep(ws):
+    assert main(["sweep", "nees", "--seeds", "2", "--workers", "1", "--out", "R"]) == 0
+
+
+def generated(rel: str):
+    def setup(ws):
+        assert main([*GEN, "--out", rel]) == 0
+
+    return setup
+
+
+def legacy_sample(ws):
+    """A sample sequence written before markers existed: known to `generate` by its manifest."""
+    generated("old")(ws)
+    (ws / "old" / MARKER).unlink()
+
+
+def one_frame(ws):
+    shutil.rmtree(ws / "seq")
+    make_sequence(ws / "seq", frames=1)
+
+
+def dangling_link(ws):
+    image(ws, 0, 2).unlink()
+    image(ws, 0, 2).symlink_to("nowhere.png")
+
+
+def tum_rows(times) -> str:
+    return "".join(f"{t} {0.1 * k:.3f} 0 {0.05 * k:.3f} 0 0 0 1\n" for k, t in enumerate(times))
+
+
+# A command replaces only what the same command wrote: each case's --out holds another's output.
+OWNERSHIP = [
+    Case(
+        "run-over-user-kitti-files", [*RUN, "--out", "u"], 2, "not written by this program", user_kitti_files
+    ),
+    Case(
+        "run-over-user-kitti-files-force",
+        [*RUN, "--out", "u", "--force"],
+        0,
+        "--force: replaced",
+        user_kitti_files,
+        writes=("u",),
+        check=has_marker("u"),
+    ),
+    Case(
+        "run-over-a-sweep", [*RUN, "--out", "R"], 2, "holds the output of `vo_lib sweep nees`", finished_sweep
+    ),
+    Case(
+        "generate-over-a-sweep",
+        [*GEN, "--out", "R"],
+        2,
+        "holds the output of `vo_lib sweep nees`",
+        finished_sweep,
+    ),
+    Case("run-over-a-generated-sequence", [*RUN, "--out", "gen"], 2, "`vo_lib generate`", generated("gen")),
+    Case("generate-over-a-run", [*GEN, "--out", "out"], 2, "`vo_lib run`", run_once("out")),
+    Case(
+        "sweep-over-a-run",
+        ["sweep", "nees", "--seeds", "2", "--workers", "1", "--out", "out"],
+        2,
+        "holds the output of `vo_lib run`",
+        run_once("out"),
+    ),
+    Case(
+        "sweep-over-another-sweep",
+        ["sweep", "lap", "--seeds", "1", "--workers", "1", "--out", "R"],
+        2,
+        "`vo_lib sweep nees`, which `vo_lib sweep lap` does not replace",
+        finished_sweep,
+    ),
+    Case("run-over-a-legacy-sample", [*RUN, "--out", "old"], 2, "not written by this program", legacy_sample),
+    Case(
+        "generate-over-its-legacy-sample",
+        [*GEN, "--out", "old"],
+        0,
+        "wrote old",
+        legacy_sample,
+        writes=("old",),
+        check=lambda ws: (ws / "old" / MARKER).is_file(),
+    ),
+    Case(
+        "run-over-a-sweep-force",
+        [*RUN, "--out", "R", "--force"],
+        0,
+        "--force: replaced",
+        finished_sweep,
+        writes=("R",),
+        check=has_marker("R"),
+    ),
+    # what used to end in a traceback, a wrong name or a quiet acceptance
+    Case("one-frame-sequence", [*RUN, "--out", "out"], 2, "has 1 frame; a run needs at least 2", one_frame),
+    Case(
+        "name-without-frame-number",
+        [*RUN],
+        2,
+        "image_0/left.png: no frame number in the name",
+        lambda ws: shutil.copy(image(ws, 0, 1), ws / "seq" / "image_0" / "left.png"),
+    ),
+    Case(
+        "dangling-link-named",
+        [*RUN],
+        2,
+        "seq/image_0/000002.png: a symbolic link to nowhere.png, which does not exist",
+        dangling_link,
+    ),
+    Case(
+        "evaluate-tum-repeated-time",
+        EVAL,
+        2,
+        "est.txt, line 3: timestamp 0.1 repeats the one on line 2",
+        edit("est.txt", tum_rows([0, 0.1, 0.1, 0.2, 0.3])),
+    ),
+    Case(
+        "evaluate-tum-backwards-time",
+        EVAL,
+        2,
+        "est.txt, line 4: timestamp 0.05 comes before the one on line 3",
+        edit("est.txt", tum_rows([0, 0.1, 0.2, 0.05, 0.3])),
+    ),
+    Case(
+        "calib-plain-numbers",
+        [*RUN],
+        2,
+        "got P0[0,3]=0, P1[0,3]=6",
+        edit("seq/calib.txt", "P0: 50 0 31.5 0 0 50 23.5 0 0 0 1 0\nP1: 50 0 31.5 6 0 50 23.5 0 0 0 1 0\n"),
+    ),
+]
+CASES += OWNERSHIP
+
+
 def test_the_table_is_large_and_ids_are_unique():
     assert len(CASES) >= 40
     assert len({c.id for c in CASES}) == len(CASES)
@@ -584,6 +723,7 @@ def test_the_table_is_large_and_ids_are_unique():
 
 @pytest.mark.parametrize("case", CASES, ids=[c.id for c in CASES])
 def test_case(case: Case, template, tmp_path, monkeypatch, capsys):
+    monkeypatch.delenv("DASK_SCHEDULER_ADDRESS", raising=False)
     ws = tmp_path / "ws"
     shutil.copytree(template, ws, symlinks=True)
     monkeypatch.setenv("VO_LIB_DATA", str(ws / "data"))
@@ -609,6 +749,81 @@ def test_case(case: Case, template, tmp_path, monkeypatch, capsys):
     assert temporaries(ws) == []  # nothing half-written left
     if case.check:
         assert case.check(ws)
+
+
+# ---- a sequence being read is never replaced; a full disk is named ----------------------------------
+
+
+def test_a_sequence_being_read_is_not_replaced(template, tmp_path, monkeypatch, capsys):
+    """`generate --out S` while something reads S: refused in one line, S unchanged."""
+    from vo_lib.outputs import reading
+
+    ws = tmp_path / "ws"
+    shutil.copytree(template, ws, symlinks=True)
+    monkeypatch.chdir(ws)
+    assert main([*GEN, "--out", "gen"]) == 0
+    capsys.readouterr()
+    before = checksums(ws, ())
+    with reading(ws / "gen"):
+        code, out, err = invoke([*GEN, "--out", "gen", "--force"], capsys)
+    assert code == 2 and err.strip().splitlines() == [
+        "python -m vo_lib generate: error: --out gen: a running command is reading this folder; "
+        "try again when it has finished"
+    ]
+    assert checksums(ws, ()) == before and temporaries(ws) == []
+    assert invoke([*GEN, "--out", "gen"], capsys)[0] == 0  # once it is read no more
+
+
+def test_run_holds_its_input_while_it_reads(template, tmp_path, monkeypatch, capsys):
+    """During the pipeline, replacing the run's input sequence fails (the run holds its lock)."""
+    import vo_lib.cli.run as run_module
+    from vo_lib.outputs import OutputError, OutputFolder
+
+    ws = tmp_path / "ws"
+    shutil.copytree(template, ws, symlinks=True)
+    monkeypatch.chdir(ws)
+    assert main([*GEN, "--out", "gen"]) == 0
+    attempts = []
+    original = run_module.run_sequence
+
+    def run_sequence(seq, **kwargs):
+        try:
+            OutputFolder(seq.path, "vo_lib generate", force=True).discard()
+            attempts.append("replaced")
+        except OutputError as exc:
+            attempts.append(str(exc))
+        return original(seq, **kwargs)
+
+    monkeypatch.setattr(run_module, "run_sequence", run_sequence)
+    assert main(["run", "--sequence", "gen", "--out", "out"]) == 0
+    assert attempts and "a running command is reading this folder" in attempts[0]
+    OutputFolder(ws / "gen", "vo_lib generate").discard()  # free again after the run
+
+
+def test_a_full_disk_is_named_in_one_line(template, tmp_path, monkeypatch, capsys):
+    """No space left while `generate` writes: one line naming --out, nothing left behind."""
+    import errno
+
+    ws = tmp_path / "ws"
+    shutil.copytree(template, ws, symlinks=True)
+    monkeypatch.chdir(ws)
+    real_write = Path.write_bytes
+    written = []
+
+    def full(self, data):
+        if ".vo_lib-" in str(self) and len(written) >= 2:
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), str(self))
+        written.append(self)
+        return real_write(self, data)
+
+    monkeypatch.setattr(Path, "write_bytes", full)
+    before = checksums(ws, ())
+    code, out, err = invoke([*GEN, "--out", "gen"], capsys)
+    assert code == 2 and err.strip().splitlines() == [
+        "python -m vo_lib generate: error: --out gen: cannot write the sequence (no space left on device);"
+        " nothing was written"
+    ]
+    assert not (ws / "gen").exists() and temporaries(ws) == [] and checksums(ws, ()) == before
 
 
 # ---- reading: numeric order and pairing, as a library -----------------------------------------------

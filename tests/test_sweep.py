@@ -111,7 +111,7 @@ def test_folder_rules(tmp_path):
     assert sorted(p.name for p in foreign.iterdir()) == ["notes.txt"]
     run_sweep(TOY, [{"seed": 0}], tmp_path / "toy", workers=1)
     other = Experiment("other", square)
-    with pytest.raises(SweepError, match="holds a sweep written by 'vo_lib sweep toy'"):
+    with pytest.raises(ValueError, match="holds the output of `vo_lib sweep toy`"):
         run_sweep(other, [{"seed": 0}], tmp_path / "toy", workers=1)
     with pytest.raises(SweepError, match="repeats a task"):
         run_sweep(TOY, [{"seed": 0}, {"seed": 0}], tmp_path / "twice", workers=1)
@@ -133,12 +133,19 @@ def test_scheduler_address(monkeypatch):
 @pytest.mark.parametrize(
     "argv, message",
     [
-        (["sweep", "lap", "--seeds", "0"], "--seeds: expected a number of seeds of at least 1"),
-        (["sweep", "lap", "--seeds", "x"], "--seeds: expected a whole number >= 1"),
-        (["sweep", "lap", "--workers", "0"], "--workers: expected a number of workers of at least 1"),
+        (["sweep", "lap", "--seeds", "0"], "--seeds: expected a whole number from 1 to 100000 (seeds)"),
+        (["sweep", "lap", "--seeds", "x"], "--seeds: expected a whole number (seeds)"),
+        (["sweep", "nees", "--seeds", "1000000000000", "--workers", "1"], "from 1 to 100000 (seeds)"),
+        (["sweep", "lap", "--workers", "0"], "--workers: expected a whole number from 1 to 1024"),
+        (["sweep", "nees", "--workers", "99999"], "--workers: expected a whole number from 1 to 1024"),
+        (["sweep", "nees", "--workers", "1000", "--seeds", "2"], "--workers 1000: this machine gives"),
         (["sweep", "lap", "--scheduler", "not an address"], "expected a scheduler address"),
         (["sweep", "nothing"], "invalid choice"),
         (["evaluate-all", "no/such/folder"], "folder not found"),
+        (
+            ["sweep", "nees", "--seeds", "2", "--scheduler", "tcp://127.0.0.1:1", "--out", "X"],
+            "--scheduler tcp://127.0.0.1:1: cannot reach the scheduler",
+        ),
     ],
 )
 def test_command_line_errors(argv, message, capsys, tmp_path, monkeypatch):
@@ -181,3 +188,16 @@ def test_evaluate_all_on_the_real_sequence(tmp_path, capsys):
     assert row["error"] == "" and row["lengths"] == "short" and int(row["segments"]) > 0
     assert 0 < float(row["t_pct"]) < 3 and 0 <= float(row["r_deg_100m"]) < 3
     assert "overall" in text and "short 25/50/100 m" in text
+
+
+def test_evaluate_all_fails_when_a_sequence_fails(tmp_path, capsys, monkeypatch):
+    """Every sequence failing (here: no images) is an exit status 2 and one line saying how many."""
+    monkeypatch.chdir(tmp_path)
+    for name in ("a", "b"):
+        (tmp_path / "root" / name / "image_0").mkdir(parents=True)
+    assert main(["evaluate-all", "root", "--workers", "1", "--out", "ev"]) == 2
+    captured = capsys.readouterr()
+    assert "failed" in captured.out
+    *each, last = captured.err.strip().splitlines()  # each failure as it happens, then the count
+    assert len(each) == 2 and all(line.startswith("failed: ") for line in each)
+    assert last.startswith("python -m vo_lib evaluate-all: error: 2 of 2 sequence(s) failed")

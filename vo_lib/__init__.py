@@ -10,6 +10,7 @@ One folder per idea; imports run downwards only (import-linter contracts in ``py
     sim/              world, renderer, laser, drives with slip, disturbances, named samples
     models/ formats/ viz/   crawler tracks and bicycle; KITTI sequences and pose files; figures
     camera.py geometry.py evaluation.py   shared: stereo rig, frames and poses, trajectory errors
+    outputs.py arguments.py   output folders written whole, only over our own; one-line CLI errors
 
 Each folder's ``__init__`` says which equations live where and where to start reading.
 Re-exported here, imported on first use: ``load_sequence`` (``data``), ``StereoCamera``

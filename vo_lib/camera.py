@@ -94,7 +94,7 @@ class StereoCamera:
         if not baseline > 0:
             raise ValueError(
                 f"P1 must place the right camera at +x of the left (P1[0,3] < P0[0,3]); "
-                f"got P0[0,3]={P0[0, 3]!r}, P1[0,3]={P1[0, 3]!r}"
+                f"got P0[0,3]={float(P0[0, 3]):g}, P1[0,3]={float(P1[0, 3]):g}"
             )
         return cls(fx, P0[1, 1], P0[0, 2], P0[1, 2], baseline, width, height)
 

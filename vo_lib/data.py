@@ -4,7 +4,7 @@
 folder and loads it; ``load_sequence("/path/to/kitti/00")`` loads any folder in the KITTI layout.
 The data folder is ``$VO_LIB_DATA`` if set, else the repository's ``data/`` (in a checkout), else
 ``vo_lib/data`` in the user's cache folder (an installed package). A sample is written there
-under the rules of :mod:`vo_lib.formats.outputs`: a folder of that name that this package did not
+under the rules of :mod:`vo_lib.outputs`: a folder of that name that this package did not
 write is never replaced.
 """
 

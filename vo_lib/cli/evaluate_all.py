@@ -143,3 +143,8 @@ def evaluate_all_command(root, frames=None, workers=None, scheduler=None, out=No
         print_aggregate(result)
     if np.isnan(t):
         print("  no segment could be scored")
+    if result.failed:
+        raise SweepError(
+            f"{len(result.failed)} of {len(result.rows)} sequence(s) failed (their errors are in the "
+            f"table above and in {result.path})"
+        )

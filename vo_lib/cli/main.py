@@ -11,7 +11,7 @@ evaluate-all   the stereo pipeline on every sequence under a folder, KITTI-style
 
 Every problem with the input or the arguments prints one line on stderr and exits with status 2;
 Ctrl-C (SIGINT) or SIGTERM removes what was half-written, prints one line and exits with 130 or
-143. Output folders follow the rules of :mod:`vo_lib.formats.outputs` (``--out``, ``--force``).
+143. Output folders follow the rules of :mod:`vo_lib.outputs` (``--out``, ``--force``).
 """
 
 from __future__ import annotations
@@ -22,11 +22,16 @@ import signal
 import sys
 from pathlib import Path
 
-from vo_lib.formats.arguments import OneLineParser
+from vo_lib.arguments import OneLineParser, count_at_least, one_line
 
 #: Bounds of ``generate --resolution`` (each side, pixels): 32 keeps a few FAST corners in view,
 #: 4096 keeps a rendered frame pair and its buffers within a few hundred MB.
 MIN_SIDE, MAX_SIDE = 32, 4096
+#: Bound of ``sweep --seeds``: a grid of 100,000 tasks takes hours on a cluster; more is a typo.
+MAX_SEEDS = 100_000
+#: Bound of ``--workers``: Dask's own limit is memory; beyond 1,024 local processes is a typo.
+#: (Local workers beyond four per core are refused by the sweep itself, which knows the cores.)
+MAX_WORKERS = 1024
 
 
 _Parser = OneLineParser  # errors in one line, exit 2
@@ -40,39 +45,6 @@ def _resolution(text: str) -> tuple[int, int]:
     if not (MIN_SIDE <= w <= MAX_SIDE and MIN_SIDE <= h <= MAX_SIDE):
         raise argparse.ArgumentTypeError(f"each side must lie in {MIN_SIDE}..{MAX_SIDE} pixels; got {text!r}")
     return w, h
-
-
-def _count(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a whole number; got {text!r}") from None
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"expected a number of frames of at least 1; got {text!r}")
-    return value
-
-
-def _seed(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a whole number >= 0; got {text!r}") from None
-    if value < 0:
-        raise argparse.ArgumentTypeError(f"expected a whole number >= 0; got {text!r}")
-    return value
-
-
-def _positive(what: str):
-    def parse(text: str) -> int:
-        try:
-            value = int(text)
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"expected a whole number >= 1; got {text!r}") from None
-        if value < 1:
-            raise argparse.ArgumentTypeError(f"expected a number of {what} of at least 1; got {text!r}")
-        return value
-
-    return parse
 
 
 def _segments(text: str) -> tuple[float, ...]:
@@ -104,11 +76,13 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument(
         "--force", action="store_true", help="replace --out even if this program did not write it"
     )
-    run.add_argument("--frames", type=_count, help="process only the first N frames")
+    run.add_argument("--frames", type=count_at_least(1, "frames"), help="process only the first N frames")
     run.add_argument(
         "--no-odometry", action="store_true", help="ignore odometry.txt (constant-velocity prediction)"
     )
-    run.add_argument("--seed", type=_seed, default=0, help="seed of the RANSAC draws (>= 0)")
+    run.add_argument(
+        "--seed", type=count_at_least(0, "seed"), default=0, help="seed of the RANSAC draws (>= 0)"
+    )
     run.add_argument(
         "--motion",
         choices=("auto", "planar", "full"),
@@ -130,7 +104,7 @@ def build_parser() -> argparse.ArgumentParser:
     gen.add_argument(
         "--force", action="store_true", help="replace --out even if this program did not write it"
     )
-    gen.add_argument("--frames", type=_count, help="keep only the first N frames")
+    gen.add_argument("--frames", type=count_at_least(1, "frames"), help="keep only the first N frames")
     gen.add_argument(
         "--resolution",
         type=_resolution,
@@ -144,18 +118,22 @@ def build_parser() -> argparse.ArgumentParser:
 
     sweep = sub.add_parser("sweep", help="a paper's statistic over many seeds, serially or on Dask")
     sweep.add_argument("name", choices=SWEEPS, help="which experiment")
-    sweep.add_argument("--seeds", type=_positive("seeds"), default=20, help="number of seeds (default 20)")
+    sweep.add_argument(
+        "--seeds", type=count_at_least(1, "seeds", MAX_SEEDS), default=20, help="number of seeds (default 20)"
+    )
     ev_all = sub.add_parser(
         "evaluate-all", help="the pipeline on every sequence under a folder, KITTI-style errors"
     )
     ev_all.add_argument(
         "root", help="folder of sequences (KITTI's sequences/NN, or folders holding image_0/)"
     )
-    ev_all.add_argument("--frames", type=_count, help="only the first N frames of each sequence")
+    ev_all.add_argument(
+        "--frames", type=count_at_least(1, "frames"), help="only the first N frames of each sequence"
+    )
     for p, default in ((sweep, "sweeps/NAME"), (ev_all, "sweeps/evaluate-all-ROOTNAME")):
         p.add_argument(
             "--workers",
-            type=_positive("workers"),
+            type=count_at_least(1, "workers", MAX_WORKERS),
             help="local worker processes (default: one per core; 1 runs in this process)",
         )
         p.add_argument(
@@ -187,7 +165,7 @@ def _stop(signum, frame):
 
 def _interrupt(signum, frame):
     """Ctrl-C: remember it (it may land where it is dropped, see ``outputs.INTERRUPTED``), raise it."""
-    from vo_lib.formats.outputs import INTERRUPTED
+    from vo_lib.outputs import INTERRUPTED
 
     INTERRUPTED.set()
     raise KeyboardInterrupt
@@ -216,22 +194,21 @@ def _signal_inside(exc: BaseException) -> BaseException | None:
     return None
 
 
-def _one_line(text: str) -> str:
-    return " ".join(str(text).splitlines())
-
-
 def _generate(args) -> None:
     from vo_lib.cli.run import UsageError
     from vo_lib.data import sample_path
-    from vo_lib.formats.outputs import check_target
+    from vo_lib.outputs import OutputError, check_target
     from vo_lib.sim.samples import generate
 
     out = args.out or sample_path(args.name, args.frames, args.resolution)
-    check_target(out, force=args.force, option="--out")  # before rendering anything
+    check_target(out, written_by="vo_lib generate", force=args.force, option="--out")  # before rendering
     try:
         path = generate(
             args.name, out, args.frames, args.resolution, progress=sys.stderr.isatty(), force=args.force
         )
+    except OutputError as exc:  # named by the folder; the user gave it as --out
+        text = str(exc)
+        raise OutputError(f"--out {text}" if args.out and not text.startswith("--out ") else text) from None
     except ValueError as exc:  # frames beyond the sample
         raise UsageError(str(exc)) from None
     print(f"wrote {path}")
@@ -271,7 +248,7 @@ def main(argv: list[str] | None = None) -> int:
     handle_term = threading.current_thread() is threading.main_thread()
     previous = signal.signal(signal.SIGTERM, _stop) if handle_term else None
     previous_int = signal.signal(signal.SIGINT, _interrupt) if handle_term else None
-    from vo_lib.formats.outputs import INTERRUPTED
+    from vo_lib.outputs import INTERRUPTED
 
     INTERRUPTED.clear()
     previous_hook, sys.unraisablehook = sys.unraisablehook, _quiet_unraisable(sys.unraisablehook)
@@ -282,9 +259,9 @@ def main(argv: list[str] | None = None) -> int:
         command = f"{parser.prog} {args.command}"
         from vo_lib.cli.run import UsageError
         from vo_lib.cli.sweep import SweepError
-        from vo_lib.formats.outputs import OutputError
         from vo_lib.formats.poses import TrajectoryError
         from vo_lib.formats.sequence import SequenceError
+        from vo_lib.outputs import OutputError
 
         try:
             try:
@@ -294,11 +271,11 @@ def main(argv: list[str] | None = None) -> int:
                     raise
                 raise signal_exc from None
         except (UsageError, SweepError, OutputError, SequenceError, TrajectoryError) as exc:
-            print(f"{command}: error: {_one_line(exc)}", file=sys.stderr)
+            print(f"{command}: error: {one_line(exc)}", file=sys.stderr)
             return 2
         except OSError as exc:  # e.g. a full disk while writing: the output was not put in place
             where = f"{exc.filename}: " if exc.filename else ""
-            print(f"{command}: error: {_one_line(where + (exc.strerror or str(exc)))}", file=sys.stderr)
+            print(f"{command}: error: {one_line(where + (exc.strerror or str(exc)))}", file=sys.stderr)
             return 2
         return 0
     except KeyboardInterrupt:

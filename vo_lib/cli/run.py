@@ -5,7 +5,7 @@
 ``.vo_lib_output.json`` (how the run was made), and prints a timing table like the paper's Table 1
 and, where the sequence has ground truth, the errors.
 
-Outputs follow :mod:`vo_lib.formats.outputs`: ``--out`` must be new, empty or an earlier output
+Outputs follow :mod:`vo_lib.outputs`: ``--out`` must be new, empty or an earlier output
 of this program (``--force`` replaces any other folder, but never the input sequence, a folder
 above or inside it, the current or the home folder); every file goes to a temporary folder first,
 renamed into place at the end, so a failed or interrupted run leaves nothing half-written and the
@@ -24,9 +24,9 @@ from pathlib import Path
 import numpy as np
 
 from vo_lib.evaluation import ate_planar, is_spot_turn, kitti_segment_errors, rpe, turned_degrees
-from vo_lib.formats.outputs import OutputFolder, notice
 from vo_lib.formats.poses import read_trajectory, write_kitti_poses, write_tum
 from vo_lib.geometry import camera_poses_from_planar, planar_from_camera_poses, wrap_angle
+from vo_lib.outputs import OutputFolder, notice, reading
 from vo_lib.sim.samples import SAMPLES
 from vo_lib.stereo_vo.pipeline import (
     WARM_UP_FRAMES,
@@ -215,45 +215,56 @@ def run_command(
     with OutputFolder(
         out_dir, "vo_lib run", force=force, inputs=[source], keep=keep, option="--out"
     ) as output:
-        tmp = output.path
         seq = resolve_sequence(name, load_frames, odometry=not no_odometry, checked=True)
-        if frames is not None and frames > len(seq) and not is_sample(name):  # samples: said above
-            notice(f"--frames {frames}: {seq.path} has {len(seq)} frames; running all {len(seq)}")
-        n = len(seq) if frames is None else min(frames, len(seq))
-        vehicle = vehicle_of(seq, use_odometry=not no_odometry)
-        mount = vehicle.mount
-        seconds = warm_up(seq, use_odometry=not no_odometry, seed=seed, motion=motion)
-        print(
-            f"warm-up: {WARM_UP_FRAMES} frames run untimed first, {seconds:.1f} s (compiling the Numba "
-            "kernels in a fresh environment, loading them from the cache after); not in timings.csv"
-        )
-        result = run_sequence(
-            seq,
-            frames=n,
-            use_odometry=not no_odometry,
-            seed=seed,
-            progress=sys.stderr.isatty(),
-            motion=motion,
-        )
-        if result.camera_poses is not None:
-            poses = result.camera_poses
-        else:
-            poses = camera_poses_from_planar(result.poses, mount)
-        write_kitti_poses(tmp / "poses.txt", poses)
-        write_tum(tmp / "trajectory.tum", seq.times[:n], poses)
-        _write_csv(tmp / "timings.csv", result.timings, FrameTimings)
-        _write_csv(tmp / "diagnostics.csv", result.diagnostics, FrameDiagnostics)
-        truth, odo = truth_and_odometry(seq, vehicle, n)
-        title = f"{Path(name).name}: {n} frames"
-        _plot(tmp / "trajectory.png", seq.times[:n], result.poses, truth, odo, title)
-        print_timing_table(result, seq.camera, n)
-        report = {}
-        if truth is not None:
-            report = error_report(result, truth, odo)
-            rpe_m = rpe(seq.poses[:n], poses)[0].rmse
-            print_error_table(report, len(result.flagged), rpe_m)
-        output.commit(sequence=str(seq.path.resolve()), frames=n, seed=seed, odometry=not no_odometry)
+        with reading(seq.path):  # no command replaces the sequence while it is read
+            report = _run_into(output, seq, name, frames, no_odometry, seed, motion)
     print(f"\nwrote {out_dir}/: poses.txt trajectory.tum timings.csv diagnostics.csv trajectory.png")
+    return report
+
+
+def _run_into(
+    output: OutputFolder, seq, name: str, frames, no_odometry: bool, seed: int, motion: str
+) -> dict:
+    """The pipeline on ``seq`` with its outputs written into ``output`` (committed at the end)."""
+    tmp = output.path
+    if frames is not None and frames > len(seq) and not is_sample(name):  # samples: said above
+        notice(f"--frames {frames}: {seq.path} has {len(seq)} frames; running all {len(seq)}")
+    n = len(seq) if frames is None else min(frames, len(seq))
+    if n < 2:
+        raise UsageError(f"{seq.path}: has {n} frame; a run needs at least 2 frames")
+    vehicle = vehicle_of(seq, use_odometry=not no_odometry)
+    mount = vehicle.mount
+    seconds = warm_up(seq, use_odometry=not no_odometry, seed=seed, motion=motion)
+    print(
+        f"warm-up: {WARM_UP_FRAMES} frames run untimed first, {seconds:.1f} s (compiling the Numba "
+        "kernels in a fresh environment, loading them from the cache after); not in timings.csv"
+    )
+    result = run_sequence(
+        seq,
+        frames=n,
+        use_odometry=not no_odometry,
+        seed=seed,
+        progress=sys.stderr.isatty(),
+        motion=motion,
+    )
+    if result.camera_poses is not None:
+        poses = result.camera_poses
+    else:
+        poses = camera_poses_from_planar(result.poses, mount)
+    write_kitti_poses(tmp / "poses.txt", poses)
+    write_tum(tmp / "trajectory.tum", seq.times[:n], poses)
+    _write_csv(tmp / "timings.csv", result.timings, FrameTimings)
+    _write_csv(tmp / "diagnostics.csv", result.diagnostics, FrameDiagnostics)
+    truth, odo = truth_and_odometry(seq, vehicle, n)
+    title = f"{Path(name).name}: {n} frames"
+    _plot(tmp / "trajectory.png", seq.times[:n], result.poses, truth, odo, title)
+    print_timing_table(result, seq.camera, n)
+    report = {}
+    if truth is not None:
+        report = error_report(result, truth, odo)
+        rpe_m = rpe(seq.poses[:n], poses)[0].rmse
+        print_error_table(report, len(result.flagged), rpe_m)
+    output.commit(sequence=str(seq.path.resolve()), frames=n, seed=seed, odometry=not no_odometry)
     return report
 
 

@@ -12,7 +12,7 @@ Where tasks run
     given: an existing Dask cluster, whose workers must have ``vo_lib`` installed.
 
 What is written
-    The output folder (rules of :mod:`vo_lib.formats.outputs`: new, empty or written by this
+    The output folder (rules of :mod:`vo_lib.outputs`: new, empty or written by this
     program; marker ``.vo_lib_output.json``) holds ``rows.jsonl``, one finished task per line,
     appended as each task finishes and keyed by a hash of the experiment's name and the task's
     parameters, and ``results.csv``, the table of the whole grid (one row per task: parameters,
@@ -28,12 +28,12 @@ from __future__ import annotations
 import csv
 import hashlib
 import io
+import itertools
 import json
 import math
 import os
 import re
 import sys
-import tempfile
 import time
 import traceback
 from collections.abc import Callable, Iterable, Sequence
@@ -42,17 +42,21 @@ from pathlib import Path
 
 import numpy as np
 
-from vo_lib.formats.outputs import (
-    MARKER,
+from vo_lib.arguments import one_line
+from vo_lib.outputs import (
     OutputFolder,
     check_target,
-    umask,
+    read_marker,
+    remove_stale_temporaries,
+    write_atomic,
 )
 
 ROWS = "rows.jsonl"
 TABLE = "results.csv"
 #: Columns every row has after its parameters and figures.
 SECONDS, ERROR = "seconds", "error"
+#: Fewest tasks kept in flight on a cluster (four per worker when there are more workers).
+SUBMIT_WINDOW = 64
 #: Seconds allowed to reach an existing scheduler.
 CONNECT_TIMEOUT = 10.0
 _ADDRESS = re.compile(r"(?:(tcp|tls|ws|wss|ucx)://)?(\[[0-9a-fA-F:]+\]|[A-Za-z0-9_.\-]+):(\d{1,5})")
@@ -119,10 +123,6 @@ def _plain(value):
     return value
 
 
-def _one_line(text: str) -> str:
-    return " ".join(str(text).split())
-
-
 def execute(run: Callable[[dict, object], dict], params: dict, context=None) -> dict:
     """Run one task: ``{"figures": ..., "seconds": wall time, "error": "" or one line}``."""
     t0 = time.perf_counter()
@@ -132,63 +132,11 @@ def execute(run: Callable[[dict, object], dict], params: dict, context=None) -> 
     except Exception as exc:  # a failed run is a row, not a lost sweep
         figures = {}
         where = traceback.extract_tb(exc.__traceback__)[-1]
-        error = _one_line(f"{type(exc).__name__}: {exc} ({Path(where.filename).name}:{where.lineno})")
+        error = one_line(f"{type(exc).__name__}: {exc} ({Path(where.filename).name}:{where.lineno})")
     return {"figures": figures, SECONDS: time.perf_counter() - t0, ERROR: error}
 
 
 # --------------------------------------------------------------------------- the folder on disk
-
-
-def _write_atomic(path: Path, text: str) -> None:
-    """Replace ``path`` with ``text`` via a temporary file beside it (named as the package's
-    temporaries are, so that one left by a killed process is recognised and removed)."""
-    from vo_lib.formats.outputs import _temporary_prefix
-
-    fd, tmp = tempfile.mkstemp(prefix=_temporary_prefix(path.name), suffix=".tmp", dir=path.parent)
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8", newline="") as fh:
-            fh.write(text)
-            fh.flush()
-            os.fsync(fh.fileno())
-        os.chmod(tmp, 0o666 & ~umask())
-        os.replace(tmp, path)
-    except BaseException:
-        try:
-            os.unlink(tmp)
-        except OSError:
-            pass
-        raise
-
-
-def _remove_stale_files(folder: Path) -> None:
-    """Temporary files in ``folder`` left by processes of this machine that no longer run."""
-    from vo_lib.formats.outputs import _TEMPORARY, _host
-
-    if os.name == "nt":
-        return
-    for entry in os.scandir(folder):
-        match = _TEMPORARY.fullmatch(entry.name)
-        if not match or match.group(2) != _host() or not entry.is_file(follow_symlinks=False):
-            continue
-        try:
-            os.kill(int(match.group(1)), 0)
-            continue
-        except ProcessLookupError:
-            pass
-        except (PermissionError, OverflowError, OSError):
-            continue
-        try:
-            os.unlink(entry.path)
-        except OSError:
-            pass
-
-
-def _marker(folder: Path) -> dict | None:
-    try:
-        data = json.loads((folder / MARKER).read_text(encoding="utf-8"))
-    except (OSError, ValueError):
-        return None
-    return data if isinstance(data, dict) else None
 
 
 class SweepFolder:
@@ -199,24 +147,15 @@ class SweepFolder:
         self.target = Path(target)
         self.experiment = experiment
         self.written_by = f"vo_lib sweep {experiment}"
-        label = f"{option} {target}" if option else str(target)
-        marker = _marker(self.target) if self.target.is_dir() else None
-        if marker is not None and str(marker.get("written_by", "")).startswith("vo_lib sweep"):
-            if marker["written_by"] != self.written_by and not force:
-                raise SweepError(
-                    f"{label}: holds a sweep written by {marker['written_by']!r}; choose another folder, "
-                    "or add --force to replace it"
-                )
-            if marker["written_by"] == self.written_by:
-                _remove_stale_files(self.target)
-                check_target(self.target, inputs=inputs, option=option)  # still ours alone
-                self.path = self.target
-                self._lock()
-                return
-        with OutputFolder(self.target, self.written_by, force=force, inputs=inputs, option=option) as out:
-            (out.path / ROWS).touch()
-            (out.path / TABLE).touch()
-            out.commit(experiment=experiment)
+        marker = read_marker(self.target) if self.target.is_dir() else None
+        if marker is not None and marker.get("written_by") == self.written_by:  # resume it
+            remove_stale_temporaries(self.target)
+            check_target(self.target, written_by=self.written_by, inputs=inputs, option=option)
+        else:  # anything else is replaced only as the output rules allow
+            with OutputFolder(self.target, self.written_by, force=force, inputs=inputs, option=option) as out:
+                (out.path / ROWS).touch()
+                (out.path / TABLE).touch()
+                out.commit(experiment=experiment)
         self.path = self.target
         self._lock()
 
@@ -263,7 +202,7 @@ class SweepFolder:
         os.fsync(self._fh.fileno())
 
     def write_table(self, rows: list[dict]) -> Path:
-        _write_atomic(self.path / TABLE, table_csv(rows))
+        write_atomic(self.path / TABLE, table_csv(rows))
         return self.path / TABLE
 
 
@@ -317,6 +256,25 @@ def default_workers() -> int:
         return max(1, len(os.sched_getaffinity(0)))
     except AttributeError:
         return max(1, os.cpu_count() or 1)
+
+
+#: Local worker processes allowed per core: more only share the cores and multiply the memory.
+WORKERS_PER_CORE = 4
+
+
+def _check_workers(workers: int | None, local: bool) -> int:
+    """``workers`` (default: one per core), refused in one line if below 1 or, for a local
+    cluster, above :data:`WORKERS_PER_CORE` per core."""
+    cores = default_workers()
+    workers = cores if workers is None else int(workers)
+    if workers < 1:
+        raise SweepError(f"--workers {workers}: expected at least 1")
+    if local and workers > WORKERS_PER_CORE * cores:
+        raise SweepError(
+            f"--workers {workers}: this machine gives this process {cores} core(s); at most "
+            f"{WORKERS_PER_CORE * cores} local workers (--scheduler ADDRESS runs on a cluster)"
+        )
+    return workers
 
 
 class _Serial:
@@ -387,7 +345,7 @@ class _Dask:
                 self.client = Client(address, timeout=CONNECT_TIMEOUT)
             except (OSError, TimeoutError) as exc:
                 raise SweepError(
-                    f"--scheduler {address}: cannot reach the scheduler ({_one_line(exc)})"
+                    f"--scheduler {address}: cannot reach the scheduler ({one_line(exc)})"
                 ) from None
             n = len(self.client.scheduler_info().get("workers", {}))
             self.label = f"Dask scheduler {address}, {n} workers"
@@ -399,19 +357,30 @@ class _Dask:
             context = self.client.submit(experiment.setup, pure=False)
         elif context is not None:
             [context] = self.client.scatter([context], broadcast=True)
-        futures = {
-            self.client.submit(execute, experiment.run, params, context, pure=False): params
-            for params in tasks
-        }
-        for future in as_completed(futures):
+        futures: dict = {}
+
+        def submit(params: dict):
+            future = self.client.submit(execute, experiment.run, params, context, pure=False)
+            futures[future] = params
+            return future
+
+        # a window of tasks in flight, topped up as they finish: the scheduler never holds the
+        # whole grid (a million futures is gigabytes), and the first rows arrive at once
+        pending = iter(tasks)
+        window = max(SUBMIT_WINDOW, 4 * len(self.client.scheduler_info().get("workers", {})))
+        running = as_completed([submit(params) for params in itertools.islice(pending, window)])
+        for future in running:
             params = futures.pop(future)
+            following = next(pending, None)
+            if following is not None:
+                running.add(submit(following))
             try:
                 outcome = future.result()
             except Exception as exc:  # the setup failed, or a worker died
                 outcome = {
                     "figures": {},
                     SECONDS: float("nan"),
-                    ERROR: _one_line(f"{type(exc).__name__}: {exc}"),
+                    ERROR: one_line(f"{type(exc).__name__}: {exc}"),
                 }
             future.release()
             yield params, outcome
@@ -448,11 +417,17 @@ def run_sweep(
     keys = [task_key(experiment.name, t) for t in tasks]
     if len(set(keys)) != len(keys):
         raise SweepError("the sweep repeats a task (two identical parameter sets)")
-    workers = default_workers() if workers is None else int(workers)
-    if workers < 1:
-        raise SweepError(f"--workers {workers}: expected at least 1")
     address = scheduler_address(scheduler)
-    folder = SweepFolder(out, experiment.name, force=force, inputs=inputs)
+    workers = _check_workers(workers, local=client is None and address is None)
+    runner = None
+    if client is None and address is not None:  # reach it before anything is written
+        runner = _Dask(workers, address)
+    try:
+        folder = SweepFolder(out, experiment.name, force=force, inputs=inputs)
+    except BaseException:
+        if runner is not None:
+            runner.close()
+        raise
     result = SweepResult(experiment.name, [], path=folder.path / TABLE)
     try:
         done = {k: r for k, r in folder.finished().items() if not r.get(ERROR)}
@@ -461,10 +436,8 @@ def run_sweep(
         if todo:
             if client is not None:
                 runner = _Dask(workers, None, client)
-            elif address is None and workers == 1:
-                runner = _Serial()
-            else:
-                runner = _Dask(workers, address)
+            elif runner is None:
+                runner = _Serial() if workers == 1 else _Dask(workers, None)
             result.workers = runner.label
             need_setup = context is None and experiment.setup is not None
             bar = tqdm(
@@ -487,8 +460,9 @@ def run_sweep(
                         bar.write(f"failed: {params}: {outcome[ERROR]}", file=sys.stderr)
             finally:
                 bar.close()
-                runner.close()
     finally:
+        if runner is not None:
+            runner.close()
         result.rows = [done[k] for k in keys if k in done]
         try:
             folder.write_table(result.rows)

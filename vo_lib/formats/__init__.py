@@ -5,9 +5,10 @@
                one :class:`~vo_lib.formats.sequence.SequenceError` naming the file and line
 ``poses``      KITTI and TUM trajectory files, read and written; bad input raises one
                :class:`~vo_lib.formats.poses.TrajectoryError` naming the file and line
-``outputs``    output folders written whole or not at all, never over what this package did not
-               write (a marker file tells), temporary folders cleaned up
-``arguments``  command-line parsing shared by the entry points: one-line errors, exit status 2
+``kitti_raw``  KITTI raw files a sequence may carry (``oxts.txt``, ``raw_calib/``): odometry, mount
+
+Output folders (``vo_lib.outputs``) and command-line arguments (``vo_lib.arguments``) are not
+file formats and live in their own modules at the bottom of the package.
 
 Imports nothing of the package above the shared modules (``camera``, ``geometry``, ``evaluation``).
 """

@@ -47,6 +47,19 @@ def rotation_problem(R: np.ndarray) -> str | None:
     return None
 
 
+def _check_increasing(path: Path, times: np.ndarray, lines: list[int]) -> None:
+    """TUM timestamps must increase strictly (as ``times.txt``'s do): a repeated or earlier one
+    pairs two poses with one time."""
+    bad = np.flatnonzero(np.diff(times) <= 0)
+    if len(bad):
+        k = int(bad[0]) + 1
+        what = "repeats" if times[k] == times[k - 1] else "comes before"
+        raise TrajectoryError(
+            f"{path}, line {lines[k]}: timestamp {times[k]:.9g} {what} the one on line {lines[k - 1]}; "
+            "timestamps must increase"
+        )
+
+
 def read_trajectory(path, min_poses: int = 1) -> tuple[np.ndarray | None, np.ndarray]:
     """Read a KITTI pose file (12 numbers a line) or a TUM file (8); returns ``(times, poses)``.
 
@@ -99,6 +112,8 @@ def read_trajectory(path, min_poses: int = 1) -> tuple[np.ndarray | None, np.nda
             f"need at least {min_poses}"
         )
     a = np.array(rows)
+    if a.shape[1] == 8:
+        _check_increasing(path, a[:, 0], lines)
     if a.shape[1] == 12:
         return None, as_4x4(a.reshape(-1, 3, 4))
     T = np.tile(np.eye(4), (len(a), 1, 1))

@@ -25,12 +25,13 @@ A real KITTI odometry sequence loads unchanged. The rules of reading:
   was expected; the number of timestamps, poses and odometry rows must equal the frame count.
 
 Writing (:class:`SequenceWriter`) goes to a temporary folder renamed when complete, under the
-rules of :mod:`vo_lib.formats.outputs`: nothing is written over a folder this package did not
+rules of :mod:`vo_lib.outputs`: nothing is written over a folder this package did not
 write, and a failed write leaves nothing behind.
 """
 
 from __future__ import annotations
 
+import errno
 import json
 import os
 import re
@@ -42,9 +43,9 @@ import cv2
 import numpy as np
 
 from vo_lib.camera import StereoCamera
-from vo_lib.formats.outputs import OutputFolder, check_target, swap_in
 from vo_lib.formats.poses import ROTATION_TOLERANCE, rotation_problem
 from vo_lib.geometry import as_homogeneous
+from vo_lib.outputs import OutputError, OutputFolder
 
 IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".pgm", ".bmp", ".tif", ".tiff")
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
@@ -279,19 +280,32 @@ def frame_order(name: str) -> tuple:
 
 
 def _image_files(folder: Path) -> list[Path]:
+    """The images of ``folder`` in frame order; a name without a frame number, a dangling link
+    and two names of one frame number raise :class:`SequenceError` naming the file."""
     if not folder.is_dir():
         raise SequenceError(f"{folder}: missing image folder")
     try:
         with os.scandir(folder) as entries:
-            names = [
-                e.name
+            listed = [
+                e
                 for e in entries
-                if os.path.splitext(e.name)[1].lower() in IMAGE_SUFFIXES
-                and not e.name.startswith(".")
-                and e.is_file()
+                if os.path.splitext(e.name)[1].lower() in IMAGE_SUFFIXES and not e.name.startswith(".")
             ]
+            names = []
+            for e in listed:
+                if e.is_file():
+                    names.append(e.name)
+                elif e.is_symlink():
+                    target = os.readlink(e.path)
+                    raise SequenceError(f"{e.path}: a symbolic link to {target}, which does not exist")
     except OSError as exc:
         raise SequenceError(f"{folder}: cannot list the images ({exc.strerror or exc})") from None
+    for name in names:
+        if not re.search(r"[0-9]", name):
+            raise SequenceError(
+                f"{folder / name}: no frame number in the name; name each image by its frame "
+                "(000000.png, 000001.png, ...) or move it out of the folder"
+            )
     keyed = sorted((frame_order(name), name) for name in names)
     for (key_a, a), (key_b, b) in zip(keyed, keyed[1:], strict=False):
         if key_a == key_b:
@@ -396,26 +410,19 @@ def _format_row(values) -> str:
     return " ".join(repr(float(v)) for v in values)
 
 
-def replace_folder(complete: Path, target: Path, force: bool = False) -> Path:
-    """Rename the finished folder ``complete`` to ``target``; a folder already there is replaced
-    only if this package wrote it (or ``force``), under :func:`vo_lib.formats.outputs.check_target`."""
-    check_target(target, force=force)
-    swap_in(Path(complete), Path(target).resolve())
-    return Path(target)
-
-
 class SequenceWriter:
     """Write a sequence frame by frame into a temporary folder, renamed on :meth:`close`.
 
     Use as a context manager; if the block raises, the temporary folder is removed and any
     existing sequence at ``path`` is left untouched. ``path`` must be new, empty or a sequence this
-    package wrote; ``force`` replaces any other folder (see :mod:`vo_lib.formats.outputs`, whose
-    :class:`~vo_lib.formats.outputs.OutputError` is raised otherwise, before anything is written).
+    package wrote; ``force`` replaces any other folder (see :mod:`vo_lib.outputs`, whose
+    :class:`~vo_lib.outputs.OutputError` is raised otherwise, before anything is written).
     """
 
     def __init__(self, path, camera: StereoCamera, force: bool = False, option: str | None = None):
         self.path = Path(path)
         self.camera = camera
+        self.label = f"{option} {path}" if option else str(path)
         self._out = OutputFolder(self.path, "vo_lib generate", force=force, option=option)
         self._tmp = self._out.path
         (self._tmp / "image_0").mkdir()
@@ -426,28 +433,43 @@ class SequenceWriter:
         for folder, img in (("image_0", left), ("image_1", right)):
             if img.dtype != np.uint8 or img.ndim != 2:
                 raise ValueError(f"{folder} images must be 2-D uint8 grey; got {img.dtype} {img.shape}")
-            target = self._tmp / folder / f"{self.count:06d}.png"
-            if not cv2.imwrite(str(target), img):
-                raise OSError(f"cannot write {target}")
+            ok, encoded = cv2.imencode(".png", img)
+            if not ok:
+                raise ValueError(f"{folder}: frame {self.count} cannot be encoded as PNG")
+            self._write(self._tmp / folder / f"{self.count:06d}.png", encoded.tobytes())
         self.count += 1
+
+    def _write(self, path: Path, data: bytes) -> None:
+        """Write one file of the temporary folder; a full disk (or any write failure) raises
+        :class:`~vo_lib.outputs.OutputError` naming the output folder, not the temporary."""
+        try:
+            path.write_bytes(data)
+        except OSError as exc:
+            why = "no space left on device" if exc.errno == errno.ENOSPC else (exc.strerror or str(exc))
+            raise OutputError(
+                f"{self.label}: cannot write the sequence ({why}); nothing was written"
+            ) from None
 
     def close(self, times, poses=None, odometry=None, manifest: dict | None = None) -> Path:
         times = np.asarray(times, dtype=float)
         if len(times) != self.count:
             raise ValueError(f"times has {len(times)} entries for {self.count} frames")
         P0, P1 = self.camera.projection_matrices()
-        (self._tmp / "calib.txt").write_text(
-            f"P0: {_format_row(P0.ravel())}\nP1: {_format_row(P1.ravel())}\n"
+        self._write(
+            self._tmp / "calib.txt",
+            f"P0: {_format_row(P0.ravel())}\nP1: {_format_row(P1.ravel())}\n".encode(),
         )
-        (self._tmp / "times.txt").write_text("".join(f"{t!r}\n" for t in times.tolist()))
+        self._write(self._tmp / "times.txt", "".join(f"{t!r}\n" for t in times.tolist()).encode())
         if poses is not None:
             poses = np.asarray(poses, dtype=float)[:, :3, :].reshape(-1, 12)
-            (self._tmp / "poses.txt").write_text("".join(_format_row(p) + "\n" for p in poses))
+            self._write(self._tmp / "poses.txt", "".join(_format_row(p) + "\n" for p in poses).encode())
         if odometry is not None:
             odometry = np.asarray(odometry, dtype=float).reshape(-1, 2)
-            (self._tmp / "odometry.txt").write_text("".join(_format_row(o) + "\n" for o in odometry))
+            self._write(self._tmp / "odometry.txt", "".join(_format_row(o) + "\n" for o in odometry).encode())
         if manifest is not None:
-            (self._tmp / "manifest.json").write_text(json.dumps(manifest, indent=2, sort_keys=True) + "\n")
+            self._write(
+                self._tmp / "manifest.json", (json.dumps(manifest, indent=2, sort_keys=True) + "\n").encode()
+            )
         return self._out.commit(frames=self.count)
 
     def abort(self) -> None:

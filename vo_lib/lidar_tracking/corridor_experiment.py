@@ -235,7 +235,7 @@ PAPER_TABLE3_X = {
 
 
 def _arguments(argv=None):
-    from vo_lib.formats.arguments import OneLineParser, count_at_least
+    from vo_lib.arguments import OneLineParser, count_at_least
 
     parser = OneLineParser(
         prog="python -m vo_lib.lidar_tracking.corridor_experiment",

@@ -282,7 +282,7 @@ def lap_statistics(seeds) -> dict[str, float]:
 
 
 def _arguments(argv=None):
-    from vo_lib.formats.arguments import OneLineParser, count_at_least
+    from vo_lib.arguments import OneLineParser, count_at_least
 
     parser = OneLineParser(
         prog="python -m vo_lib.line_slam.lap",

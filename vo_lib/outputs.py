@@ -2,13 +2,17 @@
 
 The rules (every command that writes follows them):
 
-* **Only new, empty or our own folders are written.** A folder this package wrote carries the
-  marker file ``.vo_lib_output.json`` (which command wrote it, and the names it wrote) and holds
-  nothing else; folders written before markers existed are known by their contents (a sample's
-  ``manifest.json``, a run's five files). Any other folder is refused with :class:`OutputError`
-  unless the caller passes ``force``; even then a folder is never replaced if it is, holds or
-  lies inside an input sequence, or if it is or holds the current folder, the home folder or this
-  package.
+* **A command replaces only what the same command wrote.** A folder this package wrote carries
+  the marker file ``.vo_lib_output.json`` (which command wrote it, and the names it wrote) and
+  holds nothing else. ``run`` replaces only a folder whose marker says ``vo_lib run``,
+  ``generate`` only a generated sequence (``vo_lib generate``, or a sample sequence written
+  before markers existed, known by its ``manifest.json``), ``sweep NAME`` only a sweep of the
+  same experiment, which it resumes. A new or empty folder may always be written. Any other
+  folder is refused with :class:`OutputError`, in one line naming what is there, unless the
+  caller passes ``force``; even then a folder is never replaced if it is, holds or lies inside
+  the command's input, or if it is or holds the current folder, the home folder, the sample data
+  folder or this package. A sequence that a running command reads is never replaced: the
+  reader holds a shared lock on it (:func:`reading`), and a replacement needs it exclusively.
 * **Atomic.** Everything is written into a temporary sibling, ``.NAME.vo_lib-PID-HOST-<random>.tmp``,
   renamed to ``NAME`` when complete; the folder it replaces is removed only after that. A failed
   or interrupted write removes its temporary folder (the command line turns SIGINT and SIGTERM
@@ -19,6 +23,7 @@ The rules (every command that writes follows them):
 
 from __future__ import annotations
 
+import contextlib
 import errno
 import hashlib
 import json
@@ -47,8 +52,8 @@ _LEGACY_SEQUENCE = {
     "odometry.txt",
     "manifest.json",
 }
-#: What a run wrote before markers existed.
-_LEGACY_RUN = {"poses.txt", "trajectory.tum", "timings.csv", "diagnostics.csv", "trajectory.png"}
+#: The command whose old output (no marker) is known by its contents: a sample's manifest.
+_LEGACY_WRITER = "vo_lib generate"
 _FRAME_FILE = re.compile(r"\d+\.png")
 _TEMPORARY = re.compile(r"\..+\.vo_lib-(\d+)-([0-9a-f]{8})-[^/]*\.(?:tmp|old)")
 
@@ -103,8 +108,9 @@ def _describe(folder: Path) -> str:
     return f"{files} file{'s' * (files != 1)} in {folders + 1} folder{'s' * (folders > 0)}, {amount}"
 
 
-def foreign_content(folder: Path) -> str | None:
-    """None if ``folder`` is empty or holds only what this package wrote there; else why not."""
+def foreign_content(folder: Path, written_by: str) -> str | None:
+    """None if ``folder`` is empty or holds only what the command ``written_by`` wrote there;
+    else why not, in a few words."""
     try:
         entries = {e.name: e for e in os.scandir(folder)}
     except OSError as exc:
@@ -116,20 +122,19 @@ def foreign_content(folder: Path) -> str | None:
         try:
             data = json.loads(marker.read_text(encoding="utf-8"))
             contents = set(data["contents"])
-            if not str(data["written_by"]).startswith("vo_lib"):
-                raise ValueError
+            writer = str(data["written_by"])
         except (OSError, ValueError, KeyError, TypeError):
             return f"its marker {MARKER} is damaged"
+        if writer != written_by:
+            return f"it holds the output of `{writer}`, which `{written_by}` does not replace"
     else:
         try:
             manifest = json.loads((folder / "manifest.json").read_text(encoding="utf-8"))
             legacy = isinstance(manifest, dict) and {"sample", "fingerprint"} <= manifest.keys()
         except (OSError, ValueError):
             legacy = False
-        if legacy:
+        if legacy and written_by == _LEGACY_WRITER:
             contents = _LEGACY_SEQUENCE
-        elif set(entries) <= _LEGACY_RUN and {"poses.txt", "timings.csv", "diagnostics.csv"} <= set(entries):
-            contents = _LEGACY_RUN
         else:
             return "it was not written by this program"
     for name, entry in sorted(entries.items()):
@@ -147,12 +152,13 @@ def foreign_content(folder: Path) -> str | None:
 def check_target(
     target,
     *,
+    written_by: str,
     force: bool = False,
     inputs=(),
     keep: dict | None = None,
     option: str | None = None,
 ) -> str | None:
-    """Raise :class:`OutputError` unless folder ``target`` may be (re)written.
+    """Raise :class:`OutputError` unless folder ``target`` may be (re)written by ``written_by``.
 
     ``inputs`` are folders read by the command: ``target`` may not be one of them, above one, or
     inside one. ``keep`` maps folders never replaced, even with ``force``, to what they are (the
@@ -198,7 +204,7 @@ def check_target(
         raise OutputError(
             f"{label}: is a file, not a folder; choose another output folder (--force replaces folders only)"
         )
-    why = foreign_content(real)
+    why = foreign_content(real, written_by)
     if why is None:
         return None
     if not force:
@@ -208,9 +214,62 @@ def check_target(
     return f"{real} ({_describe(real)}; {why})"
 
 
+@contextlib.contextmanager
+def reading(folder):
+    """Hold a shared lock on ``folder`` while a command reads it: no command replaces it meanwhile
+    (:class:`OutputFolder` needs the lock exclusively). Where folders cannot be locked (Windows, or
+    a file system without locks) nothing is held."""
+    fd = _lock(Path(folder), shared=True)
+    try:
+        yield
+    finally:
+        if fd is not None:
+            os.close(fd)
+
+
+@contextlib.contextmanager
+def _exclusive(real: Path, target, option: str | None):
+    """The exclusive lock on an existing folder ``real`` (nothing if it does not exist yet);
+    :class:`OutputError` if a running command reads it."""
+    try:
+        fd = _lock(real, shared=False)
+    except BlockingIOError:
+        label = f"{option} {target}" if option else str(target)
+        raise OutputError(
+            f"{label}: a running command is reading this folder; try again when it has finished"
+        ) from None
+    try:
+        yield
+    finally:
+        if fd is not None:
+            os.close(fd)
+
+
+def _lock(folder: Path, shared: bool) -> int | None:
+    """An open descriptor of ``folder`` holding a lock (BlockingIOError if held elsewhere in the
+    other mode), or None where the folder is missing or cannot be locked."""
+    try:
+        import fcntl
+    except ImportError:
+        return None
+    try:
+        fd = os.open(folder, os.O_RDONLY | getattr(os, "O_DIRECTORY", 0))
+    except OSError:
+        return None
+    try:
+        fcntl.flock(fd, (fcntl.LOCK_SH if shared else fcntl.LOCK_EX) | fcntl.LOCK_NB)
+    except BlockingIOError:
+        os.close(fd)
+        raise
+    except OSError:  # no locks on this file system
+        os.close(fd)
+        return None
+    return fd
+
+
 def remove_stale_temporaries(parent: Path) -> list[Path]:
-    """Remove the temporary folders in ``parent`` left by processes of this machine that no longer
-    run; returns them."""
+    """Remove the temporaries (folders and files) in ``parent`` left by processes of this machine
+    that no longer run; returns them."""
     removed = []
     if os.name == "nt":  # os.kill(pid, 0) would not test but stop the process there
         return removed
@@ -221,22 +280,61 @@ def remove_stale_temporaries(parent: Path) -> list[Path]:
     host = _host()
     for entry in entries:
         match = _TEMPORARY.fullmatch(entry.name)
-        if not match or match.group(2) != host or not entry.is_dir(follow_symlinks=False):
+        if not match or match.group(2) != host or entry.is_symlink():
             continue
-        pid = int(match.group(1))
-        if pid == os.getpid():
+        if not _gone(int(match.group(1))):
             continue
-        try:
-            os.kill(pid, 0)
-            continue  # still running
-        except ProcessLookupError:
-            pass
-        except (PermissionError, OverflowError, OSError):
-            continue
-        shutil.rmtree(entry.path, ignore_errors=True)
+        if entry.is_dir(follow_symlinks=False):
+            shutil.rmtree(entry.path, ignore_errors=True)
+        else:
+            with contextlib.suppress(OSError):
+                os.unlink(entry.path)
         if not os.path.lexists(entry.path):
             removed.append(Path(entry.path))
     return removed
+
+
+def _gone(pid: int) -> bool:
+    """Does process ``pid`` of this machine no longer run (and is not this one)?"""
+    if pid == os.getpid():
+        return False
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return True
+    except (PermissionError, OverflowError, OSError):
+        return False
+    return False
+
+
+def write_atomic(path, text: str) -> Path:
+    """Replace the file ``path`` by ``text`` through a temporary file beside it (named as the
+    package's temporaries are, so that one left by a killed process is removed later); readers
+    see the old file or the new one, never a part."""
+    path = Path(path)
+    fd, tmp = tempfile.mkstemp(prefix=_temporary_prefix(path.name), suffix=".tmp", dir=path.parent)
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8", newline="") as fh:
+            fh.write(text)
+            fh.flush()
+            os.fsync(fh.fileno())
+        os.chmod(tmp, 0o666 & ~umask())
+        os.replace(tmp, path)
+    except BaseException:
+        with contextlib.suppress(OSError):
+            os.unlink(tmp)
+        raise
+    return path
+
+
+def read_marker(folder) -> dict | None:
+    """The marker of ``folder`` (which command wrote it, what it holds), or None if it has none
+    or it cannot be read."""
+    try:
+        data = json.loads((Path(folder) / MARKER).read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return None
+    return data if isinstance(data, dict) else None
 
 
 def swap_in(complete: Path, target: Path) -> None:
@@ -273,9 +371,11 @@ class OutputFolder:
         self.target = Path(target)
         self.written_by = written_by
         self.committed = False
-        self._check = dict(force=force, inputs=tuple(inputs), keep=keep, option=option)
+        self._check = dict(written_by=written_by, force=force, inputs=tuple(inputs), keep=keep, option=option)
         self.replacing = check_target(self.target, **self._check)
         self.real = self.target.resolve()
+        with _exclusive(self.real, self.target, option):  # fail now, not after the work
+            pass
         self._created: list[Path] = []
         above = self.real.parent
         while not above.exists():
@@ -311,7 +411,8 @@ class OutputFolder:
         marker = {"written_by": self.written_by, "contents": names, **details}
         (self.path / MARKER).write_text(json.dumps(marker, indent=2, sort_keys=True) + "\n", encoding="utf-8")
         replacing = check_target(self.target, **self._check)
-        swap_in(self.path, self.real)
+        with _exclusive(self.real, self.target, option=self._check["option"]):
+            swap_in(self.path, self.real)
         self.committed = True
         if replacing:
             notice(f"--force: replaced {replacing}")

@@ -17,16 +17,24 @@ class OneLineParser(argparse.ArgumentParser):
         self.exit(2, f"{self.prog}: error: {message}\n")
 
 
-def count_at_least(minimum: int, what: str):
-    """An argparse ``type`` reading a whole number ``>= minimum``; ``what`` names it in errors."""
+def one_line(text) -> str:
+    """``text`` (an exception, a message) as one line: its lines and runs of spaces joined by one
+    space, so that every error the package reports takes one line."""
+    return " ".join(str(text).split())
+
+
+def count_at_least(minimum: int, what: str, maximum: int | None = None):
+    """An argparse ``type`` reading a whole number ``>= minimum`` (and ``<= maximum`` if given);
+    ``what`` names it in errors."""
+    bounds = f">= {minimum}" if maximum is None else f"from {minimum} to {maximum}"
 
     def parse(text: str) -> int:
         try:
             value = int(text)
         except ValueError:
             raise argparse.ArgumentTypeError(f"expected a whole number ({what}); got {text!r}") from None
-        if value < minimum:
-            raise argparse.ArgumentTypeError(f"expected a whole number >= {minimum} ({what}); got {text!r}")
+        if value < minimum or (maximum is not None and value > maximum):
+            raise argparse.ArgumentTypeError(f"expected a whole number {bounds} ({what}); got {text!r}")
         return value
 
     return parse
