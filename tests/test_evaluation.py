@@ -114,3 +114,62 @@ def test_files_round_trip(tmp_path, rng):
         read_trajectory(tmp_path / "bad.txt")
     with pytest.raises(ValueError, match="ground truth has 10 poses but the estimate has 9"):
         ate(T, T[:9])
+
+
+def test_rotation_angle_is_stable_at_every_angle(rng):
+    """The angle equals scipy's rotation magnitude from 1e-9 rad to pi, where arccos of the trace
+    loses half the digits near 0."""
+    from vo_lib.evaluation import rotation_angle
+
+    angles = np.concatenate([[1e-9, 1e-7, 1e-5, 1e-3], rng.uniform(0, np.pi, 50), [np.pi - 1e-7]])
+    axes = rng.normal(size=(len(angles), 3))
+    rotvec = angles[:, None] * axes / np.linalg.norm(axes, axis=1, keepdims=True)
+    R = Rotation.from_rotvec(rotvec).as_matrix()
+    np.testing.assert_allclose(rotation_angle(R), angles, rtol=1e-6, atol=1e-15)
+    tiny = Rotation.from_rotvec([1e-9, 0, 0]).as_matrix()
+    floor = np.arccos(np.clip((np.trace(tiny) - 1) / 2, -1, 1))  # the formula it replaces
+    assert abs(rotation_angle(tiny) - 1e-9) < 1e-15 < abs(floor - 1e-9)
+
+
+def drifted(rng, T, off=1.7e-5):
+    """Poses whose rotations are off SO(3) by ``off``, as a long product of estimates drifts."""
+    D = T.copy()
+    D[:, :3, :3] += rng.normal(0, off, (len(T), 3, 3))
+    return D
+
+
+def test_a_trajectory_against_itself_in_the_other_format_has_no_error(tmp_path, rng):
+    """KITTI and TUM files of one estimate (rotations not quite orthonormal) evaluate to at most
+    1e-6 deg of rotation error against each other, both ways, as RPE and as segment errors."""
+    T = drifted(rng, random_trajectory(rng, 120))
+    write_kitti_poses(tmp_path / "poses.txt", T)
+    write_tum(tmp_path / "trajectory.tum", np.arange(len(T)) / 10, T)
+    _, K = read_trajectory(tmp_path / "poses.txt")
+    _, Q = read_trajectory(tmp_path / "trajectory.tum")
+    figures = {}
+    for name, (a, b) in {"kitti-tum": (K, Q), "tum-kitti": (Q, K)}.items():
+        r = rpe(a, b, rotation=True)[0]
+        seg = kitti_segment_errors(a, b, (5, 10, 20))
+        assert seg, "no segment fits"
+        figures[name] = (r.max, max(s[1] for s in seg.values()))
+        assert r.max <= 1e-6 and max(s[1] * length for length, s in seg.items()) <= 1e-6, figures
+    np.testing.assert_allclose(figures["kitti-tum"], figures["tum-kitti"], atol=1e-9)
+    rotations = K[:, :3, :3]
+    np.testing.assert_allclose(
+        rotations.transpose(0, 2, 1) @ rotations, np.broadcast_to(np.eye(3), rotations.shape), atol=3e-9
+    )
+
+
+def test_evaluate_prints_no_rotation_error_for_a_run_against_its_own_files(tmp_path, rng, capsys):
+    from vo_lib.cli.main import main
+
+    T = drifted(rng, random_trajectory(rng, 60))
+    write_kitti_poses(tmp_path / "poses.txt", T)
+    write_tum(tmp_path / "trajectory.tum", np.arange(len(T)) / 10, T)
+    outputs = []
+    for gt, est in (("poses.txt", "trajectory.tum"), ("trajectory.tum", "poses.txt")):
+        args = ["evaluate", "--gt", str(tmp_path / gt), "--est", str(tmp_path / est), "--segments", "5"]
+        assert main(args) == 0
+        outputs.append(capsys.readouterr().out)
+    assert outputs[0] == outputs[1]
+    assert "rotation rmse 0.0000 deg" in outputs[0] and "rotation 0.0000 deg/m" in outputs[0]

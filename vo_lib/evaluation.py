@@ -49,12 +49,22 @@ class ErrorStats:
         )
 
 
-def as_4x4(poses) -> np.ndarray:
-    """``(N, 4, 4)`` from ``(N, 4, 4)`` or ``(N, 3, 4)`` poses."""
-    T = np.asarray(poses, dtype=float)
-    if T.ndim != 3 or T.shape[1:] not in ((3, 4), (4, 4)):
-        raise ValueError(f"poses must have shape (N, 3, 4) or (N, 4, 4); got {T.shape}")
-    return as_homogeneous(T)
+def rotation_angle(R) -> np.ndarray:
+    """Angle in radians of rotation matrices ``(..., 3, 3)``, stable at every angle.
+
+    ``theta = atan2(|vee(R - R^T)| / 2, (trace R - 1) / 2)``: the sine from the skew part, the
+    cosine from the trace (Rodrigues' formula, ``R = I + sin(theta) [k]x + (1 - cos(theta)) [k]x^2``).
+    ``arccos((trace R - 1) / 2)`` alone loses half the digits near 0: a rounding of ``1e-9`` in a
+    written rotation becomes an angle of ``4e-5`` rad. Here a symmetric error (rounding, a matrix
+    not quite orthonormal) leaves the sine untouched and moves the cosine only to second order.
+    """
+    R = np.asarray(R, dtype=float)
+    skew = np.stack(
+        [R[..., 2, 1] - R[..., 1, 2], R[..., 0, 2] - R[..., 2, 0], R[..., 1, 0] - R[..., 0, 1]], axis=-1
+    )
+    sin = 0.5 * np.linalg.norm(skew, axis=-1)
+    cos = 0.5 * (np.trace(R, axis1=-2, axis2=-1) - 1.0)
+    return np.arctan2(sin, cos)
 
 
 def umeyama(source: np.ndarray, target: np.ndarray, with_scale: bool = False):
@@ -71,6 +81,16 @@ def umeyama(source: np.ndarray, target: np.ndarray, with_scale: bool = False):
     return R, mu_t - s * R @ mu_s, s
 
 
+def _pair(gt, est) -> tuple[np.ndarray, np.ndarray]:
+    """Ground truth and estimate as ``(N, 4, 4)`` matrices, checked to match."""
+    gt, est = as_homogeneous(gt), as_homogeneous(est)
+    for T in (gt, est):
+        if T.ndim != 3 or T.shape[1:] != (4, 4):
+            raise ValueError(f"poses must have shape (N, 3, 4) or (N, 4, 4); got {T.shape}")
+    _check_pair(gt, est)
+    return gt, est
+
+
 def _check_pair(gt, est):
     if len(gt) != len(est):
         raise ValueError(f"ground truth has {len(gt)} poses but the estimate has {len(est)}; expected equal")
@@ -80,8 +100,7 @@ def _check_pair(gt, est):
 
 def ate(gt, est, align: bool = True) -> tuple[ErrorStats, np.ndarray]:
     """Absolute trajectory error of positions after SE(3) alignment; ``(stats, per-pose errors)``."""
-    G, E = as_4x4(gt), as_4x4(est)
-    _check_pair(G, E)
+    G, E = _pair(gt, est)
     p_gt, p_est = G[:, :3, 3], E[:, :3, 3]
     if align:
         R, t, _ = umeyama(p_est, p_gt)
@@ -110,8 +129,7 @@ def rpe(
     Pairs start every ``delta`` frames (0-d, d-2d, ...), as evo counts them by default; with
     ``all_pairs`` every frame starts one.
     """
-    G, E = as_4x4(gt), as_4x4(est)
-    _check_pair(G, E)
+    G, E = _pair(gt, est)
     if not 1 <= delta < len(G):
         raise ValueError(f"delta must lie in 1..{len(G) - 1}; got {delta}")
     first = np.arange(0, len(G) - delta, 1 if all_pairs else delta)
@@ -119,8 +137,7 @@ def rpe(
     rel_est = np.linalg.inv(E[first]) @ E[first + delta]
     err = np.linalg.inv(rel_gt) @ rel_est
     if rotation:
-        cos = np.clip((np.trace(err[:, :3, :3], axis1=1, axis2=2) - 1) / 2, -1.0, 1.0)
-        errors = np.degrees(np.arccos(cos))
+        errors = np.degrees(rotation_angle(err[:, :3, :3]))
     else:
         errors = np.linalg.norm(err[:, :3, 3], axis=1)
     return ErrorStats.of(errors), errors
@@ -128,7 +145,7 @@ def rpe(
 
 def path_lengths(poses) -> np.ndarray:
     """Cumulative distance travelled at each pose."""
-    p = as_4x4(poses)[:, :3, 3]
+    p = as_homogeneous(poses)[:, :3, 3]
     return np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(p, axis=0), axis=1))])
 
 
@@ -163,8 +180,7 @@ def kitti_segment_errors(gt, est, lengths=(100, 200, 300, 400, 500, 600, 700, 80
 
     Short sequences have no long segments; pass lengths that fit (e.g. 1, 2, 5 m).
     """
-    G, E = as_4x4(gt), as_4x4(est)
-    _check_pair(G, E)
+    G, E = _pair(gt, est)
     dist = path_lengths(G)
     out = {}
     for length in lengths:
@@ -177,8 +193,7 @@ def kitti_segment_errors(gt, est, lengths=(100, 200, 300, 400, 500, 600, 700, 80
             rel_est = np.linalg.inv(E[first]) @ E[last]
             err = np.linalg.inv(rel_est) @ rel_gt
             t_err.append(np.linalg.norm(err[:3, 3]) / length)
-            cos = np.clip((np.trace(err[:3, :3]) - 1) / 2, -1.0, 1.0)
-            r_err.append(np.degrees(np.arccos(cos)) / length)
+            r_err.append(np.degrees(rotation_angle(err[:3, :3])) / length)
         if t_err:
             out[length] = (100.0 * float(np.mean(t_err)), float(np.mean(r_err)), len(t_err))
     return out

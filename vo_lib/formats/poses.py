@@ -9,19 +9,30 @@ from pathlib import Path
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from vo_lib.evaluation import as_4x4
+from vo_lib.geometry import as_homogeneous
+
+
+def _rigid(poses) -> tuple[np.ndarray, Rotation]:
+    """``(N, 4, 4)`` poses and their rotations, each made exactly orthonormal (the nearest rotation,
+    scipy's ``Rotation.from_matrix``): a product of many estimated motions drifts off SO(3) by
+    ``1e-5``, which a file would otherwise keep and every reader would read differently."""
+    T = as_homogeneous(poses)
+    if T.ndim != 3 or T.shape[1:] != (4, 4):
+        raise ValueError(f"poses must have shape (N, 3, 4) or (N, 4, 4); got {T.shape}")
+    return T, Rotation.from_matrix(T[:, :3, :3])
 
 
 def write_kitti_poses(path, poses) -> None:
-    """12 numbers per line: the top three rows of each pose."""
-    T = as_4x4(poses)[:, :3, :].reshape(-1, 12)
-    Path(path).write_text("".join(" ".join(f"{v:.9e}" for v in row) + "\n" for row in T))
+    """12 numbers per line: the top three rows of each pose, its rotation made orthonormal."""
+    T, rotations = _rigid(poses)
+    rows = np.concatenate([rotations.as_matrix(), T[:, :3, 3:]], axis=2).reshape(-1, 12)
+    Path(path).write_text("".join(" ".join(f"{v:.9e}" for v in row) + "\n" for row in rows))
 
 
 def write_tum(path, times, poses) -> None:
     """TUM trajectory format, as evo reads it: ``timestamp tx ty tz qx qy qz qw`` per line."""
-    T = as_4x4(poses)
-    q = Rotation.from_matrix(T[:, :3, :3]).as_quat()  # x, y, z, w
+    T, rotations = _rigid(poses)
+    q = rotations.as_quat()  # x, y, z, w
     rows = np.column_stack([np.asarray(times, float), T[:, :3, 3], q])
     Path(path).write_text("".join(" ".join(f"{v:.9f}" for v in row) + "\n" for row in rows))
 
@@ -115,7 +126,7 @@ def read_trajectory(path, min_poses: int = 1) -> tuple[np.ndarray | None, np.nda
     if a.shape[1] == 8:
         _check_increasing(path, a[:, 0], lines)
     if a.shape[1] == 12:
-        return None, as_4x4(a.reshape(-1, 3, 4))
+        return None, as_homogeneous(a.reshape(-1, 3, 4))
     T = np.tile(np.eye(4), (len(a), 1, 1))
     q = a[:, 4:8] / np.max(np.abs(a[:, 4:8]), axis=1, keepdims=True)  # no overflow in the norm
     T[:, :3, :3] = Rotation.from_quat(q).as_matrix()
