@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import csv
 import json
+import os
 import sys
 from pathlib import Path
 
@@ -26,7 +27,7 @@ from vo_lib.cli.sweep import (
     task_key,
 )
 
-REAL = Path(__file__).resolve().parents[2] / "shared" / "realdata"
+REAL = Path(os.environ.get("VO_LIB_REALDATA") or Path(__file__).resolve().parents[2] / "shared" / "realdata")
 
 # the toy tasks below travel to the workers by value (the test module is not importable there)
 cloudpickle.register_pickle_by_value(sys.modules[__name__])
