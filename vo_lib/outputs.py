@@ -108,6 +108,29 @@ def _describe(folder: Path) -> str:
     return f"{files} file{'s' * (files != 1)} in {folders + 1} folder{'s' * (folders > 0)}, {amount}"
 
 
+def _owned_names(folder: Path, has_marker: bool, written_by: str) -> set[str] | str:
+    """The names ``written_by`` wrote into ``folder`` by its marker (or, for a sample sequence
+    from before markers, by its manifest); a string saying why the folder is not its own."""
+    if has_marker:
+        try:
+            data = json.loads((folder / MARKER).read_text(encoding="utf-8"))
+            contents = set(data["contents"])
+            writer = str(data["written_by"])
+        except (OSError, ValueError, KeyError, TypeError):
+            return f"its marker {MARKER} is damaged"
+        if writer != written_by:
+            return f"it holds the output of `{writer}`, which `{written_by}` does not replace"
+        return contents
+    try:
+        manifest = json.loads((folder / "manifest.json").read_text(encoding="utf-8"))
+        legacy = isinstance(manifest, dict) and {"sample", "fingerprint"} <= manifest.keys()
+    except (OSError, ValueError):
+        legacy = False
+    if legacy and written_by == _LEGACY_WRITER:
+        return _LEGACY_SEQUENCE
+    return "it was not written by this program"
+
+
 def foreign_content(folder: Path, written_by: str) -> str | None:
     """None if ``folder`` is empty or holds only what the command ``written_by`` wrote there;
     else why not, in a few words."""
@@ -117,26 +140,9 @@ def foreign_content(folder: Path, written_by: str) -> str | None:
         return f"cannot be listed ({exc.strerror or exc})"
     if not entries:
         return None
-    marker = folder / MARKER
-    if MARKER in entries:
-        try:
-            data = json.loads(marker.read_text(encoding="utf-8"))
-            contents = set(data["contents"])
-            writer = str(data["written_by"])
-        except (OSError, ValueError, KeyError, TypeError):
-            return f"its marker {MARKER} is damaged"
-        if writer != written_by:
-            return f"it holds the output of `{writer}`, which `{written_by}` does not replace"
-    else:
-        try:
-            manifest = json.loads((folder / "manifest.json").read_text(encoding="utf-8"))
-            legacy = isinstance(manifest, dict) and {"sample", "fingerprint"} <= manifest.keys()
-        except (OSError, ValueError):
-            legacy = False
-        if legacy and written_by == _LEGACY_WRITER:
-            contents = _LEGACY_SEQUENCE
-        else:
-            return "it was not written by this program"
+    contents = _owned_names(folder, MARKER in entries, written_by)
+    if isinstance(contents, str):
+        return contents
     for name, entry in sorted(entries.items()):
         if name == MARKER:
             continue
@@ -147,6 +153,36 @@ def foreign_content(folder: Path, written_by: str) -> str | None:
                 if not (inner.is_file(follow_symlinks=False) and _FRAME_FILE.fullmatch(inner.name)):
                     return f"it holds {name}/{inner.name}, which this program did not write"
     return None
+
+
+def _check_inputs(real: Path, inputs, label: str) -> None:
+    """``real`` is none of ``inputs``, above none and inside none."""
+    for given in inputs:
+        source = Path(given).resolve()
+        if real == source:
+            raise OutputError(f"{label}: is the input sequence; choose another output folder")
+        if _contains(real, source):
+            raise OutputError(f"{label}: holds the input sequence {source}; choose another output folder")
+        if _contains(source, real):
+            raise OutputError(
+                f"{label}: lies inside the input sequence {source}; choose another output folder"
+            )
+
+
+def _check_guarded(real: Path, keep: dict | None, label: str) -> None:
+    """``real`` is not and holds neither this package, the current or home folder, nor ``keep``."""
+    guarded = {Path(__file__).resolve().parent: "this package"}
+    for where, what in ((Path.cwd, "the current folder"), (Path.home, "your home folder")):
+        try:
+            guarded[where().resolve()] = what
+        except (OSError, RuntimeError):  # no current folder (deleted) or no home
+            pass
+    for folder, what in (keep or {}).items():
+        guarded.setdefault(Path(folder).resolve(), what)
+    for folder, what in guarded.items():
+        if _contains(real, folder):
+            is_or_holds = "is" if real == folder else "holds"
+            raise OutputError(f"{label}: {is_or_holds} {what}; choose another output folder")
 
 
 def check_target(
@@ -163,36 +199,16 @@ def check_target(
     ``inputs`` are folders read by the command: ``target`` may not be one of them, above one, or
     inside one. ``keep`` maps folders never replaced, even with ``force``, to what they are (the
     current folder, the home folder and this package are always among them). Returns, when
-    ``force`` replaces a folder this package did not write, what is replaced (path, size and
-    why); otherwise None.
+    ``force`` replaces a folder that is not ``written_by``'s own, what is replaced (path, size
+    and why); otherwise None.
     """
     label = f"{option} {target}" if option else str(target)
     path = Path(target)
     if path.is_symlink() and not path.exists():
         raise OutputError(f"{label}: a symbolic link to {os.readlink(path)}, which does not exist")
     real = path.resolve()
-    for given in inputs:
-        source = Path(given).resolve()
-        if real == source:
-            raise OutputError(f"{label}: is the input sequence; choose another output folder")
-        if _contains(real, source):
-            raise OutputError(f"{label}: holds the input sequence {source}; choose another output folder")
-        if _contains(source, real):
-            raise OutputError(
-                f"{label}: lies inside the input sequence {source}; choose another output folder"
-            )
-    guarded = {Path(__file__).resolve().parents[1]: "this package"}
-    for where, what in ((Path.cwd, "the current folder"), (Path.home, "your home folder")):
-        try:
-            guarded[where().resolve()] = what
-        except (OSError, RuntimeError):  # no current folder (deleted) or no home
-            pass
-    for folder, what in (keep or {}).items():
-        guarded.setdefault(Path(folder).resolve(), what)
-    for folder, what in guarded.items():
-        if _contains(real, folder):
-            is_or_holds = "is" if real == folder else "holds"
-            raise OutputError(f"{label}: {is_or_holds} {what}; choose another output folder")
+    _check_inputs(real, inputs, label)
+    _check_guarded(real, keep, label)
     if not real.exists():
         above = real.parent
         while not above.exists() and above != above.parent:

@@ -392,6 +392,34 @@ class _Dask:
             self.cluster.close()
 
 
+def _run_missing(runner, experiment, todo, context, need_setup, folder, done, result, progress) -> None:
+    """Run the tasks ``todo`` on ``runner``, each finished row appended to ``folder`` at once and
+    recorded in ``done`` and ``result.ran``; a bar on stderr counts them against the whole grid."""
+    from tqdm import tqdm
+
+    total = len(result.reused) + len(todo)
+    bar = tqdm(
+        total=total,
+        initial=len(result.reused),
+        desc=f"sweep {experiment.name}",
+        unit="run",
+        disable=(not sys.stderr.isatty()) if progress is None else not progress,
+        file=sys.stderr,
+    )
+    try:
+        for params, outcome in runner.run(experiment, todo, context, need_setup):
+            key = task_key(experiment.name, params)
+            row = {"key": key, "params": params, **outcome}
+            folder.append(row)
+            done[key] = row
+            result.ran.append(key)
+            bar.update()
+            if outcome[ERROR]:
+                bar.write(f"failed: {params}: {outcome[ERROR]}", file=sys.stderr)
+    finally:
+        bar.close()
+
+
 def run_sweep(
     experiment: Experiment,
     tasks: Sequence[dict],
@@ -411,8 +439,6 @@ def run_sweep(
     ``progress``: a tqdm bar on stderr (default: when stderr is a terminal).
     ``client``: a ``distributed.Client`` to use (left open) instead of ``workers``/``scheduler``.
     """
-    from tqdm import tqdm
-
     tasks = [{k: _plain(v) for k, v in t.items()} for t in tasks]
     keys = [task_key(experiment.name, t) for t in tasks]
     if len(set(keys)) != len(keys):
@@ -429,6 +455,7 @@ def run_sweep(
             runner.close()
         raise
     result = SweepResult(experiment.name, [], path=folder.path / TABLE)
+    done: dict[str, dict] = {}
     try:
         done = {k: r for k, r in folder.finished().items() if not r.get(ERROR)}
         todo = [t for t, k in zip(tasks, keys, strict=True) if k not in done]
@@ -440,26 +467,7 @@ def run_sweep(
                 runner = _Serial() if workers == 1 else _Dask(workers, None)
             result.workers = runner.label
             need_setup = context is None and experiment.setup is not None
-            bar = tqdm(
-                total=len(tasks),
-                initial=len(tasks) - len(todo),
-                desc=f"sweep {experiment.name}",
-                unit="run",
-                disable=(not sys.stderr.isatty()) if progress is None else not progress,
-                file=sys.stderr,
-            )
-            try:
-                for params, outcome in runner.run(experiment, todo, context, need_setup):
-                    key = task_key(experiment.name, params)
-                    row = {"key": key, "params": params, **outcome}
-                    folder.append(row)
-                    done[key] = row
-                    result.ran.append(key)
-                    bar.update()
-                    if outcome[ERROR]:
-                        bar.write(f"failed: {params}: {outcome[ERROR]}", file=sys.stderr)
-            finally:
-                bar.close()
+            _run_missing(runner, experiment, todo, context, need_setup, folder, done, result, progress)
     finally:
         if runner is not None:
             runner.close()

@@ -58,6 +58,30 @@ def rotation_problem(R: np.ndarray) -> str | None:
     return None
 
 
+def _row(path: Path, n: int, line: str, first: tuple[int, int] | None) -> list[float]:
+    """The numbers of line ``n``, checked: as many as the ``first`` row's (its count and line),
+    finite, a rotation or a non-zero quaternion, a position within :data:`MAX_POSITION`."""
+    try:
+        values = [float(v) for v in line.split()]
+    except ValueError:
+        raise TrajectoryError(f"{path}, line {n}: not a row of numbers") from None
+    if len(values) not in (8, 12) or (first and len(values) != first[0]):
+        expected = f"{first[0]} numbers like line {first[1]}" if first else "12 numbers (KITTI) or 8 (TUM)"
+        raise TrajectoryError(f"{path}, line {n}: expected {expected}, got {len(values)}")
+    if not np.all(np.isfinite(values)):
+        raise TrajectoryError(f"{path}, line {n}: holds a NaN or infinite value")
+    position = values[3::4] if len(values) == 12 else values[1:4]
+    if len(values) == 12:
+        problem = rotation_problem(np.reshape(values, (3, 4))[:, :3])
+    else:
+        problem = None if np.max(np.abs(values[4:8])) > 1e-6 else "the quaternion qx qy qz qw is zero"
+    if not problem and np.max(np.abs(position)) > MAX_POSITION:
+        problem = f"a position beyond {MAX_POSITION:g} m"
+    if problem:
+        raise TrajectoryError(f"{path}, line {n}: {problem}")
+    return values
+
+
 def _check_increasing(path: Path, times: np.ndarray, lines: list[int]) -> None:
     """TUM timestamps must increase strictly (as ``times.txt``'s do): a repeated or earlier one
     pairs two poses with one time."""
@@ -93,27 +117,7 @@ def read_trajectory(path, min_poses: int = 1) -> tuple[np.ndarray | None, np.nda
     for n, line in enumerate(text.split("\n"), start=1):
         if not line.strip() or line.lstrip().startswith("#"):
             continue
-        try:
-            values = [float(v) for v in line.split()]
-        except ValueError:
-            raise TrajectoryError(f"{path}, line {n}: not a row of numbers") from None
-        if len(values) not in (8, 12) or (rows and len(values) != len(rows[0])):
-            expected = (
-                f"{len(rows[0])} numbers like line {lines[0]}" if rows else "12 numbers (KITTI) or 8 (TUM)"
-            )
-            raise TrajectoryError(f"{path}, line {n}: expected {expected}, got {len(values)}")
-        if not np.all(np.isfinite(values)):
-            raise TrajectoryError(f"{path}, line {n}: holds a NaN or infinite value")
-        position = values[3::4] if len(values) == 12 else values[1:4]
-        if len(values) == 12:
-            problem = rotation_problem(np.reshape(values, (3, 4))[:, :3])
-        else:
-            problem = None if np.max(np.abs(values[4:8])) > 1e-6 else "the quaternion qx qy qz qw is zero"
-        if not problem and np.max(np.abs(position)) > MAX_POSITION:
-            problem = f"a position beyond {MAX_POSITION:g} m"
-        if problem:
-            raise TrajectoryError(f"{path}, line {n}: {problem}")
-        rows.append(values)
+        rows.append(_row(path, n, line, (len(rows[0]), lines[0]) if rows else None))
         lines.append(n)
     if len(rows) < max(min_poses, 1):
         if not rows:

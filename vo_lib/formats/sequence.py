@@ -43,7 +43,7 @@ import cv2
 import numpy as np
 
 from vo_lib.camera import StereoCamera
-from vo_lib.formats.poses import ROTATION_TOLERANCE, rotation_problem
+from vo_lib.formats.poses import TrajectoryError, read_trajectory
 from vo_lib.geometry import as_homogeneous
 from vo_lib.outputs import OutputError, OutputFolder
 
@@ -136,17 +136,15 @@ def read_rows(path: Path, count: int, what: str) -> np.ndarray:
 
 def read_poses(path: Path) -> np.ndarray:
     """``(N, 3, 4)`` poses of a KITTI ``poses.txt`` (12 numbers a line, a rotation then a
-    translation); raises :class:`SequenceError`."""
-    lines = _lines(path)
-    poses = np.array([_numbers(path, n, text, 12, "a 3x4 pose") for n, text in lines]).reshape(-1, 3, 4)
-    R = poses[:, :, :3]
-    with np.errstate(all="ignore"):  # huge entries overflow: not rotations either
-        off = np.max(np.abs(R.transpose(0, 2, 1) @ R - np.eye(3)), axis=(1, 2), initial=0.0)
-        bad = ~(off <= ROTATION_TOLERANCE) | (np.linalg.det(R) < 0) if len(R) else off > 0
-    if np.any(bad):
-        k = int(np.argmax(bad))
-        raise SequenceError(f"{path}, line {lines[k][0]}: {rotation_problem(R[k])}")
-    return poses
+    translation), read by :func:`vo_lib.formats.poses.read_trajectory`; raises
+    :class:`SequenceError`."""
+    try:
+        times, poses = read_trajectory(path)
+    except TrajectoryError as exc:
+        raise SequenceError(str(exc)) from None
+    if times is not None:
+        raise SequenceError(f"{path}: TUM rows (8 numbers); a sequence's poses.txt holds KITTI rows of 12")
+    return poses[:, :3, :]
 
 
 _DEVNULL: int | None = None  # a descriptor of os.devnull, opened on first use
