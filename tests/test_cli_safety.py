@@ -471,6 +471,13 @@ CASES = [
     Case(
         "generate-ours-again",
         [*GEN, "--out", "gen"],
+        2,
+        "--out gen: holds a sequence generated earlier",
+        lambda ws: main([*GEN, "--out", "gen"]),
+    ),
+    Case(
+        "generate-ours-again-force",
+        [*GEN, "--out", "gen", "--force"],
         0,
         "wrote gen",
         lambda ws: main([*GEN, "--out", "gen"]),
@@ -659,7 +666,7 @@ OWNERSHIP = [
     Case("run-over-a-legacy-sample", [*RUN, "--out", "old"], 2, "not written by this program", legacy_sample),
     Case(
         "generate-over-its-legacy-sample",
-        [*GEN, "--out", "old"],
+        [*GEN, "--out", "old", "--force"],
         0,
         "wrote old",
         legacy_sample,
@@ -771,7 +778,7 @@ def test_a_sequence_being_read_is_not_replaced(template, tmp_path, monkeypatch, 
         "try again when it has finished"
     ]
     assert checksums(ws, ()) == before and temporaries(ws) == []
-    assert invoke([*GEN, "--out", "gen"], capsys)[0] == 0  # once it is read no more
+    assert invoke([*GEN, "--out", "gen", "--force"], capsys)[0] == 0  # once it is read no more
 
 
 def test_run_holds_its_input_while_it_reads(template, tmp_path, monkeypatch, capsys):

@@ -6,7 +6,8 @@ The rules (every command that writes follows them):
   the marker file ``.vo_lib_output.json`` (which command wrote it, and the names it wrote) and
   holds nothing else. ``run`` replaces only a folder whose marker says ``vo_lib run``,
   ``generate`` only a generated sequence (``vo_lib generate``, or a sample sequence written
-  before markers existed, known by its ``manifest.json``), ``sweep NAME`` only a sweep of the
+  before markers existed, known by its ``manifest.json``; the command line asks for ``--force``
+  there too, as a sequence may be in use), ``sweep NAME`` only a sweep of the
   same experiment, which it resumes. A new or empty folder may always be written. Any other
   folder is refused with :class:`OutputError`, in one line naming what is there, unless the
   caller passes ``force``; even then a folder is never replaced if it is, holds or lies inside

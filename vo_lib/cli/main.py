@@ -202,6 +202,11 @@ def _generate(args) -> None:
 
     out = args.out or sample_path(args.name, args.frames, args.resolution)
     check_target(out, written_by="vo_lib generate", force=args.force, option="--out")  # before rendering
+    if args.out and not args.force and (Path(out) / "image_0").is_dir():  # ours, but a sequence
+        raise OutputError(
+            f"--out {args.out}: holds a sequence generated earlier, which something may still read; "
+            "add --force to generate it again"
+        )
     try:
         path = generate(
             args.name, out, args.frames, args.resolution, progress=sys.stderr.isatty(), force=args.force
