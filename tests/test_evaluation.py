@@ -173,3 +173,15 @@ def test_evaluate_prints_no_rotation_error_for_a_run_against_its_own_files(tmp_p
         outputs.append(capsys.readouterr().out)
     assert outputs[0] == outputs[1]
     assert "rotation rmse 0.0000 deg" in outputs[0] and "rotation 0.0000 deg/m" in outputs[0]
+
+
+def test_final_error_is_the_planar_end_point_against_the_planar_distance():
+    from vo_lib.evaluation import final_error
+
+    truth = np.array([[0.0, 0.0, 0.0], [3.0, 0.0, 0.0], [3.0, 4.0, np.pi / 2]])
+    est = np.array([[0.0, 0.0, 0.0], [3.0, 0.1, 0.0], [3.3, 4.4, np.pi / 2 + np.radians(179.0) * 2]])
+    final = final_error(truth, est)
+    assert final.distance_m == pytest.approx(7.0)
+    assert final.position_m == pytest.approx(0.5) and final.percent == pytest.approx(100 * 0.5 / 7.0)
+    assert final.heading_deg == pytest.approx(2.0)  # 358 deg of turn is 2 deg off, wrapped
+    assert np.isnan(final_error(truth[:1].repeat(2, axis=0), est[:2]).percent)

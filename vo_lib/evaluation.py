@@ -175,6 +175,29 @@ def is_spot_turn(poses_planar) -> bool:
     )
 
 
+@dataclass(frozen=True)
+class FinalError:
+    """Where a drive ends against where it truly ends: the one final error every command and
+    test reports. Planar vehicle poses ``(x, y, yaw)``; the distance is the truth's planar path."""
+
+    position_m: float
+    percent: float  # of the distance travelled; NaN if the truth does not move
+    heading_deg: float
+    distance_m: float
+
+
+def final_error(truth_planar, est_planar) -> FinalError:
+    """Final position error (metres, and per cent of the planar distance the truth travels) and
+    final heading error (degrees, wrapped) of planar trajectories ``(N, 3)``."""
+    g, e = np.asarray(truth_planar, float), np.asarray(est_planar, float)
+    _check_pair(g, e)
+    distance = planar_path_length(g)
+    position = float(np.hypot(*(e[-1, :2] - g[-1, :2])))
+    heading = float(np.degrees(np.abs(wrap_angle(e[-1, 2] - g[-1, 2]))))
+    percent = 100.0 * position / distance if distance > 0 else float("nan")
+    return FinalError(position, percent, heading, distance)
+
+
 def kitti_segment_errors(gt, est, lengths=(100, 200, 300, 400, 500, 600, 700, 800), step: int = 10) -> dict:
     """KITTI odometry errors per segment length: ``{length: (translation %, rotation deg/m, count)}``.
 

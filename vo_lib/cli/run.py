@@ -23,7 +23,14 @@ from pathlib import Path
 
 import numpy as np
 
-from vo_lib.evaluation import ate_planar, is_spot_turn, kitti_segment_errors, rpe, turned_degrees
+from vo_lib.evaluation import (
+    ate_planar,
+    final_error,
+    is_spot_turn,
+    kitti_segment_errors,
+    rpe,
+    turned_degrees,
+)
 from vo_lib.formats.poses import read_trajectory, write_kitti_poses, write_tum
 from vo_lib.geometry import camera_poses_from_planar, planar_from_camera_poses, wrap_angle
 from vo_lib.outputs import OutputFolder, notice, reading
@@ -142,7 +149,7 @@ def truth_and_odometry(seq, vehicle, frames: int):
 def error_report(result: PipelineResult, truth_planar: np.ndarray, odometry_planar=None) -> dict:
     """Errors of the estimate (and of odometry alone) against the ground truth."""
     est = result.poses
-    dist = float(np.sum(np.linalg.norm(np.diff(truth_planar[:, :2], axis=0), axis=1)))
+    dist = final_error(truth_planar, est).distance_m
     report = {
         "distance_m": dist,
         "turned_deg": turned_degrees(truth_planar),
@@ -151,15 +158,15 @@ def error_report(result: PipelineResult, truth_planar: np.ndarray, odometry_plan
     for label, traj in (("vo", est), ("odometry", odometry_planar)):
         if traj is None:
             continue
-        final = float(np.linalg.norm(traj[-1, :2] - truth_planar[-1, :2]))
+        final = final_error(truth_planar, traj)
         heading = np.degrees(np.abs(wrap_angle(traj[:, 2] - truth_planar[:, 2])))
         report[label] = {
-            "final_position_error_m": final,
-            "final_position_error_pct": 100 * final / dist if not report["spot_turn"] and dist > 0 else None,
+            "final_position_error_m": final.position_m,
+            "final_position_error_pct": final.percent if not report["spot_turn"] and dist > 0 else None,
             "ate_rmse_m": ate_planar(truth_planar, traj)[0].rmse,
             "heading_error_mean_deg": float(heading.mean()),
             "heading_error_max_deg": float(heading.max()),
-            "final_heading_error_deg": float(heading[-1]),
+            "final_heading_error_deg": final.heading_deg,
         }
     return report
 

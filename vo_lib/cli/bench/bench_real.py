@@ -24,14 +24,16 @@ def realdata_folders() -> list[Path]:
     return sorted(p for p in root.iterdir() if (p / "image_0").is_dir())
 
 
-def _errors(truth, poses) -> tuple[float, str]:
-    from vo_lib.evaluation import kitti_segment_errors
+def _errors(truth, poses, mount) -> tuple[float, str]:
+    """The final error as ``run`` prints it (:func:`vo_lib.evaluation.final_error`, the car's
+    planar pose through the camera ``mount``), in per cent, and the segment errors."""
+    from vo_lib.evaluation import final_error, kitti_segment_errors
+    from vo_lib.geometry import planar_from_camera_poses
 
-    distance = float(np.sum(np.linalg.norm(np.diff(truth[:, :3, 3], axis=0), axis=1)))
-    final = 100 * float(np.linalg.norm(poses[-1, :3, 3] - truth[-1, :3, 3])) / distance
+    final = final_error(planar_from_camera_poses(truth, mount), planar_from_camera_poses(poses, mount))
     segments = kitti_segment_errors(truth, poses, SEGMENTS, step=1)
     text = ", ".join(f"{length:g} m: {t:.2f} %" for length, (t, _, _) in segments.items())
-    return final, text or "no segment fits"
+    return final.percent, text or "no segment fits"
 
 
 def bench_real(folders=None) -> dict[str, float]:
@@ -41,6 +43,7 @@ def bench_real(folders=None) -> dict[str, float]:
     from vo_lib.formats.sequence import read_sequence
     from vo_lib.stereo_vo.pipeline import run_sequence
     from vo_lib.stereo_vo.pnp_baseline import run_pnp_baseline
+    from vo_lib.stereo_vo.vehicle import vehicle_of
 
     folders = [Path(f) for f in folders] if folders else realdata_folders()
     if not folders:
@@ -68,7 +71,7 @@ def bench_real(folders=None) -> dict[str, float]:
         truth = seq.poses_4x4()
         if truth is not None:
             for name, poses in (("ours", ours.camera_poses), ("PnP baseline", base.camera_poses)):
-                final, segments = _errors(truth, poses)
+                final, segments = _errors(truth, poses, vehicle_of(seq, use_odometry=False).mount)
                 print(f"  {name:<14s} final error {final:.3f} % of the distance; segments {segments}")
                 out[f"{folder.name}:{name}:final_pct"] = final
         print(f"  frames flagged: {len(ours.flagged)}")
