@@ -124,9 +124,10 @@ def test_scheduler_address(monkeypatch):
     assert scheduler_address(None) is None
     assert scheduler_address("tcp://10.0.0.5:8786") == "tcp://10.0.0.5:8786"
     assert scheduler_address("node7:8786") == "tcp://node7:8786"
+    assert scheduler_address(" tls://[::1]:8786 ") == "tls://[::1]:8786"
     monkeypatch.setenv("DASK_SCHEDULER_ADDRESS", "tcp://head:8786")
     assert scheduler_address(None) == "tcp://head:8786"
-    for bad in ("nonsense", "tcp://host", "tcp://host:99999", "http://host:80/x"):
+    for bad in ("nonsense", "tcp://host", "tcp://host:99999", "http://host:80/x", "a b:5", "tcp://h:0"):
         with pytest.raises(SweepError, match="expected a scheduler address"):
             scheduler_address(bad)
 

@@ -32,7 +32,6 @@ import itertools
 import json
 import math
 import os
-import re
 import sys
 import time
 import traceback
@@ -59,7 +58,6 @@ SECONDS, ERROR = "seconds", "error"
 SUBMIT_WINDOW = 64
 #: Seconds allowed to reach an existing scheduler.
 CONNECT_TIMEOUT = 10.0
-_ADDRESS = re.compile(r"(?:(tcp|tls|ws|wss|ucx)://)?(\[[0-9a-fA-F:]+\]|[A-Za-z0-9_.\-]+):(\d{1,5})")
 
 
 class SweepError(ValueError):
@@ -239,15 +237,25 @@ def _cell(value):
 
 
 def scheduler_address(given: str | None) -> str | None:
-    """The scheduler to use: ``given``, else ``DASK_SCHEDULER_ADDRESS``, else None (local)."""
+    """The scheduler to use: ``given``, else ``DASK_SCHEDULER_ADDRESS``, else None (local).
+
+    Read by Dask's own address parser (``distributed.comm.addressing``): a scheme Dask knows
+    (``tcp://`` when none is given), a host and a port in 1..65535; anything else is one line."""
+    from distributed.comm.addressing import parse_address, parse_host_port, unparse_address
+    from distributed.comm.registry import backends
+
     address = given if given is not None else os.environ.get("DASK_SCHEDULER_ADDRESS") or None
     if address is None:
         return None
     option = "--scheduler" if given is not None else "DASK_SCHEDULER_ADDRESS"
-    match = _ADDRESS.fullmatch(address.strip())
-    if not match or not 0 < int(match.group(3)) < 65536:
-        raise SweepError(f"{option} {address!r}: expected a scheduler address like tcp://host:8786")
-    return address.strip() if match.group(1) else f"tcp://{address.strip()}"
+    try:
+        scheme, location = parse_address(address.strip())
+        _, port = parse_host_port(location)
+        if scheme not in backends or not 0 < port < 65536 or any(c.isspace() for c in location):
+            raise ValueError(address)
+    except (ValueError, TypeError):
+        raise SweepError(f"{option} {address!r}: expected a scheduler address like tcp://host:8786") from None
+    return unparse_address(scheme, location)
 
 
 def default_workers() -> int:
