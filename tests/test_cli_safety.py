@@ -1172,3 +1172,13 @@ def test_frames_beyond_a_sample_ask_for_the_whole_sample_with_a_notice(tmp_path,
     assert input_path("corridor", 10_000) == (sample_path("corridor"), None)
     err = capsys.readouterr().err.strip().splitlines()
     assert err == ["notice: --frames 10000: sample corridor has 541 frames; running all 541"]
+
+
+def test_the_package_is_never_an_output_folder(tmp_path, monkeypatch):
+    """Checked without writing: the package folder and a folder holding it are refused, forced."""
+    from vo_lib.outputs import OutputError, check_target
+
+    monkeypatch.chdir(tmp_path)
+    for target, phrase in ((ROOT / "vo_lib", "is this package"), (ROOT, "holds this package")):
+        with pytest.raises(OutputError, match=phrase):
+            check_target(target, written_by="vo_lib run", force=True)
