@@ -1182,3 +1182,32 @@ def test_the_package_is_never_an_output_folder(tmp_path, monkeypatch):
     for target, phrase in ((ROOT / "vo_lib", "is this package"), (ROOT, "holds this package")):
         with pytest.raises(OutputError, match=phrase):
             check_target(target, written_by="vo_lib run", force=True)
+
+
+def test_claim_folder_for_a_folder_kept_over_many_runs(tmp_path, monkeypatch):
+    """A build folder (kept, updated) is claimed when new, empty or claimed by the same command;
+    a user's folder, another command's and a damaged marker are refused in one line, unchanged."""
+    from vo_lib.outputs import OutputError, claim_folder, read_marker
+
+    monkeypatch.chdir(tmp_path)
+    site = claim_folder(tmp_path / "site", "docs build", option="--out")
+    (site / "cache.db").write_text("kept\n")
+    assert claim_folder(tmp_path / "site", "docs build") == site  # again: its own, whatever it holds
+    assert read_marker(site)["written_by"] == "docs build" and (site / "cache.db").is_file()
+    with pytest.raises(OutputError, match="holds the output of `docs build`"):
+        claim_folder(tmp_path / "site", "coursework build")
+    (tmp_path / "mine").mkdir()
+    (tmp_path / "mine" / "notes.txt").write_text("mine\n")
+    with pytest.raises(OutputError, match="not written by this program; choose another folder"):
+        claim_folder(tmp_path / "mine", "docs build", option="--out")
+    (site / MARKER).write_text("{damaged")
+    with pytest.raises(OutputError, match="marker .vo_lib_output.json is damaged"):
+        claim_folder(site, "docs build")
+    assert (tmp_path / "mine" / "notes.txt").read_text() == "mine\n" and (site / "cache.db").is_file()
+
+    def denied(self, *args, **kwargs):  # a folder the user may not write (root may write anywhere)
+        raise PermissionError(13, "Permission denied", str(self))
+
+    monkeypatch.setattr(Path, "mkdir", denied)
+    with pytest.raises(OutputError, match=r"--out new: cannot write there \(Permission denied\)"):
+        claim_folder("new", "docs build", option="--out")

@@ -59,6 +59,10 @@ _FRAME_FILE = re.compile(r"\d+\.png")
 _TEMPORARY = re.compile(r"\..+\.vo_lib-(\d+)-([0-9a-f]{8})-[^/]*\.(?:tmp|old)")
 
 
+#: The contents a marker of :func:`claim_folder` lists: whatever the command keeps there.
+ANY_CONTENTS = "*"
+
+
 class OutputError(ValueError):
     """An output folder that may not be written (it holds files this package did not write)."""
 
@@ -115,7 +119,8 @@ def _owned_names(folder: Path, has_marker: bool, written_by: str) -> set[str] | 
     if has_marker:
         try:
             data = json.loads((folder / MARKER).read_text(encoding="utf-8"))
-            contents = set(data["contents"])
+            contents = data["contents"]
+            contents = ANY_CONTENTS if contents == ANY_CONTENTS else set(contents)
             writer = str(data["written_by"])
         except (OSError, ValueError, KeyError, TypeError):
             return f"its marker {MARKER} is damaged"
@@ -142,6 +147,8 @@ def foreign_content(folder: Path, written_by: str) -> str | None:
     if not entries:
         return None
     contents = _owned_names(folder, MARKER in entries, written_by)
+    if contents == ANY_CONTENTS:  # a folder claimed whole (claim_folder): all in it is the command's
+        return None
     if isinstance(contents, str):
         return contents
     for name, entry in sorted(entries.items()):
@@ -229,6 +236,27 @@ def check_target(
             f"{label}: the folder exists and {why}; choose another folder, or add --force to replace it"
         )
     return f"{real} ({_describe(real)}; {why})"
+
+
+def claim_folder(target, written_by: str, *, force: bool = False, option: str | None = None) -> Path:
+    """Make ``target`` a folder that the command ``written_by`` keeps and updates over many runs
+    (a build folder with its caches), rather than one written whole: it must be new, empty, or
+    claimed by the same command before (``force`` claims any other folder, under the rules of
+    :func:`check_target`). The folder is created and marked; returns its resolved path. Anything
+    that prevents it (a file there, no permission, a damaged marker) is one :class:`OutputError`.
+    """
+    replacing = check_target(target, written_by=written_by, force=force, option=option)
+    label = f"{option} {target}" if option else str(target)
+    real = Path(target).resolve()
+    try:
+        real.mkdir(parents=True, exist_ok=True)
+        marker = {"written_by": written_by, "contents": ANY_CONTENTS}
+        write_atomic(real / MARKER, json.dumps(marker, indent=2, sort_keys=True) + "\n")
+    except OSError as exc:
+        raise OutputError(f"{label}: cannot write there ({exc.strerror or exc})") from None
+    if replacing:
+        notice(f"--force: claimed {replacing}; what it holds may be overwritten")
+    return real
 
 
 @contextlib.contextmanager
