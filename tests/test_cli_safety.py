@@ -1211,3 +1211,25 @@ def test_claim_folder_for_a_folder_kept_over_many_runs(tmp_path, monkeypatch):
     monkeypatch.setattr(Path, "mkdir", denied)
     with pytest.raises(OutputError, match=r"--out new: cannot write there \(Permission denied\)"):
         claim_folder("new", "docs build", option="--out")
+
+
+def test_a_full_disk_during_a_run_names_out_not_a_temporary(template, tmp_path, monkeypatch, capsys):
+    """No space left while `run` writes its files: one line naming --out, nothing left behind."""
+    import errno
+
+    import vo_lib.cli.run as run_module
+
+    ws = tmp_path / "ws"
+    shutil.copytree(template, ws, symlinks=True)
+    monkeypatch.chdir(ws)
+
+    def full(path, *args):
+        raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), str(path))
+
+    monkeypatch.setattr(run_module, "write_tum", full)
+    before = checksums(ws, ())
+    code, out, err = invoke([*RUN, "--out", "out"], capsys)
+    assert code == 2 and err.strip().splitlines() == [
+        "python -m vo_lib run: error: --out out: no space left on device; nothing was written"
+    ]
+    assert not (ws / "out").exists() and temporaries(ws) == [] and checksums(ws, ()) == before

@@ -17,6 +17,7 @@ Ctrl-C (SIGINT) or SIGTERM removes what was half-written, prints one line and ex
 from __future__ import annotations
 
 import argparse
+import errno
 import math
 import signal
 import sys
@@ -194,6 +195,17 @@ def _signal_inside(exc: BaseException) -> BaseException | None:
     return None
 
 
+def _os_error(exc: OSError, out) -> str:
+    """What went wrong, named by what the user gave: a file of a temporary output folder (removed
+    by now) is named by ``--out``, and a full disk is said in words."""
+    why = "no space left on device" if exc.errno == errno.ENOSPC else (exc.strerror or str(exc))
+    if exc.filename and ".vo_lib-" not in str(exc.filename):
+        return f"{exc.filename}: {why}"
+    if out:
+        return f"--out {out}: {why}; nothing was written"
+    return why
+
+
 def _generate(args) -> None:
     from vo_lib.cli.run import UsageError
     from vo_lib.data import sample_path
@@ -279,8 +291,9 @@ def main(argv: list[str] | None = None) -> int:
             print(f"{command}: error: {one_line(exc)}", file=sys.stderr)
             return 2
         except OSError as exc:  # e.g. a full disk while writing: the output was not put in place
-            where = f"{exc.filename}: " if exc.filename else ""
-            print(f"{command}: error: {one_line(where + (exc.strerror or str(exc)))}", file=sys.stderr)
+            print(
+                f"{command}: error: {one_line(_os_error(exc, getattr(args, 'out', None)))}", file=sys.stderr
+            )
             return 2
         return 0
     except KeyboardInterrupt:
