@@ -204,9 +204,7 @@ def wide_margins(path: pathlib.Path) -> list[str]:
             factor, other = _literal_factor(left), _literal_factor(right)
         else:
             continue
-        loose = (factor is not None and factor >= _FACTOR) or (
-            other is not None and 0 < other <= 1 / _FACTOR
-        )
+        loose = (factor is not None and factor >= _FACTOR) or (other is not None and 0 < other <= 1 / _FACTOR)
         said = "#" in lines[node.lineno - 1] or lines[node.lineno - 2].lstrip().startswith("#")
         if loose and not said:
             bad.append(f"{path.name}:{node.lineno}: {lines[node.lineno - 1].strip()}")
