@@ -13,8 +13,8 @@ unless the number is
   with the reason it may be typed.
 
 A second check reads the asserts of every code cell: one that compares with a literal factor of
-three or more (``x < 3 * y``, ``x > y / 4``) must say why in a comment on its line or the line
-above, since an assert with an empty margin cannot fail.
+three or more (``x < 3 * y``, ``x > y / 4``) must say why, in its message or in a comment on its
+line or the line above, since an assert with an empty margin cannot fail.
 
 Each offending number is reported with its notebook and line.
 """
@@ -53,6 +53,10 @@ NUMBER_WITH_UNIT = re.compile(
 )
 #: A ratio written with the sign first: "×5", "x 10".
 RATIO_FIRST = re.compile(rf"(?<![\w\d])[×](?P<num>\s?{_NUM})(?![\w×])")
+#: A magnitude in scientific notation ("~1e-14", "10⁻¹²") states a measured size even without a unit.
+SCIENTIFIC = re.compile(
+    r"(?<![\w.])(?P<num>[~≈<>≤≥]?\s?(?:\d+(?:\.\d+)?[eE][−-]?\d+|(?:\d+(?:\.\d+)?\s?[·×]\s?)?10[⁻⁰¹²³⁴⁵⁶⁷⁸⁹]+))(?!\w)"
+)
 #: Grid sizes such as 4×4 or 3×3 panels are dimensions, not ratios.
 DIMENSION = re.compile(rf"{_NUM}\s?×\s?{_NUM}")
 #: Words by which a sentence says it quotes a paper.
@@ -67,7 +71,34 @@ RUN_TIME = re.compile(r"\s*\*\*Run time\*\*")
 #: Definitional constants typed in a notebook's prose: chosen parameters of the experiments, the
 #: robot's nominal geometry, conventional thresholds. Keyed by notebook stem, then by the number
 #: as written (with its unit), each with the reason it may be typed.
-CONSTANTS: dict[str, dict[str, str]] = {}
+CONSTANTS: dict[str, dict[str, str]] = {
+    "02_circular_motion_derivation": {
+        "5 cm": "the tolerance the exercise sets",
+        "0.3 m": "the camera offset the stretch goal prescribes",
+    },
+    "03_circular_motion_numeric_checks": {
+        "±20 °": "the range of the random turns drawn in section 1",
+        "±0.5 m": "the range of the random chords drawn in section 1",
+        "1.5–15 m": "the depth range of the synthetic matches",
+        "0.5 px": "the pixel noise chosen for the experiments",
+        "12 cm": "the baseline of the simulated Bumblebee2-like rig",
+        "15 m": "the far end of the chosen depth range",
+        "8 cm": "the chord of the chosen test motion",
+        "±300 px": "a widget setting suggested to the reader",
+        "3 °": "the turn the exercise prescribes",
+        "2 °": "the turn the exercise prescribes",
+        "0.3 m": "the camera offset the exercise prescribes",
+        "10 °": "the tilt the stretch goal prescribes",
+    },
+    "01_crawler_odometry": {
+        "1 cm": "the encoder noise chosen for the model, σ per square-root metre; also the exercise's step",
+        "360 °": "one full turn, by definition",
+        "10 %": "the slip the exercise prescribes",
+        "1,080 °": "three full turns, the recorded spot turns of the exercise",
+        "0.60 m": "the nominal gauge of the odometry model the exercise starts from",
+        "0.1 °": "the tolerance the exercise sets",
+    },
+}
 
 
 def _markdown_lines(path: pathlib.Path):
@@ -111,6 +142,8 @@ def numbers_in_prose(path: pathlib.Path):
             yield n, f"{_normalise(m['num'])} {m['unit']}".strip(), text
         for m in RATIO_FIRST.finditer(clean):
             yield n, f"×{_normalise(m['num'])}", text
+        for m in SCIENTIFIC.finditer(clean):
+            yield n, _normalise(m["num"]), text
 
 
 def offending_numbers(path: pathlib.Path, seeds: str) -> list[str]:
@@ -136,6 +169,7 @@ def test_the_guard_reads_numbers():
     none = "Five 4×4 panels, eq. 14, §6, 2D, 3 cameras, x_k, χ² with 3 degrees of freedom, π/9 rad/s."
     assert [f for _, f, _ in _numbers_of(none)] == []
     assert [f for _, f, _ in _numbers_of("a heading of 2° and ×5 faster")] == ["2 °", "×5"]
+    assert [f for _, f, _ in _numbers_of("θ and ρ to ~1e-14, or 10⁻¹²")] == ["~1e-14", "10⁻¹²"]
 
 
 def _numbers_of(sentence: str):
@@ -205,7 +239,11 @@ def wide_margins(path: pathlib.Path) -> list[str]:
         else:
             continue
         loose = (factor is not None and factor >= _FACTOR) or (other is not None and 0 < other <= 1 / _FACTOR)
-        said = "#" in lines[node.lineno - 1] or lines[node.lineno - 2].lstrip().startswith("#")
+        said = (
+            node.msg is not None
+            or "#" in lines[node.lineno - 1]
+            or lines[node.lineno - 2].lstrip().startswith("#")
+        )
         if loose and not said:
             bad.append(f"{path.name}:{node.lineno}: {lines[node.lineno - 1].strip()}")
     return bad
