@@ -58,7 +58,7 @@ SCIENTIFIC = re.compile(
     r"(?<![\w.])(?P<num>[~≈<>≤≥]?\s?(?:\d+(?:\.\d+)?[eE][−-]?\d+|(?:\d+(?:\.\d+)?\s?[·×]\s?)?10[⁻⁰¹²³⁴⁵⁶⁷⁸⁹]+))(?!\w)"
 )
 #: Grid sizes such as 4×4 or 3×3 panels are dimensions, not ratios.
-DIMENSION = re.compile(rf"{_NUM}\s?×\s?{_NUM}")
+DIMENSION = re.compile(rf"{_NUM}\s?×\s?(?:{_NUM}|[a-zA-Z]\b)")
 #: Words by which a sentence says it quotes a paper.
 CITES_PAPER = re.compile(
     r"paper|seed 00\d|Table\s+\d|Fig(?:ure|\.)\s*\d|reports?|authors|\bMonteiro|Zhao|Sun\b", re.I
@@ -89,6 +89,18 @@ CONSTANTS: dict[str, dict[str, str]] = {
         "2 °": "the turn the exercise prescribes",
         "0.3 m": "the camera offset the exercise prescribes",
         "10 °": "the tilt the stretch goal prescribes",
+    },
+    "07_kalman_fusion": {
+        "1e-12": "the tolerance the comparison is held to",
+        "1 %": "the slip per metre the filter's process noise assumes (SLIP_SIGMA)",
+        "18 °/s": "the turn rate of the simulated spot-turn drive",
+        "6 %": "the mean slip the simulated spot turn is given",
+        "0.5 px": "the pixel noise chosen for the synthetic matches",
+        "30 %": "the outlier share chosen for the synthetic matches",
+        "2 mm": "the sideways pseudo-measurement's σ, a chosen constant (SIDEWAYS_SIGMA)",
+        "95 %": "the confidence level of the χ² band, by choice",
+        "2.0 m": "a number the exercise sets",
+        "2.6 m": "a number the exercise sets",
     },
     "04_world_and_sequences": {
         "66 °": "the horizontal field of view chosen for the simulated camera",
@@ -151,17 +163,49 @@ def _bare(number: str) -> list[str]:
     return re.findall(r"\d+(?:[.,]\d+)*(?:[eE]-?\d+)?", _normalise(number))
 
 
-def numbers_in_prose(path: pathlib.Path):
-    """Yield (line, written form, sentence) for every unit-bearing number of the markdown cells."""
+def _paragraphs(path: pathlib.Path):
+    """The markdown prose as paragraphs: lists of (line number, text) of consecutive lines."""
+    paragraph: list[tuple[int, str]] = []
     for n, text in _markdown_lines(path):
-        clean = re.sub(r"\]\([^)]*\)", "]", text)  # link targets are addresses, not prose
-        clean = DIMENSION.sub(" ", clean)
-        for m in NUMBER_WITH_UNIT.finditer(clean):
-            yield n, f"{_normalise(m['num'])} {m['unit']}".strip(), text
-        for m in RATIO_FIRST.finditer(clean):
-            yield n, f"×{_normalise(m['num'])}", text
-        for m in SCIENTIFIC.finditer(clean):
-            yield n, _normalise(m["num"]), text
+        if paragraph and (n != paragraph[-1][0] + 1 or not text.strip()):
+            yield paragraph
+            paragraph = []
+        if text.strip():
+            paragraph.append((n, text))
+    if paragraph:
+        yield paragraph
+
+
+def _blank(m: re.Match) -> str:
+    return " " * len(m.group())  # keeps every offset in place
+
+
+def numbers_in_prose(path: pathlib.Path):
+    """Yield (line, written form, sentence) for every unit-bearing number of the markdown cells.
+
+    The sentence is the one the number stands in, read across line breaks, so that a figure on
+    the line after "the paper reports" is still the paper's.
+    """
+    for paragraph in _paragraphs(path):
+        joined, starts = "", []
+        for _, text in paragraph:
+            starts.append(len(joined))
+            joined += text + " "
+        ends = [m.end() for m in re.finditer(r"[.!?;:](?=\s+[A-Z(*•-])", joined)] + [len(joined)]
+        for (n, text), start in zip(paragraph, starts, strict=True):
+            clean = re.sub(r"\]\([^)]*\)", _blank, text)  # link targets are addresses, not prose
+            clean = DIMENSION.sub(_blank, clean)
+            found = [
+                (m.start(), f"{_normalise(m['num'])} {m['unit']}".strip())
+                for m in NUMBER_WITH_UNIT.finditer(clean)
+            ]
+            found += [(m.start(), f"×{_normalise(m['num'])}") for m in RATIO_FIRST.finditer(clean)]
+            found += [(m.start(), _normalise(m["num"])) for m in SCIENTIFIC.finditer(clean)]
+            for offset, form in sorted(found):
+                at = start + offset
+                end = next(e for e in ends if e > at)
+                begin = max([e for e in ends if e <= at], default=0)
+                yield n, form, joined[begin:end].strip()
 
 
 def offending_numbers(path: pathlib.Path, seeds: str) -> list[str]:
@@ -184,7 +228,7 @@ def test_the_guard_reads_numbers():
     """The extraction finds what a reader sees as a figure, and leaves what is not one."""
     found = [f for _, f, _ in _numbers_of("The wall is 9.6 m ahead, 38.8 % empty, ~10–20 bits, 4.9×.")]
     assert found == ["9.6 m", "38.8 %", "~10–20 bits", "4.9 ×"]
-    none = "Five 4×4 panels, eq. 14, §6, 2D, 3 cameras, x_k, χ² with 3 degrees of freedom, π/9 rad/s."
+    none = "Five 4×4 panels, a 2 × n matrix, eq. 14, §6, 2D, 3 cameras, x_k, χ² with 3 degrees of freedom, π/9 rad/s."
     assert [f for _, f, _ in _numbers_of(none)] == []
     assert [f for _, f, _ in _numbers_of("a heading of 2° and ×5 faster")] == ["2 °", "×5"]
     assert [f for _, f, _ in _numbers_of("θ and ρ to ~1e-14, or 10⁻¹²")] == ["~1e-14", "10⁻¹²"]
