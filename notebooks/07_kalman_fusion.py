@@ -483,7 +483,8 @@ for name, diag in (("spot_turn", spot_diagnostics), ("indoor_free", indoor_diagn
     band = chi2.ppf([0.025, 0.975], 3 * len(values)) / len(values)
     slip_nees[name] = (values.mean(), band)
     print(
-        f"{name:12s} time-averaged NEES {values.mean():8.2f}  (band if independent {band[0]:.2f}–{band[1]:.2f})"
+        f"{name:12s} time-averaged NEES {values.mean():8.2f}  "
+        f"(band if independent {band[0]:.2f}–{band[1]:.2f})"
     )
 
 
@@ -660,7 +661,8 @@ nis_run_means = nis_runs.mean(axis=1)
 nis_mean, nis_se = nis_run_means.mean(), nis_run_means.std(ddof=1) / math.sqrt(runs)
 print(f"per step: {inside:.0%} of the steps' run averages inside the band {lo:.2f}–{hi:.2f}")
 print(
-    f"NEES over runs and steps: {nees_mean:.2f} ± {nees_se:.2f} (standard error over {runs} runs); 3 if consistent"
+    f"NEES over runs and steps: {nees_mean:.2f} ± {nees_se:.2f} "
+    f"(standard error over {runs} runs); 3 if consistent"
 )
 print(f"NIS over runs and steps:  {nis_mean:.2f} ± {nis_se:.2f}; 2 if consistent")
 assert inside >= 0.9  # 95 % expected; a few steps may fall out
