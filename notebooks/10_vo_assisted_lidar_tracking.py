@@ -96,6 +96,8 @@ for ax, x in zip(axes, (3.0, 9.0, 16.0), strict=True):
     ax.set_xlim(x - 6, x + 10.5)
     ax.set_ylim(-2, 2)
 axes[0].legend(fontsize="x-small", loc="lower right")
+plt.show()
+
 # %% [markdown]
 # The tracker's score of a pose is the sum over beams of the likelihood field (value 1 on a mapped
 # wall, falling off with σ = 10 cm) at the beam's end point. Moving a pose along the corridor
