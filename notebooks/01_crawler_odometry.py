@@ -224,7 +224,6 @@ display(
 )
 
 # %% [markdown]
-#
 # ## 5 · How fast does dead-reckoning uncertainty grow?
 #
 # We model encoder noise as a random walk: each track's measured distance has variance
@@ -298,7 +297,6 @@ display(
 )
 
 # %% [markdown]
-#
 # ## 6 · Drive it yourself
 #
 # `drive` integrates constant track speeds for a while, with optional slip on the left track,

@@ -84,9 +84,10 @@ display(
 # Now every u, v and d carries Gaussian noise of 0.5 px. One match gives one θ; the spread of
 # these per-match estimates is what a 1-point RANSAC has to live with.
 #
-# To first order, with tan φ = N/(f_x D), N = (u′−u₀)(v−v₀) − (u−u₀)(v′−v₀) and D = v + v′ − 2v₀,
+# To first order, with tan φ = N_φ/(f_x D_φ), N_φ = (u′−u₀)(v−v₀) − (u−u₀)(v′−v₀) and
+# D_φ = v + v′ − 2v₀ (eq. 14's numerator and denominator; not the track distance D of eq. 4),
 #
-# $$\sigma_\theta \;\approx\; \frac{2\sigma}{f_x\,|D|}
+# $$\sigma_\theta \;\approx\; \frac{2\sigma}{f_x\,|D_\varphi|}
 #   \sqrt{(v-v_0)^2+(v'-v_0)^2+(u-u_0)^2+(u'-u_0)^2}\qquad(\text{small }\theta),$$
 #
 # implemented in full by `theta_standard_deviation`. The error is inversely proportional to the

@@ -250,7 +250,6 @@ display(
 )
 
 # %% [markdown]
-#
 # ## 6 · Try the knobs
 #
 # `front_end(threshold, max_features)` reruns the front end on the same pair and reports the

@@ -323,7 +323,6 @@ display(
 )
 
 # %% [markdown]
-#
 # ## 4 · A drive with slip: odometry vs VO vs fused
 #
 # We take the first 600 frames of the `spot_turn` sample (18°/s on the spot, 6 % slip that the

@@ -547,7 +547,6 @@ display(
 )
 
 # %% [markdown]
-#
 # ## 6. What the filter is told about a wall: feature point or line
 #
 # Section 1 of the paper describes a line feature by "the distance from the robot to the line and

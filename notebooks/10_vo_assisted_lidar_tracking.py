@@ -667,7 +667,6 @@ display(
 )
 
 # %% [markdown]
-#
 # Two honest caveats. When LBPT alone recovers by itself, its pose has drifted from the visual
 # odometer's anchor, so $T_s$ keeps flagging some correct frames until the widening band admits
 # them (the share is printed above). And the umbrella can *create* a false match: seen from
