@@ -279,7 +279,7 @@ print(
     f"full {np.sqrt(P_full[1, 1]) * 100:.2f} cm, F=I {np.sqrt(P_eq9[1, 1]) * 100:.2f} cm"
 )
 print(f"relative covariance error, full Jacobians: {rel_full:.1%}")
-assert rel_full < 0.10
+assert rel_full < 0.05  # 3,000 runs estimate a covariance to a few per cent
 assert P_eq9[1, 1] < 0.3 * mc_cov[1, 1]  # eq. 9 badly under-states the lateral uncertainty
 assert np.all(lateral[99:, 2] < 0.2 * lateral[99:, 0])  # by a factor above 5 from the first metre on
 understatement = lateral[-1, 0] / lateral[-1, 2]

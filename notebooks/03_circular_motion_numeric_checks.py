@@ -218,7 +218,7 @@ def theta_spread(v_offset_px=60.0, u_offset_px=100.0, depth_m=5.0, noise_px=0.5,
 
 
 sigma_mc, sigma_model = theta_spread()
-assert abs(sigma_mc / sigma_model - 1) < 0.15
+assert abs(sigma_mc / sigma_model - 1) < 0.05  # 5,000 draws: the MAD's own spread is about 2 %
 
 # %%
 spread_widget = offer(
@@ -331,7 +331,7 @@ ax.set_title("Spot turn, camera ahead of the axis: error share against scene dep
 ax.legend(fontsize="small")
 plt.show()
 for key, value in fraction.items():
-    assert abs(value / predicted_fraction[key] - 1) < 0.1
+    assert abs(value / predicted_fraction[key] - 1) < 0.01  # a per cent: the law holds to first order
 assert fraction[(0.3, 1.0)] > 4 * fraction[(0.3, 5.0)] > 4 * fraction[(0.3, 20.0)]
 spot_360 = 360 * fraction[(0.3, 1.5)]
 print(

@@ -278,7 +278,7 @@ for name, fe in front_ends.items():
         f" {np.median(theirs):10.3f} px"
     )
 ours, theirs, where = errors["pyramid (ORB)"]
-assert len(ours) >= 100
+assert len(ours) >= 100  # enough scored features for a median; the count is printed
 assert np.median(ours) <= np.median(theirs)  # at least as accurate as SGBM at the same pixels
 assert np.median(ours) <= np.median(errors["single scale (FAST)"][0])
 
@@ -353,7 +353,8 @@ for name, res in (("pyramid", vo_full), ("single scale", vo_single)):
     m, pct, hd = final_errors(res.poses)
     print(f"6-DoF pipeline, {name:12s} front end: final error {m:.3f} m ({pct:.2f} %), heading {hd:+.3f} deg")
 if REAL:
-    assert abs(heading_error["single scale"][-1]) > 3 * abs(heading_error["pyramid"][-1])
+    # the single-scale heading drifts: an order of magnitude beyond the pyramid's
+    assert abs(heading_error["single scale"][-1]) > 10 * abs(heading_error["pyramid"][-1])
 
 fig, ax = new_axes(width=7, height=3.4)
 for name, err in heading_error.items():
@@ -515,7 +516,8 @@ for model, res in runs.items():
         f"{len(res.flagged)} of {len(res.poses)} frames flagged {reasons or ''}"
     )
 if REAL:
-    assert final_errors(runs["full"].poses)[0] < 0.1 * final_errors(runs["planar"].poses)[0]
+    # two orders of magnitude apart: the planar pipeline coasts through most frames
+    assert final_errors(runs["full"].poses)[0] < 0.01 * final_errors(runs["planar"].poses)[0]
 else:
     assert final_errors(runs["planar"].poses)[1] <= 1.0  # where its assumptions hold, the paper's model works
 
@@ -914,8 +916,9 @@ for name, poses in paths.items():
         f"{name:13s}: final position error {m:6.3f} m ({pct:5.2f} %): {along[name]:+.3f} m along the track, "
         f"{across:+.3f} m across; heading {hd:+.3f} deg; path {length:.2f} m (truth {travelled:.2f} m)"
     )
-assert final["fused"][0] < final["odometry only"][0]
-assert final["VO only"][0] < final["odometry only"][0]
+# "vision beats the odometry alone": with vision the drive ends within a fifth of its error
+assert final["fused"][0] < 0.2 * final["odometry only"][0]
+assert final["VO only"][0] < 0.2 * final["odometry only"][0]
 if REAL:  # the fused distance leans towards the odometry's
     assert np.sign(along["fused"]) == np.sign(along["odometry only"])
     assert abs(along["fused"]) > abs(along["VO only"])
@@ -1057,7 +1060,7 @@ print(
 assert np.all(np.isfinite(pnp.camera_poses)) and len(pnp.milliseconds) == n_pnp
 if REAL:  # without odometry: under 0.5 % of the distance, 0.3 deg of heading, two frames flagged
     assert final_errors(ours.poses)[1] <= 0.5 and abs(final_errors(ours.poses)[2]) <= 0.3
-    assert len(ours.flagged) <= 2
+    assert len(ours.flagged) <= 2  # a count: at most two frames flagged on this drive
 own_planar = final_errors(ours.poses[:n_pnp])[0]
 projected = final_errors(planar_from_camera_poses(ours.camera_poses[:n_pnp], vehicle.mount))[0]
 display(
