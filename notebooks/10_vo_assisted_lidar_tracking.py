@@ -448,8 +448,8 @@ spread_t = temperature_rows[0.5][0] / temperature_rows[4.0][0]
 auc_range = [min(r[2] for r in temperature_rows.values()), max(r[2] for r in temperature_rows.values())]
 display(
     Markdown(
-        f"Between T = 0.5 and T = 4 the normal frames' median $V_{{max}} \\times n$ changes "
-        f"{spread_t:.1f}-fold, while the AUC of $V_{{max}}$ stays between {auc_range[0]:.3f} and "
+        f"Between T = 0.5 and T = 4 the normal frames' median V_max × n changes "
+        f"{spread_t:.1f}-fold, while the AUC of V_max stays between {auc_range[0]:.3f} and "
         f"{auc_range[1]:.3f}. The temperature hardly changes *which* frames look normal, but it "
         "changes every value a threshold is set on: thresholds calibrated at one temperature mean "
         "nothing at another, which is why ours are calibrated on the same scale the tracker uses."
@@ -661,7 +661,7 @@ assert y_share < 0.5  # our worst Y under half the paper's *mean* VOAPT Y
 # %%
 display(
     Markdown(
-        "Across the corridor both trackers are good: the walls fix $y$, which is why our Y errors "
+        "Across the corridor both trackers are good: the walls fix y, which is why our Y errors "
         f"are far smaller than the paper's: our worst is {y_share:.0%} of the paper's *mean* VOAPT "
         "Y error (its corridor and robot were real)."
     )
