@@ -105,7 +105,7 @@ assert np.allclose(centre_2[[0, 2]], drawn["C2"]) and abs(centre_2[1]) < 1e-15
 assert np.isclose(drawn["rho"], 2 * radius_icr * np.sin(turn / 2)) and np.isclose(drawn["phi"], turn / 2)
 lean = np.degrees(drawn_offset["phi"] - turn / 2)
 print(f"with the offset the chord leans {lean:.1f}° beyond θ/2: eq. 15's T no longer fits (notebook 03)")
-assert lean > 1.0
+assert lean > 5.0  # the drawing's geometry is exact: a clear lean, not a rounding
 
 # %% [markdown]
 # ## 2 · Eliminating ρ: eq. 12
@@ -261,11 +261,29 @@ for theta_true, rho_true in [(0.0, 0.10), (np.radians(3.0), 0.08), (np.radians(-
 # (ρ cos φ, ρ sin φ) in the previous robot frame. `vo_lib.stereo_vo.circular_motion.yaw_increment` and
 # `robot_increment` encode this; notebook 03 checks it against a simulated robot.
 
+#
+# We test the sign without eq. 15: a robot above whose turning axis the camera sits turns
+# **left** on the spot by a known positive yaw; the new camera frame is built from the robot frame
+# by the axis change alone (camera x = −robot y, camera y = −robot z, camera z = robot x). The
+# points are projected to pixels in both views, and eq. 14 must return θ = +yaw.
+
 # %%
-point_ahead = sp.Matrix([0, 0, z])
-moved = R * point_ahead
-assert sp.simplify(moved[0] - z * sp.sin(2 * phi)) == 0  # x' > 0 for small positive theta
-print("theta > 0: a point ahead moves right in the image -> the camera turned left -> yaw increment = +theta")
+yaw_left = np.radians(5.0)  # a left turn: counter-clockwise seen from above, positive yaw
+cam_from_robot = np.array([[0.0, -1.0, 0.0], [0.0, 0.0, -1.0], [1.0, 0.0, 0.0]])
+c, s_ = np.cos(yaw_left), np.sin(yaw_left)
+yaw_rotation = np.array([[c, -s_, 0.0], [s_, c, 0.0], [0.0, 0.0, 1.0]])
+points_robot = rng.uniform([3.0, -2.0, -0.45], [12.0, 2.0, -0.1], size=(200, 3))  # ahead, below
+points_after = points_robot @ yaw_rotation  # each row R_yawᵀ p: the same points, robot turned
+w_before = camera.project(points_robot @ cam_from_robot.T)
+w_after = camera.project(points_after @ cam_from_robot.T)
+theta_seen = cm.theta_from_pixels(w_before, w_after, camera)
+print(
+    f"robot yaw +{np.degrees(yaw_left):.1f}°: eq. 14 gives θ from {np.degrees(theta_seen.min()):.4f}°"
+    f" to {np.degrees(theta_seen.max()):.4f}°"
+)
+assert np.allclose(theta_seen, yaw_left, atol=1e-9)  # θ = +yaw: the sign, not only the size
+assert np.allclose(cm.yaw_increment(theta_seen), yaw_left, atol=1e-9)
+assert np.all(w_after[:, 0] > w_before[:, 0])  # every point moved right in the image
 
 # %% [markdown]
 # ## Summary

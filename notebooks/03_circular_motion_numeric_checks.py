@@ -37,6 +37,7 @@
 # %%
 import matplotlib.pyplot as plt
 import numpy as np
+from IPython.display import Markdown, display
 
 from vo_lib.camera import StereoCamera
 from vo_lib.geometry import camera_motion, camera_mount, compose_planar, wrap_angle
@@ -68,8 +69,14 @@ for _ in range(200):
     worst_rho = max(
         worst_rho, np.abs(cm.rho_from_pixels(m.w_prev, m.w_curr, theta_true, camera) - rho_true).max()
     )
-print(f"worst θ error {worst_theta:.1e} rad, worst ρ error {worst_rho:.1e} m over 200,000 matches")
 assert worst_theta <= 1e-9 and worst_rho <= 1e-9
+display(
+    Markdown(
+        f"Over 200,000 matches the worst θ error is {worst_theta:.1e} rad and the worst ρ error "
+        f"{worst_rho:.1e} m: machine precision, at the scale of the arithmetic's rounding of the "
+        "pixel coordinates (hundreds of pixels, a double's relative precision of about 2e-16)."
+    )
+)
 
 # %% [markdown]
 # ## 2 · Pixel noise: how large are the errors, and where?
@@ -77,9 +84,10 @@ assert worst_theta <= 1e-9 and worst_rho <= 1e-9
 # Now every u, v and d carries Gaussian noise of 0.5 px. One match gives one θ; the spread of
 # these per-match estimates is what a 1-point RANSAC has to live with.
 #
-# To first order, with tan φ = N/(f_x D), N = (u′−u₀)(v−v₀) − (u−u₀)(v′−v₀) and D = v + v′ − 2v₀,
+# To first order, with tan φ = N_φ/(f_x D_φ), N_φ = (u′−u₀)(v−v₀) − (u−u₀)(v′−v₀) and
+# D_φ = v + v′ − 2v₀ (eq. 14's numerator and denominator; not the track distance D of eq. 4),
 #
-# $$\sigma_\theta \;\approx\; \frac{2\sigma}{f_x\,|D|}
+# $$\sigma_\theta \;\approx\; \frac{2\sigma}{f_x\,|D_\varphi|}
 #   \sqrt{(v-v_0)^2+(v'-v_0)^2+(u-u_0)^2+(u'-u_0)^2}\qquad(\text{small }\theta),$$
 #
 # implemented in full by `theta_standard_deviation`. The error is inversely proportional to the
@@ -210,7 +218,7 @@ def theta_spread(v_offset_px=60.0, u_offset_px=100.0, depth_m=5.0, noise_px=0.5,
 
 
 sigma_mc, sigma_model = theta_spread()
-assert abs(sigma_mc / sigma_model - 1) < 0.15
+assert abs(sigma_mc / sigma_model - 1) < 0.05  # 5,000 draws: the MAD's own spread is about 2 %
 
 # %%
 spread_widget = offer(
@@ -281,7 +289,7 @@ assert results[(0.0, "arc 2°, 8 cm")] < 1e-9 and results[(0.0, "spot turn 2°")
 for motion in ("arc 2°, 8 cm", "spot turn 2°"):
     # the bias grows with the offset: several percent of the turn for 10 cm, over 10 % for 30 cm
     assert 0.02 * 2 < results[(0.1, motion)] < results[(0.3, motion)]
-    assert results[(0.3, motion)] > 0.08 * 2
+    assert results[(0.3, motion)] > 0.10 * 2  # over a tenth of the 2° turn
     # and is the same share of the turn for an arc and a spot turn
     assert abs(results[(0.3, motion)] / results[(0.3, "arc 2°, 8 cm")] - 1) < 0.1
 
@@ -323,18 +331,23 @@ ax.set_title("Spot turn, camera ahead of the axis: error share against scene dep
 ax.legend(fontsize="small")
 plt.show()
 for key, value in fraction.items():
-    assert abs(value / predicted_fraction[key] - 1) < 0.1
+    assert abs(value / predicted_fraction[key] - 1) < 0.01  # a per cent: the law holds to first order
 assert fraction[(0.3, 1.0)] > 4 * fraction[(0.3, 5.0)] > 4 * fraction[(0.3, 20.0)]
 spot_360 = 360 * fraction[(0.3, 1.5)]
 print(
     f"a full spot turn with the camera 0.3 m ahead, depths 1.5–15 m: about {spot_360:.0f}° of heading error"
 )
+display(
+    Markdown(
+        "The share of every turn that is lost is about the camera's offset divided by the typical "
+        f"depth of what it sees: {fraction[(0.3, 1.0)]:.0%} of the turn in a cluttered room 1–3 m "
+        f"deep, {fraction[(0.3, 20.0)]:.1%} in an open yard 20–60 m deep, for the same 30 cm offset "
+        "(the table above)."
+    )
+)
 
 # %% [markdown]
-# The share of every turn that is lost is about the camera's offset divided by the typical depth
-# of what it sees: a fifth of the turn in a cluttered room a metre or two deep, a percent in an
-# open yard tens of metres deep, for the same 30 cm offset (the table above). A spot turn is
-# nothing but turning, so it piles up heading error fastest (the last line). Our simulated rig
+# A spot turn is nothing but turning, so it piles up heading error fastest (the last line). Our simulated rig
 # (notebook 04) therefore mounts the camera above the turning axis. A real robot should too, or
 # its pipeline should model the offset (exercise 2). The paper blames its spot-turn heading errors
 # on unequal track grip; an offset camera would be a second suspect, and a worse one indoors than
@@ -342,7 +355,8 @@ print(
 #
 # ## Summary
 #
-# - Exact matches give θ and ρ to ~1e-14: the derived equations and their implementation agree.
+# - Exact matches give θ and ρ to machine precision (section 1 prints the worst errors): the
+#   derived equations and their implementation agree.
 # - With noise, θ from one match has σ ∝ 1/|v − v₀|: matches at the camera's height are useless,
 #   depth does not matter. ρ from one match has σ ∝ z²: far matches are useless.
 # - θ equals the robot's yaw increment, checked on a simulated robot; a camera ahead of the

@@ -47,6 +47,7 @@
 
 import matplotlib.pyplot as plt
 import numpy as np
+from IPython.display import Markdown, display
 
 from vo_lib.geometry import planar_from_camera_poses
 from vo_lib.lidar_tracking.corridor_experiment import (
@@ -96,6 +97,8 @@ for ax, x in zip(axes, (3.0, 9.0, 16.0), strict=True):
     ax.set_xlim(x - 6, x + 10.5)
     ax.set_ylim(-2, 2)
 axes[0].legend(fontsize="x-small", loc="lower right")
+plt.show()
+
 # %% [markdown]
 # The tracker's score of a pose is the sum over beams of the likelihood field (value 1 on a mapped
 # wall, falling off with σ = 10 cm) at the beam's end point. Moving a pose along the corridor
@@ -206,8 +209,17 @@ print(
     f"{'time per frame [ms]':22s}{ms.mean():9.1f}{np.median(ms):9.1f}{ms.std():9.1f}{'':9s}"
     f"   {paper_table1['ms'][0]} / {paper_table1['ms'][1]} / {paper_table1['ms'][2]} / -"
 )
-assert vo_err.max() < 0.149  # every deviation below the paper's largest
-assert np.hypot(*(vo[-1, :2] - truth0[-1, :2])) < 0.005 * np.hypot(*(truth0[-1, :2] - truth0[0, :2]))
+largest_share = {name: vo_err[:, axis].max() / paper_table1[name][3] for axis, name in ((0, "X"), (1, "Y"))}
+assert max(largest_share.values()) < 0.5  # "under half": each axis's largest against the paper's
+display(
+    Markdown(
+        "Our largest deviations are "
+        + " and ".join(f"{v:.0%} ({k})" for k, v in largest_share.items())
+        + " of the paper's largest on the same axis: under half, on rendered images."
+    )
+)
+# "within centimetres": the end within 0.3 % of the distance driven
+assert np.hypot(*(vo[-1, :2] - truth0[-1, :2])) < 0.003 * np.hypot(*(truth0[-1, :2] - truth0[0, :2]))
 
 # %% [markdown]
 # ## 3. Sample scores and their statistics (eq. 8–13)
@@ -353,10 +365,12 @@ scales = {
     "raw score": lambda s: s,
 }
 normal_stats, occluded_stats = {k: [] for k in scales}, {k: [] for k in scales}
+raw_by_kind = {"normal": [], "occluded": []}  # the raw scores of each frame, for the temperature below
 for x in np.linspace(1.5, 27.5, 120):
     raw = scores_at(x)[1]
     group = occluded_stats if 7.0 <= x <= 12.5 else normal_stats if unoccluded(np.array([x]))[0] else None
     if group is not None:
+        raw_by_kind["normal" if group is normal_stats else "occluded"].append(raw)
         for scale, fn in scales.items():
             group[scale].append(box_statistics(fn(raw)))
 aucs = {}
@@ -409,6 +423,40 @@ assert posterior_vmax["normal"] / posterior_vmax["occluded"] > 3
 #   score as a log-likelihood, $e^{S_i}/\sum_j e^{S_j}$, spreads the normal and the occluded
 #   frames several-fold apart.
 #
+# **The temperature of that reading.** $e^{S_i}$ assumes that one unit of score (one beam ending
+# exactly on a mapped wall) multiplies the likelihood by $e$: a likelihood ratio of $e$ per beam,
+# a *temperature* of 1. Read at temperature $T$, the posterior is $e^{S_i/T}/\sum_j e^{S_j/T}$.
+# Nothing in the paper fixes $T$, and it sets how peaked the posterior is: $V_{max}$ and every
+# threshold calibrated on it (section 4) hold for $T = 1$ only, the library's choice. The median
+# $V_{max} \times n$ of the normal and the occluded frames above, and the AUC of $V_{max}$, for a
+# few temperatures:
+
+# %%
+temperature_rows = {}
+print(f"{'T':>5s}{'V_max × n normal':>18s}{'occluded':>10s}{'ratio':>8s}{'AUC':>7s}")
+for T in (0.5, 1.0, 2.0, 4.0):
+    v_max_t = {k: [posterior(r / T).max() * len(r) for r in raws] for k, raws in raw_by_kind.items()}
+    normal_t, occluded_t = np.median(v_max_t["normal"]), np.median(v_max_t["occluded"])
+    temperature_rows[T] = (normal_t, occluded_t, auc(v_max_t["normal"], v_max_t["occluded"]))
+    print(
+        f"{T:5.1f}{normal_t:18.1f}{occluded_t:10.1f}{normal_t / occluded_t:8.1f}{temperature_rows[T][2]:7.3f}"
+    )
+assert np.isclose(temperature_rows[1.0][0], posterior_vmax["normal"])  # T = 1: the reading above
+normal_by_t = [row[0] for row in temperature_rows.values()]
+assert np.all(np.diff(normal_by_t) < 0)  # hotter: flatter, lower V_max
+spread_t = temperature_rows[0.5][0] / temperature_rows[4.0][0]
+auc_range = [min(r[2] for r in temperature_rows.values()), max(r[2] for r in temperature_rows.values())]
+display(
+    Markdown(
+        f"Between T = 0.5 and T = 4 the normal frames' median V_max × n changes "
+        f"{spread_t:.1f}-fold, while the AUC of V_max stays between {auc_range[0]:.3f} and "
+        f"{auc_range[1]:.3f}. The temperature hardly changes *which* frames look normal, but it "
+        "changes every value a threshold is set on: thresholds calibrated at one temperature mean "
+        "nothing at another, which is why ours are calibrated on the same scale the tracker uses."
+    )
+)
+
+# %% [markdown]
 # ## 4. Control limits and credibility (eq. 14–16)
 #
 # From the normal run, the lengths of the laser's correction to the odometry ($R_{lo}$) and of the
@@ -458,13 +506,20 @@ print(
     "share of the normal run's corrections inside their limits:", {k: f"{v:.1%}" for k, v in coverage.items()}
 )
 assert min(coverage.values()) > 0.97  # 3σ limits hold what they summarise
-assert cal.laser.mean < paper_table2["LBPT"][0] and cal.vo.mean < paper_table2["visual odometer"][0]
+laser_share = cal.laser.mean / paper_table2["LBPT"][0]
+vo_share = cal.vo.mean / paper_table2["visual odometer"][0]
+assert laser_share < 1 and vo_share < 0.2  # "smaller", and for the visual odometer "a fraction"
 
-# %% [markdown]
-# The 3σ limits hold nearly all of the normal run's corrections (printed), as a Shewhart chart
-# should; a correction outside them is rare enough to mean something. Our corrections are smaller
-# than the paper's: our odometry is better per update (0.1 m of travel between laser updates) and
-# our visual odometer is rendered, not a Kinect.
+# %%
+display(
+    Markdown(
+        "The 3σ limits hold nearly all of the normal run's corrections (printed), as a Shewhart "
+        "chart should; a correction outside them is rare enough to mean something. Our mean "
+        f"corrections are smaller than the paper's, the laser's {laser_share:.0%} of its and the "
+        f"visual odometer's {vo_share:.0%}: our odometry is better per update (0.1 m of travel "
+        "between laser updates) and our visual odometer is rendered, not a Kinect."
+    )
+)
 #
 # ## 5. One drive: LBPT against VOAPT
 #
@@ -590,7 +645,8 @@ print(
 lbpt_y, voapt_y = result.table(1)["LBPT"]["max"], result.table(1)["VOAPT"]["max"]
 assert 0.5 < mx["LBPT"][0] / paper[("LBPT", 0)][0] < 2  # our LBPT fails about as badly as the paper's
 assert mx["VOAPT"][0] > paper[("VOAPT", 0)][0] and credible_in_occlusion > 0.05
-assert max(lbpt_y, voapt_y) < paper[("VOAPT", 1)][1]  # our worst Y below the paper's mean VOAPT Y
+y_share = max(lbpt_y, voapt_y) / paper[("VOAPT", 1)][1]
+assert y_share < 0.5  # our worst Y under half the paper's *mean* VOAPT Y
 
 # %% [markdown]
 # Along the corridor VOAPT cuts the maximum and the mean error severalfold (the sentence above is
@@ -600,10 +656,18 @@ assert max(lbpt_y, voapt_y) < paper[("VOAPT", 1)][1]  # our worst Y below the pa
 # threshold lies inside the occluded frames' spread, and at a share of those the control tests
 # pass too (printed). Each such spurious credible update lets the laser's wandering
 # along-corridor correction in and re-anchors the visual odometer's pose to it. A stricter
-# threshold trades this for more false alarms in the normal stretches (exercise 6).
-# Across the corridor both trackers are good: the walls fix $y$, which is why our Y errors are
-# far smaller than the paper's (its corridor and robot were real).
-#
+# threshold trades this for more false alarms in the normal stretches (an exercise below).
+
+# %%
+display(
+    Markdown(
+        "Across the corridor both trackers are good: the walls fix y, which is why our Y errors "
+        f"are far smaller than the paper's: our worst is {y_share:.0%} of the paper's *mean* VOAPT "
+        "Y error (its corridor and robot were real)."
+    )
+)
+
+# %% [markdown]
 # Two honest caveats. When LBPT alone recovers by itself, its pose has drifted from the visual
 # odometer's anchor, so $T_s$ keeps flagging some correct frames until the widening band admits
 # them (the share is printed above). And the umbrella can *create* a false match: seen from

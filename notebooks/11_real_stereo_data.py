@@ -59,8 +59,10 @@ import cv2
 import matplotlib.pyplot as plt
 import numpy as np
 import skimage.data
+from IPython.display import Markdown, display
 from scipy.ndimage import maximum_filter, minimum_filter
 from scipy.spatial.transform import Rotation
+from scipy.stats import chi2
 
 import vo_lib
 from vo_lib.camera import StereoCamera
@@ -77,6 +79,7 @@ from vo_lib.geometry import (
 from vo_lib.stereo_vo import rigid_motion
 from vo_lib.stereo_vo.circular_motion import circular_motion_from_increment, motion_matrices, robot_increment
 from vo_lib.stereo_vo.features import PATCH_HALF, StereoFrontEnd
+from vo_lib.stereo_vo.kalman import nis
 from vo_lib.stereo_vo.pipeline import run_frames, run_sequence
 from vo_lib.stereo_vo.pnp_baseline import run_pnp_baseline
 from vo_lib.stereo_vo.pyramid_features import LEVELS, SCALE_FACTOR, PyramidFrontEnd
@@ -139,7 +142,7 @@ def final_errors(poses):
 
 
 # %% [markdown]
-# ## 1 · Real images are emptier than ours
+# ## 1 · Real images against ours
 #
 # Three numbers per image: the share of 16×16 cells without a single FAST corner at threshold 20,
 # the number of corners scaled to a 640×480 image, and the share of pixels whose intensity
@@ -183,6 +186,8 @@ for name, images in ((real_name, real_images), ("rendered indoor_linear", render
     s = stats[name]
     print(f" {name:22s} {s['empty']:18.1%} {s['per_vga']:20.0f} {s['flat']:20.1%}")
 assert stats[real_name]["empty"] > 0.2  # a real frame leaves many cells without a corner
+empty_real, empty_rendered = stats[real_name]["empty"], stats["rendered indoor_linear"]["empty"]
+flat_real, flat_rendered = stats[real_name]["flat"], stats["rendered indoor_linear"]["flat"]
 
 
 def show_corners(ax, image, title):
@@ -205,9 +210,22 @@ show_corners(axes[0], real_images[0], real_name)
 show_corners(axes[1], rendered_images[0], "rendered")
 plt.show()
 
+# %%
+similar_empty = abs(empty_real - empty_rendered) < 0.1  # "about as many": within ten points
+more_flat = flat_real > flat_rendered
+display(
+    Markdown(
+        f"A real frame leaves {empty_real:.1%} of its cells empty, the rendered frames "
+        f"{empty_rendered:.1%}: "
+        + ("about as many. " if similar_empty else "not the same share. ")
+        + f"Its flat pixels ({flat_real:.1%} against {flat_rendered:.1%}) are "
+        + ("more" if more_flat else "not more")
+        + " of the image, and they come in large regions (sky, road) rather than spread out."
+    )
+)
+
 # %% [markdown]
-# A real frame leaves several times more of its cells empty than a rendered one, and most of its
-# pixels are flat. A front end that takes the strongest corners of the whole image then crowds
+# A front end that takes the strongest corners of the whole image then crowds
 # them into the textured parts (parked cars, trees), and one that takes a fixed number per cell
 # gets none from the sky and the road. The pyramid front end
 # (`vo_lib.stereo_vo.pyramid_features`) adapts instead: its FAST threshold is lowered from frame
@@ -260,8 +278,8 @@ for name, fe in front_ends.items():
         f" {np.median(theirs):10.3f} px"
     )
 ours, theirs, where = errors["pyramid (ORB)"]
-assert len(ours) >= 100
-assert np.median(ours) <= np.median(theirs)  # the issue's acceptance figure
+assert len(ours) >= 100  # enough scored features for a median; the count is printed
+assert np.median(ours) <= np.median(theirs)  # at least as accurate as SGBM at the same pixels
 assert np.median(ours) <= np.median(errors["single scale (FAST)"][0])
 
 fig, axes = new_axes(2, width=6, height=4)
@@ -335,7 +353,8 @@ for name, res in (("pyramid", vo_full), ("single scale", vo_single)):
     m, pct, hd = final_errors(res.poses)
     print(f"6-DoF pipeline, {name:12s} front end: final error {m:.3f} m ({pct:.2f} %), heading {hd:+.3f} deg")
 if REAL:
-    assert abs(heading_error["single scale"][-1]) > 3 * abs(heading_error["pyramid"][-1])
+    # the single-scale heading drifts: an order of magnitude beyond the pyramid's
+    assert abs(heading_error["single scale"][-1]) > 10 * abs(heading_error["pyramid"][-1])
 
 fig, ax = new_axes(width=7, height=3.4)
 for name, err in heading_error.items():
@@ -497,7 +516,8 @@ for model, res in runs.items():
         f"{len(res.flagged)} of {len(res.poses)} frames flagged {reasons or ''}"
     )
 if REAL:
-    assert final_errors(runs["full"].poses)[0] < 0.1 * final_errors(runs["planar"].poses)[0]
+    # two orders of magnitude apart: the planar pipeline coasts through most frames
+    assert final_errors(runs["full"].poses)[0] < 0.01 * final_errors(runs["planar"].poses)[0]
 else:
     assert final_errors(runs["planar"].poses)[1] <= 1.0  # where its assumptions hold, the paper's model works
 
@@ -546,6 +566,19 @@ if REAL:
     circular, mounted, full6 = (final_errors(p) for p in chained.values())
     assert mounted[0] < circular[0]  # the offset costs position
     assert abs(full6[2]) < 0.5 * abs(mounted[2])  # pitch, slope and bank cost heading
+    display(
+        Markdown(
+            f"In position, though, the circular model carried through the mount ends "
+            f"{mounted[0]:.3f} m off, "
+            + ("closer than" if mounted[0] < full6[0] else "no closer than")
+            + f" the 6-DoF refinement's {full6[0]:.3f} m. The planar model cannot move the camera "
+            "sideways or vertically, and over {:.0f} m of gently curving road that constraint holds "
+            "well enough to steady the position, while its heading error (above) grows; on a longer "
+            "drive the heading error turns into position error and the order would change. One "
+            "drive does not settle which is better in position; in heading the 6-DoF refinement "
+            "wins clearly.".format(travelled)
+        )
+    )
 
     fig, axes = new_axes(2, width=5.5, height=3.4)
     for name, poses in chained.items():
@@ -860,6 +893,12 @@ assert angle_cv < 0.05 and shift_cv < 0.005
 # odometry: two wheels a gauge apart (`vo_lib.stereo_vo.vehicle`) travel `s ∓ gauge·Δψ/2`, and the
 # crawler's odometry model of seed 000 (eq. 2–11) turns them back into a path. The pipeline fuses
 # them in its Kalman filter exactly as it fuses a crawler's tracks.
+#
+# Two caveats before the figures. This "wheel odometry" is not from wheels: the speed and yaw rate
+# come from the same GPS/IMU unit (OXTS) whose poses are the ground truth, so its errors are not
+# those of encoders on a real car. And its noise, `CAR_DISTANCE_SIGMA` in
+# `vo_lib.stereo_vo.vehicle`, was chosen on this very drive, against the VO: the fused figures
+# below are not an independent test of the fusion.
 
 # %%
 odometry_only = vehicle.odometry_model.integrate(vehicle.odometry[1:])
@@ -877,8 +916,9 @@ for name, poses in paths.items():
         f"{name:13s}: final position error {m:6.3f} m ({pct:5.2f} %): {along[name]:+.3f} m along the track, "
         f"{across:+.3f} m across; heading {hd:+.3f} deg; path {length:.2f} m (truth {travelled:.2f} m)"
     )
-assert final["fused"][0] < final["odometry only"][0]
-assert final["VO only"][0] < final["odometry only"][0]
+# "vision beats the odometry alone": with vision the drive ends within a fifth of its error
+assert final["fused"][0] < 0.2 * final["odometry only"][0]
+assert final["VO only"][0] < 0.2 * final["odometry only"][0]
 if REAL:  # the fused distance leans towards the odometry's
     assert np.sign(along["fused"]) == np.sign(along["odometry only"])
     assert abs(along["fused"]) > abs(along["VO only"])
@@ -891,6 +931,32 @@ odo_step_error = np.degrees(wrap_angle(np.diff(odometry_only[:, 2]) - true_step)
 print(
     f"odometry's yaw per frame: sigma {np.median(yaw_sigma):.4f} deg in the filter's model, actual error "
     f"{odo_step_error.mean():+.4f} deg mean, {odo_step_error.std():.4f} deg sd"
+)
+
+# Where the odometry's across-track error comes from: its own heading drift, integrated along the
+# path, and the truth's direction of travel differing from its heading (slip angle or mounting).
+step_length = np.linalg.norm(np.diff(truth[:, :2], axis=0), axis=1)
+heading_gap = wrap_angle(odometry_only[:-1, 2] - truth[:-1, 2])  # odometry's heading error per step
+final_heading = truth[-1, 2]
+across_dir = np.array([-math.sin(final_heading), math.cos(final_heading)])
+drift_across = float(
+    np.sum(
+        step_length[:, None]
+        * (
+            np.column_stack([np.cos(truth[:-1, 2] + heading_gap), np.sin(truth[:-1, 2] + heading_gap)])
+            - np.column_stack([np.cos(truth[:-1, 2]), np.sin(truth[:-1, 2])])
+        ),
+        axis=0,
+    )
+    @ across_dir
+)
+course = np.arctan2(*np.diff(truth[:, :2], axis=0)[:, ::-1].T)  # the direction of travel
+moving = step_length > 0.05
+crab = np.degrees(np.median(np.abs(wrap_angle(course[moving] - truth[:-1, 2][moving]))))
+_, across_odo, _ = relative_planar(truth[-1], odometry_only[-1])
+print(
+    f"odometry across the track: {across_odo:+.3f} m, of which its heading drift explains "
+    f"{drift_across:+.3f} m; the truth travels a median {crab:.2f} deg off its own heading"
 )
 
 fig, axes = new_axes(2, width=6, height=3.8)
@@ -909,13 +975,60 @@ plt.show()
 # grows with the distance; its distance, integrated from the speed, carries any scale error of the
 # speed (and of the timestamps it is integrated over) as an along-track error.
 #
+# %%
+display(
+    Markdown(
+        f"The odometry's heading drift explains only {drift_across:+.3f} m of its "
+        f"{across_odo:+.3f} m across the track. The rest comes from the odometry model's assumption "
+        "that a vehicle travels along its heading: the truth's direction of travel differs from its "
+        f"heading by a median {crab:.2f}° (a slip angle of the tyres, or how the IMU is mounted), "
+        "and integrating the speed along the heading turns that angle into an across-track error."
+    )
+)
+
+# %% [markdown]
 # The filter weighs odometry and vision by their covariances. The odometry's comes from a noise
 # per wheel distance, which over the gauge becomes the yaw sigma printed above: where that sigma is
 # far above the odometry's actual yaw error, the filter takes the heading from vision almost alone.
 # The distance it takes from both, so on the real drive the fused distance leans towards the
-# odometry's (asserted): fusion helps only as far as each sensor's error model is right. Whether
-# it beats vision alone is an empirical matter; compare the printed figures.
+# odometry's (asserted): fusion helps only as far as each sensor's error model is right.
 #
+# **A check without the truth: NIS.** Notebook 07's normalised innovation squared needs only the
+# filter's own numbers. Per frame, the innovation of the yaw is the vision's yaw increment minus
+# the odometry's, and its variance is at least the odometry's modelled yaw variance (the
+# vision's own variance would only add to it). So νᵀS⁻¹ν computed with the odometry's variance
+# alone is an upper bound of the yaw's NIS; for a consistent model its average over N frames lies
+# in the band of χ²(N)/N.
+
+# %%
+yaw_innovation = wrap_angle(np.diff(vision_only.poses[:, 2]) - np.diff(odometry_only[:, 2]))
+yaw_nis_bound = np.array(
+    [nis([nu], [[math.radians(sd) ** 2]]) for nu, sd in zip(yaw_innovation, yaw_sigma, strict=True)]
+)
+nis_band = chi2.ppf([0.025, 0.975], len(yaw_nis_bound)) / len(yaw_nis_bound)
+print(
+    f"yaw NIS, upper bound, mean over {len(yaw_nis_bound)} frames: {yaw_nis_bound.mean():.2e} "
+    f"(band of a consistent model {nis_band[0]:.2f}–{nis_band[1]:.2f})"
+)
+odometry_noise_too_wide = yaw_nis_bound.mean() < nis_band[0]
+fusion_helps = final["fused"][0] < final["VO only"][0]
+display(
+    Markdown(
+        f"The bound averages {yaw_nis_bound.mean():.1e}, "
+        + (
+            f"far below the band's lower end {nis_band[0]:.2f}: without looking at the truth, the "
+            "innovations say that the odometry's yaw noise is modelled far too wide. "
+            if odometry_noise_too_wide
+            else "inside or above the band: the innovations do not contradict the odometry's model. "
+        )
+        + f"And with the truth: fused, the drive ends {final['fused'][0]:.3f} m off, vision alone "
+        f"{final['VO only'][0]:.3f} m, odometry alone {final['odometry only'][0]:.3f} m. The fusion "
+        + ("improves on" if fusion_helps else "ends no better than")
+        + " vision alone on this drive."
+    )
+)
+
+# %% [markdown]
 # ## 7 · Where we stand against a plain OpenCV stereo odometry
 #
 # `vo_lib.stereo_vo.pnp_baseline` is the stereo odometry one writes first with OpenCV: ORB (3000
@@ -924,12 +1037,14 @@ plt.show()
 
 # %%
 n_pnp = len(seq) if REAL else 20  # the rendered sample only shows the timing
+# both timed here, one right after the other, so that the machine's load is alike for both
+ours_timed = run_sequence(seq, frames=n_pnp, use_odometry=False, motion="full")
 start = time.perf_counter()
 pnp = run_pnp_baseline(seq, frames=n_pnp, seed=SEED)
 print(f"PnP baseline: {n_pnp} frames in {time.perf_counter() - start:.1f} s")
 ours = vo_full
 rows = {
-    "ours (1-point RANSAC + 6-DoF)": (ours.camera_poses[:n_pnp], ours.timing_table()["total"]),
+    "ours (1-point RANSAC + 6-DoF)": (ours.camera_poses[:n_pnp], ours_timed.timing_table()["total"]),
     "OpenCV PnP baseline": (pnp.camera_poses, float(np.median(pnp.milliseconds[1:]))),
 }
 print(f" {'':30s} {'planar error':>13s} {'camera error':>13s} {'heading':>9s} {'ms per frame':>13s}")
@@ -939,12 +1054,23 @@ for name, (poses, ms) in rows.items():
     print(f" {name:30s} {m:8.3f} m ({pct:4.2f} %) {cam_err:9.3f} m {hd:+8.3f}° {ms:10.1f}")
 ratio = rows["OpenCV PnP baseline"][1] / rows["ours (1-point RANSAC + 6-DoF)"][1]
 print(
-    f"ours is {ratio:.1f}x the speed of the baseline in this run (median ms per frame, image loading apart)"
+    f"ours is {ratio:.1f}x the speed of the baseline, both timed in this cell "
+    "(median ms per frame, image loading apart)"
 )
 assert np.all(np.isfinite(pnp.camera_poses)) and len(pnp.milliseconds) == n_pnp
-if REAL:  # the issue's acceptance figures, without odometry
+if REAL:  # without odometry: under 0.5 % of the distance, 0.3 deg of heading, two frames flagged
     assert final_errors(ours.poses)[1] <= 0.5 and abs(final_errors(ours.poses)[2]) <= 0.3
-    assert len(ours.flagged) <= 2
+    assert len(ours.flagged) <= 2  # a count: at most two frames flagged on this drive
+own_planar = final_errors(ours.poses[:n_pnp])[0]
+projected = final_errors(planar_from_camera_poses(ours.camera_poses[:n_pnp], vehicle.mount))[0]
+display(
+    Markdown(
+        f"The same run of ours ends {own_planar:.3f} m off in its own planar pose (the figure of "
+        f"sections 2 and 6) and {projected:.3f} m off when its 6-DoF camera pose is projected to the "
+        "plane, as the baseline's must be for the table; the two differ because the pipeline's "
+        "planar pose is what its filter estimates, not the projection of its camera pose."
+    )
+)
 
 # %% [markdown]
 # ## Summary
@@ -961,9 +1087,11 @@ if REAL:  # the issue's acceptance figures, without odometry
 #   Gauss–Newton fit on reprojection errors in both images then keeps a share of its inliers
 #   and measures the motion the model cannot. We wrote that step in a few lines of NumPy and
 #   matched the library to machine precision, and OpenCV's left-image LM closely.
-# - With the real odometry fused or not, vision beats the odometry alone; how much the fusion
-#   adds depends on the odometry's noise model. The OpenCV PnP baseline is the yardstick for
-#   accuracy and speed (the printed ratio is one run's).
+# - Vision beats the odometry alone, fused or not. On this drive the fusion does not beat vision
+#   alone (section 6 prints both), and the odometry is the truth's own GPS/IMU with a noise chosen
+#   on this drive; NIS, without the truth, shows its yaw noise modelled far too wide. The OpenCV
+#   PnP baseline is the yardstick for accuracy and speed (the printed ratio is one run's, both
+#   timed alike).
 
 
 # %% [markdown]

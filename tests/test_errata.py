@@ -48,3 +48,13 @@ def test_every_check_exists():
 
 def test_readme_links_the_errata():
     assert "docs/errata.md" in (ROOT / "README.md").read_text(encoding="utf-8")
+
+
+def test_bold_signs_render_as_bold():
+    """A bold sign glued to the next letter (``**−**TV``) is not emphasis in CommonMark and would
+    show its asterisks on the site, hiding the very sign the row is about."""
+    from markdown_it import MarkdownIt
+
+    html = MarkdownIt("commonmark").enable("table").render(ERRATA.read_text(encoding="utf-8"))
+    literal = re.findall(r".{0,25}\*\*.{0,25}", html)
+    assert not literal, f"asterisks left unrendered: {literal}"

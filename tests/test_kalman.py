@@ -5,7 +5,7 @@ import pytest
 from scipy.stats import chi2
 
 from vo_lib.models.track_odometry import TrackOdometry
-from vo_lib.stereo_vo.kalman import VoKalmanFilter, measurement, measurement_jacobian
+from vo_lib.stereo_vo.kalman import VoKalmanFilter, measurement, measurement_jacobian, nis
 
 ODO = TrackOdometry()
 R_VO = np.diag([math.radians(0.05) ** 2, 0.002**2])
@@ -131,3 +131,33 @@ def test_constrained_jacobian_matches_finite_differences(rng):
             ]
         )
         np.testing.assert_allclose(constrained_jacobian(x), num, atol=1e-6)
+
+
+def test_nis_needs_no_truth_and_tells_a_wrong_noise_model():
+    """The VO components' NIS averages to 2 when the filter's R is the noise drawn, far from it
+    when the filter is told a noise ten times smaller (a standard deviation a tenth)."""
+
+    def mean_nis(r_assumed, runs=20, steps=100):
+        values = []
+        for run in range(runs):
+            rng = np.random.default_rng(2000 + run)
+            kf = VoKalmanFilter(ODO, covariance=P0)
+            truth = kf.pose + rng.multivariate_normal(np.zeros(3), P0)
+            for k in range(steps):
+                u_true = ODO.controls_for(0.02, math.radians(1.0) * math.sin(k / 30))
+                u_meas = u_true + rng.multivariate_normal(np.zeros(2), kf.control_covariance(u_true))
+                prev, truth = truth, ODO.predict(truth, u_true)
+                kf.predict(u_meas)
+                z = measurement(np.concatenate([truth, prev])) + rng.multivariate_normal(np.zeros(2), R_VO)
+                kf.update(z[0], z[1], r_assumed)
+                values.append(nis(kf.ekf.y[:2], kf.ekf.S[:2, :2]))
+                kf.finish_frame()
+        return np.mean(values), runs * steps
+
+    matched, n = mean_nis(R_VO)
+    lo, hi = chi2.ppf([0.0005, 0.9995], 2 * n) / n
+    assert lo < matched < hi
+    told_less, _ = mean_nis(R_VO / 100)
+    assert told_less > 2 * hi  # S is mostly the prediction's, so R alone moves the NIS less than R
+    with pytest.raises(ValueError):
+        nis([1.0, 2.0], np.eye(3))

@@ -259,3 +259,31 @@ class VoKalmanFilter:
         e = np.asarray(true_pose, float) - self.pose
         e[2] = wrap_angle(e[2])
         return float(e @ np.linalg.solve(self.covariance, e))
+
+
+def nis(innovation, innovation_covariance) -> float:
+    """Normalised innovation squared, νᵀ S⁻¹ ν: the consistency check that needs no ground truth.
+
+    For a consistent filter the innovation ν of an update is zero-mean with covariance
+    S = H P Hᵀ + R, so the NIS follows a χ² distribution with as many degrees of freedom as ν has
+    components, and its average over N independent updates lies in the band of χ²(mN)/N. After
+    :meth:`VoKalmanFilter.update` the filter's ``ekf.y`` and ``ekf.S`` hold ν and S; the VO's own
+    components are ``ekf.y[:2]`` and ``ekf.S[:2, :2]`` (the third is the sideways constraint).
+
+    Parameters
+    ----------
+    innovation : array_like, shape (m,)
+        The measurement minus its prediction, ν = z − h(x⁻).
+    innovation_covariance : array_like, shape (m, m)
+        Its covariance S.
+
+    Returns
+    -------
+    float
+        νᵀ S⁻¹ ν.
+    """
+    nu = np.atleast_1d(np.asarray(innovation, float))
+    S = np.atleast_2d(np.asarray(innovation_covariance, float))
+    if S.shape != (nu.size, nu.size):
+        raise ValueError(f"innovation has {nu.size} components, its covariance is {S.shape}")
+    return float(nu @ np.linalg.solve(S, nu))
