@@ -177,7 +177,11 @@ def test_saving_from_jupyterlab_leaves_every_notebook_unchanged(root, tmp_path):
         model = manager.get(name)
         assert model["type"] == "notebook"
         metadata = model["content"]["metadata"]
-        metadata["kernelspec"] = {"display_name": "Python 3 (ipykernel)", "language": "python", "name": "python3"}
+        metadata["kernelspec"] = {
+            "display_name": "Python 3 (ipykernel)",
+            "language": "python",
+            "name": "python3",
+        }
         metadata["language_info"] = {"name": "python", "version": sys.version.split()[0]}
         manager.save(model, name)
         assert (copy / "notebooks" / path.name).read_bytes() == path.read_bytes(), f"saving rewrote {name}"

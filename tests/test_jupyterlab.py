@@ -49,7 +49,9 @@ UI_TIMEOUT_MS = 60_000
 
 pytestmark = [
     pytest.mark.notebook,
-    pytest.mark.skipif(not CHROMIUM.is_file(), reason=f"no Chromium at {CHROMIUM} (apt-get install chromium)"),
+    pytest.mark.skipif(
+        not CHROMIUM.is_file(), reason=f"no Chromium at {CHROMIUM} (apt-get install chromium)"
+    ),
 ]
 
 
@@ -179,7 +181,9 @@ def test_double_click_opens_a_notebook_that_runs_and_saves_without_changing_the_
                 timeout=RUN_TIMEOUT_MS,
             )
             errors = page.locator(".jp-OutputArea-output[data-mime-type='application/vnd.jupyter.stderr']")
-            tracebacks = [t for t in errors.all_inner_texts() if "Traceback" in t or "Error" in t.split("\n")[0]]
+            tracebacks = [
+                t for t in errors.all_inner_texts() if "Traceback" in t or "Error" in t.split("\n")[0]
+            ]
             assert not tracebacks, tracebacks[0]
             page.screenshot(path=str(SCREENSHOTS / "jupyterlab-ran.png"))
 
