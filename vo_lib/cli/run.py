@@ -149,7 +149,16 @@ def _write_csv(path: Path, rows, cls) -> None:
             writer.writerow(asdict(row))
 
 
-def _plot(path: Path, times, estimate, truth, odometry, title: str) -> None:
+def odometry_name(vehicle) -> str:
+    """What the vehicle's odometry is, as the tables and the figure name it."""
+    if vehicle.kind == "crawler":
+        return "track odometry"
+    return "OXTS odometry" if vehicle.odometry_source.startswith("oxts") else "wheel odometry"
+
+
+def _plot(
+    path: Path, times, estimate, truth, odometry, title: str, odometry_label: str = "track odometry"
+) -> None:
     import matplotlib
 
     matplotlib.use("Agg")
@@ -158,7 +167,7 @@ def _plot(path: Path, times, estimate, truth, odometry, title: str) -> None:
     from vo_lib.viz.run_figure import plot_run
 
     fig = plt.figure(figsize=(11, 5), constrained_layout=True)
-    plot_run(fig, times, estimate, truth, odometry, title)
+    plot_run(fig, times, estimate, truth, odometry, title, odometry_label)
     fig.savefig(path, dpi=110)
     plt.close(fig)
 
@@ -244,13 +253,15 @@ def error_report(result: PipelineResult, truth_planar: np.ndarray, odometry_plan
     return report
 
 
-def print_error_table(report: dict, flagged: int, rpe_m: float) -> None:
+def print_error_table(
+    report: dict, flagged: int, rpe_m: float, odometry_label: str = "track odometry"
+) -> None:
     if report["spot_turn"]:
         print(f"\nErrors against ground truth ({report['turned_deg']:.0f}° turned on the spot)")
     else:
         print(f"\nErrors against ground truth ({report['distance_m']:.2f} m travelled)")
     cols = [k for k in ("vo", "odometry") if k in report]
-    names = {"vo": "visual odometry", "odometry": "track odometry"}
+    names = {"vo": "visual odometry", "odometry": odometry_label}
     print(f"  {'':<34s}" + "".join(f"{names[c]:>18s}" for c in cols))
     for key, label, fmt in (
         ("final_position_error_m", "final position error [m]", "{:.4f}"),
@@ -339,13 +350,13 @@ def run_command(
         _write_csv(tmp / "diagnostics.csv", result.diagnostics, FrameDiagnostics)
         truth, odo = truth_and_odometry(seq, vehicle, n)
         title = f"{Path(name).name}: {n} frames"
-        _plot(tmp / "trajectory.png", seq.times[:n], result.poses, truth, odo, title)
+        _plot(tmp / "trajectory.png", seq.times[:n], result.poses, truth, odo, title, odometry_name(vehicle))
         print_timing_table(result, seq.camera, n)
         report = {}
         if truth is not None:
             report = error_report(result, truth, odo)
             rpe_m = rpe(seq.poses[:n], poses)[0].rmse
-            print_error_table(report, len(result.flagged), rpe_m)
+            print_error_table(report, len(result.flagged), rpe_m, odometry_name(vehicle))
         output.commit(sequence=str(seq.path.resolve()), frames=n, seed=seed, odometry=not no_odometry)
     print(f"\nwrote {out_dir}/: poses.txt trajectory.tum timings.csv diagnostics.csv trajectory.png")
     return report
