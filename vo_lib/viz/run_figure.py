@@ -25,7 +25,7 @@ THIN_PATH = 0.15
 
 
 def _paths(estimate, truth, odometry, odometry_label="track odometry"):
-    fused = f"visual odometry (fused with {odometry_label})" if odometry is not None else "visual odometry"
+    fused = "visual odometry (fused with odometry)" if odometry is not None else "visual odometry"
     paths = [(fused, estimate, ESTIMATE_STYLE)]
     if odometry is not None:
         paths.insert(0, (odometry_label, odometry, ODOMETRY_STYLE))
