@@ -111,3 +111,28 @@ def test_a_straight_drive_is_drawn_with_the_axis_across_it_scaled_to_the_drift()
         assert "not to scale" in main.get_ylabel()
     finally:
         plt.close(fig)
+
+
+def test_help_gives_one_example_per_command_and_a_line_per_bench(capsys):
+    """Plain text (no reST backticks), an example for each command, and each benchmark with what
+    it times and how long it runs."""
+    import pytest
+
+    from vo_lib.cli.bench import BENCH_HELP, BENCHES
+    from vo_lib.cli.main import build_parser
+
+    parser = build_parser()
+    commands = ["run", "evaluate", "generate", "bench", "sweep", "evaluate-all"]
+    texts = {}
+    for argv in ([], *([c] for c in commands)):
+        with pytest.raises(SystemExit):
+            parser.parse_args([*argv, "--help"])
+        texts[" ".join(argv)] = capsys.readouterr().out
+    assert "``" not in "".join(texts.values())
+    for command in commands:
+        assert "example:" in texts[command], command
+        assert f" {command} " in texts[command].split("example:")[1], command
+        assert f"vo_lib {command} " in texts[""], f"the overview has no example of {command}"
+    assert set(BENCH_HELP) == set(BENCHES)
+    for name, (what, how_long) in BENCH_HELP.items():
+        assert f"{name}" in texts["bench"] and f"{what} ({how_long})" in " ".join(texts["bench"].split())
