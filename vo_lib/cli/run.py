@@ -79,8 +79,9 @@ def is_sample(name_or_path: str) -> bool:
 #: A step that takes longer than this (seconds) says what it is doing.
 SLOW_S = 2.0
 #: Seconds to render and write one frame pair of a crawler sample, for the first line's estimate:
-#: 40 frames of indoor_linear took 3 s on the shared 2-core machine (the road's take longer).
-RENDER_S_PER_FRAME = 0.1
+#: the 401 frames of indoor_linear took 6 s on the 2-core machine when it was quiet, 26 s at a load
+#: average of 9, so this range (the road's 1242x375 frames take longer).
+RENDER_S_PER_FRAME = (0.015, 0.1)
 
 
 def progress_line(text: str) -> None:
@@ -117,9 +118,10 @@ def announce_run(name: str, source: Path, frames: int | None, out_dir: Path) -> 
     if is_rendered(name, source):
         progress_line(f"run: sample {name}, {n} frames (rendered in {source}) -> {out_dir}/")
     else:
+        fast, slow = (n * s for s in RENDER_S_PER_FRAME)
         progress_line(
             f"run: sample {name}, {n} frames -> {out_dir}/. First use: its frames are rendered into "
-            f"{source} first (about {n * RENDER_S_PER_FRAME:.0f} s or more; later runs reuse them)"
+            f"{source} first (about {fast:.0f} to {slow:.0f} s; later runs reuse them)"
         )
 
 
