@@ -118,7 +118,7 @@ def announce_run(name: str, source: Path, frames: int | None, out_dir: Path) -> 
     if is_rendered(name, source):
         progress_line(f"run: sample {name}, {n} frames (rendered in {source}) -> {out_dir}/")
     else:
-        fast, slow = (n * s for s in RENDER_S_PER_FRAME)
+        fast, slow = (max(1.0, n * s) for s in RENDER_S_PER_FRAME)
         progress_line(
             f"run: sample {name}, {n} frames -> {out_dir}/. First use: its frames are rendered into "
             f"{source} first (about {fast:.0f} to {slow:.0f} s; later runs reuse them)"
