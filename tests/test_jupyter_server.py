@@ -11,6 +11,7 @@ import json
 import os
 import pathlib
 import secrets
+import shutil
 import socket
 import subprocess
 import sys
@@ -157,3 +158,30 @@ def test_server_opens_jupytext_notebooks_and_runs_a_cell(server):
         assert out.strip().endswith("seeded 1"), out
     finally:
         server.call(f"/api/kernels/{kernel['id']}", "DELETE")
+
+
+@pytest.mark.parametrize("root", ["", "notebooks"], ids=["served-from-repository", "served-from-notebooks"])
+def test_saving_from_jupyterlab_leaves_every_notebook_unchanged(root, tmp_path):
+    """Whichever folder JupyterLab serves, jupytext finds notebooks/jupytext.toml, and a notebook
+    saved as JupyterLab saves it (the kernel's display name and language_info added to the
+    metadata by the running kernel) is written back byte for byte as it was."""
+    from jupytext.sync_contentsmanager import TextFileContentsManager
+
+    copy = tmp_path / "repo"
+    (copy / "notebooks").mkdir(parents=True)
+    shutil.copy2(ROOT / "notebooks" / "jupytext.toml", copy / "notebooks" / "jupytext.toml")
+    manager = TextFileContentsManager(root_dir=str(copy / root))
+    for path in sorted((ROOT / "notebooks").glob("[0-9][0-9]_*.py")):
+        shutil.copy2(path, copy / "notebooks" / path.name)
+        name = path.name if root == "notebooks" else f"notebooks/{path.name}"
+        model = manager.get(name)
+        assert model["type"] == "notebook"
+        metadata = model["content"]["metadata"]
+        metadata["kernelspec"] = {
+            "display_name": "Python 3 (ipykernel)",
+            "language": "python",
+            "name": "python3",
+        }
+        metadata["language_info"] = {"name": "python", "version": sys.version.split()[0]}
+        manager.save(model, name)
+        assert (copy / "notebooks" / path.name).read_bytes() == path.read_bytes(), f"saving rewrote {name}"

@@ -47,6 +47,11 @@ def _up_to_date(path: Path, name: str) -> bool:
     return manifest.get("fingerprint") == fingerprint(name)
 
 
+def is_rendered(name: str, path) -> bool:
+    """Whether sample ``name`` is rendered, up to date, in folder ``path``."""
+    return _up_to_date(Path(path), name)
+
+
 def load_sequence(
     name_or_path,
     frames: int | None = None,
@@ -55,6 +60,9 @@ def load_sequence(
     odometry: bool = True,
 ) -> Sequence:
     """Load a named sample (generating it on first use) or a KITTI-layout folder.
+
+    ``progress`` while a sample renders: a bar (True), a line every few seconds (``"lines"``), or
+    nothing (False); see :func:`vo_lib.sim.samples.generate`.
 
     ``odometry=False`` ignores the sequence's ``odometry.txt`` (it is not read at all).
     """

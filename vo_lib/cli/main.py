@@ -21,6 +21,7 @@ import errno
 import math
 import signal
 import sys
+import textwrap
 from pathlib import Path
 
 from vo_lib.arguments import OneLineParser, count_at_least, one_line
@@ -61,15 +62,52 @@ def _segments(text: str) -> tuple[float, ...]:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    from vo_lib.cli.bench import BENCHES
+    from vo_lib.cli.bench import BENCH_HELP, BENCHES
 
     # named as it was started: the ``vo-lib`` script or ``python -m vo_lib``
     prog = "vo-lib" if Path(sys.argv[0]).name == "vo-lib" else "python -m vo_lib"
-    parser = _Parser(prog=prog, description=__doc__.split("\n")[0])
-    sub = parser.add_subparsers(dest="command", required=True)
+
+    def example(*lines: str) -> str:
+        return "example" + ("s" if len(lines) > 1 else "") + ":\n" + "\n".join(f"  {prog} {x}" for x in lines)
+
+    def wrap(text: str) -> str:
+        return textwrap.fill(text, 88)
+
+    plain = {"formatter_class": argparse.RawDescriptionHelpFormatter}
+    parser = _Parser(
+        prog=prog,
+        description=wrap(
+            "Stereo visual odometry for a crawler robot (seed 000), line-feature EKF-SLAM (seed 002) "
+            "and VO-assisted laser pose tracking (seed 004), run from the command line. Each command has "
+            "its own --help."
+        ),
+        epilog=example(
+            "run                          # the default sample, indoor_linear",
+            "run --sequence corridor --no-odometry",
+            "evaluate --gt data/indoor_linear/poses.txt --est runs/indoor_linear/poses.txt",
+            "generate outdoor_free --frames 200",
+            "bench ransac",
+            "sweep corridor --seeds 200 --workers 2",
+            "evaluate-all ~/kitti/dataset/sequences",
+        )
+        + "\n\nBad input prints one line and exits with status 2; Ctrl-C exits with 130.",
+        **plain,
+    )
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     from vo_lib.sim.samples import SAMPLES
 
-    run = sub.add_parser("run", help="run the stereo visual odometry pipeline")
+    run = sub.add_parser(
+        "run",
+        help="run the stereo visual odometry pipeline on a sample or a KITTI-layout folder",
+        description=wrap(
+            "Run seed 000's stereo visual odometry on a sequence and print a timing table and, "
+            "where the sequence has ground truth, its errors. A named sample is rendered into data/ on "
+            "first use (a minute or so) and reused after. Writes into --out (default runs/NAME): "
+            "poses.txt (KITTI), trajectory.tum (TUM), timings.csv, diagnostics.csv and trajectory.png."
+        ),
+        epilog=example("run --sequence outdoor_free --out runs/yard"),
+        **plain,
+    )
     run.add_argument("--sequence", help="sample name or KITTI-layout folder (default: indoor_linear)")
     run.add_argument(
         "--out", help="output folder (default: runs/NAME); new, empty, or written by an earlier run"
@@ -91,7 +129,18 @@ def build_parser() -> argparse.ArgumentParser:
         help="motion model: planar circular motion (the crawler), full 6-DoF (a car), or auto (default:"
         " the one that fits the sequence's vehicle)",
     )
-    ev = sub.add_parser("evaluate", help="ATE, RPE and KITTI segment errors of an estimate")
+    ev = sub.add_parser(
+        "evaluate",
+        help="ATE, RPE and KITTI segment errors of an estimate against ground truth",
+        description=wrap(
+            "Print the absolute trajectory error, the relative pose error and KITTI's segment "
+            "errors of an estimated trajectory against ground truth (KITTI or TUM files, same length)."
+        ),
+        epilog=example(
+            "evaluate --gt data/indoor_linear/poses.txt --est runs/indoor_linear/poses.txt --segments 1,2"
+        ),
+        **plain,
+    )
     ev.add_argument("--gt", required=True, help="ground-truth poses (KITTI poses.txt or TUM)")
     ev.add_argument("--est", required=True, help="estimated poses (KITTI or TUM)")
     ev.add_argument(
@@ -99,7 +148,16 @@ def build_parser() -> argparse.ArgumentParser:
         type=_segments,
         help="comma-separated segment lengths in metres (default: KITTI's 100..800)",
     )
-    gen = sub.add_parser("generate", help="render a named sample sequence")
+    gen = sub.add_parser(
+        "generate",
+        help="render a named sample sequence in the KITTI layout",
+        description=wrap(
+            "Render a named sample (stereo images, ground truth, odometry, manifest) into a "
+            "folder in the KITTI odometry layout. Samples: " + ", ".join(sorted(SAMPLES)) + "."
+        ),
+        epilog=example("generate indoor_free --out /tmp/indoor_free --resolution 320x240"),
+        **plain,
+    )
     gen.add_argument("name", choices=sorted(SAMPLES), help="which sample")
     gen.add_argument("--out", help="output folder (default: data/NAME)")
     gen.add_argument(
@@ -113,17 +171,48 @@ def build_parser() -> argparse.ArgumentParser:
         help=f"WIDTHxHEIGHT, each side {MIN_SIDE}..{MAX_SIDE} (default: the sample's own, 640x480; "
         "1242x375 for road_drive)",
     )
-    bench = sub.add_parser("bench", help="time a part of the library against a baseline")
-    bench.add_argument("name", choices=sorted(BENCHES), help="which benchmark")
+    width = max(map(len, BENCH_HELP))
+    bench = sub.add_parser(
+        "bench",
+        help="time one part of the library against its baseline",
+        description=wrap(
+            "Time one part of the library against its baseline and print the table. The benchmarks, "
+            "with how long each runs on a 2-core machine:"
+        )
+        + "\n\n"
+        + "\n".join(
+            f"  {name:<{width}}  {what} ({how_long})" for name, (what, how_long) in BENCH_HELP.items()
+        ),
+        epilog=example("bench geometry"),
+        **plain,
+    )
+    bench.add_argument("name", choices=sorted(BENCHES), metavar="NAME", help="which benchmark (listed above)")
     from vo_lib.cli.experiments import SWEEPS
 
-    sweep = sub.add_parser("sweep", help="a paper's statistic over many seeds, serially or on Dask")
+    sweep = sub.add_parser(
+        "sweep",
+        help="a paper's statistic over many seeds, serially or on Dask",
+        description=wrap(
+            "Run one experiment over many seeds, one task per seed, on a local Dask cluster "
+            "(one worker per core) or on a running scheduler, and print mean and spread. Finished rows "
+            "in --out are kept, so an interrupted sweep finishes only the missing ones."
+        ),
+        epilog=example("sweep lap --seeds 50 --workers 2"),
+        **plain,
+    )
     sweep.add_argument("name", choices=SWEEPS, help="which experiment")
     sweep.add_argument(
         "--seeds", type=count_at_least(1, "seeds", MAX_SEEDS), default=20, help="number of seeds (default 20)"
     )
     ev_all = sub.add_parser(
-        "evaluate-all", help="the pipeline on every sequence under a folder, KITTI-style errors"
+        "evaluate-all",
+        help="the pipeline on every sequence under a folder, KITTI-style errors",
+        description=wrap(
+            "Run the pipeline on every sequence under a folder (KITTI's sequences/NN, or "
+            "folders holding image_0/) and print a KITTI-style table of segment errors."
+        ),
+        epilog=example("evaluate-all ~/kitti/dataset/sequences --frames 500"),
+        **plain,
     )
     ev_all.add_argument(
         "root", help="folder of sequences (KITTI's sequences/NN, or folders holding image_0/)"

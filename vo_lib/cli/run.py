@@ -20,34 +20,32 @@ import csv
 import sys
 from dataclasses import asdict, fields
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-from vo_lib.evaluation import (
-    ate_planar,
-    final_error,
-    is_spot_turn,
-    kitti_segment_errors,
-    rpe,
-    turned_degrees,
-)
 from vo_lib.formats.poses import read_trajectory, write_kitti_poses, write_tum
 from vo_lib.geometry import camera_poses_from_planar, planar_from_camera_poses, wrap_angle
 from vo_lib.outputs import OutputFolder, notice, reading
 from vo_lib.sim.samples import SAMPLES
-from vo_lib.stereo_vo.pipeline import (
-    WARM_UP_FRAMES,
-    FrameDiagnostics,
-    FrameTimings,
-    PipelineResult,
-    run_sequence,
-    warm_up,
-)
-from vo_lib.stereo_vo.vehicle import vehicle_of
+
+# The pipeline and the metrics (SciPy, Numba) are imported where they are used, so that a run
+# says what it is about to do before they load: its first line comes within a second or two.
+if TYPE_CHECKING:
+    from vo_lib.stereo_vo.pipeline import PipelineResult
 
 DEFAULT_SEQUENCE = "indoor_linear"
-#: Seed 000, Table 1, 640x480 row: stereo processing, parameter estimation, Kalman filtering (ms).
-PAPER_TABLE1_640 = (48.969, 0.874, 0.161)
+#: Seed 000, Table 1: mean milliseconds of stereo processing, parameter estimation and Kalman
+#: filtering at each of the five resolutions the paper timed.
+PAPER_TABLE1 = {
+    (640, 480): {"stereo": 48.969, "estimation": 0.874, "kalman": 0.161},
+    (512, 384): {"stereo": 39.851, "estimation": 0.664, "kalman": 0.157},
+    (400, 300): {"stereo": 31.970, "estimation": 0.754, "kalman": 0.158},
+    (320, 240): {"stereo": 22.165, "estimation": 0.662, "kalman": 0.168},
+    (256, 192): {"stereo": 22.460, "estimation": 0.610, "kalman": 0.153},
+}
+#: Seed 000, IV.A.1: mean and standard deviation of the whole frame over 10,000 frames (ms).
+PAPER_LONG_RUN_MS = (26.5511, 4.551)
 
 
 class UsageError(Exception):
@@ -78,6 +76,55 @@ def is_sample(name_or_path: str) -> bool:
     return name_or_path in SAMPLES and not Path(name_or_path).exists()
 
 
+#: A step that takes longer than this (seconds) says what it is doing.
+SLOW_S = 2.0
+#: Seconds to render and write one frame pair of a crawler sample, for the first line's estimate:
+#: the 401 frames of indoor_linear took 6 s on the 2-core machine when it was quiet, 26 s at a load
+#: average of 9, so this range (the road's 1242x375 frames take longer).
+RENDER_S_PER_FRAME = (0.015, 0.1)
+
+
+def progress_line(text: str) -> None:
+    """One line of progress, at once, on stdout with the results: a run piped to a file shows it
+    there (stderr is kept for the one line of an error or a notice)."""
+    print(text, flush=True)
+
+
+class _say_if_slow:
+    """Print ``text`` if the block is still running after :data:`SLOW_S` seconds."""
+
+    def __init__(self, text: str):
+        import threading
+
+        self.timer = threading.Timer(SLOW_S, progress_line, (text,))
+        self.timer.daemon = True
+
+    def __enter__(self):
+        self.timer.start()
+
+    def __exit__(self, *exc):
+        self.timer.cancel()
+
+
+def announce_run(name: str, source: Path, frames: int | None, out_dir: Path) -> None:
+    """The first line of a run: what it reads, what comes first, where it writes."""
+    from vo_lib.data import is_rendered
+    from vo_lib.sim.samples import get_sample
+
+    if not is_sample(name):
+        progress_line(f"run: {source} -> {out_dir}/")
+        return
+    n = frames or get_sample(name).frames
+    if is_rendered(name, source):
+        progress_line(f"run: sample {name}, {n} frames (rendered in {source}) -> {out_dir}/")
+    else:
+        fast, slow = (max(1.0, n * s) for s in RENDER_S_PER_FRAME)
+        progress_line(
+            f"run: sample {name}, {n} frames -> {out_dir}/. First use: its frames are rendered into "
+            f"{source} first (about {fast:.0f} to {slow:.0f} s; later runs reuse them)"
+        )
+
+
 def resolve_sequence(name_or_path: str, frames: int | None, odometry: bool = True, checked: bool = False):
     """A loaded sequence for a sample name (generated on first use) or a KITTI-layout folder.
 
@@ -91,7 +138,7 @@ def resolve_sequence(name_or_path: str, frames: int | None, odometry: bool = Tru
         name_or_path,
         frames=frames if is_sample(name_or_path) else None,
         odometry=odometry,
-        progress=sys.stderr.isatty(),
+        progress=True if sys.stderr.isatty() else "lines",
     )
 
 
@@ -104,7 +151,16 @@ def _write_csv(path: Path, rows, cls) -> None:
             writer.writerow(asdict(row))
 
 
-def _plot(path: Path, times, estimate, truth, odometry, title: str) -> None:
+def odometry_name(vehicle) -> str:
+    """What the vehicle's odometry is, as the tables and the figure name it."""
+    if vehicle.kind == "crawler":
+        return "track odometry"
+    return "OXTS odometry" if vehicle.odometry_source.startswith("oxts") else "wheel odometry"
+
+
+def _plot(
+    path: Path, times, estimate, truth, odometry, title: str, odometry_label: str = "track odometry"
+) -> None:
     import matplotlib
 
     matplotlib.use("Agg")
@@ -113,27 +169,53 @@ def _plot(path: Path, times, estimate, truth, odometry, title: str) -> None:
     from vo_lib.viz.run_figure import plot_run
 
     fig = plt.figure(figsize=(11, 5), constrained_layout=True)
-    plot_run(fig, times, estimate, truth, odometry, title)
+    plot_run(fig, times, estimate, truth, odometry, title, odometry_label)
     fig.savefig(path, dpi=110)
     plt.close(fig)
 
 
-def print_timing_table(result: PipelineResult, camera, frames: int) -> None:
-    t = result.timing_table()
-    fps = 1000.0 / t["total"] if t["total"] > 0 else float("inf")
-    print(f"\nAverage time per frame (median, ms) at {camera.width}x{camera.height}, {frames} frames")
-    print(f"  {'stage':<44s}{'this run':>10s}  {'paper, 640x480':<s}")
-    rows = [
-        ("binocular stereo vision processing", t["stereo"], f"{PAPER_TABLE1_640[0]:.3f}"),
-        ("prediction and guided temporal matching", t["prediction"] + t["matching"], "-"),
-        ("parameter estimation (1-point RANSAC)", t["estimation"], f"{PAPER_TABLE1_640[1]:.3f}"),
-        *([("6-DoF refinement", t["refinement"], "-")] if t["refinement"] > 0 else []),
-        ("Kalman filtering", t["kalman"], f"{PAPER_TABLE1_640[2]:.3f}"),
-        ("whole frame", t["total"], "26.551 (mean of 10,000)"),
+def timing_rows(result: PipelineResult) -> list[tuple[str, str, np.ndarray]]:
+    """Per-frame milliseconds of each stage, as the timing table lists them: ``(key, label,
+    values)``. The stages and "between the stages" add up to the whole frame, frame by frame."""
+    from vo_lib.stereo_vo.pipeline import FrameTimings
+
+    rows = result.timings[1:] or result.timings  # the first frame only detects: no motion yet
+    column = {f.name: np.array([getattr(r, f.name) for r in rows]) for f in fields(FrameTimings)}
+    stages = [
+        ("stereo", "binocular stereo vision processing", column["stereo"]),
+        ("matching", "guided temporal matching", column["matching"]),
+        ("estimation", "parameter estimation (1-point RANSAC)", column["estimation"]),
+        ("refinement", "6-DoF refinement", column["refinement"]),
+        ("kalman", "Kalman filtering (prediction + update)", column["kalman"]),
     ]
-    for name, value, paper in rows:
-        print(f"  {name:<44s}{value:10.3f}  {paper}")
-    print(f"  frames per second: {fps:.0f}")
+    stages = [s for s in stages if s[0] != "refinement" or s[2].any()]
+    between = column["total"] - sum(values for _, _, values in stages)
+    return [*stages, ("between", "between the stages (keyframes, bookkeeping)", between)]
+
+
+def print_timing_table(result: PipelineResult, camera, frames: int) -> None:
+    """The timing table like the paper's Table 1: median and mean milliseconds per stage, and the
+    paper's figure (a mean) where the paper has one for this resolution."""
+    rows = timing_rows(result)
+    whole = sum(values for _, _, values in rows)
+    paper = PAPER_TABLE1.get((camera.width, camera.height))
+    print(f"\nTime per frame at {camera.width}x{camera.height} over {frames} frames, in ms")
+    header = f"  {'stage':<46s}{'median':>8s}{'mean':>9s}"
+    if paper:
+        header += f"   paper's mean (Table 1, {camera.width}x{camera.height})"
+    print(header)
+    for key, label, values in [*rows, ("whole", "whole frame", whole)]:
+        line = f"  {label:<46s}{np.median(values):8.3f}{np.mean(values):9.3f}"
+        if paper and key in paper:
+            line += f"   {paper[key]:.3f}"
+        print(line)
+    print("  The means add up to the whole frame; the medians (each stage's typical frame) need not.")
+    if paper:
+        print(
+            f"  The paper's 10,000-frame run: mean {PAPER_LONG_RUN_MS[0]} ms per frame, s.d. "
+            f"{PAPER_LONG_RUN_MS[1]} ms (IV.A.1; resolution not stated)."
+        )
+    print(f"  frames per second: {1000.0 / np.mean(whole):.0f} (from the mean whole frame)")
 
 
 def truth_and_odometry(seq, vehicle, frames: int):
@@ -148,6 +230,8 @@ def truth_and_odometry(seq, vehicle, frames: int):
 
 def error_report(result: PipelineResult, truth_planar: np.ndarray, odometry_planar=None) -> dict:
     """Errors of the estimate (and of odometry alone) against the ground truth."""
+    from vo_lib.evaluation import ate_planar, final_error, is_spot_turn, turned_degrees
+
     est = result.poses
     dist = final_error(truth_planar, est).distance_m
     report = {
@@ -171,13 +255,15 @@ def error_report(result: PipelineResult, truth_planar: np.ndarray, odometry_plan
     return report
 
 
-def print_error_table(report: dict, flagged: int, rpe_m: float) -> None:
+def print_error_table(
+    report: dict, flagged: int, rpe_m: float, odometry_label: str = "track odometry"
+) -> None:
     if report["spot_turn"]:
         print(f"\nErrors against ground truth ({report['turned_deg']:.0f}° turned on the spot)")
     else:
         print(f"\nErrors against ground truth ({report['distance_m']:.2f} m travelled)")
     cols = [k for k in ("vo", "odometry") if k in report]
-    names = {"vo": "visual odometry", "odometry": "track odometry"}
+    names = {"vo": "visual odometry", "odometry": odometry_label}
     print(f"  {'':<34s}" + "".join(f"{names[c]:>18s}" for c in cols))
     for key, label, fmt in (
         ("final_position_error_m", "final position error [m]", "{:.4f}"),
@@ -222,6 +308,7 @@ def run_command(
     with OutputFolder(
         out_dir, "vo_lib run", force=force, inputs=[source], keep=keep, option="--out"
     ) as output:
+        announce_run(name, source, frames, out_dir)  # once --out is known to be writable
         seq = resolve_sequence(name, load_frames, odometry=not no_odometry, checked=True)
         with reading(seq.path):  # no command replaces the sequence while it is read
             report = _run_into(output, seq, name, frames, no_odometry, seed, motion)
@@ -233,6 +320,16 @@ def _run_into(
     output: OutputFolder, seq, name: str, frames, no_odometry: bool, seed: int, motion: str
 ) -> dict:
     """The pipeline on ``seq`` with its outputs written into ``output`` (committed at the end)."""
+    from vo_lib.evaluation import rpe
+    from vo_lib.stereo_vo.pipeline import (
+        WARM_UP_FRAMES,
+        FrameDiagnostics,
+        FrameTimings,
+        run_sequence,
+        warm_up,
+    )
+    from vo_lib.stereo_vo.vehicle import vehicle_of
+
     tmp = output.path
     if frames is not None and frames > len(seq) and not is_sample(name):  # samples: said above
         notice(f"--frames {frames}: {seq.path} has {len(seq)} frames; running all {len(seq)}")
@@ -241,11 +338,14 @@ def _run_into(
         raise UsageError(f"{seq.path}: has {n} frame; a run needs at least 2 frames")
     vehicle = vehicle_of(seq, use_odometry=not no_odometry)
     mount = vehicle.mount
-    seconds = warm_up(seq, use_odometry=not no_odometry, seed=seed, motion=motion)
-    print(
-        f"warm-up: {WARM_UP_FRAMES} frames run untimed first, {seconds:.1f} s (compiling the Numba "
-        "kernels in a fresh environment, loading them from the cache after); not in timings.csv"
-    )
+    with _say_if_slow(
+        f"compiling the Numba kernels on the first {WARM_UP_FRAMES} frames (first run in this "
+        "environment only: they are cached; up to a minute on 2 cores) ..."
+    ):
+        seconds = warm_up(seq, use_odometry=not no_odometry, seed=seed, motion=motion)
+    if seconds >= SLOW_S:
+        progress_line(f"compiled in {seconds:.0f} s, before the timed run (not in timings.csv)")
+    progress_line(f"visual odometry on {n} frames ...")
     result = run_sequence(
         seq,
         frames=n,
@@ -264,13 +364,13 @@ def _run_into(
     _write_csv(tmp / "diagnostics.csv", result.diagnostics, FrameDiagnostics)
     truth, odo = truth_and_odometry(seq, vehicle, n)
     title = f"{Path(name).name}: {n} frames"
-    _plot(tmp / "trajectory.png", seq.times[:n], result.poses, truth, odo, title)
+    _plot(tmp / "trajectory.png", seq.times[:n], result.poses, truth, odo, title, odometry_name(vehicle))
     print_timing_table(result, seq.camera, n)
     report = {}
     if truth is not None:
         report = error_report(result, truth, odo)
         rpe_m = rpe(seq.poses[:n], poses)[0].rmse
-        print_error_table(report, len(result.flagged), rpe_m)
+        print_error_table(report, len(result.flagged), rpe_m, odometry_name(vehicle))
     output.commit(sequence=str(seq.path.resolve()), frames=n, seed=seed, odometry=not no_odometry)
     return report
 
@@ -280,7 +380,7 @@ def evaluate_command(gt: str, est: str, segments=None) -> None:
 
     ``segments`` are lengths in metres (a comma-separated string or numbers), each positive.
     """
-    from vo_lib.evaluation import ate
+    from vo_lib.evaluation import ate, kitti_segment_errors, rpe
 
     _, G = read_trajectory(gt, min_poses=2)
     _, E = read_trajectory(est, min_poses=2)

@@ -8,6 +8,7 @@ states everything needed to make it again.
 from __future__ import annotations
 
 import hashlib
+import time
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
@@ -35,6 +36,8 @@ SENSOR_NOISE = 1.2
 #: back to 0 (AR(1) with this stationary deviation and :data:`EXPOSURE_FRAMES` correlation).
 EXPOSURE_SIGMA = 0.04
 EXPOSURE_FRAMES = 20.0
+#: Seconds between progress lines while a sample renders and the output is not a terminal.
+PROGRESS_EVERY_S = 10.0
 #: Wheel slip of a car on dry asphalt: small and nearly equal on both sides.
 CAR_SLIP = SlipModel(mean=0.003, difference=0.001, sigma=0.002, spot_turn_mean=0.0, spot_turn_difference=0.0)
 
@@ -377,7 +380,10 @@ def generate(
     """Render sample ``name`` into folder ``out``; returns the folder.
 
     ``frames`` keeps only the first frames of the drive; ``resolution`` is ``(width, height)``,
-    by default the sample's own.
+    by default the sample's own. ``progress``: True draws a bar (tqdm), ``"lines"`` prints a line
+    on stdout at the start and every :data:`PROGRESS_EVERY_S` seconds (for output that is not a
+    terminal),
+    False prints nothing.
     ``out`` must be new, empty or a folder this package wrote; ``force`` replaces any other
     (see :class:`~vo_lib.formats.sequence.SequenceWriter`).
     """
@@ -386,9 +392,7 @@ def generate(
     camera, drive, n = rendered.camera, rendered.drive, rendered.frames
     width, height = camera.width, camera.height
     with SequenceWriter(out, camera, force=force) as writer:
-        for left, right, _ in tqdm(
-            frame_iter, total=n, desc=f"rendering {name}", unit="frame", disable=not progress
-        ):
+        for left, right, _ in _with_progress(frame_iter, n, f"rendering {name}", progress):
             writer.add(left, right)
         manifest = {
             "sample": name,
@@ -413,6 +417,32 @@ def generate(
         cameras = rendered.camera_poses()
         poses = np.linalg.inv(cameras[0]) @ cameras  # camera k in camera 0's frame
         return writer.close(drive.times[:n], poses, drive.odometry[:n], manifest)
+
+
+def _with_progress(frames, total: int, label: str, progress):
+    """Yield ``frames``, showing progress as :func:`generate` describes it."""
+    if progress is True:
+        yield from tqdm(frames, total=total, desc=label, unit="frame")
+        return
+    if not progress:
+        yield from frames
+        return
+    print(
+        f"{label}: {total} frames (the first takes longest: the world's textures are built)",
+        flush=True,
+    )
+    start = last = time.perf_counter()
+    for done, item in enumerate(frames, 1):
+        yield item
+        now = time.perf_counter()
+        if now - last >= PROGRESS_EVERY_S or done == total:
+            left = (total - done) * (now - start) / done
+            print(
+                f"{label}: {done}/{total} frames, {now - start:.0f} s"
+                + (f", about {left:.0f} s to go" if done < total else ", done"),
+                flush=True,
+            )
+            last = now
 
 
 def _camera_entry(sample: Sample, camera: StereoCamera) -> dict:

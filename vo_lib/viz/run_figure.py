@@ -1,7 +1,8 @@
 """The figure ``python -m vo_lib run`` writes: what the run did, against the truth where known.
 
 Left, the run itself: the plan view of the path (ground truth drawn wide and pale underneath, the
-estimate thin and dashed on top, odometry beside them, start and end marked), or, for a drive
+estimate dashed on top, odometry beside them, start and end marked; a straight drive has the axis
+across it stretched to the paths' spread, so that drift of a few centimetres shows), or, for a drive
 that turns on the spot, the heading against time, since its centimetres of wander say nothing.
 Right, with ground truth, the errors over time: position (centimetres) and heading (degrees).
 """
@@ -18,11 +19,16 @@ ESTIMATE_STYLE = {"color": "C0", "lw": 1.3, "ls": "--", "zorder": 3}
 ODOMETRY_STYLE = {"color": "C1", "lw": 1.0, "zorder": 2}
 
 
-def _paths(estimate, truth, odometry):
+#: A path whose narrow side is below this share of its long side is drawn with the narrow axis
+#: stretched to the spread of the paths (a straight drive: the drift across it is the point).
+THIN_PATH = 0.15
+
+
+def _paths(estimate, truth, odometry, odometry_label="track odometry"):
     fused = "visual odometry (fused with odometry)" if odometry is not None else "visual odometry"
     paths = [(fused, estimate, ESTIMATE_STYLE)]
     if odometry is not None:
-        paths.insert(0, ("track odometry", odometry, ODOMETRY_STYLE))
+        paths.insert(0, (odometry_label, odometry, ODOMETRY_STYLE))
     if truth is not None:
         paths.insert(0, ("ground truth", truth, TRUTH_STYLE))
     return paths
@@ -40,9 +46,20 @@ def _plan_view(ax, paths, title):
     _mark_ends(ax, ends[:, 0], ends[:, 1], "k", f"end ({paths[0][0]})")
     estimate = paths[-1][1]
     ax.plot(estimate[-1, 0], estimate[-1, 1], "x", color="C0", ms=9, mew=2, zorder=6, label="end (estimate)")
-    ax.set_aspect("equal", adjustable="datalim")
-    ax.set_xlabel("x [m]")
-    ax.set_ylabel("y [m]")
+    labels = ["x [m]", "y [m]"]
+    spans = np.ptp(ends[:, :2], axis=0)
+    narrow = int(np.argmin(spans))
+    if spans[narrow] < THIN_PATH * spans[1 - narrow]:
+        # A straight drive: the narrow axis is scaled to how far the paths stray across it.
+        values = np.concatenate([poses[:, narrow] for _, poses, _ in paths])
+        low, high = values.min(), values.max()
+        pad = max(0.15 * (high - low), 0.005)
+        (ax.set_ylim if narrow else ax.set_xlim)(low - pad, high + pad)
+        labels[narrow] += ", not to scale"
+    else:
+        ax.set_aspect("equal", adjustable="datalim")
+    ax.set_xlabel(labels[0])
+    ax.set_ylabel(labels[1])
     ax.set_title(title)
 
 
@@ -56,7 +73,9 @@ def _heading_view(ax, times, paths, title):
     ax.set_title(title)
 
 
-def plot_run(fig, times, estimate, truth=None, odometry=None, title: str = "") -> dict:
+def plot_run(
+    fig, times, estimate, truth=None, odometry=None, title: str = "", odometry_label: str = "track odometry"
+) -> dict:
     """Draw a run's figure on ``fig``.
 
     Parameters
@@ -67,6 +86,8 @@ def plot_run(fig, times, estimate, truth=None, odometry=None, title: str = "") -
     estimate, truth, odometry : array_like, shape (K, 3)
         Planar poses ``(x, y, yaw)``; ``truth`` and ``odometry`` may be None.
     title : str
+    odometry_label : str
+        What the odometry is: track odometry on the crawler, wheel or OXTS odometry on a car.
 
     Returns
     -------
@@ -78,7 +99,7 @@ def plot_run(fig, times, estimate, truth=None, odometry=None, title: str = "") -
     estimate = np.asarray(estimate, float)
     truth = None if truth is None else np.asarray(truth, float)
     odometry = None if odometry is None else np.asarray(odometry, float)
-    paths = _paths(estimate, truth, odometry)
+    paths = _paths(estimate, truth, odometry, odometry_label)
     spot = truth is not None and is_spot_turn(truth)
     if truth is None:
         main, errors = fig.add_subplot(1, 1, 1), []

@@ -1,0 +1,201 @@
+"""The student's first steps in a real JupyterLab, in headless Chromium.
+
+A copy of the repository's notebook folder (one notebook, its jupytext configuration and the
+``.gitignore``) is committed to a fresh git repository; ``jupyter lab`` serves that copy from its
+top folder, as the README starts it. In the browser, the test double-clicks the ``notebooks``
+folder and then the notebook: it must open as a notebook (jupytext's viewer, by the settings
+override that ``jupyterlab-settings/`` installs), not in the text editor. It then runs all cells
+from the Run menu, saves with Ctrl+S, and checks that every code cell ran without an error and
+that ``git status`` is clean: saving leaves the ``.py`` file byte for byte as committed.
+Screenshots go to ``docs/_build/screenshots/jupyterlab-*.png``.
+
+Needs Debian's Chromium at /usr/bin/chromium and Playwright (as tests/test_site.py does); it skips
+saying which is missing.
+"""
+
+from __future__ import annotations
+
+import os
+import pathlib
+import secrets
+import shutil
+import socket
+import subprocess
+import sys
+import time
+import urllib.request
+
+import jupytext
+import pytest
+
+ROOT = pathlib.Path(__file__).resolve().parents[1]
+CHROMIUM = pathlib.Path("/usr/bin/chromium")
+CHROMIUM_FLAGS = [
+    "--headless",
+    "--no-sandbox",
+    "--disable-gpu",
+    "--disable-quic",
+    "--no-first-run",
+    "--disable-background-networking",
+    "--disable-component-update",
+    "--disable-sync",
+]
+NOTEBOOK = "02_circular_motion_derivation.py"  # no rendering, no compiled kernel: quick to run
+SETTINGS = pathlib.Path(sys.prefix) / "share/jupyter/lab/settings/overrides.d/vo-notebooks.json"
+SCREENSHOTS = ROOT / "docs" / "_build" / "screenshots"
+START_TIMEOUT_S = 120
+RUN_TIMEOUT_MS = 300_000  # the notebook's own run, on a loaded 2-core machine
+UI_TIMEOUT_MS = 60_000
+
+pytestmark = [
+    pytest.mark.notebook,
+    pytest.mark.skipif(
+        not CHROMIUM.is_file(), reason=f"no Chromium at {CHROMIUM} (apt-get install chromium)"
+    ),
+]
+
+
+def git(cwd: pathlib.Path, *args: str) -> str:
+    return subprocess.run(
+        ["git", "-c", "user.name=test", "-c", "user.email=test@example.org", *args],
+        cwd=cwd,
+        check=True,
+        capture_output=True,
+        text=True,
+    ).stdout
+
+
+def free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+@pytest.fixture
+def clone(tmp_path):
+    """A git repository holding the notebook, the jupytext configuration and the .gitignore."""
+    repo = tmp_path / "repo"
+    (repo / "notebooks").mkdir(parents=True)
+    shutil.copy2(ROOT / ".gitignore", repo / ".gitignore")
+    for name in (NOTEBOOK, "jupytext.toml"):
+        shutil.copy2(ROOT / "notebooks" / name, repo / "notebooks" / name)
+    git(repo, "init", "-q")
+    git(repo, "add", "-A")
+    git(repo, "commit", "-q", "-m", "notebook")
+    return repo
+
+
+@pytest.fixture
+def lab(clone, tmp_path):
+    """``jupyter lab`` serving the clone from its top folder; yields its URL with the token."""
+    port, token = free_port(), secrets.token_hex(16)
+    log_path = tmp_path / "lab.log"
+    log = log_path.open("w")
+    proc = subprocess.Popen(
+        [
+            sys.executable,
+            "-m",
+            "jupyter",
+            "lab",
+            "--no-browser",
+            "--allow-root",  # CI containers run as root; harmless otherwise
+            "--ip=127.0.0.1",
+            f"--port={port}",
+            "--port-retries=0",
+            f"--IdentityProvider.token={token}",
+            "--LabApp.news_url=",  # no news pop-up asking for consent
+            "--LabApp.check_for_updates_class=jupyterlab.NeverCheckForUpdate",
+        ],
+        cwd=clone,
+        stdout=log,
+        stderr=subprocess.STDOUT,
+        # a user settings folder of its own: only the environment's overrides apply
+        env={
+            **os.environ,
+            "JUPYTER_RUNTIME_DIR": str(tmp_path / "runtime"),
+            "JUPYTERLAB_SETTINGS_DIR": str(tmp_path / "user-settings"),
+            "JUPYTERLAB_WORKSPACES_DIR": str(tmp_path / "workspaces"),
+        },
+    )
+    base = f"http://127.0.0.1:{port}"
+    try:
+        deadline = time.monotonic() + START_TIMEOUT_S
+        while True:
+            try:
+                urllib.request.urlopen(f"{base}/api/status?token={token}", timeout=10).close()
+                break
+            except OSError:
+                if proc.poll() is not None or time.monotonic() > deadline:
+                    log.flush()
+                    pytest.fail("jupyter lab did not start:\n" + log_path.read_text()[-3000:])
+                time.sleep(0.5)
+        yield f"{base}/lab?token={token}"
+    finally:
+        proc.terminate()
+        try:
+            proc.wait(timeout=30)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            proc.wait(timeout=30)
+        log.close()
+
+
+def test_the_settings_override_is_installed():
+    """The default viewer comes from the environment, not from a user's own settings."""
+    assert SETTINGS.is_file(), f"{SETTINGS} missing: pip install -r environment.txt installs it"
+    assert SETTINGS.read_text() == (ROOT / "jupyterlab-settings" / "vo-notebooks.json").read_text()
+
+
+def test_double_click_opens_a_notebook_that_runs_and_saves_without_changing_the_file(clone, lab):
+    sync_api = pytest.importorskip("playwright.sync_api", reason="the playwright package is not installed")
+    assert SETTINGS.is_file(), f"{SETTINGS} missing: pip install -r environment.txt installs it"
+    SCREENSHOTS.mkdir(parents=True, exist_ok=True)
+    saved = clone / "notebooks" / NOTEBOOK
+    code_cells = sum(c.cell_type == "code" for c in jupytext.read(saved).cells)
+    before = saved.stat().st_mtime_ns
+    with sync_api.sync_playwright() as playwright:
+        browser = playwright.chromium.launch(executable_path=str(CHROMIUM), args=CHROMIUM_FLAGS)
+        try:
+            page = browser.new_page(viewport={"width": 1400, "height": 900})
+            page.set_default_timeout(UI_TIMEOUT_MS)
+            page.goto(lab)
+            listing = page.locator(".jp-DirListing-content")
+            listing.get_by_text("notebooks", exact=True).dblclick()
+            listing.get_by_text(NOTEBOOK, exact=True).dblclick()
+            # A notebook view, not the text editor that opens .py files by default.
+            panel = page.locator(".jp-NotebookPanel:visible")
+            panel.wait_for()
+            assert page.locator(".jp-FileEditor:visible").count() == 0
+            page.locator(".jp-Notebook-ExecutionIndicator[data-status='idle']").first.wait_for()
+            page.screenshot(path=str(SCREENSHOTS / "jupyterlab-opened.png"))
+
+            page.locator(".lm-MenuBar-itemLabel", has_text="Run").first.click()
+            page.get_by_text("Run All Cells", exact=True).click()
+            # Every code cell has run when none is queued or running and the kernel is idle.
+            page.wait_for_function(
+                """(n) => {
+                    const prompts = [...document.querySelectorAll('.jp-CodeCell .jp-InputPrompt')];
+                    return prompts.length === n && prompts.every(p => /\\[\\d+\\]/.test(p.textContent));
+                }""",
+                arg=code_cells,
+                timeout=RUN_TIMEOUT_MS,
+            )
+            errors = page.locator(".jp-OutputArea-output[data-mime-type='application/vnd.jupyter.stderr']")
+            tracebacks = [
+                t for t in errors.all_inner_texts() if "Traceback" in t or "Error" in t.split("\n")[0]
+            ]
+            assert not tracebacks, tracebacks[0]
+            page.screenshot(path=str(SCREENSHOTS / "jupyterlab-ran.png"))
+
+            panel.click(position={"x": 200, "y": 5})
+            page.keyboard.press("Control+s")
+            deadline = time.monotonic() + UI_TIMEOUT_MS / 1000
+            while saved.stat().st_mtime_ns == before:  # the file is written again, whatever its text
+                assert time.monotonic() < deadline, "Ctrl+S did not save the notebook"
+                time.sleep(0.2)
+            page.screenshot(path=str(SCREENSHOTS / "jupyterlab-saved.png"))
+        finally:
+            browser.close()
+    status = git(clone, "status", "--porcelain")
+    assert status == "", f"saving changed the repository:\n{status}\n{git(clone, 'diff')}"
+    assert saved.read_bytes() == (ROOT / "notebooks" / NOTEBOOK).read_bytes()
