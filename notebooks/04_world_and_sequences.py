@@ -176,7 +176,14 @@ odometry = TrackOdometry()
 fig, axes = new_axes(len(WORLDS), width=4.0, height=4.0)
 drives, rows = {}, []
 for name, sample in SAMPLES.items():
-    drive = simulate_drive(sample.legs, sample.rate, sample.start, np.random.default_rng(sample.seed))
+    drive = simulate_drive(
+        sample.legs,
+        sample.rate,
+        sample.start,
+        np.random.default_rng(sample.seed),
+        slip=sample.slip,
+        surface=sample.surface,
+    )
     believed = odometry.integrate(drive.odometry[1:], start=sample.start)
     drives[name] = (drive, believed)
     rows.append(
