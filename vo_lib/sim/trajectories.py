@@ -128,8 +128,8 @@ class TrackGround:
     icr_sigma: float = 0.01
     icr_frames: float = 60.0
     contact_rate: float = 0.0
-    contact_frames: int = 6
-    contact_grip: float = 0.2
+    contact_frames: int = 4
+    contact_grip: float = 0.5
     tilt_deg: tuple[float, float] = (2.0, 5.0)
     roughness_deg: float = 0.0
     roughness_frames: float = 15.0
@@ -181,9 +181,9 @@ class TrackGround:
 RIGID_GROUND = TrackGround(icr_offset=0.0, icr_per_rate=0.0, icr_sigma=0.0)
 #: A lab floor: the crawler skids in turns, but the floor is flat.
 LAB_FLOOR = TrackGround()
-#: Outdoor paving and gravel: skid, two losses of contact per ten metres a track travels, and
-#: half a degree of pitch and roll from the unevenness.
-ROUGH_GROUND = TrackGround(contact_rate=0.2, roughness_deg=0.5)
+#: Outdoor paving: skid, two losses of contact per ten metres a track travels (each 4 frames,
+#: 0.13 s, at half grip), and 0.15 degrees of slow pitch and roll from the unevenness.
+ROUGH_GROUND = TrackGround(contact_rate=0.2, roughness_deg=0.15, roughness_frames=30.0)
 
 
 def integrate_body(steps: np.ndarray, start) -> np.ndarray:
