@@ -22,7 +22,7 @@ import numpy as np
 from vo_lib.evaluation import key_position_errors
 from vo_lib.geometry import relative_planar, wrap_angle
 from vo_lib.models.track_odometry import TrackOdometry
-from vo_lib.sim.samples import SAMPLES, fingerprint, render_sample
+from vo_lib.sim.samples import fingerprint, render_sample
 from vo_lib.stereo_vo.pipeline import run_frames
 
 #: The stored results, in the repository.
