@@ -232,7 +232,6 @@ from vo_lib.stereo_vo.ransac import (
 DRAW_SEED = 16
 K2 = GATE_SIGMAS**2  # a match passes within k = 3 of its own standard deviations
 NO_PRIOR = np.array([np.nan, np.nan])  # the compiled search takes an optional prior hypothesis
-NONE = np.empty(0)  # phase 1 needs no points
 fx, fy, u0, v0, baseline = camera.fx, camera.fy, camera.cx, camera.cy, camera.baseline
 draws = hypothesis_draws(DRAW_SEED)  # draws[0]: theta hypotheses, draws[1]: rho hypotheses
 
@@ -307,22 +306,11 @@ def adaptive_search(values, variances, uniforms, support):
 
 theta_h, var_h, count_h, tried_theta = adaptive_search(theta_j, var_theta, draws[0], theta_support)
 print(f"best θ hypothesis {math.degrees(theta_h):.4f}°: {count_h} supporters, {tried_theta} hypotheses tried")
+# the compiled search takes the residual theta_j - h as offset (theta_j, 0, 0) plus h times (-1, 0, 0)
+THETA_OFFSETS = np.stack([theta_j, 0 * theta_j, 0 * theta_j], 1)
+MINUS_X = np.array([-1.0, 0.0, 0.0])
 compiled = ransac_core.search(
-    1,
-    theta_j,
-    var_theta,
-    draws[0],
-    CONFIDENCE,
-    draws.shape[1],
-    NO_PRIOR,
-    K2,
-    NONE,
-    NONE,
-    NONE,
-    0.0,
-    0.0,
-    MIN_POOL,
-    POOL_FRACTION,
+    theta_j, var_theta, THETA_OFFSETS, MINUS_X, draws[0], NO_PRIOR, K2, ransac_core.RansacParams()
 )
 assert (theta_h, var_h, count_h, tried_theta) == tuple(compiled)
 
@@ -356,12 +344,13 @@ print(
     f"θ̂ = {math.degrees(theta_hat):.4f}° ± {math.degrees(math.sqrt(var_theta_hat)):.4f}°; "
     f"{theta_in.sum()} pass eq. 20"
 )
-compiled = ransac_core.reestimate(1, theta_h, var_h, theta_j, var_theta, K2, NONE, NONE, NONE, 0.0, 0.0)
+compiled = ransac_core.reestimate(
+    theta_j, var_theta, ransac_core.supporters(THETA_OFFSETS, MINUS_X, var_theta, theta_h, var_h, K2)
+)
 assert np.allclose((theta_hat, var_theta_hat), compiled, rtol=1e-13, atol=0)
 ta, ba = gate_angles(wa, camera)
 tb, bb = gate_angles(wb, camera)
-compiled_in = np.empty(len(wa), bool)
-ransac_core.theta_gate_pass(ta, ba, tb, bb, theta_j, var_theta, theta_hat, var_theta_hat, K2, compiled_in)
+compiled_in = ransac_core.theta_gate_pass(ta, ba, tb, bb, theta_j, var_theta, theta_hat, var_theta_hat, K2)
 assert np.array_equal(theta_in, compiled_in)
 
 # %% [markdown]
@@ -403,19 +392,14 @@ keep[theta_in] = rho_support(rho_i, var_i, rho_hat, var_rho_hat)
 print(f"ρ̂ = {rho_hat * 100:.3f} cm ({count_rho} supporters); {keep.sum()} matches pass both gates")
 Q_minus_RP = Q[theta_in] - P[theta_in] @ cm.motion_matrices(theta_hat, 0.0)[0].T  # the compiled gate adds -T
 compiled = ransac_core.search(
-    2,
     rho_i,
     var_i,
+    Q_minus_RP,
+    np.array([math.sin(theta_hat / 2), 0.0, math.cos(theta_hat / 2)]),
     draws[1],
-    CONFIDENCE,
-    draws.shape[1],
     NO_PRIOR,
     K2,
-    *Q_minus_RP.T.copy(),
-    math.sin(theta_hat / 2),
-    math.cos(theta_hat / 2),
-    MIN_POOL,
-    POOL_FRACTION,
+    ransac_core.RansacParams(),
 )
 assert compiled[2:] == (count_rho, tried_rho) and np.isclose(compiled[0], rho_h, rtol=1e-12, atol=0)
 
