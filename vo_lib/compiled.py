@@ -5,16 +5,17 @@ else beside the module, else in the user's cache folder), so only the first call
 environment pays for compilation. Where no cache folder can be written (a read-only install and
 home) the functions are compiled afresh in each process instead of failing.
 
-Every compiled kernel that Python code calls has a *plain twin*: short NumPy or Python that computes
-the same result and that a reader can step through in a debugger. The twin is registered with
-:func:`plain_twin`; :func:`choose` returns the twin instead of the kernel when the environment
-variable ``VO_LIB_PLAIN`` is set to anything but ``""`` or ``"0"``, or when the caller asks for it.
-Functions compiled with ``jit(..., step_of=kernel)`` are steps that only run inside ``kernel``;
-its twin stands for them.
+Every compiled kernel that Python code calls names its *plain twin* (``jit(twin=...)``): short
+NumPy or Python, in a ``*_plain`` module beside the kernel, that computes the same result and
+that a reader can step through in a debugger. :func:`choose` returns the twin instead of the
+kernel when the environment variable ``VO_LIB_PLAIN`` is set to anything but ``""`` or ``"0"``,
+or when the caller asks for it. Functions compiled with ``jit(step_of=...)`` are steps that only
+run inside another kernel; that kernel's twin stands for them.
 """
 
 from __future__ import annotations
 
+import importlib
 import os
 from collections.abc import Callable
 
@@ -22,8 +23,8 @@ from numba import njit
 
 #: Every compiled function of the package, by ``module.name``: the kernels and their steps.
 COMPILED: dict[str, object] = {}
-#: Kernel name -> its plain twin.
-TWINS: dict[str, Callable] = {}
+#: Kernel name -> ``module.name`` of its plain twin.
+TWINS: dict[str, str] = {}
 #: Step name -> the kernel it runs inside.
 STEPS: dict[str, str] = {}
 
@@ -43,36 +44,30 @@ def _compile(function):
         return njit(error_model="numpy")(function)
 
 
-def jit(function=None, *, step_of=None):
+def jit(function=None, *, twin: str | None = None, step_of: str | None = None):
     """Compile with NumPy semantics for division by zero (inf / nan, no exception), cached where a
     cache folder can be written, uncached otherwise.
 
     Parameters
     ----------
     function : callable
-        Python source of the kernel (usable as ``@jit`` or ``@jit(step_of=...)``).
+        Python source of the kernel (usable as ``@jit`` or ``@jit(twin=...)``).
+    twin : str, optional
+        ``module.name`` of the kernel's plain twin (imported only when it is chosen).
     step_of : str, optional
         ``module.name`` of the kernel this function is a step of; it is then not called from
         Python and has no twin of its own.
     """
     if function is None:
-        return lambda f: jit(f, step_of=step_of)
+        return lambda f: jit(f, twin=twin, step_of=step_of)
     compiled = _compile(function)
     name = kernel_name(function)
     COMPILED[name] = compiled
+    if twin is not None:
+        TWINS[name] = twin
     if step_of is not None:
         STEPS[name] = step_of
     return compiled
-
-
-def plain_twin(kernel):
-    """Register the decorated plain function as the twin of compiled ``kernel``."""
-
-    def register(plain: Callable) -> Callable:
-        TWINS[kernel_name(kernel)] = plain
-        return plain
-
-    return register
 
 
 def plain_wanted(plain: bool | None = None) -> bool:
@@ -82,8 +77,12 @@ def plain_wanted(plain: bool | None = None) -> bool:
     return os.environ.get("VO_LIB_PLAIN", "").strip() not in ("", "0")
 
 
+def twin_of(kernel) -> Callable:
+    """The plain twin of compiled ``kernel``."""
+    module, _, name = TWINS[kernel_name(kernel)].rpartition(".")
+    return getattr(importlib.import_module(module), name)
+
+
 def choose(kernel, plain: bool | None = None) -> Callable:
     """The compiled ``kernel``, or its plain twin when :func:`plain_wanted`."""
-    if plain_wanted(plain):
-        return TWINS[kernel_name(kernel)]
-    return kernel
+    return twin_of(kernel) if plain_wanted(plain) else kernel

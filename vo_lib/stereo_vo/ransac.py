@@ -46,7 +46,6 @@ from vo_lib.camera import StereoCamera
 from vo_lib.compiled import choose
 from vo_lib.geometry import as_match_array
 from vo_lib.stereo_vo import ransac_core as core
-from vo_lib.stereo_vo import ransac_plain  # noqa: F401  (registers the plain twins)
 from vo_lib.stereo_vo.circular_motion import motion_matrices, rho_from_pixels, theta_from_pixels
 from vo_lib.stereo_vo.ransac_core import CameraTerms, RansacParams
 from vo_lib.stereo_vo.ransac_core import hypotheses_needed as hypotheses_needed  # one formula for all

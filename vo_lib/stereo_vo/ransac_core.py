@@ -69,7 +69,7 @@ _theta_variance = _jit(theta_variance, step_of=_CORE)
 _hypotheses_needed = _jit(hypotheses_needed, step_of=_CORE)
 
 
-@_jit
+@_jit(twin="vo_lib.stereo_vo.ransac_plain.gauss_newton")
 def gauss_newton(P, Q, wa, wb, theta, rho, cam, iterations):
     """Gauss-Newton on forward and backward reprojection errors in disparity space (the model
     and Jacobian are written out in ``ransac_plain.reprojection``). Returns
@@ -121,7 +121,7 @@ def gauss_newton(P, Q, wa, wb, theta, rho, cam, iterations):
     return theta, rho, a00, a01, a11, rss
 
 
-@_jit
+@_jit(twin="vo_lib.stereo_vo.ransac_plain.covariance")
 def covariance(a00, a01, a11, rss, count):
     """Covariance of ``(theta, rho)`` from the normal matrix; forward and backward residuals
     carry the same noise, so their information counts once (the factor 2)."""
@@ -290,7 +290,7 @@ def whitened_pass(P, b, theta, rho, cam, params):
     return out
 
 
-@_jit
+@_jit(twin="vo_lib.stereo_vo.ransac_plain.one_point")
 def one_point_core(a, b, cam, prior_theta, prior_rho, draws, params):
     """Everything numeric of ``one_point_ransac``. ``cam`` is a :class:`CameraTerms`, ``params`` a
     :class:`RansacParams`, ``prior_theta`` / ``prior_rho`` are ``(value, variance)`` pairs, NaN

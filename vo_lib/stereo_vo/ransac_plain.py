@@ -14,7 +14,6 @@ import math
 
 import numpy as np
 
-from vo_lib.compiled import plain_twin
 from vo_lib.stereo_vo import ransac_core as core
 from vo_lib.stereo_vo.circular_motion import theta_variance
 
@@ -151,7 +150,6 @@ def reprojection(theta, rho, P, Q, wa, wb, cam):
     return r, np.concatenate([J_fwd @ d_fwd, J_bwd @ d_bwd]).reshape(-1, 2)
 
 
-@plain_twin(core.gauss_newton)
 def gauss_newton(P, Q, wa, wb, theta, rho, cam, iterations):
     """Gauss-Newton on ``(theta, rho)``: ``(theta, rho, A00, A01, A11, rss)`` with the normal
     matrix ``J^T J`` and residuals of the last iterate before its step."""
@@ -168,7 +166,6 @@ def gauss_newton(P, Q, wa, wb, theta, rho, cam, iterations):
     return theta, rho, A[0, 0], A[0, 1], A[1, 1], rss
 
 
-@plain_twin(core.covariance)
 def covariance(a00, a01, a11, rss, count):
     """``2 sigma^2 A^-1``: forward and backward residuals carry the same noise, so their
     information counts once; infinite variances when ``A`` is singular."""
@@ -189,7 +186,6 @@ def whitened_pass(P, b, theta, rho, cam, params):
     return (moved[:, 2] > 0) & (np.sum(r * r, axis=1) <= limit)
 
 
-@plain_twin(core.one_point_core)
 def one_point(a, b, cam, prior_theta, prior_rho, draws, params):
     """The whole estimator, with the arguments and results of ``ransac_core.one_point_core``."""
     k2 = params.gate_sigmas**2
