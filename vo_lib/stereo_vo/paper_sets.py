@@ -1,13 +1,14 @@
-"""Seed 000's outdoor sets at the paper's length: the two spot-turn sets (IV.B.2, Fig. 10) and the
-three free-motion sets of Table 2 (IV.B.3), run through the full pipeline and reported the way the
-paper reports them, as the average (AVG) and standard deviation (S.D.) of the errors at key
-positions.
+"""Seed 000's experiments at the paper's length: the two spot-turn sets (IV.B.2, Fig. 10), the
+three free-motion sets of Table 2 (IV.B.3), outdoor linear motion (IV.B.1) and indoor free motion
+(IV.A.3), run through the full pipeline and reported the way the paper reports them, as the
+average (AVG) and standard deviation (S.D.) of the errors at key positions.
 
-A full run renders and processes about 10,700 frames (half an hour on one core), more than a
-notebook can afford; :func:`compute` runs them once and :func:`write` stores the figures in
-``data/results/paper_sets.json`` with the code version and the sample fingerprints that made
-them. Notebook 08 reads them (:func:`load`); a ``samples``-marked test runs them again and
-compares. Run ``python -m vo_lib.stereo_vo.paper_sets`` to recompute the stored file.
+A full run renders and processes about 12,700 frames, more than a notebook can afford;
+:func:`compute` runs them once and :func:`write` stores the figures in
+``data/results/paper_sets.json``, each set with the code version and the sample fingerprint that
+made it. Notebook 08 reads them (:func:`load`); a ``samples``-marked test runs them again and
+compares. ``python -m vo_lib.stereo_vo.paper_sets [SET ...]`` recomputes the named sets (default:
+all) and stores them beside the others.
 """
 
 from __future__ import annotations
@@ -41,15 +42,29 @@ PAPER_TABLE2 = {
     "outdoor_free_2": {"x_mm": (-326.2, 818.1), "y_mm": (-1057.3, 950.6), "theta_deg": (16.68, 5.32)},
     "outdoor_free_3": {"x_mm": (-25.4, 135.8), "y_mm": (-131.9, 115.1), "theta_deg": (2.43, 3.68)},
 }
-#: The paper's frame counts of the five sets.
+#: Seed 000, IV.B.1 (outdoor linear motion, x and y) and IV.A.3 (indoor free motion): AVG, S.D.
+PAPER_OTHER = {
+    "outdoor_linear": {"x_mm": (15.8, 53.0), "y_mm": (124.5, 40.3)},
+    "indoor_free": {"x_mm": (-1.5, 47.4), "y_mm": (7.4, 8.5), "theta_deg": (0.05, 0.56)},
+}
+#: The paper's frame counts (None: not stated).
 PAPER_FRAMES = {
     "spot_turn": 1800,
     "spot_turn_2": 2400,
     "outdoor_free": 1403,
     "outdoor_free_2": 2419,
     "outdoor_free_3": 2670,
+    "outdoor_linear": 1200,
+    "indoor_free": None,
 }
 SETS = tuple(PAPER_FRAMES)
+
+
+def paper(name: str) -> dict:
+    """The paper's AVG and S.D. of a set, by quantity (``x_mm``, ``y_mm``, ``theta_deg``)."""
+    if name in PAPER_SPOT:
+        return {"theta_deg": PAPER_SPOT[name]}
+    return PAPER_TABLE2.get(name) or PAPER_OTHER[name]
 
 
 def code_version() -> str:
@@ -88,6 +103,7 @@ def run_set(name: str, frames: int | None = None) -> dict:
     steps = np.diff(truth, axis=0)
     return {
         "frames": int(n),
+        "code_version": code_version(),
         "fingerprint": fingerprint(name),
         "distance_m": float(np.hypot(steps[:, 0], steps[:, 1]).sum()),
         "turned_deg": float(np.degrees(np.abs(wrap_angle(steps[:, 2])).sum())),
@@ -100,9 +116,9 @@ def run_set(name: str, frames: int | None = None) -> dict:
     }
 
 
-def compute(names=SETS, frames: int | None = None, log=None) -> dict:
-    """Every set of ``names``, whole (or shortened to ``frames``), with the code version."""
-    out = {"code_version": code_version(), "key_every": KEY_EVERY, "seed": SEED, "sets": {}}
+def compute(names=SETS, frames: int | None = None, log=None, into: dict | None = None) -> dict:
+    """Every set of ``names``, whole (or shortened to ``frames``), added to ``into`` (or a new record)."""
+    out = into or {"key_every": KEY_EVERY, "seed": SEED, "sets": {}}
     for name in names:
         out["sets"][name] = run_set(name, frames)
         if log:
@@ -133,9 +149,13 @@ def load(path=RESULTS) -> dict:
 
 
 def main(argv=None) -> int:
-    argv = sys.argv[1:] if argv is None else argv
-    path = Path(argv[0]) if argv else RESULTS
-    print(f"written {write(compute(log=sys.stdout), path)}")
+    names = (sys.argv[1:] if argv is None else list(argv)) or list(SETS)
+    unknown = [n for n in names if n not in SETS]
+    if unknown:
+        print(f"error: unknown set {unknown[0]!r}; the sets are {', '.join(SETS)}", file=sys.stderr)
+        return 2
+    stored = json.loads(RESULTS.read_text()) if RESULTS.exists() else None
+    print(f"written {write(compute(names, log=sys.stdout, into=stored))}")
     return 0
 
 
