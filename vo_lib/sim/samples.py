@@ -273,7 +273,9 @@ class RenderedSample:
     """A sample's rig, truth and an iterator of ``(left, right, odometry_or_None)`` frames.
 
     ``vehicle_poses`` are the world poses ``(N, 4, 4)`` of the vehicle (for the crawler, its planar
-    poses on the floor; for the car, on the road's surface); ``mount`` places the left camera on it.
+    poses on the floor, tilted by the body's pitch and roll about the contact point when its ground
+    is rough; for the car, on the road's surface); ``mount`` places the left camera on it.
+    :meth:`truth` stays planar: the pose of the body on the floor.
     """
 
     camera: StereoCamera
