@@ -154,3 +154,15 @@ def test_same_seed_same_skid():
 def test_bad_ground_parameters(kwargs, message):
     with pytest.raises(ValueError, match=message):
         TrackGround(**kwargs)
+
+
+def test_a_skidding_spot_turn_still_counts_as_one():
+    from vo_lib.evaluation import is_spot_turn, planar_path_length
+
+    paths = {}
+    for name in ("spot_turn", "outdoor_free"):
+        s = SAMPLES[name]
+        rng = np.random.default_rng(s.seed)
+        paths[name] = simulate_drive(s.legs, s.rate, s.start, rng, slip=s.slip, surface=s.surface).poses
+    assert planar_path_length(paths["spot_turn"]) > 0.1  # the centre circles its turning centre
+    assert is_spot_turn(paths["spot_turn"]) and not is_spot_turn(paths["outdoor_free"])
