@@ -86,7 +86,7 @@ class TrackGround:
     """How the tracks meet the ground: skid, a wandering turning centre and brief losses of contact.
 
     Kinematics of a skid-steered vehicle after Martínez et al. (2005), "Approximating kinematics
-    for tracked mobile robots", Int. J. Robotics Research 24(10), 867-878, eq. 1-4: in the body
+    for tracked mobile robots", Int. J. Robotics Research 24(10), 867-878: in the body
     frame the vehicle turns about an ICR at ``(x_icr, v_x / omega)``, so the body's centre moves
     sideways with ``v_y = -x_icr * omega`` (it skids outward of the turn when the ICR lies ahead).
     The left and right tracks' own ICRs, which lie outside the tracks and make the body turn less
