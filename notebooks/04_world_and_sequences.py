@@ -185,14 +185,23 @@ plt.show()
 # Each sample sequence is a world, a drive and a rate. A drive is a list of legs (frames, speed,
 # turn rate) that the robot follows over the ground; the encoders count what the motors turned,
 # which is more than the ground moved by the track slip. Slip is about 1 % when driving and 6 %,
-# unequal between the tracks, when turning on the spot.
+# unequal between the tracks, when turning on the spot. The crawler also skids sideways in its
+# turns and, on the yard's rough ground, briefly loses track contact while its body pitches and
+# rolls (`vo_lib.sim.trajectories.TrackGround`); the encoders see none of that.
 
 # %%
 odometry = TrackOdometry()
 fig, axes = panel_grid(len(WORLDS))
 drives, rows = {}, []
 for name, sample in SAMPLES.items():
-    drive = simulate_drive(sample.legs, sample.rate, sample.start, np.random.default_rng(sample.seed))
+    drive = simulate_drive(
+        sample.legs,
+        sample.rate,
+        sample.start,
+        np.random.default_rng(sample.seed),
+        slip=sample.slip,
+        surface=sample.surface,
+    )
     believed = odometry.integrate(drive.odometry[1:], start=sample.start)
     drives[name] = (drive, believed)
     rows.append(

@@ -17,6 +17,8 @@
 # true disparity we know, and measures each step.
 #
 # **You will learn**
+# - how a stereo pair gives depth (triangulation), why rectified pairs are matched along rows
+#   (epipolar lines), and how the depth error grows with depth;
 # - how FAST finds corners, and why they are spread over the image by grid bucketing;
 # - what a binary descriptor is, and why the Hamming distance separates true from false matches;
 # - how rectification turns stereo matching into a search along one row, and how a parabola
@@ -47,7 +49,7 @@ from vo_lib.camera import StereoCamera
 from vo_lib.geometry import camera_mount, planar_to_matrix
 from vo_lib.sim.render import SensorEffects, StereoRenderer
 from vo_lib.sim.world import indoor_lab
-from vo_lib.stereo_vo.features import StereoFrontEnd, bucket, hamming
+from vo_lib.stereo_vo.features import ROW_TOLERANCE, StereoFrontEnd, bucket, hamming
 from vo_lib.viz.plotting import new_axes
 from vo_lib.viz.widgets import offer, slider
 
@@ -60,6 +62,127 @@ renderer = StereoRenderer(indoor_lab(), camera, SensorEffects(noise_sigma=1.0))
 pose = planar_to_matrix((-3.0, 0.3, 0.2)) @ camera_mount(height=0.5)
 left, right, depth = renderer.render_pair(pose, rng, with_depth=True)
 true_disparity = camera.fx * camera.baseline / depth
+
+# %% [markdown]
+# ## 0 · Stereo geometry: a primer
+#
+# **Triangulation.** Two pinhole cameras with the same intrinsics (focal lengths f_x, f_y,
+# principal point (u₀, v₀)) look the same way, the right one B metres to the right of the left.
+# A point at depth Z appears in the right image shifted left by the *disparity*
+# d = u − u_r = f_x B / Z, so from (u, v, d) the point is (seed 000, eq. 13)
+#
+#   X = B (u − u₀)/d,   Y = B (v − v₀)/d · f_x/f_y,   Z = f_x B / d.
+#
+# The renderer gives the true depth of every pixel of the pair above; triangulating its true
+# disparity gives that depth back:
+
+# %%
+rows_px, cols_px = np.mgrid[40:480:80, 40:640:80]
+w_true = np.column_stack([cols_px.ravel(), rows_px.ravel(), true_disparity[rows_px, cols_px].ravel()])
+points_true = camera.backproject(w_true)
+assert np.allclose(points_true[:, 2], depth[rows_px, cols_px].ravel(), rtol=1e-6)  # depth is float32
+print(f"{len(w_true)} pixels: depths {points_true[:, 2].min():.2f}–{points_true[:, 2].max():.2f} m recovered")
+
+# %% [markdown]
+# **Rectification and epipolar lines.** For a pixel of the left image, its match in the right one
+# must lie on a line, the *epipolar line*: the image of the left pixel's ray. It follows from the
+# fundamental matrix F = K⁻ᵀ [t]ₓ R K⁻¹ of the rig (R and t take left-camera points to the right
+# camera; K holds the intrinsics): a match x′ of x satisfies x′ᵀ F x = 0. When the two image
+# planes are coplanar and their rows aligned — a *rectified* pair, what calibration and
+# resampling make of a real rig, and what our renderer produces — every epipolar line is the
+# image row of its pixel, and matching becomes a search along one row (section 3). A right
+# camera pitched by only 1° tilts and shifts them:
+
+# %%
+K = np.array([[camera.fx, 0, camera.cx], [0, camera.fy, camera.cy], [0, 0, 1]])
+
+
+def fundamental(R, t):
+    """F = K^-T [t]x R K^-1 for a right camera with x_right = R x_left + t."""
+    tx = np.array([[0, -t[2], t[1]], [t[2], 0, -t[0]], [-t[1], t[0], 0]])
+    Kinv = np.linalg.inv(K)
+    return Kinv.T @ tx @ R @ Kinv
+
+
+t_rig = np.array([-camera.baseline, 0.0, 0.0])  # the right camera sits B to the right
+pitch_1deg = cv2.Rodrigues(np.array([math.radians(1.0), 0.0, 0.0]))[0]
+rigs = {"rectified": fundamental(np.eye(3), t_rig), "right camera pitched 1°": fundamental(pitch_1deg, t_rig)}
+probe = np.array([[100.0, 80.0, 1], [320.0, 240.0, 1], [540.0, 400.0, 1], [200.0, 420.0, 1]])
+fig, axes = new_axes(2, width=5.2, height=3.6)
+for ax, (name, F) in zip(axes, rigs.items(), strict=True):
+    us = np.array([0, camera.width - 1])
+    for x in probe:
+        a, b, c = F @ x  # the line a u' + b v' + c = 0 in the right image
+        ax.plot(us, -(a * us + c) / b, lw=1)
+        ax.plot(*x[:2], "k+")
+    ax.set_xlim(0, camera.width - 1)
+    ax.set_ylim(camera.height - 1, 0)
+    ax.set_title(f"epipolar lines, {name}", fontsize="small")
+    ax.set_xlabel("u′ [px]")
+axes[0].set_ylabel("v′ [px] (+: the left pixel)")
+plt.show()
+lines_rect = probe @ rigs["rectified"].T
+lines_tilt = probe @ rigs["right camera pitched 1°"].T
+row_offset = np.abs(-(lines_tilt[:, 0] * probe[:, 0] + lines_tilt[:, 2]) / lines_tilt[:, 1] - probe[:, 1])
+assert np.allclose(lines_rect[:, 0], 0) and np.allclose(-lines_rect[:, 2] / lines_rect[:, 1], probe[:, 1])
+display(
+    Markdown(
+        f"In the rectified rig each epipolar line is its pixel's row; with the right camera pitched by "
+        f"1° the match of a pixel lies {row_offset.min():.1f}–{row_offset.max():.1f} px off that row, "
+        f"far beyond the ±{ROW_TOLERANCE:.0f} px of rows the front end searches (section 3)."
+    )
+)
+assert row_offset.min() > max(5, 3 * ROW_TOLERANCE)  # one degree moves the line by several pixels
+
+# %% [markdown]
+# **Disparity against depth, and how its error grows.** Depth is inversely proportional to
+# disparity, so a fixed disparity error σ_d costs more the farther the point:
+# σ_Z ≈ |∂Z/∂d| σ_d = Z² σ_d / (f_x B), quadratic in depth. With our rig and σ_d = 0.5 px, the
+# formula against a Monte Carlo of noisy disparities:
+
+# %%
+SIGMA_D = 0.5  # px
+depths_m = np.array([1.0, 2.0, 5.0, 10.0, 20.0])
+predicted = depths_m**2 * SIGMA_D / (camera.fx * camera.baseline)
+mc_rng = np.random.default_rng(SEED)
+measured_sd = np.array(
+    [
+        np.std(
+            camera.fx
+            * camera.baseline
+            / (camera.fx * camera.baseline / z + SIGMA_D * mc_rng.standard_normal(20000))
+        )
+        for z in depths_m
+    ]
+)
+fig, axes = new_axes(2, width=5.2, height=3.4)
+zs = np.linspace(0.5, 20, 200)
+axes[0].plot(zs, camera.fx * camera.baseline / zs)
+axes[0].set_xlabel("depth Z [m]")
+axes[0].set_ylabel("disparity d [px]")
+axes[0].set_title("d = f_x B / Z", fontsize="small")
+axes[1].loglog(zs, zs**2 * SIGMA_D / (camera.fx * camera.baseline), label="Z² σ_d / (f_x B)")
+axes[1].loglog(depths_m, measured_sd, "o", label="Monte Carlo")
+axes[1].set_xlabel("depth Z [m]")
+axes[1].set_ylabel("σ_Z [m]")
+axes[1].set_title(f"depth error for σ_d = {SIGMA_D} px", fontsize="small")
+axes[1].legend(fontsize="small")
+plt.show()
+print(" Z [m]   d [px]   σ_Z formula [m]   σ_Z Monte Carlo [m]")
+for z, p_, m_ in zip(depths_m, predicted, measured_sd, strict=True):
+    print(f" {z:5.1f}  {camera.fx * camera.baseline / z:7.2f}   {p_:15.4f}   {m_:19.4f}")
+near = depths_m <= 10  # beyond, d is a few px and the first-order formula underestimates
+assert np.allclose(measured_sd[near], predicted[near], rtol=0.1)
+assert measured_sd[-1] > predicted[-1]  # at 20 m the curvature of 1/d adds to the error
+display(
+    Markdown(
+        f"At 1 m the depth error is {100 * measured_sd[0]:.2f} cm; at 10 m it is "
+        f"{measured_sd[3]:.2f} m, {measured_sd[3] / measured_sd[0]:.0f} times more for a depth ten "
+        "times larger. This is why far points say little about the distance travelled (ρ) and why "
+        "the pipeline weighs each point by its own uncertainty (notebooks 03 and 06)."
+    )
+)
+assert 80 < measured_sd[3] / measured_sd[0] < 120  # quadratic: 10² = 100
 
 # %% [markdown]
 # ## 1 · FAST corners, spread by bucketing

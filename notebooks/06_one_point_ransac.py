@@ -14,17 +14,20 @@
 # Matches between frames contain outliers. RANSAC finds the motion that most matches agree with
 # by trying hypotheses made from minimal samples. A general 6-DoF motion needs three 3-D points
 # (or five image points without depth); the planar circular-motion model needs **one** match. This
-# notebook builds the paper's 1-point RANSAC — its two gates included, with the missing Fig. 5
-# reconstructed — and measures it against the general-purpose alternatives on the same matches.
+# notebook builds the paper's 1-point RANSAC — first a naive version, then its two gates, with
+# the missing Fig. 5 reconstructed, and the pieces that make it work — and measures it against the
+# general-purpose alternatives on the same matches.
 #
 # **You will learn**
-# - how one match gives θ (eq. 14) and ρ (eq. 17), and how hypotheses are scored all at once;
-# - to write the whole estimator in plain NumPy, step by step, and check that it picks the same
-#   inliers as `vo_lib`'s compiled one on the same random draws (and how much slower it is);
-# - what the angles α and γ of the paper's Fig. 5 must be for eq. 18–20 to hold, and why each
-#   match's gate needs its own threshold;
-# - how many hypotheses 1-, 3- and 5-point RANSAC need for the same confidence, in theory and
-#   measured;
+# - how one match gives θ (eq. 14) and ρ (eq. 17);
+# - what the angles α and γ of the paper's Fig. 5 must be for eq. 18–20 to hold, and to write
+#   both gates yourself;
+# - to write a naive 1-point RANSAC, and where it fails: hypotheses from matches near the
+#   principal row, and one threshold for every match;
+# - why the effective inlier ratio is below the true one, and how many hypotheses 1-, 3- and
+#   5-point RANSAC need, in theory and counted on real draws;
+# - to add per-match σ, the pool, adaptive N_h and the refinement one at a time, measuring each,
+#   until the result is the library's;
 # - how accuracy and time compare with 3-point rigid RANSAC, OpenCV's `solvePnPRansac` and the
 #   5-point essential matrix.
 #
@@ -45,18 +48,13 @@ import time
 
 import matplotlib.pyplot as plt
 import numpy as np
+from IPython.display import Markdown, display
 
 from vo_lib.camera import StereoCamera
 from vo_lib.stereo_vo import circular_motion as cm
+from vo_lib.stereo_vo import ransac as library
 from vo_lib.stereo_vo.baselines import essential_ransac, pnp_ransac, rigid_ransac
-from vo_lib.stereo_vo.ransac import (
-    gate_angles,
-    histogram_voting,
-    hypotheses_needed,
-    one_point_ransac,
-    refine_motion,
-    theta_gate_error,
-)
+from vo_lib.stereo_vo.ransac import histogram_voting, hypotheses_needed, one_point_ransac, refine_motion
 from vo_lib.stereo_vo.synthetic import synthetic_matches
 from vo_lib.viz.plotting import draw_chord_geometry, draw_depression_geometry, new_axes
 from vo_lib.viz.widgets import offer, slider
@@ -106,6 +104,35 @@ plt.show()
 #
 # Both ratios equal r/r′; eq. 20 is their disagreement. In pixels,
 # tan α = (v − v₀)cos β / f_y and β = atan((u − u₀)/f_x): like eq. 14, the gate needs no depth.
+# Written out, the two gates are a few lines each (eq. 21 is the ρ gate: the first point moved by
+# the hypothesis must land on the second, ‖P′ − (RP + T)‖, with R and T of eq. 12):
+
+# %%
+fx, fy, u0, v0, baseline = camera.fx, camera.fy, camera.cx, camera.cy, camera.baseline
+
+
+def gate_angles(w, camera=camera):
+    """(tan α, β) of Fig. 5 for matches w = (u, v, d): the ray's depression and bearing."""
+    beta = np.arctan((w[:, 0] - u0) / fx)
+    tan_alpha = (w[:, 1] - v0) * np.cos(beta) / fy
+    return tan_alpha, beta
+
+
+def theta_gate_error(w_prev, w_curr, theta, camera=camera):
+    """error_θ = |tan α′/tan α − sin γ′/sin γ| (eq. 18–20), γ = β + φ, γ′ = β′ − φ, φ = θ/2."""
+    tan_a, beta = gate_angles(w_prev)
+    tan_a2, beta2 = gate_angles(w_curr)
+    phi = theta / 2
+    gamma, gamma2 = beta + phi, beta2 - phi
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.abs(tan_a2 / tan_a - np.sin(gamma2) / np.sin(gamma))
+
+
+def rho_gate_error(P, Q, theta, rho):
+    """error_ρ = ‖P′ − (RP + T)‖ (eq. 21) for back-projected points P → Q (eq. 13)."""
+    R, T = cm.motion_matrices(theta, rho)
+    return np.linalg.norm(Q - (P @ R.T + T), axis=1)
+
 
 # %%
 fig, axes = new_axes(2, width=5.5, height=4.5)
@@ -128,6 +155,10 @@ print(
 )
 assert np.nanmax(gate_true[exact.inliers]) < 1e-9
 assert np.nanmedian(gate_wrong[exact.inliers]) > 1e-3
+# the same gate as vo_lib's, to rounding
+assert np.allclose(
+    gate_wrong, library.theta_gate_error(exact.w_prev, exact.w_curr, theta_true + math.radians(1), camera)
+)
 
 # %% [markdown]
 # **One threshold does not fit all matches.** With pixel noise the gate is no longer zero, and its
@@ -171,72 +202,254 @@ assert within > 0.97
 assert abs(median_norm - 0.674) < 0.1  # the half-normal's median, not a unit normal's 0
 
 # %% [markdown]
-# ## 3 · How many hypotheses?
+# ## 3 · A naive 1-point RANSAC
 #
-# To draw at least one all-inlier sample of s matches with probability p when a fraction w of
-# matches are inliers, RANSAC needs N = log(1 − p) / log(1 − wˢ) hypotheses. We compare theory
-# with a measurement: how many random samples it takes, on average, until the first all-inlier one
-# (expected 1/wˢ).
+# The idea in its simplest form, in about fifteen lines: draw one match, take its θ (eq. 14),
+# count the matches whose own θ lies within a fixed threshold τ of it, keep the hypothesis with
+# the most supporters, and average them. Scoring one hypothesis looks at every match, so it costs
+# O(n); N_h hypotheses cost O(N_h·n).
+#
+# We test it on outliers like a real front end's, not only random pixels. `realistic_matches`
+# replaces a share of the inliers of a synthetic match set with *near misses* (the current point
+# moved 2–8 px along its row: a match to a similar corner nearby, as the wrong matches of notebook
+# 05 are) and with points on a *moving object* (the leftmost points of the view slide 6 px sideways
+# between the frames, like `vo_lib.sim.disturbances.MovingObject`), and keeps some random pixels.
 
 # %%
-print(" inlier ratio   N for p=0.999:  1 point   3 points   5 points")
-for w in (0.9, 0.7, 0.6, 0.5, 0.3):
-    print(
-        f"   {w:10.1f}   {'':14s}{hypotheses_needed(w, 0.999, 1):8d} {hypotheses_needed(w, 0.999, 3):10d}"
-        f" {hypotheses_needed(w, 0.999, 5):10d}"
-    )
-assert [hypotheses_needed(0.6, 0.999, k) for k in (1, 3, 5)] == [8, 29, 86]  # the sentence below
-w = 0.6
-measured = {}
-for s in (1, 3, 5):
-    draws = []
-    for _ in range(2000):
-        k = 1
-        while not np.all(rng.random(s) < w):
-            k += 1
-        draws.append(k)
-    measured[s] = np.mean(draws)
-    print(
-        f"s = {s}: mean draws to the first all-inlier sample {measured[s]:6.2f}  "
-        f"(theory 1/w^s = {1 / w**s:6.2f})"
-    )
-    assert abs(measured[s] * w**s - 1) < 0.1
+RANDOM_SHARE, NEAR_MISS_SHARE, MOVER_SHARE = 0.10, 0.15, 0.15  # shares of all matches
+NEAR_MISS_PX, MOVER_PX = (2.0, 8.0), 6.0
+
+
+def realistic_matches(n, theta, rho, rng, noise_px=0.5):
+    """n matches of (θ, ρ) with random, near-miss and moving-object outliers: (w_prev, w_curr, inliers)."""
+    s = synthetic_matches(camera, n, theta, rho, rng, noise_px=noise_px, outlier_ratio=RANDOM_SHARE)
+    w_curr, inliers = s.w_curr.copy(), s.inliers.copy()
+    good = np.flatnonzero(inliers)
+    near = rng.choice(good, int(NEAR_MISS_SHARE * n), replace=False)
+    w_curr[near, 0] += rng.choice([-1.0, 1.0], len(near)) * rng.uniform(*NEAR_MISS_PX, len(near))
+    rest = np.setdiff1d(good, near)
+    mover = rest[np.argsort(s.w_prev[rest, 0])[: int(MOVER_SHARE * n)]]  # the left of the view
+    w_curr[mover, 0] += MOVER_PX
+    inliers[near] = inliers[mover] = False
+    return s.w_prev, w_curr, inliers
+
+
+def theta_of_matches(w_prev, w_curr):
+    """θ of every match from its pixels (eq. 14).
+
+    tan(θ/2) = ((u′−u₀)(v−v₀) − (u−u₀)(v′−v₀)) / (f_x(v + v′ − 2v₀)).
+    """
+    du, dv, du2, dv2 = w_prev[:, 0] - u0, w_prev[:, 1] - v0, w_curr[:, 0] - u0, w_curr[:, 1] - v0
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return 2 * np.arctan((du2 * dv - du * dv2) / (fx * (dv + dv2)))
+
+
+def naive_one_point_ransac(w_prev, w_curr, threshold, hypotheses, rng):
+    """Draw one match, θ from eq. 14, count the matches within a fixed threshold, keep the best."""
+    theta_j = theta_of_matches(w_prev, w_curr)
+    best, best_count = np.nan, -1
+    for j in rng.integers(0, len(theta_j), hypotheses):  # one match per hypothesis
+        count = np.sum(np.abs(theta_j - theta_j[j]) < threshold)  # scoring costs O(n)
+        if count > best_count:
+            best, best_count = theta_j[j], count
+    supporters = np.abs(theta_j - best) < threshold
+    return np.mean(theta_j[supporters]), supporters
+
+
+NAIVE_HYPOTHESES = 10  # N_h for an inlier ratio of 0.5 at 99.9 % confidence (section 5)
+wp, wc, true_in = realistic_matches(300, theta_true, rho_true, np.random.default_rng(SEED))
+naive_theta, naive_in = naive_one_point_ransac(wp, wc, math.radians(0.2), NAIVE_HYPOTHESES, rng)
+print(
+    f"{true_in.mean():.0%} true inliers; naive (τ = 0.2°): θ = {math.degrees(naive_theta):.4f}° "
+    f"(true 3°), {naive_in.sum()} supporters of which {(naive_in & ~true_in).sum()} outliers"
+)
 
 # %% [markdown]
-# ## 4 · Build it: the estimator in plain NumPy, step by step
+# ## 4 · Where the naive version fails
 #
-# Before using `one_point_ransac` we write it ourselves, one step per cell, each step a small
-# function checked against the `vo_lib` function that does the same. The random numbers are
-# shared: `hypothesis_draws(seed)` returns the uniform numbers `one_point_ransac(..., rng=seed)`
-# draws (one row per phase), and both implementations turn a number u into the same hypothesis.
-# At the end both must pick the same inliers.
+# **Ill-conditioned hypotheses near the principal row.** Eq. 14 divides by v + v′ − 2v₀: a point
+# near the camera's height gives θ as a ratio of two small, noisy numbers. Its hypothesis is
+# useless even when the match is right, and a draw spent on it is a draw lost. The errors of true
+# matches' own θ, by their distance from the principal row:
+
+# %%
+many = synthetic_matches(camera, 3000, theta_true, rho_true, np.random.default_rng(3), noise_px=0.5)
+theta_many = theta_of_matches(many.w_prev, many.w_curr)
+row = np.abs(many.w_prev[:, 1] + many.w_curr[:, 1] - 2 * v0) / 2  # mean distance from v₀ [px]
+err_many = np.degrees(np.abs(theta_many - theta_true))
+bands = [(0, 10), (10, 30), (30, 100), (100, 240)]
+print(" |v − v₀| [px]   matches   median |θ_j − θ| [deg]   within 0.1°")
+band_median = []
+for lo, hi in bands:
+    sel = (row >= lo) & (row < hi)
+    band_median.append(np.median(err_many[sel]))
+    print(
+        f"   {lo:4d}–{hi:<4d}   {sel.sum():8d}   {band_median[-1]:22.3f}"
+        f"   {np.mean(err_many[sel] < 0.1):10.0%}"
+    )
+fig, ax = new_axes(width=6.5, height=3.2)
+ax.semilogy(row, err_many, ".", ms=2, alpha=0.4)
+ax.set_xlabel("distance of the match from the principal row [px]")
+ax.set_ylabel("|θ of one true match − θ| [deg]")
+ax.set_title("A true match's own θ: useless near the camera's height")
+plt.show()
+ill_ratio = band_median[0] / band_median[-1]
+display(
+    Markdown(
+        f"Within {bands[0][1]} px of the principal row a true match's own θ is off by "
+        f"{band_median[0]:.2f}° (median), {ill_ratio:.0f} times the {band_median[-1]:.3f}° of "
+        f"matches more than {bands[-1][0]} px away."
+    )
+)
+assert ill_ratio > 10 and all(np.diff(band_median) < 0)  # worse the nearer, every band
+
+# %% [markdown]
+# **One threshold for every match.** A match's θ is as uncertain as its position makes it
+# (section 2: the raw gate spans decades), so a fixed τ is too tight for some matches and too
+# loose for others. Over 40 realistic match sets of random motions, the naive estimator's error
+# and the share of true inliers it keeps (recall) and of its supporters that are true
+# (precision), for several τ, against the library's estimator:
+
+# %%
+naive_sets = []
+for seed in range(40):
+    r = np.random.default_rng(900 + seed)
+    th, rh = math.radians(r.uniform(-5, 5)), r.uniform(0.03, 0.12)
+    naive_sets.append((th, rh, *realistic_matches(300, th, rh, r)))
+thresholds_deg = (0.02, 0.05, 0.1, 0.2, 0.5, 1.0)
+naive_rows = []
+for tau in thresholds_deg:
+    errs, recall, precision = [], [], []
+    for k, (th, _, a, b, inl) in enumerate(naive_sets):
+        est, kept = naive_one_point_ransac(
+            a, b, math.radians(tau), NAIVE_HYPOTHESES, np.random.default_rng(k)
+        )
+        errs.append(abs(est - th))
+        recall.append((kept & inl).sum() / inl.sum())
+        precision.append((kept & inl).sum() / max(kept.sum(), 1))
+    naive_rows.append((tau, math.degrees(np.median(errs)), np.median(recall), np.median(precision)))
+library_err = math.degrees(
+    np.median(
+        [
+            abs(one_point_ransac(a, b, camera, rng=k).theta - th)
+            for k, (th, _, a, b, _) in enumerate(naive_sets)
+        ]
+    )
+)
+print(f" {'τ [deg]':>8s}{'median |θ err| [deg]':>22s}{'recall':>8s}{'precision':>11s}")
+for tau, e, rc, pr in naive_rows:
+    print(f" {tau:8.2f}{e:22.4f}{rc:8.0%}{pr:11.0%}")
+print(f" {'vo_lib':>8s}{library_err:22.4f}")
+naive_rows = np.array(naive_rows)
+best_naive = naive_rows[np.argmin(naive_rows[:, 1])]
+display(
+    Markdown(
+        f"The tightest τ keeps {naive_rows[0, 2]:.0%} of the true inliers; the loosest lets in so "
+        f"many outliers that only {naive_rows[-1, 3]:.0%} of its supporters are true. The best τ "
+        f"of the grid, {best_naive[0]:.2f}°, still errs by {best_naive[1]:.4f}° (median), "
+        f"{best_naive[1] / library_err:.1f} times the full estimator's {library_err:.4f}°; and the "
+        "best τ is a property of this noise and this scene, not something a robot can know."
+    )
+)
+assert naive_rows[0, 2] < 0.5 and naive_rows[-1, 3] < 0.8
+assert best_naive[1] > 2 * library_err
+
+# %% [markdown]
+# ## 5 · How many hypotheses?
 #
+# To draw at least one all-inlier sample of s matches with probability p when a fraction w of the
+# matches are inliers, RANSAC needs N_h = log(1 − p) / log(1 − wˢ) hypotheses, each scored
+# against all n matches at O(n).
+
+# %%
+print(" inlier ratio   N_h for p=0.999:  1 point   3 points   5 points")
+for w in (0.9, 0.7, 0.6, 0.5, 0.3):
+    print(
+        f"   {w:10.1f}   {'':16s}{hypotheses_needed(w, 0.999, 1):8d} {hypotheses_needed(w, 0.999, 3):10d}"
+        f" {hypotheses_needed(w, 0.999, 5):10d}"
+    )
+assert [hypotheses_needed(0.6, 0.999, k) for k in (1, 3, 5)] == [8, 29, 86]  # the summary's figures
+
+# %% [markdown]
+# The formula assumes every inlier gives a good hypothesis. Section 4 showed that is false: an
+# inlier near the principal row gives a useless one. So the **effective** inlier ratio, the share
+# of matches whose own θ could win, is below the true one. We measure it on the realistic matches
+# of section 3, calling a hypothesis good when it lies within 0.05° of the truth, and count, with
+# real draws from those matches, how many it takes to reach the first good one: drawing from every
+# match, and drawing from the *pool*, the best-conditioned half (smallest first-order σ of θ,
+# notebook 03).
+
+# %%
+GOOD_HYPOTHESIS = math.radians(0.05)
+theta_wp = theta_of_matches(wp, wc)
+good = np.abs(theta_wp - theta_true) < GOOD_HYPOTHESIS
+sd_wp = cm.theta_standard_deviation(wp, wc, camera, 0.5)
+pool_wp = np.argsort(np.nan_to_num(sd_wp, nan=np.inf))[: len(wp) // 2]
+count_rng = np.random.default_rng(SEED + 1)
+
+
+def draws_to_first_good(candidates, repeats=2000):
+    """Mean number of uniform draws from candidates until one is a good hypothesis."""
+    picks = count_rng.integers(0, len(candidates), (repeats, 200))
+    hit = good[candidates][picks]
+    return np.mean(np.argmax(hit, axis=1) + 1)
+
+
+w_true = true_in.mean()
+w_all, w_pool = good.mean(), good[pool_wp].mean()
+measured_all, measured_pool = draws_to_first_good(np.arange(len(wp))), draws_to_first_good(pool_wp)
+print(
+    f"true inlier ratio {w_true:.2f}; good hypotheses: {w_all:.2f} of all matches, {w_pool:.2f} of the pool"
+)
+print(
+    f"draws to the first good one: all matches {measured_all:.2f} (1/w = {1 / w_all:.2f}); "
+    f"pool {measured_pool:.2f} (1/w = {1 / w_pool:.2f})"
+)
+print(
+    f"N_h at 99.9 %: {hypotheses_needed(w_true)} by the true ratio, {hypotheses_needed(w_all)} by the "
+    f"effective one, {hypotheses_needed(w_pool)} from the pool"
+)
+assert w_all < w_true and w_pool > w_all  # the effective ratio is below the true one; the pool lifts it
+assert abs(measured_all * w_all - 1) < 0.1 and abs(measured_pool * w_pool - 1) < 0.1
+
+# %% [markdown]
+# ## 6 · From naive to full, one piece at a time
+#
+# The full estimator keeps the naive one's skeleton (draw one match, score every match, keep the
+# best) and changes four things, each answering a failure of sections 4 and 5:
+#
+# 1. **per-match σ**: a match supports a hypothesis within k of *its own* standard deviation, and
+#    the winner is re-estimated by the inverse-variance weighted mean (section 4, one threshold);
+# 2. **the pool**: hypotheses are drawn from the best-conditioned half only (section 5);
+# 3. **adaptive N_h**: hypotheses are drawn until N_h for the best inlier ratio found so far has
+#    been tried, instead of a fixed number;
+# 4. **the gates and the refinement**: eq. 20 and eq. 21 decide the inliers, and a least-squares
+#    fit on all of them finishes.
+#
+# Its constants, each a choice (the library, `vo_lib.stereo_vo.ransac`, uses the same values):
+
+# %%
+PIXEL_SIGMA = 0.5  # pixel noise of u, v and d that the gates assume [px]
+GATE_SIGMAS = 3.0  # k: a match passes within this many of its own standard deviations
+CONFIDENCE = 0.999  # p: probability of drawing at least one good hypothesis
+POOL_FRACTION = 0.5  # hypotheses come from this best-conditioned share of the matches ...
+MIN_POOL = 8  # ... but from at least this many
+REFINE_ITERATIONS = 2  # Gauss-Newton iterations of the first refinement
+REFINE_ROUNDS = 3  # refine, re-select the inliers, and again while they change
+WHITENED_GATE = 3.76  # eq. 21 compared in (u, v, d): sqrt of chi-square(3) at 99.7 %
+K2 = GATE_SIGMAS**2
+constants = ("PIXEL_SIGMA", "GATE_SIGMAS", "CONFIDENCE", "POOL_FRACTION", "MIN_POOL")
+constants += ("REFINE_ITERATIONS", "REFINE_ROUNDS", "WHITENED_GATE")
+assert all(globals()[name] == getattr(library, name) for name in constants)
+DRAW_SEED = 16
+draws = library.hypothesis_draws(DRAW_SEED)  # uniform numbers: draws[0] for θ, draws[1] for ρ
+
+# %% [markdown]
 # **Step 0, the usable matches.** θ needs v + v′ ≠ 2v₀ (eq. 14 is 0/0 at the camera's height) and
 # ρ needs positive disparities; every later step works on these matches only.
 
+
 # %%
-from vo_lib.stereo_vo import ransac_core
-from vo_lib.stereo_vo.ransac import (
-    CONFIDENCE,
-    GATE_SIGMAS,
-    MIN_POOL,
-    PIXEL_SIGMA,
-    POOL_FRACTION,
-    REFINE_ITERATIONS,
-    REFINE_ROUNDS,
-    WHITENED_GATE,
-    hypothesis_draws,
-    rho_gate_error,
-)
-
-DRAW_SEED = 16
-K2 = GATE_SIGMAS**2  # a match passes within k = 3 of its own standard deviations
-NO_PRIOR = np.array([np.nan, np.nan])  # the compiled search takes an optional prior hypothesis
-NONE = np.empty(0)  # phase 1 needs no points
-fx, fy, u0, v0, baseline = camera.fx, camera.fy, camera.cx, camera.cy, camera.baseline
-draws = hypothesis_draws(DRAW_SEED)  # draws[0]: theta hypotheses, draws[1]: rho hypotheses
-
-
 def usable_matches(w_prev, w_curr):
     """Matches with both disparities > 0, off the camera's height."""
     off_height = np.abs(w_prev[:, 1] + w_curr[:, 1] - 2 * v0) > 1e-9
@@ -248,10 +461,10 @@ wa, wb = m.w_prev[usable], m.w_curr[usable]
 print(f"{usable.sum()} of {len(usable)} matches usable; draws {draws.shape}")
 
 # %% [markdown]
-# **Step 1, draw one match → θ (eq. 14)**: tan(θ/2) = ((u′−u₀)(v−v₀) − (u−u₀)(v′−v₀)) /
-# (f_x(v + v′ − 2v₀)), and its first-order variance for σ = 0.5 px on u, v, u′, v′ (notebook 03):
-# with N and D = f_x(v + v′ − 2v₀) the numerator and denominator, dφ = (D dN − f_x N dD)/(D² + N²),
-# and θ = 2φ.
+# **Step 1, per-match σ: θ of each match (eq. 14) and its variance.** tan φ = n_φ / d_φ with
+# n_φ = (u′−u₀)(v−v₀) − (u−u₀)(v′−v₀) and d_φ = f_x(v + v′ − 2v₀), θ = 2φ. To first order, for
+# σ = `PIXEL_SIGMA` on u, v, u′, v′ (notebook 03), dφ = (d_φ dn_φ − n_φ dd_φ)/(d_φ² + n_φ²) with
+# dd_φ = f_x(dv + dv′).
 
 
 # %%
@@ -270,14 +483,16 @@ assert np.allclose(theta_j, cm.theta_from_pixels(wa, wb, camera), rtol=0, atol=1
 assert np.allclose(var_theta, cm.theta_standard_deviation(wa, wb, camera, PIXEL_SIGMA) ** 2, rtol=1e-12)
 
 # %% [markdown]
-# **Step 2, score every match against each hypothesis, keep the best.** Hypotheses come from the
-# best-conditioned half of the matches (the *pool*, smallest variance first); the draw u picks
-# `pool[int(u · len(pool))]`. A match j supports hypothesis h of variance v_h when
-# (θ_j − h)² ≤ k²(σ²_j + v_h), and v_h is capped at the pool's median (a hypothesis is taken as no
-# more certain than a typical one). Hypotheses come in batches: first N = log(1 − p)/log(1 − w)
-# for w = 0.5; after each batch N is recomputed from the best inlier ratio so far, until N have
+# **Step 2, score every match against each hypothesis, keep the best: the pool and adaptive N_h.**
+# Hypotheses come from the best-conditioned share `POOL_FRACTION` of the matches (the *pool*,
+# smallest variance first); the draw u picks `pool[int(u · len(pool))]`. A match j supports
+# hypothesis h of variance v_h when (θ_j − h)² ≤ k²(σ²_j + v_h), and v_h is capped at the pool's
+# median: `np.minimum` makes a hypothesis no less certain than a typical one, so an over-confident
+# draw cannot narrow every gate. Hypotheses come in batches: first N_h = log(1 − p)/log(1 − w) for
+# w = 0.5; after each batch N_h is recomputed from the best inlier ratio so far, until N_h have
 # been tried. Among equal counts the more precise hypothesis wins. Phase 2 runs the same search
-# with another support test, so the test is an argument.
+# with another support test, so the test is an argument; so are the pool's share and whether N_h
+# adapts, to measure each below.
 
 
 # %%
@@ -286,9 +501,9 @@ def theta_support(values, variances, h, var_h):
     return (values - h) ** 2 <= K2 * (variances + var_h)
 
 
-def adaptive_search(values, variances, uniforms, support):
+def adaptive_search(values, variances, uniforms, support, pool_fraction=POOL_FRACTION, adaptive=True):
     """The hypothesis with most supporters: (value, variance, supporters, hypotheses tried)."""
-    pool = np.argsort(variances)[: max(MIN_POOL, int(POOL_FRACTION * len(values)))]
+    pool = np.argsort(variances)[: max(MIN_POOL, int(pool_fraction * len(values)))]
     cap = np.median(variances[pool])
     best_value, best_var, best_count = np.nan, np.nan, -1
     tried = 0
@@ -301,30 +516,14 @@ def adaptive_search(values, variances, uniforms, support):
         if counts[top] > best_count:
             best_value, best_var, best_count = hyp[top], hyp_var[top], counts[top]
         tried = limit
-        limit = min(hypotheses_needed(max(best_count, 0) / len(values), CONFIDENCE), len(uniforms))
+        if adaptive:
+            limit = min(hypotheses_needed(max(best_count, 0) / len(values), CONFIDENCE), len(uniforms))
     return best_value, best_var, best_count, tried
 
 
 theta_h, var_h, count_h, tried_theta = adaptive_search(theta_j, var_theta, draws[0], theta_support)
 print(f"best θ hypothesis {math.degrees(theta_h):.4f}°: {count_h} supporters, {tried_theta} hypotheses tried")
-compiled = ransac_core.search(
-    1,
-    theta_j,
-    var_theta,
-    draws[0],
-    CONFIDENCE,
-    draws.shape[1],
-    NO_PRIOR,
-    K2,
-    NONE,
-    NONE,
-    NONE,
-    0.0,
-    0.0,
-    MIN_POOL,
-    POOL_FRACTION,
-)
-assert (theta_h, var_h, count_h, tried_theta) == tuple(compiled)
+assert abs(theta_h - theta_true) < math.radians(0.1) and tried_theta <= hypotheses_needed(0.5)
 
 # %% [markdown]
 # **Step 3, re-estimate θ and apply the gate of eq. 20.** θ̂ is the inverse-variance weighted
@@ -356,13 +555,7 @@ print(
     f"θ̂ = {math.degrees(theta_hat):.4f}° ± {math.degrees(math.sqrt(var_theta_hat)):.4f}°; "
     f"{theta_in.sum()} pass eq. 20"
 )
-compiled = ransac_core.reestimate(1, theta_h, var_h, theta_j, var_theta, K2, NONE, NONE, NONE, 0.0, 0.0)
-assert np.allclose((theta_hat, var_theta_hat), compiled, rtol=1e-13, atol=0)
-ta, ba = gate_angles(wa, camera)
-tb, bb = gate_angles(wb, camera)
-compiled_in = np.empty(len(wa), bool)
-ransac_core.theta_gate_pass(ta, ba, tb, bb, theta_j, var_theta, theta_hat, var_theta_hat, K2, compiled_in)
-assert np.array_equal(theta_in, compiled_in)
+assert var_theta_hat < var_h and abs(theta_hat - theta_true) < abs(theta_h - theta_true) + 1e-12
 
 # %% [markdown]
 # **Step 4, ρ from each θ inlier (eq. 16–17, sign corrected), and the gate of eq. 21.** With θ̂
@@ -401,23 +594,7 @@ rho_hat, var_rho_hat = weighted_mean(rho_i, var_i, rho_support(rho_i, var_i, rho
 keep = np.zeros(len(wa), bool)
 keep[theta_in] = rho_support(rho_i, var_i, rho_hat, var_rho_hat)
 print(f"ρ̂ = {rho_hat * 100:.3f} cm ({count_rho} supporters); {keep.sum()} matches pass both gates")
-Q_minus_RP = Q[theta_in] - P[theta_in] @ cm.motion_matrices(theta_hat, 0.0)[0].T  # the compiled gate adds -T
-compiled = ransac_core.search(
-    2,
-    rho_i,
-    var_i,
-    draws[1],
-    CONFIDENCE,
-    draws.shape[1],
-    NO_PRIOR,
-    K2,
-    *Q_minus_RP.T.copy(),
-    math.sin(theta_hat / 2),
-    math.cos(theta_hat / 2),
-    MIN_POOL,
-    POOL_FRACTION,
-)
-assert compiled[2:] == (count_rho, tried_rho) and np.isclose(compiled[0], rho_h, rtol=1e-12, atol=0)
+assert abs(rho_hat - rho_true) < 0.1 * rho_true  # before the refinement of step 5
 
 # %% [markdown]
 # **Step 5, refine.** Gauss–Newton on (θ, ρ) over all inliers minimises the reprojection errors in
@@ -488,30 +665,28 @@ print(
 )
 
 # %% [markdown]
-# ## 5 · Then use it: the same inliers, and the cost of plain NumPy
+# ## 7 · Each piece's measured effect, and the same result as the library
 #
-# Chained, the steps are the whole estimator. Given the same draws, `one_point_ransac` must pick
-# exactly the same inliers and, to rounding, the same motion: it runs the same steps, compiled
-# with Numba (`vo_lib/stereo_vo/ransac_core.py`) into one pass per step.
+# Chained, the steps are the whole estimator; its arguments switch the pieces off one at a time.
 
 
 # %%
-def numpy_one_point_ransac(w_prev, w_curr, draws):
-    """Steps 0-5 chained: (theta, rho, inlier mask over all matches)."""
+def numpy_one_point_ransac(w_prev, w_curr, draws, pool_fraction=POOL_FRACTION, adaptive=True, refine=True):
+    """Steps 0-5 chained: (theta, rho, inlier mask over all matches, θ hypotheses tried)."""
     usable = usable_matches(w_prev, w_curr)
     wa, wb = w_prev[usable], w_curr[usable]
     theta_j, var_theta = theta_per_match(wa, wb)
-    h, var_h, _, _ = adaptive_search(theta_j, var_theta, draws[0], theta_support)
+    h, var_h, _, tried = adaptive_search(theta_j, var_theta, draws[0], theta_support, pool_fraction, adaptive)
     theta, var_t = weighted_mean(theta_j, var_theta, theta_support(theta_j, var_theta, h, var_h))
     theta_in = theta_gate(wa, wb, theta_j, var_theta, theta, var_t)
     P, Q, rho_j, var_point = rho_per_match(wa, wb, theta)
     support = rho_support_at(P[theta_in], Q[theta_in], theta)
     rho_i, var_i = rho_j[theta_in], var_point[theta_in]
-    h, var_h, _, _ = adaptive_search(rho_i, var_i, draws[1], support)
+    h, var_h, _, _ = adaptive_search(rho_i, var_i, draws[1], support, pool_fraction, adaptive)
     rho, var_r = weighted_mean(rho_i, var_i, support(rho_i, var_i, h, var_h))
     keep = np.zeros(len(wa), bool)
     keep[theta_in] = support(rho_i, var_i, rho, var_r)
-    for round_ in range(REFINE_ROUNDS):
+    for round_ in range(REFINE_ROUNDS if refine else 0):
         iterations = REFINE_ITERATIONS if round_ == 0 else 1
         theta, rho, cov = gauss_newton(theta, rho, P[keep], Q[keep], wa[keep], wb[keep], iterations)
         new = reselect(theta, rho, cov[0, 0], wa, wb, P, theta_j, var_theta)
@@ -520,35 +695,146 @@ def numpy_one_point_ransac(w_prev, w_curr, draws):
             break
     inliers = np.zeros(len(w_prev), bool)
     inliers[usable] = keep
-    return theta, rho, inliers
+    return theta, rho, inliers, tried
 
 
-theta_ours, rho_ours, inliers_ours = numpy_one_point_ransac(m.w_prev, m.w_curr, draws)
-library = one_point_ransac(m.w_prev, m.w_curr, camera, rng=DRAW_SEED)
-print(
-    f"ours:   θ = {math.degrees(theta_ours):.6f}°, ρ = {rho_ours * 100:.5f} cm, {inliers_ours.sum()} inliers"
-)
-print(
-    f"vo_lib: θ = {math.degrees(library.theta):.6f}°, ρ = {library.rho * 100:.5f} cm, "
-    f"{library.inliers.sum()} inliers"
-)
-assert np.array_equal(inliers_ours, library.inliers)
-assert abs(theta_ours - library.theta) < 1e-12 and abs(rho_ours - library.rho) < 1e-12
+def theta_phase(w_prev, w_curr, draws, pool_fraction, adaptive):
+    """Steps 1-2 only, then the weighted mean: (θ, hypotheses tried)."""
+    usable = usable_matches(w_prev, w_curr)
+    theta_j, var_theta = theta_per_match(w_prev[usable], w_curr[usable])
+    h, var_h, _, tried = adaptive_search(theta_j, var_theta, draws[0], theta_support, pool_fraction, adaptive)
+    return weighted_mean(theta_j, var_theta, theta_support(theta_j, var_theta, h, var_h))[0], tried
+
 
 # %% [markdown]
-# The same on fresh match sets and draws, and the time of each (median of repeated runs, measured
-# here side by side; the ratio, not the milliseconds, is the point):
+# On the 40 realistic match sets of section 4 (each with its own draws), the error of θ and of ρ
+# and the θ hypotheses tried, as the pieces are added; for the pool, also the share of its matches
+# whose own θ is a good hypothesis (within 0.05° of the truth), against that share of all matches:
 
 # %%
-for seed in range(5):
-    s_rng = np.random.default_rng(700 + seed)
-    th, rh = math.radians(s_rng.uniform(-5, 5)), s_rng.uniform(0.03, 0.12)
-    mm = synthetic_matches(camera, 300, th, rh, s_rng, noise_px=0.5, outlier_ratio=0.4)
-    mine = numpy_one_point_ransac(mm.w_prev, mm.w_curr, hypothesis_draws(seed))
-    theirs = one_point_ransac(mm.w_prev, mm.w_curr, camera, draws=hypothesis_draws(seed))
-    assert np.array_equal(mine[2], theirs.inliers) and abs(mine[0] - theirs.theta) < 1e-12
+stages = {
+    "naive, best fixed τ": None,
+    "+ per-match σ": dict(pool_fraction=1.0, adaptive=False),
+    "+ pool": dict(pool_fraction=POOL_FRACTION, adaptive=False),
+    "+ adaptive N_h": dict(pool_fraction=POOL_FRACTION, adaptive=True),
+    "+ gates, no refinement": dict(refine=False),
+    "+ refinement (full)": dict(refine=True),
+}
+effect = {name: {"theta": [], "rho": [], "tried": []} for name in stages}
+good_share = {"all": [], "pool": []}
+for k, (th, rh, a, b, _) in enumerate(naive_sets):
+    d = library.hypothesis_draws(k)
+    est, _ = naive_one_point_ransac(
+        a, b, math.radians(best_naive[0]), NAIVE_HYPOTHESES, np.random.default_rng(k)
+    )
+    effect["naive, best fixed τ"]["theta"].append(abs(est - th))
+    effect["naive, best fixed τ"]["tried"].append(NAIVE_HYPOTHESES)
+    for name, kwargs in list(stages.items())[1:4]:
+        est, tried = theta_phase(a, b, d, **kwargs)
+        effect[name]["theta"].append(abs(est - th))
+        effect[name]["tried"].append(tried)
+    for name in ("+ gates, no refinement", "+ refinement (full)"):
+        est_t, est_r, _, tried = numpy_one_point_ransac(a, b, d, **stages[name])
+        effect[name]["theta"].append(abs(est_t - th))
+        effect[name]["rho"].append(abs(est_r - rh) / rh)
+        effect[name]["tried"].append(tried)
+    usable_k = usable_matches(a, b)
+    t_k, v_k = theta_per_match(a[usable_k], b[usable_k])
+    good_k = np.abs(t_k - th) < GOOD_HYPOTHESIS
+    good_share["all"].append(good_k.mean())
+    good_share["pool"].append(good_k[np.argsort(v_k)[: max(MIN_POOL, int(POOL_FRACTION * len(t_k)))]].mean())
+print(f" {'':24s}{'median |θ err| [deg]':>21s}{'90th pct':>10s}{'median ρ err':>14s}{'θ hypotheses':>14s}")
+summary = {}
+for name, e in effect.items():
+    t_deg = np.degrees(e["theta"])
+    summary[name] = (np.median(t_deg), np.percentile(t_deg, 90), np.mean(e["tried"]))
+    rho_text = f"{np.median(e['rho']):.2%}" if e["rho"] else "—"
+    print(
+        f" {name:24s}{summary[name][0]:21.4f}{summary[name][1]:10.4f}{rho_text:>14s}{summary[name][2]:14.1f}"
+    )
+share_all, share_pool = np.mean(good_share["all"]), np.mean(good_share["pool"])
+rho_before, rho_after = (
+    np.median(effect["+ gates, no refinement"]["rho"]),
+    np.median(effect["+ refinement (full)"]["rho"]),
+)
+print(f"good hypotheses: {share_all:.0%} of all matches, {share_pool:.0%} of the pool")
+
+# %%
+naive_e, sigma_e, pool_e = (
+    summary["naive, best fixed τ"][0],
+    summary["+ per-match σ"][0],
+    summary["+ pool"][0],
+)
+full_e = summary["+ refinement (full)"][0]
+display(
+    Markdown(
+        f"Per-match σ alone, with the weighted mean, does **not** beat the best fixed τ on θ: median "
+        f"{sigma_e:.4f}° against {naive_e:.4f}° (and that τ was picked on these very sets, which a "
+        "robot cannot do). A loose gate for an ill-conditioned match lets near misses through, and "
+        "θ from eq. 14 alone stays noisy. The pool raises the share of good hypotheses from "
+        f"{share_all:.0%} to {share_pool:.0%} and the median error to {pool_e:.4f}°. What makes "
+        f"the estimator accurate is the last step: the refinement takes the median ρ error from "
+        f"{rho_before:.2%} to {rho_after:.2%} and θ's to {full_e:.4f}°, {naive_e / full_e:.1f} "
+        "times below the naive one's."
+    )
+)
+assert sigma_e > naive_e and share_pool > share_all and pool_e < sigma_e  # each clause above
+assert rho_after < rho_before / 2 and naive_e > 2 * full_e
+
+# %% [markdown]
+# Adaptive N_h changes nothing here: with 60 % inliers the first batch already suffices. It
+# matters when the inlier ratio is low. With 80 % random outliers (40 sets), the θ phase with a
+# fixed batch against the adaptive rule, counting the sets whose θ is more than 0.1° off:
+
+# %%
+adaptive_rows = {}
+for adaptive in (False, True):
+    fails, tried = 0, []
+    for k in range(40):
+        r = np.random.default_rng(3000 + k)
+        th, rh = math.radians(r.uniform(-5, 5)), r.uniform(0.03, 0.12)
+        s80 = synthetic_matches(camera, 300, th, rh, r, noise_px=0.5, outlier_ratio=0.8)
+        est, t = theta_phase(s80.w_prev, s80.w_curr, library.hypothesis_draws(k), POOL_FRACTION, adaptive)
+        fails += abs(est - th) > math.radians(0.1)
+        tried.append(t)
+    adaptive_rows[adaptive] = (fails, np.mean(tried))
+    print(
+        f"{'adaptive' if adaptive else 'fixed   '} N_h: {fails:2d} of 40 sets fail, "
+        f"{np.mean(tried):.1f} hypotheses"
+    )
+assert summary["+ adaptive N_h"][0] == summary["+ pool"][0]  # "changes nothing here"
+assert adaptive_rows[True][0] < adaptive_rows[False][0] and adaptive_rows[True][1] > adaptive_rows[False][1]
+
+# %% [markdown]
+# **The same result as the library.** Given the same draws, the library's plain NumPy estimator,
+# `one_point_ransac(..., plain=True)`, must pick the same inliers and, to rounding, the same
+# motion. (The compiled kernel the pipeline runs is the same estimator compiled with Numba; the
+# tests compare it with the plain one, not this notebook.)
+
+# %%
+theta_ours, rho_ours, inliers_ours, _ = numpy_one_point_ransac(m.w_prev, m.w_curr, draws)
+lib_est = one_point_ransac(m.w_prev, m.w_curr, camera, rng=DRAW_SEED, plain=True)
+print(
+    f"ours:           θ = {math.degrees(theta_ours):.6f}°, ρ = {rho_ours * 100:.5f} cm, "
+    f"{inliers_ours.sum()} inliers"
+)
+print(
+    f"vo_lib (plain): θ = {math.degrees(lib_est.theta):.6f}°, ρ = {lib_est.rho * 100:.5f} cm, "
+    f"{lib_est.inliers.sum()} inliers"
+)
+assert np.array_equal(inliers_ours, lib_est.inliers)
+assert abs(theta_ours - lib_est.theta) < 1e-9 and abs(rho_ours - lib_est.rho) < 1e-9
+for k, (_, _, a, b, _) in enumerate(naive_sets[:5]):  # and on realistic sets
+    mine = numpy_one_point_ransac(a, b, library.hypothesis_draws(k))
+    theirs = one_point_ransac(a, b, camera, draws=library.hypothesis_draws(k), plain=True)
+    assert np.array_equal(mine[2], theirs.inliers) and abs(mine[0] - theirs.theta) < 1e-9
+
+# %% [markdown]
+# And the time of each (median of repeated runs, measured here side by side; the ratio, not the
+# milliseconds, is the point):
 
 
+# %%
 def median_time(fn, repeats=15):
     """Median wall time of fn() in milliseconds."""
     times = []
@@ -567,12 +853,7 @@ print(
 )
 
 # %% [markdown]
-# At 60 % inliers the 1-point method needs 8 hypotheses where 3 points need 29 and 5 points 86.
-# Our implementation draws hypotheses from the best-conditioned half of the matches, scores a
-# whole batch as one array operation, and stops when N for the best inlier ratio found so far
-# has been tried.
-#
-# ## 6 · The full estimator, and how good it is
+# ## 8 · The full estimator, and how good it is
 #
 # Phase 1 picks θ with the θ gate and refines it by the inverse-variance weighted mean of its
 # inliers; phase 2 picks ρ the same way with the gate of eq. 21, ‖P′ − (RP + T)‖, against each
@@ -613,7 +894,37 @@ assert rows[:, 0].min() >= 0.95 and math.degrees(rows[:, 1].max()) <= 0.03
 assert np.median(rows[:, 2]) <= 0.015 and rows[:, 2].max() <= 0.05
 
 # %% [markdown]
-# ## 7 · Against the general-purpose estimators
+# The same on the 40 realistic match sets of section 4 (near misses and a moving object among the
+# outliers), where a near miss that happens to agree with the motion cannot be told from an
+# inlier:
+
+# %%
+real_rows = []
+for k, (th, rh, a, b, inl) in enumerate(naive_sets):
+    est = one_point_ransac(a, b, camera, rng=k)
+    real_rows.append(
+        (
+            (est.inliers & inl).sum() / inl.sum(),
+            (est.inliers & ~inl).sum(),
+            abs(est.theta - th),
+            abs(est.rho - rh) / rh,
+        )
+    )
+real_rows = np.array(real_rows)
+print(
+    f"inliers found: worst {real_rows[:, 0].min():.1%}; outliers kept: median "
+    f"{np.median(real_rows[:, 1]):.0f}, most {real_rows[:, 1].max():.0f} of "
+    f"{round((NEAR_MISS_SHARE + MOVER_SHARE + RANDOM_SHARE) * 300)}"
+)
+print(
+    f"θ error [deg]: median {math.degrees(np.median(real_rows[:, 2])):.4f}, worst "
+    f"{math.degrees(real_rows[:, 2].max()):.4f}; ρ error: median {np.median(real_rows[:, 3]):.2%}, "
+    f"worst {real_rows[:, 3].max():.2%}"
+)
+assert real_rows[:, 0].min() >= 0.9 and math.degrees(real_rows[:, 2].max()) <= 0.04
+
+# %% [markdown]
+# ## 9 · Against the general-purpose estimators
 #
 # Same 10 match sets for everyone. The 6-DoF methods must also find the three angles and the
 # height change that the planar model knows to be zero; the essential matrix (one camera) cannot
@@ -652,17 +963,22 @@ assert table["1-point RANSAC"][1] <= table["solvePnPRansac"][1]
 assert table["1-point RANSAC"][1] <= table["3-point rigid RANSAC"][1]
 assert table["1-point RANSAC"][1] <= table["5-point essential"][1]
 assert 3 * table["1-point RANSAC"][1] <= table["3-point rigid RANSAC"][1]  # "by a wide margin"
-assert table["solvePnPRansac"][2] <= 1.2 * table["1-point RANSAC"][2]  # PnP's rho: as good or better
+pnp_rho, ours_rho = table["solvePnPRansac"][2], table["1-point RANSAC"][2]
+display(
+    Markdown(
+        "The planar model pays off in θ: knowing that roll, pitch and height do not change, the "
+        "1-point method's θ is better than every 6-DoF estimate from the same matches, by a wide "
+        "margin over the 3-D rigid fit (whose far points carry metres of depth noise). For ρ, "
+        f"`solvePnPRansac` is {'better' if pnp_rho < ours_rho else 'worse'}: {pnp_rho:.2%} against "
+        f"{ours_rho:.2%} (median); like our refinement it minimises reprojection errors in the "
+        "image, over all six degrees of freedom. The times above are single runs; "
+        "`python -m vo_lib bench ransac` measures them side by side over repeated runs."
+    )
+)
+assert pnp_rho < ours_rho  # PnP's rho is the better one on these sets
 
 # %% [markdown]
-# The planar model pays off in θ: knowing that roll, pitch and height do not change, the 1-point
-# method's θ is better than every 6-DoF estimate from the same matches, by a wide margin over the
-# 3-D rigid fit (whose far points carry metres of depth noise). For ρ, `solvePnPRansac` is as good
-# or better (printed): like our refinement it minimises reprojection errors in the image. The
-# times above are single runs; `python -m vo_lib bench ransac` measures them side by side over
-# repeated runs.
-#
-# ## 8 · Outliers and noise
+# ## 10 · Outliers and noise
 #
 # `ransac_trial(outlier_ratio, noise_px)` runs 20 seeded cases and reports how often the estimate is
 # within 0.05° and 5 % of the truth, and the median time.
@@ -707,7 +1023,10 @@ trial_widget = offer(
 # ## Summary
 #
 # - One match gives a full hypothesis; 8 hypotheses reach 99.9 % confidence at 60 % inliers,
-#   where 3-point RANSAC needs 29 and 5-point 86.
+#   where 3-point RANSAC needs 29 and 5-point 86 — if every inlier gave a good hypothesis. Near
+#   the principal row it does not, so the effective inlier ratio is lower; the pool raises it.
+# - A naive version with one fixed threshold is easy to write and hard to tune; per-match σ
+#   removes the threshold, and the refinement brings the accuracy (section 7 measures each piece).
 # - Fig. 5's angles are the ray's depression (α) and its angle to the chord (γ); then eq. 18–20
 #   hold exactly. Each match's gate gets its own threshold from first-order noise propagation.
 # - With refinement, the 1-point estimate equals a least-squares fit on the true inliers and

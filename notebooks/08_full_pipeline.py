@@ -14,8 +14,10 @@
 # Everything so far comes together: stereo front end (05), 1-point RANSAC (06) and the Kalman
 # filter fed by track odometry (07), frame after frame (`vo_lib.stereo_vo.pipeline`). We rerun seed 000's
 # experiments on the sample sequences that mirror them — processing time per resolution
-# (Table 1), linear motion, free motion, spot turns with slip, outdoor free motion (Table 2) — and
-# put the paper's figures beside ours.
+# (Table 1), linear motion, free motion, spot turns with slip, outdoor free motion (Table 2) — on a
+# crawler whose tracks slip and skid and, outdoors, lose contact on rough ground, and put the
+# paper's figures beside ours: at the paper's lengths, from results stored with the code that made
+# them.
 #
 # **You will learn**
 # - what the pipeline does per frame, and what it does with a frame it cannot trust;
@@ -25,7 +27,8 @@
 # **Prerequisites**: notebooks 04–07.
 #
 # **Run time**: about 2 minutes in quick mode (the default). Set the environment variable
-# `VO_NOTEBOOKS_FULL=1` for the full sequences (several minutes); the checks hold in both.
+# `VO_NOTEBOOKS_FULL=1` to run the illustrations on the full sequences (several minutes); the
+# comparisons with the paper use the stored full-length results either way.
 
 # %% [markdown]
 # **References**
@@ -40,12 +43,19 @@ import os
 
 import matplotlib.pyplot as plt
 import numpy as np
+from IPython.display import Markdown, display
 
+from vo_lib.camera import StereoCamera
 from vo_lib.evaluation import key_position_errors
 from vo_lib.geometry import relative_planar, wrap_angle
 from vo_lib.models.track_odometry import TrackOdometry
 from vo_lib.sim.samples import SAMPLES, render_sample
+from vo_lib.sim.trajectories import simulate_drive
+from vo_lib.stereo_vo import circular_motion as cm
+from vo_lib.stereo_vo import paper_sets
 from vo_lib.stereo_vo.pipeline import KEY_ANGLE, KEY_DISTANCE, run_frames
+from vo_lib.stereo_vo.ransac import one_point_ransac
+from vo_lib.stereo_vo.synthetic import matches_under_transform
 from vo_lib.viz.plotting import draw_flowchart, new_axes, plot_paths
 
 SEED = 8
@@ -220,14 +230,17 @@ print(
     f"errors at key positions: x {stats['x_mm'][0]:.1f} mm (s.d. {stats['x_mm'][1]:.1f}), "
     f"y {stats['y_mm'][0]:.1f} mm (s.d. {stats['y_mm'][1]:.1f}); paper: x -31.5 (22.6), y -65.2 (16.0)"
 )
-print(f"final position error {relative:.2%} of the {travelled:.2f} m travelled; paper: under 5 %")
+print(f"final position error {relative:.2%} of the {travelled:.2f} m travelled; paper: less than 5 %")
 assert relative <= 0.01
 
 # %% [markdown]
 # Outdoors (IV.B.1, Fig. 9) the paper drove 600 frames forward and 600 back, five times, with
-# mean x and y errors of 15.8 mm (s.d. 53.0) and 124.5 mm (s.d. 40.3). Our `outdoor_linear` sample
-# drives the same in the yard, whose far buildings give the low parallax of an open site; quick
-# mode runs its first 200 frames (forward only), the full mode all of it.
+# mean x and y errors of 15.8 mm (s.d. 53.0) and 124.5 mm (s.d. 40.3); it states no relative
+# error outdoors (its "less than 5 %" is for the indoor sets). Our `outdoor_linear` sample drives
+# the same in the yard, whose far buildings give the low parallax of an open site, on rough
+# ground: the tracks skid and briefly lose contact, and the body pitches and rolls
+# (`vo_lib.sim.trajectories.ROUGH_GROUND`). Here quick mode runs its first 200 frames, an
+# illustration that is not comparable with the paper; section 5 sets the whole drive beside it.
 
 # %%
 n_out = frames_for("outdoor_linear", 200)
@@ -244,25 +257,24 @@ stats_o = key_position_errors(truth_o, result_o.poses, np.arange(20, n_out, 20))
 travelled_o = np.sum(np.linalg.norm(np.diff(truth_o[:, :2], axis=0), axis=1))
 relative_o = np.linalg.norm(result_o.poses[-1, :2] - truth_o[-1, :2]) / travelled_o
 print(
-    f"errors at key positions: x {stats_o['x_mm'][0]:.1f} mm (s.d. {stats_o['x_mm'][1]:.1f}), "
-    f"y {stats_o['y_mm'][0]:.1f} mm (s.d. {stats_o['y_mm'][1]:.1f}); paper: x 15.8 (53.0), y 124.5 (40.3)"
+    f"{n_out} frames: errors at key positions: x {stats_o['x_mm'][0]:.1f} mm "
+    f"(s.d. {stats_o['x_mm'][1]:.1f}), "
+    f"y {stats_o['y_mm'][0]:.1f} mm (s.d. {stats_o['y_mm'][1]:.1f}); final position error "
+    f"{relative_o:.2%} of the {travelled_o:.2f} m travelled"
 )
-print(f"final position error {relative_o:.2%} of the {travelled_o:.2f} m travelled; paper: under 5 %")
-assert relative_o < 0.05
+assert relative_o < 0.05  # our own target: the paper's indoor bound
 
 # %% [markdown]
-# Outdoors the x error grows with the distance driven: in the open yard most matches are far,
-# their disparities small, and the distance per frame is measured a little short or long, a
-# scale error of a fraction of the distance (printed). A pure scale error cancels over a drive
-# forward and back by the same distance, as the paper's sets were, so their end-point errors
-# hide it; the error plot above shows it. It stays well within the paper's 5 %.
-
-# %% [markdown]
-# ## 4 · Spot turns with slip (seed 000, IV.B.2)
+# ## 4 · Spot turns on rough ground (seed 000, IV.B.2)
 #
-# Turning on the spot, the tracks scrub and slip unequally; the paper reports heading errors of
-# 6.38° (s.d. 6.38°) and 4.09° (s.d. 8.17°) and blames unequal track grip. Our sample slips 6 % on
-# average, strongly and unequally; we compare odometry alone, vision alone and the fusion.
+# Turning on the spot, the paper's robot made heading errors it blames on its tracks: they "were
+# not well contacted with the ground", so the motion left the planar model. Our crawler's tracks
+# slip, strongly and unequally when turning on the spot (6 % on average); it turns about a centre
+# that lies ahead of its track centre, moves with the turn rate and wanders, so its body skids
+# sideways; and on rough ground a track briefly loses contact while the body pitches and rolls
+# (`vo_lib.sim.trajectories.TrackGround`). The truth moves by all of it; the encoders see only
+# the slip. Odometry alone, vision alone and the fusion, over the first frames of `spot_turn`
+# (quick mode; an illustration, not comparable with the paper):
 
 # %%
 n_spot = frames_for("spot_turn", 300)
@@ -277,99 +289,206 @@ ax.set_xlabel("time [s]")
 ax.set_ylabel("heading error [deg]")
 ax.legend(fontsize="small")
 plt.show()
-err_odo = abs(heading_error(odo_s[-1:], truth_s[-1:])[0])
-err_fused = np.abs(heading_error(fused.poses, truth_s))
+spot_errors = {
+    "odometry": np.abs(heading_error(odo_s, truth_s)),
+    "vision": np.abs(heading_error(vision.poses, truth_s)),
+    "fused": np.abs(heading_error(fused.poses, truth_s)),
+}
 turned = math.degrees(np.sum(np.abs(np.diff(np.unwrap(truth_s[:, 2])))))
-print(
-    f"after {turned:.0f}° of turning: odometry "
-    f"{err_odo:.1f}°, fused mean {err_fused.mean():.2f}° (s.d. {err_fused.std():.2f}°), "
-    f"max {err_fused.max():.2f}°; "
-    "paper: 6.38° (6.38°) and 4.09° (8.17°)"
-)
-assert err_odo >= 5.0 and err_fused.max() <= 1.0
+print(f"after {turned:.0f}° of turning, |heading error|: last frame / mean / max")
+for name, err in spot_errors.items():
+    print(f"  {name:9s} {err[-1]:6.2f}° / {err.mean():5.2f}° / {err.max():5.2f}°")
+# the encoders count the slip as turning; vision, alone or fused, ends far closer
+assert spot_errors["fused"][-1] < spot_errors["odometry"][-1] / 2
+assert spot_errors["vision"][-1] < spot_errors["odometry"][-1] / 2
 
 # %% [markdown]
-# The paper ran two sets, 1,800 and 2,400 frames, on two grounds. Our `spot_turn_2` turns the
-# other way, more slowly, for 2,400 frames; quick mode runs the first 100 frames of it, the full
-# mode both sets whole. The fused heading error of each set, beside the paper's:
+# ### The paper's sets at full length
+#
+# The paper's two sets had 1,800 and 2,400 frames; ours, `spot_turn` and `spot_turn_2`, turn
+# 1,801 and 2,401 frames, the second the other way and more slowly. Whole runs take longer than
+# this notebook may, so `python -m vo_lib.stereo_vo.paper_sets` ran them once and stored the
+# figures with the code version that made them (`data/results/paper_sets.json`; the test
+# `tests/test_paper_sets.py -m samples` runs them again and must find the same). As the paper
+# reports them: the heading error's average (AVG) and standard deviation (S.D.) at key positions.
 
 # %%
-paper_spot = {"spot_turn": (6.38, 6.38), "spot_turn_2": (4.09, 8.17)}
-spot_sets = {"spot_turn": (fused, truth_s, odo_s)}
-spot_sets["spot_turn_2"] = run("spot_turn_2", frames_for("spot_turn_2", 100))
-print(f" {'set':12s}{'frames':>7s}{'turned':>9s}{'odometry':>10s}   fused |error|: mean / s.d. / max   paper")
-for name, (res, tr, odo) in spot_sets.items():
-    err = np.abs(heading_error(res.poses, tr))
-    turned_deg = math.degrees(np.sum(np.abs(np.diff(np.unwrap(tr[:, 2])))))
-    odo_end = abs(heading_error(odo[-1:], tr[-1:])[0])
-    print(
-        f" {name:12s}{len(tr):7d}{turned_deg:8.0f}°{odo_end:9.1f}°   {err.mean():10.2f}° / "
-        f"{err.std():.2f}° / {err.max():.2f}°    {paper_spot[name][0]:.2f}° / {paper_spot[name][1]:.2f}°"
-    )
-    assert err.max() <= 1.0  # the fusion holds the heading through every set
+stored = paper_sets.load()["sets"]
+
+
+def stored_table(names, quantities):
+    """Print ours (fused), track odometry's and the paper's AVG / S.D. of each set."""
+    print(f" {'set':15s}{'frames':>7s}{'flagged':>8s}  {'':10s}" + "".join(f"{q:>20s}" for q in quantities))
+    for name in names:
+        row, ref = stored[name], paper_sets.paper(name)
+        for label, values in (("ours", row["fused"]), ("odometry", row["odometry"]), ("paper", ref)):
+            head = f" {name:15s}{row['frames']:7d}{row['flagged']:8d}" if label == "ours" else " " * 31
+            cells = "".join(
+                f"{values[q][0]:11.2f} /{values[q][1]:7.2f}" if q in values else f"{'—':>20s}"
+                for q in quantities
+            )
+            print(f"{head}  {label:10s}{cells}")
+
+
+stored_table(("spot_turn", "spot_turn_2"), ("theta_deg",))
+
+
+def avg_sd(name, quantity, source="fused"):
+    """|AVG| and S.D. of a stored set (source 'fused' or 'odometry') or of the paper ('paper')."""
+    values = paper_sets.paper(name)[quantity] if source == "paper" else stored[name][source][quantity]
+    return abs(values[0]), values[1]
+
+
+spot = {n: (avg_sd(n, "theta_deg"), avg_sd(n, "theta_deg", "paper")) for n in ("spot_turn", "spot_turn_2")}
+# the sentences below: set 1 below the paper in both; set 2 above in AVG, below in S.D.
+assert spot["spot_turn"][0][0] < spot["spot_turn"][1][0] and spot["spot_turn"][0][1] < spot["spot_turn"][1][1]
+assert spot["spot_turn_2"][0][0] > spot["spot_turn_2"][1][0]
+assert spot["spot_turn_2"][0][1] < spot["spot_turn_2"][1][1]
+# track odometry alone is far worse than either: the slip is counted as turning
+assert all(avg_sd(n, "theta_deg", "odometry")[0] > 3 * spot[n][1][0] for n in spot)
 
 # %% [markdown]
+# In the first set our heading error is below the paper's, in average and spread; in the second
+# its average is above the paper's and its spread below. **Why ours is smaller where it is:** our
+# losses of contact are brief and come per metre a track travels, and a track turning on the
+# spot travels little, so few frames leave the planar model (the flagged column); by the paper's
+# account its Voyager-II turned with a track that stayed out of full contact. **Why the average
+# of the second set is larger:** even in contact our crawler skids, turning about a centre ahead
+# of its track centre, so the camera moves sideways on a small circle; eq. 14 assumes it moves
+# along the chord at θ/2 to its axis and reads part of that sideways motion as rotation, with a
+# sign that follows the turning direction (section 6 measures the effect). The filter cannot
+# remove an error that vision and odometry do not share: odometry alone (printed) drifts by the
+# slip far more.
+#
 # ## 5 · Free motion indoors (IV.A.3) and outdoors (IV.B.3, Table 2)
 #
-# Statistics of the x, y and heading errors at key positions, beside the paper's: indoors, and
-# Table 2's three outdoor sets (1,403, 2,419 and 2,670 frames in the paper; `outdoor_free`,
-# `outdoor_free_2` and `outdoor_free_3` here, whole in the full mode, shortened in quick mode).
+# The paper's Table 2 reports, for three outdoor sets of 1,403, 2,419 and 2,670 frames, the
+# average and standard deviation of the x, y (mm) and heading (deg) errors at key positions;
+# IV.A.3 reports the same for its indoor free motion. Ours, `outdoor_free`, `outdoor_free_2`,
+# `outdoor_free_3` and `indoor_free`, drive arcs and straights in the yard and in the lab (a flat
+# floor: skid but no losses of contact). Quick mode runs their first frames for the plots; these
+# are not comparable with the paper and carry no claim against it.
 
 # %%
-paper_free = {
-    "indoor_free": {"x_mm": (-1.5, 47.4), "y_mm": (7.4, 8.5), "theta_deg": (0.05, 0.56)},
-    "outdoor_free": {"x_mm": (47.1, 36.4), "y_mm": (268.4, 287.7), "theta_deg": (2.32, 2.57)},
-    "outdoor_free_2": {"x_mm": (-326.2, 818.1), "y_mm": (-1057.3, 950.6), "theta_deg": (16.68, 5.32)},
-    "outdoor_free_3": {"x_mm": (-25.4, 135.8), "y_mm": (-131.9, 115.1), "theta_deg": (2.43, 3.68)},
-}
 quick_frames = {"indoor_free": 400, "outdoor_free": 400, "outdoor_free_2": 150, "outdoor_free_3": 150}
 fig, axes = new_axes(4, width=4.2, height=4.0)
-table = {}
-for ax, name in zip(axes, paper_free, strict=True):
+for ax, name in zip(axes, quick_frames, strict=True):
     n = frames_for(name, quick_frames[name])
     res_f, truth_f, odo_f = run(name, n)
     plot_paths(
         ax, {"truth": truth_f, "track odometry": odo_f, "visual odometry": res_f.poses}, f"{name}, {n} frames"
     )
-    keys_f = np.arange(50, n, 50)
+    keys_f = np.arange(paper_sets.KEY_EVERY, n, paper_sets.KEY_EVERY)
     ax.plot(*truth_f[keys_f, :2].T, "ko", ms=4, mfc="none", label="key positions (truth)")
     ax.plot(*res_f.poses[keys_f, :2].T, "k+", ms=6, label="key positions (VO)")
     ax.legend(fontsize="x-small")
-    table[name] = key_position_errors(truth_f, res_f.poses, keys_f)
-    table[name]["mean_heading"] = float(np.abs(heading_error(res_f.poses, truth_f)).mean())
+    err_f = np.abs(heading_error(res_f.poses, truth_f))
+    print(f"{name}, first {n} frames: mean |heading error| {err_f.mean():.2f}°, {len(res_f.flagged)} flagged")
+    assert np.isfinite(res_f.poses).all() and len(res_f.poses) == n
 plt.show()
-print(f" {'':14s}{'x [mm] AVG / S.D.':>22s}{'y [mm] AVG / S.D.':>22s}{'θ [deg] AVG / S.D.':>22s}")
-for name, ours in table.items():
-    for label, vals in (("ours", ours), ("paper", paper_free[name])):
-        print(
-            f" {name if label == 'ours' else '':14s}"
-            + "".join(
-                f"{vals[k][0]:12.1f} /{vals[k][1]:7.1f}"
-                if k != "theta_deg"
-                else f"{vals[k][0]:12.2f} /{vals[k][1]:7.2f}"
-                for k in ("x_mm", "y_mm", "theta_deg")
-            )
-            + f"   ({label})"
-        )
-assert table["indoor_free"]["mean_heading"] <= 0.2
-# section 6: indoors our mean heading error is not below the paper's, but its spread is a tenth
-assert table["indoor_free"]["theta_deg"][0] > paper_free["indoor_free"]["theta_deg"][0]
-assert table["indoor_free"]["theta_deg"][1] < 0.2 * paper_free["indoor_free"]["theta_deg"][1]
-for name in ("outdoor_free", "outdoor_free_2", "outdoor_free_3"):  # outdoors, every set's heading
-    assert table[name]["mean_heading"] < paper_free[name]["theta_deg"][0]
 
 # %% [markdown]
-# ## 6 · Where we are better, and why that is not the whole story
+# The whole sets, stored as in section 4, beside the paper's (and the outdoor linear set of
+# section 3, whole):
+
+# %%
+free_sets = ("indoor_free", "outdoor_free", "outdoor_free_2", "outdoor_free_3", "outdoor_linear")
+stored_table(free_sets, ("x_mm", "y_mm", "theta_deg"))
+for name in free_sets:
+    row = stored[name]
+    print(
+        f" {name:15s} {row['distance_m']:5.1f} m, {row['turned_deg']:4.0f}° turned, "
+        f"{row['keys']} key positions, {row['flagged'] / row['frames']:.0%} of frames flagged"
+    )
+
+
+def ours_vs_paper(name, quantity):
+    """(ours |AVG| < paper's, ours S.D. < paper's)."""
+    (ours_avg, ours_sd), (ref_avg, ref_sd) = avg_sd(name, quantity), avg_sd(name, quantity, "paper")
+    return ours_avg < ref_avg, ours_sd < ref_sd
+
+
+# each clause of the paragraph below
+assert ours_vs_paper("outdoor_free", "theta_deg") == (True, True)
+assert ours_vs_paper("outdoor_free_2", "theta_deg") == (True, True)
+assert avg_sd("outdoor_free_2", "theta_deg")[1] < 0.5 * avg_sd("outdoor_free_2", "theta_deg", "paper")[1]
+assert ours_vs_paper("outdoor_free_3", "theta_deg") == (False, False)
+assert ours_vs_paper("outdoor_free", "y_mm") == (True, True) and ours_vs_paper("outdoor_free_2", "y_mm") == (
+    True,
+    True,
+)
+assert ours_vs_paper("outdoor_free", "x_mm") == (False, False) and ours_vs_paper(
+    "outdoor_free_3", "x_mm"
+) == (False, False)
+assert all(ours_vs_paper("indoor_free", q) == (False, False) for q in ("x_mm", "y_mm", "theta_deg"))
+assert stored["outdoor_free_3"]["flagged"] > max(
+    stored[n]["flagged"] for n in ("outdoor_free", "outdoor_free_2")
+)
+assert stored["indoor_free"]["flagged"] < 0.02 * stored["indoor_free"]["frames"]  # "hardly a frame"
+
+# %% [markdown]
+# Outdoors, the heading of the first two Table 2 sets stays below the paper's in average and
+# spread (the second's spread under half the paper's), and so do their y errors; their x errors
+# are larger than the paper's in the first set. The third set is worse than the paper's in
+# heading and in x: more of its frames are flagged than in the other two, and while a frame is
+# flagged the filter moves on track odometry, which counts slip as motion and does not see the
+# body swing when a track loses contact (odometry alone, printed, drifts far more). Indoors ours
+# is worse than the paper's in every figure: on the lab's flat floor hardly a frame is flagged,
+# and the error is the skid's bias on eq. 14 in the lab's tight turns (section 6).
 #
-# Most of our figures are smaller than the paper's, several times over. One is not: the mean
-# heading error of indoor free motion (see the table), although its spread is a fraction of the
-# paper's. Neither is a verdict on the method: our images are rendered from an exact pinhole
-# model with a known calibration, no lens distortion, perfectly rectified pairs, a camera
-# exactly above the turning axis (notebook 03 shows what an offset costs), static rich
-# texture, no lighting change, and slip that follows our own statistical model. Every one of
-# those is a source of error on a real robot. What the comparison does show is that the
-# pipeline itself — front end, 1-point RANSAC with the corrected eq. 17, and the filter — adds
-# little error of its own, and that fusing odometry and vision removes the drift each has alone.
+# ## 6 · Why ours differs from the paper
+#
+# **Skid biases eq. 14.** The circular-motion model assumes the camera moves along the chord at
+# θ/2 to its axis. A crawler that skids moves at a *sideslip angle* to that chord. Measured on
+# synthetic matches of one keyframe step (θ = 1.5°, ρ = 4 cm, no noise, no outliers), the θ
+# that the estimator returns when the chord is turned by a sideslip angle:
+
+# %%
+key_theta, key_rho = math.radians(1.5), 0.04
+print(" sideslip [deg]   θ error per keyframe [deg]")
+slip_bias = {}
+for slip_deg in (0.0, 1.0, 2.0, 5.0):
+    R_step, _ = cm.motion_matrices(key_theta, key_rho)
+    chord = 0.5 * key_theta + math.radians(slip_deg)
+    M = np.eye(4)
+    M[:3, :3], M[:3, 3] = R_step, -key_rho * np.array([math.sin(chord), 0.0, math.cos(chord)])
+    sm = matches_under_transform(StereoCamera.bumblebee2(), 400, M, np.random.default_rng(SEED))
+    est = one_point_ransac(sm.w_prev, sm.w_curr, StereoCamera.bumblebee2(), rng=SEED)
+    slip_bias[slip_deg] = math.degrees(est.theta - key_theta)
+    print(f" {slip_deg:14.1f}   {slip_bias[slip_deg]:+.4f}")
+assert abs(slip_bias[0.0]) < 1e-6  # the model's own motion: exact
+assert abs(slip_bias[5.0]) > 3 * abs(slip_bias[1.0]) > 0  # grows with the sideslip
+# the sideslip of our indoor drive: the angle of each step to the heading at its middle
+s_in = SAMPLES["indoor_free"]
+d_in = simulate_drive(
+    s_in.legs, s_in.rate, s_in.start, np.random.default_rng(s_in.seed), slip=s_in.slip, surface=s_in.surface
+)
+step = np.diff(d_in.poses, axis=0)
+mid = d_in.poses[:-1, 2] + step[:, 2] / 2
+along = np.cos(mid) * step[:, 0] + np.sin(mid) * step[:, 1]
+across = -np.sin(mid) * step[:, 0] + np.cos(mid) * step[:, 1]
+in_turns = np.abs(step[:, 2]) * s_in.rate > math.radians(10)
+sideslip_deg = np.degrees(np.abs(np.arctan2(across, along)))[in_turns]
+bias_there = abs(np.interp(np.median(sideslip_deg), list(slip_bias), list(slip_bias.values())))
+display(
+    Markdown(
+        f"In the arcs of `indoor_free` our crawler moves at a median sideslip of "
+        f"{np.median(sideslip_deg):.1f}° to its heading: a bias of about {bias_there:.3f}° per "
+        "keyframe by the table above."
+    )
+)
+assert 1.0 < np.median(sideslip_deg) < 10.0
+
+# %% [markdown]
+# Tens of keyframes per turn accumulate that bias, and the filter cannot remove it, since vision
+# dominates the heading. So the skid that real tracks have costs the planar method accuracy in
+# every turn, most in tight ones: the reason the indoor figures and the second spot-turn set's
+# average are worse than the paper's. Where ours is better, it is because our world is kinder
+# than a real one in other ways: images rendered from an exact pinhole model with a known
+# calibration, no lens distortion, perfectly rectified pairs, a camera exactly above the turning
+# axis (notebook 03 shows what an offset costs), static rich texture, no lighting change, and
+# losses of contact that are brief and random rather than a track that keeps poor contact.
+# Every one of those is a source of error on a real robot.
 #
 # ### Scaling up
 #
@@ -384,8 +503,10 @@ for name in ("outdoor_free", "outdoor_free_2", "outdoor_free_3"):  # outdoors, e
 #   at a speed per frame printed in section 2 (`python -m vo_lib bench pipeline` for a measurement).
 # - Measuring against keyframes, not the previous frame, is what makes centimetre-per-frame motion
 #   measurable.
-# - Linear, free and spot-turn motion all stay within the accuracy targets; odometry alone drifts
-#   by the slip.
+# - On a crawler that skids and, on rough ground, briefly loses track contact, the paper's sets at
+#   full length (stored, section 4 and 5) come out better than the paper's in some figures and
+#   worse in others; skid biases eq. 14 in turns, and frames flagged on rough ground leave the
+#   filter to odometry, which drifts by the slip.
 
 # %% [markdown]
 # ## Exercises

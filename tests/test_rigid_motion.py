@@ -9,7 +9,6 @@ from vo_lib.camera import StereoCamera
 from vo_lib.formats.kitti_raw import camera_in_imu_frame, read_oxts, wheel_distances_from_oxts
 from vo_lib.formats.sequence import SequenceError
 from vo_lib.geometry import camera_mount
-from vo_lib.stereo_vo.features import best_matches, best_matches_reference
 from vo_lib.stereo_vo.kalman import chord_measurement
 from vo_lib.stereo_vo.rigid_motion import (
     predict_features,
@@ -91,21 +90,6 @@ def test_vehicle_increment_of_a_camera_ahead_of_the_axis():
     assert np.allclose(vehicle_increment(with_planar_increment(T_cam, mount, other), mount), other)
 
 
-def test_compiled_best_matches_equal_the_numpy_rule():
-    rng = np.random.default_rng(7)
-    for _ in range(200):
-        n_a, n_b = rng.integers(1, 50, 2)
-        m = int(rng.integers(0, 300))
-        ia, ib = rng.integers(0, n_a, m), rng.integers(0, n_b, m)
-        dist = rng.integers(0, 25, m).astype(np.int32)
-        for mutual in (True, False):
-            for ratio in (0.8, 1.0):
-                fast = best_matches(ia, ib, dist, n_a, n_b, 18, ratio, mutual)
-                slow = best_matches_reference(ia, ib, dist, n_a, n_b, 18, ratio, mutual)
-                for x, y in zip(fast, slow, strict=True):
-                    assert np.array_equal(x, y)
-
-
 def test_oxts_reader_names_file_and_line(tmp_path):
     path = tmp_path / "oxts.txt"
     path.write_text(" ".join(["1"] * 30) + "\n" + " ".join(["1"] * 29) + "\n")
@@ -143,19 +127,6 @@ def test_camera_in_imu_frame_from_raw_calibration(tmp_path):
     (tmp_path / "calib_cam_to_cam.txt").write_text("R_rect_01: 1 0 0 0 1 0 0 0 1\n")
     with pytest.raises(SequenceError, match="no line starting with 'R_rect_00:'"):
         camera_in_imu_frame(tmp_path)
-
-
-def test_compiled_normal_equations_equal_the_numpy_ones(kitti_camera, rng):
-    from vo_lib.stereo_vo.rigid_motion import _normal_equations, _normal_equations_numpy
-
-    P = scene(rng, 200)
-    T = motion([0.01, -0.02, 0.003], [0.1, 0.0, -1.0])
-    w = project(P @ T[:3, :3].T + T[:3, 3], kitti_camera) + rng.normal(0, 2.0, (200, 3))
-    for huber in (1.0, np.inf):
-        fast = _normal_equations(P, w, np.eye(3), np.zeros(3), kitti_camera, huber)
-        slow = _normal_equations_numpy(P, w, np.eye(3), np.zeros(3), kitti_camera, huber)
-        for a, b in zip(fast, slow, strict=True):
-            np.testing.assert_allclose(a, b, rtol=1e-9, atol=1e-9)
 
 
 def test_compiled_windows_give_the_pairs_of_the_numpy_windows():

@@ -149,9 +149,11 @@ def path_lengths(poses) -> np.ndarray:
     return np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(p, axis=0), axis=1))])
 
 
-#: A drive counts as turning on the spot when its path is shorter than this (metres) while it
-#: turns by more than SPOT_TURN_MIN_DEGREES: position errors then say little, heading errors all.
-SPOT_TURN_MAX_METRES = 0.1
+#: A drive counts as turning on the spot when its path is shorter than this many metres per radian
+#: it turns (a mean turning radius below it: a skidding crawler's centre circles a few centimetres
+#: about its turning centre) while it turns by more than SPOT_TURN_MIN_DEGREES: position errors
+#: then say little, heading errors all.
+SPOT_TURN_MAX_RADIUS = 0.1
 SPOT_TURN_MIN_DEGREES = 45.0
 
 
@@ -168,10 +170,11 @@ def turned_degrees(poses_planar) -> float:
 
 
 def is_spot_turn(poses_planar) -> bool:
-    """Does the path turn on the spot (see ``SPOT_TURN_MAX_METRES``, ``SPOT_TURN_MIN_DEGREES``)?"""
+    """Does the path turn on the spot (see ``SPOT_TURN_MAX_RADIUS``, ``SPOT_TURN_MIN_DEGREES``)?"""
+    turned = turned_degrees(poses_planar)
     return (
-        planar_path_length(poses_planar) < SPOT_TURN_MAX_METRES
-        and turned_degrees(poses_planar) > SPOT_TURN_MIN_DEGREES
+        planar_path_length(poses_planar) < SPOT_TURN_MAX_RADIUS * np.radians(turned)
+        and turned > SPOT_TURN_MIN_DEGREES
     )
 
 

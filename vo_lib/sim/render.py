@@ -17,6 +17,7 @@ import cv2
 import numpy as np
 
 from vo_lib.camera import StereoCamera
+from vo_lib.compiled import choose
 from vo_lib.sim.composite import draw_nearer
 from vo_lib.sim.textures import cached_surface
 from vo_lib.sim.world import Patch, World
@@ -353,6 +354,7 @@ class StereoRenderer:
         H[:, 0] -= x0y0[:, :1] * H[:, 2]
         H[:, 1] -= x0y0[:, 1:] * H[:, 2]
         boxes, planes = np.hstack([x0y0, x1y1]).tolist(), list(abe)  # float64 scalars: keep
+        composite = choose(draw_nearer)  # or its plain twin (VO_LIB_PLAIN)
         for i in np.flatnonzero(drawn).tolist():
             x0, y0, x1, y1 = boxes[i]
             M = H[i]
@@ -368,7 +370,7 @@ class StereoRenderer:
             pts = pts4[i] if i not in clipped else np.round((clipped[i] - (x0, y0)) * 16).astype(np.int32)
             cv2.fillConvexPoly(mask, pts, 1, lineType=cv2.LINE_8, shift=4)
             a, b, e = planes[i]
-            draw_nearer(image, inv_depth, warped, mask, x0, y0, a, b, e, quad.shade)
+            composite(image, inv_depth, warped, mask, x0, y0, a, b, e, quad.shade)
         if not with_depth:
             return image
         with np.errstate(divide="ignore"):

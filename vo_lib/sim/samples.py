@@ -23,7 +23,15 @@ from vo_lib.sim import road
 from vo_lib.sim.frame_store import FrameStore
 from vo_lib.sim.render import SensorEffects, StereoRenderer
 from vo_lib.sim.textures import TEXTURE_VERSION
-from vo_lib.sim.trajectories import Leg, SlipModel, simulate_drive
+from vo_lib.sim.trajectories import (
+    LAB_FLOOR,
+    ROUGH_GROUND,
+    Leg,
+    SlipModel,
+    TrackGround,
+    attitude_matrices,
+    simulate_drive,
+)
 from vo_lib.sim.world import WORLDS
 
 #: Height of the camera above the floor; it sits above the crawler's turning axis (notebook 03).
@@ -69,6 +77,8 @@ class Sample:
     exposure_sigma: float = EXPOSURE_SIGMA
     rig: str = "crawler"  # or "car": KITTI's rig on a car (vo_lib.sim.road)
     resolution: tuple[int, int] = DEFAULT_RESOLUTION
+    #: how the tracks meet the ground (skid, losses of contact); None: the plan's exact arcs
+    surface: TrackGround | None = None
 
     @property
     def frames(self) -> int:
@@ -114,6 +124,7 @@ SAMPLES: dict[str, Sample] = {
             30.0,
             (Leg(200, 0.3), Leg(200, -0.3)),
             seed=101,
+            surface=LAB_FLOOR,
         ),
         Sample(
             "indoor_free",
@@ -131,6 +142,7 @@ SAMPLES: dict[str, Sample] = {
                 Leg(130, 0.3, np.radians(-20)),
             ),
             seed=102,
+            surface=LAB_FLOOR,
         ),
         Sample(
             "outdoor_linear",
@@ -141,6 +153,7 @@ SAMPLES: dict[str, Sample] = {
             30.0,
             (Leg(600, 0.5), Leg(600, -0.5)),
             seed=103,
+            surface=ROUGH_GROUND,
         ),
         Sample(
             "spot_turn",
@@ -151,6 +164,7 @@ SAMPLES: dict[str, Sample] = {
             30.0,
             (Leg(1800, 0.0, np.radians(18)),),
             seed=104,
+            surface=ROUGH_GROUND,
         ),
         Sample(
             "outdoor_free",
@@ -161,6 +175,7 @@ SAMPLES: dict[str, Sample] = {
             30.0,
             _turns(3, 200, 0.5, 12) + (Leg(200, 0.5),),
             seed=105,
+            surface=ROUGH_GROUND,
         ),
         Sample(
             "spot_turn_2",
@@ -171,6 +186,7 @@ SAMPLES: dict[str, Sample] = {
             30.0,
             (Leg(2400, 0.0, np.radians(-15)),),
             seed=107,
+            surface=ROUGH_GROUND,
         ),
         Sample(
             "outdoor_free_2",
@@ -183,6 +199,7 @@ SAMPLES: dict[str, Sample] = {
             + _quarter_turns((1, 1, -1, -1))
             + (Leg(200, 0.5), Leg(200, 0.5, np.radians(-13.5)), Leg(200, 0.5, np.radians(13.5))),
             seed=108,
+            surface=ROUGH_GROUND,
         ),
         Sample(
             "outdoor_free_3",
@@ -194,6 +211,7 @@ SAMPLES: dict[str, Sample] = {
             30.0,
             (Leg(269, 0.5),) + _turns_pattern((-1, 1, 1, -1, 1, 1), 200, 0.5, 15),
             seed=109,
+            surface=ROUGH_GROUND,
         ),
         Sample(
             "long_run",
@@ -204,6 +222,7 @@ SAMPLES: dict[str, Sample] = {
             30.0,
             _oval_laps(10) + (Leg(399, 0.5),),
             seed=110,
+            surface=ROUGH_GROUND,
         ),
         Sample(
             "road_drive",
@@ -257,7 +276,9 @@ class RenderedSample:
     """A sample's rig, truth and an iterator of ``(left, right, odometry_or_None)`` frames.
 
     ``vehicle_poses`` are the world poses ``(N, 4, 4)`` of the vehicle (for the crawler, its planar
-    poses on the floor; for the car, on the road's surface); ``mount`` places the left camera on it.
+    poses on the floor, tilted by the body's pitch and roll about the contact point when its ground
+    is rough; for the car, on the road's surface); ``mount`` places the left camera on it.
+    :meth:`truth` stays planar: the pose of the body on the floor.
     """
 
     camera: StereoCamera
@@ -289,7 +310,10 @@ def sample_camera(sample: Sample, resolution=None) -> StereoCamera:
 def _world_poses(sample: Sample, drive) -> np.ndarray:
     if sample.rig == "car":
         return road.vehicle_poses(drive.poses)
-    return np.stack([planar_to_matrix(p) for p in drive.poses])
+    poses = np.stack([planar_to_matrix(p) for p in drive.poses])
+    if drive.attitude is not None:
+        poses = poses @ attitude_matrices(drive.attitude)  # pitch and roll about the contact point
+    return poses
 
 
 def render_sample(name: str, frames: int | None = None, resolution=None, first: int = 0):
@@ -316,6 +340,7 @@ def render_sample(name: str, frames: int | None = None, resolution=None, first: 
         np.random.default_rng(sample.seed),
         road.CAR_ODOMETRY if car else TrackOdometry(),
         sample.slip,
+        sample.surface,
     )
     mount = road.camera_in_vehicle() if car else camera_mount(height=CAMERA_HEIGHT)
     poses = _world_poses(sample, drive)
@@ -409,6 +434,7 @@ def generate(
             "camera": _camera_entry(sample, camera),
             "track_odometry": asdict(road.CAR_ODOMETRY if sample.rig == "car" else TrackOdometry()),
             "slip": asdict(sample.slip),
+            "surface": None if sample.surface is None else asdict(sample.surface),
             "sensor_noise_grey": sample.sensor_noise,
             "exposure_sigma": sample.exposure_sigma,
             "seed": sample.seed,

@@ -5,7 +5,13 @@ driver steering to a plan would. To move a track by ``g`` over the ground when i
 the motor turns it by ``g / (1 - s)``; the encoders count that turning, with random-walk noise.
 Slip is small and nearly equal on both tracks when driving, strong and unequal in spot turns,
 where the tracks scrub sideways (the cause seed 000 gives for its spot-turn heading errors).
-Truth integrates the ground motion with the exact circular arc; odometry integrates the encoders.
+
+Slip alone changes only what the encoders read. How the tracks meet the ground also moves the
+body itself (:class:`TrackGround`): a skid-steered vehicle turns about an instantaneous centre of
+rotation (ICR) that lies ahead of or behind its track centre and moves with the turn rate, so the
+body skids sideways in every turn; on rough ground a track briefly loses contact, the body
+pitches and rolls, and the other track swings it round. Truth integrates that body motion;
+odometry integrates the encoders.
 """
 
 from __future__ import annotations
@@ -13,7 +19,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.spatial.transform import Rotation
 
+from vo_lib.geometry import wrap_angle
 from vo_lib.models.track_odometry import TrackOdometry
 
 #: Seconds over which speed changes between legs are smoothed (the crawler's acceleration).
@@ -61,6 +69,149 @@ class SlipModel:
         return base + noise
 
 
+def _ar1(n: int, sigma: float, frames: float, rng: np.random.Generator, dim: int = 1) -> np.ndarray:
+    """``(n, dim)`` AR(1) series, stationary standard deviation ``sigma``, correlation ``frames``."""
+    a = np.exp(-1.0 / frames)
+    steps = rng.normal(0.0, sigma * np.sqrt(1 - a * a), (n, dim))
+    out = np.empty((n, dim))
+    state = rng.normal(0.0, sigma, dim)
+    for k in range(n):
+        state = a * state + steps[k]
+        out[k] = state
+    return out
+
+
+@dataclass(frozen=True)
+class TrackGround:
+    """How the tracks meet the ground: skid, a wandering turning centre and brief losses of contact.
+
+    Kinematics of a skid-steered vehicle after Martínez et al. (2005), "Approximating kinematics
+    for tracked mobile robots", Int. J. Robotics Research 24(10), 867-878: in the body
+    frame the vehicle turns about an ICR at ``(x_icr, v_x / omega)``, so the body's centre moves
+    sideways with ``v_y = -x_icr * omega`` (it skids outward of the turn when the ICR lies ahead).
+    The left and right tracks' own ICRs, which lie outside the tracks and make the body turn less
+    than the tracks' travel says, are the slip of :class:`SlipModel`. Mandow et al. (2007),
+    "Experimental kinematics for wheeled skid-steer mobile robots", IROS, 1222-1227, measured the
+    ICR coordinates moving with the turn rate; here ``x_icr`` grows linearly with ``|omega|`` and
+    wanders slowly (AR(1)) around that value, as grip changes under the tracks.
+
+    On rough ground a track loses contact at random (a Poisson process per metre it travels) for
+    ``contact_frames`` frames: it keeps only ``contact_grip`` of its traction, while its encoder
+    counts on, and the body rolls towards that side and pitches by an angle drawn in
+    ``tilt_deg`` (a half-sine bump). ``roughness_deg`` adds the slow pitch and roll of uneven
+    ground. The body rotates about its contact point on the ground, so a camera mounted above it
+    moves sideways and up and down: the planar model of seed 000 no longer holds exactly.
+
+    Parameters
+    ----------
+    icr_offset : float
+        ``x_icr`` at zero turn rate, metres ahead of the track centre (the load on the tracks is
+        not centred).
+    icr_per_rate : float
+        Growth of ``x_icr`` per rad/s of turn rate, metres.
+    icr_sigma, icr_frames : float
+        Standard deviation (metres) and correlation time (frames) of the ICR's wander.
+    contact_rate : float
+        Losses of contact per metre a track travels.
+    contact_frames : int
+        Frames a loss of contact lasts.
+    contact_grip : float
+        Share of a track's traction kept while it has lost contact.
+    tilt_deg : tuple of float
+        Range of the peak roll (and of the peak pitch, either sign) during a loss, degrees.
+    roughness_deg, roughness_frames : float
+        Standard deviation (degrees) and correlation time (frames) of the ground's pitch and roll.
+    """
+
+    icr_offset: float = 0.02
+    icr_per_rate: float = 0.06
+    icr_sigma: float = 0.01
+    icr_frames: float = 60.0
+    contact_rate: float = 0.0
+    contact_frames: int = 4
+    contact_grip: float = 0.5
+    tilt_deg: tuple[float, float] = (2.0, 5.0)
+    roughness_deg: float = 0.0
+    roughness_frames: float = 15.0
+
+    def __post_init__(self):
+        for name in ("icr_sigma", "icr_frames", "contact_rate", "roughness_deg", "roughness_frames"):
+            value = float(getattr(self, name))
+            if not (np.isfinite(value) and value >= 0):
+                raise ValueError(f"{name} must be a finite number >= 0; got {value!r}")
+        if not 0.0 <= self.contact_grip <= 1.0:
+            raise ValueError(f"contact_grip must lie in [0, 1]; got {self.contact_grip!r}")
+        if int(self.contact_frames) < 1:
+            raise ValueError(f"contact_frames must be >= 1; got {self.contact_frames!r}")
+        low, high = self.tilt_deg
+        if not 0.0 <= low <= high < 45.0:
+            raise ValueError(
+                f"tilt_deg must be (low, high) with 0 <= low <= high < 45; got {self.tilt_deg!r}"
+            )
+
+    def icr(self, turn_rate: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+        """``x_icr`` (metres) per step for turn rates ``turn_rate`` (rad/s)."""
+        n = len(turn_rate)
+        wander = _ar1(n, self.icr_sigma, max(self.icr_frames, 1.0), rng)[:, 0] if self.icr_sigma else 0.0
+        return self.icr_offset + wander + self.icr_per_rate * np.abs(turn_rate)
+
+    def contact(self, ground: np.ndarray, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
+        """Per-step grip ``(N, 2)`` of each track and body attitude ``(N, 2)`` (pitch, roll; radians)."""
+        n = len(ground)
+        grip = np.ones((n, 2))
+        attitude = np.zeros((n, 2))
+        if self.contact_rate > 0:
+            # a loss starts on a track with probability rate * distance in a step (Poisson, thinned)
+            starts = rng.random((n, 2)) < self.contact_rate * np.abs(ground)
+            length = int(self.contact_frames)
+            bump = np.sin(np.pi * (np.arange(length) + 0.5) / length)
+            low, high = np.radians(self.tilt_deg)
+            for k, side in zip(*np.nonzero(starts), strict=True):
+                stop = min(n, k + length)
+                grip[k:stop, side] = np.minimum(grip[k:stop, side], self.contact_grip)
+                roll = rng.uniform(low, high) * (1.0 if side == 1 else -1.0)  # down on the lost side
+                pitch = rng.uniform(low, high) * rng.choice((-1.0, 1.0))
+                attitude[k:stop] += np.column_stack([pitch, roll]) * bump[: stop - k, None]
+        if self.roughness_deg > 0:
+            attitude += _ar1(n, np.radians(self.roughness_deg), self.roughness_frames, rng, 2)
+        return grip, attitude
+
+
+#: Ground that holds the tracks exactly: no skid, no wander, no losses of contact.
+RIGID_GROUND = TrackGround(icr_offset=0.0, icr_per_rate=0.0, icr_sigma=0.0)
+#: A lab floor: the crawler skids in turns, but the floor is flat.
+LAB_FLOOR = TrackGround()
+#: Outdoor paving: skid, two losses of contact per ten metres a track travels (each 4 frames,
+#: 0.13 s, at half grip), and 0.15 degrees of slow pitch and roll from the unevenness.
+ROUGH_GROUND = TrackGround(contact_rate=0.2, roughness_deg=0.15, roughness_frames=30.0)
+
+
+def integrate_body(steps: np.ndarray, start) -> np.ndarray:
+    """Poses ``(K + 1, 3)`` from body-frame steps ``(K, 3)`` ``(forward, left, turn)``, each taken
+    at constant velocity (the exact SE(2) exponential)."""
+    steps = np.asarray(steps, dtype=float)
+    fx, fy, w = steps.T
+    small = np.abs(w) < 1e-9
+    ws = np.where(small, 1.0, w)
+    a = np.where(small, 1.0 - w * w / 6.0, np.sin(ws) / ws)
+    b = np.where(small, w / 2.0, (1.0 - np.cos(ws)) / ws)
+    local = np.column_stack([a * fx - b * fy, b * fx + a * fy])
+    theta = float(start[2]) + np.concatenate([[0.0], np.cumsum(w)])
+    c, s = np.cos(theta[:-1]), np.sin(theta[:-1])
+    world = np.column_stack([c * local[:, 0] - s * local[:, 1], s * local[:, 0] + c * local[:, 1]])
+    poses = np.empty((len(steps) + 1, 3))
+    poses[:, :2] = np.asarray(start[:2], float) + np.vstack([np.zeros((1, 2)), np.cumsum(world, axis=0)])
+    poses[:, 2] = wrap_angle(theta)
+    return poses
+
+
+def attitude_matrices(attitude: np.ndarray) -> np.ndarray:
+    """``(N, 4, 4)`` body tilts about the contact point on the ground from ``(pitch, roll)`` rows."""
+    T = np.tile(np.eye(4), (len(attitude), 1, 1))
+    T[:, :3, :3] = Rotation.from_euler("YX", np.asarray(attitude, float)).as_matrix()
+    return T
+
+
 @dataclass(frozen=True)
 class Drive:
     """A simulated drive: one row per frame (frame 0 is the start, with zero motion)."""
@@ -70,6 +221,9 @@ class Drive:
     odometry: np.ndarray  # (N, 2) encoder readings: track distances since the previous frame
     ground: np.ndarray  # (N, 2) distances the tracks moved over the ground
     slip: np.ndarray  # (N, 2)
+    attitude: np.ndarray | None = None  # (N, 2) body pitch and roll (radians), None: level
+    icr: np.ndarray | None = None  # (N,) longitudinal ICR offset x_icr of each step (metres)
+    grip: np.ndarray | None = None  # (N, 2) share of traction each track had in each step
 
     @property
     def times(self) -> np.ndarray:
@@ -98,10 +252,13 @@ def simulate_drive(
     rng: np.random.Generator,
     odometry: TrackOdometry | None = None,
     slip: SlipModel | None = None,
+    surface: TrackGround | None = None,
 ) -> Drive:
     """Drive ``legs`` at ``rate`` frames per second from ``start`` (x, y, yaw).
 
-    Returns ``sum(leg.frames) + 1`` frames: the start and one per step.
+    Returns ``sum(leg.frames) + 1`` frames: the start and one per step. Without ``ground`` the
+    tracks hold the ground exactly and the truth follows the plan's arcs; with ``surface`` the body skids,
+    its turning centre wanders and it pitches and rolls (:class:`TrackGround`).
     """
     if rate <= 0:
         raise ValueError(f"rate must be > 0 frames per second; got {rate!r}")
@@ -111,10 +268,28 @@ def simulate_drive(
     ground = odometry.controls_for(speed / rate, turn / rate)
     slips = slip.sample(ground, rng)
     turned = ground / (1.0 - slips)  # what the motors turned and the encoders count
-    poses = odometry.integrate(ground, start=start, exact=True)
     noise_sd = odometry.encoder_sigma * np.sqrt(np.abs(turned))
     readings = turned + rng.normal(size=turned.shape) * noise_sd
     zero = np.zeros((1, 2))
+    if surface is None:
+        poses = odometry.integrate(ground, start=start, exact=True)
+        return Drive(
+            rate, poses, np.vstack([zero, readings]), np.vstack([zero, ground]), np.vstack([zero, slips])
+        )
+    # the tracks move the ground by what they planned, less what they lose in contact; the body
+    # turns by their difference over the gauge and skids sideways about the shifted ICR
+    grip, attitude = surface.contact(ground, rng)
+    moved = ground * grip
+    forward, turn = odometry.increment(moved)
+    x_icr = surface.icr(turn * rate, rng)
+    poses = integrate_body(np.column_stack([forward, -x_icr * turn, turn]), start)
     return Drive(
-        rate, poses, np.vstack([zero, readings]), np.vstack([zero, ground]), np.vstack([zero, slips])
+        rate,
+        poses,
+        np.vstack([zero, readings]),
+        np.vstack([zero, moved]),
+        np.vstack([zero, slips]),
+        attitude=np.vstack([zero, attitude]),
+        icr=np.concatenate([[surface.icr_offset], x_icr]),
+        grip=np.vstack([np.ones((1, 2)), grip]),
     )

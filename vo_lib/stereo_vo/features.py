@@ -23,6 +23,7 @@ import cv2
 import numpy as np
 
 from vo_lib.camera import StereoCamera
+from vo_lib.compiled import choose
 
 FAST_THRESHOLD = 40
 GRID = (8, 6)  # cells across, down
@@ -74,55 +75,15 @@ def best_matches(
     For each ``a`` the nearest ``b`` is kept if it is within ``max_distance``, if the second
     nearest is farther by the ``ratio`` test, and (with ``mutual``) if no other ``a`` is nearer
     to that ``b``. Returns ``(index_a, index_b, distance)``, ordered by ``b`` with ``mutual``,
-    else by ``a``. Runs compiled (:mod:`.matching_core`); :func:`best_matches_reference` is the
-    same rule in NumPy, which the tests hold it to.
+    else by ``a``. Runs compiled (:mod:`.matching_core`); ``matching_plain.best_matches`` is the
+    same rule in NumPy (``VO_LIB_PLAIN=1`` runs it).
     """
     from vo_lib.stereo_vo.matching_core import best_matches_core
 
     ia, ib, dist = np.asarray(ia, np.int64), np.asarray(ib, np.int64), np.asarray(dist)
-    return best_matches_core(
+    return choose(best_matches_core)(
         ia, ib, dist, int(n_a), int(n_b), float(max_distance), float(ratio), bool(mutual)
     )
-
-
-def best_matches_reference(
-    ia,
-    ib,
-    dist,
-    n_a: int,
-    n_b: int,
-    max_distance: int = MAX_HAMMING,
-    ratio: float = RATIO,
-    mutual: bool = True,
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """:func:`best_matches` written with NumPy sorts: the rule, readable, and the tests' reference."""
-    ia, ib, dist = np.asarray(ia), np.asarray(ib), np.asarray(dist)
-    if len(dist) == 0:
-        empty = np.zeros(0, int)
-        return empty, empty, empty
-    order = np.lexsort((dist, ia))  # by a, then by distance
-    ia_s, ib_s, d_s = ia[order], ib[order], dist[order]
-    first = np.r_[True, ia_s[1:] != ia_s[:-1]]
-    starts = np.flatnonzero(first)
-    best_a, best_b, best_d = ia_s[starts], ib_s[starts], d_s[starts]
-    second = np.full(len(starts), np.iinfo(np.int32).max, dtype=np.int64)
-    has_second = np.r_[starts[1:], len(ia_s)] - starts > 1
-    second[has_second] = d_s[starts[has_second] + 1]
-    keep = (best_d <= max_distance) & (best_d < ratio * second)
-    best_a, best_b, best_d = best_a[keep], best_b[keep], best_d[keep]
-    if mutual and len(best_b):
-        # a b claimed by several a keeps the nearest; and that a must be b's nearest over all candidates
-        nearest_for_b = np.full(n_b, np.iinfo(np.int32).max, dtype=np.int64)
-        np.minimum.at(nearest_for_b, ib, dist)
-        keep = best_d <= nearest_for_b[best_b]
-        best_a, best_b, best_d = best_a[keep], best_b[keep], best_d[keep]
-        if len(best_b) == 0:
-            return best_a, best_b, best_d
-        order = np.lexsort((best_d, best_b))
-        first_b = np.r_[True, best_b[order][1:] != best_b[order][:-1]]
-        sel = order[first_b]
-        best_a, best_b, best_d = best_a[sel], best_b[sel], best_d[sel]
-    return best_a, best_b, best_d
 
 
 def window_pairs(keys_a: np.ndarray, keys_b: np.ndarray, half_width) -> tuple[np.ndarray, np.ndarray]:
@@ -206,7 +167,7 @@ def subpixel_disparity(
     from vo_lib.stereo_vo.matching_core import sad_costs
 
     # costs[k + search] belongs to disparity d + k (one compiled pass over the patches)
-    costs = sad_costs(left, right, ui[ok], vi[ok], di[ok], r, search)
+    costs = choose(sad_costs)(left, right, ui[ok], vi[ok], di[ok], r, search)
     best = 1 + np.argmin(costs[1:-1], axis=0)  # the lowest inner cost
     pick = np.arange(costs.shape[1])
     offset = parabola_offset(costs[best - 1, pick], costs[best, pick], costs[best + 1, pick])

@@ -16,7 +16,7 @@ from vo_lib.compiled import jit as _jit
 NONE = np.iinfo(np.int32).max
 
 
-@_jit
+@_jit(twin="vo_lib.stereo_vo.matching_plain.best_matches")
 def best_matches_core(ia, ib, dist, n_a, n_b, max_distance, ratio, mutual):
     best = np.full(n_a, NONE, np.int64)
     second = np.full(n_a, NONE, np.int64)
@@ -72,7 +72,7 @@ def best_matches_core(ia, ib, dist, n_a, n_b, max_distance, ratio, mutual):
     return out_a, out_b, out_d
 
 
-@_jit
+@_jit(step_of=f"{__name__}.window_candidates")  # and of row_candidates
 def _popcount64(x):
     x = x - ((x >> np.uint64(1)) & np.uint64(0x5555555555555555))
     x = (x & np.uint64(0x3333333333333333)) + ((x >> np.uint64(2)) & np.uint64(0x3333333333333333))
@@ -80,7 +80,7 @@ def _popcount64(x):
     return (x * np.uint64(0x0101010101010101)) >> np.uint64(56)
 
 
-@_jit
+@_jit(twin="vo_lib.stereo_vo.matching_plain.window_candidates")
 def window_candidates(predicted, radius, w_curr, order_v, sorted_v, d_floor, d_fraction, des_prev, des_curr):
     """Pairs ``(i, j)`` whose current feature ``j`` lies in the square window of radius
     ``radius[i]`` around previous feature ``i``'s predicted ``(u, v)`` and within
@@ -118,7 +118,7 @@ def window_candidates(predicted, radius, w_curr, order_v, sorted_v, d_floor, d_f
     return ia[:count], ib[:count], dist[:count]
 
 
-@_jit
+@_jit(twin="vo_lib.stereo_vo.matching_plain.sad_costs")
 def sad_costs(left, right, ui, vi, di, half, search):
     """``costs[k + search, n]``: sum of absolute differences between the left patch of half-width
     ``half`` at ``(ui[n], vi[n])`` and the right patch at disparity ``di[n] + k``."""
@@ -137,7 +137,7 @@ def sad_costs(left, right, ui, vi, di, half, search):
     return costs
 
 
-@_jit
+@_jit(twin="vo_lib.stereo_vo.matching_plain.row_candidates")
 def row_candidates(
     left, left_level, right, right_level, order_v, sorted_v, row_tolerance, d_min, d_max, des_left, des_right
 ):

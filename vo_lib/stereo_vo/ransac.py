@@ -43,21 +43,25 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from vo_lib.camera import StereoCamera
+from vo_lib.compiled import choose
 from vo_lib.geometry import as_match_array
 from vo_lib.stereo_vo import ransac_core as core
 from vo_lib.stereo_vo.circular_motion import motion_matrices, rho_from_pixels, theta_from_pixels
+from vo_lib.stereo_vo.ransac_core import CameraTerms, RansacParams
+from vo_lib.stereo_vo.ransac_core import hypotheses_needed as hypotheses_needed  # one formula for all
 
-GATE_SIGMAS = 3.0  # a match is an inlier within this many standard deviations of each gate
-#: Final gate on the whitened eq. 21 residual, a 3-vector: sqrt of chi-square(3) at 99.7 %.
-WHITENED_GATE = 3.76
-PIXEL_SIGMA = 0.5  # pixel noise of u, v and d assumed by the gates
-CONFIDENCE = 0.999  # probability of drawing at least one all-inlier hypothesis
-MAX_HYPOTHESES = 200
-POOL_FRACTION = 0.5  # hypotheses come from this best-conditioned fraction of the matches
-MIN_POOL = 8
-REFINE_ITERATIONS = 2
-REFINE_ROUNDS = 3  # refine, re-select inliers, and refine again while the set changes
-INITIAL_INLIER_RATIO = 0.5  # first guess, before any hypothesis has been scored
+#: The default settings; every field is documented in :class:`RansacParams`.
+DEFAULT_PARAMS = RansacParams()
+GATE_SIGMAS = DEFAULT_PARAMS.gate_sigmas
+WHITENED_GATE = DEFAULT_PARAMS.whitened_gate
+PIXEL_SIGMA = DEFAULT_PARAMS.pixel_sigma
+CONFIDENCE = DEFAULT_PARAMS.confidence
+MAX_HYPOTHESES = DEFAULT_PARAMS.max_hypotheses
+POOL_FRACTION = DEFAULT_PARAMS.pool_fraction
+MIN_POOL = DEFAULT_PARAMS.min_pool
+REFINE_ITERATIONS = DEFAULT_PARAMS.refine_iterations
+REFINE_ROUNDS = DEFAULT_PARAMS.refine_rounds
+INITIAL_INLIER_RATIO = DEFAULT_PARAMS.initial_inlier_ratio
 
 
 @dataclass
@@ -70,16 +74,6 @@ class RansacResult:
     covariance: np.ndarray
     success: bool
     diagnostics: dict = field(default_factory=dict)
-
-
-def hypotheses_needed(inlier_ratio: float, confidence: float = CONFIDENCE, sample_size: int = 1) -> int:
-    """Hypotheses so that at least one is all-inlier with probability ``confidence``:
-    ``ceil(log(1 - p) / log(1 - w**s))``."""
-    w = min(max(float(inlier_ratio), 1e-9), 1.0)
-    good = w**sample_size
-    if good >= 1.0:
-        return 1
-    return max(1, math.ceil(math.log(1.0 - confidence) / math.log(1.0 - good)))
 
 
 def hypothesis_draws(rng=None, max_hypotheses: int = MAX_HYPOTHESES) -> np.ndarray:
@@ -136,37 +130,32 @@ def rho_gate_error(P, Q, theta, rho) -> np.ndarray:
 
 
 # ---------------------------------------------------------------------- refinement
-def _gauss_newton(P, Q, wa, wb, theta, rho, camera, iterations):
-    """Gauss-Newton on forward and backward reprojection errors in disparity space.
-
-    Forward: ``pi(R P + T) - w'``; backward: ``pi(R^T (Q - T)) - w``. With ``c, s`` of theta and
-    ``sp, cp`` of phi = theta/2, ``R P + T = (c X + s Z - rho sp, Y, -s X + c Z - rho cp)`` and
-    ``R^T (Q - T) = (c X' - s Z' - rho sp, Y', s X' + c Z' + rho cp)``: one formula with a sign
-    ``g = +1`` forward and ``-1`` backward, so both run as one vector of length 2N. The Jacobian
-    is analytic. Returns ``(theta, rho, normal_matrix, residual_sum_of_squares, count)``; the normal
-    matrix and residuals are those of the last iterate before its update.
-    """
-    fb = camera.fx * camera.baseline
-    theta, rho, a00, a01, a11, rss = core.gauss_newton(
-        P, Q, wa, wb, theta, rho, camera.fx, camera.fy, camera.cx, camera.cy, fb, iterations
+def camera_terms(camera: StereoCamera) -> CameraTerms:
+    """The camera as the kernels take it."""
+    return CameraTerms(
+        float(camera.fx), float(camera.fy), float(camera.cx), float(camera.cy), float(camera.baseline)
     )
-    return theta, rho, np.array([[a00, a01], [a01, a11]]), float(rss), 6 * len(P)
-
-
-def _covariance(A, rss, count):
-    """Covariance of ``(theta, rho)`` from the normal matrix ``A`` and the residuals."""
-    return core.covariance(A[0, 0], A[0, 1], A[1, 1], rss, count)
 
 
 def refine_motion(
-    w_prev, w_curr, theta: float, rho: float, camera: StereoCamera, iterations: int = REFINE_ITERATIONS
+    w_prev,
+    w_curr,
+    theta: float,
+    rho: float,
+    camera: StereoCamera,
+    iterations: int = REFINE_ITERATIONS,
+    plain: bool | None = None,
 ) -> tuple[float, float, np.ndarray]:
     """Least-squares ``(theta, rho)`` on matches, minimising reprojection errors in disparity space
-    in both directions. Returns ``(theta, rho, covariance)``."""
+    in both directions (Gauss-Newton, analytic Jacobian; ``ransac_plain.reprojection`` writes the
+    model out). Returns ``(theta, rho, covariance)``; ``plain`` runs the plain NumPy twin."""
     wa, wb = np.asarray(w_prev, float), np.asarray(w_curr, float)
     P, Q = camera.backproject(wa), camera.backproject(wb)
-    theta, rho, A, rss, count = _gauss_newton(P, Q, wa, wb, float(theta), float(rho), camera, iterations)
-    return float(theta), float(rho), _covariance(A, rss, count)
+    cam = camera_terms(camera)
+    theta, rho, a00, a01, a11, rss = choose(core.gauss_newton, plain)(
+        P, Q, wa, wb, float(theta), float(rho), cam, int(iterations)
+    )
+    return float(theta), float(rho), choose(core.covariance, plain)(a00, a01, a11, rss, 6 * len(P))
 
 
 # ---------------------------------------------------------------------- the estimator
@@ -177,12 +166,10 @@ def one_point_ransac(
     prior=None,
     rng=None,
     *,
-    pixel_sigma: float = PIXEL_SIGMA,
-    gate_sigmas: float = GATE_SIGMAS,
-    confidence: float = CONFIDENCE,
-    max_hypotheses: int = MAX_HYPOTHESES,
-    refine: bool = True,
+    params: RansacParams = DEFAULT_PARAMS,
     draws=None,
+    plain: bool | None = None,
+    **settings,
 ) -> RansacResult:
     """Estimate ``(theta, rho)`` from matches with 1-point RANSAC and the two gates of the paper.
 
@@ -195,14 +182,15 @@ def one_point_ransac(
         The filter's predicted motion; it is scored as one more hypothesis in each phase.
     rng : numpy.random.Generator or int, optional
         Source of the random draws (seeded, for repeatable results).
-    pixel_sigma, gate_sigmas : float
-        Pixel noise assumed by the gates, and their width in standard deviations.
-    confidence, max_hypotheses : float, int
-        Stopping rule of the adaptive hypothesis count.
-    refine : bool
-        Refine on all inliers by least squares.
-    draws : array_like, shape (2, max_hypotheses), optional
+    params : RansacParams
+        The settings (gate widths, pixel noise, stopping rule, pool, refinement).
+    draws : array_like, shape (2, params.max_hypotheses), optional
         The hypotheses' random numbers (:func:`hypothesis_draws`); when given, ``rng`` is not used.
+    plain : bool, optional
+        Run the plain NumPy twin (``ransac_plain``) instead of the compiled kernel; by default
+        the environment variable ``VO_LIB_PLAIN`` decides (:mod:`vo_lib.compiled`).
+    **settings
+        Fields of :class:`RansacParams` to change from ``params`` (e.g. ``gate_sigmas=2.5``).
 
     Returns
     -------
@@ -212,78 +200,64 @@ def one_point_ransac(
         returned then, with an empty inlier set).
     """
     t_start = time.perf_counter()
+    params = params._replace(**settings) if settings else params
     a, b = as_match_array("w_prev", w_prev), as_match_array("w_curr", w_curr)
     if a.shape != b.shape:
         raise ValueError(f"w_prev and w_curr must have the same shape; got {a.shape} and {b.shape}")
-    if draws is None:
-        draws = hypothesis_draws(rng, max_hypotheses)
-    draws = np.asarray(draws, dtype=float)
-    if draws.shape != (2, int(max_hypotheses)):
+    draws = np.ascontiguousarray(
+        hypothesis_draws(rng, params.max_hypotheses) if draws is None else draws, float
+    )
+    if draws.shape != (2, int(params.max_hypotheses)):
         raise ValueError(
-            f"draws must have shape (2, max_hypotheses) = (2, {int(max_hypotheses)}); got {draws.shape}"
+            f"draws must have shape (2, max_hypotheses) = (2, {params.max_hypotheses}); got {draws.shape}"
         )
-    n = len(a)
-    inliers = np.zeros(n, bool)
-    diagnostics = {"matches": n}
-
-    def failure(reason: str) -> RansacResult:
-        diagnostics.update(reason=reason, time_ms=(time.perf_counter() - t_start) * 1e3)
-        if prior is not None:
-            return RansacResult(
-                float(prior.theta),
-                float(prior.rho),
-                inliers,
-                np.asarray(prior.covariance, float),
-                False,
-                diagnostics,
-            )
-        return RansacResult(0.0, 0.0, inliers, np.diag([np.inf, np.inf]), False, diagnostics)
-
     no_prior = np.array([np.nan, np.nan])
     prior_theta = np.array([prior.theta, prior.covariance[0][0]], float) if prior is not None else no_prior
     prior_rho = np.array([prior.rho, prior.covariance[1][1]], float) if prior is not None else no_prior
-    status, theta, rho, covariance, inliers, tried_theta, tried_rho, theta_in, rounds = core.one_point_core(
+    status, theta, rho, covariance, inliers, tried_theta, tried_rho, theta_in, rounds = choose(
+        core.one_point_core, plain
+    )(
         np.ascontiguousarray(a),
         np.ascontiguousarray(b),
-        camera.fx,
-        camera.fy,
-        camera.cx,
-        camera.cy,
-        camera.baseline,
+        camera_terms(camera),
         prior_theta,
         prior_rho,
-        float(pixel_sigma),
-        float(gate_sigmas),
-        float(confidence),
-        int(max_hypotheses),
-        bool(refine),
-        np.ascontiguousarray(draws[0]),
-        np.ascontiguousarray(draws[1]),
-        MIN_POOL,
-        POOL_FRACTION,
-        REFINE_ITERATIONS,
-        REFINE_ROUNDS,
-        WHITENED_GATE,
+        draws,
+        params,
     )
-    if status == core.FEW_USABLE:
-        return failure("fewer than 3 matches with positive disparities off the camera's height")
-    if status == core.FEW_THETA_INLIERS:
-        diagnostics.update(hypotheses_theta=tried_theta, theta_inliers=theta_in)
-        return failure("fewer than 3 theta inliers")
-    count = int(inliers.sum())
-    diagnostics.update(
-        hypotheses_theta=tried_theta,
-        hypotheses_rho=tried_rho,
-        theta_inliers=theta_in,
-        inliers=count,
-        inlier_ratio=float(count / n),
-        refined=bool(refine),
-        refine_rounds=rounds,
-        time_ms=(time.perf_counter() - t_start) * 1e3,
-    )
-    if status == core.FEW_INLIERS:
-        return failure("fewer than 3 inliers after refinement")
-    return RansacResult(float(theta), float(rho), inliers, covariance, True, diagnostics)
+    diagnostics = {"matches": len(a)}
+    if status != core.FEW_USABLE:
+        diagnostics.update(hypotheses_theta=int(tried_theta), theta_inliers=int(theta_in))
+    if status in (core.OK, core.FEW_INLIERS):
+        count = int(inliers.sum())
+        diagnostics.update(
+            hypotheses_rho=int(tried_rho),
+            inliers=count,
+            inlier_ratio=float(count / len(a)),
+            refined=bool(params.refine),
+            refine_rounds=int(rounds),
+        )
+    diagnostics["time_ms"] = (time.perf_counter() - t_start) * 1e3
+    if status == core.OK:
+        return RansacResult(float(theta), float(rho), inliers, covariance, True, diagnostics)
+    diagnostics["reason"] = _FAILURES[status]
+    if prior is not None:
+        return RansacResult(
+            float(prior.theta),
+            float(prior.rho),
+            inliers,
+            np.asarray(prior.covariance, float),
+            False,
+            diagnostics,
+        )
+    return RansacResult(0.0, 0.0, inliers, np.diag([np.inf, np.inf]), False, diagnostics)
+
+
+_FAILURES = {
+    core.FEW_USABLE: "fewer than 3 matches with positive disparities off the camera's height",
+    core.FEW_THETA_INLIERS: "fewer than 3 theta inliers",
+    core.FEW_INLIERS: "fewer than 3 inliers after refinement",
+}
 
 
 def histogram_voting(

@@ -13,7 +13,7 @@ import numpy as np
 from vo_lib.compiled import jit as _jit
 
 
-@_jit
+@_jit(twin="vo_lib.stereo_vo.rigid_plain.normal_equations")
 def normal_equations(P, w, R, t, fx, fy, cx, cy, fb, huber):
     A = np.zeros((6, 6))
     g = np.zeros(6)

@@ -28,6 +28,7 @@ import numpy as np
 from scipy.linalg import expm, logm
 
 from vo_lib.camera import StereoCamera
+from vo_lib.compiled import choose
 
 #: Huber threshold of the refinement, pixels (of the 3-vector residual's norm).
 HUBER_PIXELS = 1.0
@@ -91,10 +92,10 @@ def reprojection_errors(P: np.ndarray, w_curr: np.ndarray, R, t, camera: StereoC
 
 def _normal_equations(P, w, R, t, camera, huber):
     """``(J^T W J, J^T W r, sum of weighted squares)`` of the Huber-weighted residuals, compiled
-    (:mod:`.rigid_core`); :func:`_normal_equations_numpy` is the same written out."""
+    (:mod:`.rigid_core`); ``rigid_plain.normal_equations`` is the same written out in NumPy."""
     from vo_lib.stereo_vo.rigid_core import normal_equations
 
-    A, g, cost = normal_equations(
+    A, g, cost = choose(normal_equations)(
         np.ascontiguousarray(P, dtype=float),
         np.ascontiguousarray(w, dtype=float),
         np.ascontiguousarray(R, dtype=float),
@@ -107,32 +108,6 @@ def _normal_equations(P, w, R, t, camera, huber):
         float(huber),
     )
     return A, g, float(cost)
-
-
-def _normal_equations_numpy(P, w, R, t, camera, huber):
-    """``(J^T W J, J^T W r, sum of weighted squares)`` of the Huber-weighted residuals."""
-    Q = P @ R.T + t
-    X, Y, Z = Q[:, 0], Q[:, 1], Q[:, 2]
-    iz = 1.0 / Z
-    fx, fy, fb = camera.fx, camera.fy, camera.fx * camera.baseline
-    r = project(Q, camera) - w
-    e = np.linalg.norm(r, axis=1)
-    wgt = np.where(e <= huber, 1.0, huber / np.maximum(e, 1e-12))
-    # rows of dpi/dQ @ [-[Q]x | I]: d(u, v, d) / d(dw_x, dw_y, dw_z, dt_x, dt_y, dt_z)
-    ju = np.column_stack(
-        [-fx * X * Y * iz**2, fx * (1 + X * X * iz**2), -fx * Y * iz, fx * iz, 0 * iz, -fx * X * iz**2]
-    )
-    jv = np.column_stack(
-        [-fy * (1 + Y * Y * iz**2), fy * X * Y * iz**2, fy * X * iz, 0 * iz, fy * iz, -fy * Y * iz**2]
-    )
-    jd = np.column_stack([-fb * Y * iz**2, fb * X * iz**2, 0 * iz, 0 * iz, 0 * iz, -fb * iz**2])
-    A = np.zeros((6, 6))
-    g = np.zeros(6)
-    for J, res in ((ju, r[:, 0]), (jv, r[:, 1]), (jd, r[:, 2])):
-        Jw = J * wgt[:, None]
-        A += Jw.T @ J
-        g += Jw.T @ res
-    return A, g, float(np.sum(wgt * e**2))
 
 
 def _gauss_newton(P, w, R, t, camera, iterations, huber):

@@ -17,6 +17,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from vo_lib.camera import StereoCamera
+from vo_lib.compiled import choose
 from vo_lib.stereo_vo.circular_motion import apply_motion
 from vo_lib.stereo_vo.features import StereoFeatures, best_matches, hamming, parabola_offset, window_pairs
 
@@ -186,7 +187,7 @@ def match_to_prediction(
         dist = hamming(prev.descriptors[ia], curr.descriptors[ib])
     else:
         order = np.argsort(curr.w[:, 1], kind="stable")
-        ia, ib, dist = window_candidates(
+        ia, ib, dist = choose(window_candidates)(
             np.ascontiguousarray(predicted, dtype=float),
             np.ascontiguousarray(np.broadcast_to(np.asarray(radius, float), (n_prev,))),
             np.ascontiguousarray(curr.w, dtype=float),

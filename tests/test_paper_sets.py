@@ -1,0 +1,53 @@
+"""The stored paper-length results (data/results/paper_sets.json) against the present code.
+
+The quick tests check that the stored file covers every set whole, from the present sample
+definitions; the ``samples``-marked test runs each set again (minutes per set) and requires the
+same figures: same seed, same result.
+"""
+
+import json
+
+import pytest
+
+from vo_lib.sim.samples import SAMPLES, fingerprint
+from vo_lib.stereo_vo import paper_sets
+
+
+def test_stored_results_cover_every_set_whole_from_the_present_samples():
+    stored = paper_sets.load()  # raises when a sample changed since its set was run
+    assert set(stored["sets"]) == set(paper_sets.SETS)
+    for name, row in stored["sets"].items():
+        assert row["frames"] == SAMPLES[name].frames, f"{name} stored shortened"
+        assert row["fingerprint"] == fingerprint(name)
+        assert len(row["code_version"]) >= 40 and not row["code_version"].endswith("+changes")
+        assert row["keys"] == len(range(paper_sets.KEY_EVERY, row["frames"], paper_sets.KEY_EVERY))
+        assert set(paper_sets.paper(name)) <= set(row["fused"])
+
+
+def test_load_refuses_results_of_other_samples(tmp_path):
+    stored = json.loads(paper_sets.RESULTS.read_text())
+    stored["sets"]["spot_turn"]["fingerprint"] = "0" * 16
+    path = tmp_path / "paper_sets.json"
+    path.write_text(json.dumps(stored))
+    with pytest.raises(ValueError, match="spot_turn"):
+        paper_sets.load(path)
+
+
+def test_unknown_set_is_one_clear_line(capsys):
+    assert paper_sets.main(["no_such_set"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "no_such_set" in err
+
+
+@pytest.mark.samples
+@pytest.mark.parametrize("name", paper_sets.SETS)
+def test_stored_set_is_what_the_code_computes(name):
+    stored = paper_sets.load()["sets"][name]
+    fresh = paper_sets.run_set(name)
+    for key in ("frames", "keys", "flagged"):
+        assert fresh[key] == stored[key], key
+    for key in ("distance_m", "turned_deg", "mean_abs_heading_deg", "max_abs_heading_deg"):
+        assert fresh[key] == pytest.approx(stored[key], rel=1e-9, abs=1e-12), key
+    for part in ("fused", "odometry"):
+        for quantity, values in stored[part].items():
+            assert fresh[part][quantity] == pytest.approx(values, rel=1e-9, abs=1e-9), (part, quantity)

@@ -1,0 +1,99 @@
+"""The matching kernels of :mod:`vo_lib.stereo_vo.matching_core` in plain NumPy, for reading.
+
+Each function has the arguments and results of the compiled kernel it is registered as the twin
+of; ``VO_LIB_PLAIN=1`` runs these instead (:mod:`vo_lib.compiled`). They use sorts, binary
+searches and ``np.bitwise_count`` where the kernels loop; the results are the same, pair for pair
+and in the same order (the tests hold them to it on random inputs).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from vo_lib.stereo_vo import matching_core as core
+
+
+def _hamming(des_a, des_b, ia, ib):
+    """Hamming distances of the descriptor pairs ``(des_a[ia], des_b[ib])`` (uint64 words)."""
+    return np.bitwise_count(des_a[ia] ^ des_b[ib]).sum(axis=1, dtype=np.int64)
+
+
+def _rows_within(key, half, sorted_keys, order):
+    """All pairs ``(i, order[s])`` with ``|sorted_keys[s] - key[i]| <= half[i]``, by ``i`` then by ``s``."""
+    lo = np.searchsorted(sorted_keys, key - half, side="left")
+    hi = np.searchsorted(sorted_keys, key + half, side="right")
+    counts = np.maximum(hi - lo, 0)
+    ia = np.repeat(np.arange(len(key)), counts)
+    within = np.arange(counts.sum()) - np.repeat(np.cumsum(counts) - counts, counts)
+    return ia, order[np.repeat(lo, counts) + within]
+
+
+def best_matches(ia, ib, dist, n_a, n_b, max_distance, ratio, mutual):
+    """For each ``a`` the nearest ``b``, kept if within ``max_distance``, if the second nearest is
+    farther by the ``ratio`` test and (with ``mutual``) if no other ``a`` is nearer to that ``b``.
+    Returns ``(index_a, index_b, distance)``, ordered by ``b`` with ``mutual``, else by ``a``."""
+    ia, ib, dist = np.asarray(ia, np.int64), np.asarray(ib, np.int64), np.asarray(dist, np.int64)
+    if len(dist) == 0:
+        empty = np.zeros(0, np.int64)
+        return empty, empty, empty
+    order = np.lexsort((dist, ia))  # by a, then by distance; ties keep the earlier candidate
+    ia_s, ib_s, d_s = ia[order], ib[order], dist[order]
+    starts = np.flatnonzero(np.r_[True, ia_s[1:] != ia_s[:-1]])
+    best_a, best_b, best_d = ia_s[starts], ib_s[starts], d_s[starts]
+    second = np.full(len(starts), core.NONE, dtype=np.int64)
+    has_second = np.r_[starts[1:], len(ia_s)] - starts > 1
+    second[has_second] = d_s[starts[has_second] + 1]
+    keep = (best_d <= max_distance) & (best_d < ratio * second)
+    best_a, best_b, best_d = best_a[keep], best_b[keep], best_d[keep]
+    if mutual and len(best_b):
+        # that a must be b's nearest over all candidates; a b claimed by several a keeps the nearest
+        nearest_for_b = np.full(n_b, core.NONE, dtype=np.int64)
+        np.minimum.at(nearest_for_b, ib, dist)
+        keep = best_d <= nearest_for_b[best_b]
+        best_a, best_b, best_d = best_a[keep], best_b[keep], best_d[keep]
+        order = np.lexsort((best_d, best_b))
+        sel = order[np.r_[True, best_b[order][1:] != best_b[order][:-1]]] if len(order) else order
+        best_a, best_b, best_d = best_a[sel], best_b[sel], best_d[sel]
+    return best_a, best_b, best_d
+
+
+def window_candidates(predicted, radius, w_curr, order_v, sorted_v, d_floor, d_fraction, des_prev, des_curr):
+    """Pairs ``(i, j)``: current feature ``j`` in the square window of half-width ``radius[i]``
+    around previous feature ``i``'s predicted ``(u, v)``, and within ``d_floor + d_fraction * d``
+    of its predicted disparity; with their Hamming distances, ordered by ``i``, then by row."""
+    seen = np.all(np.isfinite(predicted), axis=1)
+    half = np.where(seen, radius, -1.0)  # a window no row falls in
+    v = np.where(seen, predicted[:, 1], 0.0)
+    ia, ib = _rows_within(v, half, sorted_v, order_v)
+    inside = np.abs(w_curr[ib, 0] - predicted[ia, 0]) <= radius[ia]
+    inside &= np.abs(w_curr[ib, 2] - predicted[ia, 2]) <= d_floor + d_fraction * predicted[ia, 2]
+    ia, ib = ia[inside], ib[inside]
+    return ia, ib, _hamming(des_prev, des_curr, ia, ib)
+
+
+def row_candidates(
+    left, left_level, right, right_level, order_v, sorted_v, row_tolerance, d_min, d_max, des_left, des_right
+):
+    """Stereo candidates: a left and a right corner within ``row_tolerance`` rows, with a
+    disparity in ``[d_min, d_max]`` and pyramid levels at most one apart, with their Hamming
+    distances; ordered by left corner, then by right row."""
+    half = np.full(len(left), float(row_tolerance))
+    ia, ib = _rows_within(left[:, 1], half, sorted_v, order_v)
+    d = left[ia, 0] - right[ib, 0]
+    ok = (d >= d_min) & (d <= d_max) & (np.abs(left_level[ia] - right_level[ib]) <= 1)
+    ia, ib = ia[ok], ib[ok]
+    return ia, ib, _hamming(des_left, des_right, ia, ib)
+
+
+def sad_costs(left, right, ui, vi, di, half, search):
+    """``costs[k + search, n]``: sum of absolute differences between the left patch of half-width
+    ``half`` at ``(ui[n], vi[n])`` and the right patch at disparity ``di[n] + k``."""
+    du, dv = np.meshgrid(np.arange(-half, half + 1), np.arange(-half, half + 1))
+    rows = vi[:, None] + dv.ravel()  # (n, patch pixels)
+    cols = ui[:, None] + du.ravel()
+    patch = left[rows, cols].astype(np.int64)
+    costs = np.zeros((2 * search + 1, len(ui)), np.int64)
+    for s in range(2 * search + 1):
+        shifted = right[rows, cols - (di + s - search)[:, None]].astype(np.int64)
+        costs[s] = np.abs(patch - shifted).sum(axis=1)
+    return costs
