@@ -40,11 +40,12 @@
 import matplotlib.pyplot as plt
 import numpy as np
 import sympy as sp
-from IPython.display import Markdown, display
+from IPython.display import display
 
 from vo_lib.geometry import wrap_angle
 from vo_lib.models.track_odometry import TrackOdometry, apply_slip
 from vo_lib.viz.plotting import covariance_ellipse, new_axes, plot_paths
+from vo_lib.viz.prose import Markdown
 from vo_lib.viz.widgets import offer, show_math, slider
 
 SEED = 1

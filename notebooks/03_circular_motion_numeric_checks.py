@@ -38,7 +38,7 @@
 # %%
 import matplotlib.pyplot as plt
 import numpy as np
-from IPython.display import Markdown, display
+from IPython.display import display
 from scipy.spatial.transform import Rotation
 from scipy.stats import chi2
 
@@ -47,6 +47,7 @@ from vo_lib.geometry import camera_motion, camera_mount, compose_planar, wrap_an
 from vo_lib.stereo_vo import circular_motion as cm
 from vo_lib.stereo_vo.synthetic import matches_under_transform, synthetic_matches
 from vo_lib.viz.plotting import new_axes
+from vo_lib.viz.prose import Markdown
 from vo_lib.viz.widgets import offer, slider
 
 SEED = 3

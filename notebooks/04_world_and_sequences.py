@@ -48,7 +48,7 @@ from pathlib import Path
 import cv2
 import matplotlib.pyplot as plt
 import numpy as np
-from IPython.display import Markdown, display
+from IPython.display import display
 
 from vo_lib.camera import StereoCamera
 from vo_lib.formats.sequence import read_sequence
@@ -60,6 +60,7 @@ from vo_lib.sim.samples import CAMERA_HEIGHT, SAMPLES, generate, render_sample
 from vo_lib.sim.trajectories import simulate_drive
 from vo_lib.sim.world import WORLDS
 from vo_lib.viz.plotting import new_axes, plot_robot, plot_world
+from vo_lib.viz.prose import Markdown
 from vo_lib.viz.widgets import offer, slider
 
 SEED = 4

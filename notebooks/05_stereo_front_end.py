@@ -43,7 +43,7 @@ import time
 import cv2
 import matplotlib.pyplot as plt
 import numpy as np
-from IPython.display import Markdown, display
+from IPython.display import display
 
 from vo_lib.camera import StereoCamera
 from vo_lib.geometry import camera_mount, planar_to_matrix
@@ -51,6 +51,7 @@ from vo_lib.sim.render import SensorEffects, StereoRenderer
 from vo_lib.sim.world import indoor_lab
 from vo_lib.stereo_vo.features import ROW_TOLERANCE, StereoFrontEnd, bucket, hamming
 from vo_lib.viz.plotting import new_axes
+from vo_lib.viz.prose import Markdown
 from vo_lib.viz.widgets import offer, slider
 
 SEED = 5

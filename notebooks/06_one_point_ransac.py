@@ -48,7 +48,7 @@ import time
 
 import matplotlib.pyplot as plt
 import numpy as np
-from IPython.display import Markdown, display
+from IPython.display import display
 
 from vo_lib.camera import StereoCamera
 from vo_lib.stereo_vo import circular_motion as cm
@@ -57,6 +57,7 @@ from vo_lib.stereo_vo.baselines import essential_ransac, pnp_ransac, rigid_ransa
 from vo_lib.stereo_vo.ransac import histogram_voting, hypotheses_needed, one_point_ransac, refine_motion
 from vo_lib.stereo_vo.synthetic import synthetic_matches
 from vo_lib.viz.plotting import draw_chord_geometry, draw_depression_geometry, new_axes
+from vo_lib.viz.prose import Markdown
 from vo_lib.viz.widgets import offer, slider
 
 SEED = 6

@@ -45,7 +45,7 @@ import math
 
 import matplotlib.pyplot as plt
 import numpy as np
-from IPython.display import Markdown, display
+from IPython.display import display
 from scipy.stats import chi2
 
 from vo_lib.camera import StereoCamera
@@ -66,6 +66,7 @@ from vo_lib.stereo_vo.kalman import (
 from vo_lib.stereo_vo.ransac import one_point_ransac
 from vo_lib.stereo_vo.synthetic import synthetic_matches
 from vo_lib.viz.plotting import new_axes, plot_paths
+from vo_lib.viz.prose import Markdown
 from vo_lib.viz.widgets import offer, slider
 
 SEED = 7

@@ -43,7 +43,7 @@ import os
 
 import matplotlib.pyplot as plt
 import numpy as np
-from IPython.display import Markdown, display
+from IPython.display import display
 
 from vo_lib.camera import StereoCamera
 from vo_lib.evaluation import key_position_errors
@@ -57,6 +57,7 @@ from vo_lib.stereo_vo.pipeline import KEY_ANGLE, KEY_DISTANCE, run_frames
 from vo_lib.stereo_vo.ransac import one_point_ransac
 from vo_lib.stereo_vo.synthetic import matches_under_transform
 from vo_lib.viz.plotting import draw_flowchart, new_axes, plot_paths
+from vo_lib.viz.prose import Markdown
 
 SEED = 8
 rng = np.random.default_rng(SEED)

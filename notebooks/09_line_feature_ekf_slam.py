@@ -47,7 +47,7 @@ import timeit
 import matplotlib.pyplot as plt
 import numpy as np
 import sympy as sp
-from IPython.display import Markdown, display
+from IPython.display import display
 from scipy.stats import chi2
 
 from vo_lib.line_slam.ekf_slam import GATE_ASSOCIATE, GATE_AUGMENT
@@ -83,6 +83,7 @@ from vo_lib.viz.plotting import (
     plot_line_slam,
     plot_pose_errors,
 )
+from vo_lib.viz.prose import Markdown
 
 SEED = 2
 rng = np.random.default_rng(SEED)

@@ -47,7 +47,7 @@
 
 import matplotlib.pyplot as plt
 import numpy as np
-from IPython.display import Markdown, display
+from IPython.display import display
 
 from vo_lib.geometry import planar_from_camera_poses
 from vo_lib.lidar_tracking.corridor_experiment import (
@@ -69,6 +69,7 @@ from vo_lib.sim.samples import render_sample
 from vo_lib.sim.world import corridor
 from vo_lib.stereo_vo.pipeline import run_frames
 from vo_lib.viz.plotting import new_axes, plot_world
+from vo_lib.viz.prose import Markdown
 
 SEED = 4
 rng = np.random.default_rng(SEED)

@@ -59,7 +59,7 @@ import cv2
 import matplotlib.pyplot as plt
 import numpy as np
 import skimage.data
-from IPython.display import Markdown, display
+from IPython.display import display
 from scipy.ndimage import maximum_filter, minimum_filter
 from scipy.spatial.transform import Rotation
 from scipy.stats import chi2
@@ -96,6 +96,7 @@ from vo_lib.stereo_vo.synthetic import matches_under_transform
 from vo_lib.stereo_vo.temporal import match_to_prediction
 from vo_lib.stereo_vo.vehicle import KITTI_CAMERA_IN_IMU, vehicle_of
 from vo_lib.viz.plotting import new_axes, plot_paths
+from vo_lib.viz.prose import Markdown
 
 SEED = 0
 rng = np.random.default_rng(SEED)
