@@ -93,14 +93,32 @@ def heading_error(poses, truth):
 # the filter keeps its prediction, when it has too few features, matches or inliers, when the
 # inliers are too small a share of the matches, when its motion contradicts the prediction, or
 # when half its view suddenly stops agreeing (an occluder, a large moving object).
-#
-# **Keyframes.** Our crawler moves a centimetre per frame: the disparity of a point 3 m away
-# changes by 0.07 px, and most image motion is below a pixel. Measured frame to frame, such
-# motions are dominated by sub-pixel errors of the feature positions, which do not average out:
-# in our first version they shortened the measured motion by several per cent. The pipeline
-# therefore measures each frame against a *keyframe* until the motion since it exceeds
-# `KEY_DISTANCE` or `KEY_ANGLE`, applying each frame's update to a copy of the filter so that
-# the keyframe's own errors are counted once.
+
+# %%
+lab = SAMPLES["indoor_linear"]
+step_m = abs(lab.legs[0].speed) / lab.rate  # the crawler's motion per frame
+probe_depth = 3.0  # m, a point at mid-range, chosen
+cam = StereoCamera.bumblebee2()
+# d = f_x B / Z, so a step dZ changes it by f_x B dZ / Z²
+disparity_change = cam.fx * cam.baseline * step_m / probe_depth**2
+# moving ahead by dZ, a point at depth Z moves radially in the image by r dZ / (Z - dZ)
+u, v = np.meshgrid(np.arange(cam.width) - cam.cx, np.arange(cam.height) - cam.cy)
+flow_px = np.hypot(u, v) * step_m / (probe_depth - step_m)
+below_pixel = np.mean(flow_px < 1.0)
+display(
+    Markdown(
+        f"**Keyframes.** Our crawler moves {step_m * 100:.0f} cm per frame (`indoor_linear`): the "
+        f"disparity of a point {probe_depth:.0f} m away changes by {disparity_change:.2f} px, and at "
+        f"that depth the point moves less than a pixel in {below_pixel:.0%} of the image. Measured "
+        "frame to frame, such motions are dominated by sub-pixel errors of the feature positions, "
+        "which do not average out: they shorten the measured motion. The pipeline therefore "
+        "measures each frame against a *keyframe* until the motion since it exceeds `KEY_DISTANCE` "
+        "or `KEY_ANGLE`, applying each frame's update to a copy of the filter so that the "
+        "keyframe's own errors are counted once."
+    )
+)
+# sub-pixel motion, the premise of keyframes: the bound is the pixel itself, not a margin
+assert disparity_change < 1.0 and below_pixel > 0.5
 
 # %%
 print(f"new keyframe after {KEY_DISTANCE * 100:.0f} cm or {math.degrees(KEY_ANGLE):.1f}° of motion")
