@@ -61,7 +61,7 @@ SCIENTIFIC = re.compile(
 DIMENSION = re.compile(rf"{_NUM}\s?×\s?(?:{_NUM}|[a-zA-Z]\b)")
 #: Words by which a sentence says it quotes a paper.
 CITES_PAPER = re.compile(
-    r"paper|seed 00\d|Table\s+\d|Fig(?:ure|\.)\s*\d|reports?|authors|\bMonteiro|Zhao|Sun\b", re.I
+    r"paper|seed 00\d|Table\s+\d|Fig(?:ure|\.)\s*\d|authors|\bMonteiro|Zhao|Sun\b", re.I
 )
 
 #: The header's run time is the whole notebook's wall time, which no cell can compute before the
