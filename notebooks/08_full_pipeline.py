@@ -45,7 +45,8 @@ from vo_lib.evaluation import key_position_errors
 from vo_lib.geometry import relative_planar, wrap_angle
 from vo_lib.models.track_odometry import TrackOdometry
 from vo_lib.sim.samples import SAMPLES, render_sample
-from vo_lib.stereo_vo.pipeline import KEY_ANGLE, KEY_DISTANCE, run_frames
+from vo_lib.stereo_vo.config import CRAWLER
+from vo_lib.stereo_vo.pipeline import run_frames
 from vo_lib.viz.plotting import draw_flowchart, new_axes, plot_paths
 
 SEED = 8
@@ -88,11 +89,14 @@ def heading_error(poses, truth):
 # motions are dominated by sub-pixel errors of the feature positions, which do not average out:
 # in our first version they shortened the measured motion by several per cent. The pipeline
 # therefore measures each frame against a *keyframe* until the motion since it exceeds
-# `KEY_DISTANCE` or `KEY_ANGLE`, applying each frame's update to a copy of the filter so that
+# `CRAWLER.key_distance` or `CRAWLER.key_angle`, applying each frame's update to a copy of the filter so that
 # the keyframe's own errors are counted once.
 
 # %%
-print(f"new keyframe after {KEY_DISTANCE * 100:.0f} cm or {math.degrees(KEY_ANGLE):.1f}° of motion")
+print(
+    f"new keyframe after {CRAWLER.key_distance * 100:.0f} cm "
+    f"or {math.degrees(CRAWLER.key_angle):.1f}° of motion"
+)
 result, truth, _ = run("indoor_linear", 60)
 reasons = {d.reason for d in result.diagnostics if d.fallback}
 end_error = np.hypot(*(result.poses[-1, :2] - truth[-1, :2]))
@@ -498,8 +502,9 @@ assert np.isclose(sideways_error(0.01, 1e-4, 2), 0.01 * 1e-4), "two steps: only 
 # %% [markdown]
 # ### Stretch goals (not graded)
 #
-# - Set `vo_lib.stereo_vo.pipeline.KEY_DISTANCE` to 0 (a new keyframe every frame) and rerun
-#   section 3. How large is the final error now, and in which direction?
+# - Run section 3 with `StereoOdometry(camera, dataclasses.replace(CRAWLER, key_distance=0))` (a
+#   new keyframe every frame, `vo_lib.stereo_vo.pipeline`). How large is the final error now, and
+#   in which direction?
 # - Move the camera 0.3 m ahead of the turning axis in `vo_lib.sim.samples` and rerun section 4.
 # - Run `python -m vo_lib run --sequence outdoor_free --no-odometry` and compare with section 5.
 # - With KITTI odometry data, run the pipeline on sequence 00 (README). Which assumption of the

@@ -76,15 +76,14 @@ from vo_lib.geometry import (
 )
 from vo_lib.stereo_vo import rigid_motion
 from vo_lib.stereo_vo.circular_motion import circular_motion_from_increment, motion_matrices, robot_increment
+from vo_lib.stereo_vo.config import CAR
 from vo_lib.stereo_vo.features import PATCH_HALF, StereoFrontEnd
-from vo_lib.stereo_vo.pipeline import run_frames, run_sequence
+from vo_lib.stereo_vo.pipeline import StereoOdometry, run_frames, run_sequence
 from vo_lib.stereo_vo.pnp_baseline import run_pnp_baseline
 from vo_lib.stereo_vo.pyramid_features import LEVELS, SCALE_FACTOR, PyramidFrontEnd
 from vo_lib.stereo_vo.ransac import GATE_SIGMAS, one_point_ransac
-from vo_lib.stereo_vo.rigid_pipeline import (
-    MIN_INLIERS,
+from vo_lib.stereo_vo.six_dof import (
     WINDOW_PIXELS,
-    RigidStereoOdometry,
     turning_axis_transform,
     turning_axis_view,
     vehicle_increment,
@@ -323,8 +322,8 @@ if REAL:
     assert np.median(counts["pyramid"]) > 2 * np.median(counts["single scale"])
 
 vo_full = run_sequence(seq, use_odometry=False, motion="full")  # the pyramid front end
-single_odometer = RigidStereoOdometry(
-    seq.camera, vehicle.mount, seed=SEED, front_end=StereoFrontEnd(seq.camera)
+single_odometer = StereoOdometry(
+    seq.camera, CAR, mount=vehicle.mount, seed=SEED, front_end=StereoFrontEnd(seq.camera)
 )
 vo_single = run_frames(((left, right, None) for left, right in seq), seq.camera, odometer=single_odometer)
 heading_error = {
@@ -586,7 +585,7 @@ else:
 # the mount, project again). There the circular model is exact.
 #
 # A bump or the start of a slope pitches the body instead: no planar model describes that, so
-# when 1-point RANSAC keeps fewer than `MIN_RANSAC_RATIO` of the matches the pipeline draws
+# when 1-point RANSAC keeps fewer than `CAR.min_inlier_ratio` of the matches the pipeline draws
 # general 3-point hypotheses (OpenCV's P3P in `solvePnPRansac`, seeded) and keeps the better.
 
 # %%
@@ -616,8 +615,8 @@ for yaw_deg, pitch_deg in ((0, 0), (2, 0), (4, 0), (6, 0), (9, 0), (3, 1)):
         rng=turn_rng,
         pixel_sigma=1.0,
     )
-    odometer = RigidStereoOdometry(turn_camera, turn_mount, seed=SEED)
-    guess, start, ratio = odometer.hypothesis(m_turn.w_prev, m_turn.w_curr, None)
+    odometer = StereoOdometry(turn_camera, CAR, mount=turn_mount, seed=SEED)
+    guess, start, ratio = odometer.motion.hypothesis(m_turn.w_prev, m_turn.w_curr, None, odometer.rng)
     refined = rigid_motion.refine_rigid_motion(m_turn.w_prev, m_turn.w_curr, turn_camera, guess, start)
     recall_rows.append(
         (
@@ -657,7 +656,7 @@ print(
     f"kept {np.median(share):.0%} (range {share.min():.0%}..{share.max():.0%})"
 )
 assert np.median(share) < 1.0  # the general model is stricter than the gates
-assert np.all(refined_in[[not d.fallback for d in diag]] >= MIN_INLIERS)
+assert np.all(refined_in[[not d.fallback for d in diag]] >= CAR.min_inliers)
 
 fig, axes = new_axes(2, width=5.5, height=3.4)
 axes[0].plot(frames, ransac_in, label="1-point RANSAC inliers")

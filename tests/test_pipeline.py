@@ -129,7 +129,8 @@ def kitti_like_yard_run():
     from vo_lib.sim.render import SensorEffects, StereoRenderer
     from vo_lib.sim.trajectories import Leg, SlipModel, simulate_drive
     from vo_lib.sim.world import outdoor_yard
-    from vo_lib.stereo_vo.rigid_pipeline import RigidStereoOdometry
+    from vo_lib.stereo_vo.config import CAR
+    from vo_lib.stereo_vo.pipeline import StereoOdometry
 
     camera = StereoCamera(718.856, 718.856, 607.1928, 185.2157, 0.5371657, 1241, 376)
     mount = camera_mount(forward=1.1, height=1.65)
@@ -144,7 +145,7 @@ def kitti_like_yard_run():
     renderer = StereoRenderer(outdoor_yard(), camera, SensorEffects(noise_sigma=1.0))
     rng = np.random.default_rng(1)
     frames = ((*renderer.render_pair(planar_to_matrix(p) @ mount, rng), None) for p in drive.poses)
-    result = run_frames(frames, camera, odometer=RigidStereoOdometry(camera, mount))
+    result = run_frames(frames, camera, odometer=StereoOdometry(camera, CAR, mount=mount))
     truth = relative_planar(drive.poses[0], drive.poses)
     distance = np.sum(np.linalg.norm(np.diff(truth[:, :2], axis=0), axis=1))
     return result, truth, distance

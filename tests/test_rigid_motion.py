@@ -17,7 +17,7 @@ from vo_lib.stereo_vo.rigid_motion import (
     rotation_matrix,
     scaled_motion,
 )
-from vo_lib.stereo_vo.rigid_pipeline import vehicle_increment, with_planar_increment
+from vo_lib.stereo_vo.six_dof import vehicle_increment, with_planar_increment
 from vo_lib.stereo_vo.vehicle import CAR_GAUGE, car_odometry_model
 
 
@@ -181,7 +181,7 @@ def test_one_point_ransac_seen_from_the_turning_axis_keeps_every_match_in_a_shar
 
     from vo_lib.geometry import camera_motion
     from vo_lib.stereo_vo.ransac import one_point_ransac
-    from vo_lib.stereo_vo.rigid_pipeline import turning_axis_transform, turning_axis_view
+    from vo_lib.stereo_vo.six_dof import turning_axis_transform, turning_axis_view
     from vo_lib.stereo_vo.synthetic import matches_under_transform
 
     mount = camera_mount(forward=1.08, height=1.73, left=-0.31)
@@ -217,7 +217,8 @@ def test_a_pitching_car_still_gets_a_hypothesis_with_its_inliers(kitti_camera, p
     from scipy.spatial.transform import Rotation
 
     from vo_lib.geometry import camera_motion
-    from vo_lib.stereo_vo.rigid_pipeline import MIN_RANSAC_RATIO, RigidStereoOdometry
+    from vo_lib.stereo_vo.config import CAR
+    from vo_lib.stereo_vo.pipeline import StereoOdometry
     from vo_lib.stereo_vo.synthetic import matches_under_transform
 
     mount = camera_mount(forward=1.08, height=1.73, left=-0.31)
@@ -227,14 +228,15 @@ def test_a_pitching_car_still_gets_a_hypothesis_with_its_inliers(kitti_camera, p
     D[:3, :3] = Rotation.from_euler("y", pitch_deg, degrees=True).as_matrix()  # the vehicle pitches
     T = np.linalg.inv(mount) @ D @ mount @ T
     m = matches_under_transform(kitti_camera, 300, T, np.random.default_rng(3), (4.0, 60.0), 0.5, 0.2)
-    odometer = RigidStereoOdometry(kitti_camera, mount, seed=5)
-    guess, start, ratio = odometer.hypothesis(m.w_prev, m.w_curr, None)
-    assert ratio >= MIN_RANSAC_RATIO
+    odometer = StereoOdometry(kitti_camera, CAR, mount=mount, seed=5)
+    guess, start, ratio = odometer.motion.hypothesis(m.w_prev, m.w_curr, None, odometer.rng)
+    assert ratio >= CAR.min_inlier_ratio
     assert start is not None and (start & m.inliers).sum() >= 0.7 * m.inliers.sum()
     assert (start & ~m.inliers).sum() <= 2
     motion = refine_rigid_motion(m.w_prev, m.w_curr, kitti_camera, guess, start)
     assert np.allclose(motion.matrix, T, atol=2e-3)
     assert not (motion.inliers & ~m.inliers).any()
     # the same draws give the same answer
-    again = RigidStereoOdometry(kitti_camera, mount, seed=5).hypothesis(m.w_prev, m.w_curr, None)
+    again_odometer = StereoOdometry(kitti_camera, CAR, mount=mount, seed=5)
+    again = again_odometer.motion.hypothesis(m.w_prev, m.w_curr, None, again_odometer.rng)
     assert np.array_equal(again[0], guess) and np.array_equal(again[1], start)

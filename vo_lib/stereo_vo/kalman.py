@@ -143,7 +143,7 @@ class VoKalmanFilter:
         self.lateral_sigma = float(lateral_sigma)
         self.sideways_sigma = float(sideways_sigma)
         self.cv_sigma = np.asarray(cv_sigma, float)
-        self.ekf = ExtendedKalmanFilter(dim_x=6, dim_z=2)
+        self.ekf = ExtendedKalmanFilter(dim_x=6, dim_z=3)  # (theta, rho, sideways), see update
         P = np.diag([1e-8, 1e-8, 1e-10]) if covariance is None else np.asarray(covariance, float)
         self.ekf.x = np.concatenate([np.asarray(pose, float), np.asarray(pose, float)])
         self.ekf.P = np.block([[P, P], [P, P]])
@@ -248,6 +248,18 @@ class VoKalmanFilter:
         )
         self.ekf.x[2] = wrap_angle(self.ekf.x[2])
         self.flags.vo_update = True
+
+    def snapshot(self) -> tuple[np.ndarray, np.ndarray]:
+        """A copy of the state and its covariance, for :meth:`restore`."""
+        return self.ekf.x.copy(), self.ekf.P.copy()
+
+    def restore(self, snapshot: tuple[np.ndarray, np.ndarray]) -> None:
+        """Go back to a :meth:`snapshot` (an update that is not to be kept)."""
+        self.ekf.x, self.ekf.P = snapshot
+
+    def widen(self, sigma) -> None:
+        """Add independent uncertainty ``sigma = (x, y, yaw)`` (standard deviations) to the pose."""
+        self.ekf.P[:3, :3] += np.diag(sigma) ** 2
 
     def finish_frame(self, frames_since_reference: int = 1) -> None:
         """Remember the motion per frame (for constant velocity) before the next predict."""
