@@ -16,8 +16,13 @@ from vo_lib.compiled import jit as _jit
 NONE = np.iinfo(np.int32).max
 
 
-@_jit(twin="vo_lib.stereo_vo.matching_plain.best_matches")
-def best_matches_core(ia, ib, dist, n_a, n_b, max_distance, ratio, mutual):
+_BEST = f"{__name__}.best_matches_core"
+
+
+@_jit(step_of=_BEST)
+def _nearest_two(ia, ib, dist, n_a, n_b):
+    """Per ``a``: the nearest and second-nearest distance and the nearest ``b``; per ``b``: the
+    nearest distance of any ``a``. Ties go to the earlier candidate."""
     best = np.full(n_a, NONE, np.int64)
     second = np.full(n_a, NONE, np.int64)
     best_b = np.full(n_a, -1, np.int64)
@@ -32,44 +37,37 @@ def best_matches_core(ia, ib, dist, n_a, n_b, max_distance, ratio, mutual):
             second[a] = d
         if d < nearest_for_b[b]:
             nearest_for_b[b] = d
+    return best, second, best_b, nearest_for_b
+
+
+@_jit(step_of=_BEST)
+def _collect(rows, cols, best):
+    """``(rows, cols, best[rows])`` as int64 arrays."""
+    out_d = np.empty(rows.shape[0], np.int64)
+    for j in range(rows.shape[0]):
+        out_d[j] = best[rows[j]]
+    return rows.astype(np.int64), cols.astype(np.int64), out_d
+
+
+@_jit(twin="vo_lib.stereo_vo.matching_plain.best_matches")
+def best_matches_core(ia, ib, dist, n_a, n_b, max_distance, ratio, mutual):
+    best, second, best_b, nearest_for_b = _nearest_two(ia, ib, dist, n_a, n_b)
     keep = np.zeros(n_a, np.bool_)
     for a in range(n_a):
         if best_b[a] >= 0 and best[a] <= max_distance and best[a] < ratio * second[a]:
             keep[a] = (not mutual) or best[a] <= nearest_for_b[best_b[a]]
-    if mutual:
-        # one a per b: the nearest, ties to the smaller a; the result is ordered by b
-        owner = np.full(n_b, -1, np.int64)
-        for a in range(n_a):
-            if keep[a]:
-                b = best_b[a]
-                if owner[b] < 0 or best[a] < best[owner[b]]:
-                    owner[b] = a
-        count = 0
-        for b in range(n_b):
-            if owner[b] >= 0:
-                count += 1
-        out_a = np.empty(count, np.int64)
-        out_b = np.empty(count, np.int64)
-        out_d = np.empty(count, np.int64)
-        j = 0
-        for b in range(n_b):
-            if owner[b] >= 0:
-                out_a[j], out_b[j], out_d[j] = owner[b], b, best[owner[b]]
-                j += 1
-        return out_a, out_b, out_d
-    count = 0
+    if not mutual:
+        chosen = np.flatnonzero(keep)
+        return _collect(chosen, best_b[chosen], best)
+    # one a per b: the nearest, ties to the smaller a; the result is ordered by b
+    owner = np.full(n_b, -1, np.int64)
     for a in range(n_a):
         if keep[a]:
-            count += 1
-    out_a = np.empty(count, np.int64)
-    out_b = np.empty(count, np.int64)
-    out_d = np.empty(count, np.int64)
-    j = 0
-    for a in range(n_a):
-        if keep[a]:
-            out_a[j], out_b[j], out_d[j] = a, best_b[a], best[a]
-            j += 1
-    return out_a, out_b, out_d
+            b = best_b[a]
+            if owner[b] < 0 or best[a] < best[owner[b]]:
+                owner[b] = a
+    owned = np.flatnonzero(owner >= 0)
+    return _collect(owner[owned], owned, best)
 
 
 @_jit(step_of=f"{__name__}.window_candidates")  # and of row_candidates

@@ -2,6 +2,7 @@
 
 ``plotting``   figures the notebooks share; nothing here computes results
 ``widgets``    interactive wrappers around plain ``f(**params)`` functions
+``run_figure`` the figure of one run's outputs
 
 Imports no wing: a figure takes arrays and results, not estimators.
 """
