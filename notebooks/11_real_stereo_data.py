@@ -83,13 +83,15 @@ from vo_lib.stereo_vo.pnp_baseline import run_pnp_baseline
 from vo_lib.stereo_vo.pyramid_features import LEVELS, SCALE_FACTOR, PyramidFrontEnd
 from vo_lib.stereo_vo.ransac import GATE_SIGMAS, one_point_ransac
 from vo_lib.stereo_vo.six_dof import (
+    PREDICTED_RATIO,
     WINDOW_PIXELS,
     turning_axis_transform,
     turning_axis_view,
     vehicle_increment,
+    windows,
 )
 from vo_lib.stereo_vo.synthetic import matches_under_transform
-from vo_lib.stereo_vo.temporal import match_to_prediction
+from vo_lib.stereo_vo.temporal import match_features, predict_features
 from vo_lib.stereo_vo.vehicle import KITTI_CAMERA_IN_IMU, vehicle_of
 from vo_lib.viz.plotting import new_axes, plot_paths
 
@@ -449,7 +451,7 @@ scene_points = scene_points[scene_points[:, 2] < 60]
 
 def pixel_gap(Ta, Tb):
     """Median distance in (u, v, d) between the points moved by two camera motions."""
-    a, b = (rigid_motion.project(scene_points @ T[:3, :3].T + T[:3, 3], seq.camera) for T in (Ta, Tb))
+    a, b = (seq.camera.project(scene_points @ T[:3, :3].T + T[:3, 3]) for T in (Ta, Tb))
     return float(np.median(np.linalg.norm(a - b, axis=1)))
 
 
@@ -519,8 +521,8 @@ def chain_models(camera_path):
     for k in range(1, len(seq)):
         curr = pyramid_fe.process(*seq.pair(k))
         T_pred = np.linalg.inv(camera_path[k]) @ camera_path[k - 1]
-        predicted, _ = rigid_motion.predict_features(prev.w, seq.camera, T_pred)
-        mt = match_to_prediction(prev, curr, predicted, WINDOW_PIXELS)
+        predicted, _ = predict_features(prev.w, seq.camera, T_pred)
+        mt = match_features(prev, curr, predicted, windows(predicted, WINDOW_PIXELS), PREDICTED_RATIO)
         est = one_point_ransac(mt.w_prev, mt.w_curr, seq.camera, rng=rng, pixel_sigma=1.0)
         guess = as_4x4(*motion_matrices(est.theta, est.rho))
         refined = rigid_motion.refine_rigid_motion(mt.w_prev, mt.w_curr, seq.camera, guess, est.inliers)
@@ -680,7 +682,7 @@ plt.show()
 # %%
 k0, k1 = (40, 41) if REAL else (0, 30)  # the crawler moves a centimetre per frame
 feat0, feat1 = pyramid_fe.process(*seq.pair(k0)), pyramid_fe.process(*seq.pair(k1))
-one = match_to_prediction(feat0, feat1, None)
+one = match_features(feat0, feat1, ratio=PREDICTED_RATIO)
 est = one_point_ransac(one.w_prev, one.w_curr, seq.camera, rng=rng, pixel_sigma=1.0)
 guess = as_4x4(*motion_matrices(est.theta, est.rho))
 lib = rigid_motion.refine_rigid_motion(one.w_prev, one.w_curr, seq.camera, guess, est.inliers)
@@ -998,7 +1000,7 @@ assert np.isclose(at_10, image_statistics(real_images[0], threshold=10)["empty"]
 #
 # The car pitches by 0.1° between two frames. How far (`shift`, pixels) does the image of a point
 # 20 m straight ahead move? Compute it by rotating the point about the camera's x axis and
-# projecting it with `rigid_motion.project`. Is that inside the refinement's inlier threshold
+# projecting it with `camera.project`. Is that inside the refinement's inlier threshold
 # (`rigid_motion.INLIER_PIXELS`)?
 #
 # *Hint:* `Rotation.from_euler("x", angle)`.
@@ -1008,7 +1010,7 @@ assert np.isclose(at_10, image_statistics(real_images[0], threshold=10)["empty"]
 pitch = math.radians(0.1)
 point = np.array([[0.0, 0.0, 20.0]])  # on the optical axis
 Rx = Rotation.from_euler("x", pitch).as_matrix()  # about the camera's x axis (right)
-moved = rigid_motion.project(point @ Rx.T, cam) - rigid_motion.project(point, cam)
+moved = cam.project(point @ Rx.T) - cam.project(point)
 shift = float(np.hypot(moved[0, 0], moved[0, 1]))
 print(
     f"0.1 deg of pitch moves the point by {shift:.3f} px (fy = {cam.fy:.1f} px); the inlier threshold is "

@@ -88,7 +88,6 @@ class LineSlamRun:
     true_landmarks: np.ndarray
     landmark_of_segment: dict
     endpoints: dict = field(default_factory=dict)
-    visible_truth: dict = field(default_factory=dict)
     dropped: int = 0
     observer_seconds: float = 0.0
     seconds: float = 0.0

@@ -18,6 +18,7 @@ import numpy as np
 
 from vo_lib.camera import StereoCamera
 from vo_lib.compiled import choose
+from vo_lib.geometry import yaw_matrix
 from vo_lib.sim.composite import draw_nearer
 from vo_lib.sim.textures import cached_surface
 from vo_lib.sim.world import Patch, World
@@ -312,8 +313,7 @@ class StereoRenderer:
         moving = []
         for mover, body in self._movers:
             position, yaw = mover.pose(time)
-            c, s = np.cos(yaw), np.sin(yaw)
-            R = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+            R = yaw_matrix(yaw)
             moving += [_moved(q, R, position) for q in body]
         return moving
 

@@ -78,12 +78,6 @@ def mipmaps(texture: np.ndarray) -> list[np.ndarray]:
     return levels
 
 
-@lru_cache(maxsize=256)
-def cached_mipmaps(height: int, width: int, seed: int, contrast: float = 1.0) -> tuple[np.ndarray, ...]:
-    """Mipmaps of :func:`corner_texture`, computed once per process for each argument set."""
-    return tuple(mipmaps(corner_texture(height, width, seed, contrast)))
-
-
 #: Changed whenever a texture's texels change for the same arguments: it enters the samples'
 #: fingerprints, so that cached samples are rendered again.
 TEXTURE_VERSION = 4

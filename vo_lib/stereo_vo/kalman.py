@@ -24,7 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 from filterpy.kalman import ExtendedKalmanFilter
 
-from vo_lib.geometry import compose_planar, wrap_angle
+from vo_lib.geometry import compose_planar, relative_planar, wrap_angle, yaw_matrix
 from vo_lib.models.track_odometry import TrackOdometry
 from vo_lib.stereo_vo.temporal import MotionPrior
 
@@ -41,11 +41,9 @@ CV_TURN_PER_METRE = 0.05
 CV_SIGMA = (0.01, 0.005, math.radians(0.3))
 
 
-def _increment(state6: np.ndarray) -> tuple[float, float, float]:
+def _increment(state6: np.ndarray) -> np.ndarray:
     """``(dx, dy, dyaw)`` from the cloned previous pose to the current one, in the previous frame."""
-    x, y, yaw, xp, yp, yawp = (float(v) for v in state6)
-    c, s = math.cos(yawp), math.sin(yawp)
-    return c * (x - xp) + s * (y - yp), -s * (x - xp) + c * (y - yp), float(wrap_angle(yaw - yawp))
+    return relative_planar(state6[3:], state6[:3])
 
 
 def constrained_measurement(state6: np.ndarray) -> np.ndarray:
@@ -162,7 +160,7 @@ class VoKalmanFilter:
     @property
     def increment(self) -> np.ndarray:
         """``(dx, dy, dyaw)`` from the cloned reference pose to the current one, in its frame."""
-        return np.array(_increment(self.ekf.x))
+        return _increment(self.ekf.x)
 
     def control_covariance(self, u) -> np.ndarray:
         """Encoder noise (random walk) plus slip, independent per track."""
@@ -202,7 +200,7 @@ class VoKalmanFilter:
             F = np.array(
                 [[1.0, 0.0, -s * inc[0] - c * inc[1]], [0.0, 1.0, c * inc[0] - s * inc[1]], [0, 0, 1.0]]
             )
-            Rw = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+            Rw = yaw_matrix(x[2])
             # velocity changes scale with the velocity: a fraction of each component, plus the floor
             step = math.hypot(inc[0], inc[1])
             sigma = self.cv_sigma + CV_RELATIVE * np.array(
@@ -264,7 +262,7 @@ class VoKalmanFilter:
     def finish_frame(self, frames_since_reference: int = 1) -> None:
         """Remember the motion per frame (for constant velocity) before the next predict."""
         if self.flags.vo_update or self.flags.odometry:
-            self.last_increment = np.array(_increment(self.ekf.x)) / max(frames_since_reference, 1)
+            self.last_increment = _increment(self.ekf.x) / max(frames_since_reference, 1)
 
     def nees(self, true_pose) -> float:
         """Normalised estimation error squared of the pose against ``true_pose``."""

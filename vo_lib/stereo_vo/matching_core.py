@@ -79,10 +79,9 @@ def _popcount64(x):
 
 
 @_jit(twin="vo_lib.stereo_vo.matching_plain.window_candidates")
-def window_candidates(predicted, radius, w_curr, order_v, sorted_v, d_floor, d_fraction, des_prev, des_curr):
-    """Pairs ``(i, j)`` whose current feature ``j`` lies in the square window of radius
-    ``radius[i]`` around previous feature ``i``'s predicted ``(u, v)`` and within
-    ``d_floor + d_fraction * d`` of its predicted disparity, with their Hamming distances.
+def window_candidates(predicted, radius, w_curr, order_v, sorted_v, des_prev, des_curr):
+    """Pairs ``(i, j)`` whose current feature ``j`` lies within ``radius[i] = (ru, rv, rd)`` of
+    previous feature ``i``'s predicted ``(u, v, d)``, with their Hamming distances.
 
     ``order_v`` sorts the current features by row and ``sorted_v`` holds their rows in that order;
     pairs come ordered by ``i``, then by row, as from ``features.window_pairs``."""
@@ -96,13 +95,11 @@ def window_candidates(predicted, radius, w_curr, order_v, sorted_v, d_floor, d_f
         u, v, d = predicted[i, 0], predicted[i, 1], predicted[i, 2]
         if not (np.isfinite(u) and np.isfinite(v) and np.isfinite(d)):
             continue
-        r = radius[i]
-        lo = np.searchsorted(sorted_v, v - r, side="left")
-        hi = np.searchsorted(sorted_v, v + r, side="right")
-        d_window = d_floor + d_fraction * d
+        lo = np.searchsorted(sorted_v, v - radius[i, 1], side="left")
+        hi = np.searchsorted(sorted_v, v + radius[i, 1], side="right")
         for s in range(lo, hi):
             j = order_v[s]
-            if abs(w_curr[j, 0] - u) > r or abs(w_curr[j, 2] - d) > d_window:
+            if abs(w_curr[j, 0] - u) > radius[i, 0] or abs(w_curr[j, 2] - d) > radius[i, 2]:
                 continue
             if count == ia.shape[0]:  # grow
                 ia = np.concatenate((ia, np.empty_like(ia)))

@@ -46,33 +46,26 @@ import time
 import numpy as np
 
 from vo_lib.camera import StereoCamera
-from vo_lib.geometry import camera_mount
+from vo_lib.geometry import camera_mount, yaw_matrix
 from vo_lib.stereo_vo.circular_motion import motion_matrices
 from vo_lib.stereo_vo.config import PipelineConfig
 from vo_lib.stereo_vo.kalman import VoKalmanFilter, chord_measurement
 from vo_lib.stereo_vo.parts import Estimate, Prediction
 from vo_lib.stereo_vo.ransac import one_point_ransac
-from vo_lib.stereo_vo.rigid_motion import (
-    general_ransac,
-    predict_features,
-    refine_rigid_motion,
-    rotation_matrix,
-    scaled_motion,
-)
-from vo_lib.stereo_vo.temporal import match_to_prediction
+from vo_lib.stereo_vo.rigid_motion import general_ransac, refine_rigid_motion, rotation_matrix, scaled_motion
+from vo_lib.stereo_vo.temporal import match_features, predict_features
 
 #: Window half-width around a predicted position: a floor, plus a share of the predicted image
 #: motion (a near point moving 100 px between frames is predicted less well than a far one).
 WINDOW_PIXELS = 12.0
 WINDOW_FLOW_FRACTION = 0.15
+#: The disparity window: a floor plus a share of the predicted disparity (pixels).
+DISPARITY_FLOOR = 2.0
+DISPARITY_WINDOW = 0.3
+PREDICTED_RATIO = 0.9  # ratio test of the matching (pyramid features, larger motions)
 #: Good frames the recent median needs; before, this many times ``min_inliers`` matches are expected.
 RETRY_HISTORY = 3
 EXPECTED_FACTOR = 4
-
-
-def _rz(yaw: float) -> np.ndarray:
-    c, s = math.cos(yaw), math.sin(yaw)
-    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
 
 
 def rigid_inverse(T: np.ndarray) -> np.ndarray:
@@ -96,7 +89,7 @@ def with_planar_increment(T_cam: np.ndarray, mount: np.ndarray, increment) -> np
     V = mount @ rigid_inverse(T_cam) @ rigid_inverse(mount)
     yaw = math.atan2(V[1, 0], V[0, 0])
     dx, dy, dyaw = (float(v) for v in increment)
-    V[:3, :3] = _rz(dyaw) @ _rz(-yaw) @ V[:3, :3]
+    V[:3, :3] = yaw_matrix(dyaw - yaw) @ V[:3, :3]
     V[0, 3], V[1, 3] = dx, dy
     return rigid_inverse(rigid_inverse(mount) @ V @ mount)
 
@@ -139,6 +132,13 @@ def chord_covariance(T_cam: np.ndarray, covariance6: np.ndarray, mount: np.ndarr
     return J @ covariance6 @ J.T
 
 
+def windows(predicted: np.ndarray, square) -> np.ndarray:
+    """Half-widths ``(N, 3)`` of the matching windows around predicted ``(u, v, d)``: ``square``
+    pixels in u and v, and ``DISPARITY_FLOOR + DISPARITY_WINDOW * d`` in disparity."""
+    square = np.broadcast_to(np.asarray(square, float), (len(predicted),))
+    return np.column_stack([square, square, DISPARITY_FLOOR + DISPARITY_WINDOW * predicted[:, 2]])
+
+
 class SixDofMotion:
     """A car's camera: 1-point RANSAC from the turning axis as the outlier filter, then 6 DoF.
 
@@ -170,18 +170,19 @@ class SixDofMotion:
 
     def match(self, reference, features, prediction: Prediction, recent):
         if prediction.motion is None:
-            return match_to_prediction(reference, features, None)
+            return match_features(reference, features, ratio=PREDICTED_RATIO)
         pred, _ = predict_features(reference.w, self.camera, prediction.motion)
         flow = np.linalg.norm(pred[:, :2] - reference.w[:, :2], axis=1)
-        radius = WINDOW_PIXELS + WINDOW_FLOW_FRACTION * np.nan_to_num(flow, nan=0.0)
-        matches = match_to_prediction(reference, features, pred, radius)
+        square = WINDOW_PIXELS + WINDOW_FLOW_FRACTION * np.nan_to_num(flow, nan=0.0)
+        matches = match_features(reference, features, pred, windows(pred, square), PREDICTED_RATIO)
         min_inliers = self.config.min_inliers
         expected = np.median(recent) if len(recent) >= RETRY_HISTORY else EXPECTED_FACTOR * min_inliers
         if len(matches) < self.config.retry_fraction * expected:
-            wider = match_to_prediction(reference, features, pred, self.config.retry_widening * radius)
+            radius = windows(pred, self.config.retry_widening * square)
+            wider = match_features(reference, features, pred, radius, PREDICTED_RATIO)
             matches = wider if len(wider) > len(matches) else matches
         if len(matches) < min_inliers:  # the prediction is lost: compare every pair
-            brute = match_to_prediction(reference, features, None)
+            brute = match_features(reference, features, ratio=PREDICTED_RATIO)
             matches = brute if len(brute) > len(matches) else matches
         return matches
 
