@@ -131,3 +131,19 @@ def test_constrained_jacobian_matches_finite_differences(rng):
             ]
         )
         np.testing.assert_allclose(constrained_jacobian(x), num, atol=1e-6)
+
+
+def test_snapshot_restore_and_widen_keep_the_state_inside_the_filter():
+    kf = VoKalmanFilter(TrackOdometry())
+    kf.predict(np.array([0.05, 0.06]))
+    saved = kf.snapshot()
+    pose, cov = kf.pose, kf.covariance
+    kf.update(0.01, 0.05, np.diag([1e-6, 1e-6]))
+    assert not np.allclose(kf.covariance, cov)
+    kf.restore(saved)
+    assert np.array_equal(kf.pose, pose) and np.array_equal(kf.covariance, cov)
+    saved[0][:] = 99.0  # the snapshot is a copy: changing it later does not reach the filter
+    kf.restore(kf.snapshot())
+    assert np.array_equal(kf.pose, pose)
+    kf.widen((1.0, 2.0, 0.5))
+    assert np.allclose(np.diag(kf.covariance) - np.diag(cov), [1.0, 4.0, 0.25])

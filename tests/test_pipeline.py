@@ -168,3 +168,26 @@ def test_kitti_like_rig_keeps_its_matches_through_the_turn():
     result, truth, _ = kitti_like_yard_run()
     assert set(result.flagged.tolist()) <= {1}  # frame 1 (10 inliers) is flagged on the straight too
     assert heading_errors(result.poses, truth).max() < 0.5
+
+
+def test_presets_differ_where_the_vehicles_do_and_auto_picks_one():
+    from dataclasses import fields, replace
+
+    from vo_lib.camera import StereoCamera
+    from vo_lib.stereo_vo.config import CAR, CRAWLER, PRESETS
+    from vo_lib.stereo_vo.pipeline import StereoOdometry
+    from vo_lib.stereo_vo.planar_motion import PlanarMotion
+    from vo_lib.stereo_vo.six_dof import SixDofMotion
+    from vo_lib.stereo_vo.vehicle import Motion
+
+    differ = {f.name for f in fields(CRAWLER) if getattr(CRAWLER, f.name) != getattr(CAR, f.name)}
+    shared_names = {"recent_frames", "key_distance", "key_angle", "key_max_gap", "retry_fraction"}
+    assert shared_names <= differ and "vo_covariance_scale" in differ
+    assert PRESETS[Motion.PLANAR] is CRAWLER and PRESETS[Motion.FULL] is CAR
+    camera = StereoCamera(400.0, 400.0, 320.0, 240.0, 0.1, 640, 480)
+    assert isinstance(StereoOdometry(camera).motion, PlanarMotion)
+    assert isinstance(StereoOdometry(camera, CAR, mount=np.eye(4)).motion, SixDofMotion)
+    with pytest.raises(ValueError, match="mount"):
+        StereoOdometry(camera, CAR)
+    swept = StereoOdometry(camera, replace(CRAWLER, key_distance=0.0))
+    assert swept.config.key_distance == 0.0 and CRAWLER.key_distance > 0

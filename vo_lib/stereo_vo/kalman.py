@@ -252,8 +252,8 @@ class VoKalmanFilter:
         return self.ekf.x.copy(), self.ekf.P.copy()
 
     def restore(self, snapshot: tuple[np.ndarray, np.ndarray]) -> None:
-        """Go back to a :meth:`snapshot` (an update that is not to be kept)."""
-        self.ekf.x, self.ekf.P = snapshot
+        """Go back to a :meth:`snapshot` (an update that is not to be kept); the snapshot stays apart."""
+        self.ekf.x, self.ekf.P = snapshot[0].copy(), snapshot[1].copy()
 
     def widen(self, sigma) -> None:
         """Add independent uncertainty ``sigma = (x, y, yaw)`` (standard deviations) to the pose."""

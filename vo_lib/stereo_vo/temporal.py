@@ -19,7 +19,7 @@ import numpy as np
 from vo_lib.camera import StereoCamera
 from vo_lib.compiled import choose
 from vo_lib.stereo_vo.circular_motion import motion_transform
-from vo_lib.stereo_vo.features import RATIO, StereoFeatures, best_matches, hamming, parabola_offset
+from vo_lib.stereo_vo.features import RATIO, StereoFeatures, best_matches, equiangular_offset, hamming
 
 N_SIGMA = 3.0  # window half-width in standard deviations
 PIXEL_SIGMA = 1.0  # pixel noise of a feature position, added to the prediction's uncertainty
@@ -103,7 +103,7 @@ def refine_positions(
     Corners sit on whole pixels, and motion between frames is often a fraction of a pixel, so
     whole-pixel matches under-measure it. For each match the previous feature's patch is compared
     (sum of absolute differences) with the current image at the matched pixel and one pixel
-    around it; parabolas through the costs along u and along v give the sub-pixel position.
+    around it; equiangular (V) fits to the costs along u and along v give the sub-pixel position.
     Returns ``w_curr`` with refined u, v (the disparity is kept).
     """
     out = np.array(w_curr, dtype=float, copy=True)
@@ -127,8 +127,8 @@ def refine_positions(
         return np.abs(patch - curr_image[rc + dv, cc + du].astype(np.int32)).sum(axis=(1, 2))
 
     c0 = sad(0, 0)
-    out[ok, 0] = uc[ok] + parabola_offset(sad(-1, 0), c0, sad(1, 0))
-    out[ok, 1] = vc[ok] + parabola_offset(sad(0, -1), c0, sad(0, 1))
+    out[ok, 0] = uc[ok] + equiangular_offset(sad(-1, 0), c0, sad(1, 0))
+    out[ok, 1] = vc[ok] + equiangular_offset(sad(0, -1), c0, sad(0, 1))
     return out
 
 
