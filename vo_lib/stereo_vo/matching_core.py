@@ -70,7 +70,30 @@ def best_matches_core(ia, ib, dist, n_a, n_b, max_distance, ratio, mutual):
     return _collect(owner[owned], owned, best)
 
 
-@_jit(step_of=f"{__name__}.window_candidates")  # and of row_candidates
+_WINDOWS = f"{__name__}.window_candidates"  # the steps below serve row_candidates too
+
+
+@_jit(step_of=_WINDOWS)
+def _append(ia, ib, dist, count, i, j, h):
+    """Pair ``count`` is ``(i, j)`` at Hamming distance ``h``; the arrays double when full."""
+    if count == ia.shape[0]:
+        ia = np.concatenate((ia, np.empty_like(ia)))
+        ib = np.concatenate((ib, np.empty_like(ib)))
+        dist = np.concatenate((dist, np.empty_like(dist)))
+    ia[count], ib[count], dist[count] = i, j, h
+    return ia, ib, dist
+
+
+@_jit(step_of=_WINDOWS)
+def _hamming(des_a, i, des_b, j):
+    """Hamming distance of descriptor rows ``des_a[i]`` and ``des_b[j]`` (uint64 words)."""
+    h = 0
+    for k in range(des_a.shape[1]):
+        h += _popcount64(des_a[i, k] ^ des_b[j, k])
+    return h
+
+
+@_jit(step_of=_WINDOWS)
 def _popcount64(x):
     x = x - ((x >> np.uint64(1)) & np.uint64(0x5555555555555555))
     x = (x & np.uint64(0x3333333333333333)) + ((x >> np.uint64(2)) & np.uint64(0x3333333333333333))
@@ -101,14 +124,7 @@ def window_candidates(predicted, radius, w_curr, order_v, sorted_v, des_prev, de
             j = order_v[s]
             if abs(w_curr[j, 0] - u) > radius[i, 0] or abs(w_curr[j, 2] - d) > radius[i, 2]:
                 continue
-            if count == ia.shape[0]:  # grow
-                ia = np.concatenate((ia, np.empty_like(ia)))
-                ib = np.concatenate((ib, np.empty_like(ib)))
-                dist = np.concatenate((dist, np.empty_like(dist)))
-            h = 0
-            for k in range(des_prev.shape[1]):
-                h += _popcount64(des_prev[i, k] ^ des_curr[j, k])
-            ia[count], ib[count], dist[count] = i, j, h
+            ia, ib, dist = _append(ia, ib, dist, count, i, j, _hamming(des_prev, i, des_curr, j))
             count += 1
     return ia[:count], ib[:count], dist[:count]
 
@@ -153,13 +169,6 @@ def row_candidates(
             d = left[i, 0] - right[j, 0]
             if d < d_min or d > d_max or abs(left_level[i] - right_level[j]) > 1:
                 continue
-            if count == ia.shape[0]:
-                ia = np.concatenate((ia, np.empty_like(ia)))
-                ib = np.concatenate((ib, np.empty_like(ib)))
-                dist = np.concatenate((dist, np.empty_like(dist)))
-            h = 0
-            for k in range(des_left.shape[1]):
-                h += _popcount64(des_left[i, k] ^ des_right[j, k])
-            ia[count], ib[count], dist[count] = i, j, h
+            ia, ib, dist = _append(ia, ib, dist, count, i, j, _hamming(des_left, i, des_right, j))
             count += 1
     return ia[:count], ib[:count], dist[:count]
