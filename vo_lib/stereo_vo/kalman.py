@@ -41,11 +41,6 @@ CV_TURN_PER_METRE = 0.05
 CV_SIGMA = (0.01, 0.005, math.radians(0.3))
 
 
-def _increment(state6: np.ndarray) -> np.ndarray:
-    """``(dx, dy, dyaw)`` from the cloned previous pose to the current one, in the previous frame."""
-    return relative_planar(state6[3:], state6[:3])
-
-
 def constrained_measurement(state6: np.ndarray) -> np.ndarray:
     """``(theta, rho, sideways)``: the VO measurement and the deviation of the motion from its chord.
 
@@ -53,7 +48,7 @@ def constrained_measurement(state6: np.ndarray) -> np.ndarray:
     third component measures how far the increment strays from it, and the update observes it as
     zero: the nonholonomic constraint of a crawler, which (theta, rho) alone leave unobserved.
     """
-    return chord_measurement(_increment(state6))
+    return chord_measurement(relative_planar(state6[3:], state6[:3]))  # previous pose to current
 
 
 def chord_measurement(increment) -> np.ndarray:
@@ -66,7 +61,7 @@ def chord_measurement(increment) -> np.ndarray:
 
 def constrained_jacobian(state6: np.ndarray) -> np.ndarray:
     """Analytic 3x6 derivative of :func:`constrained_measurement`."""
-    dx, dy, theta = _increment(state6)
+    dx, dy, theta = relative_planar(state6[3:], state6[:3])
     sp, cp = math.sin(0.5 * theta), math.cos(0.5 * theta)
     a = float(state6[5]) + 0.5 * theta
     ca, sa = math.cos(a), math.sin(a)
@@ -160,7 +155,7 @@ class VoKalmanFilter:
     @property
     def increment(self) -> np.ndarray:
         """``(dx, dy, dyaw)`` from the cloned reference pose to the current one, in its frame."""
-        return _increment(self.ekf.x)
+        return relative_planar(self.ekf.x[3:], self.ekf.x[:3])
 
     def control_covariance(self, u) -> np.ndarray:
         """Encoder noise (random walk) plus slip, independent per track."""
@@ -262,7 +257,7 @@ class VoKalmanFilter:
     def finish_frame(self, frames_since_reference: int = 1) -> None:
         """Remember the motion per frame (for constant velocity) before the next predict."""
         if self.flags.vo_update or self.flags.odometry:
-            self.last_increment = _increment(self.ekf.x) / max(frames_since_reference, 1)
+            self.last_increment = self.increment / max(frames_since_reference, 1)
 
     def nees(self, true_pose) -> float:
         """Normalised estimation error squared of the pose against ``true_pose``."""
