@@ -189,5 +189,7 @@ def test_presets_differ_where_the_vehicles_do_and_auto_picks_one():
     assert isinstance(StereoOdometry(camera, CAR, mount=np.eye(4)).motion, SixDofMotion)
     with pytest.raises(ValueError, match="mount"):
         StereoOdometry(camera, CAR)
+    with pytest.raises(ValueError, match="motion must be one of planar, full; got 'six'"):
+        replace(CAR, motion="six")
     swept = StereoOdometry(camera, replace(CRAWLER, key_distance=0.0))
     assert swept.config.key_distance == 0.0 and CRAWLER.key_distance > 0

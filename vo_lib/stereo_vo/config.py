@@ -16,6 +16,8 @@ from scipy.stats import chi2
 
 from vo_lib.stereo_vo.ransac_core import RansacParams
 
+FRONT_ENDS = ("fast", "pyramid")
+MOTIONS = ("planar", "full")
 LOST_VIEW = "part of the view lost (occluder or moving object)"
 #: Reasons that say the reference frame no longer shares enough of the view with this one.
 LOST_REASONS = ("too few temporal matches", "too few inliers", "low inlier ratio")
@@ -74,6 +76,12 @@ class PipelineConfig:
     #: Uncertainty (x, y metres; yaw radians) added to the prediction while nothing predicts the
     #: motion (no odometry, no motion measured yet); empty: none.
     unknown_motion_sigma: tuple = ()
+
+    def __post_init__(self):
+        if self.front_end not in FRONT_ENDS:
+            raise ValueError(f"front_end must be one of {', '.join(FRONT_ENDS)}; got {self.front_end!r}")
+        if self.motion not in MOTIONS:
+            raise ValueError(f"motion must be one of {', '.join(MOTIONS)}; got {self.motion!r}")
 
 
 #: The paper's crawler: single-scale FAST, planar model, track odometry.
