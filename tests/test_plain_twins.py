@@ -145,8 +145,12 @@ def test_best_matches_equal_their_twin(seed, n_a, n_b, m, mutual, ratio):
     ia, ib = rng.integers(0, n_a, m), rng.integers(0, n_b, m)
     dist = rng.integers(0, 25, m)  # few distinct distances: many ties
     args = (ia, ib, dist, n_a, n_b, 18.0, ratio, mutual)
-    kernel, plain = matching_core.best_matches_core(*args), matching_plain.best_matches(*args)
-    for a, b in zip(kernel, plain, strict=True):
+    assert_same_arrays(matching_core.best_matches_core(*args), matching_plain.best_matches(*args))
+
+
+def assert_same_arrays(kernel_result, plain_result):
+    """Exactly the same arrays, in the same order (pairs, indices, distances)."""
+    for a, b in zip(kernel_result, plain_result, strict=True):
         assert np.array_equal(a, b)
 
 
@@ -166,9 +170,7 @@ def test_window_candidates_equal_their_twin(seed, n, m, max_radius):
     radius = np.column_stack([rng.uniform(1.0, max_radius, (n, 2)), 2.0 + 0.3 * predicted[:, 2]])
     order = np.argsort(w_curr[:, 1], kind="stable")
     args = (predicted, radius, w_curr, order, w_curr[order, 1].copy(), des_prev, des_curr)
-    kernel, plain = matching_core.window_candidates(*args), matching_plain.window_candidates(*args)
-    for a, b in zip(kernel, plain, strict=True):
-        assert np.array_equal(a, b)
+    assert_same_arrays(matching_core.window_candidates(*args), matching_plain.window_candidates(*args))
 
 
 @settings(max_examples=40, deadline=None)
@@ -183,9 +185,7 @@ def test_row_candidates_equal_their_twin(seed, n, m, tolerance):
     order = np.argsort(right[:, 1], kind="stable")
     rows = right[order, 1].copy()
     args = (left, levels_l, right, levels_r, order, rows, tolerance, 0.5, 90.0, des_left, des_right)
-    kernel, plain = matching_core.row_candidates(*args), matching_plain.row_candidates(*args)
-    for a, b in zip(kernel, plain, strict=True):
-        assert np.array_equal(a, b)
+    assert_same_arrays(matching_core.row_candidates(*args), matching_plain.row_candidates(*args))
 
 
 @settings(max_examples=40, deadline=None)
