@@ -21,8 +21,8 @@
 #   (epipolar lines), and how the depth error grows with depth;
 # - how FAST finds corners, and why they are spread over the image by grid bucketing;
 # - what a binary descriptor is, and why the Hamming distance separates true from false matches;
-# - how rectification turns stereo matching into a search along one row, and how a parabola
-#   through the matching cost gives sub-pixel disparity;
+# - how rectification turns stereo matching into a search along one row, and how an equiangular
+#   (V-shaped) fit to the matching cost gives sub-pixel disparity;
 # - what each stage costs in time at 640×480.
 #
 # **Prerequisites**: notebook 04 (the rendered world and its ground truth).
@@ -266,13 +266,9 @@ assert ok and np.median(same) < 30 and np.median(shuffled) > 100
 # nearest descriptor wins if it is below the ceiling, clearly nearer than the second nearest
 # (ratio 0.85), and if the left corner is also the right corner's nearest (mutual check).
 #
-# FAST corners sit on whole pixels, so the disparity is first an integer. The block-matching cost
-# (sum of absolute differences of 7×7 patches) at d−1, d and d+1 then places the minimum between
-# pixels. A sum of absolute differences is V-shaped around its minimum, so the fit is
-# *equiangular*: two lines of equal and opposite slope through the three samples, meeting at the
-# minimum. A parabola through the same samples would pull the minimum towards whole pixels
-# ("pixel locking"); `vo_lib.stereo_vo.features.parabola_offset` keeps its historical name but
-# computes the equiangular fit.
+# FAST corners sit on whole pixels, so the disparity is first an integer. An equiangular fit (two
+# lines of equal and opposite slope) to the block-matching cost (sum of absolute differences of
+# 7×7 patches) at d−1, d and d+1 puts its minimum between pixels.
 
 # %%
 u_i, v_i = np.rint(features.w[:, 0]).astype(int), np.rint(features.w[:, 1]).astype(int)
@@ -467,13 +463,13 @@ assert np.all(hamming_distance(other, other) == 0)
 # Write `quadratic_offset(c_minus, c_zero, c_plus)`: the position of the vertex of the parabola
 # through the costs sampled at −1, 0 and +1. Then sample a V-shaped (absolute-difference) cost
 # |x − s| at x = −1, 0, 1 for true minima s in `true_minima` below, and store the largest error
-# of your parabola in `parabola_worst` and that of `vo_lib`'s `parabola_offset` (the
+# of your parabola in `parabola_worst` and that of `vo_lib`'s `equiangular_offset` (the
 # front end's fit) in `library_worst`. Which fits a SAD cost, and what does the other do?
 #
 # *Hint:* solve a x² + b x + c through the three samples; the vertex is −b / (2a).
 
 # %%
-from vo_lib.stereo_vo.features import parabola_offset
+from vo_lib.stereo_vo.features import equiangular_offset
 
 true_minima = np.linspace(-0.45, 0.45, 19)
 
@@ -487,7 +483,7 @@ def quadratic_offset(c_minus, c_zero, c_plus):
 
 v_costs = [np.abs(x - true_minima) for x in (-1.0, 0.0, 1.0)]
 parabola_worst = float(np.abs(quadratic_offset(*v_costs) - true_minima).max())
-library_worst = float(np.abs(parabola_offset(*v_costs) - true_minima).max())
+library_worst = float(np.abs(equiangular_offset(*v_costs) - true_minima).max())
 print(
     f"worst error on a V-shaped cost: parabola {parabola_worst:.3f} px, vo_lib's fit {library_worst:.1e} px"
 )

@@ -227,7 +227,7 @@ drive = simulate_drive(
 )
 start = drive.poses[0]
 library_kf = VoKalmanFilter(odometry, pose=start)
-x6, P6 = library_kf.ekf.x.copy(), library_kf.ekf.P.copy()
+x6, P6 = library_kf.snapshot()
 
 
 class ClonedPoseEKF(ExtendedKalmanFilter):

@@ -53,7 +53,8 @@ from vo_lib.sim.samples import SAMPLES, render_sample
 from vo_lib.sim.trajectories import simulate_drive
 from vo_lib.stereo_vo import circular_motion as cm
 from vo_lib.stereo_vo import paper_sets
-from vo_lib.stereo_vo.pipeline import KEY_ANGLE, KEY_DISTANCE, run_frames
+from vo_lib.stereo_vo.config import CRAWLER
+from vo_lib.stereo_vo.pipeline import run_frames
 from vo_lib.stereo_vo.ransac import one_point_ransac
 from vo_lib.stereo_vo.synthetic import matches_under_transform
 from vo_lib.viz.plotting import draw_flowchart, new_axes, plot_paths
@@ -112,16 +113,19 @@ display(
         f"that depth the point moves less than a pixel in {below_pixel:.0%} of the image. Measured "
         "frame to frame, such motions are dominated by sub-pixel errors of the feature positions, "
         "which do not average out: they shorten the measured motion. The pipeline therefore "
-        "measures each frame against a *keyframe* until the motion since it exceeds `KEY_DISTANCE` "
-        "or `KEY_ANGLE`, applying each frame's update to a copy of the filter so that the "
-        "keyframe's own errors are counted once."
+        "measures each frame against a *keyframe* until the motion since it exceeds "
+        "`CRAWLER.key_distance` or `CRAWLER.key_angle`, applying each frame's update to a copy of "
+        "the filter so that the keyframe's own errors are counted once."
     )
 )
 # sub-pixel motion, the premise of keyframes: the bound is the pixel itself, not a margin
 assert disparity_change < 1.0 and below_pixel > 0.5
 
 # %%
-print(f"new keyframe after {KEY_DISTANCE * 100:.0f} cm or {math.degrees(KEY_ANGLE):.1f}° of motion")
+print(
+    f"new keyframe after {CRAWLER.key_distance * 100:.0f} cm "
+    f"or {math.degrees(CRAWLER.key_angle):.1f}° of motion"
+)
 result, truth, _ = run("indoor_linear", 60)
 reasons = {d.reason for d in result.diagnostics if d.fallback}
 end_error = np.hypot(*(result.poses[-1, :2] - truth[-1, :2]))
@@ -638,8 +642,9 @@ assert np.isclose(sideways_error(0.01, 1e-4, 2), 0.01 * 1e-4), "two steps: only 
 # %% [markdown]
 # ### Stretch goals (not graded)
 #
-# - Set `vo_lib.stereo_vo.pipeline.KEY_DISTANCE` to 0 (a new keyframe every frame) and rerun
-#   section 3. How large is the final error now, and in which direction?
+# - Run section 3 with `StereoOdometry(camera, dataclasses.replace(CRAWLER, key_distance=0))` (a
+#   new keyframe every frame, `vo_lib.stereo_vo.pipeline`). How large is the final error now, and
+#   in which direction?
 # - Move the camera 0.3 m ahead of the turning axis in `vo_lib.sim.samples` and rerun section 4.
 # - Run `python -m vo_lib run --sequence outdoor_free --no-odometry` and compare with section 5.
 # - With KITTI odometry data, run the pipeline on sequence 00 (README). Which assumption of the

@@ -78,22 +78,23 @@ from vo_lib.geometry import (
 )
 from vo_lib.stereo_vo import rigid_motion
 from vo_lib.stereo_vo.circular_motion import circular_motion_from_increment, motion_matrices, robot_increment
+from vo_lib.stereo_vo.config import CAR
 from vo_lib.stereo_vo.features import PATCH_HALF, StereoFrontEnd
 from vo_lib.stereo_vo.kalman import nis
-from vo_lib.stereo_vo.pipeline import run_frames, run_sequence
+from vo_lib.stereo_vo.pipeline import StereoOdometry, run_frames, run_sequence
 from vo_lib.stereo_vo.pnp_baseline import run_pnp_baseline
 from vo_lib.stereo_vo.pyramid_features import LEVELS, SCALE_FACTOR, PyramidFrontEnd
 from vo_lib.stereo_vo.ransac import GATE_SIGMAS, one_point_ransac
-from vo_lib.stereo_vo.rigid_pipeline import (
-    MIN_INLIERS,
+from vo_lib.stereo_vo.six_dof import (
+    PREDICTED_RATIO,
     WINDOW_PIXELS,
-    RigidStereoOdometry,
     turning_axis_transform,
     turning_axis_view,
     vehicle_increment,
+    windows,
 )
 from vo_lib.stereo_vo.synthetic import matches_under_transform
-from vo_lib.stereo_vo.temporal import match_to_prediction
+from vo_lib.stereo_vo.temporal import match_features, predict_features
 from vo_lib.stereo_vo.vehicle import KITTI_CAMERA_IN_IMU, vehicle_of
 from vo_lib.viz.plotting import new_axes, plot_paths
 from vo_lib.viz.prose import Markdown
@@ -342,8 +343,8 @@ if REAL:
     assert np.median(counts["pyramid"]) > 2 * np.median(counts["single scale"])
 
 vo_full = run_sequence(seq, use_odometry=False, motion="full")  # the pyramid front end
-single_odometer = RigidStereoOdometry(
-    seq.camera, vehicle.mount, seed=SEED, front_end=StereoFrontEnd(seq.camera)
+single_odometer = StereoOdometry(
+    seq.camera, CAR, mount=vehicle.mount, seed=SEED, front_end=StereoFrontEnd(seq.camera)
 )
 vo_single = run_frames(((left, right, None) for left, right in seq), seq.camera, odometer=single_odometer)
 heading_error = {
@@ -470,7 +471,7 @@ scene_points = scene_points[scene_points[:, 2] < 60]
 
 def pixel_gap(Ta, Tb):
     """Median distance in (u, v, d) between the points moved by two camera motions."""
-    a, b = (rigid_motion.project(scene_points @ T[:3, :3].T + T[:3, 3], seq.camera) for T in (Ta, Tb))
+    a, b = (seq.camera.project(scene_points @ T[:3, :3].T + T[:3, 3]) for T in (Ta, Tb))
     return float(np.median(np.linalg.norm(a - b, axis=1)))
 
 
@@ -541,8 +542,8 @@ def chain_models(camera_path):
     for k in range(1, len(seq)):
         curr = pyramid_fe.process(*seq.pair(k))
         T_pred = np.linalg.inv(camera_path[k]) @ camera_path[k - 1]
-        predicted, _ = rigid_motion.predict_features(prev.w, seq.camera, T_pred)
-        mt = match_to_prediction(prev, curr, predicted, WINDOW_PIXELS)
+        predicted, _ = predict_features(prev.w, seq.camera, T_pred)
+        mt = match_features(prev, curr, predicted, windows(predicted, WINDOW_PIXELS), PREDICTED_RATIO)
         est = one_point_ransac(mt.w_prev, mt.w_curr, seq.camera, rng=rng, pixel_sigma=1.0)
         guess = as_4x4(*motion_matrices(est.theta, est.rho))
         refined = rigid_motion.refine_rigid_motion(mt.w_prev, mt.w_curr, seq.camera, guess, est.inliers)
@@ -620,7 +621,7 @@ else:
 # the mount, project again). There the circular model is exact.
 #
 # A bump or the start of a slope pitches the body instead: no planar model describes that, so
-# when 1-point RANSAC keeps fewer than `MIN_RANSAC_RATIO` of the matches the pipeline draws
+# when 1-point RANSAC keeps fewer than `CAR.min_inlier_ratio` of the matches the pipeline draws
 # general 3-point hypotheses (OpenCV's P3P in `solvePnPRansac`, seeded) and keeps the better.
 
 # %%
@@ -650,8 +651,8 @@ for yaw_deg, pitch_deg in ((0, 0), (2, 0), (4, 0), (6, 0), (9, 0), (3, 1)):
         rng=turn_rng,
         pixel_sigma=1.0,
     )
-    odometer = RigidStereoOdometry(turn_camera, turn_mount, seed=SEED)
-    guess, start, ratio = odometer.hypothesis(m_turn.w_prev, m_turn.w_curr, None)
+    odometer = StereoOdometry(turn_camera, CAR, mount=turn_mount, seed=SEED)
+    guess, start, ratio = odometer.motion.hypothesis(m_turn.w_prev, m_turn.w_curr, None, odometer.rng)
     refined = rigid_motion.refine_rigid_motion(m_turn.w_prev, m_turn.w_curr, turn_camera, guess, start)
     recall_rows.append(
         (
@@ -691,7 +692,7 @@ print(
     f"kept {np.median(share):.0%} (range {share.min():.0%}..{share.max():.0%})"
 )
 assert np.median(share) < 1.0  # the general model is stricter than the gates
-assert np.all(refined_in[[not d.fallback for d in diag]] >= MIN_INLIERS)
+assert np.all(refined_in[[not d.fallback for d in diag]] >= CAR.min_inliers)
 
 fig, axes = new_axes(2, width=5.5, height=3.4)
 axes[0].plot(frames, ransac_in, label="1-point RANSAC inliers")
@@ -715,7 +716,7 @@ plt.show()
 # %%
 k0, k1 = (40, 41) if REAL else (0, 30)  # the crawler moves a centimetre per frame
 feat0, feat1 = pyramid_fe.process(*seq.pair(k0)), pyramid_fe.process(*seq.pair(k1))
-one = match_to_prediction(feat0, feat1, None)
+one = match_features(feat0, feat1, ratio=PREDICTED_RATIO)
 est = one_point_ransac(one.w_prev, one.w_curr, seq.camera, rng=rng, pixel_sigma=1.0)
 guess = as_4x4(*motion_matrices(est.theta, est.rho))
 lib = rigid_motion.refine_rigid_motion(one.w_prev, one.w_curr, seq.camera, guess, est.inliers)
@@ -1128,7 +1129,7 @@ assert np.isclose(at_10, image_statistics(real_images[0], threshold=10)["empty"]
 #
 # The car pitches by 0.1° between two frames. How far (`shift`, pixels) does the image of a point
 # 20 m straight ahead move? Compute it by rotating the point about the camera's x axis and
-# projecting it with `rigid_motion.project`. Is that inside the refinement's inlier threshold
+# projecting it with `camera.project`. Is that inside the refinement's inlier threshold
 # (`rigid_motion.INLIER_PIXELS`)?
 #
 # *Hint:* `Rotation.from_euler("x", angle)`.
@@ -1138,7 +1139,7 @@ assert np.isclose(at_10, image_statistics(real_images[0], threshold=10)["empty"]
 pitch = math.radians(0.1)
 point = np.array([[0.0, 0.0, 20.0]])  # on the optical axis
 Rx = Rotation.from_euler("x", pitch).as_matrix()  # about the camera's x axis (right)
-moved = rigid_motion.project(point @ Rx.T, cam) - rigid_motion.project(point, cam)
+moved = cam.project(point @ Rx.T) - cam.project(point)
 shift = float(np.hypot(moved[0, 0], moved[0, 1]))
 print(
     f"0.1 deg of pitch moves the point by {shift:.3f} px (fy = {cam.fy:.1f} px); the inlier threshold is "

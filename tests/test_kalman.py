@@ -161,3 +161,19 @@ def test_nis_needs_no_truth_and_tells_a_wrong_noise_model():
     assert told_less > 2 * hi  # S is mostly the prediction's, so R alone moves the NIS less than R
     with pytest.raises(ValueError):
         nis([1.0, 2.0], np.eye(3))
+
+
+def test_snapshot_restore_and_widen_keep_the_state_inside_the_filter():
+    kf = VoKalmanFilter(TrackOdometry())
+    kf.predict(np.array([0.05, 0.06]))
+    saved = kf.snapshot()
+    pose, cov = kf.pose, kf.covariance
+    kf.update(0.01, 0.05, np.diag([1e-6, 1e-6]))
+    assert not np.allclose(kf.covariance, cov)
+    kf.restore(saved)
+    assert np.array_equal(kf.pose, pose) and np.array_equal(kf.covariance, cov)
+    saved[0][:] = 99.0  # the snapshot is a copy: changing it later does not reach the filter
+    kf.restore(kf.snapshot())
+    assert np.array_equal(kf.pose, pose)
+    kf.widen((1.0, 2.0, 0.5))
+    assert np.allclose(np.diag(kf.covariance) - np.diag(cov), [1.0, 4.0, 0.25])

@@ -132,7 +132,8 @@ def kitti_like_yard_run():
     from vo_lib.sim.render import SensorEffects, StereoRenderer
     from vo_lib.sim.trajectories import Leg, SlipModel, simulate_drive
     from vo_lib.sim.world import outdoor_yard
-    from vo_lib.stereo_vo.rigid_pipeline import RigidStereoOdometry
+    from vo_lib.stereo_vo.config import CAR
+    from vo_lib.stereo_vo.pipeline import StereoOdometry
 
     camera = StereoCamera(718.856, 718.856, 607.1928, 185.2157, 0.5371657, 1241, 376)
     mount = camera_mount(forward=1.1, height=1.65)
@@ -147,7 +148,7 @@ def kitti_like_yard_run():
     renderer = StereoRenderer(outdoor_yard(), camera, SensorEffects(noise_sigma=1.0))
     rng = np.random.default_rng(1)
     frames = ((*renderer.render_pair(planar_to_matrix(p) @ mount, rng), None) for p in drive.poses)
-    result = run_frames(frames, camera, odometer=RigidStereoOdometry(camera, mount))
+    result = run_frames(frames, camera, odometer=StereoOdometry(camera, CAR, mount=mount))
     truth = relative_planar(drive.poses[0], drive.poses)
     distance = np.sum(np.linalg.norm(np.diff(truth[:, :2], axis=0), axis=1))
     return result, truth, distance
@@ -170,3 +171,28 @@ def test_kitti_like_rig_keeps_its_matches_through_the_turn():
     result, truth, _ = kitti_like_yard_run()
     assert set(result.flagged.tolist()) <= {1}  # frame 1 (10 inliers) is flagged on the straight too
     assert heading_errors(result.poses, truth).max() < 0.5
+
+
+def test_presets_differ_where_the_vehicles_do_and_auto_picks_one():
+    from dataclasses import fields, replace
+
+    from vo_lib.camera import StereoCamera
+    from vo_lib.stereo_vo.config import CAR, CRAWLER, PRESETS
+    from vo_lib.stereo_vo.pipeline import StereoOdometry
+    from vo_lib.stereo_vo.planar_motion import PlanarMotion
+    from vo_lib.stereo_vo.six_dof import SixDofMotion
+    from vo_lib.stereo_vo.vehicle import Motion
+
+    differ = {f.name for f in fields(CRAWLER) if getattr(CRAWLER, f.name) != getattr(CAR, f.name)}
+    shared_names = {"recent_frames", "key_distance", "key_angle", "key_max_gap", "retry_fraction"}
+    assert shared_names <= differ and "vo_covariance_scale" in differ
+    assert PRESETS[Motion.PLANAR] is CRAWLER and PRESETS[Motion.FULL] is CAR
+    camera = StereoCamera(400.0, 400.0, 320.0, 240.0, 0.1, 640, 480)
+    assert isinstance(StereoOdometry(camera).motion, PlanarMotion)
+    assert isinstance(StereoOdometry(camera, CAR, mount=np.eye(4)).motion, SixDofMotion)
+    with pytest.raises(ValueError, match="mount"):
+        StereoOdometry(camera, CAR)
+    with pytest.raises(ValueError, match="motion must be one of planar, full; got 'six'"):
+        replace(CAR, motion="six")
+    swept = StereoOdometry(camera, replace(CRAWLER, key_distance=0.0))
+    assert swept.config.key_distance == 0.0 and CRAWLER.key_distance > 0

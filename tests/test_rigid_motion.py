@@ -10,14 +10,9 @@ from vo_lib.formats.kitti_raw import camera_in_imu_frame, read_oxts, wheel_dista
 from vo_lib.formats.sequence import SequenceError
 from vo_lib.geometry import camera_mount
 from vo_lib.stereo_vo.kalman import chord_measurement
-from vo_lib.stereo_vo.rigid_motion import (
-    predict_features,
-    project,
-    refine_rigid_motion,
-    rotation_matrix,
-    scaled_motion,
-)
-from vo_lib.stereo_vo.rigid_pipeline import vehicle_increment, with_planar_increment
+from vo_lib.stereo_vo.rigid_motion import refine_rigid_motion, rotation_matrix, scaled_motion
+from vo_lib.stereo_vo.six_dof import vehicle_increment, with_planar_increment
+from vo_lib.stereo_vo.temporal import predict_features
 from vo_lib.stereo_vo.vehicle import CAR_GAUGE, car_odometry_model
 
 
@@ -39,8 +34,8 @@ def scene(rng, n=300) -> np.ndarray:
 def test_refinement_recovers_a_known_motion_and_rejects_outliers(kitti_camera, rng):
     P = scene(rng)
     T = motion([0.004, -0.03, 0.002], [0.05, -0.02, -1.2])
-    w_prev = project(P, kitti_camera)
-    w_curr = project(P @ T[:3, :3].T + T[:3, 3], kitti_camera)
+    w_prev = kitti_camera.project(P)
+    w_curr = kitti_camera.project(P @ T[:3, :3].T + T[:3, 3])
     w_curr[:, :2] += rng.normal(0, 0.2, (len(P), 2))
     bad = rng.choice(len(P), 60, replace=False)
     w_curr[bad, :2] += rng.uniform(5, 40, (60, 2)) * rng.choice([-1, 1], (60, 2))
@@ -58,7 +53,7 @@ def test_refinement_recovers_a_known_motion_and_rejects_outliers(kitti_camera, r
 
 def test_refinement_fails_cleanly_with_too_few_matches(kitti_camera, rng):
     P = scene(rng, 4)
-    w = project(P, kitti_camera)
+    w = kitti_camera.project(P)
     result = refine_rigid_motion(w, w, kitti_camera, np.eye(4))
     assert not result.success and np.isinf(result.covariance).all()
 
@@ -67,9 +62,9 @@ def test_prediction_and_scaled_motion(kitti_camera, rng):
     P = scene(rng, 50)
     T = motion([0.0, 0.02, 0.0], [0.0, 0.0, -1.0])
     twice = scaled_motion(T, 2.0)
-    pred, ok = predict_features(project(P, kitti_camera), kitti_camera, twice)
+    pred, ok = predict_features(kitti_camera.project(P), kitti_camera, twice)
     assert ok.all()
-    assert np.allclose(pred, project(P @ (T @ T)[:3, :3].T + (T @ T)[:3, 3], kitti_camera), atol=1e-6)
+    assert np.allclose(pred, kitti_camera.project(P @ (T @ T)[:3, :3].T + (T @ T)[:3, 3]), atol=1e-6)
 
 
 def test_vehicle_increment_of_a_camera_ahead_of_the_axis():
@@ -129,49 +124,6 @@ def test_camera_in_imu_frame_from_raw_calibration(tmp_path):
         camera_in_imu_frame(tmp_path)
 
 
-def test_compiled_windows_give_the_pairs_of_the_numpy_windows():
-    from vo_lib.stereo_vo.features import StereoFeatures, hamming, window_pairs
-    from vo_lib.stereo_vo.matching_core import window_candidates
-    from vo_lib.stereo_vo.temporal import DISPARITY_WINDOW
-
-    rng = np.random.default_rng(3)
-    n, m = 300, 350
-    prev = StereoFeatures(
-        np.column_stack([rng.uniform(0, 600, n), rng.uniform(0, 300, n), rng.uniform(1, 60, n)]),
-        rng.integers(0, 256, (n, 32), dtype=np.uint8),
-    )
-    curr = StereoFeatures(
-        np.column_stack([rng.uniform(0, 600, m), rng.uniform(0, 300, m), rng.uniform(1, 60, m)]),
-        rng.integers(0, 256, (m, 32), dtype=np.uint8),
-    )
-    predicted = prev.w + rng.normal(0, 5, (n, 3))
-    predicted[::17] = np.nan  # out of view
-    radius = rng.uniform(5, 40, n)
-    radius[:60] = 1e4  # windows over the whole image: more pairs than first reserved (64 each)
-    order = np.argsort(curr.w[:, 1], kind="stable")
-    ia, ib, dist = window_candidates(
-        predicted,
-        radius,
-        curr.w,
-        order,
-        curr.w[order, 1].copy(),
-        2.0,
-        DISPARITY_WINDOW,
-        prev.descriptors.view(np.uint64),
-        curr.descriptors.view(np.uint64),
-    )
-    keep = np.flatnonzero(np.isfinite(predicted[:, 0]))
-    ja, jb = window_pairs(predicted[keep, 1], curr.w[:, 1], radius[keep])
-    ja = keep[ja]
-    inside = np.abs(curr.w[jb, 0] - predicted[ja, 0]) <= radius[ja]
-    inside &= np.abs(curr.w[jb, 2] - predicted[ja, 2]) <= 2.0 + DISPARITY_WINDOW * predicted[ja, 2]
-    ja, jb = ja[inside], jb[inside]
-    assert len(ja) > 100
-    np.testing.assert_array_equal(ia, ja)
-    np.testing.assert_array_equal(ib, jb)
-    np.testing.assert_array_equal(dist, hamming(prev.descriptors[ja], curr.descriptors[jb]))
-
-
 @pytest.mark.parametrize("yaw_deg", [0.0, 4.0, 9.0])
 def test_one_point_ransac_seen_from_the_turning_axis_keeps_every_match_in_a_sharp_turn(kitti_camera, yaw_deg):
     """A car's camera a metre ahead of the axis slides sideways in a turn: seen from the camera
@@ -181,7 +133,7 @@ def test_one_point_ransac_seen_from_the_turning_axis_keeps_every_match_in_a_shar
 
     from vo_lib.geometry import camera_motion
     from vo_lib.stereo_vo.ransac import one_point_ransac
-    from vo_lib.stereo_vo.rigid_pipeline import turning_axis_transform, turning_axis_view
+    from vo_lib.stereo_vo.six_dof import turning_axis_transform, turning_axis_view
     from vo_lib.stereo_vo.synthetic import matches_under_transform
 
     mount = camera_mount(forward=1.08, height=1.73, left=-0.31)
@@ -217,7 +169,8 @@ def test_a_pitching_car_still_gets_a_hypothesis_with_its_inliers(kitti_camera, p
     from scipy.spatial.transform import Rotation
 
     from vo_lib.geometry import camera_motion
-    from vo_lib.stereo_vo.rigid_pipeline import MIN_RANSAC_RATIO, RigidStereoOdometry
+    from vo_lib.stereo_vo.config import CAR
+    from vo_lib.stereo_vo.pipeline import StereoOdometry
     from vo_lib.stereo_vo.synthetic import matches_under_transform
 
     mount = camera_mount(forward=1.08, height=1.73, left=-0.31)
@@ -227,14 +180,15 @@ def test_a_pitching_car_still_gets_a_hypothesis_with_its_inliers(kitti_camera, p
     D[:3, :3] = Rotation.from_euler("y", pitch_deg, degrees=True).as_matrix()  # the vehicle pitches
     T = np.linalg.inv(mount) @ D @ mount @ T
     m = matches_under_transform(kitti_camera, 300, T, np.random.default_rng(3), (4.0, 60.0), 0.5, 0.2)
-    odometer = RigidStereoOdometry(kitti_camera, mount, seed=5)
-    guess, start, ratio = odometer.hypothesis(m.w_prev, m.w_curr, None)
-    assert ratio >= MIN_RANSAC_RATIO
+    odometer = StereoOdometry(kitti_camera, CAR, mount=mount, seed=5)
+    guess, start, ratio = odometer.motion.hypothesis(m.w_prev, m.w_curr, None, odometer.rng)
+    assert ratio >= CAR.min_inlier_ratio
     assert start is not None and (start & m.inliers).sum() >= 0.7 * m.inliers.sum()
     assert (start & ~m.inliers).sum() <= 2
     motion = refine_rigid_motion(m.w_prev, m.w_curr, kitti_camera, guess, start)
     assert np.allclose(motion.matrix, T, atol=2e-3)
     assert not (motion.inliers & ~m.inliers).any()
     # the same draws give the same answer
-    again = RigidStereoOdometry(kitti_camera, mount, seed=5).hypothesis(m.w_prev, m.w_curr, None)
+    again_odometer = StereoOdometry(kitti_camera, CAR, mount=mount, seed=5)
+    again = again_odometer.motion.hypothesis(m.w_prev, m.w_curr, None, again_odometer.rng)
     assert np.array_equal(again[0], guess) and np.array_equal(again[1], start)

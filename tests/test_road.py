@@ -7,8 +7,8 @@ from vo_lib.geometry import relative_planar, wrap_angle
 from vo_lib.sim import road
 from vo_lib.sim.samples import SAMPLES, generate, render_sample
 from vo_lib.sim.world import road_world
-from vo_lib.stereo_vo.pipeline import run_frames
-from vo_lib.stereo_vo.rigid_pipeline import RigidStereoOdometry
+from vo_lib.stereo_vo.config import CAR
+from vo_lib.stereo_vo.pipeline import StereoOdometry, run_frames
 from vo_lib.stereo_vo.vehicle import KITTI_CAMERA_IN_IMU, car_odometry_model, vehicle_of
 
 
@@ -65,7 +65,7 @@ def test_full_pipeline_through_the_banked_bend():
     in memory, through the 6-DoF pipeline with the wheel odometry. Measured: nothing flagged,
     final position error 1.2 cm of 10.5 m (0.12 %), heading error at most 0.07 deg."""
     rendered, frames = render_sample("road_drive", 20, first=160)
-    odometer = RigidStereoOdometry(rendered.camera, rendered.mount, road.CAR_ODOMETRY)
+    odometer = StereoOdometry(rendered.camera, CAR, road.CAR_ODOMETRY, rendered.mount)
     result = run_frames(frames, rendered.camera, road.CAR_ODOMETRY, odometer=odometer)
     truth = relative_planar(rendered.truth()[0], rendered.truth())
     distance = np.sum(np.linalg.norm(np.diff(truth[:, :2], axis=0), axis=1))

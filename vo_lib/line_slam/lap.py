@@ -88,7 +88,6 @@ class LineSlamRun:
     true_landmarks: np.ndarray
     landmark_of_segment: dict
     endpoints: dict = field(default_factory=dict)
-    visible_truth: dict = field(default_factory=dict)
     dropped: int = 0
     observer_seconds: float = 0.0
     seconds: float = 0.0
@@ -121,6 +120,32 @@ def true_visible_extent(world, poses, observer: str = "closed_form", max_range: 
                 xs += [seg.start[0] + t * (seg.end[0] - seg.start[0]) for t in part]
         out[i] = (min(xs), max(xs)) if xs else None
     return out
+
+
+def _observe(segs, features, pose, sc, observe_part, tolerance, rng):
+    """Noisy observations of every segment with a visible part from ``pose``: ``(measurements,
+    their covariances (line form), segment indices, end-point observations, observer seconds)``."""
+    obs_sigma = np.array([sc.range_sigma, sc.bearing_sigma])
+    zs, obs_covs, which, ends = [], [], [], []
+    seconds = 0.0
+    for i, (a, b) in enumerate(segs):
+        t0 = time.perf_counter()
+        part = observe_part(a, b, pose[:2], sc.max_range, tolerance)
+        seconds += time.perf_counter() - t0
+        if part is None:
+            continue
+        if sc.observation == "feature_point":
+            z = observe_point(pose, features[i]) + obs_sigma * rng.standard_normal(2)
+        e = [observe_point(pose, a + t * (b - a)) + obs_sigma * rng.standard_normal(2) for t in part]
+        if sc.observation == "line":
+            z, cov = measure_line(e, sc.range_sigma, sc.bearing_sigma)
+            if cov[1, 1] > sc.max_line_direction_sigma**2:
+                continue
+            obs_covs.append(cov)
+        zs.append(z)
+        which.append(i)
+        ends.append(e)
+    return zs, obs_covs, which, ends, seconds
 
 
 def simulate_lap(
@@ -176,7 +201,6 @@ def simulate_lap(
     dropped = 0
     observer_seconds = 0.0
     noise_sigma = np.array([sc.speed_sigma, sc.steer_sigma])
-    obs_sigma = np.array([sc.range_sigma, sc.bearing_sigma])
     started = time.perf_counter()
     for k in range(1, sc.max_steps + 1):
         if math.hypot(*(np.asarray(sc.waypoints[target]) - pose[:2])) < sc.waypoint_radius:
@@ -189,24 +213,10 @@ def simulate_lap(
         ekf.predict(speed_m, steer_m)
         dr = bicycle_step(dr, speed_m, steer_m, sc.period, sc.wheelbase)
         if k % sc.observe_every == 0:
-            zs, obs_covs, which, ends = [], [], [], []
-            for i, (a, b) in enumerate(segs):
-                t0 = time.perf_counter()
-                part = observe_part(a, b, pose[:2], sc.max_range, tolerance)
-                observer_seconds += time.perf_counter() - t0
-                if part is None:
-                    continue
-                if sc.observation == "feature_point":
-                    z = observe_point(pose, features[i]) + obs_sigma * rng.standard_normal(2)
-                e = [observe_point(pose, a + t * (b - a)) + obs_sigma * rng.standard_normal(2) for t in part]
-                if sc.observation == "line":
-                    z, cov = measure_line(e, sc.range_sigma, sc.bearing_sigma)
-                    if cov[1, 1] > sc.max_line_direction_sigma**2:
-                        continue
-                    obs_covs.append(cov)
-                zs.append(z)
-                which.append(i)
-                ends.append(e)
+            zs, obs_covs, which, ends, seconds = _observe(
+                segs, features, pose, sc, observe_part, tolerance, rng
+            )
+            observer_seconds += seconds
             indices = ekf.observe(zs, association, obs_covs if sc.observation == "line" else None)
             for i, j, e in zip(which, indices, ends, strict=True):
                 if j == DROPPED:
@@ -221,7 +231,6 @@ def simulate_lap(
         est.append(ekf.pose.copy())
         covs.append(ekf.pose_cov.copy())
         dead.append(dr.copy())
-    seconds = time.perf_counter() - started
     n = ekf.n_landmarks
     return LineSlamRun(
         scenario=sc,
@@ -239,7 +248,7 @@ def simulate_lap(
         endpoints={i: np.array(v).reshape(-1, 2) for i, v in endpoints.items()},
         dropped=dropped,
         observer_seconds=observer_seconds,
-        seconds=seconds,
+        seconds=time.perf_counter() - started,
     )
 
 

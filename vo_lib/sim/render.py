@@ -18,6 +18,7 @@ import numpy as np
 
 from vo_lib.camera import StereoCamera
 from vo_lib.compiled import choose
+from vo_lib.geometry import yaw_matrix
 from vo_lib.sim.composite import draw_nearer
 from vo_lib.sim.textures import cached_surface
 from vo_lib.sim.world import Patch, World
@@ -247,6 +248,27 @@ def _clip_near(points: np.ndarray, near: float) -> np.ndarray:
     return np.array(out).reshape(-1, 3)
 
 
+def _draw(image, inv_depth, order, boxes, H, level, quads, pts4, clipped, abe) -> None:
+    """Warp each quad of ``order`` into its screen box and draw it where it is nearer (z-buffer)."""
+    planes = list(abe)  # float64 scalars: keep
+    composite = choose(draw_nearer)  # or its plain twin (VO_LIB_PLAIN)
+    for i in order:
+        x0, y0, x1, y1 = boxes[i]
+        quad = quads[i]
+        warped = cv2.warpPerspective(
+            quad.texture[level[i]],
+            H[i],
+            (x1 - x0, y1 - y0),
+            flags=cv2.INTER_LINEAR,
+            borderMode=cv2.BORDER_REPLICATE,
+        )
+        mask = np.zeros((y1 - y0, x1 - x0), np.uint8)
+        pts = pts4[i] if i not in clipped else np.round((clipped[i] - (x0, y0)) * 16).astype(np.int32)
+        cv2.fillConvexPoly(mask, pts, 1, lineType=cv2.LINE_8, shift=4)
+        a, b, e = planes[i]
+        composite(image, inv_depth, warped, mask, x0, y0, a, b, e, quad.shade)
+
+
 class StereoRenderer:
     """Render rectified stereo pairs of a world, with ground-truth depth on request.
 
@@ -291,8 +313,7 @@ class StereoRenderer:
         moving = []
         for mover, body in self._movers:
             position, yaw = mover.pose(time)
-            c, s = np.cos(yaw), np.sin(yaw)
-            R = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+            R = yaw_matrix(yaw)
             moving += [_moved(q, R, position) for q in body]
         return moving
 
@@ -353,24 +374,9 @@ class StereoRenderer:
         # each quad is warped into its screen box: the box's corner (x0, y0) becomes pixel (0, 0)
         H[:, 0] -= x0y0[:, :1] * H[:, 2]
         H[:, 1] -= x0y0[:, 1:] * H[:, 2]
-        boxes, planes = np.hstack([x0y0, x1y1]).tolist(), list(abe)  # float64 scalars: keep
-        composite = choose(draw_nearer)  # or its plain twin (VO_LIB_PLAIN)
-        for i in np.flatnonzero(drawn).tolist():
-            x0, y0, x1, y1 = boxes[i]
-            M = H[i]
-            quad = quads[todo[i]]
-            warped = cv2.warpPerspective(
-                quad.texture[level[i]],
-                M,
-                (x1 - x0, y1 - y0),
-                flags=cv2.INTER_LINEAR,
-                borderMode=cv2.BORDER_REPLICATE,
-            )
-            mask = np.zeros((y1 - y0, x1 - x0), np.uint8)
-            pts = pts4[i] if i not in clipped else np.round((clipped[i] - (x0, y0)) * 16).astype(np.int32)
-            cv2.fillConvexPoly(mask, pts, 1, lineType=cv2.LINE_8, shift=4)
-            a, b, e = planes[i]
-            composite(image, inv_depth, warped, mask, x0, y0, a, b, e, quad.shade)
+        boxes = np.hstack([x0y0, x1y1]).tolist()
+        textures = [quads[todo[i]] for i in range(len(todo))]
+        _draw(image, inv_depth, np.flatnonzero(drawn).tolist(), boxes, H, level, textures, pts4, clipped, abe)
         if not with_depth:
             return image
         with np.errstate(divide="ignore"):

@@ -78,12 +78,6 @@ def mipmaps(texture: np.ndarray) -> list[np.ndarray]:
     return levels
 
 
-@lru_cache(maxsize=256)
-def cached_mipmaps(height: int, width: int, seed: int, contrast: float = 1.0) -> tuple[np.ndarray, ...]:
-    """Mipmaps of :func:`corner_texture`, computed once per process for each argument set."""
-    return tuple(mipmaps(corner_texture(height, width, seed, contrast)))
-
-
 #: Changed whenever a texture's texels change for the same arguments: it enters the samples'
 #: fingerprints, so that cached samples are rendered again.
 TEXTURE_VERSION = 4
@@ -336,6 +330,19 @@ def vehicle_side(height: int, width: int, texel: float, seed: int) -> np.ndarray
     return img
 
 
+#: Styles drawn by a function of ``(height, width, texel, seed)``.
+_PAINTED = {
+    "brick": brick_wall,
+    "wall": painted_wall,
+    "tiles": floor_tiles,
+    "panels": ceiling_panels,
+    "fence": fence,
+    "far": far_structure,
+    "road": road_surface,
+    "vehicle": vehicle_side,
+}
+
+
 def surface_texture(style: str, height: int, width: int, texel: float, seed: int) -> np.ndarray:
     """A ``(height, width)`` uint8 texture of ``style`` with texels of ``texel`` metres.
 
@@ -343,29 +350,15 @@ def surface_texture(style: str, height: int, width: int, texel: float, seed: int
     """
     if height <= 0 or width <= 0:
         raise ValueError(f"texture size must be positive; got {height}x{width}")
-    rng = np.random.default_rng(seed)
     if style == "corners":
         return corner_texture(height, width, seed)
     if style in PHOTO_METRES:
         img = photo_texture(style, height, width, texel, seed)
     elif style == "plain":
+        rng = np.random.default_rng(seed)
         img = rng.uniform(150, 200) + smooth_wash(height, width, texel, rng, 3.0)
-    elif style == "brick":
-        img = brick_wall(height, width, texel, seed)
-    elif style == "wall":
-        img = painted_wall(height, width, texel, seed)
-    elif style == "tiles":
-        img = floor_tiles(height, width, texel, seed)
-    elif style == "panels":
-        img = ceiling_panels(height, width, texel, seed)
-    elif style == "fence":
-        img = fence(height, width, texel, seed)
-    elif style == "far":
-        img = far_structure(height, width, texel, seed)
-    elif style == "road":
-        img = road_surface(height, width, texel, seed)
-    elif style == "vehicle":
-        img = vehicle_side(height, width, texel, seed)
+    elif style in _PAINTED:
+        img = _PAINTED[style](height, width, texel, seed)
     else:
         raise ValueError(f"unknown texture style {style!r}; known: {', '.join(STYLES)}")
     return np.clip(img + 0.5, 0, 255).astype(np.uint8)

@@ -142,10 +142,6 @@ class World:
         rows = [(*s.start, *s.end) for s in self.segments if s.mapped or not mapped_only]
         return np.array(rows, dtype=float).reshape(-1, 4)
 
-    def with_segments(self, extra) -> World:
-        """A copy of this world with more segments."""
-        return replace(self, segments=self.segments + tuple(extra), notes=dict(self.notes))
-
 
 # ---------------------------------------------------------------------- building blocks
 def polyline(

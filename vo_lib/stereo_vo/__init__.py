@@ -1,16 +1,29 @@
 """Seed 000: stereo visual odometry for a crawler robot, fused with its track odometry.
 
-Read in the order a frame is processed (``pipeline`` strings them together):
+Read in the order a frame is processed (``pipeline`` strings the parts of ``parts`` together):
 
 ``features``          stereo front end: FAST corners, binary descriptors, row matching (III.A.1)
+``pyramid_features``  the same at two scales, for the large image motion of a car
 ``circular_motion``   the planar circular-motion model, theta and rho from pixels (eq. 12-17)
 ``temporal``          frame-to-frame matching guided by the filter's prediction
-``ransac``            1-point RANSAC with its gates and refinement (eq. 18-21);
-``ransac_core``       its compiled (Numba) core
+``ransac``            1-point RANSAC with its gates and refinement (eq. 18-21)
+``ransac_core``       its compiled (Numba) core and its settings, ``RansacParams``
+``ransac_plain``      the same core in plain NumPy, to read (``VO_LIB_PLAIN=1`` runs it)
+``rigid_motion``      6-DoF motion refined on reprojection errors, general 3-point RANSAC
+``rigid_core``        its compiled normal equations; ``rigid_plain`` the same in NumPy
+``matching_core``     compiled candidate search and best matches; ``matching_plain`` in NumPy
 ``kalman``            the Kalman filter fusing track odometry (eq. 2-11, in
                       ``vo_lib.models.track_odometry``) with the visual motion
+``parts``             the interfaces of the pipeline's parts (front end, motion model)
+``planar_motion``     the paper's motion model as a part: prediction, matching, 1-point RANSAC
+``six_dof``           a car's motion model as a part: turning-axis view, 6-DoF refinement
+``vehicle``           what carries the camera: mount, odometry, which motion model fits
+``config``            every setting of the pipeline, one frozen ``PipelineConfig``; the
+                      ``CRAWLER`` and ``CAR`` presets
+``frames``            what the pipeline records per frame, and a run's result
 ``pipeline``          the whole method, frame by frame (Fig. 3); start reading here
 ``baselines``         3-point rigid RANSAC, solvePnPRansac, 5-point essential matrix
+``pnp_baseline``      a PnP visual odometry to time the pipeline against on real data
 ``synthetic``         matches under a known circular motion, for exact checks
 
 The command ``python -m vo_lib run`` runs ``pipeline`` on a sequence.

@@ -164,6 +164,13 @@ def motion_matrices(theta, rho) -> tuple[np.ndarray, np.ndarray]:
     return R, T
 
 
+def motion_transform(theta: float, rho: float) -> np.ndarray:
+    """4x4 ``T_curr_from_prev`` of a circular motion (eq. 15): ``[[R, T], [0, 1]]``."""
+    M = np.eye(4)
+    M[:3, :3], M[:3, 3] = motion_matrices(theta, rho)
+    return M
+
+
 def apply_motion(points, theta: float, rho: float) -> np.ndarray:
     """``P' = R P + T`` (eq. 15) for points ``(N, 3)`` in the previous camera frame."""
     R, T = motion_matrices(theta, rho)

@@ -7,7 +7,7 @@ Per stereo pair (seed 000, III.A.1):
 2. Binary descriptors (ORB's rBRIEF) at those corners.
 3. Left-right matching on the same row (within a row tolerance) and a disparity range, by
    Hamming distance, with a distance ceiling, a ratio test and mutual (left-right) consistency.
-4. Sub-pixel disparity from a parabola through the block-matching cost at d-1, d, d+1.
+4. Sub-pixel disparity from an equiangular (V) fit to the block-matching cost at d-1, d, d+1.
 
 Output per frame: ``w = (u, v, d)`` per feature and its descriptor (:class:`StereoFeatures`).
 Hamming distances are computed only for candidate pairs, 64 bits at a time with
@@ -127,7 +127,7 @@ def bucket(
     return np.sort(chosen)
 
 
-def parabola_offset(c_minus: np.ndarray, c_zero: np.ndarray, c_plus: np.ndarray) -> np.ndarray:
+def equiangular_offset(c_minus: np.ndarray, c_zero: np.ndarray, c_plus: np.ndarray) -> np.ndarray:
     """Sub-pixel position of the minimum of a SAD cost sampled at -1, 0, +1 (0 where 0 is no minimum).
 
     A sum of absolute differences is V-shaped around its minimum, so the fit is equiangular: two
@@ -170,7 +170,7 @@ def subpixel_disparity(
     costs = choose(sad_costs)(left, right, ui[ok], vi[ok], di[ok], r, search)
     best = 1 + np.argmin(costs[1:-1], axis=0)  # the lowest inner cost
     pick = np.arange(costs.shape[1])
-    offset = parabola_offset(costs[best - 1, pick], costs[best, pick], costs[best + 1, pick])
+    offset = equiangular_offset(costs[best - 1, pick], costs[best, pick], costs[best + 1, pick])
     out[ok] = di[ok] + (best - search) + offset
     return out
 

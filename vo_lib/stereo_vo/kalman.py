@@ -24,7 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 from filterpy.kalman import ExtendedKalmanFilter
 
-from vo_lib.geometry import compose_planar, wrap_angle
+from vo_lib.geometry import compose_planar, relative_planar, wrap_angle, yaw_matrix
 from vo_lib.models.track_odometry import TrackOdometry
 from vo_lib.stereo_vo.temporal import MotionPrior
 
@@ -41,13 +41,6 @@ CV_TURN_PER_METRE = 0.05
 CV_SIGMA = (0.01, 0.005, math.radians(0.3))
 
 
-def _increment(state6: np.ndarray) -> tuple[float, float, float]:
-    """``(dx, dy, dyaw)`` from the cloned previous pose to the current one, in the previous frame."""
-    x, y, yaw, xp, yp, yawp = (float(v) for v in state6)
-    c, s = math.cos(yawp), math.sin(yawp)
-    return c * (x - xp) + s * (y - yp), -s * (x - xp) + c * (y - yp), float(wrap_angle(yaw - yawp))
-
-
 def constrained_measurement(state6: np.ndarray) -> np.ndarray:
     """``(theta, rho, sideways)``: the VO measurement and the deviation of the motion from its chord.
 
@@ -55,7 +48,7 @@ def constrained_measurement(state6: np.ndarray) -> np.ndarray:
     third component measures how far the increment strays from it, and the update observes it as
     zero: the nonholonomic constraint of a crawler, which (theta, rho) alone leave unobserved.
     """
-    return chord_measurement(_increment(state6))
+    return chord_measurement(relative_planar(state6[3:], state6[:3]))  # previous pose to current
 
 
 def chord_measurement(increment) -> np.ndarray:
@@ -68,7 +61,7 @@ def chord_measurement(increment) -> np.ndarray:
 
 def constrained_jacobian(state6: np.ndarray) -> np.ndarray:
     """Analytic 3x6 derivative of :func:`constrained_measurement`."""
-    dx, dy, theta = _increment(state6)
+    dx, dy, theta = relative_planar(state6[3:], state6[:3])
     sp, cp = math.sin(0.5 * theta), math.cos(0.5 * theta)
     a = float(state6[5]) + 0.5 * theta
     ca, sa = math.cos(a), math.sin(a)
@@ -143,7 +136,7 @@ class VoKalmanFilter:
         self.lateral_sigma = float(lateral_sigma)
         self.sideways_sigma = float(sideways_sigma)
         self.cv_sigma = np.asarray(cv_sigma, float)
-        self.ekf = ExtendedKalmanFilter(dim_x=6, dim_z=2)
+        self.ekf = ExtendedKalmanFilter(dim_x=6, dim_z=3)  # (theta, rho, sideways), see update
         P = np.diag([1e-8, 1e-8, 1e-10]) if covariance is None else np.asarray(covariance, float)
         self.ekf.x = np.concatenate([np.asarray(pose, float), np.asarray(pose, float)])
         self.ekf.P = np.block([[P, P], [P, P]])
@@ -162,7 +155,7 @@ class VoKalmanFilter:
     @property
     def increment(self) -> np.ndarray:
         """``(dx, dy, dyaw)`` from the cloned reference pose to the current one, in its frame."""
-        return np.array(_increment(self.ekf.x))
+        return relative_planar(self.ekf.x[3:], self.ekf.x[:3])
 
     def control_covariance(self, u) -> np.ndarray:
         """Encoder noise (random walk) plus slip, independent per track."""
@@ -202,7 +195,7 @@ class VoKalmanFilter:
             F = np.array(
                 [[1.0, 0.0, -s * inc[0] - c * inc[1]], [0.0, 1.0, c * inc[0] - s * inc[1]], [0, 0, 1.0]]
             )
-            Rw = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+            Rw = yaw_matrix(x[2])
             # velocity changes scale with the velocity: a fraction of each component, plus the floor
             step = math.hypot(inc[0], inc[1])
             sigma = self.cv_sigma + CV_RELATIVE * np.array(
@@ -249,10 +242,22 @@ class VoKalmanFilter:
         self.ekf.x[2] = wrap_angle(self.ekf.x[2])
         self.flags.vo_update = True
 
+    def snapshot(self) -> tuple[np.ndarray, np.ndarray]:
+        """A copy of the state and its covariance, for :meth:`restore`."""
+        return self.ekf.x.copy(), self.ekf.P.copy()
+
+    def restore(self, snapshot: tuple[np.ndarray, np.ndarray]) -> None:
+        """Go back to a :meth:`snapshot` (an update that is not to be kept); the snapshot stays apart."""
+        self.ekf.x, self.ekf.P = snapshot[0].copy(), snapshot[1].copy()
+
+    def widen(self, sigma) -> None:
+        """Add independent uncertainty ``sigma = (x, y, yaw)`` (standard deviations) to the pose."""
+        self.ekf.P[:3, :3] += np.diag(sigma) ** 2
+
     def finish_frame(self, frames_since_reference: int = 1) -> None:
         """Remember the motion per frame (for constant velocity) before the next predict."""
         if self.flags.vo_update or self.flags.odometry:
-            self.last_increment = np.array(_increment(self.ekf.x)) / max(frames_since_reference, 1)
+            self.last_increment = self.increment / max(frames_since_reference, 1)
 
     def nees(self, true_pose) -> float:
         """Normalised estimation error squared of the pose against ``true_pose``."""

@@ -16,8 +16,13 @@ from vo_lib.compiled import jit as _jit
 NONE = np.iinfo(np.int32).max
 
 
-@_jit(twin="vo_lib.stereo_vo.matching_plain.best_matches")
-def best_matches_core(ia, ib, dist, n_a, n_b, max_distance, ratio, mutual):
+_BEST = f"{__name__}.best_matches_core"
+
+
+@_jit(step_of=_BEST)
+def _nearest_two(ia, ib, dist, n_a, n_b):
+    """Per ``a``: the nearest and second-nearest distance and the nearest ``b``; per ``b``: the
+    nearest distance of any ``a``. Ties go to the earlier candidate."""
     best = np.full(n_a, NONE, np.int64)
     second = np.full(n_a, NONE, np.int64)
     best_b = np.full(n_a, -1, np.int64)
@@ -32,47 +37,63 @@ def best_matches_core(ia, ib, dist, n_a, n_b, max_distance, ratio, mutual):
             second[a] = d
         if d < nearest_for_b[b]:
             nearest_for_b[b] = d
+    return best, second, best_b, nearest_for_b
+
+
+@_jit(step_of=_BEST)
+def _collect(rows, cols, best):
+    """``(rows, cols, best[rows])`` as int64 arrays."""
+    out_d = np.empty(rows.shape[0], np.int64)
+    for j in range(rows.shape[0]):
+        out_d[j] = best[rows[j]]
+    return rows.astype(np.int64), cols.astype(np.int64), out_d
+
+
+@_jit(twin="vo_lib.stereo_vo.matching_plain.best_matches")
+def best_matches_core(ia, ib, dist, n_a, n_b, max_distance, ratio, mutual):
+    best, second, best_b, nearest_for_b = _nearest_two(ia, ib, dist, n_a, n_b)
     keep = np.zeros(n_a, np.bool_)
     for a in range(n_a):
         if best_b[a] >= 0 and best[a] <= max_distance and best[a] < ratio * second[a]:
             keep[a] = (not mutual) or best[a] <= nearest_for_b[best_b[a]]
-    if mutual:
-        # one a per b: the nearest, ties to the smaller a; the result is ordered by b
-        owner = np.full(n_b, -1, np.int64)
-        for a in range(n_a):
-            if keep[a]:
-                b = best_b[a]
-                if owner[b] < 0 or best[a] < best[owner[b]]:
-                    owner[b] = a
-        count = 0
-        for b in range(n_b):
-            if owner[b] >= 0:
-                count += 1
-        out_a = np.empty(count, np.int64)
-        out_b = np.empty(count, np.int64)
-        out_d = np.empty(count, np.int64)
-        j = 0
-        for b in range(n_b):
-            if owner[b] >= 0:
-                out_a[j], out_b[j], out_d[j] = owner[b], b, best[owner[b]]
-                j += 1
-        return out_a, out_b, out_d
-    count = 0
+    if not mutual:
+        chosen = np.flatnonzero(keep)
+        return _collect(chosen, best_b[chosen], best)
+    # one a per b: the nearest, ties to the smaller a; the result is ordered by b
+    owner = np.full(n_b, -1, np.int64)
     for a in range(n_a):
         if keep[a]:
-            count += 1
-    out_a = np.empty(count, np.int64)
-    out_b = np.empty(count, np.int64)
-    out_d = np.empty(count, np.int64)
-    j = 0
-    for a in range(n_a):
-        if keep[a]:
-            out_a[j], out_b[j], out_d[j] = a, best_b[a], best[a]
-            j += 1
-    return out_a, out_b, out_d
+            b = best_b[a]
+            if owner[b] < 0 or best[a] < best[owner[b]]:
+                owner[b] = a
+    owned = np.flatnonzero(owner >= 0)
+    return _collect(owner[owned], owned, best)
 
 
-@_jit(step_of=f"{__name__}.window_candidates")  # and of row_candidates
+_WINDOWS = f"{__name__}.window_candidates"  # the steps below serve row_candidates too
+
+
+@_jit(step_of=_WINDOWS)
+def _append(ia, ib, dist, count, i, j, h):
+    """Pair ``count`` is ``(i, j)`` at Hamming distance ``h``; the arrays double when full."""
+    if count == ia.shape[0]:
+        ia = np.concatenate((ia, np.empty_like(ia)))
+        ib = np.concatenate((ib, np.empty_like(ib)))
+        dist = np.concatenate((dist, np.empty_like(dist)))
+    ia[count], ib[count], dist[count] = i, j, h
+    return ia, ib, dist
+
+
+@_jit(step_of=_WINDOWS)
+def _hamming(des_a, i, des_b, j):
+    """Hamming distance of descriptor rows ``des_a[i]`` and ``des_b[j]`` (uint64 words)."""
+    h = 0
+    for k in range(des_a.shape[1]):
+        h += _popcount64(des_a[i, k] ^ des_b[j, k])
+    return h
+
+
+@_jit(step_of=_WINDOWS)
 def _popcount64(x):
     x = x - ((x >> np.uint64(1)) & np.uint64(0x5555555555555555))
     x = (x & np.uint64(0x3333333333333333)) + ((x >> np.uint64(2)) & np.uint64(0x3333333333333333))
@@ -81,10 +102,9 @@ def _popcount64(x):
 
 
 @_jit(twin="vo_lib.stereo_vo.matching_plain.window_candidates")
-def window_candidates(predicted, radius, w_curr, order_v, sorted_v, d_floor, d_fraction, des_prev, des_curr):
-    """Pairs ``(i, j)`` whose current feature ``j`` lies in the square window of radius
-    ``radius[i]`` around previous feature ``i``'s predicted ``(u, v)`` and within
-    ``d_floor + d_fraction * d`` of its predicted disparity, with their Hamming distances.
+def window_candidates(predicted, radius, w_curr, order_v, sorted_v, des_prev, des_curr):
+    """Pairs ``(i, j)`` whose current feature ``j`` lies within ``radius[i] = (ru, rv, rd)`` of
+    previous feature ``i``'s predicted ``(u, v, d)``, with their Hamming distances.
 
     ``order_v`` sorts the current features by row and ``sorted_v`` holds their rows in that order;
     pairs come ordered by ``i``, then by row, as from ``features.window_pairs``."""
@@ -98,22 +118,13 @@ def window_candidates(predicted, radius, w_curr, order_v, sorted_v, d_floor, d_f
         u, v, d = predicted[i, 0], predicted[i, 1], predicted[i, 2]
         if not (np.isfinite(u) and np.isfinite(v) and np.isfinite(d)):
             continue
-        r = radius[i]
-        lo = np.searchsorted(sorted_v, v - r, side="left")
-        hi = np.searchsorted(sorted_v, v + r, side="right")
-        d_window = d_floor + d_fraction * d
+        lo = np.searchsorted(sorted_v, v - radius[i, 1], side="left")
+        hi = np.searchsorted(sorted_v, v + radius[i, 1], side="right")
         for s in range(lo, hi):
             j = order_v[s]
-            if abs(w_curr[j, 0] - u) > r or abs(w_curr[j, 2] - d) > d_window:
+            if abs(w_curr[j, 0] - u) > radius[i, 0] or abs(w_curr[j, 2] - d) > radius[i, 2]:
                 continue
-            if count == ia.shape[0]:  # grow
-                ia = np.concatenate((ia, np.empty_like(ia)))
-                ib = np.concatenate((ib, np.empty_like(ib)))
-                dist = np.concatenate((dist, np.empty_like(dist)))
-            h = 0
-            for k in range(des_prev.shape[1]):
-                h += _popcount64(des_prev[i, k] ^ des_curr[j, k])
-            ia[count], ib[count], dist[count] = i, j, h
+            ia, ib, dist = _append(ia, ib, dist, count, i, j, _hamming(des_prev, i, des_curr, j))
             count += 1
     return ia[:count], ib[:count], dist[:count]
 
@@ -158,13 +169,6 @@ def row_candidates(
             d = left[i, 0] - right[j, 0]
             if d < d_min or d > d_max or abs(left_level[i] - right_level[j]) > 1:
                 continue
-            if count == ia.shape[0]:
-                ia = np.concatenate((ia, np.empty_like(ia)))
-                ib = np.concatenate((ib, np.empty_like(ib)))
-                dist = np.concatenate((dist, np.empty_like(dist)))
-            h = 0
-            for k in range(des_left.shape[1]):
-                h += _popcount64(des_left[i, k] ^ des_right[j, k])
-            ia[count], ib[count], dist[count] = i, j, h
+            ia, ib, dist = _append(ia, ib, dist, count, i, j, _hamming(des_left, i, des_right, j))
             count += 1
     return ia[:count], ib[:count], dist[:count]

@@ -57,16 +57,16 @@ def best_matches(ia, ib, dist, n_a, n_b, max_distance, ratio, mutual):
     return best_a, best_b, best_d
 
 
-def window_candidates(predicted, radius, w_curr, order_v, sorted_v, d_floor, d_fraction, des_prev, des_curr):
-    """Pairs ``(i, j)``: current feature ``j`` in the square window of half-width ``radius[i]``
-    around previous feature ``i``'s predicted ``(u, v)``, and within ``d_floor + d_fraction * d``
-    of its predicted disparity; with their Hamming distances, ordered by ``i``, then by row."""
+def window_candidates(predicted, radius, w_curr, order_v, sorted_v, des_prev, des_curr):
+    """Pairs ``(i, j)``: current feature ``j`` within ``radius[i] = (ru, rv, rd)`` of previous
+    feature ``i``'s predicted ``(u, v, d)``; with their Hamming distances, ordered by ``i``, then
+    by row."""
     seen = np.all(np.isfinite(predicted), axis=1)
-    half = np.where(seen, radius, -1.0)  # a window no row falls in
+    half = np.where(seen, radius[:, 1], -1.0)  # a window no row falls in
     v = np.where(seen, predicted[:, 1], 0.0)
     ia, ib = _rows_within(v, half, sorted_v, order_v)
-    inside = np.abs(w_curr[ib, 0] - predicted[ia, 0]) <= radius[ia]
-    inside &= np.abs(w_curr[ib, 2] - predicted[ia, 2]) <= d_floor + d_fraction * predicted[ia, 2]
+    inside = np.abs(w_curr[ib, 0] - predicted[ia, 0]) <= radius[ia, 0]
+    inside &= np.abs(w_curr[ib, 2] - predicted[ia, 2]) <= radius[ia, 2]
     ia, ib = ia[inside], ib[inside]
     return ia, ib, _hamming(des_prev, des_curr, ia, ib)
 

@@ -1,20 +1,22 @@
 """The stereo visual odometry pipeline of seed 000, frame by frame (Fig. 3 of the paper).
 
-Per frame:
+Per frame, :meth:`StereoOdometry.process` runs four parts (``parts`` gives their interfaces):
 
-1. **stereo processing**: features with disparity, ``w = (u, v, d)`` (``vo_lib.stereo_vo.features``);
-2. **prediction**: the Kalman filter moves the pose with the track odometry, or with constant
-   velocity when the sequence has none (``vo_lib.stereo_vo.kalman``);
-3. **guided temporal matching** against the reference frame inside the predicted windows
-   (``vo_lib.stereo_vo.temporal``);
-4. **1-point RANSAC** for ``(theta, rho)``, with the prediction as a prior (``vo_lib.stereo_vo.ransac``);
-5. **Kalman update** with the VO motion.
+1. **stereo front end**: features with disparity, ``w = (u, v, d)`` (``features`` or
+   ``pyramid_features``);
+2. **prediction and temporal matching**: the Kalman filter moves the pose with the odometry, or
+   with constant velocity when the sequence has none (``kalman``); the motion model matches the
+   reference frame's features inside the predicted windows (``temporal``);
+3. **motion estimation**: 1-point RANSAC with the prediction as a prior (``ransac``), and for a car
+   a 6-DoF refinement (``planar_motion`` or ``six_dof``);
+4. **Kalman update** with the VO motion.
 
 A frame whose VO motion cannot be trusted (no features, too few matches or inliers, a low inlier
 ratio as when a large object moves through the view, or a motion that contradicts the prediction)
 never stops the run: the filter keeps its prediction, and the frame is flagged. The last good
 frame stays the reference, so the next good frame is matched against it and its measurement spans
-the gap. Exactly one pose is produced per input frame.
+the gap. Exactly one pose is produced per input frame. Every setting is a field of one
+:class:`~vo_lib.stereo_vo.config.PipelineConfig`; ``CRAWLER`` and ``CAR`` are the two presets.
 """
 
 from __future__ import annotations
@@ -22,141 +24,102 @@ from __future__ import annotations
 import time
 from collections import deque
 from collections.abc import Iterable
-from dataclasses import asdict, dataclass, field, replace
 
 import numpy as np
-from scipy.stats import chi2
 
 from vo_lib.camera import StereoCamera
+from vo_lib.geometry import wrap_angle
 from vo_lib.models.track_odometry import TrackOdometry
+from vo_lib.stereo_vo.config import CAR, CRAWLER, LOST_VIEW, PRESETS, PipelineConfig
 from vo_lib.stereo_vo.features import StereoFeatures, StereoFrontEnd
+from vo_lib.stereo_vo.frames import FrameDiagnostics, FrameTimings, PipelineResult
 from vo_lib.stereo_vo.kalman import VoKalmanFilter
-from vo_lib.stereo_vo.ransac import one_point_ransac
-from vo_lib.stereo_vo.temporal import match_temporal
+from vo_lib.stereo_vo.parts import Estimate, FrontEnd, MotionModel, Prediction
+from vo_lib.stereo_vo.planar_motion import PlanarMotion
+from vo_lib.stereo_vo.pyramid_features import PyramidFrontEnd
+from vo_lib.stereo_vo.six_dof import SixDofMotion
 
-MIN_FEATURES = 20  # stereo features a frame needs to be matched
-MIN_INLIERS = 15
-MIN_INLIER_RATIO = 0.7  # of the temporal matches; a large moving object drags it down
-PRIOR_GATE = float(chi2.ppf(0.9999, 2))  # VO motion against the prediction (Mahalanobis^2)
-MAX_GAP = 90  # frames; after this long without a good frame, start again from the current one
-#: A frame whose inliers fall below this fraction of the recent median has lost part of its view
-#: to something that does not move with the world (an occluder, a large moving object)...
-LOST_VIEW_FRACTION = 0.6
-#: ...unless the drop lasts this many frames: then it is the new normal (a changed scene).
-LOST_VIEW_PATIENCE = 15
-RECENT_FRAMES = 15  # good frames whose inlier counts make the recent median
-LOST_VIEW = "part of the view lost (occluder or moving object)"
-#: Guided matching that finds fewer than this fraction of the recent median is retried with a
-#: window four times wider (a prediction more than three sigma off, e.g. as a turn begins).
-RETRY_FRACTION = 0.8
-#: Keyframes: frames are measured against a reference frame until the motion since it is large
-#: enough, so that the sub-pixel errors of feature positions are small against the motion.
-KEY_DISTANCE = 0.04  # metres of chord
-KEY_ANGLE = np.radians(1.5)
-KEY_INLIER_FRACTION = 0.75  # of the inliers of the first frame measured against this reference
-KEY_MAX_GAP = 12  # frames
-#: Scale of the least-squares covariance of (theta, rho) before it enters the filter. The
-#: least-squares covariance assumes independent pixel noise, but corners sit on whole pixels and
-#: motion between frames is often below a pixel, so the errors are correlated with the motion;
-#: measured on the rendered indoor samples, theta's spread is about 1.2x and rho's about 2.7x the
-#: least-squares figure (notebook 08).
-VO_COVARIANCE_SCALE = np.diag([1.5, 3.0]) ** 2
+__all__ = [
+    "CAR",
+    "CRAWLER",
+    "FrameDiagnostics",
+    "FrameTimings",
+    "PipelineConfig",
+    "PipelineResult",
+    "StereoOdometry",
+    "run_frames",
+    "run_sequence",
+    "warm_up",
+]
+
+#: Reference-frame matching needs the recent medians of at least this many good frames.
+MIN_HISTORY = 5
 
 
-@dataclass
-class FrameDiagnostics:
-    """What happened to one frame."""
-
-    frame: int
-    features: int = 0
-    temporal_matches: int = 0
-    inliers: int = 0
-    inlier_ratio: float = 0.0
-    ransac_inliers: int = 0  # rigid pipeline: 1-point RANSAC's, before the 6-DoF refinement
-    theta: float = float("nan")
-    rho: float = float("nan")
-    odometry: bool = False
-    fallback: bool = False
-    reason: str = ""
-
-
-@dataclass
-class FrameTimings:
-    """Milliseconds per stage (the columns of the paper's Table 1, plus matching)."""
-
-    stereo: float = 0.0
-    prediction: float = 0.0
-    matching: float = 0.0
-    estimation: float = 0.0
-    refinement: float = 0.0  # 6-DoF refinement (rigid pipeline only)
-    kalman: float = 0.0
-    total: float = 0.0
-
-
-@dataclass
-class PipelineResult:
-    """One planar pose (and covariance) per frame, with diagnostics and timings; the rigid
-    pipeline also gives each frame's 6-DoF camera pose (``camera_poses``, in frame 0's camera)."""
-
-    poses: np.ndarray
-    covariances: np.ndarray
-    diagnostics: list[FrameDiagnostics] = field(default_factory=list)
-    timings: list[FrameTimings] = field(default_factory=list)
-    camera_poses: np.ndarray | None = None
-
-    @property
-    def flagged(self) -> np.ndarray:
-        """Indices of frames whose VO motion was not used."""
-        return np.array([d.frame for d in self.diagnostics if d.fallback], dtype=int)
-
-    def timing_table(self) -> dict[str, float]:
-        """Median milliseconds of each stage over the frames after the first."""
-        rows = self.timings[1:] or self.timings
-        return {k: float(np.median([asdict(t)[k] for t in rows])) for k in asdict(rows[0])}
-
-
-class StereoVisualOdometry:
-    """Seed 000's pipeline: stereo front end, Kalman prediction, guided matching, 1-point RANSAC.
+class StereoOdometry:
+    """Seed 000's pipeline: stereo front end, prediction and matching, motion estimation, filter.
 
     Parameters
     ----------
     camera : StereoCamera
+    config : PipelineConfig
+        :data:`~vo_lib.stereo_vo.config.CRAWLER` (default) or ``CAR``, or a variant of either.
     odometry : TrackOdometry, optional
-        The crawler's odometry model; used when frames come with track distances.
+        Gauge and noise of the odometry, when frames come with track or wheel distances.
+    mount : ndarray, 4x4, optional
+        ``T_vehicle_camera``; needed by the 6-DoF motion model.
     seed : int
         Seed of the RANSAC draws.
-    front_end : StereoFrontEnd, optional
-        Defaults to ``StereoFrontEnd(camera)``.
+    front_end, motion : optional
+        Parts to use instead of those the config names (see ``parts``).
     """
 
     def __init__(
         self,
         camera: StereoCamera,
+        config: PipelineConfig = CRAWLER,
         odometry: TrackOdometry | None = None,
+        mount: np.ndarray | None = None,
         seed: int = 0,
-        front_end: StereoFrontEnd | None = None,
+        front_end: FrontEnd | None = None,
+        motion: MotionModel | None = None,
     ):
         self.camera = camera
-        self.front = front_end or StereoFrontEnd(camera)
-        self.kf = VoKalmanFilter(odometry or TrackOdometry())
+        self.config = config
+        if front_end is None:
+            front_end = PyramidFrontEnd(camera) if config.front_end == "pyramid" else StereoFrontEnd(camera)
+        if motion is None:
+            if config.motion == "full":
+                if mount is None:
+                    raise ValueError("the 6-DoF motion model needs the camera's mount")
+                motion = SixDofMotion(camera, mount, config)
+            else:
+                motion = PlanarMotion(camera, config)
+        self.front, self.motion = front_end, motion
+        self.kf = VoKalmanFilter(odometry or TrackOdometry(), lateral_sigma=config.lateral_sigma)
         self.rng = np.random.default_rng(seed)
         self.reference: StereoFeatures | None = None
         self.gap = 0  # frames since the reference frame
         self.frame = 0
-        self.recent_inliers: deque[int] = deque(maxlen=RECENT_FRAMES)
-        self.recent_matches: deque[int] = deque(maxlen=RECENT_FRAMES)
+        self.recent_inliers: deque[int] = deque(maxlen=config.recent_frames)
+        self.recent_matches: deque[int] = deque(maxlen=config.recent_frames)
         self.lost_view_frames = 0
+        self.contradicted = 0  # consecutive frames whose vision contradicted the prediction
         self.last_reason = ""
         self.reference_inliers = 0  # inliers of the first good frame against this reference
-        self.velocity_known = False
+
+    @property
+    def camera_pose(self) -> np.ndarray | None:
+        """6-DoF camera pose of the last frame in frame 0's camera (None for the planar model)."""
+        return self.motion.camera_pose
 
     def process(self, left: np.ndarray, right: np.ndarray, odometry=None):
-        """Process one stereo pair (and the track distances since the previous frame, if any).
+        """Process one stereo pair (and the odometry distances since the previous frame, if any).
 
-        Returns ``(pose, covariance, FrameDiagnostics, FrameTimings)``.
+        Returns ``(planar pose, its covariance, FrameDiagnostics, FrameTimings)``.
         """
         t0 = time.perf_counter()
-        features = self.front.process(left, right)
+        features = self.front.process(left, right)  # 1. stereo front end
         t1 = time.perf_counter()
         diag = FrameDiagnostics(self.frame, features=len(features), odometry=odometry is not None)
         timing = FrameTimings(stereo=(t1 - t0) * 1e3)
@@ -165,95 +128,24 @@ class StereoVisualOdometry:
             self.frame += 1
             timing.total = timing.stereo
             return self.kf.pose, self.kf.covariance, diag, timing
-        u = None if odometry is None else np.asarray(odometry, float)
-        if u is not None and not np.all(np.isfinite(u)):
-            u, diag.odometry = None, False
-        self.kf.predict(u, keep_reference=self.gap > 1)
-        prior = self.kf.motion_prior()
-        # without odometry, the prediction means something only once a motion has been measured
-        informative = u is not None or self.velocity_known
+        prediction = self._predict(odometry, diag)  # 2. prediction ...
         t2 = time.perf_counter()
         timing.prediction = (t2 - t1) * 1e3
-        reason, t3, t4, accepted = "", t2, t2, None
-        if self.reference is None or len(self.reference) < MIN_FEATURES:
-            reason = "no reference frame with features"
-        elif len(features) < MIN_FEATURES:
-            reason = "too few stereo features"
-        else:
-            matches = match_temporal(self.reference, features, self.camera, prior if informative else None)
-            if len(self.recent_matches) >= 5 and len(matches) < RETRY_FRACTION * np.median(
-                self.recent_matches
-            ):
-                wider = match_temporal(
-                    self.reference,
-                    features,
-                    self.camera,
-                    replace(prior, covariance=16.0 * np.asarray(prior.covariance)),
-                )
-                matches = wider if len(wider) > len(matches) else matches
-            t3 = t4 = time.perf_counter()  # no estimation time unless it runs
+        estimate, reason = None, self._unmatchable(features)
+        if not reason:
+            matches = self.motion.match(self.reference, features, prediction, self.recent_matches)
+            t3 = time.perf_counter()  # ... and temporal matching
+            timing.matching = (t3 - t2) * 1e3
             diag.temporal_matches = len(matches)
-            if len(matches) < MIN_INLIERS:
+            if len(matches) < self.config.min_inliers:
                 reason = "too few temporal matches"
             else:
-                est = one_point_ransac(
-                    matches.w_prev,
-                    matches.w_curr,
-                    self.camera,
-                    prior=prior if informative else None,
-                    rng=self.rng,
-                )
-                t4 = time.perf_counter()
-                diag.inliers = int(est.inliers.sum())
-                diag.inlier_ratio = diag.inliers / len(matches)
-                diag.theta, diag.rho = est.theta, est.rho
-                innovation = np.array([est.theta - prior.theta, est.rho - prior.rho])
-                r_vo = VO_COVARIANCE_SCALE * est.covariance
-                if not est.success or diag.inliers < MIN_INLIERS:
-                    reason = "too few inliers"
-                elif diag.inlier_ratio < MIN_INLIER_RATIO:
-                    reason = "low inlier ratio"
-                elif (
-                    informative
-                    and innovation @ np.linalg.solve(prior.covariance + r_vo, innovation) > PRIOR_GATE
-                ):
-                    reason = "motion contradicts the prediction"
-                elif self._view_lost(diag.inliers):
-                    reason = LOST_VIEW
-                else:
-                    accepted = (est.theta, est.rho, r_vo, diag.inliers, len(matches))
-        timing.matching = (t3 - t2) * 1e3
-        timing.estimation = (t4 - t3) * 1e3
+                estimate = self.motion.estimate(matches, prediction, self.rng)  # 3. motion estimation
+                timing.refinement = estimate.timings.get("refinement", 0.0)
+                timing.estimation = (time.perf_counter() - t3) * 1e3 - timing.refinement
+                reason = self._judge(estimate, prediction, diag)
         t5 = time.perf_counter()
-        pose, covariance = self.kf.pose, self.kf.covariance
-        if reason:
-            diag.fallback, diag.reason = True, reason
-            self.gap += 1
-            if (self.reference is None or self.gap > MAX_GAP) and len(features) >= MIN_FEATURES:
-                self._commit(features)
-        else:
-            theta, rho, r_vo, inliers, n_matches = accepted
-            # the update goes to a copy: until the keyframe changes, the filter keeps only its
-            # prediction, so the reference frame's errors are never counted twice
-            saved_x, saved_P = self.kf.ekf.x.copy(), self.kf.ekf.P.copy()
-            self.kf.update(theta, rho, r_vo)
-            pose, covariance = self.kf.pose, self.kf.covariance
-            if self.reference_inliers == 0:
-                self.reference_inliers = inliers
-            if self._counts_are_typical():
-                self.recent_inliers.append(inliers)
-                self.recent_matches.append(n_matches)
-            new_key = (
-                abs(rho) >= KEY_DISTANCE
-                or abs(theta) >= KEY_ANGLE
-                or inliers < KEY_INLIER_FRACTION * self.reference_inliers
-                or self.gap >= KEY_MAX_GAP
-            )
-            if new_key:
-                self._commit(features)
-            else:
-                self.kf.ekf.x, self.kf.ekf.P = saved_x, saved_P
-                self.gap += 1
+        pose, covariance = self._update(features, estimate, prediction, reason, diag)  # 4. Kalman update
         self.last_reason = reason
         t6 = time.perf_counter()
         timing.kalman = (t6 - t5) * 1e3 + timing.prediction
@@ -261,13 +153,97 @@ class StereoVisualOdometry:
         self.frame += 1
         return pose, covariance, diag, timing
 
+    # ------------------------------------------------------------------ the steps
+    def _predict(self, odometry, diag: FrameDiagnostics) -> Prediction:
+        u = None if odometry is None else np.asarray(odometry, float)
+        if u is not None and not np.all(np.isfinite(u)):
+            u, diag.odometry = None, False
+        self.kf.predict(u, keep_reference=self.gap > 1)
+        prediction = self.motion.predict(self.kf, self.gap)
+        if not prediction.informative and self.config.unknown_motion_sigma:
+            self.kf.widen(self.config.unknown_motion_sigma)  # nothing predicts the motion yet
+            prediction.prior = self.kf.motion_prior()
+        return prediction
+
+    def _unmatchable(self, features: StereoFeatures) -> str:
+        if self.reference is None:
+            return "no reference frame with features"
+        if len(features) < self.config.min_features:
+            return "too few stereo features"
+        return ""
+
+    def _judge(self, estimate: Estimate, prediction: Prediction, diag: FrameDiagnostics) -> str:
+        """Why the estimate is not to be trusted, or ``""``."""
+        cfg = self.config
+        diag.inliers, diag.inlier_ratio = estimate.inliers, estimate.inlier_ratio
+        diag.ransac_inliers = estimate.ransac_inliers
+        diag.theta, diag.rho = float(estimate.z[0]), float(estimate.z[1])
+        if not estimate.success or estimate.inliers < cfg.min_inliers:
+            return "too few inliers"
+        if estimate.inlier_ratio < cfg.min_inlier_ratio:
+            return "low inlier ratio"
+        prior = prediction.prior
+        innovation = np.array([wrap_angle(estimate.z[0] - prior.theta), estimate.z[1] - prior.rho])
+        gate = prior.covariance + estimate.covariance[:2, :2]
+        # a vision that keeps contradicting the prediction frame after frame, with enough inliers
+        # to be sure, means the prediction is wrong: it is believed, not rejected for ever
+        contradicts = innovation @ np.linalg.solve(gate, innovation) > cfg.prior_gate
+        if prediction.informative and contradicts and self.contradicted < cfg.max_contradictions:
+            self.contradicted += 1
+            return "motion contradicts the prediction"
+        if cfg.lost_view_fraction and self._view_lost(estimate.inliers):
+            return LOST_VIEW
+        self.contradicted = 0
+        return ""
+
+    def _update(self, features, estimate, prediction, reason, diag):
+        """The filter's update with a trusted estimate, the keyframe decision, or the fallback."""
+        cfg = self.config
+        if reason:
+            diag.fallback, diag.reason = True, reason
+            self.motion.place(self.kf, None, prediction)
+            pose, covariance = self.kf.pose, self.kf.covariance
+            self.gap += 1
+            stale = self.gap > cfg.restart_gap and (not cfg.restart_reasons or reason in cfg.restart_reasons)
+            if (self.reference is None or stale) and len(features) >= cfg.min_features:
+                # start again from this frame, placed where the prediction puts it: a reference
+                # the view has left behind would never match again
+                self._commit(features, None)
+            return pose, covariance
+        # the update goes to a copy: until the keyframe changes, the filter keeps only its
+        # prediction, so the reference frame's errors are never counted twice
+        saved = self.kf.snapshot()
+        z = estimate.z
+        sideways = float(z[2]) if len(z) > 2 else 0.0  # measured by a 6-DoF model, else constrained to 0
+        self.kf.update(float(z[0]), float(z[1]), estimate.covariance, sideways=sideways)
+        self.motion.place(self.kf, estimate, prediction)
+        pose, covariance = self.kf.pose, self.kf.covariance
+        if self.reference_inliers == 0:
+            self.reference_inliers = estimate.inliers
+        if not cfg.typical_counts_only or self._counts_are_typical():
+            self.recent_inliers.append(estimate.inliers)
+            self.recent_matches.append(diag.temporal_matches)
+        new_key = (
+            abs(z[1]) >= cfg.key_distance
+            or abs(z[0]) >= cfg.key_angle
+            or estimate.inliers < cfg.key_inlier_fraction * self.reference_inliers
+            or self.gap >= cfg.key_max_gap
+        )
+        if new_key:
+            self._commit(features, estimate)
+        else:
+            self.kf.restore(saved)
+            self.gap += 1
+        return pose, covariance
+
+    # ------------------------------------------------------------------ bookkeeping
     def _counts_are_typical(self) -> bool:
         """Counts measured right after frames without vision are not typical of the next ones."""
         return self.last_reason in ("", LOST_VIEW)  # still the previous frame's
 
-    def _commit(self, features: StereoFeatures) -> None:
+    def _commit(self, features: StereoFeatures, estimate: Estimate | None) -> None:
         """Make this frame the reference (keyframe): its filter state becomes the prior's base."""
-        self.velocity_known = self.velocity_known or self.kf.flags.vo_update
+        self.motion.commit(self.kf, estimate, max(self.gap, 1))
         self.kf.finish_frame(max(self.gap, 1))
         self._new_reference(features)
         self.reference_inliers = 0
@@ -281,13 +257,13 @@ class StereoVisualOdometry:
         judged = self.last_reason in ("", LOST_VIEW)
         if (
             not judged
-            or len(self.recent_inliers) < 5
-            or inliers >= LOST_VIEW_FRACTION * np.median(self.recent_inliers)
+            or len(self.recent_inliers) < MIN_HISTORY
+            or inliers >= self.config.lost_view_fraction * np.median(self.recent_inliers)
         ):
             self.lost_view_frames = 0
             return False
         self.lost_view_frames += 1
-        if self.lost_view_frames > LOST_VIEW_PATIENCE:
+        if self.lost_view_frames > self.config.lost_view_patience:
             self.recent_inliers.clear()
             self.recent_matches.clear()
             self.lost_view_frames = 0
@@ -295,7 +271,7 @@ class StereoVisualOdometry:
         return True
 
     def _new_reference(self, features: StereoFeatures) -> None:
-        self.reference = features if len(features) >= MIN_FEATURES else None
+        self.reference = features if len(features) >= self.config.min_features else None
         self.gap = 1 if self.reference is not None else self.gap + 1
 
 
@@ -305,15 +281,16 @@ def run_frames(
     odometry_model: TrackOdometry | None = None,
     seed: int = 0,
     progress=None,
-    front_end: StereoFrontEnd | None = None,
-    odometer=None,
+    front_end: FrontEnd | None = None,
+    odometer: StereoOdometry | None = None,
 ) -> PipelineResult:
     """Run the pipeline over ``(left, right, odometry_or_None)`` triples.
 
-    ``odometer`` is any object with this module's ``process`` method (default: the planar
-    :class:`StereoVisualOdometry`); one that has a ``camera_pose`` gives 6-DoF poses too.
+    ``odometer`` is the :class:`StereoOdometry` to run (default: the crawler's, with
+    ``odometry_model``, ``seed`` and ``front_end``); with the 6-DoF model the result carries
+    each frame's camera pose too.
     """
-    vo = odometer or StereoVisualOdometry(camera, odometry_model, seed, front_end)
+    vo = odometer or StereoOdometry(camera, CRAWLER, odometry_model, seed=seed, front_end=front_end)
     poses, covs, diags, timings, cameras = [], [], [], [], []
     for left, right, odo in frames:
         pose, cov, diag, timing = vo.process(left, right, odo)
@@ -321,7 +298,7 @@ def run_frames(
         covs.append(cov)
         diags.append(diag)
         timings.append(timing)
-        if hasattr(vo, "camera_pose"):
+        if vo.camera_pose is not None:
             cameras.append(vo.camera_pose.copy())
         if progress is not None:
             progress.update(1)
@@ -351,10 +328,10 @@ def run_sequence(
     """Run the pipeline on a :class:`~vo_lib.formats.sequence.Sequence` (its first ``frames`` frames).
 
     ``motion`` is ``"planar"`` (the circular-motion model, for a camera above the turning axis on
-    a flat floor: the crawler of the samples), ``"full"`` (6-DoF, :mod:`.rigid_pipeline`: a car on
-    a real road), or ``"auto"``: the one that fits the sequence's vehicle (:mod:`.vehicle`).
+    a flat floor: the crawler of the samples, preset ``CRAWLER``), ``"full"`` (6-DoF, :mod:`.six_dof`:
+    a car on a real road, preset ``CAR``), or ``"auto"``: the one that fits the sequence's vehicle
+    (:mod:`.vehicle`).
     """
-    from vo_lib.stereo_vo.rigid_pipeline import RigidStereoOdometry
     from vo_lib.stereo_vo.vehicle import vehicle_of
 
     if motion not in MOTION_MODELS:
@@ -369,9 +346,7 @@ def run_sequence(
             left, right = sequence.pair(k)
             yield left, right, (None if odo is None or k == 0 else odo[k])
 
-    odometer = None
-    if model == "full":
-        odometer = RigidStereoOdometry(sequence.camera, vehicle.mount, vehicle.odometry_model, seed)
+    odometer = StereoOdometry(sequence.camera, PRESETS[model], vehicle.odometry_model, vehicle.mount, seed)
     bar = None
     if progress:
         from tqdm.auto import tqdm

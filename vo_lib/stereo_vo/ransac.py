@@ -260,14 +260,7 @@ _FAILURES = {
 }
 
 
-def histogram_voting(
-    w_prev,
-    w_curr,
-    camera: StereoCamera,
-    bin_width: float = math.radians(0.05),
-    pixel_sigma: float = PIXEL_SIGMA,
-    gate_sigmas: float = GATE_SIGMAS,
-):
+def histogram_voting(w_prev, w_curr, camera: StereoCamera, bin_width: float = math.radians(0.05)):
     """theta as the mode of the per-match thetas (a histogram vote), then rho as the median of
     the per-match rhos of the matches in the winning bin. Returns ``(theta, rho, votes_mask)``."""
     a, b = as_match_array("w_prev", w_prev), as_match_array("w_curr", w_curr)

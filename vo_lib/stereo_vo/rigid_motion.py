@@ -69,24 +69,12 @@ class RigidMotion:
         return T
 
 
-def project(Q: np.ndarray, camera: StereoCamera) -> np.ndarray:
-    """``(u, v, d)`` of camera-frame points ``Q`` ``(N, 3)``."""
-    iz = 1.0 / Q[:, 2]
-    return np.column_stack(
-        [
-            camera.fx * Q[:, 0] * iz + camera.cx,
-            camera.fy * Q[:, 1] * iz + camera.cy,
-            camera.fx * camera.baseline * iz,
-        ]
-    )
-
-
 def reprojection_errors(P: np.ndarray, w_curr: np.ndarray, R, t, camera: StereoCamera) -> np.ndarray:
     """Norm of the disparity-space residual of every match (inf behind the camera)."""
     Q = P @ np.asarray(R).T + np.asarray(t)
     err = np.full(len(P), np.inf)
     ok = Q[:, 2] > NEAR
-    err[ok] = np.linalg.norm(project(Q[ok], camera) - w_curr[ok], axis=1)
+    err[ok] = np.linalg.norm(camera.project(Q[ok]) - w_curr[ok], axis=1)
     return err
 
 
@@ -184,16 +172,6 @@ def refine_rigid_motion(
     except np.linalg.LinAlgError:
         cov = np.full((6, 6), np.inf)
     return RigidMotion(R, t, cov, inl, float(np.sqrt(np.mean(res**2))), True)
-
-
-def predict_features(w_prev: np.ndarray, camera: StereoCamera, T) -> tuple[np.ndarray, np.ndarray]:
-    """Predicted ``(u, v, d)`` of previous features after the motion ``T``, and which are in front."""
-    T = np.asarray(T, float)
-    Q = camera.backproject(w_prev) @ T[:3, :3].T + T[:3, 3]
-    ok = Q[:, 2] > NEAR
-    w = np.full_like(Q, np.nan)
-    w[ok] = project(Q[ok], camera)
-    return w, ok
 
 
 def scaled_motion(T, factor: float) -> np.ndarray:

@@ -92,13 +92,35 @@ def matches_under_transform(
     near, far = depth_range
     if not 0 < near < far:
         raise ValueError(f"depth_range must satisfy 0 < near < far; got {depth_range}")
-    kept_prev, kept_curr, kept_pts = [], [], []
+    w_prev, w_curr, points = _visible_pairs(camera, M, n, rng, (near, far), (theta, rho))
+    inliers = np.ones(n, dtype=bool)
+    n_out = int(round(outlier_ratio * n))
+    if n_out:
+        idx = rng.choice(n, n_out, replace=False)
+        inliers[idx] = False
+        w_curr[idx, 0] = rng.uniform(0, camera.width - 1, n_out)
+        w_curr[idx, 1] = rng.uniform(0, camera.height - 1, n_out)
+        w_curr[idx, 2] = rng.choice(w_prev[:, 2], n_out)
+    if noise_px > 0:
+        w_prev = w_prev + rng.normal(0.0, noise_px, w_prev.shape)
+        w_curr = w_curr + rng.normal(0.0, noise_px, w_curr.shape)
+        # a disparity pushed to or below zero by the noise is floored, as a matcher reports it
+        w_prev[:, 2] = np.maximum(w_prev[:, 2], 0.05)
+        w_curr[:, 2] = np.maximum(w_curr[:, 2], 0.05)
+    return SyntheticMatches(w_prev, w_curr, inliers, float(theta), float(rho), points)
+
+
+def _visible_pairs(camera, M, n, rng, depth_range, motion):
+    """``n`` points drawn in the previous view (uniform in the image and in inverse depth) that stay
+    in front of the camera and in the image after ``M``: ``(w_prev, w_curr, points)``."""
+    near, far = depth_range
+    kept_prev, kept_curr, kept_pts = [np.zeros((0, 3))], [np.zeros((0, 3))], [np.zeros((0, 3))]
     count = drawn = 0
     while count < n:
         if drawn > 1000 * (n + 16) and count < 0.001 * drawn:
             raise ValueError(
-                f"the motion theta={theta!r}, rho={rho!r} leaves (almost) no point visible in both "
-                f"views within depth_range={depth_range}"
+                f"the motion theta={motion[0]!r}, rho={motion[1]!r} leaves (almost) no point visible "
+                f"in both views within depth_range={depth_range}"
             )
         m = 2 * (n - count) + 16
         drawn += m
@@ -116,21 +138,4 @@ def matches_under_transform(
         kept_curr.append(w2[ok])
         kept_pts.append(P[ok])
         count += int(ok.sum())
-    w_prev = np.concatenate(kept_prev)[:n]
-    w_curr = np.concatenate(kept_curr)[:n]
-    points = np.concatenate(kept_pts)[:n]
-    inliers = np.ones(n, dtype=bool)
-    n_out = int(round(outlier_ratio * n))
-    if n_out:
-        idx = rng.choice(n, n_out, replace=False)
-        inliers[idx] = False
-        w_curr[idx, 0] = rng.uniform(0, camera.width - 1, n_out)
-        w_curr[idx, 1] = rng.uniform(0, camera.height - 1, n_out)
-        w_curr[idx, 2] = rng.choice(w_prev[:, 2], n_out)
-    if noise_px > 0:
-        w_prev = w_prev + rng.normal(0.0, noise_px, w_prev.shape)
-        w_curr = w_curr + rng.normal(0.0, noise_px, w_curr.shape)
-        # a disparity pushed to or below zero by the noise is floored, as a matcher reports it
-        w_prev[:, 2] = np.maximum(w_prev[:, 2], 0.05)
-        w_curr[:, 2] = np.maximum(w_curr[:, 2], 0.05)
-    return SyntheticMatches(w_prev, w_curr, inliers, float(theta), float(rho), points)
+    return tuple(np.concatenate(kept)[:n] for kept in (kept_prev, kept_curr, kept_pts))

@@ -18,8 +18,8 @@ import numpy as np
 
 from vo_lib.camera import StereoCamera
 from vo_lib.compiled import choose
-from vo_lib.stereo_vo.circular_motion import apply_motion
-from vo_lib.stereo_vo.features import StereoFeatures, best_matches, hamming, parabola_offset, window_pairs
+from vo_lib.stereo_vo.circular_motion import motion_transform
+from vo_lib.stereo_vo.features import RATIO, StereoFeatures, best_matches, equiangular_offset, hamming
 
 N_SIGMA = 3.0  # window half-width in standard deviations
 PIXEL_SIGMA = 1.0  # pixel noise of a feature position, added to the prediction's uncertainty
@@ -27,8 +27,6 @@ MIN_RADIUS = 4.0  # pixels
 MAX_RADIUS = 120.0  # pixels
 PATCH_HALF = 3  # 7x7 patches for the sub-pixel refinement of matches
 NEAR = 0.1  # metres: predicted points nearer than this are not matched
-PREDICTED_RATIO = 0.9  # ratio test of match_to_prediction (pyramid features, larger motions)
-DISPARITY_WINDOW = 0.3  # of the predicted disparity, plus 2 px
 
 
 @dataclass(frozen=True)
@@ -65,10 +63,12 @@ def all_pairs(n_prev: int, n_curr: int) -> tuple[np.ndarray, np.ndarray]:
     return np.repeat(np.arange(n_prev), n_curr), np.tile(np.arange(n_curr), n_prev)
 
 
-def predict_features(w_prev: np.ndarray, camera: StereoCamera, theta: float, rho: float):
-    """Predicted ``(u, v, d)`` of previous features after the motion, and which are in front."""
-    P = camera.backproject(w_prev)
-    Q = apply_motion(P, theta, rho)
+def predict_features(w_prev: np.ndarray, camera: StereoCamera, T) -> tuple[np.ndarray, np.ndarray]:
+    """Predicted ``(u, v, d)`` of previous features after the camera motion ``T`` (4x4
+    ``T_curr_from_prev``; :func:`~vo_lib.stereo_vo.circular_motion.motion_transform` for a circular
+    one), NaN where a point ends nearer than :data:`NEAR`, and which are in front."""
+    T = np.asarray(T, float)
+    Q = camera.backproject(w_prev) @ T[:3, :3].T + T[:3, 3]
     ok = Q[:, 2] > NEAR
     w = np.full_like(Q, np.nan)
     w[ok] = camera.project(Q[ok])
@@ -81,10 +81,11 @@ def prediction_sigma(w_prev: np.ndarray, camera: StereoCamera, prior: MotionPrio
     ``J`` is taken by finite differences in theta and rho; ``base`` is the prediction, if already known.
     """
     if base is None:
-        base, _ = predict_features(w_prev, camera, prior.theta, prior.rho)
+        base, _ = predict_features(w_prev, camera, motion_transform(prior.theta, prior.rho))
     h_theta, h_rho = 1e-5, 1e-5
-    d_theta = (predict_features(w_prev, camera, prior.theta + h_theta, prior.rho)[0] - base) / h_theta
-    d_rho = (predict_features(w_prev, camera, prior.theta, prior.rho + h_rho)[0] - base) / h_rho
+    moved_theta = predict_features(w_prev, camera, motion_transform(prior.theta + h_theta, prior.rho))[0]
+    moved_rho = predict_features(w_prev, camera, motion_transform(prior.theta, prior.rho + h_rho))[0]
+    d_theta, d_rho = (moved_theta - base) / h_theta, (moved_rho - base) / h_rho
     C = np.asarray(prior.covariance, dtype=float)
     var = d_theta**2 * C[0, 0] + 2 * d_theta * d_rho * C[0, 1] + d_rho**2 * C[1, 1]
     return np.sqrt(np.nan_to_num(var, nan=np.inf) + PIXEL_SIGMA**2)
@@ -102,7 +103,7 @@ def refine_positions(
     Corners sit on whole pixels, and motion between frames is often a fraction of a pixel, so
     whole-pixel matches under-measure it. For each match the previous feature's patch is compared
     (sum of absolute differences) with the current image at the matched pixel and one pixel
-    around it; parabolas through the costs along u and along v give the sub-pixel position.
+    around it; equiangular (V) fits to the costs along u and along v give the sub-pixel position.
     Returns ``w_curr`` with refined u, v (the disparity is kept).
     """
     out = np.array(w_curr, dtype=float, copy=True)
@@ -126,55 +127,42 @@ def refine_positions(
         return np.abs(patch - curr_image[rc + dv, cc + du].astype(np.int32)).sum(axis=(1, 2))
 
     c0 = sad(0, 0)
-    out[ok, 0] = uc[ok] + parabola_offset(sad(-1, 0), c0, sad(1, 0))
-    out[ok, 1] = vc[ok] + parabola_offset(sad(0, -1), c0, sad(0, 1))
+    out[ok, 0] = uc[ok] + equiangular_offset(sad(-1, 0), c0, sad(1, 0))
+    out[ok, 1] = vc[ok] + equiangular_offset(sad(0, -1), c0, sad(0, 1))
     return out
 
 
-def match_temporal(
-    prev: StereoFeatures, curr: StereoFeatures, camera: StereoCamera, prior: MotionPrior | None = None
+def prior_windows(w_prev: np.ndarray, camera: StereoCamera, prior: MotionPrior):
+    """Each previous feature's predicted ``(u, v, d)`` under a circular-motion prior and the
+    half-widths ``(N, 3)`` of its window: ``N_SIGMA`` standard deviations, within
+    ``[MIN_RADIUS, MAX_RADIUS]``."""
+    pred, _ = predict_features(w_prev, camera, motion_transform(prior.theta, prior.rho))
+    return pred, np.clip(N_SIGMA * prediction_sigma(w_prev, camera, prior, pred), MIN_RADIUS, MAX_RADIUS)
+
+
+def match_features(
+    prev: StereoFeatures,
+    curr: StereoFeatures,
+    predicted: np.ndarray | None = None,
+    radius: np.ndarray | None = None,
+    ratio: float = RATIO,
+    refine: bool = False,
 ) -> TemporalMatches:
-    """Match features of the previous frame to the current one.
+    """Match previous features to current ones: inside windows around their predictions, or all pairs.
 
-    With a ``prior`` only candidates inside each feature's predicted window are compared;
-    without one, every pair is (brute force).
-    """
-    t0 = time.perf_counter()
-    n_prev, n_curr = len(prev), len(curr)
-    if n_prev == 0 or n_curr == 0:
-        return TemporalMatches.empty()
-    if prior is None:
-        ia, ib = all_pairs(n_prev, n_curr)
-    else:
-        pred, ok = predict_features(prev.w, camera, prior.theta, prior.rho)
-        radius = np.clip(N_SIGMA * prediction_sigma(prev.w, camera, prior, pred), MIN_RADIUS, MAX_RADIUS)
-        keep = np.flatnonzero(ok)
-        # candidates in the row window first (the narrowest), then the column and disparity windows
-        ia, ib = window_pairs(pred[keep, 1], curr.w[:, 1], radius[keep, 1])
-        ia = keep[ia]
-        inside = np.abs(curr.w[ib, 0] - pred[ia, 0]) <= radius[ia, 0]
-        inside &= np.abs(curr.w[ib, 2] - pred[ia, 2]) <= radius[ia, 2]
-        ia, ib = ia[inside], ib[inside]
-    dist = hamming(prev.descriptors[ia], curr.descriptors[ib])
-    a, b, _ = best_matches(ia, ib, dist, n_prev, n_curr)
-    w_curr = curr.w[b]
-    if prev.image is not None and curr.image is not None:
-        w_curr = refine_positions(prev.image, curr.image, prev.w[a], w_curr)
-    elapsed = (time.perf_counter() - t0) * 1e3
-    return TemporalMatches(a, b, prev.w[a], w_curr, len(ia), {"temporal_match": elapsed})
-
-
-def match_to_prediction(
-    prev: StereoFeatures, curr: StereoFeatures, predicted: np.ndarray | None, radius=None
-) -> TemporalMatches:
-    """Match previous features to current ones near their predicted ``(u, v, d)``.
-
-    ``predicted`` ``(N_prev, 3)`` holds each previous feature's predicted ``(u, v, d)`` (NaN where
-    it is not expected in view) and ``radius`` ``(N_prev,)`` the half-width of its square window in
-    pixels; the disparity must also fall within ``2 px + DISPARITY_WINDOW * d`` of its prediction.
-    Without a prediction every pair is compared (brute force). The windows and their Hamming
-    distances are found in one compiled pass (:func:`.matching_core.window_candidates`). Used with
-    the 6-DoF prediction of :mod:`vo_lib.stereo_vo.rigid_motion`.
+    Parameters
+    ----------
+    prev, curr : StereoFeatures
+    predicted : ndarray (N_prev, 3), optional
+        Each previous feature's predicted ``(u, v, d)`` (NaN where it is not expected in view).
+        Without it every pair is compared (brute force).
+    radius : ndarray (N_prev, 3)
+        Half-widths of each window in ``u``, ``v`` and ``d``. The candidates inside and their
+        Hamming distances are found in one compiled pass (:func:`.matching_core.window_candidates`).
+    ratio : float
+        Ratio test of :func:`~vo_lib.stereo_vo.features.best_matches`.
+    refine : bool
+        Refine the current positions to sub-pixel (:func:`refine_positions`) where the images are known.
     """
     from vo_lib.stereo_vo.matching_core import window_candidates
 
@@ -189,15 +177,26 @@ def match_to_prediction(
         order = np.argsort(curr.w[:, 1], kind="stable")
         ia, ib, dist = choose(window_candidates)(
             np.ascontiguousarray(predicted, dtype=float),
-            np.ascontiguousarray(np.broadcast_to(np.asarray(radius, float), (n_prev,))),
+            np.ascontiguousarray(np.broadcast_to(np.asarray(radius, float), (n_prev, 3))),
             np.ascontiguousarray(curr.w, dtype=float),
             order,
             np.ascontiguousarray(curr.w[order, 1]),
-            2.0,
-            DISPARITY_WINDOW,
             np.ascontiguousarray(prev.descriptors).view(np.uint64),
             np.ascontiguousarray(curr.descriptors).view(np.uint64),
         )
-    a, b, _ = best_matches(ia, ib, dist, n_prev, n_curr, ratio=PREDICTED_RATIO)
+    a, b, _ = best_matches(ia, ib, dist, n_prev, n_curr, ratio=ratio)
+    w_curr = curr.w[b]
+    if refine and prev.image is not None and curr.image is not None:
+        w_curr = refine_positions(prev.image, curr.image, prev.w[a], w_curr)
     elapsed = (time.perf_counter() - t0) * 1e3
-    return TemporalMatches(a, b, prev.w[a], curr.w[b], len(ia), {"temporal_match": elapsed})
+    return TemporalMatches(a, b, prev.w[a], w_curr, len(ia), {"temporal_match": elapsed})
+
+
+def match_temporal(
+    prev: StereoFeatures, curr: StereoFeatures, camera: StereoCamera, prior: MotionPrior | None = None
+) -> TemporalMatches:
+    """The paper's guided matching: inside each feature's window under the filter's ``prior``
+    (:func:`prior_windows`), refined to sub-pixel; without a prior, every pair (brute force)."""
+    if prior is None:
+        return match_features(prev, curr, refine=True)
+    return match_features(prev, curr, *prior_windows(prev.w, camera, prior), refine=True)

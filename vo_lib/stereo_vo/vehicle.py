@@ -11,7 +11,7 @@ Two kinds of vehicle reach the pipeline:
   else from the GPS/IMU packets of a KITTI raw recording (``oxts.txt``: forward speed and yaw
   rate, turned into the distances of two wheels :data:`CAR_GAUGE` apart).
 
-The vehicle's frame is x forward, y left, z up (DESIGN conventions); for a KITTI raw recording its
+The vehicle's frame is x forward, y left, z up (as in ``vo_lib.geometry``); for a KITTI raw recording its
 origin is the IMU, which sits near the rear axle, and ``raw_calib/`` places the camera in it.
 Without ``raw_calib/`` (KITTI's odometry set) :data:`KITTI_CAMERA_IN_IMU` is used: the same
 rig's calibration rounded to centimetres.
@@ -20,6 +20,7 @@ rig's calibration rounded to centimetres.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from enum import Enum
 
 import numpy as np
 
@@ -41,14 +42,33 @@ CAR_DISTANCE_SIGMA = 0.02
 KITTI_CAMERA_IN_IMU = (1.08, -0.31, 0.73)
 
 
+class VehicleKind(str, Enum):
+    """What carries the camera."""
+
+    CRAWLER = "crawler"  #: the tracked robot of seed 000
+    CAR = "car"
+
+    def __str__(self) -> str:
+        return self.value
+
+
+class Motion(str, Enum):
+    """The model of the motion between two frames that fits a vehicle."""
+
+    PLANAR = "planar"  #: circular motion on a flat floor, camera above the turning axis (eq. 12-17)
+    FULL = "full"  #: six degrees of freedom (``six_dof``)
+
+    def __str__(self) -> str:
+        return self.value
+
+
 @dataclass
 class Vehicle:
     """The rig around the camera.
 
     Attributes
     ----------
-    kind : str
-        ``"crawler"`` or ``"car"``.
+    kind : VehicleKind
     mount : ndarray, 4x4
         ``T_vehicle_camera``: the left camera's pose in the vehicle frame.
     odometry_model : TrackOdometry
@@ -57,16 +77,16 @@ class Vehicle:
         Left and right distances per frame (row 0 unused).
     odometry_source : str
         Where the odometry came from, for reports.
-    motion : str
-        The motion model that fits: ``"planar"`` (circular motion, eq. 12-17) or ``"full"`` (6-DoF).
+    motion : Motion
+        The motion model that fits: planar (circular motion, eq. 12-17) or full (6-DoF).
     """
 
-    kind: str
+    kind: VehicleKind
     mount: np.ndarray
     odometry_model: TrackOdometry
     odometry: np.ndarray | None
     odometry_source: str
-    motion: str
+    motion: Motion
 
 
 def car_odometry_model() -> TrackOdometry:
@@ -86,7 +106,8 @@ def vehicle_of(sequence, use_odometry: bool = True) -> Vehicle:
         planar = camera.get("mount", "above turning axis") == "above turning axis"
         odometry = sequence.odometry if use_odometry else None
         source = "odometry.txt" if odometry is not None else "none"
-        return Vehicle("crawler", mount, model, odometry, source, "planar" if planar else "full")
+        motion = Motion.PLANAR if planar else Motion.FULL
+        return Vehicle(VehicleKind.CRAWLER, mount, model, odometry, source, motion)
     root = sequence.path
     raw_calib = root / "raw_calib"
     if raw_calib.is_dir():
@@ -106,4 +127,4 @@ def vehicle_of(sequence, use_odometry: bool = True) -> Vehicle:
         source = "oxts.txt (speed and yaw rate)"
     elif odometry is None:
         source = "none"
-    return Vehicle("car", mount, model, odometry, source, "full")
+    return Vehicle(VehicleKind.CAR, mount, model, odometry, source, Motion.FULL)

@@ -3,6 +3,7 @@
 ``plotting``   figures the notebooks share; nothing here computes results
 ``widgets``    interactive wrappers around plain ``f(**params)`` functions
 ``prose``      sentences written by the code (Markdown that prints as text in a script)
+``run_figure`` the figure of one run's outputs
 
 Imports no wing: a figure takes arrays and results, not estimators.
 """

@@ -4,6 +4,7 @@ Times are medians of repeated runs on data drawn once with a fixed seed, so a ru
 like with like; they are measurements to read, never assertions. One module per wing
 (``bench_stereo_vo``, ``bench_line_slam``, ``bench_lidar_tracking``), one for the simulated
 sensors (``bench_sim``),
+one for the real drive beside the PnP baseline (``bench_real``),
 one for how real the samples' images look (``bench_realism``) and one for the sweep machinery
 on Dask (``bench_sweep``); the timing
 helpers are in ``common``. Each benchmark imports what it times when it runs, so listing them

@@ -1,0 +1,118 @@
+"""The settings of the stereo VO pipeline, as one frozen structure, and its two presets.
+
+:data:`CRAWLER` is the paper's robot (seed 000): single-scale FAST corners, the planar
+circular-motion model, track odometry. :data:`CAR` is a car on a real road (KITTI): a two-scale
+front end, the 1-point RANSAC seen from a virtual camera on the turning axis, a 6-DoF refinement
+and the camera's mount. Where the two differ, the field says why; a researcher sweeps a setting
+with ``dataclasses.replace(CRAWLER, key_distance=0.08)``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+from scipy.stats import chi2
+
+from vo_lib.stereo_vo.ransac_core import RansacParams
+
+FRONT_ENDS = ("fast", "pyramid")
+MOTIONS = ("planar", "full")
+LOST_VIEW = "part of the view lost (occluder or moving object)"
+#: Reasons that say the reference frame no longer shares enough of the view with this one.
+LOST_REASONS = ("too few temporal matches", "too few inliers", "low inlier ratio")
+
+
+@dataclass(frozen=True)
+class PipelineConfig:
+    """Every choice of :class:`~vo_lib.stereo_vo.pipeline.StereoOdometry` that is a number or a name."""
+
+    #: ``"fast"``: single-scale FAST corners (``features``); ``"pyramid"``: two scales
+    #: (``pyramid_features``), for the large image motion of a car.
+    front_end: str = "fast"
+    #: ``"planar"``: the circular-motion model (eq. 12-17) with its 1-point RANSAC; ``"full"``:
+    #: 1-point RANSAC as the outlier filter, then a 6-DoF refinement (``six_dof``).
+    motion: str = "planar"
+    ransac: RansacParams = field(default_factory=RansacParams)
+    min_features: int = 20  #: stereo features a frame needs to be matched
+    min_inliers: int = 15
+    #: Of the temporal matches; a large moving object drags it down (6-DoF: the 1-point RANSAC's).
+    min_inlier_ratio: float = 0.7
+    prior_gate: float = float(chi2.ppf(0.9999, 2))  #: VO motion against the prediction (Mahalanobis^2)
+    #: Consecutive frames the prior gate may reject before the vision is believed over the
+    #: prediction (wheels slipping, a speed that lags when braking); the crawler always rejects.
+    max_contradictions: float = math.inf
+    recent_frames: int = 15  #: good frames whose match and inlier counts make the recent medians
+    #: Guided matching that finds fewer than this fraction of the recent median is retried wider.
+    retry_fraction: float = 0.8
+    #: The retried window is this many times wider.
+    retry_widening: float = 4.0
+    #: Keyframes: frames are measured against a reference frame until the motion since it is large
+    #: enough (metres of chord, radians), so that sub-pixel errors are small against the motion.
+    key_distance: float = 0.04
+    key_angle: float = math.radians(1.5)
+    #: ... or the inliers fall below this fraction of the first frame's against the reference.
+    key_inlier_fraction: float = 0.75
+    key_max_gap: int = 12  #: frames
+    #: Factors applied element by element to the estimator's covariance before it enters the
+    #: filter. The least-squares covariance assumes independent pixel noise, but corners sit on
+    #: whole pixels and motion between frames is often below a pixel: on the rendered indoor
+    #: samples theta's spread is about 1.2x and rho's about 2.7x the least-squares figure
+    #: (notebook 08); the crawler's keeps the diagonal only.
+    vo_covariance_scale: tuple = ((1.5**2, 0.0), (0.0, 3.0**2))
+    #: A frame whose inliers fall below this fraction of the recent median has lost part of its
+    #: view to something that does not move with the world (0: not checked) ...
+    lost_view_fraction: float = 0.6
+    #: ... unless the drop lasts this many frames: then it is the new normal (a changed scene).
+    lost_view_patience: int = 15
+    #: After this many frames without a good one (for one of ``restart_reasons``, or any reason
+    #: when empty), the current frame becomes the reference: the view may have left the old one.
+    restart_gap: int = 90
+    restart_reasons: tuple = ()
+    #: Counts measured right after frames without vision are not typical of the next ones.
+    typical_counts_only: bool = True
+    #: Sideways motion per metre travelled that the odometry cannot see (``kalman``).
+    lateral_sigma: float = 0.0
+    #: Uncertainty (x, y metres; yaw radians) added to the prediction while nothing predicts the
+    #: motion (no odometry, no motion measured yet); empty: none.
+    unknown_motion_sigma: tuple = ()
+
+    def __post_init__(self):
+        if self.front_end not in FRONT_ENDS:
+            raise ValueError(f"front_end must be one of {', '.join(FRONT_ENDS)}; got {self.front_end!r}")
+        if self.motion not in MOTIONS:
+            raise ValueError(f"motion must be one of {', '.join(MOTIONS)}; got {self.motion!r}")
+
+
+#: The paper's crawler: single-scale FAST, planar model, track odometry.
+CRAWLER = PipelineConfig()
+
+#: A car on a real road: two-scale front end, turning-axis virtual camera, 6-DoF refinement.
+CAR = PipelineConfig(
+    front_end="pyramid",
+    motion="full",
+    ransac=RansacParams(pixel_sigma=1.0),
+    min_inlier_ratio=0.5,
+    max_contradictions=2,
+    recent_frames=10,
+    retry_fraction=0.6,
+    retry_widening=3.0,
+    # a standing car keeps its reference, so that it does not drift while it waits
+    key_distance=0.05,
+    key_angle=math.radians(1.0),
+    key_inlier_fraction=0.0,
+    key_max_gap=10,
+    # the residuals of real matches are neither independent nor Gaussian
+    vo_covariance_scale=((2.0**2,) * 3,) * 3,
+    lost_view_fraction=0.0,
+    restart_gap=2,
+    restart_reasons=LOST_REASONS,
+    typical_counts_only=False,
+    # a car's odometry frame is aligned with its direction of travel only to a fraction of a
+    # degree; a tight value lets the odometry's zero sideways motion overrule the vision's
+    # heading through their correlation. At 5 % the sideways motion is the vision's.
+    lateral_sigma=0.05,
+    unknown_motion_sigma=(10.0, 10.0, 1.0),
+)
+
+PRESETS = {"planar": CRAWLER, "full": CAR}

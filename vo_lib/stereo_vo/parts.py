@@ -1,0 +1,88 @@
+"""The small interfaces between the pipeline's steps, and what passes through them.
+
+A frame goes through four parts (seed 000, Fig. 3): the **front end** turns a stereo pair into
+features ``w = (u, v, d)``; the **motion model** predicts the motion from the filter, matches the
+features against the reference frame's inside the predicted windows and estimates the motion of
+the matches; the **filter** (:class:`~vo_lib.stereo_vo.kalman.VoKalmanFilter`) fuses it with the
+odometry. ``pipeline.StereoOdometry`` strings them together and decides which frames to trust;
+a researcher swaps a part by passing another object with the same methods.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Protocol
+
+import numpy as np
+
+from vo_lib.stereo_vo.features import StereoFeatures
+from vo_lib.stereo_vo.kalman import VoKalmanFilter
+from vo_lib.stereo_vo.temporal import MotionPrior, TemporalMatches
+
+
+@dataclass
+class Prediction:
+    """The filter's predicted motion since the reference frame.
+
+    ``prior`` is ``(theta, rho)`` and its covariance; ``informative`` is False while nothing
+    predicts the motion (no odometry, no motion measured yet); ``motion`` is the predicted 4x4
+    camera motion ``T_curr_from_prev`` of a 6-DoF model (None otherwise, or when uninformative).
+    """
+
+    prior: MotionPrior
+    informative: bool
+    motion: np.ndarray | None = None
+
+
+@dataclass
+class Estimate:
+    """A measured motion since the reference frame, ready for the filter.
+
+    ``z`` is ``(theta, rho)``, or ``(theta, rho, sideways)`` when the model measures the motion's
+    deviation from its chord; ``covariance`` matches it. ``inlier_ratio`` is what the pipeline
+    gates on; ``timings`` are milliseconds of ``estimation`` and ``refinement``.
+    """
+
+    success: bool
+    z: np.ndarray
+    covariance: np.ndarray
+    inliers: int
+    inlier_ratio: float
+    ransac_inliers: int = 0
+    motion: np.ndarray | None = None
+    timings: dict = field(default_factory=dict)
+
+
+class FrontEnd(Protocol):
+    """Stereo processing: features with disparity from a rectified pair."""
+
+    def process(self, left: np.ndarray, right: np.ndarray) -> StereoFeatures: ...
+
+
+class MotionModel(Protocol):
+    """Prediction, temporal matching and motion estimation for one model of the motion."""
+
+    #: 4x4 camera pose of the last frame in frame 0's camera, or None for a planar-only model.
+    camera_pose: np.ndarray | None
+
+    def predict(self, kf: VoKalmanFilter, gap: int) -> Prediction:
+        """The motion since the reference frame, ``gap`` frames back, as the filter predicts it."""
+        ...
+
+    def match(
+        self, reference: StereoFeatures, features: StereoFeatures, prediction: Prediction, recent: list
+    ) -> TemporalMatches:
+        """Temporal matches, guided by the prediction; ``recent`` are match counts of good frames."""
+        ...
+
+    def estimate(self, matches: TemporalMatches, prediction: Prediction, rng) -> Estimate:
+        """The motion of the matches (1-point RANSAC and whatever refines it)."""
+        ...
+
+    def place(self, kf: VoKalmanFilter, estimate: Estimate | None, prediction: Prediction) -> None:
+        """Pose this frame after the filter's update (``estimate``) or without one."""
+        ...
+
+    def commit(self, kf: VoKalmanFilter, estimate: Estimate | None, gap: int) -> None:
+        """This frame becomes the reference; ``estimate`` is its measured motion, if any."""
+        ...

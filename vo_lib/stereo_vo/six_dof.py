@@ -1,0 +1,256 @@
+"""The car's motion model as a pipeline part: 1-point RANSAC as the outlier filter, then 6 DoF.
+
+The steps are the paper's (Fig. 3, ``pipeline``); what changes is the model of the motion between
+two frames:
+
+1. **prediction**: the last measured 6-DoF motion, repeated (constant velocity), with its planar
+   part (yaw and ground-plane translation of the vehicle) taken from the Kalman filter, which
+   moves it with the odometry when the sequence has some;
+2. **temporal matching** inside windows around each feature's predicted position; a window grows
+   when the prediction proves poor (braking, the start of a turn) and the matcher falls back to
+   comparing every pair, so that no frame is left unmatched while the images overlap;
+3. **1-point RANSAC** (theta from eq. 14, rho from eq. 17): the outlier filter. The circular-motion
+   model holds for a camera above the axis the vehicle turns about; a car's camera is a metre
+   ahead of it, and in a turn it also slides sideways by that metre times the turned angle
+   (7 cm in a 4 deg frame: several pixels at 10 m, so that the model's gates reject true
+   matches). The matches are therefore seen from a *virtual camera on the turning axis*: each
+   stereo match is triangulated, moved into that camera's frame through the mount and projected
+   again (:func:`turning_axis_view`); the model is exact there, whatever the turn. Where it
+   keeps too few matches, the vehicle pitched or rolled between the frames (a bump, the start of
+   a slope), and a general 3-point RANSAC (OpenCV's P3P) gives the hypothesis instead;
+4. **6-DoF refinement** of the inliers on reprojection errors in both images
+   (:mod:`~vo_lib.stereo_vo.rigid_motion`), which also chooses the inliers again;
+5. **Kalman update**: the filter keeps the vehicle's *planar* pose, ``(x, y, yaw)`` of the axis it
+   turns about; the refined camera motion is carried into the vehicle frame through the camera's
+   mount (so a camera a metre ahead of the axis does not read a turn as a sideways step) and its
+   ``(theta, rho)`` corrects the filter, as for the crawler, together with the sideways
+   deviation from the chord, which the 6-DoF motion measures: the crawler's constraint that it is
+   zero is not imposed, because where a car's axis lies and how its frame is aligned are known
+   only to a few tenths of a degree, and 0.4 deg of misalignment is 0.7 m of drift per 100 m.
+   The rest of the motion (height, pitch, roll), which odometry cannot observe, comes from the
+   vision alone.
+
+Why the filter stays planar: the odometry it fuses (tracks, wheels, or speed and yaw rate) measures
+only the planar motion, and the paper's filter (eq. 1-11) is planar; a 6-DoF state would carry
+three components that nothing but the vision measures, and gain nothing from the filter.
+
+Each frame's 6-DoF camera pose is its reference frame's pose composed with the motion since then,
+whose planar part is the filter's and whose other part is the vision's.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+
+from vo_lib.camera import StereoCamera
+from vo_lib.geometry import camera_mount, yaw_matrix
+from vo_lib.stereo_vo.circular_motion import motion_matrices
+from vo_lib.stereo_vo.config import PipelineConfig
+from vo_lib.stereo_vo.kalman import VoKalmanFilter, chord_measurement
+from vo_lib.stereo_vo.parts import Estimate, Prediction
+from vo_lib.stereo_vo.ransac import one_point_ransac
+from vo_lib.stereo_vo.rigid_motion import general_ransac, refine_rigid_motion, rotation_matrix, scaled_motion
+from vo_lib.stereo_vo.temporal import match_features, predict_features
+
+#: Window half-width around a predicted position: a floor, plus a share of the predicted image
+#: motion (a near point moving 100 px between frames is predicted less well than a far one).
+WINDOW_PIXELS = 12.0
+WINDOW_FLOW_FRACTION = 0.15
+#: The disparity window: a floor plus a share of the predicted disparity (pixels).
+DISPARITY_FLOOR = 2.0
+DISPARITY_WINDOW = 0.3
+PREDICTED_RATIO = 0.9  # ratio test of the matching (pyramid features, larger motions)
+#: Good frames the recent median needs; before, this many times ``min_inliers`` matches are expected.
+RETRY_HISTORY = 3
+EXPECTED_FACTOR = 4
+
+
+def rigid_inverse(T: np.ndarray) -> np.ndarray:
+    """Inverse of a 4x4 rigid transform: ``(R^T, -R^T t)``."""
+    out = np.eye(4)
+    out[:3, :3] = T[:3, :3].T
+    out[:3, 3] = -T[:3, :3].T @ T[:3, 3]
+    return out
+
+
+def vehicle_increment(T_cam: np.ndarray, mount: np.ndarray) -> np.ndarray:
+    """``(dx, dy, dyaw)`` of the vehicle, in its previous frame, for a camera motion ``T_cam``
+    (``T_curr_from_prev`` of the camera mounted at ``mount`` = ``T_vehicle_camera``)."""
+    V = mount @ rigid_inverse(T_cam) @ rigid_inverse(mount)
+    return np.array([V[0, 3], V[1, 3], math.atan2(V[1, 0], V[0, 0])])
+
+
+def with_planar_increment(T_cam: np.ndarray, mount: np.ndarray, increment) -> np.ndarray:
+    """``T_cam`` with the vehicle's yaw and ground-plane translation replaced by ``increment``;
+    height, pitch and roll are kept."""
+    V = mount @ rigid_inverse(T_cam) @ rigid_inverse(mount)
+    yaw = math.atan2(V[1, 0], V[0, 0])
+    dx, dy, dyaw = (float(v) for v in increment)
+    V[:3, :3] = yaw_matrix(dyaw - yaw) @ V[:3, :3]
+    V[0, 3], V[1, 3] = dx, dy
+    return rigid_inverse(rigid_inverse(mount) @ V @ mount)
+
+
+def turning_axis_transform(mount: np.ndarray) -> np.ndarray:
+    """4x4 map from the camera's frame to a virtual camera's on the vehicle's turning axis.
+
+    The virtual camera has the real one's height, looks along the vehicle's x axis with its y axis
+    down the vehicle's z axis (``camera_mount(0, height, 0)``), so that a planar motion of the
+    vehicle is exactly the circular motion of eq. 15 in its frame.
+    """
+    axis_camera = camera_mount(0.0, float(mount[2, 3]), 0.0)
+    return rigid_inverse(axis_camera) @ np.asarray(mount, float)
+
+
+def turning_axis_view(w: np.ndarray, camera: StereoCamera, to_axis: np.ndarray) -> np.ndarray:
+    """Matches ``(u, v, d)`` as the virtual camera of :func:`turning_axis_transform` sees them
+    (same intrinsics): triangulate, move, project."""
+    X = camera.backproject(w)
+    return camera.project(X @ to_axis[:3, :3].T + to_axis[:3, 3])
+
+
+def chord_covariance(T_cam: np.ndarray, covariance6: np.ndarray, mount: np.ndarray) -> np.ndarray:
+    """3x3 covariance of ``(theta, rho, sideways)`` of the vehicle, propagated from the 6x6
+    covariance of the camera motion (rotation vector on the left, translation) by central
+    differences."""
+    J = np.zeros((3, 6))
+    h = 1e-6
+    for k in range(6):
+        delta = np.zeros(6)
+        delta[k] = h
+        out = []
+        for sign in (1.0, -1.0):
+            dR = rotation_matrix(sign * delta[:3])
+            T = np.eye(4)
+            T[:3, :3] = dR @ T_cam[:3, :3]
+            T[:3, 3] = dR @ T_cam[:3, 3] + sign * delta[3:]
+            out.append(chord_measurement(vehicle_increment(T, mount)))
+        J[:, k] = (out[0] - out[1]) / (2 * h)
+    return J @ covariance6 @ J.T
+
+
+def windows(predicted: np.ndarray, square) -> np.ndarray:
+    """Half-widths ``(N, 3)`` of the matching windows around predicted ``(u, v, d)``: ``square``
+    pixels in u and v, and ``DISPARITY_FLOOR + DISPARITY_WINDOW * d`` in disparity."""
+    square = np.broadcast_to(np.asarray(square, float), (len(predicted),))
+    return np.column_stack([square, square, DISPARITY_FLOOR + DISPARITY_WINDOW * predicted[:, 2]])
+
+
+class SixDofMotion:
+    """A car's camera: 1-point RANSAC from the turning axis as the outlier filter, then 6 DoF.
+
+    Parameters
+    ----------
+    camera : StereoCamera
+    mount : ndarray, 4x4
+        ``T_vehicle_camera``; the filter's planar pose is the vehicle's.
+    config : PipelineConfig
+    """
+
+    def __init__(self, camera: StereoCamera, mount: np.ndarray, config: PipelineConfig):
+        self.camera = camera
+        self.config = config
+        self.mount = np.asarray(mount, float)
+        self.to_axis = turning_axis_transform(self.mount)
+        self.reference_pose = np.eye(4)  # camera pose of the reference frame, in frame 0's
+        self.camera_pose = np.eye(4)
+        self.velocity: np.ndarray | None = None  # camera motion per frame, T_curr_from_prev
+
+    # ------------------------------------------------------------------ prediction
+    def predict(self, kf: VoKalmanFilter, gap: int) -> Prediction:
+        """Camera motion from the reference to this frame: constant velocity, planar part from
+        the filter (which used the odometry, if any); nothing while neither is known."""
+        if self.velocity is None and not kf.flags.odometry:
+            return Prediction(kf.motion_prior(), False)
+        T = np.eye(4) if self.velocity is None else scaled_motion(self.velocity, gap)
+        return Prediction(kf.motion_prior(), True, with_planar_increment(T, self.mount, kf.increment))
+
+    def match(self, reference, features, prediction: Prediction, recent):
+        if prediction.motion is None:
+            return match_features(reference, features, ratio=PREDICTED_RATIO)
+        pred, _ = predict_features(reference.w, self.camera, prediction.motion)
+        flow = np.linalg.norm(pred[:, :2] - reference.w[:, :2], axis=1)
+        square = WINDOW_PIXELS + WINDOW_FLOW_FRACTION * np.nan_to_num(flow, nan=0.0)
+        matches = match_features(reference, features, pred, windows(pred, square), PREDICTED_RATIO)
+        min_inliers = self.config.min_inliers
+        expected = np.median(recent) if len(recent) >= RETRY_HISTORY else EXPECTED_FACTOR * min_inliers
+        if len(matches) < self.config.retry_fraction * expected:
+            radius = windows(pred, self.config.retry_widening * square)
+            wider = match_features(reference, features, pred, radius, PREDICTED_RATIO)
+            matches = wider if len(wider) > len(matches) else matches
+        if len(matches) < min_inliers:  # the prediction is lost: compare every pair
+            brute = match_features(reference, features, ratio=PREDICTED_RATIO)
+            matches = brute if len(brute) > len(matches) else matches
+        return matches
+
+    # ------------------------------------------------------------------ estimation
+    def hypothesis(self, w_prev, w_curr, T_pred, rng):
+        """The outlier filter: ``(motion guess, inlier mask or None, inlier ratio)`` of matches.
+
+        1-point RANSAC on the matches seen from the turning axis (eq. 14-17); when it keeps fewer
+        than ``min_inlier_ratio`` of them (the vehicle pitched or rolled, or most matches are
+        wrong) a general 3-point RANSAC is tried and the better of the two is kept.
+        """
+        est = one_point_ransac(
+            turning_axis_view(w_prev, self.camera, self.to_axis),
+            turning_axis_view(w_curr, self.camera, self.to_axis),
+            self.camera,
+            rng=rng,
+            params=self.config.ransac,
+        )
+        ratio = float(est.inliers.mean()) if est.success else 0.0
+        if est.success:
+            on_axis = np.eye(4)
+            on_axis[:3, :3], on_axis[:3, 3] = motion_matrices(est.theta, est.rho)
+            # the virtual camera's motion, seen from the real camera
+            guess, start = rigid_inverse(self.to_axis) @ on_axis @ self.to_axis, est.inliers
+        else:
+            guess, start = (np.eye(4) if T_pred is None else T_pred), None
+        if ratio < self.config.min_inlier_ratio:
+            general = general_ransac(w_prev, w_curr, self.camera, int(rng.integers(2**31)))
+            if general is not None and general[1].mean() > ratio:
+                guess, start = general
+                ratio = float(start.mean())
+        return guess, start, ratio
+
+    def estimate(self, matches, prediction: Prediction, rng) -> Estimate:
+        """The hypothesis, refined in 6 DoF; ``z = (theta, rho, sideways)`` of the vehicle."""
+        guess, start, ratio = self.hypothesis(matches.w_prev, matches.w_curr, prediction.motion, rng)
+        t0 = time.perf_counter()
+        motion = refine_rigid_motion(matches.w_prev, matches.w_curr, self.camera, guess, start)
+        refinement = (time.perf_counter() - t0) * 1e3
+        z = chord_measurement(vehicle_increment(motion.matrix, self.mount))
+        covariance = np.asarray(self.config.vo_covariance_scale) * chord_covariance(
+            motion.matrix, motion.covariance, self.mount
+        )
+        return Estimate(
+            motion.success,
+            z,
+            covariance,
+            int(motion.inliers.sum()),
+            ratio,
+            int(round(ratio * len(matches))),
+            motion.matrix,
+            {"refinement": refinement},
+        )
+
+    # ------------------------------------------------------------------ poses
+    def place(self, kf: VoKalmanFilter, estimate: Estimate | None, prediction: Prediction) -> None:
+        """The camera pose: the reference's, composed with the motion since it, whose planar part
+        is the filter's (the prediction's motion, or none, when the vision was not used)."""
+        if estimate is None:
+            since_reference = prediction.motion if prediction.motion is not None else np.eye(4)
+        else:
+            since_reference = estimate.motion
+        fused = with_planar_increment(since_reference, self.mount, kf.increment)
+        self.camera_pose = self.reference_pose @ np.linalg.inv(fused)
+        self._fused = fused
+
+    def commit(self, kf: VoKalmanFilter, estimate: Estimate | None, gap: int) -> None:
+        """A measured motion since the old reference is remembered per frame (constant velocity)."""
+        if estimate is not None:
+            self.velocity = scaled_motion(self._fused, 1.0 / max(gap, 1))
+        self.reference_pose = self.camera_pose.copy()
