@@ -60,9 +60,7 @@ SCIENTIFIC = re.compile(
 #: Grid sizes such as 4×4 or 3×3 panels are dimensions, not ratios.
 DIMENSION = re.compile(rf"{_NUM}\s?×\s?(?:{_NUM}|[a-zA-Z]\b)")
 #: Words by which a sentence says it quotes a paper.
-CITES_PAPER = re.compile(
-    r"paper|seed 00\d|Table\s+\d|Fig(?:ure|\.)\s*\d|authors|\bMonteiro|Zhao|Sun\b", re.I
-)
+CITES_PAPER = re.compile(r"paper|seed 00\d|Table\s+\d|Fig(?:ure|\.)\s*\d|authors|\bMonteiro|Zhao|Sun\b", re.I)
 
 #: The header's run time is the whole notebook's wall time, which no cell can compute before the
 #: notebook ends; it is an estimate for the reference machine, not a result.
