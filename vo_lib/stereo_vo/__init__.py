@@ -25,6 +25,7 @@ Read in the order a frame is processed (``pipeline`` strings the parts of ``part
 ``baselines``         3-point rigid RANSAC, solvePnPRansac, 5-point essential matrix
 ``pnp_baseline``      a PnP visual odometry to time the pipeline against on real data
 ``synthetic``         matches under a known circular motion, for exact checks
+``paper_sets``        the paper's outdoor and spot-turn sets at full length, run once and stored
 
 The command ``python -m vo_lib run`` runs ``pipeline`` on a sequence.
 """
