@@ -260,7 +260,7 @@ for theta_true, rho_true in [(0.0, 0.10), (np.radians(3.0), 0.08), (np.radians(-
 # **Δyaw = θ**, and the camera, if it sits above the turning axis, moves by
 # (ρ cos φ, ρ sin φ) in the previous robot frame. `vo_lib.stereo_vo.circular_motion.yaw_increment` and
 # `robot_increment` encode this; notebook 03 checks it against a simulated robot.
-
+#
 #
 # We test the sign without eq. 15: a robot above whose turning axis the camera sits turns
 # **left** on the spot by a known positive yaw; the new camera frame is built from the robot frame

@@ -783,7 +783,7 @@ def test_a_sequence_being_read_is_not_replaced(template, tmp_path, monkeypatch, 
 
 def test_run_holds_its_input_while_it_reads(template, tmp_path, monkeypatch, capsys):
     """During the pipeline, replacing the run's input sequence fails (the run holds its lock)."""
-    import vo_lib.cli.run as run_module
+    import vo_lib.stereo_vo.pipeline as run_module  # run imports the pipeline where it runs it
     from vo_lib.outputs import OutputError, OutputFolder
 
     ws = tmp_path / "ws"
