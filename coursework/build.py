@@ -35,6 +35,7 @@ import signal
 import subprocess
 import sys
 import tempfile
+import time
 
 import jupytext
 import nbformat
@@ -45,6 +46,10 @@ NOTEBOOK_GLOB = "[0-9][0-9]_*.py"
 CONFIG = pathlib.Path(__file__).with_name("nbgrader_config.py")
 STUDENT_DIR, GRADING_DIR = "student", "grading"
 MARKER = ".coursework_build.json"
+SUBMISSIONS_DIR = pathlib.Path(__file__).with_name("submissions")
+ADVERSARIAL_KINDS = ("constant", "library", "wrong")  # and "unanswered": the release itself
+ANSWER_HEADER = re.compile(r"^# %% (\S+) (\S+)[ \t]*\n", re.M)  # "# %% ex1 wrong_sign" opens an answer
+SCORE_COLUMNS = ("correct", "unanswered", *ADVERSARIAL_KINDS)
 SOLUTIONS_STUDENT, UNANSWERED_STUDENT = "solutions", "unanswered"
 REGIONS = [  # nbgrader's markers: solution code, and tests kept from the student edition
     re.compile(rf"^\s*### BEGIN {what}\s*$(.*?)^\s*### END {what}\s*$", re.M | re.S)
@@ -181,32 +186,119 @@ def exercise_cell(cell: nbformat.NotebookNode) -> bool:
     return bool(meta.get("solution") or meta.get("grade"))
 
 
-def check(course: pathlib.Path, paths: list[pathlib.Path]) -> list[str]:
-    """Autograde solutions and unanswered student notebooks in a copy of ``course``.
+def answer_ids(nb: nbformat.NotebookNode) -> list[str]:
+    """grade_id of every autograded exercise: a code solution cell followed by its test cell."""
+    return [
+        c.metadata["nbgrader"]["grade_id"]
+        for c in nb.cells
+        if c.cell_type == "code" and c.metadata.get("nbgrader", {}).get("solution")
+    ]
 
-    Returns one line per notebook; raises BuildError naming every problem found.
+
+def read_submissions(path: pathlib.Path, ids: list[str]) -> dict[str, dict[str, str]]:
+    """The adversarial answers of notebook ``path``: ``{exercise: {kind: code}}``, checked complete.
+
+    Every autograded exercise needs each of ``ADVERSARIAL_KINDS``; an exercise with no ``vo_lib``
+    function to call says why under ``no_library`` instead of giving a library-calling answer.
+    """
+    file = SUBMISSIONS_DIR / f"{path.stem}.answers"
+    if not file.is_file():
+        raise BuildError(f"{path.name}: no adversarial submissions ({file.relative_to(ROOT)} is missing)")
+    answers: dict[str, dict[str, str]] = {}
+    parts = ANSWER_HEADER.split(file.read_text())
+    for exercise, kind, code in zip(parts[1::3], parts[2::3], parts[3::3], strict=True):
+        if kind in answers.setdefault(exercise, {}):
+            raise BuildError(f"{file.name}: {exercise} {kind} is given twice")
+        answers[exercise][kind] = code
+    problems = sorted(set(answers) ^ set(ids))
+    if problems:
+        raise BuildError(f"{file.name}: exercises {problems} do not match the notebook's {ids}")
+    for exercise, kinds in answers.items():
+        for kind in ADVERSARIAL_KINDS:
+            if not any(k == kind or k.startswith(kind + "_") for k in kinds):
+                if not (kind == "library" and "no_library" in kinds):
+                    raise BuildError(f"{file.name}: [{exercise}] has no {kind!r} answer")
+        kinds.pop("no_library", None)
+    return answers
+
+
+def adversarial_notebooks(
+    release: nbformat.NotebookNode, answers: dict[str, dict[str, str]]
+) -> list[tuple[str, nbformat.NotebookNode, dict[str, str]]]:
+    """The release with its answer cells filled in, as few notebooks as cover every answer.
+
+    Submission ``j`` gives exercise ``i`` its answer number ``(i + j) mod n``, ``n`` the largest
+    number of answers of any exercise; an exercise with fewer is left unanswered in the others.
+    Returns ``(student name, notebook, {exercise: kind})`` for each.
+    """
+    ids = list(answers)
+    count = max(len(kinds) for kinds in answers.values())
+    made = []
+    for j in range(count):
+        nb = nbformat.from_dict(json.loads(json.dumps(release)))
+        given = {}
+        for i, exercise in enumerate(ids):
+            kinds = list(answers[exercise])
+            k = (i + j) % count
+            if k < len(kinds):
+                given[exercise] = kinds[k]
+        for cell in nb.cells:
+            exercise = cell.metadata.get("nbgrader", {}).get("grade_id")
+            if cell.cell_type == "code" and exercise in given:
+                cell.source = answers[exercise][given[exercise]].strip("\n")
+        made.append((f"adversarial{j + 1}", nb, given))
+    return made
+
+
+def exercise_scores(sub, ids: list[str]) -> dict[str, tuple[float, float]]:
+    """Autograded (score, maximum) of each exercise of one graded submission notebook."""
+    scores = {}
+    for exercise in ids:
+        tests = [g for g in sub.grades if g.name == f"{exercise}_test" and g.auto_score is not None]
+        scores[exercise] = (sum(g.auto_score for g in tests), sum(g.max_score for g in tests))
+    return scores
+
+
+def check(course: pathlib.Path, paths: list[pathlib.Path]) -> list[str]:
+    """Autograde the solutions, the unanswered edition and the adversarial answers of ``paths``.
+
+    In a copy of ``course``: the solutions must score every autograded point; every other
+    submission (unanswered, constant or truth-copying, library-calling, plausibly wrong; see
+    ``coursework/submissions/``) must score 0 in each exercise, while cells outside the
+    exercises run without error. Returns the score table (one line per exercise, then the
+    seconds each submission took); raises BuildError naming every problem found.
     """
     from nbgrader.api import Gradebook  # only the check needs nbgrader's database layer
 
-    problems, report = [], []
+    problems: list[str] = []
+    rows = [f"{'exercise':<40} {'points':>6}  " + "  ".join(f"{k:>10}" for k in SCORE_COLUMNS)]
+    times = []
     with tempfile.TemporaryDirectory(prefix="vo-coursework-check-") as tmp:
         work = pathlib.Path(tmp) / "course"
         shutil.copytree(course, work)
+        plan = {}
         for path in paths:
             name = f"{path.stem}.ipynb"
-            for student, edition in ((SOLUTIONS_STUDENT, "source"), (UNANSWERED_STUDENT, "release")):
+            source = nbformat.read(work / "source" / path.stem / name, as_version=4)
+            release = nbformat.read(work / "release" / path.stem / name, as_version=4)
+            ids = answer_ids(source)
+            subs = [(SOLUTIONS_STUDENT, source, dict.fromkeys(ids, "correct"))]
+            subs.append((UNANSWERED_STUDENT, release, dict.fromkeys(ids, "unanswered")))
+            subs += adversarial_notebooks(release, read_submissions(path, ids))
+            plan[path] = (ids, subs)
+            for student, nb, _ in subs:
                 folder = work / "submitted" / student / path.stem
                 folder.mkdir(parents=True)
-                shutil.copy2(work / edition / path.stem / name, folder / name)
-            run_nbgrader(work, "autograde", path.stem, "--force")
+                nbformat.write(nb, folder / name)
+                started = time.monotonic()
+                run_nbgrader(work, "autograde", path.stem, f"--student={student}", "--force")
+                times.append(f"{path.stem[:2]} {student}: {time.monotonic() - started:.1f} s")
         with Gradebook(f"sqlite:///{work / 'gradebook.db'}") as gradebook:
-            for path in paths:
-                auto_points = {}  # autograded points scored, of those that can be autograded
-                for student in (SOLUTIONS_STUDENT, UNANSWERED_STUDENT):
+            for path, (ids, subs) in plan.items():
+                table = {exercise: {} for exercise in ids}
+                top = {}
+                for student, _, given in subs:
                     sub = gradebook.find_submission_notebook(path.stem, path.stem, student)
-                    auto = [g for g in sub.grades if g.auto_score is not None]
-                    auto_points[student] = (sum(g.auto_score for g in auto), sum(g.max_score for g in auto))
-                    by_hand = sub.max_score - auto_points[student][1]
                     graded = nbformat.read(
                         work / "autograded" / student / path.stem / f"{path.stem}.ipynb", as_version=4
                     )
@@ -215,19 +307,29 @@ def check(course: pathlib.Path, paths: list[pathlib.Path]) -> list[str]:
                         if failed and (student == SOLUTIONS_STUDENT or not exercise_cell(cell)):
                             head = cell.source[:60]
                             problems.append(f"{path.name} ({student}): cell {index} fails: {head!r}")
-                    if student == UNANSWERED_STUDENT:
-                        passed = [g.name for g in auto if g.auto_score > 0]
-                        problems += [f"{path.name}: unanswered {g!r} passes its test" for g in passed]
-                got, top = auto_points[SOLUTIONS_STUDENT]
-                if top == 0 or got != top:
-                    problems.append(f"{path.name}: the solutions score {got:g} of {top:g} autograded points")
-                report.append(
-                    f"{path.stem}: autograded points: solutions {got:g}/{top:g}, "
-                    f"unanswered {auto_points[UNANSWERED_STUDENT][0]:g}/{top:g}; {by_hand:g} graded by hand"
-                )
+                    for exercise, (got, most) in exercise_scores(sub, ids).items():
+                        top[exercise] = most
+                        if exercise not in given:
+                            continue
+                        kind = given[exercise]
+                        table[exercise].setdefault(kind.split("_")[0], []).append(got)
+                        if most == 0:
+                            problems.append(f"{path.name}: {exercise} has no autograded points")
+                        elif (got != most) if kind == "correct" else (got != 0):
+                            problems.append(
+                                f"{path.name} {exercise}: the {kind} answer ({student}) "
+                                f"scores {got:g} of {most:g}"
+                            )
+                for exercise in ids:
+                    cells = [
+                        "/".join(f"{g:g}" for g in table[exercise][k]) if k in table[exercise] else "-"
+                        for k in SCORE_COLUMNS
+                    ]
+                    label = f"{path.stem[:2]} {exercise}"
+                    rows.append(f"{label:<40} {top[exercise]:>6g}  " + "  ".join(f"{c:>10}" for c in cells))
     if problems:
-        raise BuildError("\n".join(problems))
-    return report
+        raise BuildError("\n".join(rows + times + problems))
+    return rows + ["seconds per submission (autograde, nbgrader's start included):"] + times
 
 
 def build(out: pathlib.Path, paths: list[pathlib.Path], check_paths: list[pathlib.Path]) -> None:
