@@ -272,7 +272,7 @@ def check(course: pathlib.Path, paths: list[pathlib.Path]) -> list[str]:
 
     problems: list[str] = []
     rows = [f"{'exercise':<40} {'points':>6}  " + "  ".join(f"{k:>10}" for k in SCORE_COLUMNS)]
-    times = []
+    times, reasons = [], ["why each adversarial answer failed:"]
     with tempfile.TemporaryDirectory(prefix="vo-coursework-check-") as tmp:
         work = pathlib.Path(tmp) / "course"
         shutil.copytree(course, work)
@@ -303,7 +303,12 @@ def check(course: pathlib.Path, paths: list[pathlib.Path]) -> list[str]:
                         work / "autograded" / student / path.stem / f"{path.stem}.ipynb", as_version=4
                     )
                     for index, cell in enumerate(graded.cells):
-                        failed = any(o.get("output_type") == "error" for o in cell.get("outputs", []))
+                        errors = [o for o in cell.get("outputs", []) if o.get("output_type") == "error"]
+                        failed = bool(errors)
+                        test_of = cell.metadata.get("nbgrader", {}).get("grade_id", "").removesuffix("_test")
+                        if errors and given.get(test_of, "correct") not in ("correct", "unanswered"):
+                            why = f"{errors[0]['ename']}: {errors[0]['evalue']}".splitlines()[0][:90]
+                            reasons.append(f"{path.stem[:2]} {test_of} {given[test_of]}: {why}")
                         if failed and (student == SOLUTIONS_STUDENT or not exercise_cell(cell)):
                             head = cell.source[:60]
                             problems.append(f"{path.name} ({student}): cell {index} fails: {head!r}")
@@ -328,8 +333,8 @@ def check(course: pathlib.Path, paths: list[pathlib.Path]) -> list[str]:
                     label = f"{path.stem[:2]} {exercise}"
                     rows.append(f"{label:<40} {top[exercise]:>6g}  " + "  ".join(f"{c:>10}" for c in cells))
     if problems:
-        raise BuildError("\n".join(rows + times + problems))
-    return rows + ["seconds per submission (autograde, nbgrader's start included):"] + times
+        raise BuildError("\n".join(rows + reasons + times + problems))
+    return rows + reasons + ["seconds per submission (autograde, nbgrader's start included):"] + times
 
 
 def build(out: pathlib.Path, paths: list[pathlib.Path], check_paths: list[pathlib.Path]) -> None:

@@ -329,6 +329,7 @@ drive_widget = offer(
 #
 # *Hint:* eq. 4 gives the heading per step; `odo.integrate(controls, exact=True)`.
 
+
 # %% nbgrader={"grade": false, "grade_id": "ex1", "locked": false, "schema_version": 3, "solution": true}
 ### BEGIN SOLUTION
 def full_turn_steps(gauge, step):
@@ -346,12 +347,12 @@ print(f"{n_full_turn} steps for a full turn; the centre moves at most {spot_tran
 # %% nbgrader={"grade": true, "grade_id": "ex1_test", "locked": true, "points": 2, "schema_version": 3, "solution": false}
 # Exercise 1: autograder test
 turned = np.cumsum(np.diff(np.unwrap(spot_poses[:, 2])))
-assert len(spot_poses) == n_full_turn + 1
+assert len(spot_poses) == n_full_turn + 1, "spot_poses: the start and one pose per step"
 assert turned[-1] >= 2 * np.pi - 1e-9 > turned[-2], "the smallest number of steps reaching 360°"
 assert spot_translation < 1e-12, "eq. 2-3: a spot turn does not translate"
 ### BEGIN HIDDEN TESTS
 fresh = np.random.default_rng()  # new inputs at every grading: a number typed in cannot pass
-for gauge, step in zip(fresh.uniform(0.3, 1.5, 20), fresh.uniform(0.002, 0.03, 20)):
+for gauge, step in zip(fresh.uniform(0.3, 1.5, 20), fresh.uniform(0.002, 0.03, 20), strict=True):
     per_step = 2 * step / gauge  # eq. 4
     n = full_turn_steps(gauge, step)
     assert (n - 1) * per_step < 2 * np.pi <= n * per_step, (
@@ -372,6 +373,7 @@ for gauge, step in zip(fresh.uniform(0.3, 1.5, 20), fresh.uniform(0.002, 0.03, 2
 #
 # *Hint:* `apply_slip`; with slip the tracks no longer move by equal and opposite distances, so
 # the robot drives a small circle. Which radius?
+
 
 # %% nbgrader={"grade": false, "grade_id": "ex2", "locked": false, "schema_version": 3, "solution": true}
 ### BEGIN SOLUTION
@@ -394,12 +396,13 @@ print(
 
 # %% nbgrader={"grade": true, "grade_id": "ex2_test", "locked": true, "points": 3, "schema_version": 3, "solution": false}
 # Exercise 2: autograder test
-assert slip_poses.shape == (n_full_turn + 1, 3)
-assert 0 < slip_displacement < 0.05 and 0 < slip_heading_error < np.pi
+assert slip_poses.shape == (n_full_turn + 1, 3), "slip_poses: the start and one pose per step"
+assert 0 < slip_displacement < 0.05, "the slipping turn ends a few millimetres from its start"
+assert 0 < slip_heading_error < np.pi, "the odometry believes it turned more than it did"
 assert np.isclose(slip_displacement, np.hypot(*slip_poses[-1, :2])), "the true final position"
 ### BEGIN HIDDEN TESTS
 fresh = np.random.default_rng()  # new inputs at every grading
-for slip, n in zip(fresh.uniform(0.02, 0.3, 5), fresh.integers(20, 400, 5)):
+for slip, n in zip(fresh.uniform(0.02, 0.3, 5), fresh.integers(20, 400, 5), strict=True):
     # every step moves slip * 1 cm / 2 forward and turns (2 - slip) cm / gauge: an arc of radius
     # R, whose chord after the whole turn is 2 R |sin(turn / 2)|
     step_forward, step_turn = 0.5 * slip * 0.01, (2 - slip) * 0.01 / odo.gauge
@@ -435,6 +438,7 @@ print(
     f"{len(recorded)} steps recorded; with the nominal gauge {odo.gauge:.2f} m they turn {nominal_turn:.1f}°"
 )
 
+
 # %% nbgrader={"grade": false, "grade_id": "ex3", "locked": false, "schema_version": 3, "solution": true}
 ### BEGIN SOLUTION
 def fit_gauge(readings, turn):
@@ -454,10 +458,11 @@ print(f"fitted gauge {fitted_gauge:.4f} m (nominal {odo.gauge:.2f} m)")
 
 # %% nbgrader={"grade": true, "grade_id": "ex3_test", "locked": true, "points": 4, "schema_version": 3, "solution": false}
 # Exercise 3: autograder test
-assert isinstance(calibrated, TrackOdometry) and calibrated.track_distance == odo.track_distance
-assert np.isclose(calibrated.gauge, fitted_gauge)
+assert isinstance(calibrated, TrackOdometry), "calibrated is a TrackOdometry"
+assert calibrated.track_distance == odo.track_distance, "keep the distance between the tracks"
+assert np.isclose(calibrated.gauge, fitted_gauge), "calibrated has the fitted gauge"
 final_turn = np.sum(calibrated.increment(recorded)[1])
-assert abs(np.degrees(final_turn - true_turn)) < 0.1
+assert abs(np.degrees(final_turn - true_turn)) < 0.1, "calibrated misses the recorded turn"
 ### BEGIN HIDDEN TESTS
 fresh = np.random.default_rng()  # a new crawler and recording at every grading
 for _ in range(5):
