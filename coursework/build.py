@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import argparse
 import hashlib
+import html as html_module
 import json
 import os
 import pathlib
@@ -259,6 +260,22 @@ def exercise_scores(sub, ids: list[str]) -> dict[str, tuple[float, float]]:
     return scores
 
 
+def feedback_leaks(course: pathlib.Path, path: pathlib.Path, student: str) -> list[str]:
+    """Generate ``student``'s feedback on notebook ``path``; return the hidden-test lines it shows."""
+    run_nbgrader(course, "generate_feedback", path.stem, f"--student={student}", "--force")
+    html = (course / "feedback" / student / path.stem / f"{path.stem}.html").read_text()
+    source = nbformat.read(course / "source" / path.stem / f"{path.stem}.ipynb", as_version=4)
+    hidden = {
+        line.strip()
+        for cell in source.cells
+        for m in REGIONS[1].finditer(cell.source)
+        for line in m.group(1).splitlines()
+        if len(line.strip()) > 20 and not line.strip().startswith("#")
+    }
+    shown = {line.strip() for line in re.sub(r"<[^>]+>", "", html_module.unescape(html)).splitlines()}
+    return sorted(hidden & shown)
+
+
 def check(course: pathlib.Path, paths: list[pathlib.Path]) -> list[str]:
     """Autograde the solutions, the unanswered edition and the adversarial answers of ``paths``.
 
@@ -325,6 +342,9 @@ def check(course: pathlib.Path, paths: list[pathlib.Path]) -> list[str]:
                                 f"{path.name} {exercise}: the {kind} answer ({student}) "
                                 f"scores {got:g} of {most:g}"
                             )
+                leaked = feedback_leaks(work, path, subs[-1][0])
+                if leaked:
+                    problems.append(f"{path.name}: the feedback shows hidden test text: {leaked[0]!r}")
                 for exercise in ids:
                     cells = [
                         "/".join(f"{g:g}" for g in table[exercise][k]) if k in table[exercise] else "-"
