@@ -53,6 +53,7 @@ PAGES = {
     "README.md": ROOT / "README.md",
     "docs/errata.md": DOCS / "errata.md",
     "docs/notation.md": DOCS / "notation.md",
+    "docs/course.md": DOCS / "course.md",
     "data/README.md": ROOT / "data" / "README.md",
 }
 TITLE = "vo-notebooks"
