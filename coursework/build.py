@@ -174,7 +174,12 @@ def refuse_unless_replaceable(dest: pathlib.Path) -> None:
     marker = dest / MARKER
     if not marker.is_file():
         raise UsageError(f"{dest}: exists and was not written by coursework/build.py; move it or use --out")
-    written = json.loads(marker.read_text())["files"]
+    try:
+        written = json.loads(marker.read_text())["files"]
+        if not isinstance(written, dict):
+            raise TypeError("files is not a mapping")
+    except (ValueError, KeyError, TypeError) as exc:
+        raise UsageError(f"{dest}: its {MARKER} is damaged ({exc}); move the folder or use --out") from None
     now = file_checksums(dest)
     changed = sorted(
         (set(written) ^ set(now)) | {k for k in written.keys() & now.keys() if written[k] != now[k]}
@@ -475,8 +480,15 @@ def build(out: pathlib.Path, paths: list[pathlib.Path], check_paths: list[pathli
             shutil.rmtree(folder, ignore_errors=True)
 
 
+class OneLineParser(argparse.ArgumentParser):
+    """Argument errors as one line (a UsageError), not argparse's usage block."""
+
+    def error(self, message: str):
+        raise UsageError(message)
+
+
 def parse_args(argv: list[str] | None) -> argparse.Namespace:
-    parser = argparse.ArgumentParser(
+    parser = OneLineParser(
         prog="python coursework/build.py",
         description="Write student/ (notebooks without solutions) and grading/ (nbgrader's course folder).",
     )
@@ -494,11 +506,13 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
 
 
 def main(argv: list[str] | None = None) -> int:
-    args = parse_args(argv)
     signal.signal(signal.SIGTERM, lambda *_: sys.exit(128 + signal.SIGTERM))
     try:
+        args = parse_args(argv)
         if not args.out.is_dir():
             raise UsageError(f"--out {args.out}: expected an existing folder")
+        if not os.access(args.out, os.W_OK | os.X_OK):
+            raise UsageError(f"--out {args.out}: not writable")
         paths = notebook_paths(args.notebooks)
         check_paths = [] if args.check is None else notebook_paths(args.check) if args.check else paths
         missing = [p.name for p in check_paths if p not in paths]
@@ -511,6 +525,9 @@ def main(argv: list[str] | None = None) -> int:
     except BuildError as exc:
         print(f"coursework/build.py: {exc}", file=sys.stderr)
         return EXIT_FAILED
+    except PermissionError as exc:
+        print(f"coursework/build.py: {exc.filename}: permission denied", file=sys.stderr)
+        return EXIT_USAGE
     except KeyboardInterrupt:
         print("coursework/build.py: interrupted; nothing written", file=sys.stderr)
         return 130

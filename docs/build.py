@@ -179,8 +179,11 @@ def claim_build_folder(out: pathlib.Path) -> None:
         raise UsageError(f"--out {out}: exists and is not a folder")
     if out.is_dir() and any(out.iterdir()) and not (out / MARKER).is_file():
         raise UsageError(f"--out {out}: not empty and not a site build folder (no {MARKER} in it)")
-    out.mkdir(parents=True, exist_ok=True)
-    (out / MARKER).write_text("written by python docs/build.py; everything here is regenerated\n")
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        (out / MARKER).write_text("written by python docs/build.py; everything here is regenerated\n")
+    except PermissionError:
+        raise UsageError(f"--out {out}: not writable") from None
 
 
 def replace_folder(new: pathlib.Path, target: pathlib.Path) -> None:

@@ -138,7 +138,7 @@ def test_build_refuses_a_folder_it_did_not_write_or_that_changed(tmp_path):
 
 
 def test_bad_arguments_exit_2_with_one_line(tmp_path):
-    for args in (["99"], ["--out", str(tmp_path / "missing")]):
+    for args in (["99"], ["--out", str(tmp_path / "missing")], ["--bogus"]):
         proc = subprocess.run(
             [sys.executable, str(ROOT / "coursework" / "build.py"), *args], capture_output=True, text=True
         )
@@ -288,3 +288,18 @@ def test_handout_wheel_installs_in_a_fresh_venv_and_runs_a_student_notebook(buil
     )
     assert proc.returncode == 0, proc.stderr[-2000:]
     assert f"ran {venv_dir}" in proc.stdout
+
+
+def test_a_folder_that_is_not_writable_or_a_damaged_marker_is_one_line_exit_2(tmp_path, monkeypatch, capsys):
+    monkeypatch.setattr(build.os, "access", lambda path, mode: False)
+    assert build.main(["--out", str(tmp_path)]) == 2
+    assert capsys.readouterr().err.strip() == f"coursework/build.py: --out {tmp_path}: not writable"
+    monkeypatch.undo()
+    folder = tmp_path / "student"
+    folder.mkdir()
+    (folder / build.MARKER).write_text("{ not json")
+    with pytest.raises(build.UsageError, match="is damaged"):
+        build.refuse_unless_replaceable(folder)
+    (folder / build.MARKER).write_text('{"files": 3}')
+    with pytest.raises(build.UsageError, match="is damaged"):
+        build.refuse_unless_replaceable(folder)
