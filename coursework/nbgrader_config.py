@@ -19,6 +19,9 @@ _sockets = tempfile.mkdtemp(prefix="vo-nbgrader-")
 atexit.register(shutil.rmtree, _sockets, True)
 c.KernelManager.transport = "ipc"
 c.KernelManager.ip = os.path.join(_sockets, "kernel")
+# The kernels nbgrader starts inherit this: vo_lib's offer() then shows no widget, which with no
+# browser to answer it could only wait.
+os.environ["VO_LIB_HEADLESS"] = "1"
 c.ClearSolutions.code_stub = {"python": "# YOUR CODE HERE\nraise NotImplementedError()"}
 c.ClearSolutions.text_stub = "YOUR ANSWER HERE"
 

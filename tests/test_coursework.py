@@ -303,3 +303,15 @@ def test_a_folder_that_is_not_writable_or_a_damaged_marker_is_one_line_exit_2(tm
     (folder / build.MARKER).write_text('{"files": 3}')
     with pytest.raises(build.UsageError, match="is damaged"):
         build.refuse_unless_replaceable(folder)
+
+
+def test_offer_shows_no_widget_in_the_autograders_kernels(monkeypatch):
+    """nbgrader's kernels have no browser: the config marks them headless and offer() does nothing."""
+    from vo_lib.viz import widgets
+
+    config = (ROOT / "coursework" / "nbgrader_config.py").read_text()
+    assert f'os.environ["{widgets.HEADLESS_VARIABLE}"] = "1"' in config
+    assert 'c.KernelManager.transport = "ipc"' in config and "allow_errors" not in config
+    monkeypatch.setattr(widgets, "in_kernel", lambda: True)
+    monkeypatch.setenv(widgets.HEADLESS_VARIABLE, "1")
+    assert widgets.offer(lambda x: x, x=(0.0, 1.0)) is None
