@@ -315,3 +315,43 @@ def test_offer_shows_no_widget_in_the_autograders_kernels(monkeypatch):
     monkeypatch.setattr(widgets, "in_kernel", lambda: True)
     monkeypatch.setenv(widgets.HEADLESS_VARIABLE, "1")
     assert widgets.offer(lambda x: x, x=(0.0, 1.0)) is None
+
+
+@pytest.mark.notebook
+def test_release_fetch_submit_collect_autograde_export_through_a_local_exchange(built, tmp_path):
+    """docs/course.md's workflow, end to end: a roster, a due date, an exchange folder."""
+    import csv
+    import getpass
+    import shutil
+
+    assignment = NOTEBOOKS[2].stem  # a quick one
+    course, home, exchange = tmp_path / "course", tmp_path / "home", tmp_path / "exchange"
+    shutil.copytree(built / "grading", course)
+    home.mkdir()
+    exchange.mkdir(mode=0o777)
+    student = getpass.getuser()  # nbgrader's exchange knows a student by their login
+    (course / "roster.csv").write_text(
+        f"id,first_name,last_name,email\n{student},Ada,Student,ada@example.org\n"
+    )
+    exchange_root = f"--Exchange.root={exchange}"
+
+    def nbgrader(folder, *args):
+        proc = subprocess.run(
+            [sys.executable, "-m", "nbgrader", *args], cwd=folder, capture_output=True, text=True, timeout=600
+        )
+        assert proc.returncode == 0, proc.stderr[-2000:]
+
+    nbgrader(course, "db", "student", "import", "roster.csv")
+    nbgrader(course, "db", "assignment", "add", assignment, "--duedate=2099-06-30 17:00:00 UTC")
+    nbgrader(course, "release_assignment", assignment, exchange_root)
+    nbgrader(home, "fetch_assignment", assignment, "--course=vo-notebooks", exchange_root)
+    assert (home / assignment / f"{assignment}.ipynb").is_file()
+    nbgrader(home, "submit", assignment, "--course=vo-notebooks", exchange_root)
+    nbgrader(course, "collect", assignment, exchange_root)
+    assert (course / "submitted" / student / assignment / f"{assignment}.ipynb").is_file()
+    nbgrader(course, "autograde", assignment)
+    nbgrader(course, "export")
+    rows = [r for r in csv.DictReader((course / "grades.csv").open()) if r["assignment"] == assignment]
+    assert [(r["student_id"], float(r["score"]), r["late_submission_penalty"]) for r in rows] == [
+        (student, 0.0, "0.0")
+    ], rows
