@@ -324,7 +324,7 @@ def test_release_fetch_submit_collect_autograde_export_through_a_local_exchange(
     import getpass
     import shutil
 
-    assignment = NOTEBOOKS[2].stem  # a quick one
+    assignment = NOTEBOOKS[0].stem  # quick, and with a written part graded by hand
     course, home, exchange = tmp_path / "course", tmp_path / "home", tmp_path / "exchange"
     shutil.copytree(built / "grading", course)
     home.mkdir()
@@ -345,13 +345,23 @@ def test_release_fetch_submit_collect_autograde_export_through_a_local_exchange(
     nbgrader(course, "db", "assignment", "add", assignment, "--duedate=2099-06-30 17:00:00 UTC")
     nbgrader(course, "release_assignment", assignment, exchange_root)
     nbgrader(home, "fetch_assignment", assignment, "--course=vo-notebooks", exchange_root)
-    assert (home / assignment / f"{assignment}.ipynb").is_file()
+    fetched = home / assignment / f"{assignment}.ipynb"
+    nb = nbformat.read(fetched, as_version=4)
+    written = [
+        c for c in nb.cells if c.cell_type == "markdown" and c.metadata.get("nbgrader", {}).get("grade")
+    ]
+    assert written, "the notebook has a written part"
+    written[0].source = "The tracks skid sideways in a turn."  # answered: it waits for the teacher
+    nbformat.write(nb, fetched)
     nbgrader(home, "submit", assignment, "--course=vo-notebooks", exchange_root)
     nbgrader(course, "collect", assignment, exchange_root)
     assert (course / "submitted" / student / assignment / f"{assignment}.ipynb").is_file()
     nbgrader(course, "autograde", assignment)
     nbgrader(course, "export")
     rows = [r for r in csv.DictReader((course / "grades.csv").open()) if r["assignment"] == assignment]
-    assert [(r["student_id"], float(r["score"]), r["late_submission_penalty"]) for r in rows] == [
-        (student, 0.0, "0.0")
-    ], rows
+    assert [
+        (r["student_id"], float(r["score"]), r["late_submission_penalty"], r["to_be_graded"]) for r in rows
+    ] == [(student, 0.0, "0.0", "1")], rows
+    nbgrader(course, "generate_feedback", assignment)
+    feedback = (course / "feedback" / student / assignment / f"{assignment}.html").read_text()
+    assert "To be graded" in feedback and "BEGIN HIDDEN TESTS" not in feedback
