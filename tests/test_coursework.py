@@ -365,3 +365,20 @@ def test_release_fetch_submit_collect_autograde_export_through_a_local_exchange(
     nbgrader(course, "generate_feedback", assignment)
     feedback = (course / "feedback" / student / assignment / f"{assignment}.html").read_text()
     assert "To be graded" in feedback and "BEGIN HIDDEN TESTS" not in feedback
+
+
+def test_course_page_states_the_points_the_notebooks_carry():
+    points = sum(
+        c.metadata["nbgrader"]["points"]
+        for p in NOTEBOOKS
+        for c in grading_cells(jupytext.read(p))
+        if c.metadata["nbgrader"].get("grade")
+    )
+    by_hand = sum(
+        c.metadata["nbgrader"]["points"]
+        for p in NOTEBOOKS
+        for c in grading_cells(jupytext.read(p))
+        if c.metadata["nbgrader"].get("grade") and c.cell_type == "markdown"
+    )
+    course = (ROOT / "docs" / "course.md").read_text()
+    assert f"{points} points in all" in course and by_hand == 2 and "one written point each" in course
