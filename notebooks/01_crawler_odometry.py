@@ -352,23 +352,31 @@ drive_widget = offer(
 # %% [markdown]
 # ## Exercises
 #
-# Easy to hard, with the points each is worth. Write your answer in the cell under each
-# exercise (it names the variables to set), then run the test cell after it, which checks them.
+# Easy to hard, with the points each is worth. Each exercise asks for a function (the cell
+# under it names it) and then uses it; the test cell after it checks both. The grader also
+# calls your functions with inputs of its own, so an answer must compute, not quote a number.
 
 # %% [markdown]
 # ### Exercise 1 · a spot turn *(easy, 2 points)*
 #
-# In a spot turn the tracks run in opposite directions, Δu_L = −Δu_R. With steps of
-# Δu_R = 1 cm, how many steps `n_full_turn` does `odo` need for one full turn (the smallest
-# number that reaches 360°)? Integrate them with the exact arc into `spot_poses` and store the
-# largest distance of the centre from its start in `spot_translation`.
+# In a spot turn the tracks run in opposite directions, Δu_L = −Δu_R. Write
+# `full_turn_steps(gauge, step)`: the smallest number of steps of Δu_R = `step` (metres) that
+# turns a crawler of effective gauge `gauge` by 360° or more. Then set `n_full_turn` for `odo`
+# and 1 cm steps, integrate them with the exact arc into `spot_poses` and store the largest
+# distance of the centre from its start in `spot_translation`.
 #
 # *Hint:* eq. 4 gives the heading per step; `odo.integrate(controls, exact=True)`.
 
+
 # %% nbgrader={"grade": false, "grade_id": "ex1", "locked": false, "schema_version": 3, "solution": true}
 ### BEGIN SOLUTION
+def full_turn_steps(gauge, step):
+    """Smallest number of spot-turn steps of ``step`` per track reaching a full turn (eq. 4)."""
+    return int(np.ceil(2 * np.pi * gauge / (2 * step)))
+
+
 spot_step = np.array([-0.01, 0.01])
-n_full_turn = int(np.ceil(2 * np.pi * odo.gauge / (spot_step[1] - spot_step[0])))
+n_full_turn = full_turn_steps(odo.gauge, 0.01)
 spot_poses = odo.integrate(np.tile(spot_step, (n_full_turn, 1)), exact=True)
 spot_translation = float(np.hypot(*spot_poses[:, :2].T).max())
 print(f"{n_full_turn} steps for a full turn; the centre moves at most {spot_translation:.1e} m")
@@ -377,29 +385,47 @@ print(f"{n_full_turn} steps for a full turn; the centre moves at most {spot_tran
 # %% nbgrader={"grade": true, "grade_id": "ex1_test", "locked": true, "points": 2, "schema_version": 3, "solution": false}
 # Exercise 1: autograder test
 turned = np.cumsum(np.diff(np.unwrap(spot_poses[:, 2])))
-assert len(spot_poses) == n_full_turn + 1
+assert len(spot_poses) == n_full_turn + 1, "spot_poses: the start and one pose per step"
 assert turned[-1] >= 2 * np.pi - 1e-9 > turned[-2], "the smallest number of steps reaching 360°"
 assert spot_translation < 1e-12, "eq. 2-3: a spot turn does not translate"
+### BEGIN HIDDEN TESTS
+fresh = np.random.default_rng()  # new inputs at every grading: a number typed in cannot pass
+for gauge, step in zip(fresh.uniform(0.3, 1.5, 20), fresh.uniform(0.002, 0.03, 20), strict=True):
+    per_step = 2 * step / gauge  # eq. 4
+    n = full_turn_steps(gauge, step)
+    assert (n - 1) * per_step < 2 * np.pi <= n * per_step, (
+        "full_turn_steps is not the smallest number of steps reaching 360° for another crawler"
+    )
+### END HIDDEN TESTS
 
 # %% [markdown]
 # ### Exercise 2 · slip in a spot turn *(medium, 3 points)*
 #
-# Repeat the full spot turn of exercise 1, but the left track slips by 10 %. Store the true
-# poses (exact arc) in `slip_poses`, the distance between the true final position and the
-# start in `slip_displacement` (metres), and the heading the odometry misses at the end in
-# `slip_heading_error` (radians, odometry minus truth).
+# Repeat a spot turn of 1 cm steps, but the left track slips. Write
+# `slip_drift(slip_left, n_steps)` returning two floats for a spot turn of `odo` of `n_steps`
+# steps whose left track slips by the share `slip_left`: the distance between the true final
+# position (exact arc) and the start, in metres, and the heading the odometry misses at the
+# end, in radians (odometry minus truth). Then store the true poses of the full turn of
+# exercise 1 with 10 % slip in `slip_poses`, and `slip_displacement, slip_heading_error` from
+# your function.
 #
 # *Hint:* `apply_slip`; with slip the tracks no longer move by equal and opposite distances, so
 # the robot drives a small circle. Which radius?
 
+
 # %% nbgrader={"grade": false, "grade_id": "ex2", "locked": false, "schema_version": 3, "solution": true}
 ### BEGIN SOLUTION
-spot_controls = np.tile(spot_step, (n_full_turn, 1))
-slip_poses = odo.integrate(apply_slip(spot_controls, slip_left=0.10), exact=True)
-slip_displacement = float(np.hypot(*slip_poses[-1, :2]))
-believed_heading = np.sum(odo.increment(spot_controls)[1])
-true_heading = np.sum(odo.increment(apply_slip(spot_controls, slip_left=0.10))[1])
-slip_heading_error = float(believed_heading - true_heading)
+def slip_drift(slip_left, n_steps):
+    """Distance from the start (m) and missed heading (rad) of a spot turn whose left track slips."""
+    controls = np.tile([-0.01, 0.01], (n_steps, 1))
+    slipped = apply_slip(controls, slip_left=slip_left)
+    true_poses = odo.integrate(slipped, exact=True)
+    believed = np.sum(odo.increment(controls)[1])
+    return float(np.hypot(*true_poses[-1, :2])), float(believed - np.sum(odo.increment(slipped)[1]))
+
+
+slip_poses = odo.integrate(apply_slip(np.tile(spot_step, (n_full_turn, 1)), slip_left=0.10), exact=True)
+slip_displacement, slip_heading_error = slip_drift(0.10, n_full_turn)
 print(
     f"10 % slip: {slip_displacement * 100:.2f} cm away, "
     f"{np.degrees(slip_heading_error):.1f}° of heading missed"
@@ -408,25 +434,34 @@ print(
 
 # %% nbgrader={"grade": true, "grade_id": "ex2_test", "locked": true, "points": 3, "schema_version": 3, "solution": false}
 # Exercise 2: autograder test
-assert slip_poses.shape == (n_full_turn + 1, 3)
-assert 0 < slip_displacement < 0.05 and 0 < slip_heading_error < np.pi
+assert slip_poses.shape == (n_full_turn + 1, 3), "slip_poses: the start and one pose per step"
+assert 0 < slip_displacement < 0.05, "the slipping turn ends a few millimetres from its start"
+assert 0 < slip_heading_error < np.pi, "the odometry believes it turned more than it did"
+assert np.isclose(slip_displacement, np.hypot(*slip_poses[-1, :2])), "the true final position"
 ### BEGIN HIDDEN TESTS
-# every step moves 0.1 * 1 cm / 2 forward and turns 1.9 cm / gauge: an arc of radius R, whose
-# chord after the whole turn is 2 R sin(turn / 2)
-step_forward, step_turn = 0.5 * (0.01 - 0.9 * 0.01), (0.01 + 0.9 * 0.01) / odo.gauge
-R_slip, turn = step_forward / step_turn, n_full_turn * step_turn
-assert np.isclose(slip_displacement, 2 * R_slip * abs(np.sin(turn / 2)), rtol=1e-9)
-assert np.isclose(slip_heading_error, n_full_turn * 0.1 * 0.01 / odo.gauge, rtol=1e-9)
+fresh = np.random.default_rng()  # new inputs at every grading
+for slip, n in zip(fresh.uniform(0.02, 0.3, 5), fresh.integers(20, 400, 5), strict=True):
+    # every step moves slip * 1 cm / 2 forward and turns (2 - slip) cm / gauge: an arc of radius
+    # R, whose chord after the whole turn is 2 R |sin(turn / 2)|
+    step_forward, step_turn = 0.5 * slip * 0.01, (2 - slip) * 0.01 / odo.gauge
+    chord = 2 * step_forward / step_turn * abs(np.sin(n * step_turn / 2))
+    displacement, heading_error = slip_drift(float(slip), int(n))
+    assert np.isclose(displacement, chord, rtol=1e-6), "the distance from the start is not the true one"
+    assert np.isclose(heading_error, n * slip * 0.01 / odo.gauge, rtol=1e-6), (
+        "the missed heading has the wrong size or sign (odometry minus truth)"
+    )
 ### END HIDDEN TESTS
 
 # %% [markdown]
-# ### Exercise 3 · calibrate the gauge *(hard, 4 points)*
+# ### Exercise 3 · calibrate the gauge *(hard, 4 points + 1 written)*
 #
 # The cell below records the encoder readings `recorded` of three spot turns (1,080°, known
 # from a turntable) of a crawler whose *effective* gauge is not the 0.60 m of `odo`, with encoder
-# noise. Estimate the effective gauge `fitted_gauge` from them and build `calibrated`, a
-# `TrackOdometry` with that gauge (keep `track_distance`, change `track_width`), whose heading
-# after the recording misses 1,080° by less than 0.1°.
+# noise. Write `fit_gauge(readings, turn)`, the effective gauge estimated from readings
+# `(K, 2)` of spot turns known to turn by `turn` radians in all. Store it for `recorded` in
+# `fitted_gauge` and build `calibrated`, a `TrackOdometry` with that gauge (keep
+# `track_distance`, change `track_width`), whose heading after the recording misses 1,080° by
+# less than 0.1°.
 #
 # *Hint:* eq. 4 summed over all steps is linear in 1 / (D + 2b).
 
@@ -441,9 +476,16 @@ print(
     f"{len(recorded)} steps recorded; with the nominal gauge {odo.gauge:.2f} m they turn {nominal_turn:.1f}°"
 )
 
+
 # %% nbgrader={"grade": false, "grade_id": "ex3", "locked": false, "schema_version": 3, "solution": true}
 ### BEGIN SOLUTION
-fitted_gauge = float(np.sum(recorded[:, 1] - recorded[:, 0]) / true_turn)  # eq. 4 summed
+def fit_gauge(readings, turn):
+    """Effective gauge D + 2b from spot-turn readings ``(K, 2)`` turning ``turn`` rad (eq. 4 summed)."""
+    readings = np.asarray(readings, float)
+    return float(np.sum(readings[:, 1] - readings[:, 0]) / turn)
+
+
+fitted_gauge = fit_gauge(recorded, true_turn)
 calibrated = TrackOdometry(
     track_distance=odo.track_distance,
     track_width=(fitted_gauge - odo.track_distance) / 2,
@@ -454,23 +496,31 @@ print(f"fitted gauge {fitted_gauge:.4f} m (nominal {odo.gauge:.2f} m)")
 
 # %% nbgrader={"grade": true, "grade_id": "ex3_test", "locked": true, "points": 4, "schema_version": 3, "solution": false}
 # Exercise 3: autograder test
-assert isinstance(calibrated, TrackOdometry) and calibrated.track_distance == odo.track_distance
-assert np.isclose(calibrated.gauge, fitted_gauge)
+assert isinstance(calibrated, TrackOdometry), "calibrated is a TrackOdometry"
+assert calibrated.track_distance == odo.track_distance, "keep the distance between the tracks"
+assert np.isclose(calibrated.gauge, fitted_gauge), "calibrated has the fitted gauge"
 final_turn = np.sum(calibrated.increment(recorded)[1])
-assert abs(np.degrees(final_turn - true_turn)) < 0.1
+assert abs(np.degrees(final_turn - true_turn)) < 0.1, "calibrated misses the recorded turn"
 ### BEGIN HIDDEN TESTS
-# the noise of the summed encoder readings, carried through eq. 4: within 3 sigma of the truth
-sigma_fit = odo.encoder_sigma * np.sqrt(np.abs(recorded).sum()) / true_turn
-# 3 sigma is a bound in the fit's own noise, not a multiple of one miss: a correct fit fails it
-# with probability 0.3 %, while the nominal gauge (0.02 m or more off) lies over 10 sigma away
-assert abs(fitted_gauge - hidden_gauge) < 3 * sigma_fit
-assert abs(odo.gauge - hidden_gauge) > 10 * sigma_fit  # so the bound tells a fit from no fit
+fresh = np.random.default_rng()  # a new crawler and recording at every grading
+for _ in range(5):
+    fresh_gauge, fresh_turn = fresh.uniform(0.4, 1.2), np.radians(360.0 * fresh.integers(1, 6))
+    steps = int(fresh.integers(500, 4000))
+    share = 0.5 * fresh_gauge * fresh_turn / steps
+    readings = np.tile([-share, share], (steps, 1))
+    readings += fresh.normal(scale=odo.encoder_sigma * np.sqrt(np.abs(readings)))
+    # the noise of the summed encoder readings, carried through eq. 4: within 4 sigma of the truth
+    sigma_fit = odo.encoder_sigma * np.sqrt(np.abs(readings).sum()) / fresh_turn
+    assert abs(fit_gauge(readings, fresh_turn) - fresh_gauge) < 4 * sigma_fit, (
+        "fit_gauge does not recover the gauge of another crawler"
+    )
 ### END HIDDEN TESTS
 
+# %% [markdown]
+# **Exercise 3, written part (1 point, graded by hand):** why might the fitted gauge differ
+# from the distance you measure between the tracks with a tape? Answer in the cell below.
+
 # %% [markdown] nbgrader={"grade": true, "grade_id": "ex3_why", "locked": false, "points": 1, "schema_version": 3, "solution": true}
-# **Exercise 3, written part (1 point):** why might the fitted gauge differ from the distance you
-# measure between the tracks with a tape?
-#
 # === BEGIN MARK SCHEME ===
 #
 # A skid-steered crawler turns by dragging its tracks sideways over the ground; how far the

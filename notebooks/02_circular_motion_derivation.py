@@ -299,7 +299,9 @@ assert np.all(w_after[:, 0] > w_before[:, 0])  # every point moved right in the 
 # ## Exercises
 #
 # Easy to hard, with the points each is worth. Write your answer in the cell under each
-# exercise (it names the variables to set), then run the test cell after it, which checks them.
+# exercise (it names what to define), then run the test cell after it, which checks it. The
+# grader also tries your answers on inputs of its own, so an answer must compute, not quote a
+# number, and must not call the `vo_lib` function that does the same job.
 
 # %% [markdown]
 # ### Exercise 1 · ρ from one row *(easy, 2 points)*
@@ -320,15 +322,26 @@ show_math(r"\rho\ \text{from}\ x'", rho_from_x)
 assert rho not in rho_from_x.free_symbols, "ρ must be eliminated"
 assert rho_from_x.free_symbols <= {x, z, xq, phi}
 assert is_zero(rho_from_x.subs(xq, xp) - rho), "on the motion the expression must return ρ"
+### BEGIN HIDDEN TESTS
+fresh = np.random.default_rng()  # new motions at every grading
+for x_, z_, phi_, rho_ in zip(*fresh.uniform([-5, 1, -0.3, -1], [5, 20, 0.3, 1], (8, 4)).T, strict=True):
+    values = {x: x_, z: z_, phi: phi_, rho: rho_}
+    moved = {**values, xq: float(xp.subs(values))}
+    assert np.isclose(float(rho_from_x.subs(moved)), rho_, atol=1e-9), (
+        "on another motion the expression does not give back its ρ"
+    )
+### END HIDDEN TESTS
 
 # %% [markdown]
 # ### Exercise 2 · how noisy is θ? *(medium, 3 points)*
 #
-# Each of u, v, u′, v′ carries independent pixel noise σ. Derive with sympy the gradient of
-# θ = 2 tan⁻¹(N / (f_x D)) (eq. 14, with N and D as in section 4) with respect to the four
-# pixel coordinates, and write `theta_sigma(w_prev, w_curr, sigma_px)` returning the
-# first-order standard deviation of θ of every match (arrays `(N, 3)` of u, v, d, as elsewhere),
-# for the `camera` of section 6.
+# Each of u, v, u′, v′ carries independent pixel noise σ. Eq. 14 reads θ = 2 tan⁻¹(N / (f_x D))
+# with N = (u′ − u₀)(v − v₀) − (u − u₀)(v′ − v₀) and D = v + v′ − 2v₀. Derive with sympy its
+# gradient with respect to the four pixel coordinates, and write
+# `theta_sigma(w_prev, w_curr, sigma_px, camera)` returning the first-order standard deviation
+# of θ of every match (arrays `(N, 3)` of u, v, d, as elsewhere) seen by `camera` (a
+# `StereoCamera`, such as the `camera` of section 6), without calling
+# `cm.theta_standard_deviation`.
 #
 # *Hint:* σ_θ = σ·‖∇θ‖; `sp.lambdify` turns the gradient into a NumPy function.
 
@@ -339,7 +352,7 @@ gradient = sp.Matrix([theta_eq14]).jacobian([u, v, u2, v2])
 gradient_fn = sp.lambdify((u, v, u2, v2, u0, v0, fx), list(gradient), "numpy")
 
 
-def theta_sigma(w_prev, w_curr, sigma_px):
+def theta_sigma(w_prev, w_curr, sigma_px, camera):
     """First-order standard deviation of eq. 14's θ under pixel noise ``sigma_px``."""
     a, b = np.asarray(w_prev, float), np.asarray(w_curr, float)
     parts = gradient_fn(a[:, 0], a[:, 1], b[:, 0], b[:, 1], camera.cx, camera.cy, camera.fx)
@@ -351,18 +364,51 @@ def theta_sigma(w_prev, w_curr, sigma_px):
 # %% nbgrader={"grade": true, "grade_id": "ex2_test", "locked": true, "points": 3, "schema_version": 3, "solution": false}
 # Exercise 2: autograder test
 check = synthetic_matches(camera, 300, np.radians(4.0), 0.1, rng)
-ours = theta_sigma(check.w_prev, check.w_curr, 0.5)
+ours = theta_sigma(check.w_prev, check.w_curr, 0.5, camera)
 assert ours.shape == (300,) and np.all(ours > 0)
-assert np.allclose(ours, cm.theta_standard_deviation(check.w_prev, check.w_curr, camera, 0.5), rtol=1e-9)
+
+
+### BEGIN HIDDEN TESTS
+def refuse(*args, **kwargs):
+    raise AssertionError("theta_sigma calls the vo_lib function the exercise asks you to write")
+
+
+fresh = np.random.default_rng()  # new matches, noise and camera at every grading
+other = StereoCamera(
+    fx=fresh.uniform(300, 900),
+    fy=fresh.uniform(300, 900),
+    cx=fresh.uniform(200, 400),
+    cy=fresh.uniform(150, 300),
+    baseline=fresh.uniform(0.1, 0.3),
+    width=640,
+    height=480,
+)
+cases = []
+for cam in (camera, other):
+    m_ = synthetic_matches(cam, 200, fresh.uniform(-0.1, 0.1), fresh.uniform(-0.2, 0.2), fresh)
+    sigma_ = fresh.uniform(0.2, 2.0)
+    cases.append((m_, sigma_, cam, cm.theta_standard_deviation(m_.w_prev, m_.w_curr, cam, sigma_)))
+saved, cm.theta_standard_deviation.__code__ = cm.theta_standard_deviation.__code__, refuse.__code__
+try:
+    for m_, sigma_, cam, expected in cases:
+        got = np.asarray(theta_sigma(m_.w_prev, m_.w_curr, sigma_, cam), float)
+        assert got.shape == expected.shape, "one standard deviation per match"
+        assert np.allclose(got, expected, rtol=1e-6), (
+            "not the first-order standard deviation of θ (a standard deviation, not a variance; "
+            "θ, not φ; all four coordinates; this camera's centre and f_x)"
+        )
+finally:
+    cm.theta_standard_deviation.__code__ = saved
+### END HIDDEN TESTS
 
 # %% [markdown]
 # ### Exercise 3 · planar or not, before θ is known *(hard, 4 points)*
 #
 # Eq. 17 uses only the x and z rows of eq. 15; the y row says y′ = y: a point keeps its height
-# under *any* planar motion. Write `height_change(w_prev, w_curr)` that returns y′ − y in metres
-# for every match, from pixels and disparities only (eq. 13), so that a match can be checked
-# before θ is estimated. Then count in `flagged` the matches of `mixed` (below) whose height
-# changes by more than 5 cm.
+# under *any* planar motion. Write `height_change(w_prev, w_curr, camera)` that returns y′ − y
+# in metres for every match, from pixels and disparities only (eq. 13, without
+# `camera.backproject`), so that a match can be checked before θ is estimated. Then count in
+# `flagged` the matches of `mixed` (below) whose height changes by more than 5 cm.
 #
 # *Hint:* eq. 13 gives y = B (v − v₀) f_x / (f_y d).
 
@@ -372,26 +418,56 @@ mixed = synthetic_matches(camera, 400, np.radians(-5.0), 0.12, rng, outlier_rati
 
 # %% nbgrader={"grade": false, "grade_id": "ex3", "locked": false, "schema_version": 3, "solution": true}
 ### BEGIN SOLUTION
-def height_change(w_prev, w_curr):
+def height_change(w_prev, w_curr, camera):
     """y' - y in metres (eq. 13): zero for every match of a planar motion."""
     a, b = np.asarray(w_prev, float), np.asarray(w_curr, float)
     scale = camera.baseline * camera.fx / camera.fy
     return scale * ((b[:, 1] - camera.cy) / b[:, 2] - (a[:, 1] - camera.cy) / a[:, 2])
 
 
-flagged = int(np.sum(np.abs(height_change(mixed.w_prev, mixed.w_curr)) > 0.05))
+flagged = int(np.sum(np.abs(height_change(mixed.w_prev, mixed.w_curr, camera)) > 0.05))
 print(f"{flagged} of {len(mixed.inliers)} matches change height by more than 5 cm")
 ### END SOLUTION
 
 # %% nbgrader={"grade": true, "grade_id": "ex3_test", "locked": true, "points": 4, "schema_version": 3, "solution": false}
 # Exercise 3: autograder test
-change = height_change(mixed.w_prev, mixed.w_curr)
+change = height_change(mixed.w_prev, mixed.w_curr, camera)
 assert change.shape == (400,)
 assert np.abs(change[mixed.inliers]).max() < 1e-9, "a planar motion keeps every height"
 ### BEGIN HIDDEN TESTS
 heights = camera.backproject(mixed.w_curr)[:, 1] - camera.backproject(mixed.w_prev)[:, 1]
-assert np.allclose(change, heights, atol=1e-9)
-assert flagged == np.sum(np.abs(heights) > 0.05)
+assert flagged == np.sum(np.abs(heights) > 0.05), "flagged does not count the matches of mixed"
+
+
+def refuse(*args, **kwargs):
+    raise AssertionError("height_change calls the vo_lib function the exercise asks you to write")
+
+
+fresh = np.random.default_rng()  # new matches and a camera with f_x != f_y at every grading
+other = StereoCamera(
+    fx=fresh.uniform(300, 900),
+    fy=fresh.uniform(300, 900),
+    cx=fresh.uniform(200, 400),
+    cy=fresh.uniform(150, 300),
+    baseline=fresh.uniform(0.1, 0.3),
+    width=640,
+    height=480,
+)
+cases = []
+for cam in (camera, other):
+    m_ = synthetic_matches(
+        cam, 300, fresh.uniform(-0.1, 0.1), fresh.uniform(-0.2, 0.2), fresh, outlier_ratio=0.4
+    )
+    truth = cam.backproject(m_.w_curr)[:, 1] - cam.backproject(m_.w_prev)[:, 1]
+    cases.append((m_, cam, truth))
+saved, StereoCamera.backproject.__code__ = StereoCamera.backproject.__code__, refuse.__code__
+try:
+    for m_, cam, truth in cases:
+        assert np.allclose(height_change(m_.w_prev, m_.w_curr, cam), truth, atol=1e-9), (
+            "not y' - y in metres for every match (which sign? which focal lengths?)"
+        )
+finally:
+    StereoCamera.backproject.__code__ = saved
 ### END HIDDEN TESTS
 
 # %% [markdown]

@@ -476,71 +476,137 @@ assert abs(fitted[0] - 2.0) < 0.2 and abs(fitted[1]) < 0.2
 # %% [markdown]
 # ## Exercises
 #
-# Easy to hard, with the points each is worth. Write your answer in the cell under each
-# exercise (it names the variables to set), then run the test cell after it, which checks them.
+# Easy to hard, with the points each is worth. Each exercise asks for a function (the cell
+# under it names it) and then uses it; the test cell after it checks both. The grader also
+# calls your functions with inputs of its own, so an answer must compute, not quote a number.
 
 # %% [markdown]
 # ### Exercise 1 · weight the matches *(easy, 2 points)*
 #
-# Section 2's 20,000 matches `m` (0.5 px noise) each give a θ. Average them with weights
-# 1/σ²_θ from `cm.theta_standard_deviation` into `theta_weighted`, and take their plain median
-# into `theta_median`. Which is closer to `theta_true`?
+# Each match gives a θ (eq. 14) whose standard deviation `cm.theta_standard_deviation` predicts.
+# Write `weighted_theta(w_prev, w_curr, camera, sigma_px)`, the average of the matches' θ with
+# weights 1/σ²_θ. On one draw of matches the weighted mean or the median may land closer to the
+# truth by luck; compare them over many draws instead: for 200 draws of 300 matches of
+# section 2's motion (`theta_true`, `rho_true`, noise `noise`), store the root-mean-square error
+# of your weighted mean in `spread_weighted` and that of the plain median of the θ in
+# `spread_median` (radians).
 #
-# *Hint:* `np.average(..., weights=...)`.
+# *Hint:* `np.average(..., weights=...)`; `synthetic_matches(camera, 300, theta_true, rho_true,
+# rng, noise_px=noise)` draws one set.
+
 
 # %% nbgrader={"grade": false, "grade_id": "ex1", "locked": false, "schema_version": 3, "solution": true}
 ### BEGIN SOLUTION
-th_each = cm.theta_from_pixels(m.w_prev, m.w_curr, camera)
-sigma_each = cm.theta_standard_deviation(m.w_prev, m.w_curr, camera, noise)
-theta_weighted = float(np.average(th_each, weights=1.0 / sigma_each**2))
-theta_median = float(np.median(th_each))
-print(
-    f"error of the weighted mean {np.degrees(theta_weighted - theta_true):+.5f}°, "
-    f"of the median {np.degrees(theta_median - theta_true):+.5f}°"
-)
+def weighted_theta(w_prev, w_curr, camera, sigma_px):
+    """Inverse-variance weighted mean of eq. 14's θ over the matches."""
+    theta_each = cm.theta_from_pixels(w_prev, w_curr, camera)
+    sigma_each = cm.theta_standard_deviation(w_prev, w_curr, camera, sigma_px)
+    return float(np.average(theta_each, weights=1.0 / sigma_each**2))
+
+
+errors_weighted, errors_median = [], []
+for _ in range(200):
+    draw = synthetic_matches(camera, 300, theta_true, rho_true, rng, noise_px=noise)
+    errors_weighted.append(weighted_theta(draw.w_prev, draw.w_curr, camera, noise) - theta_true)
+    errors_median.append(np.median(cm.theta_from_pixels(draw.w_prev, draw.w_curr, camera)) - theta_true)
+spread_weighted = float(np.sqrt(np.mean(np.square(errors_weighted))))
+spread_median = float(np.sqrt(np.mean(np.square(errors_median))))
+print(f"RMS error: weighted mean {np.degrees(spread_weighted):.5f}°, median {np.degrees(spread_median):.5f}°")
 ### END SOLUTION
 
 # %% nbgrader={"grade": true, "grade_id": "ex1_test", "locked": true, "points": 2, "schema_version": 3, "solution": false}
 # Exercise 1: autograder test
-sigma_of_mean = 1.0 / np.sqrt(np.sum(cm.theta_standard_deviation(m.w_prev, m.w_curr, camera, noise) ** -2.0))
-assert abs(theta_weighted - theta_true) < 4 * sigma_of_mean, "the weighted mean is within 4σ of the truth"
-assert np.isclose(theta_median, np.median(cm.theta_from_pixels(m.w_prev, m.w_curr, camera)))
-assert abs(theta_weighted - theta_true) < abs(theta_median - theta_true)
+assert 0 < spread_weighted < spread_median, "over many draws the weighted mean is the closer one"
+### BEGIN HIDDEN TESTS
+fresh = np.random.default_rng()  # new matches at every grading
+for _ in range(3):
+    sigma_ = fresh.uniform(0.2, 1.5)
+    draw = synthetic_matches(
+        camera, 300, fresh.uniform(-0.1, 0.1), fresh.uniform(-0.2, 0.2), fresh, noise_px=sigma_
+    )
+    each = cm.theta_from_pixels(draw.w_prev, draw.w_curr, camera)
+    weights = cm.theta_standard_deviation(draw.w_prev, draw.w_curr, camera, sigma_) ** -2.0
+    assert np.isclose(
+        weighted_theta(draw.w_prev, draw.w_curr, camera, sigma_),
+        np.average(each, weights=weights),
+        rtol=0,
+        atol=1e-10,
+    ), "weighted_theta is not the mean of the θ weighted by 1/σ²_θ"
+# the RMS errors of 200 draws are known to about 5 %: both within 30 % of a fresh estimate (4 sigma of the ratio)
+again_w, again_m = [], []
+for _ in range(200):
+    draw = synthetic_matches(camera, 300, theta_true, rho_true, fresh, noise_px=noise)
+    each = cm.theta_from_pixels(draw.w_prev, draw.w_curr, camera)
+    weights = cm.theta_standard_deviation(draw.w_prev, draw.w_curr, camera, noise) ** -2.0
+    again_w.append(np.average(each, weights=weights) - theta_true)
+    again_m.append(np.median(each) - theta_true)
+assert abs(spread_weighted / np.sqrt(np.mean(np.square(again_w))) - 1) < 0.3, "spread_weighted"
+assert abs(spread_median / np.sqrt(np.mean(np.square(again_m))) - 1) < 0.3, "spread_median"
+### END HIDDEN TESTS
 
 # %% [markdown]
 # ### Exercise 2 · a spot turn needs no depth *(medium, 3 points)*
 #
 # With the camera on the turning axis, a spot turn (ρ = 0) is a pure rotation R, and the image
 # moves by the homography H = K R K⁻¹: every pixel moves the same way whatever the depth of its
-# point. Build `H_spot` for θ = 3° and predict `predicted_uv` (shape `(N, 2)`) of `spot.w_curr`
-# from `spot.w_prev` alone.
+# point. Write `spot_homography(theta, camera)` returning H for a spot turn by `theta` radians
+# seen by `camera`, and predict `predicted_uv` (shape `(N, 2)`) of `spot.w_curr` from
+# `spot.w_prev` alone for the 3° turn below.
 #
 # *Hint:* `cm.motion_matrices(theta, 0.0)` and `camera.K`; homogeneous pixels (u, v, 1).
 
 # %%
 spot = synthetic_matches(camera, 300, np.radians(3.0), 0.0, rng, depth_range=(1.0, 50.0))
 
+
 # %% nbgrader={"grade": false, "grade_id": "ex2", "locked": false, "schema_version": 3, "solution": true}
 ### BEGIN SOLUTION
-R_spot, _ = cm.motion_matrices(np.radians(3.0), 0.0)
-H_spot = camera.K @ R_spot @ np.linalg.inv(camera.K)
+def spot_homography(theta, camera):
+    """H = K R K⁻¹ of a spot turn by ``theta`` (eq. 15 with ρ = 0)."""
+    R, _ = cm.motion_matrices(theta, 0.0)
+    return camera.K @ R @ np.linalg.inv(camera.K)
+
+
+H_spot = spot_homography(np.radians(3.0), camera)
 homogeneous = np.column_stack([spot.w_prev[:, :2], np.ones(len(spot.w_prev))]) @ H_spot.T
 predicted_uv = homogeneous[:, :2] / homogeneous[:, 2:]
 ### END SOLUTION
 
 # %% nbgrader={"grade": true, "grade_id": "ex2_test", "locked": true, "points": 3, "schema_version": 3, "solution": false}
 # Exercise 2: autograder test
-assert H_spot.shape == (3, 3) and predicted_uv.shape == (300, 2)
+assert H_spot.shape == (3, 3) and predicted_uv.shape == (300, 2), "H is 3 x 3; one (u, v) per match"
 assert np.abs(predicted_uv - spot.w_curr[:, :2]).max() < 1e-6, "pixels, whatever the depth"
+### BEGIN HIDDEN TESTS
+fresh = np.random.default_rng()  # new turns and cameras at every grading
+for _ in range(4):
+    cam = StereoCamera(
+        fx=fresh.uniform(300, 900),
+        fy=fresh.uniform(300, 900),
+        cx=fresh.uniform(200, 400),
+        cy=fresh.uniform(150, 300),
+        baseline=0.12,
+        width=640,
+        height=480,
+    )
+    turn = fresh.choice([-1, 1]) * fresh.uniform(np.radians(1), np.radians(10))
+    pairs = synthetic_matches(cam, 100, turn, 0.0, fresh, depth_range=(1.0, 50.0))
+    H = np.asarray(spot_homography(turn, cam), float)
+    moved = np.column_stack([pairs.w_prev[:, :2], np.ones(len(pairs.w_prev))]) @ H.T
+    assert np.abs(moved[:, :2] / moved[:, 2:] - pairs.w_curr[:, :2]).max() < 1e-6, (
+        "spot_homography does not map the pixels of another turn or camera (which way does R turn?)"
+    )
+### END HIDDEN TESTS
 
 # %% [markdown]
 # ### Exercise 3 · correct a camera ahead of the axis *(hard, 4 points)*
 #
 # Section 5 found that a camera `a` metres ahead of the turning axis loses a share of the turn
 # close to a / z, z the depth of the match. Each match knows its own depth (from its disparity),
-# so each can be corrected. For the spot turn `ahead` below (2°, camera 0.3 m ahead, depths
-# 1.5–15 m), find the form of the per-match correction (which sign?) and store the median of
-# the corrected θ in `theta_corrected` (radians), using only the matches in `usable`.
+# so each can be corrected. Write `correct_ahead(theta_each, depth, a)` returning the corrected
+# θ of every match from its eq. 14 θ, its depth and the camera's offset `a` (find the form and
+# the sign of the correction). For the spot turn `ahead` below (2°, camera 0.3 m ahead, depths
+# 1.5–15 m) store the median of the corrected θ of the matches in `usable` in
+# `theta_corrected` (radians).
 #
 # *Hint:* compare `th_ahead` with 2° first; `camera.depth_from_disparity`.
 
@@ -552,10 +618,16 @@ usable = ~cm.degenerate_theta_mask(ahead.w_prev, ahead.w_curr, camera, min_pixel
 th_ahead = cm.theta_from_pixels(ahead.w_prev, ahead.w_curr, camera)[usable]
 print(f"uncorrected: median θ {np.degrees(np.median(th_ahead)):.3f}° for a 2° turn")
 
+
 # %% nbgrader={"grade": false, "grade_id": "ex3", "locked": false, "schema_version": 3, "solution": true}
 ### BEGIN SOLUTION
+def correct_ahead(theta_each, depth, a):
+    """θ of matches seen by a camera ``a`` ahead of the axis, corrected: the turn looks larger by a/z."""
+    return np.asarray(theta_each, float) / (1.0 + a / np.asarray(depth, float))
+
+
 z_each = camera.depth_from_disparity(ahead.w_prev[usable, 2])
-theta_corrected = float(np.median(th_ahead / (1.0 + a_ahead / z_each)))  # the turn looks larger by a/z
+theta_corrected = float(np.median(correct_ahead(th_ahead, z_each, a_ahead)))
 print(f"corrected: median θ {np.degrees(theta_corrected):.4f}°")
 ### END SOLUTION
 
@@ -563,6 +635,21 @@ print(f"corrected: median θ {np.degrees(theta_corrected):.4f}°")
 # Exercise 3: autograder test
 before = abs(np.median(th_ahead) - np.radians(2))
 assert abs(theta_corrected - np.radians(2)) < 0.05 * before, "the correction removes most of the error"
+### BEGIN HIDDEN TESTS
+fresh = np.random.default_rng()  # new turns and offsets at every grading
+for _ in range(4):
+    a_, turn = fresh.uniform(0.1, 0.5), fresh.choice([-1, 1]) * fresh.uniform(np.radians(1), np.radians(4))
+    T_ = camera_motion(np.zeros(3), cm.robot_increment(turn, 0.0), camera_mount(forward=a_))
+    pairs = matches_under_transform(camera, 1000, T_, fresh, depth_range=(1.5, 15.0))
+    keep = ~cm.degenerate_theta_mask(pairs.w_prev, pairs.w_curr, camera, min_pixels=20)
+    each = cm.theta_from_pixels(pairs.w_prev, pairs.w_curr, camera)[keep]
+    depth = camera.depth_from_disparity(pairs.w_prev[keep, 2])
+    corrected = np.asarray(correct_ahead(each, depth, a_), float)
+    assert corrected.shape == each.shape, "one corrected θ per match"
+    assert abs(np.median(corrected) - turn) < 0.05 * abs(np.median(each) - turn), (
+        "correct_ahead does not remove the error of another turn or offset (which sign? which offset?)"
+    )
+### END HIDDEN TESTS
 
 # %% [markdown]
 # ### Stretch goals (not graded)

@@ -435,83 +435,155 @@ else:
 # %% [markdown]
 # ## Exercises
 #
-# Easy to hard, with the points each is worth. Write your answer in the cell under each
-# exercise (it names the variables to set), then run the test cell after it, which checks them.
+# Easy to hard, with the points each is worth. Each exercise asks for a function (the cell
+# under it names it) and then uses it; the test cell after it checks both. The grader also
+# calls your functions with inputs of its own, so an answer must compute, not quote a number.
 
 # %% [markdown]
 # ### Exercise 1 · depth from disparity *(easy, 2 points)*
 #
-# A stereo matcher is off by 0.25 px of disparity. How large is the resulting depth error of
-# the `camera` of section 2 for a wall 2 m away, and for one 10 m away? Store them (metres,
-# positive) in `depth_error_2m` and `depth_error_10m`.
+# A stereo matcher reads every disparity too small by a fixed number of pixels, so every depth
+# comes out too large. Write `depth_error(z, disparity_error, camera)`: by how many metres the
+# depth of a point at true depth `z` comes out too large when the disparity reads
+# `disparity_error` pixels too small (exactly, not to first order). Store it for 0.25 px and
+# the `camera` of section 2 at 2 m and at 10 m in `depth_error_2m` and `depth_error_10m`.
 #
 # *Hint:* z = f_x B / d; `camera.depth_from_disparity`.
 
 
 # %% nbgrader={"grade": false, "grade_id": "ex1", "locked": false, "schema_version": 3, "solution": true}
 ### BEGIN SOLUTION
-def depth_error(z, disparity_error=0.25):
+def depth_error(z, disparity_error, camera):
+    """Depth error (m) at true depth ``z`` of a disparity ``disparity_error`` px too small (eq. 13)."""
     d = camera.fx * camera.baseline / z
     return float(camera.depth_from_disparity(d - disparity_error) - z)
 
 
-depth_error_2m, depth_error_10m = depth_error(2.0), depth_error(10.0)
+depth_error_2m, depth_error_10m = depth_error(2.0, 0.25, camera), depth_error(10.0, 0.25, camera)
 print(f"0.25 px of disparity: {depth_error_2m * 100:.2f} cm at 2 m, {depth_error_10m * 100:.1f} cm at 10 m")
 ### END SOLUTION
 
 # %% nbgrader={"grade": true, "grade_id": "ex1_test", "locked": true, "points": 2, "schema_version": 3, "solution": false}
 # Exercise 1: autograder test
 first_order = 0.25 / (camera.fx * camera.baseline)  # dz = z^2 dd / (f B)
-assert np.isclose(depth_error_2m, 4 * first_order, rtol=0.05)
+assert np.isclose(depth_error_2m, 4 * first_order, rtol=0.05), "at 2 m: about z² dd / (f_x B)"
 assert np.isclose(depth_error_10m, 100 * first_order, rtol=0.15), "the error grows with z²"
+### BEGIN HIDDEN TESTS
+fresh = np.random.default_rng()  # new cameras, depths and disparity errors at every grading
+for _ in range(10):
+    cam = StereoCamera(
+        fx=fresh.uniform(300, 900), fy=500.0, cx=320.0, cy=240.0, baseline=fresh.uniform(0.1, 0.5)
+    )
+    z_, dd = fresh.uniform(1.0, 20.0), fresh.uniform(0.05, 1.0)
+    exact = cam.fx * cam.baseline / (cam.fx * cam.baseline / z_ - dd) - z_
+    assert np.isclose(depth_error(z_, dd, cam), exact, rtol=1e-6), (
+        "depth_error is not the exact error of another camera, depth or disparity error "
+        "(to first order only? which way does the disparity err?)"
+    )
+### END HIDDEN TESTS
 
 # %% [markdown]
 # ### Exercise 2 · a laser ahead of the axis *(medium, 3 points)*
 #
-# Mount the scanner 0.3 m ahead of the robot's centre (`LaserScanner(range_sigma=0.0,
-# max_range=30.0, mount=(0.3, 0.0, 0.0))`), scan the lab from `pose`, and express every echo in
-# the **robot** frame (x forward, y left, origin at the robot's centre): an array `robot_points`
-# of shape `(K, 2)`.
+# A scanner mounted at `mount` = (x, y, yaw) in the robot frame (x forward, y left, origin at
+# the robot's centre, yaw counter-clockwise) returns echoes in its own frame. Write
+# `to_robot_frame(points, mount)` returning the points `(K, 2)` in the robot frame, without the
+# pose helpers of `vo_lib.geometry`. Then mount the scanner 0.3 m ahead of the robot's centre
+# (`LaserScanner(range_sigma=0.0, max_range=30.0, mount=(0.3, 0.0, 0.0))`), scan the lab from
+# `pose`, and store every echo in the robot frame in `robot_points`.
 #
-# *Hint:* `scan.points()` are in the sensor's frame.
+# *Hint:* `scan.points()` are in the sensor's frame; rotate by the yaw, then shift.
+
 
 # %% nbgrader={"grade": false, "grade_id": "ex2", "locked": false, "schema_version": 3, "solution": true}
 ### BEGIN SOLUTION
-front_scan = LaserScanner(range_sigma=0.0, max_range=30.0, mount=(0.3, 0.0, 0.0)).scan(
+def to_robot_frame(points, mount):
+    """Points ``(K, 2)`` of a sensor mounted at ``mount`` = (x, y, yaw), in the robot frame."""
+    x, y, yaw = mount
+    rotation = np.array([[np.cos(yaw), -np.sin(yaw)], [np.sin(yaw), np.cos(yaw)]])
+    return np.asarray(points, float) @ rotation.T + np.array([x, y])
+
+
+front_mount = (0.3, 0.0, 0.0)
+front_scan = LaserScanner(range_sigma=0.0, max_range=30.0, mount=front_mount).scan(
     worlds["indoor_lab"].segments_array(), pose
 )
-robot_points = front_scan.points() + np.array([0.3, 0.0])
+robot_points = to_robot_frame(front_scan.points(), front_mount)
 ### END SOLUTION
 
 # %% nbgrader={"grade": true, "grade_id": "ex2_test", "locked": true, "points": 3, "schema_version": 3, "solution": false}
 # Exercise 2: autograder test: every echo, carried into the world, lies on a wall
-cos_yaw, sin_yaw = np.cos(pose[2]), np.sin(pose[2])
-on_map = robot_points @ np.array([[cos_yaw, sin_yaw], [-sin_yaw, cos_yaw]]) + pose[:2]
 walls = worlds["indoor_lab"].segments_array()  # rows (x1, y1, x2, y2)
-wall_start, wall_end = walls[None, :, :2], walls[None, :, 2:]
-span = wall_end - wall_start
-along = np.clip(np.sum((on_map[:, None] - wall_start) * span, -1) / np.sum(span**2, -1), 0, 1)
-gap = np.linalg.norm(on_map[:, None] - (wall_start + along[..., None] * span), axis=-1).min(axis=1)
-assert robot_points.shape[1] == 2 and len(robot_points) > 400
-assert gap.max() < 1e-6
+
+
+def gap_to_walls(points_robot, robot_pose):
+    """Distance of every point (robot frame) from the nearest wall of the lab."""
+    cos_yaw, sin_yaw = np.cos(robot_pose[2]), np.sin(robot_pose[2])
+    on_map = points_robot @ np.array([[cos_yaw, sin_yaw], [-sin_yaw, cos_yaw]]) + robot_pose[:2]
+    wall_start, wall_end = walls[None, :, :2], walls[None, :, 2:]
+    span = wall_end - wall_start
+    along = np.clip(np.sum((on_map[:, None] - wall_start) * span, -1) / np.sum(span**2, -1), 0, 1)
+    return np.linalg.norm(on_map[:, None] - (wall_start + along[..., None] * span), axis=-1).min(axis=1)
+
+
+assert robot_points.shape[1] == 2 and len(robot_points) > 400, "one (x, y) per echo"
+assert gap_to_walls(robot_points, pose).max() < 1e-6, "an echo carried into the world misses the walls"
+
+
+### BEGIN HIDDEN TESTS
+def refuse(*args, **kwargs):
+    raise AssertionError("to_robot_frame calls the vo_lib pose helper the exercise asks you to do without")
+
+
+import vo_lib.geometry as geometry_module  # noqa: E402
+
+fresh = np.random.default_rng()  # new mounts at every grading
+cases = []
+for _ in range(3):
+    mount_ = (fresh.uniform(-0.4, 0.4), fresh.uniform(-0.3, 0.3), fresh.uniform(-np.pi, np.pi))
+    echoes = LaserScanner(range_sigma=0.0, max_range=30.0, mount=mount_).scan(walls, pose).points()
+    cases.append((mount_, echoes))
+helpers = [geometry_module.compose_planar, geometry_module.planar_to_matrix]
+saved = [f.__code__ for f in helpers]
+for f in helpers:
+    f.__code__ = refuse.__code__
+try:
+    for mount_, echoes in cases:
+        got = np.asarray(to_robot_frame(echoes, mount_), float)
+        assert got.shape == echoes.shape, "one (x, y) per echo"
+        assert gap_to_walls(got, pose).max() < 1e-6, (
+            "to_robot_frame does not carry the echoes of a turned or shifted scanner onto the walls"
+        )
+finally:
+    for f, code in zip(helpers, saved, strict=True):
+        f.__code__ = code
+### END HIDDEN TESTS
 
 # %% [markdown]
 # ### Exercise 3 · the laser and the camera agree everywhere *(hard, 4 points)*
 #
 # Section 3 compared one beam with one pixel. Compare every beam of `scan` (the on-axis scanner)
-# that falls inside the image: convert its range to the camera's depth z, find the column it
-# falls on at the row of the camera's height, and store the absolute differences from the
-# rendered `depth` there in `depth_gaps` (metres, one per such beam).
+# that falls inside the image. Write `beam_in_image(ranges, bearings, camera)` returning two
+# arrays: each beam's depth z in the camera's frame and the (not rounded) image column u it falls
+# on at the row of the camera's height. Then store, for every valid beam whose column lies in
+# the image, the absolute differences of its z from the rendered `depth` there in `depth_gaps`
+# (metres, one per such beam).
 #
 # *Hint:* a beam's bearing is counter-clockwise (to the left), the image's u grows to the right;
 # z = r cos(bearing).
 
+
 # %% nbgrader={"grade": false, "grade_id": "ex3", "locked": false, "schema_version": 3, "solution": true}
 ### BEGIN SOLUTION
-u_beam = camera.cx - camera.fx * np.tan(scan.bearings)
+def beam_in_image(ranges, bearings, camera):
+    """Depth z and image column u of laser beams in the plane of the camera's optical axis."""
+    ranges, bearings = np.asarray(ranges, float), np.asarray(bearings, float)
+    return ranges * np.cos(bearings), camera.cx - camera.fx * np.tan(bearings)
+
+
+z_all, u_beam = beam_in_image(scan.ranges, scan.bearings, camera)
 in_view = (np.abs(scan.bearings) < np.radians(80)) & (u_beam >= 0) & (u_beam <= camera.width - 1) & scan.valid
-z_beam = scan.ranges[in_view] * np.cos(scan.bearings[in_view])
-depth_gaps = np.abs(z_beam - depth[int(round(camera.cy)), np.round(u_beam[in_view]).astype(int)])
+depth_gaps = np.abs(z_all[in_view] - depth[int(round(camera.cy)), np.round(u_beam[in_view]).astype(int)])
 print(f"{len(depth_gaps)} beams in view: median gap {np.median(depth_gaps) * 1000:.1f} mm")
 ### END SOLUTION
 
@@ -519,7 +591,21 @@ print(f"{len(depth_gaps)} beams in view: median gap {np.median(depth_gaps) * 100
 # Exercise 3: autograder test
 field_of_view = 2 * np.arctan(camera.width / 2 / camera.fx)
 assert abs(len(depth_gaps) - field_of_view / np.radians(1 / 3)) < 5, "every beam in view, once"
-assert np.median(depth_gaps) < 0.005 and np.percentile(depth_gaps, 90) < 0.03
+assert np.median(depth_gaps) < 0.005 and np.percentile(depth_gaps, 90) < 0.03, "laser and camera disagree"
+### BEGIN HIDDEN TESTS
+fresh = np.random.default_rng()  # new cameras and beams at every grading
+for _ in range(5):
+    cam = StereoCamera(
+        fx=fresh.uniform(300, 900), fy=500.0, cx=fresh.uniform(200, 400), cy=240.0, baseline=0.12
+    )
+    bearings_ = fresh.uniform(-1.0, 1.0, 50)
+    ranges_ = fresh.uniform(0.5, 30.0, 50)
+    z_, u_ = (np.asarray(a, float) for a in beam_in_image(ranges_, bearings_, cam))
+    assert np.allclose(z_, ranges_ * np.cos(bearings_)), "beam_in_image: not the depth along the optical axis"
+    assert np.allclose(u_, cam.cx - cam.fx * np.tan(bearings_)), (
+        "beam_in_image: not the column of another camera's image (which way does u grow?)"
+    )
+### END HIDDEN TESTS
 
 # %% [markdown]
 # ### Stretch goals (not graded)

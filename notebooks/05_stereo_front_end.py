@@ -430,14 +430,16 @@ display(
 # %% [markdown]
 # ## Exercises
 #
-# Easy to hard, with the points each is worth. Write your answer in the cell under each
-# exercise (it names the variables to set), then run the test cell after it, which checks them.
+# Easy to hard, with the points each is worth. Each exercise asks for a function (the cell
+# under it names it); the test cell after it checks it. The grader also calls your functions
+# with inputs of its own, and without the `vo_lib` function that does the same job.
 
 # %% [markdown]
 # ### Exercise 1 · the Hamming distance *(easy, 2 points)*
 #
 # Write `hamming_distance(a, b)` for two arrays of binary descriptors (`(N, 32)` bytes each, as
-# `features.descriptors`), returning the number of differing bits of each row pair.
+# `features.descriptors`), returning the number of differing bits of each row pair, without
+# calling `vo_lib`'s `hamming`.
 #
 # *Hint:* `np.bitwise_xor` and `np.unpackbits`.
 
@@ -454,8 +456,34 @@ def hamming_distance(a, b):
 # %% nbgrader={"grade": true, "grade_id": "ex1_test", "locked": true, "points": 2, "schema_version": 3, "solution": false}
 # Exercise 1: autograder test
 other = features.descriptors[rng.permutation(len(features.descriptors))]
-assert np.array_equal(hamming_distance(features.descriptors, other), hamming(features.descriptors, other))
-assert np.all(hamming_distance(other, other) == 0)
+assert np.array_equal(hamming_distance(features.descriptors, other), hamming(features.descriptors, other)), (
+    "not the number of differing bits of each pair"
+)
+assert np.all(hamming_distance(other, other) == 0), "a descriptor differs from itself in no bit"
+### BEGIN HIDDEN TESTS
+import vo_lib.stereo_vo.features as features_module  # noqa: E402
+
+
+def refuse(*args, **kwargs):
+    raise AssertionError("hamming_distance calls the vo_lib function the exercise asks you to write")
+
+
+fresh = np.random.default_rng()  # new descriptors at every grading
+a_ = fresh.integers(0, 256, (500, 32), dtype=np.uint8)
+b_ = a_.copy()
+flips = fresh.integers(0, 32 * 8, (500, 5))  # a few bits flipped in every row
+for row, bits in enumerate(flips):
+    for bit in bits:
+        b_[row, bit // 8] ^= np.uint8(1 << (bit % 8))
+expected = np.unpackbits(a_ ^ b_, axis=1).sum(axis=1)
+saved, features_module.hamming.__code__ = features_module.hamming.__code__, refuse.__code__
+try:
+    assert np.array_equal(np.asarray(hamming_distance(a_, b_)), expected), (
+        "on other descriptors, not the number of differing bits (bits, not bytes)"
+    )
+finally:
+    features_module.hamming.__code__ = saved
+### END HIDDEN TESTS
 
 # %% [markdown]
 # ### Exercise 2 · parabola or V? *(medium, 3 points)*
@@ -496,25 +524,32 @@ assert np.allclose(quadratic_offset(*squares), true_minima), "exact on a parabol
 assert library_worst < 1e-9 < 0.05 < parabola_worst, "the V fit is exact on a SAD cost; a parabola is not"
 ### BEGIN HIDDEN TESTS
 v_check = [np.abs(x - true_minima) for x in (-1.0, 0.0, 1.0)]
-assert np.isclose(parabola_worst, np.abs(quadratic_offset(*v_check) - true_minima).max())
+assert np.isclose(parabola_worst, np.abs(quadratic_offset(*v_check) - true_minima).max()), "parabola_worst"
+fresh = np.random.default_rng()  # new parabolas at every grading
+vertex, curvature, floor = fresh.uniform(-0.5, 0.5, 50), fresh.uniform(0.1, 50, 50), fresh.uniform(0, 100, 50)
+samples = [curvature * (x - vertex) ** 2 + floor for x in (-1.0, 0.0, 1.0)]
+assert np.allclose(np.asarray(quadratic_offset(*samples), float), vertex), (
+    "quadratic_offset does not find the vertex of other parabolas (which side is which?)"
+)
 ### END HIDDEN TESTS
 
 # %% [markdown]
 # ### Exercise 3 · bucketing by hand *(hard, 4 points)*
 #
-# Write `strongest_per_cell(points, response, grid, per_cell)`: the sorted indices of the
-# `per_cell` strongest corners of each cell of a `grid = (columns, rows)` over the image (a
-# corner belongs to the cell its pixel position falls in). Check it on section 1's FAST corners.
+# Write `strongest_per_cell(points, response, width, height, grid, per_cell)`: the sorted
+# indices of the `per_cell` strongest corners of each cell of a `grid = (columns, rows)` over a
+# `width` × `height` image (a corner belongs to the cell its pixel position falls in), without
+# calling `vo_lib`'s `bucket`. Check it on section 1's FAST corners.
 #
 # *Hint:* give each corner a cell number, then sort by cell and, within a cell, by response.
 
 
 # %% nbgrader={"grade": false, "grade_id": "ex3", "locked": false, "schema_version": 3, "solution": true}
 ### BEGIN SOLUTION
-def strongest_per_cell(points, response, grid, per_cell):
+def strongest_per_cell(points, response, width, height, grid, per_cell):
     """Sorted indices of the ``per_cell`` strongest points of every grid cell."""
-    column = np.minimum((points[:, 0] * grid[0] / camera.width).astype(int), grid[0] - 1)
-    row = np.minimum((points[:, 1] * grid[1] / camera.height).astype(int), grid[1] - 1)
+    column = np.minimum((points[:, 0] * grid[0] / width).astype(int), grid[0] - 1)
+    row = np.minimum((points[:, 1] * grid[1] / height).astype(int), grid[1] - 1)
     cell = row * grid[0] + column
     keep = []
     for c in np.unique(cell):
@@ -528,10 +563,41 @@ def strongest_per_cell(points, response, grid, per_cell):
 # %% nbgrader={"grade": true, "grade_id": "ex3_test", "locked": true, "points": 4, "schema_version": 3, "solution": false}
 # Exercise 3: autograder test
 for grid, per_cell in (((8, 6), 12), ((4, 3), 5), ((16, 12), 1)):
-    mine = strongest_per_cell(points, response, grid, per_cell)
+    mine = strongest_per_cell(points, response, camera.width, camera.height, grid, per_cell)
     assert np.array_equal(
         mine, bucket(points, response, camera.width, camera.height, grid, per_cell * grid[0] * grid[1])
+    ), f"not the {per_cell} strongest corners of every cell of a {grid} grid"
+
+
+### BEGIN HIDDEN TESTS
+import vo_lib.stereo_vo.features as features_module  # noqa: E402
+
+
+def refuse(*args, **kwargs):
+    raise AssertionError("strongest_per_cell calls the vo_lib function the exercise asks you to write")
+
+
+fresh = np.random.default_rng()  # new corners and images at every grading
+cases = []
+for _ in range(4):
+    w_, h_ = int(fresh.integers(200, 1300)), int(fresh.integers(150, 1000))
+    grid_, per_ = (int(fresh.integers(2, 10)), int(fresh.integers(2, 8))), int(fresh.integers(1, 6))
+    pts = fresh.uniform([0, 0], [w_ - 1, h_ - 1], (800, 2)).astype(np.float32)
+    resp = fresh.uniform(1, 100, 800).astype(np.float32)
+    cases.append(
+        (pts, resp, w_, h_, grid_, per_, bucket(pts, resp, w_, h_, grid_, per_ * grid_[0] * grid_[1]))
     )
+saved, features_module.bucket.__code__ = features_module.bucket.__code__, refuse.__code__
+try:
+    for pts, resp, w_, h_, grid_, per_, expected in cases:
+        got = np.asarray(strongest_per_cell(pts, resp, w_, h_, grid_, per_))
+        assert np.array_equal(got, expected), (
+            "on other corners or images, not the strongest few of every cell (strongest? per cell? "
+            "which cell?)"
+        )
+finally:
+    features_module.bucket.__code__ = saved
+### END HIDDEN TESTS
 
 # %% [markdown]
 # ### Stretch goals (not graded)

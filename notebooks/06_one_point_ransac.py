@@ -1036,8 +1036,9 @@ trial_widget = offer(
 # %% [markdown]
 # ## Exercises
 #
-# Easy to hard, with the points each is worth. Write your answer in the cell under each
-# exercise (it names the variables to set), then run the test cell after it, which checks them.
+# Easy to hard, with the points each is worth. Each exercise asks for a function (the cell
+# under it names it) and then uses it; the test cell after it checks both. The grader also
+# calls your functions with inputs of its own, so an answer must compute, not quote a number.
 # The cell below draws the matches they share: 400 matches of a 3° turn, 30 % outliers, at
 # 0.5 px and at 1 px of noise.
 
@@ -1053,109 +1054,179 @@ one_px = synthetic_matches(ex_camera, 400, ex_theta, 0.1, ex_rng, noise_px=1.0, 
 # %% [markdown]
 # ### Exercise 1 · hypotheses for 80 % outliers *(easy, 2 points)*
 #
-# With 80 % outliers, how many hypotheses does RANSAC need to draw at least one all-inlier
-# sample with probability 0.999, for samples of 1, 3 and 5 matches? Store them in a dict
-# `needed = {1: ..., 3: ..., 5: ...}`, computed from the formula, not from `vo_lib`.
+# Write `hypotheses_for(outlier_ratio, confidence, sample_size)`: how many hypotheses RANSAC
+# needs to draw at least one all-inlier sample of `sample_size` matches with probability
+# `confidence` (the smallest such whole number), from the formula, not from `vo_lib`'s
+# `hypotheses_needed`. Store the counts for 80 % outliers, probability 0.999 and samples of 1, 3
+# and 5 matches in a dict `needed = {1: ..., 3: ..., 5: ...}`.
 #
-# *Hint:* the chance that one draw of s matches is all inliers is w^s.
+# *Hint:* the chance that one draw of s matches is all inliers is w^s, w the inlier ratio.
+
 
 # %% nbgrader={"grade": false, "grade_id": "ex1", "locked": false, "schema_version": 3, "solution": true}
 ### BEGIN SOLUTION
-needed = {s: math.ceil(math.log(1 - 0.999) / math.log(1 - 0.2**s)) for s in (1, 3, 5)}
+def hypotheses_for(outlier_ratio, confidence, sample_size):
+    """Smallest number of draws giving one all-inlier sample with probability ``confidence``."""
+    all_inliers = (1.0 - outlier_ratio) ** sample_size
+    return math.ceil(math.log(1.0 - confidence) / math.log(1.0 - all_inliers))
+
+
+needed = {s: hypotheses_for(0.8, 0.999, s) for s in (1, 3, 5)}
 print(needed)
 ### END SOLUTION
 
 # %% nbgrader={"grade": true, "grade_id": "ex1_test", "locked": true, "points": 2, "schema_version": 3, "solution": false}
 # Exercise 1: autograder test
-assert set(needed) == {1, 3, 5}
+assert set(needed) == {1, 3, 5}, "one count per sample size"
 for s, count in needed.items():
-    assert count == hypotheses_needed(0.2, 0.999, sample_size=s)
+    assert count == hypotheses_needed(0.2, 0.999, sample_size=s), f"the count for samples of {s}"
+### BEGIN HIDDEN TESTS
+import vo_lib.stereo_vo.ransac as ransac_module  # noqa: E402
+
+
+def refuse(*args, **kwargs):
+    raise AssertionError("hypotheses_for calls the vo_lib function the exercise asks you to write")
+
+
+fresh = np.random.default_rng()  # new ratios and confidences at every grading
+cases = [(fresh.uniform(0.05, 0.9), fresh.uniform(0.9, 0.9999), int(fresh.integers(1, 7))) for _ in range(20)]
+expected = [hypotheses_needed(1 - e, p, sample_size=s) for e, p, s in cases]
+saved, ransac_module.hypotheses_needed.__code__ = ransac_module.hypotheses_needed.__code__, refuse.__code__
+try:
+    got = [int(hypotheses_for(e, p, s)) for e, p, s in cases]
+finally:
+    ransac_module.hypotheses_needed.__code__ = saved
+assert got == expected, (
+    "hypotheses_for gives other counts for other ratios (outliers, not inliers? rounded up?)"
+)
+### END HIDDEN TESTS
 
 # %% [markdown]
 # ### Exercise 2 · gates that assume the wrong noise *(medium, 3 points)*
 #
-# The gates assume 0.5 px of pixel noise (`pixel_sigma`). Run `one_point_ransac` (with
-# `rng=1`) on `one_px`, once with the default and once with `pixel_sigma=1.0`, and store the
-# share of the true inliers (`one_px.inliers`) each finds in `recall_default` and
-# `recall_matched`, and the number of outliers each accepts in `false_default` and
-# `false_matched`.
+# The gates assume 0.5 px of pixel noise (`pixel_sigma`). Write `gate_scores(matches, camera,
+# pixel_sigma)`: run `one_point_ransac` (with `rng=1` and that `pixel_sigma`) on `matches` (as
+# `one_px`) and return the share of the true inliers (`matches.inliers`) it finds and the number
+# of outliers it accepts. Store them for `one_px` with the default 0.5 px in
+# `recall_default, false_default`, and with `pixel_sigma=1.0` in `recall_matched, false_matched`.
 #
 # *Hint:* the result's `inliers` is a boolean mask like `one_px.inliers`.
 
+
 # %% nbgrader={"grade": false, "grade_id": "ex2", "locked": false, "schema_version": 3, "solution": true}
 ### BEGIN SOLUTION
-found = {
-    sigma: one_point_ransac(one_px.w_prev, one_px.w_curr, ex_camera, rng=1, pixel_sigma=sigma).inliers
-    for sigma in (0.5, 1.0)
-}
-truth_count = one_px.inliers.sum()
-recall_default, recall_matched = (float(np.sum(found[s] & one_px.inliers) / truth_count) for s in (0.5, 1.0))
-false_default, false_matched = (int(np.sum(found[s] & ~one_px.inliers)) for s in (0.5, 1.0))
+def gate_scores(matches, camera, pixel_sigma):
+    """Share of the true inliers one_point_ransac finds, and the number of outliers it accepts."""
+    found = one_point_ransac(matches.w_prev, matches.w_curr, camera, rng=1, pixel_sigma=pixel_sigma).inliers
+    return float(np.sum(found & matches.inliers) / matches.inliers.sum()), int(
+        np.sum(found & ~matches.inliers)
+    )
+
+
+recall_default, false_default = gate_scores(one_px, ex_camera, 0.5)
+recall_matched, false_matched = gate_scores(one_px, ex_camera, 1.0)
 print(f"inliers found: {recall_default:.0%} assuming 0.5 px, {recall_matched:.0%} assuming 1 px")
 ### END SOLUTION
 
 # %% nbgrader={"grade": true, "grade_id": "ex2_test", "locked": true, "points": 3, "schema_version": 3, "solution": false}
 # Exercise 2: autograder test
 assert recall_default < 0.8 < 0.95 < recall_matched, "gates too narrow for the noise drop inliers"
-assert false_matched <= 0.02 * np.sum(~one_px.inliers)
+assert false_matched <= 0.02 * np.sum(~one_px.inliers), "matched gates accept few outliers"
 ### BEGIN HIDDEN TESTS
-check_default = one_point_ransac(one_px.w_prev, one_px.w_curr, ex_camera, rng=1).inliers
-assert np.isclose(recall_default, np.sum(check_default & one_px.inliers) / one_px.inliers.sum())
-assert false_default == np.sum(check_default & ~one_px.inliers)
+fresh = np.random.default_rng()  # new matches at every grading
+for _ in range(2):
+    sigma_ = fresh.uniform(0.3, 1.5)
+    pairs = synthetic_matches(
+        ex_camera,
+        300,
+        fresh.uniform(-0.08, 0.08),
+        0.1,
+        fresh,
+        noise_px=sigma_,
+        outlier_ratio=fresh.uniform(0.1, 0.5),
+    )
+    found = one_point_ransac(pairs.w_prev, pairs.w_curr, ex_camera, rng=1, pixel_sigma=sigma_).inliers
+    recall_, false_ = gate_scores(pairs, ex_camera, sigma_)
+    assert np.isclose(recall_, np.sum(found & pairs.inliers) / pairs.inliers.sum()), (
+        "gate_scores: not the share of the true inliers found (of the true inliers, not of those found)"
+    )
+    assert false_ == np.sum(found & ~pairs.inliers), "gate_scores: not the number of outliers accepted"
 ### END HIDDEN TESTS
 
 # %% [markdown]
-# ### Exercise 3 · one fixed threshold *(hard, 4 points)*
+# ### Exercise 3 · one fixed threshold *(hard, 4 points + 1 written)*
 #
 # Replace the per-match gates by one fixed threshold t on |θ_i − θ|, θ_i being each match's own
-# θ (eq. 14) and θ the true turn `ex_theta`. On `half_px`, find among 0.01°, 0.02°, …, 1.00° the t
-# that classifies the most matches correctly (inlier or not, against `half_px.inliers`) and store
-# it in `best_threshold_deg`. Then keep that t for `one_px` and store the share of its true
-# inliers it accepts in `fixed_recall_1px`. Why does a threshold tuned at one noise level fail at
-# another, and why do the per-match gates not have this problem?
+# θ (eq. 14) and θ the true turn. Write `best_fixed_threshold(theta_each, theta, is_inlier,
+# grid_deg)`: the t (degrees) of the grid `grid_deg` that classifies the most matches correctly
+# (accepted inlier or rejected outlier, against the boolean `is_inlier`), the smallest such t if
+# several tie. Even tuned with the truth, can it match the gates? On `half_px`, with the grid
+# 0.01°, 0.02°, …, 8.00°, store the best t in `best_threshold_deg`, the number of matches it
+# classifies wrongly in `fixed_errors`, and the number `one_point_ransac` (with `rng=1`, its
+# gates assuming the right 0.5 px) classifies wrongly in `gate_errors`.
 #
 # *Hint:* `cm.theta_from_pixels`; compare a boolean mask with the truth and count.
 
+
 # %% nbgrader={"grade": false, "grade_id": "ex3", "locked": false, "schema_version": 3, "solution": true}
 ### BEGIN SOLUTION
-thresholds = np.round(np.arange(1, 101) * 0.01, 2)
+def best_fixed_threshold(theta_each, theta, is_inlier, grid_deg):
+    """Threshold (deg) of ``grid_deg`` classifying the most matches correctly; the smallest on ties."""
+    error = np.abs(np.asarray(theta_each) - theta)
+    correct = [np.sum((error < np.radians(t)) == is_inlier) for t in grid_deg]
+    return float(grid_deg[int(np.argmax(correct))])
+
+
+thresholds = np.round(np.arange(1, 801) * 0.01, 2)
 theta_half = cm.theta_from_pixels(half_px.w_prev, half_px.w_curr, ex_camera)
-correct = [np.sum((np.abs(theta_half - ex_theta) < np.radians(t)) == half_px.inliers) for t in thresholds]
-best_threshold_deg = float(thresholds[int(np.argmax(correct))])
-theta_one = cm.theta_from_pixels(one_px.w_prev, one_px.w_curr, ex_camera)
-accepted = np.abs(theta_one - ex_theta) < np.radians(best_threshold_deg)
-fixed_recall_1px = float(np.sum(accepted & one_px.inliers) / one_px.inliers.sum())
+best_threshold_deg = best_fixed_threshold(theta_half, ex_theta, half_px.inliers, thresholds)
+fixed_errors = int(
+    np.sum((np.abs(theta_half - ex_theta) < np.radians(best_threshold_deg)) != half_px.inliers)
+)
+gated = one_point_ransac(half_px.w_prev, half_px.w_curr, ex_camera, rng=1).inliers
+gate_errors = int(np.sum(gated != half_px.inliers))
 print(
-    f"best fixed threshold {best_threshold_deg:.2f}°; at 1 px it keeps {fixed_recall_1px:.0%} of the inliers"
+    f"best fixed threshold {best_threshold_deg:.2f}°: {fixed_errors} matches misclassified; "
+    f"the gates: {gate_errors}"
 )
 ### END SOLUTION
 
 # %% nbgrader={"grade": true, "grade_id": "ex3_test", "locked": true, "points": 4, "schema_version": 3, "solution": false}
 # Exercise 3: autograder test
-assert 0.01 <= best_threshold_deg <= 1.0
-theta_check = cm.theta_from_pixels(one_px.w_prev, one_px.w_curr, ex_camera)
-keeps = np.sum((np.abs(theta_check - ex_theta) < np.radians(best_threshold_deg)) & one_px.inliers)
-assert np.isclose(fixed_recall_1px, keeps / one_px.inliers.sum())
-### BEGIN HIDDEN TESTS
+assert 0.01 <= best_threshold_deg <= 8.0, "a threshold of the grid"
 theta_check = cm.theta_from_pixels(half_px.w_prev, half_px.w_curr, ex_camera)
-correct_at = [
-    np.sum((np.abs(theta_check - ex_theta) < np.radians(t)) == half_px.inliers)
-    for t in np.arange(1, 101) * 0.01
-]
-assert correct_at[round(best_threshold_deg * 100) - 1] == max(correct_at), "the best of the grid"
+wrong_fixed = np.sum((np.abs(theta_check - ex_theta) < np.radians(best_threshold_deg)) != half_px.inliers)
+assert fixed_errors == wrong_fixed, "fixed_errors: the matches the threshold classifies wrongly"
+assert gate_errors < fixed_errors, "even the best fixed threshold misclassifies more than the gates"
+### BEGIN HIDDEN TESTS
+gated_check = one_point_ransac(half_px.w_prev, half_px.w_curr, ex_camera, rng=1).inliers
+assert gate_errors == np.sum(gated_check != half_px.inliers), "gate_errors"
+fresh = np.random.default_rng()  # new matches and grids at every grading
+for _ in range(3):
+    turn = fresh.uniform(-0.08, 0.08)
+    pairs = synthetic_matches(
+        ex_camera, 400, turn, 0.1, fresh, noise_px=fresh.uniform(0.3, 1.0), outlier_ratio=0.3
+    )
+    each = cm.theta_from_pixels(pairs.w_prev, pairs.w_curr, ex_camera)
+    grid = np.sort(fresh.uniform(0.01, 10.0, 300))
+    correct_at = [np.sum((np.abs(each - turn) < np.radians(t)) == pairs.inliers) for t in grid]
+    assert np.isclose(
+        best_fixed_threshold(each, turn, pairs.inliers, grid), grid[int(np.argmax(correct_at))]
+    ), "best_fixed_threshold does not pick the threshold that classifies the most matches correctly"
 ### END HIDDEN TESTS
 
+# %% [markdown]
+# **Exercise 3, written part (1 point, graded by hand):** why can one threshold, even tuned
+# with the truth, not classify as well as the per-match gates? Answer in the cell below.
+
 # %% [markdown] nbgrader={"grade": true, "grade_id": "ex3_why", "locked": false, "points": 1, "schema_version": 3, "solution": true}
-# **Exercise 3, written part (1 point):** why does the fixed threshold fail when the noise
-# changes, and why do the per-match gates not?
-#
 # === BEGIN MARK SCHEME ===
 #
 # A match's θ is noisy in proportion to 1/|v − v₀| (notebook 03): one threshold is too wide for
-# matches far from the camera's height and too narrow for those near it, and tuned at one noise
-# level it drops inliers at a higher one. The gates divide each error by that match's own
-# first-order σ, so their width follows the geometry of each match; they still need the right
-# pixel noise (exercise 2), which is one number to calibrate instead of one per match.
+# matches far from the camera's height (it lets in outliers there) and too narrow for those near
+# it (it drops inliers there), whatever its value. The gates divide each error by that match's
+# own first-order σ, so their width follows the geometry of each match; they still need the
+# right pixel noise (exercise 2), one number to calibrate instead of one per match.
 #
 # === END MARK SCHEME ===
 

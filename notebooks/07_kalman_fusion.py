@@ -732,23 +732,30 @@ fuse_widget = offer(
 # %% [markdown]
 # ## Exercises
 #
-# Easy to hard, with the points each is worth. Write your answer in the cell under each
-# exercise (it names the variables to set), then run the test cell after it, which checks them.
+# Easy to hard, with the points each is worth. Each exercise asks for a function (the cell
+# under it names it) and then uses it; the test cell after it checks both. The grader also
+# calls your functions with inputs of its own, so an answer must compute, not quote a number.
 
 # %% [markdown]
 # ### Exercise 1 · one update in one dimension *(easy, 2 points)*
 #
-# A filter believes a robot is 2.0 m along a corridor with variance 0.5 m²; a measurement says
-# 2.6 m with variance 0.25 m². Compute the gain `gain_1d`, the updated mean `mean_1d` and the
-# updated variance `var_1d` by hand (no library).
+# Write `update_1d(mean, variance, measured, measurement_variance)` returning the gain, the
+# updated mean and the updated variance of a one-dimensional Kalman update, by hand (no
+# library). A filter believes a robot is 2.0 m along a corridor with variance 0.5 m²; a
+# measurement says 2.6 m with variance 0.25 m²: store its update in `gain_1d, mean_1d, var_1d`.
 #
 # *Hint:* K = P / (P + R).
 
+
 # %% nbgrader={"grade": false, "grade_id": "ex1", "locked": false, "schema_version": 3, "solution": true}
 ### BEGIN SOLUTION
-gain_1d = 0.5 / (0.5 + 0.25)
-mean_1d = 2.0 + gain_1d * (2.6 - 2.0)
-var_1d = (1 - gain_1d) * 0.5
+def update_1d(mean, variance, measured, measurement_variance):
+    """Gain, mean and variance after one scalar Kalman update."""
+    gain = variance / (variance + measurement_variance)
+    return gain, mean + gain * (measured - mean), (1 - gain) * variance
+
+
+gain_1d, mean_1d, var_1d = update_1d(2.0, 0.5, 2.6, 0.25)
 print(f"K = {gain_1d:.3f}, mean {mean_1d:.3f} m, variance {var_1d:.4f} m²")
 ### END SOLUTION
 
@@ -759,8 +766,34 @@ from filterpy.kalman import update as filterpy_update
 mean_ref, var_ref = filterpy_update(
     np.array([2.0]), np.array([[0.5]]), np.array([2.6]), np.array([[0.25]]), np.eye(1)
 )
-assert np.isclose(mean_1d, mean_ref[0]) and np.isclose(var_1d, var_ref[0, 0])
+assert np.isclose(mean_1d, mean_ref[0]) and np.isclose(var_1d, var_ref[0, 0]), (
+    "not the updated mean and variance"
+)
 assert 0 < gain_1d < 1 and var_1d < min(0.5, 0.25), "fusing two estimates beats both"
+### BEGIN HIDDEN TESTS
+import filterpy.kalman as filterpy_kalman  # noqa: E402
+
+
+def refuse(*args, **kwargs):
+    raise AssertionError("update_1d calls a library update; the exercise asks for it by hand")
+
+
+fresh = np.random.default_rng()  # new beliefs and measurements at every grading
+cases = fresh.uniform([-10, 0.01, -10, 0.01], [10, 5, 10, 5], (10, 4))
+updates = [filterpy_kalman.update, filterpy_update]
+saved = [f.__code__ for f in updates]
+for f in updates:
+    f.__code__ = refuse.__code__
+try:
+    got = [tuple(float(np.squeeze(g)) for g in update_1d(*case)) for case in cases]
+finally:
+    for f, code in zip(updates, saved, strict=True):
+        f.__code__ = code
+for (m0, p0, z0, r0), (k_, m_, p_) in zip(cases, got, strict=True):
+    assert np.isclose(k_, p0 / (p0 + r0)), "the gain of another update (P / (P + R), not R / (P + R))"
+    assert np.isclose(m_, m0 + p0 / (p0 + r0) * (z0 - m0)), "the mean of another update"
+    assert np.isclose(p_, p0 * r0 / (p0 + r0)), "the variance of another update"
+### END HIDDEN TESTS
 
 # %% [markdown]
 # ### Exercise 2 · the NEES band *(medium, 3 points)*
@@ -794,20 +827,27 @@ print(f"band [{low:.2f}, {high:.2f}]; {share_inside:.1%} of the experiments insi
 # %% nbgrader={"grade": true, "grade_id": "ex2_test", "locked": true, "points": 3, "schema_version": 3, "solution": false}
 # Exercise 2: autograder test
 low_check, high_check = nees_band(50, 3)
-assert low_check < 3 < high_check and np.isclose(
-    np.mean(chi2.cdf([low_check * 50, high_check * 50], 150)), 0.5
-)
-assert abs(share_inside - 0.95) < 0.02
+assert low_check < 3 < high_check, "the band holds the expected average NEES, the dimension"
+assert abs(share_inside - 0.95) < 0.02, "a consistent estimator stays inside a 95 % band 95 % of the time"
 assert nees_band(1000, 3)[1] - nees_band(1000, 3)[0] < high_check - low_check, "more runs, a narrower band"
+### BEGIN HIDDEN TESTS
+fresh = np.random.default_rng()  # new run counts and dimensions at every grading
+for n_, d_ in zip(fresh.integers(2, 500, 10), fresh.integers(1, 7, 10), strict=True):
+    band = np.asarray(nees_band(int(n_), int(d_)), float)
+    assert np.allclose(chi2.cdf(band * n_, n_ * d_), [0.025, 0.975], atol=1e-6), (
+        "nees_band is not the 95 % band of another average NEES (which quantiles? which degrees of freedom?)"
+    )
+### END HIDDEN TESTS
 
 # %% [markdown]
 # ### Exercise 3 · the covariance of a relative measurement *(hard, 4 points)*
 #
 # Stochastic cloning keeps two poses, a (the reference) and b (now), with a joint 6×6
-# covariance, because visual odometry measures b relative to a. For the poses and covariance
-# below, write the 3×6 Jacobian `J_rel` of `relative_planar(a, b)` with respect to (a, b) at
-# the mean, and the first-order covariance `cov_rel` of the relative pose. A Monte Carlo test
-# checks both.
+# covariance, because visual odometry measures b relative to a. Write `relative_jacobian(a, b)`
+# returning the 3×6 Jacobian of `relative_planar(a, b)` with respect to (a, b), in closed form
+# (the grader checks it without `relative_planar` at hand). For the poses and covariance below
+# store it at the mean in `J_rel`, and the first-order covariance of the relative pose in
+# `cov_rel`. A Monte Carlo test checks both.
 #
 # *Hint:* d = Rᵀ(a_yaw) (b_xy − a_xy); differentiate by hand or with sympy.
 
@@ -816,15 +856,22 @@ pose_a, pose_b = np.array([1.0, 2.0, 0.4]), np.array([1.6, 2.5, 0.7])
 joint_cov = np.diag([0.02, 0.03, 0.01, 0.025, 0.02, 0.012]) ** 2
 joint_cov[2, 5] = joint_cov[5, 2] = 0.8 * 0.01 * 0.012  # the clone shares the heading error
 
+
 # %% nbgrader={"grade": false, "grade_id": "ex3", "locked": false, "schema_version": 3, "solution": true}
 ### BEGIN SOLUTION
-c_a, s_a = math.cos(pose_a[2]), math.sin(pose_a[2])
-delta = pose_b[:2] - pose_a[:2]
-R_t = np.array([[c_a, s_a], [-s_a, c_a]])  # rotates world into a's frame
-dR_t = np.array([[-s_a, c_a], [-c_a, -s_a]])  # its derivative in a's yaw
-J_rel = np.zeros((3, 6))
-J_rel[:2, :2], J_rel[:2, 2], J_rel[:2, 3:5] = -R_t, dR_t @ delta, R_t
-J_rel[2, 2], J_rel[2, 5] = -1.0, 1.0
+def relative_jacobian(a, b):
+    """3x6 Jacobian of ``relative_planar(a, b)`` with respect to ``(a, b)``."""
+    c_a, s_a = math.cos(a[2]), math.sin(a[2])
+    delta = np.asarray(b[:2], float) - np.asarray(a[:2], float)
+    R_t = np.array([[c_a, s_a], [-s_a, c_a]])  # rotates world into a's frame
+    dR_t = np.array([[-s_a, c_a], [-c_a, -s_a]])  # its derivative in a's yaw
+    J = np.zeros((3, 6))
+    J[:2, :2], J[:2, 2], J[:2, 3:5] = -R_t, dR_t @ delta, R_t
+    J[2, 2], J[2, 5] = -1.0, 1.0
+    return J
+
+
+J_rel = relative_jacobian(pose_a, pose_b)
 cov_rel = J_rel @ joint_cov @ J_rel.T
 ### END SOLUTION
 
@@ -833,18 +880,46 @@ cov_rel = J_rel @ joint_cov @ J_rel.T
 mc_rng = np.random.default_rng(11)
 draws = mc_rng.multivariate_normal(np.r_[pose_a, pose_b], joint_cov, size=200_000)
 rel = relative_planar(draws[:, :3], draws[:, 3:])
-assert J_rel.shape == (3, 6) and np.allclose(cov_rel, cov_rel.T)
+assert J_rel.shape == (3, 6) and np.allclose(cov_rel, cov_rel.T), "J is 3 x 6; a covariance is symmetric"
 mc_cov = np.cov(rel.T)
 assert np.linalg.norm(cov_rel - mc_cov) < 0.02 * np.linalg.norm(mc_cov), "first order, against Monte Carlo"
-eps = 1e-6
-numeric = np.column_stack(
-    [
-        (relative_planar(*np.split(np.r_[pose_a, pose_b] + eps * e, 2)) - relative_planar(pose_a, pose_b))
-        / eps
-        for e in np.eye(6)
-    ]
-)
-assert np.allclose(J_rel, numeric, atol=1e-5)
+### BEGIN HIDDEN TESTS
+import vo_lib.geometry as geometry_module  # noqa: E402
+
+
+def refuse(*args, **kwargs):
+    raise AssertionError("relative_jacobian calls relative_planar; the exercise asks for the closed form")
+
+
+def central_jacobian(a, b, step=1e-6):
+    """Reference: central differences of relative_planar (error ~1e-10)."""
+    x0 = np.r_[a, b]
+    return np.column_stack(
+        [
+            (relative_planar(*np.split(x0 + step * e, 2)) - relative_planar(*np.split(x0 - step * e, 2)))
+            / (2 * step)
+            for e in np.eye(6)
+        ]
+    )
+
+
+fresh = np.random.default_rng()  # new poses at every grading
+cases = [fresh.uniform([-5, -5, -np.pi] * 2, [5, 5, np.pi] * 2) for _ in range(5)]
+expected = [central_jacobian(c[:3], c[3:]) for c in cases]
+helpers = [geometry_module.relative_planar, geometry_module.compose_planar]
+saved = [f.__code__ for f in helpers]
+for f in helpers:
+    f.__code__ = refuse.__code__
+try:
+    got = [np.asarray(relative_jacobian(c[:3], c[3:]), float) for c in cases]
+finally:
+    for f, code in zip(helpers, saved, strict=True):
+        f.__code__ = code
+for g, e in zip(got, expected, strict=True):
+    assert g.shape == (3, 6) and np.allclose(g, e, atol=1e-7), (
+        "relative_jacobian is not the derivative at other poses (signs? the yaw column?)"
+    )
+### END HIDDEN TESTS
 
 # %% [markdown]
 # ### Stretch goals (not graded)

@@ -10,9 +10,13 @@ from __future__ import annotations
 
 import importlib.util
 import json
+import os
 import pathlib
 import subprocess
 import sys
+import sysconfig
+import venv
+import zipfile
 
 import jupytext
 import nbformat
@@ -134,16 +138,247 @@ def test_build_refuses_a_folder_it_did_not_write_or_that_changed(tmp_path):
 
 
 def test_bad_arguments_exit_2_with_one_line(tmp_path):
-    for args in (["99"], ["--out", str(tmp_path / "missing")]):
+    for args in (["99"], ["--out", str(tmp_path / "missing")], ["--bogus"]):
         proc = subprocess.run(
             [sys.executable, str(ROOT / "coursework" / "build.py"), *args], capture_output=True, text=True
         )
         assert proc.returncode == 2 and len(proc.stderr.strip().splitlines()) == 1, proc.stderr
 
 
+@pytest.mark.parametrize("path", NOTEBOOKS, ids=[p.stem for p in NOTEBOOKS])
+def test_every_exercise_has_adversarial_answers_and_fresh_hidden_tests(path):
+    """Each autograded exercise: a constant, a library-calling (or why none) and a wrong answer
+    in coursework/submissions, and a hidden test that draws inputs of its own (unseeded)."""
+    nb = jupytext.read(path)
+    ids = build.answer_ids(nb)
+    answers = build.read_submissions(path, ids)  # raises BuildError when a kind is missing
+    assert list(answers) == ids
+    tests = {c.metadata["nbgrader"]["grade_id"]: c.source for c in grading_cells(nb) if c.cell_type == "code"}
+    for exercise in ids:
+        hidden = "".join(m.group(1) for m in build.REGIONS[1].finditer(tests[f"{exercise}_test"]))
+        assert "np.random.default_rng()" in hidden, (
+            f"{path.name} {exercise}: no fresh inputs in its hidden test"
+        )
+    made = build.adversarial_notebooks(nbformat.v4.new_notebook(), answers)
+    given = [(exercise, kind) for _, _, kinds in made for exercise, kind in kinds.items()]
+    assert sorted(given) == sorted((e, k) for e, kinds in answers.items() for k in kinds), "each answer once"
+
+
+@pytest.mark.parametrize("path", NOTEBOOKS, ids=[p.stem for p in NOTEBOOKS])
+def test_written_questions_stay_visible(path):
+    """A written answer cell (replaced by nbgrader's stub) holds only the mark scheme; its question,
+    with its points, is in the markdown cell before it, which the student edition keeps."""
+    cells = jupytext.read(path).cells
+    for i, cell in enumerate(cells):
+        meta = cell.metadata.get("nbgrader", {})
+        if cell.cell_type == "markdown" and meta.get("solution"):
+            assert cell.source.startswith("=== BEGIN MARK SCHEME ==="), cell.source[:80]
+            question = cells[i - 1]
+            assert "nbgrader" not in question.metadata and f"{meta['points']} point" in question.source
+
+
+def test_adversarial_answers_fill_the_release_one_kind_per_exercise():
+    release = nbformat.v4.new_notebook()
+    release.cells = [
+        nbformat.v4.new_code_cell(
+            "raise NotImplementedError()", metadata={"nbgrader": {"grade_id": e, "solution": True}}
+        )
+        for e in ("ex1", "ex2")
+    ]
+    answers = {"ex1": {"constant": "a = 1", "wrong_sign": "a = -2"}, "ex2": {"library": "b = f()"}}
+    made = build.adversarial_notebooks(release, answers)
+    assert [given for _, _, given in made] == [{"ex1": "constant"}, {"ex1": "wrong_sign", "ex2": "library"}]
+    assert [c.source for c in made[1][1].cells] == ["a = -2", "b = f()"]
+    assert release.cells[0].source == "raise NotImplementedError()", "the release itself is left alone"
+
+
 @pytest.mark.notebook
-def test_autograder_both_ways_on_a_small_notebook(built):
-    """Solutions score every autograded point; the unanswered edition runs, failing only exercises."""
+def test_autograder_scores_only_correct_answers_on_a_small_notebook(built):
+    """Solutions score every autograded point; the unanswered edition and every adversarial
+    answer (constant, library-calling, wrong) score 0 per exercise; the table says so."""
     paths = [p for p in NOTEBOOKS if p.name[:2] in AUTOGRADED_IN_SUITE]
     report = build.check(built / "grading", paths)  # raises BuildError naming each problem
-    assert len(report) == len(paths)
+    rows = [line for line in report if line.startswith(tuple(p.name[:2] + " ex" for p in paths))]
+    assert len(rows) == sum(len(build.answer_ids(jupytext.read(p))) for p in paths)
+    assert any("seconds per submission" in line for line in report)
+
+
+def test_handout_holds_notebooks_wheel_requirements_and_no_solution(built):
+    handout = built / "handout"
+    assert sorted(p.stem for p in (handout / "notebooks").glob("*.ipynb")) == [p.stem for p in NOTEBOOKS]
+    wheels = list(handout.glob("vo_lib-*.whl"))
+    assert len(wheels) == 1 and (handout / "START_HERE.md").is_file()
+    requirements = (handout / "requirements.txt").read_text().splitlines()
+    assert f"./{wheels[0].name}" in requirements and "-e ." not in requirements
+    with zipfile.ZipFile(wheels[0]) as wheel:
+        names = wheel.namelist()
+    assert names and all(n.startswith(("vo_lib/", "vo_lib-")) for n in names), "the package only"
+    lines = set().union(*(build.solution_lines(jupytext.read(p)) for p in NOTEBOOKS))
+    assert build.handout_leaks(handout, {line for line in lines if len(line) > 12} - library_lines()) == []
+
+
+def library_lines():
+    return {line.strip() for f in (ROOT / "vo_lib").rglob("*.py") for line in f.read_text().splitlines()}
+
+
+def test_handout_leaks_finds_a_solution_line_and_a_marker(tmp_path):
+    nb = nbformat.v4.new_notebook()
+    nb.cells = [nbformat.v4.new_code_cell("x = 1\nanswer = secret_formula(x)")]
+    nbformat.write(nb, tmp_path / "a.ipynb")
+    with zipfile.ZipFile(tmp_path / "vo_lib-0-py3-none-any.whl", "w") as wheel:
+        wheel.writestr("vo_lib/m.py", "def f():\n    ### BEGIN HIDDEN TESTS\n    pass\n")
+    leaks = build.handout_leaks(tmp_path, {"answer = secret_formula(x)"})
+    assert leaks == [
+        "a.ipynb: 'answer = secret_formula(x)'",
+        "vo_lib-0-py3-none-any.whl/vo_lib/m.py: '### BEGIN HIDDEN TESTS'",
+    ]
+
+
+@pytest.mark.notebook
+def test_handout_wheel_installs_in_a_fresh_venv_and_runs_a_student_notebook(built, tmp_path):
+    """The wheel, not the repository, provides vo_lib; notebook 03's non-exercise cells run."""
+    env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}  # not this checkout's vo_lib
+    venv_dir = tmp_path / "venv"
+    venv.create(venv_dir, with_pip=False)
+    python = venv_dir / "bin" / "python"
+    site = subprocess.run(
+        [str(python), "-c", "import sysconfig; print(sysconfig.get_paths()['purelib'])"],
+        capture_output=True,
+        text=True,
+        check=True,
+    ).stdout.strip()
+    wheel = next((built / "handout").glob("vo_lib-*.whl"))
+    subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "pip",
+            "--python",
+            str(python),
+            "install",
+            "--quiet",
+            "--no-deps",
+            "--no-index",
+            str(wheel),
+        ],
+        check=True,
+        capture_output=True,
+        env=env,
+    )
+    # then the other requirements, from this environment (saves a download): vo_lib is already the wheel's
+    pathlib.Path(site, "requirements_from_test_env.pth").write_text(sysconfig.get_paths()["purelib"] + "\n")
+    notebook = built / "handout" / "notebooks" / f"{NOTEBOOKS[2].stem}.ipynb"
+    script = (
+        "import sys, nbformat, vo_lib\n"
+        f"assert vo_lib.__file__.startswith({str(venv_dir)!r}), vo_lib.__file__\n"
+        f"nb = nbformat.read({str(notebook)!r}, as_version=4)\n"
+        "namespace = {}\n"
+        "for cell in nb.cells:\n"
+        "    if cell.cell_type == 'code' and 'nbgrader' not in cell.metadata:\n"
+        "        exec(compile(cell.source, 'cell', 'exec'), namespace)\n"
+        "print('ran', vo_lib.__file__)\n"
+    )
+    proc = subprocess.run(
+        [str(python), "-c", script],
+        capture_output=True,
+        text=True,
+        cwd=tmp_path,
+        env={**env, "MPLBACKEND": "Agg"},
+        timeout=600,
+    )
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    assert f"ran {venv_dir}" in proc.stdout
+
+
+def test_a_folder_that_is_not_writable_or_a_damaged_marker_is_one_line_exit_2(tmp_path, monkeypatch, capsys):
+    monkeypatch.setattr(build.os, "access", lambda path, mode: False)
+    assert build.main(["--out", str(tmp_path)]) == 2
+    assert capsys.readouterr().err.strip() == f"coursework/build.py: --out {tmp_path}: not writable"
+    monkeypatch.undo()
+    folder = tmp_path / "student"
+    folder.mkdir()
+    (folder / build.MARKER).write_text("{ not json")
+    with pytest.raises(build.UsageError, match="is damaged"):
+        build.refuse_unless_replaceable(folder)
+    (folder / build.MARKER).write_text('{"files": 3}')
+    with pytest.raises(build.UsageError, match="is damaged"):
+        build.refuse_unless_replaceable(folder)
+
+
+def test_offer_shows_no_widget_in_the_autograders_kernels(monkeypatch):
+    """nbgrader's kernels have no browser: the config marks them headless and offer() does nothing."""
+    from vo_lib.viz import widgets
+
+    config = (ROOT / "coursework" / "nbgrader_config.py").read_text()
+    assert f'os.environ["{widgets.HEADLESS_VARIABLE}"] = "1"' in config
+    assert 'c.KernelManager.transport = "ipc"' in config and "allow_errors" not in config
+    monkeypatch.setattr(widgets, "in_kernel", lambda: True)
+    monkeypatch.setenv(widgets.HEADLESS_VARIABLE, "1")
+    assert widgets.offer(lambda x: x, x=(0.0, 1.0)) is None
+
+
+@pytest.mark.notebook
+def test_release_fetch_submit_collect_autograde_export_through_a_local_exchange(built, tmp_path):
+    """docs/course.md's workflow, end to end: a roster, a due date, an exchange folder."""
+    import csv
+    import getpass
+    import shutil
+
+    assignment = NOTEBOOKS[0].stem  # quick, and with a written part graded by hand
+    course, home, exchange = tmp_path / "course", tmp_path / "home", tmp_path / "exchange"
+    shutil.copytree(built / "grading", course)
+    home.mkdir()
+    exchange.mkdir(mode=0o777)
+    student = getpass.getuser()  # nbgrader's exchange knows a student by their login
+    (course / "roster.csv").write_text(
+        f"id,first_name,last_name,email\n{student},Ada,Student,ada@example.org\n"
+    )
+    exchange_root = f"--Exchange.root={exchange}"
+
+    def nbgrader(folder, *args):
+        proc = subprocess.run(
+            [sys.executable, "-m", "nbgrader", *args], cwd=folder, capture_output=True, text=True, timeout=600
+        )
+        assert proc.returncode == 0, proc.stderr[-2000:]
+
+    nbgrader(course, "db", "student", "import", "roster.csv")
+    nbgrader(course, "db", "assignment", "add", assignment, "--duedate=2099-06-30 17:00:00 UTC")
+    nbgrader(course, "release_assignment", assignment, exchange_root)
+    nbgrader(home, "fetch_assignment", assignment, "--course=vo-notebooks", exchange_root)
+    fetched = home / assignment / f"{assignment}.ipynb"
+    nb = nbformat.read(fetched, as_version=4)
+    written = [
+        c for c in nb.cells if c.cell_type == "markdown" and c.metadata.get("nbgrader", {}).get("grade")
+    ]
+    assert written, "the notebook has a written part"
+    written[0].source = "The tracks skid sideways in a turn."  # answered: it waits for the teacher
+    nbformat.write(nb, fetched)
+    nbgrader(home, "submit", assignment, "--course=vo-notebooks", exchange_root)
+    nbgrader(course, "collect", assignment, exchange_root)
+    assert (course / "submitted" / student / assignment / f"{assignment}.ipynb").is_file()
+    nbgrader(course, "autograde", assignment)
+    nbgrader(course, "export")
+    rows = [r for r in csv.DictReader((course / "grades.csv").open()) if r["assignment"] == assignment]
+    assert [
+        (r["student_id"], float(r["score"]), r["late_submission_penalty"], r["to_be_graded"]) for r in rows
+    ] == [(student, 0.0, "0.0", "1")], rows
+    nbgrader(course, "generate_feedback", assignment)
+    feedback = (course / "feedback" / student / assignment / f"{assignment}.html").read_text()
+    assert "To be graded" in feedback and "BEGIN HIDDEN TESTS" not in feedback
+
+
+def test_course_page_states_the_points_the_notebooks_carry():
+    points = sum(
+        c.metadata["nbgrader"]["points"]
+        for p in NOTEBOOKS
+        for c in grading_cells(jupytext.read(p))
+        if c.metadata["nbgrader"].get("grade")
+    )
+    by_hand = sum(
+        c.metadata["nbgrader"]["points"]
+        for p in NOTEBOOKS
+        for c in grading_cells(jupytext.read(p))
+        if c.metadata["nbgrader"].get("grade") and c.cell_type == "markdown"
+    )
+    course = (ROOT / "docs" / "course.md").read_text()
+    assert f"{points} points in all" in course and by_hand == 2 and "one written point each" in course
