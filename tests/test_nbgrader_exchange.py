@@ -4,9 +4,10 @@ One tiny assignment (a function to write, its autograder test with hidden tests,
 answer graded by hand) goes through every nbgrader command a course runs, in the order
 docs/course.md gives them: the roster is imported, the assignment is generated and released
 into an exchange folder, two students fetch and submit it from their own folders, the teacher
-collects, autogrades, grades the written part, and returns feedback that a student fetches.
-The course folder's settings are the project's own (``coursework/nbgrader_config.py``) plus the
-lines docs/course.md tells a teacher to add; kernels talk over IPC sockets.
+collects, autogrades, grades the written parts, returns feedback that a student fetches, and
+turns the exported grades into course grades with the script of docs/course.md. The course
+folder's settings are the project's own (``coursework/nbgrader_config.py``) plus the exchange
+settings docs/course.md gives; kernels talk over IPC sockets.
 """
 
 from __future__ import annotations
@@ -14,6 +15,7 @@ from __future__ import annotations
 import datetime
 import os
 import pathlib
+import re
 import subprocess
 import sys
 
@@ -22,6 +24,7 @@ import pytest
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 PROJECT_CONFIG = ROOT / "coursework" / "nbgrader_config.py"
+COURSE_PAGE = ROOT / "docs" / "course.md"
 COURSE_ID = "vo-notebooks"
 ASSIGNMENT = "squares"
 ROSTER = "id,first_name,last_name,email\nalice,Alice,Adams,alice@example.org\nbob,Bob,Brown,bob@example.org\n"
@@ -184,6 +187,7 @@ def test_release_fetch_submit_collect_autograde_feedback(course):
         written = gb.find_grade("square_why", ASSIGNMENT, ASSIGNMENT, "alice")
         assert written.needs_manual_grade and written.manual_score is None
         written.manual_score = WRITTEN_POINTS
+        gb.find_grade("square_why", ASSIGNMENT, ASSIGNMENT, "bob").manual_score = 0
         gb.db.commit()
     with Gradebook(f"sqlite:///{teacher / 'gradebook.db'}") as gb:
         assert gb.find_submission(ASSIGNMENT, "alice").score == TEST_POINTS + WRITTEN_POINTS
@@ -196,3 +200,16 @@ def test_release_fetch_submit_collect_autograde_feedback(course):
     assert len(feedback) == 1, "Alice receives one feedback page"
     total = TEST_POINTS + WRITTEN_POINTS
     assert f"Score: {total:.1f} / {total:.1f}" in feedback[0].read_text(), "the feedback shows the grade"
+
+    # The course grade: nbgrader's export, then the script docs/course.md gives.
+    run("course", "export")
+    script = re.findall(r"```python\n(.*?)```", COURSE_PAGE.read_text(encoding="utf-8"), re.S)
+    script = [block for block in script if "grades.csv" in block]
+    assert len(script) == 1, "docs/course.md gives one script that reads grades.csv"
+    proc = subprocess.run(
+        [sys.executable, "-c", script[0]], cwd=teacher, capture_output=True, text=True, check=True
+    )
+    assert proc.stdout.splitlines() == [
+        f"alice: {total} of {total} points, 100.0 %, grade A",
+        f"bob: 0 of {total} points, 0.0 %, grade F",
+    ]
