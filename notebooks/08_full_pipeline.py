@@ -390,8 +390,9 @@ for name in ("outdoor_free", "outdoor_free_2", "outdoor_free_3"):  # outdoors, e
 # %% [markdown]
 # ## Exercises
 #
-# Easy to hard, with the points each is worth. Write your answer in the cell under each
-# exercise (it names the variables to set), then run the test cell after it, which checks them.
+# Easy to hard, with the points each is worth. Each exercise asks for a function (the cell
+# under it names it) and then uses it; the test cell after it checks both. The grader also
+# calls your functions with inputs of its own, and without `vo_lib`'s own versions at hand.
 # The cell below makes the trajectories they share: a drive of 400 steps of 1 cm with a gentle
 # curve, and an estimate of it whose heading drifts by 0.01° per step.
 
@@ -416,25 +417,65 @@ ex_estimate = drive_steps(np.array([ex_step_length, 0.0, np.radians(0.05) + ex_d
 # %% [markdown]
 # ### Exercise 1 · final error as a share of the distance *(easy, 2 points)*
 #
-# The README and Table 2 report the error at the last frame as a share of the distance
-# travelled. Compute it for `ex_estimate` against `ex_truth` in per cent: `final_error_pct`.
+# The README reports the error at the last frame as a share of the distance travelled. Write
+# `final_error_percent(estimate, truth)` for planar trajectories `(K, 3)`, in per cent, without
+# `vo_lib.evaluation`, and store it for `ex_estimate` against `ex_truth` in `final_error_pct`.
 #
 # *Hint:* the distance travelled is the length of the true path, not the start-to-end distance.
 
+
 # %% nbgrader={"grade": false, "grade_id": "ex1", "locked": false, "schema_version": 3, "solution": true}
 ### BEGIN SOLUTION
-travelled = np.sum(np.linalg.norm(np.diff(ex_truth[:, :2], axis=0), axis=1))
-final_error_pct = float(100 * np.linalg.norm(ex_estimate[-1, :2] - ex_truth[-1, :2]) / travelled)
-print(f"final error {final_error_pct:.2f} % of {travelled:.2f} m")
+def final_error_percent(estimate, truth):
+    """Final position error in per cent of the length of the true path."""
+    travelled = np.sum(np.linalg.norm(np.diff(truth[:, :2], axis=0), axis=1))
+    return float(100 * np.linalg.norm(estimate[-1, :2] - truth[-1, :2]) / travelled)
+
+
+final_error_pct = final_error_percent(ex_estimate, ex_truth)
+print(f"final error {final_error_pct:.2f} %")
 ### END SOLUTION
 
 # %% nbgrader={"grade": true, "grade_id": "ex1_test", "locked": true, "points": 2, "schema_version": 3, "solution": false}
 # Exercise 1: autograder test
-gap = np.linalg.norm(ex_estimate[-1, :2] - ex_truth[-1, :2])
 from vo_lib.geometry import planar_to_matrix
 
-length = path_lengths(np.array([planar_to_matrix(p) for p in ex_truth]))[-1]
-assert np.isclose(final_error_pct, 100 * gap / length)
+
+def reference_percent(estimate, truth):
+    gap = np.linalg.norm(estimate[-1, :2] - truth[-1, :2])
+    return 100 * gap / path_lengths(np.array([planar_to_matrix(p) for p in truth]))[-1]
+
+
+assert np.isclose(final_error_pct, reference_percent(ex_estimate, ex_truth)), (
+    "not the final error in per cent"
+)
+### BEGIN HIDDEN TESTS
+import vo_lib.evaluation as evaluation_module  # noqa: E402
+
+
+def refuse(*args, **kwargs):
+    raise AssertionError("final_error_percent calls vo_lib.evaluation; the exercise asks you to write it")
+
+
+fresh = np.random.default_rng()  # new drives at every grading
+cases = []
+for _ in range(4):
+    n_ = int(fresh.integers(50, 300))
+    truth_ = drive_steps(np.array([fresh.uniform(0.01, 0.1), 0.0, fresh.uniform(0.005, 0.05)]), n_)
+    estimate_ = truth_ + fresh.normal(scale=0.05, size=truth_.shape)
+    cases.append((estimate_, truth_, reference_percent(estimate_, truth_)))
+helpers = [evaluation_module.path_lengths, evaluation_module.planar_path_length]
+saved = [f.__code__ for f in helpers]
+for f in helpers:
+    f.__code__ = refuse.__code__
+try:
+    got = [float(final_error_percent(e, t)) for e, t, _ in cases]
+finally:
+    for f, code in zip(helpers, saved, strict=True):
+        f.__code__ = code
+for g, (_, _, expected) in zip(got, cases, strict=True):
+    assert np.isclose(g, expected), "final_error_percent differs on other drives (the length of the path?)"
+### END HIDDEN TESTS
 
 # %% [markdown]
 # ### Exercise 2 · the absolute trajectory error *(medium, 3 points)*
@@ -442,25 +483,66 @@ assert np.isclose(final_error_pct, 100 * gap / length)
 # The ATE first moves the whole estimate by the rotation and translation in the plane that fit
 # it best to the truth (least squares), then takes the RMS of the position errors. Write that
 # alignment yourself (2-D Kabsch: centre both, SVD of the cross-covariance, mind the sign of the
-# determinant) and store the RMS error in `ate_rmse`.
+# determinant) as `ate_rmse_of(truth, estimate)` for planar trajectories `(K, 3)`, without
+# `vo_lib.evaluation`, and store it for `ex_truth`, `ex_estimate` in `ate_rmse`.
 #
 # *Hint:* R = V diag(1, det(V Uᵀ)) Uᵀ for the SVD U S Vᵀ of Σ (p_est − mean)(p_true − mean)ᵀ.
 
+
 # %% nbgrader={"grade": false, "grade_id": "ex2", "locked": false, "schema_version": 3, "solution": true}
 ### BEGIN SOLUTION
-est_xy, true_xy = ex_estimate[:, :2], ex_truth[:, :2]
-est_mean, true_mean = est_xy.mean(axis=0), true_xy.mean(axis=0)
-U, _, Vt = np.linalg.svd((est_xy - est_mean).T @ (true_xy - true_mean))
-R_fit = Vt.T @ np.diag([1.0, np.linalg.det(Vt.T @ U.T)]) @ U.T
-aligned = (est_xy - est_mean) @ R_fit.T + true_mean
-ate_rmse = float(np.sqrt(np.mean(np.sum((aligned - true_xy) ** 2, axis=1))))
-print(f"ATE {ate_rmse * 100:.3f} cm (final error {np.linalg.norm(est_xy[-1] - true_xy[-1]) * 100:.2f} cm)")
+def ate_rmse_of(truth, estimate):
+    """RMS position error after the least-squares rigid alignment in the plane (2-D Kabsch)."""
+    est_xy, true_xy = estimate[:, :2], truth[:, :2]
+    est_mean, true_mean = est_xy.mean(axis=0), true_xy.mean(axis=0)
+    U, _, Vt = np.linalg.svd((est_xy - est_mean).T @ (true_xy - true_mean))
+    R_fit = Vt.T @ np.diag([1.0, np.linalg.det(Vt.T @ U.T)]) @ U.T
+    aligned = (est_xy - est_mean) @ R_fit.T + true_mean
+    return float(np.sqrt(np.mean(np.sum((aligned - true_xy) ** 2, axis=1))))
+
+
+ate_rmse = ate_rmse_of(ex_truth, ex_estimate)
+print(
+    f"ATE {ate_rmse * 100:.3f} cm (final error {np.linalg.norm(ex_estimate[-1, :2] - ex_truth[-1, :2]) * 100:.2f} cm)"
+)
 ### END SOLUTION
 
 # %% nbgrader={"grade": true, "grade_id": "ex2_test", "locked": true, "points": 3, "schema_version": 3, "solution": false}
 # Exercise 2: autograder test
-assert np.isclose(ate_rmse, ate_planar(ex_truth, ex_estimate)[0].rmse, rtol=1e-9)
+assert np.isclose(ate_rmse, ate_planar(ex_truth, ex_estimate)[0].rmse, rtol=1e-9), (
+    "not the ATE after alignment"
+)
 assert ate_rmse < np.linalg.norm(ex_estimate[-1, :2] - ex_truth[-1, :2]), "alignment spreads the drift"
+### BEGIN HIDDEN TESTS
+import vo_lib.evaluation as evaluation_module  # noqa: E402
+
+
+def refuse(*args, **kwargs):
+    raise AssertionError("ate_rmse_of calls vo_lib's alignment; the exercise asks you to write it")
+
+
+fresh = np.random.default_rng()  # new drives, turned and shifted, at every grading
+cases = []
+for _ in range(4):
+    n_ = int(fresh.integers(50, 300))
+    truth_ = drive_steps(np.array([fresh.uniform(0.01, 0.1), 0.0, fresh.uniform(0.005, 0.05)]), n_)
+    estimate_ = compose_planar(fresh.uniform([-5, -5, -np.pi], [5, 5, np.pi]), truth_)
+    estimate_ = estimate_ + fresh.normal(scale=0.03, size=truth_.shape)
+    cases.append((truth_, estimate_, ate_planar(truth_, estimate_)[0].rmse))
+helpers = [evaluation_module.umeyama, evaluation_module.ate_planar, evaluation_module.ate]
+saved = [f.__code__ for f in helpers]
+for f in helpers:
+    f.__code__ = refuse.__code__
+try:
+    got = [float(ate_rmse_of(t, e)) for t, e, _ in cases]
+finally:
+    for f, code in zip(helpers, saved, strict=True):
+        f.__code__ = code
+for g, (_, _, expected) in zip(got, cases, strict=True):
+    assert np.isclose(g, expected, rtol=1e-6), (
+        "ate_rmse_of differs on other drives (rotation and translation?)"
+    )
+### END HIDDEN TESTS
 
 # %% [markdown]
 # ### Exercise 3 · how heading drift becomes position error *(hard, 4 points)*
@@ -492,8 +574,22 @@ print(
 # Exercise 3: autograder test
 for n in (50, 400):
     straight_drift = drive_steps(np.array([0.01, 0.0, np.radians(0.01)]), n)
-    assert np.isclose(sideways_error(0.01, np.radians(0.01), n), straight_drift[-1, 1], rtol=0.01)
+    assert np.isclose(sideways_error(0.01, np.radians(0.01), n), straight_drift[-1, 1], rtol=0.01), (
+        f"not the sideways error of {n} steps to first order"
+    )
 assert np.isclose(sideways_error(0.01, 1e-4, 2), 0.01 * 1e-4), "two steps: only the second is off"
+### BEGIN HIDDEN TESTS
+fresh = np.random.default_rng()  # new steps and drifts at every grading
+# short drives (n <= 50), where n(n - 1)/2 and n(n + 1)/2 differ by 4 % or more, and small
+# drifts, where the first order is good to 1e-4
+for s_, eps_, n_ in zip(
+    fresh.uniform(0.005, 0.5, 10), fresh.uniform(1e-6, 1e-4, 10), fresh.integers(3, 51, 10), strict=True
+):
+    exact = drive_steps(np.array([s_, 0.0, eps_]), int(n_))[-1, 1]
+    assert np.isclose(float(sideways_error(s_, eps_, int(n_))), exact, rtol=1e-3), (
+        "sideways_error differs from other drifting drives (which heading does each step use?)"
+    )
+### END HIDDEN TESTS
 
 # %% [markdown]
 # ### Stretch goals (not graded)
