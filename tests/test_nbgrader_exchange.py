@@ -7,7 +7,7 @@ into an exchange folder, two students fetch and submit it from their own folders
 collects, autogrades, grades the written parts, returns feedback that a student fetches, and
 turns the exported grades into course grades with the script of docs/course.md. The course
 folder's settings are the project's own (``coursework/nbgrader_config.py``) plus the exchange
-settings docs/course.md gives; kernels talk over IPC sockets.
+settings docs/course.md gives; kernels talk over IPC sockets, as the project's settings ask.
 """
 
 from __future__ import annotations
@@ -94,8 +94,6 @@ def course(tmp_path, kernel_dir):
         PROJECT_CONFIG.read_text()
         + f"\nc.Exchange.root = {str(exchange)!r}\n"
         + "c.ExchangeCollect.check_owner = False  # one Unix user plays every role here\n"
-        + 'c.KernelManager.transport = "ipc"\n'
-        + f"c.KernelManager.ip = {str(tmp_path / 'kernel')!r}\n"
     )
     homes = {"course": teacher}
     for student in ("alice", "bob"):
@@ -128,6 +126,13 @@ def course(tmp_path, kernel_dir):
         return proc.stdout + proc.stderr
 
     return homes, exchange, run
+
+
+def test_the_project_settings_start_kernels_over_ipc():
+    from traitlets.config.loader import PyFileConfigLoader
+
+    config = PyFileConfigLoader(PROJECT_CONFIG.name, path=str(PROJECT_CONFIG.parent)).load_config()
+    assert config.KernelManager.transport == "ipc", "TCP ports stall when several kernels start at once"
 
 
 def test_release_fetch_submit_collect_autograde_feedback(course):
