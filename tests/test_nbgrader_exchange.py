@@ -135,6 +135,7 @@ def test_the_project_settings_start_kernels_over_ipc():
     assert config.KernelManager.transport == "ipc", "TCP ports stall when several kernels start at once"
 
 
+@pytest.mark.notebook
 def test_release_fetch_submit_collect_autograde_feedback(course):
     from nbgrader.api import Gradebook
 
@@ -145,7 +146,7 @@ def test_release_fetch_submit_collect_autograde_feedback(course):
     # The teacher: the roster, the assignment with a due date a week ahead, the release.
     teacher.joinpath("roster.csv").write_text(ROSTER)
     run("course", "db", "student", "import", "roster.csv")
-    week_ahead = datetime.datetime.now(datetime.UTC) + datetime.timedelta(days=7)
+    week_ahead = datetime.datetime.now(datetime.timezone.utc) + datetime.timedelta(days=7)
     run("course", "db", "assignment", "add", ASSIGNMENT, f"--duedate={week_ahead.isoformat()}")
     run("course", "generate_assignment", ASSIGNMENT)
     run("course", "release_assignment", ASSIGNMENT)
@@ -167,7 +168,7 @@ def test_release_fetch_submit_collect_autograde_feedback(course):
         run(student, "submit", ASSIGNMENT)
 
     submit("alice", "def square(x):\n    return x * x", "A product of two factors of the same sign.")
-    deadline = datetime.datetime.now(datetime.UTC)
+    deadline = datetime.datetime.now(datetime.timezone.utc)
     run("course", "db", "assignment", "add", ASSIGNMENT, f"--duedate={deadline.isoformat()}")
     submit("bob", "def square(x):\n    return x * abs(x)", "It is positive.")
 
