@@ -894,24 +894,32 @@ assert in_band["line"] > 0.9 and in_band["line"] > in_band["feature point"]
 # %% [markdown]
 # ## Exercises
 #
-# Easy to hard, with the points each is worth. Write your answer in the cell under each
-# exercise (it names the variables to set), then run the test cell after it, which checks them.
+# Easy to hard, with the points each is worth. Each exercise asks for a function (the cell
+# under it names it) and then uses it; the test cell after it checks both. The grader also
+# calls your functions with inputs of its own, and without `vo_lib`'s own versions at hand.
 
 # %% [markdown]
 # ### Exercise 1 · a wall's feature point *(easy, 2 points)*
 #
-# A wall runs through (4, 1) and (1, 5). Compute its feature point, the foot of the
-# perpendicular from the world origin to its line, into `wall_point`, and the wall's distance
-# from the origin into `wall_distance`.
+# Write `wall_feature_point(a, b)`: the feature point of the wall through the points `a` and
+# `b`, the foot of the perpendicular from the world origin to its line, without `vo_lib`'s
+# `feature_point`. Store it for the wall through (4, 1) and (1, 5) in `wall_point`, and the
+# wall's distance from the origin in `wall_distance`.
 #
 # *Hint:* project the origin onto the line: a + t (b − a) with t chosen so that the result is
 # perpendicular to b − a.
 
+
 # %% nbgrader={"grade": false, "grade_id": "ex1", "locked": false, "schema_version": 3, "solution": true}
 ### BEGIN SOLUTION
-wall_a, wall_b = np.array([4.0, 1.0]), np.array([1.0, 5.0])
-along_wall = wall_b - wall_a
-wall_point = wall_a - along_wall * (wall_a @ along_wall) / (along_wall @ along_wall)
+def wall_feature_point(a, b):
+    """Foot of the perpendicular from the origin to the line through ``a`` and ``b``."""
+    a = np.asarray(a, float)
+    along_wall = np.asarray(b, float) - a
+    return a - along_wall * (a @ along_wall) / (along_wall @ along_wall)
+
+
+wall_point = wall_feature_point([4.0, 1.0], [1.0, 5.0])
 wall_distance = float(np.hypot(*wall_point))
 print(f"feature point {wall_point}, {wall_distance:.3f} m from the origin")
 ### END SOLUTION
@@ -920,15 +928,35 @@ print(f"feature point {wall_point}, {wall_distance:.3f} m from the origin")
 # Exercise 1: autograder test
 from vo_lib.line_slam.line_landmarks import feature_point
 
-assert np.allclose(wall_point, feature_point([4.0, 1.0], [1.0, 5.0]))
+assert np.allclose(wall_point, feature_point([4.0, 1.0], [1.0, 5.0])), "not the foot of the perpendicular"
 assert np.isclose(wall_distance, abs(4.0 * 5.0 - 1.0 * 1.0) / 5.0), "|a × b| / |b − a|"
+### BEGIN HIDDEN TESTS
+import vo_lib.line_slam.line_landmarks as landmarks_module  # noqa: E402
+
+
+def refuse(*args, **kwargs):
+    raise AssertionError("wall_feature_point calls the vo_lib function the exercise asks you to write")
+
+
+fresh = np.random.default_rng()  # new walls at every grading
+walls_ = fresh.uniform(-20, 20, (20, 2, 2))
+expected = [feature_point(a, b) for a, b in walls_]
+saved, landmarks_module.feature_point.__code__ = landmarks_module.feature_point.__code__, refuse.__code__
+try:
+    got = [np.asarray(wall_feature_point(a, b), float) for a, b in walls_]
+finally:
+    landmarks_module.feature_point.__code__ = saved
+for g, e in zip(got, expected, strict=True):
+    assert np.allclose(g, e), "wall_feature_point is not the foot of the perpendicular of other walls"
+### END HIDDEN TESTS
 
 # %% [markdown]
 # ### Exercise 2 · the range–bearing Jacobians *(medium, 3 points)*
 #
 # Write `range_bearing_jacobians(pose, point)` returning the 2×3 Jacobian of (range, bearing)
 # by the pose (x, y, Φ) and the 2×2 Jacobian by the landmark (x_l, y_l), derived by hand from
-# r = √(Δx² + Δy²), b = atan2(Δy, Δx) − Φ. Mind the bearing row: it is where the paper's eq. 11
+# r = √(Δx² + Δy²), b = atan2(Δy, Δx) − Φ, without `vo_lib`'s `observation_jacobians` or
+# numerical differences of `observe_point`. Mind the bearing row: it is where the paper's eq. 11
 # prints the wrong variables.
 #
 # *Hint:* ∂atan2(Δy, Δx)/∂Δx = −Δy / r².
@@ -952,21 +980,158 @@ def range_bearing_jacobians(pose, point):
 # Exercise 2: autograder test: central differences at random poses and landmarks
 from vo_lib.line_slam.range_bearing import observe_point
 
+
+def numeric_jacobians(pose_j, point_j, step=1e-6):
+    """Central differences of observe_point by the pose and by the landmark."""
+    columns = []
+    for base, size in ((pose_j, 3), (point_j, 2)):
+        block = []
+        for k in range(size):
+            e = np.zeros(size)
+            e[k] = step
+            if size == 3:
+                diff = observe_point(base + e, point_j) - observe_point(base - e, point_j)
+            else:
+                diff = observe_point(pose_j, base + e) - observe_point(pose_j, base - e)
+            diff[1] = (diff[1] + np.pi) % (2 * np.pi) - np.pi
+            block.append(diff / (2 * step))
+        columns.append(np.column_stack(block))
+    return columns
+
+
 jac_rng = np.random.default_rng(9)
 for _ in range(20):
     pose_j, point_j = jac_rng.uniform(-5, 5, 3), jac_rng.uniform(-20, 20, 2)
     by_pose, by_point = range_bearing_jacobians(pose_j, point_j)
-    for matrix, base, size in ((by_pose, pose_j, 3), (by_point, point_j, 2)):
-        for k in range(size):
-            step = np.zeros(size)
-            step[k] = 1e-6
-            plus, minus = (base + step, base - step)
-            if size == 3:
-                diff = observe_point(plus, point_j) - observe_point(minus, point_j)
-            else:
-                diff = observe_point(pose_j, plus) - observe_point(pose_j, minus)
-            diff[1] = (diff[1] + np.pi) % (2 * np.pi) - np.pi
-            assert np.allclose(matrix[:, k], diff / 2e-6, atol=1e-6)
+    num_pose, num_point = numeric_jacobians(pose_j, point_j)
+    assert np.allclose(by_pose, num_pose, atol=1e-6), "the Jacobian by the pose"
+    assert np.allclose(by_point, num_point, atol=1e-6), "the Jacobian by the landmark"
+### BEGIN HIDDEN TESTS
+import vo_lib.line_slam.range_bearing as range_bearing_module  # noqa: E402
+
+
+def refuse(*args, **kwargs):
+    raise AssertionError("range_bearing_jacobians calls vo_lib; the exercise asks for them by hand")
+
+
+fresh = np.random.default_rng()  # new poses and landmarks at every grading
+cases = [(fresh.uniform(-5, 5, 3), fresh.uniform(-20, 20, 2)) for _ in range(20)]
+expected = [observation_jacobians(p, q) for p, q in cases]
+helpers = [range_bearing_module.observation_jacobians, range_bearing_module.observe_point]
+saved = [f.__code__ for f in helpers]
+for f in helpers:
+    f.__code__ = refuse.__code__
+try:
+    got = [tuple(np.asarray(j, float) for j in range_bearing_jacobians(p, q)) for p, q in cases]
+finally:
+    for f, code in zip(helpers, saved, strict=True):
+        f.__code__ = code
+for (g_pose, g_point), (e_pose, e_point) in zip(got, expected, strict=True):
+    assert np.allclose(g_pose, e_pose, atol=1e-9) and np.allclose(g_point, e_point, atol=1e-9), (
+        "range_bearing_jacobians differs at other poses and landmarks (the bearing row?)"
+    )
+### END HIDDEN TESTS
+
+# %% [markdown]
+# ### Exercise 3 · gate an observation *(hard, 4 points)*
+#
+# Before the filter updates a landmark with an observation it asks whether the observation
+# could have come from it: the normalised innovation squared ν S⁻¹ ν (ν the measured minus the
+# predicted range and bearing, the bearing wrapped to (−π, π]; S = H_p P H_pᵀ + H_l L H_lᵀ + R
+# with P the pose's and L the landmark's covariance, taken independent, and
+# R = diag(σ_r², σ_b²)) is compared with a χ² gate. Write
+# `innovation_squared(pose, pose_cov, point, point_cov, measured, range_sigma, bearing_sigma)`
+# with your exercise 2 Jacobians. Then, for the observations `candidates` below of the robot
+# at `gate_pose`, store in `accepted` the boolean mask of those within the 99 % gate
+# (`chi2.ppf(0.99, 2)`) of the landmark `gate_point`.
+#
+# *Hint:* ν's bearing is an angle: two bearings either side of ±π are close.
+
+# %%
+gate_pose, gate_pose_cov = np.array([1.0, -2.0, 0.0]), np.diag([0.05, 0.05, 0.01])
+gate_point, gate_point_cov = np.array([-4.0, -2.3]), np.diag([0.1, 0.2])
+gate_truth = observe_point(gate_pose, gate_point)  # its bearing lies close to ±π
+gate_rng = np.random.default_rng(21)
+candidates = gate_truth + gate_rng.normal(scale=[1.0, 0.3], size=(40, 2))
+candidates[:, 1] = (candidates[:, 1] + np.pi) % (2 * np.pi) - np.pi
+
+
+# %% nbgrader={"grade": false, "grade_id": "ex3", "locked": false, "schema_version": 3, "solution": true}
+### BEGIN SOLUTION
+def innovation_squared(pose, pose_cov, point, point_cov, measured, range_sigma, bearing_sigma):
+    """Normalised innovation squared of one range-bearing observation of a landmark."""
+    by_pose, by_point = range_bearing_jacobians(pose, point)
+    S = by_pose @ pose_cov @ by_pose.T + by_point @ point_cov @ by_point.T
+    S = S + np.diag([range_sigma**2, bearing_sigma**2])
+    dx, dy = point[0] - pose[0], point[1] - pose[1]
+    nu = np.asarray(measured, float) - [np.hypot(dx, dy), np.arctan2(dy, dx) - pose[2]]
+    nu[1] = (nu[1] + np.pi) % (2 * np.pi) - np.pi
+    return float(nu @ np.linalg.solve(S, nu))
+
+
+accepted = np.array(
+    [
+        innovation_squared(gate_pose, gate_pose_cov, gate_point, gate_point_cov, z, 0.05, 0.02)
+        < chi2.ppf(0.99, 2)
+        for z in candidates
+    ]
+)
+print(f"{accepted.sum()} of {len(candidates)} observations within the gate")
+### END SOLUTION
+
+# %% nbgrader={"grade": true, "grade_id": "ex3_test", "locked": true, "points": 4, "schema_version": 3, "solution": false}
+# Exercise 3: autograder test
+assert accepted.shape == (40,) and accepted.dtype == bool, "one boolean per candidate"
+assert 0 < accepted.sum() < 40, "the gate keeps some candidates and not others"
+### BEGIN HIDDEN TESTS
+import vo_lib.line_slam.range_bearing as range_bearing_module  # noqa: E402
+
+
+def refuse(*args, **kwargs):
+    raise AssertionError("innovation_squared calls vo_lib's Jacobians; the exercise asks for your own")
+
+
+def reference_nis(pose, pose_cov, point, point_cov, measured, range_sigma, bearing_sigma):
+    h_pose, h_point = observation_jacobians(pose, point)
+    S = (
+        h_pose @ pose_cov @ h_pose.T
+        + h_point @ point_cov @ h_point.T
+        + np.diag([range_sigma, bearing_sigma]) ** 2
+    )
+    nu = np.asarray(measured, float) - observe_point(pose, point)
+    nu[1] = (nu[1] + np.pi) % (2 * np.pi) - np.pi
+    return float(nu @ np.linalg.solve(S, nu))
+
+
+gate = chi2.ppf(0.99, 2)
+reference = [
+    reference_nis(gate_pose, gate_pose_cov, gate_point, gate_point_cov, z, 0.05, 0.02) for z in candidates
+]
+assert np.array_equal(accepted, np.array(reference) < gate), "accepted: not the candidates within the gate"
+fresh = np.random.default_rng()  # new robots, landmarks and observations at every grading
+cases = []
+for _ in range(10):
+    pose_ = np.r_[fresh.uniform(-5, 5, 2), fresh.uniform(-np.pi, np.pi)]
+    point_ = fresh.uniform(-10, 10, 2)
+    pose_cov_ = np.diag(fresh.uniform(0.001, 0.1, 3))
+    point_cov_ = np.diag(fresh.uniform(0.001, 0.3, 2))
+    z_ = observe_point(pose_, point_) + fresh.normal(scale=[0.2, 0.1])
+    z_[1] = np.pi if fresh.random() < 0.3 else z_[1]  # bearings at the seam, too
+    sigmas_ = fresh.uniform(0.01, 0.2), fresh.uniform(0.005, 0.1)
+    args = (pose_, pose_cov_, point_, point_cov_, z_, *sigmas_)
+    cases.append((args, reference_nis(*args)))
+jacobians_code = range_bearing_module.observation_jacobians.__code__
+range_bearing_module.observation_jacobians.__code__ = refuse.__code__
+try:
+    got = [float(innovation_squared(*args)) for args, _ in cases]
+finally:
+    range_bearing_module.observation_jacobians.__code__ = jacobians_code
+for g, (_, expected) in zip(got, cases, strict=True):
+    assert np.isclose(g, expected, rtol=1e-6), (
+        "innovation_squared differs for other robots and landmarks (wrapped bearing? variances, not sigmas? "
+        "both covariances?)"
+    )
+### END HIDDEN TESTS
 
 # %% [markdown]
 # ### Stretch goals (not graded)

@@ -637,23 +637,31 @@ assert max(lbpt_y, voapt_y) < paper[("VOAPT", 1)][1]  # our worst Y below the pa
 # %% [markdown]
 # ## Exercises
 #
-# Easy to hard, with the points each is worth. Write your answer in the cell under each
-# exercise (it names the variables to set), then run the test cell after it, which checks them.
+# Easy to hard, with the points each is worth. Each exercise asks for a function (the cell
+# under it names it) and then uses it; the test cell after it checks both. The grader also
+# calls your functions with inputs of its own, and without `vo_lib`'s own versions at hand.
 
 # %% [markdown]
 # ### Exercise 1 · scores as a posterior *(easy, 2 points)*
 #
-# Five sampled poses score S = (812.0, 815.5, 809.0, 815.0, 790.0). Read each score as a
-# log-likelihood and compute the posterior of every sample, `sample_posterior`, without
-# overflowing (exp(815) is not a float).
+# Write `posterior_of(scores)`: read each score as a log-likelihood and return the posterior of
+# every sample, without overflowing (exp(815) is not a float) and without `vo_lib`'s
+# `posterior`. Store it for the five scores S = (812.0, 815.5, 809.0, 815.0, 790.0) in
+# `sample_posterior`.
 #
 # *Hint:* subtracting the largest score from all of them changes nothing after normalising.
 
+
 # %% nbgrader={"grade": false, "grade_id": "ex1", "locked": false, "schema_version": 3, "solution": true}
 ### BEGIN SOLUTION
-sample_scores = np.array([812.0, 815.5, 809.0, 815.0, 790.0])
-weights = np.exp(sample_scores - sample_scores.max())
-sample_posterior = weights / weights.sum()
+def posterior_of(scores):
+    """Normalised exp(score), computed from the scores minus their largest."""
+    scores = np.asarray(scores, float)
+    weights = np.exp(scores - scores.max())
+    return weights / weights.sum()
+
+
+sample_posterior = posterior_of([812.0, 815.5, 809.0, 815.0, 790.0])
 print(np.round(sample_posterior, 4))
 ### END SOLUTION
 
@@ -661,17 +669,42 @@ print(np.round(sample_posterior, 4))
 # Exercise 1: autograder test
 from vo_lib.lidar_tracking.pose_tracking import posterior
 
-assert np.all(np.isfinite(sample_posterior)) and np.isclose(sample_posterior.sum(), 1.0)
-assert np.allclose(sample_posterior, posterior([812.0, 815.5, 809.0, 815.0, 790.0]))
+assert np.all(np.isfinite(sample_posterior)) and np.isclose(sample_posterior.sum(), 1.0), (
+    "finite, summing to 1"
+)
+assert np.allclose(sample_posterior, posterior([812.0, 815.5, 809.0, 815.0, 790.0])), "not the posterior"
+### BEGIN HIDDEN TESTS
+import vo_lib.lidar_tracking.pose_tracking as tracking_module  # noqa: E402
+
+
+def refuse(*args, **kwargs):
+    raise AssertionError("posterior_of calls the vo_lib function the exercise asks you to write")
+
+
+fresh = np.random.default_rng()  # new scores at every grading
+cases = [fresh.uniform(500, 2000) + fresh.normal(scale=fresh.uniform(0.5, 20), size=50) for _ in range(5)]
+expected = [posterior(c) for c in cases]
+saved, tracking_module.posterior.__code__ = tracking_module.posterior.__code__, refuse.__code__
+try:
+    got = [np.asarray(posterior_of(c), float) for c in cases]
+finally:
+    tracking_module.posterior.__code__ = saved
+for g, e in zip(got, expected, strict=True):
+    assert np.allclose(g, e, atol=1e-12), (
+        "posterior_of differs on other scores (exp of the scores, normalised?)"
+    )
+### END HIDDEN TESTS
 
 # %% [markdown]
 # ### Exercise 2 · control limits *(medium, 3 points)*
 #
 # Table II's control chart puts the centre line at the mean correction length, the upper limit
-# three standard deviations above it, and the lower limit at zero where the mean minus three
-# standard deviations would be negative. From the 60 correction lengths `corrections` below
-# (metres, of a normal stretch), compute `centre_line`, `upper_limit` and `lower_limit`, and
-# count in `out_of_control` the lengths of `later` (a stretch that follows) above the upper limit.
+# three standard deviations above it, and the lower limit at the mean minus three standard
+# deviations, or at zero where that would be negative. Write `control_limits(lengths)` returning
+# `(lower, centre, upper)` for correction lengths (metres), without `vo_lib`'s `ControlLimits`.
+# Store them for the 60 lengths `corrections` below (of a normal stretch) in `lower_limit`,
+# `centre_line`, `upper_limit`, and count in `out_of_control` the lengths of `later` (a stretch
+# that follows) above the upper limit.
 #
 # *Hint:* the sample standard deviation (`ddof=1`).
 
@@ -680,11 +713,17 @@ chart_rng = np.random.default_rng(SEED + 10)
 corrections = np.abs(chart_rng.normal(0.0, 0.02, 60))
 later = np.r_[np.abs(chart_rng.normal(0.0, 0.02, 30)), [0.15, 0.22, 0.09]]
 
+
 # %% nbgrader={"grade": false, "grade_id": "ex2", "locked": false, "schema_version": 3, "solution": true}
 ### BEGIN SOLUTION
-centre_line = float(corrections.mean())
-spread = float(corrections.std(ddof=1))
-upper_limit, lower_limit = centre_line + 3 * spread, max(0.0, centre_line - 3 * spread)
+def control_limits(lengths):
+    """Lower, centre and upper control limits: mean and mean ± 3 sample standard deviations."""
+    lengths = np.asarray(lengths, float)
+    centre, spread = float(lengths.mean()), float(lengths.std(ddof=1))
+    return max(0.0, centre - 3 * spread), centre, centre + 3 * spread
+
+
+lower_limit, centre_line, upper_limit = control_limits(corrections)
 out_of_control = int(np.sum(later > upper_limit))
 print(
     f"LCL {lower_limit:.3f} m, centre {centre_line:.3f} m, UCL {upper_limit:.3f} m; "
@@ -697,44 +736,123 @@ print(
 from vo_lib.lidar_tracking.pose_tracking import ControlLimits
 
 limits = ControlLimits.from_corrections(corrections)
-assert np.isclose(centre_line, limits.centre) and np.isclose(upper_limit, limits.upper)
+assert np.isclose(centre_line, limits.centre) and np.isclose(upper_limit, limits.upper), (
+    "centre or upper limit"
+)
 assert lower_limit == limits.lower == 0.0, "lengths are positive: the lower limit is zero"
-assert out_of_control == sum(not limits.contains(x) and x > limits.upper for x in later) >= 3
+assert out_of_control == sum(x > limits.upper for x in later) >= 3, "the lengths above the upper limit"
+### BEGIN HIDDEN TESTS
+import vo_lib.lidar_tracking.pose_tracking as tracking_module  # noqa: E402
+
+
+def refuse(*args, **kwargs):
+    raise AssertionError("control_limits calls the vo_lib class the exercise asks you to do without")
+
+
+fresh = np.random.default_rng()  # new stretches at every grading, some whose lower limit is not zero
+cases = [
+    np.abs(fresh.normal(fresh.uniform(0.0, 1.0), fresh.uniform(0.01, 0.2), int(fresh.integers(10, 100))))
+    for _ in range(6)
+]
+cases.append(fresh.normal(1.0, 0.05, 40))
+expected = []
+for c in cases:
+    lim = ControlLimits.from_corrections(c)
+    expected.append((lim.lower, lim.centre, lim.upper))
+from_corrections = ControlLimits.from_corrections.__func__
+saved, from_corrections.__code__ = from_corrections.__code__, refuse.__code__
+try:
+    got = [tuple(float(v) for v in control_limits(c)) for c in cases]
+finally:
+    from_corrections.__code__ = saved
+for g, e in zip(got, expected, strict=True):
+    assert np.allclose(g, e), (
+        "control_limits differs on other stretches (which standard deviation? the lower limit?)"
+    )
+### END HIDDEN TESTS
 
 # %% [markdown]
-# ### Exercise 3 · box-plot statistics *(hard, 4 points)*
+# ### Exercise 3 · the principal error direction *(hard, 4 points)*
 #
-# Section 3 draws the samples' scores as box plots. Compute, without matplotlib, the statistics a
-# box plot draws for the 200 scores `box_scores` below: the quartiles `q1`, `median_score`, `q3`,
-# the whiskers `whisker_low` and `whisker_high` (the most extreme scores within 1.5 IQR of the
-# box) and the number of fliers `n_fliers` beyond them.
+# In a corridor the laser cannot tell where along the walls the robot is: the best-scoring
+# samples spread along the corridor. The paper takes the direction of that spread from the
+# samples of the top quartile of scores (eq. 17): centre their translational corrections (eq. 19)
+# and take the unit eigenvector of the largest eigenvalue of their covariance (eq. 20). Write
+# `principal_direction(corrections, scores)` for corrections `(N, 3)` (dx, dy, dθ) and their
+# scores, returning that unit vector (either sign), without `vo_lib`'s
+# `principal_error_direction`. Store it for `spread_corrections`, `spread_scores` below in
+# `corridor_direction`, and its angle from the x axis, folded into [0°, 180°), in
+# `corridor_angle_deg`.
 #
-# *Hint:* `np.percentile` with its default (linear) interpolation, as matplotlib uses.
+# *Hint:* `np.percentile(scores, 75)`; `np.linalg.eigh` returns eigenvalues in ascending order.
 
 # %%
-box_scores = np.r_[chart_rng.normal(400.0, 25.0, 190), chart_rng.uniform(150.0, 250.0, 10)]
+spread_rng = np.random.default_rng(SEED + 20)
+spread_scores = spread_rng.uniform(700.0, 800.0, 400)
+along = np.array([np.cos(0.3), np.sin(0.3)])
+top_quarter = spread_scores >= np.percentile(spread_scores, 75)
+spread_xy = np.where(
+    top_quarter[:, None],
+    spread_rng.normal(0, 0.3, (400, 1)) * along + spread_rng.normal(0, 0.03, (400, 2)),
+    spread_rng.normal(0, 0.5, (400, 1)) * along[::-1] * [-1, 1] + spread_rng.normal(0, 0.03, (400, 2)),
+)  # the best quarter spreads along the corridor, the rest across it, more widely
+spread_corrections = np.column_stack([spread_xy, spread_rng.normal(0, 0.005, 400)])
+
 
 # %% nbgrader={"grade": false, "grade_id": "ex3", "locked": false, "schema_version": 3, "solution": true}
 ### BEGIN SOLUTION
-q1, median_score, q3 = np.percentile(box_scores, [25, 50, 75])
-iqr = q3 - q1
-inside = box_scores[(box_scores >= q1 - 1.5 * iqr) & (box_scores <= q3 + 1.5 * iqr)]
-whisker_low, whisker_high = inside.min(), inside.max()
-n_fliers = int(np.sum((box_scores < whisker_low) | (box_scores > whisker_high)))
-print(
-    f"box {q1:.1f}–{q3:.1f} (median {median_score:.1f}), "
-    f"whiskers {whisker_low:.1f}–{whisker_high:.1f}, {n_fliers} fliers"
-)
+def principal_direction(corrections, scores):
+    """Unit eigenvector of the largest eigenvalue of the top quartile's correction covariance."""
+    corrections, scores = np.asarray(corrections, float), np.asarray(scores, float)
+    top = corrections[scores >= np.percentile(scores, 75), :2]
+    centred = top - top.mean(axis=0)
+    values, vectors = np.linalg.eigh(centred.T @ centred / len(centred))
+    return vectors[:, np.argmax(values)]
+
+
+corridor_direction = principal_direction(spread_corrections, spread_scores)
+corridor_angle_deg = float(np.degrees(np.arctan2(corridor_direction[1], corridor_direction[0])) % 180.0)
+print(f"principal error direction {corridor_angle_deg:.1f}° from the x axis")
 ### END SOLUTION
 
 # %% nbgrader={"grade": true, "grade_id": "ex3_test", "locked": true, "points": 4, "schema_version": 3, "solution": false}
 # Exercise 3: autograder test
-from matplotlib.cbook import boxplot_stats
+assert np.isclose(np.linalg.norm(corridor_direction), 1.0), "a unit vector"
+assert abs(corridor_angle_deg - np.degrees(0.3)) < 3.0, "the direction the best quarter spreads along"
+### BEGIN HIDDEN TESTS
+import vo_lib.lidar_tracking.pose_tracking as tracking_module  # noqa: E402
 
-reference = boxplot_stats(box_scores)[0]
-assert np.allclose([q1, median_score, q3], [reference["q1"], reference["med"], reference["q3"]])
-assert np.allclose([whisker_low, whisker_high], [reference["whislo"], reference["whishi"]])
-assert n_fliers == len(reference["fliers"]) >= 10
+
+def refuse(*args, **kwargs):
+    raise AssertionError("principal_direction calls the vo_lib function the exercise asks you to write")
+
+
+fresh = np.random.default_rng()  # new spreads at every grading
+cases = []
+for _ in range(5):
+    angle = fresh.uniform(-np.pi, np.pi)
+    axis = np.array([np.cos(angle), np.sin(angle)])
+    scores_ = fresh.uniform(0, 1000, 300)
+    best = scores_ >= np.percentile(scores_, 75)
+    xy = np.where(
+        best[:, None],
+        fresh.normal(0, 0.3, (300, 1)) * axis + fresh.normal(0, 0.03, (300, 2)),
+        fresh.normal(0, 0.5, (300, 1)) * axis[::-1] * [-1, 1] + fresh.normal(0, 0.03, (300, 2)),
+    )
+    corrections_ = np.column_stack([xy, np.zeros(300)])
+    cases.append((corrections_, scores_, tracking_module.principal_error_direction(corrections_, scores_)))
+saved = tracking_module.principal_error_direction.__code__
+tracking_module.principal_error_direction.__code__ = refuse.__code__
+try:
+    got = [np.asarray(principal_direction(c, s), float) for c, s, _ in cases]
+finally:
+    tracking_module.principal_error_direction.__code__ = saved
+for g, (_, _, expected) in zip(got, cases, strict=True):
+    assert g.shape == (2,) and np.isclose(np.linalg.norm(g), 1.0), "a unit vector (dx, dy)"
+    assert abs(g @ expected) > 0.999, (
+        "principal_direction differs on other samples (which samples? which eigenvalue?)"
+    )
+### END HIDDEN TESTS
 
 # %% [markdown]
 # ### Stretch goals (not graded)

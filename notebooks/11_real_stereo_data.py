@@ -969,21 +969,28 @@ if REAL:  # the issue's acceptance figures, without odometry
 # %% [markdown]
 # ## Exercises
 #
-# Easy to hard, with the points each is worth. Write your answer in the cell under each
-# exercise (it names the variables to set), then run the test cell after it, which checks them.
+# Easy to hard, with the points each is worth. Each exercise asks for a function (the cell
+# under it names it) and then uses it; the test cell after it checks both. The grader also
+# calls your functions with inputs of its own, so an answer must compute, not quote a number.
 
 # %% [markdown]
 # ### Exercise 1 · a lower threshold *(easy, 2 points)*
 #
-# Lower the FAST threshold from 20 to 10 on the first real image of section 1. Store the share
-# of the cells without a corner at each threshold in `at_20` and `at_10`.
+# Write `empty_shares(image, thresholds)`: the share of the cells without a corner (section 1's
+# `image_statistics`) of `image` at each FAST threshold of `thresholds`, as a list. Store the
+# shares of the first real image of section 1 at thresholds 20 and 10 in `at_20, at_10`.
 #
 # *Hint:* `image_statistics(image, threshold=...)["empty"]`.
 
+
 # %% nbgrader={"grade": false, "grade_id": "ex1", "locked": false, "schema_version": 3, "solution": true}
 ### BEGIN SOLUTION
-at_20 = image_statistics(real_images[0], threshold=20)["empty"]
-at_10 = image_statistics(real_images[0], threshold=10)["empty"]
+def empty_shares(image, thresholds):
+    """Share of the cells without a FAST corner at each threshold."""
+    return [image_statistics(image, threshold=t)["empty"] for t in thresholds]
+
+
+at_20, at_10 = empty_shares(real_images[0], [20, 10])
 print(f"cells without a corner: {at_20:.1%} at threshold 20, {at_10:.1%} at threshold 10")
 ### END SOLUTION
 
@@ -991,26 +998,42 @@ print(f"cells without a corner: {at_20:.1%} at threshold 20, {at_10:.1%} at thre
 # Exercise 1: autograder test
 assert 0 <= at_10 < at_20 <= 1, "a lower threshold fills some cells, but the flat ones stay empty"
 ### BEGIN HIDDEN TESTS
-assert np.isclose(at_10, image_statistics(real_images[0], threshold=10)["empty"])
+assert np.isclose(at_10, image_statistics(real_images[0], threshold=10)["empty"]), "at_10"
+fresh = np.random.default_rng()  # a new image and thresholds at every grading
+texture = (fresh.random((240, 320)) * 255).astype(np.uint8)
+flat = np.zeros((240, 320), np.uint8)
+flat[:, : int(fresh.integers(40, 280))] = texture[:, :1]  # a flat part, a textured part
+image_ = cv2.GaussianBlur(np.maximum(texture * (flat == 0), flat), (0, 0), fresh.uniform(0.5, 2.0))
+thresholds_ = sorted(int(t) for t in fresh.integers(5, 60, 3))
+got = np.asarray(empty_shares(image_, thresholds_), float)
+assert np.allclose(got, [image_statistics(image_, threshold=t)["empty"] for t in thresholds_]), (
+    "empty_shares differs on another image (the share of empty cells, at each threshold?)"
+)
 ### END HIDDEN TESTS
 
 # %% [markdown]
 # ### Exercise 2 · pitch in pixels *(easy, 2 points)*
 #
-# The car pitches by 0.1° between two frames. How far (`shift`, pixels) does the image of a point
-# 20 m straight ahead move? Compute it by rotating the point about the camera's x axis and
-# projecting it with `rigid_motion.project`. Is that inside the refinement's inlier threshold
-# (`rigid_motion.INLIER_PIXELS`)?
+# The car pitches between two frames. Write `pitch_shift(pitch, depth, camera)`: how far, in
+# pixels, the image of a point `depth` metres straight ahead moves when the camera pitches by
+# `pitch` radians, by rotating the point about the camera's x axis and projecting it with
+# `rigid_motion.project`. Store it for 0.1° and 20 m with section 5's `cam` in `shift`. Is that
+# inside the refinement's inlier threshold (`rigid_motion.INLIER_PIXELS`)?
 #
 # *Hint:* `Rotation.from_euler("x", angle)`.
 
+
 # %% nbgrader={"grade": false, "grade_id": "ex2", "locked": false, "schema_version": 3, "solution": true}
 ### BEGIN SOLUTION
-pitch = math.radians(0.1)
-point = np.array([[0.0, 0.0, 20.0]])  # on the optical axis
-Rx = Rotation.from_euler("x", pitch).as_matrix()  # about the camera's x axis (right)
-moved = rigid_motion.project(point @ Rx.T, cam) - rigid_motion.project(point, cam)
-shift = float(np.hypot(moved[0, 0], moved[0, 1]))
+def pitch_shift(pitch, depth, camera):
+    """Image motion (px) of a point straight ahead when the camera pitches by ``pitch`` rad."""
+    point = np.array([[0.0, 0.0, depth]])  # on the optical axis
+    Rx = Rotation.from_euler("x", pitch).as_matrix()  # about the camera's x axis (right)
+    moved = rigid_motion.project(point @ Rx.T, camera) - rigid_motion.project(point, camera)
+    return float(np.hypot(moved[0, 0], moved[0, 1]))
+
+
+shift = pitch_shift(math.radians(0.1), 20.0, cam)
 print(
     f"0.1 deg of pitch moves the point by {shift:.3f} px (fy = {cam.fy:.1f} px); the inlier threshold is "
     f"{rigid_motion.INLIER_PIXELS} px: {'outside' if shift > rigid_motion.INLIER_PIXELS else 'inside'}"
@@ -1019,52 +1042,90 @@ print(
 
 # %% nbgrader={"grade": true, "grade_id": "ex2_test", "locked": true, "points": 2, "schema_version": 3, "solution": false}
 # Exercise 2: autograder test
-assert abs(shift - cam.fy * math.tan(math.radians(0.1))) < 1e-9
+assert abs(shift - cam.fy * math.tan(math.radians(0.1))) < 1e-9, "f_y tan(pitch), whatever the depth"
+### BEGIN HIDDEN TESTS
+fresh = np.random.default_rng()  # new pitches, depths and cameras at every grading
+for _ in range(5):
+    camera_ = StereoCamera(
+        fx=fresh.uniform(300, 900), fy=fresh.uniform(300, 900), cx=320.0, cy=240.0, baseline=0.5
+    )
+    pitch_, depth_ = fresh.uniform(-0.05, 0.05), fresh.uniform(2.0, 80.0)
+    assert np.isclose(float(pitch_shift(pitch_, depth_, camera_)), camera_.fy * abs(math.tan(pitch_))), (
+        "pitch_shift differs for other pitches or cameras (radians? which focal length?)"
+    )
+### END HIDDEN TESTS
 
 # %% [markdown]
-# ### Exercise 3 · start from nothing *(medium, 3 points)*
+# ### Exercise 3 · start from elsewhere *(medium, 3 points)*
 #
-# Start the Gauss–Newton of section 5 from no motion at all (`R = I`, `t = 0`) instead of
-# 1-point RANSAC's guess: store the result in `R_id`, `t_id` and its number of steps in
-# `steps_id`. Does it reach the same motion, and in how many steps?
+# Write `refine_from(R, t)`: section 5's Gauss–Newton on `P_in`, `w_in` (30 iterations at most,
+# tolerance 1e-10) started from the motion `R`, `t`, returning its `R`, `t` and number of steps.
+# Start it from no motion at all (`R = I`, `t = 0`) instead of 1-point RANSAC's guess and store
+# the result in `R_id, t_id, steps_id`. Does it reach the same motion, and in how many steps?
 #
 # *Hint:* `gauss_newton(P_in, w_in, R, t, iterations=30, tol=1e-10)`.
 
+
 # %% nbgrader={"grade": false, "grade_id": "ex3", "locked": false, "schema_version": 3, "solution": true}
 ### BEGIN SOLUTION
-R_id, t_id, steps_id = gauss_newton(P_in, w_in, np.eye(3), np.zeros(3), iterations=30, tol=1e-10)
+def refine_from(R, t):
+    """Section 5's Gauss-Newton on P_in, w_in from (R, t): its R, t and number of steps."""
+    return gauss_newton(P_in, w_in, np.asarray(R, float), np.asarray(t, float), iterations=30, tol=1e-10)
+
+
+R_id, t_id, steps_id = refine_from(np.eye(3), np.zeros(3))
 print(f"from the identity: {steps_id} steps (from RANSAC's guess: {steps})")
 ### END SOLUTION
 
 # %% nbgrader={"grade": true, "grade_id": "ex3_test", "locked": true, "points": 3, "schema_version": 3, "solution": false}
 # Exercise 3: autograder test
 assert np.abs(R_id - R_ours).max() < 1e-8 and np.abs(t_id - t_ours).max() < 1e-8, "the same motion"
-assert steps_id >= steps
+assert steps_id >= steps, "from farther away, not fewer steps"
+### BEGIN HIDDEN TESTS
+fresh = np.random.default_rng()  # new starting points at every grading
+for size in (0.01, 0.05, 0.1):
+    R_start = Rotation.from_rotvec(fresh.normal(scale=size, size=3)).as_matrix() @ R0
+    t_start = t0 + fresh.normal(scale=10 * size, size=3)
+    R_e, t_e, steps_e = gauss_newton(P_in, w_in, R_start, t_start, iterations=30, tol=1e-10)
+    R_g, t_g, steps_g = refine_from(R_start, t_start)
+    assert np.abs(R_g - R_e).max() < 1e-8 and np.abs(t_g - t_e).max() < 1e-8 and steps_g == steps_e, (
+        "refine_from differs from other starting points (its steps counted?)"
+    )
+### END HIDDEN TESTS
 
 # %% [markdown]
 # ### Exercise 4 · the left image alone *(hard, 4 points)*
 #
-# Write the left-image-only refinement: keep the `(u, v)` rows of the residual and of the
-# Jacobian, and iterate to convergence on the refined inliers of section 5 (`one.w_prev[sel]`,
-# `one.w_curr[sel]`, from `R0`, `t0`); store the result in `R4`, `t4`. It should agree with
-# `cv2.solvePnPRefineLM` (`tvec`) to a micrometre. How far is its translation from the stereo
-# fit's (no Huber, same inliers), which component differs most, and why?
+# Write `left_only_refine(P, w, R, t)`, the left-image-only refinement: keep the `(u, v)` rows
+# of the residual and of the Jacobian, and iterate from `R`, `t` to convergence (a step below
+# 1e-12, 50 at most); return `R`, `t`. Store its result on the refined inliers of section 5
+# (`cam.backproject(one.w_prev[sel])`, `one.w_curr[sel]`, from `R0`, `t0`) in `R4, t4`. It
+# should agree with `cv2.solvePnPRefineLM` (`tvec`) to a micrometre. How far is its
+# translation from the stereo fit's (no Huber, same inliers), which component differs most, and
+# why?
 #
 # *Hint:* section 5's `project_uvd`, `jacobian` and `exp_rotation`.
 
+
 # %% nbgrader={"grade": false, "grade_id": "ex4", "locked": false, "schema_version": 3, "solution": true}
 ### BEGIN SOLUTION
+def left_only_refine(P, w, R, t):
+    """Gauss-Newton of (R, t) on the left image's (u, v) residuals only."""
+    R, t = np.array(R, float), np.array(t, float)
+    for _ in range(50):
+        Q = P @ R.T + t
+        r = (project_uvd(Q) - w)[:, :2].reshape(-1)
+        J = jacobian(Q)[:, :2].reshape(-1, 6)
+        delta = -np.linalg.solve(J.T @ J, J.T @ r)
+        dR = exp_rotation(delta[:3])
+        R, t = dR @ R, dR @ t + delta[3:]
+        if np.abs(delta).max() < 1e-12:
+            break
+    return R, t
+
+
 P_sel, w_sel = cam.backproject(one.w_prev[sel]), one.w_curr[sel]
-R4, t4 = R0.copy(), t0.copy()
-for _ in range(50):
-    Q = P_sel @ R4.T + t4
-    r = (project_uvd(Q) - w_sel)[:, :2].reshape(-1)
-    J = jacobian(Q)[:, :2].reshape(-1, 6)
-    delta = -np.linalg.solve(J.T @ J, J.T @ r)
-    dR = exp_rotation(delta[:3])
-    R4, t4 = dR @ R4, dR @ t4 + delta[3:]
-    if np.abs(delta).max() < 1e-12:
-        break
+R4, t4 = left_only_refine(P_sel, w_sel, R0, t0)
 R_st, t_st, _ = gauss_newton(P_sel, w_sel, R0, t0, iterations=50, tol=1e-12)
 print(f"left-only minus stereo translation (x, y, z): {1000 * (t4 - t_st)} mm")
 # The 3-D points are fixed, so both fits know depth; but the stereo fit also asks the *current*
@@ -1077,7 +1138,43 @@ print(f"left-only minus stereo translation (x, y, z): {1000 * (t4 - t_st)} mm")
 P_sel, w_sel = cam.backproject(one.w_prev[sel]), one.w_curr[sel]
 to_opencv = float(np.abs(t4 - tvec.ravel()).max())
 print(f"left-only GN against solvePnPRefineLM: {to_opencv * 1e6:.3f} micrometres apart")
-assert to_opencv < 1e-6
+assert to_opencv < 1e-6, "not the left-image-only least-squares motion"
 if REAL:  # on the real drive the forward component differs most
     R_stereo, t_stereo, _ = gauss_newton(P_sel, w_sel, R0, t0, iterations=50, tol=1e-12)
-    assert np.argmax(np.abs(t4 - t_stereo)) == 2
+    assert np.argmax(np.abs(t4 - t_stereo)) == 2, "the forward component differs most"
+
+
+### BEGIN HIDDEN TESTS
+def refuse(*args, **kwargs):
+    raise AssertionError("left_only_refine calls OpenCV's refinement; the exercise asks you to write it")
+
+
+fresh = np.random.default_rng()  # new scenes and motions at every grading
+cases = []
+for _ in range(3):
+    P_ = np.column_stack([fresh.uniform(-8, 8, 150), fresh.uniform(-2, 2, 150), fresh.uniform(4, 40, 150)])
+    R_true = Rotation.from_rotvec(fresh.normal(scale=0.02, size=3)).as_matrix()
+    t_true = fresh.normal(scale=0.5, size=3)
+    w_ = project_uvd(P_ @ R_true.T + t_true) + fresh.normal(scale=[0.5, 0.5, 2.0], size=(150, 3))
+    R_ref, t_ref = R_true, t_true + 0.05  # reference: left-only Gauss-Newton from a nearby start
+    for _ in range(50):
+        Q_ = P_ @ R_ref.T + t_ref
+        step_ = -np.linalg.lstsq(
+            jacobian(Q_)[:, :2].reshape(-1, 6), (project_uvd(Q_) - w_)[:, :2].reshape(-1), rcond=None
+        )[0]
+        dR_ = exp_rotation(step_[:3])
+        R_ref, t_ref = dR_ @ R_ref, dR_ @ t_ref + step_[3:]
+        if np.abs(step_).max() < 1e-13:
+            break
+    cases.append((P_, w_, R_true, t_true + 0.05, t_ref))
+opencv_refine = cv2.solvePnPRefineLM
+cv2.solvePnPRefineLM = refuse
+try:
+    got = [np.asarray(left_only_refine(P_, w_, R_s, t_s)[1], float) for P_, w_, R_s, t_s, _ in cases]
+finally:
+    cv2.solvePnPRefineLM = opencv_refine
+for g, (_, _, _, _, t_ref) in zip(got, cases, strict=True):
+    assert np.abs(g - t_ref).max() < 1e-7, (
+        "left_only_refine differs on other scenes (the left image's rows only? converged?)"
+    )
+### END HIDDEN TESTS

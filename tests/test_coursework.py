@@ -141,9 +141,59 @@ def test_bad_arguments_exit_2_with_one_line(tmp_path):
         assert proc.returncode == 2 and len(proc.stderr.strip().splitlines()) == 1, proc.stderr
 
 
+@pytest.mark.parametrize("path", NOTEBOOKS, ids=[p.stem for p in NOTEBOOKS])
+def test_every_exercise_has_adversarial_answers_and_fresh_hidden_tests(path):
+    """Each autograded exercise: a constant, a library-calling (or why none) and a wrong answer
+    in coursework/submissions, and a hidden test that draws inputs of its own (unseeded)."""
+    nb = jupytext.read(path)
+    ids = build.answer_ids(nb)
+    answers = build.read_submissions(path, ids)  # raises BuildError when a kind is missing
+    assert list(answers) == ids
+    tests = {c.metadata["nbgrader"]["grade_id"]: c.source for c in grading_cells(nb) if c.cell_type == "code"}
+    for exercise in ids:
+        hidden = "".join(m.group(1) for m in build.REGIONS[1].finditer(tests[f"{exercise}_test"]))
+        assert "np.random.default_rng()" in hidden, (
+            f"{path.name} {exercise}: no fresh inputs in its hidden test"
+        )
+    made = build.adversarial_notebooks(nbformat.v4.new_notebook(), answers)
+    given = [(exercise, kind) for _, _, kinds in made for exercise, kind in kinds.items()]
+    assert sorted(given) == sorted((e, k) for e, kinds in answers.items() for k in kinds), "each answer once"
+
+
+@pytest.mark.parametrize("path", NOTEBOOKS, ids=[p.stem for p in NOTEBOOKS])
+def test_written_questions_stay_visible(path):
+    """A written answer cell (replaced by nbgrader's stub) holds only the mark scheme; its question,
+    with its points, is in the markdown cell before it, which the student edition keeps."""
+    cells = jupytext.read(path).cells
+    for i, cell in enumerate(cells):
+        meta = cell.metadata.get("nbgrader", {})
+        if cell.cell_type == "markdown" and meta.get("solution"):
+            assert cell.source.startswith("=== BEGIN MARK SCHEME ==="), cell.source[:80]
+            question = cells[i - 1]
+            assert "nbgrader" not in question.metadata and f"{meta['points']} point" in question.source
+
+
+def test_adversarial_answers_fill_the_release_one_kind_per_exercise():
+    release = nbformat.v4.new_notebook()
+    release.cells = [
+        nbformat.v4.new_code_cell(
+            "raise NotImplementedError()", metadata={"nbgrader": {"grade_id": e, "solution": True}}
+        )
+        for e in ("ex1", "ex2")
+    ]
+    answers = {"ex1": {"constant": "a = 1", "wrong_sign": "a = -2"}, "ex2": {"library": "b = f()"}}
+    made = build.adversarial_notebooks(release, answers)
+    assert [given for _, _, given in made] == [{"ex1": "constant"}, {"ex1": "wrong_sign", "ex2": "library"}]
+    assert [c.source for c in made[1][1].cells] == ["a = -2", "b = f()"]
+    assert release.cells[0].source == "raise NotImplementedError()", "the release itself is left alone"
+
+
 @pytest.mark.notebook
-def test_autograder_both_ways_on_a_small_notebook(built):
-    """Solutions score every autograded point; the unanswered edition runs, failing only exercises."""
+def test_autograder_scores_only_correct_answers_on_a_small_notebook(built):
+    """Solutions score every autograded point; the unanswered edition and every adversarial
+    answer (constant, library-calling, wrong) score 0 per exercise; the table says so."""
     paths = [p for p in NOTEBOOKS if p.name[:2] in AUTOGRADED_IN_SUITE]
     report = build.check(built / "grading", paths)  # raises BuildError naming each problem
-    assert len(report) == len(paths)
+    rows = [line for line in report if line.startswith(tuple(p.name[:2] + " ex" for p in paths))]
+    assert len(rows) == sum(len(build.answer_ids(jupytext.read(p))) for p in paths)
+    assert any("seconds per submission" in line for line in report)
