@@ -95,7 +95,7 @@ def course(tmp_path, kernel_dir):
         + f"\nc.Exchange.root = {str(exchange)!r}\n"
         + "c.ExchangeCollect.check_owner = False  # one Unix user plays every role here\n"
     )
-    homes = {"course": teacher}
+    homes, ran = {"course": teacher}, []
     for student in ("alice", "bob"):
         homes[student] = tmp_path / student
         homes[student].mkdir()
@@ -107,6 +107,7 @@ def course(tmp_path, kernel_dir):
         )
 
     def run(role: str, *args: str) -> str:
+        ran.append(" ".join(a for a in args[:3] if not a.startswith("-") and a != ASSIGNMENT))
         env = dict(
             os.environ,
             JUPYTER_PATH=str(kernel_dir.parent),  # the python3 kernel of the tests' environment
@@ -125,6 +126,7 @@ def course(tmp_path, kernel_dir):
         assert proc.returncode == 0, f"nbgrader {' '.join(args)} ({role}) failed:\n{proc.stderr[-2000:]}"
         return proc.stdout + proc.stderr
 
+    run.commands = ran
     return homes, exchange, run
 
 
@@ -219,3 +221,7 @@ def test_release_fetch_submit_collect_autograde_feedback(course):
         f"alice: {total} of {total} points, 100.0 %, grade A",
         f"bob: 0 of {total} points, 0.0 %, grade F",
     ]
+    # every command run here is one the course page gives
+    page = COURSE_PAGE.read_text(encoding="utf-8")
+    missing = sorted({command for command in run.commands if f"nbgrader {command}" not in page})
+    assert not missing, f"docs/course.md does not give these steps: {missing}"
