@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import argparse
 import hashlib
+import html as html_module
 import json
 import os
 import pathlib
@@ -36,6 +37,7 @@ import subprocess
 import sys
 import tempfile
 import time
+import zipfile
 
 import jupytext
 import nbformat
@@ -44,10 +46,14 @@ ROOT = pathlib.Path(__file__).resolve().parents[1]
 NOTEBOOK_DIR = ROOT / "notebooks"
 NOTEBOOK_GLOB = "[0-9][0-9]_*.py"
 CONFIG = pathlib.Path(__file__).with_name("nbgrader_config.py")
-STUDENT_DIR, GRADING_DIR = "student", "grading"
+STUDENT_DIR, GRADING_DIR, HANDOUT_DIR = "student", "grading", "handout"
 MARKER = ".coursework_build.json"
 SUBMISSIONS_DIR = pathlib.Path(__file__).with_name("submissions")
 ADVERSARIAL_KINDS = ("constant", "library", "wrong")  # and "unanswered": the release itself
+# a line that opens a solution, hidden tests or a mark scheme (not a mention of one in prose)
+MARKER_LINE = re.compile(
+    r"^\s*(### BEGIN SOLUTION|### BEGIN HIDDEN TESTS|=== BEGIN MARK SCHEME ===)\s*$", re.M
+)
 ANSWER_HEADER = re.compile(r"^# %% (\S+) (\S+)[ \t]*\n", re.M)  # "# %% ex1 wrong_sign" opens an answer
 SCORE_COLUMNS = ("correct", "unanswered", *ADVERSARIAL_KINDS)
 SOLUTIONS_STUDENT, UNANSWERED_STUDENT = "solutions", "unanswered"
@@ -56,6 +62,20 @@ REGIONS = [  # nbgrader's markers: solution code, and tests kept from the studen
     for what in ("SOLUTION", "HIDDEN TESTS")
 ]
 EXIT_FAILED, EXIT_USAGE = 1, 2
+START_HERE = """# Start here
+
+These are the student notebooks of the vo-notebooks course, without their solutions.
+
+1. Make a virtual environment and install the requirements (they include `vo_lib`, the
+   course's package, as the wheel `{wheel}` in this folder):
+
+       python -m venv .venv && . .venv/bin/activate
+       python -m pip install -r requirements.txt
+
+2. Start Jupyter in this folder (`jupyter lab`) and open `notebooks/01_crawler_odometry.ipynb`.
+3. Each notebook ends with exercises: write your answer in the cell under each one and run the
+   test cell after it. The grader also runs tests you do not see, on inputs of its own.
+"""
 
 
 class UsageError(Exception):
@@ -154,7 +174,12 @@ def refuse_unless_replaceable(dest: pathlib.Path) -> None:
     marker = dest / MARKER
     if not marker.is_file():
         raise UsageError(f"{dest}: exists and was not written by coursework/build.py; move it or use --out")
-    written = json.loads(marker.read_text())["files"]
+    try:
+        written = json.loads(marker.read_text())["files"]
+        if not isinstance(written, dict):
+            raise TypeError("files is not a mapping")
+    except (ValueError, KeyError, TypeError) as exc:
+        raise UsageError(f"{dest}: its {MARKER} is damaged ({exc}); move the folder or use --out") from None
     now = file_checksums(dest)
     changed = sorted(
         (set(written) ^ set(now)) | {k for k in written.keys() & now.keys() if written[k] != now[k]}
@@ -259,6 +284,22 @@ def exercise_scores(sub, ids: list[str]) -> dict[str, tuple[float, float]]:
     return scores
 
 
+def feedback_leaks(course: pathlib.Path, path: pathlib.Path, student: str) -> list[str]:
+    """Generate ``student``'s feedback on notebook ``path``; return the hidden-test lines it shows."""
+    run_nbgrader(course, "generate_feedback", path.stem, f"--student={student}", "--force")
+    html = (course / "feedback" / student / path.stem / f"{path.stem}.html").read_text()
+    source = nbformat.read(course / "source" / path.stem / f"{path.stem}.ipynb", as_version=4)
+    hidden = {
+        line.strip()
+        for cell in source.cells
+        for m in REGIONS[1].finditer(cell.source)
+        for line in m.group(1).splitlines()
+        if len(line.strip()) > 20 and not line.strip().startswith("#")
+    }
+    shown = {line.strip() for line in re.sub(r"<[^>]+>", "", html_module.unescape(html)).splitlines()}
+    return sorted(hidden & shown)
+
+
 def check(course: pathlib.Path, paths: list[pathlib.Path]) -> list[str]:
     """Autograde the solutions, the unanswered edition and the adversarial answers of ``paths``.
 
@@ -325,6 +366,9 @@ def check(course: pathlib.Path, paths: list[pathlib.Path]) -> list[str]:
                                 f"{path.name} {exercise}: the {kind} answer ({student}) "
                                 f"scores {got:g} of {most:g}"
                             )
+                leaked = feedback_leaks(work, path, subs[-1][0])
+                if leaked:
+                    problems.append(f"{path.name}: the feedback shows hidden test text: {leaked[0]!r}")
                 for exercise in ids:
                     cells = [
                         "/".join(f"{g:g}" for g in table[exercise][k]) if k in table[exercise] else "-"
@@ -337,9 +381,78 @@ def check(course: pathlib.Path, paths: list[pathlib.Path]) -> list[str]:
     return rows + reasons + ["seconds per submission (autograde, nbgrader's start included):"] + times
 
 
+def write_handout(folder: pathlib.Path, course: pathlib.Path, paths: list[pathlib.Path]) -> None:
+    """Fill ``folder`` with what a teacher gives out, and refuse if any of it holds solution text.
+
+    ``notebooks/NN_topic.ipynb`` (the student edition), ``vo_lib`` as a wheel (the package only:
+    no notebook sources), ``requirements.txt`` (the environment, with the wheel for the package)
+    and ``START_HERE.md``.
+    """
+    (folder / "notebooks").mkdir()
+    for path in paths:
+        shutil.copy2(course / "release" / path.stem / f"{path.stem}.ipynb", folder / "notebooks")
+    proc = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "pip",
+            "wheel",
+            "--quiet",
+            "--no-deps",
+            "--wheel-dir",
+            str(folder),
+            str(ROOT),
+        ],
+        capture_output=True,
+        text=True,
+    )
+    wheels = sorted(folder.glob("vo_lib-*.whl"))
+    if proc.returncode != 0 or len(wheels) != 1:
+        raise BuildError(
+            "the vo_lib wheel could not be built: " + (proc.stderr.strip().splitlines() or ["?"])[-1]
+        )
+    requirements = [
+        line for line in (ROOT / "environment.txt").read_text().splitlines() if line.strip() != "-e ."
+    ]
+    (folder / "requirements.txt").write_text("\n".join([*requirements, f"./{wheels[0].name}", ""]))
+    (folder / "START_HERE.md").write_text(START_HERE.format(wheel=wheels[0].name))
+    lines = set()
+    for path in paths:
+        lines |= solution_lines(
+            nbformat.read(course / "source" / path.stem / f"{path.stem}.ipynb", as_version=4)
+        )
+    # a line the package itself has (a generic "cases.append(") proves nothing about the wheel
+    library = {line.strip() for f in (ROOT / "vo_lib").rglob("*.py") for line in f.read_text().splitlines()}
+    leaks = handout_leaks(folder, {line for line in lines - library if len(line) > 12})
+    if leaks:
+        raise BuildError(f"the handout holds solution text: {leaks[0]}")
+
+
+def handout_leaks(folder: pathlib.Path, lines: set[str]) -> list[str]:
+    """``file: line`` for every solution line (or nbgrader marker) in a file of ``folder`` or the wheel."""
+    texts = []
+    for file in sorted(p for p in folder.rglob("*") if p.is_file()):
+        if file.suffix == ".whl":
+            with zipfile.ZipFile(file) as wheel:
+                texts += [
+                    (f"{file.name}/{n}", wheel.read(n).decode("utf-8", "replace")) for n in wheel.namelist()
+                ]
+        elif file.suffix == ".ipynb":
+            nb = nbformat.read(file, as_version=4)
+            texts.append((str(file.relative_to(folder)), "\n".join(cell.source for cell in nb.cells)))
+        else:
+            texts.append((str(file.relative_to(folder)), file.read_text("utf-8", "replace")))
+    found = []
+    for name, text in texts:
+        shown = {line.strip() for line in text.splitlines()}
+        found += [f"{name}: {line!r}" for line in sorted(lines & shown)]
+        found += [f"{name}: {m.group(0).strip()!r}" for m in MARKER_LINE.finditer(text)]
+    return found
+
+
 def build(out: pathlib.Path, paths: list[pathlib.Path], check_paths: list[pathlib.Path]) -> None:
     """Write ``out/grading`` and ``out/student``; autograde ``check_paths`` both ways first."""
-    for name in (GRADING_DIR, STUDENT_DIR):  # refuse before an hour of work, not after it
+    for name in (GRADING_DIR, STUDENT_DIR, HANDOUT_DIR):  # refuse before an hour of work, not after it
         refuse_unless_replaceable(out / name)
     temporaries = []
     try:
@@ -353,18 +466,29 @@ def build(out: pathlib.Path, paths: list[pathlib.Path], check_paths: list[pathli
         temporaries.append(student)
         shutil.rmtree(student)
         shutil.copytree(course / "release", student)
-        for name, built in ((GRADING_DIR, course), (STUDENT_DIR, student)):
+        handout = pathlib.Path(tempfile.mkdtemp(prefix=f".{HANDOUT_DIR}.build-", suffix=".tmp", dir=out))
+        temporaries.append(handout)
+        write_handout(handout, course, paths)
+        for name, built in ((GRADING_DIR, course), (STUDENT_DIR, student), (HANDOUT_DIR, handout)):
             built.joinpath(MARKER).write_text(json.dumps({"files": file_checksums(built)}, indent=1))
             refuse_unless_replaceable(out / name)
         publish(course, out / GRADING_DIR)
         publish(student, out / STUDENT_DIR)
+        publish(handout, out / HANDOUT_DIR)
     finally:
         for folder in temporaries:
             shutil.rmtree(folder, ignore_errors=True)
 
 
+class OneLineParser(argparse.ArgumentParser):
+    """Argument errors as one line (a UsageError), not argparse's usage block."""
+
+    def error(self, message: str):
+        raise UsageError(message)
+
+
 def parse_args(argv: list[str] | None) -> argparse.Namespace:
-    parser = argparse.ArgumentParser(
+    parser = OneLineParser(
         prog="python coursework/build.py",
         description="Write student/ (notebooks without solutions) and grading/ (nbgrader's course folder).",
     )
@@ -382,11 +506,13 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
 
 
 def main(argv: list[str] | None = None) -> int:
-    args = parse_args(argv)
     signal.signal(signal.SIGTERM, lambda *_: sys.exit(128 + signal.SIGTERM))
     try:
+        args = parse_args(argv)
         if not args.out.is_dir():
             raise UsageError(f"--out {args.out}: expected an existing folder")
+        if not os.access(args.out, os.W_OK | os.X_OK):
+            raise UsageError(f"--out {args.out}: not writable")
         paths = notebook_paths(args.notebooks)
         check_paths = [] if args.check is None else notebook_paths(args.check) if args.check else paths
         missing = [p.name for p in check_paths if p not in paths]
@@ -399,10 +525,14 @@ def main(argv: list[str] | None = None) -> int:
     except BuildError as exc:
         print(f"coursework/build.py: {exc}", file=sys.stderr)
         return EXIT_FAILED
+    except PermissionError as exc:
+        print(f"coursework/build.py: {exc.filename}: permission denied", file=sys.stderr)
+        return EXIT_USAGE
     except KeyboardInterrupt:
         print("coursework/build.py: interrupted; nothing written", file=sys.stderr)
         return 130
-    print(f"wrote {args.out / STUDENT_DIR} and {args.out / GRADING_DIR} ({len(paths)} notebooks)")
+    written = ", ".join(str(args.out / name) for name in (STUDENT_DIR, HANDOUT_DIR, GRADING_DIR))
+    print(f"wrote {written} ({len(paths)} notebooks)")
     return 0
 
 

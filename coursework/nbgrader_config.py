@@ -19,5 +19,35 @@ _sockets = tempfile.mkdtemp(prefix="vo-nbgrader-")
 atexit.register(shutil.rmtree, _sockets, True)
 c.KernelManager.transport = "ipc"
 c.KernelManager.ip = os.path.join(_sockets, "kernel")
+# The kernels nbgrader starts inherit this: vo_lib's offer() then shows no widget, which with no
+# browser to answer it could only wait.
+os.environ["VO_LIB_HEADLESS"] = "1"
 c.ClearSolutions.code_stub = {"python": "# YOUR CODE HERE\nraise NotImplementedError()"}
 c.ClearSolutions.text_stub = "YOUR ANSWER HERE"
+
+
+# Feedback shows what failed, not how it was tested: the hidden tests are taken out of the graded
+# notebook (ClearHiddenTests) and a failed test's traceback, which would quote the failing line, is
+# cut down to its message ("AssertionError: the gain of another update ..."), which the tests word
+# so as to say what is wrong without giving the answer.
+from nbconvert.preprocessors import CSSHTMLHeaderPreprocessor  # noqa: E402
+from nbgrader.preprocessors import ClearHiddenTests, GetGrades, NbGraderPreprocessor  # noqa: E402
+
+
+class MessageOnlyTracebacks(NbGraderPreprocessor):
+    """Replace the traceback of every failed test cell by its one-line message."""
+
+    def preprocess_cell(self, cell, resources, index):
+        if cell.cell_type == "code" and cell.metadata.get("nbgrader", {}).get("grade"):
+            for output in cell.get("outputs", []):
+                if output.get("output_type") == "error":
+                    output["traceback"] = [f"{output['ename']}: {output['evalue']}"]
+        return cell, resources
+
+
+c.GenerateFeedback.preprocessors = [
+    GetGrades,
+    ClearHiddenTests,
+    MessageOnlyTracebacks,
+    CSSHTMLHeaderPreprocessor,
+]

@@ -30,6 +30,7 @@ import hashlib
 import json
 import os
 import pathlib
+import re
 import shutil
 import signal
 import subprocess
@@ -44,6 +45,7 @@ from execute_notebook import KERNEL_NAME, read_notebook  # noqa: E402
 DEFAULT_OUT = DOCS / "_build"
 STUDENT_SUBFOLDER = "student"
 NOTEBOOK_GLOB = "[0-9][0-9]_*.py"  # the notebooks tests/test_notebooks.py executes
+RELEASE_GLOB = "[0-9][0-9]_*/[0-9][0-9]_*.ipynb"  # the student edition, as coursework/build.py writes it
 MARKER = ".vo_notebooks_site"
 CONF_STAMP = "conf.py.sha256"  # in doctrees/: the conf.py the pages were read with
 # Pages of the site that are files of the repository: path in the site's source tree -> file.
@@ -53,6 +55,7 @@ PAGES = {
     "README.md": ROOT / "README.md",
     "docs/errata.md": DOCS / "errata.md",
     "docs/notation.md": DOCS / "notation.md",
+    "docs/course.md": DOCS / "course.md",
     "data/README.md": ROOT / "data" / "README.md",
 }
 TITLE = "vo-notebooks"
@@ -84,7 +87,8 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
         "--notebooks",
         type=pathlib.Path,
         metavar="DIR",
-        help="folder of jupytext notebooks NN_topic.py (default notebooks/)",
+        help="folder of jupytext notebooks NN_topic.py, or the student edition's NN_topic/NN_topic.ipynb "
+        "(default notebooks/)",
     )
     parser.add_argument(
         "--student",
@@ -117,10 +121,56 @@ def find_notebooks(folder: pathlib.Path) -> list[pathlib.Path]:
     """The notebooks of ``folder``, in order; a usage error when there are none."""
     if not folder.is_dir():
         raise UsageError(f"--notebooks {folder}: not a folder")
-    notebooks = sorted(folder.glob(NOTEBOOK_GLOB))
+    notebooks = sorted(folder.glob(NOTEBOOK_GLOB)) or sorted(folder.glob(RELEASE_GLOB))
     if not notebooks:
-        raise UsageError(f"--notebooks {folder}: no notebooks named {NOTEBOOK_GLOB} in it")
+        raise UsageError(f"--notebooks {folder}: no notebooks named {NOTEBOOK_GLOB} or {RELEASE_GLOB} in it")
     return notebooks
+
+
+HIDDEN_TESTS = re.compile(
+    r"^[ \t]*### BEGIN HIDDEN TESTS[ \t]*\n.*?^[ \t]*### END HIDDEN TESTS[ \t]*\n?", re.M | re.S
+)
+SOLUTION_MARKER = re.compile(r"^[ \t]*### (BEGIN|END) SOLUTION[ \t]*\n?", re.M)
+
+
+def reading_copy(source: pathlib.Path, copy: pathlib.Path) -> None:
+    """Write the notebook ``source`` as the public reading edition's page ``copy``.
+
+    Hidden tests and mark schemes are taken out (a written answer's cell says it is graded by
+    hand); a solution cell keeps its code, folded behind a "show code" toggle (the
+    ``hide-input`` tag), without nbgrader's markers.
+    """
+    import jupytext
+
+    nb = jupytext.read(source)
+    for cell in nb.cells:
+        meta = cell.metadata.get("nbgrader", {})
+        if cell.cell_type == "markdown" and meta.get("solution"):
+            cell.source = "*The written answer goes here; it is graded by hand.*"
+        elif cell.cell_type == "code":
+            cell.source = HIDDEN_TESTS.sub("", cell.source).rstrip("\n")
+            if meta.get("solution"):
+                cell.source = SOLUTION_MARKER.sub("", cell.source).strip("\n")
+                cell.metadata["tags"] = sorted({*cell.metadata.get("tags", []), "hide-input"})
+    copy.write_text(jupytext.writes(nb, fmt="py:percent"), encoding="utf-8")
+    shutil.copystat(source, copy)
+
+
+def student_copy(release: pathlib.Path, copy: pathlib.Path) -> None:
+    """Write the student notebook ``release`` (.ipynb) as the jupytext page ``copy`` (.py).
+
+    The exercises are unanswered there: their answer and test cells are tagged
+    ``raises-exception``, so that their NotImplementedError is shown rather than failing the build.
+    """
+    import jupytext
+    import nbformat
+
+    nb = nbformat.read(release, as_version=4)
+    for cell in nb.cells:
+        if cell.cell_type == "code" and "nbgrader" in cell.metadata:
+            cell.metadata["tags"] = sorted({*cell.metadata.get("tags", []), "raises-exception"})
+    copy.write_text(jupytext.writes(nb, fmt="py:percent"), encoding="utf-8")
+    shutil.copystat(release, copy)
 
 
 def claim_build_folder(out: pathlib.Path) -> None:
@@ -129,8 +179,11 @@ def claim_build_folder(out: pathlib.Path) -> None:
         raise UsageError(f"--out {out}: exists and is not a folder")
     if out.is_dir() and any(out.iterdir()) and not (out / MARKER).is_file():
         raise UsageError(f"--out {out}: not empty and not a site build folder (no {MARKER} in it)")
-    out.mkdir(parents=True, exist_ok=True)
-    (out / MARKER).write_text("written by python docs/build.py; everything here is regenerated\n")
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        (out / MARKER).write_text("written by python docs/build.py; everything here is regenerated\n")
+    except PermissionError:
+        raise UsageError(f"--out {out}: not writable") from None
 
 
 def replace_folder(new: pathlib.Path, target: pathlib.Path) -> None:
@@ -153,11 +206,16 @@ def lay_out_sources(out: pathlib.Path, notebooks: list[pathlib.Path]) -> pathlib
     tree = out / "source"
     staging = out / "source.tmp"
     shutil.rmtree(staging, ignore_errors=True)
-    files = {**PAGES, **{f"notebooks/{nb.name}": nb for nb in notebooks}}
+    files = {**PAGES, **{f"notebooks/{nb.stem}.py": nb for nb in notebooks}}
     for name, original in files.items():
         copy = staging / name
         copy.parent.mkdir(parents=True, exist_ok=True)
-        shutil.copy2(original, copy)
+        if original.suffix == ".ipynb":
+            student_copy(original, copy)
+        elif name.startswith("notebooks/"):
+            reading_copy(original, copy)
+        else:
+            shutil.copy2(original, copy)
     replace_folder(staging, tree)
     return tree
 

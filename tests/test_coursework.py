@@ -10,9 +10,13 @@ from __future__ import annotations
 
 import importlib.util
 import json
+import os
 import pathlib
 import subprocess
 import sys
+import sysconfig
+import venv
+import zipfile
 
 import jupytext
 import nbformat
@@ -134,7 +138,7 @@ def test_build_refuses_a_folder_it_did_not_write_or_that_changed(tmp_path):
 
 
 def test_bad_arguments_exit_2_with_one_line(tmp_path):
-    for args in (["99"], ["--out", str(tmp_path / "missing")]):
+    for args in (["99"], ["--out", str(tmp_path / "missing")], ["--bogus"]):
         proc = subprocess.run(
             [sys.executable, str(ROOT / "coursework" / "build.py"), *args], capture_output=True, text=True
         )
@@ -197,3 +201,117 @@ def test_autograder_scores_only_correct_answers_on_a_small_notebook(built):
     rows = [line for line in report if line.startswith(tuple(p.name[:2] + " ex" for p in paths))]
     assert len(rows) == sum(len(build.answer_ids(jupytext.read(p))) for p in paths)
     assert any("seconds per submission" in line for line in report)
+
+
+def test_handout_holds_notebooks_wheel_requirements_and_no_solution(built):
+    handout = built / "handout"
+    assert sorted(p.stem for p in (handout / "notebooks").glob("*.ipynb")) == [p.stem for p in NOTEBOOKS]
+    wheels = list(handout.glob("vo_lib-*.whl"))
+    assert len(wheels) == 1 and (handout / "START_HERE.md").is_file()
+    requirements = (handout / "requirements.txt").read_text().splitlines()
+    assert f"./{wheels[0].name}" in requirements and "-e ." not in requirements
+    with zipfile.ZipFile(wheels[0]) as wheel:
+        names = wheel.namelist()
+    assert names and all(n.startswith(("vo_lib/", "vo_lib-")) for n in names), "the package only"
+    lines = set().union(*(build.solution_lines(jupytext.read(p)) for p in NOTEBOOKS))
+    assert build.handout_leaks(handout, {line for line in lines if len(line) > 12} - library_lines()) == []
+
+
+def library_lines():
+    return {line.strip() for f in (ROOT / "vo_lib").rglob("*.py") for line in f.read_text().splitlines()}
+
+
+def test_handout_leaks_finds_a_solution_line_and_a_marker(tmp_path):
+    nb = nbformat.v4.new_notebook()
+    nb.cells = [nbformat.v4.new_code_cell("x = 1\nanswer = secret_formula(x)")]
+    nbformat.write(nb, tmp_path / "a.ipynb")
+    with zipfile.ZipFile(tmp_path / "vo_lib-0-py3-none-any.whl", "w") as wheel:
+        wheel.writestr("vo_lib/m.py", "def f():\n    ### BEGIN HIDDEN TESTS\n    pass\n")
+    leaks = build.handout_leaks(tmp_path, {"answer = secret_formula(x)"})
+    assert leaks == [
+        "a.ipynb: 'answer = secret_formula(x)'",
+        "vo_lib-0-py3-none-any.whl/vo_lib/m.py: '### BEGIN HIDDEN TESTS'",
+    ]
+
+
+@pytest.mark.notebook
+def test_handout_wheel_installs_in_a_fresh_venv_and_runs_a_student_notebook(built, tmp_path):
+    """The wheel, not the repository, provides vo_lib; notebook 03's non-exercise cells run."""
+    env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}  # not this checkout's vo_lib
+    venv_dir = tmp_path / "venv"
+    venv.create(venv_dir, with_pip=False)
+    python = venv_dir / "bin" / "python"
+    site = subprocess.run(
+        [str(python), "-c", "import sysconfig; print(sysconfig.get_paths()['purelib'])"],
+        capture_output=True,
+        text=True,
+        check=True,
+    ).stdout.strip()
+    wheel = next((built / "handout").glob("vo_lib-*.whl"))
+    subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "pip",
+            "--python",
+            str(python),
+            "install",
+            "--quiet",
+            "--no-deps",
+            "--no-index",
+            str(wheel),
+        ],
+        check=True,
+        capture_output=True,
+        env=env,
+    )
+    # then the other requirements, from this environment (saves a download): vo_lib is already the wheel's
+    pathlib.Path(site, "requirements_from_test_env.pth").write_text(sysconfig.get_paths()["purelib"] + "\n")
+    notebook = built / "handout" / "notebooks" / f"{NOTEBOOKS[2].stem}.ipynb"
+    script = (
+        "import sys, nbformat, vo_lib\n"
+        f"assert vo_lib.__file__.startswith({str(venv_dir)!r}), vo_lib.__file__\n"
+        f"nb = nbformat.read({str(notebook)!r}, as_version=4)\n"
+        "namespace = {}\n"
+        "for cell in nb.cells:\n"
+        "    if cell.cell_type == 'code' and 'nbgrader' not in cell.metadata:\n"
+        "        exec(compile(cell.source, 'cell', 'exec'), namespace)\n"
+        "print('ran', vo_lib.__file__)\n"
+    )
+    proc = subprocess.run(
+        [str(python), "-c", script],
+        capture_output=True,
+        text=True,
+        cwd=tmp_path,
+        env={**env, "MPLBACKEND": "Agg"},
+        timeout=600,
+    )
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    assert f"ran {venv_dir}" in proc.stdout
+
+
+def test_a_folder_that_is_not_writable_or_a_damaged_marker_is_one_line_exit_2(tmp_path, monkeypatch, capsys):
+    monkeypatch.setattr(build.os, "access", lambda path, mode: False)
+    assert build.main(["--out", str(tmp_path)]) == 2
+    assert capsys.readouterr().err.strip() == f"coursework/build.py: --out {tmp_path}: not writable"
+    monkeypatch.undo()
+    folder = tmp_path / "student"
+    folder.mkdir()
+    (folder / build.MARKER).write_text("{ not json")
+    with pytest.raises(build.UsageError, match="is damaged"):
+        build.refuse_unless_replaceable(folder)
+    (folder / build.MARKER).write_text('{"files": 3}')
+    with pytest.raises(build.UsageError, match="is damaged"):
+        build.refuse_unless_replaceable(folder)
+
+
+def test_offer_shows_no_widget_in_the_autograders_kernels(monkeypatch):
+    """nbgrader's kernels have no browser: the config marks them headless and offer() does nothing."""
+    from vo_lib.viz import widgets
+
+    config = (ROOT / "coursework" / "nbgrader_config.py").read_text()
+    assert f'os.environ["{widgets.HEADLESS_VARIABLE}"] = "1"' in config
+    assert 'c.KernelManager.transport = "ipc"' in config and "allow_errors" not in config
+    monkeypatch.setattr(widgets, "in_kernel", lambda: True)
+    monkeypatch.setenv(widgets.HEADLESS_VARIABLE, "1")
+    assert widgets.offer(lambda x: x, x=(0.0, 1.0)) is None

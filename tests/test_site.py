@@ -17,6 +17,7 @@ import pathlib
 import re
 import shutil
 import threading
+from html import unescape
 
 import pytest
 
@@ -200,3 +201,71 @@ def test_every_link_of_the_checked_pages_resolves(browser, base_url):
                 checked.add(url)
                 assert request.get(url).ok, f"{path} links {url}, which does not load"
     assert len(checked) > len(NOTEBOOKS)
+
+
+# The editions hold no answers: the public site folds solutions but shows no hidden test and no
+# mark scheme; the student site (VO_NOTEBOOKS_STUDENT_SITE: docs/build.py --student --notebooks
+# student) shows no solution line either. Read from the page as Chromium has it, folded parts too.
+STUDENT_SITE = os.environ.get("VO_NOTEBOOKS_STUDENT_SITE")
+HIDDEN_REGION = re.compile(r"^\s*### BEGIN HIDDEN TESTS\s*$(.*?)^\s*### END HIDDEN TESTS\s*$", re.M | re.S)
+SOLUTION_REGION = re.compile(r"^\s*### BEGIN SOLUTION\s*$(.*?)^\s*### END SOLUTION\s*$", re.M | re.S)
+MARKERS = ("BEGIN SOLUTION", "HIDDEN TESTS", "MARK SCHEME")
+
+
+def secret_lines(path, solutions):
+    """Stripped lines of the hidden tests and mark schemes (and of the solutions, if asked) of a
+    notebook that the rest of the notebook does not also contain."""
+    import jupytext
+
+    cells = jupytext.read(path).cells
+    secret = []
+    for cell in cells:
+        if cell.cell_type == "markdown" and cell.metadata.get("nbgrader", {}).get("solution"):
+            secret.append(cell.source)
+        secret += [m.group(1) for m in HIDDEN_REGION.finditer(cell.source)]
+        if solutions:
+            secret += [m.group(1) for m in SOLUTION_REGION.finditer(cell.source)]
+    visible = "\n".join(c.source for c in cells)
+    for text in secret:
+        visible = visible.replace(text, "\n")
+    elsewhere = {line.strip() for line in visible.splitlines()}
+    return {line.strip() for t in secret for line in t.splitlines() if len(line.strip()) > 12} - elsewhere
+
+
+def shown_lines(browser, url):
+    """Every line of text of the page, its folded parts included."""
+    page = browser.new_page()
+    try:
+        response = page.goto(url, wait_until="load", timeout=PAGE_TIMEOUT_MS)
+        assert response is not None and response.ok, url
+        html = page.content()
+    finally:
+        page.close()
+    return {line.strip() for line in unescape(re.sub(r"<[^>]+>", "\n", html)).splitlines()}
+
+
+def serve(folder):
+    handler = functools.partial(QuietHandler, directory=str(folder))
+    server = http.server.ThreadingHTTPServer(("127.0.0.1", 0), handler)
+    threading.Thread(target=server.serve_forever, daemon=True).start()
+    return server, f"http://127.0.0.1:{server.server_address[1]}/"
+
+
+@pytest.mark.parametrize("path", NOTEBOOKS, ids=[p.stem for p in NOTEBOOKS])
+def test_public_site_shows_no_hidden_test_or_mark_scheme(browser, base_url, path):
+    shown = shown_lines(browser, f"{base_url}notebooks/{path.stem}.html")
+    assert not any(marker in line for line in shown for marker in MARKERS)
+    assert sorted(secret_lines(path, solutions=False) & shown) == []
+
+
+@pytest.mark.skipif(not STUDENT_SITE, reason="no student site named by VO_NOTEBOOKS_STUDENT_SITE")
+@pytest.mark.parametrize("path", NOTEBOOKS, ids=[p.stem for p in NOTEBOOKS])
+def test_student_site_shows_no_solution_hidden_test_or_mark_scheme(browser, path):
+    server, url = serve(STUDENT_SITE)
+    try:
+        shown = shown_lines(browser, f"{url}notebooks/{path.stem}.html")
+    finally:
+        server.shutdown()
+        server.server_close()
+    assert not any(marker in line for line in shown for marker in MARKERS)
+    assert sorted(secret_lines(path, solutions=True) & shown) == []

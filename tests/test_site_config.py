@@ -121,3 +121,12 @@ def test_an_exception_in_a_notebook_fails_the_build_in_one_line(build_script, tm
     assert "01_broken.py: ValueError: a deliberate error" in err
     assert "a deliberate error" in (out / "reports" / "01_broken.err.log").read_text(encoding="utf-8")
     assert not (out / "html").exists() and not (out / "executing").exists()
+
+
+def test_an_out_folder_that_is_not_writable_is_a_usage_error(build_script, tmp_path, monkeypatch):
+    def refuse(*args, **kwargs):
+        raise PermissionError(13, "Permission denied")
+
+    monkeypatch.setattr(pathlib.Path, "mkdir", refuse)
+    with pytest.raises(build_script.UsageError, match="not writable"):
+        build_script.claim_build_folder(tmp_path / "site")

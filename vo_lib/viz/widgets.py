@@ -7,7 +7,10 @@ fails the run (ipywidgets swallows exceptions raised inside ``interact``), and t
 
 from __future__ import annotations
 
+import os
 from collections.abc import Callable
+
+HEADLESS_VARIABLE = "VO_LIB_HEADLESS"  # set: offer() shows nothing (a kernel without a browser)
 
 
 def in_kernel() -> bool:
@@ -38,9 +41,11 @@ def slider(value: float, lo: float, hi: float, step: float, description: str):
 def offer(function: Callable[..., object], **controls):
     """Show ``function`` with ``controls`` (ipywidgets or abbreviations) inside Jupyter.
 
-    Outside a kernel nothing is shown and ``None`` is returned, so notebooks run as scripts.
+    Outside a kernel nothing is shown and ``None`` is returned, so notebooks run as scripts; so
+    too in a kernel with no front end to show it (``VO_LIB_HEADLESS`` set, as the autograder
+    does), where a widget would only wait for a browser that never comes.
     """
-    if not in_kernel():
+    if not in_kernel() or os.environ.get(HEADLESS_VARIABLE):
         return None
     import ipywidgets
     from IPython.display import display
