@@ -34,6 +34,21 @@ from nbconvert.preprocessors import CSSHTMLHeaderPreprocessor  # noqa: E402
 from nbgrader.preprocessors import ClearHiddenTests, GetGrades, NbGraderPreprocessor  # noqa: E402
 
 
+class GetGradesSayingToBeGraded(GetGrades):
+    """nbgrader's GetGrades, and a part still to be marked by hand says so in the feedback."""
+
+    def _get_score(self, cell, resources):
+        super()._get_score(cell, resources)
+        meta = cell.metadata["nbgrader"]
+        grade = self.gradebook.find_grade(
+            meta["grade_id"], self.notebook_id, self.assignment_id, self.student_id
+        )
+        if grade.needs_manual_grade:
+            cell.source += (
+                f"\n\n**To be graded** by hand ({grade.max_score:g} points): the score is not final."
+            )
+
+
 class MessageOnlyTracebacks(NbGraderPreprocessor):
     """Replace the traceback of every failed test cell by its one-line message."""
 
@@ -46,8 +61,44 @@ class MessageOnlyTracebacks(NbGraderPreprocessor):
 
 
 c.GenerateFeedback.preprocessors = [
-    GetGrades,
+    GetGradesSayingToBeGraded,
     ClearHiddenTests,
     MessageOnlyTracebacks,
     CSSHTMLHeaderPreprocessor,
 ]
+
+
+# grades.csv gains a column "to_be_graded": the points of each submission still to be marked by
+# hand (a written part), so that a provisional score is not read as the final one.
+from nbgrader.plugins.export import CsvExportPlugin  # noqa: E402
+
+
+class CsvExportSayingToBeGraded(CsvExportPlugin):
+    """nbgrader's CSV export with a column of the points still to be graded by hand."""
+
+    def export(self, gradebook):
+        import csv
+
+        from nbgrader.api import MissingEntry
+
+        super().export(gradebook)
+        dest = self.to or "grades.csv"
+        with open(dest, newline="") as fh:
+            rows = list(csv.DictReader(fh))
+        if not rows:
+            return
+        for row in rows:
+            try:
+                submission = gradebook.find_submission(row["assignment"], row["student_id"])
+            except MissingEntry:  # not submitted: nothing to grade
+                row["to_be_graded"] = ""
+                continue
+            pending = [g.max_score for nb in submission.notebooks for g in nb.grades if g.needs_manual_grade]
+            row["to_be_graded"] = f"{sum(pending):g}"
+        with open(dest, "w", newline="") as fh:
+            writer = csv.DictWriter(fh, fieldnames=list(rows[0]))
+            writer.writeheader()
+            writer.writerows(rows)
+
+
+c.ExportApp.plugin_class = CsvExportSayingToBeGraded

@@ -315,3 +315,70 @@ def test_offer_shows_no_widget_in_the_autograders_kernels(monkeypatch):
     monkeypatch.setattr(widgets, "in_kernel", lambda: True)
     monkeypatch.setenv(widgets.HEADLESS_VARIABLE, "1")
     assert widgets.offer(lambda x: x, x=(0.0, 1.0)) is None
+
+
+@pytest.mark.notebook
+def test_release_fetch_submit_collect_autograde_export_through_a_local_exchange(built, tmp_path):
+    """docs/course.md's workflow, end to end: a roster, a due date, an exchange folder."""
+    import csv
+    import getpass
+    import shutil
+
+    assignment = NOTEBOOKS[0].stem  # quick, and with a written part graded by hand
+    course, home, exchange = tmp_path / "course", tmp_path / "home", tmp_path / "exchange"
+    shutil.copytree(built / "grading", course)
+    home.mkdir()
+    exchange.mkdir(mode=0o777)
+    student = getpass.getuser()  # nbgrader's exchange knows a student by their login
+    (course / "roster.csv").write_text(
+        f"id,first_name,last_name,email\n{student},Ada,Student,ada@example.org\n"
+    )
+    exchange_root = f"--Exchange.root={exchange}"
+
+    def nbgrader(folder, *args):
+        proc = subprocess.run(
+            [sys.executable, "-m", "nbgrader", *args], cwd=folder, capture_output=True, text=True, timeout=600
+        )
+        assert proc.returncode == 0, proc.stderr[-2000:]
+
+    nbgrader(course, "db", "student", "import", "roster.csv")
+    nbgrader(course, "db", "assignment", "add", assignment, "--duedate=2099-06-30 17:00:00 UTC")
+    nbgrader(course, "release_assignment", assignment, exchange_root)
+    nbgrader(home, "fetch_assignment", assignment, "--course=vo-notebooks", exchange_root)
+    fetched = home / assignment / f"{assignment}.ipynb"
+    nb = nbformat.read(fetched, as_version=4)
+    written = [
+        c for c in nb.cells if c.cell_type == "markdown" and c.metadata.get("nbgrader", {}).get("grade")
+    ]
+    assert written, "the notebook has a written part"
+    written[0].source = "The tracks skid sideways in a turn."  # answered: it waits for the teacher
+    nbformat.write(nb, fetched)
+    nbgrader(home, "submit", assignment, "--course=vo-notebooks", exchange_root)
+    nbgrader(course, "collect", assignment, exchange_root)
+    assert (course / "submitted" / student / assignment / f"{assignment}.ipynb").is_file()
+    nbgrader(course, "autograde", assignment)
+    nbgrader(course, "export")
+    rows = [r for r in csv.DictReader((course / "grades.csv").open()) if r["assignment"] == assignment]
+    assert [
+        (r["student_id"], float(r["score"]), r["late_submission_penalty"], r["to_be_graded"]) for r in rows
+    ] == [(student, 0.0, "0.0", "1")], rows
+    nbgrader(course, "generate_feedback", assignment)
+    feedback = (course / "feedback" / student / assignment / f"{assignment}.html").read_text()
+    assert "To be graded" in feedback and "BEGIN HIDDEN TESTS" not in feedback
+
+
+def test_course_page_states_the_points_the_notebooks_carry():
+    points = sum(
+        c.metadata["nbgrader"]["points"]
+        for p in NOTEBOOKS
+        for c in grading_cells(jupytext.read(p))
+        if c.metadata["nbgrader"].get("grade")
+    )
+    by_hand = sum(
+        c.metadata["nbgrader"]["points"]
+        for p in NOTEBOOKS
+        for c in grading_cells(jupytext.read(p))
+        if c.metadata["nbgrader"].get("grade") and c.cell_type == "markdown"
+    )
+    course = (ROOT / "docs" / "course.md").read_text()
+    assert f"{points} points in all" in course and by_hand == 2 and "one written point each" in course

@@ -130,3 +130,34 @@ def test_an_out_folder_that_is_not_writable_is_a_usage_error(build_script, tmp_p
     monkeypatch.setattr(pathlib.Path, "mkdir", refuse)
     with pytest.raises(build_script.UsageError, match="not writable"):
         build_script.claim_build_folder(tmp_path / "site")
+
+
+def test_reading_edition_folds_solutions_and_leaves_out_hidden_tests_and_mark_schemes(build_script, tmp_path):
+    import jupytext
+
+    source = ROOT / "notebooks" / "06_one_point_ransac.py"
+    build_script.reading_copy(source, tmp_path / "06.py")
+    text = (tmp_path / "06.py").read_text()
+    assert "HIDDEN TESTS" not in text and "MARK SCHEME" not in text and "BEGIN SOLUTION" not in text
+    cells = jupytext.read(tmp_path / "06.py").cells
+    solutions = [c for c in cells if c.cell_type == "code" and c.metadata.get("nbgrader", {}).get("solution")]
+    assert solutions and all("hide-input" in c.metadata["tags"] and c.source for c in solutions)
+
+
+def test_student_site_reads_the_student_edition_layout(build_script, tmp_path):
+    import nbformat
+
+    folder = tmp_path / "student" / "03_x"
+    folder.mkdir(parents=True)
+    nb = nbformat.v4.new_notebook()
+    nb.cells = [
+        nbformat.v4.new_code_cell("x = 1"),
+        nbformat.v4.new_code_cell("raise NotImplementedError()", metadata={"nbgrader": {"solution": True}}),
+    ]
+    nbformat.write(nb, folder / "03_x.ipynb")
+    assert build_script.find_notebooks(tmp_path / "student") == [folder / "03_x.ipynb"]
+    build_script.student_copy(folder / "03_x.ipynb", tmp_path / "03_x.py")
+    import jupytext
+
+    cells = jupytext.read(tmp_path / "03_x.py").cells
+    assert [c.metadata.get("tags", []) for c in cells] == [[], ["raises-exception"]]
