@@ -42,9 +42,10 @@ def _refuse(*args, **kwargs):  # runs with the refused function's globals: only 
 
 
 def _fingerprint(code: types.CodeType) -> tuple:
-    """What stays the same when a function's source is copied, reloaded or re-executed."""
+    """What stays the same when a function's source is copied, reloaded or re-executed (its byte
+    code may not: compiler flags change some instructions)."""
     consts = tuple(_fingerprint(c) if isinstance(c, types.CodeType) else repr(c) for c in code.co_consts)
-    return code.co_code, consts, code.co_names
+    return code.co_argcount, code.co_varnames, code.co_names, consts
 
 
 def _python_function(target) -> types.FunctionType | None:
