@@ -97,10 +97,10 @@ def test_intact_finds_replaced_tools(monkeypatch):
             patch.setattr(owner, name, value)
             with pytest.raises(AssertionError, match=name):
                 intact(namespace)
+    replaced = {**namespace, "hypotheses_needed": notebook_function("lambda *a: 1")}
+    intact(replaced)  # a name the test does not rely on may be anything
     with pytest.raises(AssertionError, match="hypotheses_needed"):
-        intact({**namespace, "hypotheses_needed": notebook_function("lambda *a: 1")})
-    intact(
-        {**namespace, "hypotheses_needed": notebook_function("lambda *a: 1")}, answers=("hypotheses_needed",)
-    )
+        intact(replaced, ("hypotheses_needed",))
+    intact(namespace, ("hypotheses_needed",))
     with pytest.raises(AssertionError, match="np"):
         intact({"np": types.ModuleType("numpy")})

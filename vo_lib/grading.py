@@ -161,26 +161,33 @@ def _foreign(value, roots: tuple[str, ...]) -> bool:
     return function.__module__ == "__main__" or not file.startswith((*roots, "<"))
 
 
-def intact(
-    namespace: dict, modules: tuple[str, ...] = WATCHED_MODULES, answers: tuple[str, ...] = ()
-) -> None:
+def _genuine(value) -> bool:
+    """True if ``value`` is what its module says it is: that module's attribute of its name."""
+    module = sys.modules.get(getattr(value, "__module__", None) or "")
+    name = getattr(value, "__name__", None)
+    if module is None or module.__name__ == "__main__" or name is None:
+        return False
+    return getattr(module, name, None) is value
+
+
+def intact(namespace: dict, names: tuple[str, ...] = (), modules: tuple[str, ...] = WATCHED_MODULES) -> None:
     """Check that the code under test left the tools of the tests alone.
 
-    Every module a notebook's ``namespace`` names must be the imported module itself, and no
-    function of ``modules`` (NumPy's, ``math``'s, the built-ins) or of this package (its modules
-    and their classes) may have been replaced by one written elsewhere (nor may a name of the
-    notebook that a library function has be bound to such a replacement), such as an
-    ``np.allclose`` that always agrees, an ``np.random.default_rng`` with a known seed, or a
-    wrapper of a library function that records the answers the tests compute with it.
+    Every module a notebook's ``namespace`` names must be the imported module itself, each of
+    ``names`` must still be the library function or class it was imported as, and no function of
+    ``modules`` (NumPy's, ``math``'s, the built-ins) or of this package (its modules and their
+    classes) may have been replaced by one written elsewhere, such as an ``np.allclose`` that
+    always agrees, an ``np.random.default_rng`` with a known seed, or a wrapper of a library
+    function that records the answers the tests compute with it.
 
     Parameters
     ----------
     namespace
         The notebook's globals.
+    names
+        Names of the notebook the test uses for library functions or classes.
     modules
         Names of the modules whose functions must be their own.
-    answers
-        Names the student's answers define that a library function also has (these may differ).
 
     Raises
     ------
@@ -198,19 +205,12 @@ def intact(
     roots = _installed_roots()
     package = __name__.partition(".")[0]
     ours = [name for name in list(sys.modules) if name == package or name.startswith(package + ".")]
-    library = {
-        name: value
-        for module_name in ours
-        for name, value in list(vars(sys.modules[module_name]).items())
-        if callable(value) and not name.startswith("_")
-    }
     for name, value in list(namespace.items()):
         if isinstance(value, types.ModuleType) and sys.modules.get(value.__name__) is not value:
             raise AssertionError(f"{name!r} is not the module it claims to be; the tests need the original")
-        if name in library and name not in answers and value is not library[name] and _foreign(value, roots):
-            raise AssertionError(
-                f"{name!r} no longer names the library's {name}; the tests need the original"
-            )
+    for name in names:
+        if not _genuine(namespace.get(name)) or _foreign(namespace.get(name), roots):
+            raise AssertionError(f"{name!r} no longer names the library's own; the tests need the original")
     for module_name in (*modules, *ours):
         module = sys.modules.get(module_name)
         if module is None:
