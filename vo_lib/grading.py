@@ -137,6 +137,10 @@ WATCHED_MODULES = (
     "math",
     "numpy",
     "numpy.random",
+    "numpy.random.bit_generator",  # its randbits seeds every default_rng()
+    "secrets",
+    "random",
+    "os",
     "numpy.linalg",
     "numpy.testing",
     "scipy.special",
