@@ -394,7 +394,12 @@ print(f"RMS error: weighted mean {np.degrees(spread_weighted):.5f}°, median {np
 # Exercise 1: autograder test
 assert 0 < spread_weighted < spread_median, "over many draws the weighted mean is the closer one"
 ### BEGIN HIDDEN TESTS
-from vo_lib.grading import intact  # noqa: E402
+import importlib  # noqa: E402
+
+import vo_lib.grading  # noqa: E402
+
+grading = importlib.reload(vo_lib.grading)  # fresh from its file, whatever the answer did to it
+intact = grading.intact
 
 intact(globals(), ("synthetic_matches",))  # the answer left NumPy and the notebook's modules alone
 fresh = np.random.default_rng()  # new matches at every grading
@@ -457,7 +462,12 @@ predicted_uv = homogeneous[:, :2] / homogeneous[:, 2:]
 assert H_spot.shape == (3, 3) and predicted_uv.shape == (300, 2), "H is 3 x 3; one (u, v) per match"
 assert np.abs(predicted_uv - spot.w_curr[:, :2]).max() < 1e-6, "pixels, whatever the depth"
 ### BEGIN HIDDEN TESTS
-from vo_lib.grading import intact, refused  # noqa: E402
+import importlib  # noqa: E402
+
+import vo_lib.grading  # noqa: E402
+
+grading = importlib.reload(vo_lib.grading)  # fresh from its file, whatever the answer did to it
+intact, refused = grading.intact, grading.refused
 
 intact(
     globals(), ("StereoCamera", "synthetic_matches")
@@ -534,7 +544,12 @@ print(f"corrected: median θ {np.degrees(theta_corrected):.4f}°")
 before = abs(np.median(th_ahead) - np.radians(2))
 assert abs(theta_corrected - np.radians(2)) < 0.05 * before, "the correction removes most of the error"
 ### BEGIN HIDDEN TESTS
-from vo_lib.grading import intact  # noqa: E402
+import importlib  # noqa: E402
+
+import vo_lib.grading  # noqa: E402
+
+grading = importlib.reload(vo_lib.grading)  # fresh from its file, whatever the answer did to it
+intact = grading.intact
 
 intact(
     globals(), ("camera_motion", "camera_mount", "matches_under_transform")
