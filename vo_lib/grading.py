@@ -114,7 +114,7 @@ def refused(*targets: Callable) -> Iterator[None]:
         dispatcher.overloads.clear()
         dispatcher._clear()
         dispatcher._can_compile = False
-    previous = sys.getprofile()
+    previous, previous_threads = sys.getprofile(), getattr(threading, "_profile_hook", None)
     sys.setprofile(watch)
     threading.setprofile(watch)
     try:
@@ -123,7 +123,7 @@ def refused(*targets: Callable) -> Iterator[None]:
             raise Refused("the code under test switched off the check for refused functions")
     finally:
         sys.setprofile(previous)
-        threading.setprofile(None)
+        threading.setprofile(previous_threads)
         for function, code in swapped:
             function.__code__ = code
         for dispatcher, overloads, can_compile in emptied:
