@@ -389,6 +389,14 @@ assert len(spot_poses) == n_full_turn + 1, "spot_poses: the start and one pose p
 assert turned[-1] >= 2 * np.pi - 1e-9 > turned[-2], "the smallest number of steps reaching 360°"
 assert spot_translation < 1e-12, "eq. 2-3: a spot turn does not translate"
 ### BEGIN HIDDEN TESTS
+import importlib  # noqa: E402
+
+import vo_lib.grading  # noqa: E402
+
+grading = importlib.reload(vo_lib.grading)  # fresh from its file, whatever the answer did to it
+intact = grading.intact
+
+intact(globals())  # the answer left NumPy and the notebook's modules alone
 fresh = np.random.default_rng()  # new inputs at every grading: a number typed in cannot pass
 for gauge, step in zip(fresh.uniform(0.3, 1.5, 20), fresh.uniform(0.002, 0.03, 20), strict=True):
     per_step = 2 * step / gauge  # eq. 4
@@ -396,6 +404,7 @@ for gauge, step in zip(fresh.uniform(0.3, 1.5, 20), fresh.uniform(0.002, 0.03, 2
     assert (n - 1) * per_step < 2 * np.pi <= n * per_step, (
         "full_turn_steps is not the smallest number of steps reaching 360° for another crawler"
     )
+intact(globals())
 ### END HIDDEN TESTS
 
 # %% [markdown]
@@ -439,6 +448,14 @@ assert 0 < slip_displacement < 0.05, "the slipping turn ends a few millimetres f
 assert 0 < slip_heading_error < np.pi, "the odometry believes it turned more than it did"
 assert np.isclose(slip_displacement, np.hypot(*slip_poses[-1, :2])), "the true final position"
 ### BEGIN HIDDEN TESTS
+import importlib  # noqa: E402
+
+import vo_lib.grading  # noqa: E402
+
+grading = importlib.reload(vo_lib.grading)  # fresh from its file, whatever the answer did to it
+intact = grading.intact
+
+intact(globals())  # the answer left NumPy and the notebook's modules alone
 fresh = np.random.default_rng()  # new inputs at every grading
 for slip, n in zip(fresh.uniform(0.02, 0.3, 5), fresh.integers(20, 400, 5), strict=True):
     # every step moves slip * 1 cm / 2 forward and turns (2 - slip) cm / gauge: an arc of radius
@@ -450,6 +467,7 @@ for slip, n in zip(fresh.uniform(0.02, 0.3, 5), fresh.integers(20, 400, 5), stri
     assert np.isclose(heading_error, n * slip * 0.01 / odo.gauge, rtol=1e-6), (
         "the missed heading has the wrong size or sign (odometry minus truth)"
     )
+intact(globals())
 ### END HIDDEN TESTS
 
 # %% [markdown]
@@ -502,6 +520,14 @@ assert np.isclose(calibrated.gauge, fitted_gauge), "calibrated has the fitted ga
 final_turn = np.sum(calibrated.increment(recorded)[1])
 assert abs(np.degrees(final_turn - true_turn)) < 0.1, "calibrated misses the recorded turn"
 ### BEGIN HIDDEN TESTS
+import importlib  # noqa: E402
+
+import vo_lib.grading  # noqa: E402
+
+grading = importlib.reload(vo_lib.grading)  # fresh from its file, whatever the answer did to it
+intact = grading.intact
+
+intact(globals())  # the answer left NumPy and the notebook's modules alone
 fresh = np.random.default_rng()  # a new crawler and recording at every grading
 for _ in range(5):
     fresh_gauge, fresh_turn = fresh.uniform(0.4, 1.2), np.radians(360.0 * fresh.integers(1, 6))
@@ -514,6 +540,7 @@ for _ in range(5):
     assert abs(fit_gauge(readings, fresh_turn) - fresh_gauge) < 4 * sigma_fit, (
         "fit_gauge does not recover the gauge of another crawler"
     )
+intact(globals())
 ### END HIDDEN TESTS
 
 # %% [markdown]

@@ -518,6 +518,14 @@ print(f"RMS error: weighted mean {np.degrees(spread_weighted):.5f}°, median {np
 # Exercise 1: autograder test
 assert 0 < spread_weighted < spread_median, "over many draws the weighted mean is the closer one"
 ### BEGIN HIDDEN TESTS
+import importlib  # noqa: E402
+
+import vo_lib.grading  # noqa: E402
+
+grading = importlib.reload(vo_lib.grading)  # fresh from its file, whatever the answer did to it
+intact = grading.intact
+
+intact(globals(), ("synthetic_matches",))  # the answer left NumPy and the notebook's modules alone
 fresh = np.random.default_rng()  # new matches at every grading
 for _ in range(3):
     sigma_ = fresh.uniform(0.2, 1.5)
@@ -542,6 +550,7 @@ for _ in range(200):
     again_m.append(np.median(each) - theta_true)
 assert abs(spread_weighted / np.sqrt(np.mean(np.square(again_w))) - 1) < 0.3, "spread_weighted"
 assert abs(spread_median / np.sqrt(np.mean(np.square(again_m))) - 1) < 0.3, "spread_median"
+intact(globals(), ("synthetic_matches",))
 ### END HIDDEN TESTS
 
 # %% [markdown]
@@ -577,6 +586,27 @@ predicted_uv = homogeneous[:, :2] / homogeneous[:, 2:]
 assert H_spot.shape == (3, 3) and predicted_uv.shape == (300, 2), "H is 3 x 3; one (u, v) per match"
 assert np.abs(predicted_uv - spot.w_curr[:, :2]).max() < 1e-6, "pixels, whatever the depth"
 ### BEGIN HIDDEN TESTS
+import importlib  # noqa: E402
+
+import vo_lib.grading  # noqa: E402
+
+grading = importlib.reload(vo_lib.grading)  # fresh from its file, whatever the answer did to it
+intact, refused = grading.intact, grading.refused
+
+intact(
+    globals(), ("StereoCamera", "synthetic_matches")
+)  # the answer left NumPy and the notebook's modules alone
+import skimage.transform  # noqa: E402
+
+import vo_lib.stereo_vo.synthetic as synthetic_module  # noqa: E402
+
+simulators = [
+    synthetic_module.synthetic_matches,
+    synthetic_module.matches_under_transform,
+    StereoCamera.project,
+]
+simulators += [skimage.transform.estimate_transform, skimage.transform.ProjectiveTransform.estimate]
+simulators.append(getattr(skimage.transform.ProjectiveTransform, "from_estimate", simulators[-1]))
 fresh = np.random.default_rng()  # new turns and cameras at every grading
 for _ in range(4):
     cam = StereoCamera(
@@ -590,11 +620,13 @@ for _ in range(4):
     )
     turn = fresh.choice([-1, 1]) * fresh.uniform(np.radians(1), np.radians(10))
     pairs = synthetic_matches(cam, 100, turn, 0.0, fresh, depth_range=(1.0, 50.0))
-    H = np.asarray(spot_homography(turn, cam), float)
+    with refused(*simulators):  # derived, not fitted to simulated or projected matches
+        H = np.asarray(spot_homography(turn, cam), float)
     moved = np.column_stack([pairs.w_prev[:, :2], np.ones(len(pairs.w_prev))]) @ H.T
     assert np.abs(moved[:, :2] / moved[:, 2:] - pairs.w_curr[:, :2]).max() < 1e-6, (
         "spot_homography does not map the pixels of another turn or camera (which way does R turn?)"
     )
+intact(globals(), ("StereoCamera", "synthetic_matches"))
 ### END HIDDEN TESTS
 
 # %% [markdown]
@@ -636,6 +668,16 @@ print(f"corrected: median θ {np.degrees(theta_corrected):.4f}°")
 before = abs(np.median(th_ahead) - np.radians(2))
 assert abs(theta_corrected - np.radians(2)) < 0.05 * before, "the correction removes most of the error"
 ### BEGIN HIDDEN TESTS
+import importlib  # noqa: E402
+
+import vo_lib.grading  # noqa: E402
+
+grading = importlib.reload(vo_lib.grading)  # fresh from its file, whatever the answer did to it
+intact = grading.intact
+
+intact(
+    globals(), ("camera_motion", "camera_mount", "matches_under_transform")
+)  # the answer left NumPy and the notebook's modules alone
 fresh = np.random.default_rng()  # new turns and offsets at every grading
 for _ in range(4):
     a_, turn = fresh.uniform(0.1, 0.5), fresh.choice([-1, 1]) * fresh.uniform(np.radians(1), np.radians(4))
@@ -649,6 +691,7 @@ for _ in range(4):
     assert abs(np.median(corrected) - turn) < 0.05 * abs(np.median(each) - turn), (
         "correct_ahead does not remove the error of another turn or offset (which sign? which offset?)"
     )
+intact(globals(), ("camera_motion", "camera_mount", "matches_under_transform"))
 ### END HIDDEN TESTS
 
 # %% [markdown]

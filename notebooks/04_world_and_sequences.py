@@ -469,6 +469,14 @@ first_order = 0.25 / (camera.fx * camera.baseline)  # dz = z^2 dd / (f B)
 assert np.isclose(depth_error_2m, 4 * first_order, rtol=0.05), "at 2 m: about z² dd / (f_x B)"
 assert np.isclose(depth_error_10m, 100 * first_order, rtol=0.15), "the error grows with z²"
 ### BEGIN HIDDEN TESTS
+import importlib  # noqa: E402
+
+import vo_lib.grading  # noqa: E402
+
+grading = importlib.reload(vo_lib.grading)  # fresh from its file, whatever the answer did to it
+intact = grading.intact
+
+intact(globals(), ("StereoCamera",))  # the answer left NumPy and the notebook's modules alone
 fresh = np.random.default_rng()  # new cameras, depths and disparity errors at every grading
 for _ in range(10):
     cam = StereoCamera(
@@ -480,6 +488,7 @@ for _ in range(10):
         "depth_error is not the exact error of another camera, depth or disparity error "
         "(to first order only? which way does the disparity err?)"
     )
+intact(globals(), ("StereoCamera",))
 ### END HIDDEN TESTS
 
 # %% [markdown]
@@ -531,10 +540,14 @@ assert gap_to_walls(robot_points, pose).max() < 1e-6, "an echo carried into the 
 
 
 ### BEGIN HIDDEN TESTS
-def refuse(*args, **kwargs):
-    raise AssertionError("to_robot_frame calls the vo_lib pose helper the exercise asks you to do without")
+import importlib  # noqa: E402
 
+import vo_lib.grading  # noqa: E402
 
+grading = importlib.reload(vo_lib.grading)  # fresh from its file, whatever the answer did to it
+intact, refused = grading.intact, grading.refused
+
+intact(globals(), ("LaserScanner",))  # the answer left NumPy and the notebook's modules alone
 import vo_lib.geometry as geometry_module  # noqa: E402
 
 fresh = np.random.default_rng()  # new mounts at every grading
@@ -543,20 +556,22 @@ for _ in range(3):
     mount_ = (fresh.uniform(-0.4, 0.4), fresh.uniform(-0.3, 0.3), fresh.uniform(-np.pi, np.pi))
     echoes = LaserScanner(range_sigma=0.0, max_range=30.0, mount=mount_).scan(walls, pose).points()
     cases.append((mount_, echoes))
-helpers = [geometry_module.compose_planar, geometry_module.planar_to_matrix]
-saved = [f.__code__ for f in helpers]
-for f in helpers:
-    f.__code__ = refuse.__code__
-try:
-    for mount_, echoes in cases:
-        got = np.asarray(to_robot_frame(echoes, mount_), float)
-        assert got.shape == echoes.shape, "one (x, y) per echo"
-        assert gap_to_walls(got, pose).max() < 1e-6, (
-            "to_robot_frame does not carry the echoes of a turned or shifted scanner onto the walls"
-        )
-finally:
-    for f, code in zip(helpers, saved, strict=True):
-        f.__code__ = code
+helpers = [
+    f
+    for f in vars(geometry_module).values()
+    if callable(f) and getattr(f, "__module__", "") == geometry_module.__name__
+]
+with refused(*helpers):
+    answers = [np.asarray(to_robot_frame(echoes, mount_), float) for mount_, echoes in cases]
+for got, (mount_, echoes) in zip(answers, cases, strict=True):
+    # the reference, independent of the notebook's helpers: x_robot = R(yaw) x_sensor + (x, y)
+    c_, s_ = np.cos(mount_[2]), np.sin(mount_[2])
+    expected = echoes @ np.array([[c_, -s_], [s_, c_]]).T + np.array(mount_[:2])
+    assert got.shape == echoes.shape, "one (x, y) per echo"
+    assert np.allclose(got, expected, atol=1e-9), (
+        "to_robot_frame does not carry the echoes of a turned or shifted scanner onto the walls"
+    )
+intact(globals(), ("LaserScanner",))
 ### END HIDDEN TESTS
 
 # %% [markdown]
@@ -593,6 +608,14 @@ field_of_view = 2 * np.arctan(camera.width / 2 / camera.fx)
 assert abs(len(depth_gaps) - field_of_view / np.radians(1 / 3)) < 5, "every beam in view, once"
 assert np.median(depth_gaps) < 0.005 and np.percentile(depth_gaps, 90) < 0.03, "laser and camera disagree"
 ### BEGIN HIDDEN TESTS
+import importlib  # noqa: E402
+
+import vo_lib.grading  # noqa: E402
+
+grading = importlib.reload(vo_lib.grading)  # fresh from its file, whatever the answer did to it
+intact = grading.intact
+
+intact(globals(), ("StereoCamera",))  # the answer left NumPy and the notebook's modules alone
 fresh = np.random.default_rng()  # new cameras and beams at every grading
 for _ in range(5):
     cam = StereoCamera(
@@ -605,6 +628,7 @@ for _ in range(5):
     assert np.allclose(u_, cam.cx - cam.fx * np.tan(bearings_)), (
         "beam_in_image: not the column of another camera's image (which way does u grow?)"
     )
+intact(globals(), ("StereoCamera",))
 ### END HIDDEN TESTS
 
 # %% [markdown]

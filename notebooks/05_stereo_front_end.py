@@ -461,12 +461,16 @@ assert np.array_equal(hamming_distance(features.descriptors, other), hamming(fea
 )
 assert np.all(hamming_distance(other, other) == 0), "a descriptor differs from itself in no bit"
 ### BEGIN HIDDEN TESTS
+import importlib  # noqa: E402
+
+import vo_lib.grading  # noqa: E402
+
+grading = importlib.reload(vo_lib.grading)  # fresh from its file, whatever the answer did to it
+intact, refused = grading.intact, grading.refused
+
+intact(globals())  # the answer left NumPy and the notebook's modules alone
 import vo_lib.stereo_vo.features as features_module  # noqa: E402
-
-
-def refuse(*args, **kwargs):
-    raise AssertionError("hamming_distance calls the vo_lib function the exercise asks you to write")
-
+import vo_lib.stereo_vo.matching_core as matching_core  # noqa: E402
 
 fresh = np.random.default_rng()  # new descriptors at every grading
 a_ = fresh.integers(0, 256, (500, 32), dtype=np.uint8)
@@ -476,13 +480,12 @@ for row, bits in enumerate(flips):
     for bit in bits:
         b_[row, bit // 8] ^= np.uint8(1 << (bit % 8))
 expected = np.unpackbits(a_ ^ b_, axis=1).sum(axis=1)
-saved, features_module.hamming.__code__ = features_module.hamming.__code__, refuse.__code__
-try:
-    assert np.array_equal(np.asarray(hamming_distance(a_, b_)), expected), (
-        "on other descriptors, not the number of differing bits (bits, not bytes)"
-    )
-finally:
-    features_module.hamming.__code__ = saved
+with refused(features_module.hamming, *(f for f in vars(matching_core).values() if hasattr(f, "py_func"))):
+    got = np.asarray(hamming_distance(a_, b_))
+assert np.array_equal(got, expected), (
+    "on other descriptors, not the number of differing bits (bits, not bytes)"
+)
+intact(globals())
 ### END HIDDEN TESTS
 
 # %% [markdown]
@@ -523,6 +526,14 @@ squares = [(x - true_minima) ** 2 for x in (-1.0, 0.0, 1.0)]
 assert np.allclose(quadratic_offset(*squares), true_minima), "exact on a parabola"
 assert library_worst < 1e-9 < 0.05 < parabola_worst, "the V fit is exact on a SAD cost; a parabola is not"
 ### BEGIN HIDDEN TESTS
+import importlib  # noqa: E402
+
+import vo_lib.grading  # noqa: E402
+
+grading = importlib.reload(vo_lib.grading)  # fresh from its file, whatever the answer did to it
+intact = grading.intact
+
+intact(globals())  # the answer left NumPy and the notebook's modules alone
 v_check = [np.abs(x - true_minima) for x in (-1.0, 0.0, 1.0)]
 assert np.isclose(parabola_worst, np.abs(quadratic_offset(*v_check) - true_minima).max()), "parabola_worst"
 fresh = np.random.default_rng()  # new parabolas at every grading
@@ -531,6 +542,7 @@ samples = [curvature * (x - vertex) ** 2 + floor for x in (-1.0, 0.0, 1.0)]
 assert np.allclose(np.asarray(quadratic_offset(*samples), float), vertex), (
     "quadratic_offset does not find the vertex of other parabolas (which side is which?)"
 )
+intact(globals())
 ### END HIDDEN TESTS
 
 # %% [markdown]
@@ -570,12 +582,15 @@ for grid, per_cell in (((8, 6), 12), ((4, 3), 5), ((16, 12), 1)):
 
 
 ### BEGIN HIDDEN TESTS
+import importlib  # noqa: E402
+
+import vo_lib.grading  # noqa: E402
+
+grading = importlib.reload(vo_lib.grading)  # fresh from its file, whatever the answer did to it
+intact, refused = grading.intact, grading.refused
+
+intact(globals())  # the answer left NumPy and the notebook's modules alone
 import vo_lib.stereo_vo.features as features_module  # noqa: E402
-
-
-def refuse(*args, **kwargs):
-    raise AssertionError("strongest_per_cell calls the vo_lib function the exercise asks you to write")
-
 
 fresh = np.random.default_rng()  # new corners and images at every grading
 cases = []
@@ -585,18 +600,23 @@ for _ in range(4):
     pts = fresh.uniform([0, 0], [w_ - 1, h_ - 1], (800, 2)).astype(np.float32)
     resp = fresh.uniform(1, 100, 800).astype(np.float32)
     cases.append(
-        (pts, resp, w_, h_, grid_, per_, bucket(pts, resp, w_, h_, grid_, per_ * grid_[0] * grid_[1]))
-    )
-saved, features_module.bucket.__code__ = features_module.bucket.__code__, refuse.__code__
-try:
-    for pts, resp, w_, h_, grid_, per_, expected in cases:
-        got = np.asarray(strongest_per_cell(pts, resp, w_, h_, grid_, per_))
-        assert np.array_equal(got, expected), (
-            "on other corners or images, not the strongest few of every cell (strongest? per cell? "
-            "which cell?)"
+        (
+            pts,
+            resp,
+            w_,
+            h_,
+            grid_,
+            per_,
+            features_module.bucket(pts, resp, w_, h_, grid_, per_ * grid_[0] * grid_[1]),
         )
-finally:
-    features_module.bucket.__code__ = saved
+    )
+with refused(features_module.bucket):
+    answers = [np.asarray(strongest_per_cell(*case[:6])) for case in cases]
+for got, case in zip(answers, cases, strict=True):
+    assert np.array_equal(got, case[-1]), (
+        "on other corners or images, not the strongest few of every cell (strongest? per cell? which cell?)"
+    )
+intact(globals())
 ### END HIDDEN TESTS
 
 # %% [markdown]

@@ -1081,24 +1081,26 @@ assert set(needed) == {1, 3, 5}, "one count per sample size"
 for s, count in needed.items():
     assert count == hypotheses_needed(0.2, 0.999, sample_size=s), f"the count for samples of {s}"
 ### BEGIN HIDDEN TESTS
+import importlib  # noqa: E402
+
+import vo_lib.grading  # noqa: E402
+
+grading = importlib.reload(vo_lib.grading)  # fresh from its file, whatever the answer did to it
+intact, refused = grading.intact, grading.refused
+
+intact(globals())  # the answer left NumPy and the notebook's modules alone
 import vo_lib.stereo_vo.ransac as ransac_module  # noqa: E402
-
-
-def refuse(*args, **kwargs):
-    raise AssertionError("hypotheses_for calls the vo_lib function the exercise asks you to write")
-
+import vo_lib.stereo_vo.ransac_core as ransac_core  # noqa: E402
 
 fresh = np.random.default_rng()  # new ratios and confidences at every grading
 cases = [(fresh.uniform(0.05, 0.9), fresh.uniform(0.9, 0.9999), int(fresh.integers(1, 7))) for _ in range(20)]
-expected = [hypotheses_needed(1 - e, p, sample_size=s) for e, p, s in cases]
-saved, ransac_module.hypotheses_needed.__code__ = ransac_module.hypotheses_needed.__code__, refuse.__code__
-try:
+expected = [ransac_module.hypotheses_needed(1 - e, p, sample_size=s) for e, p, s in cases]
+with refused(ransac_module.hypotheses_needed, ransac_core.hypotheses_needed):
     got = [int(hypotheses_for(e, p, s)) for e, p, s in cases]
-finally:
-    ransac_module.hypotheses_needed.__code__ = saved
 assert got == expected, (
     "hypotheses_for gives other counts for other ratios (outliers, not inliers? rounded up?)"
 )
+intact(globals())
 ### END HIDDEN TESTS
 
 # %% [markdown]
@@ -1133,6 +1135,16 @@ print(f"inliers found: {recall_default:.0%} assuming 0.5 px, {recall_matched:.0%
 assert recall_default < 0.8 < 0.95 < recall_matched, "gates too narrow for the noise drop inliers"
 assert false_matched <= 0.02 * np.sum(~one_px.inliers), "matched gates accept few outliers"
 ### BEGIN HIDDEN TESTS
+import importlib  # noqa: E402
+
+import vo_lib.grading  # noqa: E402
+
+grading = importlib.reload(vo_lib.grading)  # fresh from its file, whatever the answer did to it
+intact = grading.intact
+
+intact(
+    globals(), ("synthetic_matches", "one_point_ransac")
+)  # the answer left NumPy and the notebook's modules alone
 fresh = np.random.default_rng()  # new matches at every grading
 for _ in range(2):
     sigma_ = fresh.uniform(0.3, 1.5)
@@ -1151,6 +1163,7 @@ for _ in range(2):
         "gate_scores: not the share of the true inliers found (of the true inliers, not of those found)"
     )
     assert false_ == np.sum(found & ~pairs.inliers), "gate_scores: not the number of outliers accepted"
+intact(globals(), ("synthetic_matches", "one_point_ransac"))
 ### END HIDDEN TESTS
 
 # %% [markdown]
@@ -1199,6 +1212,16 @@ wrong_fixed = np.sum((np.abs(theta_check - ex_theta) < np.radians(best_threshold
 assert fixed_errors == wrong_fixed, "fixed_errors: the matches the threshold classifies wrongly"
 assert gate_errors < fixed_errors, "even the best fixed threshold misclassifies more than the gates"
 ### BEGIN HIDDEN TESTS
+import importlib  # noqa: E402
+
+import vo_lib.grading  # noqa: E402
+
+grading = importlib.reload(vo_lib.grading)  # fresh from its file, whatever the answer did to it
+intact = grading.intact
+
+intact(
+    globals(), ("synthetic_matches", "one_point_ransac")
+)  # the answer left NumPy and the notebook's modules alone
 gated_check = one_point_ransac(half_px.w_prev, half_px.w_curr, ex_camera, rng=1).inliers
 assert gate_errors == np.sum(gated_check != half_px.inliers), "gate_errors"
 fresh = np.random.default_rng()  # new matches and grids at every grading
@@ -1213,6 +1236,7 @@ for _ in range(3):
     assert np.isclose(
         best_fixed_threshold(each, turn, pairs.inliers, grid), grid[int(np.argmax(correct_at))]
     ), "best_fixed_threshold does not pick the threshold that classifies the most matches correctly"
+intact(globals(), ("synthetic_matches", "one_point_ransac"))
 ### END HIDDEN TESTS
 
 # %% [markdown]

@@ -1,0 +1,232 @@
+"""Tools for the notebooks' autograder tests: run a student's code with some functions refused.
+
+An exercise that asks for a function ``vo_lib`` already has must check that the student's answer
+does not simply call it. Replacing the module attribute is not enough: an answer may hold a
+reference taken earlier, a copy made with ``types.FunctionType(f.__code__, ...)``, a copy
+recompiled by ``importlib.reload`` or ``exec(inspect.getsource(f))``, or a compiled (Numba) twin
+of the same computation. :func:`refused` covers all of these while a block runs::
+
+    with refused(hypotheses_needed, ransac_core.hypotheses_needed):
+        got = hypotheses_for(0.5, 0.99, 3)
+
+- a Python function's code is swapped for one that raises, and every call of a function whose
+  byte code matches (copies, reloaded or re-executed sources) raises too (through a profile hook);
+- a Numba dispatcher loses its compiled versions (and may not compile new ones) until the block
+  ends;
+- a built-in (C) function, such as an OpenCV routine, raises when called.
+
+Everything is restored when the block ends, also when it raises. Refusal raises
+:class:`AssertionError`, so a graded test cell fails.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import sys
+import threading
+import types
+from collections.abc import Callable, Iterator
+
+__all__ = ["Refused", "intact", "refused"]
+
+
+WRITE_IT = "which the exercise asks you to write yourself"
+
+
+class Refused(AssertionError):
+    """Raised when code running inside :func:`refused` calls a refused function."""
+
+
+def _refuse(*args, **kwargs):  # runs with the refused function's globals: only built-in names
+    raise AssertionError("this calls a library function the exercise asks you to write yourself")
+
+
+def _fingerprint(code: types.CodeType) -> tuple:
+    """What stays the same when a function's source is copied, reloaded or re-executed (its byte
+    code may not: compiler flags change some instructions)."""
+    consts = tuple(_fingerprint(c) if isinstance(c, types.CodeType) else repr(c) for c in code.co_consts)
+    return code.co_argcount, code.co_varnames, code.co_names, consts
+
+
+def _python_function(target) -> types.FunctionType | None:
+    if isinstance(target, types.MethodType):
+        target = target.__func__
+    if isinstance(target, (staticmethod, classmethod)):
+        target = target.__func__
+    return target if isinstance(target, types.FunctionType) else None
+
+
+def _is_dispatcher(target) -> bool:
+    return hasattr(target, "overloads") and hasattr(target, "py_func") and hasattr(target, "_clear")
+
+
+@contextlib.contextmanager
+def refused(*targets: Callable) -> Iterator[None]:
+    """Make ``targets`` (and every copy of them) raise :class:`Refused` while the block runs.
+
+    Parameters
+    ----------
+    *targets
+        Python functions or methods, Numba dispatchers (their ``py_func`` is refused too) and
+        built-in functions.
+
+    Raises
+    ------
+    Refused
+        When refused code runs inside the block, or when the block removed the profile hook that
+        watches for copies.
+    """
+    functions, dispatchers, builtins = [], [], []
+    for target in targets:
+        if _is_dispatcher(target):
+            dispatchers.append(target)
+            functions.append(target.py_func)
+        elif (function := _python_function(target)) is not None:
+            functions.append(function)
+        else:
+            builtins.append(target)
+    functions = list({id(f): f for f in functions}.values())
+    prints = {_fingerprint(f.__code__) for f in functions}
+    codes = {id(f.__code__) for f in functions}
+    builtin_ids = {id(b) for b in builtins}
+
+    seen: dict[int, tuple[types.CodeType, bool]] = {}
+
+    def copied(code: types.CodeType) -> bool:
+        if id(code) not in seen:
+            seen[id(code)] = code, id(code) in codes or _fingerprint(code) in prints
+        return seen[id(code)][1]
+
+    def watch(frame, event, arg):
+        if event == "call" and copied(frame.f_code):
+            raise Refused(f"this calls {frame.f_code.co_name}, {WRITE_IT}")
+        if event == "c_call" and id(arg) in builtin_ids:
+            raise Refused(f"this calls {getattr(arg, '__name__', arg)}, {WRITE_IT}")
+
+    swapped = []
+    for function in functions:
+        if not function.__code__.co_freevars:
+            swapped.append((function, function.__code__))
+            function.__code__ = _refuse.__code__
+    emptied = []
+    for dispatcher in dispatchers:
+        emptied.append((dispatcher, list(dispatcher.overloads.values()), dispatcher._can_compile))
+        dispatcher.overloads.clear()
+        dispatcher._clear()
+        dispatcher._can_compile = False
+    previous, previous_threads = sys.getprofile(), getattr(threading, "_profile_hook", None)
+    sys.setprofile(watch)
+    threading.setprofile(watch)
+    try:
+        yield
+        if sys.getprofile() is not watch:
+            raise Refused("the code under test switched off the check for refused functions")
+    finally:
+        sys.setprofile(previous)
+        threading.setprofile(previous_threads)
+        for function, code in swapped:
+            function.__code__ = code
+        for dispatcher, overloads, can_compile in emptied:
+            dispatcher._can_compile = can_compile
+            for compiled in overloads:
+                dispatcher.add_overload(compiled)
+
+
+WATCHED_MODULES = (
+    "builtins",
+    "math",
+    "numpy",
+    "numpy.random",
+    "numpy.random.bit_generator",  # its randbits seeds every default_rng()
+    "secrets",
+    "random",
+    "os",
+    "numpy.linalg",
+    "numpy.testing",
+    "scipy.special",
+)
+
+
+def _installed_roots() -> tuple[str, ...]:
+    """Folders that hold installed code: Python's own, the environment's, and this package's."""
+    import os
+
+    package = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    folders = (sys.prefix, sys.base_prefix, sys.exec_prefix, package)
+    return tuple({os.path.abspath(folder) + os.sep for folder in folders})
+
+
+def _foreign(value, roots: tuple[str, ...]) -> bool:
+    """True for a function whose code is not installed code (a notebook's, or an ``exec``'s)."""
+    function = _python_function(value)
+    if function is None:
+        return type(value).__module__ == "__main__" and callable(value) and not isinstance(value, type)
+    file = function.__code__.co_filename  # "<string>" for code generated by a library (dataclasses)
+    return function.__module__ == "__main__" or not file.startswith((*roots, "<"))
+
+
+def _genuine(value) -> bool:
+    """True if ``value`` is what its module says it is: that module's attribute of its name."""
+    module = sys.modules.get(getattr(value, "__module__", None) or "")
+    name = getattr(value, "__name__", None)
+    if module is None or module.__name__ == "__main__" or name is None:
+        return False
+    return getattr(module, name, None) is value
+
+
+def intact(namespace: dict, names: tuple[str, ...] = (), modules: tuple[str, ...] = WATCHED_MODULES) -> None:
+    """Check that the code under test left the tools of the tests alone.
+
+    Every module a notebook's ``namespace`` names must be the imported module itself, each of
+    ``names`` must still be the library function or class it was imported as, and no function of
+    ``modules`` (NumPy's, ``math``'s, the built-ins) or of this package (its modules and their
+    classes) may have been replaced by one written elsewhere, such as an ``np.allclose`` that
+    always agrees, an ``np.random.default_rng`` with a known seed, or a wrapper of a library
+    function that records the answers the tests compute with it.
+
+    Parameters
+    ----------
+    namespace
+        The notebook's globals.
+    names
+        Names of the notebook the test uses for library functions or classes.
+    modules
+        Names of the modules whose functions must be their own.
+
+    Raises
+    ------
+    AssertionError
+        Naming the first name or function found replaced.
+    """
+    import math
+
+    import numpy
+
+    for name, value in (("pi", 3.141592653589793), ("e", 2.718281828459045), ("inf", float("inf"))):
+        for module in (numpy, math):
+            if getattr(module, name) != value:
+                raise AssertionError(f"{module.__name__}.{name} was changed; the tests need the original")
+    roots = _installed_roots()
+    package = __name__.partition(".")[0]
+    ours = [name for name in list(sys.modules) if name == package or name.startswith(package + ".")]
+    for name, value in list(namespace.items()):
+        if isinstance(value, types.ModuleType) and sys.modules.get(value.__name__) is not value:
+            raise AssertionError(f"{name!r} is not the module it claims to be; the tests need the original")
+    for name in names:
+        if not _genuine(namespace.get(name)) or _foreign(namespace.get(name), roots):
+            raise AssertionError(f"{name!r} no longer names the library's own; the tests need the original")
+    for module_name in (*modules, *ours):
+        module = sys.modules.get(module_name)
+        if module is None:
+            continue
+        for name, value in list(vars(module).items()):
+            if name.startswith("__"):
+                continue
+            if _foreign(value, roots):
+                raise AssertionError(f"{module_name}.{name} was replaced; the tests need the original")
+            if isinstance(value, type) and value.__module__ == module_name:
+                for attribute, member in list(vars(value).items()):
+                    if not attribute.startswith("__") and _foreign(member, roots):
+                        raise AssertionError(
+                            f"{module_name}.{name}.{attribute} was replaced; the tests need the original"
+                        )
