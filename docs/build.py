@@ -51,8 +51,14 @@ CONF_STAMP = "conf.py.sha256"  # in doctrees/: the conf.py the pages were read w
 # Pages of the site that are files of the repository: path in the site's source tree -> file.
 PAGES = {
     "index.md": DOCS / "index.md",
-    "benchmarks.md": DOCS / "benchmarks.md",
     "README.md": ROOT / "README.md",
+    "docs/default_run.png": DOCS / "default_run.png",
+    "docs/command_line.md": DOCS / "command_line.md",
+    "docs/outputs.md": DOCS / "outputs.md",
+    "docs/real_data.md": DOCS / "real_data.md",
+    "docs/samples.md": DOCS / "samples.md",
+    "docs/benchmarks.md": DOCS / "benchmarks.md",
+    "docs/layout.md": DOCS / "layout.md",
     "docs/errata.md": DOCS / "errata.md",
     "docs/notation.md": DOCS / "notation.md",
     "docs/course.md": DOCS / "course.md",

@@ -118,6 +118,8 @@ CONSTANTS: dict[str, dict[str, str]] = {
         "~100 m": "the distance the stretch goal moves the walls to",
     },
     "10_vo_assisted_lidar_tracking": {
+        "0 °": "the start of the interval an axis direction is folded into, by definition",
+        "180 °": "the end of that interval: a direction and its opposite are one axis",
         "30 m": "the length of the simulated corridor",
         "3 m": "the width of the simulated corridor",
         "270 °": "the field of view of the simulated SICK TIM551",
@@ -129,6 +131,7 @@ CONSTANTS: dict[str, dict[str, str]] = {
         "0.5 °": "the heading spread chosen for the samples",
     },
     "11_real_stereo_data": {
+        "1e-12": "the convergence tolerance the exercise sets",
         "±2 px": "the disparity search window chosen around an upper level's corner",
         "1 px": "the threshold of the histogram's tail and of the Huber weights, both chosen",
         "2 px": "the disparity change chosen to call a patch a depth edge",
@@ -183,7 +186,7 @@ CONSTANTS: dict[str, dict[str, str]] = {
         "99.9 %": "the confidence level the hypothesis count is computed for, by choice",
         "0.01 °": "the first threshold of the grid the exercise searches",
         "0.02 °": "the second threshold of the grid the exercise searches",
-        "1.00 °": "the last threshold of the grid the exercise searches",
+        "8.00 °": "the end of the threshold grid the exercise sets",
     },
     "08_full_pipeline": {
         "6 %": "the mean slip the simulated drives are given in spot turns",

@@ -49,7 +49,11 @@ def test_every_notebook_is_in_the_toctree_and_every_page_exists(build_script):
     assert "notebooks/*" in entries and ":glob:" in index  # every notebook of the folder, by name
     # The glob takes every notebook build.py copies into the tree: those tests/test_notebooks.py runs.
     assert build_script.find_notebooks(ROOT / "notebooks") == NOTEBOOKS
-    pages = {name.removesuffix(".md") for name in build_script.PAGES if name not in ("index.md", "README.md")}
+    pages = {
+        name.removesuffix(".md")
+        for name in build_script.PAGES
+        if name.endswith(".md") and name not in ("index.md", "README.md")  # pictures are no pages
+    }
     assert pages == {e for e in entries if e != "notebooks/*"}, "a page of the site outside the toctree"
     for name, path in build_script.PAGES.items():
         assert path.is_file(), f"{name}: {path} is missing"
