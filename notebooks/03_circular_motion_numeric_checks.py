@@ -540,7 +540,8 @@ for _ in range(3):
         rtol=0,
         atol=1e-10,
     ), "weighted_theta is not the mean of the θ weighted by 1/σ²_θ"
-# the RMS errors of 200 draws are known to about 5 %: both within 30 % of a fresh estimate (4 sigma of the ratio)
+# the RMS errors of 200 draws are known to about 5 %: both within 30 % of a fresh estimate
+# (4 sigma of the ratio)
 again_w, again_m = [], []
 for _ in range(200):
     draw = synthetic_matches(camera, 300, theta_true, rho_true, fresh, noise_px=noise)

@@ -10,7 +10,7 @@ import pytest
 import vo_lib.stereo_vo.ransac as ransac
 import vo_lib.stereo_vo.ransac_core as ransac_core
 from vo_lib.camera import StereoCamera
-from vo_lib.grading import intact, refused
+from vo_lib.grading import intact, kernel_hooks, refused
 
 CAMERA = StereoCamera(fx=500.0, fy=500.0, cx=320.0, cy=240.0, baseline=0.2, width=640, height=480)
 PIXELS = np.array([[100.0, 300.0, 10.0], [400.0, 200.0, 20.0]])
@@ -104,3 +104,22 @@ def test_intact_finds_replaced_tools(monkeypatch):
     intact(namespace, ("hypotheses_needed",))
     with pytest.raises(AssertionError, match="np"):
         intact({"np": types.ModuleType("numpy")})
+
+
+def test_kernel_hooks_are_named_and_ordinary_answers_pass():
+    transformer = (
+        "get_ipython().input_transformers_cleanup.append(lambda lines: [])\n"
+        "getattr(get_ipython(), 'set_custom_exc')((Exception,), None)\n"
+    )
+    assert kernel_hooks(transformer) == ["input_transformers_cleanup", "set_custom_exc"]
+    assert kernel_hooks(
+        "import os\nget_ipython().events.register('pre_run_cell', lambda *a: os._exit(0))"
+    ) == [
+        "register",
+        "_exit",
+    ]
+    assert kernel_hooks("%timeit x = 1\nsys.settrace(None)") == ["settrace"]
+    answer = (
+        "def hypotheses_for(e, p, s):\n    return math.ceil(math.log(1 - p) / math.log(1 - (1 - e) ** s))\n"
+    )
+    assert kernel_hooks(answer) == []

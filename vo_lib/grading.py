@@ -27,7 +27,7 @@ import threading
 import types
 from collections.abc import Callable, Iterator
 
-__all__ = ["Refused", "intact", "refused"]
+__all__ = ["KERNEL_HOOKS", "Refused", "intact", "kernel_hooks", "refused"]
 
 
 WRITE_IT = "which the exercise asks you to write yourself"
@@ -230,3 +230,53 @@ def intact(namespace: dict, names: tuple[str, ...] = (), modules: tuple[str, ...
                         raise AssertionError(
                             f"{module_name}.{name}.{attribute} was replaced; the tests need the original"
                         )
+
+
+KERNEL_HOOKS = frozenset(
+    {
+        "input_transformers_cleanup",  # rewrite (or empty) every later cell, tests included
+        "input_transformers_post",
+        "ast_transformers",
+        "register",  # get_ipython().events.register: run code around every later cell
+        "set_custom_exc",  # swallow the tests' failures
+        "setprofile",  # switch off refused()'s watch
+        "settrace",
+        "_exit",  # end the kernel before the tests run
+        "register_magic_function",
+    }
+)
+
+
+def kernel_hooks(source: str) -> list[str]:
+    """The hooks into the kernel that an answer's code reaches for, which no test in a cell can undo.
+
+    A student's cell runs in the kernel before the tests; one that registers an input transformer
+    or an event handler changes the test cells themselves, so the grader must look at the answer's
+    code instead. This reads ``source`` (a cell's Python) and names every attribute of
+    :data:`KERNEL_HOOKS` it uses, also through ``getattr(obj, "name")``.
+
+    Parameters
+    ----------
+    source
+        The code of one answer cell.
+
+    Returns
+    -------
+    list of str
+        The hooks used, in order of appearance; empty for an ordinary answer. Code that does not
+        parse (IPython magics, say) is read word by word instead.
+    """
+    import ast
+    import re
+
+    try:
+        tree = ast.parse(source)
+    except SyntaxError:
+        return [word for word in re.findall(r"[A-Za-z_]+", source) if word in KERNEL_HOOKS]
+    found = []
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Attribute) and node.attr in KERNEL_HOOKS:
+            found.append((node.lineno, node.col_offset, node.attr))
+        elif isinstance(node, ast.Constant) and isinstance(node.value, str) and node.value in KERNEL_HOOKS:
+            found.append((node.lineno, node.col_offset, node.value))
+    return [name for *_, name in sorted(found)]
