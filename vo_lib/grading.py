@@ -76,6 +76,24 @@ def refused(*targets: Callable) -> Iterator[None]:
         When refused code runs inside the block, or when the block removed the profile hook that
         watches for copies.
     """
+    functions, dispatchers, builtins = _sort_targets(targets)
+    watch = _watcher(functions, builtins)
+    swapped, emptied = _disarm(functions, dispatchers)
+    previous, previous_threads = sys.getprofile(), getattr(threading, "_profile_hook", None)
+    sys.setprofile(watch)
+    threading.setprofile(watch)
+    try:
+        yield
+        if sys.getprofile() is not watch:
+            raise Refused("the code under test switched off the check for refused functions")
+    finally:
+        sys.setprofile(previous)
+        threading.setprofile(previous_threads)
+        _rearm(swapped, emptied)
+
+
+def _sort_targets(targets) -> tuple[list, list, list]:
+    """Python functions (a dispatcher's ``py_func`` among them), Numba dispatchers, built-ins."""
     functions, dispatchers, builtins = [], [], []
     for target in targets:
         if _is_dispatcher(target):
@@ -85,11 +103,15 @@ def refused(*targets: Callable) -> Iterator[None]:
             functions.append(function)
         else:
             builtins.append(target)
-    functions = list({id(f): f for f in functions}.values())
+    return list({id(f): f for f in functions}.values()), dispatchers, builtins
+
+
+def _watcher(functions: list, builtins: list):
+    """A profile hook that raises :class:`Refused` when a refused function, or a copy of its
+    code, is called."""
     prints = {_fingerprint(f.__code__) for f in functions}
     codes = {id(f.__code__) for f in functions}
     builtin_ids = {id(b) for b in builtins}
-
     seen: dict[int, tuple[types.CodeType, bool]] = {}
 
     def copied(code: types.CodeType) -> bool:
@@ -103,6 +125,12 @@ def refused(*targets: Callable) -> Iterator[None]:
         if event == "c_call" and id(arg) in builtin_ids:
             raise Refused(f"this calls {getattr(arg, '__name__', arg)}, {WRITE_IT}")
 
+    return watch
+
+
+def _disarm(functions: list, dispatchers: list) -> tuple[list, list]:
+    """Give each function the code of :func:`_refuse` and empty each dispatcher's compiled
+    versions; returns what :func:`_rearm` puts back."""
     swapped = []
     for function in functions:
         if not function.__code__.co_freevars:
@@ -114,22 +142,16 @@ def refused(*targets: Callable) -> Iterator[None]:
         dispatcher.overloads.clear()
         dispatcher._clear()
         dispatcher._can_compile = False
-    previous, previous_threads = sys.getprofile(), getattr(threading, "_profile_hook", None)
-    sys.setprofile(watch)
-    threading.setprofile(watch)
-    try:
-        yield
-        if sys.getprofile() is not watch:
-            raise Refused("the code under test switched off the check for refused functions")
-    finally:
-        sys.setprofile(previous)
-        threading.setprofile(previous_threads)
-        for function, code in swapped:
-            function.__code__ = code
-        for dispatcher, overloads, can_compile in emptied:
-            dispatcher._can_compile = can_compile
-            for compiled in overloads:
-                dispatcher.add_overload(compiled)
+    return swapped, emptied
+
+
+def _rearm(swapped: list, emptied: list) -> None:
+    for function, code in swapped:
+        function.__code__ = code
+    for dispatcher, overloads, can_compile in emptied:
+        dispatcher._can_compile = can_compile
+        for compiled in overloads:
+            dispatcher.add_overload(compiled)
 
 
 WATCHED_MODULES = (
@@ -198,6 +220,17 @@ def intact(namespace: dict, names: tuple[str, ...] = (), modules: tuple[str, ...
     AssertionError
         Naming the first name or function found replaced.
     """
+    _constants_intact()
+    roots = _installed_roots()
+    package = __name__.partition(".")[0]
+    ours = [name for name in list(sys.modules) if name == package or name.startswith(package + ".")]
+    _namespace_intact(namespace, names, roots)
+    for module_name in (*modules, *ours):
+        if (module := sys.modules.get(module_name)) is not None:
+            _module_intact(module_name, module, roots)
+
+
+def _constants_intact() -> None:
     import math
 
     import numpy
@@ -206,30 +239,29 @@ def intact(namespace: dict, names: tuple[str, ...] = (), modules: tuple[str, ...
         for module in (numpy, math):
             if getattr(module, name) != value:
                 raise AssertionError(f"{module.__name__}.{name} was changed; the tests need the original")
-    roots = _installed_roots()
-    package = __name__.partition(".")[0]
-    ours = [name for name in list(sys.modules) if name == package or name.startswith(package + ".")]
+
+
+def _namespace_intact(namespace: dict, names: tuple[str, ...], roots: tuple[str, ...]) -> None:
     for name, value in list(namespace.items()):
         if isinstance(value, types.ModuleType) and sys.modules.get(value.__name__) is not value:
             raise AssertionError(f"{name!r} is not the module it claims to be; the tests need the original")
     for name in names:
         if not _genuine(namespace.get(name)) or _foreign(namespace.get(name), roots):
             raise AssertionError(f"{name!r} no longer names the library's own; the tests need the original")
-    for module_name in (*modules, *ours):
-        module = sys.modules.get(module_name)
-        if module is None:
+
+
+def _module_intact(module_name: str, module, roots: tuple[str, ...]) -> None:
+    for name, value in list(vars(module).items()):
+        if name.startswith("__"):
             continue
-        for name, value in list(vars(module).items()):
-            if name.startswith("__"):
-                continue
-            if _foreign(value, roots):
-                raise AssertionError(f"{module_name}.{name} was replaced; the tests need the original")
-            if isinstance(value, type) and value.__module__ == module_name:
-                for attribute, member in list(vars(value).items()):
-                    if not attribute.startswith("__") and _foreign(member, roots):
-                        raise AssertionError(
-                            f"{module_name}.{name}.{attribute} was replaced; the tests need the original"
-                        )
+        if _foreign(value, roots):
+            raise AssertionError(f"{module_name}.{name} was replaced; the tests need the original")
+        if isinstance(value, type) and value.__module__ == module_name:
+            for attribute, member in list(vars(value).items()):
+                if not attribute.startswith("__") and _foreign(member, roots):
+                    raise AssertionError(
+                        f"{module_name}.{name}.{attribute} was replaced; the tests need the original"
+                    )
 
 
 KERNEL_HOOKS = frozenset(
