@@ -194,7 +194,7 @@ def test_release_fetch_submit_collect_autograde_feedback(course):
         # the written part waits for the teacher, then counts once graded by hand (formgrader's job)
         written = gb.find_grade("square_why", ASSIGNMENT, ASSIGNMENT, "alice")
         assert written.needs_manual_grade and written.manual_score is None
-        written.manual_score = WRITTEN_POINTS
+        written.manual_score, written.needs_manual_grade = WRITTEN_POINTS, False  # as formgrader saves it
         gb.db.commit()
     with Gradebook(f"sqlite:///{teacher / 'gradebook.db'}") as gb:
         assert gb.find_submission(ASSIGNMENT, "alice").score == TEST_POINTS + WRITTEN_POINTS
