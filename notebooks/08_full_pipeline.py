@@ -646,9 +646,8 @@ def ate_rmse_of(truth, estimate):
 
 
 ate_rmse = ate_rmse_of(ex_truth, ex_estimate)
-print(
-    f"ATE {ate_rmse * 100:.3f} cm (final error {np.linalg.norm(ex_estimate[-1, :2] - ex_truth[-1, :2]) * 100:.2f} cm)"
-)
+final_miss = np.linalg.norm(ex_estimate[-1, :2] - ex_truth[-1, :2])
+print(f"ATE {ate_rmse * 100:.3f} cm (final error {final_miss * 100:.2f} cm)")
 ### END SOLUTION
 
 # %% nbgrader={"grade": true, "grade_id": "ex2_test", "locked": true, "points": 3, "schema_version": 3, "solution": false}
