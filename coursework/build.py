@@ -297,7 +297,10 @@ def feedback_leaks(course: pathlib.Path, path: pathlib.Path, student: str) -> li
         if len(line.strip()) > 20 and not line.strip().startswith("#")
     }
     shown = {line.strip() for line in re.sub(r"<[^>]+>", "", html_module.unescape(html)).splitlines()}
-    return sorted(hidden & shown)
+    # a line the student wrote in their own answer (the same call as a test's) is theirs to see
+    submitted = nbformat.read(course / "submitted" / student / path.stem / f"{path.stem}.ipynb", as_version=4)
+    own = {line.strip() for cell in submitted.cells for line in cell.source.splitlines()}
+    return sorted((hidden - own) & shown)
 
 
 def check(course: pathlib.Path, paths: list[pathlib.Path]) -> list[str]:
