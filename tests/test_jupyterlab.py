@@ -7,7 +7,8 @@ folder and then the notebook: it must open as a notebook (jupytext's viewer, by 
 override that ``jupyterlab-settings/`` installs), not in the text editor. It then runs all cells
 from the Run menu, saves with Ctrl+S, and checks that every code cell ran without an error and
 that ``git status`` is clean: saving leaves the ``.py`` file byte for byte as committed.
-Screenshots go to ``docs/_build/screenshots/jupyterlab-*.png``.
+Screenshots go to ``build/screenshots/jupyterlab-*.png`` (outside the site's build folder, which
+``python docs/build.py`` claims whole).
 
 Needs Debian's Chromium at /usr/bin/chromium and Playwright (as tests/test_site.py does); it skips
 saying which is missing.
@@ -42,7 +43,7 @@ CHROMIUM_FLAGS = [
 ]
 NOTEBOOK = "02_circular_motion_derivation.py"  # no rendering, no compiled kernel: quick to run
 SETTINGS = pathlib.Path(sys.prefix) / "share/jupyter/lab/settings/overrides.d/vo-notebooks.json"
-SCREENSHOTS = ROOT / "docs" / "_build" / "screenshots"
+SCREENSHOTS = ROOT / "build" / "screenshots"
 START_TIMEOUT_S = 120
 RUN_TIMEOUT_MS = 300_000  # the notebook's own run, on a loaded 2-core machine
 UI_TIMEOUT_MS = 60_000
