@@ -804,7 +804,7 @@ intact(globals())
 # %% [markdown]
 # ### Exercise 2 · the NEES band *(medium, 3 points)*
 #
-# Section 5 judges the filter by its NEES averaged over N runs against a 95 % χ² band. Write
+# Section 6 judges the filter by its NEES averaged over N runs against a 95 % χ² band. Write
 # `nees_band(n_runs, dim)` returning the band's (lower, upper) limits for the average NEES of a
 # `dim`-dimensional state over `n_runs` runs. Then draw 2,000 experiments, each averaging the
 # NEES of 50 runs of a *consistent* 3-D estimator (errors drawn from the covariance it reports),
@@ -943,9 +943,10 @@ intact(globals())
 # %% [markdown]
 # ### Stretch goals (not graded)
 #
-# - Replace the full Jacobians of the prediction by eq. 9's F = I and repeat section 5: what
+# - Replace the full Jacobians of the prediction by eq. 9's F = I and repeat section 6: what
 #   happens to the NEES, and why?
 # - The slip in our drives has a mean, not only noise. Augment the state with the slip fraction
 #   and estimate it online. How fast does it converge in the spot turn?
-# - Without odometry the filter predicts with constant velocity: run section 2 with
-#   `kf.predict(None)` and compare the guided matching windows.
+# - Without odometry the filter predicts with constant velocity: run section 4's drive with
+#   `kf.predict(None)` and compare the growth of the predicted covariance, which sets the size of
+#   the guided matching windows of notebook 05.
