@@ -144,7 +144,7 @@ def test_landing_page_is_the_readme_with_the_notebook_map(browser, base_url, scr
         target = f"notebooks/{nb.stem}.html"
         assert target in article_links, f"the notebook map does not link {target}"
         assert target in nav_links, f"the navigation does not list {target}"
-    for target in ("docs/errata.html", "benchmarks.html"):
+    for target in ("docs/errata.html", "docs/benchmarks.html"):
         assert target in nav_links, f"the navigation does not list {target}"
     page.close()
 
@@ -167,7 +167,10 @@ def test_notebook_page_shows_figures_maths_and_outputs(browser, base_url, screen
 @pytest.mark.parametrize(
     "path",
     [
-        "benchmarks.html",
+        "docs/benchmarks.html",
+        "docs/command_line.html",
+        "docs/outputs.html",
+        "docs/course.html",
         "docs/errata.html",
         "data/README.html",
         *(f"notebooks/{nb.stem}.html" for nb in NOTEBOOKS),
