@@ -908,7 +908,9 @@ def test_signals_leave_nothing_and_print_one_line(tmp_path, args, signum, code, 
     wait_for_temporary(tmp_path, proc)
     proc.send_signal(signum)
     _, err = proc.communicate(timeout=60)
-    assert proc.returncode == code, err
+    # 128 + N, or ended by the signal itself (a shell reports both as 128 + N): the latter when
+    # the interrupt is raised again at interpreter exit, after the command has cleaned up
+    assert proc.returncode in (code, -signum), err
     assert len(err.strip().splitlines()) == 1 and phrase in err, err
     assert temporaries(tmp_path) == [] and not (tmp_path / args[args.index("--out") + 1]).exists()
     assert checksums(tmp_path, ()) == before
