@@ -1,4 +1,4 @@
-"""The pipeline on rendered samples (in memory): the acceptance figures of the pipeline issue."""
+"""The pipeline on rendered samples (in memory): the figures it must reach on each kind of drive."""
 
 import functools
 import math
