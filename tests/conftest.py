@@ -22,6 +22,32 @@ ROOT = pathlib.Path(__file__).resolve().parents[1]
 #: ``VO_LIB_REALDATA``, which the test kernel gets when the folder exists and it is not set.
 REALDATA = ROOT.parent / "shared" / "realdata"
 NOTEBOOK_KERNEL = "python3"  # the kernel every notebook names (tests/test_kernel_name.py)
+#: Debian's Chromium and the flags the browser tests start it with: headless, and no attempt to
+#: reach the network, which this machine does not have.
+CHROMIUM = pathlib.Path("/usr/bin/chromium")
+CHROMIUM_FLAGS = [
+    "--headless",
+    "--no-sandbox",
+    "--disable-gpu",
+    "--disable-quic",
+    "--no-first-run",
+    "--disable-background-networking",
+    "--disable-component-update",
+    "--disable-sync",
+]
+
+
+def stop_server(proc, log) -> None:
+    """Terminate a server a test started (killed if it does not stop in 30 s) and close its log."""
+    import subprocess
+
+    proc.terminate()
+    try:
+        proc.wait(timeout=30)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        proc.wait(timeout=30)
+    log.close()
 
 
 def pytest_configure(config):

@@ -21,7 +21,7 @@ import uuid
 
 import pytest
 import websocket
-from conftest import NOTEBOOK_KERNEL
+from conftest import NOTEBOOK_KERNEL, stop_server
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 OPENED = ("notebooks/01_crawler_odometry.py", "notebooks/06_one_point_ransac.py")
@@ -91,13 +91,7 @@ def server(tmp_path):
                 time.sleep(0.5)
         yield running
     finally:
-        proc.terminate()
-        try:
-            proc.wait(timeout=30)
-        except subprocess.TimeoutExpired:
-            proc.kill()
-            proc.wait(timeout=30)
-        log.close()
+        stop_server(proc, log)
 
 
 def execute(server: Server, kernel_id: str, code: str) -> str:

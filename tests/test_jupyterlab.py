@@ -28,19 +28,9 @@ import urllib.request
 
 import jupytext
 import pytest
+from conftest import CHROMIUM, CHROMIUM_FLAGS, stop_server
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
-CHROMIUM = pathlib.Path("/usr/bin/chromium")
-CHROMIUM_FLAGS = [
-    "--headless",
-    "--no-sandbox",
-    "--disable-gpu",
-    "--disable-quic",
-    "--no-first-run",
-    "--disable-background-networking",
-    "--disable-component-update",
-    "--disable-sync",
-]
 NOTEBOOK = "02_circular_motion_derivation.py"  # no rendering, no compiled kernel: quick to run
 SETTINGS = pathlib.Path(sys.prefix) / "share/jupyter/lab/settings/overrides.d/vo-notebooks.json"
 SCREENSHOTS = ROOT / "build" / "screenshots"
@@ -132,13 +122,7 @@ def lab(clone, tmp_path):
                 time.sleep(0.5)
         yield f"{base}/lab?token={token}"
     finally:
-        proc.terminate()
-        try:
-            proc.wait(timeout=30)
-        except subprocess.TimeoutExpired:
-            proc.kill()
-            proc.wait(timeout=30)
-        log.close()
+        stop_server(proc, log)
 
 
 def test_the_settings_override_is_installed():

@@ -20,20 +20,10 @@ import threading
 from html import unescape
 
 import pytest
+from conftest import CHROMIUM, CHROMIUM_FLAGS
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 SITE = pathlib.Path(os.environ.get("VO_NOTEBOOKS_SITE", ROOT / "docs" / "_build" / "html"))
-CHROMIUM = pathlib.Path("/usr/bin/chromium")
-CHROMIUM_FLAGS = [
-    "--headless",
-    "--no-sandbox",
-    "--disable-gpu",
-    "--disable-quic",
-    "--no-first-run",
-    "--disable-background-networking",
-    "--disable-component-update",
-    "--disable-sync",
-]
 LANDING = "index.html"
 # Two notebook pages with figures, maths typeset from Markdown and sympy output, and widgets.
 NOTEBOOK_PAGES = ["notebooks/01_crawler_odometry.html", "notebooks/02_circular_motion_derivation.html"]
