@@ -232,17 +232,16 @@ def error_report(result: PipelineResult, truth_planar: np.ndarray, odometry_plan
     """Errors of the estimate (and of odometry alone) against the ground truth."""
     from vo_lib.evaluation import ate_planar, final_error, is_spot_turn, turned_degrees
 
-    est = result.poses
-    dist = final_error(truth_planar, est).distance_m
+    trajectories = {"vo": result.poses, "odometry": odometry_planar}
+    finals = {label: final_error(truth_planar, t) for label, t in trajectories.items() if t is not None}
+    dist = finals["vo"].distance_m
     report = {
         "distance_m": dist,
         "turned_deg": turned_degrees(truth_planar),
         "spot_turn": is_spot_turn(truth_planar),
     }
-    for label, traj in (("vo", est), ("odometry", odometry_planar)):
-        if traj is None:
-            continue
-        final = final_error(truth_planar, traj)
+    for label, final in finals.items():
+        traj = trajectories[label]
         heading = np.degrees(np.abs(wrap_angle(traj[:, 2] - truth_planar[:, 2])))
         report[label] = {
             "final_position_error_m": final.position_m,
