@@ -12,10 +12,11 @@ repository):
 - ``grading/``: nbgrader's course folder (``source/`` with solutions and tests, ``release/``,
   ``gradebook.db``, ``nbgrader_config.py``), where ``nbgrader autograde`` grades submissions.
 
-Each is built under a temporary name beside its destination and renamed when complete. A
-destination is replaced only if it holds exactly the files an earlier build wrote (its marker
-lists them with their checksums), so submissions copied into ``grading/`` or notebooks a student
-edited in ``student/`` are never overwritten.
+Each is built under a temporary name beside its destination and renamed when complete, under the
+output rules of ``vo_lib.outputs``. A destination is replaced only if it holds exactly the files
+an earlier build wrote (its marker ``.vo_lib_output.json`` lists them with their checksums), so
+submissions copied into ``grading/`` or notebooks a student edited in ``student/`` are never
+overwritten.
 
 ``--check`` then autogrades, in a temporary copy of the course folder, the solutions (every test
 must pass) and the unanswered student edition (every exercise must score zero while every cell
@@ -25,7 +26,7 @@ outside the exercises runs without error).
 from __future__ import annotations
 
 import argparse
-import hashlib
+import contextlib
 import html as html_module
 import json
 import os
@@ -43,11 +44,14 @@ import jupytext
 import nbformat
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))  # this checkout's vo_lib, whatever copy is installed
+from vo_lib.outputs import OutputError, OutputFolder, check_target  # noqa: E402
+
 NOTEBOOK_DIR = ROOT / "notebooks"
 NOTEBOOK_GLOB = "[0-9][0-9]_*.py"
 CONFIG = pathlib.Path(__file__).with_name("nbgrader_config.py")
 STUDENT_DIR, GRADING_DIR, HANDOUT_DIR = "student", "grading", "handout"
-MARKER = ".coursework_build.json"
+WRITTEN_BY = "python coursework/build.py"
 SUBMISSIONS_DIR = pathlib.Path(__file__).with_name("submissions")
 ADVERSARIAL_KINDS = ("constant", "library", "wrong")  # and "unanswered": the release itself
 # a line that opens a solution, hidden tests or a mark scheme (not a mention of one in prose)
@@ -158,51 +162,12 @@ def write_course(course: pathlib.Path, paths: list[pathlib.Path]) -> None:
             raise BuildError(f"{path.name}: the student edition still holds solution text: {left[0]!r}")
 
 
-def file_checksums(folder: pathlib.Path) -> dict[str, str]:
-    """sha256 of every file under ``folder`` but the marker, by path relative to it."""
-    return {
-        p.relative_to(folder).as_posix(): hashlib.sha256(p.read_bytes()).hexdigest()
-        for p in sorted(folder.rglob("*"))
-        if p.is_file() and p.name != MARKER
-    }
-
-
 def refuse_unless_replaceable(dest: pathlib.Path) -> None:
     """Raise UsageError unless ``dest`` is absent or holds exactly what an earlier build wrote."""
-    if not dest.exists():
-        return
-    marker = dest / MARKER
-    if not marker.is_file():
-        raise UsageError(f"{dest}: exists and was not written by coursework/build.py; move it or use --out")
     try:
-        written = json.loads(marker.read_text())["files"]
-        if not isinstance(written, dict):
-            raise TypeError("files is not a mapping")
-    except (ValueError, KeyError, TypeError) as exc:
-        raise UsageError(f"{dest}: its {MARKER} is damaged ({exc}); move the folder or use --out") from None
-    now = file_checksums(dest)
-    changed = sorted(
-        (set(written) ^ set(now)) | {k for k in written.keys() & now.keys() if written[k] != now[k]}
-    )
-    if changed:
-        raise UsageError(f"{dest}: {changed[0]} was added or changed since the build; move it or use --out")
-
-
-def publish(built: pathlib.Path, dest: pathlib.Path) -> None:
-    """Rename the finished folder ``built`` to ``dest``, replacing an earlier, unchanged build."""
-    refuse_unless_replaceable(dest)
-    if not dest.exists():
-        os.replace(built, dest)
-        return
-    old = pathlib.Path(tempfile.mkdtemp(prefix=f".{dest.name}.old-", dir=dest.parent))
-    os.replace(dest, old / dest.name)
-    try:
-        os.replace(built, dest)
-    except OSError:
-        os.replace(old / dest.name, dest)
-        raise
-    finally:
-        shutil.rmtree(old, ignore_errors=True)
+        check_target(dest, written_by=WRITTEN_BY)
+    except OutputError as exc:
+        raise UsageError(str(exc)) from None
 
 
 def exercise_cell(cell: nbformat.NotebookNode) -> bool:
@@ -455,32 +420,24 @@ def handout_leaks(folder: pathlib.Path, lines: set[str]) -> list[str]:
 
 def build(out: pathlib.Path, paths: list[pathlib.Path], check_paths: list[pathlib.Path]) -> None:
     """Write ``out/grading`` and ``out/student``; autograde ``check_paths`` both ways first."""
-    for name in (GRADING_DIR, STUDENT_DIR, HANDOUT_DIR):  # refuse before an hour of work, not after it
-        refuse_unless_replaceable(out / name)
-    temporaries = []
-    try:
-        course = pathlib.Path(tempfile.mkdtemp(prefix=f".{GRADING_DIR}.build-", suffix=".tmp", dir=out))
-        temporaries.append(course)
-        write_course(course, paths)
+    with contextlib.ExitStack() as stack:  # refused before an hour of work, not after it
+        try:
+            course, student, handout = (
+                stack.enter_context(OutputFolder(out / name, WRITTEN_BY, checksums=True))
+                for name in (GRADING_DIR, STUDENT_DIR, HANDOUT_DIR)
+            )
+        except OutputError as exc:
+            raise UsageError(str(exc)) from None
+        write_course(course.path, paths)
         if check_paths:
-            for line in check(course, check_paths):
+            for line in check(course.path, check_paths):
                 print(line)
-        student = pathlib.Path(tempfile.mkdtemp(prefix=f".{STUDENT_DIR}.build-", suffix=".tmp", dir=out))
-        temporaries.append(student)
-        shutil.rmtree(student)
-        shutil.copytree(course / "release", student)
-        handout = pathlib.Path(tempfile.mkdtemp(prefix=f".{HANDOUT_DIR}.build-", suffix=".tmp", dir=out))
-        temporaries.append(handout)
-        write_handout(handout, course, paths)
-        for name, built in ((GRADING_DIR, course), (STUDENT_DIR, student), (HANDOUT_DIR, handout)):
-            built.joinpath(MARKER).write_text(json.dumps({"files": file_checksums(built)}, indent=1))
+        shutil.copytree(course.path / "release", student.path, dirs_exist_ok=True)
+        write_handout(handout.path, course.path, paths)
+        for name in (GRADING_DIR, STUDENT_DIR, HANDOUT_DIR):  # none is replaced unless all may be
             refuse_unless_replaceable(out / name)
-        publish(course, out / GRADING_DIR)
-        publish(student, out / STUDENT_DIR)
-        publish(handout, out / HANDOUT_DIR)
-    finally:
-        for folder in temporaries:
-            shutil.rmtree(folder, ignore_errors=True)
+        for folder in (course, student, handout):
+            folder.commit()
 
 
 class OneLineParser(argparse.ArgumentParser):
@@ -522,7 +479,7 @@ def main(argv: list[str] | None = None) -> int:
         if missing:
             raise UsageError(f"--check {missing[0][:2]}: that notebook is not among those built")
         build(args.out.resolve(), paths, check_paths)
-    except UsageError as exc:
+    except (UsageError, OutputError) as exc:
         print(f"coursework/build.py: {exc}", file=sys.stderr)
         return EXIT_USAGE
     except BuildError as exc:

@@ -4,7 +4,8 @@ website (Sphinx, MyST-NB, the book theme).
     python docs/build.py [--out DIR] [--notebooks DIR] [--student] [--jobs N] [--rerun]
 
 Everything is written under ``--out`` (default ``docs/_build``; ``docs/_build/student`` with
-``--student``), which holds a marker file so that no other folder is ever written into:
+``--student``), a folder the build claims under the output rules of ``vo_lib.outputs``: new,
+empty or built before (its marker ``.vo_lib_output.json`` says so), never any other folder:
 
 - ``source/``: the pages Sphinx reads, copied from the repository (README, docs pages,
   data/README.md) and from ``--notebooks`` (default ``notebooks/``);
@@ -42,11 +43,16 @@ DOCS = ROOT / "docs"
 sys.path.insert(0, str(DOCS))  # execute_notebook.py, beside this file (already there when run as a script)
 from execute_notebook import KERNEL_NAME, read_notebook  # noqa: E402
 
+sys.path.insert(0, str(ROOT))  # this checkout's vo_lib, whatever copy is installed
+from vo_lib.outputs import MARKER, OutputError, claim_folder, swap_in  # noqa: E402
+
 DEFAULT_OUT = DOCS / "_build"
 STUDENT_SUBFOLDER = "student"
 NOTEBOOK_GLOB = "[0-9][0-9]_*.py"  # the notebooks tests/test_notebooks.py executes
 RELEASE_GLOB = "[0-9][0-9]_*/[0-9][0-9]_*.ipynb"  # the student edition, as coursework/build.py writes it
-MARKER = ".vo_notebooks_site"
+WRITTEN_BY = "python docs/build.py"
+#: The marker of a build folder from before vo_lib.outputs marked it: claimed as the build's own.
+LEGACY_MARKER = ".vo_notebooks_site"
 CONF_STAMP = "conf.py.sha256"  # in doctrees/: the conf.py the pages were read with
 # Pages of the site that are files of the repository: path in the site's source tree -> file.
 PAGES = {
@@ -180,26 +186,14 @@ def student_copy(release: pathlib.Path, copy: pathlib.Path) -> None:
 
 
 def claim_build_folder(out: pathlib.Path) -> None:
-    """Make ``out`` ours: new, empty, or marked by an earlier build; any other folder is refused."""
-    if out.exists() and not out.is_dir():
-        raise UsageError(f"--out {out}: exists and is not a folder")
-    if out.is_dir() and any(out.iterdir()) and not (out / MARKER).is_file():
-        raise UsageError(f"--out {out}: not empty and not a site build folder (no {MARKER} in it)")
+    """Make ``out`` ours: new, empty, or built before; any other folder is one UsageError."""
+    legacy = (out / LEGACY_MARKER).is_file() and not (out / MARKER).exists()
     try:
-        out.mkdir(parents=True, exist_ok=True)
-        (out / MARKER).write_text("written by python docs/build.py; everything here is regenerated\n")
-    except PermissionError:
-        raise UsageError(f"--out {out}: not writable") from None
-
-
-def replace_folder(new: pathlib.Path, target: pathlib.Path) -> None:
-    """Put the complete folder ``new`` in place of ``target`` (renames, then removes the old one)."""
-    old = target.with_name(target.name + ".old")
-    shutil.rmtree(old, ignore_errors=True)
-    if target.exists():
-        target.rename(old)
-    new.rename(target)
-    shutil.rmtree(old, ignore_errors=True)
+        claim_folder(out, WRITTEN_BY, force=legacy, option="--out")
+    except OutputError as exc:
+        raise UsageError(str(exc)) from None
+    if legacy:
+        (out / LEGACY_MARKER).unlink()
 
 
 def lay_out_sources(out: pathlib.Path, notebooks: list[pathlib.Path]) -> pathlib.Path:
@@ -222,7 +216,7 @@ def lay_out_sources(out: pathlib.Path, notebooks: list[pathlib.Path]) -> pathlib
             reading_copy(original, copy)
         else:
             shutil.copy2(original, copy)
-    replace_folder(staging, tree)
+    swap_in(staging, tree)
     return tree
 
 
@@ -402,7 +396,7 @@ def run_sphinx(out: pathlib.Path, tree: pathlib.Path, jobs: int, title: str) -> 
         raise BuildError(f"Sphinx reported errors or warnings (exit {returncode}; see above)")
     conf_stamp.write_text(conf_hash)
     site = out / "html"
-    replace_folder(staging, site)
+    swap_in(staging, site)
     return site
 
 

@@ -1235,3 +1235,47 @@ def test_a_full_disk_during_a_run_names_out_not_a_temporary(template, tmp_path, 
         "python -m vo_lib run: error: --out out: no space left on device; nothing was written"
     ]
     assert not (ws / "out").exists() and temporaries(ws) == [] and checksums(ws, ()) == before
+
+
+def test_a_checksummed_folder_is_replaced_only_while_every_file_is_as_written(tmp_path):
+    from vo_lib.outputs import OutputError, OutputFolder, check_target, read_marker
+
+    def write(text: str) -> None:
+        with OutputFolder(tmp_path / "book", "book build", checksums=True) as out:
+            (out.path / "deep").mkdir()
+            (out.path / "deep" / "page.txt").write_text(text)
+            out.commit()
+
+    write("one")
+    assert read_marker(tmp_path / "book")["files"] == {"deep/page.txt": hashlib.sha256(b"one").hexdigest()}
+    write("two")  # unchanged since written: replaced
+    assert (tmp_path / "book" / "deep" / "page.txt").read_text() == "two"
+    (tmp_path / "book" / "deep" / "answers.txt").write_text("a student's")
+    with pytest.raises(OutputError, match="deep/answers.txt was added, changed or removed since"):
+        write("three")
+    (tmp_path / "book" / "deep" / "answers.txt").unlink()
+    (tmp_path / "book" / "deep" / "page.txt").unlink()
+    with pytest.raises(OutputError, match="deep/page.txt was added, changed or removed since"):
+        check_target(tmp_path / "book", written_by="book build")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["book"]  # no temporary left
+
+
+def test_a_folder_being_written_is_neither_written_nor_replaced_by_another_command(tmp_path):
+    from vo_lib.outputs import OutputError, OutputFolder, claim_folder, swap_in, writing
+
+    folder = claim_folder(tmp_path / "rows", "vo_lib sweep toy")
+    with writing(folder, option="--out"):
+        with pytest.raises(OutputError, match="--out .*rows: a running command is writing to this folder"):
+            with writing(folder, option="--out"):
+                pass
+        with pytest.raises(OutputError, match="a running command is reading this folder"):
+            OutputFolder(folder, "vo_lib sweep toy")
+    with writing(folder):  # released
+        pass
+    done = tmp_path / "done"
+    done.mkdir()
+    (done / "a").write_text("new")
+    swap_in(done, folder)  # a finished folder renamed over the old one
+    assert [p.name for p in folder.iterdir()] == ["a"] and sorted(p.name for p in tmp_path.iterdir()) == [
+        "rows"
+    ]

@@ -23,6 +23,8 @@ import jupytext
 import nbformat
 import pytest
 
+from vo_lib.outputs import MARKER, OutputFolder
+
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 NOTEBOOKS = sorted((ROOT / "notebooks").glob("[0-9][0-9]_*.py"))
 AUTOGRADED_IN_SUITE = ("03",)  # a small, quick notebook; .ci/run autogrades every one
@@ -129,13 +131,37 @@ def test_build_refuses_a_folder_it_did_not_write_or_that_changed(tmp_path):
     folder = tmp_path / "student"
     folder.mkdir()
     (folder / "notes.txt").write_text("mine")
-    with pytest.raises(build.UsageError, match="not written by coursework/build.py"):
+    with pytest.raises(build.UsageError, match="it was not written by this program"):
         build.refuse_unless_replaceable(folder)
-    (folder / build.MARKER).write_text(json.dumps({"files": build.file_checksums(folder)}))
+    folder.joinpath("notes.txt").unlink()
+    with OutputFolder(folder, build.WRITTEN_BY, checksums=True) as out:  # as a build writes it
+        (out.path / "notes.txt").write_text("mine")
+        (out.path / "sub").mkdir()
+        (out.path / "sub" / "a.ipynb").write_text("{}")
+        out.commit()
     build.refuse_unless_replaceable(folder)  # unchanged: may be replaced
     (folder / "notes.txt").write_text("edited")
-    with pytest.raises(build.UsageError, match="notes.txt was added or changed"):
+    with pytest.raises(build.UsageError, match="notes.txt was added, changed or removed"):
         build.refuse_unless_replaceable(folder)
+    (folder / "notes.txt").write_text("mine")
+    (folder / "sub" / "submitted.ipynb").write_text("{}")  # a submission copied in
+    with pytest.raises(build.UsageError, match="sub/submitted.ipynb was added"):
+        build.refuse_unless_replaceable(folder)
+
+
+def test_a_rebuild_replaces_its_own_build_and_refuses_over_collected_submissions(tmp_path):
+    script = [sys.executable, str(ROOT / "coursework" / "build.py"), "03", "--out", str(tmp_path)]
+    for _ in range(2):  # the second build replaces the first
+        proc = subprocess.run(script, capture_output=True, text=True, timeout=600)
+        assert proc.returncode == 0, proc.stderr[-3000:]
+    submitted = tmp_path / "grading" / "submitted" / "ada" / "03" / "03.ipynb"
+    submitted.parent.mkdir(parents=True)
+    submitted.write_text("{}")
+    proc = subprocess.run(script, capture_output=True, text=True, timeout=600)
+    assert proc.returncode == 2 and len(proc.stderr.strip().splitlines()) == 1, proc.stderr
+    assert "grading: the folder exists and submitted/ada/03/03.ipynb was added" in proc.stderr
+    assert submitted.read_text() == "{}"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["grading", "handout", "student"]  # no temporary
 
 
 def test_bad_arguments_exit_2_with_one_line(tmp_path):
@@ -301,10 +327,10 @@ def test_a_folder_that_is_not_writable_or_a_damaged_marker_is_one_line_exit_2(tm
     monkeypatch.undo()
     folder = tmp_path / "student"
     folder.mkdir()
-    (folder / build.MARKER).write_text("{ not json")
+    (folder / MARKER).write_text("{ not json")
     with pytest.raises(build.UsageError, match="is damaged"):
         build.refuse_unless_replaceable(folder)
-    (folder / build.MARKER).write_text('{"files": 3}')
+    (folder / MARKER).write_text(json.dumps({"written_by": build.WRITTEN_BY, "contents": [], "files": 3}))
     with pytest.raises(build.UsageError, match="is damaged"):
         build.refuse_unless_replaceable(folder)
 

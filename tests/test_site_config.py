@@ -107,8 +107,29 @@ def test_a_folder_that_is_not_a_build_folder_is_refused_untouched(build_script, 
     (precious / "chapter1.tex").write_text("mine")
     assert build_script.main(["--out", str(precious)]) == 2
     err = capsys.readouterr().err
-    assert "not a site build folder" in err and err.count("\n") == 1, err
+    assert "the folder exists and it was not written by this program" in err and err.count("\n") == 1, err
     assert [p.name for p in precious.iterdir()] == ["chapter1.tex"]
+
+
+def test_the_build_folder_is_claimed_once_and_kept(build_script, tmp_path):
+    """An earlier build (marked, or with the marker of builds before vo_lib.outputs) is the build's
+    own and is kept with its caches; another command's output is not."""
+    from vo_lib.outputs import MARKER, read_marker
+
+    out = tmp_path / "site"
+    build_script.claim_build_folder(out)
+    (out / ".jupyter_cache").mkdir()
+    build_script.claim_build_folder(out)  # claimed again: the cache stays
+    assert read_marker(out)["written_by"] == build_script.WRITTEN_BY and (out / ".jupyter_cache").is_dir()
+    old = tmp_path / "old"
+    old.mkdir()
+    (old / build_script.LEGACY_MARKER).write_text("written by python docs/build.py\n")
+    (old / "html").mkdir()
+    build_script.claim_build_folder(old)
+    assert sorted(p.name for p in old.iterdir()) == [MARKER, "html"]
+    (out / MARKER).write_text('{"written_by": "vo_lib run", "contents": []}')
+    with pytest.raises(build_script.UsageError, match="holds the output of `vo_lib run`"):
+        build_script.claim_build_folder(out)
 
 
 def test_an_exception_in_a_notebook_fails_the_build_in_one_line(build_script, tmp_path, capsys):
@@ -132,7 +153,7 @@ def test_an_out_folder_that_is_not_writable_is_a_usage_error(build_script, tmp_p
         raise PermissionError(13, "Permission denied")
 
     monkeypatch.setattr(pathlib.Path, "mkdir", refuse)
-    with pytest.raises(build_script.UsageError, match="not writable"):
+    with pytest.raises(build_script.UsageError, match="cannot write there"):
         build_script.claim_build_folder(tmp_path / "site")
 
 

@@ -20,6 +20,13 @@ The rules (every command that writes follows them):
   into exceptions so that this happens), and a temporary folder left by a process that no longer
   runs (killed, power cut) is removed by the next write beside it, with a notice.
 * **Permissions follow the umask**, for folders as for files.
+
+The parts: :func:`check_target` (may this folder be written?), :class:`OutputFolder` (a folder
+written whole; ``checksums=True`` records every file's checksum, so that a file edited or added
+there since keeps the folder from being replaced), :func:`claim_folder` (a folder kept and
+updated over many runs, such as a build folder with its caches), :func:`swap_in` (a finished
+folder renamed into place), :func:`writing` and :func:`reading` (the locks), :func:`write_atomic`,
+:func:`read_marker`, :func:`remove_stale_temporaries`, :func:`notice` and :class:`OutputError`.
 """
 
 from __future__ import annotations
@@ -113,19 +120,37 @@ def _describe(folder: Path) -> str:
     return f"{files} file{'s' * (files != 1)} in {folders + 1} folder{'s' * (folders > 0)}, {amount}"
 
 
-def _owned_names(folder: Path, has_marker: bool, written_by: str) -> set[str] | str:
+def file_checksums(folder) -> dict[str, str]:
+    """sha256 of every file under ``folder`` but the marker, by path relative to it."""
+    folder = Path(folder)
+    return {
+        p.relative_to(folder).as_posix(): hashlib.sha256(p.read_bytes()).hexdigest()
+        for p in sorted(folder.rglob("*"))
+        if p.is_file() and p.name != MARKER
+    }
+
+
+def _owned_names(folder: Path, has_marker: bool, written_by: str) -> set[str] | str | None:
     """The names ``written_by`` wrote into ``folder`` by its marker (or, for a sample sequence
-    from before markers, by its manifest); a string saying why the folder is not its own."""
+    from before markers, by its manifest); a string saying why the folder is not its own; None
+    when the marker's checksums show every file as written."""
     if has_marker:
         try:
             data = json.loads((folder / MARKER).read_text(encoding="utf-8"))
             contents = data["contents"]
             contents = ANY_CONTENTS if contents == ANY_CONTENTS else set(contents)
             writer = str(data["written_by"])
-        except (OSError, ValueError, KeyError, TypeError):
+            files = data.get("files")
+            if files is not None and not isinstance(files, dict):
+                raise TypeError("files is not a mapping")
+        except (OSError, ValueError, KeyError, TypeError, AttributeError):
             return f"its marker {MARKER} is damaged"
         if writer != written_by:
             return f"it holds the output of `{writer}`, which `{written_by}` does not replace"
+        if files is not None:
+            now = file_checksums(folder)
+            changed = sorted(k for k in files.keys() | now.keys() if files.get(k) != now.get(k))
+            return f"{changed[0]} was added, changed or removed since it was written" if changed else None
         return contents
     try:
         manifest = json.loads((folder / "manifest.json").read_text(encoding="utf-8"))
@@ -147,7 +172,7 @@ def foreign_content(folder: Path, written_by: str) -> str | None:
     if not entries:
         return None
     contents = _owned_names(folder, MARKER in entries, written_by)
-    if contents == ANY_CONTENTS:  # a folder claimed whole (claim_folder): all in it is the command's
+    if contents is None or contents == ANY_CONTENTS:  # checksums match, or a claimed folder
         return None
     if isinstance(contents, str):
         return contents
@@ -273,21 +298,28 @@ def reading(folder):
 
 
 @contextlib.contextmanager
-def _exclusive(real: Path, target, option: str | None):
+def _exclusive(real: Path, target, option: str | None, doing: str = "reading"):
     """The exclusive lock on an existing folder ``real`` (nothing if it does not exist yet);
-    :class:`OutputError` if a running command reads it."""
+    :class:`OutputError` if a running command reads or writes it."""
     try:
         fd = _lock(real, shared=False)
     except BlockingIOError:
         label = f"{option} {target}" if option else str(target)
         raise OutputError(
-            f"{label}: a running command is reading this folder; try again when it has finished"
+            f"{label}: a running command is {doing} this folder; try again when it has finished"
         ) from None
     try:
         yield
     finally:
         if fd is not None:
             os.close(fd)
+
+
+def writing(folder, option: str | None = None):
+    """Hold an exclusive lock on ``folder`` while a command updates it in place (a sweep appending
+    its rows): a second command that would read, write or replace it meanwhile is refused with
+    :class:`OutputError`. A context manager; where folders cannot be locked nothing is held."""
+    return _exclusive(Path(folder), folder, option, doing="writing to")
 
 
 def _lock(folder: Path, shared: bool) -> int | None:
@@ -404,6 +436,8 @@ def swap_in(complete: Path, target: Path) -> None:
 class OutputFolder:
     """A folder written whole: checked on entry, filled in :attr:`path` (a temporary sibling), put
     in place by :meth:`commit`; on any exception (or without a commit) nothing is left behind.
+    With ``checksums`` the marker records every file's sha256, and the folder is replaced later
+    only while every file is as written (no file added, edited or removed).
 
     ::
 
@@ -412,9 +446,12 @@ class OutputFolder:
             out.commit(seed=0)
     """
 
-    def __init__(self, target, written_by: str, *, force=False, inputs=(), keep=None, option=None):
+    def __init__(
+        self, target, written_by: str, *, force=False, inputs=(), keep=None, option=None, checksums=False
+    ):
         self.target = Path(target)
         self.written_by = written_by
+        self.checksums = checksums
         self.committed = False
         self._check = dict(written_by=written_by, force=force, inputs=tuple(inputs), keep=keep, option=option)
         self.replacing = check_target(self.target, **self._check)
@@ -454,6 +491,8 @@ class OutputFolder:
             raise KeyboardInterrupt
         names = sorted(p.name for p in self.path.iterdir())
         marker = {"written_by": self.written_by, "contents": names, **details}
+        if self.checksums:
+            marker["files"] = file_checksums(self.path)
         (self.path / MARKER).write_text(json.dumps(marker, indent=2, sort_keys=True) + "\n", encoding="utf-8")
         replacing = check_target(self.target, **self._check)
         with _exclusive(self.real, self.target, option=self._check["option"]):
