@@ -11,6 +11,7 @@ import sys
 from pathlib import Path
 
 import cloudpickle
+import numpy as np
 import pytest
 
 from vo_lib.cli.evaluate_all import find_sequences
@@ -21,9 +22,9 @@ from vo_lib.cli.sweep import (
     TABLE,
     Experiment,
     SweepError,
+    aggregate,
     local_cluster,
     run_sweep,
-    scheduler_address,
     task_key,
 )
 
@@ -119,17 +120,27 @@ def test_folder_rules(tmp_path):
     assert not (tmp_path / "twice").exists()
 
 
-def test_scheduler_address(monkeypatch):
+@pytest.mark.parametrize("bad", ["nonsense", "tcp://host", "http://host:80/x"])
+def test_a_malformed_scheduler_address_is_one_line_and_writes_nothing(bad, tmp_path, monkeypatch):
+    """Dask reads the address (--scheduler, or DASK_SCHEDULER_ADDRESS when none is given)."""
     monkeypatch.delenv("DASK_SCHEDULER_ADDRESS", raising=False)
-    assert scheduler_address(None) is None
-    assert scheduler_address("tcp://10.0.0.5:8786") == "tcp://10.0.0.5:8786"
-    assert scheduler_address("node7:8786") == "tcp://node7:8786"
-    assert scheduler_address(" tls://[::1]:8786 ") == "tls://[::1]:8786"
-    monkeypatch.setenv("DASK_SCHEDULER_ADDRESS", "tcp://head:8786")
-    assert scheduler_address(None) == "tcp://head:8786"
-    for bad in ("nonsense", "tcp://host", "tcp://host:99999", "http://host:80/x", "a b:5", "tcp://h:0"):
-        with pytest.raises(SweepError, match="expected a scheduler address"):
-            scheduler_address(bad)
+    with pytest.raises(SweepError, match=f"--scheduler '{bad}': expected a scheduler address like tcp"):
+        run_sweep(TOY, [{"seed": 0}], tmp_path / "out", scheduler=bad)
+    monkeypatch.setenv("DASK_SCHEDULER_ADDRESS", bad)
+    with pytest.raises(SweepError, match=f"DASK_SCHEDULER_ADDRESS '{bad}': expected a scheduler address"):
+        run_sweep(TOY, [{"seed": 0}], tmp_path / "out", workers=1)
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_the_aggregate_groups_the_other_parameters_and_skips_failed_rows(tmp_path):
+    tasks = [{"size": size, "seed": s, "fail": True} for size in (10, 20) for s in range(4)]
+    result = run_sweep(TOY, tasks, tmp_path / "toy", workers=1, context=0)
+    stats = aggregate(result.rows)
+    assert list(stats.index) == ["size=10, fail=True", "size=20, fail=True"]
+    # seeds 0, 1, 3 (seed 2 fails): squares 0, 1, 9
+    assert stats["mean"]["square"].tolist() == pytest.approx([10 / 3] * 2)
+    assert stats["std"]["square"].tolist() == pytest.approx([np.std([0, 1, 9])] * 2)
+    assert stats["n"]["square"].tolist() == [3, 3]
 
 
 @pytest.mark.parametrize(

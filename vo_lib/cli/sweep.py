@@ -9,28 +9,28 @@ Where tasks run
     ``workers=1`` and no scheduler: one after the other in this process. ``workers=N > 1``: a
     ``dask.distributed`` LocalCluster of N worker processes with one thread each. ``scheduler``
     (``tcp://host:8786``), or the ``DASK_SCHEDULER_ADDRESS`` environment variable when none is
-    given: an existing Dask cluster, whose workers must have ``vo_lib`` installed.
+    given: an existing Dask cluster, whose workers must have ``vo_lib`` installed. The tasks go
+    to Dask with ``Client.map`` and come back with ``as_completed``; Dask reads the address.
 
 What is written
     The output folder (rules of :mod:`vo_lib.outputs`: new, empty or written by this
     program; marker ``.vo_lib_output.json``) holds ``rows.jsonl``, one finished task per line,
     appended as each task finishes and keyed by a hash of the experiment's name and the task's
     parameters, and ``results.csv``, the table of the whole grid (one row per task: parameters,
-    figures, wall seconds, error text), replaced atomically when the sweep ends or stops. Running
-    the same sweep into the same folder again skips the rows already finished, so an interrupted
-    sweep finishes only the missing ones; rows that failed are run again.
+    figures, wall seconds, error text; written by pandas), replaced atomically when the sweep ends
+    or stops. Running the same sweep into the same folder again skips the rows already finished,
+    so an interrupted sweep finishes only the missing ones; rows that failed are run again. The
+    folder is locked while a sweep writes it (:func:`vo_lib.outputs.writing`).
 
 A task that raises becomes a row with its error; the sweep goes on.
 """
 
 from __future__ import annotations
 
-import csv
+import contextlib
+import functools
 import hashlib
-import io
-import itertools
 import json
-import math
 import os
 import sys
 import time
@@ -48,16 +48,17 @@ from vo_lib.outputs import (
     read_marker,
     remove_stale_temporaries,
     write_atomic,
+    writing,
 )
 
 ROWS = "rows.jsonl"
 TABLE = "results.csv"
 #: Columns every row has after its parameters and figures.
 SECONDS, ERROR = "seconds", "error"
-#: Fewest tasks kept in flight on a cluster (four per worker when there are more workers).
-SUBMIT_WINDOW = 64
 #: Seconds allowed to reach an existing scheduler.
 CONNECT_TIMEOUT = 10.0
+#: Local worker processes allowed per core: more only share the cores and multiply the memory.
+WORKERS_PER_CORE = 4
 
 
 class SweepError(ValueError):
@@ -70,7 +71,7 @@ class Experiment:
 
     ``setup()`` (optional) computes what every task shares (e.g. one visual-odometry run); it
     runs once per sweep, only when some task is still missing, on a worker when there is a
-    cluster. ``written_by`` names the experiment in the folder's marker.
+    cluster. ``name`` names the experiment in the folder's marker.
     """
 
     name: str
@@ -101,17 +102,6 @@ def task_key(experiment: str, params: dict) -> str:
     return hashlib.sha1(text.encode()).hexdigest()[:16]
 
 
-def grid(**axes) -> list[dict]:
-    """Every combination of the given axes, in order (the first axis varies slowest)::
-
-    grid(resolution=["640x480", "320x240"], seed=range(3))  # 6 tasks
-    """
-    tasks: list[dict] = [{}]
-    for name, values in axes.items():
-        tasks = [{**t, name: _plain(v)} for t in tasks for v in values]
-    return tasks
-
-
 def _plain(value):
     """A parameter as JSON sees it (NumPy numbers and tuples become Python numbers and lists)."""
     if isinstance(value, np.generic):
@@ -137,167 +127,62 @@ def execute(run: Callable[[dict, object], dict], params: dict, context=None) -> 
 # --------------------------------------------------------------------------- the folder on disk
 
 
-class SweepFolder:
-    """The folder of one experiment's sweep: opened (created, or resumed when it holds a sweep of
-    the same experiment), appended to row by row, its table replaced at the end."""
-
-    def __init__(self, target, experiment: str, *, force: bool = False, inputs=(), option="--out"):
-        self.target = Path(target)
-        self.experiment = experiment
-        self.written_by = f"vo_lib sweep {experiment}"
-        marker = read_marker(self.target) if self.target.is_dir() else None
-        if marker is not None and marker.get("written_by") == self.written_by:  # resume it
-            remove_stale_temporaries(self.target)
-            check_target(self.target, written_by=self.written_by, inputs=inputs, option=option)
-        else:  # anything else is replaced only as the output rules allow
-            with OutputFolder(self.target, self.written_by, force=force, inputs=inputs, option=option) as out:
-                (out.path / ROWS).touch()
-                (out.path / TABLE).touch()
-                out.commit(experiment=experiment)
-        self.path = self.target
-        self._lock()
-
-    def _lock(self) -> None:
-        """Hold an exclusive lock on the rows file: two sweeps never write one folder at once."""
-        self._fh = open(self.path / ROWS, "a+b")  # noqa: SIM115 (held for the sweep's life)
-        try:
-            import fcntl
-        except ImportError:  # Windows: no advisory lock
-            return
-        try:
-            fcntl.flock(self._fh.fileno(), fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except OSError:
-            self._fh.close()
-            raise SweepError(f"{self.target}: another sweep is writing to this folder") from None
-
-    def close(self) -> None:
-        self._fh.close()
-
-    def finished(self) -> dict[str, dict]:
-        """The rows on disk by key, the last one of a key winning; a line cut short by a kill is
-        ignored."""
-        rows = {}
-        self._fh.seek(0)
-        for line in self._fh.read().decode("utf-8", "replace").splitlines():
-            try:
-                row = json.loads(line)
-                rows[row["key"]] = row
-            except (ValueError, KeyError, TypeError):
-                continue
-        return rows
-
-    def append(self, row: dict) -> None:
-        """Add one finished row: one write of one line, flushed to disk."""
-        self._fh.seek(0, os.SEEK_END)
-        size = self._fh.tell()
-        prefix = b""
-        if size:
-            self._fh.seek(size - 1)
-            if self._fh.read(1) != b"\n":  # the cut-short line of a killed sweep stays apart
-                prefix = b"\n"
-        self._fh.write(prefix + (json.dumps(row) + "\n").encode())
-        self._fh.flush()
-        os.fsync(self._fh.fileno())
-
-    def write_table(self, rows: list[dict]) -> Path:
-        write_atomic(self.path / TABLE, table_csv(rows))
-        return self.path / TABLE
+def open_folder(target, experiment: str, *, force: bool = False, inputs=()) -> Path:
+    """The folder of ``experiment``'s sweep: resumed when it holds a sweep of the same experiment,
+    otherwise created (or replaced, as the output rules allow) with an empty store."""
+    target = Path(target)
+    written_by = f"vo_lib sweep {experiment}"
+    marker = read_marker(target) if target.is_dir() else None
+    if marker is not None and marker.get("written_by") == written_by:
+        remove_stale_temporaries(target)
+        check_target(target, written_by=written_by, inputs=inputs, option="--out")
+        return target
+    with OutputFolder(target, written_by, force=force, inputs=inputs, option="--out") as out:
+        (out.path / ROWS).touch()
+        (out.path / TABLE).touch()
+        return out.commit(experiment=experiment)
 
 
-def flatten(row: dict) -> dict:
-    """A stored row as one table row: parameters, figures, seconds, error."""
-    return {**row["params"], **row["figures"], SECONDS: row[SECONDS], ERROR: row[ERROR]}
+def read_rows(path: Path) -> dict[str, dict]:
+    """The stored rows by key, the last one of a key winning; a line cut short by a kill is
+    skipped."""
+    rows = {}
+    for line in path.read_text(encoding="utf-8", errors="replace").splitlines():
+        with contextlib.suppress(ValueError, KeyError, TypeError):
+            row = json.loads(line)
+            rows[row["key"]] = row
+    return rows
 
 
-def table_csv(rows: list[dict]) -> str:
-    """The CSV text of ``rows`` (stored rows): parameters first, then figures, seconds, error."""
-    params, figures = [], []
-    for row in rows:
-        params += [k for k in row["params"] if k not in params]
-        figures += [k for k in row["figures"] if k not in figures and k not in params]
-    columns = params + figures + [SECONDS, ERROR]
-    buffer = io.StringIO()
-    writer = csv.DictWriter(buffer, fieldnames=columns, lineterminator="\n")
-    writer.writeheader()
-    for row in rows:
-        flat = flatten(row)
-        writer.writerow({k: _cell(flat.get(k, "")) for k in columns})
-    return buffer.getvalue()
+def results_table(rows: list[dict]):
+    """The table of stored ``rows`` (a pandas DataFrame): parameters first, then figures, seconds
+    and error; lists and dicts as JSON text, Python numbers as they are (all digits in the CSV)."""
+    import pandas as pd
 
-
-def _cell(value):
-    if isinstance(value, float):
-        return repr(value)  # all digits: the table reads back to the same numbers
-    if isinstance(value, list | dict):
-        return json.dumps(value)
-    return value
+    frame = pd.DataFrame(
+        [{**r["params"], **r["figures"], SECONDS: r[SECONDS], ERROR: r[ERROR]} for r in rows], dtype=object
+    )
+    columns = [c for c in frame.columns if c not in (SECONDS, ERROR)] + [SECONDS, ERROR]
+    return frame.reindex(columns=columns).map(lambda v: json.dumps(v) if isinstance(v, list | dict) else v)
 
 
 # --------------------------------------------------------------------------- where tasks run
 
 
-def scheduler_address(given: str | None) -> str | None:
-    """The scheduler to use: ``given``, else ``DASK_SCHEDULER_ADDRESS``, else None (local).
-
-    Read by Dask's own address parser (``distributed.comm.addressing``): a scheme Dask knows
-    (``tcp://`` when none is given), a host and a port in 1..65535; anything else is one line."""
-    from distributed.comm.addressing import parse_address, parse_host_port, unparse_address
-    from distributed.comm.registry import backends
-
-    address = given if given is not None else os.environ.get("DASK_SCHEDULER_ADDRESS") or None
-    if address is None:
-        return None
-    option = "--scheduler" if given is not None else "DASK_SCHEDULER_ADDRESS"
-    try:
-        scheme, location = parse_address(address.strip())
-        _, port = parse_host_port(location)
-        if scheme not in backends or not 0 < port < 65536 or any(c.isspace() for c in location):
-            raise ValueError(address)
-    except (ValueError, TypeError):
-        raise SweepError(f"{option} {address!r}: expected a scheduler address like tcp://host:8786") from None
-    return unparse_address(scheme, location)
-
-
-def default_workers() -> int:
-    """One worker per core this process may use."""
-    try:
-        return max(1, len(os.sched_getaffinity(0)))
-    except AttributeError:
-        return max(1, os.cpu_count() or 1)
-
-
-#: Local worker processes allowed per core: more only share the cores and multiply the memory.
-WORKERS_PER_CORE = 4
-
-
 def _check_workers(workers: int | None, local: bool) -> int:
-    """``workers`` (default: one per core), refused in one line if below 1 or, for a local
-    cluster, above :data:`WORKERS_PER_CORE` per core."""
-    cores = default_workers()
-    workers = cores if workers is None else int(workers)
+    """``workers`` (default: one per core Dask finds for this process), refused in one line if
+    below 1 or, for a local cluster, above :data:`WORKERS_PER_CORE` per core."""
+    from dask.system import CPU_COUNT
+
+    workers = CPU_COUNT if workers is None else int(workers)
     if workers < 1:
         raise SweepError(f"--workers {workers}: expected at least 1")
-    if local and workers > WORKERS_PER_CORE * cores:
+    if local and workers > WORKERS_PER_CORE * CPU_COUNT:
         raise SweepError(
-            f"--workers {workers}: this machine gives this process {cores} core(s); at most "
-            f"{WORKERS_PER_CORE * cores} local workers (--scheduler ADDRESS runs on a cluster)"
+            f"--workers {workers}: this machine gives this process {CPU_COUNT} core(s); at most "
+            f"{WORKERS_PER_CORE * CPU_COUNT} local workers (--scheduler ADDRESS runs on a cluster)"
         )
     return workers
-
-
-class _Serial:
-    """Tasks one after the other in this process."""
-
-    label = "serial, in this process"
-
-    def run(self, experiment: Experiment, tasks: list[dict], context, need_setup: bool):
-        if need_setup:
-            context = experiment.setup()
-        for params in tasks:
-            yield params, execute(experiment.run, params, context)
-
-    def close(self):
-        pass
 
 
 #: Dask settings of the local cluster. Dask sets ``MALLOC_TRIM_THRESHOLD_`` in its workers, which
@@ -331,101 +216,46 @@ def local_cluster(workers: int):
         )
 
 
-class _Dask:
-    """Tasks on a dask.distributed cluster: a new LocalCluster, or an existing scheduler."""
+def connect(address: str, option: str):
+    """A ``distributed.Client`` of the scheduler at ``address`` (Dask parses it); one line if the
+    address is malformed or the scheduler cannot be reached."""
+    from distributed import Client
 
-    def __init__(self, workers: int, address: str | None, client=None):
-        from distributed import Client
-
-        self.cluster = None
-        self.owned = client is None
-        if client is not None:
-            self.client = client
-            self.label = (
-                f"Dask client {client.scheduler.address}, {len(client.scheduler_info()['workers'])} workers"
-            )
-        elif address is None:
-            self.cluster = local_cluster(workers)
-            self.client = Client(self.cluster)
-            self.label = f"Dask LocalCluster, {workers} worker processes"
-        else:
-            try:
-                self.client = Client(address, timeout=CONNECT_TIMEOUT)
-            except (OSError, TimeoutError) as exc:
-                raise SweepError(
-                    f"--scheduler {address}: cannot reach the scheduler ({one_line(exc)})"
-                ) from None
-            n = len(self.client.scheduler_info().get("workers", {}))
-            self.label = f"Dask scheduler {address}, {n} workers"
-
-    def run(self, experiment: Experiment, tasks: list[dict], context, need_setup: bool):
-        from distributed import as_completed
-
-        if need_setup:
-            context = self.client.submit(experiment.setup, pure=False)
-        elif context is not None:
-            [context] = self.client.scatter([context], broadcast=True)
-        futures: dict = {}
-
-        def submit(params: dict):
-            future = self.client.submit(execute, experiment.run, params, context, pure=False)
-            futures[future] = params
-            return future
-
-        # a window of tasks in flight, topped up as they finish: the scheduler never holds the
-        # whole grid (a million futures is gigabytes), and the first rows arrive at once
-        pending = iter(tasks)
-        window = max(SUBMIT_WINDOW, 4 * len(self.client.scheduler_info().get("workers", {})))
-        running = as_completed([submit(params) for params in itertools.islice(pending, window)])
-        for future in running:
-            params = futures.pop(future)
-            following = next(pending, None)
-            if following is not None:
-                running.add(submit(following))
-            try:
-                outcome = future.result()
-            except Exception as exc:  # the setup failed, or a worker died
-                outcome = {
-                    "figures": {},
-                    SECONDS: float("nan"),
-                    ERROR: one_line(f"{type(exc).__name__}: {exc}"),
-                }
-            future.release()
-            yield params, outcome
-
-    def close(self):
-        if self.owned:
-            self.client.close()
-        if self.cluster is not None:
-            self.cluster.close()
-
-
-def _run_missing(runner, experiment, todo, context, need_setup, folder, done, result, progress) -> None:
-    """Run the tasks ``todo`` on ``runner``, each finished row appended to ``folder`` at once and
-    recorded in ``done`` and ``result.ran``; a bar on stderr counts them against the whole grid."""
-    from tqdm import tqdm
-
-    total = len(result.reused) + len(todo)
-    bar = tqdm(
-        total=total,
-        initial=len(result.reused),
-        desc=f"sweep {experiment.name}",
-        unit="run",
-        disable=(not sys.stderr.isatty()) if progress is None else not progress,
-        file=sys.stderr,
-    )
     try:
-        for params, outcome in runner.run(experiment, todo, context, need_setup):
-            key = task_key(experiment.name, params)
-            row = {"key": key, "params": params, **outcome}
-            folder.append(row)
-            done[key] = row
-            result.ran.append(key)
-            bar.update()
-            if outcome[ERROR]:
-                bar.write(f"failed: {params}: {outcome[ERROR]}", file=sys.stderr)
-    finally:
-        bar.close()
+        return Client(address.strip(), timeout=CONNECT_TIMEOUT)
+    except ValueError as exc:
+        raise SweepError(
+            f"{option} {address!r}: expected a scheduler address like tcp://host:8786 ({one_line(exc)})"
+        ) from None
+    except (OSError, TimeoutError) as exc:
+        raise SweepError(f"{option} {address}: cannot reach the scheduler ({one_line(exc)})") from None
+
+
+def outcomes(experiment: Experiment, tasks: list[dict], context, need_setup: bool, client=None):
+    """``(params, outcome)`` of each task as it finishes: in this process without ``client``,
+    else on its cluster (``Client.map``, ``as_completed``). A task lost to the cluster (the
+    setup failed, a worker died) is an outcome with its error."""
+    if client is None:
+        context = experiment.setup() if need_setup else context
+        for params in tasks:
+            yield params, execute(experiment.run, params, context)
+        return
+    from distributed import as_completed
+
+    if need_setup:
+        context = client.submit(experiment.setup, pure=False)
+    elif context is not None:
+        [context] = client.scatter([context], broadcast=True)
+    futures = client.map(functools.partial(execute, experiment.run), tasks, context=context, pure=False)
+    params_of = dict(zip(futures, tasks, strict=True))
+    for future in as_completed(futures):
+        try:
+            outcome = future.result()
+        except Exception as exc:  # the setup failed, or a worker died
+            outcome = {"figures": {}, SECONDS: float("nan"), ERROR: one_line(f"{type(exc).__name__}: {exc}")}
+        params = params_of.pop(future)
+        future.release()  # the scheduler forgets a finished task at once
+        yield params, outcome
 
 
 def run_sweep(
@@ -451,103 +281,111 @@ def run_sweep(
     keys = [task_key(experiment.name, t) for t in tasks]
     if len(set(keys)) != len(keys):
         raise SweepError("the sweep repeats a task (two identical parameter sets)")
-    address = scheduler_address(scheduler)
+    option = "--scheduler" if scheduler is not None else "DASK_SCHEDULER_ADDRESS"
+    address = scheduler if scheduler is not None else os.environ.get("DASK_SCHEDULER_ADDRESS") or None
     workers = _check_workers(workers, local=client is None and address is None)
-    runner = None
-    if client is None and address is not None:  # reach it before anything is written
-        runner = _Dask(workers, address)
-    try:
-        folder = SweepFolder(out, experiment.name, force=force, inputs=inputs)
-    except BaseException:
-        if runner is not None:
-            runner.close()
-        raise
-    result = SweepResult(experiment.name, [], path=folder.path / TABLE)
-    done: dict[str, dict] = {}
-    try:
-        done = {k: r for k, r in folder.finished().items() if not r.get(ERROR)}
+    with contextlib.ExitStack() as stack:
+        label = f"Dask client {client.scheduler.address}" if client is not None else ""
+        if client is None and address is not None:  # reach it before anything is written
+            client = stack.enter_context(connect(address, option))
+            label = f"Dask scheduler {address.strip()}"
+        folder = open_folder(out, experiment.name, force=force, inputs=inputs)
+        stack.enter_context(writing(folder, option="--out"))  # one sweep at a time writes it
+        done = {k: r for k, r in read_rows(folder / ROWS).items() if not r.get(ERROR)}
         todo = [t for t, k in zip(tasks, keys, strict=True) if k not in done]
-        result.reused = [k for k in keys if k in done]
-        if todo:
-            if client is not None:
-                runner = _Dask(workers, None, client)
-            elif runner is None:
-                runner = _Serial() if workers == 1 else _Dask(workers, None)
-            result.workers = runner.label
-            need_setup = context is None and experiment.setup is not None
-            _run_missing(runner, experiment, todo, context, need_setup, folder, done, result, progress)
-    finally:
-        if runner is not None:
-            runner.close()
-        result.rows = [done[k] for k in keys if k in done]
+        result = SweepResult(experiment.name, [], reused=[k for k in keys if k in done], path=folder / TABLE)
         try:
-            folder.write_table(result.rows)
+            if todo:
+                if client is None and workers > 1:
+                    from distributed import Client
+
+                    client = stack.enter_context(Client(stack.enter_context(local_cluster(workers))))
+                    result.workers = f"Dask LocalCluster, {workers} worker processes"
+                elif client is not None:
+                    result.workers = f"{label}, {len(client.scheduler_info()['workers'])} workers"
+                else:
+                    result.workers = "serial, in this process"
+                need_setup = context is None and experiment.setup is not None
+                found = outcomes(experiment, todo, context, need_setup, client)
+                _store(found, experiment.name, folder / ROWS, done, result, progress, len(keys))
         finally:
-            folder.close()
+            result.rows = [done[k] for k in keys if k in done]
+            write_atomic(folder / TABLE, results_table(result.rows).to_csv(index=False, lineterminator="\n"))
     return result
+
+
+def _store(found, name: str, path: Path, done: dict, result: SweepResult, progress, total: int) -> None:
+    """Append each finished row of ``found`` to the store ``path`` at once (one flushed line),
+    recording it in ``done`` and ``result.ran``; a bar on stderr counts them against the grid."""
+    from tqdm import tqdm
+
+    show = sys.stderr.isatty() if progress is None else progress
+    with (
+        open(path, "a", encoding="utf-8") as store,
+        tqdm(
+            total=total, initial=len(result.reused), desc=f"sweep {name}", unit="run", disable=not show
+        ) as bar,
+    ):
+        if store.tell() and not path.read_bytes().endswith(b"\n"):  # a line cut short by a kill
+            store.write("\n")
+        for params, outcome in found:
+            key = task_key(name, params)
+            done[key] = {"key": key, "params": params, **outcome}
+            store.write(json.dumps(done[key]) + "\n")
+            store.flush()
+            os.fsync(store.fileno())
+            result.ran.append(key)
+            bar.update()
+            if outcome[ERROR]:
+                bar.write(f"failed: {params}: {outcome[ERROR]}", file=sys.stderr)
 
 
 # --------------------------------------------------------------------------- the aggregate table
 
 
-def numeric_figures(rows: list[dict]) -> list[str]:
-    names: list[str] = []
-    for row in rows:
-        for k, v in row["figures"].items():
-            if k not in names and isinstance(v, int | float) and not isinstance(v, bool):
-                names.append(k)
-    return names
+def aggregate(rows: list[dict], over: str = "seed"):
+    """Mean, standard deviation and count of every numeric figure over ``over`` (successful rows,
+    finite values) per combination of the other parameters: a pandas DataFrame with one row per
+    combination (``name=value, ...``, in the order first met) and columns ``(statistic, figure)``
+    for the statistics ``mean``, ``std`` and ``n``."""
+    import pandas as pd
 
-
-def aggregate(rows: list[dict], over: str = "seed") -> dict[tuple, dict[str, tuple[float, float, int]]]:
-    """Mean, standard deviation and count of every numeric figure over ``over`` (successful rows),
-    per combination of the other parameters: ``{group: {figure: (mean, std, n)}}``."""
-    groups: dict[tuple, list[dict]] = {}
-    for row in rows:
-        if row.get(ERROR):
-            continue
-        group = tuple((k, json.dumps(v)) for k, v in row["params"].items() if k != over)
-        groups.setdefault(group, []).append(row)
-    out = {}
-    for group, members in groups.items():
-        stats = {}
-        for name in numeric_figures(members):
-            v = np.array([m["figures"].get(name, math.nan) for m in members], float)
-            v = v[np.isfinite(v)]
-            stats[name] = (float(v.mean()), float(v.std()), len(v)) if len(v) else (math.nan, math.nan, 0)
-        out[group] = stats
-    return out
+    ok = [r for r in rows if not r.get(ERROR)]
+    if not ok:
+        return pd.DataFrame()
+    figures = pd.DataFrame([r["figures"] for r in ok]).select_dtypes("number")
+    figures = figures.replace([np.inf, -np.inf], np.nan)
+    group = pd.Series(
+        [", ".join(f"{k}={v}" for k, v in r["params"].items() if k != over) for r in ok], name="group"
+    )
+    by = figures.groupby(group, sort=False)
+    return pd.concat({"mean": by.mean(), "std": by.std(ddof=0), "n": by.count()}, axis=1)
 
 
 def print_aggregate(result: SweepResult, over: str = "seed", digits: int = 4) -> None:
     """Print mean +- std over ``over`` of every figure, one column per other parameter set."""
-    table = aggregate(result.rows, over)
-    failed = len(result.failed)
+    import pandas as pd
+
+    failed = result.failed
     print(
         f"\n{result.experiment}: {len(result.rows)} rows ({len(result.ran)} run now, "
-        f"{len(result.reused)} from earlier runs{f', {failed} failed' if failed else ''}); "
+        f"{len(result.reused)} from earlier runs{f', {len(failed)} failed' if failed else ''}); "
         f"mean ± std over {over}s"
     )
-    if not table:
+    stats = aggregate(result.rows, over)
+    if stats.empty:
         print("  no successful row")
-        return
-    groups = list(table)
-    width = 26
-    if any(groups):
-        header = "".join(
-            f"{', '.join(f'{k}={json.loads(v)}' for k, v in g) or '-':>{width}s}" for g in groups
-        )
-        print(f"  {'figure':<24s}{header}")
-    names = []
-    for g in groups:
-        names += [n for n in table[g] if n not in names]
-    for name in names:
-        cells = ""
-        for g in groups:
-            m, s, n = table[g].get(name, (math.nan, math.nan, 0))
-            cells += f"{f'{m:.{digits}g} ± {s:.{digits}g} (n={n})':>{width}s}"
-        print(f"  {name:<24s}{cells}")
-    for row in result.failed[:5]:
+    else:
+        figures = stats["n"].columns
+        cells = {
+            group or "-": [
+                f"{s['mean'][f]:.{digits}g} ± {s['std'][f]:.{digits}g} (n={s['n'][f]:.0f})" for f in figures
+            ]
+            for group, s in stats.iterrows()
+        }
+        table = pd.DataFrame(cells, index=figures)
+        print("  " + table.to_string().replace("\n", "\n  "))
+    for row in failed[:5]:
         print(f"  failed {row['params']}: {row[ERROR]}")
-    if failed > 5:
-        print(f"  ... and {failed - 5} more failed rows (see {result.path})")
+    if len(failed) > 5:
+        print(f"  ... and {len(failed) - 5} more failed rows (see {result.path})")
