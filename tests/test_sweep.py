@@ -100,6 +100,8 @@ def test_a_failing_task_is_a_row_and_runs_again(tmp_path, client):
         bad = result.failed[0]
         assert bad["params"]["seed"] == 2 and bad["error"].startswith("RuntimeError: seed 2 refuses")
         assert [r["figures"].get("offset") for r in result.rows] == [10, 11, None, 13]
+        with open(tmp_path / where / TABLE, newline="") as fh:  # whole numbers stay whole beside a blank
+            assert [r["offset"] for r in csv.DictReader(fh)] == ["10", "11", "", "13"]
         again = run_sweep(TOY, tasks, tmp_path / where, workers=1, context=10)
         assert again.ran == [task_key("toy", tasks[2])] and len(again.failed) == 1
 

@@ -159,11 +159,16 @@ def results_table(rows: list[dict]):
     and error; lists and dicts as JSON text, Python numbers as they are (all digits in the CSV)."""
     import pandas as pd
 
+    cells = [{**r["params"], **r["figures"]} for r in rows]
     frame = pd.DataFrame(
-        [{**r["params"], **r["figures"], SECONDS: r[SECONDS], ERROR: r[ERROR]} for r in rows], dtype=object
+        [
+            {k: json.dumps(v) if isinstance(v, list | dict) else v for k, v in c.items()}
+            | {SECONDS: r[SECONDS], ERROR: r[ERROR]}
+            for c, r in zip(cells, rows, strict=True)
+        ],
+        dtype=object,  # each number as it is: an int stays an int beside a failed row's blank
     )
-    columns = [c for c in frame.columns if c not in (SECONDS, ERROR)] + [SECONDS, ERROR]
-    return frame.reindex(columns=columns).map(lambda v: json.dumps(v) if isinstance(v, list | dict) else v)
+    return frame.reindex(columns=[c for c in frame.columns if c not in (SECONDS, ERROR)] + [SECONDS, ERROR])
 
 
 # --------------------------------------------------------------------------- where tasks run
