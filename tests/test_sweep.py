@@ -119,6 +119,10 @@ def test_folder_rules(tmp_path):
         run_sweep(other, [{"seed": 0}], tmp_path / "toy", workers=1)
     with pytest.raises(SweepError, match="repeats a task"):
         run_sweep(TOY, [{"seed": 0}, {"seed": 0}], tmp_path / "twice", workers=1)
+    from vo_lib.outputs import writing
+
+    with writing(tmp_path / "toy"), pytest.raises(ValueError, match="a running command is writing to"):
+        run_sweep(TOY, [{"seed": 1}], tmp_path / "toy", workers=1)  # another sweep holds the folder
     assert not (tmp_path / "twice").exists()
 
 
