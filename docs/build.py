@@ -44,6 +44,7 @@ sys.path.insert(0, str(DOCS))  # execute_notebook.py, beside this file (already 
 from execute_notebook import KERNEL_NAME, read_notebook  # noqa: E402
 
 sys.path.insert(0, str(ROOT))  # this checkout's vo_lib, whatever copy is installed
+from vo_lib.arguments import OneLineParser  # noqa: E402
 from vo_lib.outputs import MARKER, OutputError, claim_folder, swap_in  # noqa: E402
 
 DEFAULT_OUT = DOCS / "_build"
@@ -82,15 +83,14 @@ class UsageError(Exception):
     """A bad argument; the message is the one line shown to the user."""
 
 
-class OneLineParser(argparse.ArgumentParser):
+class Parser(OneLineParser):
     """Argument errors as one line (a UsageError) rather than argparse's usage block."""
 
-    def error(self, message: str):
-        raise UsageError(message)
+    raises = UsageError
 
 
 def parse_args(argv: list[str] | None) -> argparse.Namespace:
-    parser = OneLineParser(
+    parser = Parser(
         prog="python docs/build.py",
         description="Build the notebooks, executed, as a website under --out (html/index.html).",
     )

@@ -11,9 +11,17 @@ import argparse
 
 
 class OneLineParser(argparse.ArgumentParser):
-    """argparse with errors in one line (no usage block): ``PROG: error: MESSAGE``, exit 2."""
+    """argparse with errors in one line (no usage block): ``PROG: error: MESSAGE``, exit 2.
+
+    A script that reports its errors itself sets :attr:`raises` (in a subclass): the message is
+    then raised as that exception instead."""
+
+    #: The exception class an error is raised as, or None to print it and exit with status 2.
+    raises: type[Exception] | None = None
 
     def error(self, message: str):
+        if self.raises is not None:
+            raise self.raises(message)
         self.exit(2, f"{self.prog}: error: {message}\n")
 
 
