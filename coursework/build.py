@@ -45,13 +45,22 @@ import nbformat
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))  # this checkout's vo_lib, whatever copy is installed
-from vo_lib.outputs import OutputError, OutputFolder, check_target  # noqa: E402
+from vo_lib.outputs import (  # noqa: E402
+    MARKER,
+    OutputError,
+    OutputFolder,
+    check_target,
+    file_checksums,
+    write_atomic,
+)
 
 NOTEBOOK_DIR = ROOT / "notebooks"
 NOTEBOOK_GLOB = "[0-9][0-9]_*.py"
 CONFIG = pathlib.Path(__file__).with_name("nbgrader_config.py")
 STUDENT_DIR, GRADING_DIR, HANDOUT_DIR = "student", "grading", "handout"
 WRITTEN_BY = "python coursework/build.py"
+#: The marker of a build from before vo_lib.outputs marked it: its file checksums, alone.
+LEGACY_MARKER = ".coursework_build.json"
 SUBMISSIONS_DIR = pathlib.Path(__file__).with_name("submissions")
 ADVERSARIAL_KINDS = ("constant", "library", "wrong")  # and "unanswered": the release itself
 # a line that opens a solution, hidden tests or a mark scheme (not a mention of one in prose)
@@ -160,6 +169,21 @@ def write_course(course: pathlib.Path, paths: list[pathlib.Path]) -> None:
         left = leftover_solution_text(source, student)
         if left:
             raise BuildError(f"{path.name}: the student edition still holds solution text: {left[0]!r}")
+
+
+def adopt_earlier_build(dest: pathlib.Path) -> None:
+    """Give a build from before vo_lib.outputs marked it (``LEGACY_MARKER``) the marker of today's,
+    if every file is as that build wrote it; otherwise leave it as it is (and so refused)."""
+    try:
+        written = json.loads((dest / LEGACY_MARKER).read_text())["files"]
+    except (OSError, ValueError, KeyError, TypeError):
+        return
+    files = {k: v for k, v in file_checksums(dest).items() if k != LEGACY_MARKER}
+    if written == files and not (dest / MARKER).exists():
+        contents = sorted(p.name for p in dest.iterdir() if p.name != LEGACY_MARKER)
+        marker = {"written_by": WRITTEN_BY, "contents": contents, "files": files}
+        write_atomic(dest / MARKER, json.dumps(marker, indent=2, sort_keys=True) + "\n")
+        (dest / LEGACY_MARKER).unlink()
 
 
 def refuse_unless_replaceable(dest: pathlib.Path) -> None:
@@ -420,6 +444,8 @@ def handout_leaks(folder: pathlib.Path, lines: set[str]) -> list[str]:
 
 def build(out: pathlib.Path, paths: list[pathlib.Path], check_paths: list[pathlib.Path]) -> None:
     """Write ``out/grading`` and ``out/student``; autograde ``check_paths`` both ways first."""
+    for name in (GRADING_DIR, STUDENT_DIR, HANDOUT_DIR):
+        adopt_earlier_build(out / name)
     with contextlib.ExitStack() as stack:  # refused before an hour of work, not after it
         try:
             course, student, handout = (
