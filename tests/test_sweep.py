@@ -14,6 +14,7 @@ import cloudpickle
 import numpy as np
 import pytest
 
+from vo_lib.cli import sweep
 from vo_lib.cli.evaluate_all import find_sequences
 from vo_lib.cli.experiments import LAP, NEES, lap_tasks, nees_tasks
 from vo_lib.cli.main import main
@@ -69,13 +70,14 @@ def test_same_figures_serially_and_on_the_cluster(tmp_path, client):
         assert [r["params"]["seed"] for r in dask.rows] == [t["seed"] for t in tasks]  # grid order
 
 
-def test_rerun_finishes_only_the_missing_rows(tmp_path, client):
+def test_rerun_finishes_only_the_missing_rows(tmp_path, client, monkeypatch):
     tasks = [{"seed": s} for s in range(5)]
     out = tmp_path / "toy"
     first = run_sweep(TOY, tasks[:2], out, workers=1)  # the sweep "interrupted" after two rows
     assert len(first.ran) == 2
     with open(out / ROWS, "a") as fh:  # and a row cut short by a kill
         fh.write('{"key": "abc", "params": {"se')
+    monkeypatch.setattr(sweep, "CHUNK", 2)  # the three missing tasks go to the cluster as 2 + 1
     again = run_sweep(TOY, tasks, out, client=client)
     keys = [task_key("toy", t) for t in tasks]
     assert sorted(again.ran) == sorted(keys[2:]) and again.reused == keys[:2]

@@ -55,6 +55,9 @@ ROWS = "rows.jsonl"
 TABLE = "results.csv"
 #: Columns every row has after its parameters and figures.
 SECONDS, ERROR = "seconds", "error"
+#: Tasks given to the cluster at once: the scheduler never holds a whole grid of hundreds of
+#: thousands of tasks (each costs it memory), and a chunk keeps every worker busy to its end.
+CHUNK = 10_000
 #: Seconds allowed to reach an existing scheduler.
 CONNECT_TIMEOUT = 10.0
 #: Local worker processes allowed per core: more only share the cores and multiply the memory.
@@ -251,16 +254,22 @@ def outcomes(experiment: Experiment, tasks: list[dict], context, need_setup: boo
         context = client.submit(experiment.setup, pure=False)
     elif context is not None:
         [context] = client.scatter([context], broadcast=True)
-    futures = client.map(functools.partial(execute, experiment.run), tasks, context=context, pure=False)
-    params_of = dict(zip(futures, tasks, strict=True))
-    for future in as_completed(futures):
-        try:
-            outcome = future.result()
-        except Exception as exc:  # the setup failed, or a worker died
-            outcome = {"figures": {}, SECONDS: float("nan"), ERROR: one_line(f"{type(exc).__name__}: {exc}")}
-        params = params_of.pop(future)
-        future.release()  # the scheduler forgets a finished task at once
-        yield params, outcome
+    for start in range(0, len(tasks), CHUNK):
+        chunk = tasks[start : start + CHUNK]
+        futures = client.map(functools.partial(execute, experiment.run), chunk, context=context, pure=False)
+        params_of = dict(zip(futures, chunk, strict=True))
+        for future in as_completed(futures):
+            try:
+                outcome = future.result()
+            except Exception as exc:  # the setup failed, or a worker died
+                outcome = {
+                    "figures": {},
+                    SECONDS: float("nan"),
+                    ERROR: one_line(f"{type(exc).__name__}: {exc}"),
+                }
+            params = params_of.pop(future)
+            future.release()  # the scheduler forgets a finished task at once
+            yield params, outcome
 
 
 def run_sweep(
