@@ -22,7 +22,7 @@ def test_named_sample_is_generated_once_then_reused(data_home):
     seq = load_sequence("indoor_linear", frames=3, resolution=(160, 120), progress=False)
     assert seq.path == data_home / "indoor_linear_3f_160x120"
     assert len(seq) == 3 and seq.camera.width == 160 and seq.odometry.shape == (3, 2)
-    assert seq.manifest["rate_hz"] == 30.0 and seq.manifest["mirrors"].startswith("seed 000")
+    assert seq.manifest["rate_hz"] == 30.0 and seq.manifest["mirrors"].startswith("[Zhao]")
     stamp = (seq.path / "manifest.json").stat().st_mtime_ns
     again = load_sequence("indoor_linear", frames=3, resolution=(160, 120), progress=False)
     assert (again.path / "manifest.json").stat().st_mtime_ns == stamp
