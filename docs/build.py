@@ -68,6 +68,7 @@ PAGES = {
     "docs/layout.md": DOCS / "layout.md",
     "docs/errata.md": DOCS / "errata.md",
     "docs/notation.md": DOCS / "notation.md",
+    "docs/references.md": DOCS / "references.md",
     "docs/course.md": DOCS / "course.md",
     "data/README.md": ROOT / "data" / "README.md",
 }

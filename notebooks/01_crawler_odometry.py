@@ -9,7 +9,7 @@
 # ---
 
 # %% [markdown]
-# # 01 · Crawler track odometry (seed 000, eq. 1–11)
+# # 01 · Crawler track odometry ([Zhao], eq. 1–11)
 #
 # A crawler robot knows how far each of its two tracks has moved. From those two numbers alone
 # it can dead-reckon its pose — until slip and encoder noise make it drift. This notebook builds
@@ -33,7 +33,7 @@
 # **References**
 #
 # - X. Zhao, J. Kan, C. Zhan, *1-Point RANSAC Application: an Independent Positioning Method for
-#   Crawler Mobile Robots Based on Binocular Stereo Vision* (seed 000): §II, the crawler's motion
+#   Crawler Mobile Robots Based on Binocular Stereo Vision* [Zhao]: §II, the crawler's motion
 #   model, eq. 1–11.
 
 # %%

@@ -9,7 +9,7 @@
 # ---
 
 # %% [markdown]
-# # 02 · The circular-motion model, derived (seed 000, eq. 12–17)
+# # 02 · The circular-motion model, derived ([Zhao], eq. 12–17)
 #
 # A camera on a crawler moves in a plane, and locally on a circle. Two numbers then describe each
 # motion between frames: the deflection angle θ and the chord length ρ. The paper states how to
@@ -34,7 +34,7 @@
 # **References**
 #
 # - X. Zhao, J. Kan, C. Zhan, *1-Point RANSAC Application: an Independent Positioning Method for
-#   Crawler Mobile Robots Based on Binocular Stereo Vision* (seed 000): §II, planar circular
+#   Crawler Mobile Robots Based on Binocular Stereo Vision* [Zhao]: §II, planar circular
 #   motion, eq. 12–17 and Fig. 2.
 
 # %%

@@ -32,7 +32,7 @@
 # **References**
 #
 # - X. Zhao, J. Kan, C. Zhan, *1-Point RANSAC Application: an Independent Positioning Method for
-#   Crawler Mobile Robots Based on Binocular Stereo Vision* (seed 000): §II, eq. 12–17, and
+#   Crawler Mobile Robots Based on Binocular Stereo Vision* [Zhao]: §II, eq. 12–17, and
 #   §III.A, how θ and ρ are used.
 
 # %%

@@ -13,8 +13,8 @@
 #
 # The papers ran real robots; we cannot ship their data, and nothing may be downloaded at run
 # time. So we build one simulated world and let every sensor look at it: a stereo camera for the
-# visual odometry of seed 000, a 2-D laser scanner for the line-feature SLAM of seed 002 and the
-# pose tracking of seed 004, and the crawler's track encoders. This notebook shows the world, the
+# visual odometry of [Zhao], a 2-D laser scanner for the line-feature SLAM of [Yan 2020] and the
+# pose tracking of [Yuan], and the crawler's track encoders. This notebook shows the world, the
 # rig, the drives that mirror the paper's experiments, and the sequence files they produce.
 #
 # **You will learn**
@@ -34,10 +34,10 @@
 # **References**
 #
 # - X. Zhao, J. Kan, C. Zhan, *1-Point RANSAC Application: an Independent Positioning Method for
-#   Crawler Mobile Robots Based on Binocular Stereo Vision* (seed 000): §IV, the indoor and
+#   Crawler Mobile Robots Based on Binocular Stereo Vision* [Zhao]: §IV, the indoor and
 #   outdoor experiments the sample drives mirror.
 # - R. Yuan, F. Zhang, Y. Zhu, Y. Fu, *A Novel Visual Odometer Assisted Pose Tracking Method for
-#   Mobile Robots* (seed 004): §IV, the occluded corridor.
+#   Mobile Robots* [Yuan]: §IV, the occluded corridor.
 # - A. Geiger, P. Lenz, C. Stiller, R. Urtasun, *Vision meets Robotics: The KITTI Dataset*,
 #   International Journal of Robotics Research, 2013: the raw drives and the odometry layout.
 
@@ -73,7 +73,7 @@ np.set_printoptions(precision=4, suppress=True)
 # A world is a list of vertical segments on a floor plan — walls, pillars, boxes — each with a
 # height and a texture seed, plus a textured floor (and a ceiling indoors). The worlds: a lab (once
 # more with a trolley pushed through it), an open yard with far buildings (low parallax, as
-# outdoors in seed 000), the corridor of seed 004 with its pillars, cross walls, fire hydrant, and
+# outdoors in [Zhao]), the corridor of [Yuan] with its pillars, cross walls, fire hydrant, and
 # an **unmapped** umbrella (dashed) that the laser will see but the map does not know, and a road
 # for a car, laid along the car's drive (its surface and its traffic are seen by the camera only,
 # so the plan shows the buildings, trees, fences and parked cars beside it).
@@ -151,7 +151,7 @@ assert np.median(err) < 0.25 and np.mean(err < 0.5) > 0.9
 #
 # ## 3 · The laser scanner sees the same world
 #
-# The scanner (270°, 1/3° steps, 10 m, like the SICK TIM551 of seed 004) casts 811 rays against
+# The scanner (270°, 1/3° steps, 10 m, like the SICK TIM551 of [Yuan]) casts 811 rays against
 # the same segments. Straight ahead, the beam leaves from the point below the camera; at the
 # image row of the camera's own height, the rendered depth of that column is the same distance.
 

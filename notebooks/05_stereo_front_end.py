@@ -12,7 +12,7 @@
 # # 05 · The stereo front end: FAST corners, binary descriptors, matching along rows
 #
 # Before any motion can be estimated, each stereo pair must become a list of points with a pixel
-# position and a disparity, w = (u, v, d). Seed 000 detects corners with FAST and matches them by
+# position and a disparity, w = (u, v, d). [Zhao] detects corners with FAST and matches them by
 # Hamming distance. This notebook builds that front end step by step on a rendered pair whose
 # true disparity we know, and measures each step.
 #
@@ -33,7 +33,7 @@
 # **References**
 #
 # - X. Zhao, J. Kan, C. Zhan, *1-Point RANSAC Application: an Independent Positioning Method for
-#   Crawler Mobile Robots Based on Binocular Stereo Vision* (seed 000): §III.A.1, binocular stereo
+#   Crawler Mobile Robots Based on Binocular Stereo Vision* [Zhao]: §III.A.1, binocular stereo
 #   processing (FAST corners, Hamming matching).
 
 # %%
@@ -70,7 +70,7 @@ true_disparity = camera.fx * camera.baseline / depth
 # **Triangulation.** Two pinhole cameras with the same intrinsics (focal lengths f_x, f_y,
 # principal point (u₀, v₀)) look the same way, the right one B metres to the right of the left.
 # A point at depth Z appears in the right image shifted left by the *disparity*
-# d = u − u_r = f_x B / Z, so from (u, v, d) the point is (seed 000, eq. 13)
+# d = u − u_r = f_x B / Z, so from (u, v, d) the point is ([Zhao], eq. 13)
 #
 #   X = B (u − u₀)/d,   Y = B (v − v₀)/d · f_x/f_y,   Z = f_x B / d.
 #
@@ -298,7 +298,7 @@ assert stereo_wrong < 0.02
 # %% [markdown]
 # ## 4 · What it costs
 #
-# Seed 000's Table 1 puts stereo processing at 22.165 ms (320×240) to 48.969 ms (640×480) per
+# [Zhao]'s Table 1 puts stereo processing at 22.165 ms (320×240) to 48.969 ms (640×480) per
 # frame (including grabbing,
 # rectification and edge detection on its robot's computer). Ours, on rendered rectified images,
 # per stage (median of 20 frames along a drive):

@@ -9,7 +9,7 @@
 # ---
 
 # %% [markdown]
-# # 06 · 1-point RANSAC: one match, one hypothesis (seed 000, eq. 18–21)
+# # 06 · 1-point RANSAC: one match, one hypothesis ([Zhao], eq. 18–21)
 #
 # Matches between frames contain outliers. RANSAC finds the motion that most matches agree with
 # by trying hypotheses made from minimal samples. A general 6-DoF motion needs three 3-D points
@@ -39,7 +39,7 @@
 # **References**
 #
 # - X. Zhao, J. Kan, C. Zhan, *1-Point RANSAC Application: an Independent Positioning Method for
-#   Crawler Mobile Robots Based on Binocular Stereo Vision* (seed 000): §II, eq. 14–17, and
+#   Crawler Mobile Robots Based on Binocular Stereo Vision* [Zhao]: §II, eq. 14–17, and
 #   §III.A.3, parameter estimation by 1-point RANSAC, eq. 18–21 and the missing Fig. 5.
 
 # %%

@@ -12,7 +12,7 @@
 # # 07 · Fusing track odometry and visual odometry with a Kalman filter
 #
 # Track odometry is smooth but drifts with slip; visual odometry does not drift with slip but is
-# noisy frame to frame and fails where the camera sees nothing. Seed 000 lets a Kalman filter
+# noisy frame to frame and fails where the camera sees nothing. [Zhao] lets a Kalman filter
 # predict with the odometry and correct with the visual motion, and uses the prediction to guide
 # matching and RANSAC. This notebook writes that filter out in NumPy, from a one-dimensional one
 # up, checks it against filterpy and `vo_lib`, runs it on drives with slip, and checks that its
@@ -36,7 +36,7 @@
 # **References**
 #
 # - X. Zhao, J. Kan, C. Zhan, *1-Point RANSAC Application: an Independent Positioning Method for
-#   Crawler Mobile Robots Based on Binocular Stereo Vision* (seed 000): §II, eq. 1–11 (the
+#   Crawler Mobile Robots Based on Binocular Stereo Vision* [Zhao]: §II, eq. 1–11 (the
 #   odometry the filter predicts with), and §III.A.2, the Kalman filter's prediction and
 #   observation matching.
 

@@ -12,7 +12,7 @@
 # # 08 · The full pipeline, and the paper's experiments beside ours
 #
 # Everything so far comes together: stereo front end (05), 1-point RANSAC (06) and the Kalman
-# filter fed by track odometry (07), frame after frame (`vo_lib.stereo_vo.pipeline`). We rerun seed 000's
+# filter fed by track odometry (07), frame after frame (`vo_lib.stereo_vo.pipeline`). We rerun [Zhao]'s
 # experiments on the sample sequences that mirror them — processing time per resolution
 # (Table 1), linear motion, free motion, spot turns with slip, outdoor free motion (Table 2) — on a
 # crawler whose tracks slip and skid and, outdoors, lose contact on rough ground, and put the
@@ -34,7 +34,7 @@
 # **References**
 #
 # - X. Zhao, J. Kan, C. Zhan, *1-Point RANSAC Application: an Independent Positioning Method for
-#   Crawler Mobile Robots Based on Binocular Stereo Vision* (seed 000): §III.A, the procedure
+#   Crawler Mobile Robots Based on Binocular Stereo Vision* [Zhao]: §III.A, the procedure
 #   (Fig. 3), and §IV, Table 1, Table 2, Fig. 6 and Fig. 9.
 
 # %%
@@ -228,7 +228,7 @@ assert np.all(np.diff(counts) < 0) and counts[-1] < 0.6 * counts[0]
 # `python -m vo_lib bench long` repeats it on ten laps of an oval in the yard, rendering each
 # frame in memory outside the timed stages, and prints our mean and spread beside the paper's.
 #
-# ## 3 · Linear motion (seed 000, IV.A.2)
+# ## 3 · Linear motion ([Zhao], IV.A.2)
 #
 # 200 frames forward, 200 back. The paper reports a relative error under 5 %, and mean x and y
 # errors of −31.5 mm (s.d. 22.6) and −65.2 mm (s.d. 16.0).
@@ -288,7 +288,7 @@ print(
 assert relative_o < 0.05  # our own target: the paper's indoor bound
 
 # %% [markdown]
-# ## 4 · Spot turns on rough ground (seed 000, IV.B.2)
+# ## 4 · Spot turns on rough ground ([Zhao], IV.B.2)
 #
 # Turning on the spot, the paper's robot made heading errors it blames on its tracks: they "were
 # not well contacted with the ground", so the motion left the planar model. Our crawler's tracks

@@ -11,7 +11,7 @@
 # %% [markdown]
 # # 09 · Line-feature EKF-SLAM and the bisection observer
 #
-# Seed 002 maps walls, not points. A car-like robot laps four line segments with a simulated
+# [Yan 2020] maps walls, not points. A car-like robot laps four line segments with a simulated
 # laser; an extended Kalman filter estimates its pose and one "feature point" per wall, the foot
 # of the perpendicular from the world origin to the wall's line. To simulate the laser the paper
 # must know which part of each segment lies within range, and it finds that by bisection instead
@@ -38,7 +38,7 @@
 # **References**
 #
 # - X. Yan, G. Yang, L. Wang, *EKF-SLAM Algorithm Based on Dichotomy*, 2020,
-#   doi:10.19306/j.cnki.2095-8110.2020.03.011 (seed 002): §1, EKF-SLAM (eq. 1–13); §2, the
+#   doi:10.19306/j.cnki.2095-8110.2020.03.011 [Yan 2020]: §1, EKF-SLAM (eq. 1–13); §2, the
 #   observers of a line feature (Fig. 3–4); §3, the simulation (Fig. 5–9, Table 1).
 
 # %%
@@ -215,7 +215,7 @@ assert np.allclose(np.hstack(observation_jacobians(pose1, point1)), num_H, atol=
 # $(\Delta y/\Delta^2, -\Delta x/\Delta^2)$, the negative of the pose columns, as it must be,
 # because the bearing depends on the point and the position only through their difference.
 # These two are not flipped signs: each printed entry has the wrong variable ($\Delta x$ where
-# $\Delta y$ belongs and the reverse), as if the range row's pattern had been copied. So seed 002
+# $\Delta y$ belongs and the reverse), as if the range row's pattern had been copied. So [Yan 2020]
 # prints **four wrong entries**: two signs in eq. 6 and 7, two variables in eq. 11. A filter with
 # the printed row would pull each wall's feature point the wrong way after every observation.
 #
@@ -909,7 +909,7 @@ assert in_band["line"] > 0.9 and in_band["line"] > in_band["feature point"]
 #
 # ## Summary
 #
-# - Seed 002's Jacobians print four wrong entries: two flipped signs (eq. 6 and eq. 7, row 2)
+# - [Yan 2020]'s Jacobians print four wrong entries: two flipped signs (eq. 6 and eq. 7, row 2)
 #   and two wrong variables (the landmark columns of eq. 11's bearing row); finite differences
 #   settle each, and the library uses the derived forms.
 # - Mahalanobis association measures distance in the innovation's own σ, and picks the right wall

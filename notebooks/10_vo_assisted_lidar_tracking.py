@@ -13,7 +13,7 @@
 #
 # A laser tracker scores many sampled poses against a map and keeps the best. In a corridor the
 # long walls fix the robot across the corridor and in heading, but only "radial" features —
-# pillars, a hydrant, cross walls — fix it *along* the corridor. Seed 004 lets an umbrella hide
+# pillars, a hydrant, cross walls — fix it *along* the corridor. [Yuan] lets an umbrella hide
 # such a feature; the laser tracker (LBPT) then wanders along the corridor. The paper detects
 # this from the statistics of the sample scores and replaces the laser's correction along the
 # direction of largest uncertainty with the visual odometer's (VOAPT). We build its visual
@@ -26,7 +26,7 @@
 #   and how to read equations that were printed garbled;
 # - how PCA of the best samples finds the direction of largest error, and how a second sensor
 #   fixes just that direction;
-# - how seed 004's 6-DoF PnP odometer compares with seed 000's 1-point method;
+# - how [Yuan]'s 6-DoF PnP odometer compares with [Zhao]'s 1-point method;
 # - how to check that an indicator can fail before trusting a test that it passes.
 #
 # **Prerequisites**: notebooks 04 (world, laser), 05 (stereo front end), 08 (the 1-point pipeline).
@@ -37,10 +37,10 @@
 # **References**
 #
 # - R. Yuan, F. Zhang, Y. Zhu, Y. Fu, *A Novel Visual Odometer Assisted Pose Tracking Method for
-#   Mobile Robots* (seed 004): §II, the visual odometer (eq. 1–7); §III, sample statistics,
+#   Mobile Robots* [Yuan]: §II, the visual odometer (eq. 1–7); §III, sample statistics,
 #   control limits and compensation (eq. 8–23); §IV, Tables I–III and Fig. 1, 5, 7.
 # - X. Zhao, J. Kan, C. Zhan, *1-Point RANSAC Application: an Independent Positioning Method for
-#   Crawler Mobile Robots Based on Binocular Stereo Vision* (seed 000): §III.A, the 1-point
+#   Crawler Mobile Robots Based on Binocular Stereo Vision* [Zhao]: §III.A, the 1-point
 #   odometer run beside it.
 
 # %%
@@ -146,7 +146,7 @@ assert flat_positions(without_umbrella(world)).size == 0
 # pillar hides behind the umbrella. Without the umbrella no position is flat: the second pillar
 # is in view all along.
 #
-# ## 2. The paper's visual odometer and seed 000's, side by side
+# ## 2. The paper's visual odometer and [Zhao]'s, side by side
 #
 # `vo_lib.lidar_tracking.pnp_odometry` follows section II: ORB landmarks (Hamming distance, eq. 1),
 # brute-force matching at the start and after a loss, motion-model matching afterwards (the velocity of
@@ -166,8 +166,8 @@ pnp_poses = planar_from_camera_poses(np.stack([pnp.process(a, b) for a, b, _ in 
 one = run_frames(iter([(a, b, None) for a, b, _ in images]), rendered.camera)
 final_200 = {}
 for name, poses in (
-    ("PnP + local map (seed 004)", pnp_poses),
-    ("1-point (seed 000)", one.poses - one.poses[0]),
+    ("PnP + local map [Yuan]", pnp_poses),
+    ("1-point [Zhao]", one.poses - one.poses[0]),
 ):
     final_200[name] = np.hypot(*(poses[-1, :2] - truth_200[-1, :2]))
     print(f"{name:28s} final error {100 * final_200[name]:.2f} cm after {np.hypot(*truth_200[-1, :2]):.1f} m")
@@ -688,7 +688,7 @@ display(
 # - In a corridor the laser fixes the robot across the corridor and in heading; only radial
 #   features fix it along. Where they are hidden, the score of a pose is flat along the corridor
 #   and the laser tracker (LBPT) wanders, by a metre or more in some seeds.
-# - Seed 004's visual odometer (PnP with a local map) stays within centimetres over the whole
+# - [Yuan]'s visual odometer (PnP with a local map) stays within centimetres over the whole
 #   corridor, which is what VOAPT needs.
 # - The sample scores' box-plot statistics judge a tracker's output once the score is read as a
 #   log-likelihood (eq. 10 as a posterior); the printed eq. 11 fails where the quartiles matter,

@@ -9,7 +9,7 @@
 # ---
 
 # %% [markdown]
-# # 11 · Seed 000's stereo odometry on real images
+# # 11 · [Zhao]'s stereo odometry on real images
 #
 # Everything so far ran on images that `vo_lib` renders itself. Here the pipeline meets a real
 # recording: KITTI raw drive 2011_09_26_0001, a car in a Karlsruhe suburb, with ground truth from
@@ -42,7 +42,7 @@
 # **References**
 #
 # - X. Zhao, J. Kan, C. Zhan, *1-Point RANSAC Application: an Independent Positioning Method for
-#   Crawler Mobile Robots Based on Binocular Stereo Vision* (seed 000): §II and §III.A, applied to
+#   Crawler Mobile Robots Based on Binocular Stereo Vision* [Zhao]: §II and §III.A, applied to
 #   real images.
 # - A. Geiger, P. Lenz, C. Stiller, R. Urtasun, *Vision meets Robotics: The KITTI Dataset*,
 #   International Journal of Robotics Research, 2013: the raw drives and the odometry layout.
@@ -370,7 +370,7 @@ plt.show()
 # %% [markdown]
 # ## 3 · What the circular-motion model gets wrong on a car
 #
-# Seed 000's model (eq. 12–17) describes a camera that turns about its own vertical axis on a
+# [Zhao]'s model (eq. 12–17) describes a camera that turns about its own vertical axis on a
 # flat floor: one angle θ, one chord ρ. A car breaks it three ways:
 #
 # - **offset**: the camera sits ahead of (and above) the axis the car turns about, so a turn also
@@ -500,7 +500,7 @@ if REAL:
 # the frames or more (asserted); it is not noise but a bias shared by all points of a frame, so
 # averaging over matches does not remove it.
 #
-# Now the pipelines. `motion="planar"` is seed 000's pipeline as notebook 08 ran it (single-scale
+# Now the pipelines. `motion="planar"` is [Zhao]'s pipeline as notebook 08 ran it (single-scale
 # front end, matching windows sized for a crawler, circular motion, camera assumed on the axis);
 # `motion="full"` keeps 1-point RANSAC as the outlier filter and refines the
 # inliers in 6 DoF, with the pyramid front end and windows for a car.
@@ -893,7 +893,7 @@ assert angle_cv < 0.05 and shift_cv < 0.005
 #
 # The OXTS packets' forward speed and yaw rate, integrated between frames, stand in for wheel
 # odometry: two wheels a gauge apart (`vo_lib.stereo_vo.vehicle`) travel `s ∓ gauge·Δψ/2`, and the
-# crawler's odometry model of seed 000 (eq. 2–11) turns them back into a path. The pipeline fuses
+# crawler's odometry model of [Zhao] (eq. 2–11) turns them back into a path. The pipeline fuses
 # them in its Kalman filter exactly as it fuses a crawler's tracks.
 #
 # Two caveats before the figures. This "wheel odometry" is not from wheels: the speed and yaw rate

@@ -1,3 +1,4 @@
+import dataclasses
 import os
 import subprocess
 import sys
@@ -8,7 +9,7 @@ import pytest
 from vo_lib.data import load_sequence, sample_path
 from vo_lib.geometry import camera_mount, camera_poses_from_planar, planar_from_camera_poses
 from vo_lib.sim.frame_store import ENVIRONMENT as FRAME_STORE
-from vo_lib.sim.samples import CAMERA_HEIGHT, SAMPLES, generate, render_sample
+from vo_lib.sim.samples import CAMERA_HEIGHT, SAMPLES, fingerprint, generate, render_sample
 
 
 @pytest.fixture
@@ -21,7 +22,7 @@ def test_named_sample_is_generated_once_then_reused(data_home):
     seq = load_sequence("indoor_linear", frames=3, resolution=(160, 120), progress=False)
     assert seq.path == data_home / "indoor_linear_3f_160x120"
     assert len(seq) == 3 and seq.camera.width == 160 and seq.odometry.shape == (3, 2)
-    assert seq.manifest["rate_hz"] == 30.0 and seq.manifest["mirrors"].startswith("seed 000")
+    assert seq.manifest["rate_hz"] == 30.0 and seq.manifest["mirrors"].startswith("[Zhao]")
     stamp = (seq.path / "manifest.json").stat().st_mtime_ns
     again = load_sequence("indoor_linear", frames=3, resolution=(160, 120), progress=False)
     assert (again.path / "manifest.json").stat().st_mtime_ns == stamp
@@ -37,6 +38,16 @@ def test_out_of_date_sample_is_generated_again(data_home):
     again = load_sequence("corridor", frames=2, resolution=(80, 60), progress=False)
     assert again.manifest["fingerprint"] == seq.manifest["fingerprint"]
     assert "0" * 16 not in manifest.read_text()
+
+
+def test_fingerprint_follows_what_shapes_the_images_not_the_prose(monkeypatch):
+    """Rewording a sample's description keeps its cache; changing its random seed does not."""
+    sample = SAMPLES["indoor_linear"]
+    before = fingerprint("indoor_linear")
+    monkeypatch.setitem(SAMPLES, "indoor_linear", dataclasses.replace(sample, purpose="p", mirrors="m"))
+    assert fingerprint("indoor_linear") == before
+    monkeypatch.setitem(SAMPLES, "indoor_linear", dataclasses.replace(sample, seed=sample.seed + 1))
+    assert fingerprint("indoor_linear") != before
 
 
 def test_generation_is_deterministic(tmp_path, monkeypatch):

@@ -1,4 +1,4 @@
-"""docs/errata.md has one row per numbered equation of seeds 000, 002 and 004, a verdict from the
+"""docs/errata.md has one row per numbered equation of [Zhao], [Yan 2020] and [Yuan], a verdict from the
 fixed list, and checks that exist: named tests in their files, notebook sections in their notebooks."""
 
 from __future__ import annotations

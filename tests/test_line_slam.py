@@ -1,4 +1,4 @@
-"""Seed 002: bicycle and range-bearing models, the three segment observers, association and
+"""[Yan 2020]: bicycle and range-bearing models, the three segment observers, association and
 EKF-SLAM on the paper's lap."""
 
 from __future__ import annotations
@@ -284,7 +284,7 @@ def test_line_observation_maps_the_walls_and_beats_dead_reckoning():
 
 
 def test_readme_quotes_the_laps(laps):
-    """The README's seed 002 figures are those of these 20 laps (and of the notebook's ten
+    """The README's [Yan 2020] figures are those of these 20 laps (and of the notebook's ten
     extended laps), to their printed precision."""
     import pathlib
     import re
@@ -297,7 +297,7 @@ def test_readme_quotes_the_laps(laps):
         r"but lies above the band at ([0-9]+) % of the steps",
         text,
     )
-    assert m, "README: seed 002 sentence not found"
+    assert m, "README: [Yan 2020] sentence not found"
     slam = np.array([r.final_error() for r in laps])
     dead = np.array([r.final_dead_reckoning_error() for r in laps])
     n = min(len(r.nees) for r in laps)

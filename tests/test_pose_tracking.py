@@ -1,4 +1,4 @@
-"""Seed 004: likelihood field, score statistics and their readings, principal error direction,
+"""[Yuan]: likelihood field, score statistics and their readings, principal error direction,
 the PnP visual odometer, and the corridor experiment's acceptance over 20 seeds."""
 
 from __future__ import annotations

@@ -6,7 +6,7 @@ ways. This guard reads every markdown cell of every notebook (the jupytext ``.py
 each number that carries a unit, a per cent sign, a × or x-ratio, or a degree sign, and fails
 unless the number is
 
-- the paper's own figure: the sentence says so ("the paper reports", "seed 004", "Table 2") and
+- the paper's own figure: the sentence says so ("the paper reports", "[Yuan]", "Table 2") and
   the number appears in the text of the papers (``../shared/seeds``; the check skips with its
   reason when the texts are absent), or
 - a definitional constant of that notebook: a chosen parameter, listed in :data:`CONSTANTS`
@@ -60,7 +60,9 @@ SCIENTIFIC = re.compile(
 #: Grid sizes such as 4×4 or 3×3 panels are dimensions, not ratios.
 DIMENSION = re.compile(rf"{_NUM}\s?×\s?(?:{_NUM}|[a-zA-Z]\b)")
 #: Words by which a sentence says it quotes a paper.
-CITES_PAPER = re.compile(r"paper|seed 00\d|Table\s+\d|Fig(?:ure|\.)\s*\d|authors|\bMonteiro|Zhao|Sun\b", re.I)
+CITES_PAPER = re.compile(
+    r"paper|\[(?:Zhao|Yan 2020|Yuan)\]|Table\s+\d|Fig(?:ure|\.)\s*\d|authors|\bMonteiro|Zhao|Sun\b", re.I
+)
 
 #: The header's run time is the whole notebook's wall time, which no cell can compute before the
 #: notebook ends; it is an estimate for the reference machine, not a result.

@@ -9,9 +9,9 @@ import pytest
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 NOTEBOOKS = sorted((ROOT / "notebooks").glob("[0-9][0-9]_*.py"))
 PAPERS = {
-    "seed 000": "1-Point RANSAC Application",
-    "seed 002": "EKF-SLAM Algorithm Based on Dichotomy",
-    "seed 004": "A Novel Visual Odometer Assisted Pose Tracking Method",
+    "[Zhao]": "1-Point RANSAC Application",
+    "[Yan 2020]": "EKF-SLAM Algorithm Based on Dichotomy",
+    "[Yuan]": "A Novel Visual Odometer Assisted Pose Tracking Method",
 }
 
 

@@ -1,4 +1,4 @@
-"""The figures of vo_lib.viz draw what they say: diagrams of seed 000's Fig. 2 and 3, the run figure."""
+"""The figures of vo_lib.viz draw what they say: diagrams of [Zhao]'s Fig. 2 and 3, the run figure."""
 
 import math
 

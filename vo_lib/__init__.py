@@ -4,9 +4,9 @@ One folder per idea; imports run downwards only (import-linter contracts in ``py
 
     cli/              python -m vo_lib run | evaluate | generate | bench      (top layer)
     data.py           a sequence by name or path (renders a named sample on first use)
-    stereo_vo/        seed 000: stereo VO, 1-point RANSAC, Kalman filter      (the three wings;
-    line_slam/        seed 002: line-feature EKF-SLAM, bisection observer      independent, but
-    lidar_tracking/   seed 004: VO-assisted LIDAR pose tracking                it may use stereo_vo)
+    stereo_vo/        [Zhao]: stereo VO, 1-point RANSAC, Kalman filter      (the three wings;
+    line_slam/        [Yan 2020]: line-feature EKF-SLAM, bisection observer      independent, but
+    lidar_tracking/   [Yuan]: VO-assisted LIDAR pose tracking                it may use stereo_vo)
     sim/              world, renderer, laser, drives with slip, disturbances, named samples
     models/ formats/ viz/   crawler tracks and bicycle; KITTI sequences and pose files; figures
     camera.py geometry.py evaluation.py   shared: stereo rig, frames and poses, trajectory errors

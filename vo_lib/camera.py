@@ -1,4 +1,4 @@
-"""A rectified stereo camera: pixels plus disparity to 3-D points and back (seed 000, eq. 13).
+"""A rectified stereo camera: pixels plus disparity to 3-D points and back ([Zhao], eq. 13).
 
 The left camera is the reference. The right camera sits ``baseline`` metres along the left
 camera's +x axis, both share the intrinsics, and rows are aligned, so a point at depth ``z``
@@ -149,7 +149,7 @@ class StereoCamera:
         return w
 
     def backproject(self, w) -> np.ndarray:
-        """Points ``(N, 3)`` in the left camera frame from ``w = (u, v, d)`` (seed 000, eq. 13).
+        """Points ``(N, 3)`` in the left camera frame from ``w = (u, v, d)`` ([Zhao], eq. 13).
 
         With ``fx == fy == f`` this is the paper's ``x = B(u-u0)/d, y = B(v-v0)/d, z = Bf/d``;
         with unequal focal lengths ``y`` carries the factor ``fx / fy``.

@@ -1,4 +1,4 @@
-"""Trajectory errors: ATE, RPE, KITTI segment errors, and the statistics seed 000 reports.
+"""Trajectory errors: ATE, RPE, KITTI segment errors, and the statistics [Zhao] reports.
 
 Poses are ``(N, 4, 4)`` camera-to-world matrices (or ``(N, 3, 4)``), estimate and ground truth
 frame by frame, or planar ``(x, y, yaw)`` rows for the planar variants.
@@ -9,7 +9,7 @@ frame by frame, or planar ``(x, y, yaw)`` rows for the planar variants.
   ``E_i = (Q_i^-1 Q_{i+d})^-1 (P_i^-1 P_{i+d})``, by their translation (or rotation angle).
 * **KITTI segment errors**: for segments of given path lengths starting every ``step`` frames,
   translation error in percent of the length and rotation error in degrees per metre.
-* **Key-position statistics** (seed 000, IV): mean and standard deviation of the x, y and
+* **Key-position statistics** ([Zhao], IV): mean and standard deviation of the x, y and
   heading errors at chosen frames.
 """
 
@@ -226,7 +226,7 @@ def kitti_segment_errors(gt, est, lengths=(100, 200, 300, 400, 500, 600, 700, 80
 
 
 def key_position_errors(gt_planar, est_planar, frames) -> dict:
-    """Seed 000's statistics: mean and standard deviation of x, y (mm) and heading (deg) errors at
+    """[Zhao]'s statistics: mean and standard deviation of x, y (mm) and heading (deg) errors at
     the key ``frames``, estimate minus truth, in the frame of the start."""
     g, e = np.asarray(gt_planar, float), np.asarray(est_planar, float)
     idx = np.asarray(frames, dtype=int)

@@ -115,7 +115,7 @@ def camera_mount(forward: float = 0.0, height: float = 0.5, left: float = 0.0) -
     """4x4 pose of a forward-looking camera in the robot frame (``T_robot_camera``).
 
     ``forward``, ``left`` and ``height`` place its optical centre; with ``forward = left = 0`` it
-    sits above the turning axis, where the circular-motion model of seed 000 is exact.
+    sits above the turning axis, where the circular-motion model of [Zhao] is exact.
     """
     T = np.eye(4)
     T[:3, :3] = R_ROBOT_FROM_CAMERA

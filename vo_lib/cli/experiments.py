@@ -1,11 +1,11 @@
 """The papers' statistics as sweep experiments (:mod:`vo_lib.cli.sweep`), one task per seed.
 
-``corridor``  seed 004, Table III: LBPT and VOAPT along the occluded corridor; the shared setup
+``corridor``  [Yuan], Table III: LBPT and VOAPT along the occluded corridor; the shared setup
               is one PnP visual-odometry run on the rendered corridor and the calibration on the
               normal run (``corridor_experiment.run_experiment`` split into its per-seed pieces)
-``lap``       seed 002: one lap of the line-feature EKF-SLAM, final error and NEES
-``nees``      seed 000: one Monte Carlo run of the fused Kalman filter (notebook 07, section 4)
-``table1``    seed 000, Table 1: time per stage on the rendered ``indoor_linear`` drive at one
+``lap``       [Yan 2020]: one lap of the line-feature EKF-SLAM, final error and NEES
+``nees``      [Zhao]: one Monte Carlo run of the fused Kalman filter (notebook 07, section 4)
+``table1``    [Zhao], Table 1: time per stage on the rendered ``indoor_linear`` drive at one
               resolution (notebook 08, section 2)
 
 Every task draws from its own parameters (``seed``); figures are plain numbers. Timings
@@ -21,11 +21,11 @@ import numpy as np
 
 from vo_lib.cli.sweep import Experiment
 
-#: Seed 000's Table 1 resolutions, largest first.
+#: [Zhao]'s Table 1 resolutions, largest first.
 TABLE1_RESOLUTIONS = ("640x480", "512x384", "400x300", "320x240", "256x192")
 
 
-# --------------------------------------------------------------------------- seed 004, Table III
+# --------------------------------------------------------------------------- [Yuan], Table III
 
 
 def corridor_setup(calibration_seed: int = 1000, every: int = 2):
@@ -89,7 +89,7 @@ def corridor_experiment(calibration_seed: int = 1000, every: int = 2) -> Experim
         "corridor",
         corridor_task,
         functools.partial(corridor_setup, calibration_seed, every),
-        "seed 004, Table III (LBPT and VOAPT along the occluded corridor)",
+        "[Yuan], Table III (LBPT and VOAPT along the occluded corridor)",
     )
 
 
@@ -97,11 +97,11 @@ def corridor_tasks(seeds: int, calibration_seed: int = 1000, every: int = 2) -> 
     return [{"seed": s, "calibration_seed": calibration_seed, "every": every} for s in range(seeds)]
 
 
-# --------------------------------------------------------------------------- seed 002, laps
+# --------------------------------------------------------------------------- [Yan 2020], laps
 
 
 def lap_task(params: dict, context=None) -> dict:
-    """One lap of seed 002's EKF-SLAM: final errors (m), mean and final NEES, landmarks mapped."""
+    """One lap of [Yan 2020]'s EKF-SLAM: final errors (m), mean and final NEES, landmarks mapped."""
     from vo_lib.line_slam.lap import LineSlamScenario, simulate_lap
 
     scenario = LineSlamScenario(observation=params.get("observation", "feature_point"))
@@ -117,14 +117,14 @@ def lap_task(params: dict, context=None) -> dict:
     }
 
 
-LAP = Experiment("lap", lap_task, None, "seed 002, one lap of line-feature EKF-SLAM per seed")
+LAP = Experiment("lap", lap_task, None, "[Yan 2020], one lap of line-feature EKF-SLAM per seed")
 
 
 def lap_tasks(seeds: int, observer: str = "closed_form", observation: str = "feature_point") -> list[dict]:
     return [{"seed": s, "observer": observer, "observation": observation} for s in range(seeds)]
 
 
-# --------------------------------------------------------------------------- seed 000, NEES
+# --------------------------------------------------------------------------- [Zhao], NEES
 
 #: Notebook 07's Monte Carlo settings: VO noise, initial covariance.
 NEES_R_VO = np.diag([math.radians(0.05) ** 2, 0.002**2])
@@ -163,7 +163,7 @@ def nees_task(params: dict, context=None) -> dict:
     }
 
 
-NEES = Experiment("nees", nees_task, None, "seed 000, consistency of the fused Kalman filter (pose NEES)")
+NEES = Experiment("nees", nees_task, None, "[Zhao], consistency of the fused Kalman filter (pose NEES)")
 
 
 def nees_tasks(seeds: int, steps: int = 150, first_seed: int = 1000) -> list[dict]:
@@ -178,7 +178,7 @@ def nees_band(runs: int) -> tuple[float, float]:
     return float(lo), float(hi)
 
 
-# --------------------------------------------------------------------------- seed 000, Table 1
+# --------------------------------------------------------------------------- [Zhao], Table 1
 
 
 def table1_task(params: dict, context=None) -> dict:
@@ -195,7 +195,7 @@ def table1_task(params: dict, context=None) -> dict:
     return out
 
 
-TABLE1 = Experiment("table1", table1_task, None, "seed 000, Table 1: time per stage at five resolutions")
+TABLE1 = Experiment("table1", table1_task, None, "[Zhao], Table 1: time per stage at five resolutions")
 
 
 def table1_tasks(seeds: int, frames: int = 40) -> list[dict]:

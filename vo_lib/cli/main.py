@@ -77,8 +77,8 @@ def build_parser() -> argparse.ArgumentParser:
     parser = _Parser(
         prog=prog,
         description=wrap(
-            "Stereo visual odometry for a crawler robot (seed 000), line-feature EKF-SLAM (seed 002) "
-            "and VO-assisted laser pose tracking (seed 004), run from the command line. Each command has "
+            "Stereo visual odometry for a crawler robot [Zhao], line-feature EKF-SLAM [Yan 2020] "
+            "and VO-assisted laser pose tracking [Yuan], run from the command line. Each command has "
             "its own --help."
         ),
         epilog=example(
@@ -100,7 +100,7 @@ def build_parser() -> argparse.ArgumentParser:
         "run",
         help="run the stereo visual odometry pipeline on a sample or a KITTI-layout folder",
         description=wrap(
-            "Run seed 000's stereo visual odometry on a sequence and print a timing table and, "
+            "Run [Zhao]'s stereo visual odometry on a sequence and print a timing table and, "
             "where the sequence has ground truth, its errors. A named sample is rendered into data/ on "
             "first use (a minute or so) and reused after. Writes into --out (default runs/NAME): "
             "poses.txt (KITTI), trajectory.tum (TUM), timings.csv, diagnostics.csv and trajectory.png."

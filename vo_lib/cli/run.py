@@ -35,7 +35,7 @@ if TYPE_CHECKING:
     from vo_lib.stereo_vo.pipeline import PipelineResult
 
 DEFAULT_SEQUENCE = "indoor_linear"
-#: Seed 000, Table 1: mean milliseconds of stereo processing, parameter estimation and Kalman
+#: [Zhao], Table 1: mean milliseconds of stereo processing, parameter estimation and Kalman
 #: filtering at each of the five resolutions the paper timed.
 PAPER_TABLE1 = {
     (640, 480): {"stereo": 48.969, "estimation": 0.874, "kalman": 0.161},
@@ -44,7 +44,7 @@ PAPER_TABLE1 = {
     (320, 240): {"stereo": 22.165, "estimation": 0.662, "kalman": 0.168},
     (256, 192): {"stereo": 22.460, "estimation": 0.610, "kalman": 0.153},
 }
-#: Seed 000, IV.A.1: mean and standard deviation of the whole frame over 10,000 frames (ms).
+#: [Zhao], IV.A.1: mean and standard deviation of the whole frame over 10,000 frames (ms).
 PAPER_LONG_RUN_MS = (26.5511, 4.551)
 
 

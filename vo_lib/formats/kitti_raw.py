@@ -54,7 +54,7 @@ def wheel_distances_from_oxts(oxts: np.ndarray, times: np.ndarray, gauge: float)
 
     Between frames ``k-1`` and ``k`` the car travels ``s = mean(vf) dt`` and turns by
     ``dpsi = mean(wz) dt`` (trapezoidal rule); wheels ``gauge`` apart then travel
-    ``s -/+ gauge dpsi / 2``, which the track-odometry model (seed 000, eq. 4) turns back into the
+    ``s -/+ gauge dpsi / 2``, which the track-odometry model ([Zhao], eq. 4) turns back into the
     same ``s`` and ``dpsi``.
     """
     times = np.asarray(times, float)

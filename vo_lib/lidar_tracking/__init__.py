@@ -1,4 +1,4 @@
-"""Seed 004: LIDAR pose tracking assisted by visual odometry (VOAPT).
+"""[Yuan]: LIDAR pose tracking assisted by visual odometry (VOAPT).
 
 ``likelihood_field``      occupancy grid, likelihood field, scoring of sample poses (III.A)
 ``pose_tracking``         LBPT and VOAPT: score statistics and ``C_s`` (eq. 11-13), control
@@ -10,5 +10,5 @@
 
 The one exception to the independence of the wings: this paper builds on a stereo visual
 odometer, so this wing may import ``vo_lib.stereo_vo`` (``pnp_odometry`` detects and matches with
-seed 000's stereo front end). The independence contract in ``pyproject.toml`` states the same.
+[Zhao]'s stereo front end). The independence contract in ``pyproject.toml`` states the same.
 """

@@ -1,4 +1,4 @@
-"""Seed 004's corridor experiment: LBPT alone against VOAPT along the occluded corridor.
+"""[Yuan]'s corridor experiment: LBPT alone against VOAPT along the occluded corridor.
 
 The robot drives the ``corridor`` sample's path (1 m to 28 m along the axis at 0.5 m/s). Each
 seed draws its own encoder noise and slip (the odometry), laser noise and pose samples; the
@@ -48,7 +48,7 @@ def corridor_drive(seed: int):
 def corridor_visual_odometry(
     frames: int | None = None, resolution=(640, 480)
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Run seed 004's PnP visual odometer on the rendered corridor sample (in memory).
+    """Run [Yuan]'s PnP visual odometer on the rendered corridor sample (in memory).
 
     Returns ``(planar robot poses in the world frame (K, 3), seconds per frame)``; the renderer
     is not timed.
@@ -227,7 +227,7 @@ def run_experiment(
 
 #: The README's Table III is over this many seeds.
 README_SEEDS = 20
-#: Seed 004, Table III, X (along the corridor): max, mean, median, std in metres.
+#: [Yuan], Table III, X (along the corridor): max, mean, median, std in metres.
 PAPER_TABLE3_X = {
     "LBPT": {"max": 1.060, "mean": 0.332, "median": 0.153, "std": 0.357},
     "VOAPT": {"max": 0.148, "mean": 0.045, "median": 0.047, "std": 0.029},
@@ -239,7 +239,7 @@ def _arguments(argv=None):
 
     parser = OneLineParser(
         prog="python -m vo_lib.lidar_tracking.corridor_experiment",
-        description="Seed 004's occluded corridor: LBPT against VOAPT over many seeds (Table III).",
+        description="[Yuan]'s occluded corridor: LBPT against VOAPT over many seeds (Table III).",
     )
     parser.add_argument(
         "--seeds",

@@ -1,5 +1,5 @@
 """Occupancy grid and likelihood field of a world's mapped segments, and the scoring of many
-candidate poses against one laser scan (seed 004, section III.A).
+candidate poses against one laser scan ([Yuan], section III.A).
 
 The grid marks the cells crossed by mapped segments; the likelihood field holds, per cell,
 ``exp(-d^2 / (2 sigma^2))`` with ``d`` the distance to the nearest occupied cell (OpenCV's

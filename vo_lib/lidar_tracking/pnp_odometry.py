@@ -1,4 +1,4 @@
-"""Seed 004's visual odometer (section II): ORB landmarks, motion-model matching, PnP with
+"""[Yuan]'s visual odometer (section II): ORB landmarks, motion-model matching, PnP with
 RANSAC, and a local map of key frames.
 
 * Landmarks are ORB features with a 3-D position; similarity is the Hamming distance (eq. 1).
@@ -64,7 +64,7 @@ class PnpStep:
 
 
 class PnpVisualOdometry:
-    """Frame-by-frame 6-DoF visual odometry of seed 004 on a rectified stereo pair."""
+    """Frame-by-frame 6-DoF visual odometry of [Yuan] on a rectified stereo pair."""
 
     def __init__(
         self,

@@ -1,4 +1,4 @@
-"""Laser-based pose tracking (LBPT) and its visual-odometry-assisted form (VOAPT), seed 004
+"""Laser-based pose tracking (LBPT) and its visual-odometry-assisted form (VOAPT), [Yuan]
 section III.
 
 LBPT: around the odometry's prediction ``P_odom`` draw ``n`` sample poses, score each against

@@ -1,4 +1,4 @@
-"""Seed 002: EKF-SLAM with line-segment landmarks seen by a simulated laser, whose visible part
+"""[Yan 2020]: EKF-SLAM with line-segment landmarks seen by a simulated laser, whose visible part
 is found by bisection instead of point by point.
 
 ``range_bearing``       range-bearing observation of a point and its inverse (eq. 8-12)

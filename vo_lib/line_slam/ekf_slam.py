@@ -1,4 +1,4 @@
-"""EKF-SLAM with one feature point per line landmark (seed 002, eq. 1-13): bicycle prediction,
+"""EKF-SLAM with one feature point per line landmark ([Yan 2020], eq. 1-13): bicycle prediction,
 updates, Mahalanobis data association and state augmentation.
 
 The state is ``X = [x_v, y_v, phi, x_1, y_1, ..., x_N, y_N]`` (eq. 1-3): the vehicle pose and one
@@ -137,7 +137,7 @@ class EkfSlam:
 
     def euclidean(self, z) -> np.ndarray:
         """Plain distance, in metres, from the observed feature point (placed with the estimated
-        pose) to every landmark's: the association seed 002 argues against."""
+        pose) to every landmark's: the association [Yan 2020] argues against."""
         point, _, _ = self.model.invert(self.x[:3], z)
         marks = self.x[3:].reshape(-1, 2)
         return np.hypot(marks[:, 0] - point[0], marks[:, 1] - point[1])

@@ -1,4 +1,4 @@
-"""Seed 002's simulation: a car-like robot laps four line landmarks, observed by a simulated
+"""[Yan 2020]'s simulation: a car-like robot laps four line landmarks, observed by a simulated
 laser whose visible part of each segment comes from one of the three observers, mapped and
 localised by EKF-SLAM.
 
@@ -37,7 +37,7 @@ PAPER_WAYPOINTS = ((25.0, 0.0), (0.0, -20.0), (-35.0, 0.0), (-35.0, 10.0), (0.0,
 
 @dataclass(frozen=True)
 class LineSlamScenario:
-    """Seed 002's simulation settings.
+    """[Yan 2020]'s simulation settings.
 
     Printed in the paper: speed, its noise, steering limits and noise, the control period, the
     laser's range and noise, landmarks and waypoints. Our choices (not printed): the wheelbase
@@ -257,12 +257,12 @@ def heading_errors(run: LineSlamRun) -> np.ndarray:
     return wrap_angle(run.estimate[:, 2] - run.truth[:, 2])
 
 
-#: The README's seed 002 figures: laps over this many seeds, and extended-landmark laps over this many.
+#: The README's [Yan 2020] figures: laps over this many seeds, and extended-landmark laps over this many.
 README_SEEDS, README_EXTENDED_SEEDS = 20, 10
 
 
 def lap_statistics(seeds) -> dict[str, float]:
-    """The README's seed 002 figures over laps of ``seeds`` (closed-form observer).
+    """The README's [Yan 2020] figures over laps of ``seeds`` (closed-form observer).
 
     Final position error of EKF-SLAM and of dead reckoning (mean and standard deviation over the
     laps), the pose NEES averaged over laps and steps, its 95 % band for that many laps (chi-square
@@ -295,7 +295,7 @@ def _arguments(argv=None):
 
     parser = OneLineParser(
         prog="python -m vo_lib.line_slam.lap",
-        description="Seed 002's lap with EKF-SLAM: the README's figures over many seeds.",
+        description="[Yan 2020]'s lap with EKF-SLAM: the README's figures over many seeds.",
     )
     parser.add_argument(
         "--seeds",

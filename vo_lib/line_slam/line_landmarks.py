@@ -1,8 +1,8 @@
-"""Line-segment landmarks of seed 002 and their "landmark feature point".
+"""Line-segment landmarks of [Yan 2020] and their "landmark feature point".
 
 A landmark is a wall segment of the shared :class:`~vo_lib.sim.world.World`. The filter does not carry
 the segment itself: it carries the foot of the perpendicular from the world origin to the
-segment's line (seed 002, section 1.3), a point that fixes the infinite line. For drawing, the
+segment's line ([Yan 2020], section 1.3), a point that fixes the infinite line. For drawing, the
 segment's visible end points are projected onto the line through that point.
 """
 
@@ -14,7 +14,7 @@ import numpy as np
 
 from vo_lib.sim.world import Segment, World
 
-#: Seed 002's four landmarks: (left x, right x, slope, intercept). The parameter list of section 3
+#: [Yan 2020]'s four landmarks: (left x, right x, slope, intercept). The parameter list of section 3
 #: prints landmark 3 as (0, 60, 7/9, -35); its text on the out-of-range case says that case moves
 #: landmark 3's right end "from 45 to 60". We read the list as giving the extended landmark and
 #: take x = 45 for the normal case, as the text implies (the paper's Fig. 6 is not available to
@@ -43,12 +43,12 @@ def segment_from_slope(
 
 
 def paper_world(extended: bool = False) -> World:
-    """Seed 002's landmarks as a world; ``extended`` moves landmark 3's right end to x = 60."""
+    """[Yan 2020]'s landmarks as a world; ``extended`` moves landmark 3's right end to x = 60."""
     rows = [list(r) for r in PAPER_LANDMARKS]
     if extended:
         rows[2][1] = EXTENDED_RIGHT_X
     segs = tuple(segment_from_slope(*r, seed=i) for i, r in enumerate(rows))
-    return World("seed002_landmarks", segs, (-65.0, 65.0, -45.0, 45.0), seed=2)
+    return World("yan2020_landmarks", segs, (-65.0, 65.0, -45.0, 45.0), seed=2)
 
 
 def feature_point(a, b) -> np.ndarray:

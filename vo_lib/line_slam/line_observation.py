@@ -1,4 +1,4 @@
-"""Seed 002's observation of a line segment, and the line measurement a filter can use.
+"""[Yan 2020]'s observation of a line segment, and the line measurement a filter can use.
 
 Section 1 of the paper describes a line feature seen by the laser by "the distance from the robot
 to the line and the start and end angles of the observed segment": the triple ``(d, a_s, a_e)``

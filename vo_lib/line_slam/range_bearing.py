@@ -1,4 +1,4 @@
-"""Range-bearing observation of a point landmark (seed 002, eq. 8-12) and its inverse.
+"""Range-bearing observation of a point landmark ([Yan 2020], eq. 8-12) and its inverse.
 
 From the robot pose ``(x_v, y_v, phi)`` a point ``(x_i, y_i)`` is seen at
 

@@ -1,4 +1,4 @@
-"""Which part of a line segment lies within a laser's range: three observers (seed 002, section 2).
+"""Which part of a line segment lies within a laser's range: three observers ([Yan 2020], section 2).
 
 Each returns the visible part of the segment ``A -> B`` seen from the robot position ``G`` with
 maximum range ``D``, as segment parameters ``(t_start, t_end)`` with ``P(t) = A + t (B - A)``,
@@ -24,7 +24,7 @@ import math
 
 import numpy as np
 
-#: Default accuracy of the approximate observers, metres (a tenth of seed 002's 0.1 m range noise).
+#: Default accuracy of the approximate observers, metres (a tenth of [Yan 2020]'s 0.1 m range noise).
 DEFAULT_TOLERANCE = 0.01
 
 
@@ -75,7 +75,7 @@ def _bisect(a, d, centre, r2: float, t_in: float, t_out: float, t_tol: float) ->
 
 
 def visible_segment_bisection(a, b, centre, max_range: float, tolerance: float = DEFAULT_TOLERANCE):
-    """Seed 002's observer: choose the order of computation by where the foot of the perpendicular
+    """[Yan 2020]'s observer: choose the order of computation by where the foot of the perpendicular
     from ``G`` falls (Fig. 3 and 4), decide the easy cases from end-point distances, and bisect the
     crossing of ``F = d - D_max`` otherwise."""
     d = (b[0] - a[0], b[1] - a[1])

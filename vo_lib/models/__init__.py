@@ -1,8 +1,8 @@
 """Motion models shared by the simulation and the estimators.
 
-``track_odometry``   crawler track odometry and its covariance (seed 000, eq. 2-11):
+``track_odometry``   crawler track odometry and its covariance ([Zhao], eq. 2-11):
                      :class:`~vo_lib.models.track_odometry.TrackOdometry`
-``bicycle``          the front-wheel-steered car of seed 002 (eq. 4-5, Jacobians eq. 6-7) and
+``bicycle``          the front-wheel-steered car of [Yan 2020] (eq. 4-5, Jacobians eq. 6-7) and
                      its waypoint-following steering
 
 Start with ``track_odometry``: the simulator drives the crawler with it (``vo_lib.sim``) and

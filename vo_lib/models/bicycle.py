@@ -1,4 +1,4 @@
-"""The bicycle (front-wheel-steered) vehicle of seed 002: motion model eq. 4-5, Jacobians eq. 6-7,
+"""The bicycle (front-wheel-steered) vehicle of [Yan 2020]: motion model eq. 4-5, Jacobians eq. 6-7,
 and a waypoint-following steering controller.
 
 With speed ``V``, steering angle ``a`` of the front wheel, wheelbase ``L`` and period ``T``, the
@@ -21,11 +21,11 @@ import numpy as np
 
 from vo_lib.geometry import wrap_angle
 
-#: Seed 002's vehicle: 3 m/s, steering at most 30 degrees, turned at most pi/9 rad/s.
+#: [Yan 2020]'s vehicle: 3 m/s, steering at most 30 degrees, turned at most pi/9 rad/s.
 PAPER_SPEED = 3.0
 PAPER_MAX_STEER = math.radians(30.0)
 PAPER_MAX_STEER_RATE = math.pi / 9
-#: Not printed in seed 002; 4 m is the wheelbase of the widely used EKF-SLAM simulator whose other
+#: Not printed in [Yan 2020]; 4 m is the wheelbase of the widely used EKF-SLAM simulator whose other
 #: settings the paper repeats exactly.
 DEFAULT_WHEELBASE = 4.0
 

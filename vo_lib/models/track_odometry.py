@@ -1,4 +1,4 @@
-"""Crawler track odometry (seed 000, eq. 2-11) and its covariance propagation.
+"""Crawler track odometry ([Zhao], eq. 2-11) and its covariance propagation.
 
 A crawler turns about an instantaneous centre on its lateral axis. In one sampling interval the
 left and right tracks travel ``du_left`` and ``du_right``; with the effective gauge ``D + 2b``

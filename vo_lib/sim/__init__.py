@@ -8,7 +8,7 @@
 ``trajectories``   crawler drives with slipping tracks: truth and what the encoders report
 ``road``           the road drive: a car's path, the road's climb and bank, the car's 6-DoF poses
 ``disturbances``   blank, noisy and occluded frames
-``samples``        the named samples (seed 000's experiments, seed 004's corridor), rendered
+``samples``        the named samples ([Zhao]'s experiments, [Yuan]'s corridor), rendered
                    to the KITTI layout of ``vo_lib.formats``
 ``frame_store``    rendered frames kept on disk for the next process (``VO_LIB_FRAME_STORE``)
 ``realism``        image statistics that compare rendered frames with real ones

@@ -31,7 +31,7 @@ class LaserScan:
 
 @dataclass(frozen=True)
 class LaserScanner:
-    """A planar scanner like the SICK TIM551 of seed 004 (270 degrees, 1/3 degree, 10 m).
+    """A planar scanner like the SICK TIM551 of [Yuan] (270 degrees, 1/3 degree, 10 m).
 
     Parameters
     ----------

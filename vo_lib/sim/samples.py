@@ -1,4 +1,4 @@
-"""Named sample sequences that mirror the experiments of seed 000 (and the corridor of seed 004).
+"""Named sample sequences that mirror the experiments of [Zhao] (and the corridor of [Yuan]).
 
 Each sample is a world, a rig, a drive and a rate. :func:`generate` renders it in the KITTI layout
 with ground truth (``poses.txt``), track odometry (``odometry.txt``) and a ``manifest.json`` that
@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import hashlib
 import time
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -118,7 +118,7 @@ SAMPLES: dict[str, Sample] = {
         Sample(
             "indoor_linear",
             "straight forward and back: relative error of linear motion",
-            "seed 000, IV.A.2 (200 frames forward, 200 back)",
+            "[Zhao], IV.A.2 (200 frames forward, 200 back)",
             "indoor_lab",
             (-3.5, 0.5, 0.0),
             30.0,
@@ -129,7 +129,7 @@ SAMPLES: dict[str, Sample] = {
         Sample(
             "indoor_free",
             "arcs and straights in the lab: heading and position at key positions",
-            "seed 000, IV.A.3 (free motion), with a trolley pushed through the lab",
+            "[Zhao], IV.A.3 (free motion), with a trolley pushed through the lab",
             "indoor_lab_cart",
             (-4.5, -0.8, 0.0),
             30.0,
@@ -147,7 +147,7 @@ SAMPLES: dict[str, Sample] = {
         Sample(
             "outdoor_linear",
             "long straight forward and back in an open yard: low parallax",
-            "seed 000, IV.B.1 (600 frames forward, 600 back)",
+            "[Zhao], IV.B.1 (600 frames forward, 600 back)",
             "outdoor_yard",
             (-6.0, -2.0, 0.0),
             30.0,
@@ -158,7 +158,7 @@ SAMPLES: dict[str, Sample] = {
         Sample(
             "spot_turn",
             "turning on the spot, with strong unequal track slip",
-            "seed 000, IV.B.2 (1800 frames of spot turns)",
+            "[Zhao], IV.B.2 (1800 frames of spot turns)",
             "outdoor_yard",
             (0.0, 0.0, 0.0),
             30.0,
@@ -169,7 +169,7 @@ SAMPLES: dict[str, Sample] = {
         Sample(
             "outdoor_free",
             "free driving in the yard: errors at key positions (Table 2)",
-            "seed 000, IV.B.3 (about 1400 frames)",
+            "[Zhao], IV.B.3 (about 1400 frames)",
             "outdoor_yard",
             (-10.0, -4.0, 0.3),
             30.0,
@@ -180,7 +180,7 @@ SAMPLES: dict[str, Sample] = {
         Sample(
             "spot_turn_2",
             "turning on the spot the other way, for longer: the paper's second set",
-            "seed 000, IV.B.2 (2400 frames of spot turns, second set)",
+            "[Zhao], IV.B.2 (2400 frames of spot turns, second set)",
             "outdoor_yard",
             (0.0, 0.0, 0.0),
             30.0,
@@ -191,7 +191,7 @@ SAMPLES: dict[str, Sample] = {
         Sample(
             "outdoor_free_2",
             "a longer tour of the yard, quarter turns both ways: Table 2, set 2",
-            "seed 000, IV.B.3 (2419 frames, second set)",
+            "[Zhao], IV.B.3 (2419 frames, second set)",
             "outdoor_yard",
             (-18.0, 14.0, 3.14),
             30.0,
@@ -204,7 +204,7 @@ SAMPLES: dict[str, Sample] = {
         Sample(
             "outdoor_free_3",
             "the longest tour, at the far end of the yard: Table 2, set 3",
-            "seed 000, IV.B.3 (2670 frames, third set)",
+            "[Zhao], IV.B.3 (2670 frames, third set)",
             "outdoor_yard",
             # from the open south end: the tour sees sky and far fronts (bench realism in range)
             (0.0, -35.0, 0.524),
@@ -216,7 +216,7 @@ SAMPLES: dict[str, Sample] = {
         Sample(
             "long_run",
             "ten laps of an oval, 10,000 frames: the timing run (render it in memory: bench long)",
-            "seed 000, IV.A.1 (10000 frames, elapsed time per frame)",
+            "[Zhao], IV.A.1 (10000 frames, elapsed time per frame)",
             "outdoor_yard",
             (-22.0, 2.0, 1.57),
             30.0,
@@ -240,13 +240,13 @@ SAMPLES: dict[str, Sample] = {
         Sample(
             "corridor",
             "along a corridor whose cross features are hidden over a stretch",
-            "seed 004, corridor experiment",
+            "[Yuan], corridor experiment",
             "corridor",
             (1.0, 0.0, 0.0),
             10.0,
             (Leg(540, 0.5),),
             seed=106,
-            # the sensor seed 004's figures were measured with (README, Table III): noise of
+            # the sensor [Yuan]'s figures were measured with (README, Table III): noise of
             # 1 grey level, fixed exposure
             sensor_noise=1.0,
             exposure_sigma=0.0,
@@ -258,9 +258,11 @@ SAMPLES: dict[str, Sample] = {
 def fingerprint(name: str) -> str:
     """A short hash of everything that shapes a sample's images: its definition and its world.
 
-    A cached sample whose manifest carries another fingerprint is out of date.
+    The prose that describes a sample (``purpose``, ``mirrors``) is left out: rewording it leaves
+    the images as they were. A cached sample whose manifest carries another fingerprint is out of
+    date.
     """
-    sample = get_sample(name)
+    sample = replace(get_sample(name), purpose="", mirrors="")
     text = repr(sample) + repr(WORLDS[sample.world]()) + f"textures {TEXTURE_VERSION}"
     return hashlib.sha1(text.encode()).hexdigest()[:16]
 

@@ -4,7 +4,7 @@ A drive is a list of legs (frames, speed, turn rate) that the robot follows over
 driver steering to a plan would. To move a track by ``g`` over the ground when it slips by ``s``,
 the motor turns it by ``g / (1 - s)``; the encoders count that turning, with random-walk noise.
 Slip is small and nearly equal on both tracks when driving, strong and unequal in spot turns,
-where the tracks scrub sideways (the cause seed 000 gives for its spot-turn heading errors).
+where the tracks scrub sideways (the cause [Zhao] gives for its spot-turn heading errors).
 
 Slip alone changes only what the encoders read. How the tracks meet the ground also moves the
 body itself (:class:`TrackGround`): a skid-steered vehicle turns about an instantaneous centre of
@@ -100,7 +100,7 @@ class TrackGround:
     counts on, and the body rolls towards that side and pitches by an angle drawn in
     ``tilt_deg`` (a half-sine bump). ``roughness_deg`` adds the slow pitch and roll of uneven
     ground. The body rotates about its contact point on the ground, so a camera mounted above it
-    moves sideways and up and down: the planar model of seed 000 no longer holds exactly.
+    moves sideways and up and down: the planar model of [Zhao] no longer holds exactly.
 
     Parameters
     ----------

@@ -4,7 +4,7 @@ The same :class:`World` feeds the stereo renderer (``vo_lib.sim.render``), the l
 (``vo_lib.sim.laser``), the line landmarks of the EKF-SLAM notebook and the corridor of the
 pose-tracking notebook. A segment is a vertical rectangle standing on the floor (z = 0) between
 two plan points, with a height and a texture seed; ``mapped=False`` marks an obstacle the robot's
-map does not know (the umbrella of seed 004). Two additions only the camera sees: *patches*,
+map does not know (the umbrella of [Yuan]). Two additions only the camera sees: *patches*,
 flat textured quads in any orientation (a road that climbs and banks above the floor), and
 *movers*, textured boxes that drive along a path (traffic, a cart).
 """
@@ -238,7 +238,7 @@ def outdoor_yard(seed: int = 20) -> World:
 
 
 def corridor(seed: int = 30, length: float = 30.0, width: float = 3.0) -> World:
-    """The corridor of seed 004: two long walls, two pillars, two cross walls, a fire hydrant,
+    """The corridor of [Yuan]: two long walls, two pillars, two cross walls, a fire hydrant,
     and an unmapped umbrella that hides the second pillar from the stretch before it.
 
     Walls are painted, with doors and posters; pillars are plain, the floor tiled, the ceiling

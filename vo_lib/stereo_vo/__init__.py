@@ -1,4 +1,4 @@
-"""Seed 000: stereo visual odometry for a crawler robot, fused with its track odometry.
+"""[Zhao]: stereo visual odometry for a crawler robot, fused with its track odometry.
 
 Read in the order a frame is processed (``pipeline`` strings the parts of ``parts`` together):
 

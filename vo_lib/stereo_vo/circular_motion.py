@@ -1,4 +1,4 @@
-"""The planar circular-motion model of a camera on a crawler (seed 000, eq. 12-17).
+"""The planar circular-motion model of a camera on a crawler ([Zhao], eq. 12-17).
 
 Between two frames the camera turns by the deflection angle ``theta`` about its vertical (y)
 axis and moves along a chord of length ``rho`` that makes the angle ``phi = theta / 2`` with its
@@ -56,7 +56,7 @@ def degenerate_theta_mask(w_prev, w_curr, camera: StereoCamera, min_pixels: floa
 
 
 def theta_from_pixels(w_prev, w_curr, camera: StereoCamera) -> np.ndarray:
-    """Deflection angle ``theta`` of every match, from pixels alone (seed 000, eq. 14).
+    """Deflection angle ``theta`` of every match, from pixels alone ([Zhao], eq. 14).
 
     ``tan(theta / 2) = ((u'-u0)(v-v0) - (u-u0)(v'-v0)) / (fx (v + v' - 2 v0))``
 
@@ -111,7 +111,7 @@ def theta_variance(du, dv, du2, dv2, num, den, fx: float, sigma_px: float) -> np
 
 
 def rho_from_pixels(w_prev, w_curr, theta, camera: StereoCamera) -> np.ndarray:
-    """Chord length ``rho`` of every match given ``theta`` (seed 000, eq. 16-17, sign corrected).
+    """Chord length ``rho`` of every match given ``theta`` ([Zhao], eq. 16-17, sign corrected).
 
     ``rho = B/d [-sin phi, 0, cos phi](u-u0, ., fx) - B/d' [sin phi, 0, cos phi](u'-u0, ., fx)``
     with ``phi = theta / 2``; the paper prints ``+`` before the second term.
@@ -178,7 +178,7 @@ def apply_motion(points, theta: float, rho: float) -> np.ndarray:
 
 
 def motion_residuals(w_prev, w_curr, theta: float, rho: float, camera: StereoCamera) -> np.ndarray:
-    """``|| P' - (R P + T) ||`` per match, in metres (seed 000, eq. 21)."""
+    """``|| P' - (R P + T) ||`` per match, in metres ([Zhao], eq. 21)."""
     a, b = _pair(w_prev, w_curr)
     return np.linalg.norm(camera.backproject(b) - apply_motion(camera.backproject(a), theta, rho), axis=1)
 

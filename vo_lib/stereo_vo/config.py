@@ -1,6 +1,6 @@
 """The settings of the stereo VO pipeline, as one frozen structure, and its two presets.
 
-:data:`CRAWLER` is the paper's robot (seed 000): single-scale FAST corners, the planar
+:data:`CRAWLER` is the paper's robot [Zhao]: single-scale FAST corners, the planar
 circular-motion model, track odometry. :data:`CAR` is a car on a real road (KITTI): a two-scale
 front end, the 1-point RANSAC seen from a virtual camera on the turning axis, a 6-DoF refinement
 and the camera's mount. Where the two differ, the field says why; a researcher sweeps a setting

@@ -1,6 +1,6 @@
 """Stereo front end: FAST corners, binary descriptors, matching along rows by Hamming distance.
 
-Per stereo pair (seed 000, III.A.1):
+Per stereo pair ([Zhao], III.A.1):
 
 1. FAST corners in the left image, spread by grid bucketing (the strongest few per cell) and
    capped in number; FAST corners in the right image near the rows of the kept left ones.

@@ -1,4 +1,4 @@
-"""Kalman filter fusing crawler track odometry with visual odometry (seed 000, eq. 1-11, III.A.2-4).
+"""Kalman filter fusing crawler track odometry with visual odometry ([Zhao], eq. 1-11, III.A.2-4).
 
 The state is the planar pose ``(x, y, yaw)``. Visual odometry measures the *relative* motion
 between two frames, ``(theta, rho)`` of the circular-motion model, which depends on the current
@@ -44,7 +44,7 @@ CV_SIGMA = (0.01, 0.005, math.radians(0.3))
 def constrained_measurement(state6: np.ndarray) -> np.ndarray:
     """``(theta, rho, sideways)``: the VO measurement and the deviation of the motion from its chord.
 
-    The circular-motion model (seed 000, eq. 15) puts the motion on the chord at ``theta / 2``; the
+    The circular-motion model ([Zhao], eq. 15) puts the motion on the chord at ``theta / 2``; the
     third component measures how far the increment strays from it, and the update observes it as
     zero: the nonholonomic constraint of a crawler, which (theta, rho) alone leave unobserved.
     """

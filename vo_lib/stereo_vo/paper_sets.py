@@ -1,4 +1,4 @@
-"""Seed 000's experiments at the paper's length: the two spot-turn sets (IV.B.2, Fig. 10), the
+"""[Zhao]'s experiments at the paper's length: the two spot-turn sets (IV.B.2, Fig. 10), the
 three free-motion sets of Table 2 (IV.B.3), outdoor linear motion (IV.B.1) and indoor free motion
 (IV.A.3), run through the full pipeline and reported the way the paper reports them, as the
 average (AVG) and standard deviation (S.D.) of the errors at key positions.
@@ -34,15 +34,15 @@ KEY_EVERY = 50
 #: The pipeline's seed for these runs (notebook 08's).
 SEED = 8
 
-#: Seed 000, IV.B.2: heading error of the two spot-turn sets, AVG and S.D. in degrees.
+#: [Zhao], IV.B.2: heading error of the two spot-turn sets, AVG and S.D. in degrees.
 PAPER_SPOT = {"spot_turn": (6.38, 6.38), "spot_turn_2": (4.09, 8.17)}
-#: Seed 000, Table 2: AVG and S.D. of the x, y (mm) and heading (deg) errors of the three sets.
+#: [Zhao], Table 2: AVG and S.D. of the x, y (mm) and heading (deg) errors of the three sets.
 PAPER_TABLE2 = {
     "outdoor_free": {"x_mm": (47.1, 36.4), "y_mm": (268.4, 287.7), "theta_deg": (2.32, 2.57)},
     "outdoor_free_2": {"x_mm": (-326.2, 818.1), "y_mm": (-1057.3, 950.6), "theta_deg": (16.68, 5.32)},
     "outdoor_free_3": {"x_mm": (-25.4, 135.8), "y_mm": (-131.9, 115.1), "theta_deg": (2.43, 3.68)},
 }
-#: Seed 000, IV.B.1 (outdoor linear motion, x and y) and IV.A.3 (indoor free motion): AVG, S.D.
+#: [Zhao], IV.B.1 (outdoor linear motion, x and y) and IV.A.3 (indoor free motion): AVG, S.D.
 PAPER_OTHER = {
     "outdoor_linear": {"x_mm": (15.8, 53.0), "y_mm": (124.5, 40.3)},
     "indoor_free": {"x_mm": (-1.5, 47.4), "y_mm": (7.4, 8.5), "theta_deg": (0.05, 0.56)},

@@ -1,6 +1,6 @@
 """The small interfaces between the pipeline's steps, and what passes through them.
 
-A frame goes through four parts (seed 000, Fig. 3): the **front end** turns a stereo pair into
+A frame goes through four parts ([Zhao], Fig. 3): the **front end** turns a stereo pair into
 features ``w = (u, v, d)``; the **motion model** predicts the motion from the filter, matches the
 features against the reference frame's inside the predicted windows and estimates the motion of
 the matches; the **filter** (:class:`~vo_lib.stereo_vo.kalman.VoKalmanFilter`) fuses it with the

@@ -1,4 +1,4 @@
-"""The stereo visual odometry pipeline of seed 000, frame by frame (Fig. 3 of the paper).
+"""The stereo visual odometry pipeline of [Zhao], frame by frame (Fig. 3 of the paper).
 
 Per frame, :meth:`StereoOdometry.process` runs four parts (``parts`` gives their interfaces):
 
@@ -57,7 +57,7 @@ MIN_HISTORY = 5
 
 
 class StereoOdometry:
-    """Seed 000's pipeline: stereo front end, prediction and matching, motion estimation, filter.
+    """[Zhao]'s pipeline: stereo front end, prediction and matching, motion estimation, filter.
 
     Parameters
     ----------

@@ -24,7 +24,7 @@ RETRY_HISTORY = 5
 
 
 class PlanarMotion:
-    """Circular motion of a camera above the turning axis on a flat floor (seed 000)."""
+    """Circular motion of a camera above the turning axis on a flat floor [Zhao]."""
 
     camera_pose = None
 

@@ -1,4 +1,4 @@
-"""1-point RANSAC for the planar circular-motion model (seed 000, III.A.3, eq. 18-21).
+"""1-point RANSAC for the planar circular-motion model ([Zhao], III.A.3, eq. 18-21).
 
 One match determines the motion: theta from its pixels alone (eq. 14), then rho from its pixels
 and disparities (eq. 17, sign corrected). Following the paper, the search runs in two phases.

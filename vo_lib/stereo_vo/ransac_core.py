@@ -57,7 +57,7 @@ class CameraTerms(NamedTuple):
 
 def hypotheses_needed(inlier_ratio, confidence=0.999, sample_size=1):
     """Hypotheses so that at least one is all-inlier with probability ``confidence``:
-    ``ceil(log(1 - p) / log(1 - w**s))`` (seed 000, III.A.3)."""
+    ``ceil(log(1 - p) / log(1 - w**s))`` ([Zhao], III.A.3)."""
     w = min(max(float(inlier_ratio), 1e-9), 1.0)
     good = w**sample_size
     if good >= 1.0:

@@ -1,6 +1,6 @@
 """1-point RANSAC in plain NumPy: the twin of the compiled ``ransac_core``, for reading.
 
-Each function is one step of the estimator of seed 000, III.A.3 (the rules and their reasons are
+Each function is one step of the estimator of [Zhao], III.A.3 (the rules and their reasons are
 in ``vo_lib.stereo_vo.ransac``'s module text), and is registered as the plain twin of the kernel
 it mirrors: ``VO_LIB_PLAIN=1`` (or ``one_point_ransac(..., plain=True)``) runs these instead of
 the compiled kernels, so a reader can step through them in a debugger. They take the same

@@ -4,7 +4,7 @@ The Kalman filter predicts the circular motion ``(theta, rho)`` with a covarianc
 previous feature is moved by the predicted motion (eq. 15) and projected, giving a predicted
 ``(u, v, d)``; its uncertainty is ``J C J^T`` with ``J`` the derivative of the prediction with
 respect to ``(theta, rho)``, plus the pixel noise. Current features are candidates only inside
-that window, and the nearest descriptor wins (ratio test, mutual check). Seed 000 matches "in
+that window, and the nearest descriptor wins (ratio test, mutual check). [Zhao] matches "in
 the observation-prediction period" of the filter; this is that step. Without a prediction the
 matcher falls back to comparing every pair (brute force).
 """

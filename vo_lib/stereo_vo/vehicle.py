@@ -2,7 +2,7 @@
 
 Two kinds of vehicle reach the pipeline:
 
-* **the crawler** of the rendered samples (seed 000): the camera sits above the turning axis and
+* **the crawler** of the rendered samples [Zhao]: the camera sits above the turning axis and
   the floor is flat, so the planar circular-motion model (eq. 12-17) is exact; track distances
   come from ``odometry.txt``.
 * **a car** (KITTI): the camera is 1.6 m above the road and about a metre ahead of the axis it
@@ -45,7 +45,7 @@ KITTI_CAMERA_IN_IMU = (1.08, -0.31, 0.73)
 class VehicleKind(str, Enum):
     """What carries the camera."""
 
-    CRAWLER = "crawler"  #: the tracked robot of seed 000
+    CRAWLER = "crawler"  #: the tracked robot of [Zhao]
     CAR = "car"
 
     def __str__(self) -> str:
@@ -72,7 +72,7 @@ class Vehicle:
     mount : ndarray, 4x4
         ``T_vehicle_camera``: the left camera's pose in the vehicle frame.
     odometry_model : TrackOdometry
-        Gauge and noise of the odometry (seed 000, eq. 2-11).
+        Gauge and noise of the odometry ([Zhao], eq. 2-11).
     odometry : ndarray (N, 2) or None
         Left and right distances per frame (row 0 unused).
     odometry_source : str
@@ -100,7 +100,7 @@ def vehicle_of(sequence, use_odometry: bool = True) -> Vehicle:
     With ``use_odometry=False`` no odometry file is read (``odometry`` is None).
     """
     camera = sequence.manifest.get("camera", {}) if isinstance(sequence.manifest, dict) else {}
-    if "height_m" in camera:  # a rendered sample: the crawler of seed 000
+    if "height_m" in camera:  # a rendered sample: the crawler of [Zhao]
         mount = camera_mount(forward=float(camera.get("forward_m", 0.0)), height=float(camera["height_m"]))
         model = TrackOdometry(**sequence.manifest.get("track_odometry", {}))
         planar = camera.get("mount", "above turning axis") == "above turning axis"

@@ -111,7 +111,7 @@ def _angle_arc(ax, centre, start_dir, end_dir, radius: float, label: str, colour
 
 
 def draw_chord_geometry(ax, theta: float = 0.5, rho: float = 1.0, point=(1.2, 3.0)) -> dict:
-    """Plan view of the reconstructed Fig. 5 of seed 000: the camera moves from C to C' along a
+    """Plan view of the reconstructed Fig. 5 of [Zhao]: the camera moves from C to C' along a
     chord at phi = theta/2; a point X is seen at angle gamma from the chord at C and gamma' at C',
     at horizontal ranges r and r'. Coordinates: x right, z forward of the first camera.
 
@@ -159,7 +159,7 @@ def draw_chord_geometry(ax, theta: float = 0.5, rho: float = 1.0, point=(1.2, 3.
 
 
 def draw_depression_geometry(ax, r: float, r2: float, drop: float = 0.5) -> dict:
-    """Side view of the reconstructed Fig. 5 of seed 000: the two rays to X, each unfolded into its
+    """Side view of the reconstructed Fig. 5 of [Zhao]: the two rays to X, each unfolded into its
     own vertical plane, leave C and C' at the camera's height and fall by ``drop`` to the point
     at horizontal ranges ``r`` and ``r2``: depression angles alpha and alpha'.
 
@@ -183,7 +183,7 @@ def draw_depression_geometry(ax, r: float, r2: float, drop: float = 0.5) -> dict
 
 
 def plot_line_slam(ax, run, world, title: str = ""):
-    """Seed 002's Fig. 6/8: true path and segments, estimated path, feature points and segments."""
+    """[Yan 2020]'s Fig. 6/8: true path and segments, estimated path, feature points and segments."""
     for i, seg in enumerate(world.segments):
         ax.plot(
             *np.transpose([seg.start, seg.end]), color="C3", lw=2.5, label="true lines" if i == 0 else None
@@ -210,7 +210,7 @@ def plot_line_slam(ax, run, world, title: str = ""):
 
 
 def plot_pose_errors(axes, run, heading_errors):
-    """Seed 002's Fig. 7/9: x, y and heading errors over time with the filter's 2-sigma bounds."""
+    """[Yan 2020]'s Fig. 7/9: x, y and heading errors over time with the filter's 2-sigma bounds."""
     t = np.arange(len(run.truth)) * run.scenario.period
     errors = [run.estimate[:, 0] - run.truth[:, 0], run.estimate[:, 1] - run.truth[:, 1], heading_errors]
     sigmas = np.sqrt(np.stack([run.pose_cov[:, i, i] for i in range(3)]))
@@ -249,7 +249,7 @@ def draw_observer_case(ax, a, b, centre, max_range: float, part, title: str = ""
 
 
 def draw_circular_motion(ax, theta: float = 0.6, radius: float = 2.0, offset: float = 0.0) -> dict:
-    """Seed 000's Fig. 2, plan view of the first camera frame (x right, z forward): the robot
+    """[Zhao]'s Fig. 2, plan view of the first camera frame (x right, z forward): the robot
     turns by ``theta`` (left positive) about the instantaneous centre of rotation (ICR) at
     ``radius`` to the left of its turning axis, and the camera, ``offset`` ahead of that axis,
     moves from C to C' along a chord of length rho at the angle phi from its optical axis.

@@ -47,15 +47,15 @@ BENCHES: dict[str, Callable[[], dict[str, float]]] = {
 #: What each benchmark times and how long it runs (wall time of one run on the shared 2-core
 #: development machine under load, rounded; ``bench --help`` lists them).
 BENCH_HELP: dict[str, tuple[str, str]] = {
-    "pipeline": ("seed 000's pipeline, stage by stage, on 200 rendered frames", "about 15 s"),
+    "pipeline": ("[Zhao]'s pipeline, stage by stage, on 200 rendered frames", "about 15 s"),
     "long": ("the paper's 10,000-frame timing run (IV.A.1), rendered in memory", "about 6 min"),
     "ransac": ("1-point RANSAC against 3-point rigid RANSAC and OpenCV's solvePnPRansac", "about 30 s"),
     "frontend": ("the stereo front end per stage, guided against brute-force matching", "about 10 s"),
     "geometry": ("theta and rho (eq. 12-17) for 10,000 matches against a Python loop", "about 5 s"),
     "sensors": ("the stereo renderer per world, and the laser scanner", "about 15 s"),
-    "observers": ("seed 002's segment observers: point by point, bisection, closed form", "about 10 s"),
-    "tracking": ("seed 004's likelihood-field scoring, vectorised against pose by pose", "about 5 s"),
-    "odometers": ("seed 004's PnP odometer beside seed 000's on the rendered corridor", "about 50 s"),
+    "observers": ("[Yan 2020]'s segment observers: point by point, bisection, closed form", "about 10 s"),
+    "tracking": ("[Yuan]'s likelihood-field scoring, vectorised against pose by pose", "about 5 s"),
+    "odometers": ("[Yuan]'s PnP odometer beside [Zhao]'s on the rendered corridor", "about 50 s"),
     "real": ("the car pipeline and OpenCV's PnP baseline on real sequences (VO_LIB_REALDATA)", "about 80 s"),
     "realism": ("how real the samples' images look: empty cells, corners, noise", "about 10 s"),
     "sweep": ("a 20-seed corridor sweep serially and on 2 local Dask workers", "a few minutes"),

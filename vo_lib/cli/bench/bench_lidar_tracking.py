@@ -1,4 +1,4 @@
-"""Seed 004's VO-assisted LIDAR pose tracking: ``python -m vo_lib bench tracking|odometers``."""
+"""[Yuan]'s VO-assisted LIDAR pose tracking: ``python -m vo_lib bench tracking|odometers``."""
 
 from __future__ import annotations
 
@@ -10,7 +10,7 @@ from vo_lib.cli.bench.common import BENCH_SEED, format_row, median_seconds
 
 
 def bench_tracking() -> dict[str, float]:
-    """Seed 004: scoring 500 sample poses against a 271-beam scan, vectorised and pose by pose."""
+    """[Yuan]: scoring 500 sample poses against a 271-beam scan, vectorised and pose by pose."""
     from vo_lib.lidar_tracking.corridor_experiment import TIM551
     from vo_lib.lidar_tracking.likelihood_field import LikelihoodField
     from vo_lib.lidar_tracking.pose_tracking import sample_poses
@@ -32,7 +32,7 @@ def bench_tracking() -> dict[str, float]:
 
 
 def bench_odometers(frames: int | None = None) -> dict[str, float]:
-    """Seed 004's PnP visual odometer beside seed 000's 1-point pipeline on the rendered corridor."""
+    """[Yuan]'s PnP visual odometer beside [Zhao]'s 1-point pipeline on the rendered corridor."""
     from vo_lib.geometry import planar_from_camera_poses
     from vo_lib.lidar_tracking.pnp_odometry import run_pnp_odometry
     from vo_lib.sim.samples import render_sample
@@ -49,8 +49,8 @@ def bench_odometers(frames: int | None = None) -> dict[str, float]:
     print(f"corridor sample, {len(images)} frames, {travelled:.1f} m, 640x480, no wheel odometry")
     print(f"  {'odometer':<36s}{'ms/frame':>10s}{'final error':>14s}{'heading':>10s}")
     rows = {
-        "PnP + local map (seed 004)": (float(np.median(times)), pnp_planar),
-        "1-point RANSAC + Kalman (seed 000)": (one.timing_table()["total"] / 1e3, one_planar),
+        "PnP + local map [Yuan]": (float(np.median(times)), pnp_planar),
+        "1-point RANSAC + Kalman [Zhao]": (one.timing_table()["total"] / 1e3, one_planar),
     }
     for name, (t, p) in rows.items():
         err = float(np.hypot(*(p[-1, :2] - truth[-1, :2])))

@@ -1,4 +1,4 @@
-"""Seed 002's line-feature EKF-SLAM: ``python -m vo_lib bench observers``."""
+"""[Yan 2020]'s line-feature EKF-SLAM: ``python -m vo_lib bench observers``."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ from vo_lib.cli.bench.common import BENCH_SEED, median_seconds
 
 
 def bench_observers(laps: int = 3) -> dict[str, float]:
-    """Seed 002's observers on every (segment, pose) call of one simulated lap, and whole laps."""
+    """[Yan 2020]'s observers on every (segment, pose) call of one simulated lap, and whole laps."""
     from vo_lib.line_slam.lap import LineSlamScenario, simulate_lap
     from vo_lib.line_slam.line_landmarks import paper_world
     from vo_lib.line_slam.segment_observers import DEFAULT_TOLERANCE, OBSERVERS

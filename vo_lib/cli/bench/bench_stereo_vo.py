@@ -1,4 +1,4 @@
-"""Seed 000's stereo visual odometry: ``python -m vo_lib bench geometry|ransac|frontend|pipeline``."""
+"""[Zhao]'s stereo visual odometry: ``python -m vo_lib bench geometry|ransac|frontend|pipeline``."""
 
 from __future__ import annotations
 
@@ -200,7 +200,7 @@ def bench_pipeline(frames: int = 200) -> dict[str, float]:
     return {"frame": table["total"] / 1e3}
 
 
-#: The paper's long run (seed 000, IV.A.1): 10,000 frames, mean and standard deviation of the
+#: The paper's long run ([Zhao], IV.A.1): 10,000 frames, mean and standard deviation of the
 #: elapsed time per frame, milliseconds.
 PAPER_LONG_RUN = (10_000, 26.5511, 4.551)
 

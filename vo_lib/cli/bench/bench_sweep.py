@@ -1,6 +1,6 @@
 """The sweep machinery: ``python -m vo_lib bench sweep``.
 
-A 20-seed corridor sweep (seed 004, Table III) run serially in this process and on a 2-worker
+A 20-seed corridor sweep ([Yuan], Table III) run serially in this process and on a 2-worker
 Dask LocalCluster, in one run. The shared setup (the PnP visual odometer on the rendered corridor
 and the calibration) is computed once beforehand and given to both, so both time the same 20
 tasks. The cluster's time is given with and without starting it; the figures of both runs are
