@@ -59,7 +59,7 @@ def references() -> dict[str, str]:
     return {key: " ".join(body.split()) for key, body in ENTRY.findall(text)}
 
 
-FILES = tracked_text_files()
+FILES = [p for p in tracked_text_files() if p.name != "test_citations.py"]  # this file's examples are not citations
 
 
 def test_the_old_paper_numbers_are_gone():
