@@ -1,3 +1,4 @@
+import signal
 import subprocess
 import sys
 
@@ -32,3 +33,21 @@ def test_command_line_and_file_code_stay_small():
         text=True,
     )
     assert proc.returncode == 0, proc.stdout + proc.stderr
+
+
+def test_a_reader_closing_the_pipe_gets_one_line_not_a_traceback():
+    """`python -m vo_lib ... | head`: the reader leaves early; the command says so and ends as by SIGPIPE."""
+    script = (
+        "import sys, vo_lib.cli.main as m\n"
+        "m._dispatch = lambda args: [print('x' * 100) for _ in range(100000)]\n"
+        "sys.exit(m.main(['run']))\n"
+    )
+    proc = subprocess.Popen(
+        [sys.executable, "-c", script], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
+    )
+    proc.stdout.readline()
+    proc.stdout.close()  # as `head -1` does
+    err = proc.stderr.read()
+    assert proc.wait(timeout=60) == 128 + signal.SIGPIPE
+    expected = "python -m vo_lib run: stopped: whatever read its output closed the pipe"
+    assert err.strip().splitlines() == [expected]

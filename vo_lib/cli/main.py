@@ -19,6 +19,7 @@ from __future__ import annotations
 import argparse
 import errno
 import math
+import os
 import signal
 import sys
 import textwrap
@@ -379,6 +380,11 @@ def main(argv: list[str] | None = None) -> int:
         except (UsageError, SweepError, OutputError, SequenceError, TrajectoryError) as exc:
             print(f"{command}: error: {one_line(exc)}", file=sys.stderr)
             return 2
+        except BrokenPipeError:  # e.g. piped into `head`: the reader left, not a fault of the output
+            # Python's advice: point stdout at devnull so the interpreter's own flush at exit is quiet
+            os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+            print(f"{command}: stopped: whatever read its output closed the pipe", file=sys.stderr)
+            return 128 + signal.SIGPIPE
         except OSError as exc:  # e.g. a full disk while writing: the output was not put in place
             print(
                 f"{command}: error: {one_line(_os_error(exc, getattr(args, 'out', None)))}", file=sys.stderr
