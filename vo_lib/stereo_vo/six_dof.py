@@ -167,6 +167,7 @@ class SixDofMotion:
         self.mount_inverse = rigid_inverse(self.mount)
         self.covariance_scale = np.asarray(config.vo_covariance_scale, float)
         self.to_axis = turning_axis_transform(self.mount)
+        self.from_axis = rigid_inverse(self.to_axis)
         self.reference_pose = np.eye(4)  # camera pose of the reference frame, in frame 0's
         self.camera_pose = np.eye(4)
         self.velocity: np.ndarray | None = None  # camera motion per frame, T_curr_from_prev
@@ -219,7 +220,7 @@ class SixDofMotion:
             on_axis = np.eye(4)
             on_axis[:3, :3], on_axis[:3, 3] = motion_matrices(est.theta, est.rho)
             # the virtual camera's motion, seen from the real camera
-            guess, start = rigid_inverse(self.to_axis) @ on_axis @ self.to_axis, est.inliers
+            guess, start = self.from_axis @ on_axis @ self.to_axis, est.inliers
         else:
             guess, start = (np.eye(4) if T_pred is None else T_pred), None
         if ratio < self.config.min_inlier_ratio:
