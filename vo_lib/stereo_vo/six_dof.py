@@ -123,22 +123,27 @@ def chord_covariance(
 ) -> np.ndarray:
     """3x3 covariance of ``(theta, rho, sideways)`` of the vehicle, propagated from the 6x6
     covariance of the camera motion (rotation vector on the left, translation) by central
-    differences (``mount_inverse`` as in :func:`vehicle_increment`)."""
+    differences (``mount_inverse`` as in :func:`vehicle_increment`).
+
+    The twelve moved motions (each of the six components by ``+h`` and ``-h``) go through
+    :func:`vehicle_increment`'s products as one stack of 4x4 matrices.
+    """
     inverse = rigid_inverse(mount) if mount_inverse is None else mount_inverse
-    J = np.zeros((3, 6))
     h = 1e-6
-    R, t = T_cam[:3, :3], T_cam[:3, 3]
-    T = np.eye(4)
-    for k in range(6):
-        delta = np.zeros(6)
-        delta[k] = h
-        out = []
-        for sign in (1.0, -1.0):
-            dR = rotation_matrix(sign * delta[:3])
-            T[:3, :3] = dR @ R
-            T[:3, 3] = dR @ t + sign * delta[3:]
-            out.append(chord_measurement(vehicle_increment(T, mount, inverse)))
-        J[:, k] = (out[0] - out[1]) / (2 * h)
+    steps = np.zeros((6, 2, 6))  # component k moved by +h, then by -h
+    steps[np.arange(6), 0, np.arange(6)] = h
+    steps[np.arange(6), 1, np.arange(6)] = -h
+    steps = steps.reshape(12, 6)
+    dR = np.stack([rotation_matrix(step[:3]) for step in steps])
+    R = dR @ T_cam[:3, :3]
+    t = dR @ T_cam[:3, 3] + steps[:, 3:]
+    moved_inverse = np.zeros((12, 4, 4))  # rigid_inverse of each moved motion
+    moved_inverse[:, :3, :3] = np.swapaxes(R, 1, 2)
+    moved_inverse[:, :3, 3] = (-np.swapaxes(R, 1, 2) @ t[:, :, None])[:, :, 0]
+    moved_inverse[:, 3, 3] = 1.0
+    V = mount @ moved_inverse @ inverse
+    z = np.array([chord_measurement((M[0, 3], M[1, 3], math.atan2(M[1, 0], M[0, 0]))) for M in V])
+    J = ((z[0::2] - z[1::2]) / (2 * h)).T
     return J @ covariance6 @ J.T
 
 
