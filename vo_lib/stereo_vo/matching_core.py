@@ -74,14 +74,20 @@ _WINDOWS = f"{__name__}.window_candidates"  # the steps below serve row_candidat
 
 
 @_jit(step_of=_WINDOWS)
-def _append(ia, ib, dist, count, i, j, h):
-    """Pair ``count`` is ``(i, j)`` at Hamming distance ``h``; the arrays double when full."""
-    if count == ia.shape[0]:
-        ia = np.concatenate((ia, np.empty_like(ia)))
-        ib = np.concatenate((ib, np.empty_like(ib)))
-        dist = np.concatenate((dist, np.empty_like(dist)))
-    ia[count], ib[count], dist[count] = i, j, h
-    return ia, ib, dist
+def _row_windows(key, half, sorted_v):
+    """Per ``i``, the range ``lo[i]:hi[i]`` of ``sorted_v`` within ``half[i]`` of ``key[i]`` (empty
+    where ``key[i]`` is not finite), and the sum of their lengths: no more pairs than that can be
+    found, so the pair arrays are allocated once, at that size."""
+    n = key.shape[0]
+    lo = np.zeros(n, np.int64)
+    hi = np.zeros(n, np.int64)
+    total = 0
+    for i in range(n):
+        if np.isfinite(key[i]):
+            lo[i] = np.searchsorted(sorted_v, key[i] - half[i], side="left")
+            hi[i] = max(lo[i], np.searchsorted(sorted_v, key[i] + half[i], side="right"))
+            total += hi[i] - lo[i]
+    return lo, hi, total
 
 
 @_jit(step_of=_WINDOWS)
@@ -109,22 +115,22 @@ def window_candidates(predicted, radius, w_curr, order_v, sorted_v, des_prev, de
     ``order_v`` sorts the current features by row and ``sorted_v`` holds their rows in that order;
     pairs come ordered by ``i``, then by row, as from ``features.window_pairs``."""
     n = predicted.shape[0]
-    cap = 64
-    ia = np.empty(n * cap, np.int64)
-    ib = np.empty(n * cap, np.int64)
-    dist = np.empty(n * cap, np.int64)
-    count = 0
+    seen = np.empty(n, np.float64)  # the row, or nan where the prediction is not finite
     for i in range(n):
         u, v, d = predicted[i, 0], predicted[i, 1], predicted[i, 2]
-        if not (np.isfinite(u) and np.isfinite(v) and np.isfinite(d)):
-            continue
-        lo = np.searchsorted(sorted_v, v - radius[i, 1], side="left")
-        hi = np.searchsorted(sorted_v, v + radius[i, 1], side="right")
-        for s in range(lo, hi):
+        seen[i] = v if np.isfinite(u) and np.isfinite(v) and np.isfinite(d) else np.nan
+    lo, hi, total = _row_windows(seen, radius[:, 1], sorted_v)
+    ia = np.empty(total, np.int64)
+    ib = np.empty(total, np.int64)
+    dist = np.empty(total, np.int64)
+    count = 0
+    for i in range(n):
+        u, d = predicted[i, 0], predicted[i, 2]
+        for s in range(lo[i], hi[i]):
             j = order_v[s]
             if abs(w_curr[j, 0] - u) > radius[i, 0] or abs(w_curr[j, 2] - d) > radius[i, 2]:
                 continue
-            ia, ib, dist = _append(ia, ib, dist, count, i, j, _hamming(des_prev, i, des_curr, j))
+            ia[count], ib[count], dist[count] = i, j, _hamming(des_prev, i, des_curr, j)
             count += 1
     return ia[:count], ib[:count], dist[:count]
 
@@ -156,19 +162,17 @@ def row_candidates(
     rows, with a disparity ``left_u - right_u`` in ``[d_min, d_max]`` and pyramid levels at most
     one apart, with their Hamming distances; ordered by ``i``, then by right row."""
     n = left.shape[0]
-    cap = 64
-    ia = np.empty(n * cap, np.int64)
-    ib = np.empty(n * cap, np.int64)
-    dist = np.empty(n * cap, np.int64)
+    lo, hi, total = _row_windows(left[:, 1], np.full(n, row_tolerance), sorted_v)
+    ia = np.empty(total, np.int64)
+    ib = np.empty(total, np.int64)
+    dist = np.empty(total, np.int64)
     count = 0
     for i in range(n):
-        lo = np.searchsorted(sorted_v, left[i, 1] - row_tolerance, side="left")
-        hi = np.searchsorted(sorted_v, left[i, 1] + row_tolerance, side="right")
-        for s in range(lo, hi):
+        for s in range(lo[i], hi[i]):
             j = order_v[s]
             d = left[i, 0] - right[j, 0]
             if d < d_min or d > d_max or abs(left_level[i] - right_level[j]) > 1:
                 continue
-            ia, ib, dist = _append(ia, ib, dist, count, i, j, _hamming(des_left, i, des_right, j))
+            ia[count], ib[count], dist[count] = i, j, _hamming(des_left, i, des_right, j)
             count += 1
     return ia[:count], ib[:count], dist[:count]

@@ -10,10 +10,11 @@ rotated BRIEF), so a corner keeps its place and its descriptor as the scene grow
 
 Per stereo pair:
 
-1. **Detection and description** of both images at once, one thread each (OpenCV releases the
-   interpreter lock), with a feature budget that scales with the image area and a FAST threshold
-   that adapts from frame to frame: lowered when an image gives fewer corners than the budget
-   (sky, road and plain walls), raised again when it gives plenty.
+1. **Detection and description** of both images at once: the right image on a worker thread
+   while the calling thread does the left (OpenCV releases the interpreter lock), with a feature
+   budget that scales with the image area and a FAST threshold that adapts from frame to frame:
+   lowered when an image gives fewer corners than the budget (sky, road and plain walls), raised
+   again when it gives plenty.
 2. **Matching along rows** by Hamming distance: candidates within ``ROW_TOLERANCE`` rows, a positive
    disparity below the largest one searched, and pyramid levels at most one apart; the nearest
    candidate wins if it passes the ratio test (repetitive texture: rails, fences, lane marks give
@@ -73,7 +74,7 @@ class PyramidFrontEnd:
         self.max_disparity = float(max_disparity or MAX_DISPARITY_FRACTION * camera.width)
         self.threshold = [FAST_THRESHOLD, FAST_THRESHOLD]  # per image, adapted frame by frame
         self._orb = [self._make_orb(FAST_THRESHOLD), self._make_orb(FAST_THRESHOLD)]
-        self._pool = ThreadPoolExecutor(2)
+        self._worker = ThreadPoolExecutor(1)  # the right image's detection, beside the left's
 
     def _make_orb(self, threshold: int):
         return cv2.ORB_create(
@@ -124,7 +125,9 @@ class PyramidFrontEnd:
                 f"left and right must be 2-D grey images of one size; got {left.shape}, {right.shape}"
             )
         t0 = time.perf_counter()
-        (pl, ol, dl), (pr, orr, dr) = self._pool.map(self._detect_and_describe, (0, 1), (left, right))
+        right_side = self._worker.submit(self._detect_and_describe, 1, right)
+        pl, ol, dl = self._detect_and_describe(0, left)
+        pr, orr, dr = right_side.result()
         t1 = time.perf_counter()
         timings = {"detect": (t1 - t0) * 1e3, "describe": 0.0}
         if len(pl) == 0 or len(pr) == 0:

@@ -153,19 +153,20 @@ def refine_rigid_motion(
     P[usable] = camera.backproject(wa[usable])
     inl = usable.copy() if inliers is None else (np.asarray(inliers, bool) & usable)
     for _ in range(max(rounds, 1)):
-        if inl.sum() < min_inliers:
+        if np.count_nonzero(inl) < min_inliers:
             return RigidMotion(T0[:3, :3], T0[:3, 3], np.full((6, 6), np.inf), inl, np.inf, False)
         R, t = _gauss_newton(P[inl], wb[inl], R, t, camera, iterations, huber)
-        err = reprojection_errors(P, wb, R, t, camera)
+        err = reprojection_errors(P, wb, R, t, camera)  # of the motion the inliers below end with
         new = usable & (err < inlier_pixels)
         if np.array_equal(new, inl):
             break
         inl = new
-    if inl.sum() < min_inliers:
+    count = np.count_nonzero(inl)
+    if count < min_inliers:
         return RigidMotion(T0[:3, :3], T0[:3, 3], np.full((6, 6), np.inf), inl, np.inf, False)
     A, _, _ = _normal_equations(P[inl], wb[inl], R, t, camera, np.inf)
-    res = reprojection_errors(P[inl], wb[inl], R, t, camera)
-    dof = max(3 * int(inl.sum()) - 6, 1)
+    res = err[inl]
+    dof = max(3 * int(count) - 6, 1)
     sigma2 = float(np.sum(res**2)) / dof
     try:
         cov = sigma2 * np.linalg.inv(A)

@@ -76,22 +76,28 @@ def rigid_inverse(T: np.ndarray) -> np.ndarray:
     return out
 
 
-def vehicle_increment(T_cam: np.ndarray, mount: np.ndarray) -> np.ndarray:
+def vehicle_increment(
+    T_cam: np.ndarray, mount: np.ndarray, mount_inverse: np.ndarray | None = None
+) -> np.ndarray:
     """``(dx, dy, dyaw)`` of the vehicle, in its previous frame, for a camera motion ``T_cam``
-    (``T_curr_from_prev`` of the camera mounted at ``mount`` = ``T_vehicle_camera``)."""
-    V = mount @ rigid_inverse(T_cam) @ rigid_inverse(mount)
+    (``T_curr_from_prev`` of the camera mounted at ``mount`` = ``T_vehicle_camera``);
+    ``mount_inverse`` is ``rigid_inverse(mount)``, if already known."""
+    V = mount @ rigid_inverse(T_cam) @ (rigid_inverse(mount) if mount_inverse is None else mount_inverse)
     return np.array([V[0, 3], V[1, 3], math.atan2(V[1, 0], V[0, 0])])
 
 
-def with_planar_increment(T_cam: np.ndarray, mount: np.ndarray, increment) -> np.ndarray:
+def with_planar_increment(
+    T_cam: np.ndarray, mount: np.ndarray, increment, mount_inverse: np.ndarray | None = None
+) -> np.ndarray:
     """``T_cam`` with the vehicle's yaw and ground-plane translation replaced by ``increment``;
-    height, pitch and roll are kept."""
-    V = mount @ rigid_inverse(T_cam) @ rigid_inverse(mount)
+    height, pitch and roll are kept (``mount_inverse`` as in :func:`vehicle_increment`)."""
+    inverse = rigid_inverse(mount) if mount_inverse is None else mount_inverse
+    V = mount @ rigid_inverse(T_cam) @ inverse
     yaw = math.atan2(V[1, 0], V[0, 0])
     dx, dy, dyaw = (float(v) for v in increment)
     V[:3, :3] = yaw_matrix(dyaw - yaw) @ V[:3, :3]
     V[0, 3], V[1, 3] = dx, dy
-    return rigid_inverse(rigid_inverse(mount) @ V @ mount)
+    return rigid_inverse(inverse @ V @ mount)
 
 
 def turning_axis_transform(mount: np.ndarray) -> np.ndarray:
@@ -112,23 +118,32 @@ def turning_axis_view(w: np.ndarray, camera: StereoCamera, to_axis: np.ndarray) 
     return camera.project(X @ to_axis[:3, :3].T + to_axis[:3, 3])
 
 
-def chord_covariance(T_cam: np.ndarray, covariance6: np.ndarray, mount: np.ndarray) -> np.ndarray:
+def chord_covariance(
+    T_cam: np.ndarray, covariance6: np.ndarray, mount: np.ndarray, mount_inverse: np.ndarray | None = None
+) -> np.ndarray:
     """3x3 covariance of ``(theta, rho, sideways)`` of the vehicle, propagated from the 6x6
     covariance of the camera motion (rotation vector on the left, translation) by central
-    differences."""
-    J = np.zeros((3, 6))
+    differences (``mount_inverse`` as in :func:`vehicle_increment`).
+
+    The twelve moved motions (each of the six components by ``+h`` and ``-h``) go through
+    :func:`vehicle_increment`'s products as one stack of 4x4 matrices.
+    """
+    inverse = rigid_inverse(mount) if mount_inverse is None else mount_inverse
     h = 1e-6
-    for k in range(6):
-        delta = np.zeros(6)
-        delta[k] = h
-        out = []
-        for sign in (1.0, -1.0):
-            dR = rotation_matrix(sign * delta[:3])
-            T = np.eye(4)
-            T[:3, :3] = dR @ T_cam[:3, :3]
-            T[:3, 3] = dR @ T_cam[:3, 3] + sign * delta[3:]
-            out.append(chord_measurement(vehicle_increment(T, mount)))
-        J[:, k] = (out[0] - out[1]) / (2 * h)
+    steps = np.zeros((6, 2, 6))  # component k moved by +h, then by -h
+    steps[np.arange(6), 0, np.arange(6)] = h
+    steps[np.arange(6), 1, np.arange(6)] = -h
+    steps = steps.reshape(12, 6)
+    dR = np.stack([rotation_matrix(step[:3]) for step in steps])
+    R = dR @ T_cam[:3, :3]
+    t = dR @ T_cam[:3, 3] + steps[:, 3:]
+    moved_inverse = np.zeros((12, 4, 4))  # rigid_inverse of each moved motion
+    moved_inverse[:, :3, :3] = np.swapaxes(R, 1, 2)
+    moved_inverse[:, :3, 3] = (-np.swapaxes(R, 1, 2) @ t[:, :, None])[:, :, 0]
+    moved_inverse[:, 3, 3] = 1.0
+    V = mount @ moved_inverse @ inverse
+    z = np.array([chord_measurement((M[0, 3], M[1, 3], math.atan2(M[1, 0], M[0, 0]))) for M in V])
+    J = ((z[0::2] - z[1::2]) / (2 * h)).T
     return J @ covariance6 @ J.T
 
 
@@ -154,7 +169,10 @@ class SixDofMotion:
         self.camera = camera
         self.config = config
         self.mount = np.asarray(mount, float)
+        self.mount_inverse = rigid_inverse(self.mount)
+        self.covariance_scale = np.asarray(config.vo_covariance_scale, float)
         self.to_axis = turning_axis_transform(self.mount)
+        self.from_axis = rigid_inverse(self.to_axis)
         self.reference_pose = np.eye(4)  # camera pose of the reference frame, in frame 0's
         self.camera_pose = np.eye(4)
         self.velocity: np.ndarray | None = None  # camera motion per frame, T_curr_from_prev
@@ -166,7 +184,8 @@ class SixDofMotion:
         if self.velocity is None and not kf.flags.odometry:
             return Prediction(kf.motion_prior(), False)
         T = np.eye(4) if self.velocity is None else scaled_motion(self.velocity, gap)
-        return Prediction(kf.motion_prior(), True, with_planar_increment(T, self.mount, kf.increment))
+        motion = with_planar_increment(T, self.mount, kf.increment, self.mount_inverse)
+        return Prediction(kf.motion_prior(), True, motion)
 
     def match(self, reference, features, prediction: Prediction, recent):
         if prediction.motion is None:
@@ -206,7 +225,7 @@ class SixDofMotion:
             on_axis = np.eye(4)
             on_axis[:3, :3], on_axis[:3, 3] = motion_matrices(est.theta, est.rho)
             # the virtual camera's motion, seen from the real camera
-            guess, start = rigid_inverse(self.to_axis) @ on_axis @ self.to_axis, est.inliers
+            guess, start = self.from_axis @ on_axis @ self.to_axis, est.inliers
         else:
             guess, start = (np.eye(4) if T_pred is None else T_pred), None
         if ratio < self.config.min_inlier_ratio:
@@ -222,9 +241,10 @@ class SixDofMotion:
         t0 = time.perf_counter()
         motion = refine_rigid_motion(matches.w_prev, matches.w_curr, self.camera, guess, start)
         refinement = (time.perf_counter() - t0) * 1e3
-        z = chord_measurement(vehicle_increment(motion.matrix, self.mount))
-        covariance = np.asarray(self.config.vo_covariance_scale) * chord_covariance(
-            motion.matrix, motion.covariance, self.mount
+        T = motion.matrix
+        z = chord_measurement(vehicle_increment(T, self.mount, self.mount_inverse))
+        covariance = self.covariance_scale * chord_covariance(
+            T, motion.covariance, self.mount, self.mount_inverse
         )
         return Estimate(
             motion.success,
@@ -233,7 +253,7 @@ class SixDofMotion:
             int(motion.inliers.sum()),
             ratio,
             int(round(ratio * len(matches))),
-            motion.matrix,
+            T,
             {"refinement": refinement},
         )
 
@@ -245,7 +265,7 @@ class SixDofMotion:
             since_reference = prediction.motion if prediction.motion is not None else np.eye(4)
         else:
             since_reference = estimate.motion
-        fused = with_planar_increment(since_reference, self.mount, kf.increment)
+        fused = with_planar_increment(since_reference, self.mount, kf.increment, self.mount_inverse)
         self.camera_pose = self.reference_pose @ np.linalg.inv(fused)
         self._fused = fused
 
