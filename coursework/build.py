@@ -1,6 +1,6 @@
 """Write the student edition of the notebooks, and the nbgrader course folder that grades it.
 
-    python coursework/build.py [--out DIR] [--check [NN ...]]
+    python coursework/build.py [NN ...] [--out DIR] [--check [NN ...]] [--repeat N]
 
 The jupytext sources in ``notebooks/`` carry nbgrader's cell metadata: solution cells (code
 between ``### BEGIN SOLUTION`` and ``### END SOLUTION``) and locked autograder test cells. This
@@ -50,12 +50,13 @@ STUDENT_DIR, GRADING_DIR, HANDOUT_DIR = "student", "grading", "handout"
 MARKER = ".coursework_build.json"
 SUBMISSIONS_DIR = pathlib.Path(__file__).with_name("submissions")
 ADVERSARIAL_KINDS = ("constant", "library", "wrong")  # and "unanswered": the release itself
+TAMPERING_KIND = "kernel"  # answers that hook into or end the kernel: optional, any exercise
 # a line that opens a solution, hidden tests or a mark scheme (not a mention of one in prose)
 MARKER_LINE = re.compile(
     r"^\s*(### BEGIN SOLUTION|### BEGIN HIDDEN TESTS|=== BEGIN MARK SCHEME ===)\s*$", re.M
 )
 ANSWER_HEADER = re.compile(r"^# %% (\S+) (\S+)[ \t]*\n", re.M)  # "# %% ex1 wrong_sign" opens an answer
-SCORE_COLUMNS = ("correct", "unanswered", *ADVERSARIAL_KINDS)
+SCORE_COLUMNS = ("correct", "unanswered", *ADVERSARIAL_KINDS, TAMPERING_KIND)
 SOLUTIONS_STUDENT, UNANSWERED_STUDENT = "solutions", "unanswered"
 REGIONS = [  # nbgrader's markers: solution code, and tests kept from the student edition
     re.compile(rf"^\s*### BEGIN {what}\s*$(.*?)^\s*### END {what}\s*$", re.M | re.S)
@@ -138,6 +139,8 @@ def run_nbgrader(course: pathlib.Path, *args: str) -> None:
         env=dict(os.environ, MPLBACKEND="Agg"),
     )
     errors = [line for line in proc.stderr.splitlines() if "| ERROR]" in line or "Error" in line]
+    if "Exception while loading config file" in proc.stderr:  # nbgrader goes on without it
+        raise BuildError(f"nbgrader {args[0]}: the course's nbgrader_config.py does not load: {errors[-1:]}")
     if proc.returncode != 0:
         raise BuildError(f"nbgrader {args[0]} failed: " + " / ".join(errors[-3:] or [proc.stderr[-500:]]))
 
@@ -303,20 +306,65 @@ def feedback_leaks(course: pathlib.Path, path: pathlib.Path, student: str) -> li
     return sorted((hidden - own) & shown)
 
 
-def check(course: pathlib.Path, paths: list[pathlib.Path]) -> list[str]:
+def check(course: pathlib.Path, paths: list[pathlib.Path], repeat: int = 1) -> list[str]:
     """Autograde the solutions, the unanswered edition and the adversarial answers of ``paths``.
 
-    In a copy of ``course``: the solutions must score every autograded point; every other
-    submission (unanswered, constant or truth-copying, library-calling, plausibly wrong; see
-    ``coursework/submissions/``) must score 0 in each exercise, while cells outside the
-    exercises run without error. Returns the score table (one line per exercise, then the
-    seconds each submission took); raises BuildError naming every problem found.
+    In a copy of ``course``, ``repeat`` times over: the solutions must score every autograded
+    point; every other submission (unanswered, constant or truth-copying, library-calling,
+    plausibly wrong, tampering with the kernel; see ``coursework/submissions/``) must score 0 in
+    each exercise, while cells outside the exercises run without error; and no submission may
+    take longer than the solutions of its notebook (the notebook's own run time, measured in the
+    same repetition) plus :data:`SLACK_SECONDS`. Returns the score table (one line per exercise),
+    why each adversarial answer failed, what the grader refused or stopped (kernel hooks, a dead
+    kernel, a timeout), and the seconds each submission took; raises BuildError naming every
+    problem found.
+    """
+    problems: list[str] = []
+    times: dict[tuple[str, str], list[float]] = {}
+    for repetition in range(repeat):
+        rows, reasons, events, took, found = grade_once(course, paths)
+        problems += [f"repetition {repetition + 1}: {p}" if repeat > 1 else p for p in found]
+        for key, seconds in took.items():
+            times.setdefault(key, []).append(seconds)
+    timing = [
+        f"seconds per submission (autograde, nbgrader's start included), against the notebook's own "
+        f"run time (its solutions, graded in the same repetition) + {SLACK_SECONDS:g} s:"
+    ]
+    for (number, student), seconds in times.items():
+        limits = [own + SLACK_SECONDS for own in times[(number, SOLUTIONS_STUDENT)]]
+        over = [f"{t:.1f} s > {limit:.1f} s" for t, limit in zip(seconds, limits, strict=True) if t > limit]
+        shown = " ".join(f"{t:6.1f}" for t in seconds)
+        timing.append(f"{number} {student:<14} {shown}   limit {' '.join(f'{x:.1f}' for x in limits)}")
+        if over and student != SOLUTIONS_STUDENT:
+            problems.append(
+                f"{number} {student}: took longer than its notebook's run time + slack: {over[0]}"
+            )
+    report = rows + reasons + events + timing
+    if problems:
+        raise BuildError("\n".join(report + problems))
+    return report
+
+
+GUARD_ERRORS = ("KernelHook", "KernelDied", "NotRun", "CellTimeoutError")  # nbgrader_config.py's
+SLACK_SECONDS = 30.0
+
+
+def grade_once(
+    course: pathlib.Path, paths: list[pathlib.Path]
+) -> tuple[list[str], list[str], list[str], dict[tuple[str, str], float], list[str]]:
+    """One autograding of every submission of ``paths`` in a copy of ``course``.
+
+    Returns the score table, why each adversarial answer failed, what the grader's guards
+    reported (an answer not run, a dead kernel, a timeout), the seconds of each
+    ``(notebook number, student)`` and the problems found.
     """
     from nbgrader.api import Gradebook  # only the check needs nbgrader's database layer
 
     problems: list[str] = []
     rows = [f"{'exercise':<40} {'points':>6}  " + "  ".join(f"{k:>10}" for k in SCORE_COLUMNS)]
-    times, reasons = [], ["why each adversarial answer failed:"]
+    reasons = ["why each adversarial answer failed:"]
+    events = ["what the grader refused or stopped:"]
+    times: dict[tuple[str, str], float] = {}
     with tempfile.TemporaryDirectory(prefix="vo-coursework-check-") as tmp:
         work = pathlib.Path(tmp) / "course"
         shutil.copytree(course, work)
@@ -336,7 +384,7 @@ def check(course: pathlib.Path, paths: list[pathlib.Path]) -> list[str]:
                 nbformat.write(nb, folder / name)
                 started = time.monotonic()
                 run_nbgrader(work, "autograde", path.stem, f"--student={student}", "--force")
-                times.append(f"{path.stem[:2]} {student}: {time.monotonic() - started:.1f} s")
+                times[(path.stem[:2], student)] = time.monotonic() - started
         with Gradebook(f"sqlite:///{work / 'gradebook.db'}") as gradebook:
             for path, (ids, subs) in plan.items():
                 table = {exercise: {} for exercise in ids}
@@ -346,13 +394,25 @@ def check(course: pathlib.Path, paths: list[pathlib.Path]) -> list[str]:
                     graded = nbformat.read(
                         work / "autograded" / student / path.stem / f"{path.stem}.ipynb", as_version=4
                     )
+                    tampering = any(kind.startswith("kernel") for kind in given.values())
                     for index, cell in enumerate(graded.cells):
                         errors = [o for o in cell.get("outputs", []) if o.get("output_type") == "error"]
                         failed = bool(errors)
-                        test_of = cell.metadata.get("nbgrader", {}).get("grade_id", "").removesuffix("_test")
+                        grade_id = cell.metadata.get("nbgrader", {}).get("grade_id", "")
+                        test_of = grade_id.removesuffix("_test") if grade_id.endswith("_test") else ""
+                        for e in errors:
+                            line = f"{path.stem[:2]} {student}: {e['ename']}: {e['evalue']}".splitlines()[0]
+                            if (
+                                e.get("ename") in GUARD_ERRORS
+                                and e["ename"] != "NotRun"
+                                and line not in events
+                            ):
+                                events.append(line)
                         if errors and given.get(test_of, "correct") not in ("correct", "unanswered"):
                             why = f"{errors[0]['ename']}: {errors[0]['evalue']}".splitlines()[0][:90]
                             reasons.append(f"{path.stem[:2]} {test_of} {given[test_of]}: {why}")
+                        if tampering and all(e.get("ename") == "NotRun" for e in errors):
+                            failed = False  # stopped after a tampering answer: that answer is what failed
                         if failed and (student == SOLUTIONS_STUDENT or not exercise_cell(cell)):
                             head = cell.source[:60]
                             problems.append(f"{path.name} ({student}): cell {index} fails: {head!r}")
@@ -379,9 +439,7 @@ def check(course: pathlib.Path, paths: list[pathlib.Path]) -> list[str]:
                     ]
                     label = f"{path.stem[:2]} {exercise}"
                     rows.append(f"{label:<40} {top[exercise]:>6g}  " + "  ".join(f"{c:>10}" for c in cells))
-    if problems:
-        raise BuildError("\n".join(rows + reasons + times + problems))
-    return rows + reasons + ["seconds per submission (autograde, nbgrader's start included):"] + times
+    return rows, reasons, events, times, problems
 
 
 def write_handout(folder: pathlib.Path, course: pathlib.Path, paths: list[pathlib.Path]) -> None:
@@ -453,8 +511,11 @@ def handout_leaks(folder: pathlib.Path, lines: set[str]) -> list[str]:
     return found
 
 
-def build(out: pathlib.Path, paths: list[pathlib.Path], check_paths: list[pathlib.Path]) -> None:
-    """Write ``out/grading`` and ``out/student``; autograde ``check_paths`` both ways first."""
+def build(
+    out: pathlib.Path, paths: list[pathlib.Path], check_paths: list[pathlib.Path], repeat: int = 1
+) -> None:
+    """Write ``out/grading``, ``out/student`` and ``out/handout``; autograde ``check_paths`` first
+    (``repeat`` times over)."""
     for name in (GRADING_DIR, STUDENT_DIR, HANDOUT_DIR):  # refuse before an hour of work, not after it
         refuse_unless_replaceable(out / name)
     temporaries = []
@@ -463,7 +524,7 @@ def build(out: pathlib.Path, paths: list[pathlib.Path], check_paths: list[pathli
         temporaries.append(course)
         write_course(course, paths)
         if check_paths:
-            for line in check(course, check_paths):
+            for line in check(course, check_paths, repeat):
                 print(line)
         student = pathlib.Path(tempfile.mkdtemp(prefix=f".{STUDENT_DIR}.build-", suffix=".tmp", dir=out))
         temporaries.append(student)
@@ -500,6 +561,13 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
         "--out", type=pathlib.Path, default=ROOT, help="where to write (default: the repository)"
     )
     parser.add_argument(
+        "--repeat",
+        type=int,
+        default=1,
+        metavar="N",
+        help="with --check: autograde every submission N times over, each against its notebook's run time",
+    )
+    parser.add_argument(
         "--check",
         nargs="*",
         metavar="NN",
@@ -521,7 +589,9 @@ def main(argv: list[str] | None = None) -> int:
         missing = [p.name for p in check_paths if p not in paths]
         if missing:
             raise UsageError(f"--check {missing[0][:2]}: that notebook is not among those built")
-        build(args.out.resolve(), paths, check_paths)
+        if args.repeat < 1:
+            raise UsageError(f"--repeat {args.repeat}: expected 1 or more")
+        build(args.out.resolve(), paths, check_paths, args.repeat)
     except UsageError as exc:
         print(f"coursework/build.py: {exc}", file=sys.stderr)
         return EXIT_USAGE
