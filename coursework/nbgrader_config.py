@@ -100,7 +100,7 @@ class GuardedExecute(Execute):
             return cell, self.resources
         changed = [what for what in before or {} if before[what] != (after or {}).get(what)]
         if changed:
-            self.stopped = f"{label} changed the kernel's {', '.join(changed)}"
+            self.stopped = f"{label} changed the kernel ({', '.join(changed)})"
             cell.outputs.append(_error("KernelHook", self.stopped))
         return cell, resources
 

@@ -214,3 +214,28 @@ def test_a_timed_out_cell_is_named_and_the_notebook_goes_on():
         'cell 1 "ex1" (import time) was still running after 3 s and was stopped',
     )
     assert errors_of(cells[1]) == []
+
+
+def test_the_adversarial_set_tampers_with_the_kernel_every_way_the_grader_guards_against():
+    """coursework/submissions holds answers (kind "kernel_...") that hook into or end the kernel,
+    which coursework/build.py --check requires to score 0."""
+    import pathlib
+    import re
+
+    folder = pathlib.Path(__file__).resolve().parents[1] / "coursework" / "submissions"
+    header = re.compile(r"^# %% (\S+) (kernel_\S*)[ \t]*\n", re.M)
+    answers = [
+        part for file in sorted(folder.glob("*.answers")) for part in header.split(file.read_text())[3::3]
+    ]
+    ways = {
+        "an input transformer": r"input_transformers",
+        "an event handler after every cell": r"register\(\"post_run_cell\"",
+        "replaced built-ins": r"import builtins",
+        "a trace function": r"sys\.settrace\(",
+        "os._exit": r"os\._exit\(",
+        "SystemExit": r"raise SystemExit",
+        "a crash": r"ctypes\.string_at\(0\)",
+        "a hook the code hides from a reader": r"getattr\(get_ipython\(\), \"input_transformers\" \+",
+    }
+    missing = [way for way, pattern in ways.items() if not any(re.search(pattern, a) for a in answers)]
+    assert missing == [], missing
