@@ -18,8 +18,12 @@ lists them with their checksums), so submissions copied into ``grading/`` or not
 edited in ``student/`` are never overwritten.
 
 ``--check`` then autogrades, in a temporary copy of the course folder, the solutions (every test
-must pass) and the unanswered student edition (every exercise must score zero while every cell
-outside the exercises runs without error).
+must pass), the unanswered student edition and the adversarial answers of ``submissions/``
+(every exercise must score zero, while every cell outside the exercises runs without error),
+among them answers that hook into or end the kernel, which the course's ``nbgrader_config.py``
+refuses. It prints the score table and the seconds each submission took, and fails if one took
+longer than its notebook's own run time (its solutions, graded in the same run) plus 30 s;
+``--repeat N`` grades the whole set N times over.
 """
 
 from __future__ import annotations
@@ -446,7 +450,8 @@ def write_handout(folder: pathlib.Path, course: pathlib.Path, paths: list[pathli
     """Fill ``folder`` with what a teacher gives out, and refuse if any of it holds solution text.
 
     ``notebooks/NN_topic.ipynb`` (the student edition), ``vo_lib`` as a wheel (the package only:
-    no notebook sources), ``requirements.txt`` (the environment, with the wheel for the package)
+    no notebook sources), ``requirements.txt`` (what the notebooks need: see
+    :func:`handout_requirements`)
     and ``START_HERE.md``.
     """
     (folder / "notebooks").mkdir()
@@ -472,10 +477,7 @@ def write_handout(folder: pathlib.Path, course: pathlib.Path, paths: list[pathli
         raise BuildError(
             "the vo_lib wheel could not be built: " + (proc.stderr.strip().splitlines() or ["?"])[-1]
         )
-    requirements = [
-        line for line in (ROOT / "environment.txt").read_text().splitlines() if line.strip() != "-e ."
-    ]
-    (folder / "requirements.txt").write_text("\n".join([*requirements, f"./{wheels[0].name}", ""]))
+    (folder / "requirements.txt").write_text(handout_requirements(wheels[0].name))
     (folder / "START_HERE.md").write_text(START_HERE.format(wheel=wheels[0].name))
     lines = set()
     for path in paths:
@@ -487,6 +489,29 @@ def write_handout(folder: pathlib.Path, course: pathlib.Path, paths: list[pathli
     leaks = handout_leaks(folder, {line for line in lines - library if len(line) > 12})
     if leaks:
         raise BuildError(f"the handout holds solution text: {leaks[0]}")
+
+
+def handout_requirements(wheel: str) -> str:
+    """The handout's ``requirements.txt``: ``requirements-student.txt`` with the wheel for the package.
+
+    Its ``-e .[extras]`` (the repository, editable) becomes ``./<wheel>[extras]``; the local
+    JupyterLab settings, which open ``.py`` notebooks, are left out (the handout's notebooks are
+    ``.ipynb``), and so are its comments, which speak of the repository.
+    """
+    lines = ["# What the notebooks need: vo_lib (the wheel in this folder) and JupyterLab with its kernel."]
+    for line in (ROOT / "requirements-student.txt").read_text().splitlines():
+        requirement = line.split("#", 1)[0].strip()
+        if not requirement or requirement.startswith("./jupyterlab-settings"):
+            continue
+        if requirement.startswith("-e ."):
+            extras = requirement.removeprefix("-e .").strip()
+            requirement = f"./{wheel}{extras}"
+        lines.append(requirement)
+    if not any(line.startswith(f"./{wheel}") for line in lines):
+        raise BuildError(
+            "requirements-student.txt does not install the package (-e .[...]): the handout would lack it"
+        )
+    return "\n".join([*lines, ""])
 
 
 def handout_leaks(folder: pathlib.Path, lines: set[str]) -> list[str]:
