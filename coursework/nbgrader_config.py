@@ -43,9 +43,12 @@ from nbformat.notebooknode import NotebookNode  # noqa: E402
 from nbgrader.converters import Autograde  # noqa: E402
 from nbgrader.preprocessors import Execute  # noqa: E402
 
+import vo_lib.grading  # noqa: E402
 from vo_lib.grading import cell_label, kernel_hooks  # noqa: E402
 
-STATE = "__import__('vo_lib.grading', fromlist=['kernel_state']).kernel_state()"
+# read afresh from its file at every call: an answer that replaced the imported module's function
+# (by one that returns a copy of the state it saw) has no hold on it
+STATE = f"__import__('runpy').run_path({vo_lib.grading.__file__!r})['kernel_state']()"
 
 
 def _error(ename, evalue):
@@ -105,7 +108,7 @@ class GuardedExecute(Execute):
         return cell, resources
 
     def _kernel_state(self):
-        """vo_lib.grading.kernel_state() in the kernel, as a user expression."""
+        """:func:`vo_lib.grading.kernel_state` in the kernel, as a user expression."""
         msg_id = self.kc.execute("", silent=True, store_history=False, user_expressions={"state": STATE})
         reply = self.wait_for_reply(msg_id) or {}
         result = reply.get("content", {}).get("user_expressions", {}).get("state", {})

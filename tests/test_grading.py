@@ -170,7 +170,9 @@ def test_the_autograder_refuses_kernel_hooks_and_stops_at_a_changed_kernel():
             graded_cell("y = 2", "ex2", True),
             graded_cell("assert y == 2", "ex2_test", False),
             graded_cell(
-                "z = 3\ngetattr(get_ipython(), 'input_transformers' + '_post').append(lambda l: l)",
+                "z = 3\nimport vo_lib.grading as g\nfrozen = g.kernel_state()\n"
+                "g.kernel_state = lambda: frozen  # the state it saw, whatever comes next\n"
+                "getattr(get_ipython(), 'input_transformers' + '_post').append(lambda l: l)",
                 "ex3",
                 True,
             ),
