@@ -429,7 +429,7 @@ import matplotlib.pyplot as plt
 from IPython.core.interactiveshell import InteractiveShell
 assert vo_lib.__file__.startswith({str(venv_dir)!r}), vo_lib.__file__
 shell = InteractiveShell.instance()
-for path in sorted(pathlib.Path("notebooks").glob("*.ipynb")):
+for path in sorted(pathlib.Path(".").glob("*.ipynb")):  # run where Jupyter runs them
     shell.reset(new_session=True)
     for index, cell in enumerate(nbformat.read(path, as_version=4).cells):
         if cell.cell_type == "code" and "nbgrader" not in cell.metadata:
