@@ -3,7 +3,9 @@
 The student edition of every notebook is generated once per session (``coursework/build.py``)
 and searched for solution text. Autograding both ways (solutions score full marks; the
 unanswered edition runs and fails only its exercises) executes notebooks, so the suite does it
-for one small notebook; ``.ci/run`` does it for all of them.
+for one small notebook; ``.ci/run`` does it for all of them, and then installs the handout in a
+fresh environment from its requirements and runs every student notebook (minutes: the suite
+skips it unless ``VO_NOTEBOOKS_HANDOUT`` names a built handout).
 """
 
 from __future__ import annotations
