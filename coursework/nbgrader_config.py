@@ -22,6 +22,107 @@ c.KernelManager.ip = os.path.join(_sockets, "kernel")
 # The kernels nbgrader starts inherit this: vo_lib's offer() then shows no widget, which with no
 # browser to answer it could only wait.
 os.environ["VO_LIB_HEADLESS"] = "1"
+
+
+# The autograder's Execute, guarded. A student's cell runs in the kernel before the tests, so one
+# that hooks into the kernel (an input transformer that empties the test cells, an event handler,
+# a trace function, replaced built-ins or shell methods) or ends it (os._exit, a crash) could make
+# the tests pass or never run, and a test that never ran counts as passed. So:
+# - an answer cell whose code reaches for a kernel hook (vo_lib.grading.kernel_hooks) is not run;
+#   it and its test show why, and the exercise scores 0 until the teacher looks at it by hand;
+# - the kernel's hooks are compared before and after every answer cell (vo_lib.grading.kernel_state,
+#   read as a user expression, which no transformer or handler sees); from a change on, no test
+#   runs and each says where the kernel was changed;
+# - a kernel that dies stops the notebook, not the batch: every later cell says in which cell it
+#   died, and scores 0;
+# - a cell stopped by the timeout says which cell it was.
+import ast  # noqa: E402
+
+from nbclient.exceptions import DeadKernelError  # noqa: E402
+from nbformat.notebooknode import NotebookNode  # noqa: E402
+from nbgrader.converters import Autograde  # noqa: E402
+from nbgrader.preprocessors import Execute  # noqa: E402
+
+import vo_lib.grading  # noqa: E402
+from vo_lib.grading import cell_label, kernel_hooks  # noqa: E402
+
+# read afresh from its file at every call: an answer that replaced the imported module's function
+# (by one that returns a copy of the state it saw) has no hold on it
+STATE = f"__import__('runpy').run_path({vo_lib.grading.__file__!r})['kernel_state']()"
+
+
+def _error(ename, evalue):
+    return NotebookNode(output_type="error", ename=ename, evalue=evalue, traceback=[f"{ename}: {evalue}"])
+
+
+class GuardedExecute(Execute):
+    """nbgrader's Execute that refuses kernel hooks, survives a dead kernel and names timed-out cells."""
+
+    def preprocess(self, nb, resources=None, km=None):
+        self.stopped = None  # why no later test may run: a hook found, a dead kernel
+        self.refused = {}  # grade_id of an answer not run -> why
+        return super().preprocess(nb, resources, km)
+
+    def preprocess_cell(self, cell, resources, index):
+        if cell.cell_type != "code" or not cell.source.strip():
+            return cell, self.resources
+        meta = cell.metadata.get("nbgrader", {})
+        grade_id = meta.get("grade_id", "")
+        if self.stopped:
+            cell.outputs = [_error("NotRun", f"not run: {self.stopped}")]
+            return cell, self.resources
+        if grade_id.endswith("_test") and grade_id.removesuffix("_test") in self.refused:
+            cell.outputs = [_error("KernelHook", self.refused[grade_id.removesuffix("_test")])]
+            return cell, self.resources
+        answer = bool(meta.get("solution"))
+        if answer and (hooks := kernel_hooks(cell.source)):
+            self.refused[grade_id] = (
+                f"the answer {grade_id} was not run: it reaches into the kernel "
+                f"({', '.join(dict.fromkeys(hooks))}), which could change the tests; 0 points "
+                "until the teacher has looked at it"
+            )
+            cell.outputs = [_error("KernelHook", self.refused[grade_id])]
+            return cell, self.resources
+        label = cell_label(cell, index)
+        self.error_on_timeout = {
+            "ename": "CellTimeoutError",
+            "evalue": f"{label} was still running after {self.timeout} s and was stopped",
+            "traceback": [
+                f"CellTimeoutError: {label} was still running after {self.timeout} s and was stopped"
+            ],
+        }
+        try:
+            before = self._kernel_state() if answer else None
+            cell, resources = super().preprocess_cell(cell, resources, index)
+            after = self._kernel_state() if answer else None
+        except DeadKernelError:
+            self.stopped = f"the kernel died in {label}"
+            cell.outputs = list(cell.get("outputs", [])) + [
+                _error("KernelDied", f"the kernel died in {label}")
+            ]
+            return cell, self.resources
+        changed = [what for what in before or {} if before[what] != (after or {}).get(what)]
+        if changed:
+            self.stopped = f"{label} changed the kernel ({', '.join(changed)})"
+            cell.outputs.append(_error("KernelHook", self.stopped))
+        return cell, resources
+
+    def _kernel_state(self):
+        """:func:`vo_lib.grading.kernel_state` in the kernel, as a user expression."""
+        msg_id = self.kc.execute("", silent=True, store_history=False, user_expressions={"state": STATE})
+        reply = self.wait_for_reply(msg_id) or {}
+        result = reply.get("content", {}).get("user_expressions", {}).get("state", {})
+        text = result.get("data", {}).get("text/plain", "")
+        try:
+            return ast.literal_eval(text)
+        except (ValueError, SyntaxError):  # the expression failed: that, too, is a change
+            return {"state": text or repr(result)}
+
+
+c.Autograde.autograde_preprocessors = [  # nbgrader's own list, with GuardedExecute for Execute
+    GuardedExecute if p is Execute else p
+    for p in Autograde.class_traits()["autograde_preprocessors"].make_dynamic_default()
+]
 c.ClearSolutions.code_stub = {"python": "# YOUR CODE HERE\nraise NotImplementedError()"}
 c.ClearSolutions.text_stub = "YOUR ANSWER HERE"
 

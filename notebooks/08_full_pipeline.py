@@ -331,7 +331,7 @@ assert spot_errors["vision"][-1] < spot_errors["odometry"][-1] / 2
 # The paper's two sets had 1,800 and 2,400 frames; ours, `spot_turn` and `spot_turn_2`, turn
 # 1,801 and 2,401 frames, the second the other way and more slowly. Whole runs take longer than
 # this notebook may, so `python -m vo_lib.stereo_vo.paper_sets` ran them once and stored the
-# figures with the code version that made them (`data/results/paper_sets.json`; the test
+# figures with the code version that made them (`vo_lib/stereo_vo/paper_sets.json`; the test
 # `tests/test_paper_sets.py -m samples` runs them again and must find the same). As the paper
 # reports them: the heading error's average (AVG) and standard deviation (S.D.) at key positions.
 

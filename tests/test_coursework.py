@@ -3,7 +3,9 @@
 The student edition of every notebook is generated once per session (``coursework/build.py``)
 and searched for solution text. Autograding both ways (solutions score full marks; the
 unanswered edition runs and fails only its exercises) executes notebooks, so the suite does it
-for one small notebook; ``.ci/run`` does it for all of them.
+for one small notebook; ``.ci/run`` does it for all of them, and then installs the handout in a
+fresh environment from its requirements and runs every student notebook (minutes: the suite
+skips it unless ``VO_NOTEBOOKS_HANDOUT`` names a built handout).
 """
 
 from __future__ import annotations
@@ -13,6 +15,7 @@ import json
 import os
 import pathlib
 import re
+import shutil
 import subprocess
 import sys
 import sysconfig
@@ -257,7 +260,8 @@ def test_handout_holds_notebooks_wheel_requirements_and_no_solution(built):
     wheels = list(handout.glob("vo_lib-*.whl"))
     assert len(wheels) == 1 and (handout / "START_HERE.md").is_file()
     requirements = (handout / "requirements.txt").read_text().splitlines()
-    assert f"./{wheels[0].name}" in requirements and "-e ." not in requirements
+    assert f"./{wheels[0].name}[notebooks]" in requirements, "the wheel, with the notebooks' extras"
+    assert not any(line.startswith(("-e", "./jupyterlab-settings")) for line in requirements), requirements
     with zipfile.ZipFile(wheels[0]) as wheel:
         names = wheel.namelist()
     assert names and all(n.startswith(("vo_lib/", "vo_lib-")) for n in names), "the package only"
@@ -430,3 +434,67 @@ def test_course_page_states_the_points_the_notebooks_carry():
     )
     course = (ROOT / "docs" / "course.md").read_text()
     assert f"{points} points in all" in course and by_hand == 2 and "one written point each" in course
+
+
+HANDOUT_VARIABLE = "VO_NOTEBOOKS_HANDOUT"  # a built handout/ folder: .ci/run sets it
+
+
+@pytest.mark.notebook
+def test_handout_installs_from_its_requirements_and_runs_every_student_notebook(tmp_path):
+    """A fresh virtual environment, nothing but ``pip install -r requirements.txt`` in the handout
+    (the wheel and the package index: no package of this environment, no checkout of this
+    repository), then every student notebook's cells outside the exercises, in one IPython.
+
+    Minutes (the install, then every notebook once): .ci/run runs it on the handout that
+    ``coursework/build.py --check`` wrote; the suite skips it unless the variable names one.
+    """
+    if not os.environ.get(HANDOUT_VARIABLE):
+        pytest.skip(f"{HANDOUT_VARIABLE} names no built handout (.ci/run sets it after coursework/build.py)")
+    source = pathlib.Path(os.environ[HANDOUT_VARIABLE]).resolve()
+    assert (source / "requirements.txt").is_file(), f"{source} is not a handout"
+    handout = tmp_path / "handout"  # a copy: the run leaves nothing in the teacher's folder
+    shutil.copytree(source, handout)
+    env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "VIRTUAL_ENV")}
+    venv_dir = tmp_path / "venv"
+    venv.create(venv_dir, with_pip=True)
+    python = str(venv_dir / "bin" / "python")
+    install = subprocess.run(
+        [python, "-m", "pip", "install", "--quiet", "-r", "requirements.txt"],
+        cwd=handout,
+        capture_output=True,
+        text=True,
+        env=env,
+        timeout=1800,
+    )
+    assert install.returncode == 0, install.stderr[-3000:]
+    notebooks = sorted((handout / "notebooks").glob("*.ipynb"))
+    assert [p.stem for p in notebooks] == [p.stem for p in NOTEBOOKS]
+    script = f"""
+import sys, pathlib, nbformat, vo_lib
+import matplotlib.pyplot as plt
+from IPython.core.interactiveshell import InteractiveShell
+assert vo_lib.__file__.startswith({str(venv_dir)!r}), vo_lib.__file__
+shell = InteractiveShell.instance()
+for path in sorted(pathlib.Path(".").glob("*.ipynb")):  # run where Jupyter runs them
+    shell.reset(new_session=True)
+    for index, cell in enumerate(nbformat.read(path, as_version=4).cells):
+        if cell.cell_type == "code" and "nbgrader" not in cell.metadata:
+            result = shell.run_cell(cell.source, silent=True)
+            if not result.success:
+                error = result.error_before_exec or result.error_in_exec
+                sys.exit(f"{{path.name}}: cell {{index + 1}} failed: {{error!r}}")
+    plt.close("all")
+    print("ran", path.name, flush=True)
+"""
+    proc = subprocess.run(
+        [python, "-c", script],
+        capture_output=True,
+        text=True,
+        cwd=handout / "notebooks",
+        env={**env, "MPLBACKEND": "Agg"},
+        timeout=3600,
+    )
+    assert proc.returncode == 0, (proc.stdout[-1000:], proc.stderr[-3000:])
+    assert [line.split()[1] for line in proc.stdout.splitlines() if line.startswith("ran ")] == [
+        p.name for p in notebooks
+    ]

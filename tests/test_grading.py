@@ -119,7 +119,125 @@ def test_kernel_hooks_are_named_and_ordinary_answers_pass():
         "_exit",
     ]
     assert kernel_hooks("%timeit x = 1\nsys.settrace(None)") == ["settrace"]
+    assert kernel_hooks("import builtins\nbuiltins.all = lambda *a: True") == ["builtins", "builtins"]
+    assert kernel_hooks("get_ipython().showtraceback = print") == ["showtraceback"]
     answer = (
         "def hypotheses_for(e, p, s):\n    return math.ceil(math.log(1 - p) / math.log(1 - (1 - e) ** s))\n"
     )
     assert kernel_hooks(answer) == []
+
+
+def guarded_execute():
+    """The autograder's Execute preprocessor, as the course's nbgrader_config.py defines it."""
+    import pathlib
+    import runpy
+
+    from traitlets.config import Config
+
+    config = pathlib.Path(__file__).resolve().parents[1] / "coursework" / "nbgrader_config.py"
+    return runpy.run_path(str(config), init_globals={"get_config": Config})["GuardedExecute"]
+
+
+def graded_cell(source, grade_id, answer):
+    import nbformat
+
+    meta = {"grade_id": grade_id, "solution": answer, "grade": not answer, "locked": not answer}
+    return nbformat.v4.new_code_cell(source, metadata={"nbgrader": meta})
+
+
+def errors_of(cell):
+    return [(o["ename"], o["evalue"]) for o in cell.outputs if o["output_type"] == "error"]
+
+
+def run_guarded(cells, timeout=60):
+    import nbformat
+
+    nb = nbformat.v4.new_notebook(cells=cells)
+    nb.metadata["kernelspec"] = {"name": "python3", "display_name": "Python 3", "language": "python"}
+    executor = guarded_execute()(timeout=timeout, kernel_name="python3")
+    executor.preprocess(nb, {"metadata": {"path": "."}})
+    return nb.cells
+
+
+@pytest.mark.notebook
+def test_the_autograder_refuses_kernel_hooks_and_stops_at_a_changed_kernel():
+    """An answer that names a hook is not run (its test fails saying why); one that hides it is
+    caught by comparing the kernel before and after, and no later test runs; others pass."""
+    cells = run_guarded(
+        [
+            graded_cell("x = 1\nget_ipython().input_transformers_cleanup.append(lambda l: [])", "ex1", True),
+            graded_cell("assert x == 1", "ex1_test", False),
+            graded_cell("y = 2", "ex2", True),
+            graded_cell("assert y == 2", "ex2_test", False),
+            graded_cell(
+                "z = 3\nimport vo_lib.grading as g\nfrozen = g.kernel_state()\n"
+                "g.kernel_state = lambda: frozen  # the state it saw, whatever comes next\n"
+                "getattr(get_ipython(), 'input_transformers' + '_post').append(lambda l: l)",
+                "ex3",
+                True,
+            ),
+            graded_cell("assert z == 3", "ex3_test", False),
+        ]
+    )
+    assert [e[0] for e in errors_of(cells[0])] == ["KernelHook"]
+    assert (
+        errors_of(cells[1])[0][0] == "KernelHook"
+        and "input_transformers_cleanup" in errors_of(cells[1])[0][1]
+    )
+    assert errors_of(cells[2]) == errors_of(cells[3]) == [], "an ordinary answer is graded as before"
+    (kind, why), *_ = errors_of(cells[4])
+    assert kind == "KernelHook" and '"ex3"' in why and "input transformers" in why
+    assert errors_of(cells[5])[0][0] == "NotRun"
+
+
+@pytest.mark.notebook
+def test_a_dead_kernel_fails_every_later_cell_naming_the_cell_it_died_in():
+    cells = run_guarded(
+        [
+            graded_cell("import os, signal\nos.kill(os.getpid(), signal.SIGKILL)", "ex1", True),
+            graded_cell("assert True", "ex1_test", False),
+        ]
+    )
+    assert errors_of(cells[0])[-1] == ("KernelDied", 'the kernel died in cell 1 "ex1" (import os, signal)')
+    assert errors_of(cells[1]) == [("NotRun", 'not run: the kernel died in cell 1 "ex1" (import os, signal)')]
+
+
+@pytest.mark.notebook
+def test_a_timed_out_cell_is_named_and_the_notebook_goes_on():
+    cells = run_guarded(
+        [
+            graded_cell("import time\ntime.sleep(60)", "ex1", True),
+            graded_cell("assert 'time' in globals()", "ex1_test", False),
+        ],
+        timeout=3,
+    )
+    assert errors_of(cells[0])[-1] == (
+        "CellTimeoutError",
+        'cell 1 "ex1" (import time) was still running after 3 s and was stopped',
+    )
+    assert errors_of(cells[1]) == []
+
+
+def test_the_adversarial_set_tampers_with_the_kernel_every_way_the_grader_guards_against():
+    """coursework/submissions holds answers (kind "kernel_...") that hook into or end the kernel,
+    which coursework/build.py --check requires to score 0."""
+    import pathlib
+    import re
+
+    folder = pathlib.Path(__file__).resolve().parents[1] / "coursework" / "submissions"
+    header = re.compile(r"^# %% (\S+) (kernel_\S*)[ \t]*\n", re.M)
+    answers = [
+        part for file in sorted(folder.glob("*.answers")) for part in header.split(file.read_text())[3::3]
+    ]
+    ways = {
+        "an input transformer": r"input_transformers",
+        "an event handler after every cell": r"register\(\"post_run_cell\"",
+        "replaced built-ins": r"import builtins",
+        "a trace function": r"sys\.settrace\(",
+        "os._exit": r"os\._exit\(",
+        "SystemExit": r"raise SystemExit",
+        "a crash": r"ctypes\.string_at\(0\)",
+        "a hook the code hides from a reader": r"getattr\(get_ipython\(\), \"input_transformers\" \+",
+    }
+    missing = [way for way, pattern in ways.items() if not any(re.search(pattern, a) for a in answers)]
+    assert missing == [], missing

@@ -1,4 +1,4 @@
-"""The stored paper-length results (data/results/paper_sets.json) against the present code.
+"""The stored paper-length results (vo_lib/stereo_vo/paper_sets.json) against the present code.
 
 The quick tests check that the stored file covers every set whole, from the present sample
 definitions; the ``samples``-marked test runs each set again (minutes per set) and requires the

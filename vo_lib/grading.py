@@ -27,7 +27,7 @@ import threading
 import types
 from collections.abc import Callable, Iterator
 
-__all__ = ["KERNEL_HOOKS", "Refused", "intact", "kernel_hooks", "refused"]
+__all__ = ["KERNEL_HOOKS", "Refused", "cell_label", "intact", "kernel_hooks", "kernel_state", "refused"]
 
 
 WRITE_IT = "which the exercise asks you to write yourself"
@@ -275,6 +275,15 @@ KERNEL_HOOKS = frozenset(
         "settrace",
         "_exit",  # end the kernel before the tests run
         "register_magic_function",
+        "showtraceback",  # hide the tests' failures from the graded notebook
+        "_showtraceback",
+        "excepthook",
+        "run_cell",  # run the tests some other way, or not at all
+        "run_code",
+        "run_ast_nodes",
+        "transform_cell",
+        "builtins",  # replace all(), float() or isinstance() that the tests use
+        "__builtins__",
     }
 )
 
@@ -309,6 +318,79 @@ def kernel_hooks(source: str) -> list[str]:
     for node in ast.walk(tree):
         if isinstance(node, ast.Attribute) and node.attr in KERNEL_HOOKS:
             found.append((node.lineno, node.col_offset, node.attr))
+        elif isinstance(node, ast.Name) and node.id in KERNEL_HOOKS:
+            found.append((node.lineno, node.col_offset, node.id))
+        elif isinstance(node, (ast.Import, ast.ImportFrom)):
+            modules = [alias.name for alias in node.names] + [getattr(node, "module", None) or ""]
+            found += [(node.lineno, node.col_offset, m) for m in modules if m in KERNEL_HOOKS]
         elif isinstance(node, ast.Constant) and isinstance(node.value, str) and node.value in KERNEL_HOOKS:
             found.append((node.lineno, node.col_offset, node.value))
     return [name for *_, name in sorted(found)]
+
+
+def kernel_state() -> dict[str, str]:
+    """What a cell could change in the kernel to get round the tests, each part as a short digest.
+
+    The grader takes this before and after a student's answer cell runs (as a user expression,
+    which no input transformer or event handler sees); a part that differs names the tampering:
+    input or AST transformers added, event handlers registered, a trace or profile function set,
+    built-ins replaced, or the shell's own methods (``showtraceback``, ``run_cell``) replaced by
+    code of the notebook.
+
+    Returns
+    -------
+    dict of str to str
+        A digest of each part, by what it is; empty outside IPython.
+    """
+    import builtins
+    import hashlib
+
+    from IPython import get_ipython
+
+    shell = get_ipython()
+    if shell is None:
+        return {}
+    roots = _installed_roots()
+    trapped = {"exit", "quit", "get_ipython", "display", "__IPYTHON__", "_", "__", "___"}
+    parts = {
+        "input transformers": [
+            id(f) for f in (*shell.input_transformers_cleanup, *shell.input_transformers_post)
+        ],
+        "AST transformers": [id(t) for t in shell.ast_transformers],
+        "event handlers": sorted(
+            (event, id(f)) for event, handlers in shell.events.callbacks.items() for f in handlers
+        ),
+        "custom exception handler": [repr(shell.custom_exceptions)],
+        "trace function": [id(sys.gettrace()), id(getattr(threading, "_trace_hook", None))],
+        "profile function": [id(sys.getprofile()), id(getattr(threading, "_profile_hook", None))],
+        "built-ins": sorted((k, id(v)) for k, v in vars(builtins).items() if k not in trapped),
+        "the shell's methods": sorted(
+            (owner.__name__ if isinstance(owner, type) else "shell", name)
+            for owner in (shell, *type(shell).__mro__)
+            for name, value in list(vars(owner).items())
+            if _foreign(value, roots)
+        ),
+    }
+    return {what: hashlib.sha1(repr(value).encode()).hexdigest()[:12] for what, value in parts.items()}
+
+
+def cell_label(cell: dict, index: int) -> str:
+    """How a report names a notebook cell: its grade id (or cell id), number and first line.
+
+    Parameters
+    ----------
+    cell
+        The cell, as nbformat reads it.
+    index
+        Its position in the notebook, from 0.
+
+    Returns
+    -------
+    str
+        For example ``cell 41 "ex2" (def spot_homography(theta, camera):)``.
+    """
+    name = cell.get("metadata", {}).get("nbgrader", {}).get("grade_id") or cell.get("id")
+    lines = [line.strip() for line in cell.get("source", "").splitlines() if line.strip()]
+    first = lines[0] if lines else ""
+    first = first if len(first) <= 60 else first[:57] + "..."
+    return f"cell {index + 1}" + (f' "{name}"' if name else "") + (f" ({first})" if first else "")

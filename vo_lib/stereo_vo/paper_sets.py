@@ -4,11 +4,11 @@ three free-motion sets of Table 2 (IV.B.3), outdoor linear motion (IV.B.1) and i
 average (AVG) and standard deviation (S.D.) of the errors at key positions.
 
 A full run renders and processes about 12,700 frames, more than a notebook can afford;
-:func:`compute` runs them once and :func:`write` stores the figures in
-``data/results/paper_sets.json``, each set with the code version and the sample fingerprint that
-made it. Notebook 08 reads them (:func:`load`); a ``samples``-marked test runs them again and
-compares. ``python -m vo_lib.stereo_vo.paper_sets [SET ...]`` recomputes the named sets (default:
-all) and stores them beside the others.
+:func:`compute` runs them once and :func:`write` stores the figures in ``paper_sets.json`` beside
+this module (package data: an installed wheel has it too), each set with the code version and
+the sample fingerprint that made it. Notebook 08 reads them (:func:`load`); a ``samples``-marked
+test runs them again and compares. ``python -m vo_lib.stereo_vo.paper_sets [SET ...]`` recomputes
+the named sets (default: all) and stores them beside the others.
 """
 
 from __future__ import annotations
@@ -26,8 +26,8 @@ from vo_lib.models.track_odometry import TrackOdometry
 from vo_lib.sim.samples import fingerprint, render_sample
 from vo_lib.stereo_vo.pipeline import run_frames
 
-#: The stored results, in the repository.
-RESULTS = Path(__file__).resolve().parents[2] / "data" / "results" / "paper_sets.json"
+#: The stored results, beside this module (package data, so an installed wheel has them too).
+RESULTS = Path(__file__).resolve().with_name("paper_sets.json")
 #: Key positions: every this many frames (the paper marks its key positions on the path, Fig. 11,
 #: without stating their spacing; ours is a choice).
 KEY_EVERY = 50
