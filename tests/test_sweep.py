@@ -128,7 +128,7 @@ def test_folder_rules(tmp_path):
     assert not (tmp_path / "twice").exists()
 
 
-@pytest.mark.parametrize("bad", ["nonsense", "tcp://host", "http://host:80/x"])
+@pytest.mark.parametrize("bad", ["nonsense", "tcp://host", "http://host:80/x", "tcp://host:99999", "a b:5"])
 def test_a_malformed_scheduler_address_is_one_line_and_writes_nothing(bad, tmp_path, monkeypatch):
     """Dask reads the address (--scheduler, or DASK_SCHEDULER_ADDRESS when none is given)."""
     monkeypatch.delenv("DASK_SCHEDULER_ADDRESS", raising=False)

@@ -228,9 +228,23 @@ def connect(address: str, option: str):
     """A ``distributed.Client`` of the scheduler at ``address`` (Dask parses it); one line if the
     address is malformed or the scheduler cannot be reached."""
     from distributed import Client
+    from distributed.comm.addressing import get_address_host_port, parse_address
+    from distributed.comm.registry import get_backend
 
+    address = address.strip()
     try:
-        return Client(address.strip(), timeout=CONNECT_TIMEOUT)
+        # Dask's own parser first: a malformed address is refused at once, before a Client starts
+        # its event loop (which, on a loaded machine, can take longer than Dask waits for it)
+        scheme, _ = parse_address(address, strict=True)
+        get_backend(scheme)  # an unknown scheme
+        if scheme in ("tcp", "tls") and not 0 < get_address_host_port(address)[1] < 65536:
+            raise ValueError("the port is not between 1 and 65535")
+    except ValueError as exc:
+        raise SweepError(
+            f"{option} {address!r}: expected a scheduler address like tcp://host:8786 ({one_line(exc)})"
+        ) from None
+    try:
+        return Client(address, timeout=CONNECT_TIMEOUT)
     except ValueError as exc:
         raise SweepError(
             f"{option} {address!r}: expected a scheduler address like tcp://host:8786 ({one_line(exc)})"
