@@ -80,6 +80,11 @@ def clone(tmp_path):
 def lab(clone, tmp_path):
     """``jupyter lab`` serving the clone from its top folder; yields its URL with the token."""
     port, token = free_port(), secrets.token_hex(16)
+    # Every cell in the page, so that the test can read every prompt: JupyterLab otherwise keeps
+    # only the cells in view (windowing), and which ones depends on timing
+    tracker = tmp_path / "user-settings/@jupyterlab/notebook-extension/tracker.jupyterlab-settings"
+    tracker.parent.mkdir(parents=True)
+    tracker.write_text('{"windowingMode": "none"}')
     log_path = tmp_path / "lab.log"
     log = log_path.open("w")
     proc = subprocess.Popen(
@@ -100,7 +105,7 @@ def lab(clone, tmp_path):
         cwd=clone,
         stdout=log,
         stderr=subprocess.STDOUT,
-        # a user settings folder of its own: only the environment's overrides apply
+        # a user settings folder of its own: only the environment's overrides (and windowing) apply
         env={
             **os.environ,
             "JUPYTER_RUNTIME_DIR": str(tmp_path / "runtime"),
@@ -154,17 +159,40 @@ def test_double_click_opens_a_notebook_that_runs_and_saves_without_changing_the_
             page.locator(".jp-Notebook-ExecutionIndicator[data-status='idle']").first.wait_for()
             page.screenshot(path=str(SCREENSHOTS / "jupyterlab-opened.png"))
 
-            page.locator(".lm-MenuBar-itemLabel", has_text="Run").first.click()
-            page.get_by_text("Run All Cells", exact=True).click()
+            started = "() => [...document.querySelectorAll('.jp-CodeCell .jp-InputPrompt')]"
+            started += ".some(p => /\\[(\\*|\\d+)\\]/.test(p.textContent))"
+            for _attempt in range(3):  # the menu item may do nothing while the kernel is still connecting
+                page.locator(".lm-MenuBar-itemLabel", has_text="Run").first.click()
+                page.get_by_text("Run All Cells", exact=True).click()
+                try:
+                    page.wait_for_function(started, timeout=20_000)
+                    break
+                except sync_api.TimeoutError:
+                    page.keyboard.press("Escape")
+            else:
+                pytest.fail("Run All Cells started no cell, three times over")
             # Every code cell has run when none is queued or running and the kernel is idle.
-            page.wait_for_function(
-                """(n) => {
-                    const prompts = [...document.querySelectorAll('.jp-CodeCell .jp-InputPrompt')];
-                    return prompts.length === n && prompts.every(p => /\\[\\d+\\]/.test(p.textContent));
-                }""",
-                arg=code_cells,
-                timeout=RUN_TIMEOUT_MS,
-            )
+            # ... or a cell has failed, after which Run All runs nothing more (fail now, not at the timeout)
+            try:
+                page.wait_for_function(
+                    """(n) => {
+                        const prompts = [...document.querySelectorAll('.jp-CodeCell .jp-InputPrompt')];
+                        const failed = document.querySelector(
+                            ".jp-OutputArea-output[data-mime-type='application/vnd.jupyter.stderr']");
+                        return failed !== null || (
+                            prompts.length === n && prompts.every(p => /\\[\\d+\\]/.test(p.textContent)));
+                    }""",
+                    arg=code_cells,
+                    timeout=RUN_TIMEOUT_MS,
+                )
+            except sync_api.TimeoutError:
+                page.screenshot(path=str(SCREENSHOTS / "jupyterlab-timeout.png"))
+                prompts = page.locator(".jp-CodeCell .jp-InputPrompt").all_inner_texts()
+                status = page.locator(".jp-Notebook-ExecutionIndicator").first.get_attribute("data-status")
+                pytest.fail(
+                    f"Run All did not finish in {RUN_TIMEOUT_MS / 1000:g} s: kernel {status}, prompts "
+                    f"{' '.join(p.strip() for p in prompts)} (see jupyterlab-timeout.png in {SCREENSHOTS})"
+                )
             errors = page.locator(".jp-OutputArea-output[data-mime-type='application/vnd.jupyter.stderr']")
             tracebacks = [
                 t for t in errors.all_inner_texts() if "Traceback" in t or "Error" in t.split("\n")[0]
