@@ -36,6 +36,7 @@ SETTINGS = pathlib.Path(sys.prefix) / "share/jupyter/lab/settings/overrides.d/vo
 SCREENSHOTS = ROOT / "build" / "screenshots"
 START_TIMEOUT_S = 120
 RUN_TIMEOUT_MS = 300_000  # the notebook's own run, on a loaded 2-core machine
+RUN_ATTEMPTS = 4  # times Run All Cells is given (see the test)
 UI_TIMEOUT_MS = 60_000
 
 pytestmark = [
@@ -159,38 +160,32 @@ def test_double_click_opens_a_notebook_that_runs_and_saves_without_changing_the_
             page.locator(".jp-Notebook-ExecutionIndicator[data-status='idle']").first.wait_for()
             page.screenshot(path=str(SCREENSHOTS / "jupyterlab-opened.png"))
 
-            started = "() => [...document.querySelectorAll('.jp-CodeCell .jp-InputPrompt')]"
-            started += ".some(p => /\\[(\\*|\\d+)\\]/.test(p.textContent))"
-            for _attempt in range(3):  # the menu item may do nothing while the kernel is still connecting
+            # Every code cell has run when each prompt shows a number; or a cell has failed, after
+            # which Run All runs nothing more (fail now, not at the timeout). Under load JupyterLab's
+            # Run All Cells sometimes starts no cell, or stops after the first with the kernel idle
+            # and no error: the command is given again (the notebook runs the same from the top).
+            finished = """(n) => {
+                const prompts = [...document.querySelectorAll('.jp-CodeCell .jp-InputPrompt')];
+                const failed = document.querySelector(
+                    ".jp-OutputArea-output[data-mime-type='application/vnd.jupyter.stderr']");
+                return failed !== null || (
+                    prompts.length === n && prompts.every(p => /\\[\\d+\\]/.test(p.textContent)));
+            }"""
+            for _attempt in range(RUN_ATTEMPTS):
+                page.keyboard.press("Escape")
                 page.locator(".lm-MenuBar-itemLabel", has_text="Run").first.click()
                 page.get_by_text("Run All Cells", exact=True).click()
                 try:
-                    page.wait_for_function(started, timeout=20_000)
+                    page.wait_for_function(finished, arg=code_cells, timeout=RUN_TIMEOUT_MS // RUN_ATTEMPTS)
                     break
                 except sync_api.TimeoutError:
-                    page.keyboard.press("Escape")
+                    continue
             else:
-                pytest.fail("Run All Cells started no cell, three times over")
-            # Every code cell has run when none is queued or running and the kernel is idle.
-            # ... or a cell has failed, after which Run All runs nothing more (fail now, not at the timeout)
-            try:
-                page.wait_for_function(
-                    """(n) => {
-                        const prompts = [...document.querySelectorAll('.jp-CodeCell .jp-InputPrompt')];
-                        const failed = document.querySelector(
-                            ".jp-OutputArea-output[data-mime-type='application/vnd.jupyter.stderr']");
-                        return failed !== null || (
-                            prompts.length === n && prompts.every(p => /\\[\\d+\\]/.test(p.textContent)));
-                    }""",
-                    arg=code_cells,
-                    timeout=RUN_TIMEOUT_MS,
-                )
-            except sync_api.TimeoutError:
                 page.screenshot(path=str(SCREENSHOTS / "jupyterlab-timeout.png"))
                 prompts = page.locator(".jp-CodeCell .jp-InputPrompt").all_inner_texts()
                 status = page.locator(".jp-Notebook-ExecutionIndicator").first.get_attribute("data-status")
                 pytest.fail(
-                    f"Run All did not finish in {RUN_TIMEOUT_MS / 1000:g} s: kernel {status}, prompts "
+                    f"Run All did not finish, {RUN_ATTEMPTS} times over: kernel {status}, prompts "
                     f"{' '.join(p.strip() for p in prompts)} (see jupyterlab-timeout.png in {SCREENSHOTS})"
                 )
             errors = page.locator(".jp-OutputArea-output[data-mime-type='application/vnd.jupyter.stderr']")
