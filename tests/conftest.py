@@ -37,6 +37,23 @@ CHROMIUM_FLAGS = [
 ]
 
 
+def jupyter_command(app: str, port: int, token: str) -> list[str]:
+    """``jupyter APP`` (lab or server) on 127.0.0.1:``port`` with ``token``, for a browser or a
+    client of the tests: no browser of its own, root allowed (CI containers), no port retries."""
+    return [
+        sys.executable,
+        "-m",
+        "jupyter",
+        app,
+        "--no-browser",
+        "--allow-root",  # CI containers run as root; harmless otherwise
+        "--ip=127.0.0.1",
+        f"--port={port}",
+        "--port-retries=0",
+        f"--IdentityProvider.token={token}",
+    ]
+
+
 def stop_server(proc, log) -> None:
     """Terminate a server a test started (killed if it does not stop in 30 s) and close its log."""
     import subprocess

@@ -21,7 +21,7 @@ import uuid
 
 import pytest
 import websocket
-from conftest import NOTEBOOK_KERNEL, stop_server
+from conftest import NOTEBOOK_KERNEL, jupyter_command, stop_server
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 OPENED = ("notebooks/01_crawler_odometry.py", "notebooks/06_one_point_ransac.py")
@@ -59,16 +59,7 @@ def server(tmp_path):
     log = (tmp_path / "server.log").open("w")
     proc = subprocess.Popen(
         [
-            sys.executable,
-            "-m",
-            "jupyter",
-            "server",
-            "--no-browser",
-            "--allow-root",  # CI containers run as root; harmless otherwise
-            "--ip=127.0.0.1",
-            f"--port={port}",
-            "--port-retries=0",
-            f"--IdentityProvider.token={token}",
+            *jupyter_command("server", port, token),
             f"--ServerApp.root_dir={ROOT}",
         ],
         stdout=log,

@@ -28,7 +28,7 @@ import urllib.request
 
 import jupytext
 import pytest
-from conftest import CHROMIUM, CHROMIUM_FLAGS, stop_server
+from conftest import CHROMIUM, CHROMIUM_FLAGS, jupyter_command, stop_server
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 NOTEBOOK = "02_circular_motion_derivation.py"  # no rendering, no compiled kernel: quick to run
@@ -90,16 +90,7 @@ def lab(clone, tmp_path):
     log = log_path.open("w")
     proc = subprocess.Popen(
         [
-            sys.executable,
-            "-m",
-            "jupyter",
-            "lab",
-            "--no-browser",
-            "--allow-root",  # CI containers run as root; harmless otherwise
-            "--ip=127.0.0.1",
-            f"--port={port}",
-            "--port-retries=0",
-            f"--IdentityProvider.token={token}",
+            *jupyter_command("lab", port, token),
             "--LabApp.news_url=",  # no news pop-up asking for consent
             "--LabApp.check_for_updates_class=jupyterlab.NeverCheckForUpdate",
         ],
