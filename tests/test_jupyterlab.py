@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import os
 import pathlib
+import re
 import secrets
 import shutil
 import socket
@@ -36,7 +37,7 @@ SETTINGS = pathlib.Path(sys.prefix) / "share/jupyter/lab/settings/overrides.d/vo
 SCREENSHOTS = ROOT / "build" / "screenshots"
 START_TIMEOUT_S = 120
 RUN_TIMEOUT_MS = 300_000  # the notebook's own run, on a loaded 2-core machine
-RUN_ATTEMPTS = 4  # times Run All Cells is given (see the test)
+RUN_ATTEMPTS = 2  # times Run All Cells is given (see the test)
 UI_TIMEOUT_MS = 60_000
 
 pytestmark = [
@@ -86,6 +87,12 @@ def lab(clone, tmp_path):
     tracker = tmp_path / "user-settings/@jupyterlab/notebook-extension/tracker.jupyterlab-settings"
     tracker.parent.mkdir(parents=True)
     tracker.write_text('{"windowingMode": "none"}')
+    # No autosave: a save while Run All's cells wait (autosave comes two minutes after the first
+    # change, inside the run on a loaded machine) cancels the waiting cells of a jupytext notebook.
+    # The test saves once, with Ctrl+S, after the run.
+    docmanager = tmp_path / "user-settings/@jupyterlab/docmanager-extension/plugin.jupyterlab-settings"
+    docmanager.parent.mkdir(parents=True)
+    docmanager.write_text('{"autosave": false}')
     log_path = tmp_path / "lab.log"
     log = log_path.open("w")
     proc = subprocess.Popen(
@@ -148,13 +155,16 @@ def test_double_click_opens_a_notebook_that_runs_and_saves_without_changing_the_
             panel = page.locator(".jp-NotebookPanel:visible")
             panel.wait_for()
             assert page.locator(".jp-FileEditor:visible").count() == 0
-            page.locator(".jp-Notebook-ExecutionIndicator[data-status='idle']").first.wait_for()
+            # The kernel is connected when the status bar reads "<kernel> | Idle". The toolbar's
+            # execution indicator says "idle" from the start, before any kernel is connected, and a
+            # Run All given then clears every cell's prompt and runs nothing.
+            page.locator(".jp-StatusBar-TextItem", has_text=re.compile(r"\|\s*Idle$")).first.wait_for()
             page.screenshot(path=str(SCREENSHOTS / "jupyterlab-opened.png"))
 
             # Every code cell has run when each prompt shows a number; or a cell has failed, after
-            # which Run All runs nothing more (fail now, not at the timeout). Under load JupyterLab's
-            # Run All Cells sometimes starts no cell, or stops after the first with the kernel idle
-            # and no error: the command is given again (the notebook runs the same from the top).
+            # which Run All runs nothing more (fail now, not at the timeout). A run that stops
+            # short with the kernel idle and no error (the two causes found are excluded above) is
+            # given once more: the notebook runs the same from the top.
             finished = """(n) => {
                 const prompts = [...document.querySelectorAll('.jp-CodeCell .jp-InputPrompt')];
                 const failed = document.querySelector(
