@@ -389,6 +389,18 @@ intact(
     globals(), ("StereoCamera", "synthetic_matches")
 )  # the answer left NumPy and the notebook's modules alone
 import vo_lib.stereo_vo.ransac_core as ransac_core  # noqa: E402
+import vo_lib.stereo_vo.ransac_plain as ransac_plain  # noqa: E402
+
+
+def own_functions(module):
+    """Every function and compiled kernel a module defines (the RANSAC's compute θ's variance too)."""
+    return [
+        f
+        for f in vars(module).values()
+        if hasattr(f, "py_func")
+        or (callable(f) and not isinstance(f, type) and getattr(f, "__module__", None) == module.__name__)
+    ]
+
 
 fresh = np.random.default_rng()  # new matches, noise and camera at every grading
 other = StereoCamera(
@@ -400,16 +412,18 @@ other = StereoCamera(
     width=640,
     height=480,
 )
-cases = []
+cases = []  # inputs only: the expected values are worked out after the answer has run
 for cam in (camera, other):
     m_ = synthetic_matches(cam, 200, fresh.uniform(-0.1, 0.1), fresh.uniform(-0.2, 0.2), fresh)
-    sigma_ = fresh.uniform(0.2, 2.0)
-    cases.append((m_, sigma_, cam, cm.theta_standard_deviation(m_.w_prev, m_.w_curr, cam, sigma_)))
-with refused(cm.theta_standard_deviation, cm.theta_variance, ransac_core._theta_variance):
-    answers = [np.asarray(theta_sigma(m_.w_prev, m_.w_curr, s_, cam), float) for m_, s_, cam, _ in cases]
-for got, expected in zip(answers, [case[-1] for case in cases], strict=True):
+    cases.append((m_.w_prev, m_.w_curr, fresh.uniform(0.2, 2.0), cam))
+del m_
+library = [cm.theta_standard_deviation, cm.theta_variance, *own_functions(ransac_core), *own_functions(ransac_plain)]
+with refused(*library):
+    answers = [np.asarray(theta_sigma(a_, b_, s_, cam), float) for a_, b_, s_, cam in cases]
+for got, (a_, b_, s_, cam) in zip(answers, cases, strict=True):
+    expected = cm.theta_standard_deviation(a_, b_, cam, s_)
     assert got.shape == expected.shape, "one standard deviation per match"
-    assert np.allclose(got, expected, rtol=1e-6), (
+    assert np.allclose(got, expected, rtol=1e-9), (
         "not the first-order standard deviation of θ (a standard deviation, not a variance; "
         "θ, not φ; all four coordinates; this camera's centre and f_x)"
     )
@@ -473,16 +487,32 @@ other = StereoCamera(
     width=640,
     height=480,
 )
-cases = []
+cases = []  # inputs only: the truth is worked out after the answer has run
 for cam in (camera, other):
     m_ = synthetic_matches(
         cam, 300, fresh.uniform(-0.1, 0.1), fresh.uniform(-0.2, 0.2), fresh, outlier_ratio=0.4
     )
-    truth = cam.backproject(m_.w_curr)[:, 1] - cam.backproject(m_.w_prev)[:, 1]
-    cases.append((m_, cam, truth))
-with refused(StereoCamera.backproject):
-    answers = [np.asarray(height_change(m_.w_prev, m_.w_curr, cam), float) for m_, cam, _ in cases]
-for got, truth in zip(answers, [case[-1] for case in cases], strict=True):
+    cases.append((m_.w_prev, m_.w_curr, cam))
+del m_
+import cv2  # noqa: E402
+
+import vo_lib.stereo_vo.ransac_core as ransac_core  # noqa: E402
+import vo_lib.stereo_vo.ransac_plain as ransac_plain  # noqa: E402
+
+# eq. 13 as the library and OpenCV compute it: the camera, the RANSAC's kernels and their plain
+# twins (which back-project every match), OpenCV's triangulation
+library = [StereoCamera.backproject, cv2.triangulatePoints, cv2.reprojectImageTo3D]
+for module in (ransac_core, ransac_plain):
+    library += [
+        f
+        for f in vars(module).values()
+        if hasattr(f, "py_func")
+        or (callable(f) and not isinstance(f, type) and getattr(f, "__module__", None) == module.__name__)
+    ]
+with refused(*library):
+    answers = [np.asarray(height_change(a_, b_, cam), float) for a_, b_, cam in cases]
+for got, (a_, b_, cam) in zip(answers, cases, strict=True):
+    truth = cam.backproject(b_)[:, 1] - cam.backproject(a_)[:, 1]
     assert np.allclose(got, truth, atol=1e-9), (
         "not y' - y in metres for every match (which sign? which focal lengths?)"
     )
