@@ -545,7 +545,9 @@ for seed in fresh.integers(0, 2**63, 5):
     fresh_gauge = crawler.uniform(0.4, 1.2)
     # the noise of the summed encoder readings, carried through eq. 4: within 4 sigma of the truth
     sigma_fit = odo.encoder_sigma * np.sqrt(np.abs(readings).sum()) / fresh_turn
-    assert abs(fitted - fresh_gauge) < 4 * sigma_fit, "fit_gauge does not recover the gauge of another crawler"
+    assert abs(fitted - fresh_gauge) < 4 * sigma_fit, (
+        "fit_gauge does not recover the gauge of another crawler"
+    )
 intact(globals())
 ### END HIDDEN TESTS
 
