@@ -483,8 +483,9 @@ for _ in range(10):
         fx=fresh.uniform(300, 900), fy=500.0, cx=320.0, cy=240.0, baseline=fresh.uniform(0.1, 0.5)
     )
     z_, dd = fresh.uniform(1.0, 20.0), fresh.uniform(0.05, 1.0)
-    exact = cam.fx * cam.baseline / (cam.fx * cam.baseline / z_ - dd) - z_
-    assert np.isclose(depth_error(z_, dd, cam), exact, rtol=1e-6), (
+    got = depth_error(z_, dd, cam)
+    exact = cam.fx * cam.baseline / (cam.fx * cam.baseline / z_ - dd) - z_  # after the answer ran
+    assert np.isclose(got, exact, rtol=1e-6), (
         "depth_error is not the exact error of another camera, depth or disparity error "
         "(to first order only? which way does the disparity err?)"
     )
