@@ -420,7 +420,7 @@ del m_
 # eq. 14's θ and its variance as the library computes them (derived, not differentiated numerically)
 library = [*own_functions(cm), *own_functions(ransac_core), *own_functions(ransac_plain)]
 with refused(*library):
-    answers = [np.asarray(theta_sigma(a_, b_, s_, cam), float) for a_, b_, s_, cam in cases]
+    answers = [np.asarray(theta_sigma(a_.copy(), b_.copy(), s_, cam), float) for a_, b_, s_, cam in cases]
 for got, (a_, b_, s_, cam) in zip(answers, cases, strict=True):
     expected = cm.theta_standard_deviation(a_, b_, cam, s_)
     assert got.shape == expected.shape, "one standard deviation per match"
@@ -511,7 +511,7 @@ for module in (ransac_core, ransac_plain):
         or (callable(f) and not isinstance(f, type) and getattr(f, "__module__", None) == module.__name__)
     ]
 with refused(*library):
-    answers = [np.asarray(height_change(a_, b_, cam), float) for a_, b_, cam in cases]
+    answers = [np.asarray(height_change(a_.copy(), b_.copy(), cam), float) for a_, b_, cam in cases]
 for got, (a_, b_, cam) in zip(answers, cases, strict=True):
     truth = cam.backproject(b_)[:, 1] - cam.backproject(a_)[:, 1]
     assert np.allclose(got, truth, atol=1e-9), (

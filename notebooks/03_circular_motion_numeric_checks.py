@@ -547,7 +547,7 @@ for _ in range(3):
         camera, 300, fresh.uniform(-0.1, 0.1), fresh.uniform(-0.2, 0.2), fresh, noise_px=sigma_
     )
     with refused(*library):
-        got = weighted_theta(draw.w_prev, draw.w_curr, camera, sigma_)
+        got = weighted_theta(draw.w_prev.copy(), draw.w_curr.copy(), camera, sigma_)
     each = cm.theta_from_pixels(draw.w_prev, draw.w_curr, camera)  # after the answer: nothing to read
     weights = cm.theta_standard_deviation(draw.w_prev, draw.w_curr, camera, sigma_) ** -2.0
     assert np.isclose(got, np.average(each, weights=weights), rtol=0, atol=1e-10), (
@@ -712,7 +712,7 @@ for seed in fresh.integers(0, 2**63, 4):
     each = cm.theta_from_pixels(pairs.w_prev, pairs.w_curr, camera)[keep]
     depth = camera.depth_from_disparity(pairs.w_prev[keep, 2])
     del motion, increment, T_, pairs
-    corrected = np.asarray(correct_ahead(each, depth, a_), float)
+    corrected = np.asarray(correct_ahead(each.copy(), depth.copy(), a_), float)
     motion = np.random.default_rng(seed)
     motion.uniform(0.1, 0.5)
     turn = motion.choice([-1, 1]) * motion.uniform(np.radians(1), np.radians(4))

@@ -502,7 +502,7 @@ library += [
     and getattr(getattr(f, "py_func", f), "__module__", None) == module.__name__
 ]
 with refused(*library):
-    got = np.asarray(hamming_distance(a_, b_))
+    got = np.asarray(hamming_distance(a_.copy(), b_.copy()))
 expected = np.unpackbits(a_ ^ b_, axis=1).sum(axis=1)  # after the answer: nothing to read before
 assert np.array_equal(got, expected), (
     "on other descriptors, not the number of differing bits (bits, not bytes)"
@@ -572,7 +572,7 @@ def parabola_samples(draw):
 
 
 samples = parabola_samples(fresh)
-got = np.asarray(quadratic_offset(*samples), float)
+got = np.asarray(quadratic_offset(*(s.copy() for s in samples)), float)
 # after the answer: the vertex -b / 2a of the parabola a x^2 + b x + c through the samples
 a_coef, b_coef, _ = np.linalg.solve(np.vander([-1.0, 0.0, 1.0], 3), np.array(samples))
 assert np.allclose(got, -b_coef / (2 * a_coef)), (
@@ -637,7 +637,7 @@ for _ in range(4):
     resp = fresh.uniform(1, 100, 800).astype(np.float32)
     cases.append((pts, resp, w_, h_, grid_, per_))  # inputs only: the answers come after
 with refused(features_module.bucket):
-    answers = [np.asarray(strongest_per_cell(*case)) for case in cases]
+    answers = [np.asarray(strongest_per_cell(pts.copy(), resp.copy(), *rest)) for pts, resp, *rest in cases]
 for got, (pts, resp, w_, h_, grid_, per_) in zip(answers, cases, strict=True):
     expected = features_module.bucket(pts, resp, w_, h_, grid_, per_ * grid_[0] * grid_[1])
     assert np.array_equal(got, expected), (
