@@ -325,16 +325,25 @@ assert is_zero(rho_from_x.subs(xq, xp) - rho), "on the motion the expression mus
 ### BEGIN HIDDEN TESTS
 import importlib  # noqa: E402
 
+import numpy as np  # noqa: E402 - the tests' own modules, whatever names the answer rebound
+import sympy as sp  # noqa: E402
+
 import vo_lib.grading  # noqa: E402
+from vo_lib.stereo_vo import circular_motion as cm  # noqa: E402
 
 grading = importlib.reload(vo_lib.grading)  # fresh from its file, whatever the answer did to it
 intact = grading.intact
 
 intact(globals())  # the answer left NumPy and the notebook's modules alone
+# eq. 15's x' row and its symbols built afresh: the notebook's names may have been bound to others
+x_s, z_s, xq_s = sp.symbols("x z x'", real=True)
+phi_s, rho_s = sp.symbols("varphi rho", real=True)
+x_row = sp.cos(2 * phi_s) * x_s + sp.sin(2 * phi_s) * z_s - rho_s * sp.sin(phi_s)
+assert rho_from_x.free_symbols <= {x_s, z_s, xq_s, phi_s}, "only x, z, x' and φ, the notebook's own symbols"
 fresh = np.random.default_rng()  # new motions at every grading
 for x_, z_, phi_, rho_ in zip(*fresh.uniform([-5, 1, -0.3, -1], [5, 20, 0.3, 1], (8, 4)).T, strict=True):
-    values = {x: x_, z: z_, phi: phi_, rho: rho_}
-    moved = {**values, xq: float(xp.subs(values))}
+    values = {x_s: x_, z_s: z_, phi_s: phi_}
+    moved = {**values, xq_s: float(x_row.subs({**values, rho_s: rho_}))}
     assert np.isclose(float(rho_from_x.subs(moved)), rho_, atol=1e-9), (
         "on another motion the expression does not give back its ρ"
     )
@@ -380,7 +389,11 @@ assert ours.shape == (300,) and np.all(ours > 0)
 ### BEGIN HIDDEN TESTS
 import importlib  # noqa: E402
 
+import numpy as np  # noqa: E402 - the tests' own modules, whatever names the answer rebound
+import sympy as sp  # noqa: E402
+
 import vo_lib.grading  # noqa: E402
+from vo_lib.stereo_vo import circular_motion as cm  # noqa: E402
 
 grading = importlib.reload(vo_lib.grading)  # fresh from its file, whatever the answer did to it
 intact, refused = grading.intact, grading.refused
@@ -467,7 +480,11 @@ assert np.abs(change[mixed.inliers]).max() < 1e-9, "a planar motion keeps every 
 ### BEGIN HIDDEN TESTS
 import importlib  # noqa: E402
 
+import numpy as np  # noqa: E402 - the tests' own modules, whatever names the answer rebound
+import sympy as sp  # noqa: E402
+
 import vo_lib.grading  # noqa: E402
+from vo_lib.stereo_vo import circular_motion as cm  # noqa: E402
 
 grading = importlib.reload(vo_lib.grading)  # fresh from its file, whatever the answer did to it
 intact, refused = grading.intact, grading.refused

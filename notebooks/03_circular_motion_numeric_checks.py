@@ -522,7 +522,10 @@ assert 0 < spread_weighted < spread_median, "over many draws the weighted mean i
 ### BEGIN HIDDEN TESTS
 import importlib  # noqa: E402
 
+import numpy as np  # noqa: E402 - the tests' own modules, whatever names the answer rebound
+
 import vo_lib.grading  # noqa: E402
+from vo_lib.stereo_vo import circular_motion as cm  # noqa: E402
 
 grading = importlib.reload(vo_lib.grading)  # fresh from its file, whatever the answer did to it
 intact, refused = grading.intact, grading.refused
@@ -609,7 +612,10 @@ assert np.abs(predicted_uv - spot.w_curr[:, :2]).max() < 1e-6, "pixels, whatever
 ### BEGIN HIDDEN TESTS
 import importlib  # noqa: E402
 
+import numpy as np  # noqa: E402 - the tests' own modules, whatever names the answer rebound
+
 import vo_lib.grading  # noqa: E402
+from vo_lib.stereo_vo import circular_motion as cm  # noqa: E402
 
 grading = importlib.reload(vo_lib.grading)  # fresh from its file, whatever the answer did to it
 intact, refused = grading.intact, grading.refused
@@ -691,7 +697,10 @@ assert abs(theta_corrected - np.radians(2)) < 0.05 * before, "the correction rem
 ### BEGIN HIDDEN TESTS
 import importlib  # noqa: E402
 
+import numpy as np  # noqa: E402 - the tests' own modules, whatever names the answer rebound
+
 import vo_lib.grading  # noqa: E402
+from vo_lib.stereo_vo import circular_motion as cm  # noqa: E402
 
 grading = importlib.reload(vo_lib.grading)  # fresh from its file, whatever the answer did to it
 intact = grading.intact

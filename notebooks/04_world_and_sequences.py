@@ -471,6 +471,8 @@ assert np.isclose(depth_error_10m, 100 * first_order, rtol=0.15), "the error gro
 ### BEGIN HIDDEN TESTS
 import importlib  # noqa: E402
 
+import numpy as np  # noqa: E402 - the tests' own modules, whatever names the answer rebound
+
 import vo_lib.grading  # noqa: E402
 
 grading = importlib.reload(vo_lib.grading)  # fresh from its file, whatever the answer did to it
@@ -543,6 +545,8 @@ assert gap_to_walls(robot_points, pose).max() < 1e-6, "an echo carried into the 
 ### BEGIN HIDDEN TESTS
 import importlib  # noqa: E402
 
+import numpy as np  # noqa: E402 - the tests' own modules, whatever names the answer rebound
+
 import vo_lib.grading  # noqa: E402
 
 grading = importlib.reload(vo_lib.grading)  # fresh from its file, whatever the answer did to it
@@ -610,6 +614,8 @@ assert abs(len(depth_gaps) - field_of_view / np.radians(1 / 3)) < 5, "every beam
 assert np.median(depth_gaps) < 0.005 and np.percentile(depth_gaps, 90) < 0.03, "laser and camera disagree"
 ### BEGIN HIDDEN TESTS
 import importlib  # noqa: E402
+
+import numpy as np  # noqa: E402 - the tests' own modules, whatever names the answer rebound
 
 import vo_lib.grading  # noqa: E402
 

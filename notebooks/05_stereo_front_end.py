@@ -463,6 +463,8 @@ assert np.all(hamming_distance(other, other) == 0), "a descriptor differs from i
 ### BEGIN HIDDEN TESTS
 import importlib  # noqa: E402
 
+import numpy as np  # noqa: E402 - the tests' own modules, whatever names the answer rebound
+
 import vo_lib.grading  # noqa: E402
 
 grading = importlib.reload(vo_lib.grading)  # fresh from its file, whatever the answer did to it
@@ -550,6 +552,8 @@ assert library_worst < 1e-9 < 0.05 < parabola_worst, "the V fit is exact on a SA
 ### BEGIN HIDDEN TESTS
 import importlib  # noqa: E402
 
+import numpy as np  # noqa: E402 - the tests' own modules, whatever names the answer rebound
+
 import vo_lib.grading  # noqa: E402
 
 grading = importlib.reload(vo_lib.grading)  # fresh from its file, whatever the answer did to it
@@ -619,6 +623,8 @@ for grid, per_cell in (((8, 6), 12), ((4, 3), 5), ((16, 12), 1)):
 
 ### BEGIN HIDDEN TESTS
 import importlib  # noqa: E402
+
+import numpy as np  # noqa: E402 - the tests' own modules, whatever names the answer rebound
 
 import vo_lib.grading  # noqa: E402
 
