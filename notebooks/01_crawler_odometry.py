@@ -459,7 +459,9 @@ import vo_lib.grading  # noqa: E402
 grading = importlib.reload(vo_lib.grading)  # fresh from its file, whatever the answer did to it
 intact = grading.intact
 
-intact(globals())  # the answer left NumPy and the notebook's modules alone
+intact(globals(), ("TrackOdometry", "apply_slip"))  # the answer left NumPy and the notebook's modules alone
+# the notebook's crawler (section 1), whatever the answer bound odo to: slip_drift turns it
+odo = TrackOdometry(track_distance=0.40, track_width=0.10, encoder_sigma=0.01)
 fresh = np.random.default_rng()  # new inputs at every grading
 for slip, n in zip(fresh.uniform(0.02, 0.3, 5), fresh.integers(20, 400, 5), strict=True):
     displacement, heading_error = slip_drift(float(slip), int(n))
@@ -472,7 +474,7 @@ for slip, n in zip(fresh.uniform(0.02, 0.3, 5), fresh.integers(20, 400, 5), stri
     assert np.isclose(heading_error, n * slip * 0.01 / odo.gauge, rtol=1e-6), (
         "the missed heading has the wrong size or sign (odometry minus truth)"
     )
-intact(globals())
+intact(globals(), ("TrackOdometry", "apply_slip"))
 ### END HIDDEN TESTS
 
 # %% [markdown]
