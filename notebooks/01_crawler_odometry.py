@@ -391,6 +391,8 @@ assert spot_translation < 1e-12, "eq. 2-3: a spot turn does not translate"
 ### BEGIN HIDDEN TESTS
 import importlib  # noqa: E402
 
+import numpy as np  # noqa: E402 - the tests' own modules, whatever names the answer rebound
+
 import vo_lib.grading  # noqa: E402
 
 grading = importlib.reload(vo_lib.grading)  # fresh from its file, whatever the answer did to it
@@ -399,8 +401,8 @@ intact = grading.intact
 intact(globals())  # the answer left NumPy and the notebook's modules alone
 fresh = np.random.default_rng()  # new inputs at every grading: a number typed in cannot pass
 for gauge, step in zip(fresh.uniform(0.3, 1.5, 20), fresh.uniform(0.002, 0.03, 20), strict=True):
-    per_step = 2 * step / gauge  # eq. 4
     n = full_turn_steps(gauge, step)
+    per_step = 2 * step / gauge  # eq. 4, worked out after the answer: nothing of it to read before
     assert (n - 1) * per_step < 2 * np.pi <= n * per_step, (
         "full_turn_steps is not the smallest number of steps reaching 360° for another crawler"
     )
@@ -450,24 +452,29 @@ assert np.isclose(slip_displacement, np.hypot(*slip_poses[-1, :2])), "the true f
 ### BEGIN HIDDEN TESTS
 import importlib  # noqa: E402
 
+import numpy as np  # noqa: E402 - the tests' own modules, whatever names the answer rebound
+
 import vo_lib.grading  # noqa: E402
 
 grading = importlib.reload(vo_lib.grading)  # fresh from its file, whatever the answer did to it
 intact = grading.intact
 
-intact(globals())  # the answer left NumPy and the notebook's modules alone
+intact(globals(), ("TrackOdometry", "apply_slip"))  # the answer left NumPy and the notebook's modules alone
+# the notebook's crawler (section 1), whatever the answer bound odo to: slip_drift turns it
+odo = TrackOdometry(track_distance=0.40, track_width=0.10, encoder_sigma=0.01)
 fresh = np.random.default_rng()  # new inputs at every grading
 for slip, n in zip(fresh.uniform(0.02, 0.3, 5), fresh.integers(20, 400, 5), strict=True):
+    displacement, heading_error = slip_drift(float(slip), int(n))
     # every step moves slip * 1 cm / 2 forward and turns (2 - slip) cm / gauge: an arc of radius
-    # R, whose chord after the whole turn is 2 R |sin(turn / 2)|
+    # R, whose chord after the whole turn is 2 R |sin(turn / 2)| (worked out after the answer, so
+    # that no expected value waits in a variable while it runs)
     step_forward, step_turn = 0.5 * slip * 0.01, (2 - slip) * 0.01 / odo.gauge
     chord = 2 * step_forward / step_turn * abs(np.sin(n * step_turn / 2))
-    displacement, heading_error = slip_drift(float(slip), int(n))
     assert np.isclose(displacement, chord, rtol=1e-6), "the distance from the start is not the true one"
     assert np.isclose(heading_error, n * slip * 0.01 / odo.gauge, rtol=1e-6), (
         "the missed heading has the wrong size or sign (odometry minus truth)"
     )
-intact(globals())
+intact(globals(), ("TrackOdometry", "apply_slip"))
 ### END HIDDEN TESTS
 
 # %% [markdown]
@@ -522,6 +529,8 @@ assert abs(np.degrees(final_turn - true_turn)) < 0.1, "calibrated misses the rec
 ### BEGIN HIDDEN TESTS
 import importlib  # noqa: E402
 
+import numpy as np  # noqa: E402 - the tests' own modules, whatever names the answer rebound
+
 import vo_lib.grading  # noqa: E402
 
 grading = importlib.reload(vo_lib.grading)  # fresh from its file, whatever the answer did to it
@@ -529,15 +538,23 @@ intact = grading.intact
 
 intact(globals())  # the answer left NumPy and the notebook's modules alone
 fresh = np.random.default_rng()  # a new crawler and recording at every grading
-for _ in range(5):
-    fresh_gauge, fresh_turn = fresh.uniform(0.4, 1.2), np.radians(360.0 * fresh.integers(1, 6))
-    steps = int(fresh.integers(500, 4000))
-    share = 0.5 * fresh_gauge * fresh_turn / steps
-    readings = np.tile([-share, share], (steps, 1))
-    readings += fresh.normal(scale=odo.encoder_sigma * np.sqrt(np.abs(readings)))
+for seed in fresh.integers(0, 2**63, 5):
+    # the crawler's gauge is drawn from its own seed and forgotten before the answer runs, then
+    # drawn again after it: while fit_gauge runs, no variable holds it
+    crawler = np.random.default_rng(seed)
+    fresh_turn = np.radians(360.0 * crawler.integers(1, 6))
+    steps = int(crawler.integers(500, 4000))
+    readings = np.tile([-0.5, 0.5], (steps, 1)) * crawler.uniform(0.4, 1.2) * fresh_turn / steps
+    encoder_sigma = crawler.uniform(0.005, 0.02)  # the test's own encoders, not odo's
+    readings += crawler.normal(scale=encoder_sigma * np.sqrt(np.abs(readings)))
+    del crawler
+    fitted = fit_gauge(readings.copy(), fresh_turn)  # a copy: the answer may not change the test's
+    crawler = np.random.default_rng(seed)
+    crawler.integers(1, 6), crawler.integers(500, 4000)
+    fresh_gauge = crawler.uniform(0.4, 1.2)
     # the noise of the summed encoder readings, carried through eq. 4: within 4 sigma of the truth
-    sigma_fit = odo.encoder_sigma * np.sqrt(np.abs(readings).sum()) / fresh_turn
-    assert abs(fit_gauge(readings, fresh_turn) - fresh_gauge) < 4 * sigma_fit, (
+    sigma_fit = encoder_sigma * np.sqrt(np.abs(readings).sum()) / fresh_turn
+    assert abs(fitted - fresh_gauge) < 4 * sigma_fit, (
         "fit_gauge does not recover the gauge of another crawler"
     )
 intact(globals())

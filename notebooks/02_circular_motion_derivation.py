@@ -325,16 +325,25 @@ assert is_zero(rho_from_x.subs(xq, xp) - rho), "on the motion the expression mus
 ### BEGIN HIDDEN TESTS
 import importlib  # noqa: E402
 
+import numpy as np  # noqa: E402 - the tests' own modules, whatever names the answer rebound
+import sympy as sp  # noqa: E402
+
 import vo_lib.grading  # noqa: E402
+from vo_lib.stereo_vo import circular_motion as cm  # noqa: E402
 
 grading = importlib.reload(vo_lib.grading)  # fresh from its file, whatever the answer did to it
 intact = grading.intact
 
 intact(globals())  # the answer left NumPy and the notebook's modules alone
+# eq. 15's x' row and its symbols built afresh: the notebook's names may have been bound to others
+x_s, z_s, xq_s = sp.symbols("x z x'", real=True)
+phi_s, rho_s = sp.symbols("varphi rho", real=True)
+x_row = sp.cos(2 * phi_s) * x_s + sp.sin(2 * phi_s) * z_s - rho_s * sp.sin(phi_s)
+assert rho_from_x.free_symbols <= {x_s, z_s, xq_s, phi_s}, "only x, z, x' and φ, the notebook's own symbols"
 fresh = np.random.default_rng()  # new motions at every grading
 for x_, z_, phi_, rho_ in zip(*fresh.uniform([-5, 1, -0.3, -1], [5, 20, 0.3, 1], (8, 4)).T, strict=True):
-    values = {x: x_, z: z_, phi: phi_, rho: rho_}
-    moved = {**values, xq: float(xp.subs(values))}
+    values = {x_s: x_, z_s: z_, phi_s: phi_}
+    moved = {**values, xq_s: float(x_row.subs({**values, rho_s: rho_}))}
     assert np.isclose(float(rho_from_x.subs(moved)), rho_, atol=1e-9), (
         "on another motion the expression does not give back its ρ"
     )
@@ -380,7 +389,11 @@ assert ours.shape == (300,) and np.all(ours > 0)
 ### BEGIN HIDDEN TESTS
 import importlib  # noqa: E402
 
+import numpy as np  # noqa: E402 - the tests' own modules, whatever names the answer rebound
+import sympy as sp  # noqa: E402
+
 import vo_lib.grading  # noqa: E402
+from vo_lib.stereo_vo import circular_motion as cm  # noqa: E402
 
 grading = importlib.reload(vo_lib.grading)  # fresh from its file, whatever the answer did to it
 intact, refused = grading.intact, grading.refused
@@ -389,6 +402,18 @@ intact(
     globals(), ("StereoCamera", "synthetic_matches")
 )  # the answer left NumPy and the notebook's modules alone
 import vo_lib.stereo_vo.ransac_core as ransac_core  # noqa: E402
+import vo_lib.stereo_vo.ransac_plain as ransac_plain  # noqa: E402
+
+
+def own_functions(module):
+    """Every function and compiled kernel a module defines (the RANSAC's compute θ's variance too)."""
+    return [
+        f
+        for f in vars(module).values()
+        if hasattr(f, "py_func")
+        or (callable(f) and not isinstance(f, type) and getattr(f, "__module__", None) == module.__name__)
+    ]
+
 
 fresh = np.random.default_rng()  # new matches, noise and camera at every grading
 other = StereoCamera(
@@ -400,16 +425,19 @@ other = StereoCamera(
     width=640,
     height=480,
 )
-cases = []
+cases = []  # inputs only: the expected values are worked out after the answer has run
 for cam in (camera, other):
     m_ = synthetic_matches(cam, 200, fresh.uniform(-0.1, 0.1), fresh.uniform(-0.2, 0.2), fresh)
-    sigma_ = fresh.uniform(0.2, 2.0)
-    cases.append((m_, sigma_, cam, cm.theta_standard_deviation(m_.w_prev, m_.w_curr, cam, sigma_)))
-with refused(cm.theta_standard_deviation, cm.theta_variance, ransac_core._theta_variance):
-    answers = [np.asarray(theta_sigma(m_.w_prev, m_.w_curr, s_, cam), float) for m_, s_, cam, _ in cases]
-for got, expected in zip(answers, [case[-1] for case in cases], strict=True):
+    cases.append((m_.w_prev, m_.w_curr, fresh.uniform(0.2, 2.0), cam))
+del m_
+# eq. 14's θ and its variance as the library computes them (derived, not differentiated numerically)
+library = [*own_functions(cm), *own_functions(ransac_core), *own_functions(ransac_plain)]
+with refused(*library):
+    answers = [np.asarray(theta_sigma(a_.copy(), b_.copy(), s_, cam), float) for a_, b_, s_, cam in cases]
+for got, (a_, b_, s_, cam) in zip(answers, cases, strict=True):
+    expected = cm.theta_standard_deviation(a_, b_, cam, s_)
     assert got.shape == expected.shape, "one standard deviation per match"
-    assert np.allclose(got, expected, rtol=1e-6), (
+    assert np.allclose(got, expected, rtol=1e-9), (
         "not the first-order standard deviation of θ (a standard deviation, not a variance; "
         "θ, not φ; all four coordinates; this camera's centre and f_x)"
     )
@@ -452,7 +480,11 @@ assert np.abs(change[mixed.inliers]).max() < 1e-9, "a planar motion keeps every 
 ### BEGIN HIDDEN TESTS
 import importlib  # noqa: E402
 
+import numpy as np  # noqa: E402 - the tests' own modules, whatever names the answer rebound
+import sympy as sp  # noqa: E402
+
 import vo_lib.grading  # noqa: E402
+from vo_lib.stereo_vo import circular_motion as cm  # noqa: E402
 
 grading = importlib.reload(vo_lib.grading)  # fresh from its file, whatever the answer did to it
 intact, refused = grading.intact, grading.refused
@@ -473,16 +505,32 @@ other = StereoCamera(
     width=640,
     height=480,
 )
-cases = []
+cases = []  # inputs only: the truth is worked out after the answer has run
 for cam in (camera, other):
     m_ = synthetic_matches(
         cam, 300, fresh.uniform(-0.1, 0.1), fresh.uniform(-0.2, 0.2), fresh, outlier_ratio=0.4
     )
-    truth = cam.backproject(m_.w_curr)[:, 1] - cam.backproject(m_.w_prev)[:, 1]
-    cases.append((m_, cam, truth))
-with refused(StereoCamera.backproject):
-    answers = [np.asarray(height_change(m_.w_prev, m_.w_curr, cam), float) for m_, cam, _ in cases]
-for got, truth in zip(answers, [case[-1] for case in cases], strict=True):
+    cases.append((m_.w_prev, m_.w_curr, cam))
+del m_
+import cv2  # noqa: E402
+
+import vo_lib.stereo_vo.ransac_core as ransac_core  # noqa: E402
+import vo_lib.stereo_vo.ransac_plain as ransac_plain  # noqa: E402
+
+# eq. 13 as the library and OpenCV compute it: the camera, the RANSAC's kernels and their plain
+# twins (which back-project every match), OpenCV's triangulation
+library = [StereoCamera.backproject, cv2.triangulatePoints, cv2.reprojectImageTo3D]
+for module in (ransac_core, ransac_plain):
+    library += [
+        f
+        for f in vars(module).values()
+        if hasattr(f, "py_func")
+        or (callable(f) and not isinstance(f, type) and getattr(f, "__module__", None) == module.__name__)
+    ]
+with refused(*library):
+    answers = [np.asarray(height_change(a_.copy(), b_.copy(), cam), float) for a_, b_, cam in cases]
+for got, (a_, b_, cam) in zip(answers, cases, strict=True):
+    truth = cam.backproject(b_)[:, 1] - cam.backproject(a_)[:, 1]
     assert np.allclose(got, truth, atol=1e-9), (
         "not y' - y in metres for every match (which sign? which focal lengths?)"
     )

@@ -439,7 +439,7 @@ display(
 #
 # Write `hamming_distance(a, b)` for two arrays of binary descriptors (`(N, 32)` bytes each, as
 # `features.descriptors`), returning the number of differing bits of each row pair, without
-# calling `vo_lib`'s `hamming`.
+# calling `vo_lib`'s `hamming` or OpenCV's Hamming norm and matchers.
 #
 # *Hint:* `np.bitwise_xor` and `np.unpackbits`.
 
@@ -463,14 +463,19 @@ assert np.all(hamming_distance(other, other) == 0), "a descriptor differs from i
 ### BEGIN HIDDEN TESTS
 import importlib  # noqa: E402
 
+import numpy as np  # noqa: E402 - the tests' own modules, whatever names the answer rebound
+
 import vo_lib.grading  # noqa: E402
 
 grading = importlib.reload(vo_lib.grading)  # fresh from its file, whatever the answer did to it
 intact, refused = grading.intact, grading.refused
 
 intact(globals())  # the answer left NumPy and the notebook's modules alone
+import cv2  # noqa: E402
+
 import vo_lib.stereo_vo.features as features_module  # noqa: E402
 import vo_lib.stereo_vo.matching_core as matching_core  # noqa: E402
+import vo_lib.stereo_vo.matching_plain as matching_plain  # noqa: E402
 
 fresh = np.random.default_rng()  # new descriptors at every grading
 a_ = fresh.integers(0, 256, (500, 32), dtype=np.uint8)
@@ -479,9 +484,28 @@ flips = fresh.integers(0, 32 * 8, (500, 5))  # a few bits flipped in every row
 for row, bits in enumerate(flips):
     for bit in bits:
         b_[row, bit // 8] ^= np.uint8(1 << (bit % 8))
-expected = np.unpackbits(a_ ^ b_, axis=1).sum(axis=1)
-with refused(features_module.hamming, *(f for f in vars(matching_core).values() if hasattr(f, "py_func"))):
-    got = np.asarray(hamming_distance(a_, b_))
+del flips, bits  # which bits differ is for the answer to find
+# the matcher's compiled kernels and their plain twins count bits too; so do OpenCV's Hamming
+# norm and its matchers
+library = [
+    features_module.hamming,
+    cv2.norm,
+    cv2.batchDistance,
+    cv2.DescriptorMatcher.match,
+    cv2.DescriptorMatcher.knnMatch,
+    cv2.DescriptorMatcher.radiusMatch,
+]
+library += [
+    f
+    for module in (matching_core, matching_plain)
+    for f in vars(module).values()
+    if callable(f)
+    and not isinstance(f, type)
+    and getattr(getattr(f, "py_func", f), "__module__", None) == module.__name__
+]
+with refused(*library):
+    got = np.asarray(hamming_distance(a_.copy(), b_.copy()))
+expected = np.unpackbits(a_ ^ b_, axis=1).sum(axis=1)  # after the answer: nothing to read before
 assert np.array_equal(got, expected), (
     "on other descriptors, not the number of differing bits (bits, not bytes)"
 )
@@ -528,6 +552,8 @@ assert library_worst < 1e-9 < 0.05 < parabola_worst, "the V fit is exact on a SA
 ### BEGIN HIDDEN TESTS
 import importlib  # noqa: E402
 
+import numpy as np  # noqa: E402 - the tests' own modules, whatever names the answer rebound
+
 import vo_lib.grading  # noqa: E402
 
 grading = importlib.reload(vo_lib.grading)  # fresh from its file, whatever the answer did to it
@@ -537,9 +563,23 @@ intact(globals())  # the answer left NumPy and the notebook's modules alone
 v_check = [np.abs(x - true_minima) for x in (-1.0, 0.0, 1.0)]
 assert np.isclose(parabola_worst, np.abs(quadratic_offset(*v_check) - true_minima).max()), "parabola_worst"
 fresh = np.random.default_rng()  # new parabolas at every grading
-vertex, curvature, floor = fresh.uniform(-0.5, 0.5, 50), fresh.uniform(0.1, 50, 50), fresh.uniform(0, 100, 50)
-samples = [curvature * (x - vertex) ** 2 + floor for x in (-1.0, 0.0, 1.0)]
-assert np.allclose(np.asarray(quadratic_offset(*samples), float), vertex), (
+
+
+def parabola_samples(draw):
+    """Costs at -1, 0, +1 of 50 parabolas; their vertices are not kept."""
+    vertex_, curvature, floor = (
+        draw.uniform(-0.5, 0.5, 50),
+        draw.uniform(0.1, 50, 50),
+        draw.uniform(0, 100, 50),
+    )
+    return [curvature * (x - vertex_) ** 2 + floor for x in (-1.0, 0.0, 1.0)]
+
+
+samples = parabola_samples(fresh)
+got = np.asarray(quadratic_offset(*(s.copy() for s in samples)), float)
+# after the answer: the vertex -b / 2a of the parabola a x^2 + b x + c through the samples
+a_coef, b_coef, _ = np.linalg.solve(np.vander([-1.0, 0.0, 1.0], 3), np.array(samples))
+assert np.allclose(got, -b_coef / (2 * a_coef)), (
     "quadratic_offset does not find the vertex of other parabolas (which side is which?)"
 )
 intact(globals())
@@ -584,6 +624,8 @@ for grid, per_cell in (((8, 6), 12), ((4, 3), 5), ((16, 12), 1)):
 ### BEGIN HIDDEN TESTS
 import importlib  # noqa: E402
 
+import numpy as np  # noqa: E402 - the tests' own modules, whatever names the answer rebound
+
 import vo_lib.grading  # noqa: E402
 
 grading = importlib.reload(vo_lib.grading)  # fresh from its file, whatever the answer did to it
@@ -599,21 +641,12 @@ for _ in range(4):
     grid_, per_ = (int(fresh.integers(2, 10)), int(fresh.integers(2, 8))), int(fresh.integers(1, 6))
     pts = fresh.uniform([0, 0], [w_ - 1, h_ - 1], (800, 2)).astype(np.float32)
     resp = fresh.uniform(1, 100, 800).astype(np.float32)
-    cases.append(
-        (
-            pts,
-            resp,
-            w_,
-            h_,
-            grid_,
-            per_,
-            features_module.bucket(pts, resp, w_, h_, grid_, per_ * grid_[0] * grid_[1]),
-        )
-    )
+    cases.append((pts, resp, w_, h_, grid_, per_))  # inputs only: the answers come after
 with refused(features_module.bucket):
-    answers = [np.asarray(strongest_per_cell(*case[:6])) for case in cases]
-for got, case in zip(answers, cases, strict=True):
-    assert np.array_equal(got, case[-1]), (
+    answers = [np.asarray(strongest_per_cell(pts.copy(), resp.copy(), *rest)) for pts, resp, *rest in cases]
+for got, (pts, resp, w_, h_, grid_, per_) in zip(answers, cases, strict=True):
+    expected = features_module.bucket(pts, resp, w_, h_, grid_, per_ * grid_[0] * grid_[1])
+    assert np.array_equal(got, expected), (
         "on other corners or images, not the strongest few of every cell (strongest? per cell? which cell?)"
     )
 intact(globals())

@@ -70,6 +70,23 @@ def test_a_method_is_refused_and_other_code_runs():
     assert CAMERA.backproject(PIXELS).shape == (2, 3)
 
 
+def test_a_method_of_a_builtin_class_is_refused_on_every_object():
+    cv2 = pytest.importorskip("cv2")
+    made_before = cv2.BFMatcher(cv2.NORM_HAMMING)
+    a, b = np.zeros((1, 32), np.uint8), np.full((1, 32), 255, np.uint8)
+    with refused(cv2.DescriptorMatcher.match, cv2.norm):
+        assert np.bitwise_xor(a, b).sum() > 0 and [1, 2].count(1) == 1  # other built-ins run
+    for call in (
+        lambda: made_before.match(a, b),
+        lambda: cv2.BFMatcher(cv2.NORM_HAMMING).match(a, b),
+        lambda: cv2.norm(a, b, cv2.NORM_HAMMING),
+    ):
+        with pytest.raises(AssertionError, match="which the exercise asks you to write yourself"):
+            with refused(cv2.DescriptorMatcher.match, cv2.norm):
+                call()
+    assert made_before.match(a, b)[0].distance == 256
+
+
 def test_switching_the_watch_off_fails():
     with pytest.raises(AssertionError, match="switched off"):
         with refused(ransac.hypotheses_needed):

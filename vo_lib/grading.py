@@ -13,7 +13,8 @@ of the same computation. :func:`refused` covers all of these while a block runs:
   byte code matches (copies, reloaded or re-executed sources) raises too (through a profile hook);
 - a Numba dispatcher loses its compiled versions (and may not compile new ones) until the block
   ends;
-- a built-in (C) function, such as an OpenCV routine, raises when called.
+- a built-in (C) function, such as an OpenCV routine, raises when called, and so does a method of
+  a built-in class (``cv2.DescriptorMatcher.match``) called on any of its objects.
 
 Everything is restored when the block ends, also when it raises. Refusal raises
 :class:`AssertionError`, so a graded test cell fails.
@@ -119,10 +120,23 @@ def _watcher(functions: list, builtins: list):
             seen[id(code)] = code, id(code) in codes or _fingerprint(code) in prints
         return seen[id(code)][1]
 
+    def refused_builtin(arg) -> bool:
+        if id(arg) in builtin_ids:
+            return True
+        # a method of a built-in object (a matcher's match) is bound afresh at every call: refused
+        # if its class's method is
+        owner = getattr(arg, "__self__", None)
+        if not builtin_ids or owner is None or isinstance(owner, types.ModuleType):
+            return False
+        try:
+            return id(getattr(type(owner), arg.__name__, None)) in builtin_ids
+        except Exception:  # noqa: BLE001 - an odd owner is not a refused one
+            return False
+
     def watch(frame, event, arg):
         if event == "call" and copied(frame.f_code):
             raise Refused(f"this calls {frame.f_code.co_name}, {WRITE_IT}")
-        if event == "c_call" and id(arg) in builtin_ids:
+        if event == "c_call" and refused_builtin(arg):
             raise Refused(f"this calls {getattr(arg, '__name__', arg)}, {WRITE_IT}")
 
     return watch
