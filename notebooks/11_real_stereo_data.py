@@ -1277,36 +1277,77 @@ if REAL:  # on the real drive the forward component differs most
 
 
 ### BEGIN HIDDEN TESTS
-def refuse(*args, **kwargs):
-    raise AssertionError("left_only_refine calls OpenCV's refinement; the exercise asks you to write it")
+import importlib  # noqa: E402
+
+import scipy.optimize  # noqa: E402
+
+import vo_lib.grading  # noqa: E402
+import vo_lib.stereo_vo.rigid_core as rigid_core_module  # noqa: E402
+import vo_lib.stereo_vo.rigid_plain as rigid_plain_module  # noqa: E402
+
+grading = importlib.reload(vo_lib.grading)  # fresh from its file, whatever the answer did to it
+refinements = [getattr(cv2, name) for name in dir(cv2) if name.startswith("solvePnP")]  # OpenCV's pose solvers
+solvers = [scipy.optimize.least_squares, scipy.optimize.leastsq, scipy.optimize.minimize, scipy.optimize.root]
 
 
-fresh = np.random.default_rng()  # new scenes and motions at every grading
-cases = []
-for _ in range(3):
-    P_ = np.column_stack([fresh.uniform(-8, 8, 150), fresh.uniform(-2, 2, 150), fresh.uniform(4, 40, 150)])
-    R_true = Rotation.from_rotvec(fresh.normal(scale=0.02, size=3)).as_matrix()
-    t_true = fresh.normal(scale=0.5, size=3)
-    w_ = project_uvd(P_ @ R_true.T + t_true) + fresh.normal(scale=[0.5, 0.5, 2.0], size=(150, 3))
-    R_ref, t_ref = R_true, t_true + 0.05  # reference: left-only Gauss-Newton from a nearby start
-    for _ in range(50):
-        Q_ = P_ @ R_ref.T + t_ref
-        step_ = -np.linalg.lstsq(
-            jacobian(Q_)[:, :2].reshape(-1, 6), (project_uvd(Q_) - w_)[:, :2].reshape(-1), rcond=None
-        )[0]
-        dR_ = exp_rotation(step_[:3])
-        R_ref, t_ref = dR_ @ R_ref, dR_ @ t_ref + step_[3:]
-        if np.abs(step_).max() < 1e-13:
-            break
-    cases.append((P_, w_, R_true, t_true + 0.05, t_ref))
-opencv_refine = cv2.solvePnPRefineLM
-cv2.solvePnPRefineLM = refuse
-try:
-    got = [np.asarray(left_only_refine(P_, w_, R_s, t_s)[1], float) for P_, w_, R_s, t_s, _ in cases]
-finally:
-    cv2.solvePnPRefineLM = opencv_refine
-for g, (_, _, _, _, t_ref) in zip(got, cases, strict=True):
-    assert np.abs(g - t_ref).max() < 1e-7, (
-        "left_only_refine differs on other scenes (the left image's rows only? converged?)"
-    )
+def hidden_test_ex4(grading, camera, elsewhere, builtins_elsewhere, answer):
+    """New scenes and motions at every grading. The answer gets copies, with no library pose
+    solver or least-squares routine (OpenCV's, SciPy's, vo_lib's, the notebook's stereo
+    gauss_newton) at hand; the expected motion comes after it ran, from a left-image Gauss-Newton
+    of the test's own, on inputs the answer cannot change."""
+    import numpy as np
+
+    grading.intact(globals())  # the answer left NumPy and vo_lib alone
+    fx, fy, cx, cy, baseline = camera.fx, camera.fy, camera.cx, camera.cy, camera.baseline
+
+    def rotation(w):  # Rodrigues' formula
+        angle = np.linalg.norm(w)
+        K = np.cross(np.eye(3), w / angle) if angle > 0 else np.zeros((3, 3))
+        return np.eye(3) + np.sin(angle) * K + (1 - np.cos(angle)) * K @ K
+
+    def uvd(Q):
+        X, Y, Z = Q.T
+        return np.column_stack([fx * X / Z + cx, fy * Y / Z + cy, fx * baseline / Z])
+
+    def left_gauss_newton(P, w, R, t):
+        for _ in range(50):
+            Q = P @ R.T + t
+            X, Y, Z = Q.T
+            d_pixel = np.zeros((len(Q), 2, 3))
+            d_pixel[:, 0, 0], d_pixel[:, 0, 2] = fx / Z, -fx * X / Z**2
+            d_pixel[:, 1, 1], d_pixel[:, 1, 2] = fy / Z, -fy * Y / Z**2
+            skew = np.cross(np.eye(3)[None], Q[:, None, :])  # [Q]x of every point
+            d_point = np.concatenate([-skew, np.broadcast_to(np.eye(3), (len(Q), 3, 3))], axis=2)
+            J = (d_pixel @ d_point).reshape(-1, 6)
+            step = -np.linalg.lstsq(J, (uvd(Q) - w)[:, :2].reshape(-1), rcond=None)[0]
+            dR = rotation(step[:3])
+            R, t = dR @ R, dR @ t + step[3:]
+            if np.abs(step).max() < 1e-13:
+                break
+        return R, t
+
+    fresh = np.random.default_rng()
+    cases = []
+    for _ in range(3):
+        P = np.column_stack([fresh.uniform(-8, 8, 150), fresh.uniform(-2, 2, 150), fresh.uniform(4, 40, 150)])
+        R_true = rotation(fresh.normal(scale=0.02, size=3))
+        t_true = fresh.normal(scale=0.5, size=3)
+        w = uvd(P @ R_true.T + t_true) + fresh.normal(scale=[0.5, 0.5, 2.0], size=(150, 3))
+        cases.append(tuple(grading.frozen(a) for a in (P, w, R_true, t_true + 0.05)))
+    with grading.refused(*builtins_elsewhere, *grading.library_functions(*elsewhere)):
+        got = [np.asarray(answer(*(a.copy() for a in case))[1], float) for case in cases]
+    grading.intact(globals())
+    for value, case in zip(got, cases, strict=True):
+        assert np.abs(value - left_gauss_newton(*case)[1]).max() < 1e-7, (
+            "left_only_refine differs on other scenes (the left image's rows only? converged?)"
+        )
+
+
+hidden_test_ex4(
+    grading,
+    cam,
+    (*solvers, rigid_core_module, rigid_plain_module, rigid_motion, gauss_newton),
+    refinements,
+    left_only_refine,
+)
 ### END HIDDEN TESTS

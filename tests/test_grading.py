@@ -10,7 +10,7 @@ import pytest
 import vo_lib.stereo_vo.ransac as ransac
 import vo_lib.stereo_vo.ransac_core as ransac_core
 from vo_lib.camera import StereoCamera
-from vo_lib.grading import intact, kernel_hooks, refused
+from vo_lib.grading import frozen, intact, kernel_hooks, library_functions, refused
 
 CAMERA = StereoCamera(fx=500.0, fy=500.0, cx=320.0, cy=240.0, baseline=0.2, width=640, height=480)
 PIXELS = np.array([[100.0, 300.0, 10.0], [400.0, 200.0, 20.0]])
@@ -68,6 +68,38 @@ def test_a_method_is_refused_and_other_code_runs():
         with pytest.raises(AssertionError):
             CAMERA.backproject(PIXELS)
     assert CAMERA.backproject(PIXELS).shape == (2, 3)
+
+
+def test_library_functions_refuses_a_module_by_every_neighbour_and_not_other_code():
+    import dataclasses
+
+    import vo_lib.lidar_tracking.pose_tracking as tracking
+
+    functions = library_functions(tracking)
+    names = {getattr(f, "__qualname__", "") for f in functions}
+    # the function, a classmethod, a property and a method all count; imports and generated code do not
+    neighbours = {"posterior", "ControlLimits.from_corrections", "ControlLimits.upper", "PoseTracker.update"}
+    assert neighbours <= names
+    assert not any(name.endswith(("__eq__", "__repr__")) for name in names)
+    assert all(f.__module__ == tracking.__name__ for f in functions)
+    limits = tracking.ControlLimits.from_corrections([0.1, 0.2, 0.3])
+    with refused(*functions):
+        assert dataclasses.asdict(tracking.ControlLimits(0.2, 0.1)) == {"mean": 0.2, "std": 0.1}
+        with pytest.raises(AssertionError):
+            limits.upper  # noqa: B018 - a property refused
+        with pytest.raises(AssertionError):
+            copied_posterior = types.FunctionType(tracking.posterior.__code__, tracking.posterior.__globals__)
+            copied_posterior([1.0, 2.0])
+    assert limits.upper > limits.centre
+
+
+def test_frozen_inputs_stay_as_they_were():
+    kept = frozen(np.arange(6.0).reshape(2, 3))
+    with pytest.raises(ValueError):
+        kept[0, 0] = 1.0
+    with pytest.raises(ValueError):
+        kept.setflags(write=True)
+    assert kept.shape == (2, 3) and kept.sum() == 15.0
 
 
 def test_switching_the_watch_off_fails():

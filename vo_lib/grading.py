@@ -27,7 +27,17 @@ import threading
 import types
 from collections.abc import Callable, Iterator
 
-__all__ = ["KERNEL_HOOKS", "Refused", "cell_label", "intact", "kernel_hooks", "kernel_state", "refused"]
+__all__ = [
+    "KERNEL_HOOKS",
+    "Refused",
+    "cell_label",
+    "frozen",
+    "intact",
+    "kernel_hooks",
+    "kernel_state",
+    "library_functions",
+    "refused",
+]
 
 
 WRITE_IT = "which the exercise asks you to write yourself"
@@ -152,6 +162,82 @@ def _rearm(swapped: list, emptied: list) -> None:
         dispatcher._can_compile = can_compile
         for compiled in overloads:
             dispatcher.add_overload(compiled)
+
+
+def library_functions(*owners) -> list:
+    """Every function a module or class of ``owners`` defines, for :func:`refused` to refuse all
+    of them: an exercise that asks for something a library computes must not reach it through a
+    neighbour (a class's method, a private helper, a compiled twin, a higher-level function
+    whose result contains the answer).
+
+    Parameters
+    ----------
+    *owners
+        Modules (their own functions and classes, not what they import), classes (their
+        methods, static and class methods, and properties) and functions themselves.
+
+    Returns
+    -------
+    list
+        Python functions and Numba dispatchers, each once, with the functions they wrap
+        (``__wrapped__``); not code a library generated (a dataclass's ``__eq__``), which every
+        class of its kind shares.
+    """
+    found: dict[int, object] = {}
+
+    def add(value, file: str | None = None) -> None:
+        while value is not None and id(value) not in found:
+            function = value.py_func if _is_dispatcher(value) else _python_function(value)
+            if function is None or file not in (None, function.__code__.co_filename):
+                return  # not a function, or code that is not the module's own (a dataclass's __eq__)
+            found[id(value)] = value
+            value, file = getattr(value, "__wrapped__", None), None
+
+    def visit(owner, home: str, seen: set) -> None:
+        if id(owner) in seen:
+            return
+        seen.add(id(owner))
+        file = getattr(sys.modules.get(home), "__file__", None)
+        for value in list(vars(owner).values()):
+            if isinstance(value, property):
+                for accessor in (value.fget, value.fset, value.fdel):
+                    add(accessor, file)
+            elif isinstance(value, (staticmethod, classmethod)):
+                add(value.__func__, file)
+            elif isinstance(value, type):
+                if value.__module__ == home:
+                    visit(value, home, seen)
+            elif getattr(value, "__module__", None) == home:
+                add(value, file)
+
+    for owner in owners:
+        if isinstance(owner, (types.ModuleType, type)):
+            home = owner.__name__ if isinstance(owner, types.ModuleType) else owner.__module__
+            visit(owner, home, set())
+        else:
+            add(owner)
+    return list(found.values())
+
+
+def frozen(values):
+    """A read-only copy of ``values`` (an array of floats, or of what it holds), which no code
+    can make writable again: the inputs a test keeps to compute its expected values after the
+    code under test ran, which that code gets copies of.
+
+    Parameters
+    ----------
+    values
+        Anything :func:`numpy.asarray` takes.
+
+    Returns
+    -------
+    numpy.ndarray
+        Same shape and type, backed by an immutable ``bytes`` buffer.
+    """
+    import numpy
+
+    array = numpy.ascontiguousarray(values)
+    return numpy.frombuffer(array.tobytes(), dtype=array.dtype).reshape(array.shape)
 
 
 WATCHED_MODULES = (
