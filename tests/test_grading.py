@@ -223,6 +223,52 @@ def test_the_autograder_refuses_kernel_hooks_and_stops_at_a_changed_kernel():
 
 
 @pytest.mark.notebook
+def test_a_test_that_lets_an_answer_replace_the_graders_tools_fails_and_no_later_test_runs():
+    """An answer whose function, once a test calls it, replaces what the next hidden test loads
+    its tools with (a reload that hands back a grader that refuses nothing): that test fails."""
+    swap = (
+        "import importlib, types\n"
+        "def f():\n"
+        "    fake = types.ModuleType('vo_lib.grading')\n"
+        "    importlib.reload = lambda module: fake\n"
+        "    return 1\n"
+    )
+    cells = run_guarded(
+        [
+            graded_cell(swap, "ex1", True),
+            graded_cell("assert f() == 1", "ex1_test", False),
+            graded_cell("y = 2", "ex2", True),
+            graded_cell("assert y == 2", "ex2_test", False),
+        ]
+    )
+    assert errors_of(cells[0]) == [], "defining the function changes nothing yet"
+    (kind, why), *_ = errors_of(cells[1])
+    assert kind == "KernelHook" and '"ex1_test"' in why and "the grader's tools" in why
+    assert [e[0] for e in errors_of(cells[2])] == ["NotRun"] and errors_of(cells[3])[0][0] == "NotRun"
+
+
+def test_the_graders_tools_are_found_replaced_wherever_they_are_loaded_from():
+    import contextlib
+    import importlib
+    import runpy
+
+    import vo_lib.grading
+
+    def replaced():  # as the grader reads it: afresh from the file
+        return runpy.run_path(vo_lib.grading.__file__)["_replaced_tools"]()
+
+    assert replaced() == []
+    reload, refused_now = importlib.reload, vo_lib.grading.refused
+    try:
+        importlib.reload = lambda module: module
+        vo_lib.grading.refused = contextlib.contextmanager(lambda *targets: (yield))
+        assert replaced() == ["importlib.reload", "vo_lib.grading.refused"]
+    finally:
+        importlib.reload, vo_lib.grading.refused = reload, refused_now
+    assert replaced() == []
+
+
+@pytest.mark.notebook
 def test_a_dead_kernel_fails_every_later_cell_naming_the_cell_it_died_in():
     cells = run_guarded(
         [
