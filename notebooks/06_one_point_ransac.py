@@ -1101,11 +1101,15 @@ def hidden_test_ex1(grading, ransac, ransac_core, answer):
         (float(fresh.uniform(0.05, 0.9)), float(fresh.uniform(0.9, 0.9999)), int(fresh.integers(1, 7)))
         for _ in range(20)
     )
+    # and counts that come out whole: k draws of a half-inlier sample reach 1 - 0.5^k exactly
+    cases += tuple((0.5, 1.0 - 0.5 ** int(k), 1) for k in fresh.integers(4, 13, 2))
     with grading.refused(*grading.library_functions(ransac, ransac_core)):
         got = [int(answer(e, p, s)) for e, p, s in cases]
     grading.intact(globals())
     expected = [ransac.hypotheses_needed(1 - e, p, sample_size=s) for e, p, s in cases]
-    assert got == expected, "hypotheses_for gives other counts for other ratios (outliers, not inliers? rounded up?)"
+    assert got == expected, (
+        "hypotheses_for gives other counts for other ratios (outliers, not inliers? the smallest whole number?)"
+    )
 
 
 hidden_test_ex1(grading, ransac_module, ransac_core, hypotheses_for)

@@ -702,13 +702,14 @@ def hidden_test_ex2(grading, evaluation, geometry, answer, elsewhere):
     grading.intact(globals())  # the answer left NumPy and the notebook's modules alone
     fresh = np.random.default_rng()
     drives = []
-    for _ in range(4):
+    for mirrored in (False, False, False, True):  # and one estimate mirrored, which no rotation aligns
         step = np.array([fresh.uniform(0.01, 0.1), 0.0, fresh.uniform(0.005, 0.05)])
         truth = [np.zeros(3)]
         for _ in range(int(fresh.integers(50, 300))):
             truth.append(geometry.compose_planar(truth[-1], step))
         truth = np.array(truth)
-        estimate = geometry.compose_planar(fresh.uniform([-5, -5, -np.pi], [5, 5, np.pi]), truth)
+        estimate = truth * [1, -1, -1] if mirrored else truth
+        estimate = geometry.compose_planar(fresh.uniform([-5, -5, -np.pi], [5, 5, np.pi]), estimate)
         estimate = estimate + fresh.normal(scale=0.03, size=truth.shape)
         drives.append((grading.frozen(truth), grading.frozen(estimate)))
     with grading.refused(*grading.library_functions(evaluation, *elsewhere)):
@@ -716,7 +717,7 @@ def hidden_test_ex2(grading, evaluation, geometry, answer, elsewhere):
     grading.intact(globals())
     for value, (truth, estimate) in zip(got, drives, strict=True):
         assert np.isclose(value, evaluation.ate_planar(truth, estimate)[0].rmse, rtol=1e-6), (
-            "ate_rmse_of differs on other drives (rotation and translation?)"
+            "ate_rmse_of differs on other drives (rotation and translation? a mirror image is no rotation)"
         )
 
 

@@ -934,14 +934,15 @@ def hidden_test_ex3(grading, tracking, answer):
             fresh.normal(0, 0.3, (300, 1)) * axis + fresh.normal(0, 0.03, (300, 2)),
             fresh.normal(0, 0.5, (300, 1)) * axis[::-1] * [-1, 1] + fresh.normal(0, 0.03, (300, 2)),
         )
-        cases.append((grading.frozen(np.column_stack([xy, np.zeros(300)])), grading.frozen(scores)))
+        offset = fresh.uniform(0.5, 2.0) * np.array([np.cos(angle + 1.0), np.sin(angle + 1.0)])  # not about zero
+        cases.append((grading.frozen(np.column_stack([xy + offset, np.zeros(300)])), grading.frozen(scores)))
     with grading.refused(*grading.library_functions(tracking)):
         got = [np.asarray(answer(corrections.copy(), scores.copy()), float) for corrections, scores in cases]
     grading.intact(globals())
     for value, (corrections, scores) in zip(got, cases, strict=True):
         assert value.shape == (2,) and np.isclose(np.linalg.norm(value), 1.0), "a unit vector (dx, dy)"
         assert abs(value @ tracking.principal_error_direction(corrections, scores)) > 0.999, (
-            "principal_direction differs on other samples (which samples? which eigenvalue?)"
+            "principal_direction differs on other samples (which samples? which eigenvalue? centred?)"
         )
 
 
