@@ -110,6 +110,30 @@ def test_switching_the_watch_off_fails():
             sys.setprofile(None)
 
 
+def test_switching_the_watch_off_for_one_call_fails():
+    """A copy the swapped code misses, run with the watch off for that one call and on again."""
+    import sys
+
+    switch = getattr(sys, "set" + "profile")
+    function = copied()
+
+    def unwatched(*args):
+        watching = sys.getprofile()
+        switch(None)
+        try:
+            return function(*args)
+        finally:
+            switch(watching)
+
+    with pytest.raises(AssertionError, match="switched off"):
+        with refused(ransac.hypotheses_needed):
+            unwatched(0.5, 0.99)
+    with pytest.raises(AssertionError, match="switched off"):
+        with refused(ransac.hypotheses_needed):
+            threading.setprofile(None)
+    assert sys.getprofile() is None and int(unwatched(0.5, 0.99)) == 7
+
+
 def notebook_function(source):
     """A function as a notebook cell defines it (module ``__main__``)."""
     return eval(source, {"__name__": "__main__"})  # noqa: S307 - a fixed test string

@@ -87,7 +87,7 @@ def refused(*targets: Callable) -> Iterator[None]:
         watches for copies.
     """
     functions, dispatchers, builtins = _sort_targets(targets)
-    watch = _watcher(functions, builtins)
+    watch = _watcher(functions, builtins, sys._getframe(0).f_code)
     swapped, emptied = _disarm(functions, dispatchers)
     previous, previous_threads = sys.getprofile(), getattr(threading, "_profile_hook", None)
     sys.setprofile(watch)
@@ -116,12 +116,15 @@ def _sort_targets(targets) -> tuple[list, list, list]:
     return list({id(f): f for f in functions}.values()), dispatchers, builtins
 
 
-def _watcher(functions: list, builtins: list):
+def _watcher(functions: list, builtins: list, own: types.CodeType):
     """A profile hook that raises :class:`Refused` when a refused function, or a copy of its
-    code, is called."""
+    code, is called, or when code other than ``own`` (the :func:`refused` block's) switches
+    the hook off, even for one call and back on."""
     prints = {_fingerprint(f.__code__) for f in functions}
     codes = {id(f.__code__) for f in functions}
     builtin_ids = {id(b) for b in builtins}
+    switches = {id(sys.setprofile), id(sys.settrace)}
+    switch_codes = {id(threading.setprofile.__code__), id(threading.settrace.__code__)}
     seen: dict[int, tuple[types.CodeType, bool]] = {}
 
     def copied(code: types.CodeType) -> bool:
@@ -134,6 +137,12 @@ def _watcher(functions: list, builtins: list):
             raise Refused(f"this calls {frame.f_code.co_name}, {WRITE_IT}")
         if event == "c_call" and id(arg) in builtin_ids:
             raise Refused(f"this calls {getattr(arg, '__name__', arg)}, {WRITE_IT}")
+        caller = frame.f_code if event == "c_call" else getattr(frame.f_back, "f_code", None)
+        switching = (event == "c_call" and id(arg) in switches) or (
+            event == "call" and id(frame.f_code) in switch_codes
+        )
+        if switching and caller is not own:
+            raise Refused("the code under test switched off the check for refused functions")
 
     return watch
 
