@@ -134,6 +134,32 @@ def test_switching_the_watch_off_for_one_call_fails():
     assert sys.getprofile() is None and int(unwatched(0.5, 0.99)) == 7
 
 
+def test_another_process_or_an_unwatched_thread_is_refused():
+    """A copy run in a thread started below threading (which the watch is not on), or the
+    library run in another process, where nothing is refused."""
+    import _thread
+    import subprocess
+    import sys
+    import time
+
+    function = copied()
+
+    def in_raw_thread(*args):
+        out = []
+        _thread.start_new_thread(lambda: out.append(function(*args)), ())
+        while not out:
+            time.sleep(0.001)
+        return out[0]
+
+    with pytest.raises(AssertionError, match="unwatched thread"):
+        with refused(ransac.hypotheses_needed):
+            in_raw_thread(0.5, 0.99)
+    with pytest.raises(AssertionError, match="another process"):
+        with refused(ransac.hypotheses_needed):
+            subprocess.run([sys.executable, "-c", "print(7)"], capture_output=True)
+    assert int(in_raw_thread(0.5, 0.99)) == 7 and in_thread(function)(0.5, 0.99) == 7
+
+
 def notebook_function(source):
     """A function as a notebook cell defines it (module ``__main__``)."""
     return eval(source, {"__name__": "__main__"})  # noqa: S307 - a fixed test string

@@ -125,6 +125,9 @@ def _watcher(functions: list, builtins: list, own: types.CodeType):
     builtin_ids = {id(b) for b in builtins}
     switches = {id(sys.setprofile), id(sys.settrace)}
     switch_codes = {id(threading.setprofile.__code__), id(threading.settrace.__code__)}
+    elsewhere = {id(f) for f in _elsewhere()}
+    raw_thread = {id(getattr(sys.modules.get("_thread"), "start_new_thread", None))}
+    threading_file = threading.__file__
     seen: dict[int, tuple[types.CodeType, bool]] = {}
 
     def copied(code: types.CodeType) -> bool:
@@ -143,8 +146,31 @@ def _watcher(functions: list, builtins: list, own: types.CodeType):
         )
         if switching and caller is not own:
             raise Refused("the code under test switched off the check for refused functions")
+        if event == "c_call" and (
+            id(arg) in elsewhere or (id(arg) in raw_thread and frame.f_code.co_filename != threading_file)
+        ):
+            raise Refused(
+                f"this calls {getattr(arg, '__name__', arg)}: another process or an unwatched thread, "
+                "where the check for refused functions does not reach"
+            )
 
     return watch
+
+
+def _elsewhere() -> list:
+    """The built-ins that start another process (``subprocess``, ``multiprocessing`` and
+    ``os.system`` all come down to one of them), where a refused function would run unrefused."""
+    import os
+
+    names = ("fork", "forkpty", "system", "posix_spawn", "posix_spawnp", "execv", "execve")
+    found = [getattr(os, name) for name in names if hasattr(os, name)]
+    posix_subprocess = sys.modules.get("_posixsubprocess")
+    if posix_subprocess is None:
+        with contextlib.suppress(ImportError):
+            import _posixsubprocess as posix_subprocess
+    if posix_subprocess is not None:
+        found.append(posix_subprocess.fork_exec)
+    return found
 
 
 def _disarm(functions: list, dispatchers: list) -> tuple[list, list]:
