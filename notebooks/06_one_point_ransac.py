@@ -1238,7 +1238,7 @@ def hidden_test_ex3(grading, answer):
 
     grading.intact(globals(), ("synthetic_matches", "one_point_ransac"))
     gated_check = one_point_ransac(half_px.w_prev, half_px.w_curr, ex_camera, rng=1).inliers
-    assert gate_errors == np.sum(gated_check != half_px.inliers), "gate_errors"
+    assert int(gate_errors) == np.sum(gated_check != half_px.inliers), "gate_errors"
     fresh = np.random.default_rng()
     cases = []
     for _ in range(3):

@@ -873,19 +873,6 @@ def hidden_test_ex2(grading, experiments, nees_band, average_nees):
 
     grading.intact(globals())  # the answer left NumPy, SciPy's special functions and vo_lib alone
 
-    def reference_band(n, d):  # chi-square's quantiles, from its distribution function gammainc(k / 2, x / 2)
-        return 2 * gammaincinv(n * d / 2, np.array([0.025, 0.975])) / n
-
-    def reference_average(errors, covariance):
-        return np.einsum("eri,ij,erj->er", errors, np.linalg.inv(covariance), errors).mean(axis=1)
-
-    low_, high_ = reference_band(50, 3)
-    covariance_ = np.diag([0.04, 0.01, 0.003])  # the experiments of the cell above, drawn again
-    drawn_ = np.random.default_rng(7).multivariate_normal(np.zeros(3), covariance_, size=(2000, 50))
-    nees_ = reference_average(drawn_, covariance_)
-    assert np.isclose(share_inside, np.mean((nees_ > low_) & (nees_ < high_)), rtol=0, atol=1e-12), (
-        "share_inside: not the share of the experiments drawn above inside the band"
-    )
     fresh = np.random.default_rng()
     runs = [(int(n), int(d)) for n, d in zip(fresh.integers(2, 500, 10), fresh.integers(1, 7, 10), strict=True)]
     draws = []
@@ -900,6 +887,21 @@ def hidden_test_ex2(grading, experiments, nees_band, average_nees):
         bands = [np.asarray(nees_band(n, d), float) for n, d in runs]
         averages = [np.asarray(average_nees(e.copy(), c.copy()), float) for e, c in draws]
     grading.intact(globals())
+
+    # the references only now: the answer, called above, could read its caller's frame
+    def reference_band(n, d):  # chi-square's quantiles, from its distribution function gammainc(k / 2, x / 2)
+        return 2 * gammaincinv(n * d / 2, np.array([0.025, 0.975])) / n
+
+    def reference_average(errors, covariance):
+        return np.einsum("eri,ij,erj->er", errors, np.linalg.inv(covariance), errors).mean(axis=1)
+
+    low_, high_ = reference_band(50, 3)
+    covariance_ = np.diag([0.04, 0.01, 0.003])  # the experiments of the cell above, drawn again
+    drawn_ = np.random.default_rng(7).multivariate_normal(np.zeros(3), covariance_, size=(2000, 50))
+    nees_ = reference_average(drawn_, covariance_)
+    assert np.isclose(float(share_inside), np.mean((nees_ > low_) & (nees_ < high_)), rtol=0, atol=1e-12), (
+        "share_inside: not the share of the experiments drawn above inside the band"
+    )
     for band, (n, d) in zip(bands, runs, strict=True):
         assert np.allclose(gammainc(n * d / 2, band * n / 2), [0.025, 0.975], atol=1e-6), (
             "nees_band is not the 95 % band of another average NEES (which quantiles? which degrees of freedom?)"

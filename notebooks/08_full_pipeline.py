@@ -779,15 +779,17 @@ def hidden_test_ex3(grading, geometry, answer, drive):
 
     grading.intact(globals())  # the answer left NumPy and the notebook's modules alone
 
-    def lateral(s, eps, n):  # the drive, step by step: each step along the heading before it turns
-        return s * np.sum(np.sin(eps * np.arange(n)))
-
     fresh = np.random.default_rng()
     small = [(fresh.uniform(0.005, 0.5), fresh.uniform(1e-6, 1e-4), int(fresh.integers(3, 51))) for _ in range(10)]
     large = [(fresh.uniform(0.005, 0.5), fresh.uniform(0.01, 0.05), int(fresh.integers(30, 200))) for _ in range(10)]
     with grading.refused(drive, *grading.library_functions(geometry)):
         got = [float(answer(s, eps, n)) for s, eps, n in small + large]
     grading.intact(globals())
+
+    # the references only now: the answer, called above, could read its caller's frame
+    def lateral(s, eps, n):  # the drive, step by step: each step along the heading before it turns
+        return s * np.sum(np.sin(eps * np.arange(n)))
+
     for value, (s, eps, n) in zip(got[: len(small)], small, strict=True):
         assert np.isclose(value, lateral(s, eps, n), rtol=1e-3), (
             "sideways_error differs from other drifting drives (which heading does each step use?)"

@@ -1159,16 +1159,6 @@ def hidden_test_ex3(grading, range_bearing, elsewhere, answer):
 
     grading.intact(globals(), ("observation_jacobians", "observe_point"))
 
-    def reference_nis(pose, pose_cov, point, point_cov, measured, range_sigma, bearing_sigma):
-        h_pose, h_point = range_bearing.observation_jacobians(pose, point)
-        S = h_pose @ pose_cov @ h_pose.T + h_point @ point_cov @ h_point.T
-        S = S + np.diag([range_sigma, bearing_sigma]) ** 2
-        nu = np.asarray(measured, float) - range_bearing.observe_point(pose, point)
-        nu[1] = (nu[1] + np.pi) % (2 * np.pi) - np.pi
-        return float(nu @ np.linalg.solve(S, nu))
-
-    shown = [reference_nis(gate_pose, gate_pose_cov, gate_point, gate_point_cov, z, 0.05, 0.02) for z in candidates]
-    assert np.array_equal(accepted, np.array(shown) < chi2.ppf(0.99, 2)), "accepted: not the candidates within the gate"
     fresh = np.random.default_rng()
     cases = []
     for _ in range(10):
@@ -1182,6 +1172,18 @@ def hidden_test_ex3(grading, range_bearing, elsewhere, answer):
     with grading.refused(*grading.library_functions(*refused)):
         got = [float(answer(*(a.copy() for a in case[:5]), *case[5:])) for case in cases]
     grading.intact(globals(), ("observation_jacobians", "observe_point"))
+
+    # the references only now: the answer, called above, could read its caller's frame
+    def reference_nis(pose, pose_cov, point, point_cov, measured, range_sigma, bearing_sigma):
+        h_pose, h_point = range_bearing.observation_jacobians(pose, point)
+        S = h_pose @ pose_cov @ h_pose.T + h_point @ point_cov @ h_point.T
+        S = S + np.diag([range_sigma, bearing_sigma]) ** 2
+        nu = np.asarray(measured, float) - range_bearing.observe_point(pose, point)
+        nu[1] = (nu[1] + np.pi) % (2 * np.pi) - np.pi
+        return float(nu @ np.linalg.solve(S, nu))
+
+    shown = [reference_nis(gate_pose, gate_pose_cov, gate_point, gate_point_cov, z, 0.05, 0.02) for z in candidates]
+    assert np.array_equal(accepted, np.array(shown) < chi2.ppf(0.99, 2)), "accepted: not the candidates within the gate"
     for value, case in zip(got, cases, strict=True):
         assert np.isclose(value, reference_nis(*case), rtol=1e-6), (
             "innovation_squared differs for other robots and landmarks (wrapped bearing? variances, not "

@@ -1146,6 +1146,16 @@ def hidden_test_ex1(grading, detector, answer):
     grading.intact(globals())  # the answer left NumPy and vo_lib alone
     assert type(detector).__name__ == "builtin_function_or_method", "OpenCV's FAST detector was replaced"
 
+    fresh = np.random.default_rng()
+    texture = (fresh.random((240, 320)) * 255).astype(np.uint8)
+    flat = np.zeros((240, 320), np.uint8)
+    flat[:, : int(fresh.integers(40, 280))] = texture[:, :1]  # a flat part, a textured part
+    image = grading.frozen(cv2.GaussianBlur(np.maximum(texture * (flat == 0), flat), (0, 0), fresh.uniform(0.5, 2.0)))
+    thresholds = sorted(int(t) for t in fresh.integers(5, 60, 3))
+    got = np.asarray(answer(image.copy(), list(thresholds)), float)
+    grading.intact(globals())
+
+    # the references only now: the answer, called above, could read its caller's frame
     def empty(image, threshold, cell=16):
         keypoints = detector(threshold, True).detect(image)
         corners = np.array([k.pt for k in keypoints]).reshape(-1, 2)
@@ -1158,14 +1168,6 @@ def hidden_test_ex1(grading, detector, answer):
     assert np.isclose(at_20, empty(real_images[0], 20)) and np.isclose(at_10, empty(real_images[0], 10)), (
         "at_20, at_10: not the shares of the first real image"
     )
-    fresh = np.random.default_rng()
-    texture = (fresh.random((240, 320)) * 255).astype(np.uint8)
-    flat = np.zeros((240, 320), np.uint8)
-    flat[:, : int(fresh.integers(40, 280))] = texture[:, :1]  # a flat part, a textured part
-    image = grading.frozen(cv2.GaussianBlur(np.maximum(texture * (flat == 0), flat), (0, 0), fresh.uniform(0.5, 2.0)))
-    thresholds = sorted(int(t) for t in fresh.integers(5, 60, 3))
-    got = np.asarray(answer(image.copy(), list(thresholds)), float)
-    grading.intact(globals())
     assert np.allclose(got, [empty(image, t) for t in thresholds]), (
         "empty_shares differs on another image (the share of empty cells, at each threshold?)"
     )
@@ -1266,6 +1268,16 @@ def hidden_test_ex3(grading, camera, points, measured, answer):
         K = np.cross(np.eye(3), w / angle) if angle >= 1e-15 else np.zeros((3, 3))
         return np.eye(3) + np.sin(angle) * K + (1 - np.cos(angle)) * K @ K
 
+    fresh = np.random.default_rng()
+    starts = []
+    for size in (0.01, 0.05, 0.1):
+        R_start = rotation(fresh.normal(scale=size, size=3)) @ R0
+        starts.append((grading.frozen(R_start), grading.frozen(t0 + fresh.normal(scale=10 * size, size=3))))
+    P_kept, w_kept = grading.frozen(points), grading.frozen(measured)
+    got = [answer(R.copy(), t.copy()) for R, t in starts]
+    grading.intact(globals())
+
+    # the references only now: the answer, called above, could read its caller's frame
     def gauss_newton_of(P, w, R, t, iterations=30, tol=1e-10):
         steps = 0
         while steps < iterations:
@@ -1285,14 +1297,6 @@ def hidden_test_ex3(grading, camera, points, measured, answer):
                 break
         return R, t, steps
 
-    fresh = np.random.default_rng()
-    starts = []
-    for size in (0.01, 0.05, 0.1):
-        R_start = rotation(fresh.normal(scale=size, size=3)) @ R0
-        starts.append((grading.frozen(R_start), grading.frozen(t0 + fresh.normal(scale=10 * size, size=3))))
-    P_kept, w_kept = grading.frozen(points), grading.frozen(measured)
-    got = [answer(R.copy(), t.copy()) for R, t in starts]
-    grading.intact(globals())
     for (R_g, t_g, steps_g), (R, t) in zip(got, starts, strict=True):
         R_e, t_e, steps_e = gauss_newton_of(P_kept, w_kept, R, t)
         assert np.abs(R_g - R_e).max() < 1e-8 and np.abs(t_g - t_e).max() < 1e-8 and steps_g == steps_e, (
@@ -1387,6 +1391,19 @@ def hidden_test_ex4(grading, camera, elsewhere, builtins_elsewhere, answer):
         X, Y, Z = Q.T
         return np.column_stack([fx * X / Z + cx, fy * Y / Z + cy, fx * baseline / Z])
 
+    fresh = np.random.default_rng()
+    cases = []
+    for _ in range(3):
+        P = np.column_stack([fresh.uniform(-8, 8, 150), fresh.uniform(-2, 2, 150), fresh.uniform(4, 40, 150)])
+        R_true = rotation(fresh.normal(scale=0.02, size=3))
+        t_true = fresh.normal(scale=0.5, size=3)
+        w = uvd(P @ R_true.T + t_true) + fresh.normal(scale=[0.5, 0.5, 2.0], size=(150, 3))
+        cases.append(tuple(grading.frozen(a) for a in (P, w, R_true, t_true + 0.05)))
+    with grading.refused(*builtins_elsewhere, *grading.library_functions(*elsewhere)):
+        got = [np.asarray(answer(*(a.copy() for a in case))[1], float) for case in cases]
+    grading.intact(globals())
+
+    # the references only now: the answer, called above, could read its caller's frame
     def left_gauss_newton(P, w, R, t):
         for _ in range(50):
             Q = P @ R.T + t
@@ -1404,17 +1421,6 @@ def hidden_test_ex4(grading, camera, elsewhere, builtins_elsewhere, answer):
                 break
         return R, t
 
-    fresh = np.random.default_rng()
-    cases = []
-    for _ in range(3):
-        P = np.column_stack([fresh.uniform(-8, 8, 150), fresh.uniform(-2, 2, 150), fresh.uniform(4, 40, 150)])
-        R_true = rotation(fresh.normal(scale=0.02, size=3))
-        t_true = fresh.normal(scale=0.5, size=3)
-        w = uvd(P @ R_true.T + t_true) + fresh.normal(scale=[0.5, 0.5, 2.0], size=(150, 3))
-        cases.append(tuple(grading.frozen(a) for a in (P, w, R_true, t_true + 0.05)))
-    with grading.refused(*builtins_elsewhere, *grading.library_functions(*elsewhere)):
-        got = [np.asarray(answer(*(a.copy() for a in case))[1], float) for case in cases]
-    grading.intact(globals())
     for value, case in zip(got, cases, strict=True):
         assert np.abs(value - left_gauss_newton(*case)[1]).max() < 1e-7, (
             "left_only_refine differs on other scenes (the left image's rows only? converged?)"
