@@ -83,10 +83,14 @@ def refused(*targets: Callable) -> Iterator[None]:
     Raises
     ------
     Refused
-        When refused code runs inside the block, or when the block removed the profile hook that
-        watches for copies.
+        When refused code runs inside the block; when the block switched off the profile hook
+        that watches for copies (even for one call), started another process or a thread (where
+        the hook does not reach), or changed this module's functions (which the tests check with
+        after the block).
     """
     functions, dispatchers, builtins = _sort_targets(targets)
+    own_code, its_code = _own_code, _own_code.__code__  # held here, where the block cannot rebind them
+    own = own_code()
     watch = _watcher(functions, builtins, sys._getframe(0).f_code)
     swapped, emptied = _disarm(functions, dispatchers)
     previous, previous_threads = sys.getprofile(), getattr(threading, "_profile_hook", None)
@@ -96,10 +100,25 @@ def refused(*targets: Callable) -> Iterator[None]:
         yield
         if sys.getprofile() is not watch:
             raise Refused("the code under test switched off the check for refused functions")
+        if own_code.__code__ is not its_code or own_code() != own:
+            raise Refused("the code under test changed the grader's own functions")
     finally:
         sys.setprofile(previous)
         threading.setprofile(previous_threads)
         _rearm(swapped, emptied)
+
+
+def _own_code() -> dict:
+    """The code of every function of this module as it is now (a context manager's own too), and
+    its classes: what :func:`refused` compares when its block ends."""
+    found: dict[str, object] = {}
+    for name, value in list(globals().items()):
+        if isinstance(value, types.FunctionType):
+            inner = getattr(value, "__wrapped__", None)
+            found[name] = (value.__code__, getattr(inner, "__code__", None))
+        elif isinstance(value, type):
+            found[name] = value
+    return found
 
 
 def _sort_targets(targets) -> tuple[list, list, list]:
@@ -126,8 +145,7 @@ def _watcher(functions: list, builtins: list, own: types.CodeType):
     switches = {id(sys.setprofile), id(sys.settrace)}
     switch_codes = {id(threading.setprofile.__code__), id(threading.settrace.__code__)}
     elsewhere = {id(f) for f in _elsewhere()}
-    raw_thread = {id(getattr(sys.modules.get("_thread"), "start_new_thread", None))}
-    threading_file = threading.__file__
+    raw_thread = {id(getattr(sys.modules.get("_thread"), "start_new_thread", None))}  # threading's too
     seen: dict[int, tuple[types.CodeType, bool]] = {}
 
     def copied(code: types.CodeType) -> bool:
@@ -146,12 +164,10 @@ def _watcher(functions: list, builtins: list, own: types.CodeType):
         )
         if switching and caller is not own:
             raise Refused("the code under test switched off the check for refused functions")
-        if event == "c_call" and (
-            id(arg) in elsewhere or (id(arg) in raw_thread and frame.f_code.co_filename != threading_file)
-        ):
+        if event == "c_call" and (id(arg) in elsewhere or id(arg) in raw_thread):
             raise Refused(
-                f"this calls {getattr(arg, '__name__', arg)}: another process or an unwatched thread, "
-                "where the check for refused functions does not reach"
+                f"this calls {getattr(arg, '__name__', arg)}: another process or thread, where the check "
+                "for refused functions does not reach"
             )
 
     return watch
