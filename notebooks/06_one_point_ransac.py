@@ -1249,7 +1249,8 @@ def hidden_test_ex3(grading, answer):
         each = cm.theta_from_pixels(pairs.w_prev, pairs.w_curr, ex_camera)
         grid = np.sort(fresh.uniform(0.01, 10.0, 300))
         cases.append((grading.frozen(each), turn, grading.frozen(pairs.inliers), grading.frozen(grid)))
-    got = [float(answer(each.copy(), turn, inliers.copy(), grid.copy())) for each, turn, inliers, grid in cases]
+    with grading.refused():  # nothing to refuse; no other process, no change to the grader's tools
+        got = [float(answer(each.copy(), turn, inliers.copy(), grid.copy())) for each, turn, inliers, grid in cases]
     grading.intact(globals(), ("synthetic_matches", "one_point_ransac"))
     for value, (each, turn, inliers, grid) in zip(got, cases, strict=True):
         correct_at = [np.sum((np.abs(each - turn) < np.radians(t)) == inliers) for t in grid]

@@ -1152,7 +1152,8 @@ def hidden_test_ex1(grading, detector, answer):
     flat[:, : int(fresh.integers(40, 280))] = texture[:, :1]  # a flat part, a textured part
     image = grading.frozen(cv2.GaussianBlur(np.maximum(texture * (flat == 0), flat), (0, 0), fresh.uniform(0.5, 2.0)))
     thresholds = sorted(int(t) for t in fresh.integers(5, 60, 3))
-    got = np.asarray(answer(image.copy(), list(thresholds)), float)
+    with grading.refused():  # nothing to refuse; no other process, no change to the grader's tools
+        got = np.asarray(answer(image.copy(), list(thresholds)), float)
     grading.intact(globals())
 
     # the references only now: the answer, called above, could read its caller's frame
@@ -1274,7 +1275,8 @@ def hidden_test_ex3(grading, camera, points, measured, answer):
         R_start = rotation(fresh.normal(scale=size, size=3)) @ R0
         starts.append((grading.frozen(R_start), grading.frozen(t0 + fresh.normal(scale=10 * size, size=3))))
     P_kept, w_kept = grading.frozen(points), grading.frozen(measured)
-    got = [answer(R.copy(), t.copy()) for R, t in starts]
+    with grading.refused():  # nothing to refuse; no other process, no change to the grader's tools
+        got = [answer(R.copy(), t.copy()) for R, t in starts]
     grading.intact(globals())
 
     # the references only now: the answer, called above, could read its caller's frame
