@@ -969,20 +969,23 @@ assert np.isclose(wall_distance, abs(4.0 * 5.0 - 1.0 * 1.0) / 5.0), "|a × b| / 
 ### BEGIN HIDDEN TESTS
 import importlib  # noqa: E402
 
+import sympy.geometry.line  # noqa: E402
+
 import vo_lib.grading  # noqa: E402
 import vo_lib.line_slam.line_landmarks as landmarks_module  # noqa: E402
 
 grading = importlib.reload(vo_lib.grading)  # fresh from its file, whatever the answer did to it
 
 
-def hidden_test_ex1(grading, landmarks, answer):
-    """New walls at every grading. The answer gets copies, without vo_lib's landmark functions;
-    the expected points are computed after it ran, from walls it cannot change."""
+def hidden_test_ex1(grading, landmarks, elsewhere, answer):
+    """New walls at every grading. The answer gets copies, without vo_lib's landmark functions or
+    SymPy's lines (which project a point onto one); the expected points are computed after it
+    ran, from walls it cannot change."""
     import numpy as np
 
     grading.intact(globals(), ("feature_point",))  # the answer left NumPy and vo_lib alone
     walls = grading.frozen(np.random.default_rng().uniform(-20, 20, (20, 2, 2)))
-    with grading.refused(*grading.library_functions(landmarks)):
+    with grading.refused(*grading.library_functions(landmarks, elsewhere)):
         got = [np.asarray(answer(a.copy(), b.copy()), float) for a, b in walls]
     grading.intact(globals(), ("feature_point",))
     for value, (a, b) in zip(got, walls, strict=True):
@@ -991,7 +994,7 @@ def hidden_test_ex1(grading, landmarks, answer):
         )
 
 
-hidden_test_ex1(grading, landmarks_module, wall_feature_point)
+hidden_test_ex1(grading, landmarks_module, sympy.geometry.line, wall_feature_point)
 ### END HIDDEN TESTS
 
 # %% [markdown]
