@@ -31,8 +31,10 @@ os.environ["VO_LIB_HEADLESS"] = "1"
 # - an answer cell whose code reaches for a kernel hook (vo_lib.grading.kernel_hooks) is not run;
 #   it and its test show why, and the exercise scores 0 until the teacher looks at it by hand;
 # - the kernel's hooks are compared before and after every answer cell (vo_lib.grading.kernel_state,
-#   read as a user expression, which no transformer or handler sees); from a change on, no test
-#   runs and each says where the kernel was changed;
+#   read as a user expression, which no transformer or handler sees), and every test cell, whose
+#   calls of an answer's functions may change them too (the tools the next hidden test loads, say);
+#   from a change on, no test runs and each says where the kernel was changed, and a test cell
+#   that changed it fails;
 # - a kernel that dies stops the notebook, not the batch: every later cell says in which cell it
 #   died, and scores 0;
 # - a cell stopped by the timeout says which cell it was.
@@ -91,10 +93,11 @@ class GuardedExecute(Execute):
                 f"CellTimeoutError: {label} was still running after {self.timeout} s and was stopped"
             ],
         }
+        guarded = answer or bool(meta.get("grade"))  # an answer, or a test that calls one
         try:
-            before = self._kernel_state() if answer else None
+            before = self._kernel_state() if guarded else None
             cell, resources = super().preprocess_cell(cell, resources, index)
-            after = self._kernel_state() if answer else None
+            after = self._kernel_state() if guarded else None
         except DeadKernelError:
             self.stopped = f"the kernel died in {label}"
             cell.outputs = list(cell.get("outputs", [])) + [

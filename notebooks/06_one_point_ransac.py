@@ -1084,23 +1084,35 @@ for s, count in needed.items():
 import importlib  # noqa: E402
 
 import vo_lib.grading  # noqa: E402
-
-grading = importlib.reload(vo_lib.grading)  # fresh from its file, whatever the answer did to it
-intact, refused = grading.intact, grading.refused
-
-intact(globals())  # the answer left NumPy and the notebook's modules alone
 import vo_lib.stereo_vo.ransac as ransac_module  # noqa: E402
 import vo_lib.stereo_vo.ransac_core as ransac_core  # noqa: E402
 
-fresh = np.random.default_rng()  # new ratios and confidences at every grading
-cases = [(fresh.uniform(0.05, 0.9), fresh.uniform(0.9, 0.9999), int(fresh.integers(1, 7))) for _ in range(20)]
-expected = [ransac_module.hypotheses_needed(1 - e, p, sample_size=s) for e, p, s in cases]
-with refused(ransac_module.hypotheses_needed, ransac_core.hypotheses_needed):
-    got = [int(hypotheses_for(e, p, s)) for e, p, s in cases]
-assert got == expected, (
-    "hypotheses_for gives other counts for other ratios (outliers, not inliers? rounded up?)"
-)
-intact(globals())
+grading = importlib.reload(vo_lib.grading)  # fresh from its file, whatever the answer did to it
+
+
+def hidden_test_ex1(grading, ransac, ransac_core, answer):
+    """New ratios and confidences at every grading, without vo_lib's RANSAC modules at hand; the
+    expected counts are computed after the answer ran, from inputs it cannot change."""
+    import numpy as np
+
+    grading.intact(globals())  # the answer left NumPy and the notebook's modules alone
+    fresh = np.random.default_rng()
+    cases = tuple(
+        (float(fresh.uniform(0.05, 0.9)), float(fresh.uniform(0.9, 0.9999)), int(fresh.integers(1, 7)))
+        for _ in range(20)
+    )
+    # and counts that come out whole: k draws of a half-inlier sample reach 1 - 0.5^k exactly
+    cases += tuple((0.5, 1.0 - 0.5 ** int(k), 1) for k in fresh.integers(4, 13, 2))
+    with grading.refused(*grading.library_functions(ransac, ransac_core)):
+        got = [int(answer(e, p, s)) for e, p, s in cases]
+    grading.intact(globals())
+    expected = [ransac.hypotheses_needed(1 - e, p, sample_size=s) for e, p, s in cases]
+    assert got == expected, (
+        "hypotheses_for gives other counts for other ratios (outliers, not inliers? the smallest whole number?)"
+    )
+
+
+hidden_test_ex1(grading, ransac_module, ransac_core, hypotheses_for)
 ### END HIDDEN TESTS
 
 # %% [markdown]
@@ -1217,26 +1229,37 @@ import importlib  # noqa: E402
 import vo_lib.grading  # noqa: E402
 
 grading = importlib.reload(vo_lib.grading)  # fresh from its file, whatever the answer did to it
-intact = grading.intact
 
-intact(
-    globals(), ("synthetic_matches", "one_point_ransac")
-)  # the answer left NumPy and the notebook's modules alone
-gated_check = one_point_ransac(half_px.w_prev, half_px.w_curr, ex_camera, rng=1).inliers
-assert gate_errors == np.sum(gated_check != half_px.inliers), "gate_errors"
-fresh = np.random.default_rng()  # new matches and grids at every grading
-for _ in range(3):
-    turn = fresh.uniform(-0.08, 0.08)
-    pairs = synthetic_matches(
-        ex_camera, 400, turn, 0.1, fresh, noise_px=fresh.uniform(0.3, 1.0), outlier_ratio=0.3
-    )
-    each = cm.theta_from_pixels(pairs.w_prev, pairs.w_curr, ex_camera)
-    grid = np.sort(fresh.uniform(0.01, 10.0, 300))
-    correct_at = [np.sum((np.abs(each - turn) < np.radians(t)) == pairs.inliers) for t in grid]
-    assert np.isclose(
-        best_fixed_threshold(each, turn, pairs.inliers, grid), grid[int(np.argmax(correct_at))]
-    ), "best_fixed_threshold does not pick the threshold that classifies the most matches correctly"
-intact(globals(), ("synthetic_matches", "one_point_ransac"))
+
+def hidden_test_ex3(grading, answer):
+    """New matches and grids at every grading; the best threshold is found after the answer
+    ran, from inputs it cannot change."""
+    import numpy as np
+
+    grading.intact(globals(), ("synthetic_matches", "one_point_ransac"))
+    gated_check = one_point_ransac(half_px.w_prev, half_px.w_curr, ex_camera, rng=1).inliers
+    assert int(gate_errors) == np.sum(gated_check != half_px.inliers), "gate_errors"
+    fresh = np.random.default_rng()
+    cases = []
+    for _ in range(3):
+        turn = float(fresh.uniform(-0.08, 0.08))
+        pairs = synthetic_matches(
+            ex_camera, 400, turn, 0.1, fresh, noise_px=fresh.uniform(0.3, 1.0), outlier_ratio=0.3
+        )
+        each = cm.theta_from_pixels(pairs.w_prev, pairs.w_curr, ex_camera)
+        grid = np.sort(fresh.uniform(0.01, 10.0, 300))
+        cases.append((grading.frozen(each), turn, grading.frozen(pairs.inliers), grading.frozen(grid)))
+    with grading.refused():  # nothing to refuse; no other process, no change to the grader's tools
+        got = [float(answer(each.copy(), turn, inliers.copy(), grid.copy())) for each, turn, inliers, grid in cases]
+    grading.intact(globals(), ("synthetic_matches", "one_point_ransac"))
+    for value, (each, turn, inliers, grid) in zip(got, cases, strict=True):
+        correct_at = [np.sum((np.abs(each - turn) < np.radians(t)) == inliers) for t in grid]
+        assert np.isclose(value, grid[int(np.argmax(correct_at))]), (
+            "best_fixed_threshold does not pick the threshold that classifies the most matches correctly"
+        )
+
+
+hidden_test_ex3(grading, best_fixed_threshold)
 ### END HIDDEN TESTS
 
 # %% [markdown]

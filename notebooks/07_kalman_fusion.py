@@ -772,33 +772,41 @@ assert np.isclose(mean_1d, mean_ref[0]) and np.isclose(var_1d, var_ref[0, 0]), (
 assert 0 < gain_1d < 1 and var_1d < min(0.5, 0.25), "fusing two estimates beats both"
 ### BEGIN HIDDEN TESTS
 import importlib  # noqa: E402
+import pkgutil  # noqa: E402
+
+import filterpy  # noqa: E402
 
 import vo_lib.grading  # noqa: E402
-
-grading = importlib.reload(vo_lib.grading)  # fresh from its file, whatever the answer did to it
-intact, refused = grading.intact, grading.refused
-
-intact(globals())  # the answer left NumPy and the notebook's modules alone
-import filterpy.kalman as filterpy_kalman  # noqa: E402
-
+import vo_lib.line_slam.ekf_slam as ekf_module  # noqa: E402
 import vo_lib.stereo_vo.kalman as kalman_module  # noqa: E402
 
-fresh = np.random.default_rng()  # new beliefs and measurements at every grading
-cases = fresh.uniform([-10, 0.01, -10, 0.01], [10, 5, 10, 5], (10, 4))
-updates = [  # every library update: filterpy's functions and filters, and vo_lib's filters
-    getattr(owner, name)
-    for module in (filterpy_kalman, kalman_module)
-    for owner in [module, *(c for c in vars(module).values() if isinstance(c, type))]
-    for name in dir(owner)
-    if name.startswith("update") and callable(getattr(owner, name))
-]
-with refused(*updates):
-    got = [tuple(float(np.squeeze(g)) for g in update_1d(*case)) for case in cases]
-for (m0, p0, z0, r0), (k_, m_, p_) in zip(cases, got, strict=True):
-    assert np.isclose(k_, p0 / (p0 + r0)), "the gain of another update (P / (P + R), not R / (P + R))"
-    assert np.isclose(m_, m0 + p0 / (p0 + r0) * (z0 - m0)), "the mean of another update"
-    assert np.isclose(p_, p0 * r0 / (p0 + r0)), "the variance of another update"
-intact(globals())
+grading = importlib.reload(vo_lib.grading)  # fresh from its file, whatever the answer did to it
+
+
+def filterpy_modules():
+    """Every module of filterpy: its filters, smoothers and Gaussian products all update."""
+    names = [m.name for m in pkgutil.walk_packages(filterpy.__path__, "filterpy.")]
+    return [importlib.import_module(n) for n in names if ".examples" not in n and ".tests" not in n]
+
+
+def hidden_test_ex1(grading, libraries, answer):
+    """New beliefs and measurements at every grading, with no library filter at hand (filterpy's,
+    vo_lib's); the expected updates are computed after the answer ran."""
+    import numpy as np
+
+    grading.intact(globals())  # the answer left NumPy and the notebook's modules alone
+    fresh = np.random.default_rng()
+    cases = tuple(tuple(float(v) for v in row) for row in fresh.uniform([-10, 0.01, -10, 0.01], [10, 5, 10, 5], (10, 4)))
+    with grading.refused(*grading.library_functions(*libraries)):
+        got = [tuple(float(np.squeeze(g)) for g in answer(*case)) for case in cases]
+    grading.intact(globals())
+    for (m0, p0, z0, r0), (k_, m_, p_) in zip(cases, got, strict=True):
+        assert np.isclose(k_, p0 / (p0 + r0)), "the gain of another update (P / (P + R), not R / (P + R))"
+        assert np.isclose(m_, m0 + p0 / (p0 + r0) * (z0 - m0)), "the mean of another update"
+        assert np.isclose(p_, p0 * r0 / (p0 + r0)), "the variance of another update"
+
+
+hidden_test_ex1(grading, (*filterpy_modules(), kalman_module, ekf_module), update_1d)
 ### END HIDDEN TESTS
 
 # %% [markdown]
@@ -806,12 +814,18 @@ intact(globals())
 #
 # Section 6 judges the filter by its NEES averaged over N runs against a 95 % χ² band. Write
 # `nees_band(n_runs, dim)` returning the band's (lower, upper) limits for the average NEES of a
-# `dim`-dimensional state over `n_runs` runs. Then draw 2,000 experiments, each averaging the
-# NEES of 50 runs of a *consistent* 3-D estimator (errors drawn from the covariance it reports),
-# with `np.random.default_rng(7)`, and store the share of experiments inside the band in
-# `share_inside`.
+# `dim`-dimensional state over `n_runs` runs, and `average_nees(errors, covariance)` returning,
+# for the errors `(E, N, dim)` of E experiments of N runs each of an estimator that reports
+# `covariance`, each experiment's NEES averaged over its runs (shape `(E,)`). The cell below
+# draws 2,000 experiments of 50 runs of a *consistent* 3-D estimator (errors drawn from the
+# covariance it reports): store the share of them inside the band in `share_inside`.
 #
 # *Hint:* the sum of N independent χ²(d) values is χ²(N·d); `scipy.stats.chi2.ppf`.
+
+# %%
+band_rng = np.random.default_rng(7)
+reported = np.diag([0.04, 0.01, 0.003])
+experiment_errors = band_rng.multivariate_normal(np.zeros(3), reported, size=(2000, 50))
 
 
 # %% nbgrader={"grade": false, "grade_id": "ex2", "locked": false, "schema_version": 3, "solution": true}
@@ -821,12 +835,15 @@ def nees_band(n_runs, dim):
     return tuple(chi2.ppf([0.025, 0.975], n_runs * dim) / n_runs)
 
 
-band_rng = np.random.default_rng(7)
-reported = np.diag([0.04, 0.01, 0.003])
-errors = band_rng.multivariate_normal(np.zeros(3), reported, size=(2000, 50))
-average_nees = np.einsum("eri,ij,erj->er", errors, np.linalg.inv(reported), errors).mean(axis=1)
+def average_nees(errors, covariance):
+    """NEES e^T C^-1 e of every run, averaged over the runs of each experiment."""
+    errors = np.asarray(errors, float)
+    return np.einsum("eri,ij,erj->er", errors, np.linalg.inv(covariance), errors).mean(axis=1)
+
+
 low, high = nees_band(50, 3)
-share_inside = float(np.mean((average_nees > low) & (average_nees < high)))
+nees_each = average_nees(experiment_errors, reported)
+share_inside = float(np.mean((nees_each > low) & (nees_each < high)))
 print(f"band [{low:.2f}, {high:.2f}]; {share_inside:.1%} of the experiments inside")
 ### END SOLUTION
 
@@ -836,25 +853,66 @@ low_check, high_check = nees_band(50, 3)
 assert low_check < 3 < high_check, "the band holds the expected average NEES, the dimension"
 assert abs(share_inside - 0.95) < 0.02, "a consistent estimator stays inside a 95 % band 95 % of the time"
 assert nees_band(1000, 3)[1] - nees_band(1000, 3)[0] < high_check - low_check, "more runs, a narrower band"
+assert np.shape(average_nees(experiment_errors[:10], reported)) == (10,), "one average per experiment"
 ### BEGIN HIDDEN TESTS
 import importlib  # noqa: E402
 
+import vo_lib.cli.experiments as experiments_module  # noqa: E402
 import vo_lib.grading  # noqa: E402
+import vo_lib.line_slam.lap as lap_module  # noqa: E402
 
 grading = importlib.reload(vo_lib.grading)  # fresh from its file, whatever the answer did to it
-intact = grading.intact
 
-intact(globals())  # the answer left NumPy and the notebook's modules alone
-from scipy.special import gammainc  # noqa: E402
 
-fresh = np.random.default_rng()  # new run counts and dimensions at every grading
-for n_, d_ in zip(fresh.integers(2, 500, 10), fresh.integers(1, 7, 10), strict=True):
-    band = np.asarray(nees_band(int(n_), int(d_)), float)
-    # chi-square's distribution function with k degrees of freedom is gammainc(k / 2, x / 2)
-    assert np.allclose(gammainc(n_ * d_ / 2, band * n_ / 2), [0.025, 0.975], atol=1e-6), (
-        "nees_band is not the 95 % band of another average NEES (which quantiles? which degrees of freedom?)"
+def hidden_test_ex2(grading, experiments, nees_band, average_nees):
+    """The share of the notebook's experiments, then new run counts, dimensions, errors and
+    covariances at every grading; the answer gets copies, and the expected values, from
+    chi-square's distribution function, come after it ran."""
+    import numpy as np
+    from scipy.special import gammainc, gammaincinv
+
+    grading.intact(globals())  # the answer left NumPy, SciPy's special functions and vo_lib alone
+
+    fresh = np.random.default_rng()
+    runs = [(int(n), int(d)) for n, d in zip(fresh.integers(2, 500, 10), fresh.integers(1, 7, 10), strict=True)]
+    draws = []
+    for _ in range(3):
+        dim = int(fresh.integers(1, 6))
+        root = fresh.normal(size=(dim, dim)) + 2 * np.eye(dim)
+        covariance = root @ root.T * fresh.uniform(0.001, 1.0)
+        size = (int(fresh.integers(5, 50)), int(fresh.integers(2, 40)))
+        errors = fresh.multivariate_normal(np.zeros(dim), covariance, size=size)
+        draws.append((grading.frozen(errors), grading.frozen(covariance)))
+    with grading.refused(*grading.library_functions(*experiments)):
+        bands = [np.asarray(nees_band(n, d), float) for n, d in runs]
+        averages = [np.asarray(average_nees(e.copy(), c.copy()), float) for e, c in draws]
+    grading.intact(globals())
+
+    # the references only now: the answer, called above, could read its caller's frame
+    def reference_band(n, d):  # chi-square's quantiles, from its distribution function gammainc(k / 2, x / 2)
+        return 2 * gammaincinv(n * d / 2, np.array([0.025, 0.975])) / n
+
+    def reference_average(errors, covariance):
+        return np.einsum("eri,ij,erj->er", errors, np.linalg.inv(covariance), errors).mean(axis=1)
+
+    low_, high_ = reference_band(50, 3)
+    covariance_ = np.diag([0.04, 0.01, 0.003])  # the experiments of the cell above, drawn again
+    drawn_ = np.random.default_rng(7).multivariate_normal(np.zeros(3), covariance_, size=(2000, 50))
+    nees_ = reference_average(drawn_, covariance_)
+    assert np.isclose(float(share_inside), np.mean((nees_ > low_) & (nees_ < high_)), rtol=0, atol=1e-12), (
+        "share_inside: not the share of the experiments drawn above inside the band"
     )
-intact(globals())
+    for band, (n, d) in zip(bands, runs, strict=True):
+        assert np.allclose(gammainc(n * d / 2, band * n / 2), [0.025, 0.975], atol=1e-6), (
+            "nees_band is not the 95 % band of another average NEES (which quantiles? which degrees of freedom?)"
+        )
+    for value, (errors, covariance) in zip(averages, draws, strict=True):
+        assert value.shape == (len(errors),) and np.allclose(value, reference_average(errors, covariance)), (
+            "average_nees differs for other errors and covariances (the inverse covariance? the mean over runs?)"
+        )
+
+
+hidden_test_ex2(grading, (experiments_module, lap_module), nees_band, average_nees)
 ### END HIDDEN TESTS
 
 # %% [markdown]
@@ -904,40 +962,44 @@ assert np.linalg.norm(cov_rel - mc_cov) < 0.02 * np.linalg.norm(mc_cov), "first 
 ### BEGIN HIDDEN TESTS
 import importlib  # noqa: E402
 
+import vo_lib.geometry as geometry_module  # noqa: E402
 import vo_lib.grading  # noqa: E402
+import vo_lib.models.track_odometry as odometry_module  # noqa: E402
+import vo_lib.stereo_vo.kalman as kalman_module  # noqa: E402
 
 grading = importlib.reload(vo_lib.grading)  # fresh from its file, whatever the answer did to it
-intact, refused = grading.intact, grading.refused
-
-intact(globals())  # the answer left NumPy and the notebook's modules alone
-import vo_lib.geometry as geometry_module  # noqa: E402
 
 
-def central_jacobian(a, b, step=1e-6):
-    """Reference: central differences of relative_planar (error ~1e-10)."""
-    x0 = np.r_[a, b]
-    return np.column_stack(
-        [
-            (
-                geometry_module.relative_planar(*np.split(x0 + step * e, 2))
-                - geometry_module.relative_planar(*np.split(x0 - step * e, 2))
-            )
-            / (2 * step)
-            for e in np.eye(6)
-        ]
-    )
+def hidden_test_ex3(grading, geometry, others, answer):
+    """New poses at every grading. The answer gets copies, without vo_lib's poses and
+    Jacobians; the expected Jacobians (central differences of relative_planar, error ~1e-10)
+    are computed after it ran, from poses it cannot change."""
+    import numpy as np
+
+    grading.intact(globals())  # the answer left NumPy and the notebook's modules alone
+    fresh = np.random.default_rng()
+    cases = [grading.frozen(fresh.uniform([-5, -5, -np.pi] * 2, [5, 5, np.pi] * 2)) for _ in range(5)]
+    with grading.refused(*grading.library_functions(geometry, *others)):
+        got = [np.asarray(answer(c[:3].copy(), c[3:].copy()), float) for c in cases]
+    grading.intact(globals())
+    step = 1e-6
+    for value, c in zip(got, cases, strict=True):
+        expected = np.column_stack(
+            [
+                (
+                    geometry.relative_planar(*np.split(c + step * e, 2))
+                    - geometry.relative_planar(*np.split(c - step * e, 2))
+                )
+                / (2 * step)
+                for e in np.eye(6)
+            ]
+        )
+        assert value.shape == (3, 6) and np.allclose(value, expected, atol=1e-7), (
+            "relative_jacobian is not the derivative at other poses (signs? the yaw column?)"
+        )
 
 
-fresh = np.random.default_rng()  # new poses at every grading
-cases = [fresh.uniform([-5, -5, -np.pi] * 2, [5, 5, np.pi] * 2) for _ in range(5)]
-expected = [central_jacobian(c[:3], c[3:]) for c in cases]
-with refused(geometry_module.relative_planar, geometry_module.compose_planar):
-    got = [np.asarray(relative_jacobian(c[:3], c[3:]), float) for c in cases]
-for g, e in zip(got, expected, strict=True):
-    assert g.shape == (3, 6) and np.allclose(g, e, atol=1e-7), (
-        "relative_jacobian is not the derivative at other poses (signs? the yaw column?)"
-    )
-intact(globals())
+hidden_test_ex3(grading, geometry_module, (kalman_module, odometry_module), relative_jacobian)
 ### END HIDDEN TESTS
 
 # %% [markdown]

@@ -594,31 +594,41 @@ assert np.isclose(final_error_pct, reference_percent(ex_estimate, ex_truth)), (
     "not the final error in per cent"
 )
 ### BEGIN HIDDEN TESTS
+import importlib  # noqa: E402
+
 import vo_lib.evaluation as evaluation_module  # noqa: E402
+import vo_lib.geometry as geometry_module  # noqa: E402
+import vo_lib.grading  # noqa: E402
+
+grading = importlib.reload(vo_lib.grading)  # fresh from its file, whatever the answer did to it
 
 
-def refuse(*args, **kwargs):
-    raise AssertionError("final_error_percent calls vo_lib.evaluation; the exercise asks you to write it")
+def hidden_test_ex1(grading, evaluation, geometry, answer):
+    """New drives at every grading. The answer gets copies of them, without vo_lib.evaluation;
+    the expected values are computed after it ran, from inputs it cannot change."""
+    import numpy as np
+
+    grading.intact(globals())  # the answer left NumPy and the notebook's modules alone
+    fresh = np.random.default_rng()
+    drives = []
+    for _ in range(4):
+        step = np.array([fresh.uniform(0.01, 0.1), 0.0, fresh.uniform(0.005, 0.05)])
+        truth = [np.zeros(3)]
+        for _ in range(int(fresh.integers(50, 300))):
+            truth.append(geometry.compose_planar(truth[-1], step))
+        truth = np.array(truth)
+        estimate = truth + fresh.normal(scale=0.05, size=truth.shape)
+        drives.append((grading.frozen(estimate), grading.frozen(truth)))
+    with grading.refused(*grading.library_functions(evaluation)):
+        got = [float(answer(estimate.copy(), truth.copy())) for estimate, truth in drives]
+    grading.intact(globals())
+    for value, (estimate, truth) in zip(got, drives, strict=True):
+        assert np.isclose(value, evaluation.final_error(truth, estimate).percent), (
+            "final_error_percent differs on other drives (the length of the path?)"
+        )
 
 
-fresh = np.random.default_rng()  # new drives at every grading
-cases = []
-for _ in range(4):
-    n_ = int(fresh.integers(50, 300))
-    truth_ = drive_steps(np.array([fresh.uniform(0.01, 0.1), 0.0, fresh.uniform(0.005, 0.05)]), n_)
-    estimate_ = truth_ + fresh.normal(scale=0.05, size=truth_.shape)
-    cases.append((estimate_, truth_, reference_percent(estimate_, truth_)))
-helpers = [evaluation_module.path_lengths, evaluation_module.planar_path_length]
-saved = [f.__code__ for f in helpers]
-for f in helpers:
-    f.__code__ = refuse.__code__
-try:
-    got = [float(final_error_percent(e, t)) for e, t, _ in cases]
-finally:
-    for f, code in zip(helpers, saved, strict=True):
-        f.__code__ = code
-for g, (_, _, expected) in zip(got, cases, strict=True):
-    assert np.isclose(g, expected), "final_error_percent differs on other drives (the length of the path?)"
+hidden_test_ex1(grading, evaluation_module, geometry_module, final_error_percent)
 ### END HIDDEN TESTS
 
 # %% [markdown]
@@ -657,34 +667,61 @@ assert np.isclose(ate_rmse, ate_planar(ex_truth, ex_estimate)[0].rmse, rtol=1e-9
 )
 assert ate_rmse < np.linalg.norm(ex_estimate[-1, :2] - ex_truth[-1, :2]), "alignment spreads the drift"
 ### BEGIN HIDDEN TESTS
+import contextlib  # noqa: E402
+import importlib  # noqa: E402
+
+import scipy.linalg  # noqa: E402
+import scipy.spatial.transform  # noqa: E402
+
 import vo_lib.evaluation as evaluation_module  # noqa: E402
+import vo_lib.geometry as geometry_module  # noqa: E402
+import vo_lib.grading  # noqa: E402
+
+grading = importlib.reload(vo_lib.grading)  # fresh from its file, whatever the answer did to it
 
 
-def refuse(*args, **kwargs):
-    raise AssertionError("ate_rmse_of calls vo_lib's alignment; the exercise asks you to write it")
+def alignments_elsewhere():
+    """Other libraries' rigid alignments (Kabsch, Umeyama, Procrustes), which do the exercise."""
+    found = [scipy.linalg.orthogonal_procrustes, scipy.spatial.transform.Rotation.align_vectors]
+    with contextlib.suppress(ImportError):
+        import evo.core.geometry
+
+        found.append(evo.core.geometry)
+    with contextlib.suppress(ImportError):
+        import skimage.transform._geometric
+
+        found.append(skimage.transform._geometric._umeyama)
+    return found
 
 
-fresh = np.random.default_rng()  # new drives, turned and shifted, at every grading
-cases = []
-for _ in range(4):
-    n_ = int(fresh.integers(50, 300))
-    truth_ = drive_steps(np.array([fresh.uniform(0.01, 0.1), 0.0, fresh.uniform(0.005, 0.05)]), n_)
-    estimate_ = compose_planar(fresh.uniform([-5, -5, -np.pi], [5, 5, np.pi]), truth_)
-    estimate_ = estimate_ + fresh.normal(scale=0.03, size=truth_.shape)
-    cases.append((truth_, estimate_, ate_planar(truth_, estimate_)[0].rmse))
-helpers = [evaluation_module.umeyama, evaluation_module.ate_planar, evaluation_module.ate]
-saved = [f.__code__ for f in helpers]
-for f in helpers:
-    f.__code__ = refuse.__code__
-try:
-    got = [float(ate_rmse_of(t, e)) for t, e, _ in cases]
-finally:
-    for f, code in zip(helpers, saved, strict=True):
-        f.__code__ = code
-for g, (_, _, expected) in zip(got, cases, strict=True):
-    assert np.isclose(g, expected, rtol=1e-6), (
-        "ate_rmse_of differs on other drives (rotation and translation?)"
-    )
+def hidden_test_ex2(grading, evaluation, geometry, answer, elsewhere):
+    """New drives, turned and shifted, at every grading. The answer gets copies, with no alignment
+    of vo_lib or another library at hand; the expected values come after it ran."""
+    import numpy as np
+
+    grading.intact(globals())  # the answer left NumPy and the notebook's modules alone
+    fresh = np.random.default_rng()
+    drives = []
+    for mirrored in (False, False, False, True):  # and one estimate mirrored, which no rotation aligns
+        step = np.array([fresh.uniform(0.01, 0.1), 0.0, fresh.uniform(0.005, 0.05)])
+        truth = [np.zeros(3)]
+        for _ in range(int(fresh.integers(50, 300))):
+            truth.append(geometry.compose_planar(truth[-1], step))
+        truth = np.array(truth)
+        estimate = truth * [1, -1, -1] if mirrored else truth
+        estimate = geometry.compose_planar(fresh.uniform([-5, -5, -np.pi], [5, 5, np.pi]), estimate)
+        estimate = estimate + fresh.normal(scale=0.03, size=truth.shape)
+        drives.append((grading.frozen(truth), grading.frozen(estimate)))
+    with grading.refused(*grading.library_functions(evaluation, *elsewhere)):
+        got = [float(answer(truth.copy(), estimate.copy())) for truth, estimate in drives]
+    grading.intact(globals())
+    for value, (truth, estimate) in zip(got, drives, strict=True):
+        assert np.isclose(value, evaluation.ate_planar(truth, estimate)[0].rmse, rtol=1e-6), (
+            "ate_rmse_of differs on other drives (rotation and translation? a mirror image is no rotation)"
+        )
+
+
+hidden_test_ex2(grading, evaluation_module, geometry_module, ate_rmse_of, alignments_elsewhere())
 ### END HIDDEN TESTS
 
 # %% [markdown]
@@ -722,16 +759,48 @@ for n in (50, 400):
     )
 assert np.isclose(sideways_error(0.01, 1e-4, 2), 0.01 * 1e-4), "two steps: only the second is off"
 ### BEGIN HIDDEN TESTS
-fresh = np.random.default_rng()  # new steps and drifts at every grading
-# short drives (n <= 50), where n(n - 1)/2 and n(n + 1)/2 differ by 4 % or more, and small
-# drifts, where the first order is good to 1e-4
-for s_, eps_, n_ in zip(
-    fresh.uniform(0.005, 0.5, 10), fresh.uniform(1e-6, 1e-4, 10), fresh.integers(3, 51, 10), strict=True
-):
-    exact = drive_steps(np.array([s_, 0.0, eps_]), int(n_))[-1, 1]
-    assert np.isclose(float(sideways_error(s_, eps_, int(n_))), exact, rtol=1e-3), (
-        "sideways_error differs from other drifting drives (which heading does each step use?)"
-    )
+import importlib  # noqa: E402
+
+import vo_lib.geometry as geometry_module  # noqa: E402
+import vo_lib.grading  # noqa: E402
+
+grading = importlib.reload(vo_lib.grading)  # fresh from its file, whatever the answer did to it
+
+
+def hidden_test_ex3(grading, geometry, answer, drive):
+    """New steps and drifts at every grading, without a drive to simulate at hand.
+
+    Short drives with small drifts, where the first order is good to 1e-4 and n(n - 1)/2 and
+    n(n + 1)/2 differ by 4 % or more, against the drive; and large drifts, where the drive
+    bends away from its first order, against the first-order term itself: the drive's lateral
+    offset at a tiny drift, scaled up (first order is linear in the drift).
+    """
+    import numpy as np
+
+    grading.intact(globals())  # the answer left NumPy and the notebook's modules alone
+
+    fresh = np.random.default_rng()
+    small = [(fresh.uniform(0.005, 0.5), fresh.uniform(1e-6, 1e-4), int(fresh.integers(3, 51))) for _ in range(10)]
+    large = [(fresh.uniform(0.005, 0.5), fresh.uniform(0.01, 0.05), int(fresh.integers(30, 200))) for _ in range(10)]
+    with grading.refused(drive, *grading.library_functions(geometry)):
+        got = [float(answer(s, eps, n)) for s, eps, n in small + large]
+    grading.intact(globals())
+
+    # the references only now: the answer, called above, could read its caller's frame
+    def lateral(s, eps, n):  # the drive, step by step: each step along the heading before it turns
+        return s * np.sum(np.sin(eps * np.arange(n)))
+
+    for value, (s, eps, n) in zip(got[: len(small)], small, strict=True):
+        assert np.isclose(value, lateral(s, eps, n), rtol=1e-3), (
+            "sideways_error differs from other drifting drives (which heading does each step use?)"
+        )
+    for value, (s, eps, n) in zip(got[len(small) :], large, strict=True):
+        assert np.isclose(value, eps * lateral(s, 1e-9, n) / 1e-9, rtol=1e-5), (
+            "sideways_error is not the first-order error at larger drifts (linear in the drift?)"
+        )
+
+
+hidden_test_ex3(grading, geometry_module, sideways_error, drive_steps)
 ### END HIDDEN TESTS
 
 # %% [markdown]

@@ -967,23 +967,34 @@ from vo_lib.line_slam.line_landmarks import feature_point
 assert np.allclose(wall_point, feature_point([4.0, 1.0], [1.0, 5.0])), "not the foot of the perpendicular"
 assert np.isclose(wall_distance, abs(4.0 * 5.0 - 1.0 * 1.0) / 5.0), "|a × b| / |b − a|"
 ### BEGIN HIDDEN TESTS
+import importlib  # noqa: E402
+
+import sympy.geometry.line  # noqa: E402
+
+import vo_lib.grading  # noqa: E402
 import vo_lib.line_slam.line_landmarks as landmarks_module  # noqa: E402
 
-
-def refuse(*args, **kwargs):
-    raise AssertionError("wall_feature_point calls the vo_lib function the exercise asks you to write")
+grading = importlib.reload(vo_lib.grading)  # fresh from its file, whatever the answer did to it
 
 
-fresh = np.random.default_rng()  # new walls at every grading
-walls_ = fresh.uniform(-20, 20, (20, 2, 2))
-expected = [feature_point(a, b) for a, b in walls_]
-saved, landmarks_module.feature_point.__code__ = landmarks_module.feature_point.__code__, refuse.__code__
-try:
-    got = [np.asarray(wall_feature_point(a, b), float) for a, b in walls_]
-finally:
-    landmarks_module.feature_point.__code__ = saved
-for g, e in zip(got, expected, strict=True):
-    assert np.allclose(g, e), "wall_feature_point is not the foot of the perpendicular of other walls"
+def hidden_test_ex1(grading, landmarks, elsewhere, answer):
+    """New walls at every grading. The answer gets copies, without vo_lib's landmark functions or
+    SymPy's lines (which project a point onto one); the expected points are computed after it
+    ran, from walls it cannot change."""
+    import numpy as np
+
+    grading.intact(globals(), ("feature_point",))  # the answer left NumPy and vo_lib alone
+    walls = grading.frozen(np.random.default_rng().uniform(-20, 20, (20, 2, 2)))
+    with grading.refused(*grading.library_functions(landmarks, elsewhere)):
+        got = [np.asarray(answer(a.copy(), b.copy()), float) for a, b in walls]
+    grading.intact(globals(), ("feature_point",))
+    for value, (a, b) in zip(got, walls, strict=True):
+        assert np.allclose(value, landmarks.feature_point(a, b)), (
+            "wall_feature_point is not the foot of the perpendicular of other walls"
+        )
+
+
+hidden_test_ex1(grading, landmarks_module, sympy.geometry.line, wall_feature_point)
 ### END HIDDEN TESTS
 
 # %% [markdown]
@@ -1043,29 +1054,39 @@ for _ in range(20):
     assert np.allclose(by_pose, num_pose, atol=1e-6), "the Jacobian by the pose"
     assert np.allclose(by_point, num_point, atol=1e-6), "the Jacobian by the landmark"
 ### BEGIN HIDDEN TESTS
+import importlib  # noqa: E402
+
+import vo_lib.grading  # noqa: E402
+import vo_lib.line_slam.ekf_slam as ekf_module  # noqa: E402
+import vo_lib.line_slam.line_observation as line_observation_module  # noqa: E402
 import vo_lib.line_slam.range_bearing as range_bearing_module  # noqa: E402
 
-
-def refuse(*args, **kwargs):
-    raise AssertionError("range_bearing_jacobians calls vo_lib; the exercise asks for them by hand")
+grading = importlib.reload(vo_lib.grading)  # fresh from its file, whatever the answer did to it
 
 
-fresh = np.random.default_rng()  # new poses and landmarks at every grading
-cases = [(fresh.uniform(-5, 5, 3), fresh.uniform(-20, 20, 2)) for _ in range(20)]
-expected = [observation_jacobians(p, q) for p, q in cases]
-helpers = [range_bearing_module.observation_jacobians, range_bearing_module.observe_point]
-saved = [f.__code__ for f in helpers]
-for f in helpers:
-    f.__code__ = refuse.__code__
-try:
-    got = [tuple(np.asarray(j, float) for j in range_bearing_jacobians(p, q)) for p, q in cases]
-finally:
-    for f, code in zip(helpers, saved, strict=True):
-        f.__code__ = code
-for (g_pose, g_point), (e_pose, e_point) in zip(got, expected, strict=True):
-    assert np.allclose(g_pose, e_pose, atol=1e-9) and np.allclose(g_point, e_point, atol=1e-9), (
-        "range_bearing_jacobians differs at other poses and landmarks (the bearing row?)"
-    )
+def hidden_test_ex2(grading, observation_modules, answer):
+    """New poses and landmarks at every grading. The answer gets copies, with none of vo_lib's
+    observation models (nor observe_point to differentiate) at hand; the expected Jacobians are
+    computed after it ran, from inputs it cannot change."""
+    import numpy as np
+
+    grading.intact(globals(), ("observation_jacobians", "observe_point"))
+    fresh = np.random.default_rng()
+    cases = [(grading.frozen(fresh.uniform(-5, 5, 3)), grading.frozen(fresh.uniform(-20, 20, 2))) for _ in range(20)]
+    with grading.refused(*grading.library_functions(*observation_modules)):
+        got = [tuple(np.asarray(j, float) for j in answer(pose.copy(), point.copy())) for pose, point in cases]
+    grading.intact(globals(), ("observation_jacobians", "observe_point"))
+    reference = observation_modules[0].observation_jacobians
+    for (by_pose, by_point), (pose, point) in zip(got, cases, strict=True):
+        expected_pose, expected_point = reference(pose, point)
+        assert np.allclose(by_pose, expected_pose, atol=1e-9) and np.allclose(by_point, expected_point, atol=1e-9), (
+            "range_bearing_jacobians differs at other poses and landmarks (the bearing row?)"
+        )
+
+
+hidden_test_ex2(
+    grading, (range_bearing_module, line_observation_module, ekf_module), range_bearing_jacobians
+)
 ### END HIDDEN TESTS
 
 # %% [markdown]
@@ -1120,53 +1141,65 @@ print(f"{accepted.sum()} of {len(candidates)} observations within the gate")
 assert accepted.shape == (40,) and accepted.dtype == bool, "one boolean per candidate"
 assert 0 < accepted.sum() < 40, "the gate keeps some candidates and not others"
 ### BEGIN HIDDEN TESTS
+import importlib  # noqa: E402
+
+import vo_lib.grading  # noqa: E402
+import vo_lib.line_slam.ekf_slam as ekf_module  # noqa: E402
+import vo_lib.line_slam.line_observation as line_observation_module  # noqa: E402
 import vo_lib.line_slam.range_bearing as range_bearing_module  # noqa: E402
+import vo_lib.stereo_vo.kalman as kalman_module  # noqa: E402
+
+grading = importlib.reload(vo_lib.grading)  # fresh from its file, whatever the answer did to it
 
 
-def refuse(*args, **kwargs):
-    raise AssertionError("innovation_squared calls vo_lib's Jacobians; the exercise asks for your own")
+def hidden_test_ex3(grading, range_bearing, elsewhere, answer):
+    """The candidates of the notebook, and new robots, landmarks and observations at every
+    grading. The answer gets copies, with vo_lib's Jacobians, gates and filters out of reach
+    (observe_point stays: predicting the observation is not the exercise); the expected values
+    are computed after it ran, from inputs it cannot change."""
+    import numpy as np
+    from scipy.stats import chi2
+
+    grading.intact(globals(), ("observation_jacobians", "observe_point"))
+
+    fresh = np.random.default_rng()
+    cases = []
+    for _ in range(10):
+        pose = np.r_[fresh.uniform(-5, 5, 2), fresh.uniform(-np.pi, np.pi)]
+        point = fresh.uniform(-10, 10, 2)
+        z = range_bearing.observe_point(pose, point) + fresh.normal(scale=[0.2, 0.1])
+        z[1] = np.pi if fresh.random() < 0.3 else z[1]  # bearings at the seam, too
+        arrays = (pose, np.diag(fresh.uniform(0.001, 0.1, 3)), point, np.diag(fresh.uniform(0.001, 0.3, 2)), z)
+        cases.append((*(grading.frozen(a) for a in arrays), fresh.uniform(0.01, 0.2), fresh.uniform(0.005, 0.1)))
+    refused = [range_bearing.observation_jacobians, range_bearing.PointModel, *elsewhere]
+    with grading.refused(*grading.library_functions(*refused)):
+        got = [float(answer(*(a.copy() for a in case[:5]), *case[5:])) for case in cases]
+    grading.intact(globals(), ("observation_jacobians", "observe_point"))
+
+    # the references only now: the answer, called above, could read its caller's frame
+    def reference_nis(pose, pose_cov, point, point_cov, measured, range_sigma, bearing_sigma):
+        h_pose, h_point = range_bearing.observation_jacobians(pose, point)
+        S = h_pose @ pose_cov @ h_pose.T + h_point @ point_cov @ h_point.T
+        S = S + np.diag([range_sigma, bearing_sigma]) ** 2
+        nu = np.asarray(measured, float) - range_bearing.observe_point(pose, point)
+        nu[1] = (nu[1] + np.pi) % (2 * np.pi) - np.pi
+        return float(nu @ np.linalg.solve(S, nu))
+
+    shown = [reference_nis(gate_pose, gate_pose_cov, gate_point, gate_point_cov, z, 0.05, 0.02) for z in candidates]
+    assert np.array_equal(accepted, np.array(shown) < chi2.ppf(0.99, 2)), "accepted: not the candidates within the gate"
+    for value, case in zip(got, cases, strict=True):
+        assert np.isclose(value, reference_nis(*case), rtol=1e-6), (
+            "innovation_squared differs for other robots and landmarks (wrapped bearing? variances, not "
+            "sigmas? both covariances?)"
+        )
 
 
-def reference_nis(pose, pose_cov, point, point_cov, measured, range_sigma, bearing_sigma):
-    h_pose, h_point = observation_jacobians(pose, point)
-    S = (
-        h_pose @ pose_cov @ h_pose.T
-        + h_point @ point_cov @ h_point.T
-        + np.diag([range_sigma, bearing_sigma]) ** 2
-    )
-    nu = np.asarray(measured, float) - observe_point(pose, point)
-    nu[1] = (nu[1] + np.pi) % (2 * np.pi) - np.pi
-    return float(nu @ np.linalg.solve(S, nu))
-
-
-gate = chi2.ppf(0.99, 2)
-reference = [
-    reference_nis(gate_pose, gate_pose_cov, gate_point, gate_point_cov, z, 0.05, 0.02) for z in candidates
-]
-assert np.array_equal(accepted, np.array(reference) < gate), "accepted: not the candidates within the gate"
-fresh = np.random.default_rng()  # new robots, landmarks and observations at every grading
-cases = []
-for _ in range(10):
-    pose_ = np.r_[fresh.uniform(-5, 5, 2), fresh.uniform(-np.pi, np.pi)]
-    point_ = fresh.uniform(-10, 10, 2)
-    pose_cov_ = np.diag(fresh.uniform(0.001, 0.1, 3))
-    point_cov_ = np.diag(fresh.uniform(0.001, 0.3, 2))
-    z_ = observe_point(pose_, point_) + fresh.normal(scale=[0.2, 0.1])
-    z_[1] = np.pi if fresh.random() < 0.3 else z_[1]  # bearings at the seam, too
-    sigmas_ = fresh.uniform(0.01, 0.2), fresh.uniform(0.005, 0.1)
-    args = (pose_, pose_cov_, point_, point_cov_, z_, *sigmas_)
-    cases.append((args, reference_nis(*args)))
-jacobians_code = range_bearing_module.observation_jacobians.__code__
-range_bearing_module.observation_jacobians.__code__ = refuse.__code__
-try:
-    got = [float(innovation_squared(*args)) for args, _ in cases]
-finally:
-    range_bearing_module.observation_jacobians.__code__ = jacobians_code
-for g, (_, expected) in zip(got, cases, strict=True):
-    assert np.isclose(g, expected, rtol=1e-6), (
-        "innovation_squared differs for other robots and landmarks (wrapped bearing? variances, not sigmas? "
-        "both covariances?)"
-    )
+hidden_test_ex3(
+    grading,
+    range_bearing_module,
+    (line_observation_module, ekf_module, kalman_module),
+    innovation_squared,
+)
 ### END HIDDEN TESTS
 
 # %% [markdown]

@@ -739,25 +739,43 @@ assert np.all(np.isfinite(sample_posterior)) and np.isclose(sample_posterior.sum
 )
 assert np.allclose(sample_posterior, posterior([812.0, 815.5, 809.0, 815.0, 790.0])), "not the posterior"
 ### BEGIN HIDDEN TESTS
+import importlib  # noqa: E402
+
+import scipy.special  # noqa: E402
+
+import vo_lib.grading  # noqa: E402
 import vo_lib.lidar_tracking.pose_tracking as tracking_module  # noqa: E402
 
-
-def refuse(*args, **kwargs):
-    raise AssertionError("posterior_of calls the vo_lib function the exercise asks you to write")
+grading = importlib.reload(vo_lib.grading)  # fresh from its file, whatever the answer did to it
 
 
-fresh = np.random.default_rng()  # new scores at every grading
-cases = [fresh.uniform(500, 2000) + fresh.normal(scale=fresh.uniform(0.5, 20), size=50) for _ in range(5)]
-expected = [posterior(c) for c in cases]
-saved, tracking_module.posterior.__code__ = tracking_module.posterior.__code__, refuse.__code__
-try:
-    got = [np.asarray(posterior_of(c), float) for c in cases]
-finally:
-    tracking_module.posterior.__code__ = saved
-for g, e in zip(got, expected, strict=True):
-    assert np.allclose(g, e, atol=1e-12), (
-        "posterior_of differs on other scores (exp of the scores, normalised?)"
-    )
+def hidden_test_ex1(grading, tracking, elsewhere, answer):
+    """New scores at every grading. The answer gets copies, with vo_lib's tracking functions and
+    SciPy's normalised exponentials out of reach; the expected posteriors are computed after it
+    ran, from scores it cannot change."""
+    import numpy as np
+
+    grading.intact(globals(), ("posterior",))  # the answer left NumPy and vo_lib alone
+    fresh = np.random.default_rng()
+    cases = [
+        grading.frozen(fresh.uniform(500, 2000) + fresh.normal(scale=fresh.uniform(0.5, 20), size=50))
+        for _ in range(5)
+    ]
+    with grading.refused(*grading.library_functions(tracking, *elsewhere)):
+        got = [np.asarray(answer(scores.copy()), float) for scores in cases]
+    grading.intact(globals(), ("posterior",))
+    for value, scores in zip(got, cases, strict=True):
+        assert np.allclose(value, tracking.posterior(scores), atol=1e-12), (
+            "posterior_of differs on other scores (exp of the scores, normalised?)"
+        )
+
+
+hidden_test_ex1(
+    grading,
+    tracking_module,
+    (scipy.special.softmax, scipy.special.log_softmax, scipy.special.logsumexp),
+    posterior_of,
+)
 ### END HIDDEN TESTS
 
 # %% [markdown]
@@ -807,33 +825,38 @@ assert np.isclose(centre_line, limits.centre) and np.isclose(upper_limit, limits
 assert lower_limit == limits.lower == 0.0, "lengths are positive: the lower limit is zero"
 assert out_of_control == sum(x > limits.upper for x in later) >= 3, "the lengths above the upper limit"
 ### BEGIN HIDDEN TESTS
+import importlib  # noqa: E402
+
+import vo_lib.grading  # noqa: E402
 import vo_lib.lidar_tracking.pose_tracking as tracking_module  # noqa: E402
 
-
-def refuse(*args, **kwargs):
-    raise AssertionError("control_limits calls the vo_lib class the exercise asks you to do without")
+grading = importlib.reload(vo_lib.grading)  # fresh from its file, whatever the answer did to it
 
 
-fresh = np.random.default_rng()  # new stretches at every grading, some whose lower limit is not zero
-cases = [
-    np.abs(fresh.normal(fresh.uniform(0.0, 1.0), fresh.uniform(0.01, 0.2), int(fresh.integers(10, 100))))
-    for _ in range(6)
-]
-cases.append(fresh.normal(1.0, 0.05, 40))
-expected = []
-for c in cases:
-    lim = ControlLimits.from_corrections(c)
-    expected.append((lim.lower, lim.centre, lim.upper))
-from_corrections = ControlLimits.from_corrections.__func__
-saved, from_corrections.__code__ = from_corrections.__code__, refuse.__code__
-try:
-    got = [tuple(float(v) for v in control_limits(c)) for c in cases]
-finally:
-    from_corrections.__code__ = saved
-for g, e in zip(got, expected, strict=True):
-    assert np.allclose(g, e), (
-        "control_limits differs on other stretches (which standard deviation? the lower limit?)"
-    )
+def hidden_test_ex2(grading, tracking, answer):
+    """New stretches at every grading, some whose lower limit is not zero. The answer gets
+    copies, without vo_lib's tracking classes; the expected limits are computed after it ran,
+    from stretches it cannot change."""
+    import numpy as np
+
+    grading.intact(globals(), ("ControlLimits",))  # the answer left NumPy and vo_lib alone
+    fresh = np.random.default_rng()
+    cases = [
+        np.abs(fresh.normal(fresh.uniform(0.0, 1.0), fresh.uniform(0.01, 0.2), int(fresh.integers(10, 100))))
+        for _ in range(6)
+    ]
+    cases = [grading.frozen(c) for c in [*cases, fresh.normal(1.0, 0.05, 40)]]
+    with grading.refused(*grading.library_functions(tracking)):
+        got = [tuple(float(v) for v in answer(lengths.copy())) for lengths in cases]
+    grading.intact(globals(), ("ControlLimits",))
+    for value, lengths in zip(got, cases, strict=True):
+        limits = tracking.ControlLimits.from_corrections(lengths)
+        assert np.allclose(value, (limits.lower, limits.centre, limits.upper)), (
+            "control_limits differs on other stretches (which standard deviation? the lower limit?)"
+        )
+
+
+hidden_test_ex2(grading, tracking_module, control_limits)
 ### END HIDDEN TESTS
 
 # %% [markdown]
@@ -885,38 +908,45 @@ print(f"principal error direction {corridor_angle_deg:.1f}° from the x axis")
 assert np.isclose(np.linalg.norm(corridor_direction), 1.0), "a unit vector"
 assert abs(corridor_angle_deg - np.degrees(0.3)) < 3.0, "the direction the best quarter spreads along"
 ### BEGIN HIDDEN TESTS
+import importlib  # noqa: E402
+
+import vo_lib.grading  # noqa: E402
 import vo_lib.lidar_tracking.pose_tracking as tracking_module  # noqa: E402
 
-
-def refuse(*args, **kwargs):
-    raise AssertionError("principal_direction calls the vo_lib function the exercise asks you to write")
+grading = importlib.reload(vo_lib.grading)  # fresh from its file, whatever the answer did to it
 
 
-fresh = np.random.default_rng()  # new spreads at every grading
-cases = []
-for _ in range(5):
-    angle = fresh.uniform(-np.pi, np.pi)
-    axis = np.array([np.cos(angle), np.sin(angle)])
-    scores_ = fresh.uniform(0, 1000, 300)
-    best = scores_ >= np.percentile(scores_, 75)
-    xy = np.where(
-        best[:, None],
-        fresh.normal(0, 0.3, (300, 1)) * axis + fresh.normal(0, 0.03, (300, 2)),
-        fresh.normal(0, 0.5, (300, 1)) * axis[::-1] * [-1, 1] + fresh.normal(0, 0.03, (300, 2)),
-    )
-    corrections_ = np.column_stack([xy, np.zeros(300)])
-    cases.append((corrections_, scores_, tracking_module.principal_error_direction(corrections_, scores_)))
-saved = tracking_module.principal_error_direction.__code__
-tracking_module.principal_error_direction.__code__ = refuse.__code__
-try:
-    got = [np.asarray(principal_direction(c, s), float) for c, s, _ in cases]
-finally:
-    tracking_module.principal_error_direction.__code__ = saved
-for g, (_, _, expected) in zip(got, cases, strict=True):
-    assert g.shape == (2,) and np.isclose(np.linalg.norm(g), 1.0), "a unit vector (dx, dy)"
-    assert abs(g @ expected) > 0.999, (
-        "principal_direction differs on other samples (which samples? which eigenvalue?)"
-    )
+def hidden_test_ex3(grading, tracking, answer):
+    """New spreads at every grading. The answer gets copies, without vo_lib's tracking functions;
+    the expected directions are computed after it ran, from samples it cannot change."""
+    import numpy as np
+
+    grading.intact(globals())  # the answer left NumPy and vo_lib alone
+    fresh = np.random.default_rng()
+    cases = []
+    for _ in range(5):
+        angle = fresh.uniform(-np.pi, np.pi)
+        axis = np.array([np.cos(angle), np.sin(angle)])
+        scores = fresh.uniform(0, 1000, 300)
+        best = scores >= np.percentile(scores, 75)
+        xy = np.where(
+            best[:, None],
+            fresh.normal(0, 0.3, (300, 1)) * axis + fresh.normal(0, 0.03, (300, 2)),
+            fresh.normal(0, 0.5, (300, 1)) * axis[::-1] * [-1, 1] + fresh.normal(0, 0.03, (300, 2)),
+        )
+        offset = fresh.uniform(0.5, 2.0) * np.array([np.cos(angle + 1.0), np.sin(angle + 1.0)])  # not about zero
+        cases.append((grading.frozen(np.column_stack([xy + offset, np.zeros(300)])), grading.frozen(scores)))
+    with grading.refused(*grading.library_functions(tracking)):
+        got = [np.asarray(answer(corrections.copy(), scores.copy()), float) for corrections, scores in cases]
+    grading.intact(globals())
+    for value, (corrections, scores) in zip(got, cases, strict=True):
+        assert value.shape == (2,) and np.isclose(np.linalg.norm(value), 1.0), "a unit vector (dx, dy)"
+        assert abs(value @ tracking.principal_error_direction(corrections, scores)) > 0.999, (
+            "principal_direction differs on other samples (which samples? which eigenvalue? centred?)"
+        )
+
+
+hidden_test_ex3(grading, tracking_module, principal_direction)
 ### END HIDDEN TESTS
 
 # %% [markdown]

@@ -1130,17 +1130,51 @@ print(f"cells without a corner: {at_20:.1%} at threshold 20, {at_10:.1%} at thre
 # Exercise 1: autograder test
 assert 0 <= at_10 < at_20 <= 1, "a lower threshold fills some cells, but the flat ones stay empty"
 ### BEGIN HIDDEN TESTS
-assert np.isclose(at_10, image_statistics(real_images[0], threshold=10)["empty"]), "at_10"
-fresh = np.random.default_rng()  # a new image and thresholds at every grading
-texture = (fresh.random((240, 320)) * 255).astype(np.uint8)
-flat = np.zeros((240, 320), np.uint8)
-flat[:, : int(fresh.integers(40, 280))] = texture[:, :1]  # a flat part, a textured part
-image_ = cv2.GaussianBlur(np.maximum(texture * (flat == 0), flat), (0, 0), fresh.uniform(0.5, 2.0))
-thresholds_ = sorted(int(t) for t in fresh.integers(5, 60, 3))
-got = np.asarray(empty_shares(image_, thresholds_), float)
-assert np.allclose(got, [image_statistics(image_, threshold=t)["empty"] for t in thresholds_]), (
-    "empty_shares differs on another image (the share of empty cells, at each threshold?)"
-)
+import importlib  # noqa: E402
+
+import vo_lib.grading  # noqa: E402
+
+grading = importlib.reload(vo_lib.grading)  # fresh from its file, whatever the answer did to it
+
+
+def hidden_test_ex1(grading, detector, answer):
+    """A new image and thresholds at every grading. The expected shares are computed after the
+    answer ran, from an image it gets a copy of, by the test's own count of section 1's cells
+    (16 px), not by the notebook's image_statistics, which an answer cell can redefine."""
+    import numpy as np
+
+    grading.intact(globals())  # the answer left NumPy and vo_lib alone
+    assert type(detector).__name__ == "builtin_function_or_method", "OpenCV's FAST detector was replaced"
+
+    fresh = np.random.default_rng()
+    texture = (fresh.random((240, 320)) * 255).astype(np.uint8)
+    flat = np.zeros((240, 320), np.uint8)
+    flat[:, : int(fresh.integers(40, 280))] = texture[:, :1]  # a flat part, a textured part
+    image = grading.frozen(cv2.GaussianBlur(np.maximum(texture * (flat == 0), flat), (0, 0), fresh.uniform(0.5, 2.0)))
+    thresholds = sorted(int(t) for t in fresh.integers(5, 60, 3))
+    with grading.refused():  # nothing to refuse; no other process, no change to the grader's tools
+        got = np.asarray(answer(image.copy(), list(thresholds)), float)
+    grading.intact(globals())
+
+    # the references only now: the answer, called above, could read its caller's frame
+    def empty(image, threshold, cell=16):
+        keypoints = detector(threshold, True).detect(image)
+        corners = np.array([k.pt for k in keypoints]).reshape(-1, 2)
+        occupied = np.zeros((image.shape[0] // cell, image.shape[1] // cell), bool)
+        col, row = (corners // cell).astype(int).T
+        inside = (row < occupied.shape[0]) & (col < occupied.shape[1])
+        occupied[row[inside], col[inside]] = True
+        return 1 - occupied.mean()
+
+    assert np.isclose(at_20, empty(real_images[0], 20)) and np.isclose(at_10, empty(real_images[0], 10)), (
+        "at_20, at_10: not the shares of the first real image"
+    )
+    assert np.allclose(got, [empty(image, t) for t in thresholds]), (
+        "empty_shares differs on another image (the share of empty cells, at each threshold?)"
+    )
+
+
+hidden_test_ex1(grading, cv2.FastFeatureDetector_create, empty_shares)
 ### END HIDDEN TESTS
 
 # %% [markdown]
@@ -1214,15 +1248,65 @@ print(f"from the identity: {steps_id} steps (from RANSAC's guess: {steps})")
 assert np.abs(R_id - R_ours).max() < 1e-8 and np.abs(t_id - t_ours).max() < 1e-8, "the same motion"
 assert steps_id >= steps, "from farther away, not fewer steps"
 ### BEGIN HIDDEN TESTS
-fresh = np.random.default_rng()  # new starting points at every grading
-for size in (0.01, 0.05, 0.1):
-    R_start = Rotation.from_rotvec(fresh.normal(scale=size, size=3)).as_matrix() @ R0
-    t_start = t0 + fresh.normal(scale=10 * size, size=3)
-    R_e, t_e, steps_e = gauss_newton(P_in, w_in, R_start, t_start, iterations=30, tol=1e-10)
-    R_g, t_g, steps_g = refine_from(R_start, t_start)
-    assert np.abs(R_g - R_e).max() < 1e-8 and np.abs(t_g - t_e).max() < 1e-8 and steps_g == steps_e, (
-        "refine_from differs from other starting points (its steps counted?)"
-    )
+import importlib  # noqa: E402
+
+import vo_lib.grading  # noqa: E402
+
+grading = importlib.reload(vo_lib.grading)  # fresh from its file, whatever the answer did to it
+
+
+def hidden_test_ex3(grading, camera, points, measured, answer):
+    """New starting points at every grading. The answer gets copies; the expected motions and
+    steps come after it ran, from a Gauss-Newton of the test's own (section 5's, on disparity-space
+    residuals), not from the notebook's gauss_newton, which an answer cell can redefine."""
+    import numpy as np
+
+    grading.intact(globals())  # the answer left NumPy and vo_lib alone
+    fx, fy, cx, cy, baseline = camera.fx, camera.fy, camera.cx, camera.cy, camera.baseline
+
+    def rotation(w):  # Rodrigues' formula
+        angle = np.linalg.norm(w)
+        K = np.cross(np.eye(3), w / angle) if angle >= 1e-15 else np.zeros((3, 3))
+        return np.eye(3) + np.sin(angle) * K + (1 - np.cos(angle)) * K @ K
+
+    fresh = np.random.default_rng()
+    starts = []
+    for size in (0.01, 0.05, 0.1):
+        R_start = rotation(fresh.normal(scale=size, size=3)) @ R0
+        starts.append((grading.frozen(R_start), grading.frozen(t0 + fresh.normal(scale=10 * size, size=3))))
+    P_kept, w_kept = grading.frozen(points), grading.frozen(measured)
+    with grading.refused():  # nothing to refuse; no other process, no change to the grader's tools
+        got = [answer(R.copy(), t.copy()) for R, t in starts]
+    grading.intact(globals())
+
+    # the references only now: the answer, called above, could read its caller's frame
+    def gauss_newton_of(P, w, R, t, iterations=30, tol=1e-10):
+        steps = 0
+        while steps < iterations:
+            Q = P @ R.T + t
+            X, Y, Z = Q.T
+            r = (np.column_stack([fx * X / Z + cx, fy * Y / Z + cy, fx * baseline / Z]) - w).reshape(-1)
+            d_pixel = np.zeros((len(Q), 3, 3))
+            d_pixel[:, 0, 0], d_pixel[:, 0, 2] = fx / Z, -fx * X / Z**2
+            d_pixel[:, 1, 1], d_pixel[:, 1, 2] = fy / Z, -fy * Y / Z**2
+            d_pixel[:, 2, 2] = -fx * baseline / Z**2
+            skew = np.cross(np.eye(3)[None], Q[:, None, :])  # [Q]x of every point
+            J = (d_pixel @ np.concatenate([-skew, np.broadcast_to(np.eye(3), (len(Q), 3, 3))], axis=2)).reshape(-1, 6)
+            delta = -np.linalg.solve(J.T @ J, J.T @ r)
+            dR = rotation(delta[:3])
+            R, t, steps = dR @ R, dR @ t + delta[3:], steps + 1
+            if np.abs(delta).max() < tol:
+                break
+        return R, t, steps
+
+    for (R_g, t_g, steps_g), (R, t) in zip(got, starts, strict=True):
+        R_e, t_e, steps_e = gauss_newton_of(P_kept, w_kept, R, t)
+        assert np.abs(R_g - R_e).max() < 1e-8 and np.abs(t_g - t_e).max() < 1e-8 and steps_g == steps_e, (
+            "refine_from differs from other starting points (its steps counted?)"
+        )
+
+
+hidden_test_ex3(grading, cam, P_in, w_in, refine_from)
 ### END HIDDEN TESTS
 
 # %% [markdown]
@@ -1277,36 +1361,79 @@ if REAL:  # on the real drive the forward component differs most
 
 
 ### BEGIN HIDDEN TESTS
-def refuse(*args, **kwargs):
-    raise AssertionError("left_only_refine calls OpenCV's refinement; the exercise asks you to write it")
+import importlib  # noqa: E402
+
+import scipy.optimize  # noqa: E402
+
+import vo_lib.grading  # noqa: E402
+import vo_lib.stereo_vo.rigid_core as rigid_core_module  # noqa: E402
+import vo_lib.stereo_vo.rigid_plain as rigid_plain_module  # noqa: E402
+
+grading = importlib.reload(vo_lib.grading)  # fresh from its file, whatever the answer did to it
+refinements = [getattr(cv2, name) for name in dir(cv2) if name.startswith("solvePnP")]  # OpenCV's pose solvers
+solvers = [scipy.optimize.least_squares, scipy.optimize.leastsq, scipy.optimize.minimize, scipy.optimize.root]
 
 
-fresh = np.random.default_rng()  # new scenes and motions at every grading
-cases = []
-for _ in range(3):
-    P_ = np.column_stack([fresh.uniform(-8, 8, 150), fresh.uniform(-2, 2, 150), fresh.uniform(4, 40, 150)])
-    R_true = Rotation.from_rotvec(fresh.normal(scale=0.02, size=3)).as_matrix()
-    t_true = fresh.normal(scale=0.5, size=3)
-    w_ = project_uvd(P_ @ R_true.T + t_true) + fresh.normal(scale=[0.5, 0.5, 2.0], size=(150, 3))
-    R_ref, t_ref = R_true, t_true + 0.05  # reference: left-only Gauss-Newton from a nearby start
-    for _ in range(50):
-        Q_ = P_ @ R_ref.T + t_ref
-        step_ = -np.linalg.lstsq(
-            jacobian(Q_)[:, :2].reshape(-1, 6), (project_uvd(Q_) - w_)[:, :2].reshape(-1), rcond=None
-        )[0]
-        dR_ = exp_rotation(step_[:3])
-        R_ref, t_ref = dR_ @ R_ref, dR_ @ t_ref + step_[3:]
-        if np.abs(step_).max() < 1e-13:
-            break
-    cases.append((P_, w_, R_true, t_true + 0.05, t_ref))
-opencv_refine = cv2.solvePnPRefineLM
-cv2.solvePnPRefineLM = refuse
-try:
-    got = [np.asarray(left_only_refine(P_, w_, R_s, t_s)[1], float) for P_, w_, R_s, t_s, _ in cases]
-finally:
-    cv2.solvePnPRefineLM = opencv_refine
-for g, (_, _, _, _, t_ref) in zip(got, cases, strict=True):
-    assert np.abs(g - t_ref).max() < 1e-7, (
-        "left_only_refine differs on other scenes (the left image's rows only? converged?)"
-    )
+def hidden_test_ex4(grading, camera, elsewhere, builtins_elsewhere, answer):
+    """New scenes and motions at every grading. The answer gets copies, with no library pose
+    solver or least-squares routine (OpenCV's, SciPy's, vo_lib's, the notebook's stereo
+    gauss_newton) at hand; the expected motion comes after it ran, from a left-image Gauss-Newton
+    of the test's own, on inputs the answer cannot change."""
+    import numpy as np
+
+    grading.intact(globals())  # the answer left NumPy and vo_lib alone
+    fx, fy, cx, cy, baseline = camera.fx, camera.fy, camera.cx, camera.cy, camera.baseline
+
+    def rotation(w):  # Rodrigues' formula
+        angle = np.linalg.norm(w)
+        K = np.cross(np.eye(3), w / angle) if angle > 0 else np.zeros((3, 3))
+        return np.eye(3) + np.sin(angle) * K + (1 - np.cos(angle)) * K @ K
+
+    def uvd(Q):
+        X, Y, Z = Q.T
+        return np.column_stack([fx * X / Z + cx, fy * Y / Z + cy, fx * baseline / Z])
+
+    fresh = np.random.default_rng()
+    cases = []
+    for _ in range(3):
+        P = np.column_stack([fresh.uniform(-8, 8, 150), fresh.uniform(-2, 2, 150), fresh.uniform(4, 40, 150)])
+        R_true = rotation(fresh.normal(scale=0.02, size=3))
+        t_true = fresh.normal(scale=0.5, size=3)
+        w = uvd(P @ R_true.T + t_true) + fresh.normal(scale=[0.5, 0.5, 2.0], size=(150, 3))
+        cases.append(tuple(grading.frozen(a) for a in (P, w, R_true, t_true + 0.05)))
+    with grading.refused(*builtins_elsewhere, *grading.library_functions(*elsewhere)):
+        got = [np.asarray(answer(*(a.copy() for a in case))[1], float) for case in cases]
+    grading.intact(globals())
+
+    # the references only now: the answer, called above, could read its caller's frame
+    def left_gauss_newton(P, w, R, t):
+        for _ in range(50):
+            Q = P @ R.T + t
+            X, Y, Z = Q.T
+            d_pixel = np.zeros((len(Q), 2, 3))
+            d_pixel[:, 0, 0], d_pixel[:, 0, 2] = fx / Z, -fx * X / Z**2
+            d_pixel[:, 1, 1], d_pixel[:, 1, 2] = fy / Z, -fy * Y / Z**2
+            skew = np.cross(np.eye(3)[None], Q[:, None, :])  # [Q]x of every point
+            d_point = np.concatenate([-skew, np.broadcast_to(np.eye(3), (len(Q), 3, 3))], axis=2)
+            J = (d_pixel @ d_point).reshape(-1, 6)
+            step = -np.linalg.lstsq(J, (uvd(Q) - w)[:, :2].reshape(-1), rcond=None)[0]
+            dR = rotation(step[:3])
+            R, t = dR @ R, dR @ t + step[3:]
+            if np.abs(step).max() < 1e-13:
+                break
+        return R, t
+
+    for value, case in zip(got, cases, strict=True):
+        assert np.abs(value - left_gauss_newton(*case)[1]).max() < 1e-7, (
+            "left_only_refine differs on other scenes (the left image's rows only? converged?)"
+        )
+
+
+hidden_test_ex4(
+    grading,
+    cam,
+    (*solvers, rigid_core_module, rigid_plain_module, rigid_motion, gauss_newton),
+    refinements,
+    left_only_refine,
+)
 ### END HIDDEN TESTS

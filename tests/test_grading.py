@@ -10,7 +10,7 @@ import pytest
 import vo_lib.stereo_vo.ransac as ransac
 import vo_lib.stereo_vo.ransac_core as ransac_core
 from vo_lib.camera import StereoCamera
-from vo_lib.grading import intact, kernel_hooks, refused
+from vo_lib.grading import frozen, intact, kernel_hooks, library_functions, refused
 
 CAMERA = StereoCamera(fx=500.0, fy=500.0, cx=320.0, cy=240.0, baseline=0.2, width=640, height=480)
 PIXELS = np.array([[100.0, 300.0, 10.0], [400.0, 200.0, 20.0]])
@@ -87,12 +87,108 @@ def test_a_method_of_a_builtin_class_is_refused_on_every_object():
     assert made_before.match(a, b)[0].distance == 256
 
 
+def test_library_functions_refuses_a_module_by_every_neighbour_and_not_other_code():
+    import dataclasses
+
+    import vo_lib.lidar_tracking.pose_tracking as tracking
+
+    functions = library_functions(tracking)
+    names = {getattr(f, "__qualname__", "") for f in functions}
+    # the function, a classmethod, a property and a method all count; imports and generated code do not
+    neighbours = {"posterior", "ControlLimits.from_corrections", "ControlLimits.upper", "PoseTracker.update"}
+    assert neighbours <= names
+    assert not any(name.endswith(("__eq__", "__repr__")) for name in names)
+    assert all(f.__module__ == tracking.__name__ for f in functions)
+    limits = tracking.ControlLimits.from_corrections([0.1, 0.2, 0.3])
+    with refused(*functions):
+        assert dataclasses.asdict(tracking.ControlLimits(0.2, 0.1)) == {"mean": 0.2, "std": 0.1}
+        with pytest.raises(AssertionError):
+            limits.upper  # noqa: B018 - a property refused
+        with pytest.raises(AssertionError):
+            copied_posterior = types.FunctionType(tracking.posterior.__code__, tracking.posterior.__globals__)
+            copied_posterior([1.0, 2.0])
+    assert limits.upper > limits.centre
+
+
+def test_frozen_inputs_stay_as_they_were():
+    kept = frozen(np.arange(6.0).reshape(2, 3))
+    with pytest.raises(ValueError):
+        kept[0, 0] = 1.0
+    with pytest.raises(ValueError):
+        kept.setflags(write=True)
+    assert kept.shape == (2, 3) and kept.sum() == 15.0
+
+
 def test_switching_the_watch_off_fails():
     with pytest.raises(AssertionError, match="switched off"):
         with refused(ransac.hypotheses_needed):
             import sys
 
             sys.setprofile(None)
+
+
+def test_switching_the_watch_off_for_one_call_fails():
+    """A copy the swapped code misses, run with the watch off for that one call and on again."""
+    import sys
+
+    switch = getattr(sys, "set" + "profile")
+    function = copied()
+
+    def unwatched(*args):
+        watching = sys.getprofile()
+        switch(None)
+        try:
+            return function(*args)
+        finally:
+            switch(watching)
+
+    with pytest.raises(AssertionError, match="switched off"):
+        with refused(ransac.hypotheses_needed):
+            unwatched(0.5, 0.99)
+    with pytest.raises(AssertionError, match="switched off"):
+        with refused(ransac.hypotheses_needed):
+            threading.setprofile(None)
+    assert sys.getprofile() is None and int(unwatched(0.5, 0.99)) == 7
+
+
+def test_another_process_or_an_unwatched_thread_is_refused():
+    """A copy run in a thread started below threading (which the watch is not on), or the
+    library run in another process, where nothing is refused."""
+    import _thread
+    import subprocess
+    import sys
+    import time
+
+    function = copied()
+
+    def in_raw_thread(*args):
+        out = []
+        _thread.start_new_thread(lambda: out.append(function(*args)), ())
+        while not out:
+            time.sleep(0.001)
+        return out[0]
+
+    with pytest.raises(AssertionError, match="another process or thread"):
+        with refused(ransac.hypotheses_needed):
+            in_raw_thread(0.5, 0.99)
+    with pytest.raises(AssertionError, match="another process or thread"):
+        with refused(ransac.hypotheses_needed):
+            subprocess.run([sys.executable, "-c", "print(7)"], capture_output=True)
+    assert int(in_raw_thread(0.5, 0.99)) == 7 and in_thread(function)(0.5, 0.99) == 7
+
+
+def test_changing_the_graders_own_functions_in_a_refused_block_fails():
+    import vo_lib.grading as grading
+
+    real = grading.intact.__code__
+    try:
+        with pytest.raises(AssertionError, match="changed the grader"):
+            with refused(ransac.hypotheses_needed):
+                grading.intact.__code__ = (lambda namespace, names=(), modules=(): None).__code__
+    finally:
+        grading.intact.__code__ = real
+    with refused(ransac.hypotheses_needed):  # and an ordinary block passes
+        assert np.sqrt(9.0) == 3.0
 
 
 def notebook_function(source):
@@ -205,6 +301,52 @@ def test_the_autograder_refuses_kernel_hooks_and_stops_at_a_changed_kernel():
     (kind, why), *_ = errors_of(cells[4])
     assert kind == "KernelHook" and '"ex3"' in why and "input transformers" in why
     assert errors_of(cells[5])[0][0] == "NotRun"
+
+
+@pytest.mark.notebook
+def test_a_test_that_lets_an_answer_replace_the_graders_tools_fails_and_no_later_test_runs():
+    """An answer whose function, once a test calls it, replaces what the next hidden test loads
+    its tools with (a reload that hands back a grader that refuses nothing): that test fails."""
+    swap = (
+        "import importlib, types\n"
+        "def f():\n"
+        "    fake = types.ModuleType('vo_lib.grading')\n"
+        "    importlib.reload = lambda module: fake\n"
+        "    return 1\n"
+    )
+    cells = run_guarded(
+        [
+            graded_cell(swap, "ex1", True),
+            graded_cell("assert f() == 1", "ex1_test", False),
+            graded_cell("y = 2", "ex2", True),
+            graded_cell("assert y == 2", "ex2_test", False),
+        ]
+    )
+    assert errors_of(cells[0]) == [], "defining the function changes nothing yet"
+    (kind, why), *_ = errors_of(cells[1])
+    assert kind == "KernelHook" and '"ex1_test"' in why and "the grader's tools" in why
+    assert [e[0] for e in errors_of(cells[2])] == ["NotRun"] and errors_of(cells[3])[0][0] == "NotRun"
+
+
+def test_the_graders_tools_are_found_replaced_wherever_they_are_loaded_from():
+    import contextlib
+    import importlib
+    import runpy
+
+    import vo_lib.grading
+
+    def replaced():  # as the grader reads it: afresh from the file
+        return runpy.run_path(vo_lib.grading.__file__)["_replaced_tools"]()
+
+    assert replaced() == []
+    reload, refused_now = importlib.reload, vo_lib.grading.refused
+    try:
+        importlib.reload = lambda module: module
+        vo_lib.grading.refused = contextlib.contextmanager(lambda *targets: (yield))
+        assert replaced() == ["importlib.reload", "vo_lib.grading.refused"]
+    finally:
+        importlib.reload, vo_lib.grading.refused = reload, refused_now
+    assert replaced() == []
 
 
 @pytest.mark.notebook

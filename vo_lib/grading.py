@@ -28,7 +28,17 @@ import threading
 import types
 from collections.abc import Callable, Iterator
 
-__all__ = ["KERNEL_HOOKS", "Refused", "cell_label", "intact", "kernel_hooks", "kernel_state", "refused"]
+__all__ = [
+    "KERNEL_HOOKS",
+    "Refused",
+    "cell_label",
+    "frozen",
+    "intact",
+    "kernel_hooks",
+    "kernel_state",
+    "library_functions",
+    "refused",
+]
 
 
 WRITE_IT = "which the exercise asks you to write yourself"
@@ -74,11 +84,15 @@ def refused(*targets: Callable) -> Iterator[None]:
     Raises
     ------
     Refused
-        When refused code runs inside the block, or when the block removed the profile hook that
-        watches for copies.
+        When refused code runs inside the block; when the block switched off the profile hook
+        that watches for copies (even for one call), started another process or a thread (where
+        the hook does not reach), or changed this module's functions (which the tests check with
+        after the block).
     """
     functions, dispatchers, builtins = _sort_targets(targets)
-    watch = _watcher(functions, builtins)
+    own_code, its_code = _own_code, _own_code.__code__  # held here, where the block cannot rebind them
+    own = own_code()
+    watch = _watcher(functions, builtins, sys._getframe(0).f_code)
     swapped, emptied = _disarm(functions, dispatchers)
     previous, previous_threads = sys.getprofile(), getattr(threading, "_profile_hook", None)
     sys.setprofile(watch)
@@ -87,10 +101,25 @@ def refused(*targets: Callable) -> Iterator[None]:
         yield
         if sys.getprofile() is not watch:
             raise Refused("the code under test switched off the check for refused functions")
+        if own_code.__code__ is not its_code or own_code() != own:
+            raise Refused("the code under test changed the grader's own functions")
     finally:
         sys.setprofile(previous)
         threading.setprofile(previous_threads)
         _rearm(swapped, emptied)
+
+
+def _own_code() -> dict:
+    """The code of every function of this module as it is now (a context manager's own too), and
+    its classes: what :func:`refused` compares when its block ends."""
+    found: dict[str, object] = {}
+    for name, value in list(globals().items()):
+        if isinstance(value, types.FunctionType):
+            inner = getattr(value, "__wrapped__", None)
+            found[name] = (value.__code__, getattr(inner, "__code__", None))
+        elif isinstance(value, type):
+            found[name] = value
+    return found
 
 
 def _sort_targets(targets) -> tuple[list, list, list]:
@@ -107,12 +136,17 @@ def _sort_targets(targets) -> tuple[list, list, list]:
     return list({id(f): f for f in functions}.values()), dispatchers, builtins
 
 
-def _watcher(functions: list, builtins: list):
+def _watcher(functions: list, builtins: list, own: types.CodeType):
     """A profile hook that raises :class:`Refused` when a refused function, or a copy of its
-    code, is called."""
+    code, is called, or when code other than ``own`` (the :func:`refused` block's) switches
+    the hook off, even for one call and back on."""
     prints = {_fingerprint(f.__code__) for f in functions}
     codes = {id(f.__code__) for f in functions}
     builtin_ids = {id(b) for b in builtins}
+    switches = {id(sys.setprofile), id(sys.settrace)}
+    switch_codes = {id(threading.setprofile.__code__), id(threading.settrace.__code__)}
+    elsewhere = {id(f) for f in _elsewhere()}
+    raw_thread = {id(getattr(sys.modules.get("_thread"), "start_new_thread", None))}  # threading's too
     seen: dict[int, tuple[types.CodeType, bool]] = {}
 
     def copied(code: types.CodeType) -> bool:
@@ -138,8 +172,35 @@ def _watcher(functions: list, builtins: list):
             raise Refused(f"this calls {frame.f_code.co_name}, {WRITE_IT}")
         if event == "c_call" and refused_builtin(arg):
             raise Refused(f"this calls {getattr(arg, '__name__', arg)}, {WRITE_IT}")
+        caller = frame.f_code if event == "c_call" else getattr(frame.f_back, "f_code", None)
+        switching = (event == "c_call" and id(arg) in switches) or (
+            event == "call" and id(frame.f_code) in switch_codes
+        )
+        if switching and caller is not own:
+            raise Refused("the code under test switched off the check for refused functions")
+        if event == "c_call" and (id(arg) in elsewhere or id(arg) in raw_thread):
+            raise Refused(
+                f"this calls {getattr(arg, '__name__', arg)}: another process or thread, where the check "
+                "for refused functions does not reach"
+            )
 
     return watch
+
+
+def _elsewhere() -> list:
+    """The built-ins that start another process (``subprocess``, ``multiprocessing`` and
+    ``os.system`` all come down to one of them), where a refused function would run unrefused."""
+    import os
+
+    names = ("fork", "forkpty", "system", "posix_spawn", "posix_spawnp", "execv", "execve")
+    found = [getattr(os, name) for name in names if hasattr(os, name)]
+    posix_subprocess = sys.modules.get("_posixsubprocess")
+    if posix_subprocess is None:
+        with contextlib.suppress(ImportError):
+            import _posixsubprocess as posix_subprocess
+    if posix_subprocess is not None:
+        found.append(posix_subprocess.fork_exec)
+    return found
 
 
 def _disarm(functions: list, dispatchers: list) -> tuple[list, list]:
@@ -166,6 +227,82 @@ def _rearm(swapped: list, emptied: list) -> None:
         dispatcher._can_compile = can_compile
         for compiled in overloads:
             dispatcher.add_overload(compiled)
+
+
+def library_functions(*owners) -> list:
+    """Every function a module or class of ``owners`` defines, for :func:`refused` to refuse all
+    of them: an exercise that asks for something a library computes must not reach it through a
+    neighbour (a class's method, a private helper, a compiled twin, a higher-level function
+    whose result contains the answer).
+
+    Parameters
+    ----------
+    *owners
+        Modules (their own functions and classes, not what they import), classes (their
+        methods, static and class methods, and properties) and functions themselves.
+
+    Returns
+    -------
+    list
+        Python functions and Numba dispatchers, each once, with the functions they wrap
+        (``__wrapped__``); not code a library generated (a dataclass's ``__eq__``), which every
+        class of its kind shares.
+    """
+    found: dict[int, object] = {}
+
+    def add(value, file: str | None = None) -> None:
+        while value is not None and id(value) not in found:
+            function = value.py_func if _is_dispatcher(value) else _python_function(value)
+            if function is None or file not in (None, function.__code__.co_filename):
+                return  # not a function, or code that is not the module's own (a dataclass's __eq__)
+            found[id(value)] = value
+            value, file = getattr(value, "__wrapped__", None), None
+
+    def visit(owner, home: str, seen: set) -> None:
+        if id(owner) in seen:
+            return
+        seen.add(id(owner))
+        file = getattr(sys.modules.get(home), "__file__", None)
+        for value in list(vars(owner).values()):
+            if isinstance(value, property):
+                for accessor in (value.fget, value.fset, value.fdel):
+                    add(accessor, file)
+            elif isinstance(value, (staticmethod, classmethod)):
+                add(value.__func__, file)
+            elif isinstance(value, type):
+                if value.__module__ == home:
+                    visit(value, home, seen)
+            elif getattr(value, "__module__", None) == home:
+                add(value, file)
+
+    for owner in owners:
+        if isinstance(owner, (types.ModuleType, type)):
+            home = owner.__name__ if isinstance(owner, types.ModuleType) else owner.__module__
+            visit(owner, home, set())
+        else:
+            add(owner)
+    return list(found.values())
+
+
+def frozen(values):
+    """A read-only copy of ``values`` (an array of floats, or of what it holds), which no code
+    can make writable again: the inputs a test keeps to compute its expected values after the
+    code under test ran, which that code gets copies of.
+
+    Parameters
+    ----------
+    values
+        Anything :func:`numpy.asarray` takes.
+
+    Returns
+    -------
+    numpy.ndarray
+        Same shape and type, backed by an immutable ``bytes`` buffer.
+    """
+    import numpy
+
+    array = numpy.ascontiguousarray(values)
+    return numpy.frombuffer(array.tobytes(), dtype=array.dtype).reshape(array.shape)
 
 
 WATCHED_MODULES = (
@@ -384,8 +521,64 @@ def kernel_state() -> dict[str, str]:
             for name, value in list(vars(owner).items())
             if _foreign(value, roots)
         ),
+        "the grader's tools": _replaced_tools(),
     }
     return {what: hashlib.sha1(repr(value).encode()).hexdigest()[:12] for what, value in parts.items()}
+
+
+def _replaced_tools() -> list[str]:
+    """What a hidden test loads its tools with (``importlib.reload``, ``runpy.run_path``) and
+    this module, as loaded in the kernel, that is no longer its own: a ``reload`` that returns a
+    module whose ``refused`` lets everything through, or ``vo_lib.grading.intact`` replaced by
+    one that agrees. Empty while all are genuine, whether this module is loaded or not.
+
+    Read afresh from this file (``runpy.run_path``, as the grader calls :func:`kernel_state`),
+    ``__file__`` is this file, whatever the kernel's modules say.
+    """
+    import contextlib
+    import importlib
+    import os
+    import runpy
+
+    def own(value, module) -> bool:
+        """A function of ``module``'s file (or frozen copy), or a context manager made of one."""
+        if not isinstance(value, types.FunctionType):
+            return False
+        if value.__code__.co_filename in (module.__file__, f"<frozen {module.__name__}>"):
+            return True
+        inside = [c.cell_contents for c in value.__closure__ or ()]
+        made = [f for f in inside if isinstance(f, types.FunctionType)]
+        wrapper = value.__code__.co_filename == contextlib.__file__
+        return wrapper and bool(made) and all(own(f, module) for f in made)
+
+    replaced = [
+        f"{module.__name__}.{name}"
+        for module, name in ((importlib, "reload"), (importlib, "import_module"), (runpy, "run_path"))
+        if not own(getattr(module, name, None), module)
+    ]
+    loaded = sys.modules.get("vo_lib.grading")
+    if loaded is None:
+        return replaced
+    try:
+        same_file = os.path.samefile(loaded.__file__, __file__)
+    except (AttributeError, TypeError, OSError):
+        same_file = False
+    if not isinstance(loaded, types.ModuleType) or not same_file:
+        return [*replaced, "vo_lib.grading"]
+    package = sys.modules.get(loaded.__name__.rpartition(".")[0])
+    if package is not None and getattr(package, "grading", loaded) is not loaded:
+        replaced.append("vo_lib.grading")
+    for name in __all__:
+        value = getattr(loaded, name, None)
+        if isinstance(value, type):
+            genuine = value.__module__ == loaded.__name__
+        elif isinstance(value, (frozenset, set)):
+            genuine = value == globals()[name]
+        else:
+            genuine = own(value, loaded)
+        if not genuine:
+            replaced.append(f"vo_lib.grading.{name}")
+    return replaced
 
 
 def cell_label(cell: dict, index: int) -> str:
