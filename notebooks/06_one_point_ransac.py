@@ -1108,7 +1108,8 @@ def hidden_test_ex1(grading, ransac, ransac_core, answer):
     grading.intact(globals())
     expected = [ransac.hypotheses_needed(1 - e, p, sample_size=s) for e, p, s in cases]
     assert got == expected, (
-        "hypotheses_for gives other counts for other ratios (outliers, not inliers? the smallest whole number?)"
+        "hypotheses_for gives other counts for other ratios "
+        "(outliers, not inliers? the smallest whole number?)"
     )
 
 
@@ -1250,7 +1251,10 @@ def hidden_test_ex3(grading, answer):
         grid = np.sort(fresh.uniform(0.01, 10.0, 300))
         cases.append((grading.frozen(each), turn, grading.frozen(pairs.inliers), grading.frozen(grid)))
     with grading.refused():  # nothing to refuse; no other process, no change to the grader's tools
-        got = [float(answer(each.copy(), turn, inliers.copy(), grid.copy())) for each, turn, inliers, grid in cases]
+        got = [
+            float(answer(each.copy(), turn, inliers.copy(), grid.copy()))
+            for each, turn, inliers, grid in cases
+        ]
     grading.intact(globals(), ("synthetic_matches", "one_point_ransac"))
     for value, (each, turn, inliers, grid) in zip(got, cases, strict=True):
         correct_at = [np.sum((np.abs(each - turn) < np.radians(t)) == inliers) for t in grid]

@@ -796,7 +796,9 @@ def hidden_test_ex1(grading, libraries, answer):
 
     grading.intact(globals())  # the answer left NumPy and the notebook's modules alone
     fresh = np.random.default_rng()
-    cases = tuple(tuple(float(v) for v in row) for row in fresh.uniform([-10, 0.01, -10, 0.01], [10, 5, 10, 5], (10, 4)))
+    cases = tuple(
+        tuple(float(v) for v in row) for row in fresh.uniform([-10, 0.01, -10, 0.01], [10, 5, 10, 5], (10, 4))
+    )
     with grading.refused(*grading.library_functions(*libraries)):
         got = [tuple(float(np.squeeze(g)) for g in answer(*case)) for case in cases]
     grading.intact(globals())
@@ -874,7 +876,9 @@ def hidden_test_ex2(grading, experiments, nees_band, average_nees):
     grading.intact(globals())  # the answer left NumPy, SciPy's special functions and vo_lib alone
 
     fresh = np.random.default_rng()
-    runs = [(int(n), int(d)) for n, d in zip(fresh.integers(2, 500, 10), fresh.integers(1, 7, 10), strict=True)]
+    runs = [
+        (int(n), int(d)) for n, d in zip(fresh.integers(2, 500, 10), fresh.integers(1, 7, 10), strict=True)
+    ]
     draws = []
     for _ in range(3):
         dim = int(fresh.integers(1, 6))
@@ -904,11 +908,13 @@ def hidden_test_ex2(grading, experiments, nees_band, average_nees):
     )
     for band, (n, d) in zip(bands, runs, strict=True):
         assert np.allclose(gammainc(n * d / 2, band * n / 2), [0.025, 0.975], atol=1e-6), (
-            "nees_band is not the 95 % band of another average NEES (which quantiles? which degrees of freedom?)"
+            "nees_band is not the 95 % band of another average NEES "
+            "(which quantiles? which degrees of freedom?)"
         )
     for value, (errors, covariance) in zip(averages, draws, strict=True):
         assert value.shape == (len(errors),) and np.allclose(value, reference_average(errors, covariance)), (
-            "average_nees differs for other errors and covariances (the inverse covariance? the mean over runs?)"
+            "average_nees differs for other errors and covariances "
+            "(the inverse covariance? the mean over runs?)"
         )
 
 

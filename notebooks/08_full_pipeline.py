@@ -780,8 +780,13 @@ def hidden_test_ex3(grading, geometry, answer, drive):
     grading.intact(globals())  # the answer left NumPy and the notebook's modules alone
 
     fresh = np.random.default_rng()
-    small = [(fresh.uniform(0.005, 0.5), fresh.uniform(1e-6, 1e-4), int(fresh.integers(3, 51))) for _ in range(10)]
-    large = [(fresh.uniform(0.005, 0.5), fresh.uniform(0.01, 0.05), int(fresh.integers(30, 200))) for _ in range(10)]
+    small = [
+        (fresh.uniform(0.005, 0.5), fresh.uniform(1e-6, 1e-4), int(fresh.integers(3, 51))) for _ in range(10)
+    ]
+    large = [
+        (fresh.uniform(0.005, 0.5), fresh.uniform(0.01, 0.05), int(fresh.integers(30, 200)))
+        for _ in range(10)
+    ]
     with grading.refused(drive, *grading.library_functions(geometry)):
         got = [float(answer(s, eps, n)) for s, eps, n in small + large]
     grading.intact(globals())

@@ -1072,21 +1072,24 @@ def hidden_test_ex2(grading, observation_modules, answer):
 
     grading.intact(globals(), ("observation_jacobians", "observe_point"))
     fresh = np.random.default_rng()
-    cases = [(grading.frozen(fresh.uniform(-5, 5, 3)), grading.frozen(fresh.uniform(-20, 20, 2))) for _ in range(20)]
+    cases = [
+        (grading.frozen(fresh.uniform(-5, 5, 3)), grading.frozen(fresh.uniform(-20, 20, 2)))
+        for _ in range(20)
+    ]
     with grading.refused(*grading.library_functions(*observation_modules)):
-        got = [tuple(np.asarray(j, float) for j in answer(pose.copy(), point.copy())) for pose, point in cases]
+        got = [
+            tuple(np.asarray(j, float) for j in answer(pose.copy(), point.copy())) for pose, point in cases
+        ]
     grading.intact(globals(), ("observation_jacobians", "observe_point"))
     reference = observation_modules[0].observation_jacobians
     for (by_pose, by_point), (pose, point) in zip(got, cases, strict=True):
         expected_pose, expected_point = reference(pose, point)
-        assert np.allclose(by_pose, expected_pose, atol=1e-9) and np.allclose(by_point, expected_point, atol=1e-9), (
-            "range_bearing_jacobians differs at other poses and landmarks (the bearing row?)"
-        )
+        assert np.allclose(by_pose, expected_pose, atol=1e-9) and np.allclose(
+            by_point, expected_point, atol=1e-9
+        ), "range_bearing_jacobians differs at other poses and landmarks (the bearing row?)"
 
 
-hidden_test_ex2(
-    grading, (range_bearing_module, line_observation_module, ekf_module), range_bearing_jacobians
-)
+hidden_test_ex2(grading, (range_bearing_module, line_observation_module, ekf_module), range_bearing_jacobians)
 ### END HIDDEN TESTS
 
 # %% [markdown]
@@ -1169,8 +1172,16 @@ def hidden_test_ex3(grading, range_bearing, elsewhere, answer):
         point = fresh.uniform(-10, 10, 2)
         z = range_bearing.observe_point(pose, point) + fresh.normal(scale=[0.2, 0.1])
         z[1] = np.pi if fresh.random() < 0.3 else z[1]  # bearings at the seam, too
-        arrays = (pose, np.diag(fresh.uniform(0.001, 0.1, 3)), point, np.diag(fresh.uniform(0.001, 0.3, 2)), z)
-        cases.append((*(grading.frozen(a) for a in arrays), fresh.uniform(0.01, 0.2), fresh.uniform(0.005, 0.1)))
+        arrays = (
+            pose,
+            np.diag(fresh.uniform(0.001, 0.1, 3)),
+            point,
+            np.diag(fresh.uniform(0.001, 0.3, 2)),
+            z,
+        )
+        cases.append(
+            (*(grading.frozen(a) for a in arrays), fresh.uniform(0.01, 0.2), fresh.uniform(0.005, 0.1))
+        )
     refused = [range_bearing.observation_jacobians, range_bearing.PointModel, *elsewhere]
     with grading.refused(*grading.library_functions(*refused)):
         got = [float(answer(*(a.copy() for a in case[:5]), *case[5:])) for case in cases]
@@ -1185,8 +1196,12 @@ def hidden_test_ex3(grading, range_bearing, elsewhere, answer):
         nu[1] = (nu[1] + np.pi) % (2 * np.pi) - np.pi
         return float(nu @ np.linalg.solve(S, nu))
 
-    shown = [reference_nis(gate_pose, gate_pose_cov, gate_point, gate_point_cov, z, 0.05, 0.02) for z in candidates]
-    assert np.array_equal(accepted, np.array(shown) < chi2.ppf(0.99, 2)), "accepted: not the candidates within the gate"
+    shown = [
+        reference_nis(gate_pose, gate_pose_cov, gate_point, gate_point_cov, z, 0.05, 0.02) for z in candidates
+    ]
+    assert np.array_equal(accepted, np.array(shown) < chi2.ppf(0.99, 2)), (
+        "accepted: not the candidates within the gate"
+    )
     for value, case in zip(got, cases, strict=True):
         assert np.isclose(value, reference_nis(*case), rtol=1e-6), (
             "innovation_squared differs for other robots and landmarks (wrapped bearing? variances, not "

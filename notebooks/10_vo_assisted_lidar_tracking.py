@@ -934,7 +934,9 @@ def hidden_test_ex3(grading, tracking, answer):
             fresh.normal(0, 0.3, (300, 1)) * axis + fresh.normal(0, 0.03, (300, 2)),
             fresh.normal(0, 0.5, (300, 1)) * axis[::-1] * [-1, 1] + fresh.normal(0, 0.03, (300, 2)),
         )
-        offset = fresh.uniform(0.5, 2.0) * np.array([np.cos(angle + 1.0), np.sin(angle + 1.0)])  # not about zero
+        offset = fresh.uniform(0.5, 2.0) * np.array(
+            [np.cos(angle + 1.0), np.sin(angle + 1.0)]
+        )  # not about zero
         cases.append((grading.frozen(np.column_stack([xy + offset, np.zeros(300)])), grading.frozen(scores)))
     with grading.refused(*grading.library_functions(tracking)):
         got = [np.asarray(answer(corrections.copy(), scores.copy()), float) for corrections, scores in cases]

@@ -1150,7 +1150,9 @@ def hidden_test_ex1(grading, detector, answer):
     texture = (fresh.random((240, 320)) * 255).astype(np.uint8)
     flat = np.zeros((240, 320), np.uint8)
     flat[:, : int(fresh.integers(40, 280))] = texture[:, :1]  # a flat part, a textured part
-    image = grading.frozen(cv2.GaussianBlur(np.maximum(texture * (flat == 0), flat), (0, 0), fresh.uniform(0.5, 2.0)))
+    image = grading.frozen(
+        cv2.GaussianBlur(np.maximum(texture * (flat == 0), flat), (0, 0), fresh.uniform(0.5, 2.0))
+    )
     thresholds = sorted(int(t) for t in fresh.integers(5, 60, 3))
     with grading.refused():  # nothing to refuse; no other process, no change to the grader's tools
         got = np.asarray(answer(image.copy(), list(thresholds)), float)
@@ -1291,7 +1293,9 @@ def hidden_test_ex3(grading, camera, points, measured, answer):
             d_pixel[:, 1, 1], d_pixel[:, 1, 2] = fy / Z, -fy * Y / Z**2
             d_pixel[:, 2, 2] = -fx * baseline / Z**2
             skew = np.cross(np.eye(3)[None], Q[:, None, :])  # [Q]x of every point
-            J = (d_pixel @ np.concatenate([-skew, np.broadcast_to(np.eye(3), (len(Q), 3, 3))], axis=2)).reshape(-1, 6)
+            J = (
+                d_pixel @ np.concatenate([-skew, np.broadcast_to(np.eye(3), (len(Q), 3, 3))], axis=2)
+            ).reshape(-1, 6)
             delta = -np.linalg.solve(J.T @ J, J.T @ r)
             dR = rotation(delta[:3])
             R, t, steps = dR @ R, dR @ t + delta[3:], steps + 1
@@ -1370,7 +1374,9 @@ import vo_lib.stereo_vo.rigid_core as rigid_core_module  # noqa: E402
 import vo_lib.stereo_vo.rigid_plain as rigid_plain_module  # noqa: E402
 
 grading = importlib.reload(vo_lib.grading)  # fresh from its file, whatever the answer did to it
-refinements = [getattr(cv2, name) for name in dir(cv2) if name.startswith("solvePnP")]  # OpenCV's pose solvers
+refinements = [
+    getattr(cv2, name) for name in dir(cv2) if name.startswith("solvePnP")
+]  # OpenCV's pose solvers
 solvers = [scipy.optimize.least_squares, scipy.optimize.leastsq, scipy.optimize.minimize, scipy.optimize.root]
 
 

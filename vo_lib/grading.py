@@ -249,39 +249,43 @@ def library_functions(*owners) -> list:
         class of its kind shares.
     """
     found: dict[int, object] = {}
-
-    def add(value, file: str | None = None) -> None:
-        while value is not None and id(value) not in found:
-            function = value.py_func if _is_dispatcher(value) else _python_function(value)
-            if function is None or file not in (None, function.__code__.co_filename):
-                return  # not a function, or code that is not the module's own (a dataclass's __eq__)
-            found[id(value)] = value
-            value, file = getattr(value, "__wrapped__", None), None
-
-    def visit(owner, home: str, seen: set) -> None:
-        if id(owner) in seen:
-            return
-        seen.add(id(owner))
-        file = getattr(sys.modules.get(home), "__file__", None)
-        for value in list(vars(owner).values()):
-            if isinstance(value, property):
-                for accessor in (value.fget, value.fset, value.fdel):
-                    add(accessor, file)
-            elif isinstance(value, (staticmethod, classmethod)):
-                add(value.__func__, file)
-            elif isinstance(value, type):
-                if value.__module__ == home:
-                    visit(value, home, seen)
-            elif getattr(value, "__module__", None) == home:
-                add(value, file)
-
     for owner in owners:
         if isinstance(owner, (types.ModuleType, type)):
             home = owner.__name__ if isinstance(owner, types.ModuleType) else owner.__module__
-            visit(owner, home, set())
+            _collect_owner(found, owner, home, set())
         else:
-            add(owner)
+            _collect_function(found, owner)
     return list(found.values())
+
+
+def _collect_function(found: dict[int, object], value, file: str | None = None) -> None:
+    """Add ``value`` to ``found`` with the functions it wraps, if it is a function of ``file``."""
+    while value is not None and id(value) not in found:
+        function = value.py_func if _is_dispatcher(value) else _python_function(value)
+        if function is None or file not in (None, function.__code__.co_filename):
+            return  # not a function, or code that is not the module's own (a dataclass's __eq__)
+        found[id(value)] = value
+        value, file = getattr(value, "__wrapped__", None), None
+
+
+def _collect_owner(found: dict[int, object], owner, home: str, seen: set) -> None:
+    """Add the functions, methods and properties module ``home`` defines in ``owner`` (a module
+    or a class), and those of its classes."""
+    if id(owner) in seen:
+        return
+    seen.add(id(owner))
+    file = getattr(sys.modules.get(home), "__file__", None)
+    for value in list(vars(owner).values()):
+        if isinstance(value, property):
+            for accessor in (value.fget, value.fset, value.fdel):
+                _collect_function(found, accessor, file)
+        elif isinstance(value, (staticmethod, classmethod)):
+            _collect_function(found, value.__func__, file)
+        elif isinstance(value, type):
+            if value.__module__ == home:
+                _collect_owner(found, value, home, seen)
+        elif getattr(value, "__module__", None) == home:
+            _collect_function(found, value, file)
 
 
 def frozen(values):
