@@ -10,6 +10,7 @@ One folder per idea; imports run downwards only (import-linter contracts in ``py
     sim/              world, renderer, laser, drives with slip, disturbances, named samples
     models/ formats/ viz/   crawler tracks and bicycle; KITTI sequences and pose files; figures
     camera.py geometry.py evaluation.py   shared: stereo rig, frames and poses, trajectory errors
+    comparison.py     methods compared over seeds (share, bootstrap interval); the χ² band rule
     outputs.py arguments.py   output folders written whole, only over our own; one-line CLI errors
     compiled.py       Numba compilation, and the switch to each kernel's plain twin (VO_LIB_PLAIN)
     grading.py        the hidden tests' tools: refuse the function an exercise asks for, find patches

@@ -1,0 +1,53 @@
+"""The one helper for comparisons over seeds, and the χ² band rule."""
+
+import numpy as np
+import pytest
+from scipy.stats import chi2
+
+from vo_lib.comparison import Verdict, bootstrap_interval, chi2_band, over_seeds
+
+
+def _draws(seed: int, gap: float) -> dict[str, float]:
+    rng = np.random.default_rng(seed)
+    noise = rng.normal(size=2)
+    return {"A": 1.0 + 0.1 * noise[0], "B": 1.0 + gap + 0.1 * noise[1]}
+
+
+def test_a_clear_difference_is_reliable_and_counted():
+    c = over_seeds(lambda s: _draws(s, gap=0.5), range(20))
+    assert c.share("A", "B") == 20
+    median, low, high = c.difference("A", "B")
+    assert low <= median <= high < 0
+    assert c.verdict("A", "B") is Verdict.BETTER and c.verdict("B", "A") is Verdict.WORSE
+    assert "in 20 of 20 seeds" in c.sentence("A", "B") and "is better than" in c.sentence("A", "B")
+
+
+def test_no_difference_is_not_reliable():
+    c = over_seeds(lambda s: _draws(s, gap=0.0), range(20))
+    assert c.verdict("A", "B") is Verdict.NOT_RELIABLE
+    assert "not reliably different" in c.sentence("A", "B", unit="m")
+
+
+def test_same_seeds_same_figures():
+    a = over_seeds(lambda s: _draws(s, gap=0.05), range(10))
+    b = over_seeds(lambda s: _draws(s, gap=0.05), range(10))
+    assert a.sentence("A", "B") == b.sentence("A", "B")
+
+
+def test_methods_must_agree_across_seeds():
+    with pytest.raises(ValueError, match="same methods"):
+        over_seeds(lambda s: {"A": 1.0} if s else {"B": 1.0}, range(2))
+
+
+def test_bootstrap_interval_covers_the_median_of_a_known_sample():
+    x = np.random.default_rng(3).normal(2.0, 1.0, size=200)
+    low, high = bootstrap_interval(x)
+    assert low < 2.0 < high and high - low < 0.5
+
+
+def test_chi2_band_is_the_average_of_independent_draws():
+    low, high = chi2_band(3, 20)
+    assert (low, high) == pytest.approx(tuple(chi2.ppf([0.025, 0.975], 60) / 20))
+    means = np.random.default_rng(0).chisquare(3, size=(4000, 20)).mean(axis=1)
+    inside = np.mean((means > low) & (means < high))
+    assert 0.93 < inside < 0.97
