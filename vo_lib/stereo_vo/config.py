@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 
 from scipy.stats import chi2
 
-from vo_lib.stereo_vo.ransac_core import RansacParams
+from vo_lib.stereo_vo.ransac import RansacParams
 
 FRONT_ENDS = ("fast", "pyramid")
 MOTIONS = ("planar", "full")
