@@ -241,7 +241,10 @@ def search(
     values, variances = model.each_match()
     k2 = params.gate_sigmas**2
     pool = np.argsort(variances)[: max(params.min_pool, int(params.pool_fraction * len(values)))]
-    cap = float(np.median(variances[pool]))  # a hypothesis counts as no more certain than a typical one
+    # a hypothesis counts as no more certain than a typical one: the pool's median variance (the
+    # pool is sorted, so the median is its middle value, or the mean of its middle two)
+    in_order = variances[pool]
+    cap = 0.5 * float(in_order[(len(pool) - 1) // 2] + in_order[len(pool) // 2])
     best_value, best_var, best_count = math.nan, math.nan, -1
     if prior is not None and math.isfinite(prior[0]):
         best_value, best_var = prior[0], min(prior[1], cap)
@@ -287,8 +290,8 @@ def theta_gate_pass(
     difference), and the match's own theta within ``k`` sigma of ``theta``."""
     ta, ba, tb, bb = angles
     k2 = params.gate_sigmas**2
-    e = _theta_gate(ta, ba, tb, bb, 0.5 * theta)
-    slope = (_theta_gate(ta, ba, tb, bb, 0.5 * (theta + step)) - e) / step
+    e, e_step = _theta_gate(ta, ba, tb, bb, np.array([[0.5 * theta], [0.5 * (theta + step)]]))
+    slope = (e_step - e) / step
     var = model.variances + var_ref
     return (e * e <= k2 * slope * slope * var) & ((model.values - theta) ** 2 <= k2 * var)
 
