@@ -515,8 +515,8 @@ import cv2  # noqa: E402
 
 import vo_lib.stereo_vo.ransac as ransac_module  # noqa: E402
 
-# eq. 13 as the library and OpenCV compute it: the camera, the RANSAC's kernels and their plain
-# twins (which back-project every match), OpenCV's triangulation
+# eq. 13 as the library and OpenCV compute it: the camera, the RANSAC's functions (which
+# back-project every match), OpenCV's triangulation
 library = [StereoCamera.backproject, cv2.triangulatePoints, cv2.reprojectImageTo3D]
 for module in (ransac_module,):
     library += [

@@ -533,7 +533,7 @@ intact, refused = grading.intact, grading.refused
 intact(globals(), ("synthetic_matches",))  # the answer left NumPy and the notebook's modules alone
 import vo_lib.stereo_vo.ransac as ransac_module  # noqa: E402
 
-# the RANSAC's own functions (its kernels and their plain twins) average the θ by their weights
+# the RANSAC's own functions average the θ by their weights
 library = [
     f
     for module in (ransac_module,)
