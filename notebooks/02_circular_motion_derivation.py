@@ -401,8 +401,7 @@ intact, refused = grading.intact, grading.refused
 intact(
     globals(), ("StereoCamera", "synthetic_matches")
 )  # the answer left NumPy and the notebook's modules alone
-import vo_lib.stereo_vo.ransac_core as ransac_core  # noqa: E402
-import vo_lib.stereo_vo.ransac_plain as ransac_plain  # noqa: E402
+import vo_lib.stereo_vo.ransac as ransac_module  # noqa: E402
 
 
 def own_functions(module):
@@ -431,7 +430,7 @@ for cam in (camera, other):
     cases.append((m_.w_prev, m_.w_curr, fresh.uniform(0.2, 2.0), cam))
 del m_
 # eq. 14's θ and its variance as the library computes them (derived, not differentiated numerically)
-library = [*own_functions(cm), *own_functions(ransac_core), *own_functions(ransac_plain)]
+library = [*own_functions(cm), *own_functions(ransac_module)]
 with refused(*library):
     answers = [np.asarray(theta_sigma(a_.copy(), b_.copy(), s_, cam), float) for a_, b_, s_, cam in cases]
 for got, (a_, b_, s_, cam) in zip(answers, cases, strict=True):
@@ -514,13 +513,12 @@ for cam in (camera, other):
 del m_
 import cv2  # noqa: E402
 
-import vo_lib.stereo_vo.ransac_core as ransac_core  # noqa: E402
-import vo_lib.stereo_vo.ransac_plain as ransac_plain  # noqa: E402
+import vo_lib.stereo_vo.ransac as ransac_module  # noqa: E402
 
-# eq. 13 as the library and OpenCV compute it: the camera, the RANSAC's kernels and their plain
-# twins (which back-project every match), OpenCV's triangulation
+# eq. 13 as the library and OpenCV compute it: the camera, the RANSAC's functions (which
+# back-project every match), OpenCV's triangulation
 library = [StereoCamera.backproject, cv2.triangulatePoints, cv2.reprojectImageTo3D]
-for module in (ransac_core, ransac_plain):
+for module in (ransac_module,):
     library += [
         f
         for f in vars(module).values()

@@ -531,13 +531,12 @@ grading = importlib.reload(vo_lib.grading)  # fresh from its file, whatever the 
 intact, refused = grading.intact, grading.refused
 
 intact(globals(), ("synthetic_matches",))  # the answer left NumPy and the notebook's modules alone
-import vo_lib.stereo_vo.ransac_core as ransac_core  # noqa: E402
-import vo_lib.stereo_vo.ransac_plain as ransac_plain  # noqa: E402
+import vo_lib.stereo_vo.ransac as ransac_module  # noqa: E402
 
-# the RANSAC's own functions (its kernels and their plain twins) average the θ by their weights
+# the RANSAC's own functions average the θ by their weights
 library = [
     f
-    for module in (ransac_core, ransac_plain)
+    for module in (ransac_module,)
     for f in vars(module).values()
     if callable(f)
     and not isinstance(f, type)

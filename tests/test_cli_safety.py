@@ -991,7 +991,7 @@ def test_runs_from_a_read_only_install(tmp_path):
 def test_numba_without_any_cache_folder_compiles_uncached(monkeypatch):
     from numba.core import caching
 
-    from vo_lib.stereo_vo import ransac_core
+    from vo_lib.compiled import jit
 
     impl = getattr(caching, "CacheImpl", None) or caching._CacheImpl
     monkeypatch.setattr(impl, "_locator_classes", [])
@@ -999,7 +999,7 @@ def test_numba_without_any_cache_folder_compiles_uncached(monkeypatch):
     def twice(x):
         return 2 * x
 
-    compiled = ransac_core._jit(twice)
+    compiled = jit(twice)
     assert compiled(21) == 42 and type(compiled._cache).__name__ == "NullCache"  # no cache behind it
 
 

@@ -196,3 +196,31 @@ def test_presets_differ_where_the_vehicles_do_and_auto_picks_one():
         replace(CAR, motion="six")
     swept = StereoOdometry(camera, replace(CRAWLER, key_distance=0.0))
     assert swept.config.key_distance == 0.0 and CRAWLER.key_distance > 0
+
+
+def test_restart_reasons_are_reasons_and_a_misspelt_one_is_refused():
+    import dataclasses
+
+    from vo_lib.stereo_vo.config import CAR, CRAWLER
+    from vo_lib.stereo_vo.frames import LOST_REFERENCE, Reason
+
+    assert CAR.restart_reasons == LOST_REFERENCE and Reason.FEW_INLIERS in CAR.restart_reasons
+    by_text = dataclasses.replace(CRAWLER, restart_reasons=("too few inliers", Reason.LOW_INLIER_RATIO))
+    assert by_text.restart_reasons == {Reason.FEW_INLIERS, Reason.LOW_INLIER_RATIO}
+    with pytest.raises(ValueError, match="restart_reasons: 'too few inlier' is not a valid Reason"):
+        dataclasses.replace(CRAWLER, restart_reasons=("too few inlier",))
+
+
+def test_stopwatch_adds_each_stage_and_counts_the_whole():
+    import time
+
+    from vo_lib.stereo_vo.frames import Stopwatch
+
+    watch = Stopwatch()
+    for _ in range(2):
+        with watch("a"):
+            time.sleep(0.01)
+    with pytest.raises(KeyError), watch("b"):
+        raise KeyError("the stage is timed all the same")
+    assert watch.ms["a"] >= 20.0 and "b" in watch.ms
+    assert watch.total() >= watch.ms["a"] + watch.ms["b"]

@@ -133,3 +133,33 @@ def test_essential_matrix_gives_rotation_and_direction(camera, rng):
     est = essential_ransac(m.w_prev, m.w_curr, camera)
     assert est.success and abs(est.theta - 0.05) < math.radians(0.5)
     assert np.linalg.norm(est.t) == pytest.approx(1.0)  # no scale from one camera
+
+
+class _Offsets:
+    """A one-point model of a 1-D offset: every value is a hypothesis, residual ``value - h``."""
+
+    def __init__(self, values, variances):
+        self.values, self.variances = values, variances
+
+    def each_match(self):
+        return self.values, self.variances
+
+    def squared_residuals(self, h):
+        return (self.values[None, :] - h[:, None]) ** 2
+
+
+def test_the_hypothesis_search_takes_any_one_point_model(rng):
+    from vo_lib.stereo_vo.ransac import DEFAULT_PARAMS, reestimate, search, supporters
+
+    values = np.r_[2.0 + rng.normal(0, 0.01, 60), rng.uniform(-10, 10, 40)]
+    model = _Offsets(values, np.full(100, 0.01**2))
+    h, var_h, tried = search(model, hypothesis_draws(3)[0], None, DEFAULT_PARAMS)
+    support = supporters(model, h, var_h, DEFAULT_PARAMS)
+    assert abs(h - 2.0) < 0.03 and support[:60].mean() > 0.95 and support[60:].sum() <= 2
+    # the first batch is sized for half inliers; 60 % found needs no more (eq. 19's count)
+    assert tried == hypotheses_needed(0.5, DEFAULT_PARAMS.confidence) == 10
+    assert hypotheses_needed(support.sum() / 100, DEFAULT_PARAMS.confidence) < tried
+    mean, var = reestimate(model, support)
+    assert abs(mean - 2.0) < 0.005 and var == pytest.approx(0.01**2 / support.sum())
+    # a prior that nothing supports loses to the drawn hypotheses
+    assert abs(search(model, hypothesis_draws(3)[0], (-50.0, 1e-4), DEFAULT_PARAMS)[0] - 2.0) < 0.03

@@ -1,8 +1,9 @@
-"""The renderer's z-buffer step of :mod:`vo_lib.sim.composite` in plain NumPy, for reading.
+"""The renderer's z-buffer step in plain NumPy: the reference of the compiled
+:func:`vo_lib.sim.composite.draw_nearer`, which the renderer runs because this version makes a
+whole rendered pair about twice as slow (``python -m vo_lib bench kernels``).
 
-Registered as the twin of the compiled ``draw_nearer``; ``VO_LIB_PLAIN=1`` runs it instead
-(:mod:`vo_lib.compiled`). Same arithmetic (the plane in float64, stored as float32), so the same
-images to the last grey level.
+``VO_LIB_PLAIN=1`` runs it instead (:mod:`vo_lib.compiled`). Same arithmetic (the plane in
+float64, stored as float32), so the same images to the last grey level.
 """
 
 from __future__ import annotations

@@ -6,12 +6,11 @@ Read in the order a frame is processed (``pipeline`` strings the parts of ``part
 ``pyramid_features``  the same at two scales, for the large image motion of a car
 ``circular_motion``   the planar circular-motion model, theta and rho from pixels (eq. 12-17)
 ``temporal``          frame-to-frame matching guided by the filter's prediction
-``ransac``            1-point RANSAC with its gates and refinement (eq. 18-21)
-``ransac_core``       its compiled (Numba) core and its settings, ``RansacParams``
-``ransac_plain``      the same core in plain NumPy, to read (``VO_LIB_PLAIN=1`` runs it)
-``rigid_motion``      6-DoF motion refined on reprojection errors, general 3-point RANSAC
-``rigid_core``        its compiled normal equations; ``rigid_plain`` the same in NumPy
-``matching_core``     compiled candidate search and best matches; ``matching_plain`` in NumPy
+``ransac``            1-point RANSAC with its gates, refinement and settings (eq. 18-21)
+``rigid_motion``      6-DoF motion refined on reprojection errors, SE(3) log and exp,
+                      general 3-point RANSAC
+``matching_plain``    candidate search and best matches in NumPy, the reference
+``matching_core``     the same compiled (Numba), which the front end runs
 ``kalman``            the Kalman filter fusing track odometry (eq. 2-11, in
                       ``vo_lib.models.track_odometry``) with the visual motion
 ``parts``             the interfaces of the pipeline's parts (front end, motion model)

@@ -18,7 +18,7 @@ import numpy as np
 
 from vo_lib.camera import StereoCamera
 from vo_lib.stereo_vo.circular_motion import circular_motion_from_transform
-from vo_lib.stereo_vo.ransac import CONFIDENCE, hypotheses_needed
+from vo_lib.stereo_vo.ransac import DEFAULT_PARAMS, hypotheses_needed
 
 REPROJECTION_THRESHOLD = (
     3.0  # pixels, in (u, v, d) for the rigid fit and (u, v) for PnP: ~99 % of two noisy views
@@ -83,7 +83,7 @@ def rigid_ransac(
     camera: StereoCamera,
     rng=None,
     threshold: float = REPROJECTION_THRESHOLD,
-    confidence: float = CONFIDENCE,
+    confidence: float = DEFAULT_PARAMS.confidence,
     max_iterations: int = MAX_ITERATIONS,
 ) -> MotionEstimate:
     """3-point RANSAC on back-projected points; hypotheses scored in batches, refit on all inliers."""
@@ -118,7 +118,7 @@ def pnp_ransac(
     w_curr,
     camera: StereoCamera,
     threshold: float = REPROJECTION_THRESHOLD,
-    confidence: float = CONFIDENCE,
+    confidence: float = DEFAULT_PARAMS.confidence,
     max_iterations: int = 100,
     seed: int = 0,
 ) -> MotionEstimate:
@@ -150,7 +150,7 @@ def essential_ransac(
     w_curr,
     camera: StereoCamera,
     threshold: float = 1.0,
-    confidence: float = CONFIDENCE,
+    confidence: float = DEFAULT_PARAMS.confidence,
     seed: int = 0,
 ) -> MotionEstimate:
     """OpenCV 5-point essential-matrix RANSAC and ``recoverPose``: rotation, and translation of unit

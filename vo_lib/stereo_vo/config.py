@@ -14,13 +14,11 @@ from dataclasses import dataclass, field
 
 from scipy.stats import chi2
 
-from vo_lib.stereo_vo.ransac_core import RansacParams
+from vo_lib.stereo_vo.frames import LOST_REFERENCE, Reason
+from vo_lib.stereo_vo.ransac import RansacParams
 
 FRONT_ENDS = ("fast", "pyramid")
 MOTIONS = ("planar", "full")
-LOST_VIEW = "part of the view lost (occluder or moving object)"
-#: Reasons that say the reference frame no longer shares enough of the view with this one.
-LOST_REASONS = ("too few temporal matches", "too few inliers", "low inlier ratio")
 
 
 @dataclass(frozen=True)
@@ -68,7 +66,7 @@ class PipelineConfig:
     #: After this many frames without a good one (for one of ``restart_reasons``, or any reason
     #: when empty), the current frame becomes the reference: the view may have left the old one.
     restart_gap: int = 90
-    restart_reasons: tuple = ()
+    restart_reasons: frozenset[Reason] = frozenset()
     #: Counts measured right after frames without vision are not typical of the next ones.
     typical_counts_only: bool = True
     #: Sideways motion per metre travelled that the odometry cannot see (``kalman``).
@@ -82,6 +80,12 @@ class PipelineConfig:
             raise ValueError(f"front_end must be one of {', '.join(FRONT_ENDS)}; got {self.front_end!r}")
         if self.motion not in MOTIONS:
             raise ValueError(f"motion must be one of {', '.join(MOTIONS)}; got {self.motion!r}")
+        try:  # a misspelt reason would silently disable the restart rule: refuse it
+            reasons = frozenset(Reason(r) for r in self.restart_reasons)
+        except ValueError as exc:
+            known = ", ".join(repr(r.value) for r in Reason if r is not Reason.NONE)
+            raise ValueError(f"restart_reasons: {exc}; expected some of {known}") from None
+        object.__setattr__(self, "restart_reasons", reasons)
 
 
 #: The paper's crawler: single-scale FAST, planar model, track odometry.
@@ -106,7 +110,7 @@ CAR = PipelineConfig(
     vo_covariance_scale=((2.0**2,) * 3,) * 3,
     lost_view_fraction=0.0,
     restart_gap=2,
-    restart_reasons=LOST_REASONS,
+    restart_reasons=LOST_REFERENCE,
     typical_counts_only=False,
     # a car's odometry frame is aligned with its direction of travel only to a fraction of a
     # degree; a tight value lets the odometry's zero sideways motion overrule the vision's

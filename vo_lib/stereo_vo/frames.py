@@ -1,10 +1,54 @@
-"""What the pipeline records per frame: diagnostics, timings, and the result of a whole run."""
+"""What the pipeline records per frame: why a frame's vision was not used, diagnostics, timings
+(and the stopwatch that takes them), and the result of a whole run."""
 
 from __future__ import annotations
 
+import enum
+import time
+from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import asdict, dataclass, field
 
 import numpy as np
+
+
+class Reason(enum.StrEnum):
+    """Why a frame's VO motion was not used; :attr:`NONE` when it was. The value is the sentence
+    the diagnostics print."""
+
+    NONE = ""
+    NO_REFERENCE = "no reference frame with features"
+    FEW_FEATURES = "too few stereo features"
+    FEW_MATCHES = "too few temporal matches"
+    FEW_INLIERS = "too few inliers"
+    LOW_INLIER_RATIO = "low inlier ratio"
+    CONTRADICTS_PREDICTION = "motion contradicts the prediction"
+    VIEW_LOST = "part of the view lost (occluder or moving object)"
+
+
+#: Reasons that say the reference frame no longer shares enough of the view with this one.
+LOST_REFERENCE = frozenset({Reason.FEW_MATCHES, Reason.FEW_INLIERS, Reason.LOW_INLIER_RATIO})
+
+
+class Stopwatch:
+    """Milliseconds per named stage: ``with watch("stereo"): ...`` adds the block's time to
+    ``watch.ms["stereo"]``; :meth:`total` is the time since the watch was made."""
+
+    def __init__(self) -> None:
+        self.ms: dict[str, float] = {}
+        self._start = time.perf_counter()
+
+    @contextmanager
+    def __call__(self, stage: str) -> Iterator[None]:
+        t0 = time.perf_counter()
+        try:
+            yield
+        finally:
+            self.ms[stage] = self.ms.get(stage, 0.0) + (time.perf_counter() - t0) * 1e3
+
+    def total(self) -> float:
+        """Milliseconds since the watch was made."""
+        return (time.perf_counter() - self._start) * 1e3
 
 
 @dataclass
@@ -21,7 +65,7 @@ class FrameDiagnostics:
     rho: float = float("nan")
     odometry: bool = False
     fallback: bool = False
-    reason: str = ""
+    reason: Reason = Reason.NONE
 
 
 @dataclass

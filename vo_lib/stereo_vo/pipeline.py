@@ -30,9 +30,9 @@ import numpy as np
 from vo_lib.camera import StereoCamera
 from vo_lib.geometry import wrap_angle
 from vo_lib.models.track_odometry import TrackOdometry
-from vo_lib.stereo_vo.config import CAR, CRAWLER, LOST_VIEW, PRESETS, PipelineConfig
+from vo_lib.stereo_vo.config import CAR, CRAWLER, PRESETS, PipelineConfig
 from vo_lib.stereo_vo.features import StereoFeatures, StereoFrontEnd
-from vo_lib.stereo_vo.frames import FrameDiagnostics, FrameTimings, PipelineResult
+from vo_lib.stereo_vo.frames import FrameDiagnostics, FrameTimings, PipelineResult, Reason, Stopwatch
 from vo_lib.stereo_vo.kalman import VoKalmanFilter
 from vo_lib.stereo_vo.parts import Estimate, FrontEnd, MotionModel, Prediction
 from vo_lib.stereo_vo.planar_motion import PlanarMotion
@@ -46,6 +46,7 @@ __all__ = [
     "FrameTimings",
     "PipelineConfig",
     "PipelineResult",
+    "Reason",
     "StereoOdometry",
     "run_frames",
     "run_sequence",
@@ -105,7 +106,7 @@ class StereoOdometry:
         self.recent_matches: deque[int] = deque(maxlen=config.recent_frames)
         self.lost_view_frames = 0
         self.contradicted = 0  # consecutive frames whose vision contradicted the prediction
-        self.last_reason = ""
+        self.last_reason = Reason.NONE
         self.reference_inliers = 0  # inliers of the first good frame against this reference
 
     @property
@@ -118,40 +119,42 @@ class StereoOdometry:
 
         Returns ``(planar pose, its covariance, FrameDiagnostics, FrameTimings)``.
         """
-        t0 = time.perf_counter()
-        features = self.front.process(left, right)  # 1. stereo front end
-        t1 = time.perf_counter()
+        watch = Stopwatch()
+        with watch("stereo"):
+            features = self.front.process(left, right)  # 1. stereo front end
         diag = FrameDiagnostics(self.frame, features=len(features), odometry=odometry is not None)
-        timing = FrameTimings(stereo=(t1 - t0) * 1e3)
         if self.frame == 0:
             self._new_reference(features)
             self.frame += 1
-            timing.total = timing.stereo
-            return self.kf.pose, self.kf.covariance, diag, timing
-        prediction = self._predict(odometry, diag)  # 2. prediction ...
-        t2 = time.perf_counter()
-        timing.prediction = (t2 - t1) * 1e3
+            return self.kf.pose, self.kf.covariance, diag, self._timings(watch)
+        with watch("prediction"):
+            prediction = self._predict(odometry, diag)  # 2. prediction ...
         estimate, reason = None, self._unmatchable(features)
-        if not reason:
-            matches = self.motion.match(self.reference, features, prediction, self.recent_matches)
-            t3 = time.perf_counter()  # ... and temporal matching
-            timing.matching = (t3 - t2) * 1e3
+        if reason is Reason.NONE:
+            with watch("matching"):  # ... and temporal matching
+                matches = self.motion.match(self.reference, features, prediction, self.recent_matches)
             diag.temporal_matches = len(matches)
             if len(matches) < self.config.min_inliers:
-                reason = "too few temporal matches"
+                reason = Reason.FEW_MATCHES
             else:
-                estimate = self.motion.estimate(matches, prediction, self.rng)  # 3. motion estimation
-                timing.refinement = estimate.timings.get("refinement", 0.0)
-                timing.estimation = (time.perf_counter() - t3) * 1e3 - timing.refinement
+                with watch("estimation"):
+                    estimate = self.motion.estimate(matches, prediction, self.rng)  # 3. motion estimation
+                watch.ms["refinement"] = estimate.timings.get("refinement", 0.0)
                 reason = self._judge(estimate, prediction, diag)
-        t5 = time.perf_counter()
-        pose, covariance = self._update(features, estimate, prediction, reason, diag)  # 4. Kalman update
+        with watch("kalman"):
+            pose, covariance = self._update(features, estimate, prediction, reason, diag)  # 4. Kalman update
         self.last_reason = reason
-        t6 = time.perf_counter()
-        timing.kalman = (t6 - t5) * 1e3 + timing.prediction
-        timing.total = (t6 - t0) * 1e3
         self.frame += 1
-        return pose, covariance, diag, timing
+        return pose, covariance, diag, self._timings(watch)
+
+    @staticmethod
+    def _timings(watch: Stopwatch) -> FrameTimings:
+        """The stages as the paper's Table 1 counts them: the refinement (6-DoF) apart from the
+        estimation, and the filter's prediction with its update."""
+        ms = dict(watch.ms)
+        ms["estimation"] = ms.get("estimation", 0.0) - ms.get("refinement", 0.0)
+        ms["kalman"] = ms.get("kalman", 0.0) + ms.get("prediction", 0.0)
+        return FrameTimings(**ms, total=watch.total())
 
     # ------------------------------------------------------------------ the steps
     def _predict(self, odometry, diag: FrameDiagnostics) -> Prediction:
@@ -165,23 +168,23 @@ class StereoOdometry:
             prediction.prior = self.kf.motion_prior()
         return prediction
 
-    def _unmatchable(self, features: StereoFeatures) -> str:
+    def _unmatchable(self, features: StereoFeatures) -> Reason:
         if self.reference is None:
-            return "no reference frame with features"
+            return Reason.NO_REFERENCE
         if len(features) < self.config.min_features:
-            return "too few stereo features"
-        return ""
+            return Reason.FEW_FEATURES
+        return Reason.NONE
 
-    def _judge(self, estimate: Estimate, prediction: Prediction, diag: FrameDiagnostics) -> str:
-        """Why the estimate is not to be trusted, or ``""``."""
+    def _judge(self, estimate: Estimate, prediction: Prediction, diag: FrameDiagnostics) -> Reason:
+        """Why the estimate is not to be trusted, or :attr:`Reason.NONE`."""
         cfg = self.config
         diag.inliers, diag.inlier_ratio = estimate.inliers, estimate.inlier_ratio
         diag.ransac_inliers = estimate.ransac_inliers
         diag.theta, diag.rho = float(estimate.z[0]), float(estimate.z[1])
         if not estimate.success or estimate.inliers < cfg.min_inliers:
-            return "too few inliers"
+            return Reason.FEW_INLIERS
         if estimate.inlier_ratio < cfg.min_inlier_ratio:
-            return "low inlier ratio"
+            return Reason.LOW_INLIER_RATIO
         prior = prediction.prior
         innovation = np.array([wrap_angle(estimate.z[0] - prior.theta), estimate.z[1] - prior.rho])
         gate = prior.covariance + estimate.covariance[:2, :2]
@@ -190,16 +193,16 @@ class StereoOdometry:
         contradicts = innovation @ np.linalg.solve(gate, innovation) > cfg.prior_gate
         if prediction.informative and contradicts and self.contradicted < cfg.max_contradictions:
             self.contradicted += 1
-            return "motion contradicts the prediction"
+            return Reason.CONTRADICTS_PREDICTION
         if cfg.lost_view_fraction and self._view_lost(estimate.inliers):
-            return LOST_VIEW
+            return Reason.VIEW_LOST
         self.contradicted = 0
-        return ""
+        return Reason.NONE
 
     def _update(self, features, estimate, prediction, reason, diag):
         """The filter's update with a trusted estimate, the keyframe decision, or the fallback."""
         cfg = self.config
-        if reason:
+        if reason is not Reason.NONE:
             diag.fallback, diag.reason = True, reason
             self.motion.place(self.kf, None, prediction)
             pose, covariance = self.kf.pose, self.kf.covariance
@@ -239,7 +242,7 @@ class StereoOdometry:
     # ------------------------------------------------------------------ bookkeeping
     def _counts_are_typical(self) -> bool:
         """Counts measured right after frames without vision are not typical of the next ones."""
-        return self.last_reason in ("", LOST_VIEW)  # still the previous frame's
+        return self.last_reason in (Reason.NONE, Reason.VIEW_LOST)  # still the previous frame's
 
     def _commit(self, features: StereoFeatures, estimate: Estimate | None) -> None:
         """Make this frame the reference (keyframe): its filter state becomes the prior's base."""
@@ -254,7 +257,7 @@ class StereoOdometry:
         Judged only against the previous frame, or while a loss is going on: after frames without
         vision the reference is older and fewer matches are expected.
         """
-        judged = self.last_reason in ("", LOST_VIEW)
+        judged = self.last_reason in (Reason.NONE, Reason.VIEW_LOST)
         if (
             not judged
             or len(self.recent_inliers) < MIN_HISTORY
@@ -313,7 +316,8 @@ def run_frames(
 
 MOTION_MODELS = ("auto", "planar", "full")
 #: Frames of the untimed warm-up before a timed run: the second and third exercise matching, the
-#: 1-point RANSAC (without and with a prior) and the filter, so every compiled kernel is ready.
+#: 1-point RANSAC (without and with a prior) and the filter, so every compiled kernel is ready
+#: and every lazy import done.
 WARM_UP_FRAMES = 3
 
 

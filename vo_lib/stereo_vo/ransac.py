@@ -25,6 +25,14 @@ gate, to first order: ``|d error / d theta| * sqrt(sigma_theta_match^2 + sigma_t
 eq. 21, ``|| P' - (R P + T) ||``, against ``k`` standard deviations of that residual (depth noise
 grows as ``z^2``, so again per match, plus the hypothesis' own uncertainty).
 
+Both phases share one support test, which is what makes one loop serve them: under hypothesis
+``h`` the residual of match ``j`` is linear in ``h``, ``r_j(h) = offset_j + h direction``. Phase 1
+(eq. 20 to first order): ``offset_j = (theta_j, 0, 0)``, ``direction = (-1, 0, 0)``. Phase 2
+(eq. 21): ``offset_j = Q_j - R P_j`` and ``direction = (sin phi, 0, cos phi)``, since
+``T = -rho (sin phi, 0, cos phi)``. Match ``j`` supports ``h`` (of variance ``var_h``) when
+``|r_j(h)|^2 <= k^2 (var_j + var_h)``; NumPy tests every hypothesis of a batch against every
+match at once, an ``(H, N)`` array.
+
 Hypotheses are drawn from the best-conditioned half of the matches, scored all at once, and
 drawn until ``log(1 - p) / log(1 - w)`` of them have been tried for the best inlier ratio ``w``
 found. The winner is refined on all inliers by Gauss-Newton least squares on the reprojection
@@ -36,32 +44,55 @@ so the residual is compared in (u, v, d), where its noise is the same in every d
 
 from __future__ import annotations
 
+import enum
 import math
 import time
 from dataclasses import dataclass, field
+from typing import NamedTuple, Protocol
 
 import numpy as np
 
 from vo_lib.camera import StereoCamera
-from vo_lib.compiled import choose
 from vo_lib.geometry import as_match_array
-from vo_lib.stereo_vo import ransac_core as core
-from vo_lib.stereo_vo.circular_motion import motion_matrices, rho_from_pixels, theta_from_pixels
-from vo_lib.stereo_vo.ransac_core import CameraTerms, RansacParams
-from vo_lib.stereo_vo.ransac_core import hypotheses_needed as hypotheses_needed  # one formula for all
+from vo_lib.stereo_vo.circular_motion import (
+    motion_matrices,
+    rho_from_pixels,
+    theta_from_pixels,
+    theta_variance,
+)
+
+
+class RansacInputError(ValueError):
+    """Matches, draws or settings that :func:`one_point_ransac` cannot use."""
+
+
+class RansacParams(NamedTuple):
+    """The settings of 1-point RANSAC, as one immutable structure."""
+
+    pixel_sigma: float = 0.5  #: pixel noise of u, v and d assumed by the gates
+    gate_sigmas: float = 3.0  #: a match is an inlier within this many standard deviations of each gate
+    confidence: float = 0.999  #: probability of drawing at least one all-inlier hypothesis
+    max_hypotheses: int = 200  #: hypotheses per phase at most
+    refine: bool = True  #: refine on all inliers by least squares
+    min_pool: int = 8  #: hypotheses come from at least this many matches ...
+    pool_fraction: float = 0.5  #: ... the best-conditioned fraction of the matches
+    refine_iterations: int = 2  #: Gauss-Newton iterations of the first refinement round
+    refine_rounds: int = 3  #: refine, re-select inliers, and refine again while the set changes
+    whitened_gate: float = 3.76  #: final gate on the whitened eq. 21 residual: sqrt chi-square(3) at 99.7 %
+    initial_inlier_ratio: float = 0.5  #: first guess of the inlier ratio, before any hypothesis is scored
+
 
 #: The default settings; every field is documented in :class:`RansacParams`.
 DEFAULT_PARAMS = RansacParams()
-GATE_SIGMAS = DEFAULT_PARAMS.gate_sigmas
-WHITENED_GATE = DEFAULT_PARAMS.whitened_gate
-PIXEL_SIGMA = DEFAULT_PARAMS.pixel_sigma
-CONFIDENCE = DEFAULT_PARAMS.confidence
-MAX_HYPOTHESES = DEFAULT_PARAMS.max_hypotheses
-POOL_FRACTION = DEFAULT_PARAMS.pool_fraction
-MIN_POOL = DEFAULT_PARAMS.min_pool
-REFINE_ITERATIONS = DEFAULT_PARAMS.refine_iterations
-REFINE_ROUNDS = DEFAULT_PARAMS.refine_rounds
-INITIAL_INLIER_RATIO = DEFAULT_PARAMS.initial_inlier_ratio
+
+
+class Outcome(enum.Enum):
+    """How :func:`one_point_ransac` ended; the value is the sentence the diagnostics carry."""
+
+    OK = "ok"
+    FEW_USABLE = "fewer than 3 matches with positive disparities off the camera's height"
+    FEW_THETA_INLIERS = "fewer than 3 theta inliers"
+    FEW_INLIERS = "fewer than 3 inliers after refinement"
 
 
 @dataclass
@@ -74,9 +105,20 @@ class RansacResult:
     covariance: np.ndarray
     success: bool
     diagnostics: dict = field(default_factory=dict)
+    outcome: Outcome = Outcome.OK
 
 
-def hypothesis_draws(rng=None, max_hypotheses: int = MAX_HYPOTHESES) -> np.ndarray:
+def hypotheses_needed(inlier_ratio, confidence=0.999, sample_size=1) -> int:
+    """Hypotheses so that at least one is all-inlier with probability ``confidence``:
+    ``ceil(log(1 - p) / log(1 - w**s))`` ([Zhao], III.A.3)."""
+    w = min(max(float(inlier_ratio), 1e-9), 1.0)
+    good = w**sample_size
+    if good >= 1.0:
+        return 1
+    return max(1, math.ceil(math.log(1.0 - confidence) / math.log(1.0 - good)))
+
+
+def hypothesis_draws(rng=None, max_hypotheses: int = DEFAULT_PARAMS.max_hypotheses) -> np.ndarray:
     """The random numbers :func:`one_point_ransac` draws: one uniform number in [0, 1) per hypothesis.
 
     Row 0 serves the theta search, row 1 the rho search; hypothesis ``k`` of a phase is match
@@ -129,12 +171,227 @@ def rho_gate_error(P, Q, theta, rho) -> np.ndarray:
     return np.linalg.norm(np.asarray(Q) - moved - T[..., None, :], axis=-1)
 
 
-# ---------------------------------------------------------------------- refinement
-def camera_terms(camera: StereoCamera) -> CameraTerms:
-    """The camera as the kernels take it."""
-    return CameraTerms(
-        float(camera.fx), float(camera.fy), float(camera.cx), float(camera.cy), float(camera.baseline)
+# ---------------------------------------------------------------------- the two one-point models
+class OnePointModel(Protocol):
+    """A motion parameter that one match determines, as the hypothesis search sees it."""
+
+    def each_match(self) -> tuple[np.ndarray, np.ndarray]:
+        """The parameter from every match alone, and its variance: two arrays of shape (N,)."""
+        ...
+
+    def squared_residuals(self, h: np.ndarray) -> np.ndarray:
+        """``|r_j(h)|^2`` of every match ``j`` under every hypothesis ``h``: shape (H, N)."""
+        ...
+
+
+class ThetaModel:
+    """Phase 1: theta of one match ([Zhao], eq. 14), its first-order variance, and the gate of
+    eq. 18-20 to first order, ``r_j(theta) = theta_j - theta``."""
+
+    def __init__(self, wa: np.ndarray, wb: np.ndarray, camera: StereoCamera, pixel_sigma: float):
+        du, dv = wa[:, 0] - camera.cx, wa[:, 1] - camera.cy
+        du2, dv2 = wb[:, 0] - camera.cx, wb[:, 1] - camera.cy
+        num, den = du2 * dv - du * dv2, camera.fx * (dv + dv2)  # eq. 14: tan(theta / 2) = num / den
+        self.values = 2.0 * np.arctan(num / den)
+        self.variances = theta_variance(du, dv, du2, dv2, num, den, camera.fx, pixel_sigma)
+
+    def each_match(self) -> tuple[np.ndarray, np.ndarray]:
+        return self.values, self.variances
+
+    def squared_residuals(self, h: np.ndarray) -> np.ndarray:
+        r = self.values[None, :] - h[:, None]
+        return r * r
+
+
+class RhoModel:
+    """Phase 2, theta fixed: the chord of one match ([Zhao], eq. 16-17, sign corrected) and the
+    gate of eq. 21, ``r_j(rho) = Q_j - R P_j + rho (sin phi, 0, cos phi)``."""
+
+    def __init__(self, P: np.ndarray, Q: np.ndarray, variances: np.ndarray, theta: float):
+        sphi, cphi = math.sin(0.5 * theta), math.cos(0.5 * theta)
+        c, s = math.cos(theta), math.sin(theta)
+        self.values = (-sphi * P[:, 0] + cphi * P[:, 2]) - (sphi * Q[:, 0] + cphi * Q[:, 2])
+        self.variances = variances
+        self.offset_x = Q[:, 0] - (c * P[:, 0] + s * P[:, 2])
+        self.offset_y = Q[:, 1] - P[:, 1]
+        self.offset_z = Q[:, 2] - (-s * P[:, 0] + c * P[:, 2])
+        self.direction = (sphi, cphi)
+
+    def each_match(self) -> tuple[np.ndarray, np.ndarray]:
+        return self.values, self.variances
+
+    def squared_residuals(self, h: np.ndarray) -> np.ndarray:
+        sphi, cphi = self.direction
+        hc = h[:, None]
+        rx, rz = self.offset_x[None, :] + hc * sphi, self.offset_z[None, :] + hc * cphi
+        return rx * rx + self.offset_y[None, :] ** 2 + rz * rz
+
+
+def search(
+    model: OnePointModel, uniforms: np.ndarray, prior: tuple[float, float] | None, params: RansacParams
+) -> tuple[float, float, int]:
+    """The hypothesis with most supporters ([Zhao], eq. 18-19): ``(value, variance, tried)``.
+
+    Hypotheses are the values of matches drawn from the pool (the ``pool_fraction``
+    best-conditioned matches, at least ``min_pool``); draw ``u`` picks ``pool[int(u * len(pool))]``.
+    Each batch is scored at once; batches follow until ``hypotheses_needed`` of them, for the best
+    inlier ratio so far, have been tried. Among equal counts the more precise hypothesis wins.
+    ``prior`` (the filter's prediction, ``(value, variance)``) is scored first.
+    """
+    values, variances = model.each_match()
+    k2 = params.gate_sigmas**2
+    pool = np.argsort(variances)[: max(params.min_pool, int(params.pool_fraction * len(values)))]
+    # a hypothesis counts as no more certain than a typical one: the pool's median variance (the
+    # pool is sorted, so the median is its middle value, or the mean of its middle two)
+    in_order = variances[pool]
+    cap = 0.5 * float(in_order[(len(pool) - 1) // 2] + in_order[len(pool) // 2])
+    best_value, best_var, best_count = math.nan, math.nan, -1
+    if prior is not None and math.isfinite(prior[0]):
+        best_value, best_var = prior[0], min(prior[1], cap)
+        best_count = int(
+            np.count_nonzero(
+                model.squared_residuals(np.array([best_value]))[0] <= k2 * (variances + best_var)
+            )
+        )
+    tried = 0
+    limit = min(hypotheses_needed(params.initial_inlier_ratio, params.confidence), params.max_hypotheses)
+    while tried < limit:
+        picked = pool[np.minimum((uniforms[tried:limit] * len(pool)).astype(np.int64), len(pool) - 1)]
+        hyp, hyp_var = values[picked], np.minimum(variances[picked], cap)
+        counts = np.count_nonzero(model.squared_residuals(hyp) <= k2 * (variances + hyp_var[:, None]), axis=1)
+        top = int(np.argmax(counts - 0.5 * hyp_var / (hyp_var.max() + 1e-300)))
+        if counts[top] > best_count:
+            best_value, best_var, best_count = float(hyp[top]), float(hyp_var[top]), int(counts[top])
+        tried = limit
+        ratio = best_count / max(len(values), 1) if best_count > 0 else 1e-9
+        limit = min(hypotheses_needed(min(ratio, 1.0), params.confidence), params.max_hypotheses)
+    return best_value, best_var, tried
+
+
+def supporters(model: OnePointModel, h: float, var_h: float, params: RansacParams) -> np.ndarray:
+    """Mask of the matches supporting hypothesis ``h`` of variance ``var_h``."""
+    variances = model.each_match()[1]
+    return model.squared_residuals(np.array([h]))[0] <= params.gate_sigmas**2 * (variances + var_h)
+
+
+def reestimate(model: OnePointModel, support: np.ndarray) -> tuple[float, float]:
+    """Inverse-variance weighted mean of the supporters' values, and its variance."""
+    values, variances = model.each_match()
+    w = 1.0 / variances[support]
+    total = float(np.sum(w))
+    return float(np.sum(w * values[support])) / total, 1.0 / total
+
+
+# ---------------------------------------------------------------------- inliers of a motion
+def theta_gate_pass(
+    angles: tuple, model: ThetaModel, theta: float, var_ref: float, params: RansacParams, step: float = 1e-4
+) -> np.ndarray:
+    """eq. 20 at ``theta`` within ``k`` of each match's first-order sigma (the slope by a forward
+    difference), and the match's own theta within ``k`` sigma of ``theta``."""
+    ta, ba, tb, bb = angles
+    k2 = params.gate_sigmas**2
+    e, e_step = _theta_gate(ta, ba, tb, bb, np.array([[0.5 * theta], [0.5 * (theta + step)]]))
+    slope = (e_step - e) / step
+    var = model.variances + var_ref
+    return (e * e <= k2 * slope * slope * var) & ((model.values - theta) ** 2 <= k2 * var)
+
+
+def points_and_variances(
+    a: np.ndarray, b: np.ndarray, camera: StereoCamera, pixel_sigma: float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Points ``P = B/d (u - u0, (v - v0) fx/fy, fx)`` ([Zhao], eq. 13) of both frames and the
+    first-order variance of each pair: ``sigma^2 (B/d)^2 (|ray|^2 / d^2 + 2)`` per view."""
+    aspect = camera.fx / camera.fy
+
+    def back_project(w):
+        du, dv = w[:, 0] - camera.cx, (w[:, 1] - camera.cy) * aspect
+        scale = camera.baseline / w[:, 2]
+        ray2 = (du * du + dv * dv + camera.fx**2) / (w[:, 2] * w[:, 2])
+        return np.column_stack([scale * du, scale * dv, scale * camera.fx]), scale * scale * (ray2 + 2.0)
+
+    (P, var_a), (Q, var_b) = back_project(a), back_project(b)
+    return P, Q, pixel_sigma**2 * (var_a + var_b)
+
+
+def _moved(X: np.ndarray, theta: float, rho: float, sign: float):
+    """``R X + T`` (sign 1) or ``R^T (X - T)`` (sign -1) of eq. 15, with its derivatives in
+    ``(theta, rho)``: ``(x, y, z, dx/dtheta, dz/dtheta, dz/drho)``; dx/drho is ``-sin(theta/2)``."""
+    c, s, sp, cp = math.cos(theta), math.sin(theta), math.sin(0.5 * theta), math.cos(0.5 * theta)
+    gx, gz = sign * X[:, 0], sign * X[:, 2]
+    x = c * X[:, 0] + s * gz - rho * sp
+    z = c * X[:, 2] - s * gx - rho * cp * sign
+    dx_t = c * gz - s * X[:, 0] - 0.5 * rho * cp
+    dz_t = 0.5 * rho * sp * sign - c * gx - s * X[:, 2]
+    return x, X[:, 1], z, dx_t, dz_t, -cp * sign
+
+
+def reprojection(theta, rho, P, Q, wa, wb, camera: StereoCamera):
+    """Forward ``pi(R P + T) - w'`` and backward ``pi(R^T (Q - T)) - w`` residuals in disparity
+    space, ``(ru, rv, rd)`` each of shape (2N,), and their Jacobians in ``(theta, rho)``,
+    ``(J_theta, J_rho)`` each of shape (3, 2N), by the chain rule through ``pi``."""
+    fx, fy, fb = camera.fx, camera.fy, camera.fx * camera.baseline
+    sign = np.concatenate([np.ones(len(P)), -np.ones(len(Q))])
+    target = np.concatenate([wb, wa])
+    x, y, z, dx_t, dz_t, dz_r = _moved(np.concatenate([P, Q]), theta, rho, sign)
+    iz = 1.0 / z
+    iz2 = iz * iz
+    r = np.stack(
+        [
+            fx * x * iz - (target[:, 0] - camera.cx),
+            fy * y * iz - (target[:, 1] - camera.cy),
+            fb * iz - target[:, 2],
+        ]
     )
+    fz, yz, dz = fx * iz2, -fy * y * iz2, -fb * iz2
+    sp = math.sin(0.5 * theta)
+    J_theta = np.stack([fz * (dx_t * z - x * dz_t), yz * dz_t, dz * dz_t])
+    J_rho = np.stack([fz * (-sp * z - x * dz_r), yz * dz_r, dz * dz_r])
+    return r, J_theta, J_rho
+
+
+def gauss_newton(P, Q, wa, wb, theta: float, rho: float, camera: StereoCamera, iterations: int):
+    """Gauss-Newton on ``(theta, rho)`` over :func:`reprojection`: ``(theta, rho, A, rss)`` with
+    the normal matrix ``A = J^T J`` and the residual sum of squares of the last iterate before its
+    step."""
+    A, rss = np.zeros((2, 2)), 0.0
+    for _ in range(max(iterations, 1)):
+        r, jt, jr = reprojection(theta, rho, P, Q, wa, wb, camera)
+        a00, a01, a11 = float(np.vdot(jt, jt)), float(np.vdot(jt, jr)), float(np.vdot(jr, jr))
+        b0, b1, rss = float(np.vdot(jt, r)), float(np.vdot(jr, r)), float(np.vdot(r, r))
+        A = np.array([[a00, a01], [a01, a11]])
+        det = a00 * a11 - a01 * a01
+        if not det > 0:
+            break
+        d_theta, d_rho = -(a11 * b0 - a01 * b1) / det, -(a00 * b1 - a01 * b0) / det
+        theta, rho = theta + d_theta, rho + d_rho
+        if abs(d_theta) < 1e-10 and abs(d_rho) < 1e-9:
+            break
+    return theta, rho, A, rss
+
+
+def covariance(A: np.ndarray, rss: float, count: int) -> np.ndarray:
+    """``2 sigma^2 A^-1``: forward and backward residuals carry the same noise, so their
+    information counts once; infinite variances when ``A`` is singular."""
+    det = A[0, 0] * A[1, 1] - A[0, 1] * A[0, 1]
+    if not det > 0:
+        return np.array([[np.inf, 0.0], [0.0, np.inf]])
+    inverse = np.array([[A[1, 1], -A[0, 1]], [-A[0, 1], A[0, 0]]]) / det
+    return 2.0 * (rss / max(count - 2, 1)) * inverse
+
+
+def whitened_pass(P, b, theta: float, rho: float, camera: StereoCamera, params: RansacParams) -> np.ndarray:
+    """eq. 21 whitened: the moved point in front of the camera and its (u, v, d) residual within
+    ``whitened_gate`` standard deviations (sigma sqrt 2 per coordinate)."""
+    x, y, z, *_ = _moved(P, theta, rho, 1.0)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        iz = 1.0 / z
+        r2 = (
+            (camera.fx * x * iz - (b[:, 0] - camera.cx)) ** 2
+            + (camera.fy * y * iz - (b[:, 1] - camera.cy)) ** 2
+            + (camera.fx * camera.baseline * iz - b[:, 2]) ** 2
+        )
+    limit = params.whitened_gate**2 * 2.0 * params.pixel_sigma**2
+    return (z > 0) & (r2 <= limit)
 
 
 def refine_motion(
@@ -143,19 +400,15 @@ def refine_motion(
     theta: float,
     rho: float,
     camera: StereoCamera,
-    iterations: int = REFINE_ITERATIONS,
-    plain: bool | None = None,
+    iterations: int = DEFAULT_PARAMS.refine_iterations,
 ) -> tuple[float, float, np.ndarray]:
     """Least-squares ``(theta, rho)`` on matches, minimising reprojection errors in disparity space
-    in both directions (Gauss-Newton, analytic Jacobian; ``ransac_plain.reprojection`` writes the
-    model out). Returns ``(theta, rho, covariance)``; ``plain`` runs the plain NumPy twin."""
+    in both directions (Gauss-Newton, analytic Jacobian, :func:`reprojection`).
+    Returns ``(theta, rho, covariance)``."""
     wa, wb = np.asarray(w_prev, float), np.asarray(w_curr, float)
     P, Q = camera.backproject(wa), camera.backproject(wb)
-    cam = camera_terms(camera)
-    theta, rho, a00, a01, a11, rss = choose(core.gauss_newton, plain)(
-        P, Q, wa, wb, float(theta), float(rho), cam, int(iterations)
-    )
-    return float(theta), float(rho), choose(core.covariance, plain)(a00, a01, a11, rss, 6 * len(P))
+    theta, rho, A, rss = gauss_newton(P, Q, wa, wb, float(theta), float(rho), camera, int(iterations))
+    return float(theta), float(rho), covariance(A, rss, 6 * len(P))
 
 
 # ---------------------------------------------------------------------- the estimator
@@ -168,10 +421,25 @@ def one_point_ransac(
     *,
     params: RansacParams = DEFAULT_PARAMS,
     draws=None,
-    plain: bool | None = None,
     **settings,
 ) -> RansacResult:
-    """Estimate ``(theta, rho)`` from matches with 1-point RANSAC and the two gates of the paper.
+    """Estimate ``(theta, rho)`` from matches with 1-point RANSAC and the two gates of [Zhao].
+
+    The algorithm:
+
+    1. Keep the usable matches: both disparities > 0, off the camera's height (eq. 14 is 0/0 there).
+    2. Phase 1, theta: every match gives a theta (eq. 14) with a first-order variance
+       (:class:`ThetaModel`). :func:`search` draws hypotheses from the best-conditioned matches,
+       counts each one's supporters (eq. 18-20 to first order, ``k`` sigma per match) and stops
+       after ``log(1 - p) / log(1 - w)`` of them for the best inlier ratio ``w`` (eq. 19).
+    3. Average the winner's supporters by inverse variance; the gate of eq. 20 at that theta
+       picks the theta inliers.
+    4. Phase 2, rho: every theta inlier gives a rho (eq. 16-17) with the variance of its points
+       (eq. 13); :func:`search` again, with the gate of eq. 21 (:class:`RhoModel`), then the
+       weighted average of the supporters.
+    5. Refine ``(theta, rho)`` on all inliers by Gauss-Newton on the reprojection errors in
+       disparity space (:func:`gauss_newton`); the refined motion picks the inliers again with
+       eq. 20 and eq. 21 whitened. Repeat while the inliers change, ``refine_rounds`` at most.
 
     Parameters
     ----------
@@ -186,78 +454,99 @@ def one_point_ransac(
         The settings (gate widths, pixel noise, stopping rule, pool, refinement).
     draws : array_like, shape (2, params.max_hypotheses), optional
         The hypotheses' random numbers (:func:`hypothesis_draws`); when given, ``rng`` is not used.
-    plain : bool, optional
-        Run the plain NumPy twin (``ransac_plain``) instead of the compiled kernel; by default
-        the environment variable ``VO_LIB_PLAIN`` decides (:mod:`vo_lib.compiled`).
     **settings
         Fields of :class:`RansacParams` to change from ``params`` (e.g. ``gate_sigmas=2.5``).
 
     Returns
     -------
     RansacResult
-        ``theta``, ``rho``, an ``inliers`` mask, a 2x2 ``covariance`` and ``diagnostics``;
-        ``success`` is False when fewer than 3 usable matches exist (the prior, or zeros, are
-        returned then, with an empty inlier set).
+        ``theta``, ``rho``, an ``inliers`` mask, a 2x2 ``covariance``, the ``outcome`` and
+        ``diagnostics``; ``success`` is False when fewer than 3 matches survive a step (the prior,
+        or zeros, are returned then).
+
+    Raises
+    ------
+    RansacInputError
+        When the matches or the draws have the wrong shape or are not finite.
     """
     t_start = time.perf_counter()
     params = params._replace(**settings) if settings else params
-    a, b = as_match_array("w_prev", w_prev), as_match_array("w_curr", w_curr)
+    try:
+        a, b = as_match_array("w_prev", w_prev), as_match_array("w_curr", w_curr)
+    except ValueError as exc:
+        raise RansacInputError(str(exc)) from None
     if a.shape != b.shape:
-        raise ValueError(f"w_prev and w_curr must have the same shape; got {a.shape} and {b.shape}")
-    draws = np.ascontiguousarray(
-        hypothesis_draws(rng, params.max_hypotheses) if draws is None else draws, float
-    )
+        raise RansacInputError(f"w_prev and w_curr must have the same shape; got {a.shape} and {b.shape}")
+    draws = np.asarray(hypothesis_draws(rng, params.max_hypotheses) if draws is None else draws, float)
     if draws.shape != (2, int(params.max_hypotheses)):
-        raise ValueError(
+        raise RansacInputError(
             f"draws must have shape (2, max_hypotheses) = (2, {params.max_hypotheses}); got {draws.shape}"
         )
-    no_prior = np.array([np.nan, np.nan])
-    prior_theta = np.array([prior.theta, prior.covariance[0][0]], float) if prior is not None else no_prior
-    prior_rho = np.array([prior.rho, prior.covariance[1][1]], float) if prior is not None else no_prior
-    status, theta, rho, covariance, inliers, tried_theta, tried_rho, theta_in, rounds = choose(
-        core.one_point_core, plain
-    )(
-        np.ascontiguousarray(a),
-        np.ascontiguousarray(b),
-        camera_terms(camera),
-        prior_theta,
-        prior_rho,
-        draws,
-        params,
+    inliers = np.zeros(len(a), bool)
+    diagnostics: dict = {"matches": len(a)}
+
+    def failed(outcome: Outcome) -> RansacResult:
+        diagnostics["reason"] = outcome.value
+        diagnostics["time_ms"] = (time.perf_counter() - t_start) * 1e3
+        if prior is None:
+            return RansacResult(0.0, 0.0, inliers, np.diag([np.inf, np.inf]), False, diagnostics, outcome)
+        cov = np.asarray(prior.covariance, float)
+        return RansacResult(float(prior.theta), float(prior.rho), inliers, cov, False, diagnostics, outcome)
+
+    # 1. usable matches
+    off_height = np.abs(camera.fx * ((a[:, 1] - camera.cy) + (b[:, 1] - camera.cy))) > 1e-9 * camera.fx
+    usable = np.flatnonzero((a[:, 2] > 0) & (b[:, 2] > 0) & off_height)
+    if len(usable) < 3:
+        return failed(Outcome.FEW_USABLE)
+    wa, wb = a[usable], b[usable]
+    # 2-3. theta
+    thetas = ThetaModel(wa, wb, camera, params.pixel_sigma)
+    prior_theta = None if prior is None else (float(prior.theta), float(prior.covariance[0][0]))
+    h, var_h, tried_theta = search(thetas, draws[0], prior_theta, params)
+    theta, var_theta = reestimate(thetas, supporters(thetas, h, var_h, params))
+    angles = (*gate_angles(wa, camera), *gate_angles(wb, camera))
+    theta_in = theta_gate_pass(angles, thetas, theta, var_theta, params)
+    n_theta = int(np.count_nonzero(theta_in))
+    diagnostics.update(hypotheses_theta=tried_theta, theta_inliers=n_theta)
+    if n_theta < 3:
+        return failed(Outcome.FEW_THETA_INLIERS)
+    # 4. rho
+    P, Q, var_points = points_and_variances(wa, wb, camera, params.pixel_sigma)
+    rhos = RhoModel(P[theta_in], Q[theta_in], var_points[theta_in], theta)
+    prior_rho = None if prior is None else (float(prior.rho), float(prior.covariance[1][1]))
+    h, var_h, tried_rho = search(rhos, draws[1], prior_rho, params)
+    rho, var_rho = reestimate(rhos, supporters(rhos, h, var_h, params))
+    keep = np.zeros(len(wa), bool)
+    keep[theta_in] = supporters(rhos, rho, var_rho, params)
+    cov = np.diag([var_theta, var_rho])
+    # 5. refinement; the refined motion decides the inliers again
+    rounds = 0
+    while params.refine and np.count_nonzero(keep) >= 3 and rounds < params.refine_rounds:
+        rounds += 1
+        iterations = params.refine_iterations if rounds == 1 else 1
+        theta, rho, A, rss = gauss_newton(
+            P[keep], Q[keep], wa[keep], wb[keep], theta, rho, camera, iterations
+        )
+        cov = covariance(A, rss, 6 * int(np.count_nonzero(keep)))
+        new = theta_gate_pass(angles, thetas, theta, cov[0, 0], params) & whitened_pass(
+            P, wb, theta, rho, camera, params
+        )
+        changed, keep = bool(np.any(new != keep)), new
+        if not changed:
+            break
+    inliers[usable] = keep
+    count = int(np.count_nonzero(keep))
+    diagnostics.update(
+        hypotheses_rho=tried_rho,
+        inliers=count,
+        inlier_ratio=count / len(a),
+        refined=bool(params.refine),
+        refine_rounds=rounds,
     )
-    diagnostics = {"matches": len(a)}
-    if status != core.FEW_USABLE:
-        diagnostics.update(hypotheses_theta=int(tried_theta), theta_inliers=int(theta_in))
-    if status in (core.OK, core.FEW_INLIERS):
-        count = int(inliers.sum())
-        diagnostics.update(
-            hypotheses_rho=int(tried_rho),
-            inliers=count,
-            inlier_ratio=float(count / len(a)),
-            refined=bool(params.refine),
-            refine_rounds=int(rounds),
-        )
+    if count < 3:
+        return failed(Outcome.FEW_INLIERS)
     diagnostics["time_ms"] = (time.perf_counter() - t_start) * 1e3
-    if status == core.OK:
-        return RansacResult(float(theta), float(rho), inliers, covariance, True, diagnostics)
-    diagnostics["reason"] = _FAILURES[status]
-    if prior is not None:
-        return RansacResult(
-            float(prior.theta),
-            float(prior.rho),
-            inliers,
-            np.asarray(prior.covariance, float),
-            False,
-            diagnostics,
-        )
-    return RansacResult(0.0, 0.0, inliers, np.diag([np.inf, np.inf]), False, diagnostics)
-
-
-_FAILURES = {
-    core.FEW_USABLE: "fewer than 3 matches with positive disparities off the camera's height",
-    core.FEW_THETA_INLIERS: "fewer than 3 theta inliers",
-    core.FEW_INLIERS: "fewer than 3 inliers after refinement",
-}
+    return RansacResult(float(theta), float(rho), inliers, cov, True, diagnostics)
 
 
 def histogram_voting(w_prev, w_curr, camera: StereoCamera, bin_width: float = math.radians(0.05)):
@@ -268,7 +557,7 @@ def histogram_voting(w_prev, w_curr, camera: StereoCamera, bin_width: float = ma
         theta_j = theta_from_pixels(a, b, camera)
     ok = np.isfinite(theta_j) & (a[:, 2] > 0) & (b[:, 2] > 0)
     if ok.sum() < 3:
-        raise ValueError("histogram voting needs at least 3 matches with a defined theta")
+        raise RansacInputError("histogram voting needs at least 3 matches with a defined theta")
     t = theta_j[ok]
     edges = np.arange(t.min(), t.max() + 2 * bin_width, bin_width)
     counts, edges = np.histogram(t, edges)

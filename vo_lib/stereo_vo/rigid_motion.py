@@ -25,10 +25,9 @@ from dataclasses import dataclass
 
 import cv2
 import numpy as np
-from scipy.linalg import expm, logm
+from scipy.spatial.transform import Rotation
 
 from vo_lib.camera import StereoCamera
-from vo_lib.compiled import choose
 
 #: Huber threshold of the refinement, pixels (of the 3-vector residual's norm).
 HUBER_PIXELS = 1.0
@@ -78,30 +77,39 @@ def reprojection_errors(P: np.ndarray, w_curr: np.ndarray, R, t, camera: StereoC
     return err
 
 
-def _normal_equations(P, w, R, t, camera, huber):
-    """``(J^T W J, J^T W r, sum of weighted squares)`` of the Huber-weighted residuals, compiled
-    (:mod:`.rigid_core`); ``rigid_plain.normal_equations`` is the same written out in NumPy."""
-    from vo_lib.stereo_vo.rigid_core import normal_equations
+def normal_equations(P, w, R, t, camera: StereoCamera, huber: float) -> tuple[np.ndarray, np.ndarray, float]:
+    """``(J^T W J, J^T W r, sum of weighted squares)`` of the Huber-weighted residuals
+    ``pi(R P + t) - w`` in ``(u, v, d)``, for a left-multiplied update ``(dw, dt)`` of the pose.
 
-    A, g, cost = choose(normal_equations)(
-        np.ascontiguousarray(P, dtype=float),
-        np.ascontiguousarray(w, dtype=float),
-        np.ascontiguousarray(R, dtype=float),
-        np.ascontiguousarray(t, dtype=float),
-        camera.fx,
-        camera.fy,
-        camera.cx,
-        camera.cy,
-        camera.fx * camera.baseline,
-        float(huber),
+    ``pi(X, Y, Z) = (fx X / Z + cx, fy Y / Z + cy, fb / Z)``; a residual of length ``e`` weighs
+    1 within ``huber`` and ``huber / e`` beyond. The Jacobian rows are ``dpi/dQ [-[Q]x | I]``.
+    """
+    fx, fy, fb = camera.fx, camera.fy, camera.fx * camera.baseline
+    Q = np.asarray(P, float) @ np.asarray(R, float).T + np.asarray(t, float)
+    X, Y, Z = Q[:, 0], Q[:, 1], Q[:, 2]
+    iz = 1.0 / Z
+    iz2 = iz * iz
+    r = np.column_stack([fx * X * iz + camera.cx, fy * Y * iz + camera.cy, fb * iz]) - w
+    e = np.sqrt(np.sum(r * r, axis=1))
+    weight = np.where(e <= huber, 1.0, huber / np.maximum(e, 1e-12))
+    J = np.zeros((len(Q), 3, 6))  # d(u, v, d) / d(dw_x, dw_y, dw_z, dt_x, dt_y, dt_z)
+    J[:, 0] = np.column_stack(
+        [-fx * X * Y * iz2, fx * (1 + X * X * iz2), -fx * Y * iz, fx * iz, 0 * iz, -fx * X * iz2]
     )
-    return A, g, float(cost)
+    J[:, 1] = np.column_stack(
+        [-fy * (1 + Y * Y * iz2), fy * X * Y * iz2, fy * X * iz, 0 * iz, fy * iz, -fy * Y * iz2]
+    )
+    J[:, 2, :2], J[:, 2, 5] = np.column_stack([-fb * Y * iz2, fb * X * iz2]), -fb * iz2
+    WJ = J * weight[:, None, None]
+    A = np.einsum("nki,nkj->ij", WJ, J)
+    g = np.einsum("nki,nk->i", WJ, r)
+    return A, g, float(np.sum(weight * e * e))
 
 
 def _gauss_newton(P, w, R, t, camera, iterations, huber):
     A = np.eye(6)
     for _ in range(iterations):
-        A, g, _ = _normal_equations(P, w, R, t, camera, huber)
+        A, g, _ = normal_equations(P, w, R, t, camera, huber)
         try:
             dx = -np.linalg.solve(A, g)
         except np.linalg.LinAlgError:
@@ -164,7 +172,7 @@ def refine_rigid_motion(
     count = np.count_nonzero(inl)
     if count < min_inliers:
         return RigidMotion(T0[:3, :3], T0[:3, 3], np.full((6, 6), np.inf), inl, np.inf, False)
-    A, _, _ = _normal_equations(P[inl], wb[inl], R, t, camera, np.inf)
+    A, _, _ = normal_equations(P[inl], wb[inl], R, t, camera, np.inf)
     res = err[inl]
     dof = max(3 * int(count) - 6, 1)
     sigma2 = float(np.sum(res**2)) / dof
@@ -175,13 +183,43 @@ def refine_rigid_motion(
     return RigidMotion(R, t, cov, inl, float(np.sqrt(np.mean(res**2))), True)
 
 
+def _left_jacobian(rotvec: np.ndarray) -> np.ndarray:
+    """``V(w)`` of SE(3): ``t = V(w) v`` for the twist ``(w, v)``, in closed form,
+    ``V = I + (1 - cos a) / a^2 [w]x + (a - sin a) / a^3 [w]x^2`` with ``a = |w|`` (series below 1e-4)."""
+    a = float(np.linalg.norm(rotvec))
+    W = np.array([[0.0, -rotvec[2], rotvec[1]], [rotvec[2], 0.0, -rotvec[0]], [-rotvec[1], rotvec[0], 0.0]])
+    if a < 1e-4:
+        b, c = 0.5 - a * a / 24.0, 1.0 / 6.0 - a * a / 120.0
+    else:
+        b, c = (1.0 - np.cos(a)) / (a * a), (a - np.sin(a)) / (a * a * a)
+    return np.eye(3) + b * W + c * (W @ W)
+
+
+def se3_log(T) -> tuple[np.ndarray, np.ndarray]:
+    """The twist ``(w, v)`` of a rigid motion ``T``: ``w`` its rotation vector, ``v = V(w)^-1 t``."""
+    T = np.asarray(T, float)
+    w = Rotation.from_matrix(T[:3, :3]).as_rotvec()
+    return w, np.linalg.solve(_left_jacobian(w), T[:3, 3])
+
+
+def se3_exp(w, v) -> np.ndarray:
+    """The 4x4 rigid motion of the twist ``(w, v)``: ``R = exp([w]x)``, ``t = V(w) v``."""
+    w = np.asarray(w, float)
+    T = np.eye(4)
+    T[:3, :3] = Rotation.from_rotvec(w).as_matrix()
+    T[:3, 3] = _left_jacobian(w) @ np.asarray(v, float)
+    return T
+
+
 def scaled_motion(T, factor: float) -> np.ndarray:
     """The motion ``T`` repeated ``factor`` times: ``exp(factor log T)`` in SE(3), the same screw
-    motion run for ``factor`` times as long (``factor = 2`` gives ``T @ T``)."""
+    motion run for ``factor`` times as long (``factor = 2`` gives ``T @ T``). Closed-form log and
+    exp (:func:`se3_log`, :func:`se3_exp`)."""
     T = np.asarray(T, float)
     if factor == 1.0:
         return T.copy()
-    return np.real(expm(factor * np.real(logm(T))))
+    w, v = se3_log(T)
+    return se3_exp(factor * w, factor * v)
 
 
 def general_ransac(

@@ -41,7 +41,6 @@ whose planar part is the filter's and whose other part is the vision's.
 from __future__ import annotations
 
 import math
-import time
 
 import numpy as np
 
@@ -49,6 +48,7 @@ from vo_lib.camera import StereoCamera
 from vo_lib.geometry import camera_mount, yaw_matrix
 from vo_lib.stereo_vo.circular_motion import motion_matrices
 from vo_lib.stereo_vo.config import PipelineConfig
+from vo_lib.stereo_vo.frames import Stopwatch
 from vo_lib.stereo_vo.kalman import VoKalmanFilter, chord_measurement
 from vo_lib.stereo_vo.parts import Estimate, Prediction
 from vo_lib.stereo_vo.ransac import one_point_ransac
@@ -238,9 +238,9 @@ class SixDofMotion:
     def estimate(self, matches, prediction: Prediction, rng) -> Estimate:
         """The hypothesis, refined in 6 DoF; ``z = (theta, rho, sideways)`` of the vehicle."""
         guess, start, ratio = self.hypothesis(matches.w_prev, matches.w_curr, prediction.motion, rng)
-        t0 = time.perf_counter()
-        motion = refine_rigid_motion(matches.w_prev, matches.w_curr, self.camera, guess, start)
-        refinement = (time.perf_counter() - t0) * 1e3
+        watch = Stopwatch()
+        with watch("refinement"):
+            motion = refine_rigid_motion(matches.w_prev, matches.w_curr, self.camera, guess, start)
         T = motion.matrix
         z = chord_measurement(vehicle_increment(T, self.mount, self.mount_inverse))
         covariance = self.covariance_scale * chord_covariance(
@@ -254,7 +254,7 @@ class SixDofMotion:
             ratio,
             int(round(ratio * len(matches))),
             T,
-            {"refinement": refinement},
+            watch.ms,
         )
 
     # ------------------------------------------------------------------ poses

@@ -23,6 +23,7 @@ from vo_lib.cli.bench.bench_sim import bench_sensors
 from vo_lib.cli.bench.bench_stereo_vo import (
     bench_frontend,
     bench_geometry,
+    bench_kernels,
     bench_long,
     bench_pipeline,
     bench_ransac,
@@ -33,6 +34,7 @@ BENCHES: dict[str, Callable[[], dict[str, float]]] = {
     "pipeline": bench_pipeline,
     "long": bench_long,
     "ransac": bench_ransac,
+    "kernels": bench_kernels,
     "frontend": bench_frontend,
     "geometry": bench_geometry,
     "sensors": bench_sensors,
@@ -50,6 +52,7 @@ BENCH_HELP: dict[str, tuple[str, str]] = {
     "pipeline": ("[Zhao]'s pipeline, stage by stage, on 200 rendered frames", "about 15 s"),
     "long": ("the paper's 10,000-frame timing run (IV.A.1), rendered in memory", "about 6 min"),
     "ransac": ("1-point RANSAC against 3-point rigid RANSAC and OpenCV's solvePnPRansac", "about 30 s"),
+    "kernels": ("whole frames with each compiled kernel and with its NumPy reference", "about 1 min"),
     "frontend": ("the stereo front end per stage, guided against brute-force matching", "about 10 s"),
     "geometry": ("theta and rho (eq. 12-17) for 10,000 matches against a Python loop", "about 5 s"),
     "sensors": ("the stereo renderer per world, and the laser scanner", "about 15 s"),
