@@ -159,7 +159,7 @@ def test_one_point_ransac_seen_from_the_turning_axis_keeps_every_match_in_a_shar
     from vo_lib.geometry import camera_motion
     from vo_lib.stereo_vo.ransac import one_point_ransac
     from vo_lib.stereo_vo.six_dof import turning_axis_transform, turning_axis_view
-    from vo_lib.stereo_vo.synthetic import Scene, matches_under_transform
+    from vo_lib.stereo_vo.synthetic import matches_under_transform
 
     mount = camera_mount(forward=1.08, height=1.73, left=-0.31)
     mount[:3, :3] = Rotation.from_euler("y", 0.5, degrees=True).as_matrix() @ mount[:3, :3]  # tilted
