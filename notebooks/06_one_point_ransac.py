@@ -43,6 +43,15 @@
 # - X. Zhao, J. Kan, C. Zhan, *1-Point RANSAC Application: an Independent Positioning Method for
 #   Crawler Mobile Robots Based on Binocular Stereo Vision* [Zhao]: §II, eq. 14–17, and
 #   §III.A.3, parameter estimation by 1-point RANSAC, eq. 18–21 and the missing Fig. 5.
+# - M. A. Fischler, R. C. Bolles, *Random sample consensus* [Fischler 1981]: RANSAC, and the
+#   number of hypotheses of section 5.
+# - D. Scaramuzza, F. Fraundorfer, R. Siegwart, *Real-time monocular visual odometry for on-road
+#   vehicles with 1-point RANSAC* [Scaramuzza 2009] and J. Civera, O. G. Grasa, A. J. Davison,
+#   J. M. M. Montiel, *1-Point RANSAC for extended Kalman filtering* [Civera 2010], the paper's
+#   references [10] and [11]: one match per hypothesis, from the circular-motion constraint and
+#   from the filter's prior.
+# - D. Nistér, *An efficient solution to the five-point relative pose problem* [Nister 2004]: the
+#   5-point essential matrix of section 9.
 
 # %%
 import math
