@@ -51,7 +51,7 @@ from vo_lib.camera import StereoCamera
 from vo_lib.comparison import over_seeds
 from vo_lib.geometry import camera_motion, camera_mount, compose_planar, wrap_angle
 from vo_lib.stereo_vo import circular_motion as cm
-from vo_lib.stereo_vo.synthetic import matches_under_transform, synthetic_matches
+from vo_lib.stereo_vo.synthetic import Scene, matches_under_transform, synthetic_matches
 from vo_lib.viz.plotting import new_axes
 from vo_lib.viz.prose import Markdown
 from vo_lib.viz.widgets import offer, slider
@@ -67,9 +67,7 @@ print(camera)
 #
 # 200 random motions — turns up to ±20° per frame, chords up to ±0.5 m, forwards and
 # backwards — each with 1,000 matches. The matches come from a scene a crawler could see
-# (`vo_lib.stereo_vo.synthetic.Scene`): the rig 0.5 m above a flat floor, 30 % of the points on
-# the floor, the rest on upright surfaces up to 2.5 m high at horizontal ranges 1.5–15 m; no point
-# lies below the floor.
+# (`vo_lib.stereo_vo.synthetic.Scene`, described below the cell): no point lies below the floor.
 
 # %%
 worst_theta = worst_rho = 0.0
@@ -83,6 +81,15 @@ for _ in range(200):
         worst_rho, np.abs(cm.rho_from_pixels(m.w_prev, m.w_curr, theta_true, camera) - rho_true).max()
     )
 assert worst_theta <= 1e-9 and worst_rho <= 1e-9
+scene = Scene()
+display(
+    Markdown(
+        f"The scene: the rig {scene.camera_height} m above a flat floor, {scene.floor_share:.0%} of "
+        f"the points on the floor, the rest on upright surfaces up to {scene.top} m high; the lowest "
+        f"point of the last set is {scene.height_above_floor(m.points).min():.1e} m above the floor."
+    )
+)
+assert scene.height_above_floor(m.points).min() > -1e-9
 display(
     Markdown(
         f"Over 200,000 matches the worst θ error is {worst_theta:.1e} rad and the worst ρ error "
