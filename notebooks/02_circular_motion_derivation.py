@@ -226,8 +226,9 @@ assert sp.simplify(rho_pixels - eq17_printed) != 0
 #
 # Symbols can hide a slip of the pen, so we also check numbers. We draw 1,000 random points in
 # view of a Bumblebee2-like rig standing above a flat floor (on the floor and on upright
-# surfaces, none below it: `vo_lib.stereo_vo.synthetic.Scene`), move the camera by known (θ, ρ), project both views to
-# (u, v, d) and recover θ with eq. 14 and ρ with both versions of eq. 17. The library functions
+# surfaces, none below it: `vo_lib.stereo_vo.synthetic.Scene`), move the camera by known
+# (θ, ρ), project both views to (u, v, d) and recover θ with eq. 14 and ρ with both versions of
+# eq. 17. The library functions
 # `theta_from_pixels` and `rho_from_pixels` implement the derived forms.
 
 # %%
