@@ -418,7 +418,8 @@ offset_cmp = over_seeds(offset_share, OFFSET_SEEDS)
 spot_minus_arc = offset_cmp.difference("the spot turn", "the arc")
 display(
     Markdown(
-        f"Per degree of turn, {offset_cmp.sentence('the spot turn', 'the arc', unit='% of the turn', scale=100)}: "
+        "Per degree of turn, "
+        f"{offset_cmp.sentence('the spot turn', 'the arc', unit='% of the turn', scale=100)}: "
         f"a difference of at most {max(abs(v) for v in spot_minus_arc[1:]):.1%} of the turn, against "
         f"the {np.median(offset_cmp.figures['the arc']):.0%} both share. The spot-turn sample collects "
         "the most heading error only because it turns the most."
