@@ -915,7 +915,8 @@ display(Markdown(
     "the gate. What leaves the estimator is the refined θ's variance: its mean z² is "
     f"{rf[0]:.2f} ({rf[1]:.2f}–{rf[2]:.2f}), "
     + ("inside the band." if band[0] <= rf[0] <= band[1] else
-       f"outside the band, over-confident by a factor of about {rf[0]:.1f} in variance.")
+       f"above the band, over-confident by a factor of about {rf[0]:.1f} in variance." if rf[0] > band[1]
+       else "below the band: under-confident.")
 ))
 assert tb[1] > band[1]  # over-confident: the whole seed interval above the band
 assert sc[0] < tb[0] and np.median(gate_widening) < 0.05  # scaling helps; the gate hardly feels θ̂'s variance
