@@ -332,9 +332,9 @@ print(f" {'vo_lib':>8s}{library_err:22.4f}")
 naive_rows = np.array(naive_rows)
 best_naive = naive_rows[np.argmin(naive_rows[:, 1])]
 naive_seeds = range(len(naive_sets))
+tau_best = math.radians(best_naive[0])
 naive_best_errors = [
-    abs(naive_one_point_ransac(a, b, math.radians(best_naive[0]), NAIVE_HYPOTHESES, np.random.default_rng(k))[0]
-        - th)
+    abs(naive_one_point_ransac(a, b, tau_best, NAIVE_HYPOTHESES, np.random.default_rng(k))[0] - th)
     for k, (th, _, a, b, _) in enumerate(naive_sets)
 ]
 naive_cmp = over_seeds(
@@ -933,8 +933,8 @@ assert sc[0] < tb[0] and np.median(gate_widening) < 0.05  # scaling helps; the g
 # %% [markdown]
 # **The same result as the library.** Given the same draws, the library's plain NumPy estimator,
 # `one_point_ransac(..., plain=True)`, must pick the same inliers and the same motion, up to the
-# refinement's stopping rule. (The compiled kernel the pipeline runs is the same estimator compiled with Numba; the
-# tests compare it with the plain one, not this notebook.)
+# refinement's stopping rule. (The compiled kernel the pipeline runs is the same estimator
+# compiled with Numba; the tests compare it with the plain one, not this notebook.)
 
 # %%
 theta_ours, rho_ours, inliers_ours, _ = numpy_one_point_ransac(m.w_prev, m.w_curr, draws)
