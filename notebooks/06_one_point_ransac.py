@@ -332,7 +332,7 @@ print(f" {'vo_lib':>8s}{library_err:22.4f}")
 naive_rows = np.array(naive_rows)
 best_naive = naive_rows[np.argmin(naive_rows[:, 1])]
 naive_seeds = range(len(naive_sets))
-tau_best = math.radians(best_naive[0])
+tau_best, DEG = math.radians(best_naive[0]), 180 / math.pi
 naive_best_errors = [
     abs(naive_one_point_ransac(a, b, tau_best, NAIVE_HYPOTHESES, np.random.default_rng(k))[0] - th)
     for k, (th, _, a, b, _) in enumerate(naive_sets)
@@ -345,7 +345,7 @@ display(
         f"The tightest τ keeps {naive_rows[0, 2]:.0%} of the true inliers; the loosest lets in so "
         f"many outliers that only {naive_rows[-1, 3]:.0%} of its supporters are true. Even at the "
         f"best τ of the grid, {best_naive[0]:.2f}° (picked on these very sets), "
-        f"{naive_cmp.sentence('the full estimator', 'the naive one', unit='°', scale=180 / math.pi, digits=4)}"
+        f"{naive_cmp.sentence('the full estimator', 'the naive one', unit='°', scale=DEG, digits=4)}"
         " "
         "in θ; and the best τ is a property of this noise and this scene, not something a robot can "
         "know."
@@ -840,8 +840,9 @@ assert pool_cmp.verdict("the pool", "all matches") is Verdict.BETTER
 # **Adaptive N_h stops early.** Section 5 asked for more hypotheses at the *effective* inlier
 # ratio than the first batch holds, yet the adaptive rule tries only that first batch here (the
 # line below): it estimates the ratio from the winner's supporters, close to the true ratio, not
-# from the share of *good* hypotheses that section 5 measured. With 80 % random outliers the supporters are few and
-# the rule does draw more: fixed batch against adaptive rule, θ phase only, on 20 sets:
+# from the share of *good* hypotheses that section 5 measured. With 80 % random outliers the
+# supporters are few and the rule does draw more: fixed batch against adaptive rule, θ phase
+# only, on 20 sets:
 
 # %%
 print(
@@ -908,7 +909,7 @@ band = chi2_band(1, len(NEES_SEEDS))
 nees_rows = {
     name: (np.mean(v), *bootstrap_interval(v, np.mean), np.mean(np.array(v) > 9)) for name, v in z2.items()
 }
-print(f" variance of θ̂               mean z² (95 % seed CI)      χ²(1) band, mean of {len(NEES_SEEDS)}   |z| > 3")
+print(f" variance of θ̂            mean z² (95 % seed CI)    χ²(1) band, mean of {len(NEES_SEEDS)}  |z| > 3")
 for name, (mean, lo, hi, miss) in nees_rows.items():
     print(f" {name:26s}{mean:9.2f} ({lo:.2f}–{hi:.2f}){'':8s}{band[0]:.2f}–{band[1]:.2f}{miss:18.0%}")
 tb, sc, rf = nees_rows["textbook"], nees_rows["scaled by the scatter"], nees_rows["refined"]
