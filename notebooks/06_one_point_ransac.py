@@ -757,8 +757,11 @@ print(f"best on the tuning sets: th_yaw_angle = {TH_YAW}, th_polar_radius = {TH_
 
 # %% [markdown]
 # Then the ladder, every rung on the same 20 realistic match sets (one set per seed, each estimator
-# with its own fixed draws): the paper's estimator; our per-match σ in both gates instead of the
-# fixed thresholds, with inverse-variance re-estimation; the pool; adaptive N_h; the refinement.
+# with its own fixed draws): the paper's estimator; per-match σ (steps 1–4: a match supports a θ
+# hypothesis when its own θ lies within k of their joint σ, the winner is re-estimated by the
+# inverse-variance weighted mean, eq. 20 and eq. 21 with per-match thresholds pick the matches
+# that go on to ρ and to the refinement); the pool; adaptive N_h; the refinement (step 5). Before
+# the refinement, eq. 20 moves θ nowhere: it only decides which matches the later steps use.
 # Each rung is compared with the one below it by `over_seeds`, on the absolute θ error and on
 # the relative ρ error (lower is better), and the sentences below are written by the code.
 
