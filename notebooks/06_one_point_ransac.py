@@ -68,7 +68,16 @@ from vo_lib.stereo_vo import ransac as library
 from vo_lib.stereo_vo.baselines import essential_ransac, pnp_ransac, rigid_ransac
 from vo_lib.stereo_vo.ransac import histogram_voting, hypotheses_needed, one_point_ransac, refine_motion
 from vo_lib.stereo_vo.synthetic import synthetic_matches
-from vo_lib.viz.nb06 import median_time, plot_gate_spread, plot_hypotheses, plot_trial, print_ladder, said
+from vo_lib.viz.nb06 import (
+    median_time,
+    plot_gate_spread,
+    plot_hypotheses,
+    plot_row_errors,
+    plot_trial,
+    print_ladder,
+    print_nees,
+    said,
+)
 from vo_lib.viz.plotting import draw_chord_geometry, draw_depression_geometry, new_axes
 from vo_lib.viz.prose import Markdown
 from vo_lib.viz.widgets import offer, slider
@@ -280,12 +289,7 @@ for lo, hi in bands:
         f"   {lo:4d}–{hi:<4d}   {sel.sum():8d}   {band_median[-1]:22.3f}"
         f"   {np.mean(err_many[sel] < 0.1):10.0%}"
     )
-fig, ax = new_axes(width=6.5, height=3.2)
-ax.semilogy(row, err_many, ".", ms=2, alpha=0.4)
-ax.set_xlabel("distance of the match from the principal row [px]")
-ax.set_ylabel("|θ of one true match − θ| [deg]")
-ax.set_title("A true match's own θ: useless near the camera's height")
-plt.show()
+plot_row_errors(row, err_many)
 ill_ratio = band_median[0] / band_median[-1]
 display(
     Markdown(
@@ -912,9 +916,7 @@ band = chi2_band(1, len(NEES_SEEDS))
 nees_rows = {
     name: (np.mean(v), *bootstrap_interval(v, np.mean), np.mean(np.array(v) > 9)) for name, v in z2.items()
 }
-print(f" variance of θ̂            mean z² (95 % seed CI)    χ²(1) band, mean of {len(NEES_SEEDS)}  |z| > 3")
-for name, (mean, lo, hi, miss) in nees_rows.items():
-    print(f" {name:26s}{mean:9.2f} ({lo:.2f}–{hi:.2f}){'':8s}{band[0]:.2f}–{band[1]:.2f}{miss:18.0%}")
+print_nees(nees_rows, band, len(NEES_SEEDS))
 tb, sc, rf = nees_rows["textbook"], nees_rows["scaled by the scatter"], nees_rows["refined"]
 display(Markdown(
     f"Over {len(NEES_SEEDS)} sets, step 3's textbook variance is over-confident: the mean z² is "

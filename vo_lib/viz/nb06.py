@@ -91,3 +91,24 @@ def said(comparison: Comparison, a: str, b: str, unit: str = "", scale: float = 
     if np.all(comparison.paired(a, b) == 0):
         return f"{a} changes nothing against {b}: the same figure in all {len(comparison)} seeds"
     return comparison.sentence(a, b, unit=unit, scale=scale, digits=digits)
+
+
+def plot_row_errors(row_px: np.ndarray, error_deg: np.ndarray) -> None:
+    """|θ error| of each true match's own θ against its distance from the principal row."""
+    import matplotlib.pyplot as plt
+
+    _, ax = new_axes(width=6.5, height=3.2)
+    ax.semilogy(row_px, error_deg, ".", ms=2, alpha=0.4)
+    ax.set_xlabel("distance of the match from the principal row [px]")
+    ax.set_ylabel("|θ of one true match − θ| [deg]")
+    ax.set_title("A true match's own θ: useless near the camera's height")
+    plt.show()
+
+
+def print_nees(
+    rows: dict[str, tuple[float, float, float, float]], band: tuple[float, float], sets: int
+) -> None:
+    """One row per variance: mean z², its seed interval, the χ² band and the share with |z| > 3."""
+    print(f" variance of θ̂            mean z² (95 % seed CI)    χ²(1) band, mean of {sets}  |z| > 3")
+    for name, (mean, low, high, miss) in rows.items():
+        print(f" {name:26s}{mean:9.2f} ({low:.2f}–{high:.2f}){'':8s}{band[0]:.2f}–{band[1]:.2f}{miss:18.0%}")
