@@ -35,6 +35,9 @@
 # - X. Zhao, J. Kan, C. Zhan, *1-Point RANSAC Application: an Independent Positioning Method for
 #   Crawler Mobile Robots Based on Binocular Stereo Vision* [Zhao]: §II, the crawler's motion
 #   model, eq. 1–11.
+# - D. Scaramuzza, F. Fraundorfer, R. Siegwart, *Real-time monocular visual odometry for on-road
+#   vehicles with 1-point RANSAC* [Scaramuzza 2009], the paper's reference [10]: a nonholonomic
+#   vehicle moves locally on a circle, the constraint behind the arcs here and eq. 12–17.
 
 # %%
 import matplotlib.pyplot as plt

@@ -36,6 +36,10 @@
 # - X. Zhao, J. Kan, C. Zhan, *1-Point RANSAC Application: an Independent Positioning Method for
 #   Crawler Mobile Robots Based on Binocular Stereo Vision* [Zhao]: §II, planar circular
 #   motion, eq. 12–17 and Fig. 2.
+# - D. Scaramuzza, F. Fraundorfer, R. Siegwart, *Real-time monocular visual odometry for on-road
+#   vehicles with 1-point RANSAC* [Scaramuzza 2009], the paper's reference [10]: where the
+#   constraint φ = θ/2 of a nonholonomic vehicle moving on a circle comes from, used there with
+#   one camera and here with a stereo rig.
 
 # %%
 import matplotlib.pyplot as plt
@@ -221,8 +225,10 @@ assert sp.simplify(rho_pixels - eq17_printed) != 0
 # ## 6 · A numerical proof
 #
 # Symbols can hide a slip of the pen, so we also check numbers. We draw 1,000 random points in
-# view of a Bumblebee2-like rig, move the camera by known (θ, ρ), project both views to
-# (u, v, d) and recover θ with eq. 14 and ρ with both versions of eq. 17. The library functions
+# view of a Bumblebee2-like rig standing above a flat floor (on the floor and on upright
+# surfaces, none below it: `vo_lib.stereo_vo.synthetic.Scene`), move the camera by known
+# (θ, ρ), project both views to (u, v, d) and recover θ with eq. 14 and ρ with both versions of
+# eq. 17. The library functions
 # `theta_from_pixels` and `rho_from_pixels` implement the derived forms.
 
 # %%

@@ -38,6 +38,8 @@
 #   outdoor experiments the sample drives mirror.
 # - R. Yuan, F. Zhang, Y. Zhu, Y. Fu, *A Novel Visual Odometer Assisted Pose Tracking Method for
 #   Mobile Robots* [Yuan]: §IV, the occluded corridor.
+# - E. Rosten, T. Drummond, *Machine learning for high-speed corner detection* [Rosten 2006]:
+#   FAST, the corners the rendered textures must offer (notebook 05).
 # - A. Geiger, P. Lenz, C. Stiller, R. Urtasun, *Vision meets Robotics: The KITTI Dataset*,
 #   International Journal of Robotics Research, 2013: the raw drives and the odometry layout.
 

@@ -35,6 +35,9 @@
 # - X. Zhao, J. Kan, C. Zhan, *1-Point RANSAC Application: an Independent Positioning Method for
 #   Crawler Mobile Robots Based on Binocular Stereo Vision* [Zhao]: §III.A.1, binocular stereo
 #   processing (FAST corners, Hamming matching).
+# - E. Rosten, T. Drummond, *Machine learning for high-speed corner detection* [Rosten 2006]: FAST.
+# - E. Rublee, V. Rabaud, K. Konolige, G. Bradski, *ORB: an efficient alternative to SIFT or SURF*
+#   [Rublee 2011]: the rotated binary descriptor (rBRIEF) matched by Hamming distance.
 
 # %%
 import math

@@ -26,8 +26,10 @@
 #   principal row, and one threshold for every match;
 # - why the effective inlier ratio is below the true one, and how many hypotheses 1-, 3- and
 #   5-point RANSAC need, in theory and counted on real draws;
-# - to add per-match σ, the pool, adaptive N_h and the refinement one at a time, measuring each,
-#   until the result is the library's;
+# - to run the paper's estimator as printed (two fixed thresholds, no refinement) and to add
+#   per-match σ, the pool, adaptive N_h and the refinement one at a time, each measured over seeds
+#   against the step before, until the result is the library's;
+# - to check with a NEES whether an estimate's variance is honest;
 # - how accuracy and time compare with 3-point rigid RANSAC, OpenCV's `solvePnPRansac` and the
 #   5-point essential matrix.
 #
@@ -41,6 +43,15 @@
 # - X. Zhao, J. Kan, C. Zhan, *1-Point RANSAC Application: an Independent Positioning Method for
 #   Crawler Mobile Robots Based on Binocular Stereo Vision* [Zhao]: §II, eq. 14–17, and
 #   §III.A.3, parameter estimation by 1-point RANSAC, eq. 18–21 and the missing Fig. 5.
+# - M. A. Fischler, R. C. Bolles, *Random sample consensus* [Fischler 1981]: RANSAC, and the
+#   number of hypotheses of section 5.
+# - D. Scaramuzza, F. Fraundorfer, R. Siegwart, *Real-time monocular visual odometry for on-road
+#   vehicles with 1-point RANSAC* [Scaramuzza 2009] and J. Civera, O. G. Grasa, A. J. Davison,
+#   J. M. M. Montiel, *1-Point RANSAC for extended Kalman filtering* [Civera 2010], the paper's
+#   references [10] and [11]: one match per hypothesis, from the circular-motion constraint and
+#   from the filter's prior.
+# - D. Nistér, *An efficient solution to the five-point relative pose problem* [Nister 2004]: the
+#   5-point essential matrix of section 9.
 
 # %%
 import math
@@ -51,11 +62,22 @@ import numpy as np
 from IPython.display import display
 
 from vo_lib.camera import StereoCamera
+from vo_lib.comparison import Verdict, bootstrap_interval, chi2_band, over_seeds
 from vo_lib.stereo_vo import circular_motion as cm
 from vo_lib.stereo_vo import ransac as library
 from vo_lib.stereo_vo.baselines import essential_ransac, pnp_ransac, rigid_ransac
 from vo_lib.stereo_vo.ransac import histogram_voting, hypotheses_needed, one_point_ransac, refine_motion
 from vo_lib.stereo_vo.synthetic import synthetic_matches
+from vo_lib.viz.nb06 import (
+    median_time,
+    plot_gate_spread,
+    plot_hypotheses,
+    plot_row_errors,
+    plot_trial,
+    print_ladder,
+    print_nees,
+    said,
+)
 from vo_lib.viz.plotting import draw_chord_geometry, draw_depression_geometry, new_axes
 from vo_lib.viz.prose import Markdown
 from vo_lib.viz.widgets import offer, slider
@@ -76,16 +98,7 @@ camera = StereoCamera.bumblebee2()
 theta_true, rho_true = math.radians(3.0), 0.08
 m = synthetic_matches(camera, 300, theta_true, rho_true, rng, noise_px=0.5, outlier_ratio=0.4)
 theta_each = cm.theta_from_pixels(m.w_prev, m.w_curr, camera)
-fig, ax = new_axes(width=6.5, height=3.4)
-bins = np.linspace(-10, 15, 120)
-ax.hist(np.clip(np.degrees(theta_each[m.inliers]), -10, 15), bins=bins, alpha=0.7, label="inliers")
-ax.hist(np.clip(np.degrees(theta_each[~m.inliers]), -10, 15), bins=bins, alpha=0.7, label="outliers")
-ax.axvline(3.0, color="k", lw=1)
-ax.set_xlabel("θ proposed by one match [deg]")
-ax.set_ylabel("matches")
-ax.set_title("One hypothesis per match (true θ = 3°)")
-ax.legend(fontsize="small")
-plt.show()
+plot_hypotheses(theta_each, m.inliers, 3.0)
 
 # %% [markdown]
 # ## 2 · The θ gate and the missing Fig. 5
@@ -106,7 +119,7 @@ plt.show()
 # Both ratios equal r/r′; eq. 20 is their disagreement. In pixels,
 # tan α = (v − v₀)cos β / f_y and β = atan((u − u₀)/f_x): like eq. 14, the gate needs no depth.
 # Written out, the two gates are a few lines each (eq. 21 is the ρ gate: the first point moved by
-# the hypothesis must land on the second, ‖P′ − (RP + T)‖, with R and T of eq. 12):
+# the hypothesis must land on the second, ‖P′ − (RP + T)‖, with R and T of eq. 15):
 
 # %%
 fx, fy, u0, v0, baseline = camera.fx, camera.fy, camera.cx, camera.cy, camera.baseline
@@ -179,19 +192,7 @@ slope = (theta_gate_error(m.w_prev, m.w_curr, theta_true + h, camera) - raw) / h
 sigma = cm.theta_standard_deviation(m.w_prev, m.w_curr, camera, 0.5)
 normalised = raw / (np.abs(slope) * sigma)
 ok = m.inliers & np.isfinite(normalised)
-fig, axes = new_axes(2, width=5.2, height=3.4)
-axes[0].hist(np.log10(raw[ok]), bins=50)
-axes[0].set_xlabel("log10 error_θ of true matches")
-axes[0].set_ylabel("matches")
-axes[0].set_title("The raw θ gate")
-axes[1].hist(np.clip(normalised[ok], 0, 5), bins=50, density=True, label="true matches")
-zs = np.linspace(0, 5, 200)
-axes[1].plot(zs, 2 * np.exp(-0.5 * zs**2) / math.sqrt(2 * math.pi), "C1", label="half-normal")
-axes[1].set_xlabel("error_θ / its own σ")
-axes[1].set_ylabel("density")
-axes[1].set_title("Normalised by each match's σ")
-axes[1].legend(fontsize="small")
-plt.show()
+plot_gate_spread(raw[ok], normalised[ok])
 within = np.mean(normalised[ok] <= 3)
 median_norm = np.median(normalised[ok])
 print(
@@ -274,7 +275,7 @@ print(
 # matches' own θ, by their distance from the principal row:
 
 # %%
-many = synthetic_matches(camera, 3000, theta_true, rho_true, np.random.default_rng(3), noise_px=0.5)
+many = synthetic_matches(camera, 3000, theta_true, rho_true, np.random.default_rng(SEED + 1000), noise_px=0.5)
 theta_many = theta_of_matches(many.w_prev, many.w_curr)
 row = np.abs(many.w_prev[:, 1] + many.w_curr[:, 1] - 2 * v0) / 2  # mean distance from v₀ [px]
 err_many = np.degrees(np.abs(theta_many - theta_true))
@@ -288,12 +289,7 @@ for lo, hi in bands:
         f"   {lo:4d}–{hi:<4d}   {sel.sum():8d}   {band_median[-1]:22.3f}"
         f"   {np.mean(err_many[sel] < 0.1):10.0%}"
     )
-fig, ax = new_axes(width=6.5, height=3.2)
-ax.semilogy(row, err_many, ".", ms=2, alpha=0.4)
-ax.set_xlabel("distance of the match from the principal row [px]")
-ax.set_ylabel("|θ of one true match − θ| [deg]")
-ax.set_title("A true match's own θ: useless near the camera's height")
-plt.show()
+plot_row_errors(row, err_many)
 ill_ratio = band_median[0] / band_median[-1]
 display(
     Markdown(
@@ -313,8 +309,8 @@ assert ill_ratio > 10 and all(np.diff(band_median) < 0)  # worse the nearer, eve
 
 # %%
 naive_sets = []
-for seed in range(40):
-    r = np.random.default_rng(900 + seed)
+for seed in range(SEED + 900, SEED + 940):
+    r = np.random.default_rng(seed)
     th, rh = math.radians(r.uniform(-5, 5)), r.uniform(0.03, 0.12)
     naive_sets.append((th, rh, *realistic_matches(300, th, rh, r)))
 thresholds_deg = (0.02, 0.05, 0.1, 0.2, 0.5, 1.0)
@@ -329,31 +325,38 @@ for tau in thresholds_deg:
         recall.append((kept & inl).sum() / inl.sum())
         precision.append((kept & inl).sum() / max(kept.sum(), 1))
     naive_rows.append((tau, math.degrees(np.median(errs)), np.median(recall), np.median(precision)))
-library_err = math.degrees(
-    np.median(
-        [
-            abs(one_point_ransac(a, b, camera, rng=k).theta - th)
-            for k, (th, _, a, b, _) in enumerate(naive_sets)
-        ]
-    )
-)
+library_errors = [
+    abs(one_point_ransac(a, b, camera, rng=k).theta - th) for k, (th, _, a, b, _) in enumerate(naive_sets)
+]
+library_err = math.degrees(np.median(library_errors))
 print(f" {'τ [deg]':>8s}{'median |θ err| [deg]':>22s}{'recall':>8s}{'precision':>11s}")
 for tau, e, rc, pr in naive_rows:
     print(f" {tau:8.2f}{e:22.4f}{rc:8.0%}{pr:11.0%}")
 print(f" {'vo_lib':>8s}{library_err:22.4f}")
 naive_rows = np.array(naive_rows)
 best_naive = naive_rows[np.argmin(naive_rows[:, 1])]
+naive_seeds = range(len(naive_sets))
+tau_best, DEG = math.radians(best_naive[0]), 180 / math.pi
+naive_best_errors = [
+    abs(naive_one_point_ransac(a, b, tau_best, NAIVE_HYPOTHESES, np.random.default_rng(k))[0] - th)
+    for k, (th, _, a, b, _) in enumerate(naive_sets)
+]
+naive_cmp = over_seeds(
+    lambda k: {"the full estimator": library_errors[k], "the naive one": naive_best_errors[k]}, naive_seeds
+)
 display(
     Markdown(
         f"The tightest τ keeps {naive_rows[0, 2]:.0%} of the true inliers; the loosest lets in so "
-        f"many outliers that only {naive_rows[-1, 3]:.0%} of its supporters are true. The best τ "
-        f"of the grid, {best_naive[0]:.2f}°, still errs by {best_naive[1]:.4f}° (median), "
-        f"{best_naive[1] / library_err:.1f} times the full estimator's {library_err:.4f}°; and the "
-        "best τ is a property of this noise and this scene, not something a robot can know."
+        f"many outliers that only {naive_rows[-1, 3]:.0%} of its supporters are true. Even at the "
+        f"best τ of the grid, {best_naive[0]:.2f}° (picked on these very sets), "
+        f"{naive_cmp.sentence('the full estimator', 'the naive one', unit='°', scale=DEG, digits=4)}"
+        " "
+        "in θ; and the best τ is a property of this noise and this scene, not something a robot can "
+        "know."
     )
 )
 assert naive_rows[0, 2] < 0.5 and naive_rows[-1, 3] < 0.8
-assert best_naive[1] > 2 * library_err
+assert naive_cmp.verdict("the full estimator", "the naive one") is Verdict.BETTER
 
 # %% [markdown]
 # ## 5 · How many hypotheses?
@@ -488,8 +491,9 @@ assert np.allclose(var_theta, cm.theta_standard_deviation(wa, wb, camera, PIXEL_
 # Hypotheses come from the best-conditioned share `POOL_FRACTION` of the matches (the *pool*,
 # smallest variance first); the draw u picks `pool[int(u · len(pool))]`. A match j supports
 # hypothesis h of variance v_h when (θ_j − h)² ≤ k²(σ²_j + v_h), and v_h is capped at the pool's
-# median: `np.minimum` makes a hypothesis no less certain than a typical one, so an over-confident
-# draw cannot narrow every gate. Hypotheses come in batches: first N_h = log(1 − p)/log(1 − w) for
+# median: `np.minimum` makes a hypothesis no *less* certain than a typical one of the pool, so a
+# poorly conditioned draw cannot widen every match's gate and win by the looseness of its own
+# gate. Hypotheses come in batches: first N_h = log(1 − p)/log(1 − w) for
 # w = 0.5; after each batch N_h is recomputed from the best inlier ratio so far, until N_h have
 # been tried. Among equal counts the more precise hypothesis wins. Phase 2 runs the same search
 # with another support test, so the test is an argument; so are the pool's share and whether N_h
@@ -524,7 +528,8 @@ def adaptive_search(values, variances, uniforms, support, pool_fraction=POOL_FRA
 
 theta_h, var_h, count_h, tried_theta = adaptive_search(theta_j, var_theta, draws[0], theta_support)
 print(f"best θ hypothesis {math.degrees(theta_h):.4f}°: {count_h} supporters, {tried_theta} hypotheses tried")
-assert abs(theta_h - theta_true) < math.radians(0.1) and tried_theta <= hypotheses_needed(0.5)
+# one match's own θ: within a few times the 0.08° typical of well-conditioned matches (section 4)
+assert abs(theta_h - theta_true) < math.radians(0.25) and tried_theta <= hypotheses_needed(0.5)
 
 # %% [markdown]
 # **Step 3, re-estimate θ and apply the gate of eq. 20.** θ̂ is the inverse-variance weighted
@@ -708,103 +713,240 @@ def theta_phase(w_prev, w_curr, draws, pool_fraction, adaptive):
 
 
 # %% [markdown]
-# On the 40 realistic match sets of section 4 (each with its own draws), the error of θ and of ρ
-# and the θ hypotheses tried, as the pieces are added; for the pool, also the share of its matches
-# whose own θ is a good hypothesis (within 0.05° of the truth), against that share of all matches:
+# **The paper's estimator, as printed.** [Zhao] (§III.A.3) gates each match against a θ hypothesis
+# with eq. 20 below a fixed threshold `th_yaw_angle`, then each θ inlier against a ρ hypothesis
+# with eq. 21 below a fixed threshold `th_polar_radius` (metres), inside the filter's prediction
+# step, and prints neither threshold's value nor a re-estimation or refinement: the winning
+# hypotheses are the motion. We write it as printed, with N_h = 10 hypotheses per phase, and give
+# it the best thresholds of a grid, chosen on 20 tuning sets drawn apart from the sets it is
+# judged on (a robot gets no such choice).
+
 
 # %%
-stages = {
-    "naive, best fixed τ": None,
-    "+ per-match σ": dict(pool_fraction=1.0, adaptive=False),
-    "+ pool": dict(pool_fraction=POOL_FRACTION, adaptive=False),
-    "+ adaptive N_h": dict(pool_fraction=POOL_FRACTION, adaptive=True),
-    "+ gates, no refinement": dict(refine=False),
-    "+ refinement (full)": dict(refine=True),
+def paper_one_point_ransac(w_prev, w_curr, th_yaw, th_rho, hypotheses, rng):
+    """[Zhao], eq. 14, 17, 20 and 21 with fixed thresholds, no re-estimation: (theta, rho)."""
+    usable = usable_matches(w_prev, w_curr)
+    wa, wb = w_prev[usable], w_curr[usable]
+    theta_j = theta_of_matches(wa, wb)
+    best_theta, best_in = theta_j[0], np.zeros(len(wa), bool)
+    for j in rng.integers(0, len(wa), hypotheses):
+        inside = np.nan_to_num(theta_gate_error(wa, wb, theta_j[j], camera), nan=np.inf) < th_yaw
+        if inside.sum() > best_in.sum():
+            best_theta, best_in = theta_j[j], inside
+    P, Q = camera.backproject(wa[best_in]), camera.backproject(wb[best_in])
+    rho_j = cm.rho_from_pixels(wa[best_in], wb[best_in], best_theta, camera)
+    best_rho, best_count = np.nan, -1
+    for j in rng.integers(0, max(len(rho_j), 1), hypotheses if len(rho_j) else 0):
+        count = np.sum(rho_gate_error(P, Q, best_theta, rho_j[j]) < th_rho)
+        if count > best_count:
+            best_rho, best_count = rho_j[j], count
+    return best_theta, best_rho
+
+
+tuning_sets = [(th, rh, *realistic_matches(300, th, rh, r)) for th, rh, r in (
+    (math.radians(r.uniform(-5, 5)), r.uniform(0.03, 0.12), r)
+    for r in (np.random.default_rng(s) for s in range(SEED + 2000, SEED + 2020))
+)]
+TH_YAW_GRID, TH_RHO_GRID = (0.002, 0.005, 0.01, 0.02, 0.05), (0.02, 0.05, 0.1, 0.2, 0.5)
+tuning = {
+    (ty, tr): np.median([
+        [abs(e[0] - th), abs(e[1] - rh) / rh]
+        for th, rh, a, b, _ in tuning_sets
+        for e in [paper_one_point_ransac(a, b, ty, tr, NAIVE_HYPOTHESES, np.random.default_rng(0))]
+    ], axis=0)
+    for ty in TH_YAW_GRID for tr in TH_RHO_GRID
 }
-effect = {name: {"theta": [], "rho": [], "tried": []} for name in stages}
+TH_YAW, TH_RHO = min(tuning, key=lambda key: tuple(tuning[key]))
+print(f"best on the tuning sets: th_yaw_angle = {TH_YAW}, th_polar_radius = {TH_RHO} m")
+
+# %% [markdown]
+# Then the ladder, every rung on the same 20 realistic match sets (one set per seed, each estimator
+# with its own fixed draws): the paper's estimator; per-match σ (steps 1–4: a match supports a θ
+# hypothesis when its own θ lies within k of their joint σ, the winner is re-estimated by the
+# inverse-variance weighted mean, eq. 20 and eq. 21 with per-match thresholds pick the matches
+# that go on to ρ and to the refinement); the pool; adaptive N_h; the refinement (step 5). Before
+# the refinement, eq. 20 moves θ nowhere: it only decides which matches the later steps use.
+# Each rung is compared with the one below it by `over_seeds`, on the absolute θ error and on
+# the relative ρ error (lower is better), and the sentences below are written by the code.
+
+# %%
+LADDER = {
+    "the paper's estimator": None,
+    "per-match σ": dict(pool_fraction=1.0, adaptive=False, refine=False),
+    "+ pool": dict(pool_fraction=POOL_FRACTION, adaptive=False, refine=False),
+    "+ adaptive N_h": dict(pool_fraction=POOL_FRACTION, adaptive=True, refine=False),
+    "+ refinement (ours, full)": dict(pool_fraction=POOL_FRACTION, adaptive=True, refine=True),
+}
+LADDER_SEEDS = range(SEED + 900, SEED + 920)
+ladder_runs, adaptive_tried_ladder = {}, []
+for seed in LADDER_SEEDS:
+    r = np.random.default_rng(seed)
+    th, rh = math.radians(r.uniform(-5, 5)), r.uniform(0.03, 0.12)
+    a, b, _ = realistic_matches(300, th, rh, r)
+    row = {}
+    for name, kwargs in LADDER.items():
+        if kwargs is None:
+            est = paper_one_point_ransac(a, b, TH_YAW, TH_RHO, NAIVE_HYPOTHESES, np.random.default_rng(seed))
+        else:
+            est = numpy_one_point_ransac(a, b, library.hypothesis_draws(seed), **kwargs)
+            if name == "+ adaptive N_h":
+                adaptive_tried_ladder.append(est[3])
+        row[name] = (abs(est[0] - th), abs(est[1] - rh) / rh)
+    ladder_runs[seed] = row
+ladder_theta = over_seeds(lambda s: {k: v[0] for k, v in ladder_runs[s].items()}, LADDER_SEEDS)
+ladder_rho = over_seeds(lambda s: {k: v[1] for k, v in ladder_runs[s].items()}, LADDER_SEEDS)
+print_ladder(ladder_theta, ladder_rho)
+
+# %%
+rungs = list(LADDER)
+steps = [
+    f"- {said(ladder_theta, upper, lower, unit='°', scale=180 / math.pi, digits=4)} in θ; "
+    f"{said(ladder_rho, upper, lower, unit='%', scale=100)} in ρ."
+    for lower, upper in zip(rungs[:-1], rungs[1:], strict=True)
+]
+full, paper = rungs[-1], rungs[0]
+display(Markdown(
+    "What each piece buys, rung against the rung below it:\n\n" + "\n".join(steps) + "\n\n"
+    f"End to end, {ladder_theta.sentence(full, paper, unit='°', scale=180 / math.pi, digits=4)} "
+    f"in θ, and {ladder_rho.sentence(full, paper, unit='%', scale=100)} in ρ."
+))
+assert ladder_theta.verdict(full, paper) is Verdict.BETTER
+assert ladder_rho.verdict(full, paper) is Verdict.BETTER
+assert ladder_theta.verdict(full, "+ adaptive N_h") is Verdict.BETTER  # the refinement is the step that pays
+assert ladder_rho.verdict(full, "+ adaptive N_h") is Verdict.BETTER
+
+# %% [markdown]
+# The refinement is what makes the estimator accurate: it fits (θ, ρ) to every inlier's pixels
+# at once, where the rungs below it keep a single hypothesis or a weighted mean of per-match θs
+# that are each as noisy as their position makes them. For the pool, the share of its matches
+# whose own θ is a good hypothesis (within 0.05° of the truth), against that share of all matches,
+# over the same sets:
+
+# %%
 good_share = {"all": [], "pool": []}
-for k, (th, rh, a, b, _) in enumerate(naive_sets):
-    d = library.hypothesis_draws(k)
-    est, _ = naive_one_point_ransac(
-        a, b, math.radians(best_naive[0]), NAIVE_HYPOTHESES, np.random.default_rng(k)
-    )
-    effect["naive, best fixed τ"]["theta"].append(abs(est - th))
-    effect["naive, best fixed τ"]["tried"].append(NAIVE_HYPOTHESES)
-    for name, kwargs in list(stages.items())[1:4]:
-        est, tried = theta_phase(a, b, d, **kwargs)
-        effect[name]["theta"].append(abs(est - th))
-        effect[name]["tried"].append(tried)
-    for name in ("+ gates, no refinement", "+ refinement (full)"):
-        est_t, est_r, _, tried = numpy_one_point_ransac(a, b, d, **stages[name])
-        effect[name]["theta"].append(abs(est_t - th))
-        effect[name]["rho"].append(abs(est_r - rh) / rh)
-        effect[name]["tried"].append(tried)
+for seed in LADDER_SEEDS:
+    r = np.random.default_rng(seed)
+    th, rh = math.radians(r.uniform(-5, 5)), r.uniform(0.03, 0.12)
+    a, b, _ = realistic_matches(300, th, rh, r)
     usable_k = usable_matches(a, b)
     t_k, v_k = theta_per_match(a[usable_k], b[usable_k])
     good_k = np.abs(t_k - th) < GOOD_HYPOTHESIS
     good_share["all"].append(good_k.mean())
     good_share["pool"].append(good_k[np.argsort(v_k)[: max(MIN_POOL, int(POOL_FRACTION * len(t_k)))]].mean())
-print(f" {'':24s}{'median |θ err| [deg]':>21s}{'90th pct':>10s}{'median ρ err':>14s}{'θ hypotheses':>14s}")
-summary = {}
-for name, e in effect.items():
-    t_deg = np.degrees(e["theta"])
-    summary[name] = (np.median(t_deg), np.percentile(t_deg, 90), np.mean(e["tried"]))
-    rho_text = f"{np.median(e['rho']):.2%}" if e["rho"] else "—"
-    print(
-        f" {name:24s}{summary[name][0]:21.4f}{summary[name][1]:10.4f}{rho_text:>14s}{summary[name][2]:14.1f}"
-    )
-share_all, share_pool = np.mean(good_share["all"]), np.mean(good_share["pool"])
-rho_before, rho_after = (
-    np.median(effect["+ gates, no refinement"]["rho"]),
-    np.median(effect["+ refinement (full)"]["rho"]),
-)
-print(f"good hypotheses: {share_all:.0%} of all matches, {share_pool:.0%} of the pool")
-
-# %%
-naive_e, sigma_e, pool_e = (
-    summary["naive, best fixed τ"][0],
-    summary["+ per-match σ"][0],
-    summary["+ pool"][0],
-)
-full_e = summary["+ refinement (full)"][0]
-display(
-    Markdown(
-        f"Per-match σ alone, with the weighted mean, does **not** beat the best fixed τ on θ: median "
-        f"{sigma_e:.4f}° against {naive_e:.4f}° (and that τ was picked on these very sets, which a "
-        "robot cannot do). A loose gate for an ill-conditioned match lets near misses through, and "
-        "θ from eq. 14 alone stays noisy. The pool raises the share of good hypotheses from "
-        f"{share_all:.0%} to {share_pool:.0%} and the median error to {pool_e:.4f}°. What makes "
-        f"the estimator accurate is the last step: the refinement takes the median ρ error from "
-        f"{rho_before:.2%} to {rho_after:.2%} and θ's to {full_e:.4f}°, {naive_e / full_e:.1f} "
-        "times below the naive one's."
-    )
-)
-assert sigma_e > naive_e and share_pool > share_all and pool_e < sigma_e  # each clause above
-assert rho_after < rho_before / 2 and naive_e > 2 * full_e
+# "lower is better" for a share of bad hypotheses
+pool_cmp = over_seeds(lambda s: {"the pool": 1 - good_share["pool"][s - LADDER_SEEDS[0]],
+                                 "all matches": 1 - good_share["all"][s - LADDER_SEEDS[0]]}, LADDER_SEEDS)
+display(Markdown(
+    f"Good hypotheses: {np.mean(good_share['all']):.0%} of all matches, "
+    f"{np.mean(good_share['pool']):.0%} of the pool (mean over the sets); as a share of bad ones, "
+    f"{pool_cmp.sentence('the pool', 'all matches', unit='%', scale=100, digits=1)}."
+))
+assert pool_cmp.verdict("the pool", "all matches") is Verdict.BETTER
 
 # %% [markdown]
-# Adaptive N_h changes nothing here: with 60 % inliers the first batch already suffices. It
-# matters when the inlier ratio is low. With 80 % random outliers (40 sets), the θ phase with a
-# fixed batch against the adaptive rule, counting the sets whose θ is more than 0.1° off:
+# **Adaptive N_h stops early.** Section 5 asked for more hypotheses at the *effective* inlier
+# ratio than the first batch holds, yet the adaptive rule tries only that first batch here (the
+# line below): it estimates the ratio from the winner's supporters, close to the true ratio, not
+# from the share of *good* hypotheses that section 5 measured. With 80 % random outliers the
+# supporters are few and the rule does draw more: fixed batch against adaptive rule, θ phase
+# only, on 20 sets:
 
 # %%
-adaptive_rows = {}
-for adaptive in (False, True):
-    fails, tried = 0, []
-    for k in range(40):
-        r = np.random.default_rng(3000 + k)
-        th, rh = math.radians(r.uniform(-5, 5)), r.uniform(0.03, 0.12)
-        s80 = synthetic_matches(camera, 300, th, rh, r, noise_px=0.5, outlier_ratio=0.8)
-        est, t = theta_phase(s80.w_prev, s80.w_curr, library.hypothesis_draws(k), POOL_FRACTION, adaptive)
-        fails += abs(est - th) > math.radians(0.1)
-        tried.append(t)
-    adaptive_rows[adaptive] = (fails, np.mean(tried))
-    print(
-        f"{'adaptive' if adaptive else 'fixed   '} N_h: {fails:2d} of 40 sets fail, "
-        f"{np.mean(tried):.1f} hypotheses"
-    )
-assert summary["+ adaptive N_h"][0] == summary["+ pool"][0]  # "changes nothing here"
-assert adaptive_rows[True][0] < adaptive_rows[False][0] and adaptive_rows[True][1] > adaptive_rows[False][1]
+print(
+    f"θ hypotheses the adaptive rule tried on the ladder's sets: {sorted(set(adaptive_tried_ladder))}; "
+    f"section 5 asked for {hypotheses_needed(w_all)} (all matches) or {hypotheses_needed(w_pool)} (the pool)"
+)
+assert max(adaptive_tried_ladder) == hypotheses_needed(0.5, CONFIDENCE) < hypotheses_needed(w_pool)
+ADAPTIVE_SEEDS = range(SEED + 3000, SEED + 3020)
+adaptive_tried = {False: [], True: []}
+
+
+def adaptive_run(seed):
+    """|θ error| of the θ phase with a fixed batch and with adaptive N_h on one set of 80 % outliers."""
+    r = np.random.default_rng(seed)
+    th, rh = math.radians(r.uniform(-5, 5)), r.uniform(0.03, 0.12)
+    s80 = synthetic_matches(camera, 300, th, rh, r, noise_px=0.5, outlier_ratio=0.8)
+    out = {}
+    for adaptive, name in ((True, "adaptive N_h"), (False, "a fixed batch")):
+        draws_k = library.hypothesis_draws(seed)
+        est, tried = theta_phase(s80.w_prev, s80.w_curr, draws_k, POOL_FRACTION, adaptive)
+        adaptive_tried[adaptive].append(tried)
+        out[name] = abs(est - th)
+    return out
+
+
+adaptive_cmp = over_seeds(adaptive_run, ADAPTIVE_SEEDS)
+display(Markdown(
+    f"At 80 % outliers the adaptive rule tries {np.mean(adaptive_tried[True]):.1f} hypotheses on "
+    f"average against the batch's {np.mean(adaptive_tried[False]):.1f}; in θ, "
+    f"{said(adaptive_cmp, 'adaptive N_h', 'a fixed batch', unit='°', scale=180 / math.pi, digits=4)}."
+))
+assert np.mean(adaptive_tried[True]) > np.mean(adaptive_tried[False])  # "does draw more"
+
+# %% [markdown]
+# **How well does θ̂ know its own error?** Step 3's variance, 1/Σ(1/σ²_j), is right only when the
+# supporters' θ_j are unbiased and independent with exactly their first-order variances. The
+# normalised squared error z² = (θ̂ − θ)²/σ²_θ̂ of one set is a NEES with one degree of freedom;
+# over independent sets its mean must lie in the χ² band of `chi2_band(1, N)`. Beside the textbook
+# variance: a common repair that scales it by the supporters' own scatter about θ̂, the reduced
+# χ² = Σ(θ_j − θ̂)²/σ²_j /(n − 1) when it exceeds 1 (the Birge ratio); the same weighted mean over
+# the *true* inliers among the supporters only (an oracle no robot has, to find the cause); and
+# the refined θ's variance (step 5).
+
+# %%
+NEES_SEEDS = range(SEED + 4000, SEED + 4040)
+z2 = {"textbook": [], "scaled by the scatter": [], "true inliers only (oracle)": [], "refined": []}
+gate_widening = []
+for seed in NEES_SEEDS:
+    r = np.random.default_rng(seed)
+    th, rh = math.radians(r.uniform(-5, 5)), r.uniform(0.03, 0.12)
+    a, b, true_k = realistic_matches(300, th, rh, r)
+    ok_k = usable_matches(a, b)
+    t_k, v_k = theta_per_match(a[ok_k], b[ok_k])
+    h, v_h, _, _ = adaptive_search(t_k, v_k, library.hypothesis_draws(seed)[0], theta_support)
+    support_k = theta_support(t_k, v_k, h, v_h)
+    t_hat, v_hat = weighted_mean(t_k, v_k, support_k)
+    birge = np.sum((t_k[support_k] - t_hat) ** 2 / v_k[support_k]) / max(support_k.sum() - 1, 1)
+    z2["textbook"].append((t_hat - th) ** 2 / v_hat)
+    t_true, v_true = weighted_mean(t_k, v_k, support_k & true_k[ok_k])
+    z2["true inliers only (oracle)"].append((t_true - th) ** 2 / v_true)
+    z2["scaled by the scatter"].append((t_hat - th) ** 2 / (v_hat * max(birge, 1.0)))
+    est = one_point_ransac(a, b, camera, draws=library.hypothesis_draws(seed))
+    z2["refined"].append((est.theta - th) ** 2 / est.covariance[0, 0])
+    gate_widening.append(np.median(np.sqrt(1 + v_hat / v_k[support_k])) - 1)
+band = chi2_band(1, len(NEES_SEEDS))
+nees_rows = {
+    name: (np.mean(v), *bootstrap_interval(v, np.mean), np.mean(np.array(v) > 9)) for name, v in z2.items()
+}
+print_nees(nees_rows, band, len(NEES_SEEDS))
+tb, sc, rf = nees_rows["textbook"], nees_rows["scaled by the scatter"], nees_rows["refined"]
+orc = nees_rows["true inliers only (oracle)"]
+
+
+def side_of_band(value):
+    """Where a mean z² lies against the χ² band."""
+    if value > band[1]:
+        return f"above the band, over-confident by a factor of about {value:.1f} in variance"
+    return "inside the band" if value >= band[0] else "below the band, under-confident"
+
+
+display(Markdown(
+    f"Over {len(NEES_SEEDS)} sets, step 3's textbook variance is over-confident: the mean z² is "
+    f"{tb[0]:.1f} (95 % seed interval {tb[1]:.1f}–{tb[2]:.1f}) against the band {band[0]:.2f}–"
+    f"{band[1]:.2f}, and {tb[3]:.0%} of the sets miss by more than 3σ. Scaled by the supporters' "
+    f"scatter it gives {sc[0]:.2f} ({sc[1]:.2f}–{sc[2]:.2f}), {side_of_band(sc[0])}. Over the true "
+    f"inliers among the supporters only, the textbook variance gives {orc[0]:.2f} ({orc[1]:.2f}–"
+    f"{orc[2]:.2f}), {side_of_band(orc[0])}: the outliers that pass the support test (near misses, "
+    "moving-object points) are what move θ̂, a bias that the variance of a mean does not model and "
+    "the scaling by the scatter catches only in part. The gate barely feels either: θ̂'s variance is "
+    f"added to each match's own, which it widens by {np.median(gate_widening):.2%} (median), so the "
+    "library keeps the textbook variance in the gate. What leaves the estimator is the refined θ's "
+    f"variance: its mean z² is {rf[0]:.2f} ({rf[1]:.2f}–{rf[2]:.2f}), {side_of_band(rf[0])}."
+))
+assert tb[1] > band[1]  # over-confident: the whole seed interval above the band
+assert sc[0] < tb[0] and np.median(gate_widening) < 0.05  # scaling helps; the gate hardly feels θ̂'s variance
+assert orc[2] < tb[1]  # the cause: without the outliers among the supporters, no longer over-confident
+
 
 # %% [markdown]
 # **The same result as the library.** Given the same draws, the library's estimator,
@@ -823,7 +965,8 @@ print(
     f"{lib_est.inliers.sum()} inliers"
 )
 assert np.array_equal(inliers_ours, lib_est.inliers)
-assert abs(theta_ours - lib_est.theta) < 1e-9 and abs(rho_ours - lib_est.rho) < 1e-9
+# equal to the Gauss-Newton stopping rule (steps below 1e-10 rad and 1e-9 m), not to rounding
+assert abs(theta_ours - lib_est.theta) < 1e-9 and abs(rho_ours - lib_est.rho) < 1e-8
 for k, (_, _, a, b, _) in enumerate(naive_sets[:5]):  # and on realistic sets
     mine = numpy_one_point_ransac(a, b, library.hypothesis_draws(k))
     theirs = one_point_ransac(a, b, camera, draws=library.hypothesis_draws(k))
@@ -835,16 +978,6 @@ for k, (_, _, a, b, _) in enumerate(naive_sets[:5]):  # and on realistic sets
 
 
 # %%
-def median_time(fn, repeats=15):
-    """Median wall time of fn() in milliseconds."""
-    times = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t0)
-    return 1e3 * np.median(times)
-
-
 t_numpy = median_time(lambda: numpy_one_point_ransac(m.w_prev, m.w_curr, draws))
 t_library = median_time(lambda: one_point_ransac(m.w_prev, m.w_curr, camera, draws=draws))
 print(
@@ -865,7 +998,7 @@ print(
 
 # %%
 rows = []
-for seed in range(60):
+for seed in range(SEED, SEED + 60):
     r_rng = np.random.default_rng(seed)
     th, rh = math.radians(r_rng.uniform(-5, 5)), r_rng.uniform(0.03, 0.12)
     mm = synthetic_matches(camera, 300, th, rh, r_rng, noise_px=0.5, outlier_ratio=0.4)
@@ -926,7 +1059,7 @@ assert real_rows[:, 0].min() >= 0.9 and math.degrees(real_rows[:, 2].max()) <= 0
 # %% [markdown]
 # ## 9 · Against the general-purpose estimators
 #
-# Same 10 match sets for everyone. The 6-DoF methods must also find the three angles and the
+# The same 20 match sets for everyone, one per seed. The 6-DoF methods must also find the three angles and the
 # height change that the planar model knows to be zero; the essential matrix (one camera) cannot
 # see the scale, so its ρ is not compared. Histogram voting takes θ as the mode of the per-match
 # θs and ρ as the median of the per-match ρs in the winning bin.
@@ -939,43 +1072,36 @@ methods = {
     "solvePnPRansac": lambda mm: pnp_ransac(mm.w_prev, mm.w_curr, camera),
     "5-point essential": lambda mm: essential_ransac(mm.w_prev, mm.w_curr, camera),
 }
-cases = []
-for seed in range(10):
-    c_rng = np.random.default_rng(100 + seed)
+BASELINE_SEEDS = range(SEED + 100, SEED + 120)
+baseline_runs = {}
+for seed in BASELINE_SEEDS:
+    c_rng = np.random.default_rng(seed)
     th, rh = math.radians(c_rng.uniform(-5, 5)), c_rng.uniform(0.03, 0.12)
-    cases.append((th, rh, synthetic_matches(camera, 300, th, rh, c_rng, noise_px=0.5, outlier_ratio=0.4)))
-table = {}
-for name, fn in methods.items():
-    t_err, r_err, times = [], [], []
-    for th, rh, mm in cases:
+    mm = synthetic_matches(camera, 300, th, rh, c_rng, noise_px=0.5, outlier_ratio=0.4)
+    baseline_runs[seed] = {}
+    for name, fn in methods.items():
         t0 = time.perf_counter()
         out = fn(mm)
-        times.append(time.perf_counter() - t0)
+        elapsed = time.perf_counter() - t0
         est_theta, est_rho = out if isinstance(out, tuple) else (out.theta, out.rho)
-        t_err.append(abs(est_theta - th))
-        r_err.append(abs(est_rho - rh) / rh)
-    table[name] = (np.median(times) * 1e3, math.degrees(np.median(t_err)), np.median(r_err))
+        baseline_runs[seed][name] = (abs(est_theta - th), abs(est_rho - rh) / rh, elapsed)
+base_theta = over_seeds(lambda s: {k: v[0] for k, v in baseline_runs[s].items()}, BASELINE_SEEDS)
+base_rho = over_seeds(lambda s: {k: v[1] for k, v in baseline_runs[s].items()}, BASELINE_SEEDS)
 print(f" {'method':<22s}{'time [ms]':>10s}{'median |θ err| [deg]':>22s}{'median ρ err':>14s}")
-for name, (t, te, re) in table.items():
-    rho_text = "—" if name == "5-point essential" else f"{re:.2%}"
-    print(f" {name:<22s}{t:10.2f}{te:22.4f}{rho_text:>14s}")
-assert table["1-point RANSAC"][1] <= table["solvePnPRansac"][1]
-assert table["1-point RANSAC"][1] <= table["3-point rigid RANSAC"][1]
-assert table["1-point RANSAC"][1] <= table["5-point essential"][1]
-assert 3 * table["1-point RANSAC"][1] <= table["3-point rigid RANSAC"][1]  # "by a wide margin"
-pnp_rho, ours_rho = table["solvePnPRansac"][2], table["1-point RANSAC"][2]
-display(
-    Markdown(
-        "The planar model pays off in θ: knowing that roll, pitch and height do not change, the "
-        "1-point method's θ is better than every 6-DoF estimate from the same matches, by a wide "
-        "margin over the 3-D rigid fit (whose far points carry metres of depth noise). For ρ, "
-        f"`solvePnPRansac` is {'better' if pnp_rho < ours_rho else 'worse'}: {pnp_rho:.2%} against "
-        f"{ours_rho:.2%} (median); like our refinement it minimises reprojection errors in the "
-        "image, over all six degrees of freedom. The times above are single runs; "
-        "`python -m vo_lib bench ransac` measures them side by side over repeated runs."
-    )
-)
-assert pnp_rho < ours_rho  # PnP's rho is the better one on these sets
+for name in methods:
+    t_ms = 1e3 * np.median([baseline_runs[s][name][2] for s in BASELINE_SEEDS])
+    rho_text = "—" if name == "5-point essential" else f"{np.median(base_rho.figures[name]):.2%}"
+    print(f" {name:<22s}{t_ms:10.2f}{np.degrees(np.median(base_theta.figures[name])):22.4f}{rho_text:>14s}")
+ours, six_dof = "1-point RANSAC", ("3-point rigid RANSAC", "solvePnPRansac", "5-point essential")
+deg = 180 / math.pi
+display(Markdown(
+    "In θ, on the same matches:\n\n"
+    + "\n".join(f"- {base_theta.sentence(ours, other, unit='°', scale=deg, digits=4)};" for other in six_dof)
+    + f"\n\nIn ρ, {base_rho.sentence('solvePnPRansac', ours, unit='%', scale=100)}; like our refinement "
+    "it minimises reprojection errors in the image, over all six degrees of freedom. The times above "
+    "are single runs; `python -m vo_lib bench ransac` measures them side by side over repeated runs."
+))
+assert all(base_theta.verdict(ours, other) is Verdict.BETTER for other in six_dof)
 
 # %% [markdown]
 # ## 10 · Outliers and noise
@@ -988,8 +1114,8 @@ assert pnp_rho < ours_rho  # PnP's rho is the better one on these sets
 def ransac_trial(outlier_ratio=0.4, noise_px=0.5):
     """Success rate and median time of 1-point RANSAC over 20 seeded match sets."""
     hits, times, errs = 0, [], []
-    for seed in range(20):
-        t_rng = np.random.default_rng(500 + seed)
+    for seed in range(SEED + 500, SEED + 520):
+        t_rng = np.random.default_rng(seed)
         th, rh = math.radians(t_rng.uniform(-5, 5)), t_rng.uniform(0.03, 0.12)
         mm = synthetic_matches(camera, 300, th, rh, t_rng, noise_px=noise_px, outlier_ratio=outlier_ratio)
         t0 = time.perf_counter()
@@ -997,15 +1123,7 @@ def ransac_trial(outlier_ratio=0.4, noise_px=0.5):
         times.append((time.perf_counter() - t0) * 1e3)
         errs.append(math.degrees(abs(est.theta - th)))
         hits += est.success and errs[-1] < 0.05 and abs(est.rho - rh) < 0.05 * rh
-    fig, ax = new_axes(width=5.5, height=3.2)
-    ax.hist(errs, bins=20)
-    ax.set_xlabel("|θ error| [deg]")
-    ax.set_ylabel("match sets")
-    ax.set_title(
-        f"{outlier_ratio:.0%} outliers, {noise_px} px: {hits}/20 within 0.05° and 5 %, "
-        f"{np.median(times):.2f} ms"
-    )
-    plt.show()
+    plot_trial(errs, outlier_ratio, noise_px, hits, float(np.median(times)))
     return hits / 20
 
 
@@ -1024,13 +1142,14 @@ trial_widget = offer(
 #
 # - One match gives a full hypothesis; 8 hypotheses reach 99.9 % confidence at 60 % inliers,
 #   where 3-point RANSAC needs 29 and 5-point 86 — if every inlier gave a good hypothesis. Near
-#   the principal row it does not, so the effective inlier ratio is lower; the pool raises it.
-# - A naive version with one fixed threshold is easy to write and hard to tune; per-match σ
-#   removes the threshold, and the refinement brings the accuracy (section 7 measures each piece).
+#   the principal row it does not, so the effective inlier ratio is lower (section 5).
 # - Fig. 5's angles are the ray's depression (α) and its angle to the chord (γ); then eq. 18–20
 #   hold exactly. Each match's gate gets its own threshold from first-order noise propagation.
-# - With refinement, the 1-point estimate equals a least-squares fit on the true inliers and
-#   gives a better θ than general 6-DoF estimators on the same matches.
+# - The paper's estimator uses two fixed thresholds, `th_yaw_angle` and `th_polar_radius`, and no
+#   refinement. Section 7 runs it, and each piece we add, on the same 20 seeds; the sentences
+#   there say which pieces reliably help, with their share of seeds and interval.
+# - θ̂'s textbook variance is over-confident (section 7's NEES check); the gate hardly feels it.
+# - Section 9 sets the full estimator beside 6-DoF estimators on the same matches, over 20 seeds.
 
 # %% [markdown]
 # ## Exercises

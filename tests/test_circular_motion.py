@@ -133,3 +133,41 @@ def test_matches_under_transform_validates_and_reports_motion(camera, rng):
         matches_under_transform(camera, 5, np.eye(3), rng)
     m = synthetic_matches(camera, 5, 0.1, 0.2, rng)
     assert (m.theta, m.rho) == pytest.approx((0.1, 0.2))
+
+
+@pytest.mark.parametrize("pitch_deg", [0.0, 8.0, 20.0])
+def test_synthetic_scene_has_no_point_below_the_floor(camera, rng, pitch_deg):
+    from vo_lib.stereo_vo.synthetic import Scene
+
+    scene = Scene(pitch=np.radians(pitch_deg))
+    m = synthetic_matches(camera, 3000, np.radians(4.0), 0.1, rng, scene=scene)
+    height = scene.height_above_floor(m.points)
+    assert height.min() >= -1e-9 and height.max() <= scene.top + 1e-9
+    # the floor is seen (points on it), and the rows spread over the image: far surfaces near the
+    # principal row, the floor below it
+    assert np.mean(np.abs(height) < 1e-9) > 0.1
+    rows = np.histogram(m.w_prev[:, 1], bins=4, range=(0, camera.height))[0]
+    assert np.all(rows > 0.05 * len(m.points))
+    # the robot's motion is reported, not the pitched camera's
+    assert (m.theta, m.rho) == pytest.approx((np.radians(4.0), 0.1))
+
+
+def test_pitched_camera_breaks_the_planar_model_and_a_level_one_does_not(camera, rng):
+    from vo_lib.stereo_vo.synthetic import Scene
+
+    level = synthetic_matches(camera, 500, np.radians(4.0), 0.1, rng)
+    pitched = synthetic_matches(camera, 500, np.radians(4.0), 0.1, rng, scene=Scene(pitch=np.radians(10)))
+    errors = []
+    for m in (level, pitched):
+        ok = ~cm.degenerate_theta_mask(m.w_prev, m.w_curr, camera, min_pixels=20.0)
+        errors.append(np.median(np.abs(cm.theta_from_pixels(m.w_prev[ok], m.w_curr[ok], camera) - m.theta)))
+    assert errors[0] < 1e-9 < 1e-4 < errors[1]
+
+
+def test_scene_rejects_impossible_settings():
+    from vo_lib.stereo_vo.synthetic import Scene
+
+    with pytest.raises(ValueError, match="camera_height"):
+        Scene(camera_height=0.0)
+    with pytest.raises(ValueError, match="floor_share"):
+        Scene(floor_share=1.5)

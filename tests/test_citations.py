@@ -59,6 +59,18 @@ def references() -> dict[str, str]:
     return {key: " ".join(body.split()) for key, body in ENTRY.findall(text)}
 
 
+#: The three papers the project implements.
+PAPERS = ("Zhao", "Yan 2020", "Yuan")
+#: The works each early notebook takes an idea from, which its prose must cite ([Zhao]'s own
+#: references [10] and [11], RANSAC, the five-point solver, FAST and ORB).
+SOURCES = {
+    "01_crawler_odometry.py": ("Scaramuzza 2009",),
+    "02_circular_motion_derivation.py": ("Scaramuzza 2009",),
+    "03_circular_motion_numeric_checks.py": ("Scaramuzza 2009",),
+    "04_world_and_sequences.py": ("Rosten 2006",),
+    "05_stereo_front_end.py": ("Rosten 2006", "Rublee 2011"),
+    "06_one_point_ransac.py": ("Fischler 1981", "Scaramuzza 2009", "Civera 2010", "Nister 2004"),
+}
 #: Every tracked text file but this one, whose examples ("[Key]", "x[None]") are not citations.
 FILES = [p for p in tracked_text_files() if p.name != "test_citations.py"]
 
@@ -95,7 +107,7 @@ def test_the_guard_knows_the_old_forms_and_spares_random_seeds():
 
 def test_every_reference_is_complete():
     entries = references()
-    assert set(entries) == {"Zhao", "Yan 2020", "Yuan"}
+    assert set(entries) == set(PAPERS) | {key for keys in SOURCES.values() for key in keys}
     for key, body in entries.items():
         surname, _, year = key.partition(" ")
         authors = re.sub(r"\s*\([^)]*\)", "", body).split(".")[0]  # names in another script aside
@@ -118,3 +130,17 @@ def test_every_reference_is_cited_and_the_page_is_linked():
     used = {key for p in FILES if p != REFERENCES for key in KEY.findall(prose_of(p))}
     assert set(references()) <= used, "a reference nothing cites"
     assert "(docs/references.md)" in (ROOT / "README.md").read_text(encoding="utf-8")
+
+
+@pytest.mark.parametrize("notebook", sorted(SOURCES))
+def test_the_early_notebooks_cite_where_their_ideas_come_from(notebook):
+    cited = set(KEY.findall(prose_of(ROOT / "notebooks" / notebook)))
+    missing = sorted(set(SOURCES[notebook]) - cited)
+    assert not missing, f"notebooks/{notebook} does not cite {missing} (docs/references.md)"
+
+
+def test_the_sources_entries_carry_a_doi_and_the_papers_own_numbers():
+    entries = references()
+    for key in {key for keys in SOURCES.values() for key in keys}:
+        assert re.search(r"doi:\[?10\.\d{4,5}/", entries[key]), f"[{key}]: no doi"
+    assert "reference [10]" in entries["Scaramuzza 2009"] and "reference [11]" in entries["Civera 2010"]

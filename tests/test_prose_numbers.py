@@ -183,7 +183,6 @@ CONSTANTS: dict[str, dict[str, str]] = {
         "0.05 °": "the distance from the truth at which a hypothesis is called good (GOOD_HYPOTHESIS), "
         "and ransac_trial's θ tolerance",
         "5 %": "ransac_trial's ρ tolerance, chosen",
-        "0.1 °": "the θ error at which a set is counted as failed, chosen",
         "99.7 %": "the confidence level of the whitened eq. 21 gate, by choice",
         "99.9 %": "the confidence level the hypothesis count is computed for, by choice",
         "0.01 °": "the first threshold of the grid the exercise searches",

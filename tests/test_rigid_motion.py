@@ -223,7 +223,7 @@ def test_a_pitching_car_still_gets_a_hypothesis_with_its_inliers(kitti_camera, p
     from vo_lib.geometry import camera_motion
     from vo_lib.stereo_vo.config import CAR
     from vo_lib.stereo_vo.pipeline import StereoOdometry
-    from vo_lib.stereo_vo.synthetic import matches_under_transform
+    from vo_lib.stereo_vo.synthetic import Scene, matches_under_transform
 
     mount = camera_mount(forward=1.08, height=1.73, left=-0.31)
     theta = np.radians(3.0)
@@ -231,14 +231,17 @@ def test_a_pitching_car_still_gets_a_hypothesis_with_its_inliers(kitti_camera, p
     D = np.eye(4)
     D[:3, :3] = Rotation.from_euler("y", pitch_deg, degrees=True).as_matrix()  # the vehicle pitches
     T = np.linalg.inv(mount) @ D @ mount @ T
-    m = matches_under_transform(kitti_camera, 300, T, np.random.default_rng(3), (4.0, 60.0), 0.5, 0.2)
+    road = Scene(camera_height=1.73, top=4.0)
+    m = matches_under_transform(kitti_camera, 300, T, np.random.default_rng(3), (4.0, 60.0), 0.5, 0.2, road)
     odometer = StereoOdometry(kitti_camera, CAR, mount=mount, seed=5)
     guess, start, ratio = odometer.motion.hypothesis(m.w_prev, m.w_curr, None, odometer.rng)
     assert ratio >= CAR.min_inlier_ratio
     assert start is not None and (start & m.inliers).sum() >= 0.7 * m.inliers.sum()
     assert (start & ~m.inliers).sum() <= 2
     motion = refine_rigid_motion(m.w_prev, m.w_curr, kitti_camera, guess, start)
-    assert np.allclose(motion.matrix, T, atol=2e-3)
+    # a road scene (points above the road, crowded near the horizon): mm-level, well below the
+    # 0.017 a missed 1-degree pitch would leave
+    assert np.allclose(motion.matrix, T, atol=6e-3)
     assert not (motion.inliers & ~m.inliers).any()
     # the same draws give the same answer
     again_odometer = StereoOdometry(kitti_camera, CAR, mount=mount, seed=5)

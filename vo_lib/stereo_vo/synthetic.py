@@ -1,12 +1,17 @@
 """Synthetic stereo matches under a known circular motion, for checks that need exact truth.
 
-Points are drawn where a camera would see them (a uniform pixel and a depth), moved by eq. 15,
-and kept only when the second view sees them too; pixel noise and gross outliers are optional.
+The points belong to a physically possible scene (:class:`Scene`): the stereo rig stands
+``camera_height`` above a flat floor, possibly pitched down; a share of the points is texture on
+the floor and the rest lies on upright surfaces (walls, boxes) between the floor and ``top``, at
+horizontal ranges drawn uniformly in inverse range. No point is below the floor, and the image
+rows fill as in a room: far surfaces crowd near the principal row, the floor fills the lower
+half. The camera moves by eq. 15 of [Zhao] on the floor (or by any rigid motion), and a point is
+kept only when both views see it; pixel noise and gross outliers are optional.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -15,6 +20,50 @@ from vo_lib.stereo_vo.circular_motion import circular_motion_from_transform, mot
 
 #: Nearest depth a point may have in either view, metres.
 MIN_DEPTH = 0.3
+#: Height of the crawler's stereo rig above the floor, metres (the rendered samples' rig).
+RIG_HEIGHT = 0.5
+
+
+@dataclass(frozen=True)
+class Scene:
+    """Where the points of a synthetic match set may lie.
+
+    Attributes
+    ----------
+    camera_height : float
+        Height of the left camera's centre above the floor, metres.
+    pitch : float
+        Downward pitch of the optical axis from the horizontal, radians (0: level).
+    top : float
+        Height above the floor of the highest point on an upright surface, metres.
+    floor_share : float
+        Share of the points drawn on the floor itself (the rest on upright surfaces).
+    """
+
+    camera_height: float = RIG_HEIGHT
+    pitch: float = 0.0
+    top: float = 2.5
+    floor_share: float = 0.3
+
+    def __post_init__(self) -> None:
+        if not self.camera_height > 0:
+            raise ValueError(f"Scene.camera_height must be > 0 m; got {self.camera_height}")
+        if not self.top > 0:
+            raise ValueError(f"Scene.top must be > 0 m; got {self.top}")
+        if not 0.0 <= self.floor_share <= 1.0:
+            raise ValueError(f"Scene.floor_share must lie in [0, 1]; got {self.floor_share}")
+        if not abs(self.pitch) < np.pi / 2:
+            raise ValueError(f"Scene.pitch must lie within ±90°; got {self.pitch} rad")
+
+    def level_from_camera(self) -> np.ndarray:
+        """Rotation from the (pitched) camera frame to the level frame (x right, y down, z ahead)."""
+        c, s = np.cos(self.pitch), np.sin(self.pitch)
+        return np.array([[1.0, 0.0, 0.0], [0.0, c, s], [0.0, -s, c]])
+
+    def height_above_floor(self, points: np.ndarray) -> np.ndarray:
+        """Height above the floor of camera-frame points ``(N, 3)``, metres."""
+        level = np.asarray(points, float) @ self.level_from_camera().T
+        return self.camera_height - level[:, 1]
 
 
 @dataclass(frozen=True)
@@ -38,15 +87,22 @@ def synthetic_matches(
     depth_range: tuple[float, float] = (1.5, 15.0),
     noise_px: float = 0.0,
     outlier_ratio: float = 0.0,
+    scene: Scene | None = None,
 ) -> SyntheticMatches:
     """Draw ``n`` matches of points seen before and after the circular motion ``(theta, rho)``.
 
-    See :func:`matches_under_transform` for the parameters; the motion is eq. 15.
+    The robot moves by eq. 15 of [Zhao] on the floor; with a pitched camera (``scene.pitch``) the
+    camera's own motion is eq. 15 seen from the pitched frame, which the planar model does not
+    describe exactly. ``theta`` and ``rho`` of the result are the robot's. See
+    :func:`matches_under_transform` for the other parameters.
     """
+    scene = Scene() if scene is None else scene
     R, T = motion_matrices(theta, rho)
+    L = scene.level_from_camera()
     M = np.eye(4)
-    M[:3, :3], M[:3, 3] = R, T
-    return matches_under_transform(camera, n, M, rng, depth_range, noise_px, outlier_ratio)
+    M[:3, :3], M[:3, 3] = L.T @ R @ L, L.T @ T
+    m = matches_under_transform(camera, n, M, rng, depth_range, noise_px, outlier_ratio, scene)
+    return replace(m, theta=float(theta), rho=float(rho))
 
 
 def matches_under_transform(
@@ -57,6 +113,7 @@ def matches_under_transform(
     depth_range: tuple[float, float] = (1.5, 15.0),
     noise_px: float = 0.0,
     outlier_ratio: float = 0.0,
+    scene: Scene | None = None,
 ) -> SyntheticMatches:
     """Draw ``n`` matches of points seen before and after any rigid camera motion.
 
@@ -72,13 +129,18 @@ def matches_under_transform(
     rng : numpy.random.Generator
         Source of every random draw.
     depth_range : (float, float)
-        Depths of the points in the previous frame, metres, drawn uniformly in inverse depth
-        so that near and far points are both present.
+        Horizontal ranges of the points from the previous camera, metres, drawn uniformly in
+        inverse range so that near and far points are both present.
     noise_px : float
         Standard deviation of Gaussian noise added to u, v and d of both views, pixels.
     outlier_ratio : float
         Fraction of matches whose second view is replaced by an unrelated pixel and disparity.
+    scene : Scene, optional
+        The floor, the camera's height and pitch, and where points lie (default :class:`Scene`).
+        The floor is fixed to the previous camera: ``T_curr_from_prev`` moves the camera, not
+        the points.
     """
+    scene = Scene() if scene is None else scene
     if camera.width is None or camera.height is None:
         raise ValueError("camera must have width and height to draw matches inside the image")
     if n < 0:
@@ -92,7 +154,7 @@ def matches_under_transform(
     near, far = depth_range
     if not 0 < near < far:
         raise ValueError(f"depth_range must satisfy 0 < near < far; got {depth_range}")
-    w_prev, w_curr, points = _visible_pairs(camera, M, n, rng, (near, far), (theta, rho))
+    w_prev, w_curr, points = _visible_pairs(camera, M, n, rng, (near, far), (theta, rho), scene)
     inliers = np.ones(n, dtype=bool)
     n_out = int(round(outlier_ratio * n))
     if n_out:
@@ -110,10 +172,25 @@ def matches_under_transform(
     return SyntheticMatches(w_prev, w_curr, inliers, float(theta), float(rho), points)
 
 
-def _visible_pairs(camera, M, n, rng, depth_range, motion):
-    """``n`` points drawn in the previous view (uniform in the image and in inverse depth) that stay
-    in front of the camera and in the image after ``M``: ``(w_prev, w_curr, points)``."""
+def _scene_points(camera: StereoCamera, m: int, rng: np.random.Generator,
+                  depth_range: tuple[float, float], scene: Scene) -> np.ndarray:
+    """``m`` points of the scene in the previous camera frame, ``(m, 3)``: a column of the image
+    (uniform), a horizontal range (uniform in inverse range) and a height above the floor (0 for
+    floor texture, else uniform up to ``scene.top``). Floor texture starts at the rig's own
+    height in front of it (nearer than ``depth_range``), where a pitched camera sees the floor."""
     near, far = depth_range
+    on_floor = rng.uniform(0, 1, m) < scene.floor_share
+    nearest = np.where(on_floor, min(near, scene.camera_height), near)
+    ahead = 1.0 / rng.uniform(1.0 / far, 1.0 / nearest, m)
+    across = (rng.uniform(0, camera.width - 1, m) - camera.cx) / camera.fx * ahead
+    height = np.where(on_floor, 0.0, rng.uniform(0, scene.top, m))
+    level = np.column_stack([across, scene.camera_height - height, ahead])
+    return level @ scene.level_from_camera()  # level -> camera: the transpose, row by row
+
+
+def _visible_pairs(camera, M, n, rng, depth_range, motion, scene):
+    """``n`` points of the scene seen by the previous view that stay in front of the camera and in
+    the image after ``M``: ``(w_prev, w_curr, points)``."""
     kept_prev, kept_curr, kept_pts = [np.zeros((0, 3))], [np.zeros((0, 3))], [np.zeros((0, 3))]
     count = drawn = 0
     while count < n:
@@ -124,17 +201,13 @@ def _visible_pairs(camera, M, n, rng, depth_range, motion):
             )
         m = 2 * (n - count) + 16
         drawn += m
-        u = rng.uniform(0, camera.width - 1, m)
-        v = rng.uniform(0, camera.height - 1, m)
-        z = 1.0 / rng.uniform(1.0 / far, 1.0 / near, m)
-        d = camera.fx * camera.baseline / z
-        P = camera.backproject(np.column_stack([u, v, d]))
+        P = _scene_points(camera, m, rng, depth_range, scene)
         P2 = P @ M[:3, :3].T + M[:3, 3]
-        ok = P2[:, 2] > MIN_DEPTH
-        w2 = np.full_like(P2, np.nan)
-        w2[ok] = camera.project(P2[ok])
-        ok &= camera.in_image(np.nan_to_num(w2, nan=-1.0))
-        kept_prev.append(np.column_stack([u, v, d])[ok])
+        ok = (P[:, 2] > MIN_DEPTH) & (P2[:, 2] > MIN_DEPTH)
+        w1, w2 = np.full_like(P, np.nan), np.full_like(P2, np.nan)
+        w1[ok], w2[ok] = camera.project(P[ok]), camera.project(P2[ok])
+        ok &= camera.in_image(np.nan_to_num(w1, nan=-1.0)) & camera.in_image(np.nan_to_num(w2, nan=-1.0))
+        kept_prev.append(w1[ok])
         kept_curr.append(w2[ok])
         kept_pts.append(P[ok])
         count += int(ok.sum())

@@ -4,6 +4,7 @@
 ``widgets``    interactive wrappers around plain ``f(**params)`` functions
 ``prose``      sentences written by the code (Markdown that prints as text in a script)
 ``run_figure`` the figure of one run's outputs
+``nb06``       tables and figures of notebook 06 (1-point RANSAC), out of its story cells
 
 Imports no wing: a figure takes arrays and results, not estimators.
 """
