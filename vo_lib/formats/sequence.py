@@ -36,6 +36,7 @@ import json
 import os
 import re
 import struct
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -246,6 +247,8 @@ class Sequence:
     poses: np.ndarray | None = None  # (N, 3, 4): camera 0 at frame k in the frame of frame 0
     odometry: np.ndarray | None = None  # (N, 2)
     manifest: dict = field(default_factory=dict)
+    #: Undistorts and rectifies a raw pair (a rig read as it records), or None: already rectified.
+    rectify: Callable[[np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]] | None = None
 
     def __len__(self) -> int:
         return len(self.left_files)
@@ -260,7 +263,7 @@ class Sequence:
                     f"{path}, frame {k}: {img.shape[1]}x{img.shape[0]} image; the sequence's images are "
                     f"{self.camera.width}x{self.camera.height}"
                 )
-        return left, right
+        return (left, right) if self.rectify is None else self.rectify(left, right)
 
     def __iter__(self):
         for k in range(len(self)):
