@@ -279,6 +279,32 @@ def print_error_table(
     print(f"  frames flagged (VO not used)      {flagged:>16d}")
 
 
+def print_3d_errors(seq, poses, n: int) -> dict:
+    """The field's errors in 3-D (:func:`vo_lib.evaluation.standard_errors`) against 6-DoF truth,
+    or the ATE against position-only truth; returns them for the report (empty without truth)."""
+    from vo_lib.evaluation import Alignment, ate_positions, standard_errors
+
+    if seq.poses is not None:
+        errors = standard_errors(seq.poses[:n], poses)
+        print(f"\nErrors in 3-D, camera poses against ground truth ({n} frames)")
+        for label, value in errors.rows():
+            print(f"  {label:<62s}{value:>16s}")
+        return {"errors_3d": errors}
+    positions = seq.manifest.get("positions") if isinstance(seq.manifest, dict) else None
+    if not positions:
+        return {}
+    frames = np.asarray(positions["frames"], int)
+    keep = frames < n
+    if keep.sum() < 3:
+        return {}
+    ate, _ = ate_positions(
+        np.asarray(positions["xyz"])[keep], poses[frames[keep]], positions["lever_arm_camera"], Alignment.SE3
+    )
+    print(f"\nErrors against position-only ground truth ({positions['file']}, {int(keep.sum())} positions)")
+    print(f"  {'ATE RMSE of the tracked point, SE(3) alignment [m]':<62s}{ate.rmse:>16.4f}")
+    return {"ate_positions_m": ate.rmse}
+
+
 def run_command(
     sequence: str | None,
     out: str | None,
@@ -370,6 +396,7 @@ def _run_into(
         report = error_report(result, truth, odo)
         rpe_m = rpe(seq.poses[:n], poses)[0].rmse
         print_error_table(report, len(result.flagged), rpe_m, odometry_name(vehicle))
+    report.update(print_3d_errors(seq, poses, n))
     output.commit(sequence=str(seq.path.resolve()), frames=n, seed=seed, odometry=not no_odometry)
     return report
 
