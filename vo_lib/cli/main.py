@@ -145,6 +145,12 @@ def build_parser() -> argparse.ArgumentParser:
     ev.add_argument("--gt", required=True, help="ground truth: KITTI poses, TUM, EuRoC CSV, or positions (t x y z)")
     ev.add_argument("--est", required=True, help="estimated poses (KITTI or TUM)")
     ev.add_argument(
+        "--extrinsic-of",
+        metavar="RECORDING",
+        help="an ASL recording (holding mav0) whose calibration moves a body-frame --gt into its "
+        "rectified left camera",
+    )
+    ev.add_argument(
         "--segments",
         type=_segments,
         help="comma-separated segment lengths in metres (default: KITTI's 100..800)",
@@ -347,7 +353,7 @@ def _dispatch(args) -> None:
     elif args.command == "evaluate":
         from vo_lib.cli.run import evaluate_command
 
-        evaluate_command(args.gt, args.est, args.segments)
+        evaluate_command(args.gt, args.est, args.segments, args.extrinsic_of)
     elif args.command == "convert":
         from vo_lib.cli.run import convert_command
 

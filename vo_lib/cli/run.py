@@ -415,13 +415,14 @@ def _lengths(segments) -> tuple[float, ...] | None:
     return lengths
 
 
-def evaluate_command(gt: str, est: str, segments=None) -> None:
+def evaluate_command(gt: str, est: str, segments=None, extrinsic_of: str | None = None) -> None:
     """Print the 3-D errors of an estimate (KITTI or TUM) against ground truth in any format of
     :mod:`vo_lib.formats.groundtruth`: final error, ATE (SE(3), Sim(3)), RPE and KITTI's errors.
 
     Where both files carry timestamps they are associated as evo does; otherwise the counts must
     be equal. Position-only truth gets the ATE of the aligned positions. ``segments`` are
-    lengths in metres (default: those the sequence allows, labelled).
+    lengths in metres (default: those the sequence allows, labelled). ``extrinsic_of``: an ASL
+    recording whose calibration moves a body-frame truth into its rectified left camera.
     """
     from vo_lib.evaluation import Alignment, ate_positions, standard_errors
     from vo_lib.formats.groundtruth import GroundTruthError, TruthKind, associate, read_groundtruth
@@ -451,7 +452,12 @@ def evaluate_command(gt: str, est: str, segments=None) -> None:
             a, _ = ate_positions(truth.positions[i_gt], E[i_est], alignment=alignment)
             print(f"ATE ({alignment} alignment, positions only): rmse {a.rmse:.4f} m, max {a.max:.4f}")
         return
-    errors = standard_errors(truth.poses[i_gt], E[i_est], lengths)
+    G = truth.poses[i_gt]
+    if extrinsic_of is not None:
+        from vo_lib.formats.euroc import body_to_rectified_camera
+
+        G = G @ body_to_rectified_camera(extrinsic_of)
+    errors = standard_errors(G, E[i_est], lengths)
     for label, value in errors.rows():
         print(f"{label:<62s}{value:>16s}")
 

@@ -238,6 +238,15 @@ def truth_extrinsic(truth_path: Path) -> np.ndarray:
     return T
 
 
+def body_to_rectified_camera(path) -> np.ndarray:
+    """``T_body_rect``: the rectified left camera of the ASL recording at ``path`` in its body frame."""
+    mav0 = mav0_of(path)
+    if mav0 is None:
+        raise AslError(f"{path}: no mav0/cam0 or cam0 folder; expected the ASL layout")
+    calib = [read_camera_yaml(mav0 / side / "sensor.yaml") for side in ("cam0", "cam1")]
+    return rectify(*calib, mav0).T_body_rect
+
+
 def read_asl(path, groundtruth=None) -> Sequence:
     """Read an ASL recording as a rectified :class:`~vo_lib.formats.sequence.Sequence`.
 
