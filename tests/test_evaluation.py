@@ -197,7 +197,11 @@ def test_sim3_ate_equals_evo_and_recovers_the_scale(rng):
 
     gt = random_trajectory(rng)
     est = perturb(rng, gt)
-    est[:, :3, 3] = 0.8 * est[:, :3, 3] @ Rotation.from_euler("zyx", [0.4, 0.1, -0.2]).as_matrix().T + [1, 2, 3]
+    est[:, :3, 3] = 0.8 * est[:, :3, 3] @ Rotation.from_euler("zyx", [0.4, 0.1, -0.2]).as_matrix().T + [
+        1,
+        2,
+        3,
+    ]
     ours, _ = ate(gt, est, alignment=Alignment.SIM3)
     traj_ref, traj_est = evo_trajectory(gt), evo_trajectory(est)
     traj_est.align(traj_ref, correct_scale=True)

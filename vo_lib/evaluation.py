@@ -119,9 +119,7 @@ def align_positions(p_gt: np.ndarray, p_est: np.ndarray, alignment: Alignment = 
     return s * p_est @ R.T + t
 
 
-def ate(
-    gt, est, align: bool = True, alignment: Alignment = Alignment.SE3
-) -> tuple[ErrorStats, np.ndarray]:
+def ate(gt, est, align: bool = True, alignment: Alignment = Alignment.SE3) -> tuple[ErrorStats, np.ndarray]:
     """Absolute trajectory error of positions after an ``alignment`` (SE(3) by default; none if
     ``align`` is False); ``(stats, per-pose errors)``, as evo's APE of the translation part."""
     G, E = _pair(gt, est)
@@ -325,7 +323,9 @@ def kitti_errors(gt, est, lengths=None, step: int = KITTI_STEP) -> KittiErrors |
             r_err.append(np.degrees(rotation_angle(err[:3, :3])) / length)
     if not t_err:
         return None
-    return KittiErrors(100.0 * float(np.mean(t_err)), 100.0 * float(np.mean(r_err)), lengths, step, len(t_err))
+    return KittiErrors(
+        100.0 * float(np.mean(t_err)), 100.0 * float(np.mean(r_err)), lengths, step, len(t_err)
+    )
 
 
 def kitti_segment_errors(gt, est, lengths=(100, 200, 300, 400, 500, 600, 700, 800), step: int = 10) -> dict:
@@ -384,7 +384,10 @@ class StandardErrors:
             ("final position error, 3-D [m]", f"{f.position_m:.4f}"),
             ("  of distance travelled [%]", f"{f.percent:.2f}"),
             ("final rotation error [deg]", f"{f.rotation_deg:.3f}"),
-            ("distance travelled, 3-D, truth / estimate [m]", f"{f.distance_m:.3f} / {f.estimate_distance_m:.3f}"),
+            (
+                "distance travelled, 3-D, truth / estimate [m]",
+                f"{f.distance_m:.3f} / {f.estimate_distance_m:.3f}",
+            ),
             ("ATE RMSE, SE(3) alignment [m]", f"{self.ate_se3.rmse:.4f}"),
             (f"ATE RMSE, Sim(3) alignment (scale {self.sim3_scale:.4f}) [m]", f"{self.ate_sim3.rmse:.4f}"),
             ("RPE RMSE, 1 frame: translation [m]", f"{self.rpe_m.rmse:.5f}"),

@@ -142,7 +142,9 @@ def build_parser() -> argparse.ArgumentParser:
         ),
         **plain,
     )
-    ev.add_argument("--gt", required=True, help="ground truth: KITTI poses, TUM, EuRoC CSV, or positions (t x y z)")
+    ev.add_argument(
+        "--gt", required=True, help="ground truth: KITTI poses, TUM, EuRoC CSV, or positions (t x y z)"
+    )
     ev.add_argument("--est", required=True, help="estimated poses (KITTI or TUM)")
     ev.add_argument(
         "--extrinsic-of",

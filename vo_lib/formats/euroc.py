@@ -160,10 +160,19 @@ def rectify(left: CameraCalibration, right: CameraCalibration, where: Path) -> R
         )
     T_right_left = np.linalg.inv(right.T_BS) @ left.T_BS  # left camera -> right camera
     size = left.resolution
+    R = np.ascontiguousarray(T_right_left[:3, :3])
+    t = T_right_left[:3, 3:].copy()
     R1, R2, P1, P2, _, _, _ = cv2.stereoRectify(
-        left.K, left.distortion, right.K, right.distortion, size,
-        np.ascontiguousarray(T_right_left[:3, :3]), T_right_left[:3, 3:].copy(), flags=cv2.CALIB_ZERO_DISPARITY, alpha=0.0,
-    )  # fmt: skip
+        left.K,
+        left.distortion,
+        right.K,
+        right.distortion,
+        size,
+        R,
+        t,
+        flags=cv2.CALIB_ZERO_DISPARITY,
+        alpha=0.0,
+    )
     try:
         camera = StereoCamera.from_projection_matrices(P1, P2, *size)
     except ValueError as exc:

@@ -74,7 +74,8 @@ def _check_size(path: Path) -> None:
     size = path.stat().st_size
     if size > MAX_FILE_BYTES:
         raise GroundTruthError(
-            f"{path}: {size / 1e6:.0f} MB; a ground-truth file is expected below {MAX_FILE_BYTES / 1e6:.0f} MB"
+            f"{path}: {size / 1e6:.0f} MB; a ground-truth file is expected below "
+            f"{MAX_FILE_BYTES / 1e6:.0f} MB"
         )
 
 
