@@ -388,8 +388,8 @@ class StandardErrors:
                 "distance travelled, 3-D, truth / estimate [m]",
                 f"{f.distance_m:.3f} / {f.estimate_distance_m:.3f}",
             ),
-            ("ATE RMSE, SE(3) alignment [m]", f"{self.ate_se3.rmse:.4f}"),
-            (f"ATE RMSE, Sim(3) alignment (scale {self.sim3_scale:.4f}) [m]", f"{self.ate_sim3.rmse:.4f}"),
+            ("ATE (SE(3) alignment): rmse [m]", f"{self.ate_se3.rmse:.4f}"),
+            (f"ATE (Sim(3) alignment, scale {self.sim3_scale:.4f}): rmse [m]", f"{self.ate_sim3.rmse:.4f}"),
             ("RPE RMSE, 1 frame: translation [m]", f"{self.rpe_m.rmse:.5f}"),
             ("RPE RMSE, 1 frame: rotation [deg]", f"{self.rpe_deg.rmse:.4f}"),
         ]

@@ -424,7 +424,7 @@ def evaluate_command(gt: str, est: str, segments=None, extrinsic_of: str | None 
     lengths in metres (default: those the sequence allows, labelled). ``extrinsic_of``: an ASL
     recording whose calibration moves a body-frame truth into its rectified left camera.
     """
-    from vo_lib.evaluation import Alignment, ate_positions, standard_errors
+    from vo_lib.evaluation import Alignment, ate_positions, kitti_segment_errors, standard_errors
     from vo_lib.formats.groundtruth import GroundTruthError, TruthKind, associate, read_groundtruth
 
     lengths = _lengths(segments)
@@ -460,6 +460,12 @@ def evaluate_command(gt: str, est: str, segments=None, extrinsic_of: str | None 
     errors = standard_errors(G, E[i_est], lengths)
     for label, value in errors.rows():
         print(f"{label:<62s}{value:>16s}")
+    if lengths is not None and len(lengths) > 1:  # each length on its own, too
+        for length, (t_pct, r_deg, count) in kitti_segment_errors(G, E[i_est], lengths).items():
+            print(
+                f"segment {length:g} m: translation {t_pct:.2f} %, rotation {100 * r_deg:.3f} deg/100 m "
+                f"({count} segments)"
+            )
 
 
 def convert_command(sequence: str, to: str, out: str, force: bool = False) -> None:

@@ -69,7 +69,7 @@ class GroundTruth:
 
 def _check_size(path: Path) -> None:
     if not path.is_file():
-        what = "a folder, not a ground-truth file" if path.is_dir() else "no such ground-truth file"
+        what = "a folder, not a trajectory file" if path.is_dir() else "no such trajectory file"
         raise GroundTruthError(f"{path}: {what}")
     size = path.stat().st_size
     if size > MAX_FILE_BYTES:
@@ -140,8 +140,9 @@ def _quaternion_poses(path: Path, positions, quat_xyzw, rows) -> np.ndarray:
     return T
 
 
-def read_groundtruth(path) -> GroundTruth:
-    """Read a KITTI, TUM, EuRoC CSV or position-only ground truth (see the module's table)."""
+def read_groundtruth(path, min_poses: int = 2) -> GroundTruth:
+    """Read a KITTI, TUM, EuRoC CSV or position-only ground truth (see the module's table) of at
+    least ``min_poses`` rows."""
     path = Path(path)
     _check_size(path)
     rows = _text_rows(path)
@@ -150,10 +151,15 @@ def read_groundtruth(path) -> GroundTruth:
     comma = "," in rows[0][1]
     if not comma and len(rows[0][1].split()) in (8, 12):
         try:
-            times, poses = read_trajectory(path)
+            times, poses = read_trajectory(path, min_poses=min_poses)
         except TrajectoryError as exc:
             raise GroundTruthError(str(exc)) from None
         return GroundTruth(path, TruthKind.POSES, times, poses[:, :3, 3].copy(), poses)
+    if len(rows) < min_poses:
+        raise GroundTruthError(
+            f"{path}: {len(rows)} row{'s' * (len(rows) != 1)} (last on line {rows[-1][0]}); "
+            f"need at least {min_poses}"
+        )
     a = _parse(path, rows, comma)
     width = a.shape[1]
     if width < 4 or (not comma and width != 4):
