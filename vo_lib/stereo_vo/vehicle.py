@@ -58,6 +58,7 @@ class Motion(str, Enum):
 
     PLANAR = "planar"  #: circular motion on a flat floor, camera above the turning axis (eq. 12-17)
     FULL = "full"  #: six degrees of freedom (``six_dof``)
+    HOVER = "hover"  #: six degrees of freedom, no odometry: nothing predicts the motion well
 
     def __str__(self) -> str:
         return self.value
@@ -111,7 +112,7 @@ def drone_mount(T_body_camera: np.ndarray) -> np.ndarray:
 def _drone(T_body_camera: np.ndarray) -> Vehicle:
     """A body with no odometry, moving in six degrees of freedom."""
     model = car_odometry_model()
-    return Vehicle(VehicleKind.DRONE, drone_mount(T_body_camera), model, None, "none", Motion.FULL)
+    return Vehicle(VehicleKind.DRONE, drone_mount(T_body_camera), model, None, "none", Motion.HOVER)
 
 
 def vehicle_of(sequence, use_odometry: bool = True) -> Vehicle:
