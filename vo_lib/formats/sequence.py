@@ -37,6 +37,7 @@ import os
 import re
 import struct
 from collections.abc import Callable
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -250,12 +251,38 @@ class Sequence:
     #: Undistorts and rectifies a raw pair (a rig read as it records), or None: already rectified.
     rectify: Callable[[np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]] | None = None
 
+    #: Frames decoded ahead, on a reader thread, of the one asked for (0: none).
+    read_ahead: int = 2
+    _ahead: dict = field(default_factory=dict, init=False, repr=False, compare=False)
+    _reader: ThreadPoolExecutor | None = field(default=None, init=False, repr=False, compare=False)
+
     def __len__(self) -> int:
         return len(self.left_files)
 
+    def __getstate__(self) -> dict:
+        state = dict(self.__dict__)
+        state["_ahead"], state["_reader"] = {}, None  # a thread does not travel to another process
+        return state
+
     def pair(self, k: int) -> tuple[np.ndarray, np.ndarray]:
-        """Left and right images of frame ``k``; a file that cannot be decoded raises one
-        :class:`SequenceError` naming it and the frame."""
+        """Left and right images of frame ``k`` (rectified, where the sequence needs it); a file
+        that cannot be decoded raises one :class:`SequenceError` naming it and the frame.
+
+        Reading frame ``k`` starts decoding frames ``k + 1 ... k + read_ahead`` on a reader
+        thread (OpenCV decodes without holding the interpreter), so that a caller going through
+        the frames in order finds the next ones ready while it processes this one."""
+        if self.read_ahead > 0:
+            if self._reader is None:
+                self._reader = ThreadPoolExecutor(max_workers=1, thread_name_prefix="vo_lib-reader")
+            for j in range(k + 1, min(k + 1 + self.read_ahead, len(self))):
+                if j not in self._ahead:
+                    self._ahead[j] = self._reader.submit(self._decoded, j)
+            for j in [j for j in self._ahead if j < k]:  # the caller went back: drop stale frames
+                self._ahead.pop(j).cancel()
+        ahead = self._ahead.pop(k, None)
+        return ahead.result() if ahead is not None else self._decoded(k)
+
+    def _decoded(self, k: int) -> tuple[np.ndarray, np.ndarray]:
         left, right = load_image(self.left_files[k], k), load_image(self.right_files[k], k)
         for path, img in ((self.left_files[k], left), (self.right_files[k], right)):
             if img.shape != (self.camera.height, self.camera.width):
