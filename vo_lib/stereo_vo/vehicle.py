@@ -25,7 +25,7 @@ from enum import Enum
 import numpy as np
 
 from vo_lib.formats.kitti_raw import camera_in_imu_frame, read_oxts, wheel_distances_from_oxts
-from vo_lib.formats.sequence import SequenceError
+from vo_lib.formats.sequence import SequenceError, present
 from vo_lib.geometry import camera_mount
 from vo_lib.models.track_odometry import TrackOdometry
 
@@ -142,8 +142,8 @@ def vehicle_of(sequence, use_odometry: bool = True) -> Vehicle:
     odometry = sequence.odometry if use_odometry else None
     source = "odometry.txt"
     oxts = root / "oxts.txt"
-    if odometry is None and use_odometry and oxts.is_file():
-        packets = read_oxts(oxts)
+    if odometry is None and use_odometry and present(oxts, "the OXTS packets"):
+        packets = read_oxts(oxts, len(sequence))
         if len(packets) != len(sequence):
             raise SequenceError(f"{oxts} has {len(packets)} packets but there are {len(sequence)} images")
         odometry = wheel_distances_from_oxts(packets, sequence.times, CAR_GAUGE)
