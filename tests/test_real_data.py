@@ -10,6 +10,7 @@ meets the same position bound and beats odometry alone.
 from __future__ import annotations
 
 import os
+import re
 from pathlib import Path
 
 import cv2
@@ -352,3 +353,41 @@ def test_evaluate_reads_tum_euroc_csv_and_positions(tmp_path, capsys):
     without = ate_positions(leica.positions[i_leica], truth.poses[i_truth])[0].rmse
     # (the raw tracker's clock is a few ms off the estimate's, which EuRoC estimated: about 4 cm here)
     assert with_arm < 0.05 and with_arm < without - 0.003
+
+
+def readme_3d_rows() -> dict[tuple[str, str], list[float]]:
+    """The README's 3-D table: ``(sequence, method) -> [ATE m, final %, rotation deg, path m]``."""
+    rows = {}
+    for line in (ROOT / "README.md").read_text().splitlines():
+        if line.startswith("| `") and line.count("|") == 6 and (" ours |" in line or " PnP |" in line):
+            cells = [c.strip() for c in line.strip().strip("|").split("|")]
+            name, method = cells[0].split("`")[1], cells[0].split()[-1]
+            rows[(name, method)] = [float(re.match(r"[0-9.]+", c).group()) for c in cells[1:]]
+    return rows
+
+
+@pytest.mark.skipif(not REALDATA.is_dir(), reason=f"no real sequences under {REALDATA}")
+def test_readme_3d_table_holds_for_both_development_sequences():
+    from vo_lib.cli.bench.bench_real import bench_real
+
+    rows = readme_3d_rows()
+    folders = sorted({REALDATA / name for name, _ in rows if (REALDATA / name).is_dir()})
+    assert folders, "the README's 3-D table names no sequence found under the real data folder"
+    figures = bench_real(folders)
+    for (name, method), (ate_m, final_pct, rotation, path) in rows.items():
+        key = f"{name}:{'ours' if method == 'ours' else 'PnP baseline'}"
+        if f"{key}:ate_m" not in figures:
+            continue
+        assert figures[f"{key}:ate_m"] == pytest.approx(ate_m, abs=0.0006)
+        assert figures[f"{key}:final_pct"] == pytest.approx(final_pct, abs=0.006)
+        assert figures[f"{key}:final_rotation_deg"] == pytest.approx(rotation, abs=0.006)
+        assert figures[f"{key}:path_m"] == pytest.approx(path, abs=0.006)
+    # what the README says of the drone: ours ends with at most half the baseline's rotation error
+    drone = [name for name, _ in rows if name.startswith("euroc") and f"{name}:ours:ate_m" in figures]
+    for name in drone:
+        ours, base = (
+            figures[f"{name}:ours:final_rotation_deg"],
+            figures[f"{name}:PnP baseline:final_rotation_deg"],
+        )
+        assert ours <= 0.5 * base
+        assert abs(figures[f"{name}:ours:path_m"] / figures[f"{name}:ours:truth_path_m"] - 1) <= 0.10
