@@ -78,7 +78,11 @@ def umeyama(source: np.ndarray, target: np.ndarray, with_scale: bool = False):
     if np.linalg.det(U) * np.linalg.det(Vt) < 0:
         S[-1, -1] = -1.0
     R = U @ S @ Vt
-    s = float(np.trace(np.diag(d) @ S) / np.mean(np.sum(xs**2, axis=1))) if with_scale else 1.0
+    spread = float(np.mean(np.sum(xs**2, axis=1)))
+    if not with_scale:
+        s = 1.0
+    else:  # a source that does not move has no scale: NaN, not a division by zero
+        s = float(np.trace(np.diag(d) @ S) / spread) if spread > 0 else float("nan")
     return R, mu_t - s * R @ mu_s, s
 
 
