@@ -391,3 +391,19 @@ def test_readme_3d_table_holds_for_both_development_sequences():
         )
         assert ours <= 0.5 * base
         assert abs(figures[f"{name}:ours:path_m"] / figures[f"{name}:ours:truth_path_m"] - 1) <= 0.10
+
+
+@needs_euroc
+def test_a_rig_with_positions_only_is_scored_by_its_aligned_prism(tmp_path, capsys):
+    import shutil
+
+    from vo_lib.cli.main import main
+
+    rig = small_rig(tmp_path, frames=30)
+    shutil.rmtree(rig / "mav0" / "state_groundtruth_estimate0")
+    shutil.copytree(EUROC / "mav0" / "leica0", rig / "mav0" / "leica0")
+    assert main(["run", "--sequence", str(rig), "--out", str(tmp_path / "out")]) == 0
+    out = capsys.readouterr().out
+    assert "Errors against position-only ground truth" in out and "Errors in 3-D" not in out
+    line = next(x for x in out.splitlines() if "ATE RMSE of the tracked point" in x)
+    assert 0 < float(line.split()[-1]) < 0.05
