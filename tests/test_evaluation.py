@@ -172,7 +172,10 @@ def test_evaluate_prints_no_rotation_error_for_a_run_against_its_own_files(tmp_p
         assert main(args) == 0
         outputs.append(capsys.readouterr().out)
     assert outputs[0] == outputs[1]
-    assert "rotation rmse 0.0000 deg" in outputs[0] and "rotation 0.0000 deg/m" in outputs[0]
+    rows = {line[:62].strip(): line[62:].strip() for line in outputs[0].splitlines()}
+    assert rows["RPE RMSE, 1 frame: rotation [deg]"] == "0.0000"
+    assert rows["final rotation error [deg]"] == "0.000"
+    assert rows["KITTI rotation (5 m, 5 segments) [deg/100 m]"] == "0.000"
 
 
 def test_final_error_is_the_planar_end_point_against_the_planar_distance():
@@ -185,3 +188,100 @@ def test_final_error_is_the_planar_end_point_against_the_planar_distance():
     assert final.position_m == pytest.approx(0.5) and final.percent == pytest.approx(100 * 0.5 / 7.0)
     assert final.heading_deg == pytest.approx(2.0)  # 358 deg of turn is 2 deg off, wrapped
     assert np.isnan(final_error(truth[:1].repeat(2, axis=0), est[:2]).percent)
+
+
+def test_sim3_ate_equals_evo_and_recovers_the_scale(rng):
+    from evo.core import metrics
+
+    from vo_lib.evaluation import Alignment
+
+    gt = random_trajectory(rng)
+    est = perturb(rng, gt)
+    est[:, :3, 3] = 0.8 * est[:, :3, 3] @ Rotation.from_euler("zyx", [0.4, 0.1, -0.2]).as_matrix().T + [
+        1,
+        2,
+        3,
+    ]
+    ours, _ = ate(gt, est, alignment=Alignment.SIM3)
+    traj_ref, traj_est = evo_trajectory(gt), evo_trajectory(est)
+    traj_est.align(traj_ref, correct_scale=True)
+    ape = metrics.APE(metrics.PoseRelation.translation_part)
+    ape.process_data((traj_ref, traj_est))
+    assert ours.rmse == pytest.approx(ape.get_all_statistics()["rmse"], abs=1e-6)
+    assert ours.rmse < ate(gt, est)[0].rmse  # the scale is worth aligning
+    assert str(Alignment.SIM3) == "Sim(3)"
+
+
+def test_final_error_3d_counts_height_and_equals_evo_at_the_last_pose(rng):
+    from evo.core import metrics
+
+    from vo_lib.evaluation import final_error_3d, path_lengths
+
+    gt = random_trajectory(rng)
+    est = perturb(rng, gt)
+    est[0] = gt[0]
+    final = final_error_3d(gt, est)
+    ape = metrics.APE(metrics.PoseRelation.translation_part)
+    ape.process_data((evo_trajectory(gt), evo_trajectory(est)))  # no alignment: both start at the truth
+    assert final.position_m == pytest.approx(ape.error[-1], abs=1e-6)
+    rot = metrics.APE(metrics.PoseRelation.rotation_angle_deg)
+    rot.process_data((evo_trajectory(gt), evo_trajectory(est)))
+    assert final.rotation_deg == pytest.approx(rot.error[-1], abs=1e-6)
+    assert final.distance_m == pytest.approx(path_lengths(gt)[-1])
+    climb = gt.copy()
+    climb[:, 2, 3] += np.linspace(0, 2.0, len(gt))  # height drift alone
+    assert final_error_3d(gt, climb).position_m == pytest.approx(2.0, abs=1e-9)
+
+
+def test_kitti_errors_equal_evo_on_the_same_segments(rng):
+    from evo.core import metrics
+
+    from vo_lib.evaluation import kitti_errors, segment_lengths, segment_pairs
+
+    gt = random_trajectory(rng, 300)
+    gt[:, :3, 3] *= 0.05  # about 8 m: shorter than KITTI's segments
+    est = perturb(rng, gt)
+    lengths = segment_lengths(gt)
+    total = np.sum(np.linalg.norm(np.diff(gt[:, :3, 3], axis=0), axis=1))
+    assert len(lengths) == 8 and lengths[-1] == pytest.approx(0.8 * total, rel=0.05)
+    ours = kitti_errors(gt, est)
+    t_err, r_err = [], []
+    for length in lengths:
+        for first, last in segment_pairs(gt, length):
+            for relation, out in (
+                (metrics.PoseRelation.translation_part, t_err),
+                (metrics.PoseRelation.rotation_angle_deg, r_err),
+            ):
+                m = metrics.RPE(relation, delta=1, delta_unit=metrics.Unit.frames)
+                m.process_data((evo_trajectory(gt[[first, last]]), evo_trajectory(est[[first, last]])))
+                out.append(m.error[0] / length)
+    assert ours.count == len(t_err) > 0
+    assert ours.translation_pct == pytest.approx(100 * np.mean(t_err), abs=1e-6)
+    assert ours.rotation_deg_per_100m == pytest.approx(100 * np.mean(r_err), abs=1e-6)
+    assert ours.label().endswith(" m")
+
+
+def test_kitti_errors_use_the_benchmark_lengths_when_the_path_allows():
+    from vo_lib.evaluation import KITTI_LENGTHS, segment_lengths
+
+    T = np.tile(np.eye(4), (901, 1, 1))
+    T[:, 0, 3] = np.arange(901.0)  # 900 m straight
+    assert segment_lengths(T) == KITTI_LENGTHS
+    T[:, 0, 3] = np.arange(901.0) / 3  # 300 m: 100 and 200 m fit
+    assert segment_lengths(T) == (100.0, 200.0)
+
+
+def test_association_equals_evo(rng):
+    from evo.core import sync
+    from evo.core.trajectory import PoseTrajectory3D
+
+    from vo_lib.formats.groundtruth import associate
+
+    truth_t = np.cumsum(rng.uniform(0.004, 0.006, 400))
+    query_t = np.sort(rng.uniform(truth_t[0] - 0.05, truth_t[-1] + 0.05, 60))
+    i_q, i_t = associate(query_t, truth_t)
+    eye = [np.eye(4)]
+    a = PoseTrajectory3D(poses_se3=eye * len(query_t), timestamps=query_t)
+    b = PoseTrajectory3D(poses_se3=eye * len(truth_t), timestamps=truth_t)
+    a2, b2 = sync.associate_trajectories(a, b, max_diff=0.01)
+    assert np.allclose(a2.timestamps, query_t[i_q]) and np.allclose(b2.timestamps, truth_t[i_t])

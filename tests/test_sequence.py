@@ -163,3 +163,67 @@ def test_failed_write_leaves_nothing_and_keeps_the_old_sequence(seq_dir):
         with SequenceWriter(path.parent / "other", cam) as writer:
             writer.add(np.zeros((4, 4), np.float32), np.zeros((4, 4), np.float32))
     assert not (path.parent / "other").exists()
+
+
+@pytest.mark.parametrize("name", ["poses.txt", "odometry.txt", "manifest.json", "calib.txt", "times.txt"])
+def test_a_folder_where_a_file_belongs_is_named(seq_dir, name):
+    path = seq_dir[0]
+    (path / name).unlink()
+    (path / name).mkdir()
+    with pytest.raises(SequenceError, match=f"{name}: a folder, where .* should be a file"):
+        read_sequence(path)
+
+
+def test_an_oversized_pose_file_is_refused_before_it_is_read(seq_dir):
+    import time
+
+    path = seq_dir[0]
+    with open(path / "poses.txt", "w") as fh:
+        fh.write("1 0 0 0 0 1 0 0 0 0 1 0\n" * 200_000)  # 4 frames
+    t0 = time.perf_counter()
+    with pytest.raises(SequenceError, match="poses.txt: .* bytes, far more than 4 lines"):
+        read_sequence(path)
+    assert time.perf_counter() - t0 < 1.0
+
+
+def test_a_png_header_claiming_a_huge_image_is_one_error(seq_dir):
+    import struct
+    import zlib
+
+    path = seq_dir[0]
+    target = path / "image_1" / "000002.png"
+    data = bytearray(target.read_bytes())
+    data[16:24] = struct.pack(">II", 65535, 65535)
+    data[29:33] = struct.pack(">I", zlib.crc32(bytes(data[12:29])))  # a valid header otherwise
+    target.write_bytes(bytes(data))
+    with pytest.raises(SequenceError, match=r"000002.png, frame 2: the PNG header claims 65535x65535"):
+        read_sequence(path)
+
+
+def test_a_singular_rotation_in_a_raw_calibration_is_one_error(tmp_path):
+    from vo_lib.formats.kitti_raw import camera_in_imu_frame
+
+    raw = tmp_path / "raw_calib"
+    raw.mkdir()
+    eye = "1 0 0 0 1 0 0 0 1"
+    (raw / "calib_imu_to_velo.txt").write_text(f"R: {eye}\nT: 0 0 0\n")
+    (raw / "calib_velo_to_cam.txt").write_text("R: 1 0 0 0 1 0 0 0 0\nT: 0 0 0\n")  # singular
+    (raw / "calib_cam_to_cam.txt").write_text(f"R_rect_00: {eye}\n")
+    with pytest.raises(SequenceError, match="calib_velo_to_cam.txt: R: it is not a rotation matrix"):
+        camera_in_imu_frame(raw)
+
+
+def test_frames_are_read_ahead_and_in_order(seq_dir):
+    path, _, left, right, _, _ = seq_dir
+    seq = read_sequence(path)
+    assert seq.read_ahead > 0
+    for k in (0, 1, 3, 2, 0):  # forwards, skipping, backwards
+        np.testing.assert_array_equal(seq.pair(k)[0], left[k])
+        np.testing.assert_array_equal(seq.pair(k)[1], right[k])
+    seq.pair(1)  # frames 2 and 3 are now decoded ahead; a damaged one still raises, when asked for
+    fresh = read_sequence(path)
+    target = path / "image_0" / "000003.png"
+    target.write_bytes(target.read_bytes()[:60] + bytes(200) + target.read_bytes()[260:])
+    fresh.pair(2)
+    with pytest.raises(SequenceError, match="000003.png, frame 3"):
+        fresh.pair(3)

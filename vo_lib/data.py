@@ -1,7 +1,8 @@
 """Sample sequences on demand: generated into ``data/`` on first use, reused afterwards.
 
 ``load_sequence("indoor_linear")`` renders the named sample once (deterministically) into the data
-folder and loads it; ``load_sequence("/path/to/kitti/00")`` loads any folder in the KITTI layout.
+folder and loads it; ``load_sequence("/path/to/kitti/00")`` loads any folder in the KITTI layout,
+and a folder in EuRoC's ASL layout (holding ``mav0``) is undistorted and rectified on reading.
 The data folder is ``$VO_LIB_DATA`` if set, else the repository's ``data/`` (in a checkout), else
 ``vo_lib/data`` in the user's cache folder (an installed package). A sample is written there
 under the rules of :mod:`vo_lib.outputs`: a folder of that name that this package did not
@@ -14,6 +15,7 @@ import json
 import os
 from pathlib import Path
 
+from vo_lib.formats.euroc import mav0_of, read_asl
 from vo_lib.formats.sequence import Sequence, read_sequence
 from vo_lib.sim.samples import SAMPLES, fingerprint, generate
 
@@ -72,4 +74,6 @@ def load_sequence(
         if not _up_to_date(path, key):
             generate(key, path, frames, None if resolution is None else tuple(resolution), progress)
         return read_sequence(path, odometry=odometry)
+    if mav0_of(key) is not None:  # a rig as it records (ASL layout): rectified on reading
+        return read_asl(key)
     return read_sequence(Path(key), odometry=odometry)

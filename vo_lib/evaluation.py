@@ -16,6 +16,7 @@ frame by frame, or planar ``(x, y, yaw)`` rows for the planar variants.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from enum import Enum
 
 import numpy as np
 
@@ -77,7 +78,11 @@ def umeyama(source: np.ndarray, target: np.ndarray, with_scale: bool = False):
     if np.linalg.det(U) * np.linalg.det(Vt) < 0:
         S[-1, -1] = -1.0
     R = U @ S @ Vt
-    s = float(np.trace(np.diag(d) @ S) / np.mean(np.sum(xs**2, axis=1))) if with_scale else 1.0
+    spread = float(np.mean(np.sum(xs**2, axis=1)))
+    if not with_scale:
+        s = 1.0
+    else:  # a source that does not move has no scale: NaN, not a division by zero
+        s = float(np.trace(np.diag(d) @ S) / spread) if spread > 0 else float("nan")
     return R, mu_t - s * R @ mu_s, s
 
 
@@ -98,14 +103,47 @@ def _check_pair(gt, est):
         raise ValueError("at least two poses are needed")
 
 
-def ate(gt, est, align: bool = True) -> tuple[ErrorStats, np.ndarray]:
-    """Absolute trajectory error of positions after SE(3) alignment; ``(stats, per-pose errors)``."""
+class Alignment(str, Enum):
+    """How an estimate is aligned to the truth before its absolute errors are taken."""
+
+    NONE = "none"  #: both start in the same frame
+    SE3 = "SE(3)"  #: rotation and translation (a trajectory whose scale is observable: stereo)
+    SIM3 = "Sim(3)"  #: rotation, translation and scale: the shape alone
+
+    def __str__(self) -> str:
+        return self.value
+
+
+def align_positions(p_gt: np.ndarray, p_est: np.ndarray, alignment: Alignment = Alignment.SE3) -> np.ndarray:
+    """Estimated positions ``(N, 3)`` moved onto the truth by Umeyama's least-squares
+    ``alignment`` (Umeyama 1991, eq. 40-42; evo's ``align``/``correct_scale``)."""
+    if alignment is Alignment.NONE:
+        return p_est
+    R, t, s = umeyama(p_est, p_gt, with_scale=alignment is Alignment.SIM3)
+    return s * p_est @ R.T + t
+
+
+def ate(gt, est, align: bool = True, alignment: Alignment = Alignment.SE3) -> tuple[ErrorStats, np.ndarray]:
+    """Absolute trajectory error of positions after an ``alignment`` (SE(3) by default; none if
+    ``align`` is False); ``(stats, per-pose errors)``, as evo's APE of the translation part."""
     G, E = _pair(gt, est)
-    p_gt, p_est = G[:, :3, 3], E[:, :3, 3]
-    if align:
-        R, t, _ = umeyama(p_est, p_gt)
-        p_est = p_est @ R.T + t
+    p_gt = G[:, :3, 3]
+    p_est = align_positions(p_gt, E[:, :3, 3], alignment if align else Alignment.NONE)
     errors = np.linalg.norm(p_est - p_gt, axis=1)
+    return ErrorStats.of(errors), errors
+
+
+def ate_positions(
+    positions, est, lever_arm=(0.0, 0.0, 0.0), alignment: Alignment = Alignment.SE3
+) -> tuple[ErrorStats, np.ndarray]:
+    """ATE against position-only truth ``(N, 3)`` (a tracked prism, an antenna) in its own frame:
+    the point ``lever_arm`` (in the estimate's camera frame) is carried along the estimated poses
+    and aligned to the positions."""
+    E = as_homogeneous(est)
+    p_gt = np.asarray(positions, float)
+    _check_pair(p_gt, E)
+    p_est = E[:, :3, :3] @ np.asarray(lever_arm, float) + E[:, :3, 3]
+    errors = np.linalg.norm(align_positions(p_gt, p_est, alignment) - p_gt, axis=1)
     return ErrorStats.of(errors), errors
 
 
@@ -201,6 +239,99 @@ def final_error(truth_planar, est_planar) -> FinalError:
     return FinalError(position, percent, heading, distance)
 
 
+@dataclass(frozen=True)
+class FinalError3D:
+    """Where the estimate ends against where the truth ends, in 3-D, both starting at the same
+    pose: position error (metres, and per cent of the truth's 3-D path), the angle of the
+    rotation between the final orientations, and the truth's and the estimate's path lengths."""
+
+    position_m: float
+    percent: float  # of the distance travelled; NaN if the truth does not move
+    rotation_deg: float
+    distance_m: float
+    estimate_distance_m: float
+
+
+def final_error_3d(gt, est) -> FinalError3D:
+    """Final 3-D position and rotation errors of camera poses ``(N, 4, 4)``, each trajectory in
+    the frame of its first pose (no alignment: what a run that starts at the truth ends with)."""
+    G, E = _pair(gt, est)
+    G, E = np.linalg.inv(G[0]) @ G, np.linalg.inv(E[0]) @ E
+    distance = float(path_lengths(G)[-1])
+    position = float(np.linalg.norm(E[-1, :3, 3] - G[-1, :3, 3]))
+    rotation = float(np.degrees(rotation_angle(G[-1, :3, :3].T @ E[-1, :3, :3])))
+    percent = 100.0 * position / distance if distance > 0 else float("nan")
+    return FinalError3D(position, percent, rotation, distance, float(path_lengths(E)[-1]))
+
+
+#: The KITTI odometry benchmark's segment lengths (metres) and the frames between segment starts.
+KITTI_LENGTHS = (100.0, 200.0, 300.0, 400.0, 500.0, 600.0, 700.0, 800.0)
+KITTI_STEP = 10
+#: A sequence shorter than KITTI's segments is scored over these fractions of its path instead.
+SHORT_FRACTIONS = (0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8)
+
+
+@dataclass(frozen=True)
+class KittiErrors:
+    """The KITTI benchmark's figures: translation error in per cent and rotation error in degrees
+    per 100 m, averaged over every segment of the ``lengths`` (metres) that start every ``step``
+    frames; ``count`` segments in all."""
+
+    translation_pct: float
+    rotation_deg_per_100m: float
+    lengths: tuple[float, ...]
+    step: int
+    count: int
+
+    def label(self) -> str:
+        """The lengths, as a table prints them: ``100-800 m`` or ``0.33, 0.66, ... m``."""
+        text = ", ".join(f"{x:.3g}" for x in self.lengths)
+        return f"{text} m" if len(self.lengths) < 4 else f"{self.lengths[0]:.3g}-{self.lengths[-1]:.3g} m"
+
+
+def segment_lengths(gt) -> tuple[float, ...]:
+    """KITTI's lengths that fit in the truth's path; for a shorter path, its
+    :data:`SHORT_FRACTIONS` rounded to two significant digits."""
+    total = float(path_lengths(as_homogeneous(gt))[-1])
+    fits = tuple(x for x in KITTI_LENGTHS if x < total)
+    if fits:
+        return fits
+    return tuple(float(f"{f * total:.2g}") for f in SHORT_FRACTIONS if f * total > 0)
+
+
+def segment_pairs(gt, length: float, step: int = KITTI_STEP) -> list[tuple[int, int]]:
+    """``(first, last)`` frames of the segments of ``length`` metres, as KITTI's devkit picks them:
+    a start every ``step`` frames, the end at the first frame at least ``length`` further along."""
+    dist = path_lengths(as_homogeneous(gt))
+    pairs = []
+    for first in range(0, len(dist), step):
+        last = int(np.searchsorted(dist, dist[first] + length))
+        if last >= len(dist):
+            break
+        pairs.append((first, last))
+    return pairs
+
+
+def kitti_errors(gt, est, lengths=None, step: int = KITTI_STEP) -> KittiErrors | None:
+    """The KITTI odometry benchmark's errors (Geiger et al. 2012; the devkit's
+    ``calcSequenceErrors``): for each segment, ``E = (P_i^-1 P_j)^-1 (Q_i^-1 Q_j)``; translation
+    ``|t(E)| / length`` and rotation ``angle(E) / length``, averaged over all segments. ``lengths``
+    default to :func:`segment_lengths`. None where no segment fits."""
+    G, E = _pair(gt, est)
+    lengths = tuple(float(x) for x in (segment_lengths(G) if lengths is None else lengths))
+    t_err, r_err = [], []
+    for length in lengths:
+        for first, last in segment_pairs(G, length, step):
+            err = np.linalg.inv(np.linalg.inv(E[first]) @ E[last]) @ (np.linalg.inv(G[first]) @ G[last])
+            t_err.append(np.linalg.norm(err[:3, 3]) / length)
+            r_err.append(np.degrees(rotation_angle(err[:3, :3])) / length)
+    if not t_err:
+        return None
+    return KittiErrors(
+        100.0 * float(np.mean(t_err)), 100.0 * float(np.mean(r_err)), lengths, step, len(t_err)
+    )
+
+
 def kitti_segment_errors(gt, est, lengths=(100, 200, 300, 400, 500, 600, 700, 800), step: int = 10) -> dict:
     """KITTI odometry errors per segment length: ``{length: (translation %, rotation deg/m, count)}``.
 
@@ -236,3 +367,56 @@ def key_position_errors(gt_planar, est_planar, frames) -> dict:
         name: (float(np.mean(v)), float(np.std(v)))
         for name, v in (("x_mm", dx), ("y_mm", dy), ("theta_deg", dth))
     }
+
+
+@dataclass(frozen=True)
+class StandardErrors:
+    """The field's errors of a 6-DoF estimate against 6-DoF truth, every one in 3-D."""
+
+    final: FinalError3D
+    ate_se3: ErrorStats  #: metres, after an SE(3) alignment
+    ate_sim3: ErrorStats  #: metres, after a Sim(3) alignment
+    sim3_scale: float  #: the scale the Sim(3) alignment applied to the estimate
+    rpe_m: ErrorStats  #: 1 frame, translation (metres)
+    rpe_deg: ErrorStats  #: 1 frame, rotation (degrees)
+    kitti: KittiErrors | None
+
+    def rows(self) -> list[tuple[str, str]]:
+        """``(label, value)`` rows as the run's table and ``evaluate`` print them."""
+        f = self.final
+        rows = [
+            ("final position error, 3-D [m]", f"{f.position_m:.4f}"),
+            ("  of distance travelled [%]", f"{f.percent:.2f}"),
+            ("final rotation error [deg]", f"{f.rotation_deg:.3f}"),
+            (
+                "distance travelled, 3-D, truth / estimate [m]",
+                f"{f.distance_m:.3f} / {f.estimate_distance_m:.3f}",
+            ),
+            ("ATE (SE(3) alignment): rmse [m]", f"{self.ate_se3.rmse:.4f}"),
+            (f"ATE (Sim(3) alignment, scale {self.sim3_scale:.4f}): rmse [m]", f"{self.ate_sim3.rmse:.4f}"),
+            ("RPE RMSE, 1 frame: translation [m]", f"{self.rpe_m.rmse:.5f}"),
+            ("RPE RMSE, 1 frame: rotation [deg]", f"{self.rpe_deg.rmse:.4f}"),
+        ]
+        k = self.kitti
+        if k is None:
+            rows.append(("KITTI segment errors", "no segment fits"))
+        else:
+            where = f"{k.label()}, {k.count} segments"
+            rows.append((f"KITTI translation ({where}) [%]", f"{k.translation_pct:.3f}"))
+            rows.append((f"KITTI rotation ({where}) [deg/100 m]", f"{k.rotation_deg_per_100m:.3f}"))
+        return rows
+
+
+def standard_errors(gt, est, lengths=None) -> StandardErrors:
+    """Every 3-D error of :class:`StandardErrors` of camera poses ``est`` against ``gt``."""
+    G, E = _pair(gt, est)
+    _, _, scale = umeyama(E[:, :3, 3], G[:, :3, 3], with_scale=True)
+    return StandardErrors(
+        final_error_3d(G, E),
+        ate(G, E)[0],
+        ate(G, E, alignment=Alignment.SIM3)[0],
+        float(scale),
+        rpe(G, E)[0],
+        rpe(G, E, rotation=True)[0],
+        kitti_errors(G, E, lengths),
+    )

@@ -142,12 +142,36 @@ def build_parser() -> argparse.ArgumentParser:
         ),
         **plain,
     )
-    ev.add_argument("--gt", required=True, help="ground-truth poses (KITTI poses.txt or TUM)")
+    ev.add_argument(
+        "--gt", required=True, help="ground truth: KITTI poses, TUM, EuRoC CSV, or positions (t x y z)"
+    )
     ev.add_argument("--est", required=True, help="estimated poses (KITTI or TUM)")
+    ev.add_argument(
+        "--extrinsic-of",
+        metavar="RECORDING",
+        help="an ASL recording (holding mav0) whose calibration moves a body-frame --gt into its "
+        "rectified left camera",
+    )
     ev.add_argument(
         "--segments",
         type=_segments,
         help="comma-separated segment lengths in metres (default: KITTI's 100..800)",
+    )
+    conv = sub.add_parser(
+        "convert",
+        help="write a rectified copy of a stereo rig's recording (ASL layout) in the KITTI layout",
+        description=wrap(
+            "Undistort and rectify a recording in EuRoC's ASL layout (the folder holding mav0, or mav0) "
+            "and write it in the KITTI odometry layout, with its ground truth in the rectified left camera."
+        ),
+        epilog=example("convert /data/MH_01_easy --to kitti --out /tmp/mh01"),
+        **plain,
+    )
+    conv.add_argument("sequence", help="the recording (ASL layout) or any sequence folder")
+    conv.add_argument("--to", choices=("kitti",), default="kitti", help="layout to write (kitti)")
+    conv.add_argument("--out", required=True, help="output folder: new, empty, or written by vo_lib")
+    conv.add_argument(
+        "--force", action="store_true", help="replace --out even if this program did not write it"
     )
     gen = sub.add_parser(
         "generate",
@@ -331,7 +355,11 @@ def _dispatch(args) -> None:
     elif args.command == "evaluate":
         from vo_lib.cli.run import evaluate_command
 
-        evaluate_command(args.gt, args.est, args.segments)
+        evaluate_command(args.gt, args.est, args.segments, args.extrinsic_of)
+    elif args.command == "convert":
+        from vo_lib.cli.run import convert_command
+
+        convert_command(args.sequence, args.to, args.out, args.force)
     elif args.command == "generate":
         _generate(args)
     elif args.command == "bench":

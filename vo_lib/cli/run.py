@@ -279,6 +279,32 @@ def print_error_table(
     print(f"  frames flagged (VO not used)      {flagged:>16d}")
 
 
+def print_3d_errors(seq, poses, n: int) -> dict:
+    """The field's errors in 3-D (:func:`vo_lib.evaluation.standard_errors`) against 6-DoF truth,
+    or the ATE against position-only truth; returns them for the report (empty without truth)."""
+    from vo_lib.evaluation import Alignment, ate_positions, standard_errors
+
+    if seq.poses is not None:
+        errors = standard_errors(seq.poses[:n], poses)
+        print(f"\nErrors in 3-D, camera poses against ground truth ({n} frames)")
+        for label, value in errors.rows():
+            print(f"  {label:<62s}{value:>16s}")
+        return {"errors_3d": errors}
+    positions = seq.manifest.get("positions") if isinstance(seq.manifest, dict) else None
+    if not positions:
+        return {}
+    frames = np.asarray(positions["frames"], int)
+    keep = frames < n
+    if keep.sum() < 3:
+        return {}
+    ate, _ = ate_positions(
+        np.asarray(positions["xyz"])[keep], poses[frames[keep]], positions["lever_arm_camera"], Alignment.SE3
+    )
+    print(f"\nErrors against position-only ground truth ({positions['file']}, {int(keep.sum())} positions)")
+    print(f"  {'ATE RMSE of the tracked point, SE(3) alignment [m]':<62s}{ate.rmse:>16.4f}")
+    return {"ate_positions_m": ate.rmse}
+
+
 def run_command(
     sequence: str | None,
     out: str | None,
@@ -358,7 +384,8 @@ def _run_into(
     else:
         poses = camera_poses_from_planar(result.poses, mount)
     write_kitti_poses(tmp / "poses.txt", poses)
-    write_tum(tmp / "trajectory.tum", seq.times[:n], poses)
+    origin = float(seq.manifest.get("time_origin_s", 0.0)) if isinstance(seq.manifest, dict) else 0.0
+    write_tum(tmp / "trajectory.tum", seq.times[:n] + origin, poses)  # on the recording's clock
     _write_csv(tmp / "timings.csv", result.timings, FrameTimings)
     _write_csv(tmp / "diagnostics.csv", result.diagnostics, FrameDiagnostics)
     truth, odo = truth_and_odometry(seq, vehicle, n)
@@ -370,44 +397,91 @@ def _run_into(
         report = error_report(result, truth, odo)
         rpe_m = rpe(seq.poses[:n], poses)[0].rmse
         print_error_table(report, len(result.flagged), rpe_m, odometry_name(vehicle))
+    report.update(print_3d_errors(seq, poses, n))
     output.commit(sequence=str(seq.path.resolve()), frames=n, seed=seed, odometry=not no_odometry)
     return report
 
 
-def evaluate_command(gt: str, est: str, segments=None) -> None:
-    """Print ATE, RPE and segment errors of two trajectory files (KITTI or TUM).
-
-    ``segments`` are lengths in metres (a comma-separated string or numbers), each positive.
-    """
-    from vo_lib.evaluation import ate, kitti_segment_errors, rpe
-
-    _, G = read_trajectory(gt, min_poses=2)
-    _, E = read_trajectory(est, min_poses=2)
-    if len(G) != len(E):
-        raise UsageError(f"--gt {gt} has {len(G)} poses but --est {est} has {len(E)}; expected equal counts")
+def _lengths(segments) -> tuple[float, ...] | None:
+    """Segment lengths in metres from ``--segments`` (a comma-separated string or numbers)."""
     if segments is None:
-        lengths = (100, 200, 300, 400, 500, 600, 700, 800)
-    else:
-        try:
-            lengths = tuple(
-                float(x) for x in (segments.split(",") if isinstance(segments, str) else segments)
+        return None
+    try:
+        lengths = tuple(float(x) for x in (segments.split(",") if isinstance(segments, str) else segments))
+    except ValueError:
+        lengths = ()
+    if not lengths or not all(np.isfinite(x) and x > 0 for x in lengths):
+        raise UsageError(f"--segments {segments}: expected comma-separated positive lengths in metres")
+    return lengths
+
+
+def evaluate_command(gt: str, est: str, segments=None, extrinsic_of: str | None = None) -> None:
+    """Print the 3-D errors of an estimate (KITTI or TUM) against ground truth in any format of
+    :mod:`vo_lib.formats.groundtruth`: final error, ATE (SE(3), Sim(3)), RPE and KITTI's errors.
+
+    Where both files carry timestamps they are associated as evo does; otherwise the counts must
+    be equal. Position-only truth gets the ATE of the aligned positions. ``segments`` are
+    lengths in metres (default: those the sequence allows, labelled). ``extrinsic_of``: an ASL
+    recording whose calibration moves a body-frame truth into its rectified left camera.
+    """
+    from vo_lib.evaluation import Alignment, ate_positions, kitti_segment_errors, standard_errors
+    from vo_lib.formats.groundtruth import GroundTruthError, TruthKind, associate, read_groundtruth
+
+    lengths = _lengths(segments)
+    try:
+        truth = read_groundtruth(gt)
+    except GroundTruthError as exc:
+        raise UsageError(f"--gt {exc}") from None
+    times, E = read_trajectory(est, min_poses=2)
+    if truth.times is not None and times is not None:
+        i_est, i_gt = associate(times, truth.times)
+        if len(i_est) < 2:
+            raise UsageError(
+                f"--gt {gt}: no timestamp within 0.01 s of --est {est}'s; both must use one clock"
             )
-        except ValueError:
-            lengths = ()
-        if not lengths or not all(np.isfinite(x) and x > 0 for x in lengths):
-            raise UsageError(f"--segments {segments}: expected comma-separated positive lengths in metres")
-    a, _ = ate(G, E)
-    r, _ = rpe(G, E)
-    ra, _ = rpe(G, E, rotation=True)
-    print(
-        f"ATE (SE(3) alignment): rmse {a.rmse:.4f} m, mean {a.mean:.4f}, "
-        f"median {a.median:.4f}, max {a.max:.4f}"
-    )
-    print(f"RPE (1 frame): translation rmse {r.rmse:.5f} m, rotation rmse {ra.rmse:.4f} deg")
-    seg = kitti_segment_errors(G, E, lengths)
-    if not seg:
-        print("no KITTI segments of the requested lengths fit this trajectory (try --segments 1,2,5)")
-    for length, (t_pct, r_deg, count) in seg.items():
-        print(
-            f"segment {length:g} m: translation {t_pct:.2f} %, rotation {r_deg:.4f} deg/m ({count} segments)"
+        print(f"associated {len(i_est)} of {len(E)} poses by timestamp (within 0.01 s)")
+    elif len(truth.positions) != len(E):
+        raise UsageError(
+            f"--gt {gt} has {len(truth.positions)} poses but --est {est} has {len(E)}; expected equal counts "
+            "(or timestamps in both)"
         )
+    else:
+        i_est = i_gt = np.arange(len(E))
+    if truth.kind is TruthKind.POSITIONS:
+        for alignment in (Alignment.SE3, Alignment.SIM3):
+            a, _ = ate_positions(truth.positions[i_gt], E[i_est], alignment=alignment)
+            print(f"ATE ({alignment} alignment, positions only): rmse {a.rmse:.4f} m, max {a.max:.4f}")
+        return
+    G = truth.poses[i_gt]
+    if extrinsic_of is not None:
+        from vo_lib.formats.euroc import body_to_rectified_camera
+
+        G = G @ body_to_rectified_camera(extrinsic_of)
+    errors = standard_errors(G, E[i_est], lengths)
+    for label, value in errors.rows():
+        print(f"{label:<62s}{value:>16s}")
+    if lengths is not None and len(lengths) > 1:  # each length on its own, too
+        for length, (t_pct, r_deg, count) in kitti_segment_errors(G, E[i_est], lengths).items():
+            print(
+                f"segment {length:g} m: translation {t_pct:.2f} %, rotation {100 * r_deg:.3f} deg/100 m "
+                f"({count} segments)"
+            )
+
+
+def convert_command(sequence: str, to: str, out: str, force: bool = False) -> None:
+    """Write a rectified copy of a sequence (an ASL rig, or any readable one) in the KITTI
+    layout: ``image_0/``, ``image_1/``, ``calib.txt``, ``times.txt`` and ``poses.txt``."""
+    from vo_lib.data import load_sequence
+    from vo_lib.formats.sequence import SequenceWriter
+
+    if to != "kitti":
+        raise UsageError(f"--to {to}: expected kitti")
+    source = Path(sequence)
+    if not source.exists():
+        raise UsageError(f"{sequence}: no such folder")
+    seq = load_sequence(source, odometry=False, progress=False)
+    with reading(seq.path), SequenceWriter(out, seq.camera, force=force, option="--out") as writer:
+        for left, right in seq:
+            writer.add(left, right)
+        path = writer.close(seq.times, seq.poses)
+    print(f"wrote {path}: {len(seq)} rectified pairs in the KITTI layout")

@@ -17,15 +17,19 @@ from pathlib import Path
 
 import numpy as np
 
-from vo_lib.formats.sequence import SequenceError
+from vo_lib.formats.poses import rotation_problem
+from vo_lib.formats.sequence import SequenceError, check_size, required
 
 OXTS_FIELDS = 30
 VF, WZ = 8, 19  # zero-based columns of forward speed (m/s) and yaw rate (rad/s)
 
 
-def read_oxts(path) -> np.ndarray:
-    """``(N, 30)`` OXTS packets; every number must be finite."""
+def read_oxts(path, frames: int | None = None) -> np.ndarray:
+    """``(N, 30)`` OXTS packets; every number must be finite. With ``frames``, a file far larger
+    than that many packets is refused before it is read."""
     path = Path(path)
+    if frames is not None:
+        check_size(path, frames, "OXTS packets")
     try:
         text = path.read_text()
     except UnicodeDecodeError:
@@ -70,8 +74,7 @@ def wheel_distances_from_oxts(oxts: np.ndarray, times: np.ndarray, gauge: float)
 
 
 def _calib_values(path: Path, key: str, count: int) -> np.ndarray:
-    if not path.is_file():
-        raise SequenceError(f"{path}: missing")
+    required(path, f"a line '{key}:' of {count} numbers")
     try:
         text = path.read_text()
     except UnicodeDecodeError:
@@ -88,9 +91,19 @@ def _calib_values(path: Path, key: str, count: int) -> np.ndarray:
     raise SequenceError(f"{path}: no line starting with '{key}:'")
 
 
+def _rotation(path: Path, key: str) -> np.ndarray:
+    """The 3x3 rotation of line ``key``; a matrix that is not a rotation (singular, scaled, a
+    reflection) raises :class:`SequenceError` naming the file and key."""
+    R = _calib_values(path, key, 9).reshape(3, 3)
+    problem = rotation_problem(R)
+    if problem:
+        raise SequenceError(f"{path}: {key}: {problem.replace('the first three columns are', 'it is')}")
+    return R
+
+
 def _rigid(path: Path) -> np.ndarray:
     T = np.eye(4)
-    T[:3, :3] = _calib_values(path, "R", 9).reshape(3, 3)
+    T[:3, :3] = _rotation(path, "R")
     T[:3, 3] = _calib_values(path, "T", 3)
     return T
 
@@ -101,5 +114,5 @@ def camera_in_imu_frame(raw_calib) -> np.ndarray:
     imu_to_velo = _rigid(folder / "calib_imu_to_velo.txt")
     velo_to_cam = _rigid(folder / "calib_velo_to_cam.txt")
     rect = np.eye(4)
-    rect[:3, :3] = _calib_values(folder / "calib_cam_to_cam.txt", "R_rect_00", 9).reshape(3, 3)
+    rect[:3, :3] = _rotation(folder / "calib_cam_to_cam.txt", "R_rect_00")
     return np.linalg.inv(rect @ velo_to_cam @ imu_to_velo)

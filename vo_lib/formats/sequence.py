@@ -36,6 +36,9 @@ import json
 import os
 import re
 import struct
+import threading
+from collections.abc import Callable
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -59,6 +62,41 @@ EIGHT_BIT_MODES = {"1", "L", "P", "LA", "La", "PA", "RGB", "RGBA", "RGBa", "RGBX
 
 class SequenceError(ValueError):
     """A sequence on disk is missing something or holds something malformed."""
+
+
+#: Largest image side accepted from a header (pixels): larger claims are refused before decoding.
+MAX_IMAGE_SIDE = 16384
+#: Bytes a line of a per-frame file may take on average (a KITTI pose line is about 200, an OXTS
+#: packet about 300): a file larger than this per frame is refused before it is read.
+MAX_LINE_BYTES = 1024
+
+
+def present(path: Path, what: str) -> bool:
+    """Whether the optional file ``path`` is there; a folder (or anything but a file) in its
+    place raises :class:`SequenceError`, so that it is not silently ignored."""
+    if not os.path.lexists(path):
+        return False
+    if not Path(path).is_file():
+        kind = "a folder" if Path(path).is_dir() else "not a regular file"
+        raise SequenceError(f"{path}: {kind}, where {what} should be a file")
+    return True
+
+
+def required(path: Path, what: str) -> None:
+    """Raise :class:`SequenceError` unless ``path`` is a file: "missing", or what is there instead."""
+    if not present(path, what):
+        raise SequenceError(f"{path}: missing ({what})")
+
+
+def check_size(path: Path, frames: int, what: str) -> None:
+    """Refuse a per-frame file far larger than ``frames`` lines could be, before reading it."""
+    size = Path(path).stat().st_size
+    limit = MAX_LINE_BYTES * frames + 65536
+    if size > limit:
+        raise SequenceError(
+            f"{path}: {size:,} bytes, far more than {frames} lines of {what} take (at most {limit:,}); "
+            "expected one line per frame"
+        )
 
 
 def _numbers(path: Path, line_no: int, text: str, count: int, what: str) -> np.ndarray:
@@ -148,24 +186,32 @@ def read_poses(path: Path) -> np.ndarray:
 
 
 _DEVNULL: int | None = None  # a descriptor of os.devnull, opened on first use
+_STDERR_LOCK = threading.Lock()
 
 
 def _imread_quietly(path: Path) -> np.ndarray | None:
     """``cv2.imread`` with the process's stderr muted meanwhile: libpng prints its own message for
-    a damaged file there, and ours (one line, naming the file and frame) says it better."""
+    a damaged file there, and ours (one line, naming the file and frame) says it better. None
+    where OpenCV cannot decode the file (or refuses it: a size beyond its limits). One thread at
+    a time swaps stderr, so that the reader thread and the caller never leave it muted."""
     global _DEVNULL
-    try:
-        if _DEVNULL is None:
-            _DEVNULL = os.open(os.devnull, os.O_WRONLY)
-        saved = os.dup(2)
-    except OSError:
-        return cv2.imread(str(path), cv2.IMREAD_UNCHANGED)
-    try:
-        os.dup2(_DEVNULL, 2)
-        return cv2.imread(str(path), cv2.IMREAD_UNCHANGED)
-    finally:
-        os.dup2(saved, 2)
-        os.close(saved)
+    with _STDERR_LOCK:
+        try:
+            if _DEVNULL is None:
+                _DEVNULL = os.open(os.devnull, os.O_WRONLY)
+            saved = os.dup(2)
+        except OSError:
+            saved = None
+        try:
+            if saved is not None:
+                os.dup2(_DEVNULL, 2)
+            return cv2.imread(str(path), cv2.IMREAD_UNCHANGED)
+        except cv2.error:
+            return None
+        finally:
+            if saved is not None:
+                os.dup2(saved, 2)
+                os.close(saved)
 
 
 def load_image(path: Path, frame: int | None = None) -> np.ndarray:
@@ -199,6 +245,11 @@ def image_header(path: Path, frame: int | None = None) -> tuple[int, int, int]:
                 if len(head) < 33 or head[12:16] != b"IHDR":
                     raise SequenceError(f"{where}: damaged PNG header (no IHDR chunk)")
                 width, height = struct.unpack(">II", head[16:24])
+                if not (0 < width <= MAX_IMAGE_SIDE and 0 < height <= MAX_IMAGE_SIDE):
+                    raise SequenceError(
+                        f"{where}: the PNG header claims {width}x{height} pixels; "
+                        f"expected each side 1..{MAX_IMAGE_SIDE}"
+                    )
                 depth, colour = head[24], head[25]
                 if colour not in PNG_CHANNELS:
                     raise SequenceError(f"{where}: damaged PNG header (colour type {colour})")
@@ -246,13 +297,41 @@ class Sequence:
     poses: np.ndarray | None = None  # (N, 3, 4): camera 0 at frame k in the frame of frame 0
     odometry: np.ndarray | None = None  # (N, 2)
     manifest: dict = field(default_factory=dict)
+    #: Undistorts and rectifies a raw pair (a rig read as it records), or None: already rectified.
+    rectify: Callable[[np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]] | None = None
+
+    #: Frames decoded ahead, on a reader thread, of the one asked for (0: none).
+    read_ahead: int = 2
+    _ahead: dict = field(default_factory=dict, init=False, repr=False, compare=False)
+    _reader: ThreadPoolExecutor | None = field(default=None, init=False, repr=False, compare=False)
 
     def __len__(self) -> int:
         return len(self.left_files)
 
+    def __getstate__(self) -> dict:
+        state = dict(self.__dict__)
+        state["_ahead"], state["_reader"] = {}, None  # a thread does not travel to another process
+        return state
+
     def pair(self, k: int) -> tuple[np.ndarray, np.ndarray]:
-        """Left and right images of frame ``k``; a file that cannot be decoded raises one
-        :class:`SequenceError` naming it and the frame."""
+        """Left and right images of frame ``k`` (rectified, where the sequence needs it); a file
+        that cannot be decoded raises one :class:`SequenceError` naming it and the frame.
+
+        Reading frame ``k`` starts decoding frames ``k + 1 ... k + read_ahead`` on a reader
+        thread (OpenCV decodes without holding the interpreter), so that a caller going through
+        the frames in order finds the next ones ready while it processes this one."""
+        if self.read_ahead > 0:
+            if self._reader is None:
+                self._reader = ThreadPoolExecutor(max_workers=1, thread_name_prefix="vo_lib-reader")
+            for j in range(k + 1, min(k + 1 + self.read_ahead, len(self))):
+                if j not in self._ahead:
+                    self._ahead[j] = self._reader.submit(self._decoded, j)
+            for j in [j for j in self._ahead if j < k]:  # the caller went back: drop stale frames
+                self._ahead.pop(j).cancel()
+        ahead = self._ahead.pop(k, None)
+        return ahead.result() if ahead is not None else self._decoded(k)
+
+    def _decoded(self, k: int) -> tuple[np.ndarray, np.ndarray]:
         left, right = load_image(self.left_files[k], k), load_image(self.right_files[k], k)
         for path, img in ((self.left_files[k], left), (self.right_files[k], right)):
             if img.shape != (self.camera.height, self.camera.width):
@@ -260,7 +339,7 @@ class Sequence:
                     f"{path}, frame {k}: {img.shape[1]}x{img.shape[0]} image; the sequence's images are "
                     f"{self.camera.width}x{self.camera.height}"
                 )
-        return left, right
+        return (left, right) if self.rectify is None else self.rectify(left, right)
 
     def __iter__(self):
         for k in range(len(self)):
@@ -374,8 +453,7 @@ def read_sequence(path, odometry: bool = True) -> Sequence:
         )
         raise SequenceError(f"{root}: {counts}{_one_side_only(root, left, right)}")
     calib = root / "calib.txt"
-    if not calib.is_file():
-        raise SequenceError(f"{calib}: missing (needs P0 and P1 lines)")
+    required(calib, "needs P0 and P1 lines")
     w, h = _check_headers(left, right)
     P0, P1 = read_calib(calib)
     try:
@@ -383,24 +461,26 @@ def read_sequence(path, odometry: bool = True) -> Sequence:
     except ValueError as exc:
         raise SequenceError(f"{calib}: {exc}") from None
     times_path = root / "times.txt"
-    if not times_path.is_file():
-        raise SequenceError(f"{times_path}: missing (one timestamp per frame)")
-    times = read_times(times_path)
+    required(times_path, "one timestamp per frame")
     n = len(left)
+    check_size(times_path, n, "timestamps")
+    times = read_times(times_path)
     if len(times) != n:
         raise SequenceError(f"{times_path} has {len(times)} timestamps but there are {n} images")
     poses = odo = None
     poses_path, odo_path = root / "poses.txt", root / "odometry.txt"
-    if poses_path.is_file():
+    if present(poses_path, "the ground-truth poses"):
+        check_size(poses_path, n, "poses")
         poses = read_poses(poses_path)
         if len(poses) != n:
             raise SequenceError(f"{poses_path} has {len(poses)} poses but there are {n} images")
-    if odometry and odo_path.is_file():
+    if odometry and present(odo_path, "the odometry"):
+        check_size(odo_path, n, "odometry")
         odo = read_rows(odo_path, 2, "delta_u_left delta_u_right")
         if len(odo) != n:
             raise SequenceError(f"{odo_path} has {len(odo)} lines but there are {n} images")
     manifest_path = root / "manifest.json"
-    manifest = read_manifest(manifest_path) if manifest_path.is_file() else {}
+    manifest = read_manifest(manifest_path) if present(manifest_path, "the manifest") else {}
     return Sequence(root, camera, times, left, right, poses, odo, manifest)
 
 

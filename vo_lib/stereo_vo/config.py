@@ -10,7 +10,7 @@ with ``dataclasses.replace(CRAWLER, key_distance=0.08)``.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 from scipy.stats import chi2
 
@@ -119,4 +119,10 @@ CAR = PipelineConfig(
     unknown_motion_sigma=(10.0, 10.0, 1.0),
 )
 
-PRESETS = {"planar": CRAWLER, "full": CAR}
+#: A camera that moves in six degrees of freedom with nothing to predict its motion (a drone or
+#: a hand-held rig, no odometry): the car's settings, except that the constant-velocity
+#: prediction never vetoes the vision. With no sensor behind it, a prediction is only the last
+#: motion repeated, and a hovering body's turns and stops break it every few frames.
+HOVER = replace(CAR, prior_gate=math.inf)
+
+PRESETS = {"planar": CRAWLER, "full": CAR, "hover": HOVER}

@@ -25,7 +25,7 @@ from enum import Enum
 import numpy as np
 
 from vo_lib.formats.kitti_raw import camera_in_imu_frame, read_oxts, wheel_distances_from_oxts
-from vo_lib.formats.sequence import SequenceError
+from vo_lib.formats.sequence import SequenceError, present
 from vo_lib.geometry import camera_mount
 from vo_lib.models.track_odometry import TrackOdometry
 
@@ -47,6 +47,7 @@ class VehicleKind(str, Enum):
 
     CRAWLER = "crawler"  #: the tracked robot of [Zhao]
     CAR = "car"
+    DRONE = "drone"  #: a rig read as it records (ASL layout): a hand-held camera or a drone
 
     def __str__(self) -> str:
         return self.value
@@ -57,6 +58,7 @@ class Motion(str, Enum):
 
     PLANAR = "planar"  #: circular motion on a flat floor, camera above the turning axis (eq. 12-17)
     FULL = "full"  #: six degrees of freedom (``six_dof``)
+    HOVER = "hover"  #: six degrees of freedom, no odometry: nothing predicts the motion well
 
     def __str__(self) -> str:
         return self.value
@@ -94,12 +96,33 @@ def car_odometry_model() -> TrackOdometry:
     return TrackOdometry(track_distance=CAR_GAUGE, track_width=0.0, encoder_sigma=CAR_DISTANCE_SIGMA)
 
 
+def drone_mount(T_body_camera: np.ndarray) -> np.ndarray:
+    """The mount of a camera on a body that turns about its own origin (a drone's IMU, a
+    hand-held rig): the camera level, looking forward, offset from the origin as calibrated.
+
+    The vehicle frame's axes are the camera's (forward = optical axis, up = the image's up);
+    only its origin is the body's. Where the camera is tilted the offset is then approximate,
+    but it is a few centimetres on a compact rig.
+    """
+    origin_in_camera = np.linalg.inv(T_body_camera)[:3, 3]
+    right, down, forward = -origin_in_camera  # the camera seen from the body origin
+    return camera_mount(forward=forward, height=-down, left=-right)
+
+
+def _drone(T_body_camera: np.ndarray) -> Vehicle:
+    """A body with no odometry, moving in six degrees of freedom."""
+    model = car_odometry_model()
+    return Vehicle(VehicleKind.DRONE, drone_mount(T_body_camera), model, None, "none", Motion.HOVER)
+
+
 def vehicle_of(sequence, use_odometry: bool = True) -> Vehicle:
     """The vehicle of a :class:`~vo_lib.formats.sequence.Sequence`, from its manifest and files.
 
     With ``use_odometry=False`` no odometry file is read (``odometry`` is None).
     """
     camera = sequence.manifest.get("camera", {}) if isinstance(sequence.manifest, dict) else {}
+    if "T_body_camera" in sequence.manifest:
+        return _drone(np.asarray(sequence.manifest["T_body_camera"], float))
     if "height_m" in camera:  # a rendered sample: the crawler of [Zhao]
         mount = camera_mount(forward=float(camera.get("forward_m", 0.0)), height=float(camera["height_m"]))
         model = TrackOdometry(**sequence.manifest.get("track_odometry", {}))
@@ -119,8 +142,8 @@ def vehicle_of(sequence, use_odometry: bool = True) -> Vehicle:
     odometry = sequence.odometry if use_odometry else None
     source = "odometry.txt"
     oxts = root / "oxts.txt"
-    if odometry is None and use_odometry and oxts.is_file():
-        packets = read_oxts(oxts)
+    if odometry is None and use_odometry and present(oxts, "the OXTS packets"):
+        packets = read_oxts(oxts, len(sequence))
         if len(packets) != len(sequence):
             raise SequenceError(f"{oxts} has {len(packets)} packets but there are {len(sequence)} images")
         odometry = wheel_distances_from_oxts(packets, sequence.times, CAR_GAUGE)
