@@ -163,3 +163,16 @@ def test_the_hypothesis_search_takes_any_one_point_model(rng):
     assert abs(mean - 2.0) < 0.005 and var == pytest.approx(0.01**2 / support.sum())
     # a prior that nothing supports loses to the drawn hypotheses
     assert abs(search(model, hypothesis_draws(3)[0], (-50.0, 1e-4), DEFAULT_PARAMS)[0] - 2.0) < 0.03
+
+
+def test_reestimate_without_supporters_gives_no_estimate():
+    """No supporter: NaN with infinite variance (the caller then finds too few inliers), no error."""
+    from vo_lib.stereo_vo.ransac import reestimate
+
+    class Model:
+        def each_match(self):
+            return np.array([0.1, 0.2]), np.array([1e-4, 1e-4])
+
+    value, variance = reestimate(Model(), np.zeros(2, bool))
+    assert math.isnan(value) and variance == math.inf
+    assert reestimate(Model(), np.array([True, True])) == pytest.approx((0.15, 5e-5))

@@ -279,6 +279,8 @@ def reestimate(model: OnePointModel, support: np.ndarray) -> tuple[float, float]
     values, variances = model.each_match()
     w = 1.0 / variances[support]
     total = float(np.sum(w))
+    if total == 0.0:  # no supporter: no estimate, and the caller finds too few inliers
+        return math.nan, math.inf
     return float(np.sum(w * values[support])) / total, 1.0 / total
 
 
