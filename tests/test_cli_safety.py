@@ -268,6 +268,16 @@ CASES = [
         cwd="thesis",
     ),
     Case("out-home-force", [*RUN, "--out", "home", "--force"], 2, "your home folder"),
+    Case("out-empty-text", [*RUN, "--out", ""], 2, "--out: expected a folder; got an empty text"),
+    Case("sequence-empty-text", ["run", "--sequence", ""], 2, "--sequence: expected a sample name"),
+    Case("generate-out-empty-text", [*GEN, "--out", ""], 2, "--out: expected a folder"),
+    Case(
+        "generate-package-force",
+        [*GEN, "--out", str(ROOT / "vo_lib" / "x"), "--force"],
+        2,
+        "inside this package",
+    ),
+    Case("generate-repo-data-force", [*GEN, "--out", str(ROOT / "data"), "--force"], 2, "sample data folder"),
     Case("out-data-folder-force", [*RUN, "--out", "data", "--force"], 2, "sample data folder"),
     Case("out-is-a-file", [*RUN, "--out", "important.txt"], 2, "is a file"),
     Case("out-is-a-file-force", [*RUN, "--out", "important.txt", "--force"], 2, "is a file"),
@@ -1177,11 +1187,18 @@ def test_frames_beyond_a_sample_ask_for_the_whole_sample_with_a_notice(tmp_path,
 
 
 def test_the_package_is_never_an_output_folder(tmp_path, monkeypatch):
-    """Checked without writing: the package folder and a folder holding it are refused, forced."""
+    """Checked without writing: the package, a folder in it or holding it, and the repository's
+    own data folder are refused, forced."""
     from vo_lib.outputs import OutputError, check_target
 
     monkeypatch.chdir(tmp_path)
-    for target, phrase in ((ROOT / "vo_lib", "is this package"), (ROOT, "holds this package")):
+    for target, phrase in (
+        (ROOT / "vo_lib", "is this package"),
+        (ROOT / "vo_lib" / "cli", "lies inside this package"),
+        (ROOT / "vo_lib" / "new_folder", "lies inside this package"),
+        (ROOT, "holds this package"),
+        (ROOT / "data", "is the sample data folder"),
+    ):
         with pytest.raises(OutputError, match=phrase):
             check_target(target, written_by="vo_lib run", force=True)
 
@@ -1279,3 +1296,71 @@ def test_a_folder_being_written_is_neither_written_nor_replaced_by_another_comma
     assert [p.name for p in folder.iterdir()] == ["a"] and sorted(p.name for p in tmp_path.iterdir()) == [
         "rows"
     ]
+
+
+# ---- a kill at any step of the swap leaves the previous output whole ------------------------------
+
+KILLER = """
+import os, shutil, signal, sys
+import vo_lib.outputs as o
+target, mode, at = sys.argv[1], sys.argv[2], int(sys.argv[3])
+steps = [0]
+
+def counted(step):
+    def call(*args, **kwargs):
+        steps[0] += 1
+        if steps[0] == at:
+            os.kill(os.getpid(), signal.SIGKILL)
+        return step(*args, **kwargs)
+    return call
+
+os.rename, shutil.rmtree = counted(os.rename), counted(shutil.rmtree)
+o._exchange = counted(o._exchange) if mode == "exchange" else (lambda a, b: False)
+with o.OutputFolder(target, "vo_lib run") as out:
+    (out.path / "poses.txt").write_text("new\\n")
+    if at == 0:
+        os.kill(os.getpid(), signal.SIGKILL)
+    out.commit()
+"""
+
+
+def whole(folder: Path) -> str | None:
+    """What a run's output folder holds ("old" or "new"), or None if it is missing or not whole."""
+    from vo_lib.outputs import read_marker
+
+    marker = read_marker(folder)
+    if marker is None or sorted(p.name for p in folder.iterdir()) != sorted([MARKER, *marker["contents"]]):
+        return None
+    return (folder / "poses.txt").read_text().strip()
+
+
+@pytest.mark.parametrize("mode", ["exchange", "renames"])
+def test_a_kill_at_any_step_of_the_swap_leaves_the_previous_output(tmp_path, mode):
+    """Kill the writer (SIGKILL) before each step of the swap in turn (renames, the one-step
+    exchange, the deletion of the replaced folder). After each kill the folder is the old output
+    or the new one, whole; the next command beside it (``check_target``) restores an old output
+    set aside and removes every temporary."""
+    from vo_lib.outputs import OutputFolder, check_target
+
+    seen = []
+    for at in range(12):
+        target = tmp_path / f"out{at}"
+        with OutputFolder(target, "vo_lib run") as out:
+            (out.path / "poses.txt").write_text("old\n")
+            out.commit()
+        proc = subprocess.run(
+            [sys.executable, "-c", KILLER, str(target), mode, str(at)], env=cli_env(), capture_output=True
+        )
+        if proc.returncode == 0:
+            break
+        assert proc.returncode == -signal.SIGKILL, proc.stderr
+        after_kill = whole(target)
+        assert after_kill in ("old", "new") or (mode == "renames" and not target.exists())
+        check_target(target, written_by="vo_lib run")
+        seen.append(whole(target))
+        assert seen[-1] == (after_kill or "old") and temporaries(tmp_path) == []
+    assert proc.returncode == 0 and whole(target) == "new" and temporaries(tmp_path) == []
+    # killed before the commit, at the failed first rename (the target is not empty), at the
+    # exchange or each of the two renames, then while the replaced folder is deleted
+    assert len(seen) == (4 if mode == "exchange" else 5) and seen[0] == seen[1] == "old"
+    assert "new" in seen

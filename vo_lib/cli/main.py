@@ -25,7 +25,7 @@ import sys
 import textwrap
 from pathlib import Path
 
-from vo_lib.arguments import OneLineParser, count_at_least, one_line
+from vo_lib.arguments import OneLineParser, count_at_least, non_empty, one_line
 
 #: Bounds of ``generate --resolution`` (each side, pixels): 32 keeps a few FAST corners in view,
 #: 4096 keeps a rendered frame pair and its buffers within a few hundred MB.
@@ -109,9 +109,15 @@ def build_parser() -> argparse.ArgumentParser:
         epilog=example("run --sequence outdoor_free --out runs/yard"),
         **plain,
     )
-    run.add_argument("--sequence", help="sample name or KITTI-layout folder (default: indoor_linear)")
     run.add_argument(
-        "--out", help="output folder (default: runs/NAME); new, empty, or written by an earlier run"
+        "--sequence",
+        type=non_empty("a sample name or a folder"),
+        help="sample name or KITTI-layout folder (default: indoor_linear)",
+    )
+    run.add_argument(
+        "--out",
+        type=non_empty("a folder"),
+        help="output folder (default: runs/NAME); new, empty, or written by an earlier run",
     )
     run.add_argument(
         "--force", action="store_true", help="replace --out even if this program did not write it"
@@ -160,7 +166,7 @@ def build_parser() -> argparse.ArgumentParser:
         **plain,
     )
     gen.add_argument("name", choices=sorted(SAMPLES), help="which sample")
-    gen.add_argument("--out", help="output folder (default: data/NAME)")
+    gen.add_argument("--out", type=non_empty("a folder"), help="output folder (default: data/NAME)")
     gen.add_argument(
         "--force", action="store_true", help="replace --out even if this program did not write it"
     )
@@ -216,7 +222,9 @@ def build_parser() -> argparse.ArgumentParser:
         **plain,
     )
     ev_all.add_argument(
-        "root", help="folder of sequences (KITTI's sequences/NN, or folders holding image_0/)"
+        "root",
+        type=non_empty("a folder"),
+        help="folder of sequences (KITTI's sequences/NN, or folders holding image_0/)",
     )
     ev_all.add_argument(
         "--frames", type=count_at_least(1, "frames"), help="only the first N frames of each sequence"
@@ -234,6 +242,7 @@ def build_parser() -> argparse.ArgumentParser:
         )
         p.add_argument(
             "--out",
+            type=non_empty("a folder"),
             help=f"sweep folder (default: {default}); finished rows there are kept and not run again",
         )
         p.add_argument(
