@@ -870,6 +870,7 @@ def test_header_check_reads_no_pixels(tmp_path, monkeypatch):
     seq = make_sequence(tmp_path / "seq")
     calls = []
     monkeypatch.setattr(cv2, "imread", lambda *a: calls.append(a))
+    monkeypatch.setattr(cv2, "imdecode", lambda *a: calls.append(a))
     read_sequence(seq)
     assert calls == []
 
@@ -1364,3 +1365,30 @@ def test_a_kill_at_any_step_of_the_swap_leaves_the_previous_output(tmp_path, mod
     # exchange or each of the two renames, then while the replaced folder is deleted
     assert len(seen) == (4 if mode == "exchange" else 5) and seen[0] == seen[1] == "old"
     assert "new" in seen
+
+
+@pytest.mark.parametrize("command", ["run", "evaluate-all"])
+def test_a_path_that_is_not_utf8_is_read(template, tmp_path, command):
+    """A folder name holding the byte 0xff (read as a surrogate): OpenCV decodes the files' bytes,
+    so nothing crashes (it was a segmentation fault, exit 139), and the output is written."""
+    name = os.fsdecode(b"seq\xff")
+    root = tmp_path / "root"
+    shutil.copytree(template / "seq", root / name)
+    args = ["run", "--sequence", str(root / name)] if command == "run" else ["evaluate-all", str(root)]
+    proc = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "vo_lib",
+            *args,
+            "--out",
+            str(tmp_path / "out"),
+            *(["--workers", "1"] * (command != "run")),
+        ],
+        cwd=tmp_path,
+        env=cli_env(MPLCONFIGDIR=str(tmp_path / "mpl")),
+        capture_output=True,
+        timeout=300,
+    )
+    assert proc.returncode == 0, proc.stderr.decode(errors="replace")
+    assert b"Traceback" not in proc.stderr and (tmp_path / "out" / MARKER).is_file()

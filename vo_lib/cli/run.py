@@ -17,6 +17,7 @@ line and exit with status 2.
 from __future__ import annotations
 
 import csv
+import os
 import sys
 from dataclasses import asdict, fields
 from pathlib import Path
@@ -362,7 +363,8 @@ def _run_into(
     _write_csv(tmp / "timings.csv", result.timings, FrameTimings)
     _write_csv(tmp / "diagnostics.csv", result.diagnostics, FrameDiagnostics)
     truth, odo = truth_and_odometry(seq, vehicle, n)
-    title = f"{Path(name).name}: {n} frames"
+    # a name holding bytes that are not UTF-8 (read as surrogates) is drawn with U+FFFD in their place
+    title = f"{os.fsencode(Path(name).name).decode('utf-8', 'replace')}: {n} frames"
     _plot(tmp / "trajectory.png", seq.times[:n], result.poses, truth, odo, title, odometry_name(vehicle))
     print_timing_table(result, seq.camera, n)
     report = {}

@@ -150,6 +150,16 @@ def read_poses(path: Path) -> np.ndarray:
 _DEVNULL: int | None = None  # a descriptor of os.devnull, opened on first use
 
 
+def _decode(path: Path) -> np.ndarray | None:
+    """OpenCV's decoder on the file's bytes, or None: ``cv2.imread`` takes its path as UTF-8 and
+    crashes the process on a path holding any other byte."""
+    try:
+        data = np.fromfile(path, np.uint8)
+        return cv2.imdecode(data, cv2.IMREAD_UNCHANGED) if data.size else None
+    except (OSError, cv2.error):
+        return None
+
+
 def _imread_quietly(path: Path) -> np.ndarray | None:
     """``cv2.imread`` with the process's stderr muted meanwhile: libpng prints its own message for
     a damaged file there, and ours (one line, naming the file and frame) says it better."""
@@ -159,10 +169,10 @@ def _imread_quietly(path: Path) -> np.ndarray | None:
             _DEVNULL = os.open(os.devnull, os.O_WRONLY)
         saved = os.dup(2)
     except OSError:
-        return cv2.imread(str(path), cv2.IMREAD_UNCHANGED)
+        return _decode(path)
     try:
         os.dup2(_DEVNULL, 2)
-        return cv2.imread(str(path), cv2.IMREAD_UNCHANGED)
+        return _decode(path)
     finally:
         os.dup2(saved, 2)
         os.close(saved)
