@@ -222,3 +222,38 @@ def test_evaluate_all_fails_when_a_sequence_fails(tmp_path, capsys, monkeypatch)
     *each, last = captured.err.strip().splitlines()  # each failure as it happens, then the count
     assert len(each) == 2 and all(line.startswith("failed: ") for line in each)
     assert last.startswith("python -m vo_lib evaluate-all: error: 2 of 2 sequence(s) failed")
+
+
+def test_evaluate_all_refuses_figures_of_a_sequence_changed_while_read(tmp_path, capsys, monkeypatch):
+    """A frame rewritten while the pipeline reads the sequence: no figure, exit 2; a sequence
+    replaced by `generate` meanwhile is refused by the reader's lock; the next sweep runs it anew."""
+    from vo_lib.cli import evaluate_all
+    from vo_lib.outputs import OutputError, OutputFolder
+
+    monkeypatch.chdir(tmp_path)
+    assert main(["generate", "corridor", "--frames", "3", "--resolution", "64x48", "--out", "root/s"]) == 0
+    score, refusals = evaluate_all._score, []
+
+    def rewrite_while_reading(params):
+        figures = score(params)
+        try:
+            OutputFolder(params["path"], "vo_lib generate", force=True).discard()
+        except OutputError as exc:
+            refusals.append(str(exc))
+        frame = Path(params["path"]) / "image_0" / "000001.png"
+        frame.write_bytes((Path(params["path"]) / "image_0" / "000000.png").read_bytes())
+        return figures
+
+    monkeypatch.setattr(evaluate_all, "_score", rewrite_while_reading)
+    assert main(["evaluate-all", "root", "--workers", "1", "--out", "ev"]) == 2
+    captured = capsys.readouterr()
+    assert "its files changed while it was read" in captured.out
+    (row,) = csv.DictReader(open(tmp_path / "ev" / TABLE))
+    assert "t_pct" not in row and "SequenceChanged" in row["error"]  # no figure of the mixed data
+    assert refusals and "a running command is reading this folder" in refusals[0]
+    monkeypatch.setattr(evaluate_all, "_score", score)
+    assert main(["evaluate-all", "root", "--workers", "1", "--out", "ev"]) == 0
+    rows = list(csv.DictReader(open(tmp_path / "ev" / TABLE)))
+    assert (
+        len(rows) == 1 and rows[0]["error"] == "" and rows[0]["snapshot"] == evaluate_all.snapshot("root/s")
+    )
