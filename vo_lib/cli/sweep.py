@@ -28,10 +28,12 @@ A task that raises becomes a row with its error; the sweep goes on.
 from __future__ import annotations
 
 import contextlib
+import errno
 import functools
 import hashlib
 import json
 import os
+import signal
 import sys
 import time
 import traceback
@@ -207,14 +209,32 @@ LOCAL_CLUSTER_CONFIG = {
 }
 
 
+@contextlib.contextmanager
+def _without_ctrl_c():
+    """SIGINT ignored meanwhile (in the main thread; elsewhere nothing changes): processes started
+    here inherit the ignored signal, so that a Ctrl-C to the process group stops only this process
+    (which then closes the cluster), not every worker with a traceback of its own. A Ctrl-C in the
+    seconds the workers take to start is not seen."""
+    try:
+        previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    except ValueError:  # not the main thread
+        previous = None
+    try:
+        yield
+    finally:
+        if previous is not None:
+            signal.signal(signal.SIGINT, previous)
+
+
 def local_cluster(workers: int):
-    """A LocalCluster of ``workers`` processes, one thread each, quiet, dashboard on a free port."""
+    """A LocalCluster of ``workers`` processes, one thread each, quiet, dashboard on a free port;
+    its processes ignore Ctrl-C (see :func:`_without_ctrl_c`)."""
     import logging
 
     import dask
     from distributed import LocalCluster
 
-    with dask.config.set(LOCAL_CLUSTER_CONFIG):
+    with dask.config.set(LOCAL_CLUSTER_CONFIG), _without_ctrl_c():
         return LocalCluster(
             n_workers=workers,
             threads_per_worker=1,
@@ -336,10 +356,27 @@ def run_sweep(
                 need_setup = context is None and experiment.setup is not None
                 found = outcomes(experiment, todo, context, need_setup, client)
                 _store(found, experiment.name, folder / ROWS, done, result, progress, len(keys))
+        except OSError as exc:  # a full disk: say what is kept, read back from the store
+            raise _kept(folder, exc) from None
         finally:
             result.rows = [done[k] for k in keys if k in done]
-            write_atomic(folder / TABLE, results_table(result.rows).to_csv(index=False, lineterminator="\n"))
+            try:
+                write_atomic(
+                    folder / TABLE, results_table(result.rows).to_csv(index=False, lineterminator="\n")
+                )
+            except OSError as exc:
+                raise _kept(folder, exc) from None
     return result
+
+
+def _kept(folder: Path, exc: OSError) -> SweepError:
+    """What a sweep stopped by ``exc`` (a full disk) keeps: the finished rows its store holds."""
+    why = "no space left on device" if exc.errno == errno.ENOSPC else (exc.strerror or str(exc))
+    kept = sum(not r.get(ERROR) for r in read_rows(folder / ROWS).values())
+    return SweepError(
+        f"--out {folder}: {why}; {kept} finished row(s) are kept in {ROWS}, and a run of the same "
+        f"sweep resumes from them"
+    )
 
 
 def _store(found, name: str, path: Path, done: dict, result: SweepResult, progress, total: int) -> None:
@@ -358,10 +395,11 @@ def _store(found, name: str, path: Path, done: dict, result: SweepResult, progre
             store.write("\n")
         for params, outcome in found:
             key = task_key(name, params)
-            done[key] = {"key": key, "params": params, **outcome}
-            store.write(json.dumps(done[key]) + "\n")
+            row = {"key": key, "params": params, **outcome}
+            store.write(json.dumps(row) + "\n")
             store.flush()
             os.fsync(store.fileno())
+            done[key] = row
             result.ran.append(key)
             bar.update()
             if outcome[ERROR]:
