@@ -307,12 +307,13 @@ def _os_error(exc: OSError, out) -> str:
 
 def _generate(args) -> None:
     from vo_lib.cli.run import UsageError
-    from vo_lib.data import sample_path
+    from vo_lib.data import data_dir, sample_path
     from vo_lib.outputs import OutputError, check_target
     from vo_lib.sim.samples import generate
 
     out = args.out or sample_path(args.name, args.frames, args.resolution)
-    check_target(out, written_by="vo_lib generate", force=args.force, option="--out")  # before rendering
+    keep = {data_dir(): "the sample data folder"}
+    check_target(out, written_by="vo_lib generate", force=args.force, option="--out", keep=keep)  # first
     if args.out and not args.force and (Path(out) / "image_0").is_dir():  # ours, but a sequence
         raise OutputError(
             f"--out {args.out}: holds a sequence generated earlier, which something may still read; "
