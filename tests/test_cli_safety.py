@@ -42,7 +42,7 @@ from vo_lib.formats.sequence import (
     read_times,
     write_sequence,
 )
-from vo_lib.outputs import MARKER, _host
+from vo_lib.outputs import HOST, MARKER
 
 ROOT = Path(__file__).resolve().parents[1]
 W, H, FRAMES = 64, 48, 4
@@ -168,7 +168,7 @@ def run_once(out: str):
 def stale_temporary(ws):
     dead = subprocess.Popen([sys.executable, "-c", "pass"])
     dead.wait()
-    stale = ws / f".out.vo_lib-{dead.pid}-{_host()}-abcd1234.tmp"
+    stale = ws / f".out.vo_lib-{dead.pid}-{HOST}-abcd1234.tmp"
     stale.mkdir()
     (stale / "poses.txt").write_text("half\n")
     foreign = ws / ".out.someone-else.tmp"  # not ours: must survive

@@ -57,12 +57,12 @@ def notice(message: str) -> None:
     print(f"notice: {message}", file=sys.stderr)
 
 
-def _host() -> str:
-    return hashlib.sha1(socket.gethostname().encode()).hexdigest()[:8]
+#: This machine, in the names of temporaries: only its own processes' temporaries are judged.
+HOST = hashlib.sha1(socket.gethostname().encode()).hexdigest()[:8]
 
 
 def _prefix(name: str) -> str:
-    return f".{name}.vo_lib-{os.getpid()}-{_host()}-"
+    return f".{name}.vo_lib-{os.getpid()}-{HOST}-"
 
 
 def umask() -> int:
@@ -239,13 +239,11 @@ def writing(folder, option: str | None = None):
 
 def _gone(pid: int) -> bool:
     """Does process ``pid`` of this machine no longer run?"""
-    if os.name == "nt":  # os.kill(pid, 0) would stop the process there
-        return False
     try:
         os.kill(pid, 0)
     except ProcessLookupError:
         return True
-    except OSError:  # runs, as another user
+    except OSError:  # it runs, as another user
         pass
     return False
 
@@ -254,14 +252,16 @@ def recover(parent: Path) -> list[Path]:
     """Finish what killed processes left in ``parent``: an ``.old`` folder whose ``NAME`` is
     missing is renamed back to ``NAME``; other temporaries of dead processes of this machine are
     deleted. Returns what was deleted or restored."""
+    if os.name == "nt":  # os.kill(pid, 0) would stop the process there
+        return []
     try:
         entries = sorted(os.scandir(parent), key=lambda e: not e.name.endswith(".old"))
     except OSError:
         return []
-    restored, deleted, host = [], [], _host()
+    restored, deleted = [], []
     for entry in entries:
         match = _TEMPORARY.fullmatch(entry.name)
-        if not match or match[3] != host or entry.is_symlink() or not _gone(int(match[2])):
+        if not match or match[3] != HOST or entry.is_symlink() or not _gone(int(match[2])):
             continue
         original = Path(parent, match[1])
         if match[4] == "old" and not os.path.lexists(original):
@@ -330,18 +330,15 @@ class OutputFolder:
     def __init__(
         self, target, written_by: str, *, force=False, inputs=(), keep=None, option=None, checksums=False
     ):
-        self.target, self.written_by, self.checksums, self.committed = (
-            Path(target),
-            written_by,
-            checksums,
-            False,
-        )
+        self.target, self.written_by = Path(target), written_by
+        self.checksums, self.committed = checksums, False
         self._check = dict(written_by=written_by, force=force, inputs=tuple(inputs), keep=keep, option=option)
         check_target(self.target, **self._check)
         self.real, self.label = self.target.resolve(), _label(target, option)
         with _locked(self.real, shared=False, label=self.label):  # fail now, not after the work
             pass
         self._created = [p for p in reversed(self.real.parents) if not p.exists()]
+        self.path = self.real.parent / f"{_prefix(self.real.name)}unset.tmp"  # until mkdtemp names it
         try:
             for folder in self._created:
                 folder.mkdir()
@@ -372,9 +369,10 @@ class OutputFolder:
 
     def discard(self) -> None:
         """Delete the temporary folder and the parents this folder created (while empty)."""
-        if not self.committed and hasattr(self, "path"):
-            shutil.rmtree(self.path, ignore_errors=True)
-        for folder in reversed(self._created if not self.committed else []):
+        if self.committed:
+            return
+        shutil.rmtree(self.path, ignore_errors=True)
+        for folder in reversed(self._created):
             with contextlib.suppress(OSError):
                 folder.rmdir()
         self._created = []
