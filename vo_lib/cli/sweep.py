@@ -211,19 +211,15 @@ LOCAL_CLUSTER_CONFIG = {
 
 @contextlib.contextmanager
 def _without_ctrl_c():
-    """SIGINT ignored meanwhile (in the main thread; elsewhere nothing changes): processes started
-    here inherit the ignored signal, so that a Ctrl-C to the process group stops only this process
-    (which then closes the cluster), not every worker with a traceback of its own. A Ctrl-C in the
-    seconds the workers take to start is not seen."""
-    try:
-        previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
-    except ValueError:  # not the main thread
-        previous = None
+    """SIGINT ignored meanwhile (call it from the main thread): processes started here inherit the
+    ignored signal, so that a Ctrl-C to the process group stops only this process (which then
+    closes the cluster), not every worker with a traceback of its own. A Ctrl-C in the seconds the
+    workers take to start is not seen."""
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
     try:
         yield
     finally:
-        if previous is not None:
-            signal.signal(signal.SIGINT, previous)
+        signal.signal(signal.SIGINT, previous)
 
 
 def local_cluster(workers: int):
