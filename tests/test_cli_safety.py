@@ -31,6 +31,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from vo_lib.atomic import HOST
 from vo_lib.camera import StereoCamera
 from vo_lib.cli.main import main
 from vo_lib.formats.poses import TrajectoryError, read_trajectory
@@ -42,7 +43,7 @@ from vo_lib.formats.sequence import (
     read_times,
     write_sequence,
 )
-from vo_lib.outputs import HOST, MARKER
+from vo_lib.outputs import MARKER
 
 ROOT = Path(__file__).resolve().parents[1]
 W, H, FRAMES = 64, 48, 4
@@ -1016,6 +1017,7 @@ def test_a_folder_being_written_is_neither_written_nor_replaced_by_another_comma
 
 KILLER = """
 import os, shutil, signal, sys
+import vo_lib.atomic as a
 import vo_lib.outputs as o
 target, mode, at = sys.argv[1], sys.argv[2], int(sys.argv[3])
 steps = [0]
@@ -1029,7 +1031,7 @@ def counted(step):
     return call
 
 os.rename, shutil.rmtree = counted(os.rename), counted(shutil.rmtree)
-o._exchange = counted(o._exchange) if mode == "exchange" else (lambda a, b: False)
+a._exchange = counted(a._exchange) if mode == "exchange" else (lambda x, y: False)
 with o.OutputFolder(target, "vo_lib run") as out:
     (out.path / "poses.txt").write_text("new\\n")
     if at == 0:

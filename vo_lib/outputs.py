@@ -6,14 +6,10 @@
   :class:`OutputError` in one line, unless the caller passes ``force``. Even then a folder is
   never replaced if it is, holds or lies inside the command's input or this package, or if it is
   or holds the current folder, the home folder or the repository's ``data/`` folder.
-* **Atomic.** A folder is written into a temporary sibling ``.NAME.vo_lib-PID-HOST-RANDOM.tmp``
-  and its marker is written last. It is put in place in one step where the system can swap two
-  folders (Linux ``renameat2``), so no moment exists without a whole ``NAME``. Elsewhere the old
-  folder is first renamed to ``.NAME.vo_lib-PID-HOST-RANDOM.old``; if the process is killed
-  before the new folder takes its place, the next command beside it renames that ``.old``
-  folder back. An ``.old`` folder is deleted only once ``NAME`` exists again. A failed or
-  interrupted write deletes its temporary folder. A temporary left by a process that no longer
-  runs is deleted by the next command beside it, with a notice.
+* **Atomic.** A folder is written into a temporary sibling, its marker last, and put in place
+  by :func:`vo_lib.atomic.swap_in` (in one step where the system can swap two folders; what a
+  killed process left is finished or cleared by the next command beside it). A failed or
+  interrupted write deletes its temporary folder.
 * **Locks.** A command that reads a folder holds a shared lock on it (:func:`reading`); a
   replacement or an update in place (:func:`writing`) needs the lock exclusively.
 * **Permissions follow the umask.**
@@ -22,19 +18,15 @@
 from __future__ import annotations
 
 import contextlib
-import ctypes
-import errno
 import hashlib
 import json
 import os
-import re
-import secrets
 import shutil
-import socket
-import sys
 import tempfile
 import threading
 from pathlib import Path
+
+from vo_lib.atomic import notice, recover, swap_in, temporary_prefix, umask, write_atomic
 
 #: Set by the command line's Ctrl-C handler: an interrupt that compiled code swallowed still
 #: stops the commit.
@@ -45,34 +37,10 @@ ANY_CONTENTS = "*"
 PACKAGE = Path(__file__).resolve().parent
 #: The repository's sample data folder (in a checkout): never replaced, even with ``force``.
 REPOSITORY_DATA = PACKAGE.parent / "data"
-_TEMPORARY = re.compile(r"\.(.+)\.vo_lib-(\d+)-([0-9a-f]{8})-[^/]*\.(tmp|old)")
 
 
 class OutputError(ValueError):
     """An output folder that may not be written (it holds files this package did not write)."""
-
-
-def notice(message: str) -> None:
-    """One line on stderr for something the user should know that is not an error."""
-    print(f"notice: {message}", file=sys.stderr)
-
-
-#: This machine, in the names of temporaries: only its own processes' temporaries are judged.
-HOST = hashlib.sha1(socket.gethostname().encode()).hexdigest()[:8]
-
-
-def _prefix(name: str) -> str:
-    return f".{name}.vo_lib-{os.getpid()}-{HOST}-"
-
-
-def umask() -> int:
-    """The process's umask, read without changing it where the system allows (threads may write)."""
-    with contextlib.suppress(OSError, ValueError, IndexError):
-        with open("/proc/self/status") as fh:
-            return int(next(line for line in fh if line.startswith("Umask:")).split()[1], 8)
-    mask = os.umask(0o022)
-    os.umask(mask)
-    return mask
 
 
 def _label(target, option: str | None) -> str:
@@ -167,24 +135,6 @@ def check_target(target, *, written_by: str, force=False, inputs=(), keep=None, 
     return None if why is None else f"{real} ({why})"
 
 
-def write_atomic(path, text: str) -> Path:
-    """Replace the file ``path`` by ``text`` through a temporary file beside it."""
-    path = Path(path)
-    fd, tmp = tempfile.mkstemp(prefix=_prefix(path.name), suffix=".tmp", dir=path.parent)
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8", errors="surrogateescape", newline="") as fh:
-            fh.write(text)
-            fh.flush()
-            os.fsync(fh.fileno())
-        os.chmod(tmp, 0o666 & ~umask())
-        os.replace(tmp, path)
-    except BaseException:
-        with contextlib.suppress(OSError):
-            os.unlink(tmp)
-        raise
-    return path
-
-
 def claim_folder(target, written_by: str, *, force: bool = False, option: str | None = None) -> Path:
     """Make ``target`` a folder that ``written_by`` keeps and updates over many runs (a build
     folder with its caches): new, empty, or claimed by it before (``force``: any other, under the
@@ -237,83 +187,6 @@ def writing(folder, option: str | None = None):
     return _locked(Path(folder), shared=False, label=_label(folder, option), doing="writing to")
 
 
-def _gone(pid: int) -> bool:
-    """Does process ``pid`` of this machine no longer run?"""
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return True
-    except OSError:  # it runs, as another user
-        pass
-    return False
-
-
-def recover(parent: Path) -> list[Path]:
-    """Finish what killed processes left in ``parent``: an ``.old`` folder whose ``NAME`` is
-    missing is renamed back to ``NAME``; other temporaries of dead processes of this machine are
-    deleted. Returns what was deleted or restored."""
-    if os.name == "nt":  # os.kill(pid, 0) would stop the process there
-        return []
-    try:
-        entries = sorted(os.scandir(parent), key=lambda e: not e.name.endswith(".old"))
-    except OSError:
-        return []
-    restored, deleted = [], []
-    for entry in entries:
-        match = _TEMPORARY.fullmatch(entry.name)
-        if not match or match[3] != HOST or entry.is_symlink() or not _gone(int(match[2])):
-            continue
-        original = Path(parent, match[1])
-        if match[4] == "old" and not os.path.lexists(original):
-            os.rename(entry.path, original)
-            notice(f"restored {original}, whose replacement was interrupted")
-            restored.append(original)
-            continue
-        if entry.is_dir(follow_symlinks=False):
-            shutil.rmtree(entry.path, ignore_errors=True)
-        with contextlib.suppress(OSError):
-            os.unlink(entry.path)
-        deleted.append(Path(entry.path))
-    if deleted:
-        names = ", ".join(p.name for p in deleted)
-        notice(f"removed {len(deleted)} temporary folder(s) left by interrupted runs: {names}")
-    return restored + deleted
-
-
-remove_stale_temporaries = recover
-
-
-def _exchange(a: Path, b: Path) -> bool:
-    """Swap folders ``a`` and ``b`` in one step (Linux ``renameat2``); False where not possible."""
-    try:
-        renameat2 = ctypes.CDLL(None, use_errno=True).renameat2
-    except (OSError, AttributeError, TypeError):
-        return False
-    at_fdcwd, rename_exchange = -100, 2
-    if renameat2(at_fdcwd, os.fsencode(a), at_fdcwd, os.fsencode(b), rename_exchange) == 0:
-        return True
-    if ctypes.get_errno() in (errno.ENOSYS, errno.EINVAL, errno.EOPNOTSUPP):
-        return False
-    raise OSError(ctypes.get_errno(), os.strerror(ctypes.get_errno()), str(b))
-
-
-def swap_in(complete: Path, target: Path) -> None:
-    """Put the whole folder ``complete`` (a ``.tmp`` sibling) at ``target``; the folder it
-    replaces is deleted afterwards. No moment exists where a kill loses both (see the module)."""
-    try:
-        os.rename(complete, target)  # no target, or an empty folder
-        return
-    except OSError as exc:
-        if exc.errno not in (errno.ENOTEMPTY, errno.EEXIST):
-            raise
-    if not _exchange(complete, target):  # two renames; a kill between them is undone by recover()
-        aside = target.with_name(f"{_prefix(target.name)}{secrets.token_hex(4)}.old")
-        os.rename(target, aside)
-        os.rename(complete, target)
-        complete = aside
-    shutil.rmtree(complete)
-
-
 class OutputFolder:
     """A folder written whole: checked on entry, filled in :attr:`path` (a temporary sibling), put
     in place by :meth:`commit`; on any exception (or without a commit) nothing is left behind.
@@ -338,12 +211,14 @@ class OutputFolder:
         with _locked(self.real, shared=False, label=self.label):  # fail now, not after the work
             pass
         self._created = [p for p in reversed(self.real.parents) if not p.exists()]
-        self.path = self.real.parent / f"{_prefix(self.real.name)}unset.tmp"  # until mkdtemp names it
+        self.path = (
+            self.real.parent / f"{temporary_prefix(self.real.name)}unset.tmp"
+        )  # until mkdtemp names it
         try:
             for folder in self._created:
                 folder.mkdir()
             self.path = Path(
-                tempfile.mkdtemp(prefix=_prefix(self.real.name), suffix=".tmp", dir=self.real.parent)
+                tempfile.mkdtemp(prefix=temporary_prefix(self.real.name), suffix=".tmp", dir=self.real.parent)
             )
             os.chmod(self.path, 0o777 & ~umask())
         except OSError as exc:

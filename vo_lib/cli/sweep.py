@@ -44,11 +44,11 @@ from pathlib import Path
 import numpy as np
 
 from vo_lib.arguments import one_line
+from vo_lib.atomic import recover
 from vo_lib.outputs import (
     OutputFolder,
     check_target,
     read_marker,
-    remove_stale_temporaries,
     write_atomic,
     writing,
 )
@@ -139,7 +139,7 @@ def open_folder(target, experiment: str, *, force: bool = False, inputs=()) -> P
     written_by = f"vo_lib sweep {experiment}"
     marker = read_marker(target) if target.is_dir() else None
     if marker is not None and marker.get("written_by") == written_by:
-        remove_stale_temporaries(target)
+        recover(target)
         check_target(target, written_by=written_by, inputs=inputs, option="--out")
         return target
     with OutputFolder(target, written_by, force=force, inputs=inputs, option="--out") as out:
