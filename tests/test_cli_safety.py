@@ -1019,7 +1019,7 @@ KILLER = """
 import os, shutil, signal, sys
 import vo_lib.atomic as a
 import vo_lib.outputs as o
-target, mode, at = sys.argv[1], sys.argv[2], int(sys.argv[3])
+target, mode, at, writer = sys.argv[1], sys.argv[2], int(sys.argv[3]), sys.argv[4]
 steps = [0]
 
 def counted(step):
@@ -1032,47 +1032,69 @@ def counted(step):
 
 os.rename, shutil.rmtree = counted(os.rename), counted(shutil.rmtree)
 a._exchange = counted(a._exchange) if mode == "exchange" else (lambda x, y: False)
-with o.OutputFolder(target, "vo_lib run") as out:
-    (out.path / "poses.txt").write_text("new\\n")
-    if at == 0:
-        os.kill(os.getpid(), signal.SIGKILL)
-    out.commit()
+if at == 0:  # killed when the new folder is written, before its commit
+    o.OutputFolder.commit = lambda self, **details: os.kill(os.getpid(), signal.SIGKILL)
+if writer == "run":
+    with o.OutputFolder(target, "vo_lib run") as out:
+        (out.path / "poses.txt").write_text("new\\n")
+        out.commit()
+else:
+    from vo_lib.sim.samples import generate
+    generate("corridor", target, 3, (64, 48), progress=False, force=True)
 """
 
 
+def write_old(target: Path, writer: str) -> None:
+    """The previous output: a run's folder, or a generated sequence of 2 frames (the new has 3)."""
+    from vo_lib.outputs import OutputFolder
+    from vo_lib.sim.samples import generate
+
+    if writer == "generate":
+        generate("corridor", target, 2, (64, 48), progress=False)
+        return
+    with OutputFolder(target, "vo_lib run") as out:
+        (out.path / "poses.txt").write_text("old\n")
+        out.commit()
+
+
 def whole(folder: Path) -> str | None:
-    """What a run's output folder holds ("old" or "new"), or None if it is missing or not whole."""
+    """Which output ``folder`` holds ("old" or "new"), or None if it is missing or not whole."""
     from vo_lib.outputs import read_marker
 
     marker = read_marker(folder)
     if marker is None or sorted(p.name for p in folder.iterdir()) != sorted([MARKER, *marker["contents"]]):
         return None
+    if "frames" in marker:  # a generated sequence
+        return (
+            {2: "old", 3: "new"}[marker["frames"]] if len(read_sequence(folder)) == marker["frames"] else None
+        )
     return (folder / "poses.txt").read_text().strip()
 
 
+@pytest.mark.parametrize("writer", ["run", "generate"])
 @pytest.mark.parametrize("mode", ["exchange", "renames"])
-def test_a_kill_at_any_step_of_the_swap_leaves_the_previous_output(tmp_path, mode):
+def test_a_kill_at_any_step_of_the_swap_leaves_the_previous_output(tmp_path, mode, writer):
     """Kill the writer (SIGKILL) before each step of the swap in turn (renames, the one-step
-    exchange, the deletion of the replaced folder). After each kill the folder is the old output
-    or the new one, whole; the next command beside it (``check_target``) restores an old output
-    set aside and removes every temporary."""
-    from vo_lib.outputs import OutputFolder, check_target
+    exchange, the deletion of the replaced folder), for a run's output and a generated sequence.
+    After each kill the folder is the old output or the new one, whole; the next command beside
+    it (``check_target``) restores an old output set aside and removes every temporary."""
+    from vo_lib.outputs import check_target
 
-    seen = []
+    seen, written_by = [], f"vo_lib {writer}"
     for at in range(12):
         target = tmp_path / f"out{at}"
-        with OutputFolder(target, "vo_lib run") as out:
-            (out.path / "poses.txt").write_text("old\n")
-            out.commit()
+        write_old(target, writer)
         proc = subprocess.run(
-            [sys.executable, "-c", KILLER, str(target), mode, str(at)], env=cli_env(), capture_output=True
+            [sys.executable, "-c", KILLER, str(target), mode, str(at), writer],
+            env=cli_env(),
+            capture_output=True,
         )
         if proc.returncode == 0:
             break
         assert proc.returncode == -signal.SIGKILL, proc.stderr
         after_kill = whole(target)
         assert after_kill in ("old", "new") or (mode == "renames" and not target.exists())
-        check_target(target, written_by="vo_lib run")
+        check_target(target, written_by=written_by, force=True)
         seen.append(whole(target))
         assert seen[-1] == (after_kill or "old") and temporaries(tmp_path) == []
     assert proc.returncode == 0 and whole(target) == "new" and temporaries(tmp_path) == []
