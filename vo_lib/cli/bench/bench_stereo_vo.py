@@ -8,6 +8,7 @@ import time
 import numpy as np
 
 from vo_lib.cli.bench.common import BENCH_SEED, format_row, median_seconds
+from vo_lib.stereo_vo.paper_tables import PAPER_LONG_RUN
 
 
 def bench_geometry(n: int = 10_000) -> dict[str, float]:
@@ -198,11 +199,6 @@ def bench_pipeline(frames: int = 200) -> dict[str, float]:
         f"median inliers {inliers:.0f} (target >= 200: {'met' if inliers >= 200 else 'NOT met'})"
     )
     return {"frame": table["total"] / 1e3}
-
-
-#: The paper's long run ([Zhao], IV.A.1): 10,000 frames, mean and standard deviation of the
-#: elapsed time per frame, milliseconds.
-PAPER_LONG_RUN = (10_000, 26.5511, 4.551)
 
 
 def bench_long(frames: int = PAPER_LONG_RUN[0]) -> dict[str, float]:
