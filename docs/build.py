@@ -45,15 +45,13 @@ from execute_notebook import KERNEL_NAME, read_notebook  # noqa: E402
 
 sys.path.insert(0, str(ROOT))  # this checkout's vo_lib, whatever copy is installed
 from vo_lib.arguments import OneLineParser  # noqa: E402
-from vo_lib.outputs import MARKER, OutputError, claim_folder, swap_in  # noqa: E402
+from vo_lib.outputs import OutputError, claim_folder, swap_in  # noqa: E402
 
 DEFAULT_OUT = DOCS / "_build"
 STUDENT_SUBFOLDER = "student"
 NOTEBOOK_GLOB = "[0-9][0-9]_*.py"  # the notebooks tests/test_notebooks.py executes
 RELEASE_GLOB = "[0-9][0-9]_*/[0-9][0-9]_*.ipynb"  # the student edition, as coursework/build.py writes it
 WRITTEN_BY = "python docs/build.py"
-#: The marker of a build folder from before vo_lib.outputs marked it: claimed as the build's own.
-LEGACY_MARKER = ".vo_notebooks_site"
 CONF_STAMP = "conf.py.sha256"  # in doctrees/: the conf.py the pages were read with
 # Pages of the site that are files of the repository: path in the site's source tree -> file.
 PAGES = {
@@ -188,13 +186,10 @@ def student_copy(release: pathlib.Path, copy: pathlib.Path) -> None:
 
 def claim_build_folder(out: pathlib.Path) -> None:
     """Make ``out`` ours: new, empty, or built before; any other folder is one UsageError."""
-    legacy = (out / LEGACY_MARKER).is_file() and not (out / MARKER).exists()
     try:
-        claim_folder(out, WRITTEN_BY, force=legacy, option="--out")
+        claim_folder(out, WRITTEN_BY, option="--out")
     except OutputError as exc:
         raise UsageError(str(exc)) from None
-    if legacy:
-        (out / LEGACY_MARKER).unlink()
 
 
 def lay_out_sources(out: pathlib.Path, notebooks: list[pathlib.Path]) -> pathlib.Path:

@@ -624,25 +624,11 @@ assert yaw_sigma[300] - yaw_sigma[260] < 0.1 * (yaw_sigma[260] - yaw_sigma[199])
 # assumes.
 
 # %%
+from vo_lib.stereo_vo.consistency import monte_carlo_run
+
 runs, steps = 50, 150
-R_vo = np.diag([math.radians(0.05) ** 2, 0.002**2])
-P0 = np.diag([0.01**2, 0.01**2, math.radians(0.5) ** 2])
-nees = np.zeros((runs, steps))
-nis_runs = np.zeros((runs, steps))
-for run in range(runs):
-    r = np.random.default_rng(1000 + run)
-    f = VoKalmanFilter(odometry, covariance=P0)
-    x_true = f.pose + r.multivariate_normal(np.zeros(3), P0)
-    for k in range(steps):
-        u_true = odometry.controls_for(0.02 + 0.01 * math.sin(k / 20), math.radians(1.0) * math.sin(k / 30))
-        u_meas = u_true + r.multivariate_normal(np.zeros(2), f.control_covariance(u_true))
-        x_prev, x_true = x_true, odometry.predict(x_true, u_true)
-        f.predict(u_meas)
-        z = measurement(np.concatenate([x_true, x_prev])) + r.multivariate_normal(np.zeros(2), R_vo)
-        f.update(z[0], z[1], R_vo)
-        nis_runs[run, k] = nis(f.ekf.y[:2], f.ekf.S[:2, :2])
-        f.finish_frame()
-        nees[run, k] = f.nees(x_true)
+pairs = [monte_carlo_run(1000 + run, steps) for run in range(runs)]  # (NEES, NIS) per step of each run
+nees, nis_runs = np.array([p[0] for p in pairs]), np.array([p[1] for p in pairs])
 avg = nees.mean(axis=0)
 lo, hi = chi2.ppf([0.025, 0.975], 3 * runs) / runs
 fig, ax = new_axes(width=7, height=3.2)

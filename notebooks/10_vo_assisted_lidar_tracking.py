@@ -586,12 +586,9 @@ assert np.mean(np.abs(dirs[:, 0])) > 0.95
 
 # %%
 result = run_experiment(range(20), vo)
-paper = {
-    ("LBPT", 0): (1.060, 0.332, 0.153, 0.357),
-    ("VOAPT", 0): (0.148, 0.045, 0.047, 0.029),
-    ("LBPT", 1): (0.302, 0.114, 0.067, 0.099),
-    ("VOAPT", 1): (0.133, 0.045, 0.036, 0.036),
-}
+from vo_lib.lidar_tracking.corridor_experiment import PAPER_TABLE3
+
+paper = {(m, a): tuple(PAPER_TABLE3["XY"[a]][m].values()) for m in ("LBPT", "VOAPT") for a in (0, 1)}
 print(f"{'':14s}{'max':>8s}{'mean':>8s}{'median':>8s}{'std':>8s}   paper: max / mean / median / std")
 for axis, name in ((0, "X"), (1, "Y")):
     for method, row in result.table(axis).items():

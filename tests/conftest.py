@@ -15,7 +15,6 @@ import numpy as np
 import pytest
 
 from vo_lib.camera import StereoCamera
-from vo_lib.sim.frame_store import ENVIRONMENT as FRAME_STORE
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 #: Real sequences beside the repository (CI has them); the notebooks find them through
@@ -67,14 +66,25 @@ def stop_server(proc, log) -> None:
     log.close()
 
 
+#: The session's frame store, named to every process the session starts; tests/startup/sitecustomize.py
+#: (on their PYTHONPATH) sets vo_lib.sim.frame_store.FOLDER from it.
+FRAME_STORE = "VO_LIB_FRAME_STORE"
+STARTUP = str(pathlib.Path(__file__).with_name("startup"))
+
+
 def pytest_configure(config):
     """One frame store for the session, made before the workers start: they, the notebook kernels
-    and the command-line runs they start inherit ``VO_LIB_FRAME_STORE``, so each frame of a sample
-    that several tests render is rendered once (``vo_lib.sim.frame_store``)."""
-    if hasattr(config, "workerinput") or os.environ.get(FRAME_STORE):
-        return  # a worker (it inherits the store), or a store the caller chose
-    config.frame_store = tempfile.mkdtemp(prefix="vo_lib_frames_")
-    os.environ[FRAME_STORE] = config.frame_store
+    and the command-line runs they start inherit it, so each frame of a sample that several tests
+    render is rendered once (``vo_lib.sim.frame_store``)."""
+    if not os.environ.get(FRAME_STORE):  # else a worker (it inherits the store), or the caller's
+        config.frame_store = tempfile.mkdtemp(prefix="vo_lib_frames_")
+        os.environ[FRAME_STORE] = config.frame_store
+    paths = list(filter(None, os.environ.get("PYTHONPATH", "").split(os.pathsep)))
+    if STARTUP not in paths:
+        os.environ["PYTHONPATH"] = os.pathsep.join([STARTUP, *paths])
+    from vo_lib.sim import frame_store
+
+    frame_store.FOLDER = pathlib.Path(os.environ[FRAME_STORE])  # this process too
 
 
 def pytest_unconfigure(config):

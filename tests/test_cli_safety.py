@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import hashlib
 import os
+import shlex
 import shutil
 import signal
 import stat
@@ -30,6 +31,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from vo_lib.atomic import HOST
 from vo_lib.camera import StereoCamera
 from vo_lib.cli.main import main
 from vo_lib.formats.poses import TrajectoryError, read_trajectory
@@ -41,7 +43,7 @@ from vo_lib.formats.sequence import (
     read_times,
     write_sequence,
 )
-from vo_lib.outputs import MARKER, _host
+from vo_lib.outputs import MARKER
 
 ROOT = Path(__file__).resolve().parents[1]
 W, H, FRAMES = 64, 48, 4
@@ -167,7 +169,7 @@ def run_once(out: str):
 def stale_temporary(ws):
     dead = subprocess.Popen([sys.executable, "-c", "pass"])
     dead.wait()
-    stale = ws / f".out.vo_lib-{dead.pid}-{_host()}-abcd1234.tmp"
+    stale = ws / f".out.vo_lib-{dead.pid}-{HOST}-abcd1234.tmp"
     stale.mkdir()
     (stale / "poses.txt").write_text("half\n")
     foreign = ws / ".out.someone-else.tmp"  # not ours: must survive
@@ -193,14 +195,30 @@ def do(*steps):
 
 @dataclass
 class Case:
+    """One row: ``args`` is a command line (``RUN``, ``GEN`` and ``EVAL`` stand for the commands
+    below) or a list; ``writes``, the paths the case may write or replace, space-separated."""
+
     id: str
-    argv: list[str]
+    args: str | list[str]
     code: int
     phrase: str
     setup: Callable | None = None
-    writes: tuple[str, ...] = ()  # paths the case may write or replace
+    writes: str = ""
     cwd: str = "."
     check: Callable | None = None
+
+    @property
+    def argv(self) -> list[str]:
+        words = shlex.split(self.args) if isinstance(self.args, str) else self.args
+        return [w for word in words for w in ALIASES.get(word, [word])]
+
+
+def link(name: str, to: str):
+    return lambda ws: (ws / name).symlink_to(to)
+
+
+def reads(rel: str, text: str):
+    return lambda ws: (ws / rel).read_text() == text
 
 
 def gone(rel):
@@ -214,374 +232,151 @@ def has_marker(rel):
 RUN = ["run", "--sequence", "seq"]
 GEN = ["generate", "corridor", "--frames", "2", "--resolution", "64x48"]
 EVAL = ["evaluate", "--gt", "gt.txt", "--est", "est.txt"]
+ALIASES = {"RUN": RUN, "GEN": GEN, "EVAL": EVAL}
 
+# fmt: off
 CASES = [
     # --- outputs: never over what the program did not write ---------------------------------------
-    Case("out-new", [*RUN, "--out", "out"], 0, "wrote out/", writes=("out",), check=has_marker("out")),
-    Case(
-        "out-nested-new", [*RUN, "--out", "a/b/out"], 0, "wrote", writes=("a",), check=has_marker("a/b/out")
-    ),
-    Case(
-        "out-ours-again",
-        [*RUN, "--out", "out"],
-        0,
-        "wrote",
-        run_once("out"),
-        ("out",),
-        check=has_marker("out"),
-    ),
-    Case("out-empty", [*RUN, "--out", "empty"], 0, "wrote", writes=("empty",), check=has_marker("empty")),
-    Case("out-user-folder", [*RUN, "--out", "thesis"], 2, "--force"),
-    Case(
-        "out-user-folder-force",
-        [*RUN, "--out", "thesis", "--force"],
-        0,
-        "--force: replaced",
-        writes=("thesis",),
-        check=has_marker("thesis"),
-    ),
-    Case(
-        "out-ours-plus-user-file",
-        [*RUN, "--out", "out"],
-        2,
-        "notes.txt",
-        do(run_once("out"), edit("out/notes.txt", "mine")),
-        writes=("out",),
-        check=lambda ws: (ws / "out" / "notes.txt").read_text() == "mine",
-    ),
-    Case("out-is-input", [*RUN, "--out", "seq"], 2, "is the input sequence"),
-    Case("out-is-input-force", [*RUN, "--out", "seq", "--force"], 2, "is the input sequence"),
-    Case("out-above-input-force", [*RUN, "--out", ".", "--force"], 2, "holds the input sequence"),
-    Case("out-inside-input", [*RUN, "--out", "seq/results"], 2, "inside the input sequence"),
-    Case(
-        "out-is-cwd-force",
-        ["run", "--sequence", "../seq", "--out", ".", "--force"],
-        2,
-        "is the current folder",
-        cwd="thesis",
-    ),
-    Case(
-        "out-above-cwd-force",
-        ["run", "--sequence", "../seq", "--out", "..", "--force"],
-        2,
-        "holds the input sequence",
-        cwd="thesis",
-    ),
-    Case("out-home-force", [*RUN, "--out", "home", "--force"], 2, "your home folder"),
-    Case("out-data-folder-force", [*RUN, "--out", "data", "--force"], 2, "sample data folder"),
-    Case("out-is-a-file", [*RUN, "--out", "important.txt"], 2, "is a file"),
-    Case("out-is-a-file-force", [*RUN, "--out", "important.txt", "--force"], 2, "is a file"),
-    Case("out-under-a-file", [*RUN, "--out", "important.txt/sub"], 2, "cannot write there"),
-    Case(
-        "out-symlink-to-ours",
-        [*RUN, "--out", "link"],
-        0,
-        "wrote",
-        do(run_once("real"), lambda ws: (ws / "link").symlink_to("real")),
-        ("real", "link"),
-        check=lambda ws: (ws / "link").is_symlink() and (ws / "real" / MARKER).is_file(),
-    ),
-    Case(
-        "out-symlink-to-user-folder",
-        [*RUN, "--out", "link"],
-        2,
-        "--force",
-        lambda ws: (ws / "link").symlink_to("thesis"),
-    ),
-    Case(
-        "out-dangling-symlink",
-        [*RUN, "--out", "link"],
-        2,
-        "does not exist",
-        lambda ws: (ws / "link").symlink_to("nowhere"),
-    ),
-    Case(
-        "stale-temporary-removed",
-        [*RUN, "--out", "out"],
-        0,
-        "removed 1 temporary folder",
-        stale_temporary,
-        writes=("out", ".out.vo_lib-"),
-        check=lambda ws: (ws / ".out.someone-else.tmp" / "keep.txt").exists(),
-    ),
+    Case("out-new", "RUN --out out", 0, "wrote out/", writes="out", check=has_marker("out")),
+    Case("out-nested-new", "RUN --out a/b/out", 0, "wrote", writes="a", check=has_marker("a/b/out")),
+    Case("out-ours-again", "RUN --out out", 0, "wrote", run_once("out"), "out", check=has_marker("out")),
+    Case("out-empty", "RUN --out empty", 0, "wrote", writes="empty", check=has_marker("empty")),
+    Case("out-user-folder", "RUN --out thesis", 2, "--force"),
+    Case("out-user-folder-force", "RUN --out thesis --force", 0, "--force: replaced", writes="thesis",
+        check=has_marker("thesis")),
+    Case("out-ours-plus-user-file", "RUN --out out", 2, "notes.txt",
+        do(run_once("out"), edit("out/notes.txt", "mine")), "out", check=reads("out/notes.txt", "mine")),
+    Case("out-is-input", "RUN --out seq", 2, "is the input sequence"),
+    Case("out-is-input-force", "RUN --out seq --force", 2, "is the input sequence"),
+    Case("out-above-input-force", "RUN --out . --force", 2, "holds the input sequence"),
+    Case("out-inside-input", "RUN --out seq/results", 2, "inside the input sequence"),
+    Case("out-is-cwd-force", "run --sequence ../seq --out . --force", 2, "is the current folder",
+        cwd="thesis"),
+    Case("out-above-cwd-force", "run --sequence ../seq --out .. --force", 2, "holds the input sequence",
+        cwd="thesis"),
+    Case("out-home-force", "RUN --out home --force", 2, "your home folder"),
+    Case("out-empty-text", "RUN --out ''", 2, "--out: expected a folder; got an empty text"),
+    Case("sequence-empty-text", "run --sequence ''", 2, "--sequence: expected a sample name"),
+    Case("generate-out-empty-text", "GEN --out ''", 2, "--out: expected a folder"),
+    Case("generate-package-force", [*GEN, "--out", str(ROOT / "vo_lib" / "x"), "--force"], 2,
+        "inside this package"),
+    Case("generate-repo-data-force", [*GEN, "--out", str(ROOT / "data"), "--force"], 2, "sample data folder"),
+    Case("out-data-folder-force", "RUN --out data --force", 2, "sample data folder"),
+    Case("out-is-a-file", "RUN --out important.txt", 2, "is a file"),
+    Case("out-is-a-file-force", "RUN --out important.txt --force", 2, "is a file"),
+    Case("out-under-a-file", "RUN --out important.txt/sub", 2, "cannot write there"),
+    Case("out-symlink-to-ours", "RUN --out link", 0, "wrote", do(run_once("real"), link("link", "real")),
+        "real link", check=lambda ws: (ws / "link").is_symlink() and (ws / "real" / MARKER).is_file()),
+    Case("out-symlink-to-user-folder", "RUN --out link", 2, "--force", link("link", "thesis")),
+    Case("out-dangling-symlink", "RUN --out link", 2, "does not exist", link("link", "nowhere")),
+    Case("stale-temporary-removed", "RUN --out out", 0, "removed 1 temporary folder", stale_temporary,
+        "out .out.vo_lib-", check=lambda ws: (ws / ".out.someone-else.tmp" / "keep.txt").exists()),
     # --- the sequence: paired by name, numeric order, headers checked ----------------------------
-    Case("sequence-missing", ["run", "--sequence", "nowhere"], 2, "neither a sample name"),
-    Case("sequence-is-a-file", ["run", "--sequence", "important.txt"], 2, "not a sequence folder"),
-    Case("unpadded-names", [*RUN, "--out", "out"], 0, "wrote", unpadded, ("out",)),
-    Case("right-image-missing", [*RUN], 2, "image_0/000002.png", lambda ws: image(ws, 1, 2).unlink()),
-    Case("names-differ", [*RUN], 2, "image_1/000009.png", lambda ws: image(ws, 1, 3).rename(image(ws, 1, 9))),
-    Case(
-        "same-number-twice",
-        [*RUN],
-        2,
-        "same frame number",
-        lambda ws: shutil.copy(image(ws, 0, 1), ws / "seq" / "image_0" / "1.png"),
-    ),
-    Case(
-        "hidden-files-ignored",
-        [*RUN, "--out", "out"],
-        0,
-        "wrote",
-        edit("seq/image_0/._000001.png", b"\x00\x05\x16\x07 resource fork"),
-        ("out",),
-    ),
-    Case(
-        "zero-byte-image", [*RUN], 2, "000002.png, frame 2: empty file", edit("seq/image_0/000002.png", b"")
-    ),
-    Case(
-        "truncated-image",
-        [*RUN],
-        2,
-        "frame 2: truncated PNG",
-        lambda ws: image(ws, 1, 2).write_bytes(image(ws, 1, 2).read_bytes()[:300]),
-    ),
-    Case(
-        "not-an-image", [*RUN], 2, "frame 1: cannot read the image", edit("seq/image_0/000001.png", b"hello")
-    ),
-    Case("jpeg-sequence", [*RUN, "--out", "out"], 0, "wrote", as_jpeg, ("out",)),
-    Case("truncated-jpeg", [*RUN], 2, "000001.jpg, frame 1: truncated JPEG", truncated_jpeg),
-    Case(
-        "16-bit-image",
-        [*RUN],
-        2,
-        "frame 3: 16-bit image",
-        lambda ws: write_png(image(ws, 0, 3), np.zeros((H, W), np.uint16)),
-    ),
-    Case(
-        "size-changes",
-        [*RUN],
-        2,
-        "frame 2: 60x48 image",
-        lambda ws: write_png(image(ws, 1, 2), np.zeros((H, 60), np.uint8)),
-    ),
-    Case(
-        "colour-image-is-converted",
-        [*RUN, "--out", "out"],
-        0,
-        "wrote",
-        lambda ws: write_png(image(ws, 0, 1), np.full((H, W, 3), 90, np.uint8)),
-        ("out",),
-    ),
-    Case(
-        "damaged-image-data",
-        [*RUN, "--out", "out"],
-        2,
-        "000002.png, frame 2: cannot read the image",
-        damaged_png_data,
-        check=gone("out"),
-    ),
-    Case(  # the run stops cleanly: the earlier output is left as it was, byte for byte
-        "damaged-image-keeps-earlier-output",
-        [*RUN, "--out", "out"],
-        2,
-        "frame 2: cannot read the image",
-        do(run_once("out"), damaged_png_data),
-    ),
-    Case(  # --force replaces only when the run succeeds: the user's folder is untouched
-        "force-but-bad-input",
-        [*RUN, "--out", "thesis", "--force"],
-        2,
-        "frame 2: empty file",
-        edit("seq/image_1/000002.png", b""),
-    ),
-    Case("corrupt-manifest", [*RUN], 2, "manifest.json: not valid JSON", edit("seq/manifest.json", "{oops")),
-    Case("calib-no-p1", [*RUN], 2, "no P1 line", edit("seq/calib.txt", "P0: " + "1 " * 12 + "\n")),
-    Case(
-        "calib-short-line",
-        [*RUN],
-        2,
-        "calib.txt, line 2: P1 needs 12 numbers",
-        edit("seq/calib.txt", "P0: 50 0 31.5 0 0 50 23.5 0 0 0 1 0\nP1: 1 2 3\n"),
-    ),
-    Case("calib-binary", [*RUN], 2, "calib.txt: not a text file", edit("seq/calib.txt", b"\xff\xfe\x00P0")),
-    Case(
-        "times-short",
-        [*RUN],
-        2,
-        "has 3 timestamps but there are 4 images",
-        edit("seq/times.txt", "0\n1\n2\n"),
-    ),
-    Case("times-backwards", [*RUN], 2, "times.txt, line 3", edit("seq/times.txt", "0\n1\n0.5\n2\n")),
-    Case(
-        "poses-nan",
-        [*RUN],
-        2,
-        "poses.txt, line 2",
-        edit("seq/poses.txt", kitti_rows(1) + "1 0 0 nan 0 1 0 0 0 0 1 0\n" + kitti_rows(2)),
-    ),
-    Case(
-        "poses-not-rotation",
-        [*RUN],
-        2,
-        "not a rotation matrix",
-        edit("seq/poses.txt", "0 " * 12 + "\n" * 1 + kitti_rows(3)),
-    ),
-    Case(
-        "odometry-malformed",
-        [*RUN],
-        2,
-        "odometry.txt, line 2",
-        edit("seq/odometry.txt", "0 0\n0.01\n0 0\n0 0\n"),
-    ),
-    Case(
-        "no-odometry-ignores-it",
-        [*RUN, "--no-odometry", "--out", "out"],
-        0,
-        "wrote",
-        edit("seq/odometry.txt", b"\xff garbage"),
-        ("out",),
-    ),
-    Case(
-        "no-right-folder",
-        [*RUN],
-        2,
-        "image_1: missing image folder",
-        lambda ws: shutil.rmtree(ws / "seq" / "image_1"),
-    ),
-    Case(
-        "no-images",
-        [*RUN],
-        2,
-        "image_0: no images",
-        lambda ws: [p.unlink() for p in (ws / "seq").glob("image_*/*.png")],
-    ),
+    Case("sequence-missing", "run --sequence nowhere", 2, "neither a sample name"),
+    Case("sequence-is-a-file", "run --sequence important.txt", 2, "not a sequence folder"),
+    Case("unpadded-names", "RUN --out out", 0, "wrote", unpadded, "out"),
+    Case("right-image-missing", "RUN", 2, "image_0/000002.png", lambda ws: image(ws, 1, 2).unlink()),
+    Case("names-differ", "RUN", 2, "image_1/000009.png", lambda ws: image(ws, 1, 3).rename(image(ws, 1, 9))),
+    Case("same-number-twice", "RUN", 2, "same frame number",
+        lambda ws: shutil.copy(image(ws, 0, 1), ws / "seq" / "image_0" / "1.png")),
+    Case("hidden-files-ignored", "RUN --out out", 0, "wrote",
+        edit("seq/image_0/._000001.png", b"\x00\x05\x16\x07 resource fork"), "out"),
+    Case("zero-byte-image", "RUN", 2, "000002.png, frame 2: empty file", edit("seq/image_0/000002.png", b"")),
+    Case("truncated-image", "RUN", 2, "frame 2: truncated PNG",
+        lambda ws: image(ws, 1, 2).write_bytes(image(ws, 1, 2).read_bytes()[:300])),
+    Case("not-an-image", "RUN", 2, "frame 1: cannot read the image",
+        edit("seq/image_0/000001.png", b"hello")),
+    Case("jpeg-sequence", "RUN --out out", 0, "wrote", as_jpeg, "out"),
+    Case("truncated-jpeg", "RUN", 2, "000001.jpg, frame 1: truncated JPEG", truncated_jpeg),
+    Case("16-bit-image", "RUN", 2, "frame 3: 16-bit image",
+        lambda ws: write_png(image(ws, 0, 3), np.zeros((H, W), np.uint16))),
+    Case("size-changes", "RUN", 2, "frame 2: 60x48 image",
+        lambda ws: write_png(image(ws, 1, 2), np.zeros((H, 60), np.uint8))),
+    Case("colour-image-is-converted", "RUN --out out", 0, "wrote",
+        lambda ws: write_png(image(ws, 0, 1), np.full((H, W, 3), 90, np.uint8)), "out"),
+    Case("damaged-image-data", "RUN --out out", 2, "000002.png, frame 2: cannot read the image",
+        damaged_png_data, check=gone("out")),
+    # the run stops cleanly: the earlier output is left as it was, byte for byte
+    Case("damaged-image-keeps-earlier-output", "RUN --out out", 2, "frame 2: cannot read the image",
+        do(run_once("out"), damaged_png_data)),
+    # --force replaces only when the run succeeds: the user's folder is untouched
+    Case("force-but-bad-input", "RUN --out thesis --force", 2, "frame 2: empty file",
+        edit("seq/image_1/000002.png", b"")),
+    Case("corrupt-manifest", "RUN", 2, "manifest.json: not valid JSON", edit("seq/manifest.json", "{oops")),
+    Case("calib-no-p1", "RUN", 2, "no P1 line", edit("seq/calib.txt", "P0: " + "1 " * 12 + "\n")),
+    Case("calib-short-line", "RUN", 2, "calib.txt, line 2: P1 needs 12 numbers",
+        edit("seq/calib.txt", "P0: 50 0 31.5 0 0 50 23.5 0 0 0 1 0\nP1: 1 2 3\n")),
+    Case("calib-binary", "RUN", 2, "calib.txt: not a text file", edit("seq/calib.txt", b"\xff\xfe\x00P0")),
+    Case("times-short", "RUN", 2, "has 3 timestamps but there are 4 images",
+        edit("seq/times.txt", "0\n1\n2\n")),
+    Case("times-backwards", "RUN", 2, "times.txt, line 3", edit("seq/times.txt", "0\n1\n0.5\n2\n")),
+    Case("poses-nan", "RUN", 2, "poses.txt, line 2",
+        edit("seq/poses.txt", kitti_rows(1) + "1 0 0 nan 0 1 0 0 0 0 1 0\n" + kitti_rows(2))),
+    Case("poses-not-rotation", "RUN", 2, "not a rotation matrix",
+        edit("seq/poses.txt", "0 " * 12 + "\n" * 1 + kitti_rows(3))),
+    Case("odometry-malformed", "RUN", 2, "odometry.txt, line 2",
+        edit("seq/odometry.txt", "0 0\n0.01\n0 0\n0 0\n")),
+    Case("no-odometry-ignores-it", "RUN --no-odometry --out out", 0, "wrote",
+        edit("seq/odometry.txt", b"\xff garbage"), "out"),
+    Case("no-right-folder", "RUN", 2, "image_1: missing image folder",
+        lambda ws: shutil.rmtree(ws / "seq" / "image_1")),
+    Case("no-images", "RUN", 2, "image_0: no images",
+        lambda ws: [p.unlink() for p in (ws / "seq").glob("image_*/*.png")]),
     # --- bounds ----------------------------------------------------------------------------------
-    Case("seed-negative", [*RUN, "--seed", "-5"], 2, "--seed"),
-    Case("seed-not-a-number", [*RUN, "--seed", "abc"], 2, "--seed"),
-    Case("frames-one", [*RUN, "--frames", "1"], 2, "need at least 2 frames"),
-    Case("frames-zero", [*RUN, "--frames", "0"], 2, "expected a whole number >= 1 (frames)"),
-    Case("frames-not-a-number", [*RUN, "--frames", "many"], 2, "expected a whole number"),
-    Case(
-        "frames-beyond-sequence",
-        [*RUN, "--frames", "99", "--out", "out"],
-        0,
-        "has 4 frames; running all 4",
-        writes=("out",),
-    ),
-    Case("unknown-option", [*RUN, "--fast"], 2, "unrecognized arguments"),
+    Case("seed-negative", "RUN --seed -5", 2, "--seed"),
+    Case("seed-not-a-number", "RUN --seed abc", 2, "--seed"),
+    Case("frames-one", "RUN --frames 1", 2, "need at least 2 frames"),
+    Case("frames-zero", "RUN --frames 0", 2, "expected a whole number >= 1 (frames)"),
+    Case("frames-not-a-number", "RUN --frames many", 2, "expected a whole number"),
+    Case("frames-beyond-sequence", "RUN --frames 99 --out out", 0, "has 4 frames; running all 4",
+        writes="out"),
+    Case("unknown-option", "RUN --fast", 2, "unrecognized arguments"),
     # --- generate --------------------------------------------------------------------------------
-    Case(
-        "generate-new",
-        [*GEN, "--out", "gen"],
-        0,
-        "wrote gen",
-        writes=("gen",),
-        check=lambda ws: read_sequence(ws / "gen").camera.width == 64,
-    ),
-    Case(
-        "generate-ours-again",
-        [*GEN, "--out", "gen"],
-        2,
-        "--out gen: holds a sequence generated earlier",
-        lambda ws: main([*GEN, "--out", "gen"]),
-    ),
-    Case(
-        "generate-ours-again-force",
-        [*GEN, "--out", "gen", "--force"],
-        0,
-        "wrote gen",
-        lambda ws: main([*GEN, "--out", "gen"]),
-        ("gen",),
-    ),
-    Case("generate-over-user-sequence", [*GEN, "--out", "seq"], 2, "--force"),
-    Case("generate-over-user-folder", [*GEN, "--out", "thesis"], 2, "--force"),
-    Case(
-        "generate-over-user-folder-force",
-        [*GEN, "--out", "thesis", "--force"],
-        0,
-        "--force: replaced",
-        writes=("thesis",),
-        check=lambda ws: not (ws / "thesis" / "important.txt").exists(),
-    ),
-    Case("generate-over-a-file", [*GEN, "--out", "important.txt"], 2, "is a file"),
-    Case(
-        "generate-huge-resolution", ["generate", "corridor", "--resolution", "100000x100000"], 2, "32..4096"
-    ),
-    Case("generate-tiny-resolution", ["generate", "corridor", "--resolution", "10x10"], 2, "32..4096"),
-    Case(
-        "generate-bad-resolution", ["generate", "corridor", "--resolution", "big"], 2, "expected WIDTHxHEIGHT"
-    ),
-    Case("generate-unknown-sample", ["generate", "nope"], 2, "invalid choice: 'nope'"),
-    Case(
-        "generate-too-many-frames",
-        ["generate", "corridor", "--frames", "100000", "--out", "gen"],
-        2,
-        "frames must lie in 1..541",
-        check=gone("gen"),
-    ),
+    Case("generate-new", "GEN --out gen", 0, "wrote gen", writes="gen",
+        check=lambda ws: read_sequence(ws / "gen").camera.width == 64),
+    Case("generate-ours-again", "GEN --out gen", 2, "--out gen: holds a sequence generated earlier",
+        lambda ws: main([*GEN, "--out", "gen"])),
+    Case("generate-ours-again-force", "GEN --out gen --force", 0, "wrote gen",
+        lambda ws: main([*GEN, "--out", "gen"]), "gen"),
+    Case("generate-over-user-sequence", "GEN --out seq", 2, "--force"),
+    Case("generate-over-user-folder", "GEN --out thesis", 2, "--force"),
+    Case("generate-over-user-folder-force", "GEN --out thesis --force", 0, "--force: replaced",
+        writes="thesis", check=lambda ws: not (ws / "thesis" / "important.txt").exists()),
+    Case("generate-over-a-file", "GEN --out important.txt", 2, "is a file"),
+    Case("generate-huge-resolution", "generate corridor --resolution 100000x100000", 2, "32..4096"),
+    Case("generate-tiny-resolution", "generate corridor --resolution 10x10", 2, "32..4096"),
+    Case("generate-bad-resolution", "generate corridor --resolution big", 2, "expected WIDTHxHEIGHT"),
+    Case("generate-unknown-sample", "generate nope", 2, "invalid choice: 'nope'"),
+    Case("generate-too-many-frames", "generate corridor --frames 100000 --out gen", 2,
+        "frames must lie in 1..541", check=gone("gen")),
     # --- evaluate --------------------------------------------------------------------------------
-    Case("evaluate-ok", [*EVAL, "--segments", "0.1,0.2"], 0, "ATE (SE(3) alignment)"),
-    Case(
-        "evaluate-nan-row",
-        EVAL,
-        2,
-        "est.txt, line 3: holds a NaN",
-        edit("est.txt", kitti_rows(2) + "1 0 0 nan 0 1 0 0 0 0 1 0\n" + kitti_rows(2)),
-    ),
-    Case(
-        "evaluate-inf-row",
-        EVAL,
-        2,
-        "gt.txt, line 1: holds a NaN or infinite",
-        edit("gt.txt", "1 0 0 inf 0 1 0 0 0 0 1 0\n" + kitti_rows(4)),
-    ),
-    Case(
-        "evaluate-one-pose",
-        EVAL,
-        2,
-        "gt.txt: 1 pose (last on line 2); need at least 2",
-        edit("gt.txt", "# one pose\n" + kitti_rows(1)),
-    ),
-    Case("evaluate-empty", EVAL, 2, "est.txt: no poses", edit("est.txt", "")),
-    Case(
-        "evaluate-count-mismatch",
-        EVAL,
-        2,
-        "has 5 poses but --est est.txt has 4",
-        edit("est.txt", kitti_rows(4)),
-    ),
-    Case("evaluate-segments-text", [*EVAL, "--segments", "abc"], 2, "positive lengths"),
-    Case("evaluate-segments-negative", [*EVAL, "--segments", "0,-1"], 2, "positive lengths"),
-    Case("evaluate-segments-nan", [*EVAL, "--segments", "nan"], 2, "positive lengths"),
-    Case(
-        "evaluate-missing-file",
-        ["evaluate", "--gt", "missing.txt", "--est", "est.txt"],
-        2,
-        "no such trajectory file",
-    ),
-    Case(
-        "evaluate-folder", ["evaluate", "--gt", "thesis", "--est", "est.txt"], 2, "a folder, not a trajectory"
-    ),
-    Case(
-        "evaluate-zero-quaternion",
-        EVAL,
-        2,
-        "line 2: the quaternion",
-        edit("est.txt", "0 0 0 0 0 0 0 1\n0.1 0 0 0 0 0 0 0\n" + "0.2 0 0 0 0 0 0 1\n" * 3),
-    ),
-    Case(
-        "evaluate-not-rotation",
-        EVAL,
-        2,
-        "est.txt, line 1: the first three columns are not a rotation",
-        edit("est.txt", "2 0 0 0 0 1 0 0 0 0 1 0\n" + kitti_rows(4)),
-    ),
-    Case("evaluate-binary", EVAL, 2, "gt.txt: not a text file", edit("gt.txt", b"\x89PNG\r\n\x1a\n\xff\xff")),
-    Case(
-        "evaluate-mixed-formats",
-        EVAL,
-        2,
-        "line 2: expected 12 numbers like line 1, got 8",
-        edit("est.txt", kitti_rows(1) + "0 0 0 0 0 0 0 1\n"),
-    ),
-    Case(
-        "evaluate-huge-position",
-        EVAL,
-        2,
-        "beyond",
-        edit("est.txt", "1 0 0 1e300 0 1 0 0 0 0 1 0\n" + kitti_rows(4)),
-    ),
+    Case("evaluate-ok", "EVAL --segments 0.1,0.2", 0, "ATE (SE(3) alignment)"),
+    Case("evaluate-nan-row", "EVAL", 2, "est.txt, line 3: holds a NaN",
+        edit("est.txt", kitti_rows(2) + "1 0 0 nan 0 1 0 0 0 0 1 0\n" + kitti_rows(2))),
+    Case("evaluate-inf-row", "EVAL", 2, "gt.txt, line 1: holds a NaN or infinite",
+        edit("gt.txt", "1 0 0 inf 0 1 0 0 0 0 1 0\n" + kitti_rows(4))),
+    Case("evaluate-one-pose", "EVAL", 2, "gt.txt: 1 pose (last on line 2); need at least 2",
+        edit("gt.txt", "# one pose\n" + kitti_rows(1))),
+    Case("evaluate-empty", "EVAL", 2, "est.txt: no poses", edit("est.txt", "")),
+    Case("evaluate-count-mismatch", "EVAL", 2, "has 5 poses but --est est.txt has 4",
+        edit("est.txt", kitti_rows(4))),
+    Case("evaluate-segments-text", "EVAL --segments abc", 2, "positive lengths"),
+    Case("evaluate-segments-negative", "EVAL --segments 0,-1", 2, "positive lengths"),
+    Case("evaluate-segments-nan", "EVAL --segments nan", 2, "positive lengths"),
+    Case("evaluate-missing-file", "evaluate --gt missing.txt --est est.txt", 2, "no such trajectory file"),
+    Case("evaluate-folder", "evaluate --gt thesis --est est.txt", 2, "a folder, not a trajectory"),
+    Case("evaluate-zero-quaternion", "EVAL", 2, "line 2: the quaternion",
+        edit("est.txt", "0 0 0 0 0 0 0 1\n0.1 0 0 0 0 0 0 0\n" + "0.2 0 0 0 0 0 0 1\n" * 3)),
+    Case("evaluate-not-rotation", "EVAL", 2, "est.txt, line 1: the first three columns are not a rotation",
+        edit("est.txt", "2 0 0 0 0 1 0 0 0 0 1 0\n" + kitti_rows(4))),
+    Case("evaluate-binary", "EVAL", 2, "gt.txt: not a text file",
+        edit("gt.txt", b"\x89PNG\r\n\x1a\n\xff\xff")),
+    Case("evaluate-mixed-formats", "EVAL", 2, "line 2: expected 12 numbers like line 1, got 8",
+        edit("est.txt", kitti_rows(1) + "0 0 0 0 0 0 0 1\n")),
+    Case("evaluate-huge-position", "EVAL", 2, "beyond",
+        edit("est.txt", "1 0 0 1e300 0 1 0 0 0 0 1 0\n" + kitti_rows(4))),
 ]
+# fmt: on
 
 
 def user_kitti_files(ws):
@@ -603,12 +398,6 @@ def generated(rel: str):
     return setup
 
 
-def legacy_sample(ws):
-    """A sample sequence written before markers existed: known to `generate` by its manifest."""
-    generated("old")(ws)
-    (ws / "old" / MARKER).unlink()
-
-
 def one_frame(ws):
     shutil.rmtree(ws / "seq")
     make_sequence(ws / "seq", frames=1)
@@ -624,102 +413,37 @@ def tum_rows(times) -> str:
 
 
 # A command replaces only what the same command wrote: each case's --out holds another's output.
+# fmt: off
 OWNERSHIP = [
-    Case(
-        "run-over-user-kitti-files", [*RUN, "--out", "u"], 2, "not written by this program", user_kitti_files
-    ),
-    Case(
-        "run-over-user-kitti-files-force",
-        [*RUN, "--out", "u", "--force"],
-        0,
-        "--force: replaced",
-        user_kitti_files,
-        writes=("u",),
-        check=has_marker("u"),
-    ),
-    Case(
-        "run-over-a-sweep", [*RUN, "--out", "R"], 2, "holds the output of `vo_lib sweep nees`", finished_sweep
-    ),
-    Case(
-        "generate-over-a-sweep",
-        [*GEN, "--out", "R"],
-        2,
-        "holds the output of `vo_lib sweep nees`",
-        finished_sweep,
-    ),
-    Case("run-over-a-generated-sequence", [*RUN, "--out", "gen"], 2, "`vo_lib generate`", generated("gen")),
-    Case("generate-over-a-run", [*GEN, "--out", "out"], 2, "`vo_lib run`", run_once("out")),
-    Case(
-        "sweep-over-a-run",
-        ["sweep", "nees", "--seeds", "2", "--workers", "1", "--out", "out"],
-        2,
-        "holds the output of `vo_lib run`",
-        run_once("out"),
-    ),
-    Case(
-        "sweep-over-another-sweep",
-        ["sweep", "lap", "--seeds", "1", "--workers", "1", "--out", "R"],
-        2,
-        "`vo_lib sweep nees`, which `vo_lib sweep lap` does not replace",
-        finished_sweep,
-    ),
-    Case("run-over-a-legacy-sample", [*RUN, "--out", "old"], 2, "not written by this program", legacy_sample),
-    Case(
-        "generate-over-its-legacy-sample",
-        [*GEN, "--out", "old", "--force"],
-        0,
-        "wrote old",
-        legacy_sample,
-        writes=("old",),
-        check=lambda ws: (ws / "old" / MARKER).is_file(),
-    ),
-    Case(
-        "run-over-a-sweep-force",
-        [*RUN, "--out", "R", "--force"],
-        0,
-        "--force: replaced",
-        finished_sweep,
-        writes=("R",),
-        check=has_marker("R"),
-    ),
+    Case("run-over-user-kitti-files", "RUN --out u", 2, "not written by this program", user_kitti_files),
+    Case("run-over-user-kitti-files-force", "RUN --out u --force", 0, "--force: replaced", user_kitti_files,
+        "u", check=has_marker("u")),
+    Case("run-over-a-sweep", "RUN --out R", 2, "holds the output of `vo_lib sweep nees`", finished_sweep),
+    Case("generate-over-a-sweep", "GEN --out R", 2, "holds the output of `vo_lib sweep nees`",
+        finished_sweep),
+    Case("run-over-a-generated-sequence", "RUN --out gen", 2, "`vo_lib generate`", generated("gen")),
+    Case("generate-over-a-run", "GEN --out out", 2, "`vo_lib run`", run_once("out")),
+    Case("sweep-over-a-run", "sweep nees --seeds 2 --workers 1 --out out", 2,
+        "holds the output of `vo_lib run`", run_once("out")),
+    Case("sweep-over-another-sweep", "sweep lap --seeds 1 --workers 1 --out R", 2,
+        "`vo_lib sweep nees`, which `vo_lib sweep lap` does not replace", finished_sweep),
+    Case("run-over-a-sweep-force", "RUN --out R --force", 0, "--force: replaced", finished_sweep, "R",
+        check=has_marker("R")),
     # what used to end in a traceback, a wrong name or a quiet acceptance
-    Case("one-frame-sequence", [*RUN, "--out", "out"], 2, "has 1 frame; a run needs at least 2", one_frame),
-    Case(
-        "name-without-frame-number",
-        [*RUN],
-        2,
-        "image_0/left.png: no frame number in the name",
-        lambda ws: shutil.copy(image(ws, 0, 1), ws / "seq" / "image_0" / "left.png"),
-    ),
-    Case(
-        "dangling-link-named",
-        [*RUN],
-        2,
-        "seq/image_0/000002.png: a symbolic link to nowhere.png, which does not exist",
-        dangling_link,
-    ),
-    Case(
-        "evaluate-tum-repeated-time",
-        EVAL,
-        2,
-        "est.txt, line 3: timestamp 0.1 repeats the one on line 2",
-        edit("est.txt", tum_rows([0, 0.1, 0.1, 0.2, 0.3])),
-    ),
-    Case(
-        "evaluate-tum-backwards-time",
-        EVAL,
-        2,
+    Case("one-frame-sequence", "RUN --out out", 2, "has 1 frame; a run needs at least 2", one_frame),
+    Case("name-without-frame-number", "RUN", 2, "image_0/left.png: no frame number in the name",
+        lambda ws: shutil.copy(image(ws, 0, 1), ws / "seq" / "image_0" / "left.png")),
+    Case("dangling-link-named", "RUN", 2,
+        "seq/image_0/000002.png: a symbolic link to nowhere.png, which does not exist", dangling_link),
+    Case("evaluate-tum-repeated-time", "EVAL", 2, "est.txt, line 3: timestamp 0.1 repeats the one on line 2",
+        edit("est.txt", tum_rows([0, 0.1, 0.1, 0.2, 0.3]))),
+    Case("evaluate-tum-backwards-time", "EVAL", 2,
         "est.txt, line 4: timestamp 0.05 comes before the one on line 3",
-        edit("est.txt", tum_rows([0, 0.1, 0.2, 0.05, 0.3])),
-    ),
-    Case(
-        "calib-plain-numbers",
-        [*RUN],
-        2,
-        "got P0[0,3]=0, P1[0,3]=6",
-        edit("seq/calib.txt", "P0: 50 0 31.5 0 0 50 23.5 0 0 0 1 0\nP1: 50 0 31.5 6 0 50 23.5 0 0 0 1 0\n"),
-    ),
+        edit("est.txt", tum_rows([0, 0.1, 0.2, 0.05, 0.3]))),
+    Case("calib-plain-numbers", "RUN", 2, "got P0[0,3]=0, P1[0,3]=6",
+        edit("seq/calib.txt", "P0: 50 0 31.5 0 0 50 23.5 0 0 0 1 0\nP1: 50 0 31.5 6 0 50 23.5 0 0 0 1 0\n")),
 ]
+# fmt: on
 CASES += OWNERSHIP
 
 
@@ -740,7 +464,7 @@ def test_case(case: Case, template, tmp_path, monkeypatch, capsys):
     if case.setup:
         case.setup(ws)
     capsys.readouterr()
-    before = checksums(ws, case.writes)
+    before = checksums(ws, tuple(case.writes.split()))
     monkeypatch.chdir(ws / case.cwd)
     code, out, err = invoke(case.argv, capsys)
     assert code == case.code, f"exit {code}\nstdout: {out}\nstderr: {err}"
@@ -752,7 +476,7 @@ def test_case(case: Case, template, tmp_path, monkeypatch, capsys):
     else:
         assert len(lines) <= 1, err  # at most one notice
         assert case.phrase in out + err
-    assert checksums(ws, case.writes) == before  # not a byte of anything else changed
+    assert checksums(ws, tuple(case.writes.split())) == before  # not a byte of anything else changed
     assert temporaries(ws) == []  # nothing half-written left
     if case.check:
         assert case.check(ws)
@@ -860,6 +584,7 @@ def test_header_check_reads_no_pixels(tmp_path, monkeypatch):
     seq = make_sequence(tmp_path / "seq")
     calls = []
     monkeypatch.setattr(cv2, "imread", lambda *a: calls.append(a))
+    monkeypatch.setattr(cv2, "imdecode", lambda *a: calls.append(a))
     read_sequence(seq)
     assert calls == []
 
@@ -1177,11 +902,18 @@ def test_frames_beyond_a_sample_ask_for_the_whole_sample_with_a_notice(tmp_path,
 
 
 def test_the_package_is_never_an_output_folder(tmp_path, monkeypatch):
-    """Checked without writing: the package folder and a folder holding it are refused, forced."""
+    """Checked without writing: the package, a folder in it or holding it, and the repository's
+    own data folder are refused, forced."""
     from vo_lib.outputs import OutputError, check_target
 
     monkeypatch.chdir(tmp_path)
-    for target, phrase in ((ROOT / "vo_lib", "is this package"), (ROOT, "holds this package")):
+    for target, phrase in (
+        (ROOT / "vo_lib", "is this package"),
+        (ROOT / "vo_lib" / "cli", "lies inside this package"),
+        (ROOT / "vo_lib" / "new_folder", "lies inside this package"),
+        (ROOT, "holds this package"),
+        (ROOT / "data", "is the sample data folder"),
+    ):
         with pytest.raises(OutputError, match=phrase):
             check_target(target, written_by="vo_lib run", force=True)
 
@@ -1279,3 +1011,121 @@ def test_a_folder_being_written_is_neither_written_nor_replaced_by_another_comma
     assert [p.name for p in folder.iterdir()] == ["a"] and sorted(p.name for p in tmp_path.iterdir()) == [
         "rows"
     ]
+
+
+# ---- a kill at any step of the swap leaves the previous output whole ------------------------------
+
+KILLER = """
+import os, shutil, signal, sys
+import vo_lib.atomic as a
+import vo_lib.outputs as o
+target, mode, at, writer = sys.argv[1], sys.argv[2], int(sys.argv[3]), sys.argv[4]
+steps = [0]
+
+def counted(step):
+    def call(*args, **kwargs):
+        steps[0] += 1
+        if steps[0] == at:
+            os.kill(os.getpid(), signal.SIGKILL)
+        return step(*args, **kwargs)
+    return call
+
+os.rename, shutil.rmtree = counted(os.rename), counted(shutil.rmtree)
+a._exchange = counted(a._exchange) if mode == "exchange" else (lambda x, y: False)
+if at == 0:  # killed when the new folder is written, before its commit
+    o.OutputFolder.commit = lambda self, **details: os.kill(os.getpid(), signal.SIGKILL)
+if writer == "run":
+    with o.OutputFolder(target, "vo_lib run") as out:
+        (out.path / "poses.txt").write_text("new\\n")
+        out.commit()
+else:
+    from vo_lib.sim.samples import generate
+    generate("corridor", target, 3, (64, 48), progress=False, force=True)
+"""
+
+
+def write_old(target: Path, writer: str) -> None:
+    """The previous output: a run's folder, or a generated sequence of 2 frames (the new has 3)."""
+    from vo_lib.outputs import OutputFolder
+    from vo_lib.sim.samples import generate
+
+    if writer == "generate":
+        generate("corridor", target, 2, (64, 48), progress=False)
+        return
+    with OutputFolder(target, "vo_lib run") as out:
+        (out.path / "poses.txt").write_text("old\n")
+        out.commit()
+
+
+def whole(folder: Path) -> str | None:
+    """Which output ``folder`` holds ("old" or "new"), or None if it is missing or not whole."""
+    from vo_lib.outputs import read_marker
+
+    marker = read_marker(folder)
+    if marker is None or sorted(p.name for p in folder.iterdir()) != sorted([MARKER, *marker["contents"]]):
+        return None
+    if "frames" in marker:  # a generated sequence
+        return (
+            {2: "old", 3: "new"}[marker["frames"]] if len(read_sequence(folder)) == marker["frames"] else None
+        )
+    return (folder / "poses.txt").read_text().strip()
+
+
+@pytest.mark.parametrize("writer", ["run", "generate"])
+@pytest.mark.parametrize("mode", ["exchange", "renames"])
+def test_a_kill_at_any_step_of_the_swap_leaves_the_previous_output(tmp_path, mode, writer):
+    """Kill the writer (SIGKILL) before each step of the swap in turn (renames, the one-step
+    exchange, the deletion of the replaced folder), for a run's output and a generated sequence.
+    After each kill the folder is the old output or the new one, whole; the next command beside
+    it (``check_target``) restores an old output set aside and removes every temporary."""
+    from vo_lib.outputs import check_target
+
+    seen, written_by = [], f"vo_lib {writer}"
+    for at in range(12):
+        target = tmp_path / f"out{at}"
+        write_old(target, writer)
+        proc = subprocess.run(
+            [sys.executable, "-c", KILLER, str(target), mode, str(at), writer],
+            env=cli_env(),
+            capture_output=True,
+        )
+        if proc.returncode == 0:
+            break
+        assert proc.returncode == -signal.SIGKILL, proc.stderr
+        after_kill = whole(target)
+        assert after_kill in ("old", "new") or (mode == "renames" and not target.exists())
+        check_target(target, written_by=written_by, force=True)
+        seen.append(whole(target))
+        assert seen[-1] == (after_kill or "old") and temporaries(tmp_path) == []
+    assert proc.returncode == 0 and whole(target) == "new" and temporaries(tmp_path) == []
+    # killed before the commit, at the failed first rename (the target is not empty), at the
+    # exchange or each of the two renames, then while the replaced folder is deleted
+    assert len(seen) == (4 if mode == "exchange" else 5) and seen[0] == seen[1] == "old"
+    assert "new" in seen
+
+
+@pytest.mark.parametrize("command", ["run", "evaluate-all"])
+def test_a_path_that_is_not_utf8_is_read(template, tmp_path, command):
+    """A folder name holding the byte 0xff (read as a surrogate): OpenCV decodes the files' bytes,
+    so nothing crashes (it was a segmentation fault, exit 139), and the output is written."""
+    name = os.fsdecode(b"seq\xff")
+    root = tmp_path / "root"
+    shutil.copytree(template / "seq", root / name)
+    args = ["run", "--sequence", str(root / name)] if command == "run" else ["evaluate-all", str(root)]
+    proc = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "vo_lib",
+            *args,
+            "--out",
+            str(tmp_path / "out"),
+            *(["--workers", "1"] * (command != "run")),
+        ],
+        cwd=tmp_path,
+        env=cli_env(MPLCONFIGDIR=str(tmp_path / "mpl")),
+        capture_output=True,
+        timeout=300,
+    )
+    assert proc.returncode == 0, proc.stderr.decode(errors="replace")
+    assert b"Traceback" not in proc.stderr and (tmp_path / "out" / MARKER).is_file()

@@ -8,7 +8,7 @@ import pytest
 
 from vo_lib.data import load_sequence, sample_path
 from vo_lib.geometry import camera_mount, camera_poses_from_planar, planar_from_camera_poses
-from vo_lib.sim.frame_store import ENVIRONMENT as FRAME_STORE
+from vo_lib.sim import frame_store
 from vo_lib.sim.samples import CAMERA_HEIGHT, SAMPLES, fingerprint, generate, render_sample
 
 
@@ -51,7 +51,7 @@ def test_fingerprint_follows_what_shapes_the_images_not_the_prose(monkeypatch):
 
 
 def test_generation_is_deterministic(tmp_path, monkeypatch):
-    monkeypatch.delenv(FRAME_STORE, raising=False)  # both rendered, not the second read back
+    monkeypatch.setattr(frame_store, "FOLDER", None)  # both rendered, not the second read back
     a = generate("spot_turn", tmp_path / "a", frames=2, resolution=(96, 72), progress=False)
     b = generate("spot_turn", tmp_path / "b", frames=2, resolution=(96, 72), progress=False)
     for name in ("image_0/000001.png", "image_1/000001.png", "poses.txt", "odometry.txt", "times.txt"):
@@ -65,9 +65,9 @@ def test_frame_store_gives_the_frames_one_render_gives(tmp_path, monkeypatch):
     def frames(n, first=0):
         return [(left, right) for left, right, _ in render_sample("outdoor_free", n, (96, 72), first)[1]]
 
-    monkeypatch.delenv(FRAME_STORE, raising=False)
+    monkeypatch.setattr(frame_store, "FOLDER", None)
     plain = frames(6)
-    monkeypatch.setenv(FRAME_STORE, str(tmp_path))
+    monkeypatch.setattr(frame_store, "FOLDER", tmp_path)
     assert all(np.array_equal(a, b) for a, b in zip(sum(frames(3), ()), sum(plain[:3], ()), strict=True))
     (folder,) = tmp_path.iterdir()
     assert sorted(p.name for p in folder.iterdir()) == ["000000.npz", "000001.npz", "000002.npz"]

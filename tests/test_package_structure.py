@@ -1,4 +1,5 @@
-"""The package's shape: no module imports another that imports it back, and one pipeline class."""
+"""The package's shape: no import cycle, one pipeline class, small functions, and the package map
+of docs/layout.md naming every module."""
 
 from __future__ import annotations
 
@@ -28,22 +29,45 @@ def test_stereo_vo_has_one_pipeline_class():
     assert classes == ["StereoOdometry"]
 
 
-def test_every_module_is_in_its_package_map():
-    """Each subpackage's ``__init__`` docstring names every module and subpackage in it."""
-    import importlib
-    import pathlib
+def layout_sections(text: str) -> dict[str, str]:
+    """The package map of docs/layout.md by folder: ``"vo_lib/stereo_vo"`` -> the lines of that
+    folder's entry (the folder's line and the more indented lines below it)."""
+    import re
 
-    root = pathlib.Path(importlib.import_module("vo_lib").__file__).parent
+    block = text.split("```")[1].splitlines()
+    sections, stack = {}, []
+    for k, line in enumerate(block):
+        entry = re.match(r"( *)(\S+)/(\s|$)", line)
+        if not entry:
+            continue
+        depth = len(entry[1])
+        stack = [(d, n) for d, n in stack if d < depth] + [(depth, entry[2])]
+        below = [x for x in block[k + 1 :]]
+        end = next(
+            (i for i, x in enumerate(below) if x.strip() and len(x) - len(x.lstrip()) <= depth), len(below)
+        )
+        sections["/".join(n for _, n in stack)] = "\n".join([line, *below[:end]])
+    return sections
+
+
+def test_every_module_is_in_the_package_map():
+    """docs/layout.md names every module and subpackage of vo_lib in its folder's entry."""
+    import pathlib
+    import re
+
+    repo = pathlib.Path(__file__).resolve().parents[1]
+    sections = layout_sections((repo / "docs" / "layout.md").read_text(encoding="utf-8"))
     missing = []
-    for init in sorted(root.rglob("__init__.py")):
-        doc = importlib.import_module(".".join(init.parent.relative_to(root.parent).parts)).__doc__ or ""
-        for child in sorted(init.parent.iterdir()):
-            name = child.stem if child.suffix == ".py" else child.name
-            is_module = child.suffix == ".py" and not name.startswith("__")
-            is_package = child.is_dir() and (child / "__init__.py").is_file()
-            named = (f"``{name}``", f"{name}/", f"{name}.py")
-            if (is_module or is_package) and not any(n in doc for n in named):
-                missing.append(f"{init.parent.relative_to(root.parent)}/{child.name}")
+    for path in sorted((repo / "vo_lib").rglob("*")):
+        folder = path.parent.relative_to(repo).as_posix()
+        if path.suffix == ".py" and not path.name.startswith("__"):
+            name = path.name
+        elif path.is_dir() and (path / "__init__.py").is_file():
+            name = path.name + "/"
+        else:
+            continue
+        if not re.search(rf"(?<![\w.]){re.escape(name)}", sections.get(folder, "")):
+            missing.append(path.relative_to(repo).as_posix())
     assert missing == []
 
 

@@ -112,8 +112,8 @@ def test_a_folder_that_is_not_a_build_folder_is_refused_untouched(build_script, 
 
 
 def test_the_build_folder_is_claimed_once_and_kept(build_script, tmp_path):
-    """An earlier build (marked, or with the marker of builds before vo_lib.outputs) is the build's
-    own and is kept with its caches; another command's output is not."""
+    """An earlier build is the build's own and is kept with its caches; another command's output
+    is not, and neither is an unmarked folder."""
     from vo_lib.outputs import MARKER, read_marker
 
     out = tmp_path / "site"
@@ -123,10 +123,10 @@ def test_the_build_folder_is_claimed_once_and_kept(build_script, tmp_path):
     assert read_marker(out)["written_by"] == build_script.WRITTEN_BY and (out / ".jupyter_cache").is_dir()
     old = tmp_path / "old"
     old.mkdir()
-    (old / build_script.LEGACY_MARKER).write_text("written by python docs/build.py\n")
     (old / "html").mkdir()
-    build_script.claim_build_folder(old)
-    assert sorted(p.name for p in old.iterdir()) == [MARKER, "html"]
+    with pytest.raises(build_script.UsageError, match="not written by this program"):
+        build_script.claim_build_folder(old)
+    assert sorted(p.name for p in old.iterdir()) == ["html"]
     (out / MARKER).write_text('{"written_by": "vo_lib run", "contents": []}')
     with pytest.raises(build_script.UsageError, match="holds the output of `vo_lib run`"):
         build_script.claim_build_folder(out)

@@ -222,3 +222,88 @@ def test_evaluate_all_fails_when_a_sequence_fails(tmp_path, capsys, monkeypatch)
     *each, last = captured.err.strip().splitlines()  # each failure as it happens, then the count
     assert len(each) == 2 and all(line.startswith("failed: ") for line in each)
     assert last.startswith("python -m vo_lib evaluate-all: error: 2 of 2 sequence(s) failed")
+
+
+def test_evaluate_all_refuses_figures_of_a_sequence_changed_while_read(tmp_path, capsys, monkeypatch):
+    """A frame rewritten while the pipeline reads the sequence: no figure, exit 2; a sequence
+    replaced by `generate` meanwhile is refused by the reader's lock; the next sweep runs it anew."""
+    from vo_lib.cli import evaluate_all
+    from vo_lib.outputs import OutputError, OutputFolder
+
+    monkeypatch.chdir(tmp_path)
+    assert main(["generate", "corridor", "--frames", "3", "--resolution", "64x48", "--out", "root/s"]) == 0
+    score, refusals = evaluate_all._score, []
+
+    def rewrite_while_reading(params):
+        figures = score(params)
+        try:
+            OutputFolder(params["path"], "vo_lib generate", force=True).discard()
+        except OutputError as exc:
+            refusals.append(str(exc))
+        frame = Path(params["path"]) / "image_0" / "000001.png"
+        frame.write_bytes((Path(params["path"]) / "image_0" / "000000.png").read_bytes())
+        return figures
+
+    monkeypatch.setattr(evaluate_all, "_score", rewrite_while_reading)
+    assert main(["evaluate-all", "root", "--workers", "1", "--out", "ev"]) == 2
+    captured = capsys.readouterr()
+    assert "its files changed while it was read" in captured.out
+    (row,) = csv.DictReader(open(tmp_path / "ev" / TABLE))
+    assert "t_pct" not in row and "SequenceChanged" in row["error"]  # no figure of the mixed data
+    assert refusals and "a running command is reading this folder" in refusals[0]
+    monkeypatch.setattr(evaluate_all, "_score", score)
+    assert main(["evaluate-all", "root", "--workers", "1", "--out", "ev"]) == 0
+    rows = list(csv.DictReader(open(tmp_path / "ev" / TABLE)))
+    assert (
+        len(rows) == 1 and rows[0]["error"] == "" and rows[0]["snapshot"] == evaluate_all.snapshot("root/s")
+    )
+
+
+def test_a_full_disk_says_which_rows_are_kept(tmp_path, capsys, monkeypatch):
+    """No space left after two rows: one line saying two rows are kept, and the next run
+    resumes from them."""
+    import errno
+
+    real_dumps, written = json.dumps, []
+
+    def full_after_two(obj, *args, **kwargs):
+        if isinstance(obj, dict) and "key" in obj:  # a row of the store
+            if len(written) == 2:
+                raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+            written.append(obj)
+        return real_dumps(obj, *args, **kwargs)
+
+    monkeypatch.setattr(sweep.json, "dumps", full_after_two)
+    argv = ["sweep", "nees", "--seeds", "4", "--workers", "1", "--out", str(tmp_path / "n")]
+    assert main(argv) == 2
+    (line,) = capsys.readouterr().err.strip().splitlines()
+    assert "no space left on device; 2 finished row(s) are kept in rows.jsonl" in line
+    monkeypatch.setattr(sweep.json, "dumps", real_dumps)
+    assert main(argv) == 0
+    assert "(2 run now, 2 from earlier runs)" in capsys.readouterr().out
+
+
+def test_ctrl_c_to_the_process_group_of_a_dask_sweep_prints_one_line(tmp_path):
+    """Ctrl-C in a terminal reaches every process of the group: the workers ignore it, the
+    sweep closes them and prints one line; the rows it finished are kept."""
+    import signal
+    import subprocess
+    import time
+
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "vo_lib", "sweep", "nees", "--seeds", "2000", "--workers", "2", "--out", "X"],
+        cwd=tmp_path,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        start_new_session=True,
+    )
+    rows, end = tmp_path / "X" / ROWS, time.monotonic() + 120
+    while time.monotonic() < end and proc.poll() is None and not (rows.exists() and rows.stat().st_size):
+        time.sleep(0.2)
+    os.killpg(proc.pid, signal.SIGINT)
+    _, err = proc.communicate(timeout=120)
+    assert proc.returncode == 130 and err.strip().splitlines() == [
+        "python -m vo_lib sweep: interrupted (Ctrl-C); nothing half-written is left"
+    ], err
+    assert len(sweep.read_rows(rows)) >= 1

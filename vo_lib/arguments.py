@@ -46,3 +46,14 @@ def count_at_least(minimum: int, what: str, maximum: int | None = None):
         return value
 
     return parse
+
+
+def non_empty(what: str):
+    """An argparse ``type`` refusing an empty text (a path given as ``''``); ``what`` names it."""
+
+    def parse(text: str) -> str:
+        if not text.strip():
+            raise argparse.ArgumentTypeError(f"expected {what}; got an empty text")
+        return text
+
+    return parse

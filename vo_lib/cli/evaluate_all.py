@@ -4,7 +4,11 @@ Sequences are found as KITTI lays them out (``ROOT/sequences/NN``), or as any fo
 (ROOT itself included) holding ``image_0/``. Each sequence is one sweep task
 (:mod:`vo_lib.cli.sweep`: in this process or on Dask, finished sequences kept and skipped on a
 re-run); each runs the pipeline without odometry (``run_sequence(seq, use_odometry=False)``) and
-is scored against its ``poses.txt`` with KITTI's segment errors: translation in per cent of the
+is scored against its ``poses.txt``. A sequence is read under a shared lock (``generate`` does not
+replace it meanwhile), and its files' names, sizes and times are taken before and after the run:
+a sequence changed by anything else while it was read fails with :class:`SequenceChanged` (no
+figure of mixed data), and one changed since an earlier sweep is run again (the snapshot is one of
+the task's parameters) with KITTI's segment errors: translation in per cent of the
 segment length, rotation in degrees per 100 m, averaged over every segment of KITTI's lengths
 (100, 200, ..., 800 m). A sequence whose path is shorter than :data:`SHORT_PATH` metres has few or
 no such segments: it is scored on :data:`SHORT_LENGTHS` instead, and the table says so. The
@@ -13,6 +17,7 @@ overall row averages every segment of every sequence, as KITTI's benchmark does.
 
 from __future__ import annotations
 
+import hashlib
 import math
 import os
 from pathlib import Path
@@ -47,6 +52,21 @@ def find_sequences(root) -> list[Path]:
     return sorted(found, key=lambda p: p.relative_to(root).parts)
 
 
+class SequenceChanged(RuntimeError):
+    """A sequence's files changed while the pipeline read them."""
+
+
+def snapshot(path) -> str:
+    """A digest of the folder ``path`` and of every file in it and in its subfolders (name, size,
+    modification time): a replaced folder or an added, removed or edited file changes it."""
+    path = Path(path).resolve()
+    folders = [path, *(Path(e.path) for e in os.scandir(path) if e.is_dir())]
+    files = sorted(
+        (f.name, e.name, e.stat().st_size, e.stat().st_mtime_ns) for f in folders for e in os.scandir(f)
+    )
+    return hashlib.sha1(repr((os.stat(path).st_ino, files)).encode(errors="surrogateescape")).hexdigest()[:16]
+
+
 def segment_figures(gt, est) -> dict:
     """Per-sequence KITTI errors: ``t_pct`` (translation %), ``r_deg_100m`` (rotation deg/100 m),
     ``segments`` (how many), ``lengths`` ("kitti" or "short"), path length."""
@@ -62,7 +82,26 @@ def segment_figures(gt, est) -> dict:
 
 
 def sequence_task(params: dict, context=None) -> dict:
-    """Run the pipeline on one sequence and score it against its ground truth."""
+    """Run the pipeline on one sequence and score it against its ground truth; the sequence must
+    be as ``params["snapshot"]`` found it, from the start of the run to its end."""
+    from vo_lib.outputs import reading
+
+    with reading(params["path"]):
+        _unchanged(params, "before")
+        figures = _score(params)
+        _unchanged(params, "while")
+    return figures
+
+
+def _unchanged(params: dict, when: str) -> None:
+    if snapshot(params["path"]) != params["snapshot"]:
+        raise SequenceChanged(
+            f"{params['path']}: its files changed {when} it was read; run evaluate-all again"
+        )
+
+
+def _score(params: dict) -> dict:
+    """The pipeline on the sequence ``params["path"]``, scored with KITTI's segment errors."""
     from vo_lib.formats.sequence import read_sequence
     from vo_lib.geometry import camera_poses_from_planar
     from vo_lib.stereo_vo.pipeline import run_sequence
@@ -107,6 +146,7 @@ def evaluate_all_command(root, frames=None, workers=None, scheduler=None, out=No
             "sequence": str(s.relative_to(root)) if s != root else s.resolve().name,
             "path": str(s.resolve()),
             "frames": frames,
+            "snapshot": snapshot(s),
         }
         for s in sequences
     ]

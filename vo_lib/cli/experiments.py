@@ -2,9 +2,9 @@
 
 ``corridor``  [Yuan], Table III: LBPT and VOAPT along the occluded corridor; the shared setup
               is one PnP visual-odometry run on the rendered corridor and the calibration on the
-              normal run (``corridor_experiment.run_experiment`` split into its per-seed pieces)
+              normal run; each task is ``corridor_experiment.track_seed`` and ``seed_figures``
 ``lap``       [Yan 2020]: one lap of the line-feature EKF-SLAM, final error and NEES
-``nees``      [Zhao]: one Monte Carlo run of the fused Kalman filter (notebook 07, section 4)
+``nees``      [Zhao]: one Monte Carlo run of the fused Kalman filter (notebook 07, section 6)
 ``table1``    [Zhao], Table 1: time per stage on the rendered ``indoor_linear`` drive at one
               resolution (notebook 08, section 2)
 
@@ -15,7 +15,6 @@ Every task draws from its own parameters (``seed``); figures are plain numbers. 
 from __future__ import annotations
 
 import functools
-import math
 
 import numpy as np
 
@@ -30,16 +29,10 @@ TABLE1_RESOLUTIONS = ("640x480", "512x384", "400x300", "320x240", "256x192")
 
 def corridor_setup(calibration_seed: int = 1000, every: int = 2):
     """What every corridor task shares: the visual odometer's poses and the calibration."""
-    from vo_lib.lidar_tracking.corridor_experiment import (
-        calibrate,
-        corridor_drive,
-        corridor_visual_odometry,
-    )
-    from vo_lib.sim.world import corridor
+    from vo_lib.lidar_tracking.corridor_experiment import corridor_calibration, corridor_visual_odometry
 
     vo, _ = corridor_visual_odometry()
-    truth, odometry = corridor_drive(calibration_seed)
-    return {"vo": vo, "calibration": calibrate(corridor(), truth, odometry, vo, calibration_seed, every)}
+    return {"vo": vo, "calibration": corridor_calibration(vo, calibration_seed, every)}
 
 
 @functools.lru_cache(maxsize=1)
@@ -52,36 +45,14 @@ def _corridor_world():
 
 
 def corridor_task(params: dict, context) -> dict:
-    """Table III's statistics of one seed: LBPT and VOAPT, x and y, max/mean/median/std (m), and
-    LBPT's lost updates (error above 0.2 m) with how many of them T_s flags."""
-    from vo_lib.lidar_tracking.corridor_experiment import (
-        LOST_ERROR,
-        corridor_drive,
-        run_tracking,
-        statistics_table,
-    )
+    """Table III's row of one seed (:func:`~vo_lib.lidar_tracking.corridor_experiment.seed_figures`)."""
+    from vo_lib.lidar_tracking.corridor_experiment import seed_figures, track_seed
 
     world, field = _corridor_world()
-    seed, every = int(params["seed"]), int(params.get("every", 2))
-    truth, odometry = corridor_drive(seed)
-    vo, cal = context["vo"], context["calibration"]
-    runs = {
-        "lbpt": run_tracking(
-            world, truth, odometry, vo, seed, cal, compensate=False, every=every, field=field
-        ),
-        "voapt": run_tracking(world, truth, odometry, vo, seed, cal, every=every, field=field),
-    }
-    out = {}
-    for method, run in runs.items():
-        for axis, name in ((0, "x"), (1, "y")):
-            for stat, value in statistics_table(run.errors[:, axis]).items():
-                out[f"{method}_{name}_{stat}"] = value
-    lost = np.abs(runs["lbpt"].errors[:, 0]) > LOST_ERROR
-    out["lbpt_lost"] = int(lost.sum())
-    out["lbpt_lost_flagged"] = int(
-        sum(not s.credible for s, x in zip(runs["lbpt"].steps, lost, strict=True) if x)
+    runs = track_seed(
+        int(params["seed"]), context["vo"], context["calibration"], int(params.get("every", 2)), world, field
     )
-    return out
+    return seed_figures(*runs)
 
 
 def corridor_experiment(calibration_seed: int = 1000, every: int = 2) -> Experiment:
@@ -101,20 +72,10 @@ def corridor_tasks(seeds: int, calibration_seed: int = 1000, every: int = 2) -> 
 
 
 def lap_task(params: dict, context=None) -> dict:
-    """One lap of [Yan 2020]'s EKF-SLAM: final errors (m), mean and final NEES, landmarks mapped."""
-    from vo_lib.line_slam.lap import LineSlamScenario, simulate_lap
+    """One lap of [Yan 2020]'s EKF-SLAM (:func:`vo_lib.line_slam.lap.lap_figures`)."""
+    from vo_lib.line_slam.lap import lap_figures
 
-    scenario = LineSlamScenario(observation=params.get("observation", "feature_point"))
-    run = simulate_lap(int(params["seed"]), params.get("observer", "closed_form"), scenario)
-    nees = np.asarray(run.nees, float)
-    return {
-        "final_error": run.final_error(),
-        "dead_reckoning_error": run.final_dead_reckoning_error(),
-        "nees_mean": float(np.nanmean(nees)),
-        "nees_final": float(nees[-1]),
-        "landmarks": len(run.landmarks),
-        "dropped": int(run.dropped),
-    }
+    return lap_figures(**params)
 
 
 LAP = Experiment("lap", lap_task, None, "[Yan 2020], one lap of line-feature EKF-SLAM per seed")
@@ -126,35 +87,15 @@ def lap_tasks(seeds: int, observer: str = "closed_form", observation: str = "fea
 
 # --------------------------------------------------------------------------- [Zhao], NEES
 
-#: Notebook 07's Monte Carlo settings: VO noise, initial covariance.
-NEES_R_VO = np.diag([math.radians(0.05) ** 2, 0.002**2])
-NEES_P0 = np.diag([0.01**2, 0.01**2, math.radians(0.5) ** 2])
-
 
 def nees_task(params: dict, context=None) -> dict:
-    """One Monte Carlo run of the fused filter (notebook 07, section 4): the truth's start drawn
-    from the initial covariance, odometry and VO drawn from exactly the noise the filter assumes.
-    Figures: mean and final pose NEES, share of steps inside chi2(3)'s 95 % interval."""
+    """One Monte Carlo run of the fused filter (:func:`vo_lib.stereo_vo.consistency.monte_carlo_run`,
+    notebook 07, section 6): mean and final pose NEES, share of steps inside chi2(3)'s 95 % interval."""
     from scipy.stats import chi2
 
-    from vo_lib.models.track_odometry import TrackOdometry
-    from vo_lib.stereo_vo.kalman import VoKalmanFilter, measurement
+    from vo_lib.stereo_vo.consistency import monte_carlo_run
 
-    steps = int(params.get("steps", 150))
-    r = np.random.default_rng(int(params["seed"]))
-    odometry = TrackOdometry()
-    f = VoKalmanFilter(odometry, covariance=NEES_P0)
-    x_true = f.pose + r.multivariate_normal(np.zeros(3), NEES_P0)
-    nees = np.zeros(steps)
-    for k in range(steps):
-        u_true = odometry.controls_for(0.02 + 0.01 * math.sin(k / 20), math.radians(1.0) * math.sin(k / 30))
-        u_meas = u_true + r.multivariate_normal(np.zeros(2), f.control_covariance(u_true))
-        x_prev, x_true = x_true, odometry.predict(x_true, u_true)
-        f.predict(u_meas)
-        z = measurement(np.concatenate([x_true, x_prev])) + r.multivariate_normal(np.zeros(2), NEES_R_VO)
-        f.update(z[0], z[1], NEES_R_VO)
-        f.finish_frame()
-        nees[k] = f.nees(x_true)
+    nees, _ = monte_carlo_run(int(params["seed"]), int(params.get("steps", 150)))
     lo, hi = chi2.ppf([0.025, 0.975], 3)
     return {
         "nees_mean": float(nees.mean()),

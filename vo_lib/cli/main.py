@@ -25,7 +25,7 @@ import sys
 import textwrap
 from pathlib import Path
 
-from vo_lib.arguments import OneLineParser, count_at_least, one_line
+from vo_lib.arguments import OneLineParser, count_at_least, non_empty, one_line
 
 #: Bounds of ``generate --resolution`` (each side, pixels): 32 keeps a few FAST corners in view,
 #: 4096 keeps a rendered frame pair and its buffers within a few hundred MB.
@@ -109,9 +109,15 @@ def build_parser() -> argparse.ArgumentParser:
         epilog=example("run --sequence outdoor_free --out runs/yard"),
         **plain,
     )
-    run.add_argument("--sequence", help="sample name or KITTI-layout folder (default: indoor_linear)")
     run.add_argument(
-        "--out", help="output folder (default: runs/NAME); new, empty, or written by an earlier run"
+        "--sequence",
+        type=non_empty("a sample name or a folder"),
+        help="sample name or KITTI-layout folder (default: indoor_linear)",
+    )
+    run.add_argument(
+        "--out",
+        type=non_empty("a folder"),
+        help="output folder (default: runs/NAME); new, empty, or written by an earlier run",
     )
     run.add_argument(
         "--force", action="store_true", help="replace --out even if this program did not write it"
@@ -184,7 +190,7 @@ def build_parser() -> argparse.ArgumentParser:
         **plain,
     )
     gen.add_argument("name", choices=sorted(SAMPLES), help="which sample")
-    gen.add_argument("--out", help="output folder (default: data/NAME)")
+    gen.add_argument("--out", type=non_empty("a folder"), help="output folder (default: data/NAME)")
     gen.add_argument(
         "--force", action="store_true", help="replace --out even if this program did not write it"
     )
@@ -240,7 +246,9 @@ def build_parser() -> argparse.ArgumentParser:
         **plain,
     )
     ev_all.add_argument(
-        "root", help="folder of sequences (KITTI's sequences/NN, or folders holding image_0/)"
+        "root",
+        type=non_empty("a folder"),
+        help="folder of sequences (KITTI's sequences/NN, or folders holding image_0/)",
     )
     ev_all.add_argument(
         "--frames", type=count_at_least(1, "frames"), help="only the first N frames of each sequence"
@@ -258,6 +266,7 @@ def build_parser() -> argparse.ArgumentParser:
         )
         p.add_argument(
             "--out",
+            type=non_empty("a folder"),
             help=f"sweep folder (default: {default}); finished rows there are kept and not run again",
         )
         p.add_argument(
@@ -322,12 +331,13 @@ def _os_error(exc: OSError, out) -> str:
 
 def _generate(args) -> None:
     from vo_lib.cli.run import UsageError
-    from vo_lib.data import sample_path
+    from vo_lib.data import data_dir, sample_path
     from vo_lib.outputs import OutputError, check_target
     from vo_lib.sim.samples import generate
 
     out = args.out or sample_path(args.name, args.frames, args.resolution)
-    check_target(out, written_by="vo_lib generate", force=args.force, option="--out")  # before rendering
+    keep = {data_dir(): "the sample data folder"}
+    check_target(out, written_by="vo_lib generate", force=args.force, option="--out", keep=keep)  # first
     if args.out and not args.force and (Path(out) / "image_0").is_dir():  # ours, but a sequence
         raise OutputError(
             f"--out {args.out}: holds a sequence generated earlier, which something may still read; "

@@ -17,6 +17,7 @@ line and exit with status 2.
 from __future__ import annotations
 
 import csv
+import os
 import sys
 from dataclasses import asdict, fields
 from pathlib import Path
@@ -28,6 +29,7 @@ from vo_lib.formats.poses import read_trajectory, write_kitti_poses, write_tum
 from vo_lib.geometry import camera_poses_from_planar, planar_from_camera_poses, wrap_angle
 from vo_lib.outputs import OutputFolder, notice, reading
 from vo_lib.sim.samples import SAMPLES
+from vo_lib.stereo_vo.paper_tables import PAPER_LONG_RUN, PAPER_TABLE1
 
 # The pipeline and the metrics (SciPy, Numba) are imported where they are used, so that a run
 # says what it is about to do before they load: its first line comes within a second or two.
@@ -35,17 +37,6 @@ if TYPE_CHECKING:
     from vo_lib.stereo_vo.pipeline import PipelineResult
 
 DEFAULT_SEQUENCE = "indoor_linear"
-#: [Zhao], Table 1: mean milliseconds of stereo processing, parameter estimation and Kalman
-#: filtering at each of the five resolutions the paper timed.
-PAPER_TABLE1 = {
-    (640, 480): {"stereo": 48.969, "estimation": 0.874, "kalman": 0.161},
-    (512, 384): {"stereo": 39.851, "estimation": 0.664, "kalman": 0.157},
-    (400, 300): {"stereo": 31.970, "estimation": 0.754, "kalman": 0.158},
-    (320, 240): {"stereo": 22.165, "estimation": 0.662, "kalman": 0.168},
-    (256, 192): {"stereo": 22.460, "estimation": 0.610, "kalman": 0.153},
-}
-#: [Zhao], IV.A.1: mean and standard deviation of the whole frame over 10,000 frames (ms).
-PAPER_LONG_RUN_MS = (26.5511, 4.551)
 
 
 class UsageError(Exception):
@@ -212,8 +203,8 @@ def print_timing_table(result: PipelineResult, camera, frames: int) -> None:
     print("  The means add up to the whole frame; the medians (each stage's typical frame) need not.")
     if paper:
         print(
-            f"  The paper's 10,000-frame run: mean {PAPER_LONG_RUN_MS[0]} ms per frame, s.d. "
-            f"{PAPER_LONG_RUN_MS[1]} ms (IV.A.1; resolution not stated)."
+            f"  The paper's {PAPER_LONG_RUN[0]:,}-frame run: mean {PAPER_LONG_RUN[1]} ms per frame, s.d. "
+            f"{PAPER_LONG_RUN[2]} ms (IV.A.1; resolution not stated)."
         )
     print(f"  frames per second: {1000.0 / np.mean(whole):.0f} (from the mean whole frame)")
 
@@ -389,7 +380,8 @@ def _run_into(
     _write_csv(tmp / "timings.csv", result.timings, FrameTimings)
     _write_csv(tmp / "diagnostics.csv", result.diagnostics, FrameDiagnostics)
     truth, odo = truth_and_odometry(seq, vehicle, n)
-    title = f"{Path(name).name}: {n} frames"
+    # a name holding bytes that are not UTF-8 (read as surrogates) is drawn with U+FFFD in their place
+    title = f"{os.fsencode(Path(name).name).decode('utf-8', 'replace')}: {n} frames"
     _plot(tmp / "trajectory.png", seq.times[:n], result.poses, truth, odo, title, odometry_name(vehicle))
     print_timing_table(result, seq.camera, n)
     report = {}

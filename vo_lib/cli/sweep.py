@@ -32,6 +32,7 @@ import functools
 import hashlib
 import json
 import os
+import signal
 import sys
 import time
 import traceback
@@ -42,11 +43,11 @@ from pathlib import Path
 import numpy as np
 
 from vo_lib.arguments import one_line
+from vo_lib.atomic import recover
 from vo_lib.outputs import (
     OutputFolder,
     check_target,
     read_marker,
-    remove_stale_temporaries,
     write_atomic,
     writing,
 )
@@ -137,7 +138,7 @@ def open_folder(target, experiment: str, *, force: bool = False, inputs=()) -> P
     written_by = f"vo_lib sweep {experiment}"
     marker = read_marker(target) if target.is_dir() else None
     if marker is not None and marker.get("written_by") == written_by:
-        remove_stale_temporaries(target)
+        recover(target)
         check_target(target, written_by=written_by, inputs=inputs, option="--out")
         return target
     with OutputFolder(target, written_by, force=force, inputs=inputs, option="--out") as out:
@@ -207,14 +208,28 @@ LOCAL_CLUSTER_CONFIG = {
 }
 
 
+@contextlib.contextmanager
+def _without_ctrl_c():
+    """SIGINT ignored meanwhile (call it from the main thread): processes started here inherit the
+    ignored signal, so that a Ctrl-C to the process group stops only this process (which then
+    closes the cluster), not every worker with a traceback of its own. A Ctrl-C in the seconds the
+    workers take to start is not seen."""
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
+
+
 def local_cluster(workers: int):
-    """A LocalCluster of ``workers`` processes, one thread each, quiet, dashboard on a free port."""
+    """A LocalCluster of ``workers`` processes, one thread each, quiet, dashboard on a free port;
+    its processes ignore Ctrl-C (see :func:`_without_ctrl_c`)."""
     import logging
 
     import dask
     from distributed import LocalCluster
 
-    with dask.config.set(LOCAL_CLUSTER_CONFIG):
+    with dask.config.set(LOCAL_CLUSTER_CONFIG), _without_ctrl_c():
         return LocalCluster(
             n_workers=workers,
             threads_per_worker=1,
@@ -239,11 +254,6 @@ def connect(address: str, option: str):
         get_backend(scheme)  # an unknown scheme
         if scheme in ("tcp", "tls") and not 0 < get_address_host_port(address)[1] < 65536:
             raise ValueError("the port is not between 1 and 65535")
-    except ValueError as exc:
-        raise SweepError(
-            f"{option} {address!r}: expected a scheduler address like tcp://host:8786 ({one_line(exc)})"
-        ) from None
-    try:
         return Client(address, timeout=CONNECT_TIMEOUT)
     except ValueError as exc:
         raise SweepError(
@@ -313,7 +323,7 @@ def run_sweep(
     address = scheduler if scheduler is not None else os.environ.get("DASK_SCHEDULER_ADDRESS") or None
     workers = _check_workers(workers, local=client is None and address is None)
     with contextlib.ExitStack() as stack:
-        label = f"Dask client {client.scheduler.address}" if client is not None else ""
+        label = ""
         if client is None and address is not None:  # reach it before anything is written
             client = stack.enter_context(connect(address, option))
             label = f"Dask scheduler {address.strip()}"
@@ -330,16 +340,34 @@ def run_sweep(
                     client = stack.enter_context(Client(stack.enter_context(local_cluster(workers))))
                     result.workers = f"Dask LocalCluster, {workers} worker processes"
                 elif client is not None:
+                    label = label or f"Dask client {client.scheduler.address}"
                     result.workers = f"{label}, {len(client.scheduler_info()['workers'])} workers"
                 else:
                     result.workers = "serial, in this process"
                 need_setup = context is None and experiment.setup is not None
                 found = outcomes(experiment, todo, context, need_setup, client)
                 _store(found, experiment.name, folder / ROWS, done, result, progress, len(keys))
+        except OSError as exc:  # a full disk: say what is kept, read back from the store
+            raise _kept(folder, exc) from None
         finally:
             result.rows = [done[k] for k in keys if k in done]
-            write_atomic(folder / TABLE, results_table(result.rows).to_csv(index=False, lineterminator="\n"))
+            try:
+                write_atomic(
+                    folder / TABLE, results_table(result.rows).to_csv(index=False, lineterminator="\n")
+                )
+            except OSError as exc:
+                raise _kept(folder, exc) from None
     return result
+
+
+def _kept(folder: Path, exc: OSError) -> SweepError:
+    """What a sweep stopped by ``exc`` (a full disk) keeps: the finished rows its store holds."""
+    why = (exc.strerror or str(exc)).lower()  # "no space left on device"
+    kept = sum(not r.get(ERROR) for r in read_rows(folder / ROWS).values())
+    return SweepError(
+        f"--out {folder}: {why}; {kept} finished row(s) are kept in {ROWS}, and a run of the same "
+        f"sweep resumes from them"
+    )
 
 
 def _store(found, name: str, path: Path, done: dict, result: SweepResult, progress, total: int) -> None:
@@ -358,10 +386,11 @@ def _store(found, name: str, path: Path, done: dict, result: SweepResult, progre
             store.write("\n")
         for params, outcome in found:
             key = task_key(name, params)
-            done[key] = {"key": key, "params": params, **outcome}
-            store.write(json.dumps(done[key]) + "\n")
+            row = {"key": key, "params": params, **outcome}
+            store.write(json.dumps(row) + "\n")
             store.flush()
             os.fsync(store.fileno())
+            done[key] = row
             result.ran.append(key)
             bar.update()
             if outcome[ERROR]:

@@ -189,29 +189,46 @@ _DEVNULL: int | None = None  # a descriptor of os.devnull, opened on first use
 _STDERR_LOCK = threading.Lock()
 
 
+def _decode(path: Path) -> np.ndarray | None:
+    """OpenCV's decoder on the file's bytes, or None: ``cv2.imread`` takes its path as UTF-8 and
+    crashes the process on a path holding any other byte. A PNG cut short (no closing IEND
+    chunk) is refused before libpng sees it."""
+    try:
+        data = np.fromfile(path, np.uint8)
+    except OSError:
+        return None
+    if data.size == 0 or (data[:8].tobytes() == _PNG_SIGNATURE and data[-8:-4].tobytes() != b"IEND"):
+        return None
+    try:
+        return cv2.imdecode(data, cv2.IMREAD_UNCHANGED)
+    except cv2.error:
+        return None
+
+
+_PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
+
+
 def _imread_quietly(path: Path) -> np.ndarray | None:
-    """``cv2.imread`` with the process's stderr muted meanwhile: libpng prints its own message for
-    a damaged file there, and ours (one line, naming the file and frame) says it better. None
-    where OpenCV cannot decode the file (or refuses it: a size beyond its limits). One thread at
-    a time swaps stderr, so that the reader thread and the caller never leave it muted."""
+    """The image, decoded with the process's stderr muted meanwhile (libpng prints its own
+    message for a damaged file there, and ours, one line naming the file and frame, says it
+    better), or None where OpenCV cannot decode it. Only the main thread mutes, one call at a
+    time: muting from the reader thread could swallow what the main thread writes meanwhile."""
     global _DEVNULL
+    if threading.current_thread() is not threading.main_thread():
+        return _decode(path)
     with _STDERR_LOCK:
         try:
             if _DEVNULL is None:
                 _DEVNULL = os.open(os.devnull, os.O_WRONLY)
             saved = os.dup(2)
         except OSError:
-            saved = None
+            return _decode(path)
         try:
-            if saved is not None:
-                os.dup2(_DEVNULL, 2)
-            return cv2.imread(str(path), cv2.IMREAD_UNCHANGED)
-        except cv2.error:
-            return None
+            os.dup2(_DEVNULL, 2)
+            return _decode(path)
         finally:
-            if saved is not None:
-                os.dup2(saved, 2)
-                os.close(saved)
+            os.dup2(saved, 2)
+            os.close(saved)
 
 
 def load_image(path: Path, frame: int | None = None) -> np.ndarray:
@@ -325,11 +342,20 @@ class Sequence:
                 self._reader = ThreadPoolExecutor(max_workers=1, thread_name_prefix="vo_lib-reader")
             for j in range(k + 1, min(k + 1 + self.read_ahead, len(self))):
                 if j not in self._ahead:
-                    self._ahead[j] = self._reader.submit(self._decoded, j)
+                    self._ahead[j] = self._reader.submit(self._decoded_ahead, j)
             for j in [j for j in self._ahead if j < k]:  # the caller went back: drop stale frames
                 self._ahead.pop(j).cancel()
         ahead = self._ahead.pop(k, None)
-        return ahead.result() if ahead is not None else self._decoded(k)
+        decoded = ahead.result() if ahead is not None else None
+        return decoded if decoded is not None else self._decoded(k)
+
+    def _decoded_ahead(self, k: int) -> tuple[np.ndarray, np.ndarray] | None:
+        """Frame ``k`` decoded on the reader thread, or None: a bad frame is decoded again, and
+        reported, by the caller's thread."""
+        try:
+            return self._decoded(k)
+        except SequenceError:
+            return None
 
     def _decoded(self, k: int) -> tuple[np.ndarray, np.ndarray]:
         left, right = load_image(self.left_files[k], k), load_image(self.right_files[k], k)

@@ -257,6 +257,21 @@ def heading_errors(run: LineSlamRun) -> np.ndarray:
     return wrap_angle(run.estimate[:, 2] - run.truth[:, 2])
 
 
+def lap_figures(seed: int, observer: str = "closed_form", observation: str = "feature_point") -> dict:
+    """One lap's figures (the sweep's row): final errors of EKF-SLAM and of dead reckoning (m),
+    mean and final pose NEES, landmarks mapped, observations dropped by data association."""
+    run = simulate_lap(int(seed), observer, LineSlamScenario(observation=observation))
+    nees = np.asarray(run.nees, float)
+    return {
+        "final_error": run.final_error(),
+        "dead_reckoning_error": run.final_dead_reckoning_error(),
+        "nees_mean": float(np.nanmean(nees)),
+        "nees_final": float(nees[-1]),
+        "landmarks": len(run.landmarks),
+        "dropped": int(run.dropped),
+    }
+
+
 #: The README's [Yan 2020] figures: laps over this many seeds, and extended-landmark laps over this many.
 README_SEEDS, README_EXTENDED_SEEDS = 20, 10
 

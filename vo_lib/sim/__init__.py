@@ -10,7 +10,7 @@
 ``disturbances``   blank, noisy and occluded frames
 ``samples``        the named samples ([Zhao]'s experiments, [Yuan]'s corridor), rendered
                    to the KITTI layout of ``vo_lib.formats``
-``frame_store``    rendered frames kept on disk for the next process (``VO_LIB_FRAME_STORE``)
+``frame_store``    rendered frames kept on disk for the next process (the test suite sets its folder)
 ``realism``        image statistics that compare rendered frames with real ones
 
 The simulation uses the motion models (``vo_lib.models``) and the file formats, never an

@@ -1,17 +1,17 @@
 """Rendered frames kept on disk, so that processes rendering the same sample render it once.
 
-The test suite, its notebook kernels and the command-line runs it starts all render the same
-samples in memory (``render_sample``), each from frame 0. With ``VO_LIB_FRAME_STORE`` naming a
-folder, every frame rendered is written there, and a later request for the same frame of the same
-sample (same fingerprint, resolution and first frame) reads it back instead of rendering it. The
-sensor noise of frame ``k`` is drawn from a generator that frames ``first..k-1`` advanced, so each
-stored frame carries the generator's state after it: a request that finds frames 0-99 stored and
-needs 100-399 reads the first hundred, restores the state and renders the rest, the same images as
-one uninterrupted render.
+Processes that render the same samples in memory (``render_sample``), each from frame 0, can
+share the work: with :data:`FOLDER` naming a folder, every frame rendered is written there, and
+a later request for the same frame of the same sample (same fingerprint, resolution and first
+frame) reads it back instead of rendering it. The sensor noise of frame ``k`` is drawn from a
+generator that frames ``first..k-1`` advanced, so each stored frame carries the generator's state
+after it: a request that finds frames 0-99 stored and needs 100-399 reads the first hundred,
+restores the state and renders the rest, the same images as one uninterrupted render.
 
 Frames are written under a temporary name and renamed, so a reader never sees half a frame and
 two processes rendering the same frame at once leave one whole file. The store holds nothing but
-what was rendered into it; the test suite makes one for its session and removes it at the end.
+what was rendered into it. The test suite sets :data:`FOLDER` in every process it starts (its
+notebook kernels and command-line runs too) and removes the folder at the end.
 """
 
 from __future__ import annotations
@@ -23,8 +23,8 @@ from pathlib import Path
 
 import numpy as np
 
-#: Environment variable naming the folder of the frame store (unset: frames are not kept).
-ENVIRONMENT = "VO_LIB_FRAME_STORE"
+#: The folder of the frame store (None: rendered frames are not kept).
+FOLDER: Path | None = None
 
 
 class FrameStore:
@@ -35,11 +35,10 @@ class FrameStore:
         self.folder = Path(folder) / key
 
     @staticmethod
-    def from_environment(key: Callable[[], str]) -> FrameStore | None:
-        """The store of ``key()`` in the folder ``VO_LIB_FRAME_STORE`` names, or None when unset
-        (``key`` is only called then)."""
-        root = os.environ.get(ENVIRONMENT)
-        return FrameStore(Path(root), key()) if root else None
+    def current(key: Callable[[], str]) -> FrameStore | None:
+        """The store of ``key()`` in :data:`FOLDER`, or None when it is unset (``key`` is only
+        called then)."""
+        return FrameStore(FOLDER, key()) if FOLDER else None
 
     def _path(self, k: int) -> Path:
         return self.folder / f"{k:06d}.npz"

@@ -320,7 +320,7 @@ def _world_poses(sample: Sample, drive) -> np.ndarray:
 
 def render_sample(name: str, frames: int | None = None, resolution=None, first: int = 0):
     """Render a sample in memory: ``(RenderedSample, iterator of frames)``; nothing is written
-    (but to the frame store, when ``VO_LIB_FRAME_STORE`` names one: :mod:`vo_lib.sim.frame_store`).
+    (but to the frame store, when one is set: :mod:`vo_lib.sim.frame_store`).
 
     ``resolution`` is ``(width, height)``, by default the sample's own. ``first`` starts at a later
     frame of the drive (the first rendered frame then has no odometry, as frame 0).
@@ -349,7 +349,7 @@ def render_sample(name: str, frames: int | None = None, resolution=None, first: 
     image_rng = np.random.default_rng(sample.seed + 1)
     gains = exposure_gains(first + n, sample.exposure_sigma, np.random.default_rng(sample.seed + 3))
 
-    store = FrameStore.from_environment(
+    store = FrameStore.current(
         lambda: f"{name}-{fingerprint(name)}-{camera.width}x{camera.height}-from{first}"
     )
 

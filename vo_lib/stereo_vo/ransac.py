@@ -414,7 +414,7 @@ def refine_motion(
 
 
 # ---------------------------------------------------------------------- the estimator
-def one_point_ransac(
+def one_point_ransac(  # noqa: PLR0915 (the algorithm's five steps read best in one function)
     w_prev,
     w_curr,
     camera: StereoCamera,

@@ -8,6 +8,7 @@ import time
 import numpy as np
 
 from vo_lib.cli.bench.common import BENCH_SEED, format_row, median_seconds
+from vo_lib.stereo_vo.paper_tables import PAPER_LONG_RUN
 
 
 def bench_geometry(n: int = 10_000) -> dict[str, float]:
@@ -207,7 +208,7 @@ def _numpy_references(wanted: bool) -> None:
     os.environ["VO_LIB_PLAIN"] = "1" if wanted else "0"
 
 
-def bench_kernels(frames: int = 60) -> dict[str, float]:
+def bench_kernels(frames: int = 60) -> dict[str, float]:  # noqa: PLR0915 (three timed cases in a row)
     """The whole frame with each remaining compiled kernel and with its NumPy reference, side by
     side in one process: a kernel stays only where NumPy makes the whole frame > 1.5x slower.
 
@@ -275,11 +276,6 @@ def bench_kernels(frames: int = 60) -> dict[str, float]:
         verdict = "keep" if ratio > 1.5 else "NumPy only"
         print(f"  {name:<46s}{kernel:10.2f}{numpy_ms:10.2f}{ratio:8.2f}  {verdict}")
     return {name: k / 1e3 for name, (k, _) in rows.items()}
-
-
-#: The paper's long run ([Zhao], IV.A.1): 10,000 frames, mean and standard deviation of the
-#: elapsed time per frame, milliseconds.
-PAPER_LONG_RUN = (10_000, 26.5511, 4.551)
 
 
 def bench_long(frames: int = PAPER_LONG_RUN[0]) -> dict[str, float]:

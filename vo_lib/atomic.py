@@ -1,0 +1,145 @@
+"""Files and folders put in place whole, and what a killed process left finished or cleared.
+
+A folder is written into a temporary sibling ``.NAME.vo_lib-PID-HOST-RANDOM.tmp`` (its contents
+complete, the marker of :mod:`vo_lib.outputs` last) and put in place by :func:`swap_in`. On Linux
+the finished folder and the previous ``NAME`` are swapped in one step (``renameat2`` with
+``RENAME_EXCHANGE``): at every moment ``NAME`` is the previous folder or the new one, whole. Where
+folders cannot be swapped, the previous folder is first renamed to ``.NAME.vo_lib-PID-HOST-RANDOM.old``
+and the new one takes its name; if the process is killed between the two renames,
+:func:`recover` (run by the next command beside it) renames the ``.old`` folder back. An ``.old``
+folder is deleted only once ``NAME`` exists again; other temporaries of processes that no longer
+run are deleted. A file is replaced whole by :func:`write_atomic`.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import ctypes
+import errno
+import hashlib
+import os
+import re
+import secrets
+import shutil
+import socket
+import sys
+import tempfile
+from pathlib import Path
+
+_TEMPORARY = re.compile(r"\.(.+)\.vo_lib-(\d+)-([0-9a-f]{8})-[^/]*\.(tmp|old)")
+
+
+def notice(message: str) -> None:
+    """One line on stderr for something the user should know that is not an error."""
+    print(f"notice: {message}", file=sys.stderr)
+
+
+#: This machine, in the names of temporaries: only its own processes' temporaries are judged.
+HOST = hashlib.sha1(socket.gethostname().encode()).hexdigest()[:8]
+
+
+def temporary_prefix(name: str) -> str:
+    """The start of the name of this process's temporaries beside ``name``."""
+    return f".{name}.vo_lib-{os.getpid()}-{HOST}-"
+
+
+def umask() -> int:
+    """The process's umask, read without changing it where the system allows (threads may write)."""
+    with contextlib.suppress(OSError, ValueError, IndexError):
+        with open("/proc/self/status") as fh:
+            return int(next(line for line in fh if line.startswith("Umask:")).split()[1], 8)
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
+
+
+def write_atomic(path, text: str) -> Path:
+    """Replace the file ``path`` by ``text`` through a temporary file beside it."""
+    path = Path(path)
+    fd, tmp = tempfile.mkstemp(prefix=temporary_prefix(path.name), suffix=".tmp", dir=path.parent)
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8", errors="surrogateescape", newline="") as fh:
+            fh.write(text)
+            fh.flush()
+            os.fsync(fh.fileno())
+        os.chmod(tmp, 0o666 & ~umask())
+        os.replace(tmp, path)
+    except BaseException:
+        with contextlib.suppress(OSError):
+            os.unlink(tmp)
+        raise
+    return path
+
+
+def _gone(pid: int) -> bool:
+    """Does process ``pid`` of this machine no longer run?"""
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return True
+    except OSError:  # it runs, as another user
+        pass
+    return False
+
+
+def recover(parent: Path) -> list[Path]:
+    """Finish what killed processes left in ``parent``: an ``.old`` folder whose ``NAME`` is
+    missing is renamed back to ``NAME``; other temporaries of dead processes of this machine are
+    deleted. Returns what was deleted or restored."""
+    if os.name == "nt":  # os.kill(pid, 0) would stop the process there
+        return []
+    try:
+        entries = sorted(os.scandir(parent), key=lambda e: not e.name.endswith(".old"))
+    except OSError:
+        return []
+    restored, deleted = [], []
+    for entry in entries:
+        match = _TEMPORARY.fullmatch(entry.name)
+        if not match or match[3] != HOST or entry.is_symlink() or not _gone(int(match[2])):
+            continue
+        original = Path(parent, match[1])
+        if match[4] == "old" and not os.path.lexists(original):
+            os.rename(entry.path, original)
+            notice(f"restored {original}, whose replacement was interrupted")
+            restored.append(original)
+            continue
+        if entry.is_dir(follow_symlinks=False):
+            shutil.rmtree(entry.path, ignore_errors=True)
+        with contextlib.suppress(OSError):
+            os.unlink(entry.path)
+        deleted.append(Path(entry.path))
+    if deleted:
+        names = ", ".join(p.name for p in deleted)
+        notice(f"removed {len(deleted)} temporary folder(s) left by interrupted runs: {names}")
+    return restored + deleted
+
+
+def _exchange(a: Path, b: Path) -> bool:
+    """Swap folders ``a`` and ``b`` in one step (Linux ``renameat2``); False where not possible."""
+    try:
+        renameat2 = ctypes.CDLL(None, use_errno=True).renameat2
+    except (OSError, AttributeError, TypeError):
+        return False
+    at_fdcwd, rename_exchange = -100, 2
+    if renameat2(at_fdcwd, os.fsencode(a), at_fdcwd, os.fsencode(b), rename_exchange) == 0:
+        return True
+    if ctypes.get_errno() in (errno.ENOSYS, errno.EINVAL, errno.EOPNOTSUPP):
+        return False
+    raise OSError(ctypes.get_errno(), os.strerror(ctypes.get_errno()), str(b))
+
+
+def swap_in(complete: Path, target: Path) -> None:
+    """Put the whole folder ``complete`` (a ``.tmp`` sibling) at ``target``; the folder it
+    replaces is deleted afterwards. No moment exists where a kill loses both (see the module)."""
+    try:
+        os.rename(complete, target)  # no target, or an empty folder
+        return
+    except OSError as exc:
+        if exc.errno not in (errno.ENOTEMPTY, errno.EEXIST):
+            raise
+    if not _exchange(complete, target):  # two renames; a kill between them is undone by recover()
+        aside = target.with_name(f"{temporary_prefix(target.name)}{secrets.token_hex(4)}.old")
+        os.rename(target, aside)
+        os.rename(complete, target)
+        complete = aside
+    shutil.rmtree(complete)
