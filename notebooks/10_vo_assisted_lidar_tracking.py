@@ -416,9 +416,12 @@ assert posterior_vmax["normal"] / posterior_vmax["occluded"] > 3
 # * **On the raw scores the two readings part.** There the quartiles are of the same size as the
 #   maximum, and the printed $V_{max} - V_{lq} - V_{med}$ separates normal from occluded frames
 #   worse than chance, while $V_{max} - V_{med}$ still separates them almost perfectly: our
-#   reading of eq. 11 is the one that works.
-# * **The printed eq. 10 is a normalisation, not a posterior.** $S_i / \sum_j S_j$ does satisfy
-#   eq. 9 and keeps the samples' order (its $V_{max}$ AUC is high), but it squeezes every
+#   reading of eq. 11 is the one that works. (The printed form is not a slip: eq. 12 calls
+#   $V_{max} - V_{lq}$ the "range", and range minus median is what eq. 11 prints.)
+# * **The printed eq. 10 is a normalisation, not a posterior, for a score like ours.**
+#   $S_i / \sum_j S_j$ would be the posterior if $S_i$ were proportional to the likelihood (and the
+#   samples drawn from the prior); a grid-map score adds one term per beam, a log-likelihood.
+#   $S_i / \sum_j S_j$ does satisfy eq. 9 and keeps the samples' order (its $V_{max}$ AUC is high), but it squeezes every
 #   frame's best sample to barely above $1/n$, by about a tenth, in normal and occluded frames
 #   alike (printed). Any threshold on it would sit on a knife's edge. Reading the
 #   score as a log-likelihood, $e^{S_i}/\sum_j e^{S_j}$, spreads the normal and the occluded
