@@ -897,7 +897,7 @@ display(
 )
 
 # %% [markdown]
-# So the per-step picture and the lap averages part. At a good share of the steps the 20-seed
+# The per-step picture and the lap averages answer different questions. At a good share of the steps the 20-seed
 # NEES is above its per-step band, almost never below it; but the lap averages, judged over the
 # seeds as they must be, decide the verdict printed above (at 20 seeds, and with this notebook's
 # seeds, the over-confidence is not significant). The per-step share above the band does not
