@@ -241,8 +241,9 @@ orb = cv2.ORB_create(nlevels=1, edgeThreshold=16)
 # border filter)
 u_c, v_c = np.rint(points[:, 0]).astype(int), np.rint(points[:, 1]).astype(int)
 u_right = points[:, 0] - true_disparity[v_c, u_c]
+right_points = np.column_stack([u_right, points[:, 1]])
 pairs_left = [cv2.KeyPoint(float(x), float(y), 31.0, -1, 0, 0, i) for i, (x, y) in enumerate(points)]
-pairs_right = [cv2.KeyPoint(float(x), float(y), 31.0, -1, 0, 0, i) for i, (x, y) in enumerate(zip(u_right, points[:, 1]))]
+pairs_right = [cv2.KeyPoint(float(x), float(y), 31.0, -1, 0, 0, i) for i, (x, y) in enumerate(right_points)]
 left_kps, left_des = orb.compute(left, pairs_left)
 right_kps, right_des = orb.compute(right, pairs_right)
 left_row = {k.class_id: i for i, k in enumerate(left_kps)}
