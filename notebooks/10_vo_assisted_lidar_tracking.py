@@ -260,7 +260,8 @@ for ax in axes:
     ax.set_ylim(-0.03 * top, 1.05 * top)
 normal_frame, occluded_frame = frame_stats.values()
 assert normal_frame.v_max > 2 * occluded_frame.v_max
-assert max(st.v_uq for st in frame_stats.values()) < 0.01 * occluded_frame.v_max
+# the boxes are flat: quartiles at a few per cent of the occluded frame's maximum at most (one frame each)
+assert max(st.v_uq for st in frame_stats.values()) < 0.05 * occluded_frame.v_max
 
 # %% [markdown]
 # **The statistics, written out.** What `ScoreStatistics.from_scores` computes, in a few lines:
