@@ -726,7 +726,8 @@ print(f"right end visible from the true path:  x = {right_true:.4f} (seed {SEED}
 print(f"right end as mapped, 10 seeds:         x = {np.mean(rights):.4f} ± {np.std(rights):.4f}")
 print(
     f"mapped beyond the true visible end, per seed: median {np.median(excess):+.3f} m "
-    f"(95 % CI {excess_ci[0]:+.3f} to {excess_ci[1]:+.3f} m), beyond in {np.sum(excess > 0)} of {len(excess)} seeds"
+    f"(95 % CI {excess_ci[0]:+.3f} to {excess_ci[1]:+.3f} m), "
+    f"beyond in {np.sum(excess > 0)} of {len(excess)} seeds"
 )
 print(f"paper:                                 x = {PAPER_EXTENDED_RIGHT_END}")
 assert np.all((50 < rights_true) & (rights_true < 60)) and excess_ci[0] > 0
@@ -753,12 +754,13 @@ assert max(abs(v - right_true) for v in by_wheelbase.values()) < 0.05
 # %% [markdown]
 # As mapped (the observed end points, each with range and bearing noise, the outermost kept) the
 # wall reaches a little beyond what each seed's true path can see (the median excess and its
-# interval over the seeds are printed): the outermost of many noisy points lies beyond the true end. The paper's 54.4412 is within one σ of our mean over ten seeds. The
-# true limit depends on how close the car comes to the wall's far end, that is on how far it
-# swings past waypoint 1: seen from the waypoint itself the limit is lower, and each metre
-# further along the wall's direction adds about a metre (printed above). The paper's controller
-# settings that set that swing (the waypoint radius, the wheelbase) are not printed; the
-# wheelbase alone moves ours by only centimetres between 2.5 and 5 m.
+# interval over the seeds are printed): the outermost of many noisy points lies beyond the true
+# end. The paper's 54.4412 is within one σ of our mean over ten seeds. The true limit depends on how
+# close the car comes to the wall's far end, that is on how far it swings past waypoint 1: seen from
+# the waypoint itself the limit is lower, and each metre further along the wall's direction adds
+# about a metre (printed above). The paper's controller settings that set that swing (the waypoint
+# radius, the wheelbase) are not printed; the wheelbase alone moves ours by only centimetres between
+# 2.5 and 5 m.
 #
 # ### Table 1, as ratios
 #
@@ -864,8 +866,9 @@ print(
     f"[{low:.2f}, {high:.2f}], {100 * above:.0f} % above, {100 * below:.0f} % below"
 )
 print(
-    f"lap-averaged pose NEES {lap_nees.mean():.2f} (95 % CI over seeds {nees_ci[0]:.2f}–{nees_ci[1]:.2f}; "
-    f"consistent: 3); heading (error/σ)² {lap_z2.mean():.2f} (CI {z2_ci[0]:.2f}–{z2_ci[1]:.2f}; consistent: 1)"
+    f"lap-averaged pose NEES {lap_nees.mean():.2f} (95 % CI over seeds "
+    f"{nees_ci[0]:.2f}–{nees_ci[1]:.2f}; consistent: 3); heading (error/σ)² {lap_z2.mean():.2f} "
+    f"(CI {z2_ci[0]:.2f}–{z2_ci[1]:.2f}; consistent: 1)"
 )
 print(
     f"per seed, the heading error's mean over the lap spreads ±{seed_means.std():.2f} σ between seeds "
@@ -902,23 +905,23 @@ display(
 )
 
 # %% [markdown]
-# The per-step picture and the lap averages answer different questions. At a good share of the steps the 20-seed
-# NEES is above its per-step band, almost never below it; but the lap averages, judged over the
-# seeds as they must be, decide the verdict printed above (at 20 seeds, and with this notebook's
-# seeds, the over-confidence is not significant). The per-step share above the band does not
-# overturn that: the steps of one lap are correlated, so the same seeds sit above the band for
-# long stretches. The heading, in units of its own σ, shows why the seeds differ: each run keeps
-# its heading offset for much of the lap (its spread within a lap is smaller than between laps,
-# printed, and some seeds keep one sign nearly throughout). An offset
-# made early, before the map holds, is never undone: the map was built with it, so the laser
-# confirms the rotated picture. This is the mechanism of the known inconsistency of EKF-SLAM
-# (Huang and Dissanayake 2007, the paper's ref. [13]): the Jacobians are evaluated at the
-# *estimated* pose and landmarks, which lets the filter believe it has observed the absolute
-# heading, which no relative measurement can give; its heading variance shrinks below the truth.
-# Remedies are first-estimate Jacobians, observability-constrained EKFs, or smoothing instead of
-# filtering. Telling a small over-confidence from none needs more seeds (`python -m vo_lib
-# sweep lap`, below). So: the final error is small, far below dead reckoning; the covariance is
-# useful, and whether it is over-confident in heading is what the lap averages' intervals say.
+# The per-step picture and the lap averages answer different questions. At a good share of the steps
+# the 20-seed NEES is above its per-step band, almost never below it; but the lap averages, judged
+# over the seeds as they must be, decide the verdict printed above (at 20 seeds, and with this
+# notebook's seeds, the over-confidence is not significant). The per-step share above the band does
+# not overturn that: the steps of one lap are correlated, so the same seeds sit above the band for
+# long stretches. The heading, in units of its own σ, shows why the seeds differ: each run keeps its
+# heading offset for much of the lap (its spread within a lap is smaller than between laps, printed,
+# and some seeds keep one sign nearly throughout). An offset made early, before the map holds, is
+# never undone: the map was built with it, so the laser confirms the rotated picture. This is the
+# mechanism of the known inconsistency of EKF-SLAM (Huang and Dissanayake 2007, the paper's ref.
+# [13]): the Jacobians are evaluated at the *estimated* pose and landmarks, which lets the filter
+# believe it has observed the absolute heading, which no relative measurement can give; its heading
+# variance shrinks below the truth. Remedies are first-estimate Jacobians, observability-constrained
+# EKFs, or smoothing instead of filtering. Telling a small over-confidence from none needs more
+# seeds (`python -m vo_lib sweep lap`, below). So: the final error is small, far below dead
+# reckoning; the covariance is useful, and whether it is over-confident in heading is what the lap
+# averages' intervals say.
 #
 # ### Feature point or line?
 #

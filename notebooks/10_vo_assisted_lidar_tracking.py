@@ -425,11 +425,11 @@ assert posterior_vmax["normal"] / posterior_vmax["occluded"] > 3
 # * **The printed eq. 10 is a normalisation, not a posterior, for a score like ours.**
 #   $S_i / \sum_j S_j$ would be the posterior if $S_i$ were proportional to the likelihood (and the
 #   samples drawn from the prior); a grid-map score adds one term per beam, a log-likelihood.
-#   $S_i / \sum_j S_j$ does satisfy eq. 9 and keeps the samples' order (its $V_{max}$ AUC is high), but it squeezes every
-#   frame's best sample to barely above $1/n$, by about a tenth, in normal and occluded frames
-#   alike (printed). Any threshold on it would sit on a knife's edge. Reading the
-#   score as a log-likelihood, $e^{S_i}/\sum_j e^{S_j}$, spreads the normal and the occluded
-#   frames several-fold apart.
+#   $S_i / \sum_j S_j$ does satisfy eq. 9 and keeps the samples' order (its $V_{max}$ AUC is
+#   high), but it squeezes every frame's best sample to barely above $1/n$, by about a tenth, in
+#   normal and occluded frames alike (printed). Any threshold on it would sit on a knife's edge.
+#   Reading the score as a log-likelihood, $e^{S_i}/\sum_j e^{S_j}$, spreads the normal and the
+#   occluded frames several-fold apart.
 #
 # **The temperature of that reading.** $e^{S_i}$ assumes that one unit of score (one beam ending
 # exactly on a mapped wall) multiplies the likelihood by $e$: a likelihood ratio of $e$ per beam,
@@ -537,7 +537,9 @@ for s_ in HELD_OUT:
     used_h = [cal.thresholds.composite(st.stats) for st in run_h.steps]
     steps_h = [st for st, u in zip(run_h.steps, used_h, strict=True) if u]
     held_out_rates["laser"].append(np.mean([not cal.laser.contains(st.laser_correction) for st in steps_h]))
-    held_out_rates["visual odometer"].append(np.mean([not cal.vo.contains(st.vo_correction) for st in steps_h]))
+    held_out_rates["visual odometer"].append(
+        np.mean([not cal.vo.contains(st.vo_correction) for st in steps_h])
+    )
 alarm = {}
 for name, rates in held_out_rates.items():
     rates = np.array(rates)
@@ -679,7 +681,10 @@ def _x_figure(run, statistic):
 
 by_seed = {
     statistic: over_seeds(
-        lambda i, st=statistic: {"VOAPT": _x_figure(result.voapt[i], st), "LBPT": _x_figure(result.lbpt[i], st)},
+        lambda i, st=statistic: {
+            "VOAPT": _x_figure(result.voapt[i], st),
+            "LBPT": _x_figure(result.lbpt[i], st),
+        },
         range(len(result.seeds)),
     )
     for statistic in ("max", "mean")
@@ -718,14 +723,14 @@ y_share = max(lbpt_y, voapt_y) / paper[("VOAPT", 1)][1]
 assert y_share < 0.5  # our worst Y under half the paper's *mean* VOAPT Y
 
 # %% [markdown]
-# Along the corridor VOAPT cuts the maximum and the mean error severalfold, over seeds (the
-# sentence above is printed from the runs; the paper's factor, from one run, is about seven for both). Our LBPT fails about as
-# badly as the paper's. Our VOAPT is less good than the paper's: in the occluded stretch the
-# composite indicator $C_s$ still passes at some updates, because the calibrated $V_{max}$
-# threshold lies inside the occluded frames' spread, and at a share of those the control tests
-# pass too (printed). Each such spurious credible update lets the laser's wandering
-# along-corridor correction in and re-anchors the visual odometer's pose to it. A stricter
-# threshold trades this for more false alarms in the normal stretches (an exercise below).
+# Along the corridor VOAPT cuts the maximum and the mean error severalfold, over seeds (the sentence
+# above is printed from the runs; the paper's factor, from one run, is about seven for both). Our
+# LBPT fails about as badly as the paper's. Our VOAPT is less good than the paper's: in the occluded
+# stretch the composite indicator $C_s$ still passes at some updates, because the calibrated
+# $V_{max}$ threshold lies inside the occluded frames' spread, and at a share of those the control
+# tests pass too (printed). Each such spurious credible update lets the laser's wandering
+# along-corridor correction in and re-anchors the visual odometer's pose to it. A stricter threshold
+# trades this for more false alarms in the normal stretches (an exercise below).
 
 # %%
 display(
@@ -758,7 +763,11 @@ display(
         "unoccluded stretch, and in "
         + (f"{sum(recovered)} of them" if recovered else "none of them")
         + " a later frame of that stretch is admitted again as the widening band reaches it"
-        + ("; in the others the flags last to the corridor's end." if sum(recovered) < len(recovered) else ".")
+        + (
+            "; in the others the flags last to the corridor's end."
+            if sum(recovered) < len(recovered)
+            else "."
+        )
     )
 )
 

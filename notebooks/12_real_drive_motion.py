@@ -8,7 +8,6 @@
 #     name: python3
 # ---
 
-
 # %% [markdown]
 # # 12 · [Zhao]'s stereo odometry on a real drive
 #
@@ -596,7 +595,8 @@ if REAL:
     start = time.perf_counter()
     features_per_frame = [pyramid_fe.process(*seq.pair(k)) for k in range(len(seq))]  # no draw: once
     chained_by_seed = {
-        s_: chain_models(vo_full.camera_poses, np.random.default_rng(s_), features_per_frame) for s_ in RANSAC_SEEDS
+        s_: chain_models(vo_full.camera_poses, np.random.default_rng(s_), features_per_frame)
+        for s_ in RANSAC_SEEDS
     }
     chained = chained_by_seed[SEED]  # the figures show the first seed
     print(
@@ -622,7 +622,8 @@ if REAL:
         Markdown(
             f"Over {len(RANSAC_SEEDS)} RANSAC seeds on this one drive, in final position error, "
             f"{readings.sentence('circular through the mount', 'circular on the axis', unit='m', digits=3)}; "
-            f"in final |heading error|, {readings.sentence('6-DoF heading', 'circular heading', unit='°', digits=3)}. "
+            "in final |heading error|, "
+            f"{readings.sentence('6-DoF heading', 'circular heading', unit='°', digits=3)}. "
             f"In position, {readings.sentence('circular through the mount', '6-DoF', unit='m', digits=3)}. "
             "The planar model cannot move the camera sideways or vertically, and over "
             f"{travelled:.0f} m of gently curving road that constraint steadies the position while "
@@ -660,8 +661,8 @@ else:
 # Fed good matches, the circular model is not lost on this gently curving road, but it is biased
 # two ways (both asserted on the real drive, over RANSAC's seeds): reading a camera ahead of the
 # axis as if it were on it costs position, and ignoring pitch, slope and bank costs heading, frame
-# after frame; the 6-DoF refinement reduces the heading drift. A sharper turn makes the offset term grow with the
-# yaw rate, and a hillier road the pitch term.
+# after frame; the 6-DoF refinement reduces the heading drift. A sharper turn makes the offset
+# term grow with the yaw rate, and a hillier road the pitch term.
 
 # %% [markdown]
 # ### 4b · Sharp turns and bumps: what the outlier filter must survive
