@@ -9,24 +9,30 @@
 # ---
 
 # %% [markdown]
-# # 11 · Real stereo images and the front end they need
+# # 11 · [Zhao]'s stereo odometry on real images
 #
-# Everything so far ran on images that `vo_lib` renders itself. Here the front end meets real
-# recordings: KITTI raw drive 2011_09_26_0001, a car in a Karlsruhe suburb, and the Middlebury
-# *Motorcycle* pair with ground-truth disparity (shipped by scikit-image). We look at what is
-# different about real images, in numbers, and at the front end built for them: ORB corners in a
-# pyramid, matched along rows, with sub-pixel disparities judged against ground truth and beside
-# OpenCV's semi-global matcher. Notebook 12 then runs the motion estimation on the real drive.
+# Everything so far ran on images that `vo_lib` renders itself. Here the pipeline meets a real
+# recording: KITTI raw drive 2011_09_26_0001, a car in a Karlsruhe suburb, with ground truth from
+# its GPS/IMU, and the Middlebury *Motorcycle* pair with ground-truth disparity (shipped by
+# scikit-image). We look at what is different about real images, at the front end built for them,
+# at what the planar circular-motion model of the paper gets wrong on a car, and at how the 6-DoF
+# refinement that follows 1-point RANSAC repairs it. We then write that refinement ourselves and
+# compare the pipeline with wheel odometry, with the fusion of both, and with a plain OpenCV
+# stereo odometry.
 #
 # **You will learn**
 # - how real images differ from rendered ones, in numbers (empty cells, corners, flat regions);
-# - how a front end adapts to them (a FAST threshold lowered from frame to frame, a pyramid);
-# - how accurate our sub-pixel disparities are on real images, beside OpenCV's semi-global matcher,
-#   and where the tail of the error comes from (depth edges).
+# - how accurate our sub-pixel disparities are on real images, beside OpenCV's semi-global matcher;
+# - what the circular-motion model leaves out on a car (camera offset, slope, bank, pitch when
+#   braking), measured in pixels and in metres;
+# - why 1-point RANSAC stays as the outlier filter and how many of its inliers the 6-DoF fit keeps;
+# - how to write the 6-DoF Gauss–Newton step (residual, analytic Jacobian, rotation update);
+# - odometry against vision against their fusion on real data, and where we stand against PnP.
 #
-# **Prerequisites**: notebooks 04 and 05.
+# **Prerequisites**: notebooks 03, 05, 06 and 08.
 #
-# **Run time**: about 10 seconds of computing on two cores (longer on a busy machine).
+# **Run time**: about a minute of computing on two cores, most of it the OpenCV PnP baseline of
+# section 8 (longer on a busy machine).
 # The real recording is KITTI raw drive 2011_09_26_drive_0001 in the KITTI odometry layout with
 # its `oxts.txt` and `raw_calib/` (see the README's "Real data"); it is not part of the repository:
 # set `VO_LIB_REALDATA` to the folder that holds it. Without it the notebook says so and runs the
@@ -36,7 +42,7 @@
 # **References**
 #
 # - X. Zhao, J. Kan, C. Zhan, *1-Point RANSAC Application: an Independent Positioning Method for
-#   Crawler Mobile Robots Based on Binocular Stereo Vision* [Zhao]: §III.A, the front end, applied to
+#   Crawler Mobile Robots Based on Binocular Stereo Vision* [Zhao]: §II and §III.A, applied to
 #   real images.
 # - A. Geiger, P. Lenz, C. Stiller, R. Urtasun, *Vision meets Robotics: The KITTI Dataset*,
 #   International Journal of Robotics Research, 2013: the raw drives and the odometry layout.
@@ -46,6 +52,7 @@
 # %%
 import math
 import os
+import time
 from pathlib import Path
 
 import cv2
@@ -54,18 +61,43 @@ import numpy as np
 import skimage.data
 from IPython.display import display
 from scipy.ndimage import maximum_filter, minimum_filter
+from scipy.spatial.transform import Rotation
+from scipy.stats import chi2
 
 import vo_lib
 from vo_lib.camera import StereoCamera
+from vo_lib.comparison import Verdict, over_seeds
 from vo_lib.data import load_sequence
+from vo_lib.formats.kitti_raw import read_oxts
 from vo_lib.geometry import (
+    camera_motion,
+    camera_mount,
+    compose_planar,
     planar_from_camera_poses,
+    relative_planar,
     wrap_angle,
 )
+from vo_lib.stereo_vo import rigid_motion
+from vo_lib.stereo_vo.circular_motion import circular_motion_from_increment, motion_matrices, robot_increment
+from vo_lib.stereo_vo.config import CAR
 from vo_lib.stereo_vo.features import PATCH_HALF, StereoFrontEnd
+from vo_lib.stereo_vo.kalman import nis
+from vo_lib.stereo_vo.pipeline import StereoOdometry, run_frames, run_sequence
+from vo_lib.stereo_vo.pnp_baseline import run_pnp_baseline
 from vo_lib.stereo_vo.pyramid_features import LEVELS, SCALE_FACTOR, PyramidFrontEnd
-from vo_lib.stereo_vo.vehicle import vehicle_of
-from vo_lib.viz.plotting import new_axes
+from vo_lib.stereo_vo.ransac import GATE_SIGMAS, one_point_ransac
+from vo_lib.stereo_vo.six_dof import (
+    PREDICTED_RATIO,
+    WINDOW_PIXELS,
+    turning_axis_transform,
+    turning_axis_view,
+    vehicle_increment,
+    windows,
+)
+from vo_lib.stereo_vo.synthetic import matches_under_transform
+from vo_lib.stereo_vo.temporal import match_features, predict_features
+from vo_lib.stereo_vo.vehicle import KITTI_CAMERA_IN_IMU, vehicle_of
+from vo_lib.viz.plotting import new_axes, plot_paths
 from vo_lib.viz.prose import Markdown
 
 SEED = 0
@@ -310,14 +342,817 @@ if REAL:
     assert np.median(counts["pyramid"]) > 2 * np.median(counts["single scale"])
 
 # %% [markdown]
+# ## 3 · Build, then use: one pair of frames and the 6-DoF Gauss–Newton step
+#
+# One pair of frames, matched without any prediction (every pair of descriptors), then 1-point
+# RANSAC with the circular-motion model: its motion is the starting guess of the refinement we
+# write next.
+
+# %%
+def as_4x4(R, t):
+    T = np.eye(4)
+    T[:3, :3], T[:3, 3] = R, t
+    return T
+
+
+k0, k1 = (40, 41) if REAL else (0, 30)  # the crawler moves a centimetre per frame
+feat0, feat1 = pyramid_fe.process(*seq.pair(k0)), pyramid_fe.process(*seq.pair(k1))
+one = match_features(feat0, feat1, ratio=PREDICTED_RATIO)
+est = one_point_ransac(one.w_prev, one.w_curr, seq.camera, rng=rng, pixel_sigma=1.0)
+guess = as_4x4(*motion_matrices(est.theta, est.rho))
+
+# %% [markdown]
+# ### The Gauss–Newton step
+#
+# A motion `(R, t)` maps a point of the previous camera frame into the current one, `Q = R P + t`
+# (the convention of `vo_lib.stereo_vo.rigid_motion`). `P` is back-projected from the previous
+# match `w = (u, v, d)`; the residual compares the projection of `Q` with the current match `w'`
+# in disparity space, which is the error in the left image and, through `d`, in the right one:
+#
+# $$ r = \pi(RP + t) - w', \qquad
+#    \pi(X, Y, Z) = \Big(\tfrac{f_x X}{Z} + c_x,\; \tfrac{f_y Y}{Z} + c_y,\; \tfrac{f_x b}{Z}\Big). $$
+#
+# The update is applied on the left, `R ← exp([δω]×) R`, `t ← exp([δω]×) t + δt`, so that
+# `Q ← Q + δω × Q + δt` to first order, and the Jacobian of one residual is
+#
+# $$ \frac{\partial r}{\partial(\delta\omega, \delta t)}
+#    = \frac{\partial \pi}{\partial Q}\,\big[\,-[Q]_\times \;\big|\; I\,\big], \qquad
+#    \frac{\partial \pi}{\partial Q} = \begin{pmatrix} f_x/Z & 0 & -f_x X/Z^2 \\
+#    0 & f_y/Z & -f_y Y/Z^2 \\ 0 & 0 & -f_x b/Z^2 \end{pmatrix}. $$
+#
+# Gauss–Newton solves $(J^\top J)\,\delta = -J^\top r$ and repeats.
+
+# %%
+cam = seq.camera
+
+
+def project_uvd(Q):
+    """pi(Q) = (u, v, d) of camera-frame points."""
+    X, Y, Z = Q.T
+    return np.column_stack([cam.fx * X / Z + cam.cx, cam.fy * Y / Z + cam.cy, cam.fx * cam.baseline / Z])
+
+
+def skew(q):
+    """[q]x for each row of q: (N, 3, 3)."""
+    S = np.zeros((len(q), 3, 3))
+    S[:, 0, 1], S[:, 0, 2], S[:, 1, 2] = -q[:, 2], q[:, 1], -q[:, 0]
+    return S - S.transpose(0, 2, 1)
+
+
+def jacobian(Q):
+    """d r / d(dw, dt) of every residual: (N, 3, 6)."""
+    X, Y, Z = Q.T
+    dpi = np.zeros((len(Q), 3, 3))
+    dpi[:, 0, 0], dpi[:, 0, 2] = cam.fx / Z, -cam.fx * X / Z**2
+    dpi[:, 1, 1], dpi[:, 1, 2] = cam.fy / Z, -cam.fy * Y / Z**2
+    dpi[:, 2, 2] = -cam.fx * cam.baseline / Z**2
+    return dpi @ np.concatenate([-skew(Q), np.broadcast_to(np.eye(3), (len(Q), 3, 3))], axis=2)
+
+
+def exp_rotation(w):
+    """exp([w]x) by Rodrigues' formula."""
+    angle = np.linalg.norm(w)
+    if angle < 1e-15:
+        return np.eye(3)
+    K = skew((w / angle)[None])[0]
+    return np.eye(3) + math.sin(angle) * K + (1 - math.cos(angle)) * K @ K
+
+
+def gauss_newton(P, w_curr, R, t, iterations=rigid_motion.ITERATIONS, tol=rigid_motion.CONVERGED):
+    """Least-squares (R, t) of Q = R P + t on disparity-space residuals; returns R, t, steps."""
+    steps = 0
+    while steps < iterations:
+        Q = P @ R.T + t
+        r = (project_uvd(Q) - w_curr).reshape(-1)
+        J = jacobian(Q).reshape(-1, 6)
+        delta = -np.linalg.solve(J.T @ J, J.T @ r)
+        dR = exp_rotation(delta[:3])
+        R, t, steps = dR @ R, dR @ t + delta[3:], steps + 1
+        if np.abs(delta).max() < tol:
+            break
+    return R, t, steps
+
+
+# the analytic Jacobian against central differences of the residual, at RANSAC's guess
+P_in = cam.backproject(one.w_prev[est.inliers])
+w_in = one.w_curr[est.inliers]
+R0, t0 = guess[:3, :3], guess[:3, 3]
+numeric = np.zeros((len(P_in), 3, 6))
+for j in range(6):
+    d = np.zeros(6)
+    d[j] = 1e-6
+    plus = project_uvd(P_in @ (exp_rotation(d[:3]) @ R0).T + exp_rotation(d[:3]) @ t0 + d[3:])
+    minus = project_uvd(P_in @ (exp_rotation(-d[:3]) @ R0).T + exp_rotation(-d[:3]) @ t0 - d[3:])
+    numeric[:, :, j] = (plus - minus) / 2e-6
+analytic = jacobian(P_in @ R0.T + t0)
+jac_err = np.abs(analytic - numeric).max() / np.abs(analytic).max()
+print(f"Jacobian: largest difference from central differences {jac_err:.1e} (relative)")
+assert jac_err < 1e-6
+
+R_ours, t_ours, steps = gauss_newton(P_in, w_in, R0, t0)
+ref = rigid_motion.refine_rigid_motion(
+    one.w_prev, one.w_curr, cam, guess, est.inliers, huber=np.inf, rounds=1
+)
+dR_max, dt_max = np.abs(R_ours - ref.R).max(), np.abs(t_ours - ref.t).max()
+print(
+    f"ours: {steps} Gauss-Newton steps from RANSAC's guess; against refine_rigid_motion (no Huber, one "
+    f"round): largest difference {dR_max:.1e} in R, {dt_max:.1e} m in t"
+)
+print(f"t = {t_ours} m, rotation {np.degrees(Rotation.from_matrix(R_ours).as_rotvec())} deg")
+assert dR_max < 1e-9 and dt_max < 1e-9
+
+# %% [markdown]
+# The library's version adds two things to this step: Huber weights (a residual above 1 px counts
+# linearly, not quadratically) and rounds of re-selection (refine, choose the inliers again with
+# the refined motion, refine again). Its default result is what the pipeline uses.
+#
+# **Which of RANSAC's inliers go?** The reprojection errors of RANSAC's inliers under the
+# circular motion and under the library's refined motion:
+
+# %%
+lib = rigid_motion.refine_rigid_motion(one.w_prev, one.w_curr, seq.camera, guess, est.inliers)
+err_planar = rigid_motion.reprojection_errors(
+    seq.camera.backproject(one.w_prev), one.w_curr, guess[:3, :3], guess[:3, 3], seq.camera
+)
+err_refined = rigid_motion.reprojection_errors(
+    seq.camera.backproject(one.w_prev), one.w_curr, lib.R, lib.t, seq.camera
+)
+within = {
+    name: float(np.mean(e[est.inliers] < rigid_motion.INLIER_PIXELS))
+    for name, e in (("circular", err_planar), ("refined", err_refined))
+}
+print(
+    f"frames {k0}->{k1}: {len(one)} matches, {est.inliers.sum()} RANSAC inliers, {lib.inliers.sum()} after "
+    f"the refinement; RANSAC inliers within {rigid_motion.INLIER_PIXELS} px: {within['circular']:.0%} under "
+    f"the circular motion, {within['refined']:.0%} under the refined one (medians "
+    f"{np.median(err_planar[est.inliers]):.2f} and {np.median(err_refined[est.inliers]):.2f} px)"
+)
+if REAL:
+    assert within["refined"] > within["circular"]
+else:  # the circular model is exact for the rendered crawler: nothing for the refinement to add
+    assert abs(within["refined"] - within["circular"]) < 0.05
+
+fig, ax = new_axes(width=7, height=3.4)
+bins = np.linspace(0, 4, 41)
+ax.hist(np.minimum(err_planar[est.inliers], 4), bins, alpha=0.6, label="under RANSAC's circular motion")
+ax.hist(np.minimum(err_refined[est.inliers], 4), bins, alpha=0.6, label="under the refined 6-DoF motion")
+ax.axvline(rigid_motion.INLIER_PIXELS, color="k", ls="--", label="inlier threshold")
+ax.set_xlabel("reprojection error in (u, v, d) [px] (clipped at 4)")
+ax.set_ylabel("RANSAC inliers")
+ax.set_title(f"Frames {k0}->{k1}: RANSAC's inliers judged by each model")
+ax.legend(fontsize="small")
+plt.show()
+
+# %% [markdown]
+# The refined motion brings more of RANSAC's inliers within a pixel than the circular one does
+# (the part the model could not explain), but even under the best motion a share stays above:
+# corners of an upper pyramid level sit on a coarser grid, some points are on moving objects, some
+# matches are slightly wrong. RANSAC's gates must be wide enough for the circular model's own error,
+# so they let these through; the 6-DoF fit, with no model error left to allow for, keeps only the
+# matches that agree to a pixel. RANSAC removes the gross outliers cheaply; the refinement, the
+# fine ones.
+
+# %% [markdown]
+# **Cross-check with OpenCV.** `cv2.solvePnPRefineLM` refines the same motion by
+# Levenberg–Marquardt on the *left* image only, `(u, v)`, with the 3-D points fixed. On the
+# refined inliers it should land close to ours, but not on it: the disparity row is missing.
+
+# %%
+sel = lib.inliers
+rvec, tvec = cv2.solvePnPRefineLM(
+    cam.backproject(one.w_prev[sel]),
+    one.w_curr[sel, :2].copy(),
+    cam.K,
+    None,
+    cv2.Rodrigues(R0)[0],
+    t0.reshape(3, 1).copy(),
+)
+R_cv = cv2.Rodrigues(rvec)[0]
+angle_cv = np.degrees(np.linalg.norm(Rotation.from_matrix(R_cv @ lib.R.T).as_rotvec()))
+shift_cv = float(np.linalg.norm(tvec.ravel() - lib.t))
+print(
+    f"solvePnPRefineLM against refine_rigid_motion on {sel.sum()} inliers: {angle_cv:.4f} deg apart, "
+    f"{1000 * shift_cv:.2f} mm apart (motion {np.linalg.norm(lib.t):.3f} m)"
+)
+assert angle_cv < 0.05 and shift_cv < 0.005
+
+# %% [markdown]
+# ## 4 · The pipeline on the drive, with two front ends
+#
+# Both front ends of section 2 inside the same 6-DoF pipeline, no odometry: what the
+# single-scale corners do to the heading. A corner found at one scale only drifts with the growth
+# of the texture around it as the car approaches, and that drift has a sign.
+
+# %%
+vo_full = run_sequence(seq, use_odometry=False, motion="full", seed=SEED)  # the pyramid front end
+single_odometer = StereoOdometry(
+    seq.camera, CAR, mount=vehicle.mount, seed=SEED, front_end=StereoFrontEnd(seq.camera)
+)
+vo_single = run_frames(((left, right, None) for left, right in seq), seq.camera, odometer=single_odometer)
+heading_error = {
+    name: np.degrees(wrap_angle(res.poses[:, 2] - truth[:, 2]))
+    for name, res in (("pyramid", vo_full), ("single scale", vo_single))
+}
+for name, res in (("pyramid", vo_full), ("single scale", vo_single)):
+    m, pct, hd = final_errors(res.poses)
+    print(f"6-DoF pipeline, {name:12s} front end: final error {m:.3f} m ({pct:.2f} %), heading {hd:+.3f} deg")
+if REAL:
+    # the single-scale heading drifts: an order of magnitude beyond the pyramid's
+    assert abs(heading_error["single scale"][-1]) > 10 * abs(heading_error["pyramid"][-1])
+
+fig, ax = new_axes(width=7, height=3.4)
+for name, err in heading_error.items():
+    ax.plot(err, label=f"{name} front end")
+ax.set_xlabel("frame")
+ax.set_ylabel("heading error [deg]")
+ax.set_title("The same 6-DoF pipeline, two front ends, no odometry")
+ax.legend(fontsize="small")
+plt.show()
+
+# %% [markdown]
+# ## 5 · How many of 1-point RANSAC's inliers survive the 6-DoF refinement
+#
+# The pipeline runs 1-point RANSAC with gates of `GATE_SIGMAS` standard deviations of 1 px noise,
+# wide enough for the circular model's own error, then chooses the inliers again with the refined
+# motion, at 1 px of reprojection error in (u, v, d). `FrameDiagnostics` keeps both counts.
+
+# %%
+diag = [d for d in vo_full.diagnostics if d.ransac_inliers > 0]
+frames = np.array([d.frame for d in diag])
+ransac_in = np.array([d.ransac_inliers for d in diag])
+refined_in = np.array([d.inliers for d in diag])
+share = refined_in / ransac_in
+print(
+    f"gates of {GATE_SIGMAS:.0f} sigma; {len(diag)} frames estimated: RANSAC keeps a median of "
+    f"{np.median(ransac_in):.0f} matches, the refinement {np.median(refined_in):.0f}; median share "
+    f"kept {np.median(share):.0%} (range {share.min():.0%}..{share.max():.0%})"
+)
+assert np.median(share) < 1.0  # the general model is stricter than the gates
+assert np.all(refined_in[[not d.fallback for d in diag]] >= CAR.min_inliers)
+
+fig, axes = new_axes(2, width=5.5, height=3.4)
+axes[0].plot(frames, ransac_in, label="1-point RANSAC inliers")
+axes[0].plot(frames, refined_in, label="after the 6-DoF refinement")
+axes[0].set_xlabel("frame")
+axes[0].set_ylabel("matches")
+axes[0].set_title("Inliers per frame")
+axes[0].legend(fontsize="small")
+axes[1].plot(frames, share, ".-")
+axes[1].set_ylim(0, 1.05)
+axes[1].set_xlabel("frame")
+axes[1].set_ylabel("refined / RANSAC inliers")
+axes[1].set_title("Share of RANSAC's inliers the refinement keeps")
+plt.show()
+
+# %% [markdown]
+# ## 6 · What the circular-motion model gets wrong on a car
+#
+# [Zhao]'s model (eq. 12–17) describes a camera that turns about its own vertical axis on a
+# flat floor: one angle θ, one chord ρ. A car breaks it three ways:
+#
+# - **offset**: the camera sits ahead of (and above) the axis the car turns about, so a turn also
+#   moves the camera sideways (notebook 03 measured the bias this causes);
+# - **slope and bank**: the road climbs and tilts, so the camera also moves up and rolls;
+# - **pitch**: the body dips as the car brakes, which moves every image row.
+#
+# The ground truth gives the vehicle's pose in 6 DoF: `mount @ T_k @ inv(mount)` for the camera
+# poses `T_k` and the camera's mount `T_vehicle_camera` (vehicle frame: x forward, y left, z up,
+# origin at the IMU). Angles are `R = Rz(yaw) Ry(pitch) Rx(roll)`; positive pitch is nose down.
+
+# %%
+print("camera in the vehicle frame (forward, left, up) [m]:", vehicle.mount[:3, 3])
+T_cam = seq.poses_4x4()
+V = vehicle.mount @ T_cam @ np.linalg.inv(vehicle.mount)
+yaw_pitch_roll = np.degrees(Rotation.from_matrix(V[:, :3, :3]).as_euler("ZYX"))
+step = np.linalg.inv(V[:-1]) @ V[1:]  # vehicle motion per frame, in its previous frame
+step_ypr = np.degrees(Rotation.from_matrix(step[:, :3, :3]).as_euler("ZYX"))
+row_shift = seq.camera.fy * np.tan(np.radians(np.abs(step_ypr[:, 1])))
+print(
+    f"per frame: |d pitch| median {np.median(np.abs(step_ypr[:, 1])):.3f} deg (max "
+    f"{np.abs(step_ypr[:, 1]).max():.3f}), |d roll| median {np.median(np.abs(step_ypr[:, 2])):.3f} deg "
+    f"(max {np.abs(step_ypr[:, 2]).max():.3f}), |d height| median "
+    f"{100 * np.median(np.abs(step[:, 2, 3])):.2f} cm (max {100 * np.abs(step[:, 2, 3]).max():.2f})"
+)
+print(
+    f"a pitch change moves every image row by fy tan(d pitch): median {np.median(row_shift):.2f} px, "
+    f"max {row_shift.max():.2f} px; the refinement's inlier threshold is {rigid_motion.INLIER_PIXELS} px"
+)
+print(
+    f"over the drive: climbed {V[-1, 2, 3]:.2f} m; pitch {yaw_pitch_roll[:, 1].min():.2f}..."
+    f"{yaw_pitch_roll[:, 1].max():.2f} deg, roll {yaw_pitch_roll[:, 2].min():.2f}..."
+    f"{yaw_pitch_roll[:, 2].max():.2f} deg"
+)
+if REAL:
+    assert vehicle.mount[0, 3] > 0.5  # the camera is well ahead of the axis
+    assert np.abs(step_ypr[:, 1]).max() > 0.1 and V[-1, 2, 3] > 0.5  # the body pitches, the road climbs
+else:
+    assert np.abs(step_ypr[:, 1:]).max() < 1e-6  # the rendered floor is flat
+
+# %% [markdown]
+# The OXTS unit also gives the forward acceleration. The body's pitch *relative to the road*
+# (pitch minus the road's slope, taken from the heights over ±5 frames) follows the braking:
+
+# %%
+if REAL:
+    oxts = read_oxts(REAL_DIR / "oxts.txt")
+    forward_accel, speed = oxts[:, 14], oxts[:, 8]  # OXTS fields af and vf
+    s = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(V[:, :2, 3], axis=0), axis=1))])
+    k = np.arange(len(V))
+    lo, hi = np.clip(k - 5, 0, len(V) - 1), np.clip(k + 5, 0, len(V) - 1)
+    slope = np.degrees(np.arctan((V[hi, 2, 3] - V[lo, 2, 3]) / (s[hi] - s[lo])))
+    body_nose_up = -yaw_pitch_roll[:, 1] - slope  # relative to frame 0's attitude on its road
+    gain, offset = np.polyfit(forward_accel, body_nose_up, 1)
+    corr = np.corrcoef(forward_accel, body_nose_up)[0, 1]
+    print(
+        f"speed {speed[0]:.1f} -> {speed[-1]:.1f} m/s, acceleration {forward_accel.min():.2f}..."
+        f"{forward_accel.max():.2f} m/s^2; the nose dips {gain:.2f} deg per m/s^2 of braking "
+        f"(correlation {corr:.2f}), i.e. {seq.camera.fy * math.tan(math.radians(gain)):.1f} px of rows"
+    )
+    assert gain > 0 and corr > 0.3
+else:
+    print("skipped: the rendered crawler has no suspension (no real data)")
+
+fig, axes = new_axes(3 if REAL else 2, width=4.6, height=3.4)
+axes[0].plot(yaw_pitch_roll[:, 1], label="pitch (nose down +)")
+axes[0].plot(yaw_pitch_roll[:, 2], label="roll")
+axes[0].set_xlabel("frame")
+axes[0].set_ylabel("angle from frame 0 [deg]")
+axes[0].set_title("Vehicle attitude (ground truth)")
+axes[0].legend(fontsize="small")
+axes[1].plot(V[:, 2, 3])
+axes[1].set_xlabel("frame")
+axes[1].set_ylabel("height above frame 0 [m]")
+axes[1].set_title("The road climbs")
+if REAL:
+    axes[2].plot(forward_accel, body_nose_up, ".", label="frames")
+    aa = np.linspace(forward_accel.min(), forward_accel.max(), 2)
+    axes[2].plot(aa, offset + gain * aa, label=f"fit: {gain:.2f} deg per m/s^2")
+    axes[2].set_xlabel("forward acceleration [m/s^2]")
+    axes[2].set_ylabel("nose up minus road slope [deg]")
+    axes[2].set_title("The body dips as the car brakes")
+    axes[2].legend(fontsize="small")
+plt.show()
+
+# %% [markdown]
+# **The model error in pixels.** For each pair of frames we take the true camera motion, its
+# planar part (the vehicle's yaw and ground-plane step seen through the mount, with no pitch,
+# roll or climb), and the circular motion a camera *on* the turning axis would make with the same
+# yaw and chord. Moving the points of one real frame by each and projecting, the differences are
+# what the circular-motion model cannot explain: first the slope, bank and pitch, then the offset.
+
+# %%
+scene = pyramid_fe.process(*seq.pair(0)).w
+scene_points = seq.camera.backproject(scene)
+scene_points = scene_points[scene_points[:, 2] < 60]
+
+
+def pixel_gap(Ta, Tb):
+    """Median distance in (u, v, d) between the points moved by two camera motions."""
+    a, b = (seq.camera.project(scene_points @ T[:3, :3].T + T[:3, 3]) for T in (Ta, Tb))
+    return float(np.median(np.linalg.norm(a - b, axis=1)))
+
+
+gaps = []
+for k in range(1, len(seq)):
+    true_motion = np.linalg.inv(T_cam[k]) @ T_cam[k - 1]  # T_curr_from_prev of the camera
+    inc = vehicle_increment(true_motion, vehicle.mount)
+    planar = camera_motion(np.zeros(3), inc, vehicle.mount)
+    circular = as_4x4(*motion_matrices(*circular_motion_from_increment(inc)))
+    gaps.append((pixel_gap(true_motion, planar), pixel_gap(planar, circular)))
+gaps = np.array(gaps)
+for j, what in enumerate(("slope, bank and pitch (6-DoF vs planar)", "offset (planar vs on-axis circular)")):
+    g = gaps[:, j]
+    print(f"{what:42s}: median {np.median(g):.2f} px, 90th percentile {np.percentile(g, 90):.2f} px")
+if REAL:
+    assert np.percentile(gaps[:, 0], 90) > rigid_motion.INLIER_PIXELS
+
+# %% [markdown]
+# On the real drive the first term exceeds the refinement's 1-px inlier threshold on a tenth of
+# the frames or more (asserted); it is not noise but a bias shared by all points of a frame, so
+# averaging over matches does not remove it.
+#
+# Now the pipelines. `motion="planar"` is [Zhao]'s pipeline as notebook 08 ran it (single-scale
+# front end, matching windows sized for a crawler, circular motion, camera assumed on the axis);
+# `motion="full"` keeps 1-point RANSAC as the outlier filter and refines the
+# inliers in 6 DoF, with the pyramid front end and windows for a car.
+
+# %%
+start = time.perf_counter()
+runs = {"planar": run_sequence(seq, use_odometry=False, motion="planar", seed=SEED), "full": vo_full}
+print(f"motion=planar ran in {time.perf_counter() - start:.1f} s; motion=full is section 4's run")
+for model, res in runs.items():
+    m, pct, hd = final_errors(res.poses)
+    reasons = sorted({d.reason for d in res.diagnostics if d.fallback})
+    print(
+        f"motion={model:6s}: final error {m:6.2f} m ({pct:5.2f} % of {travelled:.1f} m), "
+        f"heading {hd:+.2f} deg, "
+        f"{len(res.flagged)} of {len(res.poses)} frames flagged {reasons or ''}"
+    )
+if REAL:
+    # two orders of magnitude apart: the planar pipeline coasts through most frames
+    assert final_errors(runs["full"].poses)[0] < 0.01 * final_errors(runs["planar"].poses)[0]
+else:
+    assert final_errors(runs["planar"].poses)[1] <= 1.0  # where its assumptions hold, the paper's model works
+
+# %% [markdown]
+# On the car the planar pipeline flags most frames and coasts, but that is the crawler's matching
+# failing at a car's speed as much as the model. To judge the *model* alone, we give all three
+# readings the same matches: every pair of consecutive frames, matched in windows around the
+# motion the full pipeline measured, then 1-point RANSAC. We chain the frame-to-frame vehicle
+# motions that (a) the circular model gives for a camera on the axis, as `motion="planar"`
+# assumes, (b) the same circular camera motion carried through the real mount, and (c) the 6-DoF
+# refinement of RANSAC's inliers carried through the mount.
+
+
+# %%
+def chain_models(camera_path, ransac_rng, frame_features):
+    """Planar vehicle poses from frame-to-frame motions read three ways (section 6's list), with
+    1-point RANSAC drawing from ``ransac_rng`` on the frames' features ``frame_features``."""
+    names = ("circular, camera on the axis", "circular, through the mount", "6-DoF, through the mount")
+    chains = {name: [np.zeros(3)] for name in names}
+    prev = frame_features[0]
+    for k in range(1, len(seq)):
+        curr = frame_features[k]
+        T_pred = np.linalg.inv(camera_path[k]) @ camera_path[k - 1]
+        predicted, _ = predict_features(prev.w, seq.camera, T_pred)
+        mt = match_features(prev, curr, predicted, windows(predicted, WINDOW_PIXELS), PREDICTED_RATIO)
+        est = one_point_ransac(mt.w_prev, mt.w_curr, seq.camera, rng=ransac_rng, pixel_sigma=1.0)
+        guess = as_4x4(*motion_matrices(est.theta, est.rho))
+        refined = rigid_motion.refine_rigid_motion(mt.w_prev, mt.w_curr, seq.camera, guess, est.inliers)
+        increments = (
+            robot_increment(est.theta, est.rho),
+            vehicle_increment(guess, vehicle.mount),
+            vehicle_increment(refined.matrix, vehicle.mount),
+        )
+        for name, inc in zip(names, increments, strict=True):
+            chains[name].append(compose_planar(chains[name][-1], inc))
+        prev = curr
+    return {name: np.array(poses) for name, poses in chains.items()}
+
+
+if REAL:
+    # one real drive: the randomness is 1-point RANSAC's, so the readings are compared over its seeds
+    RANSAC_SEEDS = range(SEED, SEED + 10)
+    start = time.perf_counter()
+    features_per_frame = [pyramid_fe.process(*seq.pair(k)) for k in range(len(seq))]  # no draw: once
+    chained_by_seed = {
+        s_: chain_models(vo_full.camera_poses, np.random.default_rng(s_), features_per_frame)
+        for s_ in RANSAC_SEEDS
+    }
+    chained = chained_by_seed[SEED]  # the figures show the first seed
+    print(
+        f"{len(seq) - 1} frame pairs matched and estimated {len(RANSAC_SEEDS)} times (RANSAC seeds "
+        f"{RANSAC_SEEDS.start}-{RANSAC_SEEDS.stop - 1}) in {time.perf_counter() - start:.1f} s; seed {SEED}:"
+    )
+    for name, poses in chained.items():
+        m, pct, hd = final_errors(poses)
+        print(f"{name:30s}: final error {m:.3f} m ({pct:.2f} %), heading {hd:+.3f} deg")
+    circular, mounted, full6 = (final_errors(p) for p in chained.values())
+
+    def _readings(seed_):
+        c, mo, f6 = (final_errors(p) for p in chained_by_seed[seed_].values())
+        return {"circular on the axis": c[0], "circular through the mount": mo[0], "6-DoF": f6[0],
+                "6-DoF heading": abs(f6[2]), "circular heading": abs(mo[2])}
+
+    readings = over_seeds(_readings, RANSAC_SEEDS)
+    offset_verdict = readings.verdict("circular through the mount", "circular on the axis")
+    heading_verdict = readings.verdict("6-DoF heading", "circular heading")
+    assert offset_verdict is Verdict.BETTER  # the offset costs position
+    assert heading_verdict is Verdict.BETTER  # pitch, slope and bank cost heading
+    display(
+        Markdown(
+            f"Over {len(RANSAC_SEEDS)} RANSAC seeds on this one drive, in final position error, "
+            f"{readings.sentence('circular through the mount', 'circular on the axis', unit='m', digits=3)}; "
+            "in final |heading error|, "
+            f"{readings.sentence('6-DoF heading', 'circular heading', unit='°', digits=3)}. "
+            f"In position, {readings.sentence('circular through the mount', '6-DoF', unit='m', digits=3)}. "
+            "The planar model cannot move the camera sideways or vertically, and over "
+            f"{travelled:.0f} m of gently curving road that constraint steadies the position while "
+            "its heading error grows; on a longer drive the heading error turns into position "
+            "error. "
+            + (
+                "The figures are the same in every seed: on this drive RANSAC's draws do not move "
+                "these readings, so the ranking rests on the one drive, not on a lucky draw; "
+                "another drive may order them otherwise."
+                if all(np.ptp(v) < 1e-9 for v in readings.figures.values())
+                else "These are RANSAC's draws on one drive: another drive may order them otherwise."
+            )
+        )
+    )
+
+    fig, axes = new_axes(2, width=5.5, height=3.4)
+    for name, poses in chained.items():
+        axes[0].plot(np.linalg.norm(poses[:, :2] - truth[:, :2], axis=1), label=name)
+        axes[1].plot(np.degrees(wrap_angle(poses[:, 2] - truth[:, 2])), label=name)
+    axes[0].set_xlabel("frame")
+    axes[0].set_ylabel("position error [m]")
+    axes[0].set_title("Frame-to-frame motions chained: position")
+    axes[1].set_xlabel("frame")
+    axes[1].set_ylabel("heading error [deg]")
+    axes[1].set_title("... and heading")
+    axes[0].legend(fontsize="small")
+    plt.show()
+else:
+    print(
+        "skipped: the rendered crawler moves a centimetre per frame, below what frame-to-frame matches "
+        "resolve (notebook 08 measures against keyframes), and its camera is on the axis of a flat floor"
+    )
+
+# %% [markdown]
+# Fed good matches, the circular model is not lost on this gently curving road, but it is biased
+# two ways (both asserted on the real drive, over RANSAC's seeds): reading a camera ahead of the
+# axis as if it were on it costs position, and ignoring pitch, slope and bank costs heading, frame
+# after frame; the 6-DoF refinement reduces the heading drift. A sharper turn makes the offset
+# term grow with the yaw rate, and a hillier road the pitch term.
+
+# %% [markdown]
+# ### 6b · Sharp turns and bumps: what the outlier filter must survive
+#
+# This drive turns by a few degrees in all; a city drive turns 90° at a crossing in two or three
+# seconds, 3–5° between frames at 10 Hz. Camera and mount are this drive's (KITTI's nominal rig
+# when the real data is absent); the matches are
+# drawn (`matches_under_transform`, 0.5 px noise, 20 % outliers) for a vehicle that moves 1 m along
+# its chord per frame and turns by an increasing angle. Seen from the camera itself, the gates of
+# eq. 20–21 lose a growing share of the *true* matches: the camera slides sideways by its offset
+# times the turned angle. The pipeline therefore runs 1-point RANSAC on the same matches as a
+# virtual camera *on the turning axis* sees them (`turning_axis_view`: triangulate, move through
+# the mount, project again). There the circular model is exact.
+#
+# A bump or the start of a slope pitches the body instead: no planar model describes that, so
+# when 1-point RANSAC keeps fewer than `CAR.min_inlier_ratio` of the matches the pipeline draws
+# general 3-point hypotheses (OpenCV's P3P in `solvePnPRansac`, seeded) and keeps the better.
+
+# %%
+if REAL:
+    turn_camera, turn_mount = seq.camera, vehicle.mount
+else:  # the section needs a car's rig, not the crawler's: KITTI's, as vo_lib assumes without raw_calib
+    turn_camera = StereoCamera(fx=721.5, fy=721.5, cx=609.6, cy=172.9, baseline=0.537, width=1242, height=375)
+    forward, left, up = KITTI_CAMERA_IN_IMU
+    turn_mount = camera_mount(forward=forward, height=up, left=left)
+to_axis = turning_axis_transform(turn_mount)
+turn_rng = np.random.default_rng(SEED)
+recall_rows = []
+for yaw_deg, pitch_deg in ((0, 0), (2, 0), (4, 0), (6, 0), (9, 0), (3, 1)):
+    th = math.radians(yaw_deg)
+    T_turn = camera_motion(np.zeros(3), [math.cos(th / 2), math.sin(th / 2), th], turn_mount)
+    bump = np.eye(4)
+    bump[:3, :3] = Rotation.from_euler("y", pitch_deg, degrees=True).as_matrix()
+    T_turn = np.linalg.inv(turn_mount) @ bump @ turn_mount @ T_turn
+    m_turn = matches_under_transform(turn_camera, 300, T_turn, turn_rng, (4.0, 60.0), 0.5, 0.2)
+    seen_by_camera = one_point_ransac(
+        m_turn.w_prev, m_turn.w_curr, turn_camera, rng=turn_rng, pixel_sigma=1.0
+    )
+    seen_on_axis = one_point_ransac(
+        turning_axis_view(m_turn.w_prev, turn_camera, to_axis),
+        turning_axis_view(m_turn.w_curr, turn_camera, to_axis),
+        turn_camera,
+        rng=turn_rng,
+        pixel_sigma=1.0,
+    )
+    odometer = StereoOdometry(turn_camera, CAR, mount=turn_mount, seed=SEED)
+    guess, start, ratio = odometer.motion.hypothesis(m_turn.w_prev, m_turn.w_curr, None, odometer.rng)
+    refined = rigid_motion.refine_rigid_motion(m_turn.w_prev, m_turn.w_curr, turn_camera, guess, start)
+    recall_rows.append(
+        (
+            yaw_deg,
+            pitch_deg,
+            np.mean(seen_by_camera.inliers[m_turn.inliers]),
+            np.mean(seen_on_axis.inliers[m_turn.inliers]),
+            np.linalg.norm(refined.t - T_turn[:3, 3]),
+        )
+    )
+print(" yaw/frame  pitch  true matches kept: camera view  axis view   pipeline's motion error")
+for yaw_deg, pitch_deg, cam_kept, axis_kept, t_err in recall_rows:
+    print(f"  {yaw_deg:5.0f}°  {pitch_deg:5.0f}°  {cam_kept:26.0%} {axis_kept:10.0%} {1000 * t_err:14.1f} mm")
+recall_table = np.array(recall_rows)
+planar_rows = recall_table[:, 1] == 0
+assert np.all(recall_table[planar_rows, 3] >= 0.98)  # on the axis every turn keeps its matches
+if np.hypot(*turn_mount[:2, 3]) > 0.5:  # a camera well off the axis (a car's)
+    assert recall_table[planar_rows][-1, 2] < 0.5  # seen from the camera, a 9° frame loses most
+assert recall_table[~planar_rows][0, 3] < 0.1  # a 1° pitch: no planar hypothesis fits...
+assert np.all(recall_table[:, 4] < 0.01)  # ...yet every motion is found to 1 cm
+
+# %% [markdown]
+# ## 7 · Odometry, vision, and both, on real data
+#
+# The OXTS packets' forward speed and yaw rate, integrated between frames, stand in for wheel
+# odometry: two wheels a gauge apart (`vo_lib.stereo_vo.vehicle`) travel `s ∓ gauge·Δψ/2`, and the
+# crawler's odometry model of [Zhao] (eq. 2–11) turns them back into a path. The pipeline fuses
+# them in its Kalman filter exactly as it fuses a crawler's tracks.
+#
+# Two caveats before the figures. This "wheel odometry" is not from wheels: the speed and yaw rate
+# come from the same GPS/IMU unit (OXTS) whose poses are the ground truth, so its errors are not
+# those of encoders on a real car. And its noise, `CAR_DISTANCE_SIGMA` in
+# `vo_lib.stereo_vo.vehicle`, was chosen on this very drive, against the VO: the fused figures
+# below are not an independent test of the fusion.
+
+# %%
+odometry_only = vehicle.odometry_model.integrate(vehicle.odometry[1:])
+vision_only = runs[vehicle.motion]  # run_sequence(seq, use_odometry=False) chooses this model
+fused = run_sequence(seq, use_odometry=True, seed=SEED)
+paths = {"odometry only": odometry_only, "VO only": vision_only.poses, "fused": fused.poses}
+final, along = {}, {}
+for name, poses in paths.items():
+    final[name] = final_errors(poses)
+    m, pct, hd = final[name]
+    # the final error in the true final vehicle frame: along the track (distance) and across it
+    along[name], across, _ = relative_planar(truth[-1], poses[-1])
+    length = np.sum(np.linalg.norm(np.diff(poses[:, :2], axis=0), axis=1))
+    print(
+        f"{name:13s}: final position error {m:6.3f} m ({pct:5.2f} %): {along[name]:+.3f} m along the track, "
+        f"{across:+.3f} m across; heading {hd:+.3f} deg; path {length:.2f} m (truth {travelled:.2f} m)"
+    )
+# "vision beats the odometry alone": on the real drive, with vision the drive ends within a fifth
+# of the odometry's error; on the rendered crawler sample (a short, slow run) within half of it
+share = 0.2 if REAL else 0.5
+assert final["fused"][0] < share * final["odometry only"][0]
+assert final["VO only"][0] < share * final["odometry only"][0]
+if REAL:  # the fused distance leans towards the odometry's
+    assert np.sign(along["fused"]) == np.sign(along["odometry only"])
+    assert abs(along["fused"]) > abs(along["VO only"])
+
+model = vehicle.odometry_model
+u = vehicle.odometry[1:]
+yaw_sigma = np.degrees(np.sqrt(np.trace(model.control_covariance(u), axis1=-2, axis2=-1)) / model.gauge)
+true_step = np.diff(truth[:, 2])
+odo_step_error = np.degrees(wrap_angle(np.diff(odometry_only[:, 2]) - true_step))
+print(
+    f"odometry's yaw per frame: sigma {np.median(yaw_sigma):.4f} deg in the filter's model, actual error "
+    f"{odo_step_error.mean():+.4f} deg mean, {odo_step_error.std():.4f} deg sd"
+)
+
+# Where the odometry's across-track error comes from: its own heading drift, integrated along the
+# path, and the truth's direction of travel differing from its heading (slip angle or mounting).
+step_length = np.linalg.norm(np.diff(truth[:, :2], axis=0), axis=1)
+heading_gap = wrap_angle(odometry_only[:-1, 2] - truth[:-1, 2])  # odometry's heading error per step
+final_heading = truth[-1, 2]
+across_dir = np.array([-math.sin(final_heading), math.cos(final_heading)])
+drift_across = float(
+    np.sum(
+        step_length[:, None]
+        * (
+            np.column_stack([np.cos(truth[:-1, 2] + heading_gap), np.sin(truth[:-1, 2] + heading_gap)])
+            - np.column_stack([np.cos(truth[:-1, 2]), np.sin(truth[:-1, 2])])
+        ),
+        axis=0,
+    )
+    @ across_dir
+)
+course = np.arctan2(*np.diff(truth[:, :2], axis=0)[:, ::-1].T)  # the direction of travel
+moving = step_length > 0.5 * np.median(step_length)  # frames that travel, whatever the speed
+crab = np.degrees(np.median(np.abs(wrap_angle(course[moving] - truth[:-1, 2][moving]))))
+_, across_odo, _ = relative_planar(truth[-1], odometry_only[-1])
+print(
+    f"odometry across the track: {across_odo:+.3f} m, of which its heading drift explains "
+    f"{drift_across:+.3f} m; the truth travels a median {crab:.2f} deg off its own heading"
+)
+
+fig, axes = new_axes(2, width=6, height=3.8)
+plot_paths(axes[0], {"truth": truth, **paths}, "Plan view (vehicle frame at frame 0)")
+for colour, (name, poses) in zip(("C1", "C2", "C3"), paths.items(), strict=True):  # as in the plan view
+    axes[1].plot(np.linalg.norm(poses[:, :2] - truth[:, :2], axis=1), colour, label=name)
+axes[1].set_xlabel("frame")
+axes[1].set_ylabel("position error [m]")
+axes[1].set_title("Error over time")
+axes[1].legend(fontsize="small")
+plt.show()
+
+# %% [markdown]
+# Split along and across the track, the final errors say what went wrong. The odometry's heading,
+# integrated from the yaw rate, drifts, and a heading error becomes an across-track error that
+# grows with the distance; its distance, integrated from the speed, carries any scale error of the
+# speed (and of the timestamps it is integrated over) as an along-track error.
+#
+# %%
+drift_share = drift_across / across_odo if across_odo else 1.0
+if abs(1 - drift_share) > 0.2 and np.isfinite(crab):
+    across_story = (
+        f"The odometry's heading drift explains {drift_across:+.3f} m of its {across_odo:+.3f} m "
+        "across the track. The rest comes from the odometry model's assumption that a vehicle "
+        "travels along its heading: the truth's direction of travel differs from its heading by a "
+        f"median {crab:.2f}° (a slip angle of the tyres, or how the IMU is mounted), and integrating "
+        "the speed along the heading turns that angle into an across-track error."
+    )
+else:
+    across_story = (
+        f"The odometry's heading drift explains {drift_across:+.3f} m of its {across_odo:+.3f} m "
+        f"across the track ({drift_share:.0%}): on this "
+        + ("drive" if REAL else "rendered sample, whose robot travels along its heading,")
+        + " the heading drift is the whole story."
+    )
+display(Markdown(across_story))
+
+# %% [markdown]
+# The filter weighs odometry and vision by their covariances. The odometry's comes from a noise
+# per wheel distance, which over the gauge becomes the yaw sigma printed above: where that sigma is
+# far above the odometry's actual yaw error, the filter takes the heading from vision almost alone.
+# The distance it takes from both, so on the real drive the fused distance leans towards the
+# odometry's (asserted): fusion helps only as far as each sensor's error model is right.
+#
+# **A check without the truth: NIS.** Notebook 07's normalised innovation squared needs only the
+# filter's own numbers. Per frame, the innovation of the yaw is the vision's yaw increment minus
+# the odometry's, and its variance is at least the odometry's modelled yaw variance (the
+# vision's own variance would only add to it). So νᵀS⁻¹ν computed with the odometry's variance
+# alone is an upper bound of the yaw's NIS; for a consistent model its average over N frames lies
+# in the band of χ²(N)/N.
+
+# %%
+yaw_innovation = wrap_angle(np.diff(vision_only.poses[:, 2]) - np.diff(odometry_only[:, 2]))
+yaw_nis_bound = np.array(
+    [nis([nu], [[math.radians(sd) ** 2]]) for nu, sd in zip(yaw_innovation, yaw_sigma, strict=True)]
+)
+nis_band = chi2.ppf([0.025, 0.975], len(yaw_nis_bound)) / len(yaw_nis_bound)
+print(
+    f"yaw NIS, upper bound, mean over {len(yaw_nis_bound)} frames: {yaw_nis_bound.mean():.2e} "
+    f"(band of a consistent model {nis_band[0]:.2f}–{nis_band[1]:.2f})"
+)
+odometry_noise_too_wide = yaw_nis_bound.mean() < nis_band[0]
+fusion_helps = final["fused"][0] < final["VO only"][0]
+display(
+    Markdown(
+        f"The bound averages {yaw_nis_bound.mean():.1e}, "
+        + (
+            f"far below the band's lower end {nis_band[0]:.2f}: without looking at the truth, the "
+            "innovations say that the odometry's yaw noise is modelled far too wide. "
+            if odometry_noise_too_wide
+            else "inside or above the band: the innovations do not contradict the odometry's model. "
+        )
+        + f"And with the truth: fused, the drive ends {final['fused'][0]:.3f} m off, vision alone "
+        f"{final['VO only'][0]:.3f} m, odometry alone {final['odometry only'][0]:.3f} m. The fusion "
+        + ("ends closer than" if fusion_helps else "ends no closer than")
+        + " vision alone in this run: one real drive and one RANSAC seed (the pipeline's seed "
+        f"{SEED}), so the only randomness here is RANSAC's, and one draw of it settles no "
+        "ranking of fusion against vision (notebooks 07 and 08 compare them over seeds)."
+    )
+)
+
+# %% [markdown]
+# ## 8 · Where we stand against a plain OpenCV stereo odometry
+#
+# `vo_lib.stereo_vo.pnp_baseline` is the stereo odometry one writes first with OpenCV: ORB (3000
+# features), brute-force cross-checked matching, `solvePnPRansac` from frame to frame. It runs
+# once here, on the same frames; timings of a single run vary with the machine and its load.
+
+# %%
+n_pnp = len(seq) if REAL else 20  # the rendered sample only shows the timing
+# both timed here, one right after the other, so that the machine's load is alike for both
+ours_timed = run_sequence(seq, frames=n_pnp, use_odometry=False, motion="full")
+start = time.perf_counter()
+pnp = run_pnp_baseline(seq, frames=n_pnp, seed=SEED)
+print(f"PnP baseline: {n_pnp} frames in {time.perf_counter() - start:.1f} s")
+ours = vo_full
+rows = {
+    "ours (1-point RANSAC + 6-DoF)": (ours.camera_poses[:n_pnp], ours_timed.timing_table()["total"]),
+    "OpenCV PnP baseline": (pnp.camera_poses, float(np.median(pnp.milliseconds[1:]))),
+}
+print(f" {'':30s} {'planar error':>13s} {'camera error':>13s} {'heading':>9s} {'ms per frame':>13s}")
+for name, (poses, ms) in rows.items():
+    m, pct, hd = final_errors(planar_from_camera_poses(poses, vehicle.mount))
+    cam_err = np.linalg.norm(poses[-1, :3, 3] - T_cam[n_pnp - 1, :3, 3])
+    print(f" {name:30s} {m:8.3f} m ({pct:4.2f} %) {cam_err:9.3f} m {hd:+8.3f}° {ms:10.1f}")
+ratio = rows["OpenCV PnP baseline"][1] / rows["ours (1-point RANSAC + 6-DoF)"][1]
+print(
+    f"ours is {ratio:.1f}x the speed of the baseline, both timed in this cell "
+    "(median ms per frame, image loading apart)"
+)
+assert np.all(np.isfinite(pnp.camera_poses)) and len(pnp.milliseconds) == n_pnp
+if REAL:  # without odometry: under 0.5 % of the distance, 0.3 deg of heading, two frames flagged
+    assert final_errors(ours.poses)[1] <= 0.5 and abs(final_errors(ours.poses)[2]) <= 0.3
+    assert len(ours.flagged) <= 2  # a count: at most two frames flagged on this drive
+own_planar = final_errors(ours.poses[:n_pnp])[0]
+projected = final_errors(planar_from_camera_poses(ours.camera_poses[:n_pnp], vehicle.mount))[0]
+display(
+    Markdown(
+        f"The same run of ours ends {own_planar:.3f} m off in its own planar pose (the figure of "
+        f"sections 4 and 7) and {projected:.3f} m off when its 6-DoF camera pose is projected to the "
+        "plane, as the baseline's must be for the table; the two differ because the pipeline's "
+        "planar pose is what its filter estimates, not the projection of its camera pose."
+    )
+)
+
+# %% [markdown]
 # ## Summary
 #
 # - Real frames leave a large share of their cells without a corner and most of their pixels flat;
 #   a front end with a fixed threshold or a fixed grid either starves or crowds. The pyramid front
 #   end adapts its threshold and finds corners at three scales, and its sub-pixel disparities on
 #   the Motorcycle pair are at least as accurate as OpenCV's semi-global matcher at the same pixels.
-# - The tail of the disparity error sits on depth edges, where a patch mixes two depths; such
-#   features give wrong 3-D points that the temporal checks must remove (notebook 12).
+# - Single-scale corners drift as the scene grows towards a car, and the heading drifts with them.
+# - The tail of the disparity error sits on depth edges, where a patch mixes two depths.
+# - On a car the circular-motion model misses the camera's offset from the turning axis, the
+#   road's slope and bank, and the body's pitch under braking; they move features by pixels in
+#   some frames, all the same way, which costs position (offset) and heading (pitch, slope, bank).
+# - 1-point RANSAC remains the outlier filter (cheap, one match per hypothesis); a 6-DoF
+#   Gauss–Newton fit on reprojection errors in both images then keeps a share of its inliers
+#   and measures the motion the model cannot. We wrote that step in a few lines of NumPy and
+#   matched the library to machine precision, and OpenCV's left-image LM closely.
+# - On this one drive (one RANSAC seed) vision ends far closer than the odometry alone, fused or
+#   not, and the fusion does not end closer than vision alone (section 7 prints both); one draw
+#   ranks nothing in general. The odometry is the truth's own GPS/IMU with a noise chosen
+#   on this drive; NIS, without the truth, shows its yaw noise modelled far too wide. The OpenCV
+#   PnP baseline is the yardstick for accuracy and speed (the printed ratio is one run's, both
+#   timed alike).
+
 
 # %% [markdown]
 # ## Exercises
@@ -398,4 +1233,269 @@ def hidden_test_ex1(grading, detector, answer):
 
 
 hidden_test_ex1(grading, cv2.FastFeatureDetector_create, empty_shares)
+### END HIDDEN TESTS
+
+# %% [markdown]
+# ### Exercise 2 · pitch in pixels *(easy, 2 points)*
+#
+# The car pitches between two frames. Write `pitch_shift(pitch, depth, camera)`: how far, in
+# pixels, the image of a point `depth` metres straight ahead moves when the camera pitches by
+# `pitch` radians, by rotating the point about the camera's x axis and projecting it with
+# `camera.project`. Store it for 0.1° and 20 m with section 5's `cam` in `shift`. Is that
+# inside the refinement's inlier threshold (`rigid_motion.INLIER_PIXELS`)?
+#
+# *Hint:* `Rotation.from_euler("x", angle)`.
+
+
+# %% nbgrader={"grade": false, "grade_id": "ex2", "locked": false, "schema_version": 3, "solution": true}
+### BEGIN SOLUTION
+def pitch_shift(pitch, depth, camera):
+    """Image motion (px) of a point straight ahead when the camera pitches by ``pitch`` rad."""
+    point = np.array([[0.0, 0.0, depth]])  # on the optical axis
+    Rx = Rotation.from_euler("x", pitch).as_matrix()  # about the camera's x axis (right)
+    moved = camera.project(point @ Rx.T) - camera.project(point)
+    return float(np.hypot(moved[0, 0], moved[0, 1]))
+
+
+shift = pitch_shift(math.radians(0.1), 20.0, cam)
+print(
+    f"0.1 deg of pitch moves the point by {shift:.3f} px (fy = {cam.fy:.1f} px); the inlier threshold is "
+    f"{rigid_motion.INLIER_PIXELS} px: {'outside' if shift > rigid_motion.INLIER_PIXELS else 'inside'}"
+)
+### END SOLUTION
+
+# %% nbgrader={"grade": true, "grade_id": "ex2_test", "locked": true, "points": 2, "schema_version": 3, "solution": false}
+# Exercise 2: autograder test
+assert abs(shift - cam.fy * math.tan(math.radians(0.1))) < 1e-9, "f_y tan(pitch), whatever the depth"
+### BEGIN HIDDEN TESTS
+fresh = np.random.default_rng()  # new pitches, depths and cameras at every grading
+for _ in range(5):
+    camera_ = StereoCamera(
+        fx=fresh.uniform(300, 900), fy=fresh.uniform(300, 900), cx=320.0, cy=240.0, baseline=0.5
+    )
+    pitch_, depth_ = fresh.uniform(-0.05, 0.05), fresh.uniform(2.0, 80.0)
+    assert np.isclose(float(pitch_shift(pitch_, depth_, camera_)), camera_.fy * abs(math.tan(pitch_))), (
+        "pitch_shift differs for other pitches or cameras (radians? which focal length?)"
+    )
+### END HIDDEN TESTS
+
+# %% [markdown]
+# ### Exercise 3 · start from elsewhere *(medium, 3 points)*
+#
+# Write `refine_from(R, t)`: section 5's Gauss–Newton on `P_in`, `w_in` (30 iterations at most,
+# tolerance 1e-10) started from the motion `R`, `t`, returning its `R`, `t` and number of steps.
+# Start it from no motion at all (`R = I`, `t = 0`) instead of 1-point RANSAC's guess and store
+# the result in `R_id, t_id, steps_id`. Does it reach the same motion, and in how many steps?
+#
+# *Hint:* `gauss_newton(P_in, w_in, R, t, iterations=30, tol=1e-10)`.
+
+
+# %% nbgrader={"grade": false, "grade_id": "ex3", "locked": false, "schema_version": 3, "solution": true}
+### BEGIN SOLUTION
+def refine_from(R, t):
+    """Section 5's Gauss-Newton on P_in, w_in from (R, t): its R, t and number of steps."""
+    return gauss_newton(P_in, w_in, np.asarray(R, float), np.asarray(t, float), iterations=30, tol=1e-10)
+
+
+R_id, t_id, steps_id = refine_from(np.eye(3), np.zeros(3))
+print(f"from the identity: {steps_id} steps (from RANSAC's guess: {steps})")
+### END SOLUTION
+
+# %% nbgrader={"grade": true, "grade_id": "ex3_test", "locked": true, "points": 3, "schema_version": 3, "solution": false}
+# Exercise 3: autograder test
+assert np.abs(R_id - R_ours).max() < 1e-8 and np.abs(t_id - t_ours).max() < 1e-8, "the same motion"
+assert steps_id >= steps, "from farther away, not fewer steps"
+### BEGIN HIDDEN TESTS
+import importlib  # noqa: E402
+
+import vo_lib.grading  # noqa: E402
+
+grading = importlib.reload(vo_lib.grading)  # fresh from its file, whatever the answer did to it
+
+
+def hidden_test_ex3(grading, camera, points, measured, answer):
+    """New starting points at every grading. The answer gets copies; the expected motions and
+    steps come after it ran, from a Gauss-Newton of the test's own (section 5's, on disparity-space
+    residuals), not from the notebook's gauss_newton, which an answer cell can redefine."""
+    import numpy as np
+
+    grading.intact(globals())  # the answer left NumPy and vo_lib alone
+    fx, fy, cx, cy, baseline = camera.fx, camera.fy, camera.cx, camera.cy, camera.baseline
+
+    def rotation(w):  # Rodrigues' formula
+        angle = np.linalg.norm(w)
+        K = np.cross(np.eye(3), w / angle) if angle >= 1e-15 else np.zeros((3, 3))
+        return np.eye(3) + np.sin(angle) * K + (1 - np.cos(angle)) * K @ K
+
+    fresh = np.random.default_rng()
+    starts = []
+    for size in (0.01, 0.05, 0.1):
+        R_start = rotation(fresh.normal(scale=size, size=3)) @ R0
+        starts.append((grading.frozen(R_start), grading.frozen(t0 + fresh.normal(scale=10 * size, size=3))))
+    P_kept, w_kept = grading.frozen(points), grading.frozen(measured)
+    with grading.refused():  # nothing to refuse; no other process, no change to the grader's tools
+        got = [answer(R.copy(), t.copy()) for R, t in starts]
+    grading.intact(globals())
+
+    # the references only now: the answer, called above, could read its caller's frame
+    def gauss_newton_of(P, w, R, t, iterations=30, tol=1e-10):
+        steps = 0
+        while steps < iterations:
+            Q = P @ R.T + t
+            X, Y, Z = Q.T
+            r = (np.column_stack([fx * X / Z + cx, fy * Y / Z + cy, fx * baseline / Z]) - w).reshape(-1)
+            d_pixel = np.zeros((len(Q), 3, 3))
+            d_pixel[:, 0, 0], d_pixel[:, 0, 2] = fx / Z, -fx * X / Z**2
+            d_pixel[:, 1, 1], d_pixel[:, 1, 2] = fy / Z, -fy * Y / Z**2
+            d_pixel[:, 2, 2] = -fx * baseline / Z**2
+            skew = np.cross(np.eye(3)[None], Q[:, None, :])  # [Q]x of every point
+            J = (
+                d_pixel @ np.concatenate([-skew, np.broadcast_to(np.eye(3), (len(Q), 3, 3))], axis=2)
+            ).reshape(-1, 6)
+            delta = -np.linalg.solve(J.T @ J, J.T @ r)
+            dR = rotation(delta[:3])
+            R, t, steps = dR @ R, dR @ t + delta[3:], steps + 1
+            if np.abs(delta).max() < tol:
+                break
+        return R, t, steps
+
+    for (R_g, t_g, steps_g), (R, t) in zip(got, starts, strict=True):
+        R_e, t_e, steps_e = gauss_newton_of(P_kept, w_kept, R, t)
+        assert np.abs(R_g - R_e).max() < 1e-8 and np.abs(t_g - t_e).max() < 1e-8 and steps_g == steps_e, (
+            "refine_from differs from other starting points (its steps counted?)"
+        )
+
+
+hidden_test_ex3(grading, cam, P_in, w_in, refine_from)
+### END HIDDEN TESTS
+
+# %% [markdown]
+# ### Exercise 4 · the left image alone *(hard, 4 points)*
+#
+# Write `left_only_refine(P, w, R, t)`, the left-image-only refinement: keep the `(u, v)` rows
+# of the residual and of the Jacobian, and iterate from `R`, `t` to convergence (a step below
+# 1e-12, 50 at most); return `R`, `t`. Store its result on the refined inliers of section 5
+# (`cam.backproject(one.w_prev[sel])`, `one.w_curr[sel]`, from `R0`, `t0`) in `R4, t4`. It
+# should agree with `cv2.solvePnPRefineLM` (`tvec`) to a micrometre. How far is its
+# translation from the stereo fit's (no Huber, same inliers), which component differs most, and
+# why?
+#
+# *Hint:* section 5's `project_uvd`, `jacobian` and `exp_rotation`.
+
+
+# %% nbgrader={"grade": false, "grade_id": "ex4", "locked": false, "schema_version": 3, "solution": true}
+### BEGIN SOLUTION
+def left_only_refine(P, w, R, t):
+    """Gauss-Newton of (R, t) on the left image's (u, v) residuals only."""
+    R, t = np.array(R, float), np.array(t, float)
+    for _ in range(50):
+        Q = P @ R.T + t
+        r = (project_uvd(Q) - w)[:, :2].reshape(-1)
+        J = jacobian(Q)[:, :2].reshape(-1, 6)
+        delta = -np.linalg.solve(J.T @ J, J.T @ r)
+        dR = exp_rotation(delta[:3])
+        R, t = dR @ R, dR @ t + delta[3:]
+        if np.abs(delta).max() < 1e-12:
+            break
+    return R, t
+
+
+P_sel, w_sel = cam.backproject(one.w_prev[sel]), one.w_curr[sel]
+R4, t4 = left_only_refine(P_sel, w_sel, R0, t0)
+R_st, t_st, _ = gauss_newton(P_sel, w_sel, R0, t0, iterations=50, tol=1e-12)
+print(f"left-only minus stereo translation (x, y, z): {1000 * (t4 - t_st)} mm")
+# The 3-D points are fixed, so both fits know depth; but the stereo fit also asks the *current*
+# disparities to agree, which pins the forward component (z), the one the left image sees worst:
+# a step along the optical axis moves the points near the image centre hardly at all.
+### END SOLUTION
+
+# %% nbgrader={"grade": true, "grade_id": "ex4_test", "locked": true, "points": 4, "schema_version": 3, "solution": false}
+# Exercise 4: autograder test
+P_sel, w_sel = cam.backproject(one.w_prev[sel]), one.w_curr[sel]
+to_opencv = float(np.abs(t4 - tvec.ravel()).max())
+print(f"left-only GN against solvePnPRefineLM: {to_opencv * 1e6:.3f} micrometres apart")
+assert to_opencv < 1e-6, "not the left-image-only least-squares motion"
+if REAL:  # on the real drive the forward component differs most
+    R_stereo, t_stereo, _ = gauss_newton(P_sel, w_sel, R0, t0, iterations=50, tol=1e-12)
+    assert np.argmax(np.abs(t4 - t_stereo)) == 2, "the forward component differs most"
+
+
+### BEGIN HIDDEN TESTS
+import importlib  # noqa: E402
+
+import scipy.optimize  # noqa: E402
+
+import vo_lib.grading  # noqa: E402
+import vo_lib.stereo_vo.rigid_core as rigid_core_module  # noqa: E402
+import vo_lib.stereo_vo.rigid_plain as rigid_plain_module  # noqa: E402
+
+grading = importlib.reload(vo_lib.grading)  # fresh from its file, whatever the answer did to it
+refinements = [
+    getattr(cv2, name) for name in dir(cv2) if name.startswith("solvePnP")
+]  # OpenCV's pose solvers
+solvers = [scipy.optimize.least_squares, scipy.optimize.leastsq, scipy.optimize.minimize, scipy.optimize.root]
+
+
+def hidden_test_ex4(grading, camera, elsewhere, builtins_elsewhere, answer):
+    """New scenes and motions at every grading. The answer gets copies, with no library pose
+    solver or least-squares routine (OpenCV's, SciPy's, vo_lib's, the notebook's stereo
+    gauss_newton) at hand; the expected motion comes after it ran, from a left-image Gauss-Newton
+    of the test's own, on inputs the answer cannot change."""
+    import numpy as np
+
+    grading.intact(globals())  # the answer left NumPy and vo_lib alone
+    fx, fy, cx, cy, baseline = camera.fx, camera.fy, camera.cx, camera.cy, camera.baseline
+
+    def rotation(w):  # Rodrigues' formula
+        angle = np.linalg.norm(w)
+        K = np.cross(np.eye(3), w / angle) if angle > 0 else np.zeros((3, 3))
+        return np.eye(3) + np.sin(angle) * K + (1 - np.cos(angle)) * K @ K
+
+    def uvd(Q):
+        X, Y, Z = Q.T
+        return np.column_stack([fx * X / Z + cx, fy * Y / Z + cy, fx * baseline / Z])
+
+    fresh = np.random.default_rng()
+    cases = []
+    for _ in range(3):
+        P = np.column_stack([fresh.uniform(-8, 8, 150), fresh.uniform(-2, 2, 150), fresh.uniform(4, 40, 150)])
+        R_true = rotation(fresh.normal(scale=0.02, size=3))
+        t_true = fresh.normal(scale=0.5, size=3)
+        w = uvd(P @ R_true.T + t_true) + fresh.normal(scale=[0.5, 0.5, 2.0], size=(150, 3))
+        cases.append(tuple(grading.frozen(a) for a in (P, w, R_true, t_true + 0.05)))
+    with grading.refused(*builtins_elsewhere, *grading.library_functions(*elsewhere)):
+        got = [np.asarray(answer(*(a.copy() for a in case))[1], float) for case in cases]
+    grading.intact(globals())
+
+    # the references only now: the answer, called above, could read its caller's frame
+    def left_gauss_newton(P, w, R, t):
+        for _ in range(50):
+            Q = P @ R.T + t
+            X, Y, Z = Q.T
+            d_pixel = np.zeros((len(Q), 2, 3))
+            d_pixel[:, 0, 0], d_pixel[:, 0, 2] = fx / Z, -fx * X / Z**2
+            d_pixel[:, 1, 1], d_pixel[:, 1, 2] = fy / Z, -fy * Y / Z**2
+            skew = np.cross(np.eye(3)[None], Q[:, None, :])  # [Q]x of every point
+            d_point = np.concatenate([-skew, np.broadcast_to(np.eye(3), (len(Q), 3, 3))], axis=2)
+            J = (d_pixel @ d_point).reshape(-1, 6)
+            step = -np.linalg.lstsq(J, (uvd(Q) - w)[:, :2].reshape(-1), rcond=None)[0]
+            dR = rotation(step[:3])
+            R, t = dR @ R, dR @ t + step[3:]
+            if np.abs(step).max() < 1e-13:
+                break
+        return R, t
+
+    for value, case in zip(got, cases, strict=True):
+        assert np.abs(value - left_gauss_newton(*case)[1]).max() < 1e-7, (
+            "left_only_refine differs on other scenes (the left image's rows only? converged?)"
+        )
+
+
+hidden_test_ex4(
+    grading,
+    cam,
+    (*solvers, rigid_core_module, rigid_plain_module, rigid_motion, gauss_newton),
+    refinements,
+    left_only_refine,
+)
 ### END HIDDEN TESTS

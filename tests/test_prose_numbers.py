@@ -133,13 +133,10 @@ CONSTANTS: dict[str, dict[str, str]] = {
         "0.5 °": "the heading spread chosen for the samples",
     },
     "11_real_stereo_data": {
+        "1e-12": "the convergence tolerance the exercise sets",
         "±2 px": "the disparity search window chosen around an upper level's corner",
         "1 px": "the threshold of the histogram's tail and of the Huber weights, both chosen",
         "2 px": "the disparity change chosen to call a patch a depth edge",
-    },
-    "12_real_drive_motion": {
-        "1e-12": "the convergence tolerance the exercise sets",
-        "1 px": "the threshold of the histogram's tail and of the Huber weights, both chosen",
         "90 °": "a right-angle turn at a crossing, by definition",
         "3–5 °": "90° in two or three seconds at 10 Hz, worked in the sentence itself",
         "10 Hz": "KITTI's frame rate",
