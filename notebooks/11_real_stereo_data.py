@@ -1068,6 +1068,12 @@ print(
 )
 odometry_noise_too_wide = yaw_nis_bound.mean() < nis_band[0]
 fusion_helps = final["fused"][0] < final["VO only"][0]
+# the only random draws here are RANSAC's: run both again with another seed
+fused_again = run_sequence(seq, use_odometry=True, seed=SEED + 1)
+vision_again = run_sequence(seq, use_odometry=False, motion=vehicle.motion, seed=SEED + 1)
+draw_free = np.allclose(fused_again.poses, fused.poses) and np.allclose(vision_again.poses, vision_only.poses)
+again = {name: final_errors(r.poses)[0] for name, r in (("fused", fused_again), ("VO only", vision_again))}
+print(f"RANSAC seed {SEED + 1}: fused {again['fused']:.3f} m, VO only {again['VO only']:.3f} m")
 display(
     Markdown(
         f"The bound averages {yaw_nis_bound.mean():.1e}, "
@@ -1080,9 +1086,16 @@ display(
         + f"And with the truth: fused, the drive ends {final['fused'][0]:.3f} m off, vision alone "
         f"{final['VO only'][0]:.3f} m, odometry alone {final['odometry only'][0]:.3f} m. The fusion "
         + ("ends closer than" if fusion_helps else "ends no closer than")
-        + " vision alone in this run: one real drive and one RANSAC seed (the pipeline's seed "
-        f"{SEED}), so the only randomness here is RANSAC's, and one draw of it settles no "
-        "ranking of fusion against vision (notebooks 07 and 08 compare them over seeds)."
+        + " vision alone on this drive. "
+        + (
+            f"With RANSAC seed {SEED + 1} instead of {SEED} both paths come out the same: RANSAC's "
+            "draws, the only random ones here, do not move them. "
+            if draw_free
+            else f"With RANSAC seed {SEED + 1} they end {again['fused']:.3f} m and "
+            f"{again['VO only']:.3f} m off: RANSAC's draws, the only random ones here, move them. "
+        )
+        + "Either way this is one real drive, and one drive ranks fusion against vision for "
+        "no other (notebooks 07 and 08 compare them over seeds)."
     )
 )
 
@@ -1146,9 +1159,9 @@ display(
 #   Gauss–Newton fit on reprojection errors in both images then keeps a share of its inliers
 #   and measures the motion the model cannot. We wrote that step in a few lines of NumPy and
 #   matched the library to machine precision, and OpenCV's left-image LM closely.
-# - On this one drive (one RANSAC seed) vision ends far closer than the odometry alone, fused or
-#   not, and the fusion does not end closer than vision alone (section 7 prints both); one draw
-#   ranks nothing in general. The odometry is the truth's own GPS/IMU with a noise chosen
+# - On this one drive vision ends far closer than the odometry alone, fused or not, and the
+#   fusion does not end closer than vision alone (section 7 prints both, with a second RANSAC
+#   seed); one drive ranks nothing in general. The odometry is the truth's own GPS/IMU with a noise chosen
 #   on this drive; NIS, without the truth, shows its yaw noise modelled far too wide. The OpenCV
 #   PnP baseline is the yardstick for accuracy and speed (the printed ratio is one run's, both
 #   timed alike).
