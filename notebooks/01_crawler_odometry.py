@@ -222,8 +222,10 @@ display(
     Markdown(
         f"{speed * seconds:.0f} m with 5 % slip on one track already cost {np.degrees(final):.1f}° of "
         f"heading and {position_error:.2f} m of position — position errors grow with the square "
-        "of the distance. This is the failure the paper reports in its spot-turn experiments, "
-        "where the two tracks grip the ground unequally; vision has to catch it."
+        "of the distance. Unequal grip is also what the paper blames for its spot-turn errors, "
+        "but there it breaks the vision model: with the tracks not well in contact with the "
+        "ground, the motion no longer meets the planar circular-motion hypothesis and the "
+        "estimated deflection angle goes wrong ([Zhao], section IV, spot-turn experiments)."
     )
 )
 

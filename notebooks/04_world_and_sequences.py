@@ -431,7 +431,10 @@ else:
 #   pose-tracking notebooks; the sensors agree where they look at the same surface.
 # - Rendered stereo pairs are consistent with their ground-truth depth to a fraction of a pixel.
 # - The samples mirror the paper's experiments; track slip makes odometry drift in every one of
-#   them, most in the spot turn — the error vision must correct.
+#   them (section 5's table). In the spot turn the encoders over-count the turn by the slip, so
+#   the odometry's heading runs ahead of the truth; the rendered sequences carry that error for
+#   vision to correct. (Which sample drifts most is one draw of each, and this notebook does not
+#   rank them.)
 # - Sequences are stored in the KITTI layout, so the same code reads real KITTI data.
 
 # %% [markdown]

@@ -48,7 +48,9 @@
 import matplotlib.pyplot as plt
 import numpy as np
 from IPython.display import display
+from scipy.stats import norm
 
+from vo_lib.comparison import Verdict, bootstrap_interval, over_seeds
 from vo_lib.geometry import planar_from_camera_poses
 from vo_lib.lidar_tracking.corridor_experiment import (
     LOST_ERROR,
@@ -59,6 +61,7 @@ from vo_lib.lidar_tracking.corridor_experiment import (
     corridor_visual_odometry,
     run_experiment,
     run_tracking,
+    statistics_table,
     unoccluded,
     without_umbrella,
 )
@@ -257,7 +260,8 @@ for ax in axes:
     ax.set_ylim(-0.03 * top, 1.05 * top)
 normal_frame, occluded_frame = frame_stats.values()
 assert normal_frame.v_max > 2 * occluded_frame.v_max
-assert max(st.v_uq for st in frame_stats.values()) < 0.01 * occluded_frame.v_max
+# the boxes are flat: quartiles at a few per cent of the occluded frame's maximum at most (one frame each)
+assert max(st.v_uq for st in frame_stats.values()) < 0.05 * occluded_frame.v_max
 
 # %% [markdown]
 # **The statistics, written out.** What `ScoreStatistics.from_scores` computes, in a few lines:
@@ -416,13 +420,16 @@ assert posterior_vmax["normal"] / posterior_vmax["occluded"] > 3
 # * **On the raw scores the two readings part.** There the quartiles are of the same size as the
 #   maximum, and the printed $V_{max} - V_{lq} - V_{med}$ separates normal from occluded frames
 #   worse than chance, while $V_{max} - V_{med}$ still separates them almost perfectly: our
-#   reading of eq. 11 is the one that works.
-# * **The printed eq. 10 is a normalisation, not a posterior.** $S_i / \sum_j S_j$ does satisfy
-#   eq. 9 and keeps the samples' order (its $V_{max}$ AUC is high), but it squeezes every
-#   frame's best sample to barely above $1/n$, by about a tenth, in normal and occluded frames
-#   alike (printed). Any threshold on it would sit on a knife's edge. Reading the
-#   score as a log-likelihood, $e^{S_i}/\sum_j e^{S_j}$, spreads the normal and the occluded
-#   frames several-fold apart.
+#   reading of eq. 11 is the one that works. (The printed form is not a slip: eq. 12 calls
+#   $V_{max} - V_{lq}$ the "range", and range minus median is what eq. 11 prints.)
+# * **The printed eq. 10 is a normalisation, not a posterior, for a score like ours.**
+#   $S_i / \sum_j S_j$ would be the posterior if $S_i$ were proportional to the likelihood (and the
+#   samples drawn from the prior); a grid-map score adds one term per beam, a log-likelihood.
+#   $S_i / \sum_j S_j$ does satisfy eq. 9 and keeps the samples' order (its $V_{max}$ AUC is
+#   high), but it squeezes every frame's best sample to barely above $1/n$, by about a tenth, in
+#   normal and occluded frames alike (printed). Any threshold on it would sit on a knife's edge.
+#   Reading the score as a log-likelihood, $e^{S_i}/\sum_j e^{S_j}$, spreads the normal and the
+#   occluded frames several-fold apart.
 #
 # **The temperature of that reading.** $e^{S_i}$ assumes that one unit of score (one beam ending
 # exactly on a mapped wall) multiplies the likelihood by $e$: a likelihood ratio of $e$ per beam,
@@ -511,11 +518,58 @@ laser_share = cal.laser.mean / paper_table2["LBPT"][0]
 vo_share = cal.vo.mean / paper_table2["visual odometer"][0]
 assert laser_share < 1 and vo_share < 0.2  # "smaller", and for the visual odometer "a fraction"
 
+# %% [markdown]
+# Limits judged on the run they were computed from say little: a Shewhart chart's promise is about
+# new data. Its nominal false-alarm rate for a normal correction is the Gaussian tail beyond 3σ
+# (one-sided where the lower limit is clipped at 0). We measure it on held-out normal runs, each
+# with its own encoder noise, slip, laser noise and samples (seeds drawn from the base seed).
+
 # %%
+CALIBRATION_SEED = 1000  # the normal run the limits came from (run_experiment's default, too)
+HELD_OUT = [s_ for s_ in range(SEED, SEED + 11) if s_ != CALIBRATION_SEED][:10]
+nominal = {
+    name: norm.sf(3) + (norm.cdf(-3) if lim.lower > 0 else 0.0)
+    for name, lim in (("laser", cal.laser), ("visual odometer", cal.vo))
+}
+held_out_rates = {"laser": [], "visual odometer": []}
+for s_ in HELD_OUT:
+    truth_h, odo_h = corridor_drive(s_)
+    run_h = run_tracking(without_umbrella(world), truth_h, odo_h, vo, s_, field=field)
+    used_h = [cal.thresholds.composite(st.stats) for st in run_h.steps]
+    steps_h = [st for st, u in zip(run_h.steps, used_h, strict=True) if u]
+    held_out_rates["laser"].append(np.mean([not cal.laser.contains(st.laser_correction) for st in steps_h]))
+    held_out_rates["visual odometer"].append(
+        np.mean([not cal.vo.contains(st.vo_correction) for st in steps_h])
+    )
+alarm = {}
+for name, rates in held_out_rates.items():
+    rates = np.array(rates)
+    alarm[name] = (rates.mean(), *bootstrap_interval(rates, np.mean))
+    print(
+        f"{name:16s} false alarms on {len(rates)} held-out normal runs: {alarm[name][0]:.2%} "
+        f"(95 % CI over seeds {alarm[name][1]:.2%}–{alarm[name][2]:.2%}); nominal {nominal[name]:.2%}; "
+        f"on the calibration run {1 - coverage[name]:.2%}"
+    )
+
+
+def _rate_sentence(name):
+    mean_, low_, high_ = alarm[name]
+    if low_ > nominal[name]:
+        verdict_ = f"above the nominal {nominal[name]:.2%}, {mean_ / nominal[name]:.0f} times it"
+    elif high_ < nominal[name]:
+        verdict_ = f"below the nominal {nominal[name]:.2%}"
+    else:
+        verdict_ = f"not reliably different from the nominal {nominal[name]:.2%}"
+    return f"the {name}'s {mean_:.2%} (95 % CI over seeds {low_:.2%}–{high_:.2%}), {verdict_}"
+
+
 display(
     Markdown(
-        "The 3σ limits hold nearly all of the normal run's corrections (printed), as a Shewhart "
-        "chart should; a correction outside them is rare enough to mean something. Our mean "
+        f"On {len(HELD_OUT)} held-out normal runs the limits raise false alarms at "
+        + _rate_sentence("laser") + "; and at " + _rate_sentence("visual odometer") + ". "
+        "The corrections are lengths, not Gaussian, so 3σ limits need not deliver a Gaussian "
+        "chart's rate; the held-out rate is what they deliver, the price of each flag in a "
+        "normal stretch. Our mean "
         f"corrections are smaller than the paper's, the laser's {laser_share:.0%} of its and the "
         f"visual odometer's {vo_share:.0%}: our odometry is better per update (0.1 m of travel "
         "between laser updates) and our visual odometer is rendered, not a Kinect."
@@ -585,7 +639,7 @@ assert np.mean(np.abs(dirs[:, 0])) > 0.95
 # the paper's single run:
 
 # %%
-result = run_experiment(range(20), vo)
+result = run_experiment(range(SEED, SEED + 20), vo)
 from vo_lib.lidar_tracking.corridor_experiment import PAPER_TABLE3
 
 paper = {(m, a): tuple(PAPER_TABLE3["XY"[a]][m].values()) for m in ("LBPT", "VOAPT") for a in (0, 1)}
@@ -619,12 +673,32 @@ print(
 assert mx["VOAPT"][0] <= 0.3 * mx["LBPT"][0] and mn["VOAPT"][0] <= 0.2 * mn["LBPT"][0]
 assert result.flagged_when_lost() >= 0.9 and result.false_alarms() <= 0.1
 
-print(
-    f"VOAPT cuts the maximum X error {mx['LBPT'][0] / mx['VOAPT'][0]:.1f}-fold "
-    f"({mx['LBPT'][0]:.2f} -> {mx['VOAPT'][0]:.2f} m; paper {paper[('LBPT', 0)][0]:.2f} -> "
-    f"{paper[('VOAPT', 0)][0]:.2f} m) and the mean {mn['LBPT'][0] / mn['VOAPT'][0]:.1f}-fold "
-    f"({mn['LBPT'][0]:.2f} -> {mn['VOAPT'][0]:.3f} m; paper {paper[('LBPT', 0)][1]:.3f} -> "
-    f"{paper[('VOAPT', 0)][1]:.3f} m)"
+def _x_figure(run, statistic):
+    return statistics_table(run.errors[:, 0])[statistic]
+
+
+by_seed = {
+    statistic: over_seeds(
+        lambda i, st=statistic: {
+            "VOAPT": _x_figure(result.voapt[i], st),
+            "LBPT": _x_figure(result.lbpt[i], st),
+        },
+        range(len(result.seeds)),
+    )
+    for statistic in ("max", "mean")
+}
+assert all(c.verdict("VOAPT", "LBPT") is Verdict.BETTER for c in by_seed.values())
+display(
+    Markdown(
+        f"Over {len(result.seeds)} seeds, in the maximum X error "
+        f"{by_seed['max'].sentence('VOAPT', 'LBPT', unit='m', digits=3)}; in the mean X error "
+        f"{by_seed['mean'].sentence('VOAPT', 'LBPT', unit='m', digits=3)}. Averaged over seeds VOAPT "
+        f"cuts the maximum {mx['LBPT'][0] / mx['VOAPT'][0]:.1f}-fold ({mx['LBPT'][0]:.2f} → "
+        f"{mx['VOAPT'][0]:.2f} m; the paper's one run {paper[('LBPT', 0)][0]:.2f} → "
+        f"{paper[('VOAPT', 0)][0]:.2f} m) and the mean {mn['LBPT'][0] / mn['VOAPT'][0]:.1f}-fold "
+        f"({mn['LBPT'][0]:.2f} → {mn['VOAPT'][0]:.3f} m; the paper's {paper[('LBPT', 0)][1]:.3f} → "
+        f"{paper[('VOAPT', 0)][1]:.3f} m)."
+    )
 )
 voapt_max = np.array([np.abs(r.errors[:, 0]).max() for r in result.voapt])
 occluded_updates = [
@@ -647,14 +721,14 @@ y_share = max(lbpt_y, voapt_y) / paper[("VOAPT", 1)][1]
 assert y_share < 0.5  # our worst Y under half the paper's *mean* VOAPT Y
 
 # %% [markdown]
-# Along the corridor VOAPT cuts the maximum and the mean error severalfold (the sentence above is
-# printed from the run; the paper's factor is about seven for both). Our LBPT fails about as
-# badly as the paper's. Our VOAPT is less good than the paper's: in the occluded stretch the
-# composite indicator $C_s$ still passes at some updates, because the calibrated $V_{max}$
-# threshold lies inside the occluded frames' spread, and at a share of those the control tests
-# pass too (printed). Each such spurious credible update lets the laser's wandering
-# along-corridor correction in and re-anchors the visual odometer's pose to it. A stricter
-# threshold trades this for more false alarms in the normal stretches (an exercise below).
+# Along the corridor VOAPT cuts the maximum and the mean error severalfold, over seeds (the sentence
+# above is printed from the runs; the paper's factor, from one run, is about seven for both). Our
+# LBPT fails about as badly as the paper's. Our VOAPT is less good than the paper's: in the occluded
+# stretch the composite indicator $C_s$ still passes at some updates, because the calibrated
+# $V_{max}$ threshold lies inside the occluded frames' spread, and at a share of those the control
+# tests pass too (printed). Each such spurious credible update lets the laser's wandering
+# along-corridor correction in and re-anchors the visual odometer's pose to it. A stricter threshold
+# trades this for more false alarms in the normal stretches (an exercise below).
 
 # %%
 display(
@@ -665,10 +739,38 @@ display(
     )
 )
 
+# %%
+# After LBPT recovers by itself in the last unoccluded stretch, are its correct frames re-admitted?
+recovered = []
+for r in result.lbpt:
+    in_last = (r.truth[:, 0] >= UNOCCLUDED[-1][0]) & (np.abs(r.errors[:, 0]) < 0.1)
+    credible = np.array([s.credible for s in r.steps])
+    idx = np.flatnonzero(in_last)
+    flagged = idx[~credible[idx]]
+    if len(flagged):
+        recovered.append(bool(np.any(credible[idx[idx > flagged[0]]])))
+print(
+    f"LBPT runs flagging correct frames in the last stretch: {len(recovered)} of {len(result.lbpt)}; "
+    f"re-admitted before the corridor ends in {sum(recovered)}"
+)
+display(
+    Markdown(
+        "Two honest caveats. When LBPT alone recovers by itself, its pose has drifted from the "
+        "visual odometer's anchor, so $T_s$ flags correct frames (the share is printed above). "
+        f"Of the {len(result.lbpt)} seeds, {len(recovered)} flag correct frames in the last "
+        "unoccluded stretch, and in "
+        + (f"{sum(recovered)} of them" if recovered else "none of them")
+        + " a later frame of that stretch is admitted again as the widening band reaches it"
+        + (
+            "; in the others the flags last to the corridor's end."
+            if sum(recovered) < len(recovered)
+            else "."
+        )
+    )
+)
+
 # %% [markdown]
-# Two honest caveats. When LBPT alone recovers by itself, its pose has drifted from the visual
-# odometer's anchor, so $T_s$ keeps flagging some correct frames until the widening band admits
-# them (the share is printed above). And the umbrella can *create* a false match: seen from
+# And the umbrella can *create* a false match: seen from
 # behind, its canopy can line up with the second pillar, and LBPT locks there with a confident
 # score; only the comparison with the visual odometer reveals it, which is why our $T_s$ needs
 # both control tests.

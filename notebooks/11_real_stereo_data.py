@@ -15,24 +15,24 @@
 # recording: KITTI raw drive 2011_09_26_0001, a car in a Karlsruhe suburb, with ground truth from
 # its GPS/IMU, and the Middlebury *Motorcycle* pair with ground-truth disparity (shipped by
 # scikit-image). We look at what is different about real images, at the front end built for them,
-# at what the planar circular-motion model of the paper gets wrong on a car, and at how the 6-DoF
-# refinement that follows 1-point RANSAC repairs it. We then write that refinement ourselves and
-# compare the pipeline with wheel odometry, with the fusion of both, and with a plain OpenCV
-# stereo odometry.
+# and at what the planar circular-motion model of the paper gets wrong on a car. We then write the
+# 6-DoF refinement that follows 1-point RANSAC ourselves, check it against `vo_lib` and OpenCV,
+# and only then use it: the pipeline on the drive, the inliers it keeps, wheel odometry against
+# vision against their fusion, and a plain OpenCV stereo odometry.
 #
 # **You will learn**
 # - how real images differ from rendered ones, in numbers (empty cells, corners, flat regions);
 # - how accurate our sub-pixel disparities are on real images, beside OpenCV's semi-global matcher;
 # - what the circular-motion model leaves out on a car (camera offset, slope, bank, pitch when
 #   braking), measured in pixels and in metres;
-# - why 1-point RANSAC stays as the outlier filter and how many of its inliers the 6-DoF fit keeps;
 # - how to write the 6-DoF Gauss–Newton step (residual, analytic Jacobian, rotation update);
+# - why 1-point RANSAC stays as the outlier filter and how many of its inliers the 6-DoF fit keeps;
 # - odometry against vision against their fusion on real data, and where we stand against PnP.
 #
 # **Prerequisites**: notebooks 03, 05, 06 and 08.
 #
 # **Run time**: about a minute of computing on two cores, most of it the OpenCV PnP baseline of
-# section 7 (longer on a busy machine).
+# section 9 (longer on a busy machine).
 # The real recording is KITTI raw drive 2011_09_26_drive_0001 in the KITTI odometry layout with
 # its `oxts.txt` and `raw_calib/` (see the README's "Real data"); it is not part of the repository:
 # set `VO_LIB_REALDATA` to the folder that holds it. Without it the notebook says so and runs the
@@ -66,6 +66,7 @@ from scipy.stats import chi2
 
 import vo_lib
 from vo_lib.camera import StereoCamera
+from vo_lib.comparison import Verdict, over_seeds
 from vo_lib.data import load_sequence
 from vo_lib.formats.kitti_raw import read_oxts
 from vo_lib.geometry import (
@@ -325,10 +326,8 @@ assert np.mean(on_edge[tail]) >= 0.8 and np.median(ours[~on_edge]) < 0.15
 # disparities are good to about a tenth of a pixel. Such features give wrong 3-D points, which the
 # temporal checks (1-point RANSAC, the 6-DoF refinement) must remove later.
 #
-# On the sequence itself, both front ends inside the same 6-DoF pipeline: the number of stereo
-# features per frame, and what the single-scale corners do to the heading. A corner found at one
-# scale only drifts with the growth of the texture around it as the car approaches, and that
-# drift has a sign.
+# On the sequence itself: the number of stereo features per frame of both front ends.
+
 
 # %%
 counts = {name: [] for name in ("pyramid", "single scale")}
@@ -341,31 +340,6 @@ for name, c in counts.items():
     print(f"{name:13s} stereo features per frame: median {np.median(c):.0f} (min {min(c)}, max {max(c)})")
 if REAL:
     assert np.median(counts["pyramid"]) > 2 * np.median(counts["single scale"])
-
-vo_full = run_sequence(seq, use_odometry=False, motion="full")  # the pyramid front end
-single_odometer = StereoOdometry(
-    seq.camera, CAR, mount=vehicle.mount, seed=SEED, front_end=StereoFrontEnd(seq.camera)
-)
-vo_single = run_frames(((left, right, None) for left, right in seq), seq.camera, odometer=single_odometer)
-heading_error = {
-    name: np.degrees(wrap_angle(res.poses[:, 2] - truth[:, 2]))
-    for name, res in (("pyramid", vo_full), ("single scale", vo_single))
-}
-for name, res in (("pyramid", vo_full), ("single scale", vo_single)):
-    m, pct, hd = final_errors(res.poses)
-    print(f"6-DoF pipeline, {name:12s} front end: final error {m:.3f} m ({pct:.2f} %), heading {hd:+.3f} deg")
-if REAL:
-    # the single-scale heading drifts: an order of magnitude beyond the pyramid's
-    assert abs(heading_error["single scale"][-1]) > 10 * abs(heading_error["pyramid"][-1])
-
-fig, ax = new_axes(width=7, height=3.4)
-for name, err in heading_error.items():
-    ax.plot(err, label=f"{name} front end")
-ax.set_xlabel("frame")
-ax.set_ylabel("heading error [deg]")
-ax.set_title("The same 6-DoF pipeline, two front ends, no odometry")
-ax.legend(fontsize="small")
-plt.show()
 
 # %% [markdown]
 # ## 3 · What the circular-motion model gets wrong on a car
@@ -383,6 +357,12 @@ plt.show()
 # origin at the IMU). Angles are `R = Rz(yaw) Ry(pitch) Rx(roll)`; positive pitch is nose down.
 
 # %%
+def as_4x4(R, t):
+    T = np.eye(4)
+    T[:3, :3], T[:3, 3] = R, t
+    return T
+
+
 print("camera in the vehicle frame (forward, left, up) [m]:", vehicle.mount[:3, 3])
 T_cam = seq.poses_4x4()
 V = vehicle.mount @ T_cam @ np.linalg.inv(vehicle.mount)
@@ -475,12 +455,6 @@ def pixel_gap(Ta, Tb):
     return float(np.median(np.linalg.norm(a - b, axis=1)))
 
 
-def as_4x4(R, t):
-    T = np.eye(4)
-    T[:3, :3], T[:3, 3] = R, t
-    return T
-
-
 gaps = []
 for k in range(1, len(seq)):
     true_motion = np.linalg.inv(T_cam[k]) @ T_cam[k - 1]  # T_curr_from_prev of the camera
@@ -499,219 +473,13 @@ if REAL:
 # On the real drive the first term exceeds the refinement's 1-px inlier threshold on a tenth of
 # the frames or more (asserted); it is not noise but a bias shared by all points of a frame, so
 # averaging over matches does not remove it.
-#
-# Now the pipelines. `motion="planar"` is [Zhao]'s pipeline as notebook 08 ran it (single-scale
-# front end, matching windows sized for a crawler, circular motion, camera assumed on the axis);
-# `motion="full"` keeps 1-point RANSAC as the outlier filter and refines the
-# inliers in 6 DoF, with the pyramid front end and windows for a car.
-
-# %%
-start = time.perf_counter()
-runs = {"planar": run_sequence(seq, use_odometry=False, motion="planar"), "full": vo_full}
-print(f"motion=planar ran in {time.perf_counter() - start:.1f} s; motion=full is section 2's run")
-for model, res in runs.items():
-    m, pct, hd = final_errors(res.poses)
-    reasons = sorted({d.reason for d in res.diagnostics if d.fallback})
-    print(
-        f"motion={model:6s}: final error {m:6.2f} m ({pct:5.2f} % of {travelled:.1f} m), "
-        f"heading {hd:+.2f} deg, "
-        f"{len(res.flagged)} of {len(res.poses)} frames flagged {reasons or ''}"
-    )
-if REAL:
-    # two orders of magnitude apart: the planar pipeline coasts through most frames
-    assert final_errors(runs["full"].poses)[0] < 0.01 * final_errors(runs["planar"].poses)[0]
-else:
-    assert final_errors(runs["planar"].poses)[1] <= 1.0  # where its assumptions hold, the paper's model works
 
 # %% [markdown]
-# On the car the planar pipeline flags most frames and coasts, but that is the crawler's matching
-# failing at a car's speed as much as the model. To judge the *model* alone, we give all three
-# readings the same matches: every pair of consecutive frames, matched in windows around the
-# motion the full pipeline measured, then 1-point RANSAC. We chain the frame-to-frame vehicle
-# motions that (a) the circular model gives for a camera on the axis, as `motion="planar"`
-# assumes, (b) the same circular camera motion carried through the real mount, and (c) the 6-DoF
-# refinement of RANSAC's inliers carried through the mount.
-
-
-# %%
-def chain_models(camera_path):
-    """Planar vehicle poses from frame-to-frame motions read three ways (section 3's list)."""
-    names = ("circular, camera on the axis", "circular, through the mount", "6-DoF, through the mount")
-    chains = {name: [np.zeros(3)] for name in names}
-    prev = pyramid_fe.process(*seq.pair(0))
-    for k in range(1, len(seq)):
-        curr = pyramid_fe.process(*seq.pair(k))
-        T_pred = np.linalg.inv(camera_path[k]) @ camera_path[k - 1]
-        predicted, _ = predict_features(prev.w, seq.camera, T_pred)
-        mt = match_features(prev, curr, predicted, windows(predicted, WINDOW_PIXELS), PREDICTED_RATIO)
-        est = one_point_ransac(mt.w_prev, mt.w_curr, seq.camera, rng=rng, pixel_sigma=1.0)
-        guess = as_4x4(*motion_matrices(est.theta, est.rho))
-        refined = rigid_motion.refine_rigid_motion(mt.w_prev, mt.w_curr, seq.camera, guess, est.inliers)
-        increments = (
-            robot_increment(est.theta, est.rho),
-            vehicle_increment(guess, vehicle.mount),
-            vehicle_increment(refined.matrix, vehicle.mount),
-        )
-        for name, inc in zip(names, increments, strict=True):
-            chains[name].append(compose_planar(chains[name][-1], inc))
-        prev = curr
-    return {name: np.array(poses) for name, poses in chains.items()}
-
-
-if REAL:
-    start = time.perf_counter()
-    chained = chain_models(vo_full.camera_poses)
-    print(f"{len(seq) - 1} frame pairs matched and estimated in {time.perf_counter() - start:.1f} s")
-    for name, poses in chained.items():
-        m, pct, hd = final_errors(poses)
-        print(f"{name:30s}: final error {m:.3f} m ({pct:.2f} %), heading {hd:+.3f} deg")
-    circular, mounted, full6 = (final_errors(p) for p in chained.values())
-    assert mounted[0] < circular[0]  # the offset costs position
-    assert abs(full6[2]) < 0.5 * abs(mounted[2])  # pitch, slope and bank cost heading
-    display(
-        Markdown(
-            f"In position, though, the circular model carried through the mount ends "
-            f"{mounted[0]:.3f} m off, "
-            + ("closer than" if mounted[0] < full6[0] else "no closer than")
-            + f" the 6-DoF refinement's {full6[0]:.3f} m. The planar model cannot move the camera "
-            "sideways or vertically, and over {:.0f} m of gently curving road that constraint holds "
-            "well enough to steady the position, while its heading error (above) grows; on a longer "
-            "drive the heading error turns into position error and the order would change. One "
-            "drive does not settle which is better in position; in heading the 6-DoF refinement "
-            "wins clearly.".format(travelled)
-        )
-    )
-
-    fig, axes = new_axes(2, width=5.5, height=3.4)
-    for name, poses in chained.items():
-        axes[0].plot(np.linalg.norm(poses[:, :2] - truth[:, :2], axis=1), label=name)
-        axes[1].plot(np.degrees(wrap_angle(poses[:, 2] - truth[:, 2])), label=name)
-    axes[0].set_xlabel("frame")
-    axes[0].set_ylabel("position error [m]")
-    axes[0].set_title("Frame-to-frame motions chained: position")
-    axes[1].set_xlabel("frame")
-    axes[1].set_ylabel("heading error [deg]")
-    axes[1].set_title("... and heading")
-    axes[0].legend(fontsize="small")
-    plt.show()
-else:
-    print(
-        "skipped: the rendered crawler moves a centimetre per frame, below what frame-to-frame matches "
-        "resolve (notebook 08 measures against keyframes), and its camera is on the axis of a flat floor"
-    )
-
-# %% [markdown]
-# Fed good matches, the circular model is not lost on this gently curving road, but it is biased
-# two ways (both asserted on the real drive): reading a camera ahead of the axis as if it were on
-# it costs position, and ignoring pitch, slope and bank costs heading, frame after frame; the 6-DoF
-# refinement removes most of the heading drift. A sharper turn makes the offset term grow with the
-# yaw rate, and a hillier road the pitch term.
-
-# %% [markdown]
-# ### 3b · Sharp turns and bumps: what the outlier filter must survive
+# ## 4 · One pair of frames: 1-point RANSAC's circular estimate
 #
-# This drive turns by a few degrees in all; a city drive turns 90° at a crossing in two or three
-# seconds, 3–5° between frames at 10 Hz. Camera and mount are this drive's (KITTI's nominal rig
-# when the real data is absent); the matches are
-# drawn (`matches_under_transform`, 0.5 px noise, 20 % outliers) for a vehicle that moves 1 m along
-# its chord per frame and turns by an increasing angle. Seen from the camera itself, the gates of
-# eq. 20–21 lose a growing share of the *true* matches: the camera slides sideways by its offset
-# times the turned angle. The pipeline therefore runs 1-point RANSAC on the same matches as a
-# virtual camera *on the turning axis* sees them (`turning_axis_view`: triangulate, move through
-# the mount, project again). There the circular model is exact.
-#
-# A bump or the start of a slope pitches the body instead: no planar model describes that, so
-# when 1-point RANSAC keeps fewer than `CAR.min_inlier_ratio` of the matches the pipeline draws
-# general 3-point hypotheses (OpenCV's P3P in `solvePnPRansac`, seeded) and keeps the better.
-
-# %%
-if REAL:
-    turn_camera, turn_mount = seq.camera, vehicle.mount
-else:  # the section needs a car's rig, not the crawler's: KITTI's, as vo_lib assumes without raw_calib
-    turn_camera = StereoCamera(fx=721.5, fy=721.5, cx=609.6, cy=172.9, baseline=0.537, width=1242, height=375)
-    forward, left, up = KITTI_CAMERA_IN_IMU
-    turn_mount = camera_mount(forward=forward, height=up, left=left)
-to_axis = turning_axis_transform(turn_mount)
-turn_rng = np.random.default_rng(SEED)
-recall_rows = []
-for yaw_deg, pitch_deg in ((0, 0), (2, 0), (4, 0), (6, 0), (9, 0), (3, 1)):
-    th = math.radians(yaw_deg)
-    T_turn = camera_motion(np.zeros(3), [math.cos(th / 2), math.sin(th / 2), th], turn_mount)
-    bump = np.eye(4)
-    bump[:3, :3] = Rotation.from_euler("y", pitch_deg, degrees=True).as_matrix()
-    T_turn = np.linalg.inv(turn_mount) @ bump @ turn_mount @ T_turn
-    m_turn = matches_under_transform(turn_camera, 300, T_turn, turn_rng, (4.0, 60.0), 0.5, 0.2)
-    seen_by_camera = one_point_ransac(
-        m_turn.w_prev, m_turn.w_curr, turn_camera, rng=turn_rng, pixel_sigma=1.0
-    )
-    seen_on_axis = one_point_ransac(
-        turning_axis_view(m_turn.w_prev, turn_camera, to_axis),
-        turning_axis_view(m_turn.w_curr, turn_camera, to_axis),
-        turn_camera,
-        rng=turn_rng,
-        pixel_sigma=1.0,
-    )
-    odometer = StereoOdometry(turn_camera, CAR, mount=turn_mount, seed=SEED)
-    guess, start, ratio = odometer.motion.hypothesis(m_turn.w_prev, m_turn.w_curr, None, odometer.rng)
-    refined = rigid_motion.refine_rigid_motion(m_turn.w_prev, m_turn.w_curr, turn_camera, guess, start)
-    recall_rows.append(
-        (
-            yaw_deg,
-            pitch_deg,
-            np.mean(seen_by_camera.inliers[m_turn.inliers]),
-            np.mean(seen_on_axis.inliers[m_turn.inliers]),
-            np.linalg.norm(refined.t - T_turn[:3, 3]),
-        )
-    )
-print(" yaw/frame  pitch  true matches kept: camera view  axis view   pipeline's motion error")
-for yaw_deg, pitch_deg, cam_kept, axis_kept, t_err in recall_rows:
-    print(f"  {yaw_deg:5.0f}°  {pitch_deg:5.0f}°  {cam_kept:26.0%} {axis_kept:10.0%} {1000 * t_err:14.1f} mm")
-recall_table = np.array(recall_rows)
-planar_rows = recall_table[:, 1] == 0
-assert np.all(recall_table[planar_rows, 3] >= 0.98)  # on the axis every turn keeps its matches
-if np.hypot(*turn_mount[:2, 3]) > 0.5:  # a camera well off the axis (a car's)
-    assert recall_table[planar_rows][-1, 2] < 0.5  # seen from the camera, a 9° frame loses most
-assert recall_table[~planar_rows][0, 3] < 0.1  # a 1° pitch: no planar hypothesis fits...
-assert np.all(recall_table[:, 4] < 0.01)  # ...yet every motion is found to 1 cm
-#
-# ## 4 · How many of 1-point RANSAC's inliers survive the 6-DoF refinement
-#
-# The pipeline runs 1-point RANSAC with gates of `CAR.ransac.gate_sigmas` standard deviations of 1 px noise,
-# wide enough for the circular model's own error, then chooses the inliers again with the refined
-# motion, at 1 px of reprojection error in (u, v, d). `FrameDiagnostics` keeps both counts.
-
-# %%
-diag = [d for d in vo_full.diagnostics if d.ransac_inliers > 0]
-frames = np.array([d.frame for d in diag])
-ransac_in = np.array([d.ransac_inliers for d in diag])
-refined_in = np.array([d.inliers for d in diag])
-share = refined_in / ransac_in
-print(
-    f"gates of {CAR.ransac.gate_sigmas:.0f} sigma; {len(diag)} frames estimated: RANSAC keeps a median of "
-    f"{np.median(ransac_in):.0f} matches, the refinement {np.median(refined_in):.0f}; median share "
-    f"kept {np.median(share):.0%} (range {share.min():.0%}..{share.max():.0%})"
-)
-assert np.median(share) < 1.0  # the general model is stricter than the gates
-assert np.all(refined_in[[not d.fallback for d in diag]] >= CAR.min_inliers)
-
-fig, axes = new_axes(2, width=5.5, height=3.4)
-axes[0].plot(frames, ransac_in, label="1-point RANSAC inliers")
-axes[0].plot(frames, refined_in, label="after the 6-DoF refinement")
-axes[0].set_xlabel("frame")
-axes[0].set_ylabel("matches")
-axes[0].set_title("Inliers per frame")
-axes[0].legend(fontsize="small")
-axes[1].plot(frames, share, ".-")
-axes[1].set_ylim(0, 1.05)
-axes[1].set_xlabel("frame")
-axes[1].set_ylabel("refined / RANSAC inliers")
-axes[1].set_title("Share of RANSAC's inliers the refinement keeps")
-plt.show()
-
-# %% [markdown]
-# Which ones go? One pair of frames, matched without any prediction (every pair of descriptors),
-# then 1-point RANSAC and the refinement: the reprojection errors of RANSAC's inliers under the
-# refined motion.
+# One pair of frames, matched without any prediction (every pair of descriptors), then 1-point
+# RANSAC with the circular-motion model. Section 3 says what its motion must miss on a car; it is
+# the starting guess of the 6-DoF refinement we write next.
 
 # %%
 k0, k1 = (40, 41) if REAL else (0, 30)  # the crawler moves a centimetre per frame
@@ -719,48 +487,8 @@ feat0, feat1 = pyramid_fe.process(*seq.pair(k0)), pyramid_fe.process(*seq.pair(k
 one = match_features(feat0, feat1, ratio=PREDICTED_RATIO)
 est = one_point_ransac(one.w_prev, one.w_curr, seq.camera, rng=rng, pixel_sigma=1.0)
 guess = as_4x4(*motion_matrices(est.theta, est.rho))
-lib = rigid_motion.refine_rigid_motion(one.w_prev, one.w_curr, seq.camera, guess, est.inliers)
-err_planar = rigid_motion.reprojection_errors(
-    seq.camera.backproject(one.w_prev), one.w_curr, guess[:3, :3], guess[:3, 3], seq.camera
-)
-err_refined = rigid_motion.reprojection_errors(
-    seq.camera.backproject(one.w_prev), one.w_curr, lib.R, lib.t, seq.camera
-)
-within = {
-    name: float(np.mean(e[est.inliers] < rigid_motion.INLIER_PIXELS))
-    for name, e in (("circular", err_planar), ("refined", err_refined))
-}
-print(
-    f"frames {k0}->{k1}: {len(one)} matches, {est.inliers.sum()} RANSAC inliers, {lib.inliers.sum()} after "
-    f"the refinement; RANSAC inliers within {rigid_motion.INLIER_PIXELS} px: {within['circular']:.0%} under "
-    f"the circular motion, {within['refined']:.0%} under the refined one (medians "
-    f"{np.median(err_planar[est.inliers]):.2f} and {np.median(err_refined[est.inliers]):.2f} px)"
-)
-if REAL:
-    assert within["refined"] > within["circular"]
-else:  # the circular model is exact for the rendered crawler: nothing for the refinement to add
-    assert abs(within["refined"] - within["circular"]) < 0.05
-
-fig, ax = new_axes(width=7, height=3.4)
-bins = np.linspace(0, 4, 41)
-ax.hist(np.minimum(err_planar[est.inliers], 4), bins, alpha=0.6, label="under RANSAC's circular motion")
-ax.hist(np.minimum(err_refined[est.inliers], 4), bins, alpha=0.6, label="under the refined 6-DoF motion")
-ax.axvline(rigid_motion.INLIER_PIXELS, color="k", ls="--", label="inlier threshold")
-ax.set_xlabel("reprojection error in (u, v, d) [px] (clipped at 4)")
-ax.set_ylabel("RANSAC inliers")
-ax.set_title(f"Frames {k0}->{k1}: RANSAC's inliers judged by each model")
-ax.legend(fontsize="small")
-plt.show()
 
 # %% [markdown]
-# The refined motion brings more of RANSAC's inliers within a pixel than the circular one does
-# (the part the model could not explain), but even under the best motion a share stays above:
-# corners of an upper pyramid level sit on a coarser grid, some points are on moving objects, some
-# matches are slightly wrong. RANSAC's gates must be wide enough for the circular model's own error,
-# so they let these through; the 6-DoF fit, with no model error left to allow for, keeps only the
-# matches that agree to a pixel. RANSAC removes the gross outliers cheaply; the refinement, the
-# fine ones.
-#
 # ## 5 · Build, then use: the 6-DoF Gauss–Newton step
 #
 # A motion `(R, t)` maps a point of the previous camera frame into the current one, `Q = R P + t`
@@ -865,6 +593,53 @@ assert dR_max < 1e-9 and dt_max < 1e-9
 # linearly, not quadratically) and rounds of re-selection (refine, choose the inliers again with
 # the refined motion, refine again). Its default result is what the pipeline uses.
 #
+# **Which of RANSAC's inliers go?** The reprojection errors of RANSAC's inliers under the
+# circular motion and under the library's refined motion:
+
+# %%
+lib = rigid_motion.refine_rigid_motion(one.w_prev, one.w_curr, seq.camera, guess, est.inliers)
+err_planar = rigid_motion.reprojection_errors(
+    seq.camera.backproject(one.w_prev), one.w_curr, guess[:3, :3], guess[:3, 3], seq.camera
+)
+err_refined = rigid_motion.reprojection_errors(
+    seq.camera.backproject(one.w_prev), one.w_curr, lib.R, lib.t, seq.camera
+)
+within = {
+    name: float(np.mean(e[est.inliers] < rigid_motion.INLIER_PIXELS))
+    for name, e in (("circular", err_planar), ("refined", err_refined))
+}
+print(
+    f"frames {k0}->{k1}: {len(one)} matches, {est.inliers.sum()} RANSAC inliers, {lib.inliers.sum()} after "
+    f"the refinement; RANSAC inliers within {rigid_motion.INLIER_PIXELS} px: {within['circular']:.0%} under "
+    f"the circular motion, {within['refined']:.0%} under the refined one (medians "
+    f"{np.median(err_planar[est.inliers]):.2f} and {np.median(err_refined[est.inliers]):.2f} px)"
+)
+if REAL:
+    assert within["refined"] > within["circular"]
+else:  # the circular model is exact for the rendered crawler: nothing for the refinement to add
+    assert abs(within["refined"] - within["circular"]) < 0.05
+
+fig, ax = new_axes(width=7, height=3.4)
+bins = np.linspace(0, 4, 41)
+ax.hist(np.minimum(err_planar[est.inliers], 4), bins, alpha=0.6, label="under RANSAC's circular motion")
+ax.hist(np.minimum(err_refined[est.inliers], 4), bins, alpha=0.6, label="under the refined 6-DoF motion")
+ax.axvline(rigid_motion.INLIER_PIXELS, color="k", ls="--", label="inlier threshold")
+ax.set_xlabel("reprojection error in (u, v, d) [px] (clipped at 4)")
+ax.set_ylabel("RANSAC inliers")
+ax.set_title(f"Frames {k0}->{k1}: RANSAC's inliers judged by each model")
+ax.legend(fontsize="small")
+plt.show()
+
+# %% [markdown]
+# The refined motion brings more of RANSAC's inliers within a pixel than the circular one does
+# (the part the model could not explain), but even under the best motion a share stays above:
+# corners of an upper pyramid level sit on a coarser grid, some points are on moving objects, some
+# matches are slightly wrong. RANSAC's gates must be wide enough for the circular model's own error,
+# so they let these through; the 6-DoF fit, with no model error left to allow for, keeps only the
+# matches that agree to a pixel. RANSAC removes the gross outliers cheaply; the refinement, the
+# fine ones.
+
+# %% [markdown]
 # **Cross-check with OpenCV.** `cv2.solvePnPRefineLM` refines the same motion by
 # Levenberg–Marquardt on the *left* image only, `(u, v)`, with the 3-D points fixed. On the
 # refined inliers it should land close to ours, but not on it: the disparity row is missing.
@@ -889,7 +664,277 @@ print(
 assert angle_cv < 0.05 and shift_cv < 0.005
 
 # %% [markdown]
-# ## 6 · Odometry, vision, and both, on real data
+# ## 6 · The pipeline on the drive
+#
+# Both front ends of section 2 inside the same 6-DoF pipeline, no odometry: what the
+# single-scale corners do to the heading. A corner found at one scale only drifts with the growth
+# of the texture around it as the car approaches, and that drift has a sign.
+
+# %%
+vo_full = run_sequence(seq, use_odometry=False, motion="full", seed=SEED)  # the pyramid front end
+single_odometer = StereoOdometry(
+    seq.camera, CAR, mount=vehicle.mount, seed=SEED, front_end=StereoFrontEnd(seq.camera)
+)
+vo_single = run_frames(((left, right, None) for left, right in seq), seq.camera, odometer=single_odometer)
+heading_error = {
+    name: np.degrees(wrap_angle(res.poses[:, 2] - truth[:, 2]))
+    for name, res in (("pyramid", vo_full), ("single scale", vo_single))
+}
+for name, res in (("pyramid", vo_full), ("single scale", vo_single)):
+    m, pct, hd = final_errors(res.poses)
+    print(f"6-DoF pipeline, {name:12s} front end: final error {m:.3f} m ({pct:.2f} %), heading {hd:+.3f} deg")
+if REAL:
+    # the single-scale heading drifts: an order of magnitude beyond the pyramid's
+    assert abs(heading_error["single scale"][-1]) > 10 * abs(heading_error["pyramid"][-1])
+
+fig, ax = new_axes(width=7, height=3.4)
+for name, err in heading_error.items():
+    ax.plot(err, label=f"{name} front end")
+ax.set_xlabel("frame")
+ax.set_ylabel("heading error [deg]")
+ax.set_title("The same 6-DoF pipeline, two front ends, no odometry")
+ax.legend(fontsize="small")
+plt.show()
+
+# %% [markdown]
+# Now the pipelines. `motion="planar"` is [Zhao]'s pipeline as notebook 08 ran it (single-scale
+# front end, matching windows sized for a crawler, circular motion, camera assumed on the axis);
+# `motion="full"` keeps 1-point RANSAC as the outlier filter and refines the
+# inliers in 6 DoF, with the pyramid front end and windows for a car.
+
+# %%
+start = time.perf_counter()
+runs = {"planar": run_sequence(seq, use_odometry=False, motion="planar", seed=SEED), "full": vo_full}
+print(f"motion=planar ran in {time.perf_counter() - start:.1f} s; motion=full is the run above")
+for model, res in runs.items():
+    m, pct, hd = final_errors(res.poses)
+    reasons = sorted({d.reason for d in res.diagnostics if d.fallback})
+    print(
+        f"motion={model:6s}: final error {m:6.2f} m ({pct:5.2f} % of {travelled:.1f} m), "
+        f"heading {hd:+.2f} deg, "
+        f"{len(res.flagged)} of {len(res.poses)} frames flagged {reasons or ''}"
+    )
+if REAL:
+    # two orders of magnitude apart: the planar pipeline coasts through most frames
+    assert final_errors(runs["full"].poses)[0] < 0.01 * final_errors(runs["planar"].poses)[0]
+else:
+    assert final_errors(runs["planar"].poses)[1] <= 1.0  # where its assumptions hold, the paper's model works
+
+# %% [markdown]
+# On the car the planar pipeline flags most frames and coasts, but that is the crawler's matching
+# failing at a car's speed as much as the model. To judge the *model* alone, we give all three
+# readings the same matches: every pair of consecutive frames, matched in windows around the
+# motion the full pipeline measured, then 1-point RANSAC. We chain the frame-to-frame vehicle
+# motions that (a) the circular model gives for a camera on the axis, as `motion="planar"`
+# assumes, (b) the same circular camera motion carried through the real mount, and (c) the 6-DoF
+# refinement of RANSAC's inliers carried through the mount.
+
+
+# %%
+def chain_models(camera_path, ransac_rng, frame_features):
+    """Planar vehicle poses from frame-to-frame motions read three ways (section 3's list), with
+    1-point RANSAC drawing from ``ransac_rng`` on the frames' features ``frame_features``."""
+    names = ("circular, camera on the axis", "circular, through the mount", "6-DoF, through the mount")
+    chains = {name: [np.zeros(3)] for name in names}
+    prev = frame_features[0]
+    for k in range(1, len(seq)):
+        curr = frame_features[k]
+        T_pred = np.linalg.inv(camera_path[k]) @ camera_path[k - 1]
+        predicted, _ = predict_features(prev.w, seq.camera, T_pred)
+        mt = match_features(prev, curr, predicted, windows(predicted, WINDOW_PIXELS), PREDICTED_RATIO)
+        est = one_point_ransac(mt.w_prev, mt.w_curr, seq.camera, rng=ransac_rng, pixel_sigma=1.0)
+        guess = as_4x4(*motion_matrices(est.theta, est.rho))
+        refined = rigid_motion.refine_rigid_motion(mt.w_prev, mt.w_curr, seq.camera, guess, est.inliers)
+        increments = (
+            robot_increment(est.theta, est.rho),
+            vehicle_increment(guess, vehicle.mount),
+            vehicle_increment(refined.matrix, vehicle.mount),
+        )
+        for name, inc in zip(names, increments, strict=True):
+            chains[name].append(compose_planar(chains[name][-1], inc))
+        prev = curr
+    return {name: np.array(poses) for name, poses in chains.items()}
+
+
+if REAL:
+    # one real drive: the randomness is 1-point RANSAC's, so the readings are compared over its seeds
+    RANSAC_SEEDS = range(SEED, SEED + 10)
+    start = time.perf_counter()
+    features_per_frame = [pyramid_fe.process(*seq.pair(k)) for k in range(len(seq))]  # no draw: once
+    chained_by_seed = {
+        s_: chain_models(vo_full.camera_poses, np.random.default_rng(s_), features_per_frame)
+        for s_ in RANSAC_SEEDS
+    }
+    chained = chained_by_seed[SEED]  # the figures show the first seed
+    print(
+        f"{len(seq) - 1} frame pairs matched and estimated {len(RANSAC_SEEDS)} times (RANSAC seeds "
+        f"{RANSAC_SEEDS.start}-{RANSAC_SEEDS.stop - 1}) in {time.perf_counter() - start:.1f} s; seed {SEED}:"
+    )
+    for name, poses in chained.items():
+        m, pct, hd = final_errors(poses)
+        print(f"{name:30s}: final error {m:.3f} m ({pct:.2f} %), heading {hd:+.3f} deg")
+    circular, mounted, full6 = (final_errors(p) for p in chained.values())
+
+    def _readings(seed_):
+        c, mo, f6 = (final_errors(p) for p in chained_by_seed[seed_].values())
+        return {"circular on the axis": c[0], "circular through the mount": mo[0], "6-DoF": f6[0],
+                "6-DoF heading": abs(f6[2]), "circular heading": abs(mo[2])}
+
+    readings = over_seeds(_readings, RANSAC_SEEDS)
+    offset_verdict = readings.verdict("circular through the mount", "circular on the axis")
+    heading_verdict = readings.verdict("6-DoF heading", "circular heading")
+    assert offset_verdict is Verdict.BETTER  # the offset costs position
+    assert heading_verdict is Verdict.BETTER  # pitch, slope and bank cost heading
+    display(
+        Markdown(
+            f"Over {len(RANSAC_SEEDS)} RANSAC seeds on this one drive, in final position error, "
+            f"{readings.sentence('circular through the mount', 'circular on the axis', unit='m', digits=3)}; "
+            "in final |heading error|, "
+            f"{readings.sentence('6-DoF heading', 'circular heading', unit='°', digits=3)}. "
+            f"In position, {readings.sentence('circular through the mount', '6-DoF', unit='m', digits=3)}. "
+            "The planar model cannot move the camera sideways or vertically, and over "
+            f"{travelled:.0f} m of gently curving road that constraint steadies the position while "
+            "its heading error grows; on a longer drive the heading error turns into position "
+            "error. "
+            + (
+                "The figures are the same in every seed: on this drive RANSAC's draws do not move "
+                "these readings, so the ranking rests on the one drive, not on a lucky draw; "
+                "another drive may order them otherwise."
+                if all(np.ptp(v) < 1e-9 for v in readings.figures.values())
+                else "These are RANSAC's draws on one drive: another drive may order them otherwise."
+            )
+        )
+    )
+
+    fig, axes = new_axes(2, width=5.5, height=3.4)
+    for name, poses in chained.items():
+        axes[0].plot(np.linalg.norm(poses[:, :2] - truth[:, :2], axis=1), label=name)
+        axes[1].plot(np.degrees(wrap_angle(poses[:, 2] - truth[:, 2])), label=name)
+    axes[0].set_xlabel("frame")
+    axes[0].set_ylabel("position error [m]")
+    axes[0].set_title("Frame-to-frame motions chained: position")
+    axes[1].set_xlabel("frame")
+    axes[1].set_ylabel("heading error [deg]")
+    axes[1].set_title("... and heading")
+    axes[0].legend(fontsize="small")
+    plt.show()
+else:
+    print(
+        "skipped: the rendered crawler moves a centimetre per frame, below what frame-to-frame matches "
+        "resolve (notebook 08 measures against keyframes), and its camera is on the axis of a flat floor"
+    )
+
+# %% [markdown]
+# Fed good matches, the circular model is not lost on this gently curving road, but it is biased
+# two ways (both asserted on the real drive, over RANSAC's seeds): reading a camera ahead of the
+# axis as if it were on it costs position, and ignoring pitch, slope and bank costs heading, frame
+# after frame; the 6-DoF refinement reduces the heading drift. A sharper turn makes the offset
+# term grow with the yaw rate, and a hillier road the pitch term.
+
+# %% [markdown]
+# ### 6b · Sharp turns and bumps: what the outlier filter must survive
+#
+# This drive turns by a few degrees in all; a city drive turns 90° at a crossing in two or three
+# seconds, 3–5° between frames at 10 Hz. Camera and mount are this drive's (KITTI's nominal rig
+# when the real data is absent); the matches are
+# drawn (`matches_under_transform`, 0.5 px noise, 20 % outliers) for a vehicle that moves 1 m along
+# its chord per frame and turns by an increasing angle. Seen from the camera itself, the gates of
+# eq. 20–21 lose a growing share of the *true* matches: the camera slides sideways by its offset
+# times the turned angle. The pipeline therefore runs 1-point RANSAC on the same matches as a
+# virtual camera *on the turning axis* sees them (`turning_axis_view`: triangulate, move through
+# the mount, project again). There the circular model is exact.
+#
+# A bump or the start of a slope pitches the body instead: no planar model describes that, so
+# when 1-point RANSAC keeps fewer than `CAR.min_inlier_ratio` of the matches the pipeline draws
+# general 3-point hypotheses (OpenCV's P3P in `solvePnPRansac`, seeded) and keeps the better.
+
+# %%
+if REAL:
+    turn_camera, turn_mount = seq.camera, vehicle.mount
+else:  # the section needs a car's rig, not the crawler's: KITTI's, as vo_lib assumes without raw_calib
+    turn_camera = StereoCamera(fx=721.5, fy=721.5, cx=609.6, cy=172.9, baseline=0.537, width=1242, height=375)
+    forward, left, up = KITTI_CAMERA_IN_IMU
+    turn_mount = camera_mount(forward=forward, height=up, left=left)
+to_axis = turning_axis_transform(turn_mount)
+turn_rng = np.random.default_rng(SEED)
+recall_rows = []
+for yaw_deg, pitch_deg in ((0, 0), (2, 0), (4, 0), (6, 0), (9, 0), (3, 1)):
+    th = math.radians(yaw_deg)
+    T_turn = camera_motion(np.zeros(3), [math.cos(th / 2), math.sin(th / 2), th], turn_mount)
+    bump = np.eye(4)
+    bump[:3, :3] = Rotation.from_euler("y", pitch_deg, degrees=True).as_matrix()
+    T_turn = np.linalg.inv(turn_mount) @ bump @ turn_mount @ T_turn
+    m_turn = matches_under_transform(turn_camera, 300, T_turn, turn_rng, (4.0, 60.0), 0.5, 0.2)
+    seen_by_camera = one_point_ransac(
+        m_turn.w_prev, m_turn.w_curr, turn_camera, rng=turn_rng, pixel_sigma=1.0
+    )
+    seen_on_axis = one_point_ransac(
+        turning_axis_view(m_turn.w_prev, turn_camera, to_axis),
+        turning_axis_view(m_turn.w_curr, turn_camera, to_axis),
+        turn_camera,
+        rng=turn_rng,
+        pixel_sigma=1.0,
+    )
+    odometer = StereoOdometry(turn_camera, CAR, mount=turn_mount, seed=SEED)
+    guess, start, ratio = odometer.motion.hypothesis(m_turn.w_prev, m_turn.w_curr, None, odometer.rng)
+    refined = rigid_motion.refine_rigid_motion(m_turn.w_prev, m_turn.w_curr, turn_camera, guess, start)
+    recall_rows.append(
+        (
+            yaw_deg,
+            pitch_deg,
+            np.mean(seen_by_camera.inliers[m_turn.inliers]),
+            np.mean(seen_on_axis.inliers[m_turn.inliers]),
+            np.linalg.norm(refined.t - T_turn[:3, 3]),
+        )
+    )
+print(" yaw/frame  pitch  true matches kept: camera view  axis view   pipeline's motion error")
+for yaw_deg, pitch_deg, cam_kept, axis_kept, t_err in recall_rows:
+    print(f"  {yaw_deg:5.0f}°  {pitch_deg:5.0f}°  {cam_kept:26.0%} {axis_kept:10.0%} {1000 * t_err:14.1f} mm")
+recall_table = np.array(recall_rows)
+planar_rows = recall_table[:, 1] == 0
+assert np.all(recall_table[planar_rows, 3] >= 0.98)  # on the axis every turn keeps its matches
+if np.hypot(*turn_mount[:2, 3]) > 0.5:  # a camera well off the axis (a car's)
+    assert recall_table[planar_rows][-1, 2] < 0.5  # seen from the camera, a 9° frame loses most
+assert recall_table[~planar_rows][0, 3] < 0.1  # a 1° pitch: no planar hypothesis fits...
+assert np.all(recall_table[:, 4] < 0.01)  # ...yet every motion is found to 1 cm
+
+# %% [markdown]
+# ## 7 · How many of 1-point RANSAC's inliers survive the 6-DoF refinement
+#
+# The pipeline runs 1-point RANSAC with gates of `CAR.ransac.gate_sigmas` standard deviations of 1 px noise,
+# wide enough for the circular model's own error, then chooses the inliers again with the refined
+# motion, at 1 px of reprojection error in (u, v, d). `FrameDiagnostics` keeps both counts.
+
+# %%
+diag = [d for d in vo_full.diagnostics if d.ransac_inliers > 0]
+frames = np.array([d.frame for d in diag])
+ransac_in = np.array([d.ransac_inliers for d in diag])
+refined_in = np.array([d.inliers for d in diag])
+share = refined_in / ransac_in
+print(
+    f"gates of {CAR.ransac.gate_sigmas:.0f} sigma; {len(diag)} frames estimated: RANSAC keeps a median of "
+    f"{np.median(ransac_in):.0f} matches, the refinement {np.median(refined_in):.0f}; median share "
+    f"kept {np.median(share):.0%} (range {share.min():.0%}..{share.max():.0%})"
+)
+assert np.median(share) < 1.0  # the general model is stricter than the gates
+assert np.all(refined_in[[not d.fallback for d in diag]] >= CAR.min_inliers)
+
+fig, axes = new_axes(2, width=5.5, height=3.4)
+axes[0].plot(frames, ransac_in, label="1-point RANSAC inliers")
+axes[0].plot(frames, refined_in, label="after the 6-DoF refinement")
+axes[0].set_xlabel("frame")
+axes[0].set_ylabel("matches")
+axes[0].set_title("Inliers per frame")
+axes[0].legend(fontsize="small")
+axes[1].plot(frames, share, ".-")
+axes[1].set_ylim(0, 1.05)
+axes[1].set_xlabel("frame")
+axes[1].set_ylabel("refined / RANSAC inliers")
+axes[1].set_title("Share of RANSAC's inliers the refinement keeps")
+plt.show()
+
+# %% [markdown]
+# ## 8 · Odometry, vision, and both, on real data
 #
 # The OXTS packets' forward speed and yaw rate, integrated between frames, stand in for wheel
 # odometry: two wheels a gauge apart (`vo_lib.stereo_vo.vehicle`) travel `s ∓ gauge·Δψ/2`, and the
@@ -905,7 +950,7 @@ assert angle_cv < 0.05 and shift_cv < 0.005
 # %%
 odometry_only = vehicle.odometry_model.integrate(vehicle.odometry[1:])
 vision_only = runs[vehicle.motion]  # run_sequence(seq, use_odometry=False) chooses this model
-fused = run_sequence(seq, use_odometry=True)
+fused = run_sequence(seq, use_odometry=True, seed=SEED)
 paths = {"odometry only": odometry_only, "VO only": vision_only.poses, "fused": fused.poses}
 final, along = {}, {}
 for name, poses in paths.items():
@@ -955,7 +1000,7 @@ drift_across = float(
     @ across_dir
 )
 course = np.arctan2(*np.diff(truth[:, :2], axis=0)[:, ::-1].T)  # the direction of travel
-moving = step_length > 0.05
+moving = step_length > 0.5 * np.median(step_length)  # frames that travel, whatever the speed
 crab = np.degrees(np.median(np.abs(wrap_angle(course[moving] - truth[:-1, 2][moving]))))
 _, across_odo, _ = relative_planar(truth[-1], odometry_only[-1])
 print(
@@ -980,15 +1025,23 @@ plt.show()
 # speed (and of the timestamps it is integrated over) as an along-track error.
 #
 # %%
-display(
-    Markdown(
-        f"The odometry's heading drift explains only {drift_across:+.3f} m of its "
-        f"{across_odo:+.3f} m across the track. The rest comes from the odometry model's assumption "
-        "that a vehicle travels along its heading: the truth's direction of travel differs from its "
-        f"heading by a median {crab:.2f}° (a slip angle of the tyres, or how the IMU is mounted), "
-        "and integrating the speed along the heading turns that angle into an across-track error."
+drift_share = drift_across / across_odo if across_odo else 1.0
+if abs(1 - drift_share) > 0.2 and np.isfinite(crab):
+    across_story = (
+        f"The odometry's heading drift explains {drift_across:+.3f} m of its {across_odo:+.3f} m "
+        "across the track. The rest comes from the odometry model's assumption that a vehicle "
+        "travels along its heading: the truth's direction of travel differs from its heading by a "
+        f"median {crab:.2f}° (a slip angle of the tyres, or how the IMU is mounted), and integrating "
+        "the speed along the heading turns that angle into an across-track error."
     )
-)
+else:
+    across_story = (
+        f"The odometry's heading drift explains {drift_across:+.3f} m of its {across_odo:+.3f} m "
+        f"across the track ({drift_share:.0%}): on this "
+        + ("drive" if REAL else "rendered sample, whose robot travels along its heading,")
+        + " the heading drift is the whole story."
+    )
+display(Markdown(across_story))
 
 # %% [markdown]
 # The filter weighs odometry and vision by their covariances. The odometry's comes from a noise
@@ -1016,6 +1069,12 @@ print(
 )
 odometry_noise_too_wide = yaw_nis_bound.mean() < nis_band[0]
 fusion_helps = final["fused"][0] < final["VO only"][0]
+# the only random draws here are RANSAC's: run both again with another seed
+fused_again = run_sequence(seq, use_odometry=True, seed=SEED + 1)
+vision_again = run_sequence(seq, use_odometry=False, motion=vehicle.motion, seed=SEED + 1)
+draw_free = np.allclose(fused_again.poses, fused.poses) and np.allclose(vision_again.poses, vision_only.poses)
+again = {name: final_errors(r.poses)[0] for name, r in (("fused", fused_again), ("VO only", vision_again))}
+print(f"RANSAC seed {SEED + 1}: fused {again['fused']:.3f} m, VO only {again['VO only']:.3f} m")
 display(
     Markdown(
         f"The bound averages {yaw_nis_bound.mean():.1e}, "
@@ -1027,13 +1086,22 @@ display(
         )
         + f"And with the truth: fused, the drive ends {final['fused'][0]:.3f} m off, vision alone "
         f"{final['VO only'][0]:.3f} m, odometry alone {final['odometry only'][0]:.3f} m. The fusion "
-        + ("improves on" if fusion_helps else "ends no better than")
-        + " vision alone on this drive."
+        + ("ends closer than" if fusion_helps else "ends no closer than")
+        + " vision alone on this drive. "
+        + (
+            f"With RANSAC seed {SEED + 1} instead of {SEED} both paths come out the same: RANSAC's "
+            "draws, the only random ones here, do not move them. "
+            if draw_free
+            else f"With RANSAC seed {SEED + 1} they end {again['fused']:.3f} m and "
+            f"{again['VO only']:.3f} m off: RANSAC's draws, the only random ones here, move them. "
+        )
+        + "Either way this is one real drive, and one drive ranks fusion against vision for "
+        "no other (notebooks 07 and 08 compare them over seeds)."
     )
 )
 
 # %% [markdown]
-# ## 7 · Where we stand against a plain OpenCV stereo odometry
+# ## 9 · Where we stand against a plain OpenCV stereo odometry
 #
 # `vo_lib.stereo_vo.pnp_baseline` is the stereo odometry one writes first with OpenCV: ORB (3000
 # features), brute-force cross-checked matching, `solvePnPRansac` from frame to frame. It runs
@@ -1070,7 +1138,7 @@ projected = final_errors(planar_from_camera_poses(ours.camera_poses[:n_pnp], veh
 display(
     Markdown(
         f"The same run of ours ends {own_planar:.3f} m off in its own planar pose (the figure of "
-        f"sections 2 and 6) and {projected:.3f} m off when its 6-DoF camera pose is projected to the "
+        f"sections 6 and 8) and {projected:.3f} m off when its 6-DoF camera pose is projected to the "
         "plane, as the baseline's must be for the table; the two differ because the pipeline's "
         "planar pose is what its filter estimates, not the projection of its camera pose."
     )
@@ -1084,6 +1152,7 @@ display(
 #   end adapts its threshold and finds corners at three scales, and its sub-pixel disparities on
 #   the Motorcycle pair are at least as accurate as OpenCV's semi-global matcher at the same pixels.
 # - Single-scale corners drift as the scene grows towards a car, and the heading drifts with them.
+# - The tail of the disparity error sits on depth edges, where a patch mixes two depths.
 # - On a car the circular-motion model misses the camera's offset from the turning axis, the
 #   road's slope and bank, and the body's pitch under braking; they move features by pixels in
 #   some frames, all the same way, which costs position (offset) and heading (pitch, slope, bank).
@@ -1091,8 +1160,9 @@ display(
 #   Gauss–Newton fit on reprojection errors in both images then keeps a share of its inliers
 #   and measures the motion the model cannot. We wrote that step in a few lines of NumPy and
 #   matched the library to machine precision, and OpenCV's left-image LM closely.
-# - Vision beats the odometry alone, fused or not. On this drive the fusion does not beat vision
-#   alone (section 6 prints both), and the odometry is the truth's own GPS/IMU with a noise chosen
+# - On this one drive vision ends far closer than the odometry alone, fused or not, and the
+#   fusion does not end closer than vision alone (section 8 prints both, with a second RANSAC
+#   seed); one drive ranks nothing in general. The odometry is the truth's own GPS/IMU with a noise chosen
 #   on this drive; NIS, without the truth, shows its yaw noise modelled far too wide. The OpenCV
 #   PnP baseline is the yardstick for accuracy and speed (the printed ratio is one run's, both
 #   timed alike).
