@@ -177,3 +177,55 @@ def test_snapshot_restore_and_widen_keep_the_state_inside_the_filter():
     assert np.array_equal(kf.pose, pose)
     kf.widen((1.0, 2.0, 0.5))
     assert np.allclose(np.diag(kf.covariance) - np.diag(cov), [1.0, 4.0, 0.25])
+
+
+# --- the slip-calibrated filter ----------------------------------------------------------------
+
+
+def _spot_turn(kf, slip, rng, steps=300, outage=()):
+    """A spot turn whose encoders over-count by ``1 / (1 - slip)``; VO sees the true turn.
+    Returns the final heading error (rad)."""
+    from vo_lib.stereo_vo.kalman import SlipCalibratedFilter  # noqa: F401  (the class under test)
+
+    truth = np.zeros(3)
+    for k in range(steps):
+        u_true = ODO.controls_for(0.0, math.radians(0.6))
+        prev, truth = truth, ODO.predict(truth, u_true)
+        kf.predict(u_true / (1.0 - slip))
+        if k not in outage:
+            z = measurement(np.concatenate([truth, prev])) + rng.multivariate_normal(np.zeros(2), R_VO)
+            kf.update(z[0], z[1], R_VO)
+        kf.finish_frame()
+    return abs(math.remainder(kf.pose[2] - truth[2], math.tau))
+
+
+def test_slip_calibration_learns_the_turn_scale():
+    from vo_lib.stereo_vo.kalman import SlipCalibratedFilter
+
+    kf = SlipCalibratedFilter(ODO)
+    _spot_turn(kf, 0.06, np.random.default_rng(3))
+    sigma = math.sqrt(kf.scale_variances[1])
+    assert abs(kf.scales[1] - 0.94) < 3 * sigma  # true turn over counted turn, 1 - slip, within 3σ
+    assert sigma < 0.01 and abs(kf.scales[1] - 1.0) > 3 * sigma  # and told apart from no slip
+
+
+def test_slip_calibration_removes_the_bias_through_an_outage():
+    """Through 100 frames without VO the plain filter drifts by the slip of every turn; the
+    calibrated one by what is left of its learnt scale's error."""
+    from vo_lib.stereo_vo.kalman import SlipCalibratedFilter
+
+    gap = set(range(150, 250))
+    plain = _spot_turn(VoKalmanFilter(ODO), 0.06, np.random.default_rng(4), outage=gap)
+    calibrated = _spot_turn(SlipCalibratedFilter(ODO), 0.06, np.random.default_rng(4), outage=gap)
+    assert plain > math.radians(3.0)  # 6 % of 100 frames of 0.6°
+    assert calibrated < 0.2 * plain  # most of the bias is learnt
+
+
+def test_slip_calibration_without_freedom_is_the_plain_filter():
+    from vo_lib.stereo_vo.kalman import SlipCalibratedFilter
+
+    a, b = VoKalmanFilter(ODO), SlipCalibratedFilter(ODO, scale_sigma=0.0, scale_drift=0.0)
+    simulate(a, np.random.default_rng(5), 50)
+    simulate(b, np.random.default_rng(5), 50)
+    assert np.allclose(a.ekf.x, b.ekf.x, atol=1e-12) and np.allclose(a.ekf.P, b.ekf.P, atol=1e-15)
+    assert np.all(b.scales == 1.0)
