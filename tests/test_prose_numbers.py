@@ -454,7 +454,6 @@ NOT_RANDOM: dict[str, dict[str, str]] = {
         "fusion hurts the heading": "the mechanism of the heading figures printed over seeds above",
         "Learning the slip removes the bias where there is a large one": "explains the "
         "calibrated filter's seed figures printed just above",
-        "A filter that is to help in both": "a design requirement, no measured comparison",
         "it removes\nnoise where both are noisy": "the summary restates section 4's seed figures",
     },
 }
