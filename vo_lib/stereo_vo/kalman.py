@@ -351,6 +351,12 @@ class SlipCalibratedFilter(VoKalmanFilter):
         self.scale_covariance = self.scale_covariance + np.eye(2) * self.scale_drift**2
         super().predict(self.scales * u, keep_reference)
 
+    def control_covariance(self, u) -> np.ndarray:
+        """The parent's encoder and slip noise of the corrected distances ``u``, plus what the
+        scales' own uncertainty adds to them: ``diag(counted) P_c diag(counted)``."""
+        counted = np.asarray(u, float) / self.scales
+        return super().control_covariance(u) + np.diag(counted) @ self.scale_covariance @ np.diag(counted)
+
     def update(self, theta: float, rho: float, covariance, sideways: float = 0.0) -> None:
         """Learn the scales from ``(theta, rho)`` against the counted motion, then update the pose."""
         covariance = np.asarray(covariance, float)
@@ -362,7 +368,7 @@ class SlipCalibratedFilter(VoKalmanFilter):
             # the scales, joins the VO's in the innovation, else the scales would shrink to explain it
             J = H / np.where(self._counted == 0.0, 1.0, self._counted) * self.scales
             R = covariance[:2, :2] * max(1.0, self.innovation_nis / 2.0)
-            R = R + J @ self.control_covariance(self._counted) @ J.T
+            R = R + J @ VoKalmanFilter.control_covariance(self, self._counted) @ J.T
             innovation = np.array([theta, rho]) - H @ self.scales
             S = H @ self.scale_covariance @ H.T + R
             self.innovation_nis += NIS_MEMORY * (nis(innovation, S) - self.innovation_nis)
