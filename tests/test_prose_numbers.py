@@ -431,7 +431,7 @@ RANDOM_COMPARISONS = ("03", "06", "07", "08", "09", "10", "11")
 #: Words by which a sentence says one method or condition did better or worse than another.
 COMPARATIVE = re.compile(
     r"\b(better|worse|helps?|helped|hurts?|beats?|beaten|outperforms?|outperformed|"
-    r"more accurate|less accurate|(?:the|suffers?|errs?|gains?|loses?|costs?) (?:most|least)|"
+    r"more accurate|less accurate|(?:suffers?|errs?|gains?|loses?|costs?) (?:most|least)|"
     r"(?:most|least) (?:in|on|where|when|accurate))\b",
     re.I,
 )
