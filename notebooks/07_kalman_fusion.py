@@ -503,6 +503,7 @@ display(
 assert heading_cmp["spot turn"].verdict("fused", "odometry") is Verdict.BETTER
 assert position_cmp["indoor"].verdict("fused", "odometry") is Verdict.BETTER
 assert heading_cmp["spot turn"].verdict("fused", "VO") is Verdict.NOT_RELIABLE
+assert heading_cmp["indoor"].verdict("fused", "VO") is Verdict.NOT_RELIABLE
 assert position_cmp["indoor, weak vision"].verdict("fused", "VO") is Verdict.BETTER
 assert position_cmp["spot turn, weak vision"].verdict("fused", "VO") is Verdict.BETTER
 assert heading_cmp["spot turn, weak vision"].verdict("fused", "VO") is Verdict.WORSE
