@@ -177,3 +177,76 @@ def test_snapshot_restore_and_widen_keep_the_state_inside_the_filter():
     assert np.array_equal(kf.pose, pose)
     kf.widen((1.0, 2.0, 0.5))
     assert np.allclose(np.diag(kf.covariance) - np.diag(cov), [1.0, 4.0, 0.25])
+
+
+# --- the slip-calibrated filter ----------------------------------------------------------------
+
+
+def _spot_turn(kf, slip, rng, steps=300, outage=()):
+    """A spot turn whose encoders over-count by ``1 / (1 - slip)``; VO sees the true turn.
+    Returns the final heading error (rad)."""
+    from vo_lib.stereo_vo.kalman import SlipCalibratedFilter  # noqa: F401  (the class under test)
+
+    truth = np.zeros(3)
+    for k in range(steps):
+        u_true = ODO.controls_for(0.0, math.radians(0.6))
+        prev, truth = truth, ODO.predict(truth, u_true)
+        kf.predict(u_true / (1.0 - slip))
+        if k not in outage:
+            z = measurement(np.concatenate([truth, prev])) + rng.multivariate_normal(np.zeros(2), R_VO)
+            kf.update(z[0], z[1], R_VO)
+        kf.finish_frame()
+    return abs(math.remainder(kf.pose[2] - truth[2], math.tau))
+
+
+def test_slip_calibration_learns_the_turn_scale():
+    from vo_lib.stereo_vo.kalman import SlipCalibratedFilter
+
+    kf = SlipCalibratedFilter(ODO)
+    _spot_turn(kf, 0.06, np.random.default_rng(3))
+    mean_scale = kf.scales.mean()  # the turn of a spot turn scales with both tracks' mean
+    sigma = math.sqrt(np.ones(2) @ kf.scale_covariance @ np.ones(2)) / 2
+    assert abs(mean_scale - 0.94) < 3 * sigma  # ground over counted distance, 1 - slip, within 3σ
+    assert sigma < 0.01 and abs(mean_scale - 1.0) > 3 * sigma  # and told apart from no slip
+
+
+def test_slip_calibration_learns_unequal_slip_when_driving():
+    """Unequal slip while driving adds a turn the encoders count and the ground does not; the
+    learnt scales tell the tracks apart."""
+    from vo_lib.stereo_vo.kalman import SlipCalibratedFilter
+
+    kf, rng = SlipCalibratedFilter(ODO), np.random.default_rng(6)
+    truth, slip = np.zeros(3), np.array([0.01, 0.05])
+    for _ in range(400):
+        u_true = ODO.controls_for(0.05, 0.0)
+        prev, truth = truth, ODO.predict(truth, u_true)
+        kf.predict(u_true / (1.0 - slip) + rng.normal(0.0, 1e-4, 2))
+        z = measurement(np.concatenate([truth, prev])) + rng.multivariate_normal(np.zeros(2), R_VO)
+        kf.update(z[0], z[1], R_VO)
+        kf.finish_frame()
+    sigma = np.sqrt(np.diag(kf.scale_covariance))
+    assert np.all(np.abs(kf.scales - (1.0 - slip)) < 3 * sigma)  # each track within 3σ
+    apart = np.array([1.0, -1.0])
+    assert kf.scales @ apart > 3 * math.sqrt(apart @ kf.scale_covariance @ apart)  # the two told apart
+
+
+def test_slip_calibration_removes_the_bias_through_an_outage():
+    """Through 100 frames without VO the plain filter drifts by the slip of every turn; the
+    calibrated one by what is left of its learnt scale's error."""
+    from vo_lib.stereo_vo.kalman import SlipCalibratedFilter
+
+    gap = set(range(150, 250))
+    plain = _spot_turn(VoKalmanFilter(ODO), 0.06, np.random.default_rng(4), outage=gap)
+    calibrated = _spot_turn(SlipCalibratedFilter(ODO), 0.06, np.random.default_rng(4), outage=gap)
+    assert plain > math.radians(3.0)  # 6 % of 100 frames of 0.6°
+    assert calibrated < 0.5 * plain  # most of the bias is learnt
+
+
+def test_slip_calibration_without_freedom_is_the_plain_filter():
+    from vo_lib.stereo_vo.kalman import SlipCalibratedFilter
+
+    a, b = VoKalmanFilter(ODO), SlipCalibratedFilter(ODO, scale_sigma=0.0, scale_drift=0.0)
+    simulate(a, np.random.default_rng(5), 50)
+    simulate(b, np.random.default_rng(5), 50)
+    assert np.allclose(a.ekf.x, b.ekf.x, atol=1e-12) and np.allclose(a.ekf.P, b.ekf.P, atol=1e-15)
+    assert np.all(b.scales == 1.0)

@@ -51,3 +51,22 @@ def test_stored_set_is_what_the_code_computes(name):
     for part in ("fused", "odometry"):
         for quantity, values in stored[part].items():
             assert fresh[part][quantity] == pytest.approx(values, rel=1e-9, abs=1e-9), (part, quantity)
+
+
+def test_stored_contradiction_study_is_present_and_current():
+    study = json.loads(paper_sets.RESULTS.read_text())["contradictions"]
+    assert study["fingerprint"] == fingerprint(study["set"])
+    assert len(study["seeds"]) == paper_sets.CONTRADICTION_DRIVES >= 10
+    assert study["seeds"][0] == SAMPLES[study["set"]].seed  # the sample's own drive, then new ones
+    for label in ("preset", "believed"):
+        assert len(study[label]["flagged"]) == len(study["seeds"]) == len(study[label]["heading_rms_deg"])
+
+
+@pytest.mark.samples
+def test_stored_contradiction_study_is_what_the_code_computes():
+    stored = json.loads(paper_sets.RESULTS.read_text())["contradictions"]
+    fresh = paper_sets.contradiction_study()
+    for label in ("preset", "believed"):
+        assert fresh[label]["flagged"] == stored[label]["flagged"], label
+        expected = pytest.approx(stored[label]["heading_rms_deg"], rel=1e-9)
+        assert fresh[label]["heading_rms_deg"] == expected, label

@@ -97,6 +97,7 @@ CONSTANTS: dict[str, dict[str, str]] = {
         "18 °/s": "the turn rate of the simulated spot-turn drive",
         "6 %": "the mean slip the simulated spot turn is given",
         "0.5 px": "the pixel noise chosen for the synthetic matches",
+        "2 px": "the pixel noise chosen for the weak-vision condition of section 4",
         "30 %": "the outlier share chosen for the synthetic matches",
         "2 mm": "the sideways pseudo-measurement's σ, a chosen constant (SIDEWAYS_SIGMA)",
         "95 %": "the confidence level of the χ² band, by choice",
@@ -190,6 +191,7 @@ CONSTANTS: dict[str, dict[str, str]] = {
         "8.00 °": "the end of the threshold grid the exercise sets",
     },
     "08_full_pipeline": {
+        "95 %": "the confidence level of the χ² band, by choice",
         "6 %": "the mean slip the simulated drives are given in spot turns",
         "1.5 °": "the turn of the synthetic keyframe step, chosen (key_theta)",
         "4 cm": "the chord of the synthetic keyframe step, chosen (key_rho)",
@@ -419,3 +421,167 @@ def wide_margins(path: pathlib.Path) -> list[str]:
 def test_wide_assert_margins_say_why(path):
     bad = wide_margins(path)
     assert not bad, "asserts with a margin of 3× or more and no comment saying why:\n" + "\n".join(bad)
+
+
+# --- comparative sentences rest on seeds, not on one draw ------------------------------------
+
+#: Notebooks whose comparisons are about random outcomes (draws of noise, slip, matches).
+RANDOM_COMPARISONS = ("03", "06", "07", "08", "09", "10", "11")
+#: Words by which a sentence says one method or condition did better or worse than another.
+COMPARATIVE = re.compile(
+    r"\b(better|worse|helps?|helped|hurts?|beats?|beaten|outperforms?|outperformed|"
+    r"more accurate|less accurate|(?:suffers?|errs?|gains?|loses?|costs?) (?:most|least)|"
+    r"(?:most|least) (?:in|on|where|when|accurate))\b",
+    re.I,
+)
+#: What a comparative sentence about a random outcome must carry: its seed count or share, or the
+#: statement that the difference is not reliable.
+SEED_FIGURE = re.compile(
+    r"(?:\d+|\{[^{}]+\})\s+of\s+(?:\d+|\{[^{}]+\})\s+(?:seeds|runs|laps|draws)|"
+    r"over\s+(?:\d+|\{[^{}]+\}|the)\s+(?:seeds|runs|laps|draws)|"
+    r"not reliabl[ey]",
+    re.I,
+)
+#: Sentences with a comparative word that are not claims about a random outcome, each with its
+#: reason; keyed by notebook stem and a fragment of the sentence.
+NOT_RANDOM: dict[str, dict[str, str]] = {
+    "07_kalman_fusion": {
+        "does fusion ever help?)": "announces the questions the seed figures below answer",
+        "Above 3 the filter is over-confident": "defines what NEES values mean, no comparison of draws",
+        "Fusion therefore helps where the two errors are independent noise": "the mechanism, stated "
+        "ahead of the seed figures of the cell before it",
+        "so averaging removes VO's noise": "the mechanism of the position figures printed over seeds above",
+        "where fusion helps, where it hurts, and why": "the learning goals announce section 4's seed figures",
+        "fusion hurts the heading": "the mechanism of the heading figures printed over seeds above",
+        "Learning the slip removes the bias where there is a large one": "explains the "
+        "calibrated filter's seed figures printed just above",
+        "it removes\nnoise where both are noisy": "the summary restates section 4's seed figures",
+    },
+}
+
+
+NOT_RANDOM["08_full_pipeline"] = {
+    "Notebook 07 measures over seeds when fusing helps": "points to the seed comparisons of notebook 07",
+}
+
+
+def _story_cells(path: pathlib.Path) -> str:
+    """The notebook's source up to its graded exercises (their text is set by the exercises)."""
+    text = path.read_text(encoding="utf-8")
+    cut = text.find("\n# ## Exercises")
+    return text if cut < 0 else text[:cut]
+
+
+def _sentences(text: str):
+    """Sentences and list items; a question claims nothing and is left out."""
+    parts = re.split(r"(?<=[.!?])\s+(?=[A-Z*(])|\s+(?=[-*] )", text)
+    return [s.strip() for s in parts if s.strip() and not s.strip().endswith("?")]
+
+
+def _markdown_sentences(path: pathlib.Path):
+    """(line, sentence) of the markdown cells of the story."""
+    story_lines = _story_cells(path).count("\n") + 1
+    for paragraph in _paragraphs(path):
+        if paragraph[0][0] > story_lines:
+            break
+        joined = " ".join(text.strip() for _, text in paragraph)
+        for sentence in _sentences(joined):
+            yield paragraph[0][0], sentence
+
+
+def _literal_text(node: ast.AST) -> str:
+    """The text a string expression writes, its computed parts as "{…}"."""
+    if isinstance(node, ast.Constant) and isinstance(node.value, str):
+        return node.value
+    if isinstance(node, ast.JoinedStr):
+        return "".join(_literal_text(v) if isinstance(v, ast.Constant) else "{…}" for v in node.values)
+    if isinstance(node, ast.BinOp) and isinstance(node.op, ast.Add):
+        return _literal_text(node.left) + _literal_text(node.right)
+    return "{…}"
+
+
+def _code_sentences(path: pathlib.Path):
+    """(line, literal text, written by a comparison) of every ``Markdown(...)`` the story's code
+    writes: its string parts, and whether it calls ``Comparison.sentence`` (directly or through a
+    function of the notebook that does)."""
+    source = _story_cells(path)
+    try:
+        tree = ast.parse(source)
+    except SyntaxError:
+        return
+    helpers = {
+        node.name
+        for node in ast.walk(tree)
+        if isinstance(node, ast.FunctionDef) and ".sentence(" in (ast.get_source_segment(source, node) or "")
+    }
+    for node in ast.walk(tree):
+        if not (isinstance(node, ast.Call) and getattr(node.func, "id", "") == "Markdown"):
+            continue
+        segment = ast.get_source_segment(source, node) or ""
+        compared = ".sentence(" in segment or any(re.search(rf"\b{h}\(", segment) for h in helpers)
+        parts = [_literal_text(arg) for arg in node.args]
+        yield node.lineno, "".join(parts), compared
+
+
+def unseeded_comparisons(path: pathlib.Path) -> list[str]:
+    """Comparative sentences of ``path``'s story with no seed figure, as "file:line: sentence"."""
+    allowed = NOT_RANDOM.get(path.stem, {})
+    bad = []
+
+    def check(line, sentence, compared=False):
+        if not COMPARATIVE.search(sentence) or compared or SEED_FIGURE.search(sentence):
+            return
+        flat = " ".join(sentence.split())
+        if any(" ".join(k.split()) in flat for k in allowed):
+            return
+        bad.append(f"{path.name}:{line}: {flat[:160]}")
+
+    for line, sentence in _markdown_sentences(path):
+        check(line, sentence)
+    for line, text, compared in _code_sentences(path):
+        for sentence in _sentences(text):
+            check(line, sentence, compared)
+    return bad
+
+
+def test_the_comparison_guard_reads_sentences():
+    """A comparative sentence passes with a seed share, or as a Comparison's sentence; a sentence
+    without a comparative word, or with "at least", is not one."""
+    assert COMPARATIVE.search("the fused filter does better") and not COMPARATIVE.search("at least 10")
+    assert SEED_FIGURE.search("lower in 17 of 20 seeds") and SEED_FIGURE.search("in {n} of {m} seeds")
+    assert SEED_FIGURE.search("the two are not reliably different") and not SEED_FIGURE.search("in one run")
+    tmp = pathlib.Path(__file__).with_name("_comparison_probe.py")
+    try:
+        tmp.write_text(
+            "# %% [markdown]\n# Fused beats VO. Fused beats VO in 9 of 10 seeds. The wall is grey.\n\n"
+            "# %%\nc = None\ndisplay(Markdown('VO is worse.'))\ndisplay(Markdown(c.sentence('a', 'b')))\n",
+            encoding="utf-8",
+        )
+        found = unseeded_comparisons(tmp)
+    finally:
+        tmp.unlink(missing_ok=True)
+    assert [f.split(": ", 1)[1] for f in found] == ["Fused beats VO.", "VO is worse."]
+
+
+def test_not_random_entries_are_used_and_explained():
+    for stem, table in NOT_RANDOM.items():
+        path = ROOT / "notebooks" / f"{stem}.py"
+        said = [s for _, s in _markdown_sentences(path)] + [t for _, t, _ in _code_sentences(path)]
+        text = " ".join(" ".join(said).split())
+        for fragment, reason in table.items():
+            assert len(reason.split()) >= 3, f"{stem}: {fragment!r} needs a reason"
+            assert " ".join(fragment.split()) in text, f"{stem}: {fragment!r} is listed but not in its story"
+
+
+_RANDOM_NOTEBOOKS = [p for p in NOTEBOOKS if p.stem[:2] in RANDOM_COMPARISONS]
+
+
+@pytest.mark.parametrize("path", _RANDOM_NOTEBOOKS, ids=[p.stem for p in _RANDOM_NOTEBOOKS])
+def test_comparisons_rest_on_seeds(path):
+    bad = unseeded_comparisons(path)
+    assert not bad, (
+        f"{len(bad)} comparative sentence(s) of {path.name} state no seed count or share: write them "
+        "with vo_lib.comparison (Comparison.sentence), state 'in k of n seeds', say the difference is "
+        "not reliable, or list a statement that is not about a random outcome in NOT_RANDOM:\n"
+        + "\n".join(bad)
+    )

@@ -292,3 +292,88 @@ def nis(innovation, innovation_covariance) -> float:
     if S.shape != (nu.size, nu.size):
         raise ValueError(f"innovation has {nu.size} components, its covariance is {S.shape}")
     return float(nu @ np.linalg.solve(S, nu))
+
+
+#: Initial uncertainty of each track's scale (true over counted distance; a slip of up to ~10 %).
+SCALE_SIGMA = 0.05
+#: How far the scales may drift per frame (random walk): slip changes with the ground and the
+#: manoeuvre, from about 1 % when driving to about 6 % in a spot turn.
+SCALE_DRIFT = 0.0005
+#: Weight of the newest update in the running mean of the scale updates' normalised innovation
+#: squared (about the last 1 / NIS_MEMORY updates count).
+NIS_MEMORY = 0.02
+
+
+class SlipCalibratedFilter(VoKalmanFilter):
+    """:class:`VoKalmanFilter` whose track odometry is corrected by the slip's mean, learnt online.
+
+    Slip makes the encoders over-count: a track that slips by ``s`` turns ``1 / (1 - s)`` times as
+    far as it moves over the ground, so each track's count is too large by a *mean* factor that
+    the zero-mean process noise of :class:`VoKalmanFilter` does not model; it leaks into the fused
+    pose in proportion to the weight the filter gives the odometry. Here each track has a scale,
+    ``c = (c_left, c_right)``, ground distance over counted distance, a random walk
+    (``SCALE_DRIFT`` per frame). The VO measurement of the motion since the reference is linear in
+    them: with the counted distances ``(u_l, u_r)`` and the gauge ``b`` ([Zhao], eq. 4–5),
+    ``theta = (c_r u_r − c_l u_l) / b`` and ``rho = (c_l u_l + c_r u_r) / 2 · sinc(theta / 2)``
+    (eq. 15's chord of an arc), so a linear Kalman update learns ``c``; the prediction then moves
+    the pose with the corrected distances. Equal scales model a slip that scales the whole motion
+    (the spot turn); unequal ones the turn that unequal slip adds when driving.
+
+    The VO's reported variance may be smaller than its real error, and the scales would then
+    follow its noise. The update therefore keeps a running mean of its normalised innovation
+    squared (2 for a consistent 2-D update) and inflates the VO covariance it uses by the mean's
+    excess over 2 (noise set from the innovation statistics). The counted distances are noisy as
+    well (encoder noise, the slip's random part): their covariance, carried through the scales,
+    is added to the innovation's, or the scales would shrink to explain that noise away.
+
+    The scales are estimated apart from the pose (a two-stage estimate): the VO measurement that
+    updates them also updates the pose, and the correlation this creates is not carried. It is
+    small when the scales change slowly against the frame rate, as slip does; the NEES over seeds
+    checks the effect.
+    """
+
+    def __init__(self, *args, scale_sigma: float = SCALE_SIGMA, scale_drift: float = SCALE_DRIFT, **kwargs):
+        super().__init__(*args, **kwargs)
+        self.scales = np.ones(2)  # (c_left, c_right)
+        self.scale_covariance = np.eye(2) * float(scale_sigma) ** 2
+        self.scale_drift = float(scale_drift)
+        self.innovation_nis = 2.0  # running mean of the scale updates' NIS (2 if consistent)
+        self._counted: np.ndarray | None = None  # (left, right) counted since the reference
+
+    def predict(self, u=None, keep_reference: bool = False) -> None:
+        """Scale each track's counted distance by its learnt factor, then predict as the parent."""
+        if u is None:
+            self._counted = None
+            super().predict(None, keep_reference)
+            return
+        u = np.asarray(u, float)
+        self._counted = u + (self._counted if keep_reference and self._counted is not None else 0.0)
+        self.scale_covariance = self.scale_covariance + np.eye(2) * self.scale_drift**2
+        super().predict(self.scales * u, keep_reference)
+
+    def control_covariance(self, u) -> np.ndarray:
+        """The parent's encoder and slip noise of the corrected distances ``u``, plus what the
+        scales' own uncertainty adds to them: ``diag(counted) P_c diag(counted)``."""
+        counted = np.asarray(u, float) / self.scales
+        return super().control_covariance(u) + np.diag(counted) @ self.scale_covariance @ np.diag(counted)
+
+    def update(self, theta: float, rho: float, covariance, sideways: float = 0.0) -> None:
+        """Learn the scales from ``(theta, rho)`` against the counted motion, then update the pose."""
+        covariance = np.asarray(covariance, float)
+        if self._counted is not None:
+            left, right = self._counted
+            gauge, chord = self.odometry.gauge, float(np.sinc(0.5 * theta / math.pi))
+            H = np.array([[-left / gauge, right / gauge], [0.5 * left * chord, 0.5 * right * chord]])
+            # the counts are noisy too (encoder noise and slip's random part): their noise, through
+            # the scales, joins the VO's in the innovation, else the scales would shrink to explain it
+            J = H / np.where(self._counted == 0.0, 1.0, self._counted) * self.scales
+            R = covariance[:2, :2] * max(1.0, self.innovation_nis / 2.0)
+            R = R + J @ VoKalmanFilter.control_covariance(self, self._counted) @ J.T
+            innovation = np.array([theta, rho]) - H @ self.scales
+            S = H @ self.scale_covariance @ H.T + R
+            self.innovation_nis += NIS_MEMORY * (nis(innovation, S) - self.innovation_nis)
+            K = self.scale_covariance @ H.T @ np.linalg.inv(S)
+            self.scales = self.scales + K @ innovation
+            I_KH = np.eye(2) - K @ H
+            self.scale_covariance = I_KH @ self.scale_covariance @ I_KH.T + K @ R @ K.T
+        super().update(theta, rho, covariance, sideways)

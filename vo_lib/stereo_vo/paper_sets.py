@@ -8,7 +8,8 @@ A full run renders and processes about 12,700 frames, more than a notebook can a
 this module (package data: an installed wheel has it too), each set with the code version and
 the sample fingerprint that made it. Notebook 08 reads them (:func:`load`); a ``samples``-marked
 test runs them again and compares. ``python -m vo_lib.stereo_vo.paper_sets [SET ...]`` recomputes
-the named sets (default: all) and stores them beside the others.
+the named sets (default: all) and stores them beside the others; ``... paper_sets contradictions``
+recomputes :func:`contradiction_study` (vision rejected after a lost track contact, over seeds).
 """
 
 from __future__ import annotations
@@ -16,6 +17,7 @@ from __future__ import annotations
 import json
 import subprocess
 import sys
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -23,8 +25,9 @@ import numpy as np
 from vo_lib.evaluation import key_position_errors
 from vo_lib.geometry import relative_planar, wrap_angle
 from vo_lib.models.track_odometry import TrackOdometry
-from vo_lib.sim.samples import fingerprint, render_sample
-from vo_lib.stereo_vo.pipeline import run_frames
+from vo_lib.sim.samples import SAMPLES, fingerprint, render_sample
+from vo_lib.stereo_vo.config import CRAWLER
+from vo_lib.stereo_vo.pipeline import StereoOdometry, run_frames
 
 #: The stored results, beside this module (package data, so an installed wheel has them too).
 RESULTS = Path(__file__).resolve().with_name("paper_sets.json")
@@ -116,6 +119,55 @@ def run_set(name: str, frames: int | None = None) -> dict:
     }
 
 
+#: The study of vision rejected after a lost track contact: the sample, its first frames, the
+#: drives (the sample's own seed and the next ones: each draws the slip, the losses of contact
+#: and the image noise anew), and the number of consecutive contradicting frames after which the
+#: vision is believed (the crawler's preset never believes it: math.inf).
+CONTRADICTION_SET = "outdoor_free_3"
+CONTRADICTION_FRAMES = 600
+CONTRADICTION_DRIVES = 10
+CONTRADICTION_LIMIT = 2
+
+
+def contradiction_study(
+    name: str = CONTRADICTION_SET, frames: int = CONTRADICTION_FRAMES, drives: int = CONTRADICTION_DRIVES
+) -> dict:
+    """The crawler's pipeline as preset and with ``max_contradictions = CONTRADICTION_LIMIT`` on
+    the first ``frames`` of ``drives`` draws of the sample ``name``: the sample itself and copies
+    whose seed is the next ones. Per drive, the frames flagged and the RMS heading error (degrees)
+    of each setting. (The pipeline's own seed draws only RANSAC's hypotheses and changes these
+    figures in their seventh digit; the drive is the draw that matters.)
+    """
+    base = SAMPLES[name]
+    seeds = [base.seed + k for k in range(drives)]
+    settings = {"preset": CRAWLER, "believed": replace(CRAWLER, max_contradictions=CONTRADICTION_LIMIT)}
+    rows = {label: {"flagged": [], "heading_rms_deg": []} for label in settings}
+    for seed in seeds:
+        variant = f"{name}@{seed}"
+        SAMPLES[variant] = replace(base, name=variant, seed=seed)  # a draw of the same drive plan
+        try:
+            rendered, frame_iter = render_sample(variant, frames)
+            images = list(frame_iter)
+        finally:
+            del SAMPLES[variant]
+        truth = relative_planar(rendered.truth()[0], rendered.truth())
+        for label, config in settings.items():
+            odometer = StereoOdometry(rendered.camera, config, TrackOdometry(), seed=SEED)
+            result = run_frames(iter(images), rendered.camera, odometer=odometer)
+            heading = np.degrees(wrap_angle(result.poses[:, 2] - truth[:, 2]))
+            rows[label]["flagged"].append(int(len(result.flagged)))
+            rows[label]["heading_rms_deg"].append(float(np.sqrt(np.mean(heading**2))))
+    return {
+        "set": name,
+        "frames": int(frames),
+        "seeds": seeds,
+        "limit": CONTRADICTION_LIMIT,
+        "fingerprint": fingerprint(name),
+        "code_version": code_version(),
+        **rows,
+    }
+
+
 def compute(names=SETS, frames: int | None = None, log=None, into: dict | None = None) -> dict:
     """Every set of ``names``, whole (or shortened to ``frames``), added to ``into`` (or a new record)."""
     out = into or {"key_every": KEY_EVERY, "seed": SEED, "sets": {}}
@@ -150,9 +202,17 @@ def load(path=RESULTS) -> dict:
 
 def main(argv=None) -> int:
     names = (sys.argv[1:] if argv is None else list(argv)) or list(SETS)
+    if names == ["contradictions"]:
+        stored = json.loads(RESULTS.read_text())
+        stored["contradictions"] = contradiction_study()
+        print(f"written {write(stored)}")
+        return 0
     unknown = [n for n in names if n not in SETS]
     if unknown:
-        print(f"error: unknown set {unknown[0]!r}; the sets are {', '.join(SETS)}", file=sys.stderr)
+        print(
+            f"error: unknown set {unknown[0]!r}; the sets are {', '.join(SETS)} (or 'contradictions' alone)",
+            file=sys.stderr,
+        )
         return 2
     stored = json.loads(RESULTS.read_text()) if RESULTS.exists() else None
     print(f"written {write(compute(names, log=sys.stdout, into=stored))}")
