@@ -37,6 +37,7 @@ import os
 import re
 import struct
 import threading
+import zlib
 from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
@@ -191,13 +192,13 @@ _STDERR_LOCK = threading.Lock()
 
 def _decode(path: Path) -> np.ndarray | None:
     """OpenCV's decoder on the file's bytes, or None: ``cv2.imread`` takes its path as UTF-8 and
-    crashes the process on a path holding any other byte. A PNG cut short (no closing IEND
-    chunk) is refused before libpng sees it."""
+    crashes the process on a path holding any other byte. A damaged PNG is refused before
+    libpng sees it."""
     try:
         data = np.fromfile(path, np.uint8)
     except OSError:
         return None
-    if data.size == 0 or (data[:8].tobytes() == _PNG_SIGNATURE and data[-8:-4].tobytes() != b"IEND"):
+    if data.size == 0 or (data[:8].tobytes() == _PNG_SIGNATURE and not _png_intact(data.tobytes())):
         return None
     try:
         return cv2.imdecode(data, cv2.IMREAD_UNCHANGED)
@@ -206,6 +207,21 @@ def _decode(path: Path) -> np.ndarray | None:
 
 
 _PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
+
+
+def _png_intact(data: bytes) -> bool:
+    """Every chunk of a PNG whole and matching its CRC, up to IEND: a damaged file is refused here,
+    quietly, rather than by libpng, which prints its own message on stderr (from any thread)."""
+    at = len(_PNG_SIGNATURE)
+    while at + 12 <= len(data):
+        (length,) = struct.unpack_from(">I", data, at)
+        end = at + 8 + length
+        if end + 4 > len(data) or zlib.crc32(data[at + 4 : end]) != struct.unpack_from(">I", data, end)[0]:
+            return False
+        if data[at + 4 : at + 8] == b"IEND":
+            return True
+        at = end + 4
+    return False
 
 
 def _imread_quietly(path: Path) -> np.ndarray | None:
