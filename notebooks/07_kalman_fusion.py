@@ -502,9 +502,8 @@ display(
 # the claims of the next cell's explanation, each over the seeds
 assert heading_cmp["spot turn"].verdict("fused", "odometry") is Verdict.BETTER
 assert position_cmp["indoor"].verdict("fused", "odometry") is Verdict.BETTER
-for c in ("spot turn", "indoor"):  # not told apart, or apart by less than a hundredth of a degree
-    assert (heading_cmp[c].verdict("fused", "VO") is Verdict.NOT_RELIABLE
-            or abs(heading_cmp[c].difference("fused", "VO")[0]) < 0.01)
+assert heading_cmp["spot turn"].verdict("fused", "VO") is not Verdict.BETTER  # the slip's mean leaks in
+assert all(abs(heading_cmp[c].difference("fused", "VO")[0]) < 0.05 for c in ("spot turn", "indoor"))
 assert position_cmp["indoor, weak vision"].verdict("fused", "VO") is Verdict.BETTER
 assert position_cmp["spot turn, weak vision"].verdict("fused", "VO") is Verdict.BETTER
 assert heading_cmp["spot turn, weak vision"].verdict("fused", "VO") is Verdict.WORSE
@@ -521,8 +520,8 @@ assert heading_cmp["spot turn, VO outage"].verdict("fused", "VO") is Verdict.WOR
 #   noise, so odometry's heading runs away while the fused heading does not;
 # - with vision as good as the samples give it, VO's θ variance is a small fraction of the
 #   odometry's, the average is nearly VO's own, and the slip's mean still leaks in with the
-#   small weight the filter gives the odometry; the two are not reliably told apart, or differ by
-#   less than a hundredth of a degree;
+#   small weight the filter gives the odometry: over the seeds the two differ by a few hundredths
+#   of a degree at most, one way or the other (the sentences above say which, for this base seed);
 # - with weak vision the weights become comparable. Odometry's distance carries little bias (1 %
 #   slip when driving; on the spot the two tracks' counts cancel), so averaging removes VO's noise
 #   from the position: fusion helps in both drives;
