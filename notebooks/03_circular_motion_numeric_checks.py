@@ -434,8 +434,7 @@ assert max(abs(v) for v in spot_minus_arc[1:]) < 0.2 * np.median(offset_cmp.figu
 # above is a small fraction of the share both carry). Our simulated rig
 # (notebook 04) therefore mounts the camera above the turning axis. A real robot should too, or
 # its pipeline should model the offset (exercise 3). The paper blames its spot-turn heading errors
-# on unequal track grip; an offset camera would be a second suspect, and a worse one indoors than
-# out.
+# on unequal track grip; an offset camera would be a second suspect.
 #
 # ## 6 · The limits of the planar model: pitch and roll
 #

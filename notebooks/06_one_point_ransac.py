@@ -767,7 +767,8 @@ print(f"best on the tuning sets: th_yaw_angle = {TH_YAW}, th_polar_radius = {TH_
 # that go on to ρ and to the refinement); the pool; adaptive N_h; the refinement (step 5). Before
 # the refinement, eq. 20 moves θ nowhere: it only decides which matches the later steps use.
 # Each rung is compared with the one below it by `over_seeds`, on the absolute θ error and on
-# the relative ρ error (lower is better), and the sentences below are written by the code.
+# the relative ρ error (the smaller, the closer to the truth), and the sentences below are
+# written by the code.
 
 # %%
 LADDER = {
@@ -1146,8 +1147,8 @@ trial_widget = offer(
 # - Fig. 5's angles are the ray's depression (α) and its angle to the chord (γ); then eq. 18–20
 #   hold exactly. Each match's gate gets its own threshold from first-order noise propagation.
 # - The paper's estimator uses two fixed thresholds, `th_yaw_angle` and `th_polar_radius`, and no
-#   refinement. Section 7 runs it, and each piece we add, on the same 20 seeds; the sentences
-#   there say which pieces reliably help, with their share of seeds and interval.
+#   refinement. Section 7 runs it, and each piece we add, over 20 seeds, the same for each;
+#   the sentences there say which pieces reliably help, with their share of seeds and interval.
 # - θ̂'s textbook variance is over-confident (section 7's NEES check); the gate hardly feels it.
 # - Section 9 sets the full estimator beside 6-DoF estimators on the same matches, over 20 seeds.
 

@@ -846,7 +846,8 @@ else:
 #
 # A bump or the start of a slope pitches the body instead: no planar model describes that, so
 # when 1-point RANSAC keeps fewer than `CAR.min_inlier_ratio` of the matches the pipeline draws
-# general 3-point hypotheses (OpenCV's P3P in `solvePnPRansac`, seeded) and keeps the better.
+# general 3-point hypotheses (OpenCV's P3P in `solvePnPRansac`, seeded) and keeps whichever of
+# the two holds the larger share of inliers.
 
 # %%
 if REAL:
@@ -1048,7 +1049,7 @@ display(Markdown(across_story))
 # per wheel distance, which over the gauge becomes the yaw sigma printed above: where that sigma is
 # far above the odometry's actual yaw error, the filter takes the heading from vision almost alone.
 # The distance it takes from both, so on the real drive the fused distance leans towards the
-# odometry's (asserted): fusion helps only as far as each sensor's error model is right.
+# odometry's (asserted): fusion is only as sound as each sensor's error model.
 #
 # **A check without the truth: NIS.** Notebook 07's normalised innovation squared needs only the
 # filter's own numbers. Per frame, the innovation of the yaw is the vision's yaw increment minus
