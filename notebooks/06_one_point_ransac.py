@@ -66,6 +66,15 @@ from vo_lib.comparison import Verdict, bootstrap_interval, chi2_band, over_seeds
 from vo_lib.stereo_vo import circular_motion as cm
 from vo_lib.stereo_vo import ransac as library
 from vo_lib.stereo_vo.baselines import essential_ransac, pnp_ransac, rigid_ransac
+from vo_lib.stereo_vo.demo_one_point import (
+    MOVER_PX,
+    MOVER_SHARE,
+    NEAR_MISS_PX,
+    NEAR_MISS_SHARE,
+    RANDOM_SHARE,
+    ransac_trial,
+    realistic_matches,
+)
 from vo_lib.stereo_vo.ransac import histogram_voting, hypotheses_needed, one_point_ransac, refine_motion
 from vo_lib.stereo_vo.synthetic import synthetic_matches
 from vo_lib.viz.nb06 import (
@@ -73,10 +82,10 @@ from vo_lib.viz.nb06 import (
     plot_gate_spread,
     plot_hypotheses,
     plot_row_errors,
-    plot_trial,
     print_ladder,
     print_nees,
     said,
+    side_of_band,
 )
 from vo_lib.viz.plotting import draw_chord_geometry, draw_depression_geometry, new_axes
 from vo_lib.viz.prose import Markdown
@@ -218,22 +227,8 @@ assert abs(median_norm - 0.674) < 0.1  # the half-normal's median, not a unit no
 # between the frames, like `vo_lib.sim.disturbances.MovingObject`), and keeps some random pixels.
 
 # %%
-RANDOM_SHARE, NEAR_MISS_SHARE, MOVER_SHARE = 0.10, 0.15, 0.15  # shares of all matches
-NEAR_MISS_PX, MOVER_PX = (2.0, 8.0), 6.0
-
-
-def realistic_matches(n, theta, rho, rng, noise_px=0.5):
-    """n matches of (θ, ρ) with random, near-miss and moving-object outliers: (w_prev, w_curr, inliers)."""
-    s = synthetic_matches(camera, n, theta, rho, rng, noise_px=noise_px, outlier_ratio=RANDOM_SHARE)
-    w_curr, inliers = s.w_curr.copy(), s.inliers.copy()
-    good = np.flatnonzero(inliers)
-    near = rng.choice(good, int(NEAR_MISS_SHARE * n), replace=False)
-    w_curr[near, 0] += rng.choice([-1.0, 1.0], len(near)) * rng.uniform(*NEAR_MISS_PX, len(near))
-    rest = np.setdiff1d(good, near)
-    mover = rest[np.argsort(s.w_prev[rest, 0])[: int(MOVER_SHARE * n)]]  # the left of the view
-    w_curr[mover, 0] += MOVER_PX
-    inliers[near] = inliers[mover] = False
-    return s.w_prev, w_curr, inliers
+print(f"random {RANDOM_SHARE:.0%}, near misses {NEAR_MISS_SHARE:.0%} ({NEAR_MISS_PX[0]:g}–{NEAR_MISS_PX[1]:g} px), "
+      f"moving object {MOVER_SHARE:.0%} ({MOVER_PX:g} px) of all matches")
 
 
 def theta_of_matches(w_prev, w_curr):
@@ -924,25 +919,18 @@ tb, sc, rf = nees_rows["textbook"], nees_rows["scaled by the scatter"], nees_row
 orc = nees_rows["true inliers only (oracle)"]
 
 
-def side_of_band(value):
-    """Where a mean z² lies against the χ² band."""
-    if value > band[1]:
-        return f"above the band, over-confident by a factor of about {value:.1f} in variance"
-    return "inside the band" if value >= band[0] else "below the band, under-confident"
-
-
 display(Markdown(
     f"Over {len(NEES_SEEDS)} sets, step 3's textbook variance is over-confident: the mean z² is "
     f"{tb[0]:.1f} (95 % seed interval {tb[1]:.1f}–{tb[2]:.1f}) against the band {band[0]:.2f}–"
     f"{band[1]:.2f}, and {tb[3]:.0%} of the sets miss by more than 3σ. Scaled by the supporters' "
-    f"scatter it gives {sc[0]:.2f} ({sc[1]:.2f}–{sc[2]:.2f}), {side_of_band(sc[0])}. Over the true "
+    f"scatter it gives {sc[0]:.2f} ({sc[1]:.2f}–{sc[2]:.2f}), {side_of_band(sc[0], band)}. Over the true "
     f"inliers among the supporters only, the textbook variance gives {orc[0]:.2f} ({orc[1]:.2f}–"
-    f"{orc[2]:.2f}), {side_of_band(orc[0])}: the outliers that pass the support test (near misses, "
+    f"{orc[2]:.2f}), {side_of_band(orc[0], band)}: the outliers that pass the support test (near misses, "
     "moving-object points) are what move θ̂, a bias that the variance of a mean does not model and "
     "the scaling by the scatter catches only in part. The gate barely feels either: θ̂'s variance is "
     f"added to each match's own, which it widens by {np.median(gate_widening):.2%} (median), so the "
     "library keeps the textbook variance in the gate. What leaves the estimator is the refined θ's "
-    f"variance: its mean z² is {rf[0]:.2f} ({rf[1]:.2f}–{rf[2]:.2f}), {side_of_band(rf[0])}."
+    f"variance: its mean z² is {rf[0]:.2f} ({rf[1]:.2f}–{rf[2]:.2f}), {side_of_band(rf[0], band)}."
 ))
 assert tb[1] > band[1]  # over-confident: the whole seed interval above the band
 assert sc[0] < tb[0] and np.median(gate_widening) < 0.05  # scaling helps; the gate hardly feels θ̂'s variance
@@ -1112,22 +1100,6 @@ assert all(base_theta.verdict(ours, other) is Verdict.BETTER for other in six_do
 
 
 # %%
-def ransac_trial(outlier_ratio=0.4, noise_px=0.5):
-    """Success rate and median time of 1-point RANSAC over 20 seeded match sets."""
-    hits, times, errs = 0, [], []
-    for seed in range(SEED + 500, SEED + 520):
-        t_rng = np.random.default_rng(seed)
-        th, rh = math.radians(t_rng.uniform(-5, 5)), t_rng.uniform(0.03, 0.12)
-        mm = synthetic_matches(camera, 300, th, rh, t_rng, noise_px=noise_px, outlier_ratio=outlier_ratio)
-        t0 = time.perf_counter()
-        est = one_point_ransac(mm.w_prev, mm.w_curr, camera, rng=t_rng, pixel_sigma=max(noise_px, 0.1))
-        times.append((time.perf_counter() - t0) * 1e3)
-        errs.append(math.degrees(abs(est.theta - th)))
-        hits += est.success and errs[-1] < 0.05 and abs(est.rho - rh) < 0.05 * rh
-    plot_trial(errs, outlier_ratio, noise_px, hits, float(np.median(times)))
-    return hits / 20
-
-
 rate = ransac_trial()
 assert rate >= 0.95
 
