@@ -55,6 +55,7 @@ from vo_lib.sim.trajectories import simulate_drive
 from vo_lib.stereo_vo import circular_motion as cm
 from vo_lib.stereo_vo import paper_sets
 from vo_lib.stereo_vo.config import CRAWLER
+from vo_lib.stereo_vo.demo_pipeline import heading_error, rms_of, sides, stored_table
 from vo_lib.stereo_vo.pipeline import run_frames
 from vo_lib.stereo_vo.ransac import one_point_ransac
 from vo_lib.stereo_vo.synthetic import matches_under_transform
@@ -81,10 +82,6 @@ def run(name, frames, use_odometry=True, resolution=(640, 480)):
     truth = relative_planar(rendered.truth()[0], rendered.truth())
     odometry = TrackOdometry().integrate(rendered.drive.odometry[1:frames])
     return result, truth, odometry
-
-
-def heading_error(poses, truth):
-    return np.degrees(wrap_angle(poses[:, 2] - truth[:, 2]))
 
 
 # %% [markdown]
@@ -340,42 +337,13 @@ assert spot_errors["vision"][-1] < spot_errors["odometry"][-1] / 2
 stored = paper_sets.load()["sets"]
 
 
-def rms(values):
-    """Root mean square of the key-position errors from their AVG and S.D.: √(AVG² + S.D.²).
-    Signed errors of opposite signs cancel in an average; they do not in an RMS."""
-    return math.hypot(values[0], values[1])
-
-
-def rms_of(name, quantity, source="fused"):
-    """RMS of a stored set (source 'fused' or 'odometry') or of the paper's figures ('paper')."""
-    values = paper_sets.paper(name).get(quantity) if source == "paper" else stored[name][source][quantity]
-    return math.nan if values is None else rms(values)
-
-
-def stored_table(names, quantities):
-    """Ours (fused), track odometry's and the paper's AVG / S.D. and RMS of each set."""
-    heads = "".join(f"{q + ' AVG / S.D. / RMS':>30s}" for q in quantities)
-    print(f" {'set':15s}{'frames':>7s}{'flagged':>8s}  {'':10s}" + heads)
-    for name in names:
-        row, ref = stored[name], paper_sets.paper(name)
-        for label, values in (("ours", row["fused"]), ("odometry", row["odometry"]), ("paper", ref)):
-            head = f" {name:15s}{row['frames']:7d}{row['flagged']:8d}" if label == "ours" else " " * 31
-            cells = "".join(
-                f"{values[q][0]:11.2f} /{values[q][1]:7.2f} /{rms(values[q]):8.2f}"
-                if q in values
-                else f"{'—':>30s}"
-                for q in quantities
-            )
-            print(f"{head}  {label:10s}{cells}")
-
-
-stored_table(("spot_turn", "spot_turn_2"), ("theta_deg",))
+stored_table(stored, ("spot_turn", "spot_turn_2"), ("theta_deg",))
 spot_sets = ("spot_turn", "spot_turn_2")
 flag_share = {n: stored[n]["flagged"] / stored[n]["frames"] for n in spot_sets}
 # the sentences below: in RMS both sets lie below the paper's; odometry alone far above both
-assert all(rms_of(n, "theta_deg") < rms_of(n, "theta_deg", "paper") for n in spot_sets)
+assert all(rms_of(stored, n, "theta_deg") < rms_of(stored, n, "theta_deg", "paper") for n in spot_sets)
 # "far above": at least three times the paper's
-assert all(rms_of(n, "theta_deg", "odometry") > 3 * rms_of(n, "theta_deg", "paper") for n in spot_sets)
+assert all(rms_of(stored, n, "theta_deg", "odometry") > 3 * rms_of(stored, n, "theta_deg", "paper") for n in spot_sets)
 display(
     Markdown(
         "Each stored set is one run, and so is each of the paper's: these figures set two runs side "
@@ -383,18 +351,18 @@ display(
         "errors of both signs cancel in an AVG; the RMS, √(AVG² + S.D.²), cannot cancel. The heading "
         "RMS is "
         + " and ".join(
-            f"{rms_of(n, 'theta_deg'):.2f}° against the paper's {rms_of(n, 'theta_deg', 'paper'):.2f}° "
+            f"{rms_of(stored, n, 'theta_deg'):.2f}° against the paper's {rms_of(stored, n, 'theta_deg', 'paper'):.2f}° "
             f"in `{n}`" for n in spot_sets
         )
         + "; track odometry alone reaches "
-        + " and ".join(f"{rms_of(n, 'theta_deg', 'odometry'):.1f}°" for n in spot_sets)
+        + " and ".join(f"{rms_of(stored, n, 'theta_deg', 'odometry'):.1f}°" for n in spot_sets)
         + ", since the encoders count the slip as turning. The flagged column does not explain the "
         f"sets' difference: `spot_turn` flags {flag_share['spot_turn']:.1%} of its frames and "
         f"`spot_turn_2` {flag_share['spot_turn_2']:.1%}, yet the second has the larger heading RMS."
     )
 )
 assert flag_share["spot_turn"] > flag_share["spot_turn_2"]  # the clause "yet the second ..."
-assert rms_of("spot_turn_2", "theta_deg") > rms_of("spot_turn", "theta_deg")
+assert rms_of(stored, "spot_turn_2", "theta_deg") > rms_of(stored, "spot_turn", "theta_deg")
 
 # %% [markdown]
 # **Why our heading error stays below the paper's here:** our losses of contact are brief and come
@@ -449,7 +417,7 @@ plt.show()
 # %%
 free_sets = ("indoor_free", "outdoor_free", "outdoor_free_2", "outdoor_free_3", "outdoor_linear")
 QUANTITIES = ("x_mm", "y_mm", "theta_deg")
-stored_table(free_sets, QUANTITIES)
+stored_table(stored, free_sets, QUANTITIES)
 for name in free_sets:
     row = stored[name]
     print(
@@ -457,10 +425,10 @@ for name in free_sets:
         f"{row['keys']} key positions, {row['flagged'] / row['frames']:.0%} of frames flagged"
     )
 ratio = {
-    (n, q): rms_of(n, q) / rms_of(n, q, "paper")
+    (n, q): rms_of(stored, n, q) / rms_of(stored, n, q, "paper")
     for n in free_sets
     for q in QUANTITIES
-    if not math.isnan(rms_of(n, q, "paper"))
+    if not math.isnan(rms_of(stored, n, q, "paper"))
 }
 print("\n ours / paper, RMS of the key-position errors")
 for name in free_sets:
@@ -468,21 +436,11 @@ for name in free_sets:
     print(f" {name:15s}" + "".join(cells))
 
 
-def sides(names):
-    """Which RMS of each set lie above and below the paper's, in words."""
-    words = []
-    for name in names:
-        above = [q for q in QUANTITIES if ratio.get((name, q), 0) > 1]
-        below = [q for q in QUANTITIES if 0 < ratio.get((name, q), 2) < 1]
-        words.append(f"`{name}` above in {', '.join(above) or 'none'}, below in {', '.join(below) or 'none'}")
-    return "; ".join(words)
-
-
-odometry_lower = [q for q in QUANTITIES if rms_of("indoor_free", q, "odometry") < rms_of("indoor_free", q)]
+odometry_lower = [q for q in QUANTITIES if rms_of(stored, "indoor_free", q, "odometry") < rms_of(stored, "indoor_free", q)]
 flagged_share = {n: stored[n]["flagged"] / stored[n]["frames"] for n in free_sets}
 display(
     Markdown(
-        "Against the paper's RMS, one run each: " + sides(free_sets) + ". "
+        "Against the paper's RMS, one run each: " + sides(free_sets, ratio, QUANTITIES) + ". "
         f"`outdoor_free_3` flags {flagged_share['outdoor_free_3']:.0%} of its frames, against "
         f"{flagged_share['outdoor_free']:.0%} and {flagged_share['outdoor_free_2']:.0%} in the other "
         "two Table 2 sets; while a frame is flagged the filter moves on track odometry, which counts "
