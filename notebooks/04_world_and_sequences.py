@@ -61,6 +61,7 @@ from vo_lib.sim.render import StereoRenderer
 from vo_lib.sim.samples import CAMERA_HEIGHT, SAMPLES, generate, render_sample
 from vo_lib.sim.trajectories import simulate_drive
 from vo_lib.sim.world import WORLDS
+from vo_lib.viz.nb04 import panel_grid
 from vo_lib.viz.plotting import new_axes, plot_robot, plot_world
 from vo_lib.viz.prose import Markdown
 from vo_lib.viz.widgets import offer, slider
@@ -82,16 +83,6 @@ np.set_printoptions(precision=4, suppress=True)
 
 # %%
 worlds = {name: make() for name, make in WORLDS.items()}
-
-
-def panel_grid(n, columns=3, size=4.6):
-    """``n`` square panels in rows of ``columns``, large enough for their legends; spares hidden."""
-    rows = -(-n // columns)
-    fig, grid = plt.subplots(rows, columns, figsize=(size * columns, size * rows), constrained_layout=True)
-    grid = np.atleast_1d(grid).ravel()
-    for spare in grid[n:]:
-        spare.set_visible(False)
-    return fig, grid[:n]
 
 
 fig, axes = panel_grid(len(worlds))
