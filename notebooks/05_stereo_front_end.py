@@ -54,6 +54,7 @@ from vo_lib.geometry import camera_mount, planar_to_matrix
 from vo_lib.sim.render import SensorEffects, StereoRenderer
 from vo_lib.sim.world import indoor_lab
 from vo_lib.stereo_vo.features import ROW_TOLERANCE, StereoFrontEnd, bucket, hamming
+from vo_lib.viz.nb05 import cells_covered
 from vo_lib.viz.plotting import new_axes
 from vo_lib.viz.prose import Markdown
 from vo_lib.viz.widgets import offer, slider
@@ -218,15 +219,11 @@ for ax, sel, title in (
 plt.show()
 
 
-def cells_covered(sel):
-    return len(np.unique((points[sel, 0] // 80).astype(int) * 10 + (points[sel, 1] // 80).astype(int)))
-
-
 print(
-    f"{len(keypoints)} FAST corners; grid cells covered: strongest {cells_covered(strongest)}, "
-    f"bucketed {cells_covered(kept)} of 48"
+    f"{len(keypoints)} FAST corners; grid cells covered: strongest {cells_covered(points[strongest])}, "
+    f"bucketed {cells_covered(points[kept])} of 48"
 )
-assert cells_covered(kept) > cells_covered(strongest)
+assert cells_covered(points[kept]) > cells_covered(points[strongest])
 
 # %% [markdown]
 # ## 2 · Binary descriptors and the Hamming distance
