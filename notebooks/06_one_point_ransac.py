@@ -72,6 +72,7 @@ from vo_lib.stereo_vo.demo_one_point import (
     NEAR_MISS_PX,
     NEAR_MISS_SHARE,
     RANDOM_SHARE,
+    draws_to_first_good,
     ransac_trial,
     realistic_matches,
 )
@@ -387,16 +388,11 @@ pool_wp = np.argsort(np.nan_to_num(sd_wp, nan=np.inf))[: len(wp) // 2]
 count_rng = np.random.default_rng(SEED + 1)
 
 
-def draws_to_first_good(candidates, repeats=2000):
-    """Mean number of uniform draws from candidates until one is a good hypothesis."""
-    picks = count_rng.integers(0, len(candidates), (repeats, 200))
-    hit = good[candidates][picks]
-    return np.mean(np.argmax(hit, axis=1) + 1)
-
-
 w_true = true_in.mean()
 w_all, w_pool = good.mean(), good[pool_wp].mean()
-measured_all, measured_pool = draws_to_first_good(np.arange(len(wp))), draws_to_first_good(pool_wp)
+measured_all, measured_pool = draws_to_first_good(np.arange(len(wp)), good, count_rng), draws_to_first_good(
+    pool_wp, good, count_rng
+)
 print(
     f"true inlier ratio {w_true:.2f}; good hypotheses: {w_all:.2f} of all matches, {w_pool:.2f} of the pool"
 )

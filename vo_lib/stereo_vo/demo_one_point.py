@@ -53,3 +53,13 @@ def ransac_trial(outlier_ratio=0.4, noise_px=0.5):
         hits += est.success and errs[-1] < 0.05 and abs(est.rho - rh) < 0.05 * rh
     plot_trial(errs, outlier_ratio, noise_px, hits, float(np.median(times)))
     return hits / 20
+
+
+def draws_to_first_good(
+    candidates: np.ndarray, good: np.ndarray, rng: np.random.Generator, repeats: int = 2000
+) -> float:
+    """Mean number of uniform draws from ``candidates`` until one is a good hypothesis (``good``
+    marks the matches that give one), over ``repeats`` trials."""
+    picks = rng.integers(0, len(candidates), (repeats, 200))
+    hit = good[candidates][picks]
+    return float(np.mean(np.argmax(hit, axis=1) + 1))
