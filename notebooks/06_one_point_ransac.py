@@ -72,6 +72,7 @@ from vo_lib.stereo_vo.demo_one_point import (
     NEAR_MISS_PX,
     NEAR_MISS_SHARE,
     RANDOM_SHARE,
+    adaptive_run,
     draws_to_first_good,
     ransac_trial,
     realistic_matches,
@@ -853,21 +854,9 @@ ADAPTIVE_SEEDS = range(SEED + 3000, SEED + 3020)
 adaptive_tried = {False: [], True: []}
 
 
-def adaptive_run(seed):
-    """|θ error| of the θ phase with a fixed batch and with adaptive N_h on one set of 80 % outliers."""
-    r = np.random.default_rng(seed)
-    th, rh = math.radians(r.uniform(-5, 5)), r.uniform(0.03, 0.12)
-    s80 = synthetic_matches(camera, 300, th, rh, r, noise_px=0.5, outlier_ratio=0.8)
-    out = {}
-    for adaptive, name in ((True, "adaptive N_h"), (False, "a fixed batch")):
-        draws_k = library.hypothesis_draws(seed)
-        est, tried = theta_phase(s80.w_prev, s80.w_curr, draws_k, POOL_FRACTION, adaptive)
-        adaptive_tried[adaptive].append(tried)
-        out[name] = abs(est - th)
-    return out
-
-
-adaptive_cmp = over_seeds(adaptive_run, ADAPTIVE_SEEDS)
+adaptive_cmp = over_seeds(
+    lambda seed: adaptive_run(seed, theta_phase, POOL_FRACTION, adaptive_tried), ADAPTIVE_SEEDS
+)
 display(Markdown(
     f"At 80 % outliers the adaptive rule tries {np.mean(adaptive_tried[True]):.1f} hypotheses on "
     f"average against the batch's {np.mean(adaptive_tried[False]):.1f}; in θ, "

@@ -8,11 +8,12 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Callable
 
 import numpy as np
 
 from vo_lib.camera import StereoCamera
-from vo_lib.stereo_vo.ransac import one_point_ransac
+from vo_lib.stereo_vo.ransac import hypothesis_draws, one_point_ransac
 from vo_lib.stereo_vo.synthetic import synthetic_matches
 from vo_lib.viz.nb06 import plot_trial
 
@@ -63,3 +64,23 @@ def draws_to_first_good(
     picks = rng.integers(0, len(candidates), (repeats, 200))
     hit = good[candidates][picks]
     return float(np.mean(np.argmax(hit, axis=1) + 1))
+
+
+def adaptive_run(
+    seed: int, theta_phase: Callable, pool_fraction: float, tried: dict[bool, list]
+) -> dict[str, float]:
+    """|θ error| of the θ phase with a fixed batch and with adaptive N_h on one set of 80 % outliers.
+
+    ``theta_phase(w_prev, w_curr, draws, pool_fraction, adaptive)`` is the notebook's θ phase,
+    returning (θ, hypotheses tried); the counts are appended to ``tried[adaptive]``.
+    """
+    r = np.random.default_rng(seed)
+    th, rh = math.radians(r.uniform(-5, 5)), r.uniform(0.03, 0.12)
+    s80 = synthetic_matches(camera, 300, th, rh, r, noise_px=0.5, outlier_ratio=0.8)
+    out = {}
+    for adaptive, name in ((True, "adaptive N_h"), (False, "a fixed batch")):
+        draws_k = hypothesis_draws(seed)
+        est, count = theta_phase(s80.w_prev, s80.w_curr, draws_k, pool_fraction, adaptive)
+        tried[adaptive].append(count)
+        out[name] = abs(est - th)
+    return out
