@@ -48,15 +48,13 @@ from IPython.display import display
 from vo_lib.camera import StereoCamera
 from vo_lib.comparison import Comparison, Verdict, bootstrap_interval, chi2_band
 from vo_lib.evaluation import key_position_errors
-from vo_lib.geometry import relative_planar, wrap_angle
-from vo_lib.models.track_odometry import TrackOdometry
-from vo_lib.sim.samples import SAMPLES, render_sample
+from vo_lib.geometry import wrap_angle
+from vo_lib.sim.samples import SAMPLES
 from vo_lib.sim.trajectories import simulate_drive
 from vo_lib.stereo_vo import circular_motion as cm
 from vo_lib.stereo_vo import paper_sets
 from vo_lib.stereo_vo.config import CRAWLER
-from vo_lib.stereo_vo.demo_pipeline import heading_error, rms_of, sides, stored_table
-from vo_lib.stereo_vo.pipeline import run_frames
+from vo_lib.stereo_vo.demo_pipeline import frames_for, heading_error, rms_of, run, sides, stored_table
 from vo_lib.stereo_vo.ransac import one_point_ransac
 from vo_lib.stereo_vo.synthetic import matches_under_transform
 from vo_lib.viz.plotting import draw_flowchart, new_axes, plot_paths
@@ -67,21 +65,6 @@ rng = np.random.default_rng(SEED)
 np.set_printoptions(precision=3, suppress=True)
 FULL = os.environ.get("VO_NOTEBOOKS_FULL") == "1"
 print("full run" if FULL else "quick mode: shortened sequences (VO_NOTEBOOKS_FULL=1 for the full ones)")
-
-
-def frames_for(name, quick):
-    return SAMPLES[name].frames if FULL else quick
-
-
-def run(name, frames, use_odometry=True, resolution=(640, 480)):
-    """Render a sample in memory and run the pipeline; returns (result, truth from the start, odometry)."""
-    rendered, frame_iter = render_sample(name, frames, resolution)
-    if not use_odometry:
-        frame_iter = ((left, right, None) for left, right, _ in frame_iter)
-    result = run_frames(frame_iter, rendered.camera, seed=SEED)
-    truth = relative_planar(rendered.truth()[0], rendered.truth())
-    odometry = TrackOdometry().integrate(rendered.drive.odometry[1:frames])
-    return result, truth, odometry
 
 
 # %% [markdown]
@@ -171,7 +154,7 @@ paper_table1 = {  # stereo processing, parameter estimation, Kalman filtering (m
     (320, 240): (22.165, 0.662, 0.168),
     (256, 192): (22.460, 0.610, 0.153),
 }
-n_table = frames_for("indoor_linear", 40)
+n_table = frames_for("indoor_linear", 40, FULL)
 rows, features = [], {}
 for res in paper_table1:
     r, _, _ = run("indoor_linear", n_table, resolution=res)
@@ -264,7 +247,7 @@ assert relative <= 0.01
 # illustration that is not comparable with the paper; section 5 sets the whole drive beside it.
 
 # %%
-n_out = frames_for("outdoor_linear", 200)
+n_out = frames_for("outdoor_linear", 200, FULL)
 result_o, truth_o, _ = run("outdoor_linear", n_out)
 fig, ax = new_axes(width=7, height=3.2)
 for col, name in ((0, "x"), (1, "y")):
@@ -298,7 +281,7 @@ assert relative_o < 0.05  # our own target: the paper's indoor bound
 # (quick mode; an illustration, not comparable with the paper):
 
 # %%
-n_spot = frames_for("spot_turn", 300)
+n_spot = frames_for("spot_turn", 300, FULL)
 fused, truth_s, odo_s = run("spot_turn", n_spot)
 vision, _, _ = run("spot_turn", n_spot, use_odometry=False)
 t = np.arange(n_spot) / SAMPLES["spot_turn"].rate
@@ -393,7 +376,7 @@ quick_runs = {
 }
 fig, axes = new_axes(4, width=4.2, height=4.0)
 for ax, name in zip(axes, quick_frames, strict=True):
-    n = frames_for(name, quick_frames[name])
+    n = frames_for(name, quick_frames[name], FULL)
     res_f, truth_f, odo_f = run(name, n)
     quick_runs[name] = (res_f, truth_f)
     plot_paths(

@@ -11,8 +11,11 @@ from collections.abc import Iterable, Sequence
 
 import numpy as np
 
-from vo_lib.geometry import wrap_angle
+from vo_lib.geometry import relative_planar, wrap_angle
+from vo_lib.models.track_odometry import TrackOdometry
+from vo_lib.sim.samples import SAMPLES, render_sample
 from vo_lib.stereo_vo import paper_sets
+from vo_lib.stereo_vo.pipeline import run_frames
 
 
 def heading_error(poses: np.ndarray, truth: np.ndarray) -> np.ndarray:
@@ -57,3 +60,23 @@ def sides(names: Iterable[str], ratio: dict, quantities: Sequence[str]) -> str:
         below = [q for q in quantities if 0 < ratio.get((name, q), 2) < 1]
         words.append(f"`{name}` above in {', '.join(above) or 'none'}, below in {', '.join(below) or 'none'}")
     return "; ".join(words)
+
+
+def frames_for(name: str, quick: int, full: bool) -> int:
+    """The frames of a sample the notebook runs: all of them in a full run, else ``quick``."""
+    return SAMPLES[name].frames if full else quick
+
+
+#: The notebook's base seed: the pipeline's RANSAC draws from it.
+SEED = 8
+
+
+def run(name: str, frames: int, use_odometry: bool = True, resolution: tuple[int, int] = (640, 480)):
+    """Render a sample in memory and run the pipeline; returns (result, truth from the start, odometry)."""
+    rendered, frame_iter = render_sample(name, frames, resolution)
+    if not use_odometry:
+        frame_iter = ((left, right, None) for left, right, _ in frame_iter)
+    result = run_frames(frame_iter, rendered.camera, seed=SEED)
+    truth = relative_planar(rendered.truth()[0], rendered.truth())
+    odometry = TrackOdometry().integrate(rendered.drive.odometry[1:frames])
+    return result, truth, odometry
