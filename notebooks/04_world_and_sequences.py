@@ -56,6 +56,7 @@ from vo_lib.camera import StereoCamera
 from vo_lib.formats.sequence import read_sequence
 from vo_lib.geometry import camera_mount, planar_to_matrix, wrap_angle
 from vo_lib.models.track_odometry import TrackOdometry
+from vo_lib.sim.demo_worlds import view_from
 from vo_lib.sim.laser import LaserScanner
 from vo_lib.sim.render import StereoRenderer
 from vo_lib.sim.samples import CAMERA_HEIGHT, SAMPLES, generate, render_sample
@@ -295,30 +296,7 @@ print("read back: odometry, calibration and the first pair equal what was render
 
 
 # %%
-def view_from(world_name="corridor", x=11.0, y=0.0, yaw_deg=0.0):
-    """Left image, ground-truth depth and laser scan of a robot at ``(x, y, yaw)`` in a world."""
-    world = worlds[world_name]
-    robot = np.array([x, y, np.radians(yaw_deg)])
-    image, depth_map = StereoRenderer(world, camera).render(planar_to_matrix(robot) @ mount, with_depth=True)
-    scan = LaserScanner().scan(world.segments_array(), robot, np.random.default_rng(SEED))
-    fig, axes = new_axes(3, width=4.6, height=3.4)
-    axes[0].imshow(image, cmap="gray")
-    axes[0].set_title("left image")
-    axes[1].imshow(np.where(np.isfinite(depth_map), depth_map, np.nan), cmap="viridis", vmin=0, vmax=15)
-    axes[1].set_title("depth [m] (0-15)")
-    for ax in axes[:2]:
-        ax.axis("off")
-    plot_world(axes[2], world, "plan and laser scan")
-    c, s = np.cos(robot[2]), np.sin(robot[2])
-    end = scan.points() @ np.array([[c, s], [-s, c]]) + robot[:2]
-    axes[2].plot(end[:, 0], end[:, 1], ".", ms=1.5, color="C3")
-    plot_robot(axes[2], robot)
-    plt.show()
-    return int(scan.valid.sum())
-
-
 beams = view_from()
-assert beams > 400
 
 # %%
 walk_widget = offer(

@@ -20,6 +20,8 @@ import skimage.data  # noqa: E402
 import sympy as sp  # noqa: E402
 
 from vo_lib.lidar_tracking import demo_corridor  # noqa: E402
+from vo_lib.sim import demo_worlds  # noqa: E402
+from vo_lib.sim.laser import LaserScanner  # noqa: E402
 from vo_lib.stereo_vo import demo_fusion, demo_one_point, demo_pipeline, demo_real  # noqa: E402
 from vo_lib.viz import nb04, nb05, nb06, nb09, nb11  # noqa: E402
 
@@ -169,3 +171,10 @@ def test_image_statistics_of_a_blank_image_and_a_photograph():
 def test_as_4x4():
     T = demo_real.as_4x4(np.eye(3), np.array([1.0, 2.0, 3.0]))
     assert T.shape == (4, 4) and np.array_equal(T[:3, 3], [1, 2, 3]) and np.array_equal(T[3], [0, 0, 0, 1])
+
+
+def test_the_walk_widget_sees_the_corridor_from_its_default_pose():
+    """Notebook 04's `view_from()`: about half of the scanner's beams or more end on a wall."""
+    scanner = LaserScanner()
+    beams = int(round(scanner.fov / scanner.angular_step)) + 1
+    assert demo_worlds.view_from() > 0.49 * beams
