@@ -95,7 +95,15 @@ from vo_lib.stereo_vo.six_dof import (
 from vo_lib.stereo_vo.synthetic import matches_under_transform
 from vo_lib.stereo_vo.temporal import match_features
 from vo_lib.stereo_vo.vehicle import KITTI_CAMERA_IN_IMU, vehicle_of
-from vo_lib.viz.nb11 import disparity_errors, errors_against, find_repo, pixel_gap, show_corners
+from vo_lib.viz.nb11 import (
+    CELL,
+    disparity_errors,
+    errors_against,
+    find_repo,
+    image_statistics,
+    pixel_gap,
+    show_corners,
+)
 from vo_lib.viz.plotting import new_axes, plot_paths
 from vo_lib.viz.prose import Markdown
 
@@ -135,26 +143,7 @@ final_errors = errors_against(truth)  # (metres, % of the distance, heading deg)
 # gradient is below 8 grey levels per pixel (sky, road, plain walls, where no corner can be).
 
 # %%
-CELL = 16
-
-
-def image_statistics(image, threshold=20, low_gradient=8.0):
-    """Empty-cell share, corners per 640x480, low-gradient share and the occupancy grid."""
-    h, w = image.shape
-    keypoints = cv2.FastFeatureDetector_create(threshold, True).detect(image)
-    corners = np.array([k.pt for k in keypoints]).reshape(-1, 2)
-    occupied = np.zeros((h // CELL, w // CELL), bool)
-    col, row = (corners // CELL).astype(int).T
-    inside = (row < occupied.shape[0]) & (col < occupied.shape[1])
-    occupied[row[inside], col[inside]] = True
-    gradient = np.hypot(cv2.Sobel(image, cv2.CV_32F, 1, 0), cv2.Sobel(image, cv2.CV_32F, 0, 1)) / 8
-    return {
-        "empty": 1 - occupied.mean(),
-        "per_vga": len(corners) * 640 * 480 / (h * w),
-        "flat": float(np.mean(gradient < low_gradient)),
-        "corners": corners,
-        "occupied": occupied,
-    }
+print(f"cells of {CELL}x{CELL} px")
 
 
 moto_left, moto_right, moto_truth = skimage.data.stereo_motorcycle()

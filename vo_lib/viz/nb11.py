@@ -9,6 +9,7 @@ import math
 from collections.abc import Callable
 from pathlib import Path
 
+import cv2
 import numpy as np
 
 from vo_lib.geometry import wrap_angle
@@ -79,3 +80,30 @@ def pixel_gap(Ta: np.ndarray, Tb: np.ndarray, camera, points: np.ndarray) -> flo
     """Median distance in (u, v, d) between ``points`` moved by two camera motions and projected."""
     a, b = (camera.project(points @ T[:3, :3].T + T[:3, 3]) for T in (Ta, Tb))
     return float(np.median(np.linalg.norm(a - b, axis=1)))
+
+
+#: The side of the square cells whose share without a corner measures how a frame is covered [px].
+CELL = 16
+
+
+def image_statistics(image: np.ndarray, threshold: int = 20, low_gradient: float = 8.0) -> dict:
+    """Empty-cell share, corners per 640x480, low-gradient share and the occupancy grid of an image.
+
+    FAST corners at ``threshold`` (with non-maximum suppression) fill :data:`CELL`-pixel cells; a
+    pixel is of low gradient below ``low_gradient`` grey levels per pixel (Sobel / 8).
+    """
+    h, w = image.shape
+    keypoints = cv2.FastFeatureDetector_create(threshold, True).detect(image)
+    corners = np.array([k.pt for k in keypoints]).reshape(-1, 2)
+    occupied = np.zeros((h // CELL, w // CELL), bool)
+    col, row = (corners // CELL).astype(int).T
+    inside = (row < occupied.shape[0]) & (col < occupied.shape[1])
+    occupied[row[inside], col[inside]] = True
+    gradient = np.hypot(cv2.Sobel(image, cv2.CV_32F, 1, 0), cv2.Sobel(image, cv2.CV_32F, 0, 1)) / 8
+    return {
+        "empty": 1 - occupied.mean(),
+        "per_vga": len(corners) * 640 * 480 / (h * w),
+        "flat": float(np.mean(gradient < low_gradient)),
+        "corners": corners,
+        "occupied": occupied,
+    }
