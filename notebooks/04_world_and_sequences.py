@@ -59,7 +59,7 @@ from vo_lib.models.track_odometry import TrackOdometry
 from vo_lib.sim.demo_worlds import view_from
 from vo_lib.sim.laser import LaserScanner
 from vo_lib.sim.render import StereoRenderer
-from vo_lib.sim.samples import CAMERA_HEIGHT, SAMPLES, generate, render_sample
+from vo_lib.sim.samples import CAMERA_HEIGHT, SAMPLES, generate
 from vo_lib.sim.trajectories import simulate_drive
 from vo_lib.sim.world import WORLDS
 from vo_lib.viz.nb04 import panel_grid
@@ -276,16 +276,8 @@ with tempfile.TemporaryDirectory() as tmp:
     seq = read_sequence(path)
     print(f"{len(seq)} frames, camera {seq.camera}, rate {seq.manifest['rate_hz']} Hz")
     print("first odometry rows (left, right track distance, m):\n", seq.odometry[:3])
-    first_left, first_right = seq.pair(0)
-    read_odometry, read_camera = seq.odometry.copy(), seq.camera
-# what was read back is what the simulation made: the encoders' readings, the rig, the images
-corridor_drive = drives["corridor"][0]
-assert np.allclose(read_odometry, corridor_drive.odometry[:5], atol=1e-9)
-assert np.isclose(read_camera.baseline, camera.baseline) and np.isclose(read_camera.fx, camera.fx / 2)
-_, frames_again = render_sample("corridor", 1, (320, 240))
-left_again, right_again, _ = next(iter(frames_again))
-assert np.array_equal(first_left, left_again) and np.array_equal(first_right, right_again)
-print("read back: odometry, calibration and the first pair equal what was rendered")
+# What is read back is what the simulation made (the encoders' readings, the rig at half the
+# resolution, the images): the notebook tests write and read the same five frames and compare.
 
 # %% [markdown]
 # ## 7 · Walk through the world

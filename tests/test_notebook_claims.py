@@ -19,9 +19,12 @@ import pytest  # noqa: E402
 import skimage.data  # noqa: E402
 import sympy as sp  # noqa: E402
 
+from vo_lib.camera import StereoCamera  # noqa: E402
+from vo_lib.formats.sequence import read_sequence  # noqa: E402
 from vo_lib.lidar_tracking import demo_corridor  # noqa: E402
 from vo_lib.sim import demo_worlds  # noqa: E402
 from vo_lib.sim.laser import LaserScanner  # noqa: E402
+from vo_lib.sim.samples import generate, render_sample  # noqa: E402
 from vo_lib.stereo_vo import demo_fusion, demo_one_point, demo_pipeline, demo_real  # noqa: E402
 from vo_lib.viz import nb04, nb05, nb06, nb09, nb11  # noqa: E402
 
@@ -137,6 +140,22 @@ def test_rate_sentence_states_the_verdict_the_interval_gives():
     assert "not reliably different" in words(0.01, 0.0, 0.02)
     assert "7 times it" in words(0.07, 0.05, 0.09)
     assert "below the nominal" in words(0.001, 0.0, 0.005)
+
+
+# --- notebook 04: a sequence on disk reads back as it was rendered ---
+
+
+def test_a_generated_sequence_reads_back_as_rendered(tmp_path):
+    """Notebook 04, section 6: five corridor frames at 320x240 written and read again."""
+    path = generate("corridor", tmp_path / "corridor", frames=5, resolution=(320, 240), progress=False)
+    seq = read_sequence(path)
+    rendered, frames = render_sample("corridor", 5, (320, 240))
+    left, right, _ = next(iter(frames))
+    assert np.allclose(seq.odometry, rendered.drive.odometry[:5], atol=1e-9)
+    full = StereoCamera.bumblebee2()
+    assert np.isclose(seq.camera.baseline, full.baseline) and np.isclose(seq.camera.fx, full.fx / 2)
+    first_left, first_right = seq.pair(0)
+    assert np.array_equal(first_left, left) and np.array_equal(first_right, right)
 
 
 # --- notebooks 04, 05, 11 --------------------------------------------------------------------
