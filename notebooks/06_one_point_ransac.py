@@ -434,9 +434,6 @@ REFINE_ITERATIONS = 2  # Gauss-Newton iterations of the first refinement
 REFINE_ROUNDS = 3  # refine, re-select the inliers, and again while they change
 WHITENED_GATE = 3.76  # eq. 21 compared in (u, v, d): sqrt of chi-square(3) at 99.7 %
 K2 = GATE_SIGMAS**2
-constants = ("PIXEL_SIGMA", "GATE_SIGMAS", "CONFIDENCE", "POOL_FRACTION", "MIN_POOL")
-constants += ("REFINE_ITERATIONS", "REFINE_ROUNDS", "WHITENED_GATE")
-assert all(globals()[name] == getattr(library.DEFAULT_PARAMS, name.lower()) for name in constants)
 DRAW_SEED = 16
 draws = library.hypothesis_draws(DRAW_SEED)  # uniform numbers: draws[0] for θ, draws[1] for ρ
 

@@ -8,6 +8,8 @@ helper counts what it says) is checked here, on the helper modules the notebooks
 from __future__ import annotations
 
 import math
+import pathlib
+import re
 
 import matplotlib
 
@@ -26,7 +28,10 @@ from vo_lib.sim import demo_worlds  # noqa: E402
 from vo_lib.sim.laser import LaserScanner  # noqa: E402
 from vo_lib.sim.samples import generate, render_sample  # noqa: E402
 from vo_lib.stereo_vo import demo_fusion, demo_one_point, demo_pipeline, demo_real  # noqa: E402
+from vo_lib.stereo_vo.ransac import DEFAULT_PARAMS  # noqa: E402
 from vo_lib.viz import nb04, nb05, nb06, nb09, nb11  # noqa: E402
+
+ROOT = pathlib.Path(__file__).resolve().parents[1]
 
 
 @pytest.fixture(autouse=True)
@@ -74,6 +79,17 @@ def test_side_of_band_names_each_side():
     assert nb06.side_of_band(3.0, band) == "inside the band"
     assert nb06.side_of_band(1.0, band).startswith("below")
     assert "over-confident" in nb06.side_of_band(9.0, band)
+
+
+def test_notebook_06_constants_are_the_library_defaults():
+    """Notebook 06 says the library uses the same values as its constants."""
+    text = next((ROOT / "notebooks").glob("06_*.py")).read_text(encoding="utf-8")
+    names = ("PIXEL_SIGMA", "GATE_SIGMAS", "CONFIDENCE", "POOL_FRACTION", "MIN_POOL")
+    names += ("REFINE_ITERATIONS", "REFINE_ROUNDS", "WHITENED_GATE")
+    for name in names:
+        typed = re.search(rf"^{name} = ([0-9.]+)", text, re.M)
+        assert typed, f"notebook 06 types no {name}"
+        assert float(typed.group(1)) == getattr(DEFAULT_PARAMS, name.lower()), name
 
 
 # --- notebook 07 -----------------------------------------------------------------------------
