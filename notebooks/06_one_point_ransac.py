@@ -229,7 +229,8 @@ assert abs(median_norm - 0.674) < 0.1  # the half-normal's median, not a unit no
 # between the frames, like `vo_lib.sim.disturbances.MovingObject`), and keeps some random pixels.
 
 # %%
-print(f"random {RANDOM_SHARE:.0%}, near misses {NEAR_MISS_SHARE:.0%} ({NEAR_MISS_PX[0]:g}–{NEAR_MISS_PX[1]:g} px), "
+print(f"random {RANDOM_SHARE:.0%}, near misses {NEAR_MISS_SHARE:.0%} "
+      f"({NEAR_MISS_PX[0]:g}–{NEAR_MISS_PX[1]:g} px), "
       f"moving object {MOVER_SHARE:.0%} ({MOVER_PX:g} px) of all matches")
 
 

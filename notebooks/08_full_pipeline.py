@@ -325,8 +325,11 @@ spot_sets = ("spot_turn", "spot_turn_2")
 flag_share = {n: stored[n]["flagged"] / stored[n]["frames"] for n in spot_sets}
 # the sentences below: in RMS both sets lie below the paper's; odometry alone far above both
 assert all(rms_of(stored, n, "theta_deg") < rms_of(stored, n, "theta_deg", "paper") for n in spot_sets)
+odometry_over_paper = [
+    rms_of(stored, n, "theta_deg", "odometry") / rms_of(stored, n, "theta_deg", "paper") for n in spot_sets
+]
 # "far above": at least three times the paper's
-assert all(rms_of(stored, n, "theta_deg", "odometry") > 3 * rms_of(stored, n, "theta_deg", "paper") for n in spot_sets)
+assert min(odometry_over_paper) > 3
 display(
     Markdown(
         "Each stored set is one run, and so is each of the paper's: these figures set two runs side "
@@ -334,7 +337,8 @@ display(
         "errors of both signs cancel in an AVG; the RMS, √(AVG² + S.D.²), cannot cancel. The heading "
         "RMS is "
         + " and ".join(
-            f"{rms_of(stored, n, 'theta_deg'):.2f}° against the paper's {rms_of(stored, n, 'theta_deg', 'paper'):.2f}° "
+            f"{rms_of(stored, n, 'theta_deg'):.2f}° against the paper's "
+            f"{rms_of(stored, n, 'theta_deg', 'paper'):.2f}° "
             f"in `{n}`" for n in spot_sets
         )
         + "; track odometry alone reaches "
@@ -419,7 +423,9 @@ for name in free_sets:
     print(f" {name:15s}" + "".join(cells))
 
 
-odometry_lower = [q for q in QUANTITIES if rms_of(stored, "indoor_free", q, "odometry") < rms_of(stored, "indoor_free", q)]
+odometry_lower = [
+    q for q in QUANTITIES if rms_of(stored, "indoor_free", q, "odometry") < rms_of(stored, "indoor_free", q)
+]
 flagged_share = {n: stored[n]["flagged"] / stored[n]["frames"] for n in free_sets}
 display(
     Markdown(

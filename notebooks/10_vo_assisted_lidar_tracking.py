@@ -526,7 +526,10 @@ for name, rates in held_out_rates.items():
 display(
     Markdown(
         f"On {len(HELD_OUT)} held-out normal runs the limits raise false alarms at "
-        + rate_sentence("laser", alarm, nominal) + "; and at " + rate_sentence("visual odometer", alarm, nominal) + ". "
+        + rate_sentence("laser", alarm, nominal)
+        + "; and at "
+        + rate_sentence("visual odometer", alarm, nominal)
+        + ". "
         "The corrections are lengths, not Gaussian, so 3σ limits need not deliver a Gaussian "
         "chart's rate; the held-out rate is what they deliver, the price of each flag in a "
         "normal stretch. Our mean "

@@ -398,7 +398,8 @@ for k in range(1, len(seq)):
     inc = vehicle_increment(true_motion, vehicle.mount)
     planar = camera_motion(np.zeros(3), inc, vehicle.mount)
     circular = as_4x4(*motion_matrices(*circular_motion_from_increment(inc)))
-    gaps.append(tuple(pixel_gap(a, b, seq.camera, scene_points) for a, b in ((true_motion, planar), (planar, circular))))
+    pairs = ((true_motion, planar), (planar, circular))
+    gaps.append(tuple(pixel_gap(a, b, seq.camera, scene_points) for a, b in pairs))
 gaps = np.array(gaps)
 for j, what in enumerate(("slope, bank and pitch (6-DoF vs planar)", "offset (planar vs on-axis circular)")):
     g = gaps[:, j]
@@ -674,7 +675,9 @@ if REAL:
     start = time.perf_counter()
     features_per_frame = [pyramid_fe.process(*seq.pair(k)) for k in range(len(seq))]  # no draw: once
     chained_by_seed = {
-        s_: chain_models(seq, vehicle.mount, vo_full.camera_poses, np.random.default_rng(s_), features_per_frame)
+        s_: chain_models(
+            seq, vehicle.mount, vo_full.camera_poses, np.random.default_rng(s_), features_per_frame
+        )
         for s_ in RANSAC_SEEDS
     }
     chained = chained_by_seed[SEED]  # the figures show the first seed
