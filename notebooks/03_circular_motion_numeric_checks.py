@@ -59,6 +59,7 @@ from vo_lib.stereo_vo.demo_circular import (
     tilted_matches,
 )
 from vo_lib.stereo_vo.synthetic import Scene, matches_under_transform, synthetic_matches
+from vo_lib.viz.nb03 import local_exponent
 from vo_lib.viz.plotting import new_axes
 from vo_lib.viz.prose import Markdown
 from vo_lib.viz.widgets import offer, slider
@@ -188,12 +189,8 @@ assert measured[0] > 10 * measured[-1]  # near the camera's height, an order of 
 row_centre = np.sqrt(bins[1:] * np.maximum(bins[:-1], 1))  # geometric bin centres, as plotted
 
 
-def local_exponent(i):
-    """p of σ_θ ∝ |v − v₀|^−p between bins i and i + 1."""
-    return -np.log(measured[i + 1] / measured[i]) / np.log(row_centre[i + 1] / row_centre[i])
-
-
-inner, outer = local_exponent(1), local_exponent(len(measured) - 2)
+inner = local_exponent(measured, row_centre, 1)  # p of σ_θ ∝ |v − v₀|^−p between two bins
+outer = local_exponent(measured, row_centre, len(measured) - 2)
 display(
     Markdown(
         f"Between the {bins[1]}–{bins[2]} px and {bins[2]}–{bins[3]} px bins σ_θ falls as "

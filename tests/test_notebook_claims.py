@@ -29,7 +29,7 @@ from vo_lib.sim.laser import LaserScanner  # noqa: E402
 from vo_lib.sim.samples import generate, render_sample  # noqa: E402
 from vo_lib.stereo_vo import demo_fusion, demo_one_point, demo_pipeline, demo_real  # noqa: E402
 from vo_lib.stereo_vo.ransac import DEFAULT_PARAMS  # noqa: E402
-from vo_lib.viz import nb04, nb05, nb06, nb09, nb11  # noqa: E402
+from vo_lib.viz import nb03, nb04, nb05, nb06, nb09, nb11  # noqa: E402
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 
@@ -213,3 +213,9 @@ def test_the_walk_widget_sees_the_corridor_from_its_default_pose():
     scanner = LaserScanner()
     beams = int(round(scanner.fov / scanner.angular_step)) + 1
     assert demo_worlds.view_from() > 0.49 * beams
+
+
+def test_local_exponent_reads_a_power_law():
+    centres = np.array([1.0, 2.0, 4.0, 8.0])
+    measured = 3.0 * centres**-1.5
+    assert all(math.isclose(nb03.local_exponent(measured, centres, i), 1.5) for i in range(3))
