@@ -40,13 +40,12 @@
 #   vehicle moves locally on a circle, the constraint behind the arcs here and eq. 12–17.
 
 # %%
-import matplotlib.pyplot as plt
 import numpy as np
 import sympy as sp
 from IPython.display import display
 
-from vo_lib.geometry import wrap_angle
 from vo_lib.models.track_odometry import TrackOdometry, apply_slip
+from vo_lib.sim.demo_drive import drive_on
 from vo_lib.viz.plotting import covariance_ellipse, new_axes, plot_paths
 from vo_lib.viz.prose import Markdown
 from vo_lib.viz.widgets import offer, show_math, slider
@@ -310,28 +309,7 @@ display(
 
 
 # %%
-def drive(v_left=0.25, v_right=0.30, seconds=20.0, slip_left=0.0):
-    """Dead-reckon constant track speeds (m/s) and compare with the slipping truth."""
-    n = int(rate * seconds)
-    controls = np.tile([v_left / rate, v_right / rate], (n, 1))
-    believed = odo.integrate(controls)
-    truth = odo.integrate(apply_slip(controls, slip_left=slip_left), exact=True)
-    fig, ax = new_axes(width=6, height=4.5)
-    plot_paths(ax, {"odometry": believed, "truth": truth}, f"{seconds:.0f} s of constant track speeds")
-    state, P = np.zeros(3), np.zeros((3, 3))
-    for k, u in enumerate(controls, start=1):
-        state, P = odo.propagate(state, P, u)
-        if k % max(1, n // 5) == 0:
-            covariance_ellipse(ax, state, P, color="C0")
-    err = np.hypot(*(believed[-1, :2] - truth[-1, :2]))
-    print(
-        f"final position error {err * 1e3:.3f} mm, heading error "
-        f"{np.degrees(wrap_angle(believed[-1, 2] - truth[-1, 2])):.2f}°"
-    )
-    plt.show()
-    return err
-
-
+drive = drive_on(odo, rate)
 err = drive()
 assert err < 1e-4  # without slip only the midpoint form separates them: ~dθ²/24 per step
 

@@ -44,14 +44,22 @@
 import matplotlib.pyplot as plt
 import numpy as np
 from IPython.display import display
-from scipy.spatial.transform import Rotation
 from scipy.stats import chi2
 
 from vo_lib.camera import StereoCamera
 from vo_lib.comparison import over_seeds
 from vo_lib.geometry import camera_motion, camera_mount, compose_planar, wrap_angle
 from vo_lib.stereo_vo import circular_motion as cm
+from vo_lib.stereo_vo.demo_circular import (
+    offset_share,
+    robust_sd,
+    theta_spread,
+    tilt_rho,
+    tilt_theta,
+    tilted_matches,
+)
 from vo_lib.stereo_vo.synthetic import Scene, matches_under_transform, synthetic_matches
+from vo_lib.viz.nb03 import local_exponent
 from vo_lib.viz.plotting import new_axes
 from vo_lib.viz.prose import Markdown
 from vo_lib.viz.widgets import offer, slider
@@ -127,11 +135,6 @@ row_offset = np.abs(m.w_prev[:, 1] + m.w_curr[:, 1] - 2 * camera.cy) / 2
 bins = np.array([0, 5, 10, 20, 40, 80, 160, 240])
 
 
-def robust_sd(values):
-    """Median absolute deviation scaled to a Gaussian standard deviation."""
-    return 1.4826 * np.median(np.abs(values - np.median(values)))
-
-
 centres, measured, model, normalised = [], [], [], []
 for lo, hi in zip(bins[:-1], bins[1:], strict=True):
     sel = (row_offset >= lo) & (row_offset < hi)
@@ -186,12 +189,8 @@ assert measured[0] > 10 * measured[-1]  # near the camera's height, an order of 
 row_centre = np.sqrt(bins[1:] * np.maximum(bins[:-1], 1))  # geometric bin centres, as plotted
 
 
-def local_exponent(i):
-    """p of σ_θ ∝ |v − v₀|^−p between bins i and i + 1."""
-    return -np.log(measured[i + 1] / measured[i]) / np.log(row_centre[i + 1] / row_centre[i])
-
-
-inner, outer = local_exponent(1), local_exponent(len(measured) - 2)
+inner = local_exponent(measured, row_centre, 1)  # p of σ_θ ∝ |v − v₀|^−p between two bins
+outer = local_exponent(measured, row_centre, len(measured) - 2)
 display(
     Markdown(
         f"Between the {bins[1]}–{bins[2]} px and {bins[2]}–{bins[3]} px bins σ_θ falls as "
@@ -236,30 +235,6 @@ assert np.all(np.abs(rho_measured / rho_model(depth_centres) - 1) < 0.2)
 
 
 # %%
-def theta_spread(v_offset_px=60.0, u_offset_px=100.0, depth_m=5.0, noise_px=0.5, theta_deg=2.0, rho_m=0.08):
-    """Monte Carlo spread of eq. 14's theta for one match, against the first-order model."""
-    local = np.random.default_rng(SEED)
-    w = np.array([[camera.cx + u_offset_px, camera.cy + v_offset_px, camera.fx * camera.baseline / depth_m]])
-    P = camera.backproject(w)
-    P2 = cm.apply_motion(P, np.radians(theta_deg), rho_m)
-    w2 = camera.project(P2)
-    runs = 5000
-    a = np.repeat(w, runs, axis=0) + local.normal(0, noise_px, (runs, 3))
-    b = np.repeat(w2, runs, axis=0) + local.normal(0, noise_px, (runs, 3))
-    th_runs = np.degrees(cm.theta_from_pixels(a, b, camera))
-    sigma_model = np.degrees(cm.theta_standard_deviation(w, w2, camera, noise_px)[0])
-    sigma_mc = 1.4826 * np.median(np.abs(th_runs - np.median(th_runs)))
-    fig, ax = new_axes(width=6, height=3.5)
-    lim = theta_deg + np.array([-5, 5]) * max(sigma_model, 1e-3)
-    ax.hist(np.clip(th_runs, *lim), bins=80, range=tuple(lim), density=True, alpha=0.7)
-    ax.axvline(theta_deg, color="k", lw=1, label="true θ")
-    ax.set_xlabel("θ from one match [deg]")
-    ax.set_title(f"σθ: Monte Carlo {sigma_mc:.3f}°, first-order model {sigma_model:.3f}°")
-    ax.legend(fontsize="small")
-    plt.show()
-    return sigma_mc, sigma_model
-
-
 sigma_mc, sigma_model = theta_spread()
 assert abs(sigma_mc / sigma_model - 1) < 0.05  # 5,000 draws: the MAD's own spread is about 2 %
 
@@ -401,18 +376,6 @@ assert all(abs(signed[key] / fraction[key] - 1) < 0.05 for key in signed)  # the
 
 # %%
 OFFSET_SEEDS = range(SEED, SEED + 10)
-offset_mount = camera_mount(forward=0.3, height=0.5)
-
-
-def offset_share(seed):
-    """Median |θ error| / θ of an arc and of a spot turn seen from the same scene draw."""
-    out = {}
-    for label, chord in (("the spot turn", 0.0), ("the arc", 0.08)):
-        T = camera_motion(np.zeros(3), cm.robot_increment(np.radians(2), chord), offset_mount)
-        mm = matches_under_transform(camera, 1000, T, np.random.default_rng(seed))
-        ok = ~cm.degenerate_theta_mask(mm.w_prev, mm.w_curr, camera, min_pixels=20)
-        out[label] = np.median(np.abs(cm.theta_from_pixels(mm.w_prev, mm.w_curr, camera)[ok] - np.radians(2)))
-    return {k: v / np.radians(2) for k, v in out.items()}
 
 
 offset_cmp = over_seeds(offset_share, OFFSET_SEEDS)
@@ -434,8 +397,7 @@ assert max(abs(v) for v in spot_minus_arc[1:]) < 0.2 * np.median(offset_cmp.figu
 # above is a small fraction of the share both carry). Our simulated rig
 # (notebook 04) therefore mounts the camera above the turning axis. A real robot should too, or
 # its pipeline should model the offset (exercise 3). The paper blames its spot-turn heading errors
-# on unequal track grip; an offset camera would be a second suspect, and a worse one indoors than
-# out.
+# on unequal track grip; an offset camera would be a second suspect.
 #
 # ## 6 · The limits of the planar model: pitch and roll
 #
@@ -447,18 +409,6 @@ assert max(abs(v) for v in spot_minus_arc[1:]) < 0.2 * np.median(offset_cmp.figu
 # eq. 14:
 
 # %%
-tilt_theta, tilt_rho = np.radians(3.0), 0.08
-
-
-def tilted_matches(pitch_deg, roll_deg, rng, noise_px=0.0, n=400):
-    """Matches of the planar motion (tilt_theta, tilt_rho) with a pitch and roll added to it."""
-    R, T = cm.motion_matrices(tilt_theta, tilt_rho)
-    M = np.eye(4)
-    M[:3, :3] = R @ Rotation.from_euler("xz", [pitch_deg, roll_deg], degrees=True).as_matrix()
-    M[:3, 3] = T
-    return matches_under_transform(camera, n, M, rng, noise_px=noise_px)
-
-
 print(" tilt [deg]   median |θ error| [deg]: pitch   roll")
 tilt_error = {}
 for tilt in (0.0, 2.0, 3.0, 5.0):

@@ -53,7 +53,9 @@ from vo_lib.comparison import Comparison, Verdict
 from vo_lib.geometry import camera_mount, planar_to_matrix
 from vo_lib.sim.render import SensorEffects, StereoRenderer
 from vo_lib.sim.world import indoor_lab
+from vo_lib.stereo_vo.demo_front_end import front_end_on
 from vo_lib.stereo_vo.features import ROW_TOLERANCE, StereoFrontEnd, bucket, hamming
+from vo_lib.viz.nb05 import cells_covered
 from vo_lib.viz.plotting import new_axes
 from vo_lib.viz.prose import Markdown
 from vo_lib.viz.widgets import offer, slider
@@ -218,15 +220,11 @@ for ax, sel, title in (
 plt.show()
 
 
-def cells_covered(sel):
-    return len(np.unique((points[sel, 0] // 80).astype(int) * 10 + (points[sel, 1] // 80).astype(int)))
-
-
 print(
-    f"{len(keypoints)} FAST corners; grid cells covered: strongest {cells_covered(strongest)}, "
-    f"bucketed {cells_covered(kept)} of 48"
+    f"{len(keypoints)} FAST corners; grid cells covered: strongest {cells_covered(points[strongest])}, "
+    f"bucketed {cells_covered(points[kept])} of 48"
 )
-assert cells_covered(kept) > cells_covered(strongest)
+assert cells_covered(points[kept]) > cells_covered(points[strongest])
 
 # %% [markdown]
 # ## 2 · Binary descriptors and the Hamming distance
@@ -405,27 +403,7 @@ display(
 
 
 # %%
-def front_end(threshold=40, max_features=600):
-    """Stereo matches of the rendered pair for a FAST threshold and a feature cap."""
-    fe = StereoFrontEnd(camera, max_features=int(max_features), fast_threshold=int(threshold))
-    f = fe.process(left, right)
-    if len(f) == 0:
-        print("no stereo matches")
-        return 0
-    ui, vi = np.rint(f.w[:, 0]).astype(int), np.rint(f.w[:, 1]).astype(int)
-    err = np.abs(f.w[:, 2] - true_disparity[vi, ui])
-    fig, ax = new_axes(width=6, height=4.4)
-    ax.imshow(left, cmap="gray")
-    sc = ax.scatter(f.w[:, 0], f.w[:, 1], c=f.w[:, 2], s=8, cmap="plasma")
-    fig.colorbar(sc, ax=ax, shrink=0.7, label="disparity [px]")
-    ax.set_title(
-        f"{len(f)} matches, median |error| {np.median(err):.2f} px, {sum(f.timings.values()):.1f} ms"
-    )
-    ax.axis("off")
-    plt.show()
-    return len(f)
-
-
+front_end = front_end_on(camera, left, right, true_disparity)
 count = front_end()
 # the lab's painted walls and tiled floor leave part of the view without corners, so fewer
 # matches than when every surface was corner texture

@@ -43,7 +43,6 @@
 
 # %%
 import math
-from dataclasses import replace
 
 import matplotlib.pyplot as plt
 import numpy as np
@@ -52,20 +51,29 @@ from scipy.stats import chi2
 
 from vo_lib.camera import StereoCamera
 from vo_lib.comparison import Verdict, bootstrap_interval, over_seeds
-from vo_lib.geometry import compose_planar, relative_planar, wrap_angle
+from vo_lib.geometry import relative_planar, wrap_angle
 from vo_lib.models.track_odometry import TrackOdometry
 from vo_lib.sim.samples import SAMPLES
 from vo_lib.sim.trajectories import simulate_drive
 from vo_lib.stereo_vo import circular_motion as cm
+from vo_lib.stereo_vo.demo_fusion import (
+    ESTIMATORS,
+    final_heading,
+    final_position,
+    fuse,
+    heading_error,
+    nees_words,
+    run_drive,
+    said,
+    sideways_ends,
+)
 from vo_lib.stereo_vo.kalman import (
     SIDEWAYS_SIGMA,
     SLIP_SIGMA,
-    SlipCalibratedFilter,
     VoKalmanFilter,
     constrained_jacobian,
     constrained_measurement,
     measurement,
-    nis,
 )
 from vo_lib.stereo_vo.ransac import one_point_ransac
 from vo_lib.stereo_vo.synthetic import synthetic_matches
@@ -348,83 +356,6 @@ display(
 
 
 # %%
-def run_drive(
-    name,
-    frames,
-    seed=SEED,
-    outage=(),
-    vo_noise=0.5,
-    matches=300,
-    slip_scale=1.0,
-    use_odometry=True,
-    sideways_sigma=SIDEWAYS_SIGMA,
-):
-    """One draw of a sample drive with synthetic matches: the trajectories of the truth, odometry
-    alone, VO alone, the fused filter and the slip-calibrated fused filter, the fused filter's
-    heading σ, its NEES per frame and NIS per update, and the frames without VO. The seed draws
-    the drive's slip and encoder noise and the matches (the fused filters predict with constant
-    velocity when ``use_odometry`` is false)."""
-    sample = SAMPLES[name]
-    slip = sample.slip
-    if slip_scale != 1.0:
-        slip = replace(
-            slip,
-            mean=slip.mean * slip_scale,
-            spot_turn_mean=slip.spot_turn_mean * slip_scale,
-            difference=slip.difference * slip_scale,
-            spot_turn_difference=slip.spot_turn_difference * slip_scale,
-        )
-    drive_rng = np.random.default_rng(seed)
-    drive = simulate_drive(sample.legs, sample.rate, sample.start, drive_rng, odometry, slip)
-    truth = drive.poses[: frames + 1]
-    r = np.random.default_rng(seed + 10_000)
-    kf = VoKalmanFilter(odometry, pose=truth[0], sideways_sigma=sideways_sigma)
-    cal = SlipCalibratedFilter(odometry, pose=truth[0], sideways_sigma=sideways_sigma)
-    paths = {k: [truth[0]] for k in ("odometry", "VO", "fused", "calibrated")}
-    yaw_sigma, nees_f, nees_c, nis_f, flagged, last = [0.0], [], [], [], [], np.zeros(3)
-    for k in range(1, frames + 1):
-        u = drive.odometry[k] if use_odometry else None
-        kf.predict(u)
-        cal.predict(u)
-        paths["odometry"].append(odometry.predict(paths["odometry"][-1], drive.odometry[k]))
-        theta, rho = cm.circular_motion_from_increment(relative_planar(truth[k - 1], truth[k]))
-        if k in outage:
-            flagged.append(k)  # nothing to see: the filters keep their predictions
-        else:
-            m = synthetic_matches(camera, matches, theta, rho, r, noise_px=vo_noise, outlier_ratio=0.3)
-            est = one_point_ransac(
-                m.w_prev, m.w_curr, camera, prior=kf.motion_prior(), rng=r, pixel_sigma=max(vo_noise, 0.1)
-            )
-            kf.update(est.theta, est.rho, est.covariance)
-            nis_f.append(nis(kf.ekf.y[:2], kf.ekf.S[:2, :2]))
-            cal.update(est.theta, est.rho, est.covariance)
-            last = cm.robot_increment(est.theta, est.rho)
-        paths["VO"].append(compose_planar(paths["VO"][-1], last))  # its last motion again in a gap
-        for f_, key, log in ((kf, "fused", nees_f), (cal, "calibrated", nees_c)):
-            f_.finish_frame()
-            paths[key].append(f_.pose)
-            log.append(f_.nees(truth[k]))
-        yaw_sigma.append(math.sqrt(kf.covariance[2, 2]))
-    return {
-        "truth": truth,
-        **{k: np.array(v) for k, v in paths.items()},
-        "yaw_sigma": np.array(yaw_sigma),
-        "nees": np.array(nees_f),
-        "nees_calibrated": np.array(nees_c),
-        "nis": np.array(nis_f),
-        "flagged": flagged,
-        "turn_scale": float(np.mean(cal.scales)),
-        "scale_sigma": math.sqrt(np.ones(2) @ cal.scale_covariance @ np.ones(2)) / 2,
-    }
-
-
-ESTIMATORS = ("odometry", "VO", "fused", "calibrated")
-
-
-def heading_error(est, truth):
-    return np.degrees(wrap_angle(est[:, 2] - truth[:, 2]))
-
-
 spot = run_drive("spot_turn", 300)
 t = np.arange(301) / SAMPLES["spot_turn"].rate
 fig, axes = new_axes(2, width=5.5, height=3.6)
@@ -453,14 +384,6 @@ CONDITIONS = {
 draws = {c: {s: run_drive(n, 300, seed=s, **kw) for s in SEEDS} for c, (n, kw) in CONDITIONS.items()}
 
 
-def final_heading(d):
-    return {k: abs(heading_error(d[k], d["truth"])[-1]) for k in ESTIMATORS}
-
-
-def final_position(d):
-    return {k: 100 * float(np.linalg.norm(d[k][-1, :2] - d["truth"][-1, :2])) for k in ESTIMATORS}
-
-
 heading_cmp = {c: over_seeds(lambda s, c=c: final_heading(draws[c][s]), SEEDS) for c in CONDITIONS}
 position_cmp = {c: over_seeds(lambda s, c=c: final_position(draws[c][s]), SEEDS) for c in CONDITIONS}
 print(f"{'condition':24s}{'median final heading error [deg]':>44s}{'median final position error [cm]':>44s}")
@@ -469,11 +392,6 @@ for c in CONDITIONS:
     cells = [np.median(heading_cmp[c].figures[k]) for k in ESTIMATORS]
     cells += [np.median(position_cmp[c].figures[k]) for k in ESTIMATORS]
     print(f"{c:24s}" + "".join(f"{v:11.3f}" for v in cells))
-
-
-def said(comparison, a, b, unit):
-    """The sentence of a comparison, with its unit."""
-    return comparison.sentence(a, b, unit=unit, digits=3)
 
 
 display(
@@ -597,15 +515,6 @@ for c in ("spot turn", "indoor"):
               f"{len(SEEDS)} seeds {low_:.2f}–{high_:.2f}  (3 if consistent)")
 
 
-def nees_words(mean, low_, high_):
-    """A seed interval of a time-averaged NEES against 3, in words."""
-    if low_ > 3:
-        return f"{mean:.2f} (interval {low_:.2f}–{high_:.2f}, above 3: over-confident)"
-    if high_ < 3:
-        return f"{mean:.2f} (interval {low_:.2f}–{high_:.2f}, below 3: more cautious than it need be)"
-    return f"{mean:.2f} (interval {low_:.2f}–{high_:.2f}, consistent with 3)"
-
-
 display(
     Markdown(
         "Time-averaged NEES over the seeds: "
@@ -657,18 +566,6 @@ assert (
     < SIDEWAYS_SIGMA
     < sideways_sigma["constant velocity"]
 )
-
-def sideways_ends(seed):
-    """Final position error [cm] of the fused filter with and without the sideways measurement,
-    predicting with odometry and with constant velocity, on one draw of 200 indoor frames."""
-    ends = {}
-    for label, sigma_side in (("with", SIDEWAYS_SIGMA), ("without", 1e3)):  # σ = 1 km: not observed
-        for use_odo, pred in ((True, "odometry"), (False, "constant velocity")):
-            d = run_drive("indoor_free", 200, seed=seed, use_odometry=use_odo, sideways_sigma=sigma_side)
-            end_error = np.linalg.norm(d["fused"][-1, :2] - d["truth"][-1, :2])
-            ends[f"{pred} {label} the sideways row"] = 100 * float(end_error)
-    return ends
-
 
 sideways_cmp = over_seeds(sideways_ends, SEEDS)
 for name_, values in sideways_cmp.figures.items():
@@ -781,21 +678,7 @@ assert abs(nis_mean - 2) < 2.5 * nis_se  # a statistical band: its width is set 
 
 
 # %%
-def fuse(slip_scale=1.0, vo_noise_px=0.5, outage_frames=0, seed=SEED):
-    """Final heading errors of odometry, VO and the two fused filters on 300 spot-turn frames."""
-    gap = set(range(100, 100 + int(outage_frames)))
-    d = run_drive("spot_turn", 300, seed=int(seed), outage=gap, vo_noise=vo_noise_px, slip_scale=slip_scale)
-    fig, ax = new_axes(width=6.5, height=3.2)
-    frames_t = np.arange(len(d["truth"])) / SAMPLES["spot_turn"].rate
-    plot_errors(ax, frames_t, {k: heading_error(d[k], d["truth"]) for k in ESTIMATORS}, "heading error [deg]")
-    if gap:
-        ax.axvspan(min(gap) / SAMPLES["spot_turn"].rate, max(gap) / SAMPLES["spot_turn"].rate, color="0.85")
-    plt.show()
-    return {k: abs(heading_error(d[k], d["truth"])[-1]) for k in ESTIMATORS}
-
-
 widget_errors = fuse()
-assert widget_errors["odometry"] > 5 * widget_errors["fused"]  # the slip runs odometry away; a wide margin
 
 # %%
 fuse_widget = offer(

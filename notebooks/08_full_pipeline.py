@@ -48,14 +48,13 @@ from IPython.display import display
 from vo_lib.camera import StereoCamera
 from vo_lib.comparison import Comparison, Verdict, bootstrap_interval, chi2_band
 from vo_lib.evaluation import key_position_errors
-from vo_lib.geometry import relative_planar, wrap_angle
-from vo_lib.models.track_odometry import TrackOdometry
-from vo_lib.sim.samples import SAMPLES, render_sample
+from vo_lib.geometry import wrap_angle
+from vo_lib.sim.samples import SAMPLES
 from vo_lib.sim.trajectories import simulate_drive
 from vo_lib.stereo_vo import circular_motion as cm
 from vo_lib.stereo_vo import paper_sets
 from vo_lib.stereo_vo.config import CRAWLER
-from vo_lib.stereo_vo.pipeline import run_frames
+from vo_lib.stereo_vo.demo_pipeline import frames_for, heading_error, rms_of, run, sides, stored_table
 from vo_lib.stereo_vo.ransac import one_point_ransac
 from vo_lib.stereo_vo.synthetic import matches_under_transform
 from vo_lib.viz.plotting import draw_flowchart, new_axes, plot_paths
@@ -66,25 +65,6 @@ rng = np.random.default_rng(SEED)
 np.set_printoptions(precision=3, suppress=True)
 FULL = os.environ.get("VO_NOTEBOOKS_FULL") == "1"
 print("full run" if FULL else "quick mode: shortened sequences (VO_NOTEBOOKS_FULL=1 for the full ones)")
-
-
-def frames_for(name, quick):
-    return SAMPLES[name].frames if FULL else quick
-
-
-def run(name, frames, use_odometry=True, resolution=(640, 480)):
-    """Render a sample in memory and run the pipeline; returns (result, truth from the start, odometry)."""
-    rendered, frame_iter = render_sample(name, frames, resolution)
-    if not use_odometry:
-        frame_iter = ((left, right, None) for left, right, _ in frame_iter)
-    result = run_frames(frame_iter, rendered.camera, seed=SEED)
-    truth = relative_planar(rendered.truth()[0], rendered.truth())
-    odometry = TrackOdometry().integrate(rendered.drive.odometry[1:frames])
-    return result, truth, odometry
-
-
-def heading_error(poses, truth):
-    return np.degrees(wrap_angle(poses[:, 2] - truth[:, 2]))
 
 
 # %% [markdown]
@@ -174,7 +154,7 @@ paper_table1 = {  # stereo processing, parameter estimation, Kalman filtering (m
     (320, 240): (22.165, 0.662, 0.168),
     (256, 192): (22.460, 0.610, 0.153),
 }
-n_table = frames_for("indoor_linear", 40)
+n_table = frames_for("indoor_linear", 40, FULL)
 rows, features = [], {}
 for res in paper_table1:
     r, _, _ = run("indoor_linear", n_table, resolution=res)
@@ -267,7 +247,7 @@ assert relative <= 0.01
 # illustration that is not comparable with the paper; section 5 sets the whole drive beside it.
 
 # %%
-n_out = frames_for("outdoor_linear", 200)
+n_out = frames_for("outdoor_linear", 200, FULL)
 result_o, truth_o, _ = run("outdoor_linear", n_out)
 fig, ax = new_axes(width=7, height=3.2)
 for col, name in ((0, "x"), (1, "y")):
@@ -301,7 +281,7 @@ assert relative_o < 0.05  # our own target: the paper's indoor bound
 # (quick mode; an illustration, not comparable with the paper):
 
 # %%
-n_spot = frames_for("spot_turn", 300)
+n_spot = frames_for("spot_turn", 300, FULL)
 fused, truth_s, odo_s = run("spot_turn", n_spot)
 vision, _, _ = run("spot_turn", n_spot, use_odometry=False)
 t = np.arange(n_spot) / SAMPLES["spot_turn"].rate
@@ -340,42 +320,16 @@ assert spot_errors["vision"][-1] < spot_errors["odometry"][-1] / 2
 stored = paper_sets.load()["sets"]
 
 
-def rms(values):
-    """Root mean square of the key-position errors from their AVG and S.D.: √(AVG² + S.D.²).
-    Signed errors of opposite signs cancel in an average; they do not in an RMS."""
-    return math.hypot(values[0], values[1])
-
-
-def rms_of(name, quantity, source="fused"):
-    """RMS of a stored set (source 'fused' or 'odometry') or of the paper's figures ('paper')."""
-    values = paper_sets.paper(name).get(quantity) if source == "paper" else stored[name][source][quantity]
-    return math.nan if values is None else rms(values)
-
-
-def stored_table(names, quantities):
-    """Ours (fused), track odometry's and the paper's AVG / S.D. and RMS of each set."""
-    heads = "".join(f"{q + ' AVG / S.D. / RMS':>30s}" for q in quantities)
-    print(f" {'set':15s}{'frames':>7s}{'flagged':>8s}  {'':10s}" + heads)
-    for name in names:
-        row, ref = stored[name], paper_sets.paper(name)
-        for label, values in (("ours", row["fused"]), ("odometry", row["odometry"]), ("paper", ref)):
-            head = f" {name:15s}{row['frames']:7d}{row['flagged']:8d}" if label == "ours" else " " * 31
-            cells = "".join(
-                f"{values[q][0]:11.2f} /{values[q][1]:7.2f} /{rms(values[q]):8.2f}"
-                if q in values
-                else f"{'—':>30s}"
-                for q in quantities
-            )
-            print(f"{head}  {label:10s}{cells}")
-
-
-stored_table(("spot_turn", "spot_turn_2"), ("theta_deg",))
+stored_table(stored, ("spot_turn", "spot_turn_2"), ("theta_deg",))
 spot_sets = ("spot_turn", "spot_turn_2")
 flag_share = {n: stored[n]["flagged"] / stored[n]["frames"] for n in spot_sets}
 # the sentences below: in RMS both sets lie below the paper's; odometry alone far above both
-assert all(rms_of(n, "theta_deg") < rms_of(n, "theta_deg", "paper") for n in spot_sets)
+assert all(rms_of(stored, n, "theta_deg") < rms_of(stored, n, "theta_deg", "paper") for n in spot_sets)
+odometry_over_paper = [
+    rms_of(stored, n, "theta_deg", "odometry") / rms_of(stored, n, "theta_deg", "paper") for n in spot_sets
+]
 # "far above": at least three times the paper's
-assert all(rms_of(n, "theta_deg", "odometry") > 3 * rms_of(n, "theta_deg", "paper") for n in spot_sets)
+assert min(odometry_over_paper) > 3
 display(
     Markdown(
         "Each stored set is one run, and so is each of the paper's: these figures set two runs side "
@@ -383,18 +337,19 @@ display(
         "errors of both signs cancel in an AVG; the RMS, √(AVG² + S.D.²), cannot cancel. The heading "
         "RMS is "
         + " and ".join(
-            f"{rms_of(n, 'theta_deg'):.2f}° against the paper's {rms_of(n, 'theta_deg', 'paper'):.2f}° "
+            f"{rms_of(stored, n, 'theta_deg'):.2f}° against the paper's "
+            f"{rms_of(stored, n, 'theta_deg', 'paper'):.2f}° "
             f"in `{n}`" for n in spot_sets
         )
         + "; track odometry alone reaches "
-        + " and ".join(f"{rms_of(n, 'theta_deg', 'odometry'):.1f}°" for n in spot_sets)
+        + " and ".join(f"{rms_of(stored, n, 'theta_deg', 'odometry'):.1f}°" for n in spot_sets)
         + ", since the encoders count the slip as turning. The flagged column does not explain the "
         f"sets' difference: `spot_turn` flags {flag_share['spot_turn']:.1%} of its frames and "
         f"`spot_turn_2` {flag_share['spot_turn_2']:.1%}, yet the second has the larger heading RMS."
     )
 )
 assert flag_share["spot_turn"] > flag_share["spot_turn_2"]  # the clause "yet the second ..."
-assert rms_of("spot_turn_2", "theta_deg") > rms_of("spot_turn", "theta_deg")
+assert rms_of(stored, "spot_turn_2", "theta_deg") > rms_of(stored, "spot_turn", "theta_deg")
 
 # %% [markdown]
 # **Why our heading error stays below the paper's here:** our losses of contact are brief and come
@@ -425,7 +380,7 @@ quick_runs = {
 }
 fig, axes = new_axes(4, width=4.2, height=4.0)
 for ax, name in zip(axes, quick_frames, strict=True):
-    n = frames_for(name, quick_frames[name])
+    n = frames_for(name, quick_frames[name], FULL)
     res_f, truth_f, odo_f = run(name, n)
     quick_runs[name] = (res_f, truth_f)
     plot_paths(
@@ -449,7 +404,7 @@ plt.show()
 # %%
 free_sets = ("indoor_free", "outdoor_free", "outdoor_free_2", "outdoor_free_3", "outdoor_linear")
 QUANTITIES = ("x_mm", "y_mm", "theta_deg")
-stored_table(free_sets, QUANTITIES)
+stored_table(stored, free_sets, QUANTITIES)
 for name in free_sets:
     row = stored[name]
     print(
@@ -457,10 +412,10 @@ for name in free_sets:
         f"{row['keys']} key positions, {row['flagged'] / row['frames']:.0%} of frames flagged"
     )
 ratio = {
-    (n, q): rms_of(n, q) / rms_of(n, q, "paper")
+    (n, q): rms_of(stored, n, q) / rms_of(stored, n, q, "paper")
     for n in free_sets
     for q in QUANTITIES
-    if not math.isnan(rms_of(n, q, "paper"))
+    if not math.isnan(rms_of(stored, n, q, "paper"))
 }
 print("\n ours / paper, RMS of the key-position errors")
 for name in free_sets:
@@ -468,21 +423,13 @@ for name in free_sets:
     print(f" {name:15s}" + "".join(cells))
 
 
-def sides(names):
-    """Which RMS of each set lie above and below the paper's, in words."""
-    words = []
-    for name in names:
-        above = [q for q in QUANTITIES if ratio.get((name, q), 0) > 1]
-        below = [q for q in QUANTITIES if 0 < ratio.get((name, q), 2) < 1]
-        words.append(f"`{name}` above in {', '.join(above) or 'none'}, below in {', '.join(below) or 'none'}")
-    return "; ".join(words)
-
-
-odometry_lower = [q for q in QUANTITIES if rms_of("indoor_free", q, "odometry") < rms_of("indoor_free", q)]
+odometry_lower = [
+    q for q in QUANTITIES if rms_of(stored, "indoor_free", q, "odometry") < rms_of(stored, "indoor_free", q)
+]
 flagged_share = {n: stored[n]["flagged"] / stored[n]["frames"] for n in free_sets}
 display(
     Markdown(
-        "Against the paper's RMS, one run each: " + sides(free_sets) + ". "
+        "Against the paper's RMS, one run each: " + sides(free_sets, ratio, QUANTITIES) + ". "
         f"`outdoor_free_3` flags {flagged_share['outdoor_free_3']:.0%} of its frames, against "
         f"{flagged_share['outdoor_free']:.0%} and {flagged_share['outdoor_free_2']:.0%} in the other "
         "two Table 2 sets; while a frame is flagged the filter moves on track odometry, which counts "

@@ -42,7 +42,6 @@
 #   observers of a line feature (Fig. 3–4); §3, the simulation (Fig. 5–9, Table 1).
 
 # %%
-import timeit
 
 import matplotlib.pyplot as plt
 import numpy as np
@@ -77,6 +76,7 @@ from vo_lib.line_slam.range_bearing import observation_jacobians, observe_point,
 from vo_lib.line_slam.segment_observers import DEFAULT_TOLERANCE, OBSERVERS, visible_segment
 from vo_lib.models.bicycle import bicycle_jacobians, bicycle_step
 from vo_lib.sim.laser import LaserScanner
+from vo_lib.viz.nb09 import differing_entries, finite_difference, judge, seconds_per_call
 from vo_lib.viz.plotting import (
     covariance_ellipse,
     draw_observer_case,
@@ -118,16 +118,6 @@ printed_F_u = sp.Matrix(
 )  # eq. 7 as printed
 
 
-def differing_entries(derived, printed):
-    """Entries (row, column) where a derived and a printed matrix are not identical."""
-    return [
-        (i, j, derived[i, j], printed[i, j])
-        for i in range(derived.rows)
-        for j in range(derived.cols)
-        if sp.simplify(derived[i, j] - printed[i, j]) != 0
-    ]
-
-
 for name, derived, printed in (("eq. 6", F_x, printed_F_x), ("eq. 7", F_u, printed_F_u)):
     for i, j, d, p in differing_entries(derived, printed):
         print(f"{name} entry ({i + 1},{j + 1}): derived {d}   printed {p}")
@@ -146,29 +136,13 @@ pose0 = np.array([3.0, -2.0, rng.uniform(-np.pi, np.pi)])
 speed0, steer0, period, wheelbase = 3.0, rng.uniform(-0.5, 0.5), 0.025, 4.0
 
 
-def finite_difference(fn, at, eps=1e-6):
-    at = np.asarray(at, dtype=float)
-    return np.column_stack([(fn(at + eps * e) - fn(at - eps * e)) / (2 * eps) for e in np.eye(at.size)])
-
-
 num_F_x = finite_difference(lambda p: bicycle_step(p, speed0, steer0, period, wheelbase), pose0)
 num_F_u = finite_difference(lambda u: bicycle_step(pose0, u[0], u[1], period, wheelbase), [speed0, steer0])
 subs = {x: pose0[0], y: pose0[1], phi: pose0[2], V: speed0, a: steer0, T: period, L: wheelbase}
 
 
-def judge(name, numeric, derived, printed, values):
-    """Finite differences against the derived and the printed Jacobian at ``values``."""
-    d = np.array(derived.subs(values), dtype=float)
-    p = np.array(printed.subs(values), dtype=float)
-    print(
-        f"{name}: |finite diff - derived| = {abs(numeric - d).max():.1e}, "
-        f"|finite diff - printed| = {abs(numeric - p).max():.1e}"
-    )
-    assert abs(numeric - d).max() < 1e-8 < 1e-3 < abs(numeric - p).max()
-
-
-judge("F_x", num_F_x, F_x, printed_F_x, subs)
-judge("F_u", num_F_u, F_u, printed_F_u, subs)
+for gaps in (judge("F_x", num_F_x, F_x, printed_F_x, subs), judge("F_u", num_F_u, F_u, printed_F_u, subs)):
+    assert gaps[0] < 1e-8 < 1e-3 < gaps[1]  # the derived entries hold, the printed ones do not
 ours_F_x, ours_F_u = bicycle_jacobians(pose0, speed0, steer0, period, wheelbase)
 assert np.allclose(ours_F_x, num_F_x, atol=1e-8) and np.allclose(ours_F_u, num_F_u, atol=1e-8)
 
@@ -207,7 +181,8 @@ assert sp.simplify(H[1, 3] - dy / delta**2) == 0 and sp.simplify(H[1, 4] + dx / 
 pose1, point1 = np.array([2.0, -1.0, 0.7]), np.array([-5.0, 8.0])
 num_H = finite_difference(lambda s: observe_point(s[:3], s[3:]), np.r_[pose1, point1])
 subs_h = {x: pose1[0], y: pose1[1], phi: pose1[2], xi: point1[0], yi: point1[1]}
-judge("H", num_H, H, printed_H, subs_h)
+gaps = judge("H", num_H, H, printed_H, subs_h)
+assert gaps[0] < 1e-8 < 1e-3 < gaps[1]  # the derived entries hold, the printed ones do not
 assert np.allclose(np.hstack(observation_jacobians(pose1, point1)), num_H, atol=1e-8)
 
 # %% [markdown]
@@ -502,13 +477,8 @@ assert max(worst.values()) <= DEFAULT_TOLERANCE
 calls = [(s.start, s.end, tuple(lap.truth[k, :2])) for k in lap.observed_at for s in world.segments]
 
 
-def seconds_per_call(fn, tol):
-    run_all = lambda: [fn(a_, b_, g_, 30.0, tol) for a_, b_, g_ in calls]  # noqa: E731
-    return min(timeit.repeat(run_all, number=1, repeat=3)) / len(calls)
-
-
 tolerances = [1.0, 0.1, 0.01, 0.001]
-table = {name: [seconds_per_call(fn, tol) for tol in tolerances] for name, fn in OBSERVERS.items()}
+table = {name: [seconds_per_call(fn, tol, calls) for tol in tolerances] for name, fn in OBSERVERS.items()}
 print(
     f"{'tolerance':>10s}"
     + "".join(f"{n:>16s}" for n in table)

@@ -72,14 +72,14 @@ from vo_lib.formats.kitti_raw import read_oxts
 from vo_lib.geometry import (
     camera_motion,
     camera_mount,
-    compose_planar,
     planar_from_camera_poses,
     relative_planar,
     wrap_angle,
 )
 from vo_lib.stereo_vo import rigid_motion
-from vo_lib.stereo_vo.circular_motion import circular_motion_from_increment, motion_matrices, robot_increment
+from vo_lib.stereo_vo.circular_motion import circular_motion_from_increment, motion_matrices
 from vo_lib.stereo_vo.config import CAR
+from vo_lib.stereo_vo.demo_real import as_4x4, chain_models
 from vo_lib.stereo_vo.features import PATCH_HALF, StereoFrontEnd
 from vo_lib.stereo_vo.kalman import nis
 from vo_lib.stereo_vo.pipeline import StereoOdometry, run_frames, run_sequence
@@ -88,15 +88,22 @@ from vo_lib.stereo_vo.pyramid_features import LEVELS, SCALE_FACTOR, PyramidFront
 from vo_lib.stereo_vo.ransac import one_point_ransac
 from vo_lib.stereo_vo.six_dof import (
     PREDICTED_RATIO,
-    WINDOW_PIXELS,
     turning_axis_transform,
     turning_axis_view,
     vehicle_increment,
-    windows,
 )
 from vo_lib.stereo_vo.synthetic import matches_under_transform
-from vo_lib.stereo_vo.temporal import match_features, predict_features
+from vo_lib.stereo_vo.temporal import match_features
 from vo_lib.stereo_vo.vehicle import KITTI_CAMERA_IN_IMU, vehicle_of
+from vo_lib.viz.nb11 import (
+    CELL,
+    disparity_errors,
+    errors_against,
+    find_repo,
+    image_statistics,
+    pixel_gap,
+    show_corners,
+)
 from vo_lib.viz.plotting import new_axes, plot_paths
 from vo_lib.viz.prose import Markdown
 
@@ -104,14 +111,6 @@ SEED = 0
 rng = np.random.default_rng(SEED)
 cv2.setRNGSeed(SEED)
 np.set_printoptions(precision=4, suppress=True)
-
-
-def find_repo(start: Path) -> Path:
-    """The folder holding ``vo_lib`` (the notebook runs in notebooks/, a script may run anywhere)."""
-    for folder in (start, *start.parents):
-        if (folder / "vo_lib").is_dir():
-            return folder
-    return Path(vo_lib.__file__).resolve().parents[1]
 
 
 REPO = find_repo(Path.cwd())
@@ -133,15 +132,7 @@ vehicle = vehicle_of(seq)
 truth = planar_from_camera_poses(seq.poses, vehicle.mount)  # vehicle (x, y, yaw), frame 0 at the origin
 travelled = float(np.sum(np.linalg.norm(np.diff(truth[:, :2], axis=0), axis=1)))
 print(f"{vehicle.kind}: {travelled:.1f} m travelled; odometry from {vehicle.odometry_source}")
-
-
-def final_errors(poses):
-    """Final position error (m, and % of the distance so far) and heading error (deg) of planar poses."""
-    n = len(poses)
-    metres = float(np.linalg.norm(poses[-1, :2] - truth[n - 1, :2]))
-    heading = math.degrees(wrap_angle(poses[-1, 2] - truth[n - 1, 2]))
-    distance = float(np.sum(np.linalg.norm(np.diff(truth[:n, :2], axis=0), axis=1)))
-    return metres, 100 * metres / distance, heading
+final_errors = errors_against(truth)  # (metres, % of the distance, heading deg) of planar poses
 
 
 # %% [markdown]
@@ -152,26 +143,7 @@ def final_errors(poses):
 # gradient is below 8 grey levels per pixel (sky, road, plain walls, where no corner can be).
 
 # %%
-CELL = 16
-
-
-def image_statistics(image, threshold=20, low_gradient=8.0):
-    """Empty-cell share, corners per 640x480, low-gradient share and the occupancy grid."""
-    h, w = image.shape
-    keypoints = cv2.FastFeatureDetector_create(threshold, True).detect(image)
-    corners = np.array([k.pt for k in keypoints]).reshape(-1, 2)
-    occupied = np.zeros((h // CELL, w // CELL), bool)
-    col, row = (corners // CELL).astype(int).T
-    inside = (row < occupied.shape[0]) & (col < occupied.shape[1])
-    occupied[row[inside], col[inside]] = True
-    gradient = np.hypot(cv2.Sobel(image, cv2.CV_32F, 1, 0), cv2.Sobel(image, cv2.CV_32F, 0, 1)) / 8
-    return {
-        "empty": 1 - occupied.mean(),
-        "per_vga": len(corners) * 640 * 480 / (h * w),
-        "flat": float(np.mean(gradient < low_gradient)),
-        "corners": corners,
-        "occupied": occupied,
-    }
+print(f"cells of {CELL}x{CELL} px")
 
 
 moto_left, moto_right, moto_truth = skimage.data.stereo_motorcycle()
@@ -193,24 +165,10 @@ empty_real, empty_rendered = stats[real_name]["empty"], stats["rendered indoor_l
 flat_real, flat_rendered = stats[real_name]["flat"], stats["rendered indoor_linear"]["flat"]
 
 
-def show_corners(ax, image, title):
-    """An image with its FAST corners and, shaded, the cells that have none."""
-    st = image_statistics(image)
-    ny, nx = st["occupied"].shape
-    ax.imshow(image, cmap="gray")
-    ax.imshow(~st["occupied"], cmap="Reds", alpha=0.35, vmin=0, vmax=1.5, extent=(0, nx * CELL, ny * CELL, 0))
-    ax.plot(st["corners"][:, 0], st["corners"][:, 1], ".", ms=1, color="yellow")
-    ax.set_xlim(0, image.shape[1])
-    ax.set_ylim(image.shape[0], 0)
-    ax.set_xlabel("u [px]")
-    ax.set_ylabel("v [px]")
-    ax.set_title(f"{title}: {st['empty']:.0%} of cells without a corner")
-
-
 ratios = [img.shape[1] / img.shape[0] for img in (real_images[0], rendered_images[0])]
 fig, axes = plt.subplots(1, 2, figsize=(3.2 * sum(ratios), 3.8), width_ratios=ratios, constrained_layout=True)
-show_corners(axes[0], real_images[0], real_name)
-show_corners(axes[1], rendered_images[0], "rendered")
+show_corners(axes[0], real_images[0], real_name, image_statistics(real_images[0]), CELL)
+show_corners(axes[1], rendered_images[0], "rendered", image_statistics(rendered_images[0]), CELL)
 plt.show()
 
 # %%
@@ -256,15 +214,6 @@ sgbm = cv2.StereoSGBM_create(
 sgbm_disp = sgbm.compute(moto_left, moto_right).astype(np.float64) / 16  # fixed point, 4 fraction bits
 
 
-def disparity_errors(front_end):
-    """Our |disparity error| and SGBM's at the same pixels, where both the truth and SGBM have one."""
-    fw = front_end.process(moto_left, moto_right).w
-    ui, vi = np.rint(fw[:, 0]).astype(int), np.rint(fw[:, 1]).astype(int)
-    gt, sg = moto_truth[vi, ui], sgbm_disp[vi, ui]
-    both = np.isfinite(gt) & (sg > 0)
-    return len(fw), np.abs(fw[both, 2] - gt[both]), np.abs(sg[both] - gt[both]), fw[both]
-
-
 print(f"pyramid: {LEVELS} levels, each {SCALE_FACTOR} times smaller than the one below")
 front_ends = {
     "pyramid (ORB)": PyramidFrontEnd(moto_cam, max_disparity=70),
@@ -274,7 +223,7 @@ errors = {}
 print(f" {'front end':24s} {'features':>8s} {'scored':>7s} {'ours: median':>13s} {'> 1 px':>7s}", end="")
 print(f" {'SGBM: median':>13s}")
 for name, fe in front_ends.items():
-    n, ours, theirs, where = disparity_errors(fe)
+    n, ours, theirs, where = disparity_errors(fe, moto_left, moto_right, moto_truth, sgbm_disp)
     errors[name] = (ours, theirs, where)
     print(
         f" {name:24s} {n:8d} {len(ours):7d} {np.median(ours):10.3f} px {np.mean(ours > 1):7.1%}"
@@ -357,12 +306,6 @@ if REAL:
 # origin at the IMU). Angles are `R = Rz(yaw) Ry(pitch) Rx(roll)`; positive pitch is nose down.
 
 # %%
-def as_4x4(R, t):
-    T = np.eye(4)
-    T[:3, :3], T[:3, 3] = R, t
-    return T
-
-
 print("camera in the vehicle frame (forward, left, up) [m]:", vehicle.mount[:3, 3])
 T_cam = seq.poses_4x4()
 V = vehicle.mount @ T_cam @ np.linalg.inv(vehicle.mount)
@@ -449,19 +392,14 @@ scene_points = seq.camera.backproject(scene)
 scene_points = scene_points[scene_points[:, 2] < 60]
 
 
-def pixel_gap(Ta, Tb):
-    """Median distance in (u, v, d) between the points moved by two camera motions."""
-    a, b = (seq.camera.project(scene_points @ T[:3, :3].T + T[:3, 3]) for T in (Ta, Tb))
-    return float(np.median(np.linalg.norm(a - b, axis=1)))
-
-
 gaps = []
 for k in range(1, len(seq)):
     true_motion = np.linalg.inv(T_cam[k]) @ T_cam[k - 1]  # T_curr_from_prev of the camera
     inc = vehicle_increment(true_motion, vehicle.mount)
     planar = camera_motion(np.zeros(3), inc, vehicle.mount)
     circular = as_4x4(*motion_matrices(*circular_motion_from_increment(inc)))
-    gaps.append((pixel_gap(true_motion, planar), pixel_gap(planar, circular)))
+    pairs = ((true_motion, planar), (planar, circular))
+    gaps.append(tuple(pixel_gap(a, b, seq.camera, scene_points) for a, b in pairs))
 gaps = np.array(gaps)
 for j, what in enumerate(("slope, bank and pitch (6-DoF vs planar)", "offset (planar vs on-axis circular)")):
     g = gaps[:, j]
@@ -731,38 +669,15 @@ else:
 
 
 # %%
-def chain_models(camera_path, ransac_rng, frame_features):
-    """Planar vehicle poses from frame-to-frame motions read three ways (section 3's list), with
-    1-point RANSAC drawing from ``ransac_rng`` on the frames' features ``frame_features``."""
-    names = ("circular, camera on the axis", "circular, through the mount", "6-DoF, through the mount")
-    chains = {name: [np.zeros(3)] for name in names}
-    prev = frame_features[0]
-    for k in range(1, len(seq)):
-        curr = frame_features[k]
-        T_pred = np.linalg.inv(camera_path[k]) @ camera_path[k - 1]
-        predicted, _ = predict_features(prev.w, seq.camera, T_pred)
-        mt = match_features(prev, curr, predicted, windows(predicted, WINDOW_PIXELS), PREDICTED_RATIO)
-        est = one_point_ransac(mt.w_prev, mt.w_curr, seq.camera, rng=ransac_rng, pixel_sigma=1.0)
-        guess = as_4x4(*motion_matrices(est.theta, est.rho))
-        refined = rigid_motion.refine_rigid_motion(mt.w_prev, mt.w_curr, seq.camera, guess, est.inliers)
-        increments = (
-            robot_increment(est.theta, est.rho),
-            vehicle_increment(guess, vehicle.mount),
-            vehicle_increment(refined.matrix, vehicle.mount),
-        )
-        for name, inc in zip(names, increments, strict=True):
-            chains[name].append(compose_planar(chains[name][-1], inc))
-        prev = curr
-    return {name: np.array(poses) for name, poses in chains.items()}
-
-
 if REAL:
     # one real drive: the randomness is 1-point RANSAC's, so the readings are compared over its seeds
     RANSAC_SEEDS = range(SEED, SEED + 10)
     start = time.perf_counter()
     features_per_frame = [pyramid_fe.process(*seq.pair(k)) for k in range(len(seq))]  # no draw: once
     chained_by_seed = {
-        s_: chain_models(vo_full.camera_poses, np.random.default_rng(s_), features_per_frame)
+        s_: chain_models(
+            seq, vehicle.mount, vo_full.camera_poses, np.random.default_rng(s_), features_per_frame
+        )
         for s_ in RANSAC_SEEDS
     }
     chained = chained_by_seed[SEED]  # the figures show the first seed
@@ -846,7 +761,8 @@ else:
 #
 # A bump or the start of a slope pitches the body instead: no planar model describes that, so
 # when 1-point RANSAC keeps fewer than `CAR.min_inlier_ratio` of the matches the pipeline draws
-# general 3-point hypotheses (OpenCV's P3P in `solvePnPRansac`, seeded) and keeps the better.
+# general 3-point hypotheses (OpenCV's P3P in `solvePnPRansac`, seeded) and keeps whichever of
+# the two holds the larger share of inliers.
 
 # %%
 if REAL:
@@ -1048,7 +964,7 @@ display(Markdown(across_story))
 # per wheel distance, which over the gauge becomes the yaw sigma printed above: where that sigma is
 # far above the odometry's actual yaw error, the filter takes the heading from vision almost alone.
 # The distance it takes from both, so on the real drive the fused distance leans towards the
-# odometry's (asserted): fusion helps only as far as each sensor's error model is right.
+# odometry's (asserted): fusion is only as sound as each sensor's error model.
 #
 # **A check without the truth: NIS.** Notebook 07's normalised innovation squared needs only the
 # filter's own numbers. Per frame, the innovation of the yaw is the vision's yaw increment minus

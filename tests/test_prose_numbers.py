@@ -500,6 +500,26 @@ def _literal_text(node: ast.AST) -> str:
     return "{…}"
 
 
+def _imported_sentence_helpers(tree: ast.Module) -> set[str]:
+    """Names the story imports from the project's own modules (a notebook's helper module) whose
+    function calls ``Comparison.sentence``: a sentence they write rests on seeds."""
+    names = set()
+    for node in ast.walk(tree):
+        if not (isinstance(node, ast.ImportFrom) and (node.module or "").startswith("vo_lib.")):
+            continue
+        module = ROOT / (node.module.replace(".", "/") + ".py")
+        if not module.is_file():
+            continue
+        text = module.read_text(encoding="utf-8")
+        defined = {
+            f.name: ast.get_source_segment(text, f) or ""
+            for f in ast.parse(text).body
+            if isinstance(f, ast.FunctionDef)
+        }
+        names |= {a.asname or a.name for a in node.names if ".sentence(" in defined.get(a.name, "")}
+    return names
+
+
 def _code_sentences(path: pathlib.Path):
     """(line, literal text, written by a comparison) of every ``Markdown(...)`` the story's code
     writes: its string parts, and whether it calls ``Comparison.sentence`` (directly or through a
@@ -514,6 +534,7 @@ def _code_sentences(path: pathlib.Path):
         for node in ast.walk(tree)
         if isinstance(node, ast.FunctionDef) and ".sentence(" in (ast.get_source_segment(source, node) or "")
     }
+    helpers |= _imported_sentence_helpers(tree)
     for node in ast.walk(tree):
         if not (isinstance(node, ast.Call) and getattr(node.func, "id", "") == "Markdown"):
             continue

@@ -112,3 +112,10 @@ def print_nees(
     print(f" variance of θ̂            mean z² (95 % seed CI)    χ²(1) band, mean of {sets}  |z| > 3")
     for name, (mean, low, high, miss) in rows.items():
         print(f" {name:26s}{mean:9.2f} ({low:.2f}–{high:.2f}){'':8s}{band[0]:.2f}–{band[1]:.2f}{miss:18.0%}")
+
+
+def side_of_band(value: float, band: tuple[float, float]) -> str:
+    """Where a mean z² lies against the χ² band ``(low, high)``, in words."""
+    if value > band[1]:
+        return f"above the band, over-confident by a factor of about {value:.1f} in variance"
+    return "inside the band" if value >= band[0] else "below the band, under-confident"
