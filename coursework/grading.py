@@ -118,9 +118,15 @@ def review(source: str) -> list[tuple[int, Reason]]:
     A static read (:mod:`ast`): nothing runs. Source that does not parse is not flagged (it fails
     its tests anyway); IPython magics (``%``, ``!``) are flagged as kernel use.
     """
-    found = [(n, Reason.KERNEL) for n, line in enumerate(source.splitlines(), 1) if line.lstrip()[:1] in "%!"]
+    found = [
+        (n, Reason.KERNEL)
+        for n, line in enumerate(source.splitlines(), 1)
+        if line.lstrip().startswith(("%", "!"))
+    ]
     try:
-        tree = ast.parse("\n".join("" if line.lstrip()[:1] in "%!" else line for line in source.splitlines()))
+        tree = ast.parse(
+            "\n".join("" if line.lstrip().startswith(("%", "!")) else line for line in source.splitlines())
+        )
     except SyntaxError:
         return found
     for node in ast.walk(tree):
