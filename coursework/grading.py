@@ -99,14 +99,16 @@ MODULES = {
     "inspect": Reason.FRAME, "linecache": Reason.FRAME, "ctypes": Reason.LOW_LEVEL, "gc": Reason.LOW_LEVEL,
     "importlib": Reason.LOW_LEVEL, "threading": Reason.PROCESS, "multiprocessing": Reason.PROCESS,
     "subprocess": Reason.PROCESS, "concurrent": Reason.PROCESS, "_thread": Reason.PROCESS,
-    "pathlib": Reason.FILE, "shutil": Reason.FILE, "glob": Reason.FILE, "io": Reason.FILE,
+    "builtins": Reason.REBINDS, "coursework": Reason.REBINDS, "pathlib": Reason.FILE, "shutil": Reason.FILE,
+    "glob": Reason.FILE, "io": Reason.FILE,
 }  # fmt: skip
 NAMES = {
     "open": Reason.FILE, "get_ipython": Reason.KERNEL, "_getframe": Reason.FRAME, "f_back": Reason.FRAME,
-    "f_globals": Reason.FRAME, "f_locals": Reason.FRAME, "__code__": Reason.FRAME, "_exit": Reason.PROCESS,
+    "f_globals": Reason.FRAME, "f_locals": Reason.FRAME, "__code__": Reason.FRAME,
+    "settrace": Reason.FRAME, "setprofile": Reason.FRAME, "_exit": Reason.PROCESS,
     "system": Reason.PROCESS, "popen": Reason.PROCESS, "fork": Reason.PROCESS,
     "__array__": Reason.FAKE_NUMBER, "__import__": Reason.LOW_LEVEL, "exec": Reason.LOW_LEVEL,
-    "eval": Reason.LOW_LEVEL,
+    "eval": Reason.LOW_LEVEL, "exit": Reason.PROCESS, "quit": Reason.PROCESS,
 }  # fmt: skip
 PROTECTED = {"np", "numpy", "grading", "assert_allclose"}
 NUMBER_TYPES = {"float", "int", "complex", "bool"}
