@@ -248,6 +248,38 @@ def read_submissions(path: pathlib.Path, ids: list[str]) -> dict[str, dict[str, 
     return answers
 
 
+WARNING_WRAPPER = """
+import functools as _functools
+import sys as _sys
+import warnings as _warnings
+
+_quiet_{name} = {name}
+
+
+@_functools.wraps(_quiet_{name})
+def {name}(*args, **kwargs):
+    _warnings.warn("a correct answer that warns at every call", UserWarning, stacklevel=2)
+    print("progress 100%", file=_sys.stderr)
+    return _quiet_{name}(*args, **kwargs)
+"""
+
+
+def stderr_answer(solution: str) -> str:
+    """The solution ``solution`` (its markers taken out) writing to stderr, there and in its tests.
+
+    Its first function is wrapped in one that warns and prints a progress line on stderr at every
+    call, so the test cell writes to stderr too; a correct answer must still score full marks.
+    """
+    code = "\n".join(
+        line
+        for line in solution.splitlines()
+        if line.strip() not in ("### BEGIN SOLUTION", "### END SOLUTION")
+    )
+    code += '\nimport sys as _sys\n\nprint("progress 100%", file=_sys.stderr)\n'
+    defined = re.search(r"^def (\w+)\(", code, re.M)
+    return code + (WARNING_WRAPPER.format(name=defined.group(1)) if defined else "")
+
+
 def adversarial_notebooks(
     release: nbformat.NotebookNode, answers: dict[str, dict[str, str]]
 ) -> list[tuple[str, nbformat.NotebookNode, dict[str, str]]]:
@@ -372,7 +404,13 @@ def grade_once(
             ids = answer_ids(source)
             subs = [(SOLUTIONS_STUDENT, source, dict.fromkeys(ids, "correct"))]
             subs.append((UNANSWERED_STUDENT, release, dict.fromkeys(ids, "unanswered")))
-            subs += adversarial_notebooks(release, read_submissions(path, ids))
+            answers = read_submissions(path, ids)
+            for cell in source.cells:
+                if cell.metadata.get("nbgrader", {}).get("grade_id") in answers and cell.cell_type == "code":
+                    answers[cell.metadata["nbgrader"]["grade_id"]]["correct_stderr"] = stderr_answer(
+                        cell.source
+                    )
+            subs += adversarial_notebooks(release, answers)
             plan[path] = (ids, subs)
             for student, nb, _ in subs:
                 folder = work / "submitted" / student / path.stem
