@@ -71,6 +71,8 @@ SUBMISSIONS_DIR = pathlib.Path(__file__).with_name("submissions")
 ADVERSARIAL_KINDS = ("constant", "library", "wrong")  # and "unanswered": the release itself
 FLAGGED_KIND = "flagged"  # answers the integrity report must name: optional, any exercise
 TOOLS = pathlib.Path(__file__).with_name("grading.py")
+# what the autograder's kernels may not read, beside the course folder's own solutions
+SOLUTION_FILES = (NOTEBOOK_DIR, ROOT / "coursework" / "submissions", ROOT / "coursework" / "answer_key.md")
 # a line that opens a solution, hidden tests or a mark scheme (not a mention of one in prose)
 MARKER_LINE = re.compile(
     r"^\s*(### BEGIN SOLUTION|### BEGIN HIDDEN TESTS|=== BEGIN MARK SCHEME ===)\s*$", re.M
@@ -156,7 +158,7 @@ def run_nbgrader(course: pathlib.Path, *args: str) -> None:
         cwd=course,
         capture_output=True,
         text=True,
-        env=dict(os.environ, MPLBACKEND="Agg"),
+        env=dict(os.environ, MPLBACKEND="Agg", VO_HIDDEN=os.pathsep.join(map(str, SOLUTION_FILES))),
     )
     errors = [line for line in proc.stderr.splitlines() if "| ERROR]" in line or "Error" in line]
     if "Exception while loading config file" in proc.stderr:  # nbgrader goes on without it

@@ -18,7 +18,11 @@ from __future__ import annotations
 import ast
 import contextlib
 import enum
+import os
 import pathlib
+import shlex
+import shutil
+import subprocess
 import sys
 import types
 from collections.abc import Callable, Iterator
@@ -227,8 +231,34 @@ class VerdictOnly(NbGraderPreprocessor):
         return cell, resources
 
 
+def can_isolate() -> bool:
+    """True if this machine lets an unprivileged user make a user and mount namespace (``unshare``)."""
+    found = shutil.which("unshare")
+    return bool(found) and subprocess.run([found, "-rm", "true"], capture_output=True).returncode == 0
+
+
+def isolated_kernel(kernel_args: list[str], hidden: list[str]) -> None:
+    """Replace this process by an IPython kernel (``-f CONNECTION_FILE`` and the rest of
+    ``kernel_args``) that sees each path of ``hidden`` empty.
+
+    The kernel runs in its own user and mount namespace (``unshare -rm``), where an empty tmpfs
+    is mounted over each hidden folder and ``/dev/null`` over each hidden file; outside it,
+    nothing changes. The paths come from ``VO_HIDDEN`` (``os.pathsep``-separated).
+    """
+    mounts = [
+        f"mount {'-t tmpfs none' if os.path.isdir(path) else '--bind /dev/null'} {shlex.quote(path)}"
+        for path in hidden
+        if os.path.exists(path)
+    ]
+    kernel = shlex.join([sys.executable, "-m", "ipykernel_launcher", "-f", *kernel_args])
+    os.execvp("unshare", ["unshare", "-rm", "--", "sh", "-c", " && ".join([*mounts, f"exec {kernel}"])])
+
+
 def main(argv: list[str]) -> int:
-    """Print the integrity report of every notebook under the folder ``argv[0]``."""
+    """Print the integrity report of every notebook under the folder ``argv[0]``; or, with
+    ``--kernel CONNECTION_FILE``, start the autograder's isolated kernel."""
+    if len(argv) >= 2 and argv[0] == "--kernel":
+        isolated_kernel(argv[1:], [p for p in os.environ.get("VO_HIDDEN", "").split(os.pathsep) if p])
     if len(argv) != 1 or not pathlib.Path(argv[0]).is_dir():
         print(
             "coursework/grading.py: expected one argument, a folder of submitted notebooks", file=sys.stderr

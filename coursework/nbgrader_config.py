@@ -35,6 +35,30 @@ _tools = str(_here.parent if _here.name == "coursework" else _here)
 sys.path.insert(0, _tools)
 os.environ["PYTHONPATH"] = os.pathsep.join(filter(None, [_tools, os.environ.get("PYTHONPATH")]))
 
+import json  # noqa: E402
+
+from coursework.grading import can_isolate  # noqa: E402
+
+# The kernels run isolated: what a student's code can read must not include the solutions. Each
+# kernel starts in its own mount namespace where the course's solutions and tests (source/), the
+# release, the other submissions, the feedback and the gradebook are empty, and so is every path
+# listed in VO_HIDDEN beforehand (a checkout of the notebooks, say): see docs/course.md. The
+# kernel spec "python3" of a private Jupyter path starts it through coursework/grading.py.
+_hidden = [str(_here / name) for name in ("source", "release", "submitted", "feedback", "gradebook.db")]
+if _here.name != "coursework" and can_isolate():
+    os.environ["VO_HIDDEN"] = os.pathsep.join(
+        [*_hidden, *filter(None, os.environ.get("VO_HIDDEN", "").split(os.pathsep))]
+    )
+    _spec = pathlib.Path(_sockets) / "kernels" / "python3"
+    _spec.mkdir(parents=True)
+    _launcher = [sys.executable, str(_here / "coursework" / "grading.py"), "--kernel", "{connection_file}"]
+    (_spec / "kernel.json").write_text(
+        json.dumps({"argv": _launcher, "display_name": "Python 3", "language": "python"})
+    )
+    os.environ["JUPYTER_PATH"] = os.pathsep.join(filter(None, [_sockets, os.environ.get("JUPYTER_PATH")]))
+elif _here.name != "coursework":
+    print("nbgrader_config.py: unshare -rm is not allowed here: kernels run NOT isolated", file=sys.stderr)
+
 from nbgrader.converters import Autograde  # noqa: E402
 from nbgrader.preprocessors import ClearHiddenTests, Execute, GetGrades  # noqa: E402
 

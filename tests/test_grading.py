@@ -1,6 +1,9 @@
 """coursework/grading.py: the hidden tests' guard, the integrity report and the autograder's steps."""
 
+import json
+import os
 import pathlib
+import sys
 
 import jupytext
 import nbformat
@@ -141,3 +144,30 @@ def test_the_report_command_lists_flagged_answers_and_refuses_a_bad_argument(tmp
     assert "to be reviewed: ada/01/01.ipynb ex1: line 1" in capsys.readouterr().out
     assert grading.main([str(tmp_path / "nowhere")]) == 2
     assert capsys.readouterr().err.count("\n") == 1
+
+
+@pytest.mark.skipif(not grading.can_isolate(), reason="this machine allows no user namespace (unshare -rm)")
+def test_the_isolated_kernel_finds_the_hidden_solutions_empty(tmp_path, monkeypatch):
+    import nbclient
+
+    (tmp_path / "source" / "01").mkdir(parents=True)
+    (tmp_path / "source" / "01" / "01.ipynb").write_text("the teacher's solution")
+    (tmp_path / "gradebook.db").write_text("grades")
+    spec = tmp_path / "jupyter" / "kernels" / "python3"
+    spec.mkdir(parents=True)
+    argv = [sys.executable, grading.__file__, "--kernel", "{connection_file}"]
+    (spec / "kernel.json").write_text(
+        json.dumps({"argv": argv, "display_name": "isolated", "language": "python"})
+    )
+    monkeypatch.setenv("JUPYTER_PATH", str(tmp_path / "jupyter"))
+    monkeypatch.setenv(
+        "VO_HIDDEN", os.pathsep.join([str(tmp_path / "source"), str(tmp_path / "gradebook.db")])
+    )
+    source, book = str(tmp_path / "source"), str(tmp_path / "gradebook.db")
+    probe = f"import os\nprint(os.listdir({source!r}), open({book!r}).read())"
+    nb = nbformat.v4.new_notebook(cells=[nbformat.v4.new_code_cell(probe)])
+    nbclient.NotebookClient(nb, kernel_name="python3", timeout=60).execute()
+    assert nb.cells[0].outputs[0]["text"] == "[] \n"
+    assert (
+        tmp_path / "source" / "01" / "01.ipynb"
+    ).read_text() == "the teacher's solution"  # outside: as it was
