@@ -283,16 +283,17 @@ def stderr_answer(solution: str) -> str:
 
 
 def adversarial_notebooks(
-    release: nbformat.NotebookNode, answers: dict[str, dict[str, str]]
+    release: nbformat.NotebookNode, answers: dict[str, dict[str, str]], name: str = "adversarial"
 ) -> list[tuple[str, nbformat.NotebookNode, dict[str, str]]]:
     """The release with its answer cells filled in, as few notebooks as cover every answer.
 
     Submission ``j`` gives exercise ``i`` its answer number ``(i + j) mod n``, ``n`` the largest
     number of answers of any exercise; an exercise with fewer is left unanswered in the others.
-    Returns ``(student name, notebook, {exercise: kind})`` for each.
+    Returns ``(student name, notebook, {exercise: kind})`` for each, the students named ``name``
+    and a number.
     """
     ids = list(answers)
-    count = max(len(kinds) for kinds in answers.values())
+    count = max((len(kinds) for kinds in answers.values()), default=0)
     made = []
     for j in range(count):
         nb = nbformat.from_dict(json.loads(json.dumps(release)))
@@ -306,7 +307,7 @@ def adversarial_notebooks(
             exercise = cell.metadata.get("nbgrader", {}).get("grade_id")
             if cell.cell_type == "code" and exercise in given:
                 cell.source = answers[exercise][given[exercise]].strip("\n")
-        made.append((f"adversarial{j + 1}", nb, given))
+        made.append((f"{name}{j + 1}", nb, given))
     return made
 
 
@@ -412,7 +413,14 @@ def grade_once(
                     answers[cell.metadata["nbgrader"]["grade_id"]]["correct_stderr"] = stderr_answer(
                         cell.source
                     )
-            subs += adversarial_notebooks(release, answers)
+            # a flagged answer may break the answers beside it (NumPy rebound, later cells emptied):
+            # flagged answers share submissions only with each other
+            for name, flagged in (("adversarial", False), (FLAGGED_KIND, True)):
+                chosen = {
+                    exercise: {k: a for k, a in kinds.items() if k.startswith(FLAGGED_KIND) == flagged}
+                    for exercise, kinds in answers.items()
+                }
+                subs += adversarial_notebooks(release, chosen, name)
             plan[path] = (ids, subs)
             for student, nb, _ in subs:
                 folder = work / "submitted" / student / path.stem
