@@ -415,12 +415,12 @@ def grade_once(
                     )
             # a flagged answer may break the answers beside it (NumPy rebound, later cells emptied):
             # flagged answers share submissions only with each other
-            for name, flagged in (("adversarial", False), (FLAGGED_KIND, True)):
+            for student_name, flagged in (("adversarial", False), (FLAGGED_KIND, True)):
                 chosen = {
                     exercise: {k: a for k, a in kinds.items() if k.startswith(FLAGGED_KIND) == flagged}
                     for exercise, kinds in answers.items()
                 }
-                subs += adversarial_notebooks(release, chosen, name)
+                subs += adversarial_notebooks(release, chosen, student_name)
             plan[path] = (ids, subs)
             for student, nb, _ in subs:
                 folder = work / "submitted" / student / path.stem
