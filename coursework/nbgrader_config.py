@@ -37,7 +37,7 @@ os.environ["PYTHONPATH"] = os.pathsep.join(filter(None, [_tools, os.environ.get(
 
 import json  # noqa: E402
 
-from coursework.grading import can_isolate  # noqa: E402
+from coursework import grading as _grading  # noqa: E402
 
 # The kernels run isolated: what a student's code can read must not include the solutions. Each
 # kernel starts in its own mount namespace where the course's solutions and tests (source/), the
@@ -45,13 +45,13 @@ from coursework.grading import can_isolate  # noqa: E402
 # listed in VO_HIDDEN beforehand (a checkout of the notebooks, say): see docs/course.md. The
 # kernel spec "python3" of a private Jupyter path starts it through coursework/grading.py.
 _hidden = [str(_here / name) for name in ("source", "release", "submitted", "feedback", "gradebook.db")]
-if _here.name != "coursework" and can_isolate():
+if _here.name != "coursework" and _grading.can_isolate():
     os.environ["VO_HIDDEN"] = os.pathsep.join(
         [*_hidden, *filter(None, os.environ.get("VO_HIDDEN", "").split(os.pathsep))]
     )
     _spec = pathlib.Path(_sockets) / "kernels" / "python3"
     _spec.mkdir(parents=True)
-    _launcher = [sys.executable, str(_here / "coursework" / "grading.py"), "--kernel", "{connection_file}"]
+    _launcher = [sys.executable, _grading.__file__, "--kernel", "{connection_file}"]
     (_spec / "kernel.json").write_text(
         json.dumps({"argv": _launcher, "display_name": "Python 3", "language": "python"})
     )
