@@ -579,9 +579,12 @@ assert np.allclose(got, -b_coef / (2 * a_coef)), (
 # Write `strongest_per_cell(points, response, width, height, grid, per_cell)`: the sorted
 # indices of the `per_cell` strongest corners of each cell of a `grid = (columns, rows)` over a
 # `width` × `height` image (a corner belongs to the cell its pixel position falls in), without
-# calling `vo_lib`'s `bucket`. Check it on section 1's FAST corners.
+# calling `vo_lib`'s `bucket`. FAST scores are whole numbers and many corners share one: of two
+# corners with the same response, keep the one with the smaller index first. Check it on
+# section 1's FAST corners.
 #
-# *Hint:* give each corner a cell number, then sort by cell and, within a cell, by response.
+# *Hint:* give each corner a cell number, then sort by cell and, within a cell, by response
+# (`np.argsort(..., kind="stable")` keeps equal responses in index order).
 
 
 # %% nbgrader={"grade": false, "grade_id": "ex3", "locked": false, "schema_version": 3, "solution": true}

@@ -1090,8 +1090,8 @@ hidden_test_ex2(grading, (range_bearing_module, line_observation_module, ekf_mod
 # R = diag(σ_r², σ_b²)) is compared with a χ² gate. Write
 # `innovation_squared(pose, pose_cov, point, point_cov, measured, range_sigma, bearing_sigma)`
 # with your exercise 2 Jacobians. Then, for the observations `candidates` below of the robot
-# at `gate_pose`, store in `accepted` the boolean mask of those within the 99 % gate
-# (`chi2.ppf(0.99, 2)`) of the landmark `gate_point`.
+# at `gate_pose`, measured with σ_r = 0.05 m and σ_b = 0.02 rad, store in `accepted` the boolean
+# mask of those within the 99 % gate (`chi2.ppf(0.99, 2)`) of the landmark `gate_point`.
 #
 # *Hint:* ν's bearing is an angle: two bearings either side of ±π are close.
 

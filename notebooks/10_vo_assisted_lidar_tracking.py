@@ -855,7 +855,7 @@ hidden_test_ex2(grading, tracking_module, control_limits)
 # samples of the top quartile of scores (eq. 17): centre their translational corrections (eq. 19)
 # and take the unit eigenvector of the largest eigenvalue of their covariance (eq. 20). Write
 # `principal_direction(corrections, scores)` for corrections `(N, 3)` (dx, dy, dθ) and their
-# scores, returning that unit vector (either sign), without `vo_lib`'s
+# scores, returning that unit vector as a 2-vector (x, y) (either sign), without `vo_lib`'s
 # `principal_error_direction`. Store it for `spread_corrections`, `spread_scores` below in
 # `corridor_direction`, and its angle from the x axis, folded into [0°, 180°), in
 # `corridor_angle_deg`.
