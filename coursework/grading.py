@@ -40,30 +40,33 @@ class GradingError(AssertionError):
 def unavailable(*functions: Callable) -> Iterator[None]:
     """Make ``functions`` raise :class:`GradingError` while the block runs.
 
-    Every loaded module (the notebook's namespace among them) that holds one of ``functions`` under
-    some name gets, for that name, a function that raises; all are restored when the block ends.
-    This stops an answer that calls the library, under its own name or an alias. It is a guard for
-    honest mistakes, not a sandbox: the integrity report is what catches deliberate workarounds.
+    Every loaded module (the notebook's namespace among them) and every class a module defines
+    that holds one of ``functions`` under some name gets, for that name, a function that raises
+    (a method, ``VoKalmanFilter.update`` say, is refused on every object of its class); all are
+    restored when the block ends. This stops an answer that calls the library, under its own name
+    or an alias. It is a guard for honest mistakes, not a sandbox: the integrity report is what
+    catches deliberate workarounds.
     """
     wanted = {id(f) for f in functions}
 
     def refuse(*args, **kwargs):
         raise GradingError("this calls a library function that the exercise asks you to write yourself")
 
-    swapped = []
-    for module in list(sys.modules.values()):
-        namespace = getattr(module, "__dict__", None)
-        if not isinstance(namespace, dict):
-            continue
-        for name, value in list(namespace.items()):
-            if id(value) in wanted:
-                swapped.append((namespace, name, value))
-                namespace[name] = refuse
+    owners = [m for m in list(sys.modules.values()) if isinstance(getattr(m, "__dict__", None), dict)]
+    owners += [
+        c
+        for m in owners[:]
+        for c in list(vars(m).values())
+        if isinstance(c, type) and c.__module__ == m.__name__
+    ]
+    swapped = [(o, n, v) for o in owners for n, v in list(vars(o).items()) if id(v) in wanted]
+    for owner, name, _ in swapped:
+        setattr(owner, name, refuse)
     try:
         yield
     finally:
-        for namespace, name, value in swapped:
-            namespace[name] = value
+        for owner, name, value in swapped:
+            setattr(owner, name, value)
 
 
 def library_functions(*modules: types.ModuleType) -> list[Callable]:

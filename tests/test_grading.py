@@ -34,6 +34,16 @@ def test_an_unavailable_function_comes_back_when_the_block_raises():
     assert ransac.hypotheses_needed is original
 
 
+def test_an_unavailable_method_raises_on_every_object_of_its_class():
+    from vo_lib.stereo_vo.kalman import VoKalmanFilter
+
+    original = VoKalmanFilter.update
+    with grading.unavailable(original):
+        with pytest.raises(grading.GradingError):
+            VoKalmanFilter.update(None, 0.0, 0.0, np.eye(2))
+    assert VoKalmanFilter.update is original
+
+
 def test_library_functions_lists_what_a_module_defines_not_what_it_imports():
     import vo_lib.geometry as geometry
 
