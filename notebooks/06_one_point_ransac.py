@@ -1260,6 +1260,111 @@ hidden_test_ex3(grading, best_fixed_threshold)
 # === END MARK SCHEME ===
 
 # %% [markdown]
+# ### Exercise 4 · the θ gate and the 1-point loop *(hard, 4 points)*
+#
+# Build phase 1 of the 1-point RANSAC yourself. First the gate: write
+# `theta_gate(w_prev, w_curr, theta, camera)`, error_θ of eq. 20 for every match,
+# |tan α′/tan α − sin γ′/sin γ|, with tan α = (v − v₀) cos β / f_y, β = atan((u − u₀) / f_x),
+# γ = β + θ/2 for the previous image and γ′ = β′ − θ/2 for the current one (section 3).
+# Then the loop: write `one_point_theta(w_prev, w_curr, camera, threshold, n_hypotheses, rng)`.
+# It draws the hypotheses' matches with `rng.integers(len(w_prev), size=n_hypotheses)`, takes each
+# drawn match's own θ (eq. 14, `cm.theta_from_pixels`) as a hypothesis, counts the matches whose
+# gate error under it is below `threshold`, and returns `(theta, inliers)`: the hypothesis with
+# the most inliers (the first drawn of those that tie) and its boolean inlier mask. Use neither
+# `one_point_ransac` nor the library's gate functions. Store the result for `half_px`, with
+# threshold 0.02, 50 hypotheses and `np.random.default_rng(7)`, in `loop_theta`, `loop_inliers`.
+#
+# *Hint:* θ of every match once, with `cm.theta_from_pixels`; then one `theta_gate` per hypothesis.
+
+
+# %% nbgrader={"grade": false, "grade_id": "ex4", "locked": false, "schema_version": 3, "solution": true}
+### BEGIN SOLUTION
+def theta_gate(w_prev, w_curr, theta, camera):
+    """error_theta of eq. 20 for every match under the deflection ``theta``."""
+    a, b = np.asarray(w_prev, float), np.asarray(w_curr, float)
+    beta_a = np.arctan((a[:, 0] - camera.cx) / camera.fx)
+    beta_b = np.arctan((b[:, 0] - camera.cx) / camera.fx)
+    tan_a = (a[:, 1] - camera.cy) * np.cos(beta_a) / camera.fy
+    tan_b = (b[:, 1] - camera.cy) * np.cos(beta_b) / camera.fy
+    return np.abs(tan_b / tan_a - np.sin(beta_b - theta / 2) / np.sin(beta_a + theta / 2))
+
+
+def one_point_theta(w_prev, w_curr, camera, threshold, n_hypotheses, rng):
+    """The theta of one drawn match with the most matches within ``threshold`` of eq. 20, and those."""
+    each = cm.theta_from_pixels(w_prev, w_curr, camera)
+    best, best_inliers = None, None
+    for i in rng.integers(len(each), size=n_hypotheses):
+        inliers = theta_gate(w_prev, w_curr, each[i], camera) < threshold
+        if best_inliers is None or inliers.sum() > best_inliers.sum():
+            best, best_inliers = float(each[i]), inliers
+    return best, best_inliers
+
+
+loop_theta, loop_inliers = one_point_theta(
+    half_px.w_prev, half_px.w_curr, ex_camera, 0.02, 50, np.random.default_rng(7)
+)
+print(f"θ = {np.degrees(loop_theta):.3f}° with {loop_inliers.sum()} inliers")
+### END SOLUTION
+
+# %% nbgrader={"grade": true, "grade_id": "ex4_test", "locked": true, "points": 4, "schema_version": 3, "solution": false}
+# Exercise 4: autograder test
+assert theta_gate(half_px.w_prev, half_px.w_curr, ex_theta, ex_camera).shape == (400,), "one error per match"
+assert abs(np.degrees(loop_theta - ex_theta)) < 0.05, "the hypothesis with most inliers is close to 3°"
+assert loop_inliers.sum() > 200 and np.mean(half_px.inliers[loop_inliers]) > 0.97, "true inliers, nearly all"
+assert np.array_equal(loop_inliers, theta_gate(half_px.w_prev, half_px.w_curr, loop_theta, ex_camera) < 0.02)
+### BEGIN HIDDEN TESTS
+import vo_lib.stereo_vo.ransac as ransac_module  # noqa: E402
+from coursework import grading  # noqa: E402
+
+
+def hidden_test_ex4(grading, ransac, gate, loop):
+    """The gate on another camera's pixels, the loop on noise-free match sets with 30-60 %
+    outliers, all drawn from fixed seeds; eq. 20 written out here, apart from the notebook."""
+    import numpy as np
+
+    from vo_lib.camera import StereoCamera
+    from vo_lib.stereo_vo.circular_motion import theta_from_pixels
+    from vo_lib.stereo_vo.synthetic import synthetic_matches
+
+    def eq20(a, b, theta, cam):
+        ba, bb = np.arctan((a[:, 0] - cam.cx) / cam.fx), np.arctan((b[:, 0] - cam.cx) / cam.fx)
+        ta, tb = (a[:, 1] - cam.cy) * np.cos(ba) / cam.fy, (b[:, 1] - cam.cy) * np.cos(bb) / cam.fy
+        return np.abs(tb / ta - np.sin(bb - theta / 2) / np.sin(ba + theta / 2))
+
+    fresh = np.random.default_rng(6041)
+    cam = StereoCamera(fx=420.0, fy=380.0, cx=300.0, cy=250.0, baseline=0.12, width=640, height=480)
+    a = np.column_stack([fresh.uniform(0, 640, 60), fresh.uniform(270, 480, 60), fresh.uniform(1, 40, 60)])
+    b = a + fresh.normal(0, 4, (60, 3))
+    turn = fresh.uniform(0.02, 0.1)
+    library = [*grading.library_functions(ransac), ransac.one_point_ransac]
+    with grading.unavailable(*library):
+        got = np.asarray(gate(a.copy(), b.copy(), turn, cam), float)
+    assert got.shape == (60,) and np.allclose(got, eq20(a, b, turn, cam), rtol=1e-9), (
+        "theta_gate is not error_θ of eq. 20 (half the turn in γ and γ′? which ratio over which? "
+        "f_x in β and f_y in tan α?)"
+    )
+    for seed in range(4):
+        turn = float(fresh.uniform(-0.08, 0.08))
+        pairs = synthetic_matches(
+            ex_camera, 300, turn, fresh.uniform(0.05, 0.3), fresh, outlier_ratio=0.3 + 0.1 * seed
+        )
+        with grading.unavailable(*library):
+            theta, inliers = loop(
+                pairs.w_prev.copy(), pairs.w_curr.copy(), ex_camera, 0.02, 40, np.random.default_rng(seed)
+            )
+        assert any(np.isclose(theta, theta_from_pixels(pairs.w_prev, pairs.w_curr, ex_camera))), (
+            "a hypothesis is the θ of one match"
+        )
+        assert abs(theta - turn) < 1e-9, "one_point_theta does not keep the hypothesis with the most inliers"
+        assert np.array_equal(
+            np.asarray(inliers, bool), eq20(pairs.w_prev, pairs.w_curr, theta, ex_camera) < 0.02
+        ), "the inliers are the matches within the threshold under the kept hypothesis"
+
+
+hidden_test_ex4(grading, ransac_module, theta_gate, one_point_theta)
+### END HIDDEN TESTS
+
+# %% [markdown]
 # ### Stretch goals (not graded)
 #
 # - Push the outlier ratio to 80 %: when does the method fail? Would drawing hypotheses only near
