@@ -418,7 +418,7 @@ for got, (a_, b_, s_, cam) in zip(answers, cases, strict=True):
 ### END HIDDEN TESTS
 
 # %% [markdown]
-# ### Exercise 3 · planar or not, before θ is known *(hard, 4 points)*
+# ### Exercise 3 · planar or not, before θ is known *(medium, 4 points)*
 #
 # Eq. 17 uses only the x and z rows of eq. 15; the y row says y′ = y: a point keeps its height
 # under *any* planar motion. Write `height_change(w_prev, w_curr, camera)` that returns y′ − y

@@ -1110,7 +1110,7 @@ hidden_test_ex1(grading, ransac_module, hypotheses_for)
 ### END HIDDEN TESTS
 
 # %% [markdown]
-# ### Exercise 2 · gates that assume the wrong noise *(medium, 3 points)*
+# ### Exercise 2 · gates that assume the wrong noise *(easy, 3 points)*
 #
 # The gates assume 0.5 px of pixel noise (`pixel_sigma`). Write `gate_scores(matches, camera,
 # pixel_sigma)`: run `one_point_ransac` (with `rng=1` and that `pixel_sigma`) on `matches` (as
@@ -1311,7 +1311,9 @@ print(f"θ = {np.degrees(loop_theta):.3f}° with {loop_inliers.sum()} inliers")
 assert theta_gate(half_px.w_prev, half_px.w_curr, ex_theta, ex_camera).shape == (400,), "one error per match"
 assert abs(np.degrees(loop_theta - ex_theta)) < 0.05, "the hypothesis with most inliers is close to 3°"
 assert loop_inliers.sum() > 200 and np.mean(half_px.inliers[loop_inliers]) > 0.97, "true inliers, nearly all"
-assert np.array_equal(loop_inliers, theta_gate(half_px.w_prev, half_px.w_curr, loop_theta, ex_camera) < 0.02)
+assert np.array_equal(
+    loop_inliers, theta_gate(half_px.w_prev, half_px.w_curr, loop_theta, ex_camera) < 0.02
+), "loop_inliers: the matches within 0.02 of eq. 20 under loop_theta"
 ### BEGIN HIDDEN TESTS
 import vo_lib.stereo_vo.ransac as ransac_module  # noqa: E402
 from coursework import grading  # noqa: E402

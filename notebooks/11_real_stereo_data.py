@@ -1112,7 +1112,7 @@ display(
 # `image_statistics`) of `image` at each FAST threshold of `thresholds`, as a list. Store the
 # shares of the first real image of section 1 at thresholds 20 and 10 in `at_20, at_10`.
 #
-# *Hint:* `image_statistics(image, threshold=...)["empty"]`.
+# *Hint:* `image_statistics` takes the FAST threshold as a keyword; print what it returns.
 
 
 # %% nbgrader={"grade": false, "grade_id": "ex1", "locked": false, "schema_version": 3, "solution": true}
@@ -1225,7 +1225,7 @@ for _ in range(5):
 # Start it from no motion at all (`R = I`, `t = 0`) instead of 1-point RANSAC's guess and store
 # the result in `R_id, t_id, steps_id`. Does it reach the same motion, and in how many steps?
 #
-# *Hint:* `gauss_newton(P_in, w_in, R, t, iterations=30, tol=1e-10)`.
+# *Hint:* `help(gauss_newton)` names its keyword arguments.
 
 
 # %% nbgrader={"grade": false, "grade_id": "ex3", "locked": false, "schema_version": 3, "solution": true}
