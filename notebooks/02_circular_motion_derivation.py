@@ -306,7 +306,8 @@ assert np.all(w_after[:, 0] > w_before[:, 0])  # every point moved right in the 
 # %% [markdown]
 # ### Exercise 1 · ρ from one row *(easy, 2 points)*
 #
-# Eq. 15's x′ row alone also fixes ρ once φ is known. Solve it for ρ with sympy and store the
+# Eq. 15's x′ row alone also fixes ρ once φ is known, for a turn (φ ≠ 0: driving straight, ρ
+# drops out of that row and only the z′ row measures it). Solve it for ρ with sympy and store the
 # expression in `rho_from_x`: it may contain `x`, `z`, `xq` (x′) and `phi`, but not `rho`.
 #
 # *Hint:* `xq - xp` is zero on the motion; `sp.solve(..., rho)` returns a list.

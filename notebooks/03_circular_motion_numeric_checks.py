@@ -643,7 +643,8 @@ for _ in range(4):
 # close to a / z, z the depth of the match. Each match knows its own depth (from its disparity),
 # so each can be corrected. Write `correct_ahead(theta_each, depth, a)` returning the corrected
 # θ of every match from its eq. 14 θ, its depth and the camera's offset `a` (find the form and
-# the sign of the correction). For the spot turn `ahead` below (2°, camera 0.3 m ahead, depths
+# the sign of the correction: the exact one for a spot turn, which the tests check to 1e-6, not
+# its first-order approximation). For the spot turn `ahead` below (2°, camera 0.3 m ahead, depths
 # 1.5–15 m) store the median of the corrected θ of the matches in `usable` in
 # `theta_corrected` (radians).
 #
