@@ -70,14 +70,17 @@ def unavailable(*functions: Callable) -> Iterator[None]:
 
 
 def library_functions(*modules: types.ModuleType) -> list[Callable]:
-    """The functions (and compiled kernels) each of ``modules`` defines itself, not imports."""
+    """The functions (and compiled kernels) that each of ``modules`` defines itself, not imports,
+    and those of every loaded module whose name extends its name (``ransac`` covers ``ransac_*``)."""
+    names = tuple(m.__name__ for m in modules)
+    owners = [m for n, m in list(sys.modules.items()) if n.startswith(names) and hasattr(m, "__dict__")]
     return [
         value
-        for module in modules
+        for module in owners
         for value in vars(module).values()
         if callable(value)
         and not isinstance(value, type)
-        and getattr(value, "__module__", None) == module.__name__
+        and getattr(getattr(value, "py_func", value), "__module__", None) == module.__name__
     ]
 
 
