@@ -101,7 +101,7 @@ class Reason(enum.Enum):
     LOW_LEVEL = "uses ctypes, gc or importlib"
     PROCESS = "starts threads or processes, or ends the interpreter"
     FAKE_NUMBER = "subclasses a built-in number or defines __array__"
-    REBINDS = "rebinds a name of NumPy or of the grader"
+    REBINDS = "rebinds a name of NumPy, of an imported module or of the grader"
 
 
 MODULES = {
@@ -141,6 +141,12 @@ def review(source: str) -> list[tuple[int, Reason]]:
         )
     except SyntaxError:
         return found
+    imported = {  # names the cell binds to modules: assigning to their attributes patches a library
+        (alias.asname or alias.name).split(".")[0]
+        for node in ast.walk(tree)
+        if isinstance(node, ast.Import)
+        for alias in node.names
+    }
     for node in ast.walk(tree):
         reason = None
         if isinstance(node, (ast.Import, ast.ImportFrom)):
@@ -160,7 +166,9 @@ def review(source: str) -> list[tuple[int, Reason]]:
             reason = Reason.FAKE_NUMBER
         elif isinstance(node, (ast.Assign, ast.AugAssign, ast.Delete)):
             targets = node.targets if isinstance(node, (ast.Assign, ast.Delete)) else [node.target]
-            if any(_rebinds(t) for t in targets):
+            if any(_rebinds(t) for t in targets) or any(
+                isinstance(t, ast.Attribute) and _named(t.value, *imported) for t in targets
+            ):
                 reason = Reason.REBINDS
         if reason is not None:
             found.append((node.lineno, reason))

@@ -384,6 +384,7 @@ assert ours.shape == (300,) and np.all(ours > 0)
 import numpy as np  # noqa: E402 - the tests' own modules, whatever names the answer rebound
 import sympy as sp  # noqa: E402
 
+from coursework import grading  # noqa: E402, F811
 from vo_lib.stereo_vo import circular_motion as cm  # noqa: E402
 
 refused = grading.unavailable

@@ -538,6 +538,8 @@ assert gap_to_walls(robot_points, pose).max() < 1e-6, "an echo carried into the 
 ### BEGIN HIDDEN TESTS
 import numpy as np  # noqa: E402 - the tests' own modules, whatever names the answer rebound
 
+from coursework import grading  # noqa: E402, F811
+
 refused = grading.unavailable
 
 import vo_lib.geometry as geometry_module  # noqa: E402
