@@ -36,6 +36,13 @@ class GradingError(AssertionError):
     """A hidden test's answer called a function the exercise asks the student to write."""
 
 
+class _Names:
+    """A dictionary of names seen as an object, so that ``setattr`` writes into it."""
+
+    def __init__(self, names: dict) -> None:
+        self.__dict__ = names
+
+
 @contextlib.contextmanager
 def unavailable(*functions: Callable) -> Iterator[None]:
     """Make ``functions`` raise :class:`GradingError` while the block runs.
@@ -59,6 +66,8 @@ def unavailable(*functions: Callable) -> Iterator[None]:
         for c in list(vars(m).values())
         if isinstance(c, type) and c.__module__ == m.__name__
     ]
+    shell = getattr(sys.modules.get("IPython"), "get_ipython", lambda: None)()
+    owners += [_Names(shell.user_ns)] if shell else []  # the notebook's own names
     swapped = [(o, n, v) for o in owners for n, v in list(vars(o).items()) if id(v) in wanted]
     for owner, name, _ in swapped:
         setattr(owner, name, refuse)
@@ -80,7 +89,7 @@ def library_functions(*modules: types.ModuleType) -> list[Callable]:
         for value in vars(module).values()
         if callable(value)
         and not isinstance(value, type)
-        and getattr(getattr(value, "py_func", value), "__module__", None) == module.__name__
+        and str(getattr(getattr(value, "py_func", value), "__module__", "")).startswith(names)
     ]
 
 
