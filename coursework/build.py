@@ -20,11 +20,12 @@ overwritten.
 
 ``--check`` then autogrades, in a temporary copy of the course folder, the solutions (every test
 must pass), the unanswered student edition and the adversarial answers of ``submissions/``
-(every exercise must score zero, while every cell outside the exercises runs without error),
-among them answers that hook into or end the kernel, which the course's ``nbgrader_config.py``
-refuses. It prints the score table and the seconds each submission took, and fails if one took
-longer than its notebook's own run time (its solutions, graded in the same run) plus 30 s;
-``--repeat N`` grades the whole set N times over.
+(every exercise must score zero, while every cell outside the exercises runs without error;
+a correct answer that writes to stderr must score full marks; an answer of kind ``flagged`` must
+be named "to be reviewed" by the integrity report of ``coursework/grading.py``, and no other
+answer may be). It prints the integrity report, the score table and the seconds each submission
+took, and fails if one took longer than its notebook's own run time (its solutions, graded in the
+same run) plus 30 s; ``--repeat N`` grades the whole set N times over.
 """
 
 from __future__ import annotations
@@ -49,6 +50,7 @@ import nbformat
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))  # this checkout's vo_lib, whatever copy is installed
+from coursework.grading import report  # noqa: E402
 from vo_lib.outputs import (  # noqa: E402
     MARKER,
     OutputError,
@@ -67,13 +69,16 @@ WRITTEN_BY = "python coursework/build.py"
 LEGACY_MARKER = ".coursework_build.json"
 SUBMISSIONS_DIR = pathlib.Path(__file__).with_name("submissions")
 ADVERSARIAL_KINDS = ("constant", "library", "wrong")  # and "unanswered": the release itself
-TAMPERING_KIND = "kernel"  # answers that hook into or end the kernel: optional, any exercise
+FLAGGED_KIND = "flagged"  # answers the integrity report must name: optional, any exercise
+TOOLS = pathlib.Path(__file__).with_name("grading.py")
+# what the autograder's kernels may not read, beside the course folder's own solutions
+SOLUTION_FILES = (NOTEBOOK_DIR, ROOT / "coursework" / "submissions", ROOT / "coursework" / "answer_key.md")
 # a line that opens a solution, hidden tests or a mark scheme (not a mention of one in prose)
 MARKER_LINE = re.compile(
     r"^\s*(### BEGIN SOLUTION|### BEGIN HIDDEN TESTS|=== BEGIN MARK SCHEME ===)\s*$", re.M
 )
 ANSWER_HEADER = re.compile(r"^# %% (\S+) (\S+)[ \t]*\n", re.M)  # "# %% ex1 wrong_sign" opens an answer
-SCORE_COLUMNS = ("correct", "unanswered", *ADVERSARIAL_KINDS, TAMPERING_KIND)
+SCORE_COLUMNS = ("correct", "unanswered", *ADVERSARIAL_KINDS, FLAGGED_KIND)
 SOLUTIONS_STUDENT, UNANSWERED_STUDENT = "solutions", "unanswered"
 REGIONS = [  # nbgrader's markers: solution code, and tests kept from the student edition
     re.compile(rf"^\s*### BEGIN {what}\s*$(.*?)^\s*### END {what}\s*$", re.M | re.S)
@@ -153,7 +158,7 @@ def run_nbgrader(course: pathlib.Path, *args: str) -> None:
         cwd=course,
         capture_output=True,
         text=True,
-        env=dict(os.environ, MPLBACKEND="Agg"),
+        env=dict(os.environ, MPLBACKEND="Agg", VO_HIDDEN=os.pathsep.join(map(str, SOLUTION_FILES))),
     )
     errors = [line for line in proc.stderr.splitlines() if "| ERROR]" in line or "Error" in line]
     if "Exception while loading config file" in proc.stderr:  # nbgrader goes on without it
@@ -165,6 +170,8 @@ def run_nbgrader(course: pathlib.Path, *args: str) -> None:
 def write_course(course: pathlib.Path, paths: list[pathlib.Path]) -> None:
     """Fill ``course`` (an empty folder) with nbgrader's course layout and generate the release."""
     shutil.copy2(CONFIG, course / "nbgrader_config.py")
+    (course / "coursework").mkdir()
+    shutil.copy2(TOOLS, course / "coursework" / "grading.py")
     for path in paths:
         folder = course / "source" / path.stem
         folder.mkdir(parents=True)
@@ -243,17 +250,50 @@ def read_submissions(path: pathlib.Path, ids: list[str]) -> dict[str, dict[str, 
     return answers
 
 
+WARNING_WRAPPER = """
+import functools as _functools
+import sys as _sys
+import warnings as _warnings
+
+_quiet_{name} = {name}
+
+
+@_functools.wraps(_quiet_{name})
+def {name}(*args, **kwargs):
+    _warnings.warn("a correct answer that warns at every call", UserWarning, stacklevel=2)
+    print("progress 100%", file=_sys.stderr)
+    return _quiet_{name}(*args, **kwargs)
+"""
+
+
+def stderr_answer(solution: str) -> str:
+    """The solution ``solution`` (its markers taken out) writing to stderr, there and in its tests.
+
+    Its first function is wrapped in one that warns and prints a progress line on stderr at every
+    call, so the test cell writes to stderr too; a correct answer must still score full marks.
+    """
+    code = "\n".join(
+        line
+        for line in solution.splitlines()
+        if line.strip() not in ("### BEGIN SOLUTION", "### END SOLUTION")
+    )
+    code += '\nimport sys as _sys\n\nprint("progress 100%", file=_sys.stderr)\n'
+    defined = re.search(r"^def (\w+)\(", code, re.M)
+    return code + (WARNING_WRAPPER.format(name=defined.group(1)) if defined else "")
+
+
 def adversarial_notebooks(
-    release: nbformat.NotebookNode, answers: dict[str, dict[str, str]]
+    release: nbformat.NotebookNode, answers: dict[str, dict[str, str]], name: str = "adversarial"
 ) -> list[tuple[str, nbformat.NotebookNode, dict[str, str]]]:
     """The release with its answer cells filled in, as few notebooks as cover every answer.
 
     Submission ``j`` gives exercise ``i`` its answer number ``(i + j) mod n``, ``n`` the largest
     number of answers of any exercise; an exercise with fewer is left unanswered in the others.
-    Returns ``(student name, notebook, {exercise: kind})`` for each.
+    Returns ``(student name, notebook, {exercise: kind})`` for each, the students named ``name``
+    and a number.
     """
     ids = list(answers)
-    count = max(len(kinds) for kinds in answers.values())
+    count = max((len(kinds) for kinds in answers.values()), default=0)
     made = []
     for j in range(count):
         nb = nbformat.from_dict(json.loads(json.dumps(release)))
@@ -267,7 +307,7 @@ def adversarial_notebooks(
             exercise = cell.metadata.get("nbgrader", {}).get("grade_id")
             if cell.cell_type == "code" and exercise in given:
                 cell.source = answers[exercise][given[exercise]].strip("\n")
-        made.append((f"adversarial{j + 1}", nb, given))
+        made.append((f"{name}{j + 1}", nb, given))
     return made
 
 
@@ -299,24 +339,17 @@ def feedback_leaks(course: pathlib.Path, path: pathlib.Path, student: str) -> li
     return sorted((hidden - own) & shown)
 
 
-def feedback_text(course: pathlib.Path, path: pathlib.Path, student: str) -> str:
-    """The text of ``student``'s feedback page on notebook ``path``, generated by nbgrader."""
-    run_nbgrader(course, "generate_feedback", path.stem, f"--student={student}", "--force")
-    html = (course / "feedback" / student / path.stem / f"{path.stem}.html").read_text()
-    return re.sub(r"<[^>]+>", "", html_module.unescape(html))
-
-
 def check(course: pathlib.Path, paths: list[pathlib.Path], repeat: int = 1) -> list[str]:
     """Autograde the solutions, the unanswered edition and the adversarial answers of ``paths``.
 
     In a copy of ``course``, ``repeat`` times over: the solutions must score every autograded
-    point; every other submission (unanswered, constant or truth-copying, library-calling,
-    plausibly wrong, tampering with the kernel; see ``coursework/submissions/``) must score 0 in
-    each exercise, while cells outside the exercises run without error; and no submission may
+    point, and so must every ``correct_*`` answer of ``coursework/submissions/``; every other
+    submission (unanswered, constant or truth-copying, library-calling, plausibly wrong, flagged)
+    must score 0 in each exercise, while cells outside the exercises run without error; and no submission may
     take longer than the solutions of its notebook (the notebook's own run time, measured in the
     same repetition) plus :data:`SLACK_SECONDS`. Returns the score table (one line per exercise),
-    why each adversarial answer failed, what the grader refused or stopped (kernel hooks, a dead
-    kernel, a timeout), and the seconds each submission took; raises BuildError naming every
+    why each adversarial answer failed, the integrity report (answers to be reviewed), and the
+    seconds each submission took; raises BuildError naming every
     problem found.
     """
     problems: list[str] = []
@@ -345,7 +378,6 @@ def check(course: pathlib.Path, paths: list[pathlib.Path], repeat: int = 1) -> l
     return report
 
 
-GUARD_ERRORS = ("KernelHook", "KernelDied", "NotRun", "CellTimeoutError")  # nbgrader_config.py's
 SLACK_SECONDS = 30.0
 
 
@@ -354,8 +386,7 @@ def grade_once(
 ) -> tuple[list[str], list[str], list[str], dict[tuple[str, str], float], list[str]]:
     """One autograding of every submission of ``paths`` in a copy of ``course``.
 
-    Returns the score table, why each adversarial answer failed, what the grader's guards
-    reported (an answer not run, a dead kernel, a timeout), the seconds of each
+    Returns the score table, why each adversarial answer failed, the integrity report, the seconds of each
     ``(notebook number, student)`` and the problems found.
     """
     from nbgrader.api import Gradebook  # only the check needs nbgrader's database layer
@@ -363,7 +394,7 @@ def grade_once(
     problems: list[str] = []
     rows = [f"{'exercise':<40} {'points':>6}  " + "  ".join(f"{k:>10}" for k in SCORE_COLUMNS)]
     reasons = ["why each adversarial answer failed:"]
-    events = ["what the grader refused or stopped:"]
+    events = ["to be reviewed (the integrity report):"]
     times: dict[tuple[str, str], float] = {}
     with tempfile.TemporaryDirectory(prefix="vo-coursework-check-") as tmp:
         work = pathlib.Path(tmp) / "course"
@@ -376,7 +407,20 @@ def grade_once(
             ids = answer_ids(source)
             subs = [(SOLUTIONS_STUDENT, source, dict.fromkeys(ids, "correct"))]
             subs.append((UNANSWERED_STUDENT, release, dict.fromkeys(ids, "unanswered")))
-            subs += adversarial_notebooks(release, read_submissions(path, ids))
+            answers = read_submissions(path, ids)
+            for cell in source.cells:
+                if cell.metadata.get("nbgrader", {}).get("grade_id") in answers and cell.cell_type == "code":
+                    answers[cell.metadata["nbgrader"]["grade_id"]]["correct_stderr"] = stderr_answer(
+                        cell.source
+                    )
+            # a flagged answer may break the answers beside it (NumPy rebound, later cells emptied):
+            # flagged answers share submissions only with each other
+            for student_name, flagged in (("adversarial", False), (FLAGGED_KIND, True)):
+                chosen = {
+                    exercise: {k: a for k, a in kinds.items() if k.startswith(FLAGGED_KIND) == flagged}
+                    for exercise, kinds in answers.items()
+                }
+                subs += adversarial_notebooks(release, chosen, student_name)
             plan[path] = (ids, subs)
             for student, nb, _ in subs:
                 folder = work / "submitted" / student / path.stem
@@ -394,37 +438,24 @@ def grade_once(
                     graded = nbformat.read(
                         work / "autograded" / student / path.stem / f"{path.stem}.ipynb", as_version=4
                     )
-                    tampering = any(kind.startswith("kernel") for kind in given.values())
-                    guard_lines = []
+                    flagged = report(graded)
+                    events += [f"{path.stem[:2]} {student} {e}: " + "; ".join(w) for e, w in flagged.items()]
+                    for exercise, kind in given.items():
+                        if (exercise in flagged) != kind.startswith(FLAGGED_KIND):
+                            problems.append(
+                                f"{path.name} {exercise}: the {kind} answer ({student}) is "
+                                + ("flagged" if exercise in flagged else "not flagged")
+                            )
                     for index, cell in enumerate(graded.cells):
                         errors = [o for o in cell.get("outputs", []) if o.get("output_type") == "error"]
-                        failed = bool(errors)
                         grade_id = cell.metadata.get("nbgrader", {}).get("grade_id", "")
                         test_of = grade_id.removesuffix("_test") if grade_id.endswith("_test") else ""
-                        for e in errors:
-                            line = f"{path.stem[:2]} {student}: {e['ename']}: {e['evalue']}".splitlines()[0]
-                            if (
-                                e.get("ename") in GUARD_ERRORS
-                                and e["ename"] != "NotRun"
-                                and line not in events
-                            ):
-                                events.append(line)
-                                guard_lines.append(f"{e['ename']}: {e['evalue']}")
-                        if errors and given.get(test_of, "correct") not in ("correct", "unanswered"):
+                        if errors and not given.get(test_of, "correct").startswith(("correct", "unanswered")):
                             why = f"{errors[0]['ename']}: {errors[0]['evalue']}".splitlines()[0][:90]
                             reasons.append(f"{path.stem[:2]} {test_of} {given[test_of]}: {why}")
-                        if tampering and all(e.get("ename") == "NotRun" for e in errors):
-                            failed = False  # stopped after a tampering answer: that answer is what failed
-                        if failed and (student == SOLUTIONS_STUDENT or not exercise_cell(cell)):
+                        if errors and (student == SOLUTIONS_STUDENT or not exercise_cell(cell)):
                             head = cell.source[:60]
                             problems.append(f"{path.name} ({student}): cell {index} fails: {head!r}")
-                    if guard_lines:  # the student reads why, too
-                        shown = feedback_text(work, path, student)
-                        problems += [
-                            f"{path.name} ({student}): the feedback does not say {line!r}"
-                            for line in guard_lines
-                            if line not in shown
-                        ]
                     for exercise, (got, most) in exercise_scores(sub, ids).items():
                         top[exercise] = most
                         if exercise not in given:
@@ -433,7 +464,7 @@ def grade_once(
                         table[exercise].setdefault(kind.split("_")[0], []).append(got)
                         if most == 0:
                             problems.append(f"{path.name}: {exercise} has no autograded points")
-                        elif (got != most) if kind == "correct" else (got != 0):
+                        elif (got != most) if kind.startswith("correct") else (got != 0):
                             problems.append(
                                 f"{path.name} {exercise}: the {kind} answer ({student}) "
                                 f"scores {got:g} of {most:g}"

@@ -24,118 +24,61 @@ c.KernelManager.ip = os.path.join(_sockets, "kernel")
 os.environ["VO_LIB_HEADLESS"] = "1"
 
 
-# The autograder's Execute, guarded. A student's cell runs in the kernel before the tests, so one
-# that hooks into the kernel (an input transformer that empties the test cells, an event handler,
-# a trace function, replaced built-ins or shell methods) or ends it (os._exit, a crash) could make
-# the tests pass or never run, and a test that never ran counts as passed. So:
-# - an answer cell whose code reaches for a kernel hook (vo_lib.grading.kernel_hooks) is not run;
-#   it and its test show why, and the exercise scores 0 until the teacher looks at it by hand;
-# - the kernel's hooks are compared before and after every answer cell (vo_lib.grading.kernel_state,
-#   read as a user expression, which no transformer or handler sees), and every test cell, whose
-#   calls of an answer's functions may change them too (the tools the next hidden test loads, say);
-#   from a change on, no test runs and each says where the kernel was changed, and a test cell
-#   that changed it fails;
-# - a kernel that dies stops the notebook, not the batch: every later cell says in which cell it
-#   died, and scores 0;
-# - a cell stopped by the timeout says which cell it was.
-import ast  # noqa: E402
+# The course's grading tools (coursework/grading.py, beside this file in the course folder), for
+# this file and for the hidden tests, which run in the kernels it starts: `from coursework import
+# grading`.
+import pathlib  # noqa: E402
+import sys  # noqa: E402
 
-from nbclient.exceptions import DeadKernelError  # noqa: E402
-from nbformat.notebooknode import NotebookNode  # noqa: E402
+_here = pathlib.Path(__file__).resolve().parent
+_tools = str(_here.parent if _here.name == "coursework" else _here)
+sys.path.insert(0, _tools)
+os.environ["PYTHONPATH"] = os.pathsep.join(filter(None, [_tools, os.environ.get("PYTHONPATH")]))
+
+import json  # noqa: E402
+
+from coursework import grading as _grading  # noqa: E402
+
+# The kernels run isolated: what a student's code can read must not include the solutions. Each
+# kernel starts in its own mount namespace where the course's solutions and tests (source/), the
+# release, the other submissions, the feedback and the gradebook are empty, and so is every path
+# listed in VO_HIDDEN beforehand (a checkout of the notebooks, say): see docs/course.md. The
+# kernel spec "python3" of a private Jupyter path starts it through coursework/grading.py.
+_hidden = [str(_here / name) for name in ("source", "release", "submitted", "feedback", "gradebook.db")]
+if _here.name != "coursework" and _grading.can_isolate():
+    os.environ["VO_HIDDEN"] = os.pathsep.join(
+        [*_hidden, *filter(None, os.environ.get("VO_HIDDEN", "").split(os.pathsep))]
+    )
+    _spec = pathlib.Path(_sockets) / "kernels" / "python3"
+    _spec.mkdir(parents=True)
+    _launcher = [sys.executable, _grading.__file__, "--kernel", "{connection_file}"]
+    (_spec / "kernel.json").write_text(
+        json.dumps({"argv": _launcher, "display_name": "Python 3", "language": "python"})
+    )
+    os.environ["JUPYTER_PATH"] = os.pathsep.join(filter(None, [_sockets, os.environ.get("JUPYTER_PATH")]))
+elif _here.name != "coursework":
+    print("nbgrader_config.py: unshare -rm is not allowed here: kernels run NOT isolated", file=sys.stderr)
+
 from nbgrader.converters import Autograde  # noqa: E402
-from nbgrader.preprocessors import Execute  # noqa: E402
+from nbgrader.preprocessors import ClearHiddenTests, Execute, GetGrades  # noqa: E402
 
-import vo_lib.grading  # noqa: E402
-from vo_lib.grading import cell_label, kernel_hooks  # noqa: E402
+from coursework.grading import QuietStderr, ToBeReviewed, VerdictOnly  # noqa: E402
 
-# read afresh from its file at every call: an answer that replaced the imported module's function
-# (by one that returns a copy of the state it saw) has no hold on it
-STATE = f"__import__('runpy').run_path({vo_lib.grading.__file__!r})['kernel_state']()"
-
-
-def _error(ename, evalue):
-    return NotebookNode(output_type="error", ename=ename, evalue=evalue, traceback=[f"{ename}: {evalue}"])
-
-
-class GuardedExecute(Execute):
-    """nbgrader's Execute that refuses kernel hooks, survives a dead kernel and names timed-out cells."""
-
-    def preprocess(self, nb, resources=None, km=None):
-        self.stopped = None  # why no later test may run: a hook found, a dead kernel
-        self.refused = {}  # grade_id of an answer not run -> why
-        return super().preprocess(nb, resources, km)
-
-    def preprocess_cell(self, cell, resources, index):
-        if cell.cell_type != "code" or not cell.source.strip():
-            return cell, self.resources
-        meta = cell.metadata.get("nbgrader", {})
-        grade_id = meta.get("grade_id", "")
-        if self.stopped:
-            cell.outputs = [_error("NotRun", f"not run: {self.stopped}")]
-            return cell, self.resources
-        if grade_id.endswith("_test") and grade_id.removesuffix("_test") in self.refused:
-            cell.outputs = [_error("KernelHook", self.refused[grade_id.removesuffix("_test")])]
-            return cell, self.resources
-        answer = bool(meta.get("solution"))
-        if answer and (hooks := kernel_hooks(cell.source)):
-            self.refused[grade_id] = (
-                f"the answer {grade_id} was not run: it reaches into the kernel "
-                f"({', '.join(dict.fromkeys(hooks))}), which could change the tests; 0 points "
-                "until the teacher has looked at it"
-            )
-            cell.outputs = [_error("KernelHook", self.refused[grade_id])]
-            return cell, self.resources
-        label = cell_label(cell, index)
-        self.error_on_timeout = {
-            "ename": "CellTimeoutError",
-            "evalue": f"{label} was still running after {self.timeout} s and was stopped",
-            "traceback": [
-                f"CellTimeoutError: {label} was still running after {self.timeout} s and was stopped"
-            ],
-        }
-        guarded = answer or bool(meta.get("grade"))  # an answer, or a test that calls one
-        try:
-            before = self._kernel_state() if guarded else None
-            cell, resources = super().preprocess_cell(cell, resources, index)
-            after = self._kernel_state() if guarded else None
-        except DeadKernelError:
-            self.stopped = f"the kernel died in {label}"
-            cell.outputs = list(cell.get("outputs", [])) + [
-                _error("KernelDied", f"the kernel died in {label}")
-            ]
-            return cell, self.resources
-        changed = [what for what in before or {} if before[what] != (after or {}).get(what)]
-        if changed:
-            self.stopped = f"{label} changed the kernel ({', '.join(changed)})"
-            cell.outputs.append(_error("KernelHook", self.stopped))
-        return cell, resources
-
-    def _kernel_state(self):
-        """:func:`vo_lib.grading.kernel_state` in the kernel, as a user expression."""
-        msg_id = self.kc.execute("", silent=True, store_history=False, user_expressions={"state": STATE})
-        reply = self.wait_for_reply(msg_id) or {}
-        result = reply.get("content", {}).get("user_expressions", {}).get("state", {})
-        text = result.get("data", {}).get("text/plain", "")
-        try:
-            return ast.literal_eval(text)
-        except (ValueError, SyntaxError):  # the expression failed: that, too, is a change
-            return {"state": text or repr(result)}
-
-
-c.Autograde.autograde_preprocessors = [  # nbgrader's own list, with GuardedExecute for Execute
-    GuardedExecute if p is Execute else p
-    for p in Autograde.class_traits()["autograde_preprocessors"].make_dynamic_default()
-]
+# After the notebook ran: stderr (warnings, progress bars) is dropped from graded cells, and the
+# test of an answer the integrity report flags fails with the report's lines (0 points until the
+# teacher has read the answer and graded it by hand).
+_steps = Autograde.class_traits()["autograde_preprocessors"].make_dynamic_default()
+_at = _steps.index(Execute) + 1
+c.Autograde.autograde_preprocessors = [*_steps[:_at], QuietStderr, ToBeReviewed, *_steps[_at:]]
 c.ClearSolutions.code_stub = {"python": "# YOUR CODE HERE\nraise NotImplementedError()"}
 c.ClearSolutions.text_stub = "YOUR ANSWER HERE"
 
 
 # Feedback shows what failed, not how it was tested: the hidden tests are taken out of the graded
-# notebook (ClearHiddenTests) and a failed test's traceback, which would quote the failing line, is
-# cut down to its message ("AssertionError: the gain of another update ..."), which the tests word
-# so as to say what is wrong without giving the answer.
+# notebook (ClearHiddenTests), and a test cell keeps only its error, cut down to its one-line
+# message ("AssertionError: the gain of another update ..."), not the traceback (which would quote
+# the failing line) nor anything the answer printed while the test ran.
 from nbconvert.preprocessors import CSSHTMLHeaderPreprocessor  # noqa: E402
-from nbgrader.preprocessors import ClearHiddenTests, GetGrades, NbGraderPreprocessor  # noqa: E402
 
 
 class GetGradesSayingToBeGraded(GetGrades):
@@ -153,21 +96,10 @@ class GetGradesSayingToBeGraded(GetGrades):
             )
 
 
-class MessageOnlyTracebacks(NbGraderPreprocessor):
-    """Replace the traceback of every failed test cell by its one-line message."""
-
-    def preprocess_cell(self, cell, resources, index):
-        if cell.cell_type == "code" and cell.metadata.get("nbgrader", {}).get("grade"):
-            for output in cell.get("outputs", []):
-                if output.get("output_type") == "error":
-                    output["traceback"] = [f"{output['ename']}: {output['evalue']}"]
-        return cell, resources
-
-
 c.GenerateFeedback.preprocessors = [
     GetGradesSayingToBeGraded,
     ClearHiddenTests,
-    MessageOnlyTracebacks,
+    VerdictOnly,
     CSSHTMLHeaderPreprocessor,
 ]
 

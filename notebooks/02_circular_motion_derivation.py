@@ -312,7 +312,8 @@ assert np.all(w_after[:, 0] > w_before[:, 0])  # every point moved right in the 
 # %% [markdown]
 # ### Exercise 1 · ρ from one row *(easy, 2 points)*
 #
-# Eq. 15's x′ row alone also fixes ρ once φ is known. Solve it for ρ with sympy and store the
+# Eq. 15's x′ row alone also fixes ρ once φ is known, for a turn (φ ≠ 0: driving straight, ρ
+# drops out of that row and only the z′ row measures it). Solve it for ρ with sympy and store the
 # expression in `rho_from_x`: it may contain `x`, `z`, `xq` (x′) and `phi`, but not `rho`.
 #
 # *Hint:* `xq - xp` is zero on the motion; `sp.solve(..., rho)` returns a list.
@@ -329,31 +330,24 @@ assert rho not in rho_from_x.free_symbols, "ρ must be eliminated"
 assert rho_from_x.free_symbols <= {x, z, xq, phi}
 assert is_zero(rho_from_x.subs(xq, xp) - rho), "on the motion the expression must return ρ"
 ### BEGIN HIDDEN TESTS
-import importlib  # noqa: E402
-
 import numpy as np  # noqa: E402 - the tests' own modules, whatever names the answer rebound
 import sympy as sp  # noqa: E402
 
-import vo_lib.grading  # noqa: E402
+from coursework import grading  # noqa: E402
 from vo_lib.stereo_vo import circular_motion as cm  # noqa: E402
 
-grading = importlib.reload(vo_lib.grading)  # fresh from its file, whatever the answer did to it
-intact = grading.intact
-
-intact(globals())  # the answer left NumPy and the notebook's modules alone
 # eq. 15's x' row and its symbols built afresh: the notebook's names may have been bound to others
 x_s, z_s, xq_s = sp.symbols("x z x'", real=True)
 phi_s, rho_s = sp.symbols("varphi rho", real=True)
 x_row = sp.cos(2 * phi_s) * x_s + sp.sin(2 * phi_s) * z_s - rho_s * sp.sin(phi_s)
 assert rho_from_x.free_symbols <= {x_s, z_s, xq_s, phi_s}, "only x, z, x' and φ, the notebook's own symbols"
-fresh = np.random.default_rng()  # new motions at every grading
+fresh = np.random.default_rng(2011)  # motions drawn from a fixed seed
 for x_, z_, phi_, rho_ in zip(*fresh.uniform([-5, 1, -0.3, -1], [5, 20, 0.3, 1], (8, 4)).T, strict=True):
     values = {x_s: x_, z_s: z_, phi_s: phi_}
     moved = {**values, xq_s: float(x_row.subs({**values, rho_s: rho_}))}
     assert np.isclose(float(rho_from_x.subs(moved)), rho_, atol=1e-9), (
         "on another motion the expression does not give back its ρ"
     )
-intact(globals())
 ### END HIDDEN TESTS
 
 # %% [markdown]
@@ -393,34 +387,17 @@ assert ours.shape == (300,) and np.all(ours > 0)
 
 
 ### BEGIN HIDDEN TESTS
-import importlib  # noqa: E402
-
 import numpy as np  # noqa: E402 - the tests' own modules, whatever names the answer rebound
 import sympy as sp  # noqa: E402
 
-import vo_lib.grading  # noqa: E402
+from coursework import grading  # noqa: E402, F811
 from vo_lib.stereo_vo import circular_motion as cm  # noqa: E402
 
-grading = importlib.reload(vo_lib.grading)  # fresh from its file, whatever the answer did to it
-intact, refused = grading.intact, grading.refused
+refused = grading.unavailable
 
-intact(
-    globals(), ("StereoCamera", "synthetic_matches")
-)  # the answer left NumPy and the notebook's modules alone
 import vo_lib.stereo_vo.ransac as ransac_module  # noqa: E402
 
-
-def own_functions(module):
-    """Every function and compiled kernel a module defines (the RANSAC's compute θ's variance too)."""
-    return [
-        f
-        for f in vars(module).values()
-        if hasattr(f, "py_func")
-        or (callable(f) and not isinstance(f, type) and getattr(f, "__module__", None) == module.__name__)
-    ]
-
-
-fresh = np.random.default_rng()  # new matches, noise and camera at every grading
+fresh = np.random.default_rng(2021)  # matches, noise and camera drawn from a fixed seed
 other = StereoCamera(
     fx=fresh.uniform(300, 900),
     fy=fresh.uniform(300, 900),
@@ -436,7 +413,7 @@ for cam in (camera, other):
     cases.append((m_.w_prev, m_.w_curr, fresh.uniform(0.2, 2.0), cam))
 del m_
 # eq. 14's θ and its variance as the library computes them (derived, not differentiated numerically)
-library = [*own_functions(cm), *own_functions(ransac_module)]
+library = grading.library_functions(cm, ransac_module)
 with refused(*library):
     answers = [np.asarray(theta_sigma(a_.copy(), b_.copy(), s_, cam), float) for a_, b_, s_, cam in cases]
 for got, (a_, b_, s_, cam) in zip(answers, cases, strict=True):
@@ -446,11 +423,10 @@ for got, (a_, b_, s_, cam) in zip(answers, cases, strict=True):
         "not the first-order standard deviation of θ (a standard deviation, not a variance; "
         "θ, not φ; all four coordinates; this camera's centre and f_x)"
     )
-intact(globals(), ("StereoCamera", "synthetic_matches"))
 ### END HIDDEN TESTS
 
 # %% [markdown]
-# ### Exercise 3 · planar or not, before θ is known *(hard, 4 points)*
+# ### Exercise 3 · planar or not, before θ is known *(medium, 4 points)*
 #
 # Eq. 17 uses only the x and z rows of eq. 15; the y row says y′ = y: a point keeps its height
 # under *any* planar motion. Write `height_change(w_prev, w_curr, camera)` that returns y′ − y
@@ -483,24 +459,18 @@ change = height_change(mixed.w_prev, mixed.w_curr, camera)
 assert change.shape == (400,)
 assert np.abs(change[mixed.inliers]).max() < 1e-9, "a planar motion keeps every height"
 ### BEGIN HIDDEN TESTS
-import importlib  # noqa: E402
-
 import numpy as np  # noqa: E402 - the tests' own modules, whatever names the answer rebound
 import sympy as sp  # noqa: E402
 
-import vo_lib.grading  # noqa: E402
+from coursework import grading  # noqa: E402
 from vo_lib.stereo_vo import circular_motion as cm  # noqa: E402
 
-grading = importlib.reload(vo_lib.grading)  # fresh from its file, whatever the answer did to it
-intact, refused = grading.intact, grading.refused
+refused = grading.unavailable
 
-intact(
-    globals(), ("StereoCamera", "synthetic_matches")
-)  # the answer left NumPy and the notebook's modules alone
 heights = camera.backproject(mixed.w_curr)[:, 1] - camera.backproject(mixed.w_prev)[:, 1]
 assert flagged == np.sum(np.abs(heights) > 0.05), "flagged does not count the matches of mixed"
 
-fresh = np.random.default_rng()  # new matches and a camera with f_x != f_y at every grading
+fresh = np.random.default_rng(2031)  # matches and a camera with f_x != f_y drawn from a fixed seed
 other = StereoCamera(
     fx=fresh.uniform(300, 900),
     fy=fresh.uniform(300, 900),
@@ -521,16 +491,10 @@ import cv2  # noqa: E402
 
 import vo_lib.stereo_vo.ransac as ransac_module  # noqa: E402
 
-# eq. 13 as the library and OpenCV compute it: the camera, the RANSAC's functions (which
-# back-project every match), OpenCV's triangulation
+# eq. 13 as the library and OpenCV compute it: the camera, the RANSAC (which back-projects every
+# match), OpenCV's triangulation
 library = [StereoCamera.backproject, cv2.triangulatePoints, cv2.reprojectImageTo3D]
-for module in (ransac_module,):
-    library += [
-        f
-        for f in vars(module).values()
-        if hasattr(f, "py_func")
-        or (callable(f) and not isinstance(f, type) and getattr(f, "__module__", None) == module.__name__)
-    ]
+library += grading.library_functions(ransac_module)
 with refused(*library):
     answers = [np.asarray(height_change(a_.copy(), b_.copy(), cam), float) for a_, b_, cam in cases]
 for got, (a_, b_, cam) in zip(answers, cases, strict=True):
@@ -538,7 +502,6 @@ for got, (a_, b_, cam) in zip(answers, cases, strict=True):
     assert np.allclose(got, truth, atol=1e-9), (
         "not y' - y in metres for every match (which sign? which focal lengths?)"
     )
-intact(globals(), ("StereoCamera", "synthetic_matches"))
 ### END HIDDEN TESTS
 
 # %% [markdown]

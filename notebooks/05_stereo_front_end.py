@@ -467,23 +467,19 @@ assert np.array_equal(hamming_distance(features.descriptors, other), hamming(fea
 )
 assert np.all(hamming_distance(other, other) == 0), "a descriptor differs from itself in no bit"
 ### BEGIN HIDDEN TESTS
-import importlib  # noqa: E402
-
 import numpy as np  # noqa: E402 - the tests' own modules, whatever names the answer rebound
 
-import vo_lib.grading  # noqa: E402
+from coursework import grading  # noqa: E402
 
-grading = importlib.reload(vo_lib.grading)  # fresh from its file, whatever the answer did to it
-intact, refused = grading.intact, grading.refused
+refused = grading.unavailable
 
-intact(globals())  # the answer left NumPy and the notebook's modules alone
 import cv2  # noqa: E402
 
 import vo_lib.stereo_vo.features as features_module  # noqa: E402
 import vo_lib.stereo_vo.matching_core as matching_core  # noqa: E402
 import vo_lib.stereo_vo.matching_plain as matching_plain  # noqa: E402
 
-fresh = np.random.default_rng()  # new descriptors at every grading
+fresh = np.random.default_rng(5011)  # descriptors drawn from a fixed seed
 a_ = fresh.integers(0, 256, (500, 32), dtype=np.uint8)
 b_ = a_.copy()
 flips = fresh.integers(0, 32 * 8, (500, 5))  # a few bits flipped in every row
@@ -515,7 +511,6 @@ expected = np.unpackbits(a_ ^ b_, axis=1).sum(axis=1)  # after the answer: nothi
 assert np.array_equal(got, expected), (
     "on other descriptors, not the number of differing bits (bits, not bytes)"
 )
-intact(globals())
 ### END HIDDEN TESTS
 
 # %% [markdown]
@@ -556,19 +551,13 @@ squares = [(x - true_minima) ** 2 for x in (-1.0, 0.0, 1.0)]
 assert np.allclose(quadratic_offset(*squares), true_minima), "exact on a parabola"
 assert library_worst < 1e-9 < 0.05 < parabola_worst, "the V fit is exact on a SAD cost; a parabola is not"
 ### BEGIN HIDDEN TESTS
-import importlib  # noqa: E402
-
 import numpy as np  # noqa: E402 - the tests' own modules, whatever names the answer rebound
 
-import vo_lib.grading  # noqa: E402
+from coursework import grading  # noqa: E402
 
-grading = importlib.reload(vo_lib.grading)  # fresh from its file, whatever the answer did to it
-intact = grading.intact
-
-intact(globals())  # the answer left NumPy and the notebook's modules alone
 v_check = [np.abs(x - true_minima) for x in (-1.0, 0.0, 1.0)]
 assert np.isclose(parabola_worst, np.abs(quadratic_offset(*v_check) - true_minima).max()), "parabola_worst"
-fresh = np.random.default_rng()  # new parabolas at every grading
+fresh = np.random.default_rng(5021)  # parabolas drawn from a fixed seed
 
 
 def parabola_samples(draw):
@@ -588,7 +577,6 @@ a_coef, b_coef, _ = np.linalg.solve(np.vander([-1.0, 0.0, 1.0], 3), np.array(sam
 assert np.allclose(got, -b_coef / (2 * a_coef)), (
     "quadratic_offset does not find the vertex of other parabolas (which side is which?)"
 )
-intact(globals())
 ### END HIDDEN TESTS
 
 # %% [markdown]
@@ -597,9 +585,12 @@ intact(globals())
 # Write `strongest_per_cell(points, response, width, height, grid, per_cell)`: the sorted
 # indices of the `per_cell` strongest corners of each cell of a `grid = (columns, rows)` over a
 # `width` × `height` image (a corner belongs to the cell its pixel position falls in), without
-# calling `vo_lib`'s `bucket`. Check it on section 1's FAST corners.
+# calling `vo_lib`'s `bucket`. FAST scores are whole numbers and many corners share one: of two
+# corners with the same response, keep the one with the smaller index first. Check it on
+# section 1's FAST corners.
 #
-# *Hint:* give each corner a cell number, then sort by cell and, within a cell, by response.
+# *Hint:* give each corner a cell number, then sort by cell and, within a cell, by response
+# (`np.argsort(..., kind="stable")` keeps equal responses in index order).
 
 
 # %% nbgrader={"grade": false, "grade_id": "ex3", "locked": false, "schema_version": 3, "solution": true}
@@ -628,19 +619,15 @@ for grid, per_cell in (((8, 6), 12), ((4, 3), 5), ((16, 12), 1)):
 
 
 ### BEGIN HIDDEN TESTS
-import importlib  # noqa: E402
-
 import numpy as np  # noqa: E402 - the tests' own modules, whatever names the answer rebound
 
-import vo_lib.grading  # noqa: E402
+from coursework import grading  # noqa: E402
 
-grading = importlib.reload(vo_lib.grading)  # fresh from its file, whatever the answer did to it
-intact, refused = grading.intact, grading.refused
+refused = grading.unavailable
 
-intact(globals())  # the answer left NumPy and the notebook's modules alone
 import vo_lib.stereo_vo.features as features_module  # noqa: E402
 
-fresh = np.random.default_rng()  # new corners and images at every grading
+fresh = np.random.default_rng(5031)  # corners and images drawn from a fixed seed
 cases = []
 for _ in range(4):
     w_, h_ = int(fresh.integers(200, 1300)), int(fresh.integers(150, 1000))
@@ -655,7 +642,6 @@ for got, (pts, resp, w_, h_, grid_, per_) in zip(answers, cases, strict=True):
     assert np.array_equal(got, expected), (
         "on other corners or images, not the strongest few of every cell (strongest? per cell? which cell?)"
     )
-intact(globals())
 ### END HIDDEN TESTS
 
 # %% [markdown]

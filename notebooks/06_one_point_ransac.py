@@ -1154,12 +1154,8 @@ assert set(needed) == {1, 3, 5}, "one count per sample size"
 for s, count in needed.items():
     assert count == hypotheses_needed(0.2, 0.999, sample_size=s), f"the count for samples of {s}"
 ### BEGIN HIDDEN TESTS
-import importlib  # noqa: E402
-
-import vo_lib.grading  # noqa: E402
 import vo_lib.stereo_vo.ransac as ransac_module  # noqa: E402
-
-grading = importlib.reload(vo_lib.grading)  # fresh from its file, whatever the answer did to it
+from coursework import grading  # noqa: E402
 
 
 def hidden_test_ex1(grading, ransac, answer):
@@ -1167,17 +1163,15 @@ def hidden_test_ex1(grading, ransac, answer):
     expected counts are computed after the answer ran, from inputs it cannot change."""
     import numpy as np
 
-    grading.intact(globals())  # the answer left NumPy and the notebook's modules alone
-    fresh = np.random.default_rng()
+    fresh = np.random.default_rng(6011)
     cases = tuple(
         (float(fresh.uniform(0.05, 0.9)), float(fresh.uniform(0.9, 0.9999)), int(fresh.integers(1, 7)))
         for _ in range(20)
     )
     # and counts that come out whole: k draws of a half-inlier sample reach 1 - 0.5^k exactly
     cases += tuple((0.5, 1.0 - 0.5 ** int(k), 1) for k in fresh.integers(4, 13, 2))
-    with grading.refused(*grading.library_functions(ransac)):
+    with grading.unavailable(*grading.library_functions(ransac), ransac.hypotheses_needed):
         got = [int(answer(e, p, s)) for e, p, s in cases]
-    grading.intact(globals())
     expected = [ransac.hypotheses_needed(1 - e, p, sample_size=s) for e, p, s in cases]
     assert got == expected, (
         "hypotheses_for gives other counts for other ratios "
@@ -1189,7 +1183,7 @@ hidden_test_ex1(grading, ransac_module, hypotheses_for)
 ### END HIDDEN TESTS
 
 # %% [markdown]
-# ### Exercise 2 · gates that assume the wrong noise *(medium, 3 points)*
+# ### Exercise 2 · gates that assume the wrong noise *(easy, 3 points)*
 #
 # The gates assume 0.5 px of pixel noise (`pixel_sigma`). Write `gate_scores(matches, camera,
 # pixel_sigma)`: run `one_point_ransac` (with `rng=1` and that `pixel_sigma`) on `matches` (as
@@ -1220,17 +1214,9 @@ print(f"inliers found: {recall_default:.0%} assuming 0.5 px, {recall_matched:.0%
 assert recall_default < 0.8 < 0.95 < recall_matched, "gates too narrow for the noise drop inliers"
 assert false_matched <= 0.02 * np.sum(~one_px.inliers), "matched gates accept few outliers"
 ### BEGIN HIDDEN TESTS
-import importlib  # noqa: E402
+from coursework import grading  # noqa: E402
 
-import vo_lib.grading  # noqa: E402
-
-grading = importlib.reload(vo_lib.grading)  # fresh from its file, whatever the answer did to it
-intact = grading.intact
-
-intact(
-    globals(), ("synthetic_matches", "one_point_ransac")
-)  # the answer left NumPy and the notebook's modules alone
-fresh = np.random.default_rng()  # new matches at every grading
+fresh = np.random.default_rng(6021)  # matches drawn from a fixed seed
 for _ in range(2):
     sigma_ = fresh.uniform(0.3, 1.5)
     pairs = synthetic_matches(
@@ -1248,7 +1234,6 @@ for _ in range(2):
         "gate_scores: not the share of the true inliers found (of the true inliers, not of those found)"
     )
     assert false_ == np.sum(found & ~pairs.inliers), "gate_scores: not the number of outliers accepted"
-intact(globals(), ("synthetic_matches", "one_point_ransac"))
 ### END HIDDEN TESTS
 
 # %% [markdown]
@@ -1297,11 +1282,7 @@ wrong_fixed = np.sum((np.abs(theta_check - ex_theta) < np.radians(best_threshold
 assert fixed_errors == wrong_fixed, "fixed_errors: the matches the threshold classifies wrongly"
 assert gate_errors < fixed_errors, "even the best fixed threshold misclassifies more than the gates"
 ### BEGIN HIDDEN TESTS
-import importlib  # noqa: E402
-
-import vo_lib.grading  # noqa: E402
-
-grading = importlib.reload(vo_lib.grading)  # fresh from its file, whatever the answer did to it
+from coursework import grading  # noqa: E402
 
 
 def hidden_test_ex3(grading, answer):
@@ -1309,10 +1290,9 @@ def hidden_test_ex3(grading, answer):
     ran, from inputs it cannot change."""
     import numpy as np
 
-    grading.intact(globals(), ("synthetic_matches", "one_point_ransac"))
     gated_check = one_point_ransac(half_px.w_prev, half_px.w_curr, ex_camera, rng=1).inliers
     assert int(gate_errors) == np.sum(gated_check != half_px.inliers), "gate_errors"
-    fresh = np.random.default_rng()
+    fresh = np.random.default_rng(6031)
     cases = []
     for _ in range(3):
         turn = float(fresh.uniform(-0.08, 0.08))
@@ -1322,12 +1302,11 @@ def hidden_test_ex3(grading, answer):
         each = cm.theta_from_pixels(pairs.w_prev, pairs.w_curr, ex_camera)
         grid = np.sort(fresh.uniform(0.01, 10.0, 300))
         cases.append((grading.frozen(each), turn, grading.frozen(pairs.inliers), grading.frozen(grid)))
-    with grading.refused():  # nothing to refuse; no other process, no change to the grader's tools
+    with grading.unavailable():  # nothing to refuse; no other process, no change to the grader's tools
         got = [
             float(answer(each.copy(), turn, inliers.copy(), grid.copy()))
             for each, turn, inliers, grid in cases
         ]
-    grading.intact(globals(), ("synthetic_matches", "one_point_ransac"))
     for value, (each, turn, inliers, grid) in zip(got, cases, strict=True):
         correct_at = [np.sum((np.abs(each - turn) < np.radians(t)) == inliers) for t in grid]
         assert np.isclose(value, grid[int(np.argmax(correct_at))]), (
@@ -1352,6 +1331,113 @@ hidden_test_ex3(grading, best_fixed_threshold)
 # right pixel noise (exercise 2), one number to calibrate instead of one per match.
 #
 # === END MARK SCHEME ===
+
+# %% [markdown]
+# ### Exercise 4 · the θ gate and the 1-point loop *(hard, 4 points)*
+#
+# Build phase 1 of the 1-point RANSAC yourself. First the gate: write
+# `theta_gate(w_prev, w_curr, theta, camera)`, error_θ of eq. 20 for every match,
+# |tan α′/tan α − sin γ′/sin γ|, with tan α = (v − v₀) cos β / f_y, β = atan((u − u₀) / f_x),
+# γ = β + θ/2 for the previous image and γ′ = β′ − θ/2 for the current one (section 3).
+# Then the loop: write `one_point_theta(w_prev, w_curr, camera, threshold, n_hypotheses, rng)`.
+# It draws the hypotheses' matches with `rng.integers(len(w_prev), size=n_hypotheses)`, takes each
+# drawn match's own θ (eq. 14, `cm.theta_from_pixels`) as a hypothesis, counts the matches whose
+# gate error under it is below `threshold`, and returns `(theta, inliers)`: the hypothesis with
+# the most inliers (the first drawn of those that tie) and its boolean inlier mask. Use neither
+# `one_point_ransac` nor the library's gate functions. Store the result for `half_px`, with
+# threshold 0.02, 50 hypotheses and `np.random.default_rng(7)`, in `loop_theta`, `loop_inliers`.
+#
+# *Hint:* θ of every match once, with `cm.theta_from_pixels`; then one `theta_gate` per hypothesis.
+
+
+# %% nbgrader={"grade": false, "grade_id": "ex4", "locked": false, "schema_version": 3, "solution": true}
+### BEGIN SOLUTION
+def theta_gate(w_prev, w_curr, theta, camera):
+    """error_theta of eq. 20 for every match under the deflection ``theta``."""
+    a, b = np.asarray(w_prev, float), np.asarray(w_curr, float)
+    beta_a = np.arctan((a[:, 0] - camera.cx) / camera.fx)
+    beta_b = np.arctan((b[:, 0] - camera.cx) / camera.fx)
+    tan_a = (a[:, 1] - camera.cy) * np.cos(beta_a) / camera.fy
+    tan_b = (b[:, 1] - camera.cy) * np.cos(beta_b) / camera.fy
+    return np.abs(tan_b / tan_a - np.sin(beta_b - theta / 2) / np.sin(beta_a + theta / 2))
+
+
+def one_point_theta(w_prev, w_curr, camera, threshold, n_hypotheses, rng):
+    """The theta of one drawn match with the most matches within ``threshold`` of eq. 20, and those."""
+    each = cm.theta_from_pixels(w_prev, w_curr, camera)
+    best, best_inliers = None, None
+    for i in rng.integers(len(each), size=n_hypotheses):
+        inliers = theta_gate(w_prev, w_curr, each[i], camera) < threshold
+        if best_inliers is None or inliers.sum() > best_inliers.sum():
+            best, best_inliers = float(each[i]), inliers
+    return best, best_inliers
+
+
+loop_theta, loop_inliers = one_point_theta(
+    half_px.w_prev, half_px.w_curr, ex_camera, 0.02, 50, np.random.default_rng(7)
+)
+print(f"θ = {np.degrees(loop_theta):.3f}° with {loop_inliers.sum()} inliers")
+### END SOLUTION
+
+# %% nbgrader={"grade": true, "grade_id": "ex4_test", "locked": true, "points": 4, "schema_version": 3, "solution": false}
+# Exercise 4: autograder test
+assert theta_gate(half_px.w_prev, half_px.w_curr, ex_theta, ex_camera).shape == (400,), "one error per match"
+assert abs(np.degrees(loop_theta - ex_theta)) < 0.05, "the hypothesis with most inliers is close to 3°"
+assert loop_inliers.sum() > 200 and np.mean(half_px.inliers[loop_inliers]) > 0.97, "true inliers, nearly all"
+assert np.array_equal(
+    loop_inliers, theta_gate(half_px.w_prev, half_px.w_curr, loop_theta, ex_camera) < 0.02
+), "loop_inliers: the matches within 0.02 of eq. 20 under loop_theta"
+### BEGIN HIDDEN TESTS
+import vo_lib.stereo_vo.ransac as ransac_module  # noqa: E402
+from coursework import grading  # noqa: E402
+
+
+def hidden_test_ex4(grading, ransac, gate, loop):
+    """The gate on another camera's pixels, the loop on noise-free match sets with 30-60 %
+    outliers, all drawn from fixed seeds; eq. 20 written out here, apart from the notebook."""
+    import numpy as np
+
+    from vo_lib.camera import StereoCamera
+    from vo_lib.stereo_vo.circular_motion import theta_from_pixels
+    from vo_lib.stereo_vo.synthetic import synthetic_matches
+
+    def eq20(a, b, theta, cam):
+        ba, bb = np.arctan((a[:, 0] - cam.cx) / cam.fx), np.arctan((b[:, 0] - cam.cx) / cam.fx)
+        ta, tb = (a[:, 1] - cam.cy) * np.cos(ba) / cam.fy, (b[:, 1] - cam.cy) * np.cos(bb) / cam.fy
+        return np.abs(tb / ta - np.sin(bb - theta / 2) / np.sin(ba + theta / 2))
+
+    fresh = np.random.default_rng(6041)
+    cam = StereoCamera(fx=420.0, fy=380.0, cx=300.0, cy=250.0, baseline=0.12, width=640, height=480)
+    a = np.column_stack([fresh.uniform(0, 640, 60), fresh.uniform(270, 480, 60), fresh.uniform(1, 40, 60)])
+    b = a + fresh.normal(0, 4, (60, 3))
+    turn = fresh.uniform(0.02, 0.1)
+    library = [*grading.library_functions(ransac), ransac.one_point_ransac]
+    with grading.unavailable(*library):
+        got = np.asarray(gate(a.copy(), b.copy(), turn, cam), float)
+    assert got.shape == (60,) and np.allclose(got, eq20(a, b, turn, cam), rtol=1e-9), (
+        "theta_gate is not error_θ of eq. 20 (half the turn in γ and γ′? which ratio over which? "
+        "f_x in β and f_y in tan α?)"
+    )
+    for seed in range(4):
+        turn = float(fresh.uniform(-0.08, 0.08))
+        pairs = synthetic_matches(
+            ex_camera, 300, turn, fresh.uniform(0.05, 0.3), fresh, outlier_ratio=0.3 + 0.1 * seed
+        )
+        with grading.unavailable(*library):
+            theta, inliers = loop(
+                pairs.w_prev.copy(), pairs.w_curr.copy(), ex_camera, 0.02, 40, np.random.default_rng(seed)
+            )
+        assert any(np.isclose(theta, theta_from_pixels(pairs.w_prev, pairs.w_curr, ex_camera))), (
+            "a hypothesis is the θ of one match"
+        )
+        assert abs(theta - turn) < 1e-9, "one_point_theta does not keep the hypothesis with the most inliers"
+        assert np.array_equal(
+            np.asarray(inliers, bool), eq20(pairs.w_prev, pairs.w_curr, theta, ex_camera) < 0.02
+        ), "the inliers are the matches within the threshold under the kept hypothesis"
+
+
+hidden_test_ex4(grading, ransac_module, theta_gate, one_point_theta)
+### END HIDDEN TESTS
 
 # %% [markdown]
 # ### Stretch goals (not graded)

@@ -764,11 +764,9 @@ import pkgutil  # noqa: E402
 
 import filterpy  # noqa: E402
 
-import vo_lib.grading  # noqa: E402
 import vo_lib.line_slam.ekf_slam as ekf_module  # noqa: E402
 import vo_lib.stereo_vo.kalman as kalman_module  # noqa: E402
-
-grading = importlib.reload(vo_lib.grading)  # fresh from its file, whatever the answer did to it
+from coursework import grading  # noqa: E402
 
 
 def filterpy_modules():
@@ -782,14 +780,12 @@ def hidden_test_ex1(grading, libraries, answer):
     vo_lib's); the expected updates are computed after the answer ran."""
     import numpy as np
 
-    grading.intact(globals())  # the answer left NumPy and the notebook's modules alone
-    fresh = np.random.default_rng()
+    fresh = np.random.default_rng(7011)
     cases = tuple(
         tuple(float(v) for v in row) for row in fresh.uniform([-10, 0.01, -10, 0.01], [10, 5, 10, 5], (10, 4))
     )
-    with grading.refused(*grading.library_functions(*libraries)):
+    with grading.unavailable(*grading.library_functions(*libraries)):
         got = [tuple(float(np.squeeze(g)) for g in answer(*case)) for case in cases]
-    grading.intact(globals())
     for (m0, p0, z0, r0), (k_, m_, p_) in zip(cases, got, strict=True):
         assert np.isclose(k_, p0 / (p0 + r0)), "the gain of another update (P / (P + R), not R / (P + R))"
         assert np.isclose(m_, m0 + p0 / (p0 + r0) * (z0 - m0)), "the mean of another update"
@@ -845,13 +841,9 @@ assert abs(share_inside - 0.95) < 0.02, "a consistent estimator stays inside a 9
 assert nees_band(1000, 3)[1] - nees_band(1000, 3)[0] < high_check - low_check, "more runs, a narrower band"
 assert np.shape(average_nees(experiment_errors[:10], reported)) == (10,), "one average per experiment"
 ### BEGIN HIDDEN TESTS
-import importlib  # noqa: E402
-
 import vo_lib.cli.experiments as experiments_module  # noqa: E402
-import vo_lib.grading  # noqa: E402
 import vo_lib.line_slam.lap as lap_module  # noqa: E402
-
-grading = importlib.reload(vo_lib.grading)  # fresh from its file, whatever the answer did to it
+from coursework import grading  # noqa: E402
 
 
 def hidden_test_ex2(grading, experiments, nees_band, average_nees):
@@ -861,9 +853,7 @@ def hidden_test_ex2(grading, experiments, nees_band, average_nees):
     import numpy as np
     from scipy.special import gammainc, gammaincinv
 
-    grading.intact(globals())  # the answer left NumPy, SciPy's special functions and vo_lib alone
-
-    fresh = np.random.default_rng()
+    fresh = np.random.default_rng(7021)
     runs = [
         (int(n), int(d)) for n, d in zip(fresh.integers(2, 500, 10), fresh.integers(1, 7, 10), strict=True)
     ]
@@ -875,10 +865,9 @@ def hidden_test_ex2(grading, experiments, nees_band, average_nees):
         size = (int(fresh.integers(5, 50)), int(fresh.integers(2, 40)))
         errors = fresh.multivariate_normal(np.zeros(dim), covariance, size=size)
         draws.append((grading.frozen(errors), grading.frozen(covariance)))
-    with grading.refused(*grading.library_functions(*experiments)):
+    with grading.unavailable(*grading.library_functions(*experiments)):
         bands = [np.asarray(nees_band(n, d), float) for n, d in runs]
         averages = [np.asarray(average_nees(e.copy(), c.copy()), float) for e, c in draws]
-    grading.intact(globals())
 
     # the references only now: the answer, called above, could read its caller's frame
     def reference_band(n, d):  # chi-square's quantiles, from its distribution function gammainc(k / 2, x / 2)
@@ -954,14 +943,10 @@ assert J_rel.shape == (3, 6) and np.allclose(cov_rel, cov_rel.T), "J is 3 x 6; a
 mc_cov = np.cov(rel.T)
 assert np.linalg.norm(cov_rel - mc_cov) < 0.02 * np.linalg.norm(mc_cov), "first order, against Monte Carlo"
 ### BEGIN HIDDEN TESTS
-import importlib  # noqa: E402
-
 import vo_lib.geometry as geometry_module  # noqa: E402
-import vo_lib.grading  # noqa: E402
 import vo_lib.models.track_odometry as odometry_module  # noqa: E402
 import vo_lib.stereo_vo.kalman as kalman_module  # noqa: E402
-
-grading = importlib.reload(vo_lib.grading)  # fresh from its file, whatever the answer did to it
+from coursework import grading  # noqa: E402
 
 
 def hidden_test_ex3(grading, geometry, others, answer):
@@ -970,12 +955,10 @@ def hidden_test_ex3(grading, geometry, others, answer):
     are computed after it ran, from poses it cannot change."""
     import numpy as np
 
-    grading.intact(globals())  # the answer left NumPy and the notebook's modules alone
-    fresh = np.random.default_rng()
+    fresh = np.random.default_rng(7031)
     cases = [grading.frozen(fresh.uniform([-5, -5, -np.pi] * 2, [5, 5, np.pi] * 2)) for _ in range(5)]
-    with grading.refused(*grading.library_functions(geometry, *others)):
+    with grading.unavailable(*grading.library_functions(geometry, *others)):
         got = [np.asarray(answer(c[:3].copy(), c[3:].copy()), float) for c in cases]
-    grading.intact(globals())
     step = 1e-6
     for value, c in zip(got, cases, strict=True):
         expected = np.column_stack(
@@ -994,6 +977,140 @@ def hidden_test_ex3(grading, geometry, others, answer):
 
 
 hidden_test_ex3(grading, geometry_module, (kalman_module, odometry_module), relative_jacobian)
+### END HIDDEN TESTS
+
+# %% [markdown]
+# ### Exercise 4 · the filter's predict and update *(hard, 4 points)*
+#
+# Write the two steps of this notebook's filter yourself, without `VoKalmanFilter` or filterpy.
+# `ekf_predict(x, P, u, Q_u, odometry)` takes the pose belief `x` (3,), `P` (3×3), the track
+# readings `u` and their covariance `Q_u`; it moves the pose with `odometry.step(x, u)` (which
+# also returns F = ∂f/∂x and G = ∂f/∂u, eq. 6–11) and clones the previous pose: it returns the
+# state [x′, x] (6,) and its covariance, [[F P Fᵀ + G Q_u Gᵀ, F P], [P Fᵀ, P]]. Then
+# `ekf_update(x6, P6, z, R)` corrects that state with the measurement z = (θ, ρ, 0) (the last
+# component: the motion stays on its chord) of covariance `R` (3×3): h = `constrained_measurement`,
+# H = `constrained_jacobian`, the residual's θ wrapped to (−π, π], gain K = P Hᵀ S⁻¹ with
+# S = H P Hᵀ + R, the covariance in Joseph form (I − KH) P (I − KH)ᵀ + K R Kᵀ, and the current
+# yaw wrapped. Store the prediction of `ex_belief` below in `x6_pred, P6_pred`, and its update
+# with `ex_z`, `ex_R` in `x6_post, P6_post`.
+#
+# *Hint:* `np.block` builds P6; `wrap_angle` wraps an angle.
+
+# %%
+ex_odometry = TrackOdometry(track_distance=0.45, track_width=0.08, encoder_sigma=0.004)
+ex_belief = (np.array([1.0, 2.0, 0.3]), np.diag([0.01, 0.02, 0.002]))
+ex_u = np.array([0.10, 0.13])
+ex_z, ex_R = np.array([0.069, 0.116, 0.0]), np.diag([0.002**2, 0.003**2, SIDEWAYS_SIGMA**2])
+
+
+# %% nbgrader={"grade": false, "grade_id": "ex4", "locked": false, "schema_version": 3, "solution": true}
+### BEGIN SOLUTION
+def ekf_predict(x, P, u, Q_u, odometry):
+    """The pose moved by odometry ``u`` and the previous pose cloned: ``(x6, P6)``."""
+    x, P = np.asarray(x, float), np.asarray(P, float)
+    x_new, F, G = odometry.step(x, u)
+    P6 = np.block([[F @ P @ F.T + G @ np.asarray(Q_u, float) @ G.T, F @ P], [P @ F.T, P]])
+    return np.concatenate([x_new, x]), P6
+
+
+def ekf_update(x6, P6, z, R):
+    """The cloned state corrected by the measurement ``z = (theta, rho, 0)`` (Joseph form)."""
+    x6, P6, R = np.asarray(x6, float), np.asarray(P6, float), np.asarray(R, float)
+    H = constrained_jacobian(x6)
+    y = np.asarray(z, float) - constrained_measurement(x6)
+    y[0] = wrap_angle(y[0])
+    K = P6 @ H.T @ np.linalg.inv(H @ P6 @ H.T + R)
+    x_post = x6 + K @ y
+    x_post[2] = wrap_angle(x_post[2])
+    I_KH = np.eye(6) - K @ H
+    return x_post, I_KH @ P6 @ I_KH.T + K @ R @ K.T
+
+
+x6_pred, P6_pred = ekf_predict(*ex_belief, ex_u, ex_odometry.control_covariance(ex_u), ex_odometry)
+x6_post, P6_post = ekf_update(x6_pred, P6_pred, ex_z, ex_R)
+print(f"predicted pose {x6_pred[:3].round(4)}, corrected {x6_post[:3].round(4)}")
+### END SOLUTION
+
+# %% nbgrader={"grade": true, "grade_id": "ex4_test", "locked": true, "points": 4, "schema_version": 3, "solution": false}
+# Exercise 4: autograder test
+assert np.shape(x6_pred) == (6,) and np.shape(P6_pred) == (6, 6), "a cloned state of six"
+assert np.allclose(x6_pred[3:], ex_belief[0]) and np.allclose(P6_pred[3:, 3:], ex_belief[1]), "the clone"
+assert np.allclose(P6_post, P6_post.T) and np.trace(P6_post[:3, :3]) < np.trace(P6_pred[:3, :3]), (
+    "an update makes the current pose surer"
+)
+### BEGIN HIDDEN TESTS
+import filterpy.kalman.EKF as filterpy_ekf  # noqa: E402
+import filterpy.kalman.kalman_filter as filterpy_kf  # noqa: E402
+
+import vo_lib.stereo_vo.kalman as kalman_module  # noqa: E402
+from coursework import grading  # noqa: E402
+
+
+def hidden_test_ex4(grading, kalman, predict, update):
+    """Beliefs, readings and measurements drawn from a fixed seed, one of them with a residual
+    across ±π; the expected values from filterpy's EKF, after the answer ran."""
+    import numpy as np
+    from filterpy.kalman import ExtendedKalmanFilter
+
+    from vo_lib.geometry import wrap_angle
+    from vo_lib.models.track_odometry import TrackOdometry
+
+    fresh = np.random.default_rng(7041)
+    refused = [
+        kalman.VoKalmanFilter.predict,
+        kalman.VoKalmanFilter.update,
+        ExtendedKalmanFilter.predict,
+        ExtendedKalmanFilter.update,
+        ExtendedKalmanFilter.predict_update,
+        *grading.library_functions(filterpy_ekf, filterpy_kf),
+    ]
+    for case in range(4):
+        crawler = TrackOdometry(
+            track_distance=fresh.uniform(0.3, 0.6), track_width=fresh.uniform(0.05, 0.1), encoder_sigma=0.004
+        )
+        x = np.array([*fresh.uniform(-5, 5, 2), fresh.uniform(-np.pi, np.pi)])
+        A = fresh.normal(size=(3, 3)) * [0.1, 0.1, 0.03]
+        P = A @ A.T + 1e-4 * np.eye(3)
+        u = fresh.uniform(-0.1, 0.2, 2)
+        Q_u = crawler.control_covariance(u)
+        z = np.array([fresh.normal(0.0, 0.05), fresh.uniform(0.0, 0.2), 0.0])
+        R = np.diag(fresh.uniform(0.001, 0.01, 3) ** 2)
+        with grading.unavailable(*refused):
+            x6, P6 = (
+                np.asarray(a, float) for a in predict(x.copy(), P.copy(), u.copy(), Q_u.copy(), crawler)
+            )
+        x_new, F, G = crawler.step(x, u)
+        assert np.allclose(x6, np.concatenate([x_new, x])), (
+            "ekf_predict: the state is [moved pose, previous pose]"
+        )
+        expected = np.block([[F @ P @ F.T + G @ Q_u @ G.T, F @ P], [P @ F.T, P]])
+        assert np.allclose(P6, expected, atol=1e-12), (
+            "ekf_predict: not the cloned covariance (F P Fᵀ + G Q_u Gᵀ, and the cross terms F P)"
+        )
+        expected_x = np.concatenate([x_new, x])
+        if case == 3:  # a measured turn written 2π away from the predicted one: the same turn
+            z[0] = kalman.constrained_measurement(expected_x)[0] + 0.05 - 2 * np.pi
+        with grading.unavailable(*refused):
+            x_post, P_post = (
+                np.asarray(a, float) for a in update(expected_x.copy(), expected.copy(), z.copy(), R.copy())
+            )
+        ekf = ExtendedKalmanFilter(dim_x=6, dim_z=3)
+        ekf.x, ekf.P = expected_x.copy(), expected.copy()
+
+        def residual(a, b):
+            y = np.asarray(a, float) - b
+            y[0] = wrap_angle(y[0])
+            return y
+
+        ekf.update(z, kalman.constrained_jacobian, kalman.constrained_measurement, R=R, residual=residual)
+        ekf.x[2] = wrap_angle(ekf.x[2])
+        assert np.allclose(x_post, ekf.x, atol=1e-9), (
+            "ekf_update: not the corrected state (the gain uses S = H P Hᵀ + R; the residual's θ wrapped?)"
+        )
+        assert np.allclose(P_post, ekf.P, atol=1e-12), "ekf_update: not the corrected covariance"
+
+
+hidden_test_ex4(grading, kalman_module, ekf_predict, ekf_update)
 ### END HIDDEN TESTS
 
 # %% [markdown]

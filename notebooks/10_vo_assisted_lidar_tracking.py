@@ -798,14 +798,10 @@ assert np.all(np.isfinite(sample_posterior)) and np.isclose(sample_posterior.sum
 )
 assert np.allclose(sample_posterior, posterior([812.0, 815.5, 809.0, 815.0, 790.0])), "not the posterior"
 ### BEGIN HIDDEN TESTS
-import importlib  # noqa: E402
-
 import scipy.special  # noqa: E402
 
-import vo_lib.grading  # noqa: E402
 import vo_lib.lidar_tracking.pose_tracking as tracking_module  # noqa: E402
-
-grading = importlib.reload(vo_lib.grading)  # fresh from its file, whatever the answer did to it
+from coursework import grading  # noqa: E402
 
 
 def hidden_test_ex1(grading, tracking, elsewhere, answer):
@@ -814,15 +810,13 @@ def hidden_test_ex1(grading, tracking, elsewhere, answer):
     ran, from scores it cannot change."""
     import numpy as np
 
-    grading.intact(globals(), ("posterior",))  # the answer left NumPy and vo_lib alone
-    fresh = np.random.default_rng()
+    fresh = np.random.default_rng(10011)
     cases = [
         grading.frozen(fresh.uniform(500, 2000) + fresh.normal(scale=fresh.uniform(0.5, 20), size=50))
         for _ in range(5)
     ]
-    with grading.refused(*grading.library_functions(tracking, *elsewhere)):
+    with grading.unavailable(*grading.library_functions(tracking, *elsewhere)):
         got = [np.asarray(answer(scores.copy()), float) for scores in cases]
-    grading.intact(globals(), ("posterior",))
     for value, scores in zip(got, cases, strict=True):
         assert np.allclose(value, tracking.posterior(scores), atol=1e-12), (
             "posterior_of differs on other scores (exp of the scores, normalised?)"
@@ -884,12 +878,8 @@ assert np.isclose(centre_line, limits.centre) and np.isclose(upper_limit, limits
 assert lower_limit == limits.lower == 0.0, "lengths are positive: the lower limit is zero"
 assert out_of_control == sum(x > limits.upper for x in later) >= 3, "the lengths above the upper limit"
 ### BEGIN HIDDEN TESTS
-import importlib  # noqa: E402
-
-import vo_lib.grading  # noqa: E402
 import vo_lib.lidar_tracking.pose_tracking as tracking_module  # noqa: E402
-
-grading = importlib.reload(vo_lib.grading)  # fresh from its file, whatever the answer did to it
+from coursework import grading  # noqa: E402
 
 
 def hidden_test_ex2(grading, tracking, answer):
@@ -898,16 +888,14 @@ def hidden_test_ex2(grading, tracking, answer):
     from stretches it cannot change."""
     import numpy as np
 
-    grading.intact(globals(), ("ControlLimits",))  # the answer left NumPy and vo_lib alone
-    fresh = np.random.default_rng()
+    fresh = np.random.default_rng(10021)
     cases = [
         np.abs(fresh.normal(fresh.uniform(0.0, 1.0), fresh.uniform(0.01, 0.2), int(fresh.integers(10, 100))))
         for _ in range(6)
     ]
     cases = [grading.frozen(c) for c in [*cases, fresh.normal(1.0, 0.05, 40)]]
-    with grading.refused(*grading.library_functions(tracking)):
+    with grading.unavailable(*grading.library_functions(tracking)):
         got = [tuple(float(v) for v in answer(lengths.copy())) for lengths in cases]
-    grading.intact(globals(), ("ControlLimits",))
     for value, lengths in zip(got, cases, strict=True):
         limits = tracking.ControlLimits.from_corrections(lengths)
         assert np.allclose(value, (limits.lower, limits.centre, limits.upper)), (
@@ -926,7 +914,7 @@ hidden_test_ex2(grading, tracking_module, control_limits)
 # samples of the top quartile of scores (eq. 17): centre their translational corrections (eq. 19)
 # and take the unit eigenvector of the largest eigenvalue of their covariance (eq. 20). Write
 # `principal_direction(corrections, scores)` for corrections `(N, 3)` (dx, dy, dθ) and their
-# scores, returning that unit vector (either sign), without `vo_lib`'s
+# scores, returning that unit vector as a 2-vector (x, y) (either sign), without `vo_lib`'s
 # `principal_error_direction`. Store it for `spread_corrections`, `spread_scores` below in
 # `corridor_direction`, and its angle from the x axis, folded into [0°, 180°), in
 # `corridor_angle_deg`.
@@ -967,12 +955,8 @@ print(f"principal error direction {corridor_angle_deg:.1f}° from the x axis")
 assert np.isclose(np.linalg.norm(corridor_direction), 1.0), "a unit vector"
 assert abs(corridor_angle_deg - np.degrees(0.3)) < 3.0, "the direction the best quarter spreads along"
 ### BEGIN HIDDEN TESTS
-import importlib  # noqa: E402
-
-import vo_lib.grading  # noqa: E402
 import vo_lib.lidar_tracking.pose_tracking as tracking_module  # noqa: E402
-
-grading = importlib.reload(vo_lib.grading)  # fresh from its file, whatever the answer did to it
+from coursework import grading  # noqa: E402
 
 
 def hidden_test_ex3(grading, tracking, answer):
@@ -980,8 +964,7 @@ def hidden_test_ex3(grading, tracking, answer):
     the expected directions are computed after it ran, from samples it cannot change."""
     import numpy as np
 
-    grading.intact(globals())  # the answer left NumPy and vo_lib alone
-    fresh = np.random.default_rng()
+    fresh = np.random.default_rng(10031)
     cases = []
     for _ in range(5):
         angle = fresh.uniform(-np.pi, np.pi)
@@ -997,9 +980,8 @@ def hidden_test_ex3(grading, tracking, answer):
             [np.cos(angle + 1.0), np.sin(angle + 1.0)]
         )  # not about zero
         cases.append((grading.frozen(np.column_stack([xy + offset, np.zeros(300)])), grading.frozen(scores)))
-    with grading.refused(*grading.library_functions(tracking)):
+    with grading.unavailable(*grading.library_functions(tracking)):
         got = [np.asarray(answer(corrections.copy(), scores.copy()), float) for corrections, scores in cases]
-    grading.intact(globals())
     for value, (corrections, scores) in zip(got, cases, strict=True):
         assert value.shape == (2,) and np.isclose(np.linalg.norm(value), 1.0), "a unit vector (dx, dy)"
         assert abs(value @ tracking.principal_error_direction(corrections, scores)) > 0.999, (

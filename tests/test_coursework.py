@@ -194,9 +194,9 @@ def test_bad_arguments_exit_2_with_one_line(tmp_path):
 
 
 @pytest.mark.parametrize("path", NOTEBOOKS, ids=[p.stem for p in NOTEBOOKS])
-def test_every_exercise_has_adversarial_answers_and_fresh_hidden_tests(path):
+def test_every_exercise_has_adversarial_answers_and_seeded_hidden_tests(path):
     """Each autograded exercise: a constant, a library-calling (or why none) and a wrong answer
-    in coursework/submissions, and a hidden test that draws inputs of its own (unseeded)."""
+    in coursework/submissions, and a hidden test whose every draw comes from a fixed seed."""
     nb = jupytext.read(path)
     ids = build.answer_ids(nb)
     answers = build.read_submissions(path, ids)  # raises BuildError when a kind is missing
@@ -204,9 +204,9 @@ def test_every_exercise_has_adversarial_answers_and_fresh_hidden_tests(path):
     tests = {c.metadata["nbgrader"]["grade_id"]: c.source for c in grading_cells(nb) if c.cell_type == "code"}
     for exercise in ids:
         hidden = "".join(m.group(1) for m in build.REGIONS[1].finditer(tests[f"{exercise}_test"]))
-        assert "np.random.default_rng()" in hidden, (
-            f"{path.name} {exercise}: no fresh inputs in its hidden test"
-        )
+        assert re.search(r"default_rng\(\d+\)", hidden), f"{path.name} {exercise}: no seeded inputs"
+        assert "default_rng()" not in hidden, f"{path.name} {exercise}: an unseeded draw changes a regrade"
+        assert "vo_lib.grading" not in hidden and "intact(" not in hidden
     made = build.adversarial_notebooks(nbformat.v4.new_notebook(), answers)
     given = [(exercise, kind) for _, _, kinds in made for exercise, kind in kinds.items()]
     assert sorted(given) == sorted((e, k) for e, kinds in answers.items() for k in kinds), "each answer once"
@@ -252,6 +252,19 @@ def test_autograder_scores_only_correct_answers_on_a_small_notebook(built):
     rows = [line for line in report if row.match(line)]
     assert len(rows) == sum(len(build.answer_ids(jupytext.read(p))) for p in paths)
     assert any("seconds per submission" in line for line in report)
+
+
+@pytest.mark.notebook
+def test_autograding_the_same_submissions_twice_gives_identical_marks(built, tmp_path):
+    """Hidden tests draw from fixed seeds: a regrade of every submission of a notebook gives the
+    same score table, and the same reasons for each failure."""
+    course = tmp_path / "course"
+    shutil.copytree(built / "grading", course)
+    paths = [p for p in NOTEBOOKS if p.name[:2] in AUTOGRADED_IN_SUITE]
+    first = build.grade_once(course, paths)
+    second = build.grade_once(course, paths)
+    assert first[4] == [] and second[4] == [], first[4] + second[4]
+    assert first[0] == second[0] and sorted(first[1]) == sorted(second[1])
 
 
 def test_handout_holds_notebooks_wheel_requirements_and_no_solution(built):

@@ -16,6 +16,7 @@ import datetime
 import os
 import pathlib
 import re
+import shutil
 import subprocess
 import sys
 
@@ -95,6 +96,8 @@ def course(tmp_path, kernel_dir):
         + f"\nc.Exchange.root = {str(exchange)!r}\n"
         + "c.ExchangeCollect.check_owner = False  # one Unix user plays every role here\n"
     )
+    (teacher / "coursework").mkdir()  # the grading tools, as coursework/build.py lays them out
+    shutil.copy2(PROJECT_CONFIG.with_name("grading.py"), teacher / "coursework" / "grading.py")
     homes, ran = {"course": teacher}, []
     for student in ("alice", "bob"):
         homes[student] = tmp_path / student

@@ -13,7 +13,6 @@ One folder per idea; imports run downwards only (import-linter contracts in ``py
     comparison.py     methods compared over seeds (share, bootstrap interval); the χ² band rule
     outputs.py arguments.py   output folders written whole, only over our own; one-line CLI errors
     compiled.py       Numba compilation, and the switch to each kernel's plain twin (VO_LIB_PLAIN)
-    grading.py        the hidden tests' tools: refuse the function an exercise asks for, find patches
 
 Each folder's ``__init__`` says which equations live where and where to start reading.
 Re-exported here, imported on first use: ``load_sequence`` (``data``), ``StereoCamera``
