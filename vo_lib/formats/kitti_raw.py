@@ -17,8 +17,8 @@ from pathlib import Path
 
 import numpy as np
 
+from vo_lib.formats.frame_files import SequenceError, check_size, required
 from vo_lib.formats.poses import rotation_problem
-from vo_lib.formats.sequence import SequenceError, check_size, required
 
 OXTS_FIELDS = 30
 VF, WZ = 8, 19  # zero-based columns of forward speed (m/s) and yaw rate (rad/s)
