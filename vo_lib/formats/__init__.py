@@ -10,6 +10,7 @@
 ``euroc``      a stereo rig as it records, in EuRoC's ASL layout (``mav0/cam0``, ``cam1``,
                ``sensor.yaml``): undistorted and rectified with OpenCV on reading, images paired by
                timestamp; bad input raises one :class:`~vo_lib.formats.euroc.AslError`
+``asl_calibration`` its ``sensor.yaml`` files and the rectification computed from them
 ``groundtruth`` ground truth as KITTI poses, TUM, EuRoC CSV or positions only, associated with the
                images by timestamp as evo does; :class:`~vo_lib.formats.groundtruth.GroundTruthError`
 
