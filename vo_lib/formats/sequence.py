@@ -33,6 +33,7 @@ write, and a failed write leaves nothing behind.
 
 from __future__ import annotations
 
+import time
 from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
@@ -90,6 +91,8 @@ class Sequence:
 
     #: Frames decoded ahead, on a reader thread, of the one asked for (0: none).
     read_ahead: int = 2
+    #: Milliseconds each frame's pair took to decode (and rectify), by frame, wherever it was decoded.
+    decoding_ms: dict = field(default_factory=dict, init=False, repr=False, compare=False)
     _ahead: dict = field(default_factory=dict, init=False, repr=False, compare=False)
     _reader: ThreadPoolExecutor | None = field(default=None, init=False, repr=False, compare=False)
 
@@ -129,6 +132,7 @@ class Sequence:
             return None
 
     def _decoded(self, k: int) -> tuple[np.ndarray, np.ndarray]:
+        start = time.perf_counter()
         left, right = load_image(self.left_files[k], k), load_image(self.right_files[k], k)
         for path, img in ((self.left_files[k], left), (self.right_files[k], right)):
             if img.shape != (self.camera.height, self.camera.width):
@@ -136,7 +140,9 @@ class Sequence:
                     f"{path}, frame {k}: {img.shape[1]}x{img.shape[0]} image; the sequence's images are "
                     f"{self.camera.width}x{self.camera.height}"
                 )
-        return (left, right) if self.rectify is None else self.rectify(left, right)
+        pair = (left, right) if self.rectify is None else self.rectify(left, right)
+        self.decoding_ms[k] = 1000.0 * (time.perf_counter() - start)
+        return pair
 
     def __iter__(self):
         for k in range(len(self)):
