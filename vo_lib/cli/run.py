@@ -307,6 +307,25 @@ def _lengths(segments) -> tuple[float, ...] | None:
     return lengths
 
 
+def _associated(truth, gt: str, est: str, times, E: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Indices ``(i_est, i_gt)`` of the poses compared: associated by timestamp where both files
+    carry them (as evo does), else one to one, the counts equal."""
+    from vo_lib.formats.groundtruth import associate
+
+    if truth.times is None or times is None:
+        if len(truth.positions) != len(E):
+            raise UsageError(
+                f"--gt {gt} has {len(truth.positions)} poses but --est {est} has {len(E)}; "
+                "expected equal counts (or timestamps in both)"
+            )
+        return np.arange(len(E)), np.arange(len(E))
+    i_est, i_gt = associate(times, truth.times)
+    if len(i_est) < 2:
+        raise UsageError(f"--gt {gt}: no timestamp within 0.01 s of --est {est}'s; both must use one clock")
+    print(f"associated {len(i_est)} of {len(E)} poses by timestamp (within 0.01 s)")
+    return i_est, i_gt
+
+
 def evaluate_command(gt: str, est: str, segments=None, extrinsic_of: str | None = None) -> None:
     """Print the 3-D errors of an estimate (KITTI or TUM) against ground truth in any format of
     :mod:`vo_lib.formats.groundtruth`: final error, ATE (SE(3), Sim(3)), RPE and KITTI's errors.
@@ -317,7 +336,8 @@ def evaluate_command(gt: str, est: str, segments=None, extrinsic_of: str | None 
     recording whose calibration moves a body-frame truth into its rectified left camera.
     """
     from vo_lib.evaluation import Alignment, ate_positions, kitti_segment_errors, standard_errors
-    from vo_lib.formats.groundtruth import GroundTruthError, TruthKind, associate, read_groundtruth
+    from vo_lib.formats.euroc import body_to_rectified_camera
+    from vo_lib.formats.groundtruth import GroundTruthError, TruthKind, read_groundtruth
 
     lengths = _lengths(segments)
     try:
@@ -325,39 +345,21 @@ def evaluate_command(gt: str, est: str, segments=None, extrinsic_of: str | None 
     except GroundTruthError as exc:
         raise UsageError(f"--gt {exc}") from None
     times, E = read_trajectory(est, min_poses=2)
-    if truth.times is not None and times is not None:
-        i_est, i_gt = associate(times, truth.times)
-        if len(i_est) < 2:
-            raise UsageError(
-                f"--gt {gt}: no timestamp within 0.01 s of --est {est}'s; both must use one clock"
-            )
-        print(f"associated {len(i_est)} of {len(E)} poses by timestamp (within 0.01 s)")
-    elif len(truth.positions) != len(E):
-        raise UsageError(
-            f"--gt {gt} has {len(truth.positions)} poses but --est {est} has {len(E)}; expected equal counts "
-            "(or timestamps in both)"
-        )
-    else:
-        i_est = i_gt = np.arange(len(E))
+    i_est, i_gt = _associated(truth, gt, est, times, E)
     if truth.kind is TruthKind.POSITIONS:
         for alignment in (Alignment.SE3, Alignment.SIM3):
             a, _ = ate_positions(truth.positions[i_gt], E[i_est], alignment=alignment)
             print(f"ATE ({alignment} alignment, positions only): rmse {a.rmse:.4f} m, max {a.max:.4f}")
         return
-    G = truth.poses[i_gt]
-    if extrinsic_of is not None:
-        from vo_lib.formats.euroc import body_to_rectified_camera
-
-        G = G @ body_to_rectified_camera(extrinsic_of)
-    errors = standard_errors(G, E[i_est], lengths)
-    for label, value in errors.rows():
+    G = truth.poses[i_gt] @ (np.eye(4) if extrinsic_of is None else body_to_rectified_camera(extrinsic_of))
+    for label, value in standard_errors(G, E[i_est], lengths).rows():
         print(f"{label:<62s}{value:>16s}")
-    if lengths is not None and len(lengths) > 1:  # each length on its own, too
-        for length, (t_pct, r_deg, count) in kitti_segment_errors(G, E[i_est], lengths).items():
-            print(
-                f"segment {length:g} m: translation {t_pct:.2f} %, rotation {100 * r_deg:.3f} deg/100 m "
-                f"({count} segments)"
-            )
+    segments = kitti_segment_errors(G, E[i_est], lengths) if lengths and len(lengths) > 1 else {}
+    for length, (t_pct, r_deg, count) in segments.items():  # each length on its own, too
+        print(
+            f"segment {length:g} m: translation {t_pct:.2f} %, rotation {100 * r_deg:.3f} deg/100 m "
+            f"({count} segments)"
+        )
 
 
 def convert_command(sequence: str, to: str, out: str, force: bool = False) -> None:
