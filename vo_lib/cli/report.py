@@ -8,7 +8,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from vo_lib.geometry import planar_from_camera_poses, wrap_angle
+from vo_lib.geometry import camera_poses_from_planar, planar_from_camera_poses, wrap_angle
 from vo_lib.stereo_vo.paper_tables import PAPER_LONG_RUN, PAPER_TABLE1
 
 if TYPE_CHECKING:
@@ -178,3 +178,24 @@ def position_only_errors(seq, poses: np.ndarray, n: int) -> dict:
     print(f"\nErrors against position-only ground truth ({positions['file']}, {int(keep.sum())} positions)")
     print(f"  {'ATE RMSE of the tracked point, SE(3) alignment [m]':<62s}{ate.rmse:>16.4f}")
     return {"ate_positions_m": ate.rmse}
+
+
+def odometry_name(vehicle) -> str:
+    """What the vehicle's odometry is, as the tables and the figure name it."""
+    if vehicle.kind == "crawler":
+        return "track odometry"
+    return "OXTS odometry" if vehicle.odometry_source.startswith("oxts") else "wheel odometry"
+
+
+def errors_3d(truth: np.ndarray, estimates: dict, mount: np.ndarray) -> dict:
+    """:func:`vo_lib.evaluation.standard_errors` of each estimate (camera poses, or planar poses
+    carried to the camera through ``mount``) against the camera's 6-DoF truth; None for a
+    missing estimate."""
+    from vo_lib.evaluation import standard_errors
+
+    errors = {}
+    for label, poses in estimates.items():
+        if poses is not None and np.ndim(poses) == 2:
+            poses = camera_poses_from_planar(poses, mount)
+        errors[label] = None if poses is None else standard_errors(truth, poses)
+    return errors

@@ -26,6 +26,8 @@ import numpy as np
 
 from vo_lib.cli.report import (
     error_report,
+    errors_3d,
+    odometry_name,
     position_only_errors,
     print_error_table,
     print_timing_table,
@@ -160,13 +162,6 @@ def _write_csv(path: Path, rows, cls) -> None:
             writer.writerow(asdict(row))
 
 
-def odometry_name(vehicle) -> str:
-    """What the vehicle's odometry is, as the tables and the figure name it."""
-    if vehicle.kind == "crawler":
-        return "track odometry"
-    return "OXTS odometry" if vehicle.odometry_source.startswith("oxts") else "wheel odometry"
-
-
 def _plot(
     path: Path, times, estimate, truth, odometry, title: str, odometry_label: str = "track odometry"
 ) -> None:
@@ -274,24 +269,10 @@ def _run_into(
     report = position_only_errors(seq, poses, n) if truth is None else {}
     if truth is not None:
         report = error_report(result, truth, odo)
-        report["errors_3d"] = _errors_3d(seq.poses[:n], {"vo": poses, "odometry": odo}, mount)
+        report["errors_3d"] = errors_3d(seq.poses[:n], {"vo": poses, "odometry": odo}, mount)
         print_error_table(report, len(result.flagged), report["errors_3d"], odometry_name(vehicle))
     output.commit(sequence=str(seq.path.resolve()), frames=n, seed=seed, odometry=not no_odometry)
     return report
-
-
-def _errors_3d(truth: np.ndarray, estimates: dict, mount: np.ndarray) -> dict:
-    """:func:`vo_lib.evaluation.standard_errors` of each estimate (camera poses, or planar poses
-    carried to the camera through ``mount``) against the camera's 6-DoF truth; None for a
-    missing estimate."""
-    from vo_lib.evaluation import standard_errors
-
-    errors = {}
-    for label, poses in estimates.items():
-        if poses is not None and np.ndim(poses) == 2:
-            poses = camera_poses_from_planar(poses, mount)
-        errors[label] = None if poses is None else standard_errors(truth, poses)
-    return errors
 
 
 def _lengths(segments) -> tuple[float, ...] | None:
