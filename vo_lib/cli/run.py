@@ -275,19 +275,6 @@ def _run_into(
     return report
 
 
-def _lengths(segments) -> tuple[float, ...] | None:
-    """Segment lengths in metres from ``--segments`` (a comma-separated string or numbers)."""
-    if segments is None:
-        return None
-    try:
-        lengths = tuple(float(x) for x in (segments.split(",") if isinstance(segments, str) else segments))
-    except ValueError:
-        lengths = ()
-    if not lengths or not all(np.isfinite(x) and x > 0 for x in lengths):
-        raise UsageError(f"--segments {segments}: expected comma-separated positive lengths in metres")
-    return lengths
-
-
 def _associated(truth, gt: str, est: str, times, E: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Indices ``(i_est, i_gt)`` of the poses compared: associated by timestamp where both files
     carry them (as evo does), else one to one, the counts equal."""
@@ -313,14 +300,15 @@ def evaluate_command(gt: str, est: str, segments=None, extrinsic_of: str | None 
 
     Where both files carry timestamps they are associated as evo does; otherwise the counts must
     be equal. Position-only truth gets the ATE of the aligned positions. ``segments`` are
-    lengths in metres (default: those the sequence allows, labelled). ``extrinsic_of``: an ASL
-    recording whose calibration moves a body-frame truth into its rectified left camera.
+    lengths in metres, as ``--segments`` parsed them (default: those the sequence allows,
+    labelled). ``extrinsic_of``: an ASL recording whose calibration moves a body-frame truth
+    into its rectified left camera.
     """
     from vo_lib.evaluation import Alignment, ate_positions, kitti_segment_errors, standard_errors
     from vo_lib.formats.euroc import body_to_rectified_camera
     from vo_lib.formats.groundtruth import GroundTruthError, TruthKind, read_groundtruth
 
-    lengths = _lengths(segments)
+    lengths = None if segments is None else tuple(segments)
     try:
         truth = read_groundtruth(gt)
     except GroundTruthError as exc:
