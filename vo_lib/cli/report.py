@@ -130,6 +130,15 @@ def _row(label: str, values, fmt: str) -> str:
     return f"  {label:<{LABEL}s}" + "".join(f"{c:>{COLUMN}s}" for c in cells)
 
 
+def _how_far(report: dict, vo_3d) -> str:
+    """The table's title: the turn of a spot turn, else the distance (3-D where known)."""
+    if report["spot_turn"]:
+        return f"{report['turned_deg']:.0f}° turned on the spot"
+    if vo_3d is not None:
+        return f"{vo_3d.final.distance_m:.2f} m travelled in 3-D"
+    return f"{report['distance_m']:.2f} m travelled, planar"
+
+
 def print_error_table(
     report: dict,
     flagged: int,
@@ -141,22 +150,16 @@ def print_error_table(
     each column's camera poses) and the planar rows of ``report`` (:func:`error_report`)."""
     errors = errors or {}
     vo_3d = errors.get("vo")
-    if report["spot_turn"]:
-        print(f"\nErrors against ground truth ({report['turned_deg']:.0f}° turned on the spot)")
-    elif vo_3d is not None:
-        print(f"\nErrors against ground truth ({vo_3d.final.distance_m:.2f} m travelled in 3-D)")
-    else:
-        print(f"\nErrors against ground truth ({report['distance_m']:.2f} m travelled, planar)")
+    print(f"\nErrors against ground truth ({_how_far(report, vo_3d)})")
     cols = [k for k in ("vo", "odometry") if k in report]
     names = {"vo": "visual odometry", "odometry": odometry_label}
     print(f"  {'':<{LABEL}s}" + "".join(f"{names[c]:>{COLUMN}s}" for c in cols))
-    if vo_3d is not None:
-        for label, figure, fmt in ROWS_3D:
-            if report["spot_turn"] and "of distance" in label:
-                continue
+    rows_3d = [] if vo_3d is None else ROWS_3D
+    for label, figure, fmt in rows_3d:
+        if not (report["spot_turn"] and "of distance" in label):
             print(_row(label, [None if errors.get(c) is None else figure(errors[c]) for c in cols], fmt))
-        if vo_3d.kitti is not None:
-            print(f"  (KITTI errors over {vo_3d.kitti.label()}, {vo_3d.kitti.count} segments)")
+    if vo_3d is not None and vo_3d.kitti is not None:
+        print(f"  (KITTI errors over {vo_3d.kitti.label()}, {vo_3d.kitti.count} segments)")
     for label, key, fmt in ROWS_PLANAR:
         print(_row(label, [report[c][key] for c in cols], fmt))
     print(_row("frames flagged (VO not used)", [flagged], "{:d}"))
