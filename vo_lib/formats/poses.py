@@ -105,7 +105,7 @@ def read_trajectory(path, min_poses: int = 1) -> tuple[np.ndarray | None, np.nda
     """
     path = Path(path)
     rows, lines = [], []
-    for n, line in enumerate(_text(path).split("\n"), start=1):
+    for n, line in enumerate(read_text(path).split("\n"), start=1):
         if not line.strip() or line.lstrip().startswith("#"):
             continue
         rows.append(_row(path, n, line, (len(rows[0]), lines[0]) if rows else None))
@@ -124,7 +124,7 @@ def read_trajectory(path, min_poses: int = 1) -> tuple[np.ndarray | None, np.nda
     return a[:, 0], _tum_poses(a)
 
 
-def _text(path: Path) -> str:
+def read_text(path: Path) -> str:
     """The text of a trajectory file; a folder, a missing file, an unreadable or non-UTF-8 one
     raises :class:`TrajectoryError`."""
     if not path.is_file():
