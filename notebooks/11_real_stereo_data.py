@@ -64,7 +64,6 @@ from scipy.ndimage import maximum_filter, minimum_filter
 from scipy.spatial.transform import Rotation
 from scipy.stats import chi2
 
-import vo_lib
 from vo_lib.camera import StereoCamera
 from vo_lib.comparison import Verdict, over_seeds
 from vo_lib.data import load_sequence

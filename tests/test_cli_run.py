@@ -41,7 +41,16 @@ def test_run_writes_every_output(workdir):
     np.testing.assert_allclose(kitti, tum, atol=1e-6)
     assert len((out / "timings.csv").read_text().splitlines()) == 26
     assert "binocular stereo vision processing" in proc.stdout and "48.969" in proc.stdout
-    assert "final position error [m]" in proc.stdout
+    table = proc.stdout[proc.stdout.index("Errors against ground truth") :]
+    assert "m travelled in 3-D" in table.splitlines()[0]
+    for row in (
+        "final position error, 3-D [m]",
+        "distance travelled by the estimate, 3-D [m]",
+        "planar heading error",
+    ):
+        assert row in table
+    assert "final position error [m]" not in proc.stdout and "Errors in 3-D" not in proc.stdout  # one table
+    assert "image decoding (on the reader thread)" in proc.stdout
     assert "median" in proc.stdout and "mean" in proc.stdout and "whole frame" in proc.stdout
     assert proc.stdout.startswith("run: sample indoor_linear, 25 frames")  # the first line: what comes
     assert not [p for p in workdir.iterdir() if p.name.startswith(".out")]  # no temporary left
@@ -114,8 +123,30 @@ def test_error_table_of_a_spot_turn_reports_the_turn_not_a_percentage(capsys):
     result = PipelineResult(estimate, np.zeros((41, 3, 3)), [], [], None)
     report = error_report(result, truth, truth + [0.0, 0.0, np.radians(3.0)])
     assert report["spot_turn"] and report["turned_deg"] == pytest.approx(400.0)
-    print_error_table(report, 0, 0.0)
+    print_error_table(report, 0)
     out = capsys.readouterr().out
     assert "Errors against ground truth (400° turned on the spot)" in out
     assert "m travelled" not in out and "nan" not in out and "of distance travelled" not in out
-    assert re.search(r"final heading error \[deg\]\s+0\.500\s+3\.000", out)
+    assert re.search(r"planar heading error, final \[deg\]\s+0\.500\s+3\.000", out)
+
+
+def test_error_table_gives_each_column_its_3d_errors(capsys):
+    from vo_lib.cli.run import error_report, print_error_table
+    from vo_lib.evaluation import standard_errors
+    from vo_lib.geometry import camera_poses_from_planar
+    from vo_lib.stereo_vo.pipeline import PipelineResult
+
+    x = np.linspace(0.0, 2.0, 21)
+    truth = np.column_stack([x, np.zeros(21), np.zeros(21)])
+    drifted = truth + np.column_stack([np.zeros(21), np.linspace(0.0, 0.03, 21), np.zeros(21)])
+    mount = np.eye(4)
+    errors = {
+        c: standard_errors(camera_poses_from_planar(truth, mount), camera_poses_from_planar(p, mount))
+        for c, p in (("vo", truth), ("odometry", drifted))
+    }
+    result = PipelineResult(truth, np.zeros((21, 3, 3)), [], [], None)
+    print_error_table(error_report(result, truth, drifted), 1, errors)
+    out = capsys.readouterr().out
+    assert "(2.00 m travelled in 3-D)" in out
+    assert re.search(r"final position error, 3-D \[m\]\s+0\.0000\s+0\.0300", out)
+    assert re.search(r"frames flagged \(VO not used\)\s+1\n", out)

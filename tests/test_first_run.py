@@ -75,7 +75,7 @@ def test_timing_rows_add_up_to_the_whole_frame_and_name_mean_and_median(capsys):
     assert "refinement" not in [key for key, _, _ in rows]  # no 6-DoF stage on the crawler
     print_timing_table(result, _Camera(640, 480), 51)
     out = capsys.readouterr().out
-    assert "median" in out and "mean" in out and "The means add up to the whole frame" in out
+    assert "median" in out and "mean" in out and "The means of the stages add up to the whole frame" in out
     assert f"{PAPER_TABLE1[(640, 480)]['stereo']:.3f}" in out and "paper's mean (Table 1, 640x480)" in out
 
 

@@ -15,6 +15,7 @@ import numpy as np
 import pytest
 
 from vo_lib.cli import sweep
+from vo_lib.cli import tasks as task_engine
 from vo_lib.cli.evaluate_all import find_sequences
 from vo_lib.cli.experiments import LAP, NEES, lap_tasks, nees_tasks
 from vo_lib.cli.main import main
@@ -77,7 +78,7 @@ def test_rerun_finishes_only_the_missing_rows(tmp_path, client, monkeypatch):
     assert len(first.ran) == 2
     with open(out / ROWS, "a") as fh:  # and a row cut short by a kill
         fh.write('{"key": "abc", "params": {"se')
-    monkeypatch.setattr(sweep, "CHUNK", 2)  # the three missing tasks go to the cluster as 2 + 1
+    monkeypatch.setattr(task_engine, "CHUNK", 2)  # the three missing tasks go to the cluster as 2 + 1
     again = run_sweep(TOY, tasks, out, client=client)
     keys = [task_key("toy", t) for t in tasks]
     assert sorted(again.ran) == sorted(keys[2:]) and again.reused == keys[:2]

@@ -82,6 +82,23 @@ def _gone(pid: int) -> bool:
     return False
 
 
+def _abandoned(entry: os.DirEntry) -> re.Match | None:
+    """The parts of a temporary's name (``NAME``, process, host, kind) where a dead process of
+    this machine left it, else None."""
+    match = _TEMPORARY.fullmatch(entry.name)
+    if not match or match[3] != HOST or entry.is_symlink() or not _gone(int(match[2])):
+        return None
+    return match
+
+
+def _remove(entry: os.DirEntry) -> None:
+    """Delete a temporary folder (or file) and whatever it holds; what cannot go is left."""
+    if entry.is_dir(follow_symlinks=False):
+        shutil.rmtree(entry.path, ignore_errors=True)
+    with contextlib.suppress(OSError):
+        os.unlink(entry.path)
+
+
 def recover(parent: Path) -> list[Path]:
     """Finish what killed processes left in ``parent``: an ``.old`` folder whose ``NAME`` is
     missing is renamed back to ``NAME``; other temporaries of dead processes of this machine are
@@ -93,21 +110,15 @@ def recover(parent: Path) -> list[Path]:
     except OSError:
         return []
     restored, deleted = [], []
-    for entry in entries:
-        match = _TEMPORARY.fullmatch(entry.name)
-        if not match or match[3] != HOST or entry.is_symlink() or not _gone(int(match[2])):
-            continue
-        original = Path(parent, match[1])
-        if match[4] == "old" and not os.path.lexists(original):
+    for entry, match in ((e, _abandoned(e)) for e in entries):
+        original = Path(parent, match[1]) if match else None
+        if match and match[4] == "old" and not os.path.lexists(original):
             os.rename(entry.path, original)
             notice(f"restored {original}, whose replacement was interrupted")
             restored.append(original)
-            continue
-        if entry.is_dir(follow_symlinks=False):
-            shutil.rmtree(entry.path, ignore_errors=True)
-        with contextlib.suppress(OSError):
-            os.unlink(entry.path)
-        deleted.append(Path(entry.path))
+        elif match:
+            _remove(entry)
+            deleted.append(Path(entry.path))
     if deleted:
         names = ", ".join(p.name for p in deleted)
         notice(f"removed {len(deleted)} temporary folder(s) left by interrupted runs: {names}")

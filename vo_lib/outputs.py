@@ -104,6 +104,14 @@ def _guarded(inputs, keep: dict | None) -> list[tuple[Path, str, bool]]:
     return guarded + [(Path(p).resolve(), what, False) for p, what in (keep or {}).items()]
 
 
+def _check_guarded(real: Path, label: str, inputs, keep) -> None:
+    """Refuse an output folder that is, holds or (for an input) lies inside a folder never replaced."""
+    for folder, what, inside in _guarded(inputs, keep):
+        if _contains(real, folder) or (inside and _contains(folder, real)):
+            where = "is" if real == folder else "holds" if _contains(real, folder) else "lies inside"
+            raise OutputError(f"{label}: {where} {what}; choose another output folder")
+
+
 def check_target(target, *, written_by: str, force=False, inputs=(), keep=None, option=None) -> str | None:
     """Raise :class:`OutputError` unless folder ``target`` may be (re)written by ``written_by``.
 
@@ -115,10 +123,7 @@ def check_target(target, *, written_by: str, force=False, inputs=(), keep=None, 
     if path.is_symlink() and not path.exists():
         raise OutputError(f"{label}: a symbolic link to {os.readlink(path)}, which does not exist")
     real = path.resolve()
-    for folder, what, inside in _guarded(inputs, keep):
-        if _contains(real, folder) or (inside and _contains(folder, real)):
-            where = "is" if real == folder else "holds" if _contains(real, folder) else "lies inside"
-            raise OutputError(f"{label}: {where} {what}; choose another output folder")
+    _check_guarded(real, label, inputs, keep)
     recover(real.parent)
     if not real.exists():
         above = next(p for p in real.parents if p.exists())

@@ -148,19 +148,13 @@ def table1_tasks(seeds: int, frames: int = 40) -> list[dict]:
 # --------------------------------------------------------------------------- the command
 
 
-def _experiment(name: str, seeds: int) -> tuple[Experiment, list[dict]]:
-    if name == "corridor":
-        return corridor_experiment(), corridor_tasks(seeds)
-    if name == "lap":
-        return LAP, lap_tasks(seeds)
-    if name == "nees":
-        return NEES, nees_tasks(seeds)
-    if name == "table1":
-        return TABLE1, table1_tasks(seeds)
-    raise ValueError(f"unknown experiment {name!r}")
-
-
-SWEEPS = ("corridor", "lap", "nees", "table1")
+#: Each sweep: its experiment and its tasks for a number of seeds.
+SWEEPS = {
+    "corridor": (corridor_experiment, corridor_tasks),
+    "lap": (lambda: LAP, lap_tasks),
+    "nees": (lambda: NEES, nees_tasks),
+    "table1": (lambda: TABLE1, table1_tasks),
+}
 
 
 def sweep_command(
@@ -176,7 +170,8 @@ def sweep_command(
 
     from vo_lib.cli.sweep import print_aggregate, run_sweep
 
-    experiment, tasks = _experiment(name, seeds)
+    make_experiment, make_tasks = SWEEPS[name]
+    experiment, tasks = make_experiment(), make_tasks(seeds)
     target = Path(out) if out else Path("sweeps") / name
     result = run_sweep(experiment, tasks, target, workers, scheduler, force=force)
     print(f"{experiment.describe}: {len(tasks)} tasks" + (f" ({result.workers})" if result.workers else ""))

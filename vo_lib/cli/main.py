@@ -17,7 +17,9 @@ Ctrl-C (SIGINT) or SIGTERM removes what was half-written, prints one line and ex
 from __future__ import annotations
 
 import argparse
+import contextlib
 import errno
+import importlib
 import math
 import os
 import signal
@@ -355,93 +357,109 @@ def _generate(args) -> None:
     print(f"wrote {path}")
 
 
+#: Commands that call one function: its module, its name and the arguments it takes, in order.
+COMMANDS = {
+    "run": (
+        "vo_lib.cli.run",
+        "run_command",
+        ("sequence", "out", "frames", "no_odometry", "seed", "force", "motion"),
+    ),
+    "evaluate": ("vo_lib.cli.run", "evaluate_command", ("gt", "est", "segments", "extrinsic_of")),
+    "convert": ("vo_lib.cli.run", "convert_command", ("sequence", "to", "out", "force")),
+    "sweep": (
+        "vo_lib.cli.experiments",
+        "sweep_command",
+        ("name", "seeds", "workers", "scheduler", "out", "force"),
+    ),
+    "evaluate-all": (
+        "vo_lib.cli.evaluate_all",
+        "evaluate_all_command",
+        ("root", "frames", "workers", "scheduler", "out", "force"),
+    ),
+}
+
+
 def _dispatch(args) -> None:
-    if args.command == "run":
-        from vo_lib.cli.run import run_command
-
-        run_command(
-            args.sequence, args.out, args.frames, args.no_odometry, args.seed, args.force, args.motion
-        )
-    elif args.command == "evaluate":
-        from vo_lib.cli.run import evaluate_command
-
-        evaluate_command(args.gt, args.est, args.segments, args.extrinsic_of)
-    elif args.command == "convert":
-        from vo_lib.cli.run import convert_command
-
-        convert_command(args.sequence, args.to, args.out, args.force)
-    elif args.command == "generate":
-        _generate(args)
-    elif args.command == "bench":
+    """Run the parsed command (its module is imported only now, so that parsing stays fast)."""
+    if args.command == "generate":
+        return _generate(args)
+    if args.command == "bench":
         from vo_lib.cli.bench import BENCHES
 
-        BENCHES[args.name]()
-    elif args.command == "sweep":
-        from vo_lib.cli.experiments import sweep_command
+        return BENCHES[args.name]()
+    module, name, arguments = COMMANDS[args.command]
+    getattr(importlib.import_module(module), name)(*(getattr(args, a) for a in arguments))
+    return None
 
-        sweep_command(args.name, args.seeds, args.workers, args.scheduler, args.out, args.force)
-    elif args.command == "evaluate-all":
-        from vo_lib.cli.evaluate_all import evaluate_all_command
 
-        evaluate_all_command(args.root, args.frames, args.workers, args.scheduler, args.out, args.force)
+def _run_parsed(args, command: str) -> int:
+    """Run the parsed command; every failure the user can act on is one line on stderr and its
+    exit status (2; 141 when whatever read the output closed the pipe)."""
+    from vo_lib.cli.run import UsageError
+    from vo_lib.cli.sweep import SweepError
+    from vo_lib.formats.poses import TrajectoryError
+    from vo_lib.formats.sequence import SequenceError
+    from vo_lib.outputs import OutputError
+
+    try:
+        try:
+            _dispatch(args)
+        except SystemError as exc:
+            if (signal_exc := _signal_inside(exc)) is None:
+                raise
+            raise signal_exc from None
+    except (UsageError, SweepError, OutputError, SequenceError, TrajectoryError) as exc:
+        print(f"{command}: error: {one_line(exc)}", file=sys.stderr)
+        return 2
+    except BrokenPipeError:  # e.g. piped into `head`: the reader left, not a fault of the output
+        # Python's advice: point stdout at devnull so the interpreter's own flush at exit is quiet
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        print(f"{command}: stopped: whatever read its output closed the pipe", file=sys.stderr)
+        return 128 + signal.SIGPIPE
+    except OSError as exc:  # e.g. a full disk while writing: the output was not put in place
+        print(f"{command}: error: {one_line(_os_error(exc, getattr(args, 'out', None)))}", file=sys.stderr)
+        return 2
+    return 0
+
+
+@contextlib.contextmanager
+def _signals():
+    """SIGTERM and SIGINT handled as :func:`_stop` and :func:`_interrupt` meanwhile (from the main
+    thread only: Python sets handlers there), unraisable signals kept quiet; all put back after."""
+    import threading
+
+    from vo_lib.outputs import INTERRUPTED
+
+    handled = (signal.SIGTERM, _stop), (signal.SIGINT, _interrupt)
+    main_thread = threading.current_thread() is threading.main_thread()
+    previous = {signum: signal.signal(signum, handler) for signum, handler in handled} if main_thread else {}
+    INTERRUPTED.clear()
+    previous_hook, sys.unraisablehook = sys.unraisablehook, _quiet_unraisable(sys.unraisablehook)
+    defaults = {signal.SIGTERM: signal.SIG_DFL, signal.SIGINT: signal.default_int_handler}
+    try:
+        yield
+    finally:
+        sys.unraisablehook = previous_hook
+        for signum, handler in previous.items():
+            signal.signal(signum, handler if handler is not None else defaults[signum])
 
 
 def main(argv: list[str] | None = None) -> int:
     """Parse ``argv`` and run the command; returns the exit status (argparse exits with 2 itself)."""
-    import threading
-
-    handle_term = threading.current_thread() is threading.main_thread()
-    previous = signal.signal(signal.SIGTERM, _stop) if handle_term else None
-    previous_int = signal.signal(signal.SIGINT, _interrupt) if handle_term else None
-    from vo_lib.outputs import INTERRUPTED
-
-    INTERRUPTED.clear()
-    previous_hook, sys.unraisablehook = sys.unraisablehook, _quiet_unraisable(sys.unraisablehook)
     command = "python -m vo_lib"
-    try:
-        parser = build_parser()
-        args = parser.parse_args(argv)
-        command = f"{parser.prog} {args.command}"
-        from vo_lib.cli.run import UsageError
-        from vo_lib.cli.sweep import SweepError
-        from vo_lib.formats.poses import TrajectoryError
-        from vo_lib.formats.sequence import SequenceError
-        from vo_lib.outputs import OutputError
-
+    with _signals():
         try:
-            try:
-                _dispatch(args)
-            except SystemError as exc:
-                if (signal_exc := _signal_inside(exc)) is None:
-                    raise
-                raise signal_exc from None
-        except (UsageError, SweepError, OutputError, SequenceError, TrajectoryError) as exc:
-            print(f"{command}: error: {one_line(exc)}", file=sys.stderr)
-            return 2
-        except BrokenPipeError:  # e.g. piped into `head`: the reader left, not a fault of the output
-            # Python's advice: point stdout at devnull so the interpreter's own flush at exit is quiet
-            os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
-            print(f"{command}: stopped: whatever read its output closed the pipe", file=sys.stderr)
-            return 128 + signal.SIGPIPE
-        except OSError as exc:  # e.g. a full disk while writing: the output was not put in place
-            print(
-                f"{command}: error: {one_line(_os_error(exc, getattr(args, 'out', None)))}", file=sys.stderr
-            )
-            return 2
-        return 0
-    except KeyboardInterrupt:
-        print(f"{command}: interrupted (Ctrl-C); nothing half-written is left", file=sys.stderr)
-        return 130
-    except _Stopped as stop:
-        name = signal.Signals(stop.signum).name
-        print(f"{command}: stopped by {name}; nothing half-written is left", file=sys.stderr)
-        return 128 + stop.signum
-    finally:
-        sys.unraisablehook = previous_hook
-        if handle_term:
-            signal.signal(signal.SIGTERM, previous if previous is not None else signal.SIG_DFL)
-            restore = previous_int if previous_int is not None else signal.default_int_handler
-            signal.signal(signal.SIGINT, restore)
+            parser = build_parser()
+            args = parser.parse_args(argv)
+            command = f"{parser.prog} {args.command}"
+            return _run_parsed(args, command)
+        except KeyboardInterrupt:
+            print(f"{command}: interrupted (Ctrl-C); nothing half-written is left", file=sys.stderr)
+            return 130
+        except _Stopped as stop:
+            name = signal.Signals(stop.signum).name
+            print(f"{command}: stopped by {name}; nothing half-written is left", file=sys.stderr)
+            return 128 + stop.signum
 
 
 if __name__ == "__main__":

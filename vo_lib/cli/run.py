@@ -21,21 +21,41 @@ import os
 import sys
 from dataclasses import asdict, fields
 from pathlib import Path
-from typing import TYPE_CHECKING
 
 import numpy as np
 
+from vo_lib.cli.report import (
+    error_report,
+    errors_3d,
+    odometry_name,
+    position_only_errors,
+    print_error_table,
+    print_timing_table,
+    timing_rows,
+    truth_and_odometry,
+)
 from vo_lib.formats.poses import read_trajectory, write_kitti_poses, write_tum
-from vo_lib.geometry import camera_poses_from_planar, planar_from_camera_poses, wrap_angle
+from vo_lib.geometry import camera_poses_from_planar
 from vo_lib.outputs import OutputFolder, notice, reading
 from vo_lib.sim.samples import SAMPLES
-from vo_lib.stereo_vo.paper_tables import PAPER_LONG_RUN, PAPER_TABLE1
+from vo_lib.stereo_vo.paper_tables import PAPER_TABLE1
+
+__all__ = [
+    "PAPER_TABLE1",
+    "UsageError",
+    "convert_command",
+    "error_report",
+    "evaluate_command",
+    "odometry_name",
+    "print_error_table",
+    "print_timing_table",
+    "run_command",
+    "timing_rows",
+    "truth_and_odometry",
+]
 
 # The pipeline and the metrics (SciPy, Numba) are imported where they are used, so that a run
 # says what it is about to do before they load: its first line comes within a second or two.
-if TYPE_CHECKING:
-    from vo_lib.stereo_vo.pipeline import PipelineResult
-
 DEFAULT_SEQUENCE = "indoor_linear"
 
 
@@ -142,13 +162,6 @@ def _write_csv(path: Path, rows, cls) -> None:
             writer.writerow(asdict(row))
 
 
-def odometry_name(vehicle) -> str:
-    """What the vehicle's odometry is, as the tables and the figure name it."""
-    if vehicle.kind == "crawler":
-        return "track odometry"
-    return "OXTS odometry" if vehicle.odometry_source.startswith("oxts") else "wheel odometry"
-
-
 def _plot(
     path: Path, times, estimate, truth, odometry, title: str, odometry_label: str = "track odometry"
 ) -> None:
@@ -163,137 +176,6 @@ def _plot(
     plot_run(fig, times, estimate, truth, odometry, title, odometry_label)
     fig.savefig(path, dpi=110)
     plt.close(fig)
-
-
-def timing_rows(result: PipelineResult) -> list[tuple[str, str, np.ndarray]]:
-    """Per-frame milliseconds of each stage, as the timing table lists them: ``(key, label,
-    values)``. The stages and "between the stages" add up to the whole frame, frame by frame."""
-    from vo_lib.stereo_vo.pipeline import FrameTimings
-
-    rows = result.timings[1:] or result.timings  # the first frame only detects: no motion yet
-    column = {f.name: np.array([getattr(r, f.name) for r in rows]) for f in fields(FrameTimings)}
-    stages = [
-        ("stereo", "binocular stereo vision processing", column["stereo"]),
-        ("matching", "guided temporal matching", column["matching"]),
-        ("estimation", "parameter estimation (1-point RANSAC)", column["estimation"]),
-        ("refinement", "6-DoF refinement", column["refinement"]),
-        ("kalman", "Kalman filtering (prediction + update)", column["kalman"]),
-    ]
-    stages = [s for s in stages if s[0] != "refinement" or s[2].any()]
-    between = column["total"] - sum(values for _, _, values in stages)
-    return [*stages, ("between", "between the stages (keyframes, bookkeeping)", between)]
-
-
-def print_timing_table(result: PipelineResult, camera, frames: int) -> None:
-    """The timing table like the paper's Table 1: median and mean milliseconds per stage, and the
-    paper's figure (a mean) where the paper has one for this resolution."""
-    rows = timing_rows(result)
-    whole = sum(values for _, _, values in rows)
-    paper = PAPER_TABLE1.get((camera.width, camera.height))
-    print(f"\nTime per frame at {camera.width}x{camera.height} over {frames} frames, in ms")
-    header = f"  {'stage':<46s}{'median':>8s}{'mean':>9s}"
-    if paper:
-        header += f"   paper's mean (Table 1, {camera.width}x{camera.height})"
-    print(header)
-    for key, label, values in [*rows, ("whole", "whole frame", whole)]:
-        line = f"  {label:<46s}{np.median(values):8.3f}{np.mean(values):9.3f}"
-        if paper and key in paper:
-            line += f"   {paper[key]:.3f}"
-        print(line)
-    print("  The means add up to the whole frame; the medians (each stage's typical frame) need not.")
-    if paper:
-        print(
-            f"  The paper's {PAPER_LONG_RUN[0]:,}-frame run: mean {PAPER_LONG_RUN[1]} ms per frame, s.d. "
-            f"{PAPER_LONG_RUN[2]} ms (IV.A.1; resolution not stated)."
-        )
-    print(f"  frames per second: {1000.0 / np.mean(whole):.0f} (from the mean whole frame)")
-
-
-def truth_and_odometry(seq, vehicle, frames: int):
-    """Planar vehicle poses of the ground truth and of odometry alone over the first ``frames``
-    frames (each None where the sequence has none): what :func:`error_report` compares."""
-    truth = None if seq.poses is None else planar_from_camera_poses(seq.poses[:frames], vehicle.mount)
-    odometry = None
-    if vehicle.odometry is not None:
-        odometry = vehicle.odometry_model.integrate(vehicle.odometry[1:frames])
-    return truth, odometry
-
-
-def error_report(result: PipelineResult, truth_planar: np.ndarray, odometry_planar=None) -> dict:
-    """Errors of the estimate (and of odometry alone) against the ground truth."""
-    from vo_lib.evaluation import ate_planar, final_error, is_spot_turn, turned_degrees
-
-    trajectories = {"vo": result.poses, "odometry": odometry_planar}
-    finals = {label: final_error(truth_planar, t) for label, t in trajectories.items() if t is not None}
-    dist = finals["vo"].distance_m
-    report = {
-        "distance_m": dist,
-        "turned_deg": turned_degrees(truth_planar),
-        "spot_turn": is_spot_turn(truth_planar),
-    }
-    for label, final in finals.items():
-        traj = trajectories[label]
-        heading = np.degrees(np.abs(wrap_angle(traj[:, 2] - truth_planar[:, 2])))
-        report[label] = {
-            "final_position_error_m": final.position_m,
-            "final_position_error_pct": final.percent if not report["spot_turn"] and dist > 0 else None,
-            "ate_rmse_m": ate_planar(truth_planar, traj)[0].rmse,
-            "heading_error_mean_deg": float(heading.mean()),
-            "heading_error_max_deg": float(heading.max()),
-            "final_heading_error_deg": final.heading_deg,
-        }
-    return report
-
-
-def print_error_table(
-    report: dict, flagged: int, rpe_m: float, odometry_label: str = "track odometry"
-) -> None:
-    if report["spot_turn"]:
-        print(f"\nErrors against ground truth ({report['turned_deg']:.0f}° turned on the spot)")
-    else:
-        print(f"\nErrors against ground truth ({report['distance_m']:.2f} m travelled)")
-    cols = [k for k in ("vo", "odometry") if k in report]
-    names = {"vo": "visual odometry", "odometry": odometry_label}
-    print(f"  {'':<34s}" + "".join(f"{names[c]:>18s}" for c in cols))
-    for key, label, fmt in (
-        ("final_position_error_m", "final position error [m]", "{:.4f}"),
-        ("final_position_error_pct", "  of distance travelled [%]", "{:.2f}"),
-        ("ate_rmse_m", "ATE RMSE, planar alignment [m]", "{:.4f}"),
-        ("heading_error_mean_deg", "mean heading error [deg]", "{:.3f}"),
-        ("heading_error_max_deg", "max heading error [deg]", "{:.3f}"),
-        ("final_heading_error_deg", "final heading error [deg]", "{:.3f}"),
-    ):
-        if report[cols[0]][key] is None:  # no distance to relate a position error to
-            continue
-        print(f"  {label:<34s}" + "".join(f"{fmt.format(report[c][key]):>18s}" for c in cols))
-    print(f"  relative pose error, 1 frame [m]  {rpe_m:>16.5f}")
-    print(f"  frames flagged (VO not used)      {flagged:>16d}")
-
-
-def print_3d_errors(seq, poses, n: int) -> dict:
-    """The field's errors in 3-D (:func:`vo_lib.evaluation.standard_errors`) against 6-DoF truth,
-    or the ATE against position-only truth; returns them for the report (empty without truth)."""
-    from vo_lib.evaluation import Alignment, ate_positions, standard_errors
-
-    if seq.poses is not None:
-        errors = standard_errors(seq.poses[:n], poses)
-        print(f"\nErrors in 3-D, camera poses against ground truth ({n} frames)")
-        for label, value in errors.rows():
-            print(f"  {label:<62s}{value:>16s}")
-        return {"errors_3d": errors}
-    positions = seq.manifest.get("positions") if isinstance(seq.manifest, dict) else None
-    if not positions:
-        return {}
-    frames = np.asarray(positions["frames"], int)
-    keep = frames < n
-    if keep.sum() < 3:
-        return {}
-    ate, _ = ate_positions(
-        np.asarray(positions["xyz"])[keep], poses[frames[keep]], positions["lever_arm_camera"], Alignment.SE3
-    )
-    print(f"\nErrors against position-only ground truth ({positions['file']}, {int(keep.sum())} positions)")
-    print(f"  {'ATE RMSE of the tracked point, SE(3) alignment [m]':<62s}{ate.rmse:>16.4f}")
-    return {"ate_positions_m": ate.rmse}
 
 
 def run_command(
@@ -336,7 +218,6 @@ def _run_into(
     output: OutputFolder, seq, name: str, frames, no_odometry: bool, seed: int, motion: str
 ) -> dict:
     """The pipeline on ``seq`` with its outputs written into ``output`` (committed at the end)."""
-    from vo_lib.evaluation import rpe
     from vo_lib.stereo_vo.pipeline import (
         WARM_UP_FRAMES,
         FrameDiagnostics,
@@ -383,28 +264,34 @@ def _run_into(
     # a name holding bytes that are not UTF-8 (read as surrogates) is drawn with U+FFFD in their place
     title = f"{os.fsencode(Path(name).name).decode('utf-8', 'replace')}: {n} frames"
     _plot(tmp / "trajectory.png", seq.times[:n], result.poses, truth, odo, title, odometry_name(vehicle))
-    print_timing_table(result, seq.camera, n)
-    report = {}
+    decoding = [seq.decoding_ms[k] for k in range(1, n) if k in seq.decoding_ms]
+    print_timing_table(result, seq.camera, n, decoding)
+    report = position_only_errors(seq, poses, n) if truth is None else {}
     if truth is not None:
         report = error_report(result, truth, odo)
-        rpe_m = rpe(seq.poses[:n], poses)[0].rmse
-        print_error_table(report, len(result.flagged), rpe_m, odometry_name(vehicle))
-    report.update(print_3d_errors(seq, poses, n))
+        report["errors_3d"] = errors_3d(seq.poses[:n], {"vo": poses, "odometry": odo}, mount)
+        print_error_table(report, len(result.flagged), report["errors_3d"], odometry_name(vehicle))
     output.commit(sequence=str(seq.path.resolve()), frames=n, seed=seed, odometry=not no_odometry)
     return report
 
 
-def _lengths(segments) -> tuple[float, ...] | None:
-    """Segment lengths in metres from ``--segments`` (a comma-separated string or numbers)."""
-    if segments is None:
-        return None
-    try:
-        lengths = tuple(float(x) for x in (segments.split(",") if isinstance(segments, str) else segments))
-    except ValueError:
-        lengths = ()
-    if not lengths or not all(np.isfinite(x) and x > 0 for x in lengths):
-        raise UsageError(f"--segments {segments}: expected comma-separated positive lengths in metres")
-    return lengths
+def _associated(truth, gt: str, est: str, times, E: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Indices ``(i_est, i_gt)`` of the poses compared: associated by timestamp where both files
+    carry them (as evo does), else one to one, the counts equal."""
+    from vo_lib.formats.groundtruth import associate
+
+    if truth.times is None or times is None:
+        if len(truth.positions) != len(E):
+            raise UsageError(
+                f"--gt {gt} has {len(truth.positions)} poses but --est {est} has {len(E)}; "
+                "expected equal counts (or timestamps in both)"
+            )
+        return np.arange(len(E)), np.arange(len(E))
+    i_est, i_gt = associate(times, truth.times)
+    if len(i_est) < 2:
+        raise UsageError(f"--gt {gt}: no timestamp within 0.01 s of --est {est}'s; both must use one clock")
+    print(f"associated {len(i_est)} of {len(E)} poses by timestamp (within 0.01 s)")
+    return i_est, i_gt
 
 
 def evaluate_command(gt: str, est: str, segments=None, extrinsic_of: str | None = None) -> None:
@@ -413,51 +300,35 @@ def evaluate_command(gt: str, est: str, segments=None, extrinsic_of: str | None 
 
     Where both files carry timestamps they are associated as evo does; otherwise the counts must
     be equal. Position-only truth gets the ATE of the aligned positions. ``segments`` are
-    lengths in metres (default: those the sequence allows, labelled). ``extrinsic_of``: an ASL
-    recording whose calibration moves a body-frame truth into its rectified left camera.
+    lengths in metres, as ``--segments`` parsed them (default: those the sequence allows,
+    labelled). ``extrinsic_of``: an ASL recording whose calibration moves a body-frame truth
+    into its rectified left camera.
     """
     from vo_lib.evaluation import Alignment, ate_positions, kitti_segment_errors, standard_errors
-    from vo_lib.formats.groundtruth import GroundTruthError, TruthKind, associate, read_groundtruth
+    from vo_lib.formats.euroc import body_to_rectified_camera
+    from vo_lib.formats.groundtruth import GroundTruthError, TruthKind, read_groundtruth
 
-    lengths = _lengths(segments)
+    lengths = None if segments is None else tuple(segments)
     try:
         truth = read_groundtruth(gt)
     except GroundTruthError as exc:
         raise UsageError(f"--gt {exc}") from None
     times, E = read_trajectory(est, min_poses=2)
-    if truth.times is not None and times is not None:
-        i_est, i_gt = associate(times, truth.times)
-        if len(i_est) < 2:
-            raise UsageError(
-                f"--gt {gt}: no timestamp within 0.01 s of --est {est}'s; both must use one clock"
-            )
-        print(f"associated {len(i_est)} of {len(E)} poses by timestamp (within 0.01 s)")
-    elif len(truth.positions) != len(E):
-        raise UsageError(
-            f"--gt {gt} has {len(truth.positions)} poses but --est {est} has {len(E)}; expected equal counts "
-            "(or timestamps in both)"
-        )
-    else:
-        i_est = i_gt = np.arange(len(E))
+    i_est, i_gt = _associated(truth, gt, est, times, E)
     if truth.kind is TruthKind.POSITIONS:
         for alignment in (Alignment.SE3, Alignment.SIM3):
             a, _ = ate_positions(truth.positions[i_gt], E[i_est], alignment=alignment)
             print(f"ATE ({alignment} alignment, positions only): rmse {a.rmse:.4f} m, max {a.max:.4f}")
         return
-    G = truth.poses[i_gt]
-    if extrinsic_of is not None:
-        from vo_lib.formats.euroc import body_to_rectified_camera
-
-        G = G @ body_to_rectified_camera(extrinsic_of)
-    errors = standard_errors(G, E[i_est], lengths)
-    for label, value in errors.rows():
+    G = truth.poses[i_gt] @ (np.eye(4) if extrinsic_of is None else body_to_rectified_camera(extrinsic_of))
+    for label, value in standard_errors(G, E[i_est], lengths).rows():
         print(f"{label:<62s}{value:>16s}")
-    if lengths is not None and len(lengths) > 1:  # each length on its own, too
-        for length, (t_pct, r_deg, count) in kitti_segment_errors(G, E[i_est], lengths).items():
-            print(
-                f"segment {length:g} m: translation {t_pct:.2f} %, rotation {100 * r_deg:.3f} deg/100 m "
-                f"({count} segments)"
-            )
+    segments = kitti_segment_errors(G, E[i_est], lengths) if lengths and len(lengths) > 1 else {}
+    for length, (t_pct, r_deg, count) in segments.items():  # each length on its own, too
+        print(
+            f"segment {length:g} m: translation {t_pct:.2f} %, rotation {100 * r_deg:.3f} deg/100 m "
+            f"({count} segments)"
+        )
 
 
 def convert_command(sequence: str, to: str, out: str, force: bool = False) -> None:

@@ -22,28 +22,34 @@ What is written
     so an interrupted sweep finishes only the missing ones; rows that failed are run again. The
     folder is locked while a sweep writes it (:func:`vo_lib.outputs.writing`).
 
-A task that raises becomes a row with its error; the sweep goes on.
+A task that raises becomes a row with its error; the sweep goes on (:mod:`vo_lib.cli.tasks`).
 """
 
 from __future__ import annotations
 
 import contextlib
-import functools
 import hashlib
 import json
 import os
-import signal
 import sys
-import time
-import traceback
 from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
-from vo_lib.arguments import one_line
 from vo_lib.atomic import recover
+from vo_lib.cli.tasks import (
+    ERROR,
+    SECONDS,
+    SweepError,
+    check_workers,
+    connect,
+    local_cluster,
+    outcomes,
+    plain,
+    start_client,
+)
 from vo_lib.outputs import (
     OutputFolder,
     check_target,
@@ -52,21 +58,10 @@ from vo_lib.outputs import (
     writing,
 )
 
+__all__ = ["SweepError", "local_cluster"]
+
 ROWS = "rows.jsonl"
 TABLE = "results.csv"
-#: Columns every row has after its parameters and figures.
-SECONDS, ERROR = "seconds", "error"
-#: Tasks given to the cluster at once: the scheduler never holds a whole grid of hundreds of
-#: thousands of tasks (each costs it memory), and a chunk keeps every worker busy to its end.
-CHUNK = 10_000
-#: Seconds allowed to reach an existing scheduler.
-CONNECT_TIMEOUT = 10.0
-#: Local worker processes allowed per core: more only share the cores and multiply the memory.
-WORKERS_PER_CORE = 4
-
-
-class SweepError(ValueError):
-    """A bad argument or folder for a sweep: reported in one line, exit status 2."""
 
 
 @dataclass(frozen=True)
@@ -104,28 +99,6 @@ def task_key(experiment: str, params: dict) -> str:
     """The key of a task on disk: a hash of the experiment's name and its parameters."""
     text = json.dumps({"experiment": experiment, "params": params}, sort_keys=True, separators=(",", ":"))
     return hashlib.sha1(text.encode()).hexdigest()[:16]
-
-
-def _plain(value):
-    """A parameter as JSON sees it (NumPy numbers and tuples become Python numbers and lists)."""
-    if isinstance(value, np.generic):
-        return value.item()
-    if isinstance(value, tuple):
-        return [_plain(v) for v in value]
-    return value
-
-
-def execute(run: Callable[[dict, object], dict], params: dict, context=None) -> dict:
-    """Run one task: ``{"figures": ..., "seconds": wall time, "error": "" or one line}``."""
-    t0 = time.perf_counter()
-    try:
-        figures = {str(k): _plain(v) for k, v in dict(run(params, context)).items()}
-        error = ""
-    except Exception as exc:  # a failed run is a row, not a lost sweep
-        figures = {}
-        where = traceback.extract_tb(exc.__traceback__)[-1]
-        error = one_line(f"{type(exc).__name__}: {exc} ({Path(where.filename).name}:{where.lineno})")
-    return {"figures": figures, SECONDS: time.perf_counter() - t0, ERROR: error}
 
 
 # --------------------------------------------------------------------------- the folder on disk
@@ -175,127 +148,6 @@ def results_table(rows: list[dict]):
     return frame.reindex(columns=[c for c in frame.columns if c not in (SECONDS, ERROR)] + [SECONDS, ERROR])
 
 
-# --------------------------------------------------------------------------- where tasks run
-
-
-def _check_workers(workers: int | None, local: bool) -> int:
-    """``workers`` (default: one per core Dask finds for this process), refused in one line if
-    below 1 or, for a local cluster, above :data:`WORKERS_PER_CORE` per core."""
-    from dask.system import CPU_COUNT
-
-    workers = CPU_COUNT if workers is None else int(workers)
-    if workers < 1:
-        raise SweepError(f"--workers {workers}: expected at least 1")
-    if local and workers > WORKERS_PER_CORE * CPU_COUNT:
-        raise SweepError(
-            f"--workers {workers}: this machine gives this process {CPU_COUNT} core(s); at most "
-            f"{WORKERS_PER_CORE * CPU_COUNT} local workers (--scheduler ADDRESS runs on a cluster)"
-        )
-    return workers
-
-
-#: Dask settings of the local cluster. Dask sets ``MALLOC_TRIM_THRESHOLD_`` in its workers, which
-#: also turns off glibc's adaptive mmap threshold: every large NumPy temporary (the tracker scores
-#: a thousand poses at once) is then mapped and unmapped afresh. Unset, a task still runs in the
-#: worker's executor thread, whose malloc arena gives its top back to the system after every large
-#: free: a corridor task spent as long in page faults (system time) as in computing, twice its
-#: time in this process. A 64 MiB top pad keeps the arena's memory for the next temporary, and the
-#: task runs as fast as here. The statistical profiler is off too (10 ms samples).
-LOCAL_CLUSTER_CONFIG = {
-    "distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": None,
-    "distributed.nanny.pre-spawn-environ.MALLOC_TOP_PAD_": str(64 * 2**20),
-    "distributed.worker.profile.enabled": False,
-}
-
-
-@contextlib.contextmanager
-def _without_ctrl_c():
-    """SIGINT ignored meanwhile (call it from the main thread): processes started here inherit the
-    ignored signal, so that a Ctrl-C to the process group stops only this process (which then
-    closes the cluster), not every worker with a traceback of its own. A Ctrl-C in the seconds the
-    workers take to start is not seen."""
-    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
-    try:
-        yield
-    finally:
-        signal.signal(signal.SIGINT, previous)
-
-
-def local_cluster(workers: int):
-    """A LocalCluster of ``workers`` processes, one thread each, quiet, dashboard on a free port;
-    its processes ignore Ctrl-C (see :func:`_without_ctrl_c`)."""
-    import logging
-
-    import dask
-    from distributed import LocalCluster
-
-    with dask.config.set(LOCAL_CLUSTER_CONFIG), _without_ctrl_c():
-        return LocalCluster(
-            n_workers=workers,
-            threads_per_worker=1,
-            processes=True,
-            dashboard_address=":0",
-            silence_logs=logging.ERROR,
-        )
-
-
-def connect(address: str, option: str):
-    """A ``distributed.Client`` of the scheduler at ``address`` (Dask parses it); one line if the
-    address is malformed or the scheduler cannot be reached."""
-    from distributed import Client
-    from distributed.comm.addressing import get_address_host_port, parse_address
-    from distributed.comm.registry import get_backend
-
-    address = address.strip()
-    try:
-        # Dask's own parser first: a malformed address is refused at once, before a Client starts
-        # its event loop (which, on a loaded machine, can take longer than Dask waits for it)
-        scheme, _ = parse_address(address, strict=True)
-        get_backend(scheme)  # an unknown scheme
-        if scheme in ("tcp", "tls") and not 0 < get_address_host_port(address)[1] < 65536:
-            raise ValueError("the port is not between 1 and 65535")
-        return Client(address, timeout=CONNECT_TIMEOUT)
-    except ValueError as exc:
-        raise SweepError(
-            f"{option} {address!r}: expected a scheduler address like tcp://host:8786 ({one_line(exc)})"
-        ) from None
-    except (OSError, TimeoutError) as exc:
-        raise SweepError(f"{option} {address}: cannot reach the scheduler ({one_line(exc)})") from None
-
-
-def outcomes(experiment: Experiment, tasks: list[dict], context, need_setup: bool, client=None):
-    """``(params, outcome)`` of each task as it finishes: in this process without ``client``,
-    else on its cluster (``Client.map``, ``as_completed``). A task lost to the cluster (the
-    setup failed, a worker died) is an outcome with its error."""
-    if client is None:
-        context = experiment.setup() if need_setup else context
-        for params in tasks:
-            yield params, execute(experiment.run, params, context)
-        return
-    from distributed import as_completed
-
-    if need_setup:
-        context = client.submit(experiment.setup, pure=False)
-    elif context is not None:
-        [context] = client.scatter([context], broadcast=True)
-    for start in range(0, len(tasks), CHUNK):
-        chunk = tasks[start : start + CHUNK]
-        futures = client.map(functools.partial(execute, experiment.run), chunk, context=context, pure=False)
-        params_of = dict(zip(futures, chunk, strict=True))
-        for future in as_completed(futures):
-            try:
-                outcome = future.result()
-            except Exception as exc:  # the setup failed, or a worker died
-                outcome = {
-                    "figures": {},
-                    SECONDS: float("nan"),
-                    ERROR: one_line(f"{type(exc).__name__}: {exc}"),
-                }
-            params = params_of.pop(future)
-            future.release()  # the scheduler forgets a finished task at once
-            yield params, outcome
-
-
 def run_sweep(
     experiment: Experiment,
     tasks: Sequence[dict],
@@ -315,13 +167,13 @@ def run_sweep(
     ``progress``: a tqdm bar on stderr (default: when stderr is a terminal).
     ``client``: a ``distributed.Client`` to use (left open) instead of ``workers``/``scheduler``.
     """
-    tasks = [{k: _plain(v) for k, v in t.items()} for t in tasks]
+    tasks = [{k: plain(v) for k, v in t.items()} for t in tasks]
     keys = [task_key(experiment.name, t) for t in tasks]
     if len(set(keys)) != len(keys):
         raise SweepError("the sweep repeats a task (two identical parameter sets)")
     option = "--scheduler" if scheduler is not None else "DASK_SCHEDULER_ADDRESS"
     address = scheduler if scheduler is not None else os.environ.get("DASK_SCHEDULER_ADDRESS") or None
-    workers = _check_workers(workers, local=client is None and address is None)
+    workers = check_workers(workers, local=client is None and address is None)
     with contextlib.ExitStack() as stack:
         label = ""
         if client is None and address is not None:  # reach it before anything is written
@@ -334,16 +186,7 @@ def run_sweep(
         result = SweepResult(experiment.name, [], reused=[k for k in keys if k in done], path=folder / TABLE)
         try:
             if todo:
-                if client is None and workers > 1:
-                    from distributed import Client
-
-                    client = stack.enter_context(Client(stack.enter_context(local_cluster(workers))))
-                    result.workers = f"Dask LocalCluster, {workers} worker processes"
-                elif client is not None:
-                    label = label or f"Dask client {client.scheduler.address}"
-                    result.workers = f"{label}, {len(client.scheduler_info()['workers'])} workers"
-                else:
-                    result.workers = "serial, in this process"
+                client, result.workers = start_client(stack, client, workers, label)
                 need_setup = context is None and experiment.setup is not None
                 found = outcomes(experiment, todo, context, need_setup, client)
                 _store(found, experiment.name, folder / ROWS, done, result, progress, len(keys))

@@ -30,7 +30,7 @@ from pathlib import Path
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from vo_lib.formats.poses import MAX_POSITION, TrajectoryError, read_trajectory
+from vo_lib.formats.poses import MAX_POSITION, TrajectoryError, read_text, read_trajectory
 
 #: Largest time difference (s) at which a ground-truth sample is associated with an image: evo's
 #: default ``max_diff``.
@@ -80,12 +80,11 @@ def _check_size(path: Path) -> None:
 
 
 def _text_rows(path: Path) -> list[tuple[int, str]]:
+    """The numbered rows of the file, comments (``#``, ``%``) and blank lines left out."""
     try:
-        text = path.read_bytes().decode("utf-8-sig")
-    except OSError as exc:
-        raise GroundTruthError(f"{path}: cannot read ({exc.strerror or exc})") from None
-    except UnicodeDecodeError as exc:
-        raise GroundTruthError(f"{path}: not a text file (byte {exc.start} is not UTF-8)") from None
+        text = read_text(path)
+    except TrajectoryError as exc:
+        raise GroundTruthError(str(exc)) from None
     return [
         (n, line.strip())
         for n, line in enumerate(text.split("\n"), start=1)

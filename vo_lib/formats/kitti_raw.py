@@ -17,11 +17,25 @@ from pathlib import Path
 
 import numpy as np
 
+from vo_lib.formats.frame_files import SequenceError, check_size, read_text, required
 from vo_lib.formats.poses import rotation_problem
-from vo_lib.formats.sequence import SequenceError, check_size, required
 
 OXTS_FIELDS = 30
 VF, WZ = 8, 19  # zero-based columns of forward speed (m/s) and yaw rate (rad/s)
+
+
+def _packet(path: Path, line_no: int, line: str) -> list[float]:
+    """The :data:`OXTS_FIELDS` finite numbers of one line of ``oxts.txt``."""
+    parts = line.split()
+    if len(parts) != OXTS_FIELDS:
+        raise SequenceError(f"{path}, line {line_no}: expected {OXTS_FIELDS} numbers; got {len(parts)}")
+    try:
+        values = [float(p) for p in parts]
+    except ValueError:
+        raise SequenceError(f"{path}, line {line_no}: expected {OXTS_FIELDS} numbers") from None
+    if not np.all(np.isfinite(values)):
+        raise SequenceError(f"{path}, line {line_no}: not every number is finite")
+    return values
 
 
 def read_oxts(path, frames: int | None = None) -> np.ndarray:
@@ -30,24 +44,8 @@ def read_oxts(path, frames: int | None = None) -> np.ndarray:
     path = Path(path)
     if frames is not None:
         check_size(path, frames, "OXTS packets")
-    try:
-        text = path.read_text()
-    except UnicodeDecodeError:
-        raise SequenceError(f"{path}: not a text file (expected {OXTS_FIELDS} numbers per line)") from None
-    rows = []
-    for line_no, line in enumerate(text.splitlines(), 1):
-        if not line.strip():
-            continue
-        parts = line.split()
-        if len(parts) != OXTS_FIELDS:
-            raise SequenceError(f"{path}, line {line_no}: expected {OXTS_FIELDS} numbers; got {len(parts)}")
-        try:
-            values = [float(p) for p in parts]
-        except ValueError:
-            raise SequenceError(f"{path}, line {line_no}: expected {OXTS_FIELDS} numbers") from None
-        if not np.all(np.isfinite(values)):
-            raise SequenceError(f"{path}, line {line_no}: not every number is finite")
-        rows.append(values)
+    lines = enumerate(read_text(path).split("\n"), 1)
+    rows = [_packet(path, line_no, line) for line_no, line in lines if line.strip()]
     if not rows:
         raise SequenceError(f"{path}: no OXTS packets")
     return np.array(rows)

@@ -104,17 +104,8 @@ def read_trajectory(path, min_poses: int = 1) -> tuple[np.ndarray | None, np.nda
     than ``min_poses`` poses, raises one :class:`TrajectoryError` naming the file and line.
     """
     path = Path(path)
-    if not path.is_file():
-        what = "a folder, not a trajectory file" if path.is_dir() else "no such trajectory file"
-        raise TrajectoryError(f"{path}: {what}")
-    try:
-        text = path.read_bytes().decode("utf-8-sig")
-    except OSError as exc:
-        raise TrajectoryError(f"{path}: cannot read ({exc.strerror or exc})") from None
-    except UnicodeDecodeError as exc:
-        raise TrajectoryError(f"{path}: not a text file (byte {exc.start} is not UTF-8)") from None
     rows, lines = [], []
-    for n, line in enumerate(text.split("\n"), start=1):
+    for n, line in enumerate(read_text(path).split("\n"), start=1):
         if not line.strip() or line.lstrip().startswith("#"):
             continue
         rows.append(_row(path, n, line, (len(rows[0]), lines[0]) if rows else None))
@@ -127,12 +118,30 @@ def read_trajectory(path, min_poses: int = 1) -> tuple[np.ndarray | None, np.nda
             f"need at least {min_poses}"
         )
     a = np.array(rows)
-    if a.shape[1] == 8:
-        _check_increasing(path, a[:, 0], lines)
     if a.shape[1] == 12:
         return None, as_homogeneous(a.reshape(-1, 3, 4))
+    _check_increasing(path, a[:, 0], lines)
+    return a[:, 0], _tum_poses(a)
+
+
+def read_text(path: Path) -> str:
+    """The text of a trajectory file; a folder, a missing file, an unreadable or non-UTF-8 one
+    raises :class:`TrajectoryError`."""
+    if not path.is_file():
+        what = "a folder, not a trajectory file" if path.is_dir() else "no such trajectory file"
+        raise TrajectoryError(f"{path}: {what}")
+    try:
+        return path.read_bytes().decode("utf-8-sig")
+    except OSError as exc:
+        raise TrajectoryError(f"{path}: cannot read ({exc.strerror or exc})") from None
+    except UnicodeDecodeError as exc:
+        raise TrajectoryError(f"{path}: not a text file (byte {exc.start} is not UTF-8)") from None
+
+
+def _tum_poses(a: np.ndarray) -> np.ndarray:
+    """``(N, 4, 4)`` poses of TUM rows ``t x y z qx qy qz qw``."""
     T = np.tile(np.eye(4), (len(a), 1, 1))
     q = a[:, 4:8] / np.max(np.abs(a[:, 4:8]), axis=1, keepdims=True)  # no overflow in the norm
     T[:, :3, :3] = Rotation.from_quat(q).as_matrix()
     T[:, :3, 3] = a[:, 1:4]
-    return a[:, 0], T
+    return T

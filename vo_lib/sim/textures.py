@@ -22,7 +22,7 @@ paint, a dark window band and wheels).
 
 from __future__ import annotations
 
-from functools import lru_cache
+import functools
 
 import cv2
 import numpy as np
@@ -94,7 +94,7 @@ BRICK_GREY, MORTAR_GREY = (115.0, 8.0), 140.0
 STOREY = 3.0
 
 
-@lru_cache(maxsize=4)
+@functools.lru_cache(maxsize=4)
 def photograph(name: str) -> np.ndarray:
     """A grey scikit-image photograph (``"grass"``, ``"gravel"``), float32."""
     return getattr(skimage.data, name)().astype(np.float32)
@@ -220,10 +220,8 @@ def floor_tiles(height: int, width: int, texel: float, seed: int, side: float = 
     img = cv2.resize(greys, (greys.shape[1] * n, greys.shape[0] * n), interpolation=cv2.INTER_NEAREST)
     img = img[:height, :width].copy()
     grout = max(1, int(round(0.006 / texel)))
-    for k in range(0, height, n):
-        img[k : k + grout] = 95
-    for k in range(0, width, n):
-        img[:, k : k + grout] = 95
+    img[np.arange(height) % n < grout] = 95
+    img[:, np.arange(width) % n < grout] = 95
     speckle = photo_texture("asphalt", height, width, texel, seed + 1) - PHOTO_TONE["asphalt"][0]
     return img + 3.0 * speckle
 
@@ -233,10 +231,8 @@ def ceiling_panels(height: int, width: int, texel: float, seed: int) -> np.ndarr
     rng = np.random.default_rng(seed)
     n = max(1, int(round(0.6 / texel)))
     img = np.full((height, width), 175.0, np.float32) + smooth_wash(height, width, texel, rng, 2.0)
-    for k in range(0, height, n):
-        img[k : k + 2] = 150
-    for k in range(0, width, n):
-        img[:, k : k + 2] = 150
+    img[np.arange(height) % n < 2] = 150
+    img[:, np.arange(width) % n < 2] = 150
     for r in range(n, height - n, 4 * n):
         for c in range(n, width - n, 3 * n):
             img[r + 4 : r + n - 4, c + 4 : c + 2 * n - 4] = 245
@@ -248,8 +244,7 @@ def fence(height: int, width: int, texel: float, seed: int) -> np.ndarray:
     rng = np.random.default_rng(seed)
     img = np.full((height, width), 170.0, np.float32) + smooth_wash(height, width, texel, rng, 4.0)
     pitch, post = int(round(0.25 / texel)), max(1, int(round(0.05 / texel)))
-    for c in range(0, width, pitch):
-        img[:, c : c + post] = 70
+    img[:, np.arange(width) % pitch < post] = 70
     for y in (0.3, 1.1):
         img[int(y / texel) : int((y + 0.06) / texel) + 1] = 80
     return img
@@ -297,22 +292,26 @@ def road_surface(height: int, width: int, texel: float, seed: int) -> np.ndarray
     img = grey + ROAD_GRAIN * (asphalt - grey)
     gravel = photo_texture("gravel", height, width, texel, seed + 1)
     wash = smooth_wash(height, width, texel, np.random.default_rng(seed + 2), 4.0)
-    along = np.arange(width) * texel
-    edge = 0.0
-    for band, w in ROAD_BANDS:
-        r0, r1 = int(round(edge / texel)), int(round((edge + w) / texel))
-        if band == "gravel":
-            img[r0:r1] = gravel[r0:r1]
-        elif band == "kerb":
-            img[r0:r1] = KERB_GREY + 0.3 * (gravel[r0:r1] - PHOTO_TONE["gravel"][0])
-        elif band == "line":
-            img[r0:r1] = LINE_GREY
-        elif band == "dashes":
-            painted = np.mod(along, DASH[1]) < DASH[0]
-            c0, c1 = r0 + (r1 - r0) // 3, r1 - (r1 - r0) // 3
-            img[c0:c1, painted] = LINE_GREY
-        edge += w
+    painted = np.mod(np.arange(width) * texel, DASH[1]) < DASH[0]  # the centre line's dashes
+    band_grey = {  # each band's grey over its rows r0:r1
+        "gravel": lambda r0, r1: gravel[r0:r1],
+        "kerb": lambda r0, r1: KERB_GREY + 0.3 * (gravel[r0:r1] - PHOTO_TONE["gravel"][0]),
+        "line": lambda r0, r1: LINE_GREY,
+        "asphalt": lambda r0, r1: img[r0:r1],
+        "dashes": lambda r0, r1: _dashed(img[r0:r1], painted, (r1 - r0) // 3, r1 - r0),
+    }
+    edges = np.cumsum([0.0, *(w for _, w in ROAD_BANDS)])
+    for (band, _), start, end in zip(ROAD_BANDS, edges, edges[1:], strict=False):
+        r0, r1 = int(round(start / texel)), int(round(end / texel))
+        img[r0:r1] = band_grey[band](r0, r1)
     return img + wash
+
+
+def _dashed(rows: np.ndarray, painted: np.ndarray, third: int, n: int) -> np.ndarray:
+    """The ``n`` rows of a dashed band with the line painted over their middle third."""
+    rows = rows.copy()
+    rows[third : n - third, painted] = LINE_GREY
+    return rows
 
 
 def vehicle_side(height: int, width: int, texel: float, seed: int) -> np.ndarray:
@@ -330,8 +329,17 @@ def vehicle_side(height: int, width: int, texel: float, seed: int) -> np.ndarray
     return img
 
 
-#: Styles drawn by a function of ``(height, width, texel, seed)``.
-_PAINTED = {
+def plain_paint(height: int, width: int, texel: float, seed: int) -> np.ndarray:
+    """A uniform grey with a faint wash."""
+    rng = np.random.default_rng(seed)
+    return rng.uniform(150, 200) + smooth_wash(height, width, texel, rng, 3.0)
+
+
+#: Every style, drawn by a function of ``(height, width, texel, seed)``.
+_DRAW = {
+    "corners": lambda height, width, texel, seed: corner_texture(height, width, seed),
+    **{style: functools.partial(photo_texture, style) for style in PHOTO_METRES},
+    "plain": plain_paint,
     "brick": brick_wall,
     "wall": painted_wall,
     "tiles": floor_tiles,
@@ -350,18 +358,9 @@ def surface_texture(style: str, height: int, width: int, texel: float, seed: int
     """
     if height <= 0 or width <= 0:
         raise ValueError(f"texture size must be positive; got {height}x{width}")
-    if style == "corners":
-        return corner_texture(height, width, seed)
-    if style in PHOTO_METRES:
-        img = photo_texture(style, height, width, texel, seed)
-    elif style == "plain":
-        rng = np.random.default_rng(seed)
-        img = rng.uniform(150, 200) + smooth_wash(height, width, texel, rng, 3.0)
-    elif style in _PAINTED:
-        img = _PAINTED[style](height, width, texel, seed)
-    else:
+    if style not in _DRAW:
         raise ValueError(f"unknown texture style {style!r}; known: {', '.join(STYLES)}")
-    return np.clip(img + 0.5, 0, 255).astype(np.uint8)
+    return np.clip(_DRAW[style](height, width, texel, seed) + 0.5, 0, 255).astype(np.uint8)
 
 
 STYLES = (
@@ -379,7 +378,7 @@ STYLES = (
 )
 
 
-@lru_cache(maxsize=256)
+@functools.lru_cache(maxsize=256)
 def cached_surface(style: str, height: int, width: int, texel: float, seed: int) -> tuple[np.ndarray, ...]:
     """Mipmaps of :func:`surface_texture`, computed once per process for each argument set."""
     return tuple(mipmaps(surface_texture(style, height, width, texel, seed)))

@@ -3,12 +3,9 @@
 Times are medians of repeated runs on data drawn once with a fixed seed, so a run compares
 like with like; they are measurements to read, never assertions. One module per wing
 (``bench_stereo_vo``, ``bench_line_slam``, ``bench_lidar_tracking``), one for the simulated
-sensors (``bench_sim``),
-one for the real drive beside the PnP baseline (``bench_real``),
-one for how real the samples' images look (``bench_realism``) and one for the sweep machinery
-on Dask (``bench_sweep``); the timing
-helpers are in ``common``. Each benchmark imports what it times when it runs, so listing them
-stays fast.
+sensors (``bench_sim``), one for the real drive beside the PnP baseline (``bench_real``) and one
+for how real the samples' images look (``bench_realism``); the timing helpers are in ``common``.
+Each benchmark imports what it times when it runs, so listing them stays fast.
 """
 
 from __future__ import annotations
@@ -28,7 +25,6 @@ from vo_lib.cli.bench.bench_stereo_vo import (
     bench_pipeline,
     bench_ransac,
 )
-from vo_lib.cli.bench.bench_sweep import bench_sweep
 
 BENCHES: dict[str, Callable[[], dict[str, float]]] = {
     "pipeline": bench_pipeline,
@@ -43,7 +39,6 @@ BENCHES: dict[str, Callable[[], dict[str, float]]] = {
     "odometers": bench_odometers,
     "real": bench_real,
     "realism": bench_realism,
-    "sweep": bench_sweep,
 }
 
 #: What each benchmark times and how long it runs (wall time of one run on the shared 2-core
@@ -61,5 +56,4 @@ BENCH_HELP: dict[str, tuple[str, str]] = {
     "odometers": ("[Yuan]'s PnP odometer beside [Zhao]'s on the rendered corridor", "about 50 s"),
     "real": ("the car pipeline and OpenCV's PnP baseline on real sequences (VO_LIB_REALDATA)", "about 80 s"),
     "realism": ("how real the samples' images look: empty cells, corners, noise", "about 10 s"),
-    "sweep": ("a 20-seed corridor sweep serially and on 2 local Dask workers", "a few minutes"),
 }

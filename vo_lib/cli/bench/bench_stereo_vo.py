@@ -208,7 +208,38 @@ def _numpy_references(wanted: bool) -> None:
     os.environ["VO_LIB_PLAIN"] = "1" if wanted else "0"
 
 
-def bench_kernels(frames: int = 60) -> dict[str, float]:  # noqa: PLR0915 (three timed cases in a row)
+def _kernel_and_numpy(time_it) -> tuple[float, float]:
+    """``time_it()`` (milliseconds) with the compiled kernels, then with their NumPy references;
+    the setting is put back afterwards."""
+    import os
+
+    before = os.environ.get("VO_LIB_PLAIN")
+    times = []
+    try:
+        for numpy_only in (False, True):
+            _numpy_references(numpy_only)
+            times.append(time_it())
+    finally:
+        if before is None:
+            os.environ.pop("VO_LIB_PLAIN", None)
+        else:
+            os.environ["VO_LIB_PLAIN"] = before
+    return times[0], times[1]
+
+
+def _render_ms(renderer, poses) -> float:
+    """Median milliseconds to render a stereo pair at each of ``poses`` (after one warm-up)."""
+    rng = np.random.default_rng(BENCH_SEED)
+    renderer.render_pair(poses[0], rng)  # warm
+    times = []
+    for pose in poses:
+        t0 = time.perf_counter()
+        renderer.render_pair(pose, rng)
+        times.append((time.perf_counter() - t0) * 1e3)
+    return float(np.median(times))
+
+
+def bench_kernels(frames: int = 60) -> dict[str, float]:
     """The whole frame with each remaining compiled kernel and with its NumPy reference, side by
     side in one process: a kernel stays only where NumPy makes the whole frame > 1.5x slower.
 
@@ -216,8 +247,6 @@ def bench_kernels(frames: int = 60) -> dict[str, float]:  # noqa: PLR0915 (three
     ``$VO_LIB_REALDATA`` when set and on a rendered indoor drive; the renderer's composite on a
     whole rendered pair.
     """
-    import os
-
     from vo_lib.cli.bench.bench_real import realdata_folders
     from vo_lib.formats.sequence import read_sequence
     from vo_lib.geometry import camera_mount, planar_to_matrix
@@ -227,48 +256,30 @@ def bench_kernels(frames: int = 60) -> dict[str, float]:  # noqa: PLR0915 (three
     from vo_lib.sim.world import WORLDS
     from vo_lib.stereo_vo.pipeline import run_frames, run_sequence
 
-    before = os.environ.get("VO_LIB_PLAIN")
+    def sequence_ms(seq) -> float:
+        run_sequence(seq, frames=3, use_odometry=False)  # warm
+        return run_sequence(seq, use_odometry=False).timing_table()["total"]
+
+    def frames_ms() -> float:
+        run_frames(iter(images[:3]), rendered.camera)  # warm
+        return run_frames(iter(images), rendered.camera).timing_table()["total"]
+
     rows: dict[str, tuple[float, float]] = {}
-    try:
-        rendered, frame_iter = render_sample("indoor_free", frames)
-        images = list(frame_iter)
-        for folder in realdata_folders():
-            seq = read_sequence(folder)
-            for k in range(len(seq)):
-                seq.pair(k)
-            pair = []
-            for numpy_only in (False, True):
-                _numpy_references(numpy_only)
-                run_sequence(seq, frames=3, use_odometry=False)  # warm
-                pair.append(run_sequence(seq, use_odometry=False).timing_table()["total"])
-            rows[f"matching: whole frame, {folder.name}"] = (pair[0], pair[1])
-        pair = []
-        for numpy_only in (False, True):
-            _numpy_references(numpy_only)
-            run_frames(iter(images[:3]), rendered.camera)  # warm
-            pair.append(run_frames(iter(images), rendered.camera).timing_table()["total"])
-        rows["matching: whole frame, indoor_free"] = (pair[0], pair[1])
-        sample = SAMPLES["indoor_free"]
-        drive = simulate_drive(sample.legs, sample.rate, sample.start, np.random.default_rng(sample.seed))
-        renderer = StereoRenderer(WORLDS[sample.world](), rendered.camera, SensorEffects(noise_sigma=1.0))
-        poses = [planar_to_matrix(p) @ camera_mount(height=0.5) for p in drive.poses[100:120]]
-        pair = []
-        for numpy_only in (False, True):
-            _numpy_references(numpy_only)
-            rng = np.random.default_rng(BENCH_SEED)
-            renderer.render_pair(poses[0], rng)  # warm
-            times = []
-            for pose in poses:
-                t0 = time.perf_counter()
-                renderer.render_pair(pose, rng)
-                times.append((time.perf_counter() - t0) * 1e3)
-            pair.append(float(np.median(times)))
-        rows["composite: whole rendered pair, indoor_lab"] = (pair[0], pair[1])
-    finally:
-        if before is None:
-            os.environ.pop("VO_LIB_PLAIN", None)
-        else:
-            os.environ["VO_LIB_PLAIN"] = before
+    rendered, frame_iter = render_sample("indoor_free", frames)
+    images = list(frame_iter)
+    for folder in realdata_folders():
+        seq = read_sequence(folder)
+        for k in range(len(seq)):
+            seq.pair(k)
+        rows[f"matching: whole frame, {folder.name}"] = _kernel_and_numpy(lambda seq=seq: sequence_ms(seq))
+    rows["matching: whole frame, indoor_free"] = _kernel_and_numpy(frames_ms)
+    sample = SAMPLES["indoor_free"]
+    drive = simulate_drive(sample.legs, sample.rate, sample.start, np.random.default_rng(sample.seed))
+    renderer = StereoRenderer(WORLDS[sample.world](), rendered.camera, SensorEffects(noise_sigma=1.0))
+    poses = [planar_to_matrix(p) @ camera_mount(height=0.5) for p in drive.poses[100:120]]
+    rows["composite: whole rendered pair, indoor_lab"] = _kernel_and_numpy(
+        lambda: _render_ms(renderer, poses)
+    )
     print("compiled kernels against their NumPy references (median ms; NumPy / kernel; keep if > 1.5)")
     print(f"  {'case':<46s}{'kernel':>10s}{'NumPy':>10s}{'ratio':>8s}  verdict")
     for name, (kernel, numpy_ms) in rows.items():

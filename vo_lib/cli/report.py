@@ -1,0 +1,204 @@
+"""The tables ``python -m vo_lib run`` prints: time per stage (like [Zhao]'s Table 1) and the
+errors against ground truth, position errors and distances in 3-D, heading errors planar."""
+
+from __future__ import annotations
+
+from dataclasses import fields
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from vo_lib.geometry import camera_poses_from_planar, planar_from_camera_poses, wrap_angle
+from vo_lib.stereo_vo.paper_tables import PAPER_LONG_RUN, PAPER_TABLE1
+
+if TYPE_CHECKING:
+    from vo_lib.evaluation import StandardErrors
+    from vo_lib.stereo_vo.pipeline import PipelineResult
+
+#: Width of a row's label and of each column in the error table.
+LABEL, COLUMN = 46, 18
+
+
+def timing_rows(result: PipelineResult) -> list[tuple[str, str, np.ndarray]]:
+    """Per-frame milliseconds of each stage, as the timing table lists them: ``(key, label,
+    values)``. The stages and "between the stages" add up to the whole frame, frame by frame."""
+    from vo_lib.stereo_vo.pipeline import FrameTimings
+
+    rows = result.timings[1:] or result.timings  # the first frame only detects: no motion yet
+    column = {f.name: np.array([getattr(r, f.name) for r in rows]) for f in fields(FrameTimings)}
+    stages = [
+        ("stereo", "binocular stereo vision processing", column["stereo"]),
+        ("matching", "guided temporal matching", column["matching"]),
+        ("estimation", "parameter estimation (1-point RANSAC)", column["estimation"]),
+        ("refinement", "6-DoF refinement", column["refinement"]),
+        ("kalman", "Kalman filtering (prediction + update)", column["kalman"]),
+    ]
+    stages = [s for s in stages if s[0] != "refinement" or s[2].any()]
+    between = column["total"] - sum(values for _, _, values in stages)
+    return [*stages, ("between", "between the stages (keyframes, bookkeeping)", between)]
+
+
+def print_timing_table(result: PipelineResult, camera, frames: int, decoding_ms=None) -> None:
+    """The timing table like the paper's Table 1: median and mean milliseconds per stage, and the
+    paper's figure (a mean) where the paper has one for this resolution. ``decoding_ms``: the
+    milliseconds each frame's images took to decode, on the reader thread (a line of its own,
+    outside the whole frame, which the reader thread overlaps)."""
+    rows = timing_rows(result)
+    whole = sum(values for _, _, values in rows)
+    paper = PAPER_TABLE1.get((camera.width, camera.height), {})
+    print(f"\nTime per frame at {camera.width}x{camera.height} over {frames} frames, in ms")
+    title = f"   paper's mean (Table 1, {camera.width}x{camera.height})" if paper else ""
+    print(f"  {'stage':<46s}{'median':>8s}{'mean':>9s}{title}")
+    for key, label, values in [*rows, ("whole", "whole frame", whole)]:
+        figure = f"   {paper[key]:.3f}" if key in paper else ""
+        print(f"  {label:<46s}{np.median(values):8.3f}{np.mean(values):9.3f}{figure}")
+    if decoding_ms is not None and len(decoding_ms):
+        label = "image decoding (on the reader thread)"
+        print(f"  {label:<46s}{np.median(decoding_ms):8.3f}{np.mean(decoding_ms):9.3f}")
+    print("  The means of the stages add up to the whole frame; the medians (each stage's typical")
+    print("  frame) need not. Images are decoded ahead on a reader thread, outside the whole frame.")
+    if paper:
+        print(
+            f"  The paper's {PAPER_LONG_RUN[0]:,}-frame run: mean {PAPER_LONG_RUN[1]} ms per frame, s.d. "
+            f"{PAPER_LONG_RUN[2]} ms (IV.A.1; resolution not stated)."
+        )
+    print(f"  frames per second: {1000.0 / np.mean(whole):.0f} (from the mean whole frame)")
+
+
+def truth_and_odometry(seq, vehicle, frames: int):
+    """Planar vehicle poses of the ground truth and of odometry alone over the first ``frames``
+    frames (each None where the sequence has none): what :func:`error_report` compares."""
+    truth = None if seq.poses is None else planar_from_camera_poses(seq.poses[:frames], vehicle.mount)
+    odometry = None
+    if vehicle.odometry is not None:
+        odometry = vehicle.odometry_model.integrate(vehicle.odometry[1:frames])
+    return truth, odometry
+
+
+def error_report(result: PipelineResult, truth_planar: np.ndarray, odometry_planar=None) -> dict:
+    """Planar errors of the estimate (and of odometry alone) against the ground truth: final
+    position error (m, % of the distance travelled), planar ATE, heading errors."""
+    from vo_lib.evaluation import ate_planar, final_error, is_spot_turn, turned_degrees
+
+    trajectories = {"vo": result.poses, "odometry": odometry_planar}
+    finals = {label: final_error(truth_planar, t) for label, t in trajectories.items() if t is not None}
+    dist = finals["vo"].distance_m
+    report = {
+        "distance_m": dist,
+        "turned_deg": turned_degrees(truth_planar),
+        "spot_turn": is_spot_turn(truth_planar),
+    }
+    for label, final in finals.items():
+        traj = trajectories[label]
+        heading = np.degrees(np.abs(wrap_angle(traj[:, 2] - truth_planar[:, 2])))
+        report[label] = {
+            "final_position_error_m": final.position_m,
+            "final_position_error_pct": final.percent if not report["spot_turn"] and dist > 0 else None,
+            "ate_rmse_m": ate_planar(truth_planar, traj)[0].rmse,
+            "heading_error_mean_deg": float(heading.mean()),
+            "heading_error_max_deg": float(heading.max()),
+            "final_heading_error_deg": final.heading_deg,
+        }
+    return report
+
+
+#: The 3-D rows: label, the figure of a column's :class:`~vo_lib.evaluation.StandardErrors`, format.
+ROWS_3D = (
+    ("final position error, 3-D [m]", lambda e: e.final.position_m, "{:.4f}"),
+    ("  of distance travelled, 3-D [%]", lambda e: e.final.percent, "{:.2f}"),
+    ("final rotation error, 3-D [deg]", lambda e: e.final.rotation_deg, "{:.3f}"),
+    ("distance travelled by the estimate, 3-D [m]", lambda e: e.final.estimate_distance_m, "{:.3f}"),
+    ("ATE RMSE, SE(3) alignment [m]", lambda e: e.ate_se3.rmse, "{:.4f}"),
+    ("ATE RMSE, Sim(3) alignment [m]", lambda e: e.ate_sim3.rmse, "{:.4f}"),
+    ("  scale of the Sim(3) alignment", lambda e: e.sim3_scale, "{:.4f}"),
+    ("RPE RMSE, 1 frame, translation [m]", lambda e: e.rpe_m.rmse, "{:.5f}"),
+    ("RPE RMSE, 1 frame, rotation [deg]", lambda e: e.rpe_deg.rmse, "{:.4f}"),
+    ("KITTI translation error [%]", lambda e: e.kitti and e.kitti.translation_pct, "{:.3f}"),
+    ("KITTI rotation error [deg/100 m]", lambda e: e.kitti and e.kitti.rotation_deg_per_100m, "{:.3f}"),
+)
+#: The planar rows: label, key of :func:`error_report`'s column, format.
+ROWS_PLANAR = (
+    ("ATE RMSE, planar alignment [m]", "ate_rmse_m", "{:.4f}"),
+    ("planar heading error, mean [deg]", "heading_error_mean_deg", "{:.3f}"),
+    ("planar heading error, max [deg]", "heading_error_max_deg", "{:.3f}"),
+    ("planar heading error, final [deg]", "final_heading_error_deg", "{:.3f}"),
+)
+
+
+def _row(label: str, values, fmt: str) -> str:
+    cells = ["" if v is None or not np.isfinite(v) else fmt.format(v) for v in values]
+    return f"  {label:<{LABEL}s}" + "".join(f"{c:>{COLUMN}s}" for c in cells)
+
+
+def _how_far(report: dict, vo_3d) -> str:
+    """The table's title: the turn of a spot turn, else the distance (3-D where known)."""
+    if report["spot_turn"]:
+        return f"{report['turned_deg']:.0f}° turned on the spot"
+    if vo_3d is not None:
+        return f"{vo_3d.final.distance_m:.2f} m travelled in 3-D"
+    return f"{report['distance_m']:.2f} m travelled, planar"
+
+
+def print_error_table(
+    report: dict,
+    flagged: int,
+    errors: dict[str, StandardErrors | None] | None = None,
+    odometry_label: str = "track odometry",
+) -> None:
+    """One table of errors against ground truth, a column for visual odometry and one for
+    odometry alone: the rows of ``errors`` (3-D, :func:`vo_lib.evaluation.standard_errors` of
+    each column's camera poses) and the planar rows of ``report`` (:func:`error_report`)."""
+    errors = errors or {}
+    vo_3d = errors.get("vo")
+    print(f"\nErrors against ground truth ({_how_far(report, vo_3d)})")
+    cols = [k for k in ("vo", "odometry") if k in report]
+    names = {"vo": "visual odometry", "odometry": odometry_label}
+    print(f"  {'':<{LABEL}s}" + "".join(f"{names[c]:>{COLUMN}s}" for c in cols))
+    rows_3d = [] if vo_3d is None else ROWS_3D
+    for label, figure, fmt in rows_3d:
+        if not (report["spot_turn"] and "of distance" in label):
+            print(_row(label, [None if errors.get(c) is None else figure(errors[c]) for c in cols], fmt))
+    if vo_3d is not None and vo_3d.kitti is not None:
+        print(f"  (KITTI errors over {vo_3d.kitti.label()}, {vo_3d.kitti.count} segments)")
+    for label, key, fmt in ROWS_PLANAR:
+        print(_row(label, [report[c][key] for c in cols], fmt))
+    print(_row("frames flagged (VO not used)", [flagged], "{:d}"))
+
+
+def position_only_errors(seq, poses: np.ndarray, n: int) -> dict:
+    """The ATE of the tracked point against position-only truth (a laser tracker's prism), printed;
+    returns it for the report (empty where the sequence has no such truth)."""
+    from vo_lib.evaluation import Alignment, ate_positions
+
+    positions = seq.manifest.get("positions") if isinstance(seq.manifest, dict) else None
+    frames = np.asarray(positions["frames"], int) if positions else np.zeros(0, int)
+    keep = frames < n
+    if keep.sum() < 3:
+        return {}
+    ate, _ = ate_positions(
+        np.asarray(positions["xyz"])[keep], poses[frames[keep]], positions["lever_arm_camera"], Alignment.SE3
+    )
+    print(f"\nErrors against position-only ground truth ({positions['file']}, {int(keep.sum())} positions)")
+    print(f"  {'ATE RMSE of the tracked point, SE(3) alignment [m]':<62s}{ate.rmse:>16.4f}")
+    return {"ate_positions_m": ate.rmse}
+
+
+def odometry_name(vehicle) -> str:
+    """What the vehicle's odometry is, as the tables and the figure name it."""
+    if vehicle.kind == "crawler":
+        return "track odometry"
+    return "OXTS odometry" if vehicle.odometry_source.startswith("oxts") else "wheel odometry"
+
+
+def errors_3d(truth: np.ndarray, estimates: dict, mount: np.ndarray) -> dict:
+    """:func:`vo_lib.evaluation.standard_errors` of each estimate (camera poses, or planar poses
+    carried to the camera through ``mount``) against the camera's 6-DoF truth; None for a
+    missing estimate."""
+    from vo_lib.evaluation import standard_errors
+
+    errors = {}
+    for label, poses in estimates.items():
+        if poses is not None and np.ndim(poses) == 2:
+            poses = camera_poses_from_planar(poses, mount)
+        errors[label] = None if poses is None else standard_errors(truth, poses)
+    return errors

@@ -1,0 +1,161 @@
+"""A camera's calibration in the ASL layout of the EuRoC datasets (and of Kalibr), and the
+stereo rectification OpenCV computes from two of them.
+
+``sensor.yaml`` holds ``T_BS`` (camera to body, 4x4), ``intrinsics`` ``[fu, fv, cu, cv]``,
+``distortion_model: radial-tangential``, ``distortion_coefficients`` ``[k1, k2, p1, p2]`` and
+``resolution``. Every problem raises one :class:`AslError` naming the file and key.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import cv2
+import numpy as np
+import yaml
+
+from vo_lib.camera import StereoCamera
+from vo_lib.formats.frame_files import SequenceError
+from vo_lib.formats.poses import rotation_problem
+
+
+class AslError(SequenceError):
+    """An ASL folder that cannot be read: the file (and key or line) named, and what was expected."""
+
+
+@dataclass(frozen=True)
+class CameraCalibration:
+    """One camera's ``sensor.yaml``: ``T_BS`` (camera to body), ``K``, radial-tangential
+    ``distortion`` ``[k1, k2, p1, p2]`` and ``resolution`` ``(width, height)``."""
+
+    T_BS: np.ndarray
+    K: np.ndarray
+    distortion: np.ndarray
+    resolution: tuple[int, int]
+
+
+@dataclass(frozen=True)
+class Rectification:
+    """The undistort-and-rectify maps of a stereo pair and the rectified left camera's pose in
+    the body frame (``T_body_rect``)."""
+
+    left_maps: tuple[np.ndarray, np.ndarray]
+    right_maps: tuple[np.ndarray, np.ndarray]
+    camera: StereoCamera
+    T_body_rect: np.ndarray
+
+    def __call__(self, left: np.ndarray, right: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Both images undistorted and rectified (bilinear)."""
+        return (
+            cv2.remap(left, *self.left_maps, cv2.INTER_LINEAR),
+            cv2.remap(right, *self.right_maps, cv2.INTER_LINEAR),
+        )
+
+
+def _yaml(path: Path) -> dict:
+    if not path.is_file():
+        raise AslError(f"{path}: missing (the camera's calibration: T_BS, intrinsics, distortion)")
+    try:
+        data = yaml.safe_load(path.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError) as exc:
+        raise AslError(f"{path}: cannot read ({exc})") from None
+    except yaml.YAMLError as exc:
+        mark = getattr(exc, "problem_mark", None)
+        where = f", line {mark.line + 1}" if mark is not None else ""
+        raise AslError(f"{path}{where}: not valid YAML ({getattr(exc, 'problem', None) or exc})") from None
+    if not isinstance(data, dict):
+        raise AslError(f"{path}: expected YAML keys (T_BS, intrinsics, ...), got {type(data).__name__}")
+    return data
+
+
+def _numbers(path: Path, data: dict, key: str, count: int, what: str) -> np.ndarray:
+    value = data.get(key)
+    if isinstance(value, dict):  # T_BS: {rows, cols, data}
+        value = value.get("data")
+    try:
+        a = np.array(value, dtype=float).ravel()
+    except (TypeError, ValueError):
+        a = np.array([])
+    if value is None:
+        raise AslError(f"{path}: key {key} missing; expected {what}")
+    if a.size != count or not np.all(np.isfinite(a)):
+        raise AslError(f"{path}: key {key}: expected {what} ({count} finite numbers), got {value!r:.60}")
+    return a
+
+
+def read_camera_yaml(path) -> CameraCalibration:
+    """One camera's calibration from its ``sensor.yaml``; raises :class:`AslError` naming the key."""
+    path = Path(path)
+    data = _yaml(path)
+    T = _numbers(path, data, "T_BS", 16, "a 4x4 camera-to-body transform, data: [16 numbers]").reshape(4, 4)
+    problem = rotation_problem(T[:3, :3])
+    if problem or not np.allclose(T[3], [0, 0, 0, 1]):
+        raise AslError(f"{path}: key T_BS: {problem or 'the last row is not 0 0 0 1'}")
+    fu, fv, cu, cv = _numbers(path, data, "intrinsics", 4, "[fu, fv, cu, cv]")
+    if fu <= 0 or fv <= 0:
+        raise AslError(f"{path}: key intrinsics: focal lengths must be > 0, got fu={fu:g}, fv={fv:g}")
+    model = data.get("distortion_model", "radial-tangential")
+    if model not in ("radial-tangential", "radtan", "none"):
+        raise AslError(
+            f"{path}: key distortion_model: {model!r} is not supported; expected radial-tangential"
+        )
+    dist = (
+        np.zeros(4)
+        if model == "none"
+        else _numbers(path, data, "distortion_coefficients", 4, "[k1, k2, p1, p2]")
+    )
+    width, height = _numbers(path, data, "resolution", 2, "[width, height]")
+    if width < 1 or height < 1 or width != int(width) or height != int(height):
+        raise AslError(f"{path}: key resolution: expected two positive whole numbers, got {[width, height]}")
+    K = np.array([[fu, 0.0, cu], [0.0, fv, cv], [0.0, 0.0, 1.0]])
+    return CameraCalibration(T, K, dist, (int(width), int(height)))
+
+
+def rectify(left: CameraCalibration, right: CameraCalibration, where: Path) -> Rectification:
+    """OpenCV's rectification of a calibrated pair (``stereoRectify`` with zero disparity at
+    infinity, ``alpha = 0``: only valid pixels), its maps, and the rectified stereo camera."""
+    if left.resolution != right.resolution:
+        raise AslError(
+            f"{where}: cam0 is {left.resolution[0]}x{left.resolution[1]} but cam1 is "
+            f"{right.resolution[0]}x{right.resolution[1]} (key resolution); expected one size"
+        )
+    T_right_left = np.linalg.inv(right.T_BS) @ left.T_BS  # left camera -> right camera
+    size = left.resolution
+    R = np.ascontiguousarray(T_right_left[:3, :3])
+    t = T_right_left[:3, 3:].copy()
+    R1, R2, P1, P2, _, _, _ = cv2.stereoRectify(
+        left.K,
+        left.distortion,
+        right.K,
+        right.distortion,
+        size,
+        R,
+        t,
+        flags=cv2.CALIB_ZERO_DISPARITY,
+        alpha=0.0,
+    )
+    try:
+        camera = StereoCamera.from_projection_matrices(P1, P2, *size)
+    except ValueError as exc:
+        raise AslError(f"{where}: cam1 is not to the right of cam0 in T_BS ({exc})") from None
+    maps = [
+        cv2.initUndistortRectifyMap(c.K, c.distortion, R, P, size, cv2.CV_16SC2)
+        for c, R, P in ((left, R1, P1), (right, R2, P2))
+    ]
+    T_left_rect = np.eye(4)
+    T_left_rect[:3, :3] = R1.T  # rectified -> raw left camera
+    return Rectification(tuple(maps[0]), tuple(maps[1]), camera, left.T_BS @ T_left_rect)
+
+
+def truth_extrinsic(truth_path: Path) -> np.ndarray:
+    """``T_BS`` of the ``sensor.yaml`` beside a ground-truth file (the tracked frame in the body),
+    or the identity where there is none."""
+    sensor = truth_path.parent / "sensor.yaml"
+    if not sensor.is_file():
+        return np.eye(4)
+    T = _numbers(sensor, _yaml(sensor), "T_BS", 16, "a 4x4 transform, data: [16 numbers]").reshape(4, 4)
+    problem = rotation_problem(T[:3, :3])
+    if problem:
+        raise AslError(f"{sensor}: key T_BS: {problem}")
+    return T

@@ -1,0 +1,162 @@
+"""The text files of a sequence folder: ``calib.txt``, ``times.txt``, ``poses.txt``,
+``odometry.txt`` (one line per frame) and ``manifest.json``.
+
+Every problem raises one :class:`SequenceError` naming the file (and line) and what was expected.
+A per-frame file far larger than its frame count allows is refused before it is read.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from pathlib import Path
+
+import numpy as np
+
+from vo_lib.formats.poses import TrajectoryError, read_trajectory
+
+
+class SequenceError(ValueError):
+    """A sequence on disk is missing something or holds something malformed."""
+
+
+#: Bytes a line of a per-frame file may take on average (a KITTI pose line is about 200, an OXTS
+#: packet about 300): a file larger than this per frame is refused before it is read.
+MAX_LINE_BYTES = 1024
+
+
+def present(path: Path, what: str) -> bool:
+    """Whether the optional file ``path`` is there; a folder (or anything but a file) in its
+    place raises :class:`SequenceError`, so that it is not silently ignored."""
+    if not os.path.lexists(path):
+        return False
+    if not Path(path).is_file():
+        kind = "a folder" if Path(path).is_dir() else "not a regular file"
+        raise SequenceError(f"{path}: {kind}, where {what} should be a file")
+    return True
+
+
+def required(path: Path, what: str) -> None:
+    """Raise :class:`SequenceError` unless ``path`` is a file: "missing", or what is there instead."""
+    if not present(path, what):
+        raise SequenceError(f"{path}: missing ({what})")
+
+
+def check_size(path: Path, frames: int, what: str) -> None:
+    """Refuse a per-frame file far larger than ``frames`` lines could be, before reading it."""
+    size = Path(path).stat().st_size
+    limit = MAX_LINE_BYTES * frames + 65536
+    if size > limit:
+        raise SequenceError(
+            f"{path}: {size:,} bytes, far more than {frames} lines of {what} take (at most {limit:,}); "
+            "expected one line per frame"
+        )
+
+
+def _numbers(path: Path, line_no: int, text: str, count: int, what: str) -> np.ndarray:
+    parts = text.split()
+    if len(parts) != count:
+        plural = "s" if count != 1 else ""
+        raise SequenceError(f"{path}, line {line_no}: {what} needs {count} number{plural}, got {len(parts)}")
+    try:
+        values = np.array([float(p) for p in parts])
+    except ValueError as exc:
+        raise SequenceError(f"{path}, line {line_no}: {what} holds a non-number ({exc})") from None
+    if not np.all(np.isfinite(values)):
+        raise SequenceError(f"{path}, line {line_no}: {what} holds a NaN or infinite value")
+    return values
+
+
+def read_text(path: Path) -> str:
+    """The text of a small file (UTF-8, an initial byte-order mark dropped); any problem is a
+    :class:`SequenceError` naming the file."""
+    try:
+        data = Path(path).read_bytes()
+    except OSError as exc:
+        raise SequenceError(f"{path}: cannot read ({exc.strerror or exc})") from None
+    try:
+        return data.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        raise SequenceError(f"{path}: not a text file (byte {exc.start} is not UTF-8)") from None
+
+
+def _lines(path: Path) -> list[tuple[int, str]]:
+    """Non-empty lines with their 1-based numbers (lines end at newlines only)."""
+    return [(i, s.strip()) for i, s in enumerate(read_text(path).split("\n"), start=1) if s.strip()]
+
+
+def read_calib(path: Path) -> tuple[np.ndarray, np.ndarray]:
+    """``(P0, P1)`` 3x4 matrices from a KITTI ``calib.txt``; raises :class:`SequenceError`."""
+    found, where = {}, {}
+    for line_no, text in _lines(path):
+        key, sep, rest = text.partition(":")
+        if not sep:
+            raise SequenceError(f"{path}, line {line_no}: expected 'NAME: numbers', got {text[:40]!r}")
+        key = key.strip()
+        if key in ("P0", "P1", "P2", "P3"):
+            if key in found:
+                raise SequenceError(
+                    f"{path}, line {line_no}: a second {key} line (the first is line {where[key]})"
+                )
+            found[key] = _numbers(path, line_no, rest, 12, key).reshape(3, 4)
+            where[key] = line_no
+    for key in ("P0", "P1"):
+        if key not in found:
+            side = "left" if key == "P0" else "right"
+            raise SequenceError(f"{path}: no {key} line ({side} camera projection, 12 numbers)")
+    return found["P0"], found["P1"]
+
+
+def read_times(path: Path) -> np.ndarray:
+    """Timestamps in seconds, one a line, strictly increasing; raises :class:`SequenceError`."""
+    times, previous = [], None
+    for line_no, text in _lines(path):
+        t = _numbers(path, line_no, text, 1, "a timestamp")[0]
+        if previous is not None and not t > previous:
+            raise SequenceError(
+                f"{path}, line {line_no}: time {t} is not after {previous} on the line before"
+            )
+        times.append(t)
+        previous = t
+    return np.array(times)
+
+
+def read_rows(path: Path, count: int, what: str) -> np.ndarray:
+    """``(N, count)`` finite numbers, one row a line; raises :class:`SequenceError`."""
+    return np.array([_numbers(path, n, text, count, what) for n, text in _lines(path)]).reshape(-1, count)
+
+
+def read_poses(path: Path) -> np.ndarray:
+    """``(N, 3, 4)`` poses of a KITTI ``poses.txt`` (12 numbers a line, a rotation then a
+    translation), read by :func:`vo_lib.formats.poses.read_trajectory`; raises
+    :class:`SequenceError`."""
+    try:
+        times, poses = read_trajectory(path)
+    except TrajectoryError as exc:
+        raise SequenceError(str(exc)) from None
+    if times is not None:
+        raise SequenceError(f"{path}: TUM rows (8 numbers); a sequence's poses.txt holds KITTI rows of 12")
+    return poses[:, :3, :]
+
+
+def read_manifest(path: Path) -> dict:
+    """The JSON object of a ``manifest.json``; raises :class:`SequenceError`."""
+    try:
+        manifest = json.loads(read_text(path))
+    except json.JSONDecodeError as exc:
+        raise SequenceError(
+            f"{path}: not valid JSON ({exc.msg} at line {exc.lineno}, column {exc.colno})"
+        ) from None
+    if not isinstance(manifest, dict):
+        raise SequenceError(f"{path}: expected a JSON object {{...}}, got a {type(manifest).__name__}")
+    return manifest
+
+
+def read_per_frame(path: Path, frames: int, noun: str, read) -> np.ndarray:
+    """``read(path)`` of a file holding one line per frame: its size is checked before it is read
+    and its length after; ``noun`` names the rows in the error ("timestamps", "poses")."""
+    check_size(path, frames, noun)
+    rows = read(path)
+    if len(rows) != frames:
+        raise SequenceError(f"{path} has {len(rows)} {noun} but there are {frames} images")
+    return rows

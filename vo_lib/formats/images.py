@@ -1,0 +1,243 @@
+"""The image files of a sequence: listed in frame order, checked from their headers, decoded.
+
+* **Frames are paired by file name, in numeric order.** Names sort by the numbers in them,
+  whatever their padding (``2.png`` before ``10.png``); two names of one number on one side
+  (``1.png`` and ``01.png``) are an error. Hidden files (``._000001.png`` and the like) are ignored.
+* **Every image header is checked when the sequence is opened**, cheaply (PNG headers and end
+  markers are read without decoding; other formats through Pillow's lazy open): size equal to
+  the first image's, 8 bits per channel, PNG and JPEG files complete (their end marker present).
+  What can only be found by decoding (damaged compressed data) raises when the frame is read.
+
+Every problem raises one :class:`~vo_lib.formats.frame_files.SequenceError` naming the file.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import struct
+import threading
+import zlib
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+from vo_lib.formats.frame_files import SequenceError
+
+IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".pgm", ".bmp", ".tif", ".tiff")
+PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
+PNG_END = b"\x00\x00\x00\x00IEND\xaeB`\x82"
+JPEG_START, JPEG_END = b"\xff\xd8", b"\xff\xd9"
+#: Channels of each PNG colour type as OpenCV decodes it (palette images become BGR).
+PNG_CHANNELS = {0: 1, 2: 3, 3: 3, 4: 4, 6: 4}
+#: Pillow modes of 8 bits per channel (or fewer, widened to 8 when decoded).
+EIGHT_BIT_MODES = {"1", "L", "P", "LA", "La", "PA", "RGB", "RGBA", "RGBa", "RGBX", "CMYK", "YCbCr"}
+#: Largest image side accepted from a header (pixels): larger claims are refused before decoding.
+MAX_IMAGE_SIDE = 16384
+#: Bytes searched for an end marker at the end of a file.
+TAIL_BYTES = 65536
+
+_DEVNULL: int | None = None  # a descriptor of os.devnull, opened on first use
+_STDERR_LOCK = threading.Lock()
+
+
+def _where(path: Path, frame: int | None) -> str:
+    return f"{path}, frame {frame}" if frame is not None else f"{path}"
+
+
+def _decode(path: Path) -> np.ndarray | None:
+    """OpenCV's decoder on the file's bytes, or None: ``cv2.imread`` takes its path as UTF-8 and
+    crashes the process on a path holding any other byte. A PNG cut short (no closing IEND
+    chunk) is refused before libpng sees it."""
+    try:
+        data = np.fromfile(path, np.uint8)
+    except OSError:
+        return None
+    if data.size == 0 or (data[:8].tobytes() == PNG_SIGNATURE and data[-8:-4].tobytes() != b"IEND"):
+        return None
+    try:
+        return cv2.imdecode(data, cv2.IMREAD_UNCHANGED)
+    except cv2.error:
+        return None
+
+
+def _png_chunks_intact(data: bytes) -> bool:
+    """Whether every chunk of a PNG carries the checksum (CRC-32) of its bytes: checked before a
+    thread that cannot mute stderr lets libpng see the file (libpng prints its own message for
+    damaged data there). Cheap beside decoding; damage that keeps every checksum is left to
+    the decoder."""
+    at = 8
+    while at + 12 <= len(data):
+        end = at + 8 + struct.unpack(">I", data[at : at + 4])[0]  # after the chunk's type and data
+        if zlib.crc32(data[at + 4 : end]).to_bytes(4, "big") != data[end : end + 4]:
+            return False
+        at = end + 4
+    return True
+
+
+def _imread_quietly(path: Path) -> np.ndarray | None:
+    """The image, decoded with the process's stderr muted meanwhile (libpng prints its own
+    message for a damaged file there, and ours, one line naming the file and frame, says it
+    better), or None where OpenCV cannot decode it. Only the main thread mutes, one call at a
+    time: muting from the reader thread could swallow what the main thread writes meanwhile."""
+    global _DEVNULL
+    if threading.current_thread() is not threading.main_thread():
+        try:
+            data = Path(path).read_bytes()
+        except OSError:
+            return None
+        return None if data[:8] == PNG_SIGNATURE and not _png_chunks_intact(data) else _decode(path)
+    with _STDERR_LOCK:
+        try:
+            if _DEVNULL is None:
+                _DEVNULL = os.open(os.devnull, os.O_WRONLY)
+            saved = os.dup(2)
+        except OSError:
+            return _decode(path)
+        try:
+            os.dup2(_DEVNULL, 2)
+            return _decode(path)
+        finally:
+            os.dup2(saved, 2)
+            os.close(saved)
+
+
+def load_image(path: Path, frame: int | None = None) -> np.ndarray:
+    """An 8-bit grey image; colour is converted to grey, 16-bit images are refused. A file that
+    cannot be decoded raises one :class:`SequenceError` naming it (and ``frame``)."""
+    where = _where(path, frame)
+    img = _imread_quietly(path)
+    if img is None or img.size == 0:
+        raise SequenceError(f"{where}: cannot read the image (empty, truncated, damaged or not an image)")
+    if img.dtype != np.uint8:
+        raise SequenceError(
+            f"{where}: {img.dtype} image; expected 8-bit grey (convert it, e.g. scale 16-bit values to 0-255)"
+        )
+    if img.ndim == 3:
+        img = cv2.cvtColor(img, cv2.COLOR_BGRA2GRAY if img.shape[2] == 4 else cv2.COLOR_BGR2GRAY)
+    return img
+
+
+def _has_end(fh, size: int, marker: bytes) -> bool:
+    """Whether ``marker`` closes the file (PNG's IEND chunk, JPEG's end of image), allowing
+    trailing bytes after it within the last :data:`TAIL_BYTES`."""
+    fh.seek(max(0, size - TAIL_BYTES))
+    return marker in fh.read()
+
+
+def _png_header(head: bytes, where: str) -> tuple[int, int, int]:
+    """``(width, height, bit depth)`` from a PNG's first 33 bytes."""
+    if len(head) < 33 or head[12:16] != b"IHDR":
+        raise SequenceError(f"{where}: damaged PNG header (no IHDR chunk)")
+    width, height = struct.unpack(">II", head[16:24])
+    if not (0 < width <= MAX_IMAGE_SIDE and 0 < height <= MAX_IMAGE_SIDE):
+        raise SequenceError(
+            f"{where}: the PNG header claims {width}x{height} pixels; expected each side 1..{MAX_IMAGE_SIDE}"
+        )
+    if head[25] not in PNG_CHANNELS:
+        raise SequenceError(f"{where}: damaged PNG header (colour type {head[25]})")
+    return width, height, head[24]
+
+
+def image_header(path: Path, frame: int | None = None) -> tuple[int, int, int]:
+    """``(width, height, bits per channel)`` of an image file, read without decoding the pixels
+    where possible; raises :class:`SequenceError` naming the file (and ``frame``)."""
+    where = _where(path, frame)
+    try:
+        with open(path, "rb") as fh:
+            head, size = fh.read(33), fh.seek(0, 2)
+            if size == 0:
+                raise SequenceError(f"{where}: empty file; expected an image")
+            kind, marker = ("PNG", PNG_END) if head.startswith(PNG_SIGNATURE) else ("JPEG", JPEG_END)
+            header = _png_header(head, where) if kind == "PNG" else None
+            if (kind == "PNG" or head.startswith(JPEG_START)) and not _has_end(fh, size, marker):
+                what = "end chunk" if kind == "PNG" else "end marker"
+                raise SequenceError(f"{where}: truncated {kind} (no {what}); expected a complete image")
+    except OSError as exc:
+        raise SequenceError(f"{where}: cannot open the image ({exc.strerror or exc})") from None
+    return header or _header_other(path, where)
+
+
+def _header_other(path: Path, where: str) -> tuple[int, int, int]:
+    """Header of a non-PNG image through Pillow's lazy open, else by decoding it with OpenCV."""
+    try:
+        from PIL import Image
+
+        with Image.open(path) as im:
+            width, height = im.size
+            return width, height, 8 if im.mode in EIGHT_BIT_MODES else 16
+    except Exception:  # Pillow missing, or a file it cannot read: let OpenCV try
+        img = _imread_quietly(path)
+        if img is None or img.size == 0:
+            raise SequenceError(f"{where}: cannot read the image (damaged or not an image)") from None
+        return img.shape[1], img.shape[0], 8 * img.dtype.itemsize
+
+
+def frame_order(name: str) -> tuple:
+    """Sort key of an image name: the numbers in it compared as numbers (``2.png`` < ``10.png``)."""
+    parts = re.split(r"([0-9]+)", name)  # text, number, text, number, ..., text
+    return tuple(int(part) if k % 2 else part for k, part in enumerate(parts))
+
+
+def _is_image(entry: os.DirEntry) -> bool:
+    """Whether a folder entry is an image file; a dangling link of an image's name raises."""
+    if entry.name.startswith(".") or os.path.splitext(entry.name)[1].lower() not in IMAGE_SUFFIXES:
+        return False
+    if not entry.is_file():
+        if entry.is_symlink():
+            target = os.readlink(entry.path)
+            raise SequenceError(f"{entry.path}: a symbolic link to {target}, which does not exist")
+        return False
+    if not re.search(r"[0-9]", entry.name):
+        raise SequenceError(
+            f"{entry.path}: no frame number in the name; name each image by its frame "
+            "(000000.png, 000001.png, ...) or move it out of the folder"
+        )
+    return True
+
+
+def image_files(folder: Path) -> list[Path]:
+    """The images of ``folder`` in frame order; a name without a frame number, a dangling link
+    and two names of one frame number raise :class:`SequenceError` naming the file."""
+    if not folder.is_dir():
+        raise SequenceError(f"{folder}: missing image folder")
+    try:
+        with os.scandir(folder) as entries:
+            keyed = sorted((frame_order(e.name), e.name) for e in entries if _is_image(e))
+    except OSError as exc:
+        raise SequenceError(f"{folder}: cannot list the images ({exc.strerror or exc})") from None
+    for (key_a, a), (key_b, b) in zip(keyed, keyed[1:], strict=False):
+        if key_a == key_b:
+            raise SequenceError(f"{folder}: {a} and {b} carry the same frame number; keep one file per frame")
+    return [folder / name for _, name in keyed]
+
+
+def unpaired(left: list[Path], right: list[Path]) -> str:
+    """What keeps two image lists from pairing by name: their counts and the lonely names."""
+    names_l, names_r = {p.name for p in left}, {p.name for p in right}
+    lonely = [f"image_0/{n}" for n in names_l - names_r] + [f"image_1/{n}" for n in names_r - names_l]
+    lonely.sort(key=lambda s: frame_order(s.split("/")[1]))
+    listed = ", ".join(lonely[:4]) + (f" and {len(lonely) - 4} more" if len(lonely) > 4 else "")
+    counts = f"image_0 has {len(left)} images but image_1 has {len(right)}; " * (len(left) != len(right))
+    return f"{counts}{len(lonely)} image(s) without a partner of the same name on the other side: {listed}"
+
+
+def check_headers(left: list[Path], right: list[Path]) -> tuple[int, int]:
+    """Width and height shared by every image, checked from the headers; raises on the first
+    file that is unreadable, not 8-bit or of another size."""
+    size = None
+    for k, path in enumerate(p for pair in zip(left, right, strict=True) for p in pair):
+        width, height, depth = image_header(path, k // 2)
+        if depth > 8:
+            raise SequenceError(
+                f"{path}, frame {k // 2}: {depth}-bit image; expected 8-bit grey "
+                "(convert it, e.g. scale 16-bit values to 0-255)"
+            )
+        size = size or (width, height)
+        if (width, height) != size:
+            raise SequenceError(
+                f"{path}, frame {k // 2}: {width}x{height} image, but {left[0]} is {size[0]}x{size[1]}; "
+                "every image of a sequence must have one size"
+            )
+    return size

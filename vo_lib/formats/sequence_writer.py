@@ -1,0 +1,110 @@
+"""Writing a sequence in the KITTI odometry layout, plus our ``odometry.txt`` and ``manifest.json``.
+
+:class:`SequenceWriter` writes into a temporary folder renamed when complete, under the rules of
+:mod:`vo_lib.outputs`: nothing is written over a folder this package did not write, and a failed
+write leaves nothing behind.
+"""
+
+from __future__ import annotations
+
+import errno
+import json
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+from vo_lib.camera import StereoCamera
+from vo_lib.outputs import OutputError, OutputFolder
+
+
+def _format_row(values) -> str:
+    return " ".join(repr(float(v)) for v in values)
+
+
+def _format_rows(values, count: int) -> str:
+    """One line of ``count`` numbers per row, each written exactly (``repr``)."""
+    return "".join(_format_row(row) + "\n" for row in np.asarray(values, dtype=float).reshape(-1, count))
+
+
+class SequenceWriter:
+    """Write a sequence frame by frame into a temporary folder, renamed on :meth:`close`.
+
+    Use as a context manager; if the block raises, the temporary folder is removed and any
+    existing sequence at ``path`` is left untouched. ``path`` must be new, empty or a sequence this
+    package wrote; ``force`` replaces any other folder (see :mod:`vo_lib.outputs`, whose
+    :class:`~vo_lib.outputs.OutputError` is raised otherwise, before anything is written).
+    """
+
+    def __init__(self, path, camera: StereoCamera, force: bool = False, option: str | None = None):
+        self.path = Path(path)
+        self.camera = camera
+        self.label = f"{option} {path}" if option else str(path)
+        self._out = OutputFolder(self.path, "vo_lib generate", force=force, option=option)
+        self._tmp = self._out.path
+        (self._tmp / "image_0").mkdir()
+        (self._tmp / "image_1").mkdir()
+        self.count = 0
+
+    def add(self, left: np.ndarray, right: np.ndarray) -> None:
+        for folder, img in (("image_0", left), ("image_1", right)):
+            if img.dtype != np.uint8 or img.ndim != 2:
+                raise ValueError(f"{folder} images must be 2-D uint8 grey; got {img.dtype} {img.shape}")
+            ok, encoded = cv2.imencode(".png", img)
+            if not ok:
+                raise ValueError(f"{folder}: frame {self.count} cannot be encoded as PNG")
+            self._write(self._tmp / folder / f"{self.count:06d}.png", encoded.tobytes())
+        self.count += 1
+
+    def _write(self, path: Path, data: bytes) -> None:
+        """Write one file of the temporary folder; a full disk (or any write failure) raises
+        :class:`~vo_lib.outputs.OutputError` naming the output folder, not the temporary."""
+        try:
+            path.write_bytes(data)
+        except OSError as exc:
+            why = "no space left on device" if exc.errno == errno.ENOSPC else (exc.strerror or str(exc))
+            raise OutputError(
+                f"{self.label}: cannot write the sequence ({why}); nothing was written"
+            ) from None
+
+    def close(self, times, poses=None, odometry=None, manifest: dict | None = None) -> Path:
+        """Write the text files and move the finished sequence into place; returns its path."""
+        times = np.asarray(times, dtype=float)
+        if len(times) != self.count:
+            raise ValueError(f"times has {len(times)} entries for {self.count} frames")
+        P0, P1 = self.camera.projection_matrices()
+        files = {
+            "calib.txt": f"P0: {_format_row(P0.ravel())}\nP1: {_format_row(P1.ravel())}\n",
+            "times.txt": "".join(f"{t!r}\n" for t in times.tolist()),
+            "poses.txt": None if poses is None else _format_rows(np.asarray(poses, float)[:, :3, :], 12),
+            "odometry.txt": None if odometry is None else _format_rows(odometry, 2),
+            "manifest.json": None
+            if manifest is None
+            else json.dumps(manifest, indent=2, sort_keys=True) + "\n",
+        }
+        for name, text in files.items():
+            if text is not None:
+                self._write(self._tmp / name, text.encode())
+        return self._out.commit(frames=self.count)
+
+    def abort(self) -> None:
+        self._out.discard()
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, exc_type, exc, tb):
+        self.abort()
+        return False
+
+
+def write_sequence(
+    path, camera, left_images, right_images, times, poses=None, odometry=None, manifest=None, force=False
+):
+    """Write a whole sequence at once (see :class:`SequenceWriter`)."""
+    if len(left_images) != len(right_images):
+        raise ValueError(f"{len(left_images)} left images but {len(right_images)} right images")
+    with SequenceWriter(path, camera, force=force) as writer:
+        for left, right in zip(left_images, right_images, strict=True):
+            writer.add(left, right)
+        return writer.close(times, poses, odometry, manifest)
