@@ -160,8 +160,14 @@ def track_subpixel(
     p1 = np.ascontiguousarray(w_curr[:, :2], dtype=np.float32).reshape(-1, 1, 2)
     criteria = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 20, 0.01)
     tracked, status, _ = cv2.calcOpticalFlowPyrLK(
-        prev_image, curr_image, p0, p1.copy(), winSize=(2 * half + 1, 2 * half + 1), maxLevel=0,
-        criteria=criteria, flags=cv2.OPTFLOW_USE_INITIAL_FLOW,
+        prev_image,
+        curr_image,
+        p0,
+        p1.copy(),
+        winSize=(2 * half + 1, 2 * half + 1),
+        maxLevel=0,
+        criteria=criteria,
+        flags=cv2.OPTFLOW_USE_INITIAL_FLOW,
     )
     tracked = tracked.reshape(-1, 2).astype(float)
     keep = (status.ravel() == 1) & (np.linalg.norm(tracked - out[:, :2], axis=1) <= max_shift)
