@@ -106,3 +106,22 @@ def test_best_matches_with_no_survivor():
     assert len(a) == len(b) == len(d) == 0
     a, b, _ = best_matches(ia, ib, dist, 2, 1)
     assert a.tolist() == [1] and b.tolist() == [0]
+
+
+def test_tracking_finds_a_subpixel_shift_and_keeps_the_corner_where_it_fails():
+    import cv2
+
+    from vo_lib.stereo_vo.temporal import track_subpixel
+
+    rng = np.random.default_rng(3)
+    texture = cv2.GaussianBlur(rng.uniform(0, 255, (120, 160)).astype(np.float32), (0, 0), 2.0)
+    shift = np.float32([[1, 0, 0.37], [0, 1, -0.62]])  # the scene moves right 0.37 px, up 0.62 px
+    prev = np.clip(texture, 0, 255).astype(np.uint8)
+    curr = np.clip(cv2.warpAffine(texture, shift, (160, 120), flags=cv2.INTER_CUBIC), 0, 255).astype(np.uint8)
+    w_prev = np.array([[60.0, 50.0, 8.0], [90.0, 70.0, 5.0], [5.0, 5.0, 3.0]])
+    w_curr = np.array([[60.0, 49.0, 8.0], [91.0, 70.0, 5.0], [40.0, 80.0, 3.0]])  # whole-pixel matches
+    out = track_subpixel(prev, curr, w_prev, w_curr)
+    assert np.allclose(out[:2, :2] - w_prev[:2, :2], [0.37, -0.62], atol=0.05)
+    assert np.array_equal(out[:, 2], w_curr[:, 2])  # disparities kept
+    assert np.array_equal(out[2], w_curr[2])  # a wrong match tracks far from its corner: kept as it was
+    assert len(track_subpixel(prev, curr, np.zeros((0, 3)), np.zeros((0, 3)))) == 0

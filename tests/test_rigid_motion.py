@@ -247,3 +247,28 @@ def test_a_pitching_car_still_gets_a_hypothesis_with_its_inliers(kitti_camera, p
     again_odometer = StereoOdometry(kitti_camera, CAR, mount=mount, seed=5)
     again = again_odometer.motion.hypothesis(m.w_prev, m.w_curr, None, again_odometer.rng)
     assert np.array_equal(again[0], guess) and np.array_equal(again[1], start)
+
+
+def test_car_gauge_gives_the_measured_yaw_noise_of_the_oxts_yaw_rate():
+    import os
+    from pathlib import Path
+
+    from vo_lib.formats.kitti_raw import VF
+    from vo_lib.stereo_vo.vehicle import CAR_DISTANCE_SIGMA, gauge_for_yaw_noise
+
+    default = Path(__file__).resolve().parents[1].parent / "shared" / "realdata"
+    root = Path(os.environ.get("VO_LIB_REALDATA") or default)
+    drive = root / "kitti_raw_2011_09_26_drive_0001"
+    if not (drive / "oxts.txt").is_file():
+        pytest.skip(f"no KITTI raw drive 0001 with oxts.txt under {root}")
+    times = np.loadtxt(drive / "times.txt")
+    oxts = read_oxts(drive / "oxts.txt", len(times))
+    u = wheel_distances_from_oxts(oxts, times, CAR_GAUGE)
+    s, dpsi = car_odometry_model().increment(u[1:])
+    heading_change = np.diff(np.unwrap(oxts[:, 5]))  # field 6: the OXTS heading
+    gauge = gauge_for_yaw_noise(s, dpsi - heading_change, CAR_DISTANCE_SIGMA)
+    assert gauge == pytest.approx(CAR_GAUGE, rel=0.05)
+    assert np.allclose(s, 0.5 * (oxts[1:, VF] + oxts[:-1, VF]) * np.diff(times))
+    with pytest.raises(ValueError, match="some error"):
+        gauge_for_yaw_noise(s, np.zeros_like(s), CAR_DISTANCE_SIGMA)
+    assert gauge_for_yaw_noise([1.0, 1.0], [0.01, 0.01], 0.02) == pytest.approx(0.02 * np.sqrt(2 * 2 / 2e-4))

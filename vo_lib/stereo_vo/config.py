@@ -32,6 +32,8 @@ class PipelineConfig:
     #: 1-point RANSAC as the outlier filter, then a 6-DoF refinement (``six_dof``).
     motion: str = "planar"
     ransac: RansacParams = field(default_factory=RansacParams)
+    #: track the matched corners to sub-pixel positions in the current image (6-DoF motion only)
+    subpixel_tracking: bool = False
     min_features: int = 20  #: stereo features a frame needs to be matched
     min_inliers: int = 15
     #: Of the temporal matches; a large moving object drags it down (6-DoF: the 1-point RANSAC's).
@@ -123,6 +125,6 @@ CAR = PipelineConfig(
 #: a hand-held rig, no odometry): the car's settings, except that the constant-velocity
 #: prediction never vetoes the vision. With no sensor behind it, a prediction is only the last
 #: motion repeated, and a hovering body's turns and stops break it every few frames.
-HOVER = replace(CAR, prior_gate=math.inf)
+HOVER = replace(CAR, prior_gate=math.inf, subpixel_tracking=True)
 
 PRESETS = {"planar": CRAWLER, "full": CAR, "hover": HOVER}

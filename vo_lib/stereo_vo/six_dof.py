@@ -41,6 +41,7 @@ whose planar part is the filter's and whose other part is the vision's.
 from __future__ import annotations
 
 import math
+import time
 
 import numpy as np
 
@@ -53,7 +54,7 @@ from vo_lib.stereo_vo.kalman import VoKalmanFilter, chord_measurement
 from vo_lib.stereo_vo.parts import Estimate, Prediction
 from vo_lib.stereo_vo.ransac import one_point_ransac
 from vo_lib.stereo_vo.rigid_motion import general_ransac, refine_rigid_motion, rotation_matrix, scaled_motion
-from vo_lib.stereo_vo.temporal import match_features, predict_features
+from vo_lib.stereo_vo.temporal import match_features, predict_features, track_subpixel
 
 #: Window half-width around a predicted position: a floor, plus a share of the predicted image
 #: motion (a near point moving 100 px between frames is predicted less well than a far one).
@@ -189,7 +190,8 @@ class SixDofMotion:
 
     def match(self, reference, features, prediction: Prediction, recent):
         if prediction.motion is None:
-            return match_features(reference, features, ratio=PREDICTED_RATIO)
+            brute = match_features(reference, features, ratio=PREDICTED_RATIO)
+            return self.tracked(reference, features, brute)
         pred, _ = predict_features(reference.w, self.camera, prediction.motion)
         flow = np.linalg.norm(pred[:, :2] - reference.w[:, :2], axis=1)
         square = WINDOW_PIXELS + WINDOW_FLOW_FRACTION * np.nan_to_num(flow, nan=0.0)
@@ -203,6 +205,17 @@ class SixDofMotion:
         if len(matches) < min_inliers:  # the prediction is lost: compare every pair
             brute = match_features(reference, features, ratio=PREDICTED_RATIO)
             matches = brute if len(brute) > len(matches) else matches
+        return self.tracked(reference, features, matches)
+
+    def tracked(self, reference, features, matches):
+        """``matches`` with the current positions tracked to sub-pixel (:func:`.track_subpixel`)
+        where the preset asks for it and both images are known."""
+        if not self.config.subpixel_tracking or reference.image is None or features.image is None:
+            return matches
+        t0 = time.perf_counter()
+        matches.w_curr = track_subpixel(reference.image, features.image, matches.w_prev, matches.w_curr)
+        ms = (time.perf_counter() - t0) * 1e3
+        matches.timings["temporal_match"] = matches.timings.get("temporal_match", 0.0) + ms
         return matches
 
     # ------------------------------------------------------------------ estimation

@@ -14,6 +14,7 @@ from __future__ import annotations
 import time
 from dataclasses import dataclass, field
 
+import cv2
 import numpy as np
 
 from vo_lib.camera import StereoCamera
@@ -26,6 +27,8 @@ PIXEL_SIGMA = 1.0  # pixel noise of a feature position, added to the prediction'
 MIN_RADIUS = 4.0  # pixels
 MAX_RADIUS = 120.0  # pixels
 PATCH_HALF = 3  # 7x7 patches for the sub-pixel refinement of matches
+TRACK_HALF = 7  # 15x15 windows for the sub-pixel tracking of matches (Lucas-Kanade)
+TRACK_MAX_SHIFT = 1.5  # pixels: a tracked position further than this from its corner is not kept
 NEAR = 0.1  # metres: predicted points nearer than this are not matched
 
 
@@ -129,6 +132,46 @@ def refine_positions(
     c0 = sad(0, 0)
     out[ok, 0] = uc[ok] + equiangular_offset(sad(-1, 0), c0, sad(1, 0))
     out[ok, 1] = vc[ok] + equiangular_offset(sad(0, -1), c0, sad(0, 1))
+    return out
+
+
+def track_subpixel(
+    prev_image: np.ndarray,
+    curr_image: np.ndarray,
+    w_prev: np.ndarray,
+    w_curr: np.ndarray,
+    half: int = TRACK_HALF,
+    max_shift: float = TRACK_MAX_SHIFT,
+) -> np.ndarray:
+    """Sub-pixel position in the current image of each matched previous feature, by tracking.
+
+    Corners found in an image pyramid sit on whole pixels of their level (a grid of 1.2 px or
+    coarser above the first), so matched corner positions measure the motion between frames to
+    a pixel at best. Each previous feature's window is tracked into the current image by
+    OpenCV's iterative Lucas-Kanade (``calcOpticalFlowPyrLK``), started at the matched corner.
+    A track that fails, or ends more than ``max_shift`` pixels from the corner (another corner,
+    or an occlusion), keeps the corner's position. Returns ``w_curr`` with refined u, v (the
+    disparity is kept).
+    """
+    out = np.array(w_curr, dtype=float, copy=True)
+    if len(out) == 0:
+        return out
+    p0 = np.ascontiguousarray(w_prev[:, :2], dtype=np.float32).reshape(-1, 1, 2)
+    p1 = np.ascontiguousarray(w_curr[:, :2], dtype=np.float32).reshape(-1, 1, 2)
+    criteria = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 20, 0.01)
+    tracked, status, _ = cv2.calcOpticalFlowPyrLK(
+        prev_image,
+        curr_image,
+        p0,
+        p1.copy(),
+        winSize=(2 * half + 1, 2 * half + 1),
+        maxLevel=0,
+        criteria=criteria,
+        flags=cv2.OPTFLOW_USE_INITIAL_FLOW,
+    )
+    tracked = tracked.reshape(-1, 2).astype(float)
+    keep = (status.ravel() == 1) & (np.linalg.norm(tracked - out[:, :2], axis=1) <= max_shift)
+    out[keep, :2] = tracked[keep]
     return out
 
 
