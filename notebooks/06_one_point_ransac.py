@@ -1281,7 +1281,7 @@ theta_check = cm.theta_from_pixels(half_px.w_prev, half_px.w_curr, ex_camera)
 wrong_fixed = np.sum((np.abs(theta_check - ex_theta) < np.radians(best_threshold_deg)) != half_px.inliers)
 assert fixed_errors == wrong_fixed, "fixed_errors: the matches the threshold classifies wrongly"
 gated_visible = one_point_ransac(half_px.w_prev, half_px.w_curr, ex_camera, rng=1).inliers
-assert gate_errors == np.sum(gated_visible != half_px.inliers), "gate_errors: the gates' misclassified matches"
+assert gate_errors == np.sum(gated_visible != half_px.inliers), "gate_errors: the gates' wrong matches"
 ### BEGIN HIDDEN TESTS
 from coursework import grading  # noqa: E402
 

@@ -1130,9 +1130,8 @@ def hidden_test_ex1(grading, detector, answer):
     texture = (fresh.random((240, 320)) * 255).astype(np.uint8)
     flat = np.zeros((240, 320), np.uint8)
     flat[:, : int(fresh.integers(40, 280))] = texture[:, :1]  # a flat part, a textured part
-    image = grading.frozen(
-        cv2.GaussianBlur(np.maximum(texture * (flat == 0), flat), (0, 0), fresh.uniform(0.5, 2.0))
-    )
+    image = cv2.GaussianBlur(np.maximum(texture * (flat == 0), flat), (0, 0), fresh.uniform(0.5, 2.0))
+    image.flags.writeable = False  # an 8-bit image, as FAST needs; the answer gets a copy
     thresholds = sorted(int(t) for t in fresh.integers(5, 60, 3))
     with grading.unavailable():  # nothing to refuse; no other process, no change to the grader's tools
         got = np.asarray(answer(image.copy(), list(thresholds)), float)

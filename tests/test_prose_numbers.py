@@ -77,6 +77,7 @@ CONSTANTS: dict[str, dict[str, str]] = {
         "0.3 m": "the camera offset the stretch goal prescribes",
     },
     "03_circular_motion_numeric_checks": {
+        "1e-6": "the tolerance exercise 3's tests check to",
         "±20 °": "the range of the random turns drawn in section 1",
         "±0.5 m": "the range of the random chords drawn in section 1",
         "1.5–15 m": "the depth range of the synthetic matches",
@@ -105,6 +106,8 @@ CONSTANTS: dict[str, dict[str, str]] = {
         "2.6 m": "a number the exercise sets",
     },
     "09_line_feature_ekf_slam": {
+        "0.05 m": "the range noise exercise 3 gives for its candidates",
+        "0.02 rad": "the bearing noise exercise 3 gives for its candidates",
         "360 °": "the field of view given to the scanner of the check",
         "30 m": "the laser range of the paper's simulation, given to the scanner of the check",
         "99 %": "the confidence level of the association gate, by choice",

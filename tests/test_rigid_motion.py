@@ -157,7 +157,7 @@ def test_wheel_distances_give_back_speed_and_yaw_rate():
     oxts[:, 19] = [0.0, 0.1, 0.1, -0.2, -0.2]  # yaw rate
     u = wheel_distances_from_oxts(oxts, times, CAR_GAUGE)
     assert np.allclose(u[0], 0)
-    model = car_odometry_model()
+    model = car_odometry_model(CAR_GAUGE)
     s, dpsi = model.increment(u[1:])
     assert np.allclose(s, [1.0, 1.1, 1.2, 1.2])
     assert np.allclose(dpsi, [0.005, 0.01, -0.005, -0.02])
@@ -264,7 +264,7 @@ def test_car_gauge_gives_the_measured_yaw_noise_of_the_oxts_yaw_rate():
     times = np.loadtxt(drive / "times.txt")
     oxts = read_oxts(drive / "oxts.txt", len(times))
     u = wheel_distances_from_oxts(oxts, times, CAR_GAUGE)
-    s, dpsi = car_odometry_model().increment(u[1:])
+    s, dpsi = car_odometry_model(CAR_GAUGE).increment(u[1:])
     heading_change = np.diff(np.unwrap(oxts[:, 5]))  # field 6: the OXTS heading
     gauge = gauge_for_yaw_noise(s, dpsi - heading_change, CAR_DISTANCE_SIGMA)
     assert gauge == pytest.approx(CAR_GAUGE, rel=0.05)

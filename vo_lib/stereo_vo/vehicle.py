@@ -38,6 +38,9 @@ from vo_lib.models.track_odometry import TrackOdometry
 #: (bias included), which :func:`gauge_for_yaw_noise` turns into 176 m. A car's real track
 #: (about 1.6 m) would model a gyro a hundred times noisier than it is.
 CAR_GAUGE = 176.0
+#: The rendered road car's wheel gauge (``vo_lib.sim.road``), metres: its odometry is simulated
+#: with two wheels this far apart, so the model of a sample's ``odometry.txt`` uses it too.
+ROAD_CAR_GAUGE = 1.6
 #: Noise of a wheel distance derived from the GPS/IMU speed, per square-root metre. On KITTI raw
 #: drive 0001 the distance per frame integrated from the OXTS speed differs from the stereo
 #: vision's by 1.4 % rms (up to 3.7 cm in a 1.3 m frame, most while braking: the speed lags),
@@ -122,9 +125,9 @@ def gauge_for_yaw_noise(distances: np.ndarray, yaw_errors: np.ndarray, distance_
     return float(distance_sigma * np.sqrt(2.0 * s.sum() / np.sum(e**2)))
 
 
-def car_odometry_model() -> TrackOdometry:
-    """Two wheels :data:`CAR_GAUGE` apart: ``D + 2b`` with ``b = 0``."""
-    return TrackOdometry(track_distance=CAR_GAUGE, track_width=0.0, encoder_sigma=CAR_DISTANCE_SIGMA)
+def car_odometry_model(gauge: float = ROAD_CAR_GAUGE) -> TrackOdometry:
+    """Two wheels ``gauge`` apart: ``D + 2b`` with ``b = 0`` (:data:`CAR_GAUGE` for OXTS odometry)."""
+    return TrackOdometry(track_distance=gauge, track_width=0.0, encoder_sigma=CAR_DISTANCE_SIGMA)
 
 
 def drone_mount(T_body_camera: np.ndarray) -> np.ndarray:
@@ -178,6 +181,7 @@ def vehicle_of(sequence, use_odometry: bool = True) -> Vehicle:
         if len(packets) != len(sequence):
             raise SequenceError(f"{oxts} has {len(packets)} packets but there are {len(sequence)} images")
         odometry = wheel_distances_from_oxts(packets, sequence.times, CAR_GAUGE)
+        model = car_odometry_model(CAR_GAUGE)
         source = "oxts.txt (speed and yaw rate)"
     elif odometry is None:
         source = "none"
