@@ -408,11 +408,14 @@ def grade_once(
             subs = [(SOLUTIONS_STUDENT, source, dict.fromkeys(ids, "correct"))]
             subs.append((UNANSWERED_STUDENT, release, dict.fromkeys(ids, "unanswered")))
             answers = read_submissions(path, ids)
-            for cell in source.cells:
-                if cell.metadata.get("nbgrader", {}).get("grade_id") in answers and cell.cell_type == "code":
-                    answers[cell.metadata["nbgrader"]["grade_id"]]["correct_stderr"] = stderr_answer(
-                        cell.source
-                    )
+            # every exercise answered correctly, writing to stderr: one submission of its own, as a
+            # later exercise's correct answer may build on an earlier one's
+            noisy = {
+                cell.metadata["nbgrader"]["grade_id"]: {"correct_stderr": stderr_answer(cell.source)}
+                for cell in source.cells
+                if cell.metadata.get("nbgrader", {}).get("grade_id") in answers and cell.cell_type == "code"
+            }
+            subs += adversarial_notebooks(release, noisy, "stderr")
             # a flagged answer may break the answers beside it (NumPy rebound, later cells emptied):
             # flagged answers share submissions only with each other
             for student_name, flagged in (("adversarial", False), (FLAGGED_KIND, True)):

@@ -82,19 +82,33 @@ def unavailable(*functions: Callable) -> Iterator[None]:
             setattr(owner, name, value)
 
 
-def library_functions(*modules: types.ModuleType) -> list[Callable]:
-    """The functions (and compiled kernels) that each of ``modules`` defines itself, not imports,
-    and those of every loaded module whose name extends its name (``ransac`` covers ``ransac_*``)."""
-    names = tuple(m.__name__ for m in modules)
-    owners = [m for n, m in list(sys.modules.items()) if n.startswith(names) and hasattr(m, "__dict__")]
-    return [
+def library_functions(*owners: types.ModuleType | type | Callable) -> list[Callable]:
+    """What a hidden test refuses, from modules, classes and functions.
+
+    A function stands for itself; a class for its methods; a module for the functions and the
+    classes' methods it defines itself (not imports), and those of every loaded module whose name
+    extends its name (``ransac`` covers ``ransac_*``).
+    """
+    names = tuple(o.__name__ for o in owners if isinstance(o, types.ModuleType))
+    modules = [
+        m for n, m in list(sys.modules.items()) if names and n.startswith(names) and hasattr(m, "__dict__")
+    ]
+    defined = [
         value
-        for module in owners
+        for module in modules
         for value in vars(module).values()
         if callable(value)
-        and not isinstance(value, type)
         and str(getattr(getattr(value, "py_func", value), "__module__", "")).startswith(names)
     ]
+    classes = [c for c in (*owners, *defined) if isinstance(c, type)]
+    methods = [
+        v
+        for c in classes
+        for v in vars(c).values()
+        if isinstance(v, (types.FunctionType, staticmethod, classmethod))
+    ]
+    functions = [f for f in (*owners, *defined) if not isinstance(f, (type, types.ModuleType))]
+    return functions + methods
 
 
 def frozen(values) -> np.ndarray:

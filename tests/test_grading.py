@@ -52,6 +52,22 @@ def test_library_functions_lists_what_a_module_defines_not_what_it_imports():
     assert np.sqrt not in found
 
 
+def test_library_functions_takes_functions_classes_and_the_methods_of_a_modules_classes():
+    import scipy.special
+    import sympy.geometry.line as line
+
+    from vo_lib.stereo_vo.kalman import VoKalmanFilter
+
+    assert scipy.special.softmax in grading.library_functions(scipy.special.softmax)
+    assert VoKalmanFilter.__dict__["update"] in grading.library_functions(VoKalmanFilter)
+    found = grading.library_functions(line)  # SymPy's projection is a method of a class of the module
+    assert line.LinearEntity.__dict__["projection"] in found
+    wall = line.Line((0, 0), (1, 1))
+    with grading.unavailable(*found), pytest.raises(grading.GradingError):
+        wall.projection((1, 0))
+    assert wall.projection((1, 0)) == line.Point(0.5, 0.5)
+
+
 def test_frozen_is_a_read_only_copy():
     source = np.arange(3.0)
     copy = grading.frozen(source)

@@ -150,6 +150,7 @@ def test_auc_and_box_statistics():
 
 def test_rate_sentence_states_the_verdict_the_interval_gives():
     nominal = {"laser": 0.01}
+
     def words(mean, low, high):
         return demo_corridor.rate_sentence("laser", {"laser": (mean, low, high)}, nominal)
 
