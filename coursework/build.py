@@ -533,18 +533,19 @@ def write_handout(folder: pathlib.Path, course: pathlib.Path, paths: list[pathli
 def handout_requirements(wheel: str) -> str:
     """The handout's ``requirements.txt``: ``requirements-student.txt`` with the wheel for the package.
 
-    Its ``-e .[extras]`` (the repository, editable) becomes ``./<wheel>[extras]``; the local
-    JupyterLab settings, which open ``.py`` notebooks, are left out (the handout's notebooks are
-    ``.ipynb``), and so are its comments, which speak of the repository.
+    Its ``-e .[extras]`` (the repository, editable) becomes ``./<wheel>[extras]``; the other
+    folders of the repository it installs are left out: the JupyterLab settings, which open ``.py``
+    notebooks (the handout's are ``.ipynb``), and ``coursework``, which only hidden tests import
+    (the handout has none). So are its comments, which speak of the repository.
     """
     lines = ["# What the notebooks need: vo_lib (the wheel in this folder) and JupyterLab with its kernel."]
     for line in (ROOT / "requirements-student.txt").read_text().splitlines():
         requirement = line.split("#", 1)[0].strip()
-        if not requirement or requirement.startswith("./jupyterlab-settings"):
+        package = re.fullmatch(r"-e \.(\[[\w,]+\])?", requirement)
+        if package:
+            requirement = f"./{wheel}{package.group(1) or ''}"
+        elif not requirement or requirement.removeprefix("-e ").startswith("./"):
             continue
-        if requirement.startswith("-e ."):
-            extras = requirement.removeprefix("-e .").strip()
-            requirement = f"./{wheel}{extras}"
         lines.append(requirement)
     if not any(line.startswith(f"./{wheel}") for line in lines):
         raise BuildError(
