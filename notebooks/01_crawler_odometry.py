@@ -372,15 +372,11 @@ assert len(spot_poses) == n_full_turn + 1, "spot_poses: the start and one pose p
 assert turned[-1] >= 2 * np.pi - 1e-9 > turned[-2], "the smallest number of steps reaching 360°"
 assert spot_translation < 1e-12, "eq. 2-3: a spot turn does not translate"
 ### BEGIN HIDDEN TESTS
-import numpy as np  # noqa: E402 - the tests' own modules, whatever names the answer rebound
+import numpy as np
 
-fresh = np.random.default_rng(1011)  # inputs drawn from a fixed seed: a number typed in cannot pass
-for gauge, step in zip(fresh.uniform(0.3, 1.5, 20), fresh.uniform(0.002, 0.03, 20), strict=True):
-    n = full_turn_steps(gauge, step)
-    per_step = 2 * step / gauge  # eq. 4, worked out after the answer: nothing of it to read before
-    assert (n - 1) * per_step < 2 * np.pi <= n * per_step, (
-        "full_turn_steps is not the smallest number of steps reaching 360° for another crawler"
-    )
+_h11 = np.random.default_rng(1011).uniform([0.3, 0.002], [1.5, 0.03], (20, 2))  # gauges and steps
+_h11_got = np.vectorize(full_turn_steps)(_h11[:, 0], _h11[:, 1])
+assert np.array_equal(_h11_got, np.ceil(np.pi * _h11[:, 0] / _h11[:, 1])), "not the smallest count for 360°"
 ### END HIDDEN TESTS
 
 # %% [markdown]
@@ -424,22 +420,16 @@ assert 0 < slip_displacement < 0.05, "the slipping turn ends a few millimetres f
 assert 0 < slip_heading_error < np.pi, "the odometry believes it turned more than it did"
 assert np.isclose(slip_displacement, np.hypot(*slip_poses[-1, :2])), "the true final position"
 ### BEGIN HIDDEN TESTS
-import numpy as np  # noqa: E402 - the tests' own modules, whatever names the answer rebound
+import numpy as np
 
-# the notebook's crawler (section 1), whatever the answer bound odo to: slip_drift turns it
-odo = TrackOdometry(track_distance=0.40, track_width=0.10, encoder_sigma=0.01)
-fresh = np.random.default_rng(1021)  # inputs drawn from a fixed seed
-for slip, n in zip(fresh.uniform(0.02, 0.3, 5), fresh.integers(20, 400, 5), strict=True):
-    displacement, heading_error = slip_drift(float(slip), int(n))
-    # every step moves slip * 1 cm / 2 forward and turns (2 - slip) cm / gauge: an arc of radius
-    # R, whose chord after the whole turn is 2 R |sin(turn / 2)| (worked out after the answer, so
-    # that no expected value waits in a variable while it runs)
-    step_forward, step_turn = 0.5 * slip * 0.01, (2 - slip) * 0.01 / odo.gauge
-    chord = 2 * step_forward / step_turn * abs(np.sin(n * step_turn / 2))
-    assert np.isclose(displacement, chord, rtol=1e-6), "the distance from the start is not the true one"
-    assert np.isclose(heading_error, n * slip * 0.01 / odo.gauge, rtol=1e-6), (
-        "the missed heading has the wrong size or sign (odometry minus truth)"
-    )
+_h12 = np.random.default_rng(1021)
+_h12_slip, _h12_n = _h12.uniform(0.02, 0.3, 5), _h12.integers(20, 400, 5)
+_h12_got = np.array([slip_drift(float(s), int(n)) for s, n in zip(_h12_slip, _h12_n, strict=True)])
+# the notebook's crawler (gauge 0.6 m): every step is an arc turning (2 - slip) cm / gauge
+_h12_turn = (2 - _h12_slip) * 0.01 / 0.6
+_h12_chord = _h12_slip * 0.01 / _h12_turn * np.abs(np.sin(_h12_n * _h12_turn / 2))
+assert np.allclose(_h12_got[:, 0], _h12_chord, rtol=1e-6, atol=0), "not the true distance from the start"
+assert np.allclose(_h12_got[:, 1], _h12_n * _h12_slip * 0.01 / 0.6), "the missed heading: size or sign?"
 ### END HIDDEN TESTS
 
 # %% [markdown]
@@ -492,28 +482,12 @@ assert np.isclose(calibrated.gauge, fitted_gauge), "calibrated has the fitted ga
 final_turn = np.sum(calibrated.increment(recorded)[1])
 assert abs(np.degrees(final_turn - true_turn)) < 0.1, "calibrated misses the recorded turn"
 ### BEGIN HIDDEN TESTS
-import numpy as np  # noqa: E402 - the tests' own modules, whatever names the answer rebound
+import numpy as np
 
-fresh = np.random.default_rng(1031)  # a crawler and recording drawn from a fixed seed
-for seed in fresh.integers(0, 2**63, 5):
-    # the crawler's gauge is drawn from its own seed and forgotten before the answer runs, then
-    # drawn again after it: while fit_gauge runs, no variable holds it
-    crawler = np.random.default_rng(seed)
-    fresh_turn = np.radians(360.0 * crawler.integers(1, 6))
-    steps = int(crawler.integers(500, 4000))
-    readings = np.tile([-0.5, 0.5], (steps, 1)) * crawler.uniform(0.4, 1.2) * fresh_turn / steps
-    encoder_sigma = crawler.uniform(0.005, 0.02)  # the test's own encoders, not odo's
-    readings += crawler.normal(scale=encoder_sigma * np.sqrt(np.abs(readings)))
-    del crawler
-    fitted = fit_gauge(readings.copy(), fresh_turn)  # a copy: the answer may not change the test's
-    crawler = np.random.default_rng(seed)
-    crawler.integers(1, 6), crawler.integers(500, 4000)
-    fresh_gauge = crawler.uniform(0.4, 1.2)
-    # the noise of the summed encoder readings, carried through eq. 4: within 4 sigma of the truth
-    sigma_fit = encoder_sigma * np.sqrt(np.abs(readings).sum()) / fresh_turn
-    assert abs(fitted - fresh_gauge) < 4 * sigma_fit, (
-        "fit_gauge does not recover the gauge of another crawler"
-    )
+_h13 = np.random.default_rng(1031)  # another crawler: 720° in 2,000 noisy steps
+_h13_steps = np.tile([-1.0, 1.0], (2000, 1)) * _h13.uniform(0.2, 0.6) * 4 * np.pi / 2000
+_h13_got = fit_gauge(_h13_steps + _h13.normal(scale=1e-5, size=(2000, 2)), 4 * np.pi)
+assert abs(_h13_got - 2 * np.random.default_rng(1031).uniform(0.2, 0.6)) < 1e-3, "not another crawler's gauge"
 ### END HIDDEN TESTS
 
 # %% [markdown]

@@ -330,24 +330,14 @@ assert rho not in rho_from_x.free_symbols, "ρ must be eliminated"
 assert rho_from_x.free_symbols <= {x, z, xq, phi}
 assert is_zero(rho_from_x.subs(xq, xp) - rho), "on the motion the expression must return ρ"
 ### BEGIN HIDDEN TESTS
-import numpy as np  # noqa: E402 - the tests' own modules, whatever names the answer rebound
-import sympy as sp  # noqa: E402
+import numpy as np
+import sympy as sp
 
-from coursework import grading  # noqa: E402
-from vo_lib.stereo_vo import circular_motion as cm  # noqa: E402
-
-# eq. 15's x' row and its symbols built afresh: the notebook's names may have been bound to others
-x_s, z_s, xq_s = sp.symbols("x z x'", real=True)
-phi_s, rho_s = sp.symbols("varphi rho", real=True)
-x_row = sp.cos(2 * phi_s) * x_s + sp.sin(2 * phi_s) * z_s - rho_s * sp.sin(phi_s)
-assert rho_from_x.free_symbols <= {x_s, z_s, xq_s, phi_s}, "only x, z, x' and φ, the notebook's own symbols"
-fresh = np.random.default_rng(2011)  # motions drawn from a fixed seed
-for x_, z_, phi_, rho_ in zip(*fresh.uniform([-5, 1, -0.3, -1], [5, 20, 0.3, 1], (8, 4)).T, strict=True):
-    values = {x_s: x_, z_s: z_, phi_s: phi_}
-    moved = {**values, xq_s: float(x_row.subs({**values, rho_s: rho_}))}
-    assert np.isclose(float(rho_from_x.subs(moved)), rho_, atol=1e-9), (
-        "on another motion the expression does not give back its ρ"
-    )
+_h21_x, _h21_z, _h21_xq, _h21_phi = sp.symbols("x z x' varphi", real=True)  # the notebook's symbols
+_h21 = np.random.default_rng(2011).uniform([-5, 1, -0.3, -1], [5, 20, 0.3, 1])  # x, z, φ, ρ of a motion
+_h21_xq_ = np.cos(2 * _h21[2]) * _h21[0] + np.sin(2 * _h21[2]) * _h21[1] - _h21[3] * np.sin(_h21[2])
+_h21_got = float(rho_from_x.subs({_h21_x: _h21[0], _h21_z: _h21[1], _h21_phi: _h21[2], _h21_xq: _h21_xq_}))
+assert np.isclose(_h21_got, _h21[3]), "on another motion the expression does not give back its ρ"
 ### END HIDDEN TESTS
 
 # %% [markdown]
@@ -387,42 +377,18 @@ assert ours.shape == (300,) and np.all(ours > 0)
 
 
 ### BEGIN HIDDEN TESTS
-import numpy as np  # noqa: E402 - the tests' own modules, whatever names the answer rebound
-import sympy as sp  # noqa: E402
+import numpy as np
 
-from coursework import grading  # noqa: E402, F811
-from vo_lib.stereo_vo import circular_motion as cm  # noqa: E402
+from coursework import grading
+from vo_lib.stereo_vo import circular_motion as cm_module
+from vo_lib.stereo_vo import ransac as ransac_module
 
-refused = grading.unavailable
-
-import vo_lib.stereo_vo.ransac as ransac_module  # noqa: E402
-
-fresh = np.random.default_rng(2021)  # matches, noise and camera drawn from a fixed seed
-other = StereoCamera(
-    fx=fresh.uniform(300, 900),
-    fy=fresh.uniform(300, 900),
-    cx=fresh.uniform(200, 400),
-    cy=fresh.uniform(150, 300),
-    baseline=fresh.uniform(0.1, 0.3),
-    width=640,
-    height=480,
-)
-cases = []  # inputs only: the expected values are worked out after the answer has run
-for cam in (camera, other):
-    m_ = synthetic_matches(cam, 200, fresh.uniform(-0.1, 0.1), fresh.uniform(-0.2, 0.2), fresh)
-    cases.append((m_.w_prev, m_.w_curr, fresh.uniform(0.2, 2.0), cam))
-del m_
-# eq. 14's θ and its variance as the library computes them (derived, not differentiated numerically)
-library = grading.library_functions(cm, ransac_module)
-with refused(*library):
-    answers = [np.asarray(theta_sigma(a_.copy(), b_.copy(), s_, cam), float) for a_, b_, s_, cam in cases]
-for got, (a_, b_, s_, cam) in zip(answers, cases, strict=True):
-    expected = cm.theta_standard_deviation(a_, b_, cam, s_)
-    assert got.shape == expected.shape, "one standard deviation per match"
-    assert np.allclose(got, expected, rtol=1e-9), (
-        "not the first-order standard deviation of θ (a standard deviation, not a variance; "
-        "θ, not φ; all four coordinates; this camera's centre and f_x)"
-    )
+_h22_cam = StereoCamera(fx=700.0, fy=650.0, cx=300.0, cy=200.0, baseline=0.2, width=640, height=480)
+_h22 = synthetic_matches(_h22_cam, 200, 0.07, -0.15, np.random.default_rng(2021))
+with grading.unavailable(*grading.library_functions(cm_module, ransac_module)):
+    _h22_got = theta_sigma(_h22.w_prev, _h22.w_curr, 1.3, _h22_cam)
+_h22_expected = cm_module.theta_standard_deviation(_h22.w_prev, _h22.w_curr, _h22_cam, 1.3)
+assert np.allclose(_h22_got, _h22_expected, rtol=1e-9), "not the standard deviation of θ for another camera"
 ### END HIDDEN TESTS
 
 # %% [markdown]
@@ -459,49 +425,22 @@ change = height_change(mixed.w_prev, mixed.w_curr, camera)
 assert change.shape == (400,)
 assert np.abs(change[mixed.inliers]).max() < 1e-9, "a planar motion keeps every height"
 ### BEGIN HIDDEN TESTS
-import numpy as np  # noqa: E402 - the tests' own modules, whatever names the answer rebound
-import sympy as sp  # noqa: E402
+import cv2
+import numpy as np
 
-from coursework import grading  # noqa: E402
-from vo_lib.stereo_vo import circular_motion as cm  # noqa: E402
+from coursework import grading
+from vo_lib import camera as camera_module
+from vo_lib.stereo_vo import ransac as ransac_module
 
-refused = grading.unavailable
-
-heights = camera.backproject(mixed.w_curr)[:, 1] - camera.backproject(mixed.w_prev)[:, 1]
-assert flagged == np.sum(np.abs(heights) > 0.05), "flagged does not count the matches of mixed"
-
-fresh = np.random.default_rng(2031)  # matches and a camera with f_x != f_y drawn from a fixed seed
-other = StereoCamera(
-    fx=fresh.uniform(300, 900),
-    fy=fresh.uniform(300, 900),
-    cx=fresh.uniform(200, 400),
-    cy=fresh.uniform(150, 300),
-    baseline=fresh.uniform(0.1, 0.3),
-    width=640,
-    height=480,
-)
-cases = []  # inputs only: the truth is worked out after the answer has run
-for cam in (camera, other):
-    m_ = synthetic_matches(
-        cam, 300, fresh.uniform(-0.1, 0.1), fresh.uniform(-0.2, 0.2), fresh, outlier_ratio=0.4
-    )
-    cases.append((m_.w_prev, m_.w_curr, cam))
-del m_
-import cv2  # noqa: E402
-
-import vo_lib.stereo_vo.ransac as ransac_module  # noqa: E402
-
-# eq. 13 as the library and OpenCV compute it: the camera, the RANSAC (which back-projects every
-# match), OpenCV's triangulation
-library = [StereoCamera.backproject, cv2.triangulatePoints, cv2.reprojectImageTo3D]
-library += grading.library_functions(ransac_module)
-with refused(*library):
-    answers = [np.asarray(height_change(a_.copy(), b_.copy(), cam), float) for a_, b_, cam in cases]
-for got, (a_, b_, cam) in zip(answers, cases, strict=True):
-    truth = cam.backproject(b_)[:, 1] - cam.backproject(a_)[:, 1]
-    assert np.allclose(got, truth, atol=1e-9), (
-        "not y' - y in metres for every match (which sign? which focal lengths?)"
-    )
+_h23_cam = StereoCamera(fx=700.0, fy=560.0, cx=300.0, cy=200.0, baseline=0.2, width=640, height=480)
+_h23 = synthetic_matches(_h23_cam, 300, 0.05, 0.1, np.random.default_rng(2031), outlier_ratio=0.4)
+_h23_eq13 = [camera_module.StereoCamera.backproject, cv2.triangulatePoints, cv2.reprojectImageTo3D]
+with grading.unavailable(*grading.library_functions(ransac_module, *_h23_eq13)):
+    _h23_got = height_change(_h23.w_prev, _h23.w_curr, _h23_cam)
+_h23_y = [camera_module.StereoCamera.backproject(_h23_cam, w)[:, 1] for w in (_h23.w_prev, _h23.w_curr)]
+assert np.allclose(_h23_got, _h23_y[1] - _h23_y[0], atol=1e-9), "not y' - y in metres (sign? focal lengths?)"
+_h23_y = [camera_module.StereoCamera.backproject(camera, w)[:, 1] for w in (mixed.w_prev, mixed.w_curr)]
+assert flagged == np.sum(np.abs(_h23_y[1] - _h23_y[0]) > 0.05), "flagged does not count the matches of mixed"
 ### END HIDDEN TESTS
 
 # %% [markdown]

@@ -467,50 +467,21 @@ assert np.array_equal(hamming_distance(features.descriptors, other), hamming(fea
 )
 assert np.all(hamming_distance(other, other) == 0), "a descriptor differs from itself in no bit"
 ### BEGIN HIDDEN TESTS
-import numpy as np  # noqa: E402 - the tests' own modules, whatever names the answer rebound
+import cv2
+import numpy as np
 
-from coursework import grading  # noqa: E402
+from coursework import grading
+from vo_lib.stereo_vo import features as features_module
+from vo_lib.stereo_vo import matching_core, matching_plain
 
-refused = grading.unavailable
-
-import cv2  # noqa: E402
-
-import vo_lib.stereo_vo.features as features_module  # noqa: E402
-import vo_lib.stereo_vo.matching_core as matching_core  # noqa: E402
-import vo_lib.stereo_vo.matching_plain as matching_plain  # noqa: E402
-
-fresh = np.random.default_rng(5011)  # descriptors drawn from a fixed seed
-a_ = fresh.integers(0, 256, (500, 32), dtype=np.uint8)
-b_ = a_.copy()
-flips = fresh.integers(0, 32 * 8, (500, 5))  # a few bits flipped in every row
-for row, bits in enumerate(flips):
-    for bit in bits:
-        b_[row, bit // 8] ^= np.uint8(1 << (bit % 8))
-del flips, bits  # which bits differ is for the answer to find
-# the matcher's compiled kernels and their plain twins count bits too; so do OpenCV's Hamming
-# norm and its matchers
-library = [
-    features_module.hamming,
-    cv2.norm,
-    cv2.batchDistance,
-    cv2.DescriptorMatcher.match,
-    cv2.DescriptorMatcher.knnMatch,
-    cv2.DescriptorMatcher.radiusMatch,
-]
-library += [
-    f
-    for module in (matching_core, matching_plain)
-    for f in vars(module).values()
-    if callable(f)
-    and not isinstance(f, type)
-    and getattr(getattr(f, "py_func", f), "__module__", None) == module.__name__
-]
-with refused(*library):
-    got = np.asarray(hamming_distance(a_.copy(), b_.copy()))
-expected = np.unpackbits(a_ ^ b_, axis=1).sum(axis=1)  # after the answer: nothing to read before
-assert np.array_equal(got, expected), (
-    "on other descriptors, not the number of differing bits (bits, not bytes)"
+_h51_a, _h51_b = np.random.default_rng(5011).integers(0, 256, (2, 500, 32), dtype=np.uint8)
+_h51_no = grading.library_functions(
+    features_module, matching_core, matching_plain, cv2.norm, cv2.batchDistance
 )
+_h51_no += [getattr(cv2.DescriptorMatcher, m) for m in ("match", "knnMatch", "radiusMatch")]
+with grading.unavailable(*_h51_no):
+    _h51_got = hamming_distance(_h51_a, _h51_b)
+assert np.array_equal(_h51_got, features_module.hamming(_h51_a, _h51_b)), "not each pair's differing bits"
 ### END HIDDEN TESTS
 
 # %% [markdown]
@@ -551,32 +522,15 @@ squares = [(x - true_minima) ** 2 for x in (-1.0, 0.0, 1.0)]
 assert np.allclose(quadratic_offset(*squares), true_minima), "exact on a parabola"
 assert library_worst < 1e-9 < 0.05 < parabola_worst, "the V fit is exact on a SAD cost; a parabola is not"
 ### BEGIN HIDDEN TESTS
-import numpy as np  # noqa: E402 - the tests' own modules, whatever names the answer rebound
+import numpy as np
 
-from coursework import grading  # noqa: E402
-
-v_check = [np.abs(x - true_minima) for x in (-1.0, 0.0, 1.0)]
-assert np.isclose(parabola_worst, np.abs(quadratic_offset(*v_check) - true_minima).max()), "parabola_worst"
-fresh = np.random.default_rng(5021)  # parabolas drawn from a fixed seed
-
-
-def parabola_samples(draw):
-    """Costs at -1, 0, +1 of 50 parabolas; their vertices are not kept."""
-    vertex_, curvature, floor = (
-        draw.uniform(-0.5, 0.5, 50),
-        draw.uniform(0.1, 50, 50),
-        draw.uniform(0, 100, 50),
-    )
-    return [curvature * (x - vertex_) ** 2 + floor for x in (-1.0, 0.0, 1.0)]
-
-
-samples = parabola_samples(fresh)
-got = np.asarray(quadratic_offset(*(s.copy() for s in samples)), float)
-# after the answer: the vertex -b / 2a of the parabola a x^2 + b x + c through the samples
-a_coef, b_coef, _ = np.linalg.solve(np.vander([-1.0, 0.0, 1.0], 3), np.array(samples))
-assert np.allclose(got, -b_coef / (2 * a_coef)), (
-    "quadratic_offset does not find the vertex of other parabolas (which side is which?)"
-)
+_h52 = np.random.default_rng(5021).uniform([-0.5, 0.1, 0], [0.5, 50, 100], (50, 3))
+_h52_costs = [_h52[:, 1] * (x - _h52[:, 0]) ** 2 + _h52[:, 2] for x in (-1.0, 0.0, 1.0)]  # c (x - v)² + f
+_h52_got = quadratic_offset(*(c.copy() for c in _h52_costs))
+_h52_a, _h52_b, _h52_c = np.polyfit([-1.0, 0.0, 1.0], np.array(_h52_costs), 2)
+assert np.allclose(_h52_got, -_h52_b / (2 * _h52_a)), "not the vertex of other parabolas (which side?)"
+_h52_costs = [np.abs(x - true_minima) for x in (-1.0, 0.0, 1.0)]
+assert np.isclose(parabola_worst, np.abs(quadratic_offset(*_h52_costs) - true_minima).max()), "parabola_worst"
 ### END HIDDEN TESTS
 
 # %% [markdown]
@@ -619,29 +573,17 @@ for grid, per_cell in (((8, 6), 12), ((4, 3), 5), ((16, 12), 1)):
 
 
 ### BEGIN HIDDEN TESTS
-import numpy as np  # noqa: E402 - the tests' own modules, whatever names the answer rebound
+import numpy as np
 
-from coursework import grading  # noqa: E402
+from coursework import grading
+from vo_lib.stereo_vo import features as features_module
 
-refused = grading.unavailable
-
-import vo_lib.stereo_vo.features as features_module  # noqa: E402
-
-fresh = np.random.default_rng(5031)  # corners and images drawn from a fixed seed
-cases = []
-for _ in range(4):
-    w_, h_ = int(fresh.integers(200, 1300)), int(fresh.integers(150, 1000))
-    grid_, per_ = (int(fresh.integers(2, 10)), int(fresh.integers(2, 8))), int(fresh.integers(1, 6))
-    pts = fresh.uniform([0, 0], [w_ - 1, h_ - 1], (800, 2)).astype(np.float32)
-    resp = fresh.uniform(1, 100, 800).astype(np.float32)
-    cases.append((pts, resp, w_, h_, grid_, per_))  # inputs only: the answers come after
-with refused(features_module.bucket):
-    answers = [np.asarray(strongest_per_cell(pts.copy(), resp.copy(), *rest)) for pts, resp, *rest in cases]
-for got, (pts, resp, w_, h_, grid_, per_) in zip(answers, cases, strict=True):
-    expected = features_module.bucket(pts, resp, w_, h_, grid_, per_ * grid_[0] * grid_[1])
-    assert np.array_equal(got, expected), (
-        "on other corners or images, not the strongest few of every cell (strongest? per cell? which cell?)"
-    )
+_h53 = np.random.default_rng(5031)
+_h53_points, _h53_response = _h53.uniform(0, [900, 700], (800, 2)), _h53.integers(1, 30, 800).astype(float)
+with grading.unavailable(features_module.bucket):
+    _h53_got = strongest_per_cell(_h53_points.copy(), _h53_response.copy(), 900, 700, (7, 5), 3)
+_h53_expected = features_module.bucket(_h53_points, _h53_response, 900, 700, (7, 5), 3 * 7 * 5)
+assert np.array_equal(_h53_got, _h53_expected), "not the strongest few of every cell (per cell? ties?)"
 ### END HIDDEN TESTS
 
 # %% [markdown]
