@@ -509,9 +509,7 @@ assert point_over_bisection > 2  # "several times" below; timings on a loaded ma
 assert point_over_closed > 10  # "tens of times"
 ratios = np.array(table["point_by_point"]) / np.array(table["bisection"])
 coarse = [i for i, tol in enumerate(tolerances) if tol >= DEFAULT_TOLERANCE]
-closed_cheapest = all(
-    table["closed_form"][i] < table["bisection"][i] for i in range(len(tolerances))
-)
+closed_cheapest = all(table["closed_form"][i] < table["bisection"][i] for i in range(len(tolerances)))
 display(
     Markdown(
         f"From {tolerances[0]:g} m down to {DEFAULT_TOLERANCE * 100:.0f} cm the ratio, point by "
@@ -523,8 +521,11 @@ display(
         f"{point_over_bisection:.1f} times faster and the closed form {point_over_closed:.0f} times "
         "(timings vary with the machine's load). The paper's conclusion 3) notes that bisection "
         "slows as the tolerance shrinks; the closed form is the answer to that: exact, and "
-        + ("cheaper than bisection at every tolerance timed here." if closed_cheapest
-           else "cheaper than bisection at the finer tolerances timed here.")
+        + (
+            "cheaper than bisection at every tolerance timed here."
+            if closed_cheapest
+            else "cheaper than bisection at the finer tolerances timed here."
+        )
     )
 )
 
@@ -780,8 +781,11 @@ display(
         f"is {lap_ratio:.1f}×: **not reproduced**. Per call, at our default tolerance, point by "
         f"point takes {call_seconds['point_by_point'] / call_seconds['bisection']:.1f}× "
         "bisection's time ("
-        + ("more than" if call_seconds["point_by_point"] / call_seconds["bisection"] > paper_ratio
-           else "less than")
+        + (
+            "more than"
+            if call_seconds["point_by_point"] / call_seconds["bisection"] > paper_ratio
+            else "less than"
+        )
         + " the paper's whole-run ratio; the table above shows how it moves with the tolerance); "
         "but in our lap the point-by-point observer takes only about "
         f"{observer_share:.0%} of the lap's time (its {len(calls)} calls at the time per call "
@@ -925,9 +929,7 @@ n_line = min(len(r.nees) for r in laps_line)
 nees_line = np.mean([r.nees[:n_line] for r in laps_line], axis=0)
 line_err = np.array([r.final_error() for r in laps_line])
 lap_nees_line = np.array([r.nees[:n_line].mean() for r in laps_line])
-print(
-    f"{'':15s}{'final error [m]':>18s}{'lap NEES (95 % CI)':>22s}{'steps in band':>15s}{'landmarks':>11s}"
-)
+print(f"{'':15s}{'final error [m]':>18s}{'lap NEES (95 % CI)':>22s}{'steps in band':>15s}{'landmarks':>11s}")
 in_band = {}
 for name, runs, nees_, per_lap, err in (
     ("feature point", laps, mean_nees, lap_nees, slam_err),
@@ -948,12 +950,15 @@ calibration = over_seeds(
     lambda i: {"the line form": abs(lap_nees_line[i] - 3), "the feature-point form": abs(lap_nees[i] - 3)},
     range(len(laps)),
 )
-four_walls = {name: sum(len(r.landmarks) == 4 for r in runs) for name, runs in
-              (("feature point", laps), ("line", laps_line))}
+four_walls = {
+    name: sum(len(r.landmarks) == 4 for r in runs)
+    for name, runs in (("feature point", laps), ("line", laps_line))
+}
 assert all(0 <= v <= len(laps) for v in four_walls.values())
-assert over_seeds(lambda i: {"line": line_err[i], "dr": dr_err[i]}, range(len(laps))).verdict(
-    "line", "dr"
-) is Verdict.BETTER
+assert (
+    over_seeds(lambda i: {"line": line_err[i], "dr": dr_err[i]}, range(len(laps))).verdict("line", "dr")
+    is Verdict.BETTER
+)
 assert all(0 <= v <= 1 for v in in_band.values())
 forms_verdict = forms.verdict("the feature-point form", "the line form")
 display(

@@ -691,8 +691,13 @@ if REAL:
 
     def _readings(seed_):
         c, mo, f6 = (final_errors(p) for p in chained_by_seed[seed_].values())
-        return {"circular on the axis": c[0], "circular through the mount": mo[0], "6-DoF": f6[0],
-                "6-DoF heading": abs(f6[2]), "circular heading": abs(mo[2])}
+        return {
+            "circular on the axis": c[0],
+            "circular through the mount": mo[0],
+            "6-DoF": f6[0],
+            "6-DoF heading": abs(f6[2]),
+            "circular heading": abs(mo[2]),
+        }
 
     readings = over_seeds(_readings, RANSAC_SEEDS)
     offset_verdict = readings.verdict("circular through the mount", "circular on the axis")
