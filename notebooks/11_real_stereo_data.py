@@ -691,8 +691,13 @@ if REAL:
 
     def _readings(seed_):
         c, mo, f6 = (final_errors(p) for p in chained_by_seed[seed_].values())
-        return {"circular on the axis": c[0], "circular through the mount": mo[0], "6-DoF": f6[0],
-                "6-DoF heading": abs(f6[2]), "circular heading": abs(mo[2])}
+        return {
+            "circular on the axis": c[0],
+            "circular through the mount": mo[0],
+            "6-DoF": f6[0],
+            "6-DoF heading": abs(f6[2]),
+            "circular heading": abs(mo[2]),
+        }
 
     readings = over_seeds(_readings, RANSAC_SEEDS)
     offset_verdict = readings.verdict("circular through the mount", "circular on the axis")
@@ -1115,46 +1120,17 @@ print(f"cells without a corner: {at_20:.1%} at threshold 20, {at_10:.1%} at thre
 # Exercise 1: autograder test
 assert 0 <= at_10 < at_20 <= 1, "a lower threshold fills some cells, but the flat ones stay empty"
 ### BEGIN HIDDEN TESTS
-from coursework import grading  # noqa: E402
+import vo_lib.viz.nb11 as nb11_module  # noqa: E402
 
-
-def hidden_test_ex1(grading, detector, answer):
-    """A image and thresholds drawn from a fixed seed. The expected shares are computed after the
-    answer ran, from an image it gets a copy of, by the test's own count of section 1's cells
-    (16 px), not by the notebook's image_statistics, which an answer cell can redefine."""
-    import numpy as np
-
-    assert type(detector).__name__ == "builtin_function_or_method", "OpenCV's FAST detector was replaced"
-
-    fresh = np.random.default_rng(11011)
-    texture = (fresh.random((240, 320)) * 255).astype(np.uint8)
-    flat = np.zeros((240, 320), np.uint8)
-    flat[:, : int(fresh.integers(40, 280))] = texture[:, :1]  # a flat part, a textured part
-    image = cv2.GaussianBlur(np.maximum(texture * (flat == 0), flat), (0, 0), fresh.uniform(0.5, 2.0))
-    image.flags.writeable = False  # an 8-bit image, as FAST needs; the answer gets a copy
-    thresholds = sorted(int(t) for t in fresh.integers(5, 60, 3))
-    with grading.unavailable():  # nothing to refuse; no other process, no change to the grader's tools
-        got = np.asarray(answer(image.copy(), list(thresholds)), float)
-
-    # the references only now: the answer, called above, could read its caller's frame
-    def empty(image, threshold, cell=16):
-        keypoints = detector(threshold, True).detect(image)
-        corners = np.array([k.pt for k in keypoints]).reshape(-1, 2)
-        occupied = np.zeros((image.shape[0] // cell, image.shape[1] // cell), bool)
-        col, row = (corners // cell).astype(int).T
-        inside = (row < occupied.shape[0]) & (col < occupied.shape[1])
-        occupied[row[inside], col[inside]] = True
-        return 1 - occupied.mean()
-
-    assert np.isclose(at_20, empty(real_images[0], 20)) and np.isclose(at_10, empty(real_images[0], 10)), (
-        "at_20, at_10: not the shares of the first real image"
-    )
-    assert np.allclose(got, [empty(image, t) for t in thresholds]), (
-        "empty_shares differs on another image (the share of empty cells, at each threshold?)"
-    )
-
-
-hidden_test_ex1(grading, cv2.FastFeatureDetector_create, empty_shares)
+_h1_rng = np.random.default_rng(11011)  # a textured part beside a flat one, 8-bit as FAST needs
+_h1_image = cv2.GaussianBlur(_h1_rng.integers(0, 256, (240, 320), np.uint8), (0, 0), _h1_rng.uniform(0.5, 2))
+_h1_image[:, : _h1_rng.integers(40, 280)] = 128
+_h1_thresholds = sorted(_h1_rng.integers(5, 60, 3).tolist())
+_h1_got = empty_shares(_h1_image, _h1_thresholds)
+_h1_expected = [nb11_module.image_statistics(_h1_image, threshold=t)["empty"] for t in _h1_thresholds]
+assert np.allclose(_h1_got, _h1_expected), "empty_shares differs on another image (empty cells?)"
+_h1_first = [nb11_module.image_statistics(real_images[0], threshold=t)["empty"] for t in (20, 10)]
+assert np.allclose([at_20, at_10], _h1_first), "at_20, at_10: not the shares of the first real image"
 ### END HIDDEN TESTS
 
 # %% [markdown]
@@ -1190,15 +1166,13 @@ print(
 # Exercise 2: autograder test
 assert abs(shift - cam.fy * math.tan(math.radians(0.1))) < 1e-9, "f_y tan(pitch), whatever the depth"
 ### BEGIN HIDDEN TESTS
-fresh = np.random.default_rng(11021)  # pitches, depths and cameras drawn from a fixed seed
-for _ in range(5):
-    camera_ = StereoCamera(
-        fx=fresh.uniform(300, 900), fy=fresh.uniform(300, 900), cx=320.0, cy=240.0, baseline=0.5
-    )
-    pitch_, depth_ = fresh.uniform(-0.05, 0.05), fresh.uniform(2.0, 80.0)
-    assert np.isclose(float(pitch_shift(pitch_, depth_, camera_)), camera_.fy * abs(math.tan(pitch_))), (
-        "pitch_shift differs for other pitches or cameras (radians? which focal length?)"
-    )
+import vo_lib.camera as camera_module  # noqa: E402
+
+_h2_draws = np.random.default_rng(11021).uniform([300, 300, -0.05, 2], [900, 900, 0.05, 80], (5, 4))
+for _h2_fx, _h2_fy, _h2_pitch, _h2_depth in _h2_draws:  # cameras, pitches and depths
+    _h2_camera = camera_module.StereoCamera(fx=_h2_fx, fy=_h2_fy, cx=320.0, cy=240.0, baseline=0.5)
+    _h2_got = pitch_shift(_h2_pitch, _h2_depth, _h2_camera)
+    assert np.isclose(_h2_got, _h2_fy * abs(np.tan(_h2_pitch))), "pitch_shift differs (radians? which f?)"
 ### END HIDDEN TESTS
 
 # %% [markdown]
@@ -1228,61 +1202,25 @@ print(f"from the identity: {steps_id} steps (from RANSAC's guess: {steps})")
 assert np.abs(R_id - R_ours).max() < 1e-8 and np.abs(t_id - t_ours).max() < 1e-8, "the same motion"
 assert steps_id >= steps, "from farther away, not fewer steps"
 ### BEGIN HIDDEN TESTS
-from coursework import grading  # noqa: E402
+import vo_lib.stereo_vo.rigid_motion as rigid_motion_module  # noqa: E402
+
+_h3_moves = np.random.default_rng(11031).normal(0, np.outer([0.01, 0.03, 0.05], [1, 1, 1, 10, 10, 10]))
+_h3_starts = [(rigid_motion_module.rotation_matrix(m[:3]) @ R0, t0 + m[3:]) for m in _h3_moves]
+_h3_got = [refine_from(R, t) for R, t in _h3_starts]  # from farther and farther away
 
 
-def hidden_test_ex3(grading, camera, points, measured, answer):
-    """New starting points at every grading. The answer gets copies; the expected motions and
-    steps come after it ran, from a Gauss-Newton of the test's own (section 5's, on disparity-space
-    residuals), not from the notebook's gauss_newton, which an answer cell can redefine."""
-    import numpy as np
-
-    fx, fy, cx, cy, baseline = camera.fx, camera.fy, camera.cx, camera.cy, camera.baseline
-
-    def rotation(w):  # Rodrigues' formula
-        angle = np.linalg.norm(w)
-        K = np.cross(np.eye(3), w / angle) if angle >= 1e-15 else np.zeros((3, 3))
-        return np.eye(3) + np.sin(angle) * K + (1 - np.cos(angle)) * K @ K
-
-    fresh = np.random.default_rng(11031)
-    starts = []
-    for size in (0.01, 0.05, 0.1):
-        R_start = rotation(fresh.normal(scale=size, size=3)) @ R0
-        starts.append((grading.frozen(R_start), grading.frozen(t0 + fresh.normal(scale=10 * size, size=3))))
-    P_kept, w_kept = grading.frozen(points), grading.frozen(measured)
-    with grading.unavailable():  # nothing to refuse; no other process, no change to the grader's tools
-        got = [answer(R.copy(), t.copy()) for R, t in starts]
-
-    # the references only now: the answer, called above, could read its caller's frame
-    def gauss_newton_of(P, w, R, t, iterations=30, tol=1e-10):
-        steps = 0
-        while steps < iterations:
-            Q = P @ R.T + t
-            X, Y, Z = Q.T
-            r = (np.column_stack([fx * X / Z + cx, fy * Y / Z + cy, fx * baseline / Z]) - w).reshape(-1)
-            d_pixel = np.zeros((len(Q), 3, 3))
-            d_pixel[:, 0, 0], d_pixel[:, 0, 2] = fx / Z, -fx * X / Z**2
-            d_pixel[:, 1, 1], d_pixel[:, 1, 2] = fy / Z, -fy * Y / Z**2
-            d_pixel[:, 2, 2] = -fx * baseline / Z**2
-            skew = np.cross(np.eye(3)[None], Q[:, None, :])  # [Q]x of every point
-            J = (
-                d_pixel @ np.concatenate([-skew, np.broadcast_to(np.eye(3), (len(Q), 3, 3))], axis=2)
-            ).reshape(-1, 6)
-            delta = -np.linalg.solve(J.T @ J, J.T @ r)
-            dR = rotation(delta[:3])
-            R, t, steps = dR @ R, dR @ t + delta[3:], steps + 1
-            if np.abs(delta).max() < tol:
-                break
-        return R, t, steps
-
-    for (R_g, t_g, steps_g), (R, t) in zip(got, starts, strict=True):
-        R_e, t_e, steps_e = gauss_newton_of(P_kept, w_kept, R, t)
-        assert np.abs(R_g - R_e).max() < 1e-8 and np.abs(t_g - t_e).max() < 1e-8 and steps_g == steps_e, (
-            "refine_from differs from other starting points (its steps counted?)"
-        )
+def _h3_refine(R, t, steps=0):  # section 5's Gauss-Newton on the library's normal equations
+    A, g, _ = rigid_motion_module.normal_equations(P_in, w_in, R, t, cam, np.inf)
+    delta = -np.linalg.solve(A, g)
+    dR = rigid_motion_module.rotation_matrix(delta[:3])
+    R, t, steps = dR @ R, dR @ t + delta[3:], steps + 1
+    return (R, t, steps) if np.abs(delta).max() < 1e-10 or steps == 30 else _h3_refine(R, t, steps)
 
 
-hidden_test_ex3(grading, cam, P_in, w_in, refine_from)
+_h3_expected = [_h3_refine(R, t) for R, t in _h3_starts]
+_h3_apart = [np.vstack(g[:2]) - np.vstack(e[:2]) for g, e in zip(_h3_got, _h3_expected, strict=True)]
+assert np.abs(_h3_apart).max() < 1e-8, "refine_from: not the motion from other starting points"
+assert [g[2] for g in _h3_got] == [e[2] for e in _h3_expected], "refine_from: not the steps from others"
 ### END HIDDEN TESTS
 
 # %% [markdown]
@@ -1339,72 +1277,24 @@ if REAL:  # on the real drive the forward component differs most
 ### BEGIN HIDDEN TESTS
 import scipy.optimize  # noqa: E402
 
+import vo_lib.stereo_vo.rigid_motion as rigid_motion_module  # noqa: E402
 from coursework import grading  # noqa: E402
 
-refinements = [
-    getattr(cv2, name) for name in dir(cv2) if name.startswith("solvePnP")
-]  # OpenCV's pose solvers
-solvers = [scipy.optimize.least_squares, scipy.optimize.leastsq, scipy.optimize.minimize, scipy.optimize.root]
+_h4_rng = np.random.default_rng(11041)  # a scene, a motion, noisy matches (the disparities noisier)
+_h4_P = _h4_rng.uniform([-8, -2, 4], [8, 2, 40], (150, 3))
+_h4_R = rigid_motion_module.rotation_matrix(_h4_rng.normal(0, 0.02, 3))
+_h4_w = cam.project(_h4_P @ _h4_R.T + _h4_rng.normal(0, 0.5, 3)) + _h4_rng.normal(0, [0.5, 0.5, 2], (150, 3))
+_h4_solvers = [getattr(cv2, name) for name in dir(cv2) if name.startswith("solvePnP")]
+with grading.unavailable(*_h4_solvers, *grading.library_functions(scipy.optimize, rigid_motion_module)):
+    _h4_got = left_only_refine(_h4_P, _h4_w, _h4_R, np.zeros(3))
 
 
-def hidden_test_ex4(grading, camera, elsewhere, builtins_elsewhere, answer):
-    """New scenes and motions at every grading. The answer gets copies, with no library pose
-    solver or least-squares routine (OpenCV's, SciPy's, vo_lib's, the notebook's stereo
-    gauss_newton) at hand; the expected motion comes after it ran, from a left-image Gauss-Newton
-    of the test's own, on inputs the answer cannot change."""
-    import numpy as np
-
-    fx, fy, cx, cy, baseline = camera.fx, camera.fy, camera.cx, camera.cy, camera.baseline
-
-    def rotation(w):  # Rodrigues' formula
-        angle = np.linalg.norm(w)
-        K = np.cross(np.eye(3), w / angle) if angle > 0 else np.zeros((3, 3))
-        return np.eye(3) + np.sin(angle) * K + (1 - np.cos(angle)) * K @ K
-
-    def uvd(Q):
-        X, Y, Z = Q.T
-        return np.column_stack([fx * X / Z + cx, fy * Y / Z + cy, fx * baseline / Z])
-
-    fresh = np.random.default_rng(11041)
-    cases = []
-    for _ in range(3):
-        P = np.column_stack([fresh.uniform(-8, 8, 150), fresh.uniform(-2, 2, 150), fresh.uniform(4, 40, 150)])
-        R_true = rotation(fresh.normal(scale=0.02, size=3))
-        t_true = fresh.normal(scale=0.5, size=3)
-        w = uvd(P @ R_true.T + t_true) + fresh.normal(scale=[0.5, 0.5, 2.0], size=(150, 3))
-        cases.append(tuple(grading.frozen(a) for a in (P, w, R_true, t_true + 0.05)))
-    with grading.unavailable(*builtins_elsewhere, *grading.library_functions(*elsewhere)):
-        got = [np.asarray(answer(*(a.copy() for a in case))[1], float) for case in cases]
-
-    # the references only now: the answer, called above, could read its caller's frame
-    def left_gauss_newton(P, w, R, t):
-        for _ in range(50):
-            Q = P @ R.T + t
-            X, Y, Z = Q.T
-            d_pixel = np.zeros((len(Q), 2, 3))
-            d_pixel[:, 0, 0], d_pixel[:, 0, 2] = fx / Z, -fx * X / Z**2
-            d_pixel[:, 1, 1], d_pixel[:, 1, 2] = fy / Z, -fy * Y / Z**2
-            skew = np.cross(np.eye(3)[None], Q[:, None, :])  # [Q]x of every point
-            d_point = np.concatenate([-skew, np.broadcast_to(np.eye(3), (len(Q), 3, 3))], axis=2)
-            J = (d_pixel @ d_point).reshape(-1, 6)
-            step = -np.linalg.lstsq(J, (uvd(Q) - w)[:, :2].reshape(-1), rcond=None)[0]
-            dR = rotation(step[:3])
-            R, t = dR @ R, dR @ t + step[3:]
-            if np.abs(step).max() < 1e-13:
-                break
-        return R, t
-
-    for value, case in zip(got, cases, strict=True):
-        assert np.abs(value - left_gauss_newton(*case)[1]).max() < 1e-7, (
-            "left_only_refine differs on other scenes (the left image's rows only? converged?)"
-        )
+def _h4_residuals(x):  # the left image's (u, v) residuals of R turned by x[:3], moved by x[3:]
+    R = rigid_motion_module.rotation_matrix(x[:3]) @ _h4_R
+    return (cam.project(_h4_P @ R.T + x[3:]) - _h4_w)[:, :2].ravel()
 
 
-hidden_test_ex4(
-    grading,
-    cam,
-    (*solvers, rigid_motion, gauss_newton),
-    refinements,
-    left_only_refine,
-)
+_h4_x = scipy.optimize.least_squares(_h4_residuals, np.zeros(6), xtol=1e-15, ftol=1e-15, gtol=1e-15).x
+_h4_expected = np.vstack([rigid_motion_module.rotation_matrix(_h4_x[:3]) @ _h4_R, _h4_x[3:]])
+assert np.abs(np.vstack(_h4_got) - _h4_expected).max() < 1e-7, "left_only_refine: the left image's rows only?"
 ### END HIDDEN TESTS
