@@ -359,10 +359,20 @@ display(
 spot = run_drive("spot_turn", 300)
 t = np.arange(301) / SAMPLES["spot_turn"].rate
 fig, axes = new_axes(2, width=5.5, height=3.6)
-plot_errors(axes[0], t, {k: heading_error(spot[k], spot["truth"]) for k in ESTIMATORS[:3]},
-            "heading error [deg]", "spot turn, one draw")
-plot_errors(axes[1], t, {k: heading_error(spot[k], spot["truth"]) for k in ESTIMATORS[1:]},
-            "heading error [deg]", "the same, without odometry alone")
+plot_errors(
+    axes[0],
+    t,
+    {k: heading_error(spot[k], spot["truth"]) for k in ESTIMATORS[:3]},
+    "heading error [deg]",
+    "spot turn, one draw",
+)
+plot_errors(
+    axes[1],
+    t,
+    {k: heading_error(spot[k], spot["truth"]) for k in ESTIMATORS[1:]},
+    "heading error [deg]",
+    "the same, without odometry alone",
+)
 plt.show()
 
 # %% [markdown]
@@ -403,8 +413,7 @@ display(
         + f". In heading, spot turn: {said(heading_cmp['spot turn'], 'fused', 'odometry', '°')}.\n\n"
         "Vision alone, with vision as good as the samples give it: "
         + "; ".join(
-            f"{c}: {said(heading_cmp[c], 'fused', 'VO', '°')} in heading"
-            for c in ("spot turn", "indoor")
+            f"{c}: {said(heading_cmp[c], 'fused', 'VO', '°')} in heading" for c in ("spot turn", "indoor")
         )
         + ".\n\nWith weak vision: "
         + "; ".join(
@@ -511,8 +520,10 @@ for c in ("spot turn", "indoor"):
         per_seed = [d[key].mean() for d in draws[c].values()]
         low_, high_ = bootstrap_interval(per_seed, np.mean)
         nees_rows[(c, label)] = (float(np.mean(per_seed)), low_, high_)
-        print(f"{c:10s} {label:11s} time-averaged NEES {np.mean(per_seed):7.2f}  95 % interval over "
-              f"{len(SEEDS)} seeds {low_:.2f}–{high_:.2f}  (3 if consistent)")
+        print(
+            f"{c:10s} {label:11s} time-averaged NEES {np.mean(per_seed):7.2f}  95 % interval over "
+            f"{len(SEEDS)} seeds {low_:.2f}–{high_:.2f}  (3 if consistent)"
+        )
 
 
 display(
@@ -759,40 +770,18 @@ assert np.isclose(mean_1d, mean_ref[0]) and np.isclose(var_1d, var_ref[0, 0]), (
 )
 assert 0 < gain_1d < 1 and var_1d < min(0.5, 0.25), "fusing two estimates beats both"
 ### BEGIN HIDDEN TESTS
-import importlib  # noqa: E402
-import pkgutil  # noqa: E402
-
-import filterpy  # noqa: E402
+import filterpy.kalman  # noqa: E402
 
 import vo_lib.line_slam.ekf_slam as ekf_module  # noqa: E402
 import vo_lib.stereo_vo.kalman as kalman_module  # noqa: E402
 from coursework import grading  # noqa: E402
 
-
-def filterpy_modules():
-    """Every module of filterpy: its filters, smoothers and Gaussian products all update."""
-    names = [m.name for m in pkgutil.walk_packages(filterpy.__path__, "filterpy.")]
-    return [importlib.import_module(n) for n in names if ".examples" not in n and ".tests" not in n]
-
-
-def hidden_test_ex1(grading, libraries, answer):
-    """New beliefs and measurements at every grading, with no library filter at hand (filterpy's,
-    vo_lib's); the expected updates are computed after the answer ran."""
-    import numpy as np
-
-    fresh = np.random.default_rng(7011)
-    cases = tuple(
-        tuple(float(v) for v in row) for row in fresh.uniform([-10, 0.01, -10, 0.01], [10, 5, 10, 5], (10, 4))
-    )
-    with grading.unavailable(*grading.library_functions(*libraries)):
-        got = [tuple(float(np.squeeze(g)) for g in answer(*case)) for case in cases]
-    for (m0, p0, z0, r0), (k_, m_, p_) in zip(cases, got, strict=True):
-        assert np.isclose(k_, p0 / (p0 + r0)), "the gain of another update (P / (P + R), not R / (P + R))"
-        assert np.isclose(m_, m0 + p0 / (p0 + r0) * (z0 - m0)), "the mean of another update"
-        assert np.isclose(p_, p0 * r0 / (p0 + r0)), "the variance of another update"
-
-
-hidden_test_ex1(grading, (*filterpy_modules(), kalman_module, ekf_module), update_1d)
+_h1_m, _h1_p, _h1_z, _h1_r = np.random.default_rng(7011).uniform([-10, 0.01, -10, 0.01], [10, 5, 10, 5])
+with grading.unavailable(*grading.library_functions(filterpy, kalman_module, ekf_module)):
+    _h1_got = [float(np.squeeze(v)) for v in update_1d(_h1_m, _h1_p, _h1_z, _h1_r)]
+_h1_k = _h1_p / (_h1_p + _h1_r)
+_h1_expected = [_h1_k, _h1_m + _h1_k * (_h1_z - _h1_m), (1 - _h1_k) * _h1_p]
+assert np.allclose(_h1_got, _h1_expected), "update_1d: another update's gain, mean or variance (P / (P + R)?)"
 ### END HIDDEN TESTS
 
 # %% [markdown]
@@ -841,61 +830,26 @@ assert abs(share_inside - 0.95) < 0.02, "a consistent estimator stays inside a 9
 assert nees_band(1000, 3)[1] - nees_band(1000, 3)[0] < high_check - low_check, "more runs, a narrower band"
 assert np.shape(average_nees(experiment_errors[:10], reported)) == (10,), "one average per experiment"
 ### BEGIN HIDDEN TESTS
+import scipy.stats  # noqa: E402
+
 import vo_lib.cli.experiments as experiments_module  # noqa: E402
-import vo_lib.line_slam.lap as lap_module  # noqa: E402
+import vo_lib.comparison as comparison_module  # noqa: E402
 from coursework import grading  # noqa: E402
 
-
-def hidden_test_ex2(grading, experiments, nees_band, average_nees):
-    """The share of the notebook's experiments, then new run counts, dimensions, errors and
-    covariances at every grading; the answer gets copies, and the expected values, from
-    chi-square's distribution function, come after it ran."""
-    import numpy as np
-    from scipy.special import gammainc, gammaincinv
-
-    fresh = np.random.default_rng(7021)
-    runs = [
-        (int(n), int(d)) for n, d in zip(fresh.integers(2, 500, 10), fresh.integers(1, 7, 10), strict=True)
-    ]
-    draws = []
-    for _ in range(3):
-        dim = int(fresh.integers(1, 6))
-        root = fresh.normal(size=(dim, dim)) + 2 * np.eye(dim)
-        covariance = root @ root.T * fresh.uniform(0.001, 1.0)
-        size = (int(fresh.integers(5, 50)), int(fresh.integers(2, 40)))
-        errors = fresh.multivariate_normal(np.zeros(dim), covariance, size=size)
-        draws.append((grading.frozen(errors), grading.frozen(covariance)))
-    with grading.unavailable(*grading.library_functions(*experiments)):
-        bands = [np.asarray(nees_band(n, d), float) for n, d in runs]
-        averages = [np.asarray(average_nees(e.copy(), c.copy()), float) for e, c in draws]
-
-    # the references only now: the answer, called above, could read its caller's frame
-    def reference_band(n, d):  # chi-square's quantiles, from its distribution function gammainc(k / 2, x / 2)
-        return 2 * gammaincinv(n * d / 2, np.array([0.025, 0.975])) / n
-
-    def reference_average(errors, covariance):
-        return np.einsum("eri,ij,erj->er", errors, np.linalg.inv(covariance), errors).mean(axis=1)
-
-    low_, high_ = reference_band(50, 3)
-    covariance_ = np.diag([0.04, 0.01, 0.003])  # the experiments of the cell above, drawn again
-    drawn_ = np.random.default_rng(7).multivariate_normal(np.zeros(3), covariance_, size=(2000, 50))
-    nees_ = reference_average(drawn_, covariance_)
-    assert np.isclose(float(share_inside), np.mean((nees_ > low_) & (nees_ < high_)), rtol=0, atol=1e-12), (
-        "share_inside: not the share of the experiments drawn above inside the band"
-    )
-    for band, (n, d) in zip(bands, runs, strict=True):
-        assert np.allclose(gammainc(n * d / 2, band * n / 2), [0.025, 0.975], atol=1e-6), (
-            "nees_band is not the 95 % band of another average NEES "
-            "(which quantiles? which degrees of freedom?)"
-        )
-    for value, (errors, covariance) in zip(averages, draws, strict=True):
-        assert value.shape == (len(errors),) and np.allclose(value, reference_average(errors, covariance)), (
-            "average_nees differs for other errors and covariances "
-            "(the inverse covariance? the mean over runs?)"
-        )
-
-
-hidden_test_ex2(grading, (experiments_module, lap_module), nees_band, average_nees)
+_h2_rng = np.random.default_rng(7021)  # errors of a 4-D estimator with a full covariance
+_h2_cov = np.cov(_h2_rng.normal(size=(4, 10)))
+_h2_errors = _h2_rng.multivariate_normal(np.zeros(4), _h2_cov, size=(6, 20))
+with grading.unavailable(*grading.library_functions(experiments_module, comparison_module.chi2_band)):
+    _h2_band, _h2_nees = nees_band(37, 4), average_nees(_h2_errors, _h2_cov)
+_h2_expected = np.einsum("eri,ij,erj->er", _h2_errors, np.linalg.inv(_h2_cov), _h2_errors).mean(axis=1)
+assert np.allclose(_h2_nees, _h2_expected), "average_nees: not each experiment's mean of eᵀ C⁻¹ e"
+_h2_expected = scipy.stats.chi2.ppf([0.025, 0.975], 4 * 37) / 37
+assert np.allclose(_h2_band, _h2_expected), "nees_band: not the 95 % band (quantiles? degrees of freedom?)"
+_h2_var = np.array([0.04, 0.01, 0.003])  # the experiments of the cell above, drawn again
+_h2_drawn = np.random.default_rng(7).multivariate_normal(np.zeros(3), np.diag(_h2_var), (2000, 50))
+_h2_each = (_h2_drawn**2 / _h2_var).sum(axis=2).mean(axis=1)
+_h2_low, _h2_high = scipy.stats.chi2.ppf([0.025, 0.975], 150) / 50
+assert share_inside == np.mean((_h2_each > _h2_low) & (_h2_each < _h2_high)), "share_inside: not the share"
 ### END HIDDEN TESTS
 
 # %% [markdown]
@@ -948,35 +902,13 @@ import vo_lib.models.track_odometry as odometry_module  # noqa: E402
 import vo_lib.stereo_vo.kalman as kalman_module  # noqa: E402
 from coursework import grading  # noqa: E402
 
-
-def hidden_test_ex3(grading, geometry, others, answer):
-    """New poses at every grading. The answer gets copies, without vo_lib's poses and
-    Jacobians; the expected Jacobians (central differences of relative_planar, error ~1e-10)
-    are computed after it ran, from poses it cannot change."""
-    import numpy as np
-
-    fresh = np.random.default_rng(7031)
-    cases = [grading.frozen(fresh.uniform([-5, -5, -np.pi] * 2, [5, 5, np.pi] * 2)) for _ in range(5)]
-    with grading.unavailable(*grading.library_functions(geometry, *others)):
-        got = [np.asarray(answer(c[:3].copy(), c[3:].copy()), float) for c in cases]
-    step = 1e-6
-    for value, c in zip(got, cases, strict=True):
-        expected = np.column_stack(
-            [
-                (
-                    geometry.relative_planar(*np.split(c + step * e, 2))
-                    - geometry.relative_planar(*np.split(c - step * e, 2))
-                )
-                / (2 * step)
-                for e in np.eye(6)
-            ]
-        )
-        assert value.shape == (3, 6) and np.allclose(value, expected, atol=1e-7), (
-            "relative_jacobian is not the derivative at other poses (signs? the yaw column?)"
-        )
-
-
-hidden_test_ex3(grading, geometry_module, (kalman_module, odometry_module), relative_jacobian)
+_h3_poses = np.random.default_rng(7031).uniform([-5, -5, -1.2] * 2, [5, 5, 1.2] * 2)  # new poses a, b
+with grading.unavailable(*grading.library_functions(geometry_module, odometry_module, kalman_module)):
+    _h3_J = relative_jacobian(_h3_poses[:3], _h3_poses[3:])
+_h3_moved = _h3_poses + 1e-6 * np.vstack([np.eye(6), -np.eye(6)])  # central differences of relative_planar
+_h3_rel = geometry_module.relative_planar(_h3_moved[:, :3], _h3_moved[:, 3:])
+_h3_expected = (_h3_rel[:6] - _h3_rel[6:]).T / 2e-6
+assert np.allclose(_h3_J, _h3_expected, atol=1e-7), "relative_jacobian: not the derivative (yaw column?)"
 ### END HIDDEN TESTS
 
 # %% [markdown]
@@ -1039,78 +971,26 @@ assert np.allclose(P6_post, P6_post.T) and np.trace(P6_post[:3, :3]) < np.trace(
     "an update makes the current pose surer"
 )
 ### BEGIN HIDDEN TESTS
-import filterpy.kalman.EKF as filterpy_ekf  # noqa: E402
-import filterpy.kalman.kalman_filter as filterpy_kf  # noqa: E402
+import filterpy  # noqa: E402
 
+import vo_lib.models.track_odometry as odometry_module  # noqa: E402
 import vo_lib.stereo_vo.kalman as kalman_module  # noqa: E402
 from coursework import grading  # noqa: E402
 
-
-def hidden_test_ex4(grading, kalman, predict, update):
-    """Beliefs, readings and measurements drawn from a fixed seed, one of them with a residual
-    across ±π; the expected values from filterpy's EKF, after the answer ran."""
-    import numpy as np
-    from filterpy.kalman import ExtendedKalmanFilter
-
-    from vo_lib.geometry import wrap_angle
-    from vo_lib.models.track_odometry import TrackOdometry
-
-    fresh = np.random.default_rng(7041)
-    refused = [
-        kalman.VoKalmanFilter.predict,
-        kalman.VoKalmanFilter.update,
-        ExtendedKalmanFilter.predict,
-        ExtendedKalmanFilter.update,
-        ExtendedKalmanFilter.predict_update,
-        *grading.library_functions(filterpy_ekf, filterpy_kf),
-    ]
-    for case in range(4):
-        crawler = TrackOdometry(
-            track_distance=fresh.uniform(0.3, 0.6), track_width=fresh.uniform(0.05, 0.1), encoder_sigma=0.004
-        )
-        x = np.array([*fresh.uniform(-5, 5, 2), fresh.uniform(-np.pi, np.pi)])
-        A = fresh.normal(size=(3, 3)) * [0.1, 0.1, 0.03]
-        P = A @ A.T + 1e-4 * np.eye(3)
-        u = fresh.uniform(-0.1, 0.2, 2)
-        Q_u = crawler.control_covariance(u)
-        z = np.array([fresh.normal(0.0, 0.05), fresh.uniform(0.0, 0.2), 0.0])
-        R = np.diag(fresh.uniform(0.001, 0.01, 3) ** 2)
-        with grading.unavailable(*refused):
-            x6, P6 = (
-                np.asarray(a, float) for a in predict(x.copy(), P.copy(), u.copy(), Q_u.copy(), crawler)
-            )
-        x_new, F, G = crawler.step(x, u)
-        assert np.allclose(x6, np.concatenate([x_new, x])), (
-            "ekf_predict: the state is [moved pose, previous pose]"
-        )
-        expected = np.block([[F @ P @ F.T + G @ Q_u @ G.T, F @ P], [P @ F.T, P]])
-        assert np.allclose(P6, expected, atol=1e-12), (
-            "ekf_predict: not the cloned covariance (F P Fᵀ + G Q_u Gᵀ, and the cross terms F P)"
-        )
-        expected_x = np.concatenate([x_new, x])
-        if case == 3:  # a measured turn written 2π away from the predicted one: the same turn
-            z[0] = kalman.constrained_measurement(expected_x)[0] + 0.05 - 2 * np.pi
-        with grading.unavailable(*refused):
-            x_post, P_post = (
-                np.asarray(a, float) for a in update(expected_x.copy(), expected.copy(), z.copy(), R.copy())
-            )
-        ekf = ExtendedKalmanFilter(dim_x=6, dim_z=3)
-        ekf.x, ekf.P = expected_x.copy(), expected.copy()
-
-        def residual(a, b):
-            y = np.asarray(a, float) - b
-            y[0] = wrap_angle(y[0])
-            return y
-
-        ekf.update(z, kalman.constrained_jacobian, kalman.constrained_measurement, R=R, residual=residual)
-        ekf.x[2] = wrap_angle(ekf.x[2])
-        assert np.allclose(x_post, ekf.x, atol=1e-9), (
-            "ekf_update: not the corrected state (the gain uses S = H P Hᵀ + R; the residual's θ wrapped?)"
-        )
-        assert np.allclose(P_post, ekf.P, atol=1e-12), "ekf_update: not the corrected covariance"
-
-
-hidden_test_ex4(grading, kalman_module, ekf_predict, ekf_update)
+_h4_rng = np.random.default_rng(7041)  # a new belief; a measured turn written 2π away (the same turn)
+_h4_x, _h4_P = _h4_rng.uniform(-3, 3, 3), np.diag(_h4_rng.uniform(0.001, 0.01, 3))
+_h4_u, _h4_R = _h4_rng.uniform(0.05, 0.2, 2), np.diag(_h4_rng.uniform(0.001, 0.01, 3) ** 2)
+_h4_kf = kalman_module.VoKalmanFilter(odometry_module.TrackOdometry(), pose=_h4_x, covariance=_h4_P)
+_h4_Q, _h4_z = _h4_kf.control_covariance(_h4_u), np.array([0.05 - 2 * np.pi, 0.1, 0.0])
+with grading.unavailable(*grading.library_functions(kalman_module.VoKalmanFilter, filterpy)):
+    _h4_x6, _h4_P6 = ekf_predict(_h4_x, _h4_P, _h4_u, _h4_Q, _h4_kf.odometry)
+    _h4_x6_post, _h4_P6_post = ekf_update(_h4_x6, _h4_P6, _h4_z, _h4_R)
+_h4_kf.predict(_h4_u)  # the library's predict and update, after the answer ran
+assert np.allclose(_h4_x6, _h4_kf.ekf.x), "ekf_predict: not [moved pose, previous pose]"
+assert np.allclose(_h4_P6, _h4_kf.ekf.P), "ekf_predict: not the cloned covariance (the cross terms F P?)"
+_h4_kf.update(_h4_z[0], _h4_z[1], _h4_R)
+assert np.allclose(_h4_x6_post, _h4_kf.ekf.x), "ekf_update: not the corrected state (θ wrapped?)"
+assert np.allclose(_h4_P6_post, _h4_kf.ekf.P), "ekf_update: not the corrected covariance"
 ### END HIDDEN TESTS
 
 # %% [markdown]
