@@ -28,7 +28,6 @@ import types
 from collections.abc import Callable, Iterator
 
 import nbformat
-import numpy as np
 
 try:
     from nbgrader.preprocessors import NbGraderPreprocessor
@@ -109,13 +108,6 @@ def library_functions(*owners: types.ModuleType | type | Callable) -> list[Calla
     ]
     functions = [f for f in (*owners, *defined) if not isinstance(f, (type, types.ModuleType))]
     return functions + methods
-
-
-def frozen(values) -> np.ndarray:
-    """A read-only float copy of ``values``: an answer cannot change a test's input in place."""
-    array = np.array(values, dtype=float)
-    array.flags.writeable = False
-    return array
 
 
 class Reason(enum.Enum):
