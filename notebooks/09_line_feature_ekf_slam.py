@@ -517,8 +517,9 @@ display(
         f"{tolerances[-1] * 1000:g} mm does sampling's ℓ/ε cost take over ({ratios[-1]:.0f}×). At "
         f"{DEFAULT_TOLERANCE * 100:.0f} cm (our default, a tenth of the range noise) bisection runs "
         f"{point_over_bisection:.1f} times as fast as point by point and the closed form "
-        f"{point_over_closed:.0f} times (timings vary with the machine's load). The paper's conclusion 3) notes that bisection "
-        "slows as the tolerance shrinks; the closed form is the answer to that: exact, and "
+        f"{point_over_closed:.0f} times (timings vary with the machine's load). The paper's "
+        "conclusion 3) notes that bisection slows as the tolerance shrinks; the closed form is "
+        "the answer to that: exact, and "
         + (
             "cheaper than bisection at every tolerance timed here."
             if closed_cheapest
