@@ -1062,71 +1062,79 @@ assert np.allclose(_h1_got, _h1_expected), "wall_feature_point: not the foot of 
 ### END HIDDEN TESTS
 
 # %% [markdown]
-# ### Exercise 2 · the range–bearing Jacobians *(medium, 3 points)*
+# ### Exercise 2 · a sensor ahead of the axle *(medium, 3 points)*
 #
-# Write `range_bearing_jacobians(pose, point)` returning the 2×3 Jacobian of (range, bearing)
-# by the pose (x, y, Φ) and the 2×2 Jacobian by the landmark (x_l, y_l), derived by hand from
-# r = √(Δx² + Δy²), b = atan2(Δy, Δx) − Φ, without `vo_lib`'s `observation_jacobians` or
-# numerical differences of `observe_point`. Mind the bearing row: it is where the paper's eq. 11
-# prints the wrong variables.
+# The filter above observes from the robot's reference point. Mount the range–bearing sensor d
+# metres ahead of it, along the heading: it sits at s = (x + d cos Φ, y + d sin Φ) and sees the
+# landmark (x_l, y_l) at r = |l − s|, b = atan2(y_l − s_y, x_l − s_x) − Φ. Write
+# `offset_observation_jacobians(pose, point, d)` returning the 2×3 Jacobian of (r, b) by the pose
+# (x, y, Φ) and the 2×2 Jacobian by the landmark, derived by hand, without `vo_lib`'s observation
+# functions or numerical differences. With d = 0 they are section 2's.
 #
-# *Hint:* ∂atan2(Δy, Δx)/∂Δx = −Δy / r².
+# *Hint:* the sensor turns with the robot: Φ moves s as well as the bearing's origin.
 
 
 # %% nbgrader={"grade": false, "grade_id": "ex2", "locked": false, "schema_version": 3, "solution": true}
 ### BEGIN SOLUTION
-def range_bearing_jacobians(pose, point):
-    """Jacobians of (range, bearing) by the pose (2x3) and by the landmark (2x2)."""
-    dx, dy = point[0] - pose[0], point[1] - pose[1]
+def offset_observation_jacobians(pose, point, d):
+    """Jacobians of (range, bearing) from a sensor d ahead of the pose: by the pose (2x3) and by
+    the landmark (2x2)."""
+    c, s = np.cos(pose[2]), np.sin(pose[2])
+    dx, dy = point[0] - pose[0] - d * c, point[1] - pose[1] - d * s
     q = dx * dx + dy * dy
     r = np.sqrt(q)
     by_point = np.array([[dx / r, dy / r], [-dy / q, dx / q]])
-    by_pose = np.column_stack([-by_point, [0.0, -1.0]])
-    return by_pose, by_point
+    by_heading = -by_point @ [-d * s, d * c] + [0.0, -1.0]  # through s, and the bearing's origin
+    return np.column_stack([-by_point, by_heading]), by_point
 
 
 ### END SOLUTION
 
+
 # %% nbgrader={"grade": true, "grade_id": "ex2_test", "locked": true, "points": 3, "schema_version": 3, "solution": false}
-# Exercise 2: autograder test: central differences at random poses and landmarks
-from vo_lib.line_slam.range_bearing import observe_point
+# Exercise 2: autograder test: central differences at random poses, landmarks and offsets
+def observe_from_ahead(pose_and_point, d):
+    """(range, bearing) of the landmark from a sensor d ahead of the pose, the five stacked."""
+    x, y, phi, x_l, y_l = pose_and_point
+    s_x, s_y = x + d * np.cos(phi), y + d * np.sin(phi)
+    return np.array([np.hypot(x_l - s_x, y_l - s_y), np.arctan2(y_l - s_y, x_l - s_x) - phi])
 
 
-def numeric_jacobians(pose_j, point_j, step=1e-6):
-    """Central differences of observe_point by the pose and by the landmark."""
+def numeric_jacobian(pose_and_point, d, step=1e-6):
+    """Central differences of observe_from_ahead, the bearing's wrapped, one column per component."""
     columns = []
-    for base, size in ((pose_j, 3), (point_j, 2)):
-        block = []
-        for k in range(size):
-            e = np.zeros(size)
-            e[k] = step
-            if size == 3:
-                diff = observe_point(base + e, point_j) - observe_point(base - e, point_j)
-            else:
-                diff = observe_point(pose_j, base + e) - observe_point(pose_j, base - e)
-            diff[1] = (diff[1] + np.pi) % (2 * np.pi) - np.pi
-            block.append(diff / (2 * step))
-        columns.append(np.column_stack(block))
-    return columns
+    for e in step * np.eye(5):
+        diff = observe_from_ahead(pose_and_point + e, d) - observe_from_ahead(pose_and_point - e, d)
+        diff[1] = (diff[1] + np.pi) % (2 * np.pi) - np.pi
+        columns.append(diff / (2 * step))
+    return np.column_stack(columns)
 
 
 jac_rng = np.random.default_rng(9)
 for _ in range(20):
     pose_j, point_j = jac_rng.uniform(-5, 5, 3), jac_rng.uniform(-20, 20, 2)
-    by_pose, by_point = range_bearing_jacobians(pose_j, point_j)
-    num_pose, num_point = numeric_jacobians(pose_j, point_j)
-    assert np.allclose(by_pose, num_pose, atol=1e-6), "the Jacobian by the pose"
-    assert np.allclose(by_point, num_point, atol=1e-6), "the Jacobian by the landmark"
+    by_pose, by_point = offset_observation_jacobians(pose_j, point_j, 0.4)
+    numeric = numeric_jacobian(np.r_[pose_j, point_j], 0.4)
+    assert np.allclose(by_pose, numeric[:, :3], atol=1e-6), "the Jacobian by the pose"
+    assert np.allclose(by_point, numeric[:, 3:], atol=1e-6), "the Jacobian by the landmark"
 ### BEGIN HIDDEN TESTS
 import vo_lib.line_slam as line_slam_module  # noqa: E402
 from coursework import grading  # noqa: E402
 
 _h2_rng = np.random.default_rng(9021)
-_h2_cases = [(_h2_rng.uniform(-5, 5, 3), _h2_rng.uniform(-20, 20, 2)) for _ in range(20)]
+_h2_cases = [
+    (_h2_rng.uniform(-5, 5, 3), _h2_rng.uniform(-20, 20, 2), _h2_rng.uniform(-1, 2)) for _ in range(9)
+]
 with grading.unavailable(*grading.library_functions(line_slam_module)):  # observe_point too: no differences
-    _h2_got = [np.hstack(range_bearing_jacobians(pose, point)) for pose, point in _h2_cases]
-_h2_expected = [np.hstack(line_slam_module.range_bearing.observation_jacobians(*case)) for case in _h2_cases]
-assert np.allclose(_h2_got, _h2_expected, atol=1e-9), "range_bearing_jacobians differs (the bearing row?)"
+    _h2_got = [np.hstack(offset_observation_jacobians(pose, point, d)) for pose, point, d in _h2_cases]
+_h2_expected = []
+for _h2_pose, _h2_point, _h2_d in _h2_cases:  # section 2's Jacobians at the sensor, then its turn
+    _h2_c, _h2_s = np.cos(_h2_pose[2]), np.sin(_h2_pose[2])
+    _h2_sensor = _h2_pose + [_h2_d * _h2_c, _h2_d * _h2_s, 0.0]
+    _h2_hp, _h2_hl = line_slam_module.range_bearing.observation_jacobians(_h2_sensor, _h2_point)
+    _h2_hp[:, 2] += _h2_hp[:, :2] @ [-_h2_d * _h2_s, _h2_d * _h2_c]
+    _h2_expected.append(np.hstack([_h2_hp, _h2_hl]))
+assert np.allclose(_h2_got, _h2_expected, atol=1e-9), "differs for other offsets (d of either sign?)"
 ### END HIDDEN TESTS
 
 # %% [markdown]
@@ -1138,9 +1146,10 @@ assert np.allclose(_h2_got, _h2_expected, atol=1e-9), "range_bearing_jacobians d
 # with P the pose's and L the landmark's covariance, taken independent, and
 # R = diag(σ_r², σ_b²)) is compared with a χ² gate. Write
 # `innovation_squared(pose, pose_cov, point, point_cov, measured, range_sigma, bearing_sigma)`
-# with your exercise 2 Jacobians. Then, for the observations `candidates` below of the robot
-# at `gate_pose`, measured with σ_r = 0.05 m and σ_b = 0.02 rad, store in `accepted` the boolean
-# mask of those within the 99 % gate (`chi2.ppf(0.99, 2)`) of the landmark `gate_point`.
+# with section 2's `observation_jacobians` (imported above). Then, for the observations
+# `candidates` below of the robot at `gate_pose`, measured with σ_r = 0.05 m and σ_b = 0.02 rad,
+# store in `accepted` the boolean mask of those within the 99 % gate (`chi2.ppf(0.99, 2)`) of the
+# landmark `gate_point`.
 #
 # *Hint:* ν's bearing is an angle: two bearings either side of ±π are close.
 
@@ -1157,7 +1166,7 @@ candidates[:, 1] = (candidates[:, 1] + np.pi) % (2 * np.pi) - np.pi
 ### BEGIN SOLUTION
 def innovation_squared(pose, pose_cov, point, point_cov, measured, range_sigma, bearing_sigma):
     """Normalised innovation squared of one range-bearing observation of a landmark."""
-    by_pose, by_point = range_bearing_jacobians(pose, point)
+    by_pose, by_point = observation_jacobians(pose, point)
     S = by_pose @ pose_cov @ by_pose.T + by_point @ point_cov @ by_point.T
     S = S + np.diag([range_sigma**2, bearing_sigma**2])
     dx, dy = point[0] - pose[0], point[1] - pose[1]
@@ -1189,9 +1198,10 @@ _h3_low, _h3_high = [-5, -5, -5, -10, -10, 1, -np.pi, 0.01, 0.01], [5, 5, 5, 10,
 _h3_draws = np.random.default_rng(9031).uniform(_h3_low, _h3_high, (10, 9))  # any bearing: the seam too
 _h3_pose_cov, _h3_point_cov = np.diag([0.05, 0.02, 0.01]), np.diag([0.1, 0.3])
 _h3_cases = [(d[:3], _h3_pose_cov, d[3:5], _h3_point_cov, d[5:7], *d[7:]) for d in _h3_draws]
-_h3_observe = line_slam_module.range_bearing.observe_point  # predicting is not the exercise: not refused
+_h3_observe = line_slam_module.range_bearing.observe_point
 _h3_refused = grading.library_functions(line_slam_module, kalman_module)
-with grading.unavailable(*[f for f in _h3_refused if f is not _h3_observe]):
+_h3_given = (_h3_observe, line_slam_module.range_bearing.observation_jacobians)  # section 2's
+with grading.unavailable(*[f for f in _h3_refused if f not in _h3_given]):
     _h3_got = [innovation_squared(*case) for case in _h3_cases]
 
 
