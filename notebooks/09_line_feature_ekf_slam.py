@@ -1079,12 +1079,12 @@ assert np.allclose(_h1_got, _h1_expected), "wall_feature_point: not the foot of 
 def offset_observation_jacobians(pose, point, d):
     """Jacobians of (range, bearing) from a sensor d ahead of the pose: by the pose (2x3) and by
     the landmark (2x2)."""
-    c, s = np.cos(pose[2]), np.sin(pose[2])
-    dx, dy = point[0] - pose[0] - d * c, point[1] - pose[1] - d * s
+    cos_h, sin_h = np.cos(pose[2]), np.sin(pose[2])
+    dx, dy = point[0] - pose[0] - d * cos_h, point[1] - pose[1] - d * sin_h
     q = dx * dx + dy * dy
     r = np.sqrt(q)
     by_point = np.array([[dx / r, dy / r], [-dy / q, dx / q]])
-    by_heading = -by_point @ [-d * s, d * c] + [0.0, -1.0]  # through s, and the bearing's origin
+    by_heading = -by_point @ [-d * sin_h, d * cos_h] + [0.0, -1.0]  # through s, and the bearing's origin
     return np.column_stack([-by_point, by_heading]), by_point
 
 
