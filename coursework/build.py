@@ -252,7 +252,6 @@ def read_submissions(path: pathlib.Path, ids: list[str]) -> dict[str, dict[str, 
 
 WARNING_WRAPPER = """
 import functools as _functools
-import sys as _sys
 import warnings as _warnings
 
 _quiet_{name} = {name}
