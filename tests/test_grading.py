@@ -1,9 +1,7 @@
 """coursework/grading.py: the hidden tests' guard, the integrity report and the autograder's steps."""
 
 import json
-import os
 import pathlib
-import sys
 
 import jupytext
 import nbformat
@@ -80,8 +78,10 @@ def test_library_functions_takes_functions_classes_and_the_methods_of_a_modules_
         ("import sys\nexpected = sys._getframe(1).f_globals['expected']", Reason.FRAME),
         ("import linecache\nprint(linecache.cache)", Reason.FRAME),
         ("import ctypes", Reason.LOW_LEVEL),
-        ("import threading\nthreading.Thread(target=print).start()", Reason.PROCESS),
-        ("import os\nos._exit(0)", Reason.PROCESS),
+        ("import threading\nthreading.Thread(target=print).start()", Reason.THREADS),
+        ("import os\nos._exit(0)", Reason.EXIT),
+        ("import os\nos.system('cp ../../source/06/06.ipynb .')", Reason.EXIT),
+        ("f = hypotheses_for.__code__", Reason.CODE),
         ("class Always(float):\n    def __eq__(self, other):\n        return True", Reason.FAKE_NUMBER),
         ("class Echo:\n    def __array__(self):\n        return 0", Reason.FAKE_NUMBER),
         ("import functools\nnp.allclose = functools.partial(lambda *a: True)", Reason.REBINDS),
@@ -130,8 +130,7 @@ def test_stderr_never_costs_a_mark_and_a_flagged_answer_fails_its_test():
             _cell("test", "assert x == 2", "ex2_test"),
         ]
     )
-    nb, _ = grading.QuietStderr().preprocess(nb, {})
-    nb, _ = grading.ToBeReviewed().preprocess(nb, {})
+    nb, _ = grading.AfterRun().preprocess(nb, {})
     assert [o.get("name") for o in nb.cells[1].outputs] == ["stdout"]
     assert nb.cells[0].outputs == [] and not any(o.output_type == "error" for o in nb.cells[1].outputs)
     (error,) = nb.cells[3].outputs
@@ -172,15 +171,12 @@ def test_the_isolated_kernel_finds_the_hidden_solutions_empty(tmp_path, monkeypa
     (tmp_path / "gradebook.db").write_text("grades")
     spec = tmp_path / "jupyter" / "kernels" / "python3"
     spec.mkdir(parents=True)
-    argv = [sys.executable, grading.__file__, "--kernel", "{connection_file}"]
+    source, book = str(tmp_path / "source"), str(tmp_path / "gradebook.db")
+    argv = grading.isolated_kernel([source, book, str(tmp_path / "nothing here")])
     (spec / "kernel.json").write_text(
         json.dumps({"argv": argv, "display_name": "isolated", "language": "python"})
     )
     monkeypatch.setenv("JUPYTER_PATH", str(tmp_path / "jupyter"))
-    monkeypatch.setenv(
-        "VO_HIDDEN", os.pathsep.join([str(tmp_path / "source"), str(tmp_path / "gradebook.db")])
-    )
-    source, book = str(tmp_path / "source"), str(tmp_path / "gradebook.db")
     probe = f"import os\nprint(os.listdir({source!r}), open({book!r}).read())"
     nb = nbformat.v4.new_notebook(cells=[nbformat.v4.new_code_cell(probe)])
     nbclient.NotebookClient(nb, kernel_name="python3", timeout=60).execute()
