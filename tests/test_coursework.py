@@ -512,3 +512,27 @@ for path in sorted(pathlib.Path(".").glob("*.ipynb")):  # run where Jupyter runs
     assert [line.split()[1] for line in proc.stdout.splitlines() if line.startswith("ran ")] == [
         p.name for p in notebooks
     ]
+
+
+def marked_lines(text: str, begin: str, end: str) -> int:
+    """The non-blank lines between each ``### BEGIN ...`` marker and its ``### END ...``."""
+    count, inside = 0, False
+    for line in (s.strip() for s in text.splitlines()):
+        inside = (inside or line.endswith(begin)) and not line.endswith(end)
+        count += inside and bool(line) and not line.endswith(begin)
+    return count
+
+
+def test_grading_stays_in_proportion_to_what_it_grades():
+    """Hidden tests take at most 1.2 lines per line of solution; the grading code beside the course
+    (grading.py and nbgrader_config.py) at most 300 lines."""
+    texts = [p.read_text() for p in NOTEBOOKS]
+    solution = sum(marked_lines(t, "BEGIN SOLUTION", "END SOLUTION") for t in texts)
+    hidden = sum(marked_lines(t, "BEGIN HIDDEN TESTS", "END HIDDEN TESTS") for t in texts)
+    assert (
+        marked_lines("a\n### BEGIN SOLUTION\nx = 1\n\ny = 2\n### END SOLUTION\nb", "N SOLUTION", "D SOLUTION")
+        == 2
+    )
+    assert 0 < hidden <= 1.2 * solution, (hidden, solution)
+    tools = [ROOT / "coursework" / name for name in ("grading.py", "nbgrader_config.py")]
+    assert sum(len(p.read_text().splitlines()) for p in tools) <= 300
