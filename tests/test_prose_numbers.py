@@ -141,15 +141,19 @@ CONSTANTS: dict[str, dict[str, str]] = {
         "±2 px": "the disparity search window chosen around an upper level's corner",
         "1 px": "the threshold of the histogram's tail and of the Huber weights, both chosen",
         "2 px": "the disparity change chosen to call a patch a depth edge",
+        "0.1 °": "the pitch the exercise prescribes",
+        "20 m": "the distance the exercise prescribes",
+        "1e-10": "the tolerance the exercise's hint passes",
+    },
+    "12_real_drive_pipeline": {
         "90 °": "a right-angle turn at a crossing, by definition",
         "3–5 °": "90° in two or three seconds at 10 Hz, worked in the sentence itself",
         "10 Hz": "KITTI's frame rate",
         "0.5 px": "the pixel noise chosen for the synthetic matches",
         "20 %": "the outlier share chosen for the synthetic matches",
         "1 m": "the chord per frame chosen for the synthetic turns",
-        "0.1 °": "the pitch the exercise prescribes",
-        "20 m": "the distance the exercise prescribes",
-        "1e-10": "the tolerance the exercise's hint passes",
+        "1 px": "the refinement's inlier threshold, chosen",
+        "5 °": "the turn the exercise prescribes",
     },
     "04_world_and_sequences": {
         "66 °": "the horizontal field of view chosen for the simulated camera",
@@ -429,7 +433,7 @@ def test_wide_assert_margins_say_why(path):
 # --- comparative sentences rest on seeds, not on one draw ------------------------------------
 
 #: Notebooks whose comparisons are about random outcomes (draws of noise, slip, matches).
-RANDOM_COMPARISONS = ("03", "06", "07", "08", "09", "10", "11")
+RANDOM_COMPARISONS = ("03", "06", "07", "08", "09", "10", "11", "12")
 #: Words by which a sentence says one method or condition did better or worse than another.
 COMPARATIVE = re.compile(
     r"\b(better|worse|helps?|helped|hurts?|beats?|beaten|outperforms?|outperformed|"

@@ -31,6 +31,13 @@ def data_dir() -> Path:
     return Path(cache) / "vo_lib" / "data"
 
 
+def real_sequence_path(name: str) -> Path | None:
+    """The folder ``name`` under ``$VO_LIB_REALDATA`` (real recordings, kept out of the repository),
+    or None when the variable is unset or the folder is not there."""
+    root = os.environ.get("VO_LIB_REALDATA", "")
+    return Path(root) / name if root and (Path(root) / name).is_dir() else None
+
+
 def sample_path(name: str, frames: int | None = None, resolution=None) -> Path:
     """Folder of a generated sample: the full sample at its own size keeps its plain name."""
     full = frames is None or frames == SAMPLES[name].frames

@@ -1,4 +1,4 @@
-"""Demonstration scaffolding of notebook 11 (real stereo data), kept out of its story cells.
+"""Demonstration scaffolding of notebook 12 (a real drive), kept out of its story cells.
 
 Frame-to-frame motions of a sequence read three ways by the circular-motion model and the 6-DoF
 refinement, chained into planar poses.

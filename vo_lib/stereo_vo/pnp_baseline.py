@@ -3,7 +3,7 @@
 ORB features in both images, stereo matches by brute-force Hamming matching with cross-check on
 the same rows, their triangulated points matched to the next left image the same way, and the
 motion from ``cv2.solvePnPRansac`` (iterative PnP on reprojection errors in the left image). This
-is the usual first stereo odometry one writes with OpenCV; the benchmark and notebook 11 run it
+is the usual first stereo odometry one writes with OpenCV; the benchmark and notebook 12 run it
 on the same frames as our pipeline, in the same process.
 """
 

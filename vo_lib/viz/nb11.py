@@ -1,4 +1,4 @@
-"""Figures and small measurements of notebook 11 (real stereo data), kept out of its story cells.
+"""Figures and small measurements of notebooks 11 and 12 (real stereo data), out of their story cells.
 
 Nothing here estimates motion: the functions draw, locate or measure what the notebook computed.
 """
