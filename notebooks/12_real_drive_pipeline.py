@@ -31,8 +31,8 @@
 #
 # **Prerequisites**: notebooks 07, 08 and 11.
 #
-# **Run time**: about a minute of computing on two cores, most of it the OpenCV PnP baseline of
-# section 5 (longer on a busy machine).
+# **Run time**: about half a minute of computing on two cores with the real drive, most of it the
+# OpenCV PnP baseline of section 5; ten seconds without it (longer on a busy machine).
 # The real recording is not part of the repository: set `VO_LIB_REALDATA` to the folder that
 # holds `kitti_raw_2011_09_26_drive_0001` (see the README's "Real data"). Without it the notebook
 # says so and runs the same sections on a short rendered sample.
@@ -568,11 +568,11 @@ display(
 #   hypotheses, and the pipeline draws them when the planar ones explain too few matches.
 # - 1-point RANSAC remains the outlier filter (cheap, one match per hypothesis); the 6-DoF fit then
 #   keeps a share of its inliers and measures the motion the model cannot.
-# - On this one drive vision ends far closer than the odometry alone, fused or not, and the
-#   fusion does not end closer than vision alone (section 4 prints both, with a second RANSAC
-#   seed); one drive ranks nothing in general. The odometry is the truth's own GPS/IMU with a
-#   noise chosen on this drive; NIS, without the truth, shows its yaw noise modelled far too wide.
-#   The OpenCV PnP baseline is the yardstick for accuracy and speed (the printed ratio is one
+# - On this one drive vision ends far closer than the odometry alone, fused or not; whether the
+#   fusion ends closer than vision alone, section 4 prints, with a second RANSAC seed, and one
+#   drive ranks nothing in general. The odometry is the truth's own GPS/IMU with a noise chosen
+#   on this drive; NIS judges that noise model without the truth.
+# - The OpenCV PnP baseline is the yardstick for accuracy and speed (the printed ratio is one
 #   run's, both timed alike).
 
 # %% [markdown]
@@ -629,7 +629,7 @@ assert np.allclose(_h1_got, _h1_expected), "along_across differs on other poses 
 # camera sideways. Write `camera_slide(mount, yaw)`: the camera's displacement (metres, in the
 # *previous* camera frame: x right, y down, z forward) when the vehicle turns by `yaw` radians on
 # the spot, about the origin of its own frame. `mount` is the camera's 4×4 pose in the vehicle
-# frame (`vehicle.mount`, x forward, y left, z up). Store it for this drive's mount and a turn of
+# frame (x forward, y left, z up). Store it for section 2's car mount `turn_mount` and a turn of
 # 5° in `slide`. Which component is the largest, and what does that do to eq. 20–21's gates?
 #
 # *Hint:* where is the camera's centre in the vehicle frame before the turn, and after it?
@@ -645,7 +645,7 @@ def camera_slide(mount, yaw):
     return mount[:3, :3].T @ (turn @ centre - centre)  # its displacement, into the camera's axes
 
 
-slide = camera_slide(vehicle.mount, math.radians(5))
+slide = camera_slide(turn_mount, math.radians(5))
 print(f"a 5 deg turn moves the camera by {slide} m (x right, y down, z forward)")
 # A camera ahead of the axis slides mostly along its own x: sideways, which the circular model,
 # whose camera only turns about its own vertical axis, reads as more turn (or not at all).
@@ -653,7 +653,7 @@ print(f"a 5 deg turn moves the camera by {slide} m (x right, y down, z forward)"
 
 # %% nbgrader={"grade": true, "grade_id": "ex2_test", "locked": true, "points": 3, "schema_version": 3, "solution": false}
 # Exercise 2: autograder test
-offset = np.hypot(*vehicle.mount[:2, 3])  # the camera's horizontal distance from the turning axis
+offset = np.hypot(*turn_mount[:2, 3])  # the camera's horizontal distance from the turning axis
 assert np.isclose(np.linalg.norm(slide), 2 * offset * math.sin(math.radians(5) / 2)), "a chord of the turn"
 ### BEGIN HIDDEN TESTS
 import vo_lib.geometry as geometry_module  # noqa: E402
