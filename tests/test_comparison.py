@@ -51,3 +51,9 @@ def test_chi2_band_is_the_average_of_independent_draws():
     means = np.random.default_rng(0).chisquare(3, size=(4000, 20)).mean(axis=1)
     inside = np.mean((means > low) & (means < high))
     assert 0.93 < inside < 0.97
+
+
+def test_the_bootstrap_gives_the_same_interval_with_or_without_an_axis_argument():
+    values = np.random.default_rng(3).normal(size=15)
+    one_at_a_time = bootstrap_interval(values, statistic=lambda v: float(np.median(v)))
+    assert bootstrap_interval(values) == one_at_a_time

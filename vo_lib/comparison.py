@@ -48,7 +48,10 @@ def bootstrap_interval(
     x = np.asarray(list(values), dtype=float)
     rng = np.random.default_rng(BOOTSTRAP_SEED)
     draws = rng.integers(0, len(x), size=(RESAMPLES, len(x)))
-    stats = np.apply_along_axis(statistic, 1, x[draws])
+    try:  # NumPy's reductions take an axis: every resample in one call
+        stats = np.asarray(statistic(x[draws], axis=1), dtype=float)
+    except TypeError:  # a statistic of one sample at a time
+        stats = np.apply_along_axis(statistic, 1, x[draws])
     low, high = np.quantile(stats, [(1 - confidence) / 2, (1 + confidence) / 2])
     return float(low), float(high)
 
