@@ -81,7 +81,11 @@ np.set_printoptions(precision=4, suppress=True)
 REAL_DIR = real_sequence_path("kitti_raw_2011_09_26_drive_0001")  # None without VO_LIB_REALDATA
 REAL = REAL_DIR is not None
 seq = load_sequence(REAL_DIR) if REAL else load_sequence("indoor_linear", frames=60, progress=False)
-print(f"{'real data' if REAL else 'no real data (VO_LIB_REALDATA): the rendered sample'} {seq.path.name}")
+print(
+    f"real data: {seq.path.name}"
+    if REAL
+    else f"real data not found (VO_LIB_REALDATA): the rendered {seq.path.name}"
+)
 vehicle = vehicle_of(seq)
 truth = planar_from_camera_poses(seq.poses, vehicle.mount)  # vehicle (x, y, yaw), frame 0 at the origin
 travelled = float(np.sum(np.linalg.norm(np.diff(truth[:, :2], axis=0), axis=1)))

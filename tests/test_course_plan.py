@@ -2,7 +2,7 @@
 
 The points of every notebook's graded exercises live in nbgrader's cell metadata (``"points": N``
 on the ``# %% nbgrader={...}`` lines of ``notebooks/*.py``). The course page's points table, its
-twelve-week plan and objectives, and the answer key of the written questions are written by hand;
+thirteen-week plan and objectives, and the answer key of the written questions are written by hand;
 these tests fail as soon as a notebook's exercises change and the pages do not follow.
 """
 
@@ -18,7 +18,7 @@ ROOT = pathlib.Path(__file__).resolve().parents[1]
 NOTEBOOKS = sorted((ROOT / "notebooks").glob("[0-9][0-9]_*.py"))
 COURSE = ROOT / "docs" / "course.md"
 ANSWER_KEY = ROOT / "coursework" / "answer_key.md"
-WEEKS = 12
+WEEKS = 13
 KEY_HEADING = re.compile(r"^## (\d\d) · (\S+) · (\d+(?:\.\d+)?) points?$", re.M)
 
 
@@ -99,7 +99,7 @@ def test_the_grading_script_applies_the_scale_of_the_table(course_text):
     assert re.findall(r"^SCALE = \[(.*)\]$", course_text, re.M) == [scale]
 
 
-def test_twelve_weeks_one_notebook_each_in_order_and_hours_that_add_up(course_text):
+def test_thirteen_weeks_one_notebook_each_in_order_and_hours_that_add_up(course_text):
     rows = table(course_text, "week")
     body, total = rows[:-1], rows[-1]
     assert [int(row[0]) for row in body] == list(range(1, WEEKS + 1))
