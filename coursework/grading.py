@@ -162,12 +162,11 @@ class AfterRun(NbGraderPreprocessor):
         if cell.cell_type == "code" and cell.metadata.get("nbgrader"):
             cell.outputs = [o for o in cell.get("outputs", []) if o.get("name") != "stderr"]
         exercise = cell.metadata.get("nbgrader", {}).get("grade_id", "").removesuffix("_test")
-        if cell.metadata.get("nbgrader", {}).get("grade") and exercise in self.flagged:
-            why = "; ".join(self.flagged[exercise])
-            why = f"the answer {exercise} is to be reviewed by the teacher: {why}"
-            cell.outputs.append(
-                nbformat.v4.new_output("error", ename="ToBeReviewed", evalue=why, traceback=[why])
-            )
+        found = self.flagged.get(exercise)
+        if cell.metadata.get("nbgrader", {}).get("grade") and found:
+            why = f"the answer {exercise} is to be reviewed by the teacher: {'; '.join(found)}"
+            error = dict(ename="ToBeReviewed", evalue=why, traceback=[f"ToBeReviewed: {why}"])
+            cell.outputs.append(nbformat.v4.new_output("error", **error))
         return cell, resources
 
 

@@ -35,8 +35,8 @@ if in_course and grading.can_isolate():
     hidden = [str(here / n) for n in ("source", "release", "submitted", "feedback", "gradebook.db")]
     hidden += [p for p in os.environ.get("VO_HIDDEN", "").split(os.pathsep) if p]
     spec = {"argv": grading.isolated_kernel(hidden), "display_name": "Python 3", "language": "python"}
-    (pathlib.Path(sockets) / "kernels" / "python3").mkdir(parents=True)
-    (pathlib.Path(sockets) / "kernels" / "python3" / "kernel.json").write_text(json.dumps(spec))
+    (kernel_folder := pathlib.Path(sockets) / "kernels" / "python3").mkdir(parents=True)
+    (kernel_folder / "kernel.json").write_text(json.dumps(spec))
     os.environ["JUPYTER_PATH"] = os.pathsep.join(filter(None, [sockets, os.environ.get("JUPYTER_PATH")]))
 elif in_course:
     print("nbgrader_config.py: unshare -rm is not allowed here: kernels run NOT isolated", file=sys.stderr)

@@ -530,7 +530,9 @@ def test_grading_stays_in_proportion_to_what_it_grades():
     solution = sum(marked_lines(t, "BEGIN SOLUTION", "END SOLUTION") for t in texts)
     hidden = sum(marked_lines(t, "BEGIN HIDDEN TESTS", "END HIDDEN TESTS") for t in texts)
     assert (
-        marked_lines("a\n### BEGIN SOLUTION\nx = 1\n\ny = 2\n### END SOLUTION\nb", "N SOLUTION", "D SOLUTION")
+        marked_lines(
+            "a\n### BEGIN SOLUTION\nx = 1\n\ny = 2\n### END SOLUTION\nb", "BEGIN SOLUTION", "END SOLUTION"
+        )
         == 2
     )
     assert 0 < hidden <= 1.2 * solution, (hidden, solution)
