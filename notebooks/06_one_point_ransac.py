@@ -77,7 +77,8 @@ from vo_lib.stereo_vo.demo_one_point import (
     ransac_trial,
     realistic_matches,
 )
-from vo_lib.stereo_vo.ransac import histogram_voting, hypotheses_needed, one_point_ransac, refine_motion
+from vo_lib.stereo_vo.ransac import histogram_voting, hypotheses_needed, one_point_ransac
+from vo_lib.stereo_vo.refinement import refine_motion
 from vo_lib.stereo_vo.synthetic import synthetic_matches
 from vo_lib.viz.nb06 import (
     median_time,

@@ -85,3 +85,29 @@ def test_functions_of_vo_lib_are_small_enough_to_read():
         cwd=root,
     )
     assert proc.returncode == 0, proc.stdout + proc.stderr
+
+
+def test_no_module_is_more_complex_than_the_pipeline():
+    """Summed McCabe complexity per module (ruff C901 at threshold 0): none above the pipeline's,
+    which strings the whole method together."""
+    import collections
+    import json
+    import pathlib
+    import re
+    import subprocess
+    import sys
+
+    root = pathlib.Path(__file__).resolve().parents[1]
+    proc = subprocess.run(
+        [sys.executable, "-m", "ruff", "check", "--no-cache", "--select", "C901", "--output-format", "json"]
+        + ["--config", "lint.mccabe.max-complexity=0", "vo_lib"],
+        capture_output=True,
+        text=True,
+        cwd=root,
+    )
+    summed = collections.Counter()
+    for finding in json.loads(proc.stdout):
+        module = pathlib.Path(finding["filename"]).relative_to(root).as_posix()
+        summed[module] += int(re.search(r"\((\d+) > 0\)", finding["message"]).group(1))
+    pipeline = summed.pop("vo_lib/stereo_vo/pipeline.py")
+    assert pipeline > 0 and {m: c for m, c in summed.items() if c > pipeline} == {}

@@ -1,8 +1,9 @@
-"""The stored paper-length results (vo_lib/stereo_vo/paper_sets.json) against the present code.
+"""The stored results against the present code: the paper-length sets notebook 08 reads
+(vo_lib/stereo_vo/paper_sets.json) and notebook 07's seed study (vo_lib/stereo_vo/demo_fusion.json).
 
-The quick tests check that the stored file covers every set whole, from the present sample
-definitions; the ``samples``-marked test runs each set again (minutes per set) and requires the
-same figures: same seed, same result.
+The quick tests check that each stored file covers what its notebook reads, from the present
+sample definitions; the ``samples``-marked tests run them again (minutes) and require the same
+figures: same seed, same result.
 """
 
 import json
@@ -10,7 +11,7 @@ import json
 import pytest
 
 from vo_lib.sim.samples import SAMPLES, fingerprint
-from vo_lib.stereo_vo import paper_sets
+from vo_lib.stereo_vo import demo_fusion, paper_sets
 
 
 def test_stored_results_cover_every_set_whole_from_the_present_samples():
@@ -70,3 +71,39 @@ def test_stored_contradiction_study_is_what_the_code_computes():
         assert fresh[label]["flagged"] == stored[label]["flagged"], label
         expected = pytest.approx(stored[label]["heading_rms_deg"], rel=1e-9)
         assert fresh[label]["heading_rms_deg"] == expected, label
+
+
+def test_stored_fusion_study_covers_the_notebooks_seeds_from_the_present_samples():
+    stored = json.loads(demo_fusion.STORED.read_text())
+    seeds = list(range(demo_fusion.SEED, demo_fusion.SEED + 10))
+    assert stored["seeds"] == seeds and stored["fingerprint"] == demo_fusion.study_fingerprint()
+    assert set(stored["conditions"]) == set(demo_fusion.CONDITIONS)
+    for rows in (*stored["conditions"].values(), stored["sideways"]):
+        assert list(rows) == [str(s) for s in seeds]
+    assert demo_fusion.seed_figures(seeds) == stored  # read, not run
+
+
+def test_fusion_study_runs_for_other_seeds_or_when_asked(monkeypatch):
+    monkeypatch.setattr(demo_fusion, "run_study", lambda seeds: {"ran": list(seeds)})
+    stored_seeds = json.loads(demo_fusion.STORED.read_text())["seeds"]
+    assert demo_fusion.seed_figures(range(3, 13)) == {"ran": list(range(3, 13))}
+    assert demo_fusion.seed_figures(stored_seeds, fresh=True) == {"ran": stored_seeds}
+
+
+@pytest.mark.samples
+def test_stored_fusion_study_is_what_the_code_computes():
+    stored = json.loads(demo_fusion.STORED.read_text())
+    fresh = json.loads(json.dumps(demo_fusion.run_study(stored["seeds"])))  # seeds as text, as stored
+    assert fresh["fingerprint"] == stored["fingerprint"]
+    for part in ("conditions", "sideways"):
+        flat_fresh, flat_stored = _leaves(fresh[part]), _leaves(stored[part])
+        assert list(flat_fresh) == list(flat_stored)
+        for key, value in flat_stored.items():
+            assert flat_fresh[key] == pytest.approx(value, rel=1e-9, abs=1e-12), key
+
+
+def _leaves(tree, prefix=()):
+    """A nested dict's numbers by their key path."""
+    if not isinstance(tree, dict):
+        return {prefix: tree}
+    return {k: v for key, sub in tree.items() for k, v in _leaves(sub, (*prefix, key)).items()}

@@ -10,10 +10,10 @@ from vo_lib.stereo_vo.ransac import (
     hypotheses_needed,
     hypothesis_draws,
     one_point_ransac,
-    refine_motion,
     rho_gate_error,
     theta_gate_error,
 )
+from vo_lib.stereo_vo.refinement import refine_motion
 from vo_lib.stereo_vo.synthetic import synthetic_matches
 from vo_lib.stereo_vo.temporal import MotionPrior
 

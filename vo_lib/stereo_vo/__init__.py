@@ -6,7 +6,8 @@ Read in the order a frame is processed (``pipeline`` strings the parts of ``part
 ``pyramid_features``  the same at two scales, for the large image motion of a car
 ``circular_motion``   the planar circular-motion model, theta and rho from pixels (eq. 12-17)
 ``temporal``          frame-to-frame matching guided by the filter's prediction
-``ransac``            1-point RANSAC with its gates, refinement and settings (eq. 18-21)
+``ransac``            1-point RANSAC with its gates and settings (eq. 18-21)
+``refinement``        its last step: (theta, rho) by least squares on the inliers, eq. 21 whitened
 ``rigid_motion``      6-DoF motion refined on reprojection errors, SE(3) log and exp,
                       general 3-point RANSAC
 ``matching_plain``    candidate search and best matches in NumPy, the reference

@@ -3,12 +3,21 @@
 A drive of the project's samples with synthetic matches, run through odometry alone, VO alone,
 the fused filter and the slip-calibrated filter; the figures the notebook compares over seeds;
 and the interactive ``fuse`` widget. The filters themselves are :mod:`vo_lib.stereo_vo.kalman`.
+
+The seed study of section 4 (five conditions and the sideways study, ten seeds each: about
+23,000 frames, 20 s) is run once and stored beside this module (``demo_fusion.json``, package
+data). :func:`seed_figures` reads it when it holds the seeds asked for and was made from the
+present samples, and runs the study otherwise. ``python -m vo_lib.stereo_vo.demo_fusion``
+stores it again; ``pytest -m samples`` runs it again and must find the same figures.
 """
 
 from __future__ import annotations
 
+import json
 import math
+import sys
 from dataclasses import replace
+from pathlib import Path
 
 import matplotlib.pyplot as plt
 import numpy as np
@@ -17,7 +26,7 @@ from vo_lib.camera import StereoCamera
 from vo_lib.comparison import Comparison
 from vo_lib.geometry import compose_planar, relative_planar, wrap_angle
 from vo_lib.models.track_odometry import TrackOdometry
-from vo_lib.sim.samples import SAMPLES
+from vo_lib.sim.samples import SAMPLES, fingerprint
 from vo_lib.sim.trajectories import simulate_drive
 from vo_lib.stereo_vo import circular_motion as cm
 from vo_lib.stereo_vo.kalman import SIDEWAYS_SIGMA, SlipCalibratedFilter, VoKalmanFilter, nis
@@ -30,6 +39,19 @@ from vo_lib.viz.plotting import new_axes
 SEED = 7
 #: The estimators every drive reports, in the order of the notebook's tables.
 ESTIMATORS = ("odometry", "VO", "fused", "calibrated")
+#: Section 4's conditions: a sample and the drive's settings (weak vision: 40 matches with 2 px
+#: noise, as on a low-texture floor; an outage: no VO for 100 frames).
+CONDITIONS = {
+    "spot turn": ("spot_turn", {}),
+    "spot turn, weak vision": ("spot_turn", {"vo_noise": 2.0, "matches": 40}),
+    "spot turn, VO outage": ("spot_turn", {"outage": range(100, 200)}),
+    "indoor": ("indoor_free", {}),
+    "indoor, weak vision": ("indoor_free", {"vo_noise": 2.0, "matches": 40}),
+}
+#: Frames of each condition's drive.
+STUDY_FRAMES = 300
+#: The stored seed study (package data, so an installed wheel has it too).
+STORED = Path(__file__).resolve().with_name("demo_fusion.json")
 camera = StereoCamera.bumblebee2()
 odometry = TrackOdometry()
 
@@ -156,3 +178,62 @@ def fuse(slip_scale=1.0, vo_noise_px=0.5, outage_frames=0, seed=SEED):
         ax.axvspan(min(gap) / SAMPLES["spot_turn"].rate, max(gap) / SAMPLES["spot_turn"].rate, color="0.85")
     plt.show()
     return {k: abs(heading_error(d[k], d["truth"])[-1]) for k in ESTIMATORS}
+
+
+def drive_figures(d: dict) -> dict:
+    """What section 4 keeps of one drive: final heading [deg] and position [cm] errors of each
+    estimator, the calibrated filter's learnt turn scale and its σ, and the two filters'
+    time-averaged NEES."""
+    return {
+        "heading": final_heading(d),
+        "position": final_position(d),
+        "turn_scale": d["turn_scale"],
+        "scale_sigma": d["scale_sigma"],
+        "nees": float(d["nees"].mean()),
+        "nees_calibrated": float(d["nees_calibrated"].mean()),
+    }
+
+
+def study_fingerprint() -> str:
+    """The fingerprints of the samples the study draws from."""
+    return " ".join(fingerprint(n) for n in sorted({n for n, _ in CONDITIONS.values()}))
+
+
+def run_study(seeds) -> dict:
+    """Section 4's seed study, run: ``{"seeds", "fingerprint", "conditions": {condition: {seed:
+    drive_figures}}, "sideways": {seed: sideways_ends}}`` (seeds as text, as JSON keeps them)."""
+    seeds = [int(s) for s in seeds]
+    return {
+        "seeds": seeds,
+        "fingerprint": study_fingerprint(),
+        "conditions": {
+            c: {str(s): drive_figures(run_drive(n, STUDY_FRAMES, seed=s, **kw)) for s in seeds}
+            for c, (n, kw) in CONDITIONS.items()
+        },
+        "sideways": {str(s): sideways_ends(s) for s in seeds},
+    }
+
+
+def seed_figures(seeds, fresh: bool = False) -> dict:
+    """Section 4's seed study for ``seeds``: the stored one when it holds exactly these seeds and
+    was made from the present samples (and ``fresh`` is false), else run now (20 s for 10 seeds)."""
+    seeds = [int(s) for s in seeds]
+    if not fresh and STORED.exists():
+        stored = json.loads(STORED.read_text())
+        if stored["seeds"] == seeds and stored["fingerprint"] == study_fingerprint():
+            return stored
+    return run_study(seeds)
+
+
+def main(argv=None) -> int:
+    """Run the study for the notebook's seeds and store it (written beside, then renamed)."""
+    seeds = range(SEED, SEED + 10)
+    tmp = STORED.with_suffix(".json.part")
+    tmp.write_text(json.dumps(run_study(seeds), indent=1) + "\n")
+    tmp.replace(STORED)
+    print(f"written {STORED}", file=sys.stdout)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -60,6 +60,7 @@ from vo_lib.stereo_vo.circular_motion import (
     theta_from_pixels,
     theta_variance,
 )
+from vo_lib.stereo_vo.refinement import covariance, gauss_newton, whitened_pass
 
 
 class RansacInputError(ValueError):
@@ -315,104 +316,6 @@ def points_and_variances(
     return P, Q, pixel_sigma**2 * (var_a + var_b)
 
 
-def _moved(X: np.ndarray, theta: float, rho: float, sign: float):
-    """``R X + T`` (sign 1) or ``R^T (X - T)`` (sign -1) of eq. 15, with its derivatives in
-    ``(theta, rho)``: ``(x, y, z, dx/dtheta, dz/dtheta, dz/drho)``; dx/drho is ``-sin(theta/2)``."""
-    c, s, sp, cp = math.cos(theta), math.sin(theta), math.sin(0.5 * theta), math.cos(0.5 * theta)
-    gx, gz = sign * X[:, 0], sign * X[:, 2]
-    x = c * X[:, 0] + s * gz - rho * sp
-    z = c * X[:, 2] - s * gx - rho * cp * sign
-    dx_t = c * gz - s * X[:, 0] - 0.5 * rho * cp
-    dz_t = 0.5 * rho * sp * sign - c * gx - s * X[:, 2]
-    return x, X[:, 1], z, dx_t, dz_t, -cp * sign
-
-
-def reprojection(theta, rho, P, Q, wa, wb, camera: StereoCamera):
-    """Forward ``pi(R P + T) - w'`` and backward ``pi(R^T (Q - T)) - w`` residuals in disparity
-    space, ``(ru, rv, rd)`` each of shape (2N,), and their Jacobians in ``(theta, rho)``,
-    ``(J_theta, J_rho)`` each of shape (3, 2N), by the chain rule through ``pi``."""
-    fx, fy, fb = camera.fx, camera.fy, camera.fx * camera.baseline
-    sign = np.concatenate([np.ones(len(P)), -np.ones(len(Q))])
-    target = np.concatenate([wb, wa])
-    x, y, z, dx_t, dz_t, dz_r = _moved(np.concatenate([P, Q]), theta, rho, sign)
-    iz = 1.0 / z
-    iz2 = iz * iz
-    r = np.stack(
-        [
-            fx * x * iz - (target[:, 0] - camera.cx),
-            fy * y * iz - (target[:, 1] - camera.cy),
-            fb * iz - target[:, 2],
-        ]
-    )
-    fz, yz, dz = fx * iz2, -fy * y * iz2, -fb * iz2
-    sp = math.sin(0.5 * theta)
-    J_theta = np.stack([fz * (dx_t * z - x * dz_t), yz * dz_t, dz * dz_t])
-    J_rho = np.stack([fz * (-sp * z - x * dz_r), yz * dz_r, dz * dz_r])
-    return r, J_theta, J_rho
-
-
-def gauss_newton(P, Q, wa, wb, theta: float, rho: float, camera: StereoCamera, iterations: int):
-    """Gauss-Newton on ``(theta, rho)`` over :func:`reprojection`: ``(theta, rho, A, rss)`` with
-    the normal matrix ``A = J^T J`` and the residual sum of squares of the last iterate before its
-    step."""
-    A, rss = np.zeros((2, 2)), 0.0
-    for _ in range(max(iterations, 1)):
-        r, jt, jr = reprojection(theta, rho, P, Q, wa, wb, camera)
-        a00, a01, a11 = float(np.vdot(jt, jt)), float(np.vdot(jt, jr)), float(np.vdot(jr, jr))
-        b0, b1, rss = float(np.vdot(jt, r)), float(np.vdot(jr, r)), float(np.vdot(r, r))
-        A = np.array([[a00, a01], [a01, a11]])
-        det = a00 * a11 - a01 * a01
-        if not det > 0:
-            break
-        d_theta, d_rho = -(a11 * b0 - a01 * b1) / det, -(a00 * b1 - a01 * b0) / det
-        theta, rho = theta + d_theta, rho + d_rho
-        if abs(d_theta) < 1e-10 and abs(d_rho) < 1e-9:
-            break
-    return theta, rho, A, rss
-
-
-def covariance(A: np.ndarray, rss: float, count: int) -> np.ndarray:
-    """``2 sigma^2 A^-1``: forward and backward residuals carry the same noise, so their
-    information counts once; infinite variances when ``A`` is singular."""
-    det = A[0, 0] * A[1, 1] - A[0, 1] * A[0, 1]
-    if not det > 0:
-        return np.array([[np.inf, 0.0], [0.0, np.inf]])
-    inverse = np.array([[A[1, 1], -A[0, 1]], [-A[0, 1], A[0, 0]]]) / det
-    return 2.0 * (rss / max(count - 2, 1)) * inverse
-
-
-def whitened_pass(P, b, theta: float, rho: float, camera: StereoCamera, params: RansacParams) -> np.ndarray:
-    """eq. 21 whitened: the moved point in front of the camera and its (u, v, d) residual within
-    ``whitened_gate`` standard deviations (sigma sqrt 2 per coordinate)."""
-    x, y, z, *_ = _moved(P, theta, rho, 1.0)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        iz = 1.0 / z
-        r2 = (
-            (camera.fx * x * iz - (b[:, 0] - camera.cx)) ** 2
-            + (camera.fy * y * iz - (b[:, 1] - camera.cy)) ** 2
-            + (camera.fx * camera.baseline * iz - b[:, 2]) ** 2
-        )
-    limit = params.whitened_gate**2 * 2.0 * params.pixel_sigma**2
-    return (z > 0) & (r2 <= limit)
-
-
-def refine_motion(
-    w_prev,
-    w_curr,
-    theta: float,
-    rho: float,
-    camera: StereoCamera,
-    iterations: int = DEFAULT_PARAMS.refine_iterations,
-) -> tuple[float, float, np.ndarray]:
-    """Least-squares ``(theta, rho)`` on matches, minimising reprojection errors in disparity space
-    in both directions (Gauss-Newton, analytic Jacobian, :func:`reprojection`).
-    Returns ``(theta, rho, covariance)``."""
-    wa, wb = np.asarray(w_prev, float), np.asarray(w_curr, float)
-    P, Q = camera.backproject(wa), camera.backproject(wb)
-    theta, rho, A, rss = gauss_newton(P, Q, wa, wb, float(theta), float(rho), camera, int(iterations))
-    return float(theta), float(rho), covariance(A, rss, 6 * len(P))
-
-
 # ---------------------------------------------------------------------- the estimator
 def one_point_ransac(  # noqa: PLR0915 (the algorithm's five steps read best in one function)
     w_prev,
@@ -531,7 +434,7 @@ def one_point_ransac(  # noqa: PLR0915 (the algorithm's five steps read best in 
         )
         cov = covariance(A, rss, 6 * int(np.count_nonzero(keep)))
         new = theta_gate_pass(angles, thetas, theta, cov[0, 0], params) & whitened_pass(
-            P, wb, theta, rho, camera, params
+            P, wb, theta, rho, camera, params.whitened_gate, params.pixel_sigma
         )
         changed, keep = bool(np.any(new != keep)), new
         if not changed:
