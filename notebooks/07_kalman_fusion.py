@@ -383,8 +383,8 @@ plt.show()
 # of 100 frames in the spot turn. The figures are the final heading error (degrees) and the
 # final position error (cm).
 #
-# Ten seeds of five conditions, and the sideways study of the next section, are about 23,000
-# frames: 20 s, more than this notebook's budget. `seed_figures` therefore reads them from
+# Ten seeds of five conditions, and the sideways study of the next section, take twice this
+# notebook's whole budget to run. `seed_figures` therefore reads their figures from
 # `vo_lib/stereo_vo/demo_fusion.json`, stored by `python -m vo_lib.stereo_vo.demo_fusion` for the
 # base seed 7 (`pytest -m samples` runs the study again and must find the same figures). With
 # another `SEED`, or with `VO_NOTEBOOKS_FULL=1`, it runs them here.

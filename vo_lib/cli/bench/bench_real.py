@@ -5,8 +5,9 @@ the ``shared/realdata`` folder beside the repository): KITTI-layout folders (``i
 recordings in EuRoC's ASL layout (``mav0/``), which are undistorted and rectified on reading. Per
 sequence, without odometry, it prints the per-stage median milliseconds of our pipeline and the
 baseline's, each timed from images decoded beforehand (so that neither shares the cores with a
-decoding thread), with the decoding (and rectification) per frame reported apart; and for both, the 3-D errors: ATE after SE(3) alignment, final position and
-rotation error, and the path length against the truth's.
+decoding thread), with the decoding (and rectification) per frame reported apart; and for
+both, the 3-D errors: ATE after SE(3) alignment, final position and rotation error, and the
+path length against the truth's.
 """
 
 from __future__ import annotations
