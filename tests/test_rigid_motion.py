@@ -272,3 +272,26 @@ def test_car_gauge_gives_the_measured_yaw_noise_of_the_oxts_yaw_rate():
     with pytest.raises(ValueError, match="some error"):
         gauge_for_yaw_noise(s, np.zeros_like(s), CAR_DISTANCE_SIGMA)
     assert gauge_for_yaw_noise([1.0, 1.0], [0.01, 0.01], 0.02) == pytest.approx(0.02 * np.sqrt(2 * 2 / 2e-4))
+
+
+def test_a_free_body_gets_general_hypotheses_without_the_planar_model(kitti_camera, monkeypatch):
+    """The drone's preset: a motion that rolls and climbs, the general 3-point RANSAC alone (the
+    planar 1-point RANSAC is not called), its inliers the true matches."""
+    from vo_lib.stereo_vo import six_dof
+    from vo_lib.stereo_vo.config import HOVER
+    from vo_lib.stereo_vo.pipeline import StereoOdometry
+    from vo_lib.stereo_vo.synthetic import matches_under_transform
+
+    T = motion([0.02, -0.03, 0.05], [0.05, -0.04, 0.3])
+    m = matches_under_transform(kitti_camera, 300, T, np.random.default_rng(4), (4.0, 40.0), 0.5, 0.3)
+
+    def refuse(*args, **kwargs):
+        raise AssertionError("the planar 1-point RANSAC was called")
+
+    monkeypatch.setattr(six_dof, "one_point_ransac", refuse)
+    odometer = StereoOdometry(kitti_camera, HOVER, mount=camera_mount(forward=0.0, height=0.0), seed=5)
+    guess, start, ratio = odometer.motion.hypothesis(m.w_prev, m.w_curr, None, odometer.rng)
+    assert start is not None and ratio == pytest.approx(start.mean())
+    assert (start & m.inliers).sum() >= 0.8 * m.inliers.sum() and (start & ~m.inliers).sum() <= 2
+    refined = refine_rigid_motion(m.w_prev, m.w_curr, kitti_camera, guess, start)
+    assert np.allclose(refined.matrix, T, atol=6e-3)

@@ -34,6 +34,11 @@ class PipelineConfig:
     ransac: RansacParams = field(default_factory=RansacParams)
     #: track the matched corners to sub-pixel positions in the current image (6-DoF motion only)
     subpixel_tracking: bool = False
+    #: 6-DoF motion: try 1-point RANSAC's planar motion first (a vehicle that turns on the ground),
+    #: and a general 3-point RANSAC only where it keeps too few matches; False: the general one
+    #: alone (a body that moves freely in six degrees of freedom, which the planar model does not
+    #: describe, so that its inliers would be a chance subset).
+    planar_hypotheses: bool = True
     min_features: int = 20  #: stereo features a frame needs to be matched
     min_inliers: int = 15
     #: Of the temporal matches; a large moving object drags it down (6-DoF: the 1-point RANSAC's).
@@ -122,9 +127,21 @@ CAR = PipelineConfig(
 )
 
 #: A camera that moves in six degrees of freedom with nothing to predict its motion (a drone or
-#: a hand-held rig, no odometry): the car's settings, except that the constant-velocity
-#: prediction never vetoes the vision. With no sensor behind it, a prediction is only the last
-#: motion repeated, and a hovering body's turns and stops break it every few frames.
-HOVER = replace(CAR, prior_gate=math.inf, subpixel_tracking=True)
+#: a hand-held rig, no odometry): the car's settings, except that
+#:
+#: - the constant-velocity prediction never vetoes the vision: with no sensor behind it, a
+#:   prediction is only the last motion repeated, and a hovering body's turns and stops break it
+#:   every few frames;
+#: - the hypotheses are general (3-point), since the body does not turn on a ground plane;
+#: - a new keyframe is also taken when the inliers fall below the crawler's fraction of the first
+#:   frame's: a body that pitches or rolls turns its view away from the reference without the yaw
+#:   or the chord that key the car's frames.
+HOVER = replace(
+    CAR,
+    prior_gate=math.inf,
+    subpixel_tracking=True,
+    planar_hypotheses=False,
+    key_inlier_fraction=CRAWLER.key_inlier_fraction,
+)
 
 PRESETS = {"planar": CRAWLER, "full": CAR, "hover": HOVER}

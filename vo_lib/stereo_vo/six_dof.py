@@ -17,7 +17,9 @@ two frames:
    stereo match is triangulated, moved into that camera's frame through the mount and projected
    again (:func:`turning_axis_view`); the model is exact there, whatever the turn. Where it
    keeps too few matches, the vehicle pitched or rolled between the frames (a bump, the start of
-   a slope), and a general 3-point RANSAC (OpenCV's P3P) gives the hypothesis instead;
+   a slope), and a general 3-point RANSAC (OpenCV's P3P) gives the hypothesis instead. A body
+   that moves freely (a drone, a hand-held rig: ``planar_hypotheses`` off) uses the general
+   RANSAC from the start;
 4. **6-DoF refinement** of the inliers on reprojection errors in both images
    (:mod:`~vo_lib.stereo_vo.rigid_motion`), which also chooses the inliers again;
 5. **Kalman update**: the filter keeps the vehicle's *planar* pose, ``(x, y, yaw)`` of the axis it
@@ -224,8 +226,14 @@ class SixDofMotion:
 
         1-point RANSAC on the matches seen from the turning axis (eq. 14-17); when it keeps fewer
         than ``min_inlier_ratio`` of them (the vehicle pitched or rolled, or most matches are
-        wrong) a general 3-point RANSAC is tried and the better of the two is kept.
+        wrong) a general 3-point RANSAC is tried and the better of the two is kept. Without
+        ``planar_hypotheses`` (a body free in six degrees of freedom) the general one alone, and
+        1-point RANSAC only where it finds nothing.
         """
+        if not self.config.planar_hypotheses:
+            general = general_ransac(w_prev, w_curr, self.camera, int(rng.integers(2**31)))
+            if general is not None:
+                return general[0], general[1], float(general[1].mean())
         est = one_point_ransac(
             turning_axis_view(w_prev, self.camera, self.to_axis),
             turning_axis_view(w_curr, self.camera, self.to_axis),
