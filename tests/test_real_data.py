@@ -412,3 +412,46 @@ def test_a_rig_with_positions_only_is_scored_by_its_aligned_prism(tmp_path, caps
     assert "Errors against position-only ground truth" in out and "Errors in 3-D" not in out
     line = next(x for x in out.splitlines() if "ATE RMSE of the tracked point" in x)
     assert 0 < float(line.split()[-1]) < 0.05
+
+
+#: The rows of docs/real_data.md's table of the drone's preset, each part taken out in turn.
+DRONE_PRESET_ROWS = {
+    "as preset": {},
+    "without sub-pixel tracking": {"subpixel_tracking": False},
+    "with 1-point (planar) hypotheses": {"planar_hypotheses": True},
+    "without keyframes on inliers": {"key_inlier_fraction": 0.0},
+    "neither of the last two (the car's settings with tracking)": {
+        "planar_hypotheses": True,
+        "key_inlier_fraction": 0.0,
+    },
+}
+
+
+@needs_euroc
+def test_the_drone_preset_table_of_the_docs_holds(monkeypatch):
+    """docs/real_data.md's figures of each part of the drone's preset, run again on EuRoC MH01."""
+    from dataclasses import replace
+
+    from vo_lib.cli.bench.bench_real import error_rows
+    from vo_lib.data import load_sequence
+    from vo_lib.stereo_vo import pipeline
+    from vo_lib.stereo_vo.config import HOVER
+
+    text = (ROOT / "docs" / "real_data.md").read_text(encoding="utf-8")
+    rows = {}
+    for line in text.splitlines():
+        cells = [c.strip() for c in line.strip().strip("|").split("|")]
+        if len(cells) == 5 and cells[0] in DRONE_PRESET_ROWS:
+            rows[cells[0]] = [float(re.match(r"[0-9.]+", c).group()) for c in cells[1:]]
+    assert set(rows) == set(DRONE_PRESET_ROWS)
+    seq = load_sequence(EUROC, odometry=False, progress=False)
+    truth = seq.poses_4x4()
+    for label, changes in DRONE_PRESET_ROWS.items():
+        monkeypatch.setitem(pipeline.PRESETS, "hover", replace(HOVER, **changes))
+        cv2.setRNGSeed(0)
+        figures = error_rows(truth, run_sequence(seq, use_odometry=False, seed=0).camera_poses)
+        ate_m, final_pct, rotation, path = rows[label]
+        assert figures["ate_m"] == pytest.approx(ate_m, abs=0.0006), label
+        assert figures["final_pct"] == pytest.approx(final_pct, abs=0.006), label
+        assert figures["final_rotation_deg"] == pytest.approx(rotation, abs=0.006), label
+        assert figures["path_m"] == pytest.approx(path, abs=0.006), label

@@ -264,9 +264,11 @@ class SixDofMotion:
             motion = refine_rigid_motion(matches.w_prev, matches.w_curr, self.camera, guess, start)
         T = motion.matrix
         z = chord_measurement(vehicle_increment(T, self.mount, self.mount_inverse))
-        covariance = self.covariance_scale * chord_covariance(
-            T, motion.covariance, self.mount, self.mount_inverse
-        )
+        covariance = np.full((3, 3), np.inf)  # a failed refinement measures nothing
+        if motion.success:
+            covariance = self.covariance_scale * chord_covariance(
+                T, motion.covariance, self.mount, self.mount_inverse
+            )
         return Estimate(
             motion.success,
             z,
