@@ -86,24 +86,23 @@ def normal_equations(P, w, R, t, camera: StereoCamera, huber: float) -> tuple[np
     """
     fx, fy, fb = camera.fx, camera.fy, camera.fx * camera.baseline
     Q = np.asarray(P, float) @ np.asarray(R, float).T + np.asarray(t, float)
-    X, Y, Z = Q[:, 0], Q[:, 1], Q[:, 2]
-    iz = 1.0 / Z
-    iz2 = iz * iz
-    r = np.column_stack([fx * X * iz + camera.cx, fy * Y * iz + camera.cy, fb * iz]) - w
-    e = np.sqrt(np.sum(r * r, axis=1))
+    iz = 1.0 / Q[:, 2]
+    x, y = Q[:, 0] * iz, Q[:, 1] * iz  # normalised image coordinates
+    r = np.empty((len(Q), 3))
+    r[:, 0] = fx * x + camera.cx - w[:, 0]
+    r[:, 1] = fy * y + camera.cy - w[:, 1]
+    r[:, 2] = fb * iz - w[:, 2]
+    e = np.sqrt(np.einsum("ij,ij->i", r, r))
     weight = np.where(e <= huber, 1.0, huber / np.maximum(e, 1e-12))
     J = np.zeros((len(Q), 3, 6))  # d(u, v, d) / d(dw_x, dw_y, dw_z, dt_x, dt_y, dt_z)
-    J[:, 0] = np.column_stack(
-        [-fx * X * Y * iz2, fx * (1 + X * X * iz2), -fx * Y * iz, fx * iz, 0 * iz, -fx * X * iz2]
-    )
-    J[:, 1] = np.column_stack(
-        [-fy * (1 + Y * Y * iz2), fy * X * Y * iz2, fy * X * iz, 0 * iz, fy * iz, -fy * Y * iz2]
-    )
-    J[:, 2, :2], J[:, 2, 5] = np.column_stack([-fb * Y * iz2, fb * X * iz2]), -fb * iz2
-    WJ = J * weight[:, None, None]
-    A = np.einsum("nki,nkj->ij", WJ, J)
-    g = np.einsum("nki,nk->i", WJ, r)
-    return A, g, float(np.sum(weight * e * e))
+    J[:, 0, 0], J[:, 0, 1], J[:, 0, 2] = -fx * x * y, fx * (1 + x * x), -fx * y
+    J[:, 0, 3], J[:, 0, 5] = fx * iz, -fx * x * iz
+    J[:, 1, 0], J[:, 1, 1], J[:, 1, 2] = -fy * (1 + y * y), fy * x * y, fy * x
+    J[:, 1, 4], J[:, 1, 5] = fy * iz, -fy * y * iz
+    J[:, 2, 0], J[:, 2, 1], J[:, 2, 5] = -fb * y * iz, fb * x * iz, -fb * iz * iz
+    # the sums over matches as one matrix product of the stacked rows (3 per match)
+    WJ = (J * weight[:, None, None]).reshape(-1, 6)
+    return WJ.T @ J.reshape(-1, 6), WJ.T @ r.ravel(), float(np.sum(weight * e * e))
 
 
 def _gauss_newton(P, w, R, t, camera, iterations, huber):
