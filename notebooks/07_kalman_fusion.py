@@ -487,14 +487,18 @@ assert heading_cmp["spot turn, weak vision"].verdict("calibrated", "fused") is V
 assert heading_cmp["spot turn, VO outage"].verdict("calibrated", "fused") is Verdict.BETTER
 assert position_cmp["indoor, weak vision"].verdict("calibrated", "fused") is Verdict.WORSE
 assert position_cmp["indoor"].verdict("calibrated", "fused") is Verdict.WORSE
+# the clause "more with weak vision" of the next cell
+cost = {c: position_cmp[c].difference("calibrated", "fused")[0] for c in ("indoor", "indoor, weak vision")}
+assert cost["indoor, weak vision"] > cost["indoor"]
 
 # %% [markdown]
 # Learning the slip removes the bias where there is a large one to remove, in the spot turn. On the
 # indoor floor it costs position, with good vision and more with weak vision: the slip it would
-# remove there is about 1 %, and the VO of one frame cannot resolve so little. The scales drift (a random walk, so that they can
-# follow the slip from one manoeuvre to the next) and each frame's weak measurement pulls them
-# only a little, so they wander with the VO's noise by about as much as the slip they are meant
-# to find; the corrected odometry carries that wander into the pose.
+# remove there is about 1 %, and the VO of one frame cannot resolve so little. The scales drift
+# (a random walk, so that they can follow the slip from one manoeuvre to the next) and each
+# frame's measurement pulls them only a little, so they wander with the VO's noise, with weak
+# vision by about as much as the slip they are meant to find; the corrected odometry carries
+# that wander into the pose.
 
 # %%
 scale_sigma = {c: np.median([d["scale_sigma"] for d in draws[c].values()]) for c in CONDITIONS}
