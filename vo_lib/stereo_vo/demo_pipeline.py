@@ -67,16 +67,23 @@ def frames_for(name: str, quick: int, full: bool) -> int:
     return SAMPLES[name].frames if full else quick
 
 
-#: The notebook's base seed: the pipeline's RANSAC draws from it.
+#: The notebook's base seed: the pipeline's RANSAC draws from it unless another is given.
 SEED = 8
 
 
-def run(name: str, frames: int, use_odometry: bool = True, resolution: tuple[int, int] = (640, 480)):
-    """Render a sample in memory and run the pipeline; returns (result, truth from the start, odometry)."""
+def run(
+    name: str,
+    frames: int,
+    use_odometry: bool = True,
+    resolution: tuple[int, int] = (640, 480),
+    seed: int = SEED,
+):
+    """Render a sample in memory and run the pipeline (RANSAC drawing from ``seed``; the sample's
+    images and drive are its own); returns (result, truth from the start, odometry)."""
     rendered, frame_iter = render_sample(name, frames, resolution)
     if not use_odometry:
         frame_iter = ((left, right, None) for left, right, _ in frame_iter)
-    result = run_frames(frame_iter, rendered.camera, seed=SEED)
+    result = run_frames(frame_iter, rendered.camera, seed=seed)
     truth = relative_planar(rendered.truth()[0], rendered.truth())
     odometry = TrackOdometry().integrate(rendered.drive.odometry[1:frames])
     return result, truth, odometry
