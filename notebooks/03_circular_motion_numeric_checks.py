@@ -119,7 +119,7 @@ display(
 #   \sqrt{(v-v_0)^2+(v'-v_0)^2+(u-u_0)^2+(u'-u_0)^2}\qquad(\text{small }\theta),$$
 #
 # implemented in full by `theta_standard_deviation`. Near the principal row, where |D_φ| is small
-# against the horizontal offsets, the error grows as 1/|v − v₀|: **matches at the camera's height
+# against the horizontal offsets, the error grows about as 1/|v − v₀|: **matches at the camera's height
 # are useless for θ**. Far from it the root grows with |v − v₀| too, and σ_θ levels off towards
 # √2·σ/f_x·√(1 + (u − u₀)²/(v − v₀)²): the table below shows both regimes.
 
@@ -313,7 +313,8 @@ for motion in ("arc 2°, 8 cm", "spot turn 2°"):
     assert abs(results[(0.3, motion)] / results[(0.3, "arc 2°, 8 cm")] - 1) < 0.1
 
 # %% [markdown]
-# The error is the same fraction of the turn whether the robot drives an arc or turns on the spot.
+# The error is nearly the same fraction of the turn (within a tenth of it) whether the robot drives
+# an arc or turns on the spot; which of the two is larger, over seeds, is printed below.
 # But the fraction is not a property of the camera alone: the sideways swing a·θ shifts near
 # points in the image more than far ones, so it depends on how deep the scene is. We repeat the
 # measurement for scenes at several depths, for both offsets, and set the fraction beside
@@ -539,11 +540,11 @@ assert abs(fitted[0] - 2.0) < 0.2 and abs(fitted[1]) < 0.2
 #
 # - Exact matches give θ and ρ to machine precision (section 1 prints the worst errors): the
 #   derived equations and their implementation agree.
-# - With noise, θ from one match has σ ∝ 1/|v − v₀| near the principal row, levelling off far
+# - With noise, θ from one match has σ roughly ∝ 1/|v − v₀| near the principal row, levelling off far
 #   from it (section 2's table): matches at the camera's height are useless,
 #   depth does not matter. ρ from one match has σ ∝ z²: far matches are useless.
 # - θ equals the robot's yaw increment, checked on a simulated robot; a camera ahead of the
-#   turning axis breaks the model: it over-estimates every turn, an arc as much as a spot turn,
+#   turning axis breaks the model: it over-estimates every turn, an arc nearly as much as a spot turn,
 #   by a share close to the offset over the scene's typical depth.
 
 # %% [markdown]
