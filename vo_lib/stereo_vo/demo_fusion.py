@@ -15,13 +15,13 @@ from __future__ import annotations
 
 import json
 import math
-import sys
 from dataclasses import replace
 from pathlib import Path
 
 import matplotlib.pyplot as plt
 import numpy as np
 
+from vo_lib.atomic import write_atomic
 from vo_lib.camera import StereoCamera
 from vo_lib.comparison import Comparison
 from vo_lib.geometry import compose_planar, relative_planar, wrap_angle
@@ -226,12 +226,9 @@ def seed_figures(seeds, fresh: bool = False) -> dict:
 
 
 def main(argv=None) -> int:
-    """Run the study for the notebook's seeds and store it (written beside, then renamed)."""
-    seeds = range(SEED, SEED + 10)
-    tmp = STORED.with_suffix(".json.part")
-    tmp.write_text(json.dumps(run_study(seeds), indent=1) + "\n")
-    tmp.replace(STORED)
-    print(f"written {STORED}", file=sys.stdout)
+    """Run the study for the notebook's seeds and store it (an interrupted write keeps the old file)."""
+    study = run_study(range(SEED, SEED + 10))
+    print(f"written {write_atomic(STORED, json.dumps(study, indent=1) + chr(10))}")
     return 0
 
 

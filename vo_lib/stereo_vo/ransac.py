@@ -60,7 +60,7 @@ from vo_lib.stereo_vo.circular_motion import (
     theta_from_pixels,
     theta_variance,
 )
-from vo_lib.stereo_vo.refinement import covariance, gauss_newton, whitened_pass
+from vo_lib.stereo_vo.refinement import ITERATIONS, covariance, gauss_newton, whitened_pass
 
 
 class RansacInputError(ValueError):
@@ -77,7 +77,7 @@ class RansacParams(NamedTuple):
     refine: bool = True  #: refine on all inliers by least squares
     min_pool: int = 8  #: hypotheses come from at least this many matches ...
     pool_fraction: float = 0.5  #: ... the best-conditioned fraction of the matches
-    refine_iterations: int = 2  #: Gauss-Newton iterations of the first refinement round
+    refine_iterations: int = ITERATIONS  #: Gauss-Newton iterations of the first refinement round
     refine_rounds: int = 3  #: refine, re-select inliers, and refine again while the set changes
     whitened_gate: float = 3.76  #: final gate on the whitened eq. 21 residual: sqrt chi-square(3) at 99.7 %
     initial_inlier_ratio: float = 0.5  #: first guess of the inlier ratio, before any hypothesis is scored

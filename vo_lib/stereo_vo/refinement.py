@@ -16,6 +16,9 @@ import numpy as np
 
 from vo_lib.camera import StereoCamera
 
+#: Gauss-Newton iterations of a first refinement (RANSAC's default, ``RansacParams.refine_iterations``).
+ITERATIONS = 2
+
 
 def _moved(X: np.ndarray, theta: float, rho: float, sign: float):
     """``R X + T`` (sign 1) or ``R^T (X - T)`` (sign -1) of eq. 15, with its derivatives in
@@ -106,7 +109,7 @@ def refine_motion(
     theta: float,
     rho: float,
     camera: StereoCamera,
-    iterations: int = 2,
+    iterations: int = ITERATIONS,
 ) -> tuple[float, float, np.ndarray]:
     """Least-squares ``(theta, rho)`` on matches, minimising reprojection errors in disparity space
     in both directions (Gauss-Newton, analytic Jacobian, :func:`reprojection`).
