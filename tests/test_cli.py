@@ -51,3 +51,20 @@ def test_a_reader_closing_the_pipe_gets_one_line_not_a_traceback():
     assert proc.wait(timeout=60) == 128 + signal.SIGPIPE
     expected = "python -m vo_lib run: stopped: whatever read its output closed the pipe"
     assert err.strip().splitlines() == [expected]
+
+
+def test_bench_real_reports_the_fastest_run_and_refuses_runs_that_differ():
+    from types import SimpleNamespace
+
+    import numpy as np
+    import pytest
+
+    from vo_lib.cli.bench.bench_real import REPEATS, fastest
+
+    times = iter([5.0, 3.0, 4.0])
+    run = lambda: SimpleNamespace(camera_poses=np.eye(4)[None], ms=next(times))  # noqa: E731
+    best, all_times = fastest(run, lambda r: r.ms)
+    assert REPEATS == 3 and best.ms == 3.0 and all_times == [5.0, 3.0, 4.0]
+    poses = iter([np.eye(4)[None], np.eye(4)[None], 2 * np.eye(4)[None]])
+    with pytest.raises(RuntimeError, match="different poses"):
+        fastest(lambda: SimpleNamespace(camera_poses=next(poses)), lambda r: 1.0)
