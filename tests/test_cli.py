@@ -68,3 +68,20 @@ def test_bench_real_reports_the_fastest_run_and_refuses_runs_that_differ():
     poses = iter([np.eye(4)[None], np.eye(4)[None], 2 * np.eye(4)[None]])
     with pytest.raises(RuntimeError, match="different poses"):
         fastest(lambda: SimpleNamespace(camera_poses=next(poses)), lambda r: 1.0)
+
+
+def test_step_scale_measures_the_steps_not_the_path():
+    import numpy as np
+
+    from vo_lib.cli.bench.bench_real import step_scale
+
+    truth = np.repeat(np.eye(4)[None], 50, axis=0)
+    truth[:, 2, 3] = np.linspace(0.0, 4.9, 50)  # straight ahead, 0.1 m a frame
+    short = truth.copy()
+    short[:, :3, 3] *= 0.99
+    assert np.isclose(step_scale(truth, short), 0.99, rtol=1e-12)
+    jitter = truth.copy()
+    jitter[::2, 0, 3] += 0.02  # sideways zigzag: a longer path, the same steps ahead
+    path = lambda P: np.linalg.norm(np.diff(P[:, :3, 3], axis=0), axis=1).sum()  # noqa: E731
+    assert path(jitter) > 1.01 * path(truth)
+    assert np.isclose(step_scale(truth, jitter), 1.0, rtol=1e-12)

@@ -30,16 +30,3 @@ def plot_errors(ax, t: np.ndarray, errors: Mapping[str, np.ndarray], ylabel: str
     if title:
         ax.set_title(title)
     ax.legend(fontsize="small")
-
-
-def plot_paths_coloured(ax, paths: Mapping[str, np.ndarray], title: str = "") -> None:
-    """Plan view of planar paths ``{name: (K, 3) poses}`` in the estimators' colours."""
-    for name, poses in paths.items():
-        poses = np.asarray(poses)
-        ax.plot(poses[:, 0], poses[:, 1], label=name, color=COLOURS.get(name), lw=1.2)
-    ax.set_aspect("equal", adjustable="datalim")
-    ax.set_xlabel("x [m]")
-    ax.set_ylabel("y [m]")
-    if title:
-        ax.set_title(title)
-    ax.legend(fontsize="small")

@@ -52,8 +52,20 @@ def decode_all(seq) -> tuple[list, float]:
     return pairs, float(np.median(ms))
 
 
+def step_scale(truth, poses) -> float:
+    """The scale of the frame-to-frame motions against the truth's: the least-squares factor ``s``
+    of ``t_est = s t_true`` over every step, each translation in the camera of the step's start
+    (no alignment needed). Below 1: the steps are measured short. A path can be longer than the
+    truth's while its steps are short, by moving sideways from frame to frame."""
+    T, E = np.asarray(truth, float), np.asarray(poses, float)
+    t_true = (np.linalg.inv(T[:-1]) @ T[1:])[:, :3, 3]
+    t_est = (np.linalg.inv(E[:-1]) @ E[1:])[:, :3, 3]
+    return float(np.sum(t_est * t_true) / np.sum(t_true * t_true))
+
+
 def error_rows(truth, poses) -> dict[str, float]:
-    """ATE (SE(3)), final 3-D position (% of the path) and rotation errors, path lengths."""
+    """ATE (SE(3)), final 3-D position (% of the path) and rotation errors, path lengths, and the
+    scale of the steps (:func:`step_scale`)."""
     from vo_lib.evaluation import ate, final_error_3d
 
     final = final_error_3d(truth, poses)
@@ -63,6 +75,7 @@ def error_rows(truth, poses) -> dict[str, float]:
         "final_rotation_deg": final.rotation_deg,
         "path_m": final.estimate_distance_m,
         "truth_path_m": final.distance_m,
+        "step_scale": step_scale(truth, poses),
     }
 
 
@@ -122,12 +135,15 @@ def bench_real(folders=None) -> dict[str, float]:
         truth = seq.poses_4x4()
         if truth is None:
             continue
-        print(f"  {'':<14s}{'ATE SE(3) [m]':>14s}{'final [%]':>11s}{'rotation [deg]':>16s}{'path [m]':>10s}")
+        print(
+            f"  {'':<14s}{'ATE SE(3) [m]':>14s}{'final [%]':>11s}{'rotation [deg]':>16s}{'path [m]':>10s}"
+            f"{'step scale':>12s}"
+        )
         for name, poses in (("ours", ours.camera_poses), ("PnP baseline", base.camera_poses)):
             rows = error_rows(truth, poses)
             print(
                 f"  {name:<14s}{rows['ate_m']:14.4f}{rows['final_pct']:11.3f}"
-                f"{rows['final_rotation_deg']:16.3f}{rows['path_m']:10.3f}"
+                f"{rows['final_rotation_deg']:16.3f}{rows['path_m']:10.3f}{rows['step_scale']:12.4f}"
             )
             out.update({f"{folder.name}:{name}:{key}": value for key, value in rows.items()})
         print(f"  {'truth':<14s}{'':>41s}{rows['truth_path_m']:10.3f}")
