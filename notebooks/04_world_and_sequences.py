@@ -136,7 +136,6 @@ print(
     f"{textured.sum()} textured pixels: median |error| {np.median(err):.3f} px, "
     f"{np.mean(err < 0.5):.1%} within 0.5 px"
 )
-assert np.median(err) < 0.25 and np.mean(err < 0.5) > 0.9
 
 # %% [markdown]
 # Block matching recovers the rendered geometry to a fraction of a pixel: the images are
@@ -159,9 +158,6 @@ print(
     f"laser straight ahead: {scan.ranges[ahead]:.4f} m; rendered depth at the image centre: "
     f"{depth[row, col]:.4f} m; one pixel covers {pixel_width * 100:.2f} cm of wall there"
 )
-# the image centre and the beam straight ahead can differ by the wall under half a pixel (the
-# pixel's centre is not the optical axis); that physical bound is the margin, not the measured gap
-assert abs(scan.ranges[ahead] - depth[row, col]) < 0.5 * pixel_width
 
 noisy = LaserScanner(range_sigma=0.01).scan(worlds["indoor_lab"].segments_array(), pose, rng)
 fig, ax = new_axes(width=7, height=4.5)
@@ -222,8 +218,6 @@ spot_heading_error = abs(dict((r[0], r[3]) for r in rows)["spot_turn"])
 corridor_error = dict((r[0], r[2]) for r in rows)["corridor"]
 corridor_length = np.sum(np.linalg.norm(np.diff(drives["corridor"][0].poses[:, :2], axis=0), axis=1))
 spot_total_turn = np.degrees(np.abs(np.unwrap(drives["spot_turn"][0].poses[:, 2])[-1]))
-assert spot_heading_error >= 10.0  # "tens of degrees"
-assert corridor_error >= 1.0  # "metres off"
 
 # %% [markdown]
 # ## 5 · Track slip, made visible
@@ -259,7 +253,6 @@ over_count = (np.unwrap(spot_believed[:, 2])[-1] - spot_believed[0, 2]) / (
     np.unwrap(spot.poses[:, 2])[-1] - spot.poses[0, 2]
 )
 print(f"odometry turned {over_count:.3f} times the true angle")
-assert 1.03 < over_count < 1.10  # the mean spot-turn slip, 6 %
 
 # %% [markdown]
 # ## 6 · A sequence on disk
@@ -344,7 +337,6 @@ for ax, (title, image) in zip(axes[:, 0], shown, strict=True):
     ax.axis("off")
 plt.show()
 road_stats = frame_stats[shown[0][0]]
-assert 0.35 <= road_stats.empty_cells <= 0.75 and 0.3 <= road_stats.low_gradient <= 0.6
 
 # %%
 if len(shown) == 2:

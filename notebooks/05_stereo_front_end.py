@@ -102,18 +102,13 @@ print(f"{len(w_true)} pixels: depths {points_true[:, 2].min():.2f}–{points_tru
 
 # %%
 K = np.array([[camera.fx, 0, camera.cx], [0, camera.fy, camera.cy], [0, 0, 1]])
-
-
-def fundamental(R, t):
-    """F = K^-T [t]x R K^-1 for a right camera with x_right = R x_left + t."""
-    tx = np.array([[0, -t[2], t[1]], [t[2], 0, -t[0]], [-t[1], t[0], 0]])
-    Kinv = np.linalg.inv(K)
-    return Kinv.T @ tx @ R @ Kinv
-
-
-t_rig = np.array([-camera.baseline, 0.0, 0.0])  # the right camera sits B to the right
+K_inv = np.linalg.inv(K)
+t_rig = np.array([-camera.baseline, 0.0, 0.0])  # x_right = R x_left + t: the right camera is B to the right
+t_cross = np.array([[0, -t_rig[2], t_rig[1]], [t_rig[2], 0, -t_rig[0]], [-t_rig[1], t_rig[0], 0]])  # [t]x
 pitch_1deg = cv2.Rodrigues(np.array([math.radians(1.0), 0.0, 0.0]))[0]
-rigs = {"rectified": fundamental(np.eye(3), t_rig), "right camera pitched 1°": fundamental(pitch_1deg, t_rig)}
+# the fundamental matrix F = K^-T [t]x R K^-1 of each rig
+rigs = {"rectified": np.eye(3), "right camera pitched 1°": pitch_1deg}
+rigs = {name: K_inv.T @ t_cross @ R @ K_inv for name, R in rigs.items()}
 probe = np.array([[100.0, 80.0, 1], [320.0, 240.0, 1], [540.0, 400.0, 1], [200.0, 420.0, 1]])
 fig, axes = new_axes(2, width=5.2, height=3.6)
 for ax, (name, F) in zip(axes, rigs.items(), strict=True):
@@ -139,7 +134,6 @@ display(
         f"far beyond the ±{ROW_TOLERANCE:.0f} px of rows the front end searches (section 3)."
     )
 )
-assert row_offset.min() > max(5, 3 * ROW_TOLERANCE)  # one degree moves the line by several pixels
 
 # %% [markdown]
 # **Disparity against depth, and how its error grows.** Depth is inversely proportional to
@@ -224,7 +218,6 @@ print(
     f"{len(keypoints)} FAST corners; grid cells covered: strongest {cells_covered(points[strongest])}, "
     f"bucketed {cells_covered(points[kept])} of 48"
 )
-assert cells_covered(points[kept]) > cells_covered(points[strongest])
 
 # %% [markdown]
 # ## 2 · Binary descriptors and the Hamming distance
@@ -267,8 +260,6 @@ print(
     f"distance: same corner {np.median(same):.0f} bits, unrelated {np.median(shuffled):.0f} bits; "
     f"{np.mean(same > 60):.0%} of the true pairs lie above the ceiling"
 )
-assert len(common) > 0.5 * len(keypoints)
-assert np.median(same) < 0.5 * np.median(shuffled) and np.median(shuffled) > 100
 
 # %% [markdown]
 # ## 3 · Matching along rows, and sub-pixel disparity
@@ -306,8 +297,6 @@ print(
     f"median |error|: integer {np.median(np.abs(err_integer)):.3f} px, "
     f"sub-pixel {stereo_median_err:.3f} px; wrong matches (> 2 px): {stereo_wrong:.1%}"
 )
-assert stereo_median_err < 0.7 * np.median(np.abs(err_integer))
-assert stereo_wrong < 0.02
 
 # %% [markdown]
 # ## 4 · What it costs
@@ -370,8 +359,6 @@ pair_share = np.median(guided[:, 2]) / np.median(brute[:, 2])
 correct_guided = np.median(guided[:, 0] * (1 - guided[:, 1]))
 correct_brute = np.median(brute[:, 0] * (1 - brute[:, 1]))
 wrong_guided, wrong_brute = np.mean(guided[:, 1]), np.mean(brute[:, 1])
-assert pair_share < 0.01  # a per cent at most: the sentence below says a small share
-assert correct_guided > 0.9 * correct_brute  # "as many correct matches", within a tenth
 # wrong-match rates paired frame by frame: each pair of frames is its own draw of image noise
 by_frame = Comparison(tuple(range(len(guided))), {"guided": guided[:, 1], "brute force": brute[:, 1]})
 median_diff, diff_low, diff_high = (100 * v for v in by_frame.difference("guided", "brute force"))
@@ -381,7 +368,6 @@ rate_words = {
     Verdict.WORSE: "higher",
     Verdict.NOT_RELIABLE: "not reliably different",
 }[wrong_verdict]
-assert wrong_verdict is Verdict.BETTER  # the window's reason below presumes it
 display(
     Markdown(
         f"Guided matching compares {pair_share:.1%} of the pairs brute force compares and finds "
@@ -405,9 +391,6 @@ display(
 # %%
 front_end = front_end_on(camera, left, right, true_disparity)
 count = front_end()
-# the lab's painted walls and tiled floor leave part of the view without corners, so fewer
-# matches than when every surface was corner texture
-assert count > 250
 
 # %%
 knobs = offer(

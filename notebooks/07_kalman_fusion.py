@@ -52,7 +52,7 @@ from IPython.display import display
 from scipy.stats import chi2
 
 from vo_lib.camera import StereoCamera
-from vo_lib.comparison import Verdict, bootstrap_interval, over_seeds
+from vo_lib.comparison import bootstrap_interval, over_seeds
 from vo_lib.geometry import relative_planar, wrap_angle
 from vo_lib.models.track_odometry import TrackOdometry
 from vo_lib.sim.samples import SAMPLES
@@ -426,15 +426,6 @@ display(
         + " in heading."
     )
 )
-# the claims of the next cell's explanation, each over the seeds
-assert heading_cmp["spot turn"].verdict("fused", "odometry") is Verdict.BETTER
-assert position_cmp["indoor"].verdict("fused", "odometry") is Verdict.BETTER
-assert heading_cmp["spot turn"].verdict("fused", "VO") is not Verdict.BETTER  # the slip's mean leaks in
-assert all(abs(heading_cmp[c].difference("fused", "VO")[0]) < 0.05 for c in ("spot turn", "indoor"))
-assert position_cmp["indoor, weak vision"].verdict("fused", "VO") is Verdict.BETTER
-assert position_cmp["spot turn, weak vision"].verdict("fused", "VO") is Verdict.BETTER
-assert heading_cmp["spot turn, weak vision"].verdict("fused", "VO") is Verdict.WORSE
-assert heading_cmp["spot turn, VO outage"].verdict("fused", "VO") is Verdict.WORSE
 
 # %% [markdown]
 # **Why.** The filter's state holds no velocity: each frame it has two independent estimates of
@@ -483,13 +474,6 @@ display(
         f"against 1 − {SAMPLES['spot_turn'].slip.spot_turn_mean:.2f} for the sampled slip."
     )
 )
-assert heading_cmp["spot turn, weak vision"].verdict("calibrated", "fused") is Verdict.BETTER
-assert heading_cmp["spot turn, VO outage"].verdict("calibrated", "fused") is Verdict.BETTER
-assert position_cmp["indoor, weak vision"].verdict("calibrated", "fused") is Verdict.WORSE
-assert position_cmp["indoor"].verdict("calibrated", "fused") is Verdict.WORSE
-# the clause "more with weak vision" of the next cell
-cost = {c: position_cmp[c].difference("calibrated", "fused")[0] for c in ("indoor", "indoor, weak vision")}
-assert cost["indoor, weak vision"] > cost["indoor"]
 
 # %% [markdown]
 # Learning the slip removes the bias where there is a large one to remove, in the spot turn. On the
@@ -511,9 +495,6 @@ display(
         "correct what its sensor can resolve."
     )
 )
-# the clause "about as much as the slip": indoors with weak vision the scale's σ reaches the 1 % slip
-assert scale_sigma["indoor, weak vision"] > 0.5 * SAMPLES["indoor_free"].slip.mean
-assert scale_sigma["spot turn, weak vision"] < 0.5 * SAMPLES["spot_turn"].slip.spot_turn_mean
 
 # %% [markdown]
 # Does the filters' covariance tell the truth on these drives? Each draw gives one NEES per frame;
@@ -544,7 +525,6 @@ display(
         "covariance can claim more than it knows; its intervals above say how much on these drives."
     )
 )
-assert nees_rows[("spot turn", "fused")][1] > 3  # the clause "over-confident" of the spot turn
 
 # %% [markdown]
 # ### The third measurement: the motion lies on its chord
@@ -636,9 +616,6 @@ print(
     f"{len(flagged)} frames flagged; heading σ {np.degrees(yaw_sigma[199]):.3f}° before, "
     f"{np.degrees(yaw_sigma[260]):.3f}° at the end of the gap, {np.degrees(yaw_sigma[300]):.3f}° after"
 )
-assert len(flagged) == 61 and yaw_sigma[260] > 5 * yaw_sigma[199]
-# after the gap the growth all but stops
-assert yaw_sigma[300] - yaw_sigma[260] < 0.1 * (yaw_sigma[260] - yaw_sigma[199])
 
 # %% [markdown]
 # ## 6 · Does the filter believe its own covariance? NEES and NIS

@@ -49,7 +49,7 @@ import numpy as np
 from IPython.display import display
 from scipy.stats import norm
 
-from vo_lib.comparison import Verdict, bootstrap_interval, over_seeds
+from vo_lib.comparison import bootstrap_interval, over_seeds
 from vo_lib.geometry import planar_from_camera_poses
 from vo_lib.lidar_tracking.corridor_experiment import (
     LOST_ERROR,
@@ -127,16 +127,10 @@ ax.set_xlabel("pose offset along the corridor [m]")
 ax.set_ylabel("score - best score")
 ax.legend(fontsize="small")
 ax.set_title("Score of poses shifted along the corridor")
-for x in (9.0, 11.0):
-    assert np.ptp(profiles[x]) < 0.5  # flat: nothing fixes the position along the corridor
-for x in (3.0, 16.0, 23.0):
-    assert np.ptp(profiles[x]) > 10 and abs(offsets[np.argmax(profiles[x])]) <= 0.03
 
 
 flat_here = flat_positions(world, field, offsets)
 print(f"flat along the corridor from x = {flat_here.min():.1f} to {flat_here.max():.1f} m")
-assert np.all(np.diff(flat_here) < 0.15)  # one stretch
-assert flat_positions(without_umbrella(world), field, offsets).size == 0
 
 # %% [markdown]
 # Between the stretch's ends (printed) the score is flat along the corridor: behind the robot the
@@ -177,7 +171,6 @@ print(
 )
 best = min(final_200, key=final_200.get)
 print(f"closer to the truth after 200 frames: {best}")
-assert max(final_200.values()) < 0.03  # both within 3 cm after 10 m
 
 # %% [markdown]
 # On this stretch both odometers end within centimetres of the truth; which one ends closer
@@ -209,7 +202,6 @@ print(
     f"   {paper_table1['ms'][0]} / {paper_table1['ms'][1]} / {paper_table1['ms'][2]} / -"
 )
 largest_share = {name: vo_err[:, axis].max() / paper_table1[name][3] for axis, name in ((0, "X"), (1, "Y"))}
-assert max(largest_share.values()) < 0.5  # "under half": each axis's largest against the paper's
 display(
     Markdown(
         "Our largest deviations are "
@@ -217,8 +209,6 @@ display(
         + " of the paper's largest on the same axis: under half, on rendered images."
     )
 )
-# "within centimetres": the end within 0.3 % of the distance driven
-assert np.hypot(*(vo[-1, :2] - truth0[-1, :2])) < 0.003 * np.hypot(*(truth0[-1, :2] - truth0[0, :2]))
 
 # %% [markdown]
 # ## 3. Sample scores and their statistics (eq. 8–13)
@@ -247,10 +237,6 @@ for ax, x, title in ((axes[0], 3.0, "normal (x = 3 m)"), (axes[1], 9.0, "occlude
 top = max(st.v_max for st in frame_stats.values())
 for ax in axes:
     ax.set_ylim(-0.03 * top, 1.05 * top)
-normal_frame, occluded_frame = frame_stats.values()
-assert normal_frame.v_max > 2 * occluded_frame.v_max
-# the boxes are flat: quartiles at a few per cent of the occluded frame's maximum at most (one frame each)
-assert max(st.v_uq for st in frame_stats.values()) < 0.05 * occluded_frame.v_max
 
 # %% [markdown]
 # **The statistics, written out.** What `ScoreStatistics.from_scores` computes, in a few lines:
@@ -358,10 +344,6 @@ for scale in scales:
     print(f"{scale:22s}" + "".join(f"{v:13.3f}" for v in aucs[scale].values()))
 post = normal_stats["posterior × n (ours)"] + occluded_stats["posterior × n (ours)"]
 print(f"posterior scale: largest |D_s / V_max - 1| = {max(abs(s['d_s'] / s['v_max'] - 1) for s in post):.1e}")
-assert all(abs(s["d_s"] / s["v_max"] - 1) < 1e-3 for s in post)  # D_s is V_max on our scale
-assert aucs["raw score"]["d_s"] > 0.95 and aucs["raw score"]["d_s_printed"] < 0.5
-ours = aucs["posterior × n (ours)"]
-assert ours["v_max"] == ours["d_s"] == ours["d_s_printed"]
 printed10 = {
     kind: np.median([s["v_max"] for s in group["printed eq. 10 × n"]])
     for kind, group in (("normal", normal_stats), ("occluded", occluded_stats))
@@ -375,9 +357,6 @@ print(
     f"{printed10['occluded']:.3f}; "
     f"posterior {posterior_vmax['normal']:.1f} / {posterior_vmax['occluded']:.1f}"
 )
-every_printed10 = [s["v_max"] for g in (normal_stats, occluded_stats) for s in g["printed eq. 10 × n"]]
-assert max(every_printed10) < 1.25 and printed10["normal"] / printed10["occluded"] < 1.1
-assert posterior_vmax["normal"] / posterior_vmax["occluded"] > 3
 
 # %% [markdown]
 # Three findings, each of which could have come out otherwise:
@@ -390,7 +369,7 @@ assert posterior_vmax["normal"] / posterior_vmax["occluded"] > 3
 # * **On the raw scores the two readings part.** There the quartiles are of the same size as the
 #   maximum, and on this run the printed $V_{max} - V_{lq} - V_{med}$ has an AUC below one half
 #   (it ranks occluded frames above normal ones more often than not), while $V_{max} - V_{med}$
-#   still separates them almost perfectly (both asserted): our reading of eq. 11 is the one that
+#   still separates them almost perfectly (tests check both): our reading of eq. 11 is the one that
 #   works. (The printed form is not a slip: eq. 12 calls
 #   $V_{max} - V_{lq}$ the "range", and range minus median is what eq. 11 prints.)
 # * **The printed eq. 10 is a normalisation, not a posterior, for a score like ours.**
@@ -420,7 +399,6 @@ for T in (0.5, 1.0, 2.0, 4.0):
     print(
         f"{T:5.1f}{normal_t:18.1f}{occluded_t:10.1f}{normal_t / occluded_t:8.1f}{temperature_rows[T][2]:7.3f}"
     )
-assert np.isclose(temperature_rows[1.0][0], posterior_vmax["normal"])  # T = 1: the reading above
 normal_by_t = [row[0] for row in temperature_rows.values()]
 assert np.all(np.diff(normal_by_t) < 0)  # hotter: flatter, lower V_max
 spread_t = temperature_rows[0.5][0] / temperature_rows[4.0][0]
@@ -453,7 +431,6 @@ display(
 truth_c, odo_c = corridor_drive(1000)
 cal = calibrate(world, truth_c, odo_c, vo, 1000)
 print("thresholds on our posterior:", cal.thresholds)
-assert abs(cal.thresholds.d_s - cal.thresholds.v_max) < 1e-3 * cal.thresholds.v_max  # C_s: D_s repeats V_max
 paper_table2 = {"LBPT": (0.0228, 0.0319, 0.1184), "visual odometer": (0.0288, 0.0332, 0.1283)}
 print(f"{'':16s}{'ours':>10s}{'paper':>10s}")
 for label, lim in (("LBPT", cal.laser), ("visual odometer", cal.vo)):
@@ -487,7 +464,6 @@ print(
 assert min(coverage.values()) > 0.97  # 3σ limits hold what they summarise
 laser_share = cal.laser.mean / paper_table2["LBPT"][0]
 vo_share = cal.vo.mean / paper_table2["visual odometer"][0]
-assert laser_share < 1 and vo_share < 0.2  # "smaller", and for the visual odometer "a fraction"
 
 # %% [markdown]
 # Limits judged on the run they were computed from say little: a Shewhart chart's promise is about
@@ -593,7 +569,6 @@ for s, pose in zip(voapt.steps, voapt.estimate, strict=True):
         ax.arrow(pose[0], pose[1], 0.6 * s.direction[0], 0.6 * s.direction[1], head_width=0.08, color="C1")
 ax.set_aspect("equal", adjustable="box")
 ax.set_ylim(-1.8, 1.8)
-assert np.mean(np.abs(dirs[:, 0])) > 0.95
 
 # %% [markdown]
 # ## 6. Table III over 20 seeds
@@ -634,8 +609,6 @@ print(
     f"on LBPT's own run, {100 * result.false_alarms_lbpt():.1f} % of unoccluded updates "
     "within 0.1 m are flagged"
 )
-assert mx["VOAPT"][0] <= 0.3 * mx["LBPT"][0] and mn["VOAPT"][0] <= 0.2 * mn["LBPT"][0]
-assert result.flagged_when_lost() >= 0.9 and result.false_alarms() <= 0.1
 
 by_seed = {
     statistic: over_seeds(
@@ -647,7 +620,6 @@ by_seed = {
     )
     for statistic in ("max", "mean")
 }
-assert all(c.verdict("VOAPT", "LBPT") is Verdict.BETTER for c in by_seed.values())
 display(
     Markdown(
         f"Over {len(result.seeds)} seeds, in the maximum X error "
@@ -676,11 +648,7 @@ print(
     "of VOAPT's updates"
 )
 lbpt_y, voapt_y = result.table(1)["LBPT"]["max"], result.table(1)["VOAPT"]["max"]
-assert 0.5 < mx["LBPT"][0] / paper[("LBPT", 0)][0] < 2  # our LBPT fails about as badly as the paper's
-assert mx["VOAPT"][0] > paper[("VOAPT", 0)][0] and credible_in_occlusion > 0.05
-assert mn["VOAPT"][0] < paper[("VOAPT", 0)][1]  # the clause "its mean error lies below it"
 y_share = max(lbpt_y, voapt_y) / paper[("VOAPT", 1)][1]
-assert y_share < 0.5  # our worst Y under half the paper's *mean* VOAPT Y
 
 # %% [markdown]
 # Along the corridor VOAPT cuts the maximum and the mean error severalfold, over seeds (the sentence

@@ -1,5 +1,10 @@
 """Every notebook is a test: read the jupytext .py, execute it in a fresh kernel, fail on any error.
 
+The story cells keep the asserts that check a derivation. The checks of the notebooks' measured
+claims (the figures a sentence states) live in ``tests/notebook_checks/<notebook>.py``: each part
+starts with ``# after: TEXT`` and runs, in the same kernel, right after the one code cell holding
+TEXT, so it sees the values that sentence describes.
+
 Each cell runs under a timeout; kernels talk over IPC sockets rather than TCP ports, which stall
 when several start at once; and an exception inside any cell fails the test with its traceback.
 """
@@ -13,6 +18,7 @@ import subprocess
 import sys
 
 import jupytext
+import nbformat
 import pytest
 from jupyter_client.kernelspec import KernelSpecManager
 from jupyter_client.manager import KernelManager
@@ -23,6 +29,7 @@ ROOT = pathlib.Path(__file__).resolve().parents[1]
 NOTEBOOK_DIR = ROOT / "notebooks"
 NOTEBOOKS = sorted(NOTEBOOK_DIR.glob("[0-9][0-9]_*.py"))
 CELL_TIMEOUT_S = 300
+CHECKS_DIR = ROOT / "tests" / "notebook_checks"
 #: Real KITTI-layout sequences beside the repository: notebooks read them through VO_LIB_REALDATA.
 REALDATA = ROOT.parent / "shared" / "realdata"
 
@@ -31,12 +38,29 @@ def test_there_are_notebooks():
     assert len(NOTEBOOKS) >= 3, f"expected notebooks under {NOTEBOOK_DIR}"
 
 
+def with_checks(nb: nbformat.NotebookNode, path: pathlib.Path) -> int:
+    """Insert each part of the notebook's checks file after the code cell its ``# after:`` names."""
+    checks = CHECKS_DIR / path.name
+    if not checks.exists():
+        return 0
+    parts = re.split(r"^# after: (.+)$", checks.read_text(), flags=re.M)[1:]
+    places = []
+    for anchor, code in zip(parts[::2], parts[1::2], strict=True):
+        hits = [i for i, c in enumerate(nb.cells) if c.cell_type == "code" and anchor.strip() in c.source]
+        assert len(hits) == 1, f"{checks.name}: '# after: {anchor}' is in {len(hits)} code cells, not one"
+        places.append((hits[0], code.strip()))
+    for index, code in reversed(sorted(places, key=lambda p: p[0])):  # the last first: indices hold
+        nb.cells.insert(index + 1, nbformat.v4.new_code_cell(code))
+    return len(places)
+
+
 @pytest.mark.notebook
 @pytest.mark.parametrize("path", NOTEBOOKS, ids=[p.stem for p in NOTEBOOKS])
 def test_notebook_executes(path, kernel_dir, tmp_path, monkeypatch):
     if REALDATA.is_dir() and not os.environ.get("VO_LIB_REALDATA"):
         monkeypatch.setenv("VO_LIB_REALDATA", str(REALDATA))  # the kernel inherits it
     nb = jupytext.read(path)
+    with_checks(nb, path)
     ksm = KernelSpecManager(kernel_dirs=[str(kernel_dir)], ensure_native_kernel=False)
     km = KernelManager(
         kernel_name=nb.metadata["kernelspec"]["name"],  # the kernel the notebook names, in kernel_dir
@@ -62,6 +86,13 @@ def test_notebook_executes(path, kernel_dir, tmp_path, monkeypatch):
             km.shutdown_kernel(now=True)
     codes = [c for c in nb.cells if c.cell_type == "code"]
     assert codes and all(c.get("execution_count") for c in codes), "some code cells did not run"
+
+
+def test_every_checks_file_finds_its_notebook_and_cells():
+    for checks in CHECKS_DIR.glob("*.py"):
+        path = NOTEBOOK_DIR / checks.name
+        assert path.exists(), f"{checks.name}: no notebook of that name in notebooks/"
+        assert with_checks(jupytext.read(path), path) >= 1, f"{checks.name}: no '# after:' line"
 
 
 @pytest.mark.parametrize("path", NOTEBOOKS, ids=[p.stem for p in NOTEBOOKS])

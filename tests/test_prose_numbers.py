@@ -424,7 +424,11 @@ def wide_margins(path: pathlib.Path) -> list[str]:
     return bad
 
 
-@pytest.mark.parametrize("path", NOTEBOOKS, ids=[p.stem for p in NOTEBOOKS])
+#: The notebooks and the checks of their claims (tests/notebook_checks), which run in their kernels.
+ASSERTING = NOTEBOOKS + sorted((ROOT / "tests" / "notebook_checks").glob("*.py"))
+
+
+@pytest.mark.parametrize("path", ASSERTING, ids=[f"{p.parent.name}/{p.stem}" for p in ASSERTING])
 def test_wide_assert_margins_say_why(path):
     bad = wide_margins(path)
     assert not bad, "asserts with a margin of 3× or more and no comment saying why:\n" + "\n".join(bad)
