@@ -487,10 +487,9 @@ def grade_once(
 def write_handout(folder: pathlib.Path, course: pathlib.Path, paths: list[pathlib.Path]) -> None:
     """Fill ``folder`` with what a teacher gives out, and refuse if any of it holds solution text.
 
-    ``notebooks/NN_topic.ipynb`` (the student edition), ``vo_lib`` as a wheel (the package only:
-    no notebook sources), ``requirements.txt`` (what the notebooks need: see
-    :func:`handout_requirements`)
-    and ``START_HERE.md``.
+    ``notebooks/NN_topic.ipynb`` (the student edition), ``vo_lib`` with the notebooks' helpers
+    ``vo_book`` as one wheel (the packages only: no notebook sources), ``requirements.txt`` (what
+    the notebooks need: see :func:`handout_requirements`) and ``START_HERE.md``.
     """
     (folder / "notebooks").mkdir()
     for path in paths:
@@ -523,7 +522,8 @@ def write_handout(folder: pathlib.Path, course: pathlib.Path, paths: list[pathli
             nbformat.read(course / "source" / path.stem / f"{path.stem}.ipynb", as_version=4)
         )
     # a line the package itself has (a generic "cases.append(") proves nothing about the wheel
-    library = {line.strip() for f in (ROOT / "vo_lib").rglob("*.py") for line in f.read_text().splitlines()}
+    packages = [f for name in ("vo_lib", "vo_book") for f in (ROOT / name).rglob("*.py")]
+    library = {line.strip() for f in packages for line in f.read_text().splitlines()}
     leaks = handout_leaks(folder, {line for line in lines - library if len(line) > 12})
     if leaks:
         raise BuildError(f"the handout holds solution text: {leaks[0]}")

@@ -44,11 +44,11 @@ import numpy as np
 import sympy as sp
 from IPython.display import display
 
+from vo_book.demo_drive import drive_on
+from vo_book.plotting import covariance_ellipse, new_axes, plot_paths
+from vo_book.prose import Markdown
+from vo_book.widgets import offer, show_math, slider
 from vo_lib.models.track_odometry import TrackOdometry, apply_slip
-from vo_lib.sim.demo_drive import drive_on
-from vo_lib.viz.plotting import covariance_ellipse, new_axes, plot_paths
-from vo_lib.viz.prose import Markdown
-from vo_lib.viz.widgets import offer, show_math, slider
 
 SEED = 1
 rng = np.random.default_rng(SEED)

@@ -46,11 +46,11 @@ import matplotlib.pyplot as plt
 import numpy as np
 import sympy as sp
 
+from vo_book.plotting import draw_circular_motion, new_axes
+from vo_book.widgets import show_math
 from vo_lib.camera import StereoCamera
 from vo_lib.stereo_vo import circular_motion as cm
 from vo_lib.stereo_vo.synthetic import synthetic_matches
-from vo_lib.viz.plotting import draw_circular_motion, new_axes
-from vo_lib.viz.widgets import show_math
 
 SEED = 2
 rng = np.random.default_rng(SEED)

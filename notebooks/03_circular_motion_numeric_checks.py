@@ -46,11 +46,7 @@ import numpy as np
 from IPython.display import display
 from scipy.stats import chi2
 
-from vo_lib.camera import StereoCamera
-from vo_lib.comparison import over_seeds
-from vo_lib.geometry import camera_motion, camera_mount, compose_planar, wrap_angle
-from vo_lib.stereo_vo import circular_motion as cm
-from vo_lib.stereo_vo.demo_circular import (
+from vo_book.demo_circular import (
     offset_share,
     robust_sd,
     theta_spread,
@@ -58,11 +54,15 @@ from vo_lib.stereo_vo.demo_circular import (
     tilt_theta,
     tilted_matches,
 )
+from vo_book.nb03 import local_exponent
+from vo_book.plotting import new_axes
+from vo_book.prose import Markdown
+from vo_book.widgets import offer, slider
+from vo_lib.camera import StereoCamera
+from vo_lib.comparison import over_seeds
+from vo_lib.geometry import camera_motion, camera_mount, compose_planar, wrap_angle
+from vo_lib.stereo_vo import circular_motion as cm
 from vo_lib.stereo_vo.synthetic import Scene, matches_under_transform, synthetic_matches
-from vo_lib.viz.nb03 import local_exponent
-from vo_lib.viz.plotting import new_axes
-from vo_lib.viz.prose import Markdown
-from vo_lib.viz.widgets import offer, slider
 
 SEED = 3
 rng = np.random.default_rng(SEED)

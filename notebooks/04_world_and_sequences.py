@@ -52,20 +52,20 @@ import matplotlib.pyplot as plt
 import numpy as np
 from IPython.display import display
 
+from vo_book.demo_worlds import view_from
+from vo_book.nb04 import panel_grid
+from vo_book.plotting import new_axes, plot_robot, plot_world
+from vo_book.prose import Markdown
+from vo_book.widgets import offer, slider
 from vo_lib.camera import StereoCamera
 from vo_lib.formats.sequence import read_sequence
 from vo_lib.geometry import camera_mount, planar_to_matrix, wrap_angle
 from vo_lib.models.track_odometry import TrackOdometry
-from vo_lib.sim.demo_worlds import view_from
 from vo_lib.sim.laser import LaserScanner
 from vo_lib.sim.render import StereoRenderer
 from vo_lib.sim.samples import CAMERA_HEIGHT, SAMPLES, generate
 from vo_lib.sim.trajectories import simulate_drive
 from vo_lib.sim.world import WORLDS
-from vo_lib.viz.nb04 import panel_grid
-from vo_lib.viz.plotting import new_axes, plot_robot, plot_world
-from vo_lib.viz.prose import Markdown
-from vo_lib.viz.widgets import offer, slider
 
 SEED = 4
 rng = np.random.default_rng(SEED)

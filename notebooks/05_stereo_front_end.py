@@ -48,17 +48,17 @@ import matplotlib.pyplot as plt
 import numpy as np
 from IPython.display import display
 
+from vo_book.demo_front_end import front_end_on
+from vo_book.nb05 import cells_covered
+from vo_book.plotting import new_axes
+from vo_book.prose import Markdown
+from vo_book.widgets import offer, slider
 from vo_lib.camera import StereoCamera
 from vo_lib.comparison import Comparison, Verdict
 from vo_lib.geometry import camera_mount, planar_to_matrix
 from vo_lib.sim.render import SensorEffects, StereoRenderer
 from vo_lib.sim.world import indoor_lab
-from vo_lib.stereo_vo.demo_front_end import front_end_on
 from vo_lib.stereo_vo.features import ROW_TOLERANCE, StereoFrontEnd, bucket, hamming
-from vo_lib.viz.nb05 import cells_covered
-from vo_lib.viz.plotting import new_axes
-from vo_lib.viz.prose import Markdown
-from vo_lib.viz.widgets import offer, slider
 
 SEED = 5
 rng = np.random.default_rng(SEED)

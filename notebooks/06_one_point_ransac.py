@@ -61,12 +61,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 from IPython.display import display
 
-from vo_lib.camera import StereoCamera
-from vo_lib.comparison import bootstrap_interval, chi2_band, over_seeds
-from vo_lib.stereo_vo import circular_motion as cm
-from vo_lib.stereo_vo import ransac as library
-from vo_lib.stereo_vo.baselines import essential_ransac, pnp_ransac, rigid_ransac
-from vo_lib.stereo_vo.demo_one_point import (
+from vo_book.demo_one_point import (
     MOVER_PX,
     MOVER_SHARE,
     NEAR_MISS_PX,
@@ -77,10 +72,7 @@ from vo_lib.stereo_vo.demo_one_point import (
     ransac_trial,
     realistic_matches,
 )
-from vo_lib.stereo_vo.ransac import histogram_voting, hypotheses_needed, one_point_ransac
-from vo_lib.stereo_vo.refinement import refine_motion
-from vo_lib.stereo_vo.synthetic import synthetic_matches
-from vo_lib.viz.nb06 import (
+from vo_book.nb06 import (
     median_time,
     plot_gate_spread,
     plot_hypotheses,
@@ -90,9 +82,17 @@ from vo_lib.viz.nb06 import (
     said,
     side_of_band,
 )
-from vo_lib.viz.plotting import draw_chord_geometry, draw_depression_geometry, new_axes
-from vo_lib.viz.prose import Markdown
-from vo_lib.viz.widgets import offer, slider
+from vo_book.plotting import draw_chord_geometry, draw_depression_geometry, new_axes
+from vo_book.prose import Markdown
+from vo_book.widgets import offer, slider
+from vo_lib.camera import StereoCamera
+from vo_lib.comparison import bootstrap_interval, chi2_band, over_seeds
+from vo_lib.stereo_vo import circular_motion as cm
+from vo_lib.stereo_vo import ransac as library
+from vo_lib.stereo_vo.baselines import essential_ransac, pnp_ransac, rigid_ransac
+from vo_lib.stereo_vo.ransac import histogram_voting, hypotheses_needed, one_point_ransac
+from vo_lib.stereo_vo.refinement import refine_motion
+from vo_lib.stereo_vo.synthetic import synthetic_matches
 
 SEED = 6
 rng = np.random.default_rng(SEED)

@@ -51,14 +51,7 @@ import numpy as np
 from IPython.display import display
 from scipy.stats import chi2
 
-from vo_lib.camera import StereoCamera
-from vo_lib.comparison import bootstrap_interval, over_seeds
-from vo_lib.geometry import relative_planar, wrap_angle
-from vo_lib.models.track_odometry import TrackOdometry
-from vo_lib.sim.samples import SAMPLES
-from vo_lib.sim.trajectories import simulate_drive
-from vo_lib.stereo_vo import circular_motion as cm
-from vo_lib.stereo_vo.demo_fusion import (
+from vo_book.demo_fusion import (
     CONDITIONS,
     ESTIMATORS,
     fuse,
@@ -68,6 +61,17 @@ from vo_lib.stereo_vo.demo_fusion import (
     said,
     seed_figures,
 )
+from vo_book.nb07 import plot_errors
+from vo_book.plotting import new_axes
+from vo_book.prose import Markdown
+from vo_book.widgets import offer, slider
+from vo_lib.camera import StereoCamera
+from vo_lib.comparison import bootstrap_interval, over_seeds
+from vo_lib.geometry import relative_planar, wrap_angle
+from vo_lib.models.track_odometry import TrackOdometry
+from vo_lib.sim.samples import SAMPLES
+from vo_lib.sim.trajectories import simulate_drive
+from vo_lib.stereo_vo import circular_motion as cm
 from vo_lib.stereo_vo.kalman import (
     SIDEWAYS_SIGMA,
     SLIP_SIGMA,
@@ -78,10 +82,6 @@ from vo_lib.stereo_vo.kalman import (
 )
 from vo_lib.stereo_vo.ransac import one_point_ransac
 from vo_lib.stereo_vo.synthetic import synthetic_matches
-from vo_lib.viz.nb07 import plot_errors
-from vo_lib.viz.plotting import new_axes
-from vo_lib.viz.prose import Markdown
-from vo_lib.viz.widgets import offer, slider
 
 SEED = 7
 FULL = os.environ.get("VO_NOTEBOOKS_FULL") == "1"  # run section 4's seed study, not read it
@@ -386,7 +386,7 @@ plt.show()
 #
 # Ten seeds of five conditions, and the sideways study of the next section, take several times as
 # long as the rest of the notebook. `seed_figures` therefore reads their figures from
-# `vo_lib/stereo_vo/demo_fusion.json`, stored by `python -m vo_lib.stereo_vo.demo_fusion` for the
+# `vo_book/demo_fusion.json`, stored by `python -m vo_book.demo_fusion` for the
 # base seed 7 (`pytest -m samples` runs the study again and must find the same figures). With
 # another `SEED`, or with `VO_NOTEBOOKS_FULL=1`, it runs them here.
 

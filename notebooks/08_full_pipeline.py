@@ -45,6 +45,9 @@ import matplotlib.pyplot as plt
 import numpy as np
 from IPython.display import display
 
+from vo_book.demo_pipeline import frames_for, heading_error, rms_of, run, sides, stored_table
+from vo_book.plotting import draw_flowchart, new_axes, plot_paths
+from vo_book.prose import Markdown
 from vo_lib.camera import StereoCamera
 from vo_lib.comparison import Comparison, bootstrap_interval, chi2_band
 from vo_lib.evaluation import key_position_errors
@@ -54,11 +57,8 @@ from vo_lib.sim.trajectories import simulate_drive
 from vo_lib.stereo_vo import circular_motion as cm
 from vo_lib.stereo_vo import paper_sets
 from vo_lib.stereo_vo.config import CRAWLER
-from vo_lib.stereo_vo.demo_pipeline import frames_for, heading_error, rms_of, run, sides, stored_table
 from vo_lib.stereo_vo.ransac import one_point_ransac
 from vo_lib.stereo_vo.synthetic import matches_under_transform
-from vo_lib.viz.plotting import draw_flowchart, new_axes, plot_paths
-from vo_lib.viz.prose import Markdown
 
 SEED = 8
 np.set_printoptions(precision=3, suppress=True)

@@ -49,6 +49,15 @@ import sympy as sp
 from IPython.display import display
 from scipy.stats import chi2
 
+from vo_book.nb09 import differing_entries, finite_difference, judge, seconds_per_call
+from vo_book.plotting import (
+    covariance_ellipse,
+    draw_observer_case,
+    new_axes,
+    plot_line_slam,
+    plot_pose_errors,
+)
+from vo_book.prose import Markdown
 from vo_lib.comparison import bootstrap_interval, chi2_band, over_seeds
 from vo_lib.line_slam.lap import (
     LineSlamScenario,
@@ -75,15 +84,6 @@ from vo_lib.line_slam.range_bearing import observation_jacobians, observe_point,
 from vo_lib.line_slam.segment_observers import DEFAULT_TOLERANCE, OBSERVERS, visible_segment
 from vo_lib.models.bicycle import bicycle_jacobians, bicycle_step
 from vo_lib.sim.laser import LaserScanner
-from vo_lib.viz.nb09 import differing_entries, finite_difference, judge, seconds_per_call
-from vo_lib.viz.plotting import (
-    covariance_ellipse,
-    draw_observer_case,
-    new_axes,
-    plot_line_slam,
-    plot_pose_errors,
-)
-from vo_lib.viz.prose import Markdown
 
 SEED = 2
 rng = np.random.default_rng(SEED)

@@ -49,6 +49,16 @@ import numpy as np
 from IPython.display import display
 from scipy.stats import norm
 
+from vo_book.demo_corridor import (
+    auc,
+    box_statistics,
+    flat_positions,
+    rate_sentence,
+    scores_at,
+    x_figure,
+)
+from vo_book.plotting import new_axes, plot_world
+from vo_book.prose import Markdown
 from vo_lib.comparison import bootstrap_interval, over_seeds
 from vo_lib.geometry import planar_from_camera_poses
 from vo_lib.lidar_tracking.corridor_experiment import (
@@ -63,22 +73,12 @@ from vo_lib.lidar_tracking.corridor_experiment import (
     unoccluded,
     without_umbrella,
 )
-from vo_lib.lidar_tracking.demo_corridor import (
-    auc,
-    box_statistics,
-    flat_positions,
-    rate_sentence,
-    scores_at,
-    x_figure,
-)
 from vo_lib.lidar_tracking.likelihood_field import LikelihoodField
 from vo_lib.lidar_tracking.pnp_odometry import PnpVisualOdometry
 from vo_lib.lidar_tracking.pose_tracking import ScoreStatistics, Thresholds, posterior
 from vo_lib.sim.samples import render_sample
 from vo_lib.sim.world import corridor
 from vo_lib.stereo_vo.pipeline import run_frames
-from vo_lib.viz.plotting import new_axes, plot_world
-from vo_lib.viz.prose import Markdown
 
 SEED = 4
 rng = np.random.default_rng(SEED)

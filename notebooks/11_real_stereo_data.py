@@ -58,6 +58,18 @@ from IPython.display import display
 from scipy.ndimage import maximum_filter, minimum_filter
 from scipy.spatial.transform import Rotation
 
+from vo_book.demo_real import as_4x4
+from vo_book.nb11 import (
+    CELL,
+    disparity_errors,
+    errors_against,
+    find_repo,
+    image_statistics,
+    pixel_gap,
+    show_corners,
+)
+from vo_book.plotting import new_axes
+from vo_book.prose import Markdown
 from vo_lib.camera import StereoCamera
 from vo_lib.data import load_sequence, real_sequence_path
 from vo_lib.formats.kitti_raw import read_oxts
@@ -67,7 +79,6 @@ from vo_lib.geometry import (
 )
 from vo_lib.stereo_vo import rigid_motion
 from vo_lib.stereo_vo.circular_motion import circular_motion_from_increment, motion_matrices
-from vo_lib.stereo_vo.demo_real import as_4x4
 from vo_lib.stereo_vo.features import PATCH_HALF, StereoFrontEnd
 from vo_lib.stereo_vo.pyramid_features import LEVELS, SCALE_FACTOR, PyramidFrontEnd
 from vo_lib.stereo_vo.ransac import one_point_ransac
@@ -77,17 +88,6 @@ from vo_lib.stereo_vo.six_dof import (
 )
 from vo_lib.stereo_vo.temporal import match_features
 from vo_lib.stereo_vo.vehicle import vehicle_of
-from vo_lib.viz.nb11 import (
-    CELL,
-    disparity_errors,
-    errors_against,
-    find_repo,
-    image_statistics,
-    pixel_gap,
-    show_corners,
-)
-from vo_lib.viz.plotting import new_axes
-from vo_lib.viz.prose import Markdown
 
 SEED = 0
 rng = np.random.default_rng(SEED)
@@ -627,7 +627,7 @@ print(f"cells without a corner: {at_20:.1%} at threshold 20, {at_10:.1%} at thre
 # Exercise 1: autograder test
 assert 0 <= at_10 < at_20 <= 1, "a lower threshold fills some cells, but the flat ones stay empty"
 ### BEGIN HIDDEN TESTS
-import vo_lib.viz.nb11 as nb11_module  # noqa: E402
+import vo_book.nb11 as nb11_module  # noqa: E402
 
 _h1_rng = np.random.default_rng(11011)  # a textured part beside a flat one, 8-bit as FAST needs
 _h1_image = cv2.GaussianBlur(_h1_rng.integers(0, 256, (240, 320), np.uint8), (0, 0), _h1_rng.uniform(0.5, 2))

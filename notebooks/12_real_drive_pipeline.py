@@ -55,13 +55,16 @@ from IPython.display import display
 from scipy.spatial.transform import Rotation
 from scipy.stats import chi2
 
+from vo_book.demo_real import chain_models
+from vo_book.nb11 import errors_against
+from vo_book.plotting import new_axes, plot_paths
+from vo_book.prose import Markdown
 from vo_lib.camera import StereoCamera
 from vo_lib.comparison import Verdict, over_seeds
 from vo_lib.data import load_sequence, real_sequence_path
 from vo_lib.geometry import camera_motion, camera_mount, planar_from_camera_poses, relative_planar, wrap_angle
 from vo_lib.stereo_vo import rigid_motion
 from vo_lib.stereo_vo.config import CAR
-from vo_lib.stereo_vo.demo_real import chain_models
 from vo_lib.stereo_vo.features import StereoFrontEnd
 from vo_lib.stereo_vo.kalman import nis
 from vo_lib.stereo_vo.pipeline import StereoOdometry, run_frames, run_sequence
@@ -71,9 +74,6 @@ from vo_lib.stereo_vo.ransac import one_point_ransac
 from vo_lib.stereo_vo.six_dof import turning_axis_transform, turning_axis_view
 from vo_lib.stereo_vo.synthetic import matches_under_transform
 from vo_lib.stereo_vo.vehicle import KITTI_CAMERA_IN_IMU, vehicle_of
-from vo_lib.viz.nb11 import errors_against
-from vo_lib.viz.plotting import new_axes, plot_paths
-from vo_lib.viz.prose import Markdown
 
 SEED = 0
 np.set_printoptions(precision=4, suppress=True)

@@ -278,13 +278,15 @@ def test_handout_holds_notebooks_wheel_requirements_and_no_solution(built):
     assert not any(line.startswith(("-e", "./jupyterlab-settings")) for line in requirements), requirements
     with zipfile.ZipFile(wheels[0]) as wheel:
         names = wheel.namelist()
-    assert names and all(n.startswith(("vo_lib/", "vo_lib-")) for n in names), "the package only"
+    assert names and all(n.startswith(("vo_lib/", "vo_book/", "vo_lib-")) for n in names), "the packages only"
+    assert "vo_book/widgets.py" in names, "the notebooks' helpers travel with the library"
     lines = set().union(*(build.solution_lines(jupytext.read(p)) for p in NOTEBOOKS))
     assert build.handout_leaks(handout, {line for line in lines if len(line) > 12} - library_lines()) == []
 
 
 def library_lines():
-    return {line.strip() for f in (ROOT / "vo_lib").rglob("*.py") for line in f.read_text().splitlines()}
+    packages = [f for name in ("vo_lib", "vo_book") for f in (ROOT / name).rglob("*.py")]
+    return {line.strip() for f in packages for line in f.read_text().splitlines()}
 
 
 def test_handout_leaks_finds_a_solution_line_and_a_marker(tmp_path):
@@ -373,7 +375,7 @@ def test_a_folder_that_is_not_writable_or_a_damaged_marker_is_one_line_exit_2(tm
 
 def test_offer_shows_no_widget_in_the_autograders_kernels(monkeypatch):
     """nbgrader's kernels have no browser: the config marks them headless and offer() does nothing."""
-    from vo_lib.viz import widgets
+    from vo_book import widgets
 
     config = (ROOT / "coursework" / "nbgrader_config.py").read_text()
     assert f'os.environ["{widgets.HEADLESS_VARIABLE}"] = "1"' in config

@@ -21,15 +21,25 @@ import pytest  # noqa: E402
 import skimage.data  # noqa: E402
 import sympy as sp  # noqa: E402
 
+from vo_book import (  # noqa: E402
+    demo_corridor,
+    demo_fusion,
+    demo_one_point,
+    demo_pipeline,
+    demo_real,
+    demo_worlds,
+    nb03,
+    nb04,
+    nb05,
+    nb06,
+    nb09,
+    nb11,
+)
 from vo_lib.camera import StereoCamera  # noqa: E402
 from vo_lib.formats.sequence import read_sequence  # noqa: E402
-from vo_lib.lidar_tracking import demo_corridor  # noqa: E402
-from vo_lib.sim import demo_worlds  # noqa: E402
 from vo_lib.sim.laser import LaserScanner  # noqa: E402
 from vo_lib.sim.samples import generate, render_sample  # noqa: E402
-from vo_lib.stereo_vo import demo_fusion, demo_one_point, demo_pipeline, demo_real  # noqa: E402
 from vo_lib.stereo_vo.ransac import DEFAULT_PARAMS  # noqa: E402
-from vo_lib.viz import nb03, nb04, nb05, nb06, nb09, nb11  # noqa: E402
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 

@@ -1,5 +1,5 @@
 """The stored results against the present code: the paper-length sets notebook 08 reads
-(vo_lib/stereo_vo/paper_sets.json) and notebook 07's seed study (vo_lib/stereo_vo/demo_fusion.json).
+(vo_lib/stereo_vo/paper_sets.json) and notebook 07's seed study (vo_book/demo_fusion.json).
 
 The quick tests check that each stored file covers what its notebook reads, from the present
 sample definitions; the ``samples``-marked tests run them again (minutes) and require the same
@@ -10,8 +10,9 @@ import json
 
 import pytest
 
+from vo_book import demo_fusion
 from vo_lib.sim.samples import SAMPLES, fingerprint
-from vo_lib.stereo_vo import demo_fusion, paper_sets
+from vo_lib.stereo_vo import paper_sets
 
 
 def test_stored_results_cover_every_set_whole_from_the_present_samples():

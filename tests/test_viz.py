@@ -1,4 +1,4 @@
-"""The figures of vo_lib.viz draw what they say: diagrams of [Zhao]'s Fig. 2 and 3, the run figure."""
+"""The figures of vo_book.plotting and vo_lib.viz draw what they say: [Zhao]'s Fig. 2 and 3, a run."""
 
 import math
 
@@ -10,7 +10,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 import pytest
 
-from vo_lib.viz.plotting import draw_circular_motion, draw_flowchart
+from vo_book.plotting import draw_circular_motion, draw_flowchart
 from vo_lib.viz.run_figure import plot_run
 
 

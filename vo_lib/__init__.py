@@ -8,13 +8,14 @@ One folder per idea; imports run downwards only (import-linter contracts in ``py
     line_slam/        [Yan 2020]: line-feature EKF-SLAM, bisection observer      independent, but
     lidar_tracking/   [Yuan]: VO-assisted LIDAR pose tracking                it may use stereo_vo)
     sim/              world, renderer, laser, drives with slip, disturbances, named samples
-    models/ formats/ viz/   crawler tracks and bicycle; KITTI sequences and pose files; figures
+    models/ formats/ viz/   crawler tracks and bicycle; sequences and pose files; figures
     camera.py geometry.py evaluation.py   shared: stereo rig, frames and poses, trajectory errors
     comparison.py     methods compared over seeds (share, bootstrap interval); the χ² band rule
     outputs.py arguments.py   output folders written whole, only over our own; one-line CLI errors
     compiled.py       Numba compilation, and the switch to each kernel's plain twin (VO_LIB_PLAIN)
 
-Each folder's ``__init__`` says which equations live where and where to start reading.
+Each folder's ``__init__`` says which equations live where and where to start reading. The
+notebooks' widgets and demonstrations are in ``vo_book``, beside this package.
 Re-exported here, imported on first use: ``load_sequence`` (``data``), ``StereoCamera``
 (``camera``), ``TrackOdometry`` (``models.track_odometry``), ``theta_from_pixels`` and
 ``rho_from_pixels`` (``stereo_vo.circular_motion``), ``one_point_ransac`` (``stereo_vo.ransac``),

@@ -7,9 +7,9 @@ from collections.abc import Callable
 import matplotlib.pyplot as plt
 import numpy as np
 
+from vo_book.plotting import new_axes
 from vo_lib.camera import StereoCamera
 from vo_lib.stereo_vo.features import StereoFrontEnd
-from vo_lib.viz.plotting import new_axes
 
 
 def front_end_on(

@@ -11,8 +11,8 @@ from collections.abc import Callable
 
 import numpy as np
 
+from vo_book.plotting import new_axes
 from vo_lib.comparison import Comparison
-from vo_lib.viz.plotting import new_axes
 
 
 def print_ladder(theta: Comparison, rho: Comparison) -> None:

@@ -9,13 +9,13 @@ from __future__ import annotations
 import matplotlib.pyplot as plt
 import numpy as np
 
+from vo_book.plotting import new_axes, plot_robot, plot_world
 from vo_lib.camera import StereoCamera
 from vo_lib.geometry import camera_mount, planar_to_matrix
 from vo_lib.sim.laser import LaserScanner
 from vo_lib.sim.render import StereoRenderer
 from vo_lib.sim.samples import CAMERA_HEIGHT
 from vo_lib.sim.world import WORLDS
-from vo_lib.viz.plotting import new_axes, plot_robot, plot_world
 
 #: The notebook's base seed: the laser's range noise draws from it.
 SEED = 4

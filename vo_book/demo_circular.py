@@ -10,11 +10,11 @@ import matplotlib.pyplot as plt
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+from vo_book.plotting import new_axes
 from vo_lib.camera import StereoCamera
 from vo_lib.geometry import camera_motion, camera_mount
 from vo_lib.stereo_vo import circular_motion as cm
 from vo_lib.stereo_vo.synthetic import matches_under_transform
-from vo_lib.viz.plotting import new_axes
 
 #: The notebook's base seed: the widget's Monte Carlo draws from it.
 SEED = 3

@@ -7,7 +7,7 @@ and the interactive ``fuse`` widget. The filters themselves are :mod:`vo_lib.ste
 The seed study of section 4 (five conditions and the sideways study, ten seeds each: about
 23,000 frames, 20 s) is run once and stored beside this module (``demo_fusion.json``, package
 data). :func:`seed_figures` reads it when it holds the seeds asked for and was made from the
-present samples, and runs the study otherwise. ``python -m vo_lib.stereo_vo.demo_fusion``
+present samples, and runs the study otherwise. ``python -m vo_book.demo_fusion``
 stores it again; ``pytest -m samples`` runs it again and must find the same figures.
 """
 
@@ -21,6 +21,8 @@ from pathlib import Path
 import matplotlib.pyplot as plt
 import numpy as np
 
+from vo_book.nb07 import plot_errors
+from vo_book.plotting import new_axes
 from vo_lib.atomic import write_atomic
 from vo_lib.camera import StereoCamera
 from vo_lib.comparison import Comparison
@@ -32,8 +34,6 @@ from vo_lib.stereo_vo import circular_motion as cm
 from vo_lib.stereo_vo.kalman import SIDEWAYS_SIGMA, SlipCalibratedFilter, VoKalmanFilter, nis
 from vo_lib.stereo_vo.ransac import one_point_ransac
 from vo_lib.stereo_vo.synthetic import synthetic_matches
-from vo_lib.viz.nb07 import plot_errors
-from vo_lib.viz.plotting import new_axes
 
 #: The notebook's base seed: a drive's draws come from it unless another is given.
 SEED = 7

@@ -12,10 +12,10 @@ from collections.abc import Callable
 
 import numpy as np
 
+from vo_book.nb06 import plot_trial
 from vo_lib.camera import StereoCamera
 from vo_lib.stereo_vo.ransac import hypothesis_draws, one_point_ransac
 from vo_lib.stereo_vo.synthetic import synthetic_matches
-from vo_lib.viz.nb06 import plot_trial
 
 #: The notebook's base seed; the trial's match sets are drawn from seeds beside it.
 SEED = 6

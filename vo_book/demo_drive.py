@@ -7,9 +7,9 @@ from collections.abc import Callable
 import matplotlib.pyplot as plt
 import numpy as np
 
+from vo_book.plotting import covariance_ellipse, new_axes, plot_paths
 from vo_lib.geometry import wrap_angle
 from vo_lib.models.track_odometry import TrackOdometry, apply_slip
-from vo_lib.viz.plotting import covariance_ellipse, new_axes, plot_paths
 
 
 def drive_on(odo: TrackOdometry, rate: float) -> Callable[..., float]:
