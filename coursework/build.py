@@ -65,6 +65,10 @@ NOTEBOOK_GLOB = "[0-9][0-9]_*.py"
 CONFIG = pathlib.Path(__file__).with_name("nbgrader_config.py")
 STUDENT_DIR, GRADING_DIR, HANDOUT_DIR = "student", "grading", "handout"
 WRITTEN_BY = "python coursework/build.py"
+#: What the handout's wheel is built from, copied apart so that a stale ``build/`` folder of the
+#: checkout cannot slip modules that no longer exist into it.
+WHEEL_SOURCES = ("pyproject.toml", "README.md", "vo_lib", "vo_book")
+CACHES = shutil.ignore_patterns("__pycache__", "*.pyc")
 #: The marker of a build from before vo_lib.outputs marked it: its file checksums, alone.
 LEGACY_MARKER = ".coursework_build.json"
 SUBMISSIONS_DIR = pathlib.Path(__file__).with_name("submissions")
@@ -494,21 +498,17 @@ def write_handout(folder: pathlib.Path, course: pathlib.Path, paths: list[pathli
     (folder / "notebooks").mkdir()
     for path in paths:
         shutil.copy2(course / "release" / path.stem / f"{path.stem}.ipynb", folder / "notebooks")
-    proc = subprocess.run(
-        [
-            sys.executable,
-            "-m",
-            "pip",
-            "wheel",
-            "--quiet",
-            "--no-deps",
-            "--wheel-dir",
-            str(folder),
-            str(ROOT),
-        ],
-        capture_output=True,
-        text=True,
-    )
+    with tempfile.TemporaryDirectory() as source:  # only what the wheel is made of: no stale build/
+        for name in WHEEL_SOURCES:
+            if (ROOT / name).is_dir():
+                shutil.copytree(ROOT / name, pathlib.Path(source) / name, ignore=CACHES)
+            else:
+                shutil.copy2(ROOT / name, source)
+        proc = subprocess.run(
+            [sys.executable, "-m", "pip", "wheel", "-q", "--no-deps", "--wheel-dir", str(folder), source],
+            capture_output=True,
+            text=True,
+        )
     wheels = sorted(folder.glob("vo_lib-*.whl"))
     if proc.returncode != 0 or len(wheels) != 1:
         raise BuildError(
