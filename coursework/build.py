@@ -52,12 +52,9 @@ ROOT = pathlib.Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))  # this checkout's vo_lib, whatever copy is installed
 from coursework.grading import report  # noqa: E402
 from vo_lib.outputs import (  # noqa: E402
-    MARKER,
     OutputError,
     OutputFolder,
     check_target,
-    file_checksums,
-    write_atomic,
 )
 
 NOTEBOOK_DIR = ROOT / "notebooks"
@@ -69,8 +66,6 @@ WRITTEN_BY = "python coursework/build.py"
 #: checkout cannot slip modules that no longer exist into it.
 WHEEL_SOURCES = ("pyproject.toml", "README.md", "vo_lib", "vo_book")
 CACHES = shutil.ignore_patterns("__pycache__", "*.pyc")
-#: The marker of a build from before vo_lib.outputs marked it: its file checksums, alone.
-LEGACY_MARKER = ".coursework_build.json"
 SUBMISSIONS_DIR = pathlib.Path(__file__).with_name("submissions")
 ADVERSARIAL_KINDS = ("constant", "library", "wrong")  # and "unanswered": the release itself
 FLAGGED_KIND = "flagged"  # answers the integrity report must name: optional, any exercise
@@ -187,21 +182,6 @@ def write_course(course: pathlib.Path, paths: list[pathlib.Path]) -> None:
         left = leftover_solution_text(source, student)
         if left:
             raise BuildError(f"{path.name}: the student edition still holds solution text: {left[0]!r}")
-
-
-def adopt_earlier_build(dest: pathlib.Path) -> None:
-    """Give a build from before vo_lib.outputs marked it (``LEGACY_MARKER``) the marker of today's,
-    if every file is as that build wrote it; otherwise leave it as it is (and so refused)."""
-    try:
-        written = json.loads((dest / LEGACY_MARKER).read_text())["files"]
-    except (OSError, ValueError, KeyError, TypeError):
-        return
-    files = {k: v for k, v in file_checksums(dest).items() if k != LEGACY_MARKER}
-    if written == files and not (dest / MARKER).exists():
-        contents = sorted(p.name for p in dest.iterdir() if p.name != LEGACY_MARKER)
-        marker = {"written_by": WRITTEN_BY, "contents": contents, "files": files}
-        write_atomic(dest / MARKER, json.dumps(marker, indent=2, sort_keys=True) + "\n")
-        (dest / LEGACY_MARKER).unlink()
 
 
 def refuse_unless_replaceable(dest: pathlib.Path) -> None:
@@ -580,8 +560,6 @@ def build(
 ) -> None:
     """Write ``out/grading``, ``out/student`` and ``out/handout``; autograde ``check_paths`` first
     (``repeat`` times over)."""
-    for name in (GRADING_DIR, STUDENT_DIR, HANDOUT_DIR):
-        adopt_earlier_build(out / name)
     with contextlib.ExitStack() as stack:  # refused before an hour of work, not after it
         try:
             course, student, handout = (

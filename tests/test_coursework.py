@@ -167,24 +167,6 @@ def test_a_rebuild_replaces_its_own_build_and_refuses_over_collected_submissions
     assert sorted(p.name for p in tmp_path.iterdir()) == ["grading", "handout", "student"]  # no temporary
 
 
-def test_a_build_from_before_the_output_rules_is_adopted_only_if_unchanged(tmp_path):
-    from vo_lib.outputs import file_checksums
-
-    for name, edit in (("same", False), ("edited", True)):
-        folder = tmp_path / name
-        (folder / "03").mkdir(parents=True)
-        (folder / "03" / "03.ipynb").write_text("{}")
-        (folder / build.LEGACY_MARKER).write_text(json.dumps({"files": file_checksums(folder)}))
-        if edit:
-            (folder / "03" / "03.ipynb").write_text('{"cells": []}')
-        build.adopt_earlier_build(folder)
-    build.refuse_unless_replaceable(tmp_path / "same")  # adopted: a rebuild replaces it
-    assert sorted(p.name for p in (tmp_path / "same").iterdir()) == [MARKER, "03"]
-    with pytest.raises(build.UsageError, match="it was not written by this program"):
-        build.refuse_unless_replaceable(tmp_path / "edited")
-    assert (tmp_path / "edited" / build.LEGACY_MARKER).is_file()
-
-
 def test_bad_arguments_exit_2_with_one_line(tmp_path):
     for args in (["99"], ["--out", str(tmp_path / "missing")], ["--bogus"]):
         proc = subprocess.run(
