@@ -60,7 +60,7 @@ from vo_book.nb11 import errors_against
 from vo_book.plotting import new_axes, plot_paths
 from vo_book.prose import Markdown
 from vo_lib.camera import StereoCamera
-from vo_lib.comparison import Verdict, over_seeds
+from vo_lib.comparison import over_seeds
 from vo_lib.data import load_sequence, real_sequence_path
 from vo_lib.geometry import camera_motion, camera_mount, planar_from_camera_poses, relative_planar, wrap_angle
 from vo_lib.stereo_vo import rigid_motion
@@ -114,9 +114,6 @@ heading_error = {
 for name, res in (("pyramid", vo_full), ("single scale", vo_single)):
     m, pct, hd = final_errors(res.poses)
     print(f"6-DoF pipeline, {name:12s} front end: final error {m:.3f} m ({pct:.2f} %), heading {hd:+.3f} deg")
-if REAL:
-    # the single-scale heading drifts: an order of magnitude beyond the pyramid's
-    assert abs(heading_error["single scale"][-1]) > 10 * abs(heading_error["pyramid"][-1])
 
 fig, ax = new_axes(width=7, height=3.4)
 for name, err in heading_error.items():
@@ -145,11 +142,6 @@ for model, res in runs.items():
         f"heading {hd:+.2f} deg, "
         f"{len(res.flagged)} of {len(res.poses)} frames flagged {reasons or ''}"
     )
-if REAL:
-    # two orders of magnitude apart: the planar pipeline coasts through most frames
-    assert final_errors(runs["full"].poses)[0] < 0.01 * final_errors(runs["planar"].poses)[0]
-else:
-    assert final_errors(runs["planar"].poses)[1] <= 1.0  # where its assumptions hold, the paper's model works
 
 # %% [markdown]
 # On the car the planar pipeline flags most frames and coasts, but that is the crawler's matching
@@ -196,8 +188,6 @@ if REAL:
     readings = over_seeds(_readings, RANSAC_SEEDS)
     offset_verdict = readings.verdict("circular through the mount", "circular on the axis")
     heading_verdict = readings.verdict("6-DoF heading", "circular heading")
-    assert offset_verdict is Verdict.BETTER  # the offset costs position
-    assert heading_verdict is Verdict.BETTER  # pitch, slope and bank cost heading
     display(
         Markdown(
             f"Over {len(RANSAC_SEEDS)} RANSAC seeds on this one drive, in final position error, "
@@ -239,10 +229,10 @@ else:
 
 # %% [markdown]
 # Fed good matches, the circular model is not lost on this gently curving road, but it is biased
-# two ways (both asserted on the real drive, over RANSAC's seeds): reading a camera ahead of the
-# axis as if it were on it costs position, and ignoring pitch, slope and bank costs heading, frame
-# after frame; the 6-DoF refinement reduces the heading drift. A sharper turn makes the offset
-# term grow with the yaw rate, and a hillier road the pitch term.
+# two ways (both hold on the real drive over RANSAC's seeds; the tests check them): reading a
+# camera ahead of the axis as if it were on it costs position, and ignoring pitch, slope and bank
+# costs heading, frame after frame; the 6-DoF refinement reduces the heading drift. A sharper turn
+# makes the offset term grow with the yaw rate, and a hillier road the pitch term.
 
 # %% [markdown]
 # ## 2 · Sharp turns and bumps: what the outlier filter must survive
@@ -307,8 +297,6 @@ for yaw_deg, pitch_deg, cam_kept, axis_kept, t_err in recall_rows:
 recall_table = np.array(recall_rows)
 planar_rows = recall_table[:, 1] == 0
 assert np.all(recall_table[planar_rows, 3] >= 0.98)  # on the axis every turn keeps its matches
-if np.hypot(*turn_mount[:2, 3]) > 0.5:  # a camera well off the axis (a car's)
-    assert recall_table[planar_rows][-1, 2] < 0.5  # seen from the camera, a 9° frame loses most
 
 # %% [markdown]
 # ## 3 · How many of 1-point RANSAC's inliers survive the 6-DoF refinement
@@ -373,12 +361,6 @@ for name, poses in paths.items():
         f"{name:13s}: final position error {m:6.3f} m ({pct:5.2f} %): {along[name]:+.3f} m along the track, "
         f"{across:+.3f} m across; heading {hd:+.3f} deg; path {length:.2f} m (truth {travelled:.2f} m)"
     )
-# "vision beats the odometry alone": on the real drive, with vision the drive ends within a fifth
-# of the odometry's error; on the rendered crawler sample (a short, slow run) within half of it
-share = 0.2 if REAL else 0.5
-if REAL:  # the fused distance leans towards the odometry's
-    assert np.sign(along["fused"]) == np.sign(along["odometry only"])
-    assert abs(along["fused"]) > abs(along["VO only"])
 
 model = vehicle.odometry_model
 u = vehicle.odometry[1:]
@@ -458,7 +440,7 @@ display(Markdown(across_story))
 # error measured on this drive: were it far above the odometry's actual error, the filter would
 # take the heading from vision almost alone.
 # The distance it takes from both, so on the real drive the fused distance leans towards the
-# odometry's (asserted): fusion is only as sound as each sensor's error model.
+# odometry's (the tests check it): fusion is only as sound as each sensor's error model.
 #
 # **A check without the truth: NIS.** Notebook 07's normalised innovation squared needs only the
 # filter's own numbers. Per frame, the innovation of the yaw is the vision's yaw increment minus
@@ -539,9 +521,6 @@ print(
     f"ours is {ratio:.1f}x the speed of the baseline, both timed in this cell "
     "(median ms per frame, image loading apart)"
 )
-if REAL:  # without odometry: under 0.5 % of the distance, 0.3 deg of heading, at most two frames flagged
-    assert final_errors(ours.poses)[1] <= 0.5 and abs(final_errors(ours.poses)[2]) <= 0.3
-    assert len(ours.flagged) <= 2  # a count: at most two frames flagged on this drive
 own_planar = final_errors(ours.poses[:n_pnp])[0]
 projected = final_errors(planar_from_camera_poses(ours.camera_poses[:n_pnp], vehicle.mount))[0]
 display(

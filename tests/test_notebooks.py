@@ -11,6 +11,7 @@ when several start at once; and an exception inside any cell fails the test with
 
 from __future__ import annotations
 
+import ast
 import os
 import pathlib
 import re
@@ -43,11 +44,15 @@ def with_checks(nb: nbformat.NotebookNode, path: pathlib.Path) -> int:
     checks = CHECKS_DIR / path.name
     if not checks.exists():
         return 0
-    parts = re.split(r"^# after: (.+)$", checks.read_text(), flags=re.M)[1:]
+    preamble, *parts = re.split(r"^# after: (.+)$", checks.read_text(), flags=re.M)
+    assert all(isinstance(n, ast.Expr) for n in ast.parse(preamble).body), (
+        f"{checks.name}: code before the first '# after:' line would never run"
+    )
     places = []
     for anchor, code in zip(parts[::2], parts[1::2], strict=True):
         hits = [i for i, c in enumerate(nb.cells) if c.cell_type == "code" and anchor.strip() in c.source]
         assert len(hits) == 1, f"{checks.name}: '# after: {anchor}' is in {len(hits)} code cells, not one"
+        compile(code, f"{checks.name}, after {anchor}", "exec")  # a slip fails here, not an hour later
         places.append((hits[0], code.strip()))
     for index, code in reversed(sorted(places, key=lambda p: p[0])):  # the last first: indices hold
         nb.cells.insert(index + 1, nbformat.v4.new_code_cell(code))
@@ -141,11 +146,16 @@ READS_REAL = [p for p in NOTEBOOKS if "VO_LIB_REALDATA" in p.read_text()]
 
 @pytest.mark.notebook
 @pytest.mark.parametrize("path", READS_REAL, ids=[p.stem for p in READS_REAL])
-def test_notebook_executes_without_real_data(path):
-    """The stand-in path (how a reader without KITTI, and the site's build, runs it) passes its asserts."""
+def test_notebook_executes_without_real_data(path, tmp_path):
+    """The stand-in path (how a reader without KITTI, and the site's build, runs it) passes its
+    asserts and its claim checks: the notebook with its checks, run as a script in notebooks/."""
     env = {**os.environ, "VO_LIB_REALDATA": "", "VO_LIB_HEADLESS": "1", "MPLBACKEND": "Agg"}
+    nb = jupytext.read(path)
+    with_checks(nb, path)
+    script = tmp_path / path.name
+    script.write_text(jupytext.writes(nb, fmt="py:percent"), encoding="utf-8")
     done = subprocess.run(
-        [sys.executable, path.name], cwd=NOTEBOOK_DIR, env=env, capture_output=True, text=True, timeout=600
+        [sys.executable, str(script)], cwd=NOTEBOOK_DIR, env=env, capture_output=True, text=True, timeout=600
     )
     assert "real data not found" in done.stdout or "no real frame" in done.stdout, done.stdout[-2000:]
     assert done.returncode == 0, f"{path.name} without real data:\n{done.stderr[-3000:]}"

@@ -20,7 +20,7 @@ def find_repo(start: Path) -> Path:
     for folder in (start, *start.parents):
         if (folder / "vo_lib").is_dir():
             return folder
-    return Path(__file__).resolve().parents[2]
+    return Path(__file__).resolve().parents[1]
 
 
 def errors_against(truth: np.ndarray) -> Callable[[np.ndarray], tuple[float, float, float]]:

@@ -1,4 +1,4 @@
 """This notebook's measured claims, checked in its kernel after the cells named (tests/test_notebooks.py)."""
 
-# after: fig, axes = new_axes(2, width=5.5, height=4.5)
+# after: lean = np.degrees(
 assert lean > 5.0  # the drawing's geometry is exact: a clear lean, not a rounding

@@ -1,6 +1,6 @@
 """This notebook's measured claims, checked in its kernel after the cells named (tests/test_notebooks.py)."""
 
-# after: camera = StereoCamera.bumblebee2()
+# after: err = np.abs(measured - true_disparity)
 assert np.median(err) < 0.25 and np.mean(err < 0.5) > 0.9
 
 # after: scanner = LaserScanner(range_sigma=0.0, max_range=30.0)  # longer than 10 m: no wall is cut off
@@ -9,8 +9,10 @@ assert np.median(err) < 0.25 and np.mean(err < 0.5) > 0.9
 assert abs(scan.ranges[ahead] - depth[row, col]) < 0.5 * pixel_width
 
 # after: odometry = TrackOdometry()
-assert spot_heading_error >= 10.0  # "tens of degrees"
-assert corridor_error >= 1.0  # "metres off"
+# the sizes the printed sentence reports: the spot turn's heading ten degrees or more off, the
+# corridor drive a metre or more off
+assert spot_heading_error >= 10.0
+assert corridor_error >= 1.0
 
 # after: spot, spot_believed = drives["spot_turn"]
 assert 1.03 < over_count < 1.10  # the mean spot-turn slip, 6 %

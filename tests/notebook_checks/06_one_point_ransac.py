@@ -23,12 +23,16 @@ assert var_theta_hat < var_h and abs(theta_hat - theta_true) < abs(theta_h - the
 assert abs(rho_hat - rho_true) < 0.1 * rho_true  # before the refinement of step 5
 
 # after: rungs = list(LADDER)
+from vo_lib.comparison import Verdict
+
 assert ladder_theta.verdict(full, paper) is Verdict.BETTER
 assert ladder_rho.verdict(full, paper) is Verdict.BETTER
 assert ladder_theta.verdict(full, "+ adaptive N_h") is Verdict.BETTER  # the refinement is the step that pays
 assert ladder_rho.verdict(full, "+ adaptive N_h") is Verdict.BETTER
 
 # after: good_share = {"all": [], "pool": []}
+from vo_lib.comparison import Verdict
+
 assert pool_cmp.verdict("the pool", "all matches") is Verdict.BETTER
 
 # after: ADAPTIVE_SEEDS = range(SEED + 3000, SEED + 3020)
@@ -48,6 +52,8 @@ assert np.median(rows[:, 2]) <= 0.015 and rows[:, 2].max() <= 0.05
 assert real_rows[:, 0].min() >= 0.9 and math.degrees(real_rows[:, 2].max()) <= 0.04
 
 # after: methods = {
+from vo_lib.comparison import Verdict
+
 # what holds at every base seed tried: better than the rigid and essential estimators in θ, and
 # never reliably worse than PnP, which minimises reprojection errors as our refinement does
 rigid_and_essential = ("3-point rigid RANSAC", "5-point essential")

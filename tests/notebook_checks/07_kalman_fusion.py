@@ -14,6 +14,8 @@ assert heading_cmp["spot turn, weak vision"].verdict("fused", "VO") is Verdict.W
 assert heading_cmp["spot turn, VO outage"].verdict("fused", "VO") is Verdict.WORSE
 
 # after: "The slip-calibrated filter against the plain one, in heading: "
+from vo_lib.comparison import Verdict
+
 assert heading_cmp["spot turn, weak vision"].verdict("calibrated", "fused") is Verdict.BETTER
 assert heading_cmp["spot turn, VO outage"].verdict("calibrated", "fused") is Verdict.BETTER
 assert position_cmp["indoor, weak vision"].verdict("calibrated", "fused") is Verdict.WORSE

@@ -16,7 +16,7 @@ assert max(largest_share.values()) < 0.5  # "under half": each axis's largest ag
 # "within centimetres": the end within 0.3 % of the distance driven
 assert np.hypot(*(vo[-1, :2] - truth0[-1, :2])) < 0.003 * np.hypot(*(truth0[-1, :2] - truth0[0, :2]))
 
-# after: fig, axes = new_axes(2, width=5.5, height=3.4)
+# after: frame_stats, raw_scores = {}, {}
 normal_frame, occluded_frame = frame_stats.values()
 assert normal_frame.v_max > 2 * occluded_frame.v_max
 # the boxes are flat: quartiles at a few per cent of the occluded frame's maximum at most (one frame each)
