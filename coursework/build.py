@@ -64,7 +64,8 @@ STUDENT_DIR, GRADING_DIR, HANDOUT_DIR = "student", "grading", "handout"
 WRITTEN_BY = "python coursework/build.py"
 #: What the handout's wheel is built from, copied apart so that a stale ``build/`` folder of the
 #: checkout cannot slip modules that no longer exist into it.
-WHEEL_SOURCES = ("pyproject.toml", "README.md", "vo_lib", "vo_book")
+PACKAGES = ("vo_lib", "vo_book")
+WHEEL_SOURCES = ("pyproject.toml", "README.md", *PACKAGES)
 CACHES = shutil.ignore_patterns("__pycache__", "*.pyc")
 SUBMISSIONS_DIR = pathlib.Path(__file__).with_name("submissions")
 ADVERSARIAL_KINDS = ("constant", "library", "wrong")  # and "unanswered": the release itself
@@ -501,12 +502,16 @@ def write_handout(folder: pathlib.Path, course: pathlib.Path, paths: list[pathli
         lines |= solution_lines(
             nbformat.read(course / "source" / path.stem / f"{path.stem}.ipynb", as_version=4)
         )
-    # a line the package itself has (a generic "cases.append(") proves nothing about the wheel
-    packages = [f for name in ("vo_lib", "vo_book") for f in (ROOT / name).rglob("*.py")]
-    library = {line.strip() for f in packages for line in f.read_text().splitlines()}
-    leaks = handout_leaks(folder, {line for line in lines - library if len(line) > 12})
+    # a line the packages themselves have (a generic "cases.append(") proves nothing about the wheel
+    leaks = handout_leaks(folder, {line for line in lines - library_lines() if len(line) > 12})
     if leaks:
         raise BuildError(f"the handout holds solution text: {leaks[0]}")
+
+
+def library_lines() -> set[str]:
+    """Every stripped line of the packages the wheel holds (:data:`PACKAGES`)."""
+    files = [f for name in PACKAGES for f in (ROOT / name).rglob("*.py")]
+    return {line.strip() for f in files for line in f.read_text().splitlines()}
 
 
 def handout_requirements(wheel: str) -> str:
