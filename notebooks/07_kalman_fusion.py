@@ -692,8 +692,8 @@ fuse_widget = offer(
 # The NEES above averages 50 runs in this process. For a paper's confidence intervals,
 # `python -m vo_lib sweep nees --seeds 1000` runs one task per seed on a local Dask cluster (one
 # worker process per core), or on a lab's cluster with `--scheduler tcp://host:8786`; each run
-# draws from its own seed, so the figures are the same serially and on any cluster, and an
-# interrupted sweep re-runs only its missing rows (README, "Sweeps").
+# draws from its own seed, so the figures are the same serially and on any cluster; it prints each
+# figure's mean and its 95 % interval over the seeds (README, "Sweeps").
 #
 # ## Summary
 #
@@ -818,14 +818,14 @@ assert np.shape(average_nees(experiment_errors[:10], reported)) == (10,), "one a
 ### BEGIN HIDDEN TESTS
 import scipy.stats  # noqa: E402
 
-import vo_lib.cli.experiments as experiments_module  # noqa: E402
+import vo_lib.stereo_vo.consistency as consistency_module  # noqa: E402
 import vo_lib.comparison as comparison_module  # noqa: E402
 from coursework import grading  # noqa: E402
 
 _h2_rng = np.random.default_rng(7021)  # errors of a 4-D estimator with a full covariance
 _h2_cov = np.cov(_h2_rng.normal(size=(4, 10)))
 _h2_errors = _h2_rng.multivariate_normal(np.zeros(4), _h2_cov, size=(6, 20))
-with grading.unavailable(*grading.library_functions(experiments_module, comparison_module.chi2_band)):
+with grading.unavailable(*grading.library_functions(consistency_module, comparison_module.chi2_band)):
     _h2_band, _h2_nees = nees_band(37, 4), average_nees(_h2_errors, _h2_cov)
 _h2_expected = np.einsum("eri,ij,erj->er", _h2_errors, np.linalg.inv(_h2_cov), _h2_errors).mean(axis=1)
 assert np.allclose(_h2_nees, _h2_expected), "average_nees: not each experiment's mean of eᵀ C⁻¹ e"

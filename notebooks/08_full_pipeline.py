@@ -582,9 +582,8 @@ display(
 # ### Scaling up
 #
 # Table 1 here is one run per resolution in this process. `python -m vo_lib sweep table1 --seeds 20`
-# repeats it over seeds on a local Dask cluster (or `--scheduler tcp://host:8786`), and
-# `python -m vo_lib evaluate-all ROOT` runs the pipeline on every sequence of a KITTI-style folder
-# and prints the KITTI table (README, "Sweeps").
+# repeats it over seeds on a local Dask cluster (or `--scheduler tcp://host:8786`) and prints each
+# stage's mean time with its 95 % interval (README, "Sweeps").
 #
 # ## Summary
 #

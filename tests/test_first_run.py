@@ -124,7 +124,7 @@ def test_help_gives_one_example_per_command_and_a_line_per_bench(capsys):
     from vo_lib.cli.main import build_parser
 
     parser = build_parser()
-    commands = ["run", "evaluate", "generate", "bench", "sweep", "evaluate-all"]
+    commands = ["run", "evaluate", "convert", "generate", "bench", "sweep"]
     texts = {}
     for argv in ([], *([c] for c in commands)):
         with pytest.raises(SystemExit):

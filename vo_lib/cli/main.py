@@ -7,7 +7,6 @@ evaluate       trajectory errors of an estimate against ground truth (KITTI or T
 generate NAME  render a named sample sequence (KITTI layout, with ground truth and odometry)
 bench NAME     time one part of the library against its baseline (``bench --help`` lists them)
 sweep NAME     a paper's statistic over many seeds, in this process or on Dask (corridor, lap, nees, table1)
-evaluate-all   the stereo pipeline on every sequence under a folder, KITTI-style error table
 
 Every problem with the input or the arguments prints one line on stderr and exits with status 2;
 Ctrl-C (SIGINT) or SIGTERM removes what was half-written, prints one line and exits with 130 or
@@ -91,7 +90,6 @@ def build_parser() -> argparse.ArgumentParser:
             "generate outdoor_free --frames 200",
             "bench ransac",
             "sweep corridor --seeds 200 --workers 2",
-            "evaluate-all ~/kitti/dataset/sequences",
         )
         + "\n\nBad input prints one line and exits with status 2; Ctrl-C exits with 130.",
         **plain,
@@ -220,60 +218,33 @@ def build_parser() -> argparse.ArgumentParser:
         **plain,
     )
     bench.add_argument("name", choices=sorted(BENCHES), metavar="NAME", help="which benchmark (listed above)")
-    from vo_lib.cli.experiments import SWEEPS
+    from vo_lib.cli.sweep import SWEEPS
 
     sweep = sub.add_parser(
         "sweep",
         help="a paper's statistic over many seeds, serially or on Dask",
         description=wrap(
-            "Run one experiment over many seeds, one task per seed, on a local Dask cluster "
-            "(one worker per core) or on a running scheduler, and print mean and spread. Finished rows "
-            "in --out are kept, so an interrupted sweep finishes only the missing ones."
+            "Run one experiment over many seeds, one task per seed, on a local Dask cluster (one "
+            "worker per core) or on a running scheduler; write results.csv and print each figure's "
+            "mean, spread and 95 % interval over the seeds."
         ),
         epilog=example("sweep lap --seeds 50 --workers 2"),
         **plain,
     )
-    sweep.add_argument("name", choices=SWEEPS, help="which experiment")
+    sweep.add_argument("name", choices=sorted(SWEEPS), help="which experiment")
     sweep.add_argument(
         "--seeds", type=count_at_least(1, "seeds", MAX_SEEDS), default=20, help="number of seeds (default 20)"
     )
-    ev_all = sub.add_parser(
-        "evaluate-all",
-        help="the pipeline on every sequence under a folder, KITTI-style errors",
-        description=wrap(
-            "Run the pipeline on every sequence under a folder (KITTI's sequences/NN, or "
-            "folders holding image_0/) and print a KITTI-style table of segment errors."
-        ),
-        epilog=example("evaluate-all ~/kitti/dataset/sequences --frames 500"),
-        **plain,
+    sweep.add_argument(
+        "--workers",
+        type=count_at_least(1, "workers", MAX_WORKERS),
+        help="local worker processes (default: one per core; 1 runs in this process)",
     )
-    ev_all.add_argument(
-        "root",
-        type=non_empty("a folder"),
-        help="folder of sequences (KITTI's sequences/NN, or folders holding image_0/)",
+    sweep.add_argument("--scheduler", help="address of a running Dask scheduler, e.g. tcp://host:8786")
+    sweep.add_argument("--out", type=non_empty("a folder"), help="output folder (default: sweeps/NAME)")
+    sweep.add_argument(
+        "--force", action="store_true", help="replace --out even if this program did not write it"
     )
-    ev_all.add_argument(
-        "--frames", type=count_at_least(1, "frames"), help="only the first N frames of each sequence"
-    )
-    for p, default in ((sweep, "sweeps/NAME"), (ev_all, "sweeps/evaluate-all-ROOTNAME")):
-        p.add_argument(
-            "--workers",
-            type=count_at_least(1, "workers", MAX_WORKERS),
-            help="local worker processes (default: one per core; 1 runs in this process)",
-        )
-        p.add_argument(
-            "--scheduler",
-            help="address of a running Dask scheduler, e.g. tcp://host:8786 (default: "
-            "$DASK_SCHEDULER_ADDRESS, else a local cluster)",
-        )
-        p.add_argument(
-            "--out",
-            type=non_empty("a folder"),
-            help=f"sweep folder (default: {default}); finished rows there are kept and not run again",
-        )
-        p.add_argument(
-            "--force", action="store_true", help="replace --out even if this program did not write it"
-        )
     return parser
 
 
@@ -366,16 +337,7 @@ COMMANDS = {
     ),
     "evaluate": ("vo_lib.cli.run", "evaluate_command", ("gt", "est", "segments", "extrinsic_of")),
     "convert": ("vo_lib.cli.run", "convert_command", ("sequence", "to", "out", "force")),
-    "sweep": (
-        "vo_lib.cli.experiments",
-        "sweep_command",
-        ("name", "seeds", "workers", "scheduler", "out", "force"),
-    ),
-    "evaluate-all": (
-        "vo_lib.cli.evaluate_all",
-        "evaluate_all_command",
-        ("root", "frames", "workers", "scheduler", "out", "force"),
-    ),
+    "sweep": ("vo_lib.cli.sweep", "sweep_command", ("name", "seeds", "workers", "scheduler", "out", "force")),
 }
 
 

@@ -243,6 +243,21 @@ def seed_figures(lbpt: TrackingRun, voapt: TrackingRun) -> dict[str, float]:
     return out
 
 
+@functools.lru_cache(maxsize=2)
+def _shared(calibration_seed: int, every: int):
+    """What every seed of Table III shares: the corridor, its likelihood field, the visual
+    odometer's increments and the calibration (computed once per process)."""
+    world = corridor()
+    vo, _ = corridor_visual_odometry()
+    return world, LikelihoodField.from_world(world), vo, corridor_calibration(vo, calibration_seed, every, world)
+
+
+def corridor_figures(seed: int, every: int = 2, calibration_seed: int = 1000) -> dict[str, float]:
+    """Table III's row of ``seed`` (a task of ``python -m vo_lib sweep corridor``): :func:`seed_figures`."""
+    world, field, vo, calibration = _shared(calibration_seed, every)
+    return seed_figures(*track_seed(seed, vo, calibration, every, world, field))
+
+
 def run_experiment(
     seeds, vo: np.ndarray, calibration_seed: int = 1000, world: World | None = None
 ) -> CorridorExperiment:

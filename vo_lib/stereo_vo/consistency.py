@@ -12,6 +12,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from scipy.stats import chi2
 
 from vo_lib.models.track_odometry import TrackOdometry
 from vo_lib.stereo_vo.kalman import VoKalmanFilter, measurement, nis
@@ -43,3 +44,15 @@ def monte_carlo_run(seed: int, steps: int = 150) -> tuple[np.ndarray, np.ndarray
         f.finish_frame()
         nees[k] = f.nees(x_true)
     return nees, nis_values
+
+
+def nees_figures(seed: int, steps: int = 150) -> dict[str, float]:
+    """One run's figures (a task of ``python -m vo_lib sweep nees``): the mean and final pose NEES
+    and the share of steps inside χ²(3)'s 95 % interval."""
+    nees, _ = monte_carlo_run(seed, steps)
+    low, high = chi2.ppf([0.025, 0.975], 3)
+    return {
+        "nees_mean": float(nees.mean()),
+        "nees_final": float(nees[-1]),
+        "inside_95": float(np.mean((nees > low) & (nees < high))),
+    }
