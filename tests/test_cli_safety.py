@@ -992,22 +992,17 @@ def test_a_checksummed_folder_is_replaced_only_while_every_file_is_as_written(tm
     assert sorted(p.name for p in tmp_path.iterdir()) == ["book"]  # no temporary left
 
 
-def test_a_folder_being_written_is_neither_written_nor_replaced_by_another_command(tmp_path):
-    from vo_lib.outputs import OutputError, OutputFolder, claim_folder, swap_in, writing
+def test_a_folder_being_read_is_not_replaced(tmp_path):
+    from vo_lib.outputs import OutputError, OutputFolder, claim_folder, reading, swap_in
 
     folder = claim_folder(tmp_path / "rows", "vo_lib sweep toy")
-    with writing(folder, option="--out"):
-        with pytest.raises(OutputError, match="--out .*rows: a running command is writing to this folder"):
-            with writing(folder, option="--out"):
-                pass
+    with reading(folder):
         with pytest.raises(OutputError, match="a running command is reading this folder"):
             OutputFolder(folder, "vo_lib sweep toy")
-    with writing(folder):  # released
-        pass
     done = tmp_path / "done"
     done.mkdir()
     (done / "a").write_text("new")
-    swap_in(done, folder)  # a finished folder renamed over the old one
+    swap_in(done, folder)  # released: a finished folder renamed over the old one
     assert [p.name for p in folder.iterdir()] == ["a"] and sorted(p.name for p in tmp_path.iterdir()) == [
         "rows"
     ]

@@ -1,8 +1,8 @@
 """Every compiled kernel sits beside its NumPy reference and gives the same result on random inputs.
 
 Kernels are kept only where the NumPy version makes the whole frame more than 1.5x slower (the
-stereo and temporal matching on real frames, the renderer's composite); the NumPy references are
-what ``VO_LIB_PLAIN=1`` runs (``vo_lib.compiled``). Each property test below draws
+stereo and temporal matching on real frames, the renderer's composite; ``bench kernels`` times the
+two). Each property test below draws
 inputs with hypothesis and holds the kernel to its twin: exactly where the result is discrete
 (inlier masks, counts), and to a stated tolerance where the two sum in different orders.
 """
@@ -11,13 +11,13 @@ from __future__ import annotations
 
 import importlib
 import pkgutil
+import sys
 
 import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import vo_lib
-from vo_lib import compiled
 from vo_lib.sim import composite, composite_plain
 from vo_lib.stereo_vo import matching_core, matching_plain
 
@@ -119,13 +119,6 @@ def test_draw_nearer_equals_its_twin(seed, shade):
     assert np.array_equal(images[0], images[1]) and np.array_equal(depths[0], depths[1])
 
 
-def test_the_switch_runs_every_twin(monkeypatch):
-    monkeypatch.setenv("VO_LIB_PLAIN", "1")
-    for kernel in (matching_core.sad_costs, composite.draw_nearer):
-        assert compiled.choose(kernel) is compiled.twin_of(kernel)
-        assert compiled.choose(kernel, plain=False) is kernel
-
-
 #: Kernel -> the property test holding it to its twin.
 PROPERTY_TESTS = {
     "vo_lib.stereo_vo.matching_core.best_matches_core": test_best_matches_equal_their_twin,
@@ -136,13 +129,16 @@ PROPERTY_TESTS = {
 }
 
 
-def test_every_compiled_function_has_a_twin_and_a_property_test():
+def test_every_compiled_kernel_has_a_property_test():
+    from numba.core.registry import CPUDispatcher
+
     _import_all()
-    ours = {name for name in compiled.COMPILED if name.startswith("vo_lib.")}  # not those tests compile
-    kernels = ours - set(compiled.STEPS)
+    kernels = {
+        f"{name}.{attr}"
+        for name, module in list(sys.modules.items())
+        if name.startswith("vo_lib.")
+        for attr, value in vars(module).items()
+        if isinstance(value, CPUDispatcher) and not attr.startswith("_") and value.__module__ == name
+    }
     assert kernels, "no compiled function found"
-    assert set(compiled.STEPS.values()) <= kernels, "a step names a kernel that does not exist"
-    assert sorted(kernels - set(compiled.TWINS)) == [], "compiled kernels without a plain twin"
-    for name in kernels:
-        assert callable(compiled.twin_of(compiled.COMPILED[name])), name
     assert sorted(kernels - set(PROPERTY_TESTS)) == [], "compiled kernels without a property test"

@@ -12,7 +12,7 @@ One folder per idea; imports run downwards only (import-linter contracts in ``py
     camera.py geometry.py evaluation.py   shared: stereo rig, frames and poses, trajectory errors
     comparison.py     methods compared over seeds (share, bootstrap interval); the χ² band rule
     outputs.py arguments.py   output folders written whole, only over our own; one-line CLI errors
-    compiled.py       Numba compilation, and the switch to each kernel's plain twin (VO_LIB_PLAIN)
+    compiled.py       Numba compilation, cached where it can be written
 
 Each folder's ``__init__`` says which equations live where and where to start reading. The
 notebooks' widgets and demonstrations are in ``vo_book``, beside this package.

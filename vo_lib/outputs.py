@@ -11,7 +11,7 @@
   killed process left is finished or cleared by the next command beside it). A failed or
   interrupted write deletes its temporary folder.
 * **Locks.** A command that reads a folder holds a shared lock on it (:func:`reading`); a
-  replacement or an update in place (:func:`writing`) needs the lock exclusively.
+  replacement needs the lock exclusively.
 * **Permissions follow the umask.**
 """
 
@@ -157,7 +157,7 @@ def claim_folder(target, written_by: str, *, force: bool = False, option: str | 
 
 
 @contextlib.contextmanager
-def _locked(folder: Path, shared: bool, label: str = "", doing: str = "reading"):
+def _locked(folder: Path, shared: bool, label: str = ""):
     """Hold a lock on ``folder`` (nothing where it is missing or cannot be locked); an exclusive
     lock that another command holds is :class:`OutputError`."""
     try:
@@ -172,7 +172,7 @@ def _locked(folder: Path, shared: bool, label: str = "", doing: str = "reading")
     except BlockingIOError:
         os.close(fd)
         raise OutputError(
-            f"{label}: a running command is {doing} this folder; try again when it has finished"
+            f"{label}: a running command is reading this folder; try again when it has finished"
         ) from None
     except OSError:  # no locks on this file system
         pass
@@ -185,11 +185,6 @@ def _locked(folder: Path, shared: bool, label: str = "", doing: str = "reading")
 def reading(folder):
     """A shared lock on ``folder`` while a command reads it: no command replaces it meanwhile."""
     return _locked(Path(folder), shared=True)
-
-
-def writing(folder, option: str | None = None):
-    """An exclusive lock on ``folder`` while a command updates it in place."""
-    return _locked(Path(folder), shared=False, label=_label(folder, option), doing="writing to")
 
 
 class OutputFolder:

@@ -14,7 +14,7 @@ import numpy as np
 from vo_lib.compiled import jit
 
 
-@jit(twin="vo_lib.sim.composite_plain.draw_nearer")
+@jit
 def draw_nearer(image, inv_depth, warped, mask, x0, y0, a, b, e, shade):
     """Write ``warped`` (the quad's texture over its box, top-left at ``(x0, y0)``) into ``image``
     and its plane into ``inv_depth`` where ``mask`` is set and the plane is nearer.

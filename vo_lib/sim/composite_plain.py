@@ -2,7 +2,7 @@
 :func:`vo_lib.sim.composite.draw_nearer`, which the renderer runs because this version makes a
 whole rendered pair about twice as slow (``python -m vo_lib bench kernels``).
 
-``VO_LIB_PLAIN=1`` runs it instead (:mod:`vo_lib.compiled`). Same arithmetic (the plane in
+Same arithmetic (the plane in
 float64, stored as float32), so the same images to the last grey level.
 """
 

@@ -17,7 +17,6 @@ import cv2
 import numpy as np
 
 from vo_lib.camera import StereoCamera
-from vo_lib.compiled import choose
 from vo_lib.geometry import yaw_matrix
 from vo_lib.sim.composite import draw_nearer
 from vo_lib.sim.textures import cached_surface
@@ -251,7 +250,7 @@ def _clip_near(points: np.ndarray, near: float) -> np.ndarray:
 def _draw(image, inv_depth, order, boxes, H, level, quads, pts4, clipped, abe) -> None:
     """Warp each quad of ``order`` into its screen box and draw it where it is nearer (z-buffer)."""
     planes = list(abe)  # float64 scalars: keep
-    composite = choose(draw_nearer)  # or its plain twin (VO_LIB_PLAIN)
+    composite = draw_nearer
     for i in order:
         x0, y0, x1, y1 = boxes[i]
         quad = quads[i]

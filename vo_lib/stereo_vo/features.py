@@ -23,7 +23,6 @@ import cv2
 import numpy as np
 
 from vo_lib.camera import StereoCamera
-from vo_lib.compiled import choose
 
 FAST_THRESHOLD = 40
 GRID = (8, 6)  # cells across, down
@@ -76,12 +75,12 @@ def best_matches(
     nearest is farther by the ``ratio`` test, and (with ``mutual``) if no other ``a`` is nearer
     to that ``b``. Returns ``(index_a, index_b, distance)``, ordered by ``b`` with ``mutual``,
     else by ``a``. Runs compiled (:mod:`.matching_core`); ``matching_plain.best_matches`` is the
-    same rule in NumPy (``VO_LIB_PLAIN=1`` runs it).
+    same rule in NumPy.
     """
     from vo_lib.stereo_vo.matching_core import best_matches_core
 
     ia, ib, dist = np.asarray(ia, np.int64), np.asarray(ib, np.int64), np.asarray(dist)
-    return choose(best_matches_core)(
+    return best_matches_core(
         ia, ib, dist, int(n_a), int(n_b), float(max_distance), float(ratio), bool(mutual)
     )
 
@@ -167,7 +166,7 @@ def subpixel_disparity(
     from vo_lib.stereo_vo.matching_core import sad_costs
 
     # costs[k + search] belongs to disparity d + k (one compiled pass over the patches)
-    costs = choose(sad_costs)(left, right, ui[ok], vi[ok], di[ok], r, search)
+    costs = sad_costs(left, right, ui[ok], vi[ok], di[ok], r, search)
     best = 1 + np.argmin(costs[1:-1], axis=0)  # the lowest inner cost
     pick = np.arange(costs.shape[1])
     offset = equiangular_offset(costs[best - 1, pick], costs[best, pick], costs[best + 1, pick])

@@ -16,10 +16,8 @@ from vo_lib.compiled import jit as _jit
 NONE = np.iinfo(np.int32).max
 
 
-_BEST = f"{__name__}.best_matches_core"
 
-
-@_jit(step_of=_BEST)
+@_jit
 def _nearest_two(ia, ib, dist, n_a, n_b):
     """Per ``a``: the nearest and second-nearest distance and the nearest ``b``; per ``b``: the
     nearest distance of any ``a``. Ties go to the earlier candidate."""
@@ -40,7 +38,7 @@ def _nearest_two(ia, ib, dist, n_a, n_b):
     return best, second, best_b, nearest_for_b
 
 
-@_jit(step_of=_BEST)
+@_jit
 def _collect(rows, cols, best):
     """``(rows, cols, best[rows])`` as int64 arrays."""
     out_d = np.empty(rows.shape[0], np.int64)
@@ -49,7 +47,7 @@ def _collect(rows, cols, best):
     return rows.astype(np.int64), cols.astype(np.int64), out_d
 
 
-@_jit(twin="vo_lib.stereo_vo.matching_plain.best_matches")
+@_jit
 def best_matches_core(ia, ib, dist, n_a, n_b, max_distance, ratio, mutual):
     best, second, best_b, nearest_for_b = _nearest_two(ia, ib, dist, n_a, n_b)
     keep = np.zeros(n_a, np.bool_)
@@ -70,10 +68,10 @@ def best_matches_core(ia, ib, dist, n_a, n_b, max_distance, ratio, mutual):
     return _collect(owner[owned], owned, best)
 
 
-_WINDOWS = f"{__name__}.window_candidates"  # the steps below serve row_candidates too
+# the steps below serve window_candidates and row_candidates
 
 
-@_jit(step_of=_WINDOWS)
+@_jit
 def _row_windows(key, half, sorted_v):
     """Per ``i``, the range ``lo[i]:hi[i]`` of ``sorted_v`` within ``half[i]`` of ``key[i]`` (empty
     where ``key[i]`` is not finite), and the sum of their lengths: no more pairs than that can be
@@ -90,7 +88,7 @@ def _row_windows(key, half, sorted_v):
     return lo, hi, total
 
 
-@_jit(step_of=_WINDOWS)
+@_jit
 def _hamming(des_a, i, des_b, j):
     """Hamming distance of descriptor rows ``des_a[i]`` and ``des_b[j]`` (uint64 words)."""
     h = 0
@@ -99,7 +97,7 @@ def _hamming(des_a, i, des_b, j):
     return h
 
 
-@_jit(step_of=_WINDOWS)
+@_jit
 def _popcount64(x):
     x = x - ((x >> np.uint64(1)) & np.uint64(0x5555555555555555))
     x = (x & np.uint64(0x3333333333333333)) + ((x >> np.uint64(2)) & np.uint64(0x3333333333333333))
@@ -107,7 +105,7 @@ def _popcount64(x):
     return (x * np.uint64(0x0101010101010101)) >> np.uint64(56)
 
 
-@_jit(twin="vo_lib.stereo_vo.matching_plain.window_candidates")
+@_jit
 def window_candidates(predicted, radius, w_curr, order_v, sorted_v, des_prev, des_curr):
     """Pairs ``(i, j)`` whose current feature ``j`` lies within ``radius[i] = (ru, rv, rd)`` of
     previous feature ``i``'s predicted ``(u, v, d)``, with their Hamming distances.
@@ -135,7 +133,7 @@ def window_candidates(predicted, radius, w_curr, order_v, sorted_v, des_prev, de
     return ia[:count], ib[:count], dist[:count]
 
 
-@_jit(twin="vo_lib.stereo_vo.matching_plain.sad_costs")
+@_jit
 def sad_costs(left, right, ui, vi, di, half, search):
     """``costs[k + search, n]``: sum of absolute differences between the left patch of half-width
     ``half`` at ``(ui[n], vi[n])`` and the right patch at disparity ``di[n] + k``."""
@@ -154,7 +152,7 @@ def sad_costs(left, right, ui, vi, di, half, search):
     return costs
 
 
-@_jit(twin="vo_lib.stereo_vo.matching_plain.row_candidates")
+@_jit
 def row_candidates(
     left, left_level, right, right_level, order_v, sorted_v, row_tolerance, d_min, d_max, des_left, des_right
 ):

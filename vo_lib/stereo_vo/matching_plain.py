@@ -2,8 +2,7 @@
 :mod:`vo_lib.stereo_vo.matching_core`, which the front end runs because this version makes a
 real frame more than 1.5x slower (``python -m vo_lib bench kernels``).
 
-Each function has the arguments and results of the kernel it is the reference of;
-``VO_LIB_PLAIN=1`` runs these instead (:mod:`vo_lib.compiled`). They use sorts, binary
+Each function has the arguments and results of the kernel it is the reference of. They use sorts, binary
 searches and ``np.bitwise_count`` where the kernels loop; the results are the same, pair for pair
 and in the same order (the tests hold them to it on random inputs).
 """

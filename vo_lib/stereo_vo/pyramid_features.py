@@ -32,7 +32,6 @@ import cv2
 import numpy as np
 
 from vo_lib.camera import StereoCamera
-from vo_lib.compiled import choose
 from vo_lib.stereo_vo.features import StereoFeatures, best_matches, subpixel_disparity
 
 #: Features per image pixel: 1,500 at KITTI's 1242x375, 950 at 640x480.
@@ -104,7 +103,7 @@ class PyramidFrontEnd:
 
         pl, pr = np.ascontiguousarray(pl, dtype=float), np.ascontiguousarray(pr, dtype=float)
         order = np.argsort(pr[:, 1], kind="stable")
-        return choose(row_candidates)(
+        return row_candidates(
             pl,
             ol,
             pr,

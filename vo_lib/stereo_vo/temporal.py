@@ -18,7 +18,6 @@ import cv2
 import numpy as np
 
 from vo_lib.camera import StereoCamera
-from vo_lib.compiled import choose
 from vo_lib.stereo_vo.circular_motion import motion_transform
 from vo_lib.stereo_vo.features import RATIO, StereoFeatures, best_matches, equiangular_offset, hamming
 
@@ -218,7 +217,7 @@ def match_features(
         dist = hamming(prev.descriptors[ia], curr.descriptors[ib])
     else:
         order = np.argsort(curr.w[:, 1], kind="stable")
-        ia, ib, dist = choose(window_candidates)(
+        ia, ib, dist = window_candidates(
             np.ascontiguousarray(predicted, dtype=float),
             np.ascontiguousarray(np.broadcast_to(np.asarray(radius, float), (n_prev, 3))),
             np.ascontiguousarray(curr.w, dtype=float),
