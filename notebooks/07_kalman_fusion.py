@@ -818,8 +818,8 @@ assert np.shape(average_nees(experiment_errors[:10], reported)) == (10,), "one a
 ### BEGIN HIDDEN TESTS
 import scipy.stats  # noqa: E402
 
-import vo_lib.stereo_vo.consistency as consistency_module  # noqa: E402
 import vo_lib.comparison as comparison_module  # noqa: E402
+import vo_lib.stereo_vo.consistency as consistency_module  # noqa: E402
 from coursework import grading  # noqa: E402
 
 _h2_rng = np.random.default_rng(7021)  # errors of a 4-D estimator with a full covariance

@@ -1106,7 +1106,16 @@ def test_a_path_that_is_not_utf8_is_read(template, tmp_path):
     root = tmp_path / "root"
     shutil.copytree(template / "seq", root / name)
     proc = subprocess.run(
-        [sys.executable, "-m", "vo_lib", "run", "--sequence", str(root / name), "--out", str(tmp_path / "out")],
+        [
+            sys.executable,
+            "-m",
+            "vo_lib",
+            "run",
+            "--sequence",
+            str(root / name),
+            "--out",
+            str(tmp_path / "out"),
+        ],
         cwd=tmp_path,
         env=cli_env(MPLCONFIGDIR=str(tmp_path / "mpl")),
         capture_output=True,

@@ -312,47 +312,39 @@ def segment_pairs(gt, length: float, step: int = KITTI_STEP) -> list[tuple[int, 
     return pairs
 
 
+def segment_errors(G: np.ndarray, E: np.ndarray, length: float, step: int = KITTI_STEP) -> np.ndarray:
+    """The KITTI odometry benchmark's error of every segment of ``length`` metres (Geiger et al.
+    2012; the devkit's ``calcSequenceErrors``): ``E = (P_i^-1 P_j)^-1 (Q_i^-1 Q_j)``, as rows of
+    translation ``|t(E)| / length`` and rotation ``angle(E) / length`` (degrees per metre)."""
+    rows = []
+    for first, last in segment_pairs(G, length, step):
+        err = np.linalg.inv(np.linalg.inv(E[first]) @ E[last]) @ (np.linalg.inv(G[first]) @ G[last])
+        rows.append((np.linalg.norm(err[:3, 3]) / length, np.degrees(rotation_angle(err[:3, :3])) / length))
+    return np.reshape(rows, (-1, 2))
+
+
 def kitti_errors(gt, est, lengths=None, step: int = KITTI_STEP) -> KittiErrors | None:
-    """The KITTI odometry benchmark's errors (Geiger et al. 2012; the devkit's
-    ``calcSequenceErrors``): for each segment, ``E = (P_i^-1 P_j)^-1 (Q_i^-1 Q_j)``; translation
-    ``|t(E)| / length`` and rotation ``angle(E) / length``, averaged over all segments. ``lengths``
-    default to :func:`segment_lengths`. None where no segment fits."""
+    """The KITTI benchmark's translation (%) and rotation (deg/100 m) errors, averaged over every
+    segment of every length (:func:`segment_errors`); ``lengths`` default to
+    :func:`segment_lengths`. None where no segment fits."""
     G, E = _pair(gt, est)
     lengths = tuple(float(x) for x in (segment_lengths(G) if lengths is None else lengths))
-    t_err, r_err = [], []
-    for length in lengths:
-        for first, last in segment_pairs(G, length, step):
-            err = np.linalg.inv(np.linalg.inv(E[first]) @ E[last]) @ (np.linalg.inv(G[first]) @ G[last])
-            t_err.append(np.linalg.norm(err[:3, 3]) / length)
-            r_err.append(np.degrees(rotation_angle(err[:3, :3])) / length)
-    if not t_err:
+    errors = np.concatenate([segment_errors(G, E, length, step) for length in lengths])
+    if not len(errors):
         return None
-    return KittiErrors(
-        100.0 * float(np.mean(t_err)), 100.0 * float(np.mean(r_err)), lengths, step, len(t_err)
-    )
+    t_err, r_err = 100.0 * errors.mean(axis=0)
+    return KittiErrors(float(t_err), float(r_err), lengths, step, len(errors))
 
 
-def kitti_segment_errors(gt, est, lengths=(100, 200, 300, 400, 500, 600, 700, 800), step: int = 10) -> dict:
-    """KITTI odometry errors per segment length: ``{length: (translation %, rotation deg/m, count)}``.
-
-    Short sequences have no long segments; pass lengths that fit (e.g. 1, 2, 5 m).
-    """
+def kitti_segment_errors(gt, est, lengths=KITTI_LENGTHS, step: int = KITTI_STEP) -> dict:
+    """:func:`segment_errors` per length: ``{length: (translation %, rotation deg/m, count)}``;
+    lengths where no segment fits are left out (short sequences: pass e.g. 1, 2, 5 m)."""
     G, E = _pair(gt, est)
-    dist = path_lengths(G)
     out = {}
     for length in lengths:
-        t_err, r_err = [], []
-        for first in range(0, len(G), step):
-            last = int(np.searchsorted(dist, dist[first] + length))
-            if last >= len(G):
-                break
-            rel_gt = np.linalg.inv(G[first]) @ G[last]
-            rel_est = np.linalg.inv(E[first]) @ E[last]
-            err = np.linalg.inv(rel_est) @ rel_gt
-            t_err.append(np.linalg.norm(err[:3, 3]) / length)
-            r_err.append(np.degrees(rotation_angle(err[:3, :3])) / length)
-        if t_err:
-            out[length] = (100.0 * float(np.mean(t_err)), float(np.mean(r_err)), len(t_err))
+        errors = segment_errors(G, E, length, step)
+        if len(errors):
+            out[length] = (100.0 * float(errors[:, 0].mean()), float(errors[:, 1].mean()), len(errors))
     return out
 
 

@@ -142,11 +142,15 @@ def sweep_command(name: str, seeds: int, workers=None, scheduler=None, out=None,
         raise SweepError(f"--workers {workers}: at most {WORKERS_PER_CORE * cores} on {cores} core(s)")
     _, make_tasks, describe = SWEEPS[name]
     tasks = make_tasks(seeds)
-    with OutputFolder(Path(out or f"sweeps/{name}"), f"vo_lib sweep {name}", force=force, option="--out") as folder:
+    with OutputFolder(
+        Path(out or f"sweeps/{name}"), f"vo_lib sweep {name}", force=force, option="--out"
+    ) as folder:
         table = pd.DataFrame(run_tasks(function_of(name), tasks, workers, scheduler))
         table.to_csv(folder.path / "results.csv", index=False, lineterminator="\n")
         path = folder.commit(seeds=seeds)
-    where = "in this process" if workers == 1 and scheduler is None else scheduler or f"{workers} Dask workers"
+    where = (
+        "in this process" if workers == 1 and scheduler is None else scheduler or f"{workers} Dask workers"
+    )
     print(f"{describe}: {len(tasks)} tasks ({where}); wrote {path / 'results.csv'}")
     stats = summary(table, list(tasks[0]))
     with pd.option_context("display.max_rows", None, "display.width", 120):
@@ -156,4 +160,7 @@ def sweep_command(name: str, seeds: int, workers=None, scheduler=None, out=None,
 
         low, high = chi2_band(3, len(table))
         mean = table["nees_mean"].mean()
-        print(f"NEES averaged over {len(table)} runs: {mean:.3f}; consistent runs give {low:.3f}-{high:.3f} (95 %)")
+        print(
+            f"NEES averaged over {len(table)} runs: {mean:.3f}; "
+            f"consistent runs give {low:.3f}-{high:.3f} (95 %)"
+        )

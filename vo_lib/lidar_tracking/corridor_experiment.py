@@ -249,7 +249,12 @@ def _shared(calibration_seed: int, every: int):
     odometer's increments and the calibration (computed once per process)."""
     world = corridor()
     vo, _ = corridor_visual_odometry()
-    return world, LikelihoodField.from_world(world), vo, corridor_calibration(vo, calibration_seed, every, world)
+    return (
+        world,
+        LikelihoodField.from_world(world),
+        vo,
+        corridor_calibration(vo, calibration_seed, every, world),
+    )
 
 
 def corridor_figures(seed: int, every: int = 2, calibration_seed: int = 1000) -> dict[str, float]:

@@ -16,7 +16,6 @@ from vo_lib.compiled import jit as _jit
 NONE = np.iinfo(np.int32).max
 
 
-
 @_jit
 def _nearest_two(ia, ib, dist, n_a, n_b):
     """Per ``a``: the nearest and second-nearest distance and the nearest ``b``; per ``b``: the

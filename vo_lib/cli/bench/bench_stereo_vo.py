@@ -206,7 +206,11 @@ def bench_pipeline(frames: int = 200) -> dict[str, float]:
 KERNEL_CALLS = (
     ("vo_lib.stereo_vo.matching_core", "best_matches_core", "vo_lib.stereo_vo.matching_plain.best_matches"),
     ("vo_lib.stereo_vo.matching_core", "sad_costs", "vo_lib.stereo_vo.matching_plain.sad_costs"),
-    ("vo_lib.stereo_vo.matching_core", "window_candidates", "vo_lib.stereo_vo.matching_plain.window_candidates"),
+    (
+        "vo_lib.stereo_vo.matching_core",
+        "window_candidates",
+        "vo_lib.stereo_vo.matching_plain.window_candidates",
+    ),
     ("vo_lib.stereo_vo.matching_core", "row_candidates", "vo_lib.stereo_vo.matching_plain.row_candidates"),
     ("vo_lib.sim.render", "draw_nearer", "vo_lib.sim.composite_plain.draw_nearer"),
 )
