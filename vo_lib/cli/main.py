@@ -87,6 +87,7 @@ def build_parser() -> argparse.ArgumentParser:
             "run                          # the default sample, indoor_linear",
             "run --sequence corridor --no-odometry",
             "evaluate --gt data/indoor_linear/poses.txt --est runs/indoor_linear/poses.txt",
+            "convert /data/MH_01_easy --out /tmp/mh01",
             "generate outdoor_free --frames 200",
             "bench ransac",
             "sweep corridor --seeds 200 --workers 2",
