@@ -109,7 +109,7 @@ def test_files_round_trip(tmp_path, rng):
     assert times[3] == pytest.approx(0.3)
     (tmp_path / "bad.txt").write_text("1 2 3\n")
     with pytest.raises(
-        ValueError, match=r"bad.txt, line 1: expected 12 numbers \(KITTI\) or 8 \(TUM\), got 3"
+        ValueError, match=r"bad.txt, line 1: expected 12 numbers \(KITTI\), 8 \(TUM: .*\) or 4 .*, got 3"
     ):
         read_trajectory(tmp_path / "bad.txt")
     with pytest.raises(ValueError, match="ground truth has 10 poses but the estimate has 9"):

@@ -4,7 +4,7 @@
                ``times.txt``, optional ``poses.txt`` and our ``odometry.txt``); bad input raises
                one :class:`~vo_lib.formats.sequence.SequenceError` naming the file and line
 ``images``, ``frame_files``, ``sequence_writer``  its parts: image files, text files, writing
-``poses``      KITTI and TUM trajectory files, read and written; bad input raises one
+``poses``      trajectory files read (KITTI, TUM, EuRoC CSV, positions: one reader) and written; one
                :class:`~vo_lib.formats.poses.TrajectoryError` naming the file and line
 ``kitti_raw``  KITTI raw files a sequence may carry (``oxts.txt``, ``raw_calib/``): odometry, mount
 ``euroc``      a stereo rig as it records, in EuRoC's ASL layout (``mav0/cam0``, ``cam1``,

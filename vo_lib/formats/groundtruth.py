@@ -28,19 +28,17 @@ from enum import Enum
 from pathlib import Path
 
 import numpy as np
-from scipy.spatial.transform import Rotation
 
-from vo_lib.formats.poses import MAX_POSITION, TrajectoryError, read_text, read_trajectory
+from vo_lib.formats.poses import TrajectoryError, pose_matrices, read_rows
+from vo_lib.geometry import as_homogeneous
 
 #: Largest time difference (s) at which a ground-truth sample is associated with an image: evo's
 #: default ``max_diff``.
 MAX_TIME_DIFF_S = 0.01
-#: Largest ground-truth file read (bytes): a 200 Hz EuRoC CSV of an hour is about 70 MB.
-MAX_FILE_BYTES = 200_000_000
 NANOSECONDS = 1e-9
 
 
-class GroundTruthError(ValueError):
+class GroundTruthError(TrajectoryError):
     """A ground-truth file that cannot be read or does not cover the images (file and line named)."""
 
 
@@ -67,115 +65,28 @@ class GroundTruth:
     poses: np.ndarray | None = None
 
 
-def _check_size(path: Path) -> None:
-    if not path.is_file():
-        what = "a folder, not a trajectory file" if path.is_dir() else "no such trajectory file"
-        raise GroundTruthError(f"{path}: {what}")
-    size = path.stat().st_size
-    if size > MAX_FILE_BYTES:
-        raise GroundTruthError(
-            f"{path}: {size / 1e6:.0f} MB; a ground-truth file is expected below "
-            f"{MAX_FILE_BYTES / 1e6:.0f} MB"
-        )
-
-
-def _text_rows(path: Path) -> list[tuple[int, str]]:
-    """The numbered rows of the file, comments (``#``, ``%``) and blank lines left out."""
-    try:
-        text = read_text(path)
-    except TrajectoryError as exc:
-        raise GroundTruthError(str(exc)) from None
-    return [
-        (n, line.strip())
-        for n, line in enumerate(text.split("\n"), start=1)
-        if line.strip() and not line.lstrip().startswith(("#", "%"))
-    ]
-
-
-def _parse(path: Path, rows: list[tuple[int, str]], comma: bool) -> np.ndarray:
-    """The rows as one float array; a row of another width, a non-number or a non-finite value
-    raises naming its line."""
-    out, width = [], None
-    for n, line in rows:
-        parts = [p for p in (line.split(",") if comma else line.split())]
-        try:
-            values = [float(p) for p in parts]
-        except ValueError:
-            raise GroundTruthError(f"{path}, line {n}: not a row of numbers") from None
-        if width is None:
-            width = len(values)
-        if len(values) != width:
-            raise GroundTruthError(f"{path}, line {n}: {len(values)} numbers; the first row has {width}")
-        if not np.all(np.isfinite(values)):
-            raise GroundTruthError(f"{path}, line {n}: holds a NaN or infinite value")
-        out.append(values)
-    return np.array(out)
-
-
-def _check_times(path: Path, times: np.ndarray, rows: list[tuple[int, str]]) -> None:
-    bad = np.flatnonzero(np.diff(times) <= 0)
-    if len(bad):
-        k = int(bad[0]) + 1
-        raise GroundTruthError(
-            f"{path}, line {rows[k][0]}: timestamp does not come after the one on line {rows[k - 1][0]}; "
-            "timestamps must increase"
-        )
-
-
-def _check_positions(path: Path, positions: np.ndarray, rows: list[tuple[int, str]]) -> None:
-    far = np.flatnonzero(np.max(np.abs(positions), axis=1) > MAX_POSITION)
-    if len(far):
-        raise GroundTruthError(f"{path}, line {rows[int(far[0])][0]}: a position beyond {MAX_POSITION:g} m")
-
-
-def _quaternion_poses(path: Path, positions, quat_xyzw, rows) -> np.ndarray:
-    norm = np.linalg.norm(quat_xyzw, axis=1)
-    zero = np.flatnonzero(norm < 1e-6)
-    if len(zero):
-        raise GroundTruthError(f"{path}, line {rows[int(zero[0])][0]}: the quaternion is zero")
-    T = np.tile(np.eye(4), (len(positions), 1, 1))
-    T[:, :3, :3] = Rotation.from_quat(quat_xyzw / norm[:, None]).as_matrix()
-    T[:, :3, 3] = positions
-    return T
-
-
 def read_groundtruth(path, min_poses: int = 2) -> GroundTruth:
     """Read a KITTI, TUM, EuRoC CSV or position-only ground truth (see the module's table) of at
-    least ``min_poses`` rows."""
+    least ``min_poses`` rows, checked as :func:`~vo_lib.formats.poses.read_rows` says."""
     path = Path(path)
-    _check_size(path)
-    rows = _text_rows(path)
-    if not rows:
-        raise GroundTruthError(f"{path}: no rows")
-    comma = "," in rows[0][1]
-    if not comma and len(rows[0][1].split()) in (8, 12):
-        try:
-            times, poses = read_trajectory(path, min_poses=min_poses)
-        except TrajectoryError as exc:
-            raise GroundTruthError(str(exc)) from None
-        return GroundTruth(path, TruthKind.POSES, times, poses[:, :3, 3].copy(), poses)
-    if len(rows) < min_poses:
-        raise GroundTruthError(
-            f"{path}: {len(rows)} row{'s' * (len(rows) != 1)} (last on line {rows[-1][0]}); "
-            f"need at least {min_poses}"
-        )
-    a = _parse(path, rows, comma)
+    try:
+        a, lines, comma = read_rows(path, min_poses)
+    except TrajectoryError as exc:
+        raise GroundTruthError(str(exc)) from None
     width = a.shape[1]
-    if width < 4 or (not comma and width != 4):
-        expected = (
-            "t[ns], x, y, z (positions) or t[ns], x, y, z, qw, qx, qy, qz (EuRoC)"
-            if comma
-            else "12 numbers (KITTI), 8 (TUM: t x y z qx qy qz qw) or 4 (t x y z)"
+    if comma and 4 < width < 8:
+        raise GroundTruthError(
+            f"{path}, line {lines[0]}: {width} numbers; expected t[ns], x, y, z (positions) "
+            "or t[ns], x, y, z, qw, qx, qy, qz (EuRoC)"
         )
-        raise GroundTruthError(f"{path}, line {rows[0][0]}: {width} numbers; expected {expected}")
-    times = a[:, 0] * (NANOSECONDS if comma else 1.0)
-    _check_times(path, a[:, 0], rows)
-    positions = a[:, 1:4]
-    _check_positions(path, positions, rows)
-    if width < 8:
+    if width == 12 and not comma:
+        poses = as_homogeneous(a.reshape(-1, 3, 4))
+        return GroundTruth(path, TruthKind.POSES, None, poses[:, :3, 3].copy(), poses)
+    times, positions = a[:, 0] * (NANOSECONDS if comma else 1.0), a[:, 1:4]
+    if width == 4:
         return GroundTruth(path, TruthKind.POSITIONS, times, positions)
-    poses = _quaternion_poses(path, positions, a[:, [5, 6, 7, 4]], rows)  # EuRoC: qw qx qy qz
-    return GroundTruth(path, TruthKind.POSES, times, positions, poses)
+    quat_xyzw = a[:, [5, 6, 7, 4]] if comma else a[:, 4:8]  # EuRoC: qw qx qy qz
+    return GroundTruth(path, TruthKind.POSES, times, positions, pose_matrices(positions, quat_xyzw))
 
 
 def associate(query_times, truth_times, max_diff: float = MAX_TIME_DIFF_S) -> tuple[np.ndarray, np.ndarray]:

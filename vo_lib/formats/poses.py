@@ -45,6 +45,10 @@ class TrajectoryError(ValueError):
 ROTATION_TOLERANCE = 1e-2
 #: Largest coordinate accepted (m): beyond it, squared distances overflow in the alignment.
 MAX_POSITION = 1e9
+#: Largest trajectory file read (bytes): a 200 Hz EuRoC CSV of an hour is about 70 MB.
+MAX_FILE_BYTES = 200_000_000
+#: Widths of a row of a text file: KITTI pose, TUM (``t x y z qx qy qz qw``), position (``t x y z``).
+TEXT_WIDTHS = {12: "12 numbers (KITTI)", 8: "8 (TUM: t x y z qx qy qz qw)", 4: "4 (t x y z)"}
 
 
 def rotation_problem(R: np.ndarray) -> str | None:
@@ -58,78 +62,14 @@ def rotation_problem(R: np.ndarray) -> str | None:
     return None
 
 
-def _row(path: Path, n: int, line: str, first: tuple[int, int] | None) -> list[float]:
-    """The numbers of line ``n``, checked: as many as the ``first`` row's (its count and line),
-    finite, a rotation or a non-zero quaternion, a position within :data:`MAX_POSITION`."""
-    try:
-        values = [float(v) for v in line.split()]
-    except ValueError:
-        raise TrajectoryError(f"{path}, line {n}: not a row of numbers") from None
-    if len(values) not in (8, 12) or (first and len(values) != first[0]):
-        expected = f"{first[0]} numbers like line {first[1]}" if first else "12 numbers (KITTI) or 8 (TUM)"
-        raise TrajectoryError(f"{path}, line {n}: expected {expected}, got {len(values)}")
-    if not np.all(np.isfinite(values)):
-        raise TrajectoryError(f"{path}, line {n}: holds a NaN or infinite value")
-    position = values[3::4] if len(values) == 12 else values[1:4]
-    if len(values) == 12:
-        problem = rotation_problem(np.reshape(values, (3, 4))[:, :3])
-    else:
-        problem = None if np.max(np.abs(values[4:8])) > 1e-6 else "the quaternion qx qy qz qw is zero"
-    if not problem and np.max(np.abs(position)) > MAX_POSITION:
-        problem = f"a position beyond {MAX_POSITION:g} m"
-    if problem:
-        raise TrajectoryError(f"{path}, line {n}: {problem}")
-    return values
-
-
-def _check_increasing(path: Path, times: np.ndarray, lines: list[int]) -> None:
-    """TUM timestamps must increase strictly (as ``times.txt``'s do): a repeated or earlier one
-    pairs two poses with one time."""
-    bad = np.flatnonzero(np.diff(times) <= 0)
-    if len(bad):
-        k = int(bad[0]) + 1
-        what = "repeats" if times[k] == times[k - 1] else "comes before"
-        raise TrajectoryError(
-            f"{path}, line {lines[k]}: timestamp {times[k]:.9g} {what} the one on line {lines[k - 1]}; "
-            "timestamps must increase"
-        )
-
-
-def read_trajectory(path, min_poses: int = 1) -> tuple[np.ndarray | None, np.ndarray]:
-    """Read a KITTI pose file (12 numbers a line) or a TUM file (8); returns ``(times, poses)``.
-
-    Empty lines and lines starting with ``#`` are skipped. Every other line must hold finite
-    numbers, a rotation (KITTI) or a non-zero quaternion (TUM), and a position within
-    :data:`MAX_POSITION`; any problem, and a file of fewer
-    than ``min_poses`` poses, raises one :class:`TrajectoryError` naming the file and line.
-    """
-    path = Path(path)
-    rows, lines = [], []
-    for n, line in enumerate(read_text(path).split("\n"), start=1):
-        if not line.strip() or line.lstrip().startswith("#"):
-            continue
-        rows.append(_row(path, n, line, (len(rows[0]), lines[0]) if rows else None))
-        lines.append(n)
-    if len(rows) < max(min_poses, 1):
-        if not rows:
-            raise TrajectoryError(f"{path}: no poses")
-        raise TrajectoryError(
-            f"{path}: {len(rows)} pose{'s' * (len(rows) != 1)} (last on line {lines[-1]}); "
-            f"need at least {min_poses}"
-        )
-    a = np.array(rows)
-    if a.shape[1] == 12:
-        return None, as_homogeneous(a.reshape(-1, 3, 4))
-    _check_increasing(path, a[:, 0], lines)
-    return a[:, 0], _tum_poses(a)
-
-
 def read_text(path: Path) -> str:
-    """The text of a trajectory file; a folder, a missing file, an unreadable or non-UTF-8 one
+    """The text of a trajectory file; a folder, a missing, too large, unreadable or non-UTF-8 file
     raises :class:`TrajectoryError`."""
     if not path.is_file():
         what = "a folder, not a trajectory file" if path.is_dir() else "no such trajectory file"
         raise TrajectoryError(f"{path}: {what}")
+    if (size := path.stat().st_size) > MAX_FILE_BYTES:
+        raise TrajectoryError(f"{path}: {size / 1e6:.0f} MB; expected below {MAX_FILE_BYTES / 1e6:.0f} MB")
     try:
         return path.read_bytes().decode("utf-8-sig")
     except OSError as exc:
@@ -138,10 +78,93 @@ def read_text(path: Path) -> str:
         raise TrajectoryError(f"{path}: not a text file (byte {exc.start} is not UTF-8)") from None
 
 
-def _tum_poses(a: np.ndarray) -> np.ndarray:
-    """``(N, 4, 4)`` poses of TUM rows ``t x y z qx qy qz qw``."""
-    T = np.tile(np.eye(4), (len(a), 1, 1))
-    q = a[:, 4:8] / np.max(np.abs(a[:, 4:8]), axis=1, keepdims=True)  # no overflow in the norm
+def _row(path: Path, n: int, line: str, comma: bool, first: tuple[int, int] | None) -> list[float]:
+    """The numbers of line ``n``: as many as the ``first`` row's (its count and line), else a
+    width the formats know."""
+    try:
+        values = [float(v) for v in (line.split(",") if comma else line.split())]
+    except ValueError:
+        raise TrajectoryError(f"{path}, line {n}: not a row of numbers") from None
+    if first and len(values) != first[0]:
+        raise TrajectoryError(
+            f"{path}, line {n}: expected {first[0]} numbers like line {first[1]}, got {len(values)}"
+        )
+    if not first and (len(values) < 4 if comma else len(values) not in TEXT_WIDTHS):
+        *some, last = TEXT_WIDTHS.values()
+        expected = "t[ns], x, y, z[, ...]" if comma else f"{', '.join(some)} or {last}"
+        raise TrajectoryError(f"{path}, line {n}: expected {expected}, got {len(values)}")
+    return values
+
+
+def _check(path: Path, a: np.ndarray, lines: list[int], comma: bool) -> None:
+    """Every row finite, a rotation (KITTI) or a non-zero quaternion, a position within
+    :data:`MAX_POSITION`, and timestamps that increase; the first bad row is named."""
+
+    def refuse(bad: np.ndarray, what) -> None:
+        if bad.any():
+            k = int(np.argmax(bad))
+            raise TrajectoryError(f"{path}, line {lines[k]}: {what(k) if callable(what) else what}")
+
+    refuse(~np.isfinite(a).all(axis=1), "holds a NaN or infinite value")
+    if a.shape[1] == 12 and not comma:
+        R = a.reshape(-1, 3, 4)[:, :, :3]
+        with np.errstate(all="ignore"):  # huge entries overflow: not a rotation either
+            off = np.abs(np.swapaxes(R, 1, 2) @ R - np.eye(3)).max(axis=(1, 2))
+            refuse(~(off <= ROTATION_TOLERANCE) | (np.linalg.det(R) < 0), lambda k: rotation_problem(R[k]))
+        positions = a[:, 3::4]
+    else:
+        positions = a[:, 1:4]
+        if a.shape[1] >= 8:
+            refuse(np.abs(a[:, 4:8]).max(axis=1) <= 1e-6, "the quaternion is zero")
+        t = a[:, 0]
+        refuse(
+            np.concatenate([[False], np.diff(t) <= 0]),
+            lambda k: f"timestamp {t[k]:.9g} {'repeats' if t[k] == t[k - 1] else 'comes before'} "
+            f"the one on line {lines[k - 1]}; timestamps must increase",
+        )
+    refuse(np.abs(positions).max(axis=1) > MAX_POSITION, f"a position beyond {MAX_POSITION:g} m")
+
+
+def read_rows(path, min_rows: int = 1) -> tuple[np.ndarray, list[int], bool]:
+    """The rows of a trajectory file, checked (:func:`_check`), their line numbers, and whether the
+    file is a CSV (its first row holds commas). Blank lines and lines starting with ``#`` or ``%``
+    are skipped. Any problem, and fewer than ``min_rows`` rows, raises one
+    :class:`TrajectoryError` naming the file and line."""
+    path = Path(path)
+    rows, lines, comma = [], [], False
+    for n, line in enumerate(read_text(path).split("\n"), start=1):
+        if not (line := line.strip()) or line.startswith(("#", "%")):
+            continue
+        comma = comma or (not rows and "," in line)
+        rows.append(_row(path, n, line, comma, (len(rows[0]), lines[0]) if rows else None))
+        lines.append(n)
+    if len(rows) < max(min_rows, 1):
+        if not rows:
+            raise TrajectoryError(f"{path}: no poses")
+        plural = "s" * (len(rows) != 1)
+        raise TrajectoryError(
+            f"{path}: {len(rows)} pose{plural} (last on line {lines[-1]}); need at least {min_rows}"
+        )
+    a = np.array(rows)
+    _check(path, a, lines, comma)
+    return a, lines, comma
+
+
+def pose_matrices(positions: np.ndarray, quat_xyzw: np.ndarray) -> np.ndarray:
+    """``(N, 4, 4)`` poses of positions and quaternions ``x y z w`` (normalised here)."""
+    T = np.tile(np.eye(4), (len(positions), 1, 1))
+    q = quat_xyzw / np.max(np.abs(quat_xyzw), axis=1, keepdims=True)  # no overflow in the norm
     T[:, :3, :3] = Rotation.from_quat(q).as_matrix()
-    T[:, :3, 3] = a[:, 1:4]
+    T[:, :3, 3] = positions
     return T
+
+
+def read_trajectory(path, min_poses: int = 1) -> tuple[np.ndarray | None, np.ndarray]:
+    """Read a KITTI pose file (12 numbers a line) or a TUM file (8); returns ``(times, poses)``
+    (``times`` None for KITTI). Checked as :func:`read_rows` says."""
+    a, lines, comma = read_rows(path, min_poses)
+    if comma or a.shape[1] == 4:
+        raise TrajectoryError(f"{path}, line {lines[0]}: expected poses, 12 numbers (KITTI) or 8 (TUM)")
+    if a.shape[1] == 12:
+        return None, as_homogeneous(a.reshape(-1, 3, 4))
+    return a[:, 0], pose_matrices(a[:, 1:4], a[:, 4:8])
