@@ -12,8 +12,9 @@ Conventions
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
-from scipy.spatial.transform import Rotation
 
 #: Rotation taking camera-frame coordinates to robot-frame coordinates for a camera that
 #: looks along the robot's x axis: camera z -> robot x, camera x -> robot -y, camera y -> robot -z.
@@ -45,7 +46,9 @@ def wrap_angle(angle):
 
 def yaw_matrix(yaw: float) -> np.ndarray:
     """3x3 rotation about the z axis (up) by ``yaw``, counter-clockwise positive."""
-    return Rotation.from_euler("z", yaw).as_matrix()
+    c, s = math.cos(yaw), math.sin(yaw)
+    # R_z = [[c, -s, 0], [s, c, 0], [0, 0, 1]] (closed form: on the hot path, no Rotation object)
+    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
 
 
 def planar_to_matrix(pose, z: float = 0.0) -> np.ndarray:
