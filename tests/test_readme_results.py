@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from vo_lib.cli.run import error_report, truth_and_odometry
+from vo_lib.cli.report import error_report, truth_and_odometry
 from vo_lib.data import load_sequence
 from vo_lib.sim.samples import SAMPLES
 from vo_lib.stereo_vo.pipeline import run_sequence

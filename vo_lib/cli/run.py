@@ -31,28 +31,12 @@ from vo_lib.cli.report import (
     position_only_errors,
     print_error_table,
     print_timing_table,
-    timing_rows,
     truth_and_odometry,
 )
 from vo_lib.formats.poses import read_trajectory, write_kitti_poses, write_tum
 from vo_lib.geometry import camera_poses_from_planar
 from vo_lib.outputs import OutputFolder, notice, reading
 from vo_lib.sim.samples import SAMPLES
-from vo_lib.stereo_vo.paper_tables import PAPER_TABLE1
-
-__all__ = [
-    "PAPER_TABLE1",
-    "UsageError",
-    "convert_command",
-    "error_report",
-    "evaluate_command",
-    "odometry_name",
-    "print_error_table",
-    "print_timing_table",
-    "run_command",
-    "timing_rows",
-    "truth_and_odometry",
-]
 
 # The pipeline and the metrics (SciPy, Numba) are imported where they are used, so that a run
 # says what it is about to do before they load: its first line comes within a second or two.
