@@ -25,12 +25,14 @@ a correct answer that writes to stderr must score full marks; an answer of kind 
 be named "to be reviewed" by the integrity report of ``coursework/grading.py``, and no other
 answer may be). It prints the integrity report, the score table and the seconds each submission
 took, and fails if one took longer than its notebook's own run time (its solutions, graded in the
-same run) plus 30 s; ``--repeat N`` grades the whole set N times over.
+same run) plus 30 s; ``--repeat N`` grades the whole set N times over. Two notebooks are graded at
+a time, and the kernels share one store of rendered sample frames (see :func:`shared_frame_store`).
 """
 
 from __future__ import annotations
 
 import argparse
+import concurrent.futures
 import contextlib
 import html as html_module
 import json
@@ -43,6 +45,7 @@ import subprocess
 import sys
 import tempfile
 import time
+import unittest.mock
 import zipfile
 
 import jupytext
@@ -339,7 +342,8 @@ def check(course: pathlib.Path, paths: list[pathlib.Path], repeat: int = 1) -> l
     problems: list[str] = []
     times: dict[tuple[str, str], list[float]] = {}
     for repetition in range(repeat):
-        rows, reasons, events, took, found = grade_once(course, paths)
+        with shared_frame_store():
+            rows, reasons, events, took, found = grade_once(course, paths)
         problems += [f"repetition {repetition + 1}: {p}" if repeat > 1 else p for p in found]
         for key, seconds in took.items():
             times.setdefault(key, []).append(seconds)
@@ -363,109 +367,159 @@ def check(course: pathlib.Path, paths: list[pathlib.Path], repeat: int = 1) -> l
 
 
 SLACK_SECONDS = 30.0
+FRAME_STORE, STARTUP = "VO_LIB_FRAME_STORE", ROOT / "tests" / "startup"
+
+
+@contextlib.contextmanager
+def shared_frame_store():
+    """Let every kernel started inside share one store of rendered frames (``vo_lib.sim.frame_store``).
+
+    A sample that a notebook runs is then rendered by its first submission and read back by the
+    others: the same images, bit for bit, without rendering them a dozen times over.
+    ``tests/startup/sitecustomize.py`` (put on the kernels' ``PYTHONPATH``) points the store at the
+    folder named by ``VO_LIB_FRAME_STORE``; a test session that set one already keeps its own.
+    """
+    if os.environ.get(FRAME_STORE):
+        yield
+        return
+    with tempfile.TemporaryDirectory(prefix="vo-coursework-frames-") as folder:
+        path = os.pathsep.join(filter(None, [str(STARTUP), os.environ.get("PYTHONPATH")]))
+        with unittest.mock.patch.dict(os.environ, {FRAME_STORE: folder, "PYTHONPATH": path}):
+            yield
 
 
 def grade_once(
     course: pathlib.Path, paths: list[pathlib.Path]
 ) -> tuple[list[str], list[str], list[str], dict[tuple[str, str], float], list[str]]:
-    """One autograding of every submission of ``paths`` in a copy of ``course``.
+    """One autograding of every submission of ``paths``, :data:`GRADERS` notebooks at a time.
 
-    Returns the score table, why each adversarial answer failed, the integrity report, the seconds of each
-    ``(notebook number, student)`` and the problems found.
+    Each notebook is graded in a copy of ``course`` of its own, so the gradebooks of notebooks
+    graded side by side never meet, and its submissions run one after another, so its solutions'
+    run time (its submissions' limit) is measured beside the same neighbours as they are. The
+    heaviest notebooks start first. Returns the score table, why each adversarial answer failed,
+    the integrity report, the seconds of each ``(notebook number, student)`` and the problems found.
     """
-    from nbgrader.api import Gradebook  # only the check needs nbgrader's database layer
-
-    problems: list[str] = []
     rows = [f"{'exercise':<40} {'points':>6}  " + "  ".join(f"{k:>10}" for k in SCORE_COLUMNS)]
     reasons = ["why each adversarial answer failed:"]
     events = ["to be reviewed (the integrity report):"]
     times: dict[tuple[str, str], float] = {}
+    problems: list[str] = []
+    order = sorted(paths, key=lambda p: -GRADING_WEIGHT.get(p.stem[:2], 1))
+    with concurrent.futures.ThreadPoolExecutor(GRADERS) as pool:  # each thread waits on nbgrader
+        graded = dict(zip(order, pool.map(lambda p: grade_notebook(course, p), order), strict=True))
+    for path in paths:  # reported in notebook order, whatever finished first
+        part = graded[path]
+        rows += part[0]
+        reasons += part[1]
+        events += part[2]
+        times.update(part[3])
+        problems += part[4]
+    return rows, reasons, events, times, problems
+
+
+#: Notebooks graded side by side (two cores: one kernel each), and the notebooks that take longest
+#: to run (seconds of a solutions run, roughly), started first so that none is left alone at the end.
+GRADERS = 2
+GRADING_WEIGHT = {"08": 100, "10": 60, "09": 45, "07": 15, "12": 15, "04": 13, "06": 12}
+
+
+def grade_notebook(
+    course: pathlib.Path, path: pathlib.Path
+) -> tuple[list[str], list[str], list[str], dict[tuple[str, str], float], list[str]]:
+    """Autograde every submission of notebook ``path`` in a copy of ``course`` of its own.
+
+    Returns its rows of the score table, why each adversarial answer failed, its integrity report,
+    the seconds of each ``(notebook number, student)`` and the problems found.
+    """
+    from nbgrader.api import Gradebook  # only the check needs nbgrader's database layer
+
+    problems: list[str] = []
+    rows: list[str] = []
+    reasons: list[str] = []
+    events: list[str] = []
+    times: dict[tuple[str, str], float] = {}
     with tempfile.TemporaryDirectory(prefix="vo-coursework-check-") as tmp:
         work = pathlib.Path(tmp) / "course"
         shutil.copytree(course, work)
-        plan = {}
-        for path in paths:
-            name = f"{path.stem}.ipynb"
-            source = nbformat.read(work / "source" / path.stem / name, as_version=4)
-            release = nbformat.read(work / "release" / path.stem / name, as_version=4)
-            ids = answer_ids(source)
-            subs = [(SOLUTIONS_STUDENT, source, dict.fromkeys(ids, "correct"))]
-            subs.append((UNANSWERED_STUDENT, release, dict.fromkeys(ids, "unanswered")))
-            answers = read_submissions(path, ids)
-            # every exercise answered correctly, writing to stderr: one submission of its own, as a
-            # later exercise's correct answer may build on an earlier one's
-            noisy = {
-                cell.metadata["nbgrader"]["grade_id"]: {"correct_stderr": stderr_answer(cell.source)}
-                for cell in source.cells
-                if cell.metadata.get("nbgrader", {}).get("grade_id") in answers and cell.cell_type == "code"
+        name = f"{path.stem}.ipynb"
+        source = nbformat.read(work / "source" / path.stem / name, as_version=4)
+        release = nbformat.read(work / "release" / path.stem / name, as_version=4)
+        ids = answer_ids(source)
+        subs = [(SOLUTIONS_STUDENT, source, dict.fromkeys(ids, "correct"))]
+        subs.append((UNANSWERED_STUDENT, release, dict.fromkeys(ids, "unanswered")))
+        answers = read_submissions(path, ids)
+        # every exercise answered correctly, writing to stderr: one submission of its own, as a
+        # later exercise's correct answer may build on an earlier one's
+        noisy = {
+            cell.metadata["nbgrader"]["grade_id"]: {"correct_stderr": stderr_answer(cell.source)}
+            for cell in source.cells
+            if cell.metadata.get("nbgrader", {}).get("grade_id") in answers and cell.cell_type == "code"
+        }
+        subs += adversarial_notebooks(release, noisy, "stderr")
+        # a flagged answer may break the answers beside it (NumPy rebound, later cells emptied):
+        # flagged answers share submissions only with each other
+        for student_name, flagged in (("adversarial", False), (FLAGGED_KIND, True)):
+            chosen = {
+                exercise: {k: a for k, a in kinds.items() if k.startswith(FLAGGED_KIND) == flagged}
+                for exercise, kinds in answers.items()
             }
-            subs += adversarial_notebooks(release, noisy, "stderr")
-            # a flagged answer may break the answers beside it (NumPy rebound, later cells emptied):
-            # flagged answers share submissions only with each other
-            for student_name, flagged in (("adversarial", False), (FLAGGED_KIND, True)):
-                chosen = {
-                    exercise: {k: a for k, a in kinds.items() if k.startswith(FLAGGED_KIND) == flagged}
-                    for exercise, kinds in answers.items()
-                }
-                subs += adversarial_notebooks(release, chosen, student_name)
-            plan[path] = (ids, subs)
-            for student, nb, _ in subs:
-                folder = work / "submitted" / student / path.stem
-                folder.mkdir(parents=True)
-                nbformat.write(nb, folder / name)
-                started = time.monotonic()
-                run_nbgrader(work, "autograde", path.stem, f"--student={student}", "--force")
-                times[(path.stem[:2], student)] = time.monotonic() - started
+            subs += adversarial_notebooks(release, chosen, student_name)
+        for student, nb, _ in subs:
+            folder = work / "submitted" / student / path.stem
+            folder.mkdir(parents=True)
+            nbformat.write(nb, folder / name)
+            started = time.monotonic()
+            run_nbgrader(work, "autograde", path.stem, f"--student={student}", "--force")
+            times[(path.stem[:2], student)] = time.monotonic() - started
         with Gradebook(f"sqlite:///{work / 'gradebook.db'}") as gradebook:
-            for path, (ids, subs) in plan.items():
-                table = {exercise: {} for exercise in ids}
-                top = {}
-                for student, _, given in subs:
-                    sub = gradebook.find_submission_notebook(path.stem, path.stem, student)
-                    graded = nbformat.read(
-                        work / "autograded" / student / path.stem / f"{path.stem}.ipynb", as_version=4
-                    )
-                    flagged = report(graded)
-                    events += [f"{path.stem[:2]} {student} {e}: " + "; ".join(w) for e, w in flagged.items()]
-                    for exercise, kind in given.items():
-                        if (exercise in flagged) != kind.startswith(FLAGGED_KIND):
-                            problems.append(
-                                f"{path.name} {exercise}: the {kind} answer ({student}) is "
-                                + ("flagged" if exercise in flagged else "not flagged")
-                            )
-                    for index, cell in enumerate(graded.cells):
-                        errors = [o for o in cell.get("outputs", []) if o.get("output_type") == "error"]
-                        grade_id = cell.metadata.get("nbgrader", {}).get("grade_id", "")
-                        test_of = grade_id.removesuffix("_test") if grade_id.endswith("_test") else ""
-                        if errors and not given.get(test_of, "correct").startswith(("correct", "unanswered")):
-                            why = f"{errors[0]['ename']}: {errors[0]['evalue']}".splitlines()[0][:90]
-                            reasons.append(f"{path.stem[:2]} {test_of} {given[test_of]}: {why}")
-                        if errors and (student == SOLUTIONS_STUDENT or not exercise_cell(cell)):
-                            head = cell.source[:60]
-                            problems.append(f"{path.name} ({student}): cell {index} fails: {head!r}")
-                    for exercise, (got, most) in exercise_scores(sub, ids).items():
-                        top[exercise] = most
-                        if exercise not in given:
-                            continue
-                        kind = given[exercise]
-                        table[exercise].setdefault(kind.split("_")[0], []).append(got)
-                        if most == 0:
-                            problems.append(f"{path.name}: {exercise} has no autograded points")
-                        elif (got != most) if kind.startswith("correct") else (got != 0):
-                            problems.append(
-                                f"{path.name} {exercise}: the {kind} answer ({student}) "
-                                f"scores {got:g} of {most:g}"
-                            )
-                leaked = feedback_leaks(work, path, subs[-1][0])
-                if leaked:
-                    problems.append(f"{path.name}: the feedback shows hidden test text: {leaked[0]!r}")
-                for exercise in ids:
-                    cells = [
-                        "/".join(f"{g:g}" for g in table[exercise][k]) if k in table[exercise] else "-"
-                        for k in SCORE_COLUMNS
-                    ]
-                    label = f"{path.stem[:2]} {exercise}"
-                    rows.append(f"{label:<40} {top[exercise]:>6g}  " + "  ".join(f"{c:>10}" for c in cells))
+            table = {exercise: {} for exercise in ids}
+            top = {}
+            for student, _, given in subs:
+                sub = gradebook.find_submission_notebook(path.stem, path.stem, student)
+                graded = nbformat.read(
+                    work / "autograded" / student / path.stem / f"{path.stem}.ipynb", as_version=4
+                )
+                flagged = report(graded)
+                events += [f"{path.stem[:2]} {student} {e}: " + "; ".join(w) for e, w in flagged.items()]
+                for exercise, kind in given.items():
+                    if (exercise in flagged) != kind.startswith(FLAGGED_KIND):
+                        problems.append(
+                            f"{path.name} {exercise}: the {kind} answer ({student}) is "
+                            + ("flagged" if exercise in flagged else "not flagged")
+                        )
+                for index, cell in enumerate(graded.cells):
+                    errors = [o for o in cell.get("outputs", []) if o.get("output_type") == "error"]
+                    grade_id = cell.metadata.get("nbgrader", {}).get("grade_id", "")
+                    test_of = grade_id.removesuffix("_test") if grade_id.endswith("_test") else ""
+                    if errors and not given.get(test_of, "correct").startswith(("correct", "unanswered")):
+                        why = f"{errors[0]['ename']}: {errors[0]['evalue']}".splitlines()[0][:90]
+                        reasons.append(f"{path.stem[:2]} {test_of} {given[test_of]}: {why}")
+                    if errors and (student == SOLUTIONS_STUDENT or not exercise_cell(cell)):
+                        head = cell.source[:60]
+                        problems.append(f"{path.name} ({student}): cell {index} fails: {head!r}")
+                for exercise, (got, most) in exercise_scores(sub, ids).items():
+                    top[exercise] = most
+                    if exercise not in given:
+                        continue
+                    kind = given[exercise]
+                    table[exercise].setdefault(kind.split("_")[0], []).append(got)
+                    if most == 0:
+                        problems.append(f"{path.name}: {exercise} has no autograded points")
+                    elif (got != most) if kind.startswith("correct") else (got != 0):
+                        problems.append(
+                            f"{path.name} {exercise}: the {kind} answer ({student}) "
+                            f"scores {got:g} of {most:g}"
+                        )
+            leaked = feedback_leaks(work, path, subs[-1][0])
+            if leaked:
+                problems.append(f"{path.name}: the feedback shows hidden test text: {leaked[0]!r}")
+            for exercise in ids:
+                cells = [
+                    "/".join(f"{g:g}" for g in table[exercise][k]) if k in table[exercise] else "-"
+                    for k in SCORE_COLUMNS
+                ]
+                label = f"{path.stem[:2]} {exercise}"
+                rows.append(f"{label:<40} {top[exercise]:>6g}  " + "  ".join(f"{c:>10}" for c in cells))
     return rows, reasons, events, times, problems
 
 
