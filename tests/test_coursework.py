@@ -10,6 +10,7 @@ skips it unless ``VO_NOTEBOOKS_HANDOUT`` names a built handout).
 
 from __future__ import annotations
 
+import concurrent.futures
 import importlib.util
 import json
 import os
@@ -229,8 +230,8 @@ def test_autograder_scores_only_correct_answers_and_a_regrade_gives_identical_ma
     seeds: a second grading of every submission gives the same score table and the same reasons
     for each failure."""
     paths = [p for p in NOTEBOOKS if p.name[:2] in AUTOGRADED_IN_SUITE]
-    first = build.grade_once(built / "grading", paths)  # in a copy of the course
-    second = build.grade_once(built / "grading", paths)
+    with concurrent.futures.ThreadPoolExecutor(2) as pool:  # two gradings side by side, each in a copy
+        first, second = pool.map(lambda _: build.grade_once(built / "grading", paths), range(2))
     assert first[4] == [] and second[4] == [], first[4] + second[4]  # the problems found
     assert first[0] == second[0] and sorted(first[1]) == sorted(second[1])
     # table rows: "NN exK" and the points columns (the lines naming why an answer failed follow
