@@ -341,12 +341,12 @@ def check(course: pathlib.Path, paths: list[pathlib.Path], repeat: int = 1) -> l
     """
     problems: list[str] = []
     times: dict[tuple[str, str], list[float]] = {}
-    for repetition in range(repeat):
-        with shared_frame_store():
+    with shared_frame_store():  # one store for every repetition: the frames are the same
+        for repetition in range(repeat):
             rows, reasons, events, took, found = grade_once(course, paths)
-        problems += [f"repetition {repetition + 1}: {p}" if repeat > 1 else p for p in found]
-        for key, seconds in took.items():
-            times.setdefault(key, []).append(seconds)
+            problems += [f"repetition {repetition + 1}: {p}" if repeat > 1 else p for p in found]
+            for key, seconds in took.items():
+                times.setdefault(key, []).append(seconds)
     timing = [
         f"seconds per submission (autograde, nbgrader's start included), against the notebook's own "
         f"run time (its solutions, graded in the same repetition) + {SLACK_SECONDS:g} s:"
