@@ -298,9 +298,13 @@ walk_widget = offer(
 # A rendered frame and a real one, side by side, with three numbers that say how hard an image is
 # for a corner-based front end (`vo_lib.sim.realism`): the share of 16×16-pixel cells holding no
 # FAST corner, the FAST corners per 640×480 pixels, and the share of flat pixels (Sobel gradient
-# below 20). The rendered frame is from the road drive, made to match real road images on these
-# numbers. The real frame is the middle one of the first KITTI-layout sequence in the folder
-# named by the environment variable `VO_LIB_REALDATA`; without it, only the rendered frame is shown.
+# below 20). The rendered frame is from the road drive, whose renderer was tuned to match these
+# numbers on KITTI raw drive 2011_09_26_0001 (`vo_lib.sim.realism`). The real frame is the middle
+# one of the first KITTI-layout sequence in the folder named by the environment variable
+# `VO_LIB_REALDATA`; without it, only the rendered frame is shown. If that sequence is drive 0001
+# itself, as it is in this project's development data, the comparison below is made on the data
+# the renderer was tuned to: it shows how close the tuning came, not how the renderer generalises.
+# The printed title names the sequence.
 
 # %%
 import os

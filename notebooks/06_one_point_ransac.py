@@ -812,7 +812,8 @@ display(
 )
 
 # %% [markdown]
-# The refinement is what makes the estimator accurate: it fits (θ, ρ) to every inlier's pixels
+# What the refinement buys is said, over the seeds, by the rung sentences above. What it does
+# differently: it fits (θ, ρ) to every inlier's pixels
 # at once, where the rungs below it keep a single hypothesis or a weighted mean of per-match θs
 # that are each as noisy as their position makes them. For the pool, the share of its matches
 # whose own θ is a good hypothesis (within 0.05° of the truth), against that share of all matches,
@@ -847,8 +848,9 @@ display(
 
 # %% [markdown]
 # **Adaptive N_h stops early.** Section 5 asked for more hypotheses at the *effective* inlier
-# ratio than the first batch holds, yet the adaptive rule tries only that first batch here (the
-# line below): it estimates the ratio from the winner's supporters, close to the true ratio, not
+# ratio than the first batch holds, yet the adaptive rule can stop at that first batch (the line
+# below prints how many it drew): it estimates the ratio from the winner's supporters, close to
+# the true ratio, not
 # from the share of *good* hypotheses that section 5 measured. With 80 % random outliers the
 # supporters are few and the rule does draw more: fixed batch against adaptive rule, θ phase
 # only, on 20 sets:
@@ -1279,8 +1281,10 @@ assert np.isclose(_h3_got, _h3_grid[np.argmax(_h3_correct)]), "best_fixed_thresh
 ### END HIDDEN TESTS
 
 # %% [markdown]
-# **Exercise 3, written part (1 point, graded by hand):** why can one threshold, even tuned
-# with the truth, not classify as well as the per-match gates? Answer in the cell below.
+# **Exercise 3, written part (1 point, graded by hand):** set `fixed_errors` beside
+# `gate_errors` (one draw: it illustrates, it does not rank). What property of each match's θ lets
+# a per-match gate separate inliers in a way that no single threshold, even one tuned with the
+# truth, can? Answer in the cell below.
 
 # %% [markdown] nbgrader={"grade": true, "grade_id": "ex3_why", "locked": false, "points": 1, "schema_version": 3, "solution": true}
 # === BEGIN MARK SCHEME ===

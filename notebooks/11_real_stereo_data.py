@@ -531,8 +531,9 @@ ax.legend(fontsize="small")
 plt.show()
 
 # %% [markdown]
-# The refined motion brings more of RANSAC's inliers within a pixel than the circular one does
-# (the part the model could not explain), but even under the best motion a share stays above:
+# On this frame pair the line above prints the share of RANSAC's inliers within a pixel under
+# each motion; what the refined motion gains over the circular one is the part the model could
+# not explain. Even under the refined motion a share stays above:
 # corners of an upper pyramid level sit on a coarser grid, some points are on moving objects, some
 # matches are slightly wrong. RANSAC's gates must be wide enough for the circular model's own error,
 # so they let these through; the 6-DoF fit, with no model error left to allow for, keeps only the
@@ -569,7 +570,8 @@ assert angle_cv < 0.05 and shift_cv < 0.005
 # - Real frames leave a large share of their cells without a corner and most of their pixels flat;
 #   a front end with a fixed threshold or a fixed grid either starves or crowds. The pyramid front
 #   end adapts its threshold and finds corners at three scales, and its sub-pixel disparities on
-#   the Motorcycle pair are at least as accurate as OpenCV's semi-global matcher at the same pixels.
+#   the Motorcycle pair are at least as accurate as OpenCV's semi-global matcher at the same pixels
+#   (in median error, on that one pair).
 # - The tail of the disparity error sits on depth edges, where a patch mixes two depths.
 # - On a car the circular-motion model misses the camera's offset from the turning axis, the
 #   road's slope and bank, and the body's pitch under braking; they move features by pixels in

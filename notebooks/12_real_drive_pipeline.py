@@ -228,11 +228,12 @@ else:
     )
 
 # %% [markdown]
-# Fed good matches, the circular model is not lost on this gently curving road, but it is biased
-# two ways (both hold on the real drive over RANSAC's seeds; the tests check them): reading a
-# camera ahead of the axis as if it were on it costs position, and ignoring pitch, slope and bank
-# costs heading, frame after frame; the 6-DoF refinement reduces the heading drift. A sharper turn
-# makes the offset term grow with the yaw rate, and a hillier road the pitch term.
+# Fed good matches, the circular model is not lost on this gently curving road. Two biases are
+# to be expected of it: reading a camera ahead of the axis as if it were on it errs in position,
+# and ignoring pitch, slope and bank errs in heading, frame after frame. Whether each shows on
+# this drive, and whether the 6-DoF refinement reduces the heading drift, is what the sentences
+# above say over RANSAC's seeds. A sharper turn makes the offset term grow with the yaw rate, and
+# a hillier road the pitch term.
 
 # %% [markdown]
 # ## 2 · Sharp turns and bumps: what the outlier filter must survive
@@ -536,19 +537,22 @@ display(
 # %% [markdown]
 # ## Summary
 #
-# - Single-scale corners drift as the scene grows towards a car, and the heading drifts with them;
-#   the pyramid front end does not.
-# - Fed the same matches, the circular model read through the camera's real mount costs less
-#   position than the model with the camera on the axis, and the 6-DoF refinement less heading
-#   (section 1 prints both over RANSAC's seeds; one drive ranks them for no other).
-# - In sharp turns the gates of eq. 20–21 lose the true matches as the camera sees them, and keep
-#   them as a camera on the turning axis sees them; a bump that pitches the body needs general
-#   hypotheses, and the pipeline draws them when the planar ones explain too few matches.
+# - Single-scale corners can drift as the scene grows towards a car, and the heading with them;
+#   the pyramid front end finds each corner at its own scale, and section 1 sets the two side by
+#   side on this drive.
+# - Fed the same matches, the circular model read through the camera's real mount, the model with
+#   the camera on the axis and the 6-DoF refinement are compared in position and heading over
+#   RANSAC's seeds in section 1 (one drive ranks them for no other).
+# - In sharp turns, section 2 prints how many true matches the gates of eq. 20–21 keep as the
+#   camera sees them and as a camera on the turning axis sees them (one draw per turn rate); a
+#   bump that pitches the body needs general hypotheses, and the pipeline draws them when the
+#   planar ones explain too few matches.
 # - 1-point RANSAC remains the outlier filter (cheap, one match per hypothesis); the 6-DoF fit then
 #   keeps a share of its inliers and measures the motion the model cannot.
-# - On this one drive vision ends far closer than the odometry alone, fused or not; whether the
-#   fusion ends closer than vision alone, section 4 prints, with a second RANSAC seed, and one
-#   drive ranks nothing in general. The odometry is the truth's own GPS/IMU with a noise chosen
+# - On this one drive, section 4 prints how far the odometry alone, vision alone and their fusion
+#   end from the truth; whether the fusion ends closer than vision alone, it prints with a second
+#   RANSAC seed, and one drive ranks nothing in general. The odometry is the truth's own GPS/IMU
+#   with a noise chosen
 #   on this drive; NIS judges that noise model without the truth.
 # - The OpenCV PnP baseline is the yardstick for accuracy and speed (the printed ratio is one
 #   run's, both timed alike).

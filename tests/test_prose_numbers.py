@@ -461,11 +461,7 @@ NOT_RANDOM: dict[str, dict[str, str]] = {
         "Above 3 the filter is over-confident": "defines what NEES values mean, no comparison of draws",
         "Fusion therefore helps where the two errors are independent noise": "the mechanism, stated "
         "ahead of the seed figures of the cell before it",
-        "so averaging removes VO's noise": "the mechanism of the position figures printed over seeds above",
         "where fusion helps, where it hurts, and why": "the learning goals announce section 4's seed figures",
-        "fusion hurts the heading": "the mechanism of the heading figures printed over seeds above",
-        "Learning the slip removes the bias where there is a large one": "explains the "
-        "calibrated filter's seed figures printed just above",
         "it removes\nnoise where both are noisy": "the summary restates section 4's seed figures",
     },
 }
