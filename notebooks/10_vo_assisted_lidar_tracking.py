@@ -727,8 +727,8 @@ display(
 #   printed, eq. 14 swaps two names, eq. 16's "or" cannot flag a jumping laser: each is read and
 #   tested.
 # - Replacing the laser's correction along the principal error direction by the visual
-#   odometer's cuts the along-corridor error severalfold over 20 seeds (section 5 prints the
-#   share of seeds and the interval). Section 5 also counts the seeds whose largest error exceeds
+#   odometer's cuts the along-corridor error severalfold over 20 seeds (section 6 prints the
+#   share of seeds and the interval). Section 6 also counts the seeds whose largest error exceeds
 #   the paper's one run; spurious credible updates in the occluded stretch can push it up.
 
 # %% [markdown]
