@@ -515,11 +515,10 @@ display(
 )
 
 # %% [markdown]
-# The check needs no
-# motion estimate, only the stereo matches, so it can run before RANSAC and keep such frames out
-# of the filter (notebook 08's pipeline flags them later, when their motion contradicts the
-# prediction or too few matches agree). It cannot tell a tilted frame from one with many
-# outliers; a robust fit (RANSAC over the height changes) would.
+# The check needs no motion estimate, only the stereo matches, so it can run before RANSAC and
+# keep such frames out of the filter (notebook 08's pipeline flags them later, when their motion
+# contradicts the prediction or too few matches agree). It cannot tell a tilted frame from one
+# with many outliers; a robust fit (RANSAC over the height changes) would.
 #
 # ## Summary
 #

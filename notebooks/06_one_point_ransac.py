@@ -813,11 +813,10 @@ display(
 
 # %% [markdown]
 # What the refinement buys is said, over the seeds, by the rung sentences above. What it does
-# differently: it fits (θ, ρ) to every inlier's pixels
-# at once, where the rungs below it keep a single hypothesis or a weighted mean of per-match θs
-# that are each as noisy as their position makes them. For the pool, the share of its matches
-# whose own θ is a good hypothesis (within 0.05° of the truth), against that share of all matches,
-# over the same sets:
+# differently: it fits (θ, ρ) to every inlier's pixels at once, where the rungs below it keep a
+# single hypothesis or a weighted mean of per-match θs that are each as noisy as their position
+# makes them. For the pool, the share of its matches whose own θ is a good hypothesis (within
+# 0.05° of the truth), against that share of all matches, over the same sets:
 
 # %%
 good_share = {"all": [], "pool": []}
@@ -850,10 +849,9 @@ display(
 # **Adaptive N_h stops early.** Section 5 asked for more hypotheses at the *effective* inlier
 # ratio than the first batch holds, yet the adaptive rule can stop at that first batch (the line
 # below prints how many it drew): it estimates the ratio from the winner's supporters, close to
-# the true ratio, not
-# from the share of *good* hypotheses that section 5 measured. With 80 % random outliers the
-# supporters are few and the rule does draw more: fixed batch against adaptive rule, θ phase
-# only, on 20 sets:
+# the true ratio, not from the share of *good* hypotheses that section 5 measured. With 80 %
+# random outliers the supporters are few and the rule does draw more: fixed batch against adaptive
+# rule, θ phase only, on 20 sets:
 
 # %%
 print(

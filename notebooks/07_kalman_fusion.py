@@ -66,7 +66,7 @@ from vo_book.plotting import new_axes
 from vo_book.prose import Markdown
 from vo_book.widgets import offer, slider
 from vo_lib.camera import StereoCamera
-from vo_lib.comparison import Verdict, bootstrap_interval, over_seeds
+from vo_lib.comparison import bootstrap_interval, over_seeds
 from vo_lib.geometry import relative_planar, wrap_angle
 from vo_lib.models.track_odometry import TrackOdometry
 from vo_lib.sim.samples import SAMPLES
@@ -475,25 +475,13 @@ display(
     )
 )
 
-# %%
-wins = [c for c in CONDITIONS if heading_cmp[c].verdict("calibrated", "fused") is Verdict.BETTER]
-losses = [c for c in CONDITIONS if position_cmp[c].verdict("calibrated", "fused") is Verdict.WORSE]
-display(
-    Markdown(
-        "Over the seeds, learning the slip gives a reliably better final heading than the plain filter in: "
-        + (", ".join(wins) or "no condition")
-        + "; and a reliably worse final position in: "
-        + (", ".join(losses) or "no condition")
-        + " (each by the interval of its paired differences, as printed above)."
-    )
-)
-
 # %% [markdown]
-# A slip is worth learning where it is large: 6 % in the spot turn. On the indoor floor the slip
-# it would remove is about 1 %, and the VO of one frame cannot resolve so little. The scales drift
-# (a random walk, so that they can follow the slip from one manoeuvre to the next) and each
-# frame's measurement pulls them only a little, so they wander with the VO's noise, with weak
-# vision by about as much as the slip they are meant to find; the corrected odometry carries
+# Where learning the slip pays, over the seeds, is what the sentences above say condition by
+# condition. A slip is worth learning where it is large: 6 % in the spot turn. On the indoor floor
+# the slip it would remove is about 1 %, and the VO of one frame cannot resolve so little. The
+# scales drift (a random walk, so that they can follow the slip from one manoeuvre to the next)
+# and each frame's measurement pulls them only a little, so they wander with the VO's noise, with
+# weak vision by about as much as the slip they are meant to find; the corrected odometry carries
 # that wander into the pose.
 
 # %%

@@ -340,12 +340,12 @@ display(
 
 # %% [markdown]
 # One run each cannot rank our crawler against the paper's, but it can say what differs between
-# them. Our losses of contact are brief and come per metre a track travels, and a track turning
-# on the spot travels little, so the motion leaves the planar model only now and then; by the
-# paper's account its Voyager-II turned with a track that stayed out of full contact. And even in contact
+# them. Our losses of contact are brief and come per metre a track travels, and a track turning on
+# the spot travels little, so the motion leaves the planar model only now and then; by the paper's
+# account its Voyager-II turned with a track that stayed out of full contact. And even in contact
 # our crawler skids, turning about a centre ahead of its track centre, so the camera moves
-# sideways on a small circle; eq. 14 assumes it moves along the chord at θ/2 to its axis and
-# reads part of that sideways motion as rotation, with a sign that follows the turning direction
+# sideways on a small circle; eq. 14 assumes it moves along the chord at θ/2 to its axis and reads
+# part of that sideways motion as rotation, with a sign that follows the turning direction
 # (section 6 measures the effect). The filter cannot remove an error that vision and odometry do
 # not share.
 #

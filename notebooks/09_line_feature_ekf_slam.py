@@ -762,19 +762,16 @@ print(f"paper ratio point / bisection: {np.mean(paper_point) / np.mean(paper_bis
 # times depend on the machine and its load: printed, not asserted
 print(f"slowest lap here {max(lap_seconds.values()):.2f} s, fastest paper run {min(paper_bisection):.2f} s")
 paper_ratio = np.mean(paper_point) / np.mean(paper_bisection)
+paper_range = (min(paper_point) / max(paper_bisection), max(paper_point) / min(paper_bisection))
 lap_ratio = lap_seconds["point_by_point"] / lap_seconds["bisection"]
 observer_share = len(calls) * call_seconds["point_by_point"] / lap_seconds["point_by_point"]
 display(
     Markdown(
         f"The paper's whole-run ratio, point by point over bisection, is {paper_ratio:.1f}×; ours "
-        f"is {lap_ratio:.1f}×: "
-        + (
-            "within the range its runs allow, "
-            if min(paper_point) / max(paper_bisection) <= lap_ratio <= max(paper_point) / min(paper_bisection)
-            else "outside the range its runs allow "
-        )
-        + f"({min(paper_point) / max(paper_bisection):.1f}–{max(paper_point) / min(paper_bisection):.1f}×)"
-        + ". Per call, at our default tolerance, point by "
+        f"is {lap_ratio:.1f}×, "
+        + ("within" if paper_range[0] <= lap_ratio <= paper_range[1] else "outside")
+        + f" the range its runs allow ({paper_range[0]:.1f}–{paper_range[1]:.1f}×). Per call, at our "
+        "default tolerance, point by "
         f"point takes {call_seconds['point_by_point'] / call_seconds['bisection']:.1f}× "
         "bisection's time ("
         + (
@@ -965,13 +962,12 @@ display(
 
 # %% [markdown]
 # How far each form ends from the truth, against dead reckoning, is printed above over the seeds.
-# The feature-point form is
-# handed a point measured with the laser's full point accuracy even where the laser sees only a
-# short piece of the wall, or none of the part where the point lies — information no laser
-# provides; whether that buys a smaller final error is said above, over seeds. The line form
-# gives the filter only what the laser measures (its consistency figures are printed beside the
-# feature point's). The lap above and the figures use the feature point, as the paper's filter does;
-# the line form is the one to carry to real scans.
+# The feature-point form is handed a point measured with the laser's full point accuracy even
+# where the laser sees only a short piece of the wall, or none of the part where the point lies —
+# information no laser provides; whether that buys a smaller final error is said above, over
+# seeds. The line form gives the filter only what the laser measures (its consistency figures are
+# printed beside the feature point's). The lap above and the figures use the feature point, as the
+# paper's filter does; the line form is the one to carry to real scans.
 # %% [markdown]
 # ### Scaling up
 #

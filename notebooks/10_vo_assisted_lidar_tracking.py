@@ -370,8 +370,8 @@ print(
 #   maximum, and the two readings' AUCs are printed above for this one run (tests check, on it,
 #   that the printed $V_{max} - V_{lq} - V_{med}$ stays below one half, ranking occluded frames
 #   above normal ones more often than not, and that $V_{max} - V_{med}$ stays near one): on this
-#   run, our reading of eq. 11 is the one that separates them. (The printed form is not a slip: eq. 12 calls
-#   $V_{max} - V_{lq}$ the "range", and range minus median is what eq. 11 prints.)
+#   run, our reading of eq. 11 is the one that separates them. (The printed form is not a slip:
+#   eq. 12 calls $V_{max} - V_{lq}$ the "range", and range minus median is what eq. 11 prints.)
 # * **The printed eq. 10 is a normalisation, not a posterior, for a score like ours.**
 #   $S_i / \sum_j S_j$ would be the posterior if $S_i$ were proportional to the likelihood (and the
 #   samples drawn from the prior); a grid-map score adds one term per beam, a log-likelihood.
@@ -510,7 +510,7 @@ display(
         "chart's rate; the held-out rate is what they deliver, the price of each flag in a "
         "normal stretch. Our mean "
         f"corrections are the laser's {laser_share:.0%} of the paper's and the "
-        f"visual odometer's {vo_share:.0%} (its figures are one run's): our odometry travels only "
+        f"visual odometer's {vo_share:.0%} (the paper's are one run's): our odometry travels only "
         "0.1 m between laser "
         "updates, so each update has less drift to correct, and our visual odometer is "
         "rendered, not a Kinect."

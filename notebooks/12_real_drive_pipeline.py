@@ -549,11 +549,11 @@ display(
 #   planar ones explain too few matches.
 # - 1-point RANSAC remains the outlier filter (cheap, one match per hypothesis); the 6-DoF fit then
 #   keeps a share of its inliers and measures the motion the model cannot.
-# - On this one drive, section 4 prints how far the odometry alone, vision alone and their fusion
-#   end from the truth; whether the fusion ends closer than vision alone, it prints with a second
-#   RANSAC seed, and one drive ranks nothing in general. The odometry is the truth's own GPS/IMU
-#   with a noise chosen
-#   on this drive; NIS judges that noise model without the truth.
+# - On this one drive, section 4 prints how far the odometry alone, vision alone and their
+#   fusion end from the truth; whether the fusion ends closer than vision alone, it prints with
+#   a second RANSAC seed, and one drive ranks nothing in general. The odometry is the truth's
+#   own GPS/IMU with a noise chosen on this drive; NIS judges that noise model without the
+#   truth.
 # - The OpenCV PnP baseline is the yardstick for accuracy and speed (the printed ratio is one
 #   run's, both timed alike).
 
