@@ -22,11 +22,12 @@ overwritten.
 must pass), the unanswered student edition and the adversarial answers of ``submissions/``
 (every exercise must score zero, while every cell outside the exercises runs without error;
 a correct answer that writes to stderr must score full marks; an answer of kind ``flagged`` must
-be named "to be reviewed" by the integrity report of ``coursework/grading.py``, and no other
-answer may be). It prints the integrity report, the score table and the seconds each submission
-took, and fails if one took longer than its notebook's own run time (its solutions, graded in the
-same run) plus 30 s; ``--repeat N`` grades the whole set N times over. Two notebooks are graded at
-a time, and the kernels share one store of rendered sample frames (see :func:`shared_frame_store`).
+be named "to be reviewed" by the integrity report of ``coursework/grading.py``, which reads it
+without running it, and no other answer may be). It prints the integrity report, the score table
+and the seconds each submission took, and fails if one took longer than its notebook's own run
+time (its solutions, graded in the same run) plus 30 s; ``--repeat N`` grades the whole set N
+times over. Two notebooks are graded at a time, and the kernels share one store of rendered sample
+frames (see :func:`shared_frame_store`).
 """
 
 from __future__ import annotations
@@ -331,8 +332,9 @@ def check(course: pathlib.Path, paths: list[pathlib.Path], repeat: int = 1) -> l
 
     In a copy of ``course``, ``repeat`` times over: the solutions must score every autograded
     point, and so must every ``correct_*`` answer of ``coursework/submissions/``; every other
-    submission (unanswered, constant or truth-copying, library-calling, plausibly wrong, flagged)
-    must score 0 in each exercise, while cells outside the exercises run without error; and no submission may
+    submission (unanswered, constant or truth-copying, library-calling, plausibly wrong) must score
+    0 in each exercise, while cells outside the exercises run without error; every flagged answer
+    must be named by the integrity report (read, not run), and no other; and no submission may
     take longer than the solutions of its notebook (the notebook's own run time, measured in the
     same repetition) plus :data:`SLACK_SECONDS`. Returns the score table (one line per exercise),
     why each adversarial answer failed, the integrity report (answers to be reviewed), and the
@@ -448,6 +450,7 @@ def grade_notebook(
         subs = [(SOLUTIONS_STUDENT, source, dict.fromkeys(ids, "correct"))]
         subs.append((UNANSWERED_STUDENT, release, dict.fromkeys(ids, "unanswered")))
         answers = read_submissions(path, ids)
+        table: dict[str, dict[str, list]] = {exercise: {} for exercise in ids}
         # every exercise answered correctly, writing to stderr: one submission of its own, as a
         # later exercise's correct answer may build on an earlier one's
         noisy = {
@@ -456,14 +459,24 @@ def grade_notebook(
             if cell.metadata.get("nbgrader", {}).get("grade_id") in answers and cell.cell_type == "code"
         }
         subs += adversarial_notebooks(release, noisy, "stderr")
-        # a flagged answer may break the answers beside it (NumPy rebound, later cells emptied):
-        # flagged answers share submissions only with each other
-        for student_name, flagged in (("adversarial", False), (FLAGGED_KIND, True)):
-            chosen = {
-                exercise: {k: a for k, a in kinds.items() if k.startswith(FLAGGED_KIND) == flagged}
-                for exercise, kinds in answers.items()
-            }
-            subs += adversarial_notebooks(release, chosen, student_name)
+        chosen = {
+            exercise: {k: a for k, a in kinds.items() if not k.startswith(FLAGGED_KIND)}
+            for exercise, kinds in answers.items()
+        }
+        subs += adversarial_notebooks(release, chosen)
+        # a flagged answer is read, not run: the integrity report reads the answer's text, and the
+        # report alone fails its test (grading.AfterRun, tests/test_grading.py)
+        flagged_answers = {
+            exercise: {k: a for k, a in kinds.items() if k.startswith(FLAGGED_KIND)}
+            for exercise, kinds in answers.items()
+        }
+        for student, nb, given in adversarial_notebooks(release, flagged_answers, FLAGGED_KIND):
+            flagged = report(nb)
+            events += [f"{path.stem[:2]} {student} {e}: " + "; ".join(w) for e, w in flagged.items()]
+            for exercise, kind in given.items():
+                table[exercise].setdefault(FLAGGED_KIND, []).append("rev")
+                if exercise not in flagged:
+                    problems.append(f"{path.name} {exercise}: the {kind} answer ({student}) is not flagged")
         for student, nb, _ in subs:
             folder = work / "submitted" / student / path.stem
             folder.mkdir(parents=True)
@@ -472,7 +485,6 @@ def grade_notebook(
             run_nbgrader(work, "autograde", path.stem, f"--student={student}", "--force")
             times[(path.stem[:2], student)] = time.monotonic() - started
         with Gradebook(f"sqlite:///{work / 'gradebook.db'}") as gradebook:
-            table = {exercise: {} for exercise in ids}
             top = {}
             for student, _, given in subs:
                 sub = gradebook.find_submission_notebook(path.stem, path.stem, student)
@@ -515,7 +527,9 @@ def grade_notebook(
                 problems.append(f"{path.name}: the feedback shows hidden test text: {leaked[0]!r}")
             for exercise in ids:
                 cells = [
-                    "/".join(f"{g:g}" for g in table[exercise][k]) if k in table[exercise] else "-"
+                    "/".join(g if isinstance(g, str) else f"{g:g}" for g in table[exercise][k])
+                    if k in table[exercise]
+                    else "-"
                     for k in SCORE_COLUMNS
                 ]
                 label = f"{path.stem[:2]} {exercise}"

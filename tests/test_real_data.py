@@ -366,6 +366,7 @@ def readme_3d_rows() -> dict[tuple[str, str], list[float]]:
     return rows
 
 
+@pytest.mark.samples  # minutes: both methods on both sequences, run again (.ci/run runs them)
 @pytest.mark.skipif(not REALDATA.is_dir(), reason=f"no real sequences under {REALDATA}")
 def test_readme_3d_table_holds_for_both_development_sequences():
     from vo_lib.cli.bench.bench_real import bench_real
@@ -432,6 +433,7 @@ DRONE_PRESET_ROWS = {
 }
 
 
+@pytest.mark.samples  # each part of the preset run again on the drone (.ci/run runs them)
 @needs_euroc
 def test_the_drone_preset_table_of_the_docs_holds(monkeypatch):
     """docs/real_data.md's figures of each part of the drone's preset, run again on EuRoC MH01."""
