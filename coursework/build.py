@@ -459,24 +459,29 @@ def grade_notebook(
             if cell.metadata.get("nbgrader", {}).get("grade_id") in answers and cell.cell_type == "code"
         }
         subs += adversarial_notebooks(release, noisy, "stderr")
-        chosen = {
-            exercise: {k: a for k, a in kinds.items() if not k.startswith(FLAGGED_KIND)}
-            for exercise, kinds in answers.items()
+        kinds_of = {  # flagged answers apart: they are read, not run (below)
+            flagged: {
+                exercise: {k: a for k, a in kinds.items() if k.startswith(FLAGGED_KIND) == flagged}
+                for exercise, kinds in answers.items()
+            }
+            for flagged in (False, True)
         }
-        subs += adversarial_notebooks(release, chosen)
-        # a flagged answer is read, not run: the integrity report reads the answer's text, and the
-        # report alone fails its test (grading.AfterRun, tests/test_grading.py)
-        flagged_answers = {
-            exercise: {k: a for k, a in kinds.items() if k.startswith(FLAGGED_KIND)}
-            for exercise, kinds in answers.items()
-        }
-        for student, nb, given in adversarial_notebooks(release, flagged_answers, FLAGGED_KIND):
+        subs += adversarial_notebooks(release, kinds_of[False])
+        reviewed = adversarial_notebooks(release, kinds_of[True], FLAGGED_KIND)
+        # the integrity report reads each answer's text; for a flagged answer the report alone
+        # fails its test (grading.AfterRun, tests/test_grading.py), so running it proves nothing more
+        for student, nb, given in subs + reviewed:
             flagged = report(nb)
             events += [f"{path.stem[:2]} {student} {e}: " + "; ".join(w) for e, w in flagged.items()]
             for exercise, kind in given.items():
+                if (exercise in flagged) != kind.startswith(FLAGGED_KIND):
+                    problems.append(
+                        f"{path.name} {exercise}: the {kind} answer ({student}) is "
+                        + ("flagged" if exercise in flagged else "not flagged")
+                    )
+        for _, _, given in reviewed:
+            for exercise in given:
                 table[exercise].setdefault(FLAGGED_KIND, []).append("rev")
-                if exercise not in flagged:
-                    problems.append(f"{path.name} {exercise}: the {kind} answer ({student}) is not flagged")
         for student, nb, _ in subs:
             folder = work / "submitted" / student / path.stem
             folder.mkdir(parents=True)
@@ -491,14 +496,6 @@ def grade_notebook(
                 graded = nbformat.read(
                     work / "autograded" / student / path.stem / f"{path.stem}.ipynb", as_version=4
                 )
-                flagged = report(graded)
-                events += [f"{path.stem[:2]} {student} {e}: " + "; ".join(w) for e, w in flagged.items()]
-                for exercise, kind in given.items():
-                    if (exercise in flagged) != kind.startswith(FLAGGED_KIND):
-                        problems.append(
-                            f"{path.name} {exercise}: the {kind} answer ({student}) is "
-                            + ("flagged" if exercise in flagged else "not flagged")
-                        )
                 for index, cell in enumerate(graded.cells):
                     errors = [o for o in cell.get("outputs", []) if o.get("output_type") == "error"]
                     grade_id = cell.metadata.get("nbgrader", {}).get("grade_id", "")
