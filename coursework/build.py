@@ -74,7 +74,8 @@ CACHES = shutil.ignore_patterns("__pycache__", "*.pyc")
 SUBMISSIONS_DIR = pathlib.Path(__file__).with_name("submissions")
 ADVERSARIAL_KINDS = ("constant", "library", "wrong")  # and "unanswered": the release itself
 FLAGGED_KIND = "flagged"  # answers the integrity report must name: optional, any exercise
-TOOLS = pathlib.Path(__file__).with_name("grading.py")
+#: The course's tools beside nbgrader_config.py: the hidden tests' guard, the autograder's steps.
+TOOLS = tuple(pathlib.Path(__file__).with_name(name) for name in ("grading.py", "autograde_steps.py"))
 # what the autograder's kernels may not read, beside the course folder's own solutions
 SOLUTION_FILES = (NOTEBOOK_DIR, ROOT / "coursework" / "submissions", ROOT / "coursework" / "answer_key.md")
 # a line that opens a solution, hidden tests or a mark scheme (not a mention of one in prose)
@@ -175,7 +176,8 @@ def write_course(course: pathlib.Path, paths: list[pathlib.Path]) -> None:
     """Fill ``course`` (an empty folder) with nbgrader's course layout and generate the release."""
     shutil.copy2(CONFIG, course / "nbgrader_config.py")
     (course / "coursework").mkdir()
-    shutil.copy2(TOOLS, course / "coursework" / "grading.py")
+    for tool in TOOLS:
+        shutil.copy2(tool, course / "coursework" / tool.name)
     for path in paths:
         folder = course / "source" / path.stem
         folder.mkdir(parents=True)
@@ -469,7 +471,7 @@ def grade_notebook(
         subs += adversarial_notebooks(release, kinds_of[False])
         reviewed = adversarial_notebooks(release, kinds_of[True], FLAGGED_KIND)
         # the integrity report reads each answer's text; for a flagged answer the report alone
-        # fails its test (grading.AfterRun, tests/test_grading.py), so running it proves nothing more
+        # fails its test (autograde_steps.AfterRun, tests/test_grading.py), so running it proves nothing more
         for student, nb, given in subs + reviewed:
             flagged = report(nb)
             events += [f"{path.stem[:2]} {student} {e}: " + "; ".join(w) for e, w in flagged.items()]

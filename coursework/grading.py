@@ -1,5 +1,8 @@
 """The course's grading tools (none ships to students): the hidden tests' guard, the integrity report
-(``python coursework/grading.py FOLDER``) and the autograder's steps. See docs/course.md."""
+(``python coursework/grading.py FOLDER``) and the kernels' isolation. See docs/course.md. Every graded
+kernel imports it: the standard library only (the steps that need nbgrader: ``autograde_steps.py``)."""
+
+from __future__ import annotations
 
 import ast
 import contextlib
@@ -11,13 +14,6 @@ import subprocess
 import sys
 import types
 from collections.abc import Callable, Iterator
-
-import nbformat
-
-try:
-    from nbgrader.preprocessors import NbGraderPreprocessor
-except ModuleNotFoundError:  # a reader of the notebooks needs the hidden tests' tools only
-    NbGraderPreprocessor = object
 
 
 class GradingError(AssertionError):
@@ -139,7 +135,7 @@ def _rebinds(target: ast.AST) -> bool:
     return _named(target, *PROTECTED)
 
 
-def report(nb: nbformat.NotebookNode) -> dict[str, list[str]]:
+def report(nb) -> dict[str, list[str]]:
     """``{grade_id: ["line N: reason: code", ...]}`` for every answer cell of ``nb`` to be reviewed."""
     flagged = {}
     for cell in nb.cells:
@@ -148,37 +144,6 @@ def report(nb: nbformat.NotebookNode) -> dict[str, list[str]]:
             code = cell.source.splitlines()
             flagged[meta["grade_id"]] = [f"line {n}: {r.text}: {code[n - 1].strip()[:70]}" for n, r in found]
     return flagged
-
-
-class AfterRun(NbGraderPreprocessor):
-    """Once the notebook ran: stderr (a warning, a progress bar) is dropped and never costs a mark,
-    and the test of a flagged answer fails with the report's lines (0 until the teacher reads it)."""
-
-    def preprocess(self, nb, resources):
-        self.flagged = report(nb)
-        return super().preprocess(nb, resources)
-
-    def preprocess_cell(self, cell, resources, index):
-        if cell.cell_type == "code" and cell.metadata.get("nbgrader"):
-            cell.outputs = [o for o in cell.get("outputs", []) if o.get("name") != "stderr"]
-        exercise = cell.metadata.get("nbgrader", {}).get("grade_id", "").removesuffix("_test")
-        found = self.flagged.get(exercise)
-        if cell.metadata.get("nbgrader", {}).get("grade") and found:
-            why = f"the answer {exercise} is to be reviewed by the teacher: {'; '.join(found)}"
-            error = dict(ename="ToBeReviewed", evalue=why, traceback=[f"ToBeReviewed: {why}"])
-            cell.outputs.append(nbformat.v4.new_output("error", **error))
-        return cell, resources
-
-
-class VerdictOnly(NbGraderPreprocessor):
-    """Feedback of a test cell: its error's one-line message, no traceback and nothing it printed."""
-
-    def preprocess_cell(self, cell, resources, index):
-        if cell.cell_type == "code" and cell.metadata.get("nbgrader", {}).get("grade"):
-            cell.outputs = [o for o in cell.get("outputs", []) if o.get("output_type") == "error"]
-            for output in cell.outputs:
-                output["traceback"] = [f"{output['ename']}: {output['evalue']}"]
-        return cell, resources
 
 
 def can_isolate() -> bool:
@@ -205,6 +170,8 @@ def main(argv: list[str]) -> int:
     if len(argv) != 1 or not pathlib.Path(argv[0]).is_dir():
         print("coursework/grading.py: expected one argument, a folder of submissions", file=sys.stderr)
         return 2
+    import nbformat
+
     for path in sorted(pathlib.Path(argv[0]).rglob("*.ipynb")):
         for exercise, lines in report(nbformat.read(path, as_version=4)).items():
             print(f"to be reviewed: {path.relative_to(argv[0])} {exercise}: " + "; ".join(lines))

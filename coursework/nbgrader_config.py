@@ -19,7 +19,7 @@ tools = str(here if in_course else here.parent)  # `from coursework import gradi
 sys.path.insert(0, tools)
 os.environ["PYTHONPATH"] = os.pathsep.join(filter(None, [tools, os.environ.get("PYTHONPATH")]))
 os.environ["VO_LIB_HEADLESS"] = "1"  # no widget waits for a browser that is not there
-from coursework import grading  # noqa: E402
+from coursework import autograde_steps, grading  # noqa: E402
 
 c.CourseDirectory.course_id = "vo-notebooks"
 c.Execute.timeout = 600  # a cell still running after 10 minutes fails as CellTimeoutError
@@ -44,7 +44,7 @@ elif in_course:
 # After the notebook ran, stderr is dropped and a flagged answer's test fails with the report's lines.
 steps = Autograde.class_traits()["autograde_preprocessors"].make_dynamic_default()
 at = steps.index(Execute) + 1
-c.Autograde.autograde_preprocessors = [*steps[:at], grading.AfterRun, *steps[at:]]
+c.Autograde.autograde_preprocessors = [*steps[:at], autograde_steps.AfterRun, *steps[at:]]
 
 
 class ToBeGraded(GetGrades):
@@ -58,7 +58,7 @@ class ToBeGraded(GetGrades):
 
 
 # Feedback shows each test's verdict and one-line message: no test source, traceback or printout.
-feedback = [ToBeGraded, ClearHiddenTests, grading.VerdictOnly, CSSHTMLHeaderPreprocessor]
+feedback = [ToBeGraded, ClearHiddenTests, autograde_steps.VerdictOnly, CSSHTMLHeaderPreprocessor]
 c.GenerateFeedback.preprocessors = feedback
 
 

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 import vo_lib.stereo_vo.ransac as ransac
-from coursework import grading
+from coursework import autograde_steps, grading
 from coursework.grading import Reason, review
 
 NOTEBOOKS = sorted((pathlib.Path(__file__).resolve().parents[1] / "notebooks").glob("[01][0-9]_*.py"))
@@ -130,7 +130,7 @@ def test_stderr_never_costs_a_mark_and_a_flagged_answer_fails_its_test():
             _cell("test", "assert x == 2", "ex2_test"),
         ]
     )
-    nb, _ = grading.AfterRun().preprocess(nb, {})
+    nb, _ = autograde_steps.AfterRun().preprocess(nb, {})
     assert [o.get("name") for o in nb.cells[1].outputs] == ["stdout"]
     assert nb.cells[0].outputs == [] and not any(o.output_type == "error" for o in nb.cells[1].outputs)
     (error,) = nb.cells[3].outputs
@@ -146,7 +146,7 @@ def test_feedback_keeps_a_tests_message_only():
     }
     leaked = {"output_type": "stream", "name": "stdout", "text": "assert np.allclose(got, expected_secret)"}
     nb = nbformat.v4.new_notebook(cells=[_cell("test", "assert 0", "ex1_test", [leaked, failure])])
-    nb, _ = grading.VerdictOnly().preprocess(nb, {})
+    nb, _ = autograde_steps.VerdictOnly().preprocess(nb, {})
     (output,) = nb.cells[0].outputs
     assert output.traceback == ["AssertionError: the gain of another update"]
 

@@ -97,7 +97,8 @@ def course(tmp_path, kernel_dir):
         + "c.ExchangeCollect.check_owner = False  # one Unix user plays every role here\n"
     )
     (teacher / "coursework").mkdir()  # the grading tools, as coursework/build.py lays them out
-    shutil.copy2(PROJECT_CONFIG.with_name("grading.py"), teacher / "coursework" / "grading.py")
+    for tool in ("grading.py", "autograde_steps.py"):
+        shutil.copy2(PROJECT_CONFIG.with_name(tool), teacher / "coursework" / tool)
     homes, ran = {"course": teacher}, []
     for student in ("alice", "bob"):
         homes[student] = tmp_path / student
