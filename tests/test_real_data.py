@@ -21,8 +21,9 @@ from scipy.spatial.transform import Rotation
 from vo_lib.cli.report import error_report, truth_and_odometry
 from vo_lib.formats.poses import write_tum
 from vo_lib.formats.sequence import read_sequence
+from vo_lib.outputs import read_marker
 from vo_lib.stereo_vo.pipeline import run_sequence
-from vo_lib.stereo_vo.vehicle import vehicle_of
+from vo_lib.stereo_vo.vehicle import VehicleKind, vehicle_of
 
 ROOT = Path(__file__).resolve().parents[1]
 REALDATA = Path(os.environ.get("VO_LIB_REALDATA") or ROOT.parent / "shared" / "realdata")
@@ -316,6 +317,43 @@ def test_convert_writes_a_kitti_copy_that_reads_back(tmp_path):
     assert copy.camera.baseline == pytest.approx(original.camera.baseline, rel=1e-9)
     assert np.array_equal(copy.pair(3)[0], original.pair(3)[0])
     assert np.allclose(copy.poses_4x4(), original.poses_4x4(), atol=1e-8)
+    # the copy runs as the rig does (the camera in the body travels in its manifest), on the
+    # rig's clock to the nanosecond, and says which command wrote it
+    assert vehicle_of(copy).kind is vehicle_of(original).kind is VehicleKind.DRONE
+    assert np.array_equal(copy.times, original.times) and copy.times[1] == 0.049999872
+    assert read_marker(tmp_path / "kitti")["written_by"] == "vo_lib convert"
+
+
+@needs_euroc
+def test_evaluate_moves_a_truth_of_the_recording_into_its_rectified_camera(tmp_path, capsys):
+    """A ground truth inside an ASL recording is of its body (and a prism's positions of a point
+    on it): evaluate moves it into the rectified left camera, as run does, without being told."""
+    from vo_lib.cli.main import main
+    from vo_lib.data import load_sequence
+    from vo_lib.evaluation import ate_positions
+    from vo_lib.formats.euroc import body_to_rectified_camera, truth_extrinsic
+    from vo_lib.formats.groundtruth import associate, read_groundtruth
+
+    seq = load_sequence(EUROC)
+    seconds = seq.times + seq.manifest["time_origin_s"]
+    est = tmp_path / "truth_in_camera.tum"
+    write_tum(est, seconds, seq.poses_4x4())
+    gt = EUROC / "mav0" / "state_groundtruth_estimate0" / "groundtruth.tum"
+    assert main(["evaluate", "--gt", str(gt), "--est", str(est)]) == 0
+    out = capsys.readouterr().out
+    rows = {line[:62].strip(): line[62:].strip() for line in out.splitlines()}
+    assert "moved into its rectified left camera" in out
+    assert rows["final rotation error [deg]"] == "0.000"
+    assert rows["ATE (SE(3) alignment): rmse [m]"] == "0.0000"
+    leica_path = EUROC / "mav0" / "leica0" / "data.csv"
+    assert main(["evaluate", "--gt", str(leica_path), "--est", str(est)]) == 0
+    printed = re.search(r"SE\(3\) alignment, positions only\): rmse ([0-9.]+)", capsys.readouterr().out)
+    leica = read_groundtruth(leica_path)
+    i_est, i_leica = associate(seconds, leica.times)
+    lever = (np.linalg.inv(body_to_rectified_camera(EUROC)) @ truth_extrinsic(leica_path)[:, 3])[:3]
+    with_arm = ate_positions(leica.positions[i_leica], seq.poses_4x4()[i_est], lever)[0].rmse
+    without = ate_positions(leica.positions[i_leica], seq.poses_4x4()[i_est])[0].rmse
+    assert printed.group(1) == f"{with_arm:.4f}" and with_arm < without - 0.003
 
 
 @needs_euroc

@@ -2,7 +2,7 @@
 
 Commands
 --------
-run            the stereo VO pipeline on a sample or a KITTI-layout folder (default: indoor_linear)
+run            the stereo VO pipeline on a sample, a KITTI-layout folder or an ASL recording
 evaluate       trajectory errors of an estimate against ground truth (KITTI or TUM files)
 generate NAME  render a named sample sequence (KITTI layout, with ground truth and odometry)
 bench NAME     time one part of the library against its baseline (``bench --help`` lists them)
@@ -100,7 +100,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     run = sub.add_parser(
         "run",
-        help="run the stereo visual odometry pipeline on a sample or a KITTI-layout folder",
+        help="run the stereo visual odometry pipeline on a sample, a KITTI-layout folder or an ASL recording",
         description=wrap(
             "Run [Zhao]'s stereo visual odometry on a sequence and print a timing table and, "
             "where the sequence has ground truth, its errors. A named sample is rendered into data/ on "
@@ -113,7 +113,7 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument(
         "--sequence",
         type=non_empty("a sample name or a folder"),
-        help="sample name or KITTI-layout folder (default: indoor_linear)",
+        help="sample name, KITTI-layout folder or ASL recording (default: indoor_linear)",
     )
     run.add_argument(
         "--out",
@@ -142,7 +142,8 @@ def build_parser() -> argparse.ArgumentParser:
         help="ATE, RPE and KITTI segment errors of an estimate against ground truth",
         description=wrap(
             "Print the absolute trajectory error, the relative pose error and KITTI's segment "
-            "errors of an estimated trajectory against ground truth (KITTI or TUM files, same length)."
+            "errors of an estimated trajectory against ground truth (KITTI, TUM, EuRoC CSV or position "
+            "files), associated by timestamp where both carry them, else pose by pose."
         ),
         epilog=example(
             "evaluate --gt data/indoor_linear/poses.txt --est runs/indoor_linear/poses.txt --segments 1,2"

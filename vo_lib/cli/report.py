@@ -29,7 +29,7 @@ def timing_rows(result: PipelineResult) -> list[tuple[str, str, np.ndarray]]:
     stages = [
         ("stereo", "binocular stereo vision processing", column["stereo"]),
         ("matching", "guided temporal matching", column["matching"]),
-        ("estimation", "parameter estimation (1-point RANSAC)", column["estimation"]),
+        ("estimation", "parameter estimation (RANSAC)", column["estimation"]),
         ("refinement", "6-DoF refinement", column["refinement"]),
         ("kalman", "Kalman filtering (prediction + update)", column["kalman"]),
     ]
@@ -159,7 +159,8 @@ def print_error_table(
         if not (report["spot_turn"] and "of distance" in label):
             print(_row(label, [None if errors.get(c) is None else figure(errors[c]) for c in cols], fmt))
     if vo_3d is not None and vo_3d.kitti is not None:
-        print(f"  (KITTI errors over {vo_3d.kitti.label()}, {vo_3d.kitti.count} segments)")
+        count = vo_3d.kitti.count
+        print(f"  (KITTI errors over {vo_3d.kitti.label()}, {count} segment{'s' * (count != 1)})")
     for label, key, fmt in ROWS_PLANAR:
         print(_row(label, [report[c][key] for c in cols], fmt))
     print(_row("frames flagged (VO not used)", [flagged], "{:d}"))

@@ -278,18 +278,34 @@ def _associated(truth, gt: str, est: str, times, E: np.ndarray) -> tuple[np.ndar
     return i_est, i_gt
 
 
+def recording_of(gt: str, extrinsic_of: str | None) -> str | None:
+    """The ASL recording whose calibration moves ``--gt`` into its rectified left camera:
+    ``extrinsic_of`` if given, else the recording that holds the ``--gt`` file (as
+    ``mav0/state_groundtruth_estimate0/data.csv`` does), else None (the truth is taken as given)."""
+    from vo_lib.formats.euroc import mav0_of
+
+    if extrinsic_of is not None:
+        return extrinsic_of
+    for folder in Path(gt).resolve().parents[:3]:
+        mav0 = mav0_of(folder)
+        if mav0 is not None and (mav0 / "cam0" / "sensor.yaml").is_file():
+            return str(mav0)
+    return None
+
+
 def evaluate_command(gt: str, est: str, segments=None, extrinsic_of: str | None = None) -> None:
     """Print the 3-D errors of an estimate (KITTI or TUM) against ground truth in any format of
     :mod:`vo_lib.formats.groundtruth`: final error, ATE (SE(3), Sim(3)), RPE and KITTI's errors.
 
     Where both files carry timestamps they are associated as evo does; otherwise the counts must
-    be equal. Position-only truth gets the ATE of the aligned positions. ``segments`` are
-    lengths in metres, as ``--segments`` parsed them (default: those the sequence allows,
-    labelled). ``extrinsic_of``: an ASL recording whose calibration moves a body-frame truth
-    into its rectified left camera.
+    be equal. ``segments`` are lengths in metres, as ``--segments`` parsed them (default: those
+    the sequence allows, labelled). A truth of an ASL recording's body frame (``extrinsic_of``,
+    or the recording holding the ``--gt`` file: :func:`recording_of`) is moved into its rectified
+    left camera, the tracked frame of a ``sensor.yaml`` beside ``--gt`` taken into account; for
+    position-only truth that frame is the lever arm carried along the estimated poses.
     """
     from vo_lib.evaluation import Alignment, ate_positions, kitti_segment_errors, standard_errors
-    from vo_lib.formats.euroc import body_to_rectified_camera
+    from vo_lib.formats.euroc import body_to_rectified_camera, truth_extrinsic
     from vo_lib.formats.groundtruth import GroundTruthError, TruthKind, read_groundtruth
 
     lengths = None if segments is None else tuple(segments)
@@ -299,25 +315,36 @@ def evaluate_command(gt: str, est: str, segments=None, extrinsic_of: str | None 
         raise UsageError(f"--gt {exc}") from None
     times, E = read_trajectory(est, min_poses=2)
     i_est, i_gt = _associated(truth, gt, est, times, E)
+    recording = recording_of(gt, extrinsic_of)
+    tracked = np.eye(4)  # the tracked frame (body, prism) in the body: ours, where no recording says
+    to_camera = np.eye(4)  # the rectified left camera in the tracked frame
+    if recording is not None:
+        tracked = truth_extrinsic(Path(gt))
+        to_camera = np.linalg.inv(tracked) @ body_to_rectified_camera(recording)
+        if extrinsic_of is None:
+            print(f"--gt lies in the ASL recording {recording}: moved into its rectified left camera")
     if truth.kind is TruthKind.POSITIONS:
+        lever = np.linalg.inv(to_camera)[:3, 3]  # the tracked point in the rectified camera
         for alignment in (Alignment.SE3, Alignment.SIM3):
-            a, _ = ate_positions(truth.positions[i_gt], E[i_est], alignment=alignment)
+            a, _ = ate_positions(truth.positions[i_gt], E[i_est], lever, alignment)
             print(f"ATE ({alignment} alignment, positions only): rmse {a.rmse:.4f} m, max {a.max:.4f}")
         return
-    G = truth.poses[i_gt] @ (np.eye(4) if extrinsic_of is None else body_to_rectified_camera(extrinsic_of))
+    G = truth.poses[i_gt] @ to_camera
     for label, value in standard_errors(G, E[i_est], lengths).rows():
         print(f"{label:<62s}{value:>16s}")
     segments = kitti_segment_errors(G, E[i_est], lengths) if lengths and len(lengths) > 1 else {}
     for length, (t_pct, r_deg, count) in segments.items():  # each length on its own, too
         print(
             f"segment {length:g} m: translation {t_pct:.2f} %, rotation {100 * r_deg:.3f} deg/100 m "
-            f"({count} segments)"
+            f"({count} segment{'s' * (count != 1)})"
         )
 
 
 def convert_command(sequence: str, to: str, out: str, force: bool = False) -> None:
     """Write a rectified copy of a sequence (an ASL rig, or any readable one) in the KITTI
-    layout: ``image_0/``, ``image_1/``, ``calib.txt``, ``times.txt`` and ``poses.txt``."""
+    layout: ``image_0/``, ``image_1/``, ``calib.txt``, ``times.txt``, ``poses.txt`` and the
+    source's manifest (for an ASL rig: the camera in the body, so that the copy runs as the rig
+    does, and its position-only truth)."""
     from vo_lib.data import load_sequence
     from vo_lib.formats.sequence import SequenceWriter
 
@@ -327,8 +354,12 @@ def convert_command(sequence: str, to: str, out: str, force: bool = False) -> No
     if not source.exists():
         raise UsageError(f"{sequence}: no such folder")
     seq = load_sequence(source, odometry=False, progress=False)
-    with reading(seq.path), SequenceWriter(out, seq.camera, force=force, option="--out") as writer:
+    manifest = (
+        {k: v for k, v in seq.manifest.items() if k != "layout"} if isinstance(seq.manifest, dict) else {}
+    )
+    writer = SequenceWriter(out, seq.camera, force=force, option="--out", written_by="vo_lib convert")
+    with reading(seq.path), writer:
         for left, right in seq:
             writer.add(left, right)
-        path = writer.close(seq.times, seq.poses)
+        path = writer.close(seq.times, seq.poses, manifest=manifest or None)
     print(f"wrote {path}: {len(seq)} rectified pairs in the KITTI layout")

@@ -165,7 +165,8 @@ def read_asl(path, groundtruth=None) -> Sequence:
     poses = None
     if truth_path is not None:
         poses = _truth_into_camera(truth_path, seconds, rect.T_body_rect, manifest)
-    return Sequence(root, rect.camera, seconds - seconds[0], left, right, poses, None, manifest, rect)
+    since_first = (stamps - stamps[0]) * NANOSECONDS  # from whole nanoseconds: exact to 1 ns
+    return Sequence(root, rect.camera, since_first, left, right, poses, None, manifest, rect)
 
 
 def _truth_into_camera(truth_path: Path, seconds, T_body_rect, manifest: dict):

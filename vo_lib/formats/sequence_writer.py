@@ -36,11 +36,18 @@ class SequenceWriter:
     :class:`~vo_lib.outputs.OutputError` is raised otherwise, before anything is written).
     """
 
-    def __init__(self, path, camera: StereoCamera, force: bool = False, option: str | None = None):
+    def __init__(
+        self,
+        path,
+        camera: StereoCamera,
+        force: bool = False,
+        option: str | None = None,
+        written_by: str = "vo_lib generate",
+    ):
         self.path = Path(path)
         self.camera = camera
         self.label = f"{option} {path}" if option else str(path)
-        self._out = OutputFolder(self.path, "vo_lib generate", force=force, option=option)
+        self._out = OutputFolder(self.path, written_by, force=force, option=option)
         self._tmp = self._out.path
         (self._tmp / "image_0").mkdir()
         (self._tmp / "image_1").mkdir()
