@@ -83,7 +83,7 @@ def test_vo_alone_meets_the_acceptance_figures(real_run):
     assert heading <= MAX_FINAL_HEADING_DEG
     assert len(result.flagged) <= max(2, int(0.02 * len(seq)))
     row = readme_row(seq.path.name)
-    if row is not None:  # the README's figures still hold: those `run` prints
+    if row is not None:  # the README's planar figures still hold (run prints the 3-D ones)
         assert int(row[1]) == len(seq) and abs(numbers(row[2])[0] - distance) < 0.05
         assert abs(numbers(row[3])[0] - percent) <= README_TOLERANCE
         assert abs(numbers(row[4])[0] - heading) <= README_TOLERANCE
