@@ -213,6 +213,12 @@ class Case:
         return [w for word in words for w in ALIASES.get(word, [word])]
 
 
+def linked_into(ws: Path, name: str, folder: str) -> None:
+    """Move the sequence's ``name`` into the user's ``folder`` and link it from where it was."""
+    (ws / "seq" / name).rename(ws / folder / name)
+    (ws / "seq" / name).symlink_to(Path("..") / folder / name)
+
+
 def link(name: str, to: str):
     return lambda ws: (ws / name).symlink_to(to)
 
@@ -255,6 +261,14 @@ CASES = [
     Case("out-above-cwd-force", "run --sequence ../seq --out .. --force", 2, "holds the input sequence",
         cwd="thesis"),
     Case("out-home-force", "RUN --out home --force", 2, "your home folder"),
+    # what the input reads through a symbolic link is input too: its truth, its images
+    Case("out-holds-a-linked-input-file-force", "RUN --out thesis --force", 2,
+        "holds what the input sequence links to", lambda ws: linked_into(ws, "poses.txt", "thesis")),
+    Case("out-is-a-linked-input-folder-force", "RUN --out thesis/image_1 --force", 2,
+        "is what the input sequence links to", lambda ws: linked_into(ws, "image_1", "thesis")),
+    Case("convert-over-its-input-force", "convert seq --out seq/image_0 --force", 2,
+        "inside the input sequence"),
+    Case("convert-above-its-input-force", "convert seq --out . --force", 2, "holds the input sequence"),
     Case("out-empty-text", "RUN --out ''", 2, "--out: expected a folder; got an empty text"),
     Case("sequence-empty-text", "run --sequence ''", 2, "--sequence: expected a sample name"),
     Case("generate-out-empty-text", "GEN --out ''", 2, "--out: expected a folder"),
@@ -316,6 +330,8 @@ CASES = [
         edit("seq/poses.txt", "0 " * 12 + "\n" * 1 + kitti_rows(3))),
     Case("odometry-malformed", "RUN", 2, "odometry.txt, line 2",
         edit("seq/odometry.txt", "0 0\n0.01\n0 0\n0 0\n")),
+    Case("odometry-absurd", "RUN", 2, "odometry.txt, line 2: a number beyond",
+        edit("seq/odometry.txt", "0 0\n1e300 -1e300\n0 0\n0 0\n")),
     Case("no-odometry-ignores-it", "RUN --no-odometry --out out", 0, "wrote",
         edit("seq/odometry.txt", b"\xff garbage"), "out"),
     Case("no-right-folder", "RUN", 2, "image_1: missing image folder",

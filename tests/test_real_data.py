@@ -269,6 +269,7 @@ def test_asl_recording_is_rectified_and_its_truth_moved_into_the_left_camera():
     [
         ("yaml", "cam0/sensor.yaml: key intrinsics"),
         ("rotation", "cam1/sensor.yaml: key T_BS"),
+        ("baseline", "cam1/sensor.yaml: key T_BS puts cam1 where cam0 is"),
         ("camera", "cam1: missing camera folder"),
         ("timestamps", "has no image of the same timestamp"),
         ("truth", "the ground truth must cover every image"),
@@ -287,6 +288,8 @@ def test_a_bad_rig_gets_one_line_and_exit_2(tmp_path, capsys, damage, expected):
     elif damage == "rotation":
         path = mav0 / "cam1" / "sensor.yaml"
         path.write_text(path.read_text().replace("data: [0.0125", "data: [5.0125"))
+    elif damage == "baseline":
+        shutil.copy(mav0 / "cam0" / "sensor.yaml", mav0 / "cam1" / "sensor.yaml")
     elif damage == "camera":
         shutil.rmtree(mav0 / "cam1")
     elif damage == "timestamps":

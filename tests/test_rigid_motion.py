@@ -143,7 +143,10 @@ def test_oxts_reader_names_file_and_line(tmp_path):
     with pytest.raises(SequenceError, match=r"oxts.txt, line 2: expected 30 numbers; got 29"):
         read_oxts(path)
     path.write_text(" ".join(["1"] * 29 + ["nan"]) + "\n")
-    with pytest.raises(SequenceError, match="line 1: not every number is finite"):
+    with pytest.raises(SequenceError, match="line 1: expected finite numbers within"):
+        read_oxts(path)
+    path.write_text(" ".join(["1"] * 8 + ["1e300"] + ["1"] * 21) + "\n")  # a speed that overflows the filter
+    with pytest.raises(SequenceError, match="line 1: expected finite numbers within"):
         read_oxts(path)
     path.write_text(" ".join(["x"] * 30) + "\n")
     with pytest.raises(SequenceError, match="line 1: expected 30 numbers"):

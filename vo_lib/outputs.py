@@ -94,9 +94,21 @@ def foreign_content(folder: Path, written_by: str) -> str | None:
     return f"it holds {extra[0]}, which this program did not write" if extra else None
 
 
+def linked_from(folder) -> list[Path]:
+    """Where the symbolic links under ``folder`` lead (resolved): what an input reads through them.
+    Links to folders are listed, not followed."""
+    return [
+        (Path(root) / name).resolve()
+        for root, folders, files in os.walk(folder)
+        for name in folders + files
+        if (Path(root) / name).is_symlink()
+    ]
+
+
 def _guarded(inputs, keep: dict | None) -> list[tuple[Path, str, bool]]:
     """(folder, what it is, whether a target inside it is refused too)."""
     guarded = [(Path(p).resolve(), "the input sequence", True) for p in inputs]
+    guarded += [(t, "what the input sequence links to", True) for p in inputs for t in linked_from(p)]
     guarded += [(PACKAGE, "this package", True), (REPOSITORY_DATA.resolve(), "the sample data folder", False)]
     for where, what in ((Path.cwd, "the current folder"), (Path.home, "your home folder")):
         with contextlib.suppress(OSError, RuntimeError):  # no current folder (deleted) or no home

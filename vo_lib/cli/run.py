@@ -33,7 +33,7 @@ from vo_lib.cli.report import (
     print_timing_table,
     truth_and_odometry,
 )
-from vo_lib.formats.poses import read_trajectory, write_kitti_poses, write_tum
+from vo_lib.formats.poses import TrajectoryError, read_trajectory, write_kitti_poses, write_tum
 from vo_lib.geometry import camera_poses_from_planar
 from vo_lib.outputs import OutputFolder, notice, reading
 from vo_lib.sim.samples import SAMPLES
@@ -313,7 +313,10 @@ def evaluate_command(gt: str, est: str, segments=None, extrinsic_of: str | None 
         truth = read_groundtruth(gt)
     except GroundTruthError as exc:
         raise UsageError(f"--gt {exc}") from None
-    times, E = read_trajectory(est, min_poses=2)
+    try:
+        times, E = read_trajectory(est, min_poses=2)
+    except TrajectoryError as exc:
+        raise UsageError(f"--est {exc}") from None
     i_est, i_gt = _associated(truth, gt, est, times, E)
     recording = recording_of(gt, extrinsic_of)
     tracked = np.eye(4)  # the tracked frame (body, prism) in the body: ours, where no recording says
@@ -353,11 +356,13 @@ def convert_command(sequence: str, to: str, out: str, force: bool = False) -> No
     source = Path(sequence)
     if not source.exists():
         raise UsageError(f"{sequence}: no such folder")
-    seq = load_sequence(source, odometry=False, progress=False)
+    seq = load_sequence(source, odometry=False, progress=False)  # before --out: a bad input changes nothing
     manifest = (
         {k: v for k, v in seq.manifest.items() if k != "layout"} if isinstance(seq.manifest, dict) else {}
     )
-    writer = SequenceWriter(out, seq.camera, force=force, option="--out", written_by="vo_lib convert")
+    writer = SequenceWriter(
+        out, seq.camera, force=force, option="--out", written_by="vo_lib convert", inputs=[source, seq.path]
+    )
     with reading(seq.path), writer:
         for left, right in seq:
             writer.add(left, right)

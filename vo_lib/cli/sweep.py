@@ -87,11 +87,15 @@ def dask_client(workers: int, scheduler: str | None):
     import dask
     from distributed import Client, LocalCluster
 
+    # a Ctrl-C leaves the client's pending tasks unretrieved; asyncio would log each one's traceback
+    logging.getLogger("asyncio").setLevel(logging.CRITICAL)
     if scheduler is not None:
         try:
             client = Client(scheduler.strip(), timeout=10)
         except (ValueError, TypeError, OSError, TimeoutError) as exc:
             raise SweepError(f"--scheduler {scheduler}: cannot reach a scheduler ({one_line(exc)})") from None
+        except AssertionError:  # distributed's own event loop did not start within its 10 s
+            raise SweepError(f"--scheduler {scheduler}: cannot reach a scheduler (no event loop)") from None
         with client:
             yield client
         return

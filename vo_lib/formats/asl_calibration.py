@@ -19,6 +19,9 @@ from vo_lib.camera import StereoCamera
 from vo_lib.formats.frame_files import SequenceError
 from vo_lib.formats.poses import rotation_problem
 
+#: Shortest distance between the two cameras (metres) that makes a stereo rig.
+MIN_BASELINE_M = 1e-3
+
 
 class AslError(SequenceError):
     """An ASL folder that cannot be read: the file (and key or line) named, and what was expected."""
@@ -121,6 +124,11 @@ def rectify(left: CameraCalibration, right: CameraCalibration, where: Path) -> R
             f"{right.resolution[0]}x{right.resolution[1]} (key resolution); expected one size"
         )
     T_right_left = np.linalg.inv(right.T_BS) @ left.T_BS  # left camera -> right camera
+    if np.linalg.norm(T_right_left[:3, 3]) < MIN_BASELINE_M:
+        raise AslError(
+            f"{where / 'cam1' / 'sensor.yaml'}: key T_BS puts cam1 where cam0 is (baseline "
+            f"{np.linalg.norm(T_right_left[:3, 3]):.3g} m); expected two cameras apart"
+        )
     size = left.resolution
     R = np.ascontiguousarray(T_right_left[:3, :3])
     t = T_right_left[:3, 3:].copy()

@@ -121,9 +121,14 @@ def read_times(path: Path) -> np.ndarray:
     return np.array(times)
 
 
-def read_rows(path: Path, count: int, what: str) -> np.ndarray:
-    """``(N, count)`` finite numbers, one row a line; raises :class:`SequenceError`."""
-    return np.array([_numbers(path, n, text, count, what) for n, text in _lines(path)]).reshape(-1, count)
+def read_rows(path: Path, count: int, what: str, bound: float = np.inf) -> np.ndarray:
+    """``(N, count)`` finite numbers within ``±bound``, one row a line; raises :class:`SequenceError`."""
+    rows = []
+    for n, text in _lines(path):
+        rows.append(row := _numbers(path, n, text, count, what))
+        if np.abs(row).max(initial=0.0) > bound:
+            raise SequenceError(f"{path}, line {n}: a number beyond ±{bound:g}; expected {what}")
+    return np.array(rows).reshape(-1, count)
 
 
 def read_poses(path: Path) -> np.ndarray:

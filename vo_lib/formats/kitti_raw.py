@@ -22,6 +22,9 @@ from vo_lib.formats.poses import rotation_problem
 
 OXTS_FIELDS = 30
 VF, WZ = 8, 19  # zero-based columns of forward speed (m/s) and yaw rate (rad/s)
+#: Largest magnitude of any field: degrees of latitude, metres of altitude, m/s, rad/s and counts
+#: stay far below it; beyond, a packet is damaged (and would overflow the filter).
+MAX_OXTS_VALUE = 1e6
 
 
 def _packet(path: Path, line_no: int, line: str) -> list[float]:
@@ -33,8 +36,8 @@ def _packet(path: Path, line_no: int, line: str) -> list[float]:
         values = [float(p) for p in parts]
     except ValueError:
         raise SequenceError(f"{path}, line {line_no}: expected {OXTS_FIELDS} numbers") from None
-    if not np.all(np.isfinite(values)):
-        raise SequenceError(f"{path}, line {line_no}: not every number is finite")
+    if not np.all(np.isfinite(values)) or max(map(abs, values)) > MAX_OXTS_VALUE:
+        raise SequenceError(f"{path}, line {line_no}: expected finite numbers within ±{MAX_OXTS_VALUE:g}")
     return values
 
 

@@ -73,6 +73,9 @@ __all__ = [
     "write_sequence",
 ]
 
+#: Largest wheel distance between two frames in ``odometry.txt``, metres: beyond, the file is damaged.
+MAX_ODOMETRY_M = 1000.0
+
 
 @dataclass
 class Sequence:
@@ -156,10 +159,11 @@ class Sequence:
 def _camera(root: Path, left: list[Path], right: list[Path]) -> StereoCamera:
     """The rig of ``calib.txt``, at the size every image header shares."""
     calib = root / "calib.txt"
-    required(calib, "needs P0 and P1 lines")
+    required(calib, "the calibration, P0 and P1 lines")
     w, h = check_headers(left, right)
+    P0, P1 = read_calib(calib)
     try:
-        return StereoCamera.from_projection_matrices(*read_calib(calib), w, h)
+        return StereoCamera.from_projection_matrices(P0, P1, w, h)
     except ValueError as exc:
         raise SequenceError(f"{calib}: {exc}") from None
 
@@ -187,7 +191,10 @@ def read_sequence(path, odometry: bool = True) -> Sequence:
         poses = read_per_frame(root / "poses.txt", n, "poses", read_poses)
     if odometry and present(root / "odometry.txt", "the odometry"):
         odo = read_per_frame(
-            root / "odometry.txt", n, "lines", lambda p: read_rows(p, 2, "delta_u_left delta_u_right")
+            root / "odometry.txt",
+            n,
+            "lines",
+            lambda p: read_rows(p, 2, "delta_u_left delta_u_right", MAX_ODOMETRY_M),
         )
     manifest_path = root / "manifest.json"
     manifest = read_manifest(manifest_path) if present(manifest_path, "the manifest") else {}

@@ -43,11 +43,12 @@ class SequenceWriter:
         force: bool = False,
         option: str | None = None,
         written_by: str = "vo_lib generate",
+        inputs=(),
     ):
         self.path = Path(path)
         self.camera = camera
         self.label = f"{option} {path}" if option else str(path)
-        self._out = OutputFolder(self.path, written_by, force=force, option=option)
+        self._out = OutputFolder(self.path, written_by, force=force, inputs=inputs, option=option)
         self._tmp = self._out.path
         (self._tmp / "image_0").mkdir()
         (self._tmp / "image_1").mkdir()
