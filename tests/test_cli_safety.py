@@ -518,6 +518,10 @@ def test_a_sequence_being_read_is_not_replaced(template, tmp_path, monkeypatch, 
         "try again when it has finished"
     ]
     assert checksums(ws, ()) == before and temporaries(ws) == []
+    with reading(ws / "gen" / "image_0"):  # nor the folder that holds what is read
+        code, out, err = invoke([*GEN, "--out", "gen", "--force"], capsys)
+    assert code == 2 and "--out gen: a running command is reading this folder" in err
+    assert checksums(ws, ()) == before and temporaries(ws) == []
     assert invoke([*GEN, "--out", "gen", "--force"], capsys)[0] == 0  # once it is read no more
 
 

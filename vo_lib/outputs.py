@@ -183,8 +183,9 @@ def _locked(folder: Path, shared: bool, label: str = ""):
         fcntl.flock(fd, (fcntl.LOCK_SH if shared else fcntl.LOCK_EX) | fcntl.LOCK_NB)
     except BlockingIOError:
         os.close(fd)
+        doing = "replacing" if shared else "reading"
         raise OutputError(
-            f"{label}: a running command is reading this folder; try again when it has finished"
+            f"{label}: a running command is {doing} this folder; try again when it has finished"
         ) from None
     except OSError:  # no locks on this file system
         pass
@@ -194,9 +195,15 @@ def _locked(folder: Path, shared: bool, label: str = ""):
         os.close(fd)
 
 
+@contextlib.contextmanager
 def reading(folder):
-    """A shared lock on ``folder`` while a command reads it: no command replaces it meanwhile."""
-    return _locked(Path(folder), shared=True)
+    """Shared locks on ``folder`` and every folder above it while a command reads it: no command
+    replaces it, or a folder that holds it, meanwhile."""
+    real = Path(folder).resolve()
+    with contextlib.ExitStack() as stack:
+        for path in (real, *real.parents):
+            stack.enter_context(_locked(path, shared=True, label=str(path)))
+        yield
 
 
 class OutputFolder:
