@@ -196,7 +196,11 @@ def build_parser() -> argparse.ArgumentParser:
     gen.add_argument(
         "--force", action="store_true", help="replace --out even if this program did not write it"
     )
-    gen.add_argument("--frames", type=count_at_least(1, "frames"), help="keep only the first N frames")
+    gen.add_argument(
+        "--frames",
+        type=count_at_least(2, "frames"),
+        help="keep only the first N frames (2 or more: a run needs two)",
+    )
     gen.add_argument(
         "--resolution",
         type=_resolution,
