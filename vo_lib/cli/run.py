@@ -281,16 +281,17 @@ def _associated(truth, gt: str, est: str, times, E: np.ndarray) -> tuple[np.ndar
 def recording_of(gt: str, extrinsic_of: str | None) -> str | None:
     """The ASL recording whose calibration moves ``--gt`` into its rectified left camera:
     ``extrinsic_of`` if given, else the recording that holds the ``--gt`` file (as
-    ``mav0/state_groundtruth_estimate0/data.csv`` does), else None (the truth is taken as given)."""
+    ``mav0/state_groundtruth_estimate0/data.csv`` does; said in one line), else None (the truth
+    is taken as given)."""
     from vo_lib.formats.euroc import mav0_of
 
     if extrinsic_of is not None:
         return extrinsic_of
-    for folder in Path(gt).resolve().parents[:3]:
-        mav0 = mav0_of(folder)
-        if mav0 is not None and (mav0 / "cam0" / "sensor.yaml").is_file():
-            return str(mav0)
-    return None
+    holders = (mav0_of(folder) for folder in Path(gt).resolve().parents[:3])
+    found = next((m for m in holders if m is not None and (m / "cam0" / "sensor.yaml").is_file()), None)
+    if found is not None:
+        print(f"--gt lies in the ASL recording {found}: moved into its rectified left camera")
+    return None if found is None else str(found)
 
 
 def evaluate_command(gt: str, est: str, segments=None, extrinsic_of: str | None = None) -> None:
@@ -319,13 +320,9 @@ def evaluate_command(gt: str, est: str, segments=None, extrinsic_of: str | None 
         raise UsageError(f"--est {exc}") from None
     i_est, i_gt = _associated(truth, gt, est, times, E)
     recording = recording_of(gt, extrinsic_of)
-    tracked = np.eye(4)  # the tracked frame (body, prism) in the body: ours, where no recording says
-    to_camera = np.eye(4)  # the rectified left camera in the tracked frame
+    to_camera = np.eye(4)  # the rectified left camera in the tracked frame (body, prism)
     if recording is not None:
-        tracked = truth_extrinsic(Path(gt))
-        to_camera = np.linalg.inv(tracked) @ body_to_rectified_camera(recording)
-        if extrinsic_of is None:
-            print(f"--gt lies in the ASL recording {recording}: moved into its rectified left camera")
+        to_camera = np.linalg.inv(truth_extrinsic(Path(gt))) @ body_to_rectified_camera(recording)
     if truth.kind is TruthKind.POSITIONS:
         lever = np.linalg.inv(to_camera)[:3, 3]  # the tracked point in the rectified camera
         for alignment in (Alignment.SE3, Alignment.SIM3):
