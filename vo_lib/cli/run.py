@@ -306,7 +306,7 @@ def evaluate_command(gt: str, est: str, segments=None, extrinsic_of: str | None 
     position-only truth that frame is the lever arm carried along the estimated poses.
     """
     from vo_lib.evaluation import Alignment, ate_positions, kitti_segment_errors, standard_errors
-    from vo_lib.formats.euroc import body_to_rectified_camera, truth_extrinsic
+    from vo_lib.formats.euroc import body_to_rectified_camera, tracked_to_camera
     from vo_lib.formats.groundtruth import GroundTruthError, TruthKind, read_groundtruth
 
     lengths = None if segments is None else tuple(segments)
@@ -322,7 +322,7 @@ def evaluate_command(gt: str, est: str, segments=None, extrinsic_of: str | None 
     recording = recording_of(gt, extrinsic_of)
     to_camera = np.eye(4)  # the rectified left camera in the tracked frame (body, prism)
     if recording is not None:
-        to_camera = np.linalg.inv(truth_extrinsic(Path(gt))) @ body_to_rectified_camera(recording)
+        to_camera = tracked_to_camera(gt, body_to_rectified_camera(recording))
     if truth.kind is TruthKind.POSITIONS:
         lever = np.linalg.inv(to_camera)[:3, 3]  # the tracked point in the rectified camera
         for alignment in (Alignment.SE3, Alignment.SIM3):
@@ -354,11 +354,9 @@ def convert_command(sequence: str, to: str, out: str, force: bool = False) -> No
     if not source.exists():
         raise UsageError(f"{sequence}: no such folder")
     seq = load_sequence(source, odometry=False, progress=False)  # before --out: a bad input changes nothing
-    manifest = (
-        {k: v for k, v in seq.manifest.items() if k != "layout"} if isinstance(seq.manifest, dict) else {}
-    )
+    manifest = {k: v for k, v in seq.manifest.items() if k != "layout"}
     writer = SequenceWriter(
-        out, seq.camera, force=force, option="--out", written_by="vo_lib convert", inputs=[source, seq.path]
+        out, seq.camera, force=force, option="--out", written_by="vo_lib convert", inputs=[seq.path]
     )
     with reading(seq.path), writer:
         for left, right in seq:

@@ -52,6 +52,7 @@ __all__ = [
     "read_camera_yaml",
     "read_image_list",
     "rectify",
+    "tracked_to_camera",
     "truth_extrinsic",
 ]
 
@@ -132,6 +133,13 @@ def body_to_rectified_camera(path) -> np.ndarray:
     return rectify(*calib, mav0).T_body_rect
 
 
+def tracked_to_camera(truth_path, T_body_rect) -> np.ndarray:
+    """``X``, the rectified left camera in the frame a ground-truth file tracks (the body, or the
+    prism of the ``sensor.yaml`` beside it): ``W_k X`` is the camera's pose, and the translation of
+    ``X^-1`` is the tracked point in the camera (a prism's lever arm)."""
+    return np.linalg.inv(truth_extrinsic(Path(truth_path))) @ T_body_rect
+
+
 def read_asl(path, groundtruth=None) -> Sequence:
     """Read an ASL recording as a rectified :class:`~vo_lib.formats.sequence.Sequence`.
 
@@ -177,11 +185,10 @@ def _truth_into_camera(truth_path: Path, seconds, T_body_rect, manifest: dict):
         i_img, i_gt = covering(truth, seconds)
     except GroundTruthError as exc:
         raise AslError(str(exc)) from None
-    extrinsic = truth_extrinsic(truth_path)  # the tracked frame (prism, body) in the body
+    X = tracked_to_camera(truth_path, T_body_rect)
     if truth.kind is TruthKind.POSES:
-        body = truth.poses[i_gt] @ np.linalg.inv(extrinsic)  # body in the world
-        return to_camera(body, T_body_rect)
-    lever = np.linalg.inv(T_body_rect) @ extrinsic[:, 3]  # the prism in the rectified camera
+        return to_camera(truth.poses[i_gt], X)
+    lever = np.linalg.inv(X)[:, 3]  # the prism in the rectified camera
     manifest["positions"] = {
         "file": str(truth_path),
         "frames": i_img.tolist(),
