@@ -643,10 +643,12 @@ def test_signals_leave_nothing_and_print_one_line(tmp_path, args, signum, code, 
         make_sequence(tmp_path / "long", frames=150, size=(320, 240))
     (tmp_path / "important.txt").write_text("keep\n")
     before = checksums(tmp_path, ())
+    env = cli_env(VO_LIB_DATA=str(tmp_path / "data"))
+    env.pop("VO_LIB_FRAME_STORE", None)  # frames the session stored would be written before the signal
     proc = subprocess.Popen(
         [sys.executable, "-m", "vo_lib", *args],
         cwd=tmp_path,
-        env=cli_env(VO_LIB_DATA=str(tmp_path / "data")),
+        env=env,
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,
