@@ -270,6 +270,10 @@ def test_asl_recording_is_rectified_and_its_truth_moved_into_the_left_camera():
         ("yaml", "cam0/sensor.yaml: key intrinsics"),
         ("rotation", "cam1/sensor.yaml: key T_BS"),
         ("baseline", "cam1/sensor.yaml: key T_BS puts cam1 where cam0 is"),
+        ("shape", "cam0/sensor.yaml: key T_BS: rows: 3, cols: 4; expected 4 and 4"),
+        ("centre", "cam1/sensor.yaml: key intrinsics: principal point (-379.999, 255.238) outside"),
+        ("focal", "cam0/sensor.yaml: keys intrinsics and distortion_coefficients leave 0% of"),
+        ("distortion", "cam1/sensor.yaml: keys intrinsics and distortion_coefficients leave 0% of"),
         ("camera", "cam1: missing camera folder"),
         ("timestamps", "has no image of the same timestamp"),
         ("truth", "the ground truth must cover every image"),
@@ -288,6 +292,17 @@ def test_a_bad_rig_gets_one_line_and_exit_2(tmp_path, capsys, damage, expected):
     elif damage == "rotation":
         path = mav0 / "cam1" / "sensor.yaml"
         path.write_text(path.read_text().replace("data: [0.0125", "data: [5.0125"))
+    elif damage in ("shape", "focal"):
+        path = mav0 / "cam0" / "sensor.yaml"
+        edit = ("rows: 4", "rows: 3") if damage == "shape" else ("[458.654, ", "[1e-9, ")
+        path.write_text(path.read_text().replace(*edit))
+    elif damage in ("centre", "distortion"):
+        path = mav0 / "cam1" / "sensor.yaml"
+        text = path.read_text()
+        if damage == "centre":
+            path.write_text(text.replace(", 379.999,", ", -379.999,"))
+        else:
+            path.write_text(text.replace("[-0.28368365,", "[1e30,"))
     elif damage == "baseline":
         shutil.copy(mav0 / "cam0" / "sensor.yaml", mav0 / "cam1" / "sensor.yaml")
     elif damage == "camera":

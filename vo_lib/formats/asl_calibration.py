@@ -21,6 +21,10 @@ from vo_lib.formats.poses import rotation_problem
 
 #: Shortest distance between the two cameras (metres) that makes a stereo rig.
 MIN_BASELINE_M = 1e-3
+#: Least share of an image that must stay valid once rectified: a calibration of the images at
+#: hand keeps nearly all of it; one that is not (a focal length or a distortion off by orders of
+#: magnitude) leaves a sliver or nothing.
+MIN_VALID_SHARE = 0.25
 
 
 class AslError(SequenceError):
@@ -75,6 +79,9 @@ def _yaml(path: Path) -> dict:
 def _numbers(path: Path, data: dict, key: str, count: int, what: str) -> np.ndarray:
     value = data.get(key)
     if isinstance(value, dict):  # T_BS: {rows, cols, data}
+        shape = (value.get("rows", 4), value.get("cols", 4))
+        if shape != (4, 4):
+            raise AslError(f"{path}: key {key}: rows: {shape[0]}, cols: {shape[1]}; expected 4 and 4")
         value = value.get("data")
     try:
         a = np.array(value, dtype=float).ravel()
@@ -111,6 +118,11 @@ def read_camera_yaml(path) -> CameraCalibration:
     width, height = _numbers(path, data, "resolution", 2, "[width, height]")
     if width < 1 or height < 1 or width != int(width) or height != int(height):
         raise AslError(f"{path}: key resolution: expected two positive whole numbers, got {[width, height]}")
+    if not (0 <= cu <= width and 0 <= cv <= height):
+        raise AslError(
+            f"{path}: key intrinsics: principal point ({cu:g}, {cv:g}) outside the "
+            f"{width:g}x{height:g} image (key resolution)"
+        )
     K = np.array([[fu, 0.0, cu], [0.0, fv, cv], [0.0, 0.0, 1.0]])
     return CameraCalibration(T, K, dist, (int(width), int(height)))
 
@@ -132,7 +144,7 @@ def rectify(left: CameraCalibration, right: CameraCalibration, where: Path) -> R
     size = left.resolution
     R = np.ascontiguousarray(T_right_left[:3, :3])
     t = T_right_left[:3, 3:].copy()
-    R1, R2, P1, P2, _, _, _ = cv2.stereoRectify(
+    R1, R2, P1, P2, _, *valid = cv2.stereoRectify(
         left.K,
         left.distortion,
         right.K,
@@ -143,6 +155,13 @@ def rectify(left: CameraCalibration, right: CameraCalibration, where: Path) -> R
         flags=cv2.CALIB_ZERO_DISPARITY,
         alpha=0.0,
     )
+    for side, (_, _, w, h) in zip(("cam0", "cam1"), valid, strict=True):
+        if w * h < MIN_VALID_SHARE * size[0] * size[1]:  # alpha = 0: the share of valid pixels
+            raise AslError(
+                f"{where / side / 'sensor.yaml'}: keys intrinsics and distortion_coefficients leave "
+                f"{w * h / (size[0] * size[1]):.0%} of the image valid once rectified; expected a "
+                "calibration of these images"
+            )
     try:
         camera = StereoCamera.from_projection_matrices(P1, P2, *size)
     except ValueError as exc:
