@@ -40,6 +40,8 @@ def wrap_angle(angle):
     float or numpy.ndarray
         The same angles, shifted by whole turns into ``[-pi, pi)``.
     """
+    if isinstance(angle, float):  # one angle (the filter's hot path): the same sum, without an array
+        return (float(angle) + math.pi) % (2.0 * math.pi) - math.pi
     wrapped = np.mod(np.asarray(angle, dtype=float) + np.pi, 2.0 * np.pi) - np.pi
     return float(wrapped) if wrapped.ndim == 0 else wrapped
 
@@ -73,6 +75,10 @@ def compose_planar(pose, increment) -> np.ndarray:
     """
     pose = np.asarray(pose, dtype=float)
     inc = np.asarray(increment, dtype=float)
+    if pose.shape == inc.shape == (3,):  # one pose: the same sums on floats, several times faster
+        (x, y, yaw), (dx, dy, dyaw) = pose.tolist(), inc.tolist()
+        c, s = math.cos(yaw), math.sin(yaw)
+        return np.array([x + c * dx - s * dy, y + s * dx + c * dy, wrap_angle(yaw + dyaw)])
     c, s = np.cos(pose[..., 2]), np.sin(pose[..., 2])
     out = np.empty(np.broadcast_shapes(pose.shape, inc.shape))
     out[..., 0] = pose[..., 0] + c * inc[..., 0] - s * inc[..., 1]
@@ -88,6 +94,11 @@ def relative_planar(pose_from, pose_to) -> np.ndarray:
     """
     a = np.asarray(pose_from, dtype=float)
     b = np.asarray(pose_to, dtype=float)
+    if a.shape == b.shape == (3,):  # one pose: the same sums on floats, several times faster
+        (ax, ay, ayaw), (bx, by, byaw) = a.tolist(), b.tolist()
+        c, s = math.cos(ayaw), math.sin(ayaw)
+        dx, dy = bx - ax, by - ay
+        return np.array([c * dx + s * dy, -s * dx + c * dy, wrap_angle(byaw - ayaw)])
     c, s = np.cos(a[..., 2]), np.sin(a[..., 2])
     dx, dy = b[..., 0] - a[..., 0], b[..., 1] - a[..., 1]
     out = np.empty(np.broadcast_shapes(a.shape, b.shape))
