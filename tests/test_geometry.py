@@ -57,3 +57,16 @@ def test_as_match_array_errors_name_the_argument():
         as_match_array("w_prev", np.zeros(4))
     with pytest.raises(ValueError, match="w_curr must be finite; row 1"):
         as_match_array("w_curr", [[1, 2, 3], [1, np.nan, 3]])
+
+
+def test_one_pose_gives_the_batched_result_bit_for_bit():
+    """One pose takes a path of plain floats (the filter's hot path): it must not differ at all
+    from the batched arrays, whose results the rest of the library sees."""
+    rng = np.random.default_rng(3)
+    a, b = rng.normal(0.0, 4.0, (500, 3)), rng.normal(0.0, 4.0, (500, 3))
+    a[:20, 2], b[20:40, 2] = np.pi, -np.pi  # the wrap's edges
+    for f in (relative_planar, compose_planar):
+        one = np.array([f(p, q) for p, q in zip(a, b, strict=True)])
+        assert np.array_equal(one, f(a, b))
+    angles = np.concatenate([a[:, 2], [np.pi, -np.pi, 3 * np.pi, 0.0]])
+    assert np.array_equal([wrap_angle(float(x)) for x in angles], wrap_angle(angles))
