@@ -188,6 +188,8 @@ def _is_image(entry: os.DirEntry) -> bool:
         if entry.is_symlink():
             target = os.readlink(entry.path)
             raise SequenceError(f"{entry.path}: a symbolic link to {target}, which does not exist")
+        if entry.is_dir():
+            raise SequenceError(f"{entry.path}: a folder named like an image; expected an image file")
         return False
     if not re.search(r"[0-9]", entry.name):
         raise SequenceError(
