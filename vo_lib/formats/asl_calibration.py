@@ -156,11 +156,11 @@ def rectify(left: CameraCalibration, right: CameraCalibration, where: Path) -> R
         alpha=0.0,
     )
     for side, (_, _, w, h) in zip(("cam0", "cam1"), valid, strict=True):
-        if w * h < MIN_VALID_SHARE * size[0] * size[1]:  # alpha = 0: the share of valid pixels
+        share = w * h / (size[0] * size[1])  # of the rectified image that is valid (alpha = 0)
+        if share < MIN_VALID_SHARE:
             raise AslError(
                 f"{where / side / 'sensor.yaml'}: keys intrinsics and distortion_coefficients leave "
-                f"{w * h / (size[0] * size[1]):.0%} of the image valid once rectified; expected a "
-                "calibration of these images"
+                f"{share:.0%} of the image valid once rectified; expected a calibration of these images"
             )
     try:
         camera = StereoCamera.from_projection_matrices(P1, P2, *size)
