@@ -142,6 +142,7 @@ def test_the_project_settings_start_kernels_over_ipc():
 
 
 @pytest.mark.notebook
+@pytest.mark.course
 def test_release_fetch_submit_collect_autograde_feedback(course):
     from nbgrader.api import Gradebook
 
