@@ -270,12 +270,17 @@ def test_asl_recording_is_rectified_and_its_truth_moved_into_the_left_camera():
         ("yaml", "cam0/sensor.yaml: key intrinsics"),
         ("rotation", "cam1/sensor.yaml: key T_BS"),
         ("baseline", "cam1/sensor.yaml: key T_BS puts cam1 where cam0 is"),
-        ("shape", "cam0/sensor.yaml: key T_BS: rows: 3, cols: 4; expected 4 and 4"),
+        ("shape", "cam0/sensor.yaml: key T_BS: rows: 3, cols: 4; expected the numbers 4 and 4"),
+        ("millimetres", "cam1/sensor.yaml: key T_BS puts cam1 50.19 m from cam0; expected metres"),
+        ("model", "cam0/sensor.yaml: key camera_model: 'omni' is not supported; expected pinhole"),
         ("centre", "cam1/sensor.yaml: key intrinsics: principal point (-379.999, 255.238) outside"),
         ("focal", "cam0/sensor.yaml: keys intrinsics and distortion_coefficients leave 0% of"),
         ("distortion", "cam1/sensor.yaml: keys intrinsics and distortion_coefficients leave 0% of"),
         ("camera", "cam1: missing camera folder"),
         ("timestamps", "has no image of the same timestamp"),
+        ("order", "cam0/data.csv, line 4: timestamp 1403636584813555456 does not come after"),
+        ("missing", "cam1/data/1403636584963555584.png: listed in data.csv but missing"),
+        ("size", "cam1/data/1403636584963555584.png, frame 4: 640x480 image, but"),
         ("truth", "the ground truth must cover every image"),
     ],
 )
@@ -296,6 +301,25 @@ def test_a_bad_rig_gets_one_line_and_exit_2(tmp_path, capsys, damage, expected):
         path = mav0 / "cam0" / "sensor.yaml"
         edit = ("rows: 4", "rows: 3") if damage == "shape" else ("[458.654, ", "[1e-9, ")
         path.write_text(path.read_text().replace(*edit))
+    elif damage == "millimetres":  # its translation written in millimetres
+        path = mav0 / "cam1" / "sensor.yaml"
+        text = path.read_text()
+        for metres in ("-0.0198435579556", "0.0453689425024", "0.00786212447038"):
+            text = text.replace(metres, f"{1000 * float(metres):.10g}")
+        path.write_text(text)
+    elif damage == "model":
+        path = mav0 / "cam0" / "sensor.yaml"
+        path.write_text(path.read_text().replace("camera_model: pinhole", "camera_model: omni"))
+    elif damage == "order":  # two rows swapped
+        path = mav0 / "cam0" / "data.csv"
+        lines = path.read_text().splitlines()
+        lines[2], lines[3] = lines[3], lines[2]
+        path.write_text("\n".join(lines) + "\n")
+    elif damage in ("missing", "size"):  # an image in the middle of the recording
+        image = mav0 / "cam1" / "data" / "1403636584963555584.png"
+        image.unlink()
+        if damage == "size":
+            cv2.imwrite(str(image), np.zeros((480, 640), np.uint8))
     elif damage in ("centre", "distortion"):
         path = mav0 / "cam1" / "sensor.yaml"
         text = path.read_text()
@@ -409,6 +433,53 @@ def test_evaluate_reads_tum_euroc_csv_and_positions(tmp_path, capsys):
     without = ate_positions(leica.positions[i_leica], truth.poses[i_truth])[0].rmse
     # (the raw tracker's clock is a few ms off the estimate's, which EuRoC estimated: about 4 cm here)
     assert with_arm < 0.05 and with_arm < without - 0.003
+
+
+@needs_euroc
+def test_evaluate_refuses_a_truth_it_would_misread(tmp_path, capsys):
+    """What would print a wrong figure with exit 0 gets one line and exit 2 (a quaternion in
+    another order than its header names, KITTI camera poses moved again by an extrinsic, times in
+    another unit than the file's kind), or a notice (an EuRoC CSV compared in its body frame)."""
+    from vo_lib.cli.main import main
+    from vo_lib.formats.groundtruth import read_groundtruth
+
+    truth = read_groundtruth(EUROC / "mav0" / "state_groundtruth_estimate0" / "groundtruth.tum")
+    q = Rotation.from_matrix(truth.poses[:, :3, :3]).as_quat()  # x y z w
+    est = tmp_path / "est.tum"
+    write_tum(est, truth.times[::10], truth.poses[::10])
+
+    def table(path, header, times, quat, sep):
+        rows = np.column_stack([times, truth.positions, quat])
+        path.write_text(header + "\n" + "".join(sep.join(f"{v:.9f}" for v in r) + "\n" for r in rows))
+        return path
+
+    ns = np.round(truth.times * 1e9)
+    cases = [
+        (
+            table(tmp_path / "a.csv", "# t, x, y, z, qx, qy, qz, qw", ns, q, ","),
+            [],
+            "orders the quaternion x y z w",
+        ),
+        (
+            table(tmp_path / "b.txt", "# t x y z qw qx qy qz", truth.times, q[:, [3, 0, 1, 2]], " "),
+            [],
+            "orders the quaternion w x y z",
+        ),
+        (
+            table(tmp_path / "c.csv", "# t, x, y, z, qw, qx, qy, qz", truth.times, q[:, [3, 0, 1, 2]], ","),
+            [],
+            "a CSV's times are read as nanoseconds",
+        ),
+        (tmp_path / "kitti.txt", ["--extrinsic-of", str(EUROC)], "holds KITTI poses, which are a camera's"),
+    ]
+    np.savetxt(tmp_path / "kitti.txt", truth.poses[::10, :3, :].reshape(-1, 12))
+    for gt, extra, expected in cases:
+        assert main(["evaluate", "--gt", str(gt), "--est", str(est), *extra]) == 2, gt
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and expected in err[0], err
+    euroc = table(tmp_path / "d.csv", "# t, x, y, z, qw, qx, qy, qz", ns, q[:, [3, 0, 1, 2]], ",")
+    assert main(["evaluate", "--gt", str(euroc), "--est", str(est)]) == 0
+    assert "is an EuRoC CSV, whose poses are of the body: compared as they are" in capsys.readouterr().out
 
 
 def readme_3d_rows() -> dict[tuple[str, str], list[float]]:

@@ -273,7 +273,11 @@ def _associated(truth, gt: str, est: str, times, E: np.ndarray) -> tuple[np.ndar
         return np.arange(len(E)), np.arange(len(E))
     i_est, i_gt = associate(times, truth.times)
     if len(i_est) < 2:
-        raise UsageError(f"--gt {gt}: no timestamp within 0.01 s of --est {est}'s; both must use one clock")
+        raise UsageError(
+            f"--gt {gt}: no timestamp within 0.01 s of --est {est}'s (--gt spans {truth.times[0]:.3f} to "
+            f"{truth.times[-1]:.3f} s, --est {times[0]:.3f} to {times[-1]:.3f} s; a CSV's times are read "
+            "as nanoseconds, a text file's as seconds); both must use one clock"
+        )
     print(f"associated {len(i_est)} of {len(E)} poses by timestamp (within 0.01 s)")
     return i_est, i_gt
 
@@ -319,7 +323,17 @@ def evaluate_command(gt: str, est: str, segments=None, extrinsic_of: str | None 
     except TrajectoryError as exc:
         raise UsageError(f"--est {exc}") from None
     i_est, i_gt = _associated(truth, gt, est, times, E)
+    if truth.times is None and extrinsic_of is not None:
+        raise UsageError(
+            f"--extrinsic-of {extrinsic_of}: --gt {gt} holds KITTI poses, which are a camera's already; "
+            "expected a body-frame truth (TUM, EuRoC CSV or positions)"
+        )
     recording = recording_of(gt, extrinsic_of)
+    if recording is None and truth.kind is TruthKind.POSES and truth.csv:
+        print(
+            f"--gt {gt} is an EuRoC CSV, whose poses are of the body: compared as they are "
+            "(--extrinsic-of RECORDING moves them into its rectified left camera)"
+        )
     to_camera = np.eye(4)  # the rectified left camera in the tracked frame (body, prism)
     if recording is not None:
         to_camera = tracked_to_camera(gt, body_to_rectified_camera(recording))

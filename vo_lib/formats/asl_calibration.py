@@ -19,8 +19,10 @@ from vo_lib.camera import StereoCamera
 from vo_lib.formats.frame_files import SequenceError
 from vo_lib.formats.poses import rotation_problem
 
-#: Shortest distance between the two cameras (metres) that makes a stereo rig.
+#: Shortest and longest distance between the two cameras (metres) that make a stereo rig: a
+#: baseline beyond the longest is a calibration written in millimetres or centimetres.
 MIN_BASELINE_M = 1e-3
+MAX_BASELINE_M = 10.0
 #: Least share of an image that must stay valid once rectified: a calibration of the images at
 #: hand keeps nearly all of it; one that is not (a focal length or a distortion off by orders of
 #: magnitude) leaves a sliver or nothing.
@@ -81,7 +83,9 @@ def _numbers(path: Path, data: dict, key: str, count: int, what: str) -> np.ndar
     if isinstance(value, dict):  # T_BS: {rows, cols, data}
         shape = (value.get("rows", 4), value.get("cols", 4))
         if shape != (4, 4):
-            raise AslError(f"{path}: key {key}: rows: {shape[0]}, cols: {shape[1]}; expected 4 and 4")
+            raise AslError(
+                f"{path}: key {key}: rows: {shape[0]!r}, cols: {shape[1]!r}; expected the numbers 4 and 4"
+            )
         value = value.get("data")
     try:
         a = np.array(value, dtype=float).ravel()
@@ -98,13 +102,17 @@ def read_camera_yaml(path) -> CameraCalibration:
     """One camera's calibration from its ``sensor.yaml``; raises :class:`AslError` naming the key."""
     path = Path(path)
     data = _yaml(path)
-    T = _numbers(path, data, "T_BS", 16, "a 4x4 camera-to-body transform, data: [16 numbers]").reshape(4, 4)
+    T = _numbers(path, data, "T_BS", 16, "a 4x4 camera-to-body transform as data").reshape(4, 4)
     problem = rotation_problem(T[:3, :3])
     if problem or not np.allclose(T[3], [0, 0, 0, 1]):
         raise AslError(f"{path}: key T_BS: {problem or 'the last row is not 0 0 0 1'}")
     fu, fv, cu, cv = _numbers(path, data, "intrinsics", 4, "[fu, fv, cu, cv]")
     if fu <= 0 or fv <= 0:
         raise AslError(f"{path}: key intrinsics: focal lengths must be > 0, got fu={fu:g}, fv={fv:g}")
+    if data.get("camera_model", "pinhole") != "pinhole":
+        raise AslError(
+            f"{path}: key camera_model: {data['camera_model']!r} is not supported; expected pinhole"
+        )
     model = data.get("distortion_model", "radial-tangential")
     if model not in ("radial-tangential", "radtan", "none"):
         raise AslError(
@@ -117,7 +125,9 @@ def read_camera_yaml(path) -> CameraCalibration:
     )
     width, height = _numbers(path, data, "resolution", 2, "[width, height]")
     if width < 1 or height < 1 or width != int(width) or height != int(height):
-        raise AslError(f"{path}: key resolution: expected two positive whole numbers, got {[width, height]}")
+        raise AslError(
+            f"{path}: key resolution: expected two positive whole numbers, got [{width:g}, {height:g}]"
+        )
     if not (0 <= cu <= width and 0 <= cv <= height):
         raise AslError(
             f"{path}: key intrinsics: principal point ({cu:g}, {cv:g}) outside the "
@@ -136,10 +146,16 @@ def rectify(left: CameraCalibration, right: CameraCalibration, where: Path) -> R
             f"{right.resolution[0]}x{right.resolution[1]} (key resolution); expected one size"
         )
     T_right_left = np.linalg.inv(right.T_BS) @ left.T_BS  # left camera -> right camera
-    if np.linalg.norm(T_right_left[:3, 3]) < MIN_BASELINE_M:
+    baseline = float(np.linalg.norm(T_right_left[:3, 3]))
+    if baseline < MIN_BASELINE_M:
         raise AslError(
             f"{where / 'cam1' / 'sensor.yaml'}: key T_BS puts cam1 where cam0 is (baseline "
-            f"{np.linalg.norm(T_right_left[:3, 3]):.3g} m); expected two cameras apart"
+            f"{baseline:.3g} m); expected two cameras apart"
+        )
+    if baseline > MAX_BASELINE_M:
+        raise AslError(
+            f"{where / 'cam1' / 'sensor.yaml'}: key T_BS puts cam1 {baseline:.4g} m from cam0; expected "
+            f"metres (a stereo rig's baseline is under {MAX_BASELINE_M:g} m)"
         )
     size = left.resolution
     R = np.ascontiguousarray(T_right_left[:3, :3])

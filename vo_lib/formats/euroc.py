@@ -39,7 +39,8 @@ from vo_lib.formats.groundtruth import (
     read_groundtruth,
     to_camera,
 )
-from vo_lib.formats.sequence import Sequence, image_header
+from vo_lib.formats.images import check_headers
+from vo_lib.formats.sequence import Sequence
 
 __all__ = [
     "AslError",
@@ -83,7 +84,7 @@ def read_image_list(camera_dir: Path) -> tuple[np.ndarray, list[Path]]:
         raise AslError(f"{camera_dir}: missing camera folder (data/, data.csv, sensor.yaml)")
     if not csv_path.is_file():
         raise AslError(f"{csv_path}: missing (one line 'timestamp [ns],filename' per image)")
-    stamps, files = [], []
+    stamps, files, lines = [], [], []
     for n, line in enumerate(csv_path.read_text(encoding="utf-8-sig").split("\n"), start=1):
         line = line.strip()
         if not line or line.startswith("#"):
@@ -93,12 +94,16 @@ def read_image_list(camera_dir: Path) -> tuple[np.ndarray, list[Path]]:
             raise AslError(f"{csv_path}, line {n}: expected 'timestamp [ns],filename', got {line[:50]!r}")
         stamps.append(int(stamp))
         files.append(camera_dir / "data" / name.strip())
+        lines.append(n)
     if not stamps:
         raise AslError(f"{csv_path}: no images listed")
     order = np.diff(stamps)
     if np.any(order <= 0):
         n = int(np.flatnonzero(order <= 0)[0]) + 1
-        raise AslError(f"{csv_path}: timestamp {stamps[n]} does not come after {stamps[n - 1]}")
+        raise AslError(
+            f"{csv_path}, line {lines[n]}: timestamp {stamps[n]} does not come after {stamps[n - 1]} "
+            f"(line {lines[n - 1]}); expected increasing timestamps"
+        )
     return np.array(stamps, dtype=np.int64), files
 
 
@@ -113,7 +118,7 @@ def pair_by_timestamp(mav0: Path) -> tuple[np.ndarray, list[Path], list[Path]]:
             f"{mav0 / side / 'data.csv'}: timestamp {int(only[0])} has no image of the same timestamp on "
             f"the other camera ({len(only)} unpaired); the two cameras must be triggered together"
         )
-    for path in (left[0], right[0], left[-1], right[-1]):
+    for path in (*left, *right):
         if not path.is_file():
             raise AslError(f"{path}: listed in data.csv but missing")
     return t0, left, right
@@ -157,7 +162,7 @@ def read_asl(path, groundtruth=None) -> Sequence:
     calib = [read_camera_yaml(mav0 / side / "sensor.yaml") for side in ("cam0", "cam1")]
     rect = rectify(*calib, mav0)
     stamps, left, right = pair_by_timestamp(mav0)
-    width, height, _ = image_header(left[0], 0)
+    width, height = check_headers(left, right)  # every image, before the run: none fails late
     if (width, height) != calib[0].resolution:
         raise AslError(
             f"{left[0]}: {width}x{height} image but {mav0 / 'cam0' / 'sensor.yaml'} says resolution "

@@ -13,6 +13,8 @@ positions (CSV or text)   ``t, x, y, z`` (a laser tracker's prism, a GPS antenna
 
 A CSV is a file whose first data row holds commas; its timestamps are nanoseconds (EuRoC's
 ``leica0/data.csv`` and ``state_groundtruth_estimate0/data.csv``), a text file's are seconds.
+A header line that names the quaternion's components in another order than the format's is
+refused (:func:`header_quaternion_order`): the columns are told apart by the file's kind only.
 Poses are of the frame the file states (a body frame, or a camera); :func:`to_camera` moves them
 into a camera with the extrinsic ``T_body_camera``. Association follows evo
 (``evo.core.sync.associate_trajectories``): every query time takes the nearest ground-truth
@@ -23,6 +25,7 @@ Every problem raises one :class:`GroundTruthError` naming the file and line.
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass
 from enum import Enum
 from pathlib import Path
@@ -36,6 +39,8 @@ from vo_lib.geometry import as_homogeneous
 #: default ``max_diff``.
 MAX_TIME_DIFF_S = 0.01
 NANOSECONDS = 1e-9
+#: A header field naming a quaternion component: ``qw``, ``q_w``, ``q_RS_w []``, ``qx`` ...
+QUATERNION_FIELD = re.compile(r"q(?:_[a-z0-9]+)*?_?([wxyz])(?=$|[\s\[(])")
 
 
 class GroundTruthError(TrajectoryError):
@@ -56,13 +61,14 @@ class TruthKind(str, Enum):
 class GroundTruth:
     """A ground truth as read: ``times`` in seconds (None for KITTI poses, one per image),
     ``poses`` ``(N, 4, 4)`` of the file's frame in its world (None for positions only) and
-    ``positions`` ``(N, 3)``."""
+    ``positions`` ``(N, 3)``; ``csv``: a CSV (EuRoC's, times in nanoseconds, poses of the body)."""
 
     path: Path
     kind: TruthKind
     times: np.ndarray | None
     positions: np.ndarray
     poses: np.ndarray | None = None
+    csv: bool = False
 
 
 def read_groundtruth(path, min_poses: int = 2) -> GroundTruth:
@@ -74,6 +80,17 @@ def read_groundtruth(path, min_poses: int = 2) -> GroundTruth:
     except TrajectoryError as exc:
         raise GroundTruthError(str(exc)) from None
     width = a.shape[1]
+    expected = "wxyz" if comma else "xyzw"
+    order, line = header_quaternion_order(path, lines[0])
+    if width >= 8 and order not in ("", expected):
+        raise GroundTruthError(
+            f"{path}, line {line}: the header orders the quaternion {' '.join(order)}; "
+            + (
+                "a CSV is read as EuRoC's t[ns], x, y, z, qw, qx, qy, qz"
+                if comma
+                else "a text file is read as TUM's t x y z qx qy qz qw"
+            )
+        )
     if comma and 4 < width < 8:
         raise GroundTruthError(
             f"{path}, line {lines[0]}: {width} numbers; expected t[ns], x, y, z (positions) "
@@ -84,9 +101,24 @@ def read_groundtruth(path, min_poses: int = 2) -> GroundTruth:
         return GroundTruth(path, TruthKind.POSES, None, poses[:, :3, 3].copy(), poses)
     times, positions = a[:, 0] * (NANOSECONDS if comma else 1.0), a[:, 1:4]
     if width == 4:
-        return GroundTruth(path, TruthKind.POSITIONS, times, positions)
+        return GroundTruth(path, TruthKind.POSITIONS, times, positions, csv=comma)
     quat_xyzw = a[:, [5, 6, 7, 4]] if comma else a[:, 4:8]  # EuRoC: qw qx qy qz
-    return GroundTruth(path, TruthKind.POSES, times, positions, pose_matrices(positions, quat_xyzw))
+    return GroundTruth(path, TruthKind.POSES, times, positions, pose_matrices(positions, quat_xyzw), comma)
+
+
+def header_quaternion_order(path: Path, first_row_line: int) -> tuple[str, int]:
+    """The quaternion's components in the order the last comment line before the first row names
+    them (``"wxyz"``, ``"xyzw"``, ...) and that line's number; ``("", 0)`` where none names all four."""
+    order, found = "", 0
+    with open(path, encoding="utf-8-sig", errors="replace") as fh:
+        for n, line in enumerate(fh, start=1):
+            if n >= first_row_line:
+                break
+            fields = re.split(r"[,\s]+", line.lstrip("#% \t").strip().lower())
+            names = "".join(m.group(1) for f in fields if (m := QUATERNION_FIELD.match(f)))
+            if sorted(names) == list("wxyz"):
+                order, found = names, n
+    return order, found
 
 
 def associate(query_times, truth_times, max_diff: float = MAX_TIME_DIFF_S) -> tuple[np.ndarray, np.ndarray]:
