@@ -293,7 +293,8 @@ def test_readme_quotes_the_laps(laps):
     text = re.sub(r"\s+", " ", text)
     m = re.search(
         r"ends ([0-9.]+) ± ([0-9.]+) m from the truth where dead reckoning ends ([0-9.]+) ± ([0-9.]+) m off "
-        r"\(([0-9]+)×; closer on ([0-9]+) of the ([0-9]+) laps\)\. The pose NEES, averaged over the laps, is ([0-9.]+) over the lap and lies above "
+        r"\(([0-9]+)×; closer on ([0-9]+) of the ([0-9]+) laps\)\. "
+        r"The pose NEES, averaged over the laps, is ([0-9.]+) over the lap and lies above "
         r"its per-step 95 % band \[([0-9.]+), ([0-9.]+)\] at ([0-9]+) % of the steps",
         text,
     )
