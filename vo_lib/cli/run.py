@@ -338,8 +338,8 @@ def evaluate_command(gt: str, est: str, segments=None, extrinsic_of: str | None 
     if recording is not None:
         to_camera = tracked_to_camera(gt, body_to_rectified_camera(recording))
     if truth.kind is TruthKind.POSITIONS:
-        if lengths is not None:
-            print(f"--segments: --gt {gt} holds positions only, which give the ATE alone")
+        ignored = f"--segments: --gt {gt} holds positions only, which give the ATE alone\n"
+        print("" if lengths is None else ignored, end="")
         lever = np.linalg.inv(to_camera)[:3, 3]  # the tracked point in the rectified camera
         for alignment in (Alignment.SE3, Alignment.SIM3):
             a, _ = ate_positions(truth.positions[i_gt], E[i_est], lever, alignment)
