@@ -81,8 +81,8 @@ def read_groundtruth(path, min_poses: int = 2) -> GroundTruth:
         raise GroundTruthError(str(exc)) from None
     width = a.shape[1]
     expected = "wxyz" if comma else "xyzw"
-    order, line = header_quaternion_order(path, lines[0])
-    if width >= 8 and order not in ("", expected):
+    order, line = header_quaternion_order(path, lines[0]) if width >= 8 else ("", 0)
+    if order not in ("", expected):
         raise GroundTruthError(
             f"{path}, line {line}: the header orders the quaternion {' '.join(order)}; "
             + (
@@ -103,7 +103,9 @@ def read_groundtruth(path, min_poses: int = 2) -> GroundTruth:
     if width == 4:
         return GroundTruth(path, TruthKind.POSITIONS, times, positions, csv=comma)
     quat_xyzw = a[:, [5, 6, 7, 4]] if comma else a[:, 4:8]  # EuRoC: qw qx qy qz
-    return GroundTruth(path, TruthKind.POSES, times, positions, pose_matrices(positions, quat_xyzw), comma)
+    return GroundTruth(
+        path, TruthKind.POSES, times, positions, pose_matrices(positions, quat_xyzw), csv=comma
+    )
 
 
 def header_quaternion_order(path: Path, first_row_line: int) -> tuple[str, int]:
