@@ -285,3 +285,25 @@ def test_association_equals_evo(rng):
     b = PoseTrajectory3D(poses_se3=eye * len(truth_t), timestamps=truth_t)
     a2, b2 = sync.associate_trajectories(a, b, max_diff=0.01)
     assert np.allclose(a2.timestamps, query_t[i_q]) and np.allclose(b2.timestamps, truth_t[i_t])
+
+
+def test_rows_read_at_once_equal_rows_read_one_by_one_and_a_bad_row_is_named(tmp_path, rng):
+    """The fast whole-file read gives what ``float`` gives row by row; a row it cannot read (an
+    inline comment, a missing number) falls back to the row-by-row read, which names the line."""
+    from vo_lib.formats.poses import TrajectoryError, read_rows
+
+    T = random_trajectory(rng, 40)
+    write_kitti_poses(tmp_path / "poses.txt", T)
+    text = (tmp_path / "poses.txt").read_text()
+    a, lines, comma = read_rows(tmp_path / "poses.txt")
+    by_row = [[float(v) for v in line.split()] for line in text.splitlines() if line.strip()]
+    assert np.array_equal(a, by_row) and lines == list(range(1, 41)) and not comma
+    rows = text.splitlines()
+    bad_rows = {
+        rows[5] + " # a comment": "line 6: not a row of numbers",
+        rows[5].rsplit(" ", 1)[0]: "line 6: expected 12 numbers like line 1, got 11",
+    }
+    for bad, message in bad_rows.items():
+        (tmp_path / "bad.txt").write_text("\n".join(rows[:5] + [bad] + rows[6:]) + "\n")
+        with pytest.raises(TrajectoryError, match=message):
+            read_rows(tmp_path / "bad.txt")

@@ -10,6 +10,7 @@ from vo_lib.geometry import (
     matrix_to_planar,
     planar_to_matrix,
     relative_planar,
+    rigid_inverse,
     wrap_angle,
 )
 
@@ -70,3 +71,13 @@ def test_one_pose_gives_the_batched_result_bit_for_bit():
         assert np.array_equal(one, f(a, b))
     angles = np.concatenate([a[:, 2], [np.pi, -np.pi, 3 * np.pi, 0.0]])
     assert np.array_equal([wrap_angle(float(x)) for x in angles], wrap_angle(angles))
+
+
+def test_rigid_inverse_is_the_matrix_inverse_batched_and_single(rng):
+    from scipy.spatial.transform import Rotation
+
+    T = np.tile(np.eye(4), (50, 1, 1))
+    T[:, :3, :3] = Rotation.random(50, random_state=rng).as_matrix()
+    T[:, :3, 3] = rng.normal(0, 100, (50, 3))
+    np.testing.assert_allclose(rigid_inverse(T), np.linalg.inv(T), atol=1e-12)
+    np.testing.assert_allclose(rigid_inverse(T[7]) @ T[7], np.eye(4), atol=1e-12)

@@ -20,7 +20,7 @@ from enum import Enum
 
 import numpy as np
 
-from vo_lib.geometry import as_homogeneous, wrap_angle
+from vo_lib.geometry import as_homogeneous, rigid_inverse, wrap_angle
 
 
 @dataclass(frozen=True)
@@ -171,9 +171,9 @@ def rpe(
     if not 1 <= delta < len(G):
         raise ValueError(f"delta must lie in 1..{len(G) - 1}; got {delta}")
     first = np.arange(0, len(G) - delta, 1 if all_pairs else delta)
-    rel_gt = np.linalg.inv(G[first]) @ G[first + delta]
-    rel_est = np.linalg.inv(E[first]) @ E[first + delta]
-    err = np.linalg.inv(rel_gt) @ rel_est
+    rel_gt = rigid_inverse(G[first]) @ G[first + delta]
+    rel_est = rigid_inverse(E[first]) @ E[first + delta]
+    err = rigid_inverse(rel_gt) @ rel_est
     if rotation:
         errors = np.degrees(rotation_angle(err[:, :3, :3]))
     else:
@@ -256,7 +256,7 @@ def final_error_3d(gt, est) -> FinalError3D:
     """Final 3-D position and rotation errors of camera poses ``(N, 4, 4)``, each trajectory in
     the frame of its first pose (no alignment: what a run that starts at the truth ends with)."""
     G, E = _pair(gt, est)
-    G, E = np.linalg.inv(G[0]) @ G, np.linalg.inv(E[0]) @ E
+    G, E = rigid_inverse(G[0]) @ G, rigid_inverse(E[0]) @ E
     distance = float(path_lengths(G)[-1])
     position = float(np.linalg.norm(E[-1, :3, 3] - G[-1, :3, 3]))
     rotation = float(np.degrees(rotation_angle(G[-1, :3, :3].T @ E[-1, :3, :3])))
@@ -299,28 +299,26 @@ def segment_lengths(gt) -> tuple[float, ...]:
     return tuple(float(f"{f * total:.2g}") for f in SHORT_FRACTIONS if f * total > 0)
 
 
-def segment_pairs(gt, length: float, step: int = KITTI_STEP) -> list[tuple[int, int]]:
+def segment_pairs(gt, length: float, step: int = KITTI_STEP) -> np.ndarray:
     """``(first, last)`` frames of the segments of ``length`` metres, as KITTI's devkit picks them:
-    a start every ``step`` frames, the end at the first frame at least ``length`` further along."""
+    a start every ``step`` frames, the end at the first frame at least ``length`` further along;
+    shape ``(n, 2)``, in order, stopping at the first start whose segment runs past the end."""
     dist = path_lengths(as_homogeneous(gt))
-    pairs = []
-    for first in range(0, len(dist), step):
-        last = int(np.searchsorted(dist, dist[first] + length))
-        if last >= len(dist):
-            break
-        pairs.append((first, last))
-    return pairs
+    first = np.arange(0, len(dist), step)
+    last = np.searchsorted(dist, dist[first] + length)
+    past = np.flatnonzero(last >= len(dist))
+    n = past[0] if len(past) else len(first)
+    return np.column_stack([first[:n], last[:n]]).astype(int)
 
 
 def segment_errors(G: np.ndarray, E: np.ndarray, length: float, step: int = KITTI_STEP) -> np.ndarray:
     """The KITTI odometry benchmark's error of every segment of ``length`` metres (Geiger et al.
     2012; the devkit's ``calcSequenceErrors``): ``E = (P_i^-1 P_j)^-1 (Q_i^-1 Q_j)``, as rows of
     translation ``|t(E)| / length`` and rotation ``angle(E) / length`` (degrees per metre)."""
-    rows = []
-    for first, last in segment_pairs(G, length, step):
-        err = np.linalg.inv(np.linalg.inv(E[first]) @ E[last]) @ (np.linalg.inv(G[first]) @ G[last])
-        rows.append((np.linalg.norm(err[:3, 3]) / length, np.degrees(rotation_angle(err[:3, :3])) / length))
-    return np.reshape(rows, (-1, 2))
+    first, last = segment_pairs(G, length, step).T
+    err = rigid_inverse(rigid_inverse(E[first]) @ E[last]) @ (rigid_inverse(G[first]) @ G[last])
+    translation = np.linalg.norm(err[:, :3, 3], axis=-1) / length
+    return np.column_stack([translation, np.degrees(rotation_angle(err[:, :3, :3])) / length])
 
 
 def kitti_errors(gt, est, lengths=None, step: int = KITTI_STEP) -> KittiErrors | None:

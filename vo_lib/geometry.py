@@ -153,6 +153,18 @@ def as_homogeneous(poses) -> np.ndarray:
     return T
 
 
+def rigid_inverse(T) -> np.ndarray:
+    """Inverses of rigid transforms ``(..., 4, 4)`` in closed form: ``[R t]^-1 = [R^T  -R^T t]``."""
+    T = np.asarray(T, dtype=float)
+    R_t = np.swapaxes(T[..., :3, :3], -1, -2)
+    inverse = np.zeros_like(T)
+    inverse[..., :3, :3] = R_t
+    # -R^T t
+    inverse[..., :3, 3] = -np.einsum("...ij,...j->...i", R_t, T[..., :3, 3])
+    inverse[..., 3, 3] = 1.0
+    return inverse
+
+
 def camera_poses_from_planar(planar_poses, T_robot_camera) -> np.ndarray:
     """KITTI-style camera poses ``(N, 4, 4)``, each in the first camera's frame, of planar robot poses."""
     poses = np.asarray(planar_poses, dtype=float)

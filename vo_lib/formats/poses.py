@@ -119,8 +119,10 @@ def _check(path: Path, a: np.ndarray, lines: list[int], comma: bool) -> None:
         t = a[:, 0]
         refuse(
             np.concatenate([[False], np.diff(t) <= 0]),
-            lambda k: f"timestamp {t[k]:.9g} {'repeats' if t[k] == t[k - 1] else 'comes before'} "
-            f"the one on line {lines[k - 1]}; timestamps must increase",
+            lambda k: (
+                f"timestamp {t[k]:.9g} {'repeats' if t[k] == t[k - 1] else 'comes before'} "
+                f"the one on line {lines[k - 1]}; timestamps must increase"
+            ),
         )
     refuse(np.abs(positions).max(axis=1) > MAX_POSITION, f"a position beyond {MAX_POSITION:g} m")
 
@@ -131,21 +133,24 @@ def read_rows(path, min_rows: int = 1) -> tuple[np.ndarray, list[int], bool]:
     are skipped. Any problem, and fewer than ``min_rows`` rows, raises one
     :class:`TrajectoryError` naming the file and line."""
     path = Path(path)
-    rows, lines, comma = [], [], False
-    for n, line in enumerate(read_text(path).split("\n"), start=1):
-        if not (line := line.strip()) or line.startswith(("#", "%")):
-            continue
-        comma = comma or (not rows and "," in line)
-        rows.append(_row(path, n, line, comma, (len(rows[0]), lines[0]) if rows else None))
-        lines.append(n)
-    if len(rows) < max(min_rows, 1):
-        if not rows:
-            raise TrajectoryError(f"{path}: no poses")
+    rows = [
+        (n, line)
+        for n, text in enumerate(read_text(path).split("\n"), start=1)
+        if (line := text.strip()) and not line.startswith(("#", "%"))
+    ]
+    if not rows:
+        raise TrajectoryError(f"{path}: no poses")
+    lines, comma = [n for n, _ in rows], "," in rows[0][1]
+    width = len(_row(path, *rows[0], comma, None))  # a width the formats know
+    try:  # every row at once; where that fails, row by row, to name the first bad line
+        a = np.loadtxt([line for _, line in rows], delimiter="," if comma else None, comments=None, ndmin=2)
+    except ValueError:
+        a = np.array([_row(path, n, line, comma, (width, lines[0])) for n, line in rows])
+    if len(rows) < min_rows:
         plural = "s" * (len(rows) != 1)
         raise TrajectoryError(
             f"{path}: {len(rows)} pose{plural} (last on line {lines[-1]}); need at least {min_rows}"
         )
-    a = np.array(rows)
     _check(path, a, lines, comma)
     return a, lines, comma
 
