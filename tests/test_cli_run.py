@@ -150,3 +150,21 @@ def test_error_table_gives_each_column_its_3d_errors(capsys):
     assert "(2.00 m travelled in 3-D)" in out
     assert re.search(r"final position error, 3-D \[m\]\s+0\.0000\s+0\.0300", out)
     assert re.search(r"frames flagged \(VO not used\)\s+1\n", out)
+
+
+def test_convert_carries_the_odometry_files_of_a_kitti_folder(tmp_path):
+    """A KITTI-layout copy keeps the source's per-frame odometry files and raw calibration, byte for
+    byte (a copy without them runs without odometry, or with another camera mount)."""
+    import shutil
+
+    from vo_lib.cli.main import main
+
+    source = tmp_path / "drive"
+    shutil.copytree(os.path.join(os.path.dirname(__file__), "..", "data", "fixtures", "kitti_tiny"), source)
+    (source / "oxts.txt").write_text("".join(" ".join(["0.5"] * 30) + "\n" for _ in range(3)))
+    (source / "odometry.txt").write_text("0 0\n0.01 0.01\n0.02 0.02\n")
+    (source / "raw_calib").mkdir()
+    (source / "raw_calib" / "calib_imu_to_velo.txt").write_text("R: 1 0 0 0 1 0 0 0 1\nT: 0 0 0\n")
+    assert main(["convert", str(source), "--to", "kitti", "--out", str(tmp_path / "copy")]) == 0
+    for name in ("oxts.txt", "odometry.txt", "raw_calib/calib_imu_to_velo.txt"):
+        assert (tmp_path / "copy" / name).read_bytes() == (source / name).read_bytes(), name

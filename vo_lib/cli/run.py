@@ -358,9 +358,10 @@ def evaluate_command(gt: str, est: str, segments=None, extrinsic_of: str | None 
 
 def convert_command(sequence: str, to: str, out: str, force: bool = False) -> None:
     """Write a rectified copy of a sequence (an ASL rig, or any readable one) in the KITTI
-    layout: ``image_0/``, ``image_1/``, ``calib.txt``, ``times.txt``, ``poses.txt`` and the
+    layout: ``image_0/``, ``image_1/``, ``calib.txt``, ``times.txt``, ``poses.txt``, the
     source's manifest (for an ASL rig: the camera in the body, so that the copy runs as the rig
-    does, and its position-only truth)."""
+    does, and its position-only truth) and its odometry files as they are (``odometry.txt``,
+    ``oxts.txt``, ``raw_calib/``: :data:`~vo_lib.formats.sequence_writer.CARRIED`)."""
     from vo_lib.data import load_sequence
     from vo_lib.formats.sequence import SequenceWriter
 
@@ -377,5 +378,6 @@ def convert_command(sequence: str, to: str, out: str, force: bool = False) -> No
     with reading(seq.path), writer:
         for left, right in seq:
             writer.add(left, right)
+        writer.carry(seq.path)
         path = writer.close(seq.times, seq.poses, manifest=manifest or None)
     print(f"wrote {path}: {len(seq)} rectified pairs in the KITTI layout")

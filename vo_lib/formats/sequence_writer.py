@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import errno
 import json
+import shutil
 from pathlib import Path
 
 import cv2
@@ -16,6 +17,10 @@ import numpy as np
 
 from vo_lib.camera import StereoCamera
 from vo_lib.outputs import OutputError, OutputFolder
+
+#: Files and folders of a source sequence that a copy carries as they are: the crawler's wheel
+#: odometry, a KITTI raw drive's GPS/IMU packets and its raw calibration (the camera's mount).
+CARRIED = ("odometry.txt", "oxts.txt", "raw_calib")
 
 
 def _format_row(values) -> str:
@@ -74,6 +79,21 @@ class SequenceWriter:
             raise OutputError(
                 f"{self.label}: cannot write the sequence ({why}); nothing was written"
             ) from None
+
+    def carry(self, source: Path, names=CARRIED) -> None:
+        """Copy those of the files and folders ``names`` that ``source`` holds into the sequence,
+        unchanged (they hold one row per frame, or none: a copy of every frame keeps them right)."""
+        for name in names:
+            src = Path(source) / name
+            try:
+                if src.is_dir():
+                    shutil.copytree(src, self._tmp / name)
+                elif src.is_file():
+                    shutil.copyfile(src, self._tmp / name)
+            except OSError as exc:
+                raise OutputError(
+                    f"{self.label}: cannot copy {src} ({exc.strerror or exc}); nothing was written"
+                ) from None
 
     def close(self, times, poses=None, odometry=None, manifest: dict | None = None) -> Path:
         """Write the text files and move the finished sequence into place; returns its path."""
