@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import os
 import re
+import shutil
 from pathlib import Path
 
 import cv2
@@ -220,8 +221,6 @@ needs_euroc = pytest.mark.skipif(
 
 def small_rig(tmp_path: Path, frames: int = 6) -> Path:
     """The first ``frames`` pairs of the EuRoC sample, with its calibration and ground truth."""
-    import shutil
-
     mav0 = tmp_path / "rig" / "mav0"
     for side in ("cam0", "cam1"):
         (mav0 / side / "data").mkdir(parents=True)
@@ -396,6 +395,12 @@ def test_evaluate_moves_a_truth_of_the_recording_into_its_rectified_camera(tmp_p
     with_arm = ate_positions(leica.positions[i_leica], seq.poses_4x4()[i_est], lever)[0].rmse
     without = ate_positions(leica.positions[i_leica], seq.poses_4x4()[i_est])[0].rmse
     assert printed.group(1) == f"{with_arm:.4f}" and with_arm < without - 0.003
+    # the prism's positions copied out of the recording keep their lever arm with --extrinsic-of
+    shutil.copy(leica_path, tmp_path / "prism.csv")
+    args = ["evaluate", "--gt", str(tmp_path / "prism.csv"), "--est", str(est), "--extrinsic-of", str(EUROC)]
+    assert main(args) == 0
+    copied = re.search(r"SE\(3\) alignment, positions only\): rmse ([0-9.]+)", capsys.readouterr().out)
+    assert copied.group(1) == printed.group(1)
 
 
 @needs_euroc

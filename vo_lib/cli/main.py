@@ -158,7 +158,7 @@ def build_parser() -> argparse.ArgumentParser:
         "--extrinsic-of",
         metavar="RECORDING",
         help="an ASL recording (holding mav0) whose calibration moves a body-frame --gt into its "
-        "rectified left camera",
+        "rectified left camera (positions: from its laser tracker's prism)",
     )
     ev.add_argument(
         "--segments",

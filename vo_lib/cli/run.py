@@ -336,7 +336,8 @@ def evaluate_command(gt: str, est: str, segments=None, extrinsic_of: str | None 
         )
     to_camera = np.eye(4)  # the rectified left camera in the tracked frame (body, prism)
     if recording is not None:
-        to_camera = tracked_to_camera(gt, body_to_rectified_camera(recording))
+        tracker = recording if truth.kind is TruthKind.POSITIONS else None  # a prism's lever arm
+        to_camera = tracked_to_camera(gt, body_to_rectified_camera(recording), tracker)
     if truth.kind is TruthKind.POSITIONS:
         ignored = f"--segments: --gt {gt} holds positions only, which give the ATE alone\n"
         print("" if lengths is None else ignored, end="")

@@ -138,11 +138,16 @@ def body_to_rectified_camera(path) -> np.ndarray:
     return rectify(*calib, mav0).T_body_rect
 
 
-def tracked_to_camera(truth_path, T_body_rect) -> np.ndarray:
+def tracked_to_camera(truth_path, T_body_rect, tracker_of=None) -> np.ndarray:
     """``X``, the rectified left camera in the frame a ground-truth file tracks (the body, or the
     prism of the ``sensor.yaml`` beside it): ``W_k X`` is the camera's pose, and the translation of
-    ``X^-1`` is the tracked point in the camera (a prism's lever arm)."""
-    return np.linalg.inv(truth_extrinsic(Path(truth_path))) @ T_body_rect
+    ``X^-1`` is the tracked point in the camera (a prism's lever arm). A file without a
+    ``sensor.yaml`` beside it takes that of the laser tracker of the recording ``tracker_of``
+    (``leica0``), if given: positions copied out of the recording keep their lever arm."""
+    truth_path = Path(truth_path)
+    if tracker_of is not None and not (truth_path.parent / "sensor.yaml").is_file():
+        truth_path = mav0_of(tracker_of) / "leica0" / truth_path.name  # its sensor.yaml, if any
+    return np.linalg.inv(truth_extrinsic(truth_path)) @ T_body_rect
 
 
 def read_asl(path, groundtruth=None) -> Sequence:
