@@ -689,6 +689,35 @@ def test_a_signal_wrapped_by_compiled_code_still_exits_as_it(monkeypatch, capsys
     assert len(err.strip().splitlines()) == 1 and phrase in err, err
 
 
+@pytest.mark.parametrize(
+    "signum, code, phrase", [(signal.SIGINT, 130, "Ctrl-C"), (signal.SIGTERM, 143, "SIGTERM")]
+)
+def test_a_signal_dropped_in_a_finalizer_still_stops_the_commit(
+    monkeypatch, tmp_path, capsys, signum, code, phrase
+):
+    """A signal whose handler runs inside a finalizer raises where Python drops the exception: the
+    command goes on, but the output is not put in place and it exits as stopped by the signal."""
+    import vo_lib.cli.main as cli
+    from vo_lib.outputs import OutputFolder
+
+    class SignalsWhenFreed:
+        def __del__(self):
+            os.kill(os.getpid(), signum)
+            time.sleep(0.05)  # the handler runs here, inside the finalizer
+
+    def dispatch(args):
+        SignalsWhenFreed()  # freed at once
+        folder = OutputFolder(tmp_path / "out", "vo_lib test")
+        folder.commit()
+        return 0
+
+    monkeypatch.setattr(cli, "_dispatch", dispatch)
+    assert main(["run", "--frames", "2"]) == code
+    err = capsys.readouterr().err
+    assert len(err.strip().splitlines()) == 1 and phrase in err, err
+    assert not (tmp_path / "out").exists()
+
+
 def test_a_system_error_of_our_own_is_not_taken_for_a_signal(monkeypatch):
     import vo_lib.cli.main as cli
 

@@ -8,6 +8,7 @@
 from __future__ import annotations
 
 import argparse
+import re
 
 
 class OneLineParser(argparse.ArgumentParser):
@@ -18,6 +19,11 @@ class OneLineParser(argparse.ArgumentParser):
 
     #: The exception class an error is raised as, or None to print it and exit with status 2.
     raises: type[Exception] | None = None
+
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        # a value such as ``-1,2`` or ``-1e3`` is a value (which its type then judges), not an option
+        self._negative_number_matcher = re.compile(r"^-\.?\d[\d.,eE+-]*$")
 
     def error(self, message: str):
         if self.raises is not None:

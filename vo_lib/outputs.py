@@ -23,14 +23,14 @@ import json
 import os
 import shutil
 import tempfile
-import threading
 from pathlib import Path
 
 from vo_lib.atomic import notice, recover, swap_in, temporary_prefix, umask, write_atomic
 
-#: Set by the command line's Ctrl-C handler: an interrupt that compiled code swallowed still
-#: stops the commit.
-INTERRUPTED = threading.Event()
+#: The signals that stopped the command, as the exceptions the command line's handlers raised
+#: (Ctrl-C's ``KeyboardInterrupt``, its own for SIGTERM): one that landed where it is dropped (a
+#: finalizer, a callback from compiled code) still stops the commit.
+INTERRUPTED: list[BaseException] = []
 MARKER = ".vo_lib_output.json"
 #: The contents a marker of :func:`claim_folder` lists: whatever the command keeps there.
 ANY_CONTENTS = "*"
@@ -247,8 +247,8 @@ class OutputFolder:
     def commit(self, **details) -> Path:
         """Write the marker (last: it says the folder is whole), check the target again and put
         the folder in place; returns the target."""
-        if INTERRUPTED.is_set():
-            raise KeyboardInterrupt
+        if INTERRUPTED:
+            raise INTERRUPTED[0]
         marker = {"written_by": self.written_by, "contents": sorted(os.listdir(self.path)), **details}
         if self.checksums:
             marker["files"] = file_checksums(self.path)

@@ -263,15 +263,19 @@ class _Stopped(BaseException):
 
 
 def _stop(signum, frame):
-    raise _Stopped(signum)
+    """SIGTERM: remember it (it may land where it is dropped, see ``outputs.INTERRUPTED``), raise it."""
+    from vo_lib.outputs import INTERRUPTED
+
+    INTERRUPTED.append(stop := _Stopped(signum))
+    raise stop
 
 
 def _interrupt(signum, frame):
-    """Ctrl-C: remember it (it may land where it is dropped, see ``outputs.INTERRUPTED``), raise it."""
+    """Ctrl-C: remember it, as :func:`_stop` does, and raise it."""
     from vo_lib.outputs import INTERRUPTED
 
-    INTERRUPTED.set()
-    raise KeyboardInterrupt
+    INTERRUPTED.append(stop := KeyboardInterrupt())
+    raise stop
 
 
 def _quiet_unraisable(hook):
