@@ -307,3 +307,45 @@ def test_rows_read_at_once_equal_rows_read_one_by_one_and_a_bad_row_is_named(tmp
         (tmp_path / "bad.txt").write_text("\n".join(rows[:5] + [bad] + rows[6:]) + "\n")
         with pytest.raises(TrajectoryError, match=message):
             read_rows(tmp_path / "bad.txt")
+
+
+def test_evaluate_refuses_or_says_undefined_what_it_cannot_measure(tmp_path, rng, capsys):
+    """Figures that do not exist are not printed as numbers: a truth that stands still has no
+    percentage and no Sim(3) scale, and no segment fits it; files read the wrong way are refused."""
+    from vo_lib.cli.main import main
+
+    T = random_trajectory(rng, 50)
+    times = np.arange(len(T)) / 10
+    write_tum(tmp_path / "est.tum", times, T)
+    still = np.tile(np.eye(4), (len(T), 1, 1))
+    write_tum(tmp_path / "still.tum", times, still)
+    assert main(["evaluate", "--gt", str(tmp_path / "still.tum"), "--est", str(tmp_path / "est.tum")]) == 0
+    rows = {line[:62].strip(): line[62:].strip() for line in capsys.readouterr().out.splitlines()}
+    assert (
+        rows["of distance travelled [%]"] == "undefined" and rows["KITTI segment errors"] == "no segment fits"
+    )
+    assert rows["ATE (Sim(3) alignment, scale undefined): rmse [m]"] == "undefined"
+    # a TUM estimate whose header orders the quaternion w x y z; a CSV whose times are seconds
+    text = (tmp_path / "est.tum").read_text()
+    (tmp_path / "wxyz.tum").write_text("# timestamp tx ty tz qw qx qy qz\n" + text)
+    (tmp_path / "seconds.csv").write_text(text.replace(" ", ","))
+    refused = {
+        ("--gt", "est.tum", "--est", "wxyz.tum"): "line 1: the header orders the quaternion w x y z",
+        ("--gt", "seconds.csv", "--est", "est.tum"): "line 2: the times step by 0.1",
+    }
+    for (a, gt, b, est), message in refused.items():
+        assert main(["evaluate", a, str(tmp_path / gt), b, str(tmp_path / est)]) == 2
+        assert message in capsys.readouterr().err
+
+
+def test_association_keeps_a_pair_exactly_max_diff_apart_as_evo_and_old_mac_lines_read(tmp_path, rng):
+    from vo_lib.cli.main import _segments
+    from vo_lib.formats.groundtruth import associate
+    from vo_lib.formats.poses import read_trajectory
+
+    assert associate([0.01, 0.5], [0.0, 0.52, 1.0])[0].tolist() == [0]
+    assert _segments("5,1,3,1") == (1.0, 3.0, 5.0)  # each length once, in order, as the label says
+    T = random_trajectory(rng, 5)
+    write_kitti_poses(tmp_path / "lf.txt", T)
+    (tmp_path / "cr.txt").write_bytes((tmp_path / "lf.txt").read_bytes().replace(b"\n", b"\r"))
+    assert np.array_equal(read_trajectory(tmp_path / "cr.txt")[1], read_trajectory(tmp_path / "lf.txt")[1])

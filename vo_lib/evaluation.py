@@ -81,8 +81,8 @@ def umeyama(source: np.ndarray, target: np.ndarray, with_scale: bool = False):
     spread = float(np.mean(np.sum(xs**2, axis=1)))
     if not with_scale:
         s = 1.0
-    else:  # a source that does not move has no scale: NaN, not a division by zero
-        s = float(np.trace(np.diag(d) @ S) / spread) if spread > 0 else float("nan")
+    else:  # no scale unless both move: NaN, not a division by zero or a collapse onto one point
+        s = float(np.trace(np.diag(d) @ S) / spread) if spread > 0 and xt.any() else float("nan")
     return R, mu_t - s * R @ mu_s, s
 
 
@@ -327,7 +327,7 @@ def kitti_errors(gt, est, lengths=None, step: int = KITTI_STEP) -> KittiErrors |
     :func:`segment_lengths`. None where no segment fits."""
     G, E = _pair(gt, est)
     lengths = tuple(float(x) for x in (segment_lengths(G) if lengths is None else lengths))
-    errors = np.concatenate([segment_errors(G, E, length, step) for length in lengths])
+    errors = np.concatenate([np.zeros((0, 2))] + [segment_errors(G, E, length, step) for length in lengths])
     if not len(errors):
         return None
     t_err, r_err = 100.0 * errors.mean(axis=0)
@@ -359,6 +359,12 @@ def key_position_errors(gt_planar, est_planar, frames) -> dict:
     }
 
 
+def _shown(value: float, spec: str) -> str:
+    """``value`` as ``spec`` formats it, or "undefined" (the percentage of a truth that does not
+    move, the scale of an alignment when either trajectory stands still)."""
+    return format(value, spec) if np.isfinite(value) else "undefined"
+
+
 @dataclass(frozen=True)
 class StandardErrors:
     """The field's errors of a 6-DoF estimate against 6-DoF truth, every one in 3-D."""
@@ -376,14 +382,17 @@ class StandardErrors:
         f = self.final
         rows = [
             ("final position error, 3-D [m]", f"{f.position_m:.4f}"),
-            ("  of distance travelled [%]", f"{f.percent:.2f}"),
+            ("  of distance travelled [%]", _shown(f.percent, ".2f")),
             ("final rotation error [deg]", f"{f.rotation_deg:.3f}"),
             (
                 "distance travelled, 3-D, truth / estimate [m]",
                 f"{f.distance_m:.3f} / {f.estimate_distance_m:.3f}",
             ),
             ("ATE (SE(3) alignment): rmse [m]", f"{self.ate_se3.rmse:.4f}"),
-            (f"ATE (Sim(3) alignment, scale {self.sim3_scale:.4f}): rmse [m]", f"{self.ate_sim3.rmse:.4f}"),
+            (
+                f"ATE (Sim(3) alignment, scale {_shown(self.sim3_scale, '.4f')}): rmse [m]",
+                _shown(self.ate_sim3.rmse, ".4f"),
+            ),
             ("RPE RMSE, 1 frame: translation [m]", f"{self.rpe_m.rmse:.5f}"),
             ("RPE RMSE, 1 frame: rotation [deg]", f"{self.rpe_deg.rmse:.4f}"),
         ]
@@ -391,7 +400,7 @@ class StandardErrors:
         if k is None:
             rows.append(("KITTI segment errors", "no segment fits"))
         else:
-            where = f"{k.label()}, {k.count} segments"
+            where = f"{k.label()}, {k.count} segment{'s' * (k.count != 1)}"
             rows.append((f"KITTI translation ({where}) [%]", f"{k.translation_pct:.3f}"))
             rows.append((f"KITTI rotation ({where}) [deg/100 m]", f"{k.rotation_deg_per_100m:.3f}"))
         return rows

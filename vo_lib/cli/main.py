@@ -60,7 +60,17 @@ def _segments(text: str) -> tuple[float, ...]:
         raise argparse.ArgumentTypeError(
             f"expected comma-separated positive lengths in metres, e.g. 1,2,5; got {text!r}"
         )
-    return lengths
+    return tuple(sorted(set(lengths)))  # each length once, shortest first
+
+
+def _recording(text: str) -> str:
+    from vo_lib.formats.euroc import mav0_of
+
+    if mav0_of(text) is None:
+        raise argparse.ArgumentTypeError(
+            f"expected an ASL recording (a folder holding mav0/cam0, or mav0 itself); got {text!r}"
+        )
+    return text
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -157,6 +167,7 @@ def build_parser() -> argparse.ArgumentParser:
     ev.add_argument(
         "--extrinsic-of",
         metavar="RECORDING",
+        type=_recording,
         help="an ASL recording (holding mav0) whose calibration moves a body-frame --gt into its "
         "rectified left camera (positions: from its laser tracker's prism)",
     )

@@ -25,22 +25,22 @@ Every problem raises one :class:`GroundTruthError` naming the file and line.
 
 from __future__ import annotations
 
-import re
 from dataclasses import dataclass
 from enum import Enum
 from pathlib import Path
 
 import numpy as np
 
-from vo_lib.formats.poses import TrajectoryError, pose_matrices, read_rows
+from vo_lib.formats.poses import TrajectoryError, header_quaternion_order, pose_matrices, read_rows
 from vo_lib.geometry import as_homogeneous
 
 #: Largest time difference (s) at which a ground-truth sample is associated with an image: evo's
 #: default ``max_diff``.
 MAX_TIME_DIFF_S = 0.01
 NANOSECONDS = 1e-9
-#: A header field naming a quaternion component: ``qw``, ``q_w``, ``q_RS_w []``, ``qx`` ...
-QUATERNION_FIELD = re.compile(r"q(?:_[a-z0-9]+)*?_?([wxyz])(?=$|[\s\[(])")
+#: Smallest median step of a CSV's timestamps (nanoseconds): no tracker samples at over 1 MHz, so a
+#: smaller step is a first column in seconds or not a time at all (KITTI poses with commas).
+MIN_STEP_NS = 1000.0
 
 
 class GroundTruthError(TrajectoryError):
@@ -91,6 +91,13 @@ def read_groundtruth(path, min_poses: int = 2) -> GroundTruth:
                 else "a text file is read as TUM's t x y z qx qy qz qw"
             )
         )
+    step = float(np.median(np.diff(a[:, 0]))) if len(a) > 1 else np.inf
+    if comma and step < MIN_STEP_NS:
+        raise GroundTruthError(
+            f"{path}, line {lines[1]}: the times step by {step:.3g}; a CSV's times are read as "
+            "nanoseconds (EuRoC's t[ns], x, y, z[, qw, qx, qy, qz]), and no sensor samples more "
+            "often than every microsecond"
+        )
     if comma and 4 < width < 8:
         raise GroundTruthError(
             f"{path}, line {lines[0]}: {width} numbers; expected t[ns], x, y, z (positions) "
@@ -108,29 +115,14 @@ def read_groundtruth(path, min_poses: int = 2) -> GroundTruth:
     )
 
 
-def header_quaternion_order(path: Path, first_row_line: int) -> tuple[str, int]:
-    """The quaternion's components in the order the last comment line before the first row names
-    them (``"wxyz"``, ``"xyzw"``, ...) and that line's number; ``("", 0)`` where none names all four."""
-    order, found = "", 0
-    with open(path, encoding="utf-8-sig", errors="replace") as fh:
-        for n, line in enumerate(fh, start=1):
-            if n >= first_row_line:
-                break
-            fields = re.split(r"[,\s]+", line.lstrip("#% \t").strip().lower())
-            names = "".join(m.group(1) for f in fields if (m := QUATERNION_FIELD.match(f)))
-            if sorted(names) == list("wxyz"):
-                order, found = names, n
-    return order, found
-
-
 def associate(query_times, truth_times, max_diff: float = MAX_TIME_DIFF_S) -> tuple[np.ndarray, np.ndarray]:
-    """Indices ``(i_query, i_truth)`` of the pairs whose times differ by less than ``max_diff``
+    """Indices ``(i_query, i_truth)`` of the pairs whose times differ by at most ``max_diff``
     seconds, each query time taking its nearest truth time, as evo's ``associate_trajectories``."""
     q, t = np.asarray(query_times, float), np.asarray(truth_times, float)
     right = np.clip(np.searchsorted(t, q), 1, len(t) - 1) if len(t) > 1 else np.zeros(len(q), int)
     left = np.maximum(right - 1, 0)
     nearest = np.where(np.abs(t[left] - q) <= np.abs(t[right] - q), left, right)
-    keep = np.abs(t[nearest] - q) < max_diff
+    keep = np.abs(t[nearest] - q) <= max_diff
     return np.flatnonzero(keep), nearest[keep]
 
 

@@ -4,6 +4,7 @@
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import numpy as np
@@ -49,6 +50,8 @@ MAX_POSITION = 1e9
 MAX_FILE_BYTES = 200_000_000
 #: Widths of a row of a text file: KITTI pose, TUM (``t x y z qx qy qz qw``), position (``t x y z``).
 TEXT_WIDTHS = {12: "12 numbers (KITTI)", 8: "8 (TUM: t x y z qx qy qz qw)", 4: "4 (t x y z)"}
+#: A header field naming a quaternion component: ``qw``, ``q_w``, ``q_RS_w []``, ``qx`` ...
+QUATERNION_FIELD = re.compile(r"q(?:_[a-z0-9]+)*?_?([wxyz])(?=$|[\s\[(])")
 
 
 def rotation_problem(R: np.ndarray) -> str | None:
@@ -66,7 +69,13 @@ def read_text(path: Path) -> str:
     """The text of a trajectory file; a folder, a missing, too large, unreadable or non-UTF-8 file
     raises :class:`TrajectoryError`."""
     if not path.is_file():
-        what = "a folder, not a trajectory file" if path.is_dir() else "no such trajectory file"
+        what = (
+            "a folder, not a trajectory file"
+            if path.is_dir()
+            else "not a regular file"
+            if path.exists()
+            else "no such trajectory file"
+        )
         raise TrajectoryError(f"{path}: {what}")
     if (size := path.stat().st_size) > MAX_FILE_BYTES:
         raise TrajectoryError(f"{path}: {size / 1e6:.0f} MB; expected below {MAX_FILE_BYTES / 1e6:.0f} MB")
@@ -135,7 +144,9 @@ def read_rows(path, min_rows: int = 1) -> tuple[np.ndarray, list[int], bool]:
     path = Path(path)
     rows = [
         (n, line)
-        for n, text in enumerate(read_text(path).split("\n"), start=1)
+        for n, text in enumerate(
+            read_text(path).replace("\r\n", "\n").replace("\r", "\n").split("\n"), start=1
+        )
         if (line := text.strip()) and not line.startswith(("#", "%"))
     ]
     if not rows:
@@ -164,12 +175,37 @@ def pose_matrices(positions: np.ndarray, quat_xyzw: np.ndarray) -> np.ndarray:
     return T
 
 
+def header_quaternion_order(path: Path, first_row_line: int) -> tuple[str, int]:
+    """The quaternion's components in the order the last comment line before the first row names
+    them (``"wxyz"``, ``"xyzw"``, ...) and that line's number; ``("", 0)`` where none names all four."""
+    order, found = "", 0
+    with open(path, encoding="utf-8-sig", errors="replace") as fh:
+        for n, line in enumerate(fh, start=1):
+            if n >= first_row_line:
+                break
+            fields = re.split(r"[,\s]+", line.lstrip("#% \t").strip().lower())
+            names = "".join(m.group(1) for f in fields if (m := QUATERNION_FIELD.match(f)))
+            if sorted(names) == list("wxyz"):
+                order, found = names, n
+    return order, found
+
+
 def read_trajectory(path, min_poses: int = 1) -> tuple[np.ndarray | None, np.ndarray]:
     """Read a KITTI pose file (12 numbers a line) or a TUM file (8); returns ``(times, poses)``
     (``times`` None for KITTI). Checked as :func:`read_rows` says."""
     a, lines, comma = read_rows(path, min_poses)
     if comma or a.shape[1] == 4:
-        raise TrajectoryError(f"{path}, line {lines[0]}: expected poses, 12 numbers (KITTI) or 8 (TUM)")
+        what = "a CSV" if comma else "positions only"
+        raise TrajectoryError(
+            f"{path}, line {lines[0]}: {what}; expected poses, 12 numbers (KITTI) or 8 (TUM), "
+            "separated by spaces"
+        )
     if a.shape[1] == 12:
         return None, as_homogeneous(a.reshape(-1, 3, 4))
+    order, line = header_quaternion_order(path, lines[0])
+    if order not in ("", "xyzw"):
+        raise TrajectoryError(
+            f"{path}, line {line}: the header orders the quaternion {' '.join(order)}; "
+            "a text file is read as TUM's t x y z qx qy qz qw"
+        )
     return a[:, 0], pose_matrices(a[:, 1:4], a[:, 4:8])
