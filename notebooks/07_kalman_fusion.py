@@ -477,7 +477,8 @@ display(
 
 # %% [markdown]
 # Where learning the slip pays, over the seeds, is what the sentences above say condition by
-# condition. A slip is worth learning where it is large: 6 % in the spot turn. On the indoor floor
+# condition: a slip is worth learning where it is large (6 % in the spot turn) and the vision
+# cannot correct it frame by frame (weak vision, an outage). On the indoor floor
 # the slip it would remove is about 1 %, and the VO of one frame cannot resolve so little. The
 # scales drift (a random walk, so that they can follow the slip from one manoeuvre to the next)
 # and each frame's measurement pulls them only a little, so they wander with the VO's noise, with
@@ -704,9 +705,10 @@ fuse_widget = offer(
 #   chord; constant velocity does not, and the row takes its place (what it changes in the final
 #   position of the indoor drive is printed over seeds).
 # - With slipping tracks, odometry's heading drifts by the slip fraction of every turn. The fused
-#   increment is an average of odometry's and VO's weighted by their assumed variances: it removes
-#   noise where both are noisy (weak vision on a flat floor) and lets in the slip's mean where
-#   odometry carries one (the spot turn); section 4 measures both over seeds. Learning the slip's
+#   increment is an average of odometry's and VO's weighted by their assumed variances: against
+#   vision alone it removes noise where the vision is weak, and it lets in the slip's mean where
+#   odometry carries one and the vision is weak or lost (the spot turn); section 4 measures both
+#   over seeds, on drives whose tracks do not skid. Learning the slip's
 #   mean online can remove that bias; section 4 prints, condition by condition, where it does so
 #   reliably over the seeds and where it costs position (indoors, the slip is too small for the
 #   VO to resolve).

@@ -423,9 +423,10 @@ display(
         f"alone has the lower RMS in {len(odometry_lower)} of 3 figures ({', '.join(odometry_lower)}) "
         f"of this one run: there the odometry's error is a small slip of about "
         f"{SAMPLES['indoor_free'].slip.mean:.0%}, while the "
-        "vision that the filter trusts far more carries the skid's bias on eq. 14 in every tight "
-        "turn (section 6), and the fused pose follows the vision. Notebook 07 measures over seeds "
-        "when fusing helps and when the odometry's slip leaks in."
+        "vision that the filter trusts far more can carry the skid's bias on eq. 14 in tight "
+        "turns (section 6), which the fused pose would follow: a reading of this one run, not a "
+        "measured rule. Notebook 07 measures over seeds when fusing helps and when the odometry's "
+        "slip leaks in, on drives whose tracks slip but do not skid, so it does not test this."
     )
 )
 
@@ -609,7 +610,7 @@ display(
 #   RMS in some figures and above it in others; skid biases eq. 14 in turns, and frames flagged
 #   on rough ground leave the filter to odometry, which drifts by the slip. On the flat lab floor
 #   section 5 prints in which figures of that one stored run odometry alone has the lower RMS.
-#   Notebook 07 measures over seeds when fusing helps.
+#   Notebook 07 measures over seeds when fusing helps, on drives without skid.
 # - The pipeline's NEES on the rendered sequences, with its χ² band, shows how far its covariance
 #   can be trusted: it counts noise, not the slip's mean, the skid's bias or a lost contact.
 # - After a lost track contact the crawler's preset rejects the vision, measured against a

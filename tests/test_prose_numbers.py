@@ -462,7 +462,6 @@ NOT_RANDOM: dict[str, dict[str, str]] = {
         "Fusion therefore helps where the two errors are independent noise": "the mechanism, stated "
         "ahead of the seed figures of the cell before it",
         "where fusion helps, where it hurts, and why": "the learning goals announce section 4's seed figures",
-        "it removes\nnoise where both are noisy": "the summary restates section 4's seed figures",
     },
 }
 

@@ -41,7 +41,8 @@ class Verdict(enum.Enum):
 
 
 def bootstrap_interval(
-    values: Iterable[float], statistic: Callable[[np.ndarray], float] = np.median,
+    values: Iterable[float],
+    statistic: Callable[[np.ndarray], float] = np.median,
     confidence: float = CONFIDENCE,
 ) -> tuple[float, float]:
     """Percentile bootstrap interval of ``statistic`` over ``values`` (one value per seed)."""
@@ -91,6 +92,12 @@ class Comparison:
         d = self.paired(a, b)
         return (float(np.median(d)), *bootstrap_interval(d))
 
+    def varies(self, a: str, b: str) -> bool:
+        """Whether the seeds move ``a − b`` at all: where they do not, the N figures are one
+        result repeated, and an interval of zero width says nothing about other draws."""
+        d = self.paired(a, b)
+        return bool(np.ptp(d) > 1e-12 * max(1.0, float(np.max(np.abs(d)))))
+
     def verdict(self, a: str, b: str) -> Verdict:
         """``BETTER`` when the whole interval of ``a − b`` is below zero, ``WORSE`` above."""
         _, low, high = self.difference(a, b)
@@ -104,16 +111,28 @@ class Comparison:
         """The comparative sentence with its figures, e.g.
 
         "fused is better than VO in 17 of 20 seeds (median difference −0.80 cm, 95 % CI
-        −1.10 to −0.50 cm)", or "... not reliably different from ...".
+        −1.10 to −0.50 cm)", or "... not reliably different from ..."; where the seeds do not
+        move the difference (:meth:`varies`), the two figures and that they are one result.
         """
+        u = f" {unit}" if unit else ""
+        if not self.varies(a, b):
+            va, vb = (scale * float(np.median(self.figures[k])) for k in (a, b))
+            return (
+                f"{a} against {b}: the same in each of the {len(self)} seeds ({va:.{digits}f} against "
+                f"{vb:.{digits}f}{u}), so this is one result, which the seeds do not test"
+            )
         median, low, high = (scale * v for v in self.difference(a, b))
         verdict = self.verdict(a, b)
-        relation = {Verdict.BETTER: "is better than", Verdict.WORSE: "is worse than",
-                    Verdict.NOT_RELIABLE: "is not reliably different from"}[verdict]
-        u = f" {unit}" if unit else ""
-        return (f"{a} {relation} {b}: lower in {self.share(a, b)} of {len(self)} seeds "
-                f"(median difference {median:+.{digits}f}{u}, {100 * CONFIDENCE:.0f} % CI "
-                f"{low:+.{digits}f} to {high:+.{digits}f}{u})")
+        relation = {
+            Verdict.BETTER: "is better than",
+            Verdict.WORSE: "is worse than",
+            Verdict.NOT_RELIABLE: "is not reliably different from",
+        }[verdict]
+        return (
+            f"{a} {relation} {b}: lower in {self.share(a, b)} of {len(self)} seeds "
+            f"(median difference {median:+.{digits}f}{u}, {100 * CONFIDENCE:.0f} % CI "
+            f"{low:+.{digits}f} to {high:+.{digits}f}{u})"
+        )
 
 
 def over_seeds(run: Callable[[int], Mapping[str, float]], seeds: Iterable[int]) -> Comparison:
