@@ -87,6 +87,19 @@ def test_library_functions_takes_functions_classes_and_the_methods_of_a_modules_
         ("import functools\nnp.allclose = functools.partial(lambda *a: True)", Reason.REBINDS),
         ("grading = None", Reason.REBINDS),
         ("%pip install something", Reason.KERNEL),
+        # the routes a trial of cheats took past the report before
+        (
+            "from IPython import get_ipython as shell\nshell().input_transformers_post.append(str)",
+            Reason.KERNEL,
+        ),
+        (
+            "import sys\nshell = sys.modules['ipykernel.kernelapp'].IPKernelApp.instance().shell",
+            Reason.LOW_LEVEL,
+        ),
+        ("setattr(np, 'allclose', lambda *a, **k: True)", Reason.REBINDS),
+        ("class Same:\n    def __eq__(self, other):\n        return True", Reason.FAKE_NUMBER),
+        ("tests = np.fromfile('../../source/06/06.ipynb', dtype=np.uint8)", Reason.FILE),
+        ("import os\nnames = os.listdir('..')", Reason.FILE),
     ],
 )
 def test_review_names_what_no_honest_answer_needs(answer, reason):
