@@ -62,28 +62,22 @@ def library_functions(*owners: types.ModuleType | type | Callable) -> list[Calla
 class Reason(enum.Enum):
     """Why an answer is to be reviewed: its text, and the modules or names that show it."""
 
-    FILE = (
-        "opens or lists files",
-        "open pathlib shutil glob io fromfile load loadtxt genfromtxt memmap listdir scandir walk",
-    )
+    FILE = "opens or lists files", "open pathlib shutil glob io fromfile load loadtxt listdir scandir walk"
     NETWORK = "reaches the network", "socket urllib http requests"
     KERNEL = "uses the kernel (get_ipython, IPython)", "get_ipython IPython ipykernel"
     FRAME = "inspects frames, code or source", "inspect linecache _getframe f_back f_globals f_locals"
     CODE = "reads or traces code objects", "__code__ settrace setprofile"
     LOW_LEVEL = (
-        "uses ctypes, gc, importlib, sys.modules, exec or eval",
+        "uses ctypes, gc, importlib, sys.modules, exec",
         "ctypes gc importlib __import__ modules exec eval",
     )
     THREADS = "starts threads or processes", "threading multiprocessing subprocess concurrent _thread"
     EXIT = "runs a shell or ends the interpreter", "_exit system popen fork exit quit"
     FAKE_NUMBER = (
-        "subclasses a built-in number or defines __array__ or a comparison",
-        "__array__ __eq__ __ne__ __lt__ __le__ __gt__ __ge__ __abs__ __float__ __bool__",
+        "fakes a number or a comparison",
+        "__array__ __eq__ __ne__ __lt__ __le__ __gt__ __ge__ __abs__",
     )
-    REBINDS = (
-        "rebinds a name of NumPy, of an imported module or of the grader",
-        "builtins coursework setattr delattr",
-    )
+    REBINDS = "rebinds a name of NumPy, of a module or of the grader", "builtins coursework setattr delattr"
 
     def __init__(self, text: str, words: str) -> None:
         self.text, self.words = text, words.split()

@@ -32,9 +32,7 @@ c.KernelManager.ip = os.path.join(sockets, "kernel")
 # Isolation: the kernels see the solutions and tests (source/), the release, the other submissions,
 # the feedback, the gradebook and every path of VO_HIDDEN empty (docs/course.md says what it covers).
 if in_course and grading.can_isolate():
-    hidden = [
-        str(here / n) for n in ("source", "release", "submitted", "autograded", "feedback", "gradebook.db")
-    ]
+    hidden = [str(here / n) for n in "source release submitted autograded feedback gradebook.db".split()]
     hidden += [p for p in os.environ.get("VO_HIDDEN", "").split(os.pathsep) if p]
     spec = {"argv": grading.isolated_kernel(hidden), "display_name": "Python 3", "language": "python"}
     (kernel_folder := pathlib.Path(sockets) / "kernels" / "python3").mkdir(parents=True)
