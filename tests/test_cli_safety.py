@@ -440,6 +440,9 @@ OWNERSHIP = [
         finished_sweep),
     Case("run-over-a-generated-sequence", "RUN --out gen", 2, "`vo_lib generate`", generated("gen")),
     Case("generate-over-a-run", "GEN --out out", 2, "`vo_lib run`", run_once("out")),
+    Case("generate-over-its-own-plus-a-user-file-in-a-subfolder", "GEN --out gen", 2, "image_0/NOTES.txt",
+        do(generated("gen"), edit("gen/image_0/NOTES.txt", "mine")), "gen",
+        check=reads("gen/image_0/NOTES.txt", "mine")),
     Case("sweep-over-a-run", "sweep nees --seeds 2 --workers 1 --out out", 2,
         "holds the output of `vo_lib run`", run_once("out")),
     Case("sweep-over-another-sweep", "sweep lap --seeds 1 --workers 1 --out R", 2,
@@ -1109,10 +1112,10 @@ def write_old(target: Path, writer: str) -> None:
 
 def whole(folder: Path) -> str | None:
     """Which output ``folder`` holds ("old" or "new"), or None if it is missing or not whole."""
-    from vo_lib.outputs import read_marker
+    from vo_lib.outputs import entries, read_marker
 
     marker = read_marker(folder)
-    if marker is None or sorted(p.name for p in folder.iterdir()) != sorted([MARKER, *marker["contents"]]):
+    if marker is None or entries(folder) != marker["contents"]:
         return None
     if "frames" in marker:  # a generated sequence
         return (

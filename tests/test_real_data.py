@@ -404,6 +404,36 @@ def test_evaluate_moves_a_truth_of_the_recording_into_its_rectified_camera(tmp_p
 
 
 @needs_euroc
+def test_evaluate_moves_only_the_recordings_own_truth(tmp_path, capsys):
+    """A camera's poses kept beside or inside a recording (``convert``'s KITTI poses, a TUM
+    trajectory in a folder this package wrote) are compared as they are; evaluated against
+    themselves they agree exactly. Fewer than three associated poses are refused."""
+    from vo_lib.cli.main import main
+    from vo_lib.data import load_sequence
+    from vo_lib.outputs import MARKER
+
+    rig = small_rig(tmp_path)
+    assert main(["convert", str(rig / "mav0"), "--to", "kitti", "--out", str(rig / "kitti")]) == 0
+    seq = load_sequence(rig)
+    (rig / "mav0" / "run1").mkdir()
+    (rig / "mav0" / "run1" / MARKER).write_text(
+        '{"written_by": "vo_lib run", "contents": ["trajectory.tum"]}\n'
+    )
+    tum = rig / "mav0" / "run1" / "trajectory.tum"
+    write_tum(tum, seq.times + seq.manifest["time_origin_s"], seq.poses_4x4())
+    capsys.readouterr()
+    for gt in (rig / "kitti" / "poses.txt", tum):
+        assert main(["evaluate", "--gt", str(gt), "--est", str(gt)]) == 0
+        out = capsys.readouterr().out
+        rows = {line[:62].strip(): line[62:].strip() for line in out.splitlines()}
+        assert "moved into" not in out and rows["ATE (SE(3) alignment): rmse [m]"] == "0.0000", out
+    two = seq.times[:3] + seq.manifest["time_origin_s"] + [0, 0, 1000]  # two of three within 0.01 s
+    write_tum(tmp_path / "two.tum", two, seq.poses_4x4()[:3])
+    assert main(["evaluate", "--gt", str(tum), "--est", str(tmp_path / "two.tum")]) == 2
+    assert "2 timestamps within 0.01 s" in capsys.readouterr().err
+
+
+@needs_euroc
 def test_evaluate_reads_tum_euroc_csv_and_positions(tmp_path, capsys):
     from vo_lib.cli.main import main
     from vo_lib.formats.groundtruth import TruthKind, read_groundtruth

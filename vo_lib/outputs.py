@@ -1,8 +1,8 @@
 """Output folders that never cost a user a file: checked first, written whole or not at all.
 
 * **A command replaces only what the same command wrote.** A folder this package wrote holds the
-  marker ``.vo_lib_output.json`` (which command wrote it and the names it wrote) and nothing
-  else. A new or empty folder may always be written; any other folder is refused with
+  marker ``.vo_lib_output.json`` (which command wrote it and every file and folder it wrote,
+  subfolders' too) and nothing else. A new or empty folder may always be written; any other folder is refused with
   :class:`OutputError` in one line, unless the caller passes ``force``. Even then a folder is
   never replaced if it is, holds or lies inside the command's input or this package, or if it is
   or holds the current folder, the home folder or the repository's ``data/`` folder.
@@ -62,6 +62,18 @@ def file_checksums(folder) -> dict[str, str]:
     }
 
 
+def entries(folder) -> list[str]:
+    """Every file and folder under ``folder`` (links not followed) but the marker, by path
+    relative to it: what a marker's ``contents`` lists, so that a file added in a subfolder shows."""
+    folder = Path(folder)
+    found = [
+        (Path(root) / name).relative_to(folder).as_posix()
+        for root, folders, files in os.walk(folder)
+        for name in folders + files
+    ]
+    return sorted(set(found) - {MARKER})
+
+
 def read_marker(folder) -> dict | None:
     """The marker of ``folder``, or None if it has none or it cannot be read."""
     try:
@@ -80,6 +92,7 @@ def foreign_content(folder: Path, written_by: str) -> str | None:
         return f"cannot be listed ({exc.strerror or exc})"
     if not names or MARKER not in names:
         return "it was not written by this program" if names else None
+    names = set(entries(folder))  # down to the files in its subfolders
     marker = read_marker(folder) or {}
     contents, files = marker.get("contents"), marker.get("files", {})
     if not isinstance(contents, list | str) or not isinstance(files, dict):
@@ -249,7 +262,7 @@ class OutputFolder:
         the folder in place; returns the target."""
         if INTERRUPTED:
             raise INTERRUPTED[0]
-        marker = {"written_by": self.written_by, "contents": sorted(os.listdir(self.path)), **details}
+        marker = {"written_by": self.written_by, "contents": entries(self.path), **details}
         if self.checksums:
             marker["files"] = file_checksums(self.path)
         (self.path / MARKER).write_text(json.dumps(marker, indent=2, sort_keys=True) + "\n", encoding="utf-8")

@@ -272,9 +272,10 @@ def _associated(truth, gt: str, est: str, times, E: np.ndarray) -> tuple[np.ndar
             )
         return np.arange(len(E)), np.arange(len(E))
     i_est, i_gt = associate(times, truth.times)
-    if len(i_est) < 2:
+    if len(i_est) < 3:  # an alignment needs three points
         raise UsageError(
-            f"--gt {gt}: no timestamp within 0.01 s of --est {est}'s (--gt spans {truth.times[0]:.3f} to "
+            f"--gt {gt}: {len(i_est) or 'no'} timestamp{'s' * (len(i_est) != 1)} within 0.01 s of --est {est}'s, "
+            f"expected at least 3 (--gt spans {truth.times[0]:.3f} to "
             f"{truth.times[-1]:.3f} s, --est {times[0]:.3f} to {times[-1]:.3f} s; a CSV's times are read "
             "as nanoseconds, a text file's as seconds); both must use one clock"
         )
@@ -282,20 +283,26 @@ def _associated(truth, gt: str, est: str, times, E: np.ndarray) -> tuple[np.ndar
     return i_est, i_gt
 
 
-def recording_of(gt: str, extrinsic_of: str | None) -> str | None:
+def recording_of(gt: str, extrinsic_of: str | None, kitti: bool) -> str | None:
     """The ASL recording whose calibration moves ``--gt`` into its rectified left camera:
-    ``extrinsic_of`` if given, else the recording that holds the ``--gt`` file (as
-    ``mav0/state_groundtruth_estimate0/data.csv`` does; said in one line), else None (the truth
-    is taken as given)."""
+    ``extrinsic_of`` if given, else the ``mav0`` folder that holds the ``--gt`` file among its
+    sensors' (as ``mav0/state_groundtruth_estimate0/data.csv``; said in one line), else None: the
+    truth is taken as given. KITTI poses, and files in a folder this package wrote (``run``'s
+    ``trajectory.tum``, ``convert``'s ``poses.txt``), are a camera's already and never moved."""
     from vo_lib.formats.euroc import mav0_of
+    from vo_lib.outputs import MARKER
 
-    if extrinsic_of is not None:
+    if extrinsic_of is not None or kitti:
         return extrinsic_of
-    holders = (mav0_of(folder) for folder in Path(gt).resolve().parents[:3])
+    folders = Path(gt).resolve().parents[:3]
+    holders = (mav0_of(folder) for folder in folders)
     found = next((m for m in holders if m is not None and (m / "cam0" / "sensor.yaml").is_file()), None)
-    if found is not None:
-        print(f"--gt lies in the ASL recording {found}: moved into its rectified left camera")
-    return None if found is None else str(found)
+    if found is None or found not in Path(gt).resolve().parents:
+        return None
+    if any((folder / MARKER).is_file() for folder in folders if found in folder.parents):
+        return None
+    print(f"--gt lies in the ASL recording {found}: moved into its rectified left camera")
+    return str(found)
 
 
 def evaluate_command(gt: str, est: str, segments=None, extrinsic_of: str | None = None) -> None:
@@ -319,7 +326,7 @@ def evaluate_command(gt: str, est: str, segments=None, extrinsic_of: str | None 
     except GroundTruthError as exc:
         raise UsageError(f"--gt {exc}") from None
     try:
-        times, E = read_trajectory(est, min_poses=2)
+        times, E = read_trajectory(est, min_poses=3)  # an alignment needs three
     except TrajectoryError as exc:
         raise UsageError(f"--est {exc}") from None
     i_est, i_gt = _associated(truth, gt, est, times, E)
@@ -328,11 +335,12 @@ def evaluate_command(gt: str, est: str, segments=None, extrinsic_of: str | None 
             f"--extrinsic-of {extrinsic_of}: --gt {gt} holds KITTI poses, which are a camera's already; "
             "expected a body-frame truth (TUM, EuRoC CSV or positions)"
         )
-    recording = recording_of(gt, extrinsic_of)
-    if recording is None and truth.kind is TruthKind.POSES and truth.csv:
+    recording = recording_of(gt, extrinsic_of, kitti=truth.times is None)
+    if recording is None and truth.kind is TruthKind.POSES and truth.times is not None:
+        held = "an EuRoC CSV, whose poses are of the body" if truth.csv else "TUM poses, taken as a camera's"
         print(
-            f"--gt {gt} is an EuRoC CSV, whose poses are of the body: compared as they are "
-            "(--extrinsic-of RECORDING moves them into its rectified left camera)"
+            f"--gt {gt} is {held}: compared as they are "
+            "(--extrinsic-of RECORDING moves a body's poses into its rectified left camera)"
         )
     to_camera = np.eye(4)  # the rectified left camera in the tracked frame (body, prism)
     if recording is not None:
