@@ -2,10 +2,10 @@
 
 * **A command replaces only what the same command wrote.** A folder this package wrote holds the
   marker ``.vo_lib_output.json`` (which command wrote it and every file and folder it wrote,
-  subfolders' too) and nothing else. A new or empty folder may always be written; any other folder is refused with
-  :class:`OutputError` in one line, unless the caller passes ``force``. Even then a folder is
-  never replaced if it is, holds or lies inside the command's input or this package, or if it is
-  or holds the current folder, the home folder or the repository's ``data/`` folder.
+  subfolders' too) and nothing else. A new or empty folder may always be written; any other
+  folder is refused with :class:`OutputError` in one line, unless the caller passes ``force``.
+  Even then a folder is never replaced if it is, holds or lies inside the command's input or this
+  package, or if it is or holds the current folder, the home folder or the repository's ``data/`` folder.
 * **Atomic.** A folder is written into a temporary sibling, its marker last, and put in place
   by :func:`vo_lib.atomic.swap_in` (in one step where the system can swap two folders; what a
   killed process left is finished or cleared by the next command beside it). A failed or

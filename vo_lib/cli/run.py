@@ -274,8 +274,8 @@ def _associated(truth, gt: str, est: str, times, E: np.ndarray) -> tuple[np.ndar
     i_est, i_gt = associate(times, truth.times)
     if len(i_est) < 3:  # an alignment needs three points
         raise UsageError(
-            f"--gt {gt}: {len(i_est) or 'no'} timestamp{'s' * (len(i_est) != 1)} within 0.01 s of --est {est}'s, "
-            f"expected at least 3 (--gt spans {truth.times[0]:.3f} to "
+            f"--gt {gt}: {len(i_est) or 'no'} timestamp{'s' * (len(i_est) != 1)} within 0.01 s of "
+            f"--est {est}'s, expected at least 3 (--gt spans {truth.times[0]:.3f} to "
             f"{truth.times[-1]:.3f} s, --est {times[0]:.3f} to {times[-1]:.3f} s; a CSV's times are read "
             "as nanoseconds, a text file's as seconds); both must use one clock"
         )
