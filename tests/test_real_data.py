@@ -281,6 +281,14 @@ def test_asl_recording_is_rectified_and_its_truth_moved_into_the_left_camera():
         ("missing", "cam1/data/1403636584963555584.png: listed in data.csv but missing"),
         ("size", "cam1/data/1403636584963555584.png, frame 4: 640x480 image, but"),
         ("truth", "the ground truth must cover every image"),
+        ("truth-last-row", "state_groundtruth_estimate0/sensor.yaml: key T_BS: the last row is not 0 0 0 1"),
+        (
+            "truth-millimetres",
+            "state_groundtruth_estimate0/sensor.yaml: key T_BS puts the tracked point 141.621 from the body",
+        ),
+        ("twice", "cam0/sensor.yaml, line 22: not valid YAML (key 'intrinsics' given twice)"),
+        ("empty", "cam1/sensor.yaml: expected YAML keys (T_BS, intrinsics, ...), got an empty file"),
+        ("folder", "cam1/sensor.yaml: a folder; expected the sensor's calibration file"),
     ],
 )
 def test_a_bad_rig_gets_one_line_and_exit_2(tmp_path, capsys, damage, expected):
@@ -330,6 +338,19 @@ def test_a_bad_rig_gets_one_line_and_exit_2(tmp_path, capsys, damage, expected):
         shutil.copy(mav0 / "cam0" / "sensor.yaml", mav0 / "cam1" / "sensor.yaml")
     elif damage == "camera":
         shutil.rmtree(mav0 / "cam1")
+    elif damage.startswith("truth-"):  # the prism's extrinsic: a last row, a lever arm in millimetres
+        path = mav0 / "state_groundtruth_estimate0" / "sensor.yaml"
+        edit = ("0.0, 0.0, 0.0, 1.0]", "0.0, 0.0, 0.0, 2.0]")
+        edit = ("1.0, 0.0, 0.0, 0.0,", "1.0, 0.0, 0.0, 74.89,") if damage == "truth-millimetres" else edit
+        text = path.read_text().replace(*edit)
+        path.write_text(text.replace("0.0, 1.0, 0.0, 0.0,", "0.0, 1.0, 0.0, -120.2,"))
+    elif damage == "twice":
+        path = mav0 / "cam0" / "sensor.yaml"
+        path.write_text(path.read_text() + "intrinsics: [458.654, 457.296, 367.215, 248.375]\n")
+    elif damage in ("empty", "folder"):
+        path = mav0 / "cam1" / "sensor.yaml"
+        path.unlink()
+        path.write_text("") if damage == "empty" else path.mkdir()
     elif damage == "timestamps":
         path = mav0 / "cam1" / "data.csv"
         lines = path.read_text().splitlines()

@@ -27,6 +27,9 @@ MAX_BASELINE_M = 10.0
 #: hand keeps nearly all of it; one that is not (a focal length or a distortion off by orders of
 #: magnitude) leaves a sliver or nothing.
 MIN_VALID_SHARE = 0.25
+#: Farthest a ground truth's tracked point (a prism) may sit from the body's origin (metres):
+#: beyond it, a ``T_BS`` written in millimetres or centimetres.
+MAX_LEVER_ARM_M = 10.0
 
 
 class AslError(SequenceError):
@@ -62,11 +65,29 @@ class Rectification:
         )
 
 
+class _UniqueKeys(yaml.SafeLoader):
+    """YAML as ``safe_load`` reads it, but a key given twice in one mapping is an error (not the
+    last one silently kept)."""
+
+    def construct_mapping(self, node, deep=False):
+        seen = []
+        for key_node, _ in node.value:
+            key = self.construct_object(key_node, deep=deep)
+            if key in seen:
+                raise yaml.constructor.ConstructorError(
+                    problem=f"key {key!r} given twice", problem_mark=key_node.start_mark
+                )
+            seen.append(key)
+        return super().construct_mapping(node, deep)
+
+
 def _yaml(path: Path) -> dict:
+    if path.is_dir():
+        raise AslError(f"{path}: a folder; expected the sensor's calibration file")
     if not path.is_file():
         raise AslError(f"{path}: missing (the camera's calibration: T_BS, intrinsics, distortion)")
     try:
-        data = yaml.safe_load(path.read_text(encoding="utf-8"))
+        data = yaml.load(path.read_text(encoding="utf-8"), Loader=_UniqueKeys)  # noqa: S506 (a SafeLoader)
     except (OSError, UnicodeDecodeError) as exc:
         raise AslError(f"{path}: cannot read ({exc})") from None
     except yaml.YAMLError as exc:
@@ -74,7 +95,8 @@ def _yaml(path: Path) -> dict:
         where = f", line {mark.line + 1}" if mark is not None else ""
         raise AslError(f"{path}{where}: not valid YAML ({getattr(exc, 'problem', None) or exc})") from None
     if not isinstance(data, dict):
-        raise AslError(f"{path}: expected YAML keys (T_BS, intrinsics, ...), got {type(data).__name__}")
+        got = "an empty file" if data is None else f"a {type(data).__name__}"
+        raise AslError(f"{path}: expected YAML keys (T_BS, intrinsics, ...), got {got}")
     return data
 
 
@@ -98,14 +120,20 @@ def _numbers(path: Path, data: dict, key: str, count: int, what: str) -> np.ndar
     return a
 
 
+def _transform(path: Path, data: dict, what: str) -> np.ndarray:
+    """Key ``T_BS``: a rigid transform (a rotation, the last row 0 0 0 1)."""
+    T = _numbers(path, data, "T_BS", 16, what).reshape(4, 4)
+    problem = rotation_problem(T[:3, :3])
+    if problem or not np.allclose(T[3], [0, 0, 0, 1]):
+        raise AslError(f"{path}: key T_BS: {problem or 'the last row is not 0 0 0 1'}")
+    return T
+
+
 def read_camera_yaml(path) -> CameraCalibration:
     """One camera's calibration from its ``sensor.yaml``; raises :class:`AslError` naming the key."""
     path = Path(path)
     data = _yaml(path)
-    T = _numbers(path, data, "T_BS", 16, "a 4x4 camera-to-body transform as data").reshape(4, 4)
-    problem = rotation_problem(T[:3, :3])
-    if problem or not np.allclose(T[3], [0, 0, 0, 1]):
-        raise AslError(f"{path}: key T_BS: {problem or 'the last row is not 0 0 0 1'}")
+    T = _transform(path, data, "a 4x4 camera-to-body transform as data")
     fu, fv, cu, cv = _numbers(path, data, "intrinsics", 4, "[fu, fv, cu, cv]")
     if fu <= 0 or fv <= 0:
         raise AslError(f"{path}: key intrinsics: focal lengths must be > 0, got fu={fu:g}, fv={fv:g}")
@@ -197,8 +225,10 @@ def truth_extrinsic(truth_path: Path) -> np.ndarray:
     sensor = truth_path.parent / "sensor.yaml"
     if not sensor.is_file():
         return np.eye(4)
-    T = _numbers(sensor, _yaml(sensor), "T_BS", 16, "a 4x4 transform, data: [16 numbers]").reshape(4, 4)
-    problem = rotation_problem(T[:3, :3])
-    if problem:
-        raise AslError(f"{sensor}: key T_BS: {problem}")
+    T = _transform(sensor, _yaml(sensor), "a 4x4 transform, data: [16 numbers]")
+    if np.linalg.norm(T[:3, 3]) > MAX_LEVER_ARM_M:
+        raise AslError(
+            f"{sensor}: key T_BS puts the tracked point {np.linalg.norm(T[:3, 3]):g} from the body; "
+            f"expected metres, at most {MAX_LEVER_ARM_M:g} (millimetres?)"
+        )
     return T
