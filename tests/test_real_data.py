@@ -289,6 +289,10 @@ def test_asl_recording_is_rectified_and_its_truth_moved_into_the_left_camera():
         ("twice", "cam0/sensor.yaml, line 22: not valid YAML (key 'intrinsics' given twice)"),
         ("empty", "cam1/sensor.yaml: expected YAML keys (T_BS, intrinsics, ...), got an empty file"),
         ("folder", "cam1/sensor.yaml: a folder; expected the sensor's calibration file"),
+        ("latin-1", "cam0/data.csv: byte 4 is not UTF-8; expected text in UTF-8"),
+        ("superscript", "cam0/data.csv, line 3: expected 'timestamp [ns],filename', got '14036365848"),
+        ("overflow", "cam0/data.csv, line 3: expected 'timestamp [ns],filename', got '99999999999"),
+        ("outside", "cam0/data.csv, line 3: '../../cam1/data/1403636584813555456.png'; expected a file name"),
     ],
 )
 def test_a_bad_rig_gets_one_line_and_exit_2(tmp_path, capsys, damage, expected):
@@ -317,6 +321,18 @@ def test_a_bad_rig_gets_one_line_and_exit_2(tmp_path, capsys, damage, expected):
     elif damage == "model":
         path = mav0 / "cam0" / "sensor.yaml"
         path.write_text(path.read_text().replace("camera_model: pinhole", "camera_model: omni"))
+    elif damage in ("latin-1", "superscript", "overflow", "outside"):
+        path = mav0 / "cam0" / "data.csv"
+        lines = path.read_text().splitlines()
+        stamp, name = lines[2].split(",")
+        lines[2] = {
+            "latin-1": lines[2],
+            "superscript": f"{stamp}\u00b2,{name}",
+            "overflow": f"99999999999999999999,{name}",
+            "outside": f"{stamp},../../cam1/data/{name}",
+        }[damage]
+        text = "\n".join(lines) + "\n"
+        path.write_bytes(b"# r\xe9sum\xe9\n" + text.encode() if damage == "latin-1" else text.encode())
     elif damage == "order":  # two rows swapped
         path = mav0 / "cam0" / "data.csv"
         lines = path.read_text().splitlines()

@@ -20,6 +20,7 @@ rectified as they are read. Every problem raises one :class:`AslError` naming th
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import numpy as np
@@ -83,17 +84,29 @@ def read_image_list(camera_dir: Path) -> tuple[np.ndarray, list[Path]]:
     if not camera_dir.is_dir():
         raise AslError(f"{camera_dir}: missing camera folder (data/, data.csv, sensor.yaml)")
     if not csv_path.is_file():
-        raise AslError(f"{csv_path}: missing (one line 'timestamp [ns],filename' per image)")
+        what = "a folder" if csv_path.is_dir() else "missing"
+        raise AslError(
+            f"{csv_path}: {what}; expected a file with one line 'timestamp [ns],filename' per image"
+        )
+    try:
+        text = csv_path.read_text(encoding="utf-8-sig")
+    except UnicodeDecodeError as exc:
+        raise AslError(
+            f"{csv_path}: byte {exc.start + 1} is not UTF-8; expected text in UTF-8 (or ASCII)"
+        ) from None
     stamps, files, lines = [], [], []
-    for n, line in enumerate(csv_path.read_text(encoding="utf-8-sig").split("\n"), start=1):
+    for n, line in enumerate(text.split("\n"), start=1):
         line = line.strip()
         if not line or line.startswith("#"):
             continue
-        stamp, sep, name = line.partition(",")
-        if not sep or not stamp.strip().isdigit() or not name.strip():
+        stamp, sep, name = (part.strip() for part in line.partition(","))
+        # a time in ns fits 19 digits (int64); a name stays inside data/
+        if not sep or not re.fullmatch(r"[0-9]{1,19}", stamp) or int(stamp) >= 2**63 or not name:
             raise AslError(f"{csv_path}, line {n}: expected 'timestamp [ns],filename', got {line[:50]!r}")
+        if Path(name).is_absolute() or ".." in Path(name).parts:
+            raise AslError(f"{csv_path}, line {n}: {name[:50]!r}; expected a file name inside data/")
         stamps.append(int(stamp))
-        files.append(camera_dir / "data" / name.strip())
+        files.append(camera_dir / "data" / name)
         lines.append(n)
     if not stamps:
         raise AslError(f"{csv_path}: no images listed")
