@@ -43,10 +43,10 @@ def test_real_kitti_layout_loads_unchanged():
     assert len(seq) == 3 and seq.odometry is None
     assert seq.camera.fx == pytest.approx(718.856) and seq.camera.cx == pytest.approx(607.1928)
     assert seq.camera.baseline == pytest.approx(386.1448 / 718.856)
-    assert (seq.camera.width, seq.camera.height) == (62, 19)
+    assert (seq.camera.width, seq.camera.height) == (1241, 376)  # KITTI 00 images, flat blocks
     np.testing.assert_allclose(seq.times, [0.0, 0.10364, 0.20728])
     assert seq.poses.shape == (3, 3, 4) and seq.poses[2, 2, 3] == pytest.approx(1.716275)
-    assert seq.pair(1)[0].shape == (19, 62)
+    assert seq.pair(1)[0].shape == (376, 1241)
 
 
 def copy_fixture(tmp_path) -> Path:
@@ -87,21 +87,22 @@ def test_unreadable_and_empty_images(tmp_path):
 
 def test_left_and_right_of_different_sizes(tmp_path):
     d = copy_fixture(tmp_path)
-    cv2.imwrite(str(d / "image_1" / "000000.png"), np.zeros((19, 60), np.uint8))
+    cv2.imwrite(str(d / "image_1" / "000000.png"), np.zeros((376, 1240), np.uint8))
     with pytest.raises(
-        SequenceError, match=r"image_1/000000.png, frame 0: 60x19 image, but .*image_0/000000.png is 62x19"
+        SequenceError,
+        match=r"image_1/000000.png, frame 0: 1240x376 image, but .*image_0/000000.png is 1241x376",
     ):
         read_sequence(d)
 
 
 def test_colour_is_converted_and_16_bit_is_refused(tmp_path):
     d = copy_fixture(tmp_path)
-    colour = np.zeros((19, 62, 3), np.uint8)
+    colour = np.zeros((376, 1241, 3), np.uint8)
     colour[..., 1] = 200  # green
     cv2.imwrite(str(d / "image_0" / "000001.png"), colour)
     left, _ = read_sequence(d).pair(1)
-    assert left.shape == (19, 62) and 100 < left.mean() < 150  # grey of pure green
-    cv2.imwrite(str(d / "image_0" / "000000.png"), np.zeros((19, 62), np.uint16))
+    assert left.shape == (376, 1241) and 100 < left.mean() < 150  # grey of pure green
+    cv2.imwrite(str(d / "image_0" / "000000.png"), np.zeros((376, 1241), np.uint16))
     with pytest.raises(SequenceError, match=r"000000.png, frame 0: 16-bit image; expected 8-bit grey"):
         read_sequence(d)
 
@@ -210,6 +211,17 @@ def test_a_singular_rotation_in_a_raw_calibration_is_one_error(tmp_path):
     (raw / "calib_velo_to_cam.txt").write_text("R: 1 0 0 0 1 0 0 0 0\nT: 0 0 0\n")  # singular
     (raw / "calib_cam_to_cam.txt").write_text(f"R_rect_00: {eye}\n")
     with pytest.raises(SequenceError, match="calib_velo_to_cam.txt: R: it is not a rotation matrix"):
+        camera_in_imu_frame(raw)
+    # a translation in millimetres, and a second R line (which one would be meant?)
+    (raw / "calib_velo_to_cam.txt").write_text(f"R: {eye}\nT: 0 -80 -270\n")
+    with pytest.raises(
+        SequenceError, match="calib_velo_to_cam.txt: T puts one sensor 281.6.* expected metres"
+    ):
+        camera_in_imu_frame(raw)
+    (raw / "calib_velo_to_cam.txt").write_text(f"R: {eye}\nT: 0 0 0\nR: {eye}\n")
+    with pytest.raises(
+        SequenceError, match="calib_velo_to_cam.txt, line 3: a second R line .the first is line 1"
+    ):
         camera_in_imu_frame(raw)
 
 

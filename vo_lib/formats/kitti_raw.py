@@ -25,6 +25,8 @@ VF, WZ = 8, 19  # zero-based columns of forward speed (m/s) and yaw rate (rad/s)
 #: Largest magnitude of any field: degrees of latitude, metres of altitude, m/s, rad/s and counts
 #: stay far below it; beyond, a packet is damaged (and would overflow the filter).
 MAX_OXTS_VALUE = 1e6
+#: Farthest two sensors of one car may be apart (metres): beyond, a translation in millimetres.
+MAX_MOUNT_M = 10.0
 
 
 def _packet(path: Path, line_no: int, line: str) -> list[float]:
@@ -80,16 +82,19 @@ def _calib_values(path: Path, key: str, count: int) -> np.ndarray:
         text = path.read_text()
     except UnicodeDecodeError:
         raise SequenceError(f"{path}: not a text file") from None
-    for line_no, line in enumerate(text.splitlines(), 1):
-        if line.startswith(key + ":"):
-            try:
-                values = np.array([float(x) for x in line.split(":", 1)[1].split()])
-            except ValueError:
-                raise SequenceError(f"{path}, line {line_no}: {key} must be {count} numbers") from None
-            if values.shape != (count,) or not np.all(np.isfinite(values)):
-                raise SequenceError(f"{path}, line {line_no}: {key} must be {count} finite numbers")
-            return values
-    raise SequenceError(f"{path}: no line starting with '{key}:'")
+    found = [(n, line) for n, line in enumerate(text.splitlines(), 1) if line.startswith(key + ":")]
+    if not found:
+        raise SequenceError(f"{path}: no line starting with '{key}:'")
+    (line_no, line), *others = found
+    if others:
+        raise SequenceError(f"{path}, line {others[0][0]}: a second {key} line (the first is line {line_no})")
+    try:
+        values = np.array([float(x) for x in line.split(":", 1)[1].split()])
+    except ValueError:
+        raise SequenceError(f"{path}, line {line_no}: {key} must be {count} numbers") from None
+    if values.shape != (count,) or not np.all(np.isfinite(values)):
+        raise SequenceError(f"{path}, line {line_no}: {key} must be {count} finite numbers")
+    return values
 
 
 def _rotation(path: Path, key: str) -> np.ndarray:
@@ -106,6 +111,11 @@ def _rigid(path: Path) -> np.ndarray:
     T = np.eye(4)
     T[:3, :3] = _rotation(path, "R")
     T[:3, 3] = _calib_values(path, "T", 3)
+    if np.linalg.norm(T[:3, 3]) > MAX_MOUNT_M:
+        raise SequenceError(
+            f"{path}: T puts one sensor {np.linalg.norm(T[:3, 3]):g} from the other; expected metres, "
+            f"at most {MAX_MOUNT_M:g} (millimetres?)"
+        )
     return T
 
 

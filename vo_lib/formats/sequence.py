@@ -42,6 +42,7 @@ from pathlib import Path
 import numpy as np
 
 from vo_lib.camera import StereoCamera
+from vo_lib.formats.asl_calibration import MAX_BASELINE_M
 from vo_lib.formats.frame_files import (
     SequenceError,
     check_size,
@@ -75,6 +76,10 @@ __all__ = [
 
 #: Largest wheel distance between two frames in ``odometry.txt``, metres: beyond, the file is damaged.
 MAX_ODOMETRY_M = 1000.0
+#: Longest median time between frames (seconds): beyond it, ``times.txt`` in another unit.
+MAX_FRAME_SPACING_S = 5.0
+#: Fastest median track speed of ``odometry.txt`` (m/s): beyond it, distances in another unit.
+MAX_TRACK_SPEED_M_S = 50.0
 
 
 @dataclass
@@ -163,9 +168,19 @@ def _camera(root: Path, left: list[Path], right: list[Path]) -> StereoCamera:
     w, h = check_headers(left, right)
     P0, P1 = read_calib(calib)
     try:
-        return StereoCamera.from_projection_matrices(P0, P1, w, h)
+        camera = StereoCamera.from_projection_matrices(P0, P1, w, h)
     except ValueError as exc:
         raise SequenceError(f"{calib}: {exc}") from None
+    if camera.baseline > MAX_BASELINE_M:
+        raise SequenceError(
+            f"{calib}: P1 puts the right camera {camera.baseline:g} from the left (baseline = "
+            f"(P0[0,3] - P1[0,3]) / fx); expected metres, at most {MAX_BASELINE_M:g}"
+        )
+    if not (0 <= camera.cx <= w and 0 <= camera.cy <= h):
+        raise SequenceError(
+            f"{calib}: P0's principal point ({camera.cx:g}, {camera.cy:g}) lies outside the {w}x{h} images"
+        )
+    return camera
 
 
 def read_sequence(path, odometry: bool = True) -> Sequence:
@@ -186,6 +201,11 @@ def read_sequence(path, odometry: bool = True) -> Sequence:
     n = len(left)
     required(root / "times.txt", "one timestamp per frame")
     times = read_per_frame(root / "times.txt", n, "timestamps", read_times)
+    if n > 1 and np.median(np.diff(times)) > MAX_FRAME_SPACING_S:
+        raise SequenceError(
+            f"{root / 'times.txt'}: frames {np.median(np.diff(times)):g} apart (median); expected seconds, "
+            f"at most {MAX_FRAME_SPACING_S:g} (milliseconds or nanoseconds?)"
+        )
     poses = odo = None
     if present(root / "poses.txt", "the ground-truth poses"):
         poses = read_per_frame(root / "poses.txt", n, "poses", read_poses)
@@ -196,6 +216,13 @@ def read_sequence(path, odometry: bool = True) -> Sequence:
             "lines",
             lambda p: read_rows(p, 2, "delta_u_left delta_u_right", MAX_ODOMETRY_M),
         )
+    if odo is not None and n > 1:
+        speed = float(np.median(np.abs(odo[1:]).max(axis=1) / np.diff(times)))
+        if speed > MAX_TRACK_SPEED_M_S:
+            raise SequenceError(
+                f"{root / 'odometry.txt'}: the tracks move {speed:g} per second (median, with times.txt); "
+                f"expected metres, at most {MAX_TRACK_SPEED_M_S:g} m/s (millimetres?)"
+            )
     manifest_path = root / "manifest.json"
     manifest = read_manifest(manifest_path) if present(manifest_path, "the manifest") else {}
     return Sequence(root, camera, times, left, right, poses, odo, manifest)
