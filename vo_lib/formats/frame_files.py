@@ -13,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
-from vo_lib.formats.poses import TrajectoryError, read_trajectory
+from vo_lib.formats.poses import TrajectoryError, read_trajectory, rotation_problem
 
 
 class SequenceError(ValueError):
@@ -155,6 +155,59 @@ def read_manifest(path: Path) -> dict:
     if not isinstance(manifest, dict):
         raise SequenceError(f"{path}: expected a JSON object {{...}}, got a {type(manifest).__name__}")
     return manifest
+
+
+def _manifest_numbers(path: Path, key: str, value, shape: tuple, what: str) -> np.ndarray:
+    try:
+        a = np.array(value, dtype=float)
+    except (TypeError, ValueError):
+        a = np.array([])
+    if isinstance(value, bool) or a.shape != shape or not np.all(np.isfinite(a)):
+        raise SequenceError(f"{path}: key {key}: expected {what}, got {json.dumps(value)[:40]}")
+    return a
+
+
+def check_manifest(path: Path, manifest: dict, frames: int) -> None:
+    """Raise :class:`SequenceError` unless the keys of ``manifest.json`` that a run reads (each
+    optional) hold what it expects: ``time_origin_s`` seconds, ``camera.height_m`` and
+    ``camera.forward_m`` metres, ``T_body_camera`` a 4x4 rigid transform, ``positions`` the
+    position-only truth of frames ``0..frames-1``."""
+    camera = manifest.get("camera", {})
+    if not isinstance(camera, dict):
+        raise SequenceError(f"{path}: key camera: expected an object {{...}}, got {json.dumps(camera)[:40]}")
+    for key, value in (
+        ("time_origin_s", manifest.get("time_origin_s", 0)),
+        *((f"camera.{name}", camera.get(name, 0)) for name in ("height_m", "forward_m")),
+    ):
+        _manifest_numbers(path, key, value, (), "a number")
+    if "T_body_camera" in manifest:
+        T = _manifest_numbers(path, "T_body_camera", manifest["T_body_camera"], (4, 4), "4 rows of 4 numbers")
+        problem = rotation_problem(T[:3, :3]) or (
+            "" if np.allclose(T[3], [0, 0, 0, 1]) else "last row not 0 0 0 1"
+        )
+        if problem:
+            raise SequenceError(f"{path}: key T_body_camera: {problem}; expected a rigid transform")
+    positions = manifest.get("positions")
+    if positions is not None:
+        if not isinstance(positions, dict):
+            raise SequenceError(
+                f"{path}: key positions: expected an object with frames, xyz, lever_arm_camera"
+            )
+        index = _manifest_numbers(
+            path,
+            "positions.frames",
+            positions.get("frames"),
+            (len(positions.get("frames") or []),),
+            "frame numbers",
+        )
+        if len(index) and (index.min() < 0 or index.max() >= frames or np.any(index % 1)):
+            raise SequenceError(f"{path}: key positions.frames: expected frame numbers 0 to {frames - 1}")
+        _manifest_numbers(
+            path, "positions.xyz", positions.get("xyz"), (len(index), 3), f"{len(index)} rows of x y z"
+        )
+        _manifest_numbers(
+            path, "positions.lever_arm_camera", positions.get("lever_arm_camera"), (3,), "3 numbers"
+        )
 
 
 def read_per_frame(path: Path, frames: int, noun: str, read) -> np.ndarray:

@@ -45,6 +45,7 @@ from vo_lib.camera import StereoCamera
 from vo_lib.formats.asl_calibration import MAX_BASELINE_M
 from vo_lib.formats.frame_files import (
     SequenceError,
+    check_manifest,
     check_size,
     present,
     read_calib,
@@ -225,4 +226,5 @@ def read_sequence(path, odometry: bool = True) -> Sequence:
             )
     manifest_path = root / "manifest.json"
     manifest = read_manifest(manifest_path) if present(manifest_path, "the manifest") else {}
+    check_manifest(manifest_path, manifest, n)
     return Sequence(root, camera, times, left, right, poses, odo, manifest)

@@ -159,7 +159,13 @@ def vehicle_of(sequence, use_odometry: bool = True) -> Vehicle:
         return _drone(np.asarray(sequence.manifest["T_body_camera"], float))
     if "height_m" in camera:  # a rendered sample: the crawler of [Zhao]
         mount = camera_mount(forward=float(camera.get("forward_m", 0.0)), height=float(camera["height_m"]))
-        model = TrackOdometry(**sequence.manifest.get("track_odometry", {}))
+        try:
+            model = TrackOdometry(**sequence.manifest.get("track_odometry", {}))
+        except (TypeError, ValueError) as exc:  # an unknown key, a value that is not a length
+            where = f"{sequence.path / 'manifest.json'}: key track_odometry"
+            raise SequenceError(
+                f"{where}: expected track_distance, track_width, encoder_sigma ({exc})"
+            ) from None
         planar = camera.get("mount", "above turning axis") == "above turning axis"
         odometry = sequence.odometry if use_odometry else None
         source = "odometry.txt" if odometry is not None else "none"
