@@ -294,12 +294,11 @@ def recording_of(gt: str, extrinsic_of: str | None, kitti: bool) -> str | None:
 
     if extrinsic_of is not None or kitti:
         return extrinsic_of
-    folders = Path(gt).resolve().parents[:3]
-    holders = (mav0_of(folder) for folder in folders)
-    found = next((m for m in holders if m is not None and (m / "cam0" / "sensor.yaml").is_file()), None)
-    if found is None or found not in Path(gt).resolve().parents:
-        return None
-    if any((folder / MARKER).is_file() for folder in folders if found in folder.parents):
+    path = Path(gt).resolve()
+    holders = (m for m in map(mav0_of, path.parents[:3]) if m in path.parents)
+    found = next((m for m in holders if (m / "cam0" / "sensor.yaml").is_file()), None)
+    written = [f for f in path.parents[:3] if found in f.parents and (f / MARKER).is_file()]
+    if found is None or written:
         return None
     print(f"--gt lies in the ASL recording {found}: moved into its rectified left camera")
     return str(found)
@@ -336,11 +335,10 @@ def evaluate_command(gt: str, est: str, segments=None, extrinsic_of: str | None 
             "expected a body-frame truth (TUM, EuRoC CSV or positions)"
         )
     recording = recording_of(gt, extrinsic_of, kitti=truth.times is None)
-    if recording is None and truth.kind is TruthKind.POSES and truth.times is not None:
-        held = "an EuRoC CSV, whose poses are of the body" if truth.csv else "TUM poses, taken as a camera's"
+    if recording is None and truth.kind is TruthKind.POSES and truth.csv:
         print(
-            f"--gt {gt} is {held}: compared as they are "
-            "(--extrinsic-of RECORDING moves a body's poses into its rectified left camera)"
+            f"--gt {gt} is an EuRoC CSV, whose poses are of the body: compared as they are "
+            "(--extrinsic-of RECORDING moves them into its rectified left camera)"
         )
     to_camera = np.eye(4)  # the rectified left camera in the tracked frame (body, prism)
     if recording is not None:
