@@ -272,6 +272,7 @@ CASES = [
     Case("out-empty-text", "RUN --out ''", 2, "--out: expected a folder; got an empty text"),
     Case("sequence-empty-text", "run --sequence ''", 2, "--sequence: expected a sample name"),
     Case("generate-out-empty-text", "GEN --out ''", 2, "--out: expected a folder"),
+    Case("convert-out-empty-text", "convert seq --out ''", 2, "--out: expected a folder"),
     Case("generate-package-force", [*GEN, "--out", str(ROOT / "vo_lib" / "x"), "--force"], 2,
         "inside this package"),
     Case("generate-repo-data-force", [*GEN, "--out", str(ROOT / "data"), "--force"], 2, "sample data folder"),
@@ -386,7 +387,7 @@ CASES = [
     Case("generate-bad-resolution", "generate corridor --resolution big", 2, "expected WIDTHxHEIGHT"),
     Case("generate-unknown-sample", "generate nope", 2, "invalid choice: 'nope'"),
     Case("generate-too-many-frames", "generate corridor --frames 100000 --out gen", 2,
-        "frames must lie in 1..541", check=gone("gen")),
+        "--frames 100000: corridor has 541 frames; expected 2 to 541", check=gone("gen")),
     # --- evaluate --------------------------------------------------------------------------------
     Case("evaluate-ok", "EVAL --segments 0.1,0.2", 0, "ATE (SE(3) alignment)"),
     Case("evaluate-nan-row", "EVAL", 2, "est.txt, line 3: holds a NaN",

@@ -135,7 +135,7 @@ def test_generate_command(tmp_path):
     [
         (["generate", "nope"], "invalid choice: 'nope'"),
         (["generate", "corridor", "--resolution", "big"], "expected WIDTHxHEIGHT"),
-        (["generate", "corridor", "--frames", "100000"], "frames must lie in 1..541 for corridor"),
+        (["generate", "corridor", "--frames", "100000"], "--frames 100000: corridor has 541 frames"),
     ],
 )
 def test_generate_bad_arguments_exit_2_and_leave_nothing(tmp_path, args, message):

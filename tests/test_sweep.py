@@ -49,6 +49,10 @@ def test_sweep_command_writes_its_table_and_prints_the_summary(tmp_path, capsys)
     table = pd.read_csv(tmp_path / "n" / "results.csv")
     assert table["seed"].tolist() == [1000, 1001, 1002] and {"nees_mean", "inside_95"} <= set(table)
     assert sorted(p.name for p in (tmp_path / "n").iterdir()) == [".vo_lib_output.json", "results.csv"]
+    # one seed has no spread: its standard deviation and interval are undefined, not NaN
+    assert main(["sweep", "nees", "--seeds", "1", "--workers", "1", "--out", str(tmp_path / "one")]) == 0
+    out = capsys.readouterr().out
+    assert "undefined" in out and "nan" not in out.lower().replace("nees_mean", ""), out
 
 
 @pytest.mark.parametrize(

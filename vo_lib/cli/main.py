@@ -188,7 +188,12 @@ def build_parser() -> argparse.ArgumentParser:
     )
     conv.add_argument("sequence", help="the recording (ASL layout) or any sequence folder")
     conv.add_argument("--to", choices=("kitti",), default="kitti", help="layout to write (kitti)")
-    conv.add_argument("--out", required=True, help="output folder: new, empty, or written by vo_lib")
+    conv.add_argument(
+        "--out",
+        required=True,
+        type=non_empty("a folder"),
+        help="output folder: new, empty, or written by vo_lib",
+    )
     conv.add_argument(
         "--force", action="store_true", help="replace --out even if this program did not write it"
     )
@@ -327,8 +332,11 @@ def _generate(args) -> None:
     from vo_lib.cli.run import UsageError
     from vo_lib.data import data_dir, sample_path
     from vo_lib.outputs import OutputError, check_target
-    from vo_lib.sim.samples import generate
+    from vo_lib.sim.samples import generate, get_sample
 
+    most = get_sample(args.name).frames
+    if args.frames is not None and args.frames > most:
+        raise UsageError(f"--frames {args.frames}: {args.name} has {most} frames; expected 2 to {most}")
     out = args.out or sample_path(args.name, args.frames, args.resolution)
     keep = {data_dir(): "the sample data folder"}
     check_target(out, written_by="vo_lib generate", force=args.force, option="--out", keep=keep)  # first

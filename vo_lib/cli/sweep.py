@@ -158,13 +158,13 @@ def sweep_command(name: str, seeds: int, workers=None, scheduler=None, out=None,
     print(f"{describe}: {len(tasks)} tasks ({where}); wrote {path / 'results.csv'}")
     stats = summary(table, list(tasks[0]))
     with pd.option_context("display.max_rows", None, "display.width", 120):
-        print(stats.to_string(float_format=lambda v: f"{v:.4g}"))
+        print(stats.to_string(float_format=lambda v: f"{v:.4g}", na_rep="undefined"))  # one seed: no spread
     if name == "nees":
         from vo_lib.comparison import chi2_band
 
         low, high = chi2_band(3, len(table))
         mean = table["nees_mean"].mean()
         print(
-            f"NEES averaged over {len(table)} runs: {mean:.3f}; "
+            f"NEES averaged over {len(table)} run{'s' * (len(table) != 1)}: {mean:.3f}; "
             f"consistent runs give {low:.3f}-{high:.3f} (95 %)"
         )

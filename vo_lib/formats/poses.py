@@ -129,8 +129,8 @@ def _check(path: Path, a: np.ndarray, lines: list[int], comma: bool) -> None:
         refuse(
             np.concatenate([[False], np.diff(t) <= 0]),
             lambda k: (
-                f"timestamp {t[k]:.9g} {'repeats' if t[k] == t[k - 1] else 'comes before'} "
-                f"the one on line {lines[k - 1]}; timestamps must increase"
+                f"timestamp {float(t[k])!r} {'repeats' if t[k] == t[k - 1] else 'comes before'} "
+                f"the one on line {lines[k - 1]} ({float(t[k - 1])!r}); timestamps must increase"
             ),
         )
     refuse(np.abs(positions).max(axis=1) > MAX_POSITION, f"a position beyond {MAX_POSITION:g} m")
