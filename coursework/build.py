@@ -55,6 +55,7 @@ import nbformat
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))  # this checkout's vo_lib, whatever copy is installed
 from coursework.grading import report  # noqa: E402
+from vo_lib.arguments import OneLineParser  # noqa: E402
 from vo_lib.outputs import (  # noqa: E402
     OutputError,
     OutputFolder,
@@ -652,15 +653,14 @@ def build(
             folder.commit()
 
 
-class OneLineParser(argparse.ArgumentParser):
+class Parser(OneLineParser):
     """Argument errors as one line (a UsageError), not argparse's usage block."""
 
-    def error(self, message: str):
-        raise UsageError(message)
+    raises = UsageError
 
 
 def parse_args(argv: list[str] | None) -> argparse.Namespace:
-    parser = OneLineParser(
+    parser = Parser(
         prog="python coursework/build.py",
         description="Write student/ (notebooks without solutions) and grading/ (nbgrader's course folder).",
     )

@@ -1203,3 +1203,24 @@ def test_a_path_that_is_not_utf8_is_read(template, tmp_path):
     )
     assert proc.returncode == 0, proc.stderr.decode(errors="replace")
     assert b"Traceback" not in proc.stderr and (tmp_path / "out" / MARKER).is_file()
+
+
+def test_a_marker_names_a_file_added_in_a_subfolder_and_an_older_one_still_covers_its_folders(tmp_path):
+    """Markers list every file and folder written, subfolders' too; one written before they did
+    (top-level names only) still lets its command replace the folder."""
+    import json
+
+    from vo_lib.outputs import foreign_content
+
+    folder = tmp_path / "gen"
+    (folder / "image_0").mkdir(parents=True)
+    (folder / "image_0" / "000000.png").write_bytes(b"png")
+    (folder / MARKER).write_text(json.dumps({"written_by": "vo_lib generate", "contents": ["image_0"]}))
+    assert foreign_content(folder, "vo_lib generate") is None
+    listed = {"written_by": "vo_lib generate", "contents": ["image_0", "image_0/000000.png"]}
+    (folder / MARKER).write_text(json.dumps(listed))
+    assert foreign_content(folder, "vo_lib generate") is None
+    (folder / "image_0" / "NOTES.txt").write_text("mine")
+    assert "it holds image_0/NOTES.txt, which this program did not write" == foreign_content(
+        folder, "vo_lib generate"
+    )

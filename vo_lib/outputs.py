@@ -92,11 +92,12 @@ def foreign_content(folder: Path, written_by: str) -> str | None:
         return f"cannot be listed ({exc.strerror or exc})"
     if not names or MARKER not in names:
         return "it was not written by this program" if names else None
-    names = set(entries(folder))  # down to the files in its subfolders
     marker = read_marker(folder) or {}
     contents, files = marker.get("contents"), marker.get("files", {})
     if not isinstance(contents, list | str) or not isinstance(files, dict):
         return f"its marker {MARKER} is damaged"
+    if any("/" in str(name) for name in contents):  # down to its subfolders' files (older markers: top level)
+        names = set(entries(folder))
     if marker.get("written_by") != written_by:
         return f"it holds the output of `{marker.get('written_by')}`, which `{written_by}` does not replace"
     now = file_checksums(folder) if files else {}
