@@ -338,11 +338,11 @@ def check(course: pathlib.Path, paths: list[pathlib.Path], repeat: int = 1) -> l
     submission (unanswered, constant or truth-copying, library-calling, plausibly wrong) must score
     0 in each exercise, while cells outside the exercises run without error; every flagged answer
     must be named by the integrity report (read, not run), and no other; and no submission may
-    take longer than the solutions of its notebook (the notebook's own run time, measured in the
-    same repetition) plus :data:`SLACK_SECONDS`. Returns the score table (one line per exercise),
-    why each adversarial answer failed, the integrity report (answers to be reviewed), and the
-    seconds each submission took; raises BuildError naming every
-    problem found.
+    take longer than :data:`SLACK_FACTOR` times the solutions of its notebook (the notebook's own
+    run time, measured in the same repetition) plus :data:`SLACK_SECONDS`. Returns the score
+    table (one line per exercise), why each adversarial answer failed, the integrity report
+    (answers to be reviewed), and the seconds each submission took; raises BuildError naming
+    every problem found.
     """
     problems: list[str] = []
     times: dict[tuple[str, str], list[float]] = {}
@@ -354,16 +354,16 @@ def check(course: pathlib.Path, paths: list[pathlib.Path], repeat: int = 1) -> l
                 times.setdefault(key, []).append(seconds)
     timing = [
         f"seconds per submission (autograde, nbgrader's start included), against the notebook's own "
-        f"run time (its solutions, graded in the same repetition) + {SLACK_SECONDS:g} s:"
+        f"run time (its solutions, graded in the same repetition) x {SLACK_FACTOR:g} + {SLACK_SECONDS:g} s:"
     ]
     for (number, student), seconds in times.items():
-        limits = [own + SLACK_SECONDS for own in times[(number, SOLUTIONS_STUDENT)]]
+        limits = [SLACK_FACTOR * own + SLACK_SECONDS for own in times[(number, SOLUTIONS_STUDENT)]]
         over = [f"{t:.1f} s > {limit:.1f} s" for t, limit in zip(seconds, limits, strict=True) if t > limit]
         shown = " ".join(f"{t:6.1f}" for t in seconds)
         timing.append(f"{number} {student:<14} {shown}   limit {' '.join(f'{x:.1f}' for x in limits)}")
         if over and student != SOLUTIONS_STUDENT:
             problems.append(
-                f"{number} {student}: took longer than its notebook's run time + slack: {over[0]}"
+                f"{number} {student}: took longer than its notebook's run time with slack: {over[0]}"
             )
     report = rows + reasons + events + timing
     if problems:
@@ -371,7 +371,10 @@ def check(course: pathlib.Path, paths: list[pathlib.Path], repeat: int = 1) -> l
     return report
 
 
-SLACK_SECONDS = 30.0
+#: A submission may take its notebook's own run time times SLACK_FACTOR plus SLACK_SECONDS: a
+#: loop that never ends is caught, a machine that is busier for one submission than for the
+#: solutions is not (on a loaded 2-core machine a correct answer took up to 1.25 times as long).
+SLACK_FACTOR, SLACK_SECONDS = 1.5, 30.0
 FRAME_STORE, STARTUP = "VO_LIB_FRAME_STORE", ROOT / "tests" / "startup"
 
 
