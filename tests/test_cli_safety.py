@@ -219,6 +219,16 @@ def linked_into(ws: Path, name: str, folder: str) -> None:
     (ws / "seq" / name).symlink_to(Path("..") / folder / name)
 
 
+def linked_twice(ws: Path) -> None:
+    """seq/image_0 links to a folder of links, which lead to the user's files in ``thesis``."""
+    (ws / "links").mkdir()
+    for png in sorted((ws / "seq" / "image_0").iterdir()):
+        png.rename(ws / "thesis" / png.name)
+        (ws / "links" / png.name).symlink_to(Path("..") / "thesis" / png.name)
+    (ws / "seq" / "image_0").rmdir()
+    (ws / "seq" / "image_0").symlink_to(Path("..") / "links")
+
+
 def link(name: str, to: str):
     return lambda ws: (ws / name).symlink_to(to)
 
@@ -266,6 +276,8 @@ CASES = [
         "holds what the input sequence links to", lambda ws: linked_into(ws, "poses.txt", "thesis")),
     Case("out-is-a-linked-input-folder-force", "RUN --out thesis/image_1 --force", 2,
         "is what the input sequence links to", lambda ws: linked_into(ws, "image_1", "thesis")),
+    Case("out-holds-images-linked-through-a-linked-folder-force", "RUN --out thesis --force", 2,
+        "holds what the input sequence links to", linked_twice),
     Case("convert-over-its-input-force", "convert seq --out seq/image_0 --force", 2,
         "inside the input sequence"),
     Case("convert-above-its-input-force", "convert seq --out . --force", 2, "holds the input sequence"),
@@ -1207,7 +1219,8 @@ def test_a_path_that_is_not_utf8_is_read(template, tmp_path):
 
 def test_a_marker_names_a_file_added_in_a_subfolder_and_an_older_one_still_covers_its_folders(tmp_path):
     """Markers list every file and folder written, subfolders' too; one written before they did
-    (top-level names only) still lets its command replace the folder."""
+    (top-level names only) still lets its command replace the folder, as long as below its names
+    there are frames alone."""
     import json
 
     from vo_lib.outputs import foreign_content
@@ -1217,6 +1230,9 @@ def test_a_marker_names_a_file_added_in_a_subfolder_and_an_older_one_still_cover
     (folder / "image_0" / "000000.png").write_bytes(b"png")
     (folder / MARKER).write_text(json.dumps({"written_by": "vo_lib generate", "contents": ["image_0"]}))
     assert foreign_content(folder, "vo_lib generate") is None
+    (folder / "image_0" / "NOTES.txt").write_text("mine")  # below an older marker's names: frames alone
+    assert "image_0/NOTES.txt" in foreign_content(folder, "vo_lib generate")
+    (folder / "image_0" / "NOTES.txt").unlink()
     listed = {"written_by": "vo_lib generate", "contents": ["image_0", "image_0/000000.png"]}
     (folder / MARKER).write_text(json.dumps(listed))
     assert foreign_content(folder, "vo_lib generate") is None

@@ -21,6 +21,7 @@ import contextlib
 import hashlib
 import json
 import os
+import re
 import shutil
 import tempfile
 from pathlib import Path
@@ -96,8 +97,10 @@ def foreign_content(folder: Path, written_by: str) -> str | None:
     contents, files = marker.get("contents"), marker.get("files", {})
     if not isinstance(contents, list | str) or not isinstance(files, dict):
         return f"its marker {MARKER} is damaged"
-    if any("/" in str(name) for name in contents):  # down to its subfolders' files (older markers: top level)
+    if any("/" in str(name) for name in contents):  # down to its subfolders' files
         names = set(entries(folder))
+    elif contents != ANY_CONTENTS:  # an older marker lists its top level only: below it, frames alone
+        names |= {e for e in entries(folder) if not re.fullmatch(r"[^/]+/\d+\.png", e)}
     if marker.get("written_by") != written_by:
         return f"it holds the output of `{marker.get('written_by')}`, which `{written_by}` does not replace"
     now = file_checksums(folder) if files else {}
@@ -109,14 +112,18 @@ def foreign_content(folder: Path, written_by: str) -> str | None:
 
 
 def linked_from(folder) -> list[Path]:
-    """Where the symbolic links under ``folder`` lead (resolved): what an input reads through them.
-    Links to folders are listed, not followed."""
-    return [
-        (Path(root) / name).resolve()
-        for root, folders, files in os.walk(folder)
-        for name in folders + files
-        if (Path(root) / name).is_symlink()
-    ]
+    """Where the symbolic links under ``folder`` lead (resolved): what an input reads through them,
+    and, through a link to a folder, what that folder's own links lead to, and so on."""
+    found: list[Path] = []
+    to_walk = [Path(folder)]
+    while to_walk:
+        for root, folders, files in os.walk(to_walk.pop()):
+            for link in (Path(root) / name for name in folders + files):
+                target = link.resolve() if link.is_symlink() else None
+                if target is not None and target not in found:
+                    found.append(target)
+                    to_walk += [target] if target.is_dir() else []
+    return found
 
 
 def _guarded(inputs, keep: dict | None) -> list[tuple[Path, str, bool]]:

@@ -172,8 +172,9 @@ def matches_under_transform(
     return SyntheticMatches(w_prev, w_curr, inliers, float(theta), float(rho), points)
 
 
-def _scene_points(camera: StereoCamera, m: int, rng: np.random.Generator,
-                  depth_range: tuple[float, float], scene: Scene) -> np.ndarray:
+def _scene_points(
+    camera: StereoCamera, m: int, rng: np.random.Generator, depth_range: tuple[float, float], scene: Scene
+) -> np.ndarray:
     """``m`` points of the scene in the previous camera frame, ``(m, 3)``: a column of the image
     (uniform), a horizontal range (uniform in inverse range) and a height above the floor (0 for
     floor texture, else uniform up to ``scene.top``). Floor texture starts at the rig's own
