@@ -293,6 +293,7 @@ def test_asl_recording_is_rectified_and_its_truth_moved_into_the_left_camera():
         ("superscript", "cam0/data.csv, line 3: expected 'timestamp [ns],filename', got '14036365848"),
         ("overflow", "cam0/data.csv, line 3: expected 'timestamp [ns],filename', got '99999999999"),
         ("outside", "cam0/data.csv, line 3: '../../cam1/data/1403636584813555456.png'; expected a file name"),
+        ("spacing", "cam0/data.csv: frames 20 s apart (median); expected at most 10 s"),
     ],
 )
 def test_a_bad_rig_gets_one_line_and_exit_2(tmp_path, capsys, damage, expected):
@@ -367,6 +368,13 @@ def test_a_bad_rig_gets_one_line_and_exit_2(tmp_path, capsys, damage, expected):
         path = mav0 / "cam1" / "sensor.yaml"
         path.unlink()
         path.write_text("") if damage == "empty" else path.mkdir()
+    elif damage == "spacing":  # a frame every 20 s: too far apart to track, as in times.txt
+        for side in ("cam0", "cam1"):
+            path = mav0 / side / "data.csv"
+            lines = path.read_text().splitlines()
+            first = int(lines[1].split(",")[0])
+            rows = [f"{first + 20 * 10**9 * k},{line.split(',')[1]}" for k, line in enumerate(lines[1:])]
+            path.write_text("\n".join(lines[:1] + rows) + "\n")
     elif damage == "timestamps":
         path = mav0 / "cam1" / "data.csv"
         lines = path.read_text().splitlines()
@@ -381,6 +389,33 @@ def test_a_bad_rig_gets_one_line_and_exit_2(tmp_path, capsys, damage, expected):
     err = capsys.readouterr().err.strip().splitlines()
     assert code == 2 and len(err) == 1, err
     assert expected in err[0] and "Traceback" not in err[0]
+
+
+@needs_euroc
+def test_frames_within_the_truth_run_and_the_refusal_says_how_to_run_the_rest(tmp_path, capsys):
+    """A ground truth that ends before the images: --frames runs the pairs it covers; the refusal
+    of the whole recording says what to do, and evaluate then scores the frames it covers."""
+    from vo_lib.cli.main import main
+
+    rig = small_rig(tmp_path, frames=12)
+    truth = rig / "mav0" / "state_groundtruth_estimate0" / "groundtruth.tum"
+    t8 = int((rig / "mav0" / "cam0" / "data.csv").read_text().splitlines()[9].split(",")[0]) * 1e-9
+    lines = truth.read_text().splitlines()
+    truth.write_text(
+        "\n".join(line for line in lines if line[0] == "#" or float(line.split()[0]) < t8 + 0.002)
+    )
+    assert main(["run", "--sequence", str(rig), "--out", str(tmp_path / "all")]) == 2
+    err = capsys.readouterr().err
+    assert "must cover every image (--frames runs fewer; to run without it, move it out of mav0" in err
+    assert main(["run", "--sequence", str(rig), "--frames", "9", "--out", str(tmp_path / "nine")]) == 0
+    assert len((tmp_path / "nine" / "poses.txt").read_text().splitlines()) == 9
+    assert "final position error, 3-D" in capsys.readouterr().out
+    shutil.move(truth.parent, tmp_path / "aside")
+    assert main(["run", "--sequence", str(rig), "--out", str(tmp_path / "all")]) == 0
+    gt, est = tmp_path / "aside" / truth.name, tmp_path / "all" / "trajectory.tum"
+    capsys.readouterr()
+    assert main(["evaluate", "--gt", str(gt), "--est", str(est), "--extrinsic-of", str(rig)]) == 0
+    assert "associated 9 of 12 poses" in capsys.readouterr().out
 
 
 @needs_euroc

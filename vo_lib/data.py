@@ -73,6 +73,9 @@ def load_sequence(
     ``progress`` while a sample renders: a bar (True), a line every few seconds (``"lines"``), or
     nothing (False); see :func:`vo_lib.sim.samples.generate`.
 
+    ``frames``: a sample rendered with that many frames, or the first ``frames`` pairs of an ASL
+    recording (its ground truth need cover only those); a KITTI-layout folder is read whole.
+
     ``odometry=False`` ignores the sequence's ``odometry.txt`` (it is not read at all).
     """
     key = str(name_or_path)
@@ -82,5 +85,5 @@ def load_sequence(
             generate(key, path, frames, None if resolution is None else tuple(resolution), progress)
         return read_sequence(path, odometry=odometry)
     if mav0_of(key) is not None:  # a rig as it records (ASL layout): rectified on reading
-        return read_asl(key)
+        return read_asl(key, frames=frames)
     return read_sequence(Path(key), odometry=odometry)

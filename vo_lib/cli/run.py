@@ -131,7 +131,7 @@ def resolve_sequence(name_or_path: str, frames: int | None, odometry: bool = Tru
         _, frames = input_path(name_or_path, frames)
     return load_sequence(
         name_or_path,
-        frames=frames if is_sample(name_or_path) else None,
+        frames=frames,
         odometry=odometry,
         progress=True if sys.stderr.isatty() else "lines",
     )

@@ -41,7 +41,7 @@ from vo_lib.formats.groundtruth import (
     to_camera,
 )
 from vo_lib.formats.images import check_headers
-from vo_lib.formats.sequence import Sequence
+from vo_lib.formats.sequence import Sequence, check_frame_spacing
 
 __all__ = [
     "AslError",
@@ -163,12 +163,13 @@ def tracked_to_camera(truth_path, T_body_rect, tracker_of=None) -> np.ndarray:
     return np.linalg.inv(truth_extrinsic(truth_path)) @ T_body_rect
 
 
-def read_asl(path, groundtruth=None) -> Sequence:
+def read_asl(path, groundtruth=None, frames: int | None = None) -> Sequence:
     """Read an ASL recording as a rectified :class:`~vo_lib.formats.sequence.Sequence`.
 
     The 6-DoF ground truth (``groundtruth`` or the first of :data:`GROUND_TRUTH_FILES`) becomes
     ``poses``: the rectified left camera at each image in its first pose. Position-only ground
     truth is kept in ``manifest["positions"]`` (for an alignment; see :mod:`vo_lib.evaluation`).
+    ``frames``: read only the first so many pairs.
     """
     root = Path(path)
     mav0 = mav0_of(root)
@@ -179,7 +180,7 @@ def read_asl(path, groundtruth=None) -> Sequence:
             raise AslError(f"{mav0 / side}: missing camera folder (data/, data.csv, sensor.yaml)")
     calib = [read_camera_yaml(mav0 / side / "sensor.yaml") for side in ("cam0", "cam1")]
     rect = rectify(*calib, mav0)
-    stamps, left, right = pair_by_timestamp(mav0)
+    stamps, left, right = (x[:frames] for x in pair_by_timestamp(mav0))
     width, height = check_headers(left, right)  # every image, before the run: none fails late
     if (width, height) != calib[0].resolution:
         raise AslError(
@@ -187,6 +188,7 @@ def read_asl(path, groundtruth=None) -> Sequence:
             f"{calib[0].resolution[0]}x{calib[0].resolution[1]}"
         )
     seconds = stamps * NANOSECONDS
+    check_frame_spacing(mav0 / "cam0" / "data.csv", seconds)
     manifest = {
         "layout": "asl",
         "time_origin_s": float(seconds[0]),

@@ -126,6 +126,13 @@ def associate(query_times, truth_times, max_diff: float = MAX_TIME_DIFF_S) -> tu
     return np.flatnonzero(keep), nearest[keep]
 
 
+#: What to do about a recording's ground truth that does not cover its images.
+UNCOVERED_HINT = (
+    " (--frames runs fewer; to run without it, move it out of mav0, and evaluate --gt ... "
+    "--extrinsic-of RECORDING then scores the frames it covers)"
+)
+
+
 def covering(truth: GroundTruth, times, max_diff: float = MAX_TIME_DIFF_S) -> tuple[np.ndarray, np.ndarray]:
     """:func:`associate` the images at ``times`` (seconds, the file's clock) with ``truth``,
     checked: the truth must span the images, and a 6-DoF truth must match every image."""
@@ -141,14 +148,14 @@ def covering(truth: GroundTruth, times, max_diff: float = MAX_TIME_DIFF_S) -> tu
     if times[0] < t0 - max_diff or times[-1] > t1 + max_diff:
         raise GroundTruthError(
             f"{truth.path}: covers {t0:.3f} to {t1:.3f} s but the images span {times[0]:.3f} to "
-            f"{times[-1]:.3f} s; the ground truth must cover every image"
+            f"{times[-1]:.3f} s; the ground truth must cover every image{UNCOVERED_HINT}"
         )
     i_img, i_gt = associate(times, truth.times, max_diff)
     if truth.kind is TruthKind.POSES and len(i_img) < len(times):
         missing = int(np.setdiff1d(np.arange(len(times)), i_img)[0])
         raise GroundTruthError(
             f"{truth.path}: no pose within {max_diff} s of image {missing} (t = {times[missing]:.3f} s); "
-            "the ground truth must cover every image"
+            f"the ground truth must cover every image{UNCOVERED_HINT}"
         )
     if len(i_img) < 3:
         raise GroundTruthError(

@@ -72,15 +72,27 @@ __all__ = [
     "read_sequence",
     "read_times",
     "required",
+    "check_frame_spacing",
     "write_sequence",
 ]
 
 #: Largest wheel distance between two frames in ``odometry.txt``, metres: beyond, the file is damaged.
 MAX_ODOMETRY_M = 1000.0
-#: Longest median time between frames (seconds): beyond it, ``times.txt`` in another unit.
-MAX_FRAME_SPACING_S = 5.0
+#: Longest median time between frames (seconds), in either layout: beyond it, times in another
+#: unit (milliseconds at up to 100 frames a second) or frames too far apart to track between.
+MAX_FRAME_SPACING_S = 10.0
 #: Fastest median track speed of ``odometry.txt`` (m/s): beyond it, distances in another unit.
 MAX_TRACK_SPEED_M_S = 50.0
+
+
+def check_frame_spacing(path: Path, seconds) -> None:
+    """Refuse frames more than :data:`MAX_FRAME_SPACING_S` apart (median) as read from ``path``."""
+    spacing = float(np.median(np.diff(seconds))) if len(seconds) > 1 else 0.0
+    if spacing > MAX_FRAME_SPACING_S:
+        raise SequenceError(
+            f"{path}: frames {spacing:g} s apart (median); expected at most {MAX_FRAME_SPACING_S:g} s "
+            "(times in milliseconds or nanoseconds?)"
+        )
 
 
 @dataclass
@@ -202,11 +214,7 @@ def read_sequence(path, odometry: bool = True) -> Sequence:
     n = len(left)
     required(root / "times.txt", "one timestamp per frame")
     times = read_per_frame(root / "times.txt", n, "timestamps", read_times)
-    if n > 1 and np.median(np.diff(times)) > MAX_FRAME_SPACING_S:
-        raise SequenceError(
-            f"{root / 'times.txt'}: frames {np.median(np.diff(times)):g} apart (median); expected seconds, "
-            f"at most {MAX_FRAME_SPACING_S:g} (milliseconds or nanoseconds?)"
-        )
+    check_frame_spacing(root / "times.txt", times)
     poses = odo = None
     if present(root / "poses.txt", "the ground-truth poses"):
         poses = read_per_frame(root / "poses.txt", n, "poses", read_poses)
