@@ -170,3 +170,17 @@ def test_convert_carries_the_odometry_files_of_a_kitti_folder(tmp_path):
     assert main(["convert", str(source), "--to", "kitti", "--out", str(tmp_path / "copy")]) == 0
     for name in ("oxts.txt", "odometry.txt", "raw_calib/calib_imu_to_velo.txt"):
         assert (tmp_path / "copy" / name).read_bytes() == (source / name).read_bytes(), name
+    # a read-only source (a dataset kept safe) gives a copy that can be replaced: new files' modes
+    for path in (source / "raw_calib" / "calib_imu_to_velo.txt", source / "raw_calib"):
+        path.chmod(0o555 if path.is_dir() else 0o444)
+    try:
+        for _ in range(2):
+            assert main(["convert", str(source), "--to", "kitti", "--out", str(tmp_path / "copy2")]) == 0
+    finally:
+        (source / "raw_calib").chmod(0o755)
+    assert not [p for p in tmp_path.iterdir() if p.name.startswith(".")]  # nothing left beside it
+    for path in (
+        tmp_path / "copy2" / "raw_calib",
+        tmp_path / "copy2" / "raw_calib" / "calib_imu_to_velo.txt",
+    ):
+        assert path.stat().st_mode & 0o200, path  # writable by its owner (root may write regardless)

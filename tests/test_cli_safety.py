@@ -1240,3 +1240,21 @@ def test_a_marker_names_a_file_added_in_a_subfolder_and_an_older_one_still_cover
     assert "it holds image_0/NOTES.txt, which this program did not write" == foreign_content(
         folder, "vo_lib generate"
     )
+
+
+def test_a_previous_output_that_cannot_be_deleted_is_a_notice_after_the_swap(tmp_path, monkeypatch, capsys):
+    """The new folder is in place once swapped: failing to delete the old one only says where it is."""
+    from vo_lib import atomic
+
+    target, complete = tmp_path / "out", tmp_path / ".out.new.tmp"
+    for folder, text in ((target, "old"), (complete, "new")):
+        folder.mkdir()
+        (folder / "poses.txt").write_text(text)
+
+    def refuse(path, *args, **kwargs):
+        raise PermissionError(13, "Permission denied", str(path))
+
+    monkeypatch.setattr(atomic.shutil, "rmtree", refuse)
+    atomic.swap_in(complete, target)
+    assert (target / "poses.txt").read_text() == "new"
+    assert "its previous contents stay in" in capsys.readouterr().err

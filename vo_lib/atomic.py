@@ -153,4 +153,7 @@ def swap_in(complete: Path, target: Path) -> None:
         os.rename(target, aside)
         os.rename(complete, target)
         complete = aside
-    shutil.rmtree(complete)
+    try:
+        shutil.rmtree(complete)
+    except OSError as exc:  # the new folder is in place: what is left is only the old one
+        notice(f"wrote {target}, but its previous contents stay in {complete} ({exc.strerror or exc})")

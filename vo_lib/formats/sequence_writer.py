@@ -15,6 +15,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
+from vo_lib.atomic import umask
 from vo_lib.camera import StereoCamera
 from vo_lib.outputs import OutputError, OutputFolder
 
@@ -86,8 +87,10 @@ class SequenceWriter:
         for name in names:
             src = Path(source) / name
             try:
-                if src.is_dir():
-                    shutil.copytree(src, self._tmp / name)
+                if src.is_dir():  # with the umask's permissions, not src's: the copy can be replaced
+                    shutil.copytree(src, self._tmp / name, copy_function=shutil.copyfile)
+                    for folder in [self._tmp / name, *(self._tmp / name).rglob("*/")]:
+                        folder.chmod(0o777 & ~umask())
                 elif src.is_file():
                     shutil.copyfile(src, self._tmp / name)
             except OSError as exc:
