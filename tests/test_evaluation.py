@@ -325,6 +325,13 @@ def test_evaluate_refuses_or_says_undefined_what_it_cannot_measure(tmp_path, rng
         rows["of distance travelled [%]"] == "undefined" and rows["KITTI segment errors"] == "no segment fits"
     )
     assert rows["ATE (Sim(3) alignment, scale undefined): rmse [m]"] == "undefined"
+    # positions only, of a tracker that stands still: no Sim(3) scale either
+    (tmp_path / "still.txt").write_text("".join(f"{t!r} 1 2 3\n" for t in times.tolist()))
+    assert main(["evaluate", "--gt", str(tmp_path / "still.txt"), "--est", str(tmp_path / "est.tum")]) == 0
+    out = capsys.readouterr().out
+    assert (
+        "ATE (Sim(3) alignment, positions only): rmse undefined m, max undefined" in out and "nan" not in out
+    )
     # a TUM estimate whose header orders the quaternion w x y z; a CSV whose times are seconds
     text = (tmp_path / "est.tum").read_text()
     (tmp_path / "wxyz.tum").write_text("# timestamp tx ty tz qw qx qy qz\n" + text)

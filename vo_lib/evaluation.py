@@ -359,7 +359,7 @@ def key_position_errors(gt_planar, est_planar, frames) -> dict:
     }
 
 
-def _shown(value: float, spec: str) -> str:
+def shown(value: float, spec: str) -> str:
     """``value`` as ``spec`` formats it, or "undefined" (the percentage of a truth that does not
     move, the scale of an alignment when either trajectory stands still)."""
     return format(value, spec) if np.isfinite(value) else "undefined"
@@ -382,7 +382,7 @@ class StandardErrors:
         f = self.final
         rows = [
             ("final position error, 3-D [m]", f"{f.position_m:.4f}"),
-            ("  of distance travelled [%]", _shown(f.percent, ".2f")),
+            ("  of distance travelled [%]", shown(f.percent, ".2f")),
             ("final rotation error [deg]", f"{f.rotation_deg:.3f}"),
             (
                 "distance travelled, 3-D, truth / estimate [m]",
@@ -390,8 +390,8 @@ class StandardErrors:
             ),
             ("ATE (SE(3) alignment): rmse [m]", f"{self.ate_se3.rmse:.4f}"),
             (
-                f"ATE (Sim(3) alignment, scale {_shown(self.sim3_scale, '.4f')}): rmse [m]",
-                _shown(self.ate_sim3.rmse, ".4f"),
+                f"ATE (Sim(3) alignment, scale {shown(self.sim3_scale, '.4f')}): rmse [m]",
+                shown(self.ate_sim3.rmse, ".4f"),
             ),
             ("RPE RMSE, 1 frame: translation [m]", f"{self.rpe_m.rmse:.5f}"),
             ("RPE RMSE, 1 frame: rotation [deg]", f"{self.rpe_deg.rmse:.4f}"),

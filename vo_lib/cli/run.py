@@ -315,7 +315,7 @@ def evaluate_command(gt: str, est: str, segments=None, extrinsic_of: str | None 
     left camera, the tracked frame of a ``sensor.yaml`` beside ``--gt`` taken into account; for
     position-only truth that frame is the lever arm carried along the estimated poses.
     """
-    from vo_lib.evaluation import Alignment, ate_positions, kitti_segment_errors, standard_errors
+    from vo_lib.evaluation import Alignment, ate_positions, kitti_segment_errors, shown, standard_errors
     from vo_lib.formats.euroc import body_to_rectified_camera, tracked_to_camera
     from vo_lib.formats.groundtruth import GroundTruthError, TruthKind, read_groundtruth
 
@@ -350,7 +350,8 @@ def evaluate_command(gt: str, est: str, segments=None, extrinsic_of: str | None 
         lever = np.linalg.inv(to_camera)[:3, 3]  # the tracked point in the rectified camera
         for alignment in (Alignment.SE3, Alignment.SIM3):
             a, _ = ate_positions(truth.positions[i_gt], E[i_est], lever, alignment)
-            print(f"ATE ({alignment} alignment, positions only): rmse {a.rmse:.4f} m, max {a.max:.4f}")
+            rmse, worst = shown(a.rmse, ".4f"), shown(a.max, ".4f")  # undefined: a scale of nothing moving
+            print(f"ATE ({alignment} alignment, positions only): rmse {rmse} m, max {worst}")
         return
     G = truth.poses[i_gt] @ to_camera
     for label, value in standard_errors(G, E[i_est], lengths).rows():
