@@ -293,6 +293,7 @@ def test_asl_recording_is_rectified_and_its_truth_moved_into_the_left_camera():
         ("superscript", "cam0/data.csv, line 3: expected 'timestamp [ns],filename', got '14036365848"),
         ("overflow", "cam0/data.csv, line 3: expected 'timestamp [ns],filename', got '99999999999"),
         ("outside", "cam0/data.csv, line 3: '../../cam1/data/1403636584813555456.png'; expected a file name"),
+        ("columns", "cam0/data.csv, line 3: 3 columns; expected 2, 'timestamp [ns],filename'"),
         ("spacing", "cam0/data.csv: frames 20 s apart (median); expected at most 10 s"),
     ],
 )
@@ -322,7 +323,7 @@ def test_a_bad_rig_gets_one_line_and_exit_2(tmp_path, capsys, damage, expected):
     elif damage == "model":
         path = mav0 / "cam0" / "sensor.yaml"
         path.write_text(path.read_text().replace("camera_model: pinhole", "camera_model: omni"))
-    elif damage in ("latin-1", "superscript", "overflow", "outside"):
+    elif damage in ("latin-1", "superscript", "overflow", "outside", "columns"):
         path = mav0 / "cam0" / "data.csv"
         lines = path.read_text().splitlines()
         stamp, name = lines[2].split(",")
@@ -331,6 +332,7 @@ def test_a_bad_rig_gets_one_line_and_exit_2(tmp_path, capsys, damage, expected):
             "superscript": f"{stamp}\u00b2,{name}",
             "overflow": f"99999999999999999999,{name}",
             "outside": f"{stamp},../../cam1/data/{name}",
+            "columns": f"{stamp},{name},",  # a trailing comma
         }[damage]
         text = "\n".join(lines) + "\n"
         path.write_bytes(b"# r\xe9sum\xe9\n" + text.encode() if damage == "latin-1" else text.encode())

@@ -100,6 +100,9 @@ def read_image_list(camera_dir: Path) -> tuple[np.ndarray, list[Path]]:
         if not line or line.startswith("#"):
             continue
         stamp, sep, name = (part.strip() for part in line.partition(","))
+        if "," in name:  # a third column, or a trailing comma: not part of the file name
+            columns = len(line.split(","))
+            raise AslError(f"{csv_path}, line {n}: {columns} columns; expected 2, 'timestamp [ns],filename'")
         # a time in ns fits 19 digits (int64); a name stays inside data/
         if not sep or not re.fullmatch(r"[0-9]{1,19}", stamp) or int(stamp) >= 2**63 or not name:
             raise AslError(f"{csv_path}, line {n}: expected 'timestamp [ns],filename', got {line[:50]!r}")
