@@ -411,7 +411,8 @@ def test_frames_within_the_truth_run_and_the_refusal_says_how_to_run_the_rest(tm
     assert "must cover every image (--frames runs fewer; to run without it, move it out of mav0" in err
     assert main(["run", "--sequence", str(rig), "--frames", "9", "--out", str(tmp_path / "nine")]) == 0
     assert len((tmp_path / "nine" / "poses.txt").read_text().splitlines()) == 9
-    assert "final position error, 3-D" in capsys.readouterr().out
+    out = capsys.readouterr().out  # and names the one of the recording's truths it used
+    assert f"Errors against ground truth ({truth}, " in out and "final position error, 3-D" in out
     shutil.move(truth.parent, tmp_path / "aside")
     assert main(["run", "--sequence", str(rig), "--out", str(tmp_path / "all")]) == 0
     gt, est = tmp_path / "aside" / truth.name, tmp_path / "all" / "trajectory.tum"
@@ -656,6 +657,12 @@ def test_a_rig_with_positions_only_is_scored_by_its_aligned_prism(tmp_path, caps
     assert "Errors against position-only ground truth" in out and "Errors in 3-D" not in out
     line = next(x for x in out.splitlines() if "ATE RMSE of the tracked point" in x)
     assert 0 < float(line.split()[-1]) < 0.05
+    # without the tracker's sensor.yaml, its lever arm is taken as zero, and a notice says so
+    (rig / "mav0" / "leica0" / "sensor.yaml").unlink()
+    assert main(["run", "--sequence", str(rig), "--out", str(tmp_path / "out")]) == 0
+    assert "leica0/data.csv: no sensor.yaml beside it; its poses or positions are taken as the body's" in (
+        capsys.readouterr().err
+    )
 
 
 #: The rows of docs/real_data.md's table of the drone's preset, each part taken out in turn.

@@ -144,13 +144,15 @@ def print_error_table(
     flagged: int,
     errors: dict[str, StandardErrors | None] | None = None,
     odometry_label: str = "track odometry",
+    truth_file: str | None = None,
 ) -> None:
     """One table of errors against ground truth, a column for visual odometry and one for
     odometry alone: the rows of ``errors`` (3-D, :func:`vo_lib.evaluation.standard_errors` of
     each column's camera poses) and the planar rows of ``report`` (:func:`error_report`)."""
     errors = errors or {}
     vo_3d = errors.get("vo")
-    print(f"\nErrors against ground truth ({_how_far(report, vo_3d)})")
+    source = f"{truth_file}, " if truth_file else ""  # a recording's, of the several it may hold
+    print(f"\nErrors against ground truth ({source}{_how_far(report, vo_3d)})")
     cols = [k for k in ("vo", "odometry") if k in report]
     names = {"vo": "visual odometry", "odometry": odometry_label}
     print(f"  {'':<{LABEL}s}" + "".join(f"{names[c]:>{COLUMN}s}" for c in cols))

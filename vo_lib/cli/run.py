@@ -254,7 +254,10 @@ def _run_into(
     if truth is not None:
         report = error_report(result, truth, odo)
         report["errors_3d"] = errors_3d(seq.poses[:n], {"vo": poses, "odometry": odo}, mount)
-        print_error_table(report, len(result.flagged), report["errors_3d"], odometry_name(vehicle))
+        truth_file = seq.manifest.get("groundtruth")  # an ASL recording's: the one of its files used
+        print_error_table(
+            report, len(result.flagged), report["errors_3d"], odometry_name(vehicle), truth_file
+        )
     output.commit(sequence=str(seq.path.resolve()), frames=n, seed=seed, odometry=not no_odometry)
     return report
 
@@ -379,7 +382,9 @@ def convert_command(sequence: str, to: str, out: str, force: bool = False) -> No
     if not source.exists():
         raise UsageError(f"{sequence}: no such folder")
     seq = load_sequence(source, odometry=False, progress=False)  # before --out: a bad input changes nothing
-    manifest = {k: v for k, v in seq.manifest.items() if k != "layout"}
+    manifest = {
+        k: v for k, v in seq.manifest.items() if k not in ("layout", "groundtruth")
+    }  # the copy's: poses.txt
     writer = SequenceWriter(
         out, seq.camera, force=force, option="--out", written_by="vo_lib convert", inputs=[seq.path]
     )

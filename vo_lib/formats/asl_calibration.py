@@ -15,6 +15,7 @@ import cv2
 import numpy as np
 import yaml
 
+from vo_lib.atomic import notice
 from vo_lib.camera import StereoCamera
 from vo_lib.formats.frame_files import SequenceError
 from vo_lib.formats.poses import rotation_problem
@@ -221,9 +222,10 @@ def rectify(left: CameraCalibration, right: CameraCalibration, where: Path) -> R
 
 def truth_extrinsic(truth_path: Path) -> np.ndarray:
     """``T_BS`` of the ``sensor.yaml`` beside a ground-truth file (the tracked frame in the body),
-    or the identity where there is none."""
+    or the identity where there is none (said in a notice: a prism's lever arm is then taken as 0)."""
     sensor = truth_path.parent / "sensor.yaml"
     if not sensor.is_file():
+        notice(f"{truth_path}: no sensor.yaml beside it; its poses or positions are taken as the body's")
         return np.eye(4)
     T = _transform(sensor, _yaml(sensor), "a 4x4 transform, data: [16 numbers]")
     if np.linalg.norm(T[:3, 3]) > MAX_LEVER_ARM_M:

@@ -200,6 +200,7 @@ def read_asl(path, groundtruth=None, frames: int | None = None) -> Sequence:
     truth_path = Path(groundtruth) if groundtruth else find_groundtruth(mav0)
     poses = None
     if truth_path is not None:
+        manifest["groundtruth"] = str(truth_path)
         poses = _truth_into_camera(truth_path, seconds, rect.T_body_rect, manifest)
     since_first = (stamps - stamps[0]) * NANOSECONDS  # from whole nanoseconds: exact to 1 ns
     return Sequence(root, rect.camera, since_first, left, right, poses, None, manifest, rect)
