@@ -336,9 +336,15 @@ def test_evaluate_refuses_or_says_undefined_what_it_cannot_measure(tmp_path, rng
     text = (tmp_path / "est.tum").read_text()
     (tmp_path / "wxyz.tum").write_text("# timestamp tx ty tz qw qx qy qz\n" + text)
     (tmp_path / "seconds.csv").write_text(text.replace(" ", ","))
+    rows = [line.split(" ", 1) for line in text.splitlines()]  # a TUM file in nanoseconds
+    (tmp_path / "ns.tum").write_text(
+        "".join(f"{round(float(t) * 1e9) + 10**18} {rest}\n" for t, rest in rows)
+    )
     refused = {
         ("--gt", "est.tum", "--est", "wxyz.tum"): "line 1: the header orders the quaternion w x y z",
         ("--gt", "seconds.csv", "--est", "est.tum"): "line 2: the times step by 0.1",
+        ("--gt", "ns.tum", "--est", "est.tum"): "line 1: time 1000000000000000000; a text file's times",
+        ("--gt", "est.tum", "--est", "ns.tum"): "ns.tum, line 1: time 1000000000000000000; a text",
     }
     for (a, gt, b, est), message in refused.items():
         assert main(["evaluate", a, str(tmp_path / gt), b, str(tmp_path / est)]) == 2

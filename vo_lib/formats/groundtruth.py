@@ -31,7 +31,13 @@ from pathlib import Path
 
 import numpy as np
 
-from vo_lib.formats.poses import TrajectoryError, header_quaternion_order, pose_matrices, read_rows
+from vo_lib.formats.poses import (
+    TrajectoryError,
+    check_seconds,
+    header_quaternion_order,
+    pose_matrices,
+    read_rows,
+)
 from vo_lib.geometry import as_homogeneous
 
 #: Largest time difference (s) at which a ground-truth sample is associated with an image: evo's
@@ -77,6 +83,8 @@ def read_groundtruth(path, min_poses: int = 2) -> GroundTruth:
     path = Path(path)
     try:
         a, lines, comma = read_rows(path, min_poses)
+        if not comma and a.shape[1] != 12:  # TUM or positions: times in seconds
+            check_seconds(path, a[:, 0], lines)
     except TrajectoryError as exc:
         raise GroundTruthError(str(exc)) from None
     width = a.shape[1]

@@ -190,6 +190,20 @@ def header_quaternion_order(path: Path, first_row_line: int) -> tuple[str, int]:
     return order, found
 
 
+#: Latest time a text file's seconds may reach (the year 5138): beyond, they are nanoseconds.
+MAX_SECONDS = 1e11
+
+
+def check_seconds(path: Path, times: np.ndarray, lines: list[int]) -> None:
+    """Refuse a text file's times that cannot be seconds (``lines``: each row's line number)."""
+    if len(times) and np.abs(times).max() > MAX_SECONDS:
+        i = int(np.argmax(np.abs(times) > MAX_SECONDS))
+        raise TrajectoryError(
+            f"{path}, line {lines[i]}: time {times[i]:.0f}; a text file's times are read as seconds "
+            "(TUM's t x y z qx qy qz qw), at most 1e11 (nanoseconds?)"
+        )
+
+
 def read_trajectory(path, min_poses: int = 1) -> tuple[np.ndarray | None, np.ndarray]:
     """Read a KITTI pose file (12 numbers a line) or a TUM file (8); returns ``(times, poses)``
     (``times`` None for KITTI). Checked as :func:`read_rows` says."""
@@ -202,6 +216,7 @@ def read_trajectory(path, min_poses: int = 1) -> tuple[np.ndarray | None, np.nda
         )
     if a.shape[1] == 12:
         return None, as_homogeneous(a.reshape(-1, 3, 4))
+    check_seconds(path, a[:, 0], lines)
     order, line = header_quaternion_order(path, lines[0])
     if order not in ("", "xyzw"):
         raise TrajectoryError(
