@@ -276,6 +276,7 @@ def test_asl_recording_is_rectified_and_its_truth_moved_into_the_left_camera():
         ("focal", "cam0/sensor.yaml: keys intrinsics and distortion_coefficients leave 0% of"),
         ("distortion", "cam1/sensor.yaml: keys intrinsics and distortion_coefficients leave 0% of"),
         ("camera", "cam1: missing camera folder"),
+        ("swapped", "mav0: the T_BS of cam0 and cam1 put cam1 -0.11 m to the right of cam0; expected cam0"),
         ("timestamps", "has no image of the same timestamp"),
         ("order", "cam0/data.csv, line 4: timestamp 1403636584813555456 does not come after"),
         ("missing", "cam1/data/1403636584963555584.png: listed in data.csv but missing"),
@@ -355,6 +356,10 @@ def test_a_bad_rig_gets_one_line_and_exit_2(tmp_path, capsys, damage, expected):
             path.write_text(text.replace("[-0.28368365,", "[1e30,"))
     elif damage == "baseline":
         shutil.copy(mav0 / "cam0" / "sensor.yaml", mav0 / "cam1" / "sensor.yaml")
+    elif damage == "swapped":
+        (mav0 / "cam0").rename(mav0 / "left")
+        (mav0 / "cam1").rename(mav0 / "cam0")
+        (mav0 / "left").rename(mav0 / "cam1")
     elif damage == "camera":
         shutil.rmtree(mav0 / "cam1")
     elif damage.startswith("truth-"):  # the prism's extrinsic: a last row, a lever arm in millimetres

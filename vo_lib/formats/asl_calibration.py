@@ -209,8 +209,11 @@ def rectify(left: CameraCalibration, right: CameraCalibration, where: Path) -> R
             )
     try:
         camera = StereoCamera.from_projection_matrices(P1, P2, *size)
-    except ValueError as exc:
-        raise AslError(f"{where}: cam1 is not to the right of cam0 in T_BS ({exc})") from None
+    except ValueError:
+        raise AslError(
+            f"{where}: the T_BS of cam0 and cam1 put cam1 {-P2[0, 3] / P2[0, 0]:+.3g} m to the right of "
+            "cam0; expected cam0 the left camera and cam1 the right one (are the two folders swapped?)"
+        ) from None
     maps = [
         cv2.initUndistortRectifyMap(c.K, c.distortion, R, P, size, cv2.CV_16SC2)
         for c, R, P in ((left, R1, P1), (right, R2, P2))
