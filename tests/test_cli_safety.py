@@ -1258,3 +1258,15 @@ def test_a_previous_output_that_cannot_be_deleted_is_a_notice_after_the_swap(tmp
     atomic.swap_in(complete, target)
     assert (target / "poses.txt").read_text() == "new"
     assert "its previous contents stay in" in capsys.readouterr().err
+
+
+def test_a_folder_the_user_did_not_name_is_refused_without_advising_force(tmp_path):
+    """A sample's folder (named by no option) that holds a user's file: --force would not apply."""
+    from vo_lib.outputs import OutputError, check_target
+
+    (tmp_path / "sample").mkdir()
+    (tmp_path / "sample" / "notes.txt").write_text("mine")
+    with pytest.raises(OutputError, match="not written by this program; move it away$"):
+        check_target(tmp_path / "sample", written_by="vo_lib generate")
+    with pytest.raises(OutputError, match="choose another folder, or add --force to replace it$"):
+        check_target(tmp_path / "sample", written_by="vo_lib generate", option="--out")

@@ -166,10 +166,9 @@ def check_target(target, *, written_by: str, force=False, inputs=(), keep=None, 
     if not real.is_dir():
         raise OutputError(f"{label}: is a file, not a folder; choose another output folder")
     why = foreign_content(real, written_by)
-    if why is not None and not force:
-        raise OutputError(
-            f"{label}: the folder exists and {why}; choose another folder, or add --force to replace it"
-        )
+    if why is not None and not force:  # a folder the user did not name (a sample's) has no --force
+        fix = "choose another folder, or add --force to replace it" if option else "move it away"
+        raise OutputError(f"{label}: the folder exists and {why}; {fix}")
     return None if why is None else f"{real} ({why})"
 
 

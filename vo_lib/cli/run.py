@@ -113,10 +113,11 @@ def announce_run(name: str, source: Path, frames: int | None, out_dir: Path) -> 
     if is_rendered(name, source):
         progress_line(f"run: sample {name}, {n} frames (rendered in {source}) -> {out_dir}/")
     else:
-        fast, slow = (max(1.0, n * s) for s in RENDER_S_PER_FRAME)
+        fast, slow = (round(max(1.0, n * s)) for s in RENDER_S_PER_FRAME)
+        how_long = f"{fast} to {slow} s" if slow > fast else f"{slow} s"
         progress_line(
             f"run: sample {name}, {n} frames -> {out_dir}/. First use: its frames are rendered into "
-            f"{source} first (about {fast:.0f} to {slow:.0f} s; later runs reuse them)"
+            f"{source} first (about {how_long}; later runs reuse them)"
         )
 
 
