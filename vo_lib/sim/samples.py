@@ -16,6 +16,7 @@ import numpy as np
 from tqdm.auto import tqdm
 
 from vo_lib.camera import StereoCamera
+from vo_lib.formats.frame_files import CAMERA_MOUNTS
 from vo_lib.formats.sequence import SequenceWriter
 from vo_lib.geometry import camera_mount, planar_to_matrix
 from vo_lib.models.track_odometry import TrackOdometry
@@ -479,8 +480,8 @@ def _camera_entry(sample: Sample, camera: StereoCamera) -> dict:
     entry = {"fx": camera.fx, "fy": camera.fy, "cx": camera.cx, "cy": camera.cy, "baseline": camera.baseline}
     if sample.rig == "car":
         entry["in_vehicle_m"] = list(road.CAMERA_IN_VEHICLE)
-        entry["mount"] = "car: ahead of the rear axle (vo_lib.sim.road)"
+        entry["mount"] = CAMERA_MOUNTS[1]
     else:
         entry["height_m"] = CAMERA_HEIGHT
-        entry["mount"] = "above turning axis"
+        entry["mount"] = CAMERA_MOUNTS[0]
     return entry
