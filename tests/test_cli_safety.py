@@ -340,7 +340,7 @@ CASES = [
         edit("seq/manifest.json", '{"camera": {"height_m": "tall"}}')),
     Case("manifest-time-origin-beyond", "RUN", 2, "key time_origin_s: expected a number from -1e+11 to 1e+11",
         edit("seq/manifest.json", '{"time_origin_s": 1e300}')),
-    Case("manifest-height-negative", "RUN", 2, "key camera.height_m: expected a number from 0 to 10, got -0.5",
+    Case("manifest-height-negative", "RUN", 2, "camera.height_m: expected a number from 0 to 10, got -0.5",
         edit("seq/manifest.json", '{"camera": {"height_m": -0.5}}')),
     Case("manifest-mount-unknown", "RUN", 2, "key camera.mount: expected 'above turning axis' or",
         edit("seq/manifest.json", '{"camera": {"height_m": 0.5, "mount": "above the turning axis"}}')),
