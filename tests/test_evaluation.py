@@ -337,12 +337,18 @@ def test_evaluate_refuses_or_says_undefined_what_it_cannot_measure(tmp_path, rng
     (tmp_path / "wxyz.tum").write_text("# timestamp tx ty tz qw qx qy qz\n" + text)
     (tmp_path / "seconds.csv").write_text(text.replace(" ", ","))
     rows = [line.split(" ", 1) for line in text.splitlines()]  # a TUM file in nanoseconds
+    csv = [f"{1403636583783555584 + 5 * 10**7 * k},1,2,3" for k in range(5)]  # EuRoC's positions
+    csv[2], csv[3] = csv[3], csv[2]
+    (tmp_path / "order.csv").write_text("\r".join(csv) + "\r")  # old-Mac line ends, too
     (tmp_path / "ns.tum").write_text(
         "".join(f"{round(float(t) * 1e9) + 10**18} {rest}\n" for t, rest in rows)
     )
     refused = {
         ("--gt", "est.tum", "--est", "wxyz.tum"): "line 1: the header orders the quaternion w x y z",
         ("--gt", "seconds.csv", "--est", "est.tum"): "line 2: the times step by 0.1",
+        ("--gt", "order.csv", "--est", "est.tum"): (
+            "line 4: timestamp 1403636583883555584 comes before the one on line 3 (1403636583933555584)"
+        ),
         ("--gt", "ns.tum", "--est", "est.tum"): "line 1: time 1000000000000000000; a text file's times",
         ("--gt", "est.tum", "--est", "ns.tum"): "ns.tum, line 1: time 1000000000000000000; a text",
     }

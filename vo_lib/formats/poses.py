@@ -126,11 +126,16 @@ def _check(path: Path, a: np.ndarray, lines: list[int], comma: bool) -> None:
         if a.shape[1] >= 8:
             refuse(np.abs(a[:, 4:8]).max(axis=1) <= 1e-6, "the quaternion is zero")
         t = a[:, 0]
+
+        def stamp(k: int) -> str:  # as written: a float would round a time in nanoseconds
+            text = read_text(path).replace("\r\n", "\n").replace("\r", "\n")  # as read_rows splits it
+            return re.split(r"[\s,]+", text.split("\n")[lines[k] - 1].strip())[0]
+
         refuse(
             np.concatenate([[False], np.diff(t) <= 0]),
             lambda k: (
-                f"timestamp {float(t[k])!r} {'repeats' if t[k] == t[k - 1] else 'comes before'} "
-                f"the one on line {lines[k - 1]} ({float(t[k - 1])!r}); timestamps must increase"
+                f"timestamp {stamp(k)} {'repeats' if t[k] == t[k - 1] else 'comes before'} "
+                f"the one on line {lines[k - 1]} ({stamp(k - 1)}); timestamps must increase"
             ),
         )
     refuse(np.abs(positions).max(axis=1) > MAX_POSITION, f"a position beyond {MAX_POSITION:g} m")
