@@ -38,8 +38,12 @@ def test_the_summary_groups_the_other_arguments():
     assert ten["mean"] == pytest.approx(35.0) and ten["count"] == 4
     assert ten["std"] == pytest.approx(np.std([0, 10, 40, 90], ddof=1))
     half = t.ppf(0.975, 3) * ten["std"] / 2
-    assert (ten["low"], ten["high"]) == pytest.approx((35 - half, 35 + half))
+    assert (ten["low"], ten["high"]) == pytest.approx((max(0, 35 - half), 35 + half))  # squares: >= 0
     assert stats.loc[(20, "square")]["mean"] == pytest.approx(70.0)
+    # a figure never negative (an error, a NEES): its interval stops at 0; one that can be, does not
+    skewed = pd.DataFrame({"seed": range(3), "nees": [0.1, 0.2, 30.0], "bias": [-0.1, 0.2, -30.0]})
+    lows = sweep.summary(skewed, ["seed"])["low"]
+    assert lows[("all", "nees")] == 0.0 and lows[("all", "bias")] < -30
 
 
 def test_sweep_command_writes_its_table_and_prints_the_summary(tmp_path, capsys):

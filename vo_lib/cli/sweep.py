@@ -124,14 +124,17 @@ def run_tasks(function, tasks: list[dict], workers: int = 1, scheduler: str | No
 
 def summary(table, arguments: list[str]):
     """Mean, standard deviation, count and the 95 % interval of the mean (Student's t) of every
-    figure over the seeds, per setting of the other ``arguments`` (a pandas DataFrame)."""
+    figure over the seeds, per setting of the other ``arguments`` (a pandas DataFrame). A figure
+    never negative in the table (an error, a NEES) has its interval cut at 0: the mean of such a
+    figure cannot lie below, and the cut interval covers it as often."""
     from scipy.stats import t
 
     figures = [c for c in table.columns if c not in arguments]
     by = [a for a in arguments if a != "seed"] or (lambda _: "all")
     stats = table.groupby(by, sort=False)[figures].agg(["mean", "std", "count"]).stack(0, future_stack=True)
     half = t.ppf(0.975, np.maximum(stats["count"] - 1, 1)) * stats["std"] / np.sqrt(stats["count"])
-    return stats.assign(low=stats["mean"] - half, high=stats["mean"] + half)
+    floor = [0.0 if (table[f] >= 0).all() else -np.inf for f in stats.index.get_level_values(-1)]
+    return stats.assign(low=np.maximum(stats["mean"] - half, floor), high=stats["mean"] + half)
 
 
 def sweep_command(name: str, seeds: int, workers=None, scheduler=None, out=None, force=False) -> None:
