@@ -35,6 +35,8 @@ INTERRUPTED: list[BaseException] = []
 MARKER = ".vo_lib_output.json"
 #: The contents a marker of :func:`claim_folder` lists: whatever the command keeps there.
 ANY_CONTENTS = "*"
+#: A frame in a subfolder (``image_0/000042.png``): what a marker listing only the top level covers below it.
+FRAME_BELOW = re.compile(r"[^/]+/\d+\.png")
 PACKAGE = Path(__file__).resolve().parent
 #: The repository's sample data folder (in a checkout): never replaced, even with ``force``.
 REPOSITORY_DATA = PACKAGE.parent / "data"
@@ -97,10 +99,8 @@ def foreign_content(folder: Path, written_by: str) -> str | None:
     contents, files = marker.get("contents"), marker.get("files", {})
     if not isinstance(contents, list | str) or not isinstance(files, dict):
         return f"its marker {MARKER} is damaged"
-    if any("/" in str(name) for name in contents):  # down to its subfolders' files
-        names = set(entries(folder))
-    elif contents != ANY_CONTENTS:  # an older marker lists its top level only: below it, frames alone
-        names |= {e for e in entries(folder) if not re.fullmatch(r"[^/]+/\d+\.png", e)}
+    nested = any("/" in str(name) for name in contents)  # older markers list the top level only:
+    names = {e for e in entries(folder) if nested or not FRAME_BELOW.fullmatch(e)}  # below it, frames alone
     if marker.get("written_by") != written_by:
         return f"it holds the output of `{marker.get('written_by')}`, which `{written_by}` does not replace"
     now = file_checksums(folder) if files else {}
@@ -117,12 +117,12 @@ def linked_from(folder) -> list[Path]:
     found: list[Path] = []
     to_walk = [Path(folder)]
     while to_walk:
-        for root, folders, files in os.walk(to_walk.pop()):
-            for link in (Path(root) / name for name in folders + files):
-                target = link.resolve() if link.is_symlink() else None
-                if target is not None and target not in found:
-                    found.append(target)
-                    to_walk += [target] if target.is_dir() else []
+        below = [
+            Path(root) / name for root, folders, files in os.walk(to_walk.pop()) for name in folders + files
+        ]
+        new = sorted({path.resolve() for path in below if path.is_symlink()} - set(found))
+        found += new
+        to_walk += [target for target in new if target.is_dir()]
     return found
 
 

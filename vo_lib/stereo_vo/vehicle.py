@@ -19,11 +19,13 @@ rig's calibration rounded to centimetres.
 
 from __future__ import annotations
 
+import json
 from dataclasses import dataclass
 from enum import Enum
 
 import numpy as np
 
+from vo_lib.formats.frame_files import CAMERA_MOUNTS
 from vo_lib.formats.kitti_raw import camera_in_imu_frame, read_oxts, wheel_distances_from_oxts
 from vo_lib.formats.sequence import SequenceError, present
 from vo_lib.geometry import camera_mount
@@ -166,7 +168,13 @@ def vehicle_of(sequence, use_odometry: bool = True) -> Vehicle:
             raise SequenceError(
                 f"{where}: expected track_distance, track_width, encoder_sigma ({exc})"
             ) from None
-        planar = camera.get("mount", "above turning axis") == "above turning axis"
+        mount_text = camera.get("mount", CAMERA_MOUNTS[0])
+        if mount_text not in CAMERA_MOUNTS:  # a misspelt crawler's mount is not taken for another
+            raise SequenceError(
+                f"{sequence.path / 'manifest.json'}: key camera.mount: expected "
+                f"{' or '.join(map(repr, CAMERA_MOUNTS))}, got {json.dumps(mount_text)[:40]}"
+            )
+        planar = mount_text == CAMERA_MOUNTS[0]
         odometry = sequence.odometry if use_odometry else None
         source = "odometry.txt" if odometry is not None else "none"
         motion = Motion.PLANAR if planar else Motion.FULL
