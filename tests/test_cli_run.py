@@ -184,3 +184,26 @@ def test_convert_carries_the_odometry_files_of_a_kitti_folder(tmp_path):
         tmp_path / "copy2" / "raw_calib" / "calib_imu_to_velo.txt",
     ):
         assert path.stat().st_mode & 0o200, path  # writable by its owner (root may write regardless)
+
+
+def test_evaluate_compares_a_run_of_the_first_frames_with_those_of_its_sequence(tmp_path, capsys):
+    """`run --frames N` then `evaluate` against the sequence's whole poses.txt: the run's marker
+    says which frames it ran, so the first N poses are compared (and agree with the run's table);
+    an estimate that no such run wrote still needs equal counts."""
+    import shutil
+
+    from vo_lib.cli.main import main
+
+    seq, out = tmp_path / "seq", tmp_path / "out"
+    assert main(["generate", "corridor", "--frames", "8", "--resolution", "96x72", "--out", str(seq)]) == 0
+    assert main(["run", "--sequence", str(seq), "--frames", "5", "--out", str(out)]) == 0
+    table = capsys.readouterr().out
+    ran = next(line.split()[-1] for line in table.splitlines() if "final position error, 3-D" in line)
+    for est in ("poses.txt", "trajectory.tum"):
+        assert main(["evaluate", "--gt", str(seq / "poses.txt"), "--est", str(out / est)]) == 0
+        text = capsys.readouterr().out
+        assert "is a run of the first 5 frames of --gt's sequence" in text
+        assert next(line.split()[-1] for line in text.splitlines() if "final position error" in line) == ran
+    shutil.copy(out / "poses.txt", tmp_path / "mine.txt")
+    assert main(["evaluate", "--gt", str(seq / "poses.txt"), "--est", str(tmp_path / "mine.txt")]) == 2
+    assert "has 8 poses but --est" in capsys.readouterr().err

@@ -364,7 +364,7 @@ COMMANDS = {
         "run_command",
         ("sequence", "out", "frames", "no_odometry", "seed", "force", "motion"),
     ),
-    "evaluate": ("vo_lib.cli.run", "evaluate_command", ("gt", "est", "segments", "extrinsic_of")),
+    "evaluate": ("vo_lib.cli.evaluate", "evaluate_command", ("gt", "est", "segments", "extrinsic_of")),
     "convert": ("vo_lib.cli.run", "convert_command", ("sequence", "to", "out", "force")),
     "sweep": ("vo_lib.cli.sweep", "sweep_command", ("name", "seeds", "workers", "scheduler", "out", "force")),
 }

@@ -1,0 +1,138 @@
+"""``python -m vo_lib evaluate``: an estimated trajectory against ground truth in any common format.
+
+The figures are :mod:`vo_lib.evaluation`'s; the files are read by :mod:`vo_lib.formats`. Bad
+arguments and bad input print one line and exit with status 2 (:class:`~vo_lib.cli.run.UsageError`).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from vo_lib.cli.run import UsageError
+from vo_lib.formats.poses import TrajectoryError, read_trajectory
+from vo_lib.outputs import read_marker
+
+
+def first_frames_of(gt: str, est: str, n: int) -> bool:
+    """Whether ``est`` lies in the output of ``run --frames n`` on the sequence whose
+    ``poses.txt`` is ``gt``, as that output's marker records the run."""
+    marker = read_marker(Path(est).parent) or {}
+    sequence = Path(str(marker.get("sequence")))
+    ran = marker.get("written_by") == "vo_lib run" and marker.get("frames") == n
+    return (
+        ran
+        and Path(est).name in ("poses.txt", "trajectory.tum")
+        and Path(gt).resolve() == sequence / "poses.txt"
+    )
+
+
+def _associated(truth, gt: str, est: str, times, E: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Indices ``(i_est, i_gt)`` of the poses compared: associated by timestamp where both files
+    carry them (as evo does), else one to one, the counts equal."""
+    from vo_lib.formats.groundtruth import associate
+
+    if truth.times is None or times is None:
+        if len(truth.positions) > len(E) and first_frames_of(gt, est, len(E)):
+            print(
+                f"--est {est} is a run of the first {len(E)} frames of --gt's sequence: compared with those"
+            )
+            return np.arange(len(E)), np.arange(len(E))
+        if len(truth.positions) != len(E):
+            raise UsageError(
+                f"--gt {gt} has {len(truth.positions)} poses but --est {est} has {len(E)}; "
+                "expected equal counts (or timestamps in both)"
+            )
+        return np.arange(len(E)), np.arange(len(E))
+    i_est, i_gt = associate(times, truth.times)
+    if len(i_est) < 3:  # an alignment needs three points
+        raise UsageError(
+            f"--gt {gt}: {len(i_est) or 'no'} timestamp{'s' * (len(i_est) != 1)} within 0.01 s of "
+            f"--est {est}'s, expected at least 3 (--gt spans {truth.times[0]:.3f} to "
+            f"{truth.times[-1]:.3f} s, --est {times[0]:.3f} to {times[-1]:.3f} s; a CSV's times are read "
+            "as nanoseconds, a text file's as seconds); both must use one clock"
+        )
+    print(f"associated {len(i_est)} of {len(E)} poses by timestamp (within 0.01 s)")
+    return i_est, i_gt
+
+
+def recording_of(gt: str, extrinsic_of: str | None, kitti: bool) -> str | None:
+    """The ASL recording whose calibration moves ``--gt`` into its rectified left camera:
+    ``extrinsic_of`` if given, else the ``mav0`` folder that holds the ``--gt`` file among its
+    sensors' (as ``mav0/state_groundtruth_estimate0/data.csv``; said in one line), else None: the
+    truth is taken as given. KITTI poses, and files in a folder this package wrote (``run``'s
+    ``trajectory.tum``, ``convert``'s ``poses.txt``), are a camera's already and never moved."""
+    from vo_lib.formats.euroc import mav0_of
+    from vo_lib.outputs import MARKER
+
+    if extrinsic_of is not None or kitti:
+        return extrinsic_of
+    path = Path(gt).resolve()
+    holders = (m for m in map(mav0_of, path.parents[:3]) if m in path.parents)
+    found = next((m for m in holders if (m / "cam0" / "sensor.yaml").is_file()), None)
+    written = [f for f in path.parents[:3] if found in f.parents and (f / MARKER).is_file()]
+    if found is None or written:
+        return None
+    print(f"--gt lies in the ASL recording {found}: moved into its rectified left camera")
+    return str(found)
+
+
+def evaluate_command(gt: str, est: str, segments=None, extrinsic_of: str | None = None) -> None:
+    """Print the 3-D errors of an estimate (KITTI or TUM) against ground truth in any format of
+    :mod:`vo_lib.formats.groundtruth`: final error, ATE (SE(3), Sim(3)), RPE and KITTI's errors.
+
+    Where both files carry timestamps they are associated as evo does; otherwise the counts must
+    be equal. ``segments`` are lengths in metres, as ``--segments`` parsed them (default: those
+    the sequence allows, labelled). A truth of an ASL recording's body frame (``extrinsic_of``,
+    or the recording holding the ``--gt`` file: :func:`recording_of`) is moved into its rectified
+    left camera, the tracked frame of a ``sensor.yaml`` beside ``--gt`` taken into account; for
+    position-only truth that frame is the lever arm carried along the estimated poses.
+    """
+    from vo_lib.evaluation import Alignment, ate_positions, kitti_segment_errors, shown, standard_errors
+    from vo_lib.formats.euroc import body_to_rectified_camera, tracked_to_camera
+    from vo_lib.formats.groundtruth import GroundTruthError, TruthKind, read_groundtruth
+
+    lengths = None if segments is None else tuple(segments)
+    try:
+        truth = read_groundtruth(gt)
+    except GroundTruthError as exc:
+        raise UsageError(f"--gt {exc}") from None
+    try:
+        times, E = read_trajectory(est, min_poses=3)  # an alignment needs three
+    except TrajectoryError as exc:
+        raise UsageError(f"--est {exc}") from None
+    i_est, i_gt = _associated(truth, gt, est, times, E)
+    if truth.times is None and extrinsic_of is not None:
+        raise UsageError(
+            f"--extrinsic-of {extrinsic_of}: --gt {gt} holds KITTI poses, which are a camera's already; "
+            "expected a body-frame truth (TUM, EuRoC CSV or positions)"
+        )
+    recording = recording_of(gt, extrinsic_of, kitti=truth.times is None)
+    if recording is None and truth.kind is TruthKind.POSES and truth.csv:
+        print(
+            f"--gt {gt} is an EuRoC CSV, whose poses are of the body: compared as they are "
+            "(--extrinsic-of RECORDING moves them into its rectified left camera)"
+        )
+    to_camera = np.eye(4)  # the rectified left camera in the tracked frame (body, prism)
+    if recording is not None:
+        tracker = recording if truth.kind is TruthKind.POSITIONS else None  # a prism's lever arm
+        to_camera = tracked_to_camera(gt, body_to_rectified_camera(recording), tracker)
+    if truth.kind is TruthKind.POSITIONS:
+        ignored = f"--segments: --gt {gt} holds positions only, which give the ATE alone\n"
+        print("" if lengths is None else ignored, end="")
+        lever = np.linalg.inv(to_camera)[:3, 3]  # the tracked point in the rectified camera
+        for alignment in (Alignment.SE3, Alignment.SIM3):
+            a, _ = ate_positions(truth.positions[i_gt], E[i_est], lever, alignment)
+            rmse, worst = shown(a.rmse, ".4f"), shown(a.max, ".4f")  # undefined: a scale of nothing moving
+            print(f"ATE ({alignment} alignment, positions only): rmse {rmse} m, max {worst}")
+        return
+    G = truth.poses[i_gt] @ to_camera
+    for label, value in standard_errors(G, E[i_est], lengths).rows():
+        print(f"{label:<62s}{value:>16s}")
+    segments = kitti_segment_errors(G, E[i_est], lengths) if lengths and len(lengths) > 1 else {}
+    for length, (t_pct, r_deg, count) in segments.items():  # each length on its own, too
+        print(
+            f"segment {length:g} m: translation {t_pct:.2f} %, rotation {100 * r_deg:.3f} deg/100 m "
+            f"({count} segment{'s' * (count != 1)})"
+        )
