@@ -276,7 +276,7 @@ def test_asl_recording_is_rectified_and_its_truth_moved_into_the_left_camera():
         ("focal", "cam0/sensor.yaml: keys intrinsics and distortion_coefficients leave 0% of"),
         ("distortion", "cam1/sensor.yaml: keys intrinsics and distortion_coefficients leave 0% of"),
         ("camera", "cam1: missing camera folder"),
-        ("swapped", "mav0: the T_BS of cam0 and cam1 put cam1 -0.11 m to the right of cam0; expected cam0"),
+        ("swapped", "mav0: the T_BS of cam0 and cam1 put cam1 -0.11 m to the right of cam0 and +0.000399 m"),
         ("timestamps", "has no image of the same timestamp"),
         ("order", "cam0/data.csv, line 4: timestamp 1403636584813555456 does not come after"),
         ("missing", "cam1/data/1403636584963555584.png: listed in data.csv but missing"),
@@ -295,7 +295,11 @@ def test_asl_recording_is_rectified_and_its_truth_moved_into_the_left_camera():
         ("overflow", "cam0/data.csv, line 3: expected 'timestamp [ns],filename', got '99999999999"),
         ("outside", "cam0/data.csv, line 3: '../../cam1/data/1403636584813555456.png'; expected a file name"),
         ("columns", "cam0/data.csv, line 3: 3 columns; expected 2, 'timestamp [ns],filename'"),
-        ("spacing", "cam0/data.csv: frames 20 s apart (median); expected at most 10 s"),
+        ("spacing", "cam0/data.csv: frames 20 s apart (median); expected 0.001 to 10 s"),
+        (
+            "microseconds",
+            "cam0/data.csv: frames 5e-05 s apart (median); expected 0.001 to 10 s (microseconds?)",
+        ),
     ],
 )
 def test_a_bad_rig_gets_one_line_and_exit_2(tmp_path, capsys, damage, expected):
@@ -375,12 +379,15 @@ def test_a_bad_rig_gets_one_line_and_exit_2(tmp_path, capsys, damage, expected):
         path = mav0 / "cam1" / "sensor.yaml"
         path.unlink()
         path.write_text("") if damage == "empty" else path.mkdir()
-    elif damage == "spacing":  # a frame every 20 s: too far apart to track, as in times.txt
+    elif damage in ("spacing", "microseconds"):  # a frame every 20 s; or times in microseconds
         for side in ("cam0", "cam1"):
             path = mav0 / side / "data.csv"
             lines = path.read_text().splitlines()
             first = int(lines[1].split(",")[0])
-            rows = [f"{first + 20 * 10**9 * k},{line.split(',')[1]}" for k, line in enumerate(lines[1:])]
+            stamps = [int(line.split(",")[0]) for line in lines[1:]]
+            stamps = [first + 20 * 10**9 * k for k in range(len(stamps))] if damage == "spacing" else stamps
+            stamps = [t // 1000 for t in stamps] if damage == "microseconds" else stamps
+            rows = [f"{t},{line.split(',')[1]}" for t, line in zip(stamps, lines[1:], strict=True)]
             path.write_text("\n".join(lines[:1] + rows) + "\n")
     elif damage == "timestamps":
         path = mav0 / "cam1" / "data.csv"
@@ -396,6 +403,34 @@ def test_a_bad_rig_gets_one_line_and_exit_2(tmp_path, capsys, damage, expected):
     err = capsys.readouterr().err.strip().splitlines()
     assert code == 2 and len(err) == 1, err
     assert expected in err[0] and "Traceback" not in err[0]
+
+
+@needs_euroc
+def test_a_header_without_hash_and_a_rounded_calibration_are_read(tmp_path):
+    """A data.csv whose header lacks its '#', and a T_BS whose rotation is off by 0.4 % (under the
+    tolerance): read, the rotation taken as the nearest one, so the truth keeps its scale."""
+    from vo_lib.data import load_sequence
+    from vo_lib.formats.asl_calibration import read_camera_yaml
+
+    rig = small_rig(tmp_path)
+    reference = load_sequence(rig)
+    for side in ("cam0", "cam1"):
+        path = rig / "mav0" / side / "data.csv"
+        path.write_text(path.read_text().lstrip("#"))
+    path = rig / "mav0" / "cam0" / "sensor.yaml"
+    text = path.read_text()
+    start = text.index("data: [", text.index("T_BS")) + len("data: [")
+    numbers = [float(x) for x in text[start : text.index("]", start)].split(",")]
+    scaled = [1.004 * x if k % 4 < 3 and k < 12 else x for k, x in enumerate(numbers)]
+    path.write_text(text[:start] + ", ".join(f"{x:.10g}" for x in scaled) + text[text.index("]", start) :])
+    R = read_camera_yaml(path).T_BS[:3, :3]
+    assert np.allclose(R.T @ R, np.eye(3), atol=1e-12)
+    seq = load_sequence(rig)
+    assert np.array_equal(seq.times, reference.times)
+    lengths = [
+        np.linalg.norm(np.diff(s.poses_4x4()[:, :3, 3], axis=0), axis=1).sum() for s in (seq, reference)
+    ]
+    assert lengths[0] == pytest.approx(lengths[1], rel=1e-3)
 
 
 @needs_euroc

@@ -14,6 +14,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 import yaml
+from scipy.spatial.transform import Rotation
 
 from vo_lib.atomic import notice
 from vo_lib.camera import StereoCamera
@@ -127,6 +128,7 @@ def _transform(path: Path, data: dict, what: str) -> np.ndarray:
     problem = rotation_problem(T[:3, :3])
     if problem or not np.allclose(T[3], [0, 0, 0, 1]):
         raise AslError(f"{path}: key T_BS: {problem or 'the last row is not 0 0 0 1'}")
+    T[:3, :3] = Rotation.from_matrix(T[:3, :3]).as_matrix()  # the nearest rotation: rounding scales none
     return T
 
 
@@ -210,9 +212,11 @@ def rectify(left: CameraCalibration, right: CameraCalibration, where: Path) -> R
     try:
         camera = StereoCamera.from_projection_matrices(P1, P2, *size)
     except ValueError:
+        x, y, _ = np.linalg.inv(T_right_left)[:3, 3]  # cam1 in cam0: x right, y down
         raise AslError(
-            f"{where}: the T_BS of cam0 and cam1 put cam1 {-P2[0, 3] / P2[0, 0]:+.3g} m to the right of "
-            "cam0; expected cam0 the left camera and cam1 the right one (are the two folders swapped?)"
+            f"{where}: the T_BS of cam0 and cam1 put cam1 {x:+.3g} m to the right of cam0 and {y:+.3g} m "
+            "below it; expected cam1 to the right (are the folders swapped, or is T_BS inverted? it "
+            "takes the camera's coordinates into the body's)"
         ) from None
     maps = [
         cv2.initUndistortRectifyMap(c.K, c.distortion, R, P, size, cv2.CV_16SC2)

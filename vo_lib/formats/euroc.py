@@ -97,7 +97,7 @@ def read_image_list(camera_dir: Path) -> tuple[np.ndarray, list[Path]]:
     stamps, files, lines = [], [], []
     for n, line in enumerate(text.split("\n"), start=1):
         line = line.strip()
-        if not line or line.startswith("#"):
+        if not line or line.startswith("#") or (n == 1 and line[0].isalpha()):  # a header, with # or not
             continue
         stamp, sep, name = (part.strip() for part in line.partition(","))
         if "," in name:  # a third column, or a trailing comma: not part of the file name

@@ -81,8 +81,9 @@ def read_text(path: Path) -> str:
 
 
 def _lines(path: Path) -> list[tuple[int, str]]:
-    """Non-empty lines with their 1-based numbers (lines end at newlines only)."""
-    return [(i, s.strip()) for i, s in enumerate(read_text(path).split("\n"), start=1) if s.strip()]
+    """Lines neither empty nor comments (``#``), with their 1-based numbers (lines end at newlines only)."""
+    lines = enumerate(read_text(path).split("\n"), start=1)
+    return [(i, s.strip()) for i, s in lines if s.strip() and not s.strip().startswith("#")]
 
 
 def read_calib(path: Path) -> tuple[np.ndarray, np.ndarray]:

@@ -81,17 +81,21 @@ MAX_ODOMETRY_M = 1000.0
 #: Longest median time between frames (seconds), in either layout: beyond it, times in another
 #: unit (milliseconds at up to 100 frames a second) or frames too far apart to track between.
 MAX_FRAME_SPACING_S = 10.0
+#: Shortest median time between frames (seconds): a camera at 1,000 frames a second; below, times
+#: in a larger unit than the file's (microseconds where nanoseconds are expected).
+MIN_FRAME_SPACING_S = 1e-3
 #: Fastest median track speed of ``odometry.txt`` (m/s): beyond it, distances in another unit.
 MAX_TRACK_SPEED_M_S = 50.0
 
 
 def check_frame_spacing(path: Path, seconds) -> None:
-    """Refuse frames more than :data:`MAX_FRAME_SPACING_S` apart (median) as read from ``path``."""
-    spacing = float(np.median(np.diff(seconds))) if len(seconds) > 1 else 0.0
-    if spacing > MAX_FRAME_SPACING_S:
+    """Refuse frames more than :data:`MAX_FRAME_SPACING_S` or less than
+    :data:`MIN_FRAME_SPACING_S` apart (median) as read from ``path``: times in another unit."""
+    spacing = float(np.median(np.diff(seconds))) if len(seconds) > 1 else MIN_FRAME_SPACING_S
+    if not MIN_FRAME_SPACING_S <= spacing <= MAX_FRAME_SPACING_S:
         raise SequenceError(
-            f"{path}: frames {spacing:g} s apart (median); expected at most {MAX_FRAME_SPACING_S:g} s "
-            "(times in milliseconds or nanoseconds?)"
+            f"{path}: frames {spacing:.3g} s apart (median); expected {MIN_FRAME_SPACING_S:g} to "
+            f"{MAX_FRAME_SPACING_S:g} s ({'microseconds' if spacing < 1 else 'milliseconds or nanoseconds'}?)"
         )
 
 
