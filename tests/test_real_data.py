@@ -632,6 +632,14 @@ def test_evaluate_refuses_a_truth_it_would_misread(tmp_path, capsys):
     euroc = table(tmp_path / "d.csv", "# t, x, y, z, qw, qx, qy, qz", ns, q[:, [3, 0, 1, 2]], ",")
     assert main(["evaluate", "--gt", str(euroc), "--est", str(est)]) == 0
     assert "is an EuRoC CSV, whose poses are of the body: compared as they are" in capsys.readouterr().out
+    # a body-frame TUM copied out of the recording: said to be compared as it is (it was silent)
+    tum = tmp_path / "outside" / "groundtruth.tum"
+    tum.parent.mkdir()
+    shutil.copy(EUROC / "mav0" / "state_groundtruth_estimate0" / "groundtruth.tum", tum)
+    assert main(["evaluate", "--gt", str(tum), "--est", str(est)]) == 0
+    assert (
+        f"--gt {tum} is not in a recording: compared as they are, as the camera's" in capsys.readouterr().out
+    )
 
 
 def readme_3d_rows() -> dict[tuple[str, str], list[float]]:

@@ -109,10 +109,11 @@ def evaluate_command(gt: str, est: str, segments=None, extrinsic_of: str | None 
             "expected a body-frame truth (TUM, EuRoC CSV or positions)"
         )
     recording = recording_of(gt, extrinsic_of, kitti=truth.times is None)
-    if recording is None and truth.kind is TruthKind.POSES and truth.csv:
+    if recording is None and truth.times is not None and read_marker(Path(gt).parent) is None:
+        what = "an EuRoC CSV, whose poses are of the body" if truth.csv else "not in a recording"
         print(
-            f"--gt {gt} is an EuRoC CSV, whose poses are of the body: compared as they are "
-            "(--extrinsic-of RECORDING moves them into its rectified left camera)"
+            f"--gt {gt} is {what}: compared as they are, as the camera's (a body's or a tracker's: "
+            "--extrinsic-of RECORDING moves them into its rectified left camera)"
         )
     to_camera = np.eye(4)  # the rectified left camera in the tracked frame (body, prism)
     if recording is not None:
