@@ -114,7 +114,9 @@ def invoke(argv: list[str], capsys) -> tuple[int, str, str]:
 
 
 def temporaries(ws: Path) -> list[Path]:
-    return [p for p in ws.rglob("*") if ".vo_lib-" in p.name and p.name.endswith((".tmp", ".old"))]
+    """Temporaries left in ``ws`` (but ``.notes.…``: a folder beside no output, kept on purpose)."""
+    found = [p for p in ws.rglob("*") if ".vo_lib-" in p.name and p.name.endswith((".tmp", ".old"))]
+    return [p for p in found if not p.name.startswith(".notes.")]
 
 
 # ---- setups: each shapes a fresh copy of the template ---------------------------------------------
@@ -175,6 +177,9 @@ def stale_temporary(ws):
     foreign = ws / ".out.someone-else.tmp"  # not ours: must survive
     foreign.mkdir()
     (foreign / "keep.txt").write_text("keep\n")
+    other = ws / f".notes.vo_lib-{dead.pid}-{HOST}-mine.tmp"  # beside another name: not judged
+    other.mkdir()
+    (other / "keep.txt").write_text("keep\n")
 
 
 def edit(rel: str, text: str | bytes):
@@ -295,9 +300,15 @@ CASES = [
     Case("out-symlink-to-ours", "RUN --out link", 0, "wrote", do(run_once("real"), link("link", "real")),
         "real link", check=lambda ws: (ws / "link").is_symlink() and (ws / "real" / MARKER).is_file()),
     Case("out-symlink-to-user-folder", "RUN --out link", 2, "--force", link("link", "thesis")),
+    Case("out-in-a-link-loop", "RUN --out loop/out", 2, "cannot write there", link("loop", "loop")),
+    Case("input-holds-a-link-loop", "RUN --out out", 0, "wrote",
+        do(link("seq/a", "b"), link("seq/b", "a")), "out"),
+    Case("out-marker-damaged-names", "RUN --out out", 2, "is damaged", do(run_once("out"),
+        edit("out/.vo_lib_output.json", '{"written_by": "vo_lib run", "contents": [{"a": 1}]}')), "out"),
     Case("out-dangling-symlink", "RUN --out link", 2, "does not exist", link("link", "nowhere")),
     Case("stale-temporary-removed", "RUN --out out", 0, "removed 1 temporary folder", stale_temporary,
-        "out .out.vo_lib-", check=lambda ws: (ws / ".out.someone-else.tmp" / "keep.txt").exists()),
+        "out .out.vo_lib-", check=lambda ws: (ws / ".out.someone-else.tmp" / "keep.txt").exists()
+        and len(list(ws.glob(".notes.vo_lib-*/keep.txt"))) == 1),
     # --- the sequence: paired by name, numeric order, headers checked ----------------------------
     Case("sequence-missing", "run --sequence nowhere", 2, "neither a sample name"),
     Case("sequence-is-a-file", "run --sequence important.txt", 2, "not a sequence folder"),
@@ -1279,3 +1290,58 @@ def test_a_folder_the_user_did_not_name_is_refused_without_advising_force(tmp_pa
         check_target(tmp_path / "sample", written_by="vo_lib generate")
     with pytest.raises(OutputError, match="choose another folder, or add --force to replace it$"):
         check_target(tmp_path / "sample", written_by="vo_lib generate", option="--out")
+
+
+def test_an_output_link_repointed_during_the_run_is_refused_at_commit(tmp_path, monkeypatch):
+    """What was checked is where the output goes: a link --out repointed meanwhile is refused."""
+    from vo_lib.outputs import OutputError, OutputFolder
+
+    monkeypatch.chdir(tmp_path)
+    for name in ("A", "B"):
+        (tmp_path / name).mkdir()
+    Path("X").symlink_to("A")
+    with OutputFolder("X", "vo_lib run", option="--out") as out:
+        (out.path / "poses.txt").write_text("new")
+        (tmp_path / "A").rename(tmp_path / "A_saved")
+        (tmp_path / "A").mkdir()
+        (tmp_path / "A" / "thesis.tex").write_text("precious")
+        Path("X").unlink()
+        Path("X").symlink_to("B")
+        with pytest.raises(OutputError, match="--out X: now leads to .*B; nothing was written"):
+            out.commit()
+    assert (tmp_path / "A" / "thesis.tex").read_text() == "precious" and not any((tmp_path / "B").iterdir())
+
+
+def test_the_same_folder_under_another_name_is_guarded(tmp_path):
+    """An output inside the input reached under a second name (a bind mount) is refused."""
+    from vo_lib.outputs import OutputError, check_target
+
+    (tmp_path / "seq" / "image_0").mkdir(parents=True)
+    (tmp_path / "alias").mkdir()
+    mount = subprocess.run(
+        ["mount", "--bind", str(tmp_path / "seq"), str(tmp_path / "alias")], capture_output=True
+    )
+    if mount.returncode != 0:
+        pytest.skip("mount --bind is not permitted here")
+    try:
+        with pytest.raises(OutputError, match="lies inside the input sequence"):
+            check_target(
+                tmp_path / "alias" / "image_0", written_by="vo_lib run", force=True, inputs=[tmp_path / "seq"]
+            )
+    finally:
+        subprocess.run(["umount", str(tmp_path / "alias")], check=True)
+
+
+def test_links_are_looked_through_within_a_budget(tmp_path, monkeypatch):
+    """A link to a large folder (/, say) is not walked through to its end."""
+    from vo_lib import outputs
+
+    (tmp_path / "seq").mkdir()
+    (tmp_path / "big").mkdir()
+    for k in range(50):
+        (tmp_path / "big" / f"{k}").mkdir()
+        (tmp_path / "big" / f"{k}" / "link").symlink_to(tmp_path / "seq")
+    (tmp_path / "seq" / "big").symlink_to(tmp_path / "big")
+    assert len(outputs.linked_from(tmp_path / "seq")) == 2  # big, and seq through big's links
+    monkeypatch.setattr(outputs, "MAX_WALKED", 2)
+    assert outputs.linked_from(tmp_path / "seq") == [tmp_path / "big"]  # stopped early

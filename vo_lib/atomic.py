@@ -43,6 +43,19 @@ def temporary_prefix(name: str) -> str:
     return f".{name}.vo_lib-{os.getpid()}-{HOST}-"
 
 
+def real_path(path) -> Path:
+    """``path`` with its links resolved (a loop of links ends where it loops, without an error)."""
+    return Path(os.path.realpath(path))
+
+
+def inode(path) -> tuple[int, int] | None:
+    """``(device, inode)`` of ``path`` (one folder under two names has one), or None if absent."""
+    with contextlib.suppress(OSError):
+        st = os.stat(path)
+        return st.st_dev, st.st_ino
+    return None
+
+
 def umask() -> int:
     """The process's umask, read without changing it where the system allows (threads may write)."""
     with contextlib.suppress(OSError, ValueError, IndexError):
@@ -82,11 +95,11 @@ def _gone(pid: int) -> bool:
     return False
 
 
-def _abandoned(entry: os.DirEntry) -> re.Match | None:
+def _abandoned(entry: os.DirEntry, name: str) -> re.Match | None:
     """The parts of a temporary's name (``NAME``, process, host, kind) where a dead process of
-    this machine left it, else None."""
+    this machine left it beside ``name``, else None."""
     match = _TEMPORARY.fullmatch(entry.name)
-    if not match or match[3] != HOST or entry.is_symlink() or not _gone(int(match[2])):
+    if not match or match[1] != name or match[3] != HOST or entry.is_symlink() or not _gone(int(match[2])):
         return None
     return match
 
@@ -99,10 +112,11 @@ def _remove(entry: os.DirEntry) -> None:
         os.unlink(entry.path)
 
 
-def recover(parent: Path) -> list[Path]:
-    """Finish what killed processes left in ``parent``: an ``.old`` folder whose ``NAME`` is
-    missing is renamed back to ``NAME``; other temporaries of dead processes of this machine are
-    deleted. Returns what was deleted or restored."""
+def recover(parent: Path, name: str) -> list[Path]:
+    """Finish what killed processes left in ``parent`` beside ``name``: an ``.old`` folder whose
+    ``name`` is missing is renamed back to ``name``; other temporaries of ``name`` left by dead
+    processes of this machine are deleted (those of other names are left alone). Returns what was
+    deleted or restored."""
     if os.name == "nt":  # os.kill(pid, 0) would stop the process there
         return []
     try:
@@ -110,7 +124,7 @@ def recover(parent: Path) -> list[Path]:
     except OSError:
         return []
     restored, deleted = [], []
-    for entry, match in ((e, _abandoned(e)) for e in entries):
+    for entry, match in ((e, _abandoned(e, name)) for e in entries):
         original = Path(parent, match[1]) if match else None
         if match and match[4] == "old" and not os.path.lexists(original):
             os.rename(entry.path, original)

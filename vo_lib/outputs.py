@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import contextlib
 import hashlib
+import itertools
 import json
 import os
 import re
@@ -26,7 +27,7 @@ import shutil
 import tempfile
 from pathlib import Path
 
-from vo_lib.atomic import notice, recover, swap_in, temporary_prefix, umask, write_atomic
+from vo_lib.atomic import inode, notice, real_path, recover, swap_in, temporary_prefix, umask, write_atomic
 
 #: The signals that stopped the command, as the exceptions the command line's handlers raised
 #: (Ctrl-C's ``KeyboardInterrupt``, its own for SIGTERM): one that landed where it is dropped (a
@@ -38,6 +39,9 @@ ANY_CONTENTS = "*"
 #: A frame in a subfolder (``image_0/000042.png``): what a marker listing only the top level covers below it.
 FRAME_BELOW = re.compile(r"[^/]+/\d+\.png")
 PACKAGE = Path(__file__).resolve().parent
+#: Folders and files looked through for links under an input and the folders it links to: what
+#: lies in a linked folder is guarded anyway (an output may not lie inside it).
+MAX_WALKED = 100_000
 #: The repository's sample data folder (in a checkout): never replaced, even with ``force``.
 REPOSITORY_DATA = PACKAGE.parent / "data"
 
@@ -51,8 +55,10 @@ def _label(target, option: str | None) -> str:
 
 
 def _contains(outer: Path, inner: Path) -> bool:
-    """``outer`` is ``inner`` or one of its parents."""
-    return outer == inner or outer in inner.parents
+    """``outer`` is ``inner`` or one of its parents, by name or as the same folder under another
+    name (a bind mount, a case-insensitive file system)."""
+    same = (inode(outer) or "none") in {inode(p) for p in (inner, *inner.parents)}
+    return outer == inner or outer in inner.parents or same
 
 
 def file_checksums(folder) -> dict[str, str]:
@@ -97,7 +103,8 @@ def foreign_content(folder: Path, written_by: str) -> str | None:
         return "it was not written by this program" if names else None
     marker = read_marker(folder) or {}
     contents, files = marker.get("contents"), marker.get("files", {})
-    if not isinstance(contents, list | str) or not isinstance(files, dict):
+    names_ok = isinstance(contents, str) or all(isinstance(name, str) for name in contents or [None])
+    if not isinstance(contents, list | str) or not isinstance(files, dict) or not names_ok:
         return f"its marker {MARKER} is damaged"
     nested = any("/" in str(name) for name in contents)  # older markers list the top level only:
     names = {e for e in entries(folder) if nested or not FRAME_BELOW.fullmatch(e)}  # below it, frames alone
@@ -115,12 +122,12 @@ def linked_from(folder) -> list[Path]:
     """Where the symbolic links under ``folder`` lead (resolved): what an input reads through them,
     and, through a link to a folder, what that folder's own links lead to, and so on."""
     found: list[Path] = []
-    to_walk = [Path(folder)]
-    while to_walk:
-        below = [
-            Path(root) / name for root, folders, files in os.walk(to_walk.pop()) for name in folders + files
-        ]
-        new = sorted({path.resolve() for path in below if path.is_symlink()} - set(found))
+    to_walk, budget = [Path(folder)], MAX_WALKED
+    while to_walk and budget > 0:  # a link to / is not walked through the whole file system
+        walk = itertools.islice(os.walk(to_walk.pop()), budget)
+        below = [Path(root) / name for root, folders, files in walk for name in folders + files]
+        budget -= len(below) + 1
+        new = sorted({real_path(path) for path in below if path.is_symlink()} - set(found))
         found += new
         to_walk += [target for target in new if target.is_dir()]
     return found
@@ -128,13 +135,13 @@ def linked_from(folder) -> list[Path]:
 
 def _guarded(inputs, keep: dict | None) -> list[tuple[Path, str, bool]]:
     """(folder, what it is, whether a target inside it is refused too)."""
-    guarded = [(Path(p).resolve(), "the input sequence", True) for p in inputs]
+    guarded = [(real_path(p), "the input sequence", True) for p in inputs]
     guarded += [(t, "what the input sequence links to", True) for p in inputs for t in linked_from(p)]
     guarded += [(PACKAGE, "this package", True), (REPOSITORY_DATA.resolve(), "the sample data folder", False)]
     for where, what in ((Path.cwd, "the current folder"), (Path.home, "your home folder")):
         with contextlib.suppress(OSError, RuntimeError):  # no current folder (deleted) or no home
             guarded.append((where().resolve(), what, False))
-    return guarded + [(Path(p).resolve(), what, False) for p, what in (keep or {}).items()]
+    return guarded + [(real_path(p), what, False) for p, what in (keep or {}).items()]
 
 
 def _check_guarded(real: Path, label: str, inputs, keep) -> None:
@@ -155,9 +162,9 @@ def check_target(target, *, written_by: str, force=False, inputs=(), keep=None, 
     label, path = _label(target, option), Path(target)
     if path.is_symlink() and not path.exists():
         raise OutputError(f"{label}: a symbolic link to {os.readlink(path)}, which does not exist")
-    real = path.resolve()
+    real = real_path(path)
     _check_guarded(real, label, inputs, keep)
-    recover(real.parent)
+    recover(real.parent, real.name)
     if not real.exists():
         above = next(p for p in real.parents if p.exists())
         if not above.is_dir():
@@ -177,7 +184,7 @@ def claim_folder(target, written_by: str, *, force: bool = False, option: str | 
     folder with its caches): new, empty, or claimed by it before (``force``: any other, under the
     rules of :func:`check_target`). Creates and marks it; returns its resolved path."""
     replacing = check_target(target, written_by=written_by, force=force, option=option)
-    real = Path(target).resolve()
+    real = real_path(target)
     try:
         real.mkdir(parents=True, exist_ok=True)
         write_atomic(real / MARKER, json.dumps({"written_by": written_by, "contents": ANY_CONTENTS}) + "\n")
@@ -219,7 +226,7 @@ def _locked(folder: Path, shared: bool, label: str = ""):
 def reading(folder):
     """Shared locks on ``folder`` and every folder above it while a command reads it: no command
     replaces it, or a folder that holds it, meanwhile."""
-    real = Path(folder).resolve()
+    real = real_path(folder)
     with contextlib.ExitStack() as stack:
         for path in (real, *real.parents):
             stack.enter_context(_locked(path, shared=True, label=str(path)))
@@ -246,7 +253,7 @@ class OutputFolder:
         self.checksums, self.committed = checksums, False
         self._check = dict(written_by=written_by, force=force, inputs=tuple(inputs), keep=keep, option=option)
         check_target(self.target, **self._check)
-        self.real, self.label = self.target.resolve(), _label(target, option)
+        self.real, self.label = real_path(self.target), _label(target, option)
         with _locked(self.real, shared=False, label=self.label):  # fail now, not after the work
             pass
         self._created = [p for p in reversed(self.real.parents) if not p.exists()]
@@ -274,6 +281,8 @@ class OutputFolder:
             marker["files"] = file_checksums(self.path)
         (self.path / MARKER).write_text(json.dumps(marker, indent=2, sort_keys=True) + "\n", encoding="utf-8")
         replacing = check_target(self.target, **self._check)
+        if real_path(self.target) != self.real:  # a link repointed meanwhile: what was checked is elsewhere
+            raise OutputError(f"{self.label}: now leads to {real_path(self.target)}; nothing was written")
         with _locked(self.real, shared=False, label=self.label):
             swap_in(self.path, self.real)
         self.committed = True
