@@ -265,6 +265,8 @@ CASES = [
     Case("out-user-folder", "RUN --out thesis", 2, "--force"),
     Case("out-user-folder-force", "RUN --out thesis --force", 0, "--force: replaced", writes="thesis",
         check=has_marker("thesis")),
+    Case("out-ours-file-edited", "RUN --out out", 2, "poses.txt was added, changed or removed",
+        do(run_once("out"), edit("out/poses.txt", "mine")), "out", check=reads("out/poses.txt", "mine")),
     Case("out-ours-plus-user-file", "RUN --out out", 2, "notes.txt",
         do(run_once("out"), edit("out/notes.txt", "mine")), "out", check=reads("out/notes.txt", "mine")),
     Case("out-is-input", "RUN --out seq", 2, "is the input sequence"),
@@ -341,6 +343,10 @@ CASES = [
     Case("force-but-bad-input", "RUN --out thesis --force", 2, "frame 2: empty file",
         edit("seq/image_1/000002.png", b"")),
     Case("corrupt-manifest", "RUN", 2, "manifest.json: not valid JSON", edit("seq/manifest.json", "{oops")),
+    Case("manifest-nested-deep", "RUN", 2, "manifest.json: not valid JSON",
+        edit("seq/manifest.json", "[" * 100_000 + "]" * 100_000)),
+    Case("manifest-number-too-long", "RUN", 2, "manifest.json: not valid JSON (a number too long)",
+        edit("seq/manifest.json", '{"time_origin_s": 1' + "0" * 5000 + "}")),
     Case("manifest-time-origin-text", "RUN", 2,
         "time_origin_s: expected a number from -1e+11 to 1e+11, got \"abc\"",
         edit("seq/manifest.json", '{"time_origin_s": "abc"}')),
@@ -724,12 +730,16 @@ def test_signals_leave_nothing_and_print_one_line(tmp_path, args, signum, code, 
     assert checksums(tmp_path, ()) == before
 
 
+@pytest.mark.parametrize("wrapper", [SystemError, ImportError])
 @pytest.mark.parametrize(
     "signum, code, phrase", [(signal.SIGINT, 130, "Ctrl-C"), (signal.SIGTERM, 143, "SIGTERM")]
 )
-def test_a_signal_wrapped_by_compiled_code_still_exits_as_it(monkeypatch, capsys, signum, code, phrase):
-    """A Ctrl-C that lands inside a callback from compiled code (Numba unpickling its cache)
-    surfaces as a SystemError caused by it: the run still stops as interrupted, in one line."""
+def test_a_signal_wrapped_by_compiled_code_still_exits_as_it(
+    monkeypatch, capsys, signum, code, phrase, wrapper
+):
+    """A Ctrl-C that lands inside a callback from compiled code (Numba unpickling its cache) or
+    while an extension module initialises surfaces as a SystemError or an ImportError caused by
+    it: the run still stops as interrupted, in one line."""
     import vo_lib.cli.main as cli
 
     inner = KeyboardInterrupt() if signum == signal.SIGINT else cli._Stopped(signum)
@@ -738,7 +748,7 @@ def test_a_signal_wrapped_by_compiled_code_still_exits_as_it(monkeypatch, capsys
         try:
             raise inner
         except BaseException as exc:
-            raise SystemError("CPUDispatcher(...) returned a result with an exception set") from exc
+            raise wrapper("initialization failed") from exc
 
     monkeypatch.setattr(cli, "_dispatch", dispatch)
     assert main(["run", "--frames", "2"]) == code

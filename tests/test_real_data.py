@@ -294,6 +294,8 @@ def test_asl_recording_is_rectified_and_its_truth_moved_into_the_left_camera():
         ("superscript", "cam0/data.csv, line 3: expected 'timestamp [ns],filename', got '14036365848"),
         ("overflow", "cam0/data.csv, line 3: expected 'timestamp [ns],filename', got '99999999999"),
         ("outside", "cam0/data.csv, line 3: '../../cam1/data/1403636584813555456.png'; expected a file name"),
+        ("listed-twice", "cam0/data.csv, line 4: '1403636584813555456.png' listed again (line 3)"),
+        ("deep", "cam0/sensor.yaml: not valid YAML (maximum recursion depth exceeded"),
         ("columns", "cam0/data.csv, line 3: 3 columns; expected 2, 'timestamp [ns],filename'"),
         ("spacing", "cam0/data.csv: frames 20 s apart (median); expected 0.001 to 10 s"),
         (
@@ -372,6 +374,14 @@ def test_a_bad_rig_gets_one_line_and_exit_2(tmp_path, capsys, damage, expected):
         edit = ("1.0, 0.0, 0.0, 0.0,", "1.0, 0.0, 0.0, 74.89,") if damage == "truth-millimetres" else edit
         text = path.read_text().replace(*edit)
         path.write_text(text.replace("0.0, 1.0, 0.0, 0.0,", "0.0, 1.0, 0.0, -120.2,"))
+    elif damage == "listed-twice":  # a row naming the previous row's image
+        path = mav0 / "cam0" / "data.csv"
+        lines = path.read_text().splitlines()
+        lines[3] = f"{lines[3].split(',')[0]},{lines[2].split(',')[1]}"
+        path.write_text("\n".join(lines) + "\n")
+    elif damage == "deep":
+        path = mav0 / "cam0" / "sensor.yaml"
+        path.write_text(path.read_text() + "deep: " + "[" * 50_000 + "]" * 50_000 + "\n")
     elif damage == "twice":
         path = mav0 / "cam0" / "sensor.yaml"
         path.write_text(path.read_text() + "intrinsics: [458.654, 457.296, 367.215, 248.375]\n")
@@ -459,6 +469,16 @@ def test_frames_within_the_truth_run_and_the_refusal_says_how_to_run_the_rest(tm
     capsys.readouterr()
     assert main(["evaluate", "--gt", str(gt), "--est", str(est), "--extrinsic-of", str(rig)]) == 0
     assert "associated 9 of 12 poses" in capsys.readouterr().out
+
+
+@needs_euroc
+def test_a_run_of_a_recording_given_by_its_mav0_is_named_after_the_recording(tmp_path, monkeypatch):
+    from vo_lib.cli.main import main
+
+    rig = small_rig(tmp_path)
+    monkeypatch.chdir(tmp_path)
+    assert main(["run", "--sequence", str(rig / "mav0")]) == 0
+    assert (tmp_path / "runs" / "rig" / "poses.txt").is_file()
 
 
 @needs_euroc

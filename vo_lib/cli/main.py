@@ -395,7 +395,7 @@ def _run_parsed(args, command: str) -> int:
     try:
         try:
             _dispatch(args)
-        except SystemError as exc:
+        except (SystemError, ImportError) as exc:  # a signal inside compiled code, or a module it loads
             if (signal_exc := _signal_inside(exc)) is None:
                 raise
             raise signal_exc from None

@@ -65,6 +65,13 @@ def input_path(name_or_path: str, frames: int | None) -> tuple[Path, int | None]
     return Path(name_or_path), frames
 
 
+def default_name(name_or_path: str) -> str:
+    """The name of a run's default folder ``runs/NAME``: the sample's, or the sequence folder's
+    (a recording's rather than its ``mav0``'s, and the folder's own for ``.``)."""
+    path = Path(name_or_path) if is_sample(name_or_path) else Path(name_or_path).resolve()
+    return path.parent.name if path.name == "mav0" else path.name
+
+
 def is_sample(name_or_path: str) -> bool:
     return name_or_path in SAMPLES and not Path(name_or_path).exists()
 
@@ -182,12 +189,12 @@ def run_command(
     if seed < 0:
         raise UsageError(f"--seed {seed}: expected a whole number >= 0")
     source, load_frames = input_path(name, frames)
-    out_dir = Path(out) if out else Path("runs") / Path(name).name
+    out_dir = Path(out) if out else Path("runs") / default_name(name)
     from vo_lib.data import data_dir
 
     keep = {data_dir(): "the sample data folder"}
     with OutputFolder(
-        out_dir, "vo_lib run", force=force, inputs=[source], keep=keep, option="--out"
+        out_dir, "vo_lib run", force=force, inputs=[source], keep=keep, option="--out", checksums=True
     ) as output:
         announce_run(name, source, frames, out_dir)  # once --out is known to be writable
         seq = resolve_sequence(name, load_frames, odometry=not no_odometry, checked=True)
@@ -253,9 +260,8 @@ def _run_into(
     if truth is not None:
         report = error_report(result, truth, odo)
         report["errors_3d"] = errors_3d(seq.poses[:n], {"vo": poses, "odometry": odo}, mount)
-        truth_file = seq.manifest.get("groundtruth")  # an ASL recording's: the one of its files used
         print_error_table(
-            report, len(result.flagged), report["errors_3d"], odometry_name(vehicle), truth_file
+            report, len(result.flagged), report["errors_3d"], odometry_name(vehicle), seq.truth_file
         )
     output.commit(sequence=str(seq.path.resolve()), frames=n, seed=seed, odometry=not no_odometry)
     return report
@@ -276,9 +282,7 @@ def convert_command(sequence: str, to: str, out: str, force: bool = False) -> No
     if not source.exists():
         raise UsageError(f"{sequence}: no such folder")
     seq = load_sequence(source, odometry=False, progress=False)  # before --out: a bad input changes nothing
-    manifest = {
-        k: v for k, v in seq.manifest.items() if k not in ("layout", "groundtruth")
-    }  # the copy's: poses.txt
+    manifest = {k: v for k, v in seq.manifest.items() if k != "layout"}
     writer = SequenceWriter(
         out, seq.camera, force=force, option="--out", written_by="vo_lib convert", inputs=[seq.path]
     )

@@ -92,7 +92,7 @@ def _yaml(path: Path) -> dict:
         data = yaml.load(path.read_text(encoding="utf-8"), Loader=_UniqueKeys)  # noqa: S506 (a SafeLoader)
     except (OSError, UnicodeDecodeError) as exc:
         raise AslError(f"{path}: cannot read ({exc})") from None
-    except yaml.YAMLError as exc:
+    except (yaml.YAMLError, RecursionError, ValueError) as exc:  # nested too deep, a number too long
         mark = getattr(exc, "problem_mark", None)
         where = f", line {mark.line + 1}" if mark is not None else ""
         raise AslError(f"{path}{where}: not valid YAML ({getattr(exc, 'problem', None) or exc})") from None

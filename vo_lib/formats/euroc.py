@@ -94,7 +94,7 @@ def read_image_list(camera_dir: Path) -> tuple[np.ndarray, list[Path]]:
         raise AslError(
             f"{csv_path}: byte {exc.start + 1} is not UTF-8; expected text in UTF-8 (or ASCII)"
         ) from None
-    stamps, files, lines = [], [], []
+    stamps, files, lines, listed = [], [], [], {}
     for n, line in enumerate(text.split("\n"), start=1):
         line = line.strip()
         if not line or line.startswith("#") or (n == 1 and line[0].isalpha()):  # a header, with # or not
@@ -108,6 +108,8 @@ def read_image_list(camera_dir: Path) -> tuple[np.ndarray, list[Path]]:
             raise AslError(f"{csv_path}, line {n}: expected 'timestamp [ns],filename', got {line[:50]!r}")
         if Path(name).is_absolute() or ".." in Path(name).parts:
             raise AslError(f"{csv_path}, line {n}: {name[:50]!r}; expected a file name inside data/")
+        if listed.setdefault(name, n) != n:  # two frames of one image: the pairs would mix frames
+            raise AslError(f"{csv_path}, line {n}: {name[:50]!r} listed again (line {listed[name]})")
         stamps.append(int(stamp))
         files.append(camera_dir / "data" / name)
         lines.append(n)
@@ -200,10 +202,10 @@ def read_asl(path, groundtruth=None, frames: int | None = None) -> Sequence:
     truth_path = Path(groundtruth) if groundtruth else find_groundtruth(mav0)
     poses = None
     if truth_path is not None:
-        manifest["groundtruth"] = str(truth_path)
         poses = _truth_into_camera(truth_path, seconds, rect.T_body_rect, manifest)
     since_first = (stamps - stamps[0]) * NANOSECONDS  # from whole nanoseconds: exact to 1 ns
-    return Sequence(root, rect.camera, since_first, left, right, poses, None, manifest, rect)
+    truth_file = truth_path if poses is not None else None
+    return Sequence(root, rect.camera, since_first, left, right, poses, None, manifest, rect, truth_file)
 
 
 def _truth_into_camera(truth_path: Path, seconds, T_body_rect, manifest: dict):

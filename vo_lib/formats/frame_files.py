@@ -149,10 +149,11 @@ def read_manifest(path: Path) -> dict:
     """The JSON object of a ``manifest.json``; raises :class:`SequenceError`."""
     try:
         manifest = json.loads(read_text(path))
-    except json.JSONDecodeError as exc:
-        raise SequenceError(
-            f"{path}: not valid JSON ({exc.msg} at line {exc.lineno}, column {exc.colno})"
-        ) from None
+    except (ValueError, RecursionError) as exc:  # JSON's errors, a number too long, nesting too deep
+        bad = isinstance(exc, json.JSONDecodeError)
+        deep = "nested too deep" if isinstance(exc, RecursionError) else "a number too long"
+        why = f"{exc.msg} at line {exc.lineno}, column {exc.colno}" if bad else deep
+        raise SequenceError(f"{path}: not valid JSON ({why})") from None
     if not isinstance(manifest, dict):
         raise SequenceError(f"{path}: expected a JSON object {{...}}, got a {type(manifest).__name__}")
     return manifest

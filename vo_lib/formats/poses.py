@@ -46,8 +46,9 @@ class TrajectoryError(ValueError):
 ROTATION_TOLERANCE = 1e-2
 #: Largest coordinate accepted (m): beyond it, squared distances overflow in the alignment.
 MAX_POSITION = 1e9
-#: Largest trajectory file read (bytes): a 200 Hz EuRoC CSV of an hour is about 70 MB.
-MAX_FILE_BYTES = 200_000_000
+#: Largest trajectory file read (bytes): a 200 Hz EuRoC CSV of an hour is about 70 MB, and
+#: reading one takes about 12 times its size in memory.
+MAX_FILE_BYTES = 100_000_000
 #: Widths of a row of a text file: KITTI pose, TUM (``t x y z qx qy qz qw``), position (``t x y z``).
 TEXT_WIDTHS = {12: "12 numbers (KITTI)", 8: "8 (TUM: t x y z qx qy qz qw)", 4: "4 (t x y z)"}
 #: A header field naming a quaternion component: ``qw``, ``q_w``, ``q_RS_w []``, ``qx`` ...
