@@ -185,12 +185,11 @@ def _is_image(entry: os.DirEntry) -> bool:
     if entry.name.startswith(".") or os.path.splitext(entry.name)[1].lower() not in IMAGE_SUFFIXES:
         return False
     if not entry.is_file():
-        if entry.is_symlink():
+        if entry.is_symlink() and not os.path.exists(entry.path):
             target = os.readlink(entry.path)
             raise SequenceError(f"{entry.path}: a symbolic link to {target}, which does not exist")
-        if entry.is_dir():
-            raise SequenceError(f"{entry.path}: a folder named like an image; expected an image file")
-        return False
+        what = "a folder" if entry.is_dir() else "a device, pipe or socket"
+        raise SequenceError(f"{entry.path}: {what} named like an image; expected an image file")
     if not re.search(r"[0-9]", entry.name):
         raise SequenceError(
             f"{entry.path}: no frame number in the name; name each image by its frame "
