@@ -371,6 +371,9 @@ CASES = [
     Case("manifest-positions-beyond", "RUN", 2, "key positions.frames: expected frame numbers 0 to 3",
         edit("seq/manifest.json", '{"positions": {"file": "x", "frames": [0, 9], '
              '"xyz": [[0, 0, 0], [1, 0, 0]], "lever_arm_camera": [0, 0, 0]}}')),
+    Case("calib-focal-beyond", "RUN", 2, "calib.txt: P0's focal length 1e+300 px is over 100 image widths",
+        edit("seq/calib.txt", "P0: 1e300 0 31.5 0 0 1e300 23.5 0 0 0 1 0\n"
+             "P1: 1e300 0 31.5 -1e300 0 1e300 23.5 0 0 0 1 0")),
     Case("calib-no-p1", "RUN", 2, "no P1 line", edit("seq/calib.txt", "P0: " + "1 " * 12 + "\n")),
     Case("calib-short-line", "RUN", 2, "calib.txt, line 2: P1 needs 12 numbers",
         edit("seq/calib.txt", "P0: 50 0 31.5 0 0 50 23.5 0 0 0 1 0\nP1: 1 2 3\n")),

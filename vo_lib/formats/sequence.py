@@ -84,6 +84,8 @@ MAX_FRAME_SPACING_S = 10.0
 #: Shortest median time between frames (seconds): a camera at 1,000 frames a second; below, times
 #: in a larger unit than the file's (microseconds where nanoseconds are expected).
 MIN_FRAME_SPACING_S = 1e-3
+#: Longest focal length accepted, in image widths (a horizontal field of view of 0.57 degrees).
+MAX_FOCAL_WIDTHS = 100
 #: Fastest median track speed of ``odometry.txt`` (m/s): beyond it, distances in another unit.
 MAX_TRACK_SPEED_M_S = 50.0
 
@@ -198,6 +200,11 @@ def _camera(root: Path, left: list[Path], right: list[Path]) -> StereoCamera:
     if not (0 <= camera.cx <= w and 0 <= camera.cy <= h):
         raise SequenceError(
             f"{calib}: P0's principal point ({camera.cx:g}, {camera.cy:g}) lies outside the {w}x{h} images"
+        )
+    if max(camera.fx, camera.fy) > MAX_FOCAL_WIDTHS * w:
+        raise SequenceError(
+            f"{calib}: P0's focal length {max(camera.fx, camera.fy):g} px is over {MAX_FOCAL_WIDTHS} image "
+            f"widths ({w} px): a field of view under 0.6 degrees; expected pixels of these images"
         )
     return camera
 
