@@ -103,8 +103,8 @@ def foreign_content(folder: Path, written_by: str) -> str | None:
         return "it was not written by this program" if names else None
     marker = read_marker(folder) or {}
     contents, files = marker.get("contents"), marker.get("files", {})
-    names_ok = isinstance(contents, str) or all(isinstance(name, str) for name in contents or [None])
-    if not isinstance(contents, list | str) or not isinstance(files, dict) or not names_ok:
+    named = isinstance(contents, list) and all(isinstance(name, str) for name in contents)
+    if not (named or isinstance(contents, str)) or not isinstance(files, dict):
         return f"its marker {MARKER} is damaged"
     nested = any("/" in str(name) for name in contents)  # older markers list the top level only:
     names = {e for e in entries(folder) if nested or not FRAME_BELOW.fullmatch(e)}  # below it, frames alone
