@@ -114,9 +114,9 @@ def invoke(argv: list[str], capsys) -> tuple[int, str, str]:
 
 
 def temporaries(ws: Path) -> list[Path]:
-    """Temporaries left in ``ws`` (but ``.notes.…``: a folder beside no output, kept on purpose)."""
+    """Temporaries left in ``ws`` (but a user's folder named like one, holding ``keep.txt``)."""
     found = [p for p in ws.rglob("*") if ".vo_lib-" in p.name and p.name.endswith((".tmp", ".old"))]
-    return [p for p in found if not p.name.startswith(".notes.")]
+    return [p for p in found if not (p / "keep.txt").exists()]
 
 
 # ---- setups: each shapes a fresh copy of the template ---------------------------------------------
@@ -180,6 +180,23 @@ def stale_temporary(ws):
     other = ws / f".notes.vo_lib-{dead.pid}-{HOST}-mine.tmp"  # beside another name: not judged
     other.mkdir()
     (other / "keep.txt").write_text("keep\n")
+
+
+def named_like_a_temporary(random: str, beside: str):
+    """A user's folder named as a dead process's temporary beside ``beside`` would be."""
+
+    def setup(ws):
+        dead = subprocess.Popen([sys.executable, "-c", "pass"])
+        dead.wait()
+        folder = ws / f".{beside}.vo_lib-{dead.pid}-{HOST}-{random}.tmp"
+        folder.mkdir()
+        (folder / "keep.txt").write_text("keep\n")
+
+    return setup
+
+
+def kept_like_a_temporary(ws):
+    return len(list(ws.glob(".*.vo_lib-*/keep.txt"))) == 1
 
 
 def edit(rel: str, text: str | bytes):
@@ -311,6 +328,10 @@ CASES = [
     Case("stale-temporary-removed", "RUN --out out", 0, "removed 1 temporary folder", stale_temporary,
         "out .out.vo_lib-", check=lambda ws: (ws / ".out.someone-else.tmp" / "keep.txt").exists()
         and len(list(ws.glob(".notes.vo_lib-*/keep.txt"))) == 1),
+    Case("temporary-name-kept-when-refused", "RUN --out thesis", 2, "--force",
+        named_like_a_temporary("abcd1234", "thesis"), check=kept_like_a_temporary),
+    Case("temporary-name-not-ours-kept", "RUN --out out", 0, "wrote", named_like_a_temporary("x", "out"),
+        "out", check=kept_like_a_temporary),
     # --- the sequence: paired by name, numeric order, headers checked ----------------------------
     Case("sequence-missing", "run --sequence nowhere", 2, "neither a sample name"),
     Case("sequence-is-a-file", "run --sequence important.txt", 2, "not a sequence folder"),
@@ -1201,8 +1222,9 @@ def test_a_kill_at_any_step_of_the_swap_leaves_the_previous_output(tmp_path, mod
     """Kill the writer (SIGKILL) before each step of the swap in turn (renames, the one-step
     exchange, the deletion of the replaced folder), for a run's output and a generated sequence.
     After each kill the folder is the old output or the new one, whole; the next command beside
-    it (``check_target``) restores an old output set aside and removes every temporary."""
-    from vo_lib.outputs import check_target
+    it (an ``OutputFolder`` that writes nothing) restores an old output set aside and removes
+    every temporary."""
+    from vo_lib.outputs import OutputFolder
 
     seen, written_by = [], f"vo_lib {writer}"
     for at in range(12):
@@ -1218,7 +1240,8 @@ def test_a_kill_at_any_step_of_the_swap_leaves_the_previous_output(tmp_path, mod
         assert proc.returncode == -signal.SIGKILL, proc.stderr
         after_kill = whole(target)
         assert after_kill in ("old", "new") or (mode == "renames" and not target.exists())
-        check_target(target, written_by=written_by, force=True)
+        with OutputFolder(target, written_by, force=True):
+            pass
         seen.append(whole(target))
         assert seen[-1] == (after_kill or "old") and temporaries(tmp_path) == []
     assert proc.returncode == 0 and whole(target) == "new" and temporaries(tmp_path) == []
@@ -1359,6 +1382,24 @@ def test_links_are_looked_through_within_a_budget(tmp_path, monkeypatch):
         (tmp_path / "big" / f"{k}").mkdir()
         (tmp_path / "big" / f"{k}" / "link").symlink_to(tmp_path / "seq")
     (tmp_path / "seq" / "big").symlink_to(tmp_path / "big")
-    assert len(outputs.linked_from(tmp_path / "seq")) == 2  # big, and seq through big's links
+    assert outputs.linked_from(tmp_path / "seq") == ([tmp_path / "big", tmp_path / "seq"], True)
     monkeypatch.setattr(outputs, "MAX_WALKED", 2)
-    assert outputs.linked_from(tmp_path / "seq") == [tmp_path / "big"]  # stopped early
+    assert outputs.linked_from(tmp_path / "seq") == ([tmp_path / "big"], False)  # stopped early
+
+
+def test_force_is_refused_where_the_inputs_links_were_not_all_followed(tmp_path, monkeypatch):
+    """Where the budget ran out, a folder the input reads may lie beyond it: --force replaces nothing."""
+    from vo_lib import outputs
+
+    (tmp_path / "seq").mkdir()
+    (tmp_path / "notes").mkdir()
+    (tmp_path / "notes" / "thesis.tex").write_text("mine\n")
+    for k in range(5):
+        (tmp_path / "big" / f"{k}").mkdir(parents=True)
+    (tmp_path / "seq" / "big").symlink_to(tmp_path / "big")
+    check = dict(written_by="vo_lib run", force=True, inputs=[tmp_path / "seq"])
+    assert "notes" in outputs.check_target(tmp_path / "notes", **check)  # every link followed
+    monkeypatch.setattr(outputs, "MAX_WALKED", 3)
+    with pytest.raises(outputs.OutputError, match="--force refused: the input links to over 3 files"):
+        outputs.check_target(tmp_path / "notes", **check)
+    assert outputs.check_target(tmp_path / "new", **check) is None  # a new folder is still written

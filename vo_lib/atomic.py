@@ -6,9 +6,10 @@ the finished folder and the previous ``NAME`` are swapped in one step (``renamea
 ``RENAME_EXCHANGE``): at every moment ``NAME`` is the previous folder or the new one, whole. Where
 folders cannot be swapped, the previous folder is first renamed to ``.NAME.vo_lib-PID-HOST-RANDOM.old``
 and the new one takes its name; if the process is killed between the two renames,
-:func:`recover` (run by the next command beside it) renames the ``.old`` folder back. An ``.old``
+:func:`restore` (run by the next command beside it) renames the ``.old`` folder back. An ``.old``
 folder is deleted only once ``NAME`` exists again; other temporaries of processes that no longer
-run are deleted. A file is replaced whole by :func:`write_atomic`.
+run are deleted by the next command that goes on to write ``NAME`` (:func:`clear_abandoned`), not by
+one that refuses to. A file is replaced whole by :func:`write_atomic`.
 """
 
 from __future__ import annotations
@@ -26,7 +27,8 @@ import sys
 import tempfile
 from pathlib import Path
 
-_TEMPORARY = re.compile(r"\.(.+)\.vo_lib-(\d+)-([0-9a-f]{8})-[^/]*\.(tmp|old)")
+#: A temporary's name: its random part is what ``tempfile`` or ``secrets.token_hex(4)`` gives, nothing else.
+_TEMPORARY = re.compile(r"\.(.+)\.vo_lib-(\d+)-([0-9a-f]{8})-[a-z0-9_]{8}\.(tmp|old)")
 
 
 def notice(message: str) -> None:
@@ -112,31 +114,39 @@ def _remove(entry: os.DirEntry) -> None:
         os.unlink(entry.path)
 
 
-def recover(parent: Path, name: str) -> list[Path]:
-    """Finish what killed processes left in ``parent`` beside ``name``: an ``.old`` folder whose
-    ``name`` is missing is renamed back to ``name``; other temporaries of ``name`` left by dead
-    processes of this machine are deleted (those of other names are left alone). Returns what was
-    deleted or restored."""
+def _abandoned_beside(parent: Path, name: str) -> list[tuple[os.DirEntry, str]]:
+    """(entry, kind) of every temporary that dead processes of this machine left beside ``name``."""
     if os.name == "nt":  # os.kill(pid, 0) would stop the process there
         return []
-    try:
-        entries = sorted(os.scandir(parent), key=lambda e: not e.name.endswith(".old"))
-    except OSError:
-        return []
-    restored, deleted = [], []
-    for entry, match in ((e, _abandoned(e, name)) for e in entries):
-        original = Path(parent, match[1]) if match else None
-        if match and match[4] == "old" and not os.path.lexists(original):
+    with contextlib.suppress(OSError):
+        found = ((entry, _abandoned(entry, name)) for entry in os.scandir(parent))
+        return [(entry, match[4]) for entry, match in found if match]
+    return []
+
+
+def restore(parent: Path, name: str) -> Path | None:
+    """Rename back an ``.old`` folder of ``name`` whose replacement was killed between its two
+    renames (``name`` is missing); returns ``parent / name`` if it was restored."""
+    original = Path(parent, name)
+    for entry, kind in _abandoned_beside(parent, name):
+        if kind == "old" and not os.path.lexists(original):
             os.rename(entry.path, original)
             notice(f"restored {original}, whose replacement was interrupted")
-            restored.append(original)
-        elif match:
-            _remove(entry)
-            deleted.append(Path(entry.path))
+            return original
+    return None
+
+
+def clear_abandoned(parent: Path, name: str) -> list[Path]:
+    """Delete the temporaries of ``name`` left in ``parent`` by dead processes of this machine
+    (those of other names are left alone; run :func:`restore` first). Returns what was deleted."""
+    abandoned = [entry for entry, _ in _abandoned_beside(parent, name)]
+    for entry in abandoned:
+        _remove(entry)
+    deleted = [Path(entry.path) for entry in abandoned]
     if deleted:
         names = ", ".join(p.name for p in deleted)
         notice(f"removed {len(deleted)} temporary folder(s) left by interrupted runs: {names}")
-    return restored + deleted
+    return deleted
 
 
 def _exchange(a: Path, b: Path) -> bool:
@@ -162,7 +172,7 @@ def swap_in(complete: Path, target: Path) -> None:
     except OSError as exc:
         if exc.errno not in (errno.ENOTEMPTY, errno.EEXIST):
             raise
-    if not _exchange(complete, target):  # two renames; a kill between them is undone by recover()
+    if not _exchange(complete, target):  # two renames; a kill between them is undone by restore()
         aside = target.with_name(f"{temporary_prefix(target.name)}{secrets.token_hex(4)}.old")
         os.rename(target, aside)
         os.rename(complete, target)

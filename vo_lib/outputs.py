@@ -27,7 +27,17 @@ import shutil
 import tempfile
 from pathlib import Path
 
-from vo_lib.atomic import inode, notice, real_path, recover, swap_in, temporary_prefix, umask, write_atomic
+from vo_lib.atomic import (
+    clear_abandoned,
+    inode,
+    notice,
+    real_path,
+    restore,
+    swap_in,
+    temporary_prefix,
+    umask,
+    write_atomic,
+)
 
 #: The signals that stopped the command, as the exceptions the command line's handlers raised
 #: (Ctrl-C's ``KeyboardInterrupt``, its own for SIGTERM): one that landed where it is dropped (a
@@ -118,9 +128,10 @@ def foreign_content(folder: Path, written_by: str) -> str | None:
     return f"it holds {extra[0]}, which this program did not write" if extra else None
 
 
-def linked_from(folder) -> list[Path]:
+def linked_from(folder) -> tuple[list[Path], bool]:
     """Where the symbolic links under ``folder`` lead (resolved): what an input reads through them,
-    and, through a link to a folder, what that folder's own links lead to, and so on."""
+    and, through a link to a folder, what that folder's own links lead to, and so on; and whether
+    every link was looked at (not where the budget ran out)."""
     found: list[Path] = []
     to_walk, budget = [Path(folder)], MAX_WALKED
     while to_walk and budget > 0:  # a link to / is not walked through the whole file system
@@ -130,13 +141,13 @@ def linked_from(folder) -> list[Path]:
         new = sorted({real_path(path) for path in below if path.is_symlink()} - set(found))
         found += new
         to_walk += [target for target in new if target.is_dir()]
-    return found
+    return found, budget > 0  # a walk cut short has used up the budget
 
 
-def _guarded(inputs, keep: dict | None) -> list[tuple[Path, str, bool]]:
+def _guarded(inputs, links, keep: dict | None) -> list[tuple[Path, str, bool]]:
     """(folder, what it is, whether a target inside it is refused too)."""
     guarded = [(real_path(p), "the input sequence", True) for p in inputs]
-    guarded += [(t, "what the input sequence links to", True) for p in inputs for t in linked_from(p)]
+    guarded += [(t, "what the input sequence links to", True) for found, _ in links for t in found]
     guarded += [(PACKAGE, "this package", True), (REPOSITORY_DATA.resolve(), "the sample data folder", False)]
     for where, what in ((Path.cwd, "the current folder"), (Path.home, "your home folder")):
         with contextlib.suppress(OSError, RuntimeError):  # no current folder (deleted) or no home
@@ -144,12 +155,15 @@ def _guarded(inputs, keep: dict | None) -> list[tuple[Path, str, bool]]:
     return guarded + [(real_path(p), what, False) for p, what in (keep or {}).items()]
 
 
-def _check_guarded(real: Path, label: str, inputs, keep) -> None:
-    """Refuse an output folder that is, holds or (for an input) lies inside a folder never replaced."""
-    for folder, what, inside in _guarded(inputs, keep):
+def _check_guarded(real: Path, label: str, inputs, keep) -> bool:
+    """Refuse an output folder that is, holds or (for an input) lies inside a folder never replaced;
+    returns whether every link under the inputs was followed to its end."""
+    links = [linked_from(p) for p in inputs]
+    for folder, what, inside in _guarded(inputs, links, keep):
         if _contains(real, folder) or (inside and _contains(folder, real)):
             where = "is" if real == folder else "holds" if _contains(real, folder) else "lies inside"
             raise OutputError(f"{label}: {where} {what}; choose another output folder")
+    return all(whole for _, whole in links)
 
 
 def check_target(target, *, written_by: str, force=False, inputs=(), keep=None, option=None) -> str | None:
@@ -163,8 +177,8 @@ def check_target(target, *, written_by: str, force=False, inputs=(), keep=None, 
     if path.is_symlink() and not path.exists():
         raise OutputError(f"{label}: a symbolic link to {os.readlink(path)}, which does not exist")
     real = real_path(path)
-    _check_guarded(real, label, inputs, keep)
-    recover(real.parent, real.name)
+    every_link_followed = _check_guarded(real, label, inputs, keep)
+    restore(real.parent, real.name)
     if not real.exists():
         above = next(p for p in real.parents if p.exists())
         if not above.is_dir():
@@ -176,6 +190,11 @@ def check_target(target, *, written_by: str, force=False, inputs=(), keep=None, 
     if why is not None and not force:  # a folder the user did not name (a sample's) has no --force
         fix = "choose another folder, or add --force to replace it" if option else "move it away"
         raise OutputError(f"{label}: the folder exists and {why}; {fix}")
+    if why is not None and not every_link_followed:  # --force could replace a folder the input reads
+        raise OutputError(
+            f"{label}: --force refused: the input links to over {MAX_WALKED:,} files and folders, too many"
+            " to check that this folder is not one it reads; choose another output folder"
+        )
     return None if why is None else f"{real} ({why})"
 
 
@@ -254,6 +273,7 @@ class OutputFolder:
         self._check = dict(written_by=written_by, force=force, inputs=tuple(inputs), keep=keep, option=option)
         check_target(self.target, **self._check)
         self.real, self.label = real_path(self.target), _label(target, option)
+        clear_abandoned(self.real.parent, self.real.name)  # only once the target is accepted
         with _locked(self.real, shared=False, label=self.label):  # fail now, not after the work
             pass
         self._created = [p for p in reversed(self.real.parents) if not p.exists()]
@@ -277,8 +297,7 @@ class OutputFolder:
         if INTERRUPTED:
             raise INTERRUPTED[0]
         marker = {"written_by": self.written_by, "contents": entries(self.path), **details}
-        if self.checksums:
-            marker["files"] = file_checksums(self.path)
+        marker |= {"files": file_checksums(self.path)} if self.checksums else {}
         (self.path / MARKER).write_text(json.dumps(marker, indent=2, sort_keys=True) + "\n", encoding="utf-8")
         replacing = check_target(self.target, **self._check)
         if real_path(self.target) != self.real:  # a link repointed meanwhile: what was checked is elsewhere
