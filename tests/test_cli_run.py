@@ -207,3 +207,31 @@ def test_evaluate_compares_a_run_of_the_first_frames_with_those_of_its_sequence(
     shutil.copy(out / "poses.txt", tmp_path / "mine.txt")
     assert main(["evaluate", "--gt", str(seq / "poses.txt"), "--est", str(tmp_path / "mine.txt")]) == 2
     assert "has 8 poses but --est" in capsys.readouterr().err
+    # another sequence's truth of equal length: compared, and said to be another file than the run's
+    other = tmp_path / "other"
+    assert (
+        main(["generate", "indoor_free", "--frames", "5", "--resolution", "96x72", "--out", str(other)]) == 0
+    )
+    capsys.readouterr()
+    assert main(["evaluate", "--gt", str(other / "poses.txt"), "--est", str(out / "poses.txt")]) == 0
+    assert f"is a run of {seq.resolve()}, whose truth is" in capsys.readouterr().out
+    # the sequence written again over the one the run was made on: refused, not scored
+    assert (
+        main(
+            [
+                "generate",
+                "indoor_free",
+                "--frames",
+                "8",
+                "--resolution",
+                "96x72",
+                "--out",
+                str(seq),
+                "--force",
+            ]
+        )
+        == 0
+    )
+    capsys.readouterr()
+    assert main(["evaluate", "--gt", str(seq / "poses.txt"), "--est", str(out / "poses.txt")]) == 2
+    assert "changed since --est" in capsys.readouterr().err

@@ -6,6 +6,7 @@ arguments and bad input print one line and exit with status 2 (:class:`~vo_lib.c
 
 from __future__ import annotations
 
+import hashlib
 from pathlib import Path
 
 import numpy as np
@@ -25,6 +26,27 @@ def first_frames_of(gt: str, est: str, n: int) -> bool:
         ran
         and Path(est).name in ("poses.txt", "trajectory.tum")
         and Path(gt).resolve() == sequence / "poses.txt"
+    )
+
+
+def check_against_its_run(gt: str, est: str) -> None:
+    """Refuse a ``--gt`` that changed since the run that wrote ``--est`` took its errors from it
+    (its marker records the file's sha256), and say when ``--gt`` is another file than that one."""
+    marker = read_marker(Path(est).parent) or {}
+    truth = marker.get("truth") if marker.get("written_by") == "vo_lib run" else None
+    if not isinstance(truth, dict) or hashlib.sha256(Path(gt).read_bytes()).hexdigest() == truth.get(
+        "sha256"
+    ):
+        return
+    if Path(gt).resolve() == Path(str(truth.get("path"))):
+        raise UsageError(
+            f"--gt {gt}: changed since --est {est} was run against it (the run's marker records "
+            "another checksum: was the sequence written again?); expected the truth of that run, "
+            "or run it again"
+        )
+    print(
+        f"--est {est} is a run of {marker.get('sequence')}, whose truth is {truth.get('path')}; "
+        f"--gt {gt} is another file: compared as given"
     )
 
 
@@ -102,6 +124,7 @@ def evaluate_command(gt: str, est: str, segments=None, extrinsic_of: str | None 
         times, E = read_trajectory(est, min_poses=3)  # an alignment needs three
     except TrajectoryError as exc:
         raise UsageError(f"--est {exc}") from None
+    check_against_its_run(gt, est)
     i_est, i_gt = _associated(truth, gt, est, times, E)
     if truth.times is None and extrinsic_of is not None:
         raise UsageError(

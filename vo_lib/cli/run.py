@@ -17,6 +17,7 @@ line and exit with status 2.
 from __future__ import annotations
 
 import csv
+import hashlib
 import os
 import sys
 from dataclasses import asdict, fields
@@ -263,7 +264,15 @@ def _run_into(
         print_error_table(
             report, len(result.flagged), report["errors_3d"], odometry_name(vehicle), seq.truth_file
         )
-    output.commit(sequence=str(seq.path.resolve()), frames=n, seed=seed, odometry=not no_odometry)
+    truth_file = Path(seq.truth_file or seq.path / "poses.txt").resolve()  # what the errors were taken from
+    truth_record = (
+        {"path": str(truth_file), "sha256": hashlib.sha256(truth_file.read_bytes()).hexdigest()}
+        if truth_file.is_file()
+        else None
+    )
+    output.commit(
+        sequence=str(seq.path.resolve()), frames=n, seed=seed, odometry=not no_odometry, truth=truth_record
+    )
     return report
 
 
