@@ -167,7 +167,10 @@ def test_convert_carries_the_odometry_files_of_a_kitti_folder(tmp_path):
     (source / "odometry.txt").write_text("0 0\n0.01 0.01\n0.02 0.02\n")
     (source / "raw_calib").mkdir()
     (source / "raw_calib" / "calib_imu_to_velo.txt").write_text("R: 1 0 0 0 1 0 0 0 1\nT: 0 0 0\n")
+    (source / "raw_calib" / "docs").symlink_to("/usr")  # not read: not copied (nor walked)
+    (source / "raw_calib" / "loop").symlink_to("loop")
     assert main(["convert", str(source), "--to", "kitti", "--out", str(tmp_path / "copy")]) == 0
+    assert sorted(p.name for p in (tmp_path / "copy" / "raw_calib").iterdir()) == ["calib_imu_to_velo.txt"]
     for name in ("oxts.txt", "odometry.txt", "raw_calib/calib_imu_to_velo.txt"):
         assert (tmp_path / "copy" / name).read_bytes() == (source / name).read_bytes(), name
     # a read-only source (a dataset kept safe) gives a copy that can be replaced: new files' modes

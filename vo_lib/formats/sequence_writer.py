@@ -15,7 +15,6 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from vo_lib.atomic import umask
 from vo_lib.camera import StereoCamera
 from vo_lib.outputs import OutputError, OutputFolder
 
@@ -82,15 +81,16 @@ class SequenceWriter:
             ) from None
 
     def carry(self, source: Path, names=CARRIED) -> None:
-        """Copy those of the files and folders ``names`` that ``source`` holds into the sequence,
-        unchanged (they hold one row per frame, or none: a copy of every frame keeps them right)."""
+        """Copy those of the files and folders ``names`` that ``source`` holds into the sequence
+        (of a folder, the files directly in it), unchanged (they hold one row per frame, or none:
+        a copy of every frame keeps them right)."""
         for name in names:
             src = Path(source) / name
             try:
-                if src.is_dir():  # with the umask's permissions, not src's: the copy can be replaced
-                    shutil.copytree(src, self._tmp / name, copy_function=shutil.copyfile)
-                    for folder in [self._tmp / name, *(self._tmp / name).rglob("*/")]:
-                        folder.chmod(0o777 & ~umask())
+                if src.is_dir():  # its files, what is read of it (not what links to folders in it lead to)
+                    (self._tmp / name).mkdir()  # with the umask's permissions, not src's: it can be replaced
+                    for file in [f for f in sorted(src.iterdir()) if f.is_file()]:
+                        shutil.copyfile(file, self._tmp / name / file.name)
                 elif src.is_file():
                     shutil.copyfile(src, self._tmp / name)
             except OSError as exc:
