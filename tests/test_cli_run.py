@@ -75,7 +75,7 @@ def test_evaluate_command(workdir):
         (["run", "--sequence", "indoor_linear", "--frames", "1"], "need at least 2 frames"),
         (["evaluate", "--gt", "missing.txt", "--est", "missing.txt"], "missing.txt: no such trajectory file"),
         # a negative value is judged as a value, not taken for an option
-        (["evaluate", "--gt", "g.txt", "--est", "e.txt", "--segments", "-1,2"], "positive lengths in metres"),
+        (["evaluate", "--gt", "g.txt", "--est", "e.txt", "--segments", "-1,2"], "each 0.001"),
     ],
 )
 def test_bad_arguments_exit_2_with_one_line_and_leave_nothing(tmp_path, args, message):

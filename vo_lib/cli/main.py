@@ -19,7 +19,6 @@ import argparse
 import contextlib
 import errno
 import importlib
-import math
 import os
 import signal
 import sys
@@ -31,6 +30,8 @@ from vo_lib.arguments import OneLineParser, count_at_least, non_empty, one_line
 #: Bounds of ``generate --resolution`` (each side, pixels): 32 keeps a few FAST corners in view,
 #: 4096 keeps a rendered frame pair and its buffers within a few hundred MB.
 MIN_SIDE, MAX_SIDE = 32, 4096
+#: Segment lengths of ``evaluate --segments``: a millimetre to a thousand kilometres.
+MIN_SEGMENT_M, MAX_SEGMENT_M = 1e-3, 1e6
 #: Bound of ``sweep --seeds``: a grid of 100,000 tasks takes hours on a cluster; more is a typo.
 MAX_SEEDS = 100_000
 #: Bound of ``--workers``: Dask's own limit is memory; beyond 1,024 local processes is a typo.
@@ -56,9 +57,10 @@ def _segments(text: str) -> tuple[float, ...]:
         lengths = tuple(float(x) for x in text.split(","))
     except ValueError:
         lengths = ()
-    if not lengths or not all(math.isfinite(x) and x > 0 for x in lengths):
+    if not lengths or not all(MIN_SEGMENT_M <= x <= MAX_SEGMENT_M for x in lengths):
         raise argparse.ArgumentTypeError(
-            f"expected comma-separated positive lengths in metres, e.g. 1,2,5; got {text!r}"
+            f"expected comma-separated lengths in metres, each {MIN_SEGMENT_M:g} to {MAX_SEGMENT_M:g}, "
+            f"e.g. 1,2,5; got {text!r}"
         )
     return tuple(sorted(set(lengths)))  # each length once, shortest first
 
