@@ -59,7 +59,7 @@ def test_bench_real_reports_the_fastest_run_and_refuses_runs_that_differ():
     import numpy as np
     import pytest
 
-    from vo_lib.cli.bench.bench_real import REPEATS, fastest
+    from vo_lib.bench.bench_real import REPEATS, fastest
 
     times = iter([5.0, 3.0, 4.0])
     run = lambda: SimpleNamespace(camera_poses=np.eye(4)[None], ms=next(times))  # noqa: E731
@@ -73,7 +73,7 @@ def test_bench_real_reports_the_fastest_run_and_refuses_runs_that_differ():
 def test_step_scale_measures_the_steps_not_the_path():
     import numpy as np
 
-    from vo_lib.cli.bench.bench_real import step_scale
+    from vo_lib.bench.bench_real import step_scale
 
     truth = np.repeat(np.eye(4)[None], 50, axis=0)
     truth[:, 2, 3] = np.linspace(0.0, 4.9, 50)  # straight ahead, 0.1 m a frame

@@ -121,7 +121,7 @@ def test_help_gives_one_example_per_command_and_a_line_per_bench(capsys):
     it times and how long it runs."""
     import pytest
 
-    from vo_lib.cli.bench import BENCH_HELP, BENCHES
+    from vo_lib.bench import BENCH_HELP, BENCHES
     from vo_lib.cli.main import build_parser
 
     parser = build_parser()

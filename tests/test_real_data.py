@@ -676,7 +676,7 @@ def readme_3d_rows() -> dict[tuple[str, str], list[float]]:
 @pytest.mark.samples  # minutes: both methods on both sequences, run again (.ci/run runs them)
 @pytest.mark.skipif(not REALDATA.is_dir(), reason=f"no real sequences under {REALDATA}")
 def test_readme_3d_table_holds_for_both_development_sequences():
-    from vo_lib.cli.bench.bench_real import bench_real
+    from vo_lib.bench.bench_real import bench_real
 
     rows = readme_3d_rows()
     folders = sorted({REALDATA / name for name, _ in rows if (REALDATA / name).is_dir()})
@@ -752,7 +752,7 @@ def test_the_drone_preset_table_of_the_docs_holds(monkeypatch):
     """docs/real_data.md's figures of each part of the drone's preset, run again on EuRoC MH01."""
     from dataclasses import replace
 
-    from vo_lib.cli.bench.bench_real import error_rows
+    from vo_lib.bench.bench_real import error_rows
     from vo_lib.data import load_sequence
     from vo_lib.stereo_vo import pipeline
     from vo_lib.stereo_vo.config import HOVER

@@ -80,7 +80,7 @@ def test_full_pipeline_through_the_banked_bend():
 def test_road_images_are_as_hard_as_real_road_images():
     """Six frames spread over the drive fall within the real road sequences' range (the outdoor
     range of ``bench realism``). Measured: 0.62 of cells without a corner, 0.48 low-gradient pixels."""
-    from vo_lib.cli.bench.bench_realism import OUTDOOR_RANGE, sample_statistics
+    from vo_lib.bench.bench_realism import OUTDOOR_RANGE, sample_statistics
 
     stats = sample_statistics("road_drive", 6)
     (e0, e1), (g0, g1) = OUTDOOR_RANGE

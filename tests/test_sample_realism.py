@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import pytest
 
-from vo_lib.cli.bench.bench_realism import sample_range, sample_statistics
+from vo_lib.bench.bench_realism import sample_range, sample_statistics
 from vo_lib.sim.samples import SAMPLES, is_indoor
 
 pytestmark = pytest.mark.samples

@@ -3,6 +3,7 @@
 One folder per idea; imports run downwards only (import-linter contracts in ``pyproject.toml``)::
 
     cli/              python -m vo_lib run | evaluate | generate | bench      (top layer)
+    bench/            the benchmarks, each beside its baseline (python -m vo_lib bench NAME)
     data.py           a sequence by name or path (renders a named sample on first use)
     stereo_vo/        [Zhao]: stereo VO, 1-point RANSAC, Kalman filter      (the three wings;
     line_slam/        [Yan 2020]: line-feature EKF-SLAM, bisection observer      independent, but

@@ -1,9 +1,9 @@
-"""The command line, ``python -m vo_lib COMMAND`` (``main`` parses and dispatches).
+"""The command line, ``python -m vo_lib COMMAND`` (``main`` parses and dispatches; the benchmarks
+that ``bench`` runs are in :mod:`vo_lib.bench`).
 
 ``main``    the parser: run, evaluate, convert, generate, bench, sweep
 ``run``     ``run`` (the stereo VO pipeline on a sequence, files written), ``evaluate``, ``convert``
 ``report``  the run's tables: time per stage, errors in 3-D and planar
-``bench``   benchmarks, each printed beside its baseline
 ``sweep``   a paper's statistic over many seeds, serially or on Dask
 
 The top layer: it may import everything, nothing imports it.

@@ -76,7 +76,7 @@ def _recording(text: str) -> str:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    from vo_lib.cli.bench import BENCH_HELP, BENCHES
+    from vo_lib.bench import BENCH_HELP, BENCHES
 
     # named as it was started: the ``vo-lib`` script or ``python -m vo_lib``
     prog = "vo-lib" if Path(sys.argv[0]).name == "vo-lib" else "python -m vo_lib"
@@ -377,7 +377,7 @@ def _dispatch(args) -> None:
     if args.command == "generate":
         return _generate(args)
     if args.command == "bench":
-        from vo_lib.cli.bench import BENCHES
+        from vo_lib.bench import BENCHES
 
         return BENCHES[args.name]()
     module, name, arguments = COMMANDS[args.command]

@@ -8,7 +8,7 @@ import time
 
 import numpy as np
 
-from vo_lib.cli.bench.common import BENCH_SEED, format_row, median_seconds
+from vo_lib.bench.common import BENCH_SEED, format_row, median_seconds
 from vo_lib.stereo_vo.paper_tables import PAPER_LONG_RUN
 
 
@@ -251,7 +251,7 @@ def bench_kernels(frames: int = 60) -> dict[str, float]:
     ``$VO_LIB_REALDATA`` when set and on a rendered indoor drive; the renderer's composite on a
     whole rendered pair.
     """
-    from vo_lib.cli.bench.bench_real import decode_all, fastest, realdata_folders
+    from vo_lib.bench.bench_real import decode_all, fastest, realdata_folders
     from vo_lib.data import load_sequence
     from vo_lib.geometry import camera_mount, planar_to_matrix
     from vo_lib.sim.render import SensorEffects, StereoRenderer

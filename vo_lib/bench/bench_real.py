@@ -24,7 +24,7 @@ from pathlib import Path
 import numpy as np
 
 #: Where the development sequences sit when ``$VO_LIB_REALDATA`` is not set: beside the checkout.
-DEFAULT_REALDATA = Path(__file__).resolve().parents[3].parent / "shared" / "realdata"
+DEFAULT_REALDATA = Path(__file__).resolve().parents[2].parent / "shared" / "realdata"
 #: Runs of each method per sequence; the fastest is reported.
 REPEATS = 3
 

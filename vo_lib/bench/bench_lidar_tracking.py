@@ -6,7 +6,7 @@ import math
 
 import numpy as np
 
-from vo_lib.cli.bench.common import BENCH_SEED, format_row, median_seconds
+from vo_lib.bench.common import BENCH_SEED, format_row, median_seconds
 
 
 def bench_tracking() -> dict[str, float]:

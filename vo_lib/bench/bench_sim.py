@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from vo_lib.cli.bench.common import BENCH_SEED, format_row, median_seconds
+from vo_lib.bench.common import BENCH_SEED, format_row, median_seconds
 
 
 def bench_sensors() -> dict[str, float]:

@@ -12,12 +12,12 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-from vo_lib.cli.bench.bench_lidar_tracking import bench_odometers, bench_tracking
-from vo_lib.cli.bench.bench_line_slam import bench_observers
-from vo_lib.cli.bench.bench_real import bench_real
-from vo_lib.cli.bench.bench_realism import bench_realism
-from vo_lib.cli.bench.bench_sim import bench_sensors
-from vo_lib.cli.bench.bench_stereo_vo import (
+from vo_lib.bench.bench_lidar_tracking import bench_odometers, bench_tracking
+from vo_lib.bench.bench_line_slam import bench_observers
+from vo_lib.bench.bench_real import bench_real
+from vo_lib.bench.bench_realism import bench_realism
+from vo_lib.bench.bench_sim import bench_sensors
+from vo_lib.bench.bench_stereo_vo import (
     bench_frontend,
     bench_geometry,
     bench_kernels,
