@@ -88,6 +88,15 @@ def _row_windows(key, half, sorted_v):
 
 
 @_jit
+def _in_order(values, order):
+    """``values[order]`` as a new contiguous array: the loops below then read it in sequence."""
+    out = np.empty(order.shape[0], values.dtype)
+    for s in range(order.shape[0]):
+        out[s] = values[order[s]]
+    return out
+
+
+@_jit
 def _hamming(des_a, i, des_b, j):
     """Hamming distance of descriptor rows ``des_a[i]`` and ``des_b[j]`` (uint64 words)."""
     h = 0
@@ -117,16 +126,17 @@ def window_candidates(predicted, radius, w_curr, order_v, sorted_v, des_prev, de
         u, v, d = predicted[i, 0], predicted[i, 1], predicted[i, 2]
         seen[i] = v if np.isfinite(u) and np.isfinite(v) and np.isfinite(d) else np.nan
     lo, hi, total = _row_windows(seen, radius[:, 1], sorted_v)
+    sorted_u, sorted_d = _in_order(w_curr[:, 0], order_v), _in_order(w_curr[:, 2], order_v)
     ia = np.empty(total, np.int64)
     ib = np.empty(total, np.int64)
     dist = np.empty(total, np.int64)
     count = 0
     for i in range(n):
-        u, d = predicted[i, 0], predicted[i, 2]
+        u, d, ru, rd = predicted[i, 0], predicted[i, 2], radius[i, 0], radius[i, 2]
         for s in range(lo[i], hi[i]):
-            j = order_v[s]
-            if abs(w_curr[j, 0] - u) > radius[i, 0] or abs(w_curr[j, 2] - d) > radius[i, 2]:
+            if abs(sorted_u[s] - u) > ru or abs(sorted_d[s] - d) > rd:
                 continue
+            j = order_v[s]
             ia[count], ib[count], dist[count] = i, j, _hamming(des_prev, i, des_curr, j)
             count += 1
     return ia[:count], ib[:count], dist[:count]
@@ -160,16 +170,18 @@ def row_candidates(
     one apart, with their Hamming distances; ordered by ``i``, then by right row."""
     n = left.shape[0]
     lo, hi, total = _row_windows(left[:, 1], np.full(n, row_tolerance), sorted_v)
+    sorted_u, sorted_level = _in_order(right[:, 0], order_v), _in_order(right_level, order_v)
     ia = np.empty(total, np.int64)
     ib = np.empty(total, np.int64)
     dist = np.empty(total, np.int64)
     count = 0
     for i in range(n):
+        u, level = left[i, 0], left_level[i]
         for s in range(lo[i], hi[i]):
-            j = order_v[s]
-            d = left[i, 0] - right[j, 0]
-            if d < d_min or d > d_max or abs(left_level[i] - right_level[j]) > 1:
+            d = u - sorted_u[s]
+            if d < d_min or d > d_max or abs(level - sorted_level[s]) > 1:
                 continue
+            j = order_v[s]
             ia[count], ib[count], dist[count] = i, j, _hamming(des_left, i, des_right, j)
             count += 1
     return ia[:count], ib[:count], dist[:count]

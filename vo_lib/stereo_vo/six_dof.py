@@ -121,6 +121,23 @@ def turning_axis_view(w: np.ndarray, camera: StereoCamera, to_axis: np.ndarray) 
     return camera.project(X @ to_axis[:3, :3].T + to_axis[:3, 3])
 
 
+#: The central differences of :func:`chord_covariance`: each motion component moved by this much.
+COVARIANCE_STEP = 1e-6
+
+
+def _covariance_steps(h: float) -> tuple[np.ndarray, np.ndarray]:
+    """The twelve moves of :func:`chord_covariance` (component k by ``+h``, then by ``-h``) as
+    ``(12, 6)`` steps, and their rotations ``exp([step[:3]]x)``: the same for every frame."""
+    steps = np.zeros((6, 2, 6))
+    steps[np.arange(6), 0, np.arange(6)] = h
+    steps[np.arange(6), 1, np.arange(6)] = -h
+    steps = steps.reshape(12, 6)
+    return steps, np.stack([rotation_matrix(step[:3]) for step in steps])
+
+
+_COVARIANCE_STEPS = _covariance_steps(COVARIANCE_STEP)
+
+
 def chord_covariance(
     T_cam: np.ndarray, covariance6: np.ndarray, mount: np.ndarray, mount_inverse: np.ndarray | None = None
 ) -> np.ndarray:
@@ -128,16 +145,12 @@ def chord_covariance(
     covariance of the camera motion (rotation vector on the left, translation) by central
     differences (``mount_inverse`` as in :func:`vehicle_increment`).
 
-    The twelve moved motions (each of the six components by ``+h`` and ``-h``) go through
-    :func:`vehicle_increment`'s products as one stack of 4x4 matrices.
+    The twelve moved motions (each of the six components by ``+h`` and ``-h``, whose rotations
+    are computed once, at import) go through :func:`vehicle_increment`'s products as one stack
+    of 4x4 matrices.
     """
     inverse = rigid_inverse(mount) if mount_inverse is None else mount_inverse
-    h = 1e-6
-    steps = np.zeros((6, 2, 6))  # component k moved by +h, then by -h
-    steps[np.arange(6), 0, np.arange(6)] = h
-    steps[np.arange(6), 1, np.arange(6)] = -h
-    steps = steps.reshape(12, 6)
-    dR = np.stack([rotation_matrix(step[:3]) for step in steps])
+    steps, dR = _COVARIANCE_STEPS
     R = dR @ T_cam[:3, :3]
     t = dR @ T_cam[:3, 3] + steps[:, 3:]
     moved_inverse = np.zeros((12, 4, 4))  # rigid_inverse of each moved motion
@@ -146,7 +159,7 @@ def chord_covariance(
     moved_inverse[:, 3, 3] = 1.0
     V = mount @ moved_inverse @ inverse
     z = np.array([chord_measurement((M[0, 3], M[1, 3], math.atan2(M[1, 0], M[0, 0]))) for M in V])
-    J = ((z[0::2] - z[1::2]) / (2 * h)).T
+    J = ((z[0::2] - z[1::2]) / (2 * COVARIANCE_STEP)).T
     return J @ covariance6 @ J.T
 
 
