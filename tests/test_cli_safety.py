@@ -1383,16 +1383,21 @@ def test_links_are_looked_through_within_a_budget(tmp_path, monkeypatch):
         (tmp_path / "big" / f"{k}").mkdir()
         (tmp_path / "big" / f"{k}" / "link").symlink_to(tmp_path / "seq")
     (tmp_path / "seq" / "big").symlink_to(tmp_path / "big")
-    assert outputs.linked_from(tmp_path / "seq") == ([tmp_path / "big", tmp_path / "seq"], True)
+    assert outputs.linked_from(tmp_path / "seq") == ([tmp_path / "big", tmp_path / "seq"], None)
     monkeypatch.setattr(outputs, "MAX_WALKED", 2)
-    assert outputs.linked_from(tmp_path / "seq") == ([tmp_path / "big"], False)  # stopped early
+    assert outputs.linked_from(tmp_path / "seq") == (
+        [tmp_path / "big"],
+        "it holds or links to over 2 entries",
+    )
 
 
-def test_force_is_refused_where_the_inputs_links_were_not_all_followed(tmp_path, monkeypatch):
-    """Where the budget ran out, a folder the input reads may lie beyond it: --force replaces nothing."""
+def test_an_existing_folder_is_refused_where_the_inputs_links_were_not_all_followed(tmp_path, monkeypatch):
+    """Where the budget ran out, or a folder of the input could not be listed (entered, as a reader
+    opening files it names does, but not listed), a folder the input reads may lie beyond: an
+    existing output folder is refused, --force or not; a new one is written."""
     from vo_lib import outputs
 
-    (tmp_path / "seq").mkdir()
+    (tmp_path / "seq" / "data").mkdir(parents=True)
     (tmp_path / "notes").mkdir()
     (tmp_path / "notes" / "thesis.tex").write_text("mine\n")
     for k in range(5):
@@ -1401,6 +1406,21 @@ def test_force_is_refused_where_the_inputs_links_were_not_all_followed(tmp_path,
     check = dict(written_by="vo_lib run", force=True, inputs=[tmp_path / "seq"])
     assert "notes" in outputs.check_target(tmp_path / "notes", **check)  # every link followed
     monkeypatch.setattr(outputs, "MAX_WALKED", 3)
-    with pytest.raises(outputs.OutputError, match="--force refused: the input links to over 3 files"):
+    with pytest.raises(
+        outputs.OutputError, match="cannot be checked .the input: it holds or links to over 3"
+    ):
+        outputs.check_target(tmp_path / "notes", **check)
+    assert outputs.check_target(tmp_path / "new", **check) is None  # a new folder is still written
+    monkeypatch.setattr(outputs, "MAX_WALKED", 100_000)
+    (tmp_path / "seq" / "data" / "000.png").symlink_to(tmp_path / "notes" / "thesis.tex")
+    scandir, data = os.scandir, str(tmp_path / "seq" / "data")  # a folder of mode 0311, for root too
+
+    def unlistable(path="."):
+        if os.fspath(path) == data:
+            raise PermissionError(13, "Permission denied", data)
+        return scandir(path)
+
+    monkeypatch.setattr(os, "scandir", unlistable)
+    with pytest.raises(outputs.OutputError, match="data cannot be listed"):
         outputs.check_target(tmp_path / "notes", **check)
     assert outputs.check_target(tmp_path / "new", **check) is None  # a new folder is still written

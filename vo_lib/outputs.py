@@ -128,20 +128,21 @@ def foreign_content(folder: Path, written_by: str) -> str | None:
     return f"it holds {extra[0]}, which this program did not write" if extra else None
 
 
-def linked_from(folder) -> tuple[list[Path], bool]:
+def linked_from(folder) -> tuple[list[Path], str | None]:
     """Where the symbolic links under ``folder`` lead (resolved): what an input reads through them,
-    and, through a link to a folder, what that folder's own links lead to, and so on; and whether
-    every link was looked at (not where the budget ran out)."""
-    found: list[Path] = []
+    and, through a link to a folder, what that folder's own links lead to, and so on; and, where
+    not every link could be looked at, why not (else None)."""
+    found, unlisted = [], []
     to_walk, budget = [Path(folder)], MAX_WALKED
     while to_walk and budget > 0:  # a link to / is not walked through the whole file system
-        walk = itertools.islice(os.walk(to_walk.pop()), budget)
+        walk = itertools.islice(os.walk(to_walk.pop(), onerror=unlisted.append), budget)
         below = [Path(root) / name for root, folders, files in walk for name in folders + files]
         budget -= len(below) + 1
-        new = sorted({real_path(path) for path in below if path.is_symlink()} - set(found))
+        new = sorted({real_path(path) for path in below if path.is_symlink()}.difference(found))
         found += new
         to_walk += [target for target in new if target.is_dir()]
-    return found, budget > 0  # a walk cut short has used up the budget
+    hidden = f"{unlisted[0].filename} cannot be listed" if unlisted else None  # it may hide links
+    return found, hidden or (None if budget > 0 else f"it holds or links to over {MAX_WALKED:,} entries")
 
 
 def _guarded(inputs, links, keep: dict | None) -> list[tuple[Path, str, bool]]:
@@ -155,15 +156,15 @@ def _guarded(inputs, links, keep: dict | None) -> list[tuple[Path, str, bool]]:
     return guarded + [(real_path(p), what, False) for p, what in (keep or {}).items()]
 
 
-def _check_guarded(real: Path, label: str, inputs, keep) -> bool:
+def _check_guarded(real: Path, label: str, inputs, keep) -> str | None:
     """Refuse an output folder that is, holds or (for an input) lies inside a folder never replaced;
-    returns whether every link under the inputs was followed to its end."""
+    returns why not every link under the inputs could be followed, if so."""
     links = [linked_from(p) for p in inputs]
     for folder, what, inside in _guarded(inputs, links, keep):
         if _contains(real, folder) or (inside and _contains(folder, real)):
             where = "is" if real == folder else "holds" if _contains(real, folder) else "lies inside"
             raise OutputError(f"{label}: {where} {what}; choose another output folder")
-    return all(whole for _, whole in links)
+    return next((why for _, why in links if why), None)
 
 
 def check_target(target, *, written_by: str, force=False, inputs=(), keep=None, option=None) -> str | None:
@@ -177,7 +178,7 @@ def check_target(target, *, written_by: str, force=False, inputs=(), keep=None, 
     if path.is_symlink() and not path.exists():
         raise OutputError(f"{label}: a symbolic link to {os.readlink(path)}, which does not exist")
     real = real_path(path)
-    every_link_followed = _check_guarded(real, label, inputs, keep)
+    unchecked = _check_guarded(real, label, inputs, keep)
     restore(real.parent, real.name)
     if not real.exists():
         above = next(p for p in real.parents if p.exists())
@@ -186,15 +187,15 @@ def check_target(target, *, written_by: str, force=False, inputs=(), keep=None, 
         return None
     if not real.is_dir():
         raise OutputError(f"{label}: is a file, not a folder; choose another output folder")
+    if unchecked:  # an existing folder may be one the input reads through a link not looked at
+        raise OutputError(
+            f"{label}: the folder exists, and whether the input reads it cannot be checked (the input: "
+            f"{unchecked}); choose a new output folder"
+        )
     why = foreign_content(real, written_by)
     if why is not None and not force:  # a folder the user did not name (a sample's) has no --force
         fix = "choose another folder, or add --force to replace it" if option else "move it away"
         raise OutputError(f"{label}: the folder exists and {why}; {fix}")
-    if why is not None and not every_link_followed:  # --force could replace a folder the input reads
-        raise OutputError(
-            f"{label}: --force refused: the input links to over {MAX_WALKED:,} files and folders, too many"
-            " to check that this folder is not one it reads; choose another output folder"
-        )
     return None if why is None else f"{real} ({why})"
 
 
