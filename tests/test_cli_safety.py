@@ -1144,7 +1144,7 @@ def test_a_checksummed_folder_is_replaced_only_while_every_file_is_as_written(tm
 
 
 def test_a_folder_being_read_is_not_replaced(tmp_path):
-    from vo_lib.outputs import OutputError, OutputFolder, claim_folder, reading, swap_in
+    from vo_lib.outputs import OutputError, OutputFolder, claim_folder, reading, remove_replaced, swap_in
 
     folder = claim_folder(tmp_path / "rows", "vo_lib sweep toy")
     with reading(folder):
@@ -1153,7 +1153,7 @@ def test_a_folder_being_read_is_not_replaced(tmp_path):
     done = tmp_path / "done"
     done.mkdir()
     (done / "a").write_text("new")
-    swap_in(done, folder)  # released: a finished folder renamed over the old one
+    remove_replaced(swap_in(done, folder), folder)  # released: a finished folder renamed over the old one
     assert [p.name for p in folder.iterdir()] == ["a"] and sorted(p.name for p in tmp_path.iterdir()) == [
         "rows"
     ]
@@ -1316,9 +1316,34 @@ def test_a_previous_output_that_cannot_be_deleted_is_a_notice_after_the_swap(tmp
         raise PermissionError(13, "Permission denied", str(path))
 
     monkeypatch.setattr(atomic.shutil, "rmtree", refuse)
-    atomic.swap_in(complete, target)
+    atomic.remove_replaced(atomic.swap_in(complete, target), target)
     assert (target / "poses.txt").read_text() == "new"
     assert "its previous contents stay in" in capsys.readouterr().err
+
+
+def test_a_signal_after_the_swap_leaves_the_new_folder_and_says_what_it_replaced(
+    tmp_path, monkeypatch, capsys
+):
+    """Ctrl-C while the replaced folder is deleted: the new output stays in place (no second
+    deletion by the failed command's clean-up), the --force notice is printed first, and what was
+    not deleted keeps its temporary's name, for the next command beside it to clear."""
+    from vo_lib import atomic
+    from vo_lib.outputs import OutputFolder
+
+    target = tmp_path / "notes"
+    target.mkdir()
+    (target / "thesis.tex").write_text("mine\n")
+
+    def interrupted(path, *args, **kwargs):
+        raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt), OutputFolder(target, "vo_lib run", force=True) as out:
+        (out.path / "poses.txt").write_text("new\n")
+        monkeypatch.setattr(atomic.shutil, "rmtree", interrupted)
+        out.commit()
+    assert (target / "poses.txt").read_text() == "new\n"
+    assert "--force: replaced" in capsys.readouterr().err
+    assert [p.name for p in tmp_path.glob(".notes.vo_lib-*/thesis.tex")] == ["thesis.tex"]
 
 
 def test_a_folder_the_user_did_not_name_is_refused_without_advising_force(tmp_path):

@@ -163,21 +163,30 @@ def _exchange(a: Path, b: Path) -> bool:
     raise OSError(ctypes.get_errno(), os.strerror(ctypes.get_errno()), str(b))
 
 
-def swap_in(complete: Path, target: Path) -> None:
-    """Put the whole folder ``complete`` (a ``.tmp`` sibling) at ``target``; the folder it
-    replaces is deleted afterwards. No moment exists where a kill loses both (see the module)."""
+def swap_in(complete: Path, target: Path) -> Path | None:
+    """Put the whole folder ``complete`` (a ``.tmp`` sibling) at ``target``; returns the temporary
+    that now holds what ``target`` held, if anything, for :func:`remove_replaced`. No moment exists
+    where a kill loses both (see the module)."""
     try:
         os.rename(complete, target)  # no target, or an empty folder
-        return
+        return None
     except OSError as exc:
         if exc.errno not in (errno.ENOTEMPTY, errno.EEXIST):
             raise
-    if not _exchange(complete, target):  # two renames; a kill between them is undone by restore()
-        aside = target.with_name(f"{temporary_prefix(target.name)}{secrets.token_hex(4)}.old")
-        os.rename(target, aside)
-        os.rename(complete, target)
-        complete = aside
+    if _exchange(complete, target):
+        return complete
+    aside = target.with_name(f"{temporary_prefix(target.name)}{secrets.token_hex(4)}.old")
+    os.rename(target, aside)  # two renames; a kill between them is undone by restore()
+    os.rename(complete, target)
+    return aside
+
+
+def remove_replaced(replaced: Path | None, target: Path) -> None:
+    """Delete what :func:`swap_in` set aside; what is left (a signal meanwhile, a file that cannot
+    go) keeps its temporary's name, for the next command beside ``target`` to clear."""
+    if replaced is None:
+        return
     try:
-        shutil.rmtree(complete)
+        shutil.rmtree(replaced)
     except OSError as exc:  # the new folder is in place: what is left is only the old one
-        notice(f"wrote {target}, but its previous contents stay in {complete} ({exc.strerror or exc})")
+        notice(f"wrote {target}, but its previous contents stay in {replaced} ({exc.strerror or exc})")

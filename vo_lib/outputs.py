@@ -32,6 +32,7 @@ from vo_lib.atomic import (
     inode,
     notice,
     real_path,
+    remove_replaced,
     restore,
     swap_in,
     temporary_prefix,
@@ -305,10 +306,11 @@ class OutputFolder:
         if real_path(self.target) != self.real:  # a link repointed meanwhile: what was checked is elsewhere
             raise OutputError(f"{self.label}: now leads to {real_path(self.target)}; nothing was written")
         with _locked(self.real, shared=False, label=self.label):
-            swap_in(self.path, self.real)
-        self.committed = True
+            replaced = swap_in(self.path, self.real)
+        self.committed = True  # from here on, a signal leaves the new folder in place
         if replacing:
             notice(f"--force: replaced {replacing}")
+        remove_replaced(replaced, self.real)
         return self.target
 
     def discard(self) -> None:
