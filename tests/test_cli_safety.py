@@ -328,6 +328,10 @@ CASES = [
     Case("stale-temporary-removed", "RUN --out out", 0, "removed 1 temporary folder", stale_temporary,
         "out .out.vo_lib-", check=lambda ws: (ws / ".out.someone-else.tmp" / "keep.txt").exists()
         and len(list(ws.glob(".notes.vo_lib-*/keep.txt"))) == 1),
+    Case("temporary-name-huge-pid", "RUN --out out", 0, "wrote",
+        lambda ws: (ws / f".out.vo_lib-{10**20}-{HOST}-abcdefgh.old/keep.txt").mkdir(parents=True), "out"),
+    Case("marker-a-pipe", "RUN --out out", 2, "marker .vo_lib_output.json is damaged",
+        lambda ws: ((ws / "out").mkdir(), os.mkfifo(ws / "out" / MARKER))),
     Case("temporary-name-kept-when-refused", "RUN --out thesis", 2, "--force",
         named_like_a_temporary("abcd1234", "thesis"), check=kept_like_a_temporary),
     Case("temporary-name-not-ours-kept", "RUN --out out", 0, "wrote", named_like_a_temporary("x", "out"),

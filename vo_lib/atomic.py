@@ -92,7 +92,7 @@ def _gone(pid: int) -> bool:
         os.kill(pid, 0)
     except ProcessLookupError:
         return True
-    except OSError:  # it runs, as another user
+    except (OSError, OverflowError):  # it runs, as another user; or no process has that number
         pass
     return False
 

@@ -95,9 +95,11 @@ def entries(folder) -> list[str]:
 
 
 def read_marker(folder) -> dict | None:
-    """The marker of ``folder``, or None if it has none or it cannot be read."""
+    """The marker of ``folder``, or None if it has none or it cannot be read (or is no file: a pipe
+    would block)."""
+    path = Path(folder) / MARKER
     try:
-        data = json.loads((Path(folder) / MARKER).read_text(encoding="utf-8"))
+        data = json.loads(path.read_text(encoding="utf-8")) if path.is_file() else None
     except (OSError, ValueError, RecursionError):
         return None
     return data if isinstance(data, dict) else None
