@@ -167,8 +167,11 @@ def test_convert_carries_the_odometry_files_of_a_kitti_folder(tmp_path):
     (source / "odometry.txt").write_text("0 0\n0.01 0.01\n0.02 0.02\n")
     (source / "raw_calib").mkdir()
     (source / "raw_calib" / "calib_imu_to_velo.txt").write_text("R: 1 0 0 0 1 0 0 0 1\nT: 0 0 0\n")
-    (source / "raw_calib" / "docs").symlink_to("/usr")  # not read: not copied (nor walked)
+    (tmp_path / "manual").mkdir()
+    (tmp_path / "manual" / "calib_cam_to_cam.txt").write_text("not read\n")
+    (source / "raw_calib" / "docs").symlink_to(tmp_path / "manual")  # not read: not copied
     (source / "raw_calib" / "loop").symlink_to("loop")
+    (source / "raw_calib" / "env").symlink_to("/proc/self/environ")  # a file, but not one that is read
     assert main(["convert", str(source), "--to", "kitti", "--out", str(tmp_path / "copy")]) == 0
     assert sorted(p.name for p in (tmp_path / "copy" / "raw_calib").iterdir()) == ["calib_imu_to_velo.txt"]
     for name in ("oxts.txt", "odometry.txt", "raw_calib/calib_imu_to_velo.txt"):
@@ -217,7 +220,7 @@ def test_evaluate_compares_a_run_of_the_first_frames_with_those_of_its_sequence(
     )
     capsys.readouterr()
     assert main(["evaluate", "--gt", str(other / "poses.txt"), "--est", str(out / "poses.txt")]) == 0
-    assert f"is a run of {seq.resolve()}, whose truth is" in capsys.readouterr().out
+    assert f"is a run of '{seq.resolve()}', whose truth is" in capsys.readouterr().out
     # the sequence written again over the one the run was made on: refused, not scored
     assert (
         main(
@@ -238,3 +241,9 @@ def test_evaluate_compares_a_run_of_the_first_frames_with_those_of_its_sequence(
     capsys.readouterr()
     assert main(["evaluate", "--gt", str(seq / "poses.txt"), "--est", str(out / "poses.txt")]) == 2
     assert "changed since --est" in capsys.readouterr().err
+    # a run's poses.txt replaced by another's: no longer the run its marker describes
+    assert main(["run", "--sequence", str(other), "--out", str(tmp_path / "out2")]) == 0
+    shutil.copy(tmp_path / "out2" / "poses.txt", out / "poses.txt")
+    capsys.readouterr()
+    assert main(["evaluate", "--gt", str(seq / "poses.txt"), "--est", str(out / "poses.txt")]) == 2
+    assert "has 8 poses but --est" in capsys.readouterr().err

@@ -725,6 +725,14 @@ def test_a_rig_with_positions_only_is_scored_by_its_aligned_prism(tmp_path, caps
     assert "Errors against position-only ground truth" in out and "Errors in 3-D" not in out
     line = next(x for x in out.splitlines() if "ATE RMSE of the tracked point" in x)
     assert 0 < float(line.split()[-1]) < 0.05
+    # the run's marker records the positions it was scored against: evaluate refuses them once changed
+    est, gt = tmp_path / "out" / "trajectory.tum", rig / "mav0" / "leica0" / "data.csv"
+    assert main(["evaluate", "--gt", str(gt), "--est", str(est)]) == 0
+    gt.write_text(gt.read_text().replace(",4.", ",5."))
+    capsys.readouterr()
+    assert main(["evaluate", "--gt", str(gt), "--est", str(est)]) == 2
+    assert "changed since --est" in capsys.readouterr().err
+    shutil.copy(EUROC / "mav0" / "leica0" / "data.csv", gt)
     # without the tracker's sensor.yaml, its lever arm is taken as zero, and a notice says so
     (rig / "mav0" / "leica0" / "sensor.yaml").unlink()
     assert main(["run", "--sequence", str(rig), "--out", str(tmp_path / "out")]) == 0

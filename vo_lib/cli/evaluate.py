@@ -16,27 +16,32 @@ from vo_lib.formats.poses import TrajectoryError, read_trajectory
 from vo_lib.outputs import read_marker
 
 
-def first_frames_of(gt: str, est: str, n: int) -> bool:
-    """Whether ``est`` lies in the output of ``run --frames n`` on the sequence whose
-    ``poses.txt`` is ``gt``, as that output's marker records the run."""
+def _sha256(path) -> str:
+    return hashlib.sha256(Path(path).read_bytes()).hexdigest()
+
+
+def run_marker(est: str) -> dict:
+    """The marker of the ``run`` output that holds ``est``, if ``est`` is still as that run wrote
+    it (the checksum the marker records); else an empty dict."""
     marker = read_marker(Path(est).parent) or {}
+    files = marker.get("files") if marker.get("written_by") == "vo_lib run" else None
+    return marker if isinstance(files, dict) and files.get(Path(est).name) == _sha256(est) else {}
+
+
+def first_frames_of(gt: str, est: str, n: int) -> bool:
+    """Whether ``est`` is an output of ``run --frames n`` on the sequence whose ``poses.txt`` is
+    ``gt``, as that output's marker records the run."""
+    marker = run_marker(est)
     sequence = Path(str(marker.get("sequence")))
-    ran = marker.get("written_by") == "vo_lib run" and marker.get("frames") == n
-    return (
-        ran
-        and Path(est).name in ("poses.txt", "trajectory.tum")
-        and Path(gt).resolve() == sequence / "poses.txt"
-    )
+    return marker.get("frames") == n and Path(gt).resolve() == sequence / "poses.txt"
 
 
 def check_against_its_run(gt: str, est: str) -> None:
     """Refuse a ``--gt`` that changed since the run that wrote ``--est`` took its errors from it
     (its marker records the file's sha256), and say when ``--gt`` is another file than that one."""
-    marker = read_marker(Path(est).parent) or {}
-    truth = marker.get("truth") if marker.get("written_by") == "vo_lib run" else None
-    if not isinstance(truth, dict) or hashlib.sha256(Path(gt).read_bytes()).hexdigest() == truth.get(
-        "sha256"
-    ):
+    marker = run_marker(est)
+    truth = marker.get("truth")
+    if not isinstance(truth, dict) or _sha256(gt) == truth.get("sha256"):
         return
     if Path(gt).resolve() == Path(str(truth.get("path"))):
         raise UsageError(
@@ -45,7 +50,7 @@ def check_against_its_run(gt: str, est: str) -> None:
             "or run it again"
         )
     print(
-        f"--est {est} is a run of {marker.get('sequence')}, whose truth is {truth.get('path')}; "
+        f"--est {est} is a run of {marker.get('sequence')!r}, whose truth is {truth.get('path')!r}; "
         f"--gt {gt} is another file: compared as given"
     )
 
@@ -55,6 +60,8 @@ def _associated(truth, gt: str, est: str, times, E: np.ndarray) -> tuple[np.ndar
     carry them (as evo does), else one to one, the counts equal."""
     from vo_lib.formats.groundtruth import associate
 
+    if truth.times is not None and times is None:  # a run's trajectory.tum beside it has the times
+        print(f"--est {est} has no timestamps: its poses are paired with --gt's one to one, in order")
     if truth.times is None or times is None:
         if len(truth.positions) > len(E) and first_frames_of(gt, est, len(E)):
             print(

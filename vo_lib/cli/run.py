@@ -153,6 +153,18 @@ def _write_csv(path: Path, rows, cls) -> None:
             writer.writerow(asdict(row))
 
 
+def _truth_record(seq) -> dict | None:
+    """The file a run's errors were taken from (poses or positions) and its sha256, for its marker:
+    ``evaluate`` refuses that file once it has changed."""
+    truth_file = seq.truth_file or (seq.path / "poses.txt" if seq.poses is not None else None)
+    if truth_file is None:
+        return None
+    return {
+        "path": str(Path(truth_file).resolve()),
+        "sha256": hashlib.sha256(Path(truth_file).read_bytes()).hexdigest(),
+    }
+
+
 def _plot(
     path: Path, times, estimate, truth, odometry, title: str, odometry_label: str = "track odometry"
 ) -> None:
@@ -264,14 +276,12 @@ def _run_into(
         print_error_table(
             report, len(result.flagged), report["errors_3d"], odometry_name(vehicle), seq.truth_file
         )
-    truth_file = Path(seq.truth_file or seq.path / "poses.txt").resolve()  # what the errors were taken from
-    truth_record = (
-        {"path": str(truth_file), "sha256": hashlib.sha256(truth_file.read_bytes()).hexdigest()}
-        if truth_file.is_file()
-        else None
-    )
     output.commit(
-        sequence=str(seq.path.resolve()), frames=n, seed=seed, odometry=not no_odometry, truth=truth_record
+        sequence=str(seq.path.resolve()),
+        frames=n,
+        seed=seed,
+        odometry=not no_odometry,
+        truth=_truth_record(seq),
     )
     return report
 

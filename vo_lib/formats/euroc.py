@@ -204,8 +204,7 @@ def read_asl(path, groundtruth=None, frames: int | None = None) -> Sequence:
     if truth_path is not None:
         poses = _truth_into_camera(truth_path, seconds, rect.T_body_rect, manifest)
     since_first = (stamps - stamps[0]) * NANOSECONDS  # from whole nanoseconds: exact to 1 ns
-    truth_file = truth_path if poses is not None else None
-    return Sequence(root, rect.camera, since_first, left, right, poses, None, manifest, rect, truth_file)
+    return Sequence(root, rect.camera, since_first, left, right, poses, None, manifest, rect, truth_path)
 
 
 def _truth_into_camera(truth_path: Path, seconds, T_body_rect, manifest: dict):

@@ -115,7 +115,8 @@ class Sequence:
     manifest: dict = field(default_factory=dict)
     #: Undistorts and rectifies a raw pair (a rig read as it records), or None: already rectified.
     rectify: Callable[[np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]] | None = None
-    #: The file ``poses`` were read from where the layout offers several (an ASL recording's).
+    #: The file the ground truth (poses, or positions only) was read from where the layout offers
+    #: several (an ASL recording's).
     truth_file: Path | None = None
 
     #: Frames decoded ahead, on a reader thread, of the one asked for (0: none).

@@ -82,14 +82,14 @@ class SequenceWriter:
 
     def carry(self, source: Path, names=CARRIED) -> None:
         """Copy those of the files and folders ``names`` that ``source`` holds into the sequence
-        (of a folder, the files directly in it), unchanged (they hold one row per frame, or none:
+        (of ``raw_calib``, KITTI's ``calib_*.txt`` files), unchanged (they hold one row per frame, or none:
         a copy of every frame keeps them right)."""
         for name in names:
             src = Path(source) / name
             try:
-                if src.is_dir():  # its files, what is read of it (not what links to folders in it lead to)
+                if src.is_dir():  # what is read of it: KITTI's calib_*.txt, not what else it holds
                     (self._tmp / name).mkdir()  # with the umask's permissions, not src's: it can be replaced
-                    for file in [f for f in sorted(src.iterdir()) if f.is_file()]:
+                    for file in [f for f in sorted(src.glob("calib_*.txt")) if f.is_file()]:
                         shutil.copyfile(file, self._tmp / name / file.name)
                 elif src.is_file():
                     shutil.copyfile(src, self._tmp / name)
