@@ -51,6 +51,11 @@ def test_a_reader_closing_the_pipe_gets_one_line_not_a_traceback():
     assert proc.wait(timeout=60) == 128 + signal.SIGPIPE
     expected = "python -m vo_lib run: stopped: whatever read its output closed the pipe"
     assert err.strip().splitlines() == [expected]
+    # 2>&1: the line cannot be written either, and the exit status is still SIGPIPE's
+    proc = subprocess.Popen([sys.executable, "-c", script], stdout=subprocess.PIPE, stderr=subprocess.STDOUT)
+    proc.stdout.readline()
+    proc.stdout.close()
+    assert proc.wait(timeout=60) == 128 + signal.SIGPIPE
 
 
 def test_bench_real_reports_the_fastest_run_and_refuses_runs_that_differ():

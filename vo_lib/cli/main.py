@@ -407,7 +407,8 @@ def _run_parsed(args, command: str) -> int:
     except BrokenPipeError:  # e.g. piped into `head`: the reader left, not a fault of the output
         # Python's advice: point stdout at devnull so the interpreter's own flush at exit is quiet
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
-        print(f"{command}: stopped: whatever read its output closed the pipe", file=sys.stderr)
+        with contextlib.suppress(OSError):  # stderr may be the same closed pipe (2>&1)
+            print(f"{command}: stopped: whatever read its output closed the pipe", file=sys.stderr)
         return 128 + signal.SIGPIPE
     except OSError as exc:  # e.g. a full disk while writing: the output was not put in place
         print(f"{command}: error: {one_line(_os_error(exc, getattr(args, 'out', None)))}", file=sys.stderr)
