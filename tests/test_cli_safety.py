@@ -1325,6 +1325,44 @@ def test_a_previous_output_that_cannot_be_deleted_is_a_notice_after_the_swap(tmp
     assert "its previous contents stay in" in capsys.readouterr().err
 
 
+def test_a_signal_between_the_two_renames_waits_for_the_second(tmp_path, monkeypatch):
+    """Where two folders cannot be swapped in one step, SIGTERM (or Ctrl-C) landing between the
+    two renames is held back until the new folder has taken the name: the name is never missing."""
+    from vo_lib import atomic
+    from vo_lib.outputs import OutputFolder
+
+    class Stopped(Exception):
+        pass
+
+    def stop(signum, frame):
+        raise Stopped
+
+    rename, calls = os.rename, []
+
+    def rename_then_signal(src, dst):
+        rename(src, dst)
+        calls.append(dst)
+        if len(calls) == 1:
+            os.kill(os.getpid(), signal.SIGTERM)
+
+    target = tmp_path / "out"
+    previous = signal.signal(signal.SIGTERM, stop)
+    try:
+        for text in ("old\n", "new\n"):
+            with OutputFolder(target, "vo_lib run") as out:
+                (out.path / "poses.txt").write_text(text)
+                if text == "new\n":
+                    monkeypatch.setattr(atomic, "_exchange", lambda a, b: False)
+                    monkeypatch.setattr(atomic.os, "rename", rename_then_signal)
+                    with pytest.raises(Stopped):
+                        out.commit()
+                else:
+                    out.commit()
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+    assert (target / "poses.txt").read_text() == "new\n" and len(calls) == 2
+
+
 def test_a_signal_after_the_swap_leaves_the_new_folder_and_says_what_it_replaced(
     tmp_path, monkeypatch, capsys
 ):

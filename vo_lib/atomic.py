@@ -22,6 +22,7 @@ import os
 import re
 import secrets
 import shutil
+import signal
 import socket
 import sys
 import tempfile
@@ -176,9 +177,23 @@ def swap_in(complete: Path, target: Path) -> Path | None:
     if _exchange(complete, target):
         return complete
     aside = target.with_name(f"{temporary_prefix(target.name)}{secrets.token_hex(4)}.old")
-    os.rename(target, aside)  # two renames; a kill between them is undone by restore()
-    os.rename(complete, target)
+    with _signals_held():  # Ctrl-C or SIGTERM waits for both; a kill between them is undone by restore()
+        os.rename(target, aside)
+        os.rename(complete, target)
     return aside
+
+
+@contextlib.contextmanager
+def _signals_held():
+    """SIGINT and SIGTERM held back meanwhile (delivered after), where the system can hold them."""
+    if not hasattr(signal, "pthread_sigmask"):  # Windows
+        yield
+        return
+    previous = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT, signal.SIGTERM})
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, previous)
 
 
 def remove_replaced(replaced: Path | None, target: Path) -> None:
