@@ -95,7 +95,8 @@ class SequenceWriter:
                     shutil.copyfile(src, self._tmp / name)
             except OSError as exc:
                 raise OutputError(
-                    f"{self.label}: cannot copy {src} ({exc.strerror or str(exc)[:120]}); nothing was written"
+                    f"{self.label}: cannot copy {exc.filename or src} ({exc.strerror or str(exc)[:120]}); "
+                    "nothing was written"
                 ) from None
 
     def close(self, times, poses=None, odometry=None, manifest: dict | None = None) -> Path:
