@@ -168,16 +168,22 @@ def run_once(out: str):
     return setup
 
 
-def stale_temporary(ws):
+def dead_pid() -> int:
+    """The number of a process that has ended."""
     dead = subprocess.Popen([sys.executable, "-c", "pass"])
     dead.wait()
-    stale = ws / f".out.vo_lib-{dead.pid}-{HOST}-abcd1234.tmp"
+    return dead.pid
+
+
+def stale_temporary(ws):
+    pid = dead_pid()
+    stale = ws / f".out.vo_lib-{pid}-{HOST}-abcd1234.tmp"
     stale.mkdir()
     (stale / "poses.txt").write_text("half\n")
     foreign = ws / ".out.someone-else.tmp"  # not ours: must survive
     foreign.mkdir()
     (foreign / "keep.txt").write_text("keep\n")
-    other = ws / f".notes.vo_lib-{dead.pid}-{HOST}-mine.tmp"  # beside another name: not judged
+    other = ws / f".notes.vo_lib-{pid}-{HOST}-mine.tmp"  # beside another name: not judged
     other.mkdir()
     (other / "keep.txt").write_text("keep\n")
 
@@ -186,9 +192,7 @@ def named_like_a_temporary(random: str, beside: str):
     """A user's folder named as a dead process's temporary beside ``beside`` would be."""
 
     def setup(ws):
-        dead = subprocess.Popen([sys.executable, "-c", "pass"])
-        dead.wait()
-        folder = ws / f".{beside}.vo_lib-{dead.pid}-{HOST}-{random}.tmp"
+        folder = ws / f".{beside}.vo_lib-{dead_pid()}-{HOST}-{random}.tmp"
         folder.mkdir()
         (folder / "keep.txt").write_text("keep\n")
 
