@@ -26,6 +26,7 @@ import signal
 import socket
 import sys
 import tempfile
+import threading
 from pathlib import Path
 
 #: A temporary's name: its random part is what ``tempfile`` or ``secrets.token_hex(4)`` gives, nothing else.
@@ -185,15 +186,22 @@ def swap_in(complete: Path, target: Path) -> Path | None:
 
 @contextlib.contextmanager
 def _signals_held():
-    """SIGINT and SIGTERM held back meanwhile (delivered after), where the system can hold them."""
-    if not hasattr(signal, "pthread_sigmask"):  # Windows
+    """SIGINT and SIGTERM held back meanwhile and raised again after. Python runs its signal
+    handlers in the main thread, whichever thread the signal reached, so they are held there by
+    handlers that only note the signal (in another thread, nothing is held)."""
+    if threading.current_thread() is not threading.main_thread():
         yield
         return
-    previous = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT, signal.SIGTERM})
+    held: list[int] = []
+    kinds = (signal.SIGINT, signal.SIGTERM)
+    previous = {kind: signal.signal(kind, lambda signum, frame: held.append(signum)) for kind in kinds}
     try:
         yield
     finally:
-        signal.pthread_sigmask(signal.SIG_SETMASK, previous)
+        for kind, handler in previous.items():
+            signal.signal(kind, signal.SIG_DFL if handler is None else handler)
+        for kind in held[:1]:
+            signal.raise_signal(kind)
 
 
 def remove_replaced(replaced: Path | None, target: Path) -> None:
