@@ -733,6 +733,13 @@ def test_a_rig_with_positions_only_is_scored_by_its_aligned_prism(tmp_path, caps
     assert main(["evaluate", "--gt", str(gt), "--est", str(est)]) == 2
     assert "changed since --est" in capsys.readouterr().err
     shutil.copy(EUROC / "mav0" / "leica0" / "data.csv", gt)
+    # and the calibration that moved them, and the run's images with it: refused once changed too
+    calibration = rig / "mav0" / "cam1" / "sensor.yaml"
+    calibration.write_text(calibration.read_text() + "# recalibrated\n")
+    assert main(["evaluate", "--gt", str(gt), "--est", str(est)]) == 2
+    assert "(its sensor.yaml files) changed since that run" in capsys.readouterr().err
+    shutil.copy(EUROC / "mav0" / "cam1" / "sensor.yaml", calibration)
+    assert main(["evaluate", "--gt", str(gt), "--est", str(est)]) == 0
     # without the tracker's sensor.yaml, its lever arm is taken as zero, and a notice says so
     (rig / "mav0" / "leica0" / "sensor.yaml").unlink()
     assert main(["run", "--sequence", str(rig), "--out", str(tmp_path / "out")]) == 0

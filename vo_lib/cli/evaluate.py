@@ -11,7 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
-from vo_lib.cli.run import UsageError
+from vo_lib.cli.run import UsageError, calibration_digest
 from vo_lib.formats.poses import TrajectoryError, read_trajectory
 from vo_lib.outputs import read_marker
 
@@ -41,7 +41,15 @@ def check_against_its_run(gt: str, est: str) -> None:
     (its marker records the file's sha256), and say when ``--gt`` is another file than that one."""
     marker = run_marker(est)
     truth = marker.get("truth")
-    if not isinstance(truth, dict) or _sha256(gt) == truth.get("sha256"):
+    if not isinstance(truth, dict):
+        return
+    now = calibration_digest(Path(str(marker.get("sequence"))), Path(str(truth.get("path"))))
+    if now and truth.get("calibration") and now != truth.get("calibration"):
+        raise UsageError(
+            f"--est {est}: the calibration of {marker.get('sequence')!r} (its sensor.yaml files) changed "
+            "since that run; run it again"
+        )
+    if _sha256(gt) == truth.get("sha256"):
         return
     if Path(gt).resolve() == Path(str(truth.get("path"))):
         raise UsageError(

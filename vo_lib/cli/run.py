@@ -153,15 +153,34 @@ def _write_csv(path: Path, rows, cls) -> None:
             writer.writerow(asdict(row))
 
 
+def calibration_digest(sequence: Path, truth_file: Path) -> str | None:
+    """sha256 of what moves an ASL recording's truth into its rectified left camera: both cameras'
+    ``sensor.yaml`` and the one beside the truth (None for another layout, or a recording gone)."""
+    from vo_lib.formats.euroc import mav0_of
+
+    mav0 = mav0_of(sequence)
+    if mav0 is None:
+        return None
+    digest = hashlib.sha256()
+    for file in (
+        mav0 / "cam0" / "sensor.yaml",
+        mav0 / "cam1" / "sensor.yaml",
+        truth_file.parent / "sensor.yaml",
+    ):
+        digest.update(file.read_bytes() if file.is_file() else b"-")
+    return digest.hexdigest()
+
+
 def _truth_record(seq) -> dict | None:
-    """The file a run's errors were taken from (poses or positions) and its sha256, for its marker:
-    ``evaluate`` refuses that file once it has changed."""
+    """The file a run's errors were taken from (poses or positions), its sha256 and that of the
+    calibration that moved it, for its marker: ``evaluate`` refuses them once changed."""
     truth_file = seq.truth_file or (seq.path / "poses.txt" if seq.poses is not None else None)
     if truth_file is None:
         return None
     return {
         "path": str(Path(truth_file).resolve()),
         "sha256": hashlib.sha256(Path(truth_file).read_bytes()).hexdigest(),
+        "calibration": calibration_digest(seq.path, Path(truth_file)),
     }
 
 
