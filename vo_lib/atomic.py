@@ -200,8 +200,8 @@ def _signals_held():
     finally:
         for kind, handler in previous.items():
             signal.signal(kind, signal.SIG_DFL if handler is None else handler)
-        for kind in held[:1]:
-            signal.raise_signal(kind)
+        if held:
+            signal.raise_signal(held[0])
 
 
 def remove_replaced(replaced: Path | None, target: Path) -> None:

@@ -6,18 +6,13 @@ arguments and bad input print one line and exit with status 2 (:class:`~vo_lib.c
 
 from __future__ import annotations
 
-import hashlib
 from pathlib import Path
 
 import numpy as np
 
-from vo_lib.cli.run import UsageError, calibration_digest
+from vo_lib.cli.run import UsageError, calibration_digest, file_sha256
 from vo_lib.formats.poses import TrajectoryError, read_trajectory
 from vo_lib.outputs import read_marker
-
-
-def _sha256(path) -> str:
-    return hashlib.sha256(Path(path).read_bytes()).hexdigest()
 
 
 def run_marker(est: str) -> dict:
@@ -25,21 +20,20 @@ def run_marker(est: str) -> dict:
     it (the checksum the marker records); else an empty dict."""
     marker = read_marker(Path(est).parent) or {}
     files = marker.get("files") if marker.get("written_by") == "vo_lib run" else None
-    return marker if isinstance(files, dict) and files.get(Path(est).name) == _sha256(est) else {}
+    return marker if isinstance(files, dict) and files.get(Path(est).name) == file_sha256(est) else {}
 
 
-def first_frames_of(gt: str, est: str, n: int) -> bool:
-    """Whether ``est`` is an output of ``run --frames n`` on the sequence whose ``poses.txt`` is
-    ``gt``, as that output's marker records the run."""
-    marker = run_marker(est)
+def first_frames_of(gt: str, marker: dict, n: int) -> bool:
+    """Whether the run of ``marker`` (:func:`run_marker`) is a ``run --frames n`` on the sequence
+    whose ``poses.txt`` is ``gt``."""
     sequence = Path(str(marker.get("sequence")))
     return marker.get("frames") == n and Path(gt).resolve() == sequence / "poses.txt"
 
 
-def check_against_its_run(gt: str, est: str) -> None:
-    """Refuse a ``--gt`` that changed since the run that wrote ``--est`` took its errors from it
-    (its marker records the file's sha256), and say when ``--gt`` is another file than that one."""
-    marker = run_marker(est)
+def check_against_its_run(gt: str, est: str, marker: dict) -> None:
+    """Refuse a ``--gt`` that changed since the run that wrote ``--est`` (``marker``:
+    :func:`run_marker`) took its errors from it, or a run whose calibration changed since; say when
+    ``--gt`` is another file than that run's truth."""
     truth = marker.get("truth")
     if not isinstance(truth, dict):
         return
@@ -49,7 +43,7 @@ def check_against_its_run(gt: str, est: str) -> None:
             f"--est {est}: the calibration of {marker.get('sequence')!r} (its sensor.yaml files) changed "
             "since that run; run it again"
         )
-    if _sha256(gt) == truth.get("sha256"):
+    if file_sha256(gt) == truth.get("sha256"):
         return
     if Path(gt).resolve() == Path(str(truth.get("path"))):
         raise UsageError(
@@ -63,7 +57,9 @@ def check_against_its_run(gt: str, est: str) -> None:
     )
 
 
-def _associated(truth, gt: str, est: str, times, E: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def _associated(
+    truth, gt: str, est: str, times, E: np.ndarray, marker: dict
+) -> tuple[np.ndarray, np.ndarray]:
     """Indices ``(i_est, i_gt)`` of the poses compared: associated by timestamp where both files
     carry them (as evo does), else one to one, the counts equal."""
     from vo_lib.formats.groundtruth import associate
@@ -71,7 +67,7 @@ def _associated(truth, gt: str, est: str, times, E: np.ndarray) -> tuple[np.ndar
     if truth.times is not None and times is None:  # a run's trajectory.tum beside it has the times
         print(f"--est {est} has no timestamps: its poses are paired with --gt's one to one, in order")
     if truth.times is None or times is None:
-        if len(truth.positions) > len(E) and first_frames_of(gt, est, len(E)):
+        if len(truth.positions) > len(E) and first_frames_of(gt, marker, len(E)):
             print(
                 f"--est {est} is a run of the first {len(E)} frames of --gt's sequence: compared with those"
             )
@@ -139,8 +135,9 @@ def evaluate_command(gt: str, est: str, segments=None, extrinsic_of: str | None 
         times, E = read_trajectory(est, min_poses=3)  # an alignment needs three
     except TrajectoryError as exc:
         raise UsageError(f"--est {exc}") from None
-    check_against_its_run(gt, est)
-    i_est, i_gt = _associated(truth, gt, est, times, E)
+    marker = run_marker(est)  # of the run that wrote --est, if one did
+    check_against_its_run(gt, est, marker)
+    i_est, i_gt = _associated(truth, gt, est, times, E, marker)
     if truth.times is None and extrinsic_of is not None:
         raise UsageError(
             f"--extrinsic-of {extrinsic_of}: --gt {gt} holds KITTI poses, which are a camera's already; "

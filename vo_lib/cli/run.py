@@ -153,6 +153,11 @@ def _write_csv(path: Path, rows, cls) -> None:
             writer.writerow(asdict(row))
 
 
+def file_sha256(path) -> str:
+    """The sha256 of the file ``path``, in hex."""
+    return hashlib.sha256(Path(path).read_bytes()).hexdigest()
+
+
 def calibration_digest(sequence: Path, truth_file: Path) -> str | None:
     """sha256 of what moves an ASL recording's truth into its rectified left camera: both cameras'
     ``sensor.yaml`` and the one beside the truth (None for another layout, or a recording gone)."""
@@ -179,7 +184,7 @@ def _truth_record(seq) -> dict | None:
         return None
     return {
         "path": str(Path(truth_file).resolve()),
-        "sha256": hashlib.sha256(Path(truth_file).read_bytes()).hexdigest(),
+        "sha256": file_sha256(truth_file),
         "calibration": calibration_digest(seq.path, Path(truth_file)),
     }
 
