@@ -230,7 +230,7 @@ assert abs(median_norm - 0.674) < 0.1  # the half-normal's median, not a unit no
 # replaces a share of the inliers of a synthetic match set with *near misses* (the current point
 # moved 2–8 px along its row: a match to a similar corner nearby, as the wrong matches of notebook
 # 05 are) and with points on a *moving object* (the leftmost points of the view slide 6 px sideways
-# between the frames, like `vo_lib.sim.disturbances.MovingObject`), and keeps some random pixels.
+# between the frames, like the moving board of the pipeline tests), and keeps some random pixels.
 
 # %%
 print(

@@ -34,15 +34,11 @@ from hypothesis import strategies as st
 from vo_lib.atomic import HOST
 from vo_lib.camera import StereoCamera
 from vo_lib.cli.main import main
-from vo_lib.formats.poses import TrajectoryError, read_trajectory
-from vo_lib.formats.sequence import (
-    SequenceError,
-    read_calib,
-    read_poses,
-    read_sequence,
-    read_times,
-    write_sequence,
-)
+from vo_lib.formats.frame_files import SequenceError, read_calib, read_poses, read_times
+from vo_lib.formats.groundtruth import read_trajectory
+from vo_lib.formats.poses import TrajectoryError
+from vo_lib.formats.sequence import read_sequence
+from vo_lib.formats.sequence_writer import write_sequence
 from vo_lib.outputs import MARKER
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -477,8 +473,10 @@ CASES = [
     Case("evaluate-segments-negative", "EVAL --segments 0,-1", 2, "lengths in metres"),
     Case("evaluate-segments-nan", "EVAL --segments nan", 2, "each 0.001 to 1e+06"),
     Case("evaluate-segments-tiny", "EVAL --segments 1e-300", 2, "each 0.001 to 1e+06"),
-    Case("evaluate-missing-file", "evaluate --gt missing.txt --est est.txt", 2, "no such trajectory file"),
-    Case("evaluate-folder", "evaluate --gt thesis --est est.txt", 2, "a folder, not a trajectory"),
+    Case("evaluate-missing-file", "evaluate --gt missing.txt --est est.txt", 2,
+        "missing.txt: missing (the trajectory)"),
+    Case("evaluate-folder", "evaluate --gt thesis --est est.txt", 2,
+        "thesis: a folder, where the trajectory"),
     Case("evaluate-zero-quaternion", "EVAL", 2, "line 2: the quaternion",
         edit("est.txt", "0 0 0 0 0 0 0 1\n0.1 0 0 0 0 0 0 0\n" + "0.2 0 0 0 0 0 0 1\n" * 3)),
     Case("evaluate-not-rotation", "EVAL", 2, "est.txt, line 1: the first three columns are not a rotation",

@@ -3,7 +3,8 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from vo_lib.evaluation import ate, ate_planar, key_position_errors, kitti_segment_errors, rpe, umeyama
-from vo_lib.formats.poses import read_trajectory, write_kitti_poses, write_tum
+from vo_lib.formats.groundtruth import read_trajectory
+from vo_lib.formats.poses import write_kitti_poses, write_tum
 
 
 def random_trajectory(rng, n=200):
@@ -361,8 +362,7 @@ def test_evaluate_refuses_or_says_undefined_what_it_cannot_measure(tmp_path, rng
 
 def test_association_keeps_a_pair_exactly_max_diff_apart_as_evo_and_old_mac_lines_read(tmp_path, rng):
     from vo_lib.cli.main import _segments
-    from vo_lib.formats.groundtruth import associate
-    from vo_lib.formats.poses import read_trajectory
+    from vo_lib.formats.groundtruth import associate, read_trajectory
 
     assert associate([0.01, 0.5], [0.0, 0.52, 1.0])[0].tolist() == [0]
     assert _segments("5,1,3,1") == (1.0, 3.0, 5.0)  # each length once, in order, as the label says

@@ -58,5 +58,5 @@ def test_noise_is_seeded_and_scaled():
 def test_bad_parameters():
     with pytest.raises(ValueError, match="max_range must be > 0"):
         LaserScanner(max_range=0)
-    with pytest.raises(ValueError, match="range_sigma and bearing_sigma must be >= 0"):
+    with pytest.raises(ValueError, match="range_sigma must be >= 0"):
         LaserScanner(range_sigma=-1)

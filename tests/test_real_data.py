@@ -289,8 +289,8 @@ def test_asl_recording_is_rectified_and_its_truth_moved_into_the_left_camera():
         ),
         ("twice", "cam0/sensor.yaml, line 22: not valid YAML (key 'intrinsics' given twice)"),
         ("empty", "cam1/sensor.yaml: expected YAML keys (T_BS, intrinsics, ...), got an empty file"),
-        ("folder", "cam1/sensor.yaml: a folder; expected the sensor's calibration file"),
-        ("latin-1", "cam0/data.csv: byte 4 is not UTF-8; expected text in UTF-8"),
+        ("folder", "cam1/sensor.yaml: a folder, where the sensor's calibration"),
+        ("latin-1", "cam0/data.csv: not a text file (byte 3 is not UTF-8)"),
         ("superscript", "cam0/data.csv, line 3: expected 'timestamp [ns],filename', got '14036365848"),
         ("overflow", "cam0/data.csv, line 3: expected 'timestamp [ns],filename', got '99999999999"),
         ("outside", "cam0/data.csv, line 3: '../../cam1/data/1403636584813555456.png'; expected a file name"),
@@ -507,7 +507,8 @@ def test_evaluate_moves_a_truth_of_the_recording_into_its_rectified_camera(tmp_p
     from vo_lib.cli.main import main
     from vo_lib.data import load_sequence
     from vo_lib.evaluation import ate_positions
-    from vo_lib.formats.euroc import body_to_rectified_camera, truth_extrinsic
+    from vo_lib.formats.asl_calibration import truth_extrinsic
+    from vo_lib.formats.euroc import body_to_rectified_camera
     from vo_lib.formats.groundtruth import associate, read_groundtruth
 
     seq = load_sequence(EUROC)

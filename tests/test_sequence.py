@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 
 from vo_lib.camera import StereoCamera
-from vo_lib.formats.sequence import SequenceError, SequenceWriter, read_sequence, write_sequence
+from vo_lib.formats.sequence import SequenceError, read_sequence
+from vo_lib.formats.sequence_writer import SequenceWriter, write_sequence
 
 FIXTURE = Path(__file__).resolve().parents[1] / "data" / "fixtures" / "kitti_tiny"
 

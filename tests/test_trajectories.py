@@ -141,21 +141,6 @@ def test_same_seed_same_skid():
     np.testing.assert_array_equal(a.attitude, b.attitude)
 
 
-@pytest.mark.parametrize(
-    "kwargs, message",
-    [
-        ({"contact_grip": 1.5}, "contact_grip"),
-        ({"contact_frames": 0}, "contact_frames"),
-        ({"tilt_deg": (5.0, 2.0)}, "tilt_deg"),
-        ({"icr_sigma": -0.1}, "icr_sigma"),
-        ({"contact_rate": float("nan")}, "contact_rate"),
-    ],
-)
-def test_bad_ground_parameters(kwargs, message):
-    with pytest.raises(ValueError, match=message):
-        TrackGround(**kwargs)
-
-
 def test_a_skidding_spot_turn_still_counts_as_one():
     from vo_lib.evaluation import is_spot_turn, planar_path_length
 

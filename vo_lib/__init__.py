@@ -8,7 +8,7 @@ One folder per idea; imports run downwards only (import-linter contracts in ``py
     stereo_vo/        [Zhao]: stereo VO, 1-point RANSAC, Kalman filter      (the three wings;
     line_slam/        [Yan 2020]: line-feature EKF-SLAM, bisection observer      independent, but
     lidar_tracking/   [Yuan]: VO-assisted LIDAR pose tracking                it may use stereo_vo)
-    sim/              world, renderer, laser, drives with slip, disturbances, named samples
+    sim/              world, renderer, laser, drives with slip, named samples
     models/ formats/ viz/   crawler tracks and bicycle; sequences and pose files; figures
     camera.py geometry.py evaluation.py   shared: stereo rig, frames and poses, trajectory errors
     comparison.py     methods compared over seeds (share, bootstrap interval); the χ² band rule

@@ -317,7 +317,7 @@ def convert_command(sequence: str, to: str, out: str, force: bool = False) -> No
     does, and its position-only truth) and its odometry files as they are (``odometry.txt``,
     ``oxts.txt``, ``raw_calib/``: :data:`~vo_lib.formats.sequence_writer.CARRIED`)."""
     from vo_lib.data import load_sequence
-    from vo_lib.formats.sequence import SequenceWriter
+    from vo_lib.formats.sequence_writer import SequenceWriter
 
     if to != "kitti":
         raise UsageError(f"--to {to}: expected kitti")

@@ -18,7 +18,7 @@ from scipy.spatial.transform import Rotation
 
 from vo_lib.atomic import notice
 from vo_lib.camera import StereoCamera
-from vo_lib.formats.frame_files import SequenceError
+from vo_lib.formats.frame_files import SequenceError, read_text
 from vo_lib.formats.poses import rotation_problem
 
 #: Shortest and longest distance between the two cameras (metres) that make a stereo rig: a
@@ -34,8 +34,7 @@ MIN_VALID_SHARE = 0.25
 MAX_LEVER_ARM_M = 10.0
 
 
-class AslError(SequenceError):
-    """An ASL folder that cannot be read: the file (and key or line) named, and what was expected."""
+AslError = SequenceError
 
 
 @dataclass(frozen=True)
@@ -84,14 +83,9 @@ class _UniqueKeys(yaml.SafeLoader):
 
 
 def _yaml(path: Path) -> dict:
-    if path.is_dir():
-        raise AslError(f"{path}: a folder; expected the sensor's calibration file")
-    if not path.is_file():
-        raise AslError(f"{path}: missing (the camera's calibration: T_BS, intrinsics, distortion)")
+    text = read_text(path, "the sensor's calibration (T_BS, intrinsics, distortion)")
     try:
-        data = yaml.load(path.read_text(encoding="utf-8"), Loader=_UniqueKeys)  # noqa: S506 (a SafeLoader)
-    except (OSError, UnicodeDecodeError) as exc:
-        raise AslError(f"{path}: cannot read ({exc})") from None
+        data = yaml.load(text, Loader=_UniqueKeys)  # noqa: S506 (a SafeLoader)
     except (yaml.YAMLError, RecursionError, ValueError) as exc:  # nested too deep, a number too long
         mark = getattr(exc, "problem_mark", None)
         where = f", line {mark.line + 1}" if mark is not None else ""

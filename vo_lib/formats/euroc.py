@@ -25,38 +25,11 @@ from pathlib import Path
 
 import numpy as np
 
-from vo_lib.formats.asl_calibration import (
-    AslError,
-    CameraCalibration,
-    Rectification,
-    read_camera_yaml,
-    rectify,
-    truth_extrinsic,
-)
-from vo_lib.formats.groundtruth import (
-    GroundTruthError,
-    TruthKind,
-    covering,
-    read_groundtruth,
-    to_camera,
-)
+from vo_lib.formats.asl_calibration import AslError, read_camera_yaml, rectify, truth_extrinsic
+from vo_lib.formats.groundtruth import TruthKind, covering, read_groundtruth, to_camera
 from vo_lib.formats.images import check_headers
+from vo_lib.formats.poses import read_text
 from vo_lib.formats.sequence import Sequence, check_frame_spacing
-
-__all__ = [
-    "AslError",
-    "CameraCalibration",
-    "Rectification",
-    "body_to_rectified_camera",
-    "mav0_of",
-    "pair_by_timestamp",
-    "read_asl",
-    "read_camera_yaml",
-    "read_image_list",
-    "rectify",
-    "tracked_to_camera",
-    "truth_extrinsic",
-]
 
 NANOSECONDS = 1e-9
 #: Ground-truth files looked for under ``mav0``, in order: 6-DoF first, then positions only.
@@ -81,19 +54,7 @@ def mav0_of(path) -> Path | None:
 def read_image_list(camera_dir: Path) -> tuple[np.ndarray, list[Path]]:
     """``(timestamps in ns, image files)`` of one camera from its ``data.csv``."""
     csv_path = camera_dir / "data.csv"
-    if not camera_dir.is_dir():
-        raise AslError(f"{camera_dir}: missing camera folder (data/, data.csv, sensor.yaml)")
-    if not csv_path.is_file():
-        what = "a folder" if csv_path.is_dir() else "missing"
-        raise AslError(
-            f"{csv_path}: {what}; expected a file with one line 'timestamp [ns],filename' per image"
-        )
-    try:
-        text = csv_path.read_text(encoding="utf-8-sig")
-    except UnicodeDecodeError as exc:
-        raise AslError(
-            f"{csv_path}: byte {exc.start + 1} is not UTF-8; expected text in UTF-8 (or ASCII)"
-        ) from None
+    text = read_text(csv_path, "one line 'timestamp [ns],filename' per image")
     stamps, files, lines, listed = [], [], [], {}
     for n, line in enumerate(text.split("\n"), start=1):
         line = line.strip()
@@ -147,12 +108,20 @@ def find_groundtruth(mav0: Path) -> Path | None:
     return next((mav0 / name for name in GROUND_TRUTH_FILES if (mav0 / name).is_file()), None)
 
 
-def body_to_rectified_camera(path) -> np.ndarray:
-    """``T_body_rect``: the rectified left camera of the ASL recording at ``path`` in its body frame."""
+def _calibration(path) -> tuple[Path, list]:
+    """The ``mav0`` folder of the recording at ``path`` and its two cameras' calibrations."""
     mav0 = mav0_of(path)
     if mav0 is None:
         raise AslError(f"{path}: no mav0/cam0 or cam0 folder; expected the ASL layout")
-    calib = [read_camera_yaml(mav0 / side / "sensor.yaml") for side in ("cam0", "cam1")]
+    for side in ("cam0", "cam1"):
+        if not (mav0 / side).is_dir():
+            raise AslError(f"{mav0 / side}: missing camera folder (data/, data.csv, sensor.yaml)")
+    return mav0, [read_camera_yaml(mav0 / side / "sensor.yaml") for side in ("cam0", "cam1")]
+
+
+def body_to_rectified_camera(path) -> np.ndarray:
+    """``T_body_rect``: the rectified left camera of the ASL recording at ``path`` in its body frame."""
+    mav0, calib = _calibration(path)
     return rectify(*calib, mav0).T_body_rect
 
 
@@ -177,13 +146,7 @@ def read_asl(path, groundtruth=None, frames: int | None = None) -> Sequence:
     ``frames``: read only the first so many pairs.
     """
     root = Path(path)
-    mav0 = mav0_of(root)
-    if mav0 is None:
-        raise AslError(f"{root}: no mav0/cam0 or cam0 folder; expected the ASL layout")
-    for side in ("cam0", "cam1"):
-        if not (mav0 / side).is_dir():
-            raise AslError(f"{mav0 / side}: missing camera folder (data/, data.csv, sensor.yaml)")
-    calib = [read_camera_yaml(mav0 / side / "sensor.yaml") for side in ("cam0", "cam1")]
+    mav0, calib = _calibration(root)
     rect = rectify(*calib, mav0)
     stamps, left, right = (x[:frames] for x in pair_by_timestamp(mav0))
     width, height = check_headers(left, right)  # every image, before the run: none fails late
@@ -210,11 +173,8 @@ def read_asl(path, groundtruth=None, frames: int | None = None) -> Sequence:
 def _truth_into_camera(truth_path: Path, seconds, T_body_rect, manifest: dict):
     """The ground truth at the images, in the rectified left camera (6-DoF); or, for positions
     only, the positions and the lever arm put into ``manifest``."""
-    try:
-        truth = read_groundtruth(truth_path)
-        i_img, i_gt = covering(truth, seconds)
-    except GroundTruthError as exc:
-        raise AslError(str(exc)) from None
+    truth = read_groundtruth(truth_path)
+    i_img, i_gt = covering(truth, seconds)
     X = tracked_to_camera(truth_path, T_body_rect)
     if truth.kind is TruthKind.POSES:
         return to_camera(truth.poses[i_gt], X)

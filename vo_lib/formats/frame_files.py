@@ -13,11 +13,11 @@ from pathlib import Path
 
 import numpy as np
 
-from vo_lib.formats.poses import TrajectoryError, read_trajectory, rotation_problem
+from vo_lib.formats.groundtruth import read_trajectory
+from vo_lib.formats.poses import TrajectoryError, check_file, data_lines, read_text, rotation_problem
 
-
-class SequenceError(ValueError):
-    """A sequence on disk is missing something or holds something malformed."""
+SequenceError = TrajectoryError
+required = check_file
 
 
 #: Bytes a line of a per-frame file may take on average (a KITTI pose line is about 200, an OXTS
@@ -28,18 +28,9 @@ MAX_LINE_BYTES = 1024
 def present(path: Path, what: str) -> bool:
     """Whether the optional file ``path`` is there; a folder (or anything but a file) in its
     place raises :class:`SequenceError`, so that it is not silently ignored."""
-    if not os.path.lexists(path):
-        return False
-    if not Path(path).is_file():
-        kind = "a folder" if Path(path).is_dir() else "not a regular file"
-        raise SequenceError(f"{path}: {kind}, where {what} should be a file")
-    return True
-
-
-def required(path: Path, what: str) -> None:
-    """Raise :class:`SequenceError` unless ``path`` is a file: "missing", or what is there instead."""
-    if not present(path, what):
-        raise SequenceError(f"{path}: missing ({what})")
+    if os.path.lexists(path):
+        check_file(path, what)
+    return os.path.lexists(path)
 
 
 def check_size(path: Path, frames: int, what: str) -> None:
@@ -53,7 +44,7 @@ def check_size(path: Path, frames: int, what: str) -> None:
         )
 
 
-def _numbers(path: Path, line_no: int, text: str, count: int, what: str) -> np.ndarray:
+def numbers(path: Path, line_no: int, text: str, count: int, what: str) -> np.ndarray:
     parts = text.split()
     if len(parts) != count:
         plural = "s" if count != 1 else ""
@@ -67,29 +58,10 @@ def _numbers(path: Path, line_no: int, text: str, count: int, what: str) -> np.n
     return values
 
 
-def read_text(path: Path) -> str:
-    """The text of a small file (UTF-8, an initial byte-order mark dropped); any problem is a
-    :class:`SequenceError` naming the file."""
-    try:
-        data = Path(path).read_bytes()
-    except OSError as exc:
-        raise SequenceError(f"{path}: cannot read ({exc.strerror or exc})") from None
-    try:
-        return data.decode("utf-8-sig")
-    except UnicodeDecodeError as exc:
-        raise SequenceError(f"{path}: not a text file (byte {exc.start} is not UTF-8)") from None
-
-
-def _lines(path: Path) -> list[tuple[int, str]]:
-    """Lines neither empty nor comments (``#``), with their 1-based numbers (lines end at newlines only)."""
-    lines = enumerate(read_text(path).split("\n"), start=1)
-    return [(i, s.strip()) for i, s in lines if s.strip() and not s.strip().startswith("#")]
-
-
 def read_calib(path: Path) -> tuple[np.ndarray, np.ndarray]:
     """``(P0, P1)`` 3x4 matrices from a KITTI ``calib.txt``; raises :class:`SequenceError`."""
     found, where = {}, {}
-    for line_no, text in _lines(path):
+    for line_no, text in data_lines(path):
         key, sep, rest = text.partition(":")
         if not sep:
             raise SequenceError(f"{path}, line {line_no}: expected 'NAME: numbers', got {text[:40]!r}")
@@ -99,7 +71,7 @@ def read_calib(path: Path) -> tuple[np.ndarray, np.ndarray]:
                 raise SequenceError(
                     f"{path}, line {line_no}: a second {key} line (the first is line {where[key]})"
                 )
-            found[key] = _numbers(path, line_no, rest, 12, key).reshape(3, 4)
+            found[key] = numbers(path, line_no, rest, 12, key).reshape(3, 4)
             where[key] = line_no
     for key in ("P0", "P1"):
         if key not in found:
@@ -111,8 +83,8 @@ def read_calib(path: Path) -> tuple[np.ndarray, np.ndarray]:
 def read_times(path: Path) -> np.ndarray:
     """Timestamps in seconds, one a line, strictly increasing; raises :class:`SequenceError`."""
     times, previous = [], None
-    for line_no, text in _lines(path):
-        t = _numbers(path, line_no, text, 1, "a timestamp")[0]
+    for line_no, text in data_lines(path):
+        t = numbers(path, line_no, text, 1, "a timestamp")[0]
         if previous is not None and not t > previous:
             raise SequenceError(
                 f"{path}, line {line_no}: time {t} is not after {previous} on the line before"
@@ -125,8 +97,8 @@ def read_times(path: Path) -> np.ndarray:
 def read_rows(path: Path, count: int, what: str, bound: float = np.inf) -> np.ndarray:
     """``(N, count)`` finite numbers within ``±bound``, one row a line; raises :class:`SequenceError`."""
     rows = []
-    for n, text in _lines(path):
-        rows.append(row := _numbers(path, n, text, count, what))
+    for n, text in data_lines(path):
+        rows.append(row := numbers(path, n, text, count, what))
         if np.abs(row).max(initial=0.0) > bound:
             raise SequenceError(f"{path}, line {n}: a number beyond ±{bound:g}; expected {what}")
     return np.array(rows).reshape(-1, count)
@@ -136,10 +108,7 @@ def read_poses(path: Path) -> np.ndarray:
     """``(N, 3, 4)`` poses of a KITTI ``poses.txt`` (12 numbers a line, a rotation then a
     translation), read by :func:`vo_lib.formats.poses.read_trajectory`; raises
     :class:`SequenceError`."""
-    try:
-        times, poses = read_trajectory(path)
-    except TrajectoryError as exc:
-        raise SequenceError(str(exc)) from None
+    times, poses = read_trajectory(path)
     if times is not None:
         raise SequenceError(f"{path}: TUM rows (8 numbers); a sequence's poses.txt holds KITTI rows of 12")
     return poses[:, :3, :]

@@ -49,8 +49,7 @@ NANOSECONDS = 1e-9
 MIN_STEP_NS = 1000.0
 
 
-class GroundTruthError(TrajectoryError):
-    """A ground-truth file that cannot be read or does not cover the images (file and line named)."""
+GroundTruthError = TrajectoryError
 
 
 class TruthKind(str, Enum):
@@ -58,9 +57,6 @@ class TruthKind(str, Enum):
 
     POSES = "poses"  #: full 6-DoF poses
     POSITIONS = "positions"  #: positions only (a tracked prism, an antenna)
-
-    def __str__(self) -> str:
-        return self.value
 
 
 @dataclass(frozen=True)
@@ -81,12 +77,9 @@ def read_groundtruth(path, min_poses: int = 2) -> GroundTruth:
     """Read a KITTI, TUM, EuRoC CSV or position-only ground truth (see the module's table) of at
     least ``min_poses`` rows, checked as :func:`~vo_lib.formats.poses.read_rows` says."""
     path = Path(path)
-    try:
-        a, lines, comma = read_rows(path, min_poses)
-        if not comma and a.shape[1] != 12:  # TUM or positions: times in seconds
-            check_seconds(path, a[:, 0], lines)
-    except TrajectoryError as exc:
-        raise GroundTruthError(str(exc)) from None
+    a, lines, comma = read_rows(path, min_poses)
+    if not comma and a.shape[1] != 12:  # TUM or positions: times in seconds
+        check_seconds(path, a[:, 0], lines)
     width = a.shape[1]
     expected = "wxyz" if comma else "xyzw"
     order, line = header_quaternion_order(path, lines[0]) if width >= 8 else ("", 0)
@@ -123,6 +116,17 @@ def read_groundtruth(path, min_poses: int = 2) -> GroundTruth:
     )
 
 
+def read_trajectory(path, min_poses: int = 1) -> tuple[np.ndarray | None, np.ndarray]:
+    """A KITTI (12 numbers a line) or TUM (8) pose file: ``(times or None, (N, 4, 4) poses)``."""
+    truth = read_groundtruth(path, min_poses)
+    if truth.csv or truth.poses is None:
+        raise TrajectoryError(
+            f"{path}: {'a CSV' if truth.csv else 'positions only'}; expected poses, 12 numbers (KITTI) "
+            "or 8 (TUM), separated by spaces"
+        )
+    return truth.times, truth.poses
+
+
 def associate(query_times, truth_times, max_diff: float = MAX_TIME_DIFF_S) -> tuple[np.ndarray, np.ndarray]:
     """Indices ``(i_query, i_truth)`` of the pairs whose times differ by at most ``max_diff``
     seconds, each query time taking its nearest truth time, as evo's ``associate_trajectories``."""
@@ -145,13 +149,6 @@ def covering(truth: GroundTruth, times, max_diff: float = MAX_TIME_DIFF_S) -> tu
     """:func:`associate` the images at ``times`` (seconds, the file's clock) with ``truth``,
     checked: the truth must span the images, and a 6-DoF truth must match every image."""
     times = np.asarray(times, float)
-    if truth.times is None:
-        if len(truth.positions) != len(times):
-            raise GroundTruthError(
-                f"{truth.path}: {len(truth.positions)} poses but there are {len(times)} images; "
-                "a file without timestamps needs one pose per image"
-            )
-        return np.arange(len(times)), np.arange(len(times))
     t0, t1 = truth.times[0], truth.times[-1]
     if times[0] < t0 - max_diff or times[-1] > t1 + max_diff:
         raise GroundTruthError(

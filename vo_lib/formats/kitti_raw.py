@@ -17,8 +17,8 @@ from pathlib import Path
 
 import numpy as np
 
-from vo_lib.formats.frame_files import SequenceError, check_size, read_text, required
-from vo_lib.formats.poses import rotation_problem
+from vo_lib.formats.frame_files import SequenceError, check_size, numbers, read_rows
+from vo_lib.formats.poses import data_lines, rotation_problem
 
 OXTS_FIELDS = 30
 VF, WZ = 8, 19  # zero-based columns of forward speed (m/s) and yaw rate (rad/s)
@@ -29,31 +29,15 @@ MAX_OXTS_VALUE = 1e6
 MAX_MOUNT_M = 10.0
 
 
-def _packet(path: Path, line_no: int, line: str) -> list[float]:
-    """The :data:`OXTS_FIELDS` finite numbers of one line of ``oxts.txt``."""
-    parts = line.split()
-    if len(parts) != OXTS_FIELDS:
-        raise SequenceError(f"{path}, line {line_no}: expected {OXTS_FIELDS} numbers; got {len(parts)}")
-    try:
-        values = [float(p) for p in parts]
-    except ValueError:
-        raise SequenceError(f"{path}, line {line_no}: expected {OXTS_FIELDS} numbers") from None
-    if not np.all(np.isfinite(values)) or max(map(abs, values)) > MAX_OXTS_VALUE:
-        raise SequenceError(f"{path}, line {line_no}: expected finite numbers within ±{MAX_OXTS_VALUE:g}")
-    return values
-
-
 def read_oxts(path, frames: int | None = None) -> np.ndarray:
-    """``(N, 30)`` OXTS packets; every number must be finite. With ``frames``, a file far larger
-    than that many packets is refused before it is read."""
-    path = Path(path)
+    """``(N, 30)`` OXTS packets, finite and within :data:`MAX_OXTS_VALUE`. With ``frames``, a
+    file far larger than that many packets is refused before it is read."""
     if frames is not None:
         check_size(path, frames, "OXTS packets")
-    lines = enumerate(read_text(path).split("\n"), 1)
-    rows = [_packet(path, line_no, line) for line_no, line in lines if line.strip()]
-    if not rows:
+    rows = read_rows(Path(path), OXTS_FIELDS, "an OXTS packet", MAX_OXTS_VALUE)
+    if not len(rows):
         raise SequenceError(f"{path}: no OXTS packets")
-    return np.array(rows)
+    return rows
 
 
 def wheel_distances_from_oxts(oxts: np.ndarray, times: np.ndarray, gauge: float) -> np.ndarray:
@@ -77,24 +61,13 @@ def wheel_distances_from_oxts(oxts: np.ndarray, times: np.ndarray, gauge: float)
 
 
 def _calib_values(path: Path, key: str, count: int) -> np.ndarray:
-    required(path, f"a line '{key}:' of {count} numbers")
-    try:
-        text = path.read_text()
-    except UnicodeDecodeError:
-        raise SequenceError(f"{path}: not a text file") from None
-    found = [(n, line) for n, line in enumerate(text.splitlines(), 1) if line.startswith(key + ":")]
+    found = [(n, line) for n, line in data_lines(path, f"a line '{key}:'") if line.startswith(key + ":")]
     if not found:
         raise SequenceError(f"{path}: no line starting with '{key}:'")
     (line_no, line), *others = found
     if others:
         raise SequenceError(f"{path}, line {others[0][0]}: a second {key} line (the first is line {line_no})")
-    try:
-        values = np.array([float(x) for x in line.split(":", 1)[1].split()])
-    except ValueError:
-        raise SequenceError(f"{path}, line {line_no}: {key} must be {count} numbers") from None
-    if values.shape != (count,) or not np.all(np.isfinite(values)):
-        raise SequenceError(f"{path}, line {line_no}: {key} must be {count} finite numbers")
-    return values
+    return numbers(path, line_no, line.split(":", 1)[1], count, key)
 
 
 def _rotation(path: Path, key: str) -> np.ndarray:

@@ -4,6 +4,7 @@
 
 from __future__ import annotations
 
+import os
 import re
 from pathlib import Path
 
@@ -39,7 +40,7 @@ def write_tum(path, times, poses) -> None:
 
 
 class TrajectoryError(ValueError):
-    """A trajectory file that cannot be read: missing, not text, or a malformed line (named)."""
+    """A file of any format here that cannot be read (file and line or key named)."""
 
 
 #: Largest entry of ``R^T R - I`` accepted for the rotation part of a pose (files round numbers).
@@ -66,18 +67,19 @@ def rotation_problem(R: np.ndarray) -> str | None:
     return None
 
 
-def read_text(path: Path) -> str:
-    """The text of a trajectory file; a folder, a missing, too large, unreadable or non-UTF-8 file
-    raises :class:`TrajectoryError`."""
-    if not path.is_file():
-        what = (
-            "a folder, not a trajectory file"
-            if path.is_dir()
-            else "not a regular file"
-            if path.exists()
-            else "no such trajectory file"
+def check_file(path: Path, what: str = "the file") -> None:
+    """Raise :class:`TrajectoryError` unless ``path`` is a regular file: missing, or what is there."""
+    if not Path(path).is_file():
+        kind = "a folder" if Path(path).is_dir() else "not a regular file" if os.path.lexists(path) else None
+        raise TrajectoryError(
+            f"{path}: {kind}, where {what} should be a file" if kind else f"{path}: missing ({what})"
         )
-        raise TrajectoryError(f"{path}: {what}")
+
+
+def read_text(path, what: str = "the file") -> str:
+    """The UTF-8 text of a file (a byte-order mark dropped); anything else raises :class:`TrajectoryError`."""
+    path = Path(path)
+    check_file(path, what)
     if (size := path.stat().st_size) > MAX_FILE_BYTES:
         raise TrajectoryError(f"{path}: {size / 1e6:.0f} MB; expected below {MAX_FILE_BYTES / 1e6:.0f} MB")
     try:
@@ -86,6 +88,12 @@ def read_text(path: Path) -> str:
         raise TrajectoryError(f"{path}: cannot read ({exc.strerror or exc})") from None
     except UnicodeDecodeError as exc:
         raise TrajectoryError(f"{path}: not a text file (byte {exc.start} is not UTF-8)") from None
+
+
+def data_lines(path: Path, what: str = "the file") -> list[tuple[int, str]]:
+    """``(line number, text)`` of the lines neither blank nor comments (``#``, ``%``)."""
+    text = read_text(path, what).replace("\r\n", "\n").replace("\r", "\n").split("\n")
+    return [(n, s) for n, line in enumerate(text, 1) if (s := line.strip()) and not s.startswith(("#", "%"))]
 
 
 def _row(path: Path, n: int, line: str, comma: bool, first: tuple[int, int] | None) -> list[float]:
@@ -148,13 +156,7 @@ def read_rows(path, min_rows: int = 1) -> tuple[np.ndarray, list[int], bool]:
     are skipped. Any problem, and fewer than ``min_rows`` rows, raises one
     :class:`TrajectoryError` naming the file and line."""
     path = Path(path)
-    rows = [
-        (n, line)
-        for n, text in enumerate(
-            read_text(path).replace("\r\n", "\n").replace("\r", "\n").split("\n"), start=1
-        )
-        if (line := text.strip()) and not line.startswith(("#", "%"))
-    ]
+    rows = data_lines(path, "the trajectory")
     if not rows:
         raise TrajectoryError(f"{path}: no poses")
     lines, comma = [n for n, _ in rows], "," in rows[0][1]
@@ -208,25 +210,3 @@ def check_seconds(path: Path, times: np.ndarray, lines: list[int]) -> None:
             f"{path}, line {lines[i]}: time {times[i]:.0f}; a text file's times are read as seconds "
             "(TUM's t x y z qx qy qz qw), at most 1e11 (nanoseconds?)"
         )
-
-
-def read_trajectory(path, min_poses: int = 1) -> tuple[np.ndarray | None, np.ndarray]:
-    """Read a KITTI pose file (12 numbers a line) or a TUM file (8); returns ``(times, poses)``
-    (``times`` None for KITTI). Checked as :func:`read_rows` says."""
-    a, lines, comma = read_rows(path, min_poses)
-    if comma or a.shape[1] == 4:
-        what = "a CSV" if comma else "positions only"
-        raise TrajectoryError(
-            f"{path}, line {lines[0]}: {what}; expected poses, 12 numbers (KITTI) or 8 (TUM), "
-            "separated by spaces"
-        )
-    if a.shape[1] == 12:
-        return None, as_homogeneous(a.reshape(-1, 3, 4))
-    check_seconds(path, a[:, 0], lines)
-    order, line = header_quaternion_order(path, lines[0])
-    if order not in ("", "xyzw"):
-        raise TrajectoryError(
-            f"{path}, line {line}: the header orders the quaternion {' '.join(order)}; "
-            "a text file is read as TUM's t x y z qx qy qz qw"
-        )
-    return a[:, 0], pose_matrices(a[:, 1:4], a[:, 4:8])

@@ -10,25 +10,9 @@
     SEQ/odometry.txt            optional: "delta_u_left delta_u_right" per frame, metres
     SEQ/manifest.json           optional: how a sample was made (rate, speeds, rig, world)
 
-A real KITTI odometry sequence loads unchanged. The rules of reading are those of
-:mod:`vo_lib.formats.images` (image names, headers) and :mod:`vo_lib.formats.frame_files`
-(the text files):
-
-* **Frames are paired by file name, in numeric order.** ``image_0`` and ``image_1`` must hold the
-  same names; a name on one side only is an error that names it. Names sort by the numbers in
-  them, whatever their padding (``2.png`` before ``10.png``); two names of one number on one side
-  (``1.png`` and ``01.png``) are an error. Hidden files (``._000001.png`` and the like) are ignored.
-* **Every image header is checked when the sequence is opened**, cheaply (PNG headers and end
-  markers are read without decoding; other formats through Pillow's lazy open): size equal to
-  the first image's, 8 bits per channel, one to four channels, PNG and JPEG files complete (their
-  end marker present). What can only
-  be found by decoding (damaged compressed data) raises when the frame is read.
-* Every problem raises one :class:`SequenceError` naming the file (and line or frame) and what
-  was expected; the number of timestamps, poses and odometry rows must equal the frame count.
-
-Writing (:class:`SequenceWriter`) goes to a temporary folder renamed when complete, under the
-rules of :mod:`vo_lib.outputs`: nothing is written over a folder this package did not
-write, and a failed write leaves nothing behind.
+A real KITTI odometry sequence loads unchanged. Images are read as :mod:`vo_lib.formats.images`
+says, the text files as :mod:`vo_lib.formats.frame_files` says; every problem raises one
+:class:`SequenceError` naming the file (and line or frame).
 """
 
 from __future__ import annotations
@@ -46,7 +30,6 @@ from vo_lib.formats.asl_calibration import MAX_BASELINE_M
 from vo_lib.formats.frame_files import (
     SequenceError,
     check_manifest,
-    check_size,
     present,
     read_calib,
     read_manifest,
@@ -56,25 +39,8 @@ from vo_lib.formats.frame_files import (
     read_times,
     required,
 )
-from vo_lib.formats.images import check_headers, image_files, image_header, load_image, unpaired
-from vo_lib.formats.sequence_writer import SequenceWriter, write_sequence
+from vo_lib.formats.images import check_headers, image_files, load_image, unpaired
 from vo_lib.geometry import as_homogeneous
-
-__all__ = [
-    "Sequence",
-    "SequenceError",
-    "SequenceWriter",
-    "check_size",
-    "image_header",
-    "present",
-    "read_calib",
-    "read_poses",
-    "read_sequence",
-    "read_times",
-    "required",
-    "check_frame_spacing",
-    "write_sequence",
-]
 
 #: Largest wheel distance between two frames in ``odometry.txt``, metres: beyond, the file is damaged.
 MAX_ODOMETRY_M = 1000.0

@@ -134,8 +134,6 @@ def write_sequence(
     path, camera, left_images, right_images, times, poses=None, odometry=None, manifest=None, force=False
 ):
     """Write a whole sequence at once (see :class:`SequenceWriter`)."""
-    if len(left_images) != len(right_images):
-        raise ValueError(f"{len(left_images)} left images but {len(right_images)} right images")
     with SequenceWriter(path, camera, force=force) as writer:
         for left, right in zip(left_images, right_images, strict=True):
             writer.add(left, right)

@@ -7,7 +7,6 @@
 ``laser``          a 2-D laser scanner ray-cast against the same segments
 ``trajectories``   crawler drives with slipping tracks: truth and what the encoders report
 ``road``           the road drive: a car's path, the road's climb and bank, the car's 6-DoF poses
-``disturbances``   blank, noisy and occluded frames
 ``samples``        the named samples ([Zhao]'s experiments, [Yuan]'s corridor), rendered
                    to the KITTI layout of ``vo_lib.formats``
 ``frame_store``    rendered frames kept on disk for the next process (the test suite sets its folder)

@@ -41,8 +41,8 @@ class LaserScanner:
         Angle between beams, radians.
     max_range : float
         Longest range reported, metres; beams that hit nothing nearer are invalid.
-    range_sigma, bearing_sigma : float
-        Standard deviations of range (metres) and of the beam's true direction (radians).
+    range_sigma : float
+        Standard deviation of range, metres.
     mount : (x, y, yaw)
         Pose of the sensor in the robot frame.
     """
@@ -51,15 +51,14 @@ class LaserScanner:
     angular_step: float = np.radians(1.0 / 3.0)
     max_range: float = 10.0
     range_sigma: float = 0.01
-    bearing_sigma: float = 0.0
     mount: tuple[float, float, float] = (0.0, 0.0, 0.0)
 
     def __post_init__(self):
         for name in ("fov", "angular_step", "max_range"):
             if not getattr(self, name) > 0:
                 raise ValueError(f"{name} must be > 0; got {getattr(self, name)!r}")
-        if self.range_sigma < 0 or self.bearing_sigma < 0:
-            raise ValueError("range_sigma and bearing_sigma must be >= 0")
+        if self.range_sigma < 0:
+            raise ValueError("range_sigma must be >= 0")
 
     @property
     def bearings(self) -> np.ndarray:
@@ -74,10 +73,7 @@ class LaserScanner:
         segs = np.asarray(segments, dtype=float).reshape(-1, 4)
         sensor = compose_planar(np.asarray(robot_pose, dtype=float), np.asarray(self.mount, dtype=float))
         bearings = self.bearings
-        true_bearings = bearings
-        if rng is not None and self.bearing_sigma > 0:
-            true_bearings = bearings + rng.normal(0.0, self.bearing_sigma, bearings.shape)
-        ranges = cast_rays(segs, sensor[:2], sensor[2] + true_bearings)
+        ranges = cast_rays(segs, sensor[:2], sensor[2] + bearings)
         if rng is not None and self.range_sigma > 0:
             ranges = ranges + rng.normal(0.0, self.range_sigma, ranges.shape)
         valid = np.isfinite(ranges) & (ranges <= self.max_range) & (ranges > 0)

@@ -98,23 +98,3 @@ def spread_frames(count: int, wanted: int = 20) -> np.ndarray:
     if count <= 0:
         raise ValueError(f"a sequence of {count} frames has none to measure")
     return np.unique(np.linspace(0, count - 1, min(wanted, count)).astype(int))
-
-
-#: Immerkaer's noise mask: the difference of two Laplacians, blind to planes and ramps.
-NOISE_MASK = np.array([[1, -2, 1], [-2, 4, -2], [1, -2, 1]], np.float32)
-
-
-def noise_sigma(image: np.ndarray, flat_below: float = LOW_GRADIENT) -> float:
-    """Standard deviation of additive white noise in a grey image, grey levels.
-
-    J. Immerkaer, "Fast noise variance estimation" (CVIU 1996): for white noise of deviation
-    ``sigma``, ``E|I * N| = sqrt(2/pi) * 6 sigma`` (the mask's weights square-sum to 36), so
-    ``sigma = sqrt(pi/2) mean|I * N| / 6``. Only pixels of gradient magnitude below ``flat_below``
-    are averaged, so that texture and edges do not count as noise.
-    """
-    f = np.asarray(image, np.float32)
-    response = np.abs(cv2.filter2D(f, -1, NOISE_MASK))[1:-1, 1:-1]
-    flat = (gradient_magnitude(np.asarray(image)) < flat_below)[1:-1, 1:-1]
-    if not flat.any():
-        raise ValueError("the image has no flat pixels to measure its noise on")
-    return float(np.sqrt(np.pi / 2) * response[flat].mean() / 6.0)

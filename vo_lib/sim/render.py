@@ -122,53 +122,28 @@ def build_quads(world: World) -> list[_Quad]:
     texel = world.floor_texel
     quads = []
     for seg in world.segments:
-        a, b = np.array(seg.start, float), np.array(seg.end, float)
-        direction = (b - a) / seg.length
-        step = seg.texel or texel
-        cols, rows = int(np.ceil(seg.length / step)) + 1, int(np.ceil(seg.height / step)) + 1
-        tex = cached_surface(seg.style, rows, cols, step, seg.texture_seed + 1000 * world.seed)
-        origin = np.array([a[0], a[1], 0.0])
-        e1 = np.array([direction[0], direction[1], 0.0]) * step
-        e2 = np.array([0.0, 0.0, step])
-        normal = np.array([-direction[1], direction[0], 0.0])
-        for s0, s1 in zip(_tiles(seg.length, step)[:-1], _tiles(seg.length, step)[1:], strict=True):
-            p0, p1 = a + s0 * direction, a + s1 * direction
-            corners = np.array(
-                [
-                    [p0[0], p0[1], 0.0],
-                    [p1[0], p1[1], 0.0],
-                    [p1[0], p1[1], seg.height],
-                    [p0[0], p0[1], seg.height],
-                ]
-            )
-            quads.append(_Quad(corners, origin, e1, e2, normal, tex, _shade(normal)))
+        (ax, ay), (bx, by) = seg.start, seg.end
+        along = ((bx - ax) / seg.length, (by - ay) / seg.length, 0.0)
+        seed = seg.texture_seed + 1000 * world.seed
+        wall = Patch((ax, ay, 0.0), along, (0.0, 0.0, 1.0), seg.length, seg.height, seg.style, seed)
+        quads += _patch_quads(wall, seg.texel or texel, split_across=False)
     xmin, xmax, ymin, ymax = world.floor_extent
-    cols, rows = int(np.ceil((xmax - xmin) / texel)) + 1, int(np.ceil((ymax - ymin) / texel)) + 1
     planes = [(0.0, world.seed * 7 + 1, 0.95, world.floor_style)]
     if world.ceiling_height is not None:
         planes.append((world.ceiling_height, world.seed * 7 + 2, 0.8, world.ceiling_style))
-    for z, tex_seed, shade, style in planes:
-        tex = cached_surface(style, rows, cols, texel, tex_seed)
-        origin = np.array([xmin, ymin, z])
-        e1, e2 = np.array([texel, 0.0, 0.0]), np.array([0.0, texel, 0.0])
-        for x0, x1 in zip(_tiles(xmax - xmin, texel)[:-1], _tiles(xmax - xmin, texel)[1:], strict=True):
-            for y0, y1 in zip(_tiles(ymax - ymin, texel)[:-1], _tiles(ymax - ymin, texel)[1:], strict=True):
-                corners = np.array(
-                    [
-                        [xmin + x0, ymin + y0, z],
-                        [xmin + x1, ymin + y0, z],
-                        [xmin + x1, ymin + y1, z],
-                        [xmin + x0, ymin + y1, z],
-                    ]
-                )
-                quads.append(_Quad(corners, origin, e1, e2, np.array([0.0, 0.0, 1.0]), tex, shade))
+    for z, seed, shade, style in planes:
+        plane = Patch(
+            (xmin, ymin, z), (1.0, 0.0, 0.0), (0.0, 1.0, 0.0), xmax - xmin, ymax - ymin, style, seed
+        )
+        quads += _patch_quads(plane, texel, shade)
     for patch in world.patches:
         quads += _patch_quads(patch, texel)
     return quads
 
 
-def _patch_quads(patch, texel: float) -> list[_Quad]:
-    """Quads of a :class:`~vo_lib.sim.world.Patch`, cut into tiles of at most TILE_TEXELS."""
+def _patch_quads(patch, texel: float, shade: float | None = None, split_across: bool = True) -> list[_Quad]:
+    """Quads of a :class:`~vo_lib.sim.world.Patch`, cut into tiles of at most TILE_TEXELS (along
+    only, for a wall); ``shade`` overrides the flat shading of its normal."""
     along, across = np.asarray(patch.along, float), np.asarray(patch.across, float)
     origin = np.asarray(patch.origin, float)
     total = max(patch.texture_length, patch.offset + patch.length)
@@ -176,27 +151,27 @@ def _patch_quads(patch, texel: float) -> list[_Quad]:
     tex = cached_surface(patch.style, rows, cols, texel, patch.texture_seed)
     normal = np.cross(along, across)
     normal /= np.linalg.norm(normal)
-    tex_origin = origin - patch.offset * along
+    shade = _shade(normal) if shade is None else shade
+    e1, e2, tex_origin = along * texel, across * texel, origin - patch.offset * along
     if patch.outline:
-        return [
-            _Quad(
-                np.asarray(patch.outline, float),
-                tex_origin,
-                along * texel,
-                across * texel,
-                normal,
-                tex,
-                _shade(normal),
-            )
-        ]
-    quads = []
-    for a0, a1 in zip(_tiles(patch.length, texel)[:-1], _tiles(patch.length, texel)[1:], strict=True):
-        for b0, b1 in zip(_tiles(patch.width, texel)[:-1], _tiles(patch.width, texel)[1:], strict=True):
-            corners = origin + np.array([[a0, b0], [a1, b0], [a1, b1], [a0, b1]]) @ np.stack([along, across])
-            quads.append(
-                _Quad(corners, tex_origin, along * texel, across * texel, normal, tex, _shade(normal))
-            )
-    return quads
+        return [_Quad(np.asarray(patch.outline, float), tex_origin, e1, e2, normal, tex, shade)]
+    a, b = (
+        _tiles(patch.length, texel),
+        _tiles(patch.width, texel) if split_across else np.array([0.0, patch.width]),
+    )
+    return [
+        _Quad(
+            origin + np.array([[a0, b0], [a1, b0], [a1, b1], [a0, b1]]) @ np.stack([along, across]),
+            tex_origin,
+            e1,
+            e2,
+            normal,
+            tex,
+            shade,
+        )
+        for a0, a1 in zip(a[:-1], a[1:], strict=True)
+        for b0, b1 in zip(b[:-1], b[1:], strict=True)
+    ]
 
 
 def _mover_quads(mover) -> list[_Quad]:

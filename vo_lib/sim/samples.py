@@ -17,7 +17,7 @@ from tqdm.auto import tqdm
 
 from vo_lib.camera import StereoCamera
 from vo_lib.formats.frame_files import CAMERA_MOUNTS
-from vo_lib.formats.sequence import SequenceWriter
+from vo_lib.formats.sequence_writer import SequenceWriter
 from vo_lib.geometry import camera_mount, planar_to_matrix
 from vo_lib.models.track_odometry import TrackOdometry
 from vo_lib.sim import road
@@ -38,8 +38,8 @@ from vo_lib.sim.world import WORLDS
 #: Height of the camera above the floor; it sits above the crawler's turning axis (notebook 03).
 CAMERA_HEIGHT = 0.5
 DEFAULT_RESOLUTION = (640, 480)
-#: Sensor noise, grey levels: what :func:`vo_lib.sim.realism.noise_sigma` measures on the flat parts
-#: of KITTI's images (1.0-1.4 over drive 0001); rendered images carry no noise of their own.
+#: Sensor noise, grey levels: what Immerkaer's estimator measures on the flat parts of KITTI's
+#: images (1.0-1.4 over drive 0001); rendered images carry no noise of their own.
 SENSOR_NOISE = 1.2
 #: Auto-exposure: the gain of frame k is ``exp(g_k)``, ``g`` a slowly varying random walk pulled
 #: back to 0 (AR(1) with this stationary deviation and :data:`EXPOSURE_FRAMES` correlation).
@@ -86,25 +86,11 @@ class Sample:
         return sum(leg.frames for leg in self.legs) + 1
 
 
-def _turns(n: int, frames: int, speed: float, rate_deg: float) -> tuple[Leg, ...]:
-    """Alternate straight stretches and left/right arcs."""
-    legs = []
-    for i in range(n):
-        legs.append(Leg(frames, speed, 0.0))
-        legs.append(Leg(frames, speed, np.radians(rate_deg) * (1 if i % 2 == 0 else -1)))
-    return tuple(legs)
-
-
 def _turns_pattern(signs, frames: int, speed: float, rate_deg: float) -> tuple[Leg, ...]:
     """A straight stretch, then an arc turning the way of each sign."""
     return tuple(
         leg for sign in signs for leg in (Leg(frames, speed), Leg(frames, speed, np.radians(rate_deg) * sign))
     )
-
-
-def _quarter_turns(signs) -> tuple[Leg, ...]:
-    """Straights of 200 frames, each followed by a quarter turn (90 deg) the way of its sign."""
-    return _turns_pattern(signs, 200, 0.5, 13.5)
 
 
 def _oval_laps(laps: int) -> tuple[Leg, ...]:
@@ -174,7 +160,7 @@ SAMPLES: dict[str, Sample] = {
             "outdoor_yard",
             (-10.0, -4.0, 0.3),
             30.0,
-            _turns(3, 200, 0.5, 12) + (Leg(200, 0.5),),
+            _turns_pattern((1, -1, 1), 200, 0.5, 12) + (Leg(200, 0.5),),
             seed=105,
             surface=ROUGH_GROUND,
         ),
@@ -197,7 +183,7 @@ SAMPLES: dict[str, Sample] = {
             (-18.0, 14.0, 3.14),
             30.0,
             (Leg(218, 0.5),)
-            + _quarter_turns((1, 1, -1, -1))
+            + _turns_pattern((1, 1, -1, -1), 200, 0.5, 13.5)
             + (Leg(200, 0.5), Leg(200, 0.5, np.radians(-13.5)), Leg(200, 0.5, np.radians(13.5))),
             seed=108,
             surface=ROUGH_GROUND,

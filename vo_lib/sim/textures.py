@@ -363,19 +363,7 @@ def surface_texture(style: str, height: int, width: int, texel: float, seed: int
     return np.clip(_DRAW[style](height, width, texel, seed) + 0.5, 0, 255).astype(np.uint8)
 
 
-STYLES = (
-    "corners",
-    "brick",
-    *PHOTO_METRES,
-    "plain",
-    "wall",
-    "tiles",
-    "panels",
-    "fence",
-    "far",
-    "road",
-    "vehicle",
-)
+STYLES = tuple(_DRAW)
 
 
 @functools.lru_cache(maxsize=256)

@@ -58,15 +58,7 @@ class SlipModel:
         mean = np.where(spot, self.spot_turn_mean, self.mean)
         diff = np.where(spot, self.spot_turn_difference, self.difference)
         base = np.column_stack([mean + diff / 2, mean - diff / 2])
-        # AR(1) noise with the stated correlation time and stationary standard deviation sigma
-        a = np.exp(-1.0 / self.correlation_frames)
-        e = rng.normal(0.0, self.sigma * np.sqrt(1 - a * a), (n, 2))
-        noise = np.zeros((n, 2))
-        state = rng.normal(0.0, self.sigma, 2)
-        for k in range(n):
-            state = a * state + e[k]
-            noise[k] = state
-        return base + noise
+        return base + _ar1(n, self.sigma, self.correlation_frames, rng, 2)
 
 
 def _ar1(n: int, sigma: float, frames: float, rng: np.random.Generator, dim: int = 1) -> np.ndarray:
@@ -133,21 +125,6 @@ class TrackGround:
     tilt_deg: tuple[float, float] = (2.0, 5.0)
     roughness_deg: float = 0.0
     roughness_frames: float = 15.0
-
-    def __post_init__(self):
-        for name in ("icr_sigma", "icr_frames", "contact_rate", "roughness_deg", "roughness_frames"):
-            value = float(getattr(self, name))
-            if not (np.isfinite(value) and value >= 0):
-                raise ValueError(f"{name} must be a finite number >= 0; got {value!r}")
-        if not 0.0 <= self.contact_grip <= 1.0:
-            raise ValueError(f"contact_grip must lie in [0, 1]; got {self.contact_grip!r}")
-        if int(self.contact_frames) < 1:
-            raise ValueError(f"contact_frames must be >= 1; got {self.contact_frames!r}")
-        low, high = self.tilt_deg
-        if not 0.0 <= low <= high < 45.0:
-            raise ValueError(
-                f"tilt_deg must be (low, high) with 0 <= low <= high < 45; got {self.tilt_deg!r}"
-            )
 
     def icr(self, turn_rate: np.ndarray, rng: np.random.Generator) -> np.ndarray:
         """``x_icr`` (metres) per step for turn rates ``turn_rate`` (rad/s)."""

@@ -25,9 +25,8 @@ from enum import Enum
 
 import numpy as np
 
-from vo_lib.formats.frame_files import CAMERA_MOUNTS
+from vo_lib.formats.frame_files import CAMERA_MOUNTS, SequenceError, present, read_per_frame
 from vo_lib.formats.kitti_raw import camera_in_imu_frame, read_oxts, wheel_distances_from_oxts
-from vo_lib.formats.sequence import SequenceError, present
 from vo_lib.geometry import camera_mount
 from vo_lib.models.track_odometry import TrackOdometry
 
@@ -191,9 +190,7 @@ def vehicle_of(sequence, use_odometry: bool = True) -> Vehicle:
     source = "odometry.txt"
     oxts = root / "oxts.txt"
     if odometry is None and use_odometry and present(oxts, "the OXTS packets"):
-        packets = read_oxts(oxts, len(sequence))
-        if len(packets) != len(sequence):
-            raise SequenceError(f"{oxts} has {len(packets)} packets but there are {len(sequence)} images")
+        packets = read_per_frame(oxts, len(sequence), "packets", read_oxts)
         odometry = wheel_distances_from_oxts(packets, sequence.times, CAR_GAUGE)
         model = car_odometry_model(CAR_GAUGE)
         source = "oxts.txt (speed and yaw rate)"
