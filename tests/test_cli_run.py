@@ -72,7 +72,7 @@ def test_evaluate_command(workdir):
     [
         (["run", "--sequence", "no_such_sample_or_folder"], "neither a sample name"),
         (["run", "--sequence", "indoor_linear", "--out", "afile/sub"], "cannot write there"),
-        (["run", "--sequence", "indoor_linear", "--frames", "1"], "need at least 2 frames"),
+        (["run", "--sequence", "indoor_linear", "--frames", "1"], "expected a whole number >= 2 (frames)"),
         (["evaluate", "--gt", "missing.txt", "--est", "missing.txt"], "missing (the trajectory)"),
         # a negative value is judged as a value, not taken for an option
         (["evaluate", "--gt", "g.txt", "--est", "e.txt", "--segments", "-1,2"], "each 0.001"),

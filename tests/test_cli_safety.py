@@ -433,9 +433,9 @@ CASES = [
     # --- bounds ----------------------------------------------------------------------------------
     Case("seed-negative", "RUN --seed -5", 2, "--seed"),
     Case("seed-not-a-number", "RUN --seed abc", 2, "--seed"),
-    Case("frames-one", "RUN --frames 1", 2, "need at least 2 frames"),
+    Case("frames-one", "RUN --frames 1", 2, "expected a whole number >= 2 (frames)"),
     Case("generate-frames-one", "GEN --frames 1", 2, "expected a whole number >= 2 (frames)"),
-    Case("frames-zero", "RUN --frames 0", 2, "expected a whole number >= 1 (frames)"),
+    Case("frames-zero", "RUN --frames 0", 2, "expected a whole number >= 2 (frames)"),
     Case("frames-not-a-number", "RUN --frames many", 2, "expected a whole number"),
     Case("frames-beyond-sequence", "RUN --frames 99 --out out", 0, "has 4 frames; running all 4",
         writes="out"),

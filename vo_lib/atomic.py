@@ -25,7 +25,6 @@ import shutil
 import signal
 import socket
 import sys
-import tempfile
 import threading
 from pathlib import Path
 
@@ -60,26 +59,20 @@ def inode(path) -> tuple[int, int] | None:
     return None
 
 
-def umask() -> int:
-    """The process's umask, read without changing it where the system allows (threads may write)."""
-    with contextlib.suppress(OSError, ValueError, IndexError):
-        with open("/proc/self/status") as fh:
-            return int(next(line for line in fh if line.startswith("Umask:")).split()[1], 8)
-    mask = os.umask(0o022)
-    os.umask(mask)
-    return mask
+def temporary(name_beside: Path) -> Path:
+    """A new temporary's name beside ``name_beside``."""
+    return name_beside.with_name(f"{temporary_prefix(name_beside.name)}{secrets.token_hex(4)}.tmp")
 
 
 def write_atomic(path, text: str) -> Path:
     """Replace the file ``path`` by ``text`` through a temporary file beside it."""
     path = Path(path)
-    fd, tmp = tempfile.mkstemp(prefix=temporary_prefix(path.name), suffix=".tmp", dir=path.parent)
+    tmp = temporary(path)
     try:
-        with os.fdopen(fd, "w", encoding="utf-8", errors="surrogateescape", newline="") as fh:
+        with open(tmp, "x", encoding="utf-8", errors="surrogateescape", newline="") as fh:  # the umask's mode
             fh.write(text)
             fh.flush()
             os.fsync(fh.fileno())
-        os.chmod(tmp, 0o666 & ~umask())
         os.replace(tmp, path)
     except BaseException:
         with contextlib.suppress(OSError):
@@ -118,8 +111,6 @@ def _remove(entry: os.DirEntry) -> None:
 
 def _abandoned_beside(parent: Path, name: str) -> list[tuple[os.DirEntry, str]]:
     """(entry, kind) of every temporary that dead processes of this machine left beside ``name``."""
-    if os.name == "nt":  # os.kill(pid, 0) would stop the process there
-        return []
     with contextlib.suppress(OSError):
         found = ((entry, _abandoned(entry, name)) for entry in os.scandir(parent))
         return [(entry, match[4]) for entry, match in found if match]
@@ -177,7 +168,7 @@ def swap_in(complete: Path, target: Path) -> Path | None:
             raise
     if _exchange(complete, target):
         return complete
-    aside = target.with_name(f"{temporary_prefix(target.name)}{secrets.token_hex(4)}.old")
+    aside = temporary(target).with_suffix(".old")
     with _signals_held():  # Ctrl-C or SIGTERM waits for both; a kill between them is undone by restore()
         os.rename(target, aside)
         os.rename(complete, target)

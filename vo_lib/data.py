@@ -47,18 +47,13 @@ def sample_path(name: str, frames: int | None = None, resolution=None) -> Path:
     return data_dir() / tag
 
 
-def _up_to_date(path: Path, name: str) -> bool:
-    """A cached sample is reused only if its manifest carries the sample's current fingerprint."""
+def is_rendered(name: str, path) -> bool:
+    """Whether sample ``name`` is rendered in ``path`` with the sample's current fingerprint."""
     try:
-        manifest = json.loads((path / "manifest.json").read_text())
+        manifest = json.loads((Path(path) / "manifest.json").read_text())
     except (OSError, ValueError):
         return False
     return manifest.get("fingerprint") == fingerprint(name)
-
-
-def is_rendered(name: str, path) -> bool:
-    """Whether sample ``name`` is rendered, up to date, in folder ``path``."""
-    return _up_to_date(Path(path), name)
 
 
 def load_sequence(
@@ -81,7 +76,7 @@ def load_sequence(
     key = str(name_or_path)
     if key in SAMPLES and not Path(key).exists():
         path = sample_path(key, frames, resolution)
-        if not _up_to_date(path, key):
+        if not is_rendered(key, path):
             generate(key, path, frames, None if resolution is None else tuple(resolution), progress)
         return read_sequence(path, odometry=odometry)
     if mav0_of(key) is not None:  # a rig as it records (ASL layout): rectified on reading

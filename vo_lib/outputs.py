@@ -24,7 +24,6 @@ import json
 import os
 import re
 import shutil
-import tempfile
 from pathlib import Path
 
 from vo_lib.atomic import (
@@ -35,8 +34,7 @@ from vo_lib.atomic import (
     remove_replaced,
     restore,
     swap_in,
-    temporary_prefix,
-    umask,
+    temporary,
     write_atomic,
 )
 
@@ -282,16 +280,10 @@ class OutputFolder:
         with _locked(self.real, shared=False, label=self.label):  # fail now, not after the work
             pass
         self._created = [p for p in reversed(self.real.parents) if not p.exists()]
-        self.path = (
-            self.real.parent / f"{temporary_prefix(self.real.name)}unset.tmp"
-        )  # until mkdtemp names it
+        self.path = temporary(self.real)
         try:
-            for folder in self._created:
-                folder.mkdir()
-            self.path = Path(
-                tempfile.mkdtemp(prefix=temporary_prefix(self.real.name), suffix=".tmp", dir=self.real.parent)
-            )
-            os.chmod(self.path, 0o777 & ~umask())
+            for folder in [*self._created, self.path]:
+                folder.mkdir()  # with the umask's permissions
         except OSError as exc:
             self.discard()
             raise OutputError(f"{self.label}: cannot write there ({exc.strerror or exc})") from None

@@ -39,9 +39,6 @@ MAX_SEEDS = 100_000
 MAX_WORKERS = 1024
 
 
-_Parser = OneLineParser  # errors in one line, exit 2
-
-
 def _resolution(text: str) -> tuple[int, int]:
     try:
         w, h = (int(x) for x in text.lower().split("x"))
@@ -88,7 +85,14 @@ def build_parser() -> argparse.ArgumentParser:
         return textwrap.fill(text, 88)
 
     plain = {"formatter_class": argparse.RawDescriptionHelpFormatter}
-    parser = _Parser(
+
+    def output(p, what: str, **kwargs) -> None:
+        p.add_argument("--out", type=non_empty("a folder"), help=f"output folder ({what})", **kwargs)
+        p.add_argument(
+            "--force", action="store_true", help="replace --out even if this program did not write it"
+        )
+
+    parser = OneLineParser(
         prog=prog,
         description=wrap(
             "Stereo visual odometry for a crawler robot [Zhao], line-feature EKF-SLAM [Yan 2020] "
@@ -127,15 +131,8 @@ def build_parser() -> argparse.ArgumentParser:
         type=non_empty("a sample name or a folder"),
         help="sample name, KITTI-layout folder or ASL recording (default: indoor_linear)",
     )
-    run.add_argument(
-        "--out",
-        type=non_empty("a folder"),
-        help="output folder (default: runs/NAME); new, empty, or written by an earlier run",
-    )
-    run.add_argument(
-        "--force", action="store_true", help="replace --out even if this program did not write it"
-    )
-    run.add_argument("--frames", type=count_at_least(1, "frames"), help="process only the first N frames")
+    output(run, "default: runs/NAME; new, empty, or written by an earlier run")
+    run.add_argument("--frames", type=count_at_least(2, "frames"), help="process only the first N frames")
     run.add_argument(
         "--no-odometry", action="store_true", help="ignore odometry.txt (constant-velocity prediction)"
     )
@@ -190,15 +187,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     conv.add_argument("sequence", help="the recording (ASL layout) or any sequence folder")
     conv.add_argument("--to", choices=("kitti",), default="kitti", help="layout to write (kitti)")
-    conv.add_argument(
-        "--out",
-        required=True,
-        type=non_empty("a folder"),
-        help="output folder: new, empty, or written by vo_lib",
-    )
-    conv.add_argument(
-        "--force", action="store_true", help="replace --out even if this program did not write it"
-    )
+    output(conv, "new, empty, or written by vo_lib", required=True)
     gen = sub.add_parser(
         "generate",
         help="render a named sample sequence in the KITTI layout",
@@ -210,10 +199,7 @@ def build_parser() -> argparse.ArgumentParser:
         **plain,
     )
     gen.add_argument("name", choices=sorted(SAMPLES), help="which sample")
-    gen.add_argument("--out", type=non_empty("a folder"), help="output folder (default: data/NAME)")
-    gen.add_argument(
-        "--force", action="store_true", help="replace --out even if this program did not write it"
-    )
+    output(gen, "default: data/NAME")
     gen.add_argument(
         "--frames",
         type=count_at_least(2, "frames"),
@@ -265,10 +251,7 @@ def build_parser() -> argparse.ArgumentParser:
         help="local worker processes (default: one per core; 1 runs in this process)",
     )
     sweep.add_argument("--scheduler", help="address of a running Dask scheduler, e.g. tcp://host:8786")
-    sweep.add_argument("--out", type=non_empty("a folder"), help="output folder (default: sweeps/NAME)")
-    sweep.add_argument(
-        "--force", action="store_true", help="replace --out even if this program did not write it"
-    )
+    output(sweep, "default: sweeps/NAME")
     return parser
 
 
@@ -281,18 +264,10 @@ class _Stopped(BaseException):
 
 
 def _stop(signum, frame):
-    """SIGTERM: remember it (it may land where it is dropped, see ``outputs.INTERRUPTED``), raise it."""
+    """Ctrl-C or SIGTERM: remember it (it may land where it is dropped: ``outputs.INTERRUPTED``), raise it."""
     from vo_lib.outputs import INTERRUPTED
 
-    INTERRUPTED.append(stop := _Stopped(signum))
-    raise stop
-
-
-def _interrupt(signum, frame):
-    """Ctrl-C: remember it, as :func:`_stop` does, and raise it."""
-    from vo_lib.outputs import INTERRUPTED
-
-    INTERRUPTED.append(stop := KeyboardInterrupt())
+    INTERRUPTED.append(stop := KeyboardInterrupt() if signum == signal.SIGINT else _Stopped(signum))
     raise stop
 
 
@@ -354,21 +329,15 @@ def _generate(args) -> None:
     except OutputError as exc:  # named by the folder; the user gave it as --out
         text = str(exc)
         raise OutputError(f"--out {text}" if args.out and not text.startswith("--out ") else text) from None
-    except ValueError as exc:  # frames beyond the sample
-        raise UsageError(str(exc)) from None
     print(f"wrote {path}")
 
 
-#: Commands that call one function: its module, its name and the arguments it takes, in order.
+#: The module of each command that calls one function, ``COMMAND_command``, its options as keywords.
 COMMANDS = {
-    "run": (
-        "vo_lib.cli.run",
-        "run_command",
-        ("sequence", "out", "frames", "no_odometry", "seed", "force", "motion"),
-    ),
-    "evaluate": ("vo_lib.cli.evaluate", "evaluate_command", ("gt", "est", "segments", "extrinsic_of")),
-    "convert": ("vo_lib.cli.run", "convert_command", ("sequence", "to", "out", "force")),
-    "sweep": ("vo_lib.cli.sweep", "sweep_command", ("name", "seeds", "workers", "scheduler", "out", "force")),
+    "run": "vo_lib.cli.run",
+    "convert": "vo_lib.cli.run",
+    "evaluate": "vo_lib.cli.evaluate",
+    "sweep": "vo_lib.cli.sweep",
 }
 
 
@@ -380,9 +349,8 @@ def _dispatch(args) -> None:
         from vo_lib.bench import BENCHES
 
         return BENCHES[args.name]()
-    module, name, arguments = COMMANDS[args.command]
-    getattr(importlib.import_module(module), name)(*(getattr(args, a) for a in arguments))
-    return None
+    kwargs = {k: v for k, v in vars(args).items() if k != "command"}
+    return getattr(importlib.import_module(COMMANDS[args.command]), f"{args.command}_command")(**kwargs)
 
 
 def _run_parsed(args, command: str) -> int:
@@ -418,15 +386,14 @@ def _run_parsed(args, command: str) -> int:
 
 @contextlib.contextmanager
 def _signals():
-    """SIGTERM and SIGINT handled as :func:`_stop` and :func:`_interrupt` meanwhile (from the main
+    """SIGTERM and SIGINT handled by :func:`_stop` meanwhile (from the main
     thread only: Python sets handlers there), unraisable signals kept quiet; all put back after."""
     import threading
 
     from vo_lib.outputs import INTERRUPTED
 
-    handled = (signal.SIGTERM, _stop), (signal.SIGINT, _interrupt)
     main_thread = threading.current_thread() is threading.main_thread()
-    previous = {signum: signal.signal(signum, handler) for signum, handler in handled} if main_thread else {}
+    previous = {s: signal.signal(s, _stop) for s in (signal.SIGTERM, signal.SIGINT)} if main_thread else {}
     INTERRUPTED.clear()
     previous_hook, sys.unraisablehook = sys.unraisablehook, _quiet_unraisable(sys.unraisablehook)
     defaults = {signal.SIGTERM: signal.SIG_DFL, signal.SIGINT: signal.default_int_handler}
@@ -447,13 +414,15 @@ def main(argv: list[str] | None = None) -> int:
             args = parser.parse_args(argv)
             command = f"{parser.prog} {args.command}"
             return _run_parsed(args, command)
-        except KeyboardInterrupt:
-            print(f"{command}: interrupted (Ctrl-C); nothing half-written is left", file=sys.stderr)
-            return 130
-        except _Stopped as stop:
-            name = signal.Signals(stop.signum).name
-            print(f"{command}: stopped by {name}; nothing half-written is left", file=sys.stderr)
-            return 128 + stop.signum
+        except (KeyboardInterrupt, _Stopped) as stop:
+            signum = getattr(stop, "signum", signal.SIGINT)
+            how = (
+                "interrupted (Ctrl-C)"
+                if signum == signal.SIGINT
+                else f"stopped by {signal.Signals(signum).name}"
+            )
+            print(f"{command}: {how}; nothing half-written is left", file=sys.stderr)
+            return 128 + signum
 
 
 if __name__ == "__main__":

@@ -20,6 +20,7 @@ import csv
 import hashlib
 import os
 import sys
+import threading
 from dataclasses import asdict, fields
 from pathlib import Path
 
@@ -91,22 +92,6 @@ def progress_line(text: str) -> None:
     print(text, flush=True)
 
 
-class _say_if_slow:
-    """Print ``text`` if the block is still running after :data:`SLOW_S` seconds."""
-
-    def __init__(self, text: str):
-        import threading
-
-        self.timer = threading.Timer(SLOW_S, progress_line, (text,))
-        self.timer.daemon = True
-
-    def __enter__(self):
-        self.timer.start()
-
-    def __exit__(self, *exc):
-        self.timer.cancel()
-
-
 def announce_run(name: str, source: Path, frames: int | None, out_dir: Path) -> None:
     """The first line of a run: what it reads, what comes first, where it writes."""
     from vo_lib.data import is_rendered
@@ -125,23 +110,6 @@ def announce_run(name: str, source: Path, frames: int | None, out_dir: Path) -> 
             f"run: sample {name}, {n} frames -> {out_dir}/. First use: its frames are rendered into "
             f"{source} first (about {how_long}; later runs reuse them)"
         )
-
-
-def resolve_sequence(name_or_path: str, frames: int | None, odometry: bool = True, checked: bool = False):
-    """A loaded sequence for a sample name (generated on first use) or a KITTI-layout folder.
-
-    ``checked``: ``frames`` already went through :func:`input_path`.
-    """
-    from vo_lib.data import load_sequence
-
-    if not checked:
-        _, frames = input_path(name_or_path, frames)
-    return load_sequence(
-        name_or_path,
-        frames=frames,
-        odometry=odometry,
-        progress=True if sys.stderr.isatty() else "lines",
-    )
 
 
 def _write_csv(path: Path, rows, cls) -> None:
@@ -220,21 +188,19 @@ def run_command(
     written poses are the 6-DoF camera poses where the model has them, else the planar poses
     carried to the camera through its mount.
     """
+    from vo_lib.data import data_dir, load_sequence
+
     name = sequence or DEFAULT_SEQUENCE
-    if frames is not None and frames < 2:
-        raise UsageError(f"--frames {frames}: need at least 2 frames")
-    if seed < 0:
-        raise UsageError(f"--seed {seed}: expected a whole number >= 0")
     source, load_frames = input_path(name, frames)
     out_dir = Path(out) if out else Path("runs") / default_name(name)
-    from vo_lib.data import data_dir
 
     keep = {data_dir(): "the sample data folder"}
     with OutputFolder(
         out_dir, "vo_lib run", force=force, inputs=[source], keep=keep, option="--out", checksums=True
     ) as output:
         announce_run(name, source, frames, out_dir)  # once --out is known to be writable
-        seq = resolve_sequence(name, load_frames, odometry=not no_odometry, checked=True)
+        progress = True if sys.stderr.isatty() else "lines"
+        seq = load_sequence(name, frames=load_frames, odometry=not no_odometry, progress=progress)
         with reading(seq.path):  # no command replaces the sequence while it is read
             report = _run_into(output, seq, name, frames, no_odometry, seed, motion)
     print(f"\nwrote {out_dir}/: poses.txt trajectory.tum timings.csv diagnostics.csv trajectory.png")
@@ -262,12 +228,19 @@ def _run_into(
         raise UsageError(f"{seq.path}: has {n} frame; a run needs at least 2 frames")
     vehicle = vehicle_of(seq, use_odometry=not no_odometry)
     mount = vehicle.mount
-    with _say_if_slow(
+    compiling = (
         f"compiling the Numba kernels on the first {WARM_UP_FRAMES} frames (first run in this "
         "environment only: they are cached; up to a minute on 2 cores) ..."
-    ):
+    )
+    said = []  # the notice, once SLOW_S have passed; then its end is said too
+    slow = threading.Timer(SLOW_S, lambda: said.append(progress_line(compiling)))
+    slow.start()
+    try:
         seconds = warm_up(seq, use_odometry=not no_odometry, seed=seed, motion=motion)
-    if seconds >= SLOW_S:
+    finally:
+        slow.cancel()
+        slow.join()
+    if said or seconds >= SLOW_S:
         progress_line(f"compiled in {seconds:.0f} s, before the timed run (not in timings.csv)")
     progress_line(f"visual odometry on {n} frames ...")
     result = run_sequence(
@@ -319,12 +292,8 @@ def convert_command(sequence: str, to: str, out: str, force: bool = False) -> No
     from vo_lib.data import load_sequence
     from vo_lib.formats.sequence_writer import SequenceWriter
 
-    if to != "kitti":
-        raise UsageError(f"--to {to}: expected kitti")
-    source = Path(sequence)
-    if not source.exists():
-        raise UsageError(f"{sequence}: no such folder")
-    seq = load_sequence(source, odometry=False, progress=False)  # before --out: a bad input changes nothing
+    # read before --out is touched: a bad input changes nothing
+    seq = load_sequence(Path(sequence), odometry=False, progress=False)
     manifest = {k: v for k, v in seq.manifest.items() if k != "layout"}
     writer = SequenceWriter(
         out, seq.camera, force=force, option="--out", written_by="vo_lib convert", inputs=[seq.path]
