@@ -116,8 +116,8 @@ def test_warm_up_runs_before_the_first_timed_frame(workdir, monkeypatch):
 
 
 def test_error_table_of_a_spot_turn_reports_the_turn_not_a_percentage(capsys):
-    from vo_lib.cli.report import error_report, print_error_table
     from vo_lib.stereo_vo.pipeline import PipelineResult
+    from vo_lib.stereo_vo.run_report import error_report, print_error_table
 
     yaw = np.radians(np.linspace(0.0, 400.0, 41))
     truth = np.column_stack([np.zeros(41), np.zeros(41), yaw])
@@ -133,10 +133,10 @@ def test_error_table_of_a_spot_turn_reports_the_turn_not_a_percentage(capsys):
 
 
 def test_error_table_gives_each_column_its_3d_errors(capsys):
-    from vo_lib.cli.report import error_report, print_error_table
     from vo_lib.evaluation import standard_errors
     from vo_lib.geometry import camera_poses_from_planar
     from vo_lib.stereo_vo.pipeline import PipelineResult
+    from vo_lib.stereo_vo.run_report import error_report, print_error_table
 
     x = np.linspace(0.0, 2.0, 21)
     truth = np.column_stack([x, np.zeros(21), np.zeros(21)])

@@ -15,9 +15,9 @@ import numpy as np
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
-from vo_lib.cli.report import odometry_name, print_timing_table, timing_rows  # noqa: E402
 from vo_lib.stereo_vo.paper_tables import PAPER_TABLE1  # noqa: E402
 from vo_lib.stereo_vo.pipeline import FrameTimings, PipelineResult  # noqa: E402
+from vo_lib.stereo_vo.run_report import odometry_name, print_timing_table, timing_rows  # noqa: E402
 from vo_lib.viz.run_figure import plot_run  # noqa: E402
 
 #: The first line must come within 2 s on a quiet machine (0.7 s measured on the 2-core machine);

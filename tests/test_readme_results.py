@@ -16,10 +16,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from vo_lib.cli.report import error_report, truth_and_odometry
 from vo_lib.data import load_sequence
 from vo_lib.sim.samples import SAMPLES
 from vo_lib.stereo_vo.pipeline import run_sequence
+from vo_lib.stereo_vo.run_report import error_report, truth_and_odometry
 from vo_lib.stereo_vo.vehicle import vehicle_of
 
 README = Path(__file__).resolve().parents[1] / "README.md"

@@ -19,11 +19,11 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from vo_lib.cli.report import error_report, truth_and_odometry
 from vo_lib.formats.poses import write_tum
 from vo_lib.formats.sequence import read_sequence
 from vo_lib.outputs import read_marker
 from vo_lib.stereo_vo.pipeline import run_sequence
+from vo_lib.stereo_vo.run_report import error_report, truth_and_odometry
 from vo_lib.stereo_vo.vehicle import VehicleKind, vehicle_of
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -57,7 +57,7 @@ def numbers(cell: str) -> list[float]:
 
 
 def final_errors(seq, result, use_odometry: bool) -> dict:
-    """The errors ``python -m vo_lib run`` prints (:func:`vo_lib.cli.report.error_report`): final
+    """The errors ``python -m vo_lib run`` prints (:func:`vo_lib.stereo_vo.run_report.error_report`): final
     position error in % of the distance travelled and final heading error, of the car's planar
     pose against the truth's; ``report["vo"]``, ``report["odometry"]`` (where there is odometry)
     and ``report["distance_m"]``."""

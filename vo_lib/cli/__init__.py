@@ -3,7 +3,6 @@ that ``bench`` runs are in :mod:`vo_lib.bench`).
 
 ``main``    the parser: run, evaluate, convert, generate, bench, sweep
 ``run``     ``run`` (the stereo VO pipeline on a sequence, files written), ``evaluate``, ``convert``
-``report``  the run's tables: time per stage, errors in 3-D and planar
 ``sweep``   a paper's statistic over many seeds, serially or on Dask
 
 The top layer: it may import everything, nothing imports it.

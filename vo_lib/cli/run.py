@@ -24,7 +24,11 @@ import threading
 from dataclasses import asdict, fields
 from pathlib import Path
 
-from vo_lib.cli.report import (
+from vo_lib.formats.poses import write_kitti_poses, write_tum
+from vo_lib.geometry import camera_poses_from_planar
+from vo_lib.outputs import OutputFolder, notice, reading
+from vo_lib.sim.samples import SAMPLES
+from vo_lib.stereo_vo.run_report import (
     error_report,
     errors_3d,
     odometry_name,
@@ -33,10 +37,6 @@ from vo_lib.cli.report import (
     print_timing_table,
     truth_and_odometry,
 )
-from vo_lib.formats.poses import write_kitti_poses, write_tum
-from vo_lib.geometry import camera_poses_from_planar
-from vo_lib.outputs import OutputFolder, notice, reading
-from vo_lib.sim.samples import SAMPLES
 
 # The pipeline and the metrics (SciPy, Numba) are imported where they are used, so that a run
 # says what it is about to do before they load: its first line comes within a second or two.
