@@ -1,12 +1,7 @@
 """Command line of the collection: ``python -m vo_lib COMMAND``.
 
-Commands
---------
-run            the stereo VO pipeline on a sample, a KITTI-layout folder or an ASL recording
-evaluate       trajectory errors of an estimate against ground truth (KITTI or TUM files)
-generate NAME  render a named sample sequence (KITTI layout, with ground truth and odometry)
-bench NAME     time one part of the library against its baseline (``bench --help`` lists them)
-sweep NAME     a paper's statistic over many seeds, in this process or on Dask (corridor, lap, nees, table1)
+The commands (run, evaluate, convert, generate, bench, sweep) are listed by ``--help``, each with
+its own ``--help``.
 
 Every problem with the input or the arguments prints one line on stderr and exits with status 2;
 Ctrl-C (SIGINT) or SIGTERM removes what was half-written, prints one line and exits with 130 or

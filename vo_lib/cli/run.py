@@ -5,13 +5,9 @@
 ``.vo_lib_output.json`` (how the run was made), and prints a timing table like the paper's Table 1
 and, where the sequence has ground truth, the errors.
 
-Outputs follow :mod:`vo_lib.outputs`: ``--out`` must be new, empty or an earlier output
-of this program (``--force`` replaces any other folder, but never the input sequence, a folder
-above or inside it, the current or the home folder); every file goes to a temporary folder first,
-renamed into place at the end, so a failed or interrupted run leaves nothing half-written and the
-previous output untouched. An image that cannot be decoded mid-sequence stops the run the same
-way: one line naming the file and frame, nothing written. Bad arguments and bad input print one
-line and exit with status 2.
+Outputs follow :mod:`vo_lib.outputs` (``docs/outputs.md``): a failed or interrupted run, an image
+that cannot be decoded among them, leaves nothing half-written and the previous output untouched.
+Bad arguments and bad input print one line and exit with status 2.
 """
 
 from __future__ import annotations
