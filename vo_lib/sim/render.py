@@ -352,10 +352,8 @@ class StereoRenderer:
         T_left = np.asarray(T_world_camera, dtype=float)
         T_right = T_left.copy()
         T_right[:3, 3] = T_left[:3, 3] + T_left[:3, 0] * self.camera.baseline
-        if with_depth:
-            left, depth = self.render(T_left, with_depth=True, time=time)
-        else:
-            left = self.render(T_left, time=time)
+        left = self.render(T_left, with_depth, time)
+        left, depth = left if with_depth else (left, None)
         right = self.render(T_right, time=time)
         left, right = self.effects.apply(left, rng), self.effects.apply(right, rng)
         return (left, right, depth) if with_depth else (left, right)
