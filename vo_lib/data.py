@@ -1,12 +1,7 @@
-"""Sample sequences on demand: generated into ``data/`` on first use, reused afterwards.
-
-``load_sequence("indoor_linear")`` renders the named sample once (deterministically) into the data
-folder and loads it; ``load_sequence("/path/to/kitti/00")`` loads any folder in the KITTI layout,
-and a folder in EuRoC's ASL layout (holding ``mav0``) is undistorted and rectified on reading.
-The data folder is ``$VO_LIB_DATA`` if set, else the repository's ``data/`` (in a checkout), else
-``vo_lib/data`` in the user's cache folder (an installed package). A sample is written there
-under the rules of :mod:`vo_lib.outputs`: a folder of that name that this package did not
-write is never replaced.
+"""Sample sequences on demand: ``load_sequence(NAME)`` renders a named sample once into the data
+folder and loads it, ``load_sequence(PATH)`` reads a KITTI-layout folder or an ASL recording. A
+sample is written under the rules of :mod:`vo_lib.outputs` (a folder this package did not write
+is never replaced).
 """
 
 from __future__ import annotations
@@ -21,6 +16,7 @@ from vo_lib.sim.samples import SAMPLES, fingerprint, generate
 
 
 def data_dir() -> Path:
+    """``$VO_LIB_DATA``, else a checkout's ``data/``, else ``vo_lib/data`` in the user's cache."""
     env = os.environ.get("VO_LIB_DATA")
     if env:
         return Path(env)
@@ -63,16 +59,9 @@ def load_sequence(
     progress: bool = True,
     odometry: bool = True,
 ) -> Sequence:
-    """Load a named sample (generating it on first use) or a KITTI-layout folder.
-
-    ``progress`` while a sample renders: a bar (True), a line every few seconds (``"lines"``), or
-    nothing (False); see :func:`vo_lib.sim.samples.generate`.
-
-    ``frames``: a sample rendered with that many frames, or the first ``frames`` pairs of an ASL
-    recording (its ground truth need cover only those); a KITTI-layout folder is read whole.
-
-    ``odometry=False`` ignores the sequence's ``odometry.txt`` (it is not read at all).
-    """
+    """A named sample (rendered on first use, ``progress`` as :func:`vo_lib.sim.samples.generate`
+    shows it) or a folder. ``frames``: a sample of that many frames, or an ASL recording's first
+    pairs (a KITTI-layout folder is read whole); ``odometry=False``: ``odometry.txt`` is not read."""
     key = str(name_or_path)
     if key in SAMPLES and not Path(key).exists():
         path = sample_path(key, frames, resolution)

@@ -1,11 +1,6 @@
-"""Benchmarks, run as ``python -m vo_lib bench NAME``: each prints its times beside a baseline.
-
-Times are medians of repeated runs on data drawn once with a fixed seed, so a run compares
-like with like; they are measurements to read, never assertions. One module per wing
-(``bench_stereo_vo``, ``bench_line_slam``, ``bench_lidar_tracking``), one for the simulated
-sensors (``bench_sim``), one for the real drive beside the PnP baseline (``bench_real``) and one
-for how real the samples' images look (``bench_realism``); the timing helpers are in ``common``.
-Each benchmark imports what it times when it runs, so listing them stays fast.
+"""Benchmarks, run as ``python -m vo_lib bench NAME``: each prints its times beside a baseline, as
+medians of repeated runs on data drawn once with a fixed seed (measurements, never assertions).
+Each imports what it times when it runs, so listing them stays fast.
 """
 
 from __future__ import annotations

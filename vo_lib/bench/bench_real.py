@@ -1,17 +1,6 @@
-"""Benchmark on real stereo: our pipeline beside the OpenCV PnP baseline, same frames, same process.
-
-``python -m vo_lib bench real`` runs on every sequence folder in ``$VO_LIB_REALDATA`` (by default
-the ``shared/realdata`` folder beside the repository): KITTI-layout folders (``image_0/``) and
-recordings in EuRoC's ASL layout (``mav0/``), which are undistorted and rectified on reading. Per
-sequence, without odometry, it prints the per-stage median milliseconds of our pipeline and the
-baseline's, each timed from images decoded beforehand (so that neither shares the cores with a
-decoding thread), with the decoding (and rectification) per frame reported apart; and for
-both, the 3-D errors: ATE after SE(3) alignment, final position and rotation error, and the
-path length against the truth's.
-
-Each method runs :data:`REPEATS` times on the same frames and its fastest run is reported (as
-``timeit`` does: a slower run is one that other processes slowed down). The repeats give the
-same poses, which is checked.
+"""``python -m vo_lib bench real``: our pipeline beside the OpenCV PnP baseline on every sequence
+folder of ``$VO_LIB_REALDATA`` (KITTI or ASL layout), same frames, same process; what it times and
+prints is on the benchmarks page (``docs/benchmarks.md``).
 """
 
 from __future__ import annotations
@@ -92,7 +81,7 @@ def fastest(run, median_ms, repeats: int = REPEATS) -> tuple[object, list[float]
 
 def bench_real(folders=None, repeats: int = REPEATS) -> dict[str, float]:
     """Time and score our pipeline and the PnP baseline on real sequences (the fastest of
-    ``repeats`` runs each; a test that reads only the errors asks for one)."""
+    ``repeats`` runs each)."""
     import cv2
 
     from vo_lib.data import load_sequence

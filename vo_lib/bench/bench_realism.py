@@ -1,32 +1,15 @@
-"""How close the samples' images are to real ones: ``python -m vo_lib bench realism``.
-
-For every named sample and every real sequence found in the folder named by ``$VO_LIB_REALDATA``
-(KITTI-layout sequence folders, each holding ``image_0/``), the means over 20 left images spread evenly
-over the sequence of the three statistics of :mod:`vo_lib.sim.realism`. Samples are rendered in
-memory (only those 20 frames), so nothing is written. The last column says whether a sample
-meets its range: outdoor samples and the road 0.35-0.65 of cells without a corner and 0.3-0.5
-low-gradient pixels (the range of real road sequences), indoor samples at least 0.25 empty cells.
+"""``python -m vo_lib bench realism``: the statistics of :mod:`vo_lib.sim.realism`, averaged over
+:data:`FRAMES` left images, of every KITTI-layout sequence in ``$VO_LIB_REALDATA`` and of every
+named sample (rendered in memory), each sample beside the range it must meet.
 """
 
 from __future__ import annotations
-
-import os
-from pathlib import Path
 
 #: Frames measured per sequence, spread evenly over it.
 FRAMES = 20
 #: Ranges the samples must meet: (empty cells low, high), (low-gradient low, high).
 OUTDOOR_RANGE = ((0.35, 0.65), (0.30, 0.50))
 INDOOR_RANGE = ((0.25, 1.0), (0.0, 1.0))
-
-
-def realdata_root() -> Path | None:
-    """The folder named by ``$VO_LIB_REALDATA``, if the variable is set and the folder exists."""
-    env = os.environ.get("VO_LIB_REALDATA")
-    if not env:
-        return None
-    root = Path(env)
-    return root if root.is_dir() else None
 
 
 def sample_range(indoor: bool):
@@ -45,13 +28,13 @@ def sample_statistics(name: str, frames: int = FRAMES):
 
 def bench_realism(frames: int = FRAMES) -> dict[str, float]:
     """Print the realism table of every sample and real sequence; returns its figures by name."""
+    from vo_lib.bench.bench_real import realdata_folders
     from vo_lib.formats.sequence import read_sequence
     from vo_lib.sim.realism import ImageStatistics, image_statistics, spread_frames
     from vo_lib.sim.samples import SAMPLES, is_indoor
 
     rows = []
-    root = realdata_root()
-    folders = sorted(p for p in root.iterdir() if (p / "image_0").is_dir()) if root else []
+    folders = [p for p in realdata_folders() if (p / "image_0").is_dir()]
     for folder in folders:
         seq = read_sequence(folder, odometry=False)
         picked = spread_frames(len(seq), frames)
@@ -64,9 +47,7 @@ def bench_realism(frames: int = FRAMES) -> dict[str, float]:
         "suppression; gradient: 3x3 Sobel magnitude"
     )
     if not folders:
-        env = os.environ.get("VO_LIB_REALDATA")
-        where = f"VO_LIB_REALDATA={env} holds none" if env else "VO_LIB_REALDATA is not set"
-        print(f"  (no real sequences: {where}; set it to a folder of KITTI-layout sequences)")
+        print("  (no real sequences: set VO_LIB_REALDATA to a folder of KITTI-layout sequences)")
     header = f"{'cells without a corner':>24s}{'corners per 640x480':>21s}{'low-gradient pixels':>21s}"
     print(f"  {'sequence':<46s}{header}")
     out = {}
@@ -77,9 +58,9 @@ def bench_realism(frames: int = FRAMES) -> dict[str, float]:
             ok = e0 <= s.empty_cells <= e1 and g0 <= s.low_gradient <= g1
             verdict = "  in range" if ok else "  OUT of range"
         print(f"  {label:<46s}{s.empty_cells:24.2f}{s.corners_per_vga:21,.0f}{s.low_gradient:21.2f}{verdict}")
-        out[f"{label}:empty_cells"] = s.empty_cells
-        out[f"{label}:corners_per_vga"] = s.corners_per_vga
-        out[f"{label}:low_gradient"] = s.low_gradient
+        out.update(
+            {f"{label}:{key}": getattr(s, key) for key in ("empty_cells", "corners_per_vga", "low_gradient")}
+        )
     print(
         "  ranges: outdoor samples and the road 0.35-0.65 cells without a corner and 0.30-0.50 "
         "low-gradient pixels; indoor samples at least 0.25 cells without a corner"

@@ -125,7 +125,7 @@ def evaluate_command(gt: str, est: str, segments=None, extrinsic_of: str | None 
     """
     from vo_lib.evaluation import Alignment, ate_positions, kitti_segment_errors, shown, standard_errors
     from vo_lib.formats.euroc import body_to_rectified_camera, tracked_to_camera
-    from vo_lib.formats.groundtruth import GroundTruthError, TruthKind, read_groundtruth
+    from vo_lib.formats.groundtruth import GroundTruthError, read_groundtruth
 
     lengths = None if segments is None else tuple(segments)
     try:
@@ -153,9 +153,9 @@ def evaluate_command(gt: str, est: str, segments=None, extrinsic_of: str | None 
         )
     to_camera = np.eye(4)  # the rectified left camera in the tracked frame (body, prism)
     if recording is not None:
-        tracker = recording if truth.kind is TruthKind.POSITIONS else None  # a prism's lever arm
+        tracker = recording if truth.poses is None else None  # a prism's lever arm
         to_camera = tracked_to_camera(gt, body_to_rectified_camera(recording), tracker)
-    if truth.kind is TruthKind.POSITIONS:
+    if truth.poses is None:
         ignored = f"--segments: --gt {gt} holds positions only, which give the ATE alone\n"
         print("" if lengths is None else ignored, end="")
         lever = np.linalg.inv(to_camera)[:3, 3]  # the tracked point in the rectified camera

@@ -18,7 +18,7 @@ from scipy.spatial.transform import Rotation
 
 from vo_lib.atomic import notice
 from vo_lib.camera import StereoCamera
-from vo_lib.formats.frame_files import SequenceError, read_text
+from vo_lib.formats.frame_files import SequenceError, numbers_at, read_text
 from vo_lib.formats.poses import rotation_problem
 
 #: Shortest and longest distance between the two cameras (metres) that make a stereo rig: a
@@ -105,15 +105,7 @@ def _numbers(path: Path, data: dict, key: str, count: int, what: str) -> np.ndar
                 f"{path}: key {key}: rows: {shape[0]!r}, cols: {shape[1]!r}; expected the numbers 4 and 4"
             )
         value = value.get("data")
-    try:
-        a = np.array(value, dtype=float).ravel()
-    except (TypeError, ValueError):
-        a = np.array([])
-    if value is None:
-        raise AslError(f"{path}: key {key} missing; expected {what}")
-    if a.size != count or not np.all(np.isfinite(a)):
-        raise AslError(f"{path}: key {key}: expected {what} ({count} finite numbers), got {value!r:.60}")
-    return a
+    return numbers_at(path, key, value, (count,), f"{what} ({count} finite numbers)")
 
 
 def _transform(path: Path, data: dict, what: str) -> np.ndarray:

@@ -1,21 +1,7 @@
-"""A stereo rig as it records, in the ASL layout of the EuRoC datasets (and of Kalibr):
-
-::
-
-    ROOT/mav0/cam0/data/<timestamp ns>.png   left images, raw (distorted, not rectified)
-    ROOT/mav0/cam0/data.csv                  "#timestamp [ns],filename" then one row per image
-    ROOT/mav0/cam0/sensor.yaml               T_BS (camera -> body, 4x4), intrinsics [fu, fv, cu, cv],
-                                             distortion_model: radial-tangential,
-                                             distortion_coefficients [k1, k2, p1, p2], resolution
-    ROOT/mav0/cam1/...                       the right camera, likewise
-    ROOT/mav0/state_groundtruth_estimate0/   optional ground truth: groundtruth.tum or data.csv
-    ROOT/mav0/leica0/data.csv                optional: a laser tracker's prism positions
-
-``ROOT`` may also be the ``mav0`` folder itself. Reading it undistorts and rectifies both
-cameras with OpenCV (``stereoRectify``, ``initUndistortRectifyMap``), pairs the images by
-timestamp, and moves a 6-DoF ground truth from the body frame into the rectified left camera.
-The result is a :class:`~vo_lib.formats.sequence.Sequence` like any other, whose images are
-rectified as they are read. Every problem raises one :class:`AslError` naming the file and key.
+"""A stereo rig as it records, in the ASL layout of the EuRoC datasets and Kalibr (``ROOT/mav0/cam0``,
+``cam1``, optional ground truth; ``docs/real_data.md`` shows the layout). Both cameras are undistorted
+and rectified as their images are read, the images paired by timestamp, and a 6-DoF ground truth
+moved into the rectified left camera. Every problem raises one :class:`AslError` naming the file and key.
 """
 
 from __future__ import annotations
@@ -26,7 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from vo_lib.formats.asl_calibration import AslError, read_camera_yaml, rectify, truth_extrinsic
-from vo_lib.formats.groundtruth import TruthKind, covering, read_groundtruth, to_camera
+from vo_lib.formats.groundtruth import covering, read_groundtruth, to_camera
 from vo_lib.formats.images import check_headers
 from vo_lib.formats.poses import read_text
 from vo_lib.formats.sequence import Sequence, check_frame_spacing
@@ -127,10 +113,8 @@ def body_to_rectified_camera(path) -> np.ndarray:
 
 def tracked_to_camera(truth_path, T_body_rect, tracker_of=None) -> np.ndarray:
     """``X``, the rectified left camera in the frame a ground-truth file tracks (the body, or the
-    prism of the ``sensor.yaml`` beside it): ``W_k X`` is the camera's pose, and the translation of
-    ``X^-1`` is the tracked point in the camera (a prism's lever arm). A file without a
-    ``sensor.yaml`` beside it takes that of the laser tracker of the recording ``tracker_of``
-    (``leica0``), if given: positions copied out of the recording keep their lever arm."""
+    prism of the ``sensor.yaml`` beside it, else of ``tracker_of``'s ``leica0``): ``W_k X`` is the
+    camera's pose, and ``X^-1``'s translation the tracked point in the camera (a lever arm)."""
     truth_path = Path(truth_path)
     if tracker_of is not None and not (truth_path.parent / "sensor.yaml").is_file():
         truth_path = mav0_of(tracker_of) / "leica0" / truth_path.name  # its sensor.yaml, if any
@@ -138,13 +122,9 @@ def tracked_to_camera(truth_path, T_body_rect, tracker_of=None) -> np.ndarray:
 
 
 def read_asl(path, groundtruth=None, frames: int | None = None) -> Sequence:
-    """Read an ASL recording as a rectified :class:`~vo_lib.formats.sequence.Sequence`.
-
-    The 6-DoF ground truth (``groundtruth`` or the first of :data:`GROUND_TRUTH_FILES`) becomes
-    ``poses``: the rectified left camera at each image in its first pose. Position-only ground
-    truth is kept in ``manifest["positions"]`` (for an alignment; see :mod:`vo_lib.evaluation`).
-    ``frames``: read only the first so many pairs.
-    """
+    """The first ``frames`` pairs of an ASL recording, rectified; the 6-DoF truth (``groundtruth`` or
+    the first of :data:`GROUND_TRUTH_FILES`) in ``poses`` (the rectified left camera in its first
+    pose), or position-only truth in ``manifest["positions"]``."""
     root = Path(path)
     mav0, calib = _calibration(root)
     rect = rectify(*calib, mav0)
@@ -176,7 +156,7 @@ def _truth_into_camera(truth_path: Path, seconds, T_body_rect, manifest: dict):
     truth = read_groundtruth(truth_path)
     i_img, i_gt = covering(truth, seconds)
     X = tracked_to_camera(truth_path, T_body_rect)
-    if truth.kind is TruthKind.POSES:
+    if truth.poses is not None:
         return to_camera(truth.poses[i_gt], X)
     lever = np.linalg.inv(X)[:, 3]  # the prism in the rectified camera
     manifest["positions"] = {

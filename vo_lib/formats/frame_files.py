@@ -128,70 +128,60 @@ def read_manifest(path: Path) -> dict:
     return manifest
 
 
-def _manifest_numbers(path: Path, key: str, value, shape: tuple, what: str, bounds=(-np.inf, np.inf)):
+def numbers_at(path: Path, key: str, value, shape: tuple, what=None, bounds=(-np.inf, np.inf)) -> np.ndarray:
+    """``value``, found at ``key`` of ``path``, as finite numbers of ``shape`` within ``bounds``
+    (``what`` they are; by default, a number within them); else one :class:`SequenceError`."""
+    what = what or f"a number from {bounds[0]:g} to {bounds[1]:g}"
+    if value is None:
+        raise SequenceError(f"{path}: key {key} missing; expected {what}")
     try:
         a = np.array(value, dtype=float)
     except (TypeError, ValueError):
         a = np.array([])
-    within = np.all((bounds[0] <= a) & (a <= bounds[1]))
-    if isinstance(value, bool) or a.shape != shape or not np.all(np.isfinite(a)) or not within:
-        raise SequenceError(f"{path}: key {key}: expected {what}, got {json.dumps(value)[:40]}")
+    within = np.all(np.isfinite(a) & (bounds[0] <= a) & (a <= bounds[1]))
+    if isinstance(value, bool) or a.shape != shape or not within:
+        raise SequenceError(f"{path}: key {key}: expected {what}, got {json.dumps(value, default=str)[:40]}")
     return a
 
 
 #: The camera mounts a manifest may state: a crawler's camera above its turning axis (planar
 #: motion), and a car's. ``camera.mount`` holding anything else is refused, not read as the car's.
 CAMERA_MOUNTS = ("above turning axis", "car: ahead of the rear axle (vo_lib.sim.road)")
-#: The range of ``time_origin_s`` (seconds), ``camera.height_m`` and ``camera.forward_m`` (metres).
-MANIFEST_BOUNDS = {
-    "time_origin_s": (-1e11, 1e11),
-    "camera.height_m": (0.0, 10.0),
-    "camera.forward_m": (-10.0, 10.0),
-}
 
 
 def check_manifest(path: Path, manifest: dict, frames: int) -> None:
     """Raise :class:`SequenceError` unless the keys of ``manifest.json`` that a run reads (each
-    optional) hold what it expects: ``time_origin_s`` seconds, ``camera.height_m`` and
-    ``camera.forward_m`` metres (each within :data:`MANIFEST_BOUNDS`), ``T_body_camera`` a 4x4
-    rigid transform, ``positions`` the position-only truth of frames ``0..frames-1``."""
-    camera = manifest.get("camera", {})
-    if not isinstance(camera, dict):
-        raise SequenceError(f"{path}: key camera: expected an object {{...}}, got {json.dumps(camera)[:40]}")
-    for key, value in (
-        ("time_origin_s", manifest.get("time_origin_s", 0)),
-        *((f"camera.{name}", camera.get(name, 0)) for name in ("height_m", "forward_m")),
-    ):
-        low, high = MANIFEST_BOUNDS[key]
-        _manifest_numbers(path, key, value, (), f"a number from {low:g} to {high:g}", (low, high))
-    if "T_body_camera" in manifest:
-        T = _manifest_numbers(path, "T_body_camera", manifest["T_body_camera"], (4, 4), "4 rows of 4 numbers")
-        problem = rotation_problem(T[:3, :3]) or (
-            "" if np.allclose(T[3], [0, 0, 0, 1]) else "last row not 0 0 0 1"
-        )
-        if problem:
-            raise SequenceError(f"{path}: key T_body_camera: {problem}; expected a rigid transform")
-    positions = manifest.get("positions")
-    if positions is not None:
-        if not isinstance(positions, dict):
+    optional) hold numbers of the shape and range below, ``T_body_camera`` a rigid transform."""
+    camera, positions = manifest.get("camera", {}), manifest.get("positions", {})
+    for key, value in (("camera", camera), ("positions", positions)):
+        if not isinstance(value, dict):
             raise SequenceError(
-                f"{path}: key positions: expected an object with frames, xyz, lever_arm_camera"
+                f"{path}: key {key}: expected an object {{...}}, got {json.dumps(value)[:40]}"
             )
-        index = _manifest_numbers(
-            path,
-            "positions.frames",
-            positions.get("frames"),
-            (len(positions.get("frames") or []),),
-            "frame numbers",
-        )
-        if len(index) and (index.min() < 0 or index.max() >= frames or np.any(index % 1)):
-            raise SequenceError(f"{path}: key positions.frames: expected frame numbers 0 to {frames - 1}")
-        _manifest_numbers(
-            path, "positions.xyz", positions.get("xyz"), (len(index), 3), f"{len(index)} rows of x y z"
-        )
-        _manifest_numbers(
-            path, "positions.lever_arm_camera", positions.get("lever_arm_camera"), (3,), "3 numbers"
-        )
+    index = positions.get("frames")
+    n = len(index) if isinstance(index, list) else -1
+    anything = (-np.inf, np.inf)
+    wanted = [  # key, value, shape, what (None: a number within the bounds), bounds
+        ("time_origin_s", manifest.get("time_origin_s", 0), (), None, (-1e11, 1e11)),  # seconds
+        ("camera.height_m", camera.get("height_m", 0), (), None, (0.0, 10.0)),  # metres
+        ("camera.forward_m", camera.get("forward_m", 0), (), None, (-10.0, 10.0)),
+        ("T_body_camera", manifest.get("T_body_camera", np.eye(4)), (4, 4), "4 rows of 4 numbers", anything),
+    ]
+    if positions:  # the position-only truth of frames 0 .. frames - 1
+        wanted += [
+            ("positions.frames", index, (n,), f"frame numbers 0 to {frames - 1}", (0, frames - 1)),
+            ("positions.xyz", positions.get("xyz"), (n, 3), f"{n} rows of x y z", anything),
+            ("positions.lever_arm_camera", positions.get("lever_arm_camera"), (3,), "3 numbers", anything),
+        ]
+    found = {row[0]: numbers_at(path, *row) for row in wanted}
+    if positions and np.any(found["positions.frames"] % 1):
+        raise SequenceError(f"{path}: key positions.frames: expected frame numbers 0 to {frames - 1}")
+    T = found["T_body_camera"]
+    problem = rotation_problem(T[:3, :3]) or (
+        "" if np.allclose(T[3], [0, 0, 0, 1]) else "last row not 0 0 0 1"
+    )
+    if problem:
+        raise SequenceError(f"{path}: key T_body_camera: {problem}; expected a rigid transform")
 
 
 def read_per_frame(path: Path, frames: int, noun: str, read) -> np.ndarray:

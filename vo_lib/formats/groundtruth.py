@@ -1,32 +1,12 @@
-"""Ground truth in the common formats, associated with the images by timestamp.
-
-Formats, told apart by their rows:
-
-========================  ===========================================================  =========
-format                    one row                                                       holds
-========================  ===========================================================  =========
-KITTI poses               12 numbers: the top three rows of a 4x4 pose, one per image   poses
-TUM trajectory            ``t tx ty tz qx qy qz qw`` (seconds; quaternion x y z w)      poses
-EuRoC ground-truth CSV    ``t[ns], px, py, pz, qw, qx, qy, qz[, velocities, biases]``   poses
-positions (CSV or text)   ``t, x, y, z`` (a laser tracker's prism, a GPS antenna)       positions
-========================  ===========================================================  =========
-
-A CSV is a file whose first data row holds commas; its timestamps are nanoseconds (EuRoC's
-``leica0/data.csv`` and ``state_groundtruth_estimate0/data.csv``), a text file's are seconds.
-A header line that names the quaternion's components in another order than the format's is
-refused (:func:`header_quaternion_order`): the columns are told apart by the file's kind only.
-Poses are of the frame the file states (a body frame, or a camera); :func:`to_camera` moves them
-into a camera with the extrinsic ``T_body_camera``. Association follows evo
-(``evo.core.sync.associate_trajectories``): every query time takes the nearest ground-truth
-time within ``max_diff`` seconds.
-
-Every problem raises one :class:`GroundTruthError` naming the file and line.
+"""Ground truth in the formats of ``docs/real_data.md`` (KITTI poses, TUM, EuRoC CSV, positions
+only), associated with the images by timestamp as evo does. A CSV (its first row holds commas) is
+EuRoC's, times in nanoseconds; a text file's times are seconds. Every problem raises one
+:class:`GroundTruthError` naming the file and line.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
-from enum import Enum
 from pathlib import Path
 
 import numpy as np
@@ -52,13 +32,6 @@ MIN_STEP_NS = 1000.0
 GroundTruthError = TrajectoryError
 
 
-class TruthKind(str, Enum):
-    """What a ground-truth file holds."""
-
-    POSES = "poses"  #: full 6-DoF poses
-    POSITIONS = "positions"  #: positions only (a tracked prism, an antenna)
-
-
 @dataclass(frozen=True)
 class GroundTruth:
     """A ground truth as read: ``times`` in seconds (None for KITTI poses, one per image),
@@ -66,7 +39,6 @@ class GroundTruth:
     ``positions`` ``(N, 3)``; ``csv``: a CSV (EuRoC's, times in nanoseconds, poses of the body)."""
 
     path: Path
-    kind: TruthKind
     times: np.ndarray | None
     positions: np.ndarray
     poses: np.ndarray | None = None
@@ -74,8 +46,8 @@ class GroundTruth:
 
 
 def read_groundtruth(path, min_poses: int = 2) -> GroundTruth:
-    """Read a KITTI, TUM, EuRoC CSV or position-only ground truth (see the module's table) of at
-    least ``min_poses`` rows, checked as :func:`~vo_lib.formats.poses.read_rows` says."""
+    """Read a KITTI, TUM, EuRoC CSV or position-only ground truth (``docs/real_data.md``) of
+    at least ``min_poses`` rows, checked as :func:`~vo_lib.formats.poses.read_rows` says."""
     path = Path(path)
     a, lines, comma = read_rows(path, min_poses)
     if not comma and a.shape[1] != 12:  # TUM or positions: times in seconds
@@ -106,14 +78,12 @@ def read_groundtruth(path, min_poses: int = 2) -> GroundTruth:
         )
     if width == 12 and not comma:
         poses = as_homogeneous(a.reshape(-1, 3, 4))
-        return GroundTruth(path, TruthKind.POSES, None, poses[:, :3, 3].copy(), poses)
+        return GroundTruth(path, None, poses[:, :3, 3].copy(), poses)
     times, positions = a[:, 0] * (NANOSECONDS if comma else 1.0), a[:, 1:4]
     if width == 4:
-        return GroundTruth(path, TruthKind.POSITIONS, times, positions, csv=comma)
+        return GroundTruth(path, times, positions, csv=comma)
     quat_xyzw = a[:, [5, 6, 7, 4]] if comma else a[:, 4:8]  # EuRoC: qw qx qy qz
-    return GroundTruth(
-        path, TruthKind.POSES, times, positions, pose_matrices(positions, quat_xyzw), csv=comma
-    )
+    return GroundTruth(path, times, positions, pose_matrices(positions, quat_xyzw), csv=comma)
 
 
 def read_trajectory(path, min_poses: int = 1) -> tuple[np.ndarray | None, np.ndarray]:
@@ -156,7 +126,7 @@ def covering(truth: GroundTruth, times, max_diff: float = MAX_TIME_DIFF_S) -> tu
             f"{times[-1]:.3f} s; the ground truth must cover every image{UNCOVERED_HINT}"
         )
     i_img, i_gt = associate(times, truth.times, max_diff)
-    if truth.kind is TruthKind.POSES and len(i_img) < len(times):
+    if truth.poses is not None and len(i_img) < len(times):
         missing = int(np.setdiff1d(np.arange(len(times)), i_img)[0])
         raise GroundTruthError(
             f"{truth.path}: no pose within {max_diff} s of image {missing} (t = {times[missing]:.3f} s); "

@@ -47,9 +47,8 @@ def _where(path: Path, frame: int | None) -> str:
 
 
 def _decode(path: Path) -> np.ndarray | None:
-    """OpenCV's decoder on the file's bytes, or None: ``cv2.imread`` takes its path as UTF-8 and
-    crashes the process on a path holding any other byte. A PNG cut short (no closing IEND
-    chunk) is refused before libpng sees it."""
+    """OpenCV's decoder on the file's bytes (``cv2.imread`` crashes on a path that is not UTF-8),
+    or None, also for a PNG without its closing IEND chunk."""
     try:
         data = np.fromfile(path, np.uint8)
     except OSError:
@@ -63,10 +62,8 @@ def _decode(path: Path) -> np.ndarray | None:
 
 
 def _png_chunks_intact(data: bytes) -> bool:
-    """Whether every chunk of a PNG carries the checksum (CRC-32) of its bytes: checked before a
-    thread that cannot mute stderr lets libpng see the file (libpng prints its own message for
-    damaged data there). Cheap beside decoding; damage that keeps every checksum is left to
-    the decoder."""
+    """Whether every chunk of a PNG carries its CRC-32, so that libpng, on a thread that cannot
+    mute stderr, does not print its own message for damaged data."""
     at = 8
     while at + 12 <= len(data):
         end = at + 8 + struct.unpack(">I", data[at : at + 4])[0]  # after the chunk's type and data
@@ -77,10 +74,8 @@ def _png_chunks_intact(data: bytes) -> bool:
 
 
 def _imread_quietly(path: Path) -> np.ndarray | None:
-    """The image, decoded with the process's stderr muted meanwhile (libpng prints its own
-    message for a damaged file there, and ours, one line naming the file and frame, says it
-    better), or None where OpenCV cannot decode it. Only the main thread mutes, one call at a
-    time: muting from the reader thread could swallow what the main thread writes meanwhile."""
+    """The decoded image, or None, with stderr muted meanwhile against libpng's messages (by the
+    main thread only, one call at a time: other threads' writes would be swallowed)."""
     global _DEVNULL
     if threading.current_thread() is not threading.main_thread():
         try:

@@ -1,14 +1,7 @@
-"""Files of KITTI's raw recordings that a sequence folder may carry beside the odometry layout.
-
-``oxts.txt``
-    one GPS/IMU packet per image, 30 numbers per line (KITTI's ``oxts_dataformat.txt``). Two of
-    them stand in for a car's wheel odometry: the forward speed ``vf`` (field 9) and the yaw rate
-    ``wz`` (field 20).
-``raw_calib/calib_imu_to_velo.txt``, ``calib_velo_to_cam.txt``, ``calib_cam_to_cam.txt``
-    the chain that places the left rectified camera in the IMU's frame (x forward, y left, z up):
-    ``T_imu_cam = inv(R_rect_00 . T_velo_to_cam . T_imu_to_velo)``.
-
-Bad files raise :class:`~vo_lib.formats.sequence.SequenceError` naming the file and line.
+"""The files of KITTI's raw recordings a sequence folder may carry: ``oxts.txt`` (GPS/IMU packets,
+whose speed and yaw rate stand in for wheel odometry) and ``raw_calib/`` (the camera's mount); see
+``docs/real_data.md``. Bad files raise :class:`~vo_lib.formats.sequence.SequenceError` naming the
+file and line.
 """
 
 from __future__ import annotations
@@ -41,17 +34,10 @@ def read_oxts(path, frames: int | None = None) -> np.ndarray:
 
 
 def wheel_distances_from_oxts(oxts: np.ndarray, times: np.ndarray, gauge: float) -> np.ndarray:
-    """Left and right wheel distances per frame ``(N, 2)`` (row 0 is zero) from speed and yaw rate.
-
-    Between frames ``k-1`` and ``k`` the car travels ``s = mean(vf) dt`` and turns by
-    ``dpsi = mean(wz) dt`` (trapezoidal rule); wheels ``gauge`` apart then travel
-    ``s -/+ gauge dpsi / 2``, which the track-odometry model ([Zhao], eq. 4) turns back into the
-    same ``s`` and ``dpsi``.
-    """
-    times = np.asarray(times, float)
-    if len(times) != len(oxts):
-        raise ValueError(f"{len(oxts)} OXTS packets but {len(times)} timestamps")
-    dt = np.diff(times)
+    """Distances ``(N, 2)`` (metres, row 0 zero) of wheels ``gauge`` apart, ``s -/+ gauge dpsi / 2``,
+    with ``s`` and ``dpsi`` the trapezoidal integrals of ``vf`` and ``wz`` between frames: the
+    track-odometry model ([Zhao], eq. 4) turns them back into ``s`` and ``dpsi``."""
+    dt = np.diff(np.asarray(times, float))
     s = 0.5 * (oxts[1:, VF] + oxts[:-1, VF]) * dt
     dpsi = 0.5 * (oxts[1:, WZ] + oxts[:-1, WZ]) * dt
     out = np.zeros((len(oxts), 2))

@@ -15,9 +15,8 @@ from vo_lib.geometry import as_homogeneous
 
 
 def _rigid(poses) -> tuple[np.ndarray, Rotation]:
-    """``(N, 4, 4)`` poses and their rotations, each made exactly orthonormal (the nearest rotation,
-    scipy's ``Rotation.from_matrix``): a product of many estimated motions drifts off SO(3) by
-    ``1e-5``, which a file would otherwise keep and every reader would read differently."""
+    """``(N, 4, 4)`` poses and their rotations made exactly orthonormal (a product of many motions
+    drifts off SO(3) by ``1e-5``, which every reader of a file would read differently)."""
     T = as_homogeneous(poses)
     if T.ndim != 3 or T.shape[1:] != (4, 4):
         raise ValueError(f"poses must have shape (N, 3, 4) or (N, 4, 4); got {T.shape}")

@@ -95,18 +95,9 @@ class Sequence:
     def __len__(self) -> int:
         return len(self.left_files)
 
-    def __getstate__(self) -> dict:
-        state = dict(self.__dict__)
-        state["_ahead"], state["_reader"] = {}, None  # a thread does not travel to another process
-        return state
-
     def pair(self, k: int) -> tuple[np.ndarray, np.ndarray]:
-        """Left and right images of frame ``k`` (rectified, where the sequence needs it); a file
-        that cannot be decoded raises one :class:`SequenceError` naming it and the frame.
-
-        Reading frame ``k`` starts decoding frames ``k + 1 ... k + read_ahead`` on a reader
-        thread (OpenCV decodes without holding the interpreter), so that a caller going through
-        the frames in order finds the next ones ready while it processes this one."""
+        """Left and right images of frame ``k`` (rectified where needed), the next ``read_ahead``
+        frames decoded meanwhile on a reader thread; a bad file raises one :class:`SequenceError`."""
         if self.read_ahead > 0:
             if self._reader is None:
                 self._reader = ThreadPoolExecutor(max_workers=1, thread_name_prefix="vo_lib-reader")

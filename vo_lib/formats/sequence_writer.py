@@ -33,13 +33,9 @@ def _format_rows(values, count: int) -> str:
 
 
 class SequenceWriter:
-    """Write a sequence frame by frame into a temporary folder, renamed on :meth:`close`.
-
-    Use as a context manager; if the block raises, the temporary folder is removed and any
-    existing sequence at ``path`` is left untouched. ``path`` must be new, empty or a sequence this
-    package wrote; ``force`` replaces any other folder (see :mod:`vo_lib.outputs`, whose
-    :class:`~vo_lib.outputs.OutputError` is raised otherwise, before anything is written).
-    """
+    """A sequence written frame by frame into a temporary folder, renamed on :meth:`close`; a
+    context manager that leaves nothing behind if its block raises. ``path`` and ``force`` follow
+    :mod:`vo_lib.outputs` (:class:`~vo_lib.outputs.OutputError` before anything is written)."""
 
     def __init__(
         self,
@@ -81,13 +77,12 @@ class SequenceWriter:
             ) from None
 
     def carry(self, source: Path, names=CARRIED) -> None:
-        """Copy those of the files and folders ``names`` that ``source`` holds into the sequence
-        (of ``raw_calib``, KITTI's ``calib_*.txt`` files), unchanged (they hold one row per frame, or none:
-        a copy of every frame keeps them right)."""
+        """Copy those of ``names`` that ``source`` holds into the sequence, unchanged (of a folder,
+        its ``calib_*.txt`` files)."""
         for name in names:
             src = Path(source) / name
             try:
-                if src.is_dir():  # what is read of it: KITTI's calib_*.txt, not what else it holds
+                if src.is_dir():  # raw_calib: what is read of it, not what else it holds
                     (self._tmp / name).mkdir()  # with the umask's permissions, not src's: it can be replaced
                     for file in [f for f in sorted(src.glob("calib_*.txt")) if f.is_file()]:
                         shutil.copyfile(file, self._tmp / name / file.name)
@@ -119,14 +114,11 @@ class SequenceWriter:
                 self._write(self._tmp / name, text.encode())
         return self._out.commit(frames=self.count)
 
-    def abort(self) -> None:
-        self._out.discard()
-
     def __enter__(self):
         return self
 
     def __exit__(self, exc_type, exc, tb):
-        self.abort()
+        self._out.discard()
         return False
 
 

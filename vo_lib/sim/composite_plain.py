@@ -1,9 +1,5 @@
 """The renderer's z-buffer step in plain NumPy: the reference of the compiled
-:func:`vo_lib.sim.composite.draw_nearer`, which the renderer runs because this version makes a
-whole rendered pair about twice as slow (``python -m vo_lib bench kernels``).
-
-Same arithmetic (the plane in
-float64, stored as float32), so the same images to the last grey level.
+:func:`vo_lib.sim.composite.draw_nearer`, which the renderer runs (``bench kernels``).
 """
 
 from __future__ import annotations
@@ -13,8 +9,9 @@ import numpy as np
 
 def draw_nearer(image, inv_depth, warped, mask, x0, y0, a, b, e, shade):
     """Write ``warped`` (the quad's texture over its box, top-left at ``(x0, y0)``) into ``image``
-    and its plane ``a u + b v + e`` into ``inv_depth`` where ``mask`` is set and the plane is
-    nearer; ``shade`` scales the grey level, rounded half to even and saturated at 255."""
+    and its inverse depth ``a u + b v + e`` (float64, stored as float32) into ``inv_depth`` where
+    ``mask`` is set and the plane is nearer; ``shade`` scales the grey level, rounded half to even
+    and saturated at 255."""
     h, w = warped.shape
     ys, xs = y0 + np.arange(h), x0 + np.arange(w)
     z = a * xs[None, :] + (b * ys[:, None] + e)  # inverse depth of the quad's plane over its box

@@ -1,17 +1,9 @@
 """Rendered frames kept on disk, so that processes rendering the same sample render it once.
 
-Processes that render the same samples in memory (``render_sample``), each from frame 0, can
-share the work: with :data:`FOLDER` naming a folder, every frame rendered is written there, and
-a later request for the same frame of the same sample (same fingerprint, resolution and first
-frame) reads it back instead of rendering it. The sensor noise of frame ``k`` is drawn from a
-generator that frames ``first..k-1`` advanced, so each stored frame carries the generator's state
-after it: a request that finds frames 0-99 stored and needs 100-399 reads the first hundred,
-restores the state and renders the rest, the same images as one uninterrupted render.
-
-Frames are written under a temporary name and renamed, so a reader never sees half a frame and
-two processes rendering the same frame at once leave one whole file. The store holds nothing but
-what was rendered into it. The test suite sets :data:`FOLDER` in every process it starts (its
-notebook kernels and command-line runs too) and removes the folder at the end.
+With :data:`FOLDER` set (the test suite sets it in every process it starts), every frame
+``render_sample`` renders is written there with the noise generator's state after it, and a later
+request for the same frame of the same sample reads it back and goes on rendering from that state:
+the same images as one uninterrupted render. Frames are renamed into place whole.
 """
 
 from __future__ import annotations
@@ -28,16 +20,14 @@ FOLDER: Path | None = None
 
 
 class FrameStore:
-    """The stored frames of one rendering of a sample: ``key`` names its fingerprint, resolution
-    and first frame."""
+    """The stored frames of one rendering (``key``: fingerprint, resolution, first frame)."""
 
     def __init__(self, folder: Path, key: str):
         self.folder = Path(folder) / key
 
     @staticmethod
     def current(key: Callable[[], str]) -> FrameStore | None:
-        """The store of ``key()`` in :data:`FOLDER`, or None when it is unset (``key`` is only
-        called then)."""
+        """The store of ``key()`` in :data:`FOLDER` (None when unset, without calling ``key``)."""
         return FrameStore(FOLDER, key()) if FOLDER else None
 
     def _path(self, k: int) -> Path:

@@ -31,27 +31,13 @@ class LaserScan:
 
 @dataclass(frozen=True)
 class LaserScanner:
-    """A planar scanner like the SICK TIM551 of [Yuan] (270 degrees, 1/3 degree, 10 m).
+    """A planar scanner like the SICK TIM551 of [Yuan] (270 degrees, 1/3 degree, 10 m)."""
 
-    Parameters
-    ----------
-    fov : float
-        Field of view, radians, centred on the sensor's x axis.
-    angular_step : float
-        Angle between beams, radians.
-    max_range : float
-        Longest range reported, metres; beams that hit nothing nearer are invalid.
-    range_sigma : float
-        Standard deviation of range, metres.
-    mount : (x, y, yaw)
-        Pose of the sensor in the robot frame.
-    """
-
-    fov: float = np.radians(270.0)
-    angular_step: float = np.radians(1.0 / 3.0)
-    max_range: float = 10.0
-    range_sigma: float = 0.01
-    mount: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    fov: float = np.radians(270.0)  #: field of view, radians, centred on the sensor's x axis
+    angular_step: float = np.radians(1.0 / 3.0)  #: between beams, radians
+    max_range: float = 10.0  #: metres; beams that hit nothing nearer are invalid
+    range_sigma: float = 0.01  #: standard deviation of a range, metres
+    mount: tuple[float, float, float] = (0.0, 0.0, 0.0)  #: x, y, yaw of the sensor in the robot frame
 
     def __post_init__(self):
         for name in ("fov", "angular_step", "max_range"):

@@ -48,21 +48,11 @@ class _Quad:
 
 @dataclass
 class SensorEffects:
-    """Optional imperfections of a real camera, applied after rendering.
+    """Optional imperfections of a real camera, applied after rendering."""
 
-    Parameters
-    ----------
-    noise_sigma : float
-        Standard deviation of additive Gaussian noise, grey levels.
-    exposure_gain : float
-        Multiplies every grey level (auto-exposure change between frames).
-    blur_px : float
-        Length of a horizontal motion-blur kernel in pixels (0: none).
-    """
-
-    noise_sigma: float = 0.0
-    exposure_gain: float = 1.0
-    blur_px: float = 0.0
+    noise_sigma: float = 0.0  #: standard deviation of additive Gaussian noise, grey levels
+    exposure_gain: float = 1.0  #: multiplies every grey level (auto-exposure)
+    blur_px: float = 0.0  #: length of a horizontal motion-blur kernel, pixels (0: none)
 
     def apply(self, image: np.ndarray, rng: np.random.Generator | None) -> np.ndarray:
         out = image
@@ -244,15 +234,8 @@ def _draw(image, inv_depth, order, boxes, H, level, quads, pts4, clipped, abe) -
 
 
 class StereoRenderer:
-    """Render rectified stereo pairs of a world, with ground-truth depth on request.
-
-    Parameters
-    ----------
-    world : World
-    camera : StereoCamera
-        Must have ``width`` and ``height``.
-    effects : SensorEffects, optional
-    """
+    """Render rectified stereo pairs of a world (by a camera with ``width`` and ``height``), with
+    ground-truth depth on request."""
 
     def __init__(self, world: World, camera: StereoCamera, effects: SensorEffects | None = None):
         if camera.width is None or camera.height is None:
@@ -369,10 +352,8 @@ class StereoRenderer:
         T_left = np.asarray(T_world_camera, dtype=float)
         T_right = T_left.copy()
         T_right[:3, 3] = T_left[:3, 3] + T_left[:3, 0] * self.camera.baseline
-        if with_depth:
-            left, depth = self.render(T_left, with_depth=True, time=time)
-        else:
-            left = self.render(T_left, time=time)
+        left = self.render(T_left, with_depth, time)
+        left, depth = left if with_depth else (left, None)
         right = self.render(T_right, time=time)
         left, right = self.effects.apply(left, rng), self.effects.apply(right, rng)
         return (left, right, depth) if with_depth else (left, right)

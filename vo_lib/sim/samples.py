@@ -243,12 +243,8 @@ SAMPLES: dict[str, Sample] = {
 
 
 def fingerprint(name: str) -> str:
-    """A short hash of everything that shapes a sample's images: its definition and its world.
-
-    The prose that describes a sample (``purpose``, ``mirrors``) is left out: rewording it leaves
-    the images as they were. A cached sample whose manifest carries another fingerprint is out of
-    date.
-    """
+    """A short hash of everything that shapes a sample's images (its definition but its prose, its
+    world): a cached sample whose manifest carries another is out of date."""
     sample = replace(get_sample(name), purpose="", mirrors="")
     text = repr(sample) + repr(WORLDS[sample.world]()) + f"textures {TEXTURE_VERSION}"
     return hashlib.sha1(text.encode()).hexdigest()[:16]
@@ -262,13 +258,8 @@ def get_sample(name: str) -> Sample:
 
 @dataclass(frozen=True)
 class RenderedSample:
-    """A sample's rig, truth and an iterator of ``(left, right, odometry_or_None)`` frames.
-
-    ``vehicle_poses`` are the world poses ``(N, 4, 4)`` of the vehicle (for the crawler, its planar
-    poses on the floor, tilted by the body's pitch and roll about the contact point when its ground
-    is rough; for the car, on the road's surface); ``mount`` places the left camera on it.
-    :meth:`truth` stays planar: the pose of the body on the floor.
-    """
+    """A sample's rig and truth: ``vehicle_poses`` ``(N, 4, 4)`` in the world (a crawler's tilted
+    about its contact point on rough ground, a car's on the road), ``mount`` the left camera on it."""
 
     camera: StereoCamera
     mount: np.ndarray
@@ -306,12 +297,8 @@ def _world_poses(sample: Sample, drive) -> np.ndarray:
 
 
 def render_sample(name: str, frames: int | None = None, resolution=None, first: int = 0):
-    """Render a sample in memory: ``(RenderedSample, iterator of frames)``; nothing is written
-    (but to the frame store, when one is set: :mod:`vo_lib.sim.frame_store`).
-
-    ``resolution`` is ``(width, height)``, by default the sample's own. ``first`` starts at a later
-    frame of the drive (the first rendered frame then has no odometry, as frame 0).
-    """
+    """A sample rendered in memory (and the frame store, if set): ``(RenderedSample, iterator of
+    (left, right, odometry or None))`` from the drive's frame ``first``, at ``(width, height)``."""
     sample = get_sample(name)
     if not 0 <= first < sample.frames:
         raise ValueError(f"first must lie in 0..{sample.frames - 1} for {name}; got {first}")
@@ -365,11 +352,8 @@ def is_indoor(name: str) -> bool:
 
 
 def render_left_images(name: str, indices, resolution=None) -> list[np.ndarray]:
-    """Left images of frames ``indices`` of a sample, rendered in memory (for image statistics).
-
-    The drive and the sensor effects are the sample's; the sensor noise is drawn afresh for
-    these frames (seeded), so the images differ from the written sample's by the noise only.
-    """
+    """Left images of frames ``indices`` of a sample, rendered in memory, their sensor noise drawn
+    afresh (seeded): they differ from the written sample's by the noise only."""
     sample = get_sample(name)
     rendered, _ = render_sample(name, None, resolution)
     renderer = StereoRenderer(WORLDS[sample.world](), rendered.camera)
@@ -391,16 +375,10 @@ def generate(
     progress: bool = True,
     force: bool = False,
 ) -> Path:
-    """Render sample ``name`` into folder ``out``; returns the folder.
-
-    ``frames`` keeps only the first frames of the drive; ``resolution`` is ``(width, height)``,
-    by default the sample's own. ``progress``: True draws a bar (tqdm), ``"lines"`` prints a line
-    on stdout at the start and every :data:`PROGRESS_EVERY_S` seconds (for output that is not a
-    terminal),
-    False prints nothing.
-    ``out`` must be new, empty or a folder this package wrote; ``force`` replaces any other
-    (see :class:`~vo_lib.formats.sequence.SequenceWriter`).
-    """
+    """Render the first ``frames`` of sample ``name`` at ``(width, height)`` into ``out`` (and
+    ``force`` as :class:`~vo_lib.formats.sequence_writer.SequenceWriter` takes them); returns it.
+    ``progress``: a tqdm bar (True), a line every :data:`PROGRESS_EVERY_S` seconds (``"lines"``),
+    or nothing (False)."""
     sample = get_sample(name)
     rendered, frame_iter = render_sample(name, frames, resolution)
     camera, drive, n = rendered.camera, rendered.drive, rendered.frames
@@ -436,16 +414,10 @@ def generate(
 
 def _with_progress(frames, total: int, label: str, progress):
     """Yield ``frames``, showing progress as :func:`generate` describes it."""
-    if progress is True:
-        yield from tqdm(frames, total=total, desc=label, unit="frame")
+    if progress is True or not progress:  # a bar, or nothing
+        yield from tqdm(frames, total=total, desc=label, unit="frame", disable=not progress)
         return
-    if not progress:
-        yield from frames
-        return
-    print(
-        f"{label}: {total} frames (the first takes longest: the world's textures are built)",
-        flush=True,
-    )
+    print(f"{label}: {total} frames (the first takes longest: the world's textures are built)", flush=True)
     start = last = time.perf_counter()
     for done, item in enumerate(frames, 1):
         yield item

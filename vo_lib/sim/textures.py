@@ -4,20 +4,9 @@ A texture is a sum of blocky noise at several scales (nearest-neighbour upsample
 each offset by a random shift, so block corners do not line up across scales) plus random
 filled polygons and discs. Blocks give FAST its corners at every viewing distance; the polygons
 add corners at arbitrary angles. Mipmaps (Gaussian pyramids) let the renderer sample far surfaces
-without aliasing.
-
-Real surfaces are mostly poorer in corners: :func:`surface_texture` makes a texture of a named
-*style*: ``"corners"`` (the procedural one), photographs of ``"grass"`` and ``"gravel"``
-(scikit-image's bundled ones, tiled mirrored so that no seam shows, at a physical scale),
-``"asphalt"`` (the gravel photograph, finer and flatter), ``"brick"`` (bricks in running bond with
-the gravel photograph's grain, and windows; scikit-image's brick photograph is taken at a slant,
-and its courses, mirrored, meet in zigzags), ``"plain"`` (painted: a uniform
-grey with a faint wash), ``"wall"`` (a painted wall with a door and posters), ``"tiles"`` (floor
-tiles with grout lines), ``"panels"`` (a ceiling of plain panels and lights), ``"fence"`` (a
-repetitive fence of posts before a plain background), ``"far"`` (distant structure of low
-contrast, blurred), ``"road"`` (a two-lane road's cross-section: gravel verges, kerbs, edge lines,
-asphalt and a dashed centre line; columns run along the road) and ``"vehicle"`` (a car's side:
-paint, a dark window band and wheels).
+without aliasing. Real surfaces are mostly poorer in corners: :func:`surface_texture` makes one
+of the named styles of :data:`_DRAW` (photographs are scikit-image's, tiled mirrored at a
+physical scale).
 """
 
 from __future__ import annotations

@@ -93,38 +93,18 @@ class TrackGround:
     ``tilt_deg`` (a half-sine bump). ``roughness_deg`` adds the slow pitch and roll of uneven
     ground. The body rotates about its contact point on the ground, so a camera mounted above it
     moves sideways and up and down: the planar model of [Zhao] no longer holds exactly.
-
-    Parameters
-    ----------
-    icr_offset : float
-        ``x_icr`` at zero turn rate, metres ahead of the track centre (the load on the tracks is
-        not centred).
-    icr_per_rate : float
-        Growth of ``x_icr`` per rad/s of turn rate, metres.
-    icr_sigma, icr_frames : float
-        Standard deviation (metres) and correlation time (frames) of the ICR's wander.
-    contact_rate : float
-        Losses of contact per metre a track travels.
-    contact_frames : int
-        Frames a loss of contact lasts.
-    contact_grip : float
-        Share of a track's traction kept while it has lost contact.
-    tilt_deg : tuple of float
-        Range of the peak roll (and of the peak pitch, either sign) during a loss, degrees.
-    roughness_deg, roughness_frames : float
-        Standard deviation (degrees) and correlation time (frames) of the ground's pitch and roll.
     """
 
-    icr_offset: float = 0.02
-    icr_per_rate: float = 0.06
-    icr_sigma: float = 0.01
-    icr_frames: float = 60.0
-    contact_rate: float = 0.0
-    contact_frames: int = 4
-    contact_grip: float = 0.5
-    tilt_deg: tuple[float, float] = (2.0, 5.0)
-    roughness_deg: float = 0.0
-    roughness_frames: float = 15.0
+    icr_offset: float = 0.02  #: ``x_icr`` at zero turn rate, metres ahead of the track centre
+    icr_per_rate: float = 0.06  #: growth of ``x_icr`` per rad/s of turn rate, metres
+    icr_sigma: float = 0.01  #: standard deviation of the ICR's wander, metres
+    icr_frames: float = 60.0  #: its correlation time, frames
+    contact_rate: float = 0.0  #: losses of contact per metre a track travels
+    contact_frames: int = 4  #: frames a loss lasts
+    contact_grip: float = 0.5  #: share of a track's traction kept during a loss
+    tilt_deg: tuple[float, float] = (2.0, 5.0)  #: range of the peak roll (and pitch, either sign), degrees
+    roughness_deg: float = 0.0  #: standard deviation of the ground's pitch and roll, degrees
+    roughness_frames: float = 15.0  #: their correlation time, frames
 
     def icr(self, turn_rate: np.ndarray, rng: np.random.Generator) -> np.ndarray:
         """``x_icr`` (metres) per step for turn rates ``turn_rate`` (rad/s)."""

@@ -103,36 +103,17 @@ class Mover:
 
 @dataclass(frozen=True)
 class World:
-    """Segments, a textured floor over ``floor_extent`` and an optional ceiling.
-
-    Parameters
-    ----------
-    name : str
-    segments : tuple of Segment
-    floor_extent : (xmin, xmax, ymin, ymax)
-        Rectangle of textured floor, metres; beyond it the renderer shows nothing (background).
-    seed : int
-        Seed of the floor's and ceiling's textures.
-    ceiling_height : float, optional
-        Height of a textured ceiling, metres; ``None`` for open sky.
-    floor_texel : float
-        Texel size of floor and ceiling (outdoor floors use coarser texels).
-    floor_style, ceiling_style : str
-        Texture styles of floor and ceiling (:func:`vo_lib.sim.textures.surface_texture`).
-    patches : tuple of Patch
-        Flat textured quads besides the floor (seen by the camera only).
-    movers : tuple of Mover
-        Moving boxes (seen by the camera only).
-    """
+    """Segments, a textured floor over ``floor_extent`` and an optional ceiling; patches and movers
+    are seen by the camera only."""
 
     name: str
     segments: tuple[Segment, ...]
-    floor_extent: tuple[float, float, float, float]
-    seed: int = 0
-    ceiling_height: float | None = None
-    floor_texel: float = TEXEL_SIZE
+    floor_extent: tuple[float, float, float, float]  #: xmin, xmax, ymin, ymax (metres); beyond, background
+    seed: int = 0  #: of the floor's and ceiling's textures
+    ceiling_height: float | None = None  #: metres; None: open sky
+    floor_texel: float = TEXEL_SIZE  #: texel size of floor and ceiling, metres
     notes: dict = field(default_factory=dict, compare=False)
-    floor_style: str = "corners"
+    floor_style: str = "corners"  #: texture styles (:func:`vo_lib.sim.textures.surface_texture`)
     ceiling_style: str = "corners"
     patches: tuple[Patch, ...] = ()
     movers: tuple[Mover, ...] = ()
