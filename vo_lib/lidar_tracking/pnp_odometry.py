@@ -76,11 +76,6 @@ class PnpVisualOdometry:
         self.steps: list[PnpStep] = []
 
     # ------------------------------------------------------------------ the local map
-    def _map(self):
-        points = np.vstack([k.points for k in self.keyframes])
-        descriptors = np.vstack([k.descriptors for k in self.keyframes])
-        return points, descriptors
-
     def _project(self, points_w: np.ndarray, pose: np.ndarray):
         """Pixels of world points seen from camera pose ``pose`` (eq. 4-6), and their depth."""
         T_cw = np.linalg.inv(pose)
@@ -149,11 +144,14 @@ class PnpVisualOdometry:
             self.steps.append(PnpStep(0, 0, False, False, 1))
             return self.pose.copy()
         prediction = self.predicted_pose()  # eq. 2-3
-        points_w, desc_w = self._map()
+        points_w = np.vstack([k.points for k in self.keyframes])
+        desc_w = np.vstack([k.descriptors for k in self.keyframes])
         brute = self.lost
         a, b = (
-            self._match_brute_force if brute else lambda d, f: self._match_guided(points_w, d, f, prediction)
-        )(desc_w, feats)
+            self._match_brute_force(desc_w, feats)
+            if brute
+            else self._match_guided(points_w, desc_w, feats, prediction)
+        )
         inliers = 0
         new_pose = prediction
         if len(a) >= MIN_INLIERS:
