@@ -188,10 +188,12 @@ class CorridorExperiment:
         return self._flagged(self.lbpt, lambda r: unoccluded(r.truth[:, 0]) & (np.abs(r.errors[:, 0]) < 0.1))
 
 
-def corridor_calibration(vo: np.ndarray, world: World) -> Calibration:
-    """Table III's calibration: :func:`calibrate` on the normal run of :data:`CALIBRATION_SEED`."""
+def _table3(vo: np.ndarray) -> tuple[World, LikelihoodField, Calibration]:
+    """The corridor, its likelihood field and Table III's calibration (:func:`calibrate` on the
+    normal run of :data:`CALIBRATION_SEED`)."""
+    world = corridor()
     truth, odometry = corridor_drive(CALIBRATION_SEED)
-    return calibrate(world, truth, odometry, vo, CALIBRATION_SEED)
+    return world, LikelihoodField.from_world(world), calibrate(world, truth, odometry, vo, CALIBRATION_SEED)
 
 
 def track_seed(seed: int, vo: np.ndarray, calibration: Calibration, world, field) -> tuple[TrackingRun, ...]:
@@ -217,24 +219,21 @@ def seed_figures(lbpt: TrackingRun, voapt: TrackingRun) -> dict[str, float]:
 
 @functools.lru_cache(maxsize=1)
 def _shared():
-    """What every seed of Table III shares: the corridor, its likelihood field, the visual
-    odometer's increments and the calibration (computed once per process)."""
-    world = corridor()
+    """What every seed of Table III shares: the visual odometer's poses and :func:`_table3`
+    (computed once per process)."""
     vo, _ = corridor_visual_odometry()
-    return world, LikelihoodField.from_world(world), vo, corridor_calibration(vo, world)
+    return vo, *_table3(vo)
 
 
 def corridor_figures(seed: int) -> dict[str, float]:
     """Table III's row of ``seed`` (a task of ``python -m vo_lib sweep corridor``): :func:`seed_figures`."""
-    world, field, vo, calibration = _shared()
+    vo, world, field, calibration = _shared()
     return seed_figures(*track_seed(seed, vo, calibration, world, field))
 
 
 def run_experiment(seeds, vo: np.ndarray) -> CorridorExperiment:
     """Calibrate on a normal run (:data:`CALIBRATION_SEED`), then track every seed with LBPT and VOAPT."""
-    world = corridor()
-    field = LikelihoodField.from_world(world)
-    cal = corridor_calibration(vo, world)
+    world, field, cal = _table3(vo)
     runs = [track_seed(seed, vo, cal, world, field) for seed in seeds]
     return CorridorExperiment(list(seeds), cal, [r[0] for r in runs], [r[1] for r in runs])
 
