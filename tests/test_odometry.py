@@ -9,6 +9,22 @@ ODO = TrackOdometry(track_distance=0.4, track_width=0.1, encoder_sigma=0.01)
 small = st.floats(-0.2, 0.2, allow_nan=False)
 
 
+def phi(u):
+    """``phi_k = (du_right - du_left) / (2 (D + 2b))``, half the heading change (eq. 11)."""
+    return (u[1] - u[0]) / (2.0 * ODO.gauge)
+
+
+def control_matrix(theta_prev, u):
+    """``B_k`` of eq. 10, evaluated at ``phi_k`` of ``u`` (eq. 11)."""
+    c, s, k = np.cos(theta_prev + phi(u)), np.sin(theta_prev + phi(u)), 1.0 / ODO.gauge
+    return np.array([[0.5 * c, 0.5 * c], [0.5 * s, 0.5 * s], [-k, k]])
+
+
+def predict_exact(x, u):
+    """One exact circular-arc step."""
+    return ODO.integrate([u], start=x, exact=True)[-1]
+
+
 def test_gauge_is_d_plus_2b():
     assert ODO.gauge == pytest.approx(0.6)
 
@@ -18,14 +34,14 @@ def test_straight_and_spot_turn_increments():
     assert du == pytest.approx(0.1) and dth == 0.0
     du, dth = ODO.increment([-0.03, 0.03])
     assert du == 0.0 and dth == pytest.approx(0.06 / 0.6)
-    assert ODO.phi([-0.03, 0.03]) == pytest.approx(dth / 2)
+    assert phi([-0.03, 0.03]) == pytest.approx(dth / 2)
 
 
 @given(small, small, st.floats(-3, 3))
 def test_eq6_with_eq10_matrix_equals_eq2_to_5(ul, ur, theta):
     x = np.array([1.0, -2.0, theta])
     u = np.array([ul, ur])
-    via_matrix = x + ODO.control_matrix(theta, u) @ u  # F_k = I, eq. 9
+    via_matrix = x + control_matrix(theta, u) @ u  # F_k = I, eq. 9
     step = ODO.predict(x, u)
     np.testing.assert_allclose(via_matrix[:2], step[:2], atol=1e-12)
     assert np.isclose(np.cos(via_matrix[2] - step[2]), 1.0)
@@ -58,10 +74,10 @@ def test_jacobians_match_finite_differences(rng):
 def test_eq10_is_not_the_control_jacobian_when_turning():
     x, u = np.array([0.0, 0.0, 0.3]), np.array([0.1, 0.3])
     _, F_u = ODO.jacobians(x, u)
-    B = ODO.control_matrix(x[2], u)
+    B = control_matrix(x[2], u)
     np.testing.assert_allclose(F_u[2], B[2])
     du = 0.2
-    a = x[2] + ODO.phi(u)
+    a = x[2] + phi(u)
     np.testing.assert_allclose(F_u[0] - B[0], [du * np.sin(a) / 1.2, -du * np.sin(a) / 1.2])
 
 
@@ -71,7 +87,7 @@ def test_exact_arc_against_many_small_steps():
     fine = x0
     for _ in range(2000):
         fine = ODO.predict(fine, u / 2000)
-    exact = ODO.predict_exact(x0, u)
+    exact = predict_exact(x0, u)
     midpoint = ODO.predict(x0, u)
     np.testing.assert_allclose(exact, fine, atol=1e-7)
     # the midpoint step overshoots by about dtheta^2/24 of the step length
@@ -91,7 +107,7 @@ def test_integrate_is_the_loop_of_predict(rng):
     exact = ODO.integrate(controls, exact=True)
     x = np.zeros(3)
     for u in controls:
-        x = ODO.predict_exact(x, u)
+        x = predict_exact(x, u)
     np.testing.assert_allclose(exact[-1, :2], x[:2], atol=1e-10)
 
 

@@ -67,18 +67,11 @@ class StereoCamera:
 
     # ------------------------------------------------------------------ constructors
     @classmethod
-    def from_fov(cls, width: int, height: int, hfov_deg: float, baseline: float) -> StereoCamera:
-        """Square pixels, principal point at the image centre, given horizontal field of view."""
-        _positive("hfov_deg", hfov_deg)
-        if hfov_deg >= 180.0:
-            raise ValueError(f"hfov_deg must be below 180 degrees; got {hfov_deg!r}")
-        f = (width / 2.0) / math.tan(math.radians(hfov_deg) / 2.0)
-        return cls(f, f, (width - 1) / 2.0, (height - 1) / 2.0, baseline, width, height)
-
-    @classmethod
     def bumblebee2(cls, width: int = 640, height: int = 480) -> StereoCamera:
-        """A rig like the paper's Bumblebee2: 66 degrees horizontal field of view, 12 cm baseline."""
-        return cls.from_fov(width, height, BUMBLEBEE2_HFOV_DEG, BUMBLEBEE2_BASELINE)
+        """A rig like the paper's Bumblebee2: 66 degrees horizontal field of view, 12 cm baseline,
+        square pixels, principal point at the image centre."""
+        f = (width / 2.0) / math.tan(math.radians(BUMBLEBEE2_HFOV_DEG) / 2.0)
+        return cls(f, f, (width - 1) / 2.0, (height - 1) / 2.0, BUMBLEBEE2_BASELINE, width, height)
 
     @classmethod
     def from_projection_matrices(cls, P0, P1, width=None, height=None) -> StereoCamera:

@@ -65,16 +65,10 @@ def chi2_band(dof: int, count: int, confidence: float = CONFIDENCE) -> tuple[flo
 
 @dataclass(frozen=True)
 class Comparison:
-    """Per-seed figures of several methods on the same draws; lower is better.
-
-    Attributes
-    ----------
-    seeds : the seeds, one per row of ``figures``.
-    figures : mapping from a method's name to its per-seed figures (same order as ``seeds``).
-    """
+    """Per-seed figures of several methods on the same draws; lower is better."""
 
     seeds: tuple[int, ...]
-    figures: Mapping[str, np.ndarray]
+    figures: Mapping[str, np.ndarray]  #: a method's name -> its figures, one per seed in order
 
     def __len__(self) -> int:
         return len(self.seeds)
@@ -136,14 +130,9 @@ class Comparison:
 
 
 def over_seeds(run: Callable[[int], Mapping[str, float]], seeds: Iterable[int]) -> Comparison:
-    """Run ``run(seed)`` for every seed and collect each method's figure.
-
-    Parameters
-    ----------
-    run : function of one seed that draws once and returns ``{method name: figure}`` for every
-        method on that same draw (lower is better).
-    seeds : the seeds, e.g. ``range(base, base + 20)``.
-    """
+    """Run ``run(seed)`` for every seed (e.g. ``range(base, base + 20)``) and collect each
+    method's figure: ``run`` draws once and returns ``{method name: figure}`` for every method on
+    that same draw (lower is better)."""
     seeds = tuple(int(s) for s in seeds)
     rows = [dict(run(s)) for s in seeds]
     names = list(rows[0])

@@ -37,9 +37,6 @@ class ErrorStats:
     @classmethod
     def of(cls, errors) -> ErrorStats:
         e = np.asarray(errors, dtype=float)
-        if e.size == 0:
-            nan = float("nan")
-            return cls(nan, nan, nan, nan, nan, 0)
         return cls(
             float(np.sqrt(np.mean(e**2))),
             float(e.mean()),
@@ -115,7 +112,7 @@ class Alignment(str, Enum):
 
 
 def align_positions(p_gt: np.ndarray, p_est: np.ndarray, alignment: Alignment = Alignment.SE3) -> np.ndarray:
-    """Estimated positions ``(N, 3)`` moved onto the truth by Umeyama's least-squares
+    """Estimated positions ``(N, 2)`` or ``(N, 3)`` moved onto the truth by Umeyama's least-squares
     ``alignment`` (Umeyama 1991, eq. 40-42; evo's ``align``/``correct_scale``)."""
     if alignment is Alignment.NONE:
         return p_est
@@ -151,10 +148,7 @@ def ate_planar(gt_planar, est_planar, align: bool = True) -> tuple[ErrorStats, n
     """ATE of planar ``(x, y, yaw)`` trajectories after a rotation and translation in the plane."""
     g, e = np.asarray(gt_planar, float), np.asarray(est_planar, float)
     _check_pair(g, e)
-    p_est = e[:, :2]
-    if align:
-        R, t, _ = umeyama(p_est, g[:, :2])
-        p_est = p_est @ R.T + t
+    p_est = align_positions(g[:, :2], e[:, :2], Alignment.SE3 if align else Alignment.NONE)
     errors = np.linalg.norm(p_est - g[:, :2], axis=1)
     return ErrorStats.of(errors), errors
 

@@ -28,18 +28,7 @@ R_ROBOT_FROM_CAMERA = np.array(
 
 
 def wrap_angle(angle):
-    """Wrap angles into ``[-pi, pi)``.
-
-    Parameters
-    ----------
-    angle : float or array_like
-        Angles in radians.
-
-    Returns
-    -------
-    float or numpy.ndarray
-        The same angles, shifted by whole turns into ``[-pi, pi)``.
-    """
+    """Angles in radians (a float or an array) shifted by whole turns into ``[-pi, pi)``."""
     if isinstance(angle, float):  # one angle (the filter's hot path): the same sum, without an array
         return (float(angle) + math.pi) % (2.0 * math.pi) - math.pi
     wrapped = np.mod(np.asarray(angle, dtype=float) + np.pi, 2.0 * np.pi) - np.pi

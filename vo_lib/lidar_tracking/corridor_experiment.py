@@ -3,7 +3,7 @@
 The robot drives the ``corridor`` sample's path (1 m to 28 m along the axis at 0.5 m/s). Each
 seed draws its own encoder noise and slip (the odometry), laser noise and pose samples; the
 visual odometer's increments come from a VO run on the rendered corridor (or any other source of
-per-frame increments). The laser tracker updates every ``every`` frames.
+per-frame increments). The laser tracker updates every :data:`EVERY` frames.
 Run ``python -m vo_lib.lidar_tracking.corridor_experiment`` for the README's Table III (20 seeds;
 ``--seeds N`` for another count).
 """
@@ -15,6 +15,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from vo_lib.evaluation import ErrorStats
 from vo_lib.geometry import compose_planar, planar_from_camera_poses, relative_planar
 from vo_lib.lidar_tracking.likelihood_field import LikelihoodField
 from vo_lib.lidar_tracking.pnp_odometry import run_pnp_odometry
@@ -31,6 +32,11 @@ TIM551 = LaserScanner(fov=np.radians(270.0), angular_step=np.radians(1.0), max_r
 LOST_ERROR = 0.2
 #: Stretches where radial features are in view of the 10 m laser (x along the corridor, metres).
 UNOCCLUDED = ((1.0, 6.0), (18.0, 28.5))
+#: The laser tracker updates every this many frames; Table III calibrates on this seed's normal run.
+EVERY = 2
+CALIBRATION_SEED = 1000
+#: Table III's statistics of the absolute errors.
+STATISTICS = ("max", "mean", "median", "std")
 
 
 def corridor_drive(seed: int):
@@ -88,9 +94,7 @@ def run_tracking(
     seed: int,
     calibration: Calibration | None = None,
     compensate: bool = True,
-    every: int = 2,
     field: LikelihoodField | None = None,
-    scanner: LaserScanner = TIM551,
 ) -> TrackingRun:
     """Track ``truth`` from the odometry's and the visual odometer's poses (``(K, 3)`` each, any
     frame; only their increments are used): VOAPT with a calibration, LBPT with
@@ -99,32 +103,27 @@ def run_tracking(
     segments = world.segments_array()
     tracker = PoseTracker(field, truth[0], calibration, compensate, rng=np.random.default_rng(seed))
     scan_rng = np.random.default_rng(seed + 1_000_003)
-    frames = np.arange(every, len(truth), every)
+    frames = np.arange(EVERY, len(truth), EVERY)
     estimate, steps = [], []
     for k in frames:
-        odo_inc = relative_planar(odometry[k - every], odometry[k])
-        vo_inc = None if vo is None else relative_planar(vo[k - every], vo[k])
-        scan = scanner.scan(segments, truth[k], scan_rng)
+        odo_inc = relative_planar(odometry[k - EVERY], odometry[k])
+        vo_inc = None if vo is None else relative_planar(vo[k - EVERY], vo[k])
+        scan = TIM551.scan(segments, truth[k], scan_rng)
         steps.append(tracker.update(odo_inc, scan.points(), vo_inc))
         estimate.append(tracker.pose.copy())
     return TrackingRun(frames, truth[frames], np.array(estimate), steps)
 
 
-def calibrate(
-    world: World, truth, odometry, vo, seed: int, every: int = 2, quantile: float = 1.0
-) -> Calibration:
+def calibrate(world: World, truth, odometry, vo, seed: int) -> Calibration:
     """Thresholds and control limits from a normal run (the corridor without its obstacle).
 
-    Each threshold of eq. 13 is the ``quantile`` per cent point of its indicator over the run;
-    the control limits (eq. 14-15) come from the corrections of the frames where ``C_s`` holds.
+    Each threshold of eq. 13 is the 1 per cent point of its indicator over the run; the control
+    limits (eq. 14-15) come from the corrections of the frames where ``C_s`` holds.
     """
-    normal = without_umbrella(world)
-    run = run_tracking(normal, truth, odometry, vo, seed, None, every=every)
+    run = run_tracking(without_umbrella(world), truth, odometry, vo, seed)
     stats = [s.stats for s in run.steps]
     thresholds = Thresholds(
-        float(np.percentile([s.v_max for s in stats], quantile)),
-        float(np.percentile([s.d_s for s in stats], quantile)),
-        float(np.percentile([s.r_s for s in stats], quantile)),
+        *(float(np.percentile([getattr(s, k) for s in stats], 1.0)) for k in ("v_max", "d_s", "r_s"))
     )
     ok = [thresholds.composite(s) for s in stats]
     laser = [st.laser_correction for st, good in zip(run.steps, ok, strict=True) if good]
@@ -136,13 +135,8 @@ def calibrate(
 
 def statistics_table(errors: np.ndarray) -> dict[str, float]:
     """Table III's statistics of absolute errors: maximum, mean, median, standard deviation."""
-    a = np.abs(errors)
-    return {
-        "max": float(a.max()),
-        "mean": float(a.mean()),
-        "median": float(np.median(a)),
-        "std": float(a.std()),
-    }
+    stats = ErrorStats.of(np.abs(errors))
+    return {k: getattr(stats, k) for k in STATISTICS}
 
 
 def unoccluded(x: np.ndarray) -> np.ndarray:
@@ -162,14 +156,6 @@ class CorridorExperiment:
     lbpt: list
     voapt: list
 
-    def table(self, axis: int = 0) -> dict[str, dict[str, float]]:
-        """Table III for one axis (0: x, along the corridor; 1: y), each statistic averaged over seeds."""
-        out = {}
-        for name, runs in (("LBPT", self.lbpt), ("VOAPT", self.voapt)):
-            rows = [statistics_table(r.errors[:, axis]) for r in runs]
-            out[name] = {k: float(np.mean([row[k] for row in rows])) for k in rows[0]}
-        return out
-
     def spread(self, statistic: str, axis: int = 0) -> dict[str, tuple[float, float]]:
         """Mean and standard deviation over seeds of one statistic."""
         out = {}
@@ -178,54 +164,42 @@ class CorridorExperiment:
             out[name] = (float(np.mean(v)), float(np.std(v)))
         return out
 
+    def table(self, axis: int = 0) -> dict[str, dict[str, float]]:
+        """Table III for one axis (0: x, along the corridor; 1: y), each statistic averaged over seeds."""
+        means = {k: self.spread(k, axis) for k in STATISTICS}
+        return {name: {k: means[k][name][0] for k in STATISTICS} for name in ("LBPT", "VOAPT")}
+
+    @staticmethod
+    def _flagged(runs, where) -> float:
+        """Share of the updates of ``runs`` selected by ``where(run)`` (a mask) that T_s flags."""
+        flags = [not s.credible for r in runs for s, w in zip(r.steps, where(r), strict=True) if w]
+        return float(np.mean(flags)) if flags else float("nan")
+
     def flagged_when_lost(self) -> float:
         """Share of LBPT's updates with an along-corridor error above 0.2 m that T_s flags."""
-        flags = [
-            not s.credible
-            for r in self.lbpt
-            for s, e in zip(r.steps, r.errors[:, 0], strict=True)
-            if abs(e) > LOST_ERROR
-        ]
-        return float(np.mean(flags)) if flags else float("nan")
+        return self._flagged(self.lbpt, lambda r: np.abs(r.errors[:, 0]) > LOST_ERROR)
 
     def false_alarms(self) -> float:
         """Share of VOAPT's updates in the unoccluded stretches that T_s flags."""
-        flags = [
-            not s.credible
-            for r in self.voapt
-            for s, u in zip(r.steps, unoccluded(r.truth[:, 0]), strict=True)
-            if u
-        ]
-        return float(np.mean(flags))
+        return self._flagged(self.voapt, lambda r: unoccluded(r.truth[:, 0]))
 
     def false_alarms_lbpt(self) -> float:
         """The same on LBPT's updates in the unoccluded stretches where LBPT is within 0.1 m."""
-        flags = [
-            not s.credible
-            for r in self.lbpt
-            for s, u, e in zip(r.steps, unoccluded(r.truth[:, 0]), r.errors[:, 0], strict=True)
-            if u and abs(e) < 0.1
-        ]
-        return float(np.mean(flags))
+        return self._flagged(self.lbpt, lambda r: unoccluded(r.truth[:, 0]) & (np.abs(r.errors[:, 0]) < 0.1))
 
 
-def corridor_calibration(
-    vo: np.ndarray, calibration_seed: int = 1000, every: int = 2, world=None
-) -> Calibration:
-    """Table III's calibration: :func:`calibrate` on the normal run of ``calibration_seed``."""
-    truth, odometry = corridor_drive(calibration_seed)
-    return calibrate(world or corridor(), truth, odometry, vo, calibration_seed, every)
+def _table3(vo: np.ndarray) -> tuple[World, LikelihoodField, Calibration]:
+    """The corridor, its likelihood field and Table III's calibration (:func:`calibrate` on the
+    normal run of :data:`CALIBRATION_SEED`)."""
+    world = corridor()
+    truth, odometry = corridor_drive(CALIBRATION_SEED)
+    return world, LikelihoodField.from_world(world), calibrate(world, truth, odometry, vo, CALIBRATION_SEED)
 
 
-def track_seed(
-    seed: int, vo: np.ndarray, calibration: Calibration, every: int = 2, world=None, field=None
-) -> tuple[TrackingRun, TrackingRun]:
+def track_seed(seed: int, vo: np.ndarray, calibration: Calibration, world, field) -> tuple[TrackingRun, ...]:
     """LBPT and VOAPT along the drive of ``seed``, both judged by ``calibration``."""
-    world = world or corridor()
-    field = field or LikelihoodField.from_world(world)
     truth, odometry = corridor_drive(seed)
-    lbpt = run_tracking(world, truth, odometry, vo, seed, calibration, False, every, field)
-    return lbpt, run_tracking(world, truth, odometry, vo, seed, calibration, True, every, field)
+    return tuple(run_tracking(world, truth, odometry, vo, seed, calibration, c, field) for c in (False, True))
 
 
 def seed_figures(lbpt: TrackingRun, voapt: TrackingRun) -> dict[str, float]:
@@ -243,34 +217,24 @@ def seed_figures(lbpt: TrackingRun, voapt: TrackingRun) -> dict[str, float]:
     return out
 
 
-@functools.lru_cache(maxsize=2)
-def _shared(calibration_seed: int, every: int):
-    """What every seed of Table III shares: the corridor, its likelihood field, the visual
-    odometer's increments and the calibration (computed once per process)."""
-    world = corridor()
+@functools.lru_cache(maxsize=1)
+def _shared():
+    """What every seed of Table III shares: the visual odometer's poses and :func:`_table3`
+    (computed once per process)."""
     vo, _ = corridor_visual_odometry()
-    return (
-        world,
-        LikelihoodField.from_world(world),
-        vo,
-        corridor_calibration(vo, calibration_seed, every, world),
-    )
+    return vo, *_table3(vo)
 
 
-def corridor_figures(seed: int, every: int = 2, calibration_seed: int = 1000) -> dict[str, float]:
+def corridor_figures(seed: int) -> dict[str, float]:
     """Table III's row of ``seed`` (a task of ``python -m vo_lib sweep corridor``): :func:`seed_figures`."""
-    world, field, vo, calibration = _shared(calibration_seed, every)
-    return seed_figures(*track_seed(seed, vo, calibration, every, world, field))
+    vo, world, field, calibration = _shared()
+    return seed_figures(*track_seed(seed, vo, calibration, world, field))
 
 
-def run_experiment(
-    seeds, vo: np.ndarray, calibration_seed: int = 1000, world: World | None = None
-) -> CorridorExperiment:
-    """Calibrate on a normal run (``calibration_seed``), then track every seed with LBPT and VOAPT."""
-    world = world or corridor()
-    field = LikelihoodField.from_world(world)
-    cal = corridor_calibration(vo, calibration_seed, world=world)
-    runs = [track_seed(seed, vo, cal, world=world, field=field) for seed in seeds]
+def run_experiment(seeds, vo: np.ndarray) -> CorridorExperiment:
+    """Calibrate on a normal run (:data:`CALIBRATION_SEED`), then track every seed with LBPT and VOAPT."""
+    world, field, cal = _table3(vo)
+    runs = [track_seed(seed, vo, cal, world, field) for seed in seeds]
     return CorridorExperiment(list(seeds), cal, [r[0] for r in runs], [r[1] for r in runs])
 
 

@@ -5,12 +5,12 @@ RANSAC, and a local map of key frames.
   Depth comes from our stereo pair where the paper used a Kinect.
 * Matching: brute force at the start and after a loss; afterwards the velocity
   ``T_vel = T_prev^-1 T_curr`` (eq. 2) predicts the next pose (eq. 3), every map landmark is
-  projected with it (eq. 4-5) and matched only to features within ``search_radius`` pixels.
+  projected with it (eq. 4-5) and matched only to features within ``SEARCH_RADIUS`` pixels.
 * The pose: OpenCV ``solvePnPRansac`` on map landmarks (world) against current pixels,
   started from the prediction.
-* The local map holds at most ``max_keyframes`` key frames. A key frame is dropped when fewer
-  than ``min_seen_ratio`` of its landmarks are "properly observed" from the current pose: they
-  project inside the image (eq. 6) and are seen within ``view_limit`` of the direction the key
+* The local map holds at most ``MAX_KEYFRAMES`` key frames. A key frame is dropped when fewer
+  than ``MIN_SEEN_RATIO`` of its landmarks are "properly observed" from the current pose: they
+  project inside the image (eq. 6) and are seen within ``VIEW_LIMIT`` of the direction the key
   frame saw them from (eq. 7). Eq. 7 as printed compares a world-frame vector with a
   camera-frame one; we read it as the angle between the two viewing rays of the landmark, the
   current one and the key frame's, which must stay small.
@@ -66,22 +66,9 @@ class PnpStep:
 class PnpVisualOdometry:
     """Frame-by-frame 6-DoF visual odometry of [Yuan] on a rectified stereo pair."""
 
-    def __init__(
-        self,
-        camera,
-        search_radius: float = SEARCH_RADIUS,
-        max_keyframes: int = MAX_KEYFRAMES,
-        min_seen_ratio: float = MIN_SEEN_RATIO,
-        view_limit: float = VIEW_LIMIT,
-        seed: int = 0,
-    ):
+    def __init__(self, camera):
         self.camera = camera
         self.front_end = StereoFrontEnd(camera)
-        self.search_radius = search_radius
-        self.max_keyframes = max_keyframes
-        self.min_seen_ratio = min_seen_ratio
-        self.view_limit = view_limit
-        self.seed = seed
         self.pose = np.eye(4)
         self.velocity = np.eye(4)
         self.keyframes: list[KeyFrame] = []
@@ -89,11 +76,6 @@ class PnpVisualOdometry:
         self.steps: list[PnpStep] = []
 
     # ------------------------------------------------------------------ the local map
-    def _map(self):
-        points = np.vstack([k.points for k in self.keyframes])
-        descriptors = np.vstack([k.descriptors for k in self.keyframes])
-        return points, descriptors
-
     def _project(self, points_w: np.ndarray, pose: np.ndarray):
         """Pixels of world points seen from camera pose ``pose`` (eq. 4-6), and their depth."""
         T_cw = np.linalg.inv(pose)
@@ -106,7 +88,7 @@ class PnpVisualOdometry:
 
     def properly_observed(self, keyframe: KeyFrame, pose: np.ndarray) -> np.ndarray:
         """Eq. 6-7: landmarks of ``keyframe`` inside the current image and seen within
-        ``view_limit`` of the key frame's viewing direction."""
+        ``VIEW_LIMIT`` of the key frame's viewing direction."""
         u, v, z = self._project(keyframe.points, pose)
         inside = (z > 0) & (u >= 0) & (u < self.camera.width) & (v >= 0) & (v < self.camera.height)
         ray_now = keyframe.points - pose[:3, 3]
@@ -114,23 +96,22 @@ class PnpVisualOdometry:
         cos = np.einsum("ij,ij->i", ray_now, ray_then) / (
             np.linalg.norm(ray_now, axis=1) * np.linalg.norm(ray_then, axis=1) + 1e-12
         )
-        return inside & (cos >= math.cos(self.view_limit))
+        return inside & (cos >= math.cos(VIEW_LIMIT))
 
     def _cull(self) -> None:
         keep = [
             k
             for i, k in enumerate(self.keyframes)
-            if i == len(self.keyframes) - 1
-            or self.properly_observed(k, self.pose).mean() >= self.min_seen_ratio
+            if i == len(self.keyframes) - 1 or self.properly_observed(k, self.pose).mean() >= MIN_SEEN_RATIO
         ]
-        self.keyframes = keep[-self.max_keyframes :]
+        self.keyframes = keep[-MAX_KEYFRAMES:]
 
     # ------------------------------------------------------------------ matching
     def _match_guided(self, points_w, desc_w, feats, prediction):
         """Motion-model matching: map landmarks projected with the prediction, features within
-        ``search_radius`` pixels (eq. 4-5), nearest by Hamming distance with ratio and mutual tests."""
+        ``SEARCH_RADIUS`` pixels (eq. 4-5), nearest by Hamming distance with ratio and mutual tests."""
         u, v, z = self._project(points_w, prediction)
-        r = self.search_radius
+        r = SEARCH_RADIUS
         du = feats.w[None, :, 0] - u[:, None]
         dv = feats.w[None, :, 1] - v[:, None]
         ia, ib = np.nonzero((np.abs(du) <= r) & (np.abs(dv) <= r) & (z[:, None] > 0))
@@ -163,18 +144,21 @@ class PnpVisualOdometry:
             self.steps.append(PnpStep(0, 0, False, False, 1))
             return self.pose.copy()
         prediction = self.predicted_pose()  # eq. 2-3
-        points_w, desc_w = self._map()
+        points_w = np.vstack([k.points for k in self.keyframes])
+        desc_w = np.vstack([k.descriptors for k in self.keyframes])
         brute = self.lost
         a, b = (
-            self._match_brute_force if brute else lambda d, f: self._match_guided(points_w, d, f, prediction)
-        )(desc_w, feats)
+            self._match_brute_force(desc_w, feats)
+            if brute
+            else self._match_guided(points_w, desc_w, feats, prediction)
+        )
         inliers = 0
         new_pose = prediction
         if len(a) >= MIN_INLIERS:
             T_cw = np.linalg.inv(prediction)
             rvec, _ = cv2.Rodrigues(T_cw[:3, :3])
             tvec = T_cw[:3, 3].reshape(3, 1).copy()
-            cv2.setRNGSeed(self.seed)
+            cv2.setRNGSeed(0)  # RANSAC's draws: the same poses on every run
             ok, rvec, tvec, idx = cv2.solvePnPRansac(
                 points_w[a].astype(np.float64),
                 feats.w[b, :2].astype(np.float64),
@@ -215,13 +199,13 @@ class PnpVisualOdometry:
         return self.pose.copy()
 
 
-def run_pnp_odometry(camera, frames, seed: int = 0):
+def run_pnp_odometry(camera, frames):
     """Run over ``(left, right, ...)`` frames.
 
     Returns ``(camera poses (N, 4, 4), seconds per frame (N,), odometer)``; only
     :meth:`PnpVisualOdometry.process` is timed.
     """
-    vo = PnpVisualOdometry(camera, seed=seed)
+    vo = PnpVisualOdometry(camera)
     poses, seconds = [], []
     for f in frames:
         t0 = time.perf_counter()

@@ -150,12 +150,6 @@ class Calibration:
     vo: ControlLimits
 
 
-def credible(c_s: bool, laser_ok: bool, vo_ok: bool) -> bool:
-    """``T_s`` (eq. 16, as read above): the score distribution passes ``C_s`` and both
-    corrections to the odometer, the laser's and the visual odometer's, are within their limits."""
-    return c_s and laser_ok and vo_ok
-
-
 def sample_poses(prediction, n: int, rng: np.random.Generator, sigma=SAMPLE_SIGMA):
     """``n`` poses around ``prediction``, spread ``sigma = (along, across, heading)`` in the
     robot's frame (the first sample is the prediction itself)."""
@@ -213,18 +207,8 @@ class PoseTracker:
     The visual odometer runs alongside: its pose ``P_vo`` is the last credible pose carried
     forward by the visual increments, and is re-aligned with the tracker at every credible
     update. Without a calibration the tracker is plain LBPT (the best sample always wins); with
-    one and ``compensate_errors=False`` it is LBPT whose every update is judged by ``T_s``.
-
-    Parameters
-    ----------
-    field : LikelihoodField
-    start : (3,) pose
-    calibration : Calibration, optional
-        Used to judge each update (``T_s``).
-    compensate_errors : bool
-        VOAPT (True) corrects updates judged not credible; LBPT (False) only reports them.
-    samples : int
-    rng : numpy.random.Generator
+    one and ``compensate_errors=False`` it is LBPT whose every update is judged by ``T_s``. It scores
+    :data:`DEFAULT_SAMPLES` sample poses per update, drawn from ``rng``.
     """
 
     def __init__(
@@ -233,7 +217,6 @@ class PoseTracker:
         start,
         calibration: Calibration | None = None,
         compensate_errors: bool = True,
-        samples=DEFAULT_SAMPLES,
         rng=None,
     ):
         self.field = field
@@ -242,13 +225,12 @@ class PoseTracker:
         self.updates_since_credible = 0
         self.calibration = calibration
         self.compensate_errors = compensate_errors
-        self.samples = int(samples)
         self.rng = rng if rng is not None else np.random.default_rng(0)
 
     def update(self, odometry_increment, scan_points, vo_increment=None) -> TrackingStep:
         """One update: predict with the odometry, score samples, judge, correct (eq. 8-23)."""
         p_odom = compose_planar(self.pose, odometry_increment)
-        samples = sample_poses(p_odom, self.samples, self.rng)
+        samples = sample_poses(p_odom, DEFAULT_SAMPLES, self.rng)
         scores = self.field.score(samples, scan_points)
         stats = ScoreStatistics.from_scores(scores)
         corrections = samples - p_odom
@@ -264,7 +246,8 @@ class PoseTracker:
         n = self.updates_since_credible
         laser_ok = cal is None or cal.laser.contains(laser_len, n)
         vo_ok = cal is None or cal.vo.contains(vo_len, n)
-        ok = credible(c_s, laser_ok, vo_ok)
+        # T_s (eq. 16, as read above): C_s holds and both corrections to the odometer are within limits
+        ok = c_s and laser_ok and vo_ok
         direction = None
         correction = best.copy()
         compensated = not ok and self.compensate_errors and vo_increment is not None

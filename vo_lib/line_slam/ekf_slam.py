@@ -220,14 +220,7 @@ class EkfSlam:
         return float(e @ np.linalg.solve(self.P[:3, :3], e))
 
 
-def range_bearing_cov(range_sigma: float, bearing_sigma: float) -> np.ndarray:
-    """Diagonal ``R`` of a range-bearing sensor."""
-    return np.diag([range_sigma**2, bearing_sigma**2])
-
-
-def control_cov(speed_sigma: float, steer_sigma: float) -> np.ndarray:
-    """Diagonal ``Q`` of the measured speed and steering angle."""
-    return np.diag([speed_sigma**2, steer_sigma**2])
-
-
-__all__ = ["EkfSlam", "NEW", "DROPPED", "range_bearing_cov", "control_cov"]
+def diagonal_cov(*sigmas: float) -> np.ndarray:
+    """Covariance of independent noises: ``Q`` of the measured speed and steering angle, ``R`` of a
+    range-bearing sensor."""
+    return np.diag([sigma**2 for sigma in sigmas])

@@ -16,11 +16,11 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from vo_lib.geometry import wrap_angle
-from vo_lib.line_slam.ekf_slam import DROPPED, EkfSlam, control_cov, range_bearing_cov
+from vo_lib.line_slam.ekf_slam import DROPPED, EkfSlam, diagonal_cov
 from vo_lib.line_slam.line_landmarks import along_line, feature_point, line_points, paper_world
 from vo_lib.line_slam.line_observation import LINE, measure_line
 from vo_lib.line_slam.range_bearing import POINT, observe_point, point_from_observation
-from vo_lib.line_slam.segment_observers import DEFAULT_TOLERANCE, OBSERVERS
+from vo_lib.line_slam.segment_observers import DEFAULT_TOLERANCE, OBSERVERS, visible_segment
 from vo_lib.models.bicycle import (
     DEFAULT_WHEELBASE,
     PAPER_MAX_STEER,
@@ -108,21 +108,21 @@ class LineSlamRun:
         return line_points(point, [s.min(), s.max()])
 
 
-def true_visible_extent(world, poses, observer: str = "closed_form", max_range: float = 30.0) -> dict:
-    """For each segment, the extreme x reached by its visible part from any of ``poses``."""
-    fn = OBSERVERS[observer]
+def true_visible_extent(world, poses) -> dict:
+    """For each segment, the extreme x reached by its visible part from any of ``poses`` (exact
+    observer, the scenario's laser range)."""
     out = {}
     for i, seg in enumerate(world.segments):
         xs = []
         for p in poses:
-            part = fn(seg.start, seg.end, p, max_range, DEFAULT_TOLERANCE)
+            part = visible_segment(seg.start, seg.end, p, LineSlamScenario.max_range)
             if part is not None:
                 xs += [seg.start[0] + t * (seg.end[0] - seg.start[0]) for t in part]
         out[i] = (min(xs), max(xs)) if xs else None
     return out
 
 
-def _observe(segs, features, pose, sc, observe_part, tolerance, rng):
+def _observe(segs, features, pose, sc, observe_part, rng):
     """Noisy observations of every segment with a visible part from ``pose``: ``(measurements,
     their covariances (line form), segment indices, end-point observations, observer seconds)``."""
     obs_sigma = np.array([sc.range_sigma, sc.bearing_sigma])
@@ -130,7 +130,7 @@ def _observe(segs, features, pose, sc, observe_part, tolerance, rng):
     seconds = 0.0
     for i, (a, b) in enumerate(segs):
         t0 = time.perf_counter()
-        part = observe_part(a, b, pose[:2], sc.max_range, tolerance)
+        part = observe_part(a, b, pose[:2], sc.max_range, DEFAULT_TOLERANCE)
         seconds += time.perf_counter() - t0
         if part is None:
             continue
@@ -152,8 +152,6 @@ def simulate_lap(
     seed: int = 0,
     observer: str = "closed_form",
     scenario: LineSlamScenario | None = None,
-    association: str = "mahalanobis",
-    tolerance: float = DEFAULT_TOLERANCE,
 ) -> LineSlamRun:
     """Drive one lap of the waypoints and run EKF-SLAM on it.
 
@@ -180,8 +178,8 @@ def simulate_lap(
     pose = np.array([*sc.start, math.atan2(first[1] - sc.start[1], first[0] - sc.start[0])])
     ekf = EkfSlam(
         pose,
-        control_cov(sc.speed_sigma, sc.steer_sigma),
-        range_bearing_cov(sc.range_sigma, sc.bearing_sigma),
+        diagonal_cov(sc.speed_sigma, sc.steer_sigma),
+        diagonal_cov(sc.range_sigma, sc.bearing_sigma),
         sc.period,
         sc.wheelbase,
         model=models[sc.observation],
@@ -213,11 +211,9 @@ def simulate_lap(
         ekf.predict(speed_m, steer_m)
         dr = bicycle_step(dr, speed_m, steer_m, sc.period, sc.wheelbase)
         if k % sc.observe_every == 0:
-            zs, obs_covs, which, ends, seconds = _observe(
-                segs, features, pose, sc, observe_part, tolerance, rng
-            )
+            zs, obs_covs, which, ends, seconds = _observe(segs, features, pose, sc, observe_part, rng)
             observer_seconds += seconds
-            indices = ekf.observe(zs, association, obs_covs if sc.observation == "line" else None)
+            indices = ekf.observe(zs, covariances=obs_covs if sc.observation == "line" else None)
             for i, j, e in zip(which, indices, ends, strict=True):
                 if j == DROPPED:
                     dropped += 1
@@ -363,10 +359,10 @@ if __name__ == "__main__":
     main()
 
 
-def association_example(heading_sigma: float = math.radians(5.0)):
+def association_example():
     """A case where the nearest landmark in metres is the wrong one.
 
-    The robot believes it is at the origin facing +x, with ``heading_sigma`` of heading doubt;
+    The robot believes it is at the origin facing +x, with 5 degrees of heading doubt;
     two walls have feature points A = 20 m away at 4 degrees to the left and B = 20.9 m straight
     ahead. A is observed at 20 m, bearing 0 (the robot in fact faces 4 degrees left). Placed with
     the estimated pose the observation is 1.4 m from A and 0.9 m from B: Euclidean distance picks
@@ -378,11 +374,11 @@ def association_example(heading_sigma: float = math.radians(5.0)):
     sc = LineSlamScenario()
     ekf = EkfSlam(
         np.zeros(3),
-        control_cov(sc.speed_sigma, sc.steer_sigma),
-        range_bearing_cov(sc.range_sigma, sc.bearing_sigma),
+        diagonal_cov(sc.speed_sigma, sc.steer_sigma),
+        diagonal_cov(sc.range_sigma, sc.bearing_sigma),
         sc.period,
         sc.wheelbase,
-        pose_cov=np.diag([0.05**2, 0.05**2, heading_sigma**2]),
+        pose_cov=np.diag([0.05**2, 0.05**2, math.radians(5.0) ** 2]),
     )
     a = 20.0 * np.array([math.cos(math.radians(4.0)), math.sin(math.radians(4.0))])
     for point in (a, np.array([20.9, 0.0])):

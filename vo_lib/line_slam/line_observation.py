@@ -15,7 +15,7 @@ point ``p`` (the foot of the perpendicular from the world origin, section 1.3):
 
     c = |p|,  n = p / c,  rho = c - n . (x_v, y_v),  psi = atan2(p_y, p_x) - phi.
 
-A line has two descriptions, ``(rho, psi)`` and ``(-rho, psi + pi)``; :meth:`LineModel.align`
+A line has two descriptions, ``(rho, psi)`` and ``(-rho, psi + pi)``; :func:`align_line`
 picks the one nearest a prediction. :data:`LINE` is the observation model for
 :class:`~vo_lib.line_slam.ekf_slam.EkfSlam`; :data:`~vo_lib.line_slam.range_bearing.POINT` is
 the feature-point form the paper's filter uses (section 1.3: "the observed landmark feature point
@@ -29,6 +29,7 @@ import math
 import numpy as np
 
 from vo_lib.geometry import wrap_angle
+from vo_lib.line_slam.range_bearing import ObservationModel
 
 
 def paper_line_triple(end_points_robot) -> np.ndarray:
@@ -113,32 +114,15 @@ def point_from_line(pose, z) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return point, g_pose, g_z
 
 
-class LineModel:
-    """The line ``(rho, psi)`` as the observation of a wall's feature point."""
-
-    name = "line"
-
-    @staticmethod
-    def predict(pose, point) -> np.ndarray:
-        return predict_line(pose, point)
-
-    @staticmethod
-    def jacobians(pose, point):
-        return line_jacobians(pose, point)
-
-    @staticmethod
-    def invert(pose, z):
-        return point_from_line(pose, z)
-
-    @staticmethod
-    def align(z, cov, predicted):
-        """The description of the measured line, ``(rho, psi)`` or ``(-rho, psi + pi)``, whose
-        normal lies within 90 degrees of the prediction's, and its covariance."""
-        z = np.asarray(z, dtype=float)
-        if abs(wrap_angle(z[1] - predicted[1])) <= math.pi / 2:
-            return z, cov
-        flip = np.diag([-1.0, 1.0])
-        return np.array([-z[0], wrap_angle(z[1] + math.pi)]), flip @ cov @ flip
+def align_line(z, cov, predicted):
+    """The description of the measured line, ``(rho, psi)`` or ``(-rho, psi + pi)``, whose
+    normal lies within 90 degrees of the prediction's, and its covariance."""
+    z = np.asarray(z, dtype=float)
+    if abs(wrap_angle(z[1] - predicted[1])) <= math.pi / 2:
+        return z, cov
+    flip = np.diag([-1.0, 1.0])
+    return np.array([-z[0], wrap_angle(z[1] + math.pi)]), flip @ cov @ flip
 
 
-LINE = LineModel()
+#: The line ``(rho, psi)`` as the observation of a wall's feature point.
+LINE = ObservationModel(predict_line, line_jacobians, point_from_line, align_line)

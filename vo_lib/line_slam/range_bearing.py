@@ -14,6 +14,8 @@ Notebook 09 derives it with sympy and checks it by finite differences.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
+from typing import NamedTuple
 
 import numpy as np
 
@@ -53,27 +55,22 @@ def point_from_observation(pose, z) -> tuple[np.ndarray, np.ndarray, np.ndarray]
     return point, g_pose, g_z
 
 
-class PointModel:
-    """Range and bearing of a wall's feature point (eq. 10): the observation of the paper's filter."""
+class ObservationModel(NamedTuple):
+    """How a wall's feature point is observed: the prediction ``h(pose, point)``, its Jacobians
+    ``(H_pose, H_point)``, the inverse with ``(point, G_pose, G_z)``, and ``align(z, cov,
+    predicted)``, the description of ``z`` nearest the prediction."""
 
-    name = "feature_point"
-
-    @staticmethod
-    def predict(pose, point) -> np.ndarray:
-        return observe_point(pose, point)
-
-    @staticmethod
-    def jacobians(pose, point):
-        return observation_jacobians(pose, point)
-
-    @staticmethod
-    def invert(pose, z):
-        return point_from_observation(pose, z)
-
-    @staticmethod
-    def align(z, cov, predicted):
-        """A point has one description: ``z`` and ``cov`` unchanged."""
-        return np.asarray(z, dtype=float), cov
+    predict: Callable
+    jacobians: Callable
+    invert: Callable
+    align: Callable
 
 
-POINT = PointModel()
+#: Range and bearing of a wall's feature point (eq. 10): the observation of the paper's filter. A
+#: point has one description: ``align`` returns ``z`` and ``cov`` unchanged.
+POINT = ObservationModel(
+    observe_point,
+    observation_jacobians,
+    point_from_observation,
+    lambda z, cov, predicted: (np.asarray(z, dtype=float), cov),
+)

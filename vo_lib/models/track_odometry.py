@@ -81,16 +81,11 @@ class TrackOdometry:
         """Effective gauge ``D + 2b`` of eq. 4."""
         return self.track_distance + 2.0 * self.track_width
 
-    # ------------------------------------------------------------------ eq. 4, 5, 11
+    # ------------------------------------------------------------------ eq. 4, 5
     def increment(self, u):
         """``(du, dtheta)``: distance of the centre and heading change (eq. 5 and eq. 4)."""
         du_left, du_right = _controls(u)
         return 0.5 * (du_right + du_left), (du_right - du_left) / self.gauge
-
-    def phi(self, u):
-        """``phi_k = (du_right - du_left) / (2 (D + 2b))``, half the heading change (eq. 11)."""
-        du_left, du_right = _controls(u)
-        return (du_right - du_left) / (2.0 * self.gauge)
 
     def controls_for(self, du, dtheta) -> np.ndarray:
         """Track distances ``(du_left, du_right)`` that produce ``du`` and ``dtheta``: eq. 4-5 inverted."""
@@ -98,19 +93,7 @@ class TrackOdometry:
         half = 0.5 * self.gauge * np.asarray(dtheta, dtype=float)
         return np.stack(np.broadcast_arrays(du - half, du + half), axis=-1)
 
-    # ------------------------------------------------------------------ eq. 6, 9, 10
-    def control_matrix(self, theta_prev, u) -> np.ndarray:
-        """``B_k`` of eq. 10, shape ``(..., 3, 2)``, evaluated at ``phi_k`` of ``u`` (eq. 11)."""
-        a = np.asarray(theta_prev, dtype=float) + self.phi(u)
-        c, s = np.cos(a), np.sin(a)
-        k = np.broadcast_to(1.0 / self.gauge, np.shape(a))
-        B = np.empty(np.shape(a) + (3, 2))
-        B[..., 0, 0] = B[..., 0, 1] = 0.5 * c
-        B[..., 1, 0] = B[..., 1, 1] = 0.5 * s
-        B[..., 2, 0] = -k
-        B[..., 2, 1] = k
-        return B
-
+    # ------------------------------------------------------------------ eq. 2-6
     def predict(self, state, u) -> np.ndarray:
         """``x_k = F_k x_{k-1} + B_k u_k`` with ``F_k = I`` (eq. 6, 9, 10): the midpoint step of eq. 2-5."""
         state = _states(state)
@@ -119,22 +102,6 @@ class TrackOdometry:
         out = np.empty(np.broadcast_shapes(state.shape, np.shape(du) + (3,)))
         out[..., 0] = state[..., 0] + du * np.cos(a)
         out[..., 1] = state[..., 1] + du * np.sin(a)
-        out[..., 2] = wrap_angle(state[..., 2] + dtheta)
-        return out
-
-    def predict_exact(self, state, u) -> np.ndarray:
-        """The exact circular-arc step: chord ``du * sin(dtheta/2) / (dtheta/2)`` along ``theta + dtheta/2``.
-
-        Eq. 2-3 replace the chord by the arc length ``du``; the relative error is about
-        ``dtheta**2 / 24`` per step.
-        """
-        state = _states(state)
-        du, dtheta = self.increment(u)
-        chord = du * np.sinc(dtheta / (2.0 * np.pi))  # numpy's sinc(x) is sin(pi x) / (pi x)
-        a = state[..., 2] + 0.5 * dtheta
-        out = np.empty(np.broadcast_shapes(state.shape, np.shape(du) + (3,)))
-        out[..., 0] = state[..., 0] + chord * np.cos(a)
-        out[..., 1] = state[..., 1] + chord * np.sin(a)
         out[..., 2] = wrap_angle(state[..., 2] + dtheta)
         return out
 
@@ -204,8 +171,9 @@ class TrackOdometry:
     def integrate(self, controls, start=(0.0, 0.0, 0.0), exact: bool = False) -> np.ndarray:
         """Dead-reckoned poses ``(K + 1, 3)`` from ``K`` control pairs, vectorised over time.
 
-        Headings are cumulative sums of eq. 4; positions are cumulative sums of eq. 2-3
-        (or of the exact chord when ``exact``).
+        Headings are cumulative sums of eq. 4; positions are cumulative sums of eq. 2-3, or, when
+        ``exact``, of the circular arc's chord ``du * sin(dtheta/2) / (dtheta/2)`` (eq. 2-3 take the
+        arc length ``du`` for it: a relative error of about ``dtheta**2 / 24`` per step).
         """
         controls = np.asarray(controls, dtype=float)
         if controls.ndim != 2 or controls.shape[1] != 2:

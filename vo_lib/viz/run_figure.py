@@ -76,24 +76,12 @@ def _heading_view(ax, times, paths, title):
 def plot_run(
     fig, times, estimate, truth=None, odometry=None, title: str = "", odometry_label: str = "track odometry"
 ) -> dict:
-    """Draw a run's figure on ``fig``.
+    """Draw a run's figure on the matplotlib figure ``fig``: ``times`` (K,) in seconds, planar
+    poses ``(x, y, yaw)`` (K, 3), ``truth`` and ``odometry`` optional; ``odometry_label`` says what
+    the odometry is (track odometry on the crawler, wheel or OXTS odometry on a car).
 
-    Parameters
-    ----------
-    fig : matplotlib.figure.Figure
-    times : array_like, shape (K,)
-        Time of each frame in seconds.
-    estimate, truth, odometry : array_like, shape (K, 3)
-        Planar poses ``(x, y, yaw)``; ``truth`` and ``odometry`` may be None.
-    title : str
-    odometry_label : str
-        What the odometry is: track odometry on the crawler, wheel or OXTS odometry on a car.
-
-    Returns
-    -------
-    dict
-        ``main`` (the path or heading axes), ``errors`` (the list of error axes, empty without
-        truth) and ``spot_turn`` (whether the heading view was drawn).
+    Returns ``main`` (the path or heading axes), ``errors`` (the list of error axes, empty without
+    truth) and ``spot_turn`` (whether the heading view was drawn).
     """
     times = np.asarray(times, float)
     estimate = np.asarray(estimate, float)
