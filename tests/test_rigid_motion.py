@@ -8,7 +8,7 @@ import pytest
 from vo_lib.camera import StereoCamera
 from vo_lib.formats.kitti_raw import camera_in_imu_frame, read_oxts, wheel_distances_from_oxts
 from vo_lib.formats.sequence import SequenceError
-from vo_lib.geometry import camera_mount
+from vo_lib.geometry import camera_mount, rigid_inverse
 from vo_lib.stereo_vo.kalman import chord_measurement
 from vo_lib.stereo_vo.rigid_motion import (
     refine_rigid_motion,
@@ -19,7 +19,6 @@ from vo_lib.stereo_vo.rigid_motion import (
 )
 from vo_lib.stereo_vo.six_dof import (
     chord_covariance,
-    rigid_inverse,
     vehicle_increment,
     with_planar_increment,
 )
