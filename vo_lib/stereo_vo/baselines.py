@@ -20,9 +20,8 @@ from vo_lib.camera import StereoCamera
 from vo_lib.stereo_vo.circular_motion import circular_motion_from_transform
 from vo_lib.stereo_vo.ransac import DEFAULT_PARAMS, hypotheses_needed
 
-REPROJECTION_THRESHOLD = (
-    3.0  # pixels, in (u, v, d) for the rigid fit and (u, v) for PnP: ~99 % of two noisy views
-)
+#: Pixels, in (u, v, d) for the rigid fit and (u, v) for PnP: ~99 % of two noisy views.
+REPROJECTION_THRESHOLD = 3.0
 MAX_ITERATIONS = 1000
 
 
