@@ -71,22 +71,17 @@ RETRY_HISTORY = 3
 EXPECTED_FACTOR = 4
 
 
-def vehicle_increment(
-    T_cam: np.ndarray, mount: np.ndarray, mount_inverse: np.ndarray | None = None
-) -> np.ndarray:
+def vehicle_increment(T_cam: np.ndarray, mount: np.ndarray) -> np.ndarray:
     """``(dx, dy, dyaw)`` of the vehicle, in its previous frame, for a camera motion ``T_cam``
-    (``T_curr_from_prev`` of the camera mounted at ``mount`` = ``T_vehicle_camera``);
-    ``mount_inverse`` is ``rigid_inverse(mount)``, if already known."""
-    V = mount @ rigid_inverse(T_cam) @ (rigid_inverse(mount) if mount_inverse is None else mount_inverse)
+    (``T_curr_from_prev`` of the camera mounted at ``mount`` = ``T_vehicle_camera``)."""
+    V = mount @ rigid_inverse(T_cam) @ rigid_inverse(mount)
     return np.array([V[0, 3], V[1, 3], math.atan2(V[1, 0], V[0, 0])])
 
 
-def with_planar_increment(
-    T_cam: np.ndarray, mount: np.ndarray, increment, mount_inverse: np.ndarray | None = None
-) -> np.ndarray:
+def with_planar_increment(T_cam: np.ndarray, mount: np.ndarray, increment) -> np.ndarray:
     """``T_cam`` with the vehicle's yaw and ground-plane translation replaced by ``increment``;
-    height, pitch and roll are kept (``mount_inverse`` as in :func:`vehicle_increment`)."""
-    inverse = rigid_inverse(mount) if mount_inverse is None else mount_inverse
+    height, pitch and roll are kept."""
+    inverse = rigid_inverse(mount)
     V = mount @ rigid_inverse(T_cam) @ inverse
     yaw = math.atan2(V[1, 0], V[0, 0])
     dx, dy, dyaw = (float(v) for v in increment)
@@ -121,24 +116,21 @@ _STEPS = np.vstack([np.diag([COVARIANCE_STEP] * 6), np.diag([-COVARIANCE_STEP] *
 _STEP_ROTATIONS = np.stack([rotation_matrix(step[:3]) for step in _STEPS])
 
 
-def chord_covariance(
-    T_cam: np.ndarray, covariance6: np.ndarray, mount: np.ndarray, mount_inverse: np.ndarray | None = None
-) -> np.ndarray:
+def chord_covariance(T_cam: np.ndarray, covariance6: np.ndarray, mount: np.ndarray) -> np.ndarray:
     """3x3 covariance of ``(theta, rho, sideways)`` of the vehicle, propagated from the 6x6
     covariance of the camera motion (rotation vector on the left, translation) by central
-    differences (``mount_inverse`` as in :func:`vehicle_increment`).
+    differences.
 
     The twelve moved motions go through :func:`vehicle_increment`'s products as one stack of 4x4
     matrices.
     """
-    inverse = rigid_inverse(mount) if mount_inverse is None else mount_inverse
     R = _STEP_ROTATIONS @ T_cam[:3, :3]
     t = _STEP_ROTATIONS @ T_cam[:3, 3] + _STEPS[:, 3:]
     moved_inverse = np.zeros((12, 4, 4))  # rigid_inverse of each moved motion
     moved_inverse[:, :3, :3] = np.swapaxes(R, 1, 2)
     moved_inverse[:, :3, 3] = (-np.swapaxes(R, 1, 2) @ t[:, :, None])[:, :, 0]
     moved_inverse[:, 3, 3] = 1.0
-    V = mount @ moved_inverse @ inverse
+    V = mount @ moved_inverse @ rigid_inverse(mount)
     z = np.array([chord_measurement((M[0, 3], M[1, 3], math.atan2(M[1, 0], M[0, 0]))) for M in V])
     J = ((z[:6] - z[6:]) / (2 * COVARIANCE_STEP)).T
     return J @ covariance6 @ J.T
@@ -159,7 +151,6 @@ class SixDofMotion:
         self.camera = camera
         self.config = config
         self.mount = np.asarray(mount, float)
-        self.mount_inverse = rigid_inverse(self.mount)
         self.covariance_scale = np.asarray(config.vo_covariance_scale, float)
         self.to_axis = turning_axis_transform(self.mount)
         self.from_axis = rigid_inverse(self.to_axis)
@@ -174,7 +165,7 @@ class SixDofMotion:
         if self.velocity is None and not kf.flags.odometry:
             return Prediction(kf.motion_prior(), False)
         T = np.eye(4) if self.velocity is None else scaled_motion(self.velocity, gap)
-        motion = with_planar_increment(T, self.mount, kf.increment, self.mount_inverse)
+        motion = with_planar_increment(T, self.mount, kf.increment)
         return Prediction(kf.motion_prior(), True, motion)
 
     def match(self, reference, features, prediction: Prediction, recent):
@@ -248,12 +239,10 @@ class SixDofMotion:
         with watch("refinement"):
             motion = refine_rigid_motion(matches.w_prev, matches.w_curr, self.camera, guess, start)
         T = motion.matrix
-        z = chord_measurement(vehicle_increment(T, self.mount, self.mount_inverse))
+        z = chord_measurement(vehicle_increment(T, self.mount))
         covariance = np.full((3, 3), np.inf)  # a failed refinement measures nothing
         if motion.success:
-            covariance = self.covariance_scale * chord_covariance(
-                T, motion.covariance, self.mount, self.mount_inverse
-            )
+            covariance = self.covariance_scale * chord_covariance(T, motion.covariance, self.mount)
         return Estimate(
             motion.success,
             z,
@@ -273,7 +262,7 @@ class SixDofMotion:
             since_reference = prediction.motion if prediction.motion is not None else np.eye(4)
         else:
             since_reference = estimate.motion
-        fused = with_planar_increment(since_reference, self.mount, kf.increment, self.mount_inverse)
+        fused = with_planar_increment(since_reference, self.mount, kf.increment)
         self.camera_pose = self.reference_pose @ np.linalg.inv(fused)
         self._fused = fused
 
