@@ -101,22 +101,12 @@ class StepFlags:
 
 
 class VoKalmanFilter:
-    """Planar pose filter: track odometry predicts, visual odometry corrects.
+    """Planar pose filter: track odometry (eq. 2-11, with its encoder noise) predicts, visual
+    odometry corrects; the initial ``covariance`` is nearly certain by default.
 
-    Parameters
-    ----------
-    odometry : TrackOdometry
-        The crawler's odometry model (eq. 2-11) and encoder noise.
-    pose : (x, y, yaw)
-        Initial pose.
-    covariance : 3x3, optional
-        Initial covariance (default: nearly certain).
-    sideways_sigma : float
-        How far a motion may stray from its chord (:data:`SIDEWAYS_SIGMA`).
-    lateral_sigma : float
-        Sideways motion per metre travelled that the odometry cannot see, as process noise across
-        the chord (0 for the crawler, whose tracks hold it on the chord; a car's odometry frame is
-        aligned with its direction of travel only to a fraction of a degree).
+    ``lateral_sigma`` is the sideways motion per metre travelled that the odometry cannot see, as
+    process noise across the chord (0 for the crawler, whose tracks hold it on the chord; a car's
+    odometry frame is aligned with its direction of travel only to a fraction of a degree).
     """
 
     def __init__(

@@ -46,19 +46,11 @@ MIN_HISTORY = 5
 class StereoOdometry:
     """[Zhao]'s pipeline: stereo front end, prediction and matching, motion estimation, filter.
 
-    Parameters
-    ----------
-    camera : StereoCamera
-    config : PipelineConfig
-        :data:`~vo_lib.stereo_vo.config.CRAWLER` (default) or ``CAR``, or a variant of either.
-    odometry : TrackOdometry, optional
-        Gauge and noise of the odometry, when frames come with track or wheel distances.
-    mount : ndarray, 4x4, optional
-        ``T_vehicle_camera``; needed by the 6-DoF motion model.
-    seed : int
-        Seed of the RANSAC draws.
-    front_end, motion : optional
-        Parts to use instead of those the config names (see ``parts``).
+    ``config`` is :data:`~vo_lib.stereo_vo.config.CRAWLER` (default) or ``CAR``, or a variant of
+    either; ``odometry`` the gauge and noise of the odometry, when frames come with track or wheel
+    distances; ``mount`` is ``T_vehicle_camera``, which the 6-DoF motion model needs; ``seed``
+    seeds the RANSAC draws; ``front_end`` and ``motion`` are parts to use instead of those the
+    config names (see ``parts``).
     """
 
     def __init__(

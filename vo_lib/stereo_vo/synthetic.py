@@ -26,24 +26,12 @@ RIG_HEIGHT = 0.5
 
 @dataclass(frozen=True)
 class Scene:
-    """Where the points of a synthetic match set may lie.
+    """Where the points of a synthetic match set may lie."""
 
-    Attributes
-    ----------
-    camera_height : float
-        Height of the left camera's centre above the floor, metres.
-    pitch : float
-        Downward pitch of the optical axis from the horizontal, radians (0: level).
-    top : float
-        Height above the floor of the highest point on an upright surface, metres.
-    floor_share : float
-        Share of the points drawn on the floor itself (the rest on upright surfaces).
-    """
-
-    camera_height: float = RIG_HEIGHT
-    pitch: float = 0.0
-    top: float = 2.5
-    floor_share: float = 0.3
+    camera_height: float = RIG_HEIGHT  #: of the left camera's centre above the floor, metres
+    pitch: float = 0.0  #: downward pitch of the optical axis from the horizontal, radians (0: level)
+    top: float = 2.5  #: height above the floor of the highest point on an upright surface, metres
+    floor_share: float = 0.3  #: share of the points drawn on the floor itself (the rest upright)
 
     def __post_init__(self) -> None:
         if not self.camera_height > 0:

@@ -70,29 +70,14 @@ class Motion(StrEnum):
 
 @dataclass
 class Vehicle:
-    """The rig around the camera.
-
-    Attributes
-    ----------
-    kind : VehicleKind
-    mount : ndarray, 4x4
-        ``T_vehicle_camera``: the left camera's pose in the vehicle frame.
-    odometry_model : TrackOdometry
-        Gauge and noise of the odometry ([Zhao], eq. 2-11).
-    odometry : ndarray (N, 2) or None
-        Left and right distances per frame (row 0 unused).
-    odometry_source : str
-        Where the odometry came from, for reports.
-    motion : Motion
-        The motion model that fits: planar (circular motion, eq. 12-17) or full (6-DoF).
-    """
+    """The rig around the camera."""
 
     kind: VehicleKind
-    mount: np.ndarray
-    odometry_model: TrackOdometry
-    odometry: np.ndarray | None
-    odometry_source: str
-    motion: Motion
+    mount: np.ndarray  #: ``T_vehicle_camera``: the left camera's pose in the vehicle frame
+    odometry_model: TrackOdometry  #: gauge and noise of the odometry ([Zhao], eq. 2-11)
+    odometry: np.ndarray | None  #: left and right distances per frame (row 0 unused)
+    odometry_source: str  #: where the odometry came from, for reports
+    motion: Motion  #: the motion model that fits
 
 
 def gauge_for_yaw_noise(distances: np.ndarray, yaw_errors: np.ndarray, distance_sigma: float) -> float:
