@@ -105,28 +105,15 @@ def matches_under_transform(
 ) -> SyntheticMatches:
     """Draw ``n`` matches of points seen before and after any rigid camera motion.
 
-    Parameters
-    ----------
-    camera : StereoCamera
-        Must have ``width`` and ``height``.
-    n : int
-        Number of matches.
-    T_curr_from_prev : array_like, shape (4, 4)
-        Maps a point of the previous camera frame into the current one. ``theta`` and ``rho`` of
-        the result are those of :func:`~vo_lib.stereo_vo.circular_motion.circular_motion_from_transform`.
-    rng : numpy.random.Generator
-        Source of every random draw.
-    depth_range : (float, float)
-        Horizontal ranges of the points from the previous camera, metres, drawn uniformly in
-        inverse range so that near and far points are both present.
-    noise_px : float
-        Standard deviation of Gaussian noise added to u, v and d of both views, pixels.
-    outlier_ratio : float
-        Fraction of matches whose second view is replaced by an unrelated pixel and disparity.
-    scene : Scene, optional
-        The floor, the camera's height and pitch, and where points lie (default :class:`Scene`).
-        The floor is fixed to the previous camera: ``T_curr_from_prev`` moves the camera, not
-        the points.
+    ``T_curr_from_prev`` maps a point of the previous camera frame into the current one; ``theta``
+    and ``rho`` of the result are those of
+    :func:`~vo_lib.stereo_vo.circular_motion.circular_motion_from_transform`. ``depth_range`` holds
+    the horizontal ranges of the points from the previous camera, metres, drawn uniformly in
+    inverse range so that near and far points are both present; ``noise_px`` is the standard
+    deviation of Gaussian noise added to u, v and d of both views; ``outlier_ratio`` the fraction
+    of matches whose second view is replaced by an unrelated pixel and disparity. ``scene`` (default
+    :class:`Scene`) is fixed to the previous camera: ``T_curr_from_prev`` moves the camera, not
+    the points.
     """
     scene = Scene() if scene is None else scene
     if camera.width is None or camera.height is None:
