@@ -6,6 +6,7 @@ from hypothesis import strategies as st
 from vo_lib.camera import StereoCamera
 from vo_lib.geometry import camera_motion, camera_mount, compose_planar
 from vo_lib.stereo_vo import circular_motion as cm
+from vo_lib.stereo_vo.ransac import rho_gate_error
 from vo_lib.stereo_vo.synthetic import synthetic_matches
 
 
@@ -110,7 +111,7 @@ def test_synthetic_matches_refuses_motion_without_overlap(camera, rng):
 
 def test_motion_residuals_zero_for_truth(camera, rng):
     m = synthetic_matches(camera, 200, 0.05, 0.1, rng, outlier_ratio=0.2)
-    res = cm.motion_residuals(m.w_prev, m.w_curr, 0.05, 0.1, camera)
+    res = rho_gate_error(camera.backproject(m.w_prev), camera.backproject(m.w_curr), 0.05, 0.1)
     assert np.max(res[m.inliers]) < 1e-12
     assert np.median(res[~m.inliers]) > 0.5
 

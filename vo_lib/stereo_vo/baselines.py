@@ -20,9 +20,8 @@ from vo_lib.camera import StereoCamera
 from vo_lib.stereo_vo.circular_motion import circular_motion_from_transform
 from vo_lib.stereo_vo.ransac import DEFAULT_PARAMS, hypotheses_needed
 
-REPROJECTION_THRESHOLD = (
-    3.0  # pixels, in (u, v, d) for the rigid fit and (u, v) for PnP: ~99 % of two noisy views
-)
+#: Pixels, in (u, v, d) for the rigid fit and (u, v) for PnP: ~99 % of two noisy views.
+REPROJECTION_THRESHOLD = 3.0
 MAX_ITERATIONS = 1000
 
 
@@ -82,9 +81,6 @@ def rigid_ransac(
     w_curr,
     camera: StereoCamera,
     rng=None,
-    threshold: float = REPROJECTION_THRESHOLD,
-    confidence: float = DEFAULT_PARAMS.confidence,
-    max_iterations: int = MAX_ITERATIONS,
 ) -> MotionEstimate:
     """3-point RANSAC on back-projected points; hypotheses scored in batches, refit on all inliers."""
     rng = np.random.default_rng(rng)
@@ -92,7 +88,8 @@ def rigid_ransac(
     P, Q = camera.backproject(a), camera.backproject(b)
     n = len(P)
     best_count, best = -1, None
-    tried, limit = 0, min(hypotheses_needed(0.5, confidence, 3), max_iterations)
+    threshold, confidence = REPROJECTION_THRESHOLD, DEFAULT_PARAMS.confidence
+    tried, limit = 0, min(hypotheses_needed(0.5, confidence, 3), MAX_ITERATIONS)
     while tried < limit:
         k = limit - tried
         idx = np.stack([rng.choice(n, 3, replace=False) for _ in range(k)])
@@ -102,7 +99,7 @@ def rigid_ransac(
         if counts[j] > best_count:
             best_count, best = int(counts[j]), (R[j], t[j])
         tried += k
-        limit = min(hypotheses_needed(max(best_count, 1) / n, confidence, 3), max_iterations)
+        limit = min(hypotheses_needed(max(best_count, 1) / n, confidence, 3), MAX_ITERATIONS)
     inliers = _reprojection_error(P, b, best[0], best[1], camera) <= threshold
     if inliers.sum() >= 3:
         # refit on all inliers, each weighted by its inverse depth variance (z^2 grows as 1/d^4)
@@ -113,15 +110,7 @@ def rigid_ransac(
     return MotionEstimate(best[0], best[1], inliers, bool(inliers.sum() >= 3))
 
 
-def pnp_ransac(
-    w_prev,
-    w_curr,
-    camera: StereoCamera,
-    threshold: float = REPROJECTION_THRESHOLD,
-    confidence: float = DEFAULT_PARAMS.confidence,
-    max_iterations: int = 100,
-    seed: int = 0,
-) -> MotionEstimate:
+def pnp_ransac(w_prev, w_curr, camera: StereoCamera, seed: int = 0) -> MotionEstimate:
     """OpenCV ``solvePnPRansac`` from previous 3-D points to current pixels (EPnP hypotheses,
     iterative refinement on the inliers)."""
     a, b = np.asarray(w_prev, float), np.asarray(w_curr, float)
@@ -132,9 +121,9 @@ def pnp_ransac(
         b[:, :2].astype(np.float64),
         camera.K,
         None,
-        iterationsCount=max_iterations,
-        reprojectionError=threshold,
-        confidence=confidence,
+        iterationsCount=100,
+        reprojectionError=REPROJECTION_THRESHOLD,
+        confidence=DEFAULT_PARAMS.confidence,
         flags=cv2.SOLVEPNP_EPNP,
     )
     inliers = np.zeros(len(a), bool)
@@ -145,19 +134,12 @@ def pnp_ransac(
     return MotionEstimate(cv2.Rodrigues(rvec)[0], tvec.ravel(), inliers, True)
 
 
-def essential_ransac(
-    w_prev,
-    w_curr,
-    camera: StereoCamera,
-    threshold: float = 1.0,
-    confidence: float = DEFAULT_PARAMS.confidence,
-    seed: int = 0,
-) -> MotionEstimate:
-    """OpenCV 5-point essential-matrix RANSAC and ``recoverPose``: rotation, and translation of unit
-    length (a monocular camera cannot see scale)."""
+def essential_ransac(w_prev, w_curr, camera: StereoCamera, seed: int = 0) -> MotionEstimate:
+    """OpenCV 5-point essential-matrix RANSAC (1 pixel) and ``recoverPose``: rotation, and
+    translation of unit length (a monocular camera cannot see scale)."""
     a, b = np.asarray(w_prev, float), np.asarray(w_curr, float)
     cv2.setRNGSeed(seed)
-    E, mask = cv2.findEssentialMat(a[:, :2], b[:, :2], camera.K, cv2.RANSAC, confidence, threshold)
+    E, mask = cv2.findEssentialMat(a[:, :2], b[:, :2], camera.K, cv2.RANSAC, DEFAULT_PARAMS.confidence, 1.0)
     inliers = np.zeros(len(a), bool)
     if E is None or E.shape != (3, 3):
         return MotionEstimate(np.eye(3), np.zeros(3), inliers, False)

@@ -60,19 +60,9 @@ def theta_from_pixels(w_prev, w_curr, camera: StereoCamera) -> np.ndarray:
 
     ``tan(theta / 2) = ((u'-u0)(v-v0) - (u-u0)(v'-v0)) / (fx (v + v' - 2 v0))``
 
-    Disparities are not used, so matches at infinity (``d = 0``) are fine.
-
-    Parameters
-    ----------
-    w_prev, w_curr : array_like, shape (N, 3)
-        Matches ``(u, v, d)`` in the previous and the current left image.
-    camera : StereoCamera
-
-    Returns
-    -------
-    numpy.ndarray, shape (N,)
-        ``theta`` in radians, in ``(-pi, pi)``. A match exactly at the camera's height
-        (``v + v' = 2 v0``, see :func:`degenerate_theta_mask`) has no defined theta and gets NaN.
+    Disparities are not used, so matches at infinity (``d = 0``) are fine. Returns ``theta`` in
+    radians, in ``(-pi, pi)``, per match; NaN for a match exactly at the camera's height
+    (``v + v' = 2 v0``, see :func:`degenerate_theta_mask`), which has no defined theta.
     """
     a, b = _pair(w_prev, w_curr)
     num, den = _eq14_terms(a, b, camera)
@@ -84,27 +74,24 @@ def theta_from_pixels(w_prev, w_curr, camera: StereoCamera) -> np.ndarray:
 
 
 def theta_standard_deviation(w_prev, w_curr, camera: StereoCamera, sigma_px: float) -> np.ndarray:
-    """First-order standard deviation of eq. 14's theta when u, v, u', v' carry noise ``sigma_px``.
+    """First-order standard deviation of eq. 14's theta when u, v, u', v' carry noise ``sigma_px``
+    (:func:`theta_variance`). The error grows as ``1 / |D|`` near the camera's height and with the
+    distance of the match from the image centre."""
+    return np.sqrt(theta_variance(*_pair(w_prev, w_curr), camera, sigma_px))
+
+
+def theta_variance(a: np.ndarray, b: np.ndarray, camera: StereoCamera, sigma_px: float) -> np.ndarray:
+    """First-order variance of eq. 14's theta for matches ``a -> b`` already checked.
 
     With ``tan phi = N / (fx D)``, ``N = (u'-u0)(v-v0) - (u-u0)(v'-v0)``, ``D = v + v' - 2 v0``:
-    ``dphi = (fx D dN - fx N dD) / (fx^2 D^2 + N^2)``, and ``theta = 2 phi``. The error grows as
-    ``1 / |D|`` near the camera's height and with the distance of the match from the image centre.
+    ``dphi = (fx D dN - fx N dD) / (fx^2 D^2 + N^2)`` with ``dN/d(u, u', v, v') = (-dv', dv, du', -du)``
+    and ``dD/dv = dD/dv' = 1``; theta = 2 phi.
     """
-    a, b = _pair(w_prev, w_curr)
     du, dv = a[:, 0] - camera.cx, a[:, 1] - camera.cy
     du2, dv2 = b[:, 0] - camera.cx, b[:, 1] - camera.cy
-    num, den = du2 * dv - du * dv2, camera.fx * (dv + dv2)
-    return np.sqrt(theta_variance(du, dv, du2, dv2, num, den, camera.fx, sigma_px))
-
-
-def theta_variance(du, dv, du2, dv2, num, den, fx: float, sigma_px: float) -> np.ndarray:
-    """First-order variance of eq. 14's theta from its centred pixels and terms (``tan phi = num / den``).
-
-    ``dphi = (den dN - fx num dD) / (den^2 + num^2)`` with ``dN/d(u, u', v, v') = (-dv', dv, du', -du)``
-    and ``dD/dv = dD/dv' = 1``; theta = 2 phi. Shared with the RANSAC, which has the terms at hand.
-    """
+    num, den = _eq14_terms(a, b, camera)
     q = den * den + num * num
-    g_n, g_d = den / q, fx * num / q
+    g_n, g_d = den / q, camera.fx * num / q
     return (4.0 * sigma_px**2) * (
         (dv2 * g_n) ** 2 + (dv * g_n) ** 2 + (du2 * g_n - g_d) ** 2 + (du * g_n + g_d) ** 2
     )
@@ -114,20 +101,9 @@ def rho_from_pixels(w_prev, w_curr, theta, camera: StereoCamera) -> np.ndarray:
     """Chord length ``rho`` of every match given ``theta`` ([Zhao], eq. 16-17, sign corrected).
 
     ``rho = B/d [-sin phi, 0, cos phi](u-u0, ., fx) - B/d' [sin phi, 0, cos phi](u'-u0, ., fx)``
-    with ``phi = theta / 2``; the paper prints ``+`` before the second term.
-
-    Parameters
-    ----------
-    w_prev, w_curr : array_like, shape (N, 3)
-        Matches ``(u, v, d)``; both disparities must be > 0.
-    theta : float or array_like, shape (N,)
-        Deflection angle, one for all matches or one per match.
-    camera : StereoCamera
-
-    Returns
-    -------
-    numpy.ndarray, shape (N,)
-        ``rho`` in metres; negative when the camera moves backwards.
+    with ``phi = theta / 2``; the paper prints ``+`` before the second term. ``theta`` is one for
+    all matches or one per match; both disparities must be > 0. ``rho`` is negative when the
+    camera moves backwards.
     """
     a, b = _pair(w_prev, w_curr)
     for name, arr in (("w_prev", a), ("w_curr", b)):
@@ -175,12 +151,6 @@ def apply_motion(points, theta: float, rho: float) -> np.ndarray:
     """``P' = R P + T`` (eq. 15) for points ``(N, 3)`` in the previous camera frame."""
     R, T = motion_matrices(theta, rho)
     return np.asarray(points, dtype=float) @ R.T + T
-
-
-def motion_residuals(w_prev, w_curr, theta: float, rho: float, camera: StereoCamera) -> np.ndarray:
-    """``|| P' - (R P + T) ||`` per match, in metres ([Zhao], eq. 21)."""
-    a, b = _pair(w_prev, w_curr)
-    return np.linalg.norm(camera.backproject(b) - apply_motion(camera.backproject(a), theta, rho), axis=1)
 
 
 # ---------------------------------------------------------------------- camera <-> robot

@@ -48,10 +48,6 @@ class StereoFeatures:
     def __len__(self) -> int:
         return len(self.w)
 
-    @classmethod
-    def empty(cls) -> StereoFeatures:
-        return cls(np.zeros((0, 3)), np.zeros((0, 32), np.uint8))
-
 
 def hamming(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Hamming distances between paired rows of 32-byte descriptors."""
@@ -86,16 +82,15 @@ def best_matches(
 
 
 def window_pairs(keys_a: np.ndarray, keys_b: np.ndarray, half_width) -> tuple[np.ndarray, np.ndarray]:
-    """All pairs ``(i, j)`` with ``|keys_b[j] - keys_a[i]| <= half_width[i]``, by sorting ``keys_b``.
-
-    Costs a sort and two binary searches instead of comparing every pair.
-    """
+    """All pairs ``(i, j)`` with ``|keys_b[j] - keys_a[i]| <= half_width[i]``, by ``i`` then by
+    ``keys_b[j]`` (a negative half-width finds none). Costs a sort and two binary searches instead of
+    comparing every pair."""
     order = np.argsort(keys_b, kind="stable")
     sorted_b = keys_b[order]
     half = np.broadcast_to(np.asarray(half_width, dtype=float), keys_a.shape)
     lo = np.searchsorted(sorted_b, keys_a - half, side="left")
     hi = np.searchsorted(sorted_b, keys_a + half, side="right")
-    counts = hi - lo
+    counts = np.maximum(hi - lo, 0)
     ia = np.repeat(np.arange(len(keys_a)), counts)
     offsets = np.arange(counts.sum()) - np.repeat(np.cumsum(counts) - counts, counts)
     return ia, order[np.repeat(lo, counts) + offsets]
@@ -175,18 +170,9 @@ def subpixel_disparity(
 
 
 class StereoFrontEnd:
-    """Detect, describe and stereo-match features of rectified pairs.
-
-    Parameters
-    ----------
-    camera : StereoCamera
-    max_features : int
-        Cap on left features after bucketing.
-    fast_threshold : int
-        FAST intensity threshold.
-    max_disparity : float, optional
-        Largest disparity searched, pixels; defaults to :data:`MAX_DISPARITY` scaled to the image width.
-    """
+    """Detect, describe and stereo-match features of rectified pairs: at most ``max_features``
+    left corners after bucketing, FAST's intensity threshold, and the largest disparity searched
+    (default: :data:`MAX_DISPARITY` scaled to the image width)."""
 
     def __init__(
         self,
@@ -194,7 +180,6 @@ class StereoFrontEnd:
         max_features: int = MAX_FEATURES,
         fast_threshold: int = FAST_THRESHOLD,
         max_disparity: float | None = None,
-        grid=GRID,
     ):
         if camera.width is None or camera.height is None:
             raise ValueError("the front end needs a camera with width and height")
@@ -202,7 +187,6 @@ class StereoFrontEnd:
             raise ValueError(f"max_features must be > 0; got {max_features}")
         self.camera = camera
         self.max_features = max_features
-        self.grid = grid
         self.max_disparity = (
             MAX_DISPARITY * camera.width / 640 if max_disparity is None else float(max_disparity)
         )
@@ -244,7 +228,7 @@ class StereoFrontEnd:
         timings = {}
         t0 = time.perf_counter()
         pl, rl = self._detect(left)
-        keep = bucket(pl, rl, w, h, self.grid, self.max_features)
+        keep = bucket(pl, rl, w, h, GRID, self.max_features)
         pl = pl[keep]
         pr, rr = self._detect(right)
         if len(pl) and len(pr):
@@ -255,7 +239,7 @@ class StereoFrontEnd:
                 row_has_left[np.clip(rows + k, 0, h - 1)] = True
             near = row_has_left[np.rint(pr[:, 1]).astype(int)]
             pr, rr = pr[near], rr[near]
-            pr = pr[bucket(pr, rr, w, h, self.grid, int(RIGHT_FACTOR * len(pl)))]
+            pr = pr[bucket(pr, rr, w, h, GRID, int(RIGHT_FACTOR * len(pl)))]
         t1 = time.perf_counter()
         pl, dl = self._describe(left, pl)
         pr, dr = self._describe(right, pr)

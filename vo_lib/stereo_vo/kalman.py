@@ -101,24 +101,12 @@ class StepFlags:
 
 
 class VoKalmanFilter:
-    """Planar pose filter: track odometry predicts, visual odometry corrects.
+    """Planar pose filter: track odometry (eq. 2-11, with its encoder noise) predicts, visual
+    odometry corrects; the initial ``covariance`` is nearly certain by default.
 
-    Parameters
-    ----------
-    odometry : TrackOdometry
-        The crawler's odometry model (eq. 2-11) and encoder noise.
-    pose : (x, y, yaw)
-        Initial pose.
-    covariance : 3x3, optional
-        Initial covariance (default: nearly certain).
-    slip_sigma : float
-        Slip uncertainty per metre of track travel, added to the encoder noise.
-    lateral_sigma : float
-        Sideways motion per metre travelled that the odometry cannot see, as process noise across
-        the chord (0 for the crawler, whose tracks hold it on the chord; a car's odometry frame is
-        aligned with its direction of travel only to a fraction of a degree).
-    cv_sigma : (float, float, float)
-        Constant-velocity process noise per frame when no odometry is given.
+    ``lateral_sigma`` is the sideways motion per metre travelled that the odometry cannot see, as
+    process noise across the chord (0 for the crawler, whose tracks hold it on the chord; a car's
+    odometry frame is aligned with its direction of travel only to a fraction of a degree).
     """
 
     def __init__(
@@ -126,16 +114,12 @@ class VoKalmanFilter:
         odometry: TrackOdometry | None = None,
         pose=(0.0, 0.0, 0.0),
         covariance=None,
-        slip_sigma: float = SLIP_SIGMA,
-        cv_sigma=CV_SIGMA,
         sideways_sigma: float = SIDEWAYS_SIGMA,
         lateral_sigma: float = 0.0,
     ):
         self.odometry = odometry or TrackOdometry()
-        self.slip_sigma = float(slip_sigma)
         self.lateral_sigma = float(lateral_sigma)
         self.sideways_sigma = float(sideways_sigma)
-        self.cv_sigma = np.asarray(cv_sigma, float)
         self.ekf = ExtendedKalmanFilter(dim_x=6, dim_z=3)  # (theta, rho, sideways), see update
         P = np.diag([1e-8, 1e-8, 1e-10]) if covariance is None else np.asarray(covariance, float)
         self.ekf.x = np.concatenate([np.asarray(pose, float), np.asarray(pose, float)])
@@ -159,7 +143,7 @@ class VoKalmanFilter:
 
     def control_covariance(self, u) -> np.ndarray:
         """Encoder noise (random walk) plus slip, independent per track."""
-        enc, slip = self.odometry.encoder_sigma**2, self.slip_sigma**2
+        enc, slip = self.odometry.encoder_sigma**2, SLIP_SIGMA**2
         return np.diag([enc * abs(u[0]) + slip * u[0] ** 2, enc * abs(u[1]) + slip * u[1] ** 2])
 
     # ------------------------------------------------------------------ predict
@@ -198,7 +182,7 @@ class VoKalmanFilter:
             Rw = yaw_matrix(x[2])
             # velocity changes scale with the velocity: a fraction of each component, plus the floor
             step = math.hypot(inc[0], inc[1])
-            sigma = self.cv_sigma + CV_RELATIVE * np.array(
+            sigma = np.asarray(CV_SIGMA) + CV_RELATIVE * np.array(
                 [step, step, abs(inc[2]) + CV_TURN_PER_METRE * step]
             )
             Q = Rw @ np.diag(sigma**2) @ Rw.T
@@ -274,18 +258,6 @@ def nis(innovation, innovation_covariance) -> float:
     components, and its average over N independent updates lies in the band of χ²(mN)/N. After
     :meth:`VoKalmanFilter.update` the filter's ``ekf.y`` and ``ekf.S`` hold ν and S; the VO's own
     components are ``ekf.y[:2]`` and ``ekf.S[:2, :2]`` (the third is the sideways constraint).
-
-    Parameters
-    ----------
-    innovation : array_like, shape (m,)
-        The measurement minus its prediction, ν = z − h(x⁻).
-    innovation_covariance : array_like, shape (m, m)
-        Its covariance S.
-
-    Returns
-    -------
-    float
-        νᵀ S⁻¹ ν.
     """
     nu = np.atleast_1d(np.asarray(innovation, float))
     S = np.atleast_2d(np.asarray(innovation_covariance, float))

@@ -12,21 +12,12 @@ from __future__ import annotations
 import numpy as np
 
 from vo_lib.stereo_vo import matching_core as core
+from vo_lib.stereo_vo.features import window_pairs
 
 
 def _hamming(des_a, des_b, ia, ib):
     """Hamming distances of the descriptor pairs ``(des_a[ia], des_b[ib])`` (uint64 words)."""
     return np.bitwise_count(des_a[ia] ^ des_b[ib]).sum(axis=1, dtype=np.int64)
-
-
-def _rows_within(key, half, sorted_keys, order):
-    """All pairs ``(i, order[s])`` with ``|sorted_keys[s] - key[i]| <= half[i]``, by ``i`` then by ``s``."""
-    lo = np.searchsorted(sorted_keys, key - half, side="left")
-    hi = np.searchsorted(sorted_keys, key + half, side="right")
-    counts = np.maximum(hi - lo, 0)
-    ia = np.repeat(np.arange(len(key)), counts)
-    within = np.arange(counts.sum()) - np.repeat(np.cumsum(counts) - counts, counts)
-    return ia, order[np.repeat(lo, counts) + within]
 
 
 def best_matches(ia, ib, dist, n_a, n_b, max_distance, ratio, mutual):
@@ -65,7 +56,8 @@ def window_candidates(predicted, radius, w_curr, order_v, sorted_v, des_prev, de
     seen = np.all(np.isfinite(predicted), axis=1)
     half = np.where(seen, radius[:, 1], -1.0)  # a window no row falls in
     v = np.where(seen, predicted[:, 1], 0.0)
-    ia, ib = _rows_within(v, half, sorted_v, order_v)
+    ia, ib = window_pairs(v, sorted_v, half)
+    ib = order_v[ib]
     inside = np.abs(w_curr[ib, 0] - predicted[ia, 0]) <= radius[ia, 0]
     inside &= np.abs(w_curr[ib, 2] - predicted[ia, 2]) <= radius[ia, 2]
     ia, ib = ia[inside], ib[inside]
@@ -79,7 +71,8 @@ def row_candidates(
     disparity in ``[d_min, d_max]`` and pyramid levels at most one apart, with their Hamming
     distances; ordered by left corner, then by right row."""
     half = np.full(len(left), float(row_tolerance))
-    ia, ib = _rows_within(left[:, 1], half, sorted_v, order_v)
+    ia, ib = window_pairs(left[:, 1], sorted_v, half)
+    ib = order_v[ib]
     d = left[ia, 0] - right[ib, 0]
     ok = (d >= d_min) & (d <= d_max) & (np.abs(left_level[ia] - right_level[ib]) <= 1)
     ia, ib = ia[ok], ib[ok]

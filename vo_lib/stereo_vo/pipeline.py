@@ -30,7 +30,7 @@ import numpy as np
 from vo_lib.camera import StereoCamera
 from vo_lib.geometry import wrap_angle
 from vo_lib.models.track_odometry import TrackOdometry
-from vo_lib.stereo_vo.config import CAR, CRAWLER, PRESETS, PipelineConfig
+from vo_lib.stereo_vo.config import CRAWLER, PRESETS, PipelineConfig
 from vo_lib.stereo_vo.features import StereoFeatures, StereoFrontEnd
 from vo_lib.stereo_vo.frames import FrameDiagnostics, FrameTimings, PipelineResult, Reason, Stopwatch
 from vo_lib.stereo_vo.kalman import VoKalmanFilter
@@ -39,20 +39,6 @@ from vo_lib.stereo_vo.planar_motion import PlanarMotion
 from vo_lib.stereo_vo.pyramid_features import PyramidFrontEnd
 from vo_lib.stereo_vo.six_dof import SixDofMotion
 
-__all__ = [
-    "CAR",
-    "CRAWLER",
-    "FrameDiagnostics",
-    "FrameTimings",
-    "PipelineConfig",
-    "PipelineResult",
-    "Reason",
-    "StereoOdometry",
-    "run_frames",
-    "run_sequence",
-    "warm_up",
-]
-
 #: Reference-frame matching needs the recent medians of at least this many good frames.
 MIN_HISTORY = 5
 
@@ -60,19 +46,11 @@ MIN_HISTORY = 5
 class StereoOdometry:
     """[Zhao]'s pipeline: stereo front end, prediction and matching, motion estimation, filter.
 
-    Parameters
-    ----------
-    camera : StereoCamera
-    config : PipelineConfig
-        :data:`~vo_lib.stereo_vo.config.CRAWLER` (default) or ``CAR``, or a variant of either.
-    odometry : TrackOdometry, optional
-        Gauge and noise of the odometry, when frames come with track or wheel distances.
-    mount : ndarray, 4x4, optional
-        ``T_vehicle_camera``; needed by the 6-DoF motion model.
-    seed : int
-        Seed of the RANSAC draws.
-    front_end, motion : optional
-        Parts to use instead of those the config names (see ``parts``).
+    ``config`` is :data:`~vo_lib.stereo_vo.config.CRAWLER` (default) or ``CAR``, or a variant of
+    either; ``odometry`` the gauge and noise of the odometry, when frames come with track or wheel
+    distances; ``mount`` is ``T_vehicle_camera``, which the 6-DoF motion model needs; ``seed``
+    seeds the RANSAC draws; ``front_end`` and ``motion`` are parts to use instead of those the
+    config names (see ``parts``).
     """
 
     def __init__(
@@ -284,16 +262,15 @@ def run_frames(
     odometry_model: TrackOdometry | None = None,
     seed: int = 0,
     progress=None,
-    front_end: FrontEnd | None = None,
     odometer: StereoOdometry | None = None,
 ) -> PipelineResult:
     """Run the pipeline over ``(left, right, odometry_or_None)`` triples.
 
     ``odometer`` is the :class:`StereoOdometry` to run (default: the crawler's, with
-    ``odometry_model``, ``seed`` and ``front_end``); with the 6-DoF model the result carries
+    ``odometry_model`` and ``seed``); with the 6-DoF model the result carries
     each frame's camera pose too.
     """
-    vo = odometer or StereoOdometry(camera, CRAWLER, odometry_model, seed=seed, front_end=front_end)
+    vo = odometer or StereoOdometry(camera, CRAWLER, odometry_model, seed=seed)
     poses, covs, diags, timings, cameras = [], [], [], [], []
     for left, right, odo in frames:
         pose, cov, diag, timing = vo.process(left, right, odo)

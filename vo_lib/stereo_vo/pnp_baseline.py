@@ -36,9 +36,9 @@ class PnpRun:
 class PnpStereoOdometry:
     """Frame-to-frame stereo odometry with ORB and ``solvePnPRansac``."""
 
-    def __init__(self, camera: StereoCamera, features: int = FEATURES):
+    def __init__(self, camera: StereoCamera):
         self.camera = camera
-        self.orb = cv2.ORB_create(features)
+        self.orb = cv2.ORB_create(FEATURES)
         self.matcher = cv2.BFMatcher(cv2.NORM_HAMMING, crossCheck=True)
         self.previous = None
         self.pose = np.eye(4)

@@ -51,16 +51,8 @@ DISPARITY_SEARCH = 2
 
 
 class PyramidFrontEnd:
-    """Detect, describe and stereo-match features of rectified pairs at two scales.
-
-    Parameters
-    ----------
-    camera : StereoCamera
-    max_features : int, optional
-        Features per image; by default proportional to the image area.
-    max_disparity : float, optional
-        Largest disparity searched, pixels (default: 13 % of the width).
-    """
+    """Detect, describe and stereo-match features of rectified pairs at two scales: by default
+    features per image in proportion to its area, and disparities up to 13 % of its width."""
 
     def __init__(
         self, camera: StereoCamera, max_features: int | None = None, max_disparity: float | None = None

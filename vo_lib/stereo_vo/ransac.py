@@ -126,18 +126,8 @@ def hypothesis_draws(rng=None, max_hypotheses: int = DEFAULT_PARAMS.max_hypothes
     ``pool[min(int(u_k * len(pool)), len(pool) - 1)]`` of that phase's pool (its best-conditioned
     matches, ordered by variance). ``one_point_ransac(..., rng=r)`` and
     ``one_point_ransac(..., draws=hypothesis_draws(r))`` make the same draws, so another
-    implementation given these numbers can be compared with it hypothesis by hypothesis.
-
-    Parameters
-    ----------
-    rng : numpy.random.Generator or int, optional
-        Source of the draws (seeded, for repeatable results).
-    max_hypotheses : int
-        Hypotheses per phase at most.
-
-    Returns
-    -------
-    numpy.ndarray, shape (2, max_hypotheses)
+    implementation given these numbers can be compared with it hypothesis by hypothesis. Shape
+    ``(2, max_hypotheses)``.
     """
     return np.random.default_rng(rng).random(2 * int(max_hypotheses)).reshape(2, -1)
 
@@ -190,11 +180,8 @@ class ThetaModel:
     eq. 18-20 to first order, ``r_j(theta) = theta_j - theta``."""
 
     def __init__(self, wa: np.ndarray, wb: np.ndarray, camera: StereoCamera, pixel_sigma: float):
-        du, dv = wa[:, 0] - camera.cx, wa[:, 1] - camera.cy
-        du2, dv2 = wb[:, 0] - camera.cx, wb[:, 1] - camera.cy
-        num, den = du2 * dv - du * dv2, camera.fx * (dv + dv2)  # eq. 14: tan(theta / 2) = num / den
-        self.values = 2.0 * np.arctan(num / den)
-        self.variances = theta_variance(du, dv, du2, dv2, num, den, camera.fx, pixel_sigma)
+        self.values = theta_from_pixels(wa, wb, camera)  # usable matches: none at the camera's height
+        self.variances = theta_variance(wa, wb, camera, pixel_sigma)
 
     def each_match(self) -> tuple[np.ndarray, np.ndarray]:
         return self.values, self.variances

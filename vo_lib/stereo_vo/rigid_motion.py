@@ -38,6 +38,7 @@ ITERATIONS = 4
 ROUNDS = 2  # refine, choose the inliers again, refine again while they change
 NEAR = 0.1  # metres: points closer than this to the camera after the motion are not used
 CONVERGED = 1e-8  # radians and metres: an update smaller than this ends the iterations
+MIN_INLIERS = 6  # a refinement or a 3-point RANSAC that keeps fewer has failed
 #: The general (3-point) RANSAC that stands in when the planar model does not hold between two
 #: frames: hypotheses drawn, and the reprojection error (left image) of an inlier, pixels.
 GENERAL_ITERATIONS = 200
@@ -128,30 +129,13 @@ def refine_rigid_motion(
     T0,
     inliers=None,
     *,
-    inlier_pixels: float = INLIER_PIXELS,
     huber: float = HUBER_PIXELS,
-    iterations: int = ITERATIONS,
     rounds: int = ROUNDS,
-    min_inliers: int = 6,
 ) -> RigidMotion:
-    """Refine a motion on matches ``w_prev -> w_curr`` (disparity space) from the guess ``T0``.
-
-    Parameters
-    ----------
-    w_prev, w_curr : array_like, shape (N, 3)
-        Matches ``(u, v, d)``; ``w_prev`` is back-projected with its disparity.
-    camera : StereoCamera
-    T0 : array_like, 4x4
-        Initial ``T_curr_from_prev`` (e.g. the 1-point RANSAC motion, or the prediction).
-    inliers : array_like of bool, optional
-        The matches to start from (default: all with positive disparity).
-    inlier_pixels, huber : float
-        Reprojection error that makes an inlier; Huber threshold of the refinement.
-
-    Returns
-    -------
-    RigidMotion
-        ``success`` is False (and the guess returned) when fewer than ``min_inliers`` remain.
+    """Refine a motion on matches ``w_prev -> w_curr`` (disparity space) from the guess ``T0``
+    (``T_curr_from_prev``: the 1-point RANSAC motion, or the prediction), starting from the
+    ``inliers`` (default: all with positive disparity); ``huber`` is the refinement's Huber
+    threshold. ``success`` is False (and the guess returned) when fewer than ``MIN_INLIERS`` remain.
     """
     wa, wb = np.asarray(w_prev, float), np.asarray(w_curr, float)
     T0 = np.asarray(T0, float)
@@ -161,16 +145,16 @@ def refine_rigid_motion(
     P[usable] = camera.backproject(wa[usable])
     inl = usable.copy() if inliers is None else (np.asarray(inliers, bool) & usable)
     for _ in range(max(rounds, 1)):
-        if np.count_nonzero(inl) < min_inliers:
+        if np.count_nonzero(inl) < MIN_INLIERS:
             return RigidMotion(T0[:3, :3], T0[:3, 3], np.full((6, 6), np.inf), inl, np.inf, False)
-        R, t = _gauss_newton(P[inl], wb[inl], R, t, camera, iterations, huber)
+        R, t = _gauss_newton(P[inl], wb[inl], R, t, camera, ITERATIONS, huber)
         err = reprojection_errors(P, wb, R, t, camera)  # of the motion the inliers below end with
-        new = usable & (err < inlier_pixels)
+        new = usable & (err < INLIER_PIXELS)
         if np.array_equal(new, inl):
             break
         inl = new
     count = np.count_nonzero(inl)
-    if count < min_inliers:
+    if count < MIN_INLIERS:
         return RigidMotion(T0[:3, :3], T0[:3, 3], np.full((6, 6), np.inf), inl, np.inf, False)
     A, _, _ = normal_equations(P[inl], wb[inl], R, t, camera, np.inf)
     res = err[inl]
@@ -243,7 +227,7 @@ def general_ransac(
     for frames where the vehicle pitches or rolls (a bump, a kerb, the start of a slope), which
     the 1-point model of eq. 14-17 cannot describe.
     """
-    if len(w_prev) < 6:
+    if len(w_prev) < MIN_INLIERS:
         return None
     cv2.setRNGSeed(int(seed))
     ok, rvec, tvec, idx = cv2.solvePnPRansac(
@@ -256,7 +240,7 @@ def general_ransac(
         confidence=0.999,
         flags=cv2.SOLVEPNP_AP3P,
     )
-    if not ok or idx is None or len(idx) < 6:
+    if not ok or idx is None or len(idx) < MIN_INLIERS:
         return None
     T = np.eye(4)
     T[:3, :3], T[:3, 3] = cv2.Rodrigues(rvec)[0], tvec.ravel()

@@ -48,8 +48,8 @@ import time
 import numpy as np
 
 from vo_lib.camera import StereoCamera
-from vo_lib.geometry import camera_mount, yaw_matrix
-from vo_lib.stereo_vo.circular_motion import motion_matrices
+from vo_lib.geometry import camera_mount, rigid_inverse, yaw_matrix
+from vo_lib.stereo_vo.circular_motion import motion_transform
 from vo_lib.stereo_vo.config import PipelineConfig
 from vo_lib.stereo_vo.frames import Stopwatch
 from vo_lib.stereo_vo.kalman import VoKalmanFilter, chord_measurement
@@ -71,30 +71,17 @@ RETRY_HISTORY = 3
 EXPECTED_FACTOR = 4
 
 
-def rigid_inverse(T: np.ndarray) -> np.ndarray:
-    """Inverse of a 4x4 rigid transform: ``(R^T, -R^T t)``."""
-    out = np.eye(4)
-    out[:3, :3] = T[:3, :3].T
-    out[:3, 3] = -T[:3, :3].T @ T[:3, 3]
-    return out
-
-
-def vehicle_increment(
-    T_cam: np.ndarray, mount: np.ndarray, mount_inverse: np.ndarray | None = None
-) -> np.ndarray:
+def vehicle_increment(T_cam: np.ndarray, mount: np.ndarray) -> np.ndarray:
     """``(dx, dy, dyaw)`` of the vehicle, in its previous frame, for a camera motion ``T_cam``
-    (``T_curr_from_prev`` of the camera mounted at ``mount`` = ``T_vehicle_camera``);
-    ``mount_inverse`` is ``rigid_inverse(mount)``, if already known."""
-    V = mount @ rigid_inverse(T_cam) @ (rigid_inverse(mount) if mount_inverse is None else mount_inverse)
+    (``T_curr_from_prev`` of the camera mounted at ``mount`` = ``T_vehicle_camera``)."""
+    V = mount @ rigid_inverse(T_cam) @ rigid_inverse(mount)
     return np.array([V[0, 3], V[1, 3], math.atan2(V[1, 0], V[0, 0])])
 
 
-def with_planar_increment(
-    T_cam: np.ndarray, mount: np.ndarray, increment, mount_inverse: np.ndarray | None = None
-) -> np.ndarray:
+def with_planar_increment(T_cam: np.ndarray, mount: np.ndarray, increment) -> np.ndarray:
     """``T_cam`` with the vehicle's yaw and ground-plane translation replaced by ``increment``;
-    height, pitch and roll are kept (``mount_inverse`` as in :func:`vehicle_increment`)."""
-    inverse = rigid_inverse(mount) if mount_inverse is None else mount_inverse
+    height, pitch and roll are kept."""
+    inverse = rigid_inverse(mount)
     V = mount @ rigid_inverse(T_cam) @ inverse
     yaw = math.atan2(V[1, 0], V[0, 0])
     dx, dy, dyaw = (float(v) for v in increment)
@@ -121,45 +108,31 @@ def turning_axis_view(w: np.ndarray, camera: StereoCamera, to_axis: np.ndarray) 
     return camera.project(X @ to_axis[:3, :3].T + to_axis[:3, 3])
 
 
-#: The central differences of :func:`chord_covariance`: each motion component moved by this much.
+#: The central differences of :func:`chord_covariance`: each motion component moved by ``+h``
+#: (rows 0-5), then by ``-h`` (rows 6-11); their rotations ``exp([step[:3]]x)``, the same for
+#: every frame, are computed once, at import.
 COVARIANCE_STEP = 1e-6
+_STEPS = np.vstack([np.diag([COVARIANCE_STEP] * 6), np.diag([-COVARIANCE_STEP] * 6)])
+_STEP_ROTATIONS = np.stack([rotation_matrix(step[:3]) for step in _STEPS])
 
 
-def _covariance_steps(h: float) -> tuple[np.ndarray, np.ndarray]:
-    """The twelve moves of :func:`chord_covariance` (component k by ``+h``, then by ``-h``) as
-    ``(12, 6)`` steps, and their rotations ``exp([step[:3]]x)``: the same for every frame."""
-    steps = np.zeros((6, 2, 6))
-    steps[np.arange(6), 0, np.arange(6)] = h
-    steps[np.arange(6), 1, np.arange(6)] = -h
-    steps = steps.reshape(12, 6)
-    return steps, np.stack([rotation_matrix(step[:3]) for step in steps])
-
-
-_COVARIANCE_STEPS = _covariance_steps(COVARIANCE_STEP)
-
-
-def chord_covariance(
-    T_cam: np.ndarray, covariance6: np.ndarray, mount: np.ndarray, mount_inverse: np.ndarray | None = None
-) -> np.ndarray:
+def chord_covariance(T_cam: np.ndarray, covariance6: np.ndarray, mount: np.ndarray) -> np.ndarray:
     """3x3 covariance of ``(theta, rho, sideways)`` of the vehicle, propagated from the 6x6
     covariance of the camera motion (rotation vector on the left, translation) by central
-    differences (``mount_inverse`` as in :func:`vehicle_increment`).
+    differences.
 
-    The twelve moved motions (each of the six components by ``+h`` and ``-h``, whose rotations
-    are computed once, at import) go through :func:`vehicle_increment`'s products as one stack
-    of 4x4 matrices.
+    The twelve moved motions go through :func:`vehicle_increment`'s products as one stack of 4x4
+    matrices.
     """
-    inverse = rigid_inverse(mount) if mount_inverse is None else mount_inverse
-    steps, dR = _COVARIANCE_STEPS
-    R = dR @ T_cam[:3, :3]
-    t = dR @ T_cam[:3, 3] + steps[:, 3:]
+    R = _STEP_ROTATIONS @ T_cam[:3, :3]
+    t = _STEP_ROTATIONS @ T_cam[:3, 3] + _STEPS[:, 3:]
     moved_inverse = np.zeros((12, 4, 4))  # rigid_inverse of each moved motion
     moved_inverse[:, :3, :3] = np.swapaxes(R, 1, 2)
     moved_inverse[:, :3, 3] = (-np.swapaxes(R, 1, 2) @ t[:, :, None])[:, :, 0]
     moved_inverse[:, 3, 3] = 1.0
-    V = mount @ moved_inverse @ inverse
+    V = mount @ moved_inverse @ rigid_inverse(mount)
     z = np.array([chord_measurement((M[0, 3], M[1, 3], math.atan2(M[1, 0], M[0, 0]))) for M in V])
-    J = ((z[0::2] - z[1::2]) / (2 * COVARIANCE_STEP)).T
+    J = ((z[:6] - z[6:]) / (2 * COVARIANCE_STEP)).T
     return J @ covariance6 @ J.T
 
 
@@ -172,20 +145,12 @@ def windows(predicted: np.ndarray, square) -> np.ndarray:
 
 class SixDofMotion:
     """A car's camera: 1-point RANSAC from the turning axis as the outlier filter, then 6 DoF.
-
-    Parameters
-    ----------
-    camera : StereoCamera
-    mount : ndarray, 4x4
-        ``T_vehicle_camera``; the filter's planar pose is the vehicle's.
-    config : PipelineConfig
-    """
+    ``mount`` is ``T_vehicle_camera``; the filter's planar pose is the vehicle's."""
 
     def __init__(self, camera: StereoCamera, mount: np.ndarray, config: PipelineConfig):
         self.camera = camera
         self.config = config
         self.mount = np.asarray(mount, float)
-        self.mount_inverse = rigid_inverse(self.mount)
         self.covariance_scale = np.asarray(config.vo_covariance_scale, float)
         self.to_axis = turning_axis_transform(self.mount)
         self.from_axis = rigid_inverse(self.to_axis)
@@ -200,7 +165,7 @@ class SixDofMotion:
         if self.velocity is None and not kf.flags.odometry:
             return Prediction(kf.motion_prior(), False)
         T = np.eye(4) if self.velocity is None else scaled_motion(self.velocity, gap)
-        motion = with_planar_increment(T, self.mount, kf.increment, self.mount_inverse)
+        motion = with_planar_increment(T, self.mount, kf.increment)
         return Prediction(kf.motion_prior(), True, motion)
 
     def match(self, reference, features, prediction: Prediction, recent):
@@ -256,10 +221,8 @@ class SixDofMotion:
         )
         ratio = float(est.inliers.mean()) if est.success else 0.0
         if est.success:
-            on_axis = np.eye(4)
-            on_axis[:3, :3], on_axis[:3, 3] = motion_matrices(est.theta, est.rho)
             # the virtual camera's motion, seen from the real camera
-            guess, start = self.from_axis @ on_axis @ self.to_axis, est.inliers
+            guess, start = self.from_axis @ motion_transform(est.theta, est.rho) @ self.to_axis, est.inliers
         else:
             guess, start = (np.eye(4) if T_pred is None else T_pred), None
         if ratio < self.config.min_inlier_ratio:
@@ -276,12 +239,10 @@ class SixDofMotion:
         with watch("refinement"):
             motion = refine_rigid_motion(matches.w_prev, matches.w_curr, self.camera, guess, start)
         T = motion.matrix
-        z = chord_measurement(vehicle_increment(T, self.mount, self.mount_inverse))
+        z = chord_measurement(vehicle_increment(T, self.mount))
         covariance = np.full((3, 3), np.inf)  # a failed refinement measures nothing
         if motion.success:
-            covariance = self.covariance_scale * chord_covariance(
-                T, motion.covariance, self.mount, self.mount_inverse
-            )
+            covariance = self.covariance_scale * chord_covariance(T, motion.covariance, self.mount)
         return Estimate(
             motion.success,
             z,
@@ -301,7 +262,7 @@ class SixDofMotion:
             since_reference = prediction.motion if prediction.motion is not None else np.eye(4)
         else:
             since_reference = estimate.motion
-        fused = with_planar_increment(since_reference, self.mount, kf.increment, self.mount_inverse)
+        fused = with_planar_increment(since_reference, self.mount, kf.increment)
         self.camera_pose = self.reference_pose @ np.linalg.inv(fused)
         self._fused = fused
 

@@ -26,24 +26,12 @@ RIG_HEIGHT = 0.5
 
 @dataclass(frozen=True)
 class Scene:
-    """Where the points of a synthetic match set may lie.
+    """Where the points of a synthetic match set may lie."""
 
-    Attributes
-    ----------
-    camera_height : float
-        Height of the left camera's centre above the floor, metres.
-    pitch : float
-        Downward pitch of the optical axis from the horizontal, radians (0: level).
-    top : float
-        Height above the floor of the highest point on an upright surface, metres.
-    floor_share : float
-        Share of the points drawn on the floor itself (the rest on upright surfaces).
-    """
-
-    camera_height: float = RIG_HEIGHT
-    pitch: float = 0.0
-    top: float = 2.5
-    floor_share: float = 0.3
+    camera_height: float = RIG_HEIGHT  #: of the left camera's centre above the floor, metres
+    pitch: float = 0.0  #: downward pitch of the optical axis from the horizontal, radians (0: level)
+    top: float = 2.5  #: height above the floor of the highest point on an upright surface, metres
+    floor_share: float = 0.3  #: share of the points drawn on the floor itself (the rest upright)
 
     def __post_init__(self) -> None:
         if not self.camera_height > 0:
@@ -117,28 +105,15 @@ def matches_under_transform(
 ) -> SyntheticMatches:
     """Draw ``n`` matches of points seen before and after any rigid camera motion.
 
-    Parameters
-    ----------
-    camera : StereoCamera
-        Must have ``width`` and ``height``.
-    n : int
-        Number of matches.
-    T_curr_from_prev : array_like, shape (4, 4)
-        Maps a point of the previous camera frame into the current one. ``theta`` and ``rho`` of
-        the result are those of :func:`~vo_lib.stereo_vo.circular_motion.circular_motion_from_transform`.
-    rng : numpy.random.Generator
-        Source of every random draw.
-    depth_range : (float, float)
-        Horizontal ranges of the points from the previous camera, metres, drawn uniformly in
-        inverse range so that near and far points are both present.
-    noise_px : float
-        Standard deviation of Gaussian noise added to u, v and d of both views, pixels.
-    outlier_ratio : float
-        Fraction of matches whose second view is replaced by an unrelated pixel and disparity.
-    scene : Scene, optional
-        The floor, the camera's height and pitch, and where points lie (default :class:`Scene`).
-        The floor is fixed to the previous camera: ``T_curr_from_prev`` moves the camera, not
-        the points.
+    ``T_curr_from_prev`` maps a point of the previous camera frame into the current one; ``theta``
+    and ``rho`` of the result are those of
+    :func:`~vo_lib.stereo_vo.circular_motion.circular_motion_from_transform`. ``depth_range`` holds
+    the horizontal ranges of the points from the previous camera, metres, drawn uniformly in
+    inverse range so that near and far points are both present; ``noise_px`` is the standard
+    deviation of Gaussian noise added to u, v and d of both views; ``outlier_ratio`` the fraction
+    of matches whose second view is replaced by an unrelated pixel and disparity. ``scene`` (default
+    :class:`Scene`) is fixed to the previous camera: ``T_curr_from_prev`` moves the camera, not
+    the points.
     """
     scene = Scene() if scene is None else scene
     if camera.width is None or camera.height is None:

@@ -20,6 +20,7 @@ import numpy as np
 from vo_lib.camera import StereoCamera
 from vo_lib.stereo_vo.circular_motion import motion_transform
 from vo_lib.stereo_vo.features import RATIO, StereoFeatures, best_matches, equiangular_offset, hamming
+from vo_lib.stereo_vo.rigid_motion import NEAR
 
 N_SIGMA = 3.0  # window half-width in standard deviations
 PIXEL_SIGMA = 1.0  # pixel noise of a feature position, added to the prediction's uncertainty
@@ -28,7 +29,6 @@ MAX_RADIUS = 120.0  # pixels
 PATCH_HALF = 3  # 7x7 patches for the sub-pixel refinement of matches
 TRACK_HALF = 7  # 15x15 windows for the sub-pixel tracking of matches (Lucas-Kanade)
 TRACK_MAX_SHIFT = 1.5  # pixels: a tracked position further than this from its corner is not kept
-NEAR = 0.1  # metres: predicted points nearer than this are not matched
 
 
 @dataclass(frozen=True)
@@ -98,7 +98,6 @@ def refine_positions(
     curr_image: np.ndarray,
     w_prev: np.ndarray,
     w_curr: np.ndarray,
-    half: int = PATCH_HALF,
 ) -> np.ndarray:
     """Sub-pixel position in the current image of each previous feature's patch.
 
@@ -112,6 +111,7 @@ def refine_positions(
     if len(out) == 0:
         return out
     h, w = curr_image.shape
+    half = PATCH_HALF
     offs = np.arange(-half, half + 1)
     up, vp = np.rint(w_prev[:, 0]).astype(int), np.rint(w_prev[:, 1]).astype(int)
     uc, vc = np.rint(w_curr[:, 0]).astype(int), np.rint(w_curr[:, 1]).astype(int)
@@ -139,8 +139,6 @@ def track_subpixel(
     curr_image: np.ndarray,
     w_prev: np.ndarray,
     w_curr: np.ndarray,
-    half: int = TRACK_HALF,
-    max_shift: float = TRACK_MAX_SHIFT,
 ) -> np.ndarray:
     """Sub-pixel position in the current image of each matched previous feature, by tracking.
 
@@ -148,7 +146,7 @@ def track_subpixel(
     coarser above the first), so matched corner positions measure the motion between frames to
     a pixel at best. Each previous feature's window is tracked into the current image by
     OpenCV's iterative Lucas-Kanade (``calcOpticalFlowPyrLK``), started at the matched corner.
-    A track that fails, or ends more than ``max_shift`` pixels from the corner (another corner,
+    A track that fails, or ends more than ``TRACK_MAX_SHIFT`` pixels from the corner (another corner,
     or an occlusion), keeps the corner's position. Returns ``w_curr`` with refined u, v (the
     disparity is kept).
     """
@@ -163,13 +161,13 @@ def track_subpixel(
         curr_image,
         p0,
         p1.copy(),
-        winSize=(2 * half + 1, 2 * half + 1),
+        winSize=(2 * TRACK_HALF + 1, 2 * TRACK_HALF + 1),
         maxLevel=0,
         criteria=criteria,
         flags=cv2.OPTFLOW_USE_INITIAL_FLOW,
     )
     tracked = tracked.reshape(-1, 2).astype(float)
-    keep = (status.ravel() == 1) & (np.linalg.norm(tracked - out[:, :2], axis=1) <= max_shift)
+    keep = (status.ravel() == 1) & (np.linalg.norm(tracked - out[:, :2], axis=1) <= TRACK_MAX_SHIFT)
     out[keep, :2] = tracked[keep]
     return out
 
@@ -192,19 +190,11 @@ def match_features(
 ) -> TemporalMatches:
     """Match previous features to current ones: inside windows around their predictions, or all pairs.
 
-    Parameters
-    ----------
-    prev, curr : StereoFeatures
-    predicted : ndarray (N_prev, 3), optional
-        Each previous feature's predicted ``(u, v, d)`` (NaN where it is not expected in view).
-        Without it every pair is compared (brute force).
-    radius : ndarray (N_prev, 3)
-        Half-widths of each window in ``u``, ``v`` and ``d``. The candidates inside and their
-        Hamming distances are found in one compiled pass (:func:`.matching_core.window_candidates`).
-    ratio : float
-        Ratio test of :func:`~vo_lib.stereo_vo.features.best_matches`.
-    refine : bool
-        Refine the current positions to sub-pixel (:func:`refine_positions`) where the images are known.
+    ``predicted`` is each previous feature's predicted ``(u, v, d)`` (NaN where it is not expected
+    in view; without it every pair is compared, brute force) and ``radius`` the half-widths of its
+    window in ``u``, ``v`` and ``d``; the candidates inside and their Hamming distances are found in
+    one compiled pass (:func:`.matching_core.window_candidates`). ``refine`` refines the current
+    positions to sub-pixel (:func:`refine_positions`) where the images are known.
     """
     from vo_lib.stereo_vo.matching_core import window_candidates
 

@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import json
 from dataclasses import dataclass
-from enum import Enum
+from enum import StrEnum
 
 import numpy as np
 
@@ -52,73 +52,42 @@ CAR_DISTANCE_SIGMA = 0.02
 KITTI_CAMERA_IN_IMU = (1.08, -0.31, 0.73)
 
 
-class VehicleKind(str, Enum):
+class VehicleKind(StrEnum):
     """What carries the camera."""
 
     CRAWLER = "crawler"  #: the tracked robot of [Zhao]
     CAR = "car"
     DRONE = "drone"  #: a rig read as it records (ASL layout): a hand-held camera or a drone
 
-    def __str__(self) -> str:
-        return self.value
 
-
-class Motion(str, Enum):
+class Motion(StrEnum):
     """The model of the motion between two frames that fits a vehicle."""
 
     PLANAR = "planar"  #: circular motion on a flat floor, camera above the turning axis (eq. 12-17)
     FULL = "full"  #: six degrees of freedom (``six_dof``)
     HOVER = "hover"  #: six degrees of freedom, no odometry: nothing predicts the motion well
 
-    def __str__(self) -> str:
-        return self.value
-
 
 @dataclass
 class Vehicle:
-    """The rig around the camera.
-
-    Attributes
-    ----------
-    kind : VehicleKind
-    mount : ndarray, 4x4
-        ``T_vehicle_camera``: the left camera's pose in the vehicle frame.
-    odometry_model : TrackOdometry
-        Gauge and noise of the odometry ([Zhao], eq. 2-11).
-    odometry : ndarray (N, 2) or None
-        Left and right distances per frame (row 0 unused).
-    odometry_source : str
-        Where the odometry came from, for reports.
-    motion : Motion
-        The motion model that fits: planar (circular motion, eq. 12-17) or full (6-DoF).
-    """
+    """The rig around the camera."""
 
     kind: VehicleKind
-    mount: np.ndarray
-    odometry_model: TrackOdometry
-    odometry: np.ndarray | None
-    odometry_source: str
-    motion: Motion
+    mount: np.ndarray  #: ``T_vehicle_camera``: the left camera's pose in the vehicle frame
+    odometry_model: TrackOdometry  #: gauge and noise of the odometry ([Zhao], eq. 2-11)
+    odometry: np.ndarray | None  #: left and right distances per frame (row 0 unused)
+    odometry_source: str  #: where the odometry came from, for reports
+    motion: Motion  #: the motion model that fits
 
 
 def gauge_for_yaw_noise(distances: np.ndarray, yaw_errors: np.ndarray, distance_sigma: float) -> float:
     """The gauge at which the track-odometry model's yaw noise is the measured one.
 
-    Parameters
-    ----------
-    distances : ndarray (N,)
-        Distance travelled in each frame, metres.
-    yaw_errors : ndarray (N,)
-        Error of each frame's measured yaw increment against a reference, radians.
-    distance_sigma : float
-        Noise of one wheel's distance, per square-root metre.
-
-    Returns
-    -------
-    float
-        ``distance_sigma * sqrt(2 sum(s) / sum(e^2))``: the gauge whose modelled variance
-        ``2 distance_sigma^2 s / gauge^2`` per frame, summed over the frames, is the sum of the
-        squared errors (the track-odometry model of [Zhao], eq. 4-11, with ``b = 0``).
+    From the metres ``s`` travelled in each frame, the error ``e`` of each frame's measured yaw
+    increment (radians) and the noise of one wheel's distance per square-root metre:
+    ``distance_sigma * sqrt(2 sum(s) / sum(e^2))``, the gauge whose modelled variance
+    ``2 distance_sigma^2 s / gauge^2`` per frame, summed over the frames, is the sum of the
+    squared errors (the track-odometry model of [Zhao], eq. 4-11, with ``b = 0``).
     """
     s, e = np.abs(np.asarray(distances, float)), np.asarray(yaw_errors, float)
     if s.shape != e.shape or len(s) == 0 or not np.any(e):
@@ -144,12 +113,6 @@ def drone_mount(T_body_camera: np.ndarray) -> np.ndarray:
     return camera_mount(forward=forward, height=-down, left=-right)
 
 
-def _drone(T_body_camera: np.ndarray) -> Vehicle:
-    """A body with no odometry, moving in six degrees of freedom."""
-    model = car_odometry_model()
-    return Vehicle(VehicleKind.DRONE, drone_mount(T_body_camera), model, None, "none", Motion.HOVER)
-
-
 def vehicle_of(sequence, use_odometry: bool = True) -> Vehicle:
     """The vehicle of a :class:`~vo_lib.formats.sequence.Sequence`, from its manifest and files.
 
@@ -157,7 +120,8 @@ def vehicle_of(sequence, use_odometry: bool = True) -> Vehicle:
     """
     camera = sequence.manifest.get("camera", {}) if isinstance(sequence.manifest, dict) else {}
     if "T_body_camera" in sequence.manifest:
-        return _drone(np.asarray(sequence.manifest["T_body_camera"], float))
+        mount = drone_mount(np.asarray(sequence.manifest["T_body_camera"], float))  # no odometry
+        return Vehicle(VehicleKind.DRONE, mount, car_odometry_model(), None, "none", Motion.HOVER)
     if "height_m" in camera:  # a rendered sample: the crawler of [Zhao]
         mount = camera_mount(forward=float(camera.get("forward_m", 0.0)), height=float(camera["height_m"]))
         try:
