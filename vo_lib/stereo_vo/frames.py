@@ -12,7 +12,7 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 
 
-class Reason(enum.StrEnum):
+class Reason(str, enum.Enum):
     """Why a frame's VO motion was not used; :attr:`NONE` when it was. The value is the sentence
     the diagnostics print."""
 
@@ -24,6 +24,9 @@ class Reason(enum.StrEnum):
     LOW_INLIER_RATIO = "low inlier ratio"
     CONTRADICTS_PREDICTION = "motion contradicts the prediction"
     VIEW_LOST = "part of the view lost (occluder or moving object)"
+
+    def __str__(self) -> str:  # the sentence, on Python 3.10 too (no enum.StrEnum there)
+        return self.value
 
 
 #: Reasons that say the reference frame no longer shares enough of the view with this one.

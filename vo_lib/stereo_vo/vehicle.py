@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import json
 from dataclasses import dataclass
-from enum import StrEnum
+from enum import Enum
 
 import numpy as np
 
@@ -52,20 +52,26 @@ CAR_DISTANCE_SIGMA = 0.02
 KITTI_CAMERA_IN_IMU = (1.08, -0.31, 0.73)
 
 
-class VehicleKind(StrEnum):
+class VehicleKind(str, Enum):
     """What carries the camera."""
 
     CRAWLER = "crawler"  #: the tracked robot of [Zhao]
     CAR = "car"
     DRONE = "drone"  #: a rig read as it records (ASL layout): a hand-held camera or a drone
 
+    def __str__(self) -> str:
+        return self.value
 
-class Motion(StrEnum):
+
+class Motion(str, Enum):
     """The model of the motion between two frames that fits a vehicle."""
 
     PLANAR = "planar"  #: circular motion on a flat floor, camera above the turning axis (eq. 12-17)
     FULL = "full"  #: six degrees of freedom (``six_dof``)
     HOVER = "hover"  #: six degrees of freedom, no odometry: nothing predicts the motion well
+
+    def __str__(self) -> str:
+        return self.value
 
 
 @dataclass
