@@ -11,8 +11,11 @@ from scipy.stats import chi2
 
 from vo_lib.line_slam.ekf_slam import DROPPED, NEW
 from vo_lib.line_slam.lap import (
+    NEES_HIGH,
     LineSlamScenario,
     association_example,
+    lap_figures,
+    lap_row,
     simulate_lap,
     true_visible_extent,
 )
@@ -283,46 +286,65 @@ def test_line_observation_maps_the_walls_and_beats_dead_reckoning():
     assert dead > 8 * slam
 
 
-def test_readme_quotes_the_laps(laps):
-    """The README's [Yan 2020] figures are those of these 20 laps (and of the notebook's ten
-    extended laps), to their printed precision."""
+@pytest.fixture(scope="module")
+def extended_laps(shared):
+    extended = LineSlamScenario(extended=True)
+    return shared("extended-laps", lambda: [simulate_lap(seed=s, scenario=extended) for s in SEEDS])
+
+
+def test_lap_figures_are_the_rows_of_these_laps(laps, extended_laps):
+    assert lap_figures(3) == lap_row(laps[3], extended_laps[3])
+
+
+def test_readme_quotes_the_sweep(laps, extended_laps):
+    """The README's [Yan 2020] figures are what ``python -m vo_lib sweep lap --seeds 20`` prints
+    (the rows of these laps, the sweep's summary and report), to their printed precision."""
     import pathlib
     import re
+
+    import pandas as pd
+
+    from vo_lib.cli.sweep import summary
 
     text = (pathlib.Path(__file__).resolve().parents[1] / "README.md").read_text(encoding="utf-8")
     text = re.sub(r"\s+", " ", text)
     m = re.search(
+        r"over ([0-9]+) seeds of the paper's lap \(mean ± standard deviation over seeds\) the EKF-SLAM "
         r"ends ([0-9.]+) ± ([0-9.]+) m from the truth where dead reckoning ends ([0-9.]+) ± ([0-9.]+) m off "
         r"\(([0-9]+)×; closer on ([0-9]+) of the ([0-9]+) laps\)\. "
-        r"The pose NEES, averaged over the laps, is ([0-9.]+) over the lap and lies above "
-        r"its per-step 95 % band \[([0-9.]+), ([0-9.]+)\] at ([0-9]+) % of the steps",
+        r"The pose NEES of a lap, averaged over the laps, is ([0-9.]+) \(95 % interval ([0-9.]+)–([0-9.]+); "
+        r"a consistent filter gives 3\), and a lap's NEES lies above its per-step 95 % band \(above "
+        r"([0-9.]+)\) at ([0-9.]+) % of the steps \(95 % interval ([0-9.]+)–([0-9.]+) %; "
+        r"a consistent filter 2\.5 %\).*?mapped up to x = ([0-9.]+) ± ([0-9.]+) "
+        r"\(visible from the true path up to ([0-9.]+); paper ([0-9.]+)\)",
         text,
     )
-    assert m, "README: [Yan 2020] sentence not found"
-    slam = np.array([r.final_error() for r in laps])
-    dead = np.array([r.final_dead_reckoning_error() for r in laps])
-    n = min(len(r.nees) for r in laps)
-    mean_nees = np.mean([r.nees[:n] for r in laps], axis=0)
-    low, high = chi2.ppf([0.025, 0.975], 3 * len(laps)) / len(laps)
+    assert m, "README: [Yan 2020] sentences not found"
+    rows = [{"seed": s, **lap_row(r, e)} for s, r, e in zip(SEEDS, laps, extended_laps, strict=True)]
+    table = pd.DataFrame(rows)
+    st = summary(table, ["seed"]).droplevel(0)
+    slam, dead = st.loc["final_error"], st.loc["dead_reckoning_error"]
+    nees, above = st.loc["nees_mean"], st.loc["nees_above"]
+    mapped, visible = st.loc["extended_mapped_to"], st.loc["extended_visible_to"]
     ours = [
-        f"{slam.mean():.3f}",
-        f"{slam.std():.3f}",
-        f"{dead.mean():.2f}",
-        f"{dead.std():.2f}",
-        f"{dead.mean() / slam.mean():.0f}",
-        f"{np.sum(slam < dead)}",
-        f"{len(laps)}",
-        f"{mean_nees.mean():.2f}",
-        f"{low:.2f}",
-        f"{high:.2f}",
-        f"{100 * np.mean(mean_nees > high):.0f}",
+        f"{len(table)}",
+        f"{slam['mean']:.3f}",
+        f"{slam['std']:.3f}",
+        f"{dead['mean']:.2f}",
+        f"{dead['std']:.2f}",
+        f"{dead['mean'] / slam['mean']:.0f}",
+        f"{table['slam_closer'].sum():.0f}",
+        f"{len(table)}",
+        f"{nees['mean']:.2f}",
+        f"{nees['low']:.2f}",
+        f"{nees['high']:.2f}",
+        f"{NEES_HIGH:.2f}",
+        f"{100 * above['mean']:.1f}",
+        f"{100 * above['low']:.0f}",
+        f"{100 * above['high']:.1f}",
+        f"{mapped['mean']:.2f}",
+        f"{mapped['std']:.2f}",
+        f"{visible['mean']:.2f}",
+        f"{PAPER_EXTENDED_RIGHT_END}",
     ]
     assert list(m.groups()) == ours
-    m = re.search(
-        r"mapped up to x = ([0-9.]+) ± ([0-9.]+) \(visible from the true path up to ([0-9.]+);", text
-    )
-    assert m, "README: out-of-range sentence not found"
-    extended = LineSlamScenario(extended=True)
-    rights = [simulate_lap(seed=s, scenario=extended).estimated_segment(2)[:, 0].max() for s in range(10)]
-    visible = true_visible_extent(paper_world(True), simulate_lap(seed=2, scenario=extended).truth)[2][1]
-    assert list(m.groups()) == [f"{np.mean(rights):.2f}", f"{np.std(rights):.2f}", f"{visible:.2f}"]

@@ -84,3 +84,31 @@ def test_command_line_errors(argv, message, capsys, tmp_path, monkeypatch):
     err = capsys.readouterr().err
     assert message in err and len(err.strip().splitlines()) == 1
     assert list(tmp_path.iterdir()) == []  # nothing written
+
+
+def test_lap_sweep_prints_the_papers_figures_beside_ours(tmp_path, capsys):
+    assert main(["sweep", "lap", "--seeds", "2", "--workers", "1", "--out", str(tmp_path / "l")]) == 0
+    out = capsys.readouterr().out
+    assert "dead reckoning on" in out and "of 2 laps" in out and "paper 54.4412" in out
+    table = pd.read_csv(tmp_path / "l" / "results.csv")
+    assert {"nees_above", "slam_closer", "extended_mapped_to", "extended_visible_to"} <= set(table)
+
+
+def test_corridor_report_puts_table3_beside_ours(capsys):
+    """The corridor's report on a made-up table: every Table III value of the paper, beside ours,
+    and the T_s shares pooled over the seeds (not averaged per seed)."""
+    from vo_lib.lidar_tracking.corridor_experiment import PAPER_TABLE3, STATISTICS, corridor_report
+
+    row = {f"{m}_{a}_{k}": 0.5 for m in ("lbpt", "voapt") for a in "xy" for k in STATISTICS}
+    table = pd.DataFrame(
+        [
+            {"seed": 0, **row, "lbpt_lost": 10, "lbpt_lost_flagged": 10, "voapt_unoccluded": 100},
+            {"seed": 1, **row, "lbpt_lost": 0, "lbpt_lost_flagged": 0, "voapt_unoccluded": 100},
+        ]
+    ).assign(voapt_false_alarms=[0, 4])
+    corridor_report(table, sweep.summary(table, ["seed"]).droplevel(0))
+    out = capsys.readouterr().out
+    for methods in PAPER_TABLE3.values():
+        for paper in methods.values():
+            assert all(f"0.500 m (0.500-0.500) [{v:.3f}]" in out for v in paper.values())
+    assert "100.0 % of LBPT's updates" in out and "(10 of 10)" in out and "2.0 % of VOAPT's" in out

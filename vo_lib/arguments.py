@@ -1,8 +1,7 @@
-"""Command-line arguments for every entry point: errors in one line, counts checked as they parse.
+"""Command-line arguments of ``python -m vo_lib``: errors in one line, counts checked as they parse.
 
-``python -m vo_lib``, ``python -m vo_lib.line_slam.lap`` and
-``python -m vo_lib.lidar_tracking.corridor_experiment`` all report a bad argument as one line
-(``PROG: error: MESSAGE``) and exit with status 2, without argparse's usage block.
+A bad argument is reported as one line (``PROG: error: MESSAGE``), exit status 2, without
+argparse's usage block.
 """
 
 from __future__ import annotations

@@ -10,7 +10,8 @@ arguments only, so the figures are the same serially and on any cluster.
 3. Write ``results.csv`` (pandas: one row per task, arguments then figures) into the output folder
    (:class:`vo_lib.outputs.OutputFolder`: it appears whole or not at all).
 4. Print each figure's mean, standard deviation and the 95 % interval of its mean over the seeds,
-   for each setting of the other arguments.
+   for each setting of the other arguments, then what the paper's package says of them
+   (:data:`REPORTS`: the paper's values beside ours, shares pooled over the seeds).
 """
 
 from __future__ import annotations
@@ -39,7 +40,7 @@ SWEEPS = {
     "lap": (
         "vo_lib.line_slam.lap.lap_figures",
         lambda n: [{"seed": s} for s in range(n)],
-        "[Yan 2020]: one lap of line-feature EKF-SLAM per seed",
+        "[Yan 2020]: per seed, a lap of line-feature EKF-SLAM and one with landmark 3 extended",
     ),
     "nees": (
         "vo_lib.stereo_vo.consistency.nees_figures",
@@ -51,6 +52,13 @@ SWEEPS = {
         lambda n: [{"resolution": r, "seed": s} for r in TABLE1_RESOLUTIONS for s in range(n)],
         "[Zhao], Table 1: milliseconds per stage at five resolutions",
     ),
+}
+#: The function (``module.name``) that prints, below a sweep's summary, what its paper's package
+#: says of the figures; called with the table (one row per task) and the summary (one row per figure).
+REPORTS = {
+    "corridor": "vo_lib.lidar_tracking.corridor_experiment.corridor_report",
+    "lap": "vo_lib.line_slam.lap.lap_report",
+    "nees": "vo_lib.stereo_vo.consistency.nees_report",
 }
 #: Local worker processes allowed per core: more only share the cores and multiply the memory.
 WORKERS_PER_CORE = 4
@@ -67,10 +75,15 @@ class SweepError(ValueError):
     """A bad argument for a sweep: reported in one line, exit status 2."""
 
 
+def _named(path: str):
+    """The function ``module.name``."""
+    module, _, function = path.rpartition(".")
+    return getattr(importlib.import_module(module), function)
+
+
 def function_of(name: str):
     """The function a task of sweep ``name`` calls."""
-    module, _, function = SWEEPS[name][0].rpartition(".")
-    return getattr(importlib.import_module(module), function)
+    return _named(SWEEPS[name][0])
 
 
 def _call(function, kwargs: dict) -> dict:
@@ -162,12 +175,5 @@ def sweep_command(name: str, seeds: int, workers=None, scheduler=None, out=None,
     stats = summary(table, list(tasks[0]))
     with pd.option_context("display.max_rows", None, "display.width", 120):
         print(stats.to_string(float_format=lambda v: f"{v:.4g}", na_rep="undefined"))  # one seed: no spread
-    if name == "nees":
-        from vo_lib.comparison import chi2_band
-
-        low, high = chi2_band(3, len(table))
-        mean = table["nees_mean"].mean()
-        print(
-            f"NEES averaged over {len(table)} run{'s' * (len(table) != 1)}: {mean:.3f}; "
-            f"consistent runs give {low:.3f}-{high:.3f} (95 %)"
-        )
+    if name in REPORTS:
+        _named(REPORTS[name])(table, stats.droplevel(0))

@@ -6,7 +6,7 @@
                           the visual displacement (eq. 21-23)
 ``pnp_odometry``          the paper's visual odometer: ORB landmarks, PnP, local map (eq. 1-7)
 ``corridor_experiment``   the occluded corridor, LBPT against VOAPT (Table III); start here;
-                          ``python -m vo_lib.lidar_tracking.corridor_experiment`` runs it
+                          ``python -m vo_lib sweep corridor`` runs it over many seeds
 
 The one exception to the independence of the wings: this paper builds on a stereo visual
 odometer, so this wing may import ``vo_lib.stereo_vo`` (``pnp_odometry`` detects and matches with

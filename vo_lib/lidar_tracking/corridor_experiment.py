@@ -4,8 +4,9 @@ The robot drives the ``corridor`` sample's path (1 m to 28 m along the axis at 0
 seed draws its own encoder noise and slip (the odometry), laser noise and pose samples; the
 visual odometer's increments come from a VO run on the rendered corridor (or any other source of
 per-frame increments). The laser tracker updates every :data:`EVERY` frames.
-Run ``python -m vo_lib.lidar_tracking.corridor_experiment`` for the README's Table III (20 seeds;
-``--seeds N`` for another count).
+``python -m vo_lib sweep corridor --seeds 20`` prints the README's Table III beside the paper's
+(:func:`corridor_figures` per seed, :func:`corridor_report` over them); ``python -m vo_lib bench
+odometers`` times the PnP visual odometer per frame.
 """
 
 from __future__ import annotations
@@ -204,7 +205,8 @@ def track_seed(seed: int, vo: np.ndarray, calibration: Calibration, world, field
 
 def seed_figures(lbpt: TrackingRun, voapt: TrackingRun) -> dict[str, float]:
     """One seed's row of Table III (the sweep's figures): each method's statistics of the x and y
-    errors (m), LBPT's lost updates (error above :data:`LOST_ERROR`) and how many T_s flags."""
+    errors (m), LBPT's lost updates (error above :data:`LOST_ERROR`) and how many T_s flags,
+    VOAPT's updates in the unoccluded stretches and how many T_s flags (false alarms)."""
     out = {
         f"{method}_{axis}_{stat}": value
         for method, run in (("lbpt", lbpt), ("voapt", voapt))
@@ -214,6 +216,9 @@ def seed_figures(lbpt: TrackingRun, voapt: TrackingRun) -> dict[str, float]:
     lost = np.abs(lbpt.errors[:, 0]) > LOST_ERROR
     out["lbpt_lost"] = int(lost.sum())
     out["lbpt_lost_flagged"] = sum(not s.credible for s, x in zip(lbpt.steps, lost, strict=True) if x)
+    clear = unoccluded(voapt.truth[:, 0])
+    out["voapt_unoccluded"] = int(clear.sum())
+    out["voapt_false_alarms"] = sum(not s.credible for s, x in zip(voapt.steps, clear, strict=True) if x)
     return out
 
 
@@ -238,8 +243,6 @@ def run_experiment(seeds, vo: np.ndarray) -> CorridorExperiment:
     return CorridorExperiment(list(seeds), cal, [r[0] for r in runs], [r[1] for r in runs])
 
 
-#: The README's Table III is over this many seeds.
-README_SEEDS = 20
 #: [Yuan], Table III: max, mean, median and std of the absolute error in metres, per axis (X along
 #: the corridor) and method.
 PAPER_TABLE3 = {
@@ -254,39 +257,25 @@ PAPER_TABLE3 = {
 }
 
 
-def _arguments(argv=None):
-    from vo_lib.arguments import OneLineParser, count_at_least
-
-    parser = OneLineParser(
-        prog="python -m vo_lib.lidar_tracking.corridor_experiment",
-        description="[Yuan]'s occluded corridor: LBPT against VOAPT over many seeds (Table III).",
-    )
-    parser.add_argument(
-        "--seeds",
-        type=count_at_least(1, "seeds"),
-        default=README_SEEDS,
-        help=f"seeds 0..N-1 (default {README_SEEDS}, as the README's Table III)",
-    )
-    return parser.parse_args(argv)
-
-
-def main(argv=None) -> None:
-    """Table III over ``--seeds`` seeds, with the PnP visual odometer on the rendered corridor."""
-    args = _arguments(argv)
-    vo, seconds = corridor_visual_odometry()
-    print(f"PnP visual odometer: {np.median(seconds) * 1e3:.1f} ms per frame")
-    result = run_experiment(range(args.seeds), vo)
-    print(f"Table III over {args.seeds} seeds (each statistic averaged over seeds; paper in brackets)")
-    for axis, name in ((0, "X"), (1, "Y")):
-        for method, row in result.table(axis).items():
-            paper = PAPER_TABLE3[name][method]
-            cells = [f"{k} {v:.3f} m ({paper[k]:.3f})" for k, v in row.items()]
-            print(f"{method:>6s} {name}: " + ", ".join(cells))
+def corridor_report(table, stats) -> None:
+    """What ``sweep corridor`` prints below its summary: Table III, each statistic's mean over the
+    seeds with its 95 % interval beside the paper's value (:data:`PAPER_TABLE3`), and the shares
+    of LBPT's lost updates and of VOAPT's unoccluded ones that T_s flags, pooled over the seeds.
+    ``table``: one row per seed; ``stats``: the summary, one row per figure."""
+    print(f"Table III over {len(table)} seeds: mean over seeds (95 % interval) [paper]")
+    for axis, methods in PAPER_TABLE3.items():
+        for method, paper in methods.items():
+            rows = {k: stats.loc[f"{method.lower()}_{axis.lower()}_{k}"] for k in STATISTICS}
+            cells = [
+                f"{k} {r['mean']:.3f} m ({r['low']:.3f}-{r['high']:.3f}) [{paper[k]:.3f}]"
+                for k, r in rows.items()
+            ]
+            print(f"{method:>6s} {axis}: " + ", ".join(cells))
+    lost, flagged = (int(table[c].sum()) for c in ("lbpt_lost", "lbpt_lost_flagged"))
+    clear, alarms = (int(table[c].sum()) for c in ("voapt_unoccluded", "voapt_false_alarms"))
     print(
-        f"T_s flags {100 * result.flagged_when_lost():.1f} % of LBPT's updates whose error exceeds "
-        f"{LOST_ERROR} m and {100 * result.false_alarms():.1f} % of VOAPT's in unoccluded stretches"
+        f"T_s flags {100 * flagged / max(lost, 1):.1f} % of LBPT's updates whose error exceeds "
+        f"{LOST_ERROR} m "
+        f"({flagged} of {lost}) and {100 * alarms / max(clear, 1):.1f} % of VOAPT's updates in the "
+        f"unoccluded stretches ({alarms} of {clear}), pooled over the {len(table)} seeds"
     )
-
-
-if __name__ == "__main__":
-    main()

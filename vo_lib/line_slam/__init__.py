@@ -9,5 +9,5 @@ is found by bisection instead of point by point.
 ``ekf_slam``            the filter: bicycle prediction (``vo_lib.models.bicycle``, eq. 4-7),
                         feature-point or line updates, Mahalanobis association (eq. 13), augmentation
 ``lap``                 the paper's simulation, one lap with the stated parameters (start here);
-                        ``python -m vo_lib.line_slam.lap`` runs one
+                        ``python -m vo_lib sweep lap`` runs its figures over many seeds
 """

@@ -3,21 +3,29 @@ laser whose visible part of each segment comes from one of the three observers, 
 localised by EKF-SLAM.
 
 Parameters are the paper's (section 3); what it does not print is stated in
-:class:`LineSlamScenario`. Run ``python -m vo_lib.line_slam.lap`` for the README's figures (20
-laps, 10 with landmark 3 extended; ``--seeds`` and ``--extended-seeds`` change the counts).
+:class:`LineSlamScenario`. ``python -m vo_lib sweep lap --seeds 20`` prints the README's figures
+(:func:`lap_figures` per seed, :func:`lap_report` over them); ``python -m vo_lib bench observers``
+times one lap with each observer.
 """
 
 from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from vo_lib.comparison import chi2_band
 from vo_lib.geometry import wrap_angle
 from vo_lib.line_slam.ekf_slam import DROPPED, EkfSlam, diagonal_cov
-from vo_lib.line_slam.line_landmarks import along_line, feature_point, line_points, paper_world
+from vo_lib.line_slam.line_landmarks import (
+    PAPER_EXTENDED_RIGHT_END,
+    along_line,
+    feature_point,
+    line_points,
+    paper_world,
+)
 from vo_lib.line_slam.line_observation import LINE, measure_line
 from vo_lib.line_slam.range_bearing import POINT, observe_point, point_from_observation
 from vo_lib.line_slam.segment_observers import DEFAULT_TOLERANCE, OBSERVERS, visible_segment
@@ -33,6 +41,8 @@ from vo_lib.models.bicycle import (
 #: The lap: start at (0, 35), then these waypoints in turn, back to the start.
 PAPER_START = (0.0, 35.0)
 PAPER_WAYPOINTS = ((25.0, 0.0), (0.0, -20.0), (-35.0, 0.0), (-35.0, 10.0), (0.0, 35.0))
+#: Upper end of one lap's per-step 95 % band of the pose NEES (χ² with 3 degrees of freedom).
+NEES_HIGH = chi2_band(3, 1)[1]
 
 
 @dataclass(frozen=True)
@@ -253,110 +263,57 @@ def heading_errors(run: LineSlamRun) -> np.ndarray:
     return wrap_angle(run.estimate[:, 2] - run.truth[:, 2])
 
 
-def lap_figures(seed: int, observer: str = "closed_form", observation: str = "feature_point") -> dict:
-    """One lap's figures (the sweep's row): final errors of EKF-SLAM and of dead reckoning (m),
-    mean and final pose NEES, landmarks mapped, observations dropped by data association."""
-    run = simulate_lap(int(seed), observer, LineSlamScenario(observation=observation))
+def lap_row(run: LineSlamRun, extended: LineSlamRun) -> dict[str, float]:
+    """One seed's figures from its lap ``run`` and its lap with landmark 3 ``extended``: final
+    errors of EKF-SLAM and of dead reckoning (m) and whether EKF-SLAM ends closer (1 or 0), mean
+    and final pose NEES and the share of steps above :data:`NEES_HIGH`, landmarks mapped,
+    observations dropped by data association, and the x up to which the extended landmark 3 is
+    mapped and is visible from the true path (NaN if it was never mapped)."""
     nees = np.asarray(run.nees, float)
+    mapped = 2 in extended.landmark_of_segment
     return {
         "final_error": run.final_error(),
         "dead_reckoning_error": run.final_dead_reckoning_error(),
+        "slam_closer": float(run.final_error() < run.final_dead_reckoning_error()),
         "nees_mean": float(np.nanmean(nees)),
         "nees_final": float(nees[-1]),
+        "nees_above": float(np.mean(nees > NEES_HIGH)),
         "landmarks": len(run.landmarks),
         "dropped": int(run.dropped),
+        "extended_mapped_to": float(extended.estimated_segment(2)[:, 0].max()) if mapped else math.nan,
+        "extended_visible_to": true_visible_extent(paper_world(True), extended.truth)[2][1],
     }
 
 
-#: The README's [Yan 2020] figures: laps over this many seeds, and extended-landmark laps over this many.
-README_SEEDS, README_EXTENDED_SEEDS = 20, 10
+def lap_figures(seed: int, observer: str = "closed_form", observation: str = "feature_point") -> dict:
+    """One seed's figures (a task of ``python -m vo_lib sweep lap``): :func:`lap_row` of the lap
+    and of the lap with landmark 3 extended, both drawn with ``seed``."""
+    scenario = LineSlamScenario(observation=observation)
+    laps = (simulate_lap(int(seed), observer, replace(scenario, extended=e)) for e in (False, True))
+    return lap_row(*laps)
 
 
-def lap_statistics(seeds) -> dict[str, float]:
-    """The README's [Yan 2020] figures over laps of ``seeds`` (closed-form observer).
-
-    Final position error of EKF-SLAM and of dead reckoning (mean and standard deviation over the
-    laps), the pose NEES averaged over laps and steps, its 95 % band for that many laps (chi-square
-    with ``3 * laps`` degrees of freedom, divided by the laps), and the share of steps whose
-    lap-averaged NEES lies above the band.
-    """
-    from scipy.stats import chi2
-
-    runs = [simulate_lap(seed=s) for s in seeds]
-    slam = np.array([r.final_error() for r in runs])
-    dead = np.array([r.final_dead_reckoning_error() for r in runs])
-    steps = min(len(r.nees) for r in runs)
-    mean_nees = np.mean([r.nees[:steps] for r in runs], axis=0)
-    low, high = chi2.ppf([0.025, 0.975], 3 * len(runs)) / len(runs)
-    return {
-        "laps": len(runs),
-        "slam_mean": float(slam.mean()),
-        "slam_std": float(slam.std()),
-        "dead_mean": float(dead.mean()),
-        "dead_std": float(dead.std()),
-        "nees_mean": float(mean_nees.mean()),
-        "nees_low": float(low),
-        "nees_high": float(high),
-        "above_band": float(np.mean(mean_nees > high)),
-    }
-
-
-def _arguments(argv=None):
-    from vo_lib.arguments import OneLineParser, count_at_least
-
-    parser = OneLineParser(
-        prog="python -m vo_lib.line_slam.lap",
-        description="[Yan 2020]'s lap with EKF-SLAM: the README's figures over many seeds.",
-    )
-    parser.add_argument(
-        "--seeds",
-        type=count_at_least(1, "seeds"),
-        default=README_SEEDS,
-        help=f"laps (seeds 0..N-1) for the error and NEES figures (default {README_SEEDS}, as the README)",
-    )
-    parser.add_argument(
-        "--extended-seeds",
-        type=count_at_least(0, "seeds"),
-        default=README_EXTENDED_SEEDS,
-        help="laps with landmark 3 extended to x = 60, the out-of-range case "
-        f"(default {README_EXTENDED_SEEDS}, as the README; 0 skips it)",
-    )
-    return parser.parse_args(argv)
-
-
-def main(argv=None) -> None:
-    """One lap with each observer, then the README's statistics over ``--seeds`` laps."""
-    args = _arguments(argv)
-    for name in OBSERVERS:
-        run = simulate_lap(seed=1, observer=name)
-        print(
-            f"{name:>15s}: lap {run.seconds:.2f} s (observer {run.observer_seconds * 1e3:.1f} ms), "
-            f"{len(run.landmarks)} landmarks, final error {run.final_error():.3f} m "
-            f"(dead reckoning {run.final_dead_reckoning_error():.2f} m), mean NEES {run.nees.mean():.2f}"
-        )
-    st = lap_statistics(range(args.seeds))
+def lap_report(table, stats) -> None:
+    """What ``sweep lap`` prints below its summary: how often and by how much EKF-SLAM ends
+    closer than dead reckoning, what a consistent filter's NEES figures are, and the extended
+    landmark 3 beside the paper's value. ``table``: one row per seed; ``stats``: the summary, one
+    row per figure."""
+    closer, laps = int(table["slam_closer"].sum()), len(table)
+    ratio = stats.loc["dead_reckoning_error", "mean"] / stats.loc["final_error", "mean"]
+    mapped, visible = stats.loc["extended_mapped_to"], stats.loc["extended_visible_to"]
     print(
-        f"over {st['laps']} laps: EKF-SLAM ends {st['slam_mean']:.3f} ± {st['slam_std']:.3f} m "
-        f"from the truth, dead reckoning {st['dead_mean']:.2f} ± {st['dead_std']:.2f} m "
-        f"({st['dead_mean'] / st['slam_mean']:.0f}x); pose NEES {st['nees_mean']:.2f}, 95 % band "
-        f"[{st['nees_low']:.2f}, {st['nees_high']:.2f}], "
-        f"above it at {100 * st['above_band']:.0f} % of the steps"
+        f"EKF-SLAM ends closer to the truth than dead reckoning on {closer} of {laps} laps; dead "
+        f"reckoning's mean final error is {ratio:.0f}x EKF-SLAM's"
     )
-    if args.extended_seeds:
-        extended = LineSlamScenario(extended=True)
-        rights = [
-            simulate_lap(seed=s, scenario=extended).estimated_segment(2)[:, 0].max()
-            for s in range(args.extended_seeds)
-        ]
-        visible = true_visible_extent(paper_world(True), simulate_lap(seed=2, scenario=extended).truth)[2][1]
-        print(
-            f"extended landmark 3 over {len(rights)} laps: mapped up to x = {np.mean(rights):.2f} ± "
-            f"{np.std(rights):.2f} (visible from the true path up to {visible:.2f}; paper 54.4412)"
-        )
-
-
-if __name__ == "__main__":
-    main()
+    print(
+        "a consistent filter: nees_mean 3, nees_above 2.5 % "
+        f"(one lap's per-step 95 % band ends at {NEES_HIGH:.2f})"
+    )
+    print(
+        f"extended landmark 3 mapped up to x = {mapped['mean']:.2f} (95 % interval {mapped['low']:.2f}-"
+        f"{mapped['high']:.2f}), visible from the true path up to {visible['mean']:.2f}; "
+        f"paper {PAPER_EXTENDED_RIGHT_END}"
+    )
 
 
 def association_example():

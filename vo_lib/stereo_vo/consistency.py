@@ -14,6 +14,7 @@ import math
 import numpy as np
 from scipy.stats import chi2
 
+from vo_lib.comparison import chi2_band
 from vo_lib.models.track_odometry import TrackOdometry
 from vo_lib.stereo_vo.kalman import VoKalmanFilter, measurement, nis
 
@@ -56,3 +57,14 @@ def nees_figures(seed: int, steps: int = 150) -> dict[str, float]:
         "nees_final": float(nees[-1]),
         "inside_95": float(np.mean((nees > low) & (nees < high))),
     }
+
+
+def nees_report(table, stats) -> None:
+    """What ``sweep nees`` prints below its summary: the NEES averaged over the runs beside the
+    band consistent runs give (``table``: one row per run; ``stats``: the summary)."""
+    low, high = chi2_band(3, len(table))
+    mean = stats.loc["nees_mean", "mean"]
+    print(
+        f"NEES averaged over {len(table)} run{'s' * (len(table) != 1)}: {mean:.3f}; "
+        f"consistent runs give {low:.3f}-{high:.3f} (95 %)"
+    )
