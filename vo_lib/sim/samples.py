@@ -13,6 +13,7 @@ from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
+from scipy.signal import lfilter
 from tqdm.auto import tqdm
 
 from vo_lib.camera import StereoCamera
@@ -55,10 +56,8 @@ def exposure_gains(n: int, sigma: float, rng: np.random.Generator) -> np.ndarray
     """Per-frame exposure gains of an auto-exposure camera: ``exp`` of an AR(1) series, frame 0 at 1."""
     a = np.exp(-1.0 / EXPOSURE_FRAMES)
     steps = rng.normal(0.0, sigma * np.sqrt(1 - a * a), n)
-    g = np.zeros(n)
-    for k in range(1, n):
-        g[k] = a * g[k - 1] + steps[k]
-    return np.exp(g)
+    steps[0] = 0.0
+    return np.exp(lfilter([1.0], [1.0, -a], steps))  # g_k = a g_(k-1) + step_k
 
 
 @dataclass(frozen=True)
@@ -93,10 +92,9 @@ def _turns_pattern(signs, frames: int, speed: float, rate_deg: float) -> tuple[L
     )
 
 
-def _oval_laps(laps: int) -> tuple[Leg, ...]:
-    """Laps of an oval: 5 m straights joined by half turns of 1 m radius."""
-    one = (Leg(300, 0.5), Leg(180, 0.5, np.radians(30)))
-    return one * (2 * laps)
+def _yard(name: str, purpose: str, mirrors: str, start, legs, seed: int) -> Sample:
+    """A crawler's sample in the outdoor yard, at 30 Hz on rough ground."""
+    return Sample(name, purpose, mirrors, "outdoor_yard", start, 30.0, legs, seed, surface=ROUGH_GROUND)
 
 
 SAMPLES: dict[str, Sample] = {
@@ -131,85 +129,65 @@ SAMPLES: dict[str, Sample] = {
             seed=102,
             surface=LAB_FLOOR,
         ),
-        Sample(
+        _yard(
             "outdoor_linear",
             "long straight forward and back in an open yard: low parallax",
             "[Zhao], IV.B.1 (600 frames forward, 600 back)",
-            "outdoor_yard",
             (-6.0, -2.0, 0.0),
-            30.0,
             (Leg(600, 0.5), Leg(600, -0.5)),
-            seed=103,
-            surface=ROUGH_GROUND,
+            103,
         ),
-        Sample(
+        _yard(
             "spot_turn",
             "turning on the spot, with strong unequal track slip",
             "[Zhao], IV.B.2 (1800 frames of spot turns)",
-            "outdoor_yard",
             (0.0, 0.0, 0.0),
-            30.0,
             (Leg(1800, 0.0, np.radians(18)),),
-            seed=104,
-            surface=ROUGH_GROUND,
+            104,
         ),
-        Sample(
+        _yard(
             "outdoor_free",
             "free driving in the yard: errors at key positions (Table 2)",
             "[Zhao], IV.B.3 (about 1400 frames)",
-            "outdoor_yard",
             (-10.0, -4.0, 0.3),
-            30.0,
             _turns_pattern((1, -1, 1), 200, 0.5, 12) + (Leg(200, 0.5),),
-            seed=105,
-            surface=ROUGH_GROUND,
+            105,
         ),
-        Sample(
+        _yard(
             "spot_turn_2",
             "turning on the spot the other way, for longer: the paper's second set",
             "[Zhao], IV.B.2 (2400 frames of spot turns, second set)",
-            "outdoor_yard",
             (0.0, 0.0, 0.0),
-            30.0,
             (Leg(2400, 0.0, np.radians(-15)),),
-            seed=107,
-            surface=ROUGH_GROUND,
+            107,
         ),
-        Sample(
+        _yard(
             "outdoor_free_2",
             "a longer tour of the yard, quarter turns both ways: Table 2, set 2",
             "[Zhao], IV.B.3 (2419 frames, second set)",
-            "outdoor_yard",
             (-18.0, 14.0, 3.14),
-            30.0,
             (Leg(218, 0.5),)
             + _turns_pattern((1, 1, -1, -1), 200, 0.5, 13.5)
             + (Leg(200, 0.5), Leg(200, 0.5, np.radians(-13.5)), Leg(200, 0.5, np.radians(13.5))),
-            seed=108,
-            surface=ROUGH_GROUND,
+            108,
         ),
-        Sample(
+        _yard(
             "outdoor_free_3",
             "the longest tour, at the far end of the yard: Table 2, set 3",
             "[Zhao], IV.B.3 (2670 frames, third set)",
-            "outdoor_yard",
             # from the open south end: the tour sees sky and far fronts (bench realism in range)
             (0.0, -35.0, 0.524),
-            30.0,
             (Leg(269, 0.5),) + _turns_pattern((-1, 1, 1, -1, 1, 1), 200, 0.5, 15),
-            seed=109,
-            surface=ROUGH_GROUND,
+            109,
         ),
-        Sample(
+        _yard(
             "long_run",
             "ten laps of an oval, 10,000 frames: the timing run (render it in memory: bench long)",
             "[Zhao], IV.A.1 (10000 frames, elapsed time per frame)",
-            "outdoor_yard",
             (-22.0, 2.0, 1.57),
-            30.0,
-            _oval_laps(10) + (Leg(399, 0.5),),
-            seed=110,
-            surface=ROUGH_GROUND,
+            # ten laps of an oval: 5 m straights joined by half turns of 1 m radius
+            (Leg(300, 0.5), Leg(180, 0.5, np.radians(30))) * 20 + (Leg(399, 0.5),),
+            110,
         ),
         Sample(
             "road_drive",
@@ -386,6 +364,10 @@ def generate(
     with SequenceWriter(out, camera, force=force) as writer:
         for left, right, _ in _with_progress(frame_iter, n, f"rendering {name}", progress):
             writer.add(left, right)
+        # a crawler's camera states its height (the pipeline reads it as the crawler's); a car's
+        # states where it sits in the car, without height_m (read as a car)
+        car = sample.rig == "car"
+        rig = {"in_vehicle_m": list(road.CAMERA_IN_VEHICLE)} if car else {"height_m": CAMERA_HEIGHT}
         manifest = {
             "sample": name,
             "fingerprint": fingerprint(name),
@@ -398,8 +380,12 @@ def generate(
             "resolution": [width, height],
             "legs": [asdict(leg) for leg in sample.legs],
             "start_pose": list(sample.start),
-            "camera": _camera_entry(sample, camera),
-            "track_odometry": asdict(road.CAR_ODOMETRY if sample.rig == "car" else TrackOdometry()),
+            "camera": {
+                **{key: getattr(camera, key) for key in ("fx", "fy", "cx", "cy", "baseline")},
+                **rig,
+                "mount": CAMERA_MOUNTS[car],
+            },
+            "track_odometry": asdict(road.CAR_ODOMETRY if car else TrackOdometry()),
             "slip": asdict(sample.slip),
             "surface": None if sample.surface is None else asdict(sample.surface),
             "sensor_noise_grey": sample.sensor_noise,
@@ -430,16 +416,3 @@ def _with_progress(frames, total: int, label: str, progress):
                 flush=True,
             )
             last = now
-
-
-def _camera_entry(sample: Sample, camera: StereoCamera) -> dict:
-    """The manifest's camera: a crawler's states its height (the pipeline reads it as the
-    crawler's); a car's states where it sits in the car, without ``height_m`` (read as a car)."""
-    entry = {"fx": camera.fx, "fy": camera.fy, "cx": camera.cx, "cy": camera.cy, "baseline": camera.baseline}
-    if sample.rig == "car":
-        entry["in_vehicle_m"] = list(road.CAMERA_IN_VEHICLE)
-        entry["mount"] = CAMERA_MOUNTS[1]
-    else:
-        entry["height_m"] = CAMERA_HEIGHT
-        entry["mount"] = CAMERA_MOUNTS[0]
-    return entry
