@@ -19,6 +19,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.signal import lfilter
 from scipy.spatial.transform import Rotation
 
 from vo_lib.geometry import wrap_angle
@@ -65,12 +66,8 @@ def _ar1(n: int, sigma: float, frames: float, rng: np.random.Generator, dim: int
     """``(n, dim)`` AR(1) series, stationary standard deviation ``sigma``, correlation ``frames``."""
     a = np.exp(-1.0 / frames)
     steps = rng.normal(0.0, sigma * np.sqrt(1 - a * a), (n, dim))
-    out = np.empty((n, dim))
-    state = rng.normal(0.0, sigma, dim)
-    for k in range(n):
-        state = a * state + steps[k]
-        out[k] = state
-    return out
+    start = rng.normal(0.0, sigma, dim)
+    return lfilter([1.0], [1.0, -a], steps, axis=0, zi=a * start[None, :])[0]  # x_k = a x_(k-1) + step_k
 
 
 @dataclass(frozen=True)
@@ -195,10 +192,8 @@ def command_profile(legs, rate: float) -> tuple[np.ndarray, np.ndarray]:
     turn = np.concatenate([np.full(leg.frames, leg.turn_rate, float) for leg in legs])
     ramp = max(1, int(round(RAMP_SECONDS * rate)))
     if ramp > 1 and len(speed) > ramp:
-        kernel = np.ones(ramp) / ramp
-        pad = ((ramp - 1) // 2, ramp // 2)
-        speed = np.convolve(np.pad(speed, pad, mode="edge"), kernel, mode="valid")
-        turn = np.convolve(np.pad(turn, pad, mode="edge"), kernel, mode="valid")
+        kernel, pad = np.ones(ramp) / ramp, ((ramp - 1) // 2, ramp // 2)
+        speed, turn = (np.convolve(np.pad(x, pad, mode="edge"), kernel, mode="valid") for x in (speed, turn))
     return speed, turn
 
 
@@ -230,9 +225,7 @@ def simulate_drive(
     zero = np.zeros((1, 2))
     if surface is None:
         poses = odometry.integrate(ground, start=start, exact=True)
-        return Drive(
-            rate, poses, np.vstack([zero, readings]), np.vstack([zero, ground]), np.vstack([zero, slips])
-        )
+        return Drive(rate, poses, *(np.vstack([zero, x]) for x in (readings, ground, slips)))
     # the tracks move the ground by what they planned, less what they lose in contact; the body
     # turns by their difference over the gauge and skids sideways about the shifted ICR
     grip, attitude = surface.contact(ground, rng)
