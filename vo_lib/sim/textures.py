@@ -201,10 +201,10 @@ def painted_wall(height: int, width: int, texel: float, seed: int) -> np.ndarray
     return img
 
 
-def floor_tiles(height: int, width: int, texel: float, seed: int, side: float = 0.4) -> np.ndarray:
-    """Square tiles of ``side`` metres, each its own grey, with dark grout lines and a fine speckle."""
+def floor_tiles(height: int, width: int, texel: float, seed: int) -> np.ndarray:
+    """Square tiles of 0.4 m, each its own grey, with dark grout lines and a fine speckle."""
     rng = np.random.default_rng(seed)
-    n = max(1, int(round(side / texel)))
+    n = max(1, int(round(0.4 / texel)))
     greys = rng.uniform(140, 160, (height // n + 2, width // n + 2)).astype(np.float32)
     img = cv2.resize(greys, (greys.shape[1] * n, greys.shape[0] * n), interpolation=cv2.INTER_NEAREST)
     img = img[:height, :width].copy()
@@ -282,25 +282,20 @@ def road_surface(height: int, width: int, texel: float, seed: int) -> np.ndarray
     gravel = photo_texture("gravel", height, width, texel, seed + 1)
     wash = smooth_wash(height, width, texel, np.random.default_rng(seed + 2), 4.0)
     painted = np.mod(np.arange(width) * texel, DASH[1]) < DASH[0]  # the centre line's dashes
-    band_grey = {  # each band's grey over its rows r0:r1
+    band_grey = {  # each band's grey over its rows r0:r1 (asphalt: img's)
         "gravel": lambda r0, r1: gravel[r0:r1],
         "kerb": lambda r0, r1: KERB_GREY + 0.3 * (gravel[r0:r1] - PHOTO_TONE["gravel"][0]),
         "line": lambda r0, r1: LINE_GREY,
-        "asphalt": lambda r0, r1: img[r0:r1],
-        "dashes": lambda r0, r1: _dashed(img[r0:r1], painted, (r1 - r0) // 3, r1 - r0),
     }
     edges = np.cumsum([0.0, *(w for _, w in ROAD_BANDS)])
     for (band, _), start, end in zip(ROAD_BANDS, edges, edges[1:], strict=False):
         r0, r1 = int(round(start / texel)), int(round(end / texel))
-        img[r0:r1] = band_grey[band](r0, r1)
+        if band == "dashes":  # asphalt, the line painted over the band's middle third
+            third = (r1 - r0) // 3
+            img[r0 + third : r1 - third, painted] = LINE_GREY
+        elif band in band_grey:
+            img[r0:r1] = band_grey[band](r0, r1)
     return img + wash
-
-
-def _dashed(rows: np.ndarray, painted: np.ndarray, third: int, n: int) -> np.ndarray:
-    """The ``n`` rows of a dashed band with the line painted over their middle third."""
-    rows = rows.copy()
-    rows[third : n - third, painted] = LINE_GREY
-    return rows
 
 
 def vehicle_side(height: int, width: int, texel: float, seed: int) -> np.ndarray:
