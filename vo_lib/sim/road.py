@@ -127,15 +127,14 @@ def vehicle_poses(poses: np.ndarray) -> np.ndarray:
     g, c = grade(s), crossfall(s)
     pitch, roll = -np.arctan(g), np.arctan(c)
     z = elevation(s) - LANE_OFFSET * c + VEHICLE_ORIGIN_HEIGHT
-    out = np.zeros((len(poses), 4, 4))
-    for k, ((x, y, yaw), p, r) in enumerate(zip(poses, pitch, roll, strict=True)):
-        cy, sy, cp, sp, cr, sr = np.cos(yaw), np.sin(yaw), np.cos(p), np.sin(p), np.cos(r), np.sin(r)
-        Rz = np.array([[cy, -sy, 0], [sy, cy, 0], [0, 0, 1.0]])
-        Ry = np.array([[cp, 0, sp], [0, 1.0, 0], [-sp, 0, cp]])
-        Rx = np.array([[1.0, 0, 0], [0, cr, -sr], [0, sr, cr]])
-        out[k, :3, :3] = Rz @ Ry @ Rx
-        out[k, :3, 3] = (x, y, z[k])
-        out[k, 3, 3] = 1.0
+    (cy, sy), (cp, sp), (cr, sr) = ((np.cos(a), np.sin(a)) for a in (poses[:, 2], pitch, roll))
+    o, i = np.zeros(len(poses)), np.ones(len(poses))
+    Rz = np.stack([cy, -sy, o, sy, cy, o, o, o, i], axis=1).reshape(-1, 3, 3)
+    Ry = np.stack([cp, o, sp, o, i, o, -sp, o, cp], axis=1).reshape(-1, 3, 3)
+    Rx = np.stack([i, o, o, o, cr, -sr, o, sr, cr], axis=1).reshape(-1, 3, 3)
+    out = np.tile(np.eye(4), (len(poses), 1, 1))
+    out[:, :3, :3] = Rz @ Ry @ Rx
+    out[:, :3, 3] = np.column_stack([poses[:, :2], z])
     return out
 
 
