@@ -82,15 +82,12 @@ class _QuadArrays:
 
     @staticmethod
     def of(quads) -> _QuadArrays:
-        e1 = np.array([q.e1 for q in quads], float).reshape(-1, 3)
-        return _QuadArrays(
-            e1,
-            np.array([q.e2 for q in quads], float).reshape(-1, 3),
-            np.array([q.origin for q in quads], float).reshape(-1, 3),
-            np.array([q.normal for q in quads], float).reshape(-1, 3),
-            np.linalg.norm(e1, axis=1),
-            np.array([len(q.texture) for q in quads], int),
+        vectors = ("e1", "e2", "origin", "normal")
+        e1, e2, origin, normal = (
+            np.array([getattr(q, n) for q in quads], float).reshape(-1, 3) for n in vectors
         )
+        levels = np.array([len(q.texture) for q in quads], int)
+        return _QuadArrays(e1, e2, origin, normal, np.linalg.norm(e1, axis=1), levels)
 
     @staticmethod
     def join(first: _QuadArrays, second: _QuadArrays) -> _QuadArrays:
@@ -332,8 +329,8 @@ class StereoRenderer:
         H[:, 0] -= x0y0[:, :1] * H[:, 2]
         H[:, 1] -= x0y0[:, 1:] * H[:, 2]
         boxes = np.hstack([x0y0, x1y1]).tolist()
-        textures = [quads[todo[i]] for i in range(len(todo))]
-        _draw(image, inv_depth, np.flatnonzero(drawn).tolist(), boxes, H, level, textures, pts4, clipped, abe)
+        seen = [quads[i] for i in todo]
+        _draw(image, inv_depth, np.flatnonzero(drawn).tolist(), boxes, H, level, seen, pts4, clipped, abe)
         if not with_depth:
             return image
         with np.errstate(divide="ignore"):
