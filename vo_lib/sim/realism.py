@@ -19,7 +19,7 @@ On 20 frames spread evenly over KITTI raw drive 2011_09_26_0001 these give 0.40,
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 
 import cv2
 import numpy as np
@@ -49,21 +49,19 @@ class ImageStatistics:
         if not rows:
             raise ValueError("the mean of no statistics is undefined: give at least one image")
         return ImageStatistics(
-            float(np.mean([r.empty_cells for r in rows])),
-            float(np.mean([r.corners_per_vga for r in rows])),
-            float(np.mean([r.low_gradient for r in rows])),
+            *(float(np.mean([getattr(r, f.name) for r in rows])) for f in fields(ImageStatistics))
         )
 
 
-def fast_corners(image: np.ndarray, threshold: int = FAST_THRESHOLD) -> np.ndarray:
+def fast_corners(image: np.ndarray) -> np.ndarray:
     """``(N, 2)`` pixel positions (u, v) of FAST-9/16 corners with non-maximum suppression."""
-    detector = cv2.FastFeatureDetector_create(threshold, True, cv2.FAST_FEATURE_DETECTOR_TYPE_9_16)
+    detector = cv2.FastFeatureDetector_create(FAST_THRESHOLD, True, cv2.FAST_FEATURE_DETECTOR_TYPE_9_16)
     return np.array([k.pt for k in detector.detect(image)], dtype=float).reshape(-1, 2)
 
 
-def occupied_cells(shape, corners: np.ndarray, cell: int = CELL_PIXELS) -> np.ndarray:
-    """Boolean grid, one entry per ``cell`` x ``cell`` block of an image of ``shape``: holds a corner."""
-    h, w = shape[:2]
+def occupied_cells(shape, corners: np.ndarray) -> np.ndarray:
+    """Boolean grid, one entry per :data:`CELL_PIXELS`-square block of an image of ``shape``: has a corner."""
+    h, w, cell = *shape[:2], CELL_PIXELS
     grid = np.zeros((-(-h // cell), -(-w // cell)), bool)
     col, row = (np.asarray(corners, dtype=float).reshape(-1, 2) // cell).astype(int).T
     grid[row, col] = True
