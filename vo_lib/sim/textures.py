@@ -59,14 +59,6 @@ def corner_texture(height: int, width: int, seed: int, contrast: float = 1.0) ->
     return np.clip(img, 0, 255).astype(np.uint8)
 
 
-def mipmaps(texture: np.ndarray) -> list[np.ndarray]:
-    """Gaussian pyramid of a texture: level L has ``2**L`` texels of level 0 per texel."""
-    levels = [texture]
-    while min(levels[-1].shape) >= 2 * MIN_MIP_SIDE:
-        levels.append(cv2.pyrDown(levels[-1]))
-    return levels
-
-
 #: Changed whenever a texture's texels change for the same arguments: it enters the samples'
 #: fingerprints, so that cached samples are rendered again.
 TEXTURE_VERSION = 4
@@ -191,10 +183,8 @@ def painted_wall(height: int, width: int, texel: float, seed: int) -> np.ndarray
             x += rng.uniform(2.5, 5.0)
         else:  # a poster
             w, h = rng.uniform(0.4, 0.8), rng.uniform(0.5, 0.9)
-            y0 = 1.15
-            c0, r0 = int(x / texel), int(y0 / texel)
-            pw, ph = int(w / texel), int(h / texel)
-            pw, ph = min(pw, width - c0), min(ph, height - r0)
+            c0, r0 = int(x / texel), int(1.15 / texel)
+            pw, ph = min(int(w / texel), width - c0), min(int(h / texel), height - r0)
             if pw > 4 and ph > 4:
                 img[r0 : r0 + ph, c0 : c0 + pw] = corner_texture(ph, pw, int(rng.integers(1 << 30)))
             x += w + rng.uniform(2.0, 5.0)
@@ -352,5 +342,9 @@ STYLES = tuple(_DRAW)
 
 @functools.lru_cache(maxsize=256)
 def cached_surface(style: str, height: int, width: int, texel: float, seed: int) -> tuple[np.ndarray, ...]:
-    """Mipmaps of :func:`surface_texture`, computed once per process for each argument set."""
-    return tuple(mipmaps(surface_texture(style, height, width, texel, seed)))
+    """Mipmaps of :func:`surface_texture` (a Gaussian pyramid: level L has ``2**L`` texels of level 0
+    per texel), computed once per process for each argument set."""
+    levels = [surface_texture(style, height, width, texel, seed)]
+    while min(levels[-1].shape) >= 2 * MIN_MIP_SIDE:
+        levels.append(cv2.pyrDown(levels[-1]))
+    return tuple(levels)
