@@ -218,9 +218,9 @@ def outdoor_yard(seed: int = 20) -> World:
     )
 
 
-def corridor(seed: int = 30, length: float = 30.0, width: float = 3.0) -> World:
-    """The corridor of [Yuan]: two long walls, two pillars, two cross walls, a fire hydrant,
-    and an unmapped umbrella that hides the second pillar from the stretch before it.
+def corridor(seed: int = 30) -> World:
+    """The corridor of [Yuan], 30 m long and 3 m wide: two long walls, two pillars, two cross walls,
+    a fire hydrant, and an unmapped umbrella that hides the second pillar from the stretch before it.
 
     Walls are painted, with doors and posters; pillars are plain, the floor tiled, the ceiling
     panelled: most of the camera's view holds no corner, as in a real corridor. The hydrant and
@@ -233,7 +233,7 @@ def corridor(seed: int = 30, length: float = 30.0, width: float = 3.0) -> World:
     (x = 15) could fix it, and the umbrella (x = 13.7, open, 1 m wide, standing against the
     wall) hides that pillar up to x = 12.8.
     """
-    h, half = 2.8, width / 2
+    h, half, length = 2.8, 1.5, 30.0
     segs = polyline([(0, -half), (length, -half)], h, seed, "wall", style="wall")
     segs += polyline([(0, half), (length, half)], h, seed + 1, "wall", style="wall")
     segs += polyline([(0, -half), (0, half)], h, seed + 2, "end wall", style="wall")
@@ -254,7 +254,7 @@ def corridor(seed: int = 30, length: float = 30.0, width: float = 3.0) -> World:
         (0.0, length, -half, half),
         seed,
         ceiling_height=h,
-        notes={"length": length, "width": width},
+        notes={"length": length, "width": 2 * half},
         floor_style="tiles",
         ceiling_style="panels",
     )
@@ -266,14 +266,14 @@ NEAR_TEXEL = 0.02
 FAR_DISTANCE, FAR_HEIGHT = 80.0, 14.0
 
 
-def _ribbon_breaks(s, poses, most: float = 6.0) -> list[int]:
-    """Indices cutting a centre line into pieces that are nearly flat, straight and even."""
+def _ribbon_breaks(s, poses) -> list[int]:
+    """Indices cutting a centre line into pieces up to 6 m long, nearly flat, straight and even."""
     breaks, first = [0], 0
     g, c = road.grade(s), road.crossfall(s)
     for i in range(1, len(s)):
         bent = abs(poses[i, 2] - poses[first, 2]) > np.radians(1.0)
         changed = abs(g[i] - g[first]) > 0.004 or abs(c[i] - c[first]) > 0.004
-        if bent or changed or s[i] - s[first] > most or i == len(s) - 1:
+        if bent or changed or s[i] - s[first] > 6.0 or i == len(s) - 1:
             breaks.append(i)
             first = i
     return breaks
@@ -392,7 +392,7 @@ def road_world(seed: int = 40) -> World:
     climbs and banks, on rough ground; buildings, trees, fences and parked cars beside it; far structure
     of low contrast beyond (:data:`FAR_DISTANCE`); the sky; and traffic."""
     segs = road_side(seed)
-    s, poses = road.centre_line(5.0)
+    _, poses = road.centre_line(5.0)
     # grass up to the far structure (whose ring is measured from the road's edge points)
     lo, hi = poses[:, :2].min(axis=0) - FAR_DISTANCE - 5.0, poses[:, :2].max(axis=0) + FAR_DISTANCE + 5.0
     return World(
