@@ -85,11 +85,9 @@ class Sample:
         return sum(leg.frames for leg in self.legs) + 1
 
 
-def _turns_pattern(signs, frames: int, speed: float, rate_deg: float) -> tuple[Leg, ...]:
-    """A straight stretch, then an arc turning the way of each sign."""
-    return tuple(
-        leg for sign in signs for leg in (Leg(frames, speed), Leg(frames, speed, np.radians(rate_deg) * sign))
-    )
+def _turns_pattern(signs, rate_deg: float) -> tuple[Leg, ...]:
+    """200 frames straight, then 200 turning the way of each sign, at 0.5 m/s."""
+    return tuple(leg for sign in signs for leg in (Leg(200, 0.5), Leg(200, 0.5, np.radians(rate_deg) * sign)))
 
 
 def _yard(name: str, purpose: str, mirrors: str, start, legs, seed: int) -> Sample:
@@ -150,7 +148,7 @@ SAMPLES: dict[str, Sample] = {
             "free driving in the yard: errors at key positions (Table 2)",
             "[Zhao], IV.B.3 (about 1400 frames)",
             (-10.0, -4.0, 0.3),
-            _turns_pattern((1, -1, 1), 200, 0.5, 12) + (Leg(200, 0.5),),
+            _turns_pattern((1, -1, 1), 12) + (Leg(200, 0.5),),
             105,
         ),
         _yard(
@@ -167,7 +165,7 @@ SAMPLES: dict[str, Sample] = {
             "[Zhao], IV.B.3 (2419 frames, second set)",
             (-18.0, 14.0, 3.14),
             (Leg(218, 0.5),)
-            + _turns_pattern((1, 1, -1, -1), 200, 0.5, 13.5)
+            + _turns_pattern((1, 1, -1, -1), 13.5)
             + (Leg(200, 0.5), Leg(200, 0.5, np.radians(-13.5)), Leg(200, 0.5, np.radians(13.5))),
             108,
         ),
@@ -177,7 +175,7 @@ SAMPLES: dict[str, Sample] = {
             "[Zhao], IV.B.3 (2670 frames, third set)",
             # from the open south end: the tour sees sky and far fronts (bench realism in range)
             (0.0, -35.0, 0.524),
-            (Leg(269, 0.5),) + _turns_pattern((-1, 1, 1, -1, 1, 1), 200, 0.5, 15),
+            (Leg(269, 0.5),) + _turns_pattern((-1, 1, 1, -1, 1, 1), 15),
             109,
         ),
         _yard(

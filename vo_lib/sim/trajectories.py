@@ -54,12 +54,11 @@ class SlipModel:
 
     def sample(self, commands: np.ndarray, rng: np.random.Generator) -> np.ndarray:
         """Slip ``(N, 2)`` (left, right) for track distances ``(N, 2)``."""
-        n = len(commands)
         spot = (commands[:, 0] * commands[:, 1]) < 0
         mean = np.where(spot, self.spot_turn_mean, self.mean)
         diff = np.where(spot, self.spot_turn_difference, self.difference)
         base = np.column_stack([mean + diff / 2, mean - diff / 2])
-        return base + _ar1(n, self.sigma, self.correlation_frames, rng, 2)
+        return base + _ar1(len(commands), self.sigma, self.correlation_frames, rng, 2)
 
 
 def _ar1(n: int, sigma: float, frames: float, rng: np.random.Generator, dim: int = 1) -> np.ndarray:
