@@ -14,6 +14,7 @@ from pathlib import Path
 
 import numpy as np
 from scipy.signal import lfilter
+from scipy.spatial.transform import Rotation
 from tqdm.auto import tqdm
 
 from vo_lib.camera import StereoCamera
@@ -31,7 +32,6 @@ from vo_lib.sim.trajectories import (
     Leg,
     SlipModel,
     TrackGround,
-    attitude_matrices,
     simulate_drive,
 )
 from vo_lib.sim.world import WORLDS
@@ -268,7 +268,8 @@ def _world_poses(sample: Sample, drive) -> np.ndarray:
         return road.vehicle_poses(drive.poses)
     poses = np.stack([planar_to_matrix(p) for p in drive.poses])
     if drive.attitude is not None:
-        poses = poses @ attitude_matrices(drive.attitude)  # pitch and roll about the contact point
+        # the body's pitch and roll, about its contact point on the ground
+        poses[:, :3, :3] = poses[:, :3, :3] @ Rotation.from_euler("YX", drive.attitude).as_matrix()
     return poses
 
 

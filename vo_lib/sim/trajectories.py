@@ -20,7 +20,6 @@ from dataclasses import dataclass
 
 import numpy as np
 from scipy.signal import lfilter
-from scipy.spatial.transform import Rotation
 
 from vo_lib.geometry import wrap_angle
 from vo_lib.models.track_odometry import TrackOdometry
@@ -156,13 +155,6 @@ def integrate_body(steps: np.ndarray, start) -> np.ndarray:
     poses[:, :2] = np.asarray(start[:2], float) + np.vstack([np.zeros((1, 2)), np.cumsum(world, axis=0)])
     poses[:, 2] = wrap_angle(theta)
     return poses
-
-
-def attitude_matrices(attitude: np.ndarray) -> np.ndarray:
-    """``(N, 4, 4)`` body tilts about the contact point on the ground from ``(pitch, roll)`` rows."""
-    T = np.tile(np.eye(4), (len(attitude), 1, 1))
-    T[:, :3, :3] = Rotation.from_euler("YX", np.asarray(attitude, float)).as_matrix()
-    return T
 
 
 @dataclass(frozen=True)
