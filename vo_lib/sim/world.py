@@ -149,7 +149,6 @@ def box(
     height: float,
     seed: int,
     kind: str = "box",
-    mapped: bool = True,
     style: str = "corners",
 ) -> list[Segment]:
     """Four outward-facing sides of a rectangular block centred at ``centre`` with plan ``size``."""
@@ -157,7 +156,7 @@ def box(
     hx, hy = size[0] / 2, size[1] / 2
     corners = [(-hx, -hy), (hx, -hy), (hx, hy), (-hx, hy)]
     pts = [(centre[0] + c * x - s * y, centre[1] + s * x + c * y) for x, y in corners]
-    return polyline(pts, height, seed, kind, closed=True, mapped=mapped, style=style)
+    return polyline(pts, height, seed, kind, closed=True, style=style)
 
 
 # ---------------------------------------------------------------------- ready-made worlds
@@ -283,7 +282,6 @@ def road_ribbon(seed: int) -> tuple[Patch, ...]:
     """The road surface along :func:`vo_lib.sim.road.centre_line`: one patch per piece, each a
     quad whose ends stand square to the road (so that pieces meet without gaps in the bends)."""
     s, poses = road.centre_line()
-    poses = poses.copy()
     poses[:, :2] += road.LANE_OFFSET * np.column_stack([-np.sin(poses[:, 2]), np.cos(poses[:, 2])])
     z, c = road.elevation(s), road.crossfall(s)
     half = ROAD_WIDTH / 2
@@ -357,12 +355,11 @@ def road_side(seed: int) -> list[Segment]:
     """Buildings, trees, fences and parked cars beside the road, and far low-contrast structure."""
     rng = np.random.default_rng(seed)
     s, poses = road.centre_line(2.0)
-    road_xy = poses[:, :2] + road.LANE_OFFSET * np.column_stack([-np.sin(poses[:, 2]), np.cos(poses[:, 2])])
+    left = np.column_stack([-np.sin(poses[:, 2]), np.cos(poses[:, 2])])
+    road_xy = poses[:, :2] + road.LANE_OFFSET * left
     segs: list[Segment] = []
     kinds = ("building", "tree", "fence", "parked car", "building", "tree")
     for k in range(0, len(s), 4):
-        x, y, h = *road_xy[k], poses[k, 2]
-        normal = np.array([-np.sin(h), np.cos(h)])
         for side in (1.0, -1.0):
             kind = kinds[int(rng.integers(len(kinds)))]
             size, height, style, gap = {
@@ -373,13 +370,11 @@ def road_side(seed: int) -> list[Segment]:
             }[kind]
             if kind == "building" and rng.random() < 0.3:
                 style = "wall"
-            centre = np.array([x, y]) + side * normal * (
-                ROAD_WIDTH / 2 + gap + size[1] / 2 + rng.uniform(0, 4)
-            )
+            centre = road_xy[k] + side * left[k] * (ROAD_WIDTH / 2 + gap + size[1] / 2 + rng.uniform(0, 4))
             reach = np.hypot(*size) / 2 + ROAD_WIDTH / 2 + 0.3
             if np.min(np.linalg.norm(road_xy - centre, axis=1)) < reach:
                 continue  # would stand on the road (inside a bend)
-            near = box(tuple(centre), size, h, height, seed + 100 + len(segs), kind, style=style)
+            near = box(tuple(centre), size, poses[k, 2], height, seed + 100 + len(segs), kind, style=style)
             segs += [replace(seg, texel=NEAR_TEXEL) for seg in near]
     lo, hi = road_xy.min(axis=0) - FAR_DISTANCE, road_xy.max(axis=0) + FAR_DISTANCE
     ring = [(lo[0], lo[1]), (hi[0], lo[1]), (hi[0], hi[1]), (lo[0], hi[1])]
