@@ -49,8 +49,7 @@ def corner_texture(height: int, width: int, seed: int, contrast: float = 1.0) ->
         if kind == 2:
             cv2.circle(img, (int(c[0]), int(c[1])), int(s / 2), float(level), -1)
         else:
-            k = 3 if kind == 0 else 5
-            a = np.sort(ang[:k])
+            a = np.sort(ang[: 3 if kind == 0 else 5])  # a triangle or a pentagon
             pts = c + 0.5 * s * np.column_stack([np.cos(a), np.sin(a)])
             cv2.fillPoly(img, [pts.astype(np.int32)], float(level))
     lo, hi = np.percentile(img, (1, 99))
@@ -95,8 +94,7 @@ def mirrored_tiling(tile: np.ndarray, height: int, width: int, rng: np.random.Ge
 
 def photo_texture(style: str, height: int, width: int, texel: float, seed: int) -> np.ndarray:
     """A photograph of ``style`` tiled over ``(height, width)`` texels of ``texel`` metres, float32."""
-    source = "gravel" if style == "asphalt" else style
-    photo = photograph(source)
+    photo = photograph("gravel" if style == "asphalt" else style)
     side = max(4, int(round(PHOTO_METRES[style] / texel)))
     tile = cv2.resize(photo, (side, side), interpolation=cv2.INTER_AREA)
     grey, contrast = PHOTO_TONE[style]
@@ -115,9 +113,8 @@ def smooth_wash(
 
 
 def _rect(img, x0, y0, x1, y1, texel, value):
-    a = (int(x0 / texel), int(y0 / texel))
-    b = (int(x1 / texel), int(y1 / texel))
-    cv2.rectangle(img, a, b, float(value), -1)
+    corners = [(int(x / texel), int(y / texel)) for x, y in ((x0, y0), (x1, y1))]
+    cv2.rectangle(img, *corners, float(value), -1)
 
 
 def _joint_share(centre: np.ndarray, texel: float, period: float) -> np.ndarray:
