@@ -182,16 +182,8 @@ def _mover_quads(mover) -> list[_Quad]:
 
 def _moved(quad: _Quad, R: np.ndarray, t: np.ndarray) -> _Quad:
     """A body-frame quad carried to the world by rotation ``R`` and translation ``t``."""
-    normal = R @ quad.normal
-    return _Quad(
-        quad.corners @ R.T + t,
-        R @ quad.origin + t,
-        R @ quad.e1,
-        R @ quad.e2,
-        normal,
-        quad.texture,
-        _shade(normal),
-    )
+    e1, e2, normal = (R @ v for v in (quad.e1, quad.e2, quad.normal))
+    return _Quad(quad.corners @ R.T + t, R @ quad.origin + t, e1, e2, normal, quad.texture, _shade(normal))
 
 
 def _clip_near(points: np.ndarray, near: float) -> np.ndarray:
