@@ -337,11 +337,10 @@ def render_left_images(name: str, indices, resolution=None) -> list[np.ndarray]:
     rng = np.random.default_rng(sample.seed + 2)
     gains = exposure_gains(sample.frames, sample.exposure_sigma, np.random.default_rng(sample.seed + 3))
     cameras = rendered.camera_poses()
-    images = []
-    for k in map(int, indices):
-        effects = SensorEffects(noise_sigma=sample.sensor_noise, exposure_gain=float(gains[k]))
-        images.append(effects.apply(renderer.render(cameras[k], time=k / sample.rate), rng))
-    return images
+    effects = [SensorEffects(noise_sigma=sample.sensor_noise, exposure_gain=float(g)) for g in gains]
+    return [
+        effects[k].apply(renderer.render(cameras[k], time=k / sample.rate), rng) for k in map(int, indices)
+    ]
 
 
 def generate(
