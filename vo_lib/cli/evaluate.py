@@ -24,13 +24,6 @@ def run_marker(est: str) -> dict:
     return marker if isinstance(files, dict) and files.get(Path(est).name) == file_sha256(est) else {}
 
 
-def first_frames_of(gt: str, marker: dict, n: int) -> bool:
-    """Whether the run of ``marker`` (:func:`run_marker`) is a ``run --frames n`` on the sequence
-    whose ``poses.txt`` is ``gt``."""
-    sequence = Path(str(marker.get("sequence")))
-    return marker.get("frames") == n and Path(gt).resolve() == sequence / "poses.txt"
-
-
 def check_against_its_run(gt: str, est: str, marker: dict) -> None:
     """Refuse a ``--gt`` that changed since the run that wrote ``--est`` (``marker``:
     :func:`run_marker`) took its errors from it, or a run whose calibration changed since; say when
@@ -68,7 +61,9 @@ def _associated(
     if truth.times is not None and times is None:  # a run's trajectory.tum beside it has the times
         print(f"--est {est} has no timestamps: its poses are paired with --gt's one to one, in order")
     if truth.times is None or times is None:
-        if len(truth.positions) > len(E) and first_frames_of(gt, marker, len(E)):
+        sequence = Path(str(marker.get("sequence")))  # of the run that wrote --est: its first frames?
+        first = marker.get("frames") == len(E) and Path(gt).resolve() == sequence / "poses.txt"
+        if len(truth.positions) > len(E) and first:
             print(
                 f"--est {est} is a run of the first {len(E)} frames of --gt's sequence: compared with those"
             )
