@@ -25,13 +25,6 @@ from vo_lib.arguments import OneLineParser, count_at_least, non_empty, one_line
 #: Bounds of ``generate --resolution`` (each side, pixels): 32 keeps a few FAST corners in view,
 #: 4096 keeps a rendered frame pair and its buffers within a few hundred MB.
 MIN_SIDE, MAX_SIDE = 32, 4096
-#: Segment lengths of ``evaluate --segments``: a millimetre to a thousand kilometres.
-MIN_SEGMENT_M, MAX_SEGMENT_M = 1e-3, 1e6
-#: Bound of ``sweep --seeds``: a grid of 100,000 tasks takes hours on a cluster; more is a typo.
-MAX_SEEDS = 100_000
-#: Bound of ``--workers``: Dask's own limit is memory; beyond 1,024 local processes is a typo.
-#: (Local workers beyond four per core are refused by the sweep itself, which knows the cores.)
-MAX_WORKERS = 1024
 
 
 def _resolution(text: str) -> tuple[int, int]:
@@ -49,10 +42,9 @@ def _segments(text: str) -> tuple[float, ...]:
         lengths = tuple(float(x) for x in text.split(","))
     except ValueError:
         lengths = ()
-    if not lengths or not all(MIN_SEGMENT_M <= x <= MAX_SEGMENT_M for x in lengths):
+    if not lengths or not all(1e-3 <= x <= 1e6 for x in lengths):  # a millimetre to 1,000 km
         raise argparse.ArgumentTypeError(
-            f"expected comma-separated lengths in metres, each {MIN_SEGMENT_M:g} to {MAX_SEGMENT_M:g}, "
-            f"e.g. 1,2,5; got {text!r}"
+            f"expected comma-separated lengths in metres, each 0.001 to 1e+06, e.g. 1,2,5; got {text!r}"
         )
     return tuple(sorted(set(lengths)))  # each length once, shortest first
 
@@ -237,12 +229,12 @@ def build_parser() -> argparse.ArgumentParser:
         **plain,
     )
     sweep.add_argument("name", choices=sorted(SWEEPS), help="which experiment")
-    sweep.add_argument(
-        "--seeds", type=count_at_least(1, "seeds", MAX_SEEDS), default=20, help="number of seeds (default 20)"
+    sweep.add_argument(  # 100,000 tasks take hours on a cluster; more is a typo
+        "--seeds", type=count_at_least(1, "seeds", 100_000), default=20, help="number of seeds (default 20)"
     )
     sweep.add_argument(
-        "--workers",
-        type=count_at_least(1, "workers", MAX_WORKERS),
+        "--workers",  # beyond 1,024 local processes is a typo (beyond four per core: refused by the sweep)
+        type=count_at_least(1, "workers", 1024),
         help="local worker processes (default: one per core; 1 runs in this process)",
     )
     sweep.add_argument("--scheduler", help="address of a running Dask scheduler, e.g. tcp://host:8786")
@@ -354,7 +346,6 @@ def _run_parsed(args, command: str) -> int:
     from vo_lib.cli.run import UsageError
     from vo_lib.cli.sweep import SweepError
     from vo_lib.formats.poses import TrajectoryError
-    from vo_lib.formats.sequence import SequenceError
     from vo_lib.outputs import OutputError
 
     try:
@@ -364,17 +355,16 @@ def _run_parsed(args, command: str) -> int:
             if (signal_exc := _signal_inside(exc)) is None:
                 raise
             raise signal_exc from None
-    except (UsageError, SweepError, OutputError, SequenceError, TrajectoryError) as exc:
-        print(f"{command}: error: {one_line(exc)}", file=sys.stderr)
-        return 2
     except BrokenPipeError:  # e.g. piped into `head`: the reader left, not a fault of the output
         # Python's advice: point stdout at devnull so the interpreter's own flush at exit is quiet
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         with contextlib.suppress(OSError):  # stderr may be the same closed pipe (2>&1)
             print(f"{command}: stopped: whatever read its output closed the pipe", file=sys.stderr)
         return 128 + signal.SIGPIPE
-    except OSError as exc:  # e.g. a full disk while writing: the output was not put in place
-        print(f"{command}: error: {one_line(_os_error(exc, getattr(args, 'out', None)))}", file=sys.stderr)
+    except (UsageError, SweepError, OutputError, TrajectoryError, OSError) as exc:  # SequenceError too
+        # an OSError: e.g. a full disk while writing; the output was not put in place
+        why = _os_error(exc, getattr(args, "out", None)) if isinstance(exc, OSError) else exc
+        print(f"{command}: error: {one_line(why)}", file=sys.stderr)
         return 2
     return 0
 
