@@ -113,8 +113,7 @@ def _write_csv(path: Path, rows, cls) -> None:
     with path.open("w", newline="") as fh:
         writer = csv.DictWriter(fh, fieldnames=names)
         writer.writeheader()
-        for row in rows:
-            writer.writerow(asdict(row))
+        writer.writerows(map(asdict, rows))
 
 
 def file_sha256(path) -> str:
@@ -131,11 +130,8 @@ def calibration_digest(sequence: Path, truth_file: Path) -> str | None:
     if mav0 is None:
         return None
     digest = hashlib.sha256()
-    for file in (
-        mav0 / "cam0" / "sensor.yaml",
-        mav0 / "cam1" / "sensor.yaml",
-        truth_file.parent / "sensor.yaml",
-    ):
+    for folder in (mav0 / "cam0", mav0 / "cam1", truth_file.parent):
+        file = folder / "sensor.yaml"
         digest.update(file.read_bytes() if file.is_file() else b"-")
     return digest.hexdigest()
 
@@ -247,10 +243,8 @@ def _run_into(
         progress=sys.stderr.isatty(),
         motion=motion,
     )
-    if result.camera_poses is not None:
-        poses = result.camera_poses
-    else:
-        poses = camera_poses_from_planar(result.poses, mount)
+    poses = result.camera_poses
+    poses = camera_poses_from_planar(result.poses, mount) if poses is None else poses
     write_kitti_poses(tmp / "poses.txt", poses)
     origin = float(seq.manifest.get("time_origin_s", 0.0)) if isinstance(seq.manifest, dict) else 0.0
     write_tum(tmp / "trajectory.tum", seq.times[:n] + origin, poses)  # on the recording's clock
