@@ -243,11 +243,8 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 class _Stopped(BaseException):
-    """Raised by the SIGTERM handler, so that ``finally`` blocks remove half-written output."""
-
-    def __init__(self, signum: int):
-        super().__init__(signum)
-        self.signum = signum
+    """Raised by the SIGTERM handler (its one argument the signal), so that ``finally`` blocks
+    remove half-written output."""
 
 
 def _stop(signum, frame):
@@ -256,17 +253,6 @@ def _stop(signum, frame):
 
     INTERRUPTED.append(stop := KeyboardInterrupt() if signum == signal.SIGINT else _Stopped(signum))
     raise stop
-
-
-def _quiet_unraisable(hook):
-    """An unraisable-exception hook that drops our interrupts (reported, not raised, where they
-    land inside a callback from compiled code) and passes anything else on to ``hook``."""
-
-    def unraisable(info):
-        if not isinstance(info.exc_value, (KeyboardInterrupt, _Stopped)):
-            hook(info)
-
-    return unraisable
 
 
 def _signal_inside(exc: BaseException) -> BaseException | None:
@@ -380,7 +366,11 @@ def _signals():
     main_thread = threading.current_thread() is threading.main_thread()
     previous = {s: signal.signal(s, _stop) for s in (signal.SIGTERM, signal.SIGINT)} if main_thread else {}
     INTERRUPTED.clear()
-    previous_hook, sys.unraisablehook = sys.unraisablehook, _quiet_unraisable(sys.unraisablehook)
+    # our interrupts, where a callback from compiled code reports them instead of raising: dropped
+    previous_hook = sys.unraisablehook
+    sys.unraisablehook = lambda info: (
+        isinstance(info.exc_value, (KeyboardInterrupt, _Stopped)) or previous_hook(info)
+    )
     defaults = {signal.SIGTERM: signal.SIG_DFL, signal.SIGINT: signal.default_int_handler}
     try:
         yield
@@ -400,7 +390,7 @@ def main(argv: list[str] | None = None) -> int:
             command = f"{parser.prog} {args.command}"
             return _run_parsed(args, command)
         except (KeyboardInterrupt, _Stopped) as stop:
-            signum = getattr(stop, "signum", signal.SIGINT)
+            signum = stop.args[0] if isinstance(stop, _Stopped) else signal.SIGINT
             how = (
                 "interrupted (Ctrl-C)"
                 if signum == signal.SIGINT
