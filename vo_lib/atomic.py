@@ -132,11 +132,10 @@ def clear_abandoned(parent: Path, name: str) -> list[Path]:
     abandoned = [entry for entry, _ in _abandoned_beside(parent, name)]
     for entry in abandoned:
         _remove(entry)
-    deleted = [Path(entry.path) for entry in abandoned]
-    if deleted:
-        names = ", ".join(p.name for p in deleted)
-        notice(f"removed {len(deleted)} temporary folder(s) left by interrupted runs: {names}")
-    return deleted
+    if abandoned:
+        names = ", ".join(entry.name for entry in abandoned)
+        notice(f"removed {len(abandoned)} temporary folder(s) left by interrupted runs: {names}")
+    return [Path(entry.path) for entry in abandoned]
 
 
 def _exchange(a: Path, b: Path) -> bool:
