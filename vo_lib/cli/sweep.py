@@ -105,10 +105,10 @@ def dask_client(workers: int, scheduler: str | None):
     if scheduler is not None:
         try:
             client = Client(scheduler.strip(), timeout=10)
-        except (ValueError, TypeError, OSError, TimeoutError) as exc:
-            raise SweepError(f"--scheduler {scheduler}: cannot reach a scheduler ({one_line(exc)})") from None
-        except AssertionError:  # distributed's own event loop did not start within its 10 s
-            raise SweepError(f"--scheduler {scheduler}: cannot reach a scheduler (no event loop)") from None
+        except (ValueError, TypeError, OSError, AssertionError) as exc:  # OSError: TimeoutError too
+            # an AssertionError: distributed's own event loop did not start within its 10 s
+            why = "no event loop" if isinstance(exc, AssertionError) else one_line(exc)
+            raise SweepError(f"--scheduler {scheduler}: cannot reach a scheduler ({why})") from None
         with client:
             yield client
         return
