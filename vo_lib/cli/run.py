@@ -236,12 +236,7 @@ def _run_into(
         progress_line(f"compiled in {seconds:.0f} s, before the timed run (not in timings.csv)")
     progress_line(f"visual odometry on {n} frames ...")
     result = run_sequence(
-        seq,
-        frames=n,
-        use_odometry=not no_odometry,
-        seed=seed,
-        progress=sys.stderr.isatty(),
-        motion=motion,
+        seq, frames=n, use_odometry=not no_odometry, seed=seed, progress=sys.stderr.isatty(), motion=motion
     )
     poses = result.camera_poses
     poses = camera_poses_from_planar(result.poses, mount) if poses is None else poses
