@@ -305,15 +305,6 @@ def _generate(args) -> None:
     print(f"wrote {path}")
 
 
-#: The module of each command that calls one function, ``COMMAND_command``, its options as keywords.
-COMMANDS = {
-    "run": "vo_lib.cli.run",
-    "convert": "vo_lib.cli.run",
-    "evaluate": "vo_lib.cli.evaluate",
-    "sweep": "vo_lib.cli.sweep",
-}
-
-
 def _dispatch(args) -> None:
     """Run the parsed command (its module is imported only now, so that parsing stays fast)."""
     if args.command == "generate":
@@ -322,8 +313,10 @@ def _dispatch(args) -> None:
         from vo_lib.bench import BENCHES
 
         return BENCHES[args.name]()
+    # the others call COMMAND_command of vo_lib.cli.COMMAND (convert's is run's), their options as keywords
+    module = importlib.import_module(f"vo_lib.cli.{'run' if args.command == 'convert' else args.command}")
     kwargs = {k: v for k, v in vars(args).items() if k != "command"}
-    return getattr(importlib.import_module(COMMANDS[args.command]), f"{args.command}_command")(**kwargs)
+    return getattr(module, f"{args.command}_command")(**kwargs)
 
 
 def _run_parsed(args, command: str) -> int:
