@@ -149,9 +149,7 @@ def _truth_record(seq) -> dict | None:
     }
 
 
-def _plot(
-    path: Path, times, estimate, truth, odometry, title: str, odometry_label: str = "track odometry"
-) -> None:
+def _plot(path: Path, times, estimate, truth, odometry, title: str, odometry_label: str) -> None:
     import matplotlib
 
     matplotlib.use("Agg")
