@@ -67,8 +67,7 @@ def _associated(
             print(
                 f"--est {est} is a run of the first {len(E)} frames of --gt's sequence: compared with those"
             )
-            return np.arange(len(E)), np.arange(len(E))
-        if len(truth.positions) != len(E):
+        elif len(truth.positions) != len(E):
             raise UsageError(
                 f"--gt {gt} has {len(truth.positions)} poses but --est {est} has {len(E)}; "
                 "expected equal counts (or timestamps in both)"
