@@ -383,12 +383,8 @@ def main(argv: list[str] | None = None) -> int:
             command = f"{parser.prog} {args.command}"
             return _run_parsed(args, command)
         except (KeyboardInterrupt, _Stopped) as stop:
-            signum = stop.args[0] if isinstance(stop, _Stopped) else signal.SIGINT
-            how = (
-                "interrupted (Ctrl-C)"
-                if signum == signal.SIGINT
-                else f"stopped by {signal.Signals(signum).name}"
-            )
+            signum = signal.Signals(stop.args[0]) if isinstance(stop, _Stopped) else signal.SIGINT
+            how = "interrupted (Ctrl-C)" if signum == signal.SIGINT else f"stopped by {signum.name}"
             print(f"{command}: {how}; nothing half-written is left", file=sys.stderr)
             return 128 + signum
 
