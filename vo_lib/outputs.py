@@ -252,7 +252,7 @@ def reading(folder):
         yield
 
 
-class OutputFolder:
+class OutputFolder(contextlib.AbstractContextManager):  # its __enter__ returns it
     """A folder written whole: checked on entry, filled in :attr:`path` (a temporary sibling), put
     in place by :meth:`commit`; on any exception (or without a commit) nothing is left behind.
     With ``checksums`` the marker records every file's sha256, and the folder is replaced later
@@ -313,9 +313,6 @@ class OutputFolder:
             with contextlib.suppress(OSError):
                 folder.rmdir()
         self._created = []
-
-    def __enter__(self) -> OutputFolder:
-        return self
 
     def __exit__(self, exc_type, exc, tb) -> bool:
         self.discard()
