@@ -13,7 +13,7 @@ import numpy as np
 from vo_lib.cli.run import UsageError, calibration_digest, file_sha256
 from vo_lib.formats.groundtruth import read_trajectory
 from vo_lib.formats.poses import TrajectoryError
-from vo_lib.outputs import read_marker
+from vo_lib.outputs import MARKER, read_marker
 
 
 def run_marker(est: str) -> dict:
@@ -92,7 +92,6 @@ def recording_of(gt: str, extrinsic_of: str | None, kitti: bool) -> str | None:
     truth is taken as given. KITTI poses, and files in a folder this package wrote (``run``'s
     ``trajectory.tum``, ``convert``'s ``poses.txt``), are a camera's already and never moved."""
     from vo_lib.formats.euroc import mav0_of
-    from vo_lib.outputs import MARKER
 
     if extrinsic_of is not None or kitti:
         return extrinsic_of
