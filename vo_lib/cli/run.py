@@ -23,7 +23,7 @@ from pathlib import Path
 from vo_lib.formats.poses import write_kitti_poses, write_tum
 from vo_lib.geometry import camera_poses_from_planar
 from vo_lib.outputs import OutputFolder, notice, reading
-from vo_lib.sim.samples import SAMPLES
+from vo_lib.sim.samples import SAMPLES, get_sample
 from vo_lib.stereo_vo.run_report import (
     error_report,
     errors_3d,
@@ -47,7 +47,6 @@ def input_path(name_or_path: str, frames: int | None) -> tuple[Path, int | None]
     """The folder a run reads (a sample's cache folder, or the given folder) and the frame count
     to ask for (``--frames`` beyond a sample's length asks for the whole sample, with a notice)."""
     from vo_lib.data import sample_path
-    from vo_lib.sim.samples import get_sample
 
     if is_sample(name_or_path):
         full = get_sample(name_or_path).frames
@@ -91,7 +90,6 @@ def progress_line(text: str) -> None:
 def announce_run(name: str, source: Path, frames: int | None, out_dir: Path) -> None:
     """The first line of a run: what it reads, what comes first, where it writes."""
     from vo_lib.data import is_rendered
-    from vo_lib.sim.samples import get_sample
 
     if not is_sample(name):
         progress_line(f"run: {source} -> {out_dir}/")
