@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 
 from vo_lib.cli.run import UsageError, calibration_digest, file_sha256
-from vo_lib.formats.groundtruth import read_trajectory
+from vo_lib.formats.groundtruth import GroundTruthError, associate, read_groundtruth, read_trajectory
 from vo_lib.formats.poses import TrajectoryError
 from vo_lib.outputs import MARKER, read_marker
 
@@ -56,8 +56,6 @@ def _associated(
 ) -> tuple[np.ndarray, np.ndarray]:
     """Indices ``(i_est, i_gt)`` of the poses compared: associated by timestamp where both files
     carry them (as evo does), else one to one, the counts equal."""
-    from vo_lib.formats.groundtruth import associate
-
     if truth.times is not None and times is None:  # a run's trajectory.tum beside it has the times
         print(f"--est {est} has no timestamps: its poses are paired with --gt's one to one, in order")
     if truth.times is None or times is None:
@@ -118,7 +116,6 @@ def evaluate_command(gt: str, est: str, segments=None, extrinsic_of: str | None 
     """
     from vo_lib.evaluation import Alignment, ate_positions, kitti_segment_errors, shown, standard_errors
     from vo_lib.formats.euroc import body_to_rectified_camera, tracked_to_camera
-    from vo_lib.formats.groundtruth import GroundTruthError, read_groundtruth
 
     lengths = None if segments is None else tuple(segments)
     try:
