@@ -13,6 +13,7 @@ from __future__ import annotations
 import argparse
 import contextlib
 import errno
+import functools
 import importlib
 import os
 import signal
@@ -71,7 +72,8 @@ def build_parser() -> argparse.ArgumentParser:
     def wrap(text: str) -> str:
         return textwrap.fill(text, 88)
 
-    plain = {"formatter_class": argparse.RawDescriptionHelpFormatter}
+    # every parser's description wrapped by wrap(), its examples kept as written
+    plain = functools.partial(OneLineParser, formatter_class=argparse.RawDescriptionHelpFormatter)
 
     def output(p, what: str, **kwargs) -> None:
         p.add_argument("--out", type=non_empty("a folder"), help=f"output folder ({what})", **kwargs)
@@ -79,7 +81,7 @@ def build_parser() -> argparse.ArgumentParser:
             "--force", action="store_true", help="replace --out even if this program did not write it"
         )
 
-    parser = OneLineParser(
+    parser = plain(
         prog=prog,
         description=wrap(
             "Stereo visual odometry for a crawler robot [Zhao], line-feature EKF-SLAM [Yan 2020] "
@@ -96,9 +98,8 @@ def build_parser() -> argparse.ArgumentParser:
             "sweep corridor --seeds 200 --workers 2",
         )
         + "\n\nBad input prints one line and exits with status 2; Ctrl-C exits with 130.",
-        **plain,
     )
-    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND", parser_class=plain)
     from vo_lib.sim.samples import SAMPLES
 
     run = sub.add_parser(
@@ -111,7 +112,6 @@ def build_parser() -> argparse.ArgumentParser:
             "poses.txt (KITTI), trajectory.tum (TUM), timings.csv, diagnostics.csv and trajectory.png."
         ),
         epilog=example("run --sequence outdoor_free --out runs/yard"),
-        **plain,
     )
     run.add_argument(
         "--sequence",
@@ -144,7 +144,6 @@ def build_parser() -> argparse.ArgumentParser:
         epilog=example(
             "evaluate --gt data/indoor_linear/poses.txt --est runs/indoor_linear/poses.txt --segments 1,2"
         ),
-        **plain,
     )
     ev.add_argument(
         "--gt", required=True, help="ground truth: KITTI poses, TUM, EuRoC CSV, or positions (t x y z)"
@@ -170,7 +169,6 @@ def build_parser() -> argparse.ArgumentParser:
             "and write it in the KITTI odometry layout, with its ground truth in the rectified left camera."
         ),
         epilog=example("convert /data/MH_01_easy --to kitti --out /tmp/mh01"),
-        **plain,
     )
     conv.add_argument("sequence", help="the recording (ASL layout) or any sequence folder")
     conv.add_argument("--to", choices=("kitti",), default="kitti", help="layout to write (kitti)")
@@ -183,7 +181,6 @@ def build_parser() -> argparse.ArgumentParser:
             "folder in the KITTI odometry layout. Samples: " + ", ".join(sorted(SAMPLES)) + "."
         ),
         epilog=example("generate indoor_free --out /tmp/indoor_free --resolution 320x240"),
-        **plain,
     )
     gen.add_argument("name", choices=sorted(SAMPLES), help="which sample")
     output(gen, "default: data/NAME")
@@ -212,7 +209,6 @@ def build_parser() -> argparse.ArgumentParser:
             f"  {name:<{width}}  {what} ({how_long})" for name, (what, how_long) in BENCH_HELP.items()
         ),
         epilog=example("bench geometry"),
-        **plain,
     )
     bench.add_argument("name", choices=sorted(BENCHES), metavar="NAME", help="which benchmark (listed above)")
     from vo_lib.cli.sweep import SWEEPS
@@ -226,7 +222,6 @@ def build_parser() -> argparse.ArgumentParser:
             "mean, spread and 95 % interval over the seeds."
         ),
         epilog=example("sweep lap --seeds 50 --workers 2"),
-        **plain,
     )
     sweep.add_argument("name", choices=sorted(SWEEPS), help="which experiment")
     sweep.add_argument(  # 100,000 tasks take hours on a cluster; more is a typo
