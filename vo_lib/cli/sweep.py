@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import contextlib
 import importlib
+import os
 import signal
 import sys
 from pathlib import Path
@@ -152,8 +153,6 @@ def summary(table, arguments: list[str]):
 
 def sweep_command(name: str, seeds: int, workers=None, scheduler=None, out=None, force=False) -> None:
     """Run sweep ``name`` over ``seeds`` seeds, write its table and print its summary."""
-    import os
-
     import pandas as pd
 
     cores = len(os.sched_getaffinity(0))
