@@ -41,11 +41,6 @@ def notice(message: str) -> None:
 HOST = hashlib.sha1(socket.gethostname().encode()).hexdigest()[:8]
 
 
-def temporary_prefix(name: str) -> str:
-    """The start of the name of this process's temporaries beside ``name``."""
-    return f".{name}.vo_lib-{os.getpid()}-{HOST}-"
-
-
 def real_path(path) -> Path:
     """``path`` with its links resolved (a loop of links ends where it loops, without an error)."""
     return Path(os.path.realpath(path))
@@ -61,7 +56,9 @@ def inode(path) -> tuple[int, int] | None:
 
 def temporary(name_beside: Path) -> Path:
     """A new temporary's name beside ``name_beside``."""
-    return name_beside.with_name(f"{temporary_prefix(name_beside.name)}{secrets.token_hex(4)}.tmp")
+    return name_beside.with_name(
+        f".{name_beside.name}.vo_lib-{os.getpid()}-{HOST}-{secrets.token_hex(4)}.tmp"
+    )
 
 
 def write_atomic(path, text: str) -> Path:
@@ -135,11 +132,10 @@ def clear_abandoned(parent: Path, name: str) -> list[Path]:
     abandoned = [entry for entry, _ in _abandoned_beside(parent, name)]
     for entry in abandoned:
         _remove(entry)
-    deleted = [Path(entry.path) for entry in abandoned]
-    if deleted:
-        names = ", ".join(p.name for p in deleted)
-        notice(f"removed {len(deleted)} temporary folder(s) left by interrupted runs: {names}")
-    return deleted
+    if abandoned:
+        names = ", ".join(entry.name for entry in abandoned)
+        notice(f"removed {len(abandoned)} temporary folder(s) left by interrupted runs: {names}")
+    return [Path(entry.path) for entry in abandoned]
 
 
 def _exchange(a: Path, b: Path) -> bool:

@@ -53,11 +53,7 @@ def is_rendered(name: str, path) -> bool:
 
 
 def load_sequence(
-    name_or_path,
-    frames: int | None = None,
-    resolution=None,
-    progress: bool = True,
-    odometry: bool = True,
+    name_or_path, frames: int | None = None, resolution=None, progress: bool = True, odometry: bool = True
 ) -> Sequence:
     """A named sample (rendered on first use, ``progress`` as :func:`vo_lib.sim.samples.generate`
     shows it) or a folder. ``frames``: a sample of that many frames, or an ASL recording's first

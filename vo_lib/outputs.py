@@ -147,22 +147,19 @@ def linked_from(folder) -> tuple[list[Path], str | None]:
     return found, hidden or (None if budget > 0 else f"it holds or links to over {MAX_WALKED:,} entries")
 
 
-def _guarded(inputs, links, keep: dict | None) -> list[tuple[Path, str, bool]]:
-    """(folder, what it is, whether a target inside it is refused too)."""
-    guarded = [(real_path(p), "the input sequence", True) for p in inputs]
+def _check_guarded(real: Path, label: str, inputs, keep) -> str | None:
+    """Refuse an output folder that is, holds or (for an input, what it links to or this package)
+    lies inside a folder never replaced; returns why not every link under the inputs could be
+    followed, if so."""
+    links = [linked_from(p) for p in inputs]
+    guarded = [(real_path(p), "the input sequence", True) for p in inputs]  # (folder, what, inside too)
     guarded += [(t, "what the input sequence links to", True) for found, _ in links for t in found]
     guarded += [(PACKAGE, "this package", True), (REPOSITORY_DATA.resolve(), "the sample data folder", False)]
     for where, what in ((Path.cwd, "the current folder"), (Path.home, "your home folder")):
         with contextlib.suppress(OSError, RuntimeError):  # no current folder (deleted) or no home
             guarded.append((where().resolve(), what, False))
-    return guarded + [(real_path(p), what, False) for p, what in (keep or {}).items()]
-
-
-def _check_guarded(real: Path, label: str, inputs, keep) -> str | None:
-    """Refuse an output folder that is, holds or (for an input) lies inside a folder never replaced;
-    returns why not every link under the inputs could be followed, if so."""
-    links = [linked_from(p) for p in inputs]
-    for folder, what, inside in _guarded(inputs, links, keep):
+    guarded += [(real_path(p), what, False) for p, what in (keep or {}).items()]
+    for folder, what, inside in guarded:
         if _contains(real, folder) or (inside and _contains(folder, real)):
             where = "is" if real == folder else "holds" if _contains(real, folder) else "lies inside"
             raise OutputError(f"{label}: {where} {what}; choose another output folder")
@@ -255,7 +252,7 @@ def reading(folder):
         yield
 
 
-class OutputFolder:
+class OutputFolder(contextlib.AbstractContextManager):  # its __enter__ returns it
     """A folder written whole: checked on entry, filled in :attr:`path` (a temporary sibling), put
     in place by :meth:`commit`; on any exception (or without a commit) nothing is left behind.
     With ``checksums`` the marker records every file's sha256, and the folder is replaced later
@@ -316,9 +313,6 @@ class OutputFolder:
             with contextlib.suppress(OSError):
                 folder.rmdir()
         self._created = []
-
-    def __enter__(self) -> OutputFolder:
-        return self
 
     def __exit__(self, exc_type, exc, tb) -> bool:
         self.discard()

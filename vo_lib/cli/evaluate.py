@@ -11,9 +11,9 @@ from pathlib import Path
 import numpy as np
 
 from vo_lib.cli.run import UsageError, calibration_digest, file_sha256
-from vo_lib.formats.groundtruth import read_trajectory
+from vo_lib.formats.groundtruth import GroundTruthError, associate, read_groundtruth, read_trajectory
 from vo_lib.formats.poses import TrajectoryError
-from vo_lib.outputs import read_marker
+from vo_lib.outputs import MARKER, read_marker
 
 
 def run_marker(est: str) -> dict:
@@ -22,13 +22,6 @@ def run_marker(est: str) -> dict:
     marker = read_marker(Path(est).parent) or {}
     files = marker.get("files") if marker.get("written_by") == "vo_lib run" else None
     return marker if isinstance(files, dict) and files.get(Path(est).name) == file_sha256(est) else {}
-
-
-def first_frames_of(gt: str, marker: dict, n: int) -> bool:
-    """Whether the run of ``marker`` (:func:`run_marker`) is a ``run --frames n`` on the sequence
-    whose ``poses.txt`` is ``gt``."""
-    sequence = Path(str(marker.get("sequence")))
-    return marker.get("frames") == n and Path(gt).resolve() == sequence / "poses.txt"
 
 
 def check_against_its_run(gt: str, est: str, marker: dict) -> None:
@@ -63,17 +56,16 @@ def _associated(
 ) -> tuple[np.ndarray, np.ndarray]:
     """Indices ``(i_est, i_gt)`` of the poses compared: associated by timestamp where both files
     carry them (as evo does), else one to one, the counts equal."""
-    from vo_lib.formats.groundtruth import associate
-
     if truth.times is not None and times is None:  # a run's trajectory.tum beside it has the times
         print(f"--est {est} has no timestamps: its poses are paired with --gt's one to one, in order")
     if truth.times is None or times is None:
-        if len(truth.positions) > len(E) and first_frames_of(gt, marker, len(E)):
+        sequence = Path(str(marker.get("sequence")))  # of the run that wrote --est: its first frames?
+        first = marker.get("frames") == len(E) and Path(gt).resolve() == sequence / "poses.txt"
+        if len(truth.positions) > len(E) and first:
             print(
                 f"--est {est} is a run of the first {len(E)} frames of --gt's sequence: compared with those"
             )
-            return np.arange(len(E)), np.arange(len(E))
-        if len(truth.positions) != len(E):
+        elif len(truth.positions) != len(E):
             raise UsageError(
                 f"--gt {gt} has {len(truth.positions)} poses but --est {est} has {len(E)}; "
                 "expected equal counts (or timestamps in both)"
@@ -98,7 +90,6 @@ def recording_of(gt: str, extrinsic_of: str | None, kitti: bool) -> str | None:
     truth is taken as given. KITTI poses, and files in a folder this package wrote (``run``'s
     ``trajectory.tum``, ``convert``'s ``poses.txt``), are a camera's already and never moved."""
     from vo_lib.formats.euroc import mav0_of
-    from vo_lib.outputs import MARKER
 
     if extrinsic_of is not None or kitti:
         return extrinsic_of
@@ -125,7 +116,6 @@ def evaluate_command(gt: str, est: str, segments=None, extrinsic_of: str | None 
     """
     from vo_lib.evaluation import Alignment, ate_positions, kitti_segment_errors, shown, standard_errors
     from vo_lib.formats.euroc import body_to_rectified_camera, tracked_to_camera
-    from vo_lib.formats.groundtruth import GroundTruthError, read_groundtruth
 
     lengths = None if segments is None else tuple(segments)
     try:

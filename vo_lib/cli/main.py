@@ -13,6 +13,7 @@ from __future__ import annotations
 import argparse
 import contextlib
 import errno
+import functools
 import importlib
 import os
 import signal
@@ -25,13 +26,6 @@ from vo_lib.arguments import OneLineParser, count_at_least, non_empty, one_line
 #: Bounds of ``generate --resolution`` (each side, pixels): 32 keeps a few FAST corners in view,
 #: 4096 keeps a rendered frame pair and its buffers within a few hundred MB.
 MIN_SIDE, MAX_SIDE = 32, 4096
-#: Segment lengths of ``evaluate --segments``: a millimetre to a thousand kilometres.
-MIN_SEGMENT_M, MAX_SEGMENT_M = 1e-3, 1e6
-#: Bound of ``sweep --seeds``: a grid of 100,000 tasks takes hours on a cluster; more is a typo.
-MAX_SEEDS = 100_000
-#: Bound of ``--workers``: Dask's own limit is memory; beyond 1,024 local processes is a typo.
-#: (Local workers beyond four per core are refused by the sweep itself, which knows the cores.)
-MAX_WORKERS = 1024
 
 
 def _resolution(text: str) -> tuple[int, int]:
@@ -49,10 +43,9 @@ def _segments(text: str) -> tuple[float, ...]:
         lengths = tuple(float(x) for x in text.split(","))
     except ValueError:
         lengths = ()
-    if not lengths or not all(MIN_SEGMENT_M <= x <= MAX_SEGMENT_M for x in lengths):
+    if not lengths or not all(1e-3 <= x <= 1e6 for x in lengths):  # a millimetre to 1,000 km
         raise argparse.ArgumentTypeError(
-            f"expected comma-separated lengths in metres, each {MIN_SEGMENT_M:g} to {MAX_SEGMENT_M:g}, "
-            f"e.g. 1,2,5; got {text!r}"
+            f"expected comma-separated lengths in metres, each 0.001 to 1e+06, e.g. 1,2,5; got {text!r}"
         )
     return tuple(sorted(set(lengths)))  # each length once, shortest first
 
@@ -79,7 +72,8 @@ def build_parser() -> argparse.ArgumentParser:
     def wrap(text: str) -> str:
         return textwrap.fill(text, 88)
 
-    plain = {"formatter_class": argparse.RawDescriptionHelpFormatter}
+    # every parser's description wrapped by wrap(), its examples kept as written
+    plain = functools.partial(OneLineParser, formatter_class=argparse.RawDescriptionHelpFormatter)
 
     def output(p, what: str, **kwargs) -> None:
         p.add_argument("--out", type=non_empty("a folder"), help=f"output folder ({what})", **kwargs)
@@ -87,7 +81,7 @@ def build_parser() -> argparse.ArgumentParser:
             "--force", action="store_true", help="replace --out even if this program did not write it"
         )
 
-    parser = OneLineParser(
+    parser = plain(
         prog=prog,
         description=wrap(
             "Stereo visual odometry for a crawler robot [Zhao], line-feature EKF-SLAM [Yan 2020] "
@@ -104,9 +98,8 @@ def build_parser() -> argparse.ArgumentParser:
             "sweep corridor --seeds 200 --workers 2",
         )
         + "\n\nBad input prints one line and exits with status 2; Ctrl-C exits with 130.",
-        **plain,
     )
-    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND", parser_class=plain)
     from vo_lib.sim.samples import SAMPLES
 
     run = sub.add_parser(
@@ -119,7 +112,6 @@ def build_parser() -> argparse.ArgumentParser:
             "poses.txt (KITTI), trajectory.tum (TUM), timings.csv, diagnostics.csv and trajectory.png."
         ),
         epilog=example("run --sequence outdoor_free --out runs/yard"),
-        **plain,
     )
     run.add_argument(
         "--sequence",
@@ -152,7 +144,6 @@ def build_parser() -> argparse.ArgumentParser:
         epilog=example(
             "evaluate --gt data/indoor_linear/poses.txt --est runs/indoor_linear/poses.txt --segments 1,2"
         ),
-        **plain,
     )
     ev.add_argument(
         "--gt", required=True, help="ground truth: KITTI poses, TUM, EuRoC CSV, or positions (t x y z)"
@@ -178,7 +169,6 @@ def build_parser() -> argparse.ArgumentParser:
             "and write it in the KITTI odometry layout, with its ground truth in the rectified left camera."
         ),
         epilog=example("convert /data/MH_01_easy --to kitti --out /tmp/mh01"),
-        **plain,
     )
     conv.add_argument("sequence", help="the recording (ASL layout) or any sequence folder")
     conv.add_argument("--to", choices=("kitti",), default="kitti", help="layout to write (kitti)")
@@ -191,7 +181,6 @@ def build_parser() -> argparse.ArgumentParser:
             "folder in the KITTI odometry layout. Samples: " + ", ".join(sorted(SAMPLES)) + "."
         ),
         epilog=example("generate indoor_free --out /tmp/indoor_free --resolution 320x240"),
-        **plain,
     )
     gen.add_argument("name", choices=sorted(SAMPLES), help="which sample")
     output(gen, "default: data/NAME")
@@ -220,7 +209,6 @@ def build_parser() -> argparse.ArgumentParser:
             f"  {name:<{width}}  {what} ({how_long})" for name, (what, how_long) in BENCH_HELP.items()
         ),
         epilog=example("bench geometry"),
-        **plain,
     )
     bench.add_argument("name", choices=sorted(BENCHES), metavar="NAME", help="which benchmark (listed above)")
     from vo_lib.cli.sweep import SWEEPS
@@ -234,15 +222,14 @@ def build_parser() -> argparse.ArgumentParser:
             "mean, spread and 95 % interval over the seeds."
         ),
         epilog=example("sweep lap --seeds 50 --workers 2"),
-        **plain,
     )
     sweep.add_argument("name", choices=sorted(SWEEPS), help="which experiment")
-    sweep.add_argument(
-        "--seeds", type=count_at_least(1, "seeds", MAX_SEEDS), default=20, help="number of seeds (default 20)"
+    sweep.add_argument(  # 100,000 tasks take hours on a cluster; more is a typo
+        "--seeds", type=count_at_least(1, "seeds", 100_000), default=20, help="number of seeds (default 20)"
     )
     sweep.add_argument(
-        "--workers",
-        type=count_at_least(1, "workers", MAX_WORKERS),
+        "--workers",  # beyond 1,024 local processes is a typo (beyond four per core: refused by the sweep)
+        type=count_at_least(1, "workers", 1024),
         help="local worker processes (default: one per core; 1 runs in this process)",
     )
     sweep.add_argument("--scheduler", help="address of a running Dask scheduler, e.g. tcp://host:8786")
@@ -251,11 +238,8 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 class _Stopped(BaseException):
-    """Raised by the SIGTERM handler, so that ``finally`` blocks remove half-written output."""
-
-    def __init__(self, signum: int):
-        super().__init__(signum)
-        self.signum = signum
+    """Raised by the SIGTERM handler (its one argument the signal), so that ``finally`` blocks
+    remove half-written output."""
 
 
 def _stop(signum, frame):
@@ -264,17 +248,6 @@ def _stop(signum, frame):
 
     INTERRUPTED.append(stop := KeyboardInterrupt() if signum == signal.SIGINT else _Stopped(signum))
     raise stop
-
-
-def _quiet_unraisable(hook):
-    """An unraisable-exception hook that drops our interrupts (reported, not raised, where they
-    land inside a callback from compiled code) and passes anything else on to ``hook``."""
-
-    def unraisable(info):
-        if not isinstance(info.exc_value, (KeyboardInterrupt, _Stopped)):
-            hook(info)
-
-    return unraisable
 
 
 def _signal_inside(exc: BaseException) -> BaseException | None:
@@ -327,15 +300,6 @@ def _generate(args) -> None:
     print(f"wrote {path}")
 
 
-#: The module of each command that calls one function, ``COMMAND_command``, its options as keywords.
-COMMANDS = {
-    "run": "vo_lib.cli.run",
-    "convert": "vo_lib.cli.run",
-    "evaluate": "vo_lib.cli.evaluate",
-    "sweep": "vo_lib.cli.sweep",
-}
-
-
 def _dispatch(args) -> None:
     """Run the parsed command (its module is imported only now, so that parsing stays fast)."""
     if args.command == "generate":
@@ -344,8 +308,10 @@ def _dispatch(args) -> None:
         from vo_lib.bench import BENCHES
 
         return BENCHES[args.name]()
+    # the others call COMMAND_command of vo_lib.cli.COMMAND (convert's is run's), their options as keywords
+    module = importlib.import_module(f"vo_lib.cli.{'run' if args.command == 'convert' else args.command}")
     kwargs = {k: v for k, v in vars(args).items() if k != "command"}
-    return getattr(importlib.import_module(COMMANDS[args.command]), f"{args.command}_command")(**kwargs)
+    return getattr(module, f"{args.command}_command")(**kwargs)
 
 
 def _run_parsed(args, command: str) -> int:
@@ -354,7 +320,6 @@ def _run_parsed(args, command: str) -> int:
     from vo_lib.cli.run import UsageError
     from vo_lib.cli.sweep import SweepError
     from vo_lib.formats.poses import TrajectoryError
-    from vo_lib.formats.sequence import SequenceError
     from vo_lib.outputs import OutputError
 
     try:
@@ -364,17 +329,16 @@ def _run_parsed(args, command: str) -> int:
             if (signal_exc := _signal_inside(exc)) is None:
                 raise
             raise signal_exc from None
-    except (UsageError, SweepError, OutputError, SequenceError, TrajectoryError) as exc:
-        print(f"{command}: error: {one_line(exc)}", file=sys.stderr)
-        return 2
     except BrokenPipeError:  # e.g. piped into `head`: the reader left, not a fault of the output
         # Python's advice: point stdout at devnull so the interpreter's own flush at exit is quiet
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         with contextlib.suppress(OSError):  # stderr may be the same closed pipe (2>&1)
             print(f"{command}: stopped: whatever read its output closed the pipe", file=sys.stderr)
         return 128 + signal.SIGPIPE
-    except OSError as exc:  # e.g. a full disk while writing: the output was not put in place
-        print(f"{command}: error: {one_line(_os_error(exc, getattr(args, 'out', None)))}", file=sys.stderr)
+    except (UsageError, SweepError, OutputError, TrajectoryError, OSError) as exc:  # SequenceError too
+        # an OSError: e.g. a full disk while writing; the output was not put in place
+        why = _os_error(exc, getattr(args, "out", None)) if isinstance(exc, OSError) else exc
+        print(f"{command}: error: {one_line(why)}", file=sys.stderr)
         return 2
     return 0
 
@@ -390,7 +354,11 @@ def _signals():
     main_thread = threading.current_thread() is threading.main_thread()
     previous = {s: signal.signal(s, _stop) for s in (signal.SIGTERM, signal.SIGINT)} if main_thread else {}
     INTERRUPTED.clear()
-    previous_hook, sys.unraisablehook = sys.unraisablehook, _quiet_unraisable(sys.unraisablehook)
+    # our interrupts, where a callback from compiled code reports them instead of raising: dropped
+    previous_hook = sys.unraisablehook
+    sys.unraisablehook = lambda info: (
+        isinstance(info.exc_value, (KeyboardInterrupt, _Stopped)) or previous_hook(info)
+    )
     defaults = {signal.SIGTERM: signal.SIG_DFL, signal.SIGINT: signal.default_int_handler}
     try:
         yield
@@ -410,12 +378,8 @@ def main(argv: list[str] | None = None) -> int:
             command = f"{parser.prog} {args.command}"
             return _run_parsed(args, command)
         except (KeyboardInterrupt, _Stopped) as stop:
-            signum = getattr(stop, "signum", signal.SIGINT)
-            how = (
-                "interrupted (Ctrl-C)"
-                if signum == signal.SIGINT
-                else f"stopped by {signal.Signals(signum).name}"
-            )
+            signum = signal.Signals(stop.args[0]) if isinstance(stop, _Stopped) else signal.SIGINT
+            how = "interrupted (Ctrl-C)" if signum == signal.SIGINT else f"stopped by {signum.name}"
             print(f"{command}: {how}; nothing half-written is left", file=sys.stderr)
             return 128 + signum
 

@@ -23,7 +23,7 @@ from pathlib import Path
 from vo_lib.formats.poses import write_kitti_poses, write_tum
 from vo_lib.geometry import camera_poses_from_planar
 from vo_lib.outputs import OutputFolder, notice, reading
-from vo_lib.sim.samples import SAMPLES
+from vo_lib.sim.samples import SAMPLES, get_sample
 from vo_lib.stereo_vo.run_report import (
     error_report,
     errors_3d,
@@ -47,7 +47,6 @@ def input_path(name_or_path: str, frames: int | None) -> tuple[Path, int | None]
     """The folder a run reads (a sample's cache folder, or the given folder) and the frame count
     to ask for (``--frames`` beyond a sample's length asks for the whole sample, with a notice)."""
     from vo_lib.data import sample_path
-    from vo_lib.sim.samples import get_sample
 
     if is_sample(name_or_path):
         full = get_sample(name_or_path).frames
@@ -91,7 +90,6 @@ def progress_line(text: str) -> None:
 def announce_run(name: str, source: Path, frames: int | None, out_dir: Path) -> None:
     """The first line of a run: what it reads, what comes first, where it writes."""
     from vo_lib.data import is_rendered
-    from vo_lib.sim.samples import get_sample
 
     if not is_sample(name):
         progress_line(f"run: {source} -> {out_dir}/")
@@ -113,8 +111,7 @@ def _write_csv(path: Path, rows, cls) -> None:
     with path.open("w", newline="") as fh:
         writer = csv.DictWriter(fh, fieldnames=names)
         writer.writeheader()
-        for row in rows:
-            writer.writerow(asdict(row))
+        writer.writerows(map(asdict, rows))
 
 
 def file_sha256(path) -> str:
@@ -131,11 +128,8 @@ def calibration_digest(sequence: Path, truth_file: Path) -> str | None:
     if mav0 is None:
         return None
     digest = hashlib.sha256()
-    for file in (
-        mav0 / "cam0" / "sensor.yaml",
-        mav0 / "cam1" / "sensor.yaml",
-        truth_file.parent / "sensor.yaml",
-    ):
+    for folder in (mav0 / "cam0", mav0 / "cam1", truth_file.parent):
+        file = folder / "sensor.yaml"
         digest.update(file.read_bytes() if file.is_file() else b"-")
     return digest.hexdigest()
 
@@ -153,9 +147,7 @@ def _truth_record(seq) -> dict | None:
     }
 
 
-def _plot(
-    path: Path, times, estimate, truth, odometry, title: str, odometry_label: str = "track odometry"
-) -> None:
+def _plot(path: Path, times, estimate, truth, odometry, title: str, odometry_label: str) -> None:
     import matplotlib
 
     matplotlib.use("Agg")
@@ -240,17 +232,10 @@ def _run_into(
         progress_line(f"compiled in {seconds:.0f} s, before the timed run (not in timings.csv)")
     progress_line(f"visual odometry on {n} frames ...")
     result = run_sequence(
-        seq,
-        frames=n,
-        use_odometry=not no_odometry,
-        seed=seed,
-        progress=sys.stderr.isatty(),
-        motion=motion,
+        seq, frames=n, use_odometry=not no_odometry, seed=seed, progress=sys.stderr.isatty(), motion=motion
     )
-    if result.camera_poses is not None:
-        poses = result.camera_poses
-    else:
-        poses = camera_poses_from_planar(result.poses, mount)
+    poses = result.camera_poses
+    poses = camera_poses_from_planar(result.poses, mount) if poses is None else poses
     write_kitti_poses(tmp / "poses.txt", poses)
     origin = float(seq.manifest.get("time_origin_s", 0.0)) if isinstance(seq.manifest, dict) else 0.0
     write_tum(tmp / "trajectory.tum", seq.times[:n] + origin, poses)  # on the recording's clock

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import contextlib
 import importlib
+import os
 import signal
 import sys
 from pathlib import Path
@@ -105,10 +106,10 @@ def dask_client(workers: int, scheduler: str | None):
     if scheduler is not None:
         try:
             client = Client(scheduler.strip(), timeout=10)
-        except (ValueError, TypeError, OSError, TimeoutError) as exc:
-            raise SweepError(f"--scheduler {scheduler}: cannot reach a scheduler ({one_line(exc)})") from None
-        except AssertionError:  # distributed's own event loop did not start within its 10 s
-            raise SweepError(f"--scheduler {scheduler}: cannot reach a scheduler (no event loop)") from None
+        except (ValueError, TypeError, OSError, AssertionError) as exc:  # OSError: TimeoutError too
+            # an AssertionError: distributed's own event loop did not start within its 10 s
+            why = "no event loop" if isinstance(exc, AssertionError) else one_line(exc)
+            raise SweepError(f"--scheduler {scheduler}: cannot reach a scheduler ({why})") from None
         with client:
             yield client
         return
@@ -152,8 +153,6 @@ def summary(table, arguments: list[str]):
 
 def sweep_command(name: str, seeds: int, workers=None, scheduler=None, out=None, force=False) -> None:
     """Run sweep ``name`` over ``seeds`` seeds, write its table and print its summary."""
-    import os
-
     import pandas as pd
 
     cores = len(os.sched_getaffinity(0))
