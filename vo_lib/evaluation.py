@@ -111,23 +111,21 @@ class Alignment(str, Enum):
         return self.value
 
 
-def align_positions(p_gt: np.ndarray, p_est: np.ndarray, alignment: Alignment = Alignment.SE3) -> np.ndarray:
-    """Estimated positions ``(N, 2)`` or ``(N, 3)`` moved onto the truth by Umeyama's least-squares
-    ``alignment`` (Umeyama 1991, eq. 40-42; evo's ``align``/``correct_scale``)."""
-    if alignment is Alignment.NONE:
-        return p_est
-    R, t, s = umeyama(p_est, p_gt, with_scale=alignment is Alignment.SIM3)
-    return s * p_est @ R.T + t
-
-
-def ate(gt, est, align: bool = True, alignment: Alignment = Alignment.SE3) -> tuple[ErrorStats, np.ndarray]:
-    """Absolute trajectory error of positions after an ``alignment`` (SE(3) by default; none if
-    ``align`` is False); ``(stats, per-pose errors)``, as evo's APE of the translation part."""
-    G, E = _pair(gt, est)
-    p_gt = G[:, :3, 3]
-    p_est = align_positions(p_gt, E[:, :3, 3], alignment if align else Alignment.NONE)
+def _ate(p_gt: np.ndarray, p_est: np.ndarray, alignment: Alignment) -> tuple[ErrorStats, np.ndarray]:
+    """Position errors ``(N, 2)`` or ``(N, 3)`` after Umeyama's least-squares ``alignment`` of the
+    estimate onto the truth (Umeyama 1991, eq. 40-42; evo's ``align``/``correct_scale``)."""
+    if alignment is not Alignment.NONE:
+        R, t, s = umeyama(p_est, p_gt, with_scale=alignment is Alignment.SIM3)
+        p_est = s * p_est @ R.T + t
     errors = np.linalg.norm(p_est - p_gt, axis=1)
     return ErrorStats.of(errors), errors
+
+
+def ate(gt, est, alignment: Alignment = Alignment.SE3) -> tuple[ErrorStats, np.ndarray]:
+    """Absolute trajectory error of positions after an ``alignment`` (SE(3) by default);
+    ``(stats, per-pose errors)``, as evo's APE of the translation part."""
+    G, E = _pair(gt, est)
+    return _ate(G[:, :3, 3], E[:, :3, 3], alignment)
 
 
 def ate_positions(
@@ -139,18 +137,14 @@ def ate_positions(
     E = as_homogeneous(est)
     p_gt = np.asarray(positions, float)
     _check_pair(p_gt, E)
-    p_est = E[:, :3, :3] @ np.asarray(lever_arm, float) + E[:, :3, 3]
-    errors = np.linalg.norm(align_positions(p_gt, p_est, alignment) - p_gt, axis=1)
-    return ErrorStats.of(errors), errors
+    return _ate(p_gt, E[:, :3, :3] @ np.asarray(lever_arm, float) + E[:, :3, 3], alignment)
 
 
 def ate_planar(gt_planar, est_planar, align: bool = True) -> tuple[ErrorStats, np.ndarray]:
     """ATE of planar ``(x, y, yaw)`` trajectories after a rotation and translation in the plane."""
     g, e = np.asarray(gt_planar, float), np.asarray(est_planar, float)
     _check_pair(g, e)
-    p_est = align_positions(g[:, :2], e[:, :2], Alignment.SE3 if align else Alignment.NONE)
-    errors = np.linalg.norm(p_est - g[:, :2], axis=1)
-    return ErrorStats.of(errors), errors
+    return _ate(g[:, :2], e[:, :2], Alignment.SE3 if align else Alignment.NONE)
 
 
 def rpe(
