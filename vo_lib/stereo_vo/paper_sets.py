@@ -4,7 +4,7 @@ three free-motion sets of Table 2 (IV.B.3), outdoor linear motion (IV.B.1) and i
 average (AVG) and standard deviation (S.D.) of the errors at key positions.
 
 A full run renders and processes about 12,700 frames, more than a notebook can afford;
-:func:`compute` runs them once and :func:`write` stores the figures in ``paper_sets.json`` beside
+:func:`main` runs them once and stores the figures in ``paper_sets.json`` beside
 this module (package data: an installed wheel has it too), each set with the code version and
 the sample fingerprint that made it. Notebook 08 reads them (:func:`load`); a ``samples``-marked
 test runs them again and compares. ``python -m vo_lib.stereo_vo.paper_sets [SET ...]`` recomputes
@@ -22,7 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
-from vo_lib.evaluation import key_position_errors
+from vo_lib.evaluation import key_position_errors, planar_path_length, turned_degrees
 from vo_lib.geometry import relative_planar, wrap_angle
 from vo_lib.models.track_odometry import TrackOdometry
 from vo_lib.sim.samples import SAMPLES, fingerprint, render_sample
@@ -89,27 +89,26 @@ def code_version() -> str:
     return commit + ("+changes" if dirty else "")
 
 
-def run_set(name: str, frames: int | None = None) -> dict:
-    """Run one set (whole, or its first ``frames``) and return its statistics.
+def run_set(name: str) -> dict:
+    """Run one set, whole, and return its statistics.
 
     Errors are estimate minus truth in the frame of the start, at frames ``KEY_EVERY``,
     ``2 KEY_EVERY``, ... (:func:`vo_lib.evaluation.key_position_errors`), for the fused pipeline
     and for track odometry alone; plus the mean absolute heading error over every frame.
     """
-    rendered, frame_iter = render_sample(name, frames)
+    rendered, frame_iter = render_sample(name)
     n = rendered.frames
     result = run_frames(frame_iter, rendered.camera, seed=SEED)
     truth = relative_planar(rendered.truth()[0], rendered.truth())
     odometry = TrackOdometry().integrate(rendered.drive.odometry[1:n])
     keys = np.arange(KEY_EVERY, n, KEY_EVERY)
     heading = np.degrees(wrap_angle(result.poses[:, 2] - truth[:, 2]))
-    steps = np.diff(truth, axis=0)
     return {
         "frames": int(n),
         "code_version": code_version(),
         "fingerprint": fingerprint(name),
-        "distance_m": float(np.hypot(steps[:, 0], steps[:, 1]).sum()),
-        "turned_deg": float(np.degrees(np.abs(wrap_angle(steps[:, 2])).sum())),
+        "distance_m": planar_path_length(truth),
+        "turned_deg": turned_degrees(truth),
         "keys": int(len(keys)),
         "fused": key_position_errors(truth, result.poses, keys),
         "odometry": key_position_errors(truth, odometry, keys),
@@ -168,24 +167,13 @@ def contradiction_study(
     }
 
 
-def compute(names=SETS, frames: int | None = None, log=None, into: dict | None = None) -> dict:
-    """Every set of ``names``, whole (or shortened to ``frames``), added to ``into`` (or a new record)."""
-    out = into or {"key_every": KEY_EVERY, "seed": SEED, "sets": {}}
-    for name in names:
-        out["sets"][name] = run_set(name, frames)
-        if log:
-            print(f"{name}: {out['sets'][name]}", file=log, flush=True)
-    return out
-
-
-def write(results: dict, path=RESULTS) -> Path:
-    """Store ``results`` as JSON (written beside, then renamed: an interrupted write keeps the old file)."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_suffix(".json.part")
+def write(results: dict) -> Path:
+    """Store ``results`` as :data:`RESULTS` (written beside, then renamed: an interrupted write
+    keeps the old file)."""
+    tmp = RESULTS.with_suffix(".json.part")
     tmp.write_text(json.dumps(results, indent=1) + "\n")
-    tmp.replace(path)
-    return path
+    tmp.replace(RESULTS)
+    return RESULTS
 
 
 def load(path=RESULTS) -> dict:
@@ -202,20 +190,25 @@ def load(path=RESULTS) -> dict:
 
 def main(argv=None) -> int:
     names = (sys.argv[1:] if argv is None else list(argv)) or list(SETS)
-    if names == ["contradictions"]:
-        stored = json.loads(RESULTS.read_text())
-        stored["contradictions"] = contradiction_study()
-        print(f"written {write(stored)}")
-        return 0
     unknown = [n for n in names if n not in SETS]
-    if unknown:
+    if unknown and names != ["contradictions"]:
         print(
             f"error: unknown set {unknown[0]!r}; the sets are {', '.join(SETS)} (or 'contradictions' alone)",
             file=sys.stderr,
         )
         return 2
-    stored = json.loads(RESULTS.read_text()) if RESULTS.exists() else None
-    print(f"written {write(compute(names, log=sys.stdout, into=stored))}")
+    stored = (
+        json.loads(RESULTS.read_text())
+        if RESULTS.exists()
+        else {"key_every": KEY_EVERY, "seed": SEED, "sets": {}}
+    )
+    if unknown:  # names are ["contradictions"]
+        stored["contradictions"] = contradiction_study()
+    else:
+        for name in names:
+            stored["sets"][name] = run_set(name)
+            print(f"{name}: {stored['sets'][name]}", flush=True)
+    print(f"written {write(stored)}")
     return 0
 
 
