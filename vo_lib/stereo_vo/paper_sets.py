@@ -128,24 +128,22 @@ CONTRADICTION_DRIVES = 10
 CONTRADICTION_LIMIT = 2
 
 
-def contradiction_study(
-    name: str = CONTRADICTION_SET, frames: int = CONTRADICTION_FRAMES, drives: int = CONTRADICTION_DRIVES
-) -> dict:
+def contradiction_study() -> dict:
     """The crawler's pipeline as preset and with ``max_contradictions = CONTRADICTION_LIMIT`` on
-    the first ``frames`` of ``drives`` draws of the sample ``name``: the sample itself and copies
-    whose seed is the next ones. Per drive, the frames flagged and the RMS heading error (degrees)
+    the first frames of the drives of the study (above): the sample itself and copies whose seed
+    is the next ones. Per drive, the frames flagged and the RMS heading error (degrees)
     of each setting. (The pipeline's own seed draws only RANSAC's hypotheses and changes these
     figures in their seventh digit; the drive is the draw that matters.)
     """
-    base = SAMPLES[name]
-    seeds = [base.seed + k for k in range(drives)]
+    base = SAMPLES[CONTRADICTION_SET]
+    seeds = [base.seed + k for k in range(CONTRADICTION_DRIVES)]
     settings = {"preset": CRAWLER, "believed": replace(CRAWLER, max_contradictions=CONTRADICTION_LIMIT)}
     rows = {label: {"flagged": [], "heading_rms_deg": []} for label in settings}
     for seed in seeds:
-        variant = f"{name}@{seed}"
+        variant = f"{CONTRADICTION_SET}@{seed}"
         SAMPLES[variant] = replace(base, name=variant, seed=seed)  # a draw of the same drive plan
         try:
-            rendered, frame_iter = render_sample(variant, frames)
+            rendered, frame_iter = render_sample(variant, CONTRADICTION_FRAMES)
             images = list(frame_iter)
         finally:
             del SAMPLES[variant]
@@ -157,11 +155,11 @@ def contradiction_study(
             rows[label]["flagged"].append(int(len(result.flagged)))
             rows[label]["heading_rms_deg"].append(float(np.sqrt(np.mean(heading**2))))
     return {
-        "set": name,
-        "frames": int(frames),
+        "set": CONTRADICTION_SET,
+        "frames": CONTRADICTION_FRAMES,
         "seeds": seeds,
         "limit": CONTRADICTION_LIMIT,
-        "fingerprint": fingerprint(name),
+        "fingerprint": fingerprint(CONTRADICTION_SET),
         "code_version": code_version(),
         **rows,
     }
