@@ -262,13 +262,12 @@ SHORT_FRACTIONS = (0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8)
 @dataclass(frozen=True)
 class KittiErrors:
     """The KITTI benchmark's figures: translation error in per cent and rotation error in degrees
-    per 100 m, averaged over every segment of the ``lengths`` (metres) that start every ``step``
-    frames; ``count`` segments in all."""
+    per 100 m, averaged over every segment of the ``lengths`` (metres) that start every
+    :data:`KITTI_STEP` frames; ``count`` segments in all."""
 
     translation_pct: float
     rotation_deg_per_100m: float
     lengths: tuple[float, ...]
-    step: int
     count: int
 
     def label(self) -> str:
@@ -309,17 +308,17 @@ def segment_errors(G: np.ndarray, E: np.ndarray, length: float, step: int = KITT
     return np.column_stack([translation, np.degrees(rotation_angle(err[:, :3, :3])) / length])
 
 
-def kitti_errors(gt, est, lengths=None, step: int = KITTI_STEP) -> KittiErrors | None:
+def kitti_errors(gt, est, lengths=None) -> KittiErrors | None:
     """The KITTI benchmark's translation (%) and rotation (deg/100 m) errors, averaged over every
     segment of every length (:func:`segment_errors`); ``lengths`` default to
     :func:`segment_lengths`. None where no segment fits."""
     G, E = _pair(gt, est)
     lengths = tuple(float(x) for x in (segment_lengths(G) if lengths is None else lengths))
-    errors = np.concatenate([np.zeros((0, 2))] + [segment_errors(G, E, length, step) for length in lengths])
+    errors = np.concatenate([np.zeros((0, 2))] + [segment_errors(G, E, length) for length in lengths])
     if not len(errors):
         return None
     t_err, r_err = 100.0 * errors.mean(axis=0)
-    return KittiErrors(float(t_err), float(r_err), lengths, step, len(errors))
+    return KittiErrors(float(t_err), float(r_err), lengths, len(errors))
 
 
 def kitti_segment_errors(gt, est, lengths=KITTI_LENGTHS, step: int = KITTI_STEP) -> dict:
