@@ -147,25 +147,17 @@ def ate_planar(gt_planar, est_planar, align: bool = True) -> tuple[ErrorStats, n
     return _ate(g[:, :2], e[:, :2], Alignment.SE3 if align else Alignment.NONE)
 
 
-def rpe(
-    gt, est, delta: int = 1, rotation: bool = False, all_pairs: bool = False
-) -> tuple[ErrorStats, np.ndarray]:
-    """Relative pose error over ``delta`` frames: translation norm (m) or rotation angle (deg).
-
-    Pairs start every ``delta`` frames (0-d, d-2d, ...), as evo counts them by default; with
-    ``all_pairs`` every frame starts one.
-    """
+def rpe(gt, est, delta: int = 1, rotation: bool = False) -> tuple[ErrorStats, np.ndarray]:
+    """Relative pose error over ``delta`` frames: translation norm (m) or rotation angle (deg), of
+    pairs starting every ``delta`` frames (0-d, d-2d, ...), as evo counts them by default."""
     G, E = _pair(gt, est)
     if not 1 <= delta < len(G):
         raise ValueError(f"delta must lie in 1..{len(G) - 1}; got {delta}")
-    first = np.arange(0, len(G) - delta, 1 if all_pairs else delta)
+    first = np.arange(0, len(G) - delta, delta)
     rel_gt = rigid_inverse(G[first]) @ G[first + delta]
     rel_est = rigid_inverse(E[first]) @ E[first + delta]
     err = rigid_inverse(rel_gt) @ rel_est
-    if rotation:
-        errors = np.degrees(rotation_angle(err[:, :3, :3]))
-    else:
-        errors = np.linalg.norm(err[:, :3, 3], axis=1)
+    errors = np.degrees(rotation_angle(err[:, :3, :3])) if rotation else np.linalg.norm(err[:, :3, 3], axis=1)
     return ErrorStats.of(errors), errors
 
 
