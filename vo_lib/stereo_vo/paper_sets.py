@@ -37,37 +37,24 @@ KEY_EVERY = 50
 #: The pipeline's seed for these runs (notebook 08's).
 SEED = 8
 
-#: [Zhao], IV.B.2: heading error of the two spot-turn sets, AVG and S.D. in degrees.
-PAPER_SPOT = {"spot_turn": (6.38, 6.38), "spot_turn_2": (4.09, 8.17)}
-#: [Zhao], Table 2: AVG and S.D. of the x, y (mm) and heading (deg) errors of the three sets.
-PAPER_TABLE2 = {
-    "outdoor_free": {"x_mm": (47.1, 36.4), "y_mm": (268.4, 287.7), "theta_deg": (2.32, 2.57)},
-    "outdoor_free_2": {"x_mm": (-326.2, 818.1), "y_mm": (-1057.3, 950.6), "theta_deg": (16.68, 5.32)},
-    "outdoor_free_3": {"x_mm": (-25.4, 135.8), "y_mm": (-131.9, 115.1), "theta_deg": (2.43, 3.68)},
+#: [Zhao]'s AVG and S.D. of each set's errors at key positions, by quantity (x, y in mm, heading in
+#: degrees), the paper's frame count beside each: the spot turns (IV.B.2, heading only), Table 2's three
+#: free-motion sets (IV.B.3), outdoor linear motion (IV.B.1, x and y) and indoor free motion (IV.A.3).
+PAPER = {
+    "spot_turn": {"theta_deg": (6.38, 6.38)},  # 1800
+    "spot_turn_2": {"theta_deg": (4.09, 8.17)},  # 2400
+    "outdoor_free": {"x_mm": (47.1, 36.4), "y_mm": (268.4, 287.7), "theta_deg": (2.32, 2.57)},  # 1403
+    "outdoor_free_2": {"x_mm": (-326.2, 818.1), "y_mm": (-1057.3, 950.6), "theta_deg": (16.68, 5.32)},  # 2419
+    "outdoor_free_3": {"x_mm": (-25.4, 135.8), "y_mm": (-131.9, 115.1), "theta_deg": (2.43, 3.68)},  # 2670
+    "outdoor_linear": {"x_mm": (15.8, 53.0), "y_mm": (124.5, 40.3)},  # 1200
+    "indoor_free": {"x_mm": (-1.5, 47.4), "y_mm": (7.4, 8.5), "theta_deg": (0.05, 0.56)},  # not stated
 }
-#: [Zhao], IV.B.1 (outdoor linear motion, x and y) and IV.A.3 (indoor free motion): AVG, S.D.
-PAPER_OTHER = {
-    "outdoor_linear": {"x_mm": (15.8, 53.0), "y_mm": (124.5, 40.3)},
-    "indoor_free": {"x_mm": (-1.5, 47.4), "y_mm": (7.4, 8.5), "theta_deg": (0.05, 0.56)},
-}
-#: The paper's frame counts (None: not stated).
-PAPER_FRAMES = {
-    "spot_turn": 1800,
-    "spot_turn_2": 2400,
-    "outdoor_free": 1403,
-    "outdoor_free_2": 2419,
-    "outdoor_free_3": 2670,
-    "outdoor_linear": 1200,
-    "indoor_free": None,
-}
-SETS = tuple(PAPER_FRAMES)
+SETS = tuple(PAPER)
 
 
 def paper(name: str) -> dict:
     """The paper's AVG and S.D. of a set, by quantity (``x_mm``, ``y_mm``, ``theta_deg``)."""
-    if name in PAPER_SPOT:
-        return {"theta_deg": PAPER_SPOT[name]}
-    return PAPER_TABLE2.get(name) or PAPER_OTHER[name]
+    return PAPER[name]
 
 
 def code_version() -> str:
