@@ -271,7 +271,7 @@ class KittiErrors:
 def segment_lengths(gt) -> tuple[float, ...]:
     """KITTI's lengths that fit in the truth's path; for a shorter path, its
     :data:`SHORT_FRACTIONS` rounded to two significant digits."""
-    total = float(path_lengths(as_homogeneous(gt))[-1])
+    total = float(path_lengths(gt)[-1])
     fits = tuple(x for x in KITTI_LENGTHS if x < total)
     if fits:
         return fits
@@ -282,7 +282,7 @@ def segment_pairs(gt, length: float, step: int = KITTI_STEP) -> np.ndarray:
     """``(first, last)`` frames of the segments of ``length`` metres, as KITTI's devkit picks them:
     a start every ``step`` frames, the end at the first frame at least ``length`` further along;
     shape ``(n, 2)``, in order, stopping at the first start whose segment runs past the end."""
-    dist = path_lengths(as_homogeneous(gt))
+    dist = path_lengths(gt)
     first = np.arange(0, len(dist), step)
     last = np.searchsorted(dist, dist[first] + length)
     past = np.flatnonzero(last >= len(dist))
