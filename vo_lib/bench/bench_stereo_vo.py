@@ -249,17 +249,11 @@ def bench_kernels(frames: int = 60) -> dict[str, float]:
     ``$VO_LIB_REALDATA`` when set and on a rendered indoor drive; the renderer's composite on a
     whole rendered pair.
     """
-    from vo_lib.bench.bench_real import decode_all, fastest, realdata_folders
-    from vo_lib.data import load_sequence
+    from vo_lib.bench.bench_real import decoded_sequence, realdata_folders, run_ours
     from vo_lib.sim.render import SensorEffects, StereoRenderer
     from vo_lib.sim.samples import render_sample
     from vo_lib.sim.world import WORLDS
-    from vo_lib.stereo_vo.pipeline import run_frames, run_sequence, warm_up
-
-    def sequence_ms(seq) -> float:  # as bench real times it: the fastest of its runs
-        warm_up(seq, use_odometry=False)
-        total = lambda result: result.timing_table()["total"]  # noqa: E731
-        return total(fastest(lambda: run_sequence(seq, use_odometry=False), total)[0])
+    from vo_lib.stereo_vo.pipeline import run_frames
 
     def frames_ms() -> float:
         run_frames(iter(images[:3]), rendered.camera)  # warm
@@ -269,9 +263,10 @@ def bench_kernels(frames: int = 60) -> dict[str, float]:
     rendered, frame_iter = render_sample("indoor_free", frames)
     images = list(frame_iter)
     for folder in realdata_folders():
-        seq = load_sequence(folder, odometry=False, progress=False)
-        seq.pair = decode_all(seq)[0].__getitem__  # the frame timed from decoded images
-        rows[f"matching: whole frame, {folder.name}"] = _kernel_and_numpy(lambda seq=seq: sequence_ms(seq))
+        seq = decoded_sequence(folder)[0]  # as bench real times it: the fastest run, decoded images
+        rows[f"matching: whole frame, {folder.name}"] = _kernel_and_numpy(
+            lambda seq=seq: min(run_ours(seq)[1])
+        )
     rows["matching: whole frame, indoor_free"] = _kernel_and_numpy(frames_ms)
     renderer = StereoRenderer(WORLDS["indoor_lab_cart"](), rendered.camera, SensorEffects(noise_sigma=1.0))
     poses = rendered.vehicle_poses[100:120] @ rendered.mount
