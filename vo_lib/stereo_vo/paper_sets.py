@@ -175,8 +175,9 @@ def load(path=RESULTS) -> dict:
 
 def main(argv=None) -> int:
     names = (sys.argv[1:] if argv is None else list(argv)) or list(SETS)
+    study = names == ["contradictions"]
     unknown = [n for n in names if n not in SETS]
-    if unknown and names != ["contradictions"]:
+    if unknown and not study:
         print(
             f"error: unknown set {unknown[0]!r}; the sets are {', '.join(SETS)} (or 'contradictions' alone)",
             file=sys.stderr,
@@ -187,12 +188,10 @@ def main(argv=None) -> int:
         if RESULTS.exists()
         else {"key_every": KEY_EVERY, "seed": SEED, "sets": {}}
     )
-    if unknown:  # names are ["contradictions"]
-        stored["contradictions"] = contradiction_study()
-    else:
-        for name in names:
-            stored["sets"][name] = run_set(name)
-            print(f"{name}: {stored['sets'][name]}", flush=True)
+    stored.update({"contradictions": contradiction_study()} if study else {})
+    for name in [] if study else names:  # the sets, printed as each is done
+        stored["sets"][name] = run_set(name)
+        print(f"{name}: {stored['sets'][name]}", flush=True)
     print(f"written {write(stored)}")
     return 0
 
