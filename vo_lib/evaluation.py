@@ -111,23 +111,21 @@ class Alignment(str, Enum):
         return self.value
 
 
-def align_positions(p_gt: np.ndarray, p_est: np.ndarray, alignment: Alignment = Alignment.SE3) -> np.ndarray:
-    """Estimated positions ``(N, 2)`` or ``(N, 3)`` moved onto the truth by Umeyama's least-squares
-    ``alignment`` (Umeyama 1991, eq. 40-42; evo's ``align``/``correct_scale``)."""
-    if alignment is Alignment.NONE:
-        return p_est
-    R, t, s = umeyama(p_est, p_gt, with_scale=alignment is Alignment.SIM3)
-    return s * p_est @ R.T + t
-
-
-def ate(gt, est, align: bool = True, alignment: Alignment = Alignment.SE3) -> tuple[ErrorStats, np.ndarray]:
-    """Absolute trajectory error of positions after an ``alignment`` (SE(3) by default; none if
-    ``align`` is False); ``(stats, per-pose errors)``, as evo's APE of the translation part."""
-    G, E = _pair(gt, est)
-    p_gt = G[:, :3, 3]
-    p_est = align_positions(p_gt, E[:, :3, 3], alignment if align else Alignment.NONE)
+def _ate(p_gt: np.ndarray, p_est: np.ndarray, alignment: Alignment) -> tuple[ErrorStats, np.ndarray]:
+    """Position errors ``(N, 2)`` or ``(N, 3)`` after Umeyama's least-squares ``alignment`` of the
+    estimate onto the truth (Umeyama 1991, eq. 40-42; evo's ``align``/``correct_scale``)."""
+    if alignment is not Alignment.NONE:
+        R, t, s = umeyama(p_est, p_gt, with_scale=alignment is Alignment.SIM3)
+        p_est = s * p_est @ R.T + t
     errors = np.linalg.norm(p_est - p_gt, axis=1)
     return ErrorStats.of(errors), errors
+
+
+def ate(gt, est, alignment: Alignment = Alignment.SE3) -> tuple[ErrorStats, np.ndarray]:
+    """Absolute trajectory error of positions after an ``alignment`` (SE(3) by default);
+    ``(stats, per-pose errors)``, as evo's APE of the translation part."""
+    G, E = _pair(gt, est)
+    return _ate(G[:, :3, 3], E[:, :3, 3], alignment)
 
 
 def ate_positions(
@@ -139,39 +137,27 @@ def ate_positions(
     E = as_homogeneous(est)
     p_gt = np.asarray(positions, float)
     _check_pair(p_gt, E)
-    p_est = E[:, :3, :3] @ np.asarray(lever_arm, float) + E[:, :3, 3]
-    errors = np.linalg.norm(align_positions(p_gt, p_est, alignment) - p_gt, axis=1)
-    return ErrorStats.of(errors), errors
+    return _ate(p_gt, E[:, :3, :3] @ np.asarray(lever_arm, float) + E[:, :3, 3], alignment)
 
 
 def ate_planar(gt_planar, est_planar, align: bool = True) -> tuple[ErrorStats, np.ndarray]:
     """ATE of planar ``(x, y, yaw)`` trajectories after a rotation and translation in the plane."""
     g, e = np.asarray(gt_planar, float), np.asarray(est_planar, float)
     _check_pair(g, e)
-    p_est = align_positions(g[:, :2], e[:, :2], Alignment.SE3 if align else Alignment.NONE)
-    errors = np.linalg.norm(p_est - g[:, :2], axis=1)
-    return ErrorStats.of(errors), errors
+    return _ate(g[:, :2], e[:, :2], Alignment.SE3 if align else Alignment.NONE)
 
 
-def rpe(
-    gt, est, delta: int = 1, rotation: bool = False, all_pairs: bool = False
-) -> tuple[ErrorStats, np.ndarray]:
-    """Relative pose error over ``delta`` frames: translation norm (m) or rotation angle (deg).
-
-    Pairs start every ``delta`` frames (0-d, d-2d, ...), as evo counts them by default; with
-    ``all_pairs`` every frame starts one.
-    """
+def rpe(gt, est, delta: int = 1, rotation: bool = False) -> tuple[ErrorStats, np.ndarray]:
+    """Relative pose error over ``delta`` frames: translation norm (m) or rotation angle (deg), of
+    pairs starting every ``delta`` frames (0-d, d-2d, ...), as evo counts them by default."""
     G, E = _pair(gt, est)
     if not 1 <= delta < len(G):
         raise ValueError(f"delta must lie in 1..{len(G) - 1}; got {delta}")
-    first = np.arange(0, len(G) - delta, 1 if all_pairs else delta)
+    first = np.arange(0, len(G) - delta, delta)
     rel_gt = rigid_inverse(G[first]) @ G[first + delta]
     rel_est = rigid_inverse(E[first]) @ E[first + delta]
     err = rigid_inverse(rel_gt) @ rel_est
-    if rotation:
-        errors = np.degrees(rotation_angle(err[:, :3, :3]))
-    else:
-        errors = np.linalg.norm(err[:, :3, 3], axis=1)
+    errors = np.degrees(rotation_angle(err[:, :3, :3])) if rotation else np.linalg.norm(err[:, :3, 3], axis=1)
     return ErrorStats.of(errors), errors
 
 
@@ -268,13 +254,12 @@ SHORT_FRACTIONS = (0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8)
 @dataclass(frozen=True)
 class KittiErrors:
     """The KITTI benchmark's figures: translation error in per cent and rotation error in degrees
-    per 100 m, averaged over every segment of the ``lengths`` (metres) that start every ``step``
-    frames; ``count`` segments in all."""
+    per 100 m, averaged over every segment of the ``lengths`` (metres) that start every
+    :data:`KITTI_STEP` frames; ``count`` segments in all."""
 
     translation_pct: float
     rotation_deg_per_100m: float
     lengths: tuple[float, ...]
-    step: int
     count: int
 
     def label(self) -> str:
@@ -286,7 +271,7 @@ class KittiErrors:
 def segment_lengths(gt) -> tuple[float, ...]:
     """KITTI's lengths that fit in the truth's path; for a shorter path, its
     :data:`SHORT_FRACTIONS` rounded to two significant digits."""
-    total = float(path_lengths(as_homogeneous(gt))[-1])
+    total = float(path_lengths(gt)[-1])
     fits = tuple(x for x in KITTI_LENGTHS if x < total)
     if fits:
         return fits
@@ -297,7 +282,7 @@ def segment_pairs(gt, length: float, step: int = KITTI_STEP) -> np.ndarray:
     """``(first, last)`` frames of the segments of ``length`` metres, as KITTI's devkit picks them:
     a start every ``step`` frames, the end at the first frame at least ``length`` further along;
     shape ``(n, 2)``, in order, stopping at the first start whose segment runs past the end."""
-    dist = path_lengths(as_homogeneous(gt))
+    dist = path_lengths(gt)
     first = np.arange(0, len(dist), step)
     last = np.searchsorted(dist, dist[first] + length)
     past = np.flatnonzero(last >= len(dist))
@@ -315,17 +300,17 @@ def segment_errors(G: np.ndarray, E: np.ndarray, length: float, step: int = KITT
     return np.column_stack([translation, np.degrees(rotation_angle(err[:, :3, :3])) / length])
 
 
-def kitti_errors(gt, est, lengths=None, step: int = KITTI_STEP) -> KittiErrors | None:
+def kitti_errors(gt, est, lengths=None) -> KittiErrors | None:
     """The KITTI benchmark's translation (%) and rotation (deg/100 m) errors, averaged over every
     segment of every length (:func:`segment_errors`); ``lengths`` default to
     :func:`segment_lengths`. None where no segment fits."""
     G, E = _pair(gt, est)
     lengths = tuple(float(x) for x in (segment_lengths(G) if lengths is None else lengths))
-    errors = np.concatenate([np.zeros((0, 2))] + [segment_errors(G, E, length, step) for length in lengths])
+    errors = np.concatenate([np.zeros((0, 2))] + [segment_errors(G, E, length) for length in lengths])
     if not len(errors):
         return None
     t_err, r_err = 100.0 * errors.mean(axis=0)
-    return KittiErrors(float(t_err), float(r_err), lengths, step, len(errors))
+    return KittiErrors(float(t_err), float(r_err), lengths, len(errors))
 
 
 def kitti_segment_errors(gt, est, lengths=KITTI_LENGTHS, step: int = KITTI_STEP) -> dict:

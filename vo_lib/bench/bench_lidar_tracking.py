@@ -31,14 +31,14 @@ def bench_tracking() -> dict[str, float]:
     return {"score 500": vectorised}
 
 
-def bench_odometers(frames: int | None = None) -> dict[str, float]:
+def bench_odometers() -> dict[str, float]:
     """[Yuan]'s PnP visual odometer beside [Zhao]'s 1-point pipeline on the rendered corridor."""
     from vo_lib.geometry import planar_from_camera_poses
     from vo_lib.lidar_tracking.pnp_odometry import run_pnp_odometry
     from vo_lib.sim.samples import render_sample
     from vo_lib.stereo_vo.pipeline import run_frames
 
-    rendered, frame_iter = render_sample("corridor", frames)
+    rendered, frame_iter = render_sample("corridor")
     images = list(frame_iter)  # render first: only the odometers are timed
     truth = rendered.truth() - rendered.truth()[0]
     travelled = float(np.hypot(*truth[-1, :2]))

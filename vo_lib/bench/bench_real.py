@@ -28,17 +28,31 @@ def realdata_folders() -> list[Path]:
     return sorted(p for p in root.iterdir() if (p / "image_0").is_dir() or mav0_of(p) is not None)
 
 
-def decode_all(seq) -> tuple[list, float]:
-    """Every stereo pair of ``seq``, decoded (and rectified) serially, and the median milliseconds
-    one took."""
-    ahead, seq.read_ahead = seq.read_ahead, 0
+def decoded_sequence(folder) -> tuple[object, float]:
+    """The sequence in ``folder`` (no odometry) with every stereo pair decoded (and rectified)
+    beforehand, serially, and read from memory; and the median milliseconds one pair took."""
+    from vo_lib.data import load_sequence
+
+    seq = load_sequence(folder, odometry=False, progress=False)
+    seq.read_ahead = 0
     pairs, ms = [], []
     for k in range(len(seq)):
         t0 = time.perf_counter()
         pairs.append(seq.pair(k))
         ms.append((time.perf_counter() - t0) * 1e3)
-    seq.read_ahead = ahead
-    return pairs, float(np.median(ms))
+    seq.pair = pairs.__getitem__
+    return seq, float(np.median(ms))
+
+
+def run_ours(seq, repeats: int = REPEATS) -> tuple[object, list[float]]:
+    """Our pipeline on ``seq`` (no odometry, seed 0) after an untimed warm-up: :func:`fastest` of
+    ``repeats`` runs by the median milliseconds of the whole frame."""
+    from vo_lib.stereo_vo.pipeline import run_sequence, warm_up
+
+    warm_up(seq, use_odometry=False)  # compiled kernels ready before the timed run
+    return fastest(
+        partial(run_sequence, seq, use_odometry=False, seed=0), lambda r: r.timing_table()["total"], repeats
+    )
 
 
 def step_scale(truth, poses) -> float:
@@ -84,8 +98,6 @@ def bench_real(folders=None, repeats: int = REPEATS) -> dict[str, float]:
     ``repeats`` runs each)."""
     import cv2
 
-    from vo_lib.data import load_sequence
-    from vo_lib.stereo_vo.pipeline import run_sequence, warm_up
     from vo_lib.stereo_vo.pnp_baseline import run_pnp_baseline
 
     folders = [Path(f) for f in folders] if folders else realdata_folders()
@@ -95,15 +107,8 @@ def bench_real(folders=None, repeats: int = REPEATS) -> dict[str, float]:
     cv2.setRNGSeed(0)
     out = {}
     for folder in folders:
-        seq = load_sequence(folder, odometry=False, progress=False)
-        decoded, decode = decode_all(seq)
-        seq.pair = decoded.__getitem__  # both methods read the same frames, decoded beforehand
-        warm_up(seq, use_odometry=False)  # compiled kernels ready before the timed run
-        ours, ours_runs = fastest(
-            partial(run_sequence, seq, use_odometry=False, seed=0),
-            lambda r: r.timing_table()["total"],
-            repeats,
-        )
+        seq, decode = decoded_sequence(folder)  # both methods read the same frames, decoded beforehand
+        ours, ours_runs = run_ours(seq, repeats)
         base, base_runs = fastest(
             partial(run_pnp_baseline, seq, seed=0), lambda r: float(np.median(r.milliseconds[1:])), repeats
         )

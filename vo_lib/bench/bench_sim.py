@@ -11,7 +11,7 @@ def bench_sensors() -> dict[str, float]:
     """Stereo pairs per second of the renderer in each world; time of one 811-beam laser scan."""
     from vo_lib.camera import StereoCamera
     from vo_lib.geometry import camera_mount, planar_to_matrix
-    from vo_lib.sim.laser import LaserScanner
+    from vo_lib.sim.laser import LaserScanner, cast_rays
     from vo_lib.sim.render import StereoRenderer
     from vo_lib.sim.world import WORLDS
 
@@ -36,10 +36,7 @@ def bench_sensors() -> dict[str, float]:
     scanner = LaserScanner()
     beams = len(scanner.bearings)
 
-    def loop_scan():
-        # baseline: one ray at a time against all segments
-        from vo_lib.sim.laser import cast_rays
-
+    def loop_scan():  # baseline: one ray at a time against all segments
         return [cast_rays(segments, (0.0, 0.0), np.array([b])) for b in scanner.bearings]
 
     base = median_seconds(loop_scan, repeat=5)

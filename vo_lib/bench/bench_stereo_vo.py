@@ -61,8 +61,6 @@ def bench_geometry(n: int = 10_000) -> dict[str, float]:
 
 def bench_ransac(sets: int = 15, n: int = 300) -> dict[str, float]:
     """1-point RANSAC against 3-point rigid RANSAC and solvePnPRansac on the same matches."""
-    import math
-
     from vo_lib.camera import StereoCamera
     from vo_lib.stereo_vo.baselines import pnp_ransac, rigid_ransac
     from vo_lib.stereo_vo.ransac import one_point_ransac
@@ -251,19 +249,11 @@ def bench_kernels(frames: int = 60) -> dict[str, float]:
     ``$VO_LIB_REALDATA`` when set and on a rendered indoor drive; the renderer's composite on a
     whole rendered pair.
     """
-    from vo_lib.bench.bench_real import decode_all, fastest, realdata_folders
-    from vo_lib.data import load_sequence
-    from vo_lib.geometry import camera_mount, planar_to_matrix
+    from vo_lib.bench.bench_real import decoded_sequence, realdata_folders, run_ours
     from vo_lib.sim.render import SensorEffects, StereoRenderer
-    from vo_lib.sim.samples import SAMPLES, render_sample
-    from vo_lib.sim.trajectories import simulate_drive
+    from vo_lib.sim.samples import render_sample
     from vo_lib.sim.world import WORLDS
-    from vo_lib.stereo_vo.pipeline import run_frames, run_sequence, warm_up
-
-    def sequence_ms(seq) -> float:  # as bench real times it: the fastest of its runs
-        warm_up(seq, use_odometry=False)
-        total = lambda result: result.timing_table()["total"]  # noqa: E731
-        return total(fastest(lambda: run_sequence(seq, use_odometry=False), total)[0])
+    from vo_lib.stereo_vo.pipeline import run_frames
 
     def frames_ms() -> float:
         run_frames(iter(images[:3]), rendered.camera)  # warm
@@ -273,14 +263,13 @@ def bench_kernels(frames: int = 60) -> dict[str, float]:
     rendered, frame_iter = render_sample("indoor_free", frames)
     images = list(frame_iter)
     for folder in realdata_folders():
-        seq = load_sequence(folder, odometry=False, progress=False)
-        seq.pair = decode_all(seq)[0].__getitem__  # the frame timed from decoded images
-        rows[f"matching: whole frame, {folder.name}"] = _kernel_and_numpy(lambda seq=seq: sequence_ms(seq))
+        seq = decoded_sequence(folder)[0]  # as bench real times it: the fastest run, decoded images
+        rows[f"matching: whole frame, {folder.name}"] = _kernel_and_numpy(
+            lambda seq=seq: min(run_ours(seq)[1])
+        )
     rows["matching: whole frame, indoor_free"] = _kernel_and_numpy(frames_ms)
-    sample = SAMPLES["indoor_free"]
-    drive = simulate_drive(sample.legs, sample.rate, sample.start, np.random.default_rng(sample.seed))
-    renderer = StereoRenderer(WORLDS[sample.world](), rendered.camera, SensorEffects(noise_sigma=1.0))
-    poses = [planar_to_matrix(p) @ camera_mount(height=0.5) for p in drive.poses[100:120]]
+    renderer = StereoRenderer(WORLDS["indoor_lab_cart"](), rendered.camera, SensorEffects(noise_sigma=1.0))
+    poses = rendered.vehicle_poses[100:120] @ rendered.mount
     rows["composite: whole rendered pair, indoor_lab"] = _kernel_and_numpy(
         lambda: _render_ms(renderer, poses)
     )
@@ -300,8 +289,6 @@ def bench_long(frames: int = PAPER_LONG_RUN[0]) -> dict[str, float]:
     per-frame total is timed. Prints the mean, standard deviation and percentiles beside the
     paper's, and the final position error of the lap (nothing is written to disk).
     """
-    import time
-
     from vo_lib.geometry import compose_planar
     from vo_lib.sim.samples import render_sample
     from vo_lib.stereo_vo.pipeline import run_frames

@@ -47,10 +47,10 @@ def monte_carlo_run(seed: int, steps: int = 150) -> tuple[np.ndarray, np.ndarray
     return nees, nis_values
 
 
-def nees_figures(seed: int, steps: int = 150) -> dict[str, float]:
+def nees_figures(seed: int) -> dict[str, float]:
     """One run's figures (a task of ``python -m vo_lib sweep nees``): the mean and final pose NEES
     and the share of steps inside χ²(3)'s 95 % interval."""
-    nees, _ = monte_carlo_run(seed, steps)
+    nees, _ = monte_carlo_run(seed)
     low, high = chi2.ppf([0.025, 0.975], 3)
     return {
         "nees_mean": float(nees.mean()),

@@ -4,7 +4,7 @@ three free-motion sets of Table 2 (IV.B.3), outdoor linear motion (IV.B.1) and i
 average (AVG) and standard deviation (S.D.) of the errors at key positions.
 
 A full run renders and processes about 12,700 frames, more than a notebook can afford;
-:func:`compute` runs them once and :func:`write` stores the figures in ``paper_sets.json`` beside
+:func:`main` runs them once and stores the figures in ``paper_sets.json`` beside
 this module (package data: an installed wheel has it too), each set with the code version and
 the sample fingerprint that made it. Notebook 08 reads them (:func:`load`); a ``samples``-marked
 test runs them again and compares. ``python -m vo_lib.stereo_vo.paper_sets [SET ...]`` recomputes
@@ -22,7 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
-from vo_lib.evaluation import key_position_errors
+from vo_lib.evaluation import key_position_errors, planar_path_length, turned_degrees
 from vo_lib.geometry import relative_planar, wrap_angle
 from vo_lib.models.track_odometry import TrackOdometry
 from vo_lib.sim.samples import SAMPLES, fingerprint, render_sample
@@ -37,37 +37,24 @@ KEY_EVERY = 50
 #: The pipeline's seed for these runs (notebook 08's).
 SEED = 8
 
-#: [Zhao], IV.B.2: heading error of the two spot-turn sets, AVG and S.D. in degrees.
-PAPER_SPOT = {"spot_turn": (6.38, 6.38), "spot_turn_2": (4.09, 8.17)}
-#: [Zhao], Table 2: AVG and S.D. of the x, y (mm) and heading (deg) errors of the three sets.
-PAPER_TABLE2 = {
-    "outdoor_free": {"x_mm": (47.1, 36.4), "y_mm": (268.4, 287.7), "theta_deg": (2.32, 2.57)},
-    "outdoor_free_2": {"x_mm": (-326.2, 818.1), "y_mm": (-1057.3, 950.6), "theta_deg": (16.68, 5.32)},
-    "outdoor_free_3": {"x_mm": (-25.4, 135.8), "y_mm": (-131.9, 115.1), "theta_deg": (2.43, 3.68)},
+#: [Zhao]'s AVG and S.D. of each set's errors at key positions, by quantity (x, y in mm, heading in
+#: degrees), the paper's frame count beside each: the spot turns (IV.B.2, heading only), Table 2's three
+#: free-motion sets (IV.B.3), outdoor linear motion (IV.B.1, x and y) and indoor free motion (IV.A.3).
+PAPER = {
+    "spot_turn": {"theta_deg": (6.38, 6.38)},  # 1800
+    "spot_turn_2": {"theta_deg": (4.09, 8.17)},  # 2400
+    "outdoor_free": {"x_mm": (47.1, 36.4), "y_mm": (268.4, 287.7), "theta_deg": (2.32, 2.57)},  # 1403
+    "outdoor_free_2": {"x_mm": (-326.2, 818.1), "y_mm": (-1057.3, 950.6), "theta_deg": (16.68, 5.32)},  # 2419
+    "outdoor_free_3": {"x_mm": (-25.4, 135.8), "y_mm": (-131.9, 115.1), "theta_deg": (2.43, 3.68)},  # 2670
+    "outdoor_linear": {"x_mm": (15.8, 53.0), "y_mm": (124.5, 40.3)},  # 1200
+    "indoor_free": {"x_mm": (-1.5, 47.4), "y_mm": (7.4, 8.5), "theta_deg": (0.05, 0.56)},  # not stated
 }
-#: [Zhao], IV.B.1 (outdoor linear motion, x and y) and IV.A.3 (indoor free motion): AVG, S.D.
-PAPER_OTHER = {
-    "outdoor_linear": {"x_mm": (15.8, 53.0), "y_mm": (124.5, 40.3)},
-    "indoor_free": {"x_mm": (-1.5, 47.4), "y_mm": (7.4, 8.5), "theta_deg": (0.05, 0.56)},
-}
-#: The paper's frame counts (None: not stated).
-PAPER_FRAMES = {
-    "spot_turn": 1800,
-    "spot_turn_2": 2400,
-    "outdoor_free": 1403,
-    "outdoor_free_2": 2419,
-    "outdoor_free_3": 2670,
-    "outdoor_linear": 1200,
-    "indoor_free": None,
-}
-SETS = tuple(PAPER_FRAMES)
+SETS = tuple(PAPER)
 
 
 def paper(name: str) -> dict:
     """The paper's AVG and S.D. of a set, by quantity (``x_mm``, ``y_mm``, ``theta_deg``)."""
-    if name in PAPER_SPOT:
-        return {"theta_deg": PAPER_SPOT[name]}
-    return PAPER_TABLE2.get(name) or PAPER_OTHER[name]
+    return PAPER[name]
 
 
 def code_version() -> str:
@@ -89,27 +76,26 @@ def code_version() -> str:
     return commit + ("+changes" if dirty else "")
 
 
-def run_set(name: str, frames: int | None = None) -> dict:
-    """Run one set (whole, or its first ``frames``) and return its statistics.
+def run_set(name: str) -> dict:
+    """Run one set, whole, and return its statistics.
 
     Errors are estimate minus truth in the frame of the start, at frames ``KEY_EVERY``,
     ``2 KEY_EVERY``, ... (:func:`vo_lib.evaluation.key_position_errors`), for the fused pipeline
     and for track odometry alone; plus the mean absolute heading error over every frame.
     """
-    rendered, frame_iter = render_sample(name, frames)
+    rendered, frame_iter = render_sample(name)
     n = rendered.frames
     result = run_frames(frame_iter, rendered.camera, seed=SEED)
     truth = relative_planar(rendered.truth()[0], rendered.truth())
     odometry = TrackOdometry().integrate(rendered.drive.odometry[1:n])
     keys = np.arange(KEY_EVERY, n, KEY_EVERY)
     heading = np.degrees(wrap_angle(result.poses[:, 2] - truth[:, 2]))
-    steps = np.diff(truth, axis=0)
     return {
         "frames": int(n),
         "code_version": code_version(),
         "fingerprint": fingerprint(name),
-        "distance_m": float(np.hypot(steps[:, 0], steps[:, 1]).sum()),
-        "turned_deg": float(np.degrees(np.abs(wrap_angle(steps[:, 2])).sum())),
+        "distance_m": planar_path_length(truth),
+        "turned_deg": turned_degrees(truth),
         "keys": int(len(keys)),
         "fused": key_position_errors(truth, result.poses, keys),
         "odometry": key_position_errors(truth, odometry, keys),
@@ -129,24 +115,22 @@ CONTRADICTION_DRIVES = 10
 CONTRADICTION_LIMIT = 2
 
 
-def contradiction_study(
-    name: str = CONTRADICTION_SET, frames: int = CONTRADICTION_FRAMES, drives: int = CONTRADICTION_DRIVES
-) -> dict:
+def contradiction_study() -> dict:
     """The crawler's pipeline as preset and with ``max_contradictions = CONTRADICTION_LIMIT`` on
-    the first ``frames`` of ``drives`` draws of the sample ``name``: the sample itself and copies
-    whose seed is the next ones. Per drive, the frames flagged and the RMS heading error (degrees)
+    the first frames of the drives of the study (above): the sample itself and copies whose seed
+    is the next ones. Per drive, the frames flagged and the RMS heading error (degrees)
     of each setting. (The pipeline's own seed draws only RANSAC's hypotheses and changes these
     figures in their seventh digit; the drive is the draw that matters.)
     """
-    base = SAMPLES[name]
-    seeds = [base.seed + k for k in range(drives)]
+    base = SAMPLES[CONTRADICTION_SET]
+    seeds = [base.seed + k for k in range(CONTRADICTION_DRIVES)]
     settings = {"preset": CRAWLER, "believed": replace(CRAWLER, max_contradictions=CONTRADICTION_LIMIT)}
     rows = {label: {"flagged": [], "heading_rms_deg": []} for label in settings}
     for seed in seeds:
-        variant = f"{name}@{seed}"
+        variant = f"{CONTRADICTION_SET}@{seed}"
         SAMPLES[variant] = replace(base, name=variant, seed=seed)  # a draw of the same drive plan
         try:
-            rendered, frame_iter = render_sample(variant, frames)
+            rendered, frame_iter = render_sample(variant, CONTRADICTION_FRAMES)
             images = list(frame_iter)
         finally:
             del SAMPLES[variant]
@@ -158,34 +142,23 @@ def contradiction_study(
             rows[label]["flagged"].append(int(len(result.flagged)))
             rows[label]["heading_rms_deg"].append(float(np.sqrt(np.mean(heading**2))))
     return {
-        "set": name,
-        "frames": int(frames),
+        "set": CONTRADICTION_SET,
+        "frames": CONTRADICTION_FRAMES,
         "seeds": seeds,
         "limit": CONTRADICTION_LIMIT,
-        "fingerprint": fingerprint(name),
+        "fingerprint": fingerprint(CONTRADICTION_SET),
         "code_version": code_version(),
         **rows,
     }
 
 
-def compute(names=SETS, frames: int | None = None, log=None, into: dict | None = None) -> dict:
-    """Every set of ``names``, whole (or shortened to ``frames``), added to ``into`` (or a new record)."""
-    out = into or {"key_every": KEY_EVERY, "seed": SEED, "sets": {}}
-    for name in names:
-        out["sets"][name] = run_set(name, frames)
-        if log:
-            print(f"{name}: {out['sets'][name]}", file=log, flush=True)
-    return out
-
-
-def write(results: dict, path=RESULTS) -> Path:
-    """Store ``results`` as JSON (written beside, then renamed: an interrupted write keeps the old file)."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_suffix(".json.part")
+def write(results: dict) -> Path:
+    """Store ``results`` as :data:`RESULTS` (written beside, then renamed: an interrupted write
+    keeps the old file)."""
+    tmp = RESULTS.with_suffix(".json.part")
     tmp.write_text(json.dumps(results, indent=1) + "\n")
-    tmp.replace(path)
-    return path
+    tmp.replace(RESULTS)
+    return RESULTS
 
 
 def load(path=RESULTS) -> dict:
@@ -202,20 +175,24 @@ def load(path=RESULTS) -> dict:
 
 def main(argv=None) -> int:
     names = (sys.argv[1:] if argv is None else list(argv)) or list(SETS)
-    if names == ["contradictions"]:
-        stored = json.loads(RESULTS.read_text())
-        stored["contradictions"] = contradiction_study()
-        print(f"written {write(stored)}")
-        return 0
+    study = names == ["contradictions"]
     unknown = [n for n in names if n not in SETS]
-    if unknown:
+    if unknown and not study:
         print(
             f"error: unknown set {unknown[0]!r}; the sets are {', '.join(SETS)} (or 'contradictions' alone)",
             file=sys.stderr,
         )
         return 2
-    stored = json.loads(RESULTS.read_text()) if RESULTS.exists() else None
-    print(f"written {write(compute(names, log=sys.stdout, into=stored))}")
+    stored = (
+        json.loads(RESULTS.read_text())
+        if RESULTS.exists()
+        else {"key_every": KEY_EVERY, "seed": SEED, "sets": {}}
+    )
+    stored.update({"contradictions": contradiction_study()} if study else {})
+    for name in [] if study else names:  # the sets, printed as each is done
+        stored["sets"][name] = run_set(name)
+        print(f"{name}: {stored['sets'][name]}", flush=True)
+    print(f"written {write(stored)}")
     return 0
 
 
