@@ -28,9 +28,10 @@ MAX_LINE_BYTES = 1024
 def present(path: Path, what: str) -> bool:
     """Whether the optional file ``path`` is there; a folder (or anything but a file) in its
     place raises :class:`SequenceError`, so that it is not silently ignored."""
-    if os.path.lexists(path):
-        check_file(path, what)
-    return os.path.lexists(path)
+    if not os.path.lexists(path):
+        return False
+    check_file(path, what)
+    return True
 
 
 def check_size(path: Path, frames: int, what: str) -> None:
