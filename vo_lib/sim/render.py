@@ -36,14 +36,21 @@ MOVER_TEXEL = 0.02
 
 
 @dataclass(frozen=True)
-class _Quad:
-    corners: np.ndarray  # (4, 3) world corners, in order
-    origin: np.ndarray  # world point of texel (0, 0)
-    e1: np.ndarray  # world step of one texel along the texture's columns
-    e2: np.ndarray  # world step of one texel along the texture's rows
-    normal: np.ndarray
-    texture: tuple  # mipmaps
-    shade: float
+class _Quads:
+    """Textured planar quads, as arrays over the quads."""
+
+    corners: np.ndarray  # (Q, 4, 3) world corners, in order
+    origin: np.ndarray  # (Q, 3) world point of texel (0, 0)
+    e1: np.ndarray  # (Q, 3) world step of one texel along the texture's columns
+    e2: np.ndarray  # (Q, 3) world step of one texel along the texture's rows
+    normal: np.ndarray  # (Q, 3)
+    shade: np.ndarray  # (Q,)
+    textures: tuple  # each quad's mipmaps
+
+    @staticmethod
+    def join(parts) -> _Quads:
+        arrays = [np.concatenate([getattr(p, f.name) for p in parts]) for f in fields(_Quads)[:-1]]
+        return _Quads(*arrays, sum((p.textures for p in parts), ()))
 
 
 @dataclass
@@ -69,32 +76,6 @@ class SensorEffects:
         return out
 
 
-@dataclass(frozen=True)
-class _QuadArrays:
-    """The few numbers of every quad the renderer needs, as arrays over the quads."""
-
-    e1: np.ndarray  # (Q, 3)
-    e2: np.ndarray
-    origin: np.ndarray
-    normal: np.ndarray
-    texel: np.ndarray  # (Q,) length of e1
-    levels: np.ndarray  # (Q,) number of texture levels
-
-    @staticmethod
-    def of(quads) -> _QuadArrays:
-        vectors = ("e1", "e2", "origin", "normal")
-        e1, e2, origin, normal = (
-            np.array([getattr(q, n) for q in quads], float).reshape(-1, 3) for n in vectors
-        )
-        levels = np.array([len(q.texture) for q in quads], int)
-        return _QuadArrays(e1, e2, origin, normal, np.linalg.norm(e1, axis=1), levels)
-
-    @staticmethod
-    def join(first: _QuadArrays, second: _QuadArrays) -> _QuadArrays:
-        names = [f.name for f in fields(_QuadArrays)]
-        return _QuadArrays(*(np.concatenate([getattr(first, n), getattr(second, n)]) for n in names))
-
-
 def _tiles(length: float, texel: float) -> np.ndarray:
     n = max(1, int(np.ceil(length / (TILE_TEXELS * texel) - 1e-9)))
     return np.linspace(0.0, length, n + 1)
@@ -104,8 +85,8 @@ def _shade(normal: np.ndarray) -> float:
     return float(0.7 + 0.3 * abs(normal @ LIGHT_DIRECTION))
 
 
-def build_quads(world: World) -> list[_Quad]:
-    """Cut the world's segments, floor and ceiling into textured quads."""
+def build_quads(world: World) -> _Quads:
+    """Cut the world's segments, floor, ceiling and patches into textured quads."""
     texel = world.floor_texel
     quads = []
     for seg in world.segments:
@@ -113,7 +94,7 @@ def build_quads(world: World) -> list[_Quad]:
         along = ((bx - ax) / seg.length, (by - ay) / seg.length, 0.0)
         seed = seg.texture_seed + 1000 * world.seed
         wall = Patch((ax, ay, 0.0), along, (0.0, 0.0, 1.0), seg.length, seg.height, seg.style, seed)
-        quads += _patch_quads(wall, seg.texel or texel, split_across=False)
+        quads.append(_patch_quads(wall, seg.texel or texel, split_across=False))
     xmin, xmax, ymin, ymax = world.floor_extent
     planes = [(0.0, world.seed * 7 + 1, 0.95, world.floor_style)]
     if world.ceiling_height is not None:
@@ -122,13 +103,13 @@ def build_quads(world: World) -> list[_Quad]:
         plane = Patch(
             (xmin, ymin, z), (1.0, 0.0, 0.0), (0.0, 1.0, 0.0), xmax - xmin, ymax - ymin, style, seed
         )
-        quads += _patch_quads(plane, texel, shade)
+        quads.append(_patch_quads(plane, texel, shade))
     for patch in world.patches:
-        quads += _patch_quads(patch, texel)
-    return quads
+        quads.append(_patch_quads(patch, texel))
+    return _Quads.join(quads)
 
 
-def _patch_quads(patch, texel: float, shade: float | None = None, split_across: bool = True) -> list[_Quad]:
+def _patch_quads(patch, texel: float, shade: float | None = None, split_across: bool = True) -> _Quads:
     """Quads of a :class:`~vo_lib.sim.world.Patch`, cut into tiles of at most TILE_TEXELS (along
     only, for a wall); ``shade`` overrides the flat shading of its normal."""
     along, across = np.asarray(patch.along, float), np.asarray(patch.across, float)
@@ -141,27 +122,23 @@ def _patch_quads(patch, texel: float, shade: float | None = None, split_across: 
     shade = _shade(normal) if shade is None else shade
     e1, e2, tex_origin = along * texel, across * texel, origin - patch.offset * along
     if patch.outline:
-        return [_Quad(np.asarray(patch.outline, float), tex_origin, e1, e2, normal, tex, shade)]
-    a, b = (
-        _tiles(patch.length, texel),
-        _tiles(patch.width, texel) if split_across else np.array([0.0, patch.width]),
-    )
-    return [
-        _Quad(
-            origin + np.array([[a0, b0], [a1, b0], [a1, b1], [a0, b1]]) @ np.stack([along, across]),
-            tex_origin,
-            e1,
-            e2,
-            normal,
-            tex,
-            shade,
+        corners = np.asarray([patch.outline], float)
+    else:
+        a = _tiles(patch.length, texel)
+        b = _tiles(patch.width, texel) if split_across else np.array([0.0, patch.width])
+        corners = np.array(
+            [
+                origin + np.array([[a0, b0], [a1, b0], [a1, b1], [a0, b1]]) @ np.stack([along, across])
+                for a0, a1 in zip(a[:-1], a[1:], strict=True)
+                for b0, b1 in zip(b[:-1], b[1:], strict=True)
+            ]
         )
-        for a0, a1 in zip(a[:-1], a[1:], strict=True)
-        for b0, b1 in zip(b[:-1], b[1:], strict=True)
-    ]
+    q = len(corners)
+    vectors = (np.tile(v, (q, 1)) for v in (tex_origin, e1, e2, normal))
+    return _Quads(corners, *vectors, np.full(q, shade), (tex,) * q)
 
 
-def _mover_quads(mover) -> list[_Quad]:
+def _mover_quads(mover) -> _Quads:
     """Four sides and the top of a :class:`~vo_lib.sim.world.Mover`, in its body frame
     (x forward, y left, z up, origin at the bottom centre)."""
     hl, hw, h = mover.size[0] / 2, mover.size[1] / 2, mover.height
@@ -173,17 +150,20 @@ def _mover_quads(mover) -> list[_Quad]:
         side = Patch(
             tuple(a), tuple((b - a) / length), (0.0, 0.0, 1.0), length, h, mover.style, mover.texture_seed + i
         )
-        quads += _patch_quads(side, MOVER_TEXEL)
+        quads.append(_patch_quads(side, MOVER_TEXEL))
     top = Patch(
         (-hl, hw, h), (1.0, 0.0, 0.0), (0.0, -1.0, 0.0), 2 * hl, 2 * hw, "plain", mover.texture_seed + 4
     )
-    return quads + _patch_quads(top, MOVER_TEXEL)
+    return _Quads.join([*quads, _patch_quads(top, MOVER_TEXEL)])
 
 
-def _moved(quad: _Quad, R: np.ndarray, t: np.ndarray) -> _Quad:
-    """A body-frame quad carried to the world by rotation ``R`` and translation ``t``."""
-    e1, e2, normal = (R @ v for v in (quad.e1, quad.e2, quad.normal))
-    return _Quad(quad.corners @ R.T + t, R @ quad.origin + t, e1, e2, normal, quad.texture, _shade(normal))
+def _moved(quads: _Quads, R: np.ndarray, t: np.ndarray) -> _Quads:
+    """Body-frame quads carried to the world by rotation ``R`` and translation ``t``."""
+    e1, e2, normal, origin = (
+        np.array([R @ v for v in vs]) for vs in (quads.e1, quads.e2, quads.normal, quads.origin)
+    )
+    shade = np.array([_shade(n) for n in normal])
+    return _Quads(quads.corners @ R.T + t, origin + t, e1, e2, normal, shade, quads.textures)
 
 
 def _clip_near(points: np.ndarray, near: float) -> np.ndarray:
@@ -201,15 +181,14 @@ def _clip_near(points: np.ndarray, near: float) -> np.ndarray:
     return np.array(out).reshape(-1, 3)
 
 
-def _draw(image, inv_depth, order, boxes, H, level, quads, pts4, clipped, abe) -> None:
+def _draw(image, inv_depth, order, boxes, H, level, textures, shades, pts4, clipped, abe) -> None:
     """Warp each quad of ``order`` into its screen box and draw it where it is nearer (z-buffer)."""
     planes = list(abe)  # float64 scalars: keep
     composite = draw_nearer
     for i in order:
         x0, y0, x1, y1 = boxes[i]
-        quad = quads[i]
         warped = cv2.warpPerspective(
-            quad.texture[level[i]],
+            textures[i][level[i]],
             H[i],
             (x1 - x0, y1 - y0),
             flags=cv2.INTER_LINEAR,
@@ -219,7 +198,7 @@ def _draw(image, inv_depth, order, boxes, H, level, quads, pts4, clipped, abe) -
         pts = pts4[i] if i not in clipped else np.round((clipped[i] - (x0, y0)) * 16).astype(np.int32)
         cv2.fillConvexPoly(mask, pts, 1, lineType=cv2.LINE_8, shift=4)
         a, b, e = planes[i]
-        composite(image, inv_depth, warped, mask, x0, y0, a, b, e, quad.shade)
+        composite(image, inv_depth, warped, mask, x0, y0, a, b, e, shades[i])
 
 
 class StereoRenderer:
@@ -233,9 +212,7 @@ class StereoRenderer:
         self.camera = camera
         self.effects = effects or SensorEffects()
         self.quads = build_quads(world)
-        self._corners = np.stack([q.corners for q in self.quads])  # (Q, 4, 3)
         self._movers = [(m, _mover_quads(m)) for m in world.movers]
-        self._frame = _QuadArrays.of(self.quads)
         w, h = camera.width, camera.height
         sky = np.linspace(SKY_GREY[0], SKY_GREY[1], h, dtype=np.float32)
         self._sky = np.repeat(sky[:, None], w, axis=1).astype(np.uint8)
@@ -246,22 +223,13 @@ class StereoRenderer:
             [[fx, 0, cx + 0.5], [-fx, 0, w - 0.5 - cx], [0, fy, cy + 0.5], [0, -fy, h - 0.5 - cy]]
         )
 
-    def quads_at(self, time: float) -> tuple[list[_Quad], np.ndarray, _QuadArrays]:
-        """The world's quads, their corners ``(Q, 4, 3)`` and their numbers as arrays, with the
-        movers where they are at ``time``."""
-        if not self._movers:
-            return self.quads, self._corners, self._frame
-        moving = self._moving_quads(time)
-        corners = np.concatenate([self._corners, np.stack([q.corners for q in moving])])
-        return self.quads + moving, corners, _QuadArrays.join(self._frame, _QuadArrays.of(moving))
-
-    def _moving_quads(self, time: float) -> list[_Quad]:
+    def quads_at(self, time: float) -> _Quads:
+        """The world's quads, with the movers' where they are at ``time``."""
         moving = []
         for mover, body in self._movers:
             position, yaw = mover.pose(time)
-            R = yaw_matrix(yaw)
-            moving += [_moved(q, R, position) for q in body]
-        return moving
+            moving.append(_moved(body, yaw_matrix(yaw), position))
+        return _Quads.join([self.quads, *moving]) if moving else self.quads
 
     def render(self, T_world_camera, with_depth: bool = False, time: float = 0.0):
         """Grey image (uint8) seen by a camera at ``T_world_camera`` (4x4, camera to world).
@@ -275,8 +243,8 @@ class StereoRenderer:
         w, h = cam.width, cam.height
         image = self._sky.copy()
         inv_depth = np.zeros((h, w), np.float32)
-        quads, corners, frame = self.quads_at(time)
-        corners_c = (corners - c) @ R  # (Q, 4, 3), camera frame
+        quads = self.quads_at(time)
+        corners_c = (quads.corners - c) @ R  # (Q, 4, 3), camera frame
         # a quad is culled when all its corners lie outside one plane of the frustum
         outside = (corners_c @ self._frustum.T < 0).all(axis=1).any(axis=1)
         outside |= corners_c[..., 2].max(axis=1) <= NEAR_PLANE
@@ -303,16 +271,18 @@ class StereoRenderer:
         with np.errstate(invalid="ignore", over="ignore"):
             pts4 = np.round((uv4 - x0y0[:, None, :]) * 16).astype(np.int32)
         # texel -> pixel homography of each quad's plane: K [R^T e1, R^T e2, R^T (O - c)]
-        e1_c, e2_c, o_c = frame.e1[todo] @ R, frame.e2[todo] @ R, (frame.origin[todo] - c) @ R
+        e1_c, e2_c, o_c = quads.e1[todo] @ R, quads.e2[todo] @ R, (quads.origin[todo] - c) @ R
         H = cam.K @ np.stack([e1_c, e2_c, o_c], axis=2)  # (N, 3, 3)
         # texture level from the texel footprint at the nearest visible depth
-        pixels_per_texel = cam.fx * frame.texel[todo] / z_near
+        seen = [quads.textures[i] for i in todo]
+        levels = np.array([len(mipmaps) for mipmaps in seen], int)
+        pixels_per_texel = cam.fx * np.linalg.norm(quads.e1[todo], axis=1) / z_near
         with np.errstate(divide="ignore"):
-            level = np.clip(np.floor(np.log2(1.0 / pixels_per_texel)), 0, frame.levels[todo] - 1).astype(int)
+            level = np.clip(np.floor(np.log2(1.0 / pixels_per_texel)), 0, levels - 1).astype(int)
         # cv2.pyrDown centres level-L texel (s, t) on base texel (2^L s, 2^L t)
         H[:, :, :2] *= (2.0**level)[:, None, None]
         # inverse depth on each plane, affine in (u, v): n . K^-1 [u, v, 1] / (n . O_c)
-        n_c = frame.normal[todo] @ R
+        n_c = quads.normal[todo] @ R
         dist = np.einsum("ij,ij->i", n_c, o_c)
         with np.errstate(divide="ignore", invalid="ignore"):
             abe = (n_c @ self._Kinv) / dist[:, None]
@@ -321,8 +291,8 @@ class StereoRenderer:
         H[:, 0] -= x0y0[:, :1] * H[:, 2]
         H[:, 1] -= x0y0[:, 1:] * H[:, 2]
         boxes = np.hstack([x0y0, x1y1]).tolist()
-        seen = [quads[i] for i in todo]
-        _draw(image, inv_depth, np.flatnonzero(drawn).tolist(), boxes, H, level, seen, pts4, clipped, abe)
+        order = np.flatnonzero(drawn).tolist()
+        _draw(image, inv_depth, order, boxes, H, level, seen, quads.shade[todo].tolist(), pts4, clipped, abe)
         if not with_depth:
             return image
         with np.errstate(divide="ignore"):
