@@ -53,12 +53,6 @@ class ImageStatistics:
         )
 
 
-def fast_corners(image: np.ndarray) -> np.ndarray:
-    """``(N, 2)`` pixel positions (u, v) of FAST-9/16 corners with non-maximum suppression."""
-    detector = cv2.FastFeatureDetector_create(FAST_THRESHOLD, True, cv2.FAST_FEATURE_DETECTOR_TYPE_9_16)
-    return np.array([k.pt for k in detector.detect(image)], dtype=float).reshape(-1, 2)
-
-
 def occupied_cells(shape, corners: np.ndarray) -> np.ndarray:
     """Boolean grid, one entry per :data:`CELL_PIXELS`-square block of an image of ``shape``: has a corner."""
     h, w, cell = *shape[:2], CELL_PIXELS
@@ -82,7 +76,8 @@ def image_statistics(image: np.ndarray) -> ImageStatistics:
         raise ValueError(
             f"expected a grey uint8 image of at least 3x3 pixels; got {image.dtype} {image.shape}"
         )
-    corners = fast_corners(image)
+    detector = cv2.FastFeatureDetector_create(FAST_THRESHOLD, True, cv2.FAST_FEATURE_DETECTOR_TYPE_9_16)
+    corners = np.array([k.pt for k in detector.detect(image)], dtype=float).reshape(-1, 2)  # (u, v)
     h, w = image.shape
     return ImageStatistics(
         empty_cells=float(1.0 - occupied_cells(image.shape, corners).mean()),

@@ -86,10 +86,9 @@ def mirrored_tiling(tile: np.ndarray, height: int, width: int, rng: np.random.Ge
     A mirrored copy meets its neighbour in the same pixels, so the tiling has no seams.
     """
     h, w = tile.shape
-    cell = np.block([[tile, tile[:, ::-1]], [tile[::-1], tile[::-1, ::-1]]])  # period 2h x 2w
-    oy, ox = rng.integers(0, 2 * h), rng.integers(0, 2 * w)
-    reps = ((height + oy) // (2 * h) + 1, (width + ox) // (2 * w) + 1)
-    return np.tile(cell, reps)[oy : oy + height, ox : ox + width]
+    oy, ox = rng.integers(0, 2 * h), rng.integers(0, 2 * w)  # within the period, 2h x 2w
+    tiled = np.pad(tile, ((0, oy + height), (0, ox + width)), mode="symmetric")
+    return tiled[oy : oy + height, ox : ox + width]
 
 
 def photo_texture(style: str, height: int, width: int, texel: float, seed: int) -> np.ndarray:

@@ -199,7 +199,7 @@ def simulate_drive(
 ) -> Drive:
     """Drive ``legs`` at ``rate`` frames per second from ``start`` (x, y, yaw).
 
-    Returns ``sum(leg.frames) + 1`` frames: the start and one per step. Without ``ground`` the
+    Returns ``sum(leg.frames) + 1`` frames: the start and one per step. Without ``surface`` the
     tracks hold the ground exactly and the truth follows the plan's arcs; with ``surface`` the body skids,
     its turning centre wanders and it pitches and rolls (:class:`TrackGround`).
     """
@@ -227,9 +227,7 @@ def simulate_drive(
     return Drive(
         rate,
         poses,
-        np.vstack([zero, readings]),
-        np.vstack([zero, moved]),
-        np.vstack([zero, slips]),
+        *(np.vstack([zero, x]) for x in (readings, moved, slips)),
         attitude=np.vstack([zero, attitude]),
         icr=np.concatenate([[surface.icr_offset], x_icr]),
         grip=np.vstack([np.ones((1, 2)), grip]),
