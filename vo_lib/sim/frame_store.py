@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import json
 import os
-from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -24,11 +23,6 @@ class FrameStore:
 
     def __init__(self, folder: Path, key: str):
         self.folder = Path(folder) / key
-
-    @staticmethod
-    def current(key: Callable[[], str]) -> FrameStore | None:
-        """The store of ``key()`` in :data:`FOLDER` (None when unset, without calling ``key``)."""
-        return FrameStore(FOLDER, key()) if FOLDER else None
 
     def _path(self, k: int) -> Path:
         return self.folder / f"{k:06d}.npz"

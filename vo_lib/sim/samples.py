@@ -22,8 +22,7 @@ from vo_lib.formats.frame_files import CAMERA_MOUNTS
 from vo_lib.formats.sequence_writer import SequenceWriter
 from vo_lib.geometry import camera_mount, planar_to_matrix
 from vo_lib.models.track_odometry import TrackOdometry
-from vo_lib.sim import road
-from vo_lib.sim.frame_store import FrameStore
+from vo_lib.sim import frame_store, road
 from vo_lib.sim.render import SensorEffects, StereoRenderer
 from vo_lib.sim.textures import TEXTURE_VERSION
 from vo_lib.sim.trajectories import (
@@ -300,9 +299,10 @@ def render_sample(name: str, frames: int | None = None, resolution=None, first: 
     image_rng = np.random.default_rng(sample.seed + 1)
     gains = exposure_gains(first + n, sample.exposure_sigma, np.random.default_rng(sample.seed + 3))
 
-    store = FrameStore.current(
-        lambda: f"{name}-{fingerprint(name)}-{camera.width}x{camera.height}-from{first}"
-    )
+    store = None
+    if frame_store.FOLDER:  # (the fingerprint is worked out only for a store)
+        key = f"{name}-{fingerprint(name)}-{camera.width}x{camera.height}-from{first}"
+        store = frame_store.FrameStore(frame_store.FOLDER, key)
 
     def frame_iter():
         renderer = None  # built at the first frame the store does not hold (textures take a second)
