@@ -5,36 +5,14 @@ Each imports what it times when it runs, so listing them stays fast.
 
 from __future__ import annotations
 
-from collections.abc import Callable
-
-from vo_lib.bench.bench_lidar_tracking import bench_odometers, bench_tracking
-from vo_lib.bench.bench_line_slam import bench_observers
-from vo_lib.bench.bench_real import bench_real
-from vo_lib.bench.bench_realism import bench_realism
-from vo_lib.bench.bench_sim import bench_sensors
-from vo_lib.bench.bench_stereo_vo import (
-    bench_frontend,
-    bench_geometry,
-    bench_kernels,
-    bench_long,
-    bench_pipeline,
-    bench_ransac,
+from vo_lib.bench import (
+    bench_lidar_tracking,
+    bench_line_slam,
+    bench_real,
+    bench_realism,
+    bench_sim,
+    bench_stereo_vo,
 )
-
-BENCHES: dict[str, Callable[[], dict[str, float]]] = {
-    "pipeline": bench_pipeline,
-    "long": bench_long,
-    "ransac": bench_ransac,
-    "kernels": bench_kernels,
-    "frontend": bench_frontend,
-    "geometry": bench_geometry,
-    "sensors": bench_sensors,
-    "observers": bench_observers,
-    "tracking": bench_tracking,
-    "odometers": bench_odometers,
-    "real": bench_real,
-    "realism": bench_realism,
-}
 
 #: What each benchmark times and how long it runs (wall time of one run on the shared 2-core
 #: development machine under load, rounded; ``bench --help`` lists them).
@@ -51,4 +29,13 @@ BENCH_HELP: dict[str, tuple[str, str]] = {
     "odometers": ("[Yuan]'s PnP odometer beside [Zhao]'s on the rendered corridor", "about 50 s"),
     "real": ("the car pipeline and OpenCV's PnP baseline on real sequences (VO_LIB_REALDATA)", "about 80 s"),
     "realism": ("how real the samples' images look: empty cells, corners, noise", "about 10 s"),
+}
+
+#: Benchmark ``NAME`` is the function ``bench_NAME`` of one of these modules (one per wing).
+_WINGS = (bench_stereo_vo, bench_sim, bench_line_slam, bench_lidar_tracking, bench_real, bench_realism)
+BENCHES = {
+    name: getattr(module, f"bench_{name}")
+    for name in BENCH_HELP
+    for module in _WINGS
+    if hasattr(module, f"bench_{name}")
 }
