@@ -257,8 +257,7 @@ def sample_camera(sample: Sample, resolution=None) -> StereoCamera:
     width, height = sample.resolution if resolution is None else resolution
     if sample.rig == "car":
         f, cx, cy, baseline, w0, h0 = road.KITTI_RIG
-        native = StereoCamera(f, f, cx, cy, baseline, w0, h0)
-        return native if (width, height) == (w0, h0) else native.scaled(width, height)
+        return StereoCamera(f, f, cx, cy, baseline, w0, h0).scaled(width, height)
     return StereoCamera.bumblebee2(width, height)
 
 
