@@ -70,11 +70,16 @@ def _contains(outer: Path, inner: Path) -> bool:
     return outer == inner or outer in inner.parents or same
 
 
+def file_sha256(path) -> str:
+    """The sha256 of the file ``path``, in hex."""
+    return hashlib.sha256(Path(path).read_bytes()).hexdigest()
+
+
 def file_checksums(folder) -> dict[str, str]:
     """sha256 of every file under ``folder`` but the marker, by path relative to it."""
     folder = Path(folder)
     return {
-        p.relative_to(folder).as_posix(): hashlib.sha256(p.read_bytes()).hexdigest()
+        p.relative_to(folder).as_posix(): file_sha256(p)
         for p in sorted(folder.rglob("*"))
         if p.is_file() and p.name != MARKER
     }

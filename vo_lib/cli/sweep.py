@@ -25,7 +25,7 @@ from pathlib import Path
 
 import numpy as np
 
-from vo_lib.arguments import one_line
+from vo_lib.arguments import UsageError, one_line
 from vo_lib.outputs import OutputFolder
 
 #: [Zhao]'s Table 1 resolutions, largest first.
@@ -72,10 +72,6 @@ LOCAL_CLUSTER_CONFIG = {
 }
 
 
-class SweepError(ValueError):
-    """A bad argument for a sweep: reported in one line, exit status 2."""
-
-
 def _named(path: str):
     """The function ``module.name``."""
     module, _, function = path.rpartition(".")
@@ -109,7 +105,7 @@ def dask_client(workers: int, scheduler: str | None):
         except (ValueError, TypeError, OSError, AssertionError) as exc:  # OSError: TimeoutError too
             # an AssertionError: distributed's own event loop did not start within its 10 s
             why = "no event loop" if isinstance(exc, AssertionError) else one_line(exc)
-            raise SweepError(f"--scheduler {scheduler}: cannot reach a scheduler ({why})") from None
+            raise UsageError(f"--scheduler {scheduler}: cannot reach a scheduler ({why})") from None
         with client:
             yield client
         return
@@ -158,7 +154,7 @@ def sweep_command(name: str, seeds: int, workers=None, scheduler=None, out=None,
     cores = len(os.sched_getaffinity(0))
     workers = cores if workers is None else workers
     if scheduler is None and workers > WORKERS_PER_CORE * cores:
-        raise SweepError(f"--workers {workers}: at most {WORKERS_PER_CORE * cores} on {cores} core(s)")
+        raise UsageError(f"--workers {workers}: at most {WORKERS_PER_CORE * cores} on {cores} core(s)")
     _, make_tasks, describe = SWEEPS[name]
     tasks = make_tasks(seeds)
     with OutputFolder(
