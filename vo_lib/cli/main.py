@@ -342,27 +342,22 @@ def _run_parsed(args, command: str) -> int:
 
 @contextlib.contextmanager
 def _signals():
-    """SIGTERM and SIGINT handled by :func:`_stop` meanwhile (from the main
-    thread only: Python sets handlers there), unraisable signals kept quiet; all put back after."""
-    import threading
-
+    """SIGTERM and SIGINT handled by :func:`_stop` meanwhile (:func:`vo_lib.atomic.signals_to`),
+    unraisable signals kept quiet; all put back after."""
+    from vo_lib.atomic import signals_to
     from vo_lib.outputs import INTERRUPTED
 
-    main_thread = threading.current_thread() is threading.main_thread()
-    previous = {s: signal.signal(s, _stop) for s in (signal.SIGTERM, signal.SIGINT)} if main_thread else {}
     INTERRUPTED.clear()
     # our interrupts, where a callback from compiled code reports them instead of raising: dropped
     previous_hook = sys.unraisablehook
     sys.unraisablehook = lambda info: (
         isinstance(info.exc_value, (KeyboardInterrupt, _Stopped)) or previous_hook(info)
     )
-    defaults = {signal.SIGTERM: signal.SIG_DFL, signal.SIGINT: signal.default_int_handler}
     try:
-        yield
+        with signals_to(_stop):
+            yield
     finally:
         sys.unraisablehook = previous_hook
-        for signum, handler in previous.items():
-            signal.signal(signum, handler if handler is not None else defaults[signum])
 
 
 def main(argv: list[str] | None = None) -> int:
