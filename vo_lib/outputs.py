@@ -7,9 +7,7 @@
   Even then a folder is never replaced if it is, holds or lies inside the command's input or this
   package, or if it is or holds the current folder, the home folder or the repository's ``data/`` folder.
 * **Atomic.** A folder is written into a temporary sibling, its marker last, and put in place
-  by :func:`vo_lib.atomic.swap_in` (in one step where the system can swap two folders; what a
-  killed process left is finished or cleared by the next command beside it). A failed or
-  interrupted write deletes its temporary folder.
+  by :func:`vo_lib.atomic.swap_in`; a failed or interrupted write deletes its temporary folder.
 * **Locks.** A command that reads a folder holds a shared lock on it (:func:`reading`); a
   replacement needs the lock exclusively.
 * **Permissions follow the umask.**
