@@ -17,8 +17,8 @@ arguments only, so the figures are the same serially and on any cluster.
 from __future__ import annotations
 
 import contextlib
-import importlib
 import os
+import pkgutil
 import signal
 import sys
 from pathlib import Path
@@ -72,15 +72,9 @@ LOCAL_CLUSTER_CONFIG = {
 }
 
 
-def _named(path: str):
-    """The function ``module.name``."""
-    module, _, function = path.rpartition(".")
-    return getattr(importlib.import_module(module), function)
-
-
 def function_of(name: str):
     """The function a task of sweep ``name`` calls."""
-    return _named(SWEEPS[name][0])
+    return pkgutil.resolve_name(SWEEPS[name][0])
 
 
 def _call(function, kwargs: dict) -> dict:
@@ -171,4 +165,4 @@ def sweep_command(name: str, seeds: int, workers=None, scheduler=None, out=None,
     with pd.option_context("display.max_rows", None, "display.width", 120):
         print(stats.to_string(float_format=lambda v: f"{v:.4g}", na_rep="undefined"))  # one seed: no spread
     if name in REPORTS:
-        _named(REPORTS[name])(table, stats.droplevel(0))
+        pkgutil.resolve_name(REPORTS[name])(table, stats.droplevel(0))
