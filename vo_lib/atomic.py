@@ -102,21 +102,19 @@ def _abandoned_beside(parent: Path, name: str) -> list[tuple[os.DirEntry, str]]:
     return []
 
 
-def restore(parent: Path, name: str) -> Path | None:
+def restore(parent: Path, name: str) -> None:
     """Rename back an ``.old`` folder of ``name`` whose replacement was killed between its two
-    renames (``name`` is missing); returns ``parent / name`` if it was restored."""
+    renames (``name`` is missing)."""
     original = Path(parent, name)
     for entry, kind in _abandoned_beside(parent, name):
         if kind == "old" and not os.path.lexists(original):
             os.rename(entry.path, original)
             notice(f"restored {original}, whose replacement was interrupted")
-            return original
-    return None
 
 
-def clear_abandoned(parent: Path, name: str) -> list[Path]:
+def clear_abandoned(parent: Path, name: str) -> None:
     """Delete the temporaries of ``name`` left in ``parent`` by dead processes of this machine
-    (those of other names are left alone; run :func:`restore` first). Returns what was deleted."""
+    (those of other names are left alone; run :func:`restore` first)."""
     abandoned = [entry for entry, _ in _abandoned_beside(parent, name)]
     for entry in abandoned:  # what cannot go is left
         if entry.is_dir(follow_symlinks=False):
@@ -127,7 +125,6 @@ def clear_abandoned(parent: Path, name: str) -> list[Path]:
     if abandoned:
         names = ", ".join(entry.name for entry in abandoned)
         notice(f"removed {len(abandoned)} temporary folder(s) left by interrupted runs: {names}")
-    return [Path(entry.path) for entry in abandoned]
 
 
 def _exchange(a: Path, b: Path) -> bool:
