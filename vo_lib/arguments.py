@@ -10,6 +10,10 @@ import argparse
 import re
 
 
+class UsageError(ValueError):
+    """A bad argument or bad input: reported by the command line in one line, exit status 2."""
+
+
 class OneLineParser(argparse.ArgumentParser):
     """argparse with errors in one line (no usage block): ``PROG: error: MESSAGE``, exit 2.
 

@@ -89,53 +89,42 @@ def _gone(pid: int) -> bool:
     return False
 
 
-def _abandoned(entry: os.DirEntry, name: str) -> re.Match | None:
-    """The parts of a temporary's name (``NAME``, process, host, kind) where a dead process of
-    this machine left it beside ``name``, else None."""
-    match = _TEMPORARY.fullmatch(entry.name)
-    if not match or match[1] != name or match[3] != HOST or entry.is_symlink() or not _gone(int(match[2])):
-        return None
-    return match
-
-
-def _remove(entry: os.DirEntry) -> None:
-    """Delete a temporary folder (or file) and whatever it holds; what cannot go is left."""
-    if entry.is_dir(follow_symlinks=False):
-        shutil.rmtree(entry.path, ignore_errors=True)
-    with contextlib.suppress(OSError):
-        os.unlink(entry.path)
-
-
 def _abandoned_beside(parent: Path, name: str) -> list[tuple[os.DirEntry, str]]:
-    """(entry, kind) of every temporary that dead processes of this machine left beside ``name``."""
+    """(entry, kind) of every temporary that dead processes of this machine left beside ``name``
+    (a link is never one)."""
     with contextlib.suppress(OSError):
-        found = ((entry, _abandoned(entry, name)) for entry in os.scandir(parent))
-        return [(entry, match[4]) for entry, match in found if match]
+        found = ((entry, _TEMPORARY.fullmatch(entry.name)) for entry in os.scandir(parent))
+        return [
+            (entry, m[4])
+            for entry, m in found
+            if m and (m[1], m[3]) == (name, HOST) and not entry.is_symlink() and _gone(int(m[2]))
+        ]
     return []
 
 
-def restore(parent: Path, name: str) -> Path | None:
+def restore(parent: Path, name: str) -> None:
     """Rename back an ``.old`` folder of ``name`` whose replacement was killed between its two
-    renames (``name`` is missing); returns ``parent / name`` if it was restored."""
+    renames (``name`` is missing)."""
     original = Path(parent, name)
     for entry, kind in _abandoned_beside(parent, name):
         if kind == "old" and not os.path.lexists(original):
             os.rename(entry.path, original)
             notice(f"restored {original}, whose replacement was interrupted")
-            return original
-    return None
 
 
-def clear_abandoned(parent: Path, name: str) -> list[Path]:
+def clear_abandoned(parent: Path, name: str) -> None:
     """Delete the temporaries of ``name`` left in ``parent`` by dead processes of this machine
-    (those of other names are left alone; run :func:`restore` first). Returns what was deleted."""
+    (those of other names are left alone; run :func:`restore` first)."""
     abandoned = [entry for entry, _ in _abandoned_beside(parent, name)]
-    for entry in abandoned:
-        _remove(entry)
+    for entry in abandoned:  # what cannot go is left
+        if entry.is_dir(follow_symlinks=False):
+            shutil.rmtree(entry.path, ignore_errors=True)
+        else:
+            with contextlib.suppress(OSError):
+                os.unlink(entry.path)
     if abandoned:
         names = ", ".join(entry.name for entry in abandoned)
         notice(f"removed {len(abandoned)} temporary folder(s) left by interrupted runs: {names}")
-    return [Path(entry.path) for entry in abandoned]
 
 
 def _exchange(a: Path, b: Path) -> bool:
@@ -172,21 +161,28 @@ def swap_in(complete: Path, target: Path) -> Path | None:
 
 
 @contextlib.contextmanager
-def _signals_held():
-    """SIGINT and SIGTERM held back meanwhile and raised again after. Python runs its signal
-    handlers in the main thread, whichever thread the signal reached, so they are held there by
-    handlers that only note the signal (in another thread, nothing is held)."""
-    if threading.current_thread() is not threading.main_thread():
-        yield
-        return
-    held: list[int] = []
-    kinds = (signal.SIGINT, signal.SIGTERM)
-    previous = {kind: signal.signal(kind, lambda signum, frame: held.append(signum)) for kind in kinds}
+def signals_to(handler):
+    """SIGINT and SIGTERM handled by ``handler`` meanwhile, the previous handlers put back after.
+    Python sets handlers, and runs them, in the main thread only: in another thread nothing changes."""
+    main_thread = threading.current_thread() is threading.main_thread()
+    previous = {kind: signal.signal(kind, handler) for kind in (signal.SIGINT, signal.SIGTERM) if main_thread}
+    defaults = {signal.SIGINT: signal.default_int_handler, signal.SIGTERM: signal.SIG_DFL}
     try:
         yield
     finally:
-        for kind, handler in previous.items():
-            signal.signal(kind, signal.SIG_DFL if handler is None else handler)
+        for kind, old in previous.items():
+            signal.signal(kind, defaults[kind] if old is None else old)
+
+
+@contextlib.contextmanager
+def _signals_held():
+    """SIGINT and SIGTERM held back meanwhile and raised again after (whichever thread a signal
+    reached: Python runs its handlers in the main thread; in another thread nothing is held)."""
+    held: list[int] = []
+    try:
+        with signals_to(lambda signum, frame: held.append(signum)):
+            yield
+    finally:
         if held:
             signal.raise_signal(held[0])
 

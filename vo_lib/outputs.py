@@ -7,9 +7,7 @@
   Even then a folder is never replaced if it is, holds or lies inside the command's input or this
   package, or if it is or holds the current folder, the home folder or the repository's ``data/`` folder.
 * **Atomic.** A folder is written into a temporary sibling, its marker last, and put in place
-  by :func:`vo_lib.atomic.swap_in` (in one step where the system can swap two folders; what a
-  killed process left is finished or cleared by the next command beside it). A failed or
-  interrupted write deletes its temporary folder.
+  by :func:`vo_lib.atomic.swap_in`; a failed or interrupted write deletes its temporary folder.
 * **Locks.** A command that reads a folder holds a shared lock on it (:func:`reading`); a
   replacement needs the lock exclusively.
 * **Permissions follow the umask.**
@@ -70,11 +68,16 @@ def _contains(outer: Path, inner: Path) -> bool:
     return outer == inner or outer in inner.parents or same
 
 
+def file_sha256(path) -> str:
+    """The sha256 of the file ``path``, in hex."""
+    return hashlib.sha256(Path(path).read_bytes()).hexdigest()
+
+
 def file_checksums(folder) -> dict[str, str]:
     """sha256 of every file under ``folder`` but the marker, by path relative to it."""
     folder = Path(folder)
     return {
-        p.relative_to(folder).as_posix(): hashlib.sha256(p.read_bytes()).hexdigest()
+        p.relative_to(folder).as_posix(): file_sha256(p)
         for p in sorted(folder.rglob("*"))
         if p.is_file() and p.name != MARKER
     }
@@ -133,15 +136,14 @@ def linked_from(folder) -> tuple[list[Path], str | None]:
     """Where the symbolic links under ``folder`` lead (resolved): what an input reads through them,
     and, through a link to a folder, what that folder's own links lead to, and so on; and, where
     not every link could be looked at, why not (else None)."""
-    found, seen, unlisted = [], set(), []
+    found, unlisted = [], []
     to_walk, budget = [Path(folder)], MAX_WALKED
     while to_walk and budget > 0:  # a link to / is not walked through the whole file system
         walk = itertools.islice(os.walk(to_walk.pop(), onerror=unlisted.append), budget)
         below = [Path(root) / name for root, folders, files in walk for name in folders + files]
         budget -= len(below) + 1
-        new = sorted({real_path(path) for path in below if path.is_symlink()} - seen)
+        new = sorted({real_path(path) for path in below if path.is_symlink()} - set(found))
         found += new
-        seen.update(new)
         to_walk += [target for target in new if target.is_dir()]
     hidden = f"{unlisted[0].filename} cannot be listed" if unlisted else None  # it may hide links
     return found, hidden or (None if budget > 0 else f"it holds or links to over {MAX_WALKED:,} entries")

@@ -1,7 +1,7 @@
 """``python -m vo_lib evaluate``: an estimated trajectory against ground truth in any common format.
 
 The figures are :mod:`vo_lib.evaluation`'s; the files are read by :mod:`vo_lib.formats`. Bad
-arguments and bad input print one line and exit with status 2 (:class:`~vo_lib.cli.run.UsageError`).
+arguments and bad input print one line and exit with status 2 (:class:`~vo_lib.arguments.UsageError`).
 """
 
 from __future__ import annotations
@@ -10,10 +10,11 @@ from pathlib import Path
 
 import numpy as np
 
-from vo_lib.cli.run import UsageError, calibration_digest, file_sha256
+from vo_lib.arguments import UsageError
+from vo_lib.cli.run import calibration_digest
 from vo_lib.formats.groundtruth import GroundTruthError, associate, read_groundtruth, read_trajectory
 from vo_lib.formats.poses import TrajectoryError
-from vo_lib.outputs import MARKER, read_marker
+from vo_lib.outputs import MARKER, file_sha256, read_marker
 
 
 def run_marker(est: str) -> dict:

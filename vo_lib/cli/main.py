@@ -21,7 +21,7 @@ import sys
 import textwrap
 from pathlib import Path
 
-from vo_lib.arguments import OneLineParser, count_at_least, non_empty, one_line
+from vo_lib.arguments import OneLineParser, UsageError, count_at_least, non_empty, one_line
 
 #: Bounds of ``generate --resolution`` (each side, pixels): 32 keeps a few FAST corners in view,
 #: 4096 keeps a rendered frame pair and its buffers within a few hundred MB.
@@ -274,7 +274,6 @@ def _os_error(exc: OSError, out) -> str:
 
 
 def _generate(args) -> None:
-    from vo_lib.cli.run import UsageError
     from vo_lib.data import data_dir, sample_path
     from vo_lib.outputs import OutputError, check_target
     from vo_lib.sim.samples import generate, get_sample
@@ -317,8 +316,6 @@ def _dispatch(args) -> None:
 def _run_parsed(args, command: str) -> int:
     """Run the parsed command; every failure the user can act on is one line on stderr and its
     exit status (2; 141 when whatever read the output closed the pipe)."""
-    from vo_lib.cli.run import UsageError
-    from vo_lib.cli.sweep import SweepError
     from vo_lib.formats.poses import TrajectoryError
     from vo_lib.outputs import OutputError
 
@@ -335,7 +332,7 @@ def _run_parsed(args, command: str) -> int:
         with contextlib.suppress(OSError):  # stderr may be the same closed pipe (2>&1)
             print(f"{command}: stopped: whatever read its output closed the pipe", file=sys.stderr)
         return 128 + signal.SIGPIPE
-    except (UsageError, SweepError, OutputError, TrajectoryError, OSError) as exc:  # SequenceError too
+    except (UsageError, OutputError, TrajectoryError, OSError) as exc:  # SequenceError too
         # an OSError: e.g. a full disk while writing; the output was not put in place
         why = _os_error(exc, getattr(args, "out", None)) if isinstance(exc, OSError) else exc
         print(f"{command}: error: {one_line(why)}", file=sys.stderr)
@@ -345,27 +342,22 @@ def _run_parsed(args, command: str) -> int:
 
 @contextlib.contextmanager
 def _signals():
-    """SIGTERM and SIGINT handled by :func:`_stop` meanwhile (from the main
-    thread only: Python sets handlers there), unraisable signals kept quiet; all put back after."""
-    import threading
-
+    """SIGTERM and SIGINT handled by :func:`_stop` meanwhile (:func:`vo_lib.atomic.signals_to`),
+    unraisable signals kept quiet; all put back after."""
+    from vo_lib.atomic import signals_to
     from vo_lib.outputs import INTERRUPTED
 
-    main_thread = threading.current_thread() is threading.main_thread()
-    previous = {s: signal.signal(s, _stop) for s in (signal.SIGTERM, signal.SIGINT)} if main_thread else {}
     INTERRUPTED.clear()
     # our interrupts, where a callback from compiled code reports them instead of raising: dropped
     previous_hook = sys.unraisablehook
     sys.unraisablehook = lambda info: (
         isinstance(info.exc_value, (KeyboardInterrupt, _Stopped)) or previous_hook(info)
     )
-    defaults = {signal.SIGTERM: signal.SIG_DFL, signal.SIGINT: signal.default_int_handler}
     try:
-        yield
+        with signals_to(_stop):
+            yield
     finally:
         sys.unraisablehook = previous_hook
-        for signum, handler in previous.items():
-            signal.signal(signum, handler if handler is not None else defaults[signum])
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -12,7 +12,6 @@ Bad arguments and bad input print one line and exit with status 2.
 
 from __future__ import annotations
 
-import csv
 import hashlib
 import os
 import sys
@@ -20,9 +19,10 @@ import threading
 from dataclasses import asdict, fields
 from pathlib import Path
 
+from vo_lib.arguments import UsageError
 from vo_lib.formats.poses import write_kitti_poses, write_tum
 from vo_lib.geometry import camera_poses_from_planar
-from vo_lib.outputs import OutputFolder, notice, reading
+from vo_lib.outputs import OutputFolder, file_sha256, notice, reading
 from vo_lib.sim.samples import SAMPLES, get_sample
 from vo_lib.stereo_vo.run_report import (
     error_report,
@@ -37,10 +37,6 @@ from vo_lib.stereo_vo.run_report import (
 # The pipeline and the metrics (SciPy, Numba) are imported where they are used, so that a run
 # says what it is about to do before they load: its first line comes within a second or two.
 DEFAULT_SEQUENCE = "indoor_linear"
-
-
-class UsageError(Exception):
-    """A bad argument: reported in one line, exit status 2."""
 
 
 def input_path(name_or_path: str, frames: int | None) -> tuple[Path, int | None]:
@@ -107,16 +103,11 @@ def announce_run(name: str, source: Path, frames: int | None, out_dir: Path) -> 
 
 
 def _write_csv(path: Path, rows, cls) -> None:
-    names = [f.name for f in fields(cls)]
-    with path.open("w", newline="") as fh:
-        writer = csv.DictWriter(fh, fieldnames=names)
-        writer.writeheader()
-        writer.writerows(map(asdict, rows))
+    """One row per dataclass in ``rows`` under a header of ``cls``'s fields, as the csv module writes them."""
+    import pandas as pd
 
-
-def file_sha256(path) -> str:
-    """The sha256 of the file ``path``, in hex."""
-    return hashlib.sha256(Path(path).read_bytes()).hexdigest()
+    table = pd.DataFrame(map(asdict, rows), columns=[f.name for f in fields(cls)])
+    table.to_csv(path, index=False, na_rep="nan", lineterminator="\r\n")
 
 
 def calibration_digest(sequence: Path, truth_file: Path) -> str | None:

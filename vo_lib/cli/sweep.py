@@ -17,15 +17,15 @@ arguments only, so the figures are the same serially and on any cluster.
 from __future__ import annotations
 
 import contextlib
-import importlib
 import os
+import pkgutil
 import signal
 import sys
 from pathlib import Path
 
 import numpy as np
 
-from vo_lib.arguments import one_line
+from vo_lib.arguments import UsageError, one_line
 from vo_lib.outputs import OutputFolder
 
 #: [Zhao]'s Table 1 resolutions, largest first.
@@ -72,19 +72,9 @@ LOCAL_CLUSTER_CONFIG = {
 }
 
 
-class SweepError(ValueError):
-    """A bad argument for a sweep: reported in one line, exit status 2."""
-
-
-def _named(path: str):
-    """The function ``module.name``."""
-    module, _, function = path.rpartition(".")
-    return getattr(importlib.import_module(module), function)
-
-
 def function_of(name: str):
     """The function a task of sweep ``name`` calls."""
-    return _named(SWEEPS[name][0])
+    return pkgutil.resolve_name(SWEEPS[name][0])
 
 
 def _call(function, kwargs: dict) -> dict:
@@ -109,7 +99,7 @@ def dask_client(workers: int, scheduler: str | None):
         except (ValueError, TypeError, OSError, AssertionError) as exc:  # OSError: TimeoutError too
             # an AssertionError: distributed's own event loop did not start within its 10 s
             why = "no event loop" if isinstance(exc, AssertionError) else one_line(exc)
-            raise SweepError(f"--scheduler {scheduler}: cannot reach a scheduler ({why})") from None
+            raise UsageError(f"--scheduler {scheduler}: cannot reach a scheduler ({why})") from None
         with client:
             yield client
         return
@@ -158,7 +148,7 @@ def sweep_command(name: str, seeds: int, workers=None, scheduler=None, out=None,
     cores = len(os.sched_getaffinity(0))
     workers = cores if workers is None else workers
     if scheduler is None and workers > WORKERS_PER_CORE * cores:
-        raise SweepError(f"--workers {workers}: at most {WORKERS_PER_CORE * cores} on {cores} core(s)")
+        raise UsageError(f"--workers {workers}: at most {WORKERS_PER_CORE * cores} on {cores} core(s)")
     _, make_tasks, describe = SWEEPS[name]
     tasks = make_tasks(seeds)
     with OutputFolder(
@@ -175,4 +165,4 @@ def sweep_command(name: str, seeds: int, workers=None, scheduler=None, out=None,
     with pd.option_context("display.max_rows", None, "display.width", 120):
         print(stats.to_string(float_format=lambda v: f"{v:.4g}", na_rep="undefined"))  # one seed: no spread
     if name in REPORTS:
-        _named(REPORTS[name])(table, stats.droplevel(0))
+        pkgutil.resolve_name(REPORTS[name])(table, stats.droplevel(0))

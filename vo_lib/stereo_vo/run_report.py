@@ -49,12 +49,12 @@ def print_timing_table(result: PipelineResult, camera, frames: int, decoding_ms=
     print(f"\nTime per frame at {camera.width}x{camera.height} over {frames} frames, in ms")
     title = f"   paper's mean (Table 1, {camera.width}x{camera.height})" if paper else ""
     print(f"  {'stage':<46s}{'median':>8s}{'mean':>9s}{title}")
-    for key, label, values in [*rows, ("whole", "whole frame", whole)]:
+    rows += [("whole", "whole frame", whole)]
+    if decoding_ms is not None and len(decoding_ms):
+        rows += [("decoding", "image decoding (on the reader thread)", decoding_ms)]  # no paper's figure
+    for key, label, values in rows:
         figure = f"   {paper[key]:.3f}" if key in paper else ""
         print(f"  {label:<46s}{np.median(values):8.3f}{np.mean(values):9.3f}{figure}")
-    if decoding_ms is not None and len(decoding_ms):
-        label = "image decoding (on the reader thread)"
-        print(f"  {label:<46s}{np.median(decoding_ms):8.3f}{np.mean(decoding_ms):9.3f}")
     print("  The means of the stages add up to the whole frame; the medians (each stage's typical")
     print("  frame) need not. Images are decoded ahead on a reader thread, outside the whole frame.")
     if paper:
