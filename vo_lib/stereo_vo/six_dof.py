@@ -15,11 +15,8 @@ two frames:
    (7 cm in a 4 deg frame: several pixels at 10 m, so that the model's gates reject true
    matches). The matches are therefore seen from a *virtual camera on the turning axis*: each
    stereo match is triangulated, moved into that camera's frame through the mount and projected
-   again (:func:`turning_axis_view`); the model is exact there, whatever the turn. Where it
-   keeps too few matches, the vehicle pitched or rolled between the frames (a bump, the start of
-   a slope), and a general 3-point RANSAC (OpenCV's P3P) gives the hypothesis instead. A body
-   that moves freely (a drone, a hand-held rig: ``planar_hypotheses`` off) uses the general
-   RANSAC from the start;
+   again (:func:`turning_axis_view`); the model is exact there, whatever the turn. Where the
+   vehicle pitched or rolled, a general 3-point RANSAC stands in (:meth:`SixDofMotion.hypothesis`);
 4. **6-DoF refinement** of the inliers on reprojection errors in both images
    (:mod:`~vo_lib.stereo_vo.rigid_motion`), which also chooses the inliers again;
 5. **Kalman update**: the filter keeps the vehicle's *planar* pose, ``(x, y, yaw)`` of the axis it
