@@ -118,7 +118,7 @@ class VoKalmanFilter:
         self.sideways_sigma = float(sideways_sigma)
         self.ekf = ExtendedKalmanFilter(dim_x=6, dim_z=3)  # (theta, rho, sideways), see update
         P = np.diag([1e-8, 1e-8, 1e-10]) if covariance is None else np.asarray(covariance, float)
-        self.ekf.x = np.concatenate([np.asarray(pose, float), np.asarray(pose, float)])
+        self.ekf.x = np.tile(np.asarray(pose, float), 2)
         self.ekf.P = np.block([[P, P], [P, P]])
         self.last_increment = np.zeros(3)
         self.flags = StepFlags()
