@@ -64,11 +64,11 @@ from vo_lib.comparison import over_seeds
 from vo_lib.data import load_sequence, real_sequence_path
 from vo_lib.geometry import camera_motion, camera_mount, planar_from_camera_poses, relative_planar, wrap_angle
 from vo_lib.stereo_vo import rigid_motion
+from vo_lib.stereo_vo.baselines import run_pnp_baseline
 from vo_lib.stereo_vo.config import CAR
 from vo_lib.stereo_vo.features import StereoFrontEnd
 from vo_lib.stereo_vo.kalman import nis
 from vo_lib.stereo_vo.pipeline import StereoOdometry, run_frames, run_sequence
-from vo_lib.stereo_vo.baselines import run_pnp_baseline
 from vo_lib.stereo_vo.pyramid_features import PyramidFrontEnd
 from vo_lib.stereo_vo.ransac import one_point_ransac
 from vo_lib.stereo_vo.six_dof import turning_axis_transform, turning_axis_view

@@ -196,8 +196,14 @@ def simulate_lap(
     )
     dr = pose.copy()
     steer, target = 0.0, 0
-    truth, est, covs, dead = [pose.copy()], [pose.copy()], [ekf.P.copy()], [dr.copy()]  # per step
-    observed_at, nees = [], []  # per observation
+    truth, est, covs, dead, observed_at, nees = (
+        [pose.copy()],
+        [pose.copy()],
+        [ekf.P.copy()],
+        [dr.copy()],
+        [],
+        [],
+    )
     landmark_of_segment: dict[int, int] = {}
     endpoints: dict[int, list] = {i: [] for i in range(len(segs))}
     dropped = 0
