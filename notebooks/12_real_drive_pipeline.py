@@ -64,11 +64,11 @@ from vo_lib.comparison import over_seeds
 from vo_lib.data import load_sequence, real_sequence_path
 from vo_lib.geometry import camera_motion, camera_mount, planar_from_camera_poses, relative_planar, wrap_angle
 from vo_lib.stereo_vo import rigid_motion
+from vo_lib.stereo_vo.baselines import run_pnp_baseline
 from vo_lib.stereo_vo.config import CAR
 from vo_lib.stereo_vo.features import StereoFrontEnd
 from vo_lib.stereo_vo.kalman import nis
 from vo_lib.stereo_vo.pipeline import StereoOdometry, run_frames, run_sequence
-from vo_lib.stereo_vo.pnp_baseline import run_pnp_baseline
 from vo_lib.stereo_vo.pyramid_features import PyramidFrontEnd
 from vo_lib.stereo_vo.ransac import one_point_ransac
 from vo_lib.stereo_vo.six_dof import turning_axis_transform, turning_axis_view
@@ -499,9 +499,10 @@ display(
 # %% [markdown]
 # ## 5 · Where we stand against a plain OpenCV stereo odometry
 #
-# `vo_lib.stereo_vo.pnp_baseline` is the stereo odometry one writes first with OpenCV: ORB (3000
-# features), brute-force cross-checked matching, `solvePnPRansac` from frame to frame. It runs
-# once here, on the same frames; timings of a single run vary with the machine and its load.
+# `vo_lib.stereo_vo.baselines.run_pnp_baseline` is the stereo odometry one writes first with
+# OpenCV: ORB (3000 features), brute-force cross-checked matching, `solvePnPRansac` from frame to
+# frame. It runs once here, on the same frames; timings of a single run vary with the machine and
+# its load.
 
 # %%
 n_pnp = len(seq) if REAL else 20  # the rendered sample only shows the timing

@@ -5,7 +5,7 @@ import pytest
 from scipy.stats import chi2
 
 from vo_lib.models.track_odometry import TrackOdometry
-from vo_lib.stereo_vo.kalman import VoKalmanFilter, measurement, measurement_jacobian, nis
+from vo_lib.stereo_vo.kalman import VoKalmanFilter, measurement, nis
 
 ODO = TrackOdometry()
 R_VO = np.diag([math.radians(0.05) ** 2, 0.002**2])
@@ -70,18 +70,6 @@ def test_constant_velocity_without_odometry():
     prior = kf.motion_prior()
     assert prior.theta == pytest.approx(0.01, abs=1e-3) and prior.rho == pytest.approx(0.05, abs=2e-3)
     assert not kf.flags.odometry
-
-
-def test_measurement_jacobian_matches_finite_differences(rng):
-    for _ in range(20):
-        x = np.concatenate(
-            [rng.normal(size=2), [rng.uniform(-3, 3)], rng.normal(size=2), [rng.uniform(-3, 3)]]
-        )
-        J = measurement_jacobian(x)
-        num = np.column_stack(
-            [(measurement(x + 1e-6 * e) - measurement(x - 1e-6 * e)) / 2e-6 for e in np.eye(6)]
-        )
-        np.testing.assert_allclose(J, num, atol=1e-6)
 
 
 def test_prior_matches_odometry_prediction():

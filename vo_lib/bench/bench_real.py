@@ -98,7 +98,7 @@ def bench_real(folders=None, repeats: int = REPEATS) -> dict[str, float]:
     ``repeats`` runs each)."""
     import cv2
 
-    from vo_lib.stereo_vo.pnp_baseline import run_pnp_baseline
+    from vo_lib.stereo_vo.baselines import run_pnp_baseline
 
     folders = [Path(f) for f in folders] if folders else realdata_folders()
     if not folders:

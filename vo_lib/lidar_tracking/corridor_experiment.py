@@ -63,8 +63,7 @@ def corridor_visual_odometry(
     rendered, frame_iter = render_sample("corridor", frames, resolution)
     poses, seconds, _ = run_pnp_odometry(rendered.camera, frame_iter)
     planar = planar_from_camera_poses(poses, rendered.mount)
-    start = rendered.truth()[0]
-    return np.array([compose_planar(start, p) for p in planar]), seconds
+    return compose_planar(rendered.truth()[0], planar), seconds
 
 
 def without_umbrella(world: World) -> World:
@@ -126,9 +125,8 @@ def calibrate(world: World, truth, odometry, vo, seed: int) -> Calibration:
     thresholds = Thresholds(
         *(float(np.percentile([getattr(s, k) for s in stats], 1.0)) for k in ("v_max", "d_s", "r_s"))
     )
-    ok = [thresholds.composite(s) for s in stats]
-    laser = [st.laser_correction for st, good in zip(run.steps, ok, strict=True) if good]
-    vo_corr = [st.vo_correction for st, good in zip(run.steps, ok, strict=True) if good]
+    normal = [st for st in run.steps if thresholds.composite(st.stats)]
+    laser, vo_corr = ([getattr(st, k) for st in normal] for k in ("laser_correction", "vo_correction"))
     return Calibration(
         thresholds, ControlLimits.from_corrections(laser), ControlLimits.from_corrections(vo_corr)
     )
@@ -142,10 +140,7 @@ def statistics_table(errors: np.ndarray) -> dict[str, float]:
 
 def unoccluded(x: np.ndarray) -> np.ndarray:
     """Mask of positions along the corridor where radial features are in the laser's view."""
-    out = np.zeros(len(x), bool)
-    for lo, hi in UNOCCLUDED:
-        out |= (x >= lo) & (x <= hi)
-    return out
+    return np.any([(x >= lo) & (x <= hi) for lo, hi in UNOCCLUDED], axis=0)
 
 
 @dataclass

@@ -41,9 +41,8 @@ class LikelihoodField:
         cols = int(np.ceil((xmax - xmin + 2 * MARGIN) / resolution)) + 1
         rows = int(np.ceil((ymax - ymin + 2 * MARGIN) / resolution)) + 1
         occupied = np.zeros((rows, cols), np.uint8)
-        for x0, y0, x1, y1 in world.segments_array(mapped_only=True):
-            p0 = (int(round((x0 - origin[0]) / resolution)), int(round((y0 - origin[1]) / resolution)))
-            p1 = (int(round((x1 - origin[0]) / resolution)), int(round((y1 - origin[1]) / resolution)))
+        ends = world.segments_array(mapped_only=True).reshape(-1, 2, 2)  # (x, y) of both ends
+        for p0, p1 in np.rint((ends - origin) / resolution).astype(int).tolist():  # nearest cells
             cv2.line(occupied, p0, p1, 1, 1)
         distance = cv2.distanceTransform(1 - occupied, cv2.DIST_L2, cv2.DIST_MASK_PRECISE) * resolution
         field = np.exp(-0.5 * (distance / sigma) ** 2).astype(np.float32)

@@ -27,6 +27,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
+from vo_lib.stereo_vo.baselines import cross_checked_matches
 from vo_lib.stereo_vo.features import StereoFrontEnd, best_matches, hamming
 
 SEARCH_RADIUS = 15.0  # pixels around the predicted position (eq. 5)
@@ -119,14 +120,6 @@ class PnpVisualOdometry:
         a, b, _ = best_matches(ia, ib, dist, len(points_w), len(feats))
         return a, b
 
-    def _match_brute_force(self, desc_w, feats):
-        """Every landmark against every feature (OpenCV's brute-force Hamming matcher, cross-checked)."""
-        matcher = cv2.BFMatcher(cv2.NORM_HAMMING, crossCheck=True)
-        matches = matcher.match(desc_w, feats.descriptors)
-        a = np.array([m.queryIdx for m in matches], int)
-        b = np.array([m.trainIdx for m in matches], int)
-        return a, b
-
     # ------------------------------------------------------------------ one frame
     def predicted_pose(self) -> np.ndarray:
         """Eq. 2-3: the last motion repeated. The paper's world-frame velocity
@@ -147,8 +140,8 @@ class PnpVisualOdometry:
         points_w = np.vstack([k.points for k in self.keyframes])
         desc_w = np.vstack([k.descriptors for k in self.keyframes])
         brute = self.lost
-        a, b = (
-            self._match_brute_force(desc_w, feats)
+        a, b = (  # every landmark against every feature, or motion-model matching
+            cross_checked_matches(desc_w, feats.descriptors)
             if brute
             else self._match_guided(points_w, desc_w, feats, prediction)
         )

@@ -155,12 +155,7 @@ def sample_poses(prediction, n: int, rng: np.random.Generator, sigma=SAMPLE_SIGM
     robot's frame (the first sample is the prediction itself)."""
     noise = rng.standard_normal((n, 3)) * sigma
     noise[0] = 0.0
-    c, s = math.cos(prediction[2]), math.sin(prediction[2])
-    samples = np.empty((n, 3))
-    samples[:, 0] = prediction[0] + c * noise[:, 0] - s * noise[:, 1]
-    samples[:, 1] = prediction[1] + s * noise[:, 0] + c * noise[:, 1]
-    samples[:, 2] = wrap_angle(prediction[2] + noise[:, 2])
-    return samples
+    return compose_planar(prediction, noise)
 
 
 def principal_error_direction(corrections, scores, theta_limit: float = THETA_LIMIT):

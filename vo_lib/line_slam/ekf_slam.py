@@ -129,11 +129,8 @@ class EkfSlam:
     def mahalanobis(self, z, R=None) -> np.ndarray:
         """Squared Mahalanobis distance (eq. 13) of observation ``z`` to every landmark:
         ``D^2 = nu^T S^-1 nu`` with ``S`` the innovation covariance."""
-        out = np.empty(self.n_landmarks)
-        for j in range(self.n_landmarks):
-            nu, _, _, S, _ = self._innovation(z, j, R)
-            out[j] = nu @ np.linalg.solve(S, nu)
-        return out
+        innovations = (self._innovation(z, j, R) for j in range(self.n_landmarks))
+        return np.array([nu @ np.linalg.solve(S, nu) for nu, _, _, S, _ in innovations], dtype=float)
 
     def euclidean(self, z) -> np.ndarray:
         """Plain distance, in metres, from the observed feature point (placed with the estimated

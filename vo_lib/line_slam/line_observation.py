@@ -65,14 +65,12 @@ def measure_line(z_ends, range_sigma: float, bearing_sigma: float, eps: float = 
     ``bearing_sigma``, independent) propagated to first order."""
     z = np.asarray(z_ends, dtype=float).reshape(4)
     line = line_from_range_bearing(z)
-    J = np.empty((2, 4))
-    for i in range(4):
-        dz = np.zeros(4)
-        dz[i] = eps
-        hi, lo = line_from_range_bearing(z + dz), line_from_range_bearing(z - dz)
-        diff = hi - lo
-        diff[1] = wrap_angle(diff[1])
-        J[:, i] = diff / (2 * eps)
+    # central differences, one row per end-point component
+    diff = np.array(
+        [line_from_range_bearing(z + dz) - line_from_range_bearing(z - dz) for dz in eps * np.eye(4)]
+    )
+    diff[:, 1] = wrap_angle(diff[:, 1])
+    J = diff.T / (2 * eps)
     noise = np.diag([range_sigma**2, bearing_sigma**2, range_sigma**2, bearing_sigma**2])
     return line, J @ noise @ J.T
 

@@ -23,8 +23,8 @@ Read in the order a frame is processed (``pipeline`` strings the parts of ``part
 ``frames``            what the pipeline records per frame, and a run's result
 ``pipeline``          the whole method, frame by frame (Fig. 3); start reading here
 ``run_report``        the tables of a run: time per stage, errors in 3-D, planar ones labelled
-``baselines``         3-point rigid RANSAC, solvePnPRansac, 5-point essential matrix
-``pnp_baseline``      a PnP visual odometry to time the pipeline against on real data
+``baselines``         3-point rigid RANSAC, solvePnPRansac, 5-point essential matrix; a PnP
+                      visual odometry to time the pipeline against on real data
 ``synthetic``         matches under a known circular motion, for exact checks
 ``paper_sets``        the paper's outdoor and spot-turn sets at full length, run once and stored
 

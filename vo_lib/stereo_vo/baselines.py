@@ -1,4 +1,5 @@
-"""General-purpose motion estimators, run on the same matches as the 1-point method.
+"""General-purpose motion estimators, run on the same matches as the 1-point method, and the
+plain OpenCV stereo odometry that is the yardstick on real images.
 
 * :func:`rigid_ransac`: 3-point RANSAC on 3-D to 3-D matches (Kabsch/Umeyama fit, 6 DoF).
 * :func:`pnp_ransac`: OpenCV ``solvePnPRansac``, previous 3-D points to current pixels (6 DoF).
@@ -7,10 +8,18 @@
 
 Each returns a :class:`MotionEstimate` whose ``theta`` and ``rho`` are those of the planar
 circular motion closest to its rigid motion, so all estimators compare on one footing.
+
+:class:`PnpStereoOdometry` (run by :func:`run_pnp_baseline`) is the usual first stereo odometry
+one writes with OpenCV: ORB features in both images, stereo matches by brute-force Hamming
+matching with cross-check on the same rows, their triangulated points matched to the next left
+image the same way, and the motion from ``cv2.solvePnPRansac`` (iterative PnP on reprojection
+errors in the left image). The benchmark and notebook 12 run it on the same frames as our
+pipeline, in the same process.
 """
 
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass
 
 import cv2
@@ -23,6 +32,12 @@ from vo_lib.stereo_vo.ransac import DEFAULT_PARAMS, hypotheses_needed
 #: Pixels, in (u, v, d) for the rigid fit and (u, v) for PnP: ~99 % of two noisy views.
 REPROJECTION_THRESHOLD = 3.0
 MAX_ITERATIONS = 1000
+#: The PnP stereo odometry: ORB features per image, stereo row tolerance (pixels), and its
+#: ``solvePnPRansac``'s inlier threshold (pixels) and hypotheses.
+PNP_FEATURES = 3000
+PNP_ROW_TOLERANCE = 1.5
+PNP_REPROJECTION_PIXELS = 1.0
+PNP_ITERATIONS = 200
 
 
 @dataclass
@@ -146,3 +161,82 @@ def essential_ransac(w_prev, w_curr, camera: StereoCamera, seed: int = 0) -> Mot
     _, R, t, mask = cv2.recoverPose(E, a[:, :2], b[:, :2], camera.K, mask=mask)
     inliers = mask.ravel() > 0
     return MotionEstimate(R, t.ravel(), inliers, True)
+
+
+@dataclass
+class PnpRun:
+    """Camera poses ``(N, 4, 4)`` in frame 0's camera, milliseconds per frame, inliers per frame."""
+
+    camera_poses: np.ndarray
+    milliseconds: np.ndarray
+    inliers: np.ndarray
+
+
+def cross_checked_matches(des_a: np.ndarray, des_b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Index pairs ``(i, j)`` of OpenCV's brute-force Hamming matcher with cross-check: ``des_b[j]``
+    is ``des_a[i]``'s nearest and the other way round."""
+    matches = cv2.BFMatcher(cv2.NORM_HAMMING, crossCheck=True).match(des_a, des_b)
+    return np.array([m.queryIdx for m in matches], int), np.array([m.trainIdx for m in matches], int)
+
+
+class PnpStereoOdometry:
+    """Frame-to-frame stereo odometry with ORB and ``solvePnPRansac``."""
+
+    def __init__(self, camera: StereoCamera):
+        self.camera = camera
+        self.orb = cv2.ORB_create(PNP_FEATURES)
+        self.previous = None
+        self.pose = np.eye(4)
+
+    def _stereo(self, left, right):
+        kl, dl = self.orb.detectAndCompute(left, None)
+        kr, dr = self.orb.detectAndCompute(right, None)
+        if dl is None or dr is None:
+            return np.zeros((0, 2)), np.zeros((0, 32), np.uint8), np.zeros((0, 3))
+        pl, pr = cv2.KeyPoint_convert(kl).reshape(-1, 2), cv2.KeyPoint_convert(kr).reshape(-1, 2)
+        i, j = cross_checked_matches(dl, dr)
+        d = pl[i, 0] - pr[j, 0]
+        ok = (np.abs(pl[i, 1] - pr[j, 1]) < PNP_ROW_TOLERANCE) & (d > 0.5)
+        i, d = i[ok], d[ok]
+        points = self.camera.backproject(np.column_stack([pl[i], d]))
+        return pl[i], dl[i], points
+
+    def process(self, left: np.ndarray, right: np.ndarray) -> tuple[np.ndarray, int]:
+        """Camera pose of this frame in frame 0's camera, and the PnP inlier count."""
+        current = self._stereo(left, right)
+        inliers = 0
+        if self.previous is not None and len(self.previous[1]) and len(current[1]):
+            i, j = cross_checked_matches(self.previous[1], current[1])
+            if len(i) >= 6:
+                ok, rvec, tvec, idx = cv2.solvePnPRansac(
+                    self.previous[2][i].astype(np.float64),
+                    current[0][j].astype(np.float64),
+                    self.camera.K,
+                    None,
+                    iterationsCount=PNP_ITERATIONS,
+                    reprojectionError=PNP_REPROJECTION_PIXELS,
+                    confidence=DEFAULT_PARAMS.confidence,
+                )
+                if ok and idx is not None:
+                    T = np.eye(4)
+                    T[:3, :3], T[:3, 3] = cv2.Rodrigues(rvec)[0], tvec.ravel()
+                    self.pose = self.pose @ np.linalg.inv(T)
+                    inliers = len(idx)
+        self.previous = current
+        return self.pose.copy(), inliers
+
+
+def run_pnp_baseline(sequence, frames: int | None = None, seed: int = 0) -> PnpRun:
+    """Run :class:`PnpStereoOdometry` over the first ``frames`` frames of a sequence."""
+    cv2.setRNGSeed(seed)  # solvePnPRansac draws from OpenCV's generator
+    n = len(sequence) if frames is None else min(int(frames), len(sequence))
+    vo = PnpStereoOdometry(sequence.camera)
+    poses, ms, inliers = [], [], []
+    for k in range(n):
+        left, right = sequence.pair(k)
+        t0 = time.perf_counter()
+        pose, count = vo.process(left, right)
+        ms.append((time.perf_counter() - t0) * 1e3)
+        poses.append(pose)
+        inliers.append(count)
+    return PnpRun(np.array(poses), np.array(ms), np.array(inliers))

@@ -201,13 +201,8 @@ class StereoFrontEnd:
             return np.zeros((0, 2), np.float32), np.zeros(0, np.float32)
         pts = cv2.KeyPoint_convert(kps).reshape(-1, 2)
         resp = np.fromiter((k.response for k in kps), np.float32, len(kps))
-        h, w = image.shape
-        inside = (
-            (pts[:, 0] >= ORB_BORDER)
-            & (pts[:, 0] < w - ORB_BORDER)
-            & (pts[:, 1] >= ORB_BORDER)
-            & (pts[:, 1] < h - ORB_BORDER)
-        )
+        size = np.array(image.shape[::-1])  # (width, height)
+        inside = np.all((pts >= ORB_BORDER) & (pts < size - ORB_BORDER), axis=1)
         return pts[inside], resp[inside]
 
     def _describe(self, image: np.ndarray, pts: np.ndarray):

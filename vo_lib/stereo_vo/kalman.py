@@ -23,6 +23,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from filterpy.kalman import ExtendedKalmanFilter
+from scipy.linalg import block_diag
 
 from vo_lib.geometry import compose_planar, relative_planar, wrap_angle, yaw_matrix
 from vo_lib.models.track_odometry import TrackOdometry
@@ -81,11 +82,6 @@ def measurement(state6: np.ndarray) -> np.ndarray:
     return constrained_measurement(state6)[:2]
 
 
-def measurement_jacobian(state6: np.ndarray) -> np.ndarray:
-    """2x6 derivative of :func:`measurement` with respect to ``[pose_k, pose_k-1]``."""
-    return constrained_jacobian(state6)[:2]
-
-
 def _residual(z, hx):
     y = np.asarray(z, float) - hx
     y[0] = wrap_angle(y[0])
@@ -122,7 +118,7 @@ class VoKalmanFilter:
         self.sideways_sigma = float(sideways_sigma)
         self.ekf = ExtendedKalmanFilter(dim_x=6, dim_z=3)  # (theta, rho, sideways), see update
         P = np.diag([1e-8, 1e-8, 1e-10]) if covariance is None else np.asarray(covariance, float)
-        self.ekf.x = np.concatenate([np.asarray(pose, float), np.asarray(pose, float)])
+        self.ekf.x = np.tile(np.asarray(pose, float), 2)
         self.ekf.P = np.block([[P, P], [P, P]])
         self.last_increment = np.zeros(3)
         self.flags = StepFlags()
@@ -154,16 +150,8 @@ class VoKalmanFilter:
         the current pose moves on, its cross-covariance with the reference is carried along, and
         the next VO measurement is the motion from that reference frame to the current one.
         """
-        x = self.ekf.x[:3].copy()
-        P = self.ekf.P[:3, :3]
-        if keep_reference:
-            reference, P_ref, P_cross = (
-                self.ekf.x[3:].copy(),
-                self.ekf.P[3:, 3:].copy(),
-                self.ekf.P[:3, 3:].copy(),
-            )
-        else:
-            reference, P_ref, P_cross = x, P, P
+        x, P = self.ekf.x[:3], self.ekf.P[:3, :3]
+        ref = slice(3, 6) if keep_reference else slice(0, 3)  # the kept clone, or the pose cloned now
         if u is not None:
             u = np.asarray(u, float)
             x_new, F, G = self.odometry.step(x, u)  # eq. 6-11 and their full Jacobians (notebook 01)
@@ -187,17 +175,13 @@ class VoKalmanFilter:
             )
             Q = Rw @ np.diag(sigma**2) @ Rw.T
             self.flags = StepFlags(odometry=False)
-        self.ekf.x = np.concatenate([x_new, reference])
-        P6 = np.empty((6, 6))
-        P6[:3, :3] = F @ P @ F.T + Q
-        P6[:3, 3:] = F @ P_cross
-        P6[3:, :3] = P6[:3, 3:].T
-        P6[3:, 3:] = P_ref
-        self.ekf.P = P6
+        self.ekf.x = np.concatenate([x_new, self.ekf.x[ref]])
+        FP = F @ self.ekf.P[:3, ref]  # the cross-covariance, carried along
+        self.ekf.P = np.block([[F @ P @ F.T + Q, FP], [FP.T, self.ekf.P[ref, ref]]])
 
     def motion_prior(self) -> MotionPrior:
         """Predicted ``(theta, rho)`` of this frame and its covariance ``H P H^T``."""
-        H = measurement_jacobian(self.ekf.x)
+        H = constrained_jacobian(self.ekf.x)[:2]
         z = measurement(self.ekf.x)
         return MotionPrior(float(z[0]), float(z[1]), H @ self.ekf.P @ H.T)
 
@@ -210,12 +194,7 @@ class VoKalmanFilter:
         then ``(theta, rho, sideways)`` is the measurement and the constraint is not applied.
         """
         covariance = np.asarray(covariance, float)
-        R = np.zeros((3, 3))
-        if covariance.shape == (3, 3):
-            R[:] = covariance
-        else:
-            R[:2, :2] = covariance
-            R[2, 2] = self.sideways_sigma**2
+        R = covariance if covariance.shape == (3, 3) else block_diag(covariance, self.sideways_sigma**2)
         self.ekf.update(
             np.array([theta, rho, sideways]),
             constrained_jacobian,

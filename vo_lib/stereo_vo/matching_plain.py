@@ -21,9 +21,7 @@ def _hamming(des_a, des_b, ia, ib):
 
 
 def best_matches(ia, ib, dist, n_a, n_b, max_distance, ratio, mutual):
-    """For each ``a`` the nearest ``b``, kept if within ``max_distance``, if the second nearest is
-    farther by the ``ratio`` test and (with ``mutual``) if no other ``a`` is nearer to that ``b``.
-    Returns ``(index_a, index_b, distance)``, ordered by ``b`` with ``mutual``, else by ``a``."""
+    """The rule of :func:`vo_lib.stereo_vo.features.best_matches`, by sorts."""
     ia, ib, dist = np.asarray(ia, np.int64), np.asarray(ib, np.int64), np.asarray(dist, np.int64)
     if len(dist) == 0:
         empty = np.zeros(0, np.int64)
@@ -50,9 +48,7 @@ def best_matches(ia, ib, dist, n_a, n_b, max_distance, ratio, mutual):
 
 
 def window_candidates(predicted, radius, w_curr, order_v, sorted_v, des_prev, des_curr):
-    """Pairs ``(i, j)``: current feature ``j`` within ``radius[i] = (ru, rv, rd)`` of previous
-    feature ``i``'s predicted ``(u, v, d)``; with their Hamming distances, ordered by ``i``, then
-    by row."""
+    """:func:`.matching_core.window_candidates`, by :func:`.window_pairs` on the rows."""
     seen = np.all(np.isfinite(predicted), axis=1)
     half = np.where(seen, radius[:, 1], -1.0)  # a window no row falls in
     v = np.where(seen, predicted[:, 1], 0.0)
@@ -67,9 +63,7 @@ def window_candidates(predicted, radius, w_curr, order_v, sorted_v, des_prev, de
 def row_candidates(
     left, left_level, right, right_level, order_v, sorted_v, row_tolerance, d_min, d_max, des_left, des_right
 ):
-    """Stereo candidates: a left and a right corner within ``row_tolerance`` rows, with a
-    disparity in ``[d_min, d_max]`` and pyramid levels at most one apart, with their Hamming
-    distances; ordered by left corner, then by right row."""
+    """:func:`.matching_core.row_candidates`, by :func:`.window_pairs` on the rows."""
     half = np.full(len(left), float(row_tolerance))
     ia, ib = window_pairs(left[:, 1], sorted_v, half)
     ib = order_v[ib]
@@ -80,8 +74,7 @@ def row_candidates(
 
 
 def sad_costs(left, right, ui, vi, di, half, search):
-    """``costs[k + search, n]``: sum of absolute differences between the left patch of half-width
-    ``half`` at ``(ui[n], vi[n])`` and the right patch at disparity ``di[n] + k``."""
+    """:func:`.matching_core.sad_costs`, one disparity at a time over all patches."""
     du, dv = np.meshgrid(np.arange(-half, half + 1), np.arange(-half, half + 1))
     rows = vi[:, None] + dv.ravel()  # (n, patch pixels)
     cols = ui[:, None] + du.ravel()

@@ -22,6 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
+from vo_lib.atomic import write_atomic
 from vo_lib.evaluation import key_position_errors, planar_path_length, turned_degrees
 from vo_lib.geometry import relative_planar, wrap_angle
 from vo_lib.models.track_odometry import TrackOdometry
@@ -152,15 +153,6 @@ def contradiction_study() -> dict:
     }
 
 
-def write(results: dict) -> Path:
-    """Store ``results`` as :data:`RESULTS` (written beside, then renamed: an interrupted write
-    keeps the old file)."""
-    tmp = RESULTS.with_suffix(".json.part")
-    tmp.write_text(json.dumps(results, indent=1) + "\n")
-    tmp.replace(RESULTS)
-    return RESULTS
-
-
 def load(path=RESULTS) -> dict:
     """The stored results; ``ValueError`` when a set's sample has changed since they were made."""
     results = json.loads(Path(path).read_text())
@@ -192,7 +184,8 @@ def main(argv=None) -> int:
     for name in [] if study else names:  # the sets, printed as each is done
         stored["sets"][name] = run_set(name)
         print(f"{name}: {stored['sets'][name]}", flush=True)
-    print(f"written {write(stored)}")
+    text = json.dumps(stored, indent=1) + "\n"
+    print(f"written {write_atomic(RESULTS, text)}")  # an interrupted write keeps the old file
     return 0
 
 

@@ -1,10 +1,9 @@
 """The general motion of a stereo camera: six degrees of freedom, refined on reprojection errors.
 
-The circular-motion model (eq. 12-17) holds for a camera above the turning axis of a robot on a
-flat floor. A car breaks all three assumptions: the camera sits ahead of the rear axle, the road
-climbs and banks, and the body pitches as the car brakes. The pipeline therefore keeps 1-point
-RANSAC (theta from eq. 14 alone, then rho) as the *outlier filter*, which is why it is fast, and
-refines the motion of its inliers here with all six degrees of freedom.
+A car breaks the assumptions of the circular-motion model (eq. 12-17): the camera sits ahead of
+the rear axle, the road climbs and banks, the body pitches as the car brakes. The inliers of
+1-point RANSAC, the outlier filter (:mod:`.six_dof`), are refined here with all six degrees of
+freedom.
 
 A motion ``T = (R, t)`` maps a point of the previous camera frame into the current one,
 ``Q = R P + t``. Its residual for one match is the reprojection error in disparity space,
@@ -201,7 +200,7 @@ def se3_exp(w, v) -> np.ndarray:
     """The 4x4 rigid motion of the twist ``(w, v)``: ``R = exp([w]x)``, ``t = V(w) v``."""
     w = np.asarray(w, float)
     T = np.eye(4)
-    T[:3, :3] = cv2.Rodrigues(w)[0]  # exp of so(3): Rodrigues' formula
+    T[:3, :3] = rotation_matrix(w)  # exp of so(3)
     T[:3, 3] = _left_jacobian(w) @ np.asarray(v, float)
     return T
 

@@ -15,11 +15,8 @@ two frames:
    (7 cm in a 4 deg frame: several pixels at 10 m, so that the model's gates reject true
    matches). The matches are therefore seen from a *virtual camera on the turning axis*: each
    stereo match is triangulated, moved into that camera's frame through the mount and projected
-   again (:func:`turning_axis_view`); the model is exact there, whatever the turn. Where it
-   keeps too few matches, the vehicle pitched or rolled between the frames (a bump, the start of
-   a slope), and a general 3-point RANSAC (OpenCV's P3P) gives the hypothesis instead. A body
-   that moves freely (a drone, a hand-held rig: ``planar_hypotheses`` off) uses the general
-   RANSAC from the start;
+   again (:func:`turning_axis_view`); the model is exact there, whatever the turn. Where the
+   vehicle pitched or rolled, a general 3-point RANSAC stands in (:meth:`SixDofMotion.hypothesis`);
 4. **6-DoF refinement** of the inliers on reprojection errors in both images
    (:mod:`~vo_lib.stereo_vo.rigid_motion`), which also chooses the inliers again;
 5. **Kalman update**: the filter keeps the vehicle's *planar* pose, ``(x, y, yaw)`` of the axis it
@@ -124,13 +121,10 @@ def chord_covariance(T_cam: np.ndarray, covariance6: np.ndarray, mount: np.ndarr
     The twelve moved motions go through :func:`vehicle_increment`'s products as one stack of 4x4
     matrices.
     """
-    R = _STEP_ROTATIONS @ T_cam[:3, :3]
-    t = _STEP_ROTATIONS @ T_cam[:3, 3] + _STEPS[:, 3:]
-    moved_inverse = np.zeros((12, 4, 4))  # rigid_inverse of each moved motion
-    moved_inverse[:, :3, :3] = np.swapaxes(R, 1, 2)
-    moved_inverse[:, :3, 3] = (-np.swapaxes(R, 1, 2) @ t[:, :, None])[:, :, 0]
-    moved_inverse[:, 3, 3] = 1.0
-    V = mount @ moved_inverse @ rigid_inverse(mount)
+    moved = np.zeros((12, 4, 4))  # R <- exp([dw]x) R, t <- exp([dw]x) t + dt
+    moved[:, :3, :3] = _STEP_ROTATIONS @ T_cam[:3, :3]
+    moved[:, :3, 3] = _STEP_ROTATIONS @ T_cam[:3, 3] + _STEPS[:, 3:]
+    V = mount @ rigid_inverse(moved) @ rigid_inverse(mount)
     z = np.array([chord_measurement((M[0, 3], M[1, 3], math.atan2(M[1, 0], M[0, 0]))) for M in V])
     J = ((z[:6] - z[6:]) / (2 * COVARIANCE_STEP)).T
     return J @ covariance6 @ J.T

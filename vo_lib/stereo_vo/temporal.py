@@ -54,16 +54,6 @@ class TemporalMatches:
     def __len__(self) -> int:
         return len(self.idx_prev)
 
-    @classmethod
-    def empty(cls) -> TemporalMatches:
-        none = np.zeros(0, int)
-        return cls(none, none, np.zeros((0, 3)), np.zeros((0, 3)), 0, {"temporal_match": 0.0})
-
-
-def all_pairs(n_prev: int, n_curr: int) -> tuple[np.ndarray, np.ndarray]:
-    """Every ``(i, j)`` pair, ordered by ``i``: the candidates of brute-force matching."""
-    return np.repeat(np.arange(n_prev), n_curr), np.tile(np.arange(n_curr), n_prev)
-
 
 def predict_features(w_prev: np.ndarray, camera: StereoCamera, T) -> tuple[np.ndarray, np.ndarray]:
     """Predicted ``(u, v, d)`` of previous features after the camera motion ``T`` (4x4
@@ -84,10 +74,10 @@ def prediction_sigma(w_prev: np.ndarray, camera: StereoCamera, prior: MotionPrio
     """
     if base is None:
         base, _ = predict_features(w_prev, camera, motion_transform(prior.theta, prior.rho))
-    h_theta, h_rho = 1e-5, 1e-5
-    moved_theta = predict_features(w_prev, camera, motion_transform(prior.theta + h_theta, prior.rho))[0]
-    moved_rho = predict_features(w_prev, camera, motion_transform(prior.theta, prior.rho + h_rho))[0]
-    d_theta, d_rho = (moved_theta - base) / h_theta, (moved_rho - base) / h_rho
+    h = 1e-5
+    moved_theta = predict_features(w_prev, camera, motion_transform(prior.theta + h, prior.rho))[0]
+    moved_rho = predict_features(w_prev, camera, motion_transform(prior.theta, prior.rho + h))[0]
+    d_theta, d_rho = (moved_theta - base) / h, (moved_rho - base) / h
     C = np.asarray(prior.covariance, dtype=float)
     var = d_theta**2 * C[0, 0] + 2 * d_theta * d_rho * C[0, 1] + d_rho**2 * C[1, 1]
     return np.sqrt(np.nan_to_num(var, nan=np.inf) + PIXEL_SIGMA**2)
@@ -172,14 +162,6 @@ def track_subpixel(
     return out
 
 
-def prior_windows(w_prev: np.ndarray, camera: StereoCamera, prior: MotionPrior):
-    """Each previous feature's predicted ``(u, v, d)`` under a circular-motion prior and the
-    half-widths ``(N, 3)`` of its window: ``N_SIGMA`` standard deviations, within
-    ``[MIN_RADIUS, MAX_RADIUS]``."""
-    pred, _ = predict_features(w_prev, camera, motion_transform(prior.theta, prior.rho))
-    return pred, np.clip(N_SIGMA * prediction_sigma(w_prev, camera, prior, pred), MIN_RADIUS, MAX_RADIUS)
-
-
 def match_features(
     prev: StereoFeatures,
     curr: StereoFeatures,
@@ -201,9 +183,10 @@ def match_features(
     t0 = time.perf_counter()
     n_prev, n_curr = len(prev), len(curr)
     if n_prev == 0 or n_curr == 0:
-        return TemporalMatches.empty()
-    if predicted is None:
-        ia, ib = all_pairs(n_prev, n_curr)
+        none = np.zeros(0, int)
+        return TemporalMatches(none, none, np.zeros((0, 3)), np.zeros((0, 3)), 0, {"temporal_match": 0.0})
+    if predicted is None:  # every (i, j) pair, ordered by i
+        ia, ib = np.repeat(np.arange(n_prev), n_curr), np.tile(np.arange(n_curr), n_prev)
         dist = hamming(prev.descriptors[ia], curr.descriptors[ib])
     else:
         order = np.argsort(curr.w[:, 1], kind="stable")
@@ -228,7 +211,10 @@ def match_temporal(
     prev: StereoFeatures, curr: StereoFeatures, camera: StereoCamera, prior: MotionPrior | None = None
 ) -> TemporalMatches:
     """The paper's guided matching: inside each feature's window under the filter's ``prior``
-    (:func:`prior_windows`), refined to sub-pixel; without a prior, every pair (brute force)."""
+    (``N_SIGMA`` standard deviations of its predicted ``(u, v, d)``, within ``[MIN_RADIUS,
+    MAX_RADIUS]``), refined to sub-pixel; without a prior, every pair (brute force)."""
     if prior is None:
         return match_features(prev, curr, refine=True)
-    return match_features(prev, curr, *prior_windows(prev.w, camera, prior), refine=True)
+    pred, _ = predict_features(prev.w, camera, motion_transform(prior.theta, prior.rho))
+    radius = np.clip(N_SIGMA * prediction_sigma(prev.w, camera, prior, pred), MIN_RADIUS, MAX_RADIUS)
+    return match_features(prev, curr, pred, radius, refine=True)
