@@ -11,7 +11,8 @@ from pathlib import Path
 import numpy as np
 
 from vo_lib.cli.run import UsageError, calibration_digest, file_sha256
-from vo_lib.formats.groundtruth import GroundTruthError, associate, read_groundtruth, read_trajectory
+from vo_lib.evaluation import associate
+from vo_lib.formats.groundtruth import GroundTruthError, read_groundtruth, read_trajectory
 from vo_lib.formats.poses import TrajectoryError
 from vo_lib.outputs import MARKER, read_marker
 

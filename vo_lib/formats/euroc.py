@@ -11,8 +11,9 @@ from pathlib import Path
 
 import numpy as np
 
+from vo_lib.evaluation import to_camera
 from vo_lib.formats.asl_calibration import AslError, read_camera_yaml, rectify, truth_extrinsic
-from vo_lib.formats.groundtruth import covering, read_groundtruth, to_camera
+from vo_lib.formats.groundtruth import covering, read_groundtruth
 from vo_lib.formats.images import check_headers
 from vo_lib.formats.poses import read_text
 from vo_lib.formats.sequence import Sequence, check_frame_spacing
