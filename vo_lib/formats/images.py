@@ -42,10 +42,17 @@ _DEVNULL: int | None = None  # a descriptor of os.devnull, opened on first use
 _STDERR_LOCK = threading.Lock()
 
 
-def _decode(data: bytes) -> np.ndarray | None:
-    """OpenCV's decoder on a file's bytes (``cv2.imread`` crashes on a path that is not UTF-8), or None."""
+def _decode(path: Path) -> np.ndarray | None:
+    """OpenCV's decoder on the file's bytes (``cv2.imread`` crashes on a path that is not UTF-8),
+    or None, also for a PNG without its closing IEND chunk."""
     try:
-        return cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_UNCHANGED)
+        data = np.fromfile(path, np.uint8)
+    except OSError:
+        return None
+    if data.size == 0 or (data[:8].tobytes() == PNG_SIGNATURE and data[-8:-4].tobytes() != b"IEND"):
+        return None
+    try:
+        return cv2.imdecode(data, cv2.IMREAD_UNCHANGED)
     except cv2.error:
         return None
 
@@ -63,31 +70,25 @@ def _png_chunks_intact(data: bytes) -> bool:
 
 
 def _imread_quietly(path: Path) -> np.ndarray | None:
-    """The decoded image, or None (also for a PNG without its closing IEND chunk), with stderr
-    muted meanwhile against libpng's messages (by the main thread only, one call at a time: other
-    threads' writes would be swallowed)."""
+    """The decoded image, or None, with stderr muted meanwhile against libpng's messages (by the
+    main thread only, one call at a time: other threads' writes would be swallowed)."""
     global _DEVNULL
-    try:
-        data = Path(path).read_bytes()
-    except OSError:
-        return None
-    main = threading.current_thread() is threading.main_thread()
-    if not data or (
-        data[:8] == PNG_SIGNATURE and (data[-8:-4] != b"IEND" or not (main or _png_chunks_intact(data)))
-    ):
-        return None
-    if not main:
-        return _decode(data)
+    if threading.current_thread() is not threading.main_thread():
+        try:
+            data = Path(path).read_bytes()
+        except OSError:
+            return None
+        return None if data[:8] == PNG_SIGNATURE and not _png_chunks_intact(data) else _decode(path)
     with _STDERR_LOCK:
         try:
             if _DEVNULL is None:
                 _DEVNULL = os.open(os.devnull, os.O_WRONLY)
             saved = os.dup(2)
         except OSError:
-            return _decode(data)
+            return _decode(path)
         try:
             os.dup2(_DEVNULL, 2)
-            return _decode(data)
+            return _decode(path)
         finally:
             os.dup2(saved, 2)
             os.close(saved)
