@@ -278,7 +278,7 @@ def test_association_equals_evo(rng):
     from evo.core import sync
     from evo.core.trajectory import PoseTrajectory3D
 
-    from vo_lib.formats.groundtruth import associate
+    from vo_lib.evaluation import associate
 
     truth_t = np.cumsum(rng.uniform(0.004, 0.006, 400))
     query_t = np.sort(rng.uniform(truth_t[0] - 0.05, truth_t[-1] + 0.05, 60))
@@ -362,7 +362,8 @@ def test_evaluate_refuses_or_says_undefined_what_it_cannot_measure(tmp_path, rng
 
 def test_association_keeps_a_pair_exactly_max_diff_apart_as_evo_and_old_mac_lines_read(tmp_path, rng):
     from vo_lib.cli.main import _segments
-    from vo_lib.formats.groundtruth import associate, read_trajectory
+    from vo_lib.evaluation import associate
+    from vo_lib.formats.groundtruth import read_trajectory
 
     assert associate([0.01, 0.5], [0.0, 0.52, 1.0])[0].tolist() == [0]
     assert _segments("5,1,3,1") == (1.0, 3.0, 5.0)  # each length once, in order, as the label says

@@ -506,10 +506,10 @@ def test_evaluate_moves_a_truth_of_the_recording_into_its_rectified_camera(tmp_p
     on it): evaluate moves it into the rectified left camera, as run does, without being told."""
     from vo_lib.cli.main import main
     from vo_lib.data import load_sequence
-    from vo_lib.evaluation import ate_positions
+    from vo_lib.evaluation import associate, ate_positions
     from vo_lib.formats.asl_calibration import truth_extrinsic
     from vo_lib.formats.euroc import body_to_rectified_camera
-    from vo_lib.formats.groundtruth import associate, read_groundtruth
+    from vo_lib.formats.groundtruth import read_groundtruth
 
     seq = load_sequence(EUROC)
     seconds = seq.times + seq.manifest["time_origin_s"]
@@ -597,8 +597,7 @@ def test_evaluate_reads_tum_euroc_csv_and_positions(tmp_path, capsys):
     out = capsys.readouterr().out
     assert "ATE (SE(3) alignment, positions only)" in out and "holds positions only" in out
     # the prism's lever arm (leica0/sensor.yaml) carried along the body's poses meets its positions
-    from vo_lib.evaluation import ate_positions
-    from vo_lib.formats.groundtruth import associate
+    from vo_lib.evaluation import associate, ate_positions
 
     i_leica, i_truth = associate(leica.times, truth.times)
     lever = (7.48903e-02, -1.84772e-02, -1.20209e-01)

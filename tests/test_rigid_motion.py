@@ -243,7 +243,7 @@ def test_car_gauge_gives_the_measured_yaw_noise_of_the_oxts_yaw_rate():
     if not (drive / "oxts.txt").is_file():
         pytest.skip(f"no KITTI raw drive 0001 with oxts.txt under {root}")
     times = np.loadtxt(drive / "times.txt")
-    oxts = read_oxts(drive / "oxts.txt", len(times))
+    oxts = read_oxts(drive / "oxts.txt")
     u = wheel_distances_from_oxts(oxts, times, CAR_GAUGE)
     s, dpsi = car_odometry_model(CAR_GAUGE).increment(u[1:])
     heading_change = np.diff(np.unwrap(oxts[:, 5]))  # field 6: the OXTS heading

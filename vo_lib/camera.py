@@ -3,13 +3,16 @@
 The left camera is the reference. The right camera sits ``baseline`` metres along the left
 camera's +x axis, both share the intrinsics, and rows are aligned, so a point at depth ``z``
 appears in both images on the same row with disparity ``d = u_left - u_right = fx * B / z``.
+A calibrated pair that is not rectified becomes one through :func:`rectify_stereo` (OpenCV).
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import cached_property
 
+import cv2
 import numpy as np
 
 from vo_lib.geometry import as_match_array
@@ -182,3 +185,59 @@ class StereoCamera:
         return (
             (u >= margin) & (u <= self.width - 1 - margin) & (v >= margin) & (v <= self.height - 1 - margin)
         )
+
+
+@dataclass(frozen=True)
+class Rectification:
+    """The undistort-and-rectify maps of a stereo pair, the rectified cameras' projection matrices
+    and image ``size``, the rectified left camera's pose in the body frame (``T_body_rect``), and
+    the share of each rectified image that is valid."""
+
+    left_maps: tuple[np.ndarray, np.ndarray]
+    right_maps: tuple[np.ndarray, np.ndarray]
+    projections: tuple[np.ndarray, np.ndarray]
+    size: tuple[int, int]
+    T_body_rect: np.ndarray
+    valid_shares: tuple[float, float]
+
+    @cached_property
+    def camera(self) -> StereoCamera:
+        """The rectified rig; ``ValueError`` where the right camera is not to the right of the left."""
+        return StereoCamera.from_projection_matrices(*self.projections, *self.size)
+
+    def __call__(self, left: np.ndarray, right: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Both images undistorted and rectified (bilinear)."""
+        return (
+            cv2.remap(left, *self.left_maps, cv2.INTER_LINEAR),
+            cv2.remap(right, *self.right_maps, cv2.INTER_LINEAR),
+        )
+
+
+def rectify_stereo(left, right, size: tuple[int, int], T_right_left, T_body_left) -> Rectification:
+    """OpenCV's rectification of a calibrated pair (``stereoRectify`` with zero disparity at
+    infinity, ``alpha = 0``: only valid pixels) and its maps.
+
+    Parameters
+    ----------
+    left, right : tuple
+        Each camera's ``(K, distortion)``: 3x3 intrinsics and radial-tangential ``[k1, k2, p1, p2]``.
+    size : tuple of int
+        ``(width, height)`` of both cameras' images.
+    T_right_left : array_like, 4x4
+        The left camera's coordinates into the right camera's.
+    T_body_left : array_like, 4x4
+        The left camera's coordinates into the body's.
+    """
+    T_right_left = np.asarray(T_right_left, float)
+    R = np.ascontiguousarray(T_right_left[:3, :3])
+    R1, R2, P1, P2, _, *valid = cv2.stereoRectify(
+        *left, *right, size, R, T_right_left[:3, 3:].copy(), flags=cv2.CALIB_ZERO_DISPARITY, alpha=0.0
+    )
+    maps = [
+        tuple(cv2.initUndistortRectifyMap(K, dist, R_rect, P, size, cv2.CV_16SC2))
+        for (K, dist), R_rect, P in ((left, R1, P1), (right, R2, P2))
+    ]
+    T_left_rect = np.eye(4)
+    T_left_rect[:3, :3] = R1.T  # rectified -> raw left camera
+    shares = tuple(w * h / (size[0] * size[1]) for _, _, w, h in valid)
+    return Rectification(*maps, (P1, P2), size, T_body_left @ T_left_rect, shares)

@@ -11,6 +11,8 @@ frame by frame, or planar ``(x, y, yaw)`` rows for the planar variants.
   translation error in percent of the length and rotation error in degrees per metre.
 * **Key-position statistics** ([Zhao], IV): mean and standard deviation of the x, y and
   heading errors at chosen frames.
+* **Association** of an estimate's or images' timestamps with a ground truth's, as evo does, and
+  a ground truth of a body moved into a camera fixed on it.
 """
 
 from __future__ import annotations
@@ -398,3 +400,27 @@ def standard_errors(gt, est, lengths=None) -> StandardErrors:
         rpe(G, E, rotation=True)[0],
         kitti_errors(G, E, lengths),
     )
+
+
+#: Largest time difference (s) at which a ground-truth sample is associated with an image: evo's
+#: default ``max_diff``.
+MAX_TIME_DIFF_S = 0.01
+
+
+def associate(query_times, truth_times, max_diff: float = MAX_TIME_DIFF_S) -> tuple[np.ndarray, np.ndarray]:
+    """Indices ``(i_query, i_truth)`` of the pairs whose times differ by at most ``max_diff``
+    seconds, each query time taking its nearest truth time, as evo's ``associate_trajectories``."""
+    q, t = np.asarray(query_times, float), np.asarray(truth_times, float)
+    right = np.clip(np.searchsorted(t, q), 1, len(t) - 1) if len(t) > 1 else np.zeros(len(q), int)
+    left = np.maximum(right - 1, 0)
+    nearest = np.where(np.abs(t[left] - q) <= np.abs(t[right] - q), left, right)
+    keep = np.abs(t[nearest] - q) <= max_diff
+    return np.flatnonzero(keep), nearest[keep]
+
+
+def to_camera(poses, T_body_camera) -> np.ndarray:
+    """Poses of a body frame in the world ``(N, 4, 4)`` made poses of a camera fixed on it,
+    relative to the camera's first pose: ``C_k = (W_0 X)^-1 W_k X`` with ``X = T_body_camera``."""
+    X = np.asarray(T_body_camera, float)
+    C = np.asarray(poses, float) @ X
+    return np.linalg.inv(C[0]) @ C

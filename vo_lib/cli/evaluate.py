@@ -12,7 +12,8 @@ import numpy as np
 
 from vo_lib.arguments import UsageError
 from vo_lib.cli.run import calibration_digest
-from vo_lib.formats.groundtruth import GroundTruthError, associate, read_groundtruth, read_trajectory
+from vo_lib.evaluation import associate
+from vo_lib.formats.groundtruth import GroundTruthError, read_groundtruth, read_trajectory
 from vo_lib.formats.poses import TrajectoryError
 from vo_lib.outputs import MARKER, file_sha256, read_marker
 

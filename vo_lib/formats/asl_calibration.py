@@ -1,5 +1,5 @@
 """A camera's calibration in the ASL layout of the EuRoC datasets (and of Kalibr), and the
-stereo rectification OpenCV computes from two of them.
+stereo rectification of two of them (:func:`vo_lib.camera.rectify_stereo`), checked.
 
 ``sensor.yaml`` holds ``T_BS`` (camera to body, 4x4), ``intrinsics`` ``[fu, fv, cu, cv]``,
 ``distortion_model: radial-tangential``, ``distortion_coefficients`` ``[k1, k2, p1, p2]`` and
@@ -11,13 +11,12 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
-import cv2
 import numpy as np
 import yaml
 from scipy.spatial.transform import Rotation
 
 from vo_lib.atomic import notice
-from vo_lib.camera import StereoCamera
+from vo_lib.camera import Rectification, rectify_stereo
 from vo_lib.formats.frame_files import SequenceError, numbers_at, read_text
 from vo_lib.formats.poses import rotation_problem
 
@@ -46,24 +45,6 @@ class CameraCalibration:
     K: np.ndarray
     distortion: np.ndarray
     resolution: tuple[int, int]
-
-
-@dataclass(frozen=True)
-class Rectification:
-    """The undistort-and-rectify maps of a stereo pair and the rectified left camera's pose in
-    the body frame (``T_body_rect``)."""
-
-    left_maps: tuple[np.ndarray, np.ndarray]
-    right_maps: tuple[np.ndarray, np.ndarray]
-    camera: StereoCamera
-    T_body_rect: np.ndarray
-
-    def __call__(self, left: np.ndarray, right: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Both images undistorted and rectified (bilinear)."""
-        return (
-            cv2.remap(left, *self.left_maps, cv2.INTER_LINEAR),
-            cv2.remap(right, *self.right_maps, cv2.INTER_LINEAR),
-        )
 
 
 class _UniqueKeys(yaml.SafeLoader):
@@ -155,8 +136,8 @@ def read_camera_yaml(path) -> CameraCalibration:
 
 
 def rectify(left: CameraCalibration, right: CameraCalibration, where: Path) -> Rectification:
-    """OpenCV's rectification of a calibrated pair (``stereoRectify`` with zero disparity at
-    infinity, ``alpha = 0``: only valid pixels), its maps, and the rectified stereo camera."""
+    """:func:`~vo_lib.camera.rectify_stereo` of a calibrated pair, checked: one image size, a
+    baseline in metres, cam1 to the right of cam0, most of each image valid once rectified."""
     if left.resolution != right.resolution:
         raise AslError(
             f"{where}: cam0 is {left.resolution[0]}x{left.resolution[1]} but cam1 is "
@@ -174,29 +155,17 @@ def rectify(left: CameraCalibration, right: CameraCalibration, where: Path) -> R
             f"{where / 'cam1' / 'sensor.yaml'}: key T_BS puts cam1 {baseline:.4g} m from cam0; expected "
             f"metres (a stereo rig's baseline is under {MAX_BASELINE_M:g} m)"
         )
-    size = left.resolution
-    R = np.ascontiguousarray(T_right_left[:3, :3])
-    t = T_right_left[:3, 3:].copy()
-    R1, R2, P1, P2, _, *valid = cv2.stereoRectify(
-        left.K,
-        left.distortion,
-        right.K,
-        right.distortion,
-        size,
-        R,
-        t,
-        flags=cv2.CALIB_ZERO_DISPARITY,
-        alpha=0.0,
+    rect = rectify_stereo(
+        (left.K, left.distortion), (right.K, right.distortion), left.resolution, T_right_left, left.T_BS
     )
-    for side, (_, _, w, h) in zip(("cam0", "cam1"), valid, strict=True):
-        share = w * h / (size[0] * size[1])  # of the rectified image that is valid (alpha = 0)
+    for side, share in zip(("cam0", "cam1"), rect.valid_shares, strict=True):
         if share < MIN_VALID_SHARE:
             raise AslError(
                 f"{where / side / 'sensor.yaml'}: keys intrinsics and distortion_coefficients leave "
                 f"{share:.0%} of the image valid once rectified; expected a calibration of these images"
             )
     try:
-        camera = StereoCamera.from_projection_matrices(P1, P2, *size)
+        _ = rect.camera  # the rectified rig: cam1 on the left of cam0 raises
     except ValueError:
         x, y, _ = np.linalg.inv(T_right_left)[:3, 3]  # cam1 in cam0: x right, y down
         raise AslError(
@@ -204,13 +173,7 @@ def rectify(left: CameraCalibration, right: CameraCalibration, where: Path) -> R
             "below it; expected cam1 to the right (are the folders swapped, or is T_BS inverted? it "
             "takes the camera's coordinates into the body's)"
         ) from None
-    maps = [
-        cv2.initUndistortRectifyMap(c.K, c.distortion, R, P, size, cv2.CV_16SC2)
-        for c, R, P in ((left, R1, P1), (right, R2, P2))
-    ]
-    T_left_rect = np.eye(4)
-    T_left_rect[:3, :3] = R1.T  # rectified -> raw left camera
-    return Rectification(tuple(maps[0]), tuple(maps[1]), camera, left.T_BS @ T_left_rect)
+    return rect
 
 
 def truth_extrinsic(truth_path: Path) -> np.ndarray:

@@ -11,13 +11,13 @@ from pathlib import Path
 
 import numpy as np
 
+from vo_lib.evaluation import to_camera
 from vo_lib.formats.asl_calibration import AslError, read_camera_yaml, rectify, truth_extrinsic
-from vo_lib.formats.groundtruth import covering, read_groundtruth, to_camera
+from vo_lib.formats.groundtruth import NANOSECONDS, covering, read_groundtruth
 from vo_lib.formats.images import check_headers
 from vo_lib.formats.poses import read_text
 from vo_lib.formats.sequence import Sequence, check_frame_spacing
 
-NANOSECONDS = 1e-9
 #: Ground-truth files looked for under ``mav0``, in order: 6-DoF first, then positions only.
 GROUND_TRUTH_FILES = (
     "state_groundtruth_estimate0/groundtruth.tum",
@@ -89,11 +89,6 @@ def pair_by_timestamp(mav0: Path) -> tuple[np.ndarray, list[Path], list[Path]]:
     return t0, left, right
 
 
-def find_groundtruth(mav0: Path) -> Path | None:
-    """The first ground-truth file of :data:`GROUND_TRUTH_FILES` present under ``mav0``."""
-    return next((mav0 / name for name in GROUND_TRUTH_FILES if (mav0 / name).is_file()), None)
-
-
 def _calibration(path) -> tuple[Path, list]:
     """The ``mav0`` folder of the recording at ``path`` and its two cameras' calibrations."""
     mav0 = mav0_of(path)
@@ -142,7 +137,8 @@ def read_asl(path, groundtruth=None, frames: int | None = None) -> Sequence:
         "time_origin_s": float(seconds[0]),
         "T_body_camera": rect.T_body_rect.tolist(),
     }
-    truth_path = Path(groundtruth) if groundtruth else find_groundtruth(mav0)
+    found = (mav0 / name for name in GROUND_TRUTH_FILES if (mav0 / name).is_file())
+    truth_path = Path(groundtruth) if groundtruth else next(found, None)
     poses = None
     if truth_path is not None:
         poses = _truth_into_camera(truth_path, seconds, rect.T_body_rect, manifest)

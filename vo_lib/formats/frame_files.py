@@ -17,7 +17,6 @@ from vo_lib.formats.groundtruth import read_trajectory
 from vo_lib.formats.poses import TrajectoryError, check_file, data_lines, read_text, rotation_problem
 
 SequenceError = TrajectoryError
-required = check_file
 
 
 #: Bytes a line of a per-frame file may take on average (a KITTI pose line is about 200, an OXTS
@@ -32,17 +31,6 @@ def present(path: Path, what: str) -> bool:
         return False
     check_file(path, what)
     return True
-
-
-def check_size(path: Path, frames: int, what: str) -> None:
-    """Refuse a per-frame file far larger than ``frames`` lines could be, before reading it."""
-    size = Path(path).stat().st_size
-    limit = MAX_LINE_BYTES * frames + 65536
-    if size > limit:
-        raise SequenceError(
-            f"{path}: {size:,} bytes, far more than {frames} lines of {what} take (at most {limit:,}); "
-            "expected one line per frame"
-        )
 
 
 def numbers(path: Path, line_no: int, text: str, count: int, what: str) -> np.ndarray:
@@ -61,7 +49,7 @@ def numbers(path: Path, line_no: int, text: str, count: int, what: str) -> np.nd
 
 def read_calib(path: Path) -> tuple[np.ndarray, np.ndarray]:
     """``(P0, P1)`` 3x4 matrices from a KITTI ``calib.txt``; raises :class:`SequenceError`."""
-    found, where = {}, {}
+    found = {}  # key: (line number, matrix)
     for line_no, text in data_lines(path):
         key, sep, rest = text.partition(":")
         if not sep:
@@ -70,15 +58,14 @@ def read_calib(path: Path) -> tuple[np.ndarray, np.ndarray]:
         if key in ("P0", "P1", "P2", "P3"):
             if key in found:
                 raise SequenceError(
-                    f"{path}, line {line_no}: a second {key} line (the first is line {where[key]})"
+                    f"{path}, line {line_no}: a second {key} line (the first is line {found[key][0]})"
                 )
-            found[key] = numbers(path, line_no, rest, 12, key).reshape(3, 4)
-            where[key] = line_no
+            found[key] = line_no, numbers(path, line_no, rest, 12, key).reshape(3, 4)
     for key in ("P0", "P1"):
         if key not in found:
             side = "left" if key == "P0" else "right"
             raise SequenceError(f"{path}: no {key} line ({side} camera projection, 12 numbers)")
-    return found["P0"], found["P1"]
+    return found["P0"][1], found["P1"][1]
 
 
 def read_times(path: Path) -> np.ndarray:
@@ -188,7 +175,12 @@ def check_manifest(path: Path, manifest: dict, frames: int) -> None:
 def read_per_frame(path: Path, frames: int, noun: str, read) -> np.ndarray:
     """``read(path)`` of a file holding one line per frame: its size is checked before it is read
     and its length after; ``noun`` names the rows in the error ("timestamps", "poses")."""
-    check_size(path, frames, noun)
+    size, limit = Path(path).stat().st_size, MAX_LINE_BYTES * frames + 65536
+    if size > limit:
+        raise SequenceError(
+            f"{path}: {size:,} bytes, far more than {frames} lines of {noun} take (at most {limit:,}); "
+            "expected one line per frame"
+        )
     rows = read(path)
     if len(rows) != frames:
         raise SequenceError(f"{path} has {len(rows)} {noun} but there are {frames} images")

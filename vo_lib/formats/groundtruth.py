@@ -1,5 +1,5 @@
 """Ground truth in the formats of ``docs/real_data.md`` (KITTI poses, TUM, EuRoC CSV, positions
-only), associated with the images by timestamp as evo does. A CSV (its first row holds commas) is
+only), checked to cover the images it is associated with. A CSV (its first row holds commas) is
 EuRoC's, times in nanoseconds; a text file's times are seconds. Every problem raises one
 :class:`GroundTruthError` naming the file and line.
 """
@@ -11,6 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
+from vo_lib.evaluation import MAX_TIME_DIFF_S, associate
 from vo_lib.formats.poses import (
     TrajectoryError,
     check_seconds,
@@ -20,9 +21,6 @@ from vo_lib.formats.poses import (
 )
 from vo_lib.geometry import as_homogeneous
 
-#: Largest time difference (s) at which a ground-truth sample is associated with an image: evo's
-#: default ``max_diff``.
-MAX_TIME_DIFF_S = 0.01
 NANOSECONDS = 1e-9
 #: Smallest median step of a CSV's timestamps (nanoseconds): no tracker samples at over 1 MHz, so a
 #: smaller step is a first column in seconds or not a time at all (KITTI poses with commas).
@@ -97,17 +95,6 @@ def read_trajectory(path, min_poses: int = 1) -> tuple[np.ndarray | None, np.nda
     return truth.times, truth.poses
 
 
-def associate(query_times, truth_times, max_diff: float = MAX_TIME_DIFF_S) -> tuple[np.ndarray, np.ndarray]:
-    """Indices ``(i_query, i_truth)`` of the pairs whose times differ by at most ``max_diff``
-    seconds, each query time taking its nearest truth time, as evo's ``associate_trajectories``."""
-    q, t = np.asarray(query_times, float), np.asarray(truth_times, float)
-    right = np.clip(np.searchsorted(t, q), 1, len(t) - 1) if len(t) > 1 else np.zeros(len(q), int)
-    left = np.maximum(right - 1, 0)
-    nearest = np.where(np.abs(t[left] - q) <= np.abs(t[right] - q), left, right)
-    keep = np.abs(t[nearest] - q) <= max_diff
-    return np.flatnonzero(keep), nearest[keep]
-
-
 #: What to do about a recording's ground truth that does not cover its images.
 UNCOVERED_HINT = (
     " (--frames runs fewer; to run without it, move it out of mav0, and evaluate --gt ... "
@@ -137,11 +124,3 @@ def covering(truth: GroundTruth, times, max_diff: float = MAX_TIME_DIFF_S) -> tu
             f"{truth.path}: only {len(i_img)} positions within {max_diff} s of an image; need at least 3"
         )
     return i_img, i_gt
-
-
-def to_camera(poses, T_body_camera) -> np.ndarray:
-    """Poses of a body frame in the world ``(N, 4, 4)`` made poses of a camera fixed on it,
-    relative to the camera's first pose: ``C_k = (W_0 X)^-1 W_k X`` with ``X = T_body_camera``."""
-    X = np.asarray(T_body_camera, float)
-    C = np.asarray(poses, float) @ X
-    return np.linalg.inv(C[0]) @ C

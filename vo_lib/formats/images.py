@@ -29,8 +29,8 @@ IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".pgm", ".bmp", ".tif", ".tiff")
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 PNG_END = b"\x00\x00\x00\x00IEND\xaeB`\x82"
 JPEG_START, JPEG_END = b"\xff\xd8", b"\xff\xd9"
-#: Channels of each PNG colour type as OpenCV decodes it (palette images become BGR).
-PNG_CHANNELS = {0: 1, 2: 3, 3: 3, 4: 4, 6: 4}
+#: PNG colour types: grey, RGB, palette, grey with alpha, RGBA.
+PNG_COLOUR_TYPES = (0, 2, 3, 4, 6)
 #: Pillow modes of 8 bits per channel (or fewer, widened to 8 when decoded).
 EIGHT_BIT_MODES = {"1", "L", "P", "LA", "La", "PA", "RGB", "RGBA", "RGBa", "RGBX", "CMYK", "YCbCr"}
 #: Largest image side accepted from a header (pixels): larger claims are refused before decoding.
@@ -40,10 +40,6 @@ TAIL_BYTES = 65536
 
 _DEVNULL: int | None = None  # a descriptor of os.devnull, opened on first use
 _STDERR_LOCK = threading.Lock()
-
-
-def _where(path: Path, frame: int | None) -> str:
-    return f"{path}, frame {frame}" if frame is not None else f"{path}"
 
 
 def _decode(path: Path) -> np.ndarray | None:
@@ -98,10 +94,10 @@ def _imread_quietly(path: Path) -> np.ndarray | None:
             os.close(saved)
 
 
-def load_image(path: Path, frame: int | None = None) -> np.ndarray:
+def load_image(path: Path, frame: int) -> np.ndarray:
     """An 8-bit grey image; colour is converted to grey, 16-bit images are refused. A file that
-    cannot be decoded raises one :class:`SequenceError` naming it (and ``frame``)."""
-    where = _where(path, frame)
+    cannot be decoded raises one :class:`SequenceError` naming it and ``frame``."""
+    where = f"{path}, frame {frame}"
     img = _imread_quietly(path)
     if img is None or img.size == 0:
         raise SequenceError(f"{where}: cannot read the image (empty, truncated, damaged or not an image)")
@@ -114,13 +110,6 @@ def load_image(path: Path, frame: int | None = None) -> np.ndarray:
     return img
 
 
-def _has_end(fh, size: int, marker: bytes) -> bool:
-    """Whether ``marker`` closes the file (PNG's IEND chunk, JPEG's end of image), allowing
-    trailing bytes after it within the last :data:`TAIL_BYTES`."""
-    fh.seek(max(0, size - TAIL_BYTES))
-    return marker in fh.read()
-
-
 def _png_header(head: bytes, where: str) -> tuple[int, int, int]:
     """``(width, height, bit depth)`` from a PNG's first 33 bytes."""
     if len(head) < 33 or head[12:16] != b"IHDR":
@@ -130,15 +119,15 @@ def _png_header(head: bytes, where: str) -> tuple[int, int, int]:
         raise SequenceError(
             f"{where}: the PNG header claims {width}x{height} pixels; expected each side 1..{MAX_IMAGE_SIDE}"
         )
-    if head[25] not in PNG_CHANNELS:
+    if head[25] not in PNG_COLOUR_TYPES:
         raise SequenceError(f"{where}: damaged PNG header (colour type {head[25]})")
     return width, height, head[24]
 
 
-def image_header(path: Path, frame: int | None = None) -> tuple[int, int, int]:
+def image_header(path: Path, frame: int) -> tuple[int, int, int]:
     """``(width, height, bits per channel)`` of an image file, read without decoding the pixels
-    where possible; raises :class:`SequenceError` naming the file (and ``frame``)."""
-    where = _where(path, frame)
+    where possible; raises :class:`SequenceError` naming the file and ``frame``."""
+    where = f"{path}, frame {frame}"
     try:
         with open(path, "rb") as fh:
             head, size = fh.read(33), fh.seek(0, 2)
@@ -146,7 +135,8 @@ def image_header(path: Path, frame: int | None = None) -> tuple[int, int, int]:
                 raise SequenceError(f"{where}: empty file; expected an image")
             kind, marker = ("PNG", PNG_END) if head.startswith(PNG_SIGNATURE) else ("JPEG", JPEG_END)
             header = _png_header(head, where) if kind == "PNG" else None
-            if (kind == "PNG" or head.startswith(JPEG_START)) and not _has_end(fh, size, marker):
+            fh.seek(max(0, size - TAIL_BYTES))  # the end marker, trailing bytes allowed after it
+            if (kind == "PNG" or head.startswith(JPEG_START)) and marker not in fh.read():
                 what = "end chunk" if kind == "PNG" else "end marker"
                 raise SequenceError(f"{where}: truncated {kind} (no {what}); expected a complete image")
     except OSError as exc:

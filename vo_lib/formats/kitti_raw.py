@@ -10,7 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
-from vo_lib.formats.frame_files import SequenceError, check_size, numbers, read_rows
+from vo_lib.formats.frame_files import SequenceError, numbers, read_rows
 from vo_lib.formats.poses import data_lines, rotation_problem
 
 OXTS_FIELDS = 30
@@ -22,11 +22,8 @@ MAX_OXTS_VALUE = 1e6
 MAX_MOUNT_M = 10.0
 
 
-def read_oxts(path, frames: int | None = None) -> np.ndarray:
-    """``(N, 30)`` OXTS packets, finite and within :data:`MAX_OXTS_VALUE`. With ``frames``, a
-    file far larger than that many packets is refused before it is read."""
-    if frames is not None:
-        check_size(path, frames, "OXTS packets")
+def read_oxts(path) -> np.ndarray:
+    """``(N, 30)`` OXTS packets, finite and within :data:`MAX_OXTS_VALUE`."""
     rows = read_rows(Path(path), OXTS_FIELDS, "an OXTS packet", MAX_OXTS_VALUE)
     if not len(rows):
         raise SequenceError(f"{path}: no OXTS packets")

@@ -29,6 +29,7 @@ from vo_lib.camera import StereoCamera
 from vo_lib.formats.asl_calibration import MAX_BASELINE_M
 from vo_lib.formats.frame_files import (
     SequenceError,
+    check_file,
     check_manifest,
     present,
     read_calib,
@@ -37,7 +38,6 @@ from vo_lib.formats.frame_files import (
     read_poses,
     read_rows,
     read_times,
-    required,
 )
 from vo_lib.formats.images import check_headers, image_files, load_image, unpaired
 from vo_lib.geometry import as_homogeneous
@@ -143,7 +143,7 @@ class Sequence:
 def _camera(root: Path, left: list[Path], right: list[Path]) -> StereoCamera:
     """The rig of ``calib.txt``, at the size every image header shares."""
     calib = root / "calib.txt"
-    required(calib, "the calibration, P0 and P1 lines")
+    check_file(calib, "the calibration, P0 and P1 lines")
     w, h = check_headers(left, right)
     P0, P1 = read_calib(calib)
     try:
@@ -183,7 +183,7 @@ def read_sequence(path, odometry: bool = True) -> Sequence:
         raise SequenceError(f"{root}: {unpaired(left, right)}")
     camera = _camera(root, left, right)
     n = len(left)
-    required(root / "times.txt", "one timestamp per frame")
+    check_file(root / "times.txt", "one timestamp per frame")
     times = read_per_frame(root / "times.txt", n, "timestamps", read_times)
     check_frame_spacing(root / "times.txt", times)
     poses = odo = None

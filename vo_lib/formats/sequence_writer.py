@@ -23,13 +23,10 @@ from vo_lib.outputs import OutputError, OutputFolder
 CARRIED = ("odometry.txt", "oxts.txt", "raw_calib")
 
 
-def _format_row(values) -> str:
-    return " ".join(repr(float(v)) for v in values)
-
-
 def _format_rows(values, count: int) -> str:
     """One line of ``count`` numbers per row, each written exactly (``repr``)."""
-    return "".join(_format_row(row) + "\n" for row in np.asarray(values, dtype=float).reshape(-1, count))
+    rows = np.asarray(values, dtype=float).reshape(-1, count)
+    return "".join(" ".join(repr(float(v)) for v in row) + "\n" for row in rows)
 
 
 class SequenceWriter:
@@ -48,7 +45,6 @@ class SequenceWriter:
     ):
         self.path = Path(path)
         self.camera = camera
-        self.label = f"{option} {path}" if option else str(path)
         self._out = OutputFolder(self.path, written_by, force=force, inputs=inputs, option=option)
         self._tmp = self._out.path
         (self._tmp / "image_0").mkdir()
@@ -73,7 +69,7 @@ class SequenceWriter:
         except OSError as exc:
             why = "no space left on device" if exc.errno == errno.ENOSPC else (exc.strerror or str(exc))
             raise OutputError(
-                f"{self.label}: cannot write the sequence ({why}); nothing was written"
+                f"{self._out.label}: cannot write the sequence ({why}); nothing was written"
             ) from None
 
     def carry(self, source: Path, names=CARRIED) -> None:
@@ -90,8 +86,8 @@ class SequenceWriter:
                     shutil.copyfile(src, self._tmp / name)
             except OSError as exc:
                 raise OutputError(
-                    f"{self.label}: cannot copy {exc.filename or src} ({exc.strerror or str(exc)[:120]}); "
-                    "nothing was written"
+                    f"{self._out.label}: cannot copy {exc.filename or src} "
+                    f"({exc.strerror or str(exc)[:120]}); nothing was written"
                 ) from None
 
     def close(self, times, poses=None, odometry=None, manifest: dict | None = None) -> Path:
@@ -101,7 +97,7 @@ class SequenceWriter:
             raise ValueError(f"times has {len(times)} entries for {self.count} frames")
         P0, P1 = self.camera.projection_matrices()
         files = {
-            "calib.txt": f"P0: {_format_row(P0.ravel())}\nP1: {_format_row(P1.ravel())}\n",
+            "calib.txt": f"P0: {_format_rows(P0, 12)}P1: {_format_rows(P1, 12)}",
             "times.txt": "".join(f"{t!r}\n" for t in times.tolist()),
             "poses.txt": None if poses is None else _format_rows(np.asarray(poses, float)[:, :3, :], 12),
             "odometry.txt": None if odometry is None else _format_rows(odometry, 2),
