@@ -23,7 +23,6 @@ from dataclasses import dataclass
 
 import numpy as np
 from filterpy.kalman import ExtendedKalmanFilter
-from scipy.linalg import block_diag
 
 from vo_lib.geometry import compose_planar, relative_planar, wrap_angle, yaw_matrix
 from vo_lib.models.track_odometry import TrackOdometry
@@ -176,8 +175,12 @@ class VoKalmanFilter:
             Q = Rw @ np.diag(sigma**2) @ Rw.T
             self.flags = StepFlags(odometry=False)
         self.ekf.x = np.concatenate([x_new, self.ekf.x[ref]])
-        FP = F @ self.ekf.P[:3, ref]  # the cross-covariance, carried along
-        self.ekf.P = np.block([[F @ P @ F.T + Q, FP], [FP.T, self.ekf.P[ref, ref]]])
+        P6 = np.empty((6, 6))  # filled block by block: np.block costs more than the filter's algebra
+        P6[:3, :3] = F @ P @ F.T + Q
+        P6[:3, 3:] = F @ self.ekf.P[:3, ref]  # the cross-covariance, carried along
+        P6[3:, :3] = P6[:3, 3:].T
+        P6[3:, 3:] = self.ekf.P[ref, ref]
+        self.ekf.P = P6
 
     def motion_prior(self) -> MotionPrior:
         """Predicted ``(theta, rho)`` of this frame and its covariance ``H P H^T``."""
@@ -194,7 +197,11 @@ class VoKalmanFilter:
         then ``(theta, rho, sideways)`` is the measurement and the constraint is not applied.
         """
         covariance = np.asarray(covariance, float)
-        R = covariance if covariance.shape == (3, 3) else block_diag(covariance, self.sideways_sigma**2)
+        if covariance.shape == (3, 3):
+            R = covariance
+        else:
+            R = np.diag([0.0, 0.0, self.sideways_sigma**2])
+            R[:2, :2] = covariance
         self.ekf.update(
             np.array([theta, rho, sideways]),
             constrained_jacobian,
