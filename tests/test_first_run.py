@@ -7,7 +7,6 @@ import os
 import re
 import subprocess
 import sys
-import time
 
 import matplotlib
 import numpy as np
@@ -20,23 +19,20 @@ from vo_lib.stereo_vo.pipeline import FrameTimings, PipelineResult  # noqa: E402
 from vo_lib.stereo_vo.run_report import odometry_name, print_timing_table, timing_rows  # noqa: E402
 from vo_lib.viz.run_figure import plot_run  # noqa: E402
 
-#: The first line must come within 2 s on a quiet machine (0.7 s measured on the 2-core machine);
-#: the bound is wider because the test shares that machine with the rest of the suite.
-FIRST_LINE_S = 6.0
-
 
 def test_first_run_talks_at_once_and_shows_progress_when_piped(tmp_path):
     """A sample not rendered yet: the first line names the sample, its frames and the rendering to
     come; progress lines follow although stdout is a pipe, not a terminal."""
     env = dict(os.environ, VO_LIB_DATA=str(tmp_path / "data"), MPLBACKEND="Agg")
     command = [sys.executable, "-m", "vo_lib", "run", "--frames", "12", "--out", str(tmp_path / "out")]
-    start = time.perf_counter()
     proc = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
     first = proc.stdout.readline()
-    first_s = time.perf_counter() - start
+    # "at once", without a clock that a loaded machine would stretch: the line is out while the run
+    # is still at work (its output folder appears only at the end), not flushed with the rest
+    at_once = proc.poll() is None and not (tmp_path / "out").exists()
     rest, err = proc.communicate(timeout=600)
     assert proc.returncode == 0, err
-    assert first_s < FIRST_LINE_S, f"first line after {first_s:.1f} s"
+    assert at_once, "the first line came only when the run had finished"
     assert first.startswith("run: sample indoor_linear, 12 frames") and "rendered" in first
     assert re.search(r"about (\d+ to )?\d+ s", first), first  # how long the rendering will take
     lines = rest.splitlines()
