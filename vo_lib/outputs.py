@@ -136,14 +136,15 @@ def linked_from(folder) -> tuple[list[Path], str | None]:
     """Where the symbolic links under ``folder`` lead (resolved): what an input reads through them,
     and, through a link to a folder, what that folder's own links lead to, and so on; and, where
     not every link could be looked at, why not (else None)."""
-    found, unlisted = [], []
+    found, seen, unlisted = [], set(), []
     to_walk, budget = [Path(folder)], MAX_WALKED
     while to_walk and budget > 0:  # a link to / is not walked through the whole file system
         walk = itertools.islice(os.walk(to_walk.pop(), onerror=unlisted.append), budget)
         below = [Path(root) / name for root, folders, files in walk for name in folders + files]
         budget -= len(below) + 1
-        new = sorted({real_path(path) for path in below if path.is_symlink()} - set(found))
+        new = sorted({real_path(path) for path in below if path.is_symlink()} - seen)
         found += new
+        seen.update(new)
         to_walk += [target for target in new if target.is_dir()]
     hidden = f"{unlisted[0].filename} cannot be listed" if unlisted else None  # it may hide links
     return found, hidden or (None if budget > 0 else f"it holds or links to over {MAX_WALKED:,} entries")

@@ -12,6 +12,7 @@ Bad arguments and bad input print one line and exit with status 2.
 
 from __future__ import annotations
 
+import csv
 import hashlib
 import os
 import sys
@@ -103,11 +104,11 @@ def announce_run(name: str, source: Path, frames: int | None, out_dir: Path) -> 
 
 
 def _write_csv(path: Path, rows, cls) -> None:
-    """One row per dataclass in ``rows`` under a header of ``cls``'s fields, as the csv module writes them."""
-    import pandas as pd
-
-    table = pd.DataFrame(map(asdict, rows), columns=[f.name for f in fields(cls)])
-    table.to_csv(path, index=False, na_rep="nan", lineterminator="\r\n")
+    """One row per dataclass in ``rows`` under a header of ``cls``'s fields."""
+    with path.open("w", newline="") as fh:
+        writer = csv.DictWriter(fh, fieldnames=[f.name for f in fields(cls)])
+        writer.writeheader()
+        writer.writerows(map(asdict, rows))
 
 
 def calibration_digest(sequence: Path, truth_file: Path) -> str | None:

@@ -11,6 +11,7 @@ Ground-truth depth comes from the same buffer.
 
 from __future__ import annotations
 
+import itertools
 from dataclasses import dataclass, fields
 
 import cv2
@@ -50,7 +51,7 @@ class _Quads:
     @staticmethod
     def join(parts) -> _Quads:
         arrays = [np.concatenate([getattr(p, f.name) for p in parts]) for f in fields(_Quads)[:-1]]
-        return _Quads(*arrays, sum((p.textures for p in parts), ()))
+        return _Quads(*arrays, tuple(itertools.chain.from_iterable(p.textures for p in parts)))
 
 
 @dataclass
