@@ -276,3 +276,62 @@ def test_a_free_body_gets_general_hypotheses_without_the_planar_model(kitti_came
     assert (start & m.inliers).sum() >= 0.8 * m.inliers.sum() and (start & ~m.inliers).sum() <= 2
     refined = refine_rigid_motion(m.w_prev, m.w_curr, kitti_camera, guess, start)
     assert np.allclose(refined.matrix, T, atol=6e-3)
+
+
+def test_the_drone_predicts_from_the_last_frame_not_from_the_reference(kitti_camera):
+    """Constant velocity steps on from the last frame's motion since the reference (measured or
+    guessed), so frames measured against an older reference keep what they found; a new
+    reference starts the count again."""
+    from vo_lib.stereo_vo.config import HOVER
+    from vo_lib.stereo_vo.kalman import VoKalmanFilter
+    from vo_lib.stereo_vo.parts import Prediction
+    from vo_lib.stereo_vo.six_dof import SixDofMotion
+
+    model, kf = SixDofMotion(kitti_camera, camera_mount(forward=0.0, height=0.0), HOVER), VoKalmanFilter()
+    V, M = motion([0.0, 0.02, 0.0], [0.0, 0.0, 0.1]), motion([0.01, -0.05, 0.0], [0.02, 0.0, 0.05])
+    model.velocity = V
+    model.place(kf, None, Prediction(kf.motion_prior(), True, M))  # the last frame, since the reference
+    assert np.allclose(model.predict(kf, gap=3).motion, V @ M)  # not V @ V @ V
+    model.commit(kf, None, 3)
+    assert np.allclose(model.predict(kf, gap=1).motion, V)
+
+
+def test_a_frame_whose_windows_give_too_few_inliers_is_matched_again_without_them(kitti_camera, monkeypatch):
+    """A prediction that sends the matching windows astray (a turn that reverses) leaves a frame
+    with matches that agree on nothing; the pipeline matches every pair again and keeps the frame."""
+    from dataclasses import replace
+
+    from vo_lib.stereo_vo import six_dof
+    from vo_lib.stereo_vo.config import HOVER
+    from vo_lib.stereo_vo.features import StereoFeatures
+    from vo_lib.stereo_vo.pipeline import StereoOdometry
+    from vo_lib.stereo_vo.synthetic import matches_under_transform
+    from vo_lib.stereo_vo.temporal import TemporalMatches
+
+    rng = np.random.default_rng(8)
+    T = motion([0.0, 0.04, 0.0], [0.02, 0.0, 0.2])
+    good = matches_under_transform(kitti_camera, 200, T, rng, (4.0, 40.0), 0.3)
+    astray = matches_under_transform(kitti_camera, 200, T, rng, (4.0, 40.0), 0.3, outlier_ratio=1.0)
+    guided = []
+
+    def match(self, reference, features, prediction, recent):
+        guided.append(prediction.motion is not None)
+        m = astray if prediction.motion is not None else good
+        index = np.arange(len(m.w_prev))
+        return TemporalMatches(index, index, m.w_prev, m.w_curr, len(index))
+
+    class FrontEnd:
+        def process(self, left, right):
+            return StereoFeatures(good.w_curr, np.zeros((len(good.w_curr), 32), np.uint8))
+
+    monkeypatch.setattr(six_dof.SixDofMotion, "match", match)
+    config = replace(HOVER, subpixel_tracking=False)
+    odometer = StereoOdometry(
+        kitti_camera, config, mount=camera_mount(0.0, 0.0), front_end=FrontEnd(), seed=1
+    )
+    odometer.process(None, None)  # the reference
+    odometer.motion.velocity = np.eye(4)  # a prediction to guide the windows
+    _, _, diag, _ = odometer.process(None, None)
+    assert guided == [True, False]
+    assert not diag.fallback and diag.inliers >= 0.8 * len(good.w_prev)
+    assert np.allclose(odometer.camera_pose, np.linalg.inv(T), atol=5e-3)

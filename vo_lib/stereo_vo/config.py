@@ -16,6 +16,7 @@ from scipy.stats import chi2
 
 from vo_lib.stereo_vo.frames import LOST_REFERENCE, Reason
 from vo_lib.stereo_vo.ransac import RansacParams
+from vo_lib.stereo_vo.rigid_motion import MIN_INLIERS
 
 FRONT_ENDS = ("fast", "pyramid")
 MOTIONS = ("planar", "full")
@@ -135,13 +136,17 @@ CAR = PipelineConfig(
 #: - the hypotheses are general (3-point), since the body does not turn on a ground plane;
 #: - a new keyframe is also taken when the inliers fall below the crawler's fraction of the first
 #:   frame's: a body that pitches or rolls turns its view away from the reference without the yaw
-#:   or the chord that key the car's frames.
+#:   or the chord that key the car's frames;
+#: - a motion is used whenever its refinement succeeds (``rigid_motion.MIN_INLIERS``): when the
+#:   body turns fast, few matches survive, and a motion measured on them, with the covariance
+#:   they give it, beats a last motion repeated, which a turn that reverses makes worse than none.
 HOVER = replace(
     CAR,
     prior_gate=math.inf,
     subpixel_tracking=True,
     planar_hypotheses=False,
     key_inlier_fraction=CRAWLER.key_inlier_fraction,
+    min_inliers=MIN_INLIERS,
 )
 
 PRESETS = {"planar": CRAWLER, "full": CAR, "hover": HOVER}

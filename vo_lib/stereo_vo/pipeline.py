@@ -6,7 +6,8 @@ Per frame, :meth:`StereoOdometry.process` runs four parts (``parts`` gives their
    ``pyramid_features``);
 2. **prediction and temporal matching**: the Kalman filter moves the pose with the odometry, or
    with constant velocity when the sequence has none (``kalman``); the motion model matches the
-   reference frame's features inside the predicted windows (``temporal``);
+   reference frame's features inside the predicted windows (``temporal``), and a 6-DoF model
+   matches every pair again when the windows' matches leave too few inliers;
 3. **motion estimation**: 1-point RANSAC with the prediction as a prior (``ransac``), and for a car
    a 6-DoF refinement (``planar_motion`` or ``six_dof``);
 4. **Kalman update** with the VO motion.
@@ -41,6 +42,8 @@ from vo_lib.stereo_vo.six_dof import SixDofMotion
 
 #: Reference-frame matching needs the recent medians of at least this many good frames.
 MIN_HISTORY = 5
+#: Outcomes after which a frame matched inside predicted windows is matched again without them.
+UNGUIDED_RETRY = (Reason.FEW_INLIERS, Reason.LOW_INLIER_RATIO)
 
 
 class StereoOdometry:
@@ -109,16 +112,12 @@ class StereoOdometry:
             prediction = self._predict(odometry, diag)  # 2. prediction ...
         estimate, reason = None, self._unmatchable(features)
         if reason is Reason.NONE:
-            with watch("matching"):  # ... and temporal matching
-                matches = self.motion.match(self.reference, features, prediction, self.recent_matches)
-            diag.temporal_matches = len(matches)
-            if len(matches) < self.config.min_inliers:
-                reason = Reason.FEW_MATCHES
-            else:
-                with watch("estimation"):
-                    estimate = self.motion.estimate(matches, prediction, self.rng)  # 3. motion estimation
-                watch.ms["refinement"] = estimate.timings.get("refinement", 0.0)
-                reason = self._judge(estimate, prediction, diag)
+            estimate, reason = self._measure(features, prediction, diag, watch)
+            if reason in UNGUIDED_RETRY and prediction.motion is not None:
+                # the predicted motion may have sent the matching windows astray (a body that
+                # reverses its turn): match every pair and estimate again, unguided
+                unguided = Prediction(prediction.prior, prediction.informative)
+                estimate, reason = self._measure(features, unguided, diag, watch)
         with watch("kalman"):
             pose, covariance = self._update(features, estimate, prediction, reason, diag)  # 4. Kalman update
         self.last_reason = reason
@@ -145,6 +144,18 @@ class StereoOdometry:
             self.kf.widen(self.config.unknown_motion_sigma)  # nothing predicts the motion yet
             prediction.prior = self.kf.motion_prior()
         return prediction
+
+    def _measure(self, features, prediction: Prediction, diag: FrameDiagnostics, watch: Stopwatch):
+        """Temporal matching (2.) and motion estimation (3.): ``(estimate or None, reason)``."""
+        with watch("matching"):
+            matches = self.motion.match(self.reference, features, prediction, self.recent_matches)
+        diag.temporal_matches = len(matches)
+        if len(matches) < self.config.min_inliers:
+            return None, Reason.FEW_MATCHES
+        with watch("estimation"):
+            estimate = self.motion.estimate(matches, prediction, self.rng)
+        watch.ms["refinement"] = watch.ms.get("refinement", 0.0) + estimate.timings.get("refinement", 0.0)
+        return estimate, self._judge(estimate, prediction, diag)
 
     def _unmatchable(self, features: StereoFeatures) -> Reason:
         if self.reference is None:

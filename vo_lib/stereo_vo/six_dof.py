@@ -3,12 +3,13 @@
 The steps are the paper's (Fig. 3, ``pipeline``); what changes is the model of the motion between
 two frames:
 
-1. **prediction**: the last measured 6-DoF motion, repeated (constant velocity), with its planar
-   part (yaw and ground-plane translation of the vehicle) taken from the Kalman filter, which
-   moves it with the odometry when the sequence has some;
+1. **prediction**: the last frame's motion since the reference, one measured 6-DoF motion per
+   frame further (constant velocity); where the sequence has odometry, its planar part (yaw and
+   ground-plane translation of the vehicle) is the Kalman filter's, which the odometry moved;
 2. **temporal matching** inside windows around each feature's predicted position; a window grows
    when the prediction proves poor (braking, the start of a turn) and the matcher falls back to
-   comparing every pair, so that no frame is left unmatched while the images overlap;
+   comparing every pair, so that no frame is left unmatched while the images overlap (and the
+   pipeline matches every pair again when the windows' matches give too few inliers);
 3. **1-point RANSAC** (theta from eq. 14, rho from eq. 17): the outlier filter. The circular-motion
    model holds for a camera above the axis the vehicle turns about; a car's camera is a metre
    ahead of it, and in a turn it also slides sideways by that metre times the turned angle
@@ -151,15 +152,22 @@ class SixDofMotion:
         self.reference_pose = np.eye(4)  # camera pose of the reference frame, in frame 0's
         self.camera_pose = np.eye(4)
         self.velocity: np.ndarray | None = None  # camera motion per frame, T_curr_from_prev
+        self.since_reference = np.eye(4)  # camera motion from the reference to the last frame
 
     # ------------------------------------------------------------------ prediction
     def predict(self, kf: VoKalmanFilter, gap: int) -> Prediction:
-        """Camera motion from the reference to this frame: constant velocity, planar part from
-        the filter (which used the odometry, if any); nothing while neither is known."""
+        """Camera motion from the reference to this frame: the last frame's, one step of constant
+        velocity further, with the planar part from the filter where odometry moved it; nothing
+        while neither velocity nor odometry is known.
+
+        The step starts from the last frame's pose, measured or predicted, not from the
+        reference's: frames measured against an older reference keep the motion they found.
+        """
         if self.velocity is None and not kf.flags.odometry:
             return Prediction(kf.motion_prior(), False)
-        T = np.eye(4) if self.velocity is None else scaled_motion(self.velocity, gap)
-        motion = with_planar_increment(T, self.mount, kf.increment)
+        motion = (np.eye(4) if self.velocity is None else self.velocity) @ self.since_reference
+        if kf.flags.odometry:
+            motion = with_planar_increment(motion, self.mount, kf.increment)
         return Prediction(kf.motion_prior(), True, motion)
 
     def match(self, reference, features, prediction: Prediction, recent):
@@ -250,18 +258,20 @@ class SixDofMotion:
 
     # ------------------------------------------------------------------ poses
     def place(self, kf: VoKalmanFilter, estimate: Estimate | None, prediction: Prediction) -> None:
-        """The camera pose: the reference's, composed with the motion since it, whose planar part
-        is the filter's (the prediction's motion, or none, when the vision was not used)."""
-        if estimate is None:
-            since_reference = prediction.motion if prediction.motion is not None else np.eye(4)
+        """The camera pose: the reference's, composed with the motion since it: the vision's with
+        the filter's planar part, or, when the vision was not used, the prediction's (or none)."""
+        if estimate is not None:
+            fused = with_planar_increment(estimate.motion, self.mount, kf.increment)
+        elif prediction.motion is not None:
+            fused = prediction.motion
         else:
-            since_reference = estimate.motion
-        fused = with_planar_increment(since_reference, self.mount, kf.increment)
+            fused = with_planar_increment(np.eye(4), self.mount, kf.increment)
         self.camera_pose = self.reference_pose @ np.linalg.inv(fused)
-        self._fused = fused
+        self.since_reference = fused
 
     def commit(self, kf: VoKalmanFilter, estimate: Estimate | None, gap: int) -> None:
         """A measured motion since the old reference is remembered per frame (constant velocity)."""
         if estimate is not None:
-            self.velocity = scaled_motion(self._fused, 1.0 / max(gap, 1))
+            self.velocity = scaled_motion(self.since_reference, 1.0 / max(gap, 1))
         self.reference_pose = self.camera_pose.copy()
+        self.since_reference = np.eye(4)
