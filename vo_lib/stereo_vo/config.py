@@ -137,9 +137,10 @@ CAR = PipelineConfig(
 #: - a new keyframe is also taken when the inliers fall below the crawler's fraction of the first
 #:   frame's: a body that pitches or rolls turns its view away from the reference without the yaw
 #:   or the chord that key the car's frames;
-#: - a motion is used whenever its refinement succeeds (``rigid_motion.MIN_INLIERS``): when the
-#:   body turns fast, few matches survive, and a motion measured on them, with the covariance
-#:   they give it, beats a last motion repeated, which a turn that reverses makes worse than none.
+#: - a motion is used on as few inliers as its refinement accepts (``rigid_motion.MIN_INLIERS``;
+#:   the inlier ratio still counts): when the body turns fast, few matches survive, and a motion
+#:   measured on them, with the covariance they give it, beats a last motion repeated, which a
+#:   turn that reverses makes worse than none.
 HOVER = replace(
     CAR,
     prior_gate=math.inf,

@@ -182,6 +182,12 @@ class VoKalmanFilter:
         P6[3:, 3:] = self.ekf.P[ref, ref]
         self.ekf.P = P6
 
+    def predict_increment(self, increment) -> None:
+        """Put the predicted pose at ``increment`` = ``(dx, dy, dyaw)`` from the reference clone,
+        its covariance kept: a constant velocity that the motion model keeps better than the
+        filter (from the last frame's measured motion rather than the reference's)."""
+        self.ekf.x[:3] = compose_planar(self.ekf.x[3:], increment)
+
     def motion_prior(self) -> MotionPrior:
         """Predicted ``(theta, rho)`` of this frame and its covariance ``H P H^T``."""
         H = constrained_jacobian(self.ekf.x)[:2]

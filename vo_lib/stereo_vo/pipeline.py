@@ -6,8 +6,9 @@ Per frame, :meth:`StereoOdometry.process` runs four parts (``parts`` gives their
    ``pyramid_features``);
 2. **prediction and temporal matching**: the Kalman filter moves the pose with the odometry, or
    with constant velocity when the sequence has none (``kalman``); the motion model matches the
-   reference frame's features inside the predicted windows (``temporal``), and a 6-DoF model
-   matches every pair again when the windows' matches leave too few inliers;
+   reference frame's features inside the predicted windows (``temporal``); where a 6-DoF motion
+   was predicted and its windows' matches leave too few inliers or too low a ratio of them,
+   every pair is matched again, without windows;
 3. **motion estimation**: 1-point RANSAC with the prediction as a prior (``ransac``), and for a car
    a 6-DoF refinement (``planar_motion`` or ``six_dof``);
 4. **Kalman update** with the VO motion.
@@ -147,6 +148,8 @@ class StereoOdometry:
 
     def _measure(self, features, prediction: Prediction, diag: FrameDiagnostics, watch: Stopwatch):
         """Temporal matching (2.) and motion estimation (3.): ``(estimate or None, reason)``."""
+        diag.inliers, diag.inlier_ratio, diag.ransac_inliers = 0, 0.0, 0  # not an earlier attempt's
+        diag.theta = diag.rho = float("nan")
         with watch("matching"):
             matches = self.motion.match(self.reference, features, prediction, self.recent_matches)
         diag.temporal_matches = len(matches)

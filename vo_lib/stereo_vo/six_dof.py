@@ -35,7 +35,8 @@ only the planar motion, and the paper's filter (eq. 1-11) is planar; a 6-DoF sta
 three components that nothing but the vision measures, and gain nothing from the filter.
 
 Each frame's 6-DoF camera pose is its reference frame's pose composed with the motion since then,
-whose planar part is the filter's and whose other part is the vision's.
+whose planar part is the filter's and whose other part is the vision's (on a frame without vision,
+the prediction's).
 """
 
 from __future__ import annotations
@@ -157,8 +158,9 @@ class SixDofMotion:
     # ------------------------------------------------------------------ prediction
     def predict(self, kf: VoKalmanFilter, gap: int) -> Prediction:
         """Camera motion from the reference to this frame: the last frame's, one step of constant
-        velocity further, with the planar part from the filter where odometry moved it; nothing
-        while neither velocity nor odometry is known.
+        velocity further, with the planar part from the filter where odometry moved it (else the
+        filter's predicted pose is moved to it); nothing while neither velocity nor odometry is
+        known.
 
         The step starts from the last frame's pose, measured or predicted, not from the
         reference's: frames measured against an older reference keep the motion they found.
@@ -168,6 +170,8 @@ class SixDofMotion:
         motion = (np.eye(4) if self.velocity is None else self.velocity) @ self.since_reference
         if kf.flags.odometry:
             motion = with_planar_increment(motion, self.mount, kf.increment)
+        else:  # the filter's planar prediction is this one's
+            kf.predict_increment(vehicle_increment(motion, self.mount))
         return Prediction(kf.motion_prior(), True, motion)
 
     def match(self, reference, features, prediction: Prediction, recent):
