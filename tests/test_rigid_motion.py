@@ -291,9 +291,9 @@ def test_the_drone_predicts_from_the_last_frame_not_from_the_reference(kitti_cam
     V, M = motion([0.0, 0.02, 0.0], [0.0, 0.0, 0.1]), motion([0.01, -0.05, 0.0], [0.02, 0.0, 0.05])
     model.velocity = V
     model.place(kf, None, Prediction(kf.motion_prior(), True, M))  # the last frame, since the reference
-    assert np.allclose(model.predict(kf, gap=3).motion, V @ M)  # not V @ V @ V
+    assert np.allclose(model.predict(kf).motion, V @ M)  # not V repeated for each frame since the reference
     model.commit(kf, None, 3)
-    assert np.allclose(model.predict(kf, gap=1).motion, V)
+    assert np.allclose(model.predict(kf).motion, V)
 
 
 def test_a_frame_whose_windows_give_too_few_inliers_is_matched_again_without_them(kitti_camera, monkeypatch):

@@ -65,8 +65,8 @@ class MotionModel(Protocol):
     #: 4x4 camera pose of the last frame in frame 0's camera, or None for a planar-only model.
     camera_pose: np.ndarray | None
 
-    def predict(self, kf: VoKalmanFilter, gap: int) -> Prediction:
-        """The motion since the reference frame, ``gap`` frames back, as the filter predicts it."""
+    def predict(self, kf: VoKalmanFilter) -> Prediction:
+        """The motion since the reference frame, as the filter (just moved on) predicts it."""
         ...
 
     def match(

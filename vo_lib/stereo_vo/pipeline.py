@@ -140,7 +140,7 @@ class StereoOdometry:
         if u is not None and not np.all(np.isfinite(u)):
             u, diag.odometry = None, False
         self.kf.predict(u, keep_reference=self.gap > 1)
-        prediction = self.motion.predict(self.kf, self.gap)
+        prediction = self.motion.predict(self.kf)
         if not prediction.informative and self.config.unknown_motion_sigma:
             self.kf.widen(self.config.unknown_motion_sigma)  # nothing predicts the motion yet
             prediction.prior = self.kf.motion_prior()

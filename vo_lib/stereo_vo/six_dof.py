@@ -156,7 +156,7 @@ class SixDofMotion:
         self.since_reference = np.eye(4)  # camera motion from the reference to the last frame
 
     # ------------------------------------------------------------------ prediction
-    def predict(self, kf: VoKalmanFilter, gap: int) -> Prediction:
+    def predict(self, kf: VoKalmanFilter) -> Prediction:
         """Camera motion from the reference to this frame: the last frame's, one step of constant
         velocity further, with the planar part from the filter where odometry moved it (else the
         filter's predicted pose is moved to it); nothing while neither velocity nor odometry is
