@@ -5,10 +5,11 @@ Per frame, :meth:`StereoOdometry.process` runs four parts (``parts`` gives their
 1. **stereo front end**: features with disparity, ``w = (u, v, d)`` (``features`` or
    ``pyramid_features``);
 2. **prediction and temporal matching**: the Kalman filter moves the pose with the odometry, or
-   with constant velocity when the sequence has none (``kalman``); the motion model matches the
-   reference frame's features inside the predicted windows (``temporal``); where a 6-DoF motion
-   was predicted and its windows' matches leave too few inliers or too low a ratio of them,
-   every pair is matched again, without windows;
+   with constant velocity when the sequence has none (``kalman``; a 6-DoF model's own, from the
+   last frame, where it has one); the motion model matches the reference frame's features
+   inside the predicted windows (``temporal``); where a 6-DoF motion was predicted and its
+   windows' matches leave too few inliers or too low a ratio of them, every pair is matched
+   again, without windows;
 3. **motion estimation**: 1-point RANSAC with the prediction as a prior (``ransac``), and for a car
    a 6-DoF refinement (``planar_motion`` or ``six_dof``);
 4. **Kalman update** with the VO motion.

@@ -9,7 +9,8 @@ two frames:
 2. **temporal matching** inside windows around each feature's predicted position; a window grows
    when the prediction proves poor (braking, the start of a turn) and the matcher falls back to
    comparing every pair, so that no frame is left unmatched while the images overlap (and the
-   pipeline matches every pair again when the windows' matches give too few inliers);
+   pipeline matches every pair again when the windows' matches give too few inliers, or too low
+   a ratio of them);
 3. **1-point RANSAC** (theta from eq. 14, rho from eq. 17): the outlier filter. The circular-motion
    model holds for a camera above the axis the vehicle turns about; a car's camera is a metre
    ahead of it, and in a turn it also slides sideways by that metre times the turned angle
