@@ -813,20 +813,27 @@ def test_the_docs_table_of_the_drone_at_lower_frame_rates_has_every_start():
     assert set(LOWER_RATE_ROWS) == {(k, o) for k in (2, 3, 4) for o in range(k)}
 
 
+@pytest.fixture(scope="module")
+def euroc_sequence():
+    """The EuRoC sample, read (and its images checked) once for the tests that subsample it."""
+    from vo_lib.data import load_sequence
+
+    return load_sequence(EUROC, odometry=False, progress=False)
+
+
 @pytest.mark.samples  # both methods on every start of every 2nd, 3rd and 4th frame (.ci/run runs them)
 @needs_euroc
 @pytest.mark.parametrize(("k", "o"), sorted(LOWER_RATE_ROWS), ids=lambda x: str(x))
-def test_the_drone_at_lower_frame_rates_row_of_the_docs_holds(k, o):
+def test_the_drone_at_lower_frame_rates_row_of_the_docs_holds(k, o, euroc_sequence):
     """A row of docs/real_data.md's figures of the drone with only every k-th frame kept, from frame
     o, run again."""
     from dataclasses import replace
 
     from vo_lib.bench.bench_real import error_rows
-    from vo_lib.data import load_sequence
     from vo_lib.stereo_vo.baselines import run_pnp_baseline
 
     ate, ate_pnp, rotation, rotation_pnp, flagged = LOWER_RATE_ROWS[(k, o)]
-    full = load_sequence(EUROC, odometry=False, progress=False)
+    full = euroc_sequence
     every = slice(o, None, k)
     seq = replace(
         full,
