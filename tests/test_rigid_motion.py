@@ -335,3 +335,29 @@ def test_a_frame_whose_windows_give_too_few_inliers_is_matched_again_without_the
     assert guided == [True, False]
     assert not diag.fallback and diag.inliers >= 0.8 * len(good.w_prev)
     assert np.allclose(odometer.camera_pose, np.linalg.inv(T), atol=2e-3)
+
+
+def test_a_blurred_frame_is_judged_with_the_wider_gate_on_its_last_attempt_only(kitti_camera):
+    """Matches too noisy for six of them to lie within a pixel of their motion, as in a fast turn's
+    blur: the refinement fails with the usual gate; the frame's last attempt (matched without
+    windows) is refined again within ``LAST_RESORT_GATE`` and keeps the motion; an attempt inside
+    predicted windows, which the pipeline still retries without them, does not."""
+    from vo_lib.stereo_vo.config import HOVER
+    from vo_lib.stereo_vo.kalman import VoKalmanFilter
+    from vo_lib.stereo_vo.parts import Prediction
+    from vo_lib.stereo_vo.six_dof import LAST_RESORT_GATE, SixDofMotion
+    from vo_lib.stereo_vo.synthetic import matches_under_transform
+    from vo_lib.stereo_vo.temporal import TemporalMatches
+
+    T = motion([0.01, 0.15, 0.0], [0.05, 0.0, 0.1])  # 8.6 degrees of turn
+    m = matches_under_transform(kitti_camera, 16, T, np.random.default_rng(3), (2.0, 20.0), 0.8)
+    assert not refine_rigid_motion(m.w_prev, m.w_curr, kitti_camera, T).success
+    assert refine_rigid_motion(m.w_prev, m.w_curr, kitti_camera, T, gate=LAST_RESORT_GATE).success
+    index = np.arange(len(m.w_prev))
+    matches = TemporalMatches(index, index, m.w_prev, m.w_curr, len(index))
+    model = SixDofMotion(kitti_camera, camera_mount(forward=0.0, height=0.0), HOVER)
+    prior = VoKalmanFilter().motion_prior()
+    unguided = model.estimate(matches, Prediction(prior, True), np.random.default_rng(0))
+    guided = model.estimate(matches, Prediction(prior, True, T), np.random.default_rng(0))
+    assert unguided.success and unguided.inliers >= 6 and not guided.success
+    assert np.allclose(unguided.motion, T, atol=0.02)

@@ -130,11 +130,13 @@ def refine_rigid_motion(
     *,
     huber: float = HUBER_PIXELS,
     rounds: int = ROUNDS,
+    gate: float = INLIER_PIXELS,
 ) -> RigidMotion:
     """Refine a motion on matches ``w_prev -> w_curr`` (disparity space) from the guess ``T0``
     (``T_curr_from_prev``: the 1-point RANSAC motion, or the prediction), starting from the
     ``inliers`` (default: all with positive disparity); ``huber`` is the refinement's Huber
-    threshold. ``success`` is False (and the guess returned) when fewer than ``MIN_INLIERS`` remain.
+    threshold, ``gate`` the largest reprojection error of an inlier (pixels). ``success`` is False
+    (and the guess returned) when fewer than ``MIN_INLIERS`` remain.
     """
     wa, wb = np.asarray(w_prev, float), np.asarray(w_curr, float)
     T0 = np.asarray(T0, float)
@@ -148,7 +150,7 @@ def refine_rigid_motion(
             return RigidMotion(T0[:3, :3], T0[:3, 3], np.full((6, 6), np.inf), inl, np.inf, False)
         R, t = _gauss_newton(P[inl], wb[inl], R, t, camera, ITERATIONS, huber)
         err = reprojection_errors(P, wb, R, t, camera)  # of the motion the inliers below end with
-        new = usable & (err < INLIER_PIXELS)
+        new = usable & (err < gate)
         if np.array_equal(new, inl):
             break
         inl = new

@@ -20,7 +20,8 @@ two frames:
    again (:func:`turning_axis_view`); the model is exact there, whatever the turn. Where the
    vehicle pitched or rolled, a general 3-point RANSAC stands in (:meth:`SixDofMotion.hypothesis`);
 4. **6-DoF refinement** of the inliers on reprojection errors in both images
-   (:mod:`~vo_lib.stereo_vo.rigid_motion`), which also chooses the inliers again;
+   (:mod:`~vo_lib.stereo_vo.rigid_motion`), which also chooses the inliers again: those within a
+   pixel, or, on a frame's last attempt that keeps too few of them, within ``LAST_RESORT_GATE``;
 5. **Kalman update**: the filter keeps the vehicle's *planar* pose, ``(x, y, yaw)`` of the axis it
    turns about; the refined camera motion is carried into the vehicle frame through the camera's
    mount (so a camera a metre ahead of the axis does not read a turn as a sideways step) and its
@@ -55,7 +56,13 @@ from vo_lib.stereo_vo.frames import Stopwatch
 from vo_lib.stereo_vo.kalman import VoKalmanFilter, chord_measurement
 from vo_lib.stereo_vo.parts import Estimate, Prediction
 from vo_lib.stereo_vo.ransac import one_point_ransac
-from vo_lib.stereo_vo.rigid_motion import general_ransac, refine_rigid_motion, rotation_matrix, scaled_motion
+from vo_lib.stereo_vo.rigid_motion import (
+    INLIER_PIXELS,
+    general_ransac,
+    refine_rigid_motion,
+    rotation_matrix,
+    scaled_motion,
+)
 from vo_lib.stereo_vo.temporal import match_features, predict_features, track_subpixel
 
 #: Window half-width around a predicted position: a floor, plus a share of the predicted image
@@ -66,6 +73,9 @@ WINDOW_FLOW_FRACTION = 0.15
 DISPARITY_FLOOR = 2.0
 DISPARITY_WINDOW = 0.3
 PREDICTED_RATIO = 0.9  # ratio test of the matching (pyramid features, larger motions)
+#: Inlier gate of the refinement (pixels) when the usual one leaves too few inliers on a frame's
+#: last attempt; a frame judged with it is flagged only if it still leaves too few.
+LAST_RESORT_GATE = 2.0 * INLIER_PIXELS
 #: Good frames the recent median needs; before, this many times ``min_inliers`` matches are expected.
 RETRY_HISTORY = 3
 EXPECTED_FACTOR = 4
@@ -245,6 +255,13 @@ class SixDofMotion:
         watch = Stopwatch()
         with watch("refinement"):
             motion = refine_rigid_motion(matches.w_prev, matches.w_curr, self.camera, guess, start)
+            if not motion.success and prediction.motion is None:
+                # the frame's last attempt, matched without windows: in a fast turn, blur can
+                # leave fewer than MIN_INLIERS matches within a pixel of any motion
+                wide = refine_rigid_motion(
+                    matches.w_prev, matches.w_curr, self.camera, guess, start, gate=LAST_RESORT_GATE
+                )
+                motion = wide if wide.success else motion
         T = motion.matrix
         z = chord_measurement(vehicle_increment(T, self.mount))
         covariance = np.full((3, 3), np.inf)  # a failed refinement measures nothing
