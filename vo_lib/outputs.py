@@ -20,7 +20,6 @@ import hashlib
 import itertools
 import json
 import os
-import re
 import shutil
 from pathlib import Path
 
@@ -43,8 +42,6 @@ INTERRUPTED: list[BaseException] = []
 MARKER = ".vo_lib_output.json"
 #: The contents a marker of :func:`claim_folder` lists: whatever the command keeps there.
 ANY_CONTENTS = "*"
-#: A frame in a subfolder (``image_0/000042.png``): what a marker listing only the top level covers below it.
-FRAME_BELOW = re.compile(r"[^/]+/\d+\.png")
 PACKAGE = Path(__file__).resolve().parent
 #: Folders and files looked through for links under an input and the folders it links to: what
 #: lies in a linked folder is guarded anyway (an output may not lie inside it).
@@ -120,13 +117,11 @@ def foreign_content(folder: Path, written_by: str) -> str | None:
     named = isinstance(contents, list) and all(isinstance(name, str) for name in contents)
     if not (named or isinstance(contents, str)) or not isinstance(files, dict):
         return f"its marker {MARKER} is damaged"
-    nested = any("/" in str(name) for name in contents)  # older markers list the top level only:
-    names = {e for e in entries(folder) if nested or not FRAME_BELOW.fullmatch(e)}  # below it, frames alone
     if marker.get("written_by") != written_by:
         return f"it holds the output of `{marker.get('written_by')}`, which `{written_by}` does not replace"
     now = file_checksums(folder) if files else {}
     changed = sorted(k for k in files.keys() | now.keys() if files.get(k) != now.get(k))
-    extra = [] if contents == ANY_CONTENTS else sorted(names - {MARKER, *contents})
+    extra = [] if contents == ANY_CONTENTS else sorted(set(entries(folder)) - {MARKER, *contents})
     if changed:
         return f"{changed[0]} was added, changed or removed since it was written"
     return f"it holds {extra[0]}, which this program did not write" if extra else None
