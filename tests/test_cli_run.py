@@ -247,3 +247,22 @@ def test_evaluate_compares_a_run_of_the_first_frames_with_those_of_its_sequence(
     capsys.readouterr()
     assert main(["evaluate", "--gt", str(seq / "poses.txt"), "--est", str(out / "poses.txt")]) == 2
     assert "has 8 poses but --est" in capsys.readouterr().err
+
+
+def test_a_near_miss_of_the_asl_layout_is_named_as_such(tmp_path, capsys):
+    """An empty mav0, one camera's folder, or the folder above a recording: the error speaks of
+    the ASL layout, not of KITTI's image_0."""
+    from vo_lib.cli.main import main
+
+    (tmp_path / "empty" / "mav0").mkdir(parents=True)
+    for side in ("cam0", "cam1"):
+        (tmp_path / "above" / "rec" / "mav0" / side).mkdir(parents=True)
+    cases = {
+        tmp_path / "empty": "mav0: no cam0 or cam1 folder; expected the ASL layout",
+        tmp_path / "above" / "rec" / "mav0" / "cam0": "cam0: one camera of an ASL recording; give the folder",
+        tmp_path / "above": "above: holds the ASL recording",
+    }
+    for folder, expected in cases.items():
+        assert main(["run", "--sequence", str(folder), "--out", str(tmp_path / "out")]) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and expected in err[0], err

@@ -277,6 +277,10 @@ def test_asl_recording_is_rectified_and_its_truth_moved_into_the_left_camera():
         ("focal", "cam0/sensor.yaml: keys intrinsics and distortion_coefficients leave 0% of"),
         ("distortion", "cam1/sensor.yaml: keys intrinsics and distortion_coefficients leave 0% of"),
         ("camera", "cam1: missing camera folder"),
+        (
+            "no-distortion",
+            "cam1/sensor.yaml: key distortion_model: none, but key distortion_coefficients is not",
+        ),
         ("swapped", "mav0: the T_BS of cam0 and cam1 put cam1 -0.11 m to the right of cam0 and +0.000399 m"),
         ("timestamps", "has no image of the same timestamp"),
         ("order", "cam0/data.csv, line 4: timestamp 1403636584813555456 does not come after"),
@@ -369,6 +373,9 @@ def test_a_bad_rig_gets_one_line_and_exit_2(tmp_path, capsys, damage, expected):
         (mav0 / "left").rename(mav0 / "cam1")
     elif damage == "camera":
         shutil.rmtree(mav0 / "cam1")
+    elif damage == "no-distortion":  # coefficients that the model says are not there
+        path = mav0 / "cam1" / "sensor.yaml"
+        path.write_text(path.read_text().replace("radial-tangential", "none"))
     elif damage.startswith("truth-"):  # the prism's extrinsic: a last row, a lever arm in millimetres
         path = mav0 / "state_groundtruth_estimate0" / "sensor.yaml"
         edit = ("0.0, 0.0, 0.0, 1.0]", "0.0, 0.0, 0.0, 2.0]")
@@ -414,6 +421,29 @@ def test_a_bad_rig_gets_one_line_and_exit_2(tmp_path, capsys, damage, expected):
     err = capsys.readouterr().err.strip().splitlines()
     assert code == 2 and len(err) == 1, err
     assert expected in err[0] and "Traceback" not in err[0]
+
+
+@needs_euroc
+def test_a_calibration_that_leaves_no_stereo_matches_is_said(tmp_path, capsys):
+    """cam1 given cam0's intrinsics (a copy-paste slip): the rectified rows no longer line up, most
+    frames find too few stereo features, and the run says so in one notice instead of ending with
+    a trajectory that stands still and nothing but the count of flagged frames to tell."""
+    from vo_lib.cli.main import main
+
+    rig = small_rig(tmp_path)
+    path = rig / "mav0" / "cam1" / "sensor.yaml"
+    path.write_text(
+        path.read_text().replace(
+            "[457.587, 456.134, 379.999, 255.238]", "[458.654, 457.296, 367.215, 248.375]"
+        )
+    )
+    assert main(["run", "--sequence", str(rig), "--out", str(tmp_path / "out")]) == 0
+    out, err = capsys.readouterr()
+    assert "frames had too few stereo features to be matched; is each camera's calibration" in err
+    # the estimate stands still: a Sim(3) alignment has no scale, and the table says so
+    assert re.search(r"scale of the Sim\(3\) alignment +undefined", out)
+    assert main(["run", "--sequence", str(small_rig(tmp_path / "good")), "--out", str(tmp_path / "o2")]) == 0
+    assert "too few stereo features" not in capsys.readouterr().err
 
 
 @needs_euroc
@@ -536,8 +566,10 @@ def test_evaluate_moves_a_truth_of_the_recording_into_its_rectified_camera(tmp_p
     shutil.copy(leica_path, tmp_path / "prism.csv")
     args = ["evaluate", "--gt", str(tmp_path / "prism.csv"), "--est", str(est), "--extrinsic-of", str(EUROC)]
     assert main(args) == 0
-    copied = re.search(r"SE\(3\) alignment, positions only\): rmse ([0-9.]+)", capsys.readouterr().out)
+    captured = capsys.readouterr()
+    copied = re.search(r"SE\(3\) alignment, positions only\): rmse ([0-9.]+)", captured.out)
     assert copied.group(1) == printed.group(1)
+    assert f"prism.csv: positions of the prism of {EUROC / 'mav0' / 'leica0' / 'sensor.yaml'}" in captured.err
 
 
 @needs_euroc

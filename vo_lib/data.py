@@ -10,7 +10,7 @@ import json
 import os
 from pathlib import Path
 
-from vo_lib.formats.euroc import mav0_of, read_asl
+from vo_lib.formats.euroc import AslError, asl_near_miss, mav0_of, read_asl
 from vo_lib.formats.sequence import Sequence, read_sequence
 from vo_lib.sim.samples import SAMPLES, fingerprint, generate
 
@@ -66,4 +66,6 @@ def load_sequence(
         return read_sequence(path, odometry=odometry)
     if mav0_of(key) is not None:  # a rig as it records (ASL layout): rectified on reading
         return read_asl(key, frames=frames)
+    if not (Path(key) / "image_0").is_dir() and (why := asl_near_miss(key)) is not None:
+        raise AslError(why)
     return read_sequence(Path(key), odometry=odometry)

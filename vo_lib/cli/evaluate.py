@@ -49,7 +49,7 @@ def check_against_its_run(gt: str, est: str, marker: dict) -> None:
         )
     print(
         f"--est {est} is a run of {marker.get('sequence')!r}, whose truth is {truth.get('path')!r}; "
-        f"--gt {gt} is another file: compared as given"
+        f"--gt {gt} is another file: the errors below are against it"
     )
 
 

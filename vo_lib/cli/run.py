@@ -195,6 +195,7 @@ def _run_into(
         WARM_UP_FRAMES,
         FrameDiagnostics,
         FrameTimings,
+        Reason,
         run_sequence,
         warm_up,
     )
@@ -226,6 +227,13 @@ def _run_into(
     result = run_sequence(
         seq, frames=n, use_odometry=not no_odometry, seed=seed, progress=sys.stderr.isatty(), motion=motion
     )
+    featureless = sum(d.reason is Reason.FEW_FEATURES for d in result.diagnostics)
+    if featureless > (n - 1) / 2:  # the motion of most frames is only the prediction's
+        notice(
+            f"{seq.path}: {featureless} of {n - 1} frames had too few stereo features to be matched; "
+            "is each camera's calibration that of these images? (rows the rectification does not "
+            "line up give no stereo matches)"
+        )
     poses = result.camera_poses
     poses = camera_poses_from_planar(result.poses, mount) if poses is None else poses
     write_kitti_poses(tmp / "poses.txt", poses)

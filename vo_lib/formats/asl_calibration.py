@@ -116,11 +116,14 @@ def read_camera_yaml(path) -> CameraCalibration:
         raise AslError(
             f"{path}: key distortion_model: {model!r} is not supported; expected radial-tangential"
         )
-    dist = (
-        np.zeros(4)
-        if model == "none"
-        else _numbers(path, data, "distortion_coefficients", 4, "[k1, k2, p1, p2]")
-    )
+    dist = np.zeros(4)
+    if model != "none" or data.get("distortion_coefficients") is not None:
+        dist = _numbers(path, data, "distortion_coefficients", 4, "[k1, k2, p1, p2]")
+    if model == "none" and dist.any():
+        raise AslError(
+            f"{path}: key distortion_model: none, but key distortion_coefficients is not zero; "
+            "expected radial-tangential for these coefficients, or zeros"
+        )
     width, height = _numbers(path, data, "resolution", 2, "[width, height]")
     if width < 1 or height < 1 or width != int(width) or height != int(height):
         raise AslError(

@@ -6,11 +6,13 @@ moved into the rectified left camera. Every problem raises one :class:`AslError`
 
 from __future__ import annotations
 
+import contextlib
 import re
 from pathlib import Path
 
 import numpy as np
 
+from vo_lib.atomic import notice
 from vo_lib.evaluation import to_camera
 from vo_lib.formats.asl_calibration import AslError, read_camera_yaml, rectify, truth_extrinsic
 from vo_lib.formats.groundtruth import NANOSECONDS, covering, read_groundtruth
@@ -34,6 +36,22 @@ def mav0_of(path) -> Path | None:
     for candidate in (path / "mav0", path):
         if (candidate / "cam0").is_dir() or (candidate / "cam1").is_dir():
             return candidate
+    return None
+
+
+def asl_near_miss(path) -> str | None:
+    """Why ``path``, which is no recording (:func:`mav0_of`), looks like part of one or a folder
+    above one; None if it does not."""
+    path = Path(path)
+    if (path / "mav0").is_dir() or path.name == "mav0":
+        mav0 = path if path.name == "mav0" else path / "mav0"
+        return f"{mav0}: no cam0 or cam1 folder; expected the ASL layout (mav0/cam0 and mav0/cam1)"
+    if path.name in ("cam0", "cam1") and mav0_of(path.parent) is not None:
+        return f"{path}: one camera of an ASL recording; give the folder holding mav0, or mav0 itself"
+    with contextlib.suppress(OSError):
+        below = [p for p in path.iterdir() if p.is_dir() and mav0_of(p) is not None]
+        if below:
+            return f"{path}: holds the ASL recording {below[0]}; give that folder"
     return None
 
 
@@ -112,7 +130,10 @@ def tracked_to_camera(truth_path, T_body_rect, tracker_of=None) -> np.ndarray:
     camera's pose, and ``X^-1``'s translation the tracked point in the camera (a lever arm)."""
     truth_path = Path(truth_path)
     if tracker_of is not None and not (truth_path.parent / "sensor.yaml").is_file():
-        truth_path = mav0_of(tracker_of) / "leica0" / truth_path.name  # its sensor.yaml, if any
+        sensor = mav0_of(tracker_of) / "leica0" / "sensor.yaml"
+        if sensor.is_file():  # said, since the positions' file does not name it
+            notice(f"{truth_path}: positions of the prism of {sensor} (its T_BS is the lever arm)")
+            truth_path = sensor.parent / truth_path.name
     return np.linalg.inv(truth_extrinsic(truth_path)) @ T_body_rect
 
 

@@ -17,6 +17,7 @@ import os
 import re
 import struct
 import threading
+import warnings
 import zlib
 from pathlib import Path
 
@@ -149,9 +150,11 @@ def _header_other(path: Path, where: str) -> tuple[int, int, int]:
     try:
         from PIL import Image
 
-        with Image.open(path) as im:
-            width, height = im.size
-            return width, height, 8 if im.mode in EIGHT_BIT_MODES else 16
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # a damaged file's warnings: the error is one line of ours
+            with Image.open(path) as im:
+                width, height = im.size
+                return width, height, 8 if im.mode in EIGHT_BIT_MODES else 16
     except Exception:  # Pillow missing, or a file it cannot read: let OpenCV try
         img = _imread_quietly(path)
         if img is None or img.size == 0:

@@ -126,7 +126,9 @@ ROWS_PLANAR = (
 
 
 def _row(label: str, values, fmt: str) -> str:
-    cells = ["" if v is None or not np.isfinite(v) else fmt.format(v) for v in values]
+    # no figure for this column (None), or one that has no value (an alignment's scale when a
+    # trajectory stands still)
+    cells = ["" if v is None else fmt.format(v) if np.isfinite(v) else "undefined" for v in values]
     return f"  {label:<{LABEL}s}" + "".join(f"{c:>{COLUMN}s}" for c in cells)
 
 
