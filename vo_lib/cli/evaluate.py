@@ -90,12 +90,18 @@ def recording_of(gt: str, extrinsic_of: str | None, kitti: bool) -> str | None:
     ``extrinsic_of`` if given, else the ``mav0`` folder that holds the ``--gt`` file among its
     sensors' (as ``mav0/state_groundtruth_estimate0/data.csv``; said in one line), else None: the
     truth is taken as given. KITTI poses, and files in a folder this package wrote (``run``'s
-    ``trajectory.tum``, ``convert``'s ``poses.txt``), are a camera's already and never moved."""
+    ``trajectory.tum``, ``convert``'s ``poses.txt``), are a camera's already and never moved
+    (``extrinsic_of`` with one of those is refused)."""
     from vo_lib.formats.euroc import mav0_of
 
+    path = Path(gt).resolve()
+    if extrinsic_of is not None and (path.parent / MARKER).is_file():
+        raise UsageError(
+            f"--extrinsic-of {extrinsic_of}: --gt {gt} was written by this package, as a camera's poses "
+            "already; expected a body-frame truth (TUM, EuRoC CSV or positions)"
+        )
     if extrinsic_of is not None or kitti:
         return extrinsic_of
-    path = Path(gt).resolve()
     holders = (m for m in map(mav0_of, path.parents[:3]) if m in path.parents)
     found = next((m for m in holders if (m / "cam0" / "sensor.yaml").is_file()), None)
     written = [f for f in path.parents[:3] if found in f.parents and (f / MARKER).is_file()]
