@@ -266,3 +266,18 @@ def test_a_near_miss_of_the_asl_layout_is_named_as_such(tmp_path, capsys):
         assert main(["run", "--sequence", str(folder), "--out", str(tmp_path / "out")]) == 2
         err = capsys.readouterr().err.strip().splitlines()
         assert len(err) == 1 and expected in err[0], err
+
+
+def test_a_trajectory_in_nanoseconds_is_named_by_its_line(tmp_path, capsys):
+    """A TUM file whose times are EuRoC's nanoseconds: one line naming the file and line, the time
+    shown to the digits a float holds of it."""
+    from vo_lib.cli.main import main
+
+    rows = [f"{1403636579763555584 + k * 50_000_000} {0.1 * k} 0 0 0 0 0 1" for k in range(5)]
+    (tmp_path / "ns.tum").write_text("\n".join(rows) + "\n")
+    (tmp_path / "s.tum").write_text("\n".join(f"{k * 0.05} {0.1 * k} 0 0 0 0 0 1" for k in range(5)) + "\n")
+    assert main(["evaluate", "--gt", str(tmp_path / "ns.tum"), "--est", str(tmp_path / "s.tum")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert (
+        len(err) == 1 and "ns.tum, line 1: time 1.404e+18; a text file's times are read as seconds" in err[0]
+    )

@@ -206,6 +206,6 @@ def check_seconds(path: Path, times: np.ndarray, lines: list[int]) -> None:
     if len(times) and np.abs(times).max() > MAX_SECONDS:
         i = int(np.argmax(np.abs(times) > MAX_SECONDS))
         raise TrajectoryError(
-            f"{path}, line {lines[i]}: time {times[i]:.0f}; a text file's times are read as seconds "
+            f"{path}, line {lines[i]}: time {times[i]:.4g}; a text file's times are read as seconds "
             "(TUM's t x y z qx qy qz qw), at most 1e11 (nanoseconds?)"
         )
