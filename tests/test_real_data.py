@@ -213,6 +213,12 @@ def test_vo_holds_on_harder_versions_of_the_real_sequence(path, kind, tmp_path):
     assert len(result.flagged) <= max(2, int(0.02 * len(seq)))
 
 
+KITTI_RAW = REALDATA / "kitti_raw_2011_09_26_drive_0001"
+needs_kitti_raw = pytest.mark.skipif(
+    not (KITTI_RAW / "oxts.txt").is_file(), reason=f"no KITTI raw drive 0001 with oxts.txt at {KITTI_RAW}"
+)
+
+
 # ---------------------------------------------------------------- a rig as it records (ASL layout)
 EUROC = REALDATA / "euroc_mh01_200"
 needs_euroc = pytest.mark.skipif(
@@ -821,11 +827,12 @@ def test_the_drone_preset_table_of_the_docs_holds(monkeypatch):
             rows[cells[0]] = [float(re.match(r"[0-9.]+", c).group()) for c in cells[1:]]
     assert set(rows) == set(DRONE_PRESET_ROWS)
     seq = load_sequence(EUROC, odometry=False, progress=False)
-    truth = seq.poses_4x4()
+    truth, poses = seq.poses_4x4(), {}
     for label, changes in DRONE_PRESET_ROWS.items():
         monkeypatch.setitem(pipeline.PRESETS, "hover", replace(HOVER, **changes))
         cv2.setRNGSeed(0)
-        figures = error_rows(truth, run_sequence(seq, use_odometry=False, seed=0).camera_poses)
+        poses[label] = run_sequence(seq, use_odometry=False, seed=0).camera_poses
+        figures = error_rows(truth, poses[label])
         ate_m, final_pct, rotation, path = rows[label]
         assert figures["ate_m"] == pytest.approx(ate_m, abs=0.0006), label
         assert figures["final_pct"] == pytest.approx(final_pct, abs=0.006), label
@@ -833,14 +840,9 @@ def test_the_drone_preset_table_of_the_docs_holds(monkeypatch):
         assert figures["path_m"] == pytest.approx(path, abs=0.006), label
     # "the seeds of RANSAC do not move these figures": the preset with two other seeds
     monkeypatch.setitem(pipeline.PRESETS, "hover", HOVER)
-    poses = [run_sequence(seq, use_odometry=False, seed=seed).camera_poses for seed in (0, 1, 2)]
-    assert all(np.allclose(other, poses[0], atol=1e-9) for other in poses[1:])
-
-
-KITTI_RAW = REALDATA / "kitti_raw_2011_09_26_drive_0001"
-needs_kitti_raw = pytest.mark.skipif(
-    not (KITTI_RAW / "oxts.txt").is_file(), reason=f"no KITTI raw drive 0001 with oxts.txt at {KITTI_RAW}"
-)
+    for seed in (1, 2):
+        other = run_sequence(seq, use_odometry=False, seed=seed).camera_poses
+        assert np.allclose(other, poses["as preset"], atol=1e-9), seed
 
 
 @pytest.mark.samples
@@ -901,6 +903,20 @@ def test_the_docs_table_of_the_drone_at_lower_frame_rates_has_every_start():
     assert set(LOWER_RATE_ROWS) == {(k, o) for k in (2, 3, 4) for o in range(k)}
 
 
+def every_kth(full, k: int, o: int):
+    """``full`` with only every ``k``-th frame kept, from frame ``o``: the drone at a lower frame rate."""
+    from dataclasses import replace
+
+    every = slice(o, None, k)
+    return replace(
+        full,
+        times=full.times[every],
+        left_files=full.left_files[every],
+        right_files=full.right_files[every],
+        poses=full.poses[every],
+    )
+
+
 @pytest.fixture(scope="module")
 def euroc_sequence():
     """The EuRoC sample, read (and its images checked) once for the tests that subsample it."""
@@ -915,21 +931,11 @@ def euroc_sequence():
 def test_the_drone_at_lower_frame_rates_row_of_the_docs_holds(k, o, euroc_sequence):
     """A row of docs/real_data.md's figures of the drone with only every k-th frame kept, from frame
     o, run again."""
-    from dataclasses import replace
-
     from vo_lib.bench.bench_real import error_rows
     from vo_lib.stereo_vo.baselines import run_pnp_baseline
 
     ate, ate_pnp, rotation, rotation_pnp, flagged = LOWER_RATE_ROWS[(k, o)]
-    full = euroc_sequence
-    every = slice(o, None, k)
-    seq = replace(
-        full,
-        times=full.times[every],
-        left_files=full.left_files[every],
-        right_files=full.right_files[every],
-        poses=full.poses[every],
-    )
+    seq = every_kth(euroc_sequence, k, o)
     truth = seq.poses_4x4()
     ours = run_sequence(seq, use_odometry=False, seed=0)
     figures = error_rows(truth, ours.camera_poses), error_rows(truth, run_pnp_baseline(seq).camera_poses)
@@ -946,12 +952,7 @@ def test_the_drone_at_lower_frame_rates_row_of_the_docs_holds(k, o, euroc_sequen
 def test_the_drone_at_every_fourth_frame_gives_the_same_poses_with_other_seeds(euroc_sequence):
     """The docs' lower-frame-rate rows are one seed's; the RANSAC draws of other seeds give the
     same poses on the row whose frames are hardest to keep (every fourth frame from frame 0)."""
-    from dataclasses import replace
-
-    full, every = euroc_sequence, slice(0, None, 4)
-    seq = replace(
-        full, times=full.times[every], left_files=full.left_files[every], right_files=full.right_files[every]
-    )
+    seq = every_kth(euroc_sequence, 4, 0)
     poses = [run_sequence(seq, use_odometry=False, seed=seed).camera_poses for seed in (0, 1, 2)]
     assert all(np.allclose(other, poses[0], atol=1e-9) for other in poses[1:])
 
