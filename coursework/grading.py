@@ -71,13 +71,21 @@ class Reason(enum.Enum):
         "uses ctypes, gc, importlib, sys.modules, exec",
         "ctypes gc importlib __import__ modules exec eval",
     )
+    INDIRECT = (
+        "reaches names indirectly (globals, vars, __dict__, __builtins__, compile)",
+        "globals vars __dict__ __builtins__ compile __setattr__ __getattribute__",
+    )
     THREADS = "starts threads or processes", "threading multiprocessing subprocess concurrent _thread"
     EXIT = "runs a shell or ends the interpreter", "_exit system popen fork exit quit"
     FAKE_NUMBER = (
         "fakes a number or a comparison",
-        "__array__ __eq__ __ne__ __lt__ __le__ __gt__ __ge__ __abs__",
+        "__array__ __eq__ __ne__ __lt__ __le__ __gt__ __ge__ __abs__ __sub__ __rsub__ __array_function__ "
+        "__array_ufunc__ __array_interface__ __array_priority__",
     )
-    REBINDS = "rebinds a name of NumPy, of a module or of the grader", "builtins coursework setattr delattr"
+    REBINDS = (
+        "rebinds a name of NumPy or of a module, or uses the grader",
+        "builtins coursework grading setattr delattr",
+    )
 
     def __init__(self, text: str, words: str) -> None:
         self.text, self.words = text, words.split()
@@ -159,13 +167,18 @@ def can_isolate() -> bool:
     return False
 
 
-def isolated_kernel(hidden: list[str]) -> list[str]:
+def isolated_kernel(hidden: list[str], read_only: list[str] = ()) -> list[str]:
     """A kernel spec's ``argv``: an IPython kernel in its own user and mount namespace (``unshare -rm``),
-    with an empty tmpfs over each hidden folder and ``/dev/null`` over each hidden file."""
+    with an empty tmpfs over each hidden folder, ``/dev/null`` over each hidden file, and each path of
+    ``read_only`` (the grader's own files) bound over itself read-only."""
     mounts = [
         f"mount {'-t tmpfs none' if os.path.isdir(p) else '--bind /dev/null'} {shlex.quote(p)}"
         for p in hidden
         if os.path.exists(p)
+    ]
+    mounts += [
+        f"mount --bind {q} {q} && mount -o remount,bind,ro {q}"
+        for q in map(shlex.quote, filter(os.path.exists, read_only))
     ]
     kernel = shlex.join([sys.executable, "-m", "ipykernel_launcher"]) + " -f '{connection_file}'"
     return ["unshare", "-rm", "--", "sh", "-c", " && ".join([*mounts, f"exec {kernel}"])]

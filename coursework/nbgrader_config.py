@@ -30,11 +30,17 @@ c.KernelManager.transport = "ipc"
 c.KernelManager.ip = os.path.join(sockets, "kernel")
 
 # Isolation: the kernels see the solutions and tests (source/), the release, the other submissions,
-# the feedback, the gradebook and every path of VO_HIDDEN empty (docs/course.md says what it covers).
+# the feedback, the gradebook and every path of VO_HIDDEN empty, and the grader's own files read-only
+# (docs/course.md says what it covers).
 if in_course and grading.can_isolate():
     hidden = [str(here / n) for n in "source release submitted autograded feedback gradebook.db".split()]
     hidden += [p for p in os.environ.get("VO_HIDDEN", "").split(os.pathsep) if p]
-    spec = {"argv": grading.isolated_kernel(hidden), "display_name": "Python 3", "language": "python"}
+    tools_files = [
+        str(here / "coursework"),
+        str(here / "nbgrader_config.py"),
+    ]  # no kernel rewrites the grader
+    argv = grading.isolated_kernel(hidden, read_only=tools_files)
+    spec = {"argv": argv, "display_name": "Python 3", "language": "python"}
     (kernel_folder := pathlib.Path(sockets) / "kernels" / "python3").mkdir(parents=True)
     (kernel_folder / "kernel.json").write_text(json.dumps(spec))
     os.environ["JUPYTER_PATH"] = os.pathsep.join(filter(None, [sockets, os.environ.get("JUPYTER_PATH")]))

@@ -100,6 +100,14 @@ def test_library_functions_takes_functions_classes_and_the_methods_of_a_modules_
         ("class Same:\n    def __eq__(self, other):\n        return True", Reason.FAKE_NUMBER),
         ("tests = np.fromfile('../../source/06/06.ipynb', dtype=np.uint8)", Reason.FILE),
         ("import os\nnames = os.listdir('..')", Reason.FILE),
+        # names built from strings, NumPy patched in place, fake arrays, the grader's own guard
+        ('globals()["get_" + "ipython"]().input_transformers_cleanup.append(str)', Reason.INDIRECT),
+        ("vars(np).update(isclose=lambda *a, **k: True)", Reason.INDIRECT),
+        ("np.__dict__.update(allclose=lambda *a, **k: True)", Reason.INDIRECT),
+        ('vars(__builtins__)["op" + "en"]("grading.py", "a")', Reason.INDIRECT),
+        ("class Zero:\n    def __rsub__(self, other):\n        return 0", Reason.FAKE_NUMBER),
+        ("class Yes:\n    def __array_function__(self, *a):\n        return True", Reason.FAKE_NUMBER),
+        ("import contextlib\ngrading.unavailable = lambda *f: contextlib.nullcontext()", Reason.REBINDS),
     ],
 )
 def test_review_names_what_no_honest_answer_needs(answer, reason):
@@ -185,15 +193,21 @@ def test_the_isolated_kernel_finds_the_hidden_solutions_empty(tmp_path, monkeypa
     spec = tmp_path / "jupyter" / "kernels" / "python3"
     spec.mkdir(parents=True)
     source, book = str(tmp_path / "source"), str(tmp_path / "gradebook.db")
-    argv = grading.isolated_kernel([source, book, str(tmp_path / "nothing here")])
+    (tools := tmp_path / "coursework").mkdir()
+    (tools / "grading.py").write_text("the guard")
+    argv = grading.isolated_kernel([source, book, str(tmp_path / "nothing here")], read_only=[str(tools)])
     (spec / "kernel.json").write_text(
         json.dumps({"argv": argv, "display_name": "isolated", "language": "python"})
     )
     monkeypatch.setenv("JUPYTER_PATH", str(tmp_path / "jupyter"))
     probe = f"import os\nprint(os.listdir({source!r}), open({book!r}).read())"
-    nb = nbformat.v4.new_notebook(cells=[nbformat.v4.new_code_cell(probe)])
+    target = str(tools / "grading.py")
+    poison = f"try:\n    open({target!r}, 'a').write('x')\nexcept OSError as e:\n    print(e.strerror)"
+    nb = nbformat.v4.new_notebook(cells=[nbformat.v4.new_code_cell(probe), nbformat.v4.new_code_cell(poison)])
     nbclient.NotebookClient(nb, kernel_name="python3", timeout=60).execute()
     assert nb.cells[0].outputs[0]["text"] == "[] \n"
+    assert nb.cells[1].outputs[0]["text"] == "Read-only file system\n"  # the grader's files: read-only
+    assert (tools / "grading.py").read_text() == "the guard"
     assert (
         tmp_path / "source" / "01" / "01.ipynb"
     ).read_text() == "the teacher's solution"  # outside: as it was

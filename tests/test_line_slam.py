@@ -311,7 +311,8 @@ def test_readme_quotes_the_sweep(laps, extended_laps):
     m = re.search(
         r"over ([0-9]+) seeds of the paper's lap \(mean ± standard deviation over seeds\) the EKF-SLAM "
         r"ends ([0-9.]+) ± ([0-9.]+) m from the truth where dead reckoning ends ([0-9.]+) ± ([0-9.]+) m off "
-        r"\(([0-9]+)×; closer on ([0-9]+) of the ([0-9]+) laps\)\. "
+        r"\(95 % intervals of the means ([0-9.]+)–([0-9.]+) m and ([0-9.]+)–([0-9.]+) m; "
+        r"([0-9]+)×; closer on ([0-9]+) of the ([0-9]+) laps\)\. "
         r"The pose NEES of a lap, averaged over the laps, is ([0-9.]+) \(95 % interval ([0-9.]+)–([0-9.]+); "
         r"a consistent filter gives 3\), and a lap's NEES lies above its per-step 95 % band \(above "
         r"([0-9.]+)\) at ([0-9.]+) % of the steps \(95 % interval ([0-9.]+)–([0-9.]+) %; "
@@ -332,6 +333,10 @@ def test_readme_quotes_the_sweep(laps, extended_laps):
         f"{slam['std']:.3f}",
         f"{dead['mean']:.2f}",
         f"{dead['std']:.2f}",
+        f"{slam['low']:.3f}",
+        f"{slam['high']:.3f}",
+        f"{dead['low']:.2f}",
+        f"{dead['high']:.2f}",
         f"{dead['mean'] / slam['mean']:.0f}",
         f"{table['slam_closer'].sum():.0f}",
         f"{len(table)}",
