@@ -9,7 +9,8 @@ from coursework.grading import report
 
 class AfterRun(NbGraderPreprocessor):
     """Once the notebook ran: stderr (a warning, a progress bar) is dropped and never costs a mark,
-    and the test of a flagged answer fails with the report's lines (0 until the teacher reads it)."""
+    and the test of a flagged answer fails with the report's lines (0 until the teacher reads it);
+    so does every other test of that notebook, whose results the flagged answer may have bought."""
 
     def preprocess(self, nb, resources):
         self.flagged = report(nb)
@@ -20,8 +21,12 @@ class AfterRun(NbGraderPreprocessor):
             cell.outputs = [o for o in cell.get("outputs", []) if o.get("name") != "stderr"]
         exercise = cell.metadata.get("nbgrader", {}).get("grade_id", "").removesuffix("_test")
         found = self.flagged.get(exercise)
-        if cell.metadata.get("nbgrader", {}).get("grade") and found:
-            why = f"the answer {exercise} is to be reviewed by the teacher: {'; '.join(found)}"
+        if cell.metadata.get("nbgrader", {}).get("grade") and self.flagged:
+            why = (
+                f"the answer {exercise} is to be reviewed by the teacher: {'; '.join(found)}"
+                if found
+                else f"the notebook's answer {', '.join(self.flagged)} is to be reviewed by the teacher first"
+            )
             error = dict(ename="ToBeReviewed", evalue=why, traceback=[f"ToBeReviewed: {why}"])
             cell.outputs.append(nbformat.v4.new_output("error", **error))
         return cell, resources

@@ -140,7 +140,7 @@ def _cell(kind, source, grade_id, outputs=()):
     return cell
 
 
-def test_stderr_never_costs_a_mark_and_a_flagged_answer_fails_its_test():
+def test_stderr_never_costs_a_mark_and_a_flagged_answer_fails_every_test():
     warning = {"output_type": "stream", "name": "stderr", "text": "UserWarning: fitted gauge\n"}
     printed = {"output_type": "stream", "name": "stdout", "text": "42\n"}
     nb = nbformat.v4.new_notebook(
@@ -152,10 +152,15 @@ def test_stderr_never_costs_a_mark_and_a_flagged_answer_fails_its_test():
         ]
     )
     nb, _ = autograde_steps.AfterRun().preprocess(nb, {})
-    assert [o.get("name") for o in nb.cells[1].outputs] == ["stdout"]
-    assert nb.cells[0].outputs == [] and not any(o.output_type == "error" for o in nb.cells[1].outputs)
+    assert nb.cells[0].outputs == [] and [o.get("name") for o in nb.cells[1].outputs[:1]] == ["stdout"]
     (error,) = nb.cells[3].outputs
     assert error.ename == "ToBeReviewed" and "line 1" in error.evalue and "gc" in error.evalue
+    # ex1's test held too: what the flagged answer patched may have bought its pass
+    (held,) = [o for o in nb.cells[1].outputs if o.output_type == "error"]
+    assert held.ename == "ToBeReviewed" and "ex2" in held.evalue
+    clean = nbformat.v4.new_notebook(cells=[_cell("answer", "x = 1", "ex1"), _cell("test", "x", "ex1_test")])
+    clean, _ = autograde_steps.AfterRun().preprocess(clean, {})
+    assert clean.cells[1].outputs == []  # nothing flagged: nothing held
 
 
 def test_feedback_keeps_a_tests_message_only():
