@@ -20,13 +20,9 @@ class AfterRun(NbGraderPreprocessor):
         if cell.cell_type == "code" and cell.metadata.get("nbgrader"):
             cell.outputs = [o for o in cell.get("outputs", []) if o.get("name") != "stderr"]
         exercise = cell.metadata.get("nbgrader", {}).get("grade_id", "").removesuffix("_test")
-        found = self.flagged.get(exercise)
+        found = self.flagged.get(exercise, [f"held with {', '.join(self.flagged)}"])  # a flag holds them all
         if cell.metadata.get("nbgrader", {}).get("grade") and self.flagged:
-            why = (
-                f"the answer {exercise} is to be reviewed by the teacher: {'; '.join(found)}"
-                if found
-                else f"the notebook's answer {', '.join(self.flagged)} is to be reviewed by the teacher first"
-            )
+            why = f"the answer {exercise} is to be reviewed by the teacher: {'; '.join(found)}"
             error = dict(ename="ToBeReviewed", evalue=why, traceback=[f"ToBeReviewed: {why}"])
             cell.outputs.append(nbformat.v4.new_output("error", **error))
         return cell, resources

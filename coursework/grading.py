@@ -68,12 +68,9 @@ class Reason(enum.Enum):
     FRAME = "inspects frames, code or source", "inspect linecache _getframe f_back f_globals f_locals"
     CODE = "reads or traces code objects", "__code__ settrace setprofile"
     LOW_LEVEL = (
-        "uses ctypes, gc, importlib, sys.modules, exec",
-        "ctypes gc importlib __import__ modules exec eval",
-    )
-    INDIRECT = (
-        "reaches names indirectly (globals, vars, __dict__, __builtins__, compile)",
-        "globals vars __dict__ __builtins__ compile __setattr__ __getattribute__",
+        "uses ctypes, gc, importlib, sys.modules, exec, or reaches names indirectly (globals, vars)",
+        "ctypes gc importlib __import__ modules exec eval compile globals vars __dict__ __builtins__ "
+        "__setattr__ __getattribute__",
     )
     THREADS = "starts threads or processes", "threading multiprocessing subprocess concurrent _thread"
     EXIT = "runs a shell or ends the interpreter", "_exit system popen fork exit quit"
@@ -82,10 +79,7 @@ class Reason(enum.Enum):
         "__array__ __eq__ __ne__ __lt__ __le__ __gt__ __ge__ __abs__ __sub__ __rsub__ __array_function__ "
         "__array_ufunc__ __array_interface__ __array_priority__",
     )
-    REBINDS = (
-        "rebinds a name of NumPy or of a module, or uses the grader",
-        "builtins coursework grading setattr delattr",
-    )
+    REBINDS = "rebinds NumPy or a module, or uses the grader", "builtins coursework grading setattr delattr"
 
     def __init__(self, text: str, words: str) -> None:
         self.text, self.words = text, words.split()

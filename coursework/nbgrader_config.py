@@ -35,11 +35,7 @@ c.KernelManager.ip = os.path.join(sockets, "kernel")
 if in_course and grading.can_isolate():
     hidden = [str(here / n) for n in "source release submitted autograded feedback gradebook.db".split()]
     hidden += [p for p in os.environ.get("VO_HIDDEN", "").split(os.pathsep) if p]
-    tools_files = [
-        str(here / "coursework"),
-        str(here / "nbgrader_config.py"),
-    ]  # no kernel rewrites the grader
-    argv = grading.isolated_kernel(hidden, read_only=tools_files)
+    argv = grading.isolated_kernel(hidden, [str(here / "coursework"), str(here / "nbgrader_config.py")])
     spec = {"argv": argv, "display_name": "Python 3", "language": "python"}
     (kernel_folder := pathlib.Path(sockets) / "kernels" / "python3").mkdir(parents=True)
     (kernel_folder / "kernel.json").write_text(json.dumps(spec))

@@ -408,8 +408,8 @@ display(
         f"""- FAST finds {len(keypoints):,} corners in this textured scene; bucketing keeps
   {len(kept)} of them spread over the image.
 - Hamming distances of binary descriptors separate true matches (median {np.median(same):.0f} bits
-  of 256) from unrelated ones (median {np.median(shuffled):.0f} bits) cleanly; a ceiling, a ratio
-  test and a mutual check remove most errors.
+  of 256) from unrelated ones (median {np.median(shuffled):.0f} bits) on this scene; a ceiling, a
+  ratio test and a mutual check are the matcher's guards against the rest.
 - Row-constrained matching plus the equiangular sub-pixel fit gives disparities with a median
   error of {stereo_median_err:.2f} px, with {stereo_wrong:.1%} wrong matches (off by more than
   2 px), in {frontend_ms:.0f} ms per pair on this machine (section 4)."""

@@ -330,11 +330,8 @@ display(
         f"`spot_turn` flags {flag_share['spot_turn']:.1%} of its frames and "
         f"`spot_turn_2` {flag_share['spot_turn_2']:.1%}; the larger heading RMS of the two runs is "
         f"`{larger_rms}`'s, "
-        + (
-            "which flags fewer frames: the flagged frames do not explain the difference."
-            if larger_rms != more_flags
-            else "which also flags more frames."
-        )
+        + ("which flags fewer frames" if larger_rms != more_flags else "which also flags more frames")
+        + " (two runs, one each: they describe those runs and explain nothing in general)."
     )
 )
 
@@ -408,9 +405,12 @@ for name in free_sets:
     print(f" {name:15s}" + "".join(cells))
 
 
-odometry_lower = [
-    q for q in QUANTITIES if rms_of(stored, "indoor_free", q, "odometry") < rms_of(stored, "indoor_free", q)
-]
+UNITS = {"x_mm": ("x", "mm", 1), "y_mm": ("y", "mm", 1), "theta_deg": ("θ", "°", 2)}
+indoor_rms = ", ".join(  # fused / odometry alone, of the one stored run
+    f"{label} {rms_of(stored, 'indoor_free', q):.{digits}f} / "
+    f"{rms_of(stored, 'indoor_free', q, 'odometry'):.{digits}f} {unit}"
+    for q, (label, unit, digits) in UNITS.items()
+)
 flagged_share = {n: stored[n]["flagged"] / stored[n]["frames"] for n in free_sets}
 display(
     Markdown(
@@ -419,14 +419,14 @@ display(
         f"{flagged_share['outdoor_free']:.0%} and {flagged_share['outdoor_free_2']:.0%} in the other "
         "two Table 2 sets; while a frame is flagged the filter moves on track odometry, which counts "
         "slip as motion and does not see the body swing when a track loses contact. On the lab's "
-        f"flat floor (`indoor_free`, {flagged_share['indoor_free']:.1%} flagged) track odometry "
-        f"alone has the lower RMS in {len(odometry_lower)} of 3 figures ({', '.join(odometry_lower)}) "
-        f"of this one run: there the odometry's error is a small slip of about "
+        f"flat floor (`indoor_free`, {flagged_share['indoor_free']:.1%} flagged) the RMS of the "
+        f"key-position errors of this one run, fused / track odometry alone, are {indoor_rms}: one "
+        "run, which ranks neither. There the odometry's error is a small slip of about "
         f"{SAMPLES['indoor_free'].slip.mean:.0%}, while the "
         "vision that the filter trusts far more can carry the skid's bias on eq. 14 in tight "
-        "turns (section 6), which the fused pose would follow: a reading of this one run, not a "
-        "measured rule. Notebook 07 measures over seeds when fusing helps and when the odometry's "
-        "slip leaks in, on drives whose tracks slip but do not skid, so it does not test this."
+        "turns (section 6), which the fused pose would follow. Notebook 07 measures over seeds when "
+        "fusing helps and when the odometry's slip leaks in, on drives whose tracks slip but do not "
+        "skid, so it does not test this."
     )
 )
 
@@ -609,7 +609,7 @@ display(
 #   full length (stored, sections 4 and 5; one run each, as the paper's) lie below the paper's
 #   RMS in some figures and above it in others; skid biases eq. 14 in turns, and frames flagged
 #   on rough ground leave the filter to odometry, which drifts by the slip. On the flat lab floor
-#   section 5 prints in which figures of that one stored run odometry alone has the lower RMS.
+#   section 5 prints that one stored run's RMS fused and with odometry alone, which ranks neither.
 #   Notebook 07 measures over seeds when fusing helps, on drives without skid.
 # - The pipeline's NEES on the rendered sequences, with its χ² band, shows how far its covariance
 #   can be trusted: it counts noise, not the slip's mean, the skid's bias or a lost contact.

@@ -909,7 +909,9 @@ display(
 # moves a lot, more than the verdict on the lap averages.
 # Remedies are first-estimate Jacobians, observability-constrained EKFs, or smoothing instead of
 # filtering; more seeds (`python -m vo_lib sweep lap`, below) tell a small over-confidence from
-# none. So: the final error is small, far below dead reckoning, and the covariance is useful.
+# none. So: over the seeds, the final error is small and below dead reckoning's (printed above, with
+# the share and the intervals); how far the covariance can be trusted is what the lap averages
+# above, with their intervals, say.
 #
 # ### Feature point or line?
 #

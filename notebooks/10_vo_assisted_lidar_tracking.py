@@ -176,8 +176,9 @@ print(f"closer to the truth after 200 frames, in this one run: {best}")
 # On this stretch both odometers end within centimetres of the truth; which one ends closer
 # (printed) changes with the stretch and the seed, so one run does not rank them.
 # `python -m vo_lib bench odometers` runs both over the whole corridor with their times per
-# frame. The 1-point model needs fewer matches and less work per frame, and (notebook 08) shines
-# where its motion model holds; the 6-DoF PnP odometer assumes nothing about the motion.
+# frame. The 1-point model draws each hypothesis from one match and estimates two parameters, and
+# holds only where the motion is planar and circular (notebook 08); the 6-DoF PnP odometer assumes
+# nothing about the motion.
 #
 # For the tracking experiment the PnP odometer runs on the whole rendered corridor. Its errors
 # against the ground truth, with the statistics of the paper's Table I (the paper's visual
@@ -369,9 +370,10 @@ print(
 # * **On the raw scores the two readings part.** There the quartiles are of the same size as the
 #   maximum, and the two readings' AUCs are printed above for this one run (tests check, on it,
 #   that the printed $V_{max} - V_{lq} - V_{med}$ stays below one half, ranking occluded frames
-#   above normal ones more often than not, and that $V_{max} - V_{med}$ stays near one): on this
-#   run, our reading of eq. 11 is the one that separates them. (The printed form is not a slip:
-#   eq. 12 calls $V_{max} - V_{lq}$ the "range", and range minus median is what eq. 11 prints.)
+#   above normal ones more often than not, and that $V_{max} - V_{med}$ stays near one). That
+#   describes this one run and ranks the readings for no other; the reading we keep rests on the
+#   wording of eq. 12, not on this run. (The printed form is not a slip: eq. 12 calls
+#   $V_{max} - V_{lq}$ the "range", and range minus median is what eq. 11 prints.)
 # * **The printed eq. 10 is a normalisation, not a posterior, for a score like ours.**
 #   $S_i / \sum_j S_j$ would be the posterior if $S_i$ were proportional to the likelihood (and the
 #   samples drawn from the prior); a grid-map score adds one term per beam, a log-likelihood.
@@ -552,10 +554,11 @@ for ax in axes:
         ax.axvspan(lo, hi, color="C2", alpha=0.08)
 
 # %% [markdown]
-# Green: the stretches where radial features are in view. In between, LBPT's error wanders along
-# the corridor, and can lock onto the wrong place once features return; $T_s$ flags those frames,
-# and VOAPT's error stays small. Across the corridor (Y) both stay within centimetres: the walls
-# fix it. The principal error direction at the frames VOAPT compensated:
+# Green: the stretches where radial features are in view. In this one drive, between them,
+# LBPT's error wanders along the corridor and can lock onto the wrong place once features return;
+# $T_s$ flags those frames. One drive ranks neither tracker: section 6 compares them over seeds.
+# Across the corridor (Y) both stay within centimetres: the walls fix it. The principal error
+# direction at the frames VOAPT compensated:
 
 # %%
 dirs = np.array([s.direction for s in voapt.steps if s.direction is not None])
@@ -722,8 +725,9 @@ display(
 # - [Yuan]'s visual odometer (PnP with a local map) stays within centimetres over the whole
 #   corridor, which is what VOAPT needs.
 # - The sample scores' box-plot statistics judge a tracker's output once the score is read as a
-#   log-likelihood (eq. 10 as a posterior); the printed eq. 11 fails where the quartiles matter,
-#   and on the posterior scale $D_s$ adds nothing to $V_{max}$. Eq. 12's threshold cannot fail as
+#   log-likelihood (eq. 10 as a posterior); on section 3's one run, the printed eq. 11 separates
+#   normal from occluded frames worse than chance where the quartiles matter, and on the posterior
+#   scale $D_s$ adds nothing to $V_{max}$. Eq. 12's threshold cannot fail as
 #   printed, eq. 14 swaps two names, eq. 16's "or" cannot flag a jumping laser: each is read and
 #   tested.
 # - Replacing the laser's correction along the principal error direction by the visual

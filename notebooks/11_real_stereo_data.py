@@ -569,9 +569,9 @@ assert angle_cv < 0.05 and shift_cv < 0.005
 #
 # - Real frames leave a large share of their cells without a corner and most of their pixels flat;
 #   a front end with a fixed threshold or a fixed grid either starves or crowds. The pyramid front
-#   end adapts its threshold and finds corners at three scales, and its sub-pixel disparities on
-#   the Motorcycle pair are at least as accurate as OpenCV's semi-global matcher at the same pixels
-#   (in median error, on that one pair).
+#   end adapts its threshold and finds corners at each level of a small pyramid (section 2 prints
+#   how many); section 2 also sets its sub-pixel disparities on the Motorcycle pair beside OpenCV's
+#   semi-global matcher at the same pixels, a description of that one pair that ranks neither.
 # - The tail of the disparity error sits on depth edges, where a patch mixes two depths.
 # - On a car the circular-motion model misses the camera's offset from the turning axis, the
 #   road's slope and bank, and the body's pitch under braking; they move features by pixels in

@@ -11,9 +11,11 @@ import numpy as np
 import pytest
 
 from vo_lib.lidar_tracking.corridor_experiment import (
+    LOST_ERROR,
     TIM551,
     corridor_visual_odometry,
     run_experiment,
+    statistics_table,
     without_umbrella,
 )
 from vo_lib.lidar_tracking.likelihood_field import LikelihoodField
@@ -211,3 +213,9 @@ def test_readme_quotes_the_experiment(experiment):
     assert shares, "README: no T_s sentence"
     assert abs(float(shares.group(1)) - 100 * experiment.flagged_when_lost()) <= 0.5
     assert abs(float(shares.group(2)) - 100 * experiment.false_alarms()) <= 0.5
+    lost = re.search(
+        r"In ([0-9]+) of the ([0-9]+) seeds VOAPT's median error along the\s+corridor exceeds 0\.2 m", text
+    )
+    assert lost, "README: no sentence on the seeds VOAPT lost"
+    medians = [statistics_table(r.errors[:, 0])["median"] for r in experiment.voapt]
+    assert [int(lost.group(1)), int(lost.group(2))] == [sum(m > LOST_ERROR for m in medians), len(medians)]

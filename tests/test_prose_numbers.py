@@ -466,6 +466,12 @@ NOT_RANDOM: dict[str, dict[str, str]] = {
 }
 
 
+NOT_RANDOM["10_vo_assisted_lidar_tracking"] = {
+    "judge a tracker's output once the score is read": "describes section 3's one run and says so; the "
+    "reading kept rests on eq. 12's wording",
+}
+
+
 NOT_RANDOM["08_full_pipeline"] = {
     "Notebook 07 measures over seeds when fusing helps": "points to the seed comparisons of notebook 07",
 }
