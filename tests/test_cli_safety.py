@@ -1165,6 +1165,45 @@ def test_a_folder_being_read_is_not_replaced(tmp_path):
     ]
 
 
+def test_what_a_sequence_links_to_is_not_replaced_while_it_is_read(tmp_path):
+    """A sequence whose image folder is a link into another folder: that folder is read too."""
+    from vo_lib.outputs import OutputError, OutputFolder, claim_folder, reading
+
+    converted = claim_folder(tmp_path / "converted", "vo_lib convert")
+    (converted / "image_0").mkdir()
+    (tmp_path / "seq").mkdir()
+    (tmp_path / "seq" / "image_0").symlink_to(converted / "image_0")
+    with reading(tmp_path / "seq"):
+        with pytest.raises(OutputError, match="a running command is reading this folder"):
+            OutputFolder(converted, "vo_lib convert")
+
+
+def test_an_input_still_to_render_does_not_block_replacing_our_own_output(tmp_path):
+    """A sample not rendered yet (its folder missing) links nowhere: a run replaces its own output."""
+    from vo_lib.outputs import OutputFolder, check_target
+
+    with OutputFolder(tmp_path / "run", "vo_lib run") as out:
+        (out.path / "poses.txt").write_text("old\n")
+        out.commit()
+    assert check_target(tmp_path / "run", written_by="vo_lib run", inputs=[tmp_path / "not yet"]) is None
+
+
+def test_force_replaces_nothing_it_did_not_write_inside_the_sample_data_folder(tmp_path, monkeypatch):
+    """The repository's data/ holds tracked fixtures beside the rendered samples: --force replaces
+    a folder there only if this program wrote it."""
+    from vo_lib import outputs
+
+    monkeypatch.setattr(outputs, "REPOSITORY_DATA", tmp_path / "data")
+    (fixtures := tmp_path / "data" / "fixtures").mkdir(parents=True)
+    (fixtures / "calib.txt").write_text("P0: 1 0 0 0\n")
+    with pytest.raises(outputs.OutputError, match="lies inside the sample data folder"):
+        outputs.check_target(fixtures, written_by="vo_lib run", force=True, option="--out")
+    assert (fixtures / "calib.txt").is_file()
+    with outputs.OutputFolder(tmp_path / "data" / "sample_5f", "vo_lib generate") as out:
+        out.commit()
+    assert outputs.check_target(tmp_path / "data" / "sample_5f", written_by="vo_lib generate") is None
+
+
 # ---- a kill at any step of the swap leaves the previous output whole ------------------------------
 
 KILLER = """

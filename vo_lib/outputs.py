@@ -132,9 +132,14 @@ def linked_from(folder) -> tuple[list[Path], str | None]:
     and, through a link to a folder, what that folder's own links lead to, and so on; and, where
     not every link could be looked at, why not (else None)."""
     found, seen, unlisted = [], set(), []
+
+    def not_listed(error: OSError) -> None:
+        if not isinstance(error, FileNotFoundError):  # a missing folder (a sample to render) links nowhere
+            unlisted.append(error)
+
     to_walk, budget = [Path(folder)], MAX_WALKED
     while to_walk and budget > 0:  # a link to / is not walked through the whole file system
-        walk = itertools.islice(os.walk(to_walk.pop(), onerror=unlisted.append), budget)
+        walk = itertools.islice(os.walk(to_walk.pop(), onerror=not_listed), budget)
         below = [Path(root) / name for root, folders, files in walk for name in folders + files]
         budget -= len(below) + 1
         new = sorted({real_path(path) for path in below if path.is_symlink()} - seen)
@@ -190,6 +195,10 @@ def check_target(target, *, written_by: str, force=False, inputs=(), keep=None, 
             f"{unchecked}); choose a new output folder"
         )
     why = foreign_content(real, written_by)
+    if why is not None and _contains(REPOSITORY_DATA.resolve(), real):  # its fixtures: never, --force or not
+        raise OutputError(
+            f"{label}: lies inside the sample data folder and {why}; choose another output folder"
+        )
     if why is not None and not force:  # a folder the user did not name (a sample's) has no --force
         fix = "choose another folder, or add --force to replace it" if option else "move it away"
         raise OutputError(f"{label}: the folder exists and {why}; {fix}")
@@ -241,11 +250,11 @@ def _locked(folder: Path, shared: bool, label: str = ""):
 
 @contextlib.contextmanager
 def reading(folder):
-    """Shared locks on ``folder`` and every folder above it while a command reads it: no command
-    replaces it, or a folder that holds it, meanwhile."""
-    real = real_path(folder)
+    """Shared locks on ``folder``, on what its symbolic links lead to, and on every folder above
+    them while a command reads it: no command replaces any of them, or a folder that holds one."""
+    read = [real_path(folder), *linked_from(folder)[0]]
     with contextlib.ExitStack() as stack:
-        for path in (real, *real.parents):
+        for path in dict.fromkeys(p for r in read for p in (r, *r.parents)):  # each folder once
             stack.enter_context(_locked(path, shared=True, label=str(path)))
         yield
 
