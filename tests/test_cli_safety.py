@@ -428,6 +428,10 @@ CASES = [
         edit("seq/odometry.txt", b"\xff garbage"), "out"),
     Case("no-right-folder", "RUN", 2, "image_1: missing image folder",
         lambda ws: shutil.rmtree(ws / "seq" / "image_1")),
+    Case("right-folder-a-file", "RUN", 2, "image_1: a file where the image folder should be",
+        lambda ws: (shutil.rmtree(ws / "seq" / "image_1"), (ws / "seq" / "image_1").write_text(""))),
+    Case("sequence-is-its-image-folder", "run --sequence seq/image_0", 2,
+        "missing image folder; give the folder holding image_0"),
     Case("no-images", "RUN", 2, "image_0: no images",
         lambda ws: [p.unlink() for p in (ws / "seq").glob("image_*/*.png")]),
     # --- bounds ----------------------------------------------------------------------------------

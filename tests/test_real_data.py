@@ -274,6 +274,10 @@ def test_asl_recording_is_rectified_and_its_truth_moved_into_the_left_camera():
     "damage, expected",
     [
         ("yaml", "cam0/sensor.yaml: key intrinsics"),
+        (
+            "mapping",
+            'cam0/sensor.yaml: key intrinsics: expected [fu, fv, cu, cv] (4 finite numbers), got {"fu"',
+        ),
         ("rotation", "cam1/sensor.yaml: key T_BS"),
         ("baseline", "cam1/sensor.yaml: key T_BS puts cam1 where cam0 is"),
         ("shape", "cam0/sensor.yaml: key T_BS: rows: 3, cols: 4; expected the numbers 4 and 4"),
@@ -325,6 +329,10 @@ def test_a_bad_rig_gets_one_line_and_exit_2(tmp_path, capsys, damage, expected):
     if damage == "yaml":
         path = mav0 / "cam0" / "sensor.yaml"
         path.write_text(path.read_text().replace("intrinsics: [458.654, ", "intrinsics: ["))
+    elif damage == "mapping":  # the intrinsics named one by one, not as the list the format asks for
+        path = mav0 / "cam0" / "sensor.yaml"
+        text = path.read_text().replace("intrinsics: [458.654, ", "intrinsics: {fu: 458.654, fv: ")
+        path.write_text(text.replace("367.215, 248.375]", "cu: 367.215, cv: 248.375}"))
     elif damage == "rotation":
         path = mav0 / "cam1" / "sensor.yaml"
         path.write_text(path.read_text().replace("data: [0.0125", "data: [5.0125"))

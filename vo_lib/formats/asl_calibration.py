@@ -79,7 +79,7 @@ def _yaml(path: Path) -> dict:
 
 def _numbers(path: Path, data: dict, key: str, count: int, what: str) -> np.ndarray:
     value = data.get(key)
-    if isinstance(value, dict):  # T_BS: {rows, cols, data}
+    if isinstance(value, dict) and "data" in value:  # T_BS: {rows, cols, data}
         shape = (value.get("rows", 4), value.get("cols", 4))
         if shape != (4, 4):
             raise AslError(

@@ -189,6 +189,10 @@ def _is_image(entry: os.DirEntry) -> bool:
 def image_files(folder: Path) -> list[Path]:
     """The images of ``folder`` in frame order; a name without a frame number, a dangling link
     and two names of one frame number raise :class:`SequenceError` naming the file."""
+    if folder.exists() and not folder.is_dir():
+        raise SequenceError(f"{folder}: a file where the image folder should be; expected a folder of images")
+    if not folder.is_dir() and folder.parent.name == folder.name:  # --sequence named image_0 itself
+        raise SequenceError(f"{folder}: missing image folder; give the folder holding {folder.name}")
     if not folder.is_dir():
         raise SequenceError(f"{folder}: missing image folder")
     try:
