@@ -346,7 +346,14 @@ def test_evaluate_refuses_or_says_undefined_what_it_cannot_measure(tmp_path, rng
     (tmp_path / "ns.tum").write_text(
         "".join(f"{round(float(t) * 1e9) + 10**18} {rest}\n" for t, rest in rows)
     )
+    kitti = "".join(
+        ",".join(["0.9999972", "0", "0.0023", "0.1", "0", "1", "0", "0", "-0.0023", "0", "0.9999972", "0"])
+        + "\n"
+        for _ in range(3)
+    )
+    (tmp_path / "kitti.csv").write_text(kitti)  # KITTI poses, with commas
     refused = {
+        ("--gt", "kitti.csv", "--est", "est.tum"): "as KITTI poses? they are separated by spaces, not commas",
         ("--gt", "est.tum", "--est", "wxyz.tum"): "line 1: the header orders the quaternion w x y z",
         ("--gt", "seconds.csv", "--est", "est.tum"): "line 2: the times step by 0.1",
         ("--gt", "order.csv", "--est", "est.tum"): (

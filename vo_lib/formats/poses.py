@@ -139,11 +139,13 @@ def _check(path: Path, a: np.ndarray, lines: list[int], comma: bool) -> None:
             text = read_text(path).replace("\r\n", "\n").replace("\r", "\n")  # as read_rows splits it
             return re.split(r"[\s,]+", text.split("\n")[lines[k] - 1].strip())[0]
 
+        kitti = "; 12 numbers a row, as KITTI poses? they are separated by spaces, not commas"
         refuse(
             np.concatenate([[False], np.diff(t) <= 0]),
             lambda k: (
                 f"timestamp {stamp(k)} {'repeats' if t[k] == t[k - 1] else 'comes before'} "
                 f"the one on line {lines[k - 1]} ({stamp(k - 1)}); timestamps must increase"
+                + (kitti if comma and a.shape[1] == 12 else "")
             ),
         )
     refuse(np.abs(positions).max(axis=1) > MAX_POSITION, f"a position beyond {MAX_POSITION:g} m")
