@@ -132,20 +132,16 @@ def linked_from(folder) -> tuple[list[Path], str | None]:
     and, through a link to a folder, what that folder's own links lead to, and so on; and, where
     not every link could be looked at, why not (else None)."""
     found, seen, unlisted = [], set(), []
-
-    def not_listed(error: OSError) -> None:
-        if not isinstance(error, FileNotFoundError):  # a missing folder (a sample to render) links nowhere
-            unlisted.append(error)
-
     to_walk, budget = [Path(folder)], MAX_WALKED
     while to_walk and budget > 0:  # a link to / is not walked through the whole file system
-        walk = itertools.islice(os.walk(to_walk.pop(), onerror=not_listed), budget)
+        walk = itertools.islice(os.walk(to_walk.pop(), onerror=unlisted.append), budget)
         below = [Path(root) / name for root, folders, files in walk for name in folders + files]
         budget -= len(below) + 1
         new = sorted({real_path(path) for path in below if path.is_symlink()} - seen)
         found += new
         seen.update(new)
         to_walk += [target for target in new if target.is_dir()]
+    unlisted = [e for e in unlisted if not isinstance(e, FileNotFoundError)]  # a missing folder links nowhere
     hidden = f"{unlisted[0].filename} cannot be listed" if unlisted else None  # it may hide links
     return found, hidden or (None if budget > 0 else f"it holds or links to over {MAX_WALKED:,} entries")
 
@@ -195,13 +191,13 @@ def check_target(target, *, written_by: str, force=False, inputs=(), keep=None, 
             f"{unchecked}); choose a new output folder"
         )
     why = foreign_content(real, written_by)
-    if why is not None and _contains(REPOSITORY_DATA.resolve(), real):  # its fixtures: never, --force or not
-        raise OutputError(
-            f"{label}: lies inside the sample data folder and {why}; choose another output folder"
-        )
-    if why is not None and not force:  # a folder the user did not name (a sample's) has no --force
+    in_data = _contains(REPOSITORY_DATA.resolve(), real)  # beside the samples: tracked fixtures
+    if why is not None and (in_data or not force):  # a folder the user did not name has no --force
         fix = "choose another folder, or add --force to replace it" if option else "move it away"
-        raise OutputError(f"{label}: the folder exists and {why}; {fix}")
+        where = "lies inside the sample data folder (no --force there)" if in_data else "exists"
+        raise OutputError(
+            f"{label}: the folder {where} and {why}; {'choose another output folder' if in_data else fix}"
+        )
     return None if why is None else f"{real} ({why})"
 
 
