@@ -310,6 +310,15 @@ def test_rows_read_at_once_equal_rows_read_one_by_one_and_a_bad_row_is_named(tmp
         (tmp_path / "bad.txt").write_text("\n".join(rows[:5] + [bad] + rows[6:]) + "\n")
         with pytest.raises(TrajectoryError, match=message):
             read_rows(tmp_path / "bad.txt")
+    # a CSV whose header line lacks the '#' is read as with it; a first row of NaN is still refused
+    csv = [f"{1403636583783555584 + 5 * 10**7 * k},1,2,3" for k in range(4)]
+    for header in ("#timestamp [ns],p_x,p_y,p_z", "timestamp [ns],p_x,p_y,p_z"):
+        (tmp_path / "gt.csv").write_text("\n".join([header, *csv]) + "\n")
+        a, lines, comma = read_rows(tmp_path / "gt.csv")
+        assert a.shape == (4, 4) and lines == [2, 3, 4, 5] and comma
+    (tmp_path / "nan.txt").write_text("nan 1 2 3\n1 1 2 3\n")
+    with pytest.raises(TrajectoryError, match="line 1: holds a NaN"):
+        read_rows(tmp_path / "nan.txt")
 
 
 def test_evaluate_refuses_or_says_undefined_what_it_cannot_measure(tmp_path, rng, capsys):

@@ -158,6 +158,8 @@ def read_rows(path, min_rows: int = 1) -> tuple[np.ndarray, list[int], bool]:
     :class:`TrajectoryError` naming the file and line."""
     path = Path(path)
     rows = data_lines(path, "the trajectory")
+    if rows and re.match(r"[A-Za-z_]", rows[0][1]) and not re.match(r"(?i)(nan|inf)\b", rows[0][1]):
+        rows = rows[1:]  # a first line of names without '#' (timestamp,px,...): a header all the same
     if not rows:
         raise TrajectoryError(f"{path}: no poses")
     lines, comma = [n for n, _ in rows], "," in rows[0][1]
