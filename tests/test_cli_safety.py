@@ -769,6 +769,24 @@ def test_signals_leave_nothing_and_print_one_line(tmp_path, args, signum, code, 
     assert checksums(tmp_path, ()) == before
 
 
+def test_a_signal_while_exiting_after_the_command_says_so_in_one_line(tmp_path):
+    """Ctrl-C or SIGTERM in the second the interpreter takes to shut down, after the command
+    finished: one line and 128 + N, not a silent end by the signal."""
+    script = (
+        "import os, signal, sys, time\n"
+        "import vo_lib.cli.main as m\n"
+        "m.main = lambda argv=None: 0\n"
+        "status = m.entry()\n"
+        "os.kill(os.getpid(), signal.SIGTERM)\n"
+        "time.sleep(30)\n"
+        "sys.exit(status)\n"
+    )
+    proc = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=60)
+    assert proc.returncode == 143 and proc.stderr.strip().splitlines() == [
+        "vo_lib: SIGTERM while exiting; the command had finished"
+    ]
+
+
 @pytest.mark.parametrize("wrapper", [SystemError, ImportError])
 @pytest.mark.parametrize(
     "signum, code, phrase", [(signal.SIGINT, 130, "Ctrl-C"), (signal.SIGTERM, 143, "SIGTERM")]

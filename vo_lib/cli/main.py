@@ -376,5 +376,26 @@ def main(argv: list[str] | None = None) -> int:
             return 128 + signum
 
 
+def _late_stop(signum, frame) -> None:
+    """A signal once the command has finished, while the interpreter shuts down: one line, not a
+    silent end by the signal (what the command wrote is already whole)."""
+    with contextlib.suppress(OSError, ValueError):  # stdout or stderr closed by then
+        sys.stdout.flush()
+        os.write(
+            2, f"vo_lib: {signal.Signals(signum).name} while exiting; the command had finished\n".encode()
+        )
+    os._exit(128 + signum)
+
+
+def entry() -> int:
+    """The ``vo-lib`` script and ``python -m vo_lib``: :func:`main`, then :func:`_late_stop` for
+    SIGINT and SIGTERM during the second or so the interpreter takes to shut down."""
+    status = main()
+    if status < 128:  # not stopped by a signal already (that one said so, in its line)
+        for kind in (signal.SIGINT, signal.SIGTERM):
+            signal.signal(kind, _late_stop)
+    return status
+
+
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(entry())

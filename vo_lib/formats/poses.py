@@ -154,8 +154,8 @@ def _check(path: Path, a: np.ndarray, lines: list[int], comma: bool) -> None:
 def read_rows(path, min_rows: int = 1) -> tuple[np.ndarray, list[int], bool]:
     """The rows of a trajectory file, checked (:func:`_check`), their line numbers, and whether the
     file is a CSV (its first row holds commas). Blank lines, lines starting with ``#`` or ``%`` and a
-    first line of names (a header without ``#``) are skipped. Any problem, and fewer than ``min_rows`` rows, raises one
-    :class:`TrajectoryError` naming the file and line."""
+    first line of names (a header without ``#``) are skipped. Any problem, and fewer than
+    ``min_rows`` rows, raises one :class:`TrajectoryError` naming the file and line."""
     path = Path(path)
     rows = data_lines(path, "the trajectory")
     if rows and re.match(r"[A-Za-z_]", rows[0][1]) and not re.match(r"(?i)(nan|inf)\b", rows[0][1]):
