@@ -705,10 +705,10 @@ display(
 )
 
 # %% [markdown]
-# And the umbrella can *create* a false match: seen from
-# behind, its canopy can line up with the second pillar, and LBPT locks there with a confident
-# score; only the comparison with the visual odometer reveals it, which is why our $T_s$ needs
-# both control tests.
+# The umbrella could also *create* a false match: seen from behind, its canopy could line up with
+# the second pillar and hold LBPT there with a confident score, which only the comparison with the
+# visual odometer would reveal. This notebook does not show such a frame; it is the case that
+# makes our $T_s$ keep both control tests.
 #
 # ### Scaling up
 #
