@@ -344,6 +344,12 @@ def test_evaluate_refuses_or_says_undefined_what_it_cannot_measure(tmp_path, rng
     assert (
         "ATE (Sim(3) alignment, positions only): rmse undefined m, max undefined" in out and "nan" not in out
     )
+    # a ground truth in millimetres is read as metres, and evaluate says it looks like millimetres
+    (tmp_path / "mm.txt").write_text(
+        "".join(f"{t!r} {1000 * k} {2000 * k} 0\n" for k, t in enumerate(times.tolist()))
+    )
+    assert main(["evaluate", "--gt", str(tmp_path / "mm.txt"), "--est", str(tmp_path / "est.tum")]) == 0
+    assert "is one of them in millimetres?" in capsys.readouterr().out
     # a TUM estimate whose header orders the quaternion w x y z; a CSV whose times are seconds
     text = (tmp_path / "est.tum").read_text()
     (tmp_path / "wxyz.tum").write_text("# timestamp tx ty tz qw qx qy qz\n" + text)

@@ -111,6 +111,17 @@ def recording_of(gt: str, extrinsic_of: str | None, kitti: bool) -> str | None:
     return str(found)
 
 
+def _say_if_units_differ(truth_xyz: np.ndarray, est_xyz: np.ndarray) -> None:
+    """A note where the two paths differ in length a hundredfold or more (one file in millimetres,
+    say): every error printed below then measures the units, not the estimate."""
+    truth_m, est_m = (float(np.sum(np.linalg.norm(np.diff(p, axis=0), axis=1))) for p in (truth_xyz, est_xyz))
+    if min(truth_m, est_m) > 0 and max(truth_m, est_m) >= 100 * min(truth_m, est_m):
+        print(
+            f"note: the ground truth's path is {truth_m:.4g} m long and the estimate's {est_m:.4g} m: "
+            "is one of them in millimetres? Both files are read as metres"
+        )
+
+
 def evaluate_command(gt: str, est: str, segments=None, extrinsic_of: str | None = None) -> None:
     """Print the 3-D errors of an estimate (KITTI or TUM) against ground truth in any format of
     :mod:`vo_lib.formats.groundtruth`: final error, ATE (SE(3), Sim(3)), RPE and KITTI's errors.
@@ -153,6 +164,8 @@ def evaluate_command(gt: str, est: str, segments=None, extrinsic_of: str | None 
     if recording is not None:
         tracker = recording if truth.poses is None else None  # a prism's lever arm
         to_camera = tracked_to_camera(gt, body_to_rectified_camera(recording), tracker)
+    truth_xyz = truth.positions[i_gt] if truth.poses is None else truth.poses[i_gt][:, :3, 3]
+    _say_if_units_differ(truth_xyz, E[i_est][:, :3, 3])
     if truth.poses is None:
         ignored = f"--segments: --gt {gt} holds positions only, which give the ATE alone\n"
         print("" if lengths is None else ignored, end="")
