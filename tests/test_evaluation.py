@@ -367,8 +367,15 @@ def test_evaluate_refuses_or_says_undefined_what_it_cannot_measure(tmp_path, rng
         for _ in range(3)
     )
     (tmp_path / "kitti.csv").write_text(kitti)  # KITTI poses, with commas
+    (tmp_path / "tum.csv").write_text("# timestamp tx ty tz qx qy qz qw\n" + text.replace(" ", ","))
     refused = {
         ("--gt", "kitti.csv", "--est", "est.tum"): "as KITTI poses? they are separated by spaces, not commas",
+        (
+            "--gt",
+            "tum.csv",
+            "--est",
+            "est.tum",
+        ): "a TUM file? its numbers are separated by spaces, not commas",
         ("--gt", "est.tum", "--est", "wxyz.tum"): "line 1: the header orders the quaternion w x y z",
         ("--gt", "seconds.csv", "--est", "est.tum"): "line 2: the times step by 0.1",
         ("--gt", "order.csv", "--est", "est.tum"): (

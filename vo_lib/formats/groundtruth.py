@@ -58,6 +58,7 @@ def read_groundtruth(path, min_poses: int = 2) -> GroundTruth:
             f"{path}, line {line}: the header orders the quaternion {' '.join(order)}; "
             + (
                 "a CSV is read as EuRoC's t[ns], x, y, z, qw, qx, qy, qz"
+                + ("; a TUM file? its numbers are separated by spaces, not commas" if order == "xyzw" else "")
                 if comma
                 else "a text file is read as TUM's t x y z qx qy qz qw"
             )
