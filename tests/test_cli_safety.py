@@ -430,6 +430,8 @@ CASES = [
         lambda ws: shutil.rmtree(ws / "seq" / "image_1")),
     Case("right-folder-a-file", "RUN", 2, "image_1: a file where the image folder should be",
         lambda ws: (shutil.rmtree(ws / "seq" / "image_1"), (ws / "seq" / "image_1").write_text(""))),
+    Case("sequence-a-file-out-ours", "run --sequence important.txt --out out", 2,
+        "--sequence important.txt: a file, not a sequence folder", run_once("out"), "out"),
     Case("sequence-is-its-image-folder", "run --sequence seq/image_0", 2,
         "missing image folder; give the folder holding image_0"),
     Case("no-images", "RUN", 2, "image_0: no images",

@@ -56,6 +56,8 @@ def input_path(name_or_path: str, frames: int | None) -> tuple[Path, int | None]
             f"--sequence {name_or_path!r}: neither a sample name ({', '.join(SAMPLES)}) "
             "nor an existing folder"
         )
+    if not Path(name_or_path).is_dir():  # said before --out is looked at
+        raise UsageError(f"--sequence {name_or_path}: a file, not a sequence folder")
     return Path(name_or_path), frames
 
 
