@@ -593,6 +593,14 @@ assert np.isclose(_h31_got, np.average(_h31_th, weights=_h31_w), rtol=0, atol=1e
 for _h31_errors, _h31_spread in ((errors_weighted, spread_weighted), (errors_median, spread_median)):
     assert len(set(np.ravel(_h31_errors))) == 200, "the errors of 200 different draws"
     assert np.isclose(_h31_spread, np.sqrt(np.mean(np.square(_h31_errors)))), "a spread is not the RMS error"
+_h31_rng, _h31_ref = np.random.default_rng(3012), []  # the same experiment on other draws
+for _ in range(200):
+    _h31 = synthetic_matches(camera, 300, theta_true, rho_true, _h31_rng, noise_px=noise)
+    _h31_th = cm_module.theta_from_pixels(_h31.w_prev, _h31.w_curr, camera)
+    _h31_w = cm_module.theta_standard_deviation(_h31.w_prev, _h31.w_curr, camera, noise) ** -2.0
+    _h31_ref.append([np.average(_h31_th, weights=_h31_w) - theta_true, np.median(_h31_th) - theta_true])
+_h31_rms = np.sqrt(np.mean(np.square(_h31_ref), axis=0))  # 200 draws: each RMS within about 10 %
+assert np.allclose([spread_weighted, spread_median], _h31_rms, rtol=0.3), "spreads unlike these draws'"
 ### END HIDDEN TESTS
 
 # %% [markdown]
