@@ -20,15 +20,18 @@ class GradingError(AssertionError):
     """A hidden test's answer called a function the exercise asks the student to write."""
 
 
+def _refused(*args, **kwargs):  # the code a refused function runs, under its own globals: builtins only
+    raise __import__("coursework.grading", fromlist=["GradingError"]).GradingError(
+        "this calls a library function that the exercise asks you to write yourself"
+    )
+
+
 @contextlib.contextmanager
 def unavailable(*functions: Callable) -> Iterator[None]:
     """Make ``functions`` raise :class:`GradingError` under every name (in loaded modules, their classes
-    and the notebook) while the block runs: a guard for honest mistakes, not a sandbox."""
+    and the notebook) while the block runs, and, for a Python function, wherever it is held (a default
+    argument, a closure, a ``partial``: its code is swapped): a guard for honest mistakes, not a sandbox."""
     wanted = {id(f) for f in functions}
-
-    def refuse(*args, **kwargs):
-        raise GradingError("this calls a library function that the exercise asks you to write yourself")
-
     modules = [m for m in list(sys.modules.values()) if isinstance(getattr(m, "__dict__", None), dict)]
     owned = [(m, k) for m in modules for k in vars(m).values() if isinstance(k, type)]
     classes = [k for m, k in owned if k.__module__ == m.__name__]  # each class once, where defined
@@ -38,12 +41,20 @@ def unavailable(*functions: Callable) -> Iterator[None]:
     swapped += [(d, n, v) for d in spaces for n, v in list(d.items()) if id(v) in wanted]
     put = {True: dict.__setitem__, False: setattr}
     for owner, name, _ in swapped:
-        put[isinstance(owner, dict)](owner, name, refuse)
+        put[isinstance(owner, dict)](owner, name, _refused)
+    plain = [getattr(f, "__func__", f) for f in functions]  # a static or class method: its function
+    codes = [
+        (f, f.__code__) for f in plain if isinstance(f, types.FunctionType) and not f.__code__.co_freevars
+    ]
+    for f, _ in codes:
+        f.__code__ = _refused.__code__
     try:
         yield
     finally:
         for owner, name, value in swapped:
             put[isinstance(owner, dict)](owner, name, value)
+        for f, code in codes:
+            f.__code__ = code
 
 
 def library_functions(*owners: types.ModuleType | type | Callable) -> list[Callable]:

@@ -25,6 +25,21 @@ def test_an_unavailable_function_raises_under_every_name_and_comes_back():
     assert ransac.hypotheses_needed(0.5, 0.99) == hypotheses_alias(0.5, 0.99) == before
 
 
+def test_an_unavailable_function_raises_where_an_answer_holds_it_and_comes_back():
+    import functools
+
+    def answer(w, p, _count=ransac.hypotheses_needed):  # kept as a default argument
+        return _count(w, p)
+
+    held = functools.partial(ransac.hypotheses_needed, 0.5)
+    before = answer(0.5, 0.99)
+    with grading.unavailable(ransac.hypotheses_needed):
+        for call in (lambda: answer(0.5, 0.99), lambda: held(0.99)):
+            with pytest.raises(grading.GradingError, match="write yourself"):
+                call()
+    assert answer(0.5, 0.99) == held(0.99) == before
+
+
 def test_an_unavailable_function_comes_back_when_the_block_raises():
     original = ransac.hypotheses_needed
     with pytest.raises(ZeroDivisionError), grading.unavailable(original):
