@@ -648,6 +648,7 @@ print(f"a 5 deg turn moves the camera by {slide} m (x right, y down, z forward)"
 offset = np.hypot(*turn_mount[:2, 3])  # the camera's horizontal distance from the turning axis
 assert np.isclose(np.linalg.norm(slide), 2 * offset * math.sin(math.radians(5) / 2)), "a chord of the turn"
 ### BEGIN HIDDEN TESTS
+import vo_lib.evaluation as evaluation_module  # noqa: E402
 import vo_lib.geometry as geometry_module  # noqa: E402
 from coursework import grading  # noqa: E402
 
@@ -656,7 +657,7 @@ _h2_mounts = [geometry_module.camera_mount(*_h2_rng.uniform([-2, 0, -1], [2, 2, 
 for _h2_mount, _h2_pitch in zip(_h2_mounts, _h2_rng.uniform(0, 0.3, 6), strict=True):
     _h2_mount[:3, :3] = Rotation.from_euler("y", _h2_pitch).as_matrix() @ _h2_mount[:3, :3]
 _h2_yaws = _h2_rng.uniform(-0.5, 0.5, 6)
-with grading.unavailable(*grading.library_functions(geometry_module)):
+with grading.unavailable(*grading.library_functions(geometry_module, evaluation_module)):  # to_camera too
     _h2_got = [camera_slide(m, y) for m, y in zip(_h2_mounts, _h2_yaws, strict=True)]
 _h2_turns = [np.diag([1.0, 1.0, 1.0, 1.0]) for _ in _h2_yaws]
 for _h2_turn, _h2_yaw in zip(_h2_turns, _h2_yaws, strict=True):
