@@ -193,11 +193,15 @@ def check_target(target, *, written_by: str, force=False, inputs=(), keep=None, 
     why = foreign_content(real, written_by)
     in_data = _contains(REPOSITORY_DATA.resolve(), real)  # beside the samples: tracked fixtures
     if why is not None and (in_data or not force):  # a folder the user did not name has no --force
-        fix = "choose another folder, or add --force to replace it" if option else "move it away"
         where = "lies inside the sample data folder (no --force there)" if in_data else "exists"
-        raise OutputError(
-            f"{label}: the folder {where} and {why}; {'choose another output folder' if in_data else fix}"
+        fix = (
+            "choose another output folder"
+            if in_data
+            else "choose another folder, or add --force to replace it"
+            if option
+            else "move it away"
         )
+        raise OutputError(f"{label}: the folder {where} and {why}; {fix}")
     return None if why is None else f"{real} ({why})"
 
 

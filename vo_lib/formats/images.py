@@ -191,10 +191,9 @@ def image_files(folder: Path) -> list[Path]:
     and two names of one frame number raise :class:`SequenceError` naming the file."""
     if folder.exists() and not folder.is_dir():
         raise SequenceError(f"{folder}: a file where the image folder should be; expected a folder of images")
-    if not folder.is_dir() and folder.parent.name == folder.name:  # --sequence named image_0 itself
-        raise SequenceError(f"{folder}: missing image folder; give the folder holding {folder.name}")
-    if not folder.is_dir():
-        raise SequenceError(f"{folder}: missing image folder")
+    if not folder.is_dir():  # image_0/image_0: --sequence named the image folder itself
+        hint = f"; give the folder holding {folder.name}" if folder.parent.name == folder.name else ""
+        raise SequenceError(f"{folder}: missing image folder{hint}")
     try:
         with os.scandir(folder) as entries:
             keyed = sorted((frame_order(e.name), e.name) for e in entries if _is_image(e))
