@@ -91,6 +91,7 @@ class Reason(enum.Enum):
         "__array_ufunc__ __array_interface__ __array_priority__",
     )
     REBINDS = "rebinds NumPy or a module, or uses the grader", "builtins coursework grading setattr delattr"
+    PRIVATE = "reaches a private name (a leading underscore) of an imported module", ""
 
     def __init__(self, text: str, words: str) -> None:
         self.text, self.words = text, words.split()
@@ -111,13 +112,16 @@ def review(source: str) -> list[tuple[int, Reason]]:
     except SyntaxError:
         return found
     imports = [a for n in ast.walk(tree) if isinstance(n, ast.Import) for a in n.names]
-    imported = {(a.asname or a.name).split(".")[0] for a in imports}  # names bound to modules
-    found += [(node.lineno, why) for node in ast.walk(tree) for why in _reasons(node, imported)]
+    imported = {(a.asname or a.name).split(".")[0] for a in imports}  # names the cell's imports bind
+    imported |= {a.asname or a.name for n in ast.walk(tree) if isinstance(n, ast.ImportFrom) for a in n.names}
+    for node in ast.walk(tree):
+        found += [(node.lineno, why) for why in _reasons(node, imported)]
+        found += [(node.lineno, Reason.PRIVATE)] if _private(node, imported) else []
     return sorted(set(found), key=lambda item: (item[0], item[1].text))
 
 
 def _reasons(node: ast.AST, imported: set[str]) -> list[Reason]:
-    """The reasons to review one syntax node; ``imported`` are the cell's names bound to modules."""
+    """The reasons to review one syntax node; ``imported`` are the names the cell's imports bind."""
     if isinstance(node, ast.Import):
         return [FLAGGED[r] for r in (a.name.split(".")[0] for a in node.names) if r in FLAGGED]
     if isinstance(node, ast.ImportFrom):
@@ -136,9 +140,19 @@ def _reasons(node: ast.AST, imported: set[str]) -> list[Reason]:
     targets = getattr(node, "targets", None) or [getattr(node, "target", None)]
     if isinstance(node, (ast.Assign, ast.AugAssign, ast.Delete)) and any(
         _rebinds(t) or (isinstance(t, ast.Attribute) and _named(t.value, *imported)) for t in targets
-    ):  # np.allclose = ..., grading = ..., or an attribute of a module the cell imported
+    ):  # np.allclose = ..., grading = ..., or an attribute of a module or object the cell imported
         return [Reason.REBINDS]
     return []
+
+
+def _private(node: ast.AST, imported: set[str]) -> bool:
+    """``from m import _x``, or ``m._x`` where an import bound ``m`` (not ``__x__``, nor ``_replace``): a
+    module's own name, e.g. the compiled kernel inside the function an exercise asks for."""
+    names = [a.name for a in node.names] if isinstance(node, ast.ImportFrom) else [getattr(node, "attr", "")]
+    while isinstance(node, ast.Attribute):
+        node = node.value
+    inside = isinstance(node, (ast.ImportFrom, ast.Name)) and getattr(node, "id", None) in {None, *imported}
+    return inside and any(n[:1] == "_" and n[-2:] != "__" and n not in {"_replace", "_asdict"} for n in names)
 
 
 def _named(node: ast.AST, *names: str) -> bool:
