@@ -361,3 +361,52 @@ def test_a_blurred_frame_is_judged_with_the_wider_gate_on_its_last_attempt_only(
     guided = model.estimate(matches, Prediction(prior, True, T), np.random.default_rng(0))
     assert unguided.success and unguided.inliers >= 6 and not guided.success
     assert np.allclose(unguided.motion, T, atol=0.02)
+
+
+@pytest.mark.parametrize("last_attempt_ratio", [0.0, None])
+def test_the_drone_waives_the_inlier_ratio_on_a_frames_last_attempt_only(
+    kitti_camera, monkeypatch, last_attempt_ratio
+):
+    """Matches of which 30 % agree on the motion, as unguided matching pairs blurred images: the
+    guided attempt is judged by the ratio and retried without windows, where the drone's preset
+    keeps the motion whatever the ratio; with the ratio kept there (the car's rule), the frame is
+    flagged."""
+    from dataclasses import replace
+
+    from vo_lib.stereo_vo import six_dof
+    from vo_lib.stereo_vo.config import HOVER
+    from vo_lib.stereo_vo.features import StereoFeatures
+    from vo_lib.stereo_vo.frames import Reason
+    from vo_lib.stereo_vo.pipeline import StereoOdometry
+    from vo_lib.stereo_vo.synthetic import matches_under_transform
+    from vo_lib.stereo_vo.temporal import TemporalMatches
+
+    T = motion([0.0, 0.04, 0.0], [0.02, 0.0, 0.2])
+    m = matches_under_transform(
+        kitti_camera, 200, T, np.random.default_rng(8), (4.0, 40.0), 0.3, outlier_ratio=0.7
+    )
+    guided = []
+
+    def match(self, reference, features, prediction, recent):
+        guided.append(prediction.motion is not None)
+        index = np.arange(len(m.w_prev))
+        return TemporalMatches(index, index, m.w_prev, m.w_curr, len(index))
+
+    class FrontEnd:
+        def process(self, left, right):
+            return StereoFeatures(m.w_curr, np.zeros((len(m.w_curr), 32), np.uint8))
+
+    monkeypatch.setattr(six_dof.SixDofMotion, "match", match)
+    config = replace(HOVER, subpixel_tracking=False, last_attempt_ratio=last_attempt_ratio)
+    odometer = StereoOdometry(
+        kitti_camera, config, mount=camera_mount(0.0, 0.0), front_end=FrontEnd(), seed=1
+    )
+    odometer.process(None, None)  # the reference
+    odometer.motion.velocity = T  # a prediction, to guide the windows
+    _, _, diag, _ = odometer.process(None, None)
+    assert guided == [True, False] and diag.inlier_ratio < HOVER.min_inlier_ratio
+    if last_attempt_ratio is None:
+        assert diag.fallback and diag.reason is Reason.LOW_INLIER_RATIO
+    else:
+        assert not diag.fallback and diag.inliers >= 0.6 * m.inliers.sum()
+        assert np.allclose(odometer.camera_pose, np.linalg.inv(T), atol=2e-3)

@@ -44,6 +44,8 @@ class PipelineConfig:
     min_inliers: int = 15
     #: Of the temporal matches; a large moving object drags it down (6-DoF: the 1-point RANSAC's).
     min_inlier_ratio: float = 0.7
+    #: The same on a frame's last attempt, matched without windows (None: ``min_inlier_ratio``).
+    last_attempt_ratio: float | None = None
     prior_gate: float = float(chi2.ppf(0.9999, 2))  #: VO motion against the prediction (Mahalanobis^2)
     #: Consecutive frames the prior gate may reject before the vision is believed over the
     #: prediction (wheels slipping, a speed that lags when braking); the crawler always rejects.
@@ -137,10 +139,13 @@ CAR = PipelineConfig(
 #: - a new keyframe is also taken when the inliers fall below the crawler's fraction of the first
 #:   frame's: a body that pitches or rolls turns its view away from the reference without the yaw
 #:   or the chord that key the car's frames;
-#: - a motion is used on as few inliers as its refinement accepts (``rigid_motion.MIN_INLIERS``;
-#:   the inlier ratio still counts): when the body turns fast, few matches survive, and a motion
-#:   measured on them, with the covariance they give it, beats a last motion repeated, which a
-#:   turn that reverses makes worse than none.
+#: - a motion is used on as few inliers as its refinement accepts (``rigid_motion.MIN_INLIERS``):
+#:   when the body turns fast, few matches survive, and a motion measured on them, with the
+#:   covariance they give it, beats a last motion repeated, which a turn that reverses makes worse
+#:   than none. The inlier ratio still counts while the matching is guided by the prediction (a
+#:   low one sends the frame to its last attempt, every pair matched), but not on that last
+#:   attempt: in a blurred turn most unguided matches are wrong, and the ratio then says so
+#:   rather than that the motion is.
 HOVER = replace(
     CAR,
     prior_gate=math.inf,
@@ -148,6 +153,7 @@ HOVER = replace(
     planar_hypotheses=False,
     key_inlier_fraction=CRAWLER.key_inlier_fraction,
     min_inliers=MIN_INLIERS,
+    last_attempt_ratio=0.0,
 )
 
 PRESETS = {"planar": CRAWLER, "full": CAR, "hover": HOVER}

@@ -176,7 +176,8 @@ class StereoOdometry:
         diag.theta, diag.rho = float(estimate.z[0]), float(estimate.z[1])
         if not estimate.success or estimate.inliers < cfg.min_inliers:
             return Reason.FEW_INLIERS
-        if estimate.inlier_ratio < cfg.min_inlier_ratio:
+        last = prediction.motion is None and cfg.last_attempt_ratio is not None  # matched without windows
+        if estimate.inlier_ratio < (cfg.last_attempt_ratio if last else cfg.min_inlier_ratio):
             return Reason.LOW_INLIER_RATIO
         prior = prediction.prior
         innovation = np.array([wrap_angle(estimate.z[0] - prior.theta), estimate.z[1] - prior.rho])
