@@ -434,6 +434,7 @@ from vo_lib.stereo_vo import ransac as ransac_module
 _h23_cam = StereoCamera(fx=700.0, fy=560.0, cx=300.0, cy=200.0, baseline=0.2, width=640, height=480)
 _h23 = synthetic_matches(_h23_cam, 300, 0.05, 0.1, np.random.default_rng(2031), outlier_ratio=0.4)
 _h23_eq13 = [camera_module.StereoCamera.backproject, cv2.triangulatePoints, cv2.reprojectImageTo3D]
+_h23_eq13 += [cv2.perspectiveTransform, cv2.convertPointsFromHomogeneous]  # the same product by Q
 with grading.unavailable(*grading.library_functions(ransac_module, *_h23_eq13)):
     _h23_got = height_change(_h23.w_prev, _h23.w_curr, _h23_cam)
 _h23_y = [camera_module.StereoCamera.backproject(_h23_cam, w)[:, 1] for w in (_h23.w_prev, _h23.w_curr)]

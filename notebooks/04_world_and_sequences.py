@@ -451,10 +451,10 @@ assert np.allclose(_h41_got, 195 / (195 / _h41_z - _h41_dd) - _h41_z, rtol=1e-6)
 #
 # A scanner mounted at `mount` = (x, y, yaw) in the robot frame (x forward, y left, origin at
 # the robot's centre, yaw counter-clockwise) returns echoes in its own frame. Write
-# `to_robot_frame(points, mount)` returning the points `(K, 2)` in the robot frame, without the
-# pose helpers of `vo_lib.geometry`. Then mount the scanner 0.3 m ahead of the robot's centre
-# (`LaserScanner(range_sigma=0.0, max_range=30.0, mount=(0.3, 0.0, 0.0))`), scan the lab from
-# `pose`, and store every echo in the robot frame in `robot_points`.
+# `to_robot_frame(points, mount)` returning the points `(K, 2)` in the robot frame, with NumPy
+# alone (no function of `vo_lib`, whose pose helpers do it). Then mount the scanner 0.3 m ahead
+# of the robot's centre (`LaserScanner(range_sigma=0.0, max_range=30.0, mount=(0.3, 0.0, 0.0))`),
+# scan the lab from `pose`, and store every echo in the robot frame in `robot_points`.
 #
 # *Hint:* `scan.points()` are in the sensor's frame; rotate by the yaw, then shift.
 
@@ -497,12 +497,13 @@ assert gap_to_walls(robot_points, pose).max() < 1e-6, "an echo carried into the 
 ### BEGIN HIDDEN TESTS
 import numpy as np
 
+import vo_lib
 from coursework import grading
 from vo_lib import geometry as geometry_module
 
 _h42 = np.random.default_rng(4021)
 _h42_points, _h42_mount = _h42.uniform(-10, 10, (50, 2)), _h42.uniform([-0.4, -0.3, -3], [0.4, 0.3, 3])
-with grading.unavailable(*grading.library_functions(geometry_module)):
+with grading.unavailable(*grading.library_functions(vo_lib)):  # the SLAM's inverse observation too
     _h42_got = to_robot_frame(_h42_points.copy(), tuple(_h42_mount))
 _h42_expected = geometry_module.compose_planar(_h42_mount, np.column_stack([_h42_points, np.zeros(50)]))
 assert np.allclose(_h42_got, _h42_expected[:, :2]), "not the echoes of a turned and shifted scanner"

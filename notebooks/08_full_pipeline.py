@@ -648,8 +648,9 @@ ex_estimate = drive_steps(np.array([ex_step_length, 0.0, np.radians(0.05) + ex_d
 # ### Exercise 1 · final error as a share of the distance *(easy, 2 points)*
 #
 # The README reports the error at the last frame as a share of the distance travelled. Write
-# `final_error_percent(estimate, truth)` for planar trajectories `(K, 3)`, in per cent, without
-# `vo_lib.evaluation`, and store it for `ex_estimate` against `ex_truth` in `final_error_pct`.
+# `final_error_percent(estimate, truth)` for planar trajectories `(K, 3)`, in per cent, with NumPy
+# alone (no function of `vo_lib` or `evo`), and store it for `ex_estimate` against `ex_truth` in
+# `final_error_pct`.
 #
 # *Hint:* the distance travelled is the length of the true path, not the start-to-end distance.
 
@@ -680,12 +681,19 @@ assert np.isclose(final_error_pct, reference_percent(ex_estimate, ex_truth)), (
     "not the final error in per cent"
 )
 ### BEGIN HIDDEN TESTS
+import contextlib  # noqa: E402
+import importlib  # noqa: E402
+
+import vo_lib  # noqa: E402
 import vo_lib.evaluation as evaluation_module  # noqa: E402
 from coursework import grading  # noqa: E402
 
+_h1_refused = [vo_lib]  # every path length at hand: vo_lib's, and evo's where installed
+with contextlib.suppress(ImportError):
+    _h1_refused.append(importlib.import_module("evo.core"))
 _h1_truth = np.cumsum(np.random.default_rng(8011).normal(size=(60, 3)), axis=0)  # a winding path
 _h1_estimate = _h1_truth + np.random.default_rng(8012).normal(size=(60, 3))
-with grading.unavailable(*grading.library_functions(evaluation_module)):
+with grading.unavailable(*grading.library_functions(*_h1_refused)):
     _h1_got = final_error_percent(_h1_estimate, _h1_truth)
 _h1_expected = evaluation_module.final_error(_h1_truth, _h1_estimate).percent
 assert np.isclose(_h1_got, _h1_expected), "final_error_percent differs on another path (the path's length?)"
@@ -697,8 +705,9 @@ assert np.isclose(_h1_got, _h1_expected), "final_error_percent differs on anothe
 # The ATE first moves the whole estimate by the rotation and translation in the plane that fit
 # it best to the truth (least squares), then takes the RMS of the position errors. Write that
 # alignment yourself (2-D Kabsch: centre both, SVD of the cross-covariance, mind the sign of the
-# determinant) as `ate_rmse_of(truth, estimate)` for planar trajectories `(K, 3)`, without
-# `vo_lib.evaluation`, and store it for `ex_truth`, `ex_estimate` in `ate_rmse`.
+# determinant) as `ate_rmse_of(truth, estimate)` for planar trajectories `(K, 3)`, with NumPy
+# alone (no function of `vo_lib`, SciPy, OpenCV or evo that fits a transform), and store it for
+# `ex_truth`, `ex_estimate` in `ate_rmse`.
 #
 # *Hint:* R = V diag(1, det(V Uᵀ)) Uᵀ for the SVD U S Vᵀ of Σ (p_est − mean)(p_true − mean)ᵀ.
 
@@ -730,17 +739,19 @@ assert ate_rmse < np.linalg.norm(ex_estimate[-1, :2] - ex_truth[-1, :2]), "align
 import contextlib  # noqa: E402
 import importlib  # noqa: E402
 
+import cv2  # noqa: E402
 import scipy.linalg  # noqa: E402
 import scipy.spatial.transform  # noqa: E402
 
+import vo_lib  # noqa: E402
 import vo_lib.evaluation as evaluation_module  # noqa: E402
 import vo_lib.geometry as geometry_module  # noqa: E402
 from coursework import grading  # noqa: E402
 
-# every rigid alignment at hand: vo_lib's, SciPy's, and evo's and scikit-image's where installed
-_h2_refused = [evaluation_module, scipy.linalg.orthogonal_procrustes]
+# every rigid alignment at hand: vo_lib's, SciPy's, OpenCV's, and evo's and scikit-image's where installed
+_h2_refused = [vo_lib, scipy.linalg.orthogonal_procrustes, cv2.estimateAffinePartial2D, cv2.estimateAffine2D]
 _h2_refused.append(vars(scipy.spatial.transform.Rotation)["align_vectors"])  # the rest of Rotation stays
-for _h2_name in ("evo.core.geometry", "skimage.transform._geometric"):
+for _h2_name in ("evo.core", "skimage.transform._geometric"):
     with contextlib.suppress(ImportError):
         _h2_refused.append(importlib.import_module(_h2_name))
 _h2_rng = np.random.default_rng(8021)  # a winding path, and its mirror image turned, shifted and noisy

@@ -130,6 +130,14 @@ def test_library_functions_takes_functions_classes_and_the_methods_of_a_modules_
         ),
         ("import vo_lib.stereo_vo.matching_plain as m\nh = m._hamming", Reason.PRIVATE),
         ("from vo_lib.stereo_vo import matching_core\nk = matching_core._popcount64", Reason.PRIVATE),
+        # a compiled function, which no swap of names reaches, held by a default or a partial
+        ("def refine(P, w, lm=cv2.solvePnPRefineLM):\n    return lm(P, w)", Reason.HELD),
+        ("def refine(P, w, *, lm=solvePnPRefineLM):\n    return lm(P, w)", Reason.HELD),
+        ("import functools\nlm = functools.partial(cv2.solvePnPRefineLM, distCoeffs=None)", Reason.HELD),
+        (
+            "from functools import partial\nfrom cv2 import solvePnPRefineLM as s\nlm = partial(s)",
+            Reason.HELD,
+        ),
     ],
 )
 def test_review_names_what_no_honest_answer_needs(answer, reason):
@@ -153,6 +161,8 @@ def test_honest_code_with_numpy_and_ordinary_names_is_not_flagged():
         "opened = [1, 2]\nsystem_noise = 0.1\n"
         "from vo_lib.stereo_vo.ransac import DEFAULT_PARAMS\nwide = DEFAULT_PARAMS._replace(gate_sigmas=4)\n"
         "class Filter:\n    def __init__(self):\n        self._x = np.__version__\n"
+        "def spread(x, pi=np.pi, axis=0, scale=1.0):\n    return np.std(x, axis=axis) * pi * scale\n"
+        "def apply(f, x):\n    return f(x)\n"
     )
     assert review(answer) == []
 
