@@ -21,8 +21,10 @@ def print_ladder(theta: Comparison, rho: Comparison) -> None:
     print(f" {'':28s}{'median |θ err| [deg]':>21s}{'90th pct':>10s}{'median ρ err':>14s}   seeds")
     for name in theta.figures:
         t_deg = np.degrees(theta.figures[name])
-        print(f" {name:28s}{np.median(t_deg):21.4f}{np.percentile(t_deg, 90):10.4f}"
-              f"{np.median(rho.figures[name]):14.2%}{len(theta):8d}")
+        print(
+            f" {name:28s}{np.median(t_deg):21.4f}{np.percentile(t_deg, 90):10.4f}"
+            f"{np.median(rho.figures[name]):14.2%}{len(theta):8d}"
+        )
 
 
 def median_time(fn: Callable[[], object], repeats: int = 15) -> float:
@@ -71,8 +73,9 @@ def plot_gate_spread(raw: np.ndarray, normalised: np.ndarray) -> None:
     plt.show()
 
 
-def plot_trial(errors_deg: list[float], outlier_ratio: float, noise_px: float, hits: int,
-               median_ms: float) -> None:
+def plot_trial(
+    errors_deg: list[float], outlier_ratio: float, noise_px: float, hits: int, median_ms: float
+) -> None:
     """Histogram of one trial's |θ errors| with its success count and median time in the title."""
     import matplotlib.pyplot as plt
 
@@ -80,8 +83,10 @@ def plot_trial(errors_deg: list[float], outlier_ratio: float, noise_px: float, h
     ax.hist(errors_deg, bins=20)
     ax.set_xlabel("|θ error| [deg]")
     ax.set_ylabel("match sets")
-    ax.set_title(f"{outlier_ratio:.0%} outliers, {noise_px} px: {hits}/{len(errors_deg)} within 0.05° "
-                 f"and 5 %, {median_ms:.2f} ms")
+    ax.set_title(
+        f"{outlier_ratio:.0%} outliers, {noise_px} px: {hits}/{len(errors_deg)} within 0.05° "
+        f"and 5 %, {median_ms:.2f} ms"
+    )
     plt.show()
 
 
