@@ -782,7 +782,8 @@ assert np.allclose(_h1_got, _h1_expected), "update_1d: another update's gain, me
 # for the errors `(E, N, dim)` of E experiments of N runs each of an estimator that reports
 # `covariance`, each experiment's NEES averaged over its runs (shape `(E,)`). The cell below
 # draws 2,000 experiments of 50 runs of a *consistent* 3-D estimator (errors drawn from the
-# covariance it reports): store the share of them inside the band in `share_inside`.
+# covariance it reports): store the share of them inside the band in `share_inside`. Compute the
+# band from SciPy's χ² distribution, not with `vo_lib`'s `chi2_band` (notebook 06 uses it).
 #
 # *Hint:* the sum of N independent χ²(d) values is χ²(N·d); `scipy.stats.chi2.ppf`.
 

@@ -747,8 +747,8 @@ display(
 #
 # Write `posterior_of(scores)`: read each score as a log-likelihood and return the posterior of
 # every sample, without overflowing (exp(815) is not a float) and without `vo_lib`'s
-# `posterior`. Store it for the five scores S = (812.0, 815.5, 809.0, 815.0, 790.0) in
-# `sample_posterior`.
+# `posterior` or `scipy.special` (its `logsumexp` and `softmax` do the shift for you). Store it
+# for the five scores S = (812.0, 815.5, 809.0, 815.0, 790.0) in `sample_posterior`.
 #
 # *Hint:* subtracting the largest score from all of them changes nothing after normalising.
 

@@ -579,8 +579,9 @@ display(
 #
 # Write `along_across(true_pose, pose)`: where the planar pose `pose` = (x, y, yaw) lies seen
 # from the true pose `true_pose`, as `(along, across)` in metres: along the true heading
-# (positive ahead) and across it (positive to the left). Store it for the final poses of the
-# three paths of section 4 in the dictionary `split` (keys as in `paths`).
+# (positive ahead) and across it (positive to the left), without `vo_lib`'s pose functions
+# (section 4's `relative_planar` does it). Store it for the final poses of the three paths of
+# section 4 in the dictionary `split` (keys as in `paths`).
 #
 # *Hint:* rotate the difference of the positions by minus the true heading.
 
@@ -601,8 +602,10 @@ for name, (a, b) in split.items():
 
 # %% nbgrader={"grade": true, "grade_id": "ex1_test", "locked": true, "points": 2, "schema_version": 3, "solution": false}
 # Exercise 1: autograder test
-assert np.isclose(split["fused"][0], along["fused"]), "the fused path's along-track error of section 4"
-assert np.isclose(np.hypot(*split["VO only"]), final["VO only"][0]), "along and across make the final error"
+assert np.allclose(along_across((1.0, 1.0, math.pi / 2), (1.0, 3.0, 0.0)), (2.0, 0.0)), "2 m ahead, facing +y"
+assert np.allclose(along_across((0.0, 0.0, 0.0), (0.0, 0.5, 1.0)), (0.0, 0.5)), "0.5 m to the left"
+gap = paths["VO only"][-1][:2] - truth[-1][:2]
+assert np.isclose(np.hypot(*split["VO only"]), np.hypot(*gap)), "along and across make the final error"
 ### BEGIN HIDDEN TESTS
 import vo_lib.geometry as geometry_module  # noqa: E402
 from coursework import grading  # noqa: E402
@@ -621,8 +624,10 @@ assert np.allclose(_h1_got, _h1_expected), "along_across differs on other poses 
 # camera sideways. Write `camera_slide(mount, yaw)`: the camera's displacement (metres, in the
 # *previous* camera frame: x right, y down, z forward) when the vehicle turns by `yaw` radians on
 # the spot, about the origin of its own frame. `mount` is the camera's 4×4 pose in the vehicle
-# frame (x forward, y left, z up). Store it for section 2's car mount `turn_mount` and a turn of
-# 5° in `slide`. Which component is the largest, and what does that do to eq. 20–21's gates?
+# frame (x forward, y left, z up). Use NumPy (and SciPy's `Rotation`), not `vo_lib`'s pose
+# functions (section 2's `camera_motion` does it). Store it for section 2's car mount
+# `turn_mount` and a turn of 5° in `slide`. Which component is the largest, and what does that
+# do to eq. 20–21's gates?
 #
 # *Hint:* where is the camera's centre in the vehicle frame before the turn, and after it?
 
