@@ -296,42 +296,53 @@ def test_the_drone_predicts_from_the_last_frame_not_from_the_reference(kitti_cam
     assert np.allclose(model.predict(kf).motion, V)
 
 
-def test_a_frame_whose_windows_give_too_few_inliers_is_matched_again_without_them(kitti_camera, monkeypatch):
-    """A prediction that sends the matching windows astray (a turn that reverses) leaves a frame
-    with matches that agree on nothing; the pipeline matches every pair again and keeps the frame."""
+def second_frame_with(kitti_camera, monkeypatch, T, guided_matches, unguided_matches, **settings):
+    """The drone's pipeline (``HOVER`` with ``settings``) on two frames whose temporal matches are
+    given: ``guided_matches`` when the prediction ``T`` guides the windows, ``unguided_matches`` when
+    every pair is matched. Returns the second frame's diagnostics, whether each attempt was
+    guided, and the odometer."""
     from dataclasses import replace
 
     from vo_lib.stereo_vo import six_dof
     from vo_lib.stereo_vo.config import HOVER
     from vo_lib.stereo_vo.features import StereoFeatures
     from vo_lib.stereo_vo.pipeline import StereoOdometry
-    from vo_lib.stereo_vo.synthetic import matches_under_transform
     from vo_lib.stereo_vo.temporal import TemporalMatches
 
-    rng = np.random.default_rng(8)
-    T = motion([0.0, 0.04, 0.0], [0.02, 0.0, 0.2])
-    good = matches_under_transform(kitti_camera, 200, T, rng, (4.0, 40.0), 0.3)
-    astray = matches_under_transform(kitti_camera, 200, T, rng, (4.0, 40.0), 0.3, outlier_ratio=1.0)
     guided = []
 
     def match(self, reference, features, prediction, recent):
         guided.append(prediction.motion is not None)
-        m = astray if prediction.motion is not None else good
+        m = guided_matches if prediction.motion is not None else unguided_matches
         index = np.arange(len(m.w_prev))
         return TemporalMatches(index, index, m.w_prev, m.w_curr, len(index))
 
     class FrontEnd:
         def process(self, left, right):
-            return StereoFeatures(good.w_curr, np.zeros((len(good.w_curr), 32), np.uint8))
+            w = unguided_matches.w_curr
+            return StereoFeatures(w, np.zeros((len(w), 32), np.uint8))
 
     monkeypatch.setattr(six_dof.SixDofMotion, "match", match)
-    config = replace(HOVER, subpixel_tracking=False)
+    config = replace(HOVER, subpixel_tracking=False, **settings)
     odometer = StereoOdometry(
         kitti_camera, config, mount=camera_mount(0.0, 0.0), front_end=FrontEnd(), seed=1
     )
     odometer.process(None, None)  # the reference
     odometer.motion.velocity = T  # a prediction, to guide the windows
     _, _, diag, _ = odometer.process(None, None)
+    return diag, guided, odometer
+
+
+def test_a_frame_whose_windows_give_too_few_inliers_is_matched_again_without_them(kitti_camera, monkeypatch):
+    """A prediction that sends the matching windows astray (a turn that reverses) leaves a frame
+    with matches that agree on nothing; the pipeline matches every pair again and keeps the frame."""
+    from vo_lib.stereo_vo.synthetic import matches_under_transform
+
+    rng = np.random.default_rng(8)
+    T = motion([0.0, 0.04, 0.0], [0.02, 0.0, 0.2])
+    good = matches_under_transform(kitti_camera, 200, T, rng, (4.0, 40.0), 0.3)
+    astray = matches_under_transform(kitti_camera, 200, T, rng, (4.0, 40.0), 0.3, outlier_ratio=1.0)
+    diag, guided, odometer = second_frame_with(kitti_camera, monkeypatch, T, astray, good)
     assert guided == [True, False]
     assert not diag.fallback and diag.inliers >= 0.8 * len(good.w_prev)
     assert np.allclose(odometer.camera_pose, np.linalg.inv(T), atol=2e-3)
@@ -371,39 +382,17 @@ def test_the_drone_waives_the_inlier_ratio_on_a_frames_last_attempt_only(
     guided attempt is judged by the ratio and retried without windows, where the drone's preset
     keeps the motion whatever the ratio; with the ratio kept there (the car's rule), the frame is
     flagged."""
-    from dataclasses import replace
-
-    from vo_lib.stereo_vo import six_dof
     from vo_lib.stereo_vo.config import HOVER
-    from vo_lib.stereo_vo.features import StereoFeatures
     from vo_lib.stereo_vo.frames import Reason
-    from vo_lib.stereo_vo.pipeline import StereoOdometry
     from vo_lib.stereo_vo.synthetic import matches_under_transform
-    from vo_lib.stereo_vo.temporal import TemporalMatches
 
     T = motion([0.0, 0.04, 0.0], [0.02, 0.0, 0.2])
     m = matches_under_transform(
         kitti_camera, 200, T, np.random.default_rng(8), (4.0, 40.0), 0.3, outlier_ratio=0.7
     )
-    guided = []
-
-    def match(self, reference, features, prediction, recent):
-        guided.append(prediction.motion is not None)
-        index = np.arange(len(m.w_prev))
-        return TemporalMatches(index, index, m.w_prev, m.w_curr, len(index))
-
-    class FrontEnd:
-        def process(self, left, right):
-            return StereoFeatures(m.w_curr, np.zeros((len(m.w_curr), 32), np.uint8))
-
-    monkeypatch.setattr(six_dof.SixDofMotion, "match", match)
-    config = replace(HOVER, subpixel_tracking=False, last_attempt_ratio=last_attempt_ratio)
-    odometer = StereoOdometry(
-        kitti_camera, config, mount=camera_mount(0.0, 0.0), front_end=FrontEnd(), seed=1
+    diag, guided, odometer = second_frame_with(
+        kitti_camera, monkeypatch, T, m, m, last_attempt_ratio=last_attempt_ratio
     )
-    odometer.process(None, None)  # the reference
-    odometer.motion.velocity = T  # a prediction, to guide the windows
-    _, _, diag, _ = odometer.process(None, None)
     assert guided == [True, False] and diag.inlier_ratio < HOVER.min_inlier_ratio
     if last_attempt_ratio is None:
         assert diag.fallback and diag.reason is Reason.LOW_INLIER_RATIO
