@@ -7,6 +7,7 @@ from __future__ import annotations
 import ast
 import contextlib
 import enum
+import functools
 import os
 import pathlib
 import shlex
@@ -29,8 +30,9 @@ def _refused(*args, **kwargs):  # the code a refused function runs, under its ow
 @contextlib.contextmanager
 def unavailable(*functions: Callable) -> Iterator[None]:
     """Make ``functions`` raise :class:`GradingError` under every name (in loaded modules, their classes
-    and the notebook) while the block runs, and, for a Python function, wherever it is held (a default
-    argument, a closure, a ``partial``: its code is swapped): a guard for honest mistakes, not a sandbox."""
+    and the notebook) and in every ``partial`` of them there while the block runs, and, for a Python
+    function, wherever it is held (a default argument, a closure: its code is swapped): a guard for
+    honest mistakes, not a sandbox."""
     wanted = {id(f) for f in functions}
     modules = [m for m in list(sys.modules.values()) if isinstance(getattr(m, "__dict__", None), dict)]
     owned = [(m, k) for m in modules for k in vars(m).values() if isinstance(k, type)]
@@ -39,6 +41,8 @@ def unavailable(*functions: Callable) -> Iterator[None]:
     spaces = [vars(m) for m in modules] + ([shell.user_ns] if shell else [])  # dicts, written in place
     swapped = [(c, n, v) for c in classes for n, v in list(vars(c).items()) if id(v) in wanted]
     swapped += [(d, n, v) for d in spaces for n, v in list(d.items()) if id(v) in wanted]
+    partials = [(d, n, v) for d in spaces for n, v in list(d.items()) if isinstance(v, functools.partial)]
+    swapped += [(d, n, v) for d, n, v in partials if id(v.func) in wanted]  # compiled ones have no code
     put = {True: dict.__setitem__, False: setattr}
     for owner, name, _ in swapped:
         put[isinstance(owner, dict)](owner, name, _refused)
@@ -92,7 +96,7 @@ class Reason(enum.Enum):
     )
     REBINDS = "rebinds NumPy or a module, or uses the grader", "builtins coursework grading setattr delattr"
     PRIVATE = "reaches a private name (a leading underscore) of an imported module", ""
-    HELD = "holds an imported function where a test cannot refuse it (a called default, a partial)", ""
+    HELD = "holds an imported function where a test cannot refuse it (a default argument it calls)", ""
 
     def __init__(self, text: str, words: str) -> None:
         self.text, self.words = text, words.split()
@@ -100,6 +104,7 @@ class Reason(enum.Enum):
 
 FLAGGED = {word: reason for reason in Reason for word in reason.words}  # imported, used or defined
 PROTECTED = {"np", "numpy", "grading", "assert_allclose"}  # names an answer must not rebind
+NAMED_TUPLE = {"_replace", "_asdict", "_make", "_fields", "_field_defaults"}  # public, though underscored
 
 
 def review(source: str) -> list[tuple[int, Reason]]:
@@ -152,24 +157,18 @@ def _private(node: ast.AST, imported: set[str]) -> bool:
     module's own name, e.g. the compiled kernel inside the function an exercise asks for."""
     names = [a.name for a in node.names] if isinstance(node, ast.ImportFrom) else [getattr(node, "attr", "")]
     inside = isinstance(node, ast.ImportFrom) or _named(_root(node), *imported)
-    return inside and any(n[:1] == "_" and n[-2:] != "__" and n not in {"_replace", "_asdict"} for n in names)
+    return inside and any(n[:1] == "_" and n[-2:] != "__" and n not in NAMED_TUPLE for n in names)
 
 
 def _held(node: ast.AST, imported: set[str]) -> bool:
-    """``partial(m.f)``, or a default argument ``m.f`` (or ``f``) that the function calls: a compiled
-    function held so, such as OpenCV's, escapes a hidden test's refusal by name."""
-    if isinstance(node, ast.Call) and "partial" in (
-        getattr(node.func, "attr", 0),
-        getattr(node.func, "id", 0),
-    ):
-        first = node.args[0] if node.args else None
-        return isinstance(first, ast.Attribute) or _named(first, *imported)
+    """A default argument that the function calls, ``m.f`` or an imported ``f``: a compiled function
+    held so, such as OpenCV's, escapes a hidden test's refusal by name."""
     a = getattr(node, "args", None)
     if not isinstance(a, ast.arguments):
         return False
     named = (a.posonlyargs + a.args)[len(a.posonlyargs + a.args) - len(a.defaults) :]  # those with defaults
     pairs = [*zip(named, a.defaults, strict=True), *zip(a.kwonlyargs, a.kw_defaults, strict=True)]
-    held = {p.arg for p, d in pairs if isinstance(d, (ast.Attribute, ast.Name))}
+    held = {p.arg for p, d in pairs if isinstance(d, ast.Attribute) or _named(d, *imported)}
     return any(isinstance(c, ast.Call) and _named(c.func, *held) for c in ast.walk(node))
 
 
