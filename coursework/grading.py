@@ -40,9 +40,11 @@ def unavailable(*functions: Callable) -> Iterator[None]:
     shell = getattr(sys.modules.get("IPython"), "get_ipython", lambda: None)()
     spaces = [vars(m) for m in modules] + ([shell.user_ns] if shell else [])  # dicts, written in place
     swapped = [(c, n, v) for c in classes for n, v in list(vars(c).items()) if id(v) in wanted]
-    swapped += [(d, n, v) for d in spaces for n, v in list(d.items()) if id(v) in wanted]
-    partials = [(d, n, v) for d in spaces for n, v in list(d.items()) if isinstance(v, functools.partial)]
-    swapped += [(d, n, v) for d, n, v in partials if id(v.func) in wanted]  # compiled ones have no code
+
+    def refused(v) -> bool:  # one of them, or a partial of one (a compiled function has no code to swap)
+        return id(v) in wanted or (isinstance(v, functools.partial) and id(v.func) in wanted)
+
+    swapped += [(d, n, v) for d in spaces for n, v in list(d.items()) if refused(v)]
     put = {True: dict.__setitem__, False: setattr}
     for owner, name, _ in swapped:
         put[isinstance(owner, dict)](owner, name, _refused)
@@ -117,9 +119,8 @@ def review(source: str) -> list[tuple[int, Reason]]:
         tree = ast.parse("\n".join("" if m else line for m, line in zip(magic, lines, strict=True)))
     except SyntaxError:
         return found
-    imports = [a for n in ast.walk(tree) if isinstance(n, ast.Import) for a in n.names]
+    imports = [a for n in ast.walk(tree) if isinstance(n, (ast.Import, ast.ImportFrom)) for a in n.names]
     imported = {(a.asname or a.name).split(".")[0] for a in imports}  # names the cell's imports bind
-    imported |= {a.asname or a.name for n in ast.walk(tree) if isinstance(n, ast.ImportFrom) for a in n.names}
     for node in ast.walk(tree):
         found += [(node.lineno, why) for why in _reasons(node, imported)]
         found += [(node.lineno, Reason.PRIVATE)] if _private(node, imported) else []
