@@ -59,6 +59,7 @@ import time
 
 import matplotlib.pyplot as plt
 import numpy as np
+import sympy
 from IPython.display import display
 
 from vo_book.demo_one_point import (
@@ -525,8 +526,16 @@ print(f"best θ hypothesis {math.degrees(theta_h):.4f}°: {count_h} supporters, 
 # %% [markdown]
 # **Step 3, re-estimate θ and apply the gate of eq. 20.** θ̂ is the inverse-variance weighted
 # mean of the winner's supporters, with variance 1/Σ(1/σ²_j). Every match then meets the θ gate
-# at θ̂ against k first-order standard deviations of its own, |∂error_θ/∂θ|·√(σ²_j + σ²_θ̂) (the
-# slope by a forward difference), and its own θ must agree with θ̂ too.
+# at θ̂ against k first-order standard deviations of its own, |∂error_θ/∂θ|·√(σ²_j + σ²_θ̂), and
+# its own θ must agree with θ̂ too. The slope has a closed form: only sin γ′/sin γ depends on θ,
+# and ∂/∂φ of −sin(β′ − φ)/sin(β + φ) is sin(β + β′)/sin²(β + φ), so
+# ∂error_θ/∂θ = sin(β + β′) / (2 sin²(β + φ)). sympy checks it:
+
+# %%
+beta_s, beta2_s, phi_s = sympy.symbols("beta beta_2 phi")
+signed_error = -sympy.sin(beta2_s - phi_s) / sympy.sin(beta_s + phi_s)
+slope_phi = sympy.sin(beta_s + beta2_s) / sympy.sin(beta_s + phi_s) ** 2
+assert sympy.simplify(sympy.diff(signed_error, phi_s) - slope_phi) == 0
 
 
 # %%
@@ -536,11 +545,12 @@ def weighted_mean(values, variances, mask):
     return np.sum(w * values[mask]) / np.sum(w), 1 / np.sum(w)
 
 
-def theta_gate(wa, wb, theta_j, var_theta, theta, var_ref, step=1e-4):
+def theta_gate(wa, wb, theta_j, var_theta, theta, var_ref):
     """Which matches pass eq. 20 at theta, within k of their own first-order sigma (the slope of
     the signed error: |error| has a kink where a true match's error crosses zero)."""
     e = theta_gate_error(wa, wb, theta, camera, signed=True)
-    slope = (theta_gate_error(wa, wb, theta + step, camera, signed=True) - e) / step
+    beta, beta2 = gate_angles(wa)[1], gate_angles(wb)[1]
+    slope = np.sin(beta + beta2) / (2 * np.sin(beta + theta / 2) ** 2)
     var = var_theta + var_ref
     return (e**2 <= K2 * slope**2 * var) & ((theta_j - theta) ** 2 <= K2 * var)
 

@@ -77,11 +77,14 @@ def theta_standard_deviation(w_prev, w_curr, camera: StereoCamera, sigma_px: flo
     """First-order standard deviation of eq. 14's theta when u, v, u', v' carry noise ``sigma_px``
     (:func:`theta_variance`). The error grows as ``1 / |D|`` near the camera's height and with the
     distance of the match from the image centre."""
-    return np.sqrt(theta_variance(*_pair(w_prev, w_curr), camera, sigma_px))
+    return np.sqrt(theta_and_variance(*_pair(w_prev, w_curr), camera, sigma_px)[1])
 
 
-def theta_variance(a: np.ndarray, b: np.ndarray, camera: StereoCamera, sigma_px: float) -> np.ndarray:
-    """First-order variance of eq. 14's theta for matches ``a -> b`` already checked.
+def theta_and_variance(
+    a: np.ndarray, b: np.ndarray, camera: StereoCamera, sigma_px: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """eq. 14's theta and its first-order variance for matches ``a -> b`` already checked (none at
+    the camera's height).
 
     With ``tan phi = N / (fx D)``, ``N = (u'-u0)(v-v0) - (u-u0)(v'-v0)``, ``D = v + v' - 2 v0``:
     ``dphi = (fx D dN - fx N dD) / (fx^2 D^2 + N^2)`` with ``dN/d(u, u', v, v') = (-dv', dv, du', -du)``
@@ -92,7 +95,7 @@ def theta_variance(a: np.ndarray, b: np.ndarray, camera: StereoCamera, sigma_px:
     num, den = _eq14_terms(a, b, camera)
     q = den * den + num * num
     g_n, g_d = den / q, camera.fx * num / q
-    return (4.0 * sigma_px**2) * (
+    return 2.0 * np.arctan(num / den), (4.0 * sigma_px**2) * (
         (dv2 * g_n) ** 2 + (dv * g_n) ** 2 + (du2 * g_n - g_d) ** 2 + (du * g_n + g_d) ** 2
     )
 

@@ -57,10 +57,10 @@ from vo_lib.geometry import as_match_array
 from vo_lib.stereo_vo.circular_motion import (
     motion_matrices,
     rho_from_pixels,
+    theta_and_variance,
     theta_from_pixels,
-    theta_variance,
 )
-from vo_lib.stereo_vo.refinement import ITERATIONS, covariance, gauss_newton, whitened_pass
+from vo_lib.stereo_vo.refinement import ITERATIONS, both_directions, covariance, gauss_newton, whitened_pass
 
 
 class RansacInputError(ValueError):
@@ -180,8 +180,7 @@ class ThetaModel:
     eq. 18-20 to first order, ``r_j(theta) = theta_j - theta``."""
 
     def __init__(self, wa: np.ndarray, wb: np.ndarray, camera: StereoCamera, pixel_sigma: float):
-        self.values = theta_from_pixels(wa, wb, camera)  # usable matches: none at the camera's height
-        self.variances = theta_variance(wa, wb, camera, pixel_sigma)
+        self.values, self.variances = theta_and_variance(wa, wb, camera, pixel_sigma)
 
     def each_match(self) -> tuple[np.ndarray, np.ndarray]:
         return self.values, self.variances
@@ -266,22 +265,25 @@ def reestimate(model: OnePointModel, support: np.ndarray) -> tuple[float, float]
     """Inverse-variance weighted mean of the supporters' values, and its variance."""
     values, variances = model.each_match()
     w = 1.0 / variances[support]
-    total = float(np.sum(w))
+    total = float(w.sum())
     if total == 0.0:  # no supporter: no estimate, and the caller finds too few inliers
         return math.nan, math.inf
-    return float(np.sum(w * values[support])) / total, 1.0 / total
+    return float(w @ values[support]) / total, 1.0 / total
 
 
 # ---------------------------------------------------------------------- inliers of a motion
 def theta_gate_pass(
-    angles: tuple, model: ThetaModel, theta: float, var_ref: float, params: RansacParams, step: float = 1e-4
+    angles: tuple, model: ThetaModel, theta: float, var_ref: float, params: RansacParams
 ) -> np.ndarray:
-    """eq. 20 at ``theta`` within ``k`` of each match's first-order sigma (the slope by a forward
-    difference), and the match's own theta within ``k`` sigma of ``theta``."""
-    ta, ba, tb, bb = angles
+    """eq. 20 at ``theta`` within ``k`` of each match's first-order sigma, and the match's own theta
+    within ``k`` sigma of ``theta``. ``angles`` are ``(tan(alpha') / tan(alpha), beta, beta',
+    sin(beta + beta'))``; the slope of eq. 20 in theta is ``sin(beta + beta') / (2 sin^2(beta + phi))``."""
+    tan_ratio, ba, bb, sin_sum = angles
     k2 = params.gate_sigmas**2
-    e, e_step = _theta_gate(ta, ba, tb, bb, np.array([[0.5 * theta], [0.5 * (theta + step)]]))
-    slope = (e_step - e) / step
+    sin_a = np.sin(ba + 0.5 * theta)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        e = tan_ratio - np.sin(bb - 0.5 * theta) / sin_a
+        slope = 0.5 * sin_sum / (sin_a * sin_a)
     var = model.variances + var_ref
     return (e * e <= k2 * slope * slope * var) & ((model.values - theta) ** 2 <= k2 * var)
 
@@ -297,7 +299,7 @@ def points_and_variances(
         du, dv = w[:, 0] - camera.cx, (w[:, 1] - camera.cy) * aspect
         scale = camera.baseline / w[:, 2]
         ray2 = (du * du + dv * dv + camera.fx**2) / (w[:, 2] * w[:, 2])
-        return np.column_stack([scale * du, scale * dv, scale * camera.fx]), scale * scale * (ray2 + 2.0)
+        return np.array([scale * du, scale * dv, scale * camera.fx]).T, scale * scale * (ray2 + 2.0)
 
     (P, var_a), (Q, var_b) = back_project(a), back_project(b)
     return P, Q, pixel_sigma**2 * (var_a + var_b)
@@ -390,13 +392,15 @@ def one_point_ransac(  # noqa: PLR0915 (the algorithm's five steps read best in 
     usable = np.flatnonzero((a[:, 2] > 0) & (b[:, 2] > 0) & off_height)
     if len(usable) < 3:
         return failed(Outcome.FEW_USABLE)
-    wa, wb = a[usable], b[usable]
+    wa, wb = np.asfortranarray(a[usable]), np.asfortranarray(b[usable])  # contiguous columns u, v, d
     # 2-3. theta
     thetas = ThetaModel(wa, wb, camera, params.pixel_sigma)
     prior_theta = None if prior is None else (float(prior.theta), float(prior.covariance[0][0]))
     h, var_h, tried_theta = search(thetas, draws[0], prior_theta, params)
     theta, var_theta = reestimate(thetas, supporters(thetas, h, var_h, params))
-    angles = (*gate_angles(wa, camera), *gate_angles(wb, camera))
+    (ta, ba), (tb, bb) = gate_angles(wa, camera), gate_angles(wb, camera)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        angles = (tb / ta, ba, bb, np.sin(ba + bb))
     theta_in = theta_gate_pass(angles, thetas, theta, var_theta, params)
     n_theta = int(np.count_nonzero(theta_in))
     diagnostics.update(hypotheses_theta=tried_theta, theta_inliers=n_theta)
@@ -413,15 +417,17 @@ def one_point_ransac(  # noqa: PLR0915 (the algorithm's five steps read best in 
     cov = np.diag([var_theta, var_rho])
     # 5. refinement; the refined motion decides the inliers again
     rounds = 0
+    X, sign, target = both_directions(P, Q, wa, wb, camera)
     while params.refine and np.count_nonzero(keep) >= 3 and rounds < params.refine_rounds:
         rounds += 1
         iterations = params.refine_iterations if rounds == 1 else 1
+        both = np.concatenate([keep, keep])
         theta, rho, A, rss = gauss_newton(
-            P[keep], Q[keep], wa[keep], wb[keep], theta, rho, camera, iterations
+            X[:, both], sign[both], target[:, both], theta, rho, camera, iterations
         )
         cov = covariance(A, rss, 6 * int(np.count_nonzero(keep)))
         new = theta_gate_pass(angles, thetas, theta, cov[0, 0], params) & whitened_pass(
-            P, wb, theta, rho, camera, params.whitened_gate, params.pixel_sigma
+            X, target, theta, rho, camera, params.whitened_gate, params.pixel_sigma
         )
         changed, keep = bool(np.any(new != keep)), new
         if not changed:

@@ -20,49 +20,54 @@ from vo_lib.camera import StereoCamera
 ITERATIONS = 2
 
 
-def _moved(X: np.ndarray, theta: float, rho: float, sign: float):
-    """``R X + T`` (sign 1) or ``R^T (X - T)`` (sign -1) of eq. 15, with its derivatives in
-    ``(theta, rho)``: ``(x, y, z, dx/dtheta, dz/dtheta, dz/drho)``; dx/drho is ``-sin(theta/2)``."""
+def _moved(X: np.ndarray, theta: float, rho: float, sign):
+    """``R X + T`` (sign 1) or ``R^T (X - T)`` (sign -1) of eq. 15 for points ``X`` given as rows
+    ``x, y, z`` (shape (3, M)), with the derivatives in ``(theta, rho)``:
+    ``(x, y, z, dx/dtheta, dz/dtheta, dz/drho)``; dx/drho is ``-sin(theta/2)``."""
     c, s, sp, cp = math.cos(theta), math.sin(theta), math.sin(0.5 * theta), math.cos(0.5 * theta)
-    gx, gz = sign * X[:, 0], sign * X[:, 2]
-    x = c * X[:, 0] + s * gz - rho * sp
-    z = c * X[:, 2] - s * gx - rho * cp * sign
-    dx_t = c * gz - s * X[:, 0] - 0.5 * rho * cp
-    dz_t = 0.5 * rho * sp * sign - c * gx - s * X[:, 2]
-    return x, X[:, 1], z, dx_t, dz_t, -cp * sign
+    X0, X1, X2 = X
+    gx, gz = sign * X0, sign * X2
+    x = c * X0 + s * gz - rho * sp
+    z = c * X2 - s * gx - rho * cp * sign
+    dx_t = c * gz - s * X0 - 0.5 * rho * cp
+    dz_t = 0.5 * rho * sp * sign - c * gx - s * X2
+    return x, X1, z, dx_t, dz_t, -cp * sign
 
 
-def reprojection(theta, rho, P, Q, wa, wb, camera: StereoCamera):
-    """Forward ``pi(R P + T) - w'`` and backward ``pi(R^T (Q - T)) - w`` residuals in disparity
-    space, ``(ru, rv, rd)`` each of shape (2N,), and their Jacobians in ``(theta, rho)``,
-    ``(J_theta, J_rho)`` each of shape (3, 2N), by the chain rule through ``pi``."""
+def both_directions(P, Q, wa, wb, camera: StereoCamera) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The forward ``P -> wb`` and backward ``Q -> wa`` problems side by side (all of shape (N, 3)):
+    points as rows ``x, y, z`` (shape (3, 2N)), their ``sign`` (1 forward, -1 backward) and their
+    target pixels relative to the principal point as rows ``u - u0, v - v0, d``."""
+    sign = np.ones(len(P) + len(Q))
+    sign[len(P) :] = -1.0
+    target = np.concatenate([wb, wa]) - (camera.cx, camera.cy, 0.0)
+    return np.concatenate([P, Q]).T.copy(), sign, target.T.copy()
+
+
+def reprojection(theta: float, rho: float, X, sign, target, camera: StereoCamera):
+    """Residuals ``pi(R P + T) - w'`` and ``pi(R^T (Q - T)) - w`` in disparity space of the problems
+    side by side (:func:`both_directions`), ``r`` of shape (3, 2N), and their Jacobians in
+    ``(theta, rho)``, ``(J_theta, J_rho)`` of shape (3, 2N), by the chain rule through ``pi``."""
     fx, fy, fb = camera.fx, camera.fy, camera.fx * camera.baseline
-    sign = np.concatenate([np.ones(len(P)), -np.ones(len(Q))])
-    target = np.concatenate([wb, wa])
-    x, y, z, dx_t, dz_t, dz_r = _moved(np.concatenate([P, Q]), theta, rho, sign)
+    x, y, z, dx_t, dz_t, dz_r = _moved(X, theta, rho, sign)
     iz = 1.0 / z
     iz2 = iz * iz
-    r = np.stack(
-        [
-            fx * x * iz - (target[:, 0] - camera.cx),
-            fy * y * iz - (target[:, 1] - camera.cy),
-            fb * iz - target[:, 2],
-        ]
-    )
+    u, v, d = target
+    r = np.array([fx * x * iz - u, fy * y * iz - v, fb * iz - d])
     fz, yz, dz = fx * iz2, -fy * y * iz2, -fb * iz2
     sp = math.sin(0.5 * theta)
-    J_theta = np.stack([fz * (dx_t * z - x * dz_t), yz * dz_t, dz * dz_t])
-    J_rho = np.stack([fz * (-sp * z - x * dz_r), yz * dz_r, dz * dz_r])
+    J_theta = np.array([fz * (dx_t * z - x * dz_t), yz * dz_t, dz * dz_t])
+    J_rho = np.array([fz * (-sp * z - x * dz_r), yz * dz_r, dz * dz_r])
     return r, J_theta, J_rho
 
 
-def gauss_newton(P, Q, wa, wb, theta: float, rho: float, camera: StereoCamera, iterations: int):
-    """Gauss-Newton on ``(theta, rho)`` over :func:`reprojection`: ``(theta, rho, A, rss)`` with
-    the normal matrix ``A = J^T J`` and the residual sum of squares of the last iterate before its
-    step."""
+def gauss_newton(X, sign, target, theta: float, rho: float, camera: StereoCamera, iterations: int):
+    """Gauss-Newton on ``(theta, rho)`` over :func:`reprojection` (the arguments as
+    :func:`both_directions` gives them): ``(theta, rho, A, rss)`` with the normal matrix
+    ``A = J^T J`` and the residual sum of squares of the last iterate before its step."""
     A, rss = np.zeros((2, 2)), 0.0
     for _ in range(max(iterations, 1)):
-        r, jt, jr = reprojection(theta, rho, P, Q, wa, wb, camera)
+        r, jt, jr = reprojection(theta, rho, X, sign, target, camera)
         a00, a01, a11 = float(np.vdot(jt, jt)), float(np.vdot(jt, jr)), float(np.vdot(jr, jr))
         b0, b1, rss = float(np.vdot(jt, r)), float(np.vdot(jr, r)), float(np.vdot(r, r))
         A = np.array([[a00, a01], [a01, a11]])
@@ -87,34 +92,31 @@ def covariance(A: np.ndarray, rss: float, count: int) -> np.ndarray:
 
 
 def whitened_pass(
-    P, b, theta: float, rho: float, camera: StereoCamera, gate: float, pixel_sigma: float
+    X, target, theta: float, rho: float, camera: StereoCamera, gate: float, pixel_sigma: float
 ) -> np.ndarray:
-    """eq. 21 whitened: the moved point in front of the camera and its (u, v, d) residual within
-    ``gate`` standard deviations (``pixel_sigma`` sqrt 2 per coordinate)."""
-    x, y, z, *_ = _moved(P, theta, rho, 1.0)
+    """eq. 21 whitened on the forward half of the problems side by side (:func:`both_directions`):
+    the moved point in front of the camera and its (u, v, d) residual within ``gate`` standard
+    deviations (``pixel_sigma`` sqrt 2 per coordinate)."""
+    n = X.shape[1] // 2
+    x, y, z, *_ = _moved(X[:, :n], theta, rho, 1.0)
+    u, v, d = target[:, :n]
     with np.errstate(divide="ignore", invalid="ignore"):
         iz = 1.0 / z
         r2 = (
-            (camera.fx * x * iz - (b[:, 0] - camera.cx)) ** 2
-            + (camera.fy * y * iz - (b[:, 1] - camera.cy)) ** 2
-            + (camera.fx * camera.baseline * iz - b[:, 2]) ** 2
+            (camera.fx * x * iz - u) ** 2
+            + (camera.fy * y * iz - v) ** 2
+            + (camera.fx * camera.baseline * iz - d) ** 2
         )
-    limit = gate**2 * 2.0 * pixel_sigma**2
-    return (z > 0) & (r2 <= limit)
+    return (z > 0) & (r2 <= gate**2 * 2.0 * pixel_sigma**2)
 
 
 def refine_motion(
-    w_prev,
-    w_curr,
-    theta: float,
-    rho: float,
-    camera: StereoCamera,
-    iterations: int = ITERATIONS,
+    w_prev, w_curr, theta: float, rho: float, camera: StereoCamera, iterations: int = ITERATIONS
 ) -> tuple[float, float, np.ndarray]:
     """Least-squares ``(theta, rho)`` on matches, minimising reprojection errors in disparity space
     in both directions (Gauss-Newton, analytic Jacobian, :func:`reprojection`).
     Returns ``(theta, rho, covariance)``."""
     wa, wb = np.asarray(w_prev, float), np.asarray(w_curr, float)
-    P, Q = camera.backproject(wa), camera.backproject(wb)
-    theta, rho, A, rss = gauss_newton(P, Q, wa, wb, float(theta), float(rho), camera, int(iterations))
-    return float(theta), float(rho), covariance(A, rss, 6 * len(P))
+    X, sign, target = both_directions(camera.backproject(wa), camera.backproject(wb), wa, wb, camera)
+    theta, rho, A, rss = gauss_newton(X, sign, target, float(theta), float(rho), camera, int(iterations))
+    return float(theta), float(rho), covariance(A, rss, 6 * len(wa))
