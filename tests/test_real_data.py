@@ -242,6 +242,18 @@ def small_rig(tmp_path: Path, frames: int = 6) -> Path:
 
 
 @needs_euroc
+def test_kalibrs_name_for_the_distortion_coefficients_is_read_as_the_asl_one(tmp_path):
+    from vo_lib.formats.asl_calibration import read_camera_yaml
+
+    path = small_rig(tmp_path) / "mav0" / "cam0" / "sensor.yaml"
+    asl = read_camera_yaml(path)
+    path.write_text(path.read_text().replace("distortion_coefficients:", "distortion_coeffs:"))
+    assert "distortion_coefficients" not in path.read_text()
+    np.testing.assert_array_equal(read_camera_yaml(path).distortion, asl.distortion)
+    assert asl.distortion.any()
+
+
+@needs_euroc
 def test_asl_recording_is_rectified_and_its_truth_moved_into_the_left_camera():
     from vo_lib.data import load_sequence
     from vo_lib.evaluation import path_lengths
@@ -276,9 +288,15 @@ def test_asl_recording_is_rectified_and_its_truth_moved_into_the_left_camera():
         ("yaml", "cam0/sensor.yaml: key intrinsics"),
         (
             "mapping",
-            'cam0/sensor.yaml: key intrinsics: expected [fu, fv, cu, cv] (4 finite numbers), got {"fu"',
+            "cam0/sensor.yaml: key intrinsics: expected [fu, fv, cu, cv] (4 finite numbers), "
+            'got 4 numbers, {"fu"',
         ),
         ("rotation", "cam1/sensor.yaml: key T_BS"),
+        (
+            "three-rows",
+            "cam0/sensor.yaml: key T_BS: expected a 4x4 camera-to-body transform as data "
+            "(16 finite numbers), got 12 numbers, [0.0148655429818, -0.999880929698, 0.004...",
+        ),
         ("baseline", "cam1/sensor.yaml: key T_BS puts cam1 where cam0 is"),
         ("shape", "cam0/sensor.yaml: key T_BS: rows: 3, cols: 4; expected the numbers 4 and 4"),
         ("millimetres", "cam1/sensor.yaml: key T_BS puts cam1 50.19 m from cam0; expected metres"),
@@ -292,9 +310,13 @@ def test_asl_recording_is_rectified_and_its_truth_moved_into_the_left_camera():
             "cam1/sensor.yaml: key distortion_model: none, but key distortion_coefficients is not",
         ),
         ("swapped", "mav0: the T_BS of cam0 and cam1 put cam1 -0.11 m to the right of cam0 and +0.000399 m"),
-        ("timestamps", "has no image of the same timestamp"),
+        (
+            "timestamps",
+            "line 4: timestamp 1403636584863555584 has no image of the same timestamp on the other",
+        ),
+        ("nearest", "camera (the nearest is +1 microseconds away; 2 unpaired)"),
         ("order", "cam0/data.csv, line 4: timestamp 1403636584813555456 does not come after"),
-        ("missing", "cam1/data/1403636584963555584.png: listed in data.csv but missing"),
+        ("missing", "cam1/data.csv, line 6: 1403636584963555584.png is missing from"),
         ("size", "cam1/data/1403636584963555584.png, frame 4: 640x480 image, but"),
         ("truth", "the ground truth must cover every image"),
         ("truth-last-row", "state_groundtruth_estimate0/sensor.yaml: key T_BS: the last row is not 0 0 0 1"),
@@ -333,6 +355,9 @@ def test_a_bad_rig_gets_one_line_and_exit_2(tmp_path, capsys, damage, expected):
         path = mav0 / "cam0" / "sensor.yaml"
         text = path.read_text().replace("intrinsics: [458.654, ", "intrinsics: {fu: 458.654, fv: ")
         path.write_text(text.replace("367.215, 248.375]", "cu: 367.215, cv: 248.375}"))
+    elif damage == "three-rows":  # the last row of T_BS left out, and rows: 4 kept
+        path = mav0 / "cam0" / "sensor.yaml"
+        path.write_text(path.read_text().replace(",\n         0.0, 0.0, 0.0, 1.0]", "]"))
     elif damage == "rotation":
         path = mav0 / "cam1" / "sensor.yaml"
         path.write_text(path.read_text().replace("data: [0.0125", "data: [5.0125"))
@@ -421,7 +446,7 @@ def test_a_bad_rig_gets_one_line_and_exit_2(tmp_path, capsys, damage, expected):
             stamps = [t // 1000 for t in stamps] if damage == "microseconds" else stamps
             rows = [f"{t},{line.split(',')[1]}" for t, line in zip(stamps, lines[1:], strict=True)]
             path.write_text("\n".join(lines[:1] + rows) + "\n")
-    elif damage == "timestamps":
+    elif damage in ("timestamps", "nearest"):
         path = mav0 / "cam1" / "data.csv"
         lines = path.read_text().splitlines()
         stamp, name = lines[3].split(",")
@@ -503,7 +528,7 @@ def test_frames_within_the_truth_run_and_the_refusal_says_how_to_run_the_rest(tm
     )
     assert main(["run", "--sequence", str(rig), "--out", str(tmp_path / "all")]) == 2
     err = capsys.readouterr().err
-    assert "must cover every image (--frames runs fewer; to run without it, move it out of mav0" in err
+    assert "must cover every image (run --frames runs fewer; to run without it, move it out of mav0" in err
     assert main(["run", "--sequence", str(rig), "--frames", "9", "--out", str(tmp_path / "nine")]) == 0
     assert len((tmp_path / "nine" / "poses.txt").read_text().splitlines()) == 9
     out = capsys.readouterr().out  # and names the one of the recording's truths it used

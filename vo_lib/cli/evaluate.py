@@ -69,7 +69,8 @@ def _associated(
             )
         elif len(truth.positions) != len(E):
             raise UsageError(
-                f"--gt {gt} has {len(truth.positions)} poses but --est {est} has {len(E)}; "
+                f"--gt {gt} has {len(truth.positions)} {'poses' if truth.poses is not None else 'positions'} "
+                f"but --est {est} has {len(E)} poses; "
                 "expected equal counts (or timestamps in both)"
             )
         return np.arange(len(E)), np.arange(len(E))
@@ -155,7 +156,8 @@ def evaluate_command(gt: str, est: str, segments=None, extrinsic_of: str | None 
         )
     recording = recording_of(gt, extrinsic_of, kitti=truth.times is None)
     if recording is None and truth.times is not None and read_marker(Path(gt).parent) is None:
-        what = "an EuRoC CSV, whose poses are of the body" if truth.csv else "not in a recording"
+        held = "poses are of the body" if truth.poses is not None else "positions are of a tracked point"
+        what = f"an EuRoC CSV, whose {held}" if truth.csv else "not in a recording"
         print(
             f"--gt {gt} is {what}: compared as they are, as the camera's (a body's or a tracker's: "
             "--extrinsic-of RECORDING moves them into its rectified left camera)"

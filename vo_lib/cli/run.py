@@ -260,7 +260,7 @@ def _run_into(
         sequence=str(seq.path.resolve()),
         frames=n,
         seed=seed,
-        odometry=not no_odometry,
+        odometry=seq.odometry is not None and not no_odometry,  # whether odometry was fused
         truth=_truth_record(seq),
     )
     return report

@@ -2,8 +2,9 @@
 stereo rectification of two of them (:func:`vo_lib.camera.rectify_stereo`), checked.
 
 ``sensor.yaml`` holds ``T_BS`` (camera to body, 4x4), ``intrinsics`` ``[fu, fv, cu, cv]``,
-``distortion_model: radial-tangential``, ``distortion_coefficients`` ``[k1, k2, p1, p2]`` and
-``resolution``. Every problem raises one :class:`AslError` naming the file and key.
+``distortion_model: radial-tangential``, ``distortion_coefficients`` ``[k1, k2, p1, p2]`` (or
+Kalibr's name for them, ``distortion_coeffs``) and ``resolution``. Every problem raises one
+:class:`AslError` naming the file and key.
 """
 
 from __future__ import annotations
@@ -116,12 +117,15 @@ def read_camera_yaml(path) -> CameraCalibration:
         raise AslError(
             f"{path}: key distortion_model: {model!r} is not supported; expected radial-tangential"
         )
+    # the ASL name, or Kalibr's (camchain.yaml) when only that one is there
+    key = "distortion_coeffs" if "distortion_coeffs" in data else "distortion_coefficients"
+    key = "distortion_coefficients" if "distortion_coefficients" in data else key
     dist = np.zeros(4)
-    if model != "none" or data.get("distortion_coefficients") is not None:
-        dist = _numbers(path, data, "distortion_coefficients", 4, "[k1, k2, p1, p2]")
+    if model != "none" or data.get(key) is not None:
+        dist = _numbers(path, data, key, 4, "[k1, k2, p1, p2]")
     if model == "none" and dist.any():
         raise AslError(
-            f"{path}: key distortion_model: none, but key distortion_coefficients is not zero; "
+            f"{path}: key distortion_model: none, but key {key} is not zero; "
             "expected radial-tangential for these coefficients, or zeros"
         )
     width, height = _numbers(path, data, "resolution", 2, "[width, height]")

@@ -55,8 +55,8 @@ def asl_near_miss(path) -> str | None:
     return None
 
 
-def read_image_list(camera_dir: Path) -> tuple[np.ndarray, list[Path]]:
-    """``(timestamps in ns, image files)`` of one camera from its ``data.csv``."""
+def read_image_list(camera_dir: Path) -> tuple[np.ndarray, list[Path], list[int]]:
+    """``(timestamps in ns, image files, their lines)`` of one camera from its ``data.csv``."""
     csv_path = camera_dir / "data.csv"
     text = read_text(csv_path, "one line 'timestamp [ns],filename' per image")
     stamps, files, lines, listed = [], [], [], {}
@@ -87,23 +87,28 @@ def read_image_list(camera_dir: Path) -> tuple[np.ndarray, list[Path]]:
             f"{csv_path}, line {lines[n]}: timestamp {stamps[n]} does not come after {stamps[n - 1]} "
             f"(line {lines[n - 1]}); expected increasing timestamps"
         )
-    return np.array(stamps, dtype=np.int64), files
+    return np.array(stamps, dtype=np.int64), files, lines
 
 
 def pair_by_timestamp(mav0: Path) -> tuple[np.ndarray, list[Path], list[Path]]:
     """Left and right images of equal timestamps; a timestamp on one side only is an error."""
-    t0, left = read_image_list(mav0 / "cam0")
-    t1, right = read_image_list(mav0 / "cam1")
+    (t0, left, lines0), (t1, right, lines1) = (read_image_list(mav0 / side) for side in ("cam0", "cam1"))
     only = np.setxor1d(t0, t1)
     if len(only):
-        side = "cam0" if only[0] in set(t0.tolist()) else "cam1"
+        ours, theirs, lines, side = (t0, t1, lines0, "cam0") if only[0] in t0 else (t1, t0, lines1, "cam1")
+        nearest = theirs[np.argmin(np.abs(theirs.astype(float) - float(only[0])))]
         raise AslError(
-            f"{mav0 / side / 'data.csv'}: timestamp {int(only[0])} has no image of the same timestamp on "
-            f"the other camera ({len(only)} unpaired); the two cameras must be triggered together"
+            f"{mav0 / side / 'data.csv'}, line {lines[int(np.searchsorted(ours, only[0]))]}: timestamp "
+            f"{int(only[0])} has no image of the same timestamp on the other camera (the nearest is "
+            f"{(int(nearest) - int(only[0])) / 1e3:+g} microseconds away; {len(only)} unpaired); the two "
+            "cameras must be triggered together, with equal timestamps"
         )
-    for path in (*left, *right):
-        if not path.is_file():
-            raise AslError(f"{path}: listed in data.csv but missing")
+    for side, files, lines in (("cam0", left, lines0), ("cam1", right, lines1)):
+        for path, line in zip(files, lines, strict=True):
+            if not path.is_file():
+                raise AslError(
+                    f"{mav0 / side / 'data.csv'}, line {line}: {path.name} is missing from {path.parent}"
+                )
     return t0, left, right
 
 

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 from pathlib import Path
 
 import numpy as np
@@ -116,6 +117,16 @@ def read_manifest(path: Path) -> dict:
     return manifest
 
 
+def shown(value, width: int = 40) -> str:
+    """``value`` as JSON for an error message; a longer one is cut to ``width`` characters, with
+    how many numbers it holds."""
+    text = json.dumps(value, default=str)
+    if len(text) <= width:
+        return text
+    count = len(re.findall(r"-?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?", text))
+    return f"{count} numbers, {text[:width]}..." if count else f"{text[:width]}..."
+
+
 def numbers_at(path: Path, key: str, value, shape: tuple, what=None, bounds=(-np.inf, np.inf)) -> np.ndarray:
     """``value``, found at ``key`` of ``path``, as finite numbers of ``shape`` within ``bounds``
     (``what`` they are; by default, a number within them); else one :class:`SequenceError`."""
@@ -128,7 +139,7 @@ def numbers_at(path: Path, key: str, value, shape: tuple, what=None, bounds=(-np
         a = np.array([])
     within = np.all(np.isfinite(a) & (bounds[0] <= a) & (a <= bounds[1]))
     if isinstance(value, bool) or a.shape != shape or not within:
-        raise SequenceError(f"{path}: key {key}: expected {what}, got {json.dumps(value, default=str)[:40]}")
+        raise SequenceError(f"{path}: key {key}: expected {what}, got {shown(value)}")
     return a
 
 
@@ -143,9 +154,7 @@ def check_manifest(path: Path, manifest: dict, frames: int) -> None:
     camera, positions = manifest.get("camera", {}), manifest.get("positions", {})
     for key, value in (("camera", camera), ("positions", positions)):
         if not isinstance(value, dict):
-            raise SequenceError(
-                f"{path}: key {key}: expected an object {{...}}, got {json.dumps(value)[:40]}"
-            )
+            raise SequenceError(f"{path}: key {key}: expected an object {{...}}, got {shown(value)}")
     index = positions.get("frames")
     n = len(index) if isinstance(index, list) else -1
     anything = (-np.inf, np.inf)
