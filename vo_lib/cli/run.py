@@ -201,7 +201,7 @@ def _run_into(
         run_sequence,
         warm_up,
     )
-    from vo_lib.stereo_vo.vehicle import vehicle_of
+    from vo_lib.stereo_vo.vehicle import VehicleKind, vehicle_of
 
     tmp = output.path
     if frames is not None and frames > len(seq) and not is_sample(name):  # samples: said above
@@ -253,8 +253,13 @@ def _run_into(
     if truth is not None:
         report = error_report(result, truth, odo)
         report["errors_3d"] = errors_3d(seq.poses[:n], {"vo": poses, "odometry": odo}, mount)
-        print_error_table(
-            report, len(result.flagged), report["errors_3d"], odometry_name(vehicle), seq.truth_file
+        print_error_table(  # a drone has no ground plane: its planar figures mean nothing
+            report,
+            len(result.flagged),
+            report["errors_3d"],
+            odometry_name(vehicle),
+            seq.truth_file,
+            planar=vehicle.kind is not VehicleKind.DRONE,
         )
     output.commit(
         sequence=str(seq.path.resolve()),

@@ -147,10 +147,12 @@ def print_error_table(
     errors: dict[str, StandardErrors | None] | None = None,
     odometry_label: str = "track odometry",
     truth_file: str | None = None,
+    planar: bool = True,
 ) -> None:
     """One table of errors against ground truth, a column for visual odometry and one for
     odometry alone: the rows of ``errors`` (3-D, :func:`vo_lib.evaluation.standard_errors` of
-    each column's camera poses) and the planar rows of ``report`` (:func:`error_report`)."""
+    each column's camera poses) and, with ``planar`` (a vehicle on the ground), the planar rows of
+    ``report`` (:func:`error_report`)."""
     errors = errors or {}
     vo_3d = errors.get("vo")
     source = f"{truth_file}, " if truth_file else ""  # a recording's, of the several it may hold
@@ -165,7 +167,7 @@ def print_error_table(
     if vo_3d is not None and vo_3d.kitti is not None:
         count = vo_3d.kitti.count
         print(f"  (KITTI errors over {vo_3d.kitti.label()}, {count} segment{'s' * (count != 1)})")
-    for label, key, fmt in ROWS_PLANAR:
+    for label, key, fmt in ROWS_PLANAR if planar or vo_3d is None else ():
         print(_row(label, [report[c][key] for c in cols], fmt))
     print(_row("frames flagged (VO not used)", [flagged], "{:d}"))
 
