@@ -6,14 +6,16 @@ import pytest
 from vo_lib.stereo_vo.baselines import essential_ransac, kabsch, pnp_ransac, rigid_ransac
 from vo_lib.stereo_vo.circular_motion import motion_matrices
 from vo_lib.stereo_vo.ransac import (
+    gate_angles,
     histogram_voting,
     hypotheses_needed,
     hypothesis_draws,
     one_point_ransac,
     rho_gate_error,
     theta_gate_error,
+    theta_gate_slope,
 )
-from vo_lib.stereo_vo.refinement import refine_motion
+from vo_lib.stereo_vo.refinement import both_directions, refine_motion, reprojection
 from vo_lib.stereo_vo.synthetic import synthetic_matches
 from vo_lib.stereo_vo.temporal import MotionPrior
 
@@ -36,6 +38,44 @@ def test_gates_are_zero_for_true_matches(camera, rng):
     assert e_rho[m.inliers].max() < 1e-12 and np.median(e_rho[~m.inliers]) > 0.3
     # under a wrong theta the gate of eq. 20 no longer vanishes
     assert np.nanmedian(theta_gate_error(m.w_prev, m.w_curr, 0.09, camera)[m.inliers]) > 1e-3
+
+
+def test_the_theta_gates_slope_is_the_derivative_of_eq_20(camera, rng):
+    """The closed form the gate's width uses, against a central difference of the signed error."""
+    m = synthetic_matches(camera, 200, 0.05, 0.1, rng, outlier_ratio=0.3)
+    (ta, ba), (tb, bb) = gate_angles(m.w_prev, camera), gate_angles(m.w_curr, camera)
+    h = 1e-6
+
+    def signed(theta):
+        return tb / ta - np.sin(bb - theta / 2) / np.sin(ba + theta / 2)
+
+    for theta in (-0.08, 0.0, 0.05):
+        numeric = (signed(theta + h) - signed(theta - h)) / (2 * h)
+        np.testing.assert_allclose(theta_gate_slope(ba, bb, theta), numeric, rtol=1e-3)  # near poles too
+
+
+def test_the_refinements_jacobians_are_the_derivatives_of_its_residuals(camera, rng):
+    """Forward and backward reprojection residuals (disparity space) and their analytic
+    Jacobians in theta and rho, against central differences."""
+    m = synthetic_matches(camera, 50, 0.04, 0.08, rng, outlier_ratio=0.0, noise_px=0.5)
+    P, Q = camera.backproject(m.w_prev), camera.backproject(m.w_curr)
+    X, sign, target = both_directions(P, Q, m.w_prev, m.w_curr, camera)
+    theta, rho, h = 0.03, 0.07, 1e-7
+    r, J_theta, J_rho = reprojection(theta, rho, X, sign, target, camera)
+    assert r.shape == J_theta.shape == J_rho.shape == (3, 100)
+    for J, (dt, dr) in ((J_theta, (h, 0.0)), (J_rho, (0.0, h))):
+        plus = reprojection(theta + dt, rho + dr, X, sign, target, camera)[0]
+        minus = reprojection(theta - dt, rho - dr, X, sign, target, camera)[0]
+        np.testing.assert_allclose(J, (plus - minus) / (2 * h), rtol=1e-5, atol=1e-4)
+    # at the true motion of noise-free matches the residuals vanish
+    clean = synthetic_matches(camera, 50, 0.04, 0.08, rng, outlier_ratio=0.0, noise_px=0.0)
+    P, Q = camera.backproject(clean.w_prev), camera.backproject(clean.w_curr)
+    assert (
+        np.abs(
+            reprojection(0.04, 0.08, *both_directions(P, Q, clean.w_prev, clean.w_curr, camera), camera)[0]
+        ).max()
+        < 1e-8
+    )
 
 
 def test_acceptance_synthetic_matches_over_many_seeds(camera):

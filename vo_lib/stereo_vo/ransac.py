@@ -272,18 +272,25 @@ def reestimate(model: OnePointModel, support: np.ndarray) -> tuple[float, float]
 
 
 # ---------------------------------------------------------------------- inliers of a motion
+def theta_gate_slope(beta_a, beta_b, theta) -> np.ndarray:
+    """d(eq. 20, signed)/d theta: only ``sin(gamma') / sin(gamma)`` depends on theta, and
+    d/d phi of ``-sin(beta' - phi) / sin(beta + phi)`` is ``sin(beta + beta') / sin^2(beta + phi)``."""
+    sin_a = np.sin(beta_a + 0.5 * theta)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return 0.5 * np.sin(beta_a + beta_b) / (sin_a * sin_a)
+
+
 def theta_gate_pass(
     angles: tuple, model: ThetaModel, theta: float, var_ref: float, params: RansacParams
 ) -> np.ndarray:
-    """eq. 20 at ``theta`` within ``k`` of each match's first-order sigma, and the match's own theta
-    within ``k`` sigma of ``theta``. ``angles`` are ``(tan(alpha') / tan(alpha), beta, beta',
-    sin(beta + beta'))``; the slope of eq. 20 in theta is ``sin(beta + beta') / (2 sin^2(beta + phi))``."""
-    tan_ratio, ba, bb, sin_sum = angles
+    """eq. 20 at ``theta`` within ``k`` of each match's first-order sigma (the slope:
+    :func:`theta_gate_slope`), and the match's own theta within ``k`` sigma of ``theta``.
+    ``angles`` are ``(tan(alpha') / tan(alpha), beta, beta')``."""
+    tan_ratio, ba, bb = angles
     k2 = params.gate_sigmas**2
-    sin_a = np.sin(ba + 0.5 * theta)
     with np.errstate(divide="ignore", invalid="ignore"):
-        e = tan_ratio - np.sin(bb - 0.5 * theta) / sin_a
-        slope = 0.5 * sin_sum / (sin_a * sin_a)
+        e = tan_ratio - np.sin(bb - 0.5 * theta) / np.sin(ba + 0.5 * theta)
+    slope = theta_gate_slope(ba, bb, theta)
     var = model.variances + var_ref
     return (e * e <= k2 * slope * slope * var) & ((model.values - theta) ** 2 <= k2 * var)
 
@@ -400,7 +407,7 @@ def one_point_ransac(  # noqa: PLR0915 (the algorithm's five steps read best in 
     theta, var_theta = reestimate(thetas, supporters(thetas, h, var_h, params))
     (ta, ba), (tb, bb) = gate_angles(wa, camera), gate_angles(wb, camera)
     with np.errstate(divide="ignore", invalid="ignore"):
-        angles = (tb / ta, ba, bb, np.sin(ba + bb))
+        angles = (tb / ta, ba, bb)
     theta_in = theta_gate_pass(angles, thetas, theta, var_theta, params)
     n_theta = int(np.count_nonzero(theta_in))
     diagnostics.update(hypotheses_theta=tried_theta, theta_inliers=n_theta)
