@@ -75,7 +75,7 @@ def theta_from_pixels(w_prev, w_curr, camera: StereoCamera) -> np.ndarray:
 
 def theta_standard_deviation(w_prev, w_curr, camera: StereoCamera, sigma_px: float) -> np.ndarray:
     """First-order standard deviation of eq. 14's theta when u, v, u', v' carry noise ``sigma_px``
-    (:func:`theta_variance`). The error grows as ``1 / |D|`` near the camera's height and with the
+    (:func:`theta_and_variance`). The error grows as ``1 / |D|`` near the camera's height and with the
     distance of the match from the image centre."""
     return np.sqrt(theta_and_variance(*_pair(w_prev, w_curr), camera, sigma_px)[1])
 
