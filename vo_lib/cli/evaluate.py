@@ -123,6 +123,54 @@ def _say_if_units_differ(truth_xyz: np.ndarray, est_xyz: np.ndarray) -> None:
         )
 
 
+def _to_camera(truth, gt: str, extrinsic_of: str | None) -> np.ndarray:
+    """``X``, the rectified left camera in the frame ``--gt`` tracks (:func:`recording_of`), or the
+    identity where the truth is taken as given (said in one line when it may be a body's)."""
+    from vo_lib.formats.euroc import body_to_rectified_camera, tracked_to_camera
+
+    if truth.times is None and extrinsic_of is not None:
+        raise UsageError(
+            f"--extrinsic-of {extrinsic_of}: --gt {gt} holds KITTI poses, which are a camera's already; "
+            "expected a body-frame truth (TUM, EuRoC CSV or positions)"
+        )
+    recording = recording_of(gt, extrinsic_of, kitti=truth.times is None)
+    if recording is not None:
+        tracker = recording if truth.poses is None else None  # a prism's lever arm
+        return tracked_to_camera(gt, body_to_rectified_camera(recording), tracker)
+    if truth.times is not None and read_marker(Path(gt).parent) is None:
+        held = "poses are of the body" if truth.poses is not None else "positions are of a tracked point"
+        what = f"an EuRoC CSV, whose {held}" if truth.csv else "not in a recording"
+        print(
+            f"--gt {gt} is {what}: compared as they are, as the camera's (a body's or a tracker's: "
+            "--extrinsic-of RECORDING moves them into its rectified left camera)"
+        )
+    return np.eye(4)
+
+
+def _print_position_errors(positions: np.ndarray, E: np.ndarray, lever: np.ndarray) -> None:
+    """ATE of the point ``lever`` (in the camera) carried along ``E`` against ``positions``."""
+    from vo_lib.evaluation import Alignment, ate_positions, shown
+
+    for alignment in (Alignment.SE3, Alignment.SIM3):
+        a, _ = ate_positions(positions, E, lever, alignment)
+        rmse, worst = shown(a.rmse, ".4f"), shown(a.max, ".4f")  # undefined: a scale of nothing moving
+        print(f"ATE ({alignment} alignment, positions only): rmse {rmse} m, max {worst}")
+
+
+def _print_pose_errors(G: np.ndarray, E: np.ndarray, lengths) -> None:
+    """The standard errors of ``E`` against ``G``, and KITTI's errors of each segment length."""
+    from vo_lib.evaluation import kitti_segment_errors, standard_errors
+
+    for label, value in standard_errors(G, E, lengths).rows():
+        print(f"{label:<62s}{value:>16s}")
+    segments = kitti_segment_errors(G, E, lengths) if lengths and len(lengths) > 1 else {}
+    for length, (t_pct, r_deg, count) in segments.items():  # each length on its own, too
+        print(
+            f"segment {length:g} m: translation {t_pct:.2f} %, rotation {100 * r_deg:.3f} deg/100 m "
+            f"({count} segment{'s' * (count != 1)})"
+        )
+
+
 def evaluate_command(gt: str, est: str, segments=None, extrinsic_of: str | None = None) -> None:
     """Print the 3-D errors of an estimate (KITTI or TUM) against ground truth in any format of
     :mod:`vo_lib.formats.groundtruth`: final error, ATE (SE(3), Sim(3)), RPE and KITTI's errors.
@@ -134,9 +182,6 @@ def evaluate_command(gt: str, est: str, segments=None, extrinsic_of: str | None 
     left camera, the tracked frame of a ``sensor.yaml`` beside ``--gt`` taken into account; for
     position-only truth that frame is the lever arm carried along the estimated poses.
     """
-    from vo_lib.evaluation import Alignment, ate_positions, kitti_segment_errors, shown, standard_errors
-    from vo_lib.formats.euroc import body_to_rectified_camera, tracked_to_camera
-
     lengths = None if segments is None else tuple(segments)
     try:
         truth = read_groundtruth(gt)
@@ -149,40 +194,12 @@ def evaluate_command(gt: str, est: str, segments=None, extrinsic_of: str | None 
     marker = run_marker(est)  # of the run that wrote --est, if one did
     check_against_its_run(gt, est, marker)
     i_est, i_gt = _associated(truth, gt, est, times, E, marker)
-    if truth.times is None and extrinsic_of is not None:
-        raise UsageError(
-            f"--extrinsic-of {extrinsic_of}: --gt {gt} holds KITTI poses, which are a camera's already; "
-            "expected a body-frame truth (TUM, EuRoC CSV or positions)"
-        )
-    recording = recording_of(gt, extrinsic_of, kitti=truth.times is None)
-    if recording is None and truth.times is not None and read_marker(Path(gt).parent) is None:
-        held = "poses are of the body" if truth.poses is not None else "positions are of a tracked point"
-        what = f"an EuRoC CSV, whose {held}" if truth.csv else "not in a recording"
-        print(
-            f"--gt {gt} is {what}: compared as they are, as the camera's (a body's or a tracker's: "
-            "--extrinsic-of RECORDING moves them into its rectified left camera)"
-        )
-    to_camera = np.eye(4)  # the rectified left camera in the tracked frame (body, prism)
-    if recording is not None:
-        tracker = recording if truth.poses is None else None  # a prism's lever arm
-        to_camera = tracked_to_camera(gt, body_to_rectified_camera(recording), tracker)
+    to_camera = _to_camera(truth, gt, extrinsic_of)  # the rectified left camera in the tracked frame
     truth_xyz = truth.positions[i_gt] if truth.poses is None else truth.poses[i_gt][:, :3, 3]
     _say_if_units_differ(truth_xyz, E[i_est][:, :3, 3])
-    if truth.poses is None:
-        ignored = f"--segments: --gt {gt} holds positions only, which give the ATE alone\n"
-        print("" if lengths is None else ignored, end="")
-        lever = np.linalg.inv(to_camera)[:3, 3]  # the tracked point in the rectified camera
-        for alignment in (Alignment.SE3, Alignment.SIM3):
-            a, _ = ate_positions(truth.positions[i_gt], E[i_est], lever, alignment)
-            rmse, worst = shown(a.rmse, ".4f"), shown(a.max, ".4f")  # undefined: a scale of nothing moving
-            print(f"ATE ({alignment} alignment, positions only): rmse {rmse} m, max {worst}")
+    if truth.poses is not None:
+        _print_pose_errors(truth.poses[i_gt] @ to_camera, E[i_est], lengths)
         return
-    G = truth.poses[i_gt] @ to_camera
-    for label, value in standard_errors(G, E[i_est], lengths).rows():
-        print(f"{label:<62s}{value:>16s}")
-    segments = kitti_segment_errors(G, E[i_est], lengths) if lengths and len(lengths) > 1 else {}
-    for length, (t_pct, r_deg, count) in segments.items():  # each length on its own, too
-        print(
-            f"segment {length:g} m: translation {t_pct:.2f} %, rotation {100 * r_deg:.3f} deg/100 m "
-            f"({count} segment{'s' * (count != 1)})"
-        )
+    if lengths is not None:
+        print(f"--segments: --gt {gt} holds positions only, which give the ATE alone")
+    _print_position_errors(truth.positions[i_gt], E[i_est], np.linalg.inv(to_camera)[:3, 3])
