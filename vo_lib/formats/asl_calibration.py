@@ -118,8 +118,8 @@ def read_camera_yaml(path) -> CameraCalibration:
             f"{path}: key distortion_model: {model!r} is not supported; expected radial-tangential"
         )
     # the ASL name, or Kalibr's (camchain.yaml) when only that one is there
-    key = "distortion_coeffs" if "distortion_coeffs" in data else "distortion_coefficients"
-    key = "distortion_coefficients" if "distortion_coefficients" in data else key
+    kalibr = "distortion_coeffs" in data and "distortion_coefficients" not in data
+    key = "distortion_coeffs" if kalibr else "distortion_coefficients"
     dist = np.zeros(4)
     if model != "none" or data.get(key) is not None:
         dist = _numbers(path, data, key, 4, "[k1, k2, p1, p2]")

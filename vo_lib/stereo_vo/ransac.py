@@ -140,10 +140,14 @@ def gate_angles(w: np.ndarray, camera: StereoCamera) -> tuple[np.ndarray, np.nda
     return tan_alpha, beta
 
 
-def _theta_gate(ta, ba, tb, bb, phi):
-    """Signed eq. 20: ``tan(alpha')/tan(alpha) - sin(gamma')/sin(gamma)``; broadcasts over ``phi``."""
+def theta_gate_and_slope(tan_ratio, beta_a, beta_b, theta) -> tuple[np.ndarray, np.ndarray]:
+    """Signed eq. 20, ``tan(alpha')/tan(alpha) - sin(gamma')/sin(gamma)``, and its slope in theta:
+    only ``sin(gamma') / sin(gamma)`` depends on theta, and d/d phi of ``-sin(beta' - phi) /
+    sin(beta + phi)`` is ``sin(beta + beta') / sin^2(beta + phi)``. Broadcasts over ``theta``."""
+    phi = 0.5 * np.asarray(theta, dtype=float)
+    sin_a = np.sin(beta_a + phi)
     with np.errstate(divide="ignore", invalid="ignore"):
-        return tb / ta - np.sin(bb - phi) / np.sin(ba + phi)
+        return tan_ratio - np.sin(beta_b - phi) / sin_a, 0.5 * np.sin(beta_a + beta_b) / (sin_a * sin_a)
 
 
 def theta_gate_error(w_prev, w_curr, theta, camera: StereoCamera) -> np.ndarray:
@@ -151,7 +155,9 @@ def theta_gate_error(w_prev, w_curr, theta, camera: StereoCamera) -> np.ndarray:
     a, b = as_match_array("w_prev", w_prev), as_match_array("w_curr", w_curr)
     ta, ba = gate_angles(a, camera)
     tb, bb = gate_angles(b, camera)
-    return np.abs(_theta_gate(ta, ba, tb, bb, 0.5 * np.asarray(theta, dtype=float)))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        tan_ratio = tb / ta
+    return np.abs(theta_gate_and_slope(tan_ratio, ba, bb, theta)[0])
 
 
 # ---------------------------------------------------------------------- eq. 21
@@ -272,25 +278,14 @@ def reestimate(model: OnePointModel, support: np.ndarray) -> tuple[float, float]
 
 
 # ---------------------------------------------------------------------- inliers of a motion
-def theta_gate_slope(beta_a, beta_b, theta) -> np.ndarray:
-    """d(eq. 20, signed)/d theta: only ``sin(gamma') / sin(gamma)`` depends on theta, and
-    d/d phi of ``-sin(beta' - phi) / sin(beta + phi)`` is ``sin(beta + beta') / sin^2(beta + phi)``."""
-    sin_a = np.sin(beta_a + 0.5 * theta)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        return 0.5 * np.sin(beta_a + beta_b) / (sin_a * sin_a)
-
-
 def theta_gate_pass(
     angles: tuple, model: ThetaModel, theta: float, var_ref: float, params: RansacParams
 ) -> np.ndarray:
     """eq. 20 at ``theta`` within ``k`` of each match's first-order sigma (the slope:
-    :func:`theta_gate_slope`), and the match's own theta within ``k`` sigma of ``theta``.
+    :func:`theta_gate_and_slope`), and the match's own theta within ``k`` sigma of ``theta``.
     ``angles`` are ``(tan(alpha') / tan(alpha), beta, beta')``."""
-    tan_ratio, ba, bb = angles
     k2 = params.gate_sigmas**2
-    with np.errstate(divide="ignore", invalid="ignore"):
-        e = tan_ratio - np.sin(bb - 0.5 * theta) / np.sin(ba + 0.5 * theta)
-    slope = theta_gate_slope(ba, bb, theta)
+    e, slope = theta_gate_and_slope(*angles, theta)
     var = model.variances + var_ref
     return (e * e <= k2 * slope * slope * var) & ((model.values - theta) ** 2 <= k2 * var)
 
@@ -399,7 +394,7 @@ def one_point_ransac(  # noqa: PLR0915 (the algorithm's five steps read best in 
     usable = np.flatnonzero((a[:, 2] > 0) & (b[:, 2] > 0) & off_height)
     if len(usable) < 3:
         return failed(Outcome.FEW_USABLE)
-    wa, wb = np.asfortranarray(a[usable]), np.asfortranarray(b[usable])  # contiguous columns u, v, d
+    wa, wb = a[usable], b[usable]
     # 2-3. theta
     thetas = ThetaModel(wa, wb, camera, params.pixel_sigma)
     prior_theta = None if prior is None else (float(prior.theta), float(prior.covariance[0][0]))

@@ -167,8 +167,9 @@ def print_error_table(
     if vo_3d is not None and vo_3d.kitti is not None:
         count = vo_3d.kitti.count
         print(f"  (KITTI errors over {vo_3d.kitti.label()}, {count} segment{'s' * (count != 1)})")
-    for label, key, fmt in ROWS_PLANAR if planar or vo_3d is None else ():
-        print(_row(label, [report[c][key] for c in cols], fmt))
+    if planar or vo_3d is None:  # without 3-D rows, the planar ones are all there is
+        for label, key, fmt in ROWS_PLANAR:
+            print(_row(label, [report[c][key] for c in cols], fmt))
     print(_row("frames flagged (VO not used)", [flagged], "{:d}"))
 
 
