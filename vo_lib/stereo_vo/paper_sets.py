@@ -59,14 +59,23 @@ def paper(name: str) -> dict:
 
 
 def code_version() -> str:
-    """The repository's commit (with ``+changes`` when the work tree differs from it)."""
+    """The repository's commit (with ``+changes`` when the package's code differs from it; the
+    stored results themselves do not count)."""
     root = Path(__file__).resolve().parents[2]
     try:
         commit = subprocess.run(
             ["git", "rev-parse", "HEAD"], cwd=root, capture_output=True, text=True, check=True
         ).stdout.strip()
         dirty = subprocess.run(
-            ["git", "status", "--porcelain", "--untracked-files=no", "vo_lib"],
+            [
+                "git",
+                "status",
+                "--porcelain",
+                "--untracked-files=no",
+                "--",
+                "vo_lib",
+                f":!{RESULTS.relative_to(root)}",
+            ],
             cwd=root,
             capture_output=True,
             text=True,
