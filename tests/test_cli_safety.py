@@ -313,6 +313,10 @@ CASES = [
         "inside this package"),
     Case("generate-repo-data-force", [*GEN, "--out", str(ROOT / "data"), "--force"], 2, "sample data folder"),
     Case("out-data-folder-force", "RUN --out data --force", 2, "sample data folder"),
+    Case("out-inside-data-folder-force", "RUN --out data/indoor_free --force", 2,
+        "--out data/indoor_free: lies inside the sample data folder"),
+    Case("convert-odometry-a-folder", "convert seq --out conv", 2, "odometry.txt: a folder, where",
+        lambda ws: ((ws / "seq" / "odometry.txt").unlink(), (ws / "seq" / "odometry.txt").mkdir())),
     Case("out-is-a-file", "RUN --out important.txt", 2, "is a file"),
     Case("out-is-a-file-force", "RUN --out important.txt --force", 2, "is a file"),
     Case("out-under-a-file", "RUN --out important.txt/sub", 2, "cannot write there"),
@@ -634,8 +638,10 @@ def test_a_sequence_being_read_is_not_replaced(template, tmp_path, monkeypatch, 
 
 
 def test_run_holds_its_input_while_it_reads(template, tmp_path, monkeypatch, capsys):
-    """During the pipeline, replacing the run's input sequence fails (the run holds its lock)."""
+    """While the run loads its input sequence and while the pipeline reads its images, replacing
+    the sequence fails (the run holds its lock from before it reads anything)."""
     import vo_lib.stereo_vo.pipeline as run_module  # run imports the pipeline where it runs it
+    from vo_lib import data
     from vo_lib.outputs import OutputError, OutputFolder
 
     ws = tmp_path / "ws"
@@ -643,19 +649,27 @@ def test_run_holds_its_input_while_it_reads(template, tmp_path, monkeypatch, cap
     monkeypatch.chdir(ws)
     assert main([*GEN, "--out", "gen"]) == 0
     attempts = []
-    original = run_module.run_sequence
+    original_run, original_load = run_module.run_sequence, data.load_sequence
 
-    def run_sequence(seq, **kwargs):
+    def try_to_replace(path):
         try:
-            OutputFolder(seq.path, "vo_lib generate", force=True).discard()
+            OutputFolder(path, "vo_lib generate", force=True).discard()
             attempts.append("replaced")
         except OutputError as exc:
             attempts.append(str(exc))
-        return original(seq, **kwargs)
 
+    def load_sequence(name, **kwargs):  # while its files are read: the calibration, times, poses
+        try_to_replace(ws / "gen")
+        return original_load(name, **kwargs)
+
+    def run_sequence(seq, **kwargs):  # while its images are read
+        try_to_replace(seq.path)
+        return original_run(seq, **kwargs)
+
+    monkeypatch.setattr(data, "load_sequence", load_sequence)
     monkeypatch.setattr(run_module, "run_sequence", run_sequence)
     assert main(["run", "--sequence", "gen", "--out", "out"]) == 0
-    assert attempts and "a running command is reading this folder" in attempts[0]
+    assert len(attempts) >= 2 and all("a running command is reading this folder" in a for a in attempts)
     OutputFolder(ws / "gen", "vo_lib generate").discard()  # free again after the run
 
 
@@ -1292,8 +1306,8 @@ def test_a_kill_at_any_step_of_the_swap_leaves_the_previous_output(tmp_path, mod
     """Kill the writer (SIGKILL) before each step of the swap in turn (renames, the one-step
     exchange, the deletion of the replaced folder), for a run's output and a generated sequence.
     After each kill the folder is the old output or the new one, whole; the next command beside
-    it (an ``OutputFolder`` that writes nothing) restores an old output set aside and removes
-    every temporary."""
+    it (an ``OutputFolder`` that writes nothing) restores an old output set aside, even where an
+    empty folder has been made in its place meanwhile, and removes every temporary."""
     from vo_lib.outputs import OutputFolder
 
     seen, written_by = [], f"vo_lib {writer}"
@@ -1310,6 +1324,8 @@ def test_a_kill_at_any_step_of_the_swap_leaves_the_previous_output(tmp_path, mod
         assert proc.returncode == -signal.SIGKILL, proc.stderr
         after_kill = whole(target)
         assert after_kill in ("old", "new") or (mode == "renames" and not target.exists())
+        if not target.exists():  # killed between the two renames; someone then makes the folder
+            target.mkdir()  # empty: the old output set aside is still put back, not deleted
         with OutputFolder(target, written_by, force=True):
             pass
         seen.append(whole(target))

@@ -289,13 +289,13 @@ def test_asl_recording_is_rectified_and_its_truth_moved_into_the_left_camera():
         (
             "mapping",
             "cam0/sensor.yaml: key intrinsics: expected [fu, fv, cu, cv] (4 finite numbers), "
-            'got 4 numbers, {"fu"',
+            'got 4 values, {"fu"',
         ),
         ("rotation", "cam1/sensor.yaml: key T_BS"),
         (
             "three-rows",
             "cam0/sensor.yaml: key T_BS: expected a 4x4 camera-to-body transform as data "
-            "(16 finite numbers), got 12 numbers, [0.0148655429818, -0.999880929698, 0.004...",
+            "(16 finite numbers), got 12 values, [0.0148655429818, -0.999880929698, 0.004...",
         ),
         ("baseline", "cam1/sensor.yaml: key T_BS puts cam1 where cam0 is"),
         ("shape", "cam0/sensor.yaml: key T_BS: rows: 3, cols: 4; expected the numbers 4 and 4"),
@@ -303,7 +303,12 @@ def test_asl_recording_is_rectified_and_its_truth_moved_into_the_left_camera():
         ("model", "cam0/sensor.yaml: key camera_model: 'omni' is not supported; expected pinhole"),
         ("centre", "cam1/sensor.yaml: key intrinsics: principal point (-379.999, 255.238) outside"),
         ("focal", "cam0/sensor.yaml: keys intrinsics and distortion_coefficients leave 0% of"),
-        ("distortion", "cam1/sensor.yaml: keys intrinsics and distortion_coefficients leave 0% of"),
+        (
+            "distortion",
+            "cam1/sensor.yaml: key distortion_coefficients: expected [k1, k2, p1, p2] (4 finite numbers, "
+            'each within ±100), got 4 values, ["1e30", ',
+        ),
+        ("distortion-negative", "cam1/sensor.yaml: key distortion_coefficients: expected [k1, k2,"),
         ("camera", "cam1: missing camera folder"),
         (
             "no-distortion",
@@ -397,13 +402,13 @@ def test_a_bad_rig_gets_one_line_and_exit_2(tmp_path, capsys, damage, expected):
         image.unlink()
         if damage == "size":
             cv2.imwrite(str(image), np.zeros((480, 640), np.uint8))
-    elif damage in ("centre", "distortion"):
+    elif damage in ("centre", "distortion", "distortion-negative"):
         path = mav0 / "cam1" / "sensor.yaml"
         text = path.read_text()
         if damage == "centre":
             path.write_text(text.replace(", 379.999,", ", -379.999,"))
-        else:
-            path.write_text(text.replace("[-0.28368365,", "[1e30,"))
+        else:  # a coefficient that no lens has: once one that fooled the valid share
+            path.write_text(text.replace("[-0.28368365,", "[1e30," if damage == "distortion" else "[-1e30,"))
     elif damage == "baseline":
         shutil.copy(mav0 / "cam0" / "sensor.yaml", mav0 / "cam1" / "sensor.yaml")
     elif damage == "swapped":

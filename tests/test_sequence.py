@@ -240,3 +240,13 @@ def test_frames_are_read_ahead_and_in_order(seq_dir):
     fresh.pair(2)
     with pytest.raises(SequenceError, match="000003.png, frame 3"):
         fresh.pair(3)
+
+
+def test_a_long_value_in_an_error_says_how_many_values_it_holds():
+    """Every value the file holds is counted, a NaN or a text among them, in nested lists and maps."""
+    from vo_lib.formats.frame_files import shown
+
+    assert shown([float("nan"), "x", *[1.0] * 14]).startswith("16 values, [NaN, ")
+    assert shown({"fu": 458.654, "fv": 457.296, "cu": 367.215, "cv": 248.375}).startswith("4 values, {")
+    assert shown([[1.5] * 4] * 4).startswith("16 values, [[1.5,")
+    assert shown([1, 2]) == "[1, 2]" and shown("a" * 50) == '"' + "a" * 39 + "..."

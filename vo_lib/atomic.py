@@ -104,9 +104,12 @@ def _abandoned_beside(parent: Path, name: str) -> list[tuple[os.DirEntry, str]]:
 
 def restore(parent: Path, name: str) -> None:
     """Rename back an ``.old`` folder of ``name`` whose replacement was killed between its two
-    renames (``name`` is missing)."""
+    renames (``name`` is missing, or an empty folder made since, which holds nothing to lose)."""
     original = Path(parent, name)
     for entry, kind in _abandoned_beside(parent, name):
+        if kind == "old" and os.path.isdir(original) and not os.path.islink(original):
+            with contextlib.suppress(OSError):  # only an empty folder can go
+                os.rmdir(original)
         if kind == "old" and not os.path.lexists(original):
             os.rename(entry.path, original)
             notice(f"restored {original}, whose replacement was interrupted")

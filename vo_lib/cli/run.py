@@ -12,6 +12,7 @@ Bad arguments and bad input print one line and exit with status 2.
 
 from __future__ import annotations
 
+import contextlib
 import csv
 import hashlib
 import os
@@ -21,6 +22,7 @@ from dataclasses import asdict, fields
 from pathlib import Path
 
 from vo_lib.arguments import UsageError
+from vo_lib.atomic import real_path
 from vo_lib.formats.poses import write_kitti_poses, write_tum
 from vo_lib.geometry import camera_poses_from_planar
 from vo_lib.outputs import OutputFolder, file_sha256, notice, reading
@@ -170,21 +172,28 @@ def run_command(
     written poses are the 6-DoF camera poses where the model has them, else the planar poses
     carried to the camera through its mount.
     """
-    from vo_lib.data import data_dir, load_sequence
+    from vo_lib.data import data_dir, is_rendered, load_sequence
 
     name = sequence or DEFAULT_SEQUENCE
     source, load_frames = input_path(name, frames)
     out_dir = Path(out) if out else Path("runs") / default_name(name)
 
+    if out and real_path(out_dir).is_relative_to(real_path(data_dir())):  # the samples' folder, not runs'
+        raise UsageError(f"--out {out}: lies inside the sample data folder; choose another output folder")
     keep = {data_dir(): "the sample data folder"}
-    with OutputFolder(
-        out_dir, "vo_lib run", force=force, inputs=[source], keep=keep, option="--out", checksums=True
-    ) as output:
+    with (
+        OutputFolder(
+            out_dir, "vo_lib run", force=force, inputs=[source], keep=keep, option="--out", checksums=True
+        ) as output,
+        contextlib.ExitStack() as locks,
+    ):
         announce_run(name, source, frames, out_dir)  # once --out is known to be writable
         progress = True if sys.stderr.isatty() else "lines"
+        if not is_sample(name) or is_rendered(name, source):  # a sample rendered now: once it is
+            locks.enter_context(reading(source))  # no command replaces the sequence while it is read
         seq = load_sequence(name, frames=load_frames, odometry=not no_odometry, progress=progress)
-        with reading(seq.path):  # no command replaces the sequence while it is read
-            report = _run_into(output, seq, name, frames, no_odometry, seed, motion)
+        locks.enter_context(reading(seq.path))
+        report = _run_into(output, seq, name, frames, no_odometry, seed, motion)
     print(f"\nwrote {out_dir}/: poses.txt trajectory.tum timings.csv diagnostics.csv trajectory.png")
     return report
 
@@ -280,15 +289,18 @@ def convert_command(sequence: str, to: str, out: str, force: bool = False) -> No
     from vo_lib.data import load_sequence
     from vo_lib.formats.sequence_writer import SequenceWriter
 
-    # read before --out is touched: a bad input changes nothing
-    seq = load_sequence(Path(sequence), odometry=False, progress=False)
-    manifest = {k: v for k, v in seq.manifest.items() if k != "layout"}
-    writer = SequenceWriter(
-        out, seq.camera, force=force, option="--out", written_by="vo_lib convert", inputs=[seq.path]
-    )
-    with reading(seq.path), writer:
-        for left, right in seq:
-            writer.add(left, right)
-        writer.carry(seq.path)
-        path = writer.close(seq.times, seq.poses, manifest=manifest or None)
+    with contextlib.ExitStack() as locks:  # no command replaces the sequence while it is read
+        locks.enter_context(reading(sequence))
+        # read before --out is touched: a bad input changes nothing (the odometry files it carries too)
+        seq = load_sequence(Path(sequence), odometry=True, progress=False)
+        locks.enter_context(reading(seq.path))
+        manifest = {k: v for k, v in seq.manifest.items() if k != "layout"}
+        writer = SequenceWriter(
+            out, seq.camera, force=force, option="--out", written_by="vo_lib convert", inputs=[seq.path]
+        )
+        with writer:
+            for left, right in seq:
+                writer.add(left, right)
+            writer.carry(seq.path)
+            path = writer.close(seq.times, seq.poses, manifest=manifest or None)
     print(f"wrote {path}: {len(seq)} rectified pairs in the KITTI layout")

@@ -29,6 +29,10 @@ MAX_BASELINE_M = 10.0
 #: hand keeps nearly all of it; one that is not (a focal length or a distortion off by orders of
 #: magnitude) leaves a sliver or nothing.
 MIN_VALID_SHARE = 0.25
+#: Largest radial-tangential coefficient taken as a lens's: real lenses, wide ones included, stay
+#: below 1 or so; beyond this, a key or a value out of place (and the valid share, which such
+#: coefficients can fool, is not to be relied on).
+MAX_DISTORTION = 100.0
 #: Farthest a ground truth's tracked point (a prism) may sit from the body's origin (metres):
 #: beyond it, a ``T_BS`` written in millimetres or centimetres.
 MAX_LEVER_ARM_M = 10.0
@@ -78,7 +82,8 @@ def _yaml(path: Path) -> dict:
     return data
 
 
-def _numbers(path: Path, data: dict, key: str, count: int, what: str) -> np.ndarray:
+def _numbers(path: Path, data: dict, key: str, count: int, what: str, bound=np.inf) -> np.ndarray:
+    """``count`` finite numbers at ``key`` (of a ``{rows, cols, data}`` matrix too), each within ``bound``."""
     value = data.get(key)
     if isinstance(value, dict) and "data" in value:  # T_BS: {rows, cols, data}
         shape = (value.get("rows", 4), value.get("cols", 4))
@@ -87,7 +92,8 @@ def _numbers(path: Path, data: dict, key: str, count: int, what: str) -> np.ndar
                 f"{path}: key {key}: rows: {shape[0]!r}, cols: {shape[1]!r}; expected the numbers 4 and 4"
             )
         value = value.get("data")
-    return numbers_at(path, key, value, (count,), f"{what} ({count} finite numbers)")
+    within = "" if np.isinf(bound) else f", each within ±{bound:g}"
+    return numbers_at(path, key, value, (count,), f"{what} ({count} finite numbers{within})", (-bound, bound))
 
 
 def _transform(path: Path, data: dict, what: str) -> np.ndarray:
@@ -122,7 +128,7 @@ def read_camera_yaml(path) -> CameraCalibration:
     key = "distortion_coeffs" if kalibr else "distortion_coefficients"
     dist = np.zeros(4)
     if model != "none" or data.get(key) is not None:
-        dist = _numbers(path, data, key, 4, "[k1, k2, p1, p2]")
+        dist = _numbers(path, data, key, 4, "[k1, k2, p1, p2]", MAX_DISTORTION)
     if model == "none" and dist.any():
         raise AslError(
             f"{path}: key distortion_model: none, but key {key} is not zero; "

@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import json
 import os
-import re
 from pathlib import Path
 
 import numpy as np
@@ -119,12 +118,20 @@ def read_manifest(path: Path) -> dict:
 
 def shown(value, width: int = 40) -> str:
     """``value`` as JSON for an error message; a longer one is cut to ``width`` characters, with
-    how many numbers it holds."""
+    how many values a list or a map holds."""
     text = json.dumps(value, default=str)
     if len(text) <= width:
         return text
-    count = len(re.findall(r"-?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?", text))
-    return f"{count} numbers, {text[:width]}..." if count else f"{text[:width]}..."
+    if not isinstance(value, (list, tuple, dict)):
+        return f"{text[:width]}..."
+    count, items = 0, [value]  # every value of the nested lists and maps: NaN and texts too
+    while items:
+        item = items.pop()
+        if isinstance(item, (list, tuple, dict)):
+            items.extend(item.values() if isinstance(item, dict) else item)
+        else:
+            count += 1
+    return f"{count} values, {text[:width]}..."
 
 
 def numbers_at(path: Path, key: str, value, shape: tuple, what=None, bounds=(-np.inf, np.inf)) -> np.ndarray:
