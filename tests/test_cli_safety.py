@@ -803,6 +803,26 @@ def test_a_signal_while_exiting_after_the_command_says_so_in_one_line(tmp_path):
     ]
 
 
+@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM])
+def test_a_signal_in_the_interpreters_teardown_leaves_a_finished_commands_status(signum):
+    """After the last exit function, Python runs no signal handler: a Ctrl-C then (a sweep's
+    process group, a second after its table) ended a finished command as killed, silently. The
+    signal is ignored there, and the command's own status stands."""
+    script = (
+        "import os, signal, sys, time\n"
+        "import vo_lib.cli.main as m\n"
+        "m.main = lambda argv=None: 0\n"
+        "class Late:  # deleted in the teardown, after every exit function\n"
+        "    def __del__(self):\n"
+        f"        os.kill(os.getpid(), {int(signum)})\n"
+        "        time.sleep(0.5)\n"
+        "late = Late()\n"
+        "sys.exit(m.entry())\n"
+    )
+    proc = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=60)
+    assert proc.returncode == 0 and proc.stderr == ""
+
+
 @pytest.mark.parametrize("wrapper", [SystemError, ImportError])
 @pytest.mark.parametrize(
     "signum, code, phrase", [(signal.SIGINT, 130, "Ctrl-C"), (signal.SIGTERM, 143, "SIGTERM")]

@@ -11,6 +11,7 @@ Ctrl-C (SIGINT) or SIGTERM removes what was half-written, prints one line and ex
 from __future__ import annotations
 
 import argparse
+import atexit
 import contextlib
 import errno
 import functools
@@ -387,9 +388,19 @@ def _late_stop(signum, frame) -> None:
     os._exit(128 + signum)
 
 
+@atexit.register  # registered on import, before any library's: it runs after all of theirs
+def _ignore_signals_in_teardown() -> None:
+    """After the last exit function only the interpreter's teardown is left, where Python runs no
+    signal handler: a signal would end a finished command silently, as killed. It is ignored."""
+    if signal.getsignal(signal.SIGINT) is _late_stop:  # a command that finished (see entry)
+        for kind in (signal.SIGINT, signal.SIGTERM):
+            signal.signal(kind, signal.SIG_IGN)
+
+
 def entry() -> int:
     """The ``vo-lib`` script and ``python -m vo_lib``: :func:`main`, then :func:`_late_stop` for
-    SIGINT and SIGTERM during the second or so the interpreter takes to shut down."""
+    SIGINT and SIGTERM while the interpreter joins threads and runs exit functions (a local Dask
+    cluster's take seconds), and the signals ignored in the teardown after them."""
     status = main()
     if status < 128:  # not stopped by a signal already (that one said so, in its line)
         for kind in (signal.SIGINT, signal.SIGTERM):
