@@ -694,7 +694,7 @@ fuse_widget = offer(
 # `python -m vo_lib sweep nees --seeds 1000` runs one task per seed on a local Dask cluster (one
 # worker process per core), or on a lab's cluster with `--scheduler tcp://host:8786`; each run
 # draws from its own seed, so the figures are the same serially and on any cluster; it prints each
-# figure's mean and its 95 % interval over the seeds (README, "Sweeps").
+# figure's mean and its 95 % interval over the seeds (`docs/command_line.md`, "Sweeps").
 #
 # ## Summary
 #

@@ -597,7 +597,7 @@ display(
 #
 # Table 1 here is one run per resolution in this process. `python -m vo_lib sweep table1 --seeds 20`
 # repeats it over seeds on a local Dask cluster (or `--scheduler tcp://host:8786`) and prints each
-# stage's mean time with its 95 % interval (README, "Sweeps").
+# stage's mean time with its 95 % interval (`docs/command_line.md`, "Sweeps").
 #
 # ## Summary
 #

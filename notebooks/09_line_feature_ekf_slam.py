@@ -976,7 +976,7 @@ display(
 # The laps above run in this process. `python -m vo_lib sweep lap --seeds 1000` runs one lap per seed
 # on a local Dask cluster (one worker process per core), or on a lab's cluster with
 # `--scheduler tcp://host:8786`, one row per lap in `sweeps/lap/results.csv`, with the same figures
-# as a serial run (README, "Sweeps").
+# as a serial run (`docs/command_line.md`, "Sweeps").
 #
 # ## Summary
 #

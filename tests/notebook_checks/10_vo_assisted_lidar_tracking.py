@@ -41,7 +41,7 @@ assert laser_share < 1 and vo_share < 0.2  # "smaller", and for the visual odome
 # after: dirs = np.array([s.direction for s in voapt.steps if s.direction is not None])
 assert np.mean(np.abs(dirs[:, 0])) > 0.95
 
-# after: result = run_experiment(range(SEED, SEED + 20), vo)
+# after: result = run_experiment(range(20), vo)
 from vo_lib.comparison import Verdict
 
 assert mx["VOAPT"][0] <= 0.3 * mx["LBPT"][0] and mn["VOAPT"][0] <= 0.2 * mn["LBPT"][0]
@@ -49,4 +49,5 @@ assert result.flagged_when_lost() >= 0.9 and result.false_alarms() <= 0.1
 assert all(c.verdict("VOAPT", "LBPT") is Verdict.BETTER for c in by_seed.values())
 assert 0.5 < mx["LBPT"][0] / paper[("LBPT", 0)][0] < 2  # our LBPT fails about as badly as the paper's
 assert mx["VOAPT"][0] > paper[("VOAPT", 0)][0] and credible_in_occlusion > 0.05
-assert y_share < 0.5  # our worst Y under half the paper's *mean* VOAPT Y
+assert y_share < 0.5  # our largest Y, averaged over seeds, under half the paper's *mean* VOAPT Y
+assert 0 < voapt_worse < len(result.seeds) / 2  # the mean lowered "in most seeds but not all"

@@ -79,7 +79,9 @@ def build_parser() -> argparse.ArgumentParser:
     def output(p, what: str, **kwargs) -> None:
         p.add_argument("--out", type=non_empty("a folder"), help=f"output folder ({what})", **kwargs)
         p.add_argument(
-            "--force", action="store_true", help="replace --out even if this program did not write it"
+            "--force",
+            action="store_true",
+            help="replace --out, deleting what it holds, even if this program did not write it",
         )
 
     parser = plain(
