@@ -579,8 +579,25 @@ ax.set_ylim(-1.8, 1.8)
 #
 # Each seed draws its own encoder noise and slip, laser noise and pose samples; the visual
 # odometer is the PnP run above. The seeds are 0 to 19, those of `python -m vo_lib sweep corridor
-# --seeds 20` and of the README's table. Statistics of the absolute errors, averaged over seeds,
-# beside the paper's single run:
+# --seeds 20` and of the README's table. The settings the paper does not print are ours:
+
+# %%
+from vo_lib.lidar_tracking.corridor_experiment import EVERY
+from vo_lib.lidar_tracking.pose_tracking import DEFAULT_SAMPLES, SAMPLE_SIGMA
+from vo_lib.models.track_odometry import TrackOdometry
+from vo_lib.sim.samples import get_sample
+
+tracks, slip, rate = TrackOdometry(), get_sample("corridor").slip, get_sample("corridor").rate
+print(
+    f"robot: tracks {tracks.track_distance} m apart, {tracks.track_width} m wide; encoder noise "
+    f"{tracks.encoder_sigma} m per sqrt(m); slip {slip.mean:.1%} (sides differ by {slip.difference:.1%}, "
+    f"s.d. {slip.sigma:.1%})\nlaser: {TIM551.range_sigma * 100:.0f} cm range noise, an update every {EVERY} "
+    f"frames at {rate:g} Hz; tracker: {DEFAULT_SAMPLES} pose samples spread {SAMPLE_SIGMA[0]} m along, "
+    f"{SAMPLE_SIGMA[1]} m across, {np.degrees(SAMPLE_SIGMA[2]):.1f} deg in heading"
+)
+
+# %% [markdown]
+# Statistics of the absolute errors, averaged over seeds, beside the paper's single run:
 
 # %%
 result = run_experiment(range(20), vo)
