@@ -107,10 +107,11 @@ def restore(parent: Path, name: str) -> None:
     renames (``name`` is missing, or an empty folder made since, which holds nothing to lose)."""
     original = Path(parent, name)
     for entry, kind in _abandoned_beside(parent, name):
-        if kind == "old" and os.path.isdir(original) and not os.path.islink(original):
-            with contextlib.suppress(OSError):  # only an empty folder can go
-                os.rmdir(original)
-        if kind == "old" and not os.path.lexists(original):
+        if kind != "old":
+            continue
+        with contextlib.suppress(OSError):  # only an empty folder goes (not a file, a link or a full one)
+            os.rmdir(original)
+        if not os.path.lexists(original):
             os.rename(entry.path, original)
             notice(f"restored {original}, whose replacement was interrupted")
 

@@ -146,10 +146,10 @@ def linked_from(folder) -> tuple[list[Path], str | None]:
     return found, hidden or (None if budget > 0 else f"it holds or links to over {MAX_WALKED:,} entries")
 
 
-def _check_guarded(real: Path, label: str, inputs, keep) -> str | None:
-    """Refuse an output folder that is, holds or (for an input, what it links to or this package)
-    lies inside a folder never replaced; returns why not every link under the inputs could be
-    followed, if so."""
+def _check_guarded(real: Path, label: str, inputs, keep, keep_inside: bool = False) -> str | None:
+    """Refuse an output folder that is, holds or (for an input, what it links to, this package, and
+    with ``keep_inside`` the folders of ``keep``) lies inside a folder never replaced; returns why
+    not every link under the inputs could be followed, if so."""
     links = [linked_from(p) for p in inputs]
     guarded = [(real_path(p), "the input sequence", True) for p in inputs]  # (folder, what, inside too)
     guarded += [(t, "what the input sequence links to", True) for found, _ in links for t in found]
@@ -157,7 +157,7 @@ def _check_guarded(real: Path, label: str, inputs, keep) -> str | None:
     for where, what in ((Path.cwd, "the current folder"), (Path.home, "your home folder")):
         with contextlib.suppress(OSError, RuntimeError):  # no current folder (deleted) or no home
             guarded.append((where().resolve(), what, False))
-    guarded += [(real_path(p), what, False) for p, what in (keep or {}).items()]
+    guarded += [(real_path(p), what, keep_inside) for p, what in (keep or {}).items()]
     for folder, what, inside in guarded:
         if _contains(real, folder) or (inside and _contains(folder, real)):
             where = "is" if real == folder else "holds" if _contains(real, folder) else "lies inside"
@@ -165,18 +165,21 @@ def _check_guarded(real: Path, label: str, inputs, keep) -> str | None:
     return next((why for _, why in links if why), None)
 
 
-def check_target(target, *, written_by: str, force=False, inputs=(), keep=None, option=None) -> str | None:
+def check_target(
+    target, *, written_by: str, force=False, inputs=(), keep=None, keep_inside=False, option=None
+) -> str | None:
     """Raise :class:`OutputError` unless folder ``target`` may be (re)written by ``written_by``.
 
     ``inputs`` are folders the command reads; ``keep`` maps further folders never replaced to
-    what they are. First restores a folder whose replacement was killed half-way (see the module).
-    Returns what ``force`` replaces (path and why) when the folder is not ``written_by``'s own.
+    what they are (with ``keep_inside``, nothing is written inside them either). First restores
+    a folder whose replacement was killed half-way (see the module). Returns what ``force``
+    replaces (path and why) when the folder is not ``written_by``'s own.
     """
     label, path = _label(target, option), Path(target)
     if path.is_symlink() and not path.exists():
         raise OutputError(f"{label}: a symbolic link to {os.readlink(path)}, which does not exist")
     real = real_path(path)
-    unchecked = _check_guarded(real, label, inputs, keep)
+    unchecked = _check_guarded(real, label, inputs, keep, keep_inside)
     restore(real.parent, real.name)
     if not real.exists():
         above = next(p for p in real.parents if p.exists())
@@ -248,15 +251,28 @@ def _locked(folder: Path, shared: bool, label: str = ""):
         os.close(fd)
 
 
+#: Folders this process holds under :func:`reading`.
+_READ: set[Path] = set()
+
+
 @contextlib.contextmanager
 def reading(folder):
     """Shared locks on ``folder``, on what its symbolic links lead to, and on every folder above
-    them while a command reads it: no command replaces any of them, or a folder that holds one."""
-    read = [real_path(folder), *linked_from(folder)[0]]
+    them while a command reads it: no command replaces any of them, or a folder that holds one.
+    A folder that an outer ``reading`` holds already is neither walked nor locked again."""
+    real = real_path(folder)
+    if real in _READ:
+        yield
+        return
+    read = [real, *linked_from(folder)[0]]
     with contextlib.ExitStack() as stack:
         for path in dict.fromkeys(p for r in read for p in (r, *r.parents)):  # each folder once
             stack.enter_context(_locked(path, shared=True, label=str(path)))
-        yield
+        _READ.add(real)
+        try:
+            yield
+        finally:
+            _READ.discard(real)
 
 
 class OutputFolder(contextlib.AbstractContextManager):  # its __enter__ returns it
@@ -273,11 +289,27 @@ class OutputFolder(contextlib.AbstractContextManager):  # its __enter__ returns 
     """
 
     def __init__(
-        self, target, written_by: str, *, force=False, inputs=(), keep=None, option=None, checksums=False
+        self,
+        target,
+        written_by: str,
+        *,
+        force=False,
+        inputs=(),
+        keep=None,
+        keep_inside=False,
+        option=None,
+        checksums=False,
     ):
         self.target, self.written_by = Path(target), written_by
         self.checksums, self.committed = checksums, False
-        self._check = dict(written_by=written_by, force=force, inputs=tuple(inputs), keep=keep, option=option)
+        self._check = dict(
+            written_by=written_by,
+            force=force,
+            inputs=tuple(inputs),
+            keep=keep,
+            keep_inside=keep_inside,
+            option=option,
+        )
         check_target(self.target, **self._check)
         self.real, self.label = real_path(self.target), _label(target, option)
         clear_abandoned(self.real.parent, self.real.name)  # only once the target is accepted

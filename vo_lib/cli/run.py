@@ -22,7 +22,6 @@ from dataclasses import asdict, fields
 from pathlib import Path
 
 from vo_lib.arguments import UsageError
-from vo_lib.atomic import real_path
 from vo_lib.formats.poses import write_kitti_poses, write_tum
 from vo_lib.geometry import camera_poses_from_planar
 from vo_lib.outputs import OutputFolder, file_sha256, notice, reading
@@ -178,12 +177,17 @@ def run_command(
     source, load_frames = input_path(name, frames)
     out_dir = Path(out) if out else Path("runs") / default_name(name)
 
-    if out and real_path(out_dir).is_relative_to(real_path(data_dir())):  # the samples' folder, not runs'
-        raise UsageError(f"--out {out}: lies inside the sample data folder; choose another output folder")
-    keep = {data_dir(): "the sample data folder"}
+    keep = {data_dir(): "the sample data folder"}  # the samples' folder, not runs': nothing inside it
     with (
         OutputFolder(
-            out_dir, "vo_lib run", force=force, inputs=[source], keep=keep, option="--out", checksums=True
+            out_dir,
+            "vo_lib run",
+            force=force,
+            inputs=[source],
+            keep=keep,
+            keep_inside=True,
+            option="--out",
+            checksums=True,
         ) as output,
         contextlib.ExitStack() as locks,
     ):

@@ -140,6 +140,13 @@ def gate_angles(w: np.ndarray, camera: StereoCamera) -> tuple[np.ndarray, np.nda
     return tan_alpha, beta
 
 
+def match_angles(a: np.ndarray, b: np.ndarray, camera: StereoCamera) -> tuple[np.ndarray, ...]:
+    """``(tan(alpha') / tan(alpha), beta, beta')`` of matches ``a -> b``: what eq. 20 reads of them."""
+    (ta, ba), (tb, bb) = gate_angles(a, camera), gate_angles(b, camera)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return tb / ta, ba, bb
+
+
 def theta_gate_and_slope(tan_ratio, beta_a, beta_b, theta) -> tuple[np.ndarray, np.ndarray]:
     """Signed eq. 20, ``tan(alpha')/tan(alpha) - sin(gamma')/sin(gamma)``, and its slope in theta:
     only ``sin(gamma') / sin(gamma)`` depends on theta, and d/d phi of ``-sin(beta' - phi) /
@@ -153,11 +160,7 @@ def theta_gate_and_slope(tan_ratio, beta_a, beta_b, theta) -> tuple[np.ndarray, 
 def theta_gate_error(w_prev, w_curr, theta, camera: StereoCamera) -> np.ndarray:
     """``error_theta`` of eq. 20 for every match under deflection ``theta`` (zero for a true match)."""
     a, b = as_match_array("w_prev", w_prev), as_match_array("w_curr", w_curr)
-    ta, ba = gate_angles(a, camera)
-    tb, bb = gate_angles(b, camera)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        tan_ratio = tb / ta
-    return np.abs(theta_gate_and_slope(tan_ratio, ba, bb, theta)[0])
+    return np.abs(theta_gate_and_slope(*match_angles(a, b, camera), theta)[0])
 
 
 # ---------------------------------------------------------------------- eq. 21
@@ -283,7 +286,7 @@ def theta_gate_pass(
 ) -> np.ndarray:
     """eq. 20 at ``theta`` within ``k`` of each match's first-order sigma (the slope:
     :func:`theta_gate_and_slope`), and the match's own theta within ``k`` sigma of ``theta``.
-    ``angles`` are ``(tan(alpha') / tan(alpha), beta, beta')``."""
+    ``angles`` are :func:`match_angles`."""
     k2 = params.gate_sigmas**2
     e, slope = theta_gate_and_slope(*angles, theta)
     var = model.variances + var_ref
@@ -400,9 +403,7 @@ def one_point_ransac(  # noqa: PLR0915 (the algorithm's five steps read best in 
     prior_theta = None if prior is None else (float(prior.theta), float(prior.covariance[0][0]))
     h, var_h, tried_theta = search(thetas, draws[0], prior_theta, params)
     theta, var_theta = reestimate(thetas, supporters(thetas, h, var_h, params))
-    (ta, ba), (tb, bb) = gate_angles(wa, camera), gate_angles(wb, camera)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        angles = (tb / ta, ba, bb)
+    angles = match_angles(wa, wb, camera)
     theta_in = theta_gate_pass(angles, thetas, theta, var_theta, params)
     n_theta = int(np.count_nonzero(theta_in))
     diagnostics.update(hypotheses_theta=tried_theta, theta_inliers=n_theta)
