@@ -1,7 +1,5 @@
-"""Command-line arguments of ``python -m vo_lib``: errors in one line, counts checked as they parse.
-
-A bad argument is reported as one line (``PROG: error: MESSAGE``), exit status 2, without
-argparse's usage block.
+"""Command-line arguments of ``python -m vo_lib``: errors in one line (``PROG: error: MESSAGE``, exit
+status 2, without argparse's usage block), counts checked as they parse.
 """
 
 from __future__ import annotations
@@ -15,10 +13,7 @@ class UsageError(ValueError):
 
 
 class OneLineParser(argparse.ArgumentParser):
-    """argparse with errors in one line (no usage block): ``PROG: error: MESSAGE``, exit 2.
-
-    A script that reports its errors itself sets :attr:`raises` (in a subclass): the message is
-    then raised as that exception instead."""
+    """argparse with errors in one line, exit 2 (or raised as :attr:`raises`, set by a subclass)."""
 
     #: The exception class an error is raised as, or None to print it and exit with status 2.
     raises: type[Exception] | None = None
@@ -35,14 +30,12 @@ class OneLineParser(argparse.ArgumentParser):
 
 
 def one_line(text) -> str:
-    """``text`` (an exception, a message) as one line: its lines and runs of spaces joined by one
-    space, so that every error the package reports takes one line."""
+    """``text`` (an exception, a message) as one line: lines and runs of spaces joined by one space."""
     return " ".join(str(text).split())
 
 
 def count_at_least(minimum: int, what: str, maximum: int | None = None):
-    """An argparse ``type`` reading a whole number ``>= minimum`` (and ``<= maximum`` if given);
-    ``what`` names it in errors."""
+    """An argparse ``type``: a whole number ``>= minimum`` (and ``<= maximum``), ``what`` in errors."""
     bounds = f">= {minimum}" if maximum is None else f"from {minimum} to {maximum}"
 
     def parse(text: str) -> int:

@@ -1,15 +1,12 @@
 """Files and folders put in place whole, and what a killed process left finished or cleared.
 
-A folder is written into a temporary sibling ``.NAME.vo_lib-PID-HOST-RANDOM.tmp`` (its contents
-complete, the marker of :mod:`vo_lib.outputs` last) and put in place by :func:`swap_in`. On Linux
-the finished folder and the previous ``NAME`` are swapped in one step (``renameat2`` with
-``RENAME_EXCHANGE``): at every moment ``NAME`` is the previous folder or the new one, whole. Where
-folders cannot be swapped, the previous folder is first renamed to ``.NAME.vo_lib-PID-HOST-RANDOM.old``
-and the new one takes its name; if the process is killed between the two renames,
-:func:`restore` (run by the next command beside it) renames the ``.old`` folder back. An ``.old``
-folder is deleted only once ``NAME`` exists again; other temporaries of processes that no longer
-run are deleted by the next command that goes on to write ``NAME`` (:func:`clear_abandoned`), not by
-one that refuses to. A file is replaced whole by :func:`write_atomic`.
+A folder is written into a temporary sibling ``.NAME.vo_lib-PID-HOST-RANDOM.tmp`` and put in place
+by :func:`swap_in`: on Linux swapped with the previous ``NAME`` in one step (``renameat2``,
+``RENAME_EXCHANGE``), so ``NAME`` is always the previous folder or the new one, whole. Elsewhere the
+previous folder is first renamed to ``.NAME.vo_lib-PID-HOST-RANDOM.old``; a kill between the two
+renames is undone by :func:`restore` (run by the next command beside it). Other temporaries of dead
+processes are deleted by the next command that goes on to write ``NAME`` (:func:`clear_abandoned`).
+A file is replaced whole by :func:`write_atomic`.
 """
 
 from __future__ import annotations
@@ -90,8 +87,7 @@ def _gone(pid: int) -> bool:
 
 
 def _abandoned_beside(parent: Path, name: str) -> list[tuple[os.DirEntry, str]]:
-    """(entry, kind) of every temporary that dead processes of this machine left beside ``name``
-    (a link is never one)."""
+    """(entry, kind) of every temporary (never a link) of ``name`` left by dead processes of this machine."""
     with contextlib.suppress(OSError):
         found = ((entry, _TEMPORARY.fullmatch(entry.name)) for entry in os.scandir(parent))
         return [
@@ -104,11 +100,9 @@ def _abandoned_beside(parent: Path, name: str) -> list[tuple[os.DirEntry, str]]:
 
 def restore(parent: Path, name: str) -> None:
     """Rename back an ``.old`` folder of ``name`` whose replacement was killed between its two
-    renames (``name`` is missing, or an empty folder made since, which holds nothing to lose)."""
+    renames (``name`` missing, or an empty folder made since)."""
     original = Path(parent, name)
-    for entry, kind in _abandoned_beside(parent, name):
-        if kind != "old":
-            continue
+    for entry in (entry for entry, kind in _abandoned_beside(parent, name) if kind == "old"):
         with contextlib.suppress(OSError):  # only an empty folder goes (not a file, a link or a full one)
             os.rmdir(original)
         if not os.path.lexists(original):
@@ -117,8 +111,7 @@ def restore(parent: Path, name: str) -> None:
 
 
 def clear_abandoned(parent: Path, name: str) -> None:
-    """Delete the temporaries of ``name`` left in ``parent`` by dead processes of this machine
-    (those of other names are left alone; run :func:`restore` first)."""
+    """Delete the temporaries of ``name`` left in ``parent`` by dead processes (after :func:`restore`)."""
     abandoned = [entry for entry, _ in _abandoned_beside(parent, name)]
     for entry in abandoned:  # what cannot go is left
         if entry.is_dir(follow_symlinks=False):
@@ -147,8 +140,7 @@ def _exchange(a: Path, b: Path) -> bool:
 
 def swap_in(complete: Path, target: Path) -> Path | None:
     """Put the whole folder ``complete`` (a ``.tmp`` sibling) at ``target``; returns the temporary
-    that now holds what ``target`` held, if anything, for :func:`remove_replaced`. No moment exists
-    where a kill loses both (see the module)."""
+    that now holds what ``target`` held, if anything, for :func:`remove_replaced`."""
     try:
         os.rename(complete, target)  # no target, or an empty folder
         return None
@@ -166,8 +158,7 @@ def swap_in(complete: Path, target: Path) -> Path | None:
 
 @contextlib.contextmanager
 def signals_to(handler):
-    """SIGINT and SIGTERM handled by ``handler`` meanwhile, the previous handlers put back after.
-    Python sets handlers, and runs them, in the main thread only: in another thread nothing changes."""
+    """SIGINT and SIGTERM handled by ``handler`` meanwhile (in the main thread; elsewhere nothing changes)."""
     main_thread = threading.current_thread() is threading.main_thread()
     previous = {kind: signal.signal(kind, handler) for kind in (signal.SIGINT, signal.SIGTERM) if main_thread}
     defaults = {signal.SIGINT: signal.default_int_handler, signal.SIGTERM: signal.SIG_DFL}
@@ -180,8 +171,7 @@ def signals_to(handler):
 
 @contextlib.contextmanager
 def _signals_held():
-    """SIGINT and SIGTERM held back meanwhile and raised again after (whichever thread a signal
-    reached: Python runs its handlers in the main thread; in another thread nothing is held)."""
+    """SIGINT and SIGTERM held back meanwhile and raised again after (in the main thread only)."""
     held: list[int] = []
     try:
         with signals_to(lambda signum, frame: held.append(signum)):
@@ -192,8 +182,7 @@ def _signals_held():
 
 
 def remove_replaced(replaced: Path | None, target: Path) -> None:
-    """Delete what :func:`swap_in` set aside; what is left (a signal meanwhile, a file that cannot
-    go) keeps its temporary's name, for the next command beside ``target`` to clear."""
+    """Delete what :func:`swap_in` set aside; what cannot go keeps its temporary's name (for later)."""
     if replaced is None:
         return
     try:

@@ -1,7 +1,6 @@
 """Sample sequences on demand: ``load_sequence(NAME)`` renders a named sample once into the data
-folder and loads it, ``load_sequence(PATH)`` reads a KITTI-layout folder or an ASL recording. A
-sample is written under the rules of :mod:`vo_lib.outputs` (a folder this package did not write
-is never replaced).
+folder (under the rules of :mod:`vo_lib.outputs`) and loads it; ``load_sequence(PATH)`` reads a
+KITTI-layout folder or an ASL recording.
 """
 
 from __future__ import annotations
@@ -28,8 +27,7 @@ def data_dir() -> Path:
 
 
 def real_sequence_path(name: str) -> Path | None:
-    """The folder ``name`` under ``$VO_LIB_REALDATA`` (real recordings, kept out of the repository),
-    or None when the variable is unset or the folder is not there."""
+    """The folder ``name`` under ``$VO_LIB_REALDATA`` (real recordings, not in the repository), or None."""
     root = os.environ.get("VO_LIB_REALDATA", "")
     return Path(root) / name if root and (Path(root) / name).is_dir() else None
 

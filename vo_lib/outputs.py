@@ -1,15 +1,13 @@
 """Output folders that never cost a user a file: checked first, written whole or not at all.
 
-* **A command replaces only what the same command wrote.** A folder this package wrote holds the
-  marker ``.vo_lib_output.json`` (which command wrote it and every file and folder it wrote,
-  subfolders' too) and nothing else. A new or empty folder may always be written; any other
-  folder is refused with :class:`OutputError` in one line, unless the caller passes ``force``.
-  Even then a folder is never replaced if it is, holds or lies inside the command's input or this
-  package, or if it is or holds the current folder, the home folder or the repository's ``data/`` folder.
-* **Atomic.** A folder is written into a temporary sibling, its marker last, and put in place
-  by :func:`vo_lib.atomic.swap_in`; a failed or interrupted write deletes its temporary folder.
-* **Locks.** A command that reads a folder holds a shared lock on it (:func:`reading`); a
-  replacement needs the lock exclusively.
+* **A command replaces only what the same command wrote**: a folder this package wrote holds
+  the marker ``.vo_lib_output.json`` (its command, every file and folder it wrote) and nothing
+  else. New or empty folders may be written; any other is :class:`OutputError` unless ``force``.
+  Never replaced, even so: the input, this package or what lies inside them, and folders that
+  are or hold the current folder, the home folder or the repository's ``data/``.
+* **Atomic**: written into a temporary sibling, marker last, put in place by
+  :func:`vo_lib.atomic.swap_in`; a failed or interrupted write deletes the temporary.
+* **Locks**: a reader holds a shared lock (:func:`reading`); a replacement needs it exclusively.
 * **Permissions follow the umask.**
 """
 
@@ -35,16 +33,14 @@ from vo_lib.atomic import (
     write_atomic,
 )
 
-#: The signals that stopped the command, as the exceptions the command line's handlers raised
-#: (Ctrl-C's ``KeyboardInterrupt``, its own for SIGTERM): one that landed where it is dropped (a
-#: finalizer, a callback from compiled code) still stops the commit.
+#: The signals that stopped the command, as the exceptions its handlers raised: one dropped where it
+#: landed (a finalizer, a callback from compiled code) still stops the commit.
 INTERRUPTED: list[BaseException] = []
 MARKER = ".vo_lib_output.json"
 #: The contents a marker of :func:`claim_folder` lists: whatever the command keeps there.
 ANY_CONTENTS = "*"
 PACKAGE = Path(__file__).resolve().parent
-#: Folders and files looked through for links under an input and the folders it links to: what
-#: lies in a linked folder is guarded anyway (an output may not lie inside it).
+#: Entries looked through for links under an input and the folders it links to.
 MAX_WALKED = 100_000
 #: The repository's sample data folder (in a checkout): never replaced, even with ``force``.
 REPOSITORY_DATA = PACKAGE.parent / "data"
@@ -59,8 +55,8 @@ def _label(target, option: str | None) -> str:
 
 
 def _contains(outer: Path, inner: Path) -> bool:
-    """``outer`` is ``inner`` or one of its parents, by name or as the same folder under another
-    name (a bind mount, a case-insensitive file system)."""
+    """``outer`` is ``inner`` or one of its parents, by name or by inode (a bind mount, a
+    case-insensitive file system)."""
     same = (inode(outer) or "none") in {inode(p) for p in (inner, *inner.parents)}
     return outer == inner or outer in inner.parents or same
 
@@ -81,8 +77,7 @@ def file_checksums(folder) -> dict[str, str]:
 
 
 def entries(folder) -> list[str]:
-    """Every file and folder under ``folder`` (links not followed) but the marker, by path
-    relative to it: what a marker's ``contents`` lists, so that a file added in a subfolder shows."""
+    """Every file and folder under ``folder`` (links not followed) but the marker, by relative path."""
     folder = Path(folder)
     found = [
         (Path(root) / name).relative_to(folder).as_posix()
@@ -93,8 +88,7 @@ def entries(folder) -> list[str]:
 
 
 def read_marker(folder) -> dict | None:
-    """The marker of ``folder``, or None if it has none or it cannot be read (or is no file: a pipe
-    would block)."""
+    """The marker of ``folder``, or None if it is missing, unreadable or no file (a pipe would block)."""
     path = Path(folder) / MARKER
     try:
         data = json.loads(path.read_text(encoding="utf-8")) if path.is_file() else None
@@ -104,8 +98,7 @@ def read_marker(folder) -> dict | None:
 
 
 def foreign_content(folder: Path, written_by: str) -> str | None:
-    """None if ``folder`` is empty or holds only what ``written_by`` wrote there (the names its
-    marker lists, with what is in them); else why not, in a few words."""
+    """None if ``folder`` is empty or holds only what ``written_by`` wrote there; else why not."""
     try:
         names = set(os.listdir(folder))
     except OSError as exc:
@@ -128,9 +121,8 @@ def foreign_content(folder: Path, written_by: str) -> str | None:
 
 
 def linked_from(folder) -> tuple[list[Path], str | None]:
-    """Where the symbolic links under ``folder`` lead (resolved): what an input reads through them,
-    and, through a link to a folder, what that folder's own links lead to, and so on; and, where
-    not every link could be looked at, why not (else None)."""
+    """Where the symbolic links under ``folder`` lead, and those under the folders they lead to, and
+    so on; and why not every link could be looked at (else None)."""
     found, seen, unlisted = [], set(), []
     to_walk, budget = [Path(folder)], MAX_WALKED
     while to_walk and budget > 0:  # a link to / is not walked through the whole file system
@@ -171,9 +163,8 @@ def check_target(
     """Raise :class:`OutputError` unless folder ``target`` may be (re)written by ``written_by``.
 
     ``inputs`` are folders the command reads; ``keep`` maps further folders never replaced to
-    what they are (with ``keep_inside``, nothing is written inside them either). First restores
-    a folder whose replacement was killed half-way (see the module). Returns what ``force``
-    replaces (path and why) when the folder is not ``written_by``'s own.
+    what they are (with ``keep_inside``, nor written inside). Restores a folder whose replacement
+    was killed half-way. Returns what ``force`` replaces (path and why), if anything.
     """
     label, path = _label(target, option), Path(target)
     if path.is_symlink() and not path.exists():
@@ -195,39 +186,33 @@ def check_target(
         )
     why = foreign_content(real, written_by)
     in_data = _contains(REPOSITORY_DATA.resolve(), real)  # beside the samples: tracked fixtures
-    if why is not None and (in_data or not force):  # a folder the user did not name has no --force
-        where = "lies inside the sample data folder (no --force there)" if in_data else "exists"
-        fix = (
+    if why is not None and in_data:
+        raise OutputError(
+            f"{label}: the folder lies inside the sample data folder (no --force there) and {why}; "
             "choose another output folder"
-            if in_data
-            else "choose another folder, or add --force to replace it"
-            if option
-            else "move it away"
         )
-        raise OutputError(f"{label}: the folder {where} and {why}; {fix}")
+    if why is not None and not force:  # a folder the user did not name has no --force
+        fix = "choose another folder, or add --force to replace it" if option else "move it away"
+        raise OutputError(f"{label}: the folder exists and {why}; {fix}")
     return None if why is None else f"{real} ({why})"
 
 
-def claim_folder(target, written_by: str, *, force: bool = False, option: str | None = None) -> Path:
-    """Make ``target`` a folder that ``written_by`` keeps and updates over many runs (a build
-    folder with its caches): new, empty, or claimed by it before (``force``: any other, under the
-    rules of :func:`check_target`). Creates and marks it; returns its resolved path."""
-    replacing = check_target(target, written_by=written_by, force=force, option=option)
+def claim_folder(target, written_by: str, *, option: str | None = None) -> Path:
+    """Create and mark ``target``, a folder that ``written_by`` updates over many runs (a build
+    folder), under the rules of :func:`check_target`; returns its resolved path."""
+    check_target(target, written_by=written_by, option=option)
     real = real_path(target)
     try:
         real.mkdir(parents=True, exist_ok=True)
         write_atomic(real / MARKER, json.dumps({"written_by": written_by, "contents": ANY_CONTENTS}) + "\n")
     except OSError as exc:
         raise OutputError(f"{_label(target, option)}: cannot write there ({exc.strerror or exc})") from None
-    if replacing:
-        notice(f"--force: claimed {replacing}; what it holds may be overwritten")
     return real
 
 
 @contextlib.contextmanager
 def _locked(folder: Path, shared: bool, label: str = ""):
-    """Hold a lock on ``folder`` (nothing where it is missing or cannot be locked); an exclusive
-    lock that another command holds is :class:`OutputError`."""
+    """Hold a lock on ``folder`` (if it can be); a lock another command holds is :class:`OutputError`."""
     try:
         import fcntl
 
@@ -257,9 +242,8 @@ _READ: set[Path] = set()
 
 @contextlib.contextmanager
 def reading(folder):
-    """Shared locks on ``folder``, on what its symbolic links lead to, and on every folder above
-    them while a command reads it: no command replaces any of them, or a folder that holds one.
-    A folder that an outer ``reading`` holds already is neither walked nor locked again."""
+    """Shared locks on ``folder``, on what its links lead to and on every folder above them while a
+    command reads it (none is replaced meanwhile); a folder an outer ``reading`` holds is skipped."""
     real = real_path(folder)
     if real in _READ:
         yield
@@ -276,10 +260,10 @@ def reading(folder):
 
 
 class OutputFolder(contextlib.AbstractContextManager):  # its __enter__ returns it
-    """A folder written whole: checked on entry, filled in :attr:`path` (a temporary sibling), put
-    in place by :meth:`commit`; on any exception (or without a commit) nothing is left behind.
-    With ``checksums`` the marker records every file's sha256, and the folder is replaced later
-    only while every file is as written.
+    """A folder written whole: checked on entry (``check`` as :func:`check_target` takes it),
+    filled in :attr:`path` (a temporary sibling), put in place by :meth:`commit`; on any exception
+    (or without a commit) nothing is left behind. With ``checksums`` the marker records every
+    file's sha256, and the folder is replaced later only while every file is as written.
 
     ::
 
@@ -288,30 +272,12 @@ class OutputFolder(contextlib.AbstractContextManager):  # its __enter__ returns 
             out.commit(seed=0)
     """
 
-    def __init__(
-        self,
-        target,
-        written_by: str,
-        *,
-        force=False,
-        inputs=(),
-        keep=None,
-        keep_inside=False,
-        option=None,
-        checksums=False,
-    ):
+    def __init__(self, target, written_by: str, *, checksums=False, **check):
         self.target, self.written_by = Path(target), written_by
         self.checksums, self.committed = checksums, False
-        self._check = dict(
-            written_by=written_by,
-            force=force,
-            inputs=tuple(inputs),
-            keep=keep,
-            keep_inside=keep_inside,
-            option=option,
-        )
+        self._check = dict(written_by=written_by, **check)
         check_target(self.target, **self._check)
-        self.real, self.label = real_path(self.target), _label(target, option)
+        self.real, self.label = real_path(self.target), _label(target, check.get("option"))
         clear_abandoned(self.real.parent, self.real.name)  # only once the target is accepted
         with _locked(self.real, shared=False, label=self.label):  # fail now, not after the work
             pass
@@ -325,8 +291,7 @@ class OutputFolder(contextlib.AbstractContextManager):  # its __enter__ returns 
             raise OutputError(f"{self.label}: cannot write there ({exc.strerror or exc})") from None
 
     def commit(self, **details) -> Path:
-        """Write the marker (last: it says the folder is whole), check the target again and put
-        the folder in place; returns the target."""
+        """Write the marker (last: the folder is whole), check again, put it in place; returns the target."""
         if INTERRUPTED:
             raise INTERRUPTED[0]
         marker = {"written_by": self.written_by, "contents": entries(self.path), **details}

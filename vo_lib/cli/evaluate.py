@@ -1,7 +1,5 @@
-"""``python -m vo_lib evaluate``: an estimated trajectory against ground truth in any common format.
-
-The figures are :mod:`vo_lib.evaluation`'s; the files are read by :mod:`vo_lib.formats`. Bad
-arguments and bad input print one line and exit with status 2 (:class:`~vo_lib.arguments.UsageError`).
+"""``python -m vo_lib evaluate``: an estimated trajectory against ground truth in any common format
+(figures of :mod:`vo_lib.evaluation`, files read by :mod:`vo_lib.formats`).
 """
 
 from __future__ import annotations
@@ -19,17 +17,15 @@ from vo_lib.outputs import MARKER, file_sha256, read_marker
 
 
 def run_marker(est: str) -> dict:
-    """The marker of the ``run`` output that holds ``est``, if ``est`` is still as that run wrote
-    it (the checksum the marker records); else an empty dict."""
+    """The marker of the ``run`` output holding ``est`` if ``est`` is as that run wrote it; else {}."""
     marker = read_marker(Path(est).parent) or {}
     files = marker.get("files") if marker.get("written_by") == "vo_lib run" else None
     return marker if isinstance(files, dict) and files.get(Path(est).name) == file_sha256(est) else {}
 
 
 def check_against_its_run(gt: str, est: str, marker: dict) -> None:
-    """Refuse a ``--gt`` that changed since the run that wrote ``--est`` (``marker``:
-    :func:`run_marker`) took its errors from it, or a run whose calibration changed since; say when
-    ``--gt`` is another file than that run's truth."""
+    """Refuse a ``--gt`` or a calibration changed since the run that wrote ``--est`` (``marker``)
+    used them; say when ``--gt`` is another file than that run's truth."""
     truth = marker.get("truth")
     if not isinstance(truth, dict):
         return
@@ -56,8 +52,8 @@ def check_against_its_run(gt: str, est: str, marker: dict) -> None:
 def _associated(
     truth, gt: str, est: str, times, E: np.ndarray, marker: dict
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Indices ``(i_est, i_gt)`` of the poses compared: associated by timestamp where both files
-    carry them (as evo does), else one to one, the counts equal."""
+    """Indices ``(i_est, i_gt)`` of the poses compared: by timestamp where both files carry them (as
+    evo does), else one to one."""
     if truth.times is not None and times is None:  # a run's trajectory.tum beside it has the times
         print(f"--est {est} has no timestamps: its poses are paired with --gt's one to one, in order")
     if truth.times is None or times is None:
@@ -88,11 +84,9 @@ def _associated(
 
 def recording_of(gt: str, extrinsic_of: str | None, kitti: bool) -> str | None:
     """The ASL recording whose calibration moves ``--gt`` into its rectified left camera:
-    ``extrinsic_of`` if given, else the ``mav0`` folder that holds the ``--gt`` file among its
-    sensors' (as ``mav0/state_groundtruth_estimate0/data.csv``; said in one line), else None: the
-    truth is taken as given. KITTI poses, and files in a folder this package wrote (``run``'s
-    ``trajectory.tum``, ``convert``'s ``poses.txt``), are a camera's already and never moved
-    (``extrinsic_of`` with one of those is refused)."""
+    ``extrinsic_of``, else the ``mav0`` folder holding the ``--gt`` file among its sensors' (said in
+    one line), else None (taken as given). KITTI poses and files this package wrote are a camera's
+    already: never moved (``extrinsic_of`` with one is refused)."""
     from vo_lib.formats.euroc import mav0_of
 
     path = Path(gt).resolve()
@@ -113,8 +107,7 @@ def recording_of(gt: str, extrinsic_of: str | None, kitti: bool) -> str | None:
 
 
 def _say_if_units_differ(truth_xyz: np.ndarray, est_xyz: np.ndarray) -> None:
-    """A note where the two paths differ in length a hundredfold or more (one file in millimetres,
-    say): every error printed below then measures the units, not the estimate."""
+    """A note where the two paths' lengths differ a hundredfold or more (one in millimetres?)."""
     truth_m, est_m = (float(np.sum(np.linalg.norm(np.diff(p, axis=0), axis=1))) for p in (truth_xyz, est_xyz))
     if min(truth_m, est_m) > 0 and max(truth_m, est_m) >= 100 * min(truth_m, est_m):
         print(
@@ -125,7 +118,7 @@ def _say_if_units_differ(truth_xyz: np.ndarray, est_xyz: np.ndarray) -> None:
 
 def _to_camera(truth, gt: str, extrinsic_of: str | None) -> np.ndarray:
     """``X``, the rectified left camera in the frame ``--gt`` tracks (:func:`recording_of`), or the
-    identity where the truth is taken as given (said in one line when it may be a body's)."""
+    identity (said when the truth may be a body's)."""
     from vo_lib.formats.euroc import body_to_rectified_camera, tracked_to_camera
 
     if truth.times is None and extrinsic_of is not None:
@@ -175,12 +168,9 @@ def evaluate_command(gt: str, est: str, segments=None, extrinsic_of: str | None 
     """Print the 3-D errors of an estimate (KITTI or TUM) against ground truth in any format of
     :mod:`vo_lib.formats.groundtruth`: final error, ATE (SE(3), Sim(3)), RPE and KITTI's errors.
 
-    Where both files carry timestamps they are associated as evo does; otherwise the counts must
-    be equal. ``segments`` are lengths in metres, as ``--segments`` parsed them (default: those
-    the sequence allows, labelled). A truth of an ASL recording's body frame (``extrinsic_of``,
-    or the recording holding the ``--gt`` file: :func:`recording_of`) is moved into its rectified
-    left camera, the tracked frame of a ``sensor.yaml`` beside ``--gt`` taken into account; for
-    position-only truth that frame is the lever arm carried along the estimated poses.
+    ``segments``: lengths in metres (default: those the sequence allows). A truth of an ASL
+    recording's body (:func:`recording_of`) is moved into its rectified left camera, through the
+    ``sensor.yaml`` beside ``--gt``; for positions only, as a lever arm carried along the estimate.
     """
     lengths = None if segments is None else tuple(segments)
     try:

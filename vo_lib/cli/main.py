@@ -1,11 +1,9 @@
-"""Command line of the collection: ``python -m vo_lib COMMAND``.
+"""Command line of the collection: ``python -m vo_lib COMMAND`` (run, evaluate, convert, generate,
+bench, sweep; each has its own ``--help``).
 
-The commands (run, evaluate, convert, generate, bench, sweep) are listed by ``--help``, each with
-its own ``--help``.
-
-Every problem with the input or the arguments prints one line on stderr and exits with status 2;
-Ctrl-C (SIGINT) or SIGTERM removes what was half-written, prints one line and exits with 130 or
-143. Output folders follow the rules of :mod:`vo_lib.outputs` (``--out``, ``--force``).
+A bad input or argument prints one line on stderr and exits with status 2; Ctrl-C (SIGINT) or
+SIGTERM removes what was half-written, prints one line and exits with 130 or 143. Output folders
+follow :mod:`vo_lib.outputs` (``--out``, ``--force``).
 """
 
 from __future__ import annotations
@@ -105,16 +103,20 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND", parser_class=plain)
     from vo_lib.sim.samples import SAMPLES
 
-    run = sub.add_parser(
+    def command(name: str, help: str, description: str, *examples: str, listing: str = ""):
+        """A subcommand, its description wrapped by wrap() and then ``listing``, its examples as written."""
+        return sub.add_parser(
+            name, help=help, description=wrap(description) + listing, epilog=example(*examples)
+        )
+
+    run = command(
         "run",
-        help="run the stereo visual odometry pipeline on a sample, a KITTI-layout folder or an ASL recording",
-        description=wrap(
-            "Run [Zhao]'s stereo visual odometry on a sequence and print a timing table and, "
-            "where the sequence has ground truth, its errors. A named sample is rendered into data/ on "
-            "first use (a minute or so) and reused after. Writes into --out (default runs/NAME): "
-            "poses.txt (KITTI), trajectory.tum (TUM), timings.csv, diagnostics.csv and trajectory.png."
-        ),
-        epilog=example("run --sequence outdoor_free --out runs/yard"),
+        "run the stereo visual odometry pipeline on a sample, a KITTI-layout folder or an ASL recording",
+        "Run [Zhao]'s stereo visual odometry on a sequence and print a timing table and, "
+        "where the sequence has ground truth, its errors. A named sample is rendered into data/ on "
+        "first use (a minute or so) and reused after. Writes into --out (default runs/NAME): "
+        "poses.txt (KITTI), trajectory.tum (TUM), timings.csv, diagnostics.csv and trajectory.png.",
+        "run --sequence outdoor_free --out runs/yard",
     )
     run.add_argument(
         "--sequence",
@@ -136,17 +138,13 @@ def build_parser() -> argparse.ArgumentParser:
         help="motion model: planar circular motion (the crawler), full 6-DoF (a car), or auto (default:"
         " the one that fits the sequence's vehicle)",
     )
-    ev = sub.add_parser(
+    ev = command(
         "evaluate",
-        help="ATE, RPE and KITTI segment errors of an estimate against ground truth",
-        description=wrap(
-            "Print the absolute trajectory error, the relative pose error and KITTI's segment "
-            "errors of an estimated trajectory against ground truth (KITTI, TUM, EuRoC CSV or position "
-            "files), associated by timestamp where both carry them, else pose by pose."
-        ),
-        epilog=example(
-            "evaluate --gt data/indoor_linear/poses.txt --est runs/indoor_linear/poses.txt --segments 1,2"
-        ),
+        "ATE, RPE and KITTI segment errors of an estimate against ground truth",
+        "Print the absolute trajectory error, the relative pose error and KITTI's segment "
+        "errors of an estimated trajectory against ground truth (KITTI, TUM, EuRoC CSV or position "
+        "files), associated by timestamp where both carry them, else pose by pose.",
+        "evaluate --gt data/indoor_linear/poses.txt --est runs/indoor_linear/poses.txt --segments 1,2",
     )
     ev.add_argument(
         "--gt", required=True, help="ground truth: KITTI poses, TUM, EuRoC CSV, or positions (t x y z)"
@@ -164,26 +162,22 @@ def build_parser() -> argparse.ArgumentParser:
         type=_segments,
         help="comma-separated segment lengths in metres (default: KITTI's 100..800)",
     )
-    conv = sub.add_parser(
+    conv = command(
         "convert",
-        help="write a rectified copy of a stereo rig's recording (ASL layout) in the KITTI layout",
-        description=wrap(
-            "Undistort and rectify a recording in EuRoC's ASL layout (the folder holding mav0, or mav0) "
-            "and write it in the KITTI odometry layout, with its ground truth in the rectified left camera."
-        ),
-        epilog=example("convert /data/MH_01_easy --to kitti --out /tmp/mh01"),
+        "write a rectified copy of a stereo rig's recording (ASL layout) in the KITTI layout",
+        "Undistort and rectify a recording in EuRoC's ASL layout (the folder holding mav0, or mav0) "
+        "and write it in the KITTI odometry layout, with its ground truth in the rectified left camera.",
+        "convert /data/MH_01_easy --to kitti --out /tmp/mh01",
     )
     conv.add_argument("sequence", help="the recording (ASL layout) or any sequence folder")
     conv.add_argument("--to", choices=("kitti",), default="kitti", help="layout to write (kitti)")
     output(conv, "new, empty, or written by vo_lib", required=True)
-    gen = sub.add_parser(
+    gen = command(
         "generate",
-        help="render a named sample sequence in the KITTI layout",
-        description=wrap(
-            "Render a named sample (stereo images, ground truth, odometry, manifest) into a "
-            "folder in the KITTI odometry layout. Samples: " + ", ".join(sorted(SAMPLES)) + "."
-        ),
-        epilog=example("generate indoor_free --out /tmp/indoor_free --resolution 320x240"),
+        "render a named sample sequence in the KITTI layout",
+        "Render a named sample (stereo images, ground truth, odometry, manifest) into a "
+        "folder in the KITTI odometry layout. Samples: " + ", ".join(sorted(SAMPLES)) + ".",
+        "generate indoor_free --out /tmp/indoor_free --resolution 320x240",
     )
     gen.add_argument("name", choices=sorted(SAMPLES), help="which sample")
     output(gen, "default: data/NAME")
@@ -200,31 +194,25 @@ def build_parser() -> argparse.ArgumentParser:
         "1242x375 for road_drive)",
     )
     width = max(map(len, BENCH_HELP))
-    bench = sub.add_parser(
+    bench = command(
         "bench",
-        help="time one part of the library against its baseline",
-        description=wrap(
-            "Time one part of the library against its baseline and print the table. The benchmarks, "
-            "with how long each runs on a 2-core machine:"
-        )
-        + "\n\n"
-        + "\n".join(
-            f"  {name:<{width}}  {what} ({how_long})" for name, (what, how_long) in BENCH_HELP.items()
-        ),
-        epilog=example("bench geometry"),
+        "time one part of the library against its baseline",
+        "Time one part of the library against its baseline and print the table. The benchmarks, "
+        "with how long each runs on a 2-core machine:",
+        "bench geometry",
+        listing="\n\n"
+        + "\n".join(f"  {name:<{width}}  {what} ({how})" for name, (what, how) in BENCH_HELP.items()),
     )
     bench.add_argument("name", choices=sorted(BENCHES), metavar="NAME", help="which benchmark (listed above)")
     from vo_lib.cli.sweep import SWEEPS
 
-    sweep = sub.add_parser(
+    sweep = command(
         "sweep",
-        help="a paper's statistic over many seeds, serially or on Dask",
-        description=wrap(
-            "Run one experiment over many seeds, one task per seed, on a local Dask cluster (one "
-            "worker per core) or on a running scheduler; write results.csv and print each figure's "
-            "mean, spread and 95 % interval over the seeds."
-        ),
-        epilog=example("sweep lap --seeds 50 --workers 2"),
+        "a paper's statistic over many seeds, serially or on Dask",
+        "Run one experiment over many seeds, one task per seed, on a local Dask cluster (one "
+        "worker per core) or on a running scheduler; write results.csv and print each figure's "
+        "mean, spread and 95 % interval over the seeds.",
+        "sweep lap --seeds 50 --workers 2",
     )
     sweep.add_argument("name", choices=sorted(SWEEPS), help="which experiment")
     sweep.add_argument(  # 100,000 tasks take hours on a cluster; more is a typo
@@ -241,8 +229,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 class _Stopped(BaseException):
-    """Raised by the SIGTERM handler (its one argument the signal), so that ``finally`` blocks
-    remove half-written output."""
+    """Raised by the SIGTERM handler (its argument the signal): ``finally`` blocks clean up."""
 
 
 def _stop(signum, frame):
@@ -266,8 +253,7 @@ def _signal_inside(exc: BaseException) -> BaseException | None:
 
 
 def _os_error(exc: OSError, out) -> str:
-    """What went wrong, named by what the user gave: a file of a temporary output folder (removed
-    by now) is named by ``--out``, and a full disk is said in words."""
+    """What went wrong, named by what the user gave (``--out`` for a file of a temporary output folder)."""
     why = "no space left on device" if exc.errno == errno.ENOSPC else (exc.strerror or str(exc))
     if exc.filename and ".vo_lib-" not in str(exc.filename):
         return f"{exc.filename}: {why}"
@@ -317,8 +303,8 @@ def _dispatch(args) -> None:
 
 
 def _run_parsed(args, command: str) -> int:
-    """Run the parsed command; every failure the user can act on is one line on stderr and its
-    exit status (2; 141 when whatever read the output closed the pipe)."""
+    """Run the parsed command; a failure the user can act on is one line on stderr and status 2 (141
+    when whatever read the output closed the pipe)."""
     from vo_lib.formats.poses import TrajectoryError
     from vo_lib.outputs import OutputError
 
@@ -343,13 +329,13 @@ def _run_parsed(args, command: str) -> int:
     return 0
 
 
-@contextlib.contextmanager
-def _signals():
-    """SIGTERM and SIGINT handled by :func:`_stop` meanwhile (:func:`vo_lib.atomic.signals_to`),
-    unraisable signals kept quiet; all put back after."""
+def main(argv: list[str] | None = None) -> int:
+    """Parse ``argv`` and run the command, SIGINT and SIGTERM handled by :func:`_stop`; returns the
+    exit status (argparse exits with 2 itself)."""
     from vo_lib.atomic import signals_to
     from vo_lib.outputs import INTERRUPTED
 
+    command = "python -m vo_lib"
     INTERRUPTED.clear()
     # our interrupts, where a callback from compiled code reports them instead of raising: dropped
     previous_hook = sys.unraisablehook
@@ -358,30 +344,22 @@ def _signals():
     )
     try:
         with signals_to(_stop):
-            yield
-    finally:
-        sys.unraisablehook = previous_hook
-
-
-def main(argv: list[str] | None = None) -> int:
-    """Parse ``argv`` and run the command; returns the exit status (argparse exits with 2 itself)."""
-    command = "python -m vo_lib"
-    with _signals():
-        try:
             parser = build_parser()
             args = parser.parse_args(argv)
             command = f"{parser.prog} {args.command}"
             return _run_parsed(args, command)
-        except (KeyboardInterrupt, _Stopped) as stop:
-            signum = signal.Signals(stop.args[0]) if isinstance(stop, _Stopped) else signal.SIGINT
-            how = "interrupted (Ctrl-C)" if signum == signal.SIGINT else f"stopped by {signum.name}"
-            print(f"{command}: {how}; nothing half-written is left", file=sys.stderr)
-            return 128 + signum
+    except (KeyboardInterrupt, _Stopped) as stop:
+        signum = signal.Signals(stop.args[0]) if isinstance(stop, _Stopped) else signal.SIGINT
+        how = "interrupted (Ctrl-C)" if signum == signal.SIGINT else f"stopped by {signum.name}"
+        print(f"{command}: {how}; nothing half-written is left", file=sys.stderr)
+        return 128 + signum
+    finally:
+        sys.unraisablehook = previous_hook
 
 
 def _late_stop(signum, frame) -> None:
     """A signal once the command has finished, while the interpreter shuts down: one line, not a
-    silent end by the signal (what the command wrote is already whole)."""
+    silent end."""
     with contextlib.suppress(OSError, ValueError):  # stdout or stderr closed by then
         sys.stdout.flush()
         os.write(
@@ -392,8 +370,8 @@ def _late_stop(signum, frame) -> None:
 
 @atexit.register  # registered on import, before any library's: it runs after all of theirs
 def _ignore_signals_in_teardown() -> None:
-    """After the last exit function only the interpreter's teardown is left, where Python runs no
-    signal handler: a signal would end a finished command silently, as killed. It is ignored."""
+    """Signals ignored after the last exit function: in the teardown Python runs no handler, and a
+    signal would end a finished command silently, as killed."""
     if signal.getsignal(signal.SIGINT) is _late_stop:  # a command that finished (see entry)
         for kind in (signal.SIGINT, signal.SIGTERM):
             signal.signal(kind, signal.SIG_IGN)

@@ -1,13 +1,9 @@
 """``python -m vo_lib run`` and ``python -m vo_lib convert``: the pipeline as a command.
 
-``run`` writes, into ``--out`` (default ``runs/NAME``): ``poses.txt`` (KITTI), ``trajectory.tum``
-(TUM, readable by evo), ``timings.csv``, ``diagnostics.csv``, ``trajectory.png`` and the marker
-``.vo_lib_output.json`` (how the run was made), and prints a timing table like the paper's Table 1
-and, where the sequence has ground truth, the errors.
-
-Outputs follow :mod:`vo_lib.outputs` (``docs/outputs.md``): a failed or interrupted run, an image
-that cannot be decoded among them, leaves nothing half-written and the previous output untouched.
-Bad arguments and bad input print one line and exit with status 2.
+``run`` writes into ``--out`` (default ``runs/NAME``, under the rules of :mod:`vo_lib.outputs`):
+``poses.txt`` (KITTI), ``trajectory.tum`` (TUM), ``timings.csv``, ``diagnostics.csv``,
+``trajectory.png`` and the marker (how the run was made), and prints a timing table like the
+paper's Table 1 and, where the sequence has ground truth, the errors.
 """
 
 from __future__ import annotations
@@ -42,8 +38,7 @@ DEFAULT_SEQUENCE = "indoor_linear"
 
 
 def input_path(name_or_path: str, frames: int | None) -> tuple[Path, int | None]:
-    """The folder a run reads (a sample's cache folder, or the given folder) and the frame count
-    to ask for (``--frames`` beyond a sample's length asks for the whole sample, with a notice)."""
+    """The folder a run reads and the frame count to ask for (all of a sample shorter than ``--frames``)."""
     from vo_lib.data import sample_path
 
     if is_sample(name_or_path):
@@ -63,8 +58,7 @@ def input_path(name_or_path: str, frames: int | None) -> tuple[Path, int | None]
 
 
 def default_name(name_or_path: str) -> str:
-    """The name of a run's default folder ``runs/NAME``: the sample's, or the sequence folder's
-    (a recording's rather than its ``mav0``'s, and the folder's own for ``.``)."""
+    """The NAME of a run's default ``runs/NAME``: the sample's, or the sequence folder's (not ``mav0``)."""
     path = Path(name_or_path) if is_sample(name_or_path) else Path(name_or_path).resolve()
     return path.parent.name if path.name == "mav0" else path.name
 
@@ -81,28 +75,24 @@ SLOW_S = 2.0
 RENDER_S_PER_FRAME = (0.015, 0.1)
 
 
-def progress_line(text: str) -> None:
-    """One line of progress, at once, on stdout with the results: a run piped to a file shows it
-    there (stderr is kept for the one line of an error or a notice)."""
-    print(text, flush=True)
-
-
 def announce_run(name: str, source: Path, frames: int | None, out_dir: Path) -> None:
-    """The first line of a run: what it reads, what comes first, where it writes."""
+    """The first line of a run: what it reads, what comes first, where it writes (on stdout, with the
+    other progress lines and the results; stderr is for an error or a notice)."""
     from vo_lib.data import is_rendered
 
     if not is_sample(name):
-        progress_line(f"run: {source} -> {out_dir}/")
+        print(f"run: {source} -> {out_dir}/", flush=True)
         return
     n = frames or get_sample(name).frames
     if is_rendered(name, source):
-        progress_line(f"run: sample {name}, {n} frames (rendered in {source}) -> {out_dir}/")
+        print(f"run: sample {name}, {n} frames (rendered in {source}) -> {out_dir}/", flush=True)
     else:
         fast, slow = (round(max(1.0, n * s)) for s in RENDER_S_PER_FRAME)
         how_long = f"{fast} to {slow} s" if slow > fast else f"{slow} s"
-        progress_line(
+        print(
             f"run: sample {name}, {n} frames -> {out_dir}/. First use: its frames are rendered into "
-            f"{source} first (about {how_long}; later runs reuse them)"
+            f"{source} first (about {how_long}; later runs reuse them)",
+            flush=True,
         )
 
 
@@ -115,8 +105,8 @@ def _write_csv(path: Path, rows, cls) -> None:
 
 
 def calibration_digest(sequence: Path, truth_file: Path) -> str | None:
-    """sha256 of what moves an ASL recording's truth into its rectified left camera: both cameras'
-    ``sensor.yaml`` and the one beside the truth (None for another layout, or a recording gone)."""
+    """sha256 of the ``sensor.yaml`` files that move an ASL recording's truth into its rectified left
+    camera (None for another layout)."""
     from vo_lib.formats.euroc import mav0_of
 
     mav0 = mav0_of(sequence)
@@ -130,8 +120,8 @@ def calibration_digest(sequence: Path, truth_file: Path) -> str | None:
 
 
 def _truth_record(seq) -> dict | None:
-    """The file a run's errors were taken from (poses or positions), its sha256 and that of the
-    calibration that moved it, for its marker: ``evaluate`` refuses them once changed."""
+    """The truth file of a run's errors, with the sha256 of it and of its calibration (``evaluate``
+    refuses them once changed)."""
     truth_file = seq.truth_file or (seq.path / "poses.txt" if seq.poses is not None else None)
     if truth_file is None:
         return None
@@ -166,11 +156,8 @@ def run_command(
     motion: str = "auto",
 ) -> dict:
     """Run the pipeline and write its outputs; returns the error report (empty without truth).
-
-    ``motion`` picks the model (``auto``: planar for the crawler samples, 6-DoF for a car); the
-    written poses are the 6-DoF camera poses where the model has them, else the planar poses
-    carried to the camera through its mount.
-    """
+    ``motion``: the model (``auto``: planar for the crawler, 6-DoF for a car; planar poses are
+    written carried to the camera through its mount)."""
     from vo_lib.data import data_dir, is_rendered, load_sequence
 
     name = sequence or DEFAULT_SEQUENCE
@@ -229,7 +216,7 @@ def _run_into(
         "environment only: they are cached; up to a minute on 2 cores) ..."
     )
     said = []  # the notice, once SLOW_S have passed; then its end is said too
-    slow = threading.Timer(SLOW_S, lambda: said.append(progress_line(compiling)))
+    slow = threading.Timer(SLOW_S, lambda: said.append(print(compiling, flush=True)))
     slow.start()
     try:
         seconds = warm_up(seq, use_odometry=not no_odometry, seed=seed, motion=motion)
@@ -237,8 +224,8 @@ def _run_into(
         slow.cancel()
         slow.join()
     if said or seconds >= SLOW_S:
-        progress_line(f"compiled in {seconds:.0f} s, before the timed run (not in timings.csv)")
-    progress_line(f"visual odometry on {n} frames ...")
+        print(f"compiled in {seconds:.0f} s, before the timed run (not in timings.csv)", flush=True)
+    print(f"visual odometry on {n} frames ...", flush=True)
     result = run_sequence(
         seq, frames=n, use_odometry=not no_odometry, seed=seed, progress=sys.stderr.isatty(), motion=motion
     )
@@ -285,11 +272,9 @@ def _run_into(
 
 
 def convert_command(sequence: str, to: str, out: str, force: bool = False) -> None:
-    """Write a rectified copy of a sequence (an ASL rig, or any readable one) in the KITTI
-    layout: ``image_0/``, ``image_1/``, ``calib.txt``, ``times.txt``, ``poses.txt``, the
-    source's manifest (for an ASL rig: the camera in the body, so that the copy runs as the rig
-    does, and its position-only truth) and its odometry files as they are (``odometry.txt``,
-    ``oxts.txt``, ``raw_calib/``: :data:`~vo_lib.formats.sequence_writer.CARRIED`)."""
+    """Write a rectified copy of a sequence (an ASL rig, or any readable one) in the KITTI layout,
+    with the source's manifest (an ASL rig's camera in the body, its position-only truth) and its
+    odometry files (:data:`~vo_lib.formats.sequence_writer.CARRIED`)."""
     from vo_lib.data import load_sequence
     from vo_lib.formats.sequence_writer import SequenceWriter
 

@@ -1,17 +1,14 @@
 """``python -m vo_lib sweep NAME``: a paper's statistic over many seeds, on Dask or in this process.
 
-Each sweep calls one function of its paper's package, once per task, with keyword arguments
-(``seed`` among them) and gets a dict of numbers. The function draws its random numbers from its
-arguments only, so the figures are the same serially and on any cluster.
+Each task calls one function of its paper's package with keyword arguments (``seed`` among them,
+its only source of randomness: the figures are the same on any cluster) and gets a dict of numbers.
 
 1. Make the grid of tasks (:data:`SWEEPS`).
-2. Run them: one after the other here (``--workers 1``), on a Dask LocalCluster of worker
-   processes, or on a running scheduler (``--scheduler``); ``Client.map`` and ``gather``.
-3. Write ``results.csv`` (pandas: one row per task, arguments then figures) into the output folder
-   (:class:`vo_lib.outputs.OutputFolder`: it appears whole or not at all).
-4. Print each figure's mean, standard deviation and the 95 % interval of its mean over the seeds,
-   for each setting of the other arguments, then what the paper's package says of them
-   (:data:`REPORTS`: the paper's values beside ours, shares pooled over the seeds).
+2. Run them here (``--workers 1``), on a Dask LocalCluster or on a running scheduler.
+3. Write ``results.csv`` (one row per task, arguments then figures) into an
+   :class:`vo_lib.outputs.OutputFolder`.
+4. Print each figure's mean, standard deviation and 95 % interval of the mean over the seeds, per
+   setting of the other arguments, then the paper's package's report (:data:`REPORTS`).
 """
 
 from __future__ import annotations
@@ -83,9 +80,8 @@ def _call(function, kwargs: dict) -> dict:
 
 @contextlib.contextmanager
 def dask_client(workers: int, scheduler: str | None):
-    """A ``distributed.Client``: of the scheduler at ``scheduler``, else of a new LocalCluster of
-    ``workers`` single-threaded processes, started with Ctrl-C ignored so that a Ctrl-C to the
-    process group stops only this process (which then closes the cluster)."""
+    """A ``distributed.Client`` of ``scheduler``, else of a new LocalCluster of ``workers`` processes
+    that ignore Ctrl-C (this process stops and closes the cluster)."""
     import logging
 
     import dask
@@ -128,9 +124,8 @@ def run_tasks(function, tasks: list[dict], workers: int = 1, scheduler: str | No
 
 def summary(table, arguments: list[str]):
     """Mean, standard deviation, count and the 95 % interval of the mean (Student's t) of every
-    figure over the seeds, per setting of the other ``arguments`` (a pandas DataFrame). A figure
-    never negative in the table (an error, a NEES) has its interval cut at 0: the mean of such a
-    figure cannot lie below, and the cut interval covers it as often."""
+    figure over the seeds, per setting of the other ``arguments`` (a DataFrame). A figure never
+    negative (an error, a NEES) has its interval cut at 0, which covers its mean as often."""
     from scipy.stats import t
 
     figures = [c for c in table.columns if c not in arguments]

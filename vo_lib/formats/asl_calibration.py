@@ -1,5 +1,5 @@
-"""A camera's calibration in the ASL layout of the EuRoC datasets (and of Kalibr), and the
-stereo rectification of two of them (:func:`vo_lib.camera.rectify_stereo`), checked.
+"""A camera's calibration in the ASL layout of EuRoC (and Kalibr), and the checked stereo
+rectification of two (:func:`vo_lib.camera.rectify_stereo`).
 
 ``sensor.yaml`` holds ``T_BS`` (camera to body, 4x4), ``intrinsics`` ``[fu, fv, cu, cv]``,
 ``distortion_model: radial-tangential``, ``distortion_coefficients`` ``[k1, k2, p1, p2]`` (or
@@ -18,24 +18,15 @@ from scipy.spatial.transform import Rotation
 
 from vo_lib.atomic import notice
 from vo_lib.camera import Rectification, rectify_stereo
-from vo_lib.formats.frame_files import SequenceError, numbers_at, read_text
-from vo_lib.formats.poses import rotation_problem
+from vo_lib.formats.frame_files import SequenceError, check_metres, numbers_at, read_text
+from vo_lib.formats.poses import rigid_problem
 
-#: Shortest and longest distance between the two cameras (metres) that make a stereo rig: a
-#: baseline beyond the longest is a calibration written in millimetres or centimetres.
+#: Shortest distance between a stereo rig's cameras (metres).
 MIN_BASELINE_M = 1e-3
-MAX_BASELINE_M = 10.0
-#: Least share of an image that must stay valid once rectified: a calibration of the images at
-#: hand keeps nearly all of it; one that is not (a focal length or a distortion off by orders of
-#: magnitude) leaves a sliver or nothing.
+#: Least share of an image valid once rectified: a calibration of other images leaves a sliver.
 MIN_VALID_SHARE = 0.25
-#: Largest radial-tangential coefficient taken as a lens's: real lenses, wide ones included, stay
-#: below 1 or so; beyond this, a key or a value out of place (and the valid share, which such
-#: coefficients can fool, is not to be relied on).
+#: Largest radial-tangential coefficient taken as a lens's (real ones stay below 1 or so).
 MAX_DISTORTION = 100.0
-#: Farthest a ground truth's tracked point (a prism) may sit from the body's origin (metres):
-#: beyond it, a ``T_BS`` written in millimetres or centimetres.
-MAX_LEVER_ARM_M = 10.0
 
 
 AslError = SequenceError
@@ -53,8 +44,7 @@ class CameraCalibration:
 
 
 class _UniqueKeys(yaml.SafeLoader):
-    """YAML as ``safe_load`` reads it, but a key given twice in one mapping is an error (not the
-    last one silently kept)."""
+    """YAML as ``safe_load`` reads it, but a key given twice in one mapping is an error."""
 
     def construct_mapping(self, node, deep=False):
         seen = []
@@ -99,9 +89,8 @@ def _numbers(path: Path, data: dict, key: str, count: int, what: str, bound=np.i
 def _transform(path: Path, data: dict, what: str) -> np.ndarray:
     """Key ``T_BS``: a rigid transform (a rotation, the last row 0 0 0 1)."""
     T = _numbers(path, data, "T_BS", 16, what).reshape(4, 4)
-    problem = rotation_problem(T[:3, :3])
-    if problem or not np.allclose(T[3], [0, 0, 0, 1]):
-        raise AslError(f"{path}: key T_BS: {problem or 'the last row is not 0 0 0 1'}")
+    if problem := rigid_problem(T):
+        raise AslError(f"{path}: key T_BS: {problem}")
     T[:3, :3] = Rotation.from_matrix(T[:3, :3]).as_matrix()  # the nearest rotation: rounding scales none
     return T
 
@@ -149,8 +138,8 @@ def read_camera_yaml(path) -> CameraCalibration:
 
 
 def rectify(left: CameraCalibration, right: CameraCalibration, where: Path) -> Rectification:
-    """:func:`~vo_lib.camera.rectify_stereo` of a calibrated pair, checked: one image size, a
-    baseline in metres, cam1 to the right of cam0, most of each image valid once rectified."""
+    """:func:`~vo_lib.camera.rectify_stereo` of a pair, checked: one image size, a baseline in
+    metres, cam1 to the right of cam0, most of each image valid once rectified."""
     if left.resolution != right.resolution:
         raise AslError(
             f"{where}: cam0 is {left.resolution[0]}x{left.resolution[1]} but cam1 is "
@@ -163,11 +152,7 @@ def rectify(left: CameraCalibration, right: CameraCalibration, where: Path) -> R
             f"{where / 'cam1' / 'sensor.yaml'}: key T_BS puts cam1 where cam0 is (baseline "
             f"{baseline:.3g} m); expected two cameras apart"
         )
-    if baseline > MAX_BASELINE_M:
-        raise AslError(
-            f"{where / 'cam1' / 'sensor.yaml'}: key T_BS puts cam1 {baseline:.4g} m from cam0; expected "
-            f"metres (a stereo rig's baseline is under {MAX_BASELINE_M:g} m)"
-        )
+    check_metres(where / "cam1" / "sensor.yaml", f"key T_BS puts cam1 {baseline:.4g} m from cam0", baseline)
     rect = rectify_stereo(
         (left.K, left.distortion), (right.K, right.distortion), left.resolution, T_right_left, left.T_BS
     )
@@ -190,16 +175,13 @@ def rectify(left: CameraCalibration, right: CameraCalibration, where: Path) -> R
 
 
 def truth_extrinsic(truth_path: Path) -> np.ndarray:
-    """``T_BS`` of the ``sensor.yaml`` beside a ground-truth file (the tracked frame in the body),
-    or the identity where there is none (said in a notice: a prism's lever arm is then taken as 0)."""
+    """``T_BS`` of the ``sensor.yaml`` beside a ground-truth file (the tracked frame in the body), or
+    the identity (with a notice) where there is none."""
     sensor = truth_path.parent / "sensor.yaml"
     if not sensor.is_file():
         notice(f"{truth_path}: no sensor.yaml beside it; its poses or positions are taken as the body's")
         return np.eye(4)
     T = _transform(sensor, _yaml(sensor), "a 4x4 transform, data: [16 numbers]")
-    if np.linalg.norm(T[:3, 3]) > MAX_LEVER_ARM_M:
-        raise AslError(
-            f"{sensor}: key T_BS puts the tracked point {np.linalg.norm(T[:3, 3]):g} from the body; "
-            f"expected metres, at most {MAX_LEVER_ARM_M:g} (millimetres?)"
-        )
+    lever = np.linalg.norm(T[:3, 3])
+    check_metres(sensor, f"key T_BS puts the tracked point {lever:g} from the body", lever)
     return T

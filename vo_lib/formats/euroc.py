@@ -1,7 +1,6 @@
-"""A stereo rig as it records, in the ASL layout of the EuRoC datasets and Kalibr (``ROOT/mav0/cam0``,
-``cam1``, optional ground truth; ``docs/real_data.md`` shows the layout). Both cameras are undistorted
-and rectified as their images are read, the images paired by timestamp, and a 6-DoF ground truth
-moved into the rectified left camera. Every problem raises one :class:`AslError` naming the file and key.
+"""A stereo rig as it records, in the ASL layout of EuRoC and Kalibr (``ROOT/mav0/cam0``, ``cam1``,
+optional ground truth; ``docs/real_data.md``): images paired by timestamp, rectified as they are
+read, a 6-DoF truth moved into the rectified left camera. A problem raises one :class:`AslError`.
 """
 
 from __future__ import annotations
@@ -13,6 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from vo_lib.atomic import notice
+from vo_lib.camera import Rectification
 from vo_lib.evaluation import to_camera
 from vo_lib.formats.asl_calibration import AslError, read_camera_yaml, rectify, truth_extrinsic
 from vo_lib.formats.groundtruth import NANOSECONDS, covering, read_groundtruth
@@ -30,8 +30,7 @@ GROUND_TRUTH_FILES = (
 
 
 def mav0_of(path) -> Path | None:
-    """The ``mav0`` folder of an ASL recording at ``path`` (the folder itself or the one holding
-    it), or None if ``path`` is not one."""
+    """The ``mav0`` folder of an ASL recording at ``path`` (``mav0`` or the folder holding it), or None."""
     path = Path(path)
     for candidate in (path / "mav0", path):
         if (candidate / "cam0").is_dir() or (candidate / "cam1").is_dir():
@@ -40,8 +39,7 @@ def mav0_of(path) -> Path | None:
 
 
 def asl_near_miss(path) -> str | None:
-    """Why ``path``, which is no recording (:func:`mav0_of`), looks like part of one or a folder
-    above one; None if it does not."""
+    """Why ``path``, no recording, looks like part of one or a folder above one; else None."""
     path = Path(path)
     if (path / "mav0").is_dir() or path.name == "mav0":
         mav0 = path if path.name == "mav0" else path / "mav0"
@@ -112,27 +110,27 @@ def pair_by_timestamp(mav0: Path) -> tuple[np.ndarray, list[Path], list[Path]]:
     return t0, left, right
 
 
-def _calibration(path) -> tuple[Path, list]:
-    """The ``mav0`` folder of the recording at ``path`` and its two cameras' calibrations."""
+def _calibration(path) -> tuple[Path, list, Rectification]:
+    """The ``mav0`` folder of the recording at ``path``, its cameras' calibrations and rectification."""
     mav0 = mav0_of(path)
     if mav0 is None:
         raise AslError(f"{path}: no mav0/cam0 or cam0 folder; expected the ASL layout")
     for side in ("cam0", "cam1"):
         if not (mav0 / side).is_dir():
             raise AslError(f"{mav0 / side}: missing camera folder (data/, data.csv, sensor.yaml)")
-    return mav0, [read_camera_yaml(mav0 / side / "sensor.yaml") for side in ("cam0", "cam1")]
+    calib = [read_camera_yaml(mav0 / side / "sensor.yaml") for side in ("cam0", "cam1")]
+    return mav0, calib, rectify(*calib, mav0)
 
 
 def body_to_rectified_camera(path) -> np.ndarray:
     """``T_body_rect``: the rectified left camera of the ASL recording at ``path`` in its body frame."""
-    mav0, calib = _calibration(path)
-    return rectify(*calib, mav0).T_body_rect
+    return _calibration(path)[2].T_body_rect
 
 
 def tracked_to_camera(truth_path, T_body_rect, tracker_of=None) -> np.ndarray:
     """``X``, the rectified left camera in the frame a ground-truth file tracks (the body, or the
     prism of the ``sensor.yaml`` beside it, else of ``tracker_of``'s ``leica0``): ``W_k X`` is the
-    camera's pose, and ``X^-1``'s translation the tracked point in the camera (a lever arm)."""
+    camera's pose, ``X^-1``'s translation the tracked point in the camera (a lever arm)."""
     truth_path = Path(truth_path)
     if tracker_of is not None and not (truth_path.parent / "sensor.yaml").is_file():
         sensor = mav0_of(tracker_of) / "leica0" / "sensor.yaml"
@@ -147,8 +145,7 @@ def read_asl(path, groundtruth=None, frames: int | None = None) -> Sequence:
     the first of :data:`GROUND_TRUTH_FILES`) in ``poses`` (the rectified left camera in its first
     pose), or position-only truth in ``manifest["positions"]``."""
     root = Path(path)
-    mav0, calib = _calibration(root)
-    rect = rectify(*calib, mav0)
+    mav0, calib, rect = _calibration(root)
     stamps, left, right = (x[:frames] for x in pair_by_timestamp(mav0))
     width, height = check_headers(left, right)  # every image, before the run: none fails late
     if (width, height) != calib[0].resolution:
@@ -173,8 +170,8 @@ def read_asl(path, groundtruth=None, frames: int | None = None) -> Sequence:
 
 
 def _truth_into_camera(truth_path: Path, seconds, T_body_rect, manifest: dict):
-    """The ground truth at the images, in the rectified left camera (6-DoF); or, for positions
-    only, the positions and the lever arm put into ``manifest``."""
+    """The 6-DoF truth at the images, in the rectified left camera; or None, positions and lever arm
+    put into ``manifest``."""
     truth = read_groundtruth(truth_path)
     i_img, i_gt = covering(truth, seconds)
     X = tracked_to_camera(truth_path, T_body_rect)

@@ -1,8 +1,6 @@
 """The text files of a sequence folder: ``calib.txt``, ``times.txt``, ``poses.txt``,
-``odometry.txt`` (one line per frame) and ``manifest.json``.
-
-Every problem raises one :class:`SequenceError` naming the file (and line) and what was expected.
-A per-frame file far larger than its frame count allows is refused before it is read.
+``odometry.txt`` (one line per frame) and ``manifest.json``. Every problem raises one
+:class:`SequenceError` naming the file (and line) and what was expected.
 """
 
 from __future__ import annotations
@@ -14,23 +12,29 @@ from pathlib import Path
 import numpy as np
 
 from vo_lib.formats.groundtruth import read_trajectory
-from vo_lib.formats.poses import TrajectoryError, check_file, data_lines, read_text, rotation_problem
+from vo_lib.formats.poses import TrajectoryError, check_file, data_lines, read_text, rigid_problem
 
 SequenceError = TrajectoryError
 
 
-#: Bytes a line of a per-frame file may take on average (a KITTI pose line is about 200, an OXTS
-#: packet about 300): a file larger than this per frame is refused before it is read.
+#: Farthest apart two sensors of one vehicle may be (metres): beyond, a file in millimetres.
+MAX_RIG_M = 10.0
+#: Bytes a line of a per-frame file may take on average (a KITTI pose line about 200, an OXTS packet 300).
 MAX_LINE_BYTES = 1024
 
 
 def present(path: Path, what: str) -> bool:
-    """Whether the optional file ``path`` is there; a folder (or anything but a file) in its
-    place raises :class:`SequenceError`, so that it is not silently ignored."""
+    """Whether the optional file ``path`` is there; anything but a file in its place raises."""
     if not os.path.lexists(path):
         return False
     check_file(path, what)
     return True
+
+
+def check_metres(path: Path, claim: str, value: float, most: float = MAX_RIG_M, unit: str = "") -> None:
+    """Refuse a ``value`` beyond ``most`` (``claim`` states it): a file not in metres."""
+    if value > most:
+        raise SequenceError(f"{path}: {claim}; expected metres, at most {most:g}{unit} (millimetres?)")
 
 
 def numbers(path: Path, line_no: int, text: str, count: int, what: str) -> np.ndarray:
@@ -93,9 +97,7 @@ def read_rows(path: Path, count: int, what: str, bound: float = np.inf) -> np.nd
 
 
 def read_poses(path: Path) -> np.ndarray:
-    """``(N, 3, 4)`` poses of a KITTI ``poses.txt`` (12 numbers a line, a rotation then a
-    translation), read by :func:`vo_lib.formats.poses.read_trajectory`; raises
-    :class:`SequenceError`."""
+    """``(N, 3, 4)`` poses of a KITTI ``poses.txt``; raises :class:`SequenceError`."""
     times, poses = read_trajectory(path)
     if times is not None:
         raise SequenceError(f"{path}: TUM rows (8 numbers); a sequence's poses.txt holds KITTI rows of 12")
@@ -117,8 +119,7 @@ def read_manifest(path: Path) -> dict:
 
 
 def shown(value, width: int = 40) -> str:
-    """``value`` as JSON for an error message; a longer one is cut to ``width`` characters, with
-    how many values a list or a map holds."""
+    """``value`` as JSON for an error message, cut to ``width`` characters (with a count of values)."""
     text = json.dumps(value, default=str)
     if len(text) <= width:
         return text
@@ -135,8 +136,8 @@ def shown(value, width: int = 40) -> str:
 
 
 def numbers_at(path: Path, key: str, value, shape: tuple, what=None, bounds=(-np.inf, np.inf)) -> np.ndarray:
-    """``value``, found at ``key`` of ``path``, as finite numbers of ``shape`` within ``bounds``
-    (``what`` they are; by default, a number within them); else one :class:`SequenceError`."""
+    """``value`` at ``key`` of ``path`` as finite numbers of ``shape`` within ``bounds`` (``what``
+    they are, by default a number within them); else one :class:`SequenceError`."""
     what = what or f"a number from {bounds[0]:g} to {bounds[1]:g}"
     if value is None:
         raise SequenceError(f"{path}: key {key} missing; expected {what}")
@@ -150,14 +151,13 @@ def numbers_at(path: Path, key: str, value, shape: tuple, what=None, bounds=(-np
     return a
 
 
-#: The camera mounts a manifest may state: a crawler's camera above its turning axis (planar
-#: motion), and a car's. ``camera.mount`` holding anything else is refused, not read as the car's.
+#: The camera mounts a manifest may state (a crawler's, planar; a car's); any other is refused.
 CAMERA_MOUNTS = ("above turning axis", "car: ahead of the rear axle (vo_lib.sim.road)")
 
 
 def check_manifest(path: Path, manifest: dict, frames: int) -> None:
-    """Raise :class:`SequenceError` unless the keys of ``manifest.json`` that a run reads (each
-    optional) hold numbers of the shape and range below, ``T_body_camera`` a rigid transform."""
+    """Raise :class:`SequenceError` unless the (optional) keys of ``manifest.json`` that a run reads
+    hold numbers of the shape and range below, ``T_body_camera`` a rigid transform."""
     camera, positions = manifest.get("camera", {}), manifest.get("positions", {})
     for key, value in (("camera", camera), ("positions", positions)):
         if not isinstance(value, dict):
@@ -180,17 +180,13 @@ def check_manifest(path: Path, manifest: dict, frames: int) -> None:
     found = {row[0]: numbers_at(path, *row) for row in wanted}
     if positions and np.any(found["positions.frames"] % 1):
         raise SequenceError(f"{path}: key positions.frames: expected frame numbers 0 to {frames - 1}")
-    T = found["T_body_camera"]
-    problem = rotation_problem(T[:3, :3]) or (
-        "" if np.allclose(T[3], [0, 0, 0, 1]) else "last row not 0 0 0 1"
-    )
-    if problem:
+    if problem := rigid_problem(found["T_body_camera"]):
         raise SequenceError(f"{path}: key T_body_camera: {problem}; expected a rigid transform")
 
 
 def read_per_frame(path: Path, frames: int, noun: str, read) -> np.ndarray:
-    """``read(path)`` of a file holding one line per frame: its size is checked before it is read
-    and its length after; ``noun`` names the rows in the error ("timestamps", "poses")."""
+    """``read(path)`` of a file of one line per frame, its size checked before and its length after;
+    ``noun`` names the rows ("timestamps", "poses")."""
     size, limit = Path(path).stat().st_size, MAX_LINE_BYTES * frames + 65536
     if size > limit:
         raise SequenceError(

@@ -1,6 +1,5 @@
 """Ground truth in the formats of ``docs/real_data.md`` (KITTI poses, TUM, EuRoC CSV, positions
-only), checked to cover the images it is associated with. A CSV (its first row holds commas) is
-EuRoC's, times in nanoseconds; a text file's times are seconds. Every problem raises one
+only): a CSV is EuRoC's (nanoseconds), a text file's times are seconds. Every problem raises one
 :class:`GroundTruthError` naming the file and line.
 """
 
@@ -22,8 +21,7 @@ from vo_lib.formats.poses import (
 from vo_lib.geometry import as_homogeneous
 
 NANOSECONDS = 1e-9
-#: Smallest median step of a CSV's timestamps (nanoseconds): no tracker samples at over 1 MHz, so a
-#: smaller step is a first column in seconds or not a time at all (KITTI poses with commas).
+#: Smallest median step of a CSV's timestamps (ns): no tracker samples at over 1 MHz.
 MIN_STEP_NS = 1000.0
 
 
@@ -32,9 +30,8 @@ GroundTruthError = TrajectoryError
 
 @dataclass(frozen=True)
 class GroundTruth:
-    """A ground truth as read: ``times`` in seconds (None for KITTI poses, one per image),
-    ``poses`` ``(N, 4, 4)`` of the file's frame in its world (None for positions only) and
-    ``positions`` ``(N, 3)``; ``csv``: a CSV (EuRoC's, times in nanoseconds, poses of the body)."""
+    """``times`` in seconds (None for KITTI poses: one per image), ``positions`` ``(N, 3)``, ``poses``
+    ``(N, 4, 4)`` (None for positions only); ``csv``: EuRoC's CSV (poses of the body)."""
 
     path: Path
     times: np.ndarray | None
@@ -44,8 +41,7 @@ class GroundTruth:
 
 
 def read_groundtruth(path, min_poses: int = 2) -> GroundTruth:
-    """Read a KITTI, TUM, EuRoC CSV or position-only ground truth (``docs/real_data.md``) of
-    at least ``min_poses`` rows, checked as :func:`~vo_lib.formats.poses.read_rows` says."""
+    """A KITTI, TUM, EuRoC CSV or position-only ground truth of at least ``min_poses`` rows."""
     path = Path(path)
     a, lines, comma = read_rows(path, min_poses)
     if not comma and a.shape[1] != 12:  # TUM or positions: times in seconds
@@ -104,8 +100,8 @@ UNCOVERED_HINT = (
 
 
 def covering(truth: GroundTruth, times, max_diff: float = MAX_TIME_DIFF_S) -> tuple[np.ndarray, np.ndarray]:
-    """:func:`associate` the images at ``times`` (seconds, the file's clock) with ``truth``,
-    checked: the truth must span the images, and a 6-DoF truth must match every image."""
+    """:func:`associate` the images at ``times`` (seconds) with ``truth``, which must span them (a
+    6-DoF truth: match every one)."""
     times = np.asarray(times, float)
     t0, t1 = truth.times[0], truth.times[-1]
     if times[0] < t0 - max_diff or times[-1] > t1 + max_diff:

@@ -1,12 +1,10 @@
 """The image files of a sequence: listed in frame order, checked from their headers, decoded.
 
-* **Frames are paired by file name, in numeric order.** Names sort by the numbers in them,
-  whatever their padding (``2.png`` before ``10.png``); two names of one number on one side
-  (``1.png`` and ``01.png``) are an error. Hidden files (``._000001.png`` and the like) are ignored.
-* **Every image header is checked when the sequence is opened**, cheaply (PNG headers and end
-  markers are read without decoding; other formats through Pillow's lazy open): size equal to
-  the first image's, 8 bits per channel, PNG and JPEG files complete (their end marker present).
-  What can only be found by decoding (damaged compressed data) raises when the frame is read.
+* **Frames are paired by file name, in numeric order** (``2.png`` before ``10.png``); two names
+  of one number on one side (``1.png``, ``01.png``) are an error; hidden files are ignored.
+* **Every image header is checked when the sequence is opened**, without decoding (Pillow's lazy
+  open for formats other than PNG): one size, 8 bits per channel, PNG and JPEG end markers present.
+  Damaged compressed data raises when the frame is read.
 
 Every problem raises one :class:`~vo_lib.formats.frame_files.SequenceError` naming the file.
 """
@@ -36,20 +34,16 @@ PNG_COLOUR_TYPES = (0, 2, 3, 4, 6)
 EIGHT_BIT_MODES = {"1", "L", "P", "LA", "La", "PA", "RGB", "RGBA", "RGBa", "RGBX", "CMYK", "YCbCr"}
 #: Largest image side accepted from a header (pixels): larger claims are refused before decoding.
 MAX_IMAGE_SIDE = 16384
+#: What an image of more than 8 bits per channel is told.
+NOT_8_BIT = "expected 8-bit grey (convert it, e.g. scale 16-bit values to 0-255)"
 #: Bytes searched for an end marker at the end of a file.
 TAIL_BYTES = 65536
 
 _DEVNULL: int | None = None  # a descriptor of os.devnull, opened on first use
-_STDERR_LOCK = threading.Lock()
 
 
-def _decode(path: Path) -> np.ndarray | None:
-    """OpenCV's decoder on the file's bytes (``cv2.imread`` crashes on a path that is not UTF-8),
-    or None, also for a PNG without its closing IEND chunk."""
-    try:
-        data = np.fromfile(path, np.uint8)
-    except OSError:
-        return None
+def _decode(data: np.ndarray) -> np.ndarray | None:
+    """OpenCV's decoder on a file's bytes, or None (also for a PNG without its IEND chunk)."""
     if data.size == 0 or (data[:8].tobytes() == PNG_SIGNATURE and data[-8:-4].tobytes() != b"IEND"):
         return None
     try:
@@ -59,8 +53,7 @@ def _decode(path: Path) -> np.ndarray | None:
 
 
 def _png_chunks_intact(data: bytes) -> bool:
-    """Whether every chunk of a PNG carries its CRC-32, so that libpng, on a thread that cannot
-    mute stderr, does not print its own message for damaged data."""
+    """Whether every chunk of a PNG carries its CRC-32 (libpng prints to stderr about damaged data)."""
     at = 8
     while at + 12 <= len(data):
         end = at + 8 + struct.unpack(">I", data[at : at + 4])[0]  # after the chunk's type and data
@@ -71,41 +64,38 @@ def _png_chunks_intact(data: bytes) -> bool:
 
 
 def _imread_quietly(path: Path) -> np.ndarray | None:
-    """The decoded image, or None, with stderr muted meanwhile against libpng's messages (by the
-    main thread only, one call at a time: other threads' writes would be swallowed)."""
+    """The decoded image, or None, libpng's messages kept off stderr: muted by the main thread (in
+    another, its writes would be swallowed); elsewhere a damaged PNG is not decoded."""
     global _DEVNULL
+    try:
+        data = np.fromfile(path, np.uint8)  # cv2.imread crashes on a path that is not UTF-8
+    except OSError:
+        return None
     if threading.current_thread() is not threading.main_thread():
-        try:
-            data = Path(path).read_bytes()
-        except OSError:
-            return None
-        return None if data[:8] == PNG_SIGNATURE and not _png_chunks_intact(data) else _decode(path)
-    with _STDERR_LOCK:
-        try:
-            if _DEVNULL is None:
-                _DEVNULL = os.open(os.devnull, os.O_WRONLY)
-            saved = os.dup(2)
-        except OSError:
-            return _decode(path)
-        try:
-            os.dup2(_DEVNULL, 2)
-            return _decode(path)
-        finally:
-            os.dup2(saved, 2)
-            os.close(saved)
+        png = data[:8].tobytes() == PNG_SIGNATURE
+        return None if png and not _png_chunks_intact(data.tobytes()) else _decode(data)
+    try:
+        if _DEVNULL is None:
+            _DEVNULL = os.open(os.devnull, os.O_WRONLY)
+        saved = os.dup(2)
+    except OSError:
+        return _decode(data)
+    try:
+        os.dup2(_DEVNULL, 2)
+        return _decode(data)
+    finally:
+        os.dup2(saved, 2)
+        os.close(saved)
 
 
 def load_image(path: Path, frame: int) -> np.ndarray:
-    """An 8-bit grey image; colour is converted to grey, 16-bit images are refused. A file that
-    cannot be decoded raises one :class:`SequenceError` naming it and ``frame``."""
+    """An 8-bit grey image (colour made grey, 16 bits refused); else :class:`SequenceError`."""
     where = f"{path}, frame {frame}"
     img = _imread_quietly(path)
     if img is None or img.size == 0:
         raise SequenceError(f"{where}: cannot read the image (empty, truncated, damaged or not an image)")
     if img.dtype != np.uint8:
-        raise SequenceError(
-            f"{where}: {img.dtype} image; expected 8-bit grey (convert it, e.g. scale 16-bit values to 0-255)"
-        )
+        raise SequenceError(f"{where}: {img.dtype} image; {NOT_8_BIT}")
     if img.ndim == 3:
         img = cv2.cvtColor(img, cv2.COLOR_BGRA2GRAY if img.shape[2] == 4 else cv2.COLOR_BGR2GRAY)
     return img
@@ -126,8 +116,7 @@ def _png_header(head: bytes, where: str) -> tuple[int, int, int]:
 
 
 def image_header(path: Path, frame: int) -> tuple[int, int, int]:
-    """``(width, height, bits per channel)`` of an image file, read without decoding the pixels
-    where possible; raises :class:`SequenceError` naming the file and ``frame``."""
+    """``(width, height, bits per channel)`` of an image file, without decoding where possible."""
     where = f"{path}, frame {frame}"
     try:
         with open(path, "rb") as fh:
@@ -187,8 +176,8 @@ def _is_image(entry: os.DirEntry) -> bool:
 
 
 def image_files(folder: Path) -> list[Path]:
-    """The images of ``folder`` in frame order; a name without a frame number, a dangling link
-    and two names of one frame number raise :class:`SequenceError` naming the file."""
+    """The images of ``folder`` in frame order; a name without a frame number, a dangling link or
+    two names of one frame number raise :class:`SequenceError`."""
     if folder.exists() and not folder.is_dir():
         raise SequenceError(f"{folder}: a file where the image folder should be; expected a folder of images")
     if not folder.is_dir():  # image_0/image_0: --sequence named the image folder itself
@@ -216,16 +205,13 @@ def unpaired(left: list[Path], right: list[Path]) -> str:
 
 
 def check_headers(left: list[Path], right: list[Path]) -> tuple[int, int]:
-    """Width and height shared by every image, checked from the headers; raises on the first
-    file that is unreadable, not 8-bit or of another size."""
+    """Width and height of every image, from the headers; raises on one unreadable, not 8-bit or of
+    another size."""
     size = None
     for k, path in enumerate(p for pair in zip(left, right, strict=True) for p in pair):
         width, height, depth = image_header(path, k // 2)
         if depth > 8:
-            raise SequenceError(
-                f"{path}, frame {k // 2}: {depth}-bit image; expected 8-bit grey "
-                "(convert it, e.g. scale 16-bit values to 0-255)"
-            )
+            raise SequenceError(f"{path}, frame {k // 2}: {depth}-bit image; {NOT_8_BIT}")
         size = size or (width, height)
         if (width, height) != size:
             raise SequenceError(

@@ -1,7 +1,5 @@
-"""The files of KITTI's raw recordings a sequence folder may carry: ``oxts.txt`` (GPS/IMU packets,
-whose speed and yaw rate stand in for wheel odometry) and ``raw_calib/`` (the camera's mount); see
-``docs/real_data.md``. Bad files raise :class:`~vo_lib.formats.sequence.SequenceError` naming the
-file and line.
+"""KITTI raw files a sequence folder may carry (``docs/real_data.md``): ``oxts.txt`` (GPS/IMU packets,
+whose speed and yaw rate stand in for wheel odometry) and ``raw_calib/`` (the camera's mount).
 """
 
 from __future__ import annotations
@@ -10,16 +8,13 @@ from pathlib import Path
 
 import numpy as np
 
-from vo_lib.formats.frame_files import SequenceError, numbers, read_rows
+from vo_lib.formats.frame_files import SequenceError, check_metres, numbers, read_rows
 from vo_lib.formats.poses import data_lines, rotation_problem
 
 OXTS_FIELDS = 30
 VF, WZ = 8, 19  # zero-based columns of forward speed (m/s) and yaw rate (rad/s)
-#: Largest magnitude of any field: degrees of latitude, metres of altitude, m/s, rad/s and counts
-#: stay far below it; beyond, a packet is damaged (and would overflow the filter).
+#: Largest magnitude of any OXTS field: beyond, a packet is damaged (and would overflow the filter).
 MAX_OXTS_VALUE = 1e6
-#: Farthest two sensors of one car may be apart (metres): beyond, a translation in millimetres.
-MAX_MOUNT_M = 10.0
 
 
 def read_oxts(path) -> np.ndarray:
@@ -54,8 +49,7 @@ def _calib_values(path: Path, key: str, count: int) -> np.ndarray:
 
 
 def _rotation(path: Path, key: str) -> np.ndarray:
-    """The 3x3 rotation of line ``key``; a matrix that is not a rotation (singular, scaled, a
-    reflection) raises :class:`SequenceError` naming the file and key."""
+    """The 3x3 rotation of line ``key``; else :class:`SequenceError`."""
     R = _calib_values(path, key, 9).reshape(3, 3)
     problem = rotation_problem(R)
     if problem:
@@ -67,11 +61,8 @@ def _rigid(path: Path) -> np.ndarray:
     T = np.eye(4)
     T[:3, :3] = _rotation(path, "R")
     T[:3, 3] = _calib_values(path, "T", 3)
-    if np.linalg.norm(T[:3, 3]) > MAX_MOUNT_M:
-        raise SequenceError(
-            f"{path}: T puts one sensor {np.linalg.norm(T[:3, 3]):g} from the other; expected metres, "
-            f"at most {MAX_MOUNT_M:g} (millimetres?)"
-        )
+    distance = np.linalg.norm(T[:3, 3])
+    check_metres(path, f"T puts one sensor {distance:g} from the other", distance)
     return T
 
 

@@ -15,8 +15,8 @@ from vo_lib.geometry import as_homogeneous
 
 
 def _rigid(poses) -> tuple[np.ndarray, Rotation]:
-    """``(N, 4, 4)`` poses and their rotations made exactly orthonormal (a product of many motions
-    drifts off SO(3) by ``1e-5``, which every reader of a file would read differently)."""
+    """``(N, 4, 4)`` poses and their rotations made orthonormal (a product of many motions drifts off
+    SO(3) by ``1e-5``, which readers of a file would each read differently)."""
     T = as_homogeneous(poses)
     if T.ndim != 3 or T.shape[1:] != (4, 4):
         raise ValueError(f"poses must have shape (N, 3, 4) or (N, 4, 4); got {T.shape}")
@@ -46,8 +46,7 @@ class TrajectoryError(ValueError):
 ROTATION_TOLERANCE = 1e-2
 #: Largest coordinate accepted (m): beyond it, squared distances overflow in the alignment.
 MAX_POSITION = 1e9
-#: Largest trajectory file read (bytes): a 200 Hz EuRoC CSV of an hour is about 70 MB, and
-#: reading one takes about 12 times its size in memory.
+#: Largest file read (bytes): a 200 Hz EuRoC CSV of an hour is about 70 MB (12 times that in memory).
 MAX_FILE_BYTES = 100_000_000
 #: Widths of a row of a text file: KITTI pose, TUM (``t x y z qx qy qz qw``), position (``t x y z``).
 TEXT_WIDTHS = {12: "12 numbers (KITTI)", 8: "8 (TUM: t x y z qx qy qz qw)", 4: "4 (t x y z)"}
@@ -66,6 +65,13 @@ def rotation_problem(R: np.ndarray) -> str | None:
     return None
 
 
+def rigid_problem(T: np.ndarray) -> str | None:
+    """None if the 4x4 ``T`` is a rigid transform (:func:`rotation_problem`), else what is wrong."""
+    return rotation_problem(T[:3, :3]) or (
+        None if np.allclose(T[3], [0, 0, 0, 1]) else "the last row is not 0 0 0 1"
+    )
+
+
 def check_file(path: Path, what: str = "the file") -> None:
     """Raise :class:`TrajectoryError` unless ``path`` is a regular file: missing, or what is there."""
     if not Path(path).is_file():
@@ -76,7 +82,7 @@ def check_file(path: Path, what: str = "the file") -> None:
 
 
 def read_text(path, what: str = "the file") -> str:
-    """The UTF-8 text of a file (a byte-order mark dropped); anything else raises :class:`TrajectoryError`."""
+    """The UTF-8 text of a file (without a byte-order mark); else :class:`TrajectoryError`."""
     path = Path(path)
     check_file(path, what)
     if (size := path.stat().st_size) > MAX_FILE_BYTES:
@@ -96,8 +102,7 @@ def data_lines(path: Path, what: str = "the file") -> list[tuple[int, str]]:
 
 
 def _row(path: Path, n: int, line: str, comma: bool, first: tuple[int, int] | None) -> list[float]:
-    """The numbers of line ``n``: as many as the ``first`` row's (its count and line), else a
-    width the formats know."""
+    """The numbers of line ``n``: as many as the ``first`` row's (count, line), else a known width."""
     try:
         values = [float(v) for v in (line.split(",") if comma else line.split())]
     except ValueError:
@@ -113,9 +118,10 @@ def _row(path: Path, n: int, line: str, comma: bool, first: tuple[int, int] | No
     return values
 
 
-def _check(path: Path, a: np.ndarray, lines: list[int], comma: bool) -> None:
+def _check(path: Path, a: np.ndarray, rows: list[tuple[int, str]], comma: bool) -> None:
     """Every row finite, a rotation (KITTI) or a non-zero quaternion, a position within
-    :data:`MAX_POSITION`, and timestamps that increase; the first bad row is named."""
+    :data:`MAX_POSITION`, timestamps increasing; else the first bad row is named."""
+    lines = [n for n, _ in rows]
 
     def refuse(bad: np.ndarray, what) -> None:
         if bad.any():
@@ -136,8 +142,7 @@ def _check(path: Path, a: np.ndarray, lines: list[int], comma: bool) -> None:
         t = a[:, 0]
 
         def stamp(k: int) -> str:  # as written: a float would round a time in nanoseconds
-            text = read_text(path).replace("\r\n", "\n").replace("\r", "\n")  # as read_rows splits it
-            return re.split(r"[\s,]+", text.split("\n")[lines[k] - 1].strip())[0]
+            return re.split(r"[\s,]+", rows[k][1])[0]
 
         kitti = "; 12 numbers a row, as KITTI poses? they are separated by spaces, not commas"
         refuse(
@@ -153,9 +158,8 @@ def _check(path: Path, a: np.ndarray, lines: list[int], comma: bool) -> None:
 
 def read_rows(path, min_rows: int = 1) -> tuple[np.ndarray, list[int], bool]:
     """The rows of a trajectory file, checked (:func:`_check`), their line numbers, and whether the
-    file is a CSV (its first row holds commas). Blank lines, lines starting with ``#`` or ``%`` and a
-    first line of names (a header without ``#``) are skipped. Any problem, and fewer than
-    ``min_rows`` rows, raises one :class:`TrajectoryError` naming the file and line."""
+    file is a CSV (commas in its first row). Comments and a first line of names are skipped. Any
+    problem, and fewer than ``min_rows`` rows, raises one :class:`TrajectoryError`."""
     path = Path(path)
     rows = data_lines(path, "the trajectory")
     if rows and re.match(r"[A-Za-z_]", rows[0][1]) and not re.match(r"(?i)(nan|inf)\b", rows[0][1]):
@@ -173,7 +177,7 @@ def read_rows(path, min_rows: int = 1) -> tuple[np.ndarray, list[int], bool]:
         raise TrajectoryError(
             f"{path}: {len(rows)} pose{plural} (last on line {lines[-1]}); need at least {min_rows}"
         )
-    _check(path, a, lines, comma)
+    _check(path, a, rows, comma)
     return a, lines, comma
 
 
@@ -187,8 +191,8 @@ def pose_matrices(positions: np.ndarray, quat_xyzw: np.ndarray) -> np.ndarray:
 
 
 def header_quaternion_order(path: Path, first_row_line: int) -> tuple[str, int]:
-    """The quaternion's components in the order the last comment line before the first row names
-    them (``"wxyz"``, ``"xyzw"``, ...) and that line's number; ``("", 0)`` where none names all four."""
+    """The quaternion's components as the last header line before the first row orders them
+    (``"wxyz"``, ...) and that line's number; ``("", 0)`` where none names all four."""
     order, found = "", 0
     with open(path, encoding="utf-8-sig", errors="replace") as fh:
         for n, line in enumerate(fh, start=1):

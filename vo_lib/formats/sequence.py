@@ -10,9 +10,8 @@
     SEQ/odometry.txt            optional: "delta_u_left delta_u_right" per frame, metres
     SEQ/manifest.json           optional: how a sample was made (rate, speeds, rig, world)
 
-A real KITTI odometry sequence loads unchanged. Images are read as :mod:`vo_lib.formats.images`
-says, the text files as :mod:`vo_lib.formats.frame_files` says; every problem raises one
-:class:`SequenceError` naming the file (and line or frame).
+A real KITTI odometry sequence loads unchanged. Images are read by :mod:`vo_lib.formats.images`,
+text files by :mod:`vo_lib.formats.frame_files`; a problem raises one :class:`SequenceError`.
 """
 
 from __future__ import annotations
@@ -26,11 +25,11 @@ from pathlib import Path
 import numpy as np
 
 from vo_lib.camera import StereoCamera
-from vo_lib.formats.asl_calibration import MAX_BASELINE_M
 from vo_lib.formats.frame_files import (
     SequenceError,
     check_file,
     check_manifest,
+    check_metres,
     present,
     read_calib,
     read_manifest,
@@ -44,12 +43,9 @@ from vo_lib.geometry import as_homogeneous
 
 #: Largest wheel distance between two frames in ``odometry.txt``, metres: beyond, the file is damaged.
 MAX_ODOMETRY_M = 1000.0
-#: Longest median time between frames (seconds), in either layout: beyond it, times in another
-#: unit (milliseconds at up to 100 frames a second) or frames too far apart to track between.
-MAX_FRAME_SPACING_S = 10.0
-#: Shortest median time between frames (seconds): a camera at 1,000 frames a second; below, times
-#: in a larger unit than the file's (microseconds where nanoseconds are expected).
-MIN_FRAME_SPACING_S = 1e-3
+#: Median time between frames (seconds), in either layout: outside, times in another unit (or frames
+#: too far apart to track between).
+MIN_FRAME_SPACING_S, MAX_FRAME_SPACING_S = 1e-3, 10.0
 #: Longest focal length accepted, in image widths (a horizontal field of view of 0.57 degrees).
 MAX_FOCAL_WIDTHS = 100
 #: Fastest median track speed of ``odometry.txt`` (m/s): beyond it, distances in another unit.
@@ -57,8 +53,7 @@ MAX_TRACK_SPEED_M_S = 50.0
 
 
 def check_frame_spacing(path: Path, seconds) -> None:
-    """Refuse frames more than :data:`MAX_FRAME_SPACING_S` or less than
-    :data:`MIN_FRAME_SPACING_S` apart (median) as read from ``path``: times in another unit."""
+    """Refuse frames (of ``path``) closer or farther apart than the bounds above (median)."""
     spacing = float(np.median(np.diff(seconds))) if len(seconds) > 1 else MIN_FRAME_SPACING_S
     if not MIN_FRAME_SPACING_S <= spacing <= MAX_FRAME_SPACING_S:
         raise SequenceError(
@@ -81,8 +76,7 @@ class Sequence:
     manifest: dict = field(default_factory=dict)
     #: Undistorts and rectifies a raw pair (a rig read as it records), or None: already rectified.
     rectify: Callable[[np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]] | None = None
-    #: The file the ground truth (poses, or positions only) was read from where the layout offers
-    #: several (an ASL recording's).
+    #: The file the ground truth was read from, where the layout offers several (an ASL recording's).
     truth_file: Path | None = None
 
     #: Frames decoded ahead, on a reader thread, of the one asked for (0: none).
@@ -97,7 +91,7 @@ class Sequence:
 
     def pair(self, k: int) -> tuple[np.ndarray, np.ndarray]:
         """Left and right images of frame ``k`` (rectified where needed), the next ``read_ahead``
-        frames decoded meanwhile on a reader thread; a bad file raises one :class:`SequenceError`."""
+        decoded meanwhile on a reader thread."""
         if self.read_ahead > 0:
             if self._reader is None:
                 self._reader = ThreadPoolExecutor(max_workers=1, thread_name_prefix="vo_lib-reader")
@@ -111,8 +105,7 @@ class Sequence:
         return decoded if decoded is not None else self._decoded(k)
 
     def _decoded_ahead(self, k: int) -> tuple[np.ndarray, np.ndarray] | None:
-        """Frame ``k`` decoded on the reader thread, or None: a bad frame is decoded again, and
-        reported, by the caller's thread."""
+        """Frame ``k``, or None: a bad frame is decoded again, and reported, by the caller's thread."""
         try:
             return self._decoded(k)
         except SequenceError:
@@ -132,8 +125,7 @@ class Sequence:
         return pair
 
     def __iter__(self):
-        for k in range(len(self)):
-            yield self.pair(k)
+        return map(self.pair, range(len(self)))
 
     def poses_4x4(self) -> np.ndarray | None:
         """Ground-truth camera poses as ``(N, 4, 4)`` matrices, or None."""
@@ -150,11 +142,10 @@ def _camera(root: Path, left: list[Path], right: list[Path]) -> StereoCamera:
         camera = StereoCamera.from_projection_matrices(P0, P1, w, h)
     except ValueError as exc:
         raise SequenceError(f"{calib}: {exc}") from None
-    if camera.baseline > MAX_BASELINE_M:
-        raise SequenceError(
-            f"{calib}: P1 puts the right camera {camera.baseline:g} from the left (baseline = "
-            f"(P0[0,3] - P1[0,3]) / fx); expected metres, at most {MAX_BASELINE_M:g}"
-        )
+    claim = (
+        f"P1 puts the right camera {camera.baseline:g} from the left (baseline = (P0[0,3] - P1[0,3]) / fx)"
+    )
+    check_metres(calib, claim, camera.baseline)
     if not (0 <= camera.cx <= w and 0 <= camera.cy <= h):
         raise SequenceError(
             f"{calib}: P0's principal point ({camera.cx:g}, {camera.cy:g}) lies outside the {w}x{h} images"
@@ -168,10 +159,7 @@ def _camera(root: Path, left: list[Path], right: list[Path]) -> StereoCamera:
 
 
 def read_sequence(path, odometry: bool = True) -> Sequence:
-    """Read and check a sequence folder (KITTI layout plus ``odometry.txt``).
-
-    ``odometry=False`` ignores ``odometry.txt`` entirely (it is not even read).
-    """
+    """Read and check a sequence folder (``odometry=False``: ``odometry.txt`` is not read)."""
     root = Path(path)
     if not root.is_dir():
         what = "a file, not a sequence folder" if root.exists() else "sequence folder not found"
@@ -198,11 +186,8 @@ def read_sequence(path, odometry: bool = True) -> Sequence:
         )
     if odo is not None and n > 1:
         speed = float(np.median(np.abs(odo[1:]).max(axis=1) / np.diff(times)))
-        if speed > MAX_TRACK_SPEED_M_S:
-            raise SequenceError(
-                f"{root / 'odometry.txt'}: the tracks move {speed:g} per second (median, with times.txt); "
-                f"expected metres, at most {MAX_TRACK_SPEED_M_S:g} m/s (millimetres?)"
-            )
+        claim = f"the tracks move {speed:g} per second (median, with times.txt)"
+        check_metres(root / "odometry.txt", claim, speed, MAX_TRACK_SPEED_M_S, " m/s")
     manifest_path = root / "manifest.json"
     manifest = read_manifest(manifest_path) if present(manifest_path, "the manifest") else {}
     check_manifest(manifest_path, manifest, n)

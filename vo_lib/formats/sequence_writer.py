@@ -1,8 +1,5 @@
-"""Writing a sequence in the KITTI odometry layout, plus our ``odometry.txt`` and ``manifest.json``.
-
-:class:`SequenceWriter` writes into a temporary folder renamed when complete, under the rules of
-:mod:`vo_lib.outputs`: nothing is written over a folder this package did not write, and a failed
-write leaves nothing behind.
+"""Writing a sequence in the KITTI odometry layout, plus our ``odometry.txt`` and ``manifest.json``,
+under the rules of :mod:`vo_lib.outputs` (whole or not at all, never over a folder not ours).
 """
 
 from __future__ import annotations
@@ -29,10 +26,9 @@ def _format_rows(values, count: int) -> str:
     return "".join(" ".join(repr(float(v)) for v in row) + "\n" for row in rows)
 
 
-class SequenceWriter:
-    """A sequence written frame by frame into a temporary folder, renamed on :meth:`close`; a
-    context manager that leaves nothing behind if its block raises. ``path`` and ``force`` follow
-    :mod:`vo_lib.outputs` (:class:`~vo_lib.outputs.OutputError` before anything is written)."""
+class SequenceWriter(OutputFolder):
+    """An :class:`~vo_lib.outputs.OutputFolder` that a sequence is written into frame by frame, put
+    in place at ``path`` by :meth:`close`."""
 
     def __init__(
         self,
@@ -43,13 +39,10 @@ class SequenceWriter:
         written_by: str = "vo_lib generate",
         inputs=(),
     ):
-        self.path = Path(path)
-        self.camera = camera
-        self._out = OutputFolder(self.path, written_by, force=force, inputs=inputs, option=option)
-        self._tmp = self._out.path
-        (self._tmp / "image_0").mkdir()
-        (self._tmp / "image_1").mkdir()
-        self.count = 0
+        super().__init__(path, written_by, force=force, inputs=inputs, option=option)
+        self.camera, self.count = camera, 0
+        (self.path / "image_0").mkdir()
+        (self.path / "image_1").mkdir()
 
     def add(self, left: np.ndarray, right: np.ndarray) -> None:
         for folder, img in (("image_0", left), ("image_1", right)):
@@ -58,7 +51,7 @@ class SequenceWriter:
             ok, encoded = cv2.imencode(".png", img)
             if not ok:
                 raise ValueError(f"{folder}: frame {self.count} cannot be encoded as PNG")
-            self._write(self._tmp / folder / f"{self.count:06d}.png", encoded.tobytes())
+            self._write(self.path / folder / f"{self.count:06d}.png", encoded.tobytes())
         self.count += 1
 
     def _write(self, path: Path, data: bytes) -> None:
@@ -69,7 +62,7 @@ class SequenceWriter:
         except OSError as exc:
             why = "no space left on device" if exc.errno == errno.ENOSPC else (exc.strerror or str(exc))
             raise OutputError(
-                f"{self._out.label}: cannot write the sequence ({why}); nothing was written"
+                f"{self.label}: cannot write the sequence ({why}); nothing was written"
             ) from None
 
     def carry(self, source: Path, names=CARRIED) -> None:
@@ -79,14 +72,14 @@ class SequenceWriter:
             src = Path(source) / name
             try:
                 if src.is_dir():  # raw_calib: what is read of it, not what else it holds
-                    (self._tmp / name).mkdir()  # with the umask's permissions, not src's: it can be replaced
+                    (self.path / name).mkdir()  # with the umask's permissions, not src's: it can be replaced
                     for file in [f for f in sorted(src.glob("calib_*.txt")) if f.is_file()]:
-                        shutil.copyfile(file, self._tmp / name / file.name)
+                        shutil.copyfile(file, self.path / name / file.name)
                 elif src.is_file():
-                    shutil.copyfile(src, self._tmp / name)
+                    shutil.copyfile(src, self.path / name)
             except OSError as exc:
                 raise OutputError(
-                    f"{self._out.label}: cannot copy {exc.filename or src} "
+                    f"{self.label}: cannot copy {exc.filename or src} "
                     f"({exc.strerror or str(exc)[:120]}); nothing was written"
                 ) from None
 
@@ -107,22 +100,13 @@ class SequenceWriter:
         }
         for name, text in files.items():
             if text is not None:
-                self._write(self._tmp / name, text.encode())
-        return self._out.commit(frames=self.count)
-
-    def __enter__(self):
-        return self
-
-    def __exit__(self, exc_type, exc, tb):
-        self._out.discard()
-        return False
+                self._write(self.path / name, text.encode())
+        return self.commit(frames=self.count)
 
 
-def write_sequence(
-    path, camera, left_images, right_images, times, poses=None, odometry=None, manifest=None, force=False
-):
+def write_sequence(path, camera, left_images, right_images, times, poses=None, odometry=None, manifest=None):
     """Write a whole sequence at once (see :class:`SequenceWriter`)."""
-    with SequenceWriter(path, camera, force=force) as writer:
+    with SequenceWriter(path, camera) as writer:
         for left, right in zip(left_images, right_images, strict=True):
             writer.add(left, right)
         return writer.close(times, poses, odometry, manifest)
