@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from vo_lib.bench.common import BENCH_SEED, median_seconds
+from vo_lib.bench.common import BENCH_SEED, median_seconds, met
 
 
 def bench_observers(laps: int = 3) -> dict[str, float]:
@@ -46,9 +46,8 @@ def bench_observers(laps: int = 3) -> dict[str, float]:
         )
     ratio_b, ratio_c = base / per_call["bisection"], base / per_call["closed_form"]
     print(
-        f"  targets: point/bisection >= 4.5 ({'met' if ratio_b >= 4.5 else 'NOT met'}: {ratio_b:.1f}; "
-        f"paper about 5); point/closed form >= 20 ({'met' if ratio_c >= 20 else 'NOT met'}: {ratio_c:.1f}); "
-        f"lap with closed form <= 3 s ({'met' if lap['closed_form'] <= 3 else 'NOT met'}: "
-        f"{lap['closed_form']:.2f} s)"
+        f"  targets: point/bisection >= 4.5 ({met(ratio_b >= 4.5)}: {ratio_b:.1f}; paper about 5); "
+        f"point/closed form >= 20 ({met(ratio_c >= 20)}: {ratio_c:.1f}); "
+        f"lap with closed form <= 3 s ({met(lap['closed_form'] <= 3)}: {lap['closed_form']:.2f} s)"
     )
     return {**{f"call {k}": v for k, v in per_call.items()}, **{f"lap {k}": v for k, v in lap.items()}}

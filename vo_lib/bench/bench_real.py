@@ -6,11 +6,12 @@ prints is on the benchmarks page (``docs/benchmarks.md``).
 from __future__ import annotations
 
 import os
-import time
 from functools import partial
 from pathlib import Path
 
 import numpy as np
+
+from vo_lib.bench.common import timed_ms
 
 #: Where the development sequences sit when ``$VO_LIB_REALDATA`` is not set: beside the checkout.
 DEFAULT_REALDATA = Path(__file__).resolve().parents[2].parent / "shared" / "realdata"
@@ -35,13 +36,9 @@ def decoded_sequence(folder) -> tuple[object, float]:
 
     seq = load_sequence(folder, odometry=False, progress=False)
     seq.read_ahead = 0
-    pairs, ms = [], []
-    for k in range(len(seq)):
-        t0 = time.perf_counter()
-        pairs.append(seq.pair(k))
-        ms.append((time.perf_counter() - t0) * 1e3)
-    seq.pair = pairs.__getitem__
-    return seq, float(np.median(ms))
+    timed = [timed_ms(seq.pair, k) for k in range(len(seq))]
+    seq.pair = [pair for pair, _ in timed].__getitem__
+    return seq, float(np.median([ms for _, ms in timed]))
 
 
 def run_ours(seq, repeats: int = REPEATS) -> tuple[object, list[float]]:

@@ -5,6 +5,8 @@ named sample (rendered in memory), each sample beside the range it must meet.
 
 from __future__ import annotations
 
+from dataclasses import asdict
+
 #: Frames measured per sequence, spread evenly over it.
 FRAMES = 20
 #: Ranges the samples must meet: (empty cells low, high), (low-gradient low, high).
@@ -40,8 +42,7 @@ def bench_realism(frames: int = FRAMES) -> dict[str, float]:
         picked = spread_frames(len(seq), frames)
         stats = ImageStatistics.mean(image_statistics(seq.pair(int(k))[0]) for k in picked)
         rows.append((f"real: {folder.name}", stats, None))
-    for name in SAMPLES:
-        rows.append((f"sample {name}", sample_statistics(name, frames), sample_range(is_indoor(name))))
+    rows += [(f"sample {n}", sample_statistics(n, frames), sample_range(is_indoor(n))) for n in SAMPLES]
     print(
         f"{frames} left images spread over each sequence; FAST-9/16 at threshold 20 with non-maximum "
         "suppression; gradient: 3x3 Sobel magnitude"
@@ -58,9 +59,7 @@ def bench_realism(frames: int = FRAMES) -> dict[str, float]:
             ok = e0 <= s.empty_cells <= e1 and g0 <= s.low_gradient <= g1
             verdict = "  in range" if ok else "  OUT of range"
         print(f"  {label:<46s}{s.empty_cells:24.2f}{s.corners_per_vga:21,.0f}{s.low_gradient:21.2f}{verdict}")
-        out.update(
-            {f"{label}:{key}": getattr(s, key) for key in ("empty_cells", "corners_per_vga", "low_gradient")}
-        )
+        out.update({f"{label}:{key}": value for key, value in asdict(s).items()})
     print(
         "  ranges: outdoor samples and the road 0.35-0.65 cells without a corner and 0.30-0.50 "
         "low-gradient pixels; indoor samples at least 0.25 cells without a corner"

@@ -4,11 +4,11 @@ from __future__ import annotations
 
 import contextlib
 import math
-import time
+import pkgutil
 
 import numpy as np
 
-from vo_lib.bench.common import BENCH_SEED, format_row, median_seconds
+from vo_lib.bench.common import BENCH_SEED, format_row, median_seconds, met, timed_ms
 from vo_lib.stereo_vo.paper_tables import PAPER_LONG_RUN
 
 
@@ -53,9 +53,8 @@ def bench_geometry(n: int = 10_000) -> dict[str, float]:
     print(f"theta and rho for {n} matches (median time per call; speed-up over the loop)")
     for name, t in times.items():
         print(format_row(name, t, loop))
-    target = 1e-3
     t = times["vo_lib theta_from_pixels + rho_from_pixels"]
-    print(f"  target < {target * 1e3:.1f} ms: {'met' if t < target else 'NOT met'} ({t / target:.2f} of it)")
+    print(f"  target < 1.0 ms: {met(t < 1e-3)} ({t / 1e-3:.2f} of it)")
     return times
 
 
@@ -109,8 +108,8 @@ def bench_ransac(sets: int = 15, n: int = 300) -> dict[str, float]:
         print(f"  |dθ|: {paired.sentence('1-point RANSAC + refinement', other, unit='°', digits=4)}")
     ratio = results["OpenCV solvePnPRansac (6 DoF)"][0] / base
     print(
-        f"  target: 1-point <= 0.6 ms ({'met' if base <= 6e-4 else 'NOT met'}: {base * 1e3:.3f} ms); "
-        f"solvePnPRansac / 1-point >= 10 ({'met' if ratio >= 10 else 'NOT met'}: {ratio:.1f})"
+        f"  target: 1-point <= 0.6 ms ({met(base <= 6e-4)}: {base * 1e3:.3f} ms); "
+        f"solvePnPRansac / 1-point >= 10 ({met(ratio >= 10)}: {ratio:.1f})"
     )
     return {name: r[0] for name, r in results.items()}
 
@@ -141,16 +140,14 @@ def bench_frontend(frames: int = 30) -> dict[str, float]:
     feats = []
     for left, right in pairs:
         for _ in range(3):  # repeated, the median of three is the frame's time
-            t0 = time.perf_counter()
-            f = front.process(left, right)
-            stages["total"].append((time.perf_counter() - t0) * 1e3)
+            f, ms = timed_ms(front.process, left, right)
+            stages["total"].append(ms)
             for k in ("detect", "describe", "stereo_match"):
                 stages[k].append(f.timings[k])
         feats.append(f)
     guided, brute = [], []
     for k in range(1, len(feats)):
-        T = camera_motion(poses[k - 1], poses[k], mount)
-        theta, rho = circular_motion_from_transform(T)
+        theta, rho = circular_motion_from_transform(camera_motion(poses[k - 1], poses[k], mount))
         prior = MotionPrior(theta, rho, np.diag([np.radians(0.5) ** 2, 0.01**2]))
         guided.append(match_temporal(feats[k - 1], feats[k], cam, prior).timings["temporal_match"])
         brute.append(match_temporal(feats[k - 1], feats[k], cam, None).timings["temporal_match"])
@@ -173,8 +170,8 @@ def bench_frontend(frames: int = 30) -> dict[str, float]:
     print(f"  Kalman step (predict+update) {t_kf * 1e3:7.3f} ms")
     total = float(np.median(stages["total"]))
     print(
-        f"  targets: front end <= 8 ms ({'met' if total <= 8 else 'NOT met'}: {total:.2f}); "
-        f"Kalman <= 0.1 ms ({'met' if t_kf <= 1e-4 else 'NOT met'}: {t_kf * 1e3:.3f})"
+        f"  targets: front end <= 8 ms ({met(total <= 8)}: {total:.2f}); "
+        f"Kalman <= 0.1 ms ({met(t_kf <= 1e-4)}: {t_kf * 1e3:.3f})"
     )
     return {"front_end": total / 1e3, "kalman": t_kf}
 
@@ -201,38 +198,31 @@ def bench_pipeline(frames: int = 200) -> dict[str, float]:
     fps = 1000.0 / table["total"]
     inliers = float(np.median([d.inliers for d in result.diagnostics[1:]]))
     print(
-        f"  frames per second {fps:.0f} (target >= 60: {'met' if fps >= 60 else 'NOT met'}); "
-        f"median inliers {inliers:.0f} (target >= 200: {'met' if inliers >= 200 else 'NOT met'})"
+        f"  frames per second {fps:.0f} (target >= 60: {met(fps >= 60)}); "
+        f"median inliers {inliers:.0f} (target >= 200: {met(inliers >= 200)})"
     )
     return {"frame": table["total"] / 1e3}
 
 
 #: Each compiled kernel where the pipeline and the renderer look it up, and its NumPy reference.
 KERNEL_CALLS = (
-    ("vo_lib.stereo_vo.matching_core", "best_matches_core", "vo_lib.stereo_vo.matching_plain.best_matches"),
-    ("vo_lib.stereo_vo.matching_core", "sad_costs", "vo_lib.stereo_vo.matching_plain.sad_costs"),
-    (
-        "vo_lib.stereo_vo.matching_core",
-        "window_candidates",
-        "vo_lib.stereo_vo.matching_plain.window_candidates",
-    ),
-    ("vo_lib.stereo_vo.matching_core", "row_candidates", "vo_lib.stereo_vo.matching_plain.row_candidates"),
-    ("vo_lib.sim.render", "draw_nearer", "vo_lib.sim.composite_plain.draw_nearer"),
+    ("vo_lib.stereo_vo.matching_core.best_matches_core", "vo_lib.stereo_vo.matching_plain.best_matches"),
+    ("vo_lib.stereo_vo.matching_core.sad_costs", "vo_lib.stereo_vo.matching_plain.sad_costs"),
+    ("vo_lib.stereo_vo.matching_core.window_candidates", "vo_lib.stereo_vo.matching_plain.window_candidates"),
+    ("vo_lib.stereo_vo.matching_core.row_candidates", "vo_lib.stereo_vo.matching_plain.row_candidates"),
+    ("vo_lib.sim.render.draw_nearer", "vo_lib.sim.composite_plain.draw_nearer"),
 )
 
 
 def _kernel_and_numpy(time_it) -> tuple[float, float]:
     """``time_it()`` (milliseconds) with the compiled kernels, then with their NumPy references
     put where the kernels are called; the kernels are put back afterwards."""
-    import importlib
     from unittest import mock
 
     with_kernels = time_it()
     with contextlib.ExitStack() as stack:
-        for module, name, reference in KERNEL_CALLS:
-            where, _, function = reference.rpartition(".")
-            plain = getattr(importlib.import_module(where), function)
-            stack.enter_context(mock.patch.object(importlib.import_module(module), name, plain))
+        for kernel, reference in KERNEL_CALLS:
+            stack.enter_context(mock.patch(kernel, pkgutil.resolve_name(reference)))
         return with_kernels, time_it()
 
 
@@ -240,12 +230,7 @@ def _render_ms(renderer, poses) -> float:
     """Median milliseconds to render a stereo pair at each of ``poses`` (after one warm-up)."""
     rng = np.random.default_rng(BENCH_SEED)
     renderer.render_pair(poses[0], rng)  # warm
-    times = []
-    for pose in poses:
-        t0 = time.perf_counter()
-        renderer.render_pair(pose, rng)
-        times.append((time.perf_counter() - t0) * 1e3)
-    return float(np.median(times))
+    return float(np.median([timed_ms(renderer.render_pair, pose, rng)[1] for pose in poses]))
 
 
 def bench_kernels(frames: int = 60) -> dict[str, float]:
@@ -301,16 +286,14 @@ def bench_long(frames: int = PAPER_LONG_RUN[0]) -> dict[str, float]:
     from vo_lib.stereo_vo.pipeline import run_frames
 
     rendered, frame_iter = render_sample("long_run", frames)
-    t0 = time.perf_counter()
-    result = run_frames(frame_iter, rendered.camera)
-    wall = time.perf_counter() - t0
+    result, wall_ms = timed_ms(run_frames, frame_iter, rendered.camera)
     totals = np.array([t.total for t in result.timings[1:]])
     truth = rendered.truth()
     travelled = float(np.sum(np.linalg.norm(np.diff(truth[:, :2], axis=0), axis=1)))
     final = compose_planar(truth[0], result.poses[-1])
     error = float(np.linalg.norm(final[:2] - truth[-1, :2]))
     n, paper_mean, paper_sd = PAPER_LONG_RUN
-    print(f"long run: {frames} frames of long_run at 640x480 ({wall:.0f} s with rendering)")
+    print(f"long run: {frames} frames of long_run at 640x480 ({wall_ms / 1e3:.0f} s with rendering)")
     print(f"  {'':28s}{'mean':>9s}{'s.d.':>9s}{'median':>9s}{'99th pct':>10s}{'max':>9s}  [ms per frame]")
     print(
         f"  {'ours':28s}{totals.mean():9.2f}{totals.std():9.2f}{np.median(totals):9.2f}"

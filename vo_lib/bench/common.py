@@ -1,4 +1,4 @@
-"""Timing helpers shared by the benchmarks: median wall times, table rows, one seed."""
+"""Timing helpers shared by the benchmarks: median wall times, table rows, verdicts, one seed."""
 
 from __future__ import annotations
 
@@ -13,9 +13,7 @@ BENCH_SEED = 20261121
 def median_seconds(fn: Callable[[], object], repeat: int = 50, min_time: float = 0.2) -> float:
     """Median wall time of one call of ``fn`` over ``repeat`` batches lasting about ``min_time`` in all."""
     fn()  # warm caches and lazy imports
-    t0 = time.perf_counter()
-    fn()
-    once = max(time.perf_counter() - t0, 1e-7)
+    once = max(timed_ms(fn)[1] / 1e3, 1e-7)
     number = max(1, int(min_time / repeat / once))
     samples = []
     for _ in range(repeat):
@@ -24,6 +22,18 @@ def median_seconds(fn: Callable[[], object], repeat: int = 50, min_time: float =
             fn()
         samples.append((time.perf_counter() - t0) / number)
     return float(np.median(samples))
+
+
+def timed_ms(fn: Callable, *args) -> tuple[object, float]:
+    """``fn(*args)`` and the milliseconds it took."""
+    t0 = time.perf_counter()
+    out = fn(*args)
+    return out, (time.perf_counter() - t0) * 1e3
+
+
+def met(ok) -> str:
+    """The verdict printed beside a target."""
+    return "met" if ok else "NOT met"
 
 
 def format_row(name: str, seconds: float, baseline: float | None = None) -> str:

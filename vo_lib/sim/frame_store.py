@@ -18,33 +18,25 @@ import numpy as np
 FOLDER: Path | None = None
 
 
-class FrameStore:
-    """The stored frames of one rendering (``key``: fingerprint, resolution, first frame)."""
+def get(folder: Path, k: int) -> tuple[np.ndarray, np.ndarray, dict] | None:
+    """Left and right images of frame ``k`` in ``folder`` and the noise state after them, or None."""
+    try:
+        with np.load(folder / f"{k:06d}.npz") as data:
+            return data["left"], data["right"], json.loads(str(data["rng_state"]))
+    except (OSError, KeyError, ValueError):
+        return None  # not stored (or unreadable): render it
 
-    def __init__(self, folder: Path, key: str):
-        self.folder = Path(folder) / key
 
-    def _path(self, k: int) -> Path:
-        return self.folder / f"{k:06d}.npz"
-
-    def get(self, k: int) -> tuple[np.ndarray, np.ndarray, dict] | None:
-        """Left and right images of frame ``k`` and the noise generator's state after them, or None."""
-        try:
-            with np.load(self._path(k)) as data:
-                return data["left"], data["right"], json.loads(str(data["rng_state"]))
-        except (OSError, KeyError, ValueError):
-            return None  # not stored (or unreadable): render it
-
-    def put(self, k: int, left: np.ndarray, right: np.ndarray, rng_state: dict) -> None:
-        """Store frame ``k``; a store that cannot be written is skipped, never an error."""
-        path = self._path(k)
-        tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-        try:
-            self.folder.mkdir(parents=True, exist_ok=True)
-            with open(tmp, "wb") as f:
-                np.savez(f, left=left, right=right, rng_state=np.array(json.dumps(rng_state)))
-            os.replace(tmp, path)
-        except BaseException as exc:  # unwritable or interrupted: no temporary left behind
-            tmp.unlink(missing_ok=True)
-            if not isinstance(exc, OSError):
-                raise
+def put(folder: Path, k: int, left: np.ndarray, right: np.ndarray, rng_state: dict) -> None:
+    """Store frame ``k`` in ``folder``; a store that cannot be written is skipped, never an error."""
+    path = folder / f"{k:06d}.npz"
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        with open(tmp, "wb") as f:
+            np.savez(f, left=left, right=right, rng_state=np.array(json.dumps(rng_state)))
+        os.replace(tmp, path)
+    except BaseException as exc:  # unwritable or interrupted: no temporary left behind
+        tmp.unlink(missing_ok=True)
+        if not isinstance(exc, OSError):
+            raise

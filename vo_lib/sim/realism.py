@@ -78,10 +78,9 @@ def image_statistics(image: np.ndarray) -> ImageStatistics:
         )
     detector = cv2.FastFeatureDetector_create(FAST_THRESHOLD, True, cv2.FAST_FEATURE_DETECTOR_TYPE_9_16)
     corners = np.array([k.pt for k in detector.detect(image)], dtype=float).reshape(-1, 2)  # (u, v)
-    h, w = image.shape
     return ImageStatistics(
         empty_cells=float(1.0 - occupied_cells(image.shape, corners).mean()),
-        corners_per_vga=len(corners) * VGA_PIXELS / (h * w),
+        corners_per_vga=len(corners) * VGA_PIXELS / image.size,
         low_gradient=float(np.mean(gradient_magnitude(image) < LOW_GRADIENT)),
     )
 

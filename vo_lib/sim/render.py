@@ -65,8 +65,7 @@ class SensorEffects:
     def apply(self, image: np.ndarray, rng: np.random.Generator | None) -> np.ndarray:
         out = image
         if self.blur_px >= 1.0:
-            n = int(round(self.blur_px))
-            out = cv2.blur(out, (n, 1))
+            out = cv2.blur(out, (int(round(self.blur_px)), 1))
         if self.exposure_gain != 1.0 or self.noise_sigma > 0:
             f = out.astype(np.float32) * self.exposure_gain
             if self.noise_sigma > 0:
@@ -113,8 +112,7 @@ def build_quads(world: World) -> _Quads:
 def _patch_quads(patch, texel: float, shade: float | None = None, split_across: bool = True) -> _Quads:
     """Quads of a :class:`~vo_lib.sim.world.Patch`, cut into tiles of at most TILE_TEXELS (along
     only, for a wall); ``shade`` overrides the flat shading of its normal."""
-    along, across = np.asarray(patch.along, float), np.asarray(patch.across, float)
-    origin = np.asarray(patch.origin, float)
+    along, across, origin = (np.asarray(v, float) for v in (patch.along, patch.across, patch.origin))
     total = max(patch.texture_length, patch.offset + patch.length)
     cols, rows = int(np.ceil(total / texel)) + 1, int(np.ceil(patch.width / texel)) + 1
     tex = cached_surface(patch.style, rows, cols, texel, patch.texture_seed)
@@ -158,8 +156,9 @@ def _mover_quads(mover) -> _Quads:
     return _Quads.join([*quads, _patch_quads(top, MOVER_TEXEL)])
 
 
-def _moved(quads: _Quads, R: np.ndarray, t: np.ndarray) -> _Quads:
-    """Body-frame quads carried to the world by rotation ``R`` and translation ``t``."""
+def _moved(quads: _Quads, t: np.ndarray, yaw: float) -> _Quads:
+    """Body-frame quads carried to the world: turned by ``yaw``, moved by ``t``."""
+    R = yaw_matrix(yaw)
     e1, e2, normal, origin = (
         np.array([R @ v for v in vs]) for vs in (quads.e1, quads.e2, quads.normal, quads.origin)
     )
@@ -170,9 +169,7 @@ def _moved(quads: _Quads, R: np.ndarray, t: np.ndarray) -> _Quads:
 def _clip_near(points: np.ndarray, near: float) -> np.ndarray:
     """Sutherland-Hodgman clipping of a convex polygon (camera frame) to ``z >= near``."""
     out = []
-    n = len(points)
-    for i in range(n):
-        p, q = points[i], points[(i + 1) % n]
+    for p, q in zip(points, np.roll(points, -1, axis=0), strict=True):
         p_in, q_in = p[2] >= near, q[2] >= near
         if p_in:
             out.append(p)
@@ -184,8 +181,6 @@ def _clip_near(points: np.ndarray, near: float) -> np.ndarray:
 
 def _draw(image, inv_depth, order, boxes, H, level, textures, shades, pts4, clipped, abe) -> None:
     """Warp each quad of ``order`` into its screen box and draw it where it is nearer (z-buffer)."""
-    planes = list(abe)  # float64 scalars: keep
-    composite = draw_nearer
     for i in order:
         x0, y0, x1, y1 = boxes[i]
         warped = cv2.warpPerspective(
@@ -198,8 +193,7 @@ def _draw(image, inv_depth, order, boxes, H, level, textures, shades, pts4, clip
         mask = np.zeros((y1 - y0, x1 - x0), np.uint8)
         pts = pts4[i] if i not in clipped else np.round((clipped[i] - (x0, y0)) * 16).astype(np.int32)
         cv2.fillConvexPoly(mask, pts, 1, lineType=cv2.LINE_8, shift=4)
-        a, b, e = planes[i]
-        composite(image, inv_depth, warped, mask, x0, y0, a, b, e, shades[i])
+        draw_nearer(image, inv_depth, warped, mask, x0, y0, *abe[i], shades[i])
 
 
 class StereoRenderer:
@@ -224,14 +218,6 @@ class StereoRenderer:
             [[fx, 0, cx + 0.5], [-fx, 0, w - 0.5 - cx], [0, fy, cy + 0.5], [0, -fy, h - 0.5 - cy]]
         )
 
-    def quads_at(self, time: float) -> _Quads:
-        """The world's quads, with the movers' where they are at ``time``."""
-        moving = []
-        for mover, body in self._movers:
-            position, yaw = mover.pose(time)
-            moving.append(_moved(body, yaw_matrix(yaw), position))
-        return _Quads.join([self.quads, *moving]) if moving else self.quads
-
     def render(self, T_world_camera, with_depth: bool = False, time: float = 0.0):
         """Grey image (uint8) seen by a camera at ``T_world_camera`` (4x4, camera to world).
 
@@ -241,10 +227,10 @@ class StereoRenderer:
         T = np.asarray(T_world_camera, dtype=float)
         R, c = T[:3, :3], T[:3, 3]
         cam = self.camera
-        w, h = cam.width, cam.height
         image = self._sky.copy()
-        inv_depth = np.zeros((h, w), np.float32)
-        quads = self.quads_at(time)
+        inv_depth = np.zeros(image.shape, np.float32)
+        moving = [_moved(body, *mover.pose(time)) for mover, body in self._movers]  # at ``time``
+        quads = _Quads.join([self.quads, *moving]) if moving else self.quads
         corners_c = (quads.corners - c) @ R  # (Q, 4, 3), camera frame
         # a quad is culled when all its corners lie outside one plane of the frustum
         outside = (corners_c @ self._frustum.T < 0).all(axis=1).any(axis=1)
@@ -267,7 +253,7 @@ class StereoRenderer:
         ok = np.isfinite(lo).all(axis=1)
         lo, hi = np.where(ok[:, None], lo, 0), np.where(ok[:, None], hi, -1)
         x0y0 = np.maximum(np.floor(lo).astype(int), 0)
-        x1y1 = np.minimum(np.ceil(hi).astype(int) + 1, (w, h))
+        x1y1 = np.minimum(np.ceil(hi).astype(int) + 1, (cam.width, cam.height))
         # corners in 1/16 pixel from the box's corner, for fillConvexPoly (clipped quads: below)
         with np.errstate(invalid="ignore", over="ignore"):
             pts4 = np.round((uv4 - x0y0[:, None, :]) * 16).astype(np.int32)

@@ -85,17 +85,16 @@ def _ramp(s, start: float, end: float, value: float) -> np.ndarray:
 
 def grade(s) -> np.ndarray:
     """Rise of the road per metre along it at arc length ``s``."""
-    return _ramp(np.asarray(s, float), *CLIMB, CLIMB_GRADE)
+    return _ramp(s, *CLIMB, CLIMB_GRADE)
 
 
 def crossfall(s) -> np.ndarray:
     """Rise of the road per metre to the left at arc length ``s``."""
-    return _ramp(np.asarray(s, float), *BANK, BANK_CROSSFALL)
+    return _ramp(s, *BANK, BANK_CROSSFALL)
 
 
 def elevation(s) -> np.ndarray:
     """Height of the road's centre line at arc length ``s``: ROAD_RAISE plus the integrated grade."""
-    s = np.asarray(s, float)
     fine = np.linspace(-RUN_IN, arc_length(planned_path())[-1] + RUN_OUT, 4001)
     g = grade(fine)
     height = np.concatenate([[0.0], np.cumsum(0.5 * (g[1:] + g[:-1]) * np.diff(fine))])
@@ -109,16 +108,11 @@ def centre_line(step: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
     s = arc_length(path)
     keep = np.concatenate([[True], np.diff(s) > 1e-9])  # drop standing frames
     path, s = path[keep], s[keep]
-    total = s[-1] + RUN_OUT
-    at = np.arange(-RUN_IN, total + step / 2, step)
-    heading = np.unwrap(path[:, 2])
+    at = np.arange(-RUN_IN, s[-1] + RUN_OUT + step / 2, step)
     inside = np.clip(at, 0.0, s[-1])
-    x, y = (np.interp(inside, s, path[:, i]) for i in (0, 1))
-    h = np.interp(inside, s, heading)
+    x, y, h = (np.interp(inside, s, v) for v in (path[:, 0], path[:, 1], np.unwrap(path[:, 2])))
     beyond = at - inside  # metres before the start (< 0) or beyond the end (> 0)
-    x = x + beyond * np.cos(h)
-    y = y + beyond * np.sin(h)
-    return at, np.column_stack([x, y, h])
+    return at, np.column_stack([x + beyond * np.cos(h), y + beyond * np.sin(h), h])
 
 
 def vehicle_poses(poses: np.ndarray) -> np.ndarray:

@@ -59,6 +59,12 @@ def exposure_gains(n: int, sigma: float, rng: np.random.Generator) -> np.ndarray
     return np.exp(lfilter([1.0], [1.0, -a], steps))  # g_k = a g_(k-1) + step_k
 
 
+def _sensor_effects(sample, n: int) -> list[SensorEffects]:
+    """The sample's sensor noise and auto-exposure gain for each of its first ``n`` frames."""
+    gains = exposure_gains(n, sample.exposure_sigma, np.random.default_rng(sample.seed + 3))
+    return [SensorEffects(noise_sigma=sample.sensor_noise, exposure_gain=float(g)) for g in gains]
+
+
 @dataclass(frozen=True)
 class Sample:
     """Everything that defines a sample sequence."""
@@ -284,39 +290,32 @@ def render_sample(name: str, frames: int | None = None, resolution=None, first: 
         )
     camera = sample_camera(sample, resolution)
     car = sample.rig == "car"
-    drive = simulate_drive(
-        sample.legs,
-        sample.rate,
-        sample.start,
-        np.random.default_rng(sample.seed),
-        road.CAR_ODOMETRY if car else TrackOdometry(),
-        sample.slip,
-        sample.surface,
-    )
+    odometry = road.CAR_ODOMETRY if car else TrackOdometry()
+    rng = np.random.default_rng(sample.seed)
+    drive = simulate_drive(sample.legs, sample.rate, sample.start, rng, odometry, sample.slip, sample.surface)
     mount = road.camera_in_vehicle() if car else camera_mount(height=CAMERA_HEIGHT)
     poses = _world_poses(sample, drive)
     image_rng = np.random.default_rng(sample.seed + 1)
-    gains = exposure_gains(first + n, sample.exposure_sigma, np.random.default_rng(sample.seed + 3))
+    effects = _sensor_effects(sample, first + n)
 
-    store = None
-    if frame_store.FOLDER:  # (the fingerprint is worked out only for a store)
+    store = None  # this rendering's folder of the frame store (the fingerprint is worked out only for one)
+    if frame_store.FOLDER:
         key = f"{name}-{fingerprint(name)}-{camera.width}x{camera.height}-from{first}"
-        store = frame_store.FrameStore(frame_store.FOLDER, key)
+        store = Path(frame_store.FOLDER) / key
 
     def frame_iter():
         renderer = None  # built at the first frame the store does not hold (textures take a second)
         for k in range(first, first + n):
-            stored = store.get(k) if store else None
+            stored = frame_store.get(store, k) if store else None
             if stored:
                 left, right, state = stored
                 image_rng.bit_generator.state = state  # as if this frame had been rendered here
             else:
                 renderer = renderer or StereoRenderer(WORLDS[sample.world](), camera)
-                gain = float(gains[k])
-                renderer.effects = SensorEffects(noise_sigma=sample.sensor_noise, exposure_gain=gain)
+                renderer.effects = effects[k]
                 left, right = renderer.render_pair(poses[k] @ mount, image_rng, time=k / sample.rate)
                 if store:
-                    store.put(k, left, right, image_rng.bit_generator.state)
+                    frame_store.put(store, k, left, right, image_rng.bit_generator.state)
             yield left, right, (None if k == first else drive.odometry[k])
 
     return RenderedSample(camera, mount, drive, n, poses, first), frame_iter()
@@ -334,9 +333,8 @@ def render_left_images(name: str, indices, resolution=None) -> list[np.ndarray]:
     rendered, _ = render_sample(name, None, resolution)
     renderer = StereoRenderer(WORLDS[sample.world](), rendered.camera)
     rng = np.random.default_rng(sample.seed + 2)
-    gains = exposure_gains(sample.frames, sample.exposure_sigma, np.random.default_rng(sample.seed + 3))
     cameras = rendered.camera_poses()
-    effects = [SensorEffects(noise_sigma=sample.sensor_noise, exposure_gain=float(g)) for g in gains]
+    effects = _sensor_effects(sample, sample.frames)
     return [
         effects[k].apply(renderer.render(cameras[k], time=k / sample.rate), rng) for k in map(int, indices)
     ]
@@ -357,7 +355,6 @@ def generate(
     sample = get_sample(name)
     rendered, frame_iter = render_sample(name, frames, resolution)
     camera, drive, n = rendered.camera, rendered.drive, rendered.frames
-    width, height = camera.width, camera.height
     with SequenceWriter(out, camera, force=force) as writer:
         for left, right, _ in _with_progress(frame_iter, n, f"rendering {name}", progress):
             writer.add(left, right)
@@ -374,7 +371,7 @@ def generate(
             "frames": n,
             "frames_full": sample.frames,
             "rate_hz": sample.rate,
-            "resolution": [width, height],
+            "resolution": [camera.width, camera.height],
             "legs": [asdict(leg) for leg in sample.legs],
             "start_pose": list(sample.start),
             "camera": {

@@ -1,12 +1,11 @@
 """Grey-level textures, deterministic by seed: procedural corner-rich ones, photographs, paint.
 
-A texture is a sum of blocky noise at several scales (nearest-neighbour upsampled random grids,
-each offset by a random shift, so block corners do not line up across scales) plus random
-filled polygons and discs. Blocks give FAST its corners at every viewing distance; the polygons
-add corners at arbitrary angles. Mipmaps (Gaussian pyramids) let the renderer sample far surfaces
-without aliasing. Real surfaces are mostly poorer in corners: :func:`surface_texture` makes one
-of the named styles of :data:`_DRAW` (photographs are scikit-image's, tiled mirrored at a
-physical scale).
+The corner texture is blocky noise at several scales (random grids upsampled nearest-neighbour,
+each shifted at random so that block corners do not line up across scales), which gives FAST
+corners at every viewing distance, plus filled polygons and discs for corners at any angle. Real
+surfaces are mostly poorer in corners: :func:`surface_texture` makes each named style of
+:data:`_DRAW` (photographs are scikit-image's, tiled mirrored at a physical scale). Mipmaps
+(Gaussian pyramids) let the renderer sample far surfaces without aliasing.
 """
 
 from __future__ import annotations
@@ -27,7 +26,7 @@ GREY_RANGE = (25.0, 230.0)
 MIN_MIP_SIDE = 8
 
 
-def corner_texture(height: int, width: int, seed: int, contrast: float = 1.0) -> np.ndarray:
+def corner_texture(height: int, width: int, seed: int) -> np.ndarray:
     """A ``(height, width)`` uint8 texture; the same arguments always give the same texels."""
     if height <= 0 or width <= 0:
         raise ValueError(f"texture size must be positive; got {height}x{width}")
@@ -53,8 +52,8 @@ def corner_texture(height: int, width: int, seed: int, contrast: float = 1.0) ->
             pts = c + 0.5 * s * np.column_stack([np.cos(a), np.sin(a)])
             cv2.fillPoly(img, [pts.astype(np.int32)], float(level))
     lo, hi = np.percentile(img, (1, 99))
-    mid, half = 0.5 * sum(GREY_RANGE), 0.5 * (GREY_RANGE[1] - GREY_RANGE[0]) * contrast
-    img = mid + (img - 0.5 * (lo + hi)) * (2 * half / max(hi - lo, 1e-6))
+    scale = (GREY_RANGE[1] - GREY_RANGE[0]) / max(hi - lo, 1e-6)
+    img = 0.5 * sum(GREY_RANGE) + (img - 0.5 * (lo + hi)) * scale
     return np.clip(img, 0, 255).astype(np.uint8)
 
 
@@ -127,13 +126,11 @@ def _joint_share(centre: np.ndarray, texel: float, period: float) -> np.ndarray:
 
 
 def brick_wall(height: int, width: int, texel: float, seed: int) -> np.ndarray:
-    """Bricks in running bond: courses of bricks, each its own grey, every other course shifted by
-    half a brick, in light mortar joints, with the fine grain of the gravel photograph; framed
-    windows on every storey the wall is tall enough for.
+    """Bricks in running bond (each its own grey, odd courses shifted by half a brick) in light
+    mortar, with the gravel photograph's fine grain and framed windows on every storey.
 
-    Joints are thinner than a texel: each texel is given the share of its area that joints cover
-    (a box filter of the bond, exact for the joints), and the grey of the brick at its centre.
-    Row 0 is the floor line.
+    Joints are thinner than a texel: each texel gets the share of its area that joints cover (a box
+    filter, exact for the joints) and the grey of the brick at its centre. Row 0 is the floor line.
     """
     rng = np.random.default_rng(seed)
     pitch, course = BRICK_SIZE[0] + MORTAR, BRICK_SIZE[1] + MORTAR  # brick plus one joint
@@ -169,9 +166,8 @@ def painted_wall(height: int, width: int, texel: float, seed: int) -> np.ndarray
     rng = np.random.default_rng(seed)
     grey = rng.uniform(150, 200)
     img = grey + smooth_wash(height, width, texel, rng, 3.0)
-    length = width * texel
     x = rng.uniform(0.3, 2.0)
-    while x < length - 1.0:
+    while x < width * texel - 1.0:
         if rng.random() < 0.35:  # a door with its frame
             _rect(img, x - 0.06, 0.0, x + 0.96, 2.06, texel, grey - 60)
             _rect(img, x, 0.0, x + 0.9, 2.0, texel, rng.uniform(70, 120))
@@ -268,19 +264,18 @@ def road_surface(height: int, width: int, texel: float, seed: int) -> np.ndarray
     gravel = photo_texture("gravel", height, width, texel, seed + 1)
     wash = smooth_wash(height, width, texel, np.random.default_rng(seed + 2), 4.0)
     painted = np.mod(np.arange(width) * texel, DASH[1]) < DASH[0]  # the centre line's dashes
-    band_grey = {  # each band's grey over its rows r0:r1 (asphalt: img's)
-        "gravel": lambda r0, r1: gravel[r0:r1],
-        "kerb": lambda r0, r1: KERB_GREY + 0.3 * (gravel[r0:r1] - PHOTO_TONE["gravel"][0]),
-        "line": lambda r0, r1: LINE_GREY,
-    }
     edges = np.cumsum([0.0, *(w for _, w in ROAD_BANDS)])
     for (band, _), start, end in zip(ROAD_BANDS, edges, edges[1:], strict=False):
-        r0, r1 = int(round(start / texel)), int(round(end / texel))
+        r0, r1 = int(round(start / texel)), int(round(end / texel))  # the band's rows (asphalt: img's)
         if band == "dashes":  # asphalt, the line painted over the band's middle third
             third = (r1 - r0) // 3
             img[r0 + third : r1 - third, painted] = LINE_GREY
-        elif band in band_grey:
-            img[r0:r1] = band_grey[band](r0, r1)
+        elif band == "gravel":
+            img[r0:r1] = gravel[r0:r1]
+        elif band == "kerb":
+            img[r0:r1] = KERB_GREY + 0.3 * (gravel[r0:r1] - PHOTO_TONE["gravel"][0])
+        elif band == "line":
+            img[r0:r1] = LINE_GREY
     return img + wash
 
 

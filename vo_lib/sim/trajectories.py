@@ -6,12 +6,9 @@ the motor turns it by ``g / (1 - s)``; the encoders count that turning, with ran
 Slip is small and nearly equal on both tracks when driving, strong and unequal in spot turns,
 where the tracks scrub sideways (the cause [Zhao] gives for its spot-turn heading errors).
 
-Slip alone changes only what the encoders read. How the tracks meet the ground also moves the
-body itself (:class:`TrackGround`): a skid-steered vehicle turns about an instantaneous centre of
-rotation (ICR) that lies ahead of or behind its track centre and moves with the turn rate, so the
-body skids sideways in every turn; on rough ground a track briefly loses contact, the body
-pitches and rolls, and the other track swings it round. Truth integrates that body motion;
-odometry integrates the encoders.
+Slip alone changes only what the encoders read; how the tracks meet the ground (:class:`TrackGround`)
+also moves the body: it skids sideways about a wandering turning centre, and pitches, rolls and swings
+round when a track loses contact. Truth integrates the body's motion, odometry the encoders.
 """
 
 from __future__ import annotations
@@ -72,22 +69,21 @@ def _ar1(n: int, sigma: float, frames: float, rng: np.random.Generator, dim: int
 class TrackGround:
     """How the tracks meet the ground: skid, a wandering turning centre and brief losses of contact.
 
-    Kinematics of a skid-steered vehicle after Martínez et al. (2005), "Approximating kinematics
-    for tracked mobile robots", Int. J. Robotics Research 24(10), 867-878: in the body
-    frame the vehicle turns about an ICR at ``(x_icr, v_x / omega)``, so the body's centre moves
-    sideways with ``v_y = -x_icr * omega`` (it skids outward of the turn when the ICR lies ahead).
-    The left and right tracks' own ICRs, which lie outside the tracks and make the body turn less
-    than the tracks' travel says, are the slip of :class:`SlipModel`. Mandow et al. (2007),
-    "Experimental kinematics for wheeled skid-steer mobile robots", IROS, 1222-1227, measured the
-    ICR coordinates moving with the turn rate; here ``x_icr`` grows linearly with ``|omega|`` and
-    wanders slowly (AR(1)) around that value, as grip changes under the tracks.
+    Skid-steer kinematics after Martínez et al. (2005), "Approximating kinematics for tracked mobile
+    robots", Int. J. Robotics Research 24(10), 867-878: in the body frame the vehicle turns about an
+    ICR at ``(x_icr, v_x / omega)``, so its centre moves sideways with ``v_y = -x_icr * omega``
+    (outward of the turn when the ICR lies ahead). The tracks' own ICRs, outside the tracks (the
+    body turns less than their travel says), are the slip of :class:`SlipModel`. Mandow et al.
+    (2007), "Experimental kinematics for wheeled skid-steer mobile robots", IROS, 1222-1227,
+    measured the ICR moving with the turn rate: here ``x_icr`` grows linearly with ``|omega|`` and
+    wanders slowly around that (AR(1)) as the grip changes.
 
-    On rough ground a track loses contact at random (a Poisson process per metre it travels) for
-    ``contact_frames`` frames: it keeps only ``contact_grip`` of its traction, while its encoder
-    counts on, and the body rolls towards that side and pitches by an angle drawn in
-    ``tilt_deg`` (a half-sine bump). ``roughness_deg`` adds the slow pitch and roll of uneven
-    ground. The body rotates about its contact point on the ground, so a camera mounted above it
-    moves sideways and up and down: the planar model of [Zhao] no longer holds exactly.
+    On rough ground a track loses contact at random (Poisson, per metre it travels) for
+    ``contact_frames`` frames, keeping ``contact_grip`` of its traction while its encoder counts on;
+    the body rolls towards that side and pitches by an angle drawn in ``tilt_deg`` (a half-sine
+    bump). ``roughness_deg`` adds the slow pitch and roll of uneven ground. The body turns about its
+    contact point, so a camera above it moves sideways and up and down: [Zhao]'s planar model no
+    longer holds exactly.
     """
 
     icr_offset: float = 0.02  #: ``x_icr`` at zero turn rate, metres ahead of the track centre
@@ -110,8 +106,7 @@ class TrackGround:
     def contact(self, ground: np.ndarray, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
         """Per-step grip ``(N, 2)`` of each track and body attitude ``(N, 2)`` (pitch, roll; radians)."""
         n = len(ground)
-        grip = np.ones((n, 2))
-        attitude = np.zeros((n, 2))
+        grip, attitude = np.ones((n, 2)), np.zeros((n, 2))
         if self.contact_rate > 0:
             # a loss starts on a track with probability rate * distance in a step (Poisson, thinned)
             starts = rng.random((n, 2)) < self.contact_rate * np.abs(ground)
@@ -151,10 +146,8 @@ def integrate_body(steps: np.ndarray, start) -> np.ndarray:
     theta = float(start[2]) + np.concatenate([[0.0], np.cumsum(w)])
     c, s = np.cos(theta[:-1]), np.sin(theta[:-1])
     world = np.column_stack([c * local[:, 0] - s * local[:, 1], s * local[:, 0] + c * local[:, 1]])
-    poses = np.empty((len(steps) + 1, 3))
-    poses[:, :2] = np.asarray(start[:2], float) + np.vstack([np.zeros((1, 2)), np.cumsum(world, axis=0)])
-    poses[:, 2] = wrap_angle(theta)
-    return poses
+    xy = np.asarray(start[:2], float) + np.vstack([np.zeros((1, 2)), np.cumsum(world, axis=0)])
+    return np.column_stack([xy, wrap_angle(theta)])
 
 
 @dataclass(frozen=True)

@@ -1,12 +1,10 @@
 """One world for every sensor: a 2-D floor plan of line segments extruded to textured planes.
 
-The same :class:`World` feeds the stereo renderer (``vo_lib.sim.render``), the laser scanner
-(``vo_lib.sim.laser``), the line landmarks of the EKF-SLAM notebook and the corridor of the
-pose-tracking notebook. A segment is a vertical rectangle standing on the floor (z = 0) between
-two plan points, with a height and a texture seed; ``mapped=False`` marks an obstacle the robot's
-map does not know (the umbrella of [Yuan]). Two additions only the camera sees: *patches*,
-flat textured quads in any orientation (a road that climbs and banks above the floor), and
-*movers*, textured boxes that drive along a path (traffic, a cart).
+The same :class:`World` feeds the stereo renderer, the laser scanner, the line landmarks of the
+EKF-SLAM notebook and the pose-tracking corridor. A segment is a vertical textured rectangle on the
+floor (z = 0) between two plan points; ``mapped=False`` marks an obstacle the robot's map does not
+know (the umbrella of [Yuan]). Only the camera sees *patches*, flat textured quads in any orientation
+(a road that climbs and banks), and *movers*, textured boxes driving along a path (traffic, a cart).
 """
 
 from __future__ import annotations
@@ -143,13 +141,7 @@ def polyline(
 
 
 def box(
-    centre,
-    size,
-    yaw: float,
-    height: float,
-    seed: int,
-    kind: str = "box",
-    style: str = "corners",
+    centre, size, yaw: float, height: float, seed: int, kind: str = "box", style: str = "corners"
 ) -> list[Segment]:
     """Four outward-facing sides of a rectangular block centred at ``centre`` with plan ``size``."""
     c, s = np.cos(yaw), np.sin(yaw)
@@ -207,30 +199,21 @@ def outdoor_yard(seed: int = 20) -> World:
     for i, (x, y) in enumerate([(9, 5), (12, -7), (-8, 9), (-10, -6), (4, -13)]):
         segs += box((x, y), (1.2, 1.2), 0.4 * i, 1.2, seed + 20 + 4 * i, "crate")
     return World(
-        "outdoor_yard",
-        tuple(segs),
-        (-40.0, 40.0, -40.0, 40.0),
-        seed,
-        None,
-        floor_texel=0.02,
-        floor_style="gravel",
+        "outdoor_yard", tuple(segs), (-40.0, 40.0, -40.0, 40.0), seed, floor_texel=0.02, floor_style="gravel"
     )
 
 
 def corridor(seed: int = 30) -> World:
-    """The corridor of [Yuan], 30 m long and 3 m wide: two long walls, two pillars, two cross walls,
-    a fire hydrant, and an unmapped umbrella that hides the second pillar from the stretch before it.
+    """The corridor of [Yuan], 30 m long and 3 m wide along +x from x = 0 (axis y = 0): two long walls,
+    two pillars, two cross walls, a fire hydrant and an unmapped umbrella.
 
-    Walls are painted, with doors and posters; pillars are plain, the floor tiled, the ceiling
-    panelled: most of the camera's view holds no corner, as in a real corridor. The hydrant and
-    the umbrella keep a busy pattern.
-
-    The corridor runs along +x from x = 0; its axis is y = 0. Pillars, hydrant and cross walls
-    are the "radial" features that fix the robot's position along the axis. With a 10 m laser
-    that sees 135 degrees to either side, a robot on the axis sees the first pillar and the
-    hydrant up to x = 6.4 and the cross walls from x = 12; in between only the second pillar
-    (x = 15) could fix it, and the umbrella (x = 13.7, open, 1 m wide, standing against the
-    wall) hides that pillar up to x = 12.8.
+    Painted walls with doors and posters, plain pillars, a tiled floor and a panelled ceiling leave
+    most of the view without a corner, as in a real corridor (hydrant and umbrella are busy).
+    Pillars, hydrant and cross walls are the "radial" features that fix the position along the
+    axis. A 10 m laser seeing 135 degrees to either side sees, from the axis, the first pillar and
+    the hydrant up to x = 6.4 and the cross walls from x = 12; in between only the second pillar
+    (x = 15) could fix it, and the umbrella (x = 13.7, open, 1 m wide, against the wall) hides it up
+    to x = 12.8.
     """
     h, half, length = 2.8, 1.5, 30.0
     segs = polyline([(0, -half), (length, -half)], h, seed, "wall", style="wall")
@@ -287,30 +270,20 @@ def road_ribbon(seed: int) -> tuple[Patch, ...]:
     half = ROAD_WIDTH / 2
     left = np.column_stack([-np.sin(poses[:, 2]), np.cos(poses[:, 2]), c])  # per metre to the left
     centre = np.column_stack([poses[:, :2], z])
-    total = s[-1] - s[0]
+    total = float(s[-1] - s[0])
     patches = []
     breaks = _ribbon_breaks(s, poses)
     for i, j in zip(breaks[:-1], breaks[1:], strict=True):
-        along = centre[j] - centre[i]
-        length = float(np.linalg.norm(along))
-        along /= length
+        step = centre[j] - centre[i]
+        length = float(np.linalg.norm(step))
         mid = left[i] + left[j]
-        across = -mid / np.linalg.norm(mid)
-        outline = (centre[i] + half * left[i], centre[j] + half * left[j], centre[j] - half * left[j])
-        outline += (centre[i] - half * left[i],)
+        along, across = tuple(step / length), tuple(-mid / np.linalg.norm(mid))
+        # corners: left edge at i and j, right edge at j and i
+        ends = ((i, 1), (j, 1), (j, -1), (i, -1))
+        outline = tuple(tuple(centre[k] + side * half * left[k]) for k, side in ends)
+        offset = float(s[i] - s[0])
         patches.append(
-            Patch(
-                tuple(outline[0]),
-                tuple(along),
-                tuple(across),
-                length,
-                ROAD_WIDTH,
-                "road",
-                seed,
-                offset=float(s[i] - s[0]),
-                texture_length=float(total),
-                outline=tuple(tuple(p) for p in outline),
-            )
+            Patch(outline[0], along, across, length, ROAD_WIDTH, "road", seed, offset, total, outline)
         )
     return tuple(patches)
 
@@ -327,24 +300,15 @@ def _lane(offset: float, reverse: bool = False) -> tuple[np.ndarray, np.ndarray]
 
 def road_traffic(seed: int) -> tuple[Mover, ...]:
     """Two oncoming cars that pass the driven car on the first and last straights, one ahead."""
-    path = road.planned_path()
-    ego_s = road.arc_length(path)
+    ego_s = road.arc_length(road.planned_path())
     movers = []
     oncoming_s, oncoming = _lane(2 * road.LANE_OFFSET, reverse=True)
+    lane = tuple(map(tuple, oncoming))
     for i, (frame, speed) in enumerate(((35, 10.0), (185, 8.0))):
-        meet = ego_s[frame]  # where the driven car is when they pass each other
-        along = float(np.sum(np.linalg.norm(np.diff(oncoming[oncoming_s >= meet], axis=0), axis=1)))
-        movers.append(
-            Mover(
-                tuple(map(tuple, oncoming)),
-                speed,
-                (4.3, 1.8),
-                1.5,
-                "vehicle",
-                seed + 10 * i,
-                along - speed * frame / road.RATE,
-            )
-        )
+        # metres along its lane to where the driven car is at the frame they pass each other
+        along = float(np.sum(np.linalg.norm(np.diff(oncoming[oncoming_s >= ego_s[frame]], axis=0), axis=1)))
+        start = along - speed * frame / road.RATE
+        movers.append(Mover(lane, speed, (4.3, 1.8), 1.5, "vehicle", seed + 10 * i, start))
     ahead_s, ahead = _lane(0.0)
     start = float(np.sum(np.linalg.norm(np.diff(ahead[ahead_s <= 40.0], axis=0), axis=1)))
     movers.append(Mover(tuple(map(tuple, ahead)), 11.0, (4.5, 1.8), 1.6, "vehicle", seed + 30, start))
@@ -395,7 +359,6 @@ def road_world(seed: int = 40) -> World:
         tuple(segs),
         (float(lo[0]), float(hi[0]), float(lo[1]), float(hi[1])),
         seed,
-        None,
         floor_texel=0.06,
         floor_style="gravel",
         patches=road_ribbon(seed + 1),

@@ -24,26 +24,24 @@ ODOMETRY_STYLE = {"color": "C1", "lw": 1.0, "zorder": 2}
 THIN_PATH = 0.15
 
 
-def _paths(estimate, truth, odometry, odometry_label="track odometry"):
+def _paths(estimate, truth, odometry, odometry_label):
+    """``(label, poses, style)`` of each path given: truth, odometry, then the estimate (drawn last)."""
     fused = "visual odometry (fused with odometry)" if odometry is not None else "visual odometry"
-    paths = [(fused, estimate, ESTIMATE_STYLE)]
-    if odometry is not None:
-        paths.insert(0, (odometry_label, odometry, ODOMETRY_STYLE))
-    if truth is not None:
-        paths.insert(0, ("ground truth", truth, TRUTH_STYLE))
-    return paths
+    paths = [("ground truth", truth, TRUTH_STYLE), (odometry_label, odometry, ODOMETRY_STYLE)]
+    return [p for p in paths if p[1] is not None] + [(fused, estimate, ESTIMATE_STYLE)]
 
 
-def _mark_ends(ax, xs, ys, colour, end_label):
-    ax.plot(xs[0], ys[0], "o", color="green", ms=8, zorder=5, label="start" if end_label else None)
-    ax.plot(xs[-1], ys[-1], "s", mfc="none", mec=colour, ms=9, mew=1.5, zorder=5, label=end_label)
+def _mark_ends(ax, xs, ys, name):
+    """Start and end of the first path, ``name``."""
+    ax.plot(xs[0], ys[0], "o", color="green", ms=8, zorder=5, label="start")
+    ax.plot(xs[-1], ys[-1], "s", mfc="none", mec="k", ms=9, mew=1.5, zorder=5, label=f"end ({name})")
 
 
 def _plan_view(ax, paths, title):
     for label, poses, style in paths:
         ax.plot(poses[:, 0], poses[:, 1], label=label, **style)
     ends = paths[0][1]
-    _mark_ends(ax, ends[:, 0], ends[:, 1], "k", f"end ({paths[0][0]})")
+    _mark_ends(ax, ends[:, 0], ends[:, 1], paths[0][0])
     estimate = paths[-1][1]
     ax.plot(estimate[-1, 0], estimate[-1, 1], "x", color="C0", ms=9, mew=2, zorder=6, label="end (estimate)")
     labels = ["x [m]", "y [m]"]
@@ -58,19 +56,15 @@ def _plan_view(ax, paths, title):
         labels[narrow] += ", not to scale"
     else:
         ax.set_aspect("equal", adjustable="datalim")
-    ax.set_xlabel(labels[0])
-    ax.set_ylabel(labels[1])
-    ax.set_title(title)
+    ax.set(xlabel=labels[0], ylabel=labels[1], title=title)
 
 
 def _heading_view(ax, times, paths, title):
     for label, poses, style in paths:
         ax.plot(times, np.degrees(np.unwrap(poses[:, 2])), label=label, **style)
     truth = np.degrees(np.unwrap(paths[0][1][:, 2]))
-    _mark_ends(ax, times, truth, "k", f"end ({paths[0][0]})")
-    ax.set_xlabel("time [s]")
-    ax.set_ylabel("heading, unwrapped [deg]")
-    ax.set_title(title)
+    _mark_ends(ax, times, truth, paths[0][0])
+    ax.set(xlabel="time [s]", ylabel="heading, unwrapped [deg]", title=title)
 
 
 def plot_run(
@@ -83,10 +77,8 @@ def plot_run(
     Returns ``main`` (the path or heading axes), ``errors`` (the list of error axes, empty without
     truth) and ``spot_turn`` (whether the heading view was drawn).
     """
-    times = np.asarray(times, float)
-    estimate = np.asarray(estimate, float)
-    truth = None if truth is None else np.asarray(truth, float)
-    odometry = None if odometry is None else np.asarray(odometry, float)
+    times, estimate = np.asarray(times, float), np.asarray(estimate, float)
+    truth, odometry = (None if x is None else np.asarray(x, float) for x in (truth, odometry))
     paths = _paths(estimate, truth, odometry, odometry_label)
     spot = truth is not None and is_spot_turn(truth)
     if truth is None:
@@ -109,10 +101,8 @@ def plot_run(
         errors[0].plot(times, position, label=label, **line)
         errors[1].plot(times, heading, label=label, **line)
     if errors:
-        errors[0].set_ylabel("position error [cm]")
-        errors[0].set_title("errors against ground truth")
-        errors[1].set_ylabel("heading error [deg]")
-        errors[1].set_xlabel("time [s]")
+        errors[0].set(ylabel="position error [cm]", title="errors against ground truth")
+        errors[1].set(ylabel="heading error [deg]", xlabel="time [s]")
         errors[1].axhline(0.0, color="0.5", lw=0.8)
         for ax in errors:
             ax.grid(True, alpha=0.3)
