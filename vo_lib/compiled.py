@@ -1,11 +1,10 @@
 """Numba compilation, as every compiled kernel of the package uses it.
 
 A kernel sits beside its NumPy reference (``matching_plain`` beside ``matching_core``,
-``composite_plain`` beside ``composite``), which the tests hold it equal to and which
-``python -m vo_lib bench kernels`` times against it on whole frames: a kernel stays only where the
-reference makes the frame more than 1.5x slower. Compiled code is cached where Numba can write
-(``NUMBA_CACHE_DIR``, beside the module, or the user's cache folder); where nothing can be written
-(a read-only install and home) each process compiles afresh instead of failing.
+``composite_plain`` beside ``composite``), which the tests hold it equal to; it stays only where
+the reference makes the whole frame more than 1.5x slower (``python -m vo_lib bench kernels``).
+Compiled code is cached where Numba can write (``NUMBA_CACHE_DIR``, beside the module, or the
+user's cache folder); where nothing can be written, each process compiles afresh.
 """
 
 from __future__ import annotations

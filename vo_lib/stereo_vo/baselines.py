@@ -6,15 +6,14 @@ plain OpenCV stereo odometry that is the yardstick on real images.
 * :func:`essential_ransac`: OpenCV's 5-point essential-matrix RANSAC (monocular: rotation and the
   direction of translation, no scale).
 
-Each returns a :class:`MotionEstimate` whose ``theta`` and ``rho`` are those of the planar
-circular motion closest to its rigid motion, so all estimators compare on one footing.
+Each returns a :class:`MotionEstimate` whose ``theta`` and ``rho`` are those of the closest planar
+circular motion, so all estimators compare on one footing.
 
 :class:`PnpStereoOdometry` (run by :func:`run_pnp_baseline`) is the usual first stereo odometry
-one writes with OpenCV: ORB features in both images, stereo matches by brute-force Hamming
-matching with cross-check on the same rows, their triangulated points matched to the next left
-image the same way, and the motion from ``cv2.solvePnPRansac`` (iterative PnP on reprojection
-errors in the left image). The benchmark and notebook 12 run it on the same frames as our
-pipeline, in the same process.
+written with OpenCV: ORB in both images, brute-force Hamming matches with cross-check (on the same
+rows for stereo, to the next left image in time) and the motion from ``cv2.solvePnPRansac``
+(iterative PnP on left-image reprojection errors). The benchmark and notebook 12 run it on the
+same frames as our pipeline, in the same process.
 """
 
 from __future__ import annotations
@@ -28,6 +27,7 @@ import numpy as np
 from vo_lib.camera import StereoCamera
 from vo_lib.stereo_vo.circular_motion import circular_motion_from_transform
 from vo_lib.stereo_vo.ransac import DEFAULT_PARAMS, hypotheses_needed
+from vo_lib.stereo_vo.rigid_motion import rigid_matrix
 
 #: Pixels, in (u, v, d) for the rigid fit and (u, v) for PnP: ~99 % of two noisy views.
 REPROJECTION_THRESHOLD = 3.0
@@ -51,9 +51,7 @@ class MotionEstimate:
 
     @property
     def transform(self) -> np.ndarray:
-        T = np.eye(4)
-        T[:3, :3], T[:3, 3] = self.R, self.t
-        return T
+        return rigid_matrix(self.R, self.t)
 
     @property
     def theta(self) -> float:
@@ -218,8 +216,7 @@ class PnpStereoOdometry:
                     confidence=DEFAULT_PARAMS.confidence,
                 )
                 if ok and idx is not None:
-                    T = np.eye(4)
-                    T[:3, :3], T[:3, 3] = cv2.Rodrigues(rvec)[0], tvec.ravel()
+                    T = rigid_matrix(cv2.Rodrigues(rvec)[0], tvec.ravel())
                     self.pose = self.pose @ np.linalg.inv(T)
                     inliers = len(idx)
         self.previous = current

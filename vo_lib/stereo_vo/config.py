@@ -35,10 +35,9 @@ class PipelineConfig:
     ransac: RansacParams = field(default_factory=RansacParams)
     #: track the matched corners to sub-pixel positions in the current image (6-DoF motion only)
     subpixel_tracking: bool = False
-    #: 6-DoF motion: try 1-point RANSAC's planar motion first (a vehicle that turns on the ground),
-    #: and a general 3-point RANSAC only where it keeps too few matches; False: the general one
-    #: alone (a body that moves freely in six degrees of freedom, which the planar model does not
-    #: describe, so that its inliers would be a chance subset).
+    #: 6-DoF motion: 1-point RANSAC's planar motion first (a vehicle turning on the ground), a general
+    #: 3-point RANSAC only where it keeps too few matches; False: the general one alone (a body free
+    #: in six degrees of freedom, of which the planar model's inliers would be a chance subset).
     planar_hypotheses: bool = True
     min_features: int = 20  #: stereo features a frame needs to be matched
     min_inliers: int = 15
@@ -51,9 +50,9 @@ class PipelineConfig:
     #: prediction (wheels slipping, a speed that lags when braking); the crawler always rejects.
     max_contradictions: float = math.inf
     recent_frames: int = 15  #: good frames whose match and inlier counts make the recent medians
-    #: Guided matching that finds fewer than this fraction of the recent median is retried wider.
+    #: Guided matching that finds fewer than this fraction of the recent median is retried in a
+    #: window ``retry_widening`` times wider.
     retry_fraction: float = 0.8
-    #: The retried window is this many times wider.
     retry_widening: float = 4.0
     #: Keyframes: frames are measured against a reference frame until the motion since it is large
     #: enough (metres of chord, radians), so that sub-pixel errors are small against the motion.
@@ -86,10 +85,9 @@ class PipelineConfig:
     unknown_motion_sigma: tuple = ()
 
     def __post_init__(self):
-        if self.front_end not in FRONT_ENDS:
-            raise ValueError(f"front_end must be one of {', '.join(FRONT_ENDS)}; got {self.front_end!r}")
-        if self.motion not in MOTIONS:
-            raise ValueError(f"motion must be one of {', '.join(MOTIONS)}; got {self.motion!r}")
+        for name, allowed in (("front_end", FRONT_ENDS), ("motion", MOTIONS)):
+            if getattr(self, name) not in allowed:
+                raise ValueError(f"{name} must be one of {', '.join(allowed)}; got {getattr(self, name)!r}")
         try:  # a misspelt reason would silently disable the restart rule: refuse it
             reasons = frozenset(Reason(r) for r in self.restart_reasons)
         except ValueError as exc:
@@ -129,23 +127,15 @@ CAR = PipelineConfig(
     unknown_motion_sigma=(10.0, 10.0, 1.0),
 )
 
-#: A camera that moves in six degrees of freedom with nothing to predict its motion (a drone or
-#: a hand-held rig, no odometry): the car's settings, except that
-#:
-#: - the constant-velocity prediction never vetoes the vision: with no sensor behind it, a
-#:   prediction is only the last motion repeated, and a hovering body's turns and stops break it
-#:   every few frames;
-#: - the hypotheses are general (3-point), since the body does not turn on a ground plane;
-#: - a new keyframe is also taken when the inliers fall below the crawler's fraction of the first
-#:   frame's: a body that pitches or rolls turns its view away from the reference without the yaw
-#:   or the chord that key the car's frames;
-#: - a motion is used on as few inliers as its refinement accepts (``rigid_motion.MIN_INLIERS``):
-#:   when the body turns fast, few matches survive, and a motion measured on them, with the
-#:   covariance they give it, beats a last motion repeated, which a turn that reverses makes worse
-#:   than none. The inlier ratio still counts while the matching is guided by the prediction (a
-#:   low one sends the frame to its last attempt, every pair matched), but not on that last
-#:   attempt: in a blurred turn most unguided matches are wrong, and the ratio then says so
-#:   rather than that the motion is.
+#: A camera that moves in six degrees of freedom with nothing to predict its motion (a drone or a
+#: hand-held rig, no odometry): the car's settings, except that the constant-velocity prediction
+#: (only the last motion repeated) never vetoes the vision, since a hovering body's turns and stops
+#: break it every few frames; the hypotheses are general (3-point): the body does not turn on a
+#: ground plane; a keyframe is also taken at the crawler's inlier fraction, as pitch and roll turn
+#: the view away without the yaw or chord that key the car's frames; and a motion counts on as few
+#: inliers as the refinement accepts (``rigid_motion.MIN_INLIERS``), with no inlier ratio on the
+#: last attempt (every pair matched, most wrongly in a blurred turn): in a fast turn a motion
+#: measured on few matches beats the last one repeated, which a reversing turn makes worse than none.
 HOVER = replace(
     CAR,
     prior_gate=math.inf,

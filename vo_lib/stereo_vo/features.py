@@ -220,7 +220,6 @@ class StereoFrontEnd:
                 f"left and right must be 2-D grey images of one size; got {left.shape}, {right.shape}"
             )
         h, w = left.shape
-        timings = {}
         t0 = time.perf_counter()
         pl, rl = self._detect(left)
         keep = bucket(pl, rl, w, h, GRID, self.max_features)
@@ -239,16 +238,15 @@ class StereoFrontEnd:
         pl, dl = self._describe(left, pl)
         pr, dr = self._describe(right, pr)
         t2 = time.perf_counter()
+        timings = {"detect": (t1 - t0) * 1e3, "describe": (t2 - t1) * 1e3, "stereo_match": 0.0}
         if len(pl) == 0 or len(pr) == 0:
-            timings.update(detect=(t1 - t0) * 1e3, describe=(t2 - t1) * 1e3, stereo_match=0.0)
             return StereoFeatures(np.zeros((0, 3)), np.zeros((0, 32), np.uint8), timings, left)
         ia, ib = self._row_candidates(pl, pr)
         a, b, _ = best_matches(ia, ib, hamming(dl[ia], dr[ib]), len(pl), len(pr))
         u, v = pl[a, 0].astype(float), pl[a, 1].astype(float)
         d = subpixel_disparity(left, right, u, v, (pl[a, 0] - pr[b, 0]).astype(float))
         ok = d > 0
-        t3 = time.perf_counter()
-        timings.update(detect=(t1 - t0) * 1e3, describe=(t2 - t1) * 1e3, stereo_match=(t3 - t2) * 1e3)
+        timings["stereo_match"] = (time.perf_counter() - t2) * 1e3
         return StereoFeatures(np.column_stack([u, v, d])[ok], dl[a][ok], timings, left)
 
     def _row_candidates(self, pl: np.ndarray, pr: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

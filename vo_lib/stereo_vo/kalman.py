@@ -245,11 +245,10 @@ class VoKalmanFilter:
 def nis(innovation, innovation_covariance) -> float:
     """Normalised innovation squared, νᵀ S⁻¹ ν: the consistency check that needs no ground truth.
 
-    For a consistent filter the innovation ν of an update is zero-mean with covariance
-    S = H P Hᵀ + R, so the NIS follows a χ² distribution with as many degrees of freedom as ν has
-    components, and its average over N independent updates lies in the band of χ²(mN)/N. After
-    :meth:`VoKalmanFilter.update` the filter's ``ekf.y`` and ``ekf.S`` hold ν and S; the VO's own
-    components are ``ekf.y[:2]`` and ``ekf.S[:2, :2]`` (the third is the sideways constraint).
+    A consistent filter's innovation ν is zero-mean with covariance S = H P Hᵀ + R, so the NIS is
+    χ² with as many degrees of freedom as ν has components. After :meth:`VoKalmanFilter.update`,
+    the VO's own components are ``ekf.y[:2]`` and ``ekf.S[:2, :2]`` (the third is the sideways
+    constraint).
     """
     nu = np.atleast_1d(np.asarray(innovation, float))
     S = np.atleast_2d(np.asarray(innovation_covariance, float))
@@ -271,29 +270,22 @@ NIS_MEMORY = 0.02
 class SlipCalibratedFilter(VoKalmanFilter):
     """:class:`VoKalmanFilter` whose track odometry is corrected by the slip's mean, learnt online.
 
-    Slip makes the encoders over-count: a track that slips by ``s`` turns ``1 / (1 - s)`` times as
-    far as it moves over the ground, so each track's count is too large by a *mean* factor that
-    the zero-mean process noise of :class:`VoKalmanFilter` does not model; it leaks into the fused
-    pose in proportion to the weight the filter gives the odometry. Here each track has a scale,
-    ``c = (c_left, c_right)``, ground distance over counted distance, a random walk
-    (``SCALE_DRIFT`` per frame). The VO measurement of the motion since the reference is linear in
-    them: with the counted distances ``(u_l, u_r)`` and the gauge ``b`` ([Zhao], eq. 4–5),
-    ``theta = (c_r u_r − c_l u_l) / b`` and ``rho = (c_l u_l + c_r u_r) / 2 · sinc(theta / 2)``
-    (eq. 15's chord of an arc), so a linear Kalman update learns ``c``; the prediction then moves
-    the pose with the corrected distances. Equal scales model a slip that scales the whole motion
-    (the spot turn); unequal ones the turn that unequal slip adds when driving.
+    Slip makes the encoders over-count (a track slipping by ``s`` turns ``1 / (1 - s)`` times as far
+    as it moves), a *mean* error that zero-mean process noise does not model. Each track therefore
+    has a scale, ``c = (c_left, c_right)``, ground over counted distance, a random walk
+    (``SCALE_DRIFT`` per frame). The VO motion since the reference is linear in them: with the
+    counted distances ``(u_l, u_r)`` and the gauge ``b`` ([Zhao], eq. 4–5), ``theta = (c_r u_r −
+    c_l u_l) / b`` and ``rho = (c_l u_l + c_r u_r) / 2 · sinc(theta / 2)`` (eq. 15's chord of an
+    arc), so a linear Kalman update learns ``c``; the prediction then moves the pose with the
+    corrected distances. Equal scales model a slip of the whole motion (the spot turn), unequal ones
+    the turn that unequal slip adds when driving.
 
-    The VO's reported variance may be smaller than its real error, and the scales would then
-    follow its noise. The update therefore keeps a running mean of its normalised innovation
-    squared (2 for a consistent 2-D update) and inflates the VO covariance it uses by the mean's
-    excess over 2 (noise set from the innovation statistics). The counted distances are noisy as
-    well (encoder noise, the slip's random part): their covariance, carried through the scales,
-    is added to the innovation's, or the scales would shrink to explain that noise away.
-
-    The scales are estimated apart from the pose (a two-stage estimate): the VO measurement that
-    updates them also updates the pose, and the correlation this creates is not carried. It is
-    small when the scales change slowly against the frame rate, as slip does; the NEES over seeds
-    checks the effect.
+    Lest the scales follow the noise of a VO variance smaller than its real error, the VO covariance
+    is inflated by the excess over 2 of the running mean of the updates' normalised innovation
+    squared; the counted distances' own noise, carried through the scales, joins the innovation's,
+    or the scales would shrink to explain it away. The scales are estimated apart from the pose
+    (two stages): the correlation of their shared VO measurement is not carried, which is small
+    while slip changes slowly against the frame rate (the NEES over seeds checks it).
     """
 
     def __init__(self, *args, scale_sigma: float = SCALE_SIGMA, scale_drift: float = SCALE_DRIFT, **kwargs):

@@ -38,15 +38,6 @@ def _nearest_two(ia, ib, dist, n_a, n_b):
 
 
 @_jit
-def _collect(rows, cols, best):
-    """``(rows, cols, best[rows])`` as int64 arrays."""
-    out_d = np.empty(rows.shape[0], np.int64)
-    for j in range(rows.shape[0]):
-        out_d[j] = best[rows[j]]
-    return rows.astype(np.int64), cols.astype(np.int64), out_d
-
-
-@_jit
 def best_matches_core(ia, ib, dist, n_a, n_b, max_distance, ratio, mutual):
     best, second, best_b, nearest_for_b = _nearest_two(ia, ib, dist, n_a, n_b)
     keep = np.zeros(n_a, np.bool_)
@@ -55,7 +46,7 @@ def best_matches_core(ia, ib, dist, n_a, n_b, max_distance, ratio, mutual):
             keep[a] = (not mutual) or best[a] <= nearest_for_b[best_b[a]]
     if not mutual:
         chosen = np.flatnonzero(keep)
-        return _collect(chosen, best_b[chosen], best)
+        return chosen, best_b[chosen], best[chosen]
     # one a per b: the nearest, ties to the smaller a; the result is ordered by b
     owner = np.full(n_b, -1, np.int64)
     for a in range(n_a):
@@ -64,7 +55,7 @@ def best_matches_core(ia, ib, dist, n_a, n_b, max_distance, ratio, mutual):
             if owner[b] < 0 or best[a] < best[owner[b]]:
                 owner[b] = a
     owned = np.flatnonzero(owner >= 0)
-    return _collect(owner[owned], owned, best)
+    return owner[owned], owned, best[owner[owned]]
 
 
 # the steps below serve window_candidates and row_candidates
@@ -85,15 +76,6 @@ def _row_windows(key, half, sorted_v):
             hi[i] = max(lo[i], np.searchsorted(sorted_v, key[i] + half[i], side="right"))
             total += hi[i] - lo[i]
     return lo, hi, total
-
-
-@_jit
-def _in_order(values, order):
-    """``values[order]`` as a new contiguous array: the loops below then read it in sequence."""
-    out = np.empty(order.shape[0], values.dtype)
-    for s in range(order.shape[0]):
-        out[s] = values[order[s]]
-    return out
 
 
 @_jit
@@ -126,7 +108,7 @@ def window_candidates(predicted, radius, w_curr, order_v, sorted_v, des_prev, de
         u, v, d = predicted[i, 0], predicted[i, 1], predicted[i, 2]
         seen[i] = v if np.isfinite(u) and np.isfinite(v) and np.isfinite(d) else np.nan
     lo, hi, total = _row_windows(seen, radius[:, 1], sorted_v)
-    sorted_u, sorted_d = _in_order(w_curr[:, 0], order_v), _in_order(w_curr[:, 2], order_v)
+    sorted_u, sorted_d = w_curr[order_v, 0], w_curr[order_v, 2]  # read in sequence below
     ia = np.empty(total, np.int64)
     ib = np.empty(total, np.int64)
     dist = np.empty(total, np.int64)
@@ -170,7 +152,7 @@ def row_candidates(
     one apart, with their Hamming distances; ordered by ``i``, then by right row."""
     n = left.shape[0]
     lo, hi, total = _row_windows(left[:, 1], np.full(n, row_tolerance), sorted_v)
-    sorted_u, sorted_level = _in_order(right[:, 0], order_v), _in_order(right_level, order_v)
+    sorted_u, sorted_level = right[order_v, 0], right_level[order_v]
     ia = np.empty(total, np.int64)
     ib = np.empty(total, np.int64)
     dist = np.empty(total, np.int64)

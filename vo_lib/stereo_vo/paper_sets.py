@@ -62,25 +62,16 @@ def code_version() -> str:
     """The repository's commit (with ``+changes`` when the package's code differs from it; the
     stored results themselves do not count)."""
     root = Path(__file__).resolve().parents[2]
+
+    def git(*args) -> str:
+        done = subprocess.run(["git", *args], cwd=root, capture_output=True, text=True, check=True)
+        return done.stdout.strip()
+
     try:
-        commit = subprocess.run(
-            ["git", "rev-parse", "HEAD"], cwd=root, capture_output=True, text=True, check=True
-        ).stdout.strip()
-        dirty = subprocess.run(
-            [
-                "git",
-                "status",
-                "--porcelain",
-                "--untracked-files=no",
-                "--",
-                "vo_lib",
-                f":!{RESULTS.relative_to(root)}",
-            ],
-            cwd=root,
-            capture_output=True,
-            text=True,
-            check=True,
-        ).stdout.strip()
+        commit = git("rev-parse", "HEAD")
+        dirty = git(
+            "status", "--porcelain", "--untracked-files=no", "--", "vo_lib", f":!{RESULTS.relative_to(root)}"
+        )
     except (OSError, subprocess.CalledProcessError):
         return "unknown"
     return commit + ("+changes" if dirty else "")
@@ -184,11 +175,8 @@ def main(argv=None) -> int:
             file=sys.stderr,
         )
         return 2
-    stored = (
-        json.loads(RESULTS.read_text())
-        if RESULTS.exists()
-        else {"key_every": KEY_EVERY, "seed": SEED, "sets": {}}
-    )
+    empty = {"key_every": KEY_EVERY, "seed": SEED, "sets": {}}
+    stored = json.loads(RESULTS.read_text()) if RESULTS.exists() else empty
     stored.update({"contradictions": contradiction_study()} if study else {})
     for name in [] if study else names:  # the sets, printed as each is done
         stored["sets"][name] = run_set(name)

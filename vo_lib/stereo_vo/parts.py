@@ -1,11 +1,9 @@
-"""The small interfaces between the pipeline's steps, and what passes through them.
+"""The small interfaces between the pipeline's parts, and what passes through them.
 
-A frame goes through four parts ([Zhao], Fig. 3): the **front end** turns a stereo pair into
-features ``w = (u, v, d)``; the **motion model** predicts the motion from the filter, matches the
-features against the reference frame's inside the predicted windows and estimates the motion of
-the matches; the **filter** (:class:`~vo_lib.stereo_vo.kalman.VoKalmanFilter`) fuses it with the
-odometry. ``pipeline.StereoOdometry`` strings them together and decides which frames to trust;
-a researcher swaps a part by passing another object with the same methods.
+A frame goes through a **front end** (stereo features ``w = (u, v, d)``), a **motion model**
+(prediction, matching against the reference frame, the motion of the matches) and the **filter**
+([Zhao], Fig. 3); ``pipeline.StereoOdometry`` strings them together and decides which frames to
+trust. A researcher swaps a part by passing another object with the same methods.
 """
 
 from __future__ import annotations

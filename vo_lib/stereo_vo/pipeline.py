@@ -217,7 +217,7 @@ class StereoOdometry:
         pose, covariance = self.kf.pose, self.kf.covariance
         if self.reference_inliers == 0:
             self.reference_inliers = estimate.inliers
-        if not cfg.typical_counts_only or self._counts_are_typical():
+        if not cfg.typical_counts_only or self._after_vision():
             self.recent_inliers.append(estimate.inliers)
             self.recent_matches.append(diag.temporal_matches)
         new_key = (
@@ -234,9 +234,10 @@ class StereoOdometry:
         return pose, covariance
 
     # ------------------------------------------------------------------ bookkeeping
-    def _counts_are_typical(self) -> bool:
-        """Counts measured right after frames without vision are not typical of the next ones."""
-        return self.last_reason in (Reason.NONE, Reason.VIEW_LOST)  # still the previous frame's
+    def _after_vision(self) -> bool:
+        """The previous frame was measured (its motion used, or flagged only for a lost part of the
+        view): counts right after frames without vision are not typical of the next ones."""
+        return self.last_reason in (Reason.NONE, Reason.VIEW_LOST)
 
     def _commit(self, features: StereoFeatures, estimate: Estimate | None) -> None:
         """Make this frame the reference (keyframe): its filter state becomes the prior's base."""
@@ -251,9 +252,8 @@ class StereoOdometry:
         Judged only against the previous frame, or while a loss is going on: after frames without
         vision the reference is older and fewer matches are expected.
         """
-        judged = self.last_reason in (Reason.NONE, Reason.VIEW_LOST)
         if (
-            not judged
+            not self._after_vision()
             or len(self.recent_inliers) < MIN_HISTORY
             or inliers >= self.config.lost_view_fraction * np.median(self.recent_inliers)
         ):
@@ -340,22 +340,15 @@ def run_sequence(
 
     def frame_iter():
         for k in range(n):
-            left, right = sequence.pair(k)
-            yield left, right, (None if odo is None or k == 0 else odo[k])
+            yield *sequence.pair(k), (None if odo is None or k == 0 else odo[k])
 
     odometer = StereoOdometry(sequence.camera, PRESETS[model], vehicle.odometry_model, vehicle.mount, seed)
-    bar = None
-    if progress:
-        from tqdm.auto import tqdm
+    if not progress:
+        return run_frames(frame_iter(), sequence.camera, odometer=odometer)
+    from tqdm.auto import tqdm
 
-        bar = tqdm(total=n, desc=f"VO {sequence.path.name}", unit="frame")
-    try:
-        return run_frames(
-            frame_iter(), sequence.camera, vehicle.odometry_model, seed=seed, progress=bar, odometer=odometer
-        )
-    finally:
-        if bar is not None:
-            bar.close()
+    with tqdm(total=n, desc=f"VO {sequence.path.name}", unit="frame") as bar:
+        return run_frames(frame_iter(), sequence.camera, progress=bar, odometer=odometer)
 
 
 def warm_up(sequence, use_odometry: bool = True, seed: int = 0, motion: str = "auto") -> float:
@@ -366,11 +359,6 @@ def warm_up(sequence, use_odometry: bool = True, seed: int = 0, motion: str = "a
     timings. Returns the seconds the warm-up took.
     """
     t0 = time.perf_counter()
-    run_sequence(
-        sequence,
-        frames=min(WARM_UP_FRAMES, len(sequence)),
-        use_odometry=use_odometry,
-        seed=seed,
-        motion=motion,
-    )
+    frames = min(WARM_UP_FRAMES, len(sequence))
+    run_sequence(sequence, frames=frames, use_odometry=use_odometry, seed=seed, motion=motion)
     return time.perf_counter() - t0

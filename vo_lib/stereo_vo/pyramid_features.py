@@ -2,25 +2,24 @@
 
 The single-scale front end (:mod:`vo_lib.stereo_vo.features`) suits the crawler, whose camera
 moves centimetres between frames. A car moves 0.5-1.5 m per frame, so a wall 15 m ahead grows by
-7 % from one image to the next; corners found at one scale only then drift with the growth of the
-texture around them, and on the real sequence that drift biased the heading frame after frame
-(notebook 11 sets single-scale and pyramid corners side by side). Here corners are found at two
-scales and described at their own (OpenCV's ORB: oriented FAST ranked by the Harris measure,
-rotated BRIEF), so a corner keeps its place and its descriptor as the scene grows.
+7 % from one image to the next, and corners found at one scale drift with the growing texture (on
+the real sequence that biased the heading frame after frame; notebook 11 sets single-scale and
+pyramid corners side by side). Here corners are found at two scales and described at their own
+(OpenCV's ORB: oriented FAST ranked by the Harris measure, rotated BRIEF), so a corner keeps its
+place and its descriptor as the scene grows.
 
 Per stereo pair:
 
-1. **Detection and description** of both images at once: the right image on a worker thread
-   while the calling thread does the left (OpenCV releases the interpreter lock), with a feature
-   budget that scales with the image area and a FAST threshold that adapts from frame to frame:
-   lowered when an image gives fewer corners than the budget (sky, road and plain walls), raised
-   again when it gives plenty.
-2. **Matching along rows** by Hamming distance: candidates within ``ROW_TOLERANCE`` rows, a positive
-   disparity below the largest one searched, and pyramid levels at most one apart; the nearest
-   candidate wins if it passes the ratio test (repetitive texture: rails, fences, lane marks give
-   several near-equal candidates, and such features are dropped) and the mutual check.
-3. **Sub-pixel disparity** from the equiangular fit of the block-matching cost at ``d-1, d, d+1``
-   (shared with the single-scale front end).
+1. **Detection and description** of both images at once (the right on a worker thread; OpenCV
+   releases the interpreter lock), with a feature budget in proportion to the image area and a
+   FAST threshold adapted frame by frame: lowered when an image gives fewer corners than the
+   budget (sky, road, plain walls), raised again when it gives plenty.
+2. **Matching along rows** by Hamming distance: candidates within ``ROW_TOLERANCE`` rows, a
+   positive disparity below the largest searched, pyramid levels at most one apart; the nearest
+   wins if it passes the ratio test (rails, fences, lane marks give several near-equal
+   candidates, and such features are dropped) and the mutual check.
+3. **Sub-pixel disparity** by the equiangular fit of the block-matching cost at ``d-1, d, d+1``
+   (as in the single-scale front end).
 """
 
 from __future__ import annotations
@@ -51,37 +50,34 @@ DISPARITY_SEARCH = 2
 
 
 class PyramidFrontEnd:
-    """Detect, describe and stereo-match features of rectified pairs at two scales: by default
-    features per image in proportion to its area, and disparities up to 13 % of its width."""
+    """Detect, describe and stereo-match features of rectified pairs at two scales: features per
+    image in proportion to its area, and disparities up to 13 % of its width by default."""
 
-    def __init__(
-        self, camera: StereoCamera, max_features: int | None = None, max_disparity: float | None = None
-    ):
+    def __init__(self, camera: StereoCamera, max_disparity: float | None = None):
         if camera.width is None or camera.height is None:
             raise ValueError("the front end needs a camera with width and height")
-        area = camera.width * camera.height
         self.camera = camera
-        self.max_features = int(max_features or max(MIN_FEATURES_BUDGET, round(FEATURES_PER_PIXEL * area)))
+        self.max_features = max(
+            MIN_FEATURES_BUDGET, round(FEATURES_PER_PIXEL * (camera.width * camera.height))
+        )
         self.max_disparity = float(max_disparity or MAX_DISPARITY_FRACTION * camera.width)
         self.threshold = [FAST_THRESHOLD, FAST_THRESHOLD]  # per image, adapted frame by frame
-        self._orb = [self._make_orb(FAST_THRESHOLD), self._make_orb(FAST_THRESHOLD)]
+        self._orb = [
+            cv2.ORB_create(
+                self.max_features, scaleFactor=SCALE_FACTOR, nlevels=LEVELS, fastThreshold=FAST_THRESHOLD
+            )
+            for _ in range(2)
+        ]
         self._worker = ThreadPoolExecutor(1)  # the right image's detection, beside the left's
-
-    def _make_orb(self, threshold: int):
-        return cv2.ORB_create(
-            self.max_features, scaleFactor=SCALE_FACTOR, nlevels=LEVELS, fastThreshold=int(threshold)
-        )
 
     def _detect_and_describe(self, side: int, image: np.ndarray):
         kps, des = self._orb[side].detectAndCompute(image, None)
         # adapt the threshold: too few corners -> lower it next frame, plenty -> raise it
-        found = len(kps)
-        if found < 0.9 * self.max_features and self.threshold[side] > FAST_BOUNDS[0]:
+        if len(kps) < 0.9 * self.max_features:
             self.threshold[side] = max(FAST_BOUNDS[0], int(self.threshold[side] * 0.8))
-            self._orb[side].setFastThreshold(self.threshold[side])
-        elif found >= self.max_features and self.threshold[side] < FAST_BOUNDS[1]:
+        elif len(kps) >= self.max_features:
             self.threshold[side] = min(FAST_BOUNDS[1], self.threshold[side] + 1)
-            self._orb[side].setFastThreshold(self.threshold[side])
+        self._orb[side].setFastThreshold(self.threshold[side])
         if des is None or not kps:
             return np.zeros((0, 2), np.float32), np.zeros(0, int), np.zeros((0, 32), np.uint8)
         pts = cv2.KeyPoint_convert(kps).reshape(-1, 2)
@@ -120,9 +116,8 @@ class PyramidFrontEnd:
         pl, ol, dl = self._detect_and_describe(0, left)
         pr, orr, dr = right_side.result()
         t1 = time.perf_counter()
-        timings = {"detect": (t1 - t0) * 1e3, "describe": 0.0}
+        timings = {"detect": (t1 - t0) * 1e3, "describe": 0.0, "stereo_match": 0.0}
         if len(pl) == 0 or len(pr) == 0:
-            timings["stereo_match"] = 0.0
             return StereoFeatures(np.zeros((0, 3)), np.zeros((0, 32), np.uint8), timings, left)
         ia, ib, dist = self._row_candidates(pl, ol, dl, pr, orr, dr)
         a, b, _ = best_matches(ia, ib, dist, len(pl), len(pr), max_distance=MAX_HAMMING, ratio=RATIO)

@@ -50,6 +50,13 @@ def rotation_matrix(rotvec) -> np.ndarray:
     return cv2.Rodrigues(np.asarray(rotvec, dtype=np.float64).reshape(3, 1))[0]
 
 
+def rigid_matrix(R, t) -> np.ndarray:
+    """The 4x4 matrix ``[[R, t], [0, 1]]``."""
+    T = np.eye(4)
+    T[:3, :3], T[:3, 3] = R, t
+    return T
+
+
 @dataclass
 class RigidMotion:
     """A refined 6-DoF motion ``Q = R P + t`` with its 6x6 covariance (rotation vector, t)."""
@@ -64,9 +71,7 @@ class RigidMotion:
     @property
     def matrix(self) -> np.ndarray:
         """4x4 ``T_curr_from_prev``."""
-        T = np.eye(4)
-        T[:3, :3], T[:3, 3] = self.R, self.t
-        return T
+        return rigid_matrix(self.R, self.t)
 
 
 def reprojection_errors(P: np.ndarray, w_curr: np.ndarray, R, t, camera: StereoCamera) -> np.ndarray:
@@ -147,7 +152,7 @@ def refine_rigid_motion(
     inl = usable.copy() if inliers is None else (np.asarray(inliers, bool) & usable)
     for _ in range(max(rounds, 1)):
         if np.count_nonzero(inl) < MIN_INLIERS:
-            return RigidMotion(T0[:3, :3], T0[:3, 3], np.full((6, 6), np.inf), inl, np.inf, False)
+            break
         R, t = _gauss_newton(P[inl], wb[inl], R, t, camera, ITERATIONS, huber)
         err = reprojection_errors(P, wb, R, t, camera)  # of the motion the inliers below end with
         new = usable & (err < gate)
@@ -201,10 +206,7 @@ def se3_log(T) -> tuple[np.ndarray, np.ndarray]:
 def se3_exp(w, v) -> np.ndarray:
     """The 4x4 rigid motion of the twist ``(w, v)``: ``R = exp([w]x)``, ``t = V(w) v``."""
     w = np.asarray(w, float)
-    T = np.eye(4)
-    T[:3, :3] = rotation_matrix(w)  # exp of so(3)
-    T[:3, 3] = _left_jacobian(w) @ np.asarray(v, float)
-    return T
+    return rigid_matrix(rotation_matrix(w), _left_jacobian(w) @ np.asarray(v, float))  # R: exp of so(3)
 
 
 def scaled_motion(T, factor: float) -> np.ndarray:
@@ -243,8 +245,6 @@ def general_ransac(
     )
     if not ok or idx is None or len(idx) < MIN_INLIERS:
         return None
-    T = np.eye(4)
-    T[:3, :3], T[:3, 3] = cv2.Rodrigues(rvec)[0], tvec.ravel()
     inliers = np.zeros(len(w_prev), bool)
     inliers[idx.ravel()] = True
-    return T, inliers
+    return rigid_matrix(cv2.Rodrigues(rvec)[0], tvec.ravel()), inliers

@@ -9,11 +9,11 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from vo_lib.geometry import camera_poses_from_planar, planar_from_camera_poses, wrap_angle
+from vo_lib.stereo_vo.frames import FrameTimings, PipelineResult
 from vo_lib.stereo_vo.paper_tables import PAPER_LONG_RUN, PAPER_TABLE1
 
 if TYPE_CHECKING:
     from vo_lib.evaluation import StandardErrors
-    from vo_lib.stereo_vo.pipeline import PipelineResult
 
 #: Width of a row's label and of each column in the error table.
 LABEL, COLUMN = 46, 18
@@ -22,8 +22,6 @@ LABEL, COLUMN = 46, 18
 def timing_rows(result: PipelineResult) -> list[tuple[str, str, np.ndarray]]:
     """Per-frame milliseconds of each stage, as the timing table lists them: ``(key, label,
     values)``. The stages and "between the stages" add up to the whole frame, frame by frame."""
-    from vo_lib.stereo_vo.pipeline import FrameTimings
-
     rows = result.timings[1:] or result.timings  # the first frame only detects: no motion yet
     column = {f.name: np.array([getattr(r, f.name) for r in rows]) for f in fields(FrameTimings)}
     stages = [

@@ -1,44 +1,32 @@
 """The car's motion model as a pipeline part: 1-point RANSAC as the outlier filter, then 6 DoF.
 
-The steps are the paper's (Fig. 3, ``pipeline``); what changes is the model of the motion between
-two frames:
+The steps are the paper's (Fig. 3, ``pipeline``); the model of the motion between frames differs:
 
-1. **prediction**: the last frame's motion since the reference, one measured 6-DoF motion per
-   frame further (constant velocity); where the sequence has odometry, its planar part (yaw and
-   ground-plane translation of the vehicle) is the Kalman filter's, which the odometry moved;
-2. **temporal matching** inside windows around each feature's predicted position; a window grows
-   when the prediction proves poor (braking, the start of a turn) and the matcher falls back to
-   comparing every pair, so that no frame is left unmatched while the images overlap (and the
-   pipeline matches every pair again when the windows' matches give too few inliers, or too low
-   a ratio of them);
-3. **1-point RANSAC** (theta from eq. 14, rho from eq. 17): the outlier filter. The circular-motion
-   model holds for a camera above the axis the vehicle turns about; a car's camera is a metre
-   ahead of it, and in a turn it also slides sideways by that metre times the turned angle
-   (7 cm in a 4 deg frame: several pixels at 10 m, so that the model's gates reject true
-   matches). The matches are therefore seen from a *virtual camera on the turning axis*: each
-   stereo match is triangulated, moved into that camera's frame through the mount and projected
-   again (:func:`turning_axis_view`); the model is exact there, whatever the turn. Where the
-   vehicle pitched or rolled, a general 3-point RANSAC stands in (:meth:`SixDofMotion.hypothesis`);
+1. **prediction**: the last frame's motion since the reference, one measured 6-DoF motion per frame
+   further (constant velocity); with odometry, its planar part (yaw and ground-plane translation of
+   the vehicle) is the Kalman filter's;
+2. **temporal matching** in windows around each feature's predicted position; a window grows when
+   the prediction proves poor (braking, the start of a turn), and the matcher falls back to every
+   pair, so no frame goes unmatched while the images overlap;
+3. **1-point RANSAC** (eq. 14, 17) as the outlier filter. The circular-motion model holds for a
+   camera above the turning axis; a car's camera is a metre ahead of it and slides sideways in a
+   turn (7 cm in a 4 deg frame: pixels at 10 m). So each stereo match is triangulated, moved into a
+   *virtual camera on the turning axis* and projected again (:func:`turning_axis_view`), where the
+   model is exact; where the vehicle pitched or rolled, a general 3-point RANSAC stands in
+   (:meth:`SixDofMotion.hypothesis`);
 4. **6-DoF refinement** of the inliers on reprojection errors in both images
-   (:mod:`~vo_lib.stereo_vo.rigid_motion`), which also chooses the inliers again: those within a
-   pixel, or, on a frame's last attempt that keeps too few of them, within ``LAST_RESORT_GATE``;
-5. **Kalman update**: the filter keeps the vehicle's *planar* pose, ``(x, y, yaw)`` of the axis it
-   turns about; the refined camera motion is carried into the vehicle frame through the camera's
-   mount (so a camera a metre ahead of the axis does not read a turn as a sideways step) and its
-   ``(theta, rho)`` corrects the filter, as for the crawler, together with the sideways
-   deviation from the chord, which the 6-DoF motion measures: the crawler's constraint that it is
-   zero is not imposed, because where a car's axis lies and how its frame is aligned are known
-   only to a few tenths of a degree, and 0.4 deg of misalignment is 0.7 m of drift per 100 m.
-   The rest of the motion (height, pitch, roll), which odometry cannot observe, comes from the
-   vision alone.
+   (:mod:`~vo_lib.stereo_vo.rigid_motion`), which chooses the inliers again: within a pixel, or,
+   on a frame's last attempt that keeps too few, within ``LAST_RESORT_GATE``;
+5. **Kalman update** of the vehicle's *planar* pose ``(x, y, yaw)``: the refined camera motion is
+   carried into the vehicle frame through the mount (so a camera ahead of the axis does not read a
+   turn as a sideways step), and its ``(theta, rho)`` and sideways deviation from the chord correct
+   the filter. The crawler's zero-sideways constraint is not imposed: a car's axis and frame are
+   known only to a few tenths of a degree, and 0.4 deg of misalignment is 0.7 m of drift per 100 m.
 
-Why the filter stays planar: the odometry it fuses (tracks, wheels, or speed and yaw rate) measures
-only the planar motion, and the paper's filter (eq. 1-11) is planar; a 6-DoF state would carry
-three components that nothing but the vision measures, and gain nothing from the filter.
-
-Each frame's 6-DoF camera pose is its reference frame's pose composed with the motion since then,
-whose planar part is the filter's and whose other part is the vision's (on a frame without vision,
-the prediction's).
+The filter stays planar because the odometry it fuses measures only the planar motion, as in the
+paper's filter (eq. 1-11); height, pitch and roll come from the vision alone. Each frame's 6-DoF
+camera pose is its reference frame's composed with the motion since then: planar part from the
+filter, the rest from the vision (on a frame without vision, from the prediction).
 """
 
 from __future__ import annotations
@@ -127,13 +115,10 @@ _STEP_ROTATIONS = np.stack([rotation_matrix(step[:3]) for step in _STEPS])
 
 
 def chord_covariance(T_cam: np.ndarray, covariance6: np.ndarray, mount: np.ndarray) -> np.ndarray:
-    """3x3 covariance of ``(theta, rho, sideways)`` of the vehicle, propagated from the 6x6
+    """3x3 covariance of the vehicle's ``(theta, rho, sideways)``, propagated from the 6x6
     covariance of the camera motion (rotation vector on the left, translation) by central
-    differences.
-
-    The twelve moved motions go through :func:`vehicle_increment`'s products as one stack of 4x4
-    matrices.
-    """
+    differences: the twelve moved motions go through :func:`vehicle_increment`'s products as one
+    stack of 4x4 matrices."""
     moved = np.zeros((12, 4, 4))  # R <- exp([dw]x) R, t <- exp([dw]x) t + dt
     moved[:, :3, :3] = _STEP_ROTATIONS @ T_cam[:3, :3]
     moved[:, :3, 3] = _STEP_ROTATIONS @ T_cam[:3, 3] + _STEPS[:, 3:]
@@ -168,14 +153,11 @@ class SixDofMotion:
 
     # ------------------------------------------------------------------ prediction
     def predict(self, kf: VoKalmanFilter) -> Prediction:
-        """Camera motion from the reference to this frame: the last frame's, one step of constant
-        velocity further, with the planar part from the filter where odometry moved it (else the
-        filter's predicted pose is moved to it); nothing while neither velocity nor odometry is
-        known.
-
-        The step starts from the last frame's pose, measured or predicted, not from the
-        reference's: frames measured against an older reference keep the motion they found.
-        """
+        """Camera motion from the reference to this frame: the last frame's (measured or
+        predicted, so frames measured against an older reference keep the motion they found), one
+        step of constant velocity further, with the planar part from the filter where odometry
+        moved it (else the filter's predicted pose is moved to it); nothing while neither velocity
+        nor odometry is known."""
         if self.velocity is None and not kf.flags.odometry:
             return Prediction(kf.motion_prior(), False)
         motion = (np.eye(4) if self.velocity is None else self.velocity) @ self.since_reference
@@ -219,11 +201,10 @@ class SixDofMotion:
     def hypothesis(self, w_prev, w_curr, T_pred, rng):
         """The outlier filter: ``(motion guess, inlier mask or None, inlier ratio)`` of matches.
 
-        1-point RANSAC on the matches seen from the turning axis (eq. 14-17); when it keeps fewer
-        than ``min_inlier_ratio`` of them (the vehicle pitched or rolled, or most matches are
-        wrong) a general 3-point RANSAC is tried and the better of the two is kept. Without
-        ``planar_hypotheses`` (a body free in six degrees of freedom) the general one alone, and
-        1-point RANSAC only where it finds nothing.
+        1-point RANSAC on the matches seen from the turning axis (eq. 14-17); where it keeps fewer
+        than ``min_inlier_ratio`` (the vehicle pitched or rolled, or most matches are wrong), the
+        better of it and a general 3-point RANSAC. Without ``planar_hypotheses`` (a body free in
+        six degrees of freedom) the general one, and 1-point RANSAC only where it finds nothing.
         """
         if not self.config.planar_hypotheses:
             general = general_ransac(w_prev, w_curr, self.camera, int(rng.integers(2**31)))

@@ -17,6 +17,7 @@ import numpy as np
 
 from vo_lib.camera import StereoCamera
 from vo_lib.stereo_vo.circular_motion import circular_motion_from_transform, motion_matrices
+from vo_lib.stereo_vo.rigid_motion import rigid_matrix
 
 #: Nearest depth a point may have in either view, metres.
 MIN_DEPTH = 0.3
@@ -87,8 +88,7 @@ def synthetic_matches(
     scene = Scene() if scene is None else scene
     R, T = motion_matrices(theta, rho)
     L = scene.level_from_camera()
-    M = np.eye(4)
-    M[:3, :3], M[:3, 3] = L.T @ R @ L, L.T @ T
+    M = rigid_matrix(L.T @ R @ L, L.T @ T)
     m = matches_under_transform(camera, n, M, rng, depth_range, noise_px, outlier_ratio, scene)
     return replace(m, theta=float(theta), rho=float(rho))
 
@@ -105,15 +105,13 @@ def matches_under_transform(
 ) -> SyntheticMatches:
     """Draw ``n`` matches of points seen before and after any rigid camera motion.
 
-    ``T_curr_from_prev`` maps a point of the previous camera frame into the current one; ``theta``
-    and ``rho`` of the result are those of
-    :func:`~vo_lib.stereo_vo.circular_motion.circular_motion_from_transform`. ``depth_range`` holds
-    the horizontal ranges of the points from the previous camera, metres, drawn uniformly in
-    inverse range so that near and far points are both present; ``noise_px`` is the standard
-    deviation of Gaussian noise added to u, v and d of both views; ``outlier_ratio`` the fraction
-    of matches whose second view is replaced by an unrelated pixel and disparity. ``scene`` (default
-    :class:`Scene`) is fixed to the previous camera: ``T_curr_from_prev`` moves the camera, not
-    the points.
+    ``T_curr_from_prev`` maps a point of the previous camera frame into the current one (the
+    ``scene``, default :class:`Scene`, is fixed to the previous camera); ``theta`` and ``rho`` of
+    the result are those of :func:`~vo_lib.stereo_vo.circular_motion.circular_motion_from_transform`.
+    ``depth_range``: horizontal ranges of the points from the previous camera, metres, drawn
+    uniformly in inverse range; ``noise_px``: standard deviation of Gaussian noise on u, v and d of
+    both views; ``outlier_ratio``: the share of matches whose second view is an unrelated pixel and
+    disparity.
     """
     scene = Scene() if scene is None else scene
     if camera.width is None or camera.height is None:

@@ -91,11 +91,10 @@ def refine_positions(
 ) -> np.ndarray:
     """Sub-pixel position in the current image of each previous feature's patch.
 
-    Corners sit on whole pixels, and motion between frames is often a fraction of a pixel, so
-    whole-pixel matches under-measure it. For each match the previous feature's patch is compared
-    (sum of absolute differences) with the current image at the matched pixel and one pixel
-    around it; equiangular (V) fits to the costs along u and along v give the sub-pixel position.
-    Returns ``w_curr`` with refined u, v (the disparity is kept).
+    Corners sit on whole pixels, and motion between frames is often a fraction of one. Each
+    previous feature's patch is compared (sum of absolute differences) with the current image at
+    the matched pixel and one pixel around it; equiangular (V) fits along u and along v give the
+    sub-pixel position. Returns ``w_curr`` with refined u, v (the disparity is kept).
     """
     out = np.array(w_curr, dtype=float, copy=True)
     if len(out) == 0:
@@ -132,28 +131,25 @@ def track_subpixel(
 ) -> np.ndarray:
     """Sub-pixel position in the current image of each matched previous feature, by tracking.
 
-    Corners found in an image pyramid sit on whole pixels of their level (a grid of 1.2 px or
-    coarser above the first), so matched corner positions measure the motion between frames to
-    a pixel at best. Each previous feature's window is tracked into the current image by
-    OpenCV's iterative Lucas-Kanade (``calcOpticalFlowPyrLK``), started at the matched corner.
-    A track that fails, or ends more than ``TRACK_MAX_SHIFT`` pixels from the corner (another corner,
-    or an occlusion), keeps the corner's position. Returns ``w_curr`` with refined u, v (the
-    disparity is kept).
+    Pyramid corners sit on whole pixels of their level (a grid of 1.2 px or coarser above the
+    first). Each previous feature's window is tracked into the current image by OpenCV's iterative
+    Lucas-Kanade (``calcOpticalFlowPyrLK``) from the matched corner; a track that fails or ends
+    more than ``TRACK_MAX_SHIFT`` pixels from it (another corner, an occlusion) keeps the corner.
+    Returns ``w_curr`` with refined u, v (the disparity is kept).
     """
     out = np.array(w_curr, dtype=float, copy=True)
     if len(out) == 0:
         return out
     p0 = np.ascontiguousarray(w_prev[:, :2], dtype=np.float32).reshape(-1, 1, 2)
     p1 = np.ascontiguousarray(w_curr[:, :2], dtype=np.float32).reshape(-1, 1, 2)
-    criteria = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 20, 0.01)
     tracked, status, _ = cv2.calcOpticalFlowPyrLK(
         prev_image,
         curr_image,
         p0,
-        p1.copy(),
+        p1,
         winSize=(2 * TRACK_HALF + 1, 2 * TRACK_HALF + 1),
         maxLevel=0,
-        criteria=criteria,
+        criteria=(cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 20, 0.01),
         flags=cv2.OPTFLOW_USE_INITIAL_FLOW,
     )
     tracked = tracked.reshape(-1, 2).astype(float)
@@ -172,11 +168,11 @@ def match_features(
 ) -> TemporalMatches:
     """Match previous features to current ones: inside windows around their predictions, or all pairs.
 
-    ``predicted`` is each previous feature's predicted ``(u, v, d)`` (NaN where it is not expected
-    in view; without it every pair is compared, brute force) and ``radius`` the half-widths of its
-    window in ``u``, ``v`` and ``d``; the candidates inside and their Hamming distances are found in
-    one compiled pass (:func:`.matching_core.window_candidates`). ``refine`` refines the current
-    positions to sub-pixel (:func:`refine_positions`) where the images are known.
+    ``predicted`` is each previous feature's predicted ``(u, v, d)`` (NaN where not expected in
+    view; without it, brute force) and ``radius`` its window's half-widths in ``u``, ``v`` and
+    ``d``; one compiled pass finds the candidates inside and their Hamming distances
+    (:func:`.matching_core.window_candidates`). ``refine``: current positions to sub-pixel
+    (:func:`refine_positions`) where the images are known.
     """
     from vo_lib.stereo_vo.matching_core import window_candidates
 

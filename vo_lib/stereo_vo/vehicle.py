@@ -30,23 +30,19 @@ from vo_lib.formats.kitti_raw import camera_in_imu_frame, read_oxts, wheel_dista
 from vo_lib.geometry import camera_mount
 from vo_lib.models.track_odometry import TrackOdometry
 
-#: Distance between the two wheels that turn speed and yaw rate into wheel distances, metres.
-#: It sets nothing but the modelled noise of the yaw increment: the model gives each wheel a
-#: variance ``CAR_DISTANCE_SIGMA**2 * s`` over ``s`` metres, so the turn ``(r - l) / gauge``
-#: has the variance ``2 CAR_DISTANCE_SIGMA**2 s / gauge**2``. The gauge is chosen so that this is
-#: the measured noise of the yaw increment integrated from the OXTS yaw rate: on KITTI raw drive
-#: 0001 it differs from the increment of the OXTS heading by 0.0092 deg rms per 1.0 m frame
-#: (bias included), which :func:`gauge_for_yaw_noise` turns into 176 m. A car's real track
-#: (about 1.6 m) would model a gyro a hundred times noisier than it is.
+#: Distance between the two wheels that turn speed and yaw rate into wheel distances, metres. It
+#: sets only the modelled noise of the yaw increment, ``2 CAR_DISTANCE_SIGMA**2 s / gauge**2`` over
+#: ``s`` metres, which is made the measured one: on KITTI raw drive 0001 the increment integrated
+#: from the OXTS yaw rate differs from that of the OXTS heading by 0.0092 deg rms per 1.0 m frame
+#: (bias included), which :func:`gauge_for_yaw_noise` turns into 176 m. A car's real track (about
+#: 1.6 m) would model a gyro a hundred times noisier than it is.
 CAR_GAUGE = 176.0
-#: The rendered road car's wheel gauge (``vo_lib.sim.road``), metres: its odometry is simulated
-#: with two wheels this far apart, so the model of a sample's ``odometry.txt`` uses it too.
+#: The rendered road car's wheel gauge (``vo_lib.sim.road``), metres, which models its ``odometry.txt``.
 ROAD_CAR_GAUGE = 1.6
 #: Noise of a wheel distance derived from the GPS/IMU speed, per square-root metre. On KITTI raw
-#: drive 0001 the distance per frame integrated from the OXTS speed differs from the stereo
-#: vision's by 1.4 % rms (up to 3.7 cm in a 1.3 m frame, most while braking: the speed lags),
-#: which is 0.019 per wheel and square-root metre; a tighter figure lets the filter reject good
-#: vision in favour of a lagging speed.
+#: drive 0001 the OXTS distance per frame differs from the stereo vision's by 1.4 % rms (up to
+#: 3.7 cm in a 1.3 m frame, mostly when braking: the speed lags), 0.019 per wheel and square-root
+#: metre; a tighter figure lets the filter reject good vision for a lagging speed.
 CAR_DISTANCE_SIGMA = 0.02
 #: Camera position in the vehicle frame (forward, left, up), metres, for KITTI without raw_calib.
 KITTI_CAMERA_IN_IMU = (1.08, -0.31, 0.73)
@@ -89,11 +85,10 @@ class Vehicle:
 def gauge_for_yaw_noise(distances: np.ndarray, yaw_errors: np.ndarray, distance_sigma: float) -> float:
     """The gauge at which the track-odometry model's yaw noise is the measured one.
 
-    From the metres ``s`` travelled in each frame, the error ``e`` of each frame's measured yaw
-    increment (radians) and the noise of one wheel's distance per square-root metre:
-    ``distance_sigma * sqrt(2 sum(s) / sum(e^2))``, the gauge whose modelled variance
-    ``2 distance_sigma^2 s / gauge^2`` per frame, summed over the frames, is the sum of the
-    squared errors (the track-odometry model of [Zhao], eq. 4-11, with ``b = 0``).
+    From the metres ``s`` travelled in each frame, the error ``e`` of each frame's yaw increment
+    (radians) and a wheel distance's noise per square-root metre: ``distance_sigma * sqrt(2 sum(s)
+    / sum(e^2))``, whose modelled variance ``2 distance_sigma^2 s / gauge^2`` per frame sums to
+    ``sum(e^2)`` ([Zhao], eq. 4-11, with ``b = 0``).
     """
     s, e = np.abs(np.asarray(distances, float)), np.asarray(yaw_errors, float)
     if s.shape != e.shape or len(s) == 0 or not np.any(e):
@@ -143,10 +138,9 @@ def vehicle_of(sequence, use_odometry: bool = True) -> Vehicle:
                 f"{sequence.path / 'manifest.json'}: key camera.mount: expected "
                 f"{' or '.join(map(repr, CAMERA_MOUNTS))}, got {json.dumps(mount_text)[:40]}"
             )
-        planar = mount_text == CAMERA_MOUNTS[0]
         odometry = sequence.odometry if use_odometry else None
         source = "odometry.txt" if odometry is not None else "none"
-        motion = Motion.PLANAR if planar else Motion.FULL
+        motion = Motion.PLANAR if mount_text == CAMERA_MOUNTS[0] else Motion.FULL
         return Vehicle(VehicleKind.CRAWLER, mount, model, odometry, source, motion)
     root = sequence.path
     raw_calib = root / "raw_calib"
@@ -157,13 +151,11 @@ def vehicle_of(sequence, use_odometry: bool = True) -> Vehicle:
         mount = camera_mount(forward=forward, height=up, left=left)
     model = car_odometry_model()
     odometry = sequence.odometry if use_odometry else None
-    source = "odometry.txt"
+    source = "odometry.txt" if odometry is not None else "none"
     oxts = root / "oxts.txt"
     if odometry is None and use_odometry and present(oxts, "the OXTS packets"):
         packets = read_per_frame(oxts, len(sequence), "packets", read_oxts)
         odometry = wheel_distances_from_oxts(packets, sequence.times, CAR_GAUGE)
         model = car_odometry_model(CAR_GAUGE)
         source = "oxts.txt (speed and yaw rate)"
-    elif odometry is None:
-        source = "none"
     return Vehicle(VehicleKind.CAR, mount, model, odometry, source, Motion.FULL)
