@@ -1,20 +1,15 @@
 """Comparisons over seeds: the one way this project says that one method beats another.
 
 A single random draw never carries a comparative sentence. :func:`over_seeds` runs every method
-on the same draw for each of N seeds (a paired comparison), and :class:`Comparison` answers the
-questions a sentence needs:
+on the same draw for each of N seeds (a paired comparison); :class:`Comparison` says in how many
+seeds A beats B, the median difference A − B with its bootstrap interval, whether that interval
+excludes zero, and the sentence with its figures.
 
-- in how many seeds does A beat B (:meth:`Comparison.share`);
-- the median paired difference A − B and its bootstrap interval (:meth:`Comparison.difference`);
-- whether the difference is reliable: its interval excludes zero (:meth:`Comparison.verdict`);
-- the sentence itself, with its figures (:meth:`Comparison.sentence`).
-
-Consistency uses one χ² rule everywhere (:func:`chi2_band`): the average of ``count``
-independent χ²(dof) values lies in ``chi2.ppf([α/2, 1 − α/2], dof·count) / count``. Independent
-means across Monte-Carlo runs at one time step (NEES), or across the steps of one run only where
-the values are white (the NIS of a consistent filter). A NEES averaged over the steps of one run
-is correlated in time and has no χ² band: judge it by the seeds' bootstrap interval of its mean
-against ``dof`` (:func:`bootstrap_interval`).
+Consistency uses one χ² rule (:func:`chi2_band`): the average of ``count`` independent χ²(dof)
+values lies in ``chi2.ppf([α/2, 1 − α/2], dof·count) / count``. Independent means across
+Monte-Carlo runs at one time step (NEES), or across the steps of one run only where the values are
+white (the NIS of a consistent filter). A NEES averaged over one run's steps is correlated in time:
+judge it by the seeds' bootstrap interval of its mean against ``dof`` (:func:`bootstrap_interval`).
 """
 
 from __future__ import annotations
@@ -40,11 +35,7 @@ class Verdict(enum.Enum):
     NOT_RELIABLE = "not reliably different"
 
 
-def bootstrap_interval(
-    values: Iterable[float],
-    statistic: Callable[[np.ndarray], float] = np.median,
-    confidence: float = CONFIDENCE,
-) -> tuple[float, float]:
+def bootstrap_interval(values: Iterable[float], statistic: Callable = np.median) -> tuple[float, float]:
     """Percentile bootstrap interval of ``statistic`` over ``values`` (one value per seed)."""
     x = np.asarray(list(values), dtype=float)
     rng = np.random.default_rng(BOOTSTRAP_SEED)
@@ -53,13 +44,13 @@ def bootstrap_interval(
         stats = np.asarray(statistic(x[draws], axis=1), dtype=float)
     except TypeError:  # a statistic of one sample at a time
         stats = np.apply_along_axis(statistic, 1, x[draws])
-    low, high = np.quantile(stats, [(1 - confidence) / 2, (1 + confidence) / 2])
+    low, high = np.quantile(stats, [(1 - CONFIDENCE) / 2, (1 + CONFIDENCE) / 2])
     return float(low), float(high)
 
 
-def chi2_band(dof: int, count: int, confidence: float = CONFIDENCE) -> tuple[float, float]:
+def chi2_band(dof: int, count: int) -> tuple[float, float]:
     """Band of the average of ``count`` independent χ²(``dof``) values (see the module's rule)."""
-    low, high = chi2.ppf([(1 - confidence) / 2, (1 + confidence) / 2], dof * count) / count
+    low, high = chi2.ppf([(1 - CONFIDENCE) / 2, (1 + CONFIDENCE) / 2], dof * count) / count
     return float(low), float(high)
 
 

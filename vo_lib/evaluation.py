@@ -1,18 +1,11 @@
 """Trajectory errors: ATE, RPE, KITTI segment errors, and the statistics [Zhao] reports.
 
-Poses are ``(N, 4, 4)`` camera-to-world matrices (or ``(N, 3, 4)``), estimate and ground truth
-frame by frame, or planar ``(x, y, yaw)`` rows for the planar variants.
-
-* **ATE** (absolute trajectory error): align the estimated positions to the true ones with the
-  least-squares rigid motion (Umeyama), then take the position differences.
-* **RPE** (relative pose error): compare motions over ``delta`` frames,
-  ``E_i = (Q_i^-1 Q_{i+d})^-1 (P_i^-1 P_{i+d})``, by their translation (or rotation angle).
-* **KITTI segment errors**: for segments of given path lengths starting every ``step`` frames,
-  translation error in percent of the length and rotation error in degrees per metre.
-* **Key-position statistics** ([Zhao], IV): mean and standard deviation of the x, y and
-  heading errors at chosen frames.
-* **Association** of an estimate's or images' timestamps with a ground truth's, as evo does, and
-  a ground truth of a body moved into a camera fixed on it.
+Poses are ``(N, 4, 4)`` (or ``(N, 3, 4)``) camera-to-world matrices, estimate and ground truth
+frame by frame, or planar ``(x, y, yaw)`` rows for the planar variants. ATE: position errors after
+Umeyama's least-squares alignment. RPE: motions over ``delta`` frames compared,
+``E_i = (Q_i^-1 Q_{i+d})^-1 (P_i^-1 P_{i+d})``. KITTI: segments of given path lengths, translation
+in per cent and rotation in degrees per metre. Key positions ([Zhao], IV): mean and standard
+deviation of the x, y and heading errors at chosen frames. Timestamps are associated as evo does.
 """
 
 from __future__ import annotations
@@ -50,14 +43,9 @@ class ErrorStats:
 
 
 def rotation_angle(R) -> np.ndarray:
-    """Angle in radians of rotation matrices ``(..., 3, 3)``, stable at every angle.
-
-    ``theta = atan2(|vee(R - R^T)| / 2, (trace R - 1) / 2)``: the sine from the skew part, the
-    cosine from the trace (Rodrigues' formula, ``R = I + sin(theta) [k]x + (1 - cos(theta)) [k]x^2``).
-    ``arccos((trace R - 1) / 2)`` alone loses half the digits near 0: a rounding of ``1e-9`` in a
-    written rotation becomes an angle of ``4e-5`` rad. Here a symmetric error (rounding, a matrix
-    not quite orthonormal) leaves the sine untouched and moves the cosine only to second order.
-    """
+    """Angle in radians of rotation matrices ``(..., 3, 3)``, stable at every angle:
+    ``theta = atan2(|vee(R - R^T)| / 2, (trace R - 1) / 2)`` (Rodrigues' formula). ``arccos`` of the
+    cosine alone loses half the digits near 0 (a rounding of ``1e-9`` becomes ``4e-5`` rad)."""
     R = np.asarray(R, dtype=float)
     skew = np.stack(
         [R[..., 2, 1] - R[..., 1, 2], R[..., 0, 2] - R[..., 2, 0], R[..., 1, 0] - R[..., 0, 1]], axis=-1
@@ -91,15 +79,17 @@ def _pair(gt, est) -> tuple[np.ndarray, np.ndarray]:
     for T in (gt, est):
         if T.ndim != 3 or T.shape[1:] != (4, 4):
             raise ValueError(f"poses must have shape (N, 3, 4) or (N, 4, 4); got {T.shape}")
-    _check_pair(gt, est)
-    return gt, est
+    return _check_pair(gt, est)
 
 
 def _check_pair(gt, est):
+    """``(gt, est)`` as given, once they hold as many poses, at least two."""
+    gt, est = np.asarray(gt, float), np.asarray(est, float)
     if len(gt) != len(est):
         raise ValueError(f"ground truth has {len(gt)} poses but the estimate has {len(est)}; expected equal")
     if len(gt) < 2:
         raise ValueError("at least two poses are needed")
+    return gt, est
 
 
 class Alignment(str, Enum):
@@ -136,16 +126,13 @@ def ate_positions(
     """ATE against position-only truth ``(N, 3)`` (a tracked prism, an antenna) in its own frame:
     the point ``lever_arm`` (in the estimate's camera frame) is carried along the estimated poses
     and aligned to the positions."""
-    E = as_homogeneous(est)
-    p_gt = np.asarray(positions, float)
-    _check_pair(p_gt, E)
+    p_gt, E = _check_pair(positions, as_homogeneous(est))
     return _ate(p_gt, E[:, :3, :3] @ np.asarray(lever_arm, float) + E[:, :3, 3], alignment)
 
 
 def ate_planar(gt_planar, est_planar, align: bool = True) -> tuple[ErrorStats, np.ndarray]:
     """ATE of planar ``(x, y, yaw)`` trajectories after a rotation and translation in the plane."""
-    g, e = np.asarray(gt_planar, float), np.asarray(est_planar, float)
-    _check_pair(g, e)
+    g, e = _check_pair(gt_planar, est_planar)
     return _ate(g[:, :2], e[:, :2], Alignment.SE3 if align else Alignment.NONE)
 
 
@@ -169,10 +156,8 @@ def path_lengths(poses) -> np.ndarray:
     return np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(p, axis=0), axis=1))])
 
 
-#: A drive counts as turning on the spot when its path is shorter than this many metres per radian
-#: it turns (a mean turning radius below it: a skidding crawler's centre circles a few centimetres
-#: about its turning centre) while it turns by more than SPOT_TURN_MIN_DEGREES: position errors
-#: then say little, heading errors all.
+#: A drive turns on the spot when its mean turning radius (metres per radian) is below this and it
+#: turns by more than SPOT_TURN_MIN_DEGREES: position errors then say little, heading errors all.
 SPOT_TURN_MAX_RADIUS = 0.1
 SPOT_TURN_MIN_DEGREES = 45.0
 
@@ -200,8 +185,7 @@ def is_spot_turn(poses_planar) -> bool:
 
 @dataclass(frozen=True)
 class FinalError:
-    """Where a drive ends against where it truly ends: the one final error every command and
-    test reports. Planar vehicle poses ``(x, y, yaw)``; the distance is the truth's planar path."""
+    """Where a planar drive ends against where it truly ends; the distance is the truth's path."""
 
     position_m: float
     percent: float  # of the distance travelled; NaN if the truth does not move
@@ -212,8 +196,7 @@ class FinalError:
 def final_error(truth_planar, est_planar) -> FinalError:
     """Final position error (metres, and per cent of the planar distance the truth travels) and
     final heading error (degrees, wrapped) of planar trajectories ``(N, 3)``."""
-    g, e = np.asarray(truth_planar, float), np.asarray(est_planar, float)
-    _check_pair(g, e)
+    g, e = _check_pair(truth_planar, est_planar)
     distance = planar_path_length(g)
     position = float(np.hypot(*(e[-1, :2] - g[-1, :2])))
     heading = float(np.degrees(np.abs(wrap_angle(e[-1, 2] - g[-1, 2]))))
@@ -224,8 +207,7 @@ def final_error(truth_planar, est_planar) -> FinalError:
 @dataclass(frozen=True)
 class FinalError3D:
     """Where the estimate ends against where the truth ends, in 3-D, both starting at the same
-    pose: position error (metres, and per cent of the truth's 3-D path), the angle of the
-    rotation between the final orientations, and the truth's and the estimate's path lengths."""
+    pose, and the truth's and the estimate's path lengths."""
 
     position_m: float
     percent: float  # of the distance travelled; NaN if the truth does not move
@@ -421,6 +403,5 @@ def associate(query_times, truth_times, max_diff: float = MAX_TIME_DIFF_S) -> tu
 def to_camera(poses, T_body_camera) -> np.ndarray:
     """Poses of a body frame in the world ``(N, 4, 4)`` made poses of a camera fixed on it,
     relative to the camera's first pose: ``C_k = (W_0 X)^-1 W_k X`` with ``X = T_body_camera``."""
-    X = np.asarray(T_body_camera, float)
-    C = np.asarray(poses, float) @ X
+    C = np.asarray(poses, float) @ np.asarray(T_body_camera, float)
     return np.linalg.inv(C[0]) @ C

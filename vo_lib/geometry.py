@@ -167,7 +167,5 @@ def planar_from_camera_poses(camera_poses, T_robot_camera) -> np.ndarray:
     The inverse of :func:`camera_poses_from_planar` for planar motion; for a camera that also
     pitches and rolls (a car on a real road) it keeps the yaw and the ground-plane position.
     """
-    T = as_homogeneous(camera_poses)
-    inv_mount = np.linalg.inv(T_robot_camera)
-    robot = T_robot_camera @ T @ inv_mount
+    robot = T_robot_camera @ as_homogeneous(camera_poses) @ np.linalg.inv(T_robot_camera)
     return np.stack([matrix_to_planar(M) for M in robot])

@@ -51,16 +51,11 @@ def corridor_drive(seed: int):
     return drive.poses, odo.integrate(drive.odometry[1:], start=drive.poses[0])
 
 
-@functools.lru_cache(maxsize=2)
-def corridor_visual_odometry(
-    frames: int | None = None, resolution=(640, 480)
-) -> tuple[np.ndarray, np.ndarray]:
-    """Run [Yuan]'s PnP visual odometer on the rendered corridor sample (in memory).
-
-    Returns ``(planar robot poses in the world frame (K, 3), seconds per frame)``; the renderer
-    is not timed.
-    """
-    rendered, frame_iter = render_sample("corridor", frames, resolution)
+@functools.lru_cache(maxsize=1)
+def corridor_visual_odometry() -> tuple[np.ndarray, np.ndarray]:
+    """[Yuan]'s PnP visual odometer on the corridor sample rendered in memory at 640x480:
+    ``(planar robot poses in the world frame (K, 3), seconds per frame)``, the renderer not timed."""
+    rendered, frame_iter = render_sample("corridor", None, (640, 480))
     poses, seconds, _ = run_pnp_odometry(rendered.camera, frame_iter)
     planar = planar_from_camera_poses(poses, rendered.mount)
     return compose_planar(rendered.truth()[0], planar), seconds
@@ -115,21 +110,20 @@ def run_tracking(
 
 
 def calibrate(world: World, truth, odometry, vo, seed: int) -> Calibration:
-    """Thresholds and control limits from a normal run (the corridor without its obstacle).
-
-    Each threshold of eq. 13 is the 1 per cent point of its indicator over the run; the control
-    limits (eq. 14-15) come from the corrections of the frames where ``C_s`` holds.
-    """
+    """Thresholds and control limits from a normal run (the corridor without its obstacle): each
+    threshold of eq. 13 is its indicator's 1 per cent point over the run, the control limits
+    (eq. 14-15) come from the corrections of the frames where ``C_s`` holds."""
     run = run_tracking(without_umbrella(world), truth, odometry, vo, seed)
     stats = [s.stats for s in run.steps]
     thresholds = Thresholds(
         *(float(np.percentile([getattr(s, k) for s in stats], 1.0)) for k in ("v_max", "d_s", "r_s"))
     )
     normal = [st for st in run.steps if thresholds.composite(st.stats)]
-    laser, vo_corr = ([getattr(st, k) for st in normal] for k in ("laser_correction", "vo_correction"))
-    return Calibration(
-        thresholds, ControlLimits.from_corrections(laser), ControlLimits.from_corrections(vo_corr)
+    laser, vo_limits = (
+        ControlLimits.from_corrections([getattr(st, k) for st in normal])
+        for k in ("laser_correction", "vo_correction")
     )
+    return Calibration(thresholds, laser, vo_limits)
 
 
 def statistics_table(errors: np.ndarray) -> dict[str, float]:

@@ -32,10 +32,9 @@ class LikelihoodField:
     sigma: float
 
     @classmethod
-    def from_world(
-        cls, world, resolution: float = DEFAULT_RESOLUTION, sigma: float = DEFAULT_SIGMA
-    ) -> LikelihoodField:
+    def from_world(cls, world) -> LikelihoodField:
         """Rasterise the world's *mapped* segments (unmapped obstacles are not in the map)."""
+        resolution, sigma = DEFAULT_RESOLUTION, DEFAULT_SIGMA
         xmin, xmax, ymin, ymax = world.floor_extent
         origin = (xmin - MARGIN, ymin - MARGIN)
         cols = int(np.ceil((xmax - xmin + 2 * MARGIN) / resolution)) + 1

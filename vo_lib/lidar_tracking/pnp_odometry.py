@@ -1,19 +1,16 @@
 """[Yuan]'s visual odometer (section II): ORB landmarks, motion-model matching, PnP with
 RANSAC, and a local map of key frames.
 
-* Landmarks are ORB features with a 3-D position; similarity is the Hamming distance (eq. 1).
-  Depth comes from our stereo pair where the paper used a Kinect.
-* Matching: brute force at the start and after a loss; afterwards the velocity
-  ``T_vel = T_prev^-1 T_curr`` (eq. 2) predicts the next pose (eq. 3), every map landmark is
-  projected with it (eq. 4-5) and matched only to features within ``SEARCH_RADIUS`` pixels.
-* The pose: OpenCV ``solvePnPRansac`` on map landmarks (world) against current pixels,
-  started from the prediction.
-* The local map holds at most ``MAX_KEYFRAMES`` key frames. A key frame is dropped when fewer
-  than ``MIN_SEEN_RATIO`` of its landmarks are "properly observed" from the current pose: they
-  project inside the image (eq. 6) and are seen within ``VIEW_LIMIT`` of the direction the key
-  frame saw them from (eq. 7). Eq. 7 as printed compares a world-frame vector with a
-  camera-frame one; we read it as the angle between the two viewing rays of the landmark, the
-  current one and the key frame's, which must stay small.
+* Landmarks are ORB features with a 3-D position from our stereo pair (the paper's Kinect);
+  similarity is the Hamming distance (eq. 1).
+* Matching: brute force at the start and after a loss; otherwise the velocity
+  ``T_vel = T_prev^-1 T_curr`` (eq. 2) predicts the pose (eq. 3) and each map landmark, projected
+  with it (eq. 4-5), is matched to features within ``SEARCH_RADIUS`` pixels.
+* The pose: OpenCV ``solvePnPRansac`` started from the prediction.
+* The local map holds at most ``MAX_KEYFRAMES`` key frames; one is dropped when fewer than
+  ``MIN_SEEN_RATIO`` of its landmarks project inside the image (eq. 6) and are seen within
+  ``VIEW_LIMIT`` of the key frame's viewing ray (eq. 7, which as printed compares a world-frame
+  vector with a camera-frame one).
 
 Poses are camera-to-world 4x4 matrices in the first camera's frame (KITTI convention).
 """
@@ -151,31 +148,22 @@ class PnpVisualOdometry:
             T_cw = np.linalg.inv(prediction)
             rvec, _ = cv2.Rodrigues(T_cw[:3, :3])
             tvec = T_cw[:3, 3].reshape(3, 1).copy()
+            world, pixels = points_w[a].astype(np.float64), feats.w[b, :2].astype(np.float64)
             cv2.setRNGSeed(0)  # RANSAC's draws: the same poses on every run
             ok, rvec, tvec, idx = cv2.solvePnPRansac(
-                points_w[a].astype(np.float64),
-                feats.w[b, :2].astype(np.float64),
+                world,
+                pixels,
                 self.camera.K,
                 None,
                 rvec,
                 tvec,
                 useExtrinsicGuess=not brute,
-                iterationsCount=100,
                 reprojectionError=REPROJECTION_THRESHOLD,
-                confidence=0.99,
-                flags=cv2.SOLVEPNP_ITERATIVE,
             )
             if ok and idx is not None and len(idx) >= MIN_INLIERS:
                 inliers = len(idx)
                 sel = idx.ravel()
-                rvec, tvec = cv2.solvePnPRefineLM(
-                    points_w[a[sel]].astype(np.float64),
-                    feats.w[b[sel], :2].astype(np.float64),
-                    self.camera.K,
-                    None,
-                    rvec,
-                    tvec,
-                )
+                rvec, tvec = cv2.solvePnPRefineLM(world[sel], pixels[sel], self.camera.K, None, rvec, tvec)
                 T_cw = np.eye(4)
                 T_cw[:3, :3] = cv2.Rodrigues(rvec)[0]
                 T_cw[:3, 3] = tvec.ravel()
@@ -193,11 +181,8 @@ class PnpVisualOdometry:
 
 
 def run_pnp_odometry(camera, frames):
-    """Run over ``(left, right, ...)`` frames.
-
-    Returns ``(camera poses (N, 4, 4), seconds per frame (N,), odometer)``; only
-    :meth:`PnpVisualOdometry.process` is timed.
-    """
+    """Run over ``(left, right, ...)`` frames: ``(camera poses (N, 4, 4), seconds per frame (N,),
+    odometer)``, only :meth:`PnpVisualOdometry.process` timed."""
     vo = PnpVisualOdometry(camera)
     poses, seconds = [], []
     for f in frames:

@@ -9,26 +9,22 @@ and the credibility ``T_s`` (eq. 16). When the result is not credible it finds t
 largest error by PCA of the best quarter of the samples (eq. 17-20) and replaces the laser's
 correction along that direction by the visual odometer's (eq. 21-23).
 
-Readings of the printed forms that look garbled (tested in ``tests/test_pose_tracking.py`` and
-shown in notebook 10):
+Readings of printed forms that look garbled (docs/errata.md; tested in
+``tests/test_pose_tracking.py``, shown in notebook 10):
 
-* eq. 11, ``D_s = V_max - V_lq - V_med``, mixes two location statistics; its name, "range-median
-  difference", and its purpose, how far the best sample stands above the typical one, give
-  ``D_s = V_max - V_med``.
-* eq. 12 as printed is at least 1 for any sample set, so the paper's threshold 0.7 could never
-  fail; we keep the printed ratio and calibrate its threshold on our scores.
-* eq. 14 swaps the names of the centre line and the lower limit; with eq. 15 and Table II
-  (``LCL = 0``, ``UCL = mu + 3 sigma``) the limits are ``UCL = mu + 3 sigma``, ``CL = mu``,
-  ``LCL = max(0, mu - 3 sigma)`` (a correction's length cannot be negative).
-* eq. 16 joins the two control-limit tests with "or", which accepts a laser correction far out
-  of its limits whenever the visual one is normal: a jump of the laser pose would never be
-  flagged. We require ``C_s`` and both tests. The visual odometer's pose is carried from the
-  last credible update, so its correction to the odometer measures how far the tracker has
-  drifted from what the camera saw since then. Both limits widen with the square root of the
-  number of updates since the last credible one (independent per-update errors add up so); a
-  laser that finds radial features again after a stretch without them can then be believed.
-* eq. 22 is garbled; its content is that the corrected displacement moves only along ``v_s``
-  and projects onto it as the visual odometer's does.
+* eq. 11: ``D_s = V_max - V_med``, how far the best sample stands above the typical one, as its
+  name "range-median difference" says (printed ``V_max - V_lq - V_med``).
+* eq. 12 as printed is at least 1 for any sample set (the paper's threshold 0.7 never fails); we
+  keep it and calibrate its threshold on our scores.
+* eq. 14 swaps two names; with eq. 15 and Table II: ``UCL = mu + 3 sigma``, ``CL = mu``,
+  ``LCL = max(0, mu - 3 sigma)``.
+* eq. 16 joins the control-limit tests with "or", which never flags a jump of the laser pose while
+  the visual correction is normal: we require ``C_s`` and both. The visual odometer's pose is
+  carried from the last credible update, and both limits widen with the square root of the
+  updates since then (independent errors add up so), so a laser that finds radial features again
+  can be believed.
+* eq. 22: the corrected displacement moves only along ``v_s`` and projects onto it as the visual
+  odometer's does.
 """
 
 from __future__ import annotations
@@ -49,13 +45,9 @@ THETA_LIMIT = math.radians(1.0)
 
 
 def posterior(scores) -> np.ndarray:
-    """Eq. 8-10: normalised scores as posterior probabilities of the samples.
-
-    A sample's score is the sum over beams of the likelihood field at the beam's end point; read
-    as a log-likelihood (each beam's likelihood proportional to ``exp(field)``, bounded, so an
-    unmapped obstacle cannot veto a pose), the posterior of sample ``i`` is
-    ``exp(S_i) / sum_j exp(S_j)`` (eq. 9 holds by construction).
-    """
+    """Eq. 8-10: normalised scores as posterior probabilities of the samples,
+    ``exp(S_i) / sum_j exp(S_j)``: a score (the sum of the field over beams) read as a
+    log-likelihood, bounded so that an unmapped obstacle cannot veto a pose."""
     s = np.asarray(scores, dtype=float)
     p = np.exp(s - s.max())
     return p / p.sum()
@@ -150,23 +142,23 @@ class Calibration:
     vo: ControlLimits
 
 
-def sample_poses(prediction, n: int, rng: np.random.Generator, sigma=SAMPLE_SIGMA):
-    """``n`` poses around ``prediction``, spread ``sigma = (along, across, heading)`` in the
-    robot's frame (the first sample is the prediction itself)."""
-    noise = rng.standard_normal((n, 3)) * sigma
+def sample_poses(prediction, n: int, rng: np.random.Generator):
+    """``n`` poses around ``prediction``, spread :data:`SAMPLE_SIGMA` in the robot's frame (the
+    first sample is the prediction itself)."""
+    noise = rng.standard_normal((n, 3)) * SAMPLE_SIGMA
     noise[0] = 0.0
     return compose_planar(prediction, noise)
 
 
-def principal_error_direction(corrections, scores, theta_limit: float = THETA_LIMIT):
+def principal_error_direction(corrections, scores):
     """Eq. 17-20: the unit eigenvector of the largest eigenvalue of the covariance of the
     top-quartile samples' translational corrections, or ``None`` when their headings spread more
-    than ``theta_limit`` around the best sample's (eq. 18)."""
+    than :data:`THETA_LIMIT` around the best sample's (eq. 18)."""
     corrections = np.asarray(corrections, dtype=float)
     scores = np.asarray(scores, dtype=float)
     top = corrections[scores >= np.percentile(scores, 75)]  # eq. 17 (scores or posteriors: same order)
     best = corrections[np.argmax(scores)]
-    if np.mean(wrap_angle(best[2] - top[:, 2]) ** 2) > theta_limit**2:  # eq. 18
+    if np.mean(wrap_angle(best[2] - top[:, 2]) ** 2) > THETA_LIMIT**2:  # eq. 18
         return None
     centred = top[:, :2] - top[:, :2].mean(axis=0)  # eq. 19
     values, vectors = np.linalg.eigh(centred.T @ centred / len(centred))  # eq. 20
@@ -197,30 +189,19 @@ class TrackingStep:
 
 
 class PoseTracker:
-    """LBPT, and VOAPT when given a calibration.
+    """LBPT (the best of :data:`DEFAULT_SAMPLES` samples from ``rng`` wins), and VOAPT when given
+    a calibration; with ``compensate_errors=False`` LBPT whose every update is judged by ``T_s``.
+    The visual odometer's pose ``P_vo`` is the last credible pose carried forward by the visual
+    increments."""
 
-    The visual odometer runs alongside: its pose ``P_vo`` is the last credible pose carried
-    forward by the visual increments, and is re-aligned with the tracker at every credible
-    update. Without a calibration the tracker is plain LBPT (the best sample always wins); with
-    one and ``compensate_errors=False`` it is LBPT whose every update is judged by ``T_s``. It scores
-    :data:`DEFAULT_SAMPLES` sample poses per update, drawn from ``rng``.
-    """
-
-    def __init__(
-        self,
-        field,
-        start,
-        calibration: Calibration | None = None,
-        compensate_errors: bool = True,
-        rng=None,
-    ):
+    def __init__(self, field, start, calibration: Calibration | None, compensate_errors: bool, rng):
         self.field = field
         self.pose = np.asarray(start, dtype=float).copy()
         self.vo_pose = self.pose.copy()
         self.updates_since_credible = 0
         self.calibration = calibration
         self.compensate_errors = compensate_errors
-        self.rng = rng if rng is not None else np.random.default_rng(0)
+        self.rng = rng
 
     def update(self, odometry_increment, scan_points, vo_increment=None) -> TrackingStep:
         """One update: predict with the odometry, score samples, judge, correct (eq. 8-23)."""

@@ -1,18 +1,14 @@
 """EKF-SLAM with one feature point per line landmark ([Yan 2020], eq. 1-13): bicycle prediction,
 updates, Mahalanobis data association and state augmentation.
 
-The state is ``X = [x_v, y_v, phi, x_1, y_1, ..., x_N, y_N]`` (eq. 1-3): the vehicle pose and one
-feature point per line landmark. The state grows as landmarks are found, which is why this
-filter is written out with NumPy rather than on filterpy's fixed-size filters; the equations are
-the same ones, in the same order.
-
-What a wall's observation is depends on the observation model: the range and bearing of its
-feature point (``range_bearing.POINT``, eq. 10, the paper's filter) or the line itself seen from
-the robot (``line_observation.LINE``, built from the visible part's two end points). Eq. 13's
-``V`` is taken as the innovation covariance ``S = H P H^T + R``: the paper names it "the variance
-caused by the observation", but the distance between a mapped and an observed feature point is
-also uncertain through the pose and the map, and ``S`` is the covariance of exactly that
-difference.
+The state ``X = [x_v, y_v, phi, x_1, y_1, ..., x_N, y_N]`` (eq. 1-3) holds the vehicle pose and
+one feature point per line landmark, and grows as landmarks are found (hence NumPy rather than
+filterpy's fixed-size filters). A wall is observed through its feature point's range and bearing
+(``range_bearing.POINT``, eq. 10, the paper's filter) or as the line seen from the robot
+(``line_observation.LINE``). Eq. 13's ``V`` is taken as the innovation covariance
+``S = H P H^T + R``: the paper calls it "the variance caused by the observation", but the
+difference between a mapped and an observed feature point is also uncertain through the pose and
+the map, and ``S`` is its covariance.
 """
 
 from __future__ import annotations
@@ -21,7 +17,7 @@ import numpy as np
 
 from vo_lib.geometry import wrap_angle
 from vo_lib.line_slam.range_bearing import POINT
-from vo_lib.models.bicycle import DEFAULT_WHEELBASE, bicycle_jacobians, bicycle_step
+from vo_lib.models.bicycle import bicycle_jacobians, bicycle_step
 
 #: Associate when the squared Mahalanobis distance (eq. 13) is below the chi-square 99 % point
 #: for 2 degrees of freedom; add a new landmark only when it exceeds 25 (p < 4e-6). Between the
@@ -57,16 +53,7 @@ class EkfSlam:
         default covariance of one observation, which :meth:`observe` may override per observation.
     """
 
-    def __init__(
-        self,
-        pose,
-        control_cov,
-        observation_cov,
-        period,
-        wheelbase=DEFAULT_WHEELBASE,
-        pose_cov=None,
-        model=POINT,
-    ):
+    def __init__(self, pose, control_cov, observation_cov, period, wheelbase, pose_cov=None, model=POINT):
         self.x = np.asarray(pose, dtype=float).copy()
         self.P = np.zeros((3, 3)) if pose_cov is None else np.asarray(pose_cov, dtype=float).copy()
         self.Q = np.asarray(control_cov, dtype=float)
@@ -187,15 +174,10 @@ class EkfSlam:
         model: ``P_mm = G_v P_vv G_v^T + G_z R G_z^T``, ``P_mX = G_v P_vX``."""
         R = self.R if R is None else np.asarray(R, dtype=float)
         point, g_pose, g_z = self.model.invert(self.x[:3], z)
-        n = self.x.size
-        P = np.zeros((n + 2, n + 2))
-        P[:n, :n] = self.P
         cross = g_pose @ self.P[:3, :]
-        P[n:, :n] = cross
-        P[:n, n:] = cross.T
-        P[n:, n:] = g_pose @ self.P[:3, :3] @ g_pose.T + g_z @ R @ g_z.T
+        P_mm = g_pose @ self.P[:3, :3] @ g_pose.T + g_z @ R @ g_z.T
         self.x = np.concatenate([self.x, point])
-        self.P = P
+        self.P = np.block([[self.P, cross.T], [cross, P_mm]])
         return self.n_landmarks - 1
 
     def observe(self, observations, method: str = "mahalanobis", covariances=None) -> list[int]:

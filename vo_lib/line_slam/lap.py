@@ -50,15 +50,14 @@ class LineSlamScenario:
     """[Yan 2020]'s simulation settings.
 
     Printed in the paper: speed, its noise, steering limits and noise, the control period, the
-    laser's range and noise, landmarks and waypoints. Our choices (not printed): the wheelbase
-    (4 m), an observation every 8 control periods (0.2 s), a waypoint counts as reached within
-    1 m, the start heading points at the first waypoint, the laser sees all round.
+    laser's range and noise, landmarks and waypoints. Our choices: the wheelbase (4 m), an
+    observation every 8 control periods (0.2 s), a waypoint is reached within 1 m, the start
+    heading points at the first waypoint, the laser sees all round.
 
-    ``observation`` chooses what the filter is given for a wall with a visible part:
-    ``"feature_point"`` (the paper's filter, section 1.3: range and bearing of the wall's feature
-    point, eq. 10, with the laser's point noise) or ``"line"`` (the line through the visible
-    part's two measured end points, ``line_observation.LINE``; parts shorter than
-    ``min_line_length`` are not used, their direction being noise).
+    ``observation``: ``"feature_point"`` (the paper's filter, section 1.3: range and bearing of the
+    wall's feature point, eq. 10) or ``"line"`` (the line through the visible part's two measured
+    end points, ``line_observation.LINE``; lines whose direction is more uncertain than
+    ``max_line_direction_sigma`` are not used).
     """
 
     speed: float = PAPER_SPEED
@@ -165,12 +164,10 @@ def simulate_lap(
 ) -> LineSlamRun:
     """Drive one lap of the waypoints and run EKF-SLAM on it.
 
-    The true vehicle follows the commanded speed and steering; the filter and dead reckoning
-    receive them with Gaussian noise of the scenario's sigmas (eq. 4's ``w``). Every
-    ``observe_every`` control periods each segment is passed to ``observer``; a segment with a
-    visible part yields noisy range-bearing observations of the visible part's two end points
-    (for drawing, and for the line observation) and, in the feature-point form, of its feature
-    point (eq. 10).
+    The filter and dead reckoning receive the commanded speed and steering with Gaussian noise
+    (eq. 4's ``w``). Every ``observe_every`` control periods ``observer`` finds each segment's
+    visible part, whose two end points are observed in range and bearing (for drawing and the line
+    observation), and in the feature-point form its feature point too (eq. 10).
     """
     if observer not in OBSERVERS:
         raise ValueError(f"observer must be one of {sorted(OBSERVERS)}; got {observer!r}")
@@ -196,18 +193,11 @@ def simulate_lap(
     )
     dr = pose.copy()
     steer, target = 0.0, 0
-    truth, est, covs, dead, observed_at, nees = (
-        [pose.copy()],
-        [pose.copy()],
-        [ekf.P.copy()],
-        [dr.copy()],
-        [],
-        [],
-    )
+    truth, est, covs, dead = [pose.copy()], [pose.copy()], [ekf.P.copy()], [dr.copy()]
+    observed_at, nees = [], []
     landmark_of_segment: dict[int, int] = {}
     endpoints: dict[int, list] = {i: [] for i in range(len(segs))}
-    dropped = 0
-    observer_seconds = 0.0
+    dropped, observer_seconds = 0, 0.0
     noise_sigma = np.array([sc.speed_sigma, sc.steer_sigma])
     started = time.perf_counter()
     for k in range(1, sc.max_steps + 1):
@@ -317,16 +307,13 @@ def lap_report(table, stats) -> None:
 
 
 def association_example():
-    """A case where the nearest landmark in metres is the wrong one.
+    """A case where the nearest landmark in metres is the wrong one: ``(ekf, z, true_index)``.
 
-    The robot believes it is at the origin facing +x, with 5 degrees of heading doubt;
-    two walls have feature points A = 20 m away at 4 degrees to the left and B = 20.9 m straight
-    ahead. A is observed at 20 m, bearing 0 (the robot in fact faces 4 degrees left). Placed with
-    the estimated pose the observation is 1.4 m from A and 0.9 m from B: Euclidean distance picks
-    B, but the error lies along the bearing, which is uncertain, not along the range, which is
-    precise, and the Mahalanobis distance (eq. 13) picks A.
-
-    Returns ``(ekf, z, true_index)``.
+    The robot believes it is at the origin facing +x, with 5 degrees of heading doubt; feature
+    points A (20 m, 4 degrees to the left) and B (20.9 m straight ahead). A is observed at 20 m,
+    bearing 0 (the robot in fact faces 4 degrees left): 1.4 m from A, 0.9 m from B. Euclidean
+    distance picks B, but the error lies along the uncertain bearing, not the precise range, and
+    the Mahalanobis distance (eq. 13) picks A.
     """
     sc = LineSlamScenario()
     ekf = EkfSlam(

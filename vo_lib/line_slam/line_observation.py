@@ -1,25 +1,20 @@
 """[Yan 2020]'s observation of a line segment, and the line measurement a filter can use.
 
-Section 1 of the paper describes a line feature seen by the laser by "the distance from the robot
-to the line and the start and end angles of the observed segment": the triple ``(d, a_s, a_e)``
-of :func:`paper_line_triple`. The triple alone does not fix the line: every line tangent to the
-circle of radius ``d`` about the robot that crosses both rays is consistent with it (notebook 09
-builds two). The laser measures the ranges of the two ends as well, and with them the line is
-fixed. This module turns the two measured end points of the visible part into the line in the
-robot's frame,
+Section 1 of the paper describes a line seen by the laser by "the distance from the robot to the
+line and the start and end angles of the observed segment" (:func:`paper_line_triple`). That
+triple does not fix the line (every line tangent to the circle of radius ``d`` that crosses both
+rays fits it; notebook 09 builds two); the two end points' measured ranges do. From them this
+module builds the line in the robot's frame,
 
     z = (rho, psi):  the line is {q : (cos psi, sin psi) . q = rho} in robot coordinates,
 
-and predicts the same pair from the filter's state, where the wall is carried by its feature
-point ``p`` (the foot of the perpendicular from the world origin, section 1.3):
+and predicts it from the wall's feature point ``p`` (section 1.3) in the filter's state:
 
     c = |p|,  n = p / c,  rho = c - n . (x_v, y_v),  psi = atan2(p_y, p_x) - phi.
 
-A line has two descriptions, ``(rho, psi)`` and ``(-rho, psi + pi)``; :func:`align_line`
-picks the one nearest a prediction. :data:`LINE` is the observation model for
-:class:`~vo_lib.line_slam.ekf_slam.EkfSlam`; :data:`~vo_lib.line_slam.range_bearing.POINT` is
-the feature-point form the paper's filter uses (section 1.3: "the observed landmark feature point
-is the observation").
+A line has two descriptions, ``(rho, psi)`` and ``(-rho, psi + pi)``; :func:`align_line` picks
+the one nearest a prediction. :data:`LINE` is the observation model for
+:class:`~vo_lib.line_slam.ekf_slam.EkfSlam`.
 """
 
 from __future__ import annotations
@@ -90,9 +85,7 @@ def line_jacobians(pose, point) -> tuple[np.ndarray, np.ndarray]:
     c = math.hypot(*p)
     n = p / c
     h_pose = np.array([[-n[0], -n[1], 0.0], [0.0, 0.0, -1.0]])
-    h_point = np.empty((2, 2))
-    h_point[0] = n - (pos - (n @ pos) * n) / c
-    h_point[1] = np.array([-p[1], p[0]]) / (c * c)
+    h_point = np.array([n - (pos - (n @ pos) * n) / c, np.array([-p[1], p[0]]) / (c * c)])
     return h_pose, h_point
 
 
@@ -105,11 +98,9 @@ def point_from_line(pose, z) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     n_perp = np.array([-n[1], n[0]])
     pos = np.asarray(pose[:2], dtype=float)
     c = rho + n @ pos
-    point = c * n
     d_angle = (n_perp @ pos) * n + c * n_perp
     g_pose = np.column_stack([n[0] * n, n[1] * n, d_angle])
-    g_z = np.column_stack([n, d_angle])
-    return point, g_pose, g_z
+    return c * n, g_pose, np.column_stack([n, d_angle])
 
 
 def align_line(z, cov, predicted):

@@ -37,9 +37,7 @@ def observation_jacobians(pose, point) -> tuple[np.ndarray, np.ndarray]:
     q = dx * dx + dy * dy
     r = math.sqrt(q)
     h_point = np.array([[dx / r, dy / r], [-dy / q, dx / q]])
-    h_pose = np.empty((2, 3))
-    h_pose[:, :2] = -h_point
-    h_pose[:, 2] = (0.0, -1.0)
+    h_pose = np.column_stack([-h_point, [0.0, -1.0]])
     return h_pose, h_point
 
 

@@ -1,21 +1,15 @@
 """Which part of a line segment lies within a laser's range: three observers ([Yan 2020], section 2).
 
-Each returns the visible part of the segment ``A -> B`` seen from the robot position ``G`` with
-maximum range ``D``, as segment parameters ``(t_start, t_end)`` with ``P(t) = A + t (B - A)``,
-or ``None`` when no point of the segment is within range.
+Each returns the part of the segment ``A -> B`` within range ``D`` of the robot position ``G`` as
+parameters ``(t_start, t_end)`` of ``P(t) = A + t (B - A)``, or ``None`` when none is in range.
+The distance is convex in ``t``, so the visible part is one interval; the approximate observers
+return points inside it, within ``tolerance`` metres of its ends.
 
-* :func:`visible_segment_point_by_point` samples the segment every ``tolerance`` metres and keeps
-  the first and last sample within range (the paper's baseline, vectorised with NumPy).
-* :func:`visible_segment_bisection` is the paper's observer: it finds the foot ``O`` of the
-  perpendicular from ``G`` to the line and then either (Fig. 3, foot outside the segment) bisects
-  between the near and the far end, or (Fig. 4, foot inside) bisects on the longer half ``OB``
-  and mirrors the crossing about ``O`` onto the shorter half.
-* :func:`visible_segment` is exact: the circle of radius ``D`` about ``G`` cut with the line, a
-  quadratic in ``t``, clipped to the segment.
-
-The distance from ``G`` to a point of the segment is convex in ``t``, so the visible set is one
-interval; the approximate observers return points inside it, within ``tolerance`` metres of its
-true ends.
+* :func:`visible_segment_point_by_point`: samples every ``tolerance`` metres (the paper's baseline).
+* :func:`visible_segment_bisection`: the paper's observer, by where the foot ``O`` of the
+  perpendicular from ``G`` falls: outside the segment (Fig. 3) it bisects between the near and the
+  far end; inside (Fig. 4) it bisects on the longer half and mirrors the crossing about ``O``.
+* :func:`visible_segment`: exact, the circle about ``G`` cut with the line (a quadratic in ``t``).
 """
 
 from __future__ import annotations

@@ -132,11 +132,8 @@ class TrackOdometry:
         return F_x, F_u
 
     def step(self, state, u) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """One pose, one control pair: ``(predicted state, F_x, F_u)`` in a single pass.
-
-        The same quantities as :meth:`predict` and :meth:`jacobians`, computed with scalar
-        arithmetic for the one-pose-per-frame use of a Kalman filter, where array overhead dominates.
-        """
+        """One pose, one control pair: ``(predicted state, F_x, F_u)``, as :meth:`predict` and
+        :meth:`jacobians` give them, in scalar arithmetic (a Kalman filter's hot path)."""
         x, y, theta = (float(v) for v in state)
         du_left, du_right = float(u[0]), float(u[1])
         g = self.gauge
@@ -191,10 +188,8 @@ class TrackOdometry:
 
 
 def apply_slip(u, slip_left: float = 0.0, slip_right: float = 0.0) -> np.ndarray:
-    """Ground distances of tracks that slip: each travels ``(1 - slip)`` of what its encoder reads.
-
-    A positive slip means the track spins faster than the ground moves under it, the cause the
-    paper gives for its spot-turn heading errors.
-    """
+    """Ground distances of tracks that slip: each travels ``(1 - slip)`` of what its encoder reads
+    (a positive slip spins the track faster than the ground moves: the paper's cause of its
+    spot-turn heading errors)."""
     u = np.asarray(u, dtype=float)
     return u * np.array([1.0 - slip_left, 1.0 - slip_right])
