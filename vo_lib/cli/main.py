@@ -329,13 +329,13 @@ def _run_parsed(args, command: str) -> int:
     return 0
 
 
-def main(argv: list[str] | None = None) -> int:
-    """Parse ``argv`` and run the command, SIGINT and SIGTERM handled by :func:`_stop`; returns the
-    exit status (argparse exits with 2 itself)."""
+@contextlib.contextmanager
+def _signals():
+    """SIGTERM and SIGINT handled by :func:`_stop` meanwhile (:func:`vo_lib.atomic.signals_to`),
+    unraisable signals kept quiet; all put back after."""
     from vo_lib.atomic import signals_to
     from vo_lib.outputs import INTERRUPTED
 
-    command = "python -m vo_lib"
     INTERRUPTED.clear()
     # our interrupts, where a callback from compiled code reports them instead of raising: dropped
     previous_hook = sys.unraisablehook
@@ -344,17 +344,25 @@ def main(argv: list[str] | None = None) -> int:
     )
     try:
         with signals_to(_stop):
+            yield
+    finally:
+        sys.unraisablehook = previous_hook
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Parse ``argv`` and run the command; returns the exit status (argparse exits with 2 itself)."""
+    command = "python -m vo_lib"
+    with _signals():
+        try:
             parser = build_parser()
             args = parser.parse_args(argv)
             command = f"{parser.prog} {args.command}"
             return _run_parsed(args, command)
-    except (KeyboardInterrupt, _Stopped) as stop:
-        signum = signal.Signals(stop.args[0]) if isinstance(stop, _Stopped) else signal.SIGINT
-        how = "interrupted (Ctrl-C)" if signum == signal.SIGINT else f"stopped by {signum.name}"
-        print(f"{command}: {how}; nothing half-written is left", file=sys.stderr)
-        return 128 + signum
-    finally:
-        sys.unraisablehook = previous_hook
+        except (KeyboardInterrupt, _Stopped) as stop:
+            signum = signal.Signals(stop.args[0]) if isinstance(stop, _Stopped) else signal.SIGINT
+            how = "interrupted (Ctrl-C)" if signum == signal.SIGINT else f"stopped by {signum.name}"
+            print(f"{command}: {how}; nothing half-written is left", file=sys.stderr)
+            return 128 + signum
 
 
 def _late_stop(signum, frame) -> None:

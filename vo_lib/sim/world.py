@@ -283,7 +283,18 @@ def road_ribbon(seed: int) -> tuple[Patch, ...]:
         outline = tuple(tuple(centre[k] + side * half * left[k]) for k, side in ends)
         offset = float(s[i] - s[0])
         patches.append(
-            Patch(outline[0], along, across, length, ROAD_WIDTH, "road", seed, offset, total, outline)
+            Patch(
+                outline[0],
+                along,
+                across,
+                length,
+                ROAD_WIDTH,
+                "road",
+                seed,
+                offset=offset,
+                texture_length=total,
+                outline=outline,
+            )
         )
     return tuple(patches)
 

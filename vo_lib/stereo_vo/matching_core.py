@@ -55,7 +55,8 @@ def best_matches_core(ia, ib, dist, n_a, n_b, max_distance, ratio, mutual):
             if owner[b] < 0 or best[a] < best[owner[b]]:
                 owner[b] = a
     owned = np.flatnonzero(owner >= 0)
-    return owner[owned], owned, best[owner[owned]]
+    chosen = owner[owned]
+    return chosen, owned, best[chosen]
 
 
 # the steps below serve window_candidates and row_candidates
