@@ -342,7 +342,17 @@ def test_evaluate_refuses_or_says_undefined_what_it_cannot_measure(tmp_path, rng
     assert main(["evaluate", "--gt", str(tmp_path / "still.txt"), "--est", str(tmp_path / "est.tum")]) == 0
     out = capsys.readouterr().out
     assert (
-        "ATE (Sim(3) alignment, positions only): rmse undefined m, max undefined" in out and "nan" not in out
+        "ATE (Sim(3) alignment, scale undefined, positions only): rmse undefined m, max undefined" in out
+        and "nan" not in out
+    )
+    # a quaternion that is no rotation is refused, not normalised into one nobody measured
+    lines = (tmp_path / "est.tum").read_text().splitlines()
+    values = lines[7].split()
+    lines[7] = " ".join(values[:4] + [repr(1.3 * float(v)) for v in values[4:]])
+    (tmp_path / "bad.tum").write_text("\n".join(lines) + "\n")
+    assert main(["evaluate", "--gt", str(tmp_path / "bad.tum"), "--est", str(tmp_path / "est.tum")]) == 2
+    assert (
+        "bad.tum, line 8: the quaternion's norm is 1.3; expected a unit quaternion" in capsys.readouterr().err
     )
     # a ground truth in millimetres is read as metres, and evaluate says it looks like millimetres
     (tmp_path / "mm.txt").write_text(

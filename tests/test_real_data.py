@@ -306,7 +306,7 @@ def test_asl_recording_is_rectified_and_its_truth_moved_into_the_left_camera():
         (
             "distortion",
             "cam1/sensor.yaml: key distortion_coefficients: expected [k1, k2, p1, p2] (4 finite numbers, "
-            'each within ±100), got 4 values, ["1e30", ',
+            "each within ±100), got 4 values, [1e+30, ",
         ),
         ("distortion-negative", "cam1/sensor.yaml: key distortion_coefficients: expected [k1, k2,"),
         ("camera", "cam1: missing camera folder"),
@@ -338,6 +338,17 @@ def test_asl_recording_is_rectified_and_its_truth_moved_into_the_left_camera():
         ("outside", "cam0/data.csv, line 3: '../../cam1/data/1403636584813555456.png'; expected a file name"),
         ("listed-twice", "cam0/data.csv, line 4: '1403636584813555456.png' listed again (line 3)"),
         ("deep", "cam0/sensor.yaml: not valid YAML (maximum recursion depth exceeded"),
+        (
+            "true",
+            "cam0/sensor.yaml: key intrinsics: expected [fu, fv, cu, cv] (4 finite numbers), got [true, ",
+        ),
+        ("text", 'cam0/sensor.yaml: key intrinsics: expected [fu, fv, cu, cv] (4 finite numbers), got ["458'),
+        ("image-folder", "cam1/data/1403636584963555584.png is a folder; expected an image"),
+        ("gt-folder", "state_groundtruth_estimate0/groundtruth.tum: a folder, where"),
+        (
+            "gt-quaternion",
+            "groundtruth.tum, line 6: the quaternion's norm is 1.5; expected a unit quaternion",
+        ),
         ("columns", "cam0/data.csv, line 3: 3 columns; expected 2, 'timestamp [ns],filename'"),
         ("spacing", "cam0/data.csv: frames 20 s apart (median); expected 0.001 to 10 s"),
         (
@@ -434,6 +445,22 @@ def test_a_bad_rig_gets_one_line_and_exit_2(tmp_path, capsys, damage, expected):
     elif damage == "deep":
         path = mav0 / "cam0" / "sensor.yaml"
         path.write_text(path.read_text() + "deep: " + "[" * 50_000 + "]" * 50_000 + "\n")
+    elif damage in ("true", "text"):  # YAML's true is 1 to Python, and numpy reads a quoted number
+        path = mav0 / "cam0" / "sensor.yaml"
+        path.write_text(
+            path.read_text().replace("[458.654, ", "[true, " if damage == "true" else '["458.654", ')
+        )
+    elif damage in ("image-folder", "gt-folder"):
+        path = mav0 / "cam1" / "data" / "1403636584963555584.png"
+        path = mav0 / "state_groundtruth_estimate0" / "groundtruth.tum" if damage == "gt-folder" else path
+        path.unlink()
+        path.mkdir()
+    elif damage == "gt-quaternion":  # one pose's quaternion half as long again: not a rotation
+        path = mav0 / "state_groundtruth_estimate0" / "groundtruth.tum"
+        lines = path.read_text().splitlines()
+        values = lines[5].split()
+        lines[5] = " ".join(values[:4] + [repr(1.5 * float(v)) for v in values[4:8]])
+        path.write_text("\n".join(lines) + "\n")
     elif damage == "twice":
         path = mav0 / "cam0" / "sensor.yaml"
         path.write_text(path.read_text() + "intrinsics: [458.654, 457.296, 367.215, 248.375]\n")
@@ -491,6 +518,28 @@ def test_a_calibration_that_leaves_no_stereo_matches_is_said(tmp_path, capsys):
 
 
 @needs_euroc
+@pytest.mark.parametrize(
+    "edit, expected",
+    [  # cam1 a metre away: every step ten times too long; cam0's k2 a hundredfold: few frames match
+        (("cam1", "0.0453689425024", "1.0453689425024"), "m; is the stereo baseline that of the rig?"),
+        (("cam0", "0.07395907", "7.395907"), "is each camera's calibration"),
+    ],
+)
+def test_a_run_that_looks_miscalibrated_says_so(tmp_path, capsys, edit, expected):
+    """A calibration that still rectifies, but not these images: a baseline ten times the rig's
+    gives a path ten times the truth's, a wrong distortion leaves most frames flagged; the run
+    ends, and one notice says what to look at."""
+    from vo_lib.cli.main import main
+
+    rig = small_rig(tmp_path, frames=12)
+    path = rig / "mav0" / edit[0] / "sensor.yaml"
+    path.write_text(path.read_text().replace(edit[1], edit[2]))
+    assert main(["run", "--sequence", str(rig), "--out", str(tmp_path / "out")]) == 0
+    notices = [line for line in capsys.readouterr().err.splitlines() if line.startswith("notice:")]
+    assert len(notices) == 1 and expected in notices[0], notices
+
+
+@needs_euroc
 def test_a_header_without_hash_and_a_rounded_calibration_are_read(tmp_path):
     """A data.csv whose header lacks its '#', and a T_BS whose rotation is off by 0.4 % (under the
     tolerance): read, the rotation taken as the nearest one, so the truth keeps its scale."""
@@ -533,7 +582,10 @@ def test_frames_within_the_truth_run_and_the_refusal_says_how_to_run_the_rest(tm
     )
     assert main(["run", "--sequence", str(rig), "--out", str(tmp_path / "all")]) == 2
     err = capsys.readouterr().err
-    assert "must cover every image (run --frames runs fewer; to run without it, move it out of mav0" in err
+    assert (
+        "must cover every image (run --frames runs fewer; to run or convert without it, move it out of mav0"
+        in err
+    )
     assert main(["run", "--sequence", str(rig), "--frames", "9", "--out", str(tmp_path / "nine")]) == 0
     assert len((tmp_path / "nine" / "poses.txt").read_text().splitlines()) == 9
     out = capsys.readouterr().out  # and names the one of the recording's truths it used
@@ -573,6 +625,13 @@ def test_convert_writes_a_kitti_copy_that_reads_back(tmp_path):
     assert vehicle_of(copy).kind is vehicle_of(original).kind is VehicleKind.DRONE
     assert np.array_equal(copy.times, original.times) and copy.times[1] == 0.049999872
     assert read_marker(tmp_path / "kitti")["written_by"] == "vo_lib convert"
+    # calib.txt holds all of KITTI's keys, as other readers of the layout expect: P2, P3 the same
+    # two cameras, Tr the body into the left camera
+    calib = dict(line.split(": ", 1) for line in (tmp_path / "kitti" / "calib.txt").read_text().splitlines())
+    assert list(calib) == ["P0", "P1", "P2", "P3", "Tr"]
+    assert calib["P2"] == calib["P0"] and calib["P3"] == calib["P1"]
+    Tr = np.array(calib["Tr"].split(), float).reshape(3, 4)
+    assert np.allclose(Tr, np.linalg.inv(original.manifest["T_body_camera"])[:3], atol=1e-12)
 
 
 @needs_euroc

@@ -142,12 +142,15 @@ def _to_camera(truth, gt: str, extrinsic_of: str | None) -> np.ndarray:
 
 def _print_position_errors(positions: np.ndarray, E: np.ndarray, lever: np.ndarray) -> None:
     """ATE of the point ``lever`` (in the camera) carried along ``E`` against ``positions``."""
-    from vo_lib.evaluation import Alignment, ate_positions, shown
+    from vo_lib.evaluation import Alignment, ate_positions, shown, umeyama
 
+    tracked = E[:, :3, :3] @ lever + E[:, :3, 3]  # the point carried along the estimate
     for alignment in (Alignment.SE3, Alignment.SIM3):
         a, _ = ate_positions(positions, E, lever, alignment)
         rmse, worst = shown(a.rmse, ".4f"), shown(a.max, ".4f")  # undefined: a scale of nothing moving
-        print(f"ATE ({alignment} alignment, positions only): rmse {rmse} m, max {worst}")
+        scale = umeyama(tracked, positions, with_scale=True)[2] if alignment is Alignment.SIM3 else None
+        named = "" if scale is None else f", scale {shown(scale, '.4f')}"
+        print(f"ATE ({alignment} alignment{named}, positions only): rmse {rmse} m, max {worst}")
 
 
 def _print_pose_errors(G: np.ndarray, E: np.ndarray, lengths) -> None:

@@ -14,8 +14,11 @@ import hashlib
 import os
 import sys
 import threading
+from collections import Counter
 from dataclasses import asdict, fields
 from pathlib import Path
+
+import numpy as np
 
 from vo_lib.arguments import UsageError
 from vo_lib.formats.poses import write_kitti_poses, write_tum
@@ -189,6 +192,39 @@ def run_command(
     return report
 
 
+#: A run whose path is this many times the truth's, or this fraction of it, says so: more than drift.
+PATH_RATIO = 2.0
+
+
+def _say_if_suspect(seq, n: int, diagnostics, poses) -> None:
+    """A notice where a run looks like that of a calibration not of these images: most frames
+    flagged (vision not used), or a path the truth's times ``PATH_RATIO`` or more (a baseline)."""
+    from vo_lib.stereo_vo.pipeline import Reason
+
+    reasons = Counter(d.reason for d in diagnostics if d.fallback)
+    if reasons[Reason.FEW_FEATURES] > (n - 1) / 2:  # the motion of most frames is only the prediction's
+        notice(
+            f"{seq.path}: {reasons[Reason.FEW_FEATURES]} of {n - 1} frames had too few stereo features "
+            "to be matched; is each camera's calibration that of these images? (rows the "
+            "rectification does not line up give no stereo matches)"
+        )
+    elif reasons.total() > (n - 1) / 2:
+        why = ", ".join(f"{count} {reason}" for reason, count in reasons.most_common())
+        notice(
+            f"{seq.path}: {reasons.total()} of {n - 1} frames were flagged, their vision not used "
+            f"({why}); is each camera's calibration, distortion included, that of these images?"
+        )
+    elif seq.poses is not None:
+        truth_m, est_m = (
+            float(np.linalg.norm(np.diff(p[:n, :3, 3], axis=0), axis=1).sum()) for p in (seq.poses, poses)
+        )
+        if min(truth_m, est_m) > 0 and max(truth_m, est_m) >= PATH_RATIO * min(truth_m, est_m):
+            notice(
+                f"{seq.path}: the estimate's path is {est_m:.4g} m long and the truth's {truth_m:.4g} m; "
+                "is the stereo baseline that of the rig? (cam1's T_BS in its sensor.yaml, or P1 in calib.txt)"
+            )
+
+
 def _run_into(
     output: OutputFolder, seq, name: str, frames, no_odometry: bool, seed: int, motion: str
 ) -> dict:
@@ -197,7 +233,6 @@ def _run_into(
         WARM_UP_FRAMES,
         FrameDiagnostics,
         FrameTimings,
-        Reason,
         run_sequence,
         warm_up,
     )
@@ -229,15 +264,9 @@ def _run_into(
     result = run_sequence(
         seq, frames=n, use_odometry=not no_odometry, seed=seed, progress=sys.stderr.isatty(), motion=motion
     )
-    featureless = sum(d.reason is Reason.FEW_FEATURES for d in result.diagnostics)
-    if featureless > (n - 1) / 2:  # the motion of most frames is only the prediction's
-        notice(
-            f"{seq.path}: {featureless} of {n - 1} frames had too few stereo features to be matched; "
-            "is each camera's calibration that of these images? (rows the rectification does not "
-            "line up give no stereo matches)"
-        )
     poses = result.camera_poses
     poses = camera_poses_from_planar(result.poses, mount) if poses is None else poses
+    _say_if_suspect(seq, n, result.diagnostics, poses)
     write_kitti_poses(tmp / "poses.txt", poses)
     origin = float(seq.manifest.get("time_origin_s", 0.0)) if isinstance(seq.manifest, dict) else 0.0
     write_tum(tmp / "trajectory.tum", seq.times[:n] + origin, poses)  # on the recording's clock
@@ -291,5 +320,11 @@ def convert_command(sequence: str, to: str, out: str, force: bool = False) -> No
             for left, right in seq:
                 writer.add(left, right)
             writer.carry(seq.path)
-            path = writer.close(seq.times, seq.poses, manifest=manifest or None)
+            body = manifest.get("T_body_camera")  # an ASL rig's; KITTI's Tr is the body's into the camera
+            path = writer.close(
+                seq.times,
+                seq.poses,
+                manifest=manifest or None,
+                camera_from_body=None if body is None else np.linalg.inv(body),
+            )
     print(f"wrote {path}: {len(seq)} rectified pairs in the KITTI layout")

@@ -9,6 +9,7 @@ Kalibr's name for them, ``distortion_coeffs``) and ``resolution``. Every problem
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -44,7 +45,8 @@ class CameraCalibration:
 
 
 class _UniqueKeys(yaml.SafeLoader):
-    """YAML as ``safe_load`` reads it, but a key given twice in one mapping is an error."""
+    """YAML as ``safe_load`` reads it, but a key given twice in one mapping is an error, and a
+    number written without a point (``1e-05``) is a number, as in YAML 1.2, not a text."""
 
     def construct_mapping(self, node, deep=False):
         seen = []
@@ -56,6 +58,11 @@ class _UniqueKeys(yaml.SafeLoader):
                 )
             seen.append(key)
         return super().construct_mapping(node, deep)
+
+
+_UniqueKeys.add_implicit_resolver(
+    "tag:yaml.org,2002:float", re.compile(r"^[-+]?[0-9][0-9_]*[eE][-+]?[0-9]+$"), list("-+0123456789")
+)
 
 
 def _yaml(path: Path) -> dict:

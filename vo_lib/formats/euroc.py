@@ -104,9 +104,10 @@ def pair_by_timestamp(mav0: Path) -> tuple[np.ndarray, list[Path], list[Path]]:
     for side, files, lines in (("cam0", left, lines0), ("cam1", right, lines1)):
         for path, line in zip(files, lines, strict=True):
             if not path.is_file():
-                raise AslError(
-                    f"{mav0 / side / 'data.csv'}, line {line}: {path.name} is missing from {path.parent}"
-                )
+                where = mav0 / side / "data.csv"
+                if path.is_dir():
+                    raise AslError(f"{where}, line {line}: {path} is a folder; expected an image")
+                raise AslError(f"{where}, line {line}: {path.name} is missing from {path.parent}")
     return t0, left, right
 
 
@@ -160,7 +161,8 @@ def read_asl(path, groundtruth=None, frames: int | None = None) -> Sequence:
         "time_origin_s": float(seconds[0]),
         "T_body_camera": rect.T_body_rect.tolist(),
     }
-    found = (mav0 / name for name in GROUND_TRUTH_FILES if (mav0 / name).is_file())
+    # a folder where a truth file should be is named by the reader, not passed over
+    found = (mav0 / name for name in GROUND_TRUTH_FILES if (mav0 / name).exists())
     truth_path = Path(groundtruth) if groundtruth else next(found, None)
     poses = None
     if truth_path is not None:

@@ -135,6 +135,14 @@ def shown(value, width: int = 40) -> str:
     return f"{count} values, {text[:width]}..."
 
 
+def _plain_numbers(value) -> bool:
+    """Whether every value of the nested lists ``value`` is a number as the file wrote it: not
+    ``true`` (a bool is an int in Python) and not a text such as ``"458.6"`` (numpy would read it)."""
+    if isinstance(value, (list, tuple)):
+        return all(map(_plain_numbers, value))
+    return isinstance(value, (int, float, np.number, np.ndarray)) and not isinstance(value, (bool, np.bool_))
+
+
 def numbers_at(path: Path, key: str, value, shape: tuple, what=None, bounds=(-np.inf, np.inf)) -> np.ndarray:
     """``value`` at ``key`` of ``path`` as finite numbers of ``shape`` within ``bounds`` (``what``
     they are, by default a number within them); else one :class:`SequenceError`."""
@@ -146,7 +154,7 @@ def numbers_at(path: Path, key: str, value, shape: tuple, what=None, bounds=(-np
     except (TypeError, ValueError):
         a = np.array([])
     within = np.all(np.isfinite(a) & (bounds[0] <= a) & (a <= bounds[1]))
-    if isinstance(value, bool) or a.shape != shape or not within:
+    if a.shape != shape or not within or not _plain_numbers(value):  # of a known shape: a shallow walk
         raise SequenceError(f"{path}: key {key}: expected {what}, got {shown(value)}")
     return a
 

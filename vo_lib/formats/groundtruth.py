@@ -94,7 +94,7 @@ def read_trajectory(path, min_poses: int = 1) -> tuple[np.ndarray | None, np.nda
 
 #: What to do about a recording's ground truth that does not cover its images.
 UNCOVERED_HINT = (
-    " (run --frames runs fewer; to run without it, move it out of mav0, and evaluate --gt ... "
+    " (run --frames runs fewer; to run or convert without it, move it out of mav0, and evaluate --gt ... "
     "--extrinsic-of RECORDING then scores the frames it covers)"
 )
 
@@ -103,6 +103,11 @@ def covering(truth: GroundTruth, times, max_diff: float = MAX_TIME_DIFF_S) -> tu
     """:func:`associate` the images at ``times`` (seconds) with ``truth``, which must span them (a
     6-DoF truth: match every one)."""
     times = np.asarray(times, float)
+    if len(times) < 3:  # --frames 2: the truth is fine, the images too few
+        raise GroundTruthError(
+            f"{truth.path}: {len(times)} images to compare with it; an evaluation needs at least 3 "
+            "(run --frames 3 or more)"
+        )
     t0, t1 = truth.times[0], truth.times[-1]
     if times[0] < t0 - max_diff or times[-1] > t1 + max_diff:
         raise GroundTruthError(

@@ -44,6 +44,9 @@ class TrajectoryError(ValueError):
 
 #: Largest entry of ``R^T R - I`` accepted for the rotation part of a pose (files round numbers).
 ROTATION_TOLERANCE = 1e-2
+#: Largest difference of a quaternion's norm from 1 accepted (files round numbers; beyond this the
+#: file holds something else, and normalising it would give a rotation nobody measured).
+QUATERNION_TOLERANCE = 1e-2
 #: Largest coordinate accepted (m): beyond it, squared distances overflow in the alignment.
 MAX_POSITION = 1e9
 #: Largest file read (bytes): a 200 Hz EuRoC CSV of an hour is about 70 MB (12 times that in memory).
@@ -119,7 +122,7 @@ def _row(path: Path, n: int, line: str, comma: bool, first: tuple[int, int] | No
 
 
 def _check(path: Path, a: np.ndarray, rows: list[tuple[int, str]], comma: bool) -> None:
-    """Every row finite, a rotation (KITTI) or a non-zero quaternion, a position within
+    """Every row finite, a rotation (KITTI) or a unit quaternion, a position within
     :data:`MAX_POSITION`, timestamps increasing; else the first bad row is named."""
     lines = [n for n, _ in rows]
 
@@ -138,7 +141,15 @@ def _check(path: Path, a: np.ndarray, rows: list[tuple[int, str]], comma: bool) 
     else:
         positions = a[:, 1:4]
         if a.shape[1] >= 8:
-            refuse(np.abs(a[:, 4:8]).max(axis=1) <= 1e-6, "the quaternion is zero")
+            with np.errstate(all="ignore"):  # huge entries overflow: no unit quaternion either
+                norm = np.linalg.norm(a[:, 4:8], axis=1)
+            refuse(
+                ~(np.abs(norm - 1.0) <= QUATERNION_TOLERANCE),
+                lambda k: (
+                    f"the quaternion's norm is {norm[k]:.4g}; expected a unit quaternion "
+                    f"(norm 1 within {QUATERNION_TOLERANCE:g})"
+                ),
+            )
         t = a[:, 0]
 
         def stamp(k: int) -> str:  # as written: a float would round a time in nanoseconds
@@ -182,7 +193,8 @@ def read_rows(path, min_rows: int = 1) -> tuple[np.ndarray, list[int], bool]:
 
 
 def pose_matrices(positions: np.ndarray, quat_xyzw: np.ndarray) -> np.ndarray:
-    """``(N, 4, 4)`` poses of positions and quaternions ``x y z w`` (normalised here)."""
+    """``(N, 4, 4)`` poses of positions and unit quaternions ``x y z w`` (normalised here, against
+    the rounding of the file's numbers)."""
     T = np.tile(np.eye(4), (len(positions), 1, 1))
     q = quat_xyzw / np.max(np.abs(quat_xyzw), axis=1, keepdims=True)  # no overflow in the norm
     T[:, :3, :3] = Rotation.from_quat(q).as_matrix()

@@ -83,14 +83,25 @@ class SequenceWriter(OutputFolder):
                     f"({exc.strerror or str(exc)[:120]}); nothing was written"
                 ) from None
 
-    def close(self, times, poses=None, odometry=None, manifest: dict | None = None) -> Path:
-        """Write the text files and move the finished sequence into place; returns its path."""
+    def close(
+        self, times, poses=None, odometry=None, manifest: dict | None = None, camera_from_body=None
+    ) -> Path:
+        """Write the text files and move the finished sequence into place; returns its path.
+
+        With ``camera_from_body`` (4x4: a rig's body frame into the left camera), ``calib.txt``
+        holds all of KITTI's keys, as readers of the KITTI layout expect: ``P2`` and ``P3`` repeat
+        ``P0`` and ``P1`` (KITTI's colour cameras; here the same two) and ``Tr`` is the body into
+        the left camera (KITTI's is its laser scanner's)."""
         times = np.asarray(times, dtype=float)
         if len(times) != self.count:
             raise ValueError(f"times has {len(times)} entries for {self.count} frames")
         P0, P1 = self.camera.projection_matrices()
+        calib = f"P0: {_format_rows(P0, 12)}P1: {_format_rows(P1, 12)}"
+        if camera_from_body is not None:
+            Tr = np.asarray(camera_from_body, float)[:3]
+            calib += f"P2: {_format_rows(P0, 12)}P3: {_format_rows(P1, 12)}Tr: {_format_rows(Tr, 12)}"
         files = {
-            "calib.txt": f"P0: {_format_rows(P0, 12)}P1: {_format_rows(P1, 12)}",
+            "calib.txt": calib,
             "times.txt": "".join(f"{t!r}\n" for t in times.tolist()),
             "poses.txt": None if poses is None else _format_rows(np.asarray(poses, float)[:, :3, :], 12),
             "odometry.txt": None if odometry is None else _format_rows(odometry, 2),
