@@ -639,7 +639,7 @@ def build(
     with contextlib.ExitStack() as stack:  # refused before an hour of work, not after it
         try:
             course, student, handout = (
-                stack.enter_context(OutputFolder(out / name, WRITTEN_BY, checksums=True))
+                stack.enter_context(OutputFolder(out / name, WRITTEN_BY))
                 for name in (GRADING_DIR, STUDENT_DIR, HANDOUT_DIR)
             )
         except OutputError as exc:

@@ -268,6 +268,12 @@ def has_marker(rel):
 
 
 RUN = ["run", "--sequence", "seq"]
+SAMPLE_MANIFEST = "data/corridor_2f/manifest.json"
+#: A manifest's position-only truth without the name of the file it came from.
+POSITIONS_ONLY = (
+    '{"positions": {"frames": [0, 1, 2, 3], "xyz": [[0, 0, 0], [0, 0, 0.01], [0, 0, 0.02], [0, 0, 0.03]], '
+    '"lever_arm_camera": [0, 0, 0]}}'
+)
 GEN = ["generate", "corridor", "--frames", "2", "--resolution", "64x48"]
 EVAL = ["evaluate", "--gt", "gt.txt", "--est", "est.txt"]
 ALIASES = {"RUN": RUN, "GEN": GEN, "EVAL": EVAL}
@@ -376,6 +382,20 @@ CASES = [
     Case("force-but-bad-input", "RUN --out thesis --force", 2, "frame 2: empty file",
         edit("seq/image_1/000002.png", b"")),
     Case("corrupt-manifest", "RUN", 2, "manifest.json: not valid JSON", edit("seq/manifest.json", "{oops")),
+    Case("manifest-utf16", "RUN", 2, "manifest.json: not a text file (byte 0 is not UTF-8)",
+        edit("seq/manifest.json", "{}".encode("utf-16"))),
+    Case("manifest-height-true", "RUN", 2, "camera.height_m: expected a number from 0 to 10, got true",
+        edit("seq/manifest.json", '{"camera": {"height_m": true}}')),
+    Case("manifest-positions-without-file", "RUN --out out", 0, "(the manifest's positions, 4 positions)",
+        do(lambda ws: (ws / "seq" / "poses.txt").unlink(), edit("seq/manifest.json", POSITIONS_ONLY)), "out"),
+    Case("raw-calib-a-file", "RUN", 2, "raw_calib: a file, where the folder of KITTI's raw calibration",
+        edit("seq/raw_calib", "R: 1 0 0")),
+    Case("convert-empty-text", "convert '' --out conv", 2, "argument sequence: expected a recording folder"),
+    Case("evaluate-gt-empty-text", "evaluate --gt '' --est seq/poses.txt", 2, "--gt: expected a ground"),
+    Case("sample-manifest-damaged", "run --sequence corridor --frames 2 --out out", 2,
+        "corridor_2f: the folder exists and manifest.json was added, changed or removed",
+        do(lambda ws: main(["generate", "corridor", "--frames", "2"]), edit(SAMPLE_MANIFEST, "[1]")),
+        "data"),
     Case("manifest-nested-deep", "RUN", 2, "manifest.json: not valid JSON",
         edit("seq/manifest.json", "[" * 100_000 + "]" * 100_000)),
     Case("manifest-number-too-long", "RUN", 2, "manifest.json: not valid JSON (a number too long)",
@@ -548,6 +568,18 @@ OWNERSHIP = [
     Case("generate-over-its-own-plus-a-user-file-in-a-subfolder", "GEN --out gen", 2, "image_0/NOTES.txt",
         do(generated("gen"), edit("gen/image_0/NOTES.txt", "mine")), "gen",
         check=reads("gen/image_0/NOTES.txt", "mine")),
+    # every command keeps off the samples' folder, and off an output of its own edited since
+    Case("convert-data-folder-force", "convert seq --out data --force", 2, "is the sample data folder"),
+    Case("sweep-data-folder-force", "sweep nees --seeds 1 --workers 1 --out data --force", 2,
+        "is the sample data folder"),
+    Case("convert-over-its-own-edited", "convert seq --out conv", 2, "poses.txt was added, changed or",
+        do(lambda ws: main(["convert", "seq", "--out", "conv"]), edit("conv/poses.txt", "mine")), "conv",
+        check=reads("conv/poses.txt", "mine")),
+    Case("sweep-over-its-own-edited", "sweep nees --seeds 2 --workers 1 --out R", 2,
+        "results.csv was added, changed or removed", do(finished_sweep, edit("R/results.csv", "mine")), "R",
+        check=reads("R/results.csv", "mine")),
+    Case("generate-over-its-own-edited", "GEN --out gen --force", 0, "--force: replaced",
+        do(generated("gen"), edit("gen/poses.txt", "mine")), "gen", check=has_marker("gen")),
     Case("sweep-over-a-run", "sweep nees --seeds 2 --workers 1 --out out", 2,
         "holds the output of `vo_lib run`", run_once("out")),
     Case("sweep-over-another-sweep", "sweep lap --seeds 1 --workers 1 --out R", 2,
@@ -1188,7 +1220,7 @@ def test_a_checksummed_folder_is_replaced_only_while_every_file_is_as_written(tm
     from vo_lib.outputs import OutputError, OutputFolder, check_target, read_marker
 
     def write(text: str) -> None:
-        with OutputFolder(tmp_path / "book", "book build", checksums=True) as out:
+        with OutputFolder(tmp_path / "book", "book build") as out:
             (out.path / "deep").mkdir()
             (out.path / "deep" / "page.txt").write_text(text)
             out.commit()

@@ -140,7 +140,7 @@ def test_build_refuses_a_folder_it_did_not_write_or_that_changed(tmp_path):
     with pytest.raises(build.UsageError, match="it was not written by this program"):
         build.refuse_unless_replaceable(folder)
     folder.joinpath("notes.txt").unlink()
-    with OutputFolder(folder, build.WRITTEN_BY, checksums=True) as out:  # as a build writes it
+    with OutputFolder(folder, build.WRITTEN_BY) as out:  # as a build writes it
         (out.path / "notes.txt").write_text("mine")
         (out.path / "sub").mkdir()
         (out.path / "sub" / "a.ipynb").write_text("{}")

@@ -45,9 +45,9 @@ def is_rendered(name: str, path) -> bool:
     """Whether sample ``name`` is rendered in ``path`` with the sample's current fingerprint."""
     try:
         manifest = json.loads((Path(path) / "manifest.json").read_text())
-    except (OSError, ValueError):
+    except (OSError, ValueError, RecursionError):
         return False
-    return manifest.get("fingerprint") == fingerprint(name)
+    return isinstance(manifest, dict) and manifest.get("fingerprint") == fingerprint(name)
 
 
 def load_sequence(

@@ -262,8 +262,8 @@ def reading(folder):
 class OutputFolder(contextlib.AbstractContextManager):  # its __enter__ returns it
     """A folder written whole: checked on entry (``check`` as :func:`check_target` takes it),
     filled in :attr:`path` (a temporary sibling), put in place by :meth:`commit`; on any exception
-    (or without a commit) nothing is left behind. With ``checksums`` the marker records every
-    file's sha256, and the folder is replaced later only while every file is as written.
+    (or without a commit) nothing is left behind. The marker records every file's sha256, and the
+    folder is replaced later only while every file is as written.
 
     ::
 
@@ -272,9 +272,8 @@ class OutputFolder(contextlib.AbstractContextManager):  # its __enter__ returns 
             out.commit(seed=0)
     """
 
-    def __init__(self, target, written_by: str, *, checksums=False, **check):
-        self.target, self.written_by = Path(target), written_by
-        self.checksums, self.committed = checksums, False
+    def __init__(self, target, written_by: str, **check):
+        self.target, self.written_by, self.committed = Path(target), written_by, False
         self._check = dict(written_by=written_by, **check)
         check_target(self.target, **self._check)
         self.real, self.label = real_path(self.target), _label(target, check.get("option"))
@@ -295,7 +294,7 @@ class OutputFolder(contextlib.AbstractContextManager):  # its __enter__ returns 
         if INTERRUPTED:
             raise INTERRUPTED[0]
         marker = {"written_by": self.written_by, "contents": entries(self.path), **details}
-        marker |= {"files": file_checksums(self.path)} if self.checksums else {}
+        marker["files"] = file_checksums(self.path)
         (self.path / MARKER).write_text(json.dumps(marker, indent=2, sort_keys=True) + "\n", encoding="utf-8")
         replacing = check_target(self.target, **self._check)
         if real_path(self.target) != self.real:  # a link repointed meanwhile: what was checked is elsewhere

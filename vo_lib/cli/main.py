@@ -147,9 +147,14 @@ def build_parser() -> argparse.ArgumentParser:
         "evaluate --gt data/indoor_linear/poses.txt --est runs/indoor_linear/poses.txt --segments 1,2",
     )
     ev.add_argument(
-        "--gt", required=True, help="ground truth: KITTI poses, TUM, EuRoC CSV, or positions (t x y z)"
+        "--gt",
+        required=True,
+        type=non_empty("a ground-truth file"),
+        help="ground truth: KITTI poses, TUM, EuRoC CSV, or positions (t x y z)",
     )
-    ev.add_argument("--est", required=True, help="estimated poses (KITTI or TUM)")
+    ev.add_argument(
+        "--est", required=True, type=non_empty("a pose file"), help="estimated poses (KITTI or TUM)"
+    )
     ev.add_argument(
         "--extrinsic-of",
         metavar="RECORDING",
@@ -169,7 +174,11 @@ def build_parser() -> argparse.ArgumentParser:
         "and write it in the KITTI odometry layout, with its ground truth in the rectified left camera.",
         "convert /data/MH_01_easy --to kitti --out /tmp/mh01",
     )
-    conv.add_argument("sequence", help="the recording (ASL layout) or any sequence folder")
+    conv.add_argument(
+        "sequence",
+        type=non_empty("a recording folder"),
+        help="the recording (ASL layout) or any sequence folder",
+    )
     conv.add_argument("--to", choices=("kitti",), default="kitti", help="layout to write (kitti)")
     output(conv, "new, empty, or written by vo_lib", required=True)
     gen = command(

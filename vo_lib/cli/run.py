@@ -177,7 +177,6 @@ def run_command(
             keep=keep,
             keep_inside=True,
             option="--out",
-            checksums=True,
         ) as output,
         contextlib.ExitStack() as locks,
     ):
@@ -201,7 +200,8 @@ def _say_if_suspect(seq, n: int, diagnostics, poses) -> None:
     flagged (vision not used), or a path the truth's times ``PATH_RATIO`` or more (a baseline)."""
     from vo_lib.stereo_vo.pipeline import Reason
 
-    reasons = Counter(d.reason for d in diagnostics if d.fallback)
+    # (a frame after a featureless one lacks a reference: that one is counted already)
+    reasons = Counter(d.reason for d in diagnostics if d.fallback and d.reason is not Reason.NO_REFERENCE)
     if reasons[Reason.FEW_FEATURES] > (n - 1) / 2:  # the motion of most frames is only the prediction's
         notice(
             f"{seq.path}: {reasons[Reason.FEW_FEATURES]} of {n - 1} frames had too few stereo features "
@@ -304,7 +304,7 @@ def convert_command(sequence: str, to: str, out: str, force: bool = False) -> No
     """Write a rectified copy of a sequence (an ASL rig, or any readable one) in the KITTI layout,
     with the source's manifest (an ASL rig's camera in the body, its position-only truth) and its
     odometry files (:data:`~vo_lib.formats.sequence_writer.CARRIED`)."""
-    from vo_lib.data import load_sequence
+    from vo_lib.data import data_dir, load_sequence
     from vo_lib.formats.sequence_writer import SequenceWriter
 
     with contextlib.ExitStack() as locks:  # no command replaces the sequence while it is read
@@ -314,7 +314,13 @@ def convert_command(sequence: str, to: str, out: str, force: bool = False) -> No
         locks.enter_context(reading(seq.path))
         manifest = {k: v for k, v in seq.manifest.items() if k != "layout"}
         writer = SequenceWriter(
-            out, seq.camera, force=force, option="--out", written_by="vo_lib convert", inputs=[seq.path]
+            out,
+            seq.camera,
+            force=force,
+            option="--out",
+            written_by="vo_lib convert",
+            inputs=[seq.path],
+            keep={data_dir(): "the sample data folder"},
         )
         with writer:
             for left, right in seq:

@@ -146,8 +146,11 @@ def sweep_command(name: str, seeds: int, workers=None, scheduler=None, out=None,
         raise UsageError(f"--workers {workers}: at most {WORKERS_PER_CORE * cores} on {cores} core(s)")
     _, make_tasks, describe = SWEEPS[name]
     tasks = make_tasks(seeds)
+    from vo_lib.data import data_dir
+
+    keep = {data_dir(): "the sample data folder"}
     with OutputFolder(
-        Path(out or f"sweeps/{name}"), f"vo_lib sweep {name}", force=force, option="--out"
+        Path(out or f"sweeps/{name}"), f"vo_lib sweep {name}", force=force, option="--out", keep=keep
     ) as folder:
         table = pd.DataFrame(run_tasks(function_of(name), tasks, workers, scheduler))
         table.to_csv(folder.path / "results.csv", index=False, lineterminator="\n")

@@ -106,8 +106,9 @@ def read_poses(path: Path) -> np.ndarray:
 
 def read_manifest(path: Path) -> dict:
     """The JSON object of a ``manifest.json``; raises :class:`SequenceError`."""
+    text = read_text(path)  # outside the try: its own errors (not UTF-8, too large) say what they are
     try:
-        manifest = json.loads(read_text(path))
+        manifest = json.loads(text)
     except (ValueError, RecursionError) as exc:  # JSON's errors, a number too long, nesting too deep
         bad = isinstance(exc, json.JSONDecodeError)
         deep = "nested too deep" if isinstance(exc, RecursionError) else "a number too long"

@@ -69,6 +69,10 @@ def _rigid(path: Path) -> np.ndarray:
 def camera_in_imu_frame(raw_calib) -> np.ndarray:
     """4x4 pose of the left rectified camera in the IMU frame (x forward, y left, z up)."""
     folder = Path(raw_calib)
+    if not folder.is_dir():
+        raise SequenceError(
+            f"{folder}: a file, where the folder of KITTI's raw calibration (calib_*.txt) should be"
+        )
     imu_to_velo = _rigid(folder / "calib_imu_to_velo.txt")
     velo_to_cam = _rigid(folder / "calib_velo_to_cam.txt")
     rect = np.eye(4)

@@ -38,8 +38,9 @@ class SequenceWriter(OutputFolder):
         option: str | None = None,
         written_by: str = "vo_lib generate",
         inputs=(),
+        keep=None,
     ):
-        super().__init__(path, written_by, force=force, inputs=inputs, option=option)
+        super().__init__(path, written_by, force=force, inputs=inputs, option=option, keep=keep)
         self.camera, self.count = camera, 0
         (self.path / "image_0").mkdir()
         (self.path / "image_1").mkdir()

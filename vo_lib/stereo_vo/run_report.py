@@ -184,7 +184,8 @@ def position_only_errors(seq, poses: np.ndarray, n: int) -> dict:
     ate, _ = ate_positions(
         np.asarray(positions["xyz"])[keep], poses[frames[keep]], positions["lever_arm_camera"], Alignment.SE3
     )
-    print(f"\nErrors against position-only ground truth ({positions['file']}, {int(keep.sum())} positions)")
+    source = positions.get("file", "the manifest's positions")  # the file they were read from, if named
+    print(f"\nErrors against position-only ground truth ({source}, {int(keep.sum())} positions)")
     print(f"  {'ATE RMSE of the tracked point, SE(3) alignment [m]':<62s}{ate.rmse:>16.4f}")
     return {"ate_positions_m": ate.rmse}
 
