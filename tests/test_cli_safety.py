@@ -157,6 +157,12 @@ def truncated_jpeg(ws):
     path.write_bytes(path.read_bytes()[:-200])
 
 
+def said(err: str) -> list[str]:
+    """The lines of ``err`` but the notice that the workspace's images (64x48: no corners inside
+    ORB's border) give every run: most frames had too few stereo features."""
+    return [line for line in err.strip().splitlines() if "frames had too few stereo features" not in line]
+
+
 def run_once(out: str):
     def setup(ws):
         assert main(["run", "--sequence", "seq", "--out", out]) == 0
@@ -629,7 +635,7 @@ def test_case(case: Case, template, tmp_path, monkeypatch, capsys):
     code, out, err = invoke(case.argv, capsys)
     assert code == case.code, f"exit {code}\nstdout: {out}\nstderr: {err}"
     assert "Traceback" not in err
-    lines = err.strip().splitlines()
+    lines = said(err)
     if case.code == 2:
         assert len(lines) == 1, err
         assert case.phrase in lines[0]
@@ -1210,7 +1216,7 @@ def test_a_full_disk_during_a_run_names_out_not_a_temporary(template, tmp_path, 
     monkeypatch.setattr(run_module, "write_tum", full)
     before = checksums(ws, ())
     code, out, err = invoke([*RUN, "--out", "out"], capsys)
-    assert code == 2 and err.strip().splitlines() == [
+    assert code == 2 and said(err) == [
         "python -m vo_lib run: error: --out out: no space left on device; nothing was written"
     ]
     assert not (ws / "out").exists() and temporaries(ws) == [] and checksums(ws, ()) == before

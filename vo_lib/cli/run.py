@@ -200,11 +200,12 @@ def _say_if_suspect(seq, n: int, diagnostics, poses) -> None:
     flagged (vision not used), or a path the truth's times ``PATH_RATIO`` or more (a baseline)."""
     from vo_lib.stereo_vo.pipeline import Reason
 
-    # (a frame after a featureless one lacks a reference: that one is counted already)
-    reasons = Counter(d.reason for d in diagnostics if d.fallback and d.reason is not Reason.NO_REFERENCE)
-    if reasons[Reason.FEW_FEATURES] > (n - 1) / 2:  # the motion of most frames is only the prediction's
+    reasons = Counter(d.reason for d in diagnostics if d.fallback)
+    # a frame without a reference follows frames without features
+    featureless = reasons.pop(Reason.FEW_FEATURES, 0) + reasons.pop(Reason.NO_REFERENCE, 0)
+    if featureless > (n - 1) / 2:  # the motion of most frames is only the prediction's
         notice(
-            f"{seq.path}: {reasons[Reason.FEW_FEATURES]} of {n - 1} frames had too few stereo features "
+            f"{seq.path}: {featureless} of {n - 1} frames had too few stereo features "
             "to be matched; is each camera's calibration that of these images? (rows the "
             "rectification does not line up give no stereo matches)"
         )
