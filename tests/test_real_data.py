@@ -242,6 +242,18 @@ def small_rig(tmp_path: Path, frames: int = 6) -> Path:
 
 
 @needs_euroc
+def test_numbers_are_read_as_yaml_1_2_writes_them(tmp_path):
+    """Without the point or the exponent's sign YAML 1.1 requires (1.5e2, -.5, 1e-05), a number is
+    a number still; YAML's true is not."""
+    from vo_lib.formats.asl_calibration import read_camera_yaml
+
+    path = small_rig(tmp_path) / "mav0" / "cam0" / "sensor.yaml"
+    asl = read_camera_yaml(path)
+    path.write_text(path.read_text().replace("[458.654, 457.296,", "[+4.58654e2, 45729.6e-2,"))
+    np.testing.assert_array_equal(read_camera_yaml(path).K, asl.K)
+
+
+@needs_euroc
 def test_kalibrs_name_for_the_distortion_coefficients_is_read_as_the_asl_one(tmp_path):
     from vo_lib.formats.asl_calibration import read_camera_yaml
 
@@ -345,6 +357,7 @@ def test_asl_recording_is_rectified_and_its_truth_moved_into_the_left_camera():
         ("text", 'cam0/sensor.yaml: key intrinsics: expected [fu, fv, cu, cv] (4 finite numbers), got ["458'),
         ("image-folder", "cam1/data/1403636584963555584.png is a folder; expected an image"),
         ("gt-folder", "state_groundtruth_estimate0/groundtruth.tum: a folder, where"),
+        ("gt-link", "state_groundtruth_estimate0/groundtruth.tum: "),
         (
             "gt-quaternion",
             "groundtruth.tum, line 6: the quaternion's norm is 1.5; expected a unit quaternion",
@@ -450,6 +463,10 @@ def test_a_bad_rig_gets_one_line_and_exit_2(tmp_path, capsys, damage, expected):
         path.write_text(
             path.read_text().replace("[458.654, ", "[true, " if damage == "true" else '["458.654", ')
         )
+    elif damage == "gt-link":  # a link that leads nowhere: not passed over for leica0's positions
+        path = mav0 / "state_groundtruth_estimate0" / "groundtruth.tum"
+        path.unlink()
+        path.symlink_to("nowhere.tum")
     elif damage in ("image-folder", "gt-folder"):
         path = mav0 / "cam1" / "data" / "1403636584963555584.png"
         path = mav0 / "state_groundtruth_estimate0" / "groundtruth.tum" if damage == "gt-folder" else path

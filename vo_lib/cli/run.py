@@ -322,6 +322,7 @@ def convert_command(sequence: str, to: str, out: str, force: bool = False) -> No
             written_by="vo_lib convert",
             inputs=[seq.path],
             keep={data_dir(): "the sample data folder"},
+            keep_inside=True,
         )
         with writer:
             for left, right in seq:

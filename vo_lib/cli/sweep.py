@@ -150,7 +150,12 @@ def sweep_command(name: str, seeds: int, workers=None, scheduler=None, out=None,
 
     keep = {data_dir(): "the sample data folder"}
     with OutputFolder(
-        Path(out or f"sweeps/{name}"), f"vo_lib sweep {name}", force=force, option="--out", keep=keep
+        Path(out or f"sweeps/{name}"),
+        f"vo_lib sweep {name}",
+        force=force,
+        option="--out",
+        keep=keep,
+        keep_inside=True,
     ) as folder:
         table = pd.DataFrame(run_tasks(function_of(name), tasks, workers, scheduler))
         table.to_csv(folder.path / "results.csv", index=False, lineterminator="\n")

@@ -141,6 +141,12 @@ def tracked_to_camera(truth_path, T_body_rect, tracker_of=None) -> np.ndarray:
     return np.linalg.inv(truth_extrinsic(truth_path)) @ T_body_rect
 
 
+def _stated(path: Path) -> bool:
+    """Whether ``path`` is there in some form: itself, a link leading nowhere, or a file in the place
+    of its folder."""
+    return path.exists() or path.is_symlink() or path.parent.is_file()
+
+
 def read_asl(path, groundtruth=None, frames: int | None = None) -> Sequence:
     """The first ``frames`` pairs of an ASL recording, rectified; the 6-DoF truth (``groundtruth`` or
     the first of :data:`GROUND_TRUTH_FILES`) in ``poses`` (the rectified left camera in its first
@@ -161,8 +167,8 @@ def read_asl(path, groundtruth=None, frames: int | None = None) -> Sequence:
         "time_origin_s": float(seconds[0]),
         "T_body_camera": rect.T_body_rect.tolist(),
     }
-    # a folder where a truth file should be is named by the reader, not passed over
-    found = (mav0 / name for name in GROUND_TRUTH_FILES if (mav0 / name).exists())
+    # a truth there in any form (a folder, a broken link, its folder a file) is named by the reader
+    found = (mav0 / name for name in GROUND_TRUTH_FILES if _stated(mav0 / name))
     truth_path = Path(groundtruth) if groundtruth else next(found, None)
     poses = None
     if truth_path is not None:

@@ -152,7 +152,7 @@ def numbers_at(path: Path, key: str, value, shape: tuple, what=None, bounds=(-np
         raise SequenceError(f"{path}: key {key} missing; expected {what}")
     try:
         a = np.array(value, dtype=float)
-    except (TypeError, ValueError):
+    except (TypeError, ValueError, OverflowError):  # OverflowError: an integer of hundreds of digits
         a = np.array([])
     within = np.all(np.isfinite(a) & (bounds[0] <= a) & (a <= bounds[1]))
     if a.shape != shape or not within or not _plain_numbers(value):  # of a known shape: a shallow walk

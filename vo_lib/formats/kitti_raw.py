@@ -71,7 +71,7 @@ def camera_in_imu_frame(raw_calib) -> np.ndarray:
     folder = Path(raw_calib)
     if not folder.is_dir():
         raise SequenceError(
-            f"{folder}: a file, where the folder of KITTI's raw calibration (calib_*.txt) should be"
+            f"{folder}: not a folder, where that of KITTI's raw calibration (calib_*.txt) should be"
         )
     imu_to_velo = _rigid(folder / "calib_imu_to_velo.txt")
     velo_to_cam = _rigid(folder / "calib_velo_to_cam.txt")

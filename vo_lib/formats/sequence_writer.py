@@ -39,8 +39,11 @@ class SequenceWriter(OutputFolder):
         written_by: str = "vo_lib generate",
         inputs=(),
         keep=None,
+        keep_inside=False,
     ):
-        super().__init__(path, written_by, force=force, inputs=inputs, option=option, keep=keep)
+        super().__init__(
+            path, written_by, force=force, inputs=inputs, option=option, keep=keep, keep_inside=keep_inside
+        )
         self.camera, self.count = camera, 0
         (self.path / "image_0").mkdir()
         (self.path / "image_1").mkdir()
@@ -76,6 +79,8 @@ class SequenceWriter(OutputFolder):
                     (self.path / name).mkdir()  # with the umask's permissions, not src's: it can be replaced
                     for file in [f for f in sorted(src.glob("calib_*.txt")) if f.is_file()]:
                         shutil.copyfile(file, self.path / name / file.name)
+                elif src.is_file() and name == "raw_calib":
+                    raise OutputError(f"{src}: a file, where the folder of KITTI's raw calibration should be")
                 elif src.is_file():
                     shutil.copyfile(src, self.path / name)
             except OSError as exc:

@@ -144,7 +144,7 @@ def vehicle_of(sequence, use_odometry: bool = True) -> Vehicle:
         return Vehicle(VehicleKind.CRAWLER, mount, model, odometry, source, motion)
     root = sequence.path
     raw_calib = root / "raw_calib"
-    if raw_calib.exists():  # a file there is named by the reader, not passed over
+    if raw_calib.exists() or raw_calib.is_symlink():  # a file or a broken link: named by the reader
         mount = camera_in_imu_frame(raw_calib)
     else:
         forward, left, up = KITTI_CAMERA_IN_IMU
