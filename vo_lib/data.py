@@ -26,6 +26,11 @@ def data_dir() -> Path:
     return Path(cache) / "vo_lib" / "data"
 
 
+def kept_data_folder() -> dict[Path, str]:
+    """The samples' folder as :func:`vo_lib.outputs.check_target`'s ``keep`` takes it: never replaced."""
+    return {data_dir(): "the sample data folder"}
+
+
 def real_sequence_path(name: str) -> Path | None:
     """The folder ``name`` under ``$VO_LIB_REALDATA`` (real recordings, not in the repository), or None."""
     root = os.environ.get("VO_LIB_REALDATA", "")

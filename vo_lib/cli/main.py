@@ -272,7 +272,7 @@ def _os_error(exc: OSError, out) -> str:
 
 
 def _generate(args) -> None:
-    from vo_lib.data import data_dir, sample_path
+    from vo_lib.data import kept_data_folder, sample_path
     from vo_lib.outputs import OutputError, check_target
     from vo_lib.sim.samples import generate, get_sample
 
@@ -280,8 +280,7 @@ def _generate(args) -> None:
     if args.frames is not None and args.frames > most:
         raise UsageError(f"--frames {args.frames}: {args.name} has {most} frames; expected 2 to {most}")
     out = args.out or sample_path(args.name, args.frames, args.resolution)
-    keep = {data_dir(): "the sample data folder"}
-    check_target(out, written_by="vo_lib generate", force=args.force, option="--out", keep=keep)  # first
+    check_target(out, written_by="vo_lib generate", force=args.force, option="--out", keep=kept_data_folder())
     if args.out and not args.force and (Path(out) / "image_0").is_dir():  # ours, but a sequence
         raise OutputError(
             f"--out {args.out}: holds a sequence generated earlier, which something may still read; "

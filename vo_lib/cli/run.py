@@ -18,11 +18,9 @@ from collections import Counter
 from dataclasses import asdict, fields
 from pathlib import Path
 
-import numpy as np
-
 from vo_lib.arguments import UsageError
 from vo_lib.formats.poses import write_kitti_poses, write_tum
-from vo_lib.geometry import camera_poses_from_planar
+from vo_lib.geometry import camera_poses_from_planar, rigid_inverse
 from vo_lib.outputs import OutputFolder, file_sha256, notice, reading
 from vo_lib.sim.samples import SAMPLES, get_sample
 from vo_lib.stereo_vo.run_report import (
@@ -161,13 +159,13 @@ def run_command(
     """Run the pipeline and write its outputs; returns the error report (empty without truth).
     ``motion``: the model (``auto``: planar for the crawler, 6-DoF for a car; planar poses are
     written carried to the camera through its mount)."""
-    from vo_lib.data import data_dir, is_rendered, load_sequence
+    from vo_lib.data import is_rendered, kept_data_folder, load_sequence
 
     name = sequence or DEFAULT_SEQUENCE
     source, load_frames = input_path(name, frames)
     out_dir = Path(out) if out else Path("runs") / default_name(name)
 
-    keep = {data_dir(): "the sample data folder"}  # the samples' folder, not runs': nothing inside it
+    keep = kept_data_folder()  # the samples' folder, not runs': nothing inside it
     with (
         OutputFolder(
             out_dir,
@@ -198,6 +196,7 @@ PATH_RATIO = 2.0
 def _say_if_suspect(seq, n: int, diagnostics, poses) -> None:
     """A notice where a run looks like that of a calibration not of these images: most frames
     flagged (vision not used), or a path the truth's times ``PATH_RATIO`` or more (a baseline)."""
+    from vo_lib.evaluation import path_lengths
     from vo_lib.stereo_vo.pipeline import Reason
 
     reasons = Counter(d.reason for d in diagnostics if d.fallback)
@@ -216,9 +215,7 @@ def _say_if_suspect(seq, n: int, diagnostics, poses) -> None:
             f"({why}); is each camera's calibration, distortion included, that of these images?"
         )
     elif seq.poses is not None:
-        truth_m, est_m = (
-            float(np.linalg.norm(np.diff(p[:n, :3, 3], axis=0), axis=1).sum()) for p in (seq.poses, poses)
-        )
+        truth_m, est_m = (float(path_lengths(p[:n])[-1]) for p in (seq.poses, poses))
         if min(truth_m, est_m) > 0 and max(truth_m, est_m) >= PATH_RATIO * min(truth_m, est_m):
             notice(
                 f"{seq.path}: the estimate's path is {est_m:.4g} m long and the truth's {truth_m:.4g} m; "
@@ -305,7 +302,7 @@ def convert_command(sequence: str, to: str, out: str, force: bool = False) -> No
     """Write a rectified copy of a sequence (an ASL rig, or any readable one) in the KITTI layout,
     with the source's manifest (an ASL rig's camera in the body, its position-only truth) and its
     odometry files (:data:`~vo_lib.formats.sequence_writer.CARRIED`)."""
-    from vo_lib.data import data_dir, load_sequence
+    from vo_lib.data import kept_data_folder, load_sequence
     from vo_lib.formats.sequence_writer import SequenceWriter
 
     with contextlib.ExitStack() as locks:  # no command replaces the sequence while it is read
@@ -321,7 +318,7 @@ def convert_command(sequence: str, to: str, out: str, force: bool = False) -> No
             option="--out",
             written_by="vo_lib convert",
             inputs=[seq.path],
-            keep={data_dir(): "the sample data folder"},
+            keep=kept_data_folder(),
             keep_inside=True,
         )
         with writer:
@@ -333,6 +330,6 @@ def convert_command(sequence: str, to: str, out: str, force: bool = False) -> No
                 seq.times,
                 seq.poses,
                 manifest=manifest or None,
-                camera_from_body=None if body is None else np.linalg.inv(body),
+                camera_from_body=None if body is None else rigid_inverse(body),
             )
     print(f"wrote {path}: {len(seq)} rectified pairs in the KITTI layout")

@@ -140,21 +140,20 @@ def sweep_command(name: str, seeds: int, workers=None, scheduler=None, out=None,
     """Run sweep ``name`` over ``seeds`` seeds, write its table and print its summary."""
     import pandas as pd
 
+    from vo_lib.data import kept_data_folder
+
     cores = len(os.sched_getaffinity(0))
     workers = cores if workers is None else workers
     if scheduler is None and workers > WORKERS_PER_CORE * cores:
         raise UsageError(f"--workers {workers}: at most {WORKERS_PER_CORE * cores} on {cores} core(s)")
     _, make_tasks, describe = SWEEPS[name]
     tasks = make_tasks(seeds)
-    from vo_lib.data import data_dir
-
-    keep = {data_dir(): "the sample data folder"}
     with OutputFolder(
         Path(out or f"sweeps/{name}"),
         f"vo_lib sweep {name}",
         force=force,
         option="--out",
-        keep=keep,
+        keep=kept_data_folder(),
         keep_inside=True,
     ) as folder:
         table = pd.DataFrame(run_tasks(function_of(name), tasks, workers, scheduler))
