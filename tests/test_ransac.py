@@ -56,18 +56,33 @@ def test_the_theta_gates_slope_is_the_derivative_of_eq_20(camera, rng):
         )  # near poles too
 
 
+def test_the_theta_models_gate_is_eq_20_within_k_sigma_of_its_slope(camera, rng):
+    """The gate RANSAC applies (eq. 20's error over its slope, an angle) keeps the same matches as
+    the error held to k times its slope times sigma, as theta_gate_and_slope gives them."""
+    from vo_lib.stereo_vo.ransac import ThetaModel, match_angles
+
+    m = synthetic_matches(camera, 300, 0.05, 0.1, rng, outlier_ratio=0.4, noise_px=0.5)
+    model = ThetaModel(m.w_prev, m.w_curr, camera, 0.5)
+    for theta, var_ref, k in ((0.05, 1e-8, 3.0), (0.0, 1e-6, 2.0), (-0.1, 0.0, 3.0)):
+        e, slope = theta_gate_and_slope(*match_angles(m.w_prev, m.w_curr, camera), theta)
+        var = model.variances + var_ref
+        expected = (e * e <= k * k * slope * slope * var) & ((model.values - theta) ** 2 <= k * k * var)
+        got = model.gate_pass(theta, var_ref, k * k)
+        assert np.array_equal(got, expected) and (theta != 0.05 or got[m.inliers].mean() > 0.9)
+
+
 def test_the_refinements_jacobians_are_the_derivatives_of_its_residuals(camera, rng):
     """Forward and backward reprojection residuals (disparity space) and their analytic
     Jacobians in theta and rho, against central differences."""
     m = synthetic_matches(camera, 50, 0.04, 0.08, rng, outlier_ratio=0.0, noise_px=0.5)
     P, Q = camera.backproject(m.w_prev), camera.backproject(m.w_curr)
-    X, sign, target = both_directions(P, Q, m.w_prev, m.w_curr, camera)
+    points, targets = both_directions(P, Q, m.w_prev, m.w_curr, camera)
     theta, rho, h = 0.03, 0.07, 1e-7
-    r, J_theta, J_rho = reprojection(theta, rho, X, sign, target, camera)
-    assert r.shape == J_theta.shape == J_rho.shape == (3, 100)
+    r, J_theta, J_rho = reprojection(theta, rho, points, targets, camera)
+    assert r.shape == J_theta.shape == J_rho.shape == (2, 3, 50)
     for J, (dt, dr) in ((J_theta, (h, 0.0)), (J_rho, (0.0, h))):
-        plus = reprojection(theta + dt, rho + dr, X, sign, target, camera)[0]
-        minus = reprojection(theta - dt, rho - dr, X, sign, target, camera)[0]
+        plus = reprojection(theta + dt, rho + dr, points, targets, camera)[0]
+        minus = reprojection(theta - dt, rho - dr, points, targets, camera)[0]
         np.testing.assert_allclose(J, (plus - minus) / (2 * h), rtol=1e-5, atol=1e-4)
     # at the true motion of noise-free matches the residuals vanish
     clean = synthetic_matches(camera, 50, 0.04, 0.08, rng, outlier_ratio=0.0, noise_px=0.0)

@@ -43,10 +43,11 @@ def _pair(w_prev, w_curr) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _eq14_terms(a: np.ndarray, b: np.ndarray, camera: StereoCamera):
-    """Numerator and denominator of eq. 14: ``tan phi = num / den``."""
+    """Numerator and denominator of eq. 14, ``tan phi = num / den``, and the centred pixels
+    ``(u - u0, v - v0, u' - u0, v' - v0)`` they are made of."""
     du, dv = a[:, 0] - camera.cx, a[:, 1] - camera.cy
     du2, dv2 = b[:, 0] - camera.cx, b[:, 1] - camera.cy
-    return du2 * dv - du * dv2, camera.fx * (dv + dv2)
+    return du2 * dv - du * dv2, camera.fx * (dv + dv2), (du, dv, du2, dv2)
 
 
 def degenerate_theta_mask(w_prev, w_curr, camera: StereoCamera, min_pixels: float = 0.5) -> np.ndarray:
@@ -65,7 +66,7 @@ def theta_from_pixels(w_prev, w_curr, camera: StereoCamera) -> np.ndarray:
     (``v + v' = 2 v0``, see :func:`degenerate_theta_mask`), which has no defined theta.
     """
     a, b = _pair(w_prev, w_curr)
-    num, den = _eq14_terms(a, b, camera)
+    num, den, _ = _eq14_terms(a, b, camera)
     degenerate = np.abs(den) < DEGENERATE_ROW_PIXELS * camera.fx
     with np.errstate(divide="ignore", invalid="ignore"):
         theta = 2.0 * np.arctan(num / den)
@@ -90,9 +91,7 @@ def theta_and_variance(
     ``dphi = (fx D dN - fx N dD) / (fx^2 D^2 + N^2)`` with ``dN/d(u, u', v, v') = (-dv', dv, du', -du)``
     and ``dD/dv = dD/dv' = 1``; theta = 2 phi.
     """
-    du, dv = a[:, 0] - camera.cx, a[:, 1] - camera.cy
-    du2, dv2 = b[:, 0] - camera.cx, b[:, 1] - camera.cy
-    num, den = _eq14_terms(a, b, camera)
+    num, den, (du, dv, du2, dv2) = _eq14_terms(a, b, camera)
     q = den * den + num * num
     g_n, g_d = den / q, camera.fx * num / q
     return 2.0 * np.arctan(num / den), (4.0 * sigma_px**2) * (

@@ -45,7 +45,9 @@ so the residual is compared in (u, v, d), where its noise is the same in every d
 from __future__ import annotations
 
 import enum
+import functools
 import math
+import numbers
 import time
 from dataclasses import dataclass, field
 from typing import NamedTuple, Protocol
@@ -55,12 +57,13 @@ import numpy as np
 from vo_lib.camera import StereoCamera
 from vo_lib.geometry import as_match_array
 from vo_lib.stereo_vo.circular_motion import (
+    DEGENERATE_ROW_PIXELS,
     motion_matrices,
     rho_from_pixels,
     theta_and_variance,
     theta_from_pixels,
 )
-from vo_lib.stereo_vo.refinement import ITERATIONS, both_directions, covariance, gauss_newton, whitened_pass
+from vo_lib.stereo_vo.refinement import ITERATIONS, covariance, gauss_newton, pixel_targets, whitened_pass
 
 
 class RansacInputError(ValueError):
@@ -129,7 +132,14 @@ def hypothesis_draws(rng=None, max_hypotheses: int = DEFAULT_PARAMS.max_hypothes
     implementation given these numbers can be compared with it hypothesis by hypothesis. Shape
     ``(2, max_hypotheses)``.
     """
+    if isinstance(rng, numbers.Integral):  # a seed: the same numbers every time, drawn once
+        return _seeded_draws(int(rng), int(max_hypotheses)).copy()
     return np.random.default_rng(rng).random(2 * int(max_hypotheses)).reshape(2, -1)
+
+
+@functools.lru_cache(maxsize=64)
+def _seeded_draws(seed: int, max_hypotheses: int) -> np.ndarray:
+    return np.random.default_rng(seed).random(2 * max_hypotheses).reshape(2, -1)
 
 
 # ---------------------------------------------------------------------- eq. 18-20
@@ -190,6 +200,10 @@ class ThetaModel:
 
     def __init__(self, wa: np.ndarray, wb: np.ndarray, camera: StereoCamera, pixel_sigma: float):
         self.values, self.variances = theta_and_variance(wa, wb, camera, pixel_sigma)
+        (tan_a, self.beta_a), (tan_b, self.beta_b) = gate_angles(wa, camera), gate_angles(wb, camera)
+        self.tan_ratio = tan_b / tan_a
+        # eq. 20's slope in theta is 0.5 sin(beta + beta') / sin^2(gamma) (theta_gate_and_slope)
+        self.two_over_sin_sum = 2.0 / np.sin(self.beta_a + self.beta_b)
 
     def each_match(self) -> tuple[np.ndarray, np.ndarray]:
         return self.values, self.variances
@@ -198,29 +212,40 @@ class ThetaModel:
         r = self.values[None, :] - h[:, None]
         return r * r
 
+    def gate_pass(self, theta: float, var_ref: float, k2: float) -> np.ndarray:
+        """eq. 20 at ``theta`` within ``k`` of each match's first-order sigma, and the match's own
+        theta within ``k`` sigma of ``theta`` (``k2 = k^2``; ``var_ref``: the variance of ``theta``).
+
+        eq. 20's error over its slope (:func:`theta_gate_and_slope`) is the angle it stands for,
+        ``(tan_ratio sin(gamma) - sin(gamma')) sin(gamma) 2 / sin(beta + beta')``, and is held to
+        the same bound as the match's own theta."""
+        sin_a = np.sin(self.beta_a + 0.5 * theta)
+        angle = (self.tan_ratio * sin_a - np.sin(self.beta_b - 0.5 * theta)) * sin_a * self.two_over_sin_sum
+        bound = k2 * (self.variances + var_ref)
+        return (angle * angle <= bound) & ((self.values - theta) ** 2 <= bound)
+
 
 class RhoModel:
     """Phase 2, theta fixed: the chord of one match ([Zhao], eq. 16-17, sign corrected) and the
-    gate of eq. 21, ``r_j(rho) = Q_j - R P_j + rho (sin phi, 0, cos phi)``."""
+    gate of eq. 21, ``r_j(rho) = o_j + rho e`` with ``o_j = Q_j - R P_j`` and the unit vector
+    ``e = (sin phi, 0, cos phi)``. ``P`` and ``Q`` are points as rows ``x, y, z`` (shape (3, N))."""
 
     def __init__(self, P: np.ndarray, Q: np.ndarray, variances: np.ndarray, theta: float):
-        sphi, cphi = math.sin(0.5 * theta), math.cos(0.5 * theta)
-        c, s = math.cos(theta), math.sin(theta)
-        self.values = (-sphi * P[:, 0] + cphi * P[:, 2]) - (sphi * Q[:, 0] + cphi * Q[:, 2])
+        c, s, sp, cp = math.cos(theta), math.sin(theta), math.sin(0.5 * theta), math.cos(0.5 * theta)
+        e = np.array([sp, 0.0, cp])
+        self.values = np.array([-sp, 0.0, cp]) @ P - e @ Q  # eq. 17
         self.variances = variances
-        self.offset_x = Q[:, 0] - (c * P[:, 0] + s * P[:, 2])
-        self.offset_y = Q[:, 1] - P[:, 1]
-        self.offset_z = Q[:, 2] - (-s * P[:, 0] + c * P[:, 2])
-        self.direction = (sphi, cphi)
+        offset = Q - np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]]) @ P  # Q - R P (eq. 15)
+        # |o + rho e|^2 = |o|^2 + 2 rho (o . e) + rho^2: a batch of hypotheses in three operations
+        self.offset_squared = np.einsum("ij,ij->j", offset, offset)
+        self.twice_along = 2.0 * (e @ offset)
 
     def each_match(self) -> tuple[np.ndarray, np.ndarray]:
         return self.values, self.variances
 
     def squared_residuals(self, h: np.ndarray) -> np.ndarray:
-        sphi, cphi = self.direction
         hc = h[:, None]
-        rx, rz = self.offset_x[None, :] + hc * sphi, self.offset_z[None, :] + hc * cphi
-        return rx * rx + self.offset_y[None, :] ** 2 + rz * rz
+        return self.offset_squared[None, :] + hc * (self.twice_along[None, :] + hc)
 
 
 def search(
@@ -236,6 +261,7 @@ def search(
     """
     values, variances = model.each_match()
     k2 = params.gate_sigmas**2
+    bounds = k2 * variances
     pool = np.argsort(variances)[: max(params.min_pool, int(params.pool_fraction * len(values)))]
     # a hypothesis counts as no more certain than a typical one: the pool's median variance (the
     # pool is sorted, so the median is its middle value, or the mean of its middle two)
@@ -245,17 +271,15 @@ def search(
     if prior is not None and math.isfinite(prior[0]):
         best_value, best_var = prior[0], min(prior[1], cap)
         best_count = int(
-            np.count_nonzero(
-                model.squared_residuals(np.array([best_value]))[0] <= k2 * (variances + best_var)
-            )
+            np.count_nonzero(model.squared_residuals(np.array([best_value]))[0] <= bounds + k2 * best_var)
         )
     tried = 0
     limit = min(hypotheses_needed(params.initial_inlier_ratio, params.confidence), params.max_hypotheses)
     while tried < limit:
         picked = pool[np.minimum((uniforms[tried:limit] * len(pool)).astype(np.int64), len(pool) - 1)]
         hyp, hyp_var = values[picked], np.minimum(variances[picked], cap)
-        counts = np.count_nonzero(model.squared_residuals(hyp) <= k2 * (variances + hyp_var[:, None]), axis=1)
-        top = int(np.argmax(counts - 0.5 * hyp_var / (hyp_var.max() + 1e-300)))
+        counts = (model.squared_residuals(hyp) <= bounds + (k2 * hyp_var)[:, None]).sum(axis=1)
+        top = int(np.lexsort((hyp_var, -counts))[0])  # most supporters; among equals, least variance
         if counts[top] > best_count:
             best_value, best_var, best_count = float(hyp[top]), float(hyp_var[top]), int(counts[top])
         tried = limit
@@ -281,36 +305,23 @@ def reestimate(model: OnePointModel, support: np.ndarray) -> tuple[float, float]
 
 
 # ---------------------------------------------------------------------- inliers of a motion
-def theta_gate_pass(
-    angles: tuple, model: ThetaModel, theta: float, var_ref: float, params: RansacParams
-) -> np.ndarray:
-    """eq. 20 at ``theta`` within ``k`` of each match's first-order sigma (the slope:
-    :func:`theta_gate_and_slope`), and the match's own theta within ``k`` sigma of ``theta``.
-    ``angles`` are :func:`match_angles`."""
-    k2 = params.gate_sigmas**2
-    e, slope = theta_gate_and_slope(*angles, theta)
-    var = model.variances + var_ref
-    return (e * e <= k2 * slope * slope * var) & ((model.values - theta) ** 2 <= k2 * var)
-
-
 def points_and_variances(
     a: np.ndarray, b: np.ndarray, camera: StereoCamera, pixel_sigma: float
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Points ``P = B/d (u - u0, (v - v0) fx/fy, fx)`` ([Zhao], eq. 13) of both frames and the
-    first-order variance of each pair: ``sigma^2 (B/d)^2 (|ray|^2 / d^2 + 2)`` per view."""
-    aspect = camera.fx / camera.fy
-
-    def back_project(w):
-        du, dv = w[:, 0] - camera.cx, (w[:, 1] - camera.cy) * aspect
-        scale = camera.baseline / w[:, 2]
-        ray2 = (du * du + dv * dv + camera.fx**2) / (w[:, 2] * w[:, 2])
-        return np.array([scale * du, scale * dv, scale * camera.fx]).T, scale * scale * (ray2 + 2.0)
-
-    (P, var_a), (Q, var_b) = back_project(a), back_project(b)
-    return P, Q, pixel_sigma**2 * (var_a + var_b)
+) -> tuple[np.ndarray, np.ndarray]:
+    """Points ``P = B/d (u - u0, (v - v0) fx/fy, fx)`` ([Zhao], eq. 13) of both frames, as
+    homogeneous rows ``x, y, z, 1`` (shape (2, 4, N): ``P`` then ``Q``), and the first-order
+    variance of each pair: ``sigma^2 (B/d)^2 (|ray|^2 / d^2 + 2)`` per view."""
+    w = np.array([a, b])  # (2, N, 3)
+    du, dv, d = w[..., 0] - camera.cx, (w[..., 1] - camera.cy) * (camera.fx / camera.fy), w[..., 2]
+    scale = camera.baseline / d
+    points = np.ones((2, 4, len(a)))
+    points[:, 0], points[:, 1], points[:, 2] = scale * du, scale * dv, scale * camera.fx
+    ray2 = (du * du + dv * dv + camera.fx**2) / (d * d)
+    return points, pixel_sigma**2 * (scale * scale * (ray2 + 2.0)).sum(axis=0)
 
 
 # ---------------------------------------------------------------------- the estimator
+@np.errstate(divide="ignore", invalid="ignore")  # 0/0 in a gate fails it, as NaN compares false
 def one_point_ransac(  # noqa: PLR0915 (the algorithm's five steps read best in one function)
     w_prev,
     w_curr,
@@ -393,7 +404,7 @@ def one_point_ransac(  # noqa: PLR0915 (the algorithm's five steps read best in 
         return RansacResult(float(prior.theta), float(prior.rho), inliers, cov, False, diagnostics, outcome)
 
     # 1. usable matches
-    off_height = np.abs(camera.fx * ((a[:, 1] - camera.cy) + (b[:, 1] - camera.cy))) > 1e-9 * camera.fx
+    off_height = np.abs((a[:, 1] - camera.cy) + (b[:, 1] - camera.cy)) > DEGENERATE_ROW_PIXELS
     usable = np.flatnonzero((a[:, 2] > 0) & (b[:, 2] > 0) & off_height)
     if len(usable) < 3:
         return failed(Outcome.FEW_USABLE)
@@ -403,15 +414,16 @@ def one_point_ransac(  # noqa: PLR0915 (the algorithm's five steps read best in 
     prior_theta = None if prior is None else (float(prior.theta), float(prior.covariance[0][0]))
     h, var_h, tried_theta = search(thetas, draws[0], prior_theta, params)
     theta, var_theta = reestimate(thetas, supporters(thetas, h, var_h, params))
-    angles = match_angles(wa, wb, camera)
-    theta_in = theta_gate_pass(angles, thetas, theta, var_theta, params)
+    k2 = params.gate_sigmas**2
+    theta_in = thetas.gate_pass(theta, var_theta, k2)
     n_theta = int(np.count_nonzero(theta_in))
     diagnostics.update(hypotheses_theta=tried_theta, theta_inliers=n_theta)
     if n_theta < 3:
         return failed(Outcome.FEW_THETA_INLIERS)
     # 4. rho
-    P, Q, var_points = points_and_variances(wa, wb, camera, params.pixel_sigma)
-    rhos = RhoModel(P[theta_in], Q[theta_in], var_points[theta_in], theta)
+    points, var_points = points_and_variances(wa, wb, camera, params.pixel_sigma)
+    P, Q = points[:, :3, theta_in]
+    rhos = RhoModel(P, Q, var_points[theta_in], theta)
     prior_rho = None if prior is None else (float(prior.rho), float(prior.covariance[1][1]))
     h, var_h, tried_rho = search(rhos, draws[1], prior_rho, params)
     rho, var_rho = reestimate(rhos, supporters(rhos, h, var_h, params))
@@ -420,17 +432,21 @@ def one_point_ransac(  # noqa: PLR0915 (the algorithm's five steps read best in 
     cov = np.diag([var_theta, var_rho])
     # 5. refinement; the refined motion decides the inliers again
     rounds = 0
-    X, sign, target = both_directions(P, Q, wa, wb, camera)
+    targets = pixel_targets(wa, wb, camera)
     while params.refine and np.count_nonzero(keep) >= 3 and rounds < params.refine_rounds:
         rounds += 1
         iterations = params.refine_iterations if rounds == 1 else 1
-        both = np.concatenate([keep, keep])
         theta, rho, A, rss = gauss_newton(
-            X[:, both], sign[both], target[:, both], theta, rho, camera, iterations
+            np.compress(keep, points, axis=-1),
+            np.compress(keep, targets, axis=-1),
+            theta,
+            rho,
+            camera,
+            iterations,
         )
         cov = covariance(A, rss, 6 * int(np.count_nonzero(keep)))
-        new = theta_gate_pass(angles, thetas, theta, cov[0, 0], params) & whitened_pass(
-            X, target, theta, rho, camera, params.whitened_gate, params.pixel_sigma
+        new = thetas.gate_pass(theta, cov[0, 0], k2) & whitened_pass(
+            points, targets, theta, rho, camera, params.whitened_gate, params.pixel_sigma
         )
         changed, keep = bool(np.any(new != keep)), new
         if not changed:
