@@ -90,3 +90,8 @@ def test_step_scale_measures_the_steps_not_the_path():
     path = lambda P: np.linalg.norm(np.diff(P[:, :3, 3], axis=0), axis=1).sum()  # noqa: E731
     assert path(jitter) > 1.01 * path(truth)
     assert np.isclose(step_scale(truth, jitter), 1.0, rtol=1e-12)
+    # the truth's own noise pulls the factor down (errors in the regressor); a stride of 10 frames
+    # leaves it a hundredth of the weight
+    noisy = truth.copy()
+    noisy[:, :3, 3] += np.random.default_rng(0).normal(0.0, 0.01, (50, 3))
+    assert step_scale(noisy, truth) < 0.95 and abs(step_scale(noisy, truth, stride=10) - 1) < 0.01
