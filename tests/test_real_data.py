@@ -1096,8 +1096,8 @@ def test_the_drone_short_steps_are_the_estimates_not_the_truths(monkeypatch):
     """The laser tracker arbitrates: the 6-DoF truth has its scale, the VO's path is a per cent short."""
     from vo_lib.bench.bench_real import step_scale
     from vo_lib.formats.euroc import read_asl
-    from vo_lib.stereo_vo import kalman
     from vo_lib.formats.groundtruth import read_groundtruth
+    from vo_lib.stereo_vo import kalman
     from vo_lib.stereo_vo.baselines import run_pnp_baseline
 
     leica = EUROC / "mav0" / "leica0" / "data.csv"
