@@ -128,18 +128,25 @@ def bench_real(folders=None, repeats: int = REPEATS) -> dict[str, float]:
         out[f"{folder.name}:ours_ms"], out[f"{folder.name}:baseline_ms"] = ours_ms, base_ms
         out[f"{folder.name}:decode_ms"] = decode
         truth = seq.poses_4x4()
-        if truth is None:
-            continue
+        if truth is not None:
+            out.update(_error_table(folder.name, truth, ours.camera_poses, base.camera_poses))
+    return out
+
+
+def _error_table(name: str, truth, ours, baseline) -> dict[str, float]:
+    """Print :func:`error_rows` of both methods' camera poses and the truth's path; returns them
+    keyed ``NAME:METHOD:KEY``."""
+    print(
+        f"  {'':<14s}{'ATE SE(3) [m]':>14s}{'final [%]':>11s}{'rotation [deg]':>16s}{'path [m]':>10s}"
+        f"{'step scale':>12s}"
+    )
+    out = {}
+    for method, poses in (("ours", ours), ("PnP baseline", baseline)):
+        rows = error_rows(truth, poses)
         print(
-            f"  {'':<14s}{'ATE SE(3) [m]':>14s}{'final [%]':>11s}{'rotation [deg]':>16s}{'path [m]':>10s}"
-            f"{'step scale':>12s}"
+            f"  {method:<14s}{rows['ate_m']:14.4f}{rows['final_pct']:11.3f}"
+            f"{rows['final_rotation_deg']:16.3f}{rows['path_m']:10.3f}{rows['step_scale']:12.4f}"
         )
-        for name, poses in (("ours", ours.camera_poses), ("PnP baseline", base.camera_poses)):
-            rows = error_rows(truth, poses)
-            print(
-                f"  {name:<14s}{rows['ate_m']:14.4f}{rows['final_pct']:11.3f}"
-                f"{rows['final_rotation_deg']:16.3f}{rows['path_m']:10.3f}{rows['step_scale']:12.4f}"
-            )
-            out.update({f"{folder.name}:{name}:{key}": value for key, value in rows.items()})
-        print(f"  {'truth':<14s}{'':>41s}{rows['truth_path_m']:10.3f}")
+        out.update({f"{name}:{method}:{key}": value for key, value in rows.items()})
+    print(f"  {'truth':<14s}{'':>41s}{rows['truth_path_m']:10.3f}")
     return out

@@ -12,6 +12,17 @@ from vo_lib.bench.common import BENCH_SEED, format_row, median_seconds, met, tim
 from vo_lib.stereo_vo.paper_tables import PAPER_LONG_RUN
 
 
+def _rho_loop(rows, cam) -> list[float]:
+    """rho of eq. 17 (with theta of eq. 14) match by match, in pure Python: the baseline."""
+    u0, v0, f, B = cam.cx, cam.cy, cam.fx, cam.baseline
+    out = []
+    for u, v, d, u2, v2, d2 in rows:
+        phi = math.atan(((u2 - u0) * (v - v0) - (u - u0) * (v2 - v0)) / (f * (v + v2 - 2 * v0)))
+        s, c = math.sin(phi), math.cos(phi)
+        out.append(B / d * (-s * (u - u0) + c * f) - B / d2 * (s * (u2 - u0) + c * f))
+    return out
+
+
 def bench_geometry(n: int = 10_000) -> dict[str, float]:
     """theta (eq. 14) and rho (eq. 17) for ``n`` matches: vectorised, 3-D route, pure-Python loop."""
     from vo_lib.camera import StereoCamera
@@ -34,17 +45,7 @@ def bench_geometry(n: int = 10_000) -> dict[str, float]:
         return -s * P[:, 0] + c * P[:, 2] - s * Q[:, 0] - c * Q[:, 2]
 
     rows = [tuple(r) for r in np.column_stack([a, b]).tolist()]
-    u0, v0, f, B = cam.cx, cam.cy, cam.fx, cam.baseline
-
-    def python_loop():
-        out = []
-        for u, v, d, u2, v2, d2 in rows:
-            phi = math.atan(((u2 - u0) * (v - v0) - (u - u0) * (v2 - v0)) / (f * (v + v2 - 2 * v0)))
-            s, c = math.sin(phi), math.cos(phi)
-            out.append(B / d * (-s * (u - u0) + c * f) - B / d2 * (s * (u2 - u0) + c * f))
-        return out
-
-    loop = median_seconds(python_loop, repeat=7)
+    loop = median_seconds(lambda: _rho_loop(rows, cam), repeat=7)
     times = {
         "python loop (baseline)": loop,
         "3-D points, eq. 12 + 16": median_seconds(via_points),
@@ -56,6 +57,16 @@ def bench_geometry(n: int = 10_000) -> dict[str, float]:
     t = times["vo_lib theta_from_pixels + rho_from_pixels"]
     print(f"  target < 1.0 ms: {met(t < 1e-3)} ({t / 1e-3:.2f} of it)")
     return times
+
+
+def _print_ransac_rows(results: dict[str, tuple[float, float, float, float]], base: float) -> None:
+    """A row per method: median time, its ratio to ``base``, and the errors of theta and rho."""
+    print(
+        f"  {'method':<38s}{'time':>10s}{'x 1-point':>11s}{'med |dθ|':>11s}"
+        f"{'max |dθ|':>11s}{'med |dρ|/ρ':>12s}"
+    )
+    for name, (t, tm, tx, rm) in results.items():
+        print(f"  {name:<38s}{t * 1e3:8.3f} ms{t / base:10.1f}x{tm:10.4f}°{tx:10.4f}°{100 * rm:10.2f} %")
 
 
 def bench_ransac(sets: int = 15, n: int = 300) -> dict[str, float]:
@@ -96,12 +107,7 @@ def bench_ransac(sets: int = 15, n: int = 300) -> dict[str, float]:
         )
     base = results["1-point RANSAC + refinement"][0]
     print(f"{sets} sets of {n} matches, 40 % outliers, 0.5 px noise (median over sets, same matches)")
-    print(
-        f"  {'method':<38s}{'time':>10s}{'x 1-point':>11s}{'med |dθ|':>11s}"
-        f"{'max |dθ|':>11s}{'med |dρ|/ρ':>12s}"
-    )
-    for name, (t, tm, tx, rm) in results.items():
-        print(f"  {name:<38s}{t * 1e3:8.3f} ms{t / base:10.1f}x{tm:10.4f}°{tx:10.4f}°{100 * rm:10.2f} %")
+    _print_ransac_rows(results, base)
     # accuracy compared set by set (the same matches for every method), never by medians alone
     paired = Comparison(tuple(range(sets)), theta_errors)
     for other in list(methods)[1:]:
@@ -112,6 +118,20 @@ def bench_ransac(sets: int = 15, n: int = 300) -> dict[str, float]:
         f"solvePnPRansac / 1-point >= 10 ({met(ratio >= 10)}: {ratio:.1f})"
     )
     return {name: r[0] for name, r in results.items()}
+
+
+def _front_end_stages(front, pairs) -> tuple[dict[str, list[float]], list]:
+    """Each stage's milliseconds of ``front`` on every pair, three times over, and the features."""
+    stages = {"detect": [], "describe": [], "stereo_match": [], "total": []}
+    feats = []
+    for left, right in pairs:
+        for _ in range(3):  # repeated, the median of three is the frame's time
+            f, ms = timed_ms(front.process, left, right)
+            stages["total"].append(ms)
+            for k in ("detect", "describe", "stereo_match"):
+                stages[k].append(f.timings[k])
+        feats.append(f)
+    return stages, feats
 
 
 def bench_frontend(frames: int = 30) -> dict[str, float]:
@@ -135,16 +155,7 @@ def bench_frontend(frames: int = 30) -> dict[str, float]:
     rng = np.random.default_rng(BENCH_SEED)
     poses = drive.poses[100 : 100 + frames]
     pairs = [renderer.render_pair(planar_to_matrix(p) @ mount, rng) for p in poses]
-    front = StereoFrontEnd(cam)
-    stages = {"detect": [], "describe": [], "stereo_match": [], "total": []}
-    feats = []
-    for left, right in pairs:
-        for _ in range(3):  # repeated, the median of three is the frame's time
-            f, ms = timed_ms(front.process, left, right)
-            stages["total"].append(ms)
-            for k in ("detect", "describe", "stereo_match"):
-                stages[k].append(f.timings[k])
-        feats.append(f)
+    stages, feats = _front_end_stages(StereoFrontEnd(cam), pairs)
     guided, brute = [], []
     for k in range(1, len(feats)):
         theta, rho = circular_motion_from_transform(camera_motion(poses[k - 1], poses[k], mount))

@@ -49,6 +49,21 @@ def check_against_its_run(gt: str, est: str, marker: dict) -> None:
     )
 
 
+def _check_one_to_one(truth, gt: str, est: str, count: int, marker: dict) -> None:
+    """Poses without timestamps pair one to one: equal counts, or ``--est`` a run of the first
+    frames of ``--gt``'s sequence (said in one line)."""
+    sequence = Path(str(marker.get("sequence")))  # of the run that wrote --est: its first frames?
+    first = marker.get("frames") == count and Path(gt).resolve() == sequence / "poses.txt"
+    if len(truth.positions) > count and first:
+        print(f"--est {est} is a run of the first {count} frames of --gt's sequence: compared with those")
+    elif len(truth.positions) != count:
+        raise UsageError(
+            f"--gt {gt} has {len(truth.positions)} {'poses' if truth.poses is not None else 'positions'} "
+            f"but --est {est} has {count} poses; "
+            "expected equal counts (or timestamps in both)"
+        )
+
+
 def _associated(
     truth, gt: str, est: str, times, E: np.ndarray, marker: dict
 ) -> tuple[np.ndarray, np.ndarray]:
@@ -57,18 +72,7 @@ def _associated(
     if truth.times is not None and times is None:  # a run's trajectory.tum beside it has the times
         print(f"--est {est} has no timestamps: its poses are paired with --gt's one to one, in order")
     if truth.times is None or times is None:
-        sequence = Path(str(marker.get("sequence")))  # of the run that wrote --est: its first frames?
-        first = marker.get("frames") == len(E) and Path(gt).resolve() == sequence / "poses.txt"
-        if len(truth.positions) > len(E) and first:
-            print(
-                f"--est {est} is a run of the first {len(E)} frames of --gt's sequence: compared with those"
-            )
-        elif len(truth.positions) != len(E):
-            raise UsageError(
-                f"--gt {gt} has {len(truth.positions)} {'poses' if truth.poses is not None else 'positions'} "
-                f"but --est {est} has {len(E)} poses; "
-                "expected equal counts (or timestamps in both)"
-            )
+        _check_one_to_one(truth, gt, est, len(E), marker)
         return np.arange(len(E)), np.arange(len(E))
     i_est, i_gt = associate(times, truth.times)
     if len(i_est) < 3:  # an alignment needs three points

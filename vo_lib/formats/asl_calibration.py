@@ -104,14 +104,9 @@ def _transform(path: Path, data: dict, what: str) -> np.ndarray:
     return T
 
 
-def read_camera_yaml(path) -> CameraCalibration:
-    """One camera's calibration from its ``sensor.yaml``; raises :class:`AslError` naming the key."""
-    path = Path(path)
-    data = _yaml(path)
-    T = _transform(path, data, "a 4x4 camera-to-body transform as data")
-    fu, fv, cu, cv = _numbers(path, data, "intrinsics", 4, "[fu, fv, cu, cv]")
-    if fu <= 0 or fv <= 0:
-        raise AslError(f"{path}: key intrinsics: focal lengths must be > 0, got fu={fu:g}, fv={fv:g}")
+def _distortion(path: Path, data: dict) -> np.ndarray:
+    """``[k1, k2, p1, p2]`` of a radial-tangential model, at the ASL key or at Kalibr's
+    (``camchain.yaml``) when only that one is there; zeros for ``distortion_model: none``."""
     if data.get("camera_model", "pinhole") != "pinhole":
         raise AslError(
             f"{path}: key camera_model: {data['camera_model']!r} is not supported; expected pinhole"
@@ -121,29 +116,46 @@ def read_camera_yaml(path) -> CameraCalibration:
         raise AslError(
             f"{path}: key distortion_model: {model!r} is not supported; expected radial-tangential"
         )
-    # the ASL name, or Kalibr's (camchain.yaml) when only that one is there
     kalibr = "distortion_coeffs" in data and "distortion_coefficients" not in data
     key = "distortion_coeffs" if kalibr else "distortion_coefficients"
-    dist = np.zeros(4)
-    if model != "none" or data.get(key) is not None:
-        dist = _numbers(path, data, key, 4, "[k1, k2, p1, p2]", MAX_DISTORTION)
+    if model == "none" and data.get(key) is None:
+        return np.zeros(4)
+    dist = _numbers(path, data, key, 4, "[k1, k2, p1, p2]", MAX_DISTORTION)
     if model == "none" and dist.any():
         raise AslError(
             f"{path}: key distortion_model: none, but key {key} is not zero; "
             "expected radial-tangential for these coefficients, or zeros"
         )
+    return dist
+
+
+def _image_size(path: Path, data: dict) -> tuple[int, int]:
+    """Key ``resolution``: ``(width, height)``, two positive whole numbers."""
     width, height = _numbers(path, data, "resolution", 2, "[width, height]")
     if width < 1 or height < 1 or width != int(width) or height != int(height):
         raise AslError(
             f"{path}: key resolution: expected two positive whole numbers, got [{width:g}, {height:g}]"
         )
+    return int(width), int(height)
+
+
+def read_camera_yaml(path) -> CameraCalibration:
+    """One camera's calibration from its ``sensor.yaml``; raises :class:`AslError` naming the key."""
+    path = Path(path)
+    data = _yaml(path)
+    T = _transform(path, data, "a 4x4 camera-to-body transform as data")
+    fu, fv, cu, cv = _numbers(path, data, "intrinsics", 4, "[fu, fv, cu, cv]")
+    if fu <= 0 or fv <= 0:
+        raise AslError(f"{path}: key intrinsics: focal lengths must be > 0, got fu={fu:g}, fv={fv:g}")
+    dist = _distortion(path, data)
+    width, height = _image_size(path, data)
     if not (0 <= cu <= width and 0 <= cv <= height):
         raise AslError(
             f"{path}: key intrinsics: principal point ({cu:g}, {cv:g}) outside the "
             f"{width:g}x{height:g} image (key resolution)"
         )
     K = np.array([[fu, 0.0, cu], [0.0, fv, cv], [0.0, 0.0, 1.0]])
-    return CameraCalibration(T, K, dist, (int(width), int(height)))
+    return CameraCalibration(T, K, dist, (width, height))
 
 
 def rectify(left: CameraCalibration, right: CameraCalibration, where: Path) -> Rectification:
@@ -171,6 +183,12 @@ def rectify(left: CameraCalibration, right: CameraCalibration, where: Path) -> R
                 f"{where / side / 'sensor.yaml'}: keys intrinsics and distortion_coefficients leave "
                 f"{share:.0%} of the image valid once rectified; expected a calibration of these images"
             )
+    _check_right_of(rect, T_right_left, where)
+    return rect
+
+
+def _check_right_of(rect: Rectification, T_right_left: np.ndarray, where: Path) -> None:
+    """One line when the rectified rig has cam1 on the left of cam0."""
     try:
         _ = rect.camera  # the rectified rig: cam1 on the left of cam0 raises
     except ValueError:
@@ -180,7 +198,6 @@ def rectify(left: CameraCalibration, right: CameraCalibration, where: Path) -> R
             "below it; expected cam1 to the right (are the folders swapped, or is T_BS inverted? it "
             "takes the camera's coordinates into the body's)"
         ) from None
-    return rect
 
 
 def truth_extrinsic(truth_path: Path) -> np.ndarray:

@@ -53,6 +53,20 @@ def asl_near_miss(path) -> str | None:
     return None
 
 
+def _image_row(csv_path: Path, n: int, line: str) -> tuple[int, str]:
+    """``(timestamp in ns, file name)`` of line ``n`` of a camera's ``data.csv``, checked."""
+    stamp, sep, name = (part.strip() for part in line.partition(","))
+    if "," in name:  # a third column, or a trailing comma: not part of the file name
+        columns = len(line.split(","))
+        raise AslError(f"{csv_path}, line {n}: {columns} columns; expected 2, 'timestamp [ns],filename'")
+    # a time in ns fits 19 digits (int64); a name stays inside data/
+    if not sep or not re.fullmatch(r"[0-9]{1,19}", stamp) or int(stamp) >= 2**63 or not name:
+        raise AslError(f"{csv_path}, line {n}: expected 'timestamp [ns],filename', got {line[:50]!r}")
+    if Path(name).is_absolute() or ".." in Path(name).parts:
+        raise AslError(f"{csv_path}, line {n}: {name[:50]!r}; expected a file name inside data/")
+    return int(stamp), name
+
+
 def read_image_list(camera_dir: Path) -> tuple[np.ndarray, list[Path], list[int]]:
     """``(timestamps in ns, image files, their lines)`` of one camera from its ``data.csv``."""
     csv_path = camera_dir / "data.csv"
@@ -62,22 +76,20 @@ def read_image_list(camera_dir: Path) -> tuple[np.ndarray, list[Path], list[int]
         line = line.strip()
         if not line or line.startswith("#") or (n == 1 and line[0].isalpha()):  # a header, with # or not
             continue
-        stamp, sep, name = (part.strip() for part in line.partition(","))
-        if "," in name:  # a third column, or a trailing comma: not part of the file name
-            columns = len(line.split(","))
-            raise AslError(f"{csv_path}, line {n}: {columns} columns; expected 2, 'timestamp [ns],filename'")
-        # a time in ns fits 19 digits (int64); a name stays inside data/
-        if not sep or not re.fullmatch(r"[0-9]{1,19}", stamp) or int(stamp) >= 2**63 or not name:
-            raise AslError(f"{csv_path}, line {n}: expected 'timestamp [ns],filename', got {line[:50]!r}")
-        if Path(name).is_absolute() or ".." in Path(name).parts:
-            raise AslError(f"{csv_path}, line {n}: {name[:50]!r}; expected a file name inside data/")
+        stamp, name = _image_row(csv_path, n, line)
         if listed.setdefault(name, n) != n:  # two frames of one image: the pairs would mix frames
             raise AslError(f"{csv_path}, line {n}: {name[:50]!r} listed again (line {listed[name]})")
-        stamps.append(int(stamp))
+        stamps.append(stamp)
         files.append(camera_dir / "data" / name)
         lines.append(n)
     if not stamps:
         raise AslError(f"{csv_path}: no images listed")
+    _check_increasing(csv_path, stamps, lines)
+    return np.array(stamps, dtype=np.int64), files, lines
+
+
+def _check_increasing(csv_path: Path, stamps: list[int], lines: list[int]) -> None:
+    """One line naming the first timestamp of ``data.csv`` that does not come after the one before."""
     order = np.diff(stamps)
     if np.any(order <= 0):
         n = int(np.flatnonzero(order <= 0)[0]) + 1
@@ -85,7 +97,6 @@ def read_image_list(camera_dir: Path) -> tuple[np.ndarray, list[Path], list[int]
             f"{csv_path}, line {lines[n]}: timestamp {stamps[n]} does not come after {stamps[n - 1]} "
             f"(line {lines[n - 1]}); expected increasing timestamps"
         )
-    return np.array(stamps, dtype=np.int64), files, lines
 
 
 def pair_by_timestamp(mav0: Path) -> tuple[np.ndarray, list[Path], list[Path]]:
@@ -102,13 +113,17 @@ def pair_by_timestamp(mav0: Path) -> tuple[np.ndarray, list[Path], list[Path]]:
             "cameras must be triggered together, with equal timestamps"
         )
     for side, files, lines in (("cam0", left, lines0), ("cam1", right, lines1)):
-        for path, line in zip(files, lines, strict=True):
-            if not path.is_file():
-                where = mav0 / side / "data.csv"
-                if path.is_dir():
-                    raise AslError(f"{where}, line {line}: {path} is a folder; expected an image")
-                raise AslError(f"{where}, line {line}: {path.name} is missing from {path.parent}")
+        _check_images_there(mav0 / side / "data.csv", files, lines)
     return t0, left, right
+
+
+def _check_images_there(csv_path: Path, files: list[Path], lines: list[int]) -> None:
+    """One line naming the first image that ``data.csv`` lists and is not a file."""
+    for path, line in zip(files, lines, strict=True):
+        if path.is_dir():
+            raise AslError(f"{csv_path}, line {line}: {path} is a folder; expected an image")
+        if not path.is_file():
+            raise AslError(f"{csv_path}, line {line}: {path.name} is missing from {path.parent}")
 
 
 def _calibration(path) -> tuple[Path, list, Rectification]:

@@ -65,10 +65,10 @@ def read_calib(path: Path) -> tuple[np.ndarray, np.ndarray]:
                     f"{path}, line {line_no}: a second {key} line (the first is line {found[key][0]})"
                 )
             found[key] = line_no, numbers(path, line_no, rest, 12, key).reshape(3, 4)
-    for key in ("P0", "P1"):
-        if key not in found:
-            side = "left" if key == "P0" else "right"
-            raise SequenceError(f"{path}: no {key} line ({side} camera projection, 12 numbers)")
+    missing = [(key, side) for key, side in (("P0", "left"), ("P1", "right")) if key not in found]
+    if missing:
+        key, side = missing[0]
+        raise SequenceError(f"{path}: no {key} line ({side} camera projection, 12 numbers)")
     return found["P0"][1], found["P1"][1]
 
 
@@ -168,9 +168,9 @@ def check_manifest(path: Path, manifest: dict, frames: int) -> None:
     """Raise :class:`SequenceError` unless the (optional) keys of ``manifest.json`` that a run reads
     hold numbers of the shape and range below, ``T_body_camera`` a rigid transform."""
     camera, positions = manifest.get("camera", {}), manifest.get("positions", {})
-    for key, value in (("camera", camera), ("positions", positions)):
-        if not isinstance(value, dict):
-            raise SequenceError(f"{path}: key {key}: expected an object {{...}}, got {shown(value)}")
+    objects = {"camera": camera, "positions": positions}
+    if bad := [key for key, value in objects.items() if not isinstance(value, dict)]:
+        raise SequenceError(f"{path}: key {bad[0]}: expected an object {{...}}, got {shown(objects[bad[0]])}")
     index = positions.get("frames")
     n = len(index) if isinstance(index, list) else -1
     anything = (-np.inf, np.inf)

@@ -40,12 +40,8 @@ class GroundTruth:
     csv: bool = False
 
 
-def read_groundtruth(path, min_poses: int = 2) -> GroundTruth:
-    """A KITTI, TUM, EuRoC CSV or position-only ground truth of at least ``min_poses`` rows."""
-    path = Path(path)
-    a, lines, comma = read_rows(path, min_poses)
-    if not comma and a.shape[1] != 12:  # TUM or positions: times in seconds
-        check_seconds(path, a[:, 0], lines)
+def _check_columns(path: Path, a: np.ndarray, lines: list[int], comma: bool) -> None:
+    """A CSV (EuRoC's, times in ns) or a text file (TUM's) as its header, times and widths say."""
     width = a.shape[1]
     expected = "wxyz" if comma else "xyzw"
     order, line = header_quaternion_order(path, lines[0]) if width >= 8 else ("", 0)
@@ -71,6 +67,16 @@ def read_groundtruth(path, min_poses: int = 2) -> GroundTruth:
             f"{path}, line {lines[0]}: {width} numbers; expected t[ns], x, y, z (positions) "
             "or t[ns], x, y, z, qw, qx, qy, qz (EuRoC)"
         )
+
+
+def read_groundtruth(path, min_poses: int = 2) -> GroundTruth:
+    """A KITTI, TUM, EuRoC CSV or position-only ground truth of at least ``min_poses`` rows."""
+    path = Path(path)
+    a, lines, comma = read_rows(path, min_poses)
+    if not comma and a.shape[1] != 12:  # TUM or positions: times in seconds
+        check_seconds(path, a[:, 0], lines)
+    _check_columns(path, a, lines, comma)
+    width = a.shape[1]
     if width == 12 and not comma:
         poses = as_homogeneous(a.reshape(-1, 3, 4))
         return GroundTruth(path, None, poses[:, :3, 3].copy(), poses)

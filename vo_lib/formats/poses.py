@@ -121,50 +121,64 @@ def _row(path: Path, n: int, line: str, comma: bool, first: tuple[int, int] | No
     return values
 
 
+def _refuse(path: Path, lines: list[int], bad: np.ndarray, what) -> None:
+    """One line naming the first ``bad`` row: ``what``, or ``what(k)`` of that row ``k``."""
+    if bad.any():
+        k = int(np.argmax(bad))
+        raise TrajectoryError(f"{path}, line {lines[k]}: {what(k) if callable(what) else what}")
+
+
 def _check(path: Path, a: np.ndarray, rows: list[tuple[int, str]], comma: bool) -> None:
     """Every row finite, a rotation (KITTI) or a unit quaternion, a position within
     :data:`MAX_POSITION`, timestamps increasing; else the first bad row is named."""
     lines = [n for n, _ in rows]
-
-    def refuse(bad: np.ndarray, what) -> None:
-        if bad.any():
-            k = int(np.argmax(bad))
-            raise TrajectoryError(f"{path}, line {lines[k]}: {what(k) if callable(what) else what}")
-
-    refuse(~np.isfinite(a).all(axis=1), "holds a NaN or infinite value")
+    _refuse(path, lines, ~np.isfinite(a).all(axis=1), "holds a NaN or infinite value")
     if a.shape[1] == 12 and not comma:
         R = a.reshape(-1, 3, 4)[:, :, :3]
         with np.errstate(all="ignore"):  # huge entries overflow: not a rotation either
             off = np.abs(np.swapaxes(R, 1, 2) @ R - np.eye(3)).max(axis=(1, 2))
-            refuse(~(off <= ROTATION_TOLERANCE) | (np.linalg.det(R) < 0), lambda k: rotation_problem(R[k]))
+            bad = ~(off <= ROTATION_TOLERANCE) | (np.linalg.det(R) < 0)
+            _refuse(path, lines, bad, lambda k: rotation_problem(R[k]))
         positions = a[:, 3::4]
     else:
+        _check_stamped(path, a, rows, comma)
         positions = a[:, 1:4]
-        if a.shape[1] >= 8:
-            with np.errstate(all="ignore"):  # huge entries overflow: no unit quaternion either
-                norm = np.linalg.norm(a[:, 4:8], axis=1)
-            refuse(
-                ~(np.abs(norm - 1.0) <= QUATERNION_TOLERANCE),
-                lambda k: (
-                    f"the quaternion's norm is {norm[k]:.4g}; expected a unit quaternion "
-                    f"(norm 1 within {QUATERNION_TOLERANCE:g})"
-                ),
-            )
-        t = a[:, 0]
+    _refuse(
+        path, lines, np.abs(positions).max(axis=1) > MAX_POSITION, f"a position beyond {MAX_POSITION:g} m"
+    )
 
-        def stamp(k: int) -> str:  # as written: a float would round a time in nanoseconds
-            return re.split(r"[\s,]+", rows[k][1])[0]
 
-        kitti = "; 12 numbers a row, as KITTI poses? they are separated by spaces, not commas"
-        refuse(
-            np.concatenate([[False], np.diff(t) <= 0]),
+def _check_stamped(path: Path, a: np.ndarray, rows: list[tuple[int, str]], comma: bool) -> None:
+    """Rows with a timestamp first (TUM, EuRoC, positions): unit quaternions, increasing times."""
+    lines = [n for n, _ in rows]
+    if a.shape[1] >= 8:
+        with np.errstate(all="ignore"):  # huge entries overflow: no unit quaternion either
+            norm = np.linalg.norm(a[:, 4:8], axis=1)
+        _refuse(
+            path,
+            lines,
+            ~(np.abs(norm - 1.0) <= QUATERNION_TOLERANCE),
             lambda k: (
-                f"timestamp {stamp(k)} {'repeats' if t[k] == t[k - 1] else 'comes before'} "
-                f"the one on line {lines[k - 1]} ({stamp(k - 1)}); timestamps must increase"
-                + (kitti if comma and a.shape[1] == 12 else "")
+                f"the quaternion's norm is {norm[k]:.4g}; expected a unit quaternion "
+                f"(norm 1 within {QUATERNION_TOLERANCE:g})"
             ),
         )
-    refuse(np.abs(positions).max(axis=1) > MAX_POSITION, f"a position beyond {MAX_POSITION:g} m")
+    t = a[:, 0]
+
+    def stamp(k: int) -> str:  # as written: a float would round a time in nanoseconds
+        return re.split(r"[\s,]+", rows[k][1])[0]
+
+    kitti = "; 12 numbers a row, as KITTI poses? they are separated by spaces, not commas"
+    _refuse(
+        path,
+        lines,
+        np.concatenate([[False], np.diff(t) <= 0]),
+        lambda k: (
+            f"timestamp {stamp(k)} {'repeats' if t[k] == t[k - 1] else 'comes before'} "
+            f"the one on line {lines[k - 1]} ({stamp(k - 1)}); timestamps must increase"
+            + (kitti if comma and a.shape[1] == 12 else "")
+        ),
+    )
 
 
 def read_rows(path, min_rows: int = 1) -> tuple[np.ndarray, list[int], bool]:

@@ -93,16 +93,20 @@ class Sequence:
         """Left and right images of frame ``k`` (rectified where needed), the next ``read_ahead``
         decoded meanwhile on a reader thread."""
         if self.read_ahead > 0:
-            if self._reader is None:
-                self._reader = ThreadPoolExecutor(max_workers=1, thread_name_prefix="vo_lib-reader")
-            for j in range(k + 1, min(k + 1 + self.read_ahead, len(self))):
-                if j not in self._ahead:
-                    self._ahead[j] = self._reader.submit(self._decoded_ahead, j)
-            for j in [j for j in self._ahead if j < k]:  # the caller went back: drop stale frames
-                self._ahead.pop(j).cancel()
+            self._read_ahead_of(k)
         ahead = self._ahead.pop(k, None)
         decoded = ahead.result() if ahead is not None else None
         return decoded if decoded is not None else self._decoded(k)
+
+    def _read_ahead_of(self, k: int) -> None:
+        """Frames ``k + 1`` to ``k + read_ahead`` handed to the reader thread, stale ones dropped."""
+        if self._reader is None:
+            self._reader = ThreadPoolExecutor(max_workers=1, thread_name_prefix="vo_lib-reader")
+        for j in range(k + 1, min(k + 1 + self.read_ahead, len(self))):
+            if j not in self._ahead:
+                self._ahead[j] = self._reader.submit(self._decoded_ahead, j)
+        for j in [j for j in self._ahead if j < k]:  # the caller went back: drop stale frames
+            self._ahead.pop(j).cancel()
 
     def _decoded_ahead(self, k: int) -> tuple[np.ndarray, np.ndarray] | None:
         """Frame ``k``, or None: a bad frame is decoded again, and reported, by the caller's thread."""
@@ -158,9 +162,8 @@ def _camera(root: Path, left: list[Path], right: list[Path]) -> StereoCamera:
     return camera
 
 
-def read_sequence(path, odometry: bool = True) -> Sequence:
-    """Read and check a sequence folder (``odometry=False``: ``odometry.txt`` is not read)."""
-    root = Path(path)
+def _image_pairs(root: Path) -> tuple[list[Path], list[Path]]:
+    """The left and right images of a sequence folder, paired by name."""
     if not root.is_dir():
         what = "a file, not a sequence folder" if root.exists() else "sequence folder not found"
         raise SequenceError(f"{root}: {what}")
@@ -169,6 +172,25 @@ def read_sequence(path, odometry: bool = True) -> Sequence:
         raise SequenceError(f"{root / 'image_0'}: no images")
     if [p.name for p in left] != [p.name for p in right]:
         raise SequenceError(f"{root}: {unpaired(left, right)}")
+    return left, right
+
+
+def _odometry(path: Path, times: np.ndarray) -> np.ndarray:
+    """``odometry.txt``: a row of track distances per frame, at a speed a vehicle reaches."""
+    odo = read_per_frame(
+        path, len(times), "lines", lambda p: read_rows(p, 2, "delta_u_left delta_u_right", MAX_ODOMETRY_M)
+    )
+    if len(times) > 1:
+        speed = float(np.median(np.abs(odo[1:]).max(axis=1) / np.diff(times)))
+        claim = f"the tracks move {speed:g} per second (median, with times.txt)"
+        check_metres(path, claim, speed, MAX_TRACK_SPEED_M_S, " m/s")
+    return odo
+
+
+def read_sequence(path, odometry: bool = True) -> Sequence:
+    """Read and check a sequence folder (``odometry=False``: ``odometry.txt`` is not read)."""
+    root = Path(path)
+    left, right = _image_pairs(root)
     camera = _camera(root, left, right)
     n = len(left)
     check_file(root / "times.txt", "one timestamp per frame")
@@ -178,16 +200,7 @@ def read_sequence(path, odometry: bool = True) -> Sequence:
     if present(root / "poses.txt", "the ground-truth poses"):
         poses = read_per_frame(root / "poses.txt", n, "poses", read_poses)
     if odometry and present(root / "odometry.txt", "the odometry"):
-        odo = read_per_frame(
-            root / "odometry.txt",
-            n,
-            "lines",
-            lambda p: read_rows(p, 2, "delta_u_left delta_u_right", MAX_ODOMETRY_M),
-        )
-    if odo is not None and n > 1:
-        speed = float(np.median(np.abs(odo[1:]).max(axis=1) / np.diff(times)))
-        claim = f"the tracks move {speed:g} per second (median, with times.txt)"
-        check_metres(root / "odometry.txt", claim, speed, MAX_TRACK_SPEED_M_S, " m/s")
+        odo = _odometry(root / "odometry.txt", times)
     manifest_path = root / "manifest.json"
     manifest = read_manifest(manifest_path) if present(manifest_path, "the manifest") else {}
     check_manifest(manifest_path, manifest, n)

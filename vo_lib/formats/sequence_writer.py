@@ -75,19 +75,24 @@ class SequenceWriter(OutputFolder):
         for name in names:
             src = Path(source) / name
             try:
-                if src.is_dir():  # raw_calib: what is read of it, not what else it holds
-                    (self.path / name).mkdir()  # with the umask's permissions, not src's: it can be replaced
-                    for file in [f for f in sorted(src.glob("calib_*.txt")) if f.is_file()]:
-                        shutil.copyfile(file, self.path / name / file.name)
-                elif src.is_file() and name == "raw_calib":
-                    raise OutputError(f"{src}: a file, where the folder of KITTI's raw calibration should be")
-                elif src.is_file():
-                    shutil.copyfile(src, self.path / name)
+                self._copy(src, self.path / name)
             except OSError as exc:
                 raise OutputError(
                     f"{self.label}: cannot copy {exc.filename or src} "
                     f"({exc.strerror or str(exc)[:120]}); nothing was written"
                 ) from None
+
+    @staticmethod
+    def _copy(src: Path, dst: Path) -> None:
+        """A file as it is; ``raw_calib``, a folder, as its ``calib_*.txt`` files; nothing if absent."""
+        if src.is_dir():  # raw_calib: what is read of it, not what else it holds
+            dst.mkdir()  # with the umask's permissions, not src's: it can be replaced
+            for file in [f for f in sorted(src.glob("calib_*.txt")) if f.is_file()]:
+                shutil.copyfile(file, dst / file.name)
+        elif src.is_file() and src.name == "raw_calib":
+            raise OutputError(f"{src}: a file, where the folder of KITTI's raw calibration should be")
+        elif src.is_file():
+            shutil.copyfile(src, dst)
 
     def close(
         self, times, poses=None, odometry=None, manifest: dict | None = None, camera_from_body=None

@@ -302,23 +302,29 @@ def render_sample(name: str, frames: int | None = None, resolution=None, first: 
     if frame_store.FOLDER:
         key = f"{name}-{fingerprint(name)}-{camera.width}x{camera.height}-from{first}"
         store = Path(frame_store.FOLDER) / key
+    rendered = RenderedSample(camera, mount, drive, n, poses, first)
+    return rendered, _frames(sample, rendered, effects, image_rng, store)
 
-    def frame_iter():
-        renderer = None  # built at the first frame the store does not hold (textures take a second)
-        for k in range(first, first + n):
-            stored = frame_store.get(store, k) if store else None
-            if stored:
-                left, right, state = stored
-                image_rng.bit_generator.state = state  # as if this frame had been rendered here
-            else:
-                renderer = renderer or StereoRenderer(WORLDS[sample.world](), camera)
-                renderer.effects = effects[k]
-                left, right = renderer.render_pair(poses[k] @ mount, image_rng, time=k / sample.rate)
-                if store:
-                    frame_store.put(store, k, left, right, image_rng.bit_generator.state)
-            yield left, right, (None if k == first else drive.odometry[k])
 
-    return RenderedSample(camera, mount, drive, n, poses, first), frame_iter()
+def _frames(sample: Sample, rendered: RenderedSample, effects, image_rng, store: Path | None):
+    """``(left, right, odometry or None)`` of each frame of ``rendered``: from the frame store where
+    it holds them, else rendered (and stored); ``image_rng`` as if every frame had been rendered."""
+    renderer = None  # built at the first frame the store does not hold (textures take a second)
+    first = rendered.first
+    for k in range(first, first + rendered.frames):
+        stored = frame_store.get(store, k) if store else None
+        if stored:
+            left, right, state = stored
+            image_rng.bit_generator.state = state  # as if this frame had been rendered here
+        else:
+            renderer = renderer or StereoRenderer(WORLDS[sample.world](), rendered.camera)
+            renderer.effects = effects[k]
+            left, right = renderer.render_pair(
+                rendered.vehicle_poses[k] @ rendered.mount, image_rng, time=k / sample.rate
+            )
+            if store:
+                frame_store.put(store, k, left, right, image_rng.bit_generator.state)
+        yield left, right, (None if k == first else rendered.drive.odometry[k])
 
 
 def is_indoor(name: str) -> bool:

@@ -139,6 +139,17 @@ def _how_far(report: dict, vo_3d) -> str:
     return f"{report['distance_m']:.2f} m travelled, planar"
 
 
+def _print_rows_3d(errors: dict, cols: list[str], spot_turn: bool) -> None:
+    """The 3-D rows of :func:`print_error_table` (no share of the distance after a spot turn), and
+    the segment lengths of the KITTI errors."""
+    for label, figure, fmt in ROWS_3D:
+        if not (spot_turn and "of distance" in label):
+            print(_row(label, [None if errors.get(c) is None else figure(errors[c]) for c in cols], fmt))
+    kitti = errors["vo"].kitti
+    if kitti is not None:
+        print(f"  (KITTI errors over {kitti.label()}, {kitti.count} segment{'s' * (kitti.count != 1)})")
+
+
 def print_error_table(
     report: dict,
     flagged: int,
@@ -158,13 +169,8 @@ def print_error_table(
     cols = [k for k in ("vo", "odometry") if k in report]
     names = {"vo": "visual odometry", "odometry": odometry_label}
     print(f"  {'':<{LABEL}s}" + "".join(f"{names[c]:>{COLUMN}s}" for c in cols))
-    rows_3d = [] if vo_3d is None else ROWS_3D
-    for label, figure, fmt in rows_3d:
-        if not (report["spot_turn"] and "of distance" in label):
-            print(_row(label, [None if errors.get(c) is None else figure(errors[c]) for c in cols], fmt))
-    if vo_3d is not None and vo_3d.kitti is not None:
-        count = vo_3d.kitti.count
-        print(f"  (KITTI errors over {vo_3d.kitti.label()}, {count} segment{'s' * (count != 1)})")
+    if vo_3d is not None:
+        _print_rows_3d(errors, cols, report["spot_turn"])
     if planar or vo_3d is None:  # without 3-D rows, the planar ones are all there is
         for label, key, fmt in ROWS_PLANAR:
             print(_row(label, [report[c][key] for c in cols], fmt))

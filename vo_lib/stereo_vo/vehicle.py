@@ -124,24 +124,33 @@ def vehicle_of(sequence, use_odometry: bool = True) -> Vehicle:
         mount = drone_mount(np.asarray(sequence.manifest["T_body_camera"], float))  # no odometry
         return Vehicle(VehicleKind.DRONE, mount, car_odometry_model(), None, "none", Motion.HOVER)
     if "height_m" in camera:  # a rendered sample: the crawler of [Zhao]
-        mount = camera_mount(forward=float(camera.get("forward_m", 0.0)), height=float(camera["height_m"]))
-        try:
-            model = TrackOdometry(**sequence.manifest.get("track_odometry", {}))
-        except (TypeError, ValueError) as exc:  # an unknown key, a value that is not a length
-            where = f"{sequence.path / 'manifest.json'}: key track_odometry"
-            raise SequenceError(
-                f"{where}: expected track_distance, track_width, encoder_sigma ({exc})"
-            ) from None
-        mount_text = camera.get("mount", CAMERA_MOUNTS[0])
-        if mount_text not in CAMERA_MOUNTS:  # a misspelt crawler's mount is not taken for another
-            raise SequenceError(
-                f"{sequence.path / 'manifest.json'}: key camera.mount: expected "
-                f"{' or '.join(map(repr, CAMERA_MOUNTS))}, got {json.dumps(mount_text)[:40]}"
-            )
-        odometry = sequence.odometry if use_odometry else None
-        source = "odometry.txt" if odometry is not None else "none"
-        motion = Motion.PLANAR if mount_text == CAMERA_MOUNTS[0] else Motion.FULL
-        return Vehicle(VehicleKind.CRAWLER, mount, model, odometry, source, motion)
+        return _crawler(sequence, camera, use_odometry)
+    return _car(sequence, use_odometry)
+
+
+def _crawler(sequence, camera: dict, use_odometry: bool) -> Vehicle:
+    """A rendered sample's crawler: its mount and track odometry as the manifest states them."""
+    mount = camera_mount(forward=float(camera.get("forward_m", 0.0)), height=float(camera["height_m"]))
+    try:
+        model = TrackOdometry(**sequence.manifest.get("track_odometry", {}))
+    except (TypeError, ValueError) as exc:  # an unknown key, a value that is not a length
+        where = f"{sequence.path / 'manifest.json'}: key track_odometry"
+        raise SequenceError(f"{where}: expected track_distance, track_width, encoder_sigma ({exc})") from None
+    mount_text = camera.get("mount", CAMERA_MOUNTS[0])
+    if mount_text not in CAMERA_MOUNTS:  # a misspelt crawler's mount is not taken for another
+        raise SequenceError(
+            f"{sequence.path / 'manifest.json'}: key camera.mount: expected "
+            f"{' or '.join(map(repr, CAMERA_MOUNTS))}, got {json.dumps(mount_text)[:40]}"
+        )
+    odometry = sequence.odometry if use_odometry else None
+    source = "odometry.txt" if odometry is not None else "none"
+    motion = Motion.PLANAR if mount_text == CAMERA_MOUNTS[0] else Motion.FULL
+    return Vehicle(VehicleKind.CRAWLER, mount, model, odometry, source, motion)
+
+
+def _car(sequence, use_odometry: bool) -> Vehicle:
+    """A car in the KITTI layout: the camera in its IMU frame (``raw_calib``, else KITTI's rig), and
+    wheel distances from ``odometry.txt`` or from the OXTS packets' speed and yaw rate."""
     root = sequence.path
     raw_calib = root / "raw_calib"
     if raw_calib.exists() or raw_calib.is_symlink():  # a file or a broken link: named by the reader

@@ -94,17 +94,24 @@ def plot_run(
         _plan_view(main, paths, title)
     main.grid(True, alpha=0.3)
     main.legend(loc="best", fontsize="x-small")
-    for label, poses, style in paths[1:] if truth is not None else []:
+    if errors:
+        _error_views(errors, times, paths)
+    return {"main": main, "errors": errors, "spot_turn": spot}
+
+
+def _error_views(errors, times, paths) -> None:
+    """Position and heading errors against the truth (``paths[0]``) of every other path, on the
+    two axes ``errors``."""
+    truth = paths[0][1]
+    for label, poses, style in paths[1:]:
         line = {k: v for k, v in style.items() if k != "zorder"}
         position = 100 * np.hypot(*(poses[:, :2] - truth[:, :2]).T)
         heading = np.degrees(wrap_angle(poses[:, 2] - truth[:, 2]))
         errors[0].plot(times, position, label=label, **line)
         errors[1].plot(times, heading, label=label, **line)
-    if errors:
-        errors[0].set(ylabel="position error [cm]", title="errors against ground truth")
-        errors[1].set(ylabel="heading error [deg]", xlabel="time [s]")
-        errors[1].axhline(0.0, color="0.5", lw=0.8)
-        for ax in errors:
-            ax.grid(True, alpha=0.3)
-        errors[0].legend(loc="best", fontsize="x-small")
-    return {"main": main, "errors": errors, "spot_turn": spot}
+    errors[0].set(ylabel="position error [cm]", title="errors against ground truth")
+    errors[1].set(ylabel="heading error [deg]", xlabel="time [s]")
+    errors[1].axhline(0.0, color="0.5", lw=0.8)
+    for ax in errors:
+        ax.grid(True, alpha=0.3)
+    errors[0].legend(loc="best", fontsize="x-small")
