@@ -765,6 +765,38 @@ def test_evaluate_reads_tum_euroc_csv_and_positions(tmp_path, capsys):
 
 
 @needs_euroc
+def test_a_recording_with_the_datasets_own_ground_truth_csv_reads_as_with_its_tum_copy(tmp_path):
+    """EuRoC ships its 6-DoF truth as ``state_groundtruth_estimate0/data.csv``: 17 columns (time in
+    ns, position, quaternion w x y z, then velocity and the IMU's biases), which a recording read as
+    it comes holds instead of the sample's TUM copy; the camera's poses are the same."""
+    from vo_lib.formats.euroc import read_asl
+
+    IMU_STATE = (
+        "0.1,-0.2,0.3,-0.002,0.021,0.076,-0.01,0.1,0.06"  # velocity, gyroscope and accelerometer biases
+    )
+    rig = small_rig(tmp_path, frames=12)
+    truth = np.loadtxt(EUROC / "mav0" / "state_groundtruth_estimate0" / "groundtruth.tum")
+    folder = rig / "mav0" / "state_groundtruth_estimate0"
+    (folder / "groundtruth.tum").unlink()
+    header = (
+        "#timestamp, p_RS_R_x [m], p_RS_R_y [m], p_RS_R_z [m], q_RS_w [], q_RS_x [], q_RS_y [], q_RS_z []"
+    )
+    header += ", v_RS_R_x [m s^-1], v_RS_R_y [m s^-1], v_RS_R_z [m s^-1]" + "".join(
+        f", b_{kind}_RS_S_{axis} [{unit}]"
+        for kind, unit in (("w", "rad s^-1"), ("a", "m s^-2"))
+        for axis in "xyz"
+    )
+    rows = [
+        f"{round(t * 1e9)},{x!r},{y!r},{z!r},{qw!r},{qx!r},{qy!r},{qz!r}," + IMU_STATE
+        for t, x, y, z, qx, qy, qz, qw in truth.tolist()
+    ]
+    (folder / "data.csv").write_text(header + "\n" + "\n".join(rows) + "\n")
+    from_csv = read_asl(rig)
+    assert from_csv.truth_file == folder / "data.csv"
+    np.testing.assert_allclose(from_csv.poses, read_asl(EUROC, frames=12).poses, atol=1e-9)
+
+
+@needs_euroc
 def test_evaluate_refuses_a_truth_it_would_misread(tmp_path, capsys):
     """What would print a wrong figure with exit 0 gets one line and exit 2 (a quaternion in
     another order than its header names, KITTI camera poses moved again by an extrinsic, times in
