@@ -93,7 +93,6 @@ def complexities() -> list[tuple[int, str, str]]:
     """``(McCabe complexity, module, function)`` of every function of vo_lib (ruff C901 at 0)."""
     import json
     import pathlib
-    import re
     import subprocess
     import sys
 
@@ -107,8 +106,10 @@ def complexities() -> list[tuple[int, str, str]]:
     )
     found = []
     for finding in json.loads(proc.stdout):
-        complexity, name = re.search(r"`(.+)` is too complex \((\d+) > 0\)", finding["message"]).group(2, 1)
-        found.append((int(complexity), pathlib.Path(finding["filename"]).relative_to(root).as_posix(), name))
+        message = re.search(r"`(.+)` is too complex \((\d+) > 0\)", finding["message"])
+        assert message, f"ruff's message is no longer 'NAME is too complex (N > 0)': {finding['message']}"
+        module = pathlib.Path(finding["filename"]).relative_to(root).as_posix()
+        found.append((int(message.group(2)), module, message.group(1)))
     assert len(found) > 100, proc.stderr
     return found
 
@@ -125,15 +126,16 @@ def test_no_module_is_more_complex_than_the_pipeline():
     assert pipeline > 0 and {m: c for m, c in summed.items() if c > pipeline} == {}
 
 
-#: Modules that read, write, configure, time or show rather than estimate: command line, files,
-#: outputs, the samples' catalogue, the choice of vehicle, benchmarks, reports and figures.
+#: Modules that read, write, configure, run, time or show rather than estimate: command line, files,
+#: outputs, the samples' catalogue and frame store, settings, the choice of vehicle, the papers'
+#: experiments and tables, benchmarks, reports and figures.
 MACHINERY = re.compile(
-    r"vo_lib/(cli/|formats/|bench/|viz/|outputs|atomic|arguments|data|compiled|sim/samples"
-    r"|stereo_vo/(run_report|vehicle))"
+    r"vo_lib/(__main__|cli/|formats/|bench/|viz/|outputs|atomic|arguments|data|compiled|sim/(samples|frame_store)"
+    r"|stereo_vo/(run_report|vehicle|config|paper_sets|paper_tables)|lidar_tracking/corridor_experiment)"
 )
 
 
-def test_the_most_complex_functions_are_mostly_algorithms():
+def test_at_least_half_of_the_most_complex_functions_are_algorithms():
     """Of the ten most complex functions, at least five are algorithms, however ties at the tenth
     place are broken (against the algorithms here)."""
     ranked = sorted(complexities(), reverse=True)
