@@ -54,6 +54,7 @@ from scipy.stats import chi2
 from vo_book.demo_fusion import (
     CONDITIONS,
     ESTIMATORS,
+    STUDY_SEEDS,
     fuse,
     heading_error,
     nees_words,
@@ -348,7 +349,8 @@ display(
 # own increments, and repeating the last one while it sees nothing), the fused filter, and a
 # fused filter that learns the slip's mean (`SlipCalibratedFilter`, below). One seed draws the
 # drive's slip and encoder noise and the matches; a claim that one estimator beats another is
-# made over the seeds `range(SEED, SEED + 10)`, with `vo_lib.comparison`, never on one draw.
+# made over the seeds `range(SEED, SEED + STUDY_SEEDS)` (forty), with `vo_lib.comparison`, never
+# on one draw.
 #
 # **NEES.** To ask whether a filter's covariance P tells the truth we use the normalised
 # estimation error squared, NEES = eᵀP⁻¹e for the pose error e = truth − estimate: if the error
@@ -384,14 +386,14 @@ plt.show()
 # of 100 frames in the spot turn. The figures are the final heading error (degrees) and the
 # final position error (cm).
 #
-# Ten seeds of five conditions, and the sideways study of the next section, take several times as
+# Forty seeds of five conditions, and the sideways study of the next section, take several times as
 # long as the rest of the notebook. `seed_figures` therefore reads their figures from
 # `vo_book/demo_fusion.json`, stored by `python -m vo_book.demo_fusion` for the
 # base seed 7 (`pytest -m samples` runs the study again and must find the same figures). With
 # another `SEED`, or with `VO_NOTEBOOKS_FULL=1`, it runs them here.
 
 # %%
-SEEDS = range(SEED, SEED + 10)
+SEEDS = range(SEED, SEED + STUDY_SEEDS)
 study = seed_figures(SEEDS, fresh=FULL)  # stored for SEED = 7, run for any other
 draws = {c: {s: study["conditions"][c][str(s)] for s in SEEDS} for c in CONDITIONS}
 heading_cmp = {c: over_seeds(lambda s, c=c: draws[c][s]["heading"], SEEDS) for c in CONDITIONS}
@@ -402,6 +404,8 @@ for c in CONDITIONS:
     cells = [np.median(heading_cmp[c].figures[k]) for k in ESTIMATORS]
     cells += [np.median(position_cmp[c].figures[k]) for k in ESTIMATORS]
     print(f"{c:24s}" + "".join(f"{v:11.3f}" for v in cells))
+fused_vo = max(np.max(np.abs(heading_cmp[c].paired("fused", "VO"))) for c in ("spot turn", "indoor"))
+print(f"fused against VO, final heading errors as sampled: at most {fused_vo:.3f}° apart in any seed")
 
 
 display(
@@ -439,8 +443,8 @@ display(
 # - with vision as good as the samples give it, VO's θ variance is a small fraction of the
 #   odometry's, the average is nearly VO's own, and the slip's mean can leak in only with the
 #   small weight the filter gives the odometry: over the seeds the two differ by a few hundredths
-#   of a degree at most, one way or the other, and whether the leak shows as a reliable
-#   difference depends on the draws (the sentences above say, for this base seed);
+#   of a degree at most, one way or the other (printed under the table), and whether the leak shows as a
+#   reliable difference is what the sentences above say;
 # - with weak vision the weights become comparable. Odometry's distance carries little bias (1 %
 #   slip when driving; on the spot the two tracks' counts cancel), so averaging can remove VO's
 #   noise from the position; whether it does, drive by drive, is what the sentences above measure;
@@ -481,9 +485,9 @@ display(
 # cannot correct it frame by frame (weak vision, an outage). On the indoor floor
 # the slip it would remove is about 1 %, and the VO of one frame cannot resolve so little. The
 # scales drift (a random walk, so that they can follow the slip from one manoeuvre to the next)
-# and each frame's measurement pulls them only a little, so they wander with the VO's noise, with
-# weak vision by about as much as the slip they are meant to find; the corrected odometry carries
-# that wander into the pose.
+# and each frame's measurement pulls them only a little, so they wander with the VO's noise: on
+# the indoor floor with weak vision by about as much as the slip they are meant to find (the cell
+# below prints both); the corrected odometry carries that wander into the pose.
 
 # %%
 scale_sigma = {c: np.median([d["scale_sigma"] for d in draws[c].values()]) for c in CONDITIONS}

@@ -861,6 +861,7 @@ print(
 )
 # each run's heading offset: its spread within a lap against the spread of the laps' means
 within_lap, between_laps = np.median(z_heading.std(axis=1)), seed_means.std()
+between_ci = bootstrap_interval(seed_means, np.std)  # the seeds' interval of the spread between laps
 over_confident = nees_ci[0] > 3 or z2_ci[0] > 1
 per_step_verdict = (
     "more often above it than a consistent filter would be"
@@ -886,11 +887,13 @@ display(
         f"{nees_ci[0]:.2f}–{nees_ci[1]:.2f}) against 3, and the heading's squared error in σ is "
         f"{lap_z2.mean():.2f} (CI {z2_ci[0]:.2f}–{z2_ci[1]:.2f}) against 1: {consistency} A run's "
         f"heading error in σ varies by ±{within_lap:.2f} within its lap (median) while the laps' "
-        f"means spread ±{between_laps:.2f} between seeds: "
+        f"means spread ±{between_laps:.2f} between seeds (95 % CI {between_ci[0]:.2f}–{between_ci[1]:.2f}): "
         + (
             "each run keeps much of the heading offset it makes early."
-            if within_lap < between_laps
+            if within_lap < between_ci[0]
             else "a run does not keep one heading offset through its lap."
+            if within_lap > between_ci[1]
+            else "whether a run keeps the heading offset it makes early, these seeds do not say."
         )
         + f" Final error: {slam_vs_dr.sentence('EKF-SLAM', 'dead reckoning', unit='m', digits=3)}."
     )

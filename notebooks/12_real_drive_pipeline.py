@@ -19,6 +19,12 @@
 # its inliers the refinement keeps, wheel odometry against vision against their fusion, and a
 # plain OpenCV stereo odometry as the yardstick.
 #
+# This drive is a development sequence: the car's preset (`CAR`: the two-scale front end, the
+# matching windows, the gates, the keyframes) and the noise of the OXTS odometry were chosen on it
+# and on the EuRoC drone. Every figure below says what those settings give on the data they were
+# chosen on; how they fare on drives nobody tuned to is another question, which one drive cannot
+# answer.
+#
 # **You will learn**
 # - how single-scale corners make the heading drift, and what the planar model costs in metres,
 #   over RANSAC's seeds;
@@ -197,6 +203,12 @@ if REAL:
         Verdict.WORSE: "the larger",
         Verdict.NOT_RELIABLE: "a not reliably different",
     }[readings.verdict("circular heading", "6-DoF heading")]
+    compared = [
+        ("circular through the mount", "circular on the axis"),
+        ("6-DoF heading", "circular heading"),
+        ("circular through the mount", "6-DoF"),
+        ("circular heading", "6-DoF heading"),
+    ]
     offset_verdict = readings.verdict("circular through the mount", "circular on the axis")
     heading_verdict = readings.verdict("6-DoF heading", "circular heading")
     display(
@@ -214,7 +226,7 @@ if REAL:
                 "The figures are the same in every seed: on this drive RANSAC's draws do not move "
                 "these readings, so the ranking rests on the one drive, not on a lucky draw; "
                 "another drive may order them otherwise."
-                if all(np.ptp(v) < 1e-9 for v in readings.figures.values())
+                if not any(readings.varies(*pair) for pair in compared)
                 else "These are RANSAC's draws on one drive: another drive may order them otherwise."
             )
         )

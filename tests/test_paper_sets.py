@@ -76,7 +76,7 @@ def test_stored_contradiction_study_is_what_the_code_computes():
 
 def test_stored_fusion_study_covers_the_notebooks_seeds_from_the_present_samples():
     stored = json.loads(demo_fusion.STORED.read_text())
-    seeds = list(range(demo_fusion.SEED, demo_fusion.SEED + 10))
+    seeds = list(range(demo_fusion.SEED, demo_fusion.SEED + demo_fusion.STUDY_SEEDS))
     assert stored["seeds"] == seeds and stored["fingerprint"] == demo_fusion.study_fingerprint()
     assert set(stored["conditions"]) == set(demo_fusion.CONDITIONS)
     for rows in (*stored["conditions"].values(), stored["sideways"]):

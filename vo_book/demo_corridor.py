@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from vo_lib.lidar_tracking.corridor_experiment import TIM551, statistics_table
+from vo_lib.lidar_tracking.corridor_experiment import TIM551, statistics_table, unoccluded
 from vo_lib.lidar_tracking.pose_tracking import sample_poses
 
 
@@ -39,6 +39,20 @@ def auc(positive, negative) -> float:
     return float(
         np.mean(positive[:, None] > negative[None, :]) + 0.5 * np.mean(positive[:, None] == negative[None, :])
     )
+
+
+def printed_eq11_auc(world_, field, seed: int) -> float:
+    """The AUC of the printed eq. 11 on the raw scores over one scan of the corridor (the scans of
+    section 3, seeded by ``seed``): normal frames against the occluded stretch (x 7-12.5 m)."""
+    rng = np.random.default_rng(seed)
+    normal, occluded = [], []
+    for x in np.linspace(1.5, 27.5, 120):
+        d_s_printed = box_statistics(scores_at(x, world_, field, rng)[1])["d_s_printed"]
+        if 7.0 <= x <= 12.5:
+            occluded.append(d_s_printed)
+        elif unoccluded(np.array([x]))[0]:
+            normal.append(d_s_printed)
+    return auc(normal, occluded)
 
 
 def box_statistics(values) -> dict[str, float]:

@@ -78,10 +78,13 @@ class Comparison:
         return (float(np.median(d)), *bootstrap_interval(d))
 
     def varies(self, a: str, b: str) -> bool:
-        """Whether the seeds move ``a − b`` at all: where they do not, the N figures are one
-        result repeated, and an interval of zero width says nothing about other draws."""
+        """Whether the seeds move ``a − b``: where they do not, the N figures are one result
+        repeated, and an interval of zero width says nothing about other draws. A change below a
+        millionth of the figures' size is arithmetic's (sums in another order, another thread),
+        not the draws'."""
         d = self.paired(a, b)
-        return bool(np.ptp(d) > 1e-12 * max(1.0, float(np.max(np.abs(d)))))
+        size = max(float(np.max(np.abs(self.figures[k]))) for k in (a, b))
+        return bool(np.ptp(d) > 1e-6 * size)
 
     def verdict(self, a: str, b: str) -> Verdict:
         """``BETTER`` when the whole interval of ``a − b`` is below zero, ``WORSE`` above."""

@@ -30,6 +30,7 @@ assert ours["v_max"] == ours["d_s"] == ours["d_s_printed"]
 every_printed10 = [s["v_max"] for g in (normal_stats, occluded_stats) for s in g["printed eq. 10 × n"]]
 assert max(every_printed10) < 1.25 and printed10["normal"] / printed10["occluded"] < 1.1
 assert posterior_vmax["normal"] / posterior_vmax["occluded"] > 3
+assert np.all(eq11_aucs < 0.5)  # the summary's "worse than chance", in every one of the scans
 
 # after: temperature_rows = {}
 assert np.isclose(temperature_rows[1.0][0], posterior_vmax["normal"])  # T = 1: the reading above
@@ -44,6 +45,7 @@ assert np.mean(np.abs(dirs[:, 0])) > 0.95
 # after: result = run_experiment(range(20), vo)
 from vo_lib.comparison import Verdict
 
+# the summary's "severalfold", averaged over the seeds
 assert mx["VOAPT"][0] <= 0.3 * mx["LBPT"][0] and mn["VOAPT"][0] <= 0.2 * mn["LBPT"][0]
 assert result.flagged_when_lost() >= 0.9 and result.false_alarms() <= 0.1
 assert all(c.verdict("VOAPT", "LBPT") is Verdict.BETTER for c in by_seed.values())
