@@ -32,7 +32,7 @@
 # **Prerequisites**: notebooks 01 (odometry, its Jacobians), 06 (the VO measurement).
 #
 # **Run time**: about 10 seconds (section 4's seed study is stored; with another `SEED` it is
-# run here, and the notebook takes about half a minute).
+# run here, and the notebook takes about three minutes).
 
 # %% [markdown]
 # **References**
