@@ -298,9 +298,10 @@ walk_widget = offer(
 # A rendered frame and a real one, side by side, with three numbers that say how hard an image is
 # for a corner-based front end (`vo_lib.sim.realism`): the share of 16×16-pixel cells holding no
 # FAST corner, the FAST corners per 640×480 pixels, and the share of flat pixels (Sobel gradient
-# below 20). The rendered frame is from the road drive, whose renderer was tuned to match these
-# numbers on KITTI raw drive 2011_09_26_0001 (`vo_lib.sim.realism`). The real frame is the middle
-# one of the first KITTI-layout sequence in the folder named by the environment variable
+# below 20). The rendered frame is from the road drive, whose renderer was tuned toward these
+# numbers on KITTI raw drive 2011_09_26_0001 (`vo_lib.sim.realism`); one frame of each is
+# compared. The real frame is the middle one of the first KITTI-layout sequence in the folder
+# named by the environment variable
 # `VO_LIB_REALDATA`; without it, only the rendered frame is shown. If that sequence is drive 0001
 # itself, as it is in this project's development data, the comparison below is made on the data
 # the renderer was tuned to: it shows how close the tuning came, not how the renderer generalises.
@@ -349,14 +350,17 @@ if len(shown) == 2:
         "cells without a corner": (road_stats.empty_cells, real_stats.empty_cells),
         "flat pixels": (road_stats.low_gradient, real_stats.low_gradient),
     }
-    alike = all(abs(a - b) < 0.1 for a, b in gaps.values())  # within a tenth on both shares
+    corners = (road_stats.corners_per_vga, real_stats.corners_per_vga)
+    # within a tenth on both shares, and within a quarter in corners
+    alike = all(abs(a - b) < 0.1 for a, b in gaps.values()) and 0.8 < corners[0] / corners[1] < 1.25
     verdict = "look alike" if alike else "differ"
     tuned_on = "2011_09_26_drive_0001" in real_folders[0].name  # the drive the renderer was tuned to
     display(
         Markdown(
             f"On these numbers the two {verdict}: "
             + "; ".join(f"{k} {a:.2f} rendered, {b:.2f} real" for k, (a, b) in gaps.items())
-            + ". Sky and road leave cells empty and pixels flat in both. "
+            + f"; corners per 640×480 {corners[0]:,.0f} rendered, {corners[1]:,.0f} real (one frame of "
+            "each). Sky and road leave cells empty and pixels flat in both. "
             + (
                 "This real frame is from the drive the renderer was tuned on, so this says how close "
                 "the tuning came, not how the renderer generalises."
