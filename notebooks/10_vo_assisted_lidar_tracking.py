@@ -52,6 +52,7 @@ from scipy.stats import norm
 from vo_book.demo_corridor import (
     auc,
     box_statistics,
+    corridor_scan,
     flat_positions,
     printed_eq11_auc,
     rate_sentence,
@@ -71,7 +72,6 @@ from vo_lib.lidar_tracking.corridor_experiment import (
     corridor_visual_odometry,
     run_experiment,
     run_tracking,
-    unoccluded,
     without_umbrella,
 )
 from vo_lib.lidar_tracking.likelihood_field import LikelihoodField
@@ -327,15 +327,11 @@ scales = {
     "printed eq. 10 × n": lambda s: s / s.sum() * len(s),
     "raw score": lambda s: s,
 }
-normal_stats, occluded_stats = {k: [] for k in scales}, {k: [] for k in scales}
-raw_by_kind = {"normal": [], "occluded": []}  # the raw scores of each frame, for the temperature below
-for x in np.linspace(1.5, 27.5, 120):
-    raw = scores_at(x, world, field, rng)[1]
-    group = occluded_stats if 7.0 <= x <= 12.5 else normal_stats if unoccluded(np.array([x]))[0] else None
-    if group is not None:
-        raw_by_kind["normal" if group is normal_stats else "occluded"].append(raw)
-        for scale, fn in scales.items():
-            group[scale].append(box_statistics(fn(raw)))
+raw_by_kind = corridor_scan(world, field, rng)  # the raw scores of each frame, for the temperature below
+normal_stats, occluded_stats = (
+    {scale: [box_statistics(fn(raw)) for raw in raw_by_kind[kind]] for scale, fn in scales.items()}
+    for kind in ("normal", "occluded")
+)
 aucs = {}
 print(f"{'AUC':22s}" + "".join(f"{k:>13s}" for k in ("v_max", "d_s", "d_s_printed", "r_s")))
 for scale in scales:

@@ -3,6 +3,7 @@ of docs/layout.md naming every module."""
 
 from __future__ import annotations
 
+import functools
 import re
 
 import grimp
@@ -89,7 +90,8 @@ def test_functions_of_vo_lib_are_small_enough_to_read():
     assert proc.returncode == 0, proc.stdout + proc.stderr
 
 
-def complexities() -> list[tuple[int, str, str]]:
+@functools.cache  # one ruff run serves both tests
+def complexities() -> tuple[tuple[int, str, str], ...]:
     """``(McCabe complexity, module, function)`` of every function of vo_lib (ruff C901 at 0)."""
     import json
     import pathlib
@@ -111,7 +113,7 @@ def complexities() -> list[tuple[int, str, str]]:
         module = pathlib.Path(finding["filename"]).relative_to(root).as_posix()
         found.append((int(message.group(2)), module, message.group(1)))
     assert len(found) > 100, proc.stderr
-    return found
+    return tuple(found)
 
 
 def test_no_module_is_more_complex_than_the_pipeline():

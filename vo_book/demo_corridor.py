@@ -41,17 +41,25 @@ def auc(positive, negative) -> float:
     )
 
 
-def printed_eq11_auc(world_, field, seed: int) -> float:
-    """The AUC of the printed eq. 11 on the raw scores over one scan of the corridor (the scans of
-    section 3, seeded by ``seed``): normal frames against the occluded stretch (x 7-12.5 m)."""
-    rng = np.random.default_rng(seed)
-    normal, occluded = [], []
+def corridor_scan(world_, field, rng: np.random.Generator) -> dict[str, list[np.ndarray]]:
+    """The raw sample scores of scans at 120 places along the corridor (section 3), by kind:
+    ``"normal"`` (an unoccluded stretch) and ``"occluded"`` (x 7-12.5 m); the others are scanned
+    too, so that ``rng`` moves on the same way, and left out."""
+    raws = {"normal": [], "occluded": []}
     for x in np.linspace(1.5, 27.5, 120):
-        d_s_printed = box_statistics(scores_at(x, world_, field, rng)[1])["d_s_printed"]
+        raw = scores_at(x, world_, field, rng)[1]
         if 7.0 <= x <= 12.5:
-            occluded.append(d_s_printed)
+            raws["occluded"].append(raw)
         elif unoccluded(np.array([x]))[0]:
-            normal.append(d_s_printed)
+            raws["normal"].append(raw)
+    return raws
+
+
+def printed_eq11_auc(world_, field, seed: int) -> float:
+    """The AUC of the printed eq. 11 on the raw scores of one :func:`corridor_scan` seeded by
+    ``seed``: normal frames against the occluded stretch."""
+    raws = corridor_scan(world_, field, np.random.default_rng(seed))
+    normal, occluded = ([box_statistics(r)["d_s_printed"] for r in raws[k]] for k in ("normal", "occluded"))
     return auc(normal, occluded)
 
 

@@ -31,6 +31,7 @@ def _positive(name: str, value) -> float:
 
 
 def _finite(name: str, value: float) -> None:
+    """``value`` a finite number."""
     if not math.isfinite(value):
         raise ValueError(f"{name} must be finite; got {value!r}")
 

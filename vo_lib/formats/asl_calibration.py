@@ -107,10 +107,6 @@ def _transform(path: Path, data: dict, what: str) -> np.ndarray:
 def _distortion(path: Path, data: dict) -> np.ndarray:
     """``[k1, k2, p1, p2]`` of a radial-tangential model, at the ASL key or at Kalibr's
     (``camchain.yaml``) when only that one is there; zeros for ``distortion_model: none``."""
-    if data.get("camera_model", "pinhole") != "pinhole":
-        raise AslError(
-            f"{path}: key camera_model: {data['camera_model']!r} is not supported; expected pinhole"
-        )
     model = data.get("distortion_model", "radial-tangential")
     if model not in ("radial-tangential", "radtan", "none"):
         raise AslError(
@@ -147,6 +143,10 @@ def read_camera_yaml(path) -> CameraCalibration:
     fu, fv, cu, cv = _numbers(path, data, "intrinsics", 4, "[fu, fv, cu, cv]")
     if fu <= 0 or fv <= 0:
         raise AslError(f"{path}: key intrinsics: focal lengths must be > 0, got fu={fu:g}, fv={fv:g}")
+    if data.get("camera_model", "pinhole") != "pinhole":
+        raise AslError(
+            f"{path}: key camera_model: {data['camera_model']!r} is not supported; expected pinhole"
+        )
     dist = _distortion(path, data)
     width, height = _image_size(path, data)
     if not (0 <= cu <= width and 0 <= cv <= height):

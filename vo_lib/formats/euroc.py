@@ -120,9 +120,9 @@ def pair_by_timestamp(mav0: Path) -> tuple[np.ndarray, list[Path], list[Path]]:
 def _check_images_there(csv_path: Path, files: list[Path], lines: list[int]) -> None:
     """One line naming the first image that ``data.csv`` lists and is not a file."""
     for path, line in zip(files, lines, strict=True):
-        if path.is_dir():
-            raise AslError(f"{csv_path}, line {line}: {path} is a folder; expected an image")
-        if not path.is_file():
+        if not path.is_file():  # one stat per image; a second only for the one that fails
+            if path.is_dir():
+                raise AslError(f"{csv_path}, line {line}: {path} is a folder; expected an image")
             raise AslError(f"{csv_path}, line {line}: {path.name} is missing from {path.parent}")
 
 

@@ -141,16 +141,17 @@ def _check(path: Path, a: np.ndarray, rows: list[tuple[int, str]], comma: bool) 
             _refuse(path, lines, bad, lambda k: rotation_problem(R[k]))
         positions = a[:, 3::4]
     else:
-        _check_stamped(path, a, rows, comma)
+        _check_stamped(path, a, rows, lines, comma)
         positions = a[:, 1:4]
     _refuse(
         path, lines, np.abs(positions).max(axis=1) > MAX_POSITION, f"a position beyond {MAX_POSITION:g} m"
     )
 
 
-def _check_stamped(path: Path, a: np.ndarray, rows: list[tuple[int, str]], comma: bool) -> None:
+def _check_stamped(
+    path: Path, a: np.ndarray, rows: list[tuple[int, str]], lines: list[int], comma: bool
+) -> None:
     """Rows with a timestamp first (TUM, EuRoC, positions): unit quaternions, increasing times."""
-    lines = [n for n, _ in rows]
     if a.shape[1] >= 8:
         with np.errstate(all="ignore"):  # huge entries overflow: no unit quaternion either
             norm = np.linalg.norm(a[:, 4:8], axis=1)
