@@ -27,7 +27,7 @@
 # **Prerequisites**: Python, NumPy, a first look at Kalman-filter prediction (covariance
 # propagation P ← F P Fᵀ + G M Gᵀ). No earlier notebook.
 #
-# **Run time**: about 25 seconds.
+# **Run time**: about 10 seconds.
 
 # %% [markdown]
 # **References**

@@ -27,7 +27,7 @@
 # **Prerequisites**: notebook 01 (the crawler turns about an instantaneous centre); rotation
 # matrices; the stereo relation depth = f·B/disparity.
 #
-# **Run time**: about 20 seconds. It also runs as a plain script:
+# **Run time**: about 10 seconds. It also runs as a plain script:
 # `python notebooks/02_circular_motion_derivation.py`.
 
 # %% [markdown]

@@ -27,7 +27,7 @@
 #
 # **Prerequisites**: notebook 02.
 #
-# **Run time**: about 20 seconds.
+# **Run time**: about 5 seconds.
 
 # %% [markdown]
 # **References**

@@ -28,7 +28,7 @@
 # **Prerequisites**: notebooks 01 (odometry and slip) and 03 (why the camera sits above the
 # turning axis).
 #
-# **Run time**: about 15 seconds.
+# **Run time**: about 10 seconds.
 
 # %% [markdown]
 # **References**

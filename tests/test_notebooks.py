@@ -114,6 +114,10 @@ def test_notebook_conventions(path):
     for c in cells:
         if c.cell_type == "code":
             assert not re.search(r"^\s*[%!]", c.source, re.M), f"magic in {path.name}: {c.source[:60]}"
+    run_time = re.search(r"\*\*Run time\*\*: about (\d+) seconds", cells[0].source)
+    mapped = re.search(rf"^\| {path.name[:2]} \|.* \| (\d+) s[ |]", (ROOT / "README.md").read_text(), re.M)
+    assert run_time and mapped, "the header says 'Run time: about N seconds', the README's map 'N s'"
+    assert run_time[1] == mapped[1], f"run time: the header says {run_time[1]} s, the README {mapped[1]} s"
     exercises = [
         i for i, c in enumerate(cells) if c.cell_type == "markdown" and c.source.startswith("## Exercises")
     ]
