@@ -328,10 +328,25 @@ def test_asl_recording_is_rectified_and_its_truth_moved_into_the_left_camera():
         ),
         ("swapped", "mav0: the T_BS of cam0 and cam1 put cam1 -0.11 m to the right of cam0 and +0.000399 m"),
         (
+            "diagonal",
+            "cam1/sensor.yaml: key T_BS puts cam1 +0.080 m to the right of cam0, +0.080 m below and +0.000 m "
+            "ahead; expected cam1 beside cam0 along its image rows (within 20°)",
+        ),
+        (
+            "both-distortion",
+            "cam0/sensor.yaml: keys distortion_coefficients and distortion_coeffs both given",
+        ),
+        (
+            "equidistant",
+            "cam0/sensor.yaml: key distortion_model: 'equidistant' is not supported; expected "
+            "radial-tangential or none",
+        ),
+        ("2^63", "cam0/data.csv, line 3: timestamp 9300000000000000000 is 2^63 ns or more"),
+        (
             "timestamps",
             "line 4: timestamp 1403636584863555584 has no image of the same timestamp on the other",
         ),
-        ("nearest", "camera (the nearest is +1 microseconds away; 2 unpaired)"),
+        ("nearest", "camera (the nearest is 1 microseconds later; 2 unpaired)"),
         ("order", "cam0/data.csv, line 4: timestamp 1403636584813555456 does not come after"),
         ("missing", "cam1/data.csv, line 6: 1403636584963555584.png is missing from"),
         ("size", "cam1/data/1403636584963555584.png, frame 4: 640x480 image, but"),
@@ -403,7 +418,7 @@ def test_a_bad_rig_gets_one_line_and_exit_2(tmp_path, capsys, damage, expected):
     elif damage == "model":
         path = mav0 / "cam0" / "sensor.yaml"
         path.write_text(path.read_text().replace("camera_model: pinhole", "camera_model: omni"))
-    elif damage in ("latin-1", "superscript", "overflow", "outside", "columns"):
+    elif damage in ("latin-1", "superscript", "overflow", "outside", "columns", "2^63"):
         path = mav0 / "cam0" / "data.csv"
         lines = path.read_text().splitlines()
         stamp, name = lines[2].split(",")
@@ -411,6 +426,7 @@ def test_a_bad_rig_gets_one_line_and_exit_2(tmp_path, capsys, damage, expected):
             "latin-1": lines[2],
             "superscript": f"{stamp}\u00b2,{name}",
             "overflow": f"99999999999999999999,{name}",
+            "2^63": f"9300000000000000000,{name}",
             "outside": f"{stamp},../../cam1/data/{name}",
             "columns": f"{stamp},{name},",  # a trailing comma
         }[damage]
@@ -441,6 +457,27 @@ def test_a_bad_rig_gets_one_line_and_exit_2(tmp_path, capsys, damage, expected):
         (mav0 / "left").rename(mav0 / "cam1")
     elif damage == "camera":
         shutil.rmtree(mav0 / "cam1")
+    elif damage == "diagonal":  # cam1 as far below cam0 as to its right
+        from vo_lib.formats.asl_calibration import read_camera_yaml
+
+        T0 = read_camera_yaml(mav0 / "cam0" / "sensor.yaml").T_BS
+        path = mav0 / "cam1" / "sensor.yaml"
+        text = path.read_text()
+        moved = T0[:3, 3] + T0[:3, :2] @ [0.08, 0.08]  # cam0's x (right) and y (down), in the body
+        for metres, value in zip(
+            ("-0.0198435579556", "0.0453689425024", "0.00786212447038"), moved, strict=True
+        ):
+            text = text.replace(metres, repr(float(value)))
+        path.write_text(text)
+    elif damage in ("both-distortion", "equidistant"):  # Kalibr's key beside the ASL one; a fisheye
+        path = mav0 / "cam0" / "sensor.yaml"
+        text = path.read_text()
+        edit = (
+            ("radial-tangential", "equidistant")
+            if damage == "equidistant"
+            else ("\ndistortion_model", "\ndistortion_coeffs: [0, 0, 0, 0]\ndistortion_model")
+        )
+        path.write_text(text.replace(*edit))
     elif damage == "no-distortion":  # coefficients that the model says are not there
         path = mav0 / "cam1" / "sensor.yaml"
         path.write_text(path.read_text().replace("radial-tangential", "none"))
@@ -540,18 +577,25 @@ def test_a_calibration_that_leaves_no_stereo_matches_is_said(tmp_path, capsys):
     [  # cam1 a metre away: every step ten times too long; cam0's k2 a hundredfold: few frames match
         (("cam1", "0.0453689425024", "1.0453689425024"), "m; is the stereo baseline that of the rig?"),
         (("cam0", "0.07395907", "7.395907"), "is each camera's calibration"),
+        # cam0's k1 a tenth of the lens's: a third of the frames without stereo matches, not most
+        (("cam0", "-0.28340811", "-0.028340811"), "frames had too few stereo features to be matched"),
+        # a body that moves in 6 DoF run with the planar model
+        (("--motion", "planar"), "is --motion planar the model of this body's motion, and is each"),
     ],
 )
 def test_a_run_that_looks_miscalibrated_says_so(tmp_path, capsys, edit, expected):
     """A calibration that still rectifies, but not these images: a baseline ten times the rig's
-    gives a path ten times the truth's, a wrong distortion leaves most frames flagged; the run
-    ends, and one notice says what to look at."""
+    gives a path ten times the truth's, a wrong distortion leaves frames flagged, as does a motion
+    model not of this body; the run ends, and one notice says what to look at."""
     from vo_lib.cli.main import main
 
-    rig = small_rig(tmp_path, frames=12)
-    path = rig / "mav0" / edit[0] / "sensor.yaml"
-    path.write_text(path.read_text().replace(edit[1], edit[2]))
-    assert main(["run", "--sequence", str(rig), "--out", str(tmp_path / "out")]) == 0
+    rig = small_rig(tmp_path, frames=60 if edit[1] == "-0.28340811" else 20)
+    option = list(edit) if edit[0] == "--motion" else []
+    if not option:
+        path = rig / "mav0" / edit[0] / "sensor.yaml"
+        assert edit[1] in path.read_text()
+        path.write_text(path.read_text().replace(edit[1], edit[2]))
+    assert main(["run", "--sequence", str(rig), "--out", str(tmp_path / "out"), *option]) == 0
     notices = [line for line in capsys.readouterr().err.splitlines() if line.startswith("notice:")]
     assert len(notices) == 1 and expected in notices[0], notices
 

@@ -191,28 +191,34 @@ def run_command(
 
 #: A run whose path is this many times the truth's, or this fraction of it, says so: more than drift.
 PATH_RATIO = 2.0
+#: A run with this share of its frames flagged says so (the rendered samples, whose tracks slip
+#: and lose contact by design, flag a fifth at most).
+FLAGGED_SHARE = 0.25
 
 
-def _say_if_suspect(seq, n: int, diagnostics, poses) -> None:
-    """A notice where a run looks like that of a calibration not of these images: most frames
-    flagged (vision not used), or a path the truth's times ``PATH_RATIO`` or more (a baseline)."""
+def _say_if_suspect(seq, n: int, diagnostics, poses, motion: str = "auto") -> None:
+    """A notice where a run looks like that of a calibration not of these images, or of a motion
+    model not of this body (``motion`` other than ``auto``): ``FLAGGED_SHARE`` of the frames
+    without stereo features, or flagged for other reasons (vision not used), or a path the truth's times
+    ``PATH_RATIO`` or more (a baseline)."""
     from vo_lib.evaluation import path_lengths
     from vo_lib.stereo_vo.pipeline import Reason
 
     reasons = Counter(d.reason for d in diagnostics if d.fallback)
     # a frame without a reference follows frames without features
     featureless = reasons.pop(Reason.FEW_FEATURES, 0) + reasons.pop(Reason.NO_REFERENCE, 0)
-    if featureless > (n - 1) / 2:  # the motion of most frames is only the prediction's
+    if featureless >= FLAGGED_SHARE * (n - 1):  # the motion of these frames is only the prediction's
         notice(
             f"{seq.path}: {featureless} of {n - 1} frames had too few stereo features "
             "to be matched; is each camera's calibration that of these images? (rows the "
             "rectification does not line up give no stereo matches)"
         )
-    elif reasons.total() > (n - 1) / 2:
+    elif reasons.total() >= FLAGGED_SHARE * (n - 1):
         why = ", ".join(f"{count} {reason}" for reason, count in reasons.most_common())
+        model = "" if motion == "auto" else f" is --motion {motion} the model of this body's motion, and"
         notice(
             f"{seq.path}: {reasons.total()} of {n - 1} frames were flagged, their vision not used "
-            f"({why}); is each camera's calibration, distortion included, that of these images?"
+            f"({why});{model} is each camera's calibration, distortion included, that of these images?"
         )
     elif seq.poses is not None:
         truth_m, est_m = (float(path_lengths(p[:n])[-1]) for p in (seq.poses, poses))
@@ -264,7 +270,7 @@ def _run_into(
     )
     poses = result.camera_poses
     poses = camera_poses_from_planar(result.poses, mount) if poses is None else poses
-    _say_if_suspect(seq, n, result.diagnostics, poses)
+    _say_if_suspect(seq, n, result.diagnostics, poses, motion)
     write_kitti_poses(tmp / "poses.txt", poses)
     origin = float(seq.manifest.get("time_origin_s", 0.0)) if isinstance(seq.manifest, dict) else 0.0
     write_tum(tmp / "trajectory.tum", seq.times[:n] + origin, poses)  # on the recording's clock

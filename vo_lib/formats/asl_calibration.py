@@ -24,6 +24,9 @@ from vo_lib.formats.poses import rigid_problem
 
 #: Shortest distance between a stereo rig's cameras (metres).
 MIN_BASELINE_M = 1e-3
+#: Largest angle between the baseline and cam0's image rows: rectifying a steeper rig turns the
+#: images so far that little of them is left.
+MAX_BASELINE_TILT_DEG = 20.0
 #: Least share of an image valid once rectified: a calibration of other images leaves a sliver.
 MIN_VALID_SHARE = 0.25
 #: Largest radial-tangential coefficient taken as a lens's (real ones stay below 1 or so).
@@ -110,10 +113,11 @@ def _distortion(path: Path, data: dict) -> np.ndarray:
     model = data.get("distortion_model", "radial-tangential")
     if model not in ("radial-tangential", "radtan", "none"):
         raise AslError(
-            f"{path}: key distortion_model: {model!r} is not supported; expected radial-tangential"
+            f"{path}: key distortion_model: {model!r} is not supported; expected radial-tangential or none"
         )
-    kalibr = "distortion_coeffs" in data and "distortion_coefficients" not in data
-    key = "distortion_coeffs" if kalibr else "distortion_coefficients"
+    if "distortion_coeffs" in data and "distortion_coefficients" in data:
+        raise AslError(f"{path}: keys distortion_coefficients and distortion_coeffs both given; expected one")
+    key = "distortion_coeffs" if "distortion_coeffs" in data else "distortion_coefficients"
     if model == "none" and data.get(key) is None:
         return np.zeros(4)
     dist = _numbers(path, data, key, 4, "[k1, k2, p1, p2]", MAX_DISTORTION)
@@ -174,6 +178,13 @@ def rectify(left: CameraCalibration, right: CameraCalibration, where: Path) -> R
             f"{baseline:.3g} m); expected two cameras apart"
         )
     check_metres(where / "cam1" / "sensor.yaml", f"key T_BS puts cam1 {baseline:.4g} m from cam0", baseline)
+    x, y, z = np.round(np.linalg.inv(T_right_left)[:3, 3], 3) + 0.0  # cam1 in cam0: x right, y down, z ahead
+    if np.degrees(np.arctan2(np.hypot(y, z), abs(x))) > MAX_BASELINE_TILT_DEG:
+        raise AslError(
+            f"{where / 'cam1' / 'sensor.yaml'}: key T_BS puts cam1 {x:+.3f} m to the right of cam0, "
+            f"{y:+.3f} m below and {z:+.3f} m ahead; expected cam1 beside cam0 along its image rows "
+            f"(within {MAX_BASELINE_TILT_DEG:g}°)"
+        )
     rect = rectify_stereo(
         (left.K, left.distortion), (right.K, right.distortion), left.resolution, T_right_left, left.T_BS
     )

@@ -60,8 +60,12 @@ def _image_row(csv_path: Path, n: int, line: str) -> tuple[int, str]:
         columns = len(line.split(","))
         raise AslError(f"{csv_path}, line {n}: {columns} columns; expected 2, 'timestamp [ns],filename'")
     # a time in ns fits 19 digits (int64); a name stays inside data/
-    if not sep or not re.fullmatch(r"[0-9]{1,19}", stamp) or int(stamp) >= 2**63 or not name:
+    if not sep or not re.fullmatch(r"[0-9]{1,19}", stamp) or not name:
         raise AslError(f"{csv_path}, line {n}: expected 'timestamp [ns],filename', got {line[:50]!r}")
+    if int(stamp) >= 2**63:
+        raise AslError(
+            f"{csv_path}, line {n}: timestamp {stamp} is 2^63 ns or more; expected a signed 64-bit one"
+        )
     if Path(name).is_absolute() or ".." in Path(name).parts:
         raise AslError(f"{csv_path}, line {n}: {name[:50]!r}; expected a file name inside data/")
     return int(stamp), name
@@ -106,11 +110,12 @@ def pair_by_timestamp(mav0: Path) -> tuple[np.ndarray, list[Path], list[Path]]:
     if len(only):
         ours, theirs, lines, side = (t0, t1, lines0, "cam0") if only[0] in t0 else (t1, t0, lines1, "cam1")
         nearest = theirs[np.argmin(np.abs(theirs.astype(float) - float(only[0])))]
+        offset_us = (int(nearest) - int(only[0])) / 1e3
         raise AslError(
             f"{mav0 / side / 'data.csv'}, line {lines[int(np.searchsorted(ours, only[0]))]}: timestamp "
             f"{int(only[0])} has no image of the same timestamp on the other camera (the nearest is "
-            f"{(int(nearest) - int(only[0])) / 1e3:+g} microseconds away; {len(only)} unpaired); the two "
-            "cameras must be triggered together, with equal timestamps"
+            f"{abs(offset_us):g} microseconds {'later' if offset_us > 0 else 'earlier'}; {len(only)} "
+            "unpaired); the two cameras must be triggered together, with equal timestamps"
         )
     for side, files, lines in (("cam0", left, lines0), ("cam1", right, lines1)):
         _check_images_there(mav0 / side / "data.csv", files, lines)
