@@ -77,8 +77,17 @@ ADVERSARIAL_KINDS = ("constant", "library", "wrong")  # and "unanswered": the re
 FLAGGED_KIND = "flagged"  # answers the integrity report must name: optional, any exercise
 #: The course's tools beside nbgrader_config.py: the hidden tests' guard, the autograder's steps.
 TOOLS = tuple(pathlib.Path(__file__).with_name(name) for name in ("grading.py", "autograde_steps.py"))
-# what the autograder's kernels may not read, beside the course folder's own solutions
-SOLUTION_FILES = (NOTEBOOK_DIR, ROOT / "coursework" / "submissions", ROOT / "coursework" / "answer_key.md")
+# what the autograder's kernels may not read, beside the course folder's own solutions: the
+# notebooks, the trial answers, the mark scheme, the history and the reading edition (its worked
+# solutions are folded away, not left out); listed in the course folder's hidden.txt
+SOLUTION_FILES = (
+    NOTEBOOK_DIR,
+    ROOT / "coursework" / "submissions",
+    ROOT / "coursework" / "answer_key.md",
+    ROOT / ".git",
+    ROOT / "docs" / "_build",
+)
+HIDDEN_LIST = "hidden.txt"
 # a line that opens a solution, hidden tests or a mark scheme (not a mention of one in prose)
 MARKER_LINE = re.compile(
     r"^\s*(### BEGIN SOLUTION|### BEGIN HIDDEN TESTS|=== BEGIN MARK SCHEME ===)\s*$", re.M
@@ -164,7 +173,7 @@ def run_nbgrader(course: pathlib.Path, *args: str) -> None:
         cwd=course,
         capture_output=True,
         text=True,
-        env=dict(os.environ, MPLBACKEND="Agg", VO_HIDDEN=os.pathsep.join(map(str, SOLUTION_FILES))),
+        env=dict(os.environ, MPLBACKEND="Agg"),
     )
     errors = [line for line in proc.stderr.splitlines() if "| ERROR]" in line or "Error" in line]
     if "Exception while loading config file" in proc.stderr:  # nbgrader goes on without it
@@ -176,6 +185,7 @@ def run_nbgrader(course: pathlib.Path, *args: str) -> None:
 def write_course(course: pathlib.Path, paths: list[pathlib.Path]) -> None:
     """Fill ``course`` (an empty folder) with nbgrader's course layout and generate the release."""
     shutil.copy2(CONFIG, course / "nbgrader_config.py")
+    (course / HIDDEN_LIST).write_text("".join(f"{path}\n" for path in SOLUTION_FILES))
     (course / "coursework").mkdir()
     for tool in TOOLS:
         shutil.copy2(tool, course / "coursework" / tool.name)

@@ -79,22 +79,25 @@ def library_functions(*owners: types.ModuleType | type | Callable) -> list[Calla
 class Reason(enum.Enum):
     """Why an answer is to be reviewed: its text, and the modules or names that show it."""
 
-    FILE = "opens or lists files", "open pathlib shutil glob io fromfile load loadtxt listdir scandir walk"
+    FILE = (
+        "opens, lists or runs files",
+        "open pathlib shutil glob io fromfile load loadtxt genfromtxt read_csv listdir scandir walk run_path",
+    )
     NETWORK = "reaches the network", "socket urllib http requests"
     KERNEL = "uses the kernel (get_ipython, IPython)", "get_ipython IPython ipykernel"
     FRAME = "inspects frames, code or source", "inspect linecache _getframe f_back f_globals f_locals"
-    CODE = "reads or traces code objects", "__code__ settrace setprofile"
+    CODE = "reads or copies code objects", "__code__ __globals__ codeobj Bytecode CodeType FunctionType"
     LOW_LEVEL = (
-        "uses ctypes, gc, importlib, sys.modules, exec, or reaches names indirectly (globals, vars)",
+        "uses ctypes, gc, importlib, runpy, sys.modules, exec, traces, or reaches names indirectly",
         "ctypes gc importlib __import__ modules exec eval compile globals vars __dict__ __builtins__ "
-        "__setattr__ __getattribute__",
+        "__setattr__ __getattribute__ runpy run_module settrace setprofile",
     )
     THREADS = "starts threads or processes", "threading multiprocessing subprocess concurrent _thread"
     EXIT = "runs a shell or ends the interpreter", "_exit system popen fork exit quit"
     FAKE_NUMBER = (
-        "fakes a number or a comparison",
+        "fakes a number, an array or a comparison",
         "__array__ __eq__ __ne__ __lt__ __le__ __gt__ __ge__ __abs__ __sub__ __rsub__ __array_function__ "
-        "__array_ufunc__ __array_interface__ __array_priority__",
+        "__array_ufunc__ __array_interface__ __array_priority__ __getitem__ __len__ __iter__ __float__",
     )
     REBINDS = "rebinds NumPy or a module, or uses the grader", "builtins coursework grading setattr delattr"
     PRIVATE = "reaches a private name (a leading underscore) of an imported module", ""
@@ -109,27 +112,39 @@ PROTECTED = {"np", "numpy", "grading", "assert_allclose"}  # names an answer mus
 NAMED_TUPLE = {"_replace", "_asdict", "_make", "_fields", "_field_defaults"}  # public, though underscored
 
 
-def review(source: str) -> list[tuple[int, Reason]]:
+def review(source: str, imported: frozenset[str] = frozenset()) -> list[tuple[int, Reason]]:
     """``(line, reason)`` for every construct of ``source`` that no honest answer needs, read with
-    :mod:`ast` (nothing runs). Source that does not parse fails its tests anyway; magics use the kernel."""
-    lines = source.splitlines()
-    magic = [line.lstrip().startswith(("%", "!")) for line in lines]
-    found = [(n, Reason.KERNEL) for n, is_magic in enumerate(magic, 1) if is_magic]
-    try:
-        tree = ast.parse("\n".join("" if m else line for m, line in zip(magic, lines, strict=True)))
-    except SyntaxError:
+    :mod:`ast` (nothing runs); ``imported``: names the notebook's other cells import. Source that
+    does not parse fails its tests anyway; magics use the kernel."""
+    magic = [n for n, line in enumerate(source.splitlines(), 1) if line.lstrip().startswith(("%", "!"))]
+    found = [(n, Reason.KERNEL) for n in magic]
+    if (tree := _tree(source)) is None:
         return found
-    imports = [a for n in ast.walk(tree) if isinstance(n, (ast.Import, ast.ImportFrom)) for a in n.names]
-    imported = {(a.asname or a.name).split(".")[0] for a in imports}  # names the cell's imports bind
+    imported = imported | _imports(tree)  # names the imports bind
+    defined = {n.name for n in ast.walk(tree) if isinstance(n, ast.FunctionDef)}
     for node in ast.walk(tree):
-        found += [(node.lineno, why) for why in _reasons(node, imported)]
+        found += [(node.lineno, why) for why in _reasons(node, imported, defined)]
         found += [(node.lineno, Reason.PRIVATE)] if _private(node, imported) else []
         found += [(node.lineno, Reason.HELD)] if _held(node, imported) else []
     return sorted(set(found), key=lambda item: (item[0], item[1].text))
 
 
-def _reasons(node: ast.AST, imported: set[str]) -> list[Reason]:
-    """The reasons to review one syntax node; ``imported`` are the names the cell's imports bind."""
+def _tree(source: str) -> ast.AST | None:
+    """The syntax tree of a cell, its magic lines blanked; None where it does not parse."""
+    lines = ["" if line.lstrip().startswith(("%", "!")) else line for line in source.splitlines()]
+    with contextlib.suppress(SyntaxError):
+        return ast.parse("\n".join(lines))
+    return None
+
+
+def _imports(tree: ast.AST | None) -> set[str]:
+    imports = [a for n in ast.walk(tree) if isinstance(n, (ast.Import, ast.ImportFrom)) for a in n.names]
+    return {(a.asname or a.name).split(".")[0] for a in imports}
+
+
+def _reasons(node: ast.AST, imported: set[str], defined: set[str]) -> list[Reason]:
+    """The reasons to review one syntax node; ``imported``: the names imports bind, ``defined``: the
+    functions the cell defines."""
     if isinstance(node, ast.Import):
         return [FLAGGED[r] for r in (a.name.split(".")[0] for a in node.names) if r in FLAGGED]
     if isinstance(node, ast.ImportFrom):
@@ -146,9 +161,12 @@ def _reasons(node: ast.AST, imported: set[str]) -> list[Reason]:
     ):
         return [Reason.FAKE_NUMBER]
     targets = getattr(node, "targets", None) or [getattr(node, "target", None)]
+    value = getattr(node, "value", None)
+    patch = isinstance(value, ast.Lambda) or _named(value, *defined)  # x.f = lambda ..., x.f = a def's name
     if isinstance(node, (ast.Assign, ast.AugAssign, ast.Delete)) and any(
-        _rebinds(t) or (isinstance(t, ast.Attribute) and _named(t.value, *imported)) for t in targets
-    ):  # np.allclose = ..., grading = ..., or an attribute of a module or object the cell imported
+        _rebinds(t) or (isinstance(t, ast.Attribute) and (patch or _named(_root(t), *imported)))
+        for t in targets
+    ):  # np.allclose = ..., grading = ..., an attribute of anything imported, or a function patched in
         return [Reason.REBINDS]
     return []
 
@@ -195,10 +213,11 @@ def _rebinds(target: ast.AST) -> bool:
 
 def report(nb) -> dict[str, list[str]]:
     """``{grade_id: ["line N: reason: code", ...]}`` for every answer cell of ``nb`` to be reviewed."""
-    flagged = {}
-    for cell in nb.cells:
+    flagged, code_cells = {}, [cell for cell in nb.cells if cell.cell_type == "code"]
+    imported = frozenset().union(*(_imports(tree) for c in code_cells if (tree := _tree(c.source))))
+    for cell in code_cells:
         meta = cell.metadata.get("nbgrader", {})
-        if cell.cell_type == "code" and meta.get("solution") and (found := review(cell.source)):
+        if meta.get("solution") and (found := review(cell.source, imported)):
             code = cell.source.splitlines()
             flagged[meta["grade_id"]] = [f"line {n}: {r.text}: {code[n - 1].strip()[:70]}" for n, r in found]
     return flagged

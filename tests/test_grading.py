@@ -139,6 +139,16 @@ def test_library_functions_takes_functions_classes_and_the_methods_of_a_modules_
         ("class Zero:\n    def __rsub__(self, other):\n        return 0", Reason.FAKE_NUMBER),
         ("class Yes:\n    def __array_function__(self, *a):\n        return True", Reason.FAKE_NUMBER),
         ("import contextlib\ngrading.unavailable = lambda *f: contextlib.nullcontext()", Reason.REBINDS),
+        # a fresh copy of a module, a copy of a function's code, the library patched where the
+        # test takes its expected value, a result that calls the library after the guard
+        ("import runpy\nns = runpy.run_module('vo_lib.stereo_vo.circular_motion')", Reason.LOW_LEVEL),
+        ("ns = runpy.run_path('../notebooks/02_circular_motion_derivation.py')", Reason.FILE),
+        ("data = np.genfromtxt('../../source/06/06.ipynb')", Reason.FILE),
+        ("f = types.FunctionType(dis.Bytecode(g).codeobj, g.__globals__)", Reason.CODE),
+        ("cm.theta_standard_deviation = lambda a, b, c, s: np.ones(len(a))", Reason.REBINDS),
+        ("def f(self, *a):\n    pass\nVoKalmanFilter.predict = VoKalmanFilter.update = f", Reason.REBINDS),
+        ("n = np\nn.allclose = lambda *a, **k: True", Reason.REBINDS),
+        ("class Later:\n    def __getitem__(self, k):\n        return 0", Reason.FAKE_NUMBER),
         # a library's private kernel, held in a default argument where no name swap reaches it
         (
             "from vo_lib.stereo_vo.matching_core import _popcount64\ndef f(a, p=_popcount64):\n    pass",
@@ -156,6 +166,18 @@ def test_library_functions_takes_functions_classes_and_the_methods_of_a_modules_
 )
 def test_review_names_what_no_honest_answer_needs(answer, reason):
     assert reason in {why for _, why in review(answer)}
+
+
+def test_the_report_knows_the_names_other_cells_import():
+    """An answer that patches a module the notebook imported in an earlier cell is named."""
+    nb = nbformat.v4.new_notebook()
+    nb.cells = [
+        nbformat.v4.new_code_cell("from vo_lib.stereo_vo import circular_motion as cm"),
+        _cell("answer", "cm.theta_standard_deviation = np.ones_like", "ex2"),
+        _cell("answer", "camera = cm\nwidth = camera.fx", "ex3"),
+    ]
+    assert list(grading.report(nb)) == ["ex2"]
+    assert "rebinds NumPy or a module" in grading.report(nb)["ex2"][0]
 
 
 def test_review_gives_the_line():

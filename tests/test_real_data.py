@@ -657,6 +657,11 @@ def test_frames_within_the_truth_run_and_the_refusal_says_how_to_run_the_rest(tm
     capsys.readouterr()
     assert main(["evaluate", "--gt", str(gt), "--est", str(est), "--extrinsic-of", str(rig)]) == 0
     assert "associated 9 of 12 poses" in capsys.readouterr().out
+    # the run's poses.txt has no times: the refusal points to the trajectory.tum beside it
+    args = ["evaluate", "--gt", str(gt), "--est", str(est.with_name("poses.txt")), "--extrinsic-of", str(rig)]
+    assert main(args) == 2
+    out, err = capsys.readouterr()
+    assert f"(or timestamps in both: --est {est} has them)" in err and "paired" not in out
 
 
 @needs_euroc
@@ -968,8 +973,12 @@ def test_a_rig_with_positions_only_is_scored_by_its_aligned_prism(tmp_path, caps
     assert "changed since --est" in capsys.readouterr().err
     shutil.copy(EUROC / "mav0" / "leica0" / "data.csv", gt)
     # and the calibration that moved them, and the run's images with it: refused once changed too
+    # (its numbers: a comment added changes none)
     calibration = rig / "mav0" / "cam1" / "sensor.yaml"
     calibration.write_text(calibration.read_text() + "# recalibrated\n")
+    assert main(["evaluate", "--gt", str(gt), "--est", str(est)]) == 0
+    calibration.write_text(calibration.read_text().replace("[457.587,", "[457.6,"))
+    capsys.readouterr()
     assert main(["evaluate", "--gt", str(gt), "--est", str(est)]) == 2
     assert "(its sensor.yaml files) changed since that run" in capsys.readouterr().err
     shutil.copy(EUROC / "mav0" / "cam1" / "sensor.yaml", calibration)

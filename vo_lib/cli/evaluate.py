@@ -57,10 +57,12 @@ def _check_one_to_one(truth, gt: str, est: str, count: int, marker: dict) -> Non
     if len(truth.positions) > count and first:
         print(f"--est {est} is a run of the first {count} frames of --gt's sequence: compared with those")
     elif len(truth.positions) != count:
+        stamped = Path(est).parent / "trajectory.tum"  # what a run writes beside its poses.txt
+        hint = f": --est {stamped} has them" if truth.times is not None and stamped.is_file() else ""
         raise UsageError(
             f"--gt {gt} has {len(truth.positions)} {'poses' if truth.poses is not None else 'positions'} "
             f"but --est {est} has {count} poses; "
-            "expected equal counts (or timestamps in both)"
+            f"expected equal counts (or timestamps in both{hint})"
         )
 
 
@@ -69,10 +71,10 @@ def _associated(
 ) -> tuple[np.ndarray, np.ndarray]:
     """Indices ``(i_est, i_gt)`` of the poses compared: by timestamp where both files carry them (as
     evo does), else one to one."""
-    if truth.times is not None and times is None:  # a run's trajectory.tum beside it has the times
-        print(f"--est {est} has no timestamps: its poses are paired with --gt's one to one, in order")
     if truth.times is None or times is None:
         _check_one_to_one(truth, gt, est, len(E), marker)
+        if truth.times is not None:  # a run's trajectory.tum beside it has the times
+            print(f"--est {est} has no timestamps: its poses are paired with --gt's one to one, in order")
         return np.arange(len(E)), np.arange(len(E))
     i_est, i_gt = associate(times, truth.times)
     if len(i_est) < 3:  # an alignment needs three points

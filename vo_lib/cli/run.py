@@ -106,17 +106,23 @@ def _write_csv(path: Path, rows, cls) -> None:
 
 
 def calibration_digest(sequence: Path, truth_file: Path) -> str | None:
-    """sha256 of the ``sensor.yaml`` files that move an ASL recording's truth into its rectified left
-    camera (None for another layout)."""
+    """sha256 of the calibration that moves an ASL recording's truth into its rectified left camera,
+    the numbers as read from its ``sensor.yaml`` files (a comment changes none); None for another
+    layout."""
+    import numpy as np
+
+    from vo_lib.formats.asl_calibration import read_camera_yaml, truth_extrinsic
     from vo_lib.formats.euroc import mav0_of
 
     mav0 = mav0_of(sequence)
     if mav0 is None:
         return None
     digest = hashlib.sha256()
-    for folder in (mav0 / "cam0", mav0 / "cam1", truth_file.parent):
-        file = folder / "sensor.yaml"
-        digest.update(file.read_bytes() if file.is_file() else b"-")
+    for camera in (read_camera_yaml(mav0 / side / "sensor.yaml") for side in ("cam0", "cam1")):
+        digest.update(np.concatenate([camera.T_BS.ravel(), camera.K.ravel(), camera.distortion]).tobytes())
+        digest.update(np.asarray(camera.resolution, float).tobytes())
+    has_extrinsic = (truth_file.parent / "sensor.yaml").is_file()  # else the body's: no notice here
+    digest.update(truth_extrinsic(truth_file).tobytes() if has_extrinsic else b"-")
     return digest.hexdigest()
 
 
