@@ -297,7 +297,7 @@ def _run_into(
             len(result.flagged),
             report["errors_3d"],
             odometry_name(vehicle),
-            seq.truth_file,
+            seq.truth_file or (None if is_sample(name) else seq.path / "poses.txt"),  # a KITTI layout's
             planar=vehicle.kind is not VehicleKind.DRONE,
         )
     output.commit(
