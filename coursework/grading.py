@@ -120,12 +120,12 @@ def review(source: str, imported: frozenset[str] = frozenset()) -> list[tuple[in
     found = [(n, Reason.KERNEL) for n in magic]
     if (tree := _tree(source)) is None:
         return found
-    imported = imported | _imports(tree)  # names the imports bind
+    cell = _imports(tree)  # names the cell's imports bind; a patch counts for the notebook's too
     defined = {n.name for n in ast.walk(tree) if isinstance(n, ast.FunctionDef)}
     for node in ast.walk(tree):
-        found += [(node.lineno, why) for why in _reasons(node, imported, defined)]
-        found += [(node.lineno, Reason.PRIVATE)] if _private(node, imported) else []
-        found += [(node.lineno, Reason.HELD)] if _held(node, imported) else []
+        found += [(node.lineno, why) for why in _reasons(node, cell | imported, defined)]
+        found += [(node.lineno, Reason.PRIVATE)] if _private(node, cell) else []
+        found += [(node.lineno, Reason.HELD)] if _held(node, cell) else []
     return sorted(set(found), key=lambda item: (item[0], item[1].text))
 
 
