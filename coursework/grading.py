@@ -121,9 +121,9 @@ def review(source: str, imported: frozenset[str] = frozenset()) -> list[tuple[in
     if (tree := _tree(source)) is None:
         return found
     cell = _imports(tree)  # names the cell's imports bind; a patch counts for the notebook's too
-    defined = {n.name for n in ast.walk(tree) if isinstance(n, ast.FunctionDef)}
+    patched = cell | imported | _aliases(tree, cell | imported | PROTECTED)
     for node in ast.walk(tree):
-        found += [(node.lineno, why) for why in _reasons(node, cell | imported, defined)]
+        found += [(node.lineno, why) for why in _reasons(node, patched)]
         found += [(node.lineno, Reason.PRIVATE)] if _private(node, cell) else []
         found += [(node.lineno, Reason.HELD)] if _held(node, cell) else []
     return sorted(set(found), key=lambda item: (item[0], item[1].text))
@@ -142,9 +142,16 @@ def _imports(tree: ast.AST | None) -> set[str]:
     return {(a.asname or a.name).split(".")[0] for a in imports}
 
 
-def _reasons(node: ast.AST, imported: set[str], defined: set[str]) -> list[Reason]:
-    """The reasons to review one syntax node; ``imported``: the names imports bind, ``defined``: the
-    functions the cell defines."""
+def _aliases(tree: ast.AST, names: set[str]) -> set[str]:
+    """Names the cell binds to one of ``names``: ``n = np``, ``n, s = np, sp``."""
+    pairs = [(t, n.value) for n in ast.walk(tree) if isinstance(n, ast.Assign) for t in n.targets]
+    tuples = [(t.elts, v.elts) for t, v in pairs if isinstance(t, ast.Tuple) and isinstance(v, ast.Tuple)]
+    pairs += [p for targets, values in tuples for p in zip(targets, values, strict=False)]
+    return {t.id for t, v in pairs if isinstance(t, ast.Name) and _named(v, *names)}
+
+
+def _reasons(node: ast.AST, imported: set[str]) -> list[Reason]:
+    """The reasons to review one syntax node; ``imported``: the names imports bind, and their aliases."""
     if isinstance(node, ast.Import):
         return [FLAGGED[r] for r in (a.name.split(".")[0] for a in node.names) if r in FLAGGED]
     if isinstance(node, ast.ImportFrom):
@@ -161,12 +168,9 @@ def _reasons(node: ast.AST, imported: set[str], defined: set[str]) -> list[Reaso
     ):
         return [Reason.FAKE_NUMBER]
     targets = getattr(node, "targets", None) or [getattr(node, "target", None)]
-    value = getattr(node, "value", None)
-    patch = isinstance(value, ast.Lambda) or _named(value, *defined)  # x.f = lambda ..., x.f = a def's name
     if isinstance(node, (ast.Assign, ast.AugAssign, ast.Delete)) and any(
-        _rebinds(t) or (isinstance(t, ast.Attribute) and (patch or _named(_root(t), *imported)))
-        for t in targets
-    ):  # np.allclose = ..., grading = ..., an attribute of anything imported, or a function patched in
+        _rebinds(t) or (isinstance(t, ast.Attribute) and _named(_root(t), *imported)) for t in targets
+    ):  # np.allclose = ..., grading = ..., or an attribute of anything imported (or an alias of it)
         return [Reason.REBINDS]
     return []
 
@@ -214,7 +218,9 @@ def _rebinds(target: ast.AST) -> bool:
 def report(nb) -> dict[str, list[str]]:
     """``{grade_id: ["line N: reason: code", ...]}`` for every answer cell of ``nb`` to be reviewed."""
     flagged, code_cells = {}, [cell for cell in nb.cells if cell.cell_type == "code"]
-    imported = frozenset().union(*(_imports(tree) for c in code_cells if (tree := _tree(c.source))))
+    trees = [tree for c in code_cells if (tree := _tree(c.source))]
+    imported = frozenset().union(*map(_imports, trees))
+    imported |= frozenset().union(*(_aliases(tree, imported | PROTECTED) for tree in trees))  # n = np
     for cell in code_cells:
         meta = cell.metadata.get("nbgrader", {})
         if meta.get("solution") and (found := review(cell.source, imported)):

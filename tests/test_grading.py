@@ -145,9 +145,16 @@ def test_library_functions_takes_functions_classes_and_the_methods_of_a_modules_
         ("ns = runpy.run_path('../notebooks/02_circular_motion_derivation.py')", Reason.FILE),
         ("data = np.genfromtxt('../../source/06/06.ipynb')", Reason.FILE),
         ("f = types.FunctionType(dis.Bytecode(g).codeobj, g.__globals__)", Reason.CODE),
-        ("cm.theta_standard_deviation = lambda a, b, c, s: np.ones(len(a))", Reason.REBINDS),
-        ("def f(self, *a):\n    pass\nVoKalmanFilter.predict = VoKalmanFilter.update = f", Reason.REBINDS),
+        (
+            "from vo_lib.stereo_vo import circular_motion as cm\ncm.theta_standard_deviation = lambda *a: 1",
+            Reason.REBINDS,
+        ),
+        (
+            "from vo_lib.stereo_vo.kalman import VoKalmanFilter\nVoKalmanFilter.predict = print",
+            Reason.REBINDS,
+        ),
         ("n = np\nn.allclose = lambda *a, **k: True", Reason.REBINDS),
+        ("n, s = np, sp\ns.simplify = n.sum = lambda *a, **k: 0", Reason.REBINDS),
         ("class Later:\n    def __getitem__(self, k):\n        return 0", Reason.FAKE_NUMBER),
         # a library's private kernel, held in a default argument where no name swap reaches it
         (
@@ -175,8 +182,10 @@ def test_the_report_knows_the_names_other_cells_import():
         nbformat.v4.new_code_cell("from vo_lib.stereo_vo import circular_motion as cm"),
         _cell("answer", "cm.theta_standard_deviation = np.ones_like", "ex2"),
         _cell("answer", "camera = cm\nwidth = camera.fx", "ex3"),
+        _cell("answer", "n = np\nx = 1", "ex4"),
+        _cell("answer", "n.sum = sum", "ex5"),
     ]
-    assert list(grading.report(nb)) == ["ex2"]
+    assert list(grading.report(nb)) == ["ex2", "ex5"]
     assert "rebinds NumPy or a module" in grading.report(nb)["ex2"][0]
 
 
@@ -203,6 +212,7 @@ def test_honest_code_with_numpy_and_ordinary_names_is_not_flagged():
         "def check(pose, f=observe, h=1e-6):\n    return f(pose + h)\n"
         "steps = [lambda p, f=f: f(*p) for f in (np.sin, np.cos)]\n"
         "from vo_lib.stereo_vo.ransac import RansacParams\nfields = RansacParams._fields\n"
+        "kf = Filter()\nkf.control_covariance = lambda u: u\nkf.x, kf.P = np.zeros(3), np.eye(3)\n"
     )
     assert review(answer) == []
 
