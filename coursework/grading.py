@@ -137,7 +137,7 @@ def _tree(source: str) -> ast.AST | None:
     return None
 
 
-def _imports(tree: ast.AST | None) -> set[str]:
+def _imports(tree: ast.AST) -> set[str]:
     imports = [a for n in ast.walk(tree) if isinstance(n, (ast.Import, ast.ImportFrom)) for a in n.names]
     return {(a.asname or a.name).split(".")[0] for a in imports}
 

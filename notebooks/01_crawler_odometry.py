@@ -288,7 +288,7 @@ print(
 # linearisation follows the cloud, and how much eq. 9's identity leaves out:
 
 # %%
-study = dead_reckoning_seeds(odo, u_arc, runs, steps, seeds=range(20))
+study = dead_reckoning_seeds(odo, u_arc, runs, steps, (P_full, P_eq9), seeds=range(20))
 relative, spread = study["relative"], study["spread"]
 models = np.sqrt(P_full[1, 1] / P_eq9[1, 1])  # lateral σ, full Jacobians over F = I: no draws
 display(

@@ -10,17 +10,18 @@ from vo_lib.models.track_odometry import TrackOdometry
 
 
 def dead_reckoning_seeds(
-    odo: TrackOdometry, u: np.ndarray, runs: int, steps: int, seeds: Iterable[int]
+    odo: TrackOdometry,
+    u: np.ndarray,
+    runs: int,
+    steps: int,
+    models: tuple[np.ndarray, np.ndarray],
+    seeds: Iterable[int],
 ) -> dict[str, np.ndarray]:
     """Section 5's Monte Carlo (``runs`` noisy drives of ``steps`` equal controls ``u``) once per
-    seed: ``relative``, the Frobenius distance of the full Jacobians' covariance from the cloud's
-    after the last step over the cloud's size; ``spread``, the cloud's lateral σ over the one eq. 9
-    (F = I) gives."""
-    mean, P_full, P_eq9 = np.zeros(3), np.zeros((3, 3)), np.zeros((3, 3))
-    for _ in range(steps):  # the two covariance models: no draws
-        _, F_u = odo.jacobians(mean, u)
-        P_eq9 = P_eq9 + F_u @ odo.control_covariance(u) @ F_u.T
-        mean, P_full = odo.propagate(mean, P_full, u)
+    seed, against the section's two covariances after the last step, ``models`` = (full
+    Jacobians, eq. 9's F = I): ``relative``, the Frobenius distance of the full one from the
+    cloud's over the cloud's size; ``spread``, the cloud's lateral σ over the one F = I gives."""
+    P_full, P_eq9 = models
     sd = odo.encoder_sigma * np.sqrt(np.abs(u))
     relative, spread = [], []
     for seed in seeds:

@@ -178,7 +178,8 @@ def rectify(left: CameraCalibration, right: CameraCalibration, where: Path) -> R
             f"{baseline:.3g} m); expected two cameras apart"
         )
     check_metres(where / "cam1" / "sensor.yaml", f"key T_BS puts cam1 {baseline:.4g} m from cam0", baseline)
-    x, y, z = np.round(np.linalg.inv(T_right_left)[:3, 3], 3) + 0.0  # cam1 in cam0: x right, y down, z ahead
+    cam1_in_cam0 = np.linalg.inv(T_right_left)[:3, 3]  # x right, y down, z ahead
+    x, y, z = np.round(cam1_in_cam0, 3) + 0.0
     if np.degrees(np.arctan2(np.hypot(y, z), abs(x))) > MAX_BASELINE_TILT_DEG:
         raise AslError(
             f"{where / 'cam1' / 'sensor.yaml'}: key T_BS puts cam1 {x:+.3f} m to the right of cam0, "
@@ -194,16 +195,16 @@ def rectify(left: CameraCalibration, right: CameraCalibration, where: Path) -> R
                 f"{where / side / 'sensor.yaml'}: keys intrinsics and distortion_coefficients leave "
                 f"{share:.0%} of the image valid once rectified; expected a calibration of these images"
             )
-    _check_right_of(rect, T_right_left, where)
+    _check_right_of(rect, cam1_in_cam0, where)
     return rect
 
 
-def _check_right_of(rect: Rectification, T_right_left: np.ndarray, where: Path) -> None:
+def _check_right_of(rect: Rectification, cam1_in_cam0: np.ndarray, where: Path) -> None:
     """One line when the rectified rig has cam1 on the left of cam0."""
     try:
         _ = rect.camera  # the rectified rig: cam1 on the left of cam0 raises
     except ValueError:
-        x, y, _ = np.linalg.inv(T_right_left)[:3, 3]  # cam1 in cam0: x right, y down
+        x, y, _ = cam1_in_cam0  # x right, y down
         raise AslError(
             f"{where}: the T_BS of cam0 and cam1 put cam1 {x:+.3g} m to the right of cam0 and {y:+.3g} m "
             "below it; expected cam1 to the right (are the folders swapped, or is T_BS inverted? it "
