@@ -11,6 +11,10 @@ import sys
 import tempfile
 import time
 
+# vo_lib first: it chooses OpenBLAS's kernels before NumPy loads them (vo_lib/__init__.py)
+import vo_lib  # noqa: F401
+
+# isort: split
 import numpy as np
 import pytest
 

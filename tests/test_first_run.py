@@ -25,13 +25,18 @@ def test_first_run_talks_at_once_and_shows_progress_when_piped(tmp_path):
     come; progress lines follow although stdout is a pipe, not a terminal."""
     env = dict(os.environ, VO_LIB_DATA=str(tmp_path / "data"), MPLBACKEND="Agg")
     command = [sys.executable, "-m", "vo_lib", "run", "--frames", "12", "--out", str(tmp_path / "out")]
-    proc = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
-    first = proc.stdout.readline()
-    # "at once", without a clock that a loaded machine would stretch: the line is out while the run
-    # is still at work (its output folder appears only at the end), not flushed with the rest
-    at_once = proc.poll() is None and not (tmp_path / "out").exists()
-    rest, err = proc.communicate(timeout=600)
-    assert proc.returncode == 0, err
+    with open(tmp_path / "stderr", "w+", encoding="utf-8") as stderr:
+        proc = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=stderr, text=True, env=env)
+        first = proc.stdout.readline()
+        # "at once", without a clock that a loaded machine would stretch: the line is out while the
+        # run is still at work (its output folder appears only at the end), not flushed with the rest
+        at_once = proc.poll() is None and not (tmp_path / "out").exists()
+        # read on through the same buffer: communicate() would read the pipe beneath it and lose
+        # lines that readline() had already buffered
+        rest = proc.stdout.read()
+        proc.wait(timeout=600)
+        stderr.seek(0)
+        assert proc.returncode == 0, stderr.read()
     assert at_once, "the first line came only when the run had finished"
     assert first.startswith("run: sample indoor_linear, 12 frames") and "rendered" in first
     assert re.search(r"about (\d+ to )?\d+ s", first), first  # how long the rendering will take

@@ -4,6 +4,7 @@ the PnP visual odometer, and the corridor experiment's acceptance over 20 seeds.
 from __future__ import annotations
 
 import math
+import os
 import pathlib
 import re
 
@@ -205,9 +206,9 @@ def _near(quoted, ours) -> bool:
 
 
 def test_readme_quotes_the_experiment(experiment):
-    """The README's Table III rows, T_s shares and lost seeds are this experiment's. VOAPT's move
-    with the CPU's code paths: they must be the table's or those the README gives for the other
-    machine."""
+    """The README's Table III rows, T_s shares and lost seeds are this experiment's. VOAPT's figures
+    move with OpenBLAS's kernels: they are checked where vo_lib chose the Haswell ones (every x86-64
+    CPU with AVX2), and the README's comparison of VOAPT with LBPT everywhere."""
     text = README.read_text(encoding="utf-8")
     keys = ("max", "mean", "median", "std")
     quoted = {}
@@ -224,20 +225,15 @@ def test_readme_quotes_the_experiment(experiment):
         r"In ([0-9]+) of the ([0-9]+) seeds VOAPT's median error along the\s+corridor exceeds 0\.2 m", text
     )
     assert lost, "README: no sentence on the seeds VOAPT lost"
-    other = re.search(
-        r"another development machine the same code and seeds gave VOAPT X ([0-9.]+) / ([0-9.]+) /\s+"
-        r"([0-9.]+) / ([0-9.]+) m, with ([0-9.]+) % of VOAPT's updates flagged and ([0-9]+) of the 20",
-        text,
-    )
-    assert other, "README: no VOAPT figures of the other machine"
     medians = [statistics_table(r.errors[:, 0])["median"] for r in experiment.voapt]
     assert int(lost.group(2)) == len(medians)
-    runs = sum(m > LOST_ERROR for m in medians), 100 * experiment.false_alarms()
-    machines = [
-        (quoted["VOAPT"], float(shares.group(2)), int(lost.group(1))),
-        ([float(other.group(k)) for k in range(1, 5)], float(other.group(5)), int(other.group(6))),
-    ]
-    assert any(
-        _near(figures, ours["VOAPT"]) and abs(share - runs[1]) <= 0.5 and count == runs[0]
-        for figures, share, count in machines
-    ), (ours["VOAPT"], runs, machines)
+    bound = re.search(
+        r"VOAPT's\s+maximum error is at most ([0-9.]+) of LBPT's, and its mean at most ([0-9.]+)\.", text
+    )
+    assert bound, "README: no comparison of VOAPT with LBPT"
+    assert ours["VOAPT"][0] <= float(bound.group(1)) * ours["LBPT"][0]
+    assert ours["VOAPT"][1] <= float(bound.group(2)) * ours["LBPT"][1]
+    if os.environ.get("OPENBLAS_CORETYPE") == "Haswell":
+        assert _near(quoted["VOAPT"], ours["VOAPT"]), (quoted["VOAPT"], ours["VOAPT"])
+        assert abs(float(shares.group(2)) - 100 * experiment.false_alarms()) <= 0.5
+        assert int(lost.group(1)) == sum(m > LOST_ERROR for m in medians)

@@ -24,6 +24,7 @@ Re-exported here, imported on first use: ``load_sequence`` (``data``), ``StereoC
 """
 
 import importlib
+import os
 
 __version__ = "0.1.0"
 
@@ -31,6 +32,27 @@ _EXPORTS = {"load_sequence": "data", "StereoCamera": "camera", "TrackOdometry": 
 _EXPORTS |= dict.fromkeys(("theta_from_pixels", "rho_from_pixels"), "stereo_vo.circular_motion")
 _EXPORTS |= {"one_point_ransac": "stereo_vo.ransac", "VoKalmanFilter": "stereo_vo.kalman"}
 __all__ = sorted(_EXPORTS)
+
+
+def _same_blas_kernels_everywhere() -> None:
+    """Have OpenBLAS (in NumPy and in OpenCV) use its Haswell kernels on any x86-64 CPU with AVX2.
+
+    OpenBLAS picks its kernels by CPU, and kernels round differently; RANSAC's inlier counts and
+    the trackers' thresholds turn those last bits into other poses, so a seed gave other figures
+    on an AVX-512 CPU than on an AVX2 one. OpenBLAS reads ``OPENBLAS_CORETYPE`` when it loads:
+    this works in a process that imports ``vo_lib`` before NumPy and OpenCV (the command line,
+    the test session and the kernels it starts), and a value the user set is kept.
+    """
+    try:
+        with open("/proc/cpuinfo", encoding="ascii", errors="replace") as cpuinfo:
+            avx2 = " avx2" in cpuinfo.read()
+    except OSError:  # not Linux: OpenBLAS chooses
+        return
+    if avx2:
+        os.environ.setdefault("OPENBLAS_CORETYPE", "Haswell")
+
+
+_same_blas_kernels_everywhere()
 
 
 def __getattr__(name: str):
