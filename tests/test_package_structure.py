@@ -147,3 +147,40 @@ def test_at_least_half_of_the_most_complex_functions_are_algorithms():
     algorithms = sum(1 for _, module, _ in above if not MACHINERY.match(module))
     algorithms += max(0, 10 - len(above) - tied_machinery)
     assert algorithms >= 5, ranked[:15]
+
+
+def _openblas_cores() -> dict[str, str]:
+    """Each OpenBLAS loaded in this process (NumPy's, OpenCV's) and the kernels it runs."""
+    import ctypes
+
+    cores = {}
+    for line in open("/proc/self/maps", encoding="ascii", errors="replace"):
+        path = line.split()[-1]
+        if "openblas" not in path or path in cores or not path.endswith(".so"):
+            continue
+        library = ctypes.CDLL(path)
+        for name in ("scipy_openblas_get_corename64_", "openblas_get_corename"):
+            if hasattr(library, name):
+                function = getattr(library, name)
+                function.restype = ctypes.c_char_p
+                cores[path] = function().decode()
+    return cores
+
+
+def test_openblas_runs_one_kernel_set_on_every_cpu_with_avx2():
+    """vo_lib/__init__.py has OpenBLAS use its Haswell kernels, which conftest.py gets in before
+    NumPy loads them: NumPy's and OpenCV's OpenBLAS both run them here."""
+    import os
+    import pathlib
+
+    import cv2  # noqa: F401  (loads OpenCV's OpenBLAS)
+    import numpy  # noqa: F401
+    import pytest
+
+    cpuinfo = pathlib.Path("/proc/cpuinfo")
+    if not cpuinfo.is_file() or " avx2" not in cpuinfo.read_text(errors="replace"):
+        pytest.skip("not a Linux x86-64 CPU with AVX2: OpenBLAS chooses its own kernels")
+    if os.environ.get("OPENBLAS_CORETYPE") != "Haswell":
+        pytest.skip(f"OPENBLAS_CORETYPE is set to {os.environ.get('OPENBLAS_CORETYPE')!r} by the user")
+    cores = _openblas_cores()
+    assert cores and set(cores.values()) == {"Haswell"}, cores
