@@ -19,16 +19,13 @@ tools = str(here if in_course else here.parent)  # `from coursework import gradi
 sys.path.insert(0, tools)
 os.environ["PYTHONPATH"] = os.pathsep.join(filter(None, [tools, os.environ.get("PYTHONPATH")]))
 os.environ["VO_LIB_HEADLESS"] = "1"  # no widget waits for a browser that is not there
-# vo_lib chooses OpenBLAS's kernels through the environment, which the kernels inherit: a submission
-# gets the same marks on every x86-64 CPU with AVX2 (vo_lib/__init__.py)
-import vo_lib  # noqa: E402, F401
+import vo_lib  # noqa: E402, F401  (sets OPENBLAS_CORETYPE for the grading kernels: same marks on AVX2 CPUs)
 from coursework import autograde_steps, grading  # noqa: E402
 
 c.CourseDirectory.course_id = "vo-notebooks"
 c.Execute.timeout = 600  # a cell still running after 10 minutes fails as CellTimeoutError
 # Kernels talk over Unix sockets in a private folder: kernels started at once cannot race for a port.
-sockets_folder = tempfile.TemporaryDirectory(prefix="vo-nbgrader-")  # removed when nbgrader exits
-sockets = sockets_folder.name
+sockets = (sockets_folder := tempfile.TemporaryDirectory(prefix="vo-nbgrader-")).name  # gone at exit
 c.KernelManager.transport = "ipc"
 c.KernelManager.ip = os.path.join(sockets, "kernel")
 

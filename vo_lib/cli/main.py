@@ -324,10 +324,15 @@ def _run_parsed(args, command: str) -> int:
                 raise
             raise signal_exc from None
     except BrokenPipeError:  # e.g. piped into `head`: the reader left, not a fault of the output
-        # Python's advice: point stdout at devnull so the interpreter's own flush at exit is quiet
-        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
-        with contextlib.suppress(OSError):  # stderr may be the same closed pipe (2>&1)
+        # Python's advice: point stdout at devnull so the interpreter's own flush at exit is quiet;
+        # stderr too once the line is out, as it may be the same closed pipe (2>&1) and keep the
+        # line buffered, which the flush at exit would fail to write (exit status 120)
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        with contextlib.suppress(OSError):
             print(f"{command}: stopped: whatever read its output closed the pipe", file=sys.stderr)
+            sys.stderr.flush()
+        os.dup2(devnull, sys.stderr.fileno())
         return 128 + signal.SIGPIPE
     except (UsageError, OutputError, TrajectoryError, OSError) as exc:  # SequenceError too
         # an OSError: e.g. a full disk while writing; the output was not put in place
