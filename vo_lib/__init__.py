@@ -45,7 +45,7 @@ def _same_blas_kernels_everywhere() -> None:
     """
     try:
         with open("/proc/cpuinfo", encoding="ascii", errors="replace") as cpuinfo:
-            avx2 = " avx2" in cpuinfo.read()
+            avx2 = " avx2" in next((line for line in cpuinfo if line.startswith("flags")), "")
     except OSError:  # not Linux: OpenBLAS chooses
         return
     if avx2:
