@@ -808,11 +808,12 @@ def wait_for_temporary(folder: Path, proc: subprocess.Popen, timeout=60.0) -> No
 )
 def test_signals_leave_nothing_and_print_one_line(tmp_path, args, signum, code, phrase):
     if "long" in args:
-        make_sequence(tmp_path / "long", frames=150, size=(320, 240))
+        make_sequence(tmp_path / "long", frames=300, size=(320, 240))
     (tmp_path / "important.txt").write_text("keep\n")
     before = checksums(tmp_path, ())
     env = cli_env(VO_LIB_DATA=str(tmp_path / "data"))
     env.pop("VO_LIB_FRAME_STORE", None)  # frames the session stored would be written before the signal
+    env["PYTHONUNBUFFERED"] = "1"  # the run's "visual odometry on" line arrives as it is printed
     proc = subprocess.Popen(
         [sys.executable, "-m", "vo_lib", *args],
         cwd=tmp_path,
@@ -821,9 +822,12 @@ def test_signals_leave_nothing_and_print_one_line(tmp_path, args, signum, code, 
         stderr=subprocess.PIPE,
         text=True,
     )
-    wait_for_temporary(tmp_path, proc)
+    if args[0] == "run":  # the frames' work begins (a fixed wait ended after it on a fast machine)
+        assert any(line.startswith("visual odometry on") for line in proc.stdout), proc.stderr.read()
+    else:
+        wait_for_temporary(tmp_path, proc)
     proc.send_signal(signum)
-    _, err = proc.communicate(timeout=60)
+    _, err = proc.communicate(timeout=60)  # stderr whole; stdout's lines read above are not needed
     # 128 + N, or ended by the signal itself (a shell reports both as 128 + N): the latter when
     # the interrupt is raised again at interpreter exit, after the command has cleaned up
     assert proc.returncode in (code, -signum), err

@@ -401,8 +401,15 @@ def _ignore_signals_in_teardown() -> None:
 def entry() -> int:
     """The ``vo-lib`` script and ``python -m vo_lib``: :func:`main`, then :func:`_late_stop` for
     SIGINT and SIGTERM while the interpreter joins threads and runs exit functions (a local Dask
-    cluster's take seconds), and the signals ignored in the teardown after them."""
+    cluster's take seconds), and the signals ignored in the teardown after them. A command the
+    signal stopped ends at once."""
     status = main()
+    if status in (128 + signal.SIGINT, 128 + signal.SIGTERM):  # cleaned up and said so: end here,
+        # as the signal may have caught a worker thread starting, unknown to the join at exit
+        with contextlib.suppress(OSError, ValueError):
+            sys.stdout.flush()
+            sys.stderr.flush()
+        os._exit(status)
     if status < 128:  # not stopped by a signal already (that one said so, in its line)
         for kind in (signal.SIGINT, signal.SIGTERM):
             signal.signal(kind, _late_stop)
