@@ -927,12 +927,12 @@ import vo_lib.lidar_tracking.pose_tracking as tracking_module  # noqa: E402
 from coursework import grading  # noqa: E402
 
 _h3_rng = np.random.default_rng(10031)  # the best quarter spreads along an axis, the rest across; off zero
-_h3_cases = []
-for _h3_angle in _h3_rng.uniform(-np.pi, np.pi, 4):
-    _h3_axes = np.array([[np.cos(_h3_angle), np.sin(_h3_angle)], [-np.sin(_h3_angle), np.cos(_h3_angle)]])
+_h3_cases = []  # the last case's headings spread more than its positions (in rad against m; eq. 19 has none)
+for _h3_a, _h3_size in zip(_h3_rng.uniform(-np.pi, np.pi, 4), (1.0, 1.0, 1.0, 0.003), strict=True):
+    _h3_axes = _h3_size * np.array([[np.cos(_h3_a), np.sin(_h3_a)], [-np.sin(_h3_a), np.cos(_h3_a)]])
     _h3_scores = 1.0 * _h3_rng.permutation(300)
     _h3_xy = _h3_rng.normal(0, np.where(_h3_scores[:, None] >= 225, [0.3, 0.03], [0.03, 0.5])) @ _h3_axes
-    _h3_cases.append((np.column_stack([_h3_xy + 1.5 * _h3_axes.sum(0), np.zeros(300)]), _h3_scores))
+    _h3_cases.append((np.c_[_h3_xy + 1.5 * _h3_axes.sum(0), _h3_rng.normal(0, 0.004, 300)], _h3_scores))
 with grading.unavailable(*grading.library_functions(tracking_module)):
     _h3_got = [principal_direction(corrections, scores) for corrections, scores in _h3_cases]
 _h3_expected = [tracking_module.principal_error_direction(*case) for case in _h3_cases]
