@@ -242,6 +242,20 @@ def small_rig(tmp_path: Path, frames: int = 6) -> Path:
 
 
 @needs_euroc
+def test_a_rig_of_more_cameras_says_which_two_it_reads(tmp_path, capsys):
+    from vo_lib.formats.euroc import read_asl
+
+    rig = small_rig(tmp_path)
+    read_asl(rig)
+    assert capsys.readouterr().err == ""
+    shutil.copytree(rig / "mav0" / "cam1", rig / "mav0" / "cam2")
+    read_asl(rig)
+    assert capsys.readouterr().err.strip() == (
+        f"notice: {rig / 'mav0'}: cam2 not read; the stereo pair is cam0 (left) and cam1 (right)"
+    )
+
+
+@needs_euroc
 def test_numbers_are_read_as_yaml_1_2_writes_them(tmp_path):
     """Without the point or the exponent's sign YAML 1.1 requires (1.5e2, -.5, 1e-05), a number is
     a number still; YAML's true is not."""

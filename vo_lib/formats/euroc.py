@@ -173,6 +173,9 @@ def read_asl(path, groundtruth=None, frames: int | None = None) -> Sequence:
     pose), or position-only truth in ``manifest["positions"]``."""
     root = Path(path)
     mav0, calib, rect = _calibration(root)
+    others = sorted(p.name for p in mav0.glob("cam*") if p.is_dir() and p.name not in ("cam0", "cam1"))
+    if others:  # a rig of more cameras
+        notice(f"{mav0}: {', '.join(others)} not read; the stereo pair is cam0 (left) and cam1 (right)")
     stamps, left, right = (x[:frames] for x in pair_by_timestamp(mav0))
     width, height = check_headers(left, right)  # every image, before the run: none fails late
     if (width, height) != calib[0].resolution:
