@@ -291,9 +291,8 @@ CASES = [
     Case("out-nested-new", "RUN --out a/b/out", 0, "wrote", writes="a", check=has_marker("a/b/out")),
     Case("out-ours-again", "RUN --out out", 0, "wrote", run_once("out"), "out", check=has_marker("out")),
     Case("out-empty", "RUN --out empty", 0, "wrote", writes="empty", check=has_marker("empty")),
-    Case("out-user-folder", "RUN --out thesis", 2, "--force"),
-    Case("out-user-folder-force", "RUN --out thesis --force", 0, "--force: replaced", writes="thesis",
-        check=has_marker("thesis")),
+    Case("out-user-folder", "RUN --out thesis", 2, "this program replaces only what it wrote"),
+    Case("out-user-folder-force", "RUN --out thesis --force", 2, "this program replaces only what it wrote"),
     Case("out-ours-file-edited", "RUN --out out", 2, "poses.txt was added, changed or removed",
         do(run_once("out"), edit("out/poses.txt", "mine")), "out", check=reads("out/poses.txt", "mine")),
     Case("out-ours-plus-user-file", "RUN --out out", 2, "notes.txt",
@@ -334,7 +333,7 @@ CASES = [
     Case("out-under-a-file", "RUN --out important.txt/sub", 2, "cannot write there"),
     Case("out-symlink-to-ours", "RUN --out link", 0, "wrote", do(run_once("real"), link("link", "real")),
         "real link", check=lambda ws: (ws / "link").is_symlink() and (ws / "real" / MARKER).is_file()),
-    Case("out-symlink-to-user-folder", "RUN --out link", 2, "--force", link("link", "thesis")),
+    Case("out-symlink-to-user-folder", "RUN --out link", 2, "replaces only what", link("link", "thesis")),
     Case("out-in-a-link-loop", "RUN --out loop/out", 2, "cannot write there", link("loop", "loop")),
     Case("input-holds-a-link-loop", "RUN --out out", 0, "wrote",
         do(link("seq/a", "b"), link("seq/b", "a")), "out"),
@@ -348,7 +347,7 @@ CASES = [
         lambda ws: (ws / f".out.vo_lib-{10**20}-{HOST}-abcdefgh.old/keep.txt").mkdir(parents=True), "out"),
     Case("marker-a-pipe", "RUN --out out", 2, "marker .vo_lib_output.json is damaged",
         lambda ws: ((ws / "out").mkdir(), os.mkfifo(ws / "out" / MARKER))),
-    Case("temporary-name-kept-when-refused", "RUN --out thesis", 2, "--force",
+    Case("temporary-name-kept-when-refused", "RUN --out thesis", 2, "replaces only what it wrote",
         named_like_a_temporary("abcd1234", "thesis"), check=kept_like_a_temporary),
     Case("temporary-name-not-ours-kept", "RUN --out out", 0, "wrote", named_like_a_temporary("x", "out"),
         "out", check=kept_like_a_temporary),
@@ -384,9 +383,10 @@ CASES = [
     # the run stops cleanly: the earlier output is left as it was, byte for byte
     Case("damaged-image-keeps-earlier-output", "RUN --out out", 2, "frame 2: cannot read the image",
         do(run_once("out"), damaged_png_data)),
-    # --force replaces only when the run succeeds: the user's folder is untouched
-    Case("force-but-bad-input", "RUN --out thesis --force", 2, "frame 2: empty file",
-        edit("seq/image_1/000002.png", b"")),
+    # --force replaces only when the run succeeds: the other command's output is untouched
+    Case("force-but-bad-input", "RUN --out gen --force", 2, "frame 2: empty file",
+        do(lambda ws: main([*GEN, "--out", "gen"]), edit("seq/image_1/000002.png", b"")), "gen",
+        check=has_marker("gen")),
     Case("corrupt-manifest", "RUN", 2, "manifest.json: not valid JSON", edit("seq/manifest.json", "{oops")),
     Case("manifest-utf16", "RUN", 2, "manifest.json: not a text file (byte 0 is not UTF-8)",
         edit("seq/manifest.json", "{}".encode("utf-16"))),
@@ -492,10 +492,10 @@ CASES = [
         lambda ws: main([*GEN, "--out", "gen"])),
     Case("generate-ours-again-force", "GEN --out gen --force", 0, "wrote gen",
         lambda ws: main([*GEN, "--out", "gen"]), "gen"),
-    Case("generate-over-user-sequence", "GEN --out seq", 2, "--force"),
-    Case("generate-over-user-folder", "GEN --out thesis", 2, "--force"),
-    Case("generate-over-user-folder-force", "GEN --out thesis --force", 0, "--force: replaced",
-        writes="thesis", check=lambda ws: not (ws / "thesis" / "important.txt").exists()),
+    Case("generate-over-user-sequence", "GEN --out seq", 2, "replaces only what it wrote"),
+    Case("generate-over-user-folder", "GEN --out thesis", 2, "replaces only what it wrote"),
+    Case("generate-over-user-sequence-force", "GEN --out seq --force", 2, "replaces only what it wrote"),
+    Case("generate-over-user-folder-force", "GEN --out thesis --force", 2, "replaces only what it wrote"),
     Case("generate-over-a-file", "GEN --out important.txt", 2, "is a file"),
     Case("generate-huge-resolution", "generate corridor --resolution 100000x100000", 2, "32..4096"),
     Case("generate-tiny-resolution", "generate corridor --resolution 10x10", 2, "32..4096"),
@@ -573,8 +573,8 @@ def tum_rows(times) -> str:
 # fmt: off
 OWNERSHIP = [
     Case("run-over-user-kitti-files", "RUN --out u", 2, "not written by this program", user_kitti_files),
-    Case("run-over-user-kitti-files-force", "RUN --out u --force", 0, "--force: replaced", user_kitti_files,
-        "u", check=has_marker("u")),
+    Case("run-over-user-kitti-files-force", "RUN --out u --force", 2, "replaces only what it wrote",
+        user_kitti_files, "u"),
     Case("run-over-a-sweep", "RUN --out R", 2, "holds the output of `vo_lib sweep nees`", finished_sweep),
     Case("generate-over-a-sweep", "GEN --out R", 2, "holds the output of `vo_lib sweep nees`",
         finished_sweep),
@@ -593,8 +593,10 @@ OWNERSHIP = [
     Case("sweep-over-its-own-edited", "sweep nees --seeds 2 --workers 1 --out R", 2,
         "results.csv was added, changed or removed", do(finished_sweep, edit("R/results.csv", "mine")), "R",
         check=reads("R/results.csv", "mine")),
-    Case("generate-over-its-own-edited", "GEN --out gen --force", 0, "--force: replaced",
-        do(generated("gen"), edit("gen/poses.txt", "mine")), "gen", check=has_marker("gen")),
+    Case("generate-over-its-own-edited-force", "GEN --out gen --force", 2, "poses.txt was added, changed",
+        do(generated("gen"), edit("gen/poses.txt", "mine")), "gen", check=reads("gen/poses.txt", "mine")),
+    Case("run-over-a-generated-sequence-force", "RUN --out gen --force", 0, "--force: replaced",
+        generated("gen"), "gen", check=has_marker("gen")),
     Case("sweep-over-a-run", "sweep nees --seeds 2 --workers 1 --out out", 2,
         "holds the output of `vo_lib run`", run_once("out")),
     Case("sweep-over-another-sweep", "sweep lap --seeds 1 --workers 1 --out R", 2,
@@ -1198,7 +1200,7 @@ def test_claim_folder_for_a_folder_kept_over_many_runs(tmp_path, monkeypatch):
         claim_folder(tmp_path / "site", "coursework build")
     (tmp_path / "mine").mkdir()
     (tmp_path / "mine" / "notes.txt").write_text("mine\n")
-    with pytest.raises(OutputError, match="not written by this program; choose another folder"):
+    with pytest.raises(OutputError, match=r"program \(it holds notes.txt\); choose another folder"):
         claim_folder(tmp_path / "mine", "docs build", option="--out")
     (site / MARKER).write_text("{damaged")
     with pytest.raises(OutputError, match="marker .vo_lib_output.json is damaged"):
@@ -1446,9 +1448,9 @@ def test_a_marker_names_a_file_added_in_a_subfolder(tmp_path):
     (folder / "image_0" / "000000.png").write_bytes(b"png")
     listed = {"written_by": "vo_lib generate", "contents": ["image_0", "image_0/000000.png"]}
     (folder / MARKER).write_text(json.dumps(listed))
-    assert foreign_content(folder, "vo_lib generate") is None
+    assert foreign_content(folder, "vo_lib generate") == (None, True)
     (folder / "image_0" / "NOTES.txt").write_text("mine")
-    assert "it holds image_0/NOTES.txt, which this program did not write" == foreign_content(
+    assert ("it holds image_0/NOTES.txt, which this program did not write", False) == foreign_content(
         folder, "vo_lib generate"
     )
 
@@ -1519,8 +1521,9 @@ def test_a_signal_after_the_swap_leaves_the_new_folder_and_says_what_it_replaced
     from vo_lib.outputs import OutputFolder
 
     target = tmp_path / "notes"
-    target.mkdir()
-    (target / "thesis.tex").write_text("mine\n")
+    with OutputFolder(target, "vo_lib sweep nees") as earlier:  # another command's output
+        (earlier.path / "results.csv").write_text("seed\n")
+        earlier.commit()
 
     def interrupted(path, *args, **kwargs):
         raise KeyboardInterrupt
@@ -1531,7 +1534,7 @@ def test_a_signal_after_the_swap_leaves_the_new_folder_and_says_what_it_replaced
         out.commit()
     assert (target / "poses.txt").read_text() == "new\n"
     assert "--force: replaced" in capsys.readouterr().err
-    assert [p.name for p in tmp_path.glob(".notes.vo_lib-*/thesis.tex")] == ["thesis.tex"]
+    assert [p.name for p in tmp_path.glob(".notes.vo_lib-*/results.csv")] == ["results.csv"]
 
 
 def test_a_folder_the_user_did_not_name_is_refused_without_advising_force(tmp_path):
@@ -1540,10 +1543,10 @@ def test_a_folder_the_user_did_not_name_is_refused_without_advising_force(tmp_pa
 
     (tmp_path / "sample").mkdir()
     (tmp_path / "sample" / "notes.txt").write_text("mine")
-    with pytest.raises(OutputError, match="not written by this program; move it away$"):
+    with pytest.raises(OutputError, match=r"program \(it holds notes.txt\); move it away$"):
         check_target(tmp_path / "sample", written_by="vo_lib generate")
-    with pytest.raises(OutputError, match="choose another folder, or add --force to replace it$"):
-        check_target(tmp_path / "sample", written_by="vo_lib generate", option="--out")
+    with pytest.raises(OutputError, match="choose another folder: this program replaces only what it wrote$"):
+        check_target(tmp_path / "sample", written_by="vo_lib generate", option="--out", force=True)
 
 
 def test_an_output_link_repointed_during_the_run_is_refused_at_commit(tmp_path, monkeypatch):
@@ -1611,8 +1614,9 @@ def test_an_existing_folder_is_refused_where_the_inputs_links_were_not_all_follo
     from vo_lib import outputs
 
     (tmp_path / "seq" / "data").mkdir(parents=True)
-    (tmp_path / "notes").mkdir()
-    (tmp_path / "notes" / "thesis.tex").write_text("mine\n")
+    with outputs.OutputFolder(tmp_path / "notes", "vo_lib sweep nees") as earlier:  # another command's
+        (earlier.path / "thesis.tex").write_text("mine\n")
+        earlier.commit()
     for k in range(5):
         (tmp_path / "big" / f"{k}").mkdir(parents=True)
     (tmp_path / "seq" / "big").symlink_to(tmp_path / "big")

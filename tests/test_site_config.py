@@ -127,7 +127,7 @@ def test_the_build_folder_is_claimed_once_and_kept(build_script, tmp_path):
     with pytest.raises(build_script.UsageError, match="not written by this program"):
         build_script.claim_build_folder(old)
     assert sorted(p.name for p in old.iterdir()) == ["html"]
-    (out / MARKER).write_text('{"written_by": "vo_lib run", "contents": []}')
+    (out / MARKER).write_text('{"written_by": "vo_lib run", "contents": "*"}')
     with pytest.raises(build_script.UsageError, match="holds the output of `vo_lib run`"):
         build_script.claim_build_folder(out)
 

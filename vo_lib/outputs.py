@@ -2,9 +2,10 @@
 
 * **A command replaces only what the same command wrote**: a folder this package wrote holds
   the marker ``.vo_lib_output.json`` (its command, every file and folder it wrote) and nothing
-  else. New or empty folders may be written; any other is :class:`OutputError` unless ``force``.
-  Never replaced, even so: the input, this package or what lies inside them, and folders that
-  are or hold the current folder, the home folder or the repository's ``data/``.
+  else. New or empty folders may be written; any other is :class:`OutputError`, but another
+  command's output, intact, with ``force``. Never replaced, even so: the input, this package or
+  what lies inside them, and folders that are or hold the current folder, the home folder or the
+  repository's ``data/``.
 * **Atomic**: written into a temporary sibling, marker last, put in place by
   :func:`vo_lib.atomic.swap_in`; a failed or interrupted write deletes the temporary.
 * **Locks**: a reader holds a shared lock (:func:`reading`); a replacement needs it exclusively.
@@ -97,27 +98,34 @@ def read_marker(folder) -> dict | None:
     return data if isinstance(data, dict) else None
 
 
-def foreign_content(folder: Path, written_by: str) -> str | None:
-    """None if ``folder`` is empty or holds only what ``written_by`` wrote there; else why not."""
+def foreign_content(folder: Path, written_by: str) -> tuple[str | None, bool]:
+    """``(None, True)`` if ``folder`` is empty or holds only what ``written_by`` wrote there; else
+    why not, and whether all it holds is still as this program wrote it (another command's output,
+    which ``force`` may replace)."""
     try:
         names = set(os.listdir(folder))
     except OSError as exc:
-        return f"cannot be listed ({exc.strerror or exc})"
-    if not names or MARKER not in names:
-        return "it was not written by this program" if names else None
+        return f"cannot be listed ({exc.strerror or exc})", False
+    if not names:
+        return None, True
+    if MARKER not in names:
+        return f"it was not written by this program (it holds {min(names)})", False
     marker = read_marker(folder) or {}
     contents, files = marker.get("contents"), marker.get("files", {})
     named = isinstance(contents, list) and all(isinstance(name, str) for name in contents)
     if not (named or isinstance(contents, str)) or not isinstance(files, dict):
-        return f"its marker {MARKER} is damaged"
-    if marker.get("written_by") != written_by:
-        return f"it holds the output of `{marker.get('written_by')}`, which `{written_by}` does not replace"
+        return f"its marker {MARKER} is damaged", False
     now = file_checksums(folder) if files else {}
     changed = sorted(k for k in files.keys() | now.keys() if files.get(k) != now.get(k))
     extra = [] if contents == ANY_CONTENTS else sorted(set(entries(folder)) - {MARKER, *contents})
     if changed:
-        return f"{changed[0]} was added, changed or removed since it was written"
-    return f"it holds {extra[0]}, which this program did not write" if extra else None
+        return f"{changed[0]} was added, changed or removed since it was written", False
+    if extra:
+        return f"it holds {extra[0]}, which this program did not write", False
+    if marker.get("written_by") != written_by:
+        why = f"it holds the output of `{marker.get('written_by')}`, which `{written_by}` does not replace"
+        return why, True
+    return None, True
 
 
 def linked_from(folder) -> tuple[list[Path], str | None]:
@@ -184,15 +192,20 @@ def check_target(
             f"{label}: the folder exists, and whether the input reads it cannot be checked (the input: "
             f"{unchecked}); choose a new output folder"
         )
-    why = foreign_content(real, written_by)
+    why, ours = foreign_content(real, written_by)
     in_data = _contains(REPOSITORY_DATA.resolve(), real)  # beside the samples: tracked fixtures
     if why is not None and in_data:
         raise OutputError(
             f"{label}: the folder lies inside the sample data folder (no --force there) and {why}; "
             "choose another output folder"
         )
-    if why is not None and not force:  # a folder the user did not name has no --force
-        fix = "choose another folder, or add --force to replace it" if option else "move it away"
+    if why is not None and not (force and ours):  # --force never deletes what we did not write
+        fix = (
+            "choose another folder, or add --force to replace it"
+            if ours
+            else ("choose another folder: this program replaces only what it wrote")
+        )
+        fix = fix if option else "move it away"  # a folder the user did not name has no --force
         raise OutputError(f"{label}: the folder exists and {why}; {fix}")
     return None if why is None else f"{real} ({why})"
 

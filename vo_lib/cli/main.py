@@ -79,7 +79,7 @@ def build_parser() -> argparse.ArgumentParser:
         p.add_argument(
             "--force",
             action="store_true",
-            help="replace --out, deleting what it holds, even if this program did not write it",
+            help="replace --out where another command of this program wrote it, as it wrote it",
         )
 
     parser = plain(
