@@ -19,6 +19,7 @@ class OneLineParser(argparse.ArgumentParser):
     raises: type[Exception] | None = None
 
     def __init__(self, *args, **kwargs):
+        kwargs.setdefault("allow_abbrev", False)  # --frame is a typo, not --frames
         super().__init__(*args, **kwargs)
         # a value such as ``-1,2`` or ``-1e3`` is a value (which its type then judges), not an option
         self._negative_number_matcher = re.compile(r"^-\.?\d[\d.,eE+-]*$")

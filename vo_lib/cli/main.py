@@ -114,7 +114,8 @@ def build_parser() -> argparse.ArgumentParser:
         "run the stereo visual odometry pipeline on a sample, a KITTI-layout folder or an ASL recording",
         "Run [Zhao]'s stereo visual odometry on a sequence and print a timing table and, "
         "where the sequence has ground truth, its errors. A named sample is rendered into data/ on "
-        "first use (a minute or so) and reused after. Writes into --out (default runs/NAME): "
+        "first use (a minute or so) and reused after. Writes into --out (default runs/NAME, "
+        "runs/NAME_Nf with --frames N): "
         "poses.txt (KITTI), trajectory.tum (TUM), timings.csv, diagnostics.csv and trajectory.png.",
         "run --sequence outdoor_free --out runs/yard",
     )
@@ -123,7 +124,7 @@ def build_parser() -> argparse.ArgumentParser:
         type=non_empty("a sample name or a folder"),
         help="sample name, KITTI-layout folder or ASL recording (default: indoor_linear)",
     )
-    output(run, "default: runs/NAME; new, empty, or written by an earlier run")
+    output(run, "default: runs/NAME, or runs/NAME_Nf with --frames N; new, empty, or written by a run")
     run.add_argument("--frames", type=count_at_least(2, "frames"), help="process only the first N frames")
     run.add_argument(
         "--no-odometry", action="store_true", help="ignore odometry.txt (constant-velocity prediction)"

@@ -58,10 +58,11 @@ def input_path(name_or_path: str, frames: int | None) -> tuple[Path, int | None]
     return Path(name_or_path), frames
 
 
-def default_name(name_or_path: str) -> str:
-    """The NAME of a run's default ``runs/NAME``: the sample's, or the sequence folder's (not ``mav0``)."""
+def default_name(name_or_path: str, frames: int | None = None) -> str:
+    """The NAME of a run's default ``runs/NAME``: the sample's, or the sequence folder's (not ``mav0``),
+    with ``_Nf`` for the first ``frames`` N (a short run does not replace the whole one's output)."""
     path = Path(name_or_path) if is_sample(name_or_path) else Path(name_or_path).resolve()
-    return path.parent.name if path.name == "mav0" else path.name
+    return (path.parent.name if path.name == "mav0" else path.name) + (f"_{frames}f" if frames else "")
 
 
 def is_sample(name_or_path: str) -> bool:
@@ -169,7 +170,7 @@ def run_command(
 
     name = sequence or DEFAULT_SEQUENCE
     source, load_frames = input_path(name, frames)
-    out_dir = Path(out) if out else Path("runs") / default_name(name)
+    out_dir = Path(out) if out else Path("runs") / default_name(name, frames)
 
     keep = kept_data_folder()  # the samples' folder, not runs': nothing inside it
     with (
