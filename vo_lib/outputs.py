@@ -106,10 +106,9 @@ def foreign_content(folder: Path, written_by: str) -> tuple[str | None, bool]:
         names = set(os.listdir(folder))
     except OSError as exc:
         return f"cannot be listed ({exc.strerror or exc})", False
-    if not names:
-        return None, True
-    if MARKER not in names:
-        return f"it was not written by this program (it holds {min(names)})", False
+    if MARKER not in names:  # empty, or not ours
+        why = f"it was not written by this program (it holds {min(names)})" if names else None
+        return why, not names
     marker = read_marker(folder) or {}
     contents, files = marker.get("contents"), marker.get("files", {})
     named = isinstance(contents, list) and all(isinstance(name, str) for name in contents)
@@ -122,10 +121,9 @@ def foreign_content(folder: Path, written_by: str) -> tuple[str | None, bool]:
         return f"{changed[0]} was added, changed or removed since it was written", False
     if extra:
         return f"it holds {extra[0]}, which this program did not write", False
-    if marker.get("written_by") != written_by:
-        why = f"it holds the output of `{marker.get('written_by')}`, which `{written_by}` does not replace"
-        return why, True
-    return None, True
+    other = marker.get("written_by")  # another command's output, intact: --force may replace it
+    why = f"it holds the output of `{other}`, which `{written_by}` does not replace"
+    return (why if other != written_by else None), True
 
 
 def linked_from(folder) -> tuple[list[Path], str | None]:
