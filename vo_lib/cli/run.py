@@ -258,8 +258,8 @@ def _run_into(
     vehicle = vehicle_of(seq, use_odometry=not no_odometry)
     mount = vehicle.mount
     compiling = (
-        f"compiling the Numba kernels on the first {WARM_UP_FRAMES} frames (first run in this "
-        "environment only: they are cached; up to a minute on 2 cores) ..."
+        f"compiling the Numba kernels on the first {WARM_UP_FRAMES} frames (once per environment and "
+        "motion model: they are cached; up to a minute on 2 cores) ..."
     )
     said = []  # the notice, once SLOW_S have passed; then its end is said too
     slow = threading.Timer(SLOW_S, lambda: said.append(print(compiling, flush=True)))
