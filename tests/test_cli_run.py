@@ -130,6 +130,9 @@ def test_error_table_of_a_spot_turn_reports_the_turn_not_a_percentage(capsys):
     assert "Errors against ground truth (400° turned on the spot)" in out
     assert "m travelled" not in out and "nan" not in out and "of distance travelled" not in out
     assert re.search(r"planar heading error, final \[deg\]\s+0\.500\s+3\.000", out)
+    assert "visual odometry" in out and "VO + odometry" not in out
+    print_error_table(report, 0, fused=True)  # the vision with the odometry fused: headed so
+    assert "VO + odometry" in capsys.readouterr().out
 
 
 def test_error_table_gives_each_column_its_3d_errors(capsys):

@@ -300,6 +300,7 @@ def _run_into(
             odometry_name(vehicle),
             seq.truth_file or (None if is_sample(name) else seq.path / "poses.txt"),  # a KITTI layout's
             planar=vehicle.kind is not VehicleKind.DRONE,
+            fused=vehicle.odometry is not None,
         )
     output.commit(
         sequence=str(seq.path.resolve()),

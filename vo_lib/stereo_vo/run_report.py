@@ -157,17 +157,18 @@ def print_error_table(
     odometry_label: str = "track odometry",
     truth_file: str | None = None,
     planar: bool = True,
+    fused: bool = False,
 ) -> None:
-    """One table of errors against ground truth, a column for visual odometry and one for
-    odometry alone: the rows of ``errors`` (3-D, :func:`vo_lib.evaluation.standard_errors` of
-    each column's camera poses) and, with ``planar`` (a vehicle on the ground), the planar rows of
-    ``report`` (:func:`error_report`)."""
+    """One table of errors against ground truth, a column for visual odometry (``fused`` with the
+    odometry, so headed) and one for odometry alone: the rows of ``errors`` (3-D,
+    :func:`vo_lib.evaluation.standard_errors` of each column's camera poses) and, with ``planar`` (a
+    vehicle on the ground), the planar rows of ``report`` (:func:`error_report`)."""
     errors = errors or {}
     vo_3d = errors.get("vo")
     source = f"{truth_file}, " if truth_file else ""  # a recording's, of the several it may hold
     print(f"\nErrors against ground truth ({source}{_how_far(report, vo_3d)})")
     cols = [k for k in ("vo", "odometry") if k in report]
-    names = {"vo": "visual odometry", "odometry": odometry_label}
+    names = {"vo": "VO + odometry" if fused else "visual odometry", "odometry": odometry_label}
     print(f"  {'':<{LABEL}s}" + "".join(f"{names[c]:>{COLUMN}s}" for c in cols))
     if vo_3d is not None:
         _print_rows_3d(errors, cols, report["spot_turn"])
