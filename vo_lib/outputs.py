@@ -45,6 +45,11 @@ PACKAGE = Path(__file__).resolve().parent
 MAX_WALKED = 100_000
 #: The repository's sample data folder (in a checkout): never replaced, even with ``force``.
 REPOSITORY_DATA = PACKAGE.parent / "data"
+#: What a refusal advises, by whether ``force`` may replace the folder.
+FIX_BY_FORCE = {
+    True: "choose another folder, or add --force to replace it",
+    False: "choose another folder: this program replaces only what it wrote",
+}
 
 
 class OutputError(ValueError):
@@ -198,12 +203,7 @@ def check_target(
             "choose another output folder"
         )
     if why is not None and not (force and ours):  # --force never deletes what we did not write
-        fix = (
-            "choose another folder, or add --force to replace it"
-            if ours
-            else ("choose another folder: this program replaces only what it wrote")
-        )
-        fix = fix if option else "move it away"  # a folder the user did not name has no --force
+        fix = FIX_BY_FORCE[ours] if option else "move it away"  # an unnamed folder: no --force
         raise OutputError(f"{label}: the folder exists and {why}; {fix}")
     return None if why is None else f"{real} ({why})"
 
