@@ -485,7 +485,7 @@ CASES = [
     Case("frames-beyond-sequence", "RUN --frames 99 --out out", 0, "has 4 frames; running all 4",
         writes="out"),
     Case("unknown-option", "RUN --fast", 2, "unrecognized arguments"),
-    Case("option-name-cut-short", "RUN --frame 3", 2, "unrecognized arguments: --frame 3"),
+    Case("option-name-cut-short", "RUN --frame 3", 2, "run: error: unrecognized arguments: --frame 3"),
     Case("default-out-of-a-short-run", "RUN --frames 3", 0, "wrote runs/seq_3f/", run_once("runs/seq"),
         "runs", check=lambda ws: (ws / "runs" / "seq" / MARKER).is_file()),
     # --- generate --------------------------------------------------------------------------------

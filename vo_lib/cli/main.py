@@ -369,7 +369,10 @@ def main(argv: list[str] | None = None) -> int:
     with _signals():
         try:
             parser = build_parser()
-            args = parser.parse_args(argv)
+            args, extra = parser.parse_known_args(argv)
+            if extra:  # said by the command's own parser, which names the command
+                commands = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+                commands.choices[args.command].error(f"unrecognized arguments: {' '.join(extra)}")
             command = f"{parser.prog} {args.command}"
             return _run_parsed(args, command)
         except (KeyboardInterrupt, _Stopped) as stop:
