@@ -1,5 +1,5 @@
-"""The course's grading tools (none ships to students): the hidden tests' guard, the integrity report
-(``python coursework/grading.py FOLDER``) and the kernels' isolation. See docs/course.md. Every graded
+"""The course's grading tools, none shipped to students: the hidden tests' guard, the integrity report
+(``python coursework/grading.py FOLDER``) and the kernels' isolation (docs/course.md). Every graded
 kernel imports it: the standard library only (the steps that need nbgrader: ``autograde_steps.py``)."""
 
 from __future__ import annotations
@@ -80,17 +80,18 @@ class Reason(enum.Enum):
     """Why an answer is to be reviewed: its text, and the modules or names that show it."""
 
     FILE = (
-        "opens, lists or runs files",
-        "open pathlib shutil glob io fromfile load loadtxt genfromtxt read_csv listdir scandir walk run_path",
+        "opens, lists, writes or runs files, or reaches the network",
+        "open pathlib shutil glob io fromfile load loadtxt genfromtxt read_csv listdir scandir walk run_path "
+        "memmap get_data save savez savetxt tofile socket urllib http requests",
     )
-    NETWORK = "reaches the network", "socket urllib http requests"
     KERNEL = "uses the kernel (get_ipython, IPython)", "get_ipython IPython ipykernel"
     FRAME = "inspects frames, code or source", "inspect linecache _getframe f_back f_globals f_locals"
     CODE = "reads or copies code objects", "__code__ __globals__ codeobj Bytecode CodeType FunctionType"
     LOW_LEVEL = (
-        "uses ctypes, gc, importlib, runpy, sys.modules, exec, traces, or reaches names indirectly",
+        "uses ctypes, gc, importlib, exec, traces, hooks or mocks, or reaches names indirectly",
         "ctypes gc importlib __import__ modules exec eval compile globals vars __dict__ __builtins__ "
-        "__setattr__ __getattribute__ runpy run_module settrace setprofile",
+        "__setattr__ __getattribute__ runpy run_module settrace setprofile getattr pkgutil resolve_name "
+        "attrgetter methodcaller displayhook excepthook atexit signal faulthandler kill abort unittest mock",
     )
     THREADS = "starts threads or processes", "threading multiprocessing subprocess concurrent _thread"
     EXIT = "runs a shell or ends the interpreter", "_exit system popen fork exit quit"
@@ -113,9 +114,8 @@ NAMED_TUPLE = {"_replace", "_asdict", "_make", "_fields", "_field_defaults"}  # 
 
 
 def review(source: str, imported: frozenset[str] = frozenset()) -> list[tuple[int, Reason]]:
-    """``(line, reason)`` for every construct of ``source`` that no honest answer needs, read with
-    :mod:`ast` (nothing runs); ``imported``: names the notebook's other cells import. Source that
-    does not parse fails its tests anyway; magics use the kernel."""
+    """``(line, reason)`` for every construct of ``source`` no honest answer needs, read with :mod:`ast`
+    (nothing runs); ``imported``: what the notebook's other cells import. Magics use the kernel."""
     magic = [n for n, line in enumerate(source.splitlines(), 1) if line.lstrip().startswith(("%", "!"))]
     found = [(n, Reason.KERNEL) for n in magic]
     if (tree := _tree(source)) is None:

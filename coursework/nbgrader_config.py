@@ -43,7 +43,7 @@ if in_course and grading.can_isolate():
 elif in_course:
     print("nbgrader_config.py: unshare -rm is not allowed here: kernels run NOT isolated", file=sys.stderr)
 
-# After the notebook ran, stderr is dropped and a flagged answer's test fails with the report's lines.
+# After the notebook ran, stderr and tests' values are dropped, a flagged answer's test fails (its lines).
 steps = Autograde.class_traits()["autograde_preprocessors"].make_dynamic_default()
 at = steps.index(Execute) + 1
 c.Autograde.autograde_preprocessors = [*steps[:at], autograde_steps.AfterRun, *steps[at:]]
@@ -78,8 +78,7 @@ class CsvExportToBeGraded(CsvExportPlugin):
             pending = [g.max_score for n in notebooks or [] for g in n.grades if g.needs_manual_grade]
             row["to_be_graded"] = "" if notebooks is None else f"{sum(pending):g}"
         with open(dest, "w", newline="") as fh:
-            writer = csv.DictWriter(fh, fields)
-            writer.writeheader()
+            (writer := csv.DictWriter(fh, fields)).writeheader()
             writer.writerows(rows)
 
 

@@ -247,6 +247,29 @@ def test_stderr_never_costs_a_mark_and_a_flagged_answer_fails_every_test():
     assert clean.cells[1].outputs == []  # nothing flagged: nothing held
 
 
+def test_a_test_cells_value_is_not_its_grade():
+    """nbgrader grades a test cell by its first value where it has one ("ok": full marks, "3": three
+    points): an answer that calls the display hook would pass every test it is called by. The value is
+    dropped, so the error after it decides; an answer cell keeps its value."""
+    from nbgrader.utils import determine_grade
+
+    value = {
+        "output_type": "execute_result",
+        "data": {"text/plain": "'ok'"},
+        "metadata": {},
+        "execution_count": 1,
+    }
+    failure = {"output_type": "error", "ename": "AssertionError", "evalue": "", "traceback": []}
+    test = _cell("test", "assert f() == 1", "ex1_test", [value, failure])
+    test.metadata.nbgrader["points"] = 2
+    assert determine_grade(test) == (2.0, 2.0)  # nbgrader alone: full marks
+    nb = nbformat.v4.new_notebook(cells=[_cell("answer", "f = lambda: 0\nf", "ex1", [value]), test])
+    nb, _ = autograde_steps.AfterRun().preprocess(nb, {})
+    assert (
+        determine_grade(nb.cells[1]) == (0.0, 2.0) and nb.cells[0].outputs[0].output_type == "execute_result"
+    )
+
+
 def test_feedback_keeps_a_tests_message_only():
     failure = {
         "output_type": "error",
