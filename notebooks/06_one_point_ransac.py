@@ -1125,7 +1125,7 @@ trial_widget = offer(
 #   refinement. Section 7 runs it, and each piece we add, over 20 seeds, the same for each;
 #   the sentences there say which pieces reliably help, with their share of seeds and interval.
 # - θ̂'s textbook variance is over-confident (section 7's NEES check); the gate hardly feels it.
-# - Section 9 sets the full estimator beside 6-DoF estimators on the same matches, over 20 seeds.
+# - Section 9 sets the full estimator beside 6-DoF estimators on the same matches, over 100 seeds.
 
 # %% [markdown]
 # ## Exercises

@@ -187,11 +187,10 @@ print(
 
 # %% [markdown]
 # The paper's Fig. 6 shows fewer stereo features at lower resolutions, and so do ours. Our front
-# end keeps the strongest few corners per cell of a grid and caps their number; in a lab covered
-# edge to edge with corner texture the cap set the count at every size but the smallest. The
-# lab's painted walls, tiled floor and plain ceiling leave many cells without a corner, so the
-# cap is not reached and each smaller image loses the corners that fall below FAST's threshold
-# as they shrink.
+# end keeps the strongest few corners per cell of a grid and caps their number. The lab's
+# painted walls, tiled floor and plain ceiling leave many cells without a corner, so the cap is
+# not reached and each smaller image loses the corners that fall below FAST's threshold as they
+# shrink.
 #
 # The ratios of the paper's times to ours are printed above (different work, different computer,
 # and our images need no rectification); our Kalman column, with a 6-dimensional state for the

@@ -170,12 +170,10 @@ print(
     "; brute-force frames:",
     sum(s.brute_force for s in pnp.steps),
 )
-best = min(final_200, key=final_200.get)
-print(f"closer to the truth after 200 frames, in this one run: {best}")
 
 # %% [markdown]
-# On this stretch both odometers end within centimetres of the truth; which one ends closer
-# (printed) is one run on one stretch, which does not rank them.
+# On this stretch both odometers end within centimetres of the truth; one run on one stretch
+# does not rank them.
 # `python -m vo_lib bench odometers` runs both over the whole corridor with their times per
 # frame. The 1-point model draws each hypothesis from one match and estimates two parameters, and
 # holds only where the motion is planar and circular (notebook 08); the 6-DoF PnP odometer assumes

@@ -66,7 +66,7 @@ from vo_book.nb11 import errors_against
 from vo_book.plotting import new_axes, plot_paths
 from vo_book.prose import Markdown
 from vo_lib.camera import StereoCamera
-from vo_lib.comparison import Verdict, over_seeds
+from vo_lib.comparison import over_seeds
 from vo_lib.data import load_sequence, real_sequence_path
 from vo_lib.geometry import camera_motion, camera_mount, planar_from_camera_poses, relative_planar, wrap_angle
 from vo_lib.stereo_vo import rigid_motion
@@ -193,16 +193,6 @@ if REAL:
         }
 
     readings = over_seeds(_readings, RANSAC_SEEDS)
-    planar_position = {  # words from the paired verdict over the seeds, never from one draw
-        Verdict.BETTER: "nearer",
-        Verdict.WORSE: "farther",
-        Verdict.NOT_RELIABLE: "neither reliably nearer nor farther",
-    }[readings.verdict("circular through the mount", "6-DoF")]
-    planar_heading = {
-        Verdict.BETTER: "the smaller",
-        Verdict.WORSE: "the larger",
-        Verdict.NOT_RELIABLE: "a not reliably different",
-    }[readings.verdict("circular heading", "6-DoF heading")]
     compared = [
         ("circular through the mount", "circular on the axis"),
         ("6-DoF heading", "circular heading"),
@@ -218,10 +208,9 @@ if REAL:
             "in final |heading error|, "
             f"{readings.sentence('6-DoF heading', 'circular heading', unit='°', digits=3)}. "
             f"In position, {readings.sentence('circular through the mount', '6-DoF', unit='m', digits=3)}. "
-            "The planar model cannot move the camera sideways or vertically: over these "
-            f"{travelled:.0f} m of gently curving road it ends {planar_position} in position than "
-            f"the 6-DoF model, with {planar_heading} heading error; on a longer drive a heading "
-            "error turns into position error. "
+            "The planar model cannot move the camera sideways or vertically, which the 6-DoF model "
+            f"can; over these {travelled:.0f} m of gently curving road that shows as the position "
+            "figures above, and on a longer drive a heading error turns into position error too. "
             + (
                 "The figures are the same in every seed: on this drive RANSAC's draws do not move "
                 "these readings, so the ranking rests on the one drive, not on a lucky draw; "
@@ -509,8 +498,8 @@ display(
             f"{again['VO only']:.3f} m off: RANSAC's draws, the only random ones here, move them. "
         )
         + "Either way this is one real drive, the one on which the odometry's noise was chosen: "
-        "it ranks fusion against vision neither here nor elsewhere (notebooks 07 and 08 compare "
-        "them over seeds)."
+        "it ranks fusion against vision neither here nor elsewhere (notebook 07 compares them "
+        "over seeds)."
     )
 )
 

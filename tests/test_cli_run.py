@@ -284,3 +284,32 @@ def test_a_trajectory_in_nanoseconds_is_named_by_its_line(tmp_path, capsys):
     assert (
         len(err) == 1 and "ns.tum, line 1: time 1.404e+18; a text file's times are read as seconds" in err[0]
     )
+
+
+def test_the_flagged_frames_notice_counts_every_flagged_frame(capsys):
+    """The notice's count is the error table's: frames without stereo features are among them."""
+    from types import SimpleNamespace
+
+    from vo_lib.cli.run import _say_if_suspect
+    from vo_lib.stereo_vo.frames import FrameDiagnostics, Reason
+
+    reasons = [Reason.FEW_FEATURES] * 10 + [Reason.FEW_INLIERS] * 20 + [Reason.NONE] * 70
+    diagnostics = [
+        FrameDiagnostics(k, fallback=r is not Reason.NONE, reason=r) for k, r in enumerate(reasons)
+    ]
+    _say_if_suspect(SimpleNamespace(path="seq", poses=None), 101, diagnostics, None)
+    err = capsys.readouterr().err
+    assert "30 of 100 frames were flagged" in err and "20 too few inliers, 10 too few stereo features" in err
+
+
+@pytest.mark.parametrize("where", ["missing", "afile", "empty"])
+def test_bench_real_names_a_realdata_variable_that_holds_no_sequence(tmp_path, monkeypatch, where):
+    (tmp_path / "afile").write_text("a file, not a folder")
+    (tmp_path / "empty").mkdir()
+    monkeypatch.setenv("VO_LIB_REALDATA", str(tmp_path / where))
+    proc = cli("bench", "real", cwd=tmp_path, data=tmp_path / "data")
+    assert (
+        proc.returncode == 2
+        and proc.stderr.count("\n") == 1
+        and f"VO_LIB_REALDATA={tmp_path / where}" in proc.stderr
+    )

@@ -1644,3 +1644,17 @@ def test_an_existing_folder_is_refused_where_the_inputs_links_were_not_all_follo
     with pytest.raises(outputs.OutputError, match="data cannot be listed"):
         outputs.check_target(tmp_path / "notes", **check)
     assert outputs.check_target(tmp_path / "new", **check) is None  # a new folder is still written
+
+
+def test_a_mount_point_as_out_is_refused_before_the_run(tmp_path, monkeypatch):
+    """The finished output is renamed into the place of ``--out``; a mount point cannot be renamed
+    over, so it is named as such at once, not after the run as "Device or resource busy"."""
+    from vo_lib.outputs import OutputError, check_target
+
+    mounted = tmp_path / "disk"
+    mounted.mkdir()
+    real_ismount = os.path.ismount
+    monkeypatch.setattr(os.path, "ismount", lambda p: str(p) == str(mounted) or real_ismount(p))
+    with pytest.raises(OutputError, match="--out .*disk: is a mount point.*give one inside it"):
+        check_target(mounted, written_by="vo_lib run", option="--out")
+    assert check_target(mounted / "run", written_by="vo_lib run", option="--out") is None

@@ -360,7 +360,7 @@ def test_asl_recording_is_rectified_and_its_truth_moved_into_the_left_camera():
             "timestamps",
             "line 4: timestamp 1403636584863555584 has no image of the same timestamp on the other",
         ),
-        ("nearest", "camera (the nearest is 1 microseconds later; 2 unpaired)"),
+        ("nearest", "camera (the nearest is 1 microsecond later; 2 unpaired)"),
         ("order", "cam0/data.csv, line 4: timestamp 1403636584813555456 does not come after"),
         ("missing", "cam1/data.csv, line 6: 1403636584963555584.png is missing from"),
         ("size", "cam1/data/1403636584963555584.png, frame 4: 640x480 image, but"),
@@ -1221,3 +1221,19 @@ def test_the_drone_short_steps_are_the_estimates_not_the_truths(monkeypatch):
     monkeypatch.setattr(kalman, "CV_RELATIVE", 100 * kalman.CV_RELATIVE)
     loose = run_sequence(drone, use_odometry=False, seed=0).camera_poses
     assert step_scale(truth[50:], loose[50:]) == pytest.approx(later[0], abs=2e-4)
+
+
+@needs_euroc
+def test_a_drones_figure_draws_its_estimate_in_the_truths_plan_and_its_errors_in_3d(tmp_path, monkeypatch):
+    """The plan view takes both paths from camera poses the same way (it drew the body's planar
+    poses beside the camera truth's plan, centimetres apart where the 3-D error is millimetres)."""
+    import vo_lib.viz.run_figure as run_figure
+    from vo_lib.cli.main import main
+
+    drawn = {}
+    monkeypatch.setattr(run_figure, "plot_run", lambda fig, *args: drawn.update(args=args))
+    assert main(["run", "--sequence", str(small_rig(tmp_path, frames=60)), "--out", str(tmp_path / "o")]) == 0
+    _, estimate, truth, _, _, _, (cameras, truth_cameras) = drawn["args"]
+    plan_gap = np.linalg.norm(estimate[:, :2] - truth[:, :2], axis=1).max()
+    gap_3d = np.linalg.norm(cameras[:, :3, 3] - truth_cameras[:, :3, 3], axis=1).max()
+    assert plan_gap <= gap_3d + 1e-9

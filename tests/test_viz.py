@@ -96,3 +96,22 @@ def test_run_figure_without_truth_is_one_plan_view(fig):
     t, _, estimate, _ = _drive(turn_only=False)
     drawn = plot_run(fig, t, estimate, title="no truth")
     assert drawn["errors"] == [] and len(fig.axes) == 1 and not drawn["spot_turn"]
+    # one end marked, the estimate's: not a second marker of the same point under another name
+    labels = drawn["main"].get_legend_handles_labels()[1]
+    assert labels == ["visual odometry", "start", "end (visual odometry)"]
+
+
+def test_run_figure_of_a_drone_draws_its_errors_in_3d(fig):
+    """Given camera poses (a body with no ground plane), the errors are the 3-D position error and
+    the angle of the rotation error, whatever the planar paths say."""
+    from scipy.spatial.transform import Rotation
+
+    t, truth, estimate, _ = _drive(turn_only=False)
+    T = np.tile(np.eye(4), (len(t), 1, 1))
+    E = T.copy()
+    E[:, :3, :3] = Rotation.from_rotvec(np.outer(np.linspace(0, 0.02, len(t)), [1.0, 0, 0])).as_matrix()
+    E[:, 2, 3] = 0.03  # 3 cm off along the camera's axis, which no plan view of the ground shows
+    drawn = plot_run(fig, t, estimate, truth, camera_poses=(E, T))
+    position, rotation = (ax.lines[0].get_ydata() for ax in drawn["errors"])
+    assert np.allclose(position, 3.0) and np.isclose(rotation[-1], math.degrees(0.02))
+    assert drawn["errors"][1].get_ylabel() == "rotation error [deg]"

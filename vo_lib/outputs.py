@@ -188,8 +188,11 @@ def check_target(
         if not above.is_dir():
             raise OutputError(f"{label}: cannot write there ({above} is a file)")
         return None
-    if not real.is_dir():
-        raise OutputError(f"{label}: is a file, not a folder; choose another output folder")
+    if not real.is_dir() or os.path.ismount(real):  # a finished output is renamed into its place
+        what = {True: "is a mount point, which a folder cannot be renamed over (give one inside it)"}
+        raise OutputError(
+            f"{label}: {what.get(real.is_dir(), 'is a file, not a folder')}; choose another output folder"
+        )
     if unchecked:  # an existing folder may be one the input reads through a link not looked at
         raise OutputError(
             f"{label}: the folder exists, and whether the input reads it cannot be checked (the input: "

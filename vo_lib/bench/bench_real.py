@@ -20,13 +20,25 @@ REPEATS = 3
 
 
 def realdata_folders() -> list[Path]:
-    """Sequence folders (holding ``image_0/`` or ``mav0/``) in ``$VO_LIB_REALDATA``."""
+    """Sequence folders (holding ``image_0/`` or ``mav0/``) in ``$VO_LIB_REALDATA`` (or that one
+    sequence); a variable set to anything but a folder raises :class:`UsageError`."""
+    from vo_lib.arguments import UsageError
     from vo_lib.formats.euroc import mav0_of
 
+    def is_sequence(p: Path) -> bool:
+        return (p / "image_0").is_dir() or mav0_of(p) is not None
+
     root = Path(os.environ.get("VO_LIB_REALDATA") or DEFAULT_REALDATA)
+    if os.environ.get("VO_LIB_REALDATA") and not root.is_dir():
+        raise UsageError(
+            f"VO_LIB_REALDATA={root}: not a folder; expected a folder of sequences or one sequence"
+        )
     if not root.is_dir():
         return []
-    return sorted(p for p in root.iterdir() if (p / "image_0").is_dir() or mav0_of(p) is not None)
+    found = [root] if is_sequence(root) else sorted(p for p in root.iterdir() if is_sequence(p))
+    if os.environ.get("VO_LIB_REALDATA") and not found:
+        raise UsageError(f"VO_LIB_REALDATA={root}: no sequence in it (a folder holding image_0/ or mav0/)")
+    return found
 
 
 def decoded_sequence(folder) -> tuple[object, float]:

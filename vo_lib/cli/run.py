@@ -20,7 +20,7 @@ from pathlib import Path
 
 from vo_lib.arguments import UsageError
 from vo_lib.formats.poses import write_kitti_poses, write_tum
-from vo_lib.geometry import camera_poses_from_planar, rigid_inverse
+from vo_lib.geometry import camera_poses_from_planar, planar_from_camera_poses, rigid_inverse
 from vo_lib.outputs import OutputFolder, file_sha256, notice, reading
 from vo_lib.sim.samples import SAMPLES, get_sample
 from vo_lib.stereo_vo.run_report import (
@@ -140,7 +140,9 @@ def _truth_record(seq) -> dict | None:
     }
 
 
-def _plot(path: Path, times, estimate, truth, odometry, title: str, odometry_label: str) -> None:
+def _plot(
+    path: Path, times, estimate, truth, odometry, title: str, odometry_label: str, cameras=None
+) -> None:
     import matplotlib
 
     matplotlib.use("Agg")
@@ -149,7 +151,7 @@ def _plot(path: Path, times, estimate, truth, odometry, title: str, odometry_lab
     from vo_lib.viz.run_figure import plot_run
 
     fig = plt.figure(figsize=(11, 5), constrained_layout=True)
-    plot_run(fig, times, estimate, truth, odometry, title, odometry_label)
+    plot_run(fig, times, estimate, truth, odometry, title, odometry_label, cameras)
     fig.savefig(path, dpi=110)
     plt.close(fig)
 
@@ -213,7 +215,7 @@ def _say_if_suspect(seq, n: int, diagnostics, poses, motion: str = "auto") -> No
 
     reasons = Counter(d.reason for d in diagnostics if d.fallback)
     # a frame without a reference follows frames without features
-    featureless = reasons.pop(Reason.FEW_FEATURES, 0) + reasons.pop(Reason.NO_REFERENCE, 0)
+    featureless = reasons[Reason.FEW_FEATURES] + reasons[Reason.NO_REFERENCE]
     if featureless >= FLAGGED_SHARE * (n - 1):  # the motion of these frames is only the prediction's
         notice(
             f"{seq.path}: {featureless} of {n - 1} frames had too few stereo features "
@@ -286,7 +288,18 @@ def _run_into(
     truth, odo = truth_and_odometry(seq, vehicle, n)
     # a name holding bytes that are not UTF-8 (read as surrogates) is drawn with U+FFFD in their place
     title = f"{os.fsencode(Path(name).name).decode('utf-8', 'replace')}: {n} frames"
-    _plot(tmp / "trajectory.png", seq.times[:n], result.poses, truth, odo, title, odometry_name(vehicle))
+    drone = vehicle.kind is VehicleKind.DRONE and seq.poses is not None  # no ground plane: 3-D errors
+    cameras = (poses, seq.poses[:n]) if drone else None
+    _plot(
+        tmp / "trajectory.png",
+        seq.times[:n],
+        planar_from_camera_poses(poses, mount) if drone else result.poses,  # as the truth's plan view
+        truth,
+        odo,
+        title,
+        odometry_name(vehicle),
+        cameras,
+    )
     decoding = [seq.decoding_ms[k] for k in range(1, n) if k in seq.decoding_ms]
     print_timing_table(result, seq.camera, n, decoding)
     report = position_only_errors(seq, poses, n) if truth is None else {}

@@ -114,8 +114,9 @@ def pair_by_timestamp(mav0: Path) -> tuple[np.ndarray, list[Path], list[Path]]:
         raise AslError(
             f"{mav0 / side / 'data.csv'}, line {lines[int(np.searchsorted(ours, only[0]))]}: timestamp "
             f"{int(only[0])} has no image of the same timestamp on the other camera (the nearest is "
-            f"{abs(offset_us):g} microseconds {'later' if offset_us > 0 else 'earlier'}; {len(only)} "
-            "unpaired); the two cameras must be triggered together, with equal timestamps"
+            f"{abs(offset_us):g} microsecond{'s' * (abs(offset_us) != 1)} "
+            f"{'later' if offset_us > 0 else 'earlier'}; {len(only)} unpaired); the two cameras must be "
+            "triggered together, with equal timestamps"
         )
     for side, files, lines in (("cam0", left, lines0), ("cam1", right, lines1)):
         _check_images_there(mav0 / side / "data.csv", files, lines)

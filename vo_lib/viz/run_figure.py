@@ -4,7 +4,8 @@ Left, the run itself: the plan view of the path (ground truth drawn wide and pal
 estimate dashed on top, odometry beside them, start and end marked; a straight drive has the axis
 across it stretched to the paths' spread, so that drift of a few centimetres shows), or, for a drive
 that turns on the spot, the heading against time, since its centimetres of wander say nothing.
-Right, with ground truth, the errors over time: position (centimetres) and heading (degrees).
+Right, with ground truth, the errors over time: position (centimetres) and heading (degrees); for a
+body with no ground plane (a drone), 3-D position and the angle of the rotation error.
 """
 
 from __future__ import annotations
@@ -43,7 +44,10 @@ def _plan_view(ax, paths, title):
     ends = paths[0][1]
     _mark_ends(ax, ends[:, 0], ends[:, 1], paths[0][0])
     estimate = paths[-1][1]
-    ax.plot(estimate[-1, 0], estimate[-1, 1], "x", color="C0", ms=9, mew=2, zorder=6, label="end (estimate)")
+    if len(paths) > 1:  # the end of the estimate, beside the truth's (or the odometry's)
+        ax.plot(
+            estimate[-1, 0], estimate[-1, 1], "x", color="C0", ms=9, mew=2, zorder=6, label="end (estimate)"
+        )
     labels = ["x [m]", "y [m]"]
     spans = np.ptp(ends[:, :2], axis=0)
     narrow = int(np.argmin(spans))
@@ -68,11 +72,20 @@ def _heading_view(ax, times, paths, title):
 
 
 def plot_run(
-    fig, times, estimate, truth=None, odometry=None, title: str = "", odometry_label: str = "track odometry"
+    fig,
+    times,
+    estimate,
+    truth=None,
+    odometry=None,
+    title: str = "",
+    odometry_label: str = "track odometry",
+    camera_poses=None,
 ) -> dict:
     """Draw a run's figure on the matplotlib figure ``fig``: ``times`` (K,) in seconds, planar
     poses ``(x, y, yaw)`` (K, 3), ``truth`` and ``odometry`` optional; ``odometry_label`` says what
     the odometry is (track odometry on the crawler, wheel or OXTS odometry on a car).
+    ``camera_poses``, the estimate's and the truth's 4x4 camera poses (a body with no ground plane,
+    such as a drone): the errors drawn are then in 3-D, position and rotation angle.
 
     Returns ``main`` (the path or heading axes), ``errors`` (the list of error axes, empty without
     truth) and ``spot_turn`` (whether the heading view was drawn).
@@ -94,7 +107,9 @@ def plot_run(
         _plan_view(main, paths, title)
     main.grid(True, alpha=0.3)
     main.legend(loc="best", fontsize="x-small")
-    if errors:
+    if errors and camera_poses is not None:
+        _errors_3d(errors, times, *camera_poses)
+    elif errors:
         _error_views(errors, times, paths)
     return {"main": main, "errors": errors, "spot_turn": spot}
 
@@ -112,6 +127,22 @@ def _error_views(errors, times, paths) -> None:
     errors[0].set(ylabel="position error [cm]", title="errors against ground truth")
     errors[1].set(ylabel="heading error [deg]", xlabel="time [s]")
     errors[1].axhline(0.0, color="0.5", lw=0.8)
+    for ax in errors:
+        ax.grid(True, alpha=0.3)
+    errors[0].legend(loc="best", fontsize="x-small")
+
+
+def _errors_3d(errors, times, estimate, truth) -> None:
+    """3-D position error and rotation angle of the estimate's camera poses against the truth's."""
+    E, T = np.asarray(estimate, float), np.asarray(truth, float)
+    position = 100 * np.linalg.norm(E[:, :3, 3] - T[:, :3, 3], axis=1)
+    # the angle of R_true^T R_est: cos = (trace - 1) / 2
+    cos = (np.einsum("kji,kji->k", T[:, :3, :3], E[:, :3, :3]) - 1) / 2
+    line = {k: v for k, v in ESTIMATE_STYLE.items() if k != "zorder"}
+    errors[0].plot(times, position, label="visual odometry", **line)
+    errors[1].plot(times, np.degrees(np.arccos(np.clip(cos, -1, 1))), **line)
+    errors[0].set(ylabel="3-D position error [cm]", title="errors against ground truth")
+    errors[1].set(ylabel="rotation error [deg]", xlabel="time [s]")
     for ax in errors:
         ax.grid(True, alpha=0.3)
     errors[0].legend(loc="best", fontsize="x-small")
