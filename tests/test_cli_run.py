@@ -313,3 +313,11 @@ def test_bench_real_names_a_realdata_variable_that_holds_no_sequence(tmp_path, m
         and proc.stderr.count("\n") == 1
         and f"VO_LIB_REALDATA={tmp_path / where}" in proc.stderr
     )
+
+
+def test_a_two_frame_run_prints_no_errors_and_says_why(workdir):
+    """As ``evaluate`` refuses two poses, ``run`` on two frames prints no errors (its segment
+    errors over millimetres were thousands of degrees per 100 m) and says so in one notice."""
+    proc = cli("run", "--frames", "2", "--out", str(workdir / "two"), cwd=workdir, data=workdir / "data")
+    assert proc.returncode == 0 and "Errors" not in proc.stdout and "KITTI" not in proc.stdout
+    assert "no errors for 2 frames; an evaluation needs at least 3" in proc.stderr

@@ -1237,3 +1237,25 @@ def test_a_drones_figure_draws_its_estimate_in_the_truths_plan_and_its_errors_in
     plan_gap = np.linalg.norm(estimate[:, :2] - truth[:, :2], axis=1).max()
     gap_3d = np.linalg.norm(cameras[:, :3, 3] - truth_cameras[:, :3, 3], axis=1).max()
     assert plan_gap <= gap_3d + 1e-9
+
+
+@needs_euroc
+def test_a_two_frame_run_of_a_rig_runs_without_errors(tmp_path, capsys):
+    from vo_lib.cli.main import main
+
+    assert (
+        main(
+            [
+                "run",
+                "--sequence",
+                str(small_rig(tmp_path, frames=5)),
+                "--frames",
+                "2",
+                "--out",
+                str(tmp_path / "o"),
+            ]
+        )
+        == 0
+    )
+    out, err = capsys.readouterr()
+    assert "Errors" not in out and "not read for 2 frames; an evaluation needs at least 3" in err

@@ -286,9 +286,12 @@ def _run_into(
     _write_csv(tmp / "timings.csv", result.timings, FrameTimings)
     _write_csv(tmp / "diagnostics.csv", result.diagnostics, FrameDiagnostics)
     truth, odo = truth_and_odometry(seq, vehicle, n)
+    if truth is not None and n < 3:  # as evaluate: errors of two poses mean nothing
+        notice(f"{seq.path}: no errors for {n} frames; an evaluation needs at least 3 (--frames 3 or more)")
+        truth = None
     # a name holding bytes that are not UTF-8 (read as surrogates) is drawn with U+FFFD in their place
     title = f"{os.fsencode(Path(name).name).decode('utf-8', 'replace')}: {n} frames"
-    drone = vehicle.kind is VehicleKind.DRONE and seq.poses is not None  # no ground plane: 3-D errors
+    drone = vehicle.kind is VehicleKind.DRONE and truth is not None  # no ground plane: 3-D errors
     cameras = (poses, seq.poses[:n]) if drone else None
     _plot(
         tmp / "trajectory.png",

@@ -195,7 +195,9 @@ def read_asl(path, groundtruth=None, frames: int | None = None) -> Sequence:
     found = (mav0 / name for name in GROUND_TRUTH_FILES if _stated(mav0 / name))
     truth_path = Path(groundtruth) if groundtruth else next(found, None)
     poses = None
-    if truth_path is not None:
+    if truth_path is not None and len(seconds) < 3:  # as evaluate: errors of two poses mean nothing
+        notice(f"{truth_path}: not read for {len(seconds)} frames; an evaluation needs at least 3")
+    elif truth_path is not None:
         poses = _truth_into_camera(truth_path, seconds, rect.T_body_rect, manifest)
     since_first = (stamps - stamps[0]) * NANOSECONDS  # from whole nanoseconds: exact to 1 ns
     return Sequence(root, rect.camera, since_first, left, right, poses, None, manifest, rect, truth_path)
