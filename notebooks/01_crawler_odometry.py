@@ -40,6 +40,9 @@
 #   vehicle moves locally on a circle, the constraint behind the arcs here and eq. 12–17.
 
 # %%
+import vo_lib  # noqa: F401 (first: NumPy and OpenCV then use the same BLAS kernels on every CPU)
+
+# isort: split
 import numpy as np
 import sympy as sp
 from IPython.display import display

@@ -42,6 +42,9 @@
 #   one camera and here with a stereo rig.
 
 # %%
+import vo_lib  # noqa: F401 (first: NumPy and OpenCV then use the same BLAS kernels on every CPU)
+
+# isort: split
 import matplotlib.pyplot as plt
 import numpy as np
 import sympy as sp

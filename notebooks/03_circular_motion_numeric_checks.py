@@ -41,6 +41,9 @@
 #   why section 5's offset camera breaks it.
 
 # %%
+import vo_lib  # noqa: F401 (first: NumPy and OpenCV then use the same BLAS kernels on every CPU)
+
+# isort: split
 import matplotlib.pyplot as plt
 import numpy as np
 from IPython.display import display

@@ -40,6 +40,9 @@
 #   [Rublee 2011]: the rotated binary descriptor (rBRIEF) matched by Hamming distance.
 
 # %%
+import vo_lib  # noqa: F401 (first: NumPy and OpenCV then use the same BLAS kernels on every CPU)
+
+# isort: split
 import math
 import time
 

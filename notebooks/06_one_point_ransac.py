@@ -54,6 +54,9 @@
 #   5-point essential matrix of section 9.
 
 # %%
+import vo_lib  # noqa: F401 (first: NumPy and OpenCV then use the same BLAS kernels on every CPU)
+
+# isort: split
 import math
 import time
 

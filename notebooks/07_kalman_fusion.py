@@ -43,6 +43,9 @@
 #   observation matching.
 
 # %%
+import vo_lib  # noqa: F401 (first: NumPy and OpenCV then use the same BLAS kernels on every CPU)
+
+# isort: split
 import math
 import os
 

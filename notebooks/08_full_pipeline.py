@@ -38,6 +38,9 @@
 #   (Fig. 3), and §IV, Table 1, Table 2, Fig. 6 and Fig. 9.
 
 # %%
+import vo_lib  # noqa: F401 (first: NumPy and OpenCV then use the same BLAS kernels on every CPU)
+
+# isort: split
 import math
 import os
 
@@ -687,7 +690,7 @@ assert np.isclose(final_error_pct, reference_percent(ex_estimate, ex_truth)), (
 import contextlib  # noqa: E402
 import importlib  # noqa: E402
 
-import vo_lib  # noqa: E402
+import vo_lib  # noqa: E402, F811
 import vo_lib.evaluation as evaluation_module  # noqa: E402
 from coursework import grading  # noqa: E402
 

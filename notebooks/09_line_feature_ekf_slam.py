@@ -338,6 +338,9 @@ plt.show()
 # P_mX = G_v P_vX (the new point is as uncertain as the pose it was seen from, plus the sensor).
 
 # %%
+import vo_lib  # noqa: F401 (first: NumPy and OpenCV then use the same BLAS kernels on every CPU)
+
+# isort: split
 import copy
 import math
 

@@ -44,6 +44,9 @@
 #   odometer run beside it.
 
 # %%
+import vo_lib  # noqa: F401 (first: NumPy and OpenCV then use the same BLAS kernels on every CPU)
+
+# isort: split
 import matplotlib.pyplot as plt
 import numpy as np
 from IPython.display import display

@@ -47,6 +47,9 @@
 #   GCPR 2014: the Motorcycle pair.
 
 # %%
+import vo_lib  # noqa: F401 (first: NumPy and OpenCV then use the same BLAS kernels on every CPU)
+
+# isort: split
 import math
 from pathlib import Path
 

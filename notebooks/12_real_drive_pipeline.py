@@ -52,6 +52,9 @@
 #   International Journal of Robotics Research, 2013: the raw drives and the odometry layout.
 
 # %%
+import vo_lib  # noqa: F401 (first: NumPy and OpenCV then use the same BLAS kernels on every CPU)
+
+# isort: split
 import math
 import time
 

@@ -41,7 +41,8 @@ def _same_blas_kernels_everywhere() -> None:
     the trackers' thresholds turn those last bits into other poses, so a seed gave other figures
     on an AVX-512 CPU than on an AVX2 one. OpenBLAS reads ``OPENBLAS_CORETYPE`` when it loads:
     this works in a process that imports ``vo_lib`` before NumPy and OpenCV (the command line,
-    the test session and the kernels it starts), and a value the user set is kept.
+    the test session and the kernels it starts, and every notebook, whose first import it is), and
+    a value the user set is kept.
     """
     try:
         with open("/proc/cpuinfo", encoding="ascii", errors="replace") as cpuinfo:
