@@ -102,7 +102,7 @@ class Reason(enum.Enum):
     )
     REBINDS = "rebinds NumPy or a module, or uses the grader", "builtins coursework grading setattr delattr"
     PRIVATE = "reaches a private name (a leading underscore) of an imported module", ""
-    HELD = "holds an imported function where a test cannot refuse it (a default argument it calls)", ""
+    HELD = "calls a function held where a test cannot refuse it (an item, a closure, a default)", ""
 
     def __init__(self, text: str, words: str) -> None:
         self.text, self.words = text, words.split()
@@ -176,23 +176,30 @@ def _reasons(node: ast.AST, imported: set[str]) -> list[Reason]:
 
 
 def _private(node: ast.AST, imported: set[str]) -> bool:
-    """``from m import _x``, or ``m._x`` where an import bound ``m`` (not ``__x__``, nor ``_replace``): a
-    module's own name, e.g. the compiled kernel inside the function an exercise asks for."""
-    names = [a.name for a in node.names] if isinstance(node, ast.ImportFrom) else [getattr(node, "attr", "")]
-    inside = isinstance(node, ast.ImportFrom) or _named(_root(node), *imported)
+    """``from m import _x``, ``from m._p import x``, or ``m._x`` where an import bound ``m`` (not ``__x__``,
+    nor ``_replace``): a module's own name, e.g. the compiled kernel inside the function asked for."""
+    imports = isinstance(node, (ast.Import, ast.ImportFrom))
+    paths = [str(getattr(node, "module", "")), *(a.name for a in node.names)] if imports else []
+    names = [part for path in paths for part in path.split(".")] or [getattr(node, "attr", "")]
+    inside = imports or _named(_root(node), *imported)
     return inside and any(n[:1] == "_" and n[-2:] != "__" and n not in NAMED_TUPLE for n in names)
 
 
 def _held(node: ast.AST, imported: set[str]) -> bool:
-    """A default argument that the function calls, ``m.f`` or an imported ``f``: a compiled function
-    held so, such as OpenCV's, escapes a hidden test's refusal by name."""
+    """A call of an item (``fs[0](x)``), of a parameter in a nested function, or of a default holding
+    ``m.f`` or an imported ``f``: a compiled function (OpenCV's) held so escapes a test's refusal."""
+    if isinstance(node, ast.Call):
+        return isinstance(node.func, ast.Subscript)
     a = getattr(node, "args", None)
     if not isinstance(a, ast.arguments):
         return False
     named = (a.posonlyargs + a.args)[len(a.posonlyargs + a.args) - len(a.defaults) :]  # those with defaults
     pairs = [*zip(named, a.defaults, strict=True), *zip(a.kwonlyargs, a.kw_defaults, strict=True)]
     held = {p.arg for p, d in pairs if isinstance(d, ast.Attribute) or _named(d, *imported)}
-    return any(isinstance(c, ast.Call) and _named(c.func, *held) for c in ast.walk(node))
+    inner = [f for f in ast.walk(node) if f is not node and isinstance(getattr(f, "args", 0), ast.arguments)]
+    closed = {p.arg for p in a.posonlyargs + a.args + a.kwonlyargs}  # called in a nested function
+    nested = [c for f in inner for c in ast.walk(f) if isinstance(c, ast.Call) and _named(c.func, *closed)]
+    return bool(nested) or any(isinstance(c, ast.Call) and _named(c.func, *held) for c in ast.walk(node))
 
 
 def _root(node: ast.AST) -> ast.AST:

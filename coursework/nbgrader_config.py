@@ -7,7 +7,7 @@ import pathlib
 import sys
 import tempfile
 
-from nbconvert.preprocessors import CSSHTMLHeaderPreprocessor
+from nbconvert.preprocessors import CSSHTMLHeaderPreprocessor as StyleSheet
 from nbgrader.converters import Autograde
 from nbgrader.plugins.export import CsvExportPlugin
 from nbgrader.preprocessors import ClearHiddenTests, Execute, GetGrades
@@ -60,8 +60,7 @@ class ToBeGraded(GetGrades):
 
 
 # Feedback shows each test's verdict and one-line message: no test source, traceback or printout.
-feedback = [ToBeGraded, ClearHiddenTests, autograde_steps.VerdictOnly, CSSHTMLHeaderPreprocessor]
-c.GenerateFeedback.preprocessors = feedback
+c.GenerateFeedback.preprocessors = [ToBeGraded, ClearHiddenTests, autograde_steps.VerdictOnly, StyleSheet]
 
 
 class CsvExportToBeGraded(CsvExportPlugin):
@@ -71,8 +70,7 @@ class CsvExportToBeGraded(CsvExportPlugin):
         super().export(gradebook)
         sent = {(s.name, s.student_id): s.notebooks for a in gradebook.assignments for s in a.submissions}
         with open(dest := self.to or "grades.csv", newline="") as fh:
-            table = csv.DictReader(fh)
-            rows, fields = list(table), [*(table.fieldnames or []), "to_be_graded"]
+            rows, fields = list(table := csv.DictReader(fh)), [*(table.fieldnames or []), "to_be_graded"]
         for row in rows:  # nothing to grade for an assignment not submitted
             notebooks = sent.get((row["assignment"], row["student_id"]))
             pending = [g.max_score for n in notebooks or [] for g in n.grades if g.needs_manual_grade]

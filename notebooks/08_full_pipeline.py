@@ -754,9 +754,9 @@ import vo_lib.evaluation as evaluation_module  # noqa: E402
 import vo_lib.geometry as geometry_module  # noqa: E402
 from coursework import grading  # noqa: E402
 
-# every rigid alignment at hand: vo_lib's, SciPy's, OpenCV's, and evo's and scikit-image's where installed
-_h2_refused = [vo_lib, scipy.linalg.orthogonal_procrustes, cv2.estimateAffinePartial2D, cv2.estimateAffine2D]
-_h2_refused.append(vars(scipy.spatial.transform.Rotation)["align_vectors"])  # the rest of Rotation stays
+# every rigid alignment at hand: vo_lib's, SciPy's (not the rest of Rotation), OpenCV's, evo's and skimage's
+_h2_refused = [vo_lib, scipy.linalg.orthogonal_procrustes, cv2.estimateAffine2D, cv2.estimateAffine3D]
+_h2_refused += [cv2.estimateAffinePartial2D, vars(scipy.spatial.transform.Rotation)["align_vectors"]]
 for _h2_name in ("evo.core", "skimage.transform._geometric"):
     with contextlib.suppress(ImportError):
         _h2_refused.append(importlib.import_module(_h2_name))

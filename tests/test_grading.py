@@ -169,6 +169,14 @@ def test_library_functions_takes_functions_classes_and_the_methods_of_a_modules_
             "from cv2 import solvePnPRefineLM\ndef refine(P, *, lm=solvePnPRefineLM):\n    return lm(P)",
             Reason.HELD,
         ),
+        # ... kept in a container, or handed to a closure
+        ("tools = [cv2.solvePnPRefineLM]\ndef refine(P, w):\n    return tools[0](P, w)", Reason.HELD),
+        (
+            "def using(lm):\n    return lambda P, w: lm(P, w)\nrefine = using(cv2.solvePnPRefineLM)",
+            Reason.HELD,
+        ),
+        # a public name of a private module
+        ("from scipy.spatial.transform._rotation_xp import align_vectors", Reason.PRIVATE),
     ],
 )
 def test_review_names_what_no_honest_answer_needs(answer, reason):
