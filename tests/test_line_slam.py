@@ -292,11 +292,17 @@ def extended_laps(shared):
     return shared("extended-laps", lambda: [simulate_lap(seed=s, scenario=extended) for s in SEEDS])
 
 
-def test_lap_figures_are_the_rows_of_these_laps(laps, extended_laps):
-    assert lap_figures(3) == lap_row(laps[3], extended_laps[3])
+@pytest.fixture(scope="module")
+def line_laps(shared):
+    line = LineSlamScenario(observation="line")
+    return shared("line-laps", lambda: [simulate_lap(seed=s, scenario=line) for s in SEEDS])
 
 
-def test_readme_quotes_the_sweep(laps, extended_laps):
+def test_lap_figures_are_the_rows_of_these_laps(laps, extended_laps, line_laps):
+    assert lap_figures(3) == lap_row(laps[3], extended_laps[3], line_laps[3])
+
+
+def test_readme_quotes_the_sweep(laps, extended_laps, line_laps):
     """The README's [Yan 2020] figures are what ``python -m vo_lib sweep lap --seeds 20`` prints
     (the rows of these laps, the sweep's summary and report), to their printed precision."""
     import pathlib
@@ -321,7 +327,8 @@ def test_readme_quotes_the_sweep(laps, extended_laps):
         text,
     )
     assert m, "README: [Yan 2020] sentences not found"
-    rows = [{"seed": s, **lap_row(r, e)} for s, r, e in zip(SEEDS, laps, extended_laps, strict=True)]
+    runs = zip(SEEDS, laps, extended_laps, line_laps, strict=True)
+    rows = [{"seed": s, **lap_row(r, e, n)} for s, r, e, n in runs]
     table = pd.DataFrame(rows)
     st = summary(table, ["seed"]).droplevel(0)
     slam, dead = st.loc["final_error"], st.loc["dead_reckoning_error"]

@@ -90,8 +90,9 @@ def test_lap_sweep_prints_the_papers_figures_beside_ours(tmp_path, capsys):
     assert main(["sweep", "lap", "--seeds", "2", "--workers", "1", "--out", str(tmp_path / "l")]) == 0
     out = capsys.readouterr().out
     assert "dead reckoning on" in out and "of 2 laps" in out and "paper 54.4412" in out
+    assert "final error: the feature-point form " in out and " the line form: " in out
     table = pd.read_csv(tmp_path / "l" / "results.csv")
-    assert {"nees_above", "slam_closer", "extended_mapped_to", "extended_visible_to"} <= set(table)
+    assert {"nees_above", "slam_closer", "extended_mapped_to", "line_form_error"} <= set(table)
 
 
 def test_corridor_report_puts_table3_beside_ours(capsys):

@@ -38,7 +38,7 @@ SWEEPS = {
     "lap": (
         "vo_lib.line_slam.lap.lap_figures",
         lambda n: [{"seed": s} for s in range(n)],
-        "[Yan 2020]: per seed, a lap of line-feature EKF-SLAM and one with landmark 3 extended",
+        "[Yan 2020]: per seed, a lap of EKF-SLAM, one with landmark 3 extended and one observing lines",
     ),
     "nees": (
         "vo_lib.stereo_vo.consistency.nees_figures",

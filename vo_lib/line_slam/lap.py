@@ -12,11 +12,11 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 
 import numpy as np
 
-from vo_lib.comparison import chi2_band
+from vo_lib.comparison import Comparison, chi2_band
 from vo_lib.geometry import wrap_angle
 from vo_lib.line_slam.ekf_slam import DROPPED, EkfSlam, diagonal_cov
 from vo_lib.line_slam.line_landmarks import (
@@ -253,17 +253,19 @@ def heading_errors(run: LineSlamRun) -> np.ndarray:
     return wrap_angle(run.estimate[:, 2] - run.truth[:, 2])
 
 
-def lap_row(run: LineSlamRun, extended: LineSlamRun) -> dict[str, float]:
-    """One seed's figures from its lap ``run`` and its lap with landmark 3 ``extended``: final
-    errors of EKF-SLAM and of dead reckoning (m) and whether EKF-SLAM ends closer (1 or 0), mean
-    and final pose NEES and the share of steps above :data:`NEES_HIGH`, landmarks mapped,
-    observations dropped by data association, and the x up to which the extended landmark 3 is
-    mapped and is visible from the true path (NaN if it was never mapped)."""
+def lap_row(run: LineSlamRun, extended: LineSlamRun, line: LineSlamRun) -> dict[str, float]:
+    """One seed's figures from its lap ``run``, its lap with landmark 3 ``extended`` and its lap
+    observing lines (``line``): final errors of EKF-SLAM, of dead reckoning and of the line form
+    (m) and whether EKF-SLAM ends closer than dead reckoning (1 or 0), mean and final pose NEES and
+    the share of steps above :data:`NEES_HIGH`, landmarks mapped, observations dropped by data
+    association, and the x up to which the extended landmark 3 is mapped and is visible from the
+    true path (NaN if it was never mapped)."""
     nees = np.asarray(run.nees, float)
     mapped = 2 in extended.landmark_of_segment
     return {
         "final_error": run.final_error(),
         "dead_reckoning_error": run.final_dead_reckoning_error(),
+        "line_form_error": line.final_error(),
         "slam_closer": float(run.final_error() < run.final_dead_reckoning_error()),
         "nees_mean": float(np.nanmean(nees)),
         "nees_final": float(nees[-1]),
@@ -275,12 +277,11 @@ def lap_row(run: LineSlamRun, extended: LineSlamRun) -> dict[str, float]:
     }
 
 
-def lap_figures(seed: int, observer: str = "closed_form", observation: str = "feature_point") -> dict:
-    """One seed's figures (a task of ``python -m vo_lib sweep lap``): :func:`lap_row` of the lap
-    and of the lap with landmark 3 extended, both drawn with ``seed``."""
-    scenario = LineSlamScenario(observation=observation)
-    laps = (simulate_lap(int(seed), observer, replace(scenario, extended=e)) for e in (False, True))
-    return lap_row(*laps)
+def lap_figures(seed: int, observer: str = "closed_form") -> dict:
+    """One seed's figures (a task of ``python -m vo_lib sweep lap``): :func:`lap_row` of the lap,
+    the lap with landmark 3 extended and the lap observing lines, all drawn with ``seed``."""
+    scenarios = (LineSlamScenario(), LineSlamScenario(extended=True), LineSlamScenario(observation="line"))
+    return lap_row(*(simulate_lap(int(seed), observer, sc) for sc in scenarios))
 
 
 def lap_report(table, stats) -> None:
@@ -295,6 +296,9 @@ def lap_report(table, stats) -> None:
         f"EKF-SLAM ends closer to the truth than dead reckoning on {closer} of {laps} laps; dead "
         f"reckoning's mean final error is {ratio:.0f}x EKF-SLAM's"
     )
+    point, line = "the feature-point form", "the line form"
+    forms = Comparison(tuple(table["seed"]), {point: table["final_error"], line: table["line_form_error"]})
+    print(f"final error: {forms.sentence(point, line, unit='m', digits=3)}")
     print(
         "a consistent filter: nees_mean 3, nees_above 2.5 % "
         f"(one lap's per-step 95 % band ends at {NEES_HIGH:.2f})"
