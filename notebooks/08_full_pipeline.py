@@ -29,6 +29,11 @@
 # **Run time**: about 35 seconds in quick mode (the default). Set the environment variable
 # `VO_NOTEBOOKS_FULL=1` to run the illustrations on the full sequences (several minutes); the
 # comparisons with the paper use the stored full-length results either way.
+#
+# **Development data.** The crawler's settings (`CRAWLER`) were chosen on these same rendered
+# samples, the only crawler data the project has: every figure below is what those settings give
+# on the data they were chosen on, not a held-out test of them; so is section 5's study of the
+# contradictions, which argues from draws of the drive that prompted it.
 
 # %% [markdown]
 # **References**
@@ -238,10 +243,11 @@ print(
 # Outdoors (IV.B.1, Fig. 9) the paper drove 600 frames forward and 600 back, five times, with
 # mean x and y errors of 15.8 mm (s.d. 53.0) and 124.5 mm (s.d. 40.3); it states no relative
 # error outdoors (its "less than 5 %" is for the indoor sets). Our `outdoor_linear` sample drives
-# the same in the yard, whose far buildings give the low parallax of an open site, on rough
-# ground: the tracks skid and briefly lose contact, and the body pitches and rolls
-# (`vo_lib.sim.trajectories.ROUGH_GROUND`). Here quick mode runs its first 200 frames, an
-# illustration that is not comparable with the paper; section 5 sets the whole drive beside it.
+# one such pass, 600 frames forward and 600 back, in the yard, whose far buildings give the low
+# parallax of an open site, on rough ground: the tracks skid and briefly lose contact, and the body
+# pitches and rolls (`vo_lib.sim.trajectories.ROUGH_GROUND`). Here quick mode runs its first 200
+# frames, an illustration that is not comparable with the paper; section 5 sets the whole pass
+# beside the paper's figures, which pool five passes: the conditions differ in that too.
 
 # %%
 n_out = frames_for("outdoor_linear", 200, FULL)
@@ -594,8 +600,9 @@ display(
 # not a measured cause). Where our figures lie below
 # the paper's, our world is kinder than a real one in other ways: images rendered from an exact
 # pinhole model with a known
-# calibration, no lens distortion, perfectly rectified pairs, a camera exactly above the turning
-# axis (notebook 03 shows what an offset costs), static rich texture, no lighting change, and
+# calibration, no lens distortion, perfectly rectified pairs, a turning centre that wanders by
+# centimetres only (`TrackGround`; notebook 03 shows what an offset costs), static rich texture,
+# no lighting change, and
 # losses of contact that are brief and random rather than a track that keeps poor contact.
 # Every one of those is a source of error on a real robot.
 #

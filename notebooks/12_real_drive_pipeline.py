@@ -26,8 +26,8 @@
 # answer.
 #
 # **You will learn**
-# - how single-scale corners make the heading drift, and what the planar model costs in metres,
-#   over RANSAC's seeds;
+# - what single-scale corners do to the heading on this drive (one run of each front end), and
+#   what the planar model costs in metres, over RANSAC's seeds;
 # - why the pipeline runs 1-point RANSAC as a camera on the turning axis would see the matches,
 #   and what it does when a bump pitches the body;
 # - how many of 1-point RANSAC's inliers the 6-DoF fit keeps;
@@ -212,11 +212,12 @@ if REAL:
             f"{readings.sentence('6-DoF heading', 'circular heading', unit='°', digits=3)}. "
             f"In position, {readings.sentence('circular through the mount', '6-DoF', unit='m', digits=3)}. "
             "The planar model cannot move the camera sideways or vertically, which the 6-DoF model "
-            f"can; over these {travelled:.0f} m of gently curving road that shows as the position "
-            "figures above, and on a longer drive a heading error turns into position error too. "
+            f"can; whether that costs position over these {travelled:.0f} m of gently curving road "
+            "is what the last sentence says, and on a longer drive a heading error turns into "
+            "position error too. "
             + (
                 "The figures are the same in every seed: on this drive RANSAC's draws do not move "
-                "these readings, so the ranking rests on the one drive, not on a lucky draw; "
+                "these readings, so each is one result on one drive, which the seeds do not test; "
                 "another drive may order them otherwise."
                 if not any(readings.varies(*pair) for pair in compared)
                 else "These are RANSAC's draws on one drive: another drive may order them otherwise."
@@ -253,13 +254,14 @@ else:
 # %% [markdown]
 # ## 2 · Sharp turns and bumps: what the outlier filter must survive
 #
-# This drive turns by under ten degrees in all; a city drive turns 90° at a crossing in two or three
-# seconds, 3–5° between frames at 10 Hz. Camera and mount are this drive's (KITTI's nominal rig
-# when the real data is absent); the matches are
-# drawn (`matches_under_transform`, 0.5 px noise, 20 % outliers) for a vehicle that moves 1 m along
-# its chord per frame and turns by an increasing angle. Seen from the camera itself, the gates of
-# eq. 20–21 lose a growing share of the *true* matches: the camera slides sideways by its offset
-# times the turned angle. The pipeline therefore runs 1-point RANSAC on the same matches as a
+# This drive turns little (its whole heading range is printed below); a city drive turns 90° at a
+# crossing in two or three seconds, 3–5° between frames at 10 Hz. Camera and mount are this
+# drive's (KITTI's nominal rig when the real data is absent); the matches are drawn
+# (`matches_under_transform`, 0.5 px noise, 20 % outliers), 20 times per row, for a vehicle that
+# moves 1 m along its chord per frame and turns by an increasing angle. Seen from the camera
+# itself, the gates of eq. 20–21 can lose *true* matches: the camera slides sideways by its offset
+# times the turned angle; the table gives the median share kept over the draws, and in how many
+# of them the axis view keeps more. The pipeline therefore runs 1-point RANSAC on the same matches as a
 # virtual camera *on the turning axis* sees them (`turning_axis_view`: triangulate, move through
 # the mount, project again). There the circular model is exact.
 #
@@ -276,6 +278,25 @@ else:  # the section needs a car's rig, not the crawler's: KITTI's, as vo_lib as
     forward, left, up = KITTI_CAMERA_IN_IMU
     turn_mount = camera_mount(forward=forward, height=up, left=left)
 to_axis = turning_axis_transform(turn_mount)
+TURN_DRAWS = 20
+print(f"heading range of the drive: {np.degrees(np.ptp(np.unwrap(truth[:, 2]))):.1f}°")
+
+
+def turn_draw(T_turn, rng, odometer):
+    """One draw of matches under ``T_turn``: true matches kept seen from the camera and from the
+    axis, and the pipeline's translation error (m)."""
+    m_turn = matches_under_transform(turn_camera, 300, T_turn, rng, (4.0, 60.0), 0.5, 0.2)
+    views = [(m_turn.w_prev, m_turn.w_curr)]
+    views.append(tuple(turning_axis_view(w, turn_camera, to_axis) for w in views[0]))
+    kept = [
+        np.mean(one_point_ransac(*w, turn_camera, rng=rng, pixel_sigma=1.0).inliers[m_turn.inliers])
+        for w in views
+    ]
+    guess, start, _ = odometer.motion.hypothesis(m_turn.w_prev, m_turn.w_curr, None, odometer.rng)
+    refined = rigid_motion.refine_rigid_motion(m_turn.w_prev, m_turn.w_curr, turn_camera, guess, start)
+    return (*kept, np.linalg.norm(refined.t - T_turn[:3, 3]))
+
+
 turn_rng = np.random.default_rng(SEED)
 recall_rows = []
 for yaw_deg, pitch_deg in ((0, 0), (2, 0), (4, 0), (6, 0), (9, 0), (3, 1)):
@@ -284,32 +305,18 @@ for yaw_deg, pitch_deg in ((0, 0), (2, 0), (4, 0), (6, 0), (9, 0), (3, 1)):
     bump = np.eye(4)
     bump[:3, :3] = Rotation.from_euler("y", pitch_deg, degrees=True).as_matrix()
     T_turn = np.linalg.inv(turn_mount) @ bump @ turn_mount @ T_turn
-    m_turn = matches_under_transform(turn_camera, 300, T_turn, turn_rng, (4.0, 60.0), 0.5, 0.2)
-    seen_by_camera = one_point_ransac(
-        m_turn.w_prev, m_turn.w_curr, turn_camera, rng=turn_rng, pixel_sigma=1.0
-    )
-    seen_on_axis = one_point_ransac(
-        turning_axis_view(m_turn.w_prev, turn_camera, to_axis),
-        turning_axis_view(m_turn.w_curr, turn_camera, to_axis),
-        turn_camera,
-        rng=turn_rng,
-        pixel_sigma=1.0,
-    )
     odometer = StereoOdometry(turn_camera, CAR, mount=turn_mount, seed=SEED)
-    guess, start, ratio = odometer.motion.hypothesis(m_turn.w_prev, m_turn.w_curr, None, odometer.rng)
-    refined = rigid_motion.refine_rigid_motion(m_turn.w_prev, m_turn.w_curr, turn_camera, guess, start)
-    recall_rows.append(
-        (
-            yaw_deg,
-            pitch_deg,
-            np.mean(seen_by_camera.inliers[m_turn.inliers]),
-            np.mean(seen_on_axis.inliers[m_turn.inliers]),
-            np.linalg.norm(refined.t - T_turn[:3, 3]),
-        )
+    draws = np.array([turn_draw(T_turn, turn_rng, odometer) for _ in range(TURN_DRAWS)])
+    cam_kept, axis_kept = np.median(draws[:, 0]), np.median(draws[:, 1])
+    axis_more = int(np.sum(draws[:, 1] > draws[:, 0]))
+    recall_rows.append((yaw_deg, pitch_deg, cam_kept, axis_kept, draws[:, 2].max(), axis_more))
+print(f"true matches kept (median of {TURN_DRAWS} draws), and the pipeline's largest motion error")
+print(" yaw/frame  pitch  camera view  axis view  axis keeps more   motion error")
+for yaw_deg, pitch_deg, cam_kept, axis_kept, t_err, axis_more in recall_rows:
+    print(
+        f"  {yaw_deg:5.0f}°  {pitch_deg:5.0f}°  {cam_kept:11.0%} {axis_kept:10.0%} "
+        f"{axis_more:9d} of {TURN_DRAWS} {1000 * t_err:11.1f} mm"
     )
-print(" yaw/frame  pitch  true matches kept: camera view  axis view   pipeline's motion error")
-for yaw_deg, pitch_deg, cam_kept, axis_kept, t_err in recall_rows:
-    print(f"  {yaw_deg:5.0f}°  {pitch_deg:5.0f}°  {cam_kept:26.0%} {axis_kept:10.0%} {1000 * t_err:14.1f} mm")
 recall_table = np.array(recall_rows)
 planar_rows = recall_table[:, 1] == 0
 assert np.all(recall_table[planar_rows, 3] >= 0.98)  # on the axis every turn keeps its matches
@@ -463,7 +470,9 @@ display(Markdown(across_story))
 # the odometry's, and its variance is at least the odometry's modelled yaw variance (the
 # vision's own variance would only add to it). So νᵀS⁻¹ν computed with the odometry's variance
 # alone is an upper bound of the yaw's NIS; for a consistent model its average over N frames lies
-# in the band of χ²(N)/N.
+# in the band of χ²(N)/N. On this drive the check is not independent: the yaw noise it judges was
+# set from this drive's own truth, so a bound inside the band is expected by construction here. On
+# a drive nobody tuned the noise to, the same lines judge it without the truth.
 
 # %%
 yaw_innovation = wrap_angle(np.diff(vision_only.poses[:, 2]) - np.diff(odometry_only[:, 2]))
@@ -558,7 +567,7 @@ display(
 #   the camera on the axis and the 6-DoF refinement are compared in position and heading over
 #   RANSAC's seeds in section 1 (one drive ranks them for no other).
 # - In sharp turns, section 2 prints how many true matches the gates of eq. 20–21 keep as the
-#   camera sees them and as a camera on the turning axis sees them (one draw per turn rate); a
+#   camera sees them and as a camera on the turning axis sees them (20 draws per turn rate); a
 #   bump that pitches the body needs general hypotheses, and the pipeline draws them when the
 #   planar ones explain too few matches.
 # - 1-point RANSAC remains the outlier filter (cheap, one match per hypothesis); the 6-DoF fit then
@@ -566,8 +575,8 @@ display(
 # - On this one drive, section 4 prints how far the odometry alone, vision alone and their
 #   fusion end from the truth; whether the fusion ends closer than vision alone, it prints with
 #   a second RANSAC seed, and one drive ranks nothing in general. The odometry is the truth's
-#   own GPS/IMU with a noise chosen on this drive; NIS judges that noise model without the
-#   truth.
+#   own GPS/IMU with a noise chosen on this drive; NIS judges such a noise model without the
+#   truth, though not on the drive it was chosen on.
 # - The OpenCV PnP baseline is the yardstick for accuracy and speed (the printed ratio is one
 #   run's, both timed alike).
 
