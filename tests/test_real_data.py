@@ -353,7 +353,7 @@ def test_asl_recording_is_rectified_and_its_truth_moved_into_the_left_camera():
         (
             "equidistant",
             "cam0/sensor.yaml: key distortion_model: 'equidistant' is not supported; expected "
-            "radial-tangential or none",
+            "radial-tangential (radtan) or none",
         ),
         ("2^63", "cam0/data.csv, line 3: timestamp 9300000000000000000 is 2^63 ns or more"),
         (

@@ -181,7 +181,7 @@ def build_parser() -> argparse.ArgumentParser:
         help="the recording (ASL layout) or any sequence folder",
     )
     conv.add_argument("--to", choices=("kitti",), default="kitti", help="layout to write (kitti)")
-    output(conv, "new, empty, or written by vo_lib", required=True)
+    output(conv, "new, empty, or written by a convert", required=True)
     gen = command(
         "generate",
         "render a named sample sequence in the KITTI layout",

@@ -362,4 +362,6 @@ def convert_command(sequence: str, to: str, out: str, force: bool = False) -> No
                 manifest=manifest or None,
                 camera_from_body=None if body is None else rigid_inverse(body),
             )
-    print(f"wrote {path}: {len(seq)} rectified pairs in the KITTI layout")
+    truth = "ground truth in poses.txt" if seq.poses is not None else "no ground truth"
+    truth = "position-only ground truth in manifest.json" if "positions" in manifest else truth
+    print(f"wrote {path}: {len(seq)} rectified pairs in the KITTI layout, {truth}")

@@ -113,7 +113,8 @@ def _distortion(path: Path, data: dict) -> np.ndarray:
     model = data.get("distortion_model", "radial-tangential")
     if model not in ("radial-tangential", "radtan", "none"):
         raise AslError(
-            f"{path}: key distortion_model: {model!r} is not supported; expected radial-tangential or none"
+            f"{path}: key distortion_model: {model!r} is not supported; "
+            "expected radial-tangential (radtan) or none"
         )
     if "distortion_coeffs" in data and "distortion_coefficients" in data:
         raise AslError(f"{path}: keys distortion_coefficients and distortion_coeffs both given; expected one")

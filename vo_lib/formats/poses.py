@@ -151,19 +151,7 @@ def _check(path: Path, a: np.ndarray, rows: list[tuple[int, str]], comma: bool) 
 def _check_stamped(
     path: Path, a: np.ndarray, rows: list[tuple[int, str]], lines: list[int], comma: bool
 ) -> None:
-    """Rows with a timestamp first (TUM, EuRoC, positions): unit quaternions, increasing times."""
-    if a.shape[1] >= 8:
-        with np.errstate(all="ignore"):  # huge entries overflow: no unit quaternion either
-            norm = np.linalg.norm(a[:, 4:8], axis=1)
-        _refuse(
-            path,
-            lines,
-            ~(np.abs(norm - 1.0) <= QUATERNION_TOLERANCE),
-            lambda k: (
-                f"the quaternion's norm is {norm[k]:.4g}; expected a unit quaternion "
-                f"(norm 1 within {QUATERNION_TOLERANCE:g})"
-            ),
-        )
+    """Rows with a timestamp first (TUM, EuRoC, positions): increasing times, unit quaternions."""
     t = a[:, 0]
 
     def stamp(k: int) -> str:  # as written: a float would round a time in nanoseconds
@@ -180,6 +168,18 @@ def _check_stamped(
             + (kitti if comma and a.shape[1] == 12 else "")
         ),
     )
+    if a.shape[1] >= 8:
+        with np.errstate(all="ignore"):  # huge entries overflow: no unit quaternion either
+            norm = np.linalg.norm(a[:, 4:8], axis=1)
+        _refuse(
+            path,
+            lines,
+            ~(np.abs(norm - 1.0) <= QUATERNION_TOLERANCE),
+            lambda k: (
+                f"the quaternion's norm is {norm[k]:.4g}; expected a unit quaternion "
+                f"(norm 1 within {QUATERNION_TOLERANCE:g})"
+            ),
+        )
 
 
 def read_rows(path, min_rows: int = 1) -> tuple[np.ndarray, list[int], bool]:
