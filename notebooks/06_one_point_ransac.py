@@ -1243,7 +1243,8 @@ assert np.allclose(_h2_got, _h2_expected), "gate_scores: not the inliers' recall
 # θ (eq. 14) and θ the true turn. Write `best_fixed_threshold(theta_each, theta, is_inlier,
 # grid_deg)`: the t (degrees) of the grid `grid_deg` that classifies the most matches correctly
 # (accepted inlier or rejected outlier, against the boolean `is_inlier`), the smallest such t if
-# several tie. Even tuned with the truth, can it match the gates? On `half_px`, with the grid
+# several tie. Tuned with the truth, which no real run has, how does it stand beside the gates,
+# which need only the pixel noise? On `half_px`, with the grid
 # 0.01°, 0.02°, …, 8.00°, store the best t in `best_threshold_deg`, the number of matches it
 # classifies wrongly in `fixed_errors`, and the number `one_point_ransac` (with `rng=1`, its
 # gates assuming the right 0.5 px) classifies wrongly in `gate_errors`.
@@ -1294,18 +1295,22 @@ assert np.isclose(_h3_got, _h3_grid[np.argmax(_h3_correct)]), "best_fixed_thresh
 
 # %% [markdown]
 # **Exercise 3, written part (1 point, graded by hand):** set `fixed_errors` beside
-# `gate_errors` (one draw: it illustrates, it does not rank). What property of each match's θ lets
-# a per-match gate separate inliers in a way that no single threshold, even one tuned with the
-# truth, can? Answer in the cell below.
+# `gate_errors` (one draw: it illustrates, it does not rank). The threshold was chosen with the
+# truth of this very draw; the gates were not. What property of each match's θ do the gates use
+# that a single threshold cannot, and what would a robot need to know to choose the threshold
+# without the truth? Answer in the cell below.
 
 # %% [markdown] nbgrader={"grade": true, "grade_id": "ex3_why", "locked": false, "points": 1, "schema_version": 3, "solution": true}
 # === BEGIN MARK SCHEME ===
 #
-# A match's θ is noisy in proportion to 1/|v − v₀| (notebook 03): one threshold is too wide for
-# matches far from the camera's height (it lets in outliers there) and too narrow for those near
-# it (it drops inliers there), whatever its value. The gates divide each error by that match's
-# own first-order σ, so their width follows the geometry of each match; they still need the
-# right pixel noise (exercise 2), one number to calibrate instead of one per match.
+# A match's θ is noisy in proportion to 1/|v − v₀| (notebook 03): one threshold is a compromise,
+# too wide for matches far from the camera's height (it lets in outliers there) and too narrow for
+# those near it (it drops inliers there). Chosen with the truth of one draw it can misclassify
+# as few matches as the gates or fewer (a fair answer says so where the printed counts show it),
+# but its best value depends on that draw's rows, depths, noise and outliers, which a robot does
+# not know. The gates divide each error by that match's own first-order σ, so their width follows
+# the geometry of each match; they need only the right pixel noise (exercise 2), one number to
+# calibrate.
 #
 # === END MARK SCHEME ===
 

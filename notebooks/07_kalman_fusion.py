@@ -32,7 +32,7 @@
 # **Prerequisites**: notebooks 01 (odometry, its Jacobians), 06 (the VO measurement).
 #
 # **Run time**: about 10 seconds (section 4's seed study is stored; with another `SEED` it is
-# run here, and the notebook takes about three minutes).
+# run here, and the notebook takes a minute or two more).
 
 # %% [markdown]
 # **References**
@@ -483,14 +483,15 @@ display(
 )
 
 # %% [markdown]
-# Where learning the slip pays, over the seeds, is what the sentences above say condition by
-# condition: a slip is worth learning where it is large (6 % in the spot turn) and the vision
-# cannot correct it frame by frame (weak vision, an outage). On the indoor floor
-# the slip it would remove is about 1 %, and the VO of one frame cannot resolve so little. The
-# scales drift (a random walk, so that they can follow the slip from one manoeuvre to the next)
-# and each frame's measurement pulls them only a little, so they wander with the VO's noise: on
-# the indoor floor with weak vision by about as much as the slip they are meant to find (the cell
-# below prints both); the corrected odometry carries that wander into the pose.
+# Where learning the slip pays, over the seeds, is what the sentences above say
+# condition by condition. The reasoning to hold them against: a slip can be worth learning where it
+# is large (6 % in the spot turn) and the vision cannot correct it frame by frame (weak vision, an
+# outage). On the indoor floor the slip it would remove is about 1 %, and the VO of one frame cannot
+# resolve so little. The scales drift (a random walk, so that they can follow the slip from one
+# manoeuvre to the next) and each frame's measurement pulls them only a little, so they wander with
+# the VO's noise: on the indoor floor with weak vision by an amount of the order of the slip they
+# are meant to find (the cell below prints both); the corrected odometry carries that wander into
+# the pose.
 
 # %%
 scale_sigma = {c: np.median([d["scale_sigma"] for d in draws[c].values()]) for c in CONDITIONS}
@@ -605,7 +606,7 @@ display(
 #
 # Frames 200–260 of the spot turn have no usable matches (a blank wall, darkness). The filter
 # carries on with odometry alone, flags those frames, and its heading uncertainty grows. When
-# vision returns, the uncertainty stops growing but does not shrink back: VO measures the motion
+# vision returns, the uncertainty grows far more slowly but does not shrink back: VO measures the motion
 # between frames, not the heading itself, so drift already accumulated cannot be undone — only
 # an absolute reference (a map, a landmark seen again) could.
 
@@ -713,9 +714,10 @@ fuse_widget = offer(
 #   position of the indoor drive is printed over seeds).
 # - With slipping tracks, odometry's heading drifts by the slip fraction of every turn. The fused
 #   increment is an average of odometry's and VO's weighted by their assumed variances: against
-#   vision alone it removes noise where the vision is weak, and it lets in the slip's mean where
+#   vision alone it can remove noise where the vision is weak, and it lets in the slip's mean where
 #   odometry carries one and the vision is weak or lost (the spot turn); section 4 measures both
-#   over seeds, on drives whose tracks do not skid. Learning the slip's
+#   over seeds, in position and in heading, on drives whose tracks do not skid, and says where
+#   each shows. Learning the slip's
 #   mean online can remove that bias; section 4 prints, condition by condition, where it does so
 #   reliably over the seeds and where it costs position (indoors, the slip is too small for the
 #   VO to resolve).

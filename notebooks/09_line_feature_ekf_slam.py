@@ -734,8 +734,8 @@ print("visible limit with wheelbase 2.5 m and 5 m:", {k: round(v, 3) for k, v in
 # The outermost of many noisy end points can lie beyond the true end; whether it reliably does, and
 # how far, over seeds, is printed above, with where the paper's 54.4412 falls. The true limit depends on how
 # close the car comes to the wall's far end, that is on how far it swings past waypoint 1: seen from
-# the waypoint itself the limit is lower, and each metre further along the wall's direction adds
-# about a metre (printed above). The paper's controller settings that set that swing (the waypoint
+# the waypoint itself the limit is lower, and a metre further along the wall's direction moves it
+# out by the amount printed above. The paper's controller settings that set that swing (the waypoint
 # radius, the wheelbase) are not printed; the wheelbase alone moves ours by only centimetres between
 # 2.5 and 5 m.
 #
@@ -866,11 +866,6 @@ print(
 within_lap, between_laps = np.median(z_heading.std(axis=1)), seed_means.std()
 between_ci = bootstrap_interval(seed_means, np.std)  # the seeds' interval of the spread between laps
 over_confident = nees_ci[0] > 3 or z2_ci[0] > 1
-per_step_verdict = (
-    "more often above it than a consistent filter would be"
-    if above > 0.05
-    else "no more often than a consistent filter would be"
-)
 if nees_ci[0] > 3 and z2_ci[0] > 1:
     consistency = "both intervals lie above their consistent values, a significant over-confidence."
 elif over_confident:
@@ -883,9 +878,10 @@ else:
 display(
     Markdown(
         f"Per step, the {len(laps)}-seed average of the NEES is above its band at "
-        f"{above:.0%} of the observation steps and below it at {below:.0%}, {per_step_verdict} "
-        "(about 5 % of the steps outside, half of them above; the steps of one lap are "
-        "correlated, so this share has no band of its own). Averaged over the lap, one figure per "
+        f"{above:.0%} of the observation steps and below it at {below:.0%}, where a consistent "
+        "filter would be outside at about 5 % of the steps, half of them above; the steps of one "
+        "lap are correlated, so this share has no band of its own and carries no verdict. "
+        "Averaged over the lap, one figure per "
         f"seed, the NEES is {lap_nees.mean():.2f} (95 % CI over seeds "
         f"{nees_ci[0]:.2f}–{nees_ci[1]:.2f}) against 3, and the heading's squared error in σ is "
         f"{lap_z2.mean():.2f} (CI {z2_ci[0]:.2f}–{z2_ci[1]:.2f}) against 1: {consistency} A run's "
@@ -911,12 +907,12 @@ display(
 # variance can shrink below the truth, and an offset made early, before the map holds, can stay:
 # the map was built with it, so the laser confirms the rotated picture. On a lap this short the
 # effect is small, and whether 20 seeds resolve it, and whether a run keeps its early offset, is
-# what the figures above say; re-run with another base seed and the per-step share above the band
-# moves a lot, more than the verdict on the lap averages.
+# what the figures above say; the per-step share above the band comes from one lap's correlated
+# steps and can move with the base seed, which is why it carries no verdict.
 # Remedies are first-estimate Jacobians, observability-constrained EKFs, or smoothing instead of
 # filtering; more seeds (`python -m vo_lib sweep lap`, below) tell a small over-confidence from
-# none. So: over the seeds, the final error is small and below dead reckoning's (printed above, with
-# the share and the intervals); how far the covariance can be trusted is what the lap averages
+# none. So: how the final error stands against dead reckoning's is printed above over the seeds,
+# with the share and the interval; how far the covariance can be trusted is what the lap averages
 # above, with their intervals, say.
 #
 # ### Feature point or line?
@@ -954,7 +950,6 @@ four_walls = {
     name: sum(len(r.landmarks) == 4 for r in runs)
     for name, runs in (("feature point", laps), ("line", laps_line))
 }
-forms_verdict = forms.verdict("the feature-point form", "the line form")
 forms_median, forms_low, forms_high = forms.difference("the feature-point form", "the line form")
 display(
     Markdown(
@@ -966,11 +961,11 @@ display(
         f"{four_walls['line']} with the line. Per seed, the distance of "
         "the lap NEES from 3: "
         f"{calibration.sentence('the line form', 'the feature-point form', digits=2)}. "
-        f"The final errors differ by a median {100 * abs(forms_median):.1f} cm, and the interval "
-        f"over {len(laps)} seeds is {100 * (forms_high - forms_low):.1f} cm wide"
+        f"The final errors differ by a median {100 * abs(forms_median):.1f} cm, with a 95 % interval "
+        f"{100 * (forms_high - forms_low):.1f} cm wide over {len(laps)} seeds"
         + (
-            ": so small a difference is not told from none on every draw of this many seeds "
-            "(another base seed may print another verdict); "
+            ": with an interval this wide against the difference, another base seed may print "
+            "another verdict; "
             if forms_high - forms_low > abs(forms_median)
             else "; "
         )
@@ -979,7 +974,8 @@ display(
 )
 
 # %% [markdown]
-# How far each form ends from the truth, against dead reckoning, is printed above over the seeds.
+# How far each form ends from the truth is printed above over the seeds (dead reckoning's, beside
+# the feature-point form's, in the section before).
 # The feature-point form is handed a point measured with the laser's full point accuracy even
 # where the laser sees only a short piece of the wall, or none of the part where the point lies —
 # information no laser provides; whether that buys a smaller final error is said above, over

@@ -383,10 +383,10 @@ print(
 #   $S_i / \sum_j S_j$ would be the posterior if $S_i$ were proportional to the likelihood (and the
 #   samples drawn from the prior); a grid-map score adds one term per beam, a log-likelihood.
 #   $S_i / \sum_j S_j$ does satisfy eq. 9 and keeps the samples' order (its $V_{max}$ AUC is
-#   high), but it squeezes every frame's best sample to barely above $1/n$, by about a tenth, in
-#   normal and occluded frames alike (printed). Any threshold on it would sit on a knife's edge.
-#   Reading the score as a log-likelihood, $e^{S_i}/\sum_j e^{S_j}$, spreads the normal and the
-#   occluded frames several-fold apart.
+#   high), but it squeezes the frames' best samples to barely above $1/n$, by about a tenth at the
+#   median, in normal and occluded frames alike (the medians are printed). Any threshold on it
+#   would sit on a knife's edge. Reading the score as a log-likelihood, $e^{S_i}/\sum_j e^{S_j}$,
+#   spreads the normal and the occluded frames several-fold apart.
 #
 # **The temperature of that reading.** $e^{S_i}$ assumes that one unit of score (one beam ending
 # exactly on a mapped wall) multiplies the likelihood by $e$: a likelihood ratio of $e$ per beam,
@@ -523,7 +523,8 @@ display(
         "rendered, not a Kinect."
     )
 )
-#
+
+# %% [markdown]
 # ## 5. One drive: LBPT against VOAPT
 #
 # When $T_s$ fails, VOAPT takes the best quarter of the samples (eq. 17), checks that their
@@ -582,9 +583,10 @@ ax.set_ylim(-1.8, 1.8)
 # %% [markdown]
 # ## 6. Table III over 20 seeds
 #
-# Each seed draws its own encoder noise and slip, laser noise and pose samples; the visual
-# odometer is the PnP run above. The seeds are 0 to 19, those of `python -m vo_lib sweep corridor
-# --seeds 20` and of the README's table. The settings the paper does not print are ours:
+# Each seed draws its own encoder noise and slip, laser noise and pose samples; the visual odometer
+# is the PnP run above, one run for every seed, so the intervals below hold the tracker's draws and
+# not the visual odometer's own variability. The seeds are 0 to 19, those of `python -m vo_lib sweep
+# corridor --seeds 20` and of the README's table. The settings the paper does not print are ours:
 
 # %%
 from vo_lib.lidar_tracking.corridor_experiment import EVERY
@@ -747,7 +749,7 @@ display(
 #
 # - In a corridor the laser fixes the robot across the corridor and in heading; only radial
 #   features fix it along. Where they are hidden, the score of a pose is flat along the corridor
-#   and the laser tracker (LBPT) wanders, by a metre or more in some seeds.
+#   and the laser tracker (LBPT) wanders along it (section 6 prints how far, over the seeds).
 # - [Yuan]'s visual odometer (PnP with a local map) stays within centimetres over the whole
 #   corridor, which is what VOAPT needs.
 # - The sample scores' box-plot statistics judge a tracker's output once the score is read as a
@@ -758,8 +760,8 @@ display(
 #   printed, eq. 14 swaps two names, eq. 16's "or" cannot flag a jumping laser: each is read and
 #   tested.
 # - Replacing the laser's correction along the principal error direction by the visual odometer's
-#   cuts the largest along-corridor error severalfold, averaged over 20 seeds; section 6 prints in
-#   how many seeds it lowers the largest and the mean error, with the intervals. Section 6 also counts the
+#   lowers the largest along-corridor error, averaged over 20 seeds; section 6 prints both means, in
+#   how many seeds it lowers the largest and the mean error, and the intervals. Section 6 also counts the
 #   seeds whose largest error exceeds the paper's one run; spurious credible updates in the occluded
 #   stretch can push it up.
 
