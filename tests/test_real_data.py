@@ -1233,10 +1233,32 @@ def test_a_drones_figure_draws_its_estimate_in_the_truths_plan_and_its_errors_in
     drawn = {}
     monkeypatch.setattr(run_figure, "plot_run", lambda fig, *args: drawn.update(args=args))
     assert main(["run", "--sequence", str(small_rig(tmp_path, frames=60)), "--out", str(tmp_path / "o")]) == 0
-    _, estimate, truth, _, _, _, (cameras, truth_cameras) = drawn["args"]
+    _, estimate, truth, _, _, _, (cameras, truth_cameras), tracked = drawn["args"]
     plan_gap = np.linalg.norm(estimate[:, :2] - truth[:, :2], axis=1).max()
     gap_3d = np.linalg.norm(cameras[:, :3, 3] - truth_cameras[:, :3, 3], axis=1).max()
-    assert plan_gap <= gap_3d + 1e-9
+    assert plan_gap <= gap_3d + 1e-9 and tracked is None
+
+
+@needs_euroc
+def test_a_rig_with_positions_only_draws_them_aligned_in_the_plan_of_its_estimate(tmp_path, monkeypatch):
+    """Without 6-DoF truth the figure drew no truth at all: the tracked prism's positions, moved
+    onto the estimate by the ATE's alignment, are drawn as points beside its path."""
+    import shutil
+
+    import vo_lib.viz.run_figure as run_figure
+    from vo_lib.cli.main import main
+
+    rig = small_rig(tmp_path, frames=60)
+    shutil.rmtree(rig / "mav0" / "state_groundtruth_estimate0")
+    shutil.copytree(EUROC / "mav0" / "leica0", rig / "mav0" / "leica0")
+    drawn = {}
+    monkeypatch.setattr(run_figure, "plot_run", lambda fig, *args: drawn.update(args=args))
+    assert main(["run", "--sequence", str(rig), "--out", str(tmp_path / "o")]) == 0
+    _, estimate, truth, _, _, _, cameras, tracked = drawn["args"]
+    assert truth is None and cameras is None and len(tracked) >= 3
+    # each lies within the ATE of the path (its offset from the estimate, carried into the plan)
+    gaps = np.linalg.norm(tracked[:, None, :] - estimate[None, :, :2], axis=2).min(axis=1)
+    assert gaps.max() < 0.05 and np.ptp(tracked, axis=0).max() > 0.1  # centimetres off a 12 cm path
 
 
 @needs_euroc

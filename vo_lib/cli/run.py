@@ -30,6 +30,7 @@ from vo_lib.stereo_vo.run_report import (
     position_only_errors,
     print_error_table,
     print_timing_table,
+    tracked_offsets,
     truth_and_odometry,
 )
 
@@ -141,7 +142,7 @@ def _truth_record(seq) -> dict | None:
 
 
 def _plot(
-    path: Path, times, estimate, truth, odometry, title: str, odometry_label: str, cameras=None
+    path: Path, times, estimate, truth, odometry, title: str, odometry_label: str, cameras=None, tracked=None
 ) -> None:
     import matplotlib
 
@@ -151,9 +152,27 @@ def _plot(
     from vo_lib.viz.run_figure import plot_run
 
     fig = plt.figure(figsize=(11, 5), constrained_layout=True)
-    plot_run(fig, times, estimate, truth, odometry, title, odometry_label, cameras)
+    plot_run(fig, times, estimate, truth, odometry, title, odometry_label, cameras, tracked)
     fig.savefig(path, dpi=110)
     plt.close(fig)
+
+
+def _draw(path: Path, seq, name: str, n: int, planar, poses, truth, odo, vehicle) -> None:
+    """The run's figure: its path (``planar`` poses, or the camera ``poses`` in the truth's plan)
+    beside the truth, or beside position-only truth moved onto it."""
+    from vo_lib.stereo_vo.vehicle import VehicleKind
+
+    mount = vehicle.mount
+    # a name holding bytes that are not UTF-8 (read as surrogates) is drawn with U+FFFD in their place
+    title = f"{os.fsencode(Path(name).name).decode('utf-8', 'replace')}: {n} frames"
+    drone = vehicle.kind is VehicleKind.DRONE and truth is not None  # no ground plane: 3-D errors
+    cameras = (poses, seq.poses[:n]) if drone else None
+    offsets = tracked_offsets(seq, poses, n) if truth is None else None  # a prism's positions
+    plan = planar_from_camera_poses(poses, mount) if drone or offsets is not None else planar
+    tracked = None  # where position-only truth puts the body: the estimate moved by the truth's offset
+    if offsets is not None:
+        tracked = plan[offsets[0], :2] + (offsets[1] @ mount[:3, :3].T)[:, :2]
+    _plot(path, seq.times[:n], plan, truth, odo, title, odometry_name(vehicle), cameras, tracked)
 
 
 def run_command(
@@ -289,20 +308,7 @@ def _run_into(
     if truth is not None and n < 3:  # as evaluate: errors of two poses mean nothing
         notice(f"{seq.path}: no errors for {n} frames; an evaluation needs at least 3 (--frames 3 or more)")
         truth = None
-    # a name holding bytes that are not UTF-8 (read as surrogates) is drawn with U+FFFD in their place
-    title = f"{os.fsencode(Path(name).name).decode('utf-8', 'replace')}: {n} frames"
-    drone = vehicle.kind is VehicleKind.DRONE and truth is not None  # no ground plane: 3-D errors
-    cameras = (poses, seq.poses[:n]) if drone else None
-    _plot(
-        tmp / "trajectory.png",
-        seq.times[:n],
-        planar_from_camera_poses(poses, mount) if drone else result.poses,  # as the truth's plan view
-        truth,
-        odo,
-        title,
-        odometry_name(vehicle),
-        cameras,
-    )
+    _draw(tmp / "trajectory.png", seq, name, n, result.poses, poses, truth, odo, vehicle)
     decoding = [seq.decoding_ms[k] for k in range(1, n) if k in seq.decoding_ms]
     print_timing_table(result, seq.camera, n, decoding)
     report = position_only_errors(seq, poses, n) if truth is None else {}

@@ -178,21 +178,43 @@ def print_error_table(
     print(_row("frames flagged (VO not used)", [flagged], "{:d}"))
 
 
+def _tracked(seq, n: int):
+    """The sequence's position-only truth (a laser tracker's prism) at its first ``n`` frames: the
+    manifest's entry, the frames and the positions; None where it has fewer than 3 there."""
+    positions = seq.manifest.get("positions") if isinstance(seq.manifest, dict) else None
+    frames = np.asarray(positions["frames"], int) if positions else np.zeros(0, int)
+    keep = frames < n
+    return None if keep.sum() < 3 else (positions, frames[keep], np.asarray(positions["xyz"])[keep])
+
+
+def tracked_offsets(seq, poses: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray] | None:
+    """Position-only truth against the estimate: the frames it has and, at each, the truth's
+    position of the tracked point minus the estimate's, after the ATE's SE(3) alignment, in the
+    first camera's frame ``(K, 3)``; None without such truth."""
+    from vo_lib.evaluation import umeyama
+
+    found = _tracked(seq, n)
+    if found is None:
+        return None
+    positions, frames, xyz = found
+    E = poses[frames]
+    tracked = E[:, :3, :3] @ np.asarray(positions["lever_arm_camera"], float) + E[:, :3, 3]
+    R, t, _ = umeyama(tracked, xyz)  # xyz ~ R tracked + t
+    return frames, (xyz - t) @ R - tracked
+
+
 def position_only_errors(seq, poses: np.ndarray, n: int) -> dict:
     """The ATE of the tracked point against position-only truth (a laser tracker's prism), printed;
     returns it for the report (empty where the sequence has no such truth)."""
     from vo_lib.evaluation import Alignment, ate_positions
 
-    positions = seq.manifest.get("positions") if isinstance(seq.manifest, dict) else None
-    frames = np.asarray(positions["frames"], int) if positions else np.zeros(0, int)
-    keep = frames < n
-    if keep.sum() < 3:
+    found = _tracked(seq, n)
+    if found is None:
         return {}
-    ate, _ = ate_positions(
-        np.asarray(positions["xyz"])[keep], poses[frames[keep]], positions["lever_arm_camera"], Alignment.SE3
-    )
+    positions, frames, xyz = found
+    ate, _ = ate_positions(xyz, poses[frames], positions["lever_arm_camera"], Alignment.SE3)
     source = positions.get("file", "the manifest's positions")  # the file they were read from, if named
-    print(f"\nErrors against position-only ground truth ({source}, {int(keep.sum())} positions)")
+    print(f"\nErrors against position-only ground truth ({source}, {len(frames)} positions)")
     print(f"  {'ATE RMSE of the tracked point, SE(3) alignment [m]':<62s}{ate.rmse:>16.4f}")
     return {"ate_positions_m": ate.rmse}
 

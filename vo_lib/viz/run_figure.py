@@ -16,6 +16,8 @@ from vo_lib.evaluation import is_spot_turn, turned_degrees
 from vo_lib.geometry import wrap_angle
 
 TRUTH_STYLE = {"color": "0.55", "lw": 5.0, "alpha": 0.45, "solid_capstyle": "round", "zorder": 1}
+#: Position-only truth (a tracker's prism): its samples, not a line between them.
+TRACKED_STYLE = {"color": "0.3", "ls": "none", "marker": ".", "ms": 5, "zorder": 2}
 ESTIMATE_STYLE = {"color": "C0", "lw": 1.3, "ls": "--", "zorder": 3}
 ODOMETRY_STYLE = {"color": "C1", "lw": 1.0, "zorder": 2}
 
@@ -25,10 +27,15 @@ ODOMETRY_STYLE = {"color": "C1", "lw": 1.0, "zorder": 2}
 THIN_PATH = 0.15
 
 
-def _paths(estimate, truth, odometry, odometry_label):
-    """``(label, poses, style)`` of each path given: truth, odometry, then the estimate (drawn last)."""
+def _paths(estimate, truth, odometry, odometry_label, tracked=None):
+    """``(label, poses, style)`` of each path given: truth (or tracked positions), odometry, then the
+    estimate (drawn last)."""
     fused = "visual odometry (fused with odometry)" if odometry is not None else "visual odometry"
-    paths = [("ground truth", truth, TRUTH_STYLE), (odometry_label, odometry, ODOMETRY_STYLE)]
+    paths = [
+        ("ground truth", truth, TRUTH_STYLE),
+        ("tracked point (ground truth, aligned)", tracked, TRACKED_STYLE),
+        (odometry_label, odometry, ODOMETRY_STYLE),
+    ]
     return [p for p in paths if p[1] is not None] + [(fused, estimate, ESTIMATE_STYLE)]
 
 
@@ -80,19 +87,23 @@ def plot_run(
     title: str = "",
     odometry_label: str = "track odometry",
     camera_poses=None,
+    tracked=None,
 ) -> dict:
     """Draw a run's figure on the matplotlib figure ``fig``: ``times`` (K,) in seconds, planar
     poses ``(x, y, yaw)`` (K, 3), ``truth`` and ``odometry`` optional; ``odometry_label`` says what
     the odometry is (track odometry on the crawler, wheel or OXTS odometry on a car).
     ``camera_poses``, the estimate's and the truth's 4x4 camera poses (a body with no ground plane,
-    such as a drone): the errors drawn are then in 3-D, position and rotation angle.
+    such as a drone): the errors drawn are then in 3-D, position and rotation angle. ``tracked``,
+    position-only truth ``(K, 2)`` in the plan of ``estimate`` (aligned to it), drawn as points.
 
     Returns ``main`` (the path or heading axes), ``errors`` (the list of error axes, empty without
     truth) and ``spot_turn`` (whether the heading view was drawn).
     """
     times, estimate = np.asarray(times, float), np.asarray(estimate, float)
-    truth, odometry = (None if x is None else np.asarray(x, float) for x in (truth, odometry))
-    paths = _paths(estimate, truth, odometry, odometry_label)
+    truth, odometry, tracked = (
+        None if x is None else np.asarray(x, float) for x in (truth, odometry, tracked)
+    )
+    paths = _paths(estimate, truth, odometry, odometry_label, tracked)
     spot = truth is not None and is_spot_turn(truth)
     if truth is None:
         main, errors = fig.add_subplot(1, 1, 1), []
