@@ -351,10 +351,12 @@ spot_360 = 360 * fraction[(0.3, 1.5)]
 print(
     f"a full spot turn with the camera 0.3 m ahead, depths 1.5–15 m: about {spot_360:.0f}° of heading error"
 )
+over = sum(value > 0 for value in signed.values())
 display(
     Markdown(
-        "Every turn is over-estimated (the median signed error is positive in every row), by about "
-        "the camera's offset divided by the typical depth of what it sees: "
+        ("Every turn is" if over == len(signed) else f"{over} of the {len(signed)} turns are")
+        + f" over-estimated (the median signed error is positive in {over} of the {len(signed)} rows), "
+        "by about the camera's offset divided by the typical depth of what it sees: "
         f"{signed[(0.3, 1.0)]:+.0%} of the turn in a cluttered room 1–3 m deep, "
         f"{signed[(0.3, 20.0)]:+.1%} in an open yard 20–60 m deep, for the same 30 cm offset "
         "(the table above)."
@@ -580,7 +582,7 @@ print(f"RMS error: weighted mean {np.degrees(spread_weighted):.5f}°, median {np
 # %% nbgrader={"grade": true, "grade_id": "ex1_test", "locked": true, "points": 2, "schema_version": 3, "solution": false}
 # Exercise 1: autograder test
 assert np.shape(errors_weighted) == np.shape(errors_median) == (200,), "the error of every draw"
-assert 0 < spread_weighted < spread_median, "over many draws the weighted mean is the closer one"
+assert 0 < spread_weighted < spread_median, "over these 200 draws, 1/σ² weights give the smaller RMS"
 ### BEGIN HIDDEN TESTS
 import numpy as np
 
@@ -661,14 +663,14 @@ assert np.allclose(_h32_got / _h32_got[2, 2], _h32_H / _h32_H[2, 2]), "not K R K
 # %% [markdown]
 # ### Exercise 3 · correct a camera ahead of the axis *(hard, 4 points)*
 #
-# Section 5 found that a camera `a` metres ahead of the turning axis loses a share of the turn
-# close to a / z, z the depth of the match. Each match knows its own depth (from its disparity),
-# so each can be corrected. Write `correct_ahead(theta_each, depth, a)` returning the corrected
-# θ of every match from its eq. 14 θ, its depth and the camera's offset `a` (find the form and
-# the sign of the correction: the exact one for a spot turn, which the tests check to 1e-6, not
-# its first-order approximation). For the spot turn `ahead` below (2°, camera 0.3 m ahead, depths
-# 1.5–15 m) store the median of the corrected θ of the matches in `usable` in
-# `theta_corrected` (radians).
+# Section 5 found that a camera `a` metres ahead of the turning axis over-estimates the turn by a
+# share close to a / z, z the depth of the match: eq. 14 reads θ(1 + a/z), to first order. Each
+# match knows its own depth (from its disparity), so each can be corrected. Write
+# `correct_ahead(theta_each, depth, a)` returning the corrected θ of every match from its eq. 14 θ,
+# its depth and the camera's offset `a`, by dividing out that factor (find which way the offset
+# acts first; the tests check the division to 1e-6, and its own first-order expansion differs by
+# more than that). For the spot turn `ahead` below (2°, camera 0.3 m ahead, depths 1.5–15 m) store
+# the median of the corrected θ of the matches in `usable` in `theta_corrected` (radians).
 #
 # *Hint:* compare `th_ahead` with 2° first; `camera.depth_from_disparity`.
 
@@ -702,7 +704,7 @@ import numpy as np
 
 _h33_theta, _h33_z = np.random.default_rng(3031).uniform([-0.07, 1.5], [0.07, 15.0], (100, 2)).T
 _h33_got = correct_ahead(_h33_theta.copy(), _h33_z.copy(), 0.17)
-assert np.allclose(_h33_got, _h33_theta / (1 + 0.17 / _h33_z), rtol=0, atol=1e-6), "not the exact correction"
+assert np.allclose(_h33_got, _h33_theta / (1 + 0.17 / _h33_z), rtol=0, atol=1e-6), "not θ divided by 1 + a/z"
 ### END HIDDEN TESTS
 
 # %% [markdown]

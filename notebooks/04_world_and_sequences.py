@@ -178,8 +178,9 @@ plt.show()
 #
 # Each sample sequence is a world, a drive and a rate. A drive is a list of legs (frames, speed,
 # turn rate) that the robot follows over the ground; the encoders count what the motors turned,
-# which is more than the ground moved by the track slip. Slip is about 1 % when driving and 6 %,
-# unequal between the tracks, when turning on the spot. The crawler also skids sideways in its
+# which is more than the ground moved by the track slip (`vo_lib.sim.trajectories.SlipModel`: a
+# small mean when driving, a larger one, unequal between the tracks, when turning on the spot;
+# section 5 prints what it does to the odometry). The crawler also skids sideways in its
 # turns and, on the yard's rough ground, briefly loses track contact while its body pitches and
 # rolls (`vo_lib.sim.trajectories.TrackGround`); the encoders see none of that.
 
@@ -402,7 +403,7 @@ else:
 #   pose-tracking notebooks; the sensors agree where they look at the same surface.
 # - Rendered stereo pairs are consistent with their ground-truth depth to a fraction of a pixel.
 # - The samples mirror the paper's experiments; track slip makes odometry drift in every one of
-#   them (section 5's table). In the spot turn the encoders over-count the turn by the slip, so
+#   them (section 4's table). In the spot turn the encoders over-count the turn by the slip, so
 #   the odometry's heading runs ahead of the truth; the rendered sequences carry that error for
 #   vision to correct. (Which sample drifts most is one draw of each, and this notebook does not
 #   rank them.)

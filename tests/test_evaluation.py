@@ -377,9 +377,15 @@ def test_evaluate_refuses_or_says_undefined_what_it_cannot_measure(tmp_path, rng
         for _ in range(3)
     )
     (tmp_path / "kitti.csv").write_text(kitti)  # KITTI poses, with commas
+    # ... and a longer drive's, whose later rows read as quaternions off the unit norm: the first bad
+    # line is named (its time, with the hint), not a later quaternion
+    drive = [[1.0, 0, 0, 0.1, 0, 1, 0, y, 0, 0, 1, 0] for y in (0.0, 0.0, 0.5)]
+    drive[1][0] = 0.99995
+    (tmp_path / "kitti_drive.csv").write_text("".join(",".join(map(str, r)) + "\n" for r in drive))
     (tmp_path / "tum.csv").write_text("# timestamp tx ty tz qx qy qz qw\n" + text.replace(" ", ","))
     refused = {
         ("--gt", "kitti.csv", "--est", "est.tum"): "as KITTI poses? they are separated by spaces, not commas",
+        ("--gt", "kitti_drive.csv", "--est", "est.tum"): "line 2: timestamp 0.99995 comes before",
         (
             "--gt",
             "tum.csv",

@@ -159,8 +159,6 @@ CONSTANTS: dict[str, dict[str, str]] = {
         "66 °": "the horizontal field of view chosen for the simulated camera",
         "0.5 m": "the height the simulated camera is mounted at",
         "270 °": "the field of view of the simulated scanner, as the paper's SICK TIM551",
-        "1 %": "the mean slip the simulated drives are given when driving",
-        "6 %": "the mean slip the simulated drives are given in spot turns",
         "0.25 px": "the disparity error the exercise prescribes",
         "2 m": "a wall distance the exercise prescribes",
         "10 m": "the scanner's range, and a wall distance the exercise prescribes",

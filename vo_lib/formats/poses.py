@@ -151,35 +151,30 @@ def _check(path: Path, a: np.ndarray, rows: list[tuple[int, str]], comma: bool) 
 def _check_stamped(
     path: Path, a: np.ndarray, rows: list[tuple[int, str]], lines: list[int], comma: bool
 ) -> None:
-    """Rows with a timestamp first (TUM, EuRoC, positions): increasing times, unit quaternions."""
+    """Rows with a timestamp first (TUM, EuRoC, positions): increasing times, unit quaternions; the
+    first row with either problem is named (its time first: a KITTI file with commas is told so)."""
     t = a[:, 0]
+    late = np.concatenate([[False], np.diff(t) <= 0])
+    with np.errstate(all="ignore"):  # huge entries overflow: no unit quaternion either
+        norm = np.linalg.norm(a[:, 4:8], axis=1) if a.shape[1] >= 8 else np.ones(len(a))
+    off_unit = ~(np.abs(norm - 1.0) <= QUATERNION_TOLERANCE)
 
     def stamp(k: int) -> str:  # as written: a float would round a time in nanoseconds
         return re.split(r"[\s,]+", rows[k][1])[0]
 
     kitti = "; 12 numbers a row, as KITTI poses? they are separated by spaces, not commas"
-    _refuse(
-        path,
-        lines,
-        np.concatenate([[False], np.diff(t) <= 0]),
-        lambda k: (
+
+    def problem(k: int) -> str:
+        if not late[k]:
+            tolerance = f"norm 1 within {QUATERNION_TOLERANCE:g}"
+            return f"the quaternion's norm is {norm[k]:.4g}; expected a unit quaternion ({tolerance})"
+        return (
             f"timestamp {stamp(k)} {'repeats' if t[k] == t[k - 1] else 'comes before'} "
             f"the one on line {lines[k - 1]} ({stamp(k - 1)}); timestamps must increase"
             + (kitti if comma and a.shape[1] == 12 else "")
-        ),
-    )
-    if a.shape[1] >= 8:
-        with np.errstate(all="ignore"):  # huge entries overflow: no unit quaternion either
-            norm = np.linalg.norm(a[:, 4:8], axis=1)
-        _refuse(
-            path,
-            lines,
-            ~(np.abs(norm - 1.0) <= QUATERNION_TOLERANCE),
-            lambda k: (
-                f"the quaternion's norm is {norm[k]:.4g}; expected a unit quaternion "
-                f"(norm 1 within {QUATERNION_TOLERANCE:g})"
-            ),
         )
+
+    _refuse(path, lines, late | off_unit, problem)
 
 
 def read_rows(path, min_rows: int = 1) -> tuple[np.ndarray, list[int], bool]:
