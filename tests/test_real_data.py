@@ -997,6 +997,14 @@ def test_a_rig_with_positions_only_is_scored_by_its_aligned_prism(tmp_path, caps
     assert "(its sensor.yaml files) changed since that run" in capsys.readouterr().err
     shutil.copy(EUROC / "mav0" / "cam1" / "sensor.yaml", calibration)
     assert main(["evaluate", "--gt", str(gt), "--est", str(est)]) == 0
+    # a sparse copy elsewhere: refused as too sparse, and nothing said on stdout before the refusal
+    # (it said "--gt ... is another file: the errors below are against it" first)
+    rows = gt.read_text().splitlines()
+    (tmp_path / "sparse.csv").write_text("\n".join(rows[:1] + rows[1::12]) + "\n")
+    capsys.readouterr()
+    assert main(["evaluate", "--gt", str(tmp_path / "sparse.csv"), "--est", str(est)]) == 2
+    out, err = capsys.readouterr()
+    assert out == "" and "within --est's span: too sparse, or off its clock" in err
     # without the tracker's sensor.yaml, its lever arm is taken as zero, and a notice says so
     (rig / "mav0" / "leica0" / "sensor.yaml").unlink()
     assert main(["run", "--sequence", str(rig), "--out", str(tmp_path / "out")]) == 0

@@ -4,6 +4,8 @@
 
 from __future__ import annotations
 
+import contextlib
+import io
 from pathlib import Path
 
 import numpy as np
@@ -78,11 +80,17 @@ def _associated(
         return np.arange(len(E)), np.arange(len(E))
     i_est, i_gt = associate(times, truth.times)
     if len(i_est) < 3:  # an alignment needs three points
+        inside = int(np.sum((truth.times >= times[0]) & (truth.times <= times[-1])))
+        cause = (
+            f"--gt has {inside} row{'s' * (inside != 1)} within --est's span: too sparse, or off its clock"
+            if inside
+            else "both must use one clock"
+        )
         raise UsageError(
             f"--gt {gt}: {len(i_est) or 'no'} timestamp{'s' * (len(i_est) != 1)} within 0.01 s of "
             f"--est {est}'s, expected at least 3 (--gt spans {truth.times[0]:.3f} to "
             f"{truth.times[-1]:.3f} s, --est {times[0]:.3f} to {times[-1]:.3f} s; a CSV's times are read "
-            "as nanoseconds, a text file's as seconds); both must use one clock"
+            f"as nanoseconds, a text file's as seconds); {cause}"
         )
     print(f"associated {len(i_est)} of {len(E)} poses by timestamp (within 0.01 s)")
     return i_est, i_gt
@@ -190,10 +198,13 @@ def evaluate_command(gt: str, est: str, segments=None, extrinsic_of: str | None 
         times, E = read_trajectory(est, min_poses=3)  # an alignment needs three
     except TrajectoryError as exc:
         raise UsageError(f"--est {exc}") from None
-    marker = run_marker(est)  # of the run that wrote --est, if one did
-    check_against_its_run(gt, est, marker)
-    i_est, i_gt = _associated(truth, gt, est, times, E, marker)
-    to_camera = _to_camera(truth, gt, extrinsic_of)  # the rectified left camera in the tracked frame
+    notes = io.StringIO()  # what the checks say, printed once every check has passed
+    with contextlib.redirect_stdout(notes):
+        marker = run_marker(est)  # of the run that wrote --est, if one did
+        check_against_its_run(gt, est, marker)
+        i_est, i_gt = _associated(truth, gt, est, times, E, marker)
+        to_camera = _to_camera(truth, gt, extrinsic_of)  # the rectified left camera in the tracked frame
+    print(notes.getvalue(), end="")
     truth_xyz = truth.positions[i_gt] if truth.poses is None else truth.poses[i_gt][:, :3, 3]
     _say_if_units_differ(truth_xyz, E[i_est][:, :3, 3])
     if truth.poses is not None:
