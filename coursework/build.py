@@ -675,7 +675,8 @@ class Parser(OneLineParser):
 def parse_args(argv: list[str] | None) -> argparse.Namespace:
     parser = Parser(
         prog="python coursework/build.py",
-        description="Write student/ (notebooks without solutions) and grading/ (nbgrader's course folder).",
+        description="Write handout/ (what students get), student/ (notebooks without solutions) and grading/ "
+        "(nbgrader's course folder).",
     )
     parser.add_argument("notebooks", nargs="*", metavar="NN", help="only these notebooks (default: all)")
     parser.add_argument(
