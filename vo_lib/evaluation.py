@@ -120,6 +120,12 @@ def ate(gt, est, alignment: Alignment = Alignment.SE3) -> tuple[ErrorStats, np.n
     return _ate(G[:, :3, 3], E[:, :3, 3], alignment)
 
 
+def carried_point(poses: np.ndarray, point) -> np.ndarray:
+    """``(N, 3)`` positions of ``point`` (in the posed frame, e.g. a prism in the camera) carried
+    along ``(N, 4, 4)`` ``poses``."""
+    return poses[:, :3, :3] @ np.asarray(point, float) + poses[:, :3, 3]
+
+
 def ate_positions(
     positions, est, lever_arm=(0.0, 0.0, 0.0), alignment: Alignment = Alignment.SE3
 ) -> tuple[ErrorStats, np.ndarray]:
@@ -127,7 +133,7 @@ def ate_positions(
     the point ``lever_arm`` (in the estimate's camera frame) is carried along the estimated poses
     and aligned to the positions."""
     p_gt, E = _check_pair(positions, as_homogeneous(est))
-    return _ate(p_gt, E[:, :3, :3] @ np.asarray(lever_arm, float) + E[:, :3, 3], alignment)
+    return _ate(p_gt, carried_point(E, lever_arm), alignment)
 
 
 def ate_planar(gt_planar, est_planar, align: bool = True) -> tuple[ErrorStats, np.ndarray]:

@@ -156,9 +156,9 @@ def _to_camera(truth, gt: str, extrinsic_of: str | None) -> np.ndarray:
 
 def _print_position_errors(positions: np.ndarray, E: np.ndarray, lever: np.ndarray) -> None:
     """ATE of the point ``lever`` (in the camera) carried along ``E`` against ``positions``."""
-    from vo_lib.evaluation import Alignment, ate_positions, shown, umeyama
+    from vo_lib.evaluation import Alignment, ate_positions, carried_point, shown, umeyama
 
-    tracked = E[:, :3, :3] @ lever + E[:, :3, 3]  # the point carried along the estimate
+    tracked = carried_point(E, lever)
     for alignment in (Alignment.SE3, Alignment.SIM3):
         a, _ = ate_positions(positions, E, lever, alignment)
         rmse, worst = shown(a.rmse, ".4f"), shown(a.max, ".4f")  # undefined: a scale of nothing moving

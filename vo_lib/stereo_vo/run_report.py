@@ -191,14 +191,13 @@ def tracked_offsets(seq, poses: np.ndarray, n: int) -> tuple[np.ndarray, np.ndar
     """Position-only truth against the estimate: the frames it has and, at each, the truth's
     position of the tracked point minus the estimate's, after the ATE's SE(3) alignment, in the
     first camera's frame ``(K, 3)``; None without such truth."""
-    from vo_lib.evaluation import umeyama
+    from vo_lib.evaluation import carried_point, umeyama
 
     found = _tracked(seq, n)
     if found is None:
         return None
     positions, frames, xyz = found
-    E = poses[frames]
-    tracked = E[:, :3, :3] @ np.asarray(positions["lever_arm_camera"], float) + E[:, :3, 3]
+    tracked = carried_point(poses[frames], positions["lever_arm_camera"])
     R, t, _ = umeyama(tracked, xyz)  # xyz ~ R tracked + t
     return frames, (xyz - t) @ R - tracked
 
