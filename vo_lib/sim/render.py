@@ -21,7 +21,7 @@ from vo_lib.camera import StereoCamera
 from vo_lib.geometry import yaw_matrix
 from vo_lib.sim.composite import draw_nearer
 from vo_lib.sim.textures import cached_surface
-from vo_lib.sim.world import Patch, World
+from vo_lib.sim.world import Patch, Segment, World, box
 
 #: Nearest depth drawn, metres.
 NEAR_PLANE = 0.05
@@ -90,11 +90,7 @@ def build_quads(world: World) -> _Quads:
     texel = world.floor_texel
     quads = []
     for seg in world.segments:
-        (ax, ay), (bx, by) = seg.start, seg.end
-        along = ((bx - ax) / seg.length, (by - ay) / seg.length, 0.0)
-        seed = seg.texture_seed + 1000 * world.seed
-        wall = Patch((ax, ay, 0.0), along, (0.0, 0.0, 1.0), seg.length, seg.height, seg.style, seed)
-        quads.append(_patch_quads(wall, seg.texel or texel, split_across=False))
+        quads.append(_wall_quads(seg, seg.texel or texel, seg.texture_seed + 1000 * world.seed))
     xmin, xmax, ymin, ymax = world.floor_extent
     planes = [(0.0, world.seed * 7 + 1, 0.95, world.floor_style)]
     if world.ceiling_height is not None:
@@ -104,8 +100,7 @@ def build_quads(world: World) -> _Quads:
             (xmin, ymin, z), (1.0, 0.0, 0.0), (0.0, 1.0, 0.0), xmax - xmin, ymax - ymin, style, seed
         )
         quads.append(_patch_quads(plane, texel, shade))
-    for patch in world.patches:
-        quads.append(_patch_quads(patch, texel))
+    quads += [_patch_quads(patch, texel) for patch in world.patches]
     return _Quads.join(quads)
 
 
@@ -137,23 +132,25 @@ def _patch_quads(patch, texel: float, shade: float | None = None, split_across: 
     return _Quads(corners, *vectors, np.full(q, shade), (tex,) * q)
 
 
+def _wall_quads(seg: Segment, texel: float, seed: int) -> _Quads:
+    """Quads of a vertical :class:`~vo_lib.sim.world.Segment` (texture ``seed``), cut along it only."""
+    (ax, ay), (bx, by) = seg.start, seg.end
+    along = ((bx - ax) / seg.length, (by - ay) / seg.length, 0.0)
+    wall = Patch((ax, ay, 0.0), along, (0.0, 0.0, 1.0), seg.length, seg.height, seg.style, seed)
+    return _patch_quads(wall, texel, split_across=False)
+
+
 def _mover_quads(mover) -> _Quads:
     """Four sides and the top of a :class:`~vo_lib.sim.world.Mover`, in its body frame
     (x forward, y left, z up, origin at the bottom centre)."""
+    sides = box((0.0, 0.0), mover.size, 0.0, mover.height, mover.texture_seed, style=mover.style)
     hl, hw, h = mover.size[0] / 2, mover.size[1] / 2, mover.height
-    plan = [(-hl, -hw), (hl, -hw), (hl, hw), (-hl, hw)]
-    quads = []
-    for i in range(4):
-        a, b = np.array([*plan[i], 0.0]), np.array([*plan[(i + 1) % 4], 0.0])
-        length = float(np.linalg.norm(b - a))
-        side = Patch(
-            tuple(a), tuple((b - a) / length), (0.0, 0.0, 1.0), length, h, mover.style, mover.texture_seed + i
-        )
-        quads.append(_patch_quads(side, MOVER_TEXEL))
     top = Patch(
         (-hl, hw, h), (1.0, 0.0, 0.0), (0.0, -1.0, 0.0), 2 * hl, 2 * hw, "plain", mover.texture_seed + 4
     )
-    return _Quads.join([*quads, _patch_quads(top, MOVER_TEXEL)])
+    return _Quads.join(
+        [*(_wall_quads(s, MOVER_TEXEL, s.texture_seed) for s in sides), _patch_quads(top, MOVER_TEXEL)]
+    )
 
 
 def _moved(quads: _Quads, t: np.ndarray, yaw: float) -> _Quads:
@@ -203,7 +200,6 @@ class StereoRenderer:
     def __init__(self, world: World, camera: StereoCamera, effects: SensorEffects | None = None):
         if camera.width is None or camera.height is None:
             raise ValueError("the renderer needs a camera with width and height")
-        self.world = world
         self.camera = camera
         self.effects = effects or SensorEffects()
         self.quads = build_quads(world)
@@ -275,8 +271,7 @@ class StereoRenderer:
             abe = (n_c @ self._Kinv) / dist[:, None]
         drawn = ok & (np.abs(dist) >= 1e-9) & (x1y1 > x0y0).all(axis=1)  # not clipped away nor edge-on
         # each quad is warped into its screen box: the box's corner (x0, y0) becomes pixel (0, 0)
-        H[:, 0] -= x0y0[:, :1] * H[:, 2]
-        H[:, 1] -= x0y0[:, 1:] * H[:, 2]
+        H[:, :2] -= x0y0[:, :, None] * H[:, 2:3]
         boxes = np.hstack([x0y0, x1y1]).tolist()
         order = np.flatnonzero(drawn).tolist()
         _draw(image, inv_depth, order, boxes, H, level, seen, quads.shade[todo].tolist(), pts4, clipped, abe)
