@@ -265,12 +265,10 @@ def road_ribbon(seed: int) -> tuple[Patch, ...]:
     """The road surface along :func:`vo_lib.sim.road.centre_line`: one patch per piece, each a
     quad whose ends stand square to the road (so that pieces meet without gaps in the bends)."""
     s, poses = road.centre_line()
-    poses[:, :2] += road.LANE_OFFSET * np.column_stack([-np.sin(poses[:, 2]), np.cos(poses[:, 2])])
-    z, c = road.elevation(s), road.crossfall(s)
-    half = ROAD_WIDTH / 2
+    c = road.crossfall(s)
     left = np.column_stack([-np.sin(poses[:, 2]), np.cos(poses[:, 2]), c])  # per metre to the left
-    centre = np.column_stack([poses[:, :2], z])
-    total = float(s[-1] - s[0])
+    centre = np.column_stack([poses[:, :2] + road.LANE_OFFSET * left[:, :2], road.elevation(s)])
+    half, total = ROAD_WIDTH / 2, float(s[-1] - s[0])
     patches = []
     breaks = _ribbon_breaks(s, poses)
     for i, j in zip(breaks[:-1], breaks[1:], strict=True):
