@@ -157,7 +157,6 @@ class Drive:
     rate: float
     poses: np.ndarray  # (N, 3) true planar robot poses
     odometry: np.ndarray  # (N, 2) encoder readings: track distances since the previous frame
-    ground: np.ndarray  # (N, 2) distances the tracks moved over the ground
     slip: np.ndarray  # (N, 2)
     attitude: np.ndarray | None = None  # (N, 2) body pitch and roll (radians), None: level
     icr: np.ndarray | None = None  # (N,) longitudinal ICR offset x_icr of each step (metres)
@@ -209,18 +208,17 @@ def simulate_drive(
     zero = np.zeros((1, 2))
     if surface is None:
         poses = odometry.integrate(ground, start=start, exact=True)
-        return Drive(rate, poses, *(np.vstack([zero, x]) for x in (readings, ground, slips)))
+        return Drive(rate, poses, *(np.vstack([zero, x]) for x in (readings, slips)))
     # the tracks move the ground by what they planned, less what they lose in contact; the body
     # turns by their difference over the gauge and skids sideways about the shifted ICR
     grip, attitude = surface.contact(ground, rng)
-    moved = ground * grip
-    forward, turn = odometry.increment(moved)
+    forward, turn = odometry.increment(ground * grip)
     x_icr = surface.icr(turn * rate, rng)
     poses = integrate_body(np.column_stack([forward, -x_icr * turn, turn]), start)
     return Drive(
         rate,
         poses,
-        *(np.vstack([zero, x]) for x in (readings, moved, slips)),
+        *(np.vstack([zero, x]) for x in (readings, slips)),
         attitude=np.vstack([zero, attitude]),
         icr=np.concatenate([[surface.icr_offset], x_icr]),
         grip=np.vstack([np.ones((1, 2)), grip]),
