@@ -285,28 +285,27 @@ def road_ribbon(seed: int) -> tuple[Patch, ...]:
     return tuple(patches)
 
 
-def _lane(offset: float, reverse: bool = False) -> tuple[np.ndarray, np.ndarray]:
-    """Arc lengths of the centre line and 3-D points ``offset`` metres left of the car's lane."""
+def _lane(offset: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Arc lengths and poses of the centre line every 2 m, unit vectors to its left and the 3-D
+    points ``offset`` metres left of the car's lane."""
     s, poses = road.centre_line(2.0)
     left = np.column_stack([-np.sin(poses[:, 2]), np.cos(poses[:, 2])])
-    pts = np.column_stack(
-        [poses[:, :2] + offset * left, road.elevation(s) + road.crossfall(s) * (offset - road.LANE_OFFSET)]
-    )
-    return (s[::-1], pts[::-1]) if reverse else (s, pts)
+    z = road.elevation(s) + road.crossfall(s) * (offset - road.LANE_OFFSET)
+    return s, poses, left, np.column_stack([poses[:, :2] + offset * left, z])
 
 
 def road_traffic(seed: int) -> tuple[Mover, ...]:
     """Two oncoming cars that pass the driven car on the first and last straights, one ahead."""
     ego_s = road.arc_length(road.planned_path())
     movers = []
-    oncoming_s, oncoming = _lane(2 * road.LANE_OFFSET, reverse=True)
+    oncoming_s, _, _, oncoming = (a[::-1] for a in _lane(2 * road.LANE_OFFSET))
     lane = tuple(map(tuple, oncoming))
     for i, (frame, speed) in enumerate(((35, 10.0), (185, 8.0))):
         # metres along its lane to where the driven car is at the frame they pass each other
         along = float(np.sum(np.linalg.norm(np.diff(oncoming[oncoming_s >= ego_s[frame]], axis=0), axis=1)))
         start = along - speed * frame / road.RATE
         movers.append(Mover(lane, speed, (4.3, 1.8), 1.5, "vehicle", seed + 10 * i, start))
-    ahead_s, ahead = _lane(0.0)
+    ahead_s, _, _, ahead = _lane(0.0)
     start = float(np.sum(np.linalg.norm(np.diff(ahead[ahead_s <= 40.0], axis=0), axis=1)))
     movers.append(Mover(tuple(map(tuple, ahead)), 11.0, (4.5, 1.8), 1.6, "vehicle", seed + 30, start))
     return tuple(movers)
@@ -315,9 +314,8 @@ def road_traffic(seed: int) -> tuple[Mover, ...]:
 def road_side(seed: int) -> list[Segment]:
     """Buildings, trees, fences and parked cars beside the road, and far low-contrast structure."""
     rng = np.random.default_rng(seed)
-    s, poses = road.centre_line(2.0)
-    left = np.column_stack([-np.sin(poses[:, 2]), np.cos(poses[:, 2])])
-    road_xy = poses[:, :2] + road.LANE_OFFSET * left
+    s, poses, left, lane = _lane(road.LANE_OFFSET)
+    road_xy = lane[:, :2]
     segs: list[Segment] = []
     kinds = ("building", "tree", "fence", "parked car", "building", "tree")
     for k in range(0, len(s), 4):
