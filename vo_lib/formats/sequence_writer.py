@@ -30,20 +30,8 @@ class SequenceWriter(OutputFolder):
     """An :class:`~vo_lib.outputs.OutputFolder` that a sequence is written into frame by frame, put
     in place at ``path`` by :meth:`close`."""
 
-    def __init__(
-        self,
-        path,
-        camera: StereoCamera,
-        force: bool = False,
-        option: str | None = None,
-        written_by: str = "vo_lib generate",
-        inputs=(),
-        keep=None,
-        keep_inside=False,
-    ):
-        super().__init__(
-            path, written_by, force=force, inputs=inputs, option=option, keep=keep, keep_inside=keep_inside
-        )
+    def __init__(self, path, camera: StereoCamera, written_by: str = "vo_lib generate", **check):
+        super().__init__(path, written_by, **check)  # check: as :func:`~vo_lib.outputs.check_target`
         self.camera, self.count = camera, 0
         (self.path / "image_0").mkdir()
         (self.path / "image_1").mkdir()
