@@ -57,10 +57,10 @@ class SequenceWriter(OutputFolder):
                 f"{self.label}: cannot write the sequence ({why}); nothing was written"
             ) from None
 
-    def carry(self, source: Path, names=CARRIED) -> None:
-        """Copy those of ``names`` that ``source`` holds into the sequence, unchanged (of a folder,
-        its ``calib_*.txt`` files)."""
-        for name in names:
+    def carry(self, source: Path) -> None:
+        """Copy those of :data:`CARRIED` that ``source`` holds into the sequence, unchanged (of a
+        folder, its ``calib_*.txt`` files)."""
+        for name in CARRIED:
             src = Path(source) / name
             try:
                 self._copy(src, self.path / name)
