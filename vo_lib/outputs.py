@@ -15,6 +15,7 @@
 from __future__ import annotations
 
 import contextlib
+import fcntl
 import hashlib
 import itertools
 import json
@@ -225,13 +226,11 @@ def claim_folder(target, written_by: str, *, option: str | None = None) -> Path:
 
 
 @contextlib.contextmanager
-def _locked(folder: Path, shared: bool, label: str = ""):
-    """Hold a lock on ``folder`` (if it can be); a lock another command holds is :class:`OutputError`."""
+def _locked(folder: Path, shared: bool, label: str):
+    """Hold a lock on ``folder`` (if it opens); a lock another command holds is :class:`OutputError`."""
     try:
-        import fcntl
-
-        fd = os.open(folder, os.O_RDONLY | getattr(os, "O_DIRECTORY", 0))
-    except (ImportError, OSError):
+        fd = os.open(folder, os.O_RDONLY | os.O_DIRECTORY)
+    except OSError:
         yield
         return
     try:

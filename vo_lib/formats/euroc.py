@@ -17,7 +17,7 @@ from vo_lib.evaluation import to_camera
 from vo_lib.formats.asl_calibration import AslError, read_camera_yaml, rectify, truth_extrinsic
 from vo_lib.formats.groundtruth import NANOSECONDS, covering, read_groundtruth
 from vo_lib.formats.images import check_headers
-from vo_lib.formats.poses import read_text
+from vo_lib.formats.poses import data_lines
 from vo_lib.formats.sequence import Sequence, check_frame_spacing
 
 #: Ground-truth files looked for under ``mav0``, in order: 6-DoF first, then positions only.
@@ -74,11 +74,9 @@ def _image_row(csv_path: Path, n: int, line: str) -> tuple[int, str]:
 def read_image_list(camera_dir: Path) -> tuple[np.ndarray, list[Path], list[int]]:
     """``(timestamps in ns, image files, their lines)`` of one camera from its ``data.csv``."""
     csv_path = camera_dir / "data.csv"
-    text = read_text(csv_path, "one line 'timestamp [ns],filename' per image")
     stamps, files, lines, listed = [], [], [], {}
-    for n, line in enumerate(text.split("\n"), start=1):
-        line = line.strip()
-        if not line or line.startswith("#") or (n == 1 and line[0].isalpha()):  # a header, with # or not
+    for n, line in data_lines(csv_path, "one line 'timestamp [ns],filename' per image"):
+        if n == 1 and line[0].isalpha():  # a header without '#'
             continue
         stamp, name = _image_row(csv_path, n, line)
         if listed.setdefault(name, n) != n:  # two frames of one image: the pairs would mix frames

@@ -74,25 +74,19 @@ def read_calib(path: Path) -> tuple[np.ndarray, np.ndarray]:
 
 def read_times(path: Path) -> np.ndarray:
     """Timestamps in seconds, one a line, strictly increasing; raises :class:`SequenceError`."""
-    times, previous = [], None
-    for line_no, text in data_lines(path):
-        t = numbers(path, line_no, text, 1, "a timestamp")[0]
-        if previous is not None and not t > previous:
-            raise SequenceError(
-                f"{path}, line {line_no}: time {t} is not after {previous} on the line before"
-            )
-        times.append(t)
-        previous = t
-    return np.array(times)
+    return read_rows(path, 1, "a timestamp", increasing=True)[:, 0]
 
 
-def read_rows(path: Path, count: int, what: str, bound: float = np.inf) -> np.ndarray:
-    """``(N, count)`` finite numbers within ``±bound``, one row a line; raises :class:`SequenceError`."""
+def read_rows(path: Path, count: int, what: str, bound: float = np.inf, increasing=False) -> np.ndarray:
+    """``(N, count)`` finite numbers within ``±bound``, one row a line (with ``increasing``, times
+    first, each after the one before); raises :class:`SequenceError`."""
     rows = []
     for n, text in data_lines(path):
         rows.append(row := numbers(path, n, text, count, what))
         if np.abs(row).max(initial=0.0) > bound:
             raise SequenceError(f"{path}, line {n}: a number beyond ±{bound:g}; expected {what}")
+        if increasing and len(rows) > 1 and not row[0] > (before := rows[-2][0]):
+            raise SequenceError(f"{path}, line {n}: time {row[0]} is not after {before} on the line before")
     return np.array(rows).reshape(-1, count)
 
 

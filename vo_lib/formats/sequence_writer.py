@@ -30,20 +30,8 @@ class SequenceWriter(OutputFolder):
     """An :class:`~vo_lib.outputs.OutputFolder` that a sequence is written into frame by frame, put
     in place at ``path`` by :meth:`close`."""
 
-    def __init__(
-        self,
-        path,
-        camera: StereoCamera,
-        force: bool = False,
-        option: str | None = None,
-        written_by: str = "vo_lib generate",
-        inputs=(),
-        keep=None,
-        keep_inside=False,
-    ):
-        super().__init__(
-            path, written_by, force=force, inputs=inputs, option=option, keep=keep, keep_inside=keep_inside
-        )
+    def __init__(self, path, camera: StereoCamera, written_by: str = "vo_lib generate", **check):
+        super().__init__(path, written_by, **check)  # check: as :func:`~vo_lib.outputs.check_target`
         self.camera, self.count = camera, 0
         (self.path / "image_0").mkdir()
         (self.path / "image_1").mkdir()
@@ -69,10 +57,10 @@ class SequenceWriter(OutputFolder):
                 f"{self.label}: cannot write the sequence ({why}); nothing was written"
             ) from None
 
-    def carry(self, source: Path, names=CARRIED) -> None:
-        """Copy those of ``names`` that ``source`` holds into the sequence, unchanged (of a folder,
-        its ``calib_*.txt`` files)."""
-        for name in names:
+    def carry(self, source: Path) -> None:
+        """Copy those of :data:`CARRIED` that ``source`` holds into the sequence, unchanged (of a
+        folder, its ``calib_*.txt`` files)."""
+        for name in CARRIED:
             src = Path(source) / name
             try:
                 self._copy(src, self.path / name)
