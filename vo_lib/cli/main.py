@@ -418,7 +418,3 @@ def entry() -> int:
         for kind in (signal.SIGINT, signal.SIGTERM):
             signal.signal(kind, _late_stop)
     return status
-
-
-if __name__ == "__main__":
-    sys.exit(entry())

@@ -141,26 +141,16 @@ def _truth_record(seq) -> dict | None:
     }
 
 
-def _plot(
-    path: Path, times, estimate, truth, odometry, title: str, odometry_label: str, cameras=None, tracked=None
-) -> None:
+def _draw(path: Path, seq, name: str, n: int, planar, poses, truth, odo, vehicle) -> None:
+    """The run's figure: its path (``planar`` poses, or the camera ``poses`` in the truth's plan)
+    beside the truth, or beside position-only truth moved onto it."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from vo_lib.viz.run_figure import plot_run
-
-    fig = plt.figure(figsize=(11, 5), constrained_layout=True)
-    plot_run(fig, times, estimate, truth, odometry, title, odometry_label, cameras, tracked)
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-
-
-def _draw(path: Path, seq, name: str, n: int, planar, poses, truth, odo, vehicle) -> None:
-    """The run's figure: its path (``planar`` poses, or the camera ``poses`` in the truth's plan)
-    beside the truth, or beside position-only truth moved onto it."""
     from vo_lib.stereo_vo.vehicle import VehicleKind
+    from vo_lib.viz.run_figure import plot_run
 
     mount = vehicle.mount
     # a name holding bytes that are not UTF-8 (read as surrogates) is drawn with U+FFFD in their place
@@ -172,7 +162,10 @@ def _draw(path: Path, seq, name: str, n: int, planar, poses, truth, odo, vehicle
     tracked = None  # where position-only truth puts the body: the estimate moved by the truth's offset
     if offsets is not None:
         tracked = plan[offsets[0], :2] + (offsets[1] @ mount[:3, :3].T)[:, :2]
-    _plot(path, seq.times[:n], plan, truth, odo, title, odometry_name(vehicle), cameras, tracked)
+    fig = plt.figure(figsize=(11, 5), constrained_layout=True)
+    plot_run(fig, seq.times[:n], plan, truth, odo, title, odometry_name(vehicle), cameras, tracked)
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
 
 
 def run_command(
