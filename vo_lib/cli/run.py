@@ -189,13 +189,7 @@ def run_command(
     keep = kept_data_folder()  # the samples' folder, not runs': nothing inside it
     with (
         OutputFolder(
-            out_dir,
-            "vo_lib run",
-            force=force,
-            inputs=[source],
-            keep=keep,
-            keep_inside=True,
-            option="--out",
+            out_dir, "vo_lib run", force=force, inputs=[source], keep=keep, keep_inside=True, option="--out"
         ) as output,
         contextlib.ExitStack() as locks,
     ):
