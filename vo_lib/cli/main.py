@@ -61,6 +61,8 @@ def _recording(text: str) -> str:
 
 def build_parser() -> argparse.ArgumentParser:
     from vo_lib.bench import BENCH_HELP, BENCHES
+    from vo_lib.cli.sweep import SWEEPS
+    from vo_lib.sim.samples import SAMPLES
 
     # named as it was started: the ``vo-lib`` script or ``python -m vo_lib``
     prog = "vo-lib" if Path(sys.argv[0]).name == "vo-lib" else "python -m vo_lib"
@@ -101,7 +103,6 @@ def build_parser() -> argparse.ArgumentParser:
         + "\n\nBad input prints one line and exits with status 2; Ctrl-C exits with 130.",
     )
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND", parser_class=plain)
-    from vo_lib.sim.samples import SAMPLES
 
     def command(name: str, help: str, description: str, *examples: str, listing: str = ""):
         """A subcommand, its description wrapped by wrap() and then ``listing``, its examples as written."""
@@ -199,7 +200,6 @@ def build_parser() -> argparse.ArgumentParser:
     gen.add_argument(
         "--resolution",
         type=_resolution,
-        default=None,
         help=f"WIDTHxHEIGHT, each side {MIN_SIDE}..{MAX_SIDE} (default: the sample's own, 640x480; "
         "1242x375 for road_drive)",
     )
@@ -214,8 +214,6 @@ def build_parser() -> argparse.ArgumentParser:
         + "\n".join(f"  {name:<{width}}  {what} ({how})" for name, (what, how) in BENCH_HELP.items()),
     )
     bench.add_argument("name", choices=sorted(BENCHES), metavar="NAME", help="which benchmark (listed above)")
-    from vo_lib.cli.sweep import SWEEPS
-
     sweep = command(
         "sweep",
         "a paper's statistic over many seeds, serially or on Dask",
