@@ -292,6 +292,7 @@ def bench_long(frames: int = PAPER_LONG_RUN[0]) -> dict[str, float]:
     per-frame total is timed. Prints the mean, standard deviation and percentiles beside the
     paper's, and the final position error of the lap (nothing is written to disk).
     """
+    from vo_lib.evaluation import final_error
     from vo_lib.geometry import compose_planar
     from vo_lib.sim.samples import render_sample
     from vo_lib.stereo_vo.pipeline import run_frames
@@ -300,9 +301,7 @@ def bench_long(frames: int = PAPER_LONG_RUN[0]) -> dict[str, float]:
     result, wall_ms = timed_ms(run_frames, frame_iter, rendered.camera)
     totals = np.array([t.total for t in result.timings[1:]])
     truth = rendered.truth()
-    travelled = float(np.sum(np.linalg.norm(np.diff(truth[:, :2], axis=0), axis=1)))
-    final = compose_planar(truth[0], result.poses[-1])
-    error = float(np.linalg.norm(final[:2] - truth[-1, :2]))
+    final = final_error(truth, compose_planar(truth[0], result.poses))  # the estimate from the truth's start
     n, paper_mean, paper_sd = PAPER_LONG_RUN
     print(f"long run: {frames} frames of long_run at 640x480 ({wall_ms / 1e3:.0f} s with rendering)")
     print(f"  {'':28s}{'mean':>9s}{'s.d.':>9s}{'median':>9s}{'99th pct':>10s}{'max':>9s}  [ms per frame]")
@@ -312,7 +311,7 @@ def bench_long(frames: int = PAPER_LONG_RUN[0]) -> dict[str, float]:
     )
     print(f"  {f'paper ({n} frames)':28s}{paper_mean:9.2f}{paper_sd:9.2f}")
     print(
-        f"  frames flagged {len(result.flagged)}; final position error {error:.3f} m after {travelled:.1f} m "
-        f"({100 * error / travelled:.2f} %)"
+        f"  frames flagged {len(result.flagged)}; final position error {final.position_m:.3f} m after "
+        f"{final.distance_m:.1f} m ({final.percent:.2f} %)"
     )
     return {"mean": totals.mean() / 1e3, "sd": totals.std() / 1e3}

@@ -185,11 +185,10 @@ def evaluate_command(gt: str, est: str, segments=None, extrinsic_of: str | None 
     """Print the 3-D errors of an estimate (KITTI or TUM) against ground truth in any format of
     :mod:`vo_lib.formats.groundtruth`: final error, ATE (SE(3), Sim(3)), RPE and KITTI's errors.
 
-    ``segments``: lengths in metres (default: those the sequence allows). A truth of an ASL
+    ``segments``: a tuple of lengths in metres (default: those the sequence allows). A truth of an ASL
     recording's body (:func:`recording_of`) is moved into its rectified left camera, through the
     ``sensor.yaml`` beside ``--gt``; for positions only, as a lever arm carried along the estimate.
     """
-    lengths = None if segments is None else tuple(segments)
     try:
         truth = read_groundtruth(gt)
     except GroundTruthError as exc:
@@ -208,8 +207,8 @@ def evaluate_command(gt: str, est: str, segments=None, extrinsic_of: str | None 
     truth_xyz = truth.positions[i_gt] if truth.poses is None else truth.poses[i_gt][:, :3, 3]
     _say_if_units_differ(truth_xyz, E[i_est][:, :3, 3])
     if truth.poses is not None:
-        _print_pose_errors(truth.poses[i_gt] @ to_camera, E[i_est], lengths)
+        _print_pose_errors(truth.poses[i_gt] @ to_camera, E[i_est], segments)
         return
-    if lengths is not None:
+    if segments is not None:
         print(f"--segments: --gt {gt} holds positions only, which give the ATE alone")
     _print_position_errors(truth.positions[i_gt], E[i_est], np.linalg.inv(to_camera)[:3, 3])

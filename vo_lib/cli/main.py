@@ -61,6 +61,8 @@ def _recording(text: str) -> str:
 
 def build_parser() -> argparse.ArgumentParser:
     from vo_lib.bench import BENCH_HELP, BENCHES
+    from vo_lib.cli.sweep import SWEEPS
+    from vo_lib.sim.samples import SAMPLES
 
     # named as it was started: the ``vo-lib`` script or ``python -m vo_lib``
     prog = "vo-lib" if Path(sys.argv[0]).name == "vo-lib" else "python -m vo_lib"
@@ -101,7 +103,6 @@ def build_parser() -> argparse.ArgumentParser:
         + "\n\nBad input prints one line and exits with status 2; Ctrl-C exits with 130.",
     )
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND", parser_class=plain)
-    from vo_lib.sim.samples import SAMPLES
 
     def command(name: str, help: str, description: str, *examples: str, listing: str = ""):
         """A subcommand, its description wrapped by wrap() and then ``listing``, its examples as written."""
@@ -199,7 +200,6 @@ def build_parser() -> argparse.ArgumentParser:
     gen.add_argument(
         "--resolution",
         type=_resolution,
-        default=None,
         help=f"WIDTHxHEIGHT, each side {MIN_SIDE}..{MAX_SIDE} (default: the sample's own, 640x480; "
         "1242x375 for road_drive)",
     )
@@ -214,8 +214,6 @@ def build_parser() -> argparse.ArgumentParser:
         + "\n".join(f"  {name:<{width}}  {what} ({how})" for name, (what, how) in BENCH_HELP.items()),
     )
     bench.add_argument("name", choices=sorted(BENCHES), metavar="NAME", help="which benchmark (listed above)")
-    from vo_lib.cli.sweep import SWEEPS
-
     sweep = command(
         "sweep",
         "a paper's statistic over many seeds, serially or on Dask",
@@ -272,43 +270,16 @@ def _os_error(exc: OSError, out) -> str:
     return why
 
 
-def _generate(args) -> None:
-    from vo_lib.data import kept_data_folder, sample_path
-    from vo_lib.outputs import OutputError, check_target
-    from vo_lib.sim.samples import generate, get_sample
-
-    most = get_sample(args.name).frames
-    if args.frames is not None and args.frames > most:
-        raise UsageError(f"--frames {args.frames}: {args.name} has {most} frames; expected 2 to {most}")
-    out = args.out or sample_path(args.name, args.frames, args.resolution)
-    check_target(out, written_by="vo_lib generate", force=args.force, option="--out", keep=kept_data_folder())
-    if args.out and not args.force and (Path(out) / "image_0").is_dir():  # ours, but a sequence
-        raise OutputError(
-            f"--out {args.out}: holds a sequence generated earlier, which something may still read; "
-            "add --force to generate it again"
-        )
-    try:
-        path = generate(
-            args.name, out, args.frames, args.resolution, progress=sys.stderr.isatty(), force=args.force
-        )
-    except OutputError as exc:  # named by the folder; the user gave it as --out
-        text = str(exc)
-        raise OutputError(f"--out {text}" if args.out and not text.startswith("--out ") else text) from None
-    print(f"wrote {path}")
-
-
 def _dispatch(args) -> None:
     """Run the parsed command (its module is imported only now, so that parsing stays fast)."""
-    if args.command == "generate":
-        return _generate(args)
     if args.command == "bench":
         from vo_lib.bench import BENCHES
 
         return BENCHES[args.name]()
-    # the others call COMMAND_command of vo_lib.cli.COMMAND (convert's is run's), their options as keywords
-    module = importlib.import_module(f"vo_lib.cli.{'run' if args.command == 'convert' else args.command}")
+    # the others call COMMAND_command of vo_lib.cli.COMMAND, or of run (convert, generate), with keywords
+    module = "run" if args.command in ("convert", "generate") else args.command
     kwargs = {k: v for k, v in vars(args).items() if k != "command"}
-    return getattr(module, f"{args.command}_command")(**kwargs)
+    return getattr(importlib.import_module(f"vo_lib.cli.{module}"), f"{args.command}_command")(**kwargs)
 
 
 def _run_parsed(args, command: str) -> int:
@@ -418,7 +389,3 @@ def entry() -> int:
         for kind in (signal.SIGINT, signal.SIGTERM):
             signal.signal(kind, _late_stop)
     return status
-
-
-if __name__ == "__main__":
-    sys.exit(entry())

@@ -1,4 +1,5 @@
-"""``python -m vo_lib run`` and ``python -m vo_lib convert``: the pipeline as a command.
+"""``python -m vo_lib run``, ``convert`` and ``generate``: the pipeline as a command, and the
+sequences it reads written (a recording rectified, a sample rendered).
 
 ``run`` writes into ``--out`` (default ``runs/NAME``, under the rules of :mod:`vo_lib.outputs`):
 ``poses.txt`` (KITTI), ``trajectory.tum`` (TUM), ``timings.csv``, ``diagnostics.csv``,
@@ -21,7 +22,7 @@ from pathlib import Path
 from vo_lib.arguments import UsageError
 from vo_lib.formats.poses import write_kitti_poses, write_tum
 from vo_lib.geometry import camera_poses_from_planar, planar_from_camera_poses, rigid_inverse
-from vo_lib.outputs import OutputFolder, file_sha256, notice, reading
+from vo_lib.outputs import OutputError, OutputFolder, check_target, file_sha256, notice, reading
 from vo_lib.sim.samples import SAMPLES, get_sample
 from vo_lib.stereo_vo.run_report import (
     error_report,
@@ -141,26 +142,16 @@ def _truth_record(seq) -> dict | None:
     }
 
 
-def _plot(
-    path: Path, times, estimate, truth, odometry, title: str, odometry_label: str, cameras=None, tracked=None
-) -> None:
+def _draw(path: Path, seq, name: str, n: int, planar, poses, truth, odo, vehicle) -> None:
+    """The run's figure: its path (``planar`` poses, or the camera ``poses`` in the truth's plan)
+    beside the truth, or beside position-only truth moved onto it."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from vo_lib.viz.run_figure import plot_run
-
-    fig = plt.figure(figsize=(11, 5), constrained_layout=True)
-    plot_run(fig, times, estimate, truth, odometry, title, odometry_label, cameras, tracked)
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-
-
-def _draw(path: Path, seq, name: str, n: int, planar, poses, truth, odo, vehicle) -> None:
-    """The run's figure: its path (``planar`` poses, or the camera ``poses`` in the truth's plan)
-    beside the truth, or beside position-only truth moved onto it."""
     from vo_lib.stereo_vo.vehicle import VehicleKind
+    from vo_lib.viz.run_figure import plot_run
 
     mount = vehicle.mount
     # a name holding bytes that are not UTF-8 (read as surrogates) is drawn with U+FFFD in their place
@@ -172,7 +163,10 @@ def _draw(path: Path, seq, name: str, n: int, planar, poses, truth, odo, vehicle
     tracked = None  # where position-only truth puts the body: the estimate moved by the truth's offset
     if offsets is not None:
         tracked = plan[offsets[0], :2] + (offsets[1] @ mount[:3, :3].T)[:, :2]
-    _plot(path, seq.times[:n], plan, truth, odo, title, odometry_name(vehicle), cameras, tracked)
+    fig = plt.figure(figsize=(11, 5), constrained_layout=True)
+    plot_run(fig, seq.times[:n], plan, truth, odo, title, odometry_name(vehicle), cameras, tracked)
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
 
 
 def run_command(
@@ -196,13 +190,7 @@ def run_command(
     keep = kept_data_folder()  # the samples' folder, not runs': nothing inside it
     with (
         OutputFolder(
-            out_dir,
-            "vo_lib run",
-            force=force,
-            inputs=[source],
-            keep=keep,
-            keep_inside=True,
-            option="--out",
+            out_dir, "vo_lib run", force=force, inputs=[source], keep=keep, keep_inside=True, option="--out"
         ) as output,
         contextlib.ExitStack() as locks,
     ):
@@ -371,3 +359,26 @@ def convert_command(sequence: str, to: str, out: str, force: bool = False) -> No
     truth = "ground truth in poses.txt" if seq.poses is not None else "no ground truth"
     truth = "position-only ground truth in manifest.json" if "positions" in manifest else truth
     print(f"wrote {path}: {len(seq)} rectified pairs in the KITTI layout, {truth}")
+
+
+def generate_command(name: str, out: str | None, frames: int | None, resolution, force: bool = False) -> None:
+    """Render sample ``name`` into ``out`` (default: its folder in the data folder) in the KITTI layout."""
+    from vo_lib.data import kept_data_folder, sample_path
+    from vo_lib.sim.samples import generate
+
+    most = get_sample(name).frames
+    if frames is not None and frames > most:
+        raise UsageError(f"--frames {frames}: {name} has {most} frames; expected 2 to {most}")
+    target = out or sample_path(name, frames, resolution)
+    check_target(target, written_by="vo_lib generate", force=force, option="--out", keep=kept_data_folder())
+    if out and not force and (Path(target) / "image_0").is_dir():  # ours, but a sequence
+        raise OutputError(
+            f"--out {out}: holds a sequence generated earlier, which something may still read; "
+            "add --force to generate it again"
+        )
+    try:
+        path = generate(name, target, frames, resolution, progress=sys.stderr.isatty(), force=force)
+    except OutputError as exc:  # named by the folder; the user gave it as --out
+        text = str(exc)
+        raise OutputError(f"--out {text}" if out and not text.startswith("--out ") else text) from None
+    print(f"wrote {path}")

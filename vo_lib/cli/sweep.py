@@ -24,9 +24,8 @@ import numpy as np
 
 from vo_lib.arguments import UsageError, one_line
 from vo_lib.outputs import OutputFolder
+from vo_lib.stereo_vo.paper_tables import PAPER_TABLE1  # its resolutions, largest first
 
-#: [Zhao]'s Table 1 resolutions, largest first.
-TABLE1_RESOLUTIONS = ("640x480", "512x384", "400x300", "320x240", "256x192")
 #: Each sweep: the function one task calls (``module.name``), the tasks for a number of seeds,
 #: and what it measures.
 SWEEPS = {
@@ -47,7 +46,7 @@ SWEEPS = {
     ),
     "table1": (
         "vo_lib.stereo_vo.paper_tables.stage_times",
-        lambda n: [{"resolution": r, "seed": s} for r in TABLE1_RESOLUTIONS for s in range(n)],
+        lambda n: [{"resolution": f"{w}x{h}", "seed": s} for w, h in PAPER_TABLE1 for s in range(n)],
         "[Zhao], Table 1: milliseconds per stage at five resolutions",
     ),
 }
