@@ -69,11 +69,9 @@ def compose_planar(pose, increment) -> np.ndarray:
         c, s = math.cos(yaw), math.sin(yaw)
         return np.array([x + c * dx - s * dy, y + s * dx + c * dy, wrap_angle(yaw + dyaw)])
     c, s = np.cos(pose[..., 2]), np.sin(pose[..., 2])
-    out = np.empty(np.broadcast_shapes(pose.shape, inc.shape))
-    out[..., 0] = pose[..., 0] + c * inc[..., 0] - s * inc[..., 1]
-    out[..., 1] = pose[..., 1] + s * inc[..., 0] + c * inc[..., 1]
-    out[..., 2] = wrap_angle(pose[..., 2] + inc[..., 2])
-    return out
+    x = pose[..., 0] + c * inc[..., 0] - s * inc[..., 1]
+    y = pose[..., 1] + s * inc[..., 0] + c * inc[..., 1]
+    return np.stack([x, y, wrap_angle(pose[..., 2] + inc[..., 2])], axis=-1)
 
 
 def relative_planar(pose_from, pose_to) -> np.ndarray:
@@ -90,11 +88,7 @@ def relative_planar(pose_from, pose_to) -> np.ndarray:
         return np.array([c * dx + s * dy, -s * dx + c * dy, wrap_angle(byaw - ayaw)])
     c, s = np.cos(a[..., 2]), np.sin(a[..., 2])
     dx, dy = b[..., 0] - a[..., 0], b[..., 1] - a[..., 1]
-    out = np.empty(np.broadcast_shapes(a.shape, b.shape))
-    out[..., 0] = c * dx + s * dy
-    out[..., 1] = -s * dx + c * dy
-    out[..., 2] = wrap_angle(b[..., 2] - a[..., 2])
-    return out
+    return np.stack([c * dx + s * dy, -s * dx + c * dy, wrap_angle(b[..., 2] - a[..., 2])], axis=-1)
 
 
 def as_match_array(name: str, w, columns: int = 3) -> np.ndarray:
