@@ -30,18 +30,6 @@ def _positive(name: str, value) -> float:
     return value
 
 
-def _finite(name: str, value: float) -> None:
-    """``value`` a finite number."""
-    if not math.isfinite(value):
-        raise ValueError(f"{name} must be finite; got {value!r}")
-
-
-def _pixels(name: str, value) -> None:
-    """``value``, if given, a positive whole number of pixels."""
-    if value is not None and (int(value) != value or value <= 0):
-        raise ValueError(f"{name} must be a positive whole number of pixels; got {value!r}")
-
-
 @dataclass(frozen=True)
 class StereoCamera:
     """Pinhole intrinsics shared by a rectified stereo pair, and its baseline.
@@ -72,10 +60,12 @@ class StereoCamera:
         _positive("fx (focal length in pixels)", self.fx)
         _positive("fy (focal length in pixels)", self.fy)
         _positive("baseline (metres)", self.baseline)
-        _finite("cx (principal point)", self.cx)
-        _finite("cy (principal point)", self.cy)
-        _pixels("width", self.width)
-        _pixels("height", self.height)
+        for name in ("cx", "cy"):
+            if not math.isfinite(value := getattr(self, name)):
+                raise ValueError(f"{name} (principal point) must be finite; got {value!r}")
+        for name in ("width", "height"):
+            if (value := getattr(self, name)) is not None and (int(value) != value or value <= 0):
+                raise ValueError(f"{name} must be a positive whole number of pixels; got {value!r}")
 
     # ------------------------------------------------------------------ constructors
     @classmethod
