@@ -193,7 +193,8 @@ def simulate_lap(
     )
     dr = pose.copy()
     steer, target = 0.0, 0
-    truth, est, covs, dead = [pose.copy()], [pose.copy()], [ekf.P.copy()], [dr.copy()]
+    # per step: truth, estimate, pose covariance, dead reckoning
+    rows = [(pose.copy(), pose.copy(), ekf.P.copy(), dr.copy())]
     observed_at, nees = [], []
     landmark_of_segment: dict[int, int] = {}
     endpoints: dict[int, list] = {i: [] for i in range(len(segs))}
@@ -223,18 +224,16 @@ def simulate_lap(
             observed_at.append(k)
             if k >= 4 * sc.observe_every:  # the pose covariance is rank-deficient for the first steps
                 nees.append(ekf.pose_nees(pose))
-        truth.append(pose.copy())
-        est.append(ekf.pose.copy())
-        covs.append(ekf.pose_cov.copy())
-        dead.append(dr.copy())
+        rows.append((pose.copy(), ekf.pose.copy(), ekf.pose_cov.copy(), dr.copy()))
+    truth, est, covs, dead = (np.array(column) for column in zip(*rows, strict=True))
     n = ekf.n_landmarks
     return LineSlamRun(
         scenario=sc,
         observer=observer,
-        truth=np.array(truth),
-        estimate=np.array(est),
-        pose_cov=np.array(covs),
-        dead_reckoning=np.array(dead),
+        truth=truth,
+        estimate=est,
+        pose_cov=covs,
+        dead_reckoning=dead,
         observed_at=np.array(observed_at),
         nees=np.array(nees),
         landmarks=ekf.x[3:].reshape(n, 2).copy(),
