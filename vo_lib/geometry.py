@@ -46,8 +46,7 @@ def planar_to_matrix(pose, z: float = 0.0) -> np.ndarray:
     """4x4 homogeneous matrix of a planar pose ``(x, y, yaw)`` lifted to height ``z``."""
     x, y, yaw = np.asarray(pose, dtype=float)
     T = np.eye(4)
-    T[:3, :3] = yaw_matrix(yaw)
-    T[:3, 3] = (x, y, z)
+    T[:3, :3], T[:3, 3] = yaw_matrix(yaw), (x, y, z)
     return T
 
 
@@ -115,8 +114,7 @@ def camera_mount(forward: float = 0.0, height: float = 0.5, left: float = 0.0) -
     sits above the turning axis, where the circular-motion model of [Zhao] is exact.
     """
     T = np.eye(4)
-    T[:3, :3] = R_ROBOT_FROM_CAMERA
-    T[:3, 3] = (forward, left, height)
+    T[:3, :3], T[:3, 3] = R_ROBOT_FROM_CAMERA, (forward, left, height)
     return T
 
 
