@@ -137,11 +137,8 @@ class StereoCamera:
             raise ValueError(
                 f"points must lie in front of the camera (z > 0); row {bad} has z={float(z[bad])}"
             )
-        w = np.empty_like(P)
-        w[:, 0] = self.cx + self.fx * P[:, 0] / z
-        w[:, 1] = self.cy + self.fy * P[:, 1] / z
-        w[:, 2] = self.fx * self.baseline / z
-        return w
+        u, v = self.cx + self.fx * P[:, 0] / z, self.cy + self.fy * P[:, 1] / z
+        return np.column_stack([u, v, self.fx * self.baseline / z])
 
     def backproject(self, w) -> np.ndarray:
         """Points ``(N, 3)`` in the left camera frame from ``w = (u, v, d)`` ([Zhao], eq. 13).
@@ -162,11 +159,8 @@ class StereoCamera:
                 f"w[:, 2] (disparity) must be > 0 to back-project; row {bad} has d={float(d[bad])}"
             )
         scale = self.baseline / d
-        P = np.empty_like(w)
-        P[:, 0] = scale * (w[:, 0] - self.cx)
-        P[:, 1] = scale * (w[:, 1] - self.cy) * (self.fx / self.fy)
-        P[:, 2] = scale * self.fx
-        return P
+        x, y = scale * (w[:, 0] - self.cx), scale * (w[:, 1] - self.cy) * (self.fx / self.fy)
+        return np.column_stack([x, y, scale * self.fx])
 
     def depth_from_disparity(self, d):
         """Depth ``z = fx * B / d`` of disparities ``d`` in pixels; ``d`` must be > 0."""
