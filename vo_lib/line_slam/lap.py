@@ -79,6 +79,13 @@ class LineSlamScenario:
     observation: str = "feature_point"
     max_line_direction_sigma: float = math.radians(2.0)
 
+    def filter(self, pose, **options) -> EkfSlam:
+        """EKF-SLAM from ``pose`` with this scenario's noise, period and wheelbase; ``options`` are
+        :class:`EkfSlam`'s ``pose_cov`` and ``model``."""
+        Q = diagonal_cov(self.speed_sigma, self.steer_sigma)  # speed and steering angle
+        R = diagonal_cov(self.range_sigma, self.bearing_sigma)  # range and bearing
+        return EkfSlam(pose, Q, R, self.period, self.wheelbase, **options)
+
 
 @dataclass
 class LineSlamRun:
@@ -183,14 +190,7 @@ def simulate_lap(
 
     first = sc.waypoints[0]
     pose = np.array([*sc.start, math.atan2(first[1] - sc.start[1], first[0] - sc.start[0])])
-    ekf = EkfSlam(
-        pose,
-        diagonal_cov(sc.speed_sigma, sc.steer_sigma),
-        diagonal_cov(sc.range_sigma, sc.bearing_sigma),
-        sc.period,
-        sc.wheelbase,
-        model=models[sc.observation],
-    )
+    ekf = sc.filter(pose, model=models[sc.observation])
     dr = pose.copy()
     steer, target = 0.0, 0
     # per step: truth, estimate, pose covariance, dead reckoning
@@ -318,15 +318,7 @@ def association_example():
     distance picks B, but the error lies along the uncertain bearing, not the precise range, and
     the Mahalanobis distance (eq. 13) picks A.
     """
-    sc = LineSlamScenario()
-    ekf = EkfSlam(
-        np.zeros(3),
-        diagonal_cov(sc.speed_sigma, sc.steer_sigma),
-        diagonal_cov(sc.range_sigma, sc.bearing_sigma),
-        sc.period,
-        sc.wheelbase,
-        pose_cov=np.diag([0.05**2, 0.05**2, math.radians(5.0) ** 2]),
-    )
+    ekf = LineSlamScenario().filter(np.zeros(3), pose_cov=np.diag([0.05**2, 0.05**2, math.radians(5.0) ** 2]))
     a = 20.0 * np.array([math.cos(math.radians(4.0)), math.sin(math.radians(4.0))])
     for point in (a, np.array([20.9, 0.0])):
         ekf.augment(observe_point(ekf.pose, point))
