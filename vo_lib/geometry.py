@@ -90,8 +90,8 @@ def relative_planar(pose_from, pose_to) -> np.ndarray:
     return np.stack([c * dx + s * dy, -s * dx + c * dy, wrap_angle(b[..., 2] - a[..., 2])], axis=-1)
 
 
-def as_match_array(name: str, w, columns: int = 3) -> np.ndarray:
-    """Check that ``w`` is a finite float array of shape ``(N, columns)`` and return it.
+def as_match_array(name: str, w) -> np.ndarray:
+    """Check that ``w`` is a finite float array of shape ``(N, 3)`` and return it.
 
     Raises
     ------
@@ -99,8 +99,8 @@ def as_match_array(name: str, w, columns: int = 3) -> np.ndarray:
         Naming ``name``, when the shape is wrong or a value is not finite.
     """
     arr = np.asarray(w, dtype=float)
-    if arr.ndim != 2 or arr.shape[1] != columns:
-        raise ValueError(f"{name} must have shape (N, {columns}) with columns u, v, d; got shape {arr.shape}")
+    if arr.ndim != 2 or arr.shape[1] != 3:
+        raise ValueError(f"{name} must have shape (N, 3) with columns u, v, d; got shape {arr.shape}")
     if not np.all(np.isfinite(arr)):
         bad = int(np.argwhere(~np.isfinite(arr))[0, 0])
         raise ValueError(f"{name} must be finite; row {bad} holds {arr[bad].tolist()}")
