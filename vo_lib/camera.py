@@ -30,18 +30,6 @@ def _positive(name: str, value) -> float:
     return value
 
 
-def _finite(name: str, value: float) -> None:
-    """``value`` a finite number."""
-    if not math.isfinite(value):
-        raise ValueError(f"{name} must be finite; got {value!r}")
-
-
-def _pixels(name: str, value) -> None:
-    """``value``, if given, a positive whole number of pixels."""
-    if value is not None and (int(value) != value or value <= 0):
-        raise ValueError(f"{name} must be a positive whole number of pixels; got {value!r}")
-
-
 @dataclass(frozen=True)
 class StereoCamera:
     """Pinhole intrinsics shared by a rectified stereo pair, and its baseline.
@@ -72,10 +60,12 @@ class StereoCamera:
         _positive("fx (focal length in pixels)", self.fx)
         _positive("fy (focal length in pixels)", self.fy)
         _positive("baseline (metres)", self.baseline)
-        _finite("cx (principal point)", self.cx)
-        _finite("cy (principal point)", self.cy)
-        _pixels("width", self.width)
-        _pixels("height", self.height)
+        for name in ("cx", "cy"):
+            if not math.isfinite(value := getattr(self, name)):
+                raise ValueError(f"{name} (principal point) must be finite; got {value!r}")
+        for name in ("width", "height"):
+            if (value := getattr(self, name)) is not None and (int(value) != value or value <= 0):
+                raise ValueError(f"{name} must be a positive whole number of pixels; got {value!r}")
 
     # ------------------------------------------------------------------ constructors
     @classmethod
@@ -147,11 +137,8 @@ class StereoCamera:
             raise ValueError(
                 f"points must lie in front of the camera (z > 0); row {bad} has z={float(z[bad])}"
             )
-        w = np.empty_like(P)
-        w[:, 0] = self.cx + self.fx * P[:, 0] / z
-        w[:, 1] = self.cy + self.fy * P[:, 1] / z
-        w[:, 2] = self.fx * self.baseline / z
-        return w
+        u, v = self.cx + self.fx * P[:, 0] / z, self.cy + self.fy * P[:, 1] / z
+        return np.column_stack([u, v, self.fx * self.baseline / z])
 
     def backproject(self, w) -> np.ndarray:
         """Points ``(N, 3)`` in the left camera frame from ``w = (u, v, d)`` ([Zhao], eq. 13).
@@ -172,11 +159,8 @@ class StereoCamera:
                 f"w[:, 2] (disparity) must be > 0 to back-project; row {bad} has d={float(d[bad])}"
             )
         scale = self.baseline / d
-        P = np.empty_like(w)
-        P[:, 0] = scale * (w[:, 0] - self.cx)
-        P[:, 1] = scale * (w[:, 1] - self.cy) * (self.fx / self.fy)
-        P[:, 2] = scale * self.fx
-        return P
+        x, y = scale * (w[:, 0] - self.cx), scale * (w[:, 1] - self.cy) * (self.fx / self.fy)
+        return np.column_stack([x, y, scale * self.fx])
 
     def depth_from_disparity(self, d):
         """Depth ``z = fx * B / d`` of disparities ``d`` in pixels; ``d`` must be > 0."""

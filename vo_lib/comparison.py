@@ -28,11 +28,12 @@ BOOTSTRAP_SEED = 20240611
 
 
 class Verdict(enum.Enum):
-    """Outcome of a paired comparison of ``a`` against ``b`` (lower figures are better)."""
+    """Outcome of a paired comparison of ``a`` against ``b`` (lower figures are better); the value
+    is the relation a sentence states, ``a is <value> b``."""
 
-    BETTER = "better"
-    WORSE = "worse"
-    NOT_RELIABLE = "not reliably different"
+    BETTER = "better than"
+    WORSE = "worse than"
+    NOT_RELIABLE = "not reliably different from"
 
 
 def bootstrap_interval(values: Iterable[float], statistic: Callable = np.median) -> tuple[float, float]:
@@ -110,14 +111,8 @@ class Comparison:
                 f"{vb:.{digits}f}{u}), so this is one result, which the seeds do not test"
             )
         median, low, high = (scale * v for v in self.difference(a, b))
-        verdict = self.verdict(a, b)
-        relation = {
-            Verdict.BETTER: "is better than",
-            Verdict.WORSE: "is worse than",
-            Verdict.NOT_RELIABLE: "is not reliably different from",
-        }[verdict]
         return (
-            f"{a} {relation} {b}: lower in {self.share(a, b)} of {len(self)} seeds "
+            f"{a} is {self.verdict(a, b).value} {b}: lower in {self.share(a, b)} of {len(self)} seeds "
             f"(median difference {median:+.{digits}f}{u}, {100 * CONFIDENCE:.0f} % CI "
             f"{low:+.{digits}f} to {high:+.{digits}f}{u})"
         )

@@ -14,6 +14,7 @@ from dataclasses import dataclass
 from enum import Enum
 
 import numpy as np
+from scipy.spatial.transform import Rotation
 
 from vo_lib.geometry import as_homogeneous, rigid_inverse, wrap_angle
 
@@ -43,16 +44,10 @@ class ErrorStats:
 
 
 def rotation_angle(R) -> np.ndarray:
-    """Angle in radians of rotation matrices ``(..., 3, 3)``, stable at every angle:
-    ``theta = atan2(|vee(R - R^T)| / 2, (trace R - 1) / 2)`` (Rodrigues' formula). ``arccos`` of the
-    cosine alone loses half the digits near 0 (a rounding of ``1e-9`` becomes ``4e-5`` rad)."""
-    R = np.asarray(R, dtype=float)
-    skew = np.stack(
-        [R[..., 2, 1] - R[..., 1, 2], R[..., 0, 2] - R[..., 2, 0], R[..., 1, 0] - R[..., 0, 1]], axis=-1
-    )
-    sin = 0.5 * np.linalg.norm(skew, axis=-1)
-    cos = 0.5 * (np.trace(R, axis1=-2, axis2=-1) - 1.0)
-    return np.arctan2(sin, cos)
+    """Angle in radians of rotation matrices ``(..., 3, 3)`` (Rodrigues' angle), stable at every
+    angle: SciPy's ``2 atan2(|q_xyz|, |q_w|)`` of the unit quaternion. ``arccos`` of the cosine
+    ``(trace R - 1) / 2`` loses half the digits near 0 (a rounding of ``1e-9`` becomes ``4e-5`` rad)."""
+    return Rotation.from_matrix(R).magnitude()
 
 
 def umeyama(source: np.ndarray, target: np.ndarray, with_scale: bool = False):

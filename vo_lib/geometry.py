@@ -46,8 +46,7 @@ def planar_to_matrix(pose, z: float = 0.0) -> np.ndarray:
     """4x4 homogeneous matrix of a planar pose ``(x, y, yaw)`` lifted to height ``z``."""
     x, y, yaw = np.asarray(pose, dtype=float)
     T = np.eye(4)
-    T[:3, :3] = yaw_matrix(yaw)
-    T[:3, 3] = (x, y, z)
+    T[:3, :3], T[:3, 3] = yaw_matrix(yaw), (x, y, z)
     return T
 
 
@@ -69,11 +68,9 @@ def compose_planar(pose, increment) -> np.ndarray:
         c, s = math.cos(yaw), math.sin(yaw)
         return np.array([x + c * dx - s * dy, y + s * dx + c * dy, wrap_angle(yaw + dyaw)])
     c, s = np.cos(pose[..., 2]), np.sin(pose[..., 2])
-    out = np.empty(np.broadcast_shapes(pose.shape, inc.shape))
-    out[..., 0] = pose[..., 0] + c * inc[..., 0] - s * inc[..., 1]
-    out[..., 1] = pose[..., 1] + s * inc[..., 0] + c * inc[..., 1]
-    out[..., 2] = wrap_angle(pose[..., 2] + inc[..., 2])
-    return out
+    x = pose[..., 0] + c * inc[..., 0] - s * inc[..., 1]
+    y = pose[..., 1] + s * inc[..., 0] + c * inc[..., 1]
+    return np.stack([x, y, wrap_angle(pose[..., 2] + inc[..., 2])], axis=-1)
 
 
 def relative_planar(pose_from, pose_to) -> np.ndarray:
@@ -90,15 +87,11 @@ def relative_planar(pose_from, pose_to) -> np.ndarray:
         return np.array([c * dx + s * dy, -s * dx + c * dy, wrap_angle(byaw - ayaw)])
     c, s = np.cos(a[..., 2]), np.sin(a[..., 2])
     dx, dy = b[..., 0] - a[..., 0], b[..., 1] - a[..., 1]
-    out = np.empty(np.broadcast_shapes(a.shape, b.shape))
-    out[..., 0] = c * dx + s * dy
-    out[..., 1] = -s * dx + c * dy
-    out[..., 2] = wrap_angle(b[..., 2] - a[..., 2])
-    return out
+    return np.stack([c * dx + s * dy, -s * dx + c * dy, wrap_angle(b[..., 2] - a[..., 2])], axis=-1)
 
 
-def as_match_array(name: str, w, columns: int = 3) -> np.ndarray:
-    """Check that ``w`` is a finite float array of shape ``(N, columns)`` and return it.
+def as_match_array(name: str, w) -> np.ndarray:
+    """Check that ``w`` is a finite float array of shape ``(N, 3)`` and return it.
 
     Raises
     ------
@@ -106,8 +99,8 @@ def as_match_array(name: str, w, columns: int = 3) -> np.ndarray:
         Naming ``name``, when the shape is wrong or a value is not finite.
     """
     arr = np.asarray(w, dtype=float)
-    if arr.ndim != 2 or arr.shape[1] != columns:
-        raise ValueError(f"{name} must have shape (N, {columns}) with columns u, v, d; got shape {arr.shape}")
+    if arr.ndim != 2 or arr.shape[1] != 3:
+        raise ValueError(f"{name} must have shape (N, 3) with columns u, v, d; got shape {arr.shape}")
     if not np.all(np.isfinite(arr)):
         bad = int(np.argwhere(~np.isfinite(arr))[0, 0])
         raise ValueError(f"{name} must be finite; row {bad} holds {arr[bad].tolist()}")
@@ -121,8 +114,7 @@ def camera_mount(forward: float = 0.0, height: float = 0.5, left: float = 0.0) -
     sits above the turning axis, where the circular-motion model of [Zhao] is exact.
     """
     T = np.eye(4)
-    T[:3, :3] = R_ROBOT_FROM_CAMERA
-    T[:3, 3] = (forward, left, height)
+    T[:3, :3], T[:3, 3] = R_ROBOT_FROM_CAMERA, (forward, left, height)
     return T
 
 

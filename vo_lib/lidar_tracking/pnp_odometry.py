@@ -26,6 +26,7 @@ import numpy as np
 
 from vo_lib.stereo_vo.baselines import cross_checked_matches
 from vo_lib.stereo_vo.features import StereoFrontEnd, best_matches, hamming
+from vo_lib.stereo_vo.rigid_motion import rigid_matrix
 
 SEARCH_RADIUS = 15.0  # pixels around the predicted position (eq. 5)
 MAX_KEYFRAMES = 5
@@ -164,10 +165,7 @@ class PnpVisualOdometry:
                 inliers = len(idx)
                 sel = idx.ravel()
                 rvec, tvec = cv2.solvePnPRefineLM(world[sel], pixels[sel], self.camera.K, None, rvec, tvec)
-                T_cw = np.eye(4)
-                T_cw[:3, :3] = cv2.Rodrigues(rvec)[0]
-                T_cw[:3, 3] = tvec.ravel()
-                new_pose = np.linalg.inv(T_cw)
+                new_pose = np.linalg.inv(rigid_matrix(cv2.Rodrigues(rvec)[0], tvec.ravel()))
         self.lost = inliers == 0
         self.velocity = np.linalg.inv(self.pose) @ new_pose if not self.lost else self.velocity
         self.pose = new_pose

@@ -79,6 +79,13 @@ class LineSlamScenario:
     observation: str = "feature_point"
     max_line_direction_sigma: float = math.radians(2.0)
 
+    def filter(self, pose, **options) -> EkfSlam:
+        """EKF-SLAM from ``pose`` with this scenario's noise, period and wheelbase; ``options`` are
+        :class:`EkfSlam`'s ``pose_cov`` and ``model``."""
+        Q = diagonal_cov(self.speed_sigma, self.steer_sigma)  # speed and steering angle
+        R = diagonal_cov(self.range_sigma, self.bearing_sigma)  # range and bearing
+        return EkfSlam(pose, Q, R, self.period, self.wheelbase, **options)
+
 
 @dataclass
 class LineSlamRun:
@@ -183,17 +190,11 @@ def simulate_lap(
 
     first = sc.waypoints[0]
     pose = np.array([*sc.start, math.atan2(first[1] - sc.start[1], first[0] - sc.start[0])])
-    ekf = EkfSlam(
-        pose,
-        diagonal_cov(sc.speed_sigma, sc.steer_sigma),
-        diagonal_cov(sc.range_sigma, sc.bearing_sigma),
-        sc.period,
-        sc.wheelbase,
-        model=models[sc.observation],
-    )
+    ekf = sc.filter(pose, model=models[sc.observation])
     dr = pose.copy()
     steer, target = 0.0, 0
-    truth, est, covs, dead = [pose.copy()], [pose.copy()], [ekf.P.copy()], [dr.copy()]
+    # per step: truth, estimate, pose covariance, dead reckoning
+    rows = [(pose.copy(), pose.copy(), ekf.P.copy(), dr.copy())]
     observed_at, nees = [], []
     landmark_of_segment: dict[int, int] = {}
     endpoints: dict[int, list] = {i: [] for i in range(len(segs))}
@@ -223,18 +224,16 @@ def simulate_lap(
             observed_at.append(k)
             if k >= 4 * sc.observe_every:  # the pose covariance is rank-deficient for the first steps
                 nees.append(ekf.pose_nees(pose))
-        truth.append(pose.copy())
-        est.append(ekf.pose.copy())
-        covs.append(ekf.pose_cov.copy())
-        dead.append(dr.copy())
+        rows.append((pose.copy(), ekf.pose.copy(), ekf.pose_cov.copy(), dr.copy()))
+    truth, est, covs, dead = (np.array(column) for column in zip(*rows, strict=True))
     n = ekf.n_landmarks
     return LineSlamRun(
         scenario=sc,
         observer=observer,
-        truth=np.array(truth),
-        estimate=np.array(est),
-        pose_cov=np.array(covs),
-        dead_reckoning=np.array(dead),
+        truth=truth,
+        estimate=est,
+        pose_cov=covs,
+        dead_reckoning=dead,
         observed_at=np.array(observed_at),
         nees=np.array(nees),
         landmarks=ekf.x[3:].reshape(n, 2).copy(),
@@ -319,15 +318,7 @@ def association_example():
     distance picks B, but the error lies along the uncertain bearing, not the precise range, and
     the Mahalanobis distance (eq. 13) picks A.
     """
-    sc = LineSlamScenario()
-    ekf = EkfSlam(
-        np.zeros(3),
-        diagonal_cov(sc.speed_sigma, sc.steer_sigma),
-        diagonal_cov(sc.range_sigma, sc.bearing_sigma),
-        sc.period,
-        sc.wheelbase,
-        pose_cov=np.diag([0.05**2, 0.05**2, math.radians(5.0) ** 2]),
-    )
+    ekf = LineSlamScenario().filter(np.zeros(3), pose_cov=np.diag([0.05**2, 0.05**2, math.radians(5.0) ** 2]))
     a = 20.0 * np.array([math.cos(math.radians(4.0)), math.sin(math.radians(4.0))])
     for point in (a, np.array([20.9, 0.0])):
         ekf.augment(observe_point(ekf.pose, point))

@@ -99,11 +99,8 @@ class TrackOdometry:
         state = _states(state)
         du, dtheta = self.increment(u)
         a = state[..., 2] + 0.5 * dtheta
-        out = np.empty(np.broadcast_shapes(state.shape, np.shape(du) + (3,)))
-        out[..., 0] = state[..., 0] + du * np.cos(a)
-        out[..., 1] = state[..., 1] + du * np.sin(a)
-        out[..., 2] = wrap_angle(state[..., 2] + dtheta)
-        return out
+        x, y = state[..., 0] + du * np.cos(a), state[..., 1] + du * np.sin(a)
+        return np.stack(np.broadcast_arrays(x, y, wrap_angle(state[..., 2] + dtheta)), axis=-1)
 
     # ------------------------------------------------------------------ linearisation
     def jacobians(self, state, u) -> tuple[np.ndarray, np.ndarray]:
@@ -180,11 +177,8 @@ class TrackOdometry:
         theta = start[2] + np.concatenate([[0.0], np.cumsum(dtheta)])
         step = du * np.sinc(dtheta / (2.0 * np.pi)) if exact else du
         a = theta[:-1] + 0.5 * dtheta
-        poses = np.empty((len(controls) + 1, 3))
-        poses[:, 0] = start[0] + np.concatenate([[0.0], np.cumsum(step * np.cos(a))])
-        poses[:, 1] = start[1] + np.concatenate([[0.0], np.cumsum(step * np.sin(a))])
-        poses[:, 2] = wrap_angle(theta)
-        return poses
+        x, y = (np.concatenate([[0.0], np.cumsum(step * f(a))]) for f in (np.cos, np.sin))
+        return np.column_stack([start[0] + x, start[1] + y, wrap_angle(theta)])
 
 
 def apply_slip(u, slip_left: float = 0.0, slip_right: float = 0.0) -> np.ndarray:

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from vo_lib.evaluation import is_spot_turn, turned_degrees
+from vo_lib.evaluation import is_spot_turn, rotation_angle, turned_degrees
 from vo_lib.geometry import wrap_angle
 
 TRUTH_STYLE = {"color": "0.55", "lw": 5.0, "alpha": 0.45, "solid_capstyle": "round", "zorder": 1}
@@ -122,6 +122,10 @@ def plot_run(
         _errors_3d(errors, times, *camera_poses)
     elif errors:
         _error_views(errors, times, paths)
+    for ax in errors:
+        ax.grid(True, alpha=0.3)
+    if errors:
+        errors[0].legend(loc="best", fontsize="x-small")
     return {"main": main, "errors": errors, "spot_turn": spot}
 
 
@@ -138,22 +142,14 @@ def _error_views(errors, times, paths) -> None:
     errors[0].set(ylabel="position error [cm]", title="errors against ground truth")
     errors[1].set(ylabel="heading error [deg]", xlabel="time [s]")
     errors[1].axhline(0.0, color="0.5", lw=0.8)
-    for ax in errors:
-        ax.grid(True, alpha=0.3)
-    errors[0].legend(loc="best", fontsize="x-small")
 
 
 def _errors_3d(errors, times, estimate, truth) -> None:
     """3-D position error and rotation angle of the estimate's camera poses against the truth's."""
     E, T = np.asarray(estimate, float), np.asarray(truth, float)
     position = 100 * np.linalg.norm(E[:, :3, 3] - T[:, :3, 3], axis=1)
-    # the angle of R_true^T R_est: cos = (trace - 1) / 2
-    cos = (np.einsum("kji,kji->k", T[:, :3, :3], E[:, :3, :3]) - 1) / 2
     line = {k: v for k, v in ESTIMATE_STYLE.items() if k != "zorder"}
     errors[0].plot(times, position, label="visual odometry", **line)
-    errors[1].plot(times, np.degrees(np.arccos(np.clip(cos, -1, 1))), **line)
+    errors[1].plot(times, np.degrees(rotation_angle(np.swapaxes(T[:, :3, :3], 1, 2) @ E[:, :3, :3])), **line)
     errors[0].set(ylabel="3-D position error [cm]", title="errors against ground truth")
     errors[1].set(ylabel="rotation error [deg]", xlabel="time [s]")
-    for ax in errors:
-        ax.grid(True, alpha=0.3)
-    errors[0].legend(loc="best", fontsize="x-small")
