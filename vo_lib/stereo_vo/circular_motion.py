@@ -28,6 +28,7 @@ import numpy as np
 
 from vo_lib.camera import StereoCamera
 from vo_lib.geometry import as_match_array
+from vo_lib.stereo_vo.rigid_motion import rigid_matrix
 
 #: A match whose rows satisfy ``|v + v' - 2 v0|`` below this many pixels is treated as lying at
 #: the camera's height, where eq. 14 is 0/0.
@@ -144,9 +145,7 @@ def motion_matrices(theta, rho) -> tuple[np.ndarray, np.ndarray]:
 
 def motion_transform(theta: float, rho: float) -> np.ndarray:
     """4x4 ``T_curr_from_prev`` of a circular motion (eq. 15): ``[[R, T], [0, 1]]``."""
-    M = np.eye(4)
-    M[:3, :3], M[:3, 3] = motion_matrices(theta, rho)
-    return M
+    return rigid_matrix(*motion_matrices(theta, rho))
 
 
 def apply_motion(points, theta: float, rho: float) -> np.ndarray:

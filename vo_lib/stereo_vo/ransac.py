@@ -200,8 +200,7 @@ class ThetaModel:
 
     def __init__(self, wa: np.ndarray, wb: np.ndarray, camera: StereoCamera, pixel_sigma: float):
         self.values, self.variances = theta_and_variance(wa, wb, camera, pixel_sigma)
-        (tan_a, self.beta_a), (tan_b, self.beta_b) = gate_angles(wa, camera), gate_angles(wb, camera)
-        self.tan_ratio = tan_b / tan_a
+        self.tan_ratio, self.beta_a, self.beta_b = match_angles(wa, wb, camera)
         # eq. 20's slope in theta is 0.5 sin(beta + beta') / sin^2(gamma) (theta_gate_and_slope)
         self.two_over_sin_sum = 2.0 / np.sin(self.beta_a + self.beta_b)
 
@@ -262,6 +261,10 @@ def search(
     values, variances = model.each_match()
     k2 = params.gate_sigmas**2
     bounds = k2 * variances
+
+    def support(hyp: np.ndarray, hyp_var: np.ndarray) -> np.ndarray:  # supporters of each hypothesis
+        return (model.squared_residuals(hyp) <= bounds + (k2 * hyp_var)[:, None]).sum(axis=1)
+
     pool = np.argsort(variances)[: max(params.min_pool, int(params.pool_fraction * len(values)))]
     # a hypothesis counts as no more certain than a typical one: the pool's median variance (the
     # pool is sorted, so the median is its middle value, or the mean of its middle two)
@@ -270,15 +273,13 @@ def search(
     best_value, best_var, best_count = math.nan, math.nan, -1
     if prior is not None and math.isfinite(prior[0]):
         best_value, best_var = prior[0], min(prior[1], cap)
-        best_count = int(
-            np.count_nonzero(model.squared_residuals(np.array([best_value]))[0] <= bounds + k2 * best_var)
-        )
+        best_count = int(support(np.array([best_value]), np.array([best_var]))[0])
     tried = 0
     limit = min(hypotheses_needed(params.initial_inlier_ratio, params.confidence), params.max_hypotheses)
     while tried < limit:
         picked = pool[np.minimum((uniforms[tried:limit] * len(pool)).astype(np.int64), len(pool) - 1)]
         hyp, hyp_var = values[picked], np.minimum(variances[picked], cap)
-        counts = (model.squared_residuals(hyp) <= bounds + (k2 * hyp_var)[:, None]).sum(axis=1)
+        counts = support(hyp, hyp_var)
         top = int(np.lexsort((hyp_var, -counts))[0])  # most supporters; among equals, least variance
         if counts[top] > best_count:
             best_value, best_var, best_count = float(hyp[top]), float(hyp_var[top]), int(counts[top])
