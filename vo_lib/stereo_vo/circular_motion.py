@@ -35,9 +35,9 @@ from vo_lib.stereo_vo.rigid_motion import rigid_matrix
 DEGENERATE_ROW_PIXELS = 1e-9
 
 
-def _pair(w_prev, w_curr) -> tuple[np.ndarray, np.ndarray]:
-    a = as_match_array("w_prev", w_prev)
-    b = as_match_array("w_curr", w_curr)
+def match_pair(w_prev, w_curr) -> tuple[np.ndarray, np.ndarray]:
+    """Matches ``(N, 3)`` of both frames as float arrays; ``ValueError`` unless of one shape."""
+    a, b = as_match_array("w_prev", w_prev), as_match_array("w_curr", w_curr)
     if a.shape != b.shape:
         raise ValueError(f"w_prev and w_curr must have the same shape; got {a.shape} and {b.shape}")
     return a, b
@@ -53,7 +53,7 @@ def _eq14_terms(a: np.ndarray, b: np.ndarray, camera: StereoCamera):
 
 def degenerate_theta_mask(w_prev, w_curr, camera: StereoCamera, min_pixels: float = 0.5) -> np.ndarray:
     """Matches too close to the camera's height for eq. 14: ``|v + v' - 2 v0| < min_pixels``."""
-    a, b = _pair(w_prev, w_curr)
+    a, b = match_pair(w_prev, w_curr)
     return np.abs(a[:, 1] + b[:, 1] - 2.0 * camera.cy) < min_pixels
 
 
@@ -66,7 +66,7 @@ def theta_from_pixels(w_prev, w_curr, camera: StereoCamera) -> np.ndarray:
     radians, in ``(-pi, pi)``, per match; NaN for a match exactly at the camera's height
     (``v + v' = 2 v0``, see :func:`degenerate_theta_mask`), which has no defined theta.
     """
-    a, b = _pair(w_prev, w_curr)
+    a, b = match_pair(w_prev, w_curr)
     num, den, _ = _eq14_terms(a, b, camera)
     degenerate = np.abs(den) < DEGENERATE_ROW_PIXELS * camera.fx
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -79,7 +79,7 @@ def theta_standard_deviation(w_prev, w_curr, camera: StereoCamera, sigma_px: flo
     """First-order standard deviation of eq. 14's theta when u, v, u', v' carry noise ``sigma_px``
     (:func:`theta_and_variance`). The error grows as ``1 / |D|`` near the camera's height and with the
     distance of the match from the image centre."""
-    return np.sqrt(theta_and_variance(*_pair(w_prev, w_curr), camera, sigma_px)[1])
+    return np.sqrt(theta_and_variance(*match_pair(w_prev, w_curr), camera, sigma_px)[1])
 
 
 def theta_and_variance(
@@ -108,7 +108,7 @@ def rho_from_pixels(w_prev, w_curr, theta, camera: StereoCamera) -> np.ndarray:
     all matches or one per match; both disparities must be > 0. ``rho`` is negative when the
     camera moves backwards.
     """
-    a, b = _pair(w_prev, w_curr)
+    a, b = match_pair(w_prev, w_curr)
     for name, arr in (("w_prev", a), ("w_curr", b)):
         if np.any(arr[:, 2] <= 0):
             bad = int(np.flatnonzero(arr[:, 2] <= 0)[0])

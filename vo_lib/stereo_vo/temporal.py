@@ -84,10 +84,7 @@ def prediction_sigma(w_prev: np.ndarray, camera: StereoCamera, prior: MotionPrio
 
 
 def refine_positions(
-    prev_image: np.ndarray,
-    curr_image: np.ndarray,
-    w_prev: np.ndarray,
-    w_curr: np.ndarray,
+    prev_image: np.ndarray, curr_image: np.ndarray, w_prev: np.ndarray, w_curr: np.ndarray
 ) -> np.ndarray:
     """Sub-pixel position in the current image of each previous feature's patch.
 
@@ -124,10 +121,7 @@ def refine_positions(
 
 
 def track_subpixel(
-    prev_image: np.ndarray,
-    curr_image: np.ndarray,
-    w_prev: np.ndarray,
-    w_curr: np.ndarray,
+    prev_image: np.ndarray, curr_image: np.ndarray, w_prev: np.ndarray, w_curr: np.ndarray
 ) -> np.ndarray:
     """Sub-pixel position in the current image of each matched previous feature, by tracking.
 
