@@ -131,15 +131,10 @@ def motion_matrices(theta, rho) -> tuple[np.ndarray, np.ndarray]:
     theta, rho = np.broadcast_arrays(np.asarray(theta, dtype=float), np.asarray(rho, dtype=float))
     c, s = np.cos(theta), np.sin(theta)
     R = np.zeros(theta.shape + (3, 3))
-    R[..., 0, 0] = c
-    R[..., 0, 2] = s
-    R[..., 1, 1] = 1.0
-    R[..., 2, 0] = -s
-    R[..., 2, 2] = c
+    R[..., 0, 0], R[..., 0, 2], R[..., 1, 1], R[..., 2, 0], R[..., 2, 2] = c, s, 1.0, -s, c
     phi = 0.5 * theta
     T = np.zeros(theta.shape + (3,))
-    T[..., 0] = -rho * np.sin(phi)
-    T[..., 2] = -rho * np.cos(phi)
+    T[..., 0], T[..., 2] = -rho * np.sin(phi), -rho * np.cos(phi)
     return R, T
 
 
