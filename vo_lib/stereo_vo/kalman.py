@@ -208,13 +208,8 @@ class VoKalmanFilter:
         else:
             R = np.diag([0.0, 0.0, self.sideways_sigma**2])
             R[:2, :2] = covariance
-        self.ekf.update(
-            np.array([theta, rho, sideways]),
-            constrained_jacobian,
-            constrained_measurement,
-            R=R,
-            residual=_residual,
-        )
+        z = np.array([theta, rho, sideways])
+        self.ekf.update(z, constrained_jacobian, constrained_measurement, R=R, residual=_residual)
         self.ekf.x[2] = wrap_angle(self.ekf.x[2])
         self.flags.vo_update = True
 
