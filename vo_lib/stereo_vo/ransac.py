@@ -186,11 +186,9 @@ class OnePointModel(Protocol):
 
     def each_match(self) -> tuple[np.ndarray, np.ndarray]:
         """The parameter from every match alone, and its variance: two arrays of shape (N,)."""
-        ...
 
     def squared_residuals(self, h: np.ndarray) -> np.ndarray:
         """``|r_j(h)|^2`` of every match ``j`` under every hypothesis ``h``: shape (H, N)."""
-        ...
 
 
 class ThetaModel:
