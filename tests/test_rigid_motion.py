@@ -14,6 +14,8 @@ from vo_lib.stereo_vo.rigid_motion import (
     refine_rigid_motion,
     rotation_matrix,
     scaled_motion,
+    se3_exp,
+    se3_log,
 )
 from vo_lib.stereo_vo.six_dof import (
     vehicle_increment,
@@ -75,8 +77,8 @@ def test_prediction_and_scaled_motion(kitti_camera, rng):
 
 
 @pytest.mark.parametrize("angle", [0.0, 1e-7, 1e-3, 0.3, 2.5])
-def test_scaled_motion_agrees_with_expm(angle):
-    from scipy.linalg import expm
+def test_closed_form_se3_log_and_exp_agree_with_logm_and_expm(angle):
+    from scipy.linalg import expm, logm
 
     rng = np.random.default_rng(int(angle * 1e7) % 2**32)
     axis = rng.normal(size=3)
@@ -84,7 +86,12 @@ def test_scaled_motion_agrees_with_expm(angle):
     hat = np.zeros((4, 4))
     hat[:3, :3] = [[0, -w[2], w[1]], [w[2], 0, -w[0]], [-w[1], w[0], 0]]
     hat[:3, 3] = v
-    T = expm(hat)
+    T = se3_exp(w, v)
+    np.testing.assert_allclose(T, expm(hat), atol=1e-12)
+    w2, v2 = se3_log(T)
+    np.testing.assert_allclose(np.r_[w2, v2], np.r_[w, v], atol=1e-10)
+    if angle > 0:
+        np.testing.assert_allclose(np.real(logm(T)), hat, atol=1e-8)
     for factor in (0.5, 1.0 / 3.0, 2.0, 3.0):
         np.testing.assert_allclose(scaled_motion(T, factor), np.real(expm(factor * hat)), atol=1e-10)
     assert not np.allclose(scaled_motion(T, 2.0), T) or angle == 0.0 and np.allclose(v, 0)

@@ -20,11 +20,12 @@ general one.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import cv2
 import numpy as np
-from scipy.spatial.transform import RigidTransform
+from scipy.spatial.transform import Rotation
 
 from vo_lib.camera import StereoCamera
 
@@ -172,15 +173,51 @@ def refine_rigid_motion(
     return RigidMotion(R, t, cov, inl, float(np.sqrt(np.mean(res**2))), True)
 
 
+def _left_jacobian(rotvec: np.ndarray) -> np.ndarray:
+    """``V(w)`` of SE(3): ``t = V(w) v`` for the twist ``(w, v)``, in closed form,
+    ``V = I + (1 - cos a) / a^2 [w]x + (a - sin a) / a^3 [w]x^2`` with ``a = |w|`` (series below 1e-4)."""
+    a = float(np.linalg.norm(rotvec))
+    W = np.array([[0.0, -rotvec[2], rotvec[1]], [rotvec[2], 0.0, -rotvec[0]], [-rotvec[1], rotvec[0], 0.0]])
+    if a < 1e-4:
+        b, c = 0.5 - a * a / 24.0, 1.0 / 6.0 - a * a / 120.0
+    else:
+        b, c = (1.0 - np.cos(a)) / (a * a), (a - np.sin(a)) / (a * a * a)
+    return np.eye(3) + b * W + c * (W @ W)
+
+
+def so3_log(R: np.ndarray) -> np.ndarray:
+    """The rotation vector ``w`` of a rotation matrix ``R`` in closed form (through scipy's
+    quaternions near half a turn, where ``sin a`` no longer carries the axis)."""
+    # w = a / sin(a) * vee(R - R^T) / 2,  a = atan2(|vee|, (trace R - 1) / 2)
+    vee = 0.5 * np.array([R[2, 1] - R[1, 2], R[0, 2] - R[2, 0], R[1, 0] - R[0, 1]])
+    sin_a, cos_a = float(np.linalg.norm(vee)), 0.5 * (float(np.trace(R)) - 1.0)
+    if cos_a < -0.9:
+        return Rotation.from_matrix(R).as_rotvec()
+    return vee * (math.atan2(sin_a, cos_a) / sin_a if sin_a > 1e-12 else 1.0)
+
+
+def se3_log(T) -> tuple[np.ndarray, np.ndarray]:
+    """The twist ``(w, v)`` of a rigid motion ``T``: ``w`` its rotation vector, ``v = V(w)^-1 t``."""
+    T = np.asarray(T, float)
+    w = so3_log(T[:3, :3])
+    return w, np.linalg.solve(_left_jacobian(w), T[:3, 3])
+
+
+def se3_exp(w, v) -> np.ndarray:
+    """The 4x4 rigid motion of the twist ``(w, v)``: ``R = exp([w]x)``, ``t = V(w) v``."""
+    w = np.asarray(w, float)
+    return rigid_matrix(rotation_matrix(w), _left_jacobian(w) @ np.asarray(v, float))  # R: exp of so(3)
+
+
 def scaled_motion(T, factor: float) -> np.ndarray:
     """The motion ``T`` repeated ``factor`` times: ``exp(factor log T)`` in SE(3), the same screw
-    motion run for ``factor`` times as long (``factor = 2`` gives ``T @ T``), through SciPy's
-    exponential coordinates (the twist ``(w, v)`` with ``t = V(w) v``)."""
+    motion run for ``factor`` times as long (``factor = 2`` gives ``T @ T``). Closed-form log and
+    exp (:func:`se3_log`, :func:`se3_exp`)."""
     T = np.asarray(T, float)
     if factor == 1.0:
         return T.copy()
-    twist = RigidTransform.from_matrix(T).as_exp_coords()
-    return RigidTransform.from_exp_coords(factor * twist).as_matrix()
+    w, v = se3_log(T)
+    return se3_exp(factor * w, factor * v)
 
 
 def general_ransac(
