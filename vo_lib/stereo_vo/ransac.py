@@ -35,7 +35,7 @@ match at once, an ``(H, N)`` array.
 
 Hypotheses are drawn from the best-conditioned half of the matches, scored all at once, and
 drawn until ``log(1 - p) / log(1 - w)`` of them have been tried for the best inlier ratio ``w``
-found. The refinement and the final gate work in disparity space, eq. 21 *whitened*: a
+found. The refinement and its final gate (eq. 21 *whitened*) work in disparity space: a
 back-projected point is uncertain mostly along its ray (metres, far away) and little across it
 (millimetres), so the residual is compared in (u, v, d), where its noise is the same in every
 direction.
