@@ -23,7 +23,7 @@ def test_stored_results_cover_every_set_whole_from_the_present_samples():
         assert row["fingerprint"] == fingerprint(name)
         assert len(row["code_version"]) >= 40 and not row["code_version"].endswith("+changes")
         assert row["keys"] == len(range(paper_sets.KEY_EVERY, row["frames"], paper_sets.KEY_EVERY))
-        assert set(paper_sets.paper(name)) <= set(row["fused"])
+        assert set(paper_sets.PAPER[name]) <= set(row["fused"])
 
 
 def test_load_refuses_results_of_other_samples(tmp_path):

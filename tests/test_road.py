@@ -66,7 +66,7 @@ def test_full_pipeline_through_the_banked_bend():
     final position error 1.2 cm of 10.5 m (0.12 %), heading error at most 0.07 deg."""
     rendered, frames = render_sample("road_drive", 20, first=160)
     odometer = StereoOdometry(rendered.camera, CAR, road.CAR_ODOMETRY, rendered.mount)
-    result = run_frames(frames, rendered.camera, road.CAR_ODOMETRY, odometer=odometer)
+    result = run_frames(frames, rendered.camera, odometer=odometer)
     truth = relative_planar(rendered.truth()[0], rendered.truth())
     distance = np.sum(np.linalg.norm(np.diff(truth[:, :2], axis=0), axis=1))
     error = np.linalg.norm(result.poses[-1, :2] - truth[-1, :2])

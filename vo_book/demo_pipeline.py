@@ -31,7 +31,7 @@ def rms(values: Sequence[float]) -> float:
 
 def rms_of(stored: dict, name: str, quantity: str, source: str = "fused") -> float:
     """RMS of a stored set (source 'fused' or 'odometry') or of the paper's figures ('paper')."""
-    values = paper_sets.paper(name).get(quantity) if source == "paper" else stored[name][source][quantity]
+    values = paper_sets.PAPER[name].get(quantity) if source == "paper" else stored[name][source][quantity]
     return math.nan if values is None else rms(values)
 
 
@@ -40,7 +40,7 @@ def stored_table(stored: dict, names: Iterable[str], quantities: Sequence[str]) 
     heads = "".join(f"{q + ' AVG / S.D. / RMS':>30s}" for q in quantities)
     print(f" {'set':15s}{'frames':>7s}{'flagged':>8s}  {'':10s}" + heads)
     for name in names:
-        row, ref = stored[name], paper_sets.paper(name)
+        row, ref = stored[name], paper_sets.PAPER[name]
         for label, values in (("ours", row["fused"]), ("odometry", row["odometry"]), ("paper", ref)):
             head = f" {name:15s}{row['frames']:7d}{row['flagged']:8d}" if label == "ours" else " " * 31
             cells = "".join(

@@ -89,12 +89,7 @@ def _reprojection_error(P, w_curr, R, t, camera):
     return np.nan_to_num(np.sqrt(du * du + dv * dv + dd * dd), nan=np.inf)
 
 
-def rigid_ransac(
-    w_prev,
-    w_curr,
-    camera: StereoCamera,
-    rng=None,
-) -> MotionEstimate:
+def rigid_ransac(w_prev, w_curr, camera: StereoCamera, rng=None) -> MotionEstimate:
     """3-point RANSAC on back-projected points; hypotheses scored in batches, refit on all inliers."""
     rng = np.random.default_rng(rng)
     a, b = np.asarray(w_prev, float), np.asarray(w_curr, float)

@@ -28,15 +28,16 @@ import numpy as np
 
 from vo_lib.camera import StereoCamera
 from vo_lib.geometry import as_match_array
+from vo_lib.stereo_vo.rigid_motion import rigid_matrix
 
 #: A match whose rows satisfy ``|v + v' - 2 v0|`` below this many pixels is treated as lying at
 #: the camera's height, where eq. 14 is 0/0.
 DEGENERATE_ROW_PIXELS = 1e-9
 
 
-def _pair(w_prev, w_curr) -> tuple[np.ndarray, np.ndarray]:
-    a = as_match_array("w_prev", w_prev)
-    b = as_match_array("w_curr", w_curr)
+def match_pair(w_prev, w_curr) -> tuple[np.ndarray, np.ndarray]:
+    """Matches ``(N, 3)`` of both frames as float arrays; ``ValueError`` unless of one shape."""
+    a, b = as_match_array("w_prev", w_prev), as_match_array("w_curr", w_curr)
     if a.shape != b.shape:
         raise ValueError(f"w_prev and w_curr must have the same shape; got {a.shape} and {b.shape}")
     return a, b
@@ -52,7 +53,7 @@ def _eq14_terms(a: np.ndarray, b: np.ndarray, camera: StereoCamera):
 
 def degenerate_theta_mask(w_prev, w_curr, camera: StereoCamera, min_pixels: float = 0.5) -> np.ndarray:
     """Matches too close to the camera's height for eq. 14: ``|v + v' - 2 v0| < min_pixels``."""
-    a, b = _pair(w_prev, w_curr)
+    a, b = match_pair(w_prev, w_curr)
     return np.abs(a[:, 1] + b[:, 1] - 2.0 * camera.cy) < min_pixels
 
 
@@ -65,7 +66,7 @@ def theta_from_pixels(w_prev, w_curr, camera: StereoCamera) -> np.ndarray:
     radians, in ``(-pi, pi)``, per match; NaN for a match exactly at the camera's height
     (``v + v' = 2 v0``, see :func:`degenerate_theta_mask`), which has no defined theta.
     """
-    a, b = _pair(w_prev, w_curr)
+    a, b = match_pair(w_prev, w_curr)
     num, den, _ = _eq14_terms(a, b, camera)
     degenerate = np.abs(den) < DEGENERATE_ROW_PIXELS * camera.fx
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -78,7 +79,7 @@ def theta_standard_deviation(w_prev, w_curr, camera: StereoCamera, sigma_px: flo
     """First-order standard deviation of eq. 14's theta when u, v, u', v' carry noise ``sigma_px``
     (:func:`theta_and_variance`). The error grows as ``1 / |D|`` near the camera's height and with the
     distance of the match from the image centre."""
-    return np.sqrt(theta_and_variance(*_pair(w_prev, w_curr), camera, sigma_px)[1])
+    return np.sqrt(theta_and_variance(*match_pair(w_prev, w_curr), camera, sigma_px)[1])
 
 
 def theta_and_variance(
@@ -107,7 +108,7 @@ def rho_from_pixels(w_prev, w_curr, theta, camera: StereoCamera) -> np.ndarray:
     all matches or one per match; both disparities must be > 0. ``rho`` is negative when the
     camera moves backwards.
     """
-    a, b = _pair(w_prev, w_curr)
+    a, b = match_pair(w_prev, w_curr)
     for name, arr in (("w_prev", a), ("w_curr", b)):
         if np.any(arr[:, 2] <= 0):
             bad = int(np.flatnonzero(arr[:, 2] <= 0)[0])
@@ -130,23 +131,16 @@ def motion_matrices(theta, rho) -> tuple[np.ndarray, np.ndarray]:
     theta, rho = np.broadcast_arrays(np.asarray(theta, dtype=float), np.asarray(rho, dtype=float))
     c, s = np.cos(theta), np.sin(theta)
     R = np.zeros(theta.shape + (3, 3))
-    R[..., 0, 0] = c
-    R[..., 0, 2] = s
-    R[..., 1, 1] = 1.0
-    R[..., 2, 0] = -s
-    R[..., 2, 2] = c
+    R[..., 0, 0], R[..., 0, 2], R[..., 1, 1], R[..., 2, 0], R[..., 2, 2] = c, s, 1.0, -s, c
     phi = 0.5 * theta
     T = np.zeros(theta.shape + (3,))
-    T[..., 0] = -rho * np.sin(phi)
-    T[..., 2] = -rho * np.cos(phi)
+    T[..., 0], T[..., 2] = -rho * np.sin(phi), -rho * np.cos(phi)
     return R, T
 
 
 def motion_transform(theta: float, rho: float) -> np.ndarray:
     """4x4 ``T_curr_from_prev`` of a circular motion (eq. 15): ``[[R, T], [0, 1]]``."""
-    M = np.eye(4)
-    M[:3, :3], M[:3, 3] = motion_matrices(theta, rho)
-    return M
+    return rigid_matrix(*motion_matrices(theta, rho))
 
 
 def apply_motion(points, theta: float, rho: float) -> np.ndarray:

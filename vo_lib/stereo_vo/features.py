@@ -56,29 +56,19 @@ def hamming(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 
 def best_matches(
-    ia,
-    ib,
-    dist,
-    n_a: int,
-    n_b: int,
-    max_distance: int = MAX_HAMMING,
-    ratio: float = RATIO,
-    mutual: bool = True,
+    ia, ib, dist, n_a: int, n_b: int, max_distance: int = MAX_HAMMING, ratio: float = RATIO
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Pick matches from candidate pairs ``(ia[k], ib[k])`` with Hamming distance ``dist[k]``.
 
     For each ``a`` the nearest ``b`` is kept if it is within ``max_distance``, if the second
-    nearest is farther by the ``ratio`` test, and (with ``mutual``) if no other ``a`` is nearer
-    to that ``b``. Returns ``(index_a, index_b, distance)``, ordered by ``b`` with ``mutual``,
-    else by ``a``. Runs compiled (:mod:`.matching_core`); ``matching_plain.best_matches`` is the
-    same rule in NumPy.
+    nearest is farther by the ``ratio`` test, and if no other ``a`` is nearer to that ``b``
+    (mutual check). Returns ``(index_a, index_b, distance)``, ordered by ``b``. Runs compiled
+    (:mod:`.matching_core`); ``matching_plain.best_matches`` is the same rule in NumPy.
     """
     from vo_lib.stereo_vo.matching_core import best_matches_core
 
     ia, ib, dist = np.asarray(ia, np.int64), np.asarray(ib, np.int64), np.asarray(dist)
-    return best_matches_core(
-        ia, ib, dist, int(n_a), int(n_b), float(max_distance), float(ratio), bool(mutual)
-    )
+    return best_matches_core(ia, ib, dist, int(n_a), int(n_b), float(max_distance), float(ratio))
 
 
 def window_pairs(keys_a: np.ndarray, keys_b: np.ndarray, half_width) -> tuple[np.ndarray, np.ndarray]:

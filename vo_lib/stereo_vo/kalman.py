@@ -158,7 +158,6 @@ class VoKalmanFilter:
             if self.lateral_sigma > 0:
                 across = np.array([-math.sin(x_new[2]), math.cos(x_new[2]), 0.0])
                 Q = Q + (self.lateral_sigma * 0.5 * abs(u[0] + u[1])) ** 2 * np.outer(across, across)
-            self.flags = StepFlags(odometry=True)
         else:
             inc = self.last_increment
             x_new = compose_planar(x, inc)
@@ -173,7 +172,7 @@ class VoKalmanFilter:
                 [step, step, abs(inc[2]) + CV_TURN_PER_METRE * step]
             )
             Q = Rw @ np.diag(sigma**2) @ Rw.T
-            self.flags = StepFlags(odometry=False)
+        self.flags = StepFlags(odometry=u is not None)
         self.ekf.x = np.concatenate([x_new, self.ekf.x[ref]])
         P6 = np.empty((6, 6))  # filled block by block: np.block costs more than the filter's algebra
         P6[:3, :3] = F @ P @ F.T + Q
@@ -208,13 +207,8 @@ class VoKalmanFilter:
         else:
             R = np.diag([0.0, 0.0, self.sideways_sigma**2])
             R[:2, :2] = covariance
-        self.ekf.update(
-            np.array([theta, rho, sideways]),
-            constrained_jacobian,
-            constrained_measurement,
-            R=R,
-            residual=_residual,
-        )
+        z = np.array([theta, rho, sideways])
+        self.ekf.update(z, constrained_jacobian, constrained_measurement, R=R, residual=_residual)
         self.ekf.x[2] = wrap_angle(self.ekf.x[2])
         self.flags.vo_update = True
 

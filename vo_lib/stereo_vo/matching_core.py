@@ -38,15 +38,12 @@ def _nearest_two(ia, ib, dist, n_a, n_b):
 
 
 @_jit
-def best_matches_core(ia, ib, dist, n_a, n_b, max_distance, ratio, mutual):
+def best_matches_core(ia, ib, dist, n_a, n_b, max_distance, ratio):
     best, second, best_b, nearest_for_b = _nearest_two(ia, ib, dist, n_a, n_b)
     keep = np.zeros(n_a, np.bool_)
     for a in range(n_a):
         if best_b[a] >= 0 and best[a] <= max_distance and best[a] < ratio * second[a]:
-            keep[a] = (not mutual) or best[a] <= nearest_for_b[best_b[a]]
-    if not mutual:
-        chosen = np.flatnonzero(keep)
-        return chosen, best_b[chosen], best[chosen]
+            keep[a] = best[a] <= nearest_for_b[best_b[a]]
     # one a per b: the nearest, ties to the smaller a; the result is ordered by b
     owner = np.full(n_b, -1, np.int64)
     for a in range(n_a):

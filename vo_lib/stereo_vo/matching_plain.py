@@ -20,7 +20,7 @@ def _hamming(des_a, des_b, ia, ib):
     return np.bitwise_count(des_a[ia] ^ des_b[ib]).sum(axis=1, dtype=np.int64)
 
 
-def best_matches(ia, ib, dist, n_a, n_b, max_distance, ratio, mutual):
+def best_matches(ia, ib, dist, n_a, n_b, max_distance, ratio):
     """The rule of :func:`vo_lib.stereo_vo.features.best_matches`, by sorts."""
     ia, ib, dist = np.asarray(ia, np.int64), np.asarray(ib, np.int64), np.asarray(dist, np.int64)
     if len(dist) == 0:
@@ -35,7 +35,7 @@ def best_matches(ia, ib, dist, n_a, n_b, max_distance, ratio, mutual):
     second[has_second] = d_s[starts[has_second] + 1]
     keep = (best_d <= max_distance) & (best_d < ratio * second)
     best_a, best_b, best_d = best_a[keep], best_b[keep], best_d[keep]
-    if mutual and len(best_b):
+    if len(best_b):
         # that a must be b's nearest over all candidates; a b claimed by several a keeps the nearest
         nearest_for_b = np.full(n_b, core.NONE, dtype=np.int64)
         np.minimum.at(nearest_for_b, ib, dist)

@@ -53,11 +53,6 @@ PAPER = {
 SETS = tuple(PAPER)
 
 
-def paper(name: str) -> dict:
-    """The paper's AVG and S.D. of a set, by quantity (``x_mm``, ``y_mm``, ``theta_deg``)."""
-    return PAPER[name]
-
-
 def code_version() -> str:
     """The repository's commit (with ``+changes`` when the package's code differs from it; the
     stored results themselves do not count)."""

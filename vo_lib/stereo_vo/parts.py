@@ -65,22 +65,17 @@ class MotionModel(Protocol):
 
     def predict(self, kf: VoKalmanFilter) -> Prediction:
         """The motion since the reference frame, as the filter (just moved on) predicts it."""
-        ...
 
     def match(
         self, reference: StereoFeatures, features: StereoFeatures, prediction: Prediction, recent: list
     ) -> TemporalMatches:
         """Temporal matches, guided by the prediction; ``recent`` are match counts of good frames."""
-        ...
 
     def estimate(self, matches: TemporalMatches, prediction: Prediction, rng) -> Estimate:
         """The motion of the matches (1-point RANSAC and whatever refines it)."""
-        ...
 
     def place(self, kf: VoKalmanFilter, estimate: Estimate | None, prediction: Prediction) -> None:
         """Pose this frame after the filter's update (``estimate``) or without one."""
-        ...
 
     def commit(self, kf: VoKalmanFilter, estimate: Estimate | None, gap: int) -> None:
         """This frame becomes the reference; ``estimate`` is its measured motion, if any."""
-        ...

@@ -275,18 +275,16 @@ class StereoOdometry:
 def run_frames(
     frames: Iterable,
     camera: StereoCamera,
-    odometry_model: TrackOdometry | None = None,
     seed: int = 0,
     progress=None,
     odometer: StereoOdometry | None = None,
 ) -> PipelineResult:
     """Run the pipeline over ``(left, right, odometry_or_None)`` triples.
 
-    ``odometer`` is the :class:`StereoOdometry` to run (default: the crawler's, with
-    ``odometry_model`` and ``seed``); with the 6-DoF model the result carries
-    each frame's camera pose too.
+    ``odometer`` is the :class:`StereoOdometry` to run (default: the crawler's, with track odometry
+    and ``seed``); with the 6-DoF model the result carries each frame's camera pose too.
     """
-    vo = odometer or StereoOdometry(camera, CRAWLER, odometry_model, seed=seed)
+    vo = odometer or StereoOdometry(camera, CRAWLER, seed=seed)
     poses, covs, diags, timings, cameras = [], [], [], [], []
     for left, right, odo in frames:
         pose, cov, diag, timing = vo.process(left, right, odo)

@@ -47,22 +47,13 @@ class PlanarMotion:
         return matches
 
     def estimate(self, matches, prediction: Prediction, rng) -> Estimate:
+        prior = prediction.prior if prediction.informative else None
         est = one_point_ransac(
-            matches.w_prev,
-            matches.w_curr,
-            self.camera,
-            prior=prediction.prior if prediction.informative else None,
-            rng=rng,
-            params=self.config.ransac,
+            matches.w_prev, matches.w_curr, self.camera, prior, rng, params=self.config.ransac
         )
-        inliers = int(est.inliers.sum())
-        return Estimate(
-            est.success,
-            np.array([est.theta, est.rho]),
-            np.asarray(self.config.vo_covariance_scale) * est.covariance,
-            inliers,
-            inliers / len(matches),
-        )
+        inliers, z = int(est.inliers.sum()), np.array([est.theta, est.rho])
+        covariance = np.asarray(self.config.vo_covariance_scale) * est.covariance
+        return Estimate(est.success, z, covariance, inliers, inliers / len(matches))
 
     def place(self, kf, estimate, prediction) -> None:
         """The planar pose is the filter's; nothing more to place."""

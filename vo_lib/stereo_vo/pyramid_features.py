@@ -91,18 +91,10 @@ class PyramidFrontEnd:
 
         pl, pr = np.ascontiguousarray(pl, dtype=float), np.ascontiguousarray(pr, dtype=float)
         order = np.argsort(pr[:, 1], kind="stable")
+        rows = np.ascontiguousarray(pr[order, 1])
+        words_l, words_r = (np.ascontiguousarray(d).view(np.uint64) for d in (dl, dr))
         return row_candidates(
-            pl,
-            ol,
-            pr,
-            orr,
-            order,
-            np.ascontiguousarray(pr[order, 1]),
-            ROW_TOLERANCE,
-            0.5,
-            self.max_disparity,
-            np.ascontiguousarray(dl).view(np.uint64),
-            np.ascontiguousarray(dr).view(np.uint64),
+            pl, ol, pr, orr, order, rows, ROW_TOLERANCE, 0.5, self.max_disparity, words_l, words_r
         )
 
     def process(self, left: np.ndarray, right: np.ndarray) -> StereoFeatures:

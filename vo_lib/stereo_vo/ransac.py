@@ -35,11 +35,10 @@ match at once, an ``(H, N)`` array.
 
 Hypotheses are drawn from the best-conditioned half of the matches, scored all at once, and
 drawn until ``log(1 - p) / log(1 - w)`` of them have been tried for the best inlier ratio ``w``
-found. The winner is refined on all inliers by Gauss-Newton least squares on the reprojection
-errors in disparity space, both ways, where pixel noise is uniform; the refined motion then
-decides the final inliers with the theta gate and with eq. 21 *whitened*: a back-projected
-point is uncertain mostly along its ray (metres, far away) and little across it (millimetres),
-so the residual is compared in (u, v, d), where its noise is the same in every direction.
+found. The refinement and its final gate (eq. 21 *whitened*) work in disparity space: a
+back-projected point is uncertain mostly along its ray (metres, far away) and little across it
+(millimetres), so the residual is compared in (u, v, d), where its noise is the same in every
+direction.
 """
 
 from __future__ import annotations
@@ -55,9 +54,9 @@ from typing import NamedTuple, Protocol
 import numpy as np
 
 from vo_lib.camera import StereoCamera
-from vo_lib.geometry import as_match_array
 from vo_lib.stereo_vo.circular_motion import (
     DEGENERATE_ROW_PIXELS,
+    match_pair,
     motion_matrices,
     rho_from_pixels,
     theta_and_variance,
@@ -169,7 +168,7 @@ def theta_gate_and_slope(tan_ratio, beta_a, beta_b, theta) -> tuple[np.ndarray, 
 
 def theta_gate_error(w_prev, w_curr, theta, camera: StereoCamera) -> np.ndarray:
     """``error_theta`` of eq. 20 for every match under deflection ``theta`` (zero for a true match)."""
-    a, b = as_match_array("w_prev", w_prev), as_match_array("w_curr", w_curr)
+    a, b = match_pair(w_prev, w_curr)
     return np.abs(theta_gate_and_slope(*match_angles(a, b, camera), theta)[0])
 
 
@@ -187,11 +186,9 @@ class OnePointModel(Protocol):
 
     def each_match(self) -> tuple[np.ndarray, np.ndarray]:
         """The parameter from every match alone, and its variance: two arrays of shape (N,)."""
-        ...
 
     def squared_residuals(self, h: np.ndarray) -> np.ndarray:
         """``|r_j(h)|^2`` of every match ``j`` under every hypothesis ``h``: shape (H, N)."""
-        ...
 
 
 class ThetaModel:
@@ -200,8 +197,7 @@ class ThetaModel:
 
     def __init__(self, wa: np.ndarray, wb: np.ndarray, camera: StereoCamera, pixel_sigma: float):
         self.values, self.variances = theta_and_variance(wa, wb, camera, pixel_sigma)
-        (tan_a, self.beta_a), (tan_b, self.beta_b) = gate_angles(wa, camera), gate_angles(wb, camera)
-        self.tan_ratio = tan_b / tan_a
+        self.tan_ratio, self.beta_a, self.beta_b = match_angles(wa, wb, camera)
         # eq. 20's slope in theta is 0.5 sin(beta + beta') / sin^2(gamma) (theta_gate_and_slope)
         self.two_over_sin_sum = 2.0 / np.sin(self.beta_a + self.beta_b)
 
@@ -262,6 +258,10 @@ def search(
     values, variances = model.each_match()
     k2 = params.gate_sigmas**2
     bounds = k2 * variances
+
+    def support(hyp: np.ndarray, hyp_var: np.ndarray) -> np.ndarray:  # supporters of each hypothesis
+        return (model.squared_residuals(hyp) <= bounds + (k2 * hyp_var)[:, None]).sum(axis=1)
+
     pool = np.argsort(variances)[: max(params.min_pool, int(params.pool_fraction * len(values)))]
     # a hypothesis counts as no more certain than a typical one: the pool's median variance (the
     # pool is sorted, so the median is its middle value, or the mean of its middle two)
@@ -270,15 +270,13 @@ def search(
     best_value, best_var, best_count = math.nan, math.nan, -1
     if prior is not None and math.isfinite(prior[0]):
         best_value, best_var = prior[0], min(prior[1], cap)
-        best_count = int(
-            np.count_nonzero(model.squared_residuals(np.array([best_value]))[0] <= bounds + k2 * best_var)
-        )
+        best_count = int(support(np.array([best_value]), np.array([best_var]))[0])
     tried = 0
     limit = min(hypotheses_needed(params.initial_inlier_ratio, params.confidence), params.max_hypotheses)
     while tried < limit:
         picked = pool[np.minimum((uniforms[tried:limit] * len(pool)).astype(np.int64), len(pool) - 1)]
         hyp, hyp_var = values[picked], np.minimum(variances[picked], cap)
-        counts = (model.squared_residuals(hyp) <= bounds + (k2 * hyp_var)[:, None]).sum(axis=1)
+        counts = support(hyp, hyp_var)
         top = int(np.lexsort((hyp_var, -counts))[0])  # most supporters; among equals, least variance
         if counts[top] > best_count:
             best_value, best_var, best_count = float(hyp[top]), float(hyp_var[top]), int(counts[top])
@@ -382,11 +380,9 @@ def one_point_ransac(  # noqa: PLR0915 (the algorithm's five steps read best in 
     t_start = time.perf_counter()
     params = params._replace(**settings) if settings else params
     try:
-        a, b = as_match_array("w_prev", w_prev), as_match_array("w_curr", w_curr)
+        a, b = match_pair(w_prev, w_curr)
     except ValueError as exc:
         raise RansacInputError(str(exc)) from None
-    if a.shape != b.shape:
-        raise RansacInputError(f"w_prev and w_curr must have the same shape; got {a.shape} and {b.shape}")
     draws = np.asarray(hypothesis_draws(rng, params.max_hypotheses) if draws is None else draws, float)
     if draws.shape != (2, int(params.max_hypotheses)):
         raise RansacInputError(
@@ -437,12 +433,7 @@ def one_point_ransac(  # noqa: PLR0915 (the algorithm's five steps read best in 
         rounds += 1
         iterations = params.refine_iterations if rounds == 1 else 1
         theta, rho, A, rss = gauss_newton(
-            np.compress(keep, points, axis=-1),
-            np.compress(keep, targets, axis=-1),
-            theta,
-            rho,
-            camera,
-            iterations,
+            points[..., keep], targets[..., keep], theta, rho, camera, iterations
         )
         cov = covariance(A, rss, 6 * int(np.count_nonzero(keep)))
         new = thetas.gate_pass(theta, cov[0, 0], k2) & whitened_pass(
@@ -469,7 +460,7 @@ def one_point_ransac(  # noqa: PLR0915 (the algorithm's five steps read best in 
 def histogram_voting(w_prev, w_curr, camera: StereoCamera, bin_width: float = math.radians(0.05)):
     """theta as the mode of the per-match thetas (a histogram vote), then rho as the median of
     the per-match rhos of the matches in the winning bin. Returns ``(theta, rho, votes_mask)``."""
-    a, b = as_match_array("w_prev", w_prev), as_match_array("w_curr", w_curr)
+    a, b = match_pair(w_prev, w_curr)
     with np.errstate(divide="ignore", invalid="ignore"):
         theta_j = theta_from_pixels(a, b, camera)
     ok = np.isfinite(theta_j) & (a[:, 2] > 0) & (b[:, 2] > 0)

@@ -20,7 +20,6 @@ general one.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import cv2
@@ -185,21 +184,10 @@ def _left_jacobian(rotvec: np.ndarray) -> np.ndarray:
     return np.eye(3) + b * W + c * (W @ W)
 
 
-def so3_log(R: np.ndarray) -> np.ndarray:
-    """The rotation vector ``w`` of a rotation matrix ``R`` in closed form (through scipy's
-    quaternions near half a turn, where ``sin a`` no longer carries the axis)."""
-    # w = a / sin(a) * vee(R - R^T) / 2,  a = atan2(|vee|, (trace R - 1) / 2)
-    vee = 0.5 * np.array([R[2, 1] - R[1, 2], R[0, 2] - R[2, 0], R[1, 0] - R[0, 1]])
-    sin_a, cos_a = float(np.linalg.norm(vee)), 0.5 * (float(np.trace(R)) - 1.0)
-    if cos_a < -0.9:
-        return Rotation.from_matrix(R).as_rotvec()
-    return vee * (math.atan2(sin_a, cos_a) / sin_a if sin_a > 1e-12 else 1.0)
-
-
 def se3_log(T) -> tuple[np.ndarray, np.ndarray]:
     """The twist ``(w, v)`` of a rigid motion ``T``: ``w`` its rotation vector, ``v = V(w)^-1 t``."""
     T = np.asarray(T, float)
-    w = so3_log(T[:3, :3])
+    w = Rotation.from_matrix(T[:3, :3]).as_rotvec()
     return w, np.linalg.solve(_left_jacobian(w), T[:3, 3])
 
 

@@ -210,13 +210,8 @@ class SixDofMotion:
             general = general_ransac(w_prev, w_curr, self.camera, int(rng.integers(2**31)))
             if general is not None:
                 return general[0], general[1], float(general[1].mean())
-        est = one_point_ransac(
-            turning_axis_view(w_prev, self.camera, self.to_axis),
-            turning_axis_view(w_curr, self.camera, self.to_axis),
-            self.camera,
-            rng=rng,
-            params=self.config.ransac,
-        )
+        seen_from_axis = (turning_axis_view(w, self.camera, self.to_axis) for w in (w_prev, w_curr))
+        est = one_point_ransac(*seen_from_axis, self.camera, rng=rng, params=self.config.ransac)
         ratio = float(est.inliers.mean()) if est.success else 0.0
         if est.success:
             # the virtual camera's motion, seen from the real camera
@@ -248,16 +243,8 @@ class SixDofMotion:
         covariance = np.full((3, 3), np.inf)  # a failed refinement measures nothing
         if motion.success:
             covariance = self.covariance_scale * chord_covariance(T, motion.covariance, self.mount)
-        return Estimate(
-            motion.success,
-            z,
-            covariance,
-            int(motion.inliers.sum()),
-            ratio,
-            int(round(ratio * len(matches))),
-            T,
-            watch.ms,
-        )
+        inliers, ransac_inliers = int(motion.inliers.sum()), int(round(ratio * len(matches)))
+        return Estimate(motion.success, z, covariance, inliers, ratio, ransac_inliers, T, watch.ms)
 
     # ------------------------------------------------------------------ poses
     def place(self, kf: VoKalmanFilter, estimate: Estimate | None, prediction: Prediction) -> None:

@@ -165,7 +165,7 @@ def _scene_points(
 def _visible_pairs(camera, M, n, rng, depth_range, motion, scene):
     """``n`` points of the scene seen by the previous view that stay in front of the camera and in
     the image after ``M``: ``(w_prev, w_curr, points)``."""
-    kept_prev, kept_curr, kept_pts = [np.zeros((0, 3))], [np.zeros((0, 3))], [np.zeros((0, 3))]
+    kept = [(np.zeros((0, 3)),) * 3]  # (w_prev, w_curr, points) of each draw
     count = drawn = 0
     while count < n:
         if drawn > 1000 * (n + 16) and count < 0.001 * drawn:
@@ -181,8 +181,6 @@ def _visible_pairs(camera, M, n, rng, depth_range, motion, scene):
         w1, w2 = np.full_like(P, np.nan), np.full_like(P2, np.nan)
         w1[ok], w2[ok] = camera.project(P[ok]), camera.project(P2[ok])
         ok &= camera.in_image(np.nan_to_num(w1, nan=-1.0)) & camera.in_image(np.nan_to_num(w2, nan=-1.0))
-        kept_prev.append(w1[ok])
-        kept_curr.append(w2[ok])
-        kept_pts.append(P[ok])
+        kept.append((w1[ok], w2[ok], P[ok]))
         count += int(ok.sum())
-    return tuple(np.concatenate(kept)[:n] for kept in (kept_prev, kept_curr, kept_pts))
+    return tuple(np.concatenate(draws)[:n] for draws in zip(*kept, strict=True))

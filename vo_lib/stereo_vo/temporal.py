@@ -84,10 +84,7 @@ def prediction_sigma(w_prev: np.ndarray, camera: StereoCamera, prior: MotionPrio
 
 
 def refine_positions(
-    prev_image: np.ndarray,
-    curr_image: np.ndarray,
-    w_prev: np.ndarray,
-    w_curr: np.ndarray,
+    prev_image: np.ndarray, curr_image: np.ndarray, w_prev: np.ndarray, w_curr: np.ndarray
 ) -> np.ndarray:
     """Sub-pixel position in the current image of each previous feature's patch.
 
@@ -124,10 +121,7 @@ def refine_positions(
 
 
 def track_subpixel(
-    prev_image: np.ndarray,
-    curr_image: np.ndarray,
-    w_prev: np.ndarray,
-    w_curr: np.ndarray,
+    prev_image: np.ndarray, curr_image: np.ndarray, w_prev: np.ndarray, w_curr: np.ndarray
 ) -> np.ndarray:
     """Sub-pixel position in the current image of each matched previous feature, by tracking.
 
@@ -186,15 +180,10 @@ def match_features(
         dist = hamming(prev.descriptors[ia], curr.descriptors[ib])
     else:
         order = np.argsort(curr.w[:, 1], kind="stable")
-        ia, ib, dist = window_candidates(
-            np.ascontiguousarray(predicted, dtype=float),
-            np.ascontiguousarray(np.broadcast_to(np.asarray(radius, float), (n_prev, 3))),
-            np.ascontiguousarray(curr.w, dtype=float),
-            order,
-            np.ascontiguousarray(curr.w[order, 1]),
-            np.ascontiguousarray(prev.descriptors).view(np.uint64),
-            np.ascontiguousarray(curr.descriptors).view(np.uint64),
-        )
+        half = np.broadcast_to(np.asarray(radius, float), (n_prev, 3))
+        pred, half, w = (np.ascontiguousarray(x, dtype=float) for x in (predicted, half, curr.w))
+        words_a, words_b = (np.ascontiguousarray(f.descriptors).view(np.uint64) for f in (prev, curr))
+        ia, ib, dist = window_candidates(pred, half, w, order, w[order, 1], words_a, words_b)
     a, b, _ = best_matches(ia, ib, dist, n_prev, n_curr, ratio=ratio)
     w_curr = curr.w[b]
     if refine and prev.image is not None and curr.image is not None:
