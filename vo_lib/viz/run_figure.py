@@ -122,10 +122,6 @@ def plot_run(
         _errors_3d(errors, times, *camera_poses)
     elif errors:
         _error_views(errors, times, paths)
-    for ax in errors:
-        ax.grid(True, alpha=0.3)
-    if errors:
-        errors[0].legend(loc="best", fontsize="x-small")
     return {"main": main, "errors": errors, "spot_turn": spot}
 
 
@@ -142,6 +138,7 @@ def _error_views(errors, times, paths) -> None:
     errors[0].set(ylabel="position error [cm]", title="errors against ground truth")
     errors[1].set(ylabel="heading error [deg]", xlabel="time [s]")
     errors[1].axhline(0.0, color="0.5", lw=0.8)
+    _grid_and_legend(errors)
 
 
 def _errors_3d(errors, times, estimate, truth) -> None:
@@ -153,3 +150,11 @@ def _errors_3d(errors, times, estimate, truth) -> None:
     errors[1].plot(times, np.degrees(rotation_angle(np.swapaxes(T[:, :3, :3], 1, 2) @ E[:, :3, :3])), **line)
     errors[0].set(ylabel="3-D position error [cm]", title="errors against ground truth")
     errors[1].set(ylabel="rotation error [deg]", xlabel="time [s]")
+    _grid_and_legend(errors)
+
+
+def _grid_and_legend(errors) -> None:
+    """The two error views' grid, and the legend of the upper one."""
+    for ax in errors:
+        ax.grid(True, alpha=0.3)
+    errors[0].legend(loc="best", fontsize="x-small")
