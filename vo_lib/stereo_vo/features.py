@@ -16,13 +16,13 @@ Hamming distances are computed only for candidate pairs, 64 bits at a time with
 
 from __future__ import annotations
 
-import time
 from dataclasses import dataclass, field
 
 import cv2
 import numpy as np
 
 from vo_lib.camera import StereoCamera
+from vo_lib.stereo_vo.frames import Stopwatch
 
 FAST_THRESHOLD = 40
 GRID = (8, 6)  # cells across, down
@@ -210,34 +210,38 @@ class StereoFrontEnd:
                 f"left and right must be 2-D grey images of one size; got {left.shape}, {right.shape}"
             )
         h, w = left.shape
-        t0 = time.perf_counter()
-        pl, rl = self._detect(left)
-        keep = bucket(pl, rl, w, h, GRID, self.max_features)
-        pl = pl[keep]
-        pr, rr = self._detect(right)
-        if len(pl) and len(pr):
-            # right corners only near the rows of the kept left corners
-            row_has_left = np.zeros(h + 2, bool)
-            rows = np.rint(pl[:, 1]).astype(int)
-            for k in range(-int(ROW_TOLERANCE), int(ROW_TOLERANCE) + 1):
-                row_has_left[np.clip(rows + k, 0, h - 1)] = True
-            near = row_has_left[np.rint(pr[:, 1]).astype(int)]
-            pr, rr = pr[near], rr[near]
-            pr = pr[bucket(pr, rr, w, h, GRID, int(RIGHT_FACTOR * len(pl)))]
-        t1 = time.perf_counter()
-        pl, dl = self._describe(left, pl)
-        pr, dr = self._describe(right, pr)
-        t2 = time.perf_counter()
-        timings = {"detect": (t1 - t0) * 1e3, "describe": (t2 - t1) * 1e3, "stereo_match": 0.0}
+        watch = Stopwatch()
+        with watch("detect"):
+            pl, rl = self._detect(left)
+            keep = bucket(pl, rl, w, h, GRID, self.max_features)
+            pl = pl[keep]
+            pr, rr = self._detect(right)
+            if len(pl) and len(pr):
+                # right corners only near the rows of the kept left corners
+                row_has_left = np.zeros(h + 2, bool)
+                rows = np.rint(pl[:, 1]).astype(int)
+                for k in range(-int(ROW_TOLERANCE), int(ROW_TOLERANCE) + 1):
+                    row_has_left[np.clip(rows + k, 0, h - 1)] = True
+                near = row_has_left[np.rint(pr[:, 1]).astype(int)]
+                pr, rr = pr[near], rr[near]
+                pr = pr[bucket(pr, rr, w, h, GRID, int(RIGHT_FACTOR * len(pl)))]
+        with watch("describe"):
+            pl, dl = self._describe(left, pl)
+            pr, dr = self._describe(right, pr)
+        with watch("stereo_match"):
+            w_lr, descriptors = self._stereo_match(left, right, pl, dl, pr, dr)
+        return StereoFeatures(w_lr, descriptors, watch.ms, left)
+
+    def _stereo_match(self, left, right, pl, dl, pr, dr) -> tuple[np.ndarray, np.ndarray]:
+        """``w = (u, v, d)`` and descriptors of the left features matched along rows, sub-pixel."""
         if len(pl) == 0 or len(pr) == 0:
-            return StereoFeatures(np.zeros((0, 3)), np.zeros((0, 32), np.uint8), timings, left)
+            return np.zeros((0, 3)), np.zeros((0, 32), np.uint8)
         ia, ib = self._row_candidates(pl, pr)
         a, b, _ = best_matches(ia, ib, hamming(dl[ia], dr[ib]), len(pl), len(pr))
         u, v = pl[a, 0].astype(float), pl[a, 1].astype(float)
         d = subpixel_disparity(left, right, u, v, (pl[a, 0] - pr[b, 0]).astype(float))
         ok = d > 0
-        timings["stereo_match"] = (time.perf_counter() - t2) * 1e3
-        return StereoFeatures(np.column_stack([u, v, d])[ok], dl[a][ok], timings, left)
+        return np.column_stack([u, v, d])[ok], dl[a][ok]
 
     def _row_candidates(self, pl: np.ndarray, pr: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """All (left, right) pairs on rows within the tolerance and disparities within the range."""

@@ -24,7 +24,6 @@ Per stereo pair:
 
 from __future__ import annotations
 
-import time
 from concurrent.futures import ThreadPoolExecutor
 
 import cv2
@@ -32,6 +31,7 @@ import numpy as np
 
 from vo_lib.camera import StereoCamera
 from vo_lib.stereo_vo.features import StereoFeatures, best_matches, subpixel_disparity
+from vo_lib.stereo_vo.frames import Stopwatch
 
 #: Features per image pixel: 1,500 at KITTI's 1242x375, 950 at 640x480.
 FEATURES_PER_PIXEL = 1500 / (1242 * 375)
@@ -103,18 +103,24 @@ class PyramidFrontEnd:
             raise ValueError(
                 f"left and right must be 2-D grey images of one size; got {left.shape}, {right.shape}"
             )
-        t0 = time.perf_counter()
-        right_side = self._worker.submit(self._detect_and_describe, 1, right)
-        pl, ol, dl = self._detect_and_describe(0, left)
-        pr, orr, dr = right_side.result()
-        t1 = time.perf_counter()
-        timings = {"detect": (t1 - t0) * 1e3, "describe": 0.0, "stereo_match": 0.0}
+        watch = Stopwatch()
+        with watch("detect"):
+            right_side = self._worker.submit(self._detect_and_describe, 1, right)
+            pl, ol, dl = self._detect_and_describe(0, left)
+            pr, orr, dr = right_side.result()
+        watch.ms["describe"] = 0.0  # described with detection, in one OpenCV call per image
+        with watch("stereo_match"):
+            w, descriptors = self._stereo_match(left, right, (pl, ol, dl), (pr, orr, dr))
+        return StereoFeatures(w, descriptors, watch.ms, left)
+
+    def _stereo_match(self, left, right, left_features, right_features) -> tuple[np.ndarray, np.ndarray]:
+        """``w = (u, v, d)`` and descriptors of the left features matched along rows, sub-pixel."""
+        (pl, ol, dl), (pr, orr, dr) = left_features, right_features
         if len(pl) == 0 or len(pr) == 0:
-            return StereoFeatures(np.zeros((0, 3)), np.zeros((0, 32), np.uint8), timings, left)
+            return np.zeros((0, 3)), np.zeros((0, 32), np.uint8)
         ia, ib, dist = self._row_candidates(pl, ol, dl, pr, orr, dr)
         a, b, _ = best_matches(ia, ib, dist, len(pl), len(pr), max_distance=MAX_HAMMING, ratio=RATIO)
         u, v = pl[a, 0].astype(float), pl[a, 1].astype(float)
         d = subpixel_disparity(left, right, u, v, (pl[a, 0] - pr[b, 0]).astype(float), DISPARITY_SEARCH)
         keep = d > 0.3
-        timings["stereo_match"] = (time.perf_counter() - t1) * 1e3
-        return StereoFeatures(np.column_stack([u, v, d])[keep], dl[a][keep], timings, left)
+        return np.column_stack([u, v, d])[keep], dl[a][keep]
