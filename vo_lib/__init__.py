@@ -1,22 +1,11 @@
 """vo_lib: the tested algorithms behind the vo-notebooks collection.
 
-One folder per idea; imports run downwards only (import-linter contracts in ``pyproject.toml``)::
+One folder per paper ([Zhao] ``stereo_vo``, [Yan 2020] ``line_slam``, [Yuan] ``lidar_tracking``)
+on shared layers below them; imports run downwards only (import-linter contracts in
+``pyproject.toml``). The package map, naming every module, is ``docs/layout.md`` (the tests check
+that it does); each folder's ``__init__`` says which equations live where and where to start
+reading. The notebooks' widgets and demonstrations are in ``vo_book``, beside this package.
 
-    cli/              python -m vo_lib run | evaluate | generate | bench      (top layer)
-    bench/            the benchmarks, each beside its baseline (python -m vo_lib bench NAME)
-    data.py           a sequence by name or path (renders a named sample on first use)
-    stereo_vo/        [Zhao]: stereo VO, 1-point RANSAC, Kalman filter      (the three wings;
-    line_slam/        [Yan 2020]: line-feature EKF-SLAM, bisection observer      independent, but
-    lidar_tracking/   [Yuan]: VO-assisted LIDAR pose tracking                it may use stereo_vo)
-    sim/              world, renderer, laser, drives with slip, named samples
-    models/ formats/ viz/   crawler tracks and bicycle; sequences and pose files; figures
-    camera.py geometry.py evaluation.py   shared: stereo rig, frames and poses, trajectory errors
-    comparison.py     methods compared over seeds (share, bootstrap interval); the χ² band rule
-    outputs.py arguments.py   output folders written whole, only over our own; one-line CLI errors
-    compiled.py       Numba compilation, cached where it can be written
-
-Each folder's ``__init__`` says which equations live where and where to start reading. The
-notebooks' widgets and demonstrations are in ``vo_book``, beside this package.
 Re-exported here, imported on first use: ``load_sequence`` (``data``), ``StereoCamera``
 (``camera``), ``TrackOdometry`` (``models.track_odometry``), ``theta_from_pixels`` and
 ``rho_from_pixels`` (``stereo_vo.circular_motion``), ``one_point_ransac`` (``stereo_vo.ransac``),
