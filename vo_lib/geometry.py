@@ -42,12 +42,17 @@ def yaw_matrix(yaw: float) -> np.ndarray:
     return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
 
 
+def rigid_matrix(R, t) -> np.ndarray:
+    """The 4x4 matrix ``[[R, t], [0, 1]]``."""
+    T = np.eye(4)
+    T[:3, :3], T[:3, 3] = R, t
+    return T
+
+
 def planar_to_matrix(pose, z: float = 0.0) -> np.ndarray:
     """4x4 homogeneous matrix of a planar pose ``(x, y, yaw)`` lifted to height ``z``."""
     x, y, yaw = np.asarray(pose, dtype=float)
-    T = np.eye(4)
-    T[:3, :3], T[:3, 3] = yaw_matrix(yaw), (x, y, z)
-    return T
+    return rigid_matrix(yaw_matrix(yaw), (x, y, z))
 
 
 def matrix_to_planar(T) -> np.ndarray:
@@ -113,9 +118,7 @@ def camera_mount(forward: float = 0.0, height: float = 0.5, left: float = 0.0) -
     ``forward``, ``left`` and ``height`` place its optical centre; with ``forward = left = 0`` it
     sits above the turning axis, where the circular-motion model of [Zhao] is exact.
     """
-    T = np.eye(4)
-    T[:3, :3], T[:3, 3] = R_ROBOT_FROM_CAMERA, (forward, left, height)
-    return T
+    return rigid_matrix(R_ROBOT_FROM_CAMERA, (forward, left, height))
 
 
 def camera_motion(pose_prev, pose_curr, T_robot_camera) -> np.ndarray:

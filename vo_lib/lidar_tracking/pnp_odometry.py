@@ -24,9 +24,9 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
+from vo_lib.geometry import rigid_matrix
 from vo_lib.stereo_vo.baselines import cross_checked_matches
 from vo_lib.stereo_vo.features import StereoFrontEnd, best_matches, hamming
-from vo_lib.stereo_vo.rigid_motion import rigid_matrix
 
 SEARCH_RADIUS = 15.0  # pixels around the predicted position (eq. 5)
 MAX_KEYFRAMES = 5

@@ -298,8 +298,10 @@ def render_sample(name: str, frames: int | None = None, resolution=None, first: 
     image_rng = np.random.default_rng(sample.seed + 1)
     effects = _sensor_effects(sample, first + n)
 
-    folder = frame_store.FOLDER  # this rendering's folder in it (the fingerprint is worked out only for one)
-    store = folder and Path(folder) / f"{name}-{fingerprint(name)}-{camera.width}x{camera.height}-from{first}"
+    store = None  # this rendering's folder of the frame store (the fingerprint is worked out only for one)
+    if frame_store.FOLDER:
+        key = f"{name}-{fingerprint(name)}-{camera.width}x{camera.height}-from{first}"
+        store = Path(frame_store.FOLDER) / key
     rendered = RenderedSample(camera, mount, drive, n, poses, first)
     return rendered, _frames(sample, rendered, effects, image_rng, store)
 

@@ -280,8 +280,20 @@ def road_ribbon(seed: int) -> tuple[Patch, ...]:
         ends = ((i, 1), (j, 1), (j, -1), (i, -1))
         outline = tuple(tuple(centre[k] + side * half * left[k]) for k, side in ends)
         offset = float(s[i] - s[0])
-        patch = Patch(outline[0], along, across, length, ROAD_WIDTH, "road", seed, offset, total, outline)
-        patches.append(patch)
+        patches.append(
+            Patch(
+                outline[0],
+                along,
+                across,
+                length,
+                ROAD_WIDTH,
+                "road",
+                seed,
+                offset=offset,
+                texture_length=total,
+                outline=outline,
+            )
+        )
     return tuple(patches)
 
 

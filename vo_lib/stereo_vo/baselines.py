@@ -25,9 +25,9 @@ import cv2
 import numpy as np
 
 from vo_lib.camera import StereoCamera
+from vo_lib.geometry import rigid_matrix
 from vo_lib.stereo_vo.circular_motion import circular_motion_from_transform
 from vo_lib.stereo_vo.ransac import DEFAULT_PARAMS, hypotheses_needed
-from vo_lib.stereo_vo.rigid_motion import rigid_matrix
 
 #: Pixels, in (u, v, d) for the rigid fit and (u, v) for PnP: ~99 % of two noisy views.
 REPROJECTION_THRESHOLD = 3.0

@@ -27,8 +27,7 @@ from __future__ import annotations
 import numpy as np
 
 from vo_lib.camera import StereoCamera
-from vo_lib.geometry import as_match_array
-from vo_lib.stereo_vo.rigid_motion import rigid_matrix
+from vo_lib.geometry import as_match_array, rigid_matrix
 
 #: A match whose rows satisfy ``|v + v' - 2 v0|`` below this many pixels is treated as lying at
 #: the camera's height, where eq. 14 is 0/0.

@@ -27,6 +27,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from vo_lib.camera import StereoCamera
+from vo_lib.geometry import rigid_matrix
 
 #: Huber threshold of the refinement, pixels (of the 3-vector residual's norm).
 HUBER_PIXELS = 1.0
@@ -47,13 +48,6 @@ def rotation_matrix(rotvec) -> np.ndarray:
     """``exp([w]x)`` of a rotation vector (Rodrigues' formula, OpenCV's: far cheaper per call
     than SciPy's for the single small rotations of an iteration)."""
     return cv2.Rodrigues(np.asarray(rotvec, dtype=np.float64).reshape(3, 1))[0]
-
-
-def rigid_matrix(R, t) -> np.ndarray:
-    """The 4x4 matrix ``[[R, t], [0, 1]]``."""
-    T = np.eye(4)
-    T[:3, :3], T[:3, 3] = R, t
-    return T
 
 
 @dataclass

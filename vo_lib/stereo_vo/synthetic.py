@@ -16,8 +16,8 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from vo_lib.camera import StereoCamera
+from vo_lib.geometry import rigid_matrix
 from vo_lib.stereo_vo.circular_motion import circular_motion_from_transform, motion_matrices
-from vo_lib.stereo_vo.rigid_motion import rigid_matrix
 
 #: Nearest depth a point may have in either view, metres.
 MIN_DEPTH = 0.3
