@@ -66,7 +66,6 @@ from IPython.display import display
 from scipy.ndimage import maximum_filter, minimum_filter
 from scipy.spatial.transform import Rotation
 
-from vo_book.demo_real import as_4x4
 from vo_book.nb11 import (
     CELL,
     disparity_errors,
@@ -86,7 +85,7 @@ from vo_lib.geometry import (
     planar_from_camera_poses,
 )
 from vo_lib.stereo_vo import rigid_motion
-from vo_lib.stereo_vo.circular_motion import circular_motion_from_increment, motion_matrices
+from vo_lib.stereo_vo.circular_motion import circular_motion_from_increment, motion_transform
 from vo_lib.stereo_vo.features import PATCH_HALF, StereoFrontEnd
 from vo_lib.stereo_vo.pyramid_features import LEVELS, SCALE_FACTOR, PyramidFrontEnd
 from vo_lib.stereo_vo.ransac import one_point_ransac
@@ -374,7 +373,7 @@ for k in range(1, len(seq)):
     true_motion = np.linalg.inv(T_cam[k]) @ T_cam[k - 1]  # T_curr_from_prev of the camera
     inc = vehicle_increment(true_motion, vehicle.mount)
     planar = camera_motion(np.zeros(3), inc, vehicle.mount)
-    circular = as_4x4(*motion_matrices(*circular_motion_from_increment(inc)))
+    circular = motion_transform(*circular_motion_from_increment(inc))
     pairs = ((true_motion, planar), (planar, circular))
     gaps.append(tuple(pixel_gap(a, b, seq.camera, scene_points) for a, b in pairs))
 gaps = np.array(gaps)
@@ -399,7 +398,7 @@ k0, k1 = (40, 41) if REAL else (0, 30)  # the crawler moves a centimetre per fra
 feat0, feat1 = pyramid_fe.process(*seq.pair(k0)), pyramid_fe.process(*seq.pair(k1))
 one = match_features(feat0, feat1, ratio=PREDICTED_RATIO)
 est = one_point_ransac(one.w_prev, one.w_curr, seq.camera, rng=rng, pixel_sigma=1.0)
-guess = as_4x4(*motion_matrices(est.theta, est.rho))
+guess = motion_transform(est.theta, est.rho)
 
 # %% [markdown]
 # ## 5 · Build, then use: the 6-DoF Gauss–Newton step

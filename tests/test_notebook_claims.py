@@ -26,7 +26,6 @@ from vo_book import (  # noqa: E402
     demo_fusion,
     demo_one_point,
     demo_pipeline,
-    demo_real,
     demo_worlds,
     nb03,
     nb04,
@@ -212,11 +211,6 @@ def test_image_statistics_of_a_blank_image_and_a_photograph():
     photo = skimage.data.camera()  # a 512x512 photograph: corners on the man and the tripod
     stats = nb11.image_statistics(photo)
     assert len(stats["corners"]) > 100 and stats["empty"] < 1.0 and stats["occupied"].shape == (32, 32)
-
-
-def test_as_4x4():
-    T = demo_real.as_4x4(np.eye(3), np.array([1.0, 2.0, 3.0]))
-    assert T.shape == (4, 4) and np.array_equal(T[:3, 3], [1, 2, 3]) and np.array_equal(T[3], [0, 0, 0, 1])
 
 
 def test_the_walk_widget_sees_the_corridor_from_its_default_pose():

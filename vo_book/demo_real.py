@@ -10,17 +10,10 @@ import numpy as np
 
 from vo_lib.geometry import compose_planar
 from vo_lib.stereo_vo import rigid_motion
-from vo_lib.stereo_vo.circular_motion import motion_matrices, robot_increment
+from vo_lib.stereo_vo.circular_motion import motion_transform, robot_increment
 from vo_lib.stereo_vo.ransac import one_point_ransac
 from vo_lib.stereo_vo.six_dof import PREDICTED_RATIO, WINDOW_PIXELS, vehicle_increment, windows
 from vo_lib.stereo_vo.temporal import match_features, predict_features
-
-
-def as_4x4(R: np.ndarray, t: np.ndarray) -> np.ndarray:
-    """The homogeneous 4×4 transform of rotation ``R`` and translation ``t``."""
-    T = np.eye(4)
-    T[:3, :3], T[:3, 3] = R, t
-    return T
 
 
 def chain_models(seq, mount: np.ndarray, camera_path, ransac_rng: np.random.Generator, frame_features):
@@ -37,7 +30,7 @@ def chain_models(seq, mount: np.ndarray, camera_path, ransac_rng: np.random.Gene
         predicted, _ = predict_features(prev.w, seq.camera, T_pred)
         mt = match_features(prev, curr, predicted, windows(predicted, WINDOW_PIXELS), PREDICTED_RATIO)
         est = one_point_ransac(mt.w_prev, mt.w_curr, seq.camera, rng=ransac_rng, pixel_sigma=1.0)
-        guess = as_4x4(*motion_matrices(est.theta, est.rho))
+        guess = motion_transform(est.theta, est.rho)
         refined = rigid_motion.refine_rigid_motion(mt.w_prev, mt.w_curr, seq.camera, guess, est.inliers)
         increments = (
             robot_increment(est.theta, est.rho),

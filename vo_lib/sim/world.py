@@ -310,7 +310,8 @@ def road_traffic(seed: int) -> tuple[Mover, ...]:
     """Two oncoming cars that pass the driven car on the first and last straights, one ahead."""
     ego_s = road.arc_length(road.planned_path())
     movers = []
-    oncoming_s, _, _, oncoming = (a[::-1] for a in _lane(2 * road.LANE_OFFSET))
+    s, _, _, points = _lane(2 * road.LANE_OFFSET)
+    oncoming_s, oncoming = s[::-1], points[::-1]  # driven the other way
     lane = tuple(map(tuple, oncoming))
     for i, (frame, speed) in enumerate(((35, 10.0), (185, 8.0))):
         # metres along its lane to where the driven car is at the frame they pass each other
