@@ -53,7 +53,15 @@ import matplotlib.pyplot as plt
 import numpy as np
 from IPython.display import display
 
-from vo_book.demo_pipeline import frames_for, heading_error, rms_of, run, sides, stored_table
+from vo_book.demo_pipeline import (
+    frames_for,
+    heading_error,
+    plot_features_by_resolution,
+    rms_of,
+    run,
+    sides,
+    stored_table,
+)
 from vo_book.plotting import draw_flowchart, new_axes, plot_paths
 from vo_book.prose import Markdown
 from vo_lib.camera import StereoCamera
@@ -65,6 +73,7 @@ from vo_lib.sim.trajectories import simulate_drive
 from vo_lib.stereo_vo import circular_motion as cm
 from vo_lib.stereo_vo import paper_sets
 from vo_lib.stereo_vo.config import CRAWLER
+from vo_lib.stereo_vo.paper_tables import PAPER_TABLE1, stage_times
 from vo_lib.stereo_vo.ransac import one_point_ransac
 from vo_lib.stereo_vo.synthetic import matches_under_transform
 
@@ -149,48 +158,33 @@ plt.show()
 # rectification and edge detection on its robot's computer.
 
 # %%
-paper_table1 = {  # stereo processing, parameter estimation, Kalman filtering (ms)
-    (640, 480): (48.969, 0.874, 0.161),
-    (512, 384): (39.851, 0.664, 0.157),
-    (400, 300): (31.970, 0.754, 0.158),
-    (320, 240): (22.165, 0.662, 0.168),
-    (256, 192): (22.460, 0.610, 0.153),
-}
 n_table = frames_for("indoor_linear", 40, FULL)
-rows, features = [], {}
-for res in paper_table1:
-    r, _, _ = run("indoor_linear", n_table, resolution=res, seed=SEED)
-    t = r.timing_table()
-    features[res] = np.median([d.features for d in r.diagnostics])
-    rows.append((res, t, paper_table1[res]))
+# median milliseconds per stage and stereo features per frame, at each of the paper's resolutions
+measured = {(w, h): stage_times(SEED, f"{w}x{h}", n_table) for w, h in PAPER_TABLE1}
 print(
     " resolution   stereo [ms] (paper)   matching [ms]   estimation [ms] (paper)"
     "   Kalman [ms] (paper)   features"
 )
-for (w, h), t, p in rows:
+for (w, h), t in measured.items():
+    p = PAPER_TABLE1[(w, h)]
     print(
-        f" {w:4d}x{h:<4d} {t['stereo']:8.2f} ({p[0]:6.2f}) {t['matching']:12.2f}"
-        f" {t['estimation']:12.2f} ({p[1]:5.3f})"
-        f" {t['kalman']:12.2f} ({p[2]:5.3f}) {features[(w, h)]:10.0f}"
+        f" {w:4d}x{h:<4d} {t['stereo_ms']:8.2f} ({p['stereo']:6.2f}) {t['matching_ms']:12.2f}"
+        f" {t['estimation_ms']:12.2f} ({p['estimation']:5.3f})"
+        f" {t['kalman_ms']:12.2f} ({p['kalman']:5.3f}) {t['features']:10.0f}"
     )
-counts = np.array([features[res] for res in paper_table1])
-pixels = np.array([w * h for w, h in paper_table1])
-fig, ax = new_axes(width=5.5, height=3.4)
-ax.plot(pixels / 1e3, counts, "o-")
-for (w, h), p_, c_ in zip(paper_table1, pixels, counts, strict=True):
-    ax.annotate(f"{w}×{h}", (p_ / 1e3, c_), fontsize="x-small", xytext=(3, 3), textcoords="offset points")
-ax.set_xlabel("pixels per image [thousands]")
-ax.set_ylabel("stereo features (median per frame)")
-ax.set_title("Fig. 6: stereo features against resolution")
-ax.set_ylim(0, 1.1 * counts.max())
+plot_features_by_resolution({res: t["features"] for res, t in measured.items()})
 plt.show()
-frame_ms = sum(rows[0][1][k] for k in ("stereo", "matching", "estimation", "kalman"))
+frame_ms = sum(measured[(640, 480)][f"{k}_ms"] for k in ("stereo", "matching", "estimation", "kalman"))
 print(f"640x480: {frame_ms:.1f} ms per frame for the four stages, {1000 / frame_ms:.0f} frames per second")
+ratios = {
+    res: {k: PAPER_TABLE1[res][k] / t[f"{k}_ms"] for k in ("stereo", "estimation")}
+    for res, t in measured.items()
+}
 print(
     "paper's time / ours, stereo processing: "
-    + ", ".join(f"{w}x{h} {p[0] / t['stereo']:.1f}" for (w, h), t, p in rows)
+    + ", ".join(f"{w}x{h} {r['stereo']:.1f}" for (w, h), r in ratios.items())
     + "; parameter estimation: "
-    + ", ".join(f"{p[1] / t['estimation']:.1f}" for _, t, p in rows)
+    + ", ".join(f"{r['estimation']:.1f}" for r in ratios.values())
 )
 
 # %% [markdown]
