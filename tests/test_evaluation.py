@@ -416,3 +416,60 @@ def test_association_keeps_a_pair_exactly_max_diff_apart_as_evo_and_old_mac_line
     write_kitti_poses(tmp_path / "lf.txt", T)
     (tmp_path / "cr.txt").write_bytes((tmp_path / "lf.txt").read_bytes().replace(b"\n", b"\r"))
     assert np.array_equal(read_trajectory(tmp_path / "cr.txt")[1], read_trajectory(tmp_path / "lf.txt")[1])
+
+
+def test_tum_and_euroc_ground_truth_read_as_evo_reads_them(tmp_path, rng):
+    """A TUM file (t x y z qx qy qz qw) and an EuRoC CSV (t[ns], x, y, z, qw, qx, qy, qz) give
+    evo's times and poses, and a position-only file evo's positions."""
+    from evo.tools import file_interface
+
+    from vo_lib.formats.groundtruth import read_groundtruth
+
+    T = random_trajectory(rng, 50)
+    seconds = 1403636579.0 + 0.05 * np.arange(50) + rng.uniform(0, 1e-3, 50)
+    xyz, q_xyzw = T[:, :3, 3], Rotation.from_matrix(T[:, :3, :3]).as_quat()
+    tum, csv, positions = tmp_path / "truth.tum", tmp_path / "data.csv", tmp_path / "prism.txt"
+    np.savetxt(tum, np.column_stack([seconds, xyz, q_xyzw]), fmt="%.9f")
+    header = (
+        "#timestamp, p_RS_R_x [m], p_RS_R_y [m], p_RS_R_z [m], q_RS_w [], q_RS_x [], q_RS_y [], q_RS_z []"
+    )
+    nanoseconds = np.round(seconds * 1e9).astype(np.int64)
+    rows = [
+        f"{ns}," + ",".join(f"{v:.9f}" for v in (*p, q[3], *q[:3]))
+        for ns, p, q in zip(nanoseconds, xyz, q_xyzw, strict=True)
+    ]
+    csv.write_text("\n".join([header, *rows]) + "\n")
+    np.savetxt(positions, np.column_stack([seconds, xyz]), fmt="%.9f")
+    for path, evo_traj in (
+        (tum, file_interface.read_tum_trajectory_file(str(tum))),
+        (csv, file_interface.read_euroc_csv_trajectory(str(csv))),
+    ):
+        ours = read_groundtruth(path)
+        assert np.allclose(ours.times, evo_traj.timestamps, rtol=0, atol=1e-6), path.name
+        assert np.allclose(ours.poses, np.array(evo_traj.poses_se3), rtol=0, atol=1e-6), path.name
+    only = read_groundtruth(positions)
+    assert only.poses is None and np.allclose(only.positions, xyz, atol=1e-6)
+
+
+def test_position_only_ate_equals_evo_on_the_carried_point(rng):
+    """ATE against positions only (a prism 0.1 m beside the camera) is evo's APE of the point
+    carried along the estimate, after the same SE(3) alignment."""
+    from evo.core import metrics
+    from evo.core.trajectory import PosePath3D
+
+    from vo_lib.evaluation import ate_positions, carried_point
+
+    gt = random_trajectory(rng, 120)
+    lever_arm = np.array([0.1, -0.05, 0.02])
+    prism = carried_point(gt, lever_arm)
+    est = perturb(rng, gt)
+    ours, _ = ate_positions(prism, est, lever_arm)
+
+    def points(p):
+        return PosePath3D(positions_xyz=p, orientations_quat_wxyz=np.tile([1.0, 0, 0, 0], (len(p), 1)))
+
+    traj_est = points(carried_point(est, lever_arm))
+    traj_est.align(points(prism), correct_scale=False)
+    ape = metrics.APE(metrics.PoseRelation.translation_part)
+    ape.process_data((points(prism), traj_est))
+    assert abs(ours.rmse - ape.get_statistic(metrics.StatisticsType.rmse)) < 1e-6
