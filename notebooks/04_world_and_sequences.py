@@ -51,13 +51,11 @@ import tempfile
 from pathlib import Path
 
 import cv2
-import matplotlib.pyplot as plt
 import numpy as np
 from IPython.display import display
 
 from vo_book.demo_worlds import view_from
-from vo_book.nb04 import panel_grid
-from vo_book.plotting import new_axes, plot_robot, plot_world
+from vo_book.nb04 import plot_drives, plot_frames, plot_scan, plot_spot_turn, plot_stereo_pair, plot_worlds
 from vo_book.prose import Markdown
 from vo_book.widgets import offer, slider
 from vo_lib.camera import StereoCamera
@@ -87,13 +85,7 @@ np.set_printoptions(precision=4, suppress=True)
 
 # %%
 worlds = {name: make() for name, make in WORLDS.items()}
-
-
-fig, axes = panel_grid(len(worlds))
-for ax, world in zip(axes, worlds.values(), strict=True):
-    plot_world(ax, world)
-axes[list(worlds).index("corridor")].legend(fontsize="small", loc="lower right")
-plt.show()
+plot_worlds(worlds)
 for world in worlds.values():
     print(
         f"{world.name:13s} {len(world.segments):3d} segments, floor {world.floor_extent}, "
@@ -122,19 +114,7 @@ textured = (np.abs(cv2.Sobel(left, cv2.CV_32F, 1, 0, ksize=3)) > 20) & (measured
 textured[:, :64] = False
 err = np.abs(measured - true_disparity)[textured]
 
-fig, axes = new_axes(3, width=5.0, height=3.6)
-axes[0].imshow(left, cmap="gray")
-axes[0].set_title("left image")
-im = axes[1].imshow(true_disparity, cmap="magma", vmin=0, vmax=40)
-axes[1].set_title("ground-truth disparity [px]")
-fig.colorbar(im, ax=axes[1], shrink=0.7)
-axes[2].hist(np.clip(measured - true_disparity, -2, 2)[textured], bins=80)
-axes[2].set_title("semi-global matching − truth")
-axes[2].set_xlabel("disparity error [px]")
-axes[2].set_ylabel("pixels")
-for ax in axes[:2]:
-    ax.axis("off")
-plt.show()
+plot_stereo_pair(left, true_disparity, (measured - true_disparity)[textured])
 print(
     f"{textured.sum()} textured pixels: median |error| {np.median(err):.3f} px, "
     f"{np.mean(err < 0.5):.1%} within 0.5 px"
@@ -163,15 +143,10 @@ print(
 )
 
 noisy = LaserScanner(range_sigma=0.01).scan(worlds["indoor_lab"].segments_array(), pose, rng)
-fig, ax = new_axes(width=7, height=4.5)
-plot_world(ax, worlds["indoor_lab"], "laser scan from the same pose")
 pts = noisy.points()
 c, s = np.cos(pose[2]), np.sin(pose[2])
-world_pts = pts @ np.array([[c, s], [-s, c]]) + pose[:2]
-ax.plot(world_pts[:, 0], world_pts[:, 1], ".", ms=2, color="C3", label="scan end points")
-plot_robot(ax, pose)
-ax.legend(fontsize="x-small", loc="lower right")
-plt.show()
+world_pts = pts @ np.array([[c, s], [-s, c]]) + pose[:2]  # from the scanner's frame into the world's
+plot_scan(worlds["indoor_lab"], pose, world_pts)
 
 # %% [markdown]
 # ## 4 · Drives that mirror the paper's experiments
@@ -186,7 +161,6 @@ plt.show()
 
 # %%
 odometry = TrackOdometry()
-fig, axes = panel_grid(len(WORLDS))
 drives, rows = {}, []
 for name, sample in SAMPLES.items():
     drive = simulate_drive(
@@ -207,14 +181,7 @@ for name, sample in SAMPLES.items():
             np.degrees(wrap_angle(believed[-1, 2] - drive.poses[-1, 2])),
         )
     )
-for ax, world_name in zip(axes, WORLDS, strict=True):
-    plot_world(ax, worlds[world_name], f"samples in {world_name}")
-    for name, (drive, believed) in drives.items():
-        if SAMPLES[name].world == world_name:
-            (line,) = ax.plot(*drive.poses[:, :2].T, lw=2, label=f"{name} (truth)")
-            ax.plot(*believed[:, :2].T, ls=":", color=line.get_color(), label=f"{name} (odometry)")
-    ax.legend(fontsize="small", loc="upper left")
-plt.show()
+plot_drives(worlds, drives, SAMPLES)
 print(" sample           frames   odometry end error [m]   heading error [deg]")
 for name, frames, pos_err, head_err in rows:
     print(f" {name:15s} {frames:6d}   {pos_err:22.2f}   {head_err:19.1f}")
@@ -238,21 +205,7 @@ display(
 
 # %%
 spot, spot_believed = drives["spot_turn"]
-t = spot.times
-fig, axes = new_axes(2, width=5.5, height=3.5)
-axes[0].plot(t, np.degrees(np.unwrap(spot.poses[:, 2])), label="truth")
-axes[0].plot(t, np.degrees(np.unwrap(spot_believed[:, 2])), label="odometry")
-axes[0].set_xlabel("time [s]")
-axes[0].set_ylabel("heading [deg]")
-axes[0].legend()
-axes[0].set_title("spot turn")
-axes[1].plot(t[1:], 100 * spot.slip[1:, 0], label="left track")
-axes[1].plot(t[1:], 100 * spot.slip[1:, 1], label="right track")
-axes[1].set_xlabel("time [s]")
-axes[1].set_ylabel("slip [%]")
-axes[1].legend()
-axes[1].set_title("slip of each track")
-plt.show()
+plot_spot_turn(spot.times, spot.poses[:, 2], spot_believed[:, 2], spot.slip)
 over_count = (np.unwrap(spot_believed[:, 2])[-1] - spot_believed[0, 2]) / (
     np.unwrap(spot.poses[:, 2])[-1] - spot.poses[0, 2]
 )
@@ -330,21 +283,8 @@ if real_folders:
     )
 else:
     print("no real frame: set VO_LIB_REALDATA to a folder of KITTI-layout sequences to see one here")
-fig, axes = plt.subplots(
-    len(shown), 1, figsize=(11, 3.3 * len(shown)), squeeze=False, constrained_layout=True
-)
-frame_stats = {}
-for ax, (title, image) in zip(axes[:, 0], shown, strict=True):
-    frame_stats[title] = image_statistics(image)
-    st = frame_stats[title]
-    ax.imshow(image, cmap="gray", vmin=0, vmax=255)
-    ax.set_title(
-        f"{title}: {st.empty_cells:.2f} of cells without a corner, {st.corners_per_vga:,.0f} corners "
-        f"per 640×480, {st.low_gradient:.2f} flat pixels",
-        fontsize="small",
-    )
-    ax.axis("off")
-plt.show()
+frame_stats = {title: image_statistics(image) for title, image in shown}
+plot_frames(shown, frame_stats)
 road_stats = frame_stats[shown[0][0]]
 
 # %%

@@ -47,13 +47,19 @@ import math
 import time
 
 import cv2
-import matplotlib.pyplot as plt
 import numpy as np
 from IPython.display import display
 
 from vo_book.demo_front_end import front_end_on
-from vo_book.nb05 import cells_covered, matching_rows
-from vo_book.plotting import new_axes
+from vo_book.nb05 import (
+    cells_covered,
+    matching_rows,
+    plot_corner_sets,
+    plot_depth_error,
+    plot_disparity_errors,
+    plot_epipolar_lines,
+    plot_hamming,
+)
 from vo_book.prose import Markdown
 from vo_book.widgets import offer, slider
 from vo_lib.camera import StereoCamera
@@ -113,21 +119,11 @@ pitch_1deg = cv2.Rodrigues(np.array([math.radians(1.0), 0.0, 0.0]))[0]
 rigs = {"rectified": np.eye(3), "right camera pitched 1°": pitch_1deg}
 rigs = {name: K_inv.T @ t_cross @ R @ K_inv for name, R in rigs.items()}
 probe = np.array([[100.0, 80.0, 1], [320.0, 240.0, 1], [540.0, 400.0, 1], [200.0, 420.0, 1]])
-fig, axes = new_axes(2, width=5.2, height=3.6)
-for ax, (name, F) in zip(axes, rigs.items(), strict=True):
-    us = np.array([0, camera.width - 1])
-    for x in probe:
-        a, b, c = F @ x  # the line a u' + b v' + c = 0 in the right image
-        ax.plot(us, -(a * us + c) / b, lw=1)
-        ax.plot(*x[:2], "k+")
-    ax.set_xlim(0, camera.width - 1)
-    ax.set_ylim(camera.height - 1, 0)
-    ax.set_title(f"epipolar lines, {name}", fontsize="small")
-    ax.set_xlabel("u′ [px]")
-axes[0].set_ylabel("v′ [px] (+: the left pixel)")
-plt.show()
-lines_rect = probe @ rigs["rectified"].T
-lines_tilt = probe @ rigs["right camera pitched 1°"].T
+# each probe pixel's line F x: (a, b, c) of the line a u' + b v' + c = 0 in the right image
+epipolar = {name: probe @ F.T for name, F in rigs.items()}
+plot_epipolar_lines(epipolar, probe, camera.width, camera.height)
+lines_rect = epipolar["rectified"]
+lines_tilt = epipolar["right camera pitched 1°"]
 row_offset = np.abs(-(lines_tilt[:, 0] * probe[:, 0] + lines_tilt[:, 2]) / lines_tilt[:, 1] - probe[:, 1])
 assert np.allclose(lines_rect[:, 0], 0) and np.allclose(-lines_rect[:, 2] / lines_rect[:, 1], probe[:, 1])
 display(
@@ -159,19 +155,10 @@ measured_sd = np.array(
         for z in depths_m
     ]
 )
-fig, axes = new_axes(2, width=5.2, height=3.4)
 zs = np.linspace(0.5, 20, 200)
-axes[0].plot(zs, camera.fx * camera.baseline / zs)
-axes[0].set_xlabel("depth Z [m]")
-axes[0].set_ylabel("disparity d [px]")
-axes[0].set_title("d = f_x B / Z", fontsize="small")
-axes[1].loglog(zs, zs**2 * SIGMA_D / (camera.fx * camera.baseline), label="Z² σ_d / (f_x B)")
-axes[1].loglog(depths_m, measured_sd, "o", label="Monte Carlo")
-axes[1].set_xlabel("depth Z [m]")
-axes[1].set_ylabel("σ_Z [m]")
-axes[1].set_title(f"depth error for σ_d = {SIGMA_D} px", fontsize="small")
-axes[1].legend(fontsize="small")
-plt.show()
+disparity_of_z = camera.fx * camera.baseline / zs  # d = f_x B / Z
+sigma_z_of_z = zs**2 * SIGMA_D / (camera.fx * camera.baseline)  # σ_Z = Z² σ_d / (f_x B)
+plot_depth_error(zs, disparity_of_z, sigma_z_of_z, depths_m, measured_sd, SIGMA_D)
 print(" Z [m]   d [px]   σ_Z formula [m]   σ_Z Monte Carlo [m]")
 for z, p_, m_ in zip(depths_m, predicted, measured_sd, strict=True):
     print(f" {z:5.1f}  {camera.fx * camera.baseline / z:7.2f}   {p_:15.4f}   {m_:19.4f}")
@@ -204,19 +191,7 @@ points = cv2.KeyPoint_convert(keypoints)
 response = np.array([k.response for k in keypoints])
 kept = bucket(points, response, camera.width, camera.height, grid=(8, 6), max_features=600)
 strongest = np.argsort(-response)[:600]
-
-fig, axes = new_axes(2, width=6, height=4.4)
-for ax, sel, title in (
-    (axes[0], strongest, "600 strongest corners"),
-    (axes[1], kept, f"{len(kept)} after 8×6 bucketing"),
-):
-    ax.imshow(left, cmap="gray")
-    ax.plot(points[sel, 0], points[sel, 1], "+", color="C1", ms=4)
-    ax.set_title(title)
-    ax.axis("off")
-plt.show()
-
-
+plot_corner_sets(left, points, {"600 strongest corners": strongest, f"{len(kept)} after 8×6 bucketing": kept})
 print(
     f"{len(keypoints)} FAST corners; grid cells covered: strongest {cells_covered(points[strongest])}, "
     f"bucketed {cells_covered(points[kept])} of 48"
@@ -251,13 +226,7 @@ left_des = left_des[[left_row[c] for c in common]]
 right_des = right_des[[right_row[c] for c in common]]
 same = hamming(left_des, right_des)
 shuffled = hamming(left_des, right_des[rng.permutation(len(right_des))])
-fig, ax = new_axes(width=6, height=3.4)
-ax.hist(same, bins=40, range=(0, 256), alpha=0.7, label="same corner (true disparity), left vs right")
-ax.hist(shuffled, bins=40, range=(0, 256), alpha=0.7, label="unrelated corners")
-ax.axvline(60, color="k", lw=1, ls="--", label="our ceiling (60)")
-ax.set_xlabel("Hamming distance [bits of 256]")
-ax.legend(fontsize="small")
-plt.show()
+plot_hamming(same, shuffled, ceiling=60)
 print(
     f"{len(common)} true pairs (every corner whose true right image lies inside the frame); median "
     f"distance: same corner {np.median(same):.0f} bits, unrelated {np.median(shuffled):.0f} bits; "
@@ -283,17 +252,7 @@ u_i, v_i = np.rint(features.w[:, 0]).astype(int), np.rint(features.w[:, 1]).asty
 truth = true_disparity[v_i, u_i]
 err_subpixel = features.w[:, 2] - truth
 err_integer = np.rint(features.w[:, 2]) - truth
-fig, axes = new_axes(2, width=5.5, height=3.8)
-axes[0].plot(truth, features.w[:, 2], ".", ms=3)
-axes[0].plot([0, 50], [0, 50], "k", lw=0.8)
-axes[0].set_xlabel("true disparity [px]")
-axes[0].set_ylabel("matched disparity [px]")
-axes[0].set_title(f"{len(features)} stereo matches")
-axes[1].hist(np.clip(err_integer, -1.5, 1.5), bins=60, alpha=0.6, label="integer")
-axes[1].hist(np.clip(err_subpixel, -1.5, 1.5), bins=60, alpha=0.6, label="sub-pixel")
-axes[1].set_xlabel("disparity error [px]")
-axes[1].legend(fontsize="small")
-plt.show()
+plot_disparity_errors(truth, features.w[:, 2], err_integer, err_subpixel)
 stereo_median_err = np.median(np.abs(err_subpixel))
 stereo_wrong = np.mean(np.abs(err_subpixel) > 2)
 print(
