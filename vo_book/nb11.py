@@ -14,7 +14,7 @@ import cv2
 import matplotlib.pyplot as plt
 import numpy as np
 
-from vo_book.plotting import new_axes
+from vo_book.plotting import new_axes, plot_paths
 from vo_lib.geometry import wrap_angle
 
 #: Where a reprojection error is clipped in the histogram of RANSAC's inliers [px].
@@ -193,4 +193,66 @@ def plot_inlier_errors(circular: np.ndarray, refined: np.ndarray, threshold: flo
     ax.set_ylabel("RANSAC inliers")
     ax.set_title(f"Frames {frames[0]}->{frames[1]}: RANSAC's inliers judged by each model")
     ax.legend(fontsize="small")
+    plt.show()
+
+
+def plot_heading_errors(heading_error: dict[str, np.ndarray]) -> None:
+    """Heading error per frame of the 6-DoF pipeline, one line per front end ``{name: error}``."""
+    _, ax = new_axes(width=7, height=3.4)
+    for name, err in heading_error.items():
+        ax.plot(err, label=f"{name} front end")
+    ax.set_xlabel("frame")
+    ax.set_ylabel("heading error [deg]")
+    ax.set_title("The same 6-DoF pipeline, two front ends, no odometry")
+    ax.legend(fontsize="small")
+    plt.show()
+
+
+def plot_chained_errors(chained: dict[str, np.ndarray], truth: np.ndarray) -> None:
+    """Position and heading error against ``truth`` per frame of chained planar poses
+    ``{reading: poses}``, one line per reading."""
+    _, axes = new_axes(2, width=5.5, height=3.4)
+    for name, poses in chained.items():
+        axes[0].plot(np.linalg.norm(poses[:, :2] - truth[:, :2], axis=1), label=name)
+        axes[1].plot(np.degrees(wrap_angle(poses[:, 2] - truth[:, 2])), label=name)
+    axes[0].set_xlabel("frame")
+    axes[0].set_ylabel("position error [m]")
+    axes[0].set_title("Frame-to-frame motions chained: position")
+    axes[1].set_xlabel("frame")
+    axes[1].set_ylabel("heading error [deg]")
+    axes[1].set_title("... and heading")
+    axes[0].legend(fontsize="small")
+    plt.show()
+
+
+def plot_inlier_counts(
+    frames: np.ndarray, ransac_in: np.ndarray, refined_in: np.ndarray, share: np.ndarray
+) -> None:
+    """RANSAC's inliers and those the 6-DoF refinement keeps per frame, beside the share kept."""
+    _, axes = new_axes(2, width=5.5, height=3.4)
+    axes[0].plot(frames, ransac_in, label="1-point RANSAC inliers")
+    axes[0].plot(frames, refined_in, label="after the 6-DoF refinement")
+    axes[0].set_xlabel("frame")
+    axes[0].set_ylabel("matches")
+    axes[0].set_title("Inliers per frame")
+    axes[0].legend(fontsize="small")
+    axes[1].plot(frames, share, ".-")
+    axes[1].set_ylim(0, 1.05)
+    axes[1].set_xlabel("frame")
+    axes[1].set_ylabel("refined / RANSAC inliers")
+    axes[1].set_title("Share of RANSAC's inliers the refinement keeps")
+    plt.show()
+
+
+def plot_paths_and_errors(truth: np.ndarray, paths: dict[str, np.ndarray]) -> None:
+    """Plan view of ``truth`` and the estimated ``paths`` ``{name: poses}``, beside each path's
+    position error per frame in the colour the plan view gives it."""
+    _, axes = new_axes(2, width=6, height=3.8)
+    plot_paths(axes[0], {"truth": truth, **paths}, "Plan view (vehicle frame at frame 0)")
+    for k, (name, poses) in enumerate(paths.items(), start=1):  # C0 is the truth's
+        axes[1].plot(np.linalg.norm(poses[:, :2] - truth[:, :2], axis=1), f"C{k}", label=name)
+    axes[1].set_xlabel("frame")
+    axes[1].set_ylabel("position error [m]")
+    axes[1].set_title("Error over time")
+    axes[1].legend(fontsize="small")
     plt.show()
