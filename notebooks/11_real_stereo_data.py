@@ -59,7 +59,6 @@ import math
 from pathlib import Path
 
 import cv2
-import matplotlib.pyplot as plt
 import numpy as np
 import skimage.data
 from IPython.display import display
@@ -73,9 +72,11 @@ from vo_book.nb11 import (
     find_repo,
     image_statistics,
     pixel_gap,
-    show_corners,
+    plot_attitude,
+    plot_coverage,
+    plot_disparity_errors,
+    plot_inlier_errors,
 )
-from vo_book.plotting import new_axes
 from vo_book.prose import Markdown
 from vo_lib.camera import StereoCamera
 from vo_lib.data import load_sequence, real_sequence_path
@@ -152,11 +153,7 @@ empty_real, empty_rendered = stats[real_name]["empty"], stats["rendered indoor_l
 flat_real, flat_rendered = stats[real_name]["flat"], stats["rendered indoor_linear"]["flat"]
 
 
-ratios = [img.shape[1] / img.shape[0] for img in (real_images[0], rendered_images[0])]
-fig, axes = plt.subplots(1, 2, figsize=(3.2 * sum(ratios), 3.8), width_ratios=ratios, constrained_layout=True)
-show_corners(axes[0], real_images[0], real_name, image_statistics(real_images[0]), CELL)
-show_corners(axes[1], rendered_images[0], "rendered", image_statistics(rendered_images[0]), CELL)
-plt.show()
+plot_coverage({real_name: real_images[0], "rendered": rendered_images[0]})
 
 # %%
 similar_empty = abs(empty_real - empty_rendered) < 0.1  # "about as many": within ten points
@@ -218,21 +215,7 @@ for name, fe in front_ends.items():
     )
 ours, theirs, where = errors["pyramid (ORB)"]
 
-fig, axes = new_axes(2, width=6, height=4)
-axes[0].imshow(moto_left, cmap="gray")
-sc = axes[0].scatter(where[:, 0], where[:, 1], c=np.minimum(ours, 1.0), s=8, cmap="viridis")
-fig.colorbar(sc, ax=axes[0], label="|disparity error| [px] (clipped at 1)")
-axes[0].set_xlabel("u [px]")
-axes[0].set_ylabel("v [px]")
-axes[0].set_title("Motorcycle: our matched features")
-bins = np.linspace(0, 1.5, 31)
-axes[1].hist(ours, bins, alpha=0.6, label=f"ours, median {np.median(ours):.2f} px")
-axes[1].hist(theirs, bins, alpha=0.6, label=f"SGBM at the same pixels, median {np.median(theirs):.2f} px")
-axes[1].set_xlabel("|disparity error| [px]")
-axes[1].set_ylabel("features")
-axes[1].set_title("Disparity error against ground truth")
-axes[1].legend(fontsize="small")
-plt.show()
+plot_disparity_errors(moto_left, where, ours, theirs)
 
 # %% [markdown]
 # Where is the tail of the histogram (the share above 1 px is printed)? A disparity is measured on
@@ -334,26 +317,7 @@ if REAL:
 else:
     print("skipped: the rendered crawler has no suspension (no real data)")
 
-fig, axes = new_axes(3 if REAL else 2, width=4.6, height=3.4)
-axes[0].plot(yaw_pitch_roll[:, 1], label="pitch (nose down +)")
-axes[0].plot(yaw_pitch_roll[:, 2], label="roll")
-axes[0].set_xlabel("frame")
-axes[0].set_ylabel("angle from frame 0 [deg]")
-axes[0].set_title("Vehicle attitude (ground truth)")
-axes[0].legend(fontsize="small")
-axes[1].plot(V[:, 2, 3])
-axes[1].set_xlabel("frame")
-axes[1].set_ylabel("height above frame 0 [m]")
-axes[1].set_title("The road climbs")
-if REAL:
-    axes[2].plot(forward_accel, body_nose_up, ".", label="frames")
-    aa = np.linspace(forward_accel.min(), forward_accel.max(), 2)
-    axes[2].plot(aa, offset + gain * aa, label=f"fit: {gain:.2f} deg per m/s^2")
-    axes[2].set_xlabel("forward acceleration [m/s^2]")
-    axes[2].set_ylabel("nose up minus road slope [deg]")
-    axes[2].set_title("The body dips as the car brakes")
-    axes[2].legend(fontsize="small")
-plt.show()
+plot_attitude(yaw_pitch_roll, V[:, 2, 3], (forward_accel, body_nose_up, gain, offset) if REAL else None)
 
 # %% [markdown]
 # **The model error in pixels.** For each pair of frames we take the true camera motion, its
@@ -527,16 +491,7 @@ print(
     f"{np.median(err_planar[est.inliers]):.2f} and {np.median(err_refined[est.inliers]):.2f} px)"
 )
 
-fig, ax = new_axes(width=7, height=3.4)
-bins = np.linspace(0, 4, 41)
-ax.hist(np.minimum(err_planar[est.inliers], 4), bins, alpha=0.6, label="under RANSAC's circular motion")
-ax.hist(np.minimum(err_refined[est.inliers], 4), bins, alpha=0.6, label="under the refined 6-DoF motion")
-ax.axvline(rigid_motion.INLIER_PIXELS, color="k", ls="--", label="inlier threshold")
-ax.set_xlabel("reprojection error in (u, v, d) [px] (clipped at 4)")
-ax.set_ylabel("RANSAC inliers")
-ax.set_title(f"Frames {k0}->{k1}: RANSAC's inliers judged by each model")
-ax.legend(fontsize="small")
-plt.show()
+plot_inlier_errors(err_planar[est.inliers], err_refined[est.inliers], rigid_motion.INLIER_PIXELS, (k0, k1))
 
 # %% [markdown]
 # On this frame pair (one RANSAC draw) the line above prints the share of RANSAC's inliers within a

@@ -58,15 +58,19 @@ import vo_lib  # noqa: F401 (first: NumPy and OpenCV then use the same BLAS kern
 import math
 import time
 
-import matplotlib.pyplot as plt
 import numpy as np
 from IPython.display import display
 from scipy.spatial.transform import Rotation
 from scipy.stats import chi2
 
 from vo_book.demo_real import chain_models
-from vo_book.nb11 import errors_against
-from vo_book.plotting import new_axes, plot_paths
+from vo_book.nb11 import (
+    errors_against,
+    plot_chained_errors,
+    plot_heading_errors,
+    plot_inlier_counts,
+    plot_paths_and_errors,
+)
 from vo_book.prose import Markdown
 from vo_lib.camera import StereoCamera
 from vo_lib.comparison import over_seeds
@@ -125,14 +129,7 @@ for name, res in (("pyramid", vo_full), ("single scale", vo_single)):
     m, pct, hd = final_errors(res.poses)
     print(f"6-DoF pipeline, {name:12s} front end: final error {m:.3f} m ({pct:.2f} %), heading {hd:+.3f} deg")
 
-fig, ax = new_axes(width=7, height=3.4)
-for name, err in heading_error.items():
-    ax.plot(err, label=f"{name} front end")
-ax.set_xlabel("frame")
-ax.set_ylabel("heading error [deg]")
-ax.set_title("The same 6-DoF pipeline, two front ends, no odometry")
-ax.legend(fontsize="small")
-plt.show()
+plot_heading_errors(heading_error)
 
 # %% [markdown]
 # Now the pipelines. `motion="planar"` is [Zhao]'s pipeline as notebook 08 ran it (single-scale
@@ -225,18 +222,7 @@ if REAL:
         )
     )
 
-    fig, axes = new_axes(2, width=5.5, height=3.4)
-    for name, poses in chained.items():
-        axes[0].plot(np.linalg.norm(poses[:, :2] - truth[:, :2], axis=1), label=name)
-        axes[1].plot(np.degrees(wrap_angle(poses[:, 2] - truth[:, 2])), label=name)
-    axes[0].set_xlabel("frame")
-    axes[0].set_ylabel("position error [m]")
-    axes[0].set_title("Frame-to-frame motions chained: position")
-    axes[1].set_xlabel("frame")
-    axes[1].set_ylabel("heading error [deg]")
-    axes[1].set_title("... and heading")
-    axes[0].legend(fontsize="small")
-    plt.show()
+    plot_chained_errors(chained, truth)
 else:
     print(
         "skipped: the rendered crawler moves a centimetre per frame, below what frame-to-frame matches "
@@ -340,19 +326,7 @@ print(
     f"kept {np.median(share):.0%} (range {share.min():.0%}..{share.max():.0%})"
 )
 
-fig, axes = new_axes(2, width=5.5, height=3.4)
-axes[0].plot(frames, ransac_in, label="1-point RANSAC inliers")
-axes[0].plot(frames, refined_in, label="after the 6-DoF refinement")
-axes[0].set_xlabel("frame")
-axes[0].set_ylabel("matches")
-axes[0].set_title("Inliers per frame")
-axes[0].legend(fontsize="small")
-axes[1].plot(frames, share, ".-")
-axes[1].set_ylim(0, 1.05)
-axes[1].set_xlabel("frame")
-axes[1].set_ylabel("refined / RANSAC inliers")
-axes[1].set_title("Share of RANSAC's inliers the refinement keeps")
-plt.show()
+plot_inlier_counts(frames, ransac_in, refined_in, share)
 
 # %% [markdown]
 # ## 4 · Odometry, vision, and both, on real data
@@ -421,15 +395,7 @@ print(
     f"{drift_across:+.3f} m; the truth travels a median {crab:.2f} deg off its own heading"
 )
 
-fig, axes = new_axes(2, width=6, height=3.8)
-plot_paths(axes[0], {"truth": truth, **paths}, "Plan view (vehicle frame at frame 0)")
-for colour, (name, poses) in zip(("C1", "C2", "C3"), paths.items(), strict=True):  # as in the plan view
-    axes[1].plot(np.linalg.norm(poses[:, :2] - truth[:, :2], axis=1), colour, label=name)
-axes[1].set_xlabel("frame")
-axes[1].set_ylabel("position error [m]")
-axes[1].set_title("Error over time")
-axes[1].legend(fontsize="small")
-plt.show()
+plot_paths_and_errors(truth, paths)
 
 # %% [markdown]
 # Split along and across the track, the final errors say what went wrong. The odometry's heading,

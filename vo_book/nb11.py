@@ -1,6 +1,7 @@
 """Figures and small measurements of notebooks 11 and 12 (real stereo data), out of their story cells.
 
 Nothing here estimates motion: the functions draw, locate or measure what the notebook computed.
+The ``plot_*`` functions draw one figure each from the notebook's arrays and show it.
 """
 
 from __future__ import annotations
@@ -10,9 +11,18 @@ from collections.abc import Callable
 from pathlib import Path
 
 import cv2
+import matplotlib.pyplot as plt
 import numpy as np
 
+from vo_book.plotting import new_axes, plot_paths
 from vo_lib.geometry import wrap_angle
+
+#: Where a reprojection error is clipped in the histogram of RANSAC's inliers [px].
+REPROJECTION_CLIP = 4.0
+#: Where a disparity error is clipped in the colours of the Motorcycle's features [px].
+DISPARITY_CLIP = 1.0
+#: The bins of the disparity-error histogram [px].
+DISPARITY_BINS = np.linspace(0, 1.5, 31)
 
 
 def find_repo(start: Path) -> Path:
@@ -107,3 +117,142 @@ def image_statistics(image: np.ndarray, threshold: int = 20, low_gradient: float
         "corners": corners,
         "occupied": occupied,
     }
+
+
+def plot_coverage(images: dict[str, np.ndarray]) -> None:
+    """Images ``{title: image}`` side by side, each at its own aspect ratio, with its FAST corners
+    and, shaded, the :data:`CELL`-pixel cells that have none (as :func:`image_statistics` finds
+    them)."""
+    ratios = [img.shape[1] / img.shape[0] for img in images.values()]
+    _, axes = plt.subplots(
+        1, len(images), figsize=(3.2 * sum(ratios), 3.8), width_ratios=ratios, constrained_layout=True
+    )
+    for ax, (title, image) in zip(axes, images.items(), strict=True):
+        show_corners(ax, image, title, image_statistics(image), CELL)
+    plt.show()
+
+
+def plot_disparity_errors(image: np.ndarray, where: np.ndarray, ours: np.ndarray, theirs: np.ndarray) -> None:
+    """Our matched features on ``image`` coloured by |disparity error| (``where`` holds their u, v),
+    beside the histograms of our errors and SGBM's at the same pixels, with their medians."""
+    fig, axes = new_axes(2, width=6, height=4)
+    axes[0].imshow(image, cmap="gray")
+    sc = axes[0].scatter(where[:, 0], where[:, 1], c=np.minimum(ours, DISPARITY_CLIP), s=8, cmap="viridis")
+    fig.colorbar(sc, ax=axes[0], label=f"|disparity error| [px] (clipped at {DISPARITY_CLIP:g})")
+    axes[0].set_xlabel("u [px]")
+    axes[0].set_ylabel("v [px]")
+    axes[0].set_title("Motorcycle: our matched features")
+    axes[1].hist(ours, DISPARITY_BINS, alpha=0.6, label=f"ours, median {np.median(ours):.2f} px")
+    axes[1].hist(
+        theirs, DISPARITY_BINS, alpha=0.6, label=f"SGBM at the same pixels, median {np.median(theirs):.2f} px"
+    )
+    axes[1].set_xlabel("|disparity error| [px]")
+    axes[1].set_ylabel("features")
+    axes[1].set_title("Disparity error against ground truth")
+    axes[1].legend(fontsize="small")
+    plt.show()
+
+
+def plot_attitude(yaw_pitch_roll: np.ndarray, height: np.ndarray, braking: tuple | None = None) -> None:
+    """The vehicle's pitch and roll and its height per frame; with ``braking`` =
+    ``(forward_accel, body_nose_up, gain, offset)``, a third panel of the body's pitch against the
+    forward acceleration and the fitted line."""
+    _, axes = new_axes(2 if braking is None else 3, width=4.6, height=3.4)
+    axes[0].plot(yaw_pitch_roll[:, 1], label="pitch (nose down +)")
+    axes[0].plot(yaw_pitch_roll[:, 2], label="roll")
+    axes[0].set_xlabel("frame")
+    axes[0].set_ylabel("angle from frame 0 [deg]")
+    axes[0].set_title("Vehicle attitude (ground truth)")
+    axes[0].legend(fontsize="small")
+    axes[1].plot(height)
+    axes[1].set_xlabel("frame")
+    axes[1].set_ylabel("height above frame 0 [m]")
+    axes[1].set_title("The road climbs")
+    if braking is not None:
+        forward_accel, body_nose_up, gain, offset = braking
+        axes[2].plot(forward_accel, body_nose_up, ".", label="frames")
+        aa = np.linspace(forward_accel.min(), forward_accel.max(), 2)
+        axes[2].plot(aa, offset + gain * aa, label=f"fit: {gain:.2f} deg per m/s^2")
+        axes[2].set_xlabel("forward acceleration [m/s^2]")
+        axes[2].set_ylabel("nose up minus road slope [deg]")
+        axes[2].set_title("The body dips as the car brakes")
+        axes[2].legend(fontsize="small")
+    plt.show()
+
+
+def plot_inlier_errors(circular: np.ndarray, refined: np.ndarray, threshold: float, frames: tuple) -> None:
+    """Histograms of the reprojection errors of RANSAC's inliers under the circular and the refined
+    motion (clipped at :data:`REPROJECTION_CLIP`), with the inlier ``threshold``, for the pair
+    ``frames``."""
+    _, ax = new_axes(width=7, height=3.4)
+    bins = np.linspace(0, REPROJECTION_CLIP, 41)
+    ax.hist(np.minimum(circular, REPROJECTION_CLIP), bins, alpha=0.6, label="under RANSAC's circular motion")
+    ax.hist(np.minimum(refined, REPROJECTION_CLIP), bins, alpha=0.6, label="under the refined 6-DoF motion")
+    ax.axvline(threshold, color="k", ls="--", label="inlier threshold")
+    ax.set_xlabel(f"reprojection error in (u, v, d) [px] (clipped at {REPROJECTION_CLIP:g})")
+    ax.set_ylabel("RANSAC inliers")
+    ax.set_title(f"Frames {frames[0]}->{frames[1]}: RANSAC's inliers judged by each model")
+    ax.legend(fontsize="small")
+    plt.show()
+
+
+def plot_heading_errors(heading_error: dict[str, np.ndarray]) -> None:
+    """Heading error per frame of the 6-DoF pipeline, one line per front end ``{name: error}``."""
+    _, ax = new_axes(width=7, height=3.4)
+    for name, err in heading_error.items():
+        ax.plot(err, label=f"{name} front end")
+    ax.set_xlabel("frame")
+    ax.set_ylabel("heading error [deg]")
+    ax.set_title("The same 6-DoF pipeline, two front ends, no odometry")
+    ax.legend(fontsize="small")
+    plt.show()
+
+
+def plot_chained_errors(chained: dict[str, np.ndarray], truth: np.ndarray) -> None:
+    """Position and heading error against ``truth`` per frame of chained planar poses
+    ``{reading: poses}``, one line per reading."""
+    _, axes = new_axes(2, width=5.5, height=3.4)
+    for name, poses in chained.items():
+        axes[0].plot(np.linalg.norm(poses[:, :2] - truth[:, :2], axis=1), label=name)
+        axes[1].plot(np.degrees(wrap_angle(poses[:, 2] - truth[:, 2])), label=name)
+    axes[0].set_xlabel("frame")
+    axes[0].set_ylabel("position error [m]")
+    axes[0].set_title("Frame-to-frame motions chained: position")
+    axes[1].set_xlabel("frame")
+    axes[1].set_ylabel("heading error [deg]")
+    axes[1].set_title("... and heading")
+    axes[0].legend(fontsize="small")
+    plt.show()
+
+
+def plot_inlier_counts(
+    frames: np.ndarray, ransac_in: np.ndarray, refined_in: np.ndarray, share: np.ndarray
+) -> None:
+    """RANSAC's inliers and those the 6-DoF refinement keeps per frame, beside the share kept."""
+    _, axes = new_axes(2, width=5.5, height=3.4)
+    axes[0].plot(frames, ransac_in, label="1-point RANSAC inliers")
+    axes[0].plot(frames, refined_in, label="after the 6-DoF refinement")
+    axes[0].set_xlabel("frame")
+    axes[0].set_ylabel("matches")
+    axes[0].set_title("Inliers per frame")
+    axes[0].legend(fontsize="small")
+    axes[1].plot(frames, share, ".-")
+    axes[1].set_ylim(0, 1.05)
+    axes[1].set_xlabel("frame")
+    axes[1].set_ylabel("refined / RANSAC inliers")
+    axes[1].set_title("Share of RANSAC's inliers the refinement keeps")
+    plt.show()
+
+
+def plot_paths_and_errors(truth: np.ndarray, paths: dict[str, np.ndarray]) -> None:
+    """Plan view of ``truth`` and the estimated ``paths`` ``{name: poses}``, beside each path's
+    position error per frame in the colour the plan view gives it."""
+    _, axes = new_axes(2, width=6, height=3.8)
+    plot_paths(axes[0], {"truth": truth, **paths}, "Plan view (vehicle frame at frame 0)")
+    for k, (name, poses) in enumerate(paths.items(), start=1):  # C0 is the truth's
+        axes[1].plot(np.linalg.norm(poses[:, :2] - truth[:, :2], axis=1), f"C{k}", label=name)
+    axes[1].set_xlabel("frame")
+    axes[1].set_ylabel("position error [m]")
+    axes[1].set_title("Error over time")
+    axes[1].legend(fontsize="small")
+    plt.show()
