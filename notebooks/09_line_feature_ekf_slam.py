@@ -43,20 +43,23 @@
 
 # %%
 
-import matplotlib.pyplot as plt
 import numpy as np
 import sympy as sp
 from IPython.display import display
 from scipy.stats import chi2
 
-from vo_book.nb09 import differing_entries, finite_difference, judge, seconds_per_call
-from vo_book.plotting import (
-    covariance_ellipse,
-    draw_observer_case,
-    new_axes,
-    plot_line_slam,
-    plot_pose_errors,
+from vo_book.nb09 import (
+    differing_entries,
+    finite_difference,
+    judge,
+    plot_association,
+    plot_consistency,
+    plot_line_triple,
+    plot_scan_against_observer,
+    plot_timings,
+    seconds_per_call,
 )
+from vo_book.plotting import draw_observer_case, new_axes, plot_line_slam, plot_pose_errors
 from vo_book.prose import Markdown
 from vo_lib.comparison import bootstrap_interval, chi2_band, over_seeds
 from vo_lib.line_slam.lap import (
@@ -225,36 +228,19 @@ hits = scan.points() @ np.array(
     [[np.cos(pose_g[2]), np.sin(pose_g[2])], [-np.sin(pose_g[2]), np.cos(pose_g[2])]]
 )
 hits += pose_g[:2]
-fig, ax = new_axes(width=6, height=5)
-for i, seg in enumerate(world.segments):
+visible_parts = []
+for seg in world.segments:
     a_, b_ = np.array(seg.start), np.array(seg.end)
-    ax.plot(*np.transpose([a_, b_]), color="0.4", lw=1)
     part = visible_segment(a_, b_, pose_g[:2], 30.0)
+    visible_parts.append(part)
     d_ = b_ - a_
     t_hit = (hits - a_) @ d_ / (d_ @ d_)
     on_seg = np.abs((hits - a_) @ np.array([-d_[1], d_[0]]) / np.hypot(*d_)) < 1e-6
     if part is not None:
-        seen = a_ + np.outer(part, d_)
-        ax.plot(
-            seen[:, 0],
-            seen[:, 1],
-            color="C1",
-            lw=4,
-            alpha=0.6,
-            label="visible (closed form)" if i == 0 else None,
-        )
         assert np.all((t_hit[on_seg] > part[0] - 1e-6) & (t_hit[on_seg] < part[1] + 1e-6))
     else:
         assert not on_seg.any()
-ax.plot(hits[:, 0], hits[:, 1], ".", ms=2, color="C0", label="laser echoes")
-ax.add_patch(plt.Circle(pose_g[:2], 30.0, fill=False, color="0.7"))
-ax.plot(*pose_g[:2], "k^")
-ax.set_aspect("equal")
-ax.set_xlabel("x [m]")
-ax.set_ylabel("y [m]")
-ax.legend(fontsize="small")
-ax.set_title("The shared laser scanner agrees with the observer")
-plt.show()
+plot_scan_against_observer(world, visible_parts, hits, pose_g, 30.0)
 # %% [markdown]
 # ## 4. Data association (eq. 13)
 #
@@ -301,19 +287,7 @@ print(
     {k: round(float(v), 1) for k, v in d2_printed.items()},
 )
 
-fig, ax = new_axes(width=6, height=4.5)
-covariance_ellipse(ax, placed, cov, 2.0, color="C0", label="observation, 2σ")
-for j, name in enumerate("AB"):
-    ax.plot(*ekf.landmark(j), "s", label=f"wall {name}'s feature point")
-ax.plot(*placed, "x", color="C0", ms=9, label="observation placed with the estimated pose")
-ax.set_xlim(17, 23)
-ax.set_ylim(placed[1] - 2.6 * sigma_across, placed[1] + 2.6 * sigma_across)
-ax.set_aspect("equal")
-ax.set_xlabel("x [m] (along the line of sight)")
-ax.set_ylabel("y [m]")
-ax.legend(fontsize="small", loc="lower left")
-ax.set_title("Nearest in metres is B; nearest in σ is A")
-plt.show()
+plot_association(ekf, placed, cov, sigma_across)
 # %% [markdown]
 # ### The update and the augmentation, written out
 #
@@ -490,15 +464,7 @@ for i, tol in enumerate(tolerances):
         + "".join(f"{t * 1e6:13.2f} µs" for t in row)
         + f"{row[0] / row[1]:16.1f}x{row[0] / row[2]:13.1f}x"
     )
-fig, ax = new_axes(width=5.5, height=3.4)
-for name, times in table.items():
-    ax.loglog(tolerances, np.array(times) * 1e6, "o-", label=name)
-ax.set_xlabel("tolerance [m]")
-ax.set_ylabel("time per call [µs]")
-ax.invert_xaxis()
-ax.grid(True, which="both", alpha=0.3)
-ax.legend(fontsize="small")
-plt.show()
+plot_timings(tolerances, table)
 
 # %%
 i_cm = tolerances.index(DEFAULT_TOLERANCE)  # our default tolerance, 1 cm
@@ -626,24 +592,9 @@ print(
     f"line (ρ, ψ) = ({line_z[0]:.2f} m, {np.degrees(line_z[1]):.1f}°), "
     f"σ = ({np.sqrt(line_cov[0, 0]):.3f} m, {np.degrees(np.sqrt(line_cov[1, 1])):.2f}°)"
 )
-fig, ax = new_axes(width=6.5, height=5)
-ax.plot(*np.transpose([a_, b_]), color="0.4", lw=1, label=f"wall {i_ex + 1}")
-ax.plot(*ends_world.T, color="C1", lw=4, alpha=0.6, label="visible part")
-for q in ends_world:
-    ax.plot(*np.transpose([pose_ex[:2], q]), color="C0", lw=0.8)
 foot_robot = a_ + (pose_ex[:2] - a_) @ (b_ - a_) / ((b_ - a_) @ (b_ - a_)) * (b_ - a_)
 assert np.isclose(np.hypot(*(foot_robot - pose_ex[:2])), triple[0])
-ax.plot(*np.transpose([pose_ex[:2], foot_robot]), "k:", lw=1, label="d: distance to the line")
-ax.plot(*feature_point(a_, b_), "s", color="C3", label="feature point (what eq. 10 observes)")
-ax.plot(0, 0, "k+", ms=10, label="world origin")
-ax.add_patch(plt.Circle(pose_ex[:2], 30.0, fill=False, color="0.7"))
-ax.plot(*pose_ex[:2], "k^")
-ax.set_aspect("equal")
-ax.set_xlabel("x [m]")
-ax.set_ylabel("y [m]")
-ax.legend(fontsize="x-small", loc="best")
-ax.set_title("The paper's triple: d, and the angles of the rays to the visible part's ends")
-plt.show()
+plot_line_triple((a_, b_), f"wall {i_ex + 1}", ends_world, pose_ex, foot_robot, feature_point(a_, b_), 30.0)
 # %% [markdown]
 # Which form serves the filter better is measured in section 7 over 20 laps. The lap of section 7
 # and the figures use the feature point, as the paper's filter does.
@@ -819,22 +770,7 @@ start = 4 * laps[0].scenario.observe_every  # the covariance is rank-deficient b
 z_heading = np.array([heading_errors(r)[start:K] / np.sqrt(r.pose_cov[start:K, 2, 2]) for r in laps])
 t_ctrl = np.arange(start, K) * laps[0].scenario.period
 
-fig, axes = new_axes(2, width=6.5, height=3.2)
-axes[0].plot(t_obs, mean_nees, lw=1, label=f"mean NEES over {len(laps)} seeds")
-axes[0].axhspan(low, high, color="C2", alpha=0.2, label="95 % band, per step")
-axes[0].axhline(3, color="k", lw=0.5)
-axes[0].set_xlabel("time [s]")
-axes[0].set_ylabel("pose NEES")
-axes[0].set_title(f"Pose NEES, {len(laps)} seeds")
-axes[0].legend(fontsize="small")
-for i, zz in enumerate(z_heading):
-    axes[1].plot(t_ctrl, zz, lw=0.6, color="C0" if i else "C3", alpha=0.5 if i else 1.0)
-axes[1].axhline(2, color="k", lw=0.6, ls="--")
-axes[1].axhline(-2, color="k", lw=0.6, ls="--")
-axes[1].set_xlabel("time [s]")
-axes[1].set_ylabel("heading error / σ")
-axes[1].set_title(f"Heading error in σ, each seed (seed {SEED} red)")
-plt.show()
+plot_consistency(t_obs, mean_nees, (low, high), t_ctrl, z_heading, SEED)
 
 # lap averages, one per seed, judged by their seeds' bootstrap interval against the dof
 lap_nees = np.array([r.nees[:n].mean() for r in laps])

@@ -47,7 +47,6 @@
 import vo_lib  # noqa: F401 (first: NumPy and OpenCV then use the same BLAS kernels on every CPU)
 
 # isort: split
-import matplotlib.pyplot as plt
 import numpy as np
 from IPython.display import display
 from scipy.stats import norm
@@ -62,7 +61,14 @@ from vo_book.demo_corridor import (
     scores_at,
     x_figure,
 )
-from vo_book.plotting import new_axes, plot_world
+from vo_book.nb10 import (
+    plot_corrections,
+    plot_directions,
+    plot_drive,
+    plot_posterior_boxes,
+    plot_profiles,
+    plot_scans,
+)
 from vo_book.prose import Markdown
 from vo_lib.comparison import bootstrap_interval, over_seeds
 from vo_lib.geometry import planar_from_camera_poses
@@ -100,18 +106,8 @@ np.set_printoptions(precision=4, suppress=True)
 world = corridor()
 field = LikelihoodField.from_world(world)
 segments = world.segments_array()
-fig, axes = new_axes(3, width=5.5, height=2.6)
-for ax, x in zip(axes, (3.0, 9.0, 16.0), strict=True):
-    plot_world(ax, world, f"robot at x = {x:g} m")
-    scan = TIM551.scan(segments, (x, 0.0, 0.0), rng)
-    pts = scan.points() + (x, 0.0)
-    ax.plot(pts[:, 0], pts[:, 1], ".", ms=2, color="C3")
-    ax.plot(x, 0, "k>")
-    ax.set_aspect("equal", adjustable="box")  # keep the limits below; the box takes the aspect
-    ax.set_xlim(x - 6, x + 10.5)
-    ax.set_ylim(-2, 2)
-axes[0].legend(fontsize="x-small", loc="lower right")
-plt.show()
+scans = {x: TIM551.scan(segments, (x, 0.0, 0.0), rng).points() + (x, 0.0) for x in (3.0, 9.0, 16.0)}
+plot_scans(world, scans)
 
 # %% [markdown]
 # The tracker's score of a pose is the sum over beams of the likelihood field (value 1 on a mapped
@@ -120,17 +116,12 @@ plt.show()
 
 # %%
 offsets = np.linspace(-0.6, 0.6, 61)
-fig, ax = new_axes(width=7, height=3)
 profiles = {}
 for x in (3.0, 9.0, 11.0, 16.0, 23.0):
     pts = TIM551.scan(segments, (x, 0.0, 0.0), rng).points()
     poses = np.column_stack([x + offsets, np.zeros_like(offsets), np.zeros_like(offsets)])
     profiles[x] = field.score(poses, pts)
-    ax.plot(offsets, profiles[x] - profiles[x].max(), label=f"x = {x:g} m")
-ax.set_xlabel("pose offset along the corridor [m]")
-ax.set_ylabel("score - best score")
-ax.legend(fontsize="small")
-ax.set_title("Score of poses shifted along the corridor")
+plot_profiles(offsets, profiles)
 
 
 flat_here = flat_positions(world, field, offsets)
@@ -226,20 +217,14 @@ display(
 
 
 # %%
-fig, axes = new_axes(2, width=5.5, height=3.4)
 frame_stats, raw_scores = {}, {}
-for ax, x, title in ((axes[0], 3.0, "normal (x = 3 m)"), (axes[1], 9.0, "occluded stretch (x = 9 m)")):
+for x, title in ((3.0, "normal (x = 3 m)"), (9.0, "occluded stretch (x = 9 m)")):
     samples, scores = scores_at(x, world, field, rng)
     raw_scores[title] = scores
-    ax.boxplot(posterior(scores) * len(scores), whis=(0, 100))
-    ax.set_title(title)
-    ax.set_ylabel("posterior × n (box: quartiles, whiskers: min and max)")
-    ax.set_xticks([])
     st = frame_stats[title] = ScoreStatistics.from_scores(scores)
     print(f"{title:28s} V_max {st.v_max:7.1f}  V_uq {st.v_uq:.1e}  D_s {st.d_s:7.1f}  R_s {st.r_s:10.1f}")
 top = max(st.v_max for st in frame_stats.values())
-for ax in axes:
-    ax.set_ylim(-0.03 * top, 1.05 * top)
+plot_posterior_boxes({title: posterior(s) * len(s) for title, s in raw_scores.items()}, top)
 
 # %% [markdown]
 # **The statistics, written out.** What `ScoreStatistics.from_scores` computes, in a few lines:
@@ -452,15 +437,7 @@ normal_run = run_tracking(without_umbrella(world), truth_c, odo_c, vo, 1000, fie
 used = np.array([cal.thresholds.composite(st.stats) for st in normal_run.steps])
 r_lo = np.array([st.laser_correction for st in normal_run.steps])
 r_vo = np.array([st.vo_correction for st in normal_run.steps])
-fig, ax = new_axes(width=8, height=3)
-ax.plot(normal_run.truth[:, 0], 100 * r_lo, lw=0.8, label="R_lo: laser's correction")
-ax.plot(normal_run.truth[:, 0], 100 * r_vo, lw=0.8, label="R_vo: visual odometer's correction")
-ax.axhline(100 * cal.laser.upper, color="C0", ls="--", lw=0.8, label="UCL_lo")
-ax.axhline(100 * cal.vo.upper, color="C1", ls="--", lw=0.8, label="UCL_vo")
-ax.set_xlabel("true x along the corridor [m]")
-ax.set_ylabel("correction to the odometry [cm]")
-ax.set_title("Corrections in the normal run (Fig. 1(c), Fig. 5)")
-ax.legend(fontsize="x-small", ncol=2)
+plot_corrections(normal_run.truth[:, 0], r_lo, r_vo, cal)
 coverage = {
     "laser": np.mean([cal.laser.contains(v) for v in r_lo[used]]),
     "visual odometer": np.mean([cal.vo.contains(v) for v in r_vo[used]]),
@@ -536,28 +513,7 @@ display(
 truth, odo = corridor_drive(SEED)
 lbpt = run_tracking(world, truth, odo, vo, SEED, cal, compensate=False, field=field)
 voapt = run_tracking(world, truth, odo, vo, SEED, cal, field=field)
-x = lbpt.truth[:, 0]
-fig, axes = plt.subplots(4, 1, figsize=(9, 8.5), sharex=True, constrained_layout=True)
-axes[0].plot(x, lbpt.errors[:, 0], label="LBPT")
-axes[0].plot(x, voapt.errors[:, 0], label="VOAPT")
-axes[0].set_ylabel("X error [m]")
-axes[0].set_title("Errors along (X) and across (Y) the corridor (the paper's Fig. 7), one drive")
-axes[0].legend(fontsize="small")
-axes[1].plot(x, 100 * lbpt.errors[:, 1], label="LBPT")
-axes[1].plot(x, 100 * voapt.errors[:, 1], label="VOAPT")
-axes[1].set_ylabel("Y error [cm]")
-axes[2].semilogy(x, [s.stats.v_max for s in lbpt.steps], lw=0.8, label="V_max (LBPT's samples)")
-axes[2].axhline(cal.thresholds.v_max, color="k", lw=0.8, ls="--", label="threshold")
-axes[2].set_ylabel("V_max")
-axes[2].legend(fontsize="small")
-axes[3].plot(x, [s.c_s for s in lbpt.steps], lw=0.8, label="C_s")
-axes[3].plot(x, [0.5 * s.credible for s in lbpt.steps], lw=0.8, label="T_s / 2 (LBPT)")
-axes[3].set_ylabel("indicator")
-axes[3].set_xlabel("true x along the corridor [m]")
-axes[3].legend(fontsize="small")
-for ax in axes:
-    for lo, hi in UNOCCLUDED:
-        ax.axvspan(lo, hi, color="C2", alpha=0.08)
+plot_drive(lbpt, voapt, cal.thresholds.v_max, UNOCCLUDED)
 
 # %% [markdown]
 # Green: the stretches where radial features are in view. In this one drive, between them,
@@ -572,13 +528,7 @@ print(
     f"VOAPT compensated {len(dirs)} of {len(voapt.steps)} updates; "
     f"mean |cos| to the corridor's axis {np.mean(np.abs(dirs[:, 0])):.3f}"
 )
-fig, ax = new_axes(width=10, height=2.6)
-plot_world(ax, world, "principal error directions (arrows) where VOAPT compensated")
-for s, pose in zip(voapt.steps, voapt.estimate, strict=True):
-    if s.direction is not None:
-        ax.arrow(pose[0], pose[1], 0.6 * s.direction[0], 0.6 * s.direction[1], head_width=0.08, color="C1")
-ax.set_aspect("equal", adjustable="box")
-ax.set_ylim(-1.8, 1.8)
+plot_directions(world, voapt)
 
 # %% [markdown]
 # ## 6. Table III over 20 seeds

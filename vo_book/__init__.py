@@ -16,8 +16,8 @@ the student edition and the grader find it as the notebooks do.
 ``nb07``, ``demo_fusion``     notebook 07: figures; the seed drives, with the seed study stored
                               (``demo_fusion.json``)
 ``demo_pipeline``  notebook 08's tables of the stored paper sets
-``nb09``           notebook 09's matrix comparison, finite differences and timings
-``demo_corridor``  notebook 10's score profiles, box statistics and ROC area
+``nb09``           notebook 09's matrix comparison, finite differences, timings and figures
+``nb10``, ``demo_corridor``   notebook 10: figures; score profiles, box statistics and ROC area
 ``nb11``           notebooks 11 and 12: figures and small measurements
 ``demo_real``      notebook 12's chain of the circular and 6-DoF readings
 """
