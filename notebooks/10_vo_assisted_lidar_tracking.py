@@ -84,7 +84,7 @@ from vo_lib.lidar_tracking.corridor_experiment import (
     without_umbrella,
 )
 from vo_lib.lidar_tracking.likelihood_field import LikelihoodField
-from vo_lib.lidar_tracking.pnp_odometry import PnpVisualOdometry
+from vo_lib.lidar_tracking.pnp_odometry import PAPER_TABLE1, PnpVisualOdometry
 from vo_lib.lidar_tracking.pose_tracking import ScoreStatistics, Thresholds, posterior
 from vo_lib.sim.samples import render_sample
 from vo_lib.sim.world import corridor
@@ -181,11 +181,10 @@ print(
 vo, vo_seconds = corridor_visual_odometry()
 truth0, _ = corridor_drive(0)
 vo_err = np.abs(vo[:, :2] - truth0[:, :2])
-paper_table1 = {"X": (0.050, 0.041, 0.042, 0.149), "Y": (0.045, 0.035, 0.036, 0.130), "ms": (40.3, 41, 6.2)}
 print(f"{'':22s}{'mean':>9s}{'median':>9s}{'std':>9s}{'max':>9s}   paper: mean / median / std / max")
 for axis, name in ((0, "X"), (1, "Y")):
     e = vo_err[:, axis]
-    p = paper_table1[name]
+    p = PAPER_TABLE1[name]
     print(
         f"{name + ' deviation [m]':22s}{e.mean():9.4f}{np.median(e):9.4f}{e.std():9.4f}{e.max():9.4f}"
         f"   {p[0]:.3f} / {p[1]:.3f} / {p[2]:.3f} / {p[3]:.3f}"
@@ -193,9 +192,9 @@ for axis, name in ((0, "X"), (1, "Y")):
 ms = np.asarray(vo_seconds) * 1e3
 print(
     f"{'time per frame [ms]':22s}{ms.mean():9.1f}{np.median(ms):9.1f}{ms.std():9.1f}{'':9s}"
-    f"   {paper_table1['ms'][0]} / {paper_table1['ms'][1]} / {paper_table1['ms'][2]} / -"
+    f"   {PAPER_TABLE1['ms'][0]} / {PAPER_TABLE1['ms'][1]} / {PAPER_TABLE1['ms'][2]} / -"
 )
-largest_share = {name: vo_err[:, axis].max() / paper_table1[name][3] for axis, name in ((0, "X"), (1, "Y"))}
+largest_share = {name: vo_err[:, axis].max() / PAPER_TABLE1[name][3] for axis, name in ((0, "X"), (1, "Y"))}
 display(
     Markdown(
         "Our largest deviations are "

@@ -36,6 +36,9 @@ MIN_INLIERS = 20
 REPROJECTION_THRESHOLD = 2.0  # pixels
 NEW_KEYFRAME_TRACKED = 0.6  # add a key frame when fewer than this share of features is tracked
 NEW_KEYFRAME_DISTANCE = 0.5  # ... or when the camera moved this far from the newest key frame, metres
+#: [Yuan], Table I: the paper's visual odometer (a Kinect on a real robot) against the truth: its
+#: deviation per axis, metres (mean, median, std, max), and its time per frame, ms (mean, median, std).
+PAPER_TABLE1 = {"X": (0.050, 0.041, 0.042, 0.149), "Y": (0.045, 0.035, 0.036, 0.130), "ms": (40.3, 41, 6.2)}
 
 
 @dataclass
