@@ -245,27 +245,11 @@ def _say_if_suspect(seq, n: int, diagnostics, poses, motion: str = "auto") -> No
             )
 
 
-def _run_into(
-    output: OutputFolder, seq, name: str, frames, no_odometry: bool, seed: int, motion: str
-) -> dict:
-    """The pipeline on ``seq`` with its outputs written into ``output`` (committed at the end)."""
-    from vo_lib.stereo_vo.pipeline import (
-        WARM_UP_FRAMES,
-        FrameDiagnostics,
-        FrameTimings,
-        run_sequence,
-        warm_up,
-    )
-    from vo_lib.stereo_vo.vehicle import VehicleKind, vehicle_of
+def _warm_up_saying_so(seq, no_odometry: bool, seed: int, motion: str) -> None:
+    """The untimed warm-up (:func:`~vo_lib.stereo_vo.pipeline.warm_up`); once it has taken
+    ``SLOW_S``, a line says that the kernels are compiling, and another when they are done."""
+    from vo_lib.stereo_vo.pipeline import WARM_UP_FRAMES, warm_up
 
-    tmp = output.path
-    if frames is not None and frames > len(seq) and not is_sample(name):  # samples: said above
-        notice(f"--frames {frames}: {seq.path} has {len(seq)} frames; running all {len(seq)}")
-    n = len(seq) if frames is None else min(frames, len(seq))
-    if n < 2:
-        raise UsageError(f"{seq.path}: has {n} frame; a run needs at least 2 frames")
-    vehicle = vehicle_of(seq, use_odometry=not no_odometry)
-    mount = vehicle.mount
     compiling = (
         f"compiling the Numba kernels on the first {WARM_UP_FRAMES} frames (once per environment and "
         "motion model: they are cached; up to a minute on 2 cores) ..."
@@ -280,6 +264,24 @@ def _run_into(
         slow.join()
     if said or seconds >= SLOW_S:
         print(f"compiled in {seconds:.0f} s, before the timed run (not in timings.csv)", flush=True)
+
+
+def _run_into(
+    output: OutputFolder, seq, name: str, frames, no_odometry: bool, seed: int, motion: str
+) -> dict:
+    """The pipeline on ``seq`` with its outputs written into ``output`` (committed at the end)."""
+    from vo_lib.stereo_vo.pipeline import FrameDiagnostics, FrameTimings, run_sequence
+    from vo_lib.stereo_vo.vehicle import VehicleKind, vehicle_of
+
+    tmp = output.path
+    if frames is not None and frames > len(seq) and not is_sample(name):  # samples: said above
+        notice(f"--frames {frames}: {seq.path} has {len(seq)} frames; running all {len(seq)}")
+    n = len(seq) if frames is None else min(frames, len(seq))
+    if n < 2:
+        raise UsageError(f"{seq.path}: has {n} frame; a run needs at least 2 frames")
+    vehicle = vehicle_of(seq, use_odometry=not no_odometry)
+    mount = vehicle.mount
+    _warm_up_saying_so(seq, no_odometry, seed, motion)
     print(f"visual odometry on {n} frames ...", flush=True)
     result = run_sequence(
         seq, frames=n, use_odometry=not no_odometry, seed=seed, progress=sys.stderr.isatty(), motion=motion

@@ -172,21 +172,7 @@ def rectify(left: CameraCalibration, right: CameraCalibration, where: Path) -> R
             f"{right.resolution[0]}x{right.resolution[1]} (key resolution); expected one size"
         )
     T_right_left = np.linalg.inv(right.T_BS) @ left.T_BS  # left camera -> right camera
-    baseline = float(np.linalg.norm(T_right_left[:3, 3]))
-    if baseline < MIN_BASELINE_M:
-        raise AslError(
-            f"{where / 'cam1' / 'sensor.yaml'}: key T_BS puts cam1 where cam0 is (baseline "
-            f"{baseline:.3g} m); expected two cameras apart"
-        )
-    check_metres(where / "cam1" / "sensor.yaml", f"key T_BS puts cam1 {baseline:.4g} m from cam0", baseline)
-    cam1_in_cam0 = np.linalg.inv(T_right_left)[:3, 3]  # x right, y down, z ahead
-    x, y, z = np.round(cam1_in_cam0, 3) + 0.0
-    if np.degrees(np.arctan2(np.hypot(y, z), abs(x))) > MAX_BASELINE_TILT_DEG:
-        raise AslError(
-            f"{where / 'cam1' / 'sensor.yaml'}: key T_BS puts cam1 {x:+.3f} m to the right of cam0, "
-            f"{y:+.3f} m below and {z:+.3f} m ahead; expected cam1 beside cam0 along its image rows "
-            f"(within {MAX_BASELINE_TILT_DEG:g}°)"
-        )
+    cam1_in_cam0 = _check_baseline(T_right_left, where / "cam1" / "sensor.yaml")
     rect = rectify_stereo(
         (left.K, left.distortion), (right.K, right.distortion), left.resolution, T_right_left, left.T_BS
     )
@@ -198,6 +184,27 @@ def rectify(left: CameraCalibration, right: CameraCalibration, where: Path) -> R
             )
     _check_right_of(rect, cam1_in_cam0, where)
     return rect
+
+
+def _check_baseline(T_right_left: np.ndarray, sensor: Path) -> np.ndarray:
+    """cam1's position in cam0's frame (x right, y down, z ahead), checked: in metres, apart from
+    cam0 and beside it along the image rows."""
+    baseline = float(np.linalg.norm(T_right_left[:3, 3]))
+    if baseline < MIN_BASELINE_M:
+        raise AslError(
+            f"{sensor}: key T_BS puts cam1 where cam0 is (baseline {baseline:.3g} m); "
+            "expected two cameras apart"
+        )
+    check_metres(sensor, f"key T_BS puts cam1 {baseline:.4g} m from cam0", baseline)
+    cam1_in_cam0 = np.linalg.inv(T_right_left)[:3, 3]
+    x, y, z = np.round(cam1_in_cam0, 3) + 0.0
+    if np.degrees(np.arctan2(np.hypot(y, z), abs(x))) > MAX_BASELINE_TILT_DEG:
+        raise AslError(
+            f"{sensor}: key T_BS puts cam1 {x:+.3f} m to the right of cam0, {y:+.3f} m below and "
+            f"{z:+.3f} m ahead; expected cam1 beside cam0 along its image rows "
+            f"(within {MAX_BASELINE_TILT_DEG:g}°)"
+        )
+    return cam1_in_cam0
 
 
 def _check_right_of(rect: Rectification, cam1_in_cam0: np.ndarray, where: Path) -> None:
