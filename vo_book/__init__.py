@@ -16,7 +16,7 @@ the student edition and the grader find it as the notebooks do.
 ``nb06``, ``demo_one_point``  notebook 06: outlier-mix match sets, the RANSAC trial, tables, figures
 ``nb07``, ``demo_fusion``     notebook 07: figures; the seed drives, with the seed study stored
                               (``demo_fusion.json``)
-``demo_pipeline``  notebook 08's tables of the stored paper sets
+``nb08``, ``demo_pipeline``   notebook 08: figures; the sample runs, the stored paper sets' tables
 ``nb09``           notebook 09's matrix comparison, finite differences, timings and figures
 ``nb10``, ``demo_corridor``   notebook 10: figures; score profiles, box statistics and ROC area
 ``nb11``           notebooks 11 and 12: figures and small measurements
