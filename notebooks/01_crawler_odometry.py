@@ -48,8 +48,8 @@ import sympy as sp
 from IPython.display import display
 
 from vo_book.demo_drive import drive_on
-from vo_book.nb01 import dead_reckoning_seeds
-from vo_book.plotting import covariance_ellipse, new_axes, plot_paths
+from vo_book.nb01 import dead_reckoning_seeds, plot_dead_reckoning, plot_lateral
+from vo_book.plotting import new_axes, plot_paths
 from vo_book.prose import Markdown
 from vo_book.widgets import offer, show_math, slider
 from vo_lib.models.track_odometry import TrackOdometry, apply_slip
@@ -255,30 +255,8 @@ for k in range(1, steps + 1):
     if k in checkpoints:
         history[k] = (mean.copy(), P_full.copy(), P_eq9.copy(), samples.copy())
 
-fig, ax = new_axes(width=7, height=4.5)
-ax.plot(*samples[:400, :2].T, ".", ms=2, alpha=0.3, color="0.5", label="Monte Carlo (400 of 3000)")
-for k, (m_k, Pf, P9, s_k) in history.items():
-    ax.plot(*s_k[:400, :2].T, ".", ms=2, alpha=0.3, color="0.5")
-    covariance_ellipse(ax, m_k, Pf, color="C0", label="full Jacobians, 2σ" if k == 100 else None)
-    covariance_ellipse(ax, m_k, P9, color="C3", ls="--", label="F = I (eq. 9), 2σ" if k == 100 else None)
-ax.set_aspect("equal", adjustable="datalim")
-ax.set_xlabel("x [m]")
-ax.set_ylabel("y [m]")
-ax.legend(fontsize="small")
-ax.set_title("Dead-reckoning uncertainty after 1, 2 and 3 m")
-
-fig, ax = new_axes(width=6, height=3.5)
-distance = np.arange(1, steps + 1) * 0.01
-for col, label, style in (
-    (0, "Monte Carlo", "k-"),
-    (1, "full Jacobians", "C0-"),
-    (2, "F = I (eq. 9)", "C3--"),
-):
-    ax.plot(distance, lateral[:, col] * 100, style, label=label)
-ax.set_xlabel("distance travelled [m]")
-ax.set_ylabel("σ of y [cm]")
-ax.set_title("Lateral uncertainty: the F = I ellipses are too thin to see above")
-ax.legend(fontsize="small")
+plot_dead_reckoning(samples, history)
+plot_lateral(np.arange(1, steps + 1) * 0.01, lateral)  # 1 cm per step
 
 mc_cov = np.cov(samples.T)
 print(

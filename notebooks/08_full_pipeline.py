@@ -53,16 +53,16 @@ import matplotlib.pyplot as plt
 import numpy as np
 from IPython.display import display
 
-from vo_book.demo_pipeline import (
-    frames_for,
-    heading_error,
+from vo_book.demo_pipeline import frames_for, heading_error, rms_of, run, sides, stored_table
+from vo_book.nb08 import (
     plot_features_by_resolution,
-    rms_of,
-    run,
-    sides,
-    stored_table,
+    plot_free_paths,
+    plot_linear,
+    plot_nees,
+    plot_outdoor_errors,
+    plot_spot_headings,
 )
-from vo_book.plotting import draw_flowchart, new_axes, plot_paths
+from vo_book.plotting import draw_flowchart, new_axes
 from vo_book.prose import Markdown
 from vo_lib.camera import StereoCamera
 from vo_lib.comparison import Comparison, Verdict, bootstrap_interval, chi2_band
@@ -173,7 +173,6 @@ for (w, h), t in measured.items():
         f" {t['kalman_ms']:12.2f} ({p['kalman']:5.3f}) {t['features']:10.0f}"
     )
 plot_features_by_resolution({res: t["features"] for res, t in measured.items()})
-plt.show()
 frame_ms = sum(measured[(640, 480)][f"{k}_ms"] for k in ("stereo", "matching", "estimation", "kalman"))
 print(f"640x480: {frame_ms:.1f} ms per frame for the four stages, {1000 / frame_ms:.0f} frames per second")
 ratios = {
@@ -210,15 +209,7 @@ print(
 # %%
 n_lin = SAMPLES["indoor_linear"].frames  # forward and back needs the whole drive
 result, truth, odo = run("indoor_linear", n_lin, seed=SEED)
-fig, axes = new_axes(2, width=5.5, height=3.4)
-frames_axis = np.arange(n_lin)
-for ax, col, name in ((axes[0], 0, "x"), (axes[1], 1, "y")):
-    ax.plot(frames_axis, truth[:, col] * 1000, label="truth")
-    ax.plot(frames_axis, result.poses[:, col] * 1000, "--", label="visual odometry")
-    ax.set_xlabel("frame")
-    ax.set_ylabel(f"{name} [mm]")
-axes[0].legend(fontsize="small")
-plt.show()
+plot_linear(truth, result.poses)
 keys = np.arange(20, n_lin, 20)
 stats = key_position_errors(truth, result.poses, keys)
 travelled = np.sum(np.linalg.norm(np.diff(truth[:, :2], axis=0), axis=1))
@@ -246,14 +237,7 @@ print(
 # %%
 n_out = frames_for("outdoor_linear", 200, FULL)
 result_o, truth_o, _ = run("outdoor_linear", n_out, seed=SEED)
-fig, ax = new_axes(width=7, height=3.2)
-for col, name in ((0, "x"), (1, "y")):
-    ax.plot(np.arange(n_out), (result_o.poses[:, col] - truth_o[:, col]) * 1000, label=f"{name} error")
-ax.set_xlabel("frame")
-ax.set_ylabel("error [mm]")
-ax.set_title(f"Fig. 9: outdoor linear motion, {n_out} frames")
-ax.legend(fontsize="small")
-plt.show()
+plot_outdoor_errors((result_o.poses[:, :2] - truth_o[:, :2]) * 1000)  # x and y errors, mm
 stats_o = key_position_errors(truth_o, result_o.poses, np.arange(20, n_out, 20))
 travelled_o = np.sum(np.linalg.norm(np.diff(truth_o[:, :2], axis=0), axis=1))
 relative_o = np.linalg.norm(result_o.poses[-1, :2] - truth_o[-1, :2]) / travelled_o
@@ -281,19 +265,13 @@ n_spot = frames_for("spot_turn", 300, FULL)
 fused, truth_s, odo_s = run("spot_turn", n_spot, seed=SEED)
 vision, _, _ = run("spot_turn", n_spot, use_odometry=False, seed=SEED)
 t = np.arange(n_spot) / SAMPLES["spot_turn"].rate
-fig, ax = new_axes(width=7, height=3.4)
-ax.plot(t, heading_error(odo_s, truth_s), label="track odometry only")
-ax.plot(t, heading_error(vision.poses, truth_s), label="visual odometry only")
-ax.plot(t, heading_error(fused.poses, truth_s), label="fused")
-ax.set_xlabel("time [s]")
-ax.set_ylabel("heading error [deg]")
-ax.legend(fontsize="small")
-plt.show()
-spot_errors = {
-    "odometry": np.abs(heading_error(odo_s, truth_s)),
-    "vision": np.abs(heading_error(vision.poses, truth_s)),
-    "fused": np.abs(heading_error(fused.poses, truth_s)),
+spot_signed = {
+    "odometry": heading_error(odo_s, truth_s),
+    "vision": heading_error(vision.poses, truth_s),
+    "fused": heading_error(fused.poses, truth_s),
 }
+plot_spot_headings(t, spot_signed)
+spot_errors = {name: np.abs(err) for name, err in spot_signed.items()}
 turned = math.degrees(np.sum(np.abs(np.diff(np.unwrap(truth_s[:, 2])))))
 print(f"after {turned:.0f}° of turning, |heading error|: last frame / mean / max")
 for name, err in spot_errors.items():
@@ -368,22 +346,18 @@ quick_runs = {
     "outdoor_linear": (result_o, truth_o),
     "spot_turn": (fused, truth_s),
 }
-fig, axes = new_axes(4, width=4.2, height=4.0)
-for ax, name in zip(axes, quick_frames, strict=True):
-    n = frames_for(name, quick_frames[name], FULL)
+free_paths = {}
+for name, quick in quick_frames.items():
+    n = frames_for(name, quick, FULL)
     res_f, truth_f, odo_f = run(name, n, seed=SEED)
     quick_runs[name] = (res_f, truth_f)
-    plot_paths(
-        ax, {"truth": truth_f, "track odometry": odo_f, "visual odometry": res_f.poses}, f"{name}, {n} frames"
-    )
     keys_f = np.arange(paper_sets.KEY_EVERY, n, paper_sets.KEY_EVERY)
-    ax.plot(*truth_f[keys_f, :2].T, "ko", ms=4, mfc="none", label="key positions (truth)")
-    ax.plot(*res_f.poses[keys_f, :2].T, "k+", ms=6, label="key positions (VO)")
-    ax.legend(fontsize="x-small")
+    paths_f = {"truth": truth_f, "track odometry": odo_f, "visual odometry": res_f.poses}
+    free_paths[f"{name}, {n} frames"] = (paths_f, keys_f)
     err_f = np.abs(heading_error(res_f.poses, truth_f))
     print(f"{name}, first {n} frames: mean |heading error| {err_f.mean():.2f}°, {len(res_f.flagged)} flagged")
     assert np.isfinite(res_f.poses).all() and len(res_f.poses) == n
-plt.show()
+plot_free_paths(free_paths)
 
 # %% [markdown]
 # The whole sets, stored as in section 4, beside the paper's (and the outdoor linear set of
@@ -508,14 +482,7 @@ inside_band = float(np.mean((per_frame >= band[0]) & (per_frame <= band[1])))
 above_band = float(np.mean(per_frame > band[1]))
 run_means = nees_matrix.mean(axis=1)
 nees_interval = bootstrap_interval(run_means, np.mean)
-fig, ax = new_axes(width=7, height=3.2)
-ax.semilogy(np.arange(1, common), per_frame, color="C2", label=f"NEES averaged over {len(nees_runs)} runs")
-ax.axhspan(*band, color="C2", alpha=0.2, label="95 % band")
-ax.axhline(3, color="k", lw=0.8)
-ax.set_xlabel("frame")
-ax.set_ylabel("pose NEES")
-ax.legend(fontsize="small")
-plt.show()
+plot_nees(np.arange(1, common), per_frame, band, runs=len(nees_runs))
 for name, values in nees_runs.items():
     print(f" {name:15s} time-averaged NEES {values.mean():10.1f}")
 print(

@@ -1,8 +1,8 @@
-"""Tables and figures of notebook 08 (full pipeline), kept out of its story cells.
+"""Tables and runs of notebook 08 (full pipeline), kept out of its story cells.
 
 The stored full-length runs of the paper's sets beside the paper's own figures: RMS of the
 key-position errors, the table of AVG / S.D. / RMS, and which RMS lie above or below the paper's;
-the stereo features at each of Table 1's resolutions (the paper's Fig. 6).
+the samples rendered in memory and run through the pipeline. The figures are :mod:`vo_book.nb08`.
 """
 
 from __future__ import annotations
@@ -12,7 +12,6 @@ from collections.abc import Iterable, Sequence
 
 import numpy as np
 
-from vo_book.plotting import new_axes
 from vo_lib.geometry import relative_planar, wrap_angle
 from vo_lib.models.track_odometry import TrackOdometry
 from vo_lib.sim.samples import SAMPLES, render_sample
@@ -89,18 +88,3 @@ def run(
     truth = relative_planar(rendered.truth()[0], rendered.truth())
     odometry = TrackOdometry().integrate(rendered.drive.odometry[1:frames])
     return result, truth, odometry
-
-
-def plot_features_by_resolution(features: dict) -> None:
-    """The paper's Fig. 6 for our drive: median stereo features per frame against the pixels of
-    each ``(width, height)`` in ``features``, each point labelled with its resolution."""
-    counts = np.array(list(features.values()))
-    pixels = np.array([w * h for w, h in features]) / 1e3
-    _, ax = new_axes(width=5.5, height=3.4)
-    ax.plot(pixels, counts, "o-")
-    for (w, h), p, c in zip(features, pixels, counts, strict=True):
-        ax.annotate(f"{w}×{h}", (p, c), fontsize="x-small", xytext=(3, 3), textcoords="offset points")
-    ax.set_xlabel("pixels per image [thousands]")
-    ax.set_ylabel("stereo features (median per frame)")
-    ax.set_title("Fig. 6: stereo features against resolution")
-    ax.set_ylim(0, 1.1 * counts.max())
