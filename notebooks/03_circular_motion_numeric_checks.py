@@ -44,7 +44,6 @@
 import vo_lib  # noqa: F401 (first: NumPy and OpenCV then use the same BLAS kernels on every CPU)
 
 # isort: split
-import matplotlib.pyplot as plt
 import numpy as np
 from IPython.display import display
 from scipy.stats import chi2
@@ -57,8 +56,7 @@ from vo_book.demo_circular import (
     tilt_theta,
     tilted_matches,
 )
-from vo_book.nb03 import local_exponent
-from vo_book.plotting import new_axes
+from vo_book.nb03 import local_exponent, plot_match_errors, plot_offset_share
 from vo_book.prose import Markdown
 from vo_book.widgets import offer, slider
 from vo_lib.camera import StereoCamera
@@ -146,15 +144,6 @@ for lo, hi in zip(bins[:-1], bins[1:], strict=True):
     normalised.append(robust_sd(err_theta[sel] / predicted[sel]))  # 1 where the model is right
 measured, model, normalised = np.array(measured), np.array(model), np.array(normalised)
 
-fig, axes = new_axes(2, width=5.5, height=4)
-axes[0].loglog(row_offset, np.degrees(np.abs(err_theta)), ".", ms=1, alpha=0.3, color="0.5")
-axes[0].loglog(centres, np.degrees(measured), "o-", label="measured spread per bin")
-axes[0].loglog(centres, np.degrees(model), "s--", label="first-order model")
-axes[0].set_xlabel("|v − v₀| (mean of both views) [px]")
-axes[0].set_ylabel("|θ error| [deg]")
-axes[0].set_title("Per-match θ from eq. 14, 0.5 px noise")
-axes[0].legend(fontsize="small")
-
 depth = m.points[:, 2]  # the true depth of each match's point in the first view
 err_rho = cm.rho_from_pixels(m.w_prev, m.w_curr, theta_true, camera) - rho_true
 depth_edges = np.geomspace(1.5, 15, 9)
@@ -172,15 +161,11 @@ def rho_model(z):
     return np.sqrt(2) * z**2 * noise / (camera.fx * camera.baseline)
 
 
-axes[1].loglog(depth, np.abs(err_rho), ".", ms=1, alpha=0.3, color="0.5")
-axes[1].loglog(depth_centres, rho_measured, "o-", label="measured spread per bin")
 zz = np.geomspace(1.5, 15, 50)
-axes[1].loglog(zz, rho_model(zz), "C1--", label="√2 z² σ_d / (f B)")
-axes[1].set_xlabel("depth [m]")
-axes[1].set_ylabel("|ρ error| [m]")
-axes[1].set_title("Per-match ρ from eq. 17, 0.5 px noise")
-axes[1].legend(fontsize="small")
-plt.show()
+plot_match_errors(
+    theta=(row_offset, err_theta, centres, measured, model),
+    rho=(depth, err_rho, depth_centres, rho_measured, zz, rho_model(zz)),
+)
 
 print(" |v-v0| bin [px]   measured σθ [deg]   model σθ [deg]   spread of error/model σ")
 for lo, hi, a, b, c in zip(bins[:-1], bins[1:], measured, model, normalised, strict=True):
@@ -332,19 +317,7 @@ for a in (0.1, 0.3):
             f"{a:15.1f}   {near:4.1f}–{far:<5.1f}   {fraction[(a, near)]:10.1%}   "
             f"{predicted_fraction[(a, near)]:12.1%}"
         )
-fig, ax = new_axes(width=5.5, height=4)
-for a, marker in ((0.1, "o"), (0.3, "s")):
-    xs = [predicted_fraction[(a, near)] for near, _ in depth_ranges]
-    ys = [fraction[(a, near)] for near, _ in depth_ranges]
-    ax.loglog(np.array(xs) * 100, np.array(ys) * 100, marker, label=f"camera {a:.1f} m ahead")
-    for (near, far), x_, y_ in zip(depth_ranges, xs, ys, strict=True):
-        ax.annotate(f"{near:g}–{far:g} m", (x_ * 100, y_ * 100), fontsize="x-small")
-ax.loglog([0.2, 30], [0.2, 30], "k:", lw=0.8, label="equal")
-ax.set_xlabel("a · median(1/z) [%]")
-ax.set_ylabel("median |θ error| / θ [%]")
-ax.set_title("Spot turn, camera ahead of the axis: error share against scene depth")
-ax.legend(fontsize="small")
-plt.show()
+plot_offset_share(depth_ranges, fraction, predicted_fraction)
 for key, value in fraction.items():
     assert abs(value / predicted_fraction[key] - 1) < 0.01  # a per cent: the law holds to first order
 spot_360 = 360 * fraction[(0.3, 1.5)]

@@ -49,7 +49,6 @@ import vo_lib  # noqa: F401 (first: NumPy and OpenCV then use the same BLAS kern
 import math
 import os
 
-import matplotlib.pyplot as plt
 import numpy as np
 from IPython.display import display
 from scipy.stats import chi2
@@ -65,8 +64,7 @@ from vo_book.demo_fusion import (
     said,
     seed_figures,
 )
-from vo_book.nb07 import plot_errors
-from vo_book.plotting import new_axes
+from vo_book.nb07 import plot_heading_errors, plot_nees, plot_outage
 from vo_book.prose import Markdown
 from vo_book.widgets import offer, slider
 from vo_lib.camera import StereoCamera
@@ -365,22 +363,7 @@ display(
 # %%
 spot = run_drive("spot_turn", 300, seed=SEED)
 t = np.arange(301) / SAMPLES["spot_turn"].rate
-fig, axes = new_axes(2, width=5.5, height=3.6)
-plot_errors(
-    axes[0],
-    t,
-    {k: heading_error(spot[k], spot["truth"]) for k in ESTIMATORS[:3]},
-    "heading error [deg]",
-    "spot turn, one draw",
-)
-plot_errors(
-    axes[1],
-    t,
-    {k: heading_error(spot[k], spot["truth"]) for k in ESTIMATORS[1:]},
-    "heading error [deg]",
-    "the same, without odometry alone",
-)
-plt.show()
+plot_heading_errors(t, {k: heading_error(spot[k], spot["truth"]) for k in ESTIMATORS}, "spot turn, one draw")
 
 # %% [markdown]
 # The picture is one draw. The questions it raises (is the fused filter closer than VO alone?
@@ -613,14 +596,7 @@ display(
 # %%
 gap_run = run_drive("spot_turn", 400, seed=SEED, outage=set(range(200, 261)))
 yaw_sigma, flagged = gap_run["yaw_sigma"], gap_run["flagged"]
-fig, ax = new_axes(width=7, height=3.2)
-ax.plot(np.degrees(yaw_sigma))
-ax.axvspan(200, 260, color="0.85", label="no VO (flagged)")
-ax.set_xlabel("frame")
-ax.set_ylabel("heading σ [deg]")
-ax.set_title("Heading uncertainty through a VO outage")
-ax.legend(fontsize="small")
-plt.show()
+plot_outage(yaw_sigma, (200, 260))
 print(
     f"{len(flagged)} frames flagged; heading σ {np.degrees(yaw_sigma[199]):.3f}° before, "
     f"{np.degrees(yaw_sigma[260]):.3f}° at the end of the gap, {np.degrees(yaw_sigma[300]):.3f}° after"
@@ -653,15 +629,7 @@ pairs = [monte_carlo_run(1000 + run, steps) for run in range(runs)]  # (NEES, NI
 nees, nis_runs = np.array([p[0] for p in pairs]), np.array([p[1] for p in pairs])
 avg = nees.mean(axis=0)
 lo, hi = chi2.ppf([0.025, 0.975], 3 * runs) / runs
-fig, ax = new_axes(width=7, height=3.2)
-ax.plot(avg, label="NEES averaged over 50 runs")
-ax.axhspan(lo, hi, color="C2", alpha=0.2, label="95 % band")
-ax.axhline(3, color="k", lw=0.8)
-ax.set_xlabel("step")
-ax.set_ylabel("pose NEES")
-ax.set_title("Consistency of the fused filter (50 Monte Carlo runs)")
-ax.legend(fontsize="small")
-plt.show()
+plot_nees(avg, (lo, hi), runs)
 inside = np.mean((avg > lo) & (avg < hi))
 run_means = nees.mean(axis=1)  # one independent sample per run
 nees_mean, nees_se = run_means.mean(), run_means.std(ddof=1) / math.sqrt(runs)

@@ -10,7 +10,7 @@ the student edition and the grader find it as the notebooks do.
 ``plotting``       the figures the notebooks share: paths, worlds, ellipses, the papers' diagrams
 ``demo_drive``     notebook 01's drive-it-yourself widget: dead reckoning against slipping truth
 ``nb01``           notebook 01's Monte Carlo of dead reckoning over seeds, and its figures
-``nb03``, ``demo_circular``   notebook 03: scene draws, the θ widget, the local exponent of σ_θ
+``nb03``, ``demo_circular``   notebook 03: figures, the local exponent of σ_θ; scene draws, the θ widget
 ``nb04``, ``demo_worlds``     notebook 04: figures; image, depth and scan at a pose
 ``nb05``, ``demo_front_end``  notebook 05: grid-cell count, figures; the front-end widget on one pair
 ``nb06``, ``demo_one_point``  notebook 06: outlier-mix match sets, the RANSAC trial, tables, figures
