@@ -337,6 +337,8 @@ CASES = [
         "--out data/indoor_free: lies inside the sample data folder"),
     Case("convert-odometry-a-folder", "convert seq --out conv", 2, "odometry.txt: a folder, where",
         lambda ws: ((ws / "seq" / "odometry.txt").unlink(), (ws / "seq" / "odometry.txt").mkdir())),
+    Case("convert-oxts-a-folder", "convert seq --out conv", 2, "oxts.txt: a folder, where a file should be",
+        lambda ws: (ws / "seq" / "oxts.txt").mkdir()),
     Case("out-is-a-file", "RUN --out important.txt", 2, "is a file"),
     Case("out-is-a-file-force", "RUN --out important.txt --force", 2, "is a file"),
     Case("out-under-a-file", "RUN --out important.txt/sub", 2, "cannot write there"),
@@ -427,6 +429,12 @@ CASES = [
     Case("manifest-time-origin-text", "RUN", 2,
         "time_origin_s: expected a number from -1e+11 to 1e+11, got \"abc\"",
         edit("seq/manifest.json", '{"time_origin_s": "abc"}')),
+    Case("manifest-unknown-key", "RUN", 2, "key bogus is not a manifest's; expected some of",
+        edit("seq/manifest.json", '{"bogus": 1}')),
+    Case("manifest-misspelt-camera-key", "RUN", 2, "key camera.heigth_m is not a manifest's; expected",
+        edit("seq/manifest.json", '{"camera": {"heigth_m": 0.5}}')),
+    Case("manifest-unknown-positions-key", "RUN", 2, "key positions.lever_arm is not a manifest's",
+        edit("seq/manifest.json", POSITIONS_ONLY.replace('"lever_arm_camera"', '"lever_arm"'))),
     Case("manifest-mount-a-word", "RUN", 2, "T_body_camera: expected 4 rows of 4 numbers, got \"identity\"",
         edit("seq/manifest.json", '{"T_body_camera": "identity"}')),
     Case("manifest-mount-3x3", "RUN", 2, "key T_body_camera: expected 4 rows of 4 numbers, got [[1, 0, 0]",
@@ -703,6 +711,43 @@ def test_a_sequence_being_read_is_not_replaced(template, tmp_path, monkeypatch, 
     assert code == 2 and "--out gen: a running command is reading this folder" in err
     assert checksums(ws, ()) == before and temporaries(ws) == []
     assert invoke([*GEN, "--out", "gen", "--force"], capsys)[0] == 0  # once it is read no more
+
+
+def test_evaluate_refuses_files_written_while_it_read_them(tmp_path, monkeypatch, capsys):
+    """--gt or --est written over while evaluate reads it (a `generate --force` or a run beside it):
+    one line and exit 2, not the figures of one file checked against the other."""
+    from vo_lib.cli import evaluate
+    from vo_lib.formats.poses import write_kitti_poses
+
+    T = np.tile(np.eye(4), (5, 1, 1))
+    T[:, 0, 3] = np.arange(5.0)
+    for option, name, reader in (
+        ("--gt", "gt.txt", "read_groundtruth"),
+        ("--est", "est.txt", "read_trajectory"),
+    ):
+        for path in ("gt.txt", "est.txt"):
+            write_kitti_poses(tmp_path / path, T)
+        real = getattr(evaluate, reader)
+
+        def read_then_written_over(path, *args, real=real, name=name, **kwargs):
+            value = real(path, *args, **kwargs)
+            write_kitti_poses(tmp_path / name, 2 * T)  # another command writes it meanwhile
+            return value
+
+        monkeypatch.setattr(evaluate, reader, read_then_written_over)
+        code, out, err = invoke(
+            ["evaluate", "--gt", str(tmp_path / "gt.txt"), "--est", str(tmp_path / "est.txt")], capsys
+        )
+        monkeypatch.setattr(evaluate, reader, real)
+        assert code == 2 and out == "", (option, out)
+        assert err.strip().splitlines() == [
+            f"python -m vo_lib evaluate: error: {option} {tmp_path / name}: changed while it was read; "
+            "evaluate it again when nothing writes it"
+        ]
+    assert (
+        invoke(["evaluate", "--gt", str(tmp_path / "gt.txt"), "--est", str(tmp_path / "est.txt")], capsys)[0]
+        == 0
+    )
 
 
 def test_run_holds_its_input_while_it_reads(template, tmp_path, monkeypatch, capsys):

@@ -21,7 +21,7 @@ def seq_dir(tmp_path, rng):
     poses = np.tile(np.eye(4), (4, 1, 1))
     poses[:, 2, 3] = rng.normal(size=4)
     odo = rng.normal(size=(4, 2)) * 0.01
-    path = write_sequence(tmp_path / "seq", cam, left, right, np.arange(4) / 30.0, poses, odo, {"k": 1})
+    path = write_sequence(tmp_path / "seq", cam, left, right, np.arange(4) / 30.0, poses, odo, {"seed": 1})
     return path, cam, left, right, poses, odo
 
 
@@ -35,7 +35,7 @@ def test_round_trip_is_exact(seq_dir):
     np.testing.assert_array_equal(seq.times, np.arange(4) / 30.0)
     np.testing.assert_array_equal(seq.poses_4x4(), poses)
     np.testing.assert_array_equal(seq.odometry, odo)
-    assert seq.manifest == {"k": 1}
+    assert seq.manifest == {"seed": 1}
     assert [p.name for p in path.parent.iterdir()] == ["seq"]  # no temporary folder left
 
 

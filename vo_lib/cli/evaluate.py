@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import contextlib
 import io
+from functools import partial
 from pathlib import Path
 
 import numpy as np
@@ -13,19 +14,43 @@ import numpy as np
 from vo_lib.arguments import UsageError
 from vo_lib.cli.run import calibration_digest
 from vo_lib.evaluation import associate
-from vo_lib.formats.groundtruth import GroundTruthError, read_groundtruth, read_trajectory
-from vo_lib.formats.poses import TrajectoryError
+from vo_lib.formats.groundtruth import read_groundtruth, read_trajectory
+from vo_lib.formats.poses import MAX_FILE_BYTES, TrajectoryError
 from vo_lib.outputs import MARKER, file_sha256, read_marker
 
 
-def run_marker(est: str) -> dict:
-    """The marker of the ``run`` output holding ``est`` if ``est`` is as that run wrote it; else {}."""
+def read_whole(option: str, path: str, read):
+    """``read(path)`` and the sha256 of the file it read: hashed before and after, and refused if it
+    changed meanwhile (another command writing it), so that the figures and the checks below are
+    of one file."""
+
+    def sha256() -> str | None:  # of a regular file that read() would read; else None (it says why)
+        with contextlib.suppress(OSError):
+            if Path(path).is_file() and Path(path).stat().st_size <= MAX_FILE_BYTES:
+                return file_sha256(path)
+        return None
+
+    before = sha256()
+    try:
+        value = read(path)
+    except TrajectoryError as exc:
+        raise UsageError(f"{option} {exc}") from None
+    if sha256() != before:
+        raise UsageError(
+            f"{option} {path}: changed while it was read; evaluate it again when nothing writes it"
+        )
+    return value, before
+
+
+def run_marker(est: str, est_sha256: str) -> dict:
+    """The marker of the ``run`` output holding ``est`` if ``est`` (of checksum ``est_sha256``) is as
+    that run wrote it; else {}."""
     marker = read_marker(Path(est).parent) or {}
     files = marker.get("files") if marker.get("written_by") == "vo_lib run" else None
-    return marker if isinstance(files, dict) and files.get(Path(est).name) == file_sha256(est) else {}
+    return marker if isinstance(files, dict) and files.get(Path(est).name) == est_sha256 else {}
 
 
-def check_against_its_run(gt: str, est: str, marker: dict) -> None:
+def check_against_its_run(gt: str, gt_sha256: str, est: str, marker: dict) -> None:
     """Refuse a ``--gt`` or a calibration changed since the run that wrote ``--est`` (``marker``)
     used them; say when ``--gt`` is another file than that run's truth."""
     truth = marker.get("truth")
@@ -37,7 +62,7 @@ def check_against_its_run(gt: str, est: str, marker: dict) -> None:
             f"--est {est}: the calibration of {marker.get('sequence')!r} (its sensor.yaml files) changed "
             "since that run; run it again"
         )
-    if file_sha256(gt) == truth.get("sha256"):
+    if gt_sha256 == truth.get("sha256"):
         return
     if Path(gt).resolve() == Path(str(truth.get("path"))):
         raise UsageError(
@@ -189,18 +214,12 @@ def evaluate_command(gt: str, est: str, segments=None, extrinsic_of: str | None 
     recording's body (:func:`recording_of`) is moved into its rectified left camera, through the
     ``sensor.yaml`` beside ``--gt``; for positions only, as a lever arm carried along the estimate.
     """
-    try:
-        truth = read_groundtruth(gt)
-    except GroundTruthError as exc:
-        raise UsageError(f"--gt {exc}") from None
-    try:
-        times, E = read_trajectory(est, min_poses=3)  # an alignment needs three
-    except TrajectoryError as exc:
-        raise UsageError(f"--est {exc}") from None
+    truth, gt_sha256 = read_whole("--gt", gt, read_groundtruth)
+    (times, E), est_sha256 = read_whole("--est", est, partial(read_trajectory, min_poses=3))  # 3 to align
     notes = io.StringIO()  # what the checks say, printed once every check has passed
     with contextlib.redirect_stdout(notes):
-        marker = run_marker(est)  # of the run that wrote --est, if one did
-        check_against_its_run(gt, est, marker)
+        marker = run_marker(est, est_sha256)  # of the run that wrote --est, if one did
+        check_against_its_run(gt, gt_sha256, est, marker)
         i_est, i_gt = _associated(truth, gt, est, times, E, marker)
         to_camera = _to_camera(truth, gt, extrinsic_of)  # the rectified left camera in the tracked frame
     print(notes.getvalue(), end="")

@@ -158,13 +158,34 @@ def numbers_at(path: Path, key: str, value, shape: tuple, what=None, bounds=(-np
 CAMERA_MOUNTS = ("above turning axis", "car: ahead of the rear axle (vo_lib.sim.road)")
 
 
+#: The keys a manifest may hold, at its top and in its objects: what ``generate`` and ``convert``
+#: write. A key outside them (``camera.heigth_m``) is refused: read as absent, it would change the run.
+MANIFEST_KEYS = {
+    "": {
+        *("sample", "fingerprint", "purpose", "mirrors", "world", "frames", "frames_full", "rate_hz"),
+        *("resolution", "legs", "start_pose", "camera", "track_odometry", "slip", "surface"),
+        *("sensor_noise_grey", "exposure_sigma", "seed", "robot_poses"),
+        *("time_origin_s", "T_body_camera", "positions"),
+    },
+    "camera.": {"fx", "fy", "cx", "cy", "baseline", "height_m", "forward_m", "in_vehicle_m", "mount"},
+    "positions.": {"file", "frames", "xyz", "lever_arm_camera"},
+}
+
+
 def check_manifest(path: Path, manifest: dict, frames: int) -> None:
-    """Raise :class:`SequenceError` unless the (optional) keys of ``manifest.json`` that a run reads
-    hold numbers of the shape and range below, ``T_body_camera`` a rigid transform."""
+    """Raise :class:`SequenceError` unless ``manifest.json`` holds only :data:`MANIFEST_KEYS` and its
+    (optional) keys that a run reads hold numbers of the shape and range below, ``T_body_camera`` a
+    rigid transform."""
     camera, positions = manifest.get("camera", {}), manifest.get("positions", {})
     objects = {"camera": camera, "positions": positions}
     if bad := [key for key, value in objects.items() if not isinstance(value, dict)]:
         raise SequenceError(f"{path}: key {bad[0]}: expected an object {{...}}, got {shown(objects[bad[0]])}")
+    for prefix, keys in (("", manifest), ("camera.", camera), ("positions.", positions)):
+        if unknown := sorted(set(keys) - MANIFEST_KEYS[prefix]):
+            known = ", ".join(prefix + key for key in sorted(MANIFEST_KEYS[prefix]))
+            raise SequenceError(
+                f"{path}: key {prefix}{unknown[0]} is not a manifest's; expected some of {known}"
+            )
     index = positions.get("frames")
     n = len(index) if isinstance(index, list) else -1
     anything = (-np.inf, np.inf)

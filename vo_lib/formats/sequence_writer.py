@@ -73,6 +73,8 @@ class SequenceWriter(OutputFolder):
     @staticmethod
     def _copy(src: Path, dst: Path) -> None:
         """A file as it is; ``raw_calib``, a folder, as its ``calib_*.txt`` files; nothing if absent."""
+        if src.is_dir() and src.name != "raw_calib":
+            raise OutputError(f"{src}: a folder, where a file should be")
         if src.is_dir():  # raw_calib: what is read of it, not what else it holds
             dst.mkdir()  # with the umask's permissions, not src's: it can be replaced
             for file in [f for f in sorted(src.glob("calib_*.txt")) if f.is_file()]:
