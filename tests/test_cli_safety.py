@@ -410,6 +410,8 @@ CASES = [
     Case("convert-raw-calib-a-file", "convert seq --out conv", 2, "raw_calib: a file, where the folder",
         edit("seq/raw_calib", "R: 1 0 0")),
     Case("raw-calib-a-broken-link", "RUN", 2, "raw_calib: not a folder", link("seq/raw_calib", "nowhere")),
+    Case("sequence-links-to-the-root", "RUN --out out", 2, "lies inside what the input sequence links to",
+        link("seq/everything", "/")),
     Case("convert-inside-data-folder-force", "convert seq --out data/x --force", 2,
         "lies inside the sample data folder"),
     Case("sweep-inside-data-folder", "sweep nees --seeds 1 --workers 1 --out data/x", 2,

@@ -172,6 +172,17 @@ MANIFEST_KEYS = {
 }
 
 
+def _check_known(path: Path, objects: dict[str, dict]) -> None:
+    """Refuse a key outside :data:`MANIFEST_KEYS` in the manifest's ``objects`` (by key prefix)."""
+    unknown = [
+        (prefix, key) for prefix, keys in objects.items() for key in sorted(set(keys) - MANIFEST_KEYS[prefix])
+    ]
+    if unknown:
+        prefix, key = unknown[0]
+        known = ", ".join(prefix + name for name in sorted(MANIFEST_KEYS[prefix]))
+        raise SequenceError(f"{path}: key {prefix}{key} is not a manifest's; expected some of {known}")
+
+
 def check_manifest(path: Path, manifest: dict, frames: int) -> None:
     """Raise :class:`SequenceError` unless ``manifest.json`` holds only :data:`MANIFEST_KEYS` and its
     (optional) keys that a run reads hold numbers of the shape and range below, ``T_body_camera`` a
@@ -180,12 +191,7 @@ def check_manifest(path: Path, manifest: dict, frames: int) -> None:
     objects = {"camera": camera, "positions": positions}
     if bad := [key for key, value in objects.items() if not isinstance(value, dict)]:
         raise SequenceError(f"{path}: key {bad[0]}: expected an object {{...}}, got {shown(objects[bad[0]])}")
-    for prefix, keys in (("", manifest), ("camera.", camera), ("positions.", positions)):
-        if unknown := sorted(set(keys) - MANIFEST_KEYS[prefix]):
-            known = ", ".join(prefix + key for key in sorted(MANIFEST_KEYS[prefix]))
-            raise SequenceError(
-                f"{path}: key {prefix}{unknown[0]} is not a manifest's; expected some of {known}"
-            )
+    _check_known(path, {"": manifest, "camera.": camera, "positions.": positions})
     index = positions.get("frames")
     n = len(index) if isinstance(index, list) else -1
     anything = (-np.inf, np.inf)
