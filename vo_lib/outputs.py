@@ -135,7 +135,7 @@ def foreign_content(folder: Path, written_by: str) -> tuple[str | None, bool]:
 def linked_from(folder) -> tuple[list[Path], str | None]:
     """Where the symbolic links under ``folder`` lead, and those under the folders they lead to, and
     so on; and why not every link could be looked at (else None)."""
-    found, seen, unlisted, above = [], set(), [], []
+    found, seen, unlisted = [], set(), []
     to_walk, budget, start = [Path(folder)], MAX_WALKED, real_path(folder)
     while to_walk and budget > 0:  # a link to / is not walked through the whole file system
         walk = itertools.islice(os.walk(to_walk.pop(), onerror=unlisted.append), budget)
@@ -144,15 +144,11 @@ def linked_from(folder) -> tuple[list[Path], str | None]:
         new = sorted({real_path(path) for path in below if path.is_symlink()} - seen)
         found += new
         seen.update(new)
-        for target in new:
-            try:
-                if target.is_dir() and target != start:  # one that holds the input (/) is not walked
-                    (above if _contains(target, start) else to_walk).append(target)
-            except OSError as exc:  # a link into /proc, say
-                unlisted.append(exc)
+        # folders to walk in turn, not one that holds the input (/, a parent: found, and guarded
+        # whole); os.path.isdir: a target that cannot be looked at (in /proc, say) is not walked
+        to_walk += [target for target in new if os.path.isdir(target) and not _contains(target, start)]
     unlisted = [e for e in unlisted if not isinstance(e, FileNotFoundError)]  # a missing folder links nowhere
     hidden = f"{unlisted[0].filename} cannot be listed" if unlisted else None  # it may hide links
-    hidden = hidden or (f"it links to {above[0]}, which holds it" if above else None)
     return found, hidden or (None if budget > 0 else f"it holds or links to over {MAX_WALKED:,} entries")
 
 
