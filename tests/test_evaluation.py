@@ -274,7 +274,9 @@ def test_kitti_errors_use_the_benchmark_lengths_when_the_path_allows():
     assert segment_lengths(T) == (100.0, 200.0)
 
 
-def test_association_equals_evo(rng):
+@pytest.mark.parametrize(("offset", "max_diff"), [(0.0, 0.01), (0.136, 0.025), (-0.05, 0.002)])
+def test_association_equals_evo(rng, offset, max_diff):
+    """As ``evo_ape --t_offset OFFSET --t_max_diff MAX_DIFF``: the offset is added to the estimate's times."""
     from evo.core import sync
     from evo.core.trajectory import PoseTrajectory3D
 
@@ -282,11 +284,12 @@ def test_association_equals_evo(rng):
 
     truth_t = np.cumsum(rng.uniform(0.004, 0.006, 400))
     query_t = np.sort(rng.uniform(truth_t[0] - 0.05, truth_t[-1] + 0.05, 60))
-    i_q, i_t = associate(query_t, truth_t)
+    i_q, i_t = associate(query_t + offset, truth_t, max_diff)
+    assert len(i_q) > 10
     eye = [np.eye(4)]
     a = PoseTrajectory3D(poses_se3=eye * len(query_t), timestamps=query_t)
     b = PoseTrajectory3D(poses_se3=eye * len(truth_t), timestamps=truth_t)
-    a2, b2 = sync.associate_trajectories(a, b, max_diff=0.01)
+    b2, a2 = sync.associate_trajectories(b, a, max_diff=max_diff, offset_2=offset)
     assert np.allclose(a2.timestamps, query_t[i_q]) and np.allclose(b2.timestamps, truth_t[i_t])
 
 

@@ -13,7 +13,7 @@ import numpy as np
 
 from vo_lib.arguments import UsageError
 from vo_lib.cli.run import calibration_digest
-from vo_lib.evaluation import associate
+from vo_lib.evaluation import MAX_TIME_DIFF_S, associate
 from vo_lib.formats.groundtruth import read_groundtruth, read_trajectory
 from vo_lib.formats.poses import MAX_FILE_BYTES, TrajectoryError
 from vo_lib.outputs import MARKER, file_sha256, read_marker
@@ -94,16 +94,16 @@ def _check_one_to_one(truth, gt: str, est: str, count: int, marker: dict) -> Non
 
 
 def _associated(
-    truth, gt: str, est: str, times, E: np.ndarray, marker: dict
+    truth, gt: str, est: str, times, E: np.ndarray, marker: dict, max_diff: float = MAX_TIME_DIFF_S
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Indices ``(i_est, i_gt)`` of the poses compared: by timestamp where both files carry them (as
-    evo does), else one to one."""
+    """Indices ``(i_est, i_gt)`` of the poses compared: by timestamp where both files carry them, at
+    most ``max_diff`` seconds apart (as evo does), else one to one."""
     if truth.times is None or times is None:
         _check_one_to_one(truth, gt, est, len(E), marker)
         if truth.times is not None:  # a run's trajectory.tum beside it has the times
             print(f"--est {est} has no timestamps: its poses are paired with --gt's one to one, in order")
         return np.arange(len(E)), np.arange(len(E))
-    i_est, i_gt = associate(times, truth.times)
+    i_est, i_gt = associate(times, truth.times, max_diff)
     if len(i_est) < 3:  # an alignment needs three points
         inside = int(np.sum((truth.times >= times[0]) & (truth.times <= times[-1])))
         cause = (
@@ -112,12 +112,12 @@ def _associated(
             else "both must use one clock"
         )
         raise UsageError(
-            f"--gt {gt}: {len(i_est) or 'no'} timestamp{'s' * (len(i_est) != 1)} within 0.01 s of "
+            f"--gt {gt}: {len(i_est) or 'no'} timestamp{'s' * (len(i_est) != 1)} within {max_diff:g} s of "
             f"--est {est}'s, expected at least 3 (--gt spans {truth.times[0]:.3f} to "
             f"{truth.times[-1]:.3f} s, --est {times[0]:.3f} to {times[-1]:.3f} s; a CSV's times are read "
             f"as nanoseconds, a text file's as seconds); {cause}"
         )
-    print(f"associated {len(i_est)} of {len(E)} poses by timestamp (within 0.01 s)")
+    print(f"associated {len(i_est)} of {len(E)} poses by timestamp (within {max_diff:g} s)")
     return i_est, i_gt
 
 
@@ -206,21 +206,38 @@ def _print_pose_errors(G: np.ndarray, E: np.ndarray, lengths) -> None:
         )
 
 
-def evaluate_command(gt: str, est: str, segments=None, extrinsic_of: str | None = None) -> None:
+def evaluate_command(
+    gt: str,
+    est: str,
+    segments=None,
+    extrinsic_of: str | None = None,
+    time_offset: float = 0.0,
+    max_time_diff: float = MAX_TIME_DIFF_S,
+) -> None:
     """Print the 3-D errors of an estimate (KITTI or TUM) against ground truth in any format of
     :mod:`vo_lib.formats.groundtruth`: final error, ATE (SE(3), Sim(3)), RPE and KITTI's errors.
 
     ``segments``: a tuple of lengths in metres (default: those the sequence allows). A truth of an ASL
     recording's body (:func:`recording_of`) is moved into its rectified left camera, through the
     ``sensor.yaml`` beside ``--gt``; for positions only, as a lever arm carried along the estimate.
+    ``time_offset``: seconds added to the estimate's timestamps before they are paired with the truth's,
+    at most ``max_time_diff`` apart.
     """
+    limits = (("--time-offset", time_offset, -60.0), ("--max-time-diff", max_time_diff, 0.0))
+    for option, seconds, low in limits:
+        if not low <= seconds <= 60.0:  # NaN too
+            raise UsageError(f"{option} {seconds:g}: expected seconds from {low:g} to 60")
     truth, gt_sha256 = read_whole("--gt", gt, read_groundtruth)
     (times, E), est_sha256 = read_whole("--est", est, partial(read_trajectory, min_poses=3))  # 3 to align
+    if (time_offset or max_time_diff != MAX_TIME_DIFF_S) and (times is None or truth.times is None):
+        option = f"--time-offset {time_offset:g}" if time_offset else f"--max-time-diff {max_time_diff:g}"
+        raise UsageError(f"{option}: expected timestamps in both --gt and --est")
+    times = None if times is None else times + time_offset
     notes = io.StringIO()  # what the checks say, printed once every check has passed
     with contextlib.redirect_stdout(notes):
         marker = run_marker(est, est_sha256)  # of the run that wrote --est, if one did
         check_against_its_run(gt, gt_sha256, est, marker)
-        i_est, i_gt = _associated(truth, gt, est, times, E, marker)
+        i_est, i_gt = _associated(truth, gt, est, times, E, marker, max_time_diff)
         to_camera = _to_camera(truth, gt, extrinsic_of)  # the rectified left camera in the tracked frame
     print(notes.getvalue(), end="")
     truth_xyz = truth.positions[i_gt] if truth.poses is None else truth.poses[i_gt][:, :3, 3]

@@ -169,6 +169,21 @@ def build_parser() -> argparse.ArgumentParser:
         type=_segments,
         help="comma-separated segment lengths in metres (default: KITTI's 100..800)",
     )
+    ev.add_argument(
+        "--time-offset",
+        metavar="SECONDS",
+        type=float,
+        default=0.0,
+        help="added to --est's timestamps before they are paired with --gt's: the lag of a clock not "
+        "synchronised with the cameras, as evo's --t_offset (default: 0)",
+    )
+    ev.add_argument(
+        "--max-time-diff",
+        metavar="SECONDS",
+        type=float,
+        default=0.01,
+        help="largest difference of two paired timestamps, as evo's --t_max_diff (default: 0.01)",
+    )
     conv = command(
         "convert",
         "write a rectified copy of a stereo rig's recording (ASL layout) in the KITTI layout",
