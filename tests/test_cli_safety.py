@@ -631,6 +631,8 @@ OWNERSHIP = [
     Case("one-frame-sequence", "RUN --out out", 2, "has 1 frame; a run needs at least 2", one_frame),
     Case("name-without-frame-number", "RUN", 2, "image_0/left.png: no frame number in the name",
         lambda ws: shutil.copy(image(ws, 0, 1), ws / "seq" / "image_0" / "left.png")),
+    Case("name-unlike-the-others", "RUN", 2, "image_0: 'x000001.png' is named unlike '000000.png'",
+        lambda ws: image(ws, 0, 1).rename(ws / "seq" / "image_0" / "x000001.png")),
     Case("dangling-link-named", "RUN", 2,
         "seq/image_0/000002.png: a symbolic link to nowhere.png, which does not exist", dangling_link),
     Case("folder-named-like-an-image", "RUN", 2,

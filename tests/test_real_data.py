@@ -379,6 +379,9 @@ def test_asl_recording_is_rectified_and_its_truth_moved_into_the_left_camera():
         ("outside", "cam0/data.csv, line 3: '../../cam1/data/1403636584813555456.png'; expected a file name"),
         ("listed-twice", "cam0/data.csv, line 4: '1403636584813555456.png' listed again (line 3)"),
         ("deep", "cam0/sensor.yaml: not valid YAML (maximum recursion depth exceeded"),
+        ("alias", "cam0/sensor.yaml, line 2: not valid YAML (an alias (*name, or a merge <<: *name)"),
+        ("resolution", "cam0/sensor.yaml: key resolution: expected two whole numbers from 1 to 16384"),
+        ("image-fifo", "cam1/data/1403636584963555584.png is not a regular file; expected an image"),
         (
             "true",
             "cam0/sensor.yaml: key intrinsics: expected [fu, fv, cu, cv] (4 finite numbers), got [true, ",
@@ -509,6 +512,20 @@ def test_a_bad_rig_gets_one_line_and_exit_2(tmp_path, capsys, damage, expected):
     elif damage == "deep":
         path = mav0 / "cam0" / "sensor.yaml"
         path.write_text(path.read_text() + "deep: " + "[" * 50_000 + "]" * 50_000 + "\n")
+    elif damage == "alias":  # eight lines that expand to 10^8 numbers
+        path = mav0 / "cam0" / "sensor.yaml"
+        bomb = "x0: &a0 [1, 1, 1, 1, 1, 1, 1, 1, 1, 1]\n" + "".join(
+            f"x{i}: &a{i} [{', '.join([f'*a{i - 1}'] * 10)}]\n" for i in range(1, 9)
+        )
+        path.write_text(bomb + path.read_text().replace("[458.654, 457.296, 367.215, 248.375]", "*a8"))
+    elif damage == "resolution":  # a size whose rectification maps would take gigabytes
+        for side in ("cam0", "cam1"):
+            path = mav0 / side / "sensor.yaml"
+            path.write_text(path.read_text().replace("[752, 480]", "[100000, 100000]"))
+    elif damage == "image-fifo":
+        path = mav0 / "cam1" / "data" / "1403636584963555584.png"
+        path.unlink()
+        os.mkfifo(path)
     elif damage in ("true", "text"):  # YAML's true is 1 to Python, and numpy reads a quoted number
         path = mav0 / "cam0" / "sensor.yaml"
         path.write_text(

@@ -3,6 +3,8 @@ summary's statistics, the folder written whole, command-line errors in one line.
 
 from __future__ import annotations
 
+import contextlib
+
 import numpy as np
 import pandas as pd
 import pytest
@@ -84,6 +86,44 @@ def test_command_line_errors(argv, message, capsys, tmp_path, monkeypatch):
     err = capsys.readouterr().err
     assert message in err and len(err.strip().splitlines()) == 1
     assert list(tmp_path.iterdir()) == []  # nothing written
+
+
+@pytest.mark.parametrize(
+    ("greeting", "message"),
+    [
+        (None, "no answer as a Dask scheduler within 1 s"),
+        (b"SSH-2.0-OpenSSH_9.6\r\n", "not as a Dask scheduler"),
+    ],
+)
+def test_a_scheduler_address_of_another_service_gets_one_line(
+    greeting, message, capsys, tmp_path, monkeypatch
+):
+    """A server that accepts and stays silent (a dashboard's port) or talks first (SSH): one line."""
+    import socket
+    import threading
+
+    monkeypatch.setattr(sweep, "SCHEDULER_SECONDS", 1)
+    monkeypatch.chdir(tmp_path)
+    server = socket.create_server(("127.0.0.1", 0))
+    held = []
+
+    def serve():
+        with contextlib.suppress(OSError):
+            while True:
+                conn, _ = server.accept()
+                held.append(conn)
+                if greeting:
+                    conn.sendall(greeting)
+
+    threading.Thread(target=serve, daemon=True).start()
+    address = f"tcp://127.0.0.1:{server.getsockname()[1]}"
+    try:
+        assert main(["sweep", "nees", "--seeds", "2", "--scheduler", address, "--out", "X"]) == 2
+    finally:
+        server.close()
+    err = capsys.readouterr().err
+    assert f"--scheduler {address}: cannot reach a scheduler" in err and message in err
+    assert len(err.strip().splitlines()) == 1 and list(tmp_path.iterdir()) == []
 
 
 def test_lap_sweep_prints_the_papers_figures_beside_ours(tmp_path, capsys):

@@ -40,12 +40,13 @@ def count_at_least(minimum: int, what: str, maximum: int | None = None):
     bounds = f">= {minimum}" if maximum is None else f"from {minimum} to {maximum}"
 
     def parse(text: str) -> int:
+        shown = text if len(text) <= 40 else f"{text[:20]}...({len(text)} characters)"
         try:
-            value = int(text)
+            value = int(text[:40])  # no count has 40 digits; int() refuses over 4,300 with another message
         except ValueError:
-            raise argparse.ArgumentTypeError(f"expected a whole number ({what}); got {text!r}") from None
-        if value < minimum or (maximum is not None and value > maximum):
-            raise argparse.ArgumentTypeError(f"expected a whole number {bounds} ({what}); got {text!r}")
+            raise argparse.ArgumentTypeError(f"expected a whole number ({what}); got {shown!r}") from None
+        if len(text) > 40 or value < minimum or (maximum is not None and value > maximum):
+            raise argparse.ArgumentTypeError(f"expected a whole number {bounds} ({what}); got {shown!r}")
         return value
 
     return parse

@@ -59,6 +59,8 @@ REPORTS = {
 }
 #: Local worker processes allowed per core: more only share the cores and multiply the memory.
 WORKERS_PER_CORE = 4
+#: Seconds a --scheduler has to answer, its handshake included.
+SCHEDULER_SECONDS = 20
 #: Dask settings of the local cluster: glibc keeps freed memory for the next large temporary (Dask's
 #: default trim threshold doubles a corridor task's time in page faults); no statistical profiler.
 LOCAL_CLUSTER_CONFIG = {
@@ -77,6 +79,25 @@ def _call(function, kwargs: dict) -> dict:
     return {**kwargs, **{k: float(v) for k, v in function(**kwargs).items()}}
 
 
+def _no_answer(signum, frame):
+    raise TimeoutError(f"no answer as a Dask scheduler within {SCHEDULER_SECONDS} s")
+
+
+@contextlib.contextmanager
+def _alarm():
+    """:func:`_no_answer` after ``SCHEDULER_SECONDS`` (where the system has alarms)."""
+    if not hasattr(signal, "SIGALRM"):
+        yield
+        return
+    previous = signal.signal(signal.SIGALRM, _no_answer)
+    signal.alarm(SCHEDULER_SECONDS)
+    try:
+        yield
+    finally:
+        signal.alarm(0)
+        signal.signal(signal.SIGALRM, previous)
+
+
 @contextlib.contextmanager
 def dask_client(workers: int, scheduler: str | None):
     """A ``distributed.Client`` of ``scheduler``, else of a new LocalCluster of ``workers`` processes
@@ -90,10 +111,14 @@ def dask_client(workers: int, scheduler: str | None):
     logging.getLogger("asyncio").setLevel(logging.CRITICAL)
     if scheduler is not None:
         try:
-            client = Client(scheduler.strip(), timeout=10)
-        except (ValueError, TypeError, OSError, AssertionError) as exc:  # OSError: TimeoutError too
-            # an AssertionError: distributed's own event loop did not start within its 10 s
+            with _alarm():  # bounds the handshake too, which a silent server never ends
+                client = Client(scheduler.strip(), timeout=10)
+        except (ValueError, TypeError, OSError, AssertionError, MemoryError) as exc:  # TimeoutError too
+            # an AssertionError: distributed's own event loop did not start within its 10 s; a
+            # MemoryError: another service's greeting read as the length of a message
             why = "no event loop" if isinstance(exc, AssertionError) else one_line(exc)
+            if isinstance(exc, MemoryError):
+                why = "it answered, but not as a Dask scheduler"
             raise UsageError(f"--scheduler {scheduler}: cannot reach a scheduler ({why})") from None
         with client:
             yield client

@@ -20,6 +20,7 @@ from scipy.spatial.transform import Rotation
 from vo_lib.atomic import notice
 from vo_lib.camera import Rectification, rectify_stereo
 from vo_lib.formats.frame_files import SequenceError, check_metres, numbers_at, read_text
+from vo_lib.formats.images import MAX_IMAGE_SIDE
 from vo_lib.formats.poses import rigid_problem
 
 #: Shortest distance between a stereo rig's cameras (metres).
@@ -50,6 +51,16 @@ class CameraCalibration:
 class _UniqueKeys(yaml.SafeLoader):
     """YAML as ``safe_load`` reads it, but a key given twice in one mapping is an error, and a
     number written without a point (``1e-05``) is a number, as in YAML 1.2, not a text."""
+
+    def compose_node(self, parent, index):
+        if self.check_event(yaml.AliasEvent):  # *name repeats a value: a few lines can expand to gigabytes
+            raise yaml.composer.ComposerError(
+                None,
+                None,
+                "an alias (*name, or a merge <<: *name); write the values out",
+                self.peek_event().start_mark,
+            )
+        return super().compose_node(parent, index)
 
     def construct_mapping(self, node, deep=False):
         seen = []
@@ -133,9 +144,10 @@ def _distortion(path: Path, data: dict) -> np.ndarray:
 def _image_size(path: Path, data: dict) -> tuple[int, int]:
     """Key ``resolution``: ``(width, height)``, two positive whole numbers."""
     width, height = _numbers(path, data, "resolution", 2, "[width, height]")
-    if width < 1 or height < 1 or width != int(width) or height != int(height):
+    if not (1 <= width <= MAX_IMAGE_SIDE and 1 <= height <= MAX_IMAGE_SIDE) or width % 1 or height % 1:
         raise AslError(
-            f"{path}: key resolution: expected two positive whole numbers, got [{width:g}, {height:g}]"
+            f"{path}: key resolution: expected two whole numbers from 1 to {MAX_IMAGE_SIDE}, "
+            f"got [{width:g}, {height:g}]"
         )
     return int(width), int(height)
 

@@ -125,21 +125,27 @@ def _check_images_there(csv_path: Path, files: list[Path], lines: list[int]) -> 
     """One line naming the first image that ``data.csv`` lists and is not a file."""
     for path, line in zip(files, lines, strict=True):
         if not path.is_file():  # one stat per image; a second only for the one that fails
-            if path.is_dir():
-                raise AslError(f"{csv_path}, line {line}: {path} is a folder; expected an image")
+            if path.exists():  # a folder, a pipe, a device
+                what = "a folder" if path.is_dir() else "not a regular file"
+                raise AslError(f"{csv_path}, line {line}: {path} is {what}; expected an image")
             raise AslError(f"{csv_path}, line {line}: {path.name} is missing from {path.parent}")
 
 
 def _calibration(path) -> tuple[Path, list, Rectification]:
     """The ``mav0`` folder of the recording at ``path``, its cameras' calibrations and rectification."""
+    mav0, calib = _cameras(path)
+    return mav0, calib, rectify(*calib, mav0)
+
+
+def _cameras(path) -> tuple[Path, list]:
+    """The ``mav0`` folder of the recording at ``path`` and its two cameras' calibrations."""
     mav0 = mav0_of(path)
     if mav0 is None:
         raise AslError(f"{path}: no mav0/cam0 or cam0 folder; expected the ASL layout")
     for side in ("cam0", "cam1"):
         if not (mav0 / side).is_dir():
             raise AslError(f"{mav0 / side}: missing camera folder (data/, data.csv, sensor.yaml)")
-    calib = [read_camera_yaml(mav0 / side / "sensor.yaml") for side in ("cam0", "cam1")]
-    return mav0, calib, rectify(*calib, mav0)
+    return mav0, [read_camera_yaml(mav0 / side / "sensor.yaml") for side in ("cam0", "cam1")]
 
 
 def body_to_rectified_camera(path) -> np.ndarray:
@@ -171,7 +177,7 @@ def read_asl(path, groundtruth=None, frames: int | None = None) -> Sequence:
     the first of :data:`GROUND_TRUTH_FILES`) in ``poses`` (the rectified left camera in its first
     pose), or position-only truth in ``manifest["positions"]``."""
     root = Path(path)
-    mav0, calib, rect = _calibration(root)
+    mav0, calib = _cameras(root)
     others = sorted(p.name for p in mav0.glob("cam*") if p.is_dir() and p.name not in ("cam0", "cam1"))
     if others:  # a rig of more cameras
         notice(f"{mav0}: {', '.join(others)} not read; the stereo pair is cam0 (left) and cam1 (right)")
@@ -182,6 +188,7 @@ def read_asl(path, groundtruth=None, frames: int | None = None) -> Sequence:
             f"{left[0]}: {width}x{height} image but {mav0 / 'cam0' / 'sensor.yaml'} says resolution "
             f"{calib[0].resolution[0]}x{calib[0].resolution[1]}"
         )
+    rect = rectify(*calib, mav0)  # once the images are known to be of the calibrated size
     seconds = stamps * NANOSECONDS
     check_frame_spacing(mav0 / "cam0" / "data.csv", seconds)
     manifest = {

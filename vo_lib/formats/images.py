@@ -196,6 +196,13 @@ def image_files(folder: Path) -> list[Path]:
     for (key_a, a), (key_b, b) in zip(keyed, keyed[1:], strict=False):
         if key_a == key_b:
             raise SequenceError(f"{folder}: {a} and {b} carry the same frame number; keep one file per frame")
+    # one pattern of names, or the order is the names' text (x000003.png would follow 000099.png)
+    patterns = [re.sub(r"[0-9]+", "#", name) for _, name in keyed]
+    if odd := next((k for k, pattern in enumerate(patterns) if pattern != patterns[0]), None):
+        raise SequenceError(
+            f"{folder}: {keyed[odd][1]!r} is named unlike {keyed[0][1]!r}; expected every image named "
+            "alike but for its frame number, which sets the order"
+        )
     return [folder / name for _, name in keyed]
 
 
