@@ -350,7 +350,7 @@ display(
 # own increments, and repeating the last one while it sees nothing), the fused filter, and a
 # fused filter that learns the slip's mean (`SlipCalibratedFilter`, below). One seed draws the
 # drive's slip and encoder noise and the matches; a claim that one estimator beats another is
-# made over the seeds `range(SEED, SEED + STUDY_SEEDS)` (forty), with `vo_lib.comparison`, never
+# made over the seeds `range(SEED, SEED + STUDY_SEEDS)` (120), with `vo_lib.comparison`, never
 # on one draw.
 #
 # **NEES.** To ask whether a filter's covariance P tells the truth we use the normalised
@@ -372,7 +372,7 @@ plot_heading_errors(t, {k: heading_error(spot[k], spot["truth"]) for k in ESTIMA
 # of 100 frames in the spot turn. The figures are the final heading error (degrees) and the
 # final position error (cm).
 #
-# Forty seeds of five conditions, and the sideways study of the next section, take several times as
+# 120 seeds of five conditions, and the sideways study of the next section, take several times as
 # long as the rest of the notebook. `seed_figures` therefore reads their figures from
 # `vo_book/demo_fusion.json`, stored by `python -m vo_book.demo_fusion` for the
 # base seed 7 (`pytest -m samples` runs the study again and must find the same figures). With
