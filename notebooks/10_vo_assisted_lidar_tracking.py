@@ -360,8 +360,8 @@ print(
 #   that the printed $V_{max} - V_{lq} - V_{med}$ stays below one half, ranking occluded frames
 #   above normal ones more often than not, and that $V_{max} - V_{med}$ stays near one). That
 #   describes this one run and ranks the readings for no other (the printed form's AUC over twenty
-#   more scans is printed as well, and stays below one half in each); the reading we keep rests on the
-#   wording of eq. 12, not on this run. (The printed form is not a slip: eq. 12 calls
+#   more scans is printed as well, with how many of them stay below one half); the reading we keep
+#   rests on the wording of eq. 12, not on this run. (The printed form is not a slip: eq. 12 calls
 #   $V_{max} - V_{lq}$ the "range", and range minus median is what eq. 11 prints.)
 # * **The printed eq. 10 is a normalisation, not a posterior, for a score like ours.**
 #   $S_i / \sum_j S_j$ would be the posterior if $S_i$ were proportional to the likelihood (and the

@@ -189,7 +189,7 @@ CONSTANTS: dict[str, dict[str, str]] = {
         "0.05 °": "the distance from the truth at which a hypothesis is called good (GOOD_HYPOTHESIS), "
         "and ransac_trial's θ tolerance",
         "5 %": "ransac_trial's ρ tolerance, chosen",
-        "99.7 %": "the confidence level of the whitened eq. 21 gate, by choice",
+        "99.73 %": "the confidence level of the whitened eq. 21 gate (three sigma's share), by choice",
         "99.9 %": "the confidence level the hypothesis count is computed for, by choice",
         "0.01 °": "the first threshold of the grid the exercise searches",
         "0.02 °": "the second threshold of the grid the exercise searches",

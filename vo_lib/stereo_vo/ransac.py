@@ -81,7 +81,7 @@ class RansacParams(NamedTuple):
     pool_fraction: float = 0.5  #: ... the best-conditioned fraction of the matches
     refine_iterations: int = ITERATIONS  #: Gauss-Newton iterations of the first refinement round
     refine_rounds: int = 3  #: refine, re-select inliers, and refine again while the set changes
-    whitened_gate: float = 3.76  #: final gate on the whitened eq. 21 residual: sqrt chi-square(3) at 99.7 %
+    whitened_gate: float = 3.76  #: final gate on the whitened eq. 21 residual: sqrt chi-square(3) at 99.73 %
     initial_inlier_ratio: float = 0.5  #: first guess of the inlier ratio, before any hypothesis is scored
 
 
