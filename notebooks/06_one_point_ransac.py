@@ -220,7 +220,8 @@ print(
     "(half-normal: 0.674)"
 )
 assert within > 0.97
-assert abs(median_norm - 0.674) < 0.1  # the half-normal's median, not a unit normal's 0
+# the half-normal's median, not a unit normal's 0, within four standard errors of a sample median
+assert abs(median_norm - 0.674) < 4 * 0.787 / np.sqrt(ok.sum())
 
 # %% [markdown]
 # ## 3 · A naive 1-point RANSAC
@@ -1393,8 +1394,8 @@ print(f"θ = {np.degrees(loop_theta):.3f}° with {loop_inliers.sum()} inliers")
 # %% nbgrader={"grade": true, "grade_id": "ex4_test", "locked": true, "points": 4, "schema_version": 3, "solution": false}
 # Exercise 4: autograder test
 assert theta_gate(half_px.w_prev, half_px.w_curr, ex_theta, ex_camera).shape == (400,), "one error per match"
-assert abs(np.degrees(loop_theta - ex_theta)) < 0.05, "the hypothesis with most inliers is close to 3°"
-assert loop_inliers.sum() > 200 and np.mean(half_px.inliers[loop_inliers]) > 0.97, "true inliers, nearly all"
+assert abs(np.degrees(loop_theta - ex_theta)) < 0.1, "the hypothesis with most inliers is close to 3°"
+assert loop_inliers.sum() > 150 and np.mean(half_px.inliers[loop_inliers]) > 0.95, "true inliers, nearly all"
 assert np.array_equal(
     loop_inliers, theta_gate(half_px.w_prev, half_px.w_curr, loop_theta, ex_camera) < 0.02
 ), "loop_inliers: the matches within 0.02 of eq. 20 under loop_theta"
