@@ -1433,12 +1433,14 @@ def test_a_kill_at_any_step_of_the_swap_leaves_the_previous_output(tmp_path, mod
     exchange, the deletion of the replaced folder), for a run's output and a generated sequence.
     After each kill the folder is the old output or the new one, whole; the next command beside
     it (an ``OutputFolder`` that writes nothing) restores an old output set aside, even where an
-    empty folder has been made in its place meanwhile, and removes every temporary."""
+    empty folder has been made in its place meanwhile, and removes every temporary. A run's output
+    by renames has a name of 250 characters, whose temporaries' names would pass 255 bytes whole."""
     from vo_lib.outputs import OutputFolder
 
     seen, written_by = [], f"vo_lib {writer}"
+    stem = "c" * 245 if (mode, writer) == ("renames", "run") else "out"
     for at in range(12):
-        target = tmp_path / f"out{at}"
+        target = tmp_path / f"{stem}{at}"
         write_old(target, writer)
         proc = subprocess.run(
             [sys.executable, "-c", KILLER, str(target), mode, str(at), writer],

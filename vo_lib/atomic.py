@@ -51,10 +51,18 @@ def inode(path) -> tuple[int, int] | None:
     return None
 
 
+def _stem(name: str) -> str:
+    """``name`` as a temporary's name holds it: whole, or where that would pass a file system's 255
+    bytes, its first 30 characters and a hash of the whole."""
+    if len(os.fsencode(name)) <= 150:
+        return name
+    return f"{name[:30]}~{hashlib.sha1(os.fsencode(name)).hexdigest()[:8]}"
+
+
 def temporary(name_beside: Path) -> Path:
     """A new temporary's name beside ``name_beside``."""
     return name_beside.with_name(
-        f".{name_beside.name}.vo_lib-{os.getpid()}-{HOST}-{secrets.token_hex(4)}.tmp"
+        f".{_stem(name_beside.name)}.vo_lib-{os.getpid()}-{HOST}-{secrets.token_hex(4)}.tmp"
     )
 
 
@@ -93,7 +101,7 @@ def _abandoned_beside(parent: Path, name: str) -> list[tuple[os.DirEntry, str]]:
         return [
             (entry, m[4])
             for entry, m in found
-            if m and (m[1], m[3]) == (name, HOST) and not entry.is_symlink() and _gone(int(m[2]))
+            if m and (m[1], m[3]) == (_stem(name), HOST) and not entry.is_symlink() and _gone(int(m[2]))
         ]
     return []
 
