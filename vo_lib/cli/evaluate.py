@@ -94,7 +94,7 @@ def _check_one_to_one(truth, gt: str, est: str, count: int, marker: dict) -> Non
 
 
 def _associated(
-    truth, gt: str, est: str, times, E: np.ndarray, marker: dict, max_diff: float = MAX_TIME_DIFF_S
+    truth, gt: str, est: str, times, E: np.ndarray, marker: dict, max_diff: float
 ) -> tuple[np.ndarray, np.ndarray]:
     """Indices ``(i_est, i_gt)`` of the poses compared: by timestamp where both files carry them, at
     most ``max_diff`` seconds apart (as evo does), else one to one."""

@@ -173,7 +173,7 @@ def build_parser() -> argparse.ArgumentParser:
         "--time-offset",
         metavar="SECONDS",
         type=float,
-        default=0.0,
+        default=argparse.SUPPRESS,
         help="added to --est's timestamps before they are paired with --gt's: the lag of a clock not "
         "synchronised with the cameras, as evo's --t_offset (default: 0)",
     )
@@ -181,7 +181,7 @@ def build_parser() -> argparse.ArgumentParser:
         "--max-time-diff",
         metavar="SECONDS",
         type=float,
-        default=0.01,
+        default=argparse.SUPPRESS,
         help="largest difference of two paired timestamps, as evo's --t_max_diff (default: 0.01)",
     )
     conv = command(

@@ -116,9 +116,13 @@ def dask_client(workers: int, scheduler: str | None):
         except (ValueError, TypeError, OSError, AssertionError, MemoryError) as exc:  # TimeoutError too
             # an AssertionError: distributed's own event loop did not start within its 10 s; a
             # MemoryError: another service's greeting read as the length of a message
-            why = "no event loop" if isinstance(exc, AssertionError) else one_line(exc)
-            if isinstance(exc, MemoryError):
-                why = "it answered, but not as a Dask scheduler"
+            why = (
+                "no event loop"
+                if isinstance(exc, AssertionError)
+                else "it answered, but not as a Dask scheduler"
+                if isinstance(exc, MemoryError)  # numpy's _ArrayMemoryError too
+                else one_line(exc)
+            )
             raise UsageError(f"--scheduler {scheduler}: cannot reach a scheduler ({why})") from None
         with client:
             yield client

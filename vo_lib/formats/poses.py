@@ -168,8 +168,13 @@ def _check_stamped(
         if not late[k]:
             tolerance = f"norm 1 within {QUATERNION_TOLERANCE:g}"
             return f"the quaternion's norm is {norm[k]:.4g}; expected a unit quaternion ({tolerance})"
-        order = "comes before" if t[k] < t[k - 1] else "repeats"
-        order = "rounds to the time of" if order == "repeats" and stamp(k) != stamp(k - 1) else order
+        order = (
+            "comes before"
+            if t[k] < t[k - 1]
+            else "repeats"
+            if stamp(k) == stamp(k - 1)
+            else "rounds to the time of"
+        )
         return (
             f"timestamp {stamp(k)} {order} "
             f"the one on line {lines[k - 1]} ({stamp(k - 1)}); timestamps must increase"
