@@ -662,7 +662,8 @@ def test_a_header_without_hash_and_a_rounded_calibration_are_read(tmp_path):
 @needs_euroc
 def test_frames_within_the_truth_run_and_the_refusal_says_how_to_run_the_rest(tmp_path, capsys):
     """A ground truth that ends before the images: --frames runs the pairs it covers; the refusal
-    of the whole recording says what to do, and evaluate then scores the frames it covers."""
+    of the whole recording says what to do: run it with --no-truth (convert too), untouched, and
+    evaluate scores the frames the truth covers."""
     from vo_lib.cli.main import main
 
     rig = small_rig(tmp_path, frames=12)
@@ -674,25 +675,27 @@ def test_frames_within_the_truth_run_and_the_refusal_says_how_to_run_the_rest(tm
     )
     assert main(["run", "--sequence", str(rig), "--out", str(tmp_path / "all")]) == 2
     err = capsys.readouterr().err
-    assert (
-        "must cover every image (run --frames runs fewer; to run or convert without it, move it out of mav0"
-        in err
-    )
+    assert "must cover every image (run --frames runs fewer; run or convert --no-truth reads none" in err
     assert main(["run", "--sequence", str(rig), "--frames", "9", "--out", str(tmp_path / "nine")]) == 0
     assert len((tmp_path / "nine" / "poses.txt").read_text().splitlines()) == 9
     out = capsys.readouterr().out  # and names the one of the recording's truths it used
     assert f"Errors against ground truth ({truth}, " in out and "final position error, 3-D" in out
-    shutil.move(truth.parent, tmp_path / "aside")
-    assert main(["run", "--sequence", str(rig), "--out", str(tmp_path / "all")]) == 0
-    gt, est = tmp_path / "aside" / truth.name, tmp_path / "all" / "trajectory.tum"
-    capsys.readouterr()
-    assert main(["evaluate", "--gt", str(gt), "--est", str(est), "--extrinsic-of", str(rig)]) == 0
+    before = sorted((p.relative_to(rig), p.stat().st_mtime_ns) for p in rig.rglob("*"))
+    assert main(["run", "--sequence", str(rig), "--no-truth", "--out", str(tmp_path / "all")]) == 0
+    out = capsys.readouterr().out
+    assert "Errors against ground truth" not in out and "leica0" not in out  # no other truth either
+    est = tmp_path / "all" / "trajectory.tum"
+    assert main(["evaluate", "--gt", str(truth), "--est", str(est), "--extrinsic-of", str(rig)]) == 0
     assert "associated 9 of 12 poses" in capsys.readouterr().out
     # the run's poses.txt has no times: the refusal points to the trajectory.tum beside it
-    args = ["evaluate", "--gt", str(gt), "--est", str(est.with_name("poses.txt")), "--extrinsic-of", str(rig)]
+    args = ["evaluate", "--gt", str(truth), "--est", str(est.with_name("poses.txt"))]
+    args += ["--extrinsic-of", str(rig)]
     assert main(args) == 2
     out, err = capsys.readouterr()
     assert f"(or timestamps in both: --est {est} has them)" in err and "paired" not in out
+    assert main(["convert", str(rig), "--no-truth", "--out", str(tmp_path / "copy")]) == 0
+    assert not (tmp_path / "copy" / "poses.txt").exists()
+    assert sorted((p.relative_to(rig), p.stat().st_mtime_ns) for p in rig.rglob("*")) == before
 
 
 @needs_euroc

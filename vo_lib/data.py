@@ -56,19 +56,25 @@ def is_rendered(name: str, path) -> bool:
 
 
 def load_sequence(
-    name_or_path, frames: int | None = None, resolution=None, progress: bool = True, odometry: bool = True
+    name_or_path,
+    frames: int | None = None,
+    resolution=None,
+    progress: bool = True,
+    odometry: bool = True,
+    truth: bool = True,
 ) -> Sequence:
     """A named sample (rendered on first use, ``progress`` as :func:`vo_lib.sim.samples.generate`
     shows it) or a folder. ``frames``: a sample of that many frames, or an ASL recording's first
-    pairs (a KITTI-layout folder is read whole); ``odometry=False``: ``odometry.txt`` is not read."""
+    pairs (a KITTI-layout folder is read whole); ``odometry=False``: ``odometry.txt`` is not read;
+    ``truth=False``: no ground truth is read."""
     key = str(name_or_path)
     if key in SAMPLES and not Path(key).exists():
         path = sample_path(key, frames, resolution)
         if not is_rendered(key, path):
             generate(key, path, frames, None if resolution is None else tuple(resolution), progress)
-        return read_sequence(path, odometry=odometry)
+        return read_sequence(path, odometry=odometry, truth=truth)
     if mav0_of(key) is not None:  # a rig as it records (ASL layout): rectified on reading
-        return read_asl(key, frames=frames)
+        return read_asl(key, frames=frames, truth=truth)
     if not (Path(key) / "image_0").is_dir() and (why := asl_near_miss(key)) is not None:
         raise AslError(why)
-    return read_sequence(Path(key), odometry=odometry)
+    return read_sequence(Path(key), odometry=odometry, truth=truth)

@@ -59,6 +59,14 @@ def _recording(text: str) -> str:
     return text
 
 
+def _no_truth(parser: argparse.ArgumentParser, what: str) -> None:
+    parser.add_argument(
+        "--no-truth",
+        action="store_true",
+        help=f"read no ground truth (one that does not cover every image stops the {what})",
+    )
+
+
 def build_parser() -> argparse.ArgumentParser:
     from vo_lib.bench import BENCH_HELP, BENCHES
     from vo_lib.cli.sweep import SWEEPS
@@ -130,6 +138,7 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument(
         "--no-odometry", action="store_true", help="ignore odometry.txt (constant-velocity prediction)"
     )
+    _no_truth(run, "run")
     run.add_argument(
         "--seed", type=count_at_least(0, "seed"), default=0, help="seed of the RANSAC draws (>= 0)"
     )
@@ -197,6 +206,7 @@ def build_parser() -> argparse.ArgumentParser:
         help="the recording (ASL layout) or any sequence folder",
     )
     conv.add_argument("--to", choices=("kitti",), default="kitti", help="layout to write (kitti)")
+    _no_truth(conv, "copy")
     output(conv, "new, empty, or written by a convert", required=True)
     gen = command(
         "generate",

@@ -177,6 +177,7 @@ def run_command(
     seed: int = 0,
     force: bool = False,
     motion: str = "auto",
+    no_truth: bool = False,
 ) -> dict:
     """Run the pipeline and write its outputs; returns the error report (empty without truth).
     ``motion``: the model (``auto``: planar for the crawler, 6-DoF for a car; planar poses are
@@ -198,7 +199,9 @@ def run_command(
         progress = True if sys.stderr.isatty() else "lines"
         if not is_sample(name) or is_rendered(name, source):  # a sample rendered now: once it is
             locks.enter_context(reading(source))  # no command replaces the sequence while it is read
-        seq = load_sequence(name, frames=load_frames, odometry=not no_odometry, progress=progress)
+        seq = load_sequence(
+            name, frames=load_frames, odometry=not no_odometry, progress=progress, truth=not no_truth
+        )
         locks.enter_context(reading(seq.path))
         report = _run_into(output, seq, name, frames, no_odometry, seed, motion)
     print(f"\nwrote {out_dir}/: poses.txt trajectory.tum timings.csv diagnostics.csv trajectory.png")
@@ -324,7 +327,7 @@ def _run_into(
     return report
 
 
-def convert_command(sequence: str, to: str, out: str, force: bool = False) -> None:
+def convert_command(sequence: str, to: str, out: str, force: bool = False, no_truth: bool = False) -> None:
     """Write a rectified copy of a sequence (an ASL rig, or any readable one) in the KITTI layout,
     with the source's manifest (an ASL rig's camera in the body, its position-only truth) and its
     odometry files (:data:`~vo_lib.formats.sequence_writer.CARRIED`)."""
@@ -334,7 +337,7 @@ def convert_command(sequence: str, to: str, out: str, force: bool = False) -> No
     with contextlib.ExitStack() as locks:  # no command replaces the sequence while it is read
         locks.enter_context(reading(sequence))
         # read before --out is touched: a bad input changes nothing (the odometry files it carries too)
-        seq = load_sequence(Path(sequence), odometry=True, progress=False)
+        seq = load_sequence(Path(sequence), odometry=True, progress=False, truth=not no_truth)
         locks.enter_context(reading(seq.path))
         manifest = {k: v for k, v in seq.manifest.items() if k != "layout"}
         writer = SequenceWriter(

@@ -172,10 +172,10 @@ def _stated(path: Path) -> bool:
     return path.exists() or path.is_symlink() or path.parent.is_file()
 
 
-def read_asl(path, groundtruth=None, frames: int | None = None) -> Sequence:
+def read_asl(path, groundtruth=None, frames: int | None = None, truth: bool = True) -> Sequence:
     """The first ``frames`` pairs of an ASL recording, rectified; the 6-DoF truth (``groundtruth`` or
     the first of :data:`GROUND_TRUTH_FILES`) in ``poses`` (the rectified left camera in its first
-    pose), or position-only truth in ``manifest["positions"]``."""
+    pose), or position-only truth in ``manifest["positions"]``; no truth with ``truth=False``."""
     root = Path(path)
     mav0, calib = _cameras(root)
     others = sorted(p.name for p in mav0.glob("cam*") if p.is_dir() and p.name not in ("cam0", "cam1"))
@@ -198,7 +198,7 @@ def read_asl(path, groundtruth=None, frames: int | None = None) -> Sequence:
     }
     # a truth there in any form (a folder, a broken link, its folder a file) is named by the reader
     found = (mav0 / name for name in GROUND_TRUTH_FILES if _stated(mav0 / name))
-    truth_path = Path(groundtruth) if groundtruth else next(found, None)
+    truth_path = Path(groundtruth) if groundtruth else (next(found, None) if truth else None)
     poses = None
     if truth_path is not None and len(seconds) < 3:  # as evaluate: errors of two poses mean nothing
         notice(f"{truth_path}: not read for {len(seconds)} frames; an evaluation needs at least 3")

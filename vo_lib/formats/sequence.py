@@ -187,8 +187,9 @@ def _odometry(path: Path, times: np.ndarray) -> np.ndarray:
     return odo
 
 
-def read_sequence(path, odometry: bool = True) -> Sequence:
-    """Read and check a sequence folder (``odometry=False``: ``odometry.txt`` is not read)."""
+def read_sequence(path, odometry: bool = True, truth: bool = True) -> Sequence:
+    """Read and check a sequence folder (``odometry=False``: ``odometry.txt`` is not read;
+    ``truth=False``: neither ``poses.txt`` nor the manifest's positions)."""
     root = Path(path)
     left, right = _image_pairs(root)
     camera = _camera(root, left, right)
@@ -197,11 +198,13 @@ def read_sequence(path, odometry: bool = True) -> Sequence:
     times = read_per_frame(root / "times.txt", n, "timestamps", read_times)
     check_frame_spacing(root / "times.txt", times)
     poses = odo = None
-    if present(root / "poses.txt", "the ground-truth poses"):
+    if truth and present(root / "poses.txt", "the ground-truth poses"):
         poses = read_per_frame(root / "poses.txt", n, "poses", read_poses)
     if odometry and present(root / "odometry.txt", "the odometry"):
         odo = _odometry(root / "odometry.txt", times)
     manifest_path = root / "manifest.json"
     manifest = read_manifest(manifest_path) if present(manifest_path, "the manifest") else {}
     check_manifest(manifest_path, manifest, n)
+    if not truth:
+        manifest.pop("positions", None)
     return Sequence(root, camera, times, left, right, poses, odo, manifest)
