@@ -10,7 +10,7 @@ from vo_lib.geometry import relative_planar, wrap_angle
 from vo_lib.models.track_odometry import TrackOdometry
 from vo_lib.sim.samples import render_sample
 from vo_lib.sim.textures import corner_texture
-from vo_lib.stereo_vo.pipeline import run_frames
+from vo_lib.stereo_vo.pipeline import frame_steps, run_frames
 
 
 def run_sample(name, frames=None, use_odometry=True):
@@ -240,3 +240,11 @@ def test_stopwatch_adds_each_stage_and_counts_the_whole():
         raise KeyError("the stage is timed all the same")
     assert watch.ms["a"] >= 20.0 and "b" in watch.ms
     assert watch.total() >= watch.ms["a"] + watch.ms["b"]
+
+
+def test_frame_steps_count_the_intervals_a_dropped_frame_leaves():
+    """Gaps in units of the median gap, rounded: timing jitter stays one step, a dropped frame is two."""
+    times = [0.0, 0.1, 0.21, 0.4, 0.49, 0.8, 0.9]
+    assert frame_steps(times).tolist() == [1, 1, 1, 2, 1, 3, 1]
+    assert frame_steps([5.0]).tolist() == [1]
+    assert frame_steps([0.0, 0.0, 0.0]).tolist() == [1, 1, 1]  # no spacing to measure: one step each

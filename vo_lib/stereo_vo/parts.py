@@ -63,8 +63,9 @@ class MotionModel(Protocol):
     #: 4x4 camera pose of the last frame in frame 0's camera, or None for a planar-only model.
     camera_pose: np.ndarray | None
 
-    def predict(self, kf: VoKalmanFilter) -> Prediction:
-        """The motion since the reference frame, as the filter (just moved on) predicts it."""
+    def predict(self, kf: VoKalmanFilter, steps: int = 1) -> Prediction:
+        """The motion since the reference frame, as the filter (just moved on ``steps`` frame
+        intervals) predicts it."""
 
     def match(
         self, reference: StereoFeatures, features: StereoFeatures, prediction: Prediction, recent: list

@@ -18,7 +18,9 @@ A frame whose VO motion cannot be trusted (no features, too few matches or inlie
 ratio as when a large object moves through the view, or a motion that contradicts the prediction)
 never stops the run: the filter keeps its prediction, and the frame is flagged. The last good
 frame stays the reference, so the next good frame is matched against it and its measurement spans
-the gap. Exactly one pose is produced per input frame. Every setting is a field of one
+the gap. Exactly one pose is produced per input frame. A frame that comes two or more frame
+intervals after the last (a dropped frame, from the sequence's timestamps) is predicted that many
+steps of constant velocity ahead. Every setting is a field of one
 :class:`~vo_lib.stereo_vo.config.PipelineConfig`; ``CRAWLER`` and ``CAR`` are the two presets.
 """
 
@@ -97,8 +99,9 @@ class StereoOdometry:
         """6-DoF camera pose of the last frame in frame 0's camera (None for the planar model)."""
         return self.motion.camera_pose
 
-    def process(self, left: np.ndarray, right: np.ndarray, odometry=None):
-        """Process one stereo pair (and the odometry distances since the previous frame, if any).
+    def process(self, left: np.ndarray, right: np.ndarray, odometry=None, steps: int = 1):
+        """Process one stereo pair (and the odometry distances since the previous frame, if any)
+        that comes ``steps`` frame intervals after the previous one (more than 1 after a dropped frame).
 
         Returns ``(planar pose, its covariance, FrameDiagnostics, FrameTimings)``.
         """
@@ -111,7 +114,7 @@ class StereoOdometry:
             self.frame += 1
             return self.kf.pose, self.kf.covariance, diag, self._timings(watch)
         with watch("prediction"):
-            prediction = self._predict(odometry, diag)  # 2. prediction ...
+            prediction = self._predict(odometry, diag, max(int(steps), 1))  # 2. prediction ...
         estimate, reason = None, self._unmatchable(features)
         if reason is Reason.NONE:
             estimate, reason = self._measure(features, prediction, diag, watch)
@@ -136,12 +139,15 @@ class StereoOdometry:
         return FrameTimings(**ms, total=watch.total())
 
     # ------------------------------------------------------------------ the steps
-    def _predict(self, odometry, diag: FrameDiagnostics) -> Prediction:
+    def _predict(self, odometry, diag: FrameDiagnostics, steps: int) -> Prediction:
         u = None if odometry is None else np.asarray(odometry, float)
         if u is not None and not np.all(np.isfinite(u)):
             u, diag.odometry = None, False
         self.kf.predict(u, keep_reference=self.gap > 1)
-        prediction = self.motion.predict(self.kf)
+        for _ in range(steps - 1 if u is None else 0):  # odometry spans the gap; constant velocity steps it
+            self.kf.predict(None, keep_reference=True)
+        self.gap += steps - 1  # counted in frame intervals: the velocity is per interval
+        prediction = self.motion.predict(self.kf, steps)
         if not prediction.informative and self.config.unknown_motion_sigma:
             self.kf.widen(self.config.unknown_motion_sigma)  # nothing predicts the motion yet
             prediction.prior = self.kf.motion_prior()
@@ -278,16 +284,19 @@ def run_frames(
     seed: int = 0,
     progress=None,
     odometer: StereoOdometry | None = None,
+    times=None,
 ) -> PipelineResult:
     """Run the pipeline over ``(left, right, odometry_or_None)`` triples.
 
     ``odometer`` is the :class:`StereoOdometry` to run (default: the crawler's, with track odometry
-    and ``seed``); with the 6-DoF model the result carries each frame's camera pose too.
+    and ``seed``); with the 6-DoF model the result carries each frame's camera pose too. ``times``
+    (seconds, one per frame) tell a dropped frame: :func:`frame_steps`.
     """
     vo = odometer or StereoOdometry(camera, CRAWLER, seed=seed)
     poses, covs, diags, timings, cameras = [], [], [], [], []
+    steps = iter(frame_steps(times)) if times is not None else None
     for left, right, odo in frames:
-        pose, cov, diag, timing = vo.process(left, right, odo)
+        pose, cov, diag, timing = vo.process(left, right, odo, next(steps, 1) if steps else 1)
         poses.append(pose)
         covs.append(cov)
         diags.append(diag)
@@ -303,6 +312,15 @@ def run_frames(
         timings,
         np.array(cameras) if cameras else None,
     )
+
+
+def frame_steps(times) -> np.ndarray:
+    """Frame intervals from each frame to the next: the gap between their times in units of the
+    sequence's median gap, rounded (1 but after dropped frames), at least 1; 1 for the first frame."""
+    gaps = np.diff(np.asarray(times, float))
+    if len(gaps) == 0 or not np.median(gaps) > 0:
+        return np.ones(len(gaps) + 1, int)
+    return np.r_[1, np.maximum(np.rint(gaps / np.median(gaps)), 1)].astype(int)
 
 
 MOTION_MODELS = ("auto", "planar", "full")
@@ -335,6 +353,7 @@ def run_sequence(
     model = vehicle.motion if motion == "auto" else motion
     n = len(sequence) if frames is None else min(int(frames), len(sequence))
     odo = vehicle.odometry
+    times = sequence.times[:n]
 
     def frame_iter():
         for k in range(n):
@@ -342,11 +361,13 @@ def run_sequence(
 
     odometer = StereoOdometry(sequence.camera, PRESETS[model], vehicle.odometry_model, vehicle.mount, seed)
     if not progress:
-        return run_frames(frame_iter(), sequence.camera, odometer=odometer)
+        return run_frames(frame_iter(), sequence.camera, odometer=odometer, times=times)
     from tqdm.auto import tqdm
 
     with tqdm(total=n, desc=f"VO {sequence.path.name}", unit="frame") as bar:
-        return run_frames(frame_iter(), sequence.camera, progress=bar, odometer=odometer)
+        return run_frames(
+            frame_iter(), sequence.camera, progress=bar, odometer=odometer, times=sequence.times[:n]
+        )
 
 
 def warm_up(sequence, use_odometry: bool = True, seed: int = 0, motion: str = "auto") -> float:

@@ -33,7 +33,7 @@ class PlanarMotion:
         self.config = config
         self.velocity_known = False  # a motion has been measured (constant velocity means something)
 
-    def predict(self, kf: VoKalmanFilter) -> Prediction:
+    def predict(self, kf: VoKalmanFilter, steps: int = 1) -> Prediction:
         # without odometry, the prediction means something only once a motion has been measured
         return Prediction(kf.motion_prior(), kf.flags.odometry or self.velocity_known)
 

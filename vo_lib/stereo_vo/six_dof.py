@@ -148,19 +148,20 @@ class SixDofMotion:
         self.from_axis = rigid_inverse(self.to_axis)
         self.reference_pose = np.eye(4)  # camera pose of the reference frame, in frame 0's
         self.camera_pose = np.eye(4)
-        self.velocity: np.ndarray | None = None  # camera motion per frame, T_curr_from_prev
+        self.velocity: np.ndarray | None = None  # camera motion per frame interval, T_curr_from_prev
         self.since_reference = np.eye(4)  # camera motion from the reference to the last frame
 
     # ------------------------------------------------------------------ prediction
-    def predict(self, kf: VoKalmanFilter) -> Prediction:
+    def predict(self, kf: VoKalmanFilter, steps: int = 1) -> Prediction:
         """Camera motion from the reference to this frame: the last frame's (measured or
-        predicted, so frames measured against an older reference keep the motion they found), one
-        step of constant velocity further, with the planar part from the filter where odometry
-        moved it (else the filter's predicted pose is moved to it); nothing while neither velocity
-        nor odometry is known."""
+        predicted, so frames measured against an older reference keep the motion they found),
+        ``steps`` frame intervals of constant velocity further, with the planar part from the
+        filter where odometry moved it (else the filter's predicted pose is moved to it); nothing
+        while neither velocity nor odometry is known."""
         if self.velocity is None and not kf.flags.odometry:
             return Prediction(kf.motion_prior(), False)
-        motion = (np.eye(4) if self.velocity is None else self.velocity) @ self.since_reference
+        step = np.eye(4) if self.velocity is None else np.linalg.matrix_power(self.velocity, steps)
+        motion = step @ self.since_reference
         if kf.flags.odometry:
             motion = with_planar_increment(motion, self.mount, kf.increment)
         else:  # the filter's planar prediction is this one's
