@@ -206,31 +206,59 @@ class Rectification:
         )
 
 
-def rectify_stereo(left, right, size: tuple[int, int], T_right_left, T_body_left) -> Rectification:
+def rectify_stereo(
+    left, right, size: tuple[int, int], T_right_left, T_body_left, fisheye: bool = False
+) -> Rectification:
     """OpenCV's rectification of a calibrated pair (``stereoRectify`` with zero disparity at
-    infinity, ``alpha = 0``: only valid pixels) and its maps.
+    infinity, ``alpha = 0``: only valid pixels; ``cv2.fisheye``'s, ``balance = 0``, for fisheye
+    lenses) and its maps.
 
     Parameters
     ----------
     left, right : tuple
-        Each camera's ``(K, distortion)``: 3x3 intrinsics and radial-tangential ``[k1, k2, p1, p2]``.
+        Each camera's ``(K, distortion)``: 3x3 intrinsics and radial-tangential ``[k1, k2, p1, p2]``
+        (equidistant ``[k1, k2, k3, k4]`` with ``fisheye``).
     size : tuple of int
         ``(width, height)`` of both cameras' images.
     T_right_left : array_like, 4x4
         The left camera's coordinates into the right camera's.
     T_body_left : array_like, 4x4
         The left camera's coordinates into the body's.
+    fisheye : bool
+        Both cameras follow the equidistant (Kannala-Brandt) model of ``cv2.fisheye``.
     """
     T_right_left = np.asarray(T_right_left, float)
-    R = np.ascontiguousarray(T_right_left[:3, :3])
-    R1, R2, P1, P2, _, *valid = cv2.stereoRectify(
-        *left, *right, size, R, T_right_left[:3, 3:].copy(), flags=cv2.CALIB_ZERO_DISPARITY, alpha=0.0
-    )
+    R, t = np.ascontiguousarray(T_right_left[:3, :3]), T_right_left[:3, 3:].copy()
+    if fisheye:
+        R1, R2, P1, P2, _ = cv2.fisheye.stereoRectify(
+            *left, *right, size, R, t, flags=cv2.CALIB_ZERO_DISPARITY, balance=0.0
+        )
+        shares = [
+            _sampled_share(K, dist, R_rect, P, size)
+            for (K, dist), R_rect, P in ((left, R1, P1), (right, R2, P2))
+        ]
+    else:
+        R1, R2, P1, P2, _, *valid = cv2.stereoRectify(
+            *left, *right, size, R, t, flags=cv2.CALIB_ZERO_DISPARITY, alpha=0.0
+        )
+        shares = [w * h / (size[0] * size[1]) for _, _, w, h in valid]
+    opencv = cv2.fisheye if fisheye else cv2
     maps = [
-        tuple(cv2.initUndistortRectifyMap(K, dist, R_rect, P, size, cv2.CV_16SC2))
+        tuple(opencv.initUndistortRectifyMap(K, dist, R_rect, P, size, cv2.CV_16SC2))
         for (K, dist), R_rect, P in ((left, R1, P1), (right, R2, P2))
     ]
     T_left_rect = np.eye(4)
     T_left_rect[:3, :3] = R1.T  # rectified -> raw left camera
-    shares = tuple(w * h / (size[0] * size[1]) for _, _, w, h in valid)
-    return Rectification(*maps, (P1, P2), size, T_body_left @ T_left_rect, shares)
+    return Rectification(*maps, (P1, P2), size, T_body_left @ T_left_rect, tuple(shares))
+
+
+def _sampled_share(K, dist, R_rect, P, size: tuple[int, int]) -> float:
+    """The share of a fisheye image that its rectified image shows: the rectified pixels that fall
+    inside it, times the part of it their bounding box spans (a sliver when the calibration is
+    not of the images)."""
+    x, y = cv2.fisheye.initUndistortRectifyMap(K, dist, R_rect, P, size, cv2.CV_32FC1)
+    inside = (x >= 0) & (x <= size[0] - 1) & (y >= 0) & (y <= size[1] - 1)
+    if not inside.any():
+        return 0.0
+    span = np.ptp(x[inside]) * np.ptp(y[inside]) / ((size[0] - 1) * (size[1] - 1))
+    return float(inside.mean() * span)

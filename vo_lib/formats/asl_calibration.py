@@ -3,8 +3,9 @@ rectification of two (:func:`vo_lib.camera.rectify_stereo`).
 
 ``sensor.yaml`` holds ``T_BS`` (camera to body, 4x4), ``intrinsics`` ``[fu, fv, cu, cv]``,
 ``distortion_model: radial-tangential``, ``distortion_coefficients`` ``[k1, k2, p1, p2]`` (or
-Kalibr's name for them, ``distortion_coeffs``) and ``resolution``. Every problem raises one
-:class:`AslError` naming the file and key.
+Kalibr's name for them, ``distortion_coeffs``) and ``resolution``. A fisheye lens calibrated with
+``distortion_model: equidistant`` (Kalibr's ``pinhole-equi``) has ``[k1, k2, k3, k4]`` instead.
+Every problem raises one :class:`AslError` naming the file and key.
 """
 
 from __future__ import annotations
@@ -30,7 +31,7 @@ MIN_BASELINE_M = 1e-3
 MAX_BASELINE_TILT_DEG = 20.0
 #: Least share of an image valid once rectified: a calibration of other images leaves a sliver.
 MIN_VALID_SHARE = 0.25
-#: Largest radial-tangential coefficient taken as a lens's (real ones stay below 1 or so).
+#: Largest distortion coefficient taken as a lens's (real ones stay below 1 or so).
 MAX_DISTORTION = 100.0
 
 
@@ -39,13 +40,15 @@ AslError = SequenceError
 
 @dataclass(frozen=True)
 class CameraCalibration:
-    """One camera's ``sensor.yaml``: ``T_BS`` (camera to body), ``K``, radial-tangential
-    ``distortion`` ``[k1, k2, p1, p2]`` and ``resolution`` ``(width, height)``."""
+    """One camera's ``sensor.yaml``: ``T_BS`` (camera to body), ``K``, ``distortion``
+    (radial-tangential ``[k1, k2, p1, p2]``, or equidistant ``[k1, k2, k3, k4]`` where
+    ``fisheye``) and ``resolution`` ``(width, height)``."""
 
     T_BS: np.ndarray
     K: np.ndarray
     distortion: np.ndarray
     resolution: tuple[int, int]
+    fisheye: bool = False
 
 
 class _UniqueKeys(yaml.SafeLoader):
@@ -118,27 +121,36 @@ def _transform(path: Path, data: dict, what: str) -> np.ndarray:
     return T
 
 
-def _distortion(path: Path, data: dict) -> np.ndarray:
-    """``[k1, k2, p1, p2]`` of a radial-tangential model, at the ASL key or at Kalibr's
-    (``camchain.yaml``) when only that one is there; zeros for ``distortion_model: none``."""
+def _distortion(path: Path, data: dict) -> tuple[np.ndarray, bool]:
+    """``[k1, k2, p1, p2]`` of a radial-tangential model (zeros for ``distortion_model: none``) or
+    ``[k1, k2, k3, k4]`` of an equidistant one, at the ASL key or at Kalibr's (``camchain.yaml``)
+    when only that one is there; and whether the model is equidistant."""
     model = data.get("distortion_model", "radial-tangential")
+    if model in ("equidistant", "equi"):
+        key = _coefficients_key(path, data)
+        return _numbers(path, data, key, 4, "[k1, k2, k3, k4]", MAX_DISTORTION), True
     if model not in ("radial-tangential", "radtan", "none"):
         raise AslError(
             f"{path}: key distortion_model: {model!r} is not supported; "
-            "expected radial-tangential (radtan) or none"
+            "expected radial-tangential (radtan), equidistant or none"
         )
-    if "distortion_coeffs" in data and "distortion_coefficients" in data:
-        raise AslError(f"{path}: keys distortion_coefficients and distortion_coeffs both given; expected one")
-    key = "distortion_coeffs" if "distortion_coeffs" in data else "distortion_coefficients"
+    key = _coefficients_key(path, data)
     if model == "none" and data.get(key) is None:
-        return np.zeros(4)
+        return np.zeros(4), False
     dist = _numbers(path, data, key, 4, "[k1, k2, p1, p2]", MAX_DISTORTION)
     if model == "none" and dist.any():
         raise AslError(
             f"{path}: key distortion_model: none, but key {key} is not zero; "
             "expected radial-tangential for these coefficients, or zeros"
         )
-    return dist
+    return dist, False
+
+
+def _coefficients_key(path: Path, data: dict) -> str:
+    """The key of the distortion coefficients: the ASL one, or Kalibr's where only that is given."""
+    if "distortion_coeffs" in data and "distortion_coefficients" in data:
+        raise AslError(f"{path}: keys distortion_coefficients and distortion_coeffs both given; expected one")
+    return "distortion_coeffs" if "distortion_coeffs" in data else "distortion_coefficients"
 
 
 def _image_size(path: Path, data: dict) -> tuple[int, int]:
@@ -164,7 +176,7 @@ def read_camera_yaml(path) -> CameraCalibration:
         raise AslError(
             f"{path}: key camera_model: {data['camera_model']!r} is not supported; expected pinhole"
         )
-    dist = _distortion(path, data)
+    dist, fisheye = _distortion(path, data)
     width, height = _image_size(path, data)
     if not (0 <= cu <= width and 0 <= cv <= height):
         raise AslError(
@@ -172,7 +184,7 @@ def read_camera_yaml(path) -> CameraCalibration:
             f"{width:g}x{height:g} image (key resolution)"
         )
     K = np.array([[fu, 0.0, cu], [0.0, fv, cv], [0.0, 0.0, 1.0]])
-    return CameraCalibration(T, K, dist, (width, height))
+    return CameraCalibration(T, K, dist, (width, height), fisheye)
 
 
 def rectify(left: CameraCalibration, right: CameraCalibration, where: Path) -> Rectification:
@@ -183,10 +195,21 @@ def rectify(left: CameraCalibration, right: CameraCalibration, where: Path) -> R
             f"{where}: cam0 is {left.resolution[0]}x{left.resolution[1]} but cam1 is "
             f"{right.resolution[0]}x{right.resolution[1]} (key resolution); expected one size"
         )
+    if left.fisheye != right.fisheye:
+        models = ["equidistant" if c.fisheye else "radial-tangential" for c in (left, right)]
+        raise AslError(
+            f"{where / 'cam1' / 'sensor.yaml'}: key distortion_model: {models[1]}, but cam0's is "
+            f"{models[0]}; expected one model for both cameras"
+        )
     T_right_left = np.linalg.inv(right.T_BS) @ left.T_BS  # left camera -> right camera
     cam1_in_cam0 = _check_baseline(T_right_left, where / "cam1" / "sensor.yaml")
     rect = rectify_stereo(
-        (left.K, left.distortion), (right.K, right.distortion), left.resolution, T_right_left, left.T_BS
+        (left.K, left.distortion),
+        (right.K, right.distortion),
+        left.resolution,
+        T_right_left,
+        left.T_BS,
+        fisheye=left.fisheye,
     )
     for side, share in zip(("cam0", "cam1"), rect.valid_shares, strict=True):
         if share < MIN_VALID_SHARE:
