@@ -265,16 +265,22 @@ def fisheye_rig(tmp_path: Path, frames: int) -> tuple[Path, object]:
             cv2.imwrite(
                 str(path / "data" / seq.left_files[k].name), cv2.remap(image, map_x, map_y, cv2.INTER_LINEAR)
             )
+    coefficients = ", ".join(repr(float(v)) for v in D)
+    write_calibration(rig, seq, K, f"equidistant\ndistortion_coefficients: [{coefficients}]")
+    return rig, seq
+
+
+def write_calibration(rig: Path, seq, K: np.ndarray, distortion: str) -> None:
+    """Both cameras' ``sensor.yaml``: intrinsics ``K``, ``distortion_model: {distortion}``, and the
+    poses of ``seq``'s rectified cameras (the right one the baseline along the left one's x axis)."""
     T_right = seq.rectify.T_body_rect.copy()
-    T_right[:3, 3] += T_right[:3, 0] * cam.baseline  # the baseline along the rectified x axis
+    T_right[:3, 3] += T_right[:3, 0] * seq.camera.baseline
     for side, T in (("cam0", seq.rectify.T_body_rect), ("cam1", T_right)):
         (rig / "mav0" / side / "sensor.yaml").write_text(
             f"T_BS: {{cols: 4, rows: 4, data: [{', '.join(repr(float(v)) for v in T.ravel())}]}}\n"
-            f"resolution: [{cam.width}, {cam.height}]\ncamera_model: pinhole\n"
-            f"intrinsics: [{K[0, 0]}, {K[1, 1]}, {K[0, 2]}, {K[1, 2]}]\ndistortion_model: equidistant\n"
-            f"distortion_coefficients: [{', '.join(repr(float(v)) for v in D)}]\n"
+            f"resolution: [{seq.camera.width}, {seq.camera.height}]\ncamera_model: pinhole\n"
+            f"intrinsics: [{K[0, 0]}, {K[1, 1]}, {K[0, 2]}, {K[1, 2]}]\ndistortion_model: {distortion}\n"
         )
-    return rig, seq
 
 
 @needs_euroc
@@ -1472,14 +1478,7 @@ def zoomed_rig(tmp_path: Path, focal: float, frames: int = 200) -> Path:
         for image, side in zip(seq.pair(k), ("cam0", "cam1"), strict=True):
             path = rig / "mav0" / side / "data" / seq.left_files[k].name
             cv2.imwrite(str(path), cv2.warpPerspective(image, zoom, (cam.width, cam.height)))
-    T_right = seq.rectify.T_body_rect.copy()
-    T_right[:3, 3] += T_right[:3, 0] * cam.baseline
-    for side, T in (("cam0", seq.rectify.T_body_rect), ("cam1", T_right)):
-        (rig / "mav0" / side / "sensor.yaml").write_text(
-            f"T_BS: {{cols: 4, rows: 4, data: [{', '.join(repr(float(v)) for v in T.ravel())}]}}\n"
-            f"resolution: [{cam.width}, {cam.height}]\ncamera_model: pinhole\n"
-            f"intrinsics: [{focal}, {focal}, {cam.cx}, {cam.cy}]\ndistortion_model: none\n"
-        )
+    write_calibration(rig, seq, K, "none")
     return rig
 
 
