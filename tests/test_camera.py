@@ -96,3 +96,23 @@ def test_in_image(camera):
     w = np.array([[0, 0, 1], [639, 479, 1], [640, 10, 1], [-0.5, 10, 1], [320, 240, 1]], float)
     np.testing.assert_array_equal(camera.in_image(w), [True, True, False, False, True])
     np.testing.assert_array_equal(camera.in_image(w, margin=5), [False, False, False, False, True])
+
+
+def test_a_wide_fisheye_lens_keeps_its_focal_length_and_every_rectified_pixel():
+    """An equidistant lens of 160 degrees across an 848x800 image (as small tracking cameras carry):
+    the rectified pinhole view keeps its focal length and shows only what the lens saw."""
+    import cv2
+
+    from vo_lib.camera import rectify_stereo
+
+    K = np.array([[286.0, 0.0, 424.0], [0.0, 286.0, 400.0], [0.0, 0.0, 1.0]])
+    lens = (K, np.array([-0.007, 0.045, -0.043, 0.008]))
+    T_right_left = np.eye(4)
+    T_right_left[0, 3] = -0.064  # the right camera 6.4 cm to the right
+    rect = rectify_stereo(lens, lens, (848, 800), T_right_left, np.eye(4), fisheye=True)
+    assert rect.camera.fx == pytest.approx(286.0) and rect.camera.baseline == pytest.approx(0.064)
+    x, y = cv2.fisheye.initUndistortRectifyMap(
+        *lens, np.eye(3), rect.projections[0], (848, 800), cv2.CV_32FC1
+    )
+    assert ((x >= 0) & (x <= 847) & (y >= 0) & (y <= 799)).all()
+    assert 0.25 < rect.valid_shares[0] < 0.9  # the centre of the lens's image, not all of it

@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 from scipy.stats import chi2
 
+from vo_lib.geometry import compose_planar
 from vo_lib.models.track_odometry import TrackOdometry
 from vo_lib.stereo_vo.kalman import VoKalmanFilter, measurement, nis
 
@@ -70,6 +71,24 @@ def test_constant_velocity_without_odometry():
     prior = kf.motion_prior()
     assert prior.theta == pytest.approx(0.01, abs=1e-3) and prior.rho == pytest.approx(0.05, abs=2e-3)
     assert not kf.flags.odometry
+
+
+def test_constant_velocity_over_a_gap_moves_and_spreads_as_many_intervals():
+    """``steps`` intervals at once: the pose moves by the last increment ``steps`` times over, and
+    the added spread is ``steps`` times one interval's (one velocity error, over every interval)."""
+    kfs = []
+    for steps in (1, 3):
+        kf = VoKalmanFilter(ODO)
+        kf.last_increment = np.array([0.05, 0.002, 0.01])
+        kf.ekf.P[:] = 0.0
+        kf.predict(None, steps=steps)
+        kfs.append(kf)
+    one, three = kfs
+    x = np.zeros(3)
+    for _ in range(3):
+        x = compose_planar(x, one.last_increment)
+    assert np.allclose(three.pose, x)
+    assert np.allclose(np.diag(three.covariance), 9 * np.diag(one.covariance), rtol=1e-9)
 
 
 def test_prior_matches_odometry_prediction():

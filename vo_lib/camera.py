@@ -184,7 +184,8 @@ class StereoCamera:
 class Rectification:
     """The undistort-and-rectify maps of a stereo pair, the rectified cameras' projection matrices
     and image ``size``, the rectified left camera's pose in the body frame (``T_body_rect``), and
-    the share of each rectified image that is valid."""
+    the share of each rectified image that is valid (of a fisheye lens's, that share times the part
+    of the raw image it spans: :func:`_sampled_share`)."""
 
     left_maps: tuple[np.ndarray, np.ndarray]
     right_maps: tuple[np.ndarray, np.ndarray]
@@ -210,8 +211,9 @@ def rectify_stereo(
     left, right, size: tuple[int, int], T_right_left, T_body_left, fisheye: bool = False
 ) -> Rectification:
     """OpenCV's rectification of a calibrated pair (``stereoRectify`` with zero disparity at
-    infinity, ``alpha = 0``: only valid pixels; ``cv2.fisheye``'s, ``balance = 0``, for fisheye
-    lenses) and its maps.
+    infinity, ``alpha = 0``: only valid pixels) and its maps. Fisheye lenses get ``cv2.fisheye``'s
+    rotations and a pinhole view of the left lens's own focal length, centred: the lens's
+    resolution at the centre, and only the view a pinhole image can show.
 
     Parameters
     ----------
@@ -230,9 +232,13 @@ def rectify_stereo(
     T_right_left = np.asarray(T_right_left, float)
     R, t = np.ascontiguousarray(T_right_left[:3, :3]), T_right_left[:3, 3:].copy()
     if fisheye:
-        R1, R2, P1, P2, _ = cv2.fisheye.stereoRectify(
-            *left, *right, size, R, t, flags=cv2.CALIB_ZERO_DISPARITY, balance=0.0
+        R1, R2, *_ = cv2.fisheye.stereoRectify(*left, *right, size, R, t, flags=cv2.CALIB_ZERO_DISPARITY)
+        f = float(np.sqrt(left[0][0, 0] * left[0][1, 1]))  # the lens's focal length, kept
+        P1 = np.array(
+            [[f, 0.0, (size[0] - 1) / 2, 0.0], [0.0, f, (size[1] - 1) / 2, 0.0], [0.0, 0.0, 1.0, 0.0]]
         )
+        P2 = P1.copy()
+        P2[0, 3] = -f * float(np.linalg.norm(t))  # the right camera a baseline along x
         shares = [
             _sampled_share(K, dist, R_rect, P, size)
             for (K, dist), R_rect, P in ((left, R1, P1), (right, R2, P2))

@@ -196,10 +196,10 @@ def rectify(left: CameraCalibration, right: CameraCalibration, where: Path) -> R
             f"{right.resolution[0]}x{right.resolution[1]} (key resolution); expected one size"
         )
     if left.fisheye != right.fisheye:
-        models = ["equidistant" if c.fisheye else "radial-tangential" for c in (left, right)]
+        fisheye, other = ("cam0", "cam1") if left.fisheye else ("cam1", "cam0")
         raise AslError(
-            f"{where / 'cam1' / 'sensor.yaml'}: key distortion_model: {models[1]}, but cam0's is "
-            f"{models[0]}; expected one model for both cameras"
+            f"{where / 'cam1' / 'sensor.yaml'}: key distortion_model: {fisheye}'s is equidistant but "
+            f"{other}'s is not; expected one model for both cameras"
         )
     T_right_left = np.linalg.inv(right.T_BS) @ left.T_BS  # left camera -> right camera
     cam1_in_cam0 = _check_baseline(T_right_left, where / "cam1" / "sensor.yaml")

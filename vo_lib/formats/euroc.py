@@ -175,7 +175,8 @@ def _stated(path: Path) -> bool:
 def read_asl(path, groundtruth=None, frames: int | None = None, truth: bool = True) -> Sequence:
     """The first ``frames`` pairs of an ASL recording, rectified; the 6-DoF truth (``groundtruth`` or
     the first of :data:`GROUND_TRUTH_FILES`) in ``poses`` (the rectified left camera in its first
-    pose), or position-only truth in ``manifest["positions"]``; no truth with ``truth=False``."""
+    pose), or position-only truth in ``manifest["positions"]``; with ``truth=False``, only a
+    ``groundtruth`` named here is read."""
     root = Path(path)
     mav0, calib = _cameras(root)
     others = sorted(p.name for p in mav0.glob("cam*") if p.is_dir() and p.name not in ("cam0", "cam1"))

@@ -204,7 +204,7 @@ def read_sequence(path, odometry: bool = True, truth: bool = True) -> Sequence:
         odo = _odometry(root / "odometry.txt", times)
     manifest_path = root / "manifest.json"
     manifest = read_manifest(manifest_path) if present(manifest_path, "the manifest") else {}
-    check_manifest(manifest_path, manifest, n)
     if not truth:
         manifest.pop("positions", None)
+    check_manifest(manifest_path, manifest, n)
     return Sequence(root, camera, times, left, right, poses, odo, manifest)

@@ -60,7 +60,7 @@ class PipelineConfig:
     key_angle: float = math.radians(1.5)
     #: ... or the inliers fall below this fraction of the first frame's against the reference.
     key_inlier_fraction: float = 0.75
-    key_max_gap: int = 12  #: frames
+    key_max_gap: int = 12  #: frame intervals (frames, unless frames were dropped)
     #: Factors applied element by element to the estimator's covariance before it enters the
     #: filter. The least-squares covariance assumes independent pixel noise, but corners sit on
     #: whole pixels and motion between frames is often below a pixel: on the rendered indoor
@@ -72,8 +72,8 @@ class PipelineConfig:
     lost_view_fraction: float = 0.6
     #: ... unless the drop lasts this many frames: then it is the new normal (a changed scene).
     lost_view_patience: int = 15
-    #: After this many frames without a good one (for one of ``restart_reasons``, or any reason
-    #: when empty), the current frame becomes the reference: the view may have left the old one.
+    #: After this many frame intervals without a good frame (for one of ``restart_reasons``, or any
+    #: reason when empty), the current frame becomes the reference: the view may have left the old one.
     restart_gap: int = 90
     restart_reasons: frozenset[Reason] = frozenset()
     #: Counts measured right after frames without vision are not typical of the next ones.

@@ -142,12 +142,13 @@ class VoKalmanFilter:
         return np.diag([enc * abs(u[0]) + slip * u[0] ** 2, enc * abs(u[1]) + slip * u[1] ** 2])
 
     # ------------------------------------------------------------------ predict
-    def predict(self, u=None, keep_reference: bool = False) -> None:
+    def predict(self, u=None, keep_reference: bool = False, steps: int = 1) -> None:
         """Clone the pose and move the clone's twin with odometry ``u`` (or constant velocity).
 
         With ``keep_reference`` the clone of an earlier frame is kept (it was not updated since):
         the current pose moves on, its cross-covariance with the reference is carried along, and
         the next VO measurement is the motion from that reference frame to the current one.
+        Without odometry, ``steps`` frame intervals of constant velocity are predicted at once.
         """
         x, P = self.ekf.x[:3], self.ekf.P[:3, :3]
         ref = slice(3, 6) if keep_reference else slice(0, 3)  # the kept clone, or the pose cloned now
@@ -159,11 +160,17 @@ class VoKalmanFilter:
                 across = np.array([-math.sin(x_new[2]), math.cos(x_new[2]), 0.0])
                 Q = Q + (self.lateral_sigma * 0.5 * abs(u[0] + u[1])) ** 2 * np.outer(across, across)
         else:
-            inc = self.last_increment
-            x_new = compose_planar(x, inc)
+            inc = total = self.last_increment
+            for _ in range(steps - 1):  # the same increment, interval after interval
+                total = compose_planar(total, inc)
+            x_new = compose_planar(x, total)
             c, s = math.cos(x[2]), math.sin(x[2])
             F = np.array(
-                [[1.0, 0.0, -s * inc[0] - c * inc[1]], [0.0, 1.0, c * inc[0] - s * inc[1]], [0, 0, 1.0]]
+                [
+                    [1.0, 0.0, -s * total[0] - c * total[1]],
+                    [0.0, 1.0, c * total[0] - s * total[1]],
+                    [0, 0, 1.0],
+                ]
             )
             Rw = yaw_matrix(x[2])
             # velocity changes scale with the velocity: a fraction of each component, plus the floor
@@ -171,6 +178,7 @@ class VoKalmanFilter:
             sigma = np.asarray(CV_SIGMA) + CV_RELATIVE * np.array(
                 [step, step, abs(inc[2]) + CV_TURN_PER_METRE * step]
             )
+            sigma = steps * sigma  # a velocity that is off is off over every interval of the gap
             Q = Rw @ np.diag(sigma**2) @ Rw.T
         self.flags = StepFlags(odometry=u is not None)
         self.ekf.x = np.concatenate([x_new, self.ekf.x[ref]])

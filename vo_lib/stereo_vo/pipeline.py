@@ -20,7 +20,7 @@ never stops the run: the filter keeps its prediction, and the frame is flagged. 
 frame stays the reference, so the next good frame is matched against it and its measurement spans
 the gap. Exactly one pose is produced per input frame. A frame that comes two or more frame
 intervals after the last (a dropped frame, from the sequence's timestamps) is predicted that many
-steps of constant velocity ahead. Every setting is a field of one
+steps ahead (of constant velocity, or of the odometry, which spans them). Every setting is a field of one
 :class:`~vo_lib.stereo_vo.config.PipelineConfig`; ``CRAWLER`` and ``CAR`` are the two presets.
 """
 
@@ -46,6 +46,10 @@ from vo_lib.stereo_vo.six_dof import SixDofMotion
 
 #: Reference-frame matching needs the recent medians of at least this many good frames.
 MIN_HISTORY = 5
+#: A frame more frame intervals than this after the last one (seconds of frames dropped, a paused
+#: recording) is matched with its motion unknown, as the second frame is: constant velocity is no
+#: guess over so long a gap. Up to it, the prediction's uncertainty grows with the gap.
+MAX_PREDICTED_INTERVALS = 100
 #: Outcomes after which a frame matched inside predicted windows is matched again without them.
 UNGUIDED_RETRY = (Reason.FEW_INLIERS, Reason.LOW_INLIER_RATIO)
 
@@ -85,7 +89,7 @@ class StereoOdometry:
         self.kf = VoKalmanFilter(odometry or TrackOdometry(), lateral_sigma=config.lateral_sigma)
         self.rng = np.random.default_rng(seed)
         self.reference: StereoFeatures | None = None
-        self.gap = 0  # frames since the reference frame
+        self.gap = 0  # frame intervals since the reference frame
         self.frame = 0
         self.recent_inliers: deque[int] = deque(maxlen=config.recent_frames)
         self.recent_matches: deque[int] = deque(maxlen=config.recent_frames)
@@ -101,7 +105,8 @@ class StereoOdometry:
 
     def process(self, left: np.ndarray, right: np.ndarray, odometry=None, steps: int = 1):
         """Process one stereo pair (and the odometry distances since the previous frame, if any)
-        that comes ``steps`` frame intervals after the previous one (more than 1 after a dropped frame).
+        that comes ``steps`` frame intervals after the previous one (more than 1 after a dropped frame;
+        the odometry, where given, must span them all, as distances counted between the two frames do).
 
         Returns ``(planar pose, its covariance, FrameDiagnostics, FrameTimings)``.
         """
@@ -143,11 +148,12 @@ class StereoOdometry:
         u = None if odometry is None else np.asarray(odometry, float)
         if u is not None and not np.all(np.isfinite(u)):
             u, diag.odometry = None, False
-        self.kf.predict(u, keep_reference=self.gap > 1)
-        for _ in range(steps - 1 if u is None else 0):  # odometry spans the gap; constant velocity steps it
-            self.kf.predict(None, keep_reference=True)
+        self.kf.predict(u, keep_reference=self.gap > 1, steps=steps)  # odometry spans the gap itself
         self.gap += steps - 1  # counted in frame intervals: the velocity is per interval
-        prediction = self.motion.predict(self.kf, steps)
+        if steps > MAX_PREDICTED_INTERVALS:  # too long a gap to guess the motion across
+            prediction = Prediction(self.kf.motion_prior(), False)
+        else:
+            prediction = self.motion.predict(self.kf, steps)
         if not prediction.informative and self.config.unknown_motion_sigma:
             self.kf.widen(self.config.unknown_motion_sigma)  # nothing predicts the motion yet
             prediction.prior = self.kf.motion_prior()
@@ -315,12 +321,16 @@ def run_frames(
 
 
 def frame_steps(times) -> np.ndarray:
-    """Frame intervals from each frame to the next: the gap between their times in units of the
-    sequence's median gap, rounded (1 but after dropped frames), at least 1; 1 for the first frame."""
-    gaps = np.diff(np.asarray(times, float))
+    """Frame intervals from the previous frame to each frame (1 for the first): the gap between
+    their times in units of the sequence's median gap, rounded half up, at least 1. It is 1 but
+    after dropped frames, as long as fewer than half the gaps hold a drop."""
+    times = np.asarray(times, float)
+    if not np.all(np.isfinite(times)):
+        raise ValueError("times must be finite seconds, one per frame")
+    gaps = np.diff(times)
     if len(gaps) == 0 or not np.median(gaps) > 0:
-        return np.ones(len(gaps) + 1, int)
-    return np.r_[1, np.maximum(np.rint(gaps / np.median(gaps)), 1)].astype(int)
+        return np.ones(len(times), int)
+    return np.r_[1, np.maximum(np.floor(gaps / np.median(gaps) + 0.5), 1)].astype(int)
 
 
 MOTION_MODELS = ("auto", "planar", "full")
