@@ -148,7 +148,8 @@ class StereoOdometry:
         u = None if odometry is None else np.asarray(odometry, float)
         if u is not None and not np.all(np.isfinite(u)):
             u, diag.odometry = None, False
-        self.kf.predict(u, keep_reference=self.gap > 1, steps=steps)  # odometry spans the gap itself
+        # odometry spans the gap itself; constant velocity is stepped across it, up to where it means nothing
+        self.kf.predict(u, keep_reference=self.gap > 1, steps=min(steps, MAX_PREDICTED_INTERVALS + 1))
         self.gap += steps - 1  # counted in frame intervals: the velocity is per interval
         if steps > MAX_PREDICTED_INTERVALS:  # too long a gap to guess the motion across
             prediction = Prediction(self.kf.motion_prior(), False)
@@ -302,7 +303,7 @@ def run_frames(
     poses, covs, diags, timings, cameras = [], [], [], [], []
     steps = iter(frame_steps(times)) if times is not None else None
     for left, right, odo in frames:
-        pose, cov, diag, timing = vo.process(left, right, odo, next(steps, 1) if steps else 1)
+        pose, cov, diag, timing = vo.process(left, right, odo, 1 if steps is None else next(steps, 1))
         poses.append(pose)
         covs.append(cov)
         diags.append(diag)
