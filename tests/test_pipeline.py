@@ -248,3 +248,17 @@ def test_frame_steps_count_the_intervals_a_dropped_frame_leaves():
     assert frame_steps(times).tolist() == [1, 1, 1, 2, 1, 3, 1]
     assert frame_steps([5.0]).tolist() == [1]
     assert frame_steps([0.0, 0.0, 0.0]).tolist() == [1, 1, 1]  # no spacing to measure: one step each
+
+
+def test_a_pause_in_the_recording_runs_through_with_its_motion_unknown():
+    """Timestamps a day apart in the middle of a drive: the frame after the pause is matched with
+    its motion unknown (no constant velocity stepped across a day), and the run goes on."""
+    rendered, frames_iter = render_sample("indoor_linear", 40)
+    times = np.arange(40) / 30.0
+    times[20:] += 86400.0
+    assert frame_steps(times)[20] > 1_000_000
+    result = run_frames(frames_iter, rendered.camera, times=times)
+    assert len(result.poses) == 40 and np.all(np.isfinite(result.poses))
+    assert not result.diagnostics[20].fallback  # measured, matched without a prediction
+    truth = relative_planar(rendered.truth()[0], rendered.truth())
+    assert np.linalg.norm(result.poses[-1, :2] - truth[-1, :2]) < 0.05  # the camera did not move in the pause
