@@ -329,9 +329,10 @@ def frame_steps(times) -> np.ndarray:
     if not np.all(np.isfinite(times)):
         raise ValueError("times must be finite seconds, one per frame")
     gaps = np.diff(times)
-    if len(gaps) == 0 or not np.median(gaps) > 0:
+    typical = np.median(gaps) if len(gaps) else 0.0
+    if not typical > 0:
         return np.ones(len(times), int)
-    return np.r_[1, np.maximum(np.floor(gaps / np.median(gaps) + 0.5), 1)].astype(int)
+    return np.r_[1, np.maximum(np.floor(gaps / typical + 0.5), 1)].astype(int)
 
 
 MOTION_MODELS = ("auto", "planar", "full")
@@ -376,9 +377,7 @@ def run_sequence(
     from tqdm.auto import tqdm
 
     with tqdm(total=n, desc=f"VO {sequence.path.name}", unit="frame") as bar:
-        return run_frames(
-            frame_iter(), sequence.camera, progress=bar, odometer=odometer, times=sequence.times[:n]
-        )
+        return run_frames(frame_iter(), sequence.camera, progress=bar, odometer=odometer, times=times)
 
 
 def warm_up(sequence, use_odometry: bool = True, seed: int = 0, motion: str = "auto") -> float:
