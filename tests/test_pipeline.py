@@ -262,3 +262,26 @@ def test_a_pause_in_the_recording_runs_through_with_its_motion_unknown():
     assert not result.diagnostics[20].fallback  # measured, matched without a prediction
     truth = relative_planar(rendered.truth()[0], rendered.truth())
     assert np.linalg.norm(result.poses[-1, :2] - truth[-1, :2]) < 0.05  # the camera did not move in the pause
+
+
+def test_a_restart_after_failed_frames_keeps_the_motion_per_interval():
+    """The view turned upside down matches nothing, so the pipeline restarts from such a frame. The
+    frame remembers the odometry's motion since the old reference divided by the intervals it
+    spans (0.01 m a frame at 0.3 m/s and 30 Hz), not by one more."""
+    import dataclasses
+
+    from vo_lib.stereo_vo.config import CRAWLER
+    from vo_lib.stereo_vo.pipeline import StereoOdometry
+
+    rendered, frames_iter = render_sample("indoor_linear", 20)
+    vo = StereoOdometry(rendered.camera, dataclasses.replace(CRAWLER, restart_gap=2))
+    restarts = []
+    for k, (left, right, odo) in enumerate(frames_iter):
+        if k >= 12:
+            left, right = np.flipud(left), np.flipud(right)  # the view upside down: nothing matches
+        _, _, diag, _ = vo.process(left, right, odo)
+        if diag.fallback and vo.gap == 1:  # this failed frame became the reference
+            restarts.append((k, float(np.hypot(*vo.kf.last_increment[:2]))))
+    assert restarts, "the upside-down view never made the reference stale"
+    k, per_interval = restarts[0]
+    assert per_interval == pytest.approx(0.01, rel=0.1), k

@@ -213,12 +213,13 @@ class StereoOdometry:
             diag.fallback, diag.reason = True, reason
             self.motion.place(self.kf, None, prediction)
             pose, covariance = self.kf.pose, self.kf.covariance
-            self.gap += 1
-            stale = self.gap > cfg.restart_gap and (not cfg.restart_reasons or reason in cfg.restart_reasons)
+            stale = self.gap >= cfg.restart_gap and (not cfg.restart_reasons or reason in cfg.restart_reasons)
             if (self.reference is None or stale) and len(features) >= cfg.min_features:
                 # start again from this frame, placed where the prediction puts it: a reference
                 # the view has left behind would never match again
                 self._commit(features, None)
+            else:
+                self.gap += 1
             return pose, covariance
         # the update goes to a copy: until the keyframe changes, the filter keeps only its
         # prediction, so the reference frame's errors are never counted twice
