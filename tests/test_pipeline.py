@@ -285,3 +285,25 @@ def test_a_restart_after_failed_frames_keeps_the_motion_per_interval():
     assert restarts, "the upside-down view never made the reference stale"
     k, per_interval = restarts[0]
     assert per_interval == pytest.approx(0.01, rel=0.1), k
+
+
+def test_a_repeated_pair_is_flagged_and_predicted_to_its_time():
+    """The same pair twice at one time (no distance counted between) changes no other frame's pose;
+    a pair repeated in the next frame's place is predicted there, by the odometry, and flagged."""
+    rendered, frames_iter = render_sample("indoor_linear", 30)
+    frames = list(frames_iter)
+    plain = run_frames(iter(frames), rendered.camera, times=np.arange(30) / 30.0)
+
+    inserted = [*frames[:11], (*frames[10][:2], np.zeros(2)), *frames[11:]]
+    times = np.insert(np.arange(30) / 30.0, 11, 10 / 30.0)
+    result = run_frames(iter(inserted), rendered.camera, times=times)
+    assert result.flagged.tolist() == [11]
+    np.testing.assert_array_equal(np.delete(result.poses, 11, axis=0), plain.poses)
+
+    replaced = [*frames[:20], (*frames[19][:2], frames[20][2]), *frames[21:]]
+    result = run_frames(iter(replaced), rendered.camera, times=np.arange(30) / 30.0)
+    assert result.flagged.tolist() == [20]
+    assert str(result.diagnostics[20].reason) == "the images of the frame before, repeated"
+    truth = relative_planar(rendered.truth()[0], rendered.truth())
+    assert np.linalg.norm(result.poses[20, :2] - truth[20, :2]) < 0.005  # the odometry moved it on
+    assert np.linalg.norm(result.poses[-1, :2] - plain.poses[-1, :2]) < 0.005

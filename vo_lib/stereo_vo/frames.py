@@ -24,6 +24,7 @@ class Reason(str, enum.Enum):
     LOW_INLIER_RATIO = "low inlier ratio"
     CONTRADICTS_PREDICTION = "motion contradicts the prediction"
     VIEW_LOST = "part of the view lost (occluder or moving object)"
+    REPEATED = "the images of the frame before, repeated"
 
     def __str__(self) -> str:  # the sentence, on Python 3.10 too (no enum.StrEnum there)
         return self.value

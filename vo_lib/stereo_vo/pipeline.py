@@ -20,7 +20,9 @@ never stops the run: the filter keeps its prediction, and the frame is flagged. 
 frame stays the reference, so the next good frame is matched against it and its measurement spans
 the gap. Exactly one pose is produced per input frame. A frame that comes two or more frame
 intervals after the last (a dropped frame, from the sequence's timestamps) is predicted that many
-steps ahead (of constant velocity, or of the odometry, which spans them). Every setting is a field of one
+steps ahead (of constant velocity, or of the odometry, which spans them). A pair whose images are the
+previous pair's again, as a stalled camera driver repeats them, is no new view: it is predicted to
+its time (not moved, where it repeats the time too) and flagged. Every setting is a field of one
 :class:`~vo_lib.stereo_vo.config.PipelineConfig`; ``CRAWLER`` and ``CAR`` are the two presets.
 """
 
@@ -97,6 +99,7 @@ class StereoOdometry:
         self.contradicted = 0  # consecutive frames whose vision contradicted the prediction
         self.last_reason = Reason.NONE
         self.reference_inliers = 0  # inliers of the first good frame against this reference
+        self.last_pair: tuple[np.ndarray, np.ndarray] | None = None  # the last frame's images
 
     @property
     def camera_pose(self) -> np.ndarray | None:
@@ -111,6 +114,9 @@ class StereoOdometry:
         Returns ``(planar pose, its covariance, FrameDiagnostics, FrameTimings)``.
         """
         watch = Stopwatch()
+        if self.last_pair is not None and repeated(self.last_pair, (left, right)):
+            return self._repeated(odometry, steps, watch)
+        self.last_pair = (left, right)
         with watch("stereo"):
             features = self.front.process(left, right)  # 1. stereo front end
         diag = FrameDiagnostics(self.frame, features=len(features), odometry=odometry is not None)
@@ -133,6 +139,18 @@ class StereoOdometry:
         self.last_reason = reason
         self.frame += 1
         return pose, covariance, diag, self._timings(watch)
+
+    def _repeated(self, odometry, steps: int, watch: Stopwatch):
+        """A frame whose images are the last frame's: no new view to measure. The pose is predicted
+        across its ``steps`` (0 where its time is the last frame's too) and the frame is flagged."""
+        diag = FrameDiagnostics(self.frame, odometry=odometry is not None, fallback=True)
+        diag.reason = Reason.REPEATED
+        with watch("prediction"):
+            prediction = self._predict(odometry, diag, max(int(steps), 0))
+        self.motion.place(self.kf, None, prediction)
+        self.gap += 1  # with the prediction's steps - 1: the reference is ``steps`` further back
+        self.frame += 1
+        return self.kf.pose, self.kf.covariance, diag, self._timings(watch)
 
     @staticmethod
     def _timings(watch: Stopwatch) -> FrameTimings:
@@ -324,8 +342,9 @@ def run_frames(
 
 def frame_steps(times) -> np.ndarray:
     """Frame intervals from the previous frame to each frame (1 for the first): the gap between
-    their times in units of the sequence's median gap, rounded half up, at least 1. It is 1 but
-    after dropped frames, as long as fewer than half the gaps hold a drop."""
+    their times in units of the sequence's median gap, rounded half up. It is 1 but after dropped
+    frames, as long as fewer than half the gaps hold a drop, and 0 for a frame at the time of the one
+    before (a repeated pair; a new one counts as one interval)."""
     times = np.asarray(times, float)
     if not np.all(np.isfinite(times)):
         raise ValueError("times must be finite seconds, one per frame")
@@ -333,7 +352,17 @@ def frame_steps(times) -> np.ndarray:
     typical = np.median(gaps) if len(gaps) else 0.0
     if not typical > 0:
         return np.ones(len(times), int)
-    return np.r_[1, np.maximum(np.floor(gaps / typical + 0.5), 1)].astype(int)
+    return np.r_[1, np.floor(gaps / typical + 0.5)].astype(int)
+
+
+def repeated(previous, pair) -> bool:
+    """Is ``pair`` (left and right images) the ``previous`` pair again, pixel for pixel? (Every
+    16th row first: new images differ there, and the whole comparison is then skipped.) A front end
+    that needs no images may be given None: that is never a repeat."""
+    return all(
+        a is not None and b is not None and np.array_equal(a[::16], b[::16]) and np.array_equal(a, b)
+        for a, b in zip(previous, pair, strict=True)
+    )
 
 
 MOTION_MODELS = ("auto", "planar", "full")
