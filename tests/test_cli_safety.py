@@ -1081,6 +1081,24 @@ def test_real_entry_point_prints_one_line(template, tmp_path):
     assert not (ws / "out").exists() and temporaries(ws) == []
 
 
+@pytest.mark.skipif(not os.path.lexists("/proc/kmsg"), reason="no /proc/kmsg on this system")
+def test_a_kernel_file_that_would_block_is_not_read(tmp_path):
+    """``/proc/kmsg`` says it holds 0 bytes and blocks whoever reads it (where it may be read at
+    all): given as either trajectory, it is taken as empty, in one line, without a wait."""
+    (tmp_path / "poses.txt").write_text(kitti_rows(4))
+    for args in (["--gt", "/proc/kmsg", "--est", "poses.txt"], ["--gt", "poses.txt", "--est", "/proc/kmsg"]):
+        proc = subprocess.run(
+            [sys.executable, "-m", "vo_lib", "evaluate", *args],
+            cwd=tmp_path,
+            env=cli_env(),
+            capture_output=True,
+            text=True,
+            timeout=60,
+        )
+        assert proc.returncode == 2 and len(proc.stderr.strip().splitlines()) == 1, proc.stderr
+        assert "/proc/kmsg: no poses" in proc.stderr or "/proc/kmsg: cannot read" in proc.stderr
+
+
 # ---- the parsers against random text ------------------------------------------------------------------
 
 TOKENS = [

@@ -26,7 +26,7 @@ def read_whole(option: str, path: str, read):
 
     def sha256() -> str | None:  # of a regular file that read() would read; else None (it says why)
         with contextlib.suppress(OSError):
-            if Path(path).is_file() and Path(path).stat().st_size <= MAX_FILE_BYTES:
+            if Path(path).is_file() and 0 < Path(path).stat().st_size <= MAX_FILE_BYTES:
                 return file_sha256(path)
         return None
 

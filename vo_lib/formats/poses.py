@@ -90,6 +90,8 @@ def read_text(path, what: str = "the file") -> str:
     check_file(path, what)
     if (size := path.stat().st_size) > MAX_FILE_BYTES:
         raise TrajectoryError(f"{path}: {size / 1e6:.0f} MB; expected below {MAX_FILE_BYTES / 1e6:.0f} MB")
+    if size == 0:  # nothing to read (and a kernel file such as /proc/kmsg, which says 0, would block)
+        return ""
     try:
         return path.read_bytes().decode("utf-8-sig")
     except OSError as exc:
