@@ -474,6 +474,7 @@ def test_asl_recording_is_rectified_and_its_truth_moved_into_the_left_camera():
         ("overflow", "cam0/data.csv, line 3: expected 'timestamp [ns],filename', got '99999999999"),
         ("outside", "cam0/data.csv, line 3: '../../cam1/data/1403636584813555456.png'; expected a file name"),
         ("listed-twice", "cam0/data.csv, line 4: '1403636584813555456.png' listed again (line 3)"),
+        ("rows", "cam0/data.csv: 106 rows for 6 files in data/; expected one per image"),
         ("deep", "cam0/sensor.yaml: not valid YAML (maximum recursion depth exceeded"),
         ("alias", "cam0/sensor.yaml, line 2: not valid YAML (an alias (*name, or a merge <<: *name)"),
         ("resolution", "cam0/sensor.yaml: key resolution: expected two whole numbers from 1 to 16384"),
@@ -603,6 +604,10 @@ def test_a_bad_rig_gets_one_line_and_exit_2(tmp_path, capsys, damage, expected):
         edit = ("1.0, 0.0, 0.0, 0.0,", "1.0, 0.0, 0.0, 74.89,") if damage == "truth-millimetres" else edit
         text = path.read_text().replace(*edit)
         path.write_text(text.replace("0.0, 1.0, 0.0, 0.0,", "0.0, 1.0, 0.0, -120.2,"))
+    elif damage == "rows":  # a hundred rows more than images: refused before the rows are read one by one
+        path = mav0 / "cam0" / "data.csv"
+        stamps = range(1403636600000000000, 1403636600000000000 + 100 * 10**6, 10**6)
+        path.write_text(path.read_text() + "".join(f"{t},{t}.png\n" for t in stamps))
     elif damage == "listed-twice":  # a row naming the previous row's image
         path = mav0 / "cam0" / "data.csv"
         lines = path.read_text().splitlines()

@@ -6,6 +6,7 @@ read, a 6-DoF truth moved into the rectified left camera. A problem raises one :
 from __future__ import annotations
 
 import contextlib
+import os
 import re
 from pathlib import Path
 
@@ -75,7 +76,12 @@ def read_image_list(camera_dir: Path) -> tuple[np.ndarray, list[Path], list[int]
     """``(timestamps in ns, image files, their lines)`` of one camera from its ``data.csv``."""
     csv_path = camera_dir / "data.csv"
     stamps, files, lines, listed = [], [], [], {}
-    for n, line in data_lines(csv_path, "one line 'timestamp [ns],filename' per image"):
+    rows = data_lines(csv_path, "one line 'timestamp [ns],filename' per image")
+    with contextlib.suppress(OSError):  # more rows than images: refused before each row is checked
+        if len(rows) > (images := sum(1 for _ in os.scandir(camera_dir / "data"))) + 1:
+            counts = f"{len(rows)} rows for {images} files in data/"
+            raise AslError(f"{csv_path}: {counts}; expected one per image")
+    for n, line in rows:
         if n == 1 and line[0].isalpha():  # a header without '#'
             continue
         stamp, name = _image_row(csv_path, n, line)
