@@ -287,9 +287,10 @@ def test_a_restart_after_failed_frames_keeps_the_motion_per_interval():
     assert per_interval == pytest.approx(0.01, rel=0.1), k
 
 
-def test_a_repeated_pair_is_flagged_and_predicted_to_its_time():
-    """The same pair twice at one time (no distance counted between) changes no other frame's pose;
-    a pair repeated in the next frame's place is predicted there, by the odometry, and flagged."""
+def test_a_pair_repeated_at_its_time_is_flagged_and_moves_nothing():
+    """The same pair twice at one time (no distance counted between) changes no other frame's pose.
+    A pair repeated a whole interval later is a view of its own time (a standing camera rendered
+    without noise gives such pairs): it is measured."""
     rendered, frames_iter = render_sample("indoor_linear", 30)
     frames = list(frames_iter)
     plain = run_frames(iter(frames), rendered.camera, times=np.arange(30) / 30.0)
@@ -298,12 +299,9 @@ def test_a_repeated_pair_is_flagged_and_predicted_to_its_time():
     times = np.insert(np.arange(30) / 30.0, 11, 10 / 30.0)
     result = run_frames(iter(inserted), rendered.camera, times=times)
     assert result.flagged.tolist() == [11]
+    assert str(result.diagnostics[11].reason) == "the images of the frame before, repeated"
     np.testing.assert_array_equal(np.delete(result.poses, 11, axis=0), plain.poses)
 
     replaced = [*frames[:20], (*frames[19][:2], frames[20][2]), *frames[21:]]
     result = run_frames(iter(replaced), rendered.camera, times=np.arange(30) / 30.0)
-    assert result.flagged.tolist() == [20]
-    assert str(result.diagnostics[20].reason) == "the images of the frame before, repeated"
-    truth = relative_planar(rendered.truth()[0], rendered.truth())
-    assert np.linalg.norm(result.poses[20, :2] - truth[20, :2]) < 0.005  # the odometry moved it on
-    assert np.linalg.norm(result.poses[-1, :2] - plain.poses[-1, :2]) < 0.005
+    assert str(result.diagnostics[20].reason) != "the images of the frame before, repeated"

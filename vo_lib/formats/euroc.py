@@ -77,10 +77,7 @@ def read_image_list(camera_dir: Path) -> tuple[np.ndarray, list[Path], list[int]
     csv_path = camera_dir / "data.csv"
     stamps, files, lines, listed = [], [], [], {}
     rows = data_lines(csv_path, "one line 'timestamp [ns],filename' per image")
-    with contextlib.suppress(OSError):  # more rows than images: refused before each row is checked
-        if len(rows) > (images := sum(1 for _ in os.scandir(camera_dir / "data"))) + 1:
-            counts = f"{len(rows)} rows for {images} files in data/"
-            raise AslError(f"{csv_path}: {counts}; expected one per image")
+    _check_row_count(csv_path, len(rows))
     for n, line in rows:
         if n == 1 and line[0].isalpha():  # a header without '#'
             continue
@@ -94,6 +91,13 @@ def read_image_list(camera_dir: Path) -> tuple[np.ndarray, list[Path], list[int]
         raise AslError(f"{csv_path}: no images listed")
     _check_increasing(csv_path, stamps, lines)
     return np.array(stamps, dtype=np.int64), files, lines
+
+
+def _check_row_count(csv_path: Path, rows: int) -> None:
+    """More rows than files in ``data/`` (and a header): refused before each row is checked."""
+    with contextlib.suppress(OSError):
+        if rows > (images := sum(1 for _ in os.scandir(csv_path.parent / "data"))) + 1:
+            raise AslError(f"{csv_path}: {rows} rows for {images} files in data/; expected one per image")
 
 
 def _check_increasing(csv_path: Path, stamps: list[int], lines: list[int]) -> None:

@@ -21,8 +21,8 @@ frame stays the reference, so the next good frame is matched against it and its 
 the gap. Exactly one pose is produced per input frame. A frame that comes two or more frame
 intervals after the last (a dropped frame, from the sequence's timestamps) is predicted that many
 steps ahead (of constant velocity, or of the odometry, which spans them). A pair whose images are the
-previous pair's again, as a stalled camera driver repeats them, is no new view: it is predicted to
-its time (not moved, where it repeats the time too) and flagged. Every setting is a field of one
+previous pair's, sent again within half a frame interval (as a stalled camera driver may), is no
+new view: it keeps the pose and is flagged. Every setting is a field of one
 :class:`~vo_lib.stereo_vo.config.PipelineConfig`; ``CRAWLER`` and ``CAR`` are the two presets.
 """
 
@@ -109,13 +109,14 @@ class StereoOdometry:
     def process(self, left: np.ndarray, right: np.ndarray, odometry=None, steps: int = 1):
         """Process one stereo pair (and the odometry distances since the previous frame, if any)
         that comes ``steps`` frame intervals after the previous one (more than 1 after a dropped frame;
-        the odometry, where given, must span them all, as distances counted between the two frames do).
+        the odometry, where given, must span them all, as distances counted between the two frames do;
+        0 for a frame at the previous one's time, which is a repeat if its images are the same).
 
         Returns ``(planar pose, its covariance, FrameDiagnostics, FrameTimings)``.
         """
         watch = Stopwatch()
-        if self.last_pair is not None and repeated(self.last_pair, (left, right)):
-            return self._repeated(odometry, steps, watch)
+        if steps < 1 and self.last_pair is not None and repeated(self.last_pair, (left, right)):
+            return self._repeated(odometry, watch)
         self.last_pair = (left, right)
         with watch("stereo"):
             features = self.front.process(left, right)  # 1. stereo front end
@@ -140,15 +141,15 @@ class StereoOdometry:
         self.frame += 1
         return pose, covariance, diag, self._timings(watch)
 
-    def _repeated(self, odometry, steps: int, watch: Stopwatch):
-        """A frame whose images are the last frame's: no new view to measure. The pose is predicted
-        across its ``steps`` (0 where its time is the last frame's too) and the frame is flagged."""
+    def _repeated(self, odometry, watch: Stopwatch):
+        """A frame whose images are the last frame's, sent again at its time: no new view. The pose
+        stays (or moves by what odometry counted meanwhile), and the frame is flagged."""
         diag = FrameDiagnostics(self.frame, odometry=odometry is not None, fallback=True)
         diag.reason = Reason.REPEATED
         with watch("prediction"):
-            prediction = self._predict(odometry, diag, max(int(steps), 0))
+            prediction = self._predict(odometry, diag, 0)
         self.motion.place(self.kf, None, prediction)
-        self.gap += 1  # with the prediction's steps - 1: the reference is ``steps`` further back
+        self.gap += 1  # with the prediction's steps - 1: the reference is no further back
         self.frame += 1
         return self.kf.pose, self.kf.covariance, diag, self._timings(watch)
 
