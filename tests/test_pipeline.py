@@ -10,6 +10,7 @@ from vo_lib.geometry import relative_planar, wrap_angle
 from vo_lib.models.track_odometry import TrackOdometry
 from vo_lib.sim.samples import render_sample
 from vo_lib.sim.textures import corner_texture
+from vo_lib.stereo_vo.frames import Reason
 from vo_lib.stereo_vo.pipeline import frame_steps, run_frames
 
 
@@ -288,20 +289,31 @@ def test_a_restart_after_failed_frames_keeps_the_motion_per_interval():
 
 
 def test_a_pair_repeated_at_its_time_is_flagged_and_moves_nothing():
-    """The same pair twice at one time (no distance counted between) changes no other frame's pose.
-    A pair repeated a whole interval later is a view of its own time (a standing camera rendered
-    without noise gives such pairs): it is measured."""
+    """The same pair again at its time (after the first frame, a keyframe, a frame measured against
+    an older reference), carrying half of the next frame's odometry: it keeps the last pose, and
+    every other frame's pose is the plain run's. A pair repeated a whole interval later is a view
+    of its own time (a standing camera rendered without noise gives such pairs): it is measured."""
     rendered, frames_iter = render_sample("indoor_linear", 30)
     frames = list(frames_iter)
     plain = run_frames(iter(frames), rendered.camera, times=np.arange(30) / 30.0)
 
-    inserted = [*frames[:11], (*frames[10][:2], np.zeros(2)), *frames[11:]]
-    times = np.insert(np.arange(30) / 30.0, 11, 10 / 30.0)
-    result = run_frames(iter(inserted), rendered.camera, times=times)
-    assert result.flagged.tolist() == [11]
-    assert str(result.diagnostics[11].reason) == "the images of the frame before, repeated"
-    np.testing.assert_array_equal(np.delete(result.poses, 11, axis=0), plain.poses)
+    after = (0, 4, 6, 7, 15)  # frames followed by a repeat (4: a keyframe; 6, 7: measured, not keys)
+    inserted, times = [], []
+    for k, (left, right, odo) in enumerate(frames):
+        if k - 1 in after:  # this frame's odometry shared with the repeat before it
+            inserted[-1], odo = (*inserted[-1][:2], 0.5 * odo), 0.5 * odo
+        inserted.append((left, right, odo))
+        times.append(k / 30.0)
+        if k in after:
+            inserted.append((left, right, None))
+            times.append(k / 30.0 + 0.001)
+    result = run_frames(iter(inserted), rendered.camera, times=np.array(times))
+    repeats = [j for j in range(1, len(inserted)) if inserted[j][0] is inserted[j - 1][0]]
+    assert result.flagged.tolist() == repeats
+    assert {result.diagnostics[j].reason for j in repeats} == {Reason.REPEATED}
+    np.testing.assert_array_equal(result.poses[repeats], result.poses[np.array(repeats) - 1])
+    np.testing.assert_allclose(np.delete(result.poses, repeats, axis=0), plain.poses, atol=1e-12)
 
     replaced = [*frames[:20], (*frames[19][:2], frames[20][2]), *frames[21:]]
     result = run_frames(iter(replaced), rendered.camera, times=np.arange(30) / 30.0)
-    assert str(result.diagnostics[20].reason) != "the images of the frame before, repeated"
+    assert result.diagnostics[20].reason is not Reason.REPEATED

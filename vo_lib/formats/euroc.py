@@ -94,10 +94,12 @@ def read_image_list(camera_dir: Path) -> tuple[np.ndarray, list[Path], list[int]
 
 
 def _check_row_count(csv_path: Path, rows: int) -> None:
-    """More rows than files in ``data/`` (and a header): refused before each row is checked."""
+    """More rows than files in ``data/`` (and a header): refused before each row is checked. (Where
+    ``data/`` holds folders, the rows may name files in them: not checked here.)"""
     with contextlib.suppress(OSError):
-        if rows > (images := sum(1 for _ in os.scandir(csv_path.parent / "data"))) + 1:
-            raise AslError(f"{csv_path}: {rows} rows for {images} files in data/; expected one per image")
+        entries = list(os.scandir(csv_path.parent / "data"))
+        if rows > (files := len(entries)) + 1 and not any(entry.is_dir() for entry in entries):
+            raise AslError(f"{csv_path}: {rows} rows for {files} files in data/; expected one per image")
 
 
 def _check_increasing(csv_path: Path, stamps: list[int], lines: list[int]) -> None:

@@ -148,8 +148,7 @@ class VoKalmanFilter:
         With ``keep_reference`` the clone of an earlier frame is kept (it was not updated since):
         the current pose moves on, its cross-covariance with the reference is carried along, and
         the next VO measurement is the motion from that reference frame to the current one.
-        Without odometry, ``steps`` frame intervals of constant velocity are predicted at once (0: the
-        pose stays, as for a repeated image at the same time).
+        Without odometry, ``steps`` frame intervals of constant velocity are predicted at once.
         """
         x, P = self.ekf.x[:3], self.ekf.P[:3, :3]
         ref = slice(3, 6) if keep_reference else slice(0, 3)  # the kept clone, or the pose cloned now
@@ -161,8 +160,8 @@ class VoKalmanFilter:
                 across = np.array([-math.sin(x_new[2]), math.cos(x_new[2]), 0.0])
                 Q = Q + (self.lateral_sigma * 0.5 * abs(u[0] + u[1])) ** 2 * np.outer(across, across)
         else:
-            inc, total = self.last_increment, np.zeros(3)
-            for _ in range(steps):  # the same increment, interval after interval
+            inc = total = self.last_increment
+            for _ in range(steps - 1):  # the same increment, interval after interval
                 total = compose_planar(total, inc)
             x_new = compose_planar(x, total)
             c, s = math.cos(x[2]), math.sin(x[2])

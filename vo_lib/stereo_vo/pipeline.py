@@ -22,7 +22,8 @@ the gap. Exactly one pose is produced per input frame. A frame that comes two or
 intervals after the last (a dropped frame, from the sequence's timestamps) is predicted that many
 steps ahead (of constant velocity, or of the odometry, which spans them). A pair whose images are the
 previous pair's, sent again within half a frame interval (as a stalled camera driver may), is no
-new view: it keeps the pose and is flagged. Every setting is a field of one
+new view: it keeps the last pose and is flagged, and changes nothing else (odometry counted
+meanwhile goes to the next frame). Every setting is a field of one
 :class:`~vo_lib.stereo_vo.config.PipelineConfig`; ``CRAWLER`` and ``CAR`` are the two presets.
 """
 
@@ -100,6 +101,8 @@ class StereoOdometry:
         self.last_reason = Reason.NONE
         self.reference_inliers = 0  # inliers of the first good frame against this reference
         self.last_pair: tuple[np.ndarray, np.ndarray] | None = None  # the last frame's images
+        self.last_output: tuple[np.ndarray, np.ndarray] | None = None  # its pose and covariance
+        self.owed_odometry = None  # odometry counted at repeats, added to the next frame's
 
     @property
     def camera_pose(self) -> np.ndarray | None:
@@ -118,12 +121,16 @@ class StereoOdometry:
         if steps < 1 and self.last_pair is not None and repeated(self.last_pair, (left, right)):
             return self._repeated(odometry, watch)
         self.last_pair = (left, right)
+        if self.owed_odometry is not None and odometry is not None:
+            odometry = np.add(odometry, self.owed_odometry)
+        self.owed_odometry = None
         with watch("stereo"):
             features = self.front.process(left, right)  # 1. stereo front end
         diag = FrameDiagnostics(self.frame, features=len(features), odometry=odometry is not None)
         if self.frame == 0:
             self._new_reference(features)
             self.frame += 1
+            self.last_output = self.kf.pose, self.kf.covariance
             return self.kf.pose, self.kf.covariance, diag, self._timings(watch)
         with watch("prediction"):
             prediction = self._predict(odometry, diag, max(int(steps), 1))  # 2. prediction ...
@@ -139,19 +146,21 @@ class StereoOdometry:
             pose, covariance = self._update(features, estimate, prediction, reason, diag)  # 4. Kalman update
         self.last_reason = reason
         self.frame += 1
+        self.last_output = pose, covariance
         return pose, covariance, diag, self._timings(watch)
 
     def _repeated(self, odometry, watch: Stopwatch):
-        """A frame whose images are the last frame's, sent again at its time: no new view. The pose
-        stays (or moves by what odometry counted meanwhile), and the frame is flagged."""
+        """A frame whose images are the last frame's, sent again at its time: no new view. It keeps
+        the last pose and is flagged; nothing else changes, but that odometry counted meanwhile
+        is added to the next frame's."""
         diag = FrameDiagnostics(self.frame, odometry=odometry is not None, fallback=True)
         diag.reason = Reason.REPEATED
-        with watch("prediction"):
-            prediction = self._predict(odometry, diag, 0)
-        self.motion.place(self.kf, None, prediction)
-        self.gap += 1  # with the prediction's steps - 1: the reference is no further back
+        if odometry is not None:
+            owed = self.owed_odometry
+            self.owed_odometry = np.asarray(odometry, float) if owed is None else np.add(owed, odometry)
         self.frame += 1
-        return self.kf.pose, self.kf.covariance, diag, self._timings(watch)
+        pose, covariance = self.last_output
+        return pose.copy(), covariance.copy(), diag, self._timings(watch)
 
     @staticmethod
     def _timings(watch: Stopwatch) -> FrameTimings:
