@@ -249,6 +249,11 @@ def test_frame_steps_count_the_intervals_a_dropped_frame_leaves():
     assert frame_steps(times).tolist() == [1, 1, 1, 2, 1, 3, 1]
     assert frame_steps([5.0]).tolist() == [1]
     assert frame_steps([0.0, 0.0, 0.0]).tolist() == [1, 1, 1]  # no spacing to measure: one step each
+    # repeats a millisecond after their frame: 0 intervals, and the next frame counts from the
+    # frame they repeat; sent after every frame, they do not halve the interval
+    assert frame_steps([0.0, 0.1, 0.101, 0.3, 0.3005, 0.4]).tolist() == [1, 1, 0, 2, 0, 1]
+    every_one = np.repeat(np.arange(5) / 10, 2) + np.tile([0, 1e-3], 5)
+    assert frame_steps(every_one).tolist() == [1, 0] + [1, 0] * 4
 
 
 def test_a_pause_in_the_recording_runs_through_with_its_motion_unknown():

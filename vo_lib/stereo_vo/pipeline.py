@@ -130,7 +130,7 @@ class StereoOdometry:
         if self.frame == 0:
             self._new_reference(features)
             self.frame += 1
-            self.last_output = self.kf.pose, self.kf.covariance
+            self.last_output = self.kf.pose, self.kf.covariance  # copies, as the filter gives them
             return self.kf.pose, self.kf.covariance, diag, self._timings(watch)
         with watch("prediction"):
             prediction = self._predict(odometry, diag, max(int(steps), 1))  # 2. prediction ...
@@ -146,15 +146,16 @@ class StereoOdometry:
             pose, covariance = self._update(features, estimate, prediction, reason, diag)  # 4. Kalman update
         self.last_reason = reason
         self.frame += 1
-        self.last_output = pose, covariance
+        self.last_output = pose.copy(), covariance.copy()
         return pose, covariance, diag, self._timings(watch)
 
     def _repeated(self, odometry, watch: Stopwatch):
         """A frame whose images are the last frame's, sent again at its time: no new view. It keeps
         the last pose and is flagged; nothing else changes, but that odometry counted meanwhile
         is added to the next frame's."""
-        diag = FrameDiagnostics(self.frame, odometry=odometry is not None, fallback=True)
-        diag.reason = Reason.REPEATED
+        counted = odometry is not None and bool(np.all(np.isfinite(odometry)))
+        diag = FrameDiagnostics(self.frame, odometry=counted, fallback=True)
+        diag.reason = Reason.REPEATED  # a non-finite count leaves the next frame's unknown too
         if odometry is not None:
             owed = self.owed_odometry
             self.owed_odometry = np.asarray(odometry, float) if owed is None else np.add(owed, odometry)
@@ -352,9 +353,11 @@ def run_frames(
 
 def frame_steps(times) -> np.ndarray:
     """Frame intervals from the previous frame to each frame (1 for the first): the gap between
-    their times in units of the sequence's median gap, rounded half up. It is 1 but after dropped
-    frames, as long as fewer than half the gaps hold a drop, and 0 for a frame at the time of the one
-    before (a repeated pair; a new one counts as one interval)."""
+    their times in frame intervals, rounded half up. It is 1 but after dropped frames, as long as
+    fewer than half the gaps hold a drop, and 0 for a frame within half an interval of the one
+    before (a repeated pair; a new one counts as one interval), whose successor then counts from
+    that one. The frame interval is the median gap, leaving out those under half the upper quartile
+    (repeats)."""
     times = np.asarray(times, float)
     if not np.all(np.isfinite(times)):
         raise ValueError("times must be finite seconds, one per frame")
@@ -362,7 +365,13 @@ def frame_steps(times) -> np.ndarray:
     typical = np.median(gaps) if len(gaps) else 0.0
     if not typical > 0:
         return np.ones(len(times), int)
-    return np.r_[1, np.floor(gaps / typical + 0.5)].astype(int)
+    # a frame interval, not a repeat's short gap, even where every frame is repeated
+    typical = np.median(gaps[gaps > 0.5 * np.percentile(gaps, 75)])
+    steps, anchor = np.ones(len(times), int), times[0]
+    for k in range(1, len(times)):
+        steps[k] = max(int(np.floor((times[k] - anchor) / typical + 0.5)), 0)
+        anchor = times[k] if steps[k] > 0 else anchor  # a repeat's successor counts from the frame before it
+    return steps
 
 
 def repeated(previous, pair) -> bool:
