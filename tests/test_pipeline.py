@@ -254,6 +254,9 @@ def test_frame_steps_count_the_intervals_a_dropped_frame_leaves():
     assert frame_steps([0.0, 0.1, 0.101, 0.3, 0.3005, 0.4]).tolist() == [1, 1, 0, 2, 0, 1]
     every_one = np.repeat(np.arange(5) / 10, 2) + np.tile([0, 1e-3], 5)
     assert frame_steps(every_one).tolist() == [1, 0] + [1, 0] * 4
+    # a third of the gaps hold a drop: the interval is still the short gap
+    third_dropped = [0, 0.1, 0.3, 0.4, 0.5, 0.7, 0.8, 0.9, 1.1, 1.2]
+    assert frame_steps(third_dropped).tolist() == [1, 1, 2, 1, 1, 2, 1, 1, 2, 1]
 
 
 def test_a_pause_in_the_recording_runs_through_with_its_motion_unknown():

@@ -356,8 +356,8 @@ def frame_steps(times) -> np.ndarray:
     their times in frame intervals, rounded half up. It is 1 but after dropped frames, as long as
     fewer than half the gaps hold a drop, and 0 for a frame within half an interval of the one
     before (a repeated pair; a new one counts as one interval), whose successor then counts from
-    that one. The frame interval is the median gap, leaving out those under half the upper quartile
-    (repeats)."""
+    that one. The frame interval is the median gap, leaving out those under a quarter of the upper
+    half's median (repeats)."""
     times = np.asarray(times, float)
     if not np.all(np.isfinite(times)):
         raise ValueError("times must be finite seconds, one per frame")
@@ -365,8 +365,9 @@ def frame_steps(times) -> np.ndarray:
     typical = np.median(gaps) if len(gaps) else 0.0
     if not typical > 0:
         return np.ones(len(times), int)
-    # a frame interval, not a repeat's short gap, even where every frame is repeated
-    typical = np.median(gaps[gaps > 0.5 * np.percentile(gaps, 75)])
+    # a frame interval, not a repeat's short gap, even where every frame is repeated (and
+    # not the gap of a drop, where a third of the frames or more are dropped)
+    typical = np.median(gaps[gaps > 0.25 * np.median(gaps[gaps >= typical])])
     steps, anchor = np.ones(len(times), int), times[0]
     for k in range(1, len(times)):
         steps[k] = max(int(np.floor((times[k] - anchor) / typical + 0.5)), 0)
