@@ -155,10 +155,9 @@ class StereoOdometry:
         is added to the next frame's."""
         counted = odometry is not None and bool(np.all(np.isfinite(odometry)))
         diag = FrameDiagnostics(self.frame, odometry=counted, fallback=True)
-        diag.reason = Reason.REPEATED  # a non-finite count leaves the next frame's unknown too
-        if odometry is not None:
-            owed = self.owed_odometry
-            self.owed_odometry = np.asarray(odometry, float) if owed is None else np.add(owed, odometry)
+        diag.reason = Reason.REPEATED
+        if odometry is not None:  # a non-finite count leaves the next frame's unknown too
+            self.owed_odometry = np.add(0.0 if self.owed_odometry is None else self.owed_odometry, odometry)
         self.frame += 1
         pose, covariance = self.last_output
         return pose.copy(), covariance.copy(), diag, self._timings(watch)
@@ -376,12 +375,10 @@ def frame_steps(times) -> np.ndarray:
 
 
 def repeated(previous, pair) -> bool:
-    """Is ``pair`` (left and right images) the ``previous`` pair again, pixel for pixel? (Every
-    16th row first: new images differ there, and the whole comparison is then skipped.) A front end
+    """Is ``pair`` (left and right images) the ``previous`` pair again, pixel for pixel? A front end
     that needs no images may be given None: that is never a repeat."""
     return all(
-        a is not None and b is not None and np.array_equal(a[::16], b[::16]) and np.array_equal(a, b)
-        for a, b in zip(previous, pair, strict=True)
+        a is not None and b is not None and np.array_equal(a, b) for a, b in zip(previous, pair, strict=True)
     )
 
 
