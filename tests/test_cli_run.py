@@ -258,12 +258,24 @@ def test_a_near_miss_of_the_asl_layout_is_named_as_such(tmp_path, capsys):
     from vo_lib.cli.main import main
 
     (tmp_path / "empty" / "mav0").mkdir(parents=True)
-    for side in ("cam0", "cam1"):
-        (tmp_path / "above" / "rec" / "mav0" / side).mkdir(parents=True)
+    for rec in ("rec", "rec2", "rec3"):
+        for side in ("cam0", "cam1"):
+            (tmp_path / ("above" if rec == "rec" else "many") / rec / "mav0" / side / "data").mkdir(
+                parents=True
+            )
+    (tmp_path / "many" / "rec").mkdir()
+    (tmp_path / "many" / "rec" / "mav0").symlink_to(tmp_path / "above" / "rec" / "mav0")
     cases = {
         tmp_path / "empty": "mav0: no cam0 or cam1 folder; expected the ASL layout",
         tmp_path / "above" / "rec" / "mav0" / "cam0": "cam0: one camera of an ASL recording; give the folder",
         tmp_path / "above": "above: holds the ASL recording",
+        tmp_path
+        / "above"
+        / "rec"
+        / "mav0"
+        / "cam0"
+        / "data": f"inside the ASL recording {tmp_path / 'above' / 'rec'};",
+        tmp_path / "many": "many: holds 3 ASL recordings (rec, rec2, rec3); give one of them",
     }
     for folder, expected in cases.items():
         assert main(["run", "--sequence", str(folder), "--out", str(tmp_path / "out")]) == 2

@@ -22,6 +22,21 @@ def test_a_clear_difference_is_reliable_and_counted():
     assert "in 20 of 20 seeds" in c.sentence("A", "B") and "is better than" in c.sentence("A", "B")
 
 
+def test_a_family_of_comparisons_widens_each_interval_to_hold_together():
+    """A small gap, reliable as one comparison at 95 %, is not within a family of 17, whose
+    intervals are each at 1 - 0.05/17 (99.7 %); the sentence says so."""
+    alone = over_seeds(lambda s: _draws(s, gap=0.07), range(40))
+    family = over_seeds(lambda s: _draws(s, gap=0.07), range(40), family=17)
+    assert alone.confidence == 0.95 and family.confidence == pytest.approx(1 - 0.05 / 17)
+    (_, low_a, high_a), (_, low_f, high_f) = alone.difference("A", "B"), family.difference("A", "B")
+    assert low_f < low_a <= high_a < high_f
+    assert alone.verdict("A", "B") is Verdict.BETTER and family.verdict("A", "B") is Verdict.NOT_RELIABLE
+    assert "99.7 % CI" in family.sentence("A", "B") and "one of 17 comparisons" in family.sentence("A", "B")
+    assert "95 % CI" in alone.sentence("A", "B") and "comparisons" not in alone.sentence("A", "B")
+    with pytest.raises(ValueError, match="family"):
+        over_seeds(lambda s: _draws(s, gap=0.0), range(3), family=0)
+
+
 def test_no_difference_is_not_reliable():
     c = over_seeds(lambda s: _draws(s, gap=0.0), range(20))
     assert c.verdict("A", "B") is Verdict.NOT_RELIABLE

@@ -3,7 +3,11 @@
 A single random draw never carries a comparative sentence. :func:`over_seeds` runs every method
 on the same draw for each of N seeds (a paired comparison); :class:`Comparison` says in how many
 seeds A beats B, the median difference A − B with its bootstrap interval, whether that interval
-excludes zero, and the sentence with its figures.
+excludes zero, and the sentence with its figures. Where several sentences are drawn from one
+study, each is one of a ``family``: its interval is widened (Bonferroni) so that the whole family
+holds at :data:`CONFIDENCE`, not each sentence alone. Fifteen sentences at 95 % each would state
+a difference that is not there about once in every study, and another set of seeds would state
+another.
 
 Consistency uses one χ² rule (:func:`chi2_band`): the average of ``count`` independent χ²(dof)
 values lies in ``chi2.ppf([α/2, 1 − α/2], dof·count) / count``. Independent means across
@@ -36,7 +40,9 @@ class Verdict(enum.Enum):
     NOT_RELIABLE = "not reliably different from"
 
 
-def bootstrap_interval(values: Iterable[float], statistic: Callable = np.median) -> tuple[float, float]:
+def bootstrap_interval(
+    values: Iterable[float], statistic: Callable = np.median, confidence: float = CONFIDENCE
+) -> tuple[float, float]:
     """Percentile bootstrap interval of ``statistic`` over ``values`` (one value per seed)."""
     x = np.asarray(list(values), dtype=float)
     rng = np.random.default_rng(BOOTSTRAP_SEED)
@@ -45,7 +51,7 @@ def bootstrap_interval(values: Iterable[float], statistic: Callable = np.median)
         stats = np.asarray(statistic(x[draws], axis=1), dtype=float)
     except TypeError:  # a statistic of one sample at a time
         stats = np.apply_along_axis(statistic, 1, x[draws])
-    low, high = np.quantile(stats, [(1 - CONFIDENCE) / 2, (1 + CONFIDENCE) / 2])
+    low, high = np.quantile(stats, [(1 - confidence) / 2, (1 + confidence) / 2])
     return float(low), float(high)
 
 
@@ -61,9 +67,16 @@ class Comparison:
 
     seeds: tuple[int, ...]
     figures: Mapping[str, np.ndarray]  #: a method's name -> its figures, one per seed in order
+    family: int = 1  #: the comparisons judged together on these draws (the module's Bonferroni rule)
 
     def __len__(self) -> int:
         return len(self.seeds)
+
+    @property
+    def confidence(self) -> float:
+        """Each interval's confidence: ``1 - (1 - CONFIDENCE) / family``, so that the family's
+        intervals hold together at :data:`CONFIDENCE`."""
+        return 1 - (1 - CONFIDENCE) / self.family
 
     def paired(self, a: str, b: str) -> np.ndarray:
         """Per-seed differences ``a − b``."""
@@ -76,7 +89,7 @@ class Comparison:
     def difference(self, a: str, b: str) -> tuple[float, float, float]:
         """Median of ``a − b`` over seeds, and its bootstrap interval (low, high)."""
         d = self.paired(a, b)
-        return (float(np.median(d)), *bootstrap_interval(d))
+        return (float(np.median(d)), *bootstrap_interval(d, confidence=self.confidence))
 
     def varies(self, a: str, b: str) -> bool:
         """Whether the seeds move ``a − b``: where they do not, the N figures are one result
@@ -100,8 +113,9 @@ class Comparison:
         """The comparative sentence with its figures, e.g.
 
         "fused is better than VO in 17 of 20 seeds (median difference −0.80 cm, 95 % CI
-        −1.10 to −0.50 cm)", or "... not reliably different from ..."; where the seeds do not
-        move the difference (:meth:`varies`), the two figures and that they are one result.
+        −1.10 to −0.50 cm)", or "... not reliably different from ..."; one of a family of 17 says
+        "99.7 % CI, one of 17 comparisons". Where the seeds do not move the difference
+        (:meth:`varies`), the two figures and that they are one result.
         """
         u = f" {unit}" if unit else ""
         if not self.varies(a, b):
@@ -111,20 +125,27 @@ class Comparison:
                 f"{vb:.{digits}f}{u}), so this is one result, which the seeds do not test"
             )
         median, low, high = (scale * v for v in self.difference(a, b))
+        level = f"{100 * CONFIDENCE:.0f} %" if self.family == 1 else f"{100 * self.confidence:.1f} %"
+        among = "" if self.family == 1 else f", one of {self.family} comparisons"
         return (
             f"{a} is {self.verdict(a, b).value} {b}: lower in {self.share(a, b)} of {len(self)} seeds "
-            f"(median difference {median:+.{digits}f}{u}, {100 * CONFIDENCE:.0f} % CI "
-            f"{low:+.{digits}f} to {high:+.{digits}f}{u})"
+            f"(median difference {median:+.{digits}f}{u}, {level} CI "
+            f"{low:+.{digits}f} to {high:+.{digits}f}{u}{among})"
         )
 
 
-def over_seeds(run: Callable[[int], Mapping[str, float]], seeds: Iterable[int]) -> Comparison:
+def over_seeds(
+    run: Callable[[int], Mapping[str, float]], seeds: Iterable[int], family: int = 1
+) -> Comparison:
     """Run ``run(seed)`` for every seed (e.g. ``range(base, base + 20)``) and collect each
     method's figure: ``run`` draws once and returns ``{method name: figure}`` for every method on
-    that same draw (lower is better)."""
+    that same draw (lower is better). ``family``: the comparisons that will be judged together on
+    these draws (:class:`Comparison`)."""
     seeds = tuple(int(s) for s in seeds)
     rows = [dict(run(s)) for s in seeds]
     names = list(rows[0])
     if any(list(r) != names for r in rows):
         raise ValueError("every seed must return the same methods in the same order")
-    return Comparison(seeds, {n: np.array([r[n] for r in rows], float) for n in names})
+    if int(family) < 1:
+        raise ValueError(f"family must be a count of comparisons, at least 1; got {family}")
+    return Comparison(seeds, {n: np.array([r[n] for r in rows], float) for n in names}, int(family))

@@ -41,3 +41,9 @@ assert nees_rows[("spot turn", "fused")][1] > 3  # the clause "over-confident" o
 assert len(flagged) == 61 and yaw_sigma[260] > 5 * yaw_sigma[199]
 # after the gap the growth all but stops
 assert yaw_sigma[300] - yaw_sigma[260] < 0.1 * (yaw_sigma[260] - yaw_sigma[199])
+
+# after: "constant velocity without the sideways row",
+from vo_book.demo_fusion import STATED
+
+# every comparison section 4 states is one of the family its intervals were widened for
+assert len(STATED) == STUDY_COMPARISONS

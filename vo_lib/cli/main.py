@@ -144,10 +144,10 @@ def build_parser() -> argparse.ArgumentParser:
     )
     run.add_argument(
         "--motion",
-        choices=("auto", "planar", "full"),
+        choices=("auto", "planar", "full", "hover"),
         default="auto",
-        help="motion model: planar circular motion (the crawler), full 6-DoF (a car), or auto (default:"
-        " the one that fits the sequence's vehicle)",
+        help="motion model: planar circular motion (the crawler), full 6-DoF (a car), hover (6-DoF, a"
+        " drone or a hand-held rig), or auto (default: the one that fits the sequence's vehicle)",
     )
     ev = command(
         "evaluate",

@@ -108,12 +108,23 @@ def _numbers(path: Path, data: dict, key: str, count: int, what: str, bound=np.i
                 f"{path}: key {key}: rows: {shape[0]!r}, cols: {shape[1]!r}; expected the numbers 4 and 4"
             )
         value = value.get("data")
+    if count == 16 and isinstance(value, list) and len(value) == 4 and all(_row_of_4(r) for r in value):
+        value = [x for row in value for x in row]  # four rows of four, as Kalibr writes a transform
     within = "" if np.isinf(bound) else f", each within ±{bound:g}"
     return numbers_at(path, key, value, (count,), f"{what} ({count} finite numbers{within})", (-bound, bound))
 
 
+def _row_of_4(row) -> bool:
+    return isinstance(row, list) and len(row) == 4
+
+
 def _transform(path: Path, data: dict, what: str) -> np.ndarray:
     """Key ``T_BS``: a rigid transform (a rotation, the last row 0 0 0 1)."""
+    if "T_BS" not in data and "T_cam_imu" in data:
+        raise AslError(
+            f"{path}: key T_BS missing; the file has Kalibr's T_cam_imu, which maps the body into the "
+            "camera: expected T_BS, the camera into the body (the inverse of T_cam_imu)"
+        )
     T = _numbers(path, data, "T_BS", 16, what).reshape(4, 4)
     if problem := rigid_problem(T):
         raise AslError(f"{path}: key T_BS: {problem}")
@@ -134,16 +145,25 @@ def _distortion(path: Path, data: dict) -> tuple[np.ndarray, bool]:
             f"{path}: key distortion_model: {model!r} is not supported; "
             "expected radial-tangential (radtan), equidistant or none"
         )
-    key = _coefficients_key(path, data)
-    if model == "none" and data.get(key) is None:
-        return np.zeros(4), False
+    return _radial_tangential(path, data, _coefficients_key(path, data), model), False
+
+
+def _radial_tangential(path: Path, data: dict, key: str, model: str) -> np.ndarray:
+    """``[k1, k2, p1, p2]`` at ``key``; zeros for ``model`` none (none given, or an empty list)."""
+    if model == "none" and data.get(key) in (None, []):
+        return np.zeros(4)
+    if isinstance(data.get(key), list) and len(data[key]) == 5:
+        raise AslError(
+            f"{path}: key {key}: expected [k1, k2, p1, p2], got 5 numbers (OpenCV's order, with k3 last?): "
+            "the radial-tangential model of the ASL layout has no k3"
+        )
     dist = _numbers(path, data, key, 4, "[k1, k2, p1, p2]", MAX_DISTORTION)
     if model == "none" and dist.any():
         raise AslError(
             f"{path}: key distortion_model: none, but key {key} is not zero; "
             "expected radial-tangential for these coefficients, or zeros"
         )
-    return dist, False
+    return dist
 
 
 def _coefficients_key(path: Path, data: dict) -> str:
@@ -169,13 +189,13 @@ def read_camera_yaml(path) -> CameraCalibration:
     path = Path(path)
     data = _yaml(path)
     T = _transform(path, data, "a 4x4 camera-to-body transform as data")
-    fu, fv, cu, cv = _numbers(path, data, "intrinsics", 4, "[fu, fv, cu, cv]")
-    if fu <= 0 or fv <= 0:
-        raise AslError(f"{path}: key intrinsics: focal lengths must be > 0, got fu={fu:g}, fv={fv:g}")
     if data.get("camera_model", "pinhole") != "pinhole":
         raise AslError(
             f"{path}: key camera_model: {data['camera_model']!r} is not supported; expected pinhole"
         )
+    fu, fv, cu, cv = _numbers(path, data, "intrinsics", 4, "[fu, fv, cu, cv]")
+    if fu <= 0 or fv <= 0:
+        raise AslError(f"{path}: key intrinsics: focal lengths must be > 0, got fu={fu:g}, fv={fv:g}")
     dist, fisheye = _distortion(path, data)
     width, height = _image_size(path, data)
     if not (0 <= cu <= width and 0 <= cv <= height):

@@ -47,10 +47,22 @@ def asl_near_miss(path) -> str | None:
         return f"{mav0}: no cam0 or cam1 folder; expected the ASL layout (mav0/cam0 and mav0/cam1)"
     if path.name in ("cam0", "cam1") and mav0_of(path.parent) is not None:
         return f"{path}: one camera of an ASL recording; give the folder holding mav0, or mav0 itself"
+    inside = next((p for p in path.parents if p.name == "mav0" and mav0_of(p) is not None), None)
+    if inside is not None:  # mav0/cam0/data, or deeper
+        return f"{path}: inside the ASL recording {inside.parent}; give that folder, or its mav0"
+    return _recordings_below(path)
+
+
+def _recordings_below(path: Path) -> str | None:
+    """Why ``path`` is the folder above one ASL recording or several; else None."""
+    below = []
     with contextlib.suppress(OSError):
-        below = [p for p in path.iterdir() if p.is_dir() and mav0_of(p) is not None]
-        if below:
-            return f"{path}: holds the ASL recording {below[0]}; give that folder"
+        below = sorted(p for p in path.iterdir() if p.is_dir() and mav0_of(p) is not None)
+    if len(below) == 1:
+        return f"{path}: holds the ASL recording {below[0]}; give that folder"
+    if below:
+        names = ", ".join(p.name for p in below[:3]) + (", ..." if len(below) > 3 else "")
+        return f"{path}: holds {len(below)} ASL recordings ({names}); give one of them"
     return None
 
 

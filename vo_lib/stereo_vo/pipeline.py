@@ -382,7 +382,7 @@ def repeated(previous, pair) -> bool:
     )
 
 
-MOTION_MODELS = ("auto", "planar", "full")
+MOTION_MODELS = ("auto", "planar", "full", "hover")
 #: Frames of the untimed warm-up before a timed run: the second and third exercise matching, the
 #: 1-point RANSAC (without and with a prior) and the filter, so every compiled kernel is ready
 #: and every lazy import done.
@@ -401,14 +401,15 @@ def run_sequence(
 
     ``motion`` is ``"planar"`` (the circular-motion model, for a camera above the turning axis on
     a flat floor: the crawler of the samples, preset ``CRAWLER``), ``"full"`` (6-DoF, :mod:`.six_dof`:
-    a car on a real road, preset ``CAR``), or ``"auto"``: the one that fits the sequence's vehicle
-    (:mod:`.vehicle`).
+    a car on a real road, preset ``CAR``), ``"hover"`` (6-DoF for a body free in all six, a drone
+    or a hand-held rig, preset ``HOVER``; a sequence that names no body turns about its camera), or
+    ``"auto"``: the one that fits the sequence's vehicle (:mod:`.vehicle`).
     """
     from vo_lib.stereo_vo.vehicle import vehicle_of
 
     if motion not in MOTION_MODELS:
         raise ValueError(f"motion must be one of {', '.join(MOTION_MODELS)}; got {motion!r}")
-    vehicle = vehicle_of(sequence, use_odometry)
+    vehicle = vehicle_of(sequence, use_odometry, motion)
     model = vehicle.motion if motion == "auto" else motion
     n = len(sequence) if frames is None else min(int(frames), len(sequence))
     odo = vehicle.odometry

@@ -215,6 +215,10 @@ def position_only_errors(seq, poses: np.ndarray, n: int) -> dict:
     source = positions.get("file", "the manifest's positions")  # the file they were read from, if named
     print(f"\nErrors against position-only ground truth ({source}, {len(frames)} positions)")
     print(f"  {'ATE RMSE of the tracked point, SE(3) alignment [m]':<62s}{ate.rmse:>16.4f}")
+    print(
+        "  paired at the images' times: a tracker's clock not synchronised with the cameras adds its\n"
+        "  offset to this figure (evaluate --time-offset takes it out)"
+    )
     return {"ate_positions_m": ate.rmse}
 
 

@@ -20,7 +20,7 @@ rig's calibration rounded to centimetres.
 from __future__ import annotations
 
 import json
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from enum import Enum
 
 import numpy as np
@@ -114,11 +114,20 @@ def drone_mount(T_body_camera: np.ndarray) -> np.ndarray:
     return camera_mount(forward=forward, height=-down, left=-right)
 
 
-def vehicle_of(sequence, use_odometry: bool = True) -> Vehicle:
+def vehicle_of(sequence, use_odometry: bool = True, motion: str = "auto") -> Vehicle:
     """The vehicle of a :class:`~vo_lib.formats.sequence.Sequence`, from its manifest and files.
 
-    With ``use_odometry=False`` no odometry file is read (``odometry`` is None).
+    With ``use_odometry=False`` no odometry file is read (``odometry`` is None). With ``motion =
+    "hover"`` a sequence that names no free body (a KITTI-layout folder without a manifest) is one
+    that turns about its camera: a hand-held rig, or a drone whose body is not known.
     """
+    vehicle = _vehicle(sequence, use_odometry)
+    if motion == Motion.HOVER and vehicle.kind is not VehicleKind.DRONE:
+        return replace(vehicle, kind=VehicleKind.DRONE, mount=drone_mount(np.eye(4)), motion=Motion.HOVER)
+    return vehicle
+
+
+def _vehicle(sequence, use_odometry: bool) -> Vehicle:
     camera = sequence.manifest.get("camera", {}) if isinstance(sequence.manifest, dict) else {}
     if "T_body_camera" in sequence.manifest:
         mount = drone_mount(np.asarray(sequence.manifest["T_body_camera"], float))  # no odometry
