@@ -33,40 +33,16 @@ def unavailable(*functions: Callable) -> Iterator[None]:
     """Make ``functions`` raise :class:`GradingError` under every name (in loaded modules, their classes
     and the notebook) and in every ``partial`` of them there while the block runs, and, for a Python
     function, wherever it is held (a default argument, a closure: its code is swapped): a guard for
-    honest mistakes, not a sandbox. The hidden test's own values (the notebook's ``_h`` names) are put
-    back as they were when the block began, unless the block assigned them anew, so that what the
-    test computes after the answer ran comes from inputs the answer could not change (an answer may
-    change the arrays it is given)."""
-    shell = getattr(sys.modules.get("IPython"), "get_ipython", lambda: None)()
-    before = {n: v for n, v in shell.user_ns.items() if n.startswith("_h")} if shell else {}
-    copies = _copies(before)
-    try:
-        with _refusing(functions):
-            yield
-    finally:
-        for name, value in copies.items():
-            if shell.user_ns.get(name) is before[name]:  # not an answer the block stored under it
-                shell.user_ns[name] = value
-
-
-def _copies(values: dict) -> dict:
-    """Deep copies of ``values``, leaving out what cannot be copied (a module, a compiled object)."""
-    copies = {}
-    for name, value in values.items():
-        with contextlib.suppress(Exception):
-            copies[name] = copy.deepcopy(value)
-    return copies
-
-
-@contextlib.contextmanager
-def _refusing(functions) -> Iterator[None]:
-    """The refusal of :func:`unavailable`."""
+    honest mistakes, not a sandbox. The test's own ``_h`` values are put back as they were unless the block
+    stored them anew: an answer that writes into the arrays it is given cannot fit the test to itself."""
     wanted = {id(f) for f in functions}
     modules = [m for m in list(sys.modules.values()) if isinstance(getattr(m, "__dict__", None), dict)]
     owned = [(m, k) for m in modules for k in vars(m).values() if isinstance(k, type)]
     classes = [k for m, k in owned if k.__module__ == m.__name__]  # each class once, where defined
     shell = getattr(sys.modules.get("IPython"), "get_ipython", lambda: None)()
     spaces = [vars(m) for m in modules] + ([shell.user_ns] if shell else [])  # dicts, written in place
+    held = {n: v for n, v in (shell.user_ns.items() if shell else ()) if n.startswith("_h")}
+    copies = {n: _copy(v) for n, v in held.items()}
     swapped = [(c, n, v) for c in classes for n, v in list(vars(c).items()) if id(v) in wanted]
 
     def refused(v) -> bool:  # one of them, or a partial of one (a compiled function has no code to swap)
@@ -89,6 +65,14 @@ def _refusing(functions) -> Iterator[None]:
             put[isinstance(owner, dict)](owner, name, value)
         for f, code in codes:
             f.__code__ = code
+        if shell:
+            shell.user_ns.update({n: v for n, v in copies.items() if shell.user_ns.get(n) is held[n]})
+
+
+def _copy(value):  # a deep copy, or the value itself where it has none (a module, a compiled object)
+    with contextlib.suppress(Exception):
+        return copy.deepcopy(value)
+    return value
 
 
 def library_functions(*owners: types.ModuleType | type | Callable) -> list[Callable]:
@@ -141,22 +125,17 @@ PROTECTED = {"np", "numpy", "grading", "assert_allclose"}  # names an answer mus
 NAMED_TUPLE = {"_replace", "_asdict", "_make", "_fields", "_field_defaults"}  # public, though underscored
 
 
-def review(
-    source: str, imported: frozenset[str] = frozenset(), modules: frozenset[str] = frozenset()
-) -> list[tuple[int, Reason]]:
+def review(source: str, imported: frozenset[str] = frozenset()) -> list[tuple[int, Reason]]:
     """``(line, reason)`` for every construct of ``source`` no honest answer needs, read with :mod:`ast`
-    (nothing runs); ``imported``: what the notebook's other cells import, ``modules``: the names of
-    those that are modules (``import m``). Magics use the kernel."""
+    (nothing runs); ``imported``: what the notebook's other cells import. Magics use the kernel."""
     magic = [n for n, line in enumerate(source.splitlines(), 1) if line.lstrip().startswith(("%", "!"))]
     found = [(n, Reason.KERNEL) for n in magic]
     if (tree := _tree(source)) is None:
         return found
     cell = _imports(tree)  # names the cell's imports bind; a patch counts for the notebook's too
-    modules = modules | _module_names(tree) | PROTECTED
     patched = cell | imported | _aliases(tree, cell | imported | PROTECTED)
     for node in ast.walk(tree):
-        line = getattr(node, "lineno", 0) or getattr(getattr(node, "target", None), "lineno", 0)
-        found += [(line, why) for why in _reasons(node, patched, modules)]  # a comprehension: its target's
+        found += [(getattr(node, "lineno", 0) or node.target.lineno, why) for why in _reasons(node, patched)]
         found += [(node.lineno, Reason.PRIVATE)] if _private(node, cell) else []
         found += [(node.lineno, Reason.HELD)] if _held(node, cell) else []
     return sorted(set(found), key=lambda item: (item[0], item[1].text))
@@ -175,11 +154,6 @@ def _imports(tree: ast.AST) -> set[str]:
     return {(a.asname or a.name).split(".")[0] for a in imports}
 
 
-def _module_names(tree: ast.AST) -> set[str]:
-    imports = [a for n in ast.walk(tree) if isinstance(n, ast.Import) for a in n.names]
-    return {a.asname or a.name.split(".")[0] for a in imports}
-
-
 def _aliases(tree: ast.AST, names: set[str]) -> set[str]:
     """Names the cell binds to one of ``names``: ``n = np``, ``n, s = np, sp``."""
     pairs = [(t, n.value) for n in ast.walk(tree) if isinstance(n, ast.Assign) for t in n.targets]
@@ -188,9 +162,8 @@ def _aliases(tree: ast.AST, names: set[str]) -> set[str]:
     return {t.id for t, v in pairs if isinstance(t, ast.Name) and _named(v, *names)}
 
 
-def _reasons(node: ast.AST, imported: set[str], modules: frozenset[str] = frozenset()) -> list[Reason]:
-    """The reasons to review one syntax node; ``imported``: the names imports bind, and their aliases;
-    ``modules``: those of them that are modules."""
+def _reasons(node: ast.AST, imported: set[str]) -> list[Reason]:
+    """The reasons to review one syntax node; ``imported``: the names imports bind, and their aliases."""
     if isinstance(node, ast.Import):
         return [FLAGGED[r] for r in (a.name.split(".")[0] for a in node.names) if r in FLAGGED]
     if isinstance(node, ast.ImportFrom):
@@ -209,25 +182,17 @@ def _reasons(node: ast.AST, imported: set[str], modules: frozenset[str] = frozen
     targets = _targets(node)
     if any(_rebinds(t) or (isinstance(t, ast.Attribute) and _named(_root(t), *imported)) for t in targets):
         return [Reason.REBINDS]  # np.allclose = ..., grading = ..., or an attribute of anything imported
-    if isinstance(node, ast.Call) and any(_named(a, *modules) for a in _arguments(node)):
-        return [Reason.REBINDS]  # a module handed to a function, which may then patch it
+    if isinstance(node, ast.Call) and any(_named(a, *PROTECTED) for a in node.args):
+        return [Reason.REBINDS]  # NumPy handed to a function, which may then patch it
     return []
 
 
 def _targets(node: ast.AST) -> list[ast.AST]:
-    """What ``node`` binds, however it binds it: ``=``, ``+=``, ``x: T =``, ``del``, ``for``, ``with ...
-    as``, a comprehension's ``for``."""
-    if isinstance(node, (ast.Assign, ast.Delete)):
-        return node.targets
-    if isinstance(node, (ast.AugAssign, ast.AnnAssign, ast.For, ast.AsyncFor, ast.comprehension)):
-        return [node.target]
+    """What ``node`` binds: ``=``, ``+=``, ``x: T =``, ``del``, ``for``, ``with ... as``, comprehensions."""
     if isinstance(node, (ast.With, ast.AsyncWith)):
         return [item.optional_vars for item in node.items if item.optional_vars is not None]
-    return []
-
-
-def _arguments(node: ast.Call) -> list[ast.AST]:
-    return [*node.args, *(k.value for k in node.keywords)]
+    binds = (ast.Assign, ast.Delete, ast.AugAssign, ast.AnnAssign, ast.For, ast.AsyncFor, ast.comprehension)
+    return (getattr(node, "targets", None) or [node.target]) if isinstance(node, binds) else []
 
 
 def _private(node: ast.AST, imported: set[str]) -> bool:
@@ -281,12 +246,11 @@ def report(nb) -> dict[str, list[str]]:
     """``{grade_id: ["line N: reason: code", ...]}`` for every answer cell of ``nb`` to be reviewed."""
     flagged, code_cells = {}, [cell for cell in nb.cells if cell.cell_type == "code"]
     trees = [tree for c in code_cells if (tree := _tree(c.source))]
-    modules = frozenset().union(*map(_module_names, trees))
     imported = frozenset().union(*map(_imports, trees))
     imported |= frozenset().union(*(_aliases(tree, imported | PROTECTED) for tree in trees))  # n = np
     for cell in code_cells:
         meta = cell.metadata.get("nbgrader", {})
-        if meta.get("solution") and (found := review(cell.source, imported, modules)):
+        if meta.get("solution") and (found := review(cell.source, imported)):
             code = cell.source.splitlines()
             flagged[meta["grade_id"]] = [f"line {n}: {r.text}: {code[n - 1].strip()[:70]}" for n, r in found]
     return flagged

@@ -1257,9 +1257,7 @@ import vo_lib.stereo_vo.synthetic as synthetic_module  # noqa: E402
 from coursework import grading  # noqa: E402
 
 _h2_rng = np.random.default_rng(6021)  # new matches, and the noise the gates assume
-_h2_m = synthetic_module.synthetic_matches(
-    ex_camera, 300, 0.05, 0.1, _h2_rng, noise_px=0.8, outlier_ratio=0.4
-)
+_h2_m = synthetic_module.synthetic_matches(ex_camera, 300, 0.05, 0.1, _h2_rng, (1.5, 15.0), 0.8, 0.4)
 with grading.unavailable():  # nothing refused; the matches as they were after the answer ran
     _h2_got = gate_scores(_h2_m, ex_camera, 0.8)
 _h2_found = ransac_module.one_point_ransac(_h2_m.w_prev, _h2_m.w_curr, ex_camera, rng=1, pixel_sigma=0.8)
@@ -1316,14 +1314,11 @@ assert fixed_errors == wrong_fixed, "fixed_errors: the matches the threshold cla
 gated_visible = one_point_ransac(half_px.w_prev, half_px.w_curr, ex_camera, rng=1).inliers
 assert gate_errors == np.sum(gated_visible != half_px.inliers), "gate_errors: the gates' wrong matches"
 ### BEGIN HIDDEN TESTS
-from coursework import grading  # noqa: E402
-
 _h3_rng = np.random.default_rng(6031)  # each θ: inliers near the turn (a long tail), outliers anywhere
 _h3_inliers = _h3_rng.random(300) < 0.7
 _h3_each = 0.05 + np.where(_h3_inliers, _h3_rng.standard_t(2, 300) * 0.003, _h3_rng.uniform(-0.2, 0.2, 300))
 _h3_grid = np.arange(1, 1001) * 0.01
-with grading.unavailable():  # nothing refused; the thetas and the grid as they were after the answer ran
-    _h3_got = best_fixed_threshold(_h3_each, 0.05, _h3_inliers, _h3_grid)
+_h3_got = best_fixed_threshold(_h3_each.copy(), 0.05, _h3_inliers.copy(), _h3_grid.copy())  # its own copies
 _h3_correct = [np.sum((np.abs(_h3_each - 0.05) < np.radians(t)) == _h3_inliers) for t in _h3_grid]
 assert np.isclose(_h3_got, _h3_grid[np.argmax(_h3_correct)]), "best_fixed_threshold: not the best threshold"
 ### END HIDDEN TESTS
