@@ -496,7 +496,7 @@ if runs_above == len(run_means):
 elif runs_above == 0:
     verdict_words = "more cautious than it need be on every drive"
 else:
-    verdict_words = "over-confident on some drives and cautious on others"
+    verdict_words = "over-confident on the drives above 3, and not shown to be on the others"
 display(
     Markdown(
         f"Per frame, the NEES averaged over the {len(nees_runs)} runs lies inside its band "
