@@ -47,6 +47,7 @@ def test_figures_the_seeds_do_not_move_are_one_result_not_a_ranking():
     c = over_seeds(lambda s: {"A": 0.1256, "B": 0.1318 + 1e-17 * s}, range(10))
     sentence = c.sentence("A", "B", unit="m", digits=4)
     assert not c.varies("A", "B") and over_seeds(lambda s: _draws(s, 0.5), range(5)).varies("A", "B")
+    assert c.verdict("A", "B") is Verdict.NOT_RELIABLE  # A is lower in every seed, by one result
     # arithmetic's changes (sums in another order) are not the draws': 5e-9 m on 5 cm
     rounding = over_seeds(lambda s: {"A": 0.05 + 5e-9 * (s % 3), "B": 0.055}, range(10))
     assert not rounding.varies("A", "B") and "one result" in rounding.sentence("A", "B")

@@ -101,7 +101,11 @@ class Comparison:
         return bool(np.ptp(d) > 1e-6 * size)
 
     def verdict(self, a: str, b: str) -> Verdict:
-        """``BETTER`` when the whole interval of ``a − b`` is below zero, ``WORSE`` above."""
+        """``BETTER`` when the whole interval of ``a − b`` is below zero, ``WORSE`` above;
+        ``NOT_RELIABLE`` also where the seeds do not move ``a − b`` (:meth:`varies`): an interval
+        of zero width is one result, which says nothing of other draws."""
+        if not self.varies(a, b):
+            return Verdict.NOT_RELIABLE
         _, low, high = self.difference(a, b)
         if high < 0:
             return Verdict.BETTER

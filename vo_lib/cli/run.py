@@ -249,7 +249,7 @@ def _say_if_suspect(seq, n: int, diagnostics, poses, motion: str = "auto") -> No
             )
 
 
-def _warm_up_saying_so(seq, no_odometry: bool, seed: int, motion: str) -> None:
+def _warm_up_saying_so(seq, no_odometry: bool, seed: int, motion: str, vehicle) -> None:
     """The untimed warm-up (:func:`~vo_lib.stereo_vo.pipeline.warm_up`); once it has taken
     ``SLOW_S``, a line says that the kernels are compiling, and another when they are done."""
     from vo_lib.stereo_vo.pipeline import WARM_UP_FRAMES, warm_up
@@ -262,7 +262,7 @@ def _warm_up_saying_so(seq, no_odometry: bool, seed: int, motion: str) -> None:
     slow = threading.Timer(SLOW_S, lambda: said.append(print(compiling, flush=True)))
     slow.start()
     try:
-        seconds = warm_up(seq, use_odometry=not no_odometry, seed=seed, motion=motion)
+        seconds = warm_up(seq, use_odometry=not no_odometry, seed=seed, motion=motion, vehicle=vehicle)
     finally:
         slow.cancel()
         slow.join()
@@ -302,10 +302,16 @@ def _run_into(
     vehicle = vehicle_of(seq, use_odometry=not no_odometry, motion=motion)
     mount = vehicle.mount
     print(f"motion model: {_motion_said(vehicle, motion)}", flush=True)
-    _warm_up_saying_so(seq, no_odometry, seed, motion)
+    _warm_up_saying_so(seq, no_odometry, seed, motion, vehicle)
     print(f"visual odometry on {n} frames ...", flush=True)
     result = run_sequence(
-        seq, frames=n, use_odometry=not no_odometry, seed=seed, progress=sys.stderr.isatty(), motion=motion
+        seq,
+        frames=n,
+        use_odometry=not no_odometry,
+        seed=seed,
+        progress=sys.stderr.isatty(),
+        motion=motion,
+        vehicle=vehicle,
     )
     poses = result.camera_poses
     poses = camera_poses_from_planar(result.poses, mount) if poses is None else poses

@@ -396,6 +396,7 @@ def run_sequence(
     seed: int = 0,
     progress: bool = False,
     motion: str = "auto",
+    vehicle=None,
 ) -> PipelineResult:
     """Run the pipeline on a :class:`~vo_lib.formats.sequence.Sequence` (its first ``frames`` frames).
 
@@ -403,13 +404,14 @@ def run_sequence(
     a flat floor: the crawler of the samples, preset ``CRAWLER``), ``"full"`` (6-DoF, :mod:`.six_dof`:
     a car on a real road, preset ``CAR``), ``"hover"`` (6-DoF for a body free in all six, a drone
     or a hand-held rig, preset ``HOVER``; a sequence that names no body turns about its camera), or
-    ``"auto"``: the one that fits the sequence's vehicle (:mod:`.vehicle`).
+    ``"auto"``: the one that fits the sequence's vehicle (:mod:`.vehicle`). ``vehicle``: that
+    vehicle, where the caller has read it already (``vehicle_of(sequence, use_odometry, motion)``).
     """
     from vo_lib.stereo_vo.vehicle import vehicle_of
 
     if motion not in MOTION_MODELS:
         raise ValueError(f"motion must be one of {', '.join(MOTION_MODELS)}; got {motion!r}")
-    vehicle = vehicle_of(sequence, use_odometry, motion)
+    vehicle = vehicle or vehicle_of(sequence, use_odometry, motion)
     model = vehicle.motion if motion == "auto" else motion
     n = len(sequence) if frames is None else min(int(frames), len(sequence))
     odo = vehicle.odometry
@@ -428,14 +430,16 @@ def run_sequence(
         return run_frames(frame_iter(), sequence.camera, progress=bar, odometer=odometer, times=times)
 
 
-def warm_up(sequence, use_odometry: bool = True, seed: int = 0, motion: str = "auto") -> float:
+def warm_up(sequence, use_odometry: bool = True, seed: int = 0, motion: str = "auto", vehicle=None) -> float:
     """Run the pipeline once, untimed and discarded, on the first frames of ``sequence``.
 
     Every Numba kernel the run will call is then compiled, or loaded from its cache, before the
     timed run starts, so compile time (seconds in a fresh environment) stays out of the per-frame
-    timings. Returns the seconds the warm-up took.
+    timings (``vehicle`` as in :func:`run_sequence`). Returns the seconds the warm-up took.
     """
     t0 = time.perf_counter()
     frames = min(WARM_UP_FRAMES, len(sequence))
-    run_sequence(sequence, frames=frames, use_odometry=use_odometry, seed=seed, motion=motion)
+    run_sequence(
+        sequence, frames=frames, use_odometry=use_odometry, seed=seed, motion=motion, vehicle=vehicle
+    )
     return time.perf_counter() - t0
