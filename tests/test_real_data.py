@@ -778,6 +778,22 @@ def test_a_run_that_looks_miscalibrated_says_so(tmp_path, capsys, edit, expected
 
 
 @needs_euroc
+def test_a_truth_whose_quaternions_are_written_w_first_is_named(tmp_path, capsys):
+    """A TUM truth written ``qw qx qy qz`` reads as a rotation of other axes: the run ends, and one
+    notice names the file and the quaternion order of its format."""
+    from vo_lib.cli.main import main
+
+    rig = small_rig(tmp_path, frames=20)
+    tum = rig / "mav0" / "state_groundtruth_estimate0" / "groundtruth.tum"
+    rows = [line.split() for line in tum.read_text().splitlines() if not line.startswith("#")]
+    tum.write_text("".join(" ".join([*r[:4], r[7], *r[4:7]]) + "\n" for r in rows))
+    assert main(["run", "--sequence", str(rig), "--out", str(tmp_path / "out")]) == 0
+    notices = [line for line in capsys.readouterr().err.splitlines() if line.startswith("notice:")]
+    assert len(notices) == 1 and f"{tum}: the estimate's rotations" in notices[0], notices
+    assert "(TUM: qx qy qz qw; EuRoC CSV: qw qx qy qz)" in notices[0]
+
+
+@needs_euroc
 def test_a_baseline_given_twice_its_length_is_named(tmp_path, capsys):
     """cam1 twice as far from cam0 as it is: the path comes out twice the truth's, less the per
     cent or so that the steps are measured short, and the notice still names the baseline."""
@@ -993,6 +1009,33 @@ def test_evaluate_moves_a_truth_of_the_recording_into_its_rectified_camera(tmp_p
     copied = re.search(r"SE\(3\) alignment, positions only\): rmse ([0-9.]+)", captured.out)
     assert copied.group(1) == printed.group(1)
     assert f"prism.csv: positions of the prism of {EUROC / 'mav0' / 'leica0' / 'sensor.yaml'}" in captured.err
+
+
+@needs_euroc
+def test_a_truth_linked_into_a_recording_is_that_recordings(tmp_path, capsys):
+    """A ground truth kept elsewhere and linked into a recording is read as run reads it: moved by
+    that recording's calibration (not by the one beside the link's target), and evaluate accepts
+    the run made with it."""
+    from vo_lib.cli.main import main
+
+    rig = small_rig(tmp_path)
+    for side in ("cam0", "cam1"):  # both cameras 10 cm further along the body's x: another extrinsic
+        yaml = rig / "mav0" / side / "sensor.yaml"
+        text = yaml.read_text()
+        x = re.search(r"data: \[([^,]+),([^,]+),([^,]+),([^,]+),", text)
+        shifted = f"{float(x.group(4)) + 0.1!r}"
+        yaml.write_text(text[: x.start(4)] + shifted + text[x.end(4) :])
+    gt = rig / "mav0" / "state_groundtruth_estimate0" / "groundtruth.tum"  # its sensor.yaml stays
+    (tmp_path / "store").mkdir()
+    shutil.move(gt, tmp_path / "store")
+    gt.symlink_to(tmp_path / "store" / "groundtruth.tum")
+    assert main(["run", "--sequence", str(rig), "--out", str(tmp_path / "run")]) == 0
+    by_run = capsys.readouterr().out
+    assert main(["evaluate", "--gt", str(gt), "--est", str(tmp_path / "run" / "trajectory.tum")]) == 0
+    out = capsys.readouterr().out
+    assert f"--gt lies in the ASL recording {rig / 'mav0'}" in out
+    at_run = float(re.search(r"ATE RMSE, SE\(3\) alignment \[m\] +([0-9.]+)", by_run).group(1))
+    assert f"{at_run:.4f}" == re.search(r"ATE \(SE\(3\) alignment\): rmse \[m\] +([0-9.]+)", out).group(1)
 
 
 @needs_euroc

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import contextlib
 import io
+import os
 from functools import partial
 from pathlib import Path
 
@@ -64,7 +65,7 @@ def check_against_its_run(gt: str, gt_sha256: str, est: str, marker: dict) -> No
         )
     if gt_sha256 == truth.get("sha256"):
         return
-    if Path(gt).resolve() == Path(str(truth.get("path"))):
+    if Path(gt).resolve() == Path(str(truth.get("path"))).resolve():
         raise UsageError(
             f"--gt {gt}: changed since --est {est} was run against it (the run's marker records "
             "another checksum: was the sequence written again?); expected the truth of that run, "
@@ -80,7 +81,7 @@ def _check_one_to_one(truth, gt: str, est: str, count: int, marker: dict) -> Non
     """Poses without timestamps pair one to one: equal counts, or ``--est`` a run of the first
     frames of ``--gt``'s sequence (said in one line)."""
     sequence = Path(str(marker.get("sequence")))  # of the run that wrote --est: its first frames?
-    first = marker.get("frames") == count and Path(gt).resolve() == sequence / "poses.txt"
+    first = marker.get("frames") == count and Path(gt).resolve() == (sequence / "poses.txt").resolve()
     if len(truth.positions) > count and first:
         print(f"--est {est} is a run of the first {count} frames of --gt's sequence: compared with those")
     elif len(truth.positions) != count:
@@ -125,10 +126,12 @@ def recording_of(gt: str, extrinsic_of: str | None, kitti: bool) -> str | None:
     """The ASL recording whose calibration moves ``--gt`` into its rectified left camera:
     ``extrinsic_of``, else the ``mav0`` folder holding the ``--gt`` file among its sensors' (said in
     one line), else None (taken as given). KITTI poses and files this package wrote are a camera's
-    already: never moved (``extrinsic_of`` with one is refused)."""
+    already: never moved (``extrinsic_of`` with one is refused). The folders are those of the path
+    as given: a truth linked into a recording from elsewhere is that recording's, as ``run`` reads it.
+    """
     from vo_lib.formats.euroc import mav0_of
 
-    path = Path(gt).resolve()
+    path = Path(os.path.abspath(gt))  # symbolic links not followed
     if extrinsic_of is not None and (path.parent / MARKER).is_file():
         raise UsageError(
             f"--extrinsic-of {extrinsic_of}: --gt {gt} was written by this package, as a camera's poses "

@@ -136,7 +136,7 @@ def _truth_record(seq) -> dict | None:
     if truth_file is None:
         return None
     return {
-        "path": str(Path(truth_file).resolve()),
+        "path": os.path.abspath(truth_file),  # where the run read it: links not followed
         "sha256": file_sha256(truth_file),
         "calibration": calibration_digest(seq.path, Path(truth_file)),
     }
@@ -214,6 +214,11 @@ PATH_RATIO = 1.5
 #: A run with this share of its frames flagged says so (the rendered samples, whose tracks slip
 #: and lose contact by design, flag a fifth at most).
 FLAGGED_SHARE = 0.25
+#: A run whose frame-to-frame rotations differ from the truth's by this share of the truth's own
+#: (RMS, and by at least ``TURNS_DIFFER_DEG``) says so: the development runs differ by 2-13 % of it,
+#: a TUM file whose quaternions are written w first by 160 %.
+TURNS_DIFFER = 0.5
+TURNS_DIFFER_DEG = 0.2
 
 
 def _say_if_suspect(seq, n: int, diagnostics, poses, motion: str = "auto") -> None:
@@ -241,12 +246,34 @@ def _say_if_suspect(seq, n: int, diagnostics, poses, motion: str = "auto") -> No
             f"({why});{model} is each camera's calibration, distortion included, that of these images?"
         )
     elif seq.poses is not None:
+        _say_if_turns_differ(seq, n, poses)
         truth_m, est_m = (float(path_lengths(p[:n])[-1]) for p in (seq.poses, poses))
         if min(truth_m, est_m) > 0 and max(truth_m, est_m) >= PATH_RATIO * min(truth_m, est_m):
             notice(
                 f"{seq.path}: the estimate's path is {est_m:.4g} m long and the truth's {truth_m:.4g} m; "
                 "is the stereo baseline that of the rig? (cam1's T_BS in its sensor.yaml, or P1 in calib.txt)"
             )
+
+
+def _say_if_turns_differ(seq, n: int, poses) -> None:
+    """A notice where the estimate's turns from frame to frame have little in common with the truth's
+    (``TURNS_DIFFER``): a truth of another recording, or of other quaternion order."""
+    import numpy as np
+
+    from vo_lib.evaluation import rotation_angle, rpe
+    from vo_lib.geometry import as_homogeneous
+
+    truth = as_homogeneous(seq.poses[:n])
+    turned = np.degrees(rotation_angle(np.swapaxes(truth[:-1, :3, :3], 1, 2) @ truth[1:, :3, :3]))
+    differ, turns = rpe(truth, poses, rotation=True)[0].rmse, float(np.sqrt(np.mean(turned**2)))
+    if differ >= max(TURNS_DIFFER * turns, TURNS_DIFFER_DEG):
+        truth_file = seq.truth_file or seq.path / "poses.txt"
+        notice(
+            f"{truth_file}: the estimate's rotations from frame to frame differ from the truth's by "
+            f"{differ:.2g} deg (RMS), where the truth turns {turns:.2g} deg: is it the "
+            "truth of these images, its quaternions in the order of its format (TUM: qx qy qz qw; EuRoC "
+            "CSV: qw qx qy qz)?"
+        )
 
 
 def _warm_up_saying_so(seq, no_odometry: bool, seed: int, motion: str, vehicle) -> None:

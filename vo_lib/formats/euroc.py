@@ -152,7 +152,10 @@ def _check_images_there(csv_path: Path, files: list[Path], lines: list[int]) -> 
             if path.exists():  # a folder, a pipe, a device
                 what = "a folder" if path.is_dir() else "not a regular file"
                 raise AslError(f"{csv_path}, line {line}: {path} is {what}; expected an image")
-            raise AslError(f"{csv_path}, line {line}: {path.name} is missing from {path.parent}")
+            raise AslError(
+                f"{csv_path}, line {line}: {path.name} is missing from {path.parent} "
+                f"(data.csv names each image by its path inside {csv_path.parent / 'data'})"
+            )
 
 
 def _calibration(path) -> tuple[Path, list, Rectification]:
@@ -226,7 +229,8 @@ def read_asl(path, groundtruth=None, frames: int | None = None, truth: bool = Tr
     truth_path = Path(groundtruth) if groundtruth else (next(found, None) if truth else None)
     poses = None
     if truth_path is not None and len(seconds) < 3:  # as evaluate: errors of two poses mean nothing
-        notice(f"{truth_path}: not read for {len(seconds)} frames; an evaluation needs at least 3")
+        if len(seconds) == 2:  # (a single pair is refused by whatever reads it: nothing to add)
+            notice(f"{truth_path}: not read for 2 frames; an evaluation needs at least 3")
     elif truth_path is not None:
         poses = _truth_into_camera(truth_path, seconds, rect.T_body_rect, manifest)
     since_first = (stamps - stamps[0]) * NANOSECONDS  # from whole nanoseconds: exact to 1 ns
