@@ -258,6 +258,67 @@ needs_kitti_raw = pytest.mark.skipif(
 )
 
 
+def raw_drive(tmp_path: Path) -> Path:
+    """The KITTI sample as KITTI's raw set stores the drive: ``DATE/DATE_drive_0001_sync`` with
+    ``image_00/data``, date-and-time stamps and one OXTS packet per image, the calibration above."""
+    date = tmp_path / "2011_09_26"
+    drive = date / "2011_09_26_drive_0001_sync"
+    for name in ("calib_cam_to_cam.txt", "calib_imu_to_velo.txt", "calib_velo_to_cam.txt"):
+        (date / name).parent.mkdir(parents=True, exist_ok=True)
+        shutil.copy(KITTI_RAW / "raw_calib" / name, date / name)
+    seconds = np.loadtxt(KITTI_RAW / "times.txt")
+    stamps = np.datetime64("2011-09-26T13:02:25.964389445") + np.rint(seconds * 1e9).astype("timedelta64[ns]")
+    for side, raw in (("image_0", "image_00"), ("image_1", "image_01")):
+        (drive / raw / "data").mkdir(parents=True)
+        for k in range(len(seconds)):
+            (drive / raw / "data" / f"{k:010d}.png").symlink_to(KITTI_RAW / side / f"{k:06d}.png")
+        (drive / raw / "timestamps.txt").write_text("".join(f"{str(t).replace('T', ' ')}\n" for t in stamps))
+    (drive / "oxts" / "data").mkdir(parents=True)
+    for k, line in enumerate((KITTI_RAW / "oxts.txt").read_text().splitlines()):
+        (drive / "oxts" / "data" / f"{k:010d}.txt").write_text(line + "\n")
+    return drive
+
+
+@needs_kitti_raw
+def test_a_drive_of_kittis_raw_set_runs_as_stored(tmp_path, capsys):
+    """A raw drive reads as its KITTI-layout copy: the same rig, the camera's poses from the OXTS
+    packets as KITTI's kit computes them (the copy's poses.txt), the same mount and odometry; its
+    converted copy carries them; its date folder, and a drive without calibration, are named."""
+    from vo_lib.cli.main import main
+    from vo_lib.data import load_sequence
+
+    drive, ref = raw_drive(tmp_path), load_sequence(KITTI_RAW)
+    raw = load_sequence(drive)
+    assert raw.camera == ref.camera and len(raw) == len(ref)
+    np.testing.assert_allclose(raw.times, ref.times, atol=1e-6)
+    np.testing.assert_allclose(raw.poses_4x4(), ref.poses_4x4(), atol=1e-4)  # poses.txt's digits
+    cars = [vehicle_of(seq) for seq in (raw, ref)]
+    np.testing.assert_allclose(cars[0].mount, cars[1].mount)
+    np.testing.assert_allclose(cars[0].odometry, cars[1].odometry, atol=1e-5)
+    assert main(["convert", str(drive), "--to", "kitti", "--out", str(tmp_path / "copy")]) == 0
+    copy = load_sequence(tmp_path / "copy")
+    np.testing.assert_array_equal(vehicle_of(copy).odometry, cars[0].odometry)
+    np.testing.assert_array_equal(vehicle_of(copy).mount, cars[0].mount)
+    capsys.readouterr()
+    assert main(["run", "--sequence", str(drive.parent), "--out", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and f"holds 1 drive of KITTI's raw set; pass one, e.g. {drive}" in err[0]
+    stamps = drive / "image_00" / "timestamps.txt"
+    lines = stamps.read_text().splitlines()
+    (drive / "oxts" / "data" / "0000000050.txt").unlink()
+    (drive.parent / "calib_cam_to_cam.txt").rename(drive / "calib_cam_to_cam.txt")  # read there too
+    for damage, expected in (
+        (lambda: stamps.write_text("\n".join([*lines[:4], "2011-09-26 13:02:26,4", *lines[5:]])), "line 5"),
+        (lambda: stamps.write_text("\n".join([*lines[:4], lines[2], *lines[5:]])), "is not after"),
+        (lambda: stamps.write_text("\n".join(lines)), "0000000050.txt: missing; expected one OXTS packet"),
+        (lambda: (drive / "calib_cam_to_cam.txt").unlink(), "no calib_cam_to_cam.txt in it or in"),
+    ):
+        damage()
+        assert main(["run", "--sequence", str(drive), "--out", str(tmp_path / "out")]) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and expected in err[0], err
+
+
 # ---------------------------------------------------------------- a rig as it records (ASL layout)
 EUROC = REALDATA / "euroc_mh01_200"
 needs_euroc = pytest.mark.skipif(

@@ -10,6 +10,7 @@ import os
 from pathlib import Path
 
 from vo_lib.formats.euroc import AslError, asl_near_miss, mav0_of, read_asl
+from vo_lib.formats.kitti_raw import raw_drive_of, raw_near_miss, read_kitti_raw
 from vo_lib.formats.sequence import Sequence, read_sequence
 from vo_lib.sim.samples import SAMPLES, fingerprint, generate
 
@@ -73,8 +74,15 @@ def load_sequence(
         if not is_rendered(key, path):
             generate(key, path, frames, None if resolution is None else tuple(resolution), progress)
         return read_sequence(path, odometry=odometry, truth=truth)
-    if mav0_of(key) is not None:  # a rig as it records (ASL layout): rectified on reading
-        return read_asl(key, frames=frames, truth=truth)
-    if not (Path(key) / "image_0").is_dir() and (why := asl_near_miss(key)) is not None:
+    return read_folder(Path(key), frames, odometry, truth)
+
+
+def read_folder(path: Path, frames: int | None, odometry: bool, truth: bool) -> Sequence:
+    """The sequence in ``path``, in whichever layout it is (:func:`load_sequence`)."""
+    if mav0_of(path) is not None:  # a rig as it records (ASL layout): rectified on reading
+        return read_asl(path, frames=frames, truth=truth)
+    if raw_drive_of(path) is not None:  # a drive of KITTI's raw set, as it is stored
+        return read_kitti_raw(path, truth=truth)
+    if not (path / "image_0").is_dir() and (why := asl_near_miss(path) or raw_near_miss(path)):
         raise AslError(why)
-    return read_sequence(Path(key), odometry=odometry, truth=truth)
+    return read_sequence(path, odometry=odometry, truth=truth)

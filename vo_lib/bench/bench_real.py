@@ -20,13 +20,15 @@ REPEATS = 3
 
 
 def realdata_folders() -> list[Path]:
-    """Sequence folders (holding ``image_0/`` or ``mav0/``) in ``$VO_LIB_REALDATA`` (or that one
-    sequence); a variable set to anything but a folder raises :class:`UsageError`."""
+    """Sequence folders (holding ``image_0/`` or ``mav0/``, or a raw KITTI drive) in
+    ``$VO_LIB_REALDATA`` (or that one sequence); a variable set to anything but a folder raises
+    :class:`UsageError`."""
     from vo_lib.arguments import UsageError
     from vo_lib.formats.euroc import mav0_of
+    from vo_lib.formats.kitti_raw import raw_drive_of
 
     def is_sequence(p: Path) -> bool:
-        return (p / "image_0").is_dir() or mav0_of(p) is not None
+        return (p / "image_0").is_dir() or mav0_of(p) is not None or raw_drive_of(p) is not None
 
     root = Path(os.environ.get("VO_LIB_REALDATA") or DEFAULT_REALDATA)
     if os.environ.get("VO_LIB_REALDATA") and not root.is_dir():

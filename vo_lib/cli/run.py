@@ -133,7 +133,7 @@ def _truth_record(seq) -> dict | None:
     """The truth file of a run's errors, with the sha256 of it and of its calibration (``evaluate``
     refuses them once changed)."""
     truth_file = seq.truth_file or (seq.path / "poses.txt" if seq.poses is not None else None)
-    if truth_file is None:
+    if truth_file is None or not Path(truth_file).is_file():  # none, or a folder of packets (raw KITTI)
         return None
     return {
         "path": os.path.abspath(truth_file),  # where the run read it: links not followed
@@ -404,7 +404,7 @@ def convert_command(sequence: str, to: str, out: str, force: bool = False, no_tr
         with writer:
             for left, right in seq:
                 writer.add(left, right)
-            writer.carry(seq.path)
+            writer.carry(seq.path, seq.oxts, seq.raw_calib)  # a raw KITTI drive's packets and calibration
             body = manifest.get("T_body_camera")  # an ASL rig's; KITTI's Tr is the body's into the camera
             path = writer.close(
                 seq.times,

@@ -228,10 +228,10 @@ def read_asl(path, groundtruth=None, frames: int | None = None, truth: bool = Tr
     found = (mav0 / name for name in GROUND_TRUTH_FILES if _stated(mav0 / name))
     truth_path = Path(groundtruth) if groundtruth else (next(found, None) if truth else None)
     poses = None
-    if truth_path is not None and len(seconds) < 3:  # as evaluate: errors of two poses mean nothing
-        if len(seconds) == 2:  # (a single pair is refused by whatever reads it: nothing to add)
-            notice(f"{truth_path}: not read for 2 frames; an evaluation needs at least 3")
-    elif truth_path is not None:
+    # as evaluate: errors of two poses mean nothing (and a single pair is refused by its reader)
+    if truth_path is not None and len(seconds) == 2:
+        notice(f"{truth_path}: not read for 2 frames; an evaluation needs at least 3")
+    elif truth_path is not None and len(seconds) > 2:
         poses = _truth_into_camera(truth_path, seconds, rect.T_body_rect, manifest)
     since_first = (stamps - stamps[0]) * NANOSECONDS  # from whole nanoseconds: exact to 1 ns
     return Sequence(root, rect.camera, since_first, left, right, poses, None, manifest, rect, truth_path)

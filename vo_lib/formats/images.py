@@ -206,13 +206,16 @@ def image_files(folder: Path) -> list[Path]:
     return [folder / name for _, name in keyed]
 
 
-def unpaired(left: list[Path], right: list[Path]) -> str:
-    """What keeps two image lists from pairing by name: their counts and the lonely names."""
+def unpaired(left: list[Path], right: list[Path], sides: tuple[str, str] = ("image_0", "image_1")) -> str:
+    """What keeps two image lists (of folders ``sides``) from pairing by name: their counts and the
+    lonely names."""
     names_l, names_r = {p.name for p in left}, {p.name for p in right}
-    lonely = [f"image_0/{n}" for n in names_l - names_r] + [f"image_1/{n}" for n in names_r - names_l]
-    lonely.sort(key=lambda s: frame_order(s.split("/")[1]))
+    lonely = [f"{sides[0]}/{n}" for n in names_l - names_r] + [f"{sides[1]}/{n}" for n in names_r - names_l]
+    lonely.sort(key=lambda s: frame_order(s.rsplit("/", 1)[1]))
     listed = ", ".join(lonely[:4]) + (f" and {len(lonely) - 4} more" if len(lonely) > 4 else "")
-    counts = f"image_0 has {len(left)} images but image_1 has {len(right)}; " * (len(left) != len(right))
+    counts = f"{sides[0]} has {len(left)} images but {sides[1]} has {len(right)}; " * (
+        len(left) != len(right)
+    )
     return f"{counts}{len(lonely)} image(s) without a partner of the same name on the other side: {listed}"
 
 

@@ -1,20 +1,38 @@
-"""KITTI raw files a sequence folder may carry (``docs/real_data.md``): ``oxts.txt`` (GPS/IMU packets,
-whose speed and yaw rate stand in for wheel odometry) and ``raw_calib/`` (the camera's mount).
+"""KITTI's raw set (``docs/real_data.md``): the files a KITTI-layout folder may carry beside its
+images, ``oxts.txt`` (GPS/IMU packets, whose speed and yaw rate stand in for wheel odometry) and
+``raw_calib/`` (the camera's mount); and a drive as the raw set stores it, read as it is::
+
+    DATE/calib_cam_to_cam.txt, calib_imu_to_velo.txt, calib_velo_to_cam.txt
+    DATE/DATE_drive_NNNN_sync/image_00/data/0000000000.png ...   left, rectified, grey
+                              image_01/data/ ...                  right
+                              image_00/timestamps.txt             date and time of each image
+                              oxts/data/0000000000.txt ...        one GPS/IMU packet per image
+
+(the calibration files may also sit in the drive's folder). Its ground truth is the left camera's
+pose from the packets, as KITTI's development kit computes it.
 """
 
 from __future__ import annotations
 
+import warnings
 from pathlib import Path
 
 import numpy as np
+from scipy.spatial.transform import Rotation
 
-from vo_lib.formats.frame_files import SequenceError, check_metres, numbers, read_rows
+from vo_lib.camera import StereoCamera
+from vo_lib.formats.frame_files import SequenceError, check_metres, numbers, read_per_frame, read_rows, shown
+from vo_lib.formats.images import check_headers, image_files, unpaired
 from vo_lib.formats.poses import data_lines, rotation_problem
+from vo_lib.formats.sequence import Sequence, check_frame_spacing
 
 OXTS_FIELDS = 30
 VF, WZ = 8, 19  # zero-based columns of forward speed (m/s) and yaw rate (rad/s)
 #: Largest magnitude of any OXTS field: beyond, a packet is damaged (and would overflow the filter).
 MAX_OXTS_VALUE = 1e6
+RAW_CALIB_FILES = ("calib_cam_to_cam.txt", "calib_imu_to_velo.txt", "calib_velo_to_cam.txt")
+#: The Earth's equatorial radius (WGS 84), metres, of the Mercator projection of the OXTS positions.
+EARTH_RADIUS_M = 6378137.0
 
 
 def read_oxts(path) -> np.ndarray:
@@ -78,3 +96,104 @@ def camera_in_imu_frame(raw_calib) -> np.ndarray:
     rect = np.eye(4)
     rect[:3, :3] = _rotation(folder / "calib_cam_to_cam.txt", "R_rect_00")
     return np.linalg.inv(rect @ velo_to_cam @ imu_to_velo)
+
+
+def raw_drive_of(path) -> Path | None:
+    """``path`` if it is a drive folder of KITTI's raw set (holding ``image_00/data``), else None."""
+    path = Path(path)
+    return path if (path / "image_00" / "data").is_dir() else None
+
+
+def raw_near_miss(path) -> str | None:
+    """What to pass instead where ``path`` holds drives of the raw set (a date folder), else None."""
+    path = Path(path)
+    drives = sorted(p.name for p in path.iterdir() if raw_drive_of(p)) if path.is_dir() else []
+    if not drives:
+        return None
+    count = f"{len(drives)} drive{'s' * (len(drives) > 1)}"
+    return f"{path}: holds {count} of KITTI's raw set; pass one, e.g. {path / drives[0]}"
+
+
+def read_raw_timestamps(path: Path) -> np.ndarray:
+    """Seconds since 1970 of each line ``YYYY-MM-DD HH:MM:SS.fffffffff`` (the raw set's clock)."""
+    stamps = []
+    for n, line in data_lines(path, "a date and time per image"):
+        try:
+            with warnings.catch_warnings():  # NumPy warns of what it will refuse: refused here
+                warnings.simplefilter("error")
+                stamps.append(np.datetime64(line.replace(" ", "T", 1), "ns"))
+        except (ValueError, Warning):
+            raise SequenceError(
+                f"{path}, line {n}: {shown(line)}; expected a date and time, YYYY-MM-DD HH:MM:SS.fffffffff"
+            ) from None
+        if len(stamps) > 1 and not stamps[-1] > stamps[-2]:
+            raise SequenceError(
+                f"{path}, line {n}: {stamps[-1]} is not after {stamps[-2]} on the line before"
+            )
+    return np.array(stamps, "datetime64[ns]").astype(np.int64) * 1e-9
+
+
+def poses_from_oxts(oxts: np.ndarray, camera_in_imu: np.ndarray) -> np.ndarray:
+    """``(N, 4, 4)`` poses of the left rectified camera in its first frame, from OXTS packets: the
+    IMU at the Mercator projection of latitude and longitude (scaled at the first latitude) and the
+    altitude, turned by ``R = Rz(yaw) Ry(pitch) Rx(roll)``; ``camera_in_imu`` from
+    :func:`camera_in_imu_frame` (KITTI's development kit, ``convertOxtsToPose``)."""
+    lat, lon = np.radians(oxts[:, 0]), np.radians(oxts[:, 1])
+    imu = np.tile(np.eye(4), (len(oxts), 1, 1))
+    scale = EARTH_RADIUS_M * np.cos(lat[0])
+    imu[:, 0, 3], imu[:, 1, 3], imu[:, 2, 3] = (
+        scale * lon,
+        scale * np.log(np.tan(np.pi / 4 + lat / 2)),
+        oxts[:, 2],
+    )
+    imu[:, :3, :3] = Rotation.from_euler("ZYX", oxts[:, [5, 4, 3]]).as_matrix()
+    camera = imu @ camera_in_imu
+    return np.linalg.inv(camera[0]) @ camera
+
+
+def _raw_calib_folder(drive: Path) -> Path:
+    """The folder of the raw calibration files: the drive's own, else the one holding it."""
+    for folder in (drive, drive.parent):
+        if (folder / RAW_CALIB_FILES[0]).is_file():
+            return folder
+    raise SequenceError(
+        f"{drive}: no {RAW_CALIB_FILES[0]} in it or in {drive.parent}; expected KITTI's raw calibration "
+        f"({', '.join(RAW_CALIB_FILES)}) beside the drive's folder, where the raw set keeps it"
+    )
+
+
+def _raw_packets(drive: Path, images: list[Path]) -> np.ndarray:
+    """The OXTS packet of each image: ``oxts/data/NAME.txt`` for image ``NAME.png``."""
+    folder = drive / "oxts" / "data"
+    files = [folder / f"{image.stem}.txt" for image in images]
+    if missing := next((f for f in files if not f.is_file()), None):
+        raise SequenceError(f"{missing}: missing; expected one OXTS packet per image, named as the image")
+    return np.concatenate([read_per_frame(f, 1, "OXTS packets", read_oxts) for f in files])
+
+
+def read_kitti_raw(path, truth: bool = True) -> Sequence:
+    """A drive of KITTI's raw set as the set stores it (module docstring); ``truth=False``: no poses."""
+    drive = Path(path)
+    left, right = image_files(drive / "image_00" / "data"), image_files(drive / "image_01" / "data")
+    if not left:
+        raise SequenceError(f"{drive / 'image_00' / 'data'}: no images")
+    if [p.name for p in left] != [p.name for p in right]:
+        raise SequenceError(f"{drive}: {unpaired(left, right, ('image_00/data', 'image_01/data'))}")
+    calib = _raw_calib_folder(drive)
+    cam_to_cam = calib / RAW_CALIB_FILES[0]
+    P0, P1 = (_calib_values(cam_to_cam, key, 12).reshape(3, 4) for key in ("P_rect_00", "P_rect_01"))
+    try:
+        camera = StereoCamera.from_projection_matrices(P0, P1, *check_headers(left, right))
+    except ValueError as exc:
+        raise SequenceError(f"{cam_to_cam}: P_rect_00, P_rect_01: {exc}") from None
+    check_metres(
+        cam_to_cam, f"P_rect_01 puts the right camera {camera.baseline:g} from the left", camera.baseline
+    )
+    stamps_file = drive / "image_00" / "timestamps.txt"
+    stamps = read_per_frame(stamps_file, len(left), "timestamps", read_raw_timestamps)
+    check_frame_spacing(stamps_file, stamps)
+    packets = _raw_packets(drive, left)
+    poses = poses_from_oxts(packets, camera_in_imu_frame(calib))[:, :3] if truth else None
+    manifest = {"layout": "kitti_raw", "time_origin_s": float(stamps[0])}
+    packets_of = {"truth_file": drive / "oxts" / "data", "oxts": packets, "raw_calib": calib}
+    return Sequence(drive, camera, stamps - stamps[0], left, right, poses, None, manifest, **packets_of)

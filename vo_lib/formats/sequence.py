@@ -78,6 +78,9 @@ class Sequence:
     rectify: Callable[[np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]] | None = None
     #: The file the ground truth was read from, where the layout offers several (an ASL recording's).
     truth_file: Path | None = None
+    #: A drive of KITTI's raw set: its OXTS packets, one per frame, and its raw calibration's folder.
+    oxts: np.ndarray | None = None
+    raw_calib: Path | None = None
 
     #: Frames decoded ahead, on a reader thread, of the one asked for (0: none).
     read_ahead: int = 2

@@ -57,11 +57,12 @@ class SequenceWriter(OutputFolder):
                 f"{self.label}: cannot write the sequence ({why}); nothing was written"
             ) from None
 
-    def carry(self, source: Path) -> None:
+    def carry(self, source: Path, packets=None, raw_calib: Path | None = None) -> None:
         """Copy those of :data:`CARRIED` that ``source`` holds into the sequence, unchanged (of a
-        folder, its ``calib_*.txt`` files)."""
+        folder, its ``calib_*.txt`` files). A drive of KITTI's raw set gives its OXTS ``packets``
+        (written as ``oxts.txt``) and the folder of its ``raw_calib`` instead."""
         for name in CARRIED:
-            src = Path(source) / name
+            src = Path(raw_calib) if name == "raw_calib" and raw_calib else Path(source) / name
             try:
                 self._copy(src, self.path / name)
             except OSError as exc:
@@ -69,17 +70,19 @@ class SequenceWriter(OutputFolder):
                     f"{self.label}: cannot copy {exc.filename or src} "
                     f"({exc.strerror or str(exc)[:120]}); nothing was written"
                 ) from None
+        if packets is not None:
+            self._write(self.path / "oxts.txt", _format_rows(packets, 30).encode())
 
     @staticmethod
     def _copy(src: Path, dst: Path) -> None:
         """A file as it is; ``raw_calib``, a folder, as its ``calib_*.txt`` files; nothing if absent."""
-        if src.is_dir() and src.name != "raw_calib":
+        if src.is_dir() and dst.name != "raw_calib":
             raise OutputError(f"{src}: a folder, where a file should be")
         if src.is_dir():  # raw_calib: what is read of it, not what else it holds
             dst.mkdir()  # with the umask's permissions, not src's: it can be replaced
             for file in [f for f in sorted(src.glob("calib_*.txt")) if f.is_file()]:
                 shutil.copyfile(file, dst / file.name)
-        elif src.is_file() and src.name == "raw_calib":
+        elif src.is_file() and dst.name == "raw_calib":
             raise OutputError(f"{src}: a file, where the folder of KITTI's raw calibration should be")
         elif src.is_file():
             shutil.copyfile(src, dst)

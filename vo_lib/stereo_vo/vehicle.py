@@ -161,7 +161,7 @@ def _car(sequence, use_odometry: bool) -> Vehicle:
     """A car in the KITTI layout: the camera in its IMU frame (``raw_calib``, else KITTI's rig), and
     wheel distances from ``odometry.txt`` or from the OXTS packets' speed and yaw rate."""
     root = sequence.path
-    raw_calib = root / "raw_calib"
+    raw_calib = sequence.raw_calib or root / "raw_calib"  # a raw drive's, else a KITTI-layout folder's
     if raw_calib.exists() or raw_calib.is_symlink():  # a file or a broken link: named by the reader
         mount = camera_in_imu_frame(raw_calib)
     else:
@@ -171,9 +171,13 @@ def _car(sequence, use_odometry: bool) -> Vehicle:
     odometry = sequence.odometry if use_odometry else None
     source = "odometry.txt" if odometry is not None else "none"
     oxts = root / "oxts.txt"
-    if odometry is None and use_odometry and present(oxts, "the OXTS packets"):
-        packets = read_per_frame(oxts, len(sequence), "packets", read_oxts)
+    if odometry is None and use_odometry and (sequence.oxts is not None or present(oxts, "the OXTS packets")):
+        packets = (
+            sequence.oxts
+            if sequence.oxts is not None
+            else read_per_frame(oxts, len(sequence), "packets", read_oxts)
+        )
         odometry = wheel_distances_from_oxts(packets, sequence.times, CAR_GAUGE)
         model = car_odometry_model(CAR_GAUGE)
-        source = "oxts.txt (speed and yaw rate)"
+        source = f"{'oxts/data' if sequence.oxts is not None else 'oxts.txt'} (speed and yaw rate)"
     return Vehicle(VehicleKind.CAR, mount, model, odometry, source, Motion.FULL)
