@@ -14,6 +14,7 @@ pose from the packets, as KITTI's development kit computes it.
 
 from __future__ import annotations
 
+import contextlib
 import warnings
 from pathlib import Path
 
@@ -106,8 +107,9 @@ def raw_drive_of(path) -> Path | None:
 
 def raw_near_miss(path) -> str | None:
     """What to pass instead where ``path`` holds drives of the raw set (a date folder), else None."""
-    path = Path(path)
-    drives = sorted(p.name for p in path.iterdir() if raw_drive_of(p)) if path.is_dir() else []
+    path, drives = Path(path), []
+    with contextlib.suppress(OSError):  # a folder that cannot be listed holds no drive we can read
+        drives = sorted(p.name for p in path.iterdir() if raw_drive_of(p))
     if not drives:
         return None
     count = f"{len(drives)} drive{'s' * (len(drives) > 1)}"
