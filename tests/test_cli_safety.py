@@ -492,6 +492,8 @@ CASES = [
         "--sequence important.txt: a file, not a sequence folder", run_once("out"), "out"),
     Case("sequence-is-its-image-folder", "run --sequence seq/image_0", 2,
         "missing image folder; give the folder holding image_0"),
+    Case("sequence-holds-nothing", "run --sequence empty", 2,
+        "empty holds no sequence: expected image_0/ and image_1/ (KITTI), mav0/"),
     Case("no-images", "RUN", 2, "image_0: no images",
         lambda ws: [p.unlink() for p in (ws / "seq").glob("image_*/*.png")]),
     # --- bounds ----------------------------------------------------------------------------------

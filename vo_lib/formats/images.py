@@ -175,12 +175,18 @@ def _is_image(entry: os.DirEntry) -> bool:
     return True
 
 
+#: The layouts a sequence folder may have, as an error message names them.
+LAYOUTS = "expected image_0/ and image_1/ (KITTI), mav0/ (EuRoC/ASL) or image_00/data/ (a KITTI raw drive)"
+
+
 def _check_image_folder(folder: Path) -> None:
     """One line unless ``folder`` is a folder."""
     if folder.exists() and not folder.is_dir():
         raise SequenceError(f"{folder}: a file where the image folder should be; expected a folder of images")
     if not folder.is_dir():  # image_0/image_0: --sequence named the image folder itself
         hint = f"; give the folder holding {folder.name}" if folder.parent.name == folder.name else ""
+        if not hint and not (folder.parent / "image_1").exists():  # no sequence there at all
+            hint = f"; {folder.parent} holds no sequence: {LAYOUTS}"
         raise SequenceError(f"{folder}: missing image folder{hint}")
 
 
