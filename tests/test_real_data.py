@@ -928,6 +928,7 @@ def test_frames_within_the_truth_run_and_the_refusal_says_how_to_run_the_rest(tm
     assert main(["run", "--sequence", str(rig), "--no-truth", "--out", str(tmp_path / "all")]) == 0
     out = capsys.readouterr().out
     assert "Errors against ground truth" not in out and "leica0" not in out  # no other truth either
+    assert "\nframes flagged (VO not used): 0 of 12\n" in out  # counted without the error table
     est = tmp_path / "all" / "trajectory.tum"
     assert main(["evaluate", "--gt", str(truth), "--est", str(est), "--extrinsic-of", str(rig)]) == 0
     assert "associated 9 of 12 poses" in capsys.readouterr().out

@@ -356,7 +356,9 @@ def _run_into(
     decoding = [seq.decoding_ms[k] for k in range(1, n) if k in seq.decoding_ms]
     print_timing_table(result, seq.camera, n, decoding)
     report = position_only_errors(seq, poses, n) if truth is None else {}
-    if truth is not None:
+    if truth is None:  # the error table, which counts them, is not printed
+        print(f"\nframes flagged (VO not used): {len(result.flagged)} of {n}")
+    else:
         report = error_report(result, truth, odo)
         report["errors_3d"] = errors_3d(seq.poses[:n], {"vo": poses, "odometry": odo}, mount)
         print_error_table(  # a drone has no ground plane: its planar figures mean nothing
