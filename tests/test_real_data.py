@@ -306,12 +306,18 @@ def test_a_drive_of_kittis_raw_set_runs_as_stored(tmp_path, capsys):
     stamps = drive / "image_00" / "timestamps.txt"
     lines = stamps.read_text().splitlines()
     (drive / "oxts" / "data" / "0000000050.txt").unlink()
-    (drive.parent / "calib_cam_to_cam.txt").rename(drive / "calib_cam_to_cam.txt")  # read there too
+    calib = (drive.parent / "calib_cam_to_cam.txt").rename(drive / "calib_cam_to_cam.txt")  # read there too
     for damage, expected in (
         (lambda: stamps.write_text("\n".join([*lines[:4], "2011-09-26 13:02:26,4", *lines[5:]])), "line 5"),
         (lambda: stamps.write_text("\n".join([*lines[:4], lines[2], *lines[5:]])), "is not after"),
         (lambda: stamps.write_text("\n".join(lines)), "0000000050.txt: missing; expected one OXTS packet"),
-        (lambda: (drive / "calib_cam_to_cam.txt").unlink(), "no calib_cam_to_cam.txt in it or in"),
+        (
+            lambda: calib.write_text(
+                calib.read_text().replace("S_rect_00: 1.242000e+03", "S_rect_00: 1.392e+03")
+            ),
+            "1242x375 images, where the rectified ones are 1392x375",
+        ),  # an unrectified ("extract") drive
+        (lambda: calib.unlink(), "no calib_cam_to_cam.txt in it or in"),
     ):
         damage()
         assert main(["run", "--sequence", str(drive), "--out", str(tmp_path / "out")]) == 2

@@ -184,8 +184,15 @@ def read_kitti_raw(path, truth: bool = True) -> Sequence:
     calib = _raw_calib_folder(drive)
     cam_to_cam = calib / RAW_CALIB_FILES[0]
     P0, P1 = (_calib_values(cam_to_cam, key, 12).reshape(3, 4) for key in ("P_rect_00", "P_rect_01"))
+    size, rectified = check_headers(left, right), tuple(_calib_values(cam_to_cam, "S_rect_00", 2))
+    if size != rectified:  # the raw set's "extract" drives: distorted, not rectified
+        raise SequenceError(
+            f"{drive / 'image_00' / 'data'}: {size[0]}x{size[1]} images, where the rectified ones are "
+            f"{rectified[0]:g}x{rectified[1]:g} (S_rect_00 of {cam_to_cam}); expected a drive's "
+            "synced and rectified images (a _sync drive)"
+        )
     try:
-        camera = StereoCamera.from_projection_matrices(P0, P1, *check_headers(left, right))
+        camera = StereoCamera.from_projection_matrices(P0, P1, *size)
     except ValueError as exc:
         raise SequenceError(f"{cam_to_cam}: P_rect_00, P_rect_01: {exc}") from None
     check_metres(
