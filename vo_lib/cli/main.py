@@ -120,7 +120,8 @@ def build_parser() -> argparse.ArgumentParser:
 
     run = command(
         "run",
-        "run the stereo visual odometry pipeline on a sample, a KITTI-layout folder or an ASL recording",
+        "run the stereo visual odometry pipeline on a sample, a KITTI-layout folder, a raw KITTI drive "
+        "or an ASL recording",
         "Run [Zhao]'s stereo visual odometry on a sequence and print a timing table and, "
         "where the sequence has ground truth, its errors. A named sample is rendered into data/ on "
         "first use (a minute or so) and reused after. Writes into --out (default runs/NAME, "
@@ -131,7 +132,8 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument(
         "--sequence",
         type=non_empty("a sample name or a folder"),
-        help="sample name, KITTI-layout folder or ASL recording (default: indoor_linear)",
+        help="sample name, KITTI-layout folder, raw KITTI drive (as stored) or ASL recording (default: "
+        "indoor_linear)",
     )
     output(run, "default: runs/NAME, or runs/NAME_Nf with --frames N; new, empty, or written by a run")
     run.add_argument("--frames", type=count_at_least(2, "frames"), help="process only the first N frames")
@@ -197,7 +199,8 @@ def build_parser() -> argparse.ArgumentParser:
         "convert",
         "write a rectified copy of a stereo rig's recording (ASL layout) in the KITTI layout",
         "Undistort and rectify a recording in EuRoC's ASL layout (the folder holding mav0, or mav0) "
-        "and write it in the KITTI odometry layout, with its ground truth in the rectified left camera.",
+        "and write it in the KITTI odometry layout, with its ground truth in the rectified left camera "
+        "(a drive of KITTI's raw set as stored, too: its OXTS packets and calibration carried).",
         "convert /data/MH_01_easy --to kitti --out /tmp/mh01",
     )
     conv.add_argument(
