@@ -21,11 +21,10 @@ from pathlib import Path
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from vo_lib.camera import StereoCamera
 from vo_lib.formats.frame_files import SequenceError, check_metres, numbers, read_per_frame, read_rows, shown
 from vo_lib.formats.images import check_headers, image_files, unpaired
 from vo_lib.formats.poses import data_lines, rotation_problem
-from vo_lib.formats.sequence import Sequence, check_frame_spacing
+from vo_lib.formats.sequence import Sequence, check_frame_spacing, checked_camera
 
 OXTS_FIELDS = 30
 VF, WZ = 8, 19  # zero-based columns of forward speed (m/s) and yaw rate (rad/s)
@@ -191,13 +190,7 @@ def read_kitti_raw(path, truth: bool = True) -> Sequence:
             f"{rectified[0]:g}x{rectified[1]:g} (S_rect_00 of {cam_to_cam}); expected a drive's "
             "synced and rectified images (a _sync drive)"
         )
-    try:
-        camera = StereoCamera.from_projection_matrices(P0, P1, *size)
-    except ValueError as exc:
-        raise SequenceError(f"{cam_to_cam}: P_rect_00, P_rect_01: {exc}") from None
-    check_metres(
-        cam_to_cam, f"P_rect_01 puts the right camera {camera.baseline:g} from the left", camera.baseline
-    )
+    camera = checked_camera(cam_to_cam, P0, P1, size, ("P_rect_00", "P_rect_01"))
     stamps_file = drive / "image_00" / "timestamps.txt"
     stamps = read_per_frame(stamps_file, len(left), "timestamps", read_raw_timestamps)
     check_frame_spacing(stamps_file, stamps)

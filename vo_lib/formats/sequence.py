@@ -143,24 +143,34 @@ def _camera(root: Path, left: list[Path], right: list[Path]) -> StereoCamera:
     """The rig of ``calib.txt``, at the size every image header shares."""
     calib = root / "calib.txt"
     check_file(calib, "the calibration, P0 and P1 lines")
-    w, h = check_headers(left, right)
-    P0, P1 = read_calib(calib)
+    return checked_camera(calib, *read_calib(calib), check_headers(left, right))
+
+
+def checked_camera(
+    calib: Path, P0, P1, size: tuple[int, int], keys: tuple[str, str] = ("P0", "P1")
+) -> StereoCamera:
+    """The rig of the rectified projection matrices ``P0`` and ``P1`` (lines ``keys`` of ``calib``)
+    for images of ``size``, refused in one line naming ``calib`` where it cannot be these images'
+    (a baseline not in metres, a principal point outside the image, a focal length in other units)."""
+    (w, h), (left, right) = size, keys
     try:
         camera = StereoCamera.from_projection_matrices(P0, P1, w, h)
     except ValueError as exc:
         raise SequenceError(f"{calib}: {exc}") from None
     claim = (
-        f"P1 puts the right camera {camera.baseline:g} from the left (baseline = (P0[0,3] - P1[0,3]) / fx)"
+        f"{right} puts the right camera {camera.baseline:g} from the left "
+        f"(baseline = ({left}[0,3] - {right}[0,3]) / fx)"
     )
     check_metres(calib, claim, camera.baseline)
     if not (0 <= camera.cx <= w and 0 <= camera.cy <= h):
         raise SequenceError(
-            f"{calib}: P0's principal point ({camera.cx:g}, {camera.cy:g}) lies outside the {w}x{h} images"
+            f"{calib}: {left}'s principal point ({camera.cx:g}, {camera.cy:g}) lies outside the "
+            f"{w}x{h} images"
         )
     if max(camera.fx, camera.fy) > MAX_FOCAL_WIDTHS * w:
         raise SequenceError(
-            f"{calib}: P0's focal length {max(camera.fx, camera.fy):g} px is over {MAX_FOCAL_WIDTHS} image "
-            f"widths ({w} px): a field of view under 0.6 degrees; expected pixels of these images"
+            f"{calib}: {left}'s focal length {max(camera.fx, camera.fy):g} px is over {MAX_FOCAL_WIDTHS} "
+            f"image widths ({w} px): a field of view under 0.6 degrees; expected pixels of these images"
         )
     return camera
 

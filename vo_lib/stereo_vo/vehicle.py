@@ -170,14 +170,21 @@ def _car(sequence, use_odometry: bool) -> Vehicle:
     model = car_odometry_model()
     odometry = sequence.odometry if use_odometry else None
     source = "odometry.txt" if odometry is not None else "none"
-    oxts = root / "oxts.txt"
-    if odometry is None and use_odometry and (sequence.oxts is not None or present(oxts, "the OXTS packets")):
-        packets = (
-            sequence.oxts
-            if sequence.oxts is not None
-            else read_per_frame(oxts, len(sequence), "packets", read_oxts)
-        )
-        odometry = wheel_distances_from_oxts(packets, sequence.times, CAR_GAUGE)
-        model = car_odometry_model(CAR_GAUGE)
-        source = f"{'oxts/data' if sequence.oxts is not None else 'oxts.txt'} (speed and yaw rate)"
+    if odometry is None and use_odometry:
+        packets, packets_file = _oxts_packets(sequence)
+        if packets is not None:
+            odometry = wheel_distances_from_oxts(packets, sequence.times, CAR_GAUGE)
+            model = car_odometry_model(CAR_GAUGE)
+            source = f"{packets_file} (speed and yaw rate)"
     return Vehicle(VehicleKind.CAR, mount, model, odometry, source, Motion.FULL)
+
+
+def _oxts_packets(sequence) -> tuple[np.ndarray | None, str]:
+    """A car's OXTS packets, one per frame, and the file they are in: a raw drive's (read with its
+    images), else those of ``oxts.txt``; ``(None, "")`` where there are none."""
+    if sequence.oxts is not None:
+        return sequence.oxts, "oxts/data"
+    oxts = sequence.path / "oxts.txt"
+    if not present(oxts, "the OXTS packets"):
+        return None, ""
+    return read_per_frame(oxts, len(sequence), "packets", read_oxts), "oxts.txt"
