@@ -74,6 +74,9 @@ def test_hamming_and_best_matches():
     b = a.copy()
     b[0, 0] ^= 0b1011  # three bits
     assert hamming(a, b).tolist() == [3, 0, 0]
+    every_pair = hamming(a[:, None], b[None])  # row i against row j
+    assert every_pair.shape == (3, 3) and every_pair[0, 0] == 3 and every_pair[1, 1] == 0
+    assert every_pair[2, 1] == every_pair[1, 2] == hamming(a[2:], a[1:2])[0] > 0
     # a0 -> b1 (distance 1) beats b0 (distance 10); a1 has no clear winner (ratio); b2 taken by a2
     ia, ib = np.array([0, 0, 1, 1, 2]), np.array([0, 1, 0, 2, 2])
     dist = np.array([10, 1, 5, 5, 2])

@@ -50,9 +50,10 @@ class StereoFeatures:
 
 
 def hamming(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Hamming distances between paired rows of 32-byte descriptors."""
+    """Hamming distances between paired rows of 32-byte descriptors (the last axis; the others
+    broadcast, so ``hamming(a[:, None], b[None])`` is every row of ``a`` against every row of ``b``)."""
     x = np.bitwise_xor(a.view(np.uint64), b.view(np.uint64))
-    return np.bitwise_count(x).sum(axis=1, dtype=np.int32)
+    return np.bitwise_count(x).sum(axis=-1, dtype=np.int32)
 
 
 def best_matches(

@@ -177,7 +177,7 @@ def match_features(
         return TemporalMatches(none, none, np.zeros((0, 3)), np.zeros((0, 3)), 0, {"temporal_match": 0.0})
     if predicted is None:  # every (i, j) pair, ordered by i
         ia, ib = np.repeat(np.arange(n_prev), n_curr), np.tile(np.arange(n_curr), n_prev)
-        dist = hamming(prev.descriptors[ia], curr.descriptors[ib])
+        dist = hamming(prev.descriptors[:, None], curr.descriptors[None]).ravel()
     else:
         order = np.argsort(curr.w[:, 1], kind="stable")
         half = np.broadcast_to(np.asarray(radius, float), (n_prev, 3))
