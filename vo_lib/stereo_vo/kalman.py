@@ -34,11 +34,26 @@ SLIP_SIGMA = 0.01
 #: model error of the crawler, observed as a zero pseudo-measurement in every VO update.
 SIDEWAYS_SIGMA = 0.002
 #: Constant-velocity process noise grows by this fraction of the last motion per frame...
-CV_RELATIVE = 0.2
+CV_RELATIVE = 0.6
 #: ...and the heading may change by this much per metre travelled (radians).
-CV_TURN_PER_METRE = 0.05
-#: Constant-velocity process noise per frame: (along, across, yaw) standard deviations.
-CV_SIGMA = (0.01, 0.005, math.radians(0.3))
+CV_TURN_PER_METRE = 0.15
+#: Constant-velocity process noise per frame: (along, across, yaw) standard deviations. With the
+#: two lines above, wide enough that the changes of a true motion from one frame to the next stay
+#: within one standard deviation (RMS) on both development recordings down to a quarter of their
+#: frame rates (the drone at 5 Hz turns the fastest: 0.77 sigma in yaw). A third of each of the
+#: three left the drone's turns at 2.5 sigma, and the filter pulled each turn's first frames back
+#: towards the last motion (docs/real_data.md).
+CV_SIGMA = (0.03, 0.015, math.radians(0.9))
+
+
+def constant_velocity_sigma(increment) -> np.ndarray:
+    """Standard deviations ``(along, across, yaw)`` of the change of a frame's motion from the last
+    one, ``increment`` = ``(dx, dy, dyaw)``: the floor, plus a fraction of each component (velocity
+    changes scale with the velocity), plus a turn per metre travelled."""
+    step = math.hypot(increment[0], increment[1])
+    return np.asarray(CV_SIGMA) + CV_RELATIVE * np.array(
+        [step, step, abs(increment[2]) + CV_TURN_PER_METRE * step]
+    )
 
 
 def constrained_measurement(state6: np.ndarray) -> np.ndarray:
@@ -173,12 +188,7 @@ class VoKalmanFilter:
                 ]
             )
             Rw = yaw_matrix(x[2])
-            # velocity changes scale with the velocity: a fraction of each component, plus the floor
-            step = math.hypot(inc[0], inc[1])
-            sigma = np.asarray(CV_SIGMA) + CV_RELATIVE * np.array(
-                [step, step, abs(inc[2]) + CV_TURN_PER_METRE * step]
-            )
-            sigma = steps * sigma  # a velocity that is off is off over every interval of the gap
+            sigma = steps * constant_velocity_sigma(inc)  # a velocity that is off is off over every interval
             Q = Rw @ np.diag(sigma**2) @ Rw.T
         self.flags = StepFlags(odometry=u is not None)
         self.ekf.x = np.concatenate([x_new, self.ekf.x[ref]])
