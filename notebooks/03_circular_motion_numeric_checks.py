@@ -390,8 +390,8 @@ assert tilt_error[0.0][0] < 1e-9 and tilt_error[0.0][1] < 1e-9  # planar: exact
 display(
     Markdown(
         f"A tilt of 2° already moves the per-match θ by {tilt_error[2.0][0]:.2f}° (pitch) and "
-        f"{tilt_error[2.0][1]:.2f}° (roll) in the median, more than a third of the true 3°: "
-        "the model's θ is meaningless on such a frame."
+        f"{tilt_error[2.0][1]:.2f}° (roll) in the median, {min(tilt_error[2.0]) / 3.0:.0%} of the true 3° "
+        "or more: the model's θ is meaningless on such a frame."
     )
 )
 
