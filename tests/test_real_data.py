@@ -1506,6 +1506,14 @@ def euroc_sequence():
     return load_sequence(EUROC, odometry=False, progress=False)
 
 
+def a_third_of_the_constant_velocity_noise(monkeypatch) -> None:
+    """Each of the three constant-velocity constants of ``kalman`` at a third of its value."""
+    from vo_lib.stereo_vo import kalman
+
+    for name in ("CV_SIGMA", "CV_RELATIVE", "CV_TURN_PER_METRE"):
+        monkeypatch.setattr(kalman, name, np.divide(getattr(kalman, name), 3))
+
+
 def constant_velocity_misfit(seq) -> np.ndarray:
     """RMS over the frames of the change of the vehicle's true motion from one frame to the next, in
     standard deviations of the filter's constant-velocity prediction: ``(along, across, yaw)``."""
@@ -1530,7 +1538,6 @@ def test_the_constant_velocity_noise_covers_both_recordings_down_to_a_quarter_of
     fastest (0.77 in yaw from frame 0). A third of each of the three constants left those turns
     at 2.5."""
     from vo_lib.data import load_sequence
-    from vo_lib.stereo_vo import kalman
 
     car = load_sequence(KITTI_RAW, odometry=False, progress=False)
     worst = max(
@@ -1542,8 +1549,7 @@ def test_the_constant_velocity_noise_covers_both_recordings_down_to_a_quarter_of
     assert worst <= 1.0
     quarter = every_kth(euroc_sequence, 4, 0)
     assert round(constant_velocity_misfit(quarter)[2], 2) == 0.77
-    for name in ("CV_SIGMA", "CV_RELATIVE", "CV_TURN_PER_METRE"):
-        monkeypatch.setattr(kalman, name, np.divide(getattr(kalman, name), 3))
+    a_third_of_the_constant_velocity_noise(monkeypatch)
     assert round(constant_velocity_misfit(quarter)[2], 1) == 2.5
 
 
@@ -1579,7 +1585,6 @@ def test_the_docs_paragraph_on_the_constant_velocity_noise_holds(euroc_sequence,
     and final % as the README prints them not at all."""
     from vo_lib.bench.bench_real import error_rows
     from vo_lib.data import load_sequence
-    from vo_lib.stereo_vo import kalman
 
     car = load_sequence(KITTI_RAW, odometry=False, progress=False)
     runs = [every_kth(euroc_sequence, k, o) for k, o in sorted(LOWER_RATE_ROWS)] + [euroc_sequence, car]
@@ -1591,8 +1596,7 @@ def test_the_docs_paragraph_on_the_constant_velocity_noise_holds(euroc_sequence,
         return np.array([[r["final_rotation_deg"], r["final_pct"], r["ate_m"]] for r in rows])
 
     now = figures()
-    for name in ("CV_SIGMA", "CV_RELATIVE", "CV_TURN_PER_METRE"):
-        monkeypatch.setattr(kalman, name, np.divide(getattr(kalman, name), 3))
+    a_third_of_the_constant_velocity_noise(monkeypatch)
     third = figures()
     assert (third[:9, :2] > now[:9, :2]).sum(axis=0).tolist() == [8, 9 - 6]
     assert np.abs(third[9:, 0] - now[9:, 0]).max() < 0.01
