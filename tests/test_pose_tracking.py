@@ -233,9 +233,20 @@ def test_readme_quotes_the_experiment(experiment):
         text,
     )
     assert bound, "README: no comparison of VOAPT with LBPT"
+    below = re.search(
+        r"its\s+maximum\s+X\s+error\s+is\s+below\s+LBPT's\s+in\s+([0-9]+)\s+of\s+them,\s+its\s+mean\s+in\s+([0-9]+)\.",
+        text,
+    )
+    assert below, "README: no count of the seeds where VOAPT is below LBPT"
     assert ours["VOAPT"][0] <= float(bound.group(1)) * ours["LBPT"][0]
     assert ours["VOAPT"][1] <= float(bound.group(2)) * ours["LBPT"][1]
     if os.environ.get("OPENBLAS_CORETYPE") == "Haswell":
         assert _near(quoted["VOAPT"], ours["VOAPT"]), (quoted["VOAPT"], ours["VOAPT"])
         assert abs(float(shares.group(2)) - 100 * experiment.false_alarms()) <= 0.5
         assert int(lost.group(1)) == sum(m > LOST_ERROR for m in medians)
+        for k, statistic in ((1, "max"), (2, "mean")):
+            lower = sum(
+                statistics_table(v.errors[:, 0])[statistic] < statistics_table(b.errors[:, 0])[statistic]
+                for v, b in zip(experiment.voapt, experiment.lbpt, strict=True)
+            )
+            assert int(below.group(k)) == lower, (statistic, lower)
