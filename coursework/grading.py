@@ -110,7 +110,8 @@ class Reason(enum.Enum):
     FAKE_NUMBER = (
         "fakes a number, an array or a comparison",
         "__array__ __eq__ __ne__ __lt__ __le__ __gt__ __ge__ __abs__ __sub__ __rsub__ __array_function__ "
-        "__array_ufunc__ __array_interface__ __array_priority__ __getitem__ __len__ __iter__ __float__",
+        "__array_ufunc__ __array_interface__ __array_priority__ __getitem__ __len__ __iter__ __float__ "
+        "__array_wrap__ __array_finalize__ __bool__ __index__ __int__",
     )
     REBINDS = "rebinds NumPy or a module, or uses the grader", "builtins coursework grading setattr delattr"
     PRIVATE = "reaches a private name (a leading underscore) of an imported module", ""
@@ -122,6 +123,7 @@ class Reason(enum.Enum):
 
 FLAGGED = {word: reason for reason in Reason for word in reason.words}  # imported, used or defined
 PROTECTED = {"np", "numpy", "grading", "assert_allclose"}  # names an answer must not rebind
+NUMBER_TYPES = ("float", "int", "complex", "bool")  # a subclass of one fakes a number
 NAMED_TUPLE = {"_replace", "_asdict", "_make", "_fields", "_field_defaults"}  # public, though underscored
 
 
@@ -175,9 +177,7 @@ def _reasons(node: ast.AST, imported: set[str]) -> list[Reason]:
     name = getattr(node, "id", None) or getattr(node, "attr", None) or getattr(node, "name", None)
     if isinstance(node, (ast.Name, ast.Attribute, ast.FunctionDef)) and name in FLAGGED:
         return [FLAGGED[name]]
-    if isinstance(node, ast.ClassDef) and any(
-        _named(b, "float", "int", "complex", "bool") for b in node.bases
-    ):
+    if isinstance(node, ast.ClassDef) and any(_named(b, *NUMBER_TYPES) for b in node.bases):
         return [Reason.FAKE_NUMBER]
     targets = _targets(node)
     if any(_rebinds(t) or (isinstance(t, ast.Attribute) and _named(_root(t), *imported)) for t in targets):
