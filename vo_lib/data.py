@@ -5,14 +5,14 @@ KITTI-layout folder or an ASL recording.
 
 from __future__ import annotations
 
-import json
 import os
 from pathlib import Path
 
 from vo_lib.formats.euroc import AslError, asl_near_miss, mav0_of, read_asl
 from vo_lib.formats.kitti_raw import raw_drive_of, raw_near_miss, read_kitti_raw
 from vo_lib.formats.sequence import Sequence, read_sequence
-from vo_lib.sim.samples import SAMPLES, fingerprint, generate
+from vo_lib.outputs import read_marker
+from vo_lib.sim.samples import SAMPLES, fingerprint, generate, is_sample
 
 
 def data_dir() -> Path:
@@ -49,11 +49,7 @@ def sample_path(name: str, frames: int | None = None, resolution=None) -> Path:
 
 def is_rendered(name: str, path) -> bool:
     """Whether sample ``name`` is rendered in ``path`` with the sample's current fingerprint."""
-    try:
-        manifest = json.loads((Path(path) / "manifest.json").read_text())
-    except (OSError, ValueError, RecursionError):
-        return False
-    return isinstance(manifest, dict) and manifest.get("fingerprint") == fingerprint(name)
+    return (read_marker(path, "manifest.json") or {}).get("fingerprint") == fingerprint(name)
 
 
 def load_sequence(
@@ -69,7 +65,7 @@ def load_sequence(
     pairs (a KITTI-layout folder is read whole); ``odometry=False``: ``odometry.txt`` is not read;
     ``truth=False``: no ground truth is read."""
     key = str(name_or_path)
-    if key in SAMPLES and not Path(key).exists():
+    if is_sample(key):
         path = sample_path(key, frames, resolution)
         if not is_rendered(key, path):
             generate(key, path, frames, None if resolution is None else tuple(resolution), progress)

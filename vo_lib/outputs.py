@@ -94,9 +94,10 @@ def entries(folder) -> list[str]:
     return sorted(set(found) - {MARKER})
 
 
-def read_marker(folder) -> dict | None:
-    """The marker of ``folder``, or None if it is missing, unreadable or no file (a pipe would block)."""
-    path = Path(folder) / MARKER
+def read_marker(folder, name: str = MARKER) -> dict | None:
+    """The marker (or JSON object ``name``) of ``folder``, or None if it is missing, unreadable or no
+    file (a pipe would block)."""
+    path = Path(folder) / name
     try:
         data = json.loads(path.read_text(encoding="utf-8")) if path.is_file() else None
     except (OSError, ValueError, RecursionError):

@@ -23,7 +23,7 @@ from vo_lib.arguments import UsageError
 from vo_lib.formats.poses import write_kitti_poses, write_tum
 from vo_lib.geometry import camera_poses_from_planar, planar_from_camera_poses, rigid_inverse
 from vo_lib.outputs import OutputError, OutputFolder, check_target, file_sha256, notice, reading
-from vo_lib.sim.samples import SAMPLES, get_sample
+from vo_lib.sim.samples import SAMPLES, get_sample, is_sample
 from vo_lib.stereo_vo.run_report import (
     error_report,
     errors_3d,
@@ -65,10 +65,6 @@ def default_name(name_or_path: str, frames: int | None = None) -> str:
     with ``_Nf`` for the first ``frames`` N (a short run does not replace the whole one's output)."""
     path = Path(name_or_path) if is_sample(name_or_path) else Path(name_or_path).resolve()
     return (path.parent.name if path.name == "mav0" else path.name) + (f"_{frames}f" if frames else "")
-
-
-def is_sample(name_or_path: str) -> bool:
-    return name_or_path in SAMPLES and not Path(name_or_path).exists()
 
 
 #: A step that takes longer than this (seconds) says what it is doing.

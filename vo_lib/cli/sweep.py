@@ -85,10 +85,7 @@ def _no_answer(signum, frame):
 
 @contextlib.contextmanager
 def _alarm():
-    """:func:`_no_answer` after ``SCHEDULER_SECONDS`` (where the system has alarms)."""
-    if not hasattr(signal, "SIGALRM"):
-        yield
-        return
+    """:func:`_no_answer` after ``SCHEDULER_SECONDS``."""
     previous = signal.signal(signal.SIGALRM, _no_answer)
     signal.alarm(SCHEDULER_SECONDS)
     try:

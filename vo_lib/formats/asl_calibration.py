@@ -108,14 +108,11 @@ def _numbers(path: Path, data: dict, key: str, count: int, what: str, bound=np.i
                 f"{path}: key {key}: rows: {shape[0]!r}, cols: {shape[1]!r}; expected the numbers 4 and 4"
             )
         value = value.get("data")
-    if count == 16 and isinstance(value, list) and len(value) == 4 and all(_row_of_4(r) for r in value):
+    rows = value if isinstance(value, list) else []
+    if count == 16 and [len(r) if isinstance(r, list) else 0 for r in rows] == [4] * 4:
         value = [x for row in value for x in row]  # four rows of four, as Kalibr writes a transform
     within = "" if np.isinf(bound) else f", each within ±{bound:g}"
     return numbers_at(path, key, value, (count,), f"{what} ({count} finite numbers{within})", (-bound, bound))
-
-
-def _row_of_4(row) -> bool:
-    return isinstance(row, list) and len(row) == 4
 
 
 def _transform(path: Path, data: dict, what: str) -> np.ndarray:

@@ -13,7 +13,6 @@ from pathlib import Path
 import numpy as np
 
 from vo_lib.atomic import notice
-from vo_lib.camera import Rectification
 from vo_lib.evaluation import to_camera
 from vo_lib.formats.asl_calibration import AslError, read_camera_yaml, rectify, truth_extrinsic
 from vo_lib.formats.groundtruth import NANOSECONDS, covering, read_groundtruth
@@ -158,12 +157,6 @@ def _check_images_there(csv_path: Path, files: list[Path], lines: list[int]) -> 
             )
 
 
-def _calibration(path) -> tuple[Path, list, Rectification]:
-    """The ``mav0`` folder of the recording at ``path``, its cameras' calibrations and rectification."""
-    mav0, calib = _cameras(path)
-    return mav0, calib, rectify(*calib, mav0)
-
-
 def _cameras(path) -> tuple[Path, list]:
     """The ``mav0`` folder of the recording at ``path`` and its two cameras' calibrations."""
     mav0 = mav0_of(path)
@@ -177,7 +170,8 @@ def _cameras(path) -> tuple[Path, list]:
 
 def body_to_rectified_camera(path) -> np.ndarray:
     """``T_body_rect``: the rectified left camera of the ASL recording at ``path`` in its body frame."""
-    return _calibration(path)[2].T_body_rect
+    mav0, calib = _cameras(path)
+    return rectify(*calib, mav0).T_body_rect
 
 
 def tracked_to_camera(truth_path, T_body_rect, tracker_of=None) -> np.ndarray:

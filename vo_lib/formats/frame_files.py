@@ -6,13 +6,12 @@
 from __future__ import annotations
 
 import json
-import os
 from pathlib import Path
 
 import numpy as np
 
 from vo_lib.formats.groundtruth import read_trajectory
-from vo_lib.formats.poses import TrajectoryError, check_file, data_lines, read_text, rigid_problem
+from vo_lib.formats.poses import TrajectoryError, data_lines, read_text, rigid_problem
 
 SequenceError = TrajectoryError
 
@@ -21,14 +20,6 @@ SequenceError = TrajectoryError
 MAX_RIG_M = 10.0
 #: Bytes a line of a per-frame file may take on average (a KITTI pose line about 200, an OXTS packet 300).
 MAX_LINE_BYTES = 1024
-
-
-def present(path: Path, what: str) -> bool:
-    """Whether the optional file ``path`` is there; anything but a file in its place raises."""
-    if not os.path.lexists(path):
-        return False
-    check_file(path, what)
-    return True
 
 
 def check_metres(path: Path, claim: str, value: float, most: float = MAX_RIG_M, unit: str = "") -> None:

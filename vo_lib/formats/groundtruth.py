@@ -1,6 +1,6 @@
 """Ground truth in the formats of ``docs/real_data.md`` (KITTI poses, TUM, EuRoC CSV, positions
 only): a CSV is EuRoC's (nanoseconds), a text file's times are seconds. Every problem raises one
-:class:`GroundTruthError` naming the file and line.
+:class:`TrajectoryError` naming the file and line.
 """
 
 from __future__ import annotations
@@ -25,9 +25,6 @@ NANOSECONDS = 1e-9
 MIN_STEP_NS = 1000.0
 
 
-GroundTruthError = TrajectoryError
-
-
 @dataclass(frozen=True)
 class GroundTruth:
     """``times`` in seconds (None for KITTI poses: one per image), ``positions`` ``(N, 3)``, ``poses``
@@ -46,7 +43,7 @@ def _check_columns(path: Path, a: np.ndarray, lines: list[int], comma: bool) -> 
     expected = "wxyz" if comma else "xyzw"
     order, line = header_quaternion_order(path, lines[0]) if width >= 8 else ("", 0)
     if order not in ("", expected):
-        raise GroundTruthError(
+        raise TrajectoryError(
             f"{path}, line {line}: the header orders the quaternion {' '.join(order)}; "
             + (
                 "a CSV is read as EuRoC's t[ns], x, y, z, qw, qx, qy, qz"
@@ -57,13 +54,13 @@ def _check_columns(path: Path, a: np.ndarray, lines: list[int], comma: bool) -> 
         )
     step = float(np.median(np.diff(a[:, 0]))) if len(a) > 1 else np.inf
     if comma and step < MIN_STEP_NS:
-        raise GroundTruthError(
+        raise TrajectoryError(
             f"{path}, line {lines[1]}: the times step by {step:.3g}; a CSV's times are read as "
             "nanoseconds (EuRoC's t[ns], x, y, z[, qw, qx, qy, qz]), and no sensor samples more "
             "often than every microsecond"
         )
     if comma and 4 < width < 8:
-        raise GroundTruthError(
+        raise TrajectoryError(
             f"{path}, line {lines[0]}: {width} numbers; expected t[ns], x, y, z (positions) "
             "or t[ns], x, y, z, qw, qx, qy, qz (EuRoC)"
         )
@@ -110,25 +107,25 @@ def covering(truth: GroundTruth, times, max_diff: float = MAX_TIME_DIFF_S) -> tu
     6-DoF truth: match every one)."""
     times = np.asarray(times, float)
     if len(times) < 3:  # --frames 2: the truth is fine, the images too few
-        raise GroundTruthError(
+        raise TrajectoryError(
             f"{truth.path}: {len(times)} images to compare with it; an evaluation needs at least 3 "
             "(run --frames 3 or more)"
         )
     t0, t1 = truth.times[0], truth.times[-1]
     if times[0] < t0 - max_diff or times[-1] > t1 + max_diff:
-        raise GroundTruthError(
+        raise TrajectoryError(
             f"{truth.path}: covers {t0:.3f} to {t1:.3f} s but the images span {times[0]:.3f} to "
             f"{times[-1]:.3f} s; the ground truth must cover every image{UNCOVERED_HINT}"
         )
     i_img, i_gt = associate(times, truth.times, max_diff)
     if truth.poses is not None and len(i_img) < len(times):
         missing = int(np.setdiff1d(np.arange(len(times)), i_img)[0])
-        raise GroundTruthError(
+        raise TrajectoryError(
             f"{truth.path}: no pose within {max_diff} s of image {missing} (t = {times[missing]:.3f} s); "
             f"the ground truth must cover every image{UNCOVERED_HINT}"
         )
     if len(i_img) < 3:
-        raise GroundTruthError(
+        raise TrajectoryError(
             f"{truth.path}: only {len(i_img)} positions within {max_diff} s of an image; need at least 3"
         )
     return i_img, i_gt

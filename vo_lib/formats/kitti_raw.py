@@ -22,9 +22,9 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from vo_lib.formats.frame_files import SequenceError, check_metres, numbers, read_per_frame, read_rows, shown
-from vo_lib.formats.images import check_headers, image_files, unpaired
+from vo_lib.formats.images import check_headers
 from vo_lib.formats.poses import data_lines, rotation_problem
-from vo_lib.formats.sequence import Sequence, check_frame_spacing, checked_camera
+from vo_lib.formats.sequence import Sequence, check_frame_spacing, checked_camera, image_pairs
 
 OXTS_FIELDS = 30
 VF, WZ = 8, 19  # zero-based columns of forward speed (m/s) and yaw rate (rad/s)
@@ -175,11 +175,7 @@ def _raw_packets(drive: Path, images: list[Path]) -> np.ndarray:
 def read_kitti_raw(path, truth: bool = True) -> Sequence:
     """A drive of KITTI's raw set as the set stores it (module docstring); ``truth=False``: no poses."""
     drive = Path(path)
-    left, right = image_files(drive / "image_00" / "data"), image_files(drive / "image_01" / "data")
-    if not left:
-        raise SequenceError(f"{drive / 'image_00' / 'data'}: no images")
-    if [p.name for p in left] != [p.name for p in right]:
-        raise SequenceError(f"{drive}: {unpaired(left, right, ('image_00/data', 'image_01/data'))}")
+    left, right = image_pairs(drive, ("image_00/data", "image_01/data"))
     calib = _raw_calib_folder(drive)
     cam_to_cam = calib / RAW_CALIB_FILES[0]
     P0, P1 = (_calib_values(cam_to_cam, key, 12).reshape(3, 4) for key in ("P_rect_00", "P_rect_01"))

@@ -75,13 +75,17 @@ def rigid_problem(T: np.ndarray) -> str | None:
     )
 
 
-def check_file(path: Path, what: str = "the file") -> None:
-    """Raise :class:`TrajectoryError` unless ``path`` is a regular file: missing, or what is there."""
+def check_file(path: Path, what: str = "the file", optional: bool = False) -> bool:
+    """Raise :class:`TrajectoryError` unless ``path`` is a regular file: missing, or what is there;
+    ``optional``: whether it is there (False where nothing is, a file or not)."""
+    if optional and not os.path.lexists(path):
+        return False
     if not Path(path).is_file():
         kind = "a folder" if Path(path).is_dir() else "not a regular file" if os.path.lexists(path) else None
         raise TrajectoryError(
             f"{path}: {kind}, where {what} should be a file" if kind else f"{path}: missing ({what})"
         )
+    return True
 
 
 def read_text(path, what: str = "the file") -> str:

@@ -27,10 +27,8 @@ import numpy as np
 from vo_lib.camera import StereoCamera
 from vo_lib.formats.frame_files import (
     SequenceError,
-    check_file,
     check_manifest,
     check_metres,
-    present,
     read_calib,
     read_manifest,
     read_per_frame,
@@ -39,6 +37,7 @@ from vo_lib.formats.frame_files import (
     read_times,
 )
 from vo_lib.formats.images import check_headers, image_files, load_image, unpaired
+from vo_lib.formats.poses import check_file
 from vo_lib.geometry import as_homogeneous
 
 #: Largest wheel distance between two frames in ``odometry.txt``, metres: beyond, the file is damaged.
@@ -175,16 +174,16 @@ def checked_camera(
     return camera
 
 
-def _image_pairs(root: Path) -> tuple[list[Path], list[Path]]:
-    """The left and right images of a sequence folder, paired by name."""
+def image_pairs(root: Path, sides: tuple[str, str] = ("image_0", "image_1")) -> tuple[list[Path], list[Path]]:
+    """The left and right images of a sequence folder (in its folders ``sides``), paired by name."""
     if not root.is_dir():
         what = "a file, not a sequence folder" if root.exists() else "sequence folder not found"
         raise SequenceError(f"{root}: {what}")
-    left, right = image_files(root / "image_0"), image_files(root / "image_1")
+    left, right = image_files(root / sides[0]), image_files(root / sides[1])
     if not left:
-        raise SequenceError(f"{root / 'image_0'}: no images")
+        raise SequenceError(f"{root / sides[0]}: no images")
     if [p.name for p in left] != [p.name for p in right]:
-        raise SequenceError(f"{root}: {unpaired(left, right)}")
+        raise SequenceError(f"{root}: {unpaired(left, right, sides)}")
     return left, right
 
 
@@ -204,19 +203,21 @@ def read_sequence(path, odometry: bool = True, truth: bool = True) -> Sequence:
     """Read and check a sequence folder (``odometry=False``: ``odometry.txt`` is not read;
     ``truth=False``: neither ``poses.txt`` nor the manifest's positions)."""
     root = Path(path)
-    left, right = _image_pairs(root)
+    left, right = image_pairs(root)
     camera = _camera(root, left, right)
     n = len(left)
     check_file(root / "times.txt", "one timestamp per frame")
     times = read_per_frame(root / "times.txt", n, "timestamps", read_times)
     check_frame_spacing(root / "times.txt", times)
     poses = odo = None
-    if truth and present(root / "poses.txt", "the ground-truth poses"):
+    if truth and check_file(root / "poses.txt", "the ground-truth poses", optional=True):
         poses = read_per_frame(root / "poses.txt", n, "poses", read_poses)
-    if odometry and present(root / "odometry.txt", "the odometry"):
+    if odometry and check_file(root / "odometry.txt", "the odometry", optional=True):
         odo = _odometry(root / "odometry.txt", times)
     manifest_path = root / "manifest.json"
-    manifest = read_manifest(manifest_path) if present(manifest_path, "the manifest") else {}
+    manifest = (
+        read_manifest(manifest_path) if check_file(manifest_path, "the manifest", optional=True) else {}
+    )
     if not truth:
         manifest.pop("positions", None)
     check_manifest(manifest_path, manifest, n)

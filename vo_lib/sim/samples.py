@@ -223,6 +223,11 @@ SAMPLES: dict[str, Sample] = {
 }
 
 
+def is_sample(name: str) -> bool:
+    """Whether ``name`` is a sample's (and no folder of that name is there to read instead)."""
+    return name in SAMPLES and not Path(name).exists()
+
+
 def fingerprint(name: str) -> str:
     """A short hash of everything that shapes a sample's images (its definition but its prose, its
     world): a cached sample whose manifest carries another is out of date."""

@@ -25,8 +25,9 @@ from enum import Enum
 
 import numpy as np
 
-from vo_lib.formats.frame_files import CAMERA_MOUNTS, SequenceError, present, read_per_frame
+from vo_lib.formats.frame_files import CAMERA_MOUNTS, SequenceError, read_per_frame
 from vo_lib.formats.kitti_raw import camera_in_imu_frame, read_oxts, wheel_distances_from_oxts
+from vo_lib.formats.poses import check_file
 from vo_lib.geometry import camera_mount
 from vo_lib.models.track_odometry import TrackOdometry
 
@@ -185,6 +186,6 @@ def _oxts_packets(sequence) -> tuple[np.ndarray | None, str]:
     if sequence.oxts is not None:
         return sequence.oxts, "oxts/data"
     oxts = sequence.path / "oxts.txt"
-    if not present(oxts, "the OXTS packets"):
+    if not check_file(oxts, "the OXTS packets", optional=True):
         return None, ""
     return read_per_frame(oxts, len(sequence), "packets", read_oxts), "oxts.txt"
