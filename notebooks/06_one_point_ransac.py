@@ -772,15 +772,15 @@ TH_YAW, TH_RHO = min(tuning, key=lambda key: tuple(tuning[key]))
 print(f"best on the tuning sets: th_yaw_angle = {TH_YAW}, th_polar_radius = {TH_RHO} m")
 
 # %% [markdown]
-# Then the ladder, every rung on the same 20 realistic match sets (one set per seed, each estimator
-# with its own fixed draws): the paper's estimator; per-match σ (steps 1–4: a match supports a θ
-# hypothesis when its own θ lies within k of their joint σ, the winner is re-estimated by the
-# inverse-variance weighted mean, eq. 20 and eq. 21 with per-match thresholds pick the matches
-# that go on to ρ and to the refinement); the pool; adaptive N_h; the refinement (step 5). Before
-# the refinement, eq. 20 moves θ nowhere: it only decides which matches the later steps use.
-# Each rung is compared with the one below it by `over_seeds`, on the absolute θ error and on
-# the relative ρ error (the smaller, the closer to the truth), and the sentences below are
-# written by the code.
+# Then the ladder, every rung on the same realistic match sets (one set per seed of `LADDER_SEEDS`,
+# each estimator with its own fixed draws; the table prints how many): the paper's estimator;
+# per-match σ (steps 1–4: a match supports a θ hypothesis when its own θ lies within k of their
+# joint σ, the winner is re-estimated by the inverse-variance weighted mean, eq. 20 and eq. 21 with
+# per-match thresholds pick the matches that go on to ρ and to the refinement); the pool; adaptive
+# N_h; the refinement (step 5). Before the refinement, eq. 20 moves θ nowhere: it only decides which
+# matches the later steps use. Each rung is compared with the one below it by `over_seeds`, on the
+# absolute θ error and on the relative ρ error (the smaller, the closer to the truth), and the
+# sentences below are written by the code.
 
 # %%
 LADDER = {

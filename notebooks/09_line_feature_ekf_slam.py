@@ -814,7 +814,7 @@ sides = {  # each interval against its consistent value
     for name, ci, value in (("the NEES", nees_ci, 3), ("the heading's", z2_ci, 1))
 }
 if set(sides.values()) == {"around"}:
-    consistency = f"at {len(laps)} seeds neither departure is **significant**: both intervals include it."
+    consistency = f"at {len(laps)} seeds neither differs **significantly** from its consistent value."
 else:
     consistency = (
         "; ".join(

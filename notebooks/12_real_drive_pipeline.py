@@ -151,13 +151,14 @@ for model, res in runs.items():
     )
 
 # %% [markdown]
-# On the car the planar pipeline flags most frames and coasts, but that is the crawler's matching
-# failing at a car's speed as much as the model. To judge the *model* alone, we give all three
-# readings the same matches: every pair of consecutive frames, matched in windows around the
+# On the real drive the planar pipeline flags most frames and coasts (the line above counts them;
+# without the real data a rendered crawler stands in, and it need not), but that is the crawler's
+# matching failing at a car's speed as much as the model. To judge the *model* alone, we give all
+# three readings the same matches: every pair of consecutive frames, matched in windows around the
 # motion the full pipeline measured, then 1-point RANSAC. We chain the frame-to-frame vehicle
-# motions that (a) the circular model gives for a camera on the axis, as `motion="planar"`
-# assumes, (b) the same circular camera motion carried through the real mount, and (c) the 6-DoF
-# refinement of RANSAC's inliers carried through the mount.
+# motions that (a) the circular model gives for a camera on the axis, as `motion="planar"` assumes,
+# (b) the same circular camera motion carried through the real mount, and (c) the 6-DoF refinement
+# of RANSAC's inliers carried through the mount.
 
 
 # %%
@@ -230,12 +231,12 @@ else:
     )
 
 # %% [markdown]
-# Fed good matches, the circular model is not lost on this gently curving road. Two biases are
-# to be expected of it: reading a camera ahead of the axis as if it were on it errs in position,
-# and ignoring pitch, slope and bank errs in heading, frame after frame. Whether each shows on
-# this drive, and whether the 6-DoF refinement reduces the heading drift, is what the sentences
-# above say over RANSAC's seeds. A sharper turn makes the offset term grow with the yaw rate, and
-# a hillier road the pitch term.
+# On the real drive, fed good matches, the circular model is not lost on its gently curving road
+# (without the real data, this section is skipped). Two biases are to be expected of it: reading a
+# camera ahead of the axis as if it were on it errs in position, and ignoring pitch, slope and bank
+# errs in heading, frame after frame. Whether each shows on this drive, and whether the 6-DoF
+# refinement reduces the heading drift, is what the sentences above say over RANSAC's seeds. A
+# sharper turn makes the offset term grow with the yaw rate, and a hillier road the pitch term.
 
 # %% [markdown]
 # ## 2 · Sharp turns and bumps: what the outlier filter must survive
@@ -461,10 +462,11 @@ display(
     Markdown(
         f"The bound averages {yaw_nis_bound.mean():.1e}, "
         + (
-            f"far below the band's lower end {nis_band[0]:.2f}: without looking at the truth, the "
-            "innovations say that the odometry's yaw noise is modelled far too wide. "
+            f"below the band's lower end {nis_band[0]:.2f}: without looking at the truth, the "
+            "innovations say that the odometry's yaw noise is modelled too wide. "
             if odometry_noise_too_wide
-            else "inside or above the band: the innovations do not contradict the odometry's model. "
+            else f"above its lower end {nis_band[0]:.2f}: the innovations do not say that the odometry's "
+            "yaw noise is modelled too wide. "
         )
         + f"And with the truth: fused, the drive ends {final['fused'][0]:.3f} m off, vision alone "
         f"{final['VO only'][0]:.3f} m, odometry alone {final['odometry only'][0]:.3f} m. "
@@ -475,9 +477,12 @@ display(
             else f"With RANSAC seed {SEED + 1} they end {again['fused']:.3f} m and "
             f"{again['VO only']:.3f} m off: RANSAC's draws, the only random ones here, move them. "
         )
-        + "Either way this is one real drive, the one on which the odometry's noise was chosen: "
-        "it ranks fusion against vision neither here nor elsewhere (notebook 07 compares them "
-        "over seeds)."
+        + (
+            "Either way this is one real drive, the one on which the odometry's noise was chosen: "
+            if REAL
+            else "Either way this is one rendered stand-in, not the real drive: "
+        )
+        + "it ranks fusion against vision neither here nor elsewhere (notebook 07 compares them over seeds)."
     )
 )
 
@@ -517,8 +522,10 @@ display(
     Markdown(
         f"The same run of ours ends {own_planar:.3f} m off in its own planar pose (the figure of "
         f"sections 1 and 4) and {projected:.3f} m off when its 6-DoF camera pose is projected to the "
-        "plane, as the baseline's must be for the table; the two differ because the pipeline's "
-        "planar pose is what its filter estimates, not the projection of its camera pose."
+        "plane, as the baseline's must be for the table; "
+        + ("the two differ" if f"{own_planar:.3f}" != f"{projected:.3f}" else "they can differ")
+        + " because the pipeline's planar pose is what its filter estimates, not the projection of "
+        "its camera pose."
     )
 )
 

@@ -26,10 +26,12 @@ def dead_reckoning_seeds(
     """Section 5's Monte Carlo (``runs`` noisy drives of ``steps`` equal controls ``u``) once per
     seed, against the section's two covariances after the last step, ``models`` = (full
     Jacobians, eq. 9's F = I): ``relative``, the Frobenius distance of the full one from the
-    cloud's over the cloud's size; ``spread``, the cloud's lateral σ over the one F = I gives."""
+    cloud's over the cloud's size; ``sampling``, the same distance for ``runs`` draws of a Gaussian
+    whose covariance is the full one (what the cloud's finite size alone gives); ``spread``, the
+    cloud's lateral σ over the one F = I gives."""
     P_full, P_eq9 = models
     sd = odo.encoder_sigma * np.sqrt(np.abs(u))
-    relative, spread = [], []
+    relative, sampling, spread = [], [], []
     for seed in seeds:
         rng = np.random.default_rng(seed)
         samples = np.zeros((runs, 3))
@@ -37,8 +39,10 @@ def dead_reckoning_seeds(
             samples = odo.predict(samples, u + rng.normal(size=(runs, 2)) * sd)
         cloud = np.cov(samples.T)
         relative.append(np.linalg.norm(P_full - cloud) / np.linalg.norm(cloud))
+        gaussian = np.cov(rng.multivariate_normal(np.zeros(3), P_full, runs).T)
+        sampling.append(np.linalg.norm(P_full - gaussian) / np.linalg.norm(gaussian))
         spread.append(np.sqrt(cloud[1, 1] / P_eq9[1, 1]))
-    return {"relative": np.array(relative), "spread": np.array(spread)}
+    return {"relative": np.array(relative), "sampling": np.array(sampling), "spread": np.array(spread)}
 
 
 def plot_dead_reckoning(samples: np.ndarray, history: Mapping[int, tuple]) -> None:

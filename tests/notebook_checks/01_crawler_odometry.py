@@ -8,6 +8,7 @@ assert P_eq9[1, 1] < 0.3 * mc_cov[1, 1]  # eq. 9 badly under-states the lateral 
 assert np.all(lateral[99:, 2] < 0.2 * lateral[99:, 0])  # by a factor above 5 from the first metre on
 
 # after: study = dead_reckoning_seeds(
-assert np.median(relative) < 0.03 and np.mean(relative < 0.05) >= 0.8  # a covariance to a few per cent
+# a covariance to a few per cent, of the order of the cloud's own sampling error
+assert np.median(relative) < 2.5 * np.median(sampling) and np.mean(relative < 0.05) >= 0.8
 assert np.all(np.abs(spread / models - 1) < 0.1)  # the clouds spread as the full model says
 assert runs == 3000 and odo.encoder_sigma == 0.01 and checkpoints == (100, 200, 300)  # as the text says
