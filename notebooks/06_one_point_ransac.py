@@ -1258,11 +1258,12 @@ import vo_lib.stereo_vo.ransac as ransac_module  # noqa: E402
 import vo_lib.stereo_vo.synthetic as synthetic_module  # noqa: E402
 from coursework import grading  # noqa: E402
 
-_h2_rng = np.random.default_rng(6021)  # new matches, and the noise the gates assume
-_h2_m = synthetic_module.synthetic_matches(ex_camera, 300, 0.05, 0.1, _h2_rng, (1.5, 15.0), 0.8, 0.4)
+_h2_rng, _h2_cam = np.random.default_rng(6021), ex_camera.scaled(800, 600)  # new matches, camera, noise
+_h2_m = synthetic_module.synthetic_matches(_h2_cam, 300, 0.05, 0.1, _h2_rng, (1.5, 15.0), 0.8, 0.4)
+_h2_m.inliers[::10] = False  # matches that fit the turn, labelled outliers: the gates accept some outliers
 with grading.unavailable():  # nothing refused; the matches as they were after the answer ran
-    _h2_got = gate_scores(_h2_m, ex_camera, 0.8)
-_h2_found = ransac_module.one_point_ransac(_h2_m.w_prev, _h2_m.w_curr, ex_camera, rng=1, pixel_sigma=0.8)
+    _h2_got = gate_scores(_h2_m, _h2_cam, 0.8)
+_h2_found = ransac_module.one_point_ransac(_h2_m.w_prev, _h2_m.w_curr, _h2_cam, rng=1, pixel_sigma=0.8)
 _h2_true, _h2_wrong = _h2_found.inliers & _h2_m.inliers, _h2_found.inliers & ~_h2_m.inliers
 _h2_expected = (_h2_true.sum() / _h2_m.inliers.sum(), _h2_wrong.sum())
 assert np.allclose(_h2_got, _h2_expected), "gate_scores: not the inliers' recall, the outliers kept"
@@ -1408,18 +1409,18 @@ import vo_lib.stereo_vo.ransac as ransac_module  # noqa: E402
 import vo_lib.stereo_vo.synthetic as synthetic_module  # noqa: E402
 from coursework import grading  # noqa: E402
 
-_h4_rng = np.random.default_rng(6041)  # noise-free matches, 70 % outliers
-_h4_m = synthetic_module.synthetic_matches(ex_camera, 300, -0.06, 0.2, _h4_rng, outlier_ratio=0.7)
-_h4_a, _h4_b = _h4_m.w_prev, _h4_m.w_curr
+_h4_rng = np.random.default_rng(6041)  # noise-free matches of another camera, 70 % outliers
 _h4_camera = dataclasses.replace(ex_camera, fx=420.0, fy=380.0, cx=300.0, cy=250.0)
+_h4_m = synthetic_module.synthetic_matches(_h4_camera, 300, -0.06, 0.2, _h4_rng, outlier_ratio=0.7)
+_h4_a, _h4_b = _h4_m.w_prev, _h4_m.w_curr
 with grading.unavailable(*grading.library_functions(ransac_module)):
     _h4_gate = theta_gate(_h4_a, _h4_b, 0.07, _h4_camera)
-    _h4_theta, _h4_in = one_point_theta(_h4_a, _h4_b, ex_camera, 0.02, 40, _h4_rng)
+    _h4_theta, _h4_in = one_point_theta(_h4_a, _h4_b, _h4_camera, 0.02, 40, _h4_rng)
 _h4_expected = ransac_module.theta_gate_error(_h4_a, _h4_b, 0.07, _h4_camera)
 _h4_message = "theta_gate: not eq. 20 (θ/2 in γ, γ′? f_x in β, f_y in tan α?)"
 assert np.allclose(_h4_gate, _h4_expected, rtol=1e-4), _h4_message  # float32 pixels stay within 1e-4
 assert np.isclose(_h4_theta, -0.06), "one_point_theta does not keep the hypothesis with the most inliers"
-_h4_expected = ransac_module.theta_gate_error(_h4_a, _h4_b, _h4_theta, ex_camera) < 0.02
+_h4_expected = ransac_module.theta_gate_error(_h4_a, _h4_b, _h4_theta, _h4_camera) < 0.02
 assert np.array_equal(_h4_in, _h4_expected), "the inliers: the matches within the threshold under the kept θ"
 _h4_rng = np.random.default_rng(6045)  # 0.3 px noise, half outliers, a wide gate: six θ tie for most inliers
 _h4_m = synthetic_module.synthetic_matches(ex_camera, 300, 0.04, 0.2, _h4_rng, (1.5, 15.0), 0.3, 0.5)

@@ -1152,7 +1152,7 @@ import vo_lib.line_slam as line_slam_module  # noqa: E402
 import vo_lib.stereo_vo.kalman as kalman_module  # noqa: E402
 from coursework import grading  # noqa: E402
 
-_h3_low, _h3_high = [-5, -5, -5, -10, -10, 1, -np.pi, 0.01, 0.01], [5, 5, 5, 10, 10, 15, np.pi, 0.2, 0.2]
+_h3_low, _h3_high = [-5, -5, -10, -10, -10, 1, -np.pi, 0.01, 0.01], [5, 5, 10, 10, 10, 15, np.pi, 0.2, 0.2]
 _h3_draws = np.random.default_rng(9031).uniform(_h3_low, _h3_high, (10, 9))  # any bearing: the seam too
 _h3_pose_cov, _h3_point_cov = np.diag([0.05, 0.02, 0.01]), np.diag([0.1, 0.3])
 _h3_cases = [(d[:3], _h3_pose_cov, d[3:5], _h3_point_cov, d[5:7], *d[7:]) for d in _h3_draws]
