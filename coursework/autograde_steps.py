@@ -23,7 +23,7 @@ class AfterRun(NbGraderPreprocessor):
             cell.outputs = [o for o in cell.outputs if o.get("name", o.output_type) not in dropped]
         exercise = meta.get("grade_id", "").removesuffix("_test")
         found = self.flagged.get(exercise, [f"held with {', '.join(self.flagged)}"])  # a flag holds them all
-        if meta.get("grade") and self.flagged:
+        if meta.get("grade") and self.flagged and cell.cell_type == "code":  # a written answer has no outputs
             why = f"the answer {exercise} is to be reviewed by the teacher: {'; '.join(found)}"
             cell.outputs.append(new_output("error", ename="ToBeReviewed", evalue=why, traceback=[why]))
         return cell, resources

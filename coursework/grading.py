@@ -30,11 +30,10 @@ def _refused(*args, **kwargs):  # the code a refused function runs, under its ow
 
 @contextlib.contextmanager
 def unavailable(*functions: Callable) -> Iterator[None]:
-    """Make ``functions`` raise :class:`GradingError` under every name (in loaded modules, their classes
-    and the notebook) and in every ``partial`` of them there while the block runs, and, for a Python
-    function, wherever it is held (a default argument, a closure: its code is swapped): a guard for
-    honest mistakes, not a sandbox. The test's own ``_h`` values are put back as they were unless the block
-    stored them anew: an answer that writes into the arrays it is given cannot fit the test to itself."""
+    """Make ``functions`` raise :class:`GradingError` while the block runs: under every name (in loaded
+    modules, their classes, the notebook, a ``partial``) and, for a Python function, wherever it is held
+    (its code is swapped); a guard for honest mistakes, not a sandbox. The test's ``_h`` values are put
+    back unless the block stored them anew: an answer that writes into its inputs cannot fit the test."""
     wanted = {id(f) for f in functions}
     modules = [m for m in list(sys.modules.values()) if isinstance(getattr(m, "__dict__", None), dict)]
     owned = [(m, k) for m in modules for k in vars(m).values() if isinstance(k, type)]
@@ -123,6 +122,7 @@ class Reason(enum.Enum):
 
 FLAGGED = {word: reason for reason in Reason for word in reason.words}  # imported, used or defined
 PROTECTED = {"np", "numpy", "grading", "assert_allclose"}  # names an answer must not rebind
+MODULES = ("np", "numpy", "grading")  # used only as np.f: bare, they are handed, held or iterated
 NUMBER_TYPES = ("float", "int", "complex", "bool")  # a subclass of one fakes a number
 NAMED_TUPLE = {"_replace", "_asdict", "_make", "_fields", "_field_defaults"}  # public, though underscored
 
@@ -136,7 +136,9 @@ def review(source: str, imported: frozenset[str] = frozenset()) -> list[tuple[in
         return found
     cell = _imports(tree)  # names the cell's imports bind; a patch counts for the notebook's too
     patched = cell | imported | _aliases(tree, cell | imported | PROTECTED)
+    values = {id(n.value) for n in ast.walk(tree) if isinstance(n, ast.Attribute)}  # the np of np.f
     for node in ast.walk(tree):
+        found += [(node.lineno, Reason.REBINDS)] if _named(node, *MODULES) and id(node) not in values else []
         found += [(getattr(node, "lineno", 0) or node.target.lineno, why) for why in _reasons(node, patched)]
         found += [(node.lineno, Reason.PRIVATE)] if _private(node, cell) else []
         found += [(node.lineno, Reason.HELD)] if _held(node, cell) else []
@@ -182,9 +184,8 @@ def _reasons(node: ast.AST, imported: set[str]) -> list[Reason]:
     targets = _targets(node)
     if any(_rebinds(t) or (isinstance(t, ast.Attribute) and _named(_root(t), *imported)) for t in targets):
         return [Reason.REBINDS]  # np.allclose = ..., grading = ..., or an attribute of anything imported
-    if isinstance(node, ast.Call) and any(_named(a, *PROTECTED) for a in node.args):
-        return [Reason.REBINDS]  # NumPy handed to a function, which may then patch it
-    return []
+    dunder = isinstance(node, ast.Constant) and str(node.value)[:2] == "__" and node.value in FLAGGED
+    return [FLAGGED[node.value]] if dunder else []  # type("F", (float,), {"__sub__": ...})
 
 
 def _targets(node: ast.AST) -> list[ast.AST]:
@@ -196,8 +197,7 @@ def _targets(node: ast.AST) -> list[ast.AST]:
 
 
 def _private(node: ast.AST, imported: set[str]) -> bool:
-    """``from m import _x``, ``from m._p import x``, or ``m._x`` where an import bound ``m`` (not ``__x__``,
-    nor ``_replace``): a module's own name, e.g. the compiled kernel inside the function asked for."""
+    """``from m import _x``, ``from m._p import x`` or ``m._x`` of an imported ``m`` (a private kernel)."""
     imports = isinstance(node, (ast.Import, ast.ImportFrom))
     paths = [str(getattr(node, "module", "")), *(a.name for a in node.names)] if imports else []
     names = [part for path in paths for part in path.split(".")] or [getattr(node, "attr", "")]

@@ -208,6 +208,13 @@ def test_library_functions_takes_functions_classes_and_the_methods_of_a_modules_
         ("import vo_lib.stereo_vo.ransac as library\nlibrary.theta_gate_error: object = min", Reason.REBINDS),
         # ... or NumPy handed to a function that patches it
         ("def patch(m):\n    m.allclose = min\npatch(np)", Reason.REBINDS),
+        # ... or reached through a name no assignment shows: a loop, a walrus, an item
+        ("for m in (np,):\n    m.array_equal = lambda *a, **k: True", Reason.REBINDS),
+        ("(n := np).allclose = min", Reason.REBINDS),
+        ("m = [np][0]\nm.allclose = min", Reason.REBINDS),
+        # a fake number or a lazy array made by type(), its special methods named in strings
+        ('Zero = type("Zero", (float,), {"__sub__": lambda s, o: 0.0})', Reason.FAKE_NUMBER),
+        ('Lazy = type("Lazy", (), {"__array__": lambda self, dtype=None, copy=None: 0})', Reason.FAKE_NUMBER),
     ],
 )
 def test_review_names_what_no_honest_answer_needs(answer, reason):
@@ -224,7 +231,7 @@ def test_the_report_knows_the_names_other_cells_import():
         _cell("answer", "n = np\nx = 1", "ex4"),
         _cell("answer", "n.sum = sum", "ex5"),
     ]
-    assert list(grading.report(nb)) == ["ex2", "ex5"]
+    assert list(grading.report(nb)) == ["ex2", "ex4", "ex5"]  # n = np: NumPy itself, held under a name
     assert "rebinds NumPy or a module" in grading.report(nb)["ex2"][0]
 
 
@@ -281,6 +288,12 @@ def test_stderr_never_costs_a_mark_and_a_flagged_answer_fails_every_test():
     # ex1's test held too: what the flagged answer patched may have bought its pass
     (held,) = [o for o in nb.cells[1].outputs if o.output_type == "error"]
     assert held.ename == "ToBeReviewed" and "ex2" in held.evalue
+    # a part graded by hand is text: it is held by the teacher's reading, and gets no output to fail
+    written = nbformat.v4.new_markdown_cell("The tracks grip over part of their width.")
+    written.metadata["nbgrader"] = {"grade_id": "ex2_why", "solution": True, "grade": True, "points": 1}
+    nb.cells.append(written)
+    nb, _ = autograde_steps.AfterRun().preprocess(nb, {})
+    assert "outputs" not in nb.cells[-1]
     clean = nbformat.v4.new_notebook(cells=[_cell("answer", "x = 1", "ex1"), _cell("test", "x", "ex1_test")])
     clean, _ = autograde_steps.AfterRun().preprocess(clean, {})
     assert clean.cells[1].outputs == []  # nothing flagged: nothing held
