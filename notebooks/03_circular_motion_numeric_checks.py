@@ -563,11 +563,12 @@ from coursework import grading
 from vo_lib.stereo_vo import circular_motion as cm_module
 from vo_lib.stereo_vo import ransac as ransac_module
 
-_h31 = synthetic_matches(camera, 300, 0.06, -0.1, np.random.default_rng(3011), noise_px=0.8)
+_h31_cam = StereoCamera(fx=520.0, fy=500.0, cx=310.0, cy=250.0, baseline=0.2, width=640, height=480)
+_h31 = synthetic_matches(_h31_cam, 300, 0.06, -0.1, np.random.default_rng(3011), noise_px=0.8)
 with grading.unavailable(*grading.library_functions(ransac_module)):  # the RANSAC weights its θ too
-    _h31_got = weighted_theta(_h31.w_prev, _h31.w_curr, camera, 0.8)
-_h31_w = cm_module.theta_standard_deviation(_h31.w_prev, _h31.w_curr, camera, 0.8) ** -2.0
-_h31_th = cm_module.theta_from_pixels(_h31.w_prev, _h31.w_curr, camera)
+    _h31_got = weighted_theta(_h31.w_prev, _h31.w_curr, _h31_cam, 0.8)
+_h31_w = cm_module.theta_standard_deviation(_h31.w_prev, _h31.w_curr, _h31_cam, 0.8) ** -2.0
+_h31_th = cm_module.theta_from_pixels(_h31.w_prev, _h31.w_curr, _h31_cam)
 assert np.isclose(_h31_got, np.average(_h31_th, weights=_h31_w), rtol=0, atol=1e-10), "not 1/σ²_θ weights"
 for _h31_errors, _h31_spread in ((errors_weighted, spread_weighted), (errors_median, spread_median)):
     assert len(set(np.ravel(_h31_errors))) == 200, "the errors of 200 different draws"
@@ -678,6 +679,8 @@ import numpy as np
 _h33_theta, _h33_z = np.random.default_rng(3031).uniform([-0.07, 1.5], [0.07, 15.0], (100, 2)).T
 _h33_got = correct_ahead(_h33_theta.copy(), _h33_z.copy(), 0.17)
 assert np.allclose(_h33_got, _h33_theta / (1 + 0.17 / _h33_z), rtol=0, atol=1e-6), "not θ divided by 1 + a/z"
+_h33_z = camera.depth_from_disparity(ahead.w_prev[usable, 2])  # the median the exercise asks for, not a mean
+assert np.isclose(theta_corrected, np.median(th_ahead / (1 + a_ahead / _h33_z)), rtol=0, atol=1e-9), "median?"
 ### END HIDDEN TESTS
 
 # %% [markdown]

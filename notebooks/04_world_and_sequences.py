@@ -455,6 +455,8 @@ with grading.unavailable(*grading.library_functions(vo_lib)):  # the SLAM's inve
     _h42_got = to_robot_frame(_h42_points.copy(), tuple(_h42_mount))
 _h42_expected = geometry_module.compose_planar(_h42_mount, np.column_stack([_h42_points, np.zeros(50)]))
 assert np.allclose(_h42_got, _h42_expected[:, :2]), "not the echoes of a turned and shifted scanner"
+_h42_scan = LaserScanner(range_sigma=0.0, max_range=30.0, mount=(0.3, 0.0, 0.0)).scan(walls, pose)
+assert np.allclose(robot_points, _h42_scan.points() + [0.3, 0.0]), "robot_points: the scanner 0.3 m ahead?"
 ### END HIDDEN TESTS
 
 # %% [markdown]

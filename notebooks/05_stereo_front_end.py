@@ -416,6 +416,7 @@ from vo_lib.stereo_vo import features as features_module
 from vo_lib.stereo_vo import matching_core, matching_plain
 
 _h51_a, _h51_b = np.random.default_rng(5011).integers(0, 256, (2, 500, 32), dtype=np.uint8)
+_h51_a[0], _h51_b[0] = 0, 255  # a pair differing in all 256 bits: a count in 8 bits wraps to 0
 _h51_no = grading.library_functions(
     features_module, matching_core, matching_plain, cv2.norm, cv2.batchDistance
 )

@@ -848,8 +848,9 @@ assert np.allclose(_h2_got, _h2_expected), "control_limits: other stretches (whi
 # `principal_direction(corrections, scores)` for corrections `(N, 3)` (dx, dy, dθ) and their
 # scores, returning that unit vector as a 2-vector (x, y) (either sign), without `vo_lib`'s
 # `principal_error_direction`. Store it for `spread_corrections`, `spread_scores` below in
-# `corridor_direction`, and its angle from the x axis, folded into [0°, 180°), in
-# `corridor_angle_deg`.
+# `corridor_direction`. A direction and its opposite lie on one line: write `line_angle_deg(direction)`,
+# the angle of the line along a 2-vector from the x axis in degrees, folded into [0°, 180°), and
+# store `corridor_angle_deg`, the corridor's.
 #
 # *Hint:* `np.percentile(scores, 75)`; `np.linalg.eigh` returns eigenvalues in ascending order.
 
@@ -877,8 +878,13 @@ def principal_direction(corrections, scores):
     return vectors[:, np.argmax(values)]
 
 
+def line_angle_deg(direction):
+    """Angle of the line along ``direction`` from the x axis, in degrees, folded into [0°, 180°)."""
+    return float(np.degrees(np.arctan2(direction[1], direction[0])) % 180.0)
+
+
 corridor_direction = principal_direction(spread_corrections, spread_scores)
-corridor_angle_deg = float(np.degrees(np.arctan2(corridor_direction[1], corridor_direction[0])) % 180.0)
+corridor_angle_deg = line_angle_deg(corridor_direction)
 print(f"principal error direction {corridor_angle_deg:.1f}° from the x axis")
 ### END SOLUTION
 
@@ -902,6 +908,9 @@ with grading.unavailable(*grading.library_functions(tracking_module)):
 _h3_expected = [tracking_module.principal_error_direction(*case) for case in _h3_cases]
 _h3_signed = [np.sign(got @ expected) * got for got, expected in zip(_h3_got, _h3_expected, strict=True)]
 assert np.allclose(_h3_signed, _h3_expected), "principal_direction: other samples (eigenvalue? centred?)"
+_h3_lines = np.r_[(_h3_v := _h3_rng.normal(size=(12, 2))), -_h3_v]  # all quadrants, and opposites
+_h3_folded = np.degrees(np.arctan2(_h3_lines[:, 1], _h3_lines[:, 0])) % 180
+assert np.allclose([line_angle_deg(v) for v in _h3_lines], _h3_folded), "line_angle_deg: in [0°, 180°)?"
 ### END HIDDEN TESTS
 
 # %% [markdown]
