@@ -857,8 +857,8 @@ display(
 # variance can shrink below the truth, and an offset made early, before the map holds, can stay:
 # the map was built with it, so the laser confirms the rotated picture. On a lap this short the
 # effect is small, and whether 20 seeds resolve it, and whether a run keeps its early offset, is
-# what the figures above say; the per-step share above the band comes from one lap's correlated
-# steps and can move with the base seed, which is why it carries no verdict.
+# what the figures above say; the per-step shares above and below the band come from one lap's
+# correlated steps and move with the base seed, either way, which is why they carry no verdict.
 # Remedies are first-estimate Jacobians, observability-constrained EKFs, or smoothing instead of
 # filtering; more seeds (`python -m vo_lib sweep lap`, below) tell a small inconsistency, in either
 # direction, from none. So: how the final error stands against dead reckoning's is printed above

@@ -211,7 +211,7 @@ if REAL:
             f"In position, {readings.sentence('circular through the mount', '6-DoF', unit='m', digits=3)}. "
             "The planar model cannot move the camera sideways or vertically, which the 6-DoF model "
             f"can; whether that costs position over these {travelled:.0f} m of gently curving road "
-            "is what the last sentence says, and on a longer drive a heading error turns into "
+            "is what the sentence on position says, and on a longer drive a heading error turns into "
             "position error too. "
             + (
                 "The figures are the same in every seed: on this drive RANSAC's draws do not move "
@@ -429,8 +429,9 @@ display(Markdown(across_story))
 # per wheel distance, which over the gauge becomes the yaw sigma printed above, set to the yaw
 # error measured on this drive: were it far above the odometry's actual error, the filter would
 # take the heading from vision almost alone.
-# The distance it takes from both, so on the real drive the fused distance leans towards the
-# odometry's (the tests check it): fusion is only as sound as each sensor's error model.
+# The distance it takes from both, so on the real drive the fused distance moves from the vision's
+# towards the odometry's, past the truth to the odometry's side (the tests check the side): fusion
+# is only as sound as each sensor's error model.
 #
 # **A check without the truth: NIS.** Notebook 07's normalised innovation squared needs only the
 # filter's own numbers. Per frame, the innovation of the yaw is the vision's yaw increment minus

@@ -470,6 +470,18 @@ CASES = [
         edit("seq/times.txt", "0\n33.3\n66.6\n99.9\n")),
     Case("calib-baseline-in-millimetres", "RUN", 2, "calib.txt: P1 puts the right camera 120 from the left",
         edit("seq/calib.txt", "P0: 50 0 31.5 0 0 50 23.5 0 0 0 1 0\nP1: 50 0 31.5 -6e3 0 50 23.5 0 0 0 1 0")),
+    Case("calib-focal-tiny", "RUN", 2, "calib.txt: P0's focal lengths fx=0.001, fy=0.001 px; expected pixels",
+        edit("seq/calib.txt", "P0: 1e-3 0 31.5 0 0 1e-3 23.5 0 0 0 1 0\n"
+             "P1: 1e-3 0 31.5 -1e-4 0 1e-3 23.5 0 0 0 1 0")),
+    Case("calib-focal-ratio", "RUN", 2, "calib.txt: P0's focal lengths fx=50, fy=500 px; expected",
+        edit("seq/calib.txt", "P0: 50 0 31.5 0 0 500 23.5 0 0 0 1 0\nP1: 50 0 31.5 -6 0 500 23.5 0 0 0 1 0")),
+    Case("calib-not-rectified", "RUN", 2, "calib.txt: P0 and P1 are not a rectified pair",
+        edit("seq/calib.txt", "P0: 50 0 31.5 0 0 50 23.5 0 0 0 1 0\nP1: 60 0 31.5 -6 0 50 23.5 0 0 0 1 0")),
+    Case("calib-skewed", "RUN", 2, "calib.txt: P0 and P1 are not a rectified pair",
+        edit("seq/calib.txt", "P0: 50 9 31.5 0 0 50 23.5 0 0 0 1 0\nP1: 50 9 31.5 -6 0 50 23.5 0 0 0 1 0\n")),
+    Case("calib-baseline-nothing", "RUN", 2, "calib.txt: P1 puts the right camera 2e-08 from the left",
+        edit("seq/calib.txt", "P0: 50 0 31.5 0 0 50 23.5 0 0 0 1 0\n"
+             "P1: 50 0 31.5 -1e-6 0 50 23.5 0 0 0 1 0")),
     Case("calib-principal-point-outside", "RUN", 2, "P0's principal point (315, 23.5) lies outside the 64x48",
         edit("seq/calib.txt", "P0: 50 0 315 0 0 50 23.5 0 0 0 1 0\nP1: 50 0 315 -6 0 50 23.5 0 0 0 1 0\n")),
     Case("odometry-in-millimetres", "RUN", 2, "odometry.txt: the tracks move 300 per second",

@@ -54,7 +54,7 @@ def test_figures_the_seeds_do_not_move_are_one_result_not_a_ranking():
     # while a small figure's real spread is (1e-6 rad on 1e-4 rad)
     assert over_seeds(lambda s: {"A": 1e-4 + 1e-6 * (s % 3), "B": 2e-4}, range(10)).varies("A", "B")
     assert sentence == (
-        "A against B: the same in each of the 10 seeds (0.1256 against 0.1318 m), "
+        "A against B: 0.1256 against 0.1318 m in every one of the 10 seeds, "
         "so this is one result, which the seeds do not test"
     )
 

@@ -519,7 +519,8 @@ def test_images_in_a_subfolder_of_data_are_read(tmp_path):
         ("kalibr-key", "cam0/sensor.yaml: key T_BS missing; the file has Kalibr's T_cam_imu, which maps"),
         ("k3", "cam1/sensor.yaml: key distortion_coefficients: expected [k1, k2, p1, p2], got 5 numbers"),
         ("centre", "cam1/sensor.yaml: key intrinsics: principal point (-379.999, 255.238) outside"),
-        ("focal", "cam0/sensor.yaml: keys intrinsics and distortion_coefficients leave 0% of"),
+        ("focal", "cam0/sensor.yaml: key intrinsics: focal lengths fx=1e-09, fy=457.296 px; expected pixels"),
+        ("focal-cam1", "cam1/sensor.yaml: key intrinsics: focal lengths fx=1e+09, fy=1e+09 px; expected"),
         (
             "distortion",
             "cam1/sensor.yaml: key distortion_coefficients: expected [k1, k2, p1, p2] (4 finite numbers, "
@@ -623,6 +624,9 @@ def test_a_bad_rig_gets_one_line_and_exit_2(tmp_path, capsys, damage, expected):
         path = mav0 / "cam0" / "sensor.yaml"
         edit = ("rows: 4", "rows: 3") if damage == "shape" else ("[458.654, ", "[1e-9, ")
         path.write_text(path.read_text().replace(*edit))
+    elif damage == "focal-cam1":  # the right camera's, off: its own file is named, not cam0's
+        path = mav0 / "cam1" / "sensor.yaml"
+        path.write_text(re.sub(r"intrinsics: \[[^,]+, [^,]+,", "intrinsics: [1e9, 1e9,", path.read_text()))
     elif damage == "millimetres":  # its translation written in millimetres
         path = mav0 / "cam1" / "sensor.yaml"
         text = path.read_text()

@@ -125,8 +125,8 @@ class Comparison:
         if not self.varies(a, b):
             va, vb = (scale * float(np.median(self.figures[k])) for k in (a, b))
             return (
-                f"{a} against {b}: the same in each of the {len(self)} seeds ({va:.{digits}f} against "
-                f"{vb:.{digits}f}{u}), so this is one result, which the seeds do not test"
+                f"{a} against {b}: {va:.{digits}f} against {vb:.{digits}f}{u} in every one of the "
+                f"{len(self)} seeds, so this is one result, which the seeds do not test"
             )
         median, low, high = (scale * v for v in self.difference(a, b))
         level = f"{100 * CONFIDENCE:.0f} %" if self.family == 1 else f"{100 * self.confidence:.1f} %"

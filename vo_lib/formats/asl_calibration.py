@@ -20,12 +20,17 @@ from scipy.spatial.transform import Rotation
 
 from vo_lib.atomic import notice
 from vo_lib.camera import Rectification, rectify_stereo
-from vo_lib.formats.frame_files import SequenceError, check_metres, numbers_at, read_text
+from vo_lib.formats.frame_files import (
+    MIN_BASELINE_M,
+    SequenceError,
+    check_metres,
+    focal_problem,
+    numbers_at,
+    read_text,
+)
 from vo_lib.formats.images import MAX_IMAGE_SIDE
 from vo_lib.formats.poses import rigid_problem
 
-#: Shortest distance between a stereo rig's cameras (metres).
-MIN_BASELINE_M = 1e-3
 #: Largest angle between the baseline and cam0's image rows: rectifying a steeper rig turns the
 #: images so far that little of them is left.
 MAX_BASELINE_TILT_DEG = 20.0
@@ -195,6 +200,8 @@ def read_camera_yaml(path) -> CameraCalibration:
         raise AslError(f"{path}: key intrinsics: focal lengths must be > 0, got fu={fu:g}, fv={fv:g}")
     dist, fisheye = _distortion(path, data)
     width, height = _image_size(path, data)
+    if problem := focal_problem(fu, fv, width):
+        raise AslError(f"{path}: key intrinsics: {problem} (key resolution)")
     if not (0 <= cu <= width and 0 <= cv <= height):
         raise AslError(
             f"{path}: key intrinsics: principal point ({cu:g}, {cv:g}) outside the "

@@ -18,6 +18,11 @@ SequenceError = TrajectoryError
 
 #: Farthest apart two sensors of one vehicle may be (metres): beyond, a file in millimetres.
 MAX_RIG_M = 10.0
+#: Focal lengths accepted, in image widths (horizontal fields of view of 169 down to 0.57 degrees),
+#: and the largest ratio of the two (pixels twice as tall as wide, or as wide as tall).
+MIN_FOCAL_WIDTHS, MAX_FOCAL_WIDTHS, MAX_FOCAL_RATIO = 0.05, 100, 2.0
+#: Shortest distance between a stereo rig's cameras (metres).
+MIN_BASELINE_M = 1e-3
 #: Bytes a line of a per-frame file may take on average (a KITTI pose line about 200, an OXTS packet 300).
 MAX_LINE_BYTES = 1024
 
@@ -26,6 +31,17 @@ def check_metres(path: Path, claim: str, value: float, most: float = MAX_RIG_M, 
     """Refuse a ``value`` beyond ``most`` (``claim`` states it): a file not in metres."""
     if value > most:
         raise SequenceError(f"{path}: {claim}; expected metres, at most {most:g}{unit} (millimetres?)")
+
+
+def focal_problem(fx: float, fy: float, width: float) -> str:
+    """What makes focal lengths ``fx``, ``fy`` (pixels) no camera's for images ``width`` wide, or ''."""
+    low, high = min(fx, fy), max(fx, fy)
+    if MIN_FOCAL_WIDTHS * width <= low and high <= MAX_FOCAL_WIDTHS * width and high <= MAX_FOCAL_RATIO * low:
+        return ""
+    return (
+        f"focal lengths fx={fx:g}, fy={fy:g} px; expected pixels of these {width:g} px wide images: "
+        f"{MIN_FOCAL_WIDTHS:g} to {MAX_FOCAL_WIDTHS:g} image widths, fy/fx from 0.5 to 2"
+    )
 
 
 def numbers(path: Path, line_no: int, text: str, count: int, what: str) -> np.ndarray:

@@ -24,7 +24,13 @@ from scipy.spatial.transform import Rotation
 from vo_lib.formats.frame_files import SequenceError, check_metres, numbers, read_per_frame, read_rows, shown
 from vo_lib.formats.images import check_headers
 from vo_lib.formats.poses import data_lines, rotation_problem
-from vo_lib.formats.sequence import Sequence, check_frame_spacing, checked_camera, image_pairs
+from vo_lib.formats.sequence import (
+    MAX_TRACK_SPEED_M_S,
+    Sequence,
+    check_frame_spacing,
+    checked_camera,
+    image_pairs,
+)
 
 OXTS_FIELDS = 30
 VF, WZ = 8, 19  # zero-based columns of forward speed (m/s) and yaw rate (rad/s)
@@ -40,6 +46,9 @@ def read_oxts(path) -> np.ndarray:
     rows = read_rows(Path(path), OXTS_FIELDS, "an OXTS packet", MAX_OXTS_VALUE)
     if not len(rows):
         raise SequenceError(f"{path}: no OXTS packets")
+    speed = float(np.median(np.abs(rows[:, VF])))
+    claim = f"the forward speed vf is {speed:g} per second (median)"
+    check_metres(path, claim, speed, MAX_TRACK_SPEED_M_S, " m/s")
     return rows
 
 

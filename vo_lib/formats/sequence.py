@@ -26,9 +26,12 @@ import numpy as np
 
 from vo_lib.camera import StereoCamera
 from vo_lib.formats.frame_files import (
+    MAX_FOCAL_WIDTHS,
+    MIN_BASELINE_M,
     SequenceError,
     check_manifest,
     check_metres,
+    focal_problem,
     read_calib,
     read_manifest,
     read_per_frame,
@@ -45,8 +48,6 @@ MAX_ODOMETRY_M = 1000.0
 #: Median time between frames (seconds), in either layout: outside, times in another unit (or frames
 #: too far apart to track between).
 MIN_FRAME_SPACING_S, MAX_FRAME_SPACING_S = 1e-3, 10.0
-#: Longest focal length accepted, in image widths (a horizontal field of view of 0.57 degrees).
-MAX_FOCAL_WIDTHS = 100
 #: Fastest median track speed of ``odometry.txt`` (m/s): beyond it, distances in another unit.
 MAX_TRACK_SPEED_M_S = 50.0
 
@@ -171,7 +172,23 @@ def checked_camera(
             f"{calib}: {left}'s focal length {max(camera.fx, camera.fy):g} px is over {MAX_FOCAL_WIDTHS} "
             f"image widths ({w} px): a field of view under 0.6 degrees; expected pixels of these images"
         )
+    _check_rectified(calib, camera, (P0, P1), keys, claim)
     return camera
+
+
+def _check_rectified(calib: Path, camera: StereoCamera, projections, keys: tuple[str, str], claim: str):
+    """Refuse projection matrices (lines ``keys`` of ``calib``) of no rectified stereo rig: focal
+    lengths of no camera, two intrinsic matrices, or cameras in one place (``claim``: the baseline)."""
+    if problem := focal_problem(camera.fx, camera.fy, camera.width):
+        raise SequenceError(f"{calib}: {keys[0]}'s {problem}")
+    intrinsics = (np.asarray(P, float).reshape(3, 4)[:, :3] for P in projections)
+    if not all(np.allclose(K, camera.K, rtol=1e-5, atol=1e-6) for K in intrinsics):
+        raise SequenceError(
+            f"{calib}: {keys[0]} and {keys[1]} are not a rectified pair: expected one intrinsic matrix "
+            "[[fx 0 cx] [0 fy cy] [0 0 1]] as the first three columns of both"
+        )
+    if camera.baseline < MIN_BASELINE_M:
+        raise SequenceError(f"{calib}: {claim}; expected a stereo rig, at least {MIN_BASELINE_M:g} m")
 
 
 def image_pairs(root: Path, sides: tuple[str, str] = ("image_0", "image_1")) -> tuple[list[Path], list[Path]]:
