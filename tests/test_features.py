@@ -128,3 +128,32 @@ def test_tracking_finds_a_subpixel_shift_and_keeps_the_corner_where_it_fails():
     assert np.array_equal(out[:, 2], w_curr[:, 2])  # disparities kept
     assert np.array_equal(out[2], w_curr[2])  # a wrong match tracks far from its corner: kept as it was
     assert len(track_subpixel(prev, curr, np.zeros((0, 3)), np.zeros((0, 3)))) == 0
+
+
+def test_pyramid_corners_sit_where_the_full_image_has_them():
+    """ORB reports a corner of its second level at 1.2 times its pixel there, but that level has
+    312 rows for KITTI's 375 (not 312.5), and OpenCV's resize centres pixels: a corner found on
+    both levels was put up to 0.6 px apart. ``level_zero_positions`` puts the two together."""
+    import cv2
+    from scipy.spatial import cKDTree
+
+    from vo_lib.stereo_vo.pyramid_features import LEVELS, SCALE_FACTOR, level_zero_positions
+
+    image = np.full((375, 1242), 40, np.uint8)  # KITTI's size: bright squares on a dark ground
+    for y in range(12, 345, 26):
+        for x in range(20, 1212, 26):
+            image[y : y + 11, x : x + 11] = 200
+    image = cv2.GaussianBlur(image, (3, 3), 0.8)
+    keypoints = cv2.ORB_create(5000, SCALE_FACTOR, LEVELS, fastThreshold=20).detect(image)
+    reported = cv2.KeyPoint_convert(keypoints).reshape(-1, 2).astype(float)
+    octave = np.array([k.octave for k in keypoints])
+    bottom_dv = []
+    for points in (reported, level_zero_positions(reported, octave, image.shape)):
+        level0, level1 = points[octave == 0], points[octave == 1]
+        distance, nearest = cKDTree(level0).query(level1)
+        same = distance < 1.5  # one corner, found on both levels
+        assert same.sum() > 1000
+        offset = level1[same] - level0[nearest[same]]
+        bottom_dv.append(np.median(offset[level1[same, 1] > 250, 1]))
+    assert bottom_dv[0] < -0.4  # as ORB reports them
+    assert abs(bottom_dv[1]) < 0.15

@@ -49,6 +49,26 @@ RATIO = 0.9
 DISPARITY_SEARCH = 2
 
 
+def level_zero_positions(pts: np.ndarray, octave: np.ndarray, shape) -> np.ndarray:
+    """ORB's corners in full-image pixels, with pixel centres where the image has them.
+
+    ORB reports a corner of level ``L`` at its pixel on that level times ``s = SCALE_FACTOR ** L``
+    (in single precision). But the level is the image resized to ``round(side / s)`` pixels a
+    side, and OpenCV's resize puts pixel ``x`` of it at ``(x + 0.5) * side / size - 0.5`` of the
+    full image. KITTI's 375 rows become 312, so a corner of the second level was reported 0.1 px
+    too high at the top and 0.5 px too low at the bottom, and a corner that moved between levels
+    from one frame to the next seemed to turn the camera.
+    """
+    out = np.array(pts, dtype=float)
+    height, width = shape[:2]
+    for level in np.unique(octave[octave > 0]):
+        scale = float(np.float32(SCALE_FACTOR) ** level)
+        sizes = np.rint(np.array([width, height]) / scale)
+        on_level = octave == level
+        out[on_level] = (out[on_level] / scale + 0.5) * (np.array([width, height]) / sizes) - 0.5
+    return out
+
+
 class PyramidFrontEnd:
     """Detect, describe and stereo-match features of rectified pairs at two scales: features per
     image in proportion to its area, and disparities up to 13 % of its width by default."""
@@ -82,7 +102,7 @@ class PyramidFrontEnd:
             return np.zeros((0, 2), np.float32), np.zeros(0, int), np.zeros((0, 32), np.uint8)
         pts = cv2.KeyPoint_convert(kps).reshape(-1, 2)
         octave = np.fromiter((k.octave for k in kps), int, len(kps))
-        return pts, octave, des
+        return level_zero_positions(pts, octave, image.shape), octave, des
 
     def _row_candidates(self, pl, ol, dl, pr, orr, dr):
         """Left-right pairs on rows within ``ROW_TOLERANCE``, a disparity from 0.5 px to the largest
