@@ -60,12 +60,11 @@ def level_zero_positions(pts: np.ndarray, octave: np.ndarray, shape) -> np.ndarr
     from one frame to the next seemed to turn the camera.
     """
     out = np.array(pts, dtype=float)
-    height, width = shape[:2]
+    side = np.array(shape[1::-1], float)  # width, height
     for level in np.unique(octave[octave > 0]):
-        scale = float(np.float32(SCALE_FACTOR) ** level)
-        sizes = np.rint(np.array([width, height]) / scale)
+        scale = float(np.float32(SCALE_FACTOR**level))  # as ORB computes it
         on_level = octave == level
-        out[on_level] = (out[on_level] / scale + 0.5) * (np.array([width, height]) / sizes) - 0.5
+        out[on_level] = (out[on_level] / scale + 0.5) * (side / np.rint(side / scale)) - 0.5
     return out
 
 
