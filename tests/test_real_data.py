@@ -577,7 +577,7 @@ def test_images_in_a_subfolder_of_data_are_read(tmp_path):
         ("listed-twice", "cam0/data.csv, line 4: '1403636584813555456.png' listed again (line 3)"),
         ("rows", "cam0/data.csv: 106 rows for 6 files in data/; expected one per image"),
         ("deep", "cam0/sensor.yaml: not valid YAML (maximum recursion depth exceeded"),
-        ("alias", "cam0/sensor.yaml, line 2: not valid YAML (an alias (*name, or a merge <<: *name)"),
+        ("alias", "cam0/sensor.yaml, line 2: an alias (*name, or a merge <<: *name): valid YAML, but not"),
         ("resolution", "cam0/sensor.yaml: key resolution: expected two whole numbers from 1 to 16384"),
         ("image-fifo", "cam1/data/1403636584963555584.png is not a regular file; expected an image"),
         (
@@ -862,6 +862,11 @@ def test_a_truth_whose_quaternions_are_written_w_first_is_named(tmp_path, capsys
     notices = [line for line in capsys.readouterr().err.splitlines() if line.startswith("notice:")]
     assert len(notices) == 1 and f"{tum}: the estimate's rotations" in notices[0], notices
     assert "(TUM: qx qy qz qw; EuRoC CSV: qw qx qy qz)" in notices[0]
+    # evaluate says so too, of the same truth against the run's trajectory
+    assert main(["evaluate", "--gt", str(tum), "--est", str(tmp_path / "out" / "trajectory.tum")]) == 0
+    notes = [line for line in capsys.readouterr().out.splitlines() if line.startswith("note:")]
+    assert len(notes) == 1 and "rotations from pose to pose differ" in notes[0], notes
+    assert "(TUM: qx qy qz qw; EuRoC CSV: qw qx qy qz)" in notes[0]
 
 
 @needs_euroc

@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from vo_lib.arguments import UsageError
-from vo_lib.cli.run import calibration_digest
+from vo_lib.cli.run import ORDERS, calibration_digest, turns_differ
 from vo_lib.evaluation import MAX_TIME_DIFF_S, associate
 from vo_lib.formats.groundtruth import read_groundtruth, read_trajectory
 from vo_lib.formats.poses import MAX_FILE_BYTES, TrajectoryError
@@ -158,6 +158,18 @@ def _say_if_units_differ(truth_xyz: np.ndarray, est_xyz: np.ndarray) -> None:
         )
 
 
+def _say_if_turns_differ(G: np.ndarray, E: np.ndarray) -> None:
+    """A note where the estimate's turns have little in common with the truth's (quaternions of
+    another order in one file?)."""
+    found = turns_differ(G, E)
+    if found:
+        print(
+            f"note: the estimate's rotations from pose to pose differ from the ground truth's by "
+            f"{found[0]:.2g} deg (RMS), where the truth turns {found[1]:.2g} deg: are they of one "
+            f"recording, each file's quaternions in the order of its format {ORDERS}?"
+        )
+
+
 def _to_camera(truth, gt: str, extrinsic_of: str | None) -> np.ndarray:
     """``X``, the rectified left camera in the frame ``--gt`` tracks (:func:`recording_of`), or the
     identity (said when the truth may be a body's)."""
@@ -246,6 +258,7 @@ def evaluate_command(
     truth_xyz = truth.positions[i_gt] if truth.poses is None else truth.poses[i_gt][:, :3, 3]
     _say_if_units_differ(truth_xyz, E[i_est][:, :3, 3])
     if truth.poses is not None:
+        _say_if_turns_differ(truth.poses[i_gt] @ to_camera, E[i_est])
         _print_pose_errors(truth.poses[i_gt] @ to_camera, E[i_est], segments)
         return
     if segments is not None:

@@ -15,6 +15,7 @@ import hashlib
 import os
 import sys
 import threading
+import warnings
 from collections import Counter
 from dataclasses import asdict, fields
 from pathlib import Path
@@ -160,8 +161,10 @@ def _draw(path: Path, seq, name: str, n: int, planar, poses, truth, odo, vehicle
     if offsets is not None:
         tracked = plan[offsets[0], :2] + (offsets[1] @ mount[:3, :3].T)[:, :2]
     fig = plt.figure(figsize=(11, 5), constrained_layout=True)
-    plot_run(fig, seq.times[:n], plan, truth, odo, title, odometry_name(vehicle), cameras, tracked)
-    fig.savefig(path, dpi=110)
+    with warnings.catch_warnings():  # a letter the font lacks (a name in Chinese) is drawn as a box
+        warnings.filterwarnings("ignore", "Glyph .* missing from font", UserWarning)
+        plot_run(fig, seq.times[:n], plan, truth, odo, title, odometry_name(vehicle), cameras, tracked)
+        fig.savefig(path, dpi=110)
     plt.close(fig)
 
 
@@ -215,6 +218,7 @@ FLAGGED_SHARE = 0.25
 #: a TUM file whose quaternions are written w first by 160 %.
 TURNS_DIFFER = 0.5
 TURNS_DIFFER_DEG = 0.2
+ORDERS = "(TUM: qx qy qz qw; EuRoC CSV: qw qx qy qz)"  # of the quaternions in a trajectory's rows
 
 
 def _say_if_suspect(seq, n: int, diagnostics, poses, motion: str = "auto") -> None:
@@ -251,24 +255,29 @@ def _say_if_suspect(seq, n: int, diagnostics, poses, motion: str = "auto") -> No
             )
 
 
-def _say_if_turns_differ(seq, n: int, poses) -> None:
-    """A notice where the estimate's turns from frame to frame have little in common with the truth's
-    (``TURNS_DIFFER``): a truth of another recording, or of other quaternion order."""
+def turns_differ(truth, poses) -> tuple[float, float] | None:
+    """``(differ, turns)``, degrees (RMS): how far the estimate's rotations from pose to pose are
+    from the truth's, and how far the truth's turn, where the first is ``TURNS_DIFFER`` of the
+    second or more (a truth of another recording, or of another quaternion order); else None."""
     import numpy as np
 
     from vo_lib.evaluation import rotation_angle, rpe
     from vo_lib.geometry import as_homogeneous
 
-    truth = as_homogeneous(seq.poses[:n])
+    truth = as_homogeneous(truth)
     turned = np.degrees(rotation_angle(np.swapaxes(truth[:-1, :3, :3], 1, 2) @ truth[1:, :3, :3]))
     differ, turns = rpe(truth, poses, rotation=True)[0].rmse, float(np.sqrt(np.mean(turned**2)))
-    if differ >= max(TURNS_DIFFER * turns, TURNS_DIFFER_DEG):
-        truth_file = seq.truth_file or seq.path / "poses.txt"
+    return (differ, turns) if differ >= max(TURNS_DIFFER * turns, TURNS_DIFFER_DEG) else None
+
+
+def _say_if_turns_differ(seq, n: int, poses) -> None:
+    """A notice where the estimate's turns have little in common with the truth's (:func:`turns_differ`)."""
+    found = turns_differ(seq.poses[:n], poses)
+    if found:
         notice(
-            f"{truth_file}: the estimate's rotations from frame to frame differ from the truth's by "
-            f"{differ:.2g} deg (RMS), where the truth turns {turns:.2g} deg: is it the "
-            "truth of these images, its quaternions in the order of its format (TUM: qx qy qz qw; EuRoC "
-            "CSV: qw qx qy qz)?"
+            f"{seq.truth_file or seq.path / 'poses.txt'}: the estimate's rotations from frame to frame "
+            f"differ from the truth's by {found[0]:.2g} deg (RMS), where the truth turns {found[1]:.2g} "
+            f"deg: is it the truth of these images, its quaternions in the order of its format {ORDERS}?"
         )
 
 

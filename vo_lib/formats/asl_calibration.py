@@ -56,6 +56,9 @@ class CameraCalibration:
     fisheye: bool = False
 
 
+ALIAS = "an alias (*name, or a merge <<: *name): valid YAML, but not read here; write the values out"
+
+
 class _UniqueKeys(yaml.SafeLoader):
     """YAML as ``safe_load`` reads it, but a key given twice in one mapping is an error, and a
     number written without a point (``1e-05``) is a number, as in YAML 1.2, not a text."""
@@ -65,7 +68,7 @@ class _UniqueKeys(yaml.SafeLoader):
             raise yaml.composer.ComposerError(
                 None,
                 None,
-                "an alias (*name, or a merge <<: *name); write the values out",
+                ALIAS,
                 self.peek_event().start_mark,
             )
         return super().compose_node(parent, index)
@@ -96,7 +99,10 @@ def _yaml(path: Path) -> dict:
     except (yaml.YAMLError, RecursionError, ValueError) as exc:  # nested too deep, a number too long
         mark = getattr(exc, "problem_mark", None)
         where = f", line {mark.line + 1}" if mark is not None else ""
-        raise AslError(f"{path}{where}: not valid YAML ({getattr(exc, 'problem', None) or exc})") from None
+        problem = getattr(exc, "problem", None) or exc
+        raise AslError(
+            f"{path}{where}: {problem}" if problem == ALIAS else f"{path}{where}: not valid YAML ({problem})"
+        ) from None
     if not isinstance(data, dict):
         got = "an empty file" if data is None else f"a {type(data).__name__}"
         raise AslError(f"{path}: expected YAML keys (T_BS, intrinsics, ...), got {got}")
