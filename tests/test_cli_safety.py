@@ -287,6 +287,8 @@ POSITIONS_ONLY = (
     '{"positions": {"frames": [0, 1, 2, 3], "xyz": [[0, 0, 0], [0, 0, 0.01], [0, 0, 0.02], [0, 0, 0.03]], '
     '"lever_arm_camera": [0, 0, 0]}}'
 )
+#: A crawler's manifest with the track odometry's settings ``%s``.
+CRAWLER_TRACK = '{"camera": {"height_m": 0.5}, "track_odometry": {%s}}'
 GEN = ["generate", "corridor", "--frames", "2", "--resolution", "64x48"]
 EVAL = ["evaluate", "--gt", "gt.txt", "--est", "est.txt"]
 ALIASES = {"RUN": RUN, "GEN": GEN, "EVAL": EVAL}
@@ -437,9 +439,9 @@ CASES = [
         edit("seq/manifest.json", '{"camera": {"heigth_m": 0.5}}')),
     Case("manifest-unknown-positions-key", "RUN", 2, "key positions.lever_arm is not a manifest's",
         edit("seq/manifest.json", POSITIONS_ONLY.replace('"lever_arm_camera"', '"lever_arm"'))),
-    Case("manifest-mount-a-word", "RUN", 2, "T_body_camera: expected 4 rows of 4 numbers, got \"identity\"",
+    Case("manifest-mount-a-word", "RUN", 2, "T_body_camera: expected 4 rows of 4 numbers within ±1000 m, got",
         edit("seq/manifest.json", '{"T_body_camera": "identity"}')),
-    Case("manifest-mount-3x3", "RUN", 2, "key T_body_camera: expected 4 rows of 4 numbers, got [[1, 0, 0]",
+    Case("manifest-mount-3x3", "RUN", 2, "key T_body_camera: expected 4 rows of 4 numbers within ±1000 m",
         edit("seq/manifest.json", '{"T_body_camera": [[1, 0, 0], [0, 1, 0], [0, 0, 1]]}')),
     Case("manifest-height-a-word", "RUN", 2, "camera.height_m: expected a number from 0 to 10, got \"tall\"",
         edit("seq/manifest.json", '{"camera": {"height_m": "tall"}}')),
@@ -449,11 +451,32 @@ CASES = [
         edit("seq/manifest.json", '{"camera": {"height_m": -0.5}}')),
     Case("manifest-mount-unknown", "RUN", 2, "key camera.mount: expected 'above turning axis' or",
         edit("seq/manifest.json", '{"camera": {"height_m": 0.5, "mount": "above the turning axis"}}')),
-    Case("manifest-unknown-track-setting", "RUN", 2, "key track_odometry: expected track_distance",
+    Case("manifest-unknown-track-setting", "RUN", 2, "key track_odometry.gauge is not a manifest's",
         edit("seq/manifest.json", '{"camera": {"height_m": 0.5}, "track_odometry": {"gauge": 0.6}}')),
-    Case("manifest-positions-beyond", "RUN", 2, "key positions.frames: expected frame numbers 0 to 3",
+    Case("manifest-encoder-noise-beyond", "RUN", 2,
+        "track_odometry.encoder_sigma: expected a number from 0 to 1, got 1e+160",
+        edit("seq/manifest.json", CRAWLER_TRACK % '"encoder_sigma": 1e160')),
+    Case("manifest-track-a-truth-value", "RUN", 2,
+        "track_odometry.track_distance: expected a number from 0",
+        edit("seq/manifest.json", CRAWLER_TRACK % '"track_distance": true')),
+    Case("manifest-no-gauge", "RUN", 2,
+        "track_distance + 2 track_width is 2e-300 m; expected at least 0.01 m",
+        edit("seq/manifest.json", CRAWLER_TRACK % '"track_distance": 0, "track_width": 1e-300')),
+    Case("manifest-mount-beyond", "RUN", 2, "T_body_camera: expected 4 rows of 4 numbers within ±1000 m",
+        edit("seq/manifest.json", '{"T_body_camera": [[1, 0, 0, 1e100], [0, 1, 0, 0], [0, 0, 1, 0], '
+             '[0, 0, 0, 1]]}')),
+    Case("manifest-positions-beyond", "RUN", 2,
+        "key positions.frames: expected 3 or more frame numbers 0 to 3",
         edit("seq/manifest.json", '{"positions": {"file": "x", "frames": [0, 9], '
              '"xyz": [[0, 0, 0], [1, 0, 0]], "lever_arm_camera": [0, 0, 0]}}')),
+    Case("manifest-positions-repeated", "RUN", 2, "positions.frames: expected increasing frame numbers",
+        edit("seq/manifest.json", POSITIONS_ONLY.replace("[0, 1, 2, 3]", "[3, 3, 3, 3]"))),
+    Case("manifest-positions-far", "RUN", 2, "positions.xyz: expected 4 rows of x y z within ±1e+08 m",
+        edit("seq/manifest.json", POSITIONS_ONLY.replace("[0, 0, 0.03]", "[0, 0, 1e300]"))),
+    Case("manifest-lever-arm-far", "RUN", 2, "positions.lever_arm_camera: expected 3 numbers within ±1000 m",
+        edit("seq/manifest.json", POSITIONS_ONLY.replace("[0, 0, 0]}", "[1e300, 0, 0]}"))),
+    Case("manifest-positions-file-a-list", "RUN", 2, "positions.file: expected a text, got",
+        edit("seq/manifest.json", POSITIONS_ONLY.replace('{"frames"', '{"file": ["x"], "frames"'))),
     Case("calib-focal-beyond", "RUN", 2, "calib.txt: P0's focal length 1e+300 px is over 100 image widths",
         edit("seq/calib.txt", "P0: 1e300 0 31.5 0 0 1e300 23.5 0 0 0 1 0\n"
              "P1: 1e300 0 31.5 -1e300 0 1e300 23.5 0 0 0 1 0")),
@@ -484,8 +507,14 @@ CASES = [
              "P1: 50 0 31.5 -1e-6 0 50 23.5 0 0 0 1 0")),
     Case("calib-principal-point-outside", "RUN", 2, "P0's principal point (315, 23.5) lies outside the 64x48",
         edit("seq/calib.txt", "P0: 50 0 315 0 0 50 23.5 0 0 0 1 0\nP1: 50 0 315 -6 0 50 23.5 0 0 0 1 0\n")),
+    Case("calib-right-camera-off-the-rows", "RUN", 2,
+        "calib.txt: P1 puts the right camera at (63000.1, 45000, -100000) from the left; expected",
+        edit("seq/calib.txt", "P0: 50 0 31.5 0 0 50 23.5 0 0 0 1 0\n"
+             "P1: 50 0 31.5 -6 0 50 23.5 1e5 0 0 1 1e5")),
     Case("odometry-in-millimetres", "RUN", 2, "odometry.txt: the tracks move 300 per second",
         edit("seq/odometry.txt", "0 0\n10 10\n10 10\n10 10\n")),
+    Case("odometry-one-row-damaged", "RUN", 2, "odometry.txt: frame 2: the tracks move 30000 m/s (with",
+        edit("seq/odometry.txt", "0 0\n0.01 0.01\n1000 1000\n0.01 0.01\n")),
     Case("poses-nan", "RUN", 2, "poses.txt, line 2",
         edit("seq/poses.txt", kitti_rows(1) + "1 0 0 nan 0 1 0 0 0 0 1 0\n" + kitti_rows(2))),
     Case("poses-not-rotation", "RUN", 2, "not a rotation matrix",

@@ -1,3 +1,4 @@
+import re
 import shutil
 from pathlib import Path
 
@@ -250,3 +251,22 @@ def test_a_long_value_in_an_error_says_how_many_values_it_holds():
     assert shown({"fu": 458.654, "fv": 457.296, "cu": 367.215, "cv": 248.375}).startswith("4 values, {")
     assert shown([[1.5] * 4] * 4).startswith("16 values, [[1.5,")
     assert shown([1, 2]) == "[1, 2]" and shown("a" * 50) == '"' + "a" * 39 + "..."
+
+
+@pytest.mark.parametrize(
+    "column, value, expected",
+    [
+        (8, 9e5, "packet 3: forward speed vf 900000 m/s; expected at most 50 m/s"),
+        (19, -9e5, "packet 3: yaw rate wz -900000 rad/s; expected at most 10 rad/s"),
+    ],
+)
+def test_one_damaged_oxts_packet_is_named(tmp_path, column, value, expected):
+    """A packet whose speed or yaw rate no car reaches, among good ones, is named, not driven."""
+    from vo_lib.formats.kitti_raw import read_oxts
+
+    packets = np.zeros((5, 30))
+    packets[:, 8] = 10.0  # m/s
+    packets[2, column] = value
+    np.savetxt(tmp_path / "oxts.txt", packets)
+    with pytest.raises(SequenceError, match=re.escape(expected)):
+        read_oxts(tmp_path / "oxts.txt")

@@ -176,7 +176,13 @@ MANIFEST_KEYS = {
     },
     "camera.": {"fx", "fy", "cx", "cy", "baseline", "height_m", "forward_m", "in_vehicle_m", "mount"},
     "positions.": {"file", "frames", "xyz", "lever_arm_camera"},
+    "track_odometry.": {"track_distance", "track_width", "encoder_sigma"},
 }
+#: Bounds of what a run reads from a manifest, beyond which a figure would overflow: metres (a
+#: position-only truth may be in a map's coordinates: UTM's are up to 10,000 km), and the track
+#: odometry's metres and noise per square-root metre.
+MAX_MOUNT_M, MAX_POSITION_M = 1e3, 1e8
+TRACK_BOUNDS = {"track_distance": (0.0, 1e3), "track_width": (0.0, 1e3), "encoder_sigma": (0.0, 1.0)}
 
 
 def _check_known(path: Path, objects: dict[str, dict]) -> None:
@@ -195,28 +201,67 @@ def check_manifest(path: Path, manifest: dict, frames: int) -> None:
     (optional) keys that a run reads hold numbers of the shape and range below, ``T_body_camera`` a
     rigid transform."""
     camera, positions = manifest.get("camera", {}), manifest.get("positions", {})
-    objects = {"camera": camera, "positions": positions}
+    track = manifest.get("track_odometry", {})
+    objects = {"camera": camera, "positions": positions, "track_odometry": track}
     if bad := [key for key, value in objects.items() if not isinstance(value, dict)]:
         raise SequenceError(f"{path}: key {bad[0]}: expected an object {{...}}, got {shown(objects[bad[0]])}")
-    _check_known(path, {"": manifest, "camera.": camera, "positions.": positions})
+    _check_known(path, {"": manifest, **{f"{key}.": value for key, value in objects.items()}})
     index = positions.get("frames")
     n = len(index) if isinstance(index, list) else -1
-    anything = (-np.inf, np.inf)
+    mount, metres = (-MAX_MOUNT_M, MAX_MOUNT_M), (-MAX_POSITION_M, MAX_POSITION_M)
+    within = f"within ±{MAX_MOUNT_M:g} m"
     wanted = [  # key, value, shape, what (None: a number within the bounds), bounds
         ("time_origin_s", manifest.get("time_origin_s", 0), (), None, (-1e11, 1e11)),  # seconds
         ("camera.height_m", camera.get("height_m", 0), (), None, (0.0, 10.0)),  # metres
         ("camera.forward_m", camera.get("forward_m", 0), (), None, (-10.0, 10.0)),
-        ("T_body_camera", manifest.get("T_body_camera", np.eye(4)), (4, 4), "4 rows of 4 numbers", anything),
+        (
+            "T_body_camera",
+            manifest.get("T_body_camera", np.eye(4)),
+            (4, 4),
+            f"4 rows of 4 numbers {within}",
+            mount,
+        ),
     ]
+    wanted += [(f"track_odometry.{key}", track[key], (), None, TRACK_BOUNDS[key]) for key in sorted(track)]
     if positions:  # the position-only truth of frames 0 .. frames - 1
         wanted += [
-            ("positions.frames", index, (n,), f"frame numbers 0 to {frames - 1}", (0, frames - 1)),
-            ("positions.xyz", positions.get("xyz"), (n, 3), f"{n} rows of x y z", anything),
-            ("positions.lever_arm_camera", positions.get("lever_arm_camera"), (3,), "3 numbers", anything),
+            (
+                "positions.frames",
+                index,
+                (max(n, 3),),
+                f"3 or more frame numbers 0 to {frames - 1}",
+                (0, frames - 1),
+            ),
+            (
+                "positions.xyz",
+                positions.get("xyz"),
+                (n, 3),
+                f"{n} rows of x y z within ±{MAX_POSITION_M:g} m",
+                metres,
+            ),
+            (
+                "positions.lever_arm_camera",
+                positions.get("lever_arm_camera"),
+                (3,),
+                f"3 numbers {within}",
+                mount,
+            ),
         ]
     found = {row[0]: numbers_at(path, *row) for row in wanted}
-    if positions and np.any(found["positions.frames"] % 1):
-        raise SequenceError(f"{path}: key positions.frames: expected frame numbers 0 to {frames - 1}")
+    _check_values(path, manifest, found, frames)
+
+
+def _check_values(path: Path, manifest: dict, found: dict, frames: int) -> None:
+    """What :func:`check_manifest` checks beyond shapes and bounds."""
+    if "positions.frames" in found:
+        if np.any(found["positions.frames"] % 1) or np.any(np.diff(found["positions.frames"]) <= 0):
+            raise SequenceError(
+                f"{path}: key positions.frames: expected increasing frame numbers 0 to {frames - 1}"
+            )
+        if not isinstance(manifest["positions"].get("file", ""), str):
+            raise SequenceError(
+                f"{path}: key positions.file: expected a text, got {shown(manifest['positions']['file'])}"
+            )
     if problem := rigid_problem(found["T_body_camera"]):
         raise SequenceError(f"{path}: key T_body_camera: {problem}; expected a rigid transform")
 

@@ -36,6 +36,8 @@ OXTS_FIELDS = 30
 VF, WZ = 8, 19  # zero-based columns of forward speed (m/s) and yaw rate (rad/s)
 #: Largest magnitude of any OXTS field: beyond, a packet is damaged (and would overflow the filter).
 MAX_OXTS_VALUE = 1e6
+#: Fastest turn of a car in an OXTS packet, rad/s (a car turns at 1 rad/s or less): beyond, damaged.
+MAX_YAW_RATE = 10.0
 RAW_CALIB_FILES = ("calib_cam_to_cam.txt", "calib_imu_to_velo.txt", "calib_velo_to_cam.txt")
 #: The Earth's equatorial radius (WGS 84), metres, of the Mercator projection of the OXTS positions.
 EARTH_RADIUS_M = 6378137.0
@@ -49,6 +51,15 @@ def read_oxts(path) -> np.ndarray:
     speed = float(np.median(np.abs(rows[:, VF])))
     claim = f"the forward speed vf is {speed:g} per second (median)"
     check_metres(path, claim, speed, MAX_TRACK_SPEED_M_S, " m/s")
+    for column, name, most, unit in (
+        (VF, "forward speed vf", MAX_TRACK_SPEED_M_S, "m/s"),
+        (WZ, "yaw rate wz", MAX_YAW_RATE, "rad/s"),
+    ):
+        k = int(np.argmax(np.abs(rows[:, column])))  # one damaged packet among good ones
+        if abs(rows[k, column]) > most:
+            raise SequenceError(
+                f"{path}: packet {k + 1}: {name} {rows[k, column]:g} {unit}; expected at most {most:g} {unit}"
+            )
     return rows
 
 
@@ -88,7 +99,8 @@ def _rigid(path: Path) -> np.ndarray:
     T = np.eye(4)
     T[:3, :3] = _rotation(path, "R")
     T[:3, 3] = _calib_values(path, "T", 3)
-    distance = np.linalg.norm(T[:3, 3])
+    with np.errstate(over="ignore"):  # a distance beyond floats is inf, and refused below
+        distance = np.linalg.norm(T[:3, 3])
     check_metres(path, f"T puts one sensor {distance:g} from the other", distance)
     return T
 

@@ -45,6 +45,8 @@ ROAD_CAR_GAUGE = 1.6
 #: 3.7 cm in a 1.3 m frame, mostly when braking: the speed lags), 0.019 per wheel and square-root
 #: metre; a tighter figure lets the filter reject good vision for a lagging speed.
 CAR_DISTANCE_SIGMA = 0.02
+#: The narrowest gauge a manifest's track odometry may state, metres (a turn divides by it).
+MIN_GAUGE_M = 0.01
 #: Camera position in the vehicle frame (forward, left, up), metres, for KITTI without raw_calib.
 KITTI_CAMERA_IN_IMU = (1.08, -0.31, 0.73)
 
@@ -146,6 +148,11 @@ def _crawler(sequence, camera: dict, use_odometry: bool) -> Vehicle:
     except (TypeError, ValueError) as exc:  # an unknown key, a value that is not a length
         where = f"{sequence.path / 'manifest.json'}: key track_odometry"
         raise SequenceError(f"{where}: expected track_distance, track_width, encoder_sigma ({exc})") from None
+    if model.gauge < MIN_GAUGE_M:  # the turn is the tracks' difference over the gauge: no gauge, no turn
+        raise SequenceError(
+            f"{sequence.path / 'manifest.json'}: key track_odometry: track_distance + 2 track_width is "
+            f"{model.gauge:g} m; expected at least {MIN_GAUGE_M:g} m"
+        )
     mount_text = camera.get("mount", CAMERA_MOUNTS[0])
     if mount_text not in CAMERA_MOUNTS:  # a misspelt crawler's mount is not taken for another
         raise SequenceError(
