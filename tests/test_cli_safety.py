@@ -1554,6 +1554,26 @@ def test_a_path_that_is_not_utf8_is_read(template, tmp_path):
     assert b"Warning" not in proc.stderr, proc.stderr.decode(errors="replace")
 
 
+@pytest.mark.skipif(not Path("/dev/full").exists(), reason="no /dev/full here to stand for a full disk")
+def test_a_full_standard_output_is_named_not_the_output_folder(tmp_path):
+    """Standard output on a full disk (``> /dev/full``): one line names it; the output folder, put
+    in place before, stays whole."""
+    with open("/dev/full", "w") as full:
+        proc = subprocess.run(
+            [sys.executable, "-m", "vo_lib", *GEN, "--out", str(tmp_path / "gen")],
+            cwd=tmp_path,
+            env=cli_env(MPLCONFIGDIR=str(tmp_path / "mpl")),
+            stdout=full,
+            stderr=subprocess.PIPE,
+            text=True,
+            timeout=300,
+        )
+    assert proc.returncode == 2 and proc.stderr.splitlines() == [
+        "python -m vo_lib generate: error: standard output: no space left on device"
+    ], proc.stderr
+    assert (tmp_path / "gen" / MARKER).is_file()
+
+
 def test_a_marker_names_a_file_added_in_a_subfolder(tmp_path):
     """Markers list every file and folder written, subfolders' too: a file added below them is
     not the command's to replace."""

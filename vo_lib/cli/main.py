@@ -288,6 +288,35 @@ def _signal_inside(exc: BaseException) -> BaseException | None:
     return None
 
 
+class _Stdout:
+    """``sys.stdout``, whose failures (a full disk under ``> file``) name it, not ``--out``."""
+
+    def __init__(self, stream) -> None:
+        self.stream = stream
+
+    def __getattr__(self, name: str):
+        return getattr(self.stream, name)
+
+    def write(self, text: str) -> int:
+        with _named("standard output"):
+            return self.stream.write(text)
+
+    def flush(self) -> None:
+        with _named("standard output"):
+            self.stream.flush()
+
+
+@contextlib.contextmanager
+def _named(filename: str):
+    """An OSError inside (not a closed pipe: that has its own line) named after ``filename``."""
+    try:
+        yield
+    except BrokenPipeError:
+        raise
+    except OSError as exc:
+        raise OSError(exc.errno, exc.strerror, filename) from None
+
+
 def _os_error(exc: OSError, out) -> str:
     """What went wrong, named by what the user gave (``--out`` for a file of a temporary output folder)."""
     why = "no space left on device" if exc.errno == errno.ENOSPC else (exc.strerror or str(exc))
@@ -316,9 +345,11 @@ def _run_parsed(args, command: str) -> int:
     from vo_lib.formats.poses import TrajectoryError
     from vo_lib.outputs import OutputError
 
+    stdout, sys.stdout = sys.stdout, _Stdout(sys.stdout)
     try:
         try:
             _dispatch(args)
+            sys.stdout.flush()  # what is still buffered fails here, if it fails, not at exit
         except (SystemError, ImportError) as exc:  # a signal inside compiled code, or a module it loads
             if (signal_exc := _signal_inside(exc)) is None:
                 raise
@@ -339,6 +370,8 @@ def _run_parsed(args, command: str) -> int:
         why = _os_error(exc, getattr(args, "out", None)) if isinstance(exc, OSError) else exc
         print(f"{command}: error: {one_line(why)}", file=sys.stderr)
         return 2
+    finally:
+        sys.stdout = stdout
     return 0
 
 
