@@ -418,6 +418,9 @@ CASES = [
         "lies inside the sample data folder"),
     Case("sweep-inside-data-folder", "sweep nees --seeds 1 --workers 1 --out data/x", 2,
         "lies inside the sample data folder"),
+    # VO_LIB_DATA points elsewhere (the workspace's): the checkout's own samples are kept too
+    Case("run-inside-the-checkouts-data-folder", f"RUN --out {ROOT / 'data' / 'x'}", 2,
+        "lies inside the checkout's sample data folder", check=lambda ws: not (ROOT / "data" / "x").exists()),
     Case("manifest-height-huge-integer", "RUN", 2, "camera.height_m: expected a number from 0 to 10",
         edit("seq/manifest.json", '{"camera": {"height_m": 1' + "0" * 400 + "}}")),
     Case("convert-empty-text", "convert '' --out conv", 2, "argument sequence: expected a recording folder"),

@@ -14,22 +14,28 @@ from vo_lib.formats.sequence import Sequence, read_sequence
 from vo_lib.outputs import read_marker
 from vo_lib.sim.samples import SAMPLES, fingerprint, generate, is_sample
 
+#: A checkout's sample folder (where the package is not installed alone).
+CHECKOUT_DATA = Path(__file__).resolve().parents[1] / "data"
+
 
 def data_dir() -> Path:
     """``$VO_LIB_DATA``, else a checkout's ``data/``, else ``vo_lib/data`` in the user's cache."""
     env = os.environ.get("VO_LIB_DATA")
     if env:
         return Path(env)
-    checkout = Path(__file__).resolve().parents[1] / "data"
-    if checkout.is_dir():
-        return checkout
+    if CHECKOUT_DATA.is_dir():
+        return CHECKOUT_DATA
     cache = os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache"
     return Path(cache) / "vo_lib" / "data"
 
 
 def kept_data_folder() -> dict[Path, str]:
-    """The samples' folder as :func:`vo_lib.outputs.check_target`'s ``keep`` takes it: never replaced."""
-    return {data_dir(): "the sample data folder"}
+    """The samples' folders as :func:`vo_lib.outputs.check_target`'s ``keep`` takes them, never
+    replaced: :func:`data_dir`, and a checkout's ``data/`` where ``$VO_LIB_DATA`` points elsewhere."""
+    kept = {data_dir(): "the sample data folder"}
+    if CHECKOUT_DATA.is_dir():
+        kept.setdefault(CHECKOUT_DATA, "the checkout's sample data folder")
+    return kept
 
 
 def real_sequence_path(name: str) -> Path | None:
