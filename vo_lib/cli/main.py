@@ -288,6 +288,9 @@ def _signal_inside(exc: BaseException) -> BaseException | None:
     return None
 
 
+STDOUT = "standard output"
+
+
 class _Stdout:
     """``sys.stdout``, whose failures (a full disk under ``> file``) name it, not ``--out``."""
 
@@ -298,11 +301,11 @@ class _Stdout:
         return getattr(self.stream, name)
 
     def write(self, text: str) -> int:
-        with _named("standard output"):
+        with _named(STDOUT):
             return self.stream.write(text)
 
     def flush(self) -> None:
-        with _named("standard output"):
+        with _named(STDOUT):
             self.stream.flush()
 
 
@@ -369,6 +372,9 @@ def _run_parsed(args, command: str) -> int:
         # an OSError: e.g. a full disk while writing; the output was not put in place
         why = _os_error(exc, getattr(args, "out", None)) if isinstance(exc, OSError) else exc
         print(f"{command}: error: {one_line(why)}", file=sys.stderr)
+        if isinstance(exc, OSError) and exc.filename == STDOUT:  # what it holds goes nowhere at exit
+            with contextlib.suppress(OSError, ValueError):
+                os.dup2(os.open(os.devnull, os.O_WRONLY), stdout.fileno())
         return 2
     finally:
         sys.stdout = stdout

@@ -49,6 +49,8 @@ def numbers(path: Path, line_no: int, text: str, count: int, what: str) -> np.nd
     if len(parts) != count:
         plural = "s" if count != 1 else ""
         raise SequenceError(f"{path}, line {line_no}: {what} needs {count} number{plural}, got {len(parts)}")
+    if odd := next((p for p in parts if "_" in p or not p.isascii()), None):  # Python's float reads them
+        raise SequenceError(f"{path}, line {line_no}: {what} holds {odd!r}; expected plain numbers (0-9 . e)")
     try:
         values = np.array([float(p) for p in parts])
     except ValueError as exc:

@@ -196,10 +196,12 @@ def read_rows(path, min_rows: int = 1) -> tuple[np.ndarray, list[int], bool]:
     problem, and fewer than ``min_rows`` rows, raises one :class:`TrajectoryError`."""
     path = Path(path)
     rows = data_lines(path, "the trajectory")
+    header = None
     if rows and re.match(r"[A-Za-z_]", rows[0][1]) and not re.match(r"(?i)(nan|inf)\b", rows[0][1]):
-        rows = rows[1:]  # a first line of names without '#' (timestamp,px,...): a header all the same
+        header, rows = rows[0], rows[1:]  # a first line of names without '#' (timestamp,px,...): a header
     if not rows:
-        raise TrajectoryError(f"{path}: no poses")
+        names = f" (line {header[0]}, {header[1][:40]!r}, reads as a header of names)" if header else ""
+        raise TrajectoryError(f"{path}: no poses{names}")
     lines, comma = [n for n, _ in rows], "," in rows[0][1]
     width = len(_row(path, *rows[0], comma, None))  # a width the formats know
     try:  # every row at once; where that fails, row by row, to name the first bad line
