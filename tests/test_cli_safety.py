@@ -1292,6 +1292,18 @@ def test_frames_beyond_a_sample_ask_for_the_whole_sample_with_a_notice(tmp_path,
     assert err == ["notice: --frames 10000: sample corridor has 541 frames; running all 541"]
 
 
+def test_a_sample_folder_that_is_a_file_is_named(tmp_path, monkeypatch, capsys):
+    """``VO_LIB_DATA`` naming a file: the variable is named, not ``--out`` (an existing one)."""
+    (tmp_path / "samples").write_text("not a folder")
+    (tmp_path / "out").mkdir()
+    monkeypatch.setenv("VO_LIB_DATA", str(tmp_path / "samples"))
+    code, _, err = invoke(["run", "--sequence", "corridor", "--out", str(tmp_path / "out")], capsys)
+    assert code == 2 and said(err) == [
+        f"python -m vo_lib run: error: VO_LIB_DATA={tmp_path / 'samples'}: not a folder; expected the "
+        "folder the samples are kept in"
+    ]
+
+
 def test_the_package_is_never_an_output_folder(tmp_path, monkeypatch):
     """Checked without writing: the package, a folder in it or holding it, and the repository's
     own data folder are refused, forced."""

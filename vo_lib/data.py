@@ -8,6 +8,7 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
+from vo_lib.arguments import UsageError
 from vo_lib.formats.euroc import AslError, asl_near_miss, mav0_of, read_asl
 from vo_lib.formats.kitti_raw import raw_drive_of, raw_near_miss, read_kitti_raw
 from vo_lib.formats.sequence import Sequence, read_sequence
@@ -21,6 +22,8 @@ CHECKOUT_DATA = Path(__file__).resolve().parents[1] / "data"
 def data_dir() -> Path:
     """``$VO_LIB_DATA``, else a checkout's ``data/``, else ``vo_lib/data`` in the user's cache."""
     env = os.environ.get("VO_LIB_DATA")
+    if env and Path(env).exists() and not Path(env).is_dir():
+        raise UsageError(f"VO_LIB_DATA={env}: not a folder; expected the folder the samples are kept in")
     if env:
         return Path(env)
     if CHECKOUT_DATA.is_dir():
