@@ -320,6 +320,13 @@ def _named(filename: str):
         raise OSError(exc.errno, exc.strerror, filename) from None
 
 
+def _drop_if_stdout(exc: BaseException, stdout) -> None:
+    """Where writing ``stdout`` failed, what it still holds goes nowhere at exit (not a second error)."""
+    if isinstance(exc, OSError) and exc.filename == STDOUT:
+        with contextlib.suppress(OSError, ValueError):
+            os.dup2(os.open(os.devnull, os.O_WRONLY), stdout.fileno())
+
+
 def _os_error(exc: OSError, out) -> str:
     """What went wrong, named by what the user gave (``--out`` for a file of a temporary output folder)."""
     why = "no space left on device" if exc.errno == errno.ENOSPC else (exc.strerror or str(exc))
@@ -372,9 +379,7 @@ def _run_parsed(args, command: str) -> int:
         # an OSError: e.g. a full disk while writing; the output was not put in place
         why = _os_error(exc, getattr(args, "out", None)) if isinstance(exc, OSError) else exc
         print(f"{command}: error: {one_line(why)}", file=sys.stderr)
-        if isinstance(exc, OSError) and exc.filename == STDOUT:  # what it holds goes nowhere at exit
-            with contextlib.suppress(OSError, ValueError):
-                os.dup2(os.open(os.devnull, os.O_WRONLY), stdout.fileno())
+        _drop_if_stdout(exc, stdout)
         return 2
     finally:
         sys.stdout = stdout

@@ -210,44 +210,22 @@ def check_manifest(path: Path, manifest: dict, frames: int) -> None:
     _check_known(path, {"": manifest, **{f"{key}.": value for key, value in objects.items()}})
     index = positions.get("frames")
     n = len(index) if isinstance(index, list) else -1
-    mount, metres = (-MAX_MOUNT_M, MAX_MOUNT_M), (-MAX_POSITION_M, MAX_POSITION_M)
-    within = f"within ±{MAX_MOUNT_M:g} m"
+    mount, near, last = (-MAX_MOUNT_M, MAX_MOUNT_M), f"within ±{MAX_MOUNT_M:g} m", frames - 1
+    body = manifest.get("T_body_camera", np.eye(4))
+    xyz, lever = positions.get("xyz"), positions.get("lever_arm_camera")
     wanted = [  # key, value, shape, what (None: a number within the bounds), bounds
         ("time_origin_s", manifest.get("time_origin_s", 0), (), None, (-1e11, 1e11)),  # seconds
         ("camera.height_m", camera.get("height_m", 0), (), None, (0.0, 10.0)),  # metres
         ("camera.forward_m", camera.get("forward_m", 0), (), None, (-10.0, 10.0)),
-        (
-            "T_body_camera",
-            manifest.get("T_body_camera", np.eye(4)),
-            (4, 4),
-            f"4 rows of 4 numbers {within}",
-            mount,
-        ),
+        ("T_body_camera", body, (4, 4), f"4 rows of 4 numbers {near}", mount),
     ]
     wanted += [(f"track_odometry.{key}", track[key], (), None, TRACK_BOUNDS[key]) for key in sorted(track)]
     if positions:  # the position-only truth of frames 0 .. frames - 1
+        far = f"within ±{MAX_POSITION_M:g} m"
         wanted += [
-            (
-                "positions.frames",
-                index,
-                (max(n, 3),),
-                f"3 or more frame numbers 0 to {frames - 1}",
-                (0, frames - 1),
-            ),
-            (
-                "positions.xyz",
-                positions.get("xyz"),
-                (n, 3),
-                f"{n} rows of x y z within ±{MAX_POSITION_M:g} m",
-                metres,
-            ),
-            (
-                "positions.lever_arm_camera",
-                positions.get("lever_arm_camera"),
-                (3,),
-                f"3 numbers {within}",
-                mount,
-            ),
+            ("positions.frames", index, (max(n, 3),), f"3 or more frame numbers 0 to {last}", (0, last)),
+            ("positions.xyz", xyz, (n, 3), f"{n} rows of x y z {far}", (-MAX_POSITION_M, MAX_POSITION_M)),
+            ("positions.lever_arm_camera", lever, (3,), f"3 numbers {near}", mount),
         ]
     found = {row[0]: numbers_at(path, *row) for row in wanted}
     _check_values(path, manifest, found, frames)
