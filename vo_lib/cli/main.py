@@ -103,7 +103,7 @@ def build_parser() -> argparse.ArgumentParser:
             "run                          # the default sample, indoor_linear",
             "run --sequence corridor --no-odometry",
             "evaluate --gt data/indoor_linear/poses.txt --est runs/indoor_linear/poses.txt",
-            "convert /data/MH_01_easy --out /tmp/mh01",
+            "convert /data/MH_01_easy --to kitti --out /tmp/mh01",
             "generate outdoor_free --frames 200",
             "bench ransac",
             "sweep corridor --seeds 200 --workers 2",
@@ -124,8 +124,8 @@ def build_parser() -> argparse.ArgumentParser:
         "or an ASL recording",
         "Run [Zhao]'s stereo visual odometry on a sequence and print a timing table and, "
         "where the sequence has ground truth, its errors. A named sample is rendered into data/ on "
-        "first use (a minute or so) and reused after. Writes into --out (default runs/NAME, "
-        "runs/NAME_Nf with --frames N): "
+        "first use (seconds to a minute: the run's first line says) and reused after. Writes into "
+        "--out (default runs/NAME, runs/NAME_Nf with --frames N): "
         "poses.txt (KITTI), trajectory.tum (TUM), timings.csv, diagnostics.csv and trajectory.png.",
         "run --sequence outdoor_free --out runs/yard",
     )
@@ -197,7 +197,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     conv = command(
         "convert",
-        "write a rectified copy of a stereo rig's recording (ASL layout) in the KITTI layout",
+        "write a KITTI-layout copy of a recording (ASL layout, rectified; or a raw KITTI drive)",
         "Undistort and rectify a recording in EuRoC's ASL layout (the folder holding mav0, or mav0) "
         "and write it in the KITTI odometry layout, with its ground truth in the rectified left camera "
         "(a drive of KITTI's raw set as stored, too: its OXTS packets and calibration carried).",
