@@ -22,9 +22,9 @@ CHECKOUT_DATA = Path(__file__).resolve().parents[1] / "data"
 def data_dir() -> Path:
     """``$VO_LIB_DATA``, else a checkout's ``data/``, else ``vo_lib/data`` in the user's cache."""
     env = os.environ.get("VO_LIB_DATA")
-    if env and Path(env).exists() and not Path(env).is_dir():
-        raise UsageError(f"VO_LIB_DATA={env}: not a folder; expected the folder the samples are kept in")
     if env:
+        if Path(env).exists() and not Path(env).is_dir():
+            raise UsageError(f"VO_LIB_DATA={env}: not a folder; expected the folder the samples are kept in")
         return Path(env)
     if CHECKOUT_DATA.is_dir():
         return CHECKOUT_DATA

@@ -258,8 +258,9 @@ def evaluate_command(
     truth_xyz = truth.positions[i_gt] if truth.poses is None else truth.poses[i_gt][:, :3, 3]
     _say_if_units_differ(truth_xyz, E[i_est][:, :3, 3])
     if truth.poses is not None:
-        _say_if_turns_differ(truth.poses[i_gt] @ to_camera, E[i_est])
-        _print_pose_errors(truth.poses[i_gt] @ to_camera, E[i_est], segments)
+        G = truth.poses[i_gt] @ to_camera  # the truth's camera poses
+        _say_if_turns_differ(G, E[i_est])
+        _print_pose_errors(G, E[i_est], segments)
         return
     if segments is not None:
         print(f"--segments: --gt {gt} holds positions only, which give the ATE alone")

@@ -292,7 +292,8 @@ STDOUT = "standard output"
 
 
 class _Stdout:
-    """``sys.stdout``, whose failures (a full disk under ``> file``) name it, not ``--out``."""
+    """``sys.stdout``, whose failures (a full disk under ``> file``) name it, not ``--out``; a closed
+    pipe stays a BrokenPipeError, which has its own line."""
 
     def __init__(self, stream) -> None:
         self.stream = stream
@@ -301,23 +302,19 @@ class _Stdout:
         return getattr(self.stream, name)
 
     def write(self, text: str) -> int:
-        with _named(STDOUT):
-            return self.stream.write(text)
+        return self._named(self.stream.write, text)
 
     def flush(self) -> None:
-        with _named(STDOUT):
-            self.stream.flush()
+        self._named(self.stream.flush)
 
-
-@contextlib.contextmanager
-def _named(filename: str):
-    """An OSError inside (not a closed pipe: that has its own line) named after ``filename``."""
-    try:
-        yield
-    except BrokenPipeError:
-        raise
-    except OSError as exc:
-        raise OSError(exc.errno, exc.strerror, filename) from None
+    @staticmethod
+    def _named(call, *args):
+        try:
+            return call(*args)
+        except BrokenPipeError:
+            raise
+        except OSError as exc:
+            raise OSError(exc.errno, exc.strerror, STDOUT) from None
 
 
 def _drop_if_stdout(exc: BaseException, stdout) -> None:

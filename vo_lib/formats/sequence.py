@@ -221,8 +221,9 @@ def _odometry(path: Path, times: np.ndarray) -> np.ndarray:
     )
     if len(times) > 1:
         speeds = np.abs(odo[1:]).max(axis=1) / np.diff(times)
-        claim = f"the tracks move {float(np.median(speeds)):g} per second (median, with times.txt)"
-        check_metres(path, claim, float(np.median(speeds)), MAX_TRACK_SPEED_M_S, " m/s")
+        median = float(np.median(speeds))
+        claim = f"the tracks move {median:g} per second (median, with times.txt)"
+        check_metres(path, claim, median, MAX_TRACK_SPEED_M_S, " m/s")
         k = int(np.argmax(speeds))  # one damaged row among good ones
         if speeds[k] > MAX_TRACK_SPEED_M_S:
             raise SequenceError(
