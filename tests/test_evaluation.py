@@ -396,7 +396,9 @@ def test_evaluate_refuses_or_says_undefined_what_it_cannot_measure(tmp_path, rng
             "est.tum",
         ): "a TUM file? its numbers are separated by spaces, not commas",
         ("--gt", "est.tum", "--est", "wxyz.tum"): "line 1: the header orders the quaternion w x y z",
+        # TUM's numbers with commas, and no header
         ("--gt", "seconds.csv", "--est", "est.tum"): "line 2: the times step by 0.1",
+        ("--gt", "est.tum", "--est", "seconds.csv"): "microsecond; a TUM file? its numbers are separated",
         ("--gt", "order.csv", "--est", "est.tum"): (
             "line 4: timestamp 1403636583883555584 comes before the one on line 3 (1403636583933555584)"
         ),

@@ -23,6 +23,7 @@ from vo_lib.geometry import as_homogeneous
 NANOSECONDS = 1e-9
 #: Smallest median step of a CSV's timestamps (ns): no tracker samples at over 1 MHz.
 MIN_STEP_NS = 1000.0
+TUM_WITH_COMMAS = "; a TUM file? its numbers are separated by spaces, not commas"
 
 
 @dataclass(frozen=True)
@@ -47,7 +48,7 @@ def _check_columns(path: Path, a: np.ndarray, lines: list[int], comma: bool) -> 
             f"{path}, line {line}: the header orders the quaternion {' '.join(order)}; "
             + (
                 "a CSV is read as EuRoC's t[ns], x, y, z, qw, qx, qy, qz"
-                + ("; a TUM file? its numbers are separated by spaces, not commas" if order == "xyzw" else "")
+                + (TUM_WITH_COMMAS if order == "xyzw" else "")
                 if comma
                 else "a text file is read as TUM's t x y z qx qy qz qw"
             )
@@ -57,7 +58,7 @@ def _check_columns(path: Path, a: np.ndarray, lines: list[int], comma: bool) -> 
         raise TrajectoryError(
             f"{path}, line {lines[1]}: the times step by {step:.3g}; a CSV's times are read as "
             "nanoseconds (EuRoC's t[ns], x, y, z[, qw, qx, qy, qz]), and no sensor samples more "
-            "often than every microsecond"
+            "often than every microsecond" + (TUM_WITH_COMMAS if width == 8 else "")
         )
     if comma and 4 < width < 8:
         raise TrajectoryError(
