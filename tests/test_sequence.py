@@ -270,3 +270,34 @@ def test_one_damaged_oxts_packet_is_named(tmp_path, column, value, expected):
     np.savetxt(tmp_path / "oxts.txt", packets)
     with pytest.raises(SequenceError, match=re.escape(expected)):
         read_oxts(tmp_path / "oxts.txt")
+
+
+def _damage_compressed_data(path: Path) -> None:
+    """Flip bytes of a PNG's compressed data and rewrite the chunk's CRC, as a tool that re-saves
+    a broken stream would: only the decoder can tell."""
+    import struct
+    import zlib
+
+    data = bytearray(path.read_bytes())
+    at = data.index(b"IDAT") - 4
+    length = struct.unpack(">I", data[at : at + 4])[0]
+    for k in range(at + 10, at + 8 + min(length, 40)):
+        data[k] ^= 0x5A
+    end = at + 8 + length
+    data[end : end + 4] = zlib.crc32(bytes(data[at + 4 : end])).to_bytes(4, "big")
+    path.write_bytes(bytes(data))
+
+
+def test_damaged_compressed_data_is_our_one_error_on_any_thread(seq_dir, capfd):
+    """The decoder says nothing of its own on stderr (the descriptor, not just sys.stderr), whether
+    the frame is decoded ahead on the reader thread or on the calling one."""
+    path = seq_dir[0]
+    _damage_compressed_data(path / "image_0" / "000003.png")
+    for read_ahead in (True, False):
+        seq = read_sequence(path)
+        if not read_ahead:
+            seq.read_ahead = 0
+        seq.pair(2)
+        with pytest.raises(SequenceError, match="000003.png, frame 3: cannot read the image"):
+            seq.pair(3)
+    assert capfd.readouterr().err == ""

@@ -14,13 +14,12 @@ from __future__ import annotations
 import os
 import re
 import struct
-import threading
 import warnings
-import zlib
 from pathlib import Path
 
 import cv2
 import numpy as np
+from PIL import Image
 
 from vo_lib.formats.frame_files import SequenceError
 
@@ -39,65 +38,29 @@ NOT_8_BIT = "expected 8-bit grey (convert it, e.g. scale 16-bit values to 0-255)
 #: Bytes searched for an end marker at the end of a file.
 TAIL_BYTES = 65536
 
-_DEVNULL: int | None = None  # a descriptor of os.devnull, opened on first use
 
-
-def _decode(data: np.ndarray) -> np.ndarray | None:
-    """OpenCV's decoder on a file's bytes, or None (also for a PNG without its IEND chunk)."""
-    if data.size == 0 or (data[:8].tobytes() == PNG_SIGNATURE and data[-8:-4].tobytes() != b"IEND"):
+def _decode(path: Path) -> np.ndarray | None:
+    """The image in a file, or None where it cannot be read. Pillow decodes it: on damaged data it
+    raises, where OpenCV's decoders (libpng, libjpeg) print to stderr, from whichever thread
+    decodes. Colour becomes grey by OpenCV's weights; other modes keep their depth."""
+    try:
+        with open(path, "rb") as fh, Image.open(fh) as im:
+            im.load()
+            if im.mode == "L" or im.mode.startswith(("I", "F")):  # 8-bit grey; deeper ones are refused
+                return np.asarray(im)
+            return cv2.cvtColor(np.asarray(im.convert("RGBA")), cv2.COLOR_RGBA2GRAY)
+    except Exception:  # whatever Pillow raises on a file it cannot decode: our one line says so
         return None
-    try:
-        return cv2.imdecode(data, cv2.IMREAD_UNCHANGED)
-    except cv2.error:
-        return None
-
-
-def _png_chunks_intact(data: bytes) -> bool:
-    """Whether every chunk of a PNG carries its CRC-32 (libpng prints to stderr about damaged data)."""
-    at = 8
-    while at + 12 <= len(data):
-        end = at + 8 + struct.unpack(">I", data[at : at + 4])[0]  # after the chunk's type and data
-        if zlib.crc32(data[at + 4 : end]).to_bytes(4, "big") != data[end : end + 4]:
-            return False
-        at = end + 4
-    return True
-
-
-def _imread_quietly(path: Path) -> np.ndarray | None:
-    """The decoded image, or None, libpng's messages kept off stderr: muted by the main thread (in
-    another, its writes would be swallowed); elsewhere a damaged PNG is not decoded."""
-    global _DEVNULL
-    try:
-        data = np.fromfile(path, np.uint8)  # cv2.imread crashes on a path that is not UTF-8
-    except OSError:
-        return None
-    if threading.current_thread() is not threading.main_thread():
-        png = data[:8].tobytes() == PNG_SIGNATURE
-        return None if png and not _png_chunks_intact(data.tobytes()) else _decode(data)
-    try:
-        if _DEVNULL is None:
-            _DEVNULL = os.open(os.devnull, os.O_WRONLY)
-        saved = os.dup(2)
-    except OSError:
-        return _decode(data)
-    try:
-        os.dup2(_DEVNULL, 2)
-        return _decode(data)
-    finally:
-        os.dup2(saved, 2)
-        os.close(saved)
 
 
 def load_image(path: Path, frame: int) -> np.ndarray:
     """An 8-bit grey image (colour made grey, 16 bits refused); else :class:`SequenceError`."""
     where = f"{path}, frame {frame}"
-    img = _imread_quietly(path)
+    img = _decode(path)
     if img is None or img.size == 0:
         raise SequenceError(f"{where}: cannot read the image (empty, truncated, damaged or not an image)")
     if img.dtype != np.uint8:
         raise SequenceError(f"{where}: {img.dtype} image; {NOT_8_BIT}")
-    if img.ndim == 3:
-        img = cv2.cvtColor(img, cv2.COLOR_BGRA2GRAY if img.shape[2] == 4 else cv2.COLOR_BGR2GRAY)
     return img
 
 
@@ -135,20 +98,14 @@ def image_header(path: Path, frame: int) -> tuple[int, int, int]:
 
 
 def _header_other(path: Path, where: str) -> tuple[int, int, int]:
-    """Header of a non-PNG image through Pillow's lazy open, else by decoding it with OpenCV."""
+    """Header of a non-PNG image through Pillow's lazy open (nothing decoded)."""
     try:
-        from PIL import Image
-
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")  # a damaged file's warnings: the error is one line of ours
             with Image.open(path) as im:
-                width, height = im.size
-                return width, height, 8 if im.mode in EIGHT_BIT_MODES else 16
-    except Exception:  # Pillow missing, or a file it cannot read: let OpenCV try
-        img = _imread_quietly(path)
-        if img is None or img.size == 0:
-            raise SequenceError(f"{where}: cannot read the image (damaged or not an image)") from None
-        return img.shape[1], img.shape[0], 8 * img.dtype.itemsize
+                return im.size[0], im.size[1], 8 if im.mode in EIGHT_BIT_MODES else 16
+    except Exception:  # whatever Pillow raises on a file it cannot read
+        raise SequenceError(f"{where}: cannot read the image (damaged or not an image)") from None
 
 
 def frame_order(name: str) -> tuple:
