@@ -21,6 +21,7 @@ import subprocess
 import sys
 import tempfile
 import time
+import zlib
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
@@ -143,6 +144,16 @@ def damaged_png_data(ws):
     for k in range(start, start + 40):
         data[k] ^= 0x5A
     path.write_bytes(bytes(data))
+
+
+def with_an_empty_apng_chunk(ws):
+    """A valid PNG with an animation chunk that claims no frames: Pillow reads the image and warns."""
+    path = image(ws, 0, 2)
+    data = path.read_bytes()
+    body = b"acTL" + bytes(8)
+    path.write_bytes(
+        data[:33] + (8).to_bytes(4, "big") + body + zlib.crc32(body).to_bytes(4, "big") + data[33:]
+    )
 
 
 def as_jpeg(ws):
@@ -958,6 +969,18 @@ def test_signals_leave_nothing_and_print_one_line(tmp_path, args, signum, code, 
     assert checksums(tmp_path, ()) == before
 
 
+def test_an_image_pillow_reads_with_a_warning_runs_without_it(tmp_path):
+    """Pillow warns of an animation chunk it passes over (the tests' own warning capture would hide
+    that in this process): the run prints no warning and writes its output."""
+    make_sequence(tmp_path / "seq")
+    with_an_empty_apng_chunk(tmp_path)
+    env = cli_env(VO_LIB_DATA=str(tmp_path / "data"))
+    argv = [sys.executable, "-m", "vo_lib", "run", "--sequence", "seq", "--out", "out"]
+    proc = subprocess.run(argv, cwd=tmp_path, env=env, capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0 and said(proc.stderr) == [], proc.stderr
+    assert (tmp_path / "out" / "poses.txt").is_file()
+
+
 def test_a_signal_while_exiting_after_the_command_says_so_in_one_line(tmp_path):
     """Ctrl-C or SIGTERM in the second the interpreter takes to shut down, after the command
     finished: one line and 128 + N, not a silent end by the signal."""
@@ -1020,6 +1043,55 @@ def test_a_signal_wrapped_by_compiled_code_still_exits_as_it(
     assert main(["run", "--frames", "2"]) == code
     err = capsys.readouterr().err
     assert len(err.strip().splitlines()) == 1 and phrase in err, err
+
+
+@pytest.mark.parametrize(
+    "signum, code, phrase", [(signal.SIGINT, 130, "Ctrl-C"), (signal.SIGTERM, 143, "SIGTERM")]
+)
+def test_a_signal_while_the_parser_imports_its_modules_exits_as_it(monkeypatch, capsys, signum, code, phrase):
+    """A signal inside NumPy's compiled import comes out as an ImportError of NumPy's own, which
+    keeps nothing of the signal: the one remembered says what it was."""
+    import vo_lib.cli.main as cli
+
+    def build_parser():
+        try:
+            cli._stop(signum, None)
+        except BaseException:
+            raise ImportError("Importing the numpy C-extensions failed.") from None
+
+    monkeypatch.setattr(cli, "build_parser", build_parser)
+    assert main(["run", "--frames", "2"]) == code
+    err = capsys.readouterr().err
+    assert len(err.strip().splitlines()) == 1 and phrase in err, err
+
+
+@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM])
+def test_a_signal_before_the_command_begins_says_so_in_one_line(signum):
+    """Between the start and the command's own handler (its modules loading): one line, 128 + N."""
+    script = (
+        "import os, signal, sys, time\n"
+        "import vo_lib.cli.main as m\n"
+        f"m.main = lambda argv=None: os.kill(os.getpid(), {int(signum)}) or time.sleep(30)\n"
+        "sys.exit(m.entry())\n"
+    )
+    proc = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=60)
+    name = signal.Signals(signum).name
+    assert proc.returncode == 128 + signum
+    assert proc.stderr.strip().splitlines() == [f"vo_lib: {name} while starting; nothing was done"]
+
+
+def test_a_path_that_is_not_utf8_prints_under_a_strict_locale():
+    """Under a UTF-8 locale other than C.UTF-8 standard output refuses the surrogates that stand for
+    such bytes in a path; the command prints them as the bytes they are."""
+    script = (
+        "import sys\n"
+        "import vo_lib.cli.main as m\n"
+        "m.main = lambda argv=None: print('wrote out\\udcff/') or 0\n"
+        "sys.exit(m.entry())\n"
+    )
+    env = {**os.environ, "PYTHONIOENCODING": "utf-8"}  # strict, as under en_US.UTF-8
+    proc = subprocess.run([sys.executable, "-c", script], capture_output=True, env=env, timeout=60)
+    assert proc.returncode == 0 and proc.stdout == b"wrote out\xff/\n", proc.stderr
 
 
 @pytest.mark.parametrize(

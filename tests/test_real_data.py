@@ -428,11 +428,21 @@ def test_numbers_are_read_as_yaml_1_2_writes_them(tmp_path):
     """Without the point or the exponent's sign YAML 1.1 requires (1.5e2, -.5, 1e-05), a number is
     a number still; YAML's true is not."""
     from vo_lib.formats.asl_calibration import read_camera_yaml
+    from vo_lib.formats.frame_files import SequenceError
 
     path = small_rig(tmp_path) / "mav0" / "cam0" / "sensor.yaml"
     asl = read_camera_yaml(path)
     path.write_text(path.read_text().replace("[458.654, 457.296,", "[+4.58654e2, 45729.6e-2,"))
     np.testing.assert_array_equal(read_camera_yaml(path).K, asl.K)
+    # YAML 1.1's other numbers are YAML 1.2's texts (7:38 is 458 in base 60, 4_58 is 458), and
+    # 0458 is 458, not a number in base 8
+    text = path.read_text()
+    path.write_text(text.replace("752, 480]", "0752, 0480]"))
+    assert read_camera_yaml(path).resolution == (752, 480)
+    for written in ("7:38", "4_58"):
+        path.write_text(text.replace("[+4.58654e2,", f"[{written},"))
+        with pytest.raises(SequenceError, match=f'key intrinsics: .*got \\["{written}"'):
+            read_camera_yaml(path)
 
 
 @needs_euroc
@@ -505,8 +515,8 @@ def test_images_in_a_subfolder_of_data_are_read(tmp_path):
         ("rotation", "cam1/sensor.yaml: key T_BS"),
         (
             "three-rows",
-            "cam0/sensor.yaml: key T_BS: expected a 4x4 camera-to-body transform as data "
-            "(16 finite numbers), got 12 values, [0.0148655429818, -0.999880929698, 0.004...",
+            "cam0/sensor.yaml: key T_BS: expected a 4x4 camera-to-body transform as data (16 finite "
+            "numbers, each within ±1e+06), got 12 values, [0.0148655429818, -0.999880929698, 0.004...",
         ),
         ("baseline", "cam1/sensor.yaml: key T_BS puts cam1 where cam0 is"),
         ("shape", "cam0/sensor.yaml: key T_BS: rows: 3, cols: 4; expected the numbers 4 and 4"),
@@ -593,6 +603,8 @@ def test_images_in_a_subfolder_of_data_are_read(tmp_path):
             "groundtruth.tum, line 6: the quaternion's norm is 1.5; expected a unit quaternion",
         ),
         ("columns", "cam0/data.csv, line 3: 3 columns; expected 2, 'timestamp [ns],filename'"),
+        ("gt-kitti", "groundtruth.tum: KITTI poses (12 numbers a row) carry no times to pair them with"),
+        ("huge-translation", "cam0/sensor.yaml: key T_BS: expected a 4x4 camera-to-body transform as data"),
         ("spacing", "cam0/data.csv: frames 20 s apart (median); expected 0.001 to 10 s"),
         (
             "microseconds",
@@ -757,6 +769,12 @@ def test_a_bad_rig_gets_one_line_and_exit_2(tmp_path, capsys, damage, expected):
         path = mav0 / "state_groundtruth_estimate0" / "groundtruth.tum" if damage == "gt-folder" else path
         path.unlink()
         path.mkdir()
+    elif damage == "gt-kitti":  # poses without times, as KITTI writes them
+        path = mav0 / "state_groundtruth_estimate0" / "groundtruth.tum"
+        path.write_text("1 0 0 0 0 1 0 0 0 0 1 0\n" * 3000)
+    elif damage == "huge-translation":  # a number whose square overflows
+        path = mav0 / "cam0" / "sensor.yaml"
+        path.write_text(path.read_text().replace("-0.0216401454975", "1e300"))
     elif damage == "gt-quaternion":  # one pose's quaternion half as long again: not a rotation
         path = mav0 / "state_groundtruth_estimate0" / "groundtruth.tum"
         lines = path.read_text().splitlines()

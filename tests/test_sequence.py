@@ -258,6 +258,8 @@ def test_a_long_value_in_an_error_says_how_many_values_it_holds():
     [
         (8, 9e5, "packet 3: forward speed vf 900000 m/s; expected at most 50 m/s"),
         (19, -9e5, "packet 3: yaw rate wz -900000 rad/s; expected at most 10 rad/s"),
+        (0, 270.0, "packet 3: latitude lat 270 deg; expected at most 85 deg"),  # the projection: NaN
+        (1, -190.0, "packet 3: longitude lon -190 deg; expected at most 180 deg"),
     ],
 )
 def test_one_damaged_oxts_packet_is_named(tmp_path, column, value, expected):
@@ -301,3 +303,20 @@ def test_damaged_compressed_data_is_our_one_error_on_any_thread(seq_dir, capfd):
         with pytest.raises(SequenceError, match="000003.png, frame 3: cannot read the image"):
             seq.pair(3)
     assert capfd.readouterr().err == ""
+
+
+def test_an_image_larger_than_the_decoder_takes_is_refused_from_its_header(seq_dir):
+    """A header that claims more pixels than Pillow decodes without its bomb warning: one line, no
+    decoding; each side within the bound alone is not enough."""
+    import struct
+    import zlib
+
+    path = seq_dir[0]
+    ihdr = b"IHDR" + struct.pack(">IIBBBBB", 10000, 9000, 8, 0, 0, 0, 0)
+    iend = b"IEND"
+    png = b"\x89PNG\r\n\x1a\n"
+    for chunk in (ihdr, iend):
+        png += struct.pack(">I", len(chunk) - 4) + chunk + zlib.crc32(chunk).to_bytes(4, "big")
+    (path / "image_1" / "000001.png").write_bytes(png)
+    with pytest.raises(SequenceError, match="000001.png, frame 1: the PNG header claims 10000x9000 pixels; "):
+        read_sequence(path)

@@ -16,8 +16,6 @@ def _while_loading(signum, frame) -> None:
 if __name__ == "__main__":
     for kind in (signal.SIGINT, signal.SIGTERM):
         signal.signal(kind, _while_loading)
-    from vo_lib.cli.main import entry
+    from vo_lib.cli.main import entry  # which keeps a handler of its own until the command begins
 
-    signal.signal(signal.SIGINT, signal.default_int_handler)  # main() installs its own at once
-    signal.signal(signal.SIGTERM, signal.SIG_DFL)
     sys.exit(entry())

@@ -18,6 +18,7 @@ import os
 import signal
 import sys
 import textwrap
+import warnings
 from pathlib import Path
 
 from vo_lib.arguments import OneLineParser, UsageError, count_at_least, non_empty, one_line
@@ -278,7 +279,12 @@ def _stop(signum, frame):
 
 def _signal_inside(exc: BaseException) -> BaseException | None:
     """Our interrupt or stop, if ``exc`` wraps one: a signal that lands inside a callback from
-    compiled code (Numba loading its cache) comes out as a SystemError caused by it."""
+    compiled code (Numba loading its cache) comes out as a SystemError caused by it, and one inside
+    a compiled module's import (NumPy's) as an ImportError of its own, the stop only remembered."""
+    from vo_lib.outputs import INTERRUPTED
+
+    if isinstance(exc, ImportError) and INTERRUPTED:
+        return INTERRUPTED[-1]
     seen = set()
     while exc is not None and id(exc) not in seen:
         if isinstance(exc, (KeyboardInterrupt, _Stopped)):
@@ -354,13 +360,8 @@ def _run_parsed(args, command: str) -> int:
 
     stdout, sys.stdout = sys.stdout, _Stdout(sys.stdout)
     try:
-        try:
-            _dispatch(args)
-            sys.stdout.flush()  # what is still buffered fails here, if it fails, not at exit
-        except (SystemError, ImportError) as exc:  # a signal inside compiled code, or a module it loads
-            if (signal_exc := _signal_inside(exc)) is None:
-                raise
-            raise signal_exc from None
+        _dispatch(args)
+        sys.stdout.flush()  # what is still buffered fails here, if it fails, not at exit
     except BrokenPipeError:  # e.g. piped into `head`: the reader left, not a fault of the output
         # Python's advice: point stdout at devnull so the interpreter's own flush at exit is quiet;
         # stderr too once the line is out, as it may be the same closed pipe (2>&1) and keep the
@@ -406,20 +407,33 @@ def _signals():
 def main(argv: list[str] | None = None) -> int:
     """Parse ``argv`` and run the command; returns the exit status (argparse exits with 2 itself)."""
     command = "python -m vo_lib"
-    with _signals():
+    with _signals(), warnings.catch_warnings():
+        # Pillow's notes on an image it still decodes (an APNG chunk it passes over) are not errors
+        warnings.filterwarnings("ignore", module=r"PIL\.")
         try:
-            parser = build_parser()
-            args, extra = parser.parse_known_args(argv)
-            if extra:  # said by the command's own parser, which names the command
-                commands = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
-                commands.choices[args.command].error(f"unrecognized arguments: {' '.join(extra)}")
-            command = f"{parser.prog} {args.command}"
-            return _run_parsed(args, command)
+            try:
+                parser = build_parser()  # its imports too: a signal may land inside NumPy's
+                args, extra = parser.parse_known_args(argv)
+                if extra:  # said by the command's own parser, which names the command
+                    commands = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+                    commands.choices[args.command].error(f"unrecognized arguments: {' '.join(extra)}")
+                command = f"{parser.prog} {args.command}"
+                return _run_parsed(args, command)
+            except (SystemError, ImportError) as exc:  # a signal inside compiled code, or a module it loads
+                if (stop := _signal_inside(exc)) is None:
+                    raise
+                raise stop from None
         except (KeyboardInterrupt, _Stopped) as stop:
             signum = signal.Signals(stop.args[0]) if isinstance(stop, _Stopped) else signal.SIGINT
             how = "interrupted (Ctrl-C)" if signum == signal.SIGINT else f"stopped by {signum.name}"
             print(f"{command}: {how}; nothing half-written is left", file=sys.stderr)
             return 128 + signum
+
+
+def _early_stop(signum, frame) -> None:
+    """A signal before the command has begun, while its modules load: one line, nothing to undo."""
+    os.write(2, f"vo_lib: {signal.Signals(signum).name} while starting; nothing was done\n".encode())
+    os._exit(128 + signum)
 
 
 def _late_stop(signum, frame) -> None:
@@ -446,7 +460,12 @@ def entry() -> int:
     """The ``vo-lib`` script and ``python -m vo_lib``: :func:`main`, then :func:`_late_stop` for
     SIGINT and SIGTERM while the interpreter joins threads and runs exit functions (a local Dask
     cluster's take seconds), and the signals ignored in the teardown after them. A command the
-    signal stopped ends at once."""
+    signal stopped ends at once. Before :func:`main` installs its own handler, :func:`_early_stop`;
+    a path that is not UTF-8 prints as its bytes, whatever the locale."""
+    for kind in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(kind, _early_stop)
+    with contextlib.suppress(AttributeError, ValueError):  # a stream replaced by one without it
+        sys.stdout.reconfigure(errors="surrogateescape")
     status = main()
     if status in (128 + signal.SIGINT, 128 + signal.SIGTERM):  # cleaned up and said so: end here,
         # as the signal may have caught a worker thread starting, unknown to the join at exit

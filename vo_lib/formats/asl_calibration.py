@@ -38,6 +38,9 @@ MAX_BASELINE_TILT_DEG = 20.0
 MIN_VALID_SHARE = 0.25
 #: Largest distortion coefficient taken as a lens's (real ones stay below 1 or so).
 MAX_DISTORTION = 100.0
+#: Bound of each number of a transform: a rotation's are at most 1, and a translation of a million
+#: metres is no rig's (beyond, their products overflow before any check can name the key).
+MAX_TRANSFORM_ENTRY = 1e6
 
 
 AslError = SequenceError
@@ -85,11 +88,18 @@ class _UniqueKeys(yaml.SafeLoader):
         return super().construct_mapping(node, deep)
 
 
-_UniqueKeys.add_implicit_resolver(  # YAML 1.2's floats: 1e-05, 1.5e2, -.5 (YAML 1.1 wants 1.0e+2)
-    "tag:yaml.org,2002:float",
-    re.compile(r"^[-+]?(\.[0-9]+|[0-9]+(\.[0-9]*)?)([eE][-+]?[0-9]+)?$"),
-    list("-+.0123456789"),
+# Numbers as YAML 1.2 writes them, and no others: 1e-05, 1.5e2 and -.5 are floats (YAML 1.1 wants
+# 1.0e+2), 0480 is 480 (not base 8), and 7:38 or 4_58 are texts (458 to YAML 1.1)
+INT, FLOAT = "tag:yaml.org,2002:int", "tag:yaml.org,2002:float"
+_UniqueKeys.yaml_implicit_resolvers = {
+    first: [(tag, regexp) for tag, regexp in resolvers if tag not in (INT, FLOAT)]
+    for first, resolvers in yaml.SafeLoader.yaml_implicit_resolvers.items()
+}
+_UniqueKeys.add_implicit_resolver(INT, re.compile(r"^[-+]?[0-9]+$"), list("-+0123456789"))
+_UniqueKeys.add_implicit_resolver(
+    FLOAT, re.compile(r"^[-+]?(\.[0-9]+|[0-9]+(\.[0-9]*)?)([eE][-+]?[0-9]+)?$"), list("-+.0123456789")
 )
+_UniqueKeys.add_constructor(INT, lambda loader, node: int(loader.construct_scalar(node)))
 
 
 def _yaml(path: Path) -> dict:
@@ -133,7 +143,7 @@ def _transform(path: Path, data: dict, what: str) -> np.ndarray:
             f"{path}: key T_BS missing; the file has Kalibr's T_cam_imu, which maps the body into the "
             "camera: expected T_BS, the camera into the body (the inverse of T_cam_imu)"
         )
-    T = _numbers(path, data, "T_BS", 16, what).reshape(4, 4)
+    T = _numbers(path, data, "T_BS", 16, what, MAX_TRANSFORM_ENTRY).reshape(4, 4)
     if problem := rigid_problem(T):
         raise AslError(f"{path}: key T_BS: {problem}")
     T[:3, :3] = Rotation.from_matrix(T[:3, :3]).as_matrix()  # the nearest rotation: rounding scales none

@@ -31,8 +31,9 @@ JPEG_START, JPEG_END = b"\xff\xd8", b"\xff\xd9"
 PNG_COLOUR_TYPES = (0, 2, 3, 4, 6)
 #: Pillow modes of 8 bits per channel (or fewer, widened to 8 when decoded).
 EIGHT_BIT_MODES = {"1", "L", "P", "LA", "La", "PA", "RGB", "RGBA", "RGBa", "RGBX", "CMYK", "YCbCr"}
-#: Largest image side accepted from a header (pixels): larger claims are refused before decoding.
-MAX_IMAGE_SIDE = 16384
+#: Largest image accepted from a header, pixels a side and in all (Pillow's own bound against
+#: decompression bombs, 89 million): larger claims are refused before decoding.
+MAX_IMAGE_SIDE, MAX_IMAGE_PIXELS = 16384, 89_478_485
 #: What an image of more than 8 bits per channel is told.
 NOT_8_BIT = "expected 8-bit grey (convert it, e.g. scale 16-bit values to 0-255)"
 #: Bytes searched for an end marker at the end of a file.
@@ -69,13 +70,21 @@ def _png_header(head: bytes, where: str) -> tuple[int, int, int]:
     if len(head) < 33 or head[12:16] != b"IHDR":
         raise SequenceError(f"{where}: damaged PNG header (no IHDR chunk)")
     width, height = struct.unpack(">II", head[16:24])
-    if not (0 < width <= MAX_IMAGE_SIDE and 0 < height <= MAX_IMAGE_SIDE):
-        raise SequenceError(
-            f"{where}: the PNG header claims {width}x{height} pixels; expected each side 1..{MAX_IMAGE_SIDE}"
-        )
+    _check_size(where, "PNG", width, height)
     if head[25] not in PNG_COLOUR_TYPES:
         raise SequenceError(f"{where}: damaged PNG header (colour type {head[25]})")
     return width, height, head[24]
+
+
+def _check_size(where: str, kind: str, width: int, height: int) -> None:
+    """One line unless the image is within :data:`MAX_IMAGE_SIDE` a side and :data:`MAX_IMAGE_PIXELS`."""
+    if not (
+        0 < width <= MAX_IMAGE_SIDE and 0 < height <= MAX_IMAGE_SIDE and width * height <= MAX_IMAGE_PIXELS
+    ):
+        raise SequenceError(
+            f"{where}: the {kind} header claims {width}x{height} pixels; expected each side "
+            f"1..{MAX_IMAGE_SIDE} and {MAX_IMAGE_PIXELS / 1e6:.0f} million pixels at most"
+        )
 
 
 def image_header(path: Path, frame: int) -> tuple[int, int, int]:
@@ -103,9 +112,11 @@ def _header_other(path: Path, where: str) -> tuple[int, int, int]:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")  # a damaged file's warnings: the error is one line of ours
             with Image.open(path) as im:
-                return im.size[0], im.size[1], 8 if im.mode in EIGHT_BIT_MODES else 16
+                (width, height), mode = im.size, im.mode
     except Exception:  # whatever Pillow raises on a file it cannot read
         raise SequenceError(f"{where}: cannot read the image (damaged or not an image)") from None
+    _check_size(where, im.format or "image", width, height)
+    return width, height, 8 if mode in EIGHT_BIT_MODES else 16
 
 
 def frame_order(name: str) -> tuple:

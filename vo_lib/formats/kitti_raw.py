@@ -38,13 +38,17 @@ VF, WZ = 8, 19  # zero-based columns of forward speed (m/s) and yaw rate (rad/s)
 MAX_OXTS_VALUE = 1e6
 #: Fastest turn of a car in an OXTS packet, rad/s (a car turns at 1 rad/s or less): beyond, damaged.
 MAX_YAW_RATE = 10.0
+#: Latitude and longitude bounds (degrees): the Mercator projection of the positions grows without
+#: bound towards the poles (85 degrees, as web maps stop).
+MAX_LATITUDE, MAX_LONGITUDE = 85.0, 180.0
 RAW_CALIB_FILES = ("calib_cam_to_cam.txt", "calib_imu_to_velo.txt", "calib_velo_to_cam.txt")
 #: The Earth's equatorial radius (WGS 84), metres, of the Mercator projection of the OXTS positions.
 EARTH_RADIUS_M = 6378137.0
 
 
 def read_oxts(path) -> np.ndarray:
-    """``(N, 30)`` OXTS packets, finite and within :data:`MAX_OXTS_VALUE`."""
+    """``(N, 30)`` OXTS packets, finite and within :data:`MAX_OXTS_VALUE`; position, forward speed and
+    yaw rate within their own bounds."""
     rows = read_rows(Path(path), OXTS_FIELDS, "an OXTS packet", MAX_OXTS_VALUE)
     if not len(rows):
         raise SequenceError(f"{path}: no OXTS packets")
@@ -52,6 +56,8 @@ def read_oxts(path) -> np.ndarray:
     claim = f"the forward speed vf is {speed:g} per second (median)"
     check_metres(path, claim, speed, MAX_TRACK_SPEED_M_S, " m/s")
     for column, name, most, unit in (
+        (0, "latitude lat", MAX_LATITUDE, "deg"),
+        (1, "longitude lon", MAX_LONGITUDE, "deg"),
         (VF, "forward speed vf", MAX_TRACK_SPEED_M_S, "m/s"),
         (WZ, "yaw rate wz", MAX_YAW_RATE, "rad/s"),
     ):
