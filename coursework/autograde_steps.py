@@ -1,6 +1,7 @@
 """The autograder's steps, run by nbgrader (``nbgrader_config.py``); apart from ``grading.py``, which
 every kernel imports, so that a kernel never loads nbgrader and nbformat (seconds)."""
 
+from nbformat import read
 from nbformat.v4 import new_output
 from nbgrader.preprocessors import NbGraderPreprocessor
 
@@ -12,8 +13,12 @@ class AfterRun(NbGraderPreprocessor):
     are dropped; the test of a flagged answer fails with the report's lines (0 until the teacher reads
     it), and so does every other test of the notebook, whose results the flagged answer may have bought."""
 
+    release = None  #: the course's release folder (a pathlib.Path), set by nbgrader_config.py
+
     def preprocess(self, nb, resources):
-        self.flagged = report(nb)
+        ids = resources.get("nbgrader", {})
+        path = self.release and self.release / ids.get("assignment", "") / f"{ids.get('notebook')}.ipynb"
+        self.flagged = report(nb, read(path, as_version=4) if path and path.is_file() else None)
         return super().preprocess(nb, resources)
 
     def preprocess_cell(self, cell, resources, index):
@@ -30,11 +35,13 @@ class AfterRun(NbGraderPreprocessor):
 
 
 class VerdictOnly(NbGraderPreprocessor):
-    """Feedback of a test cell: its error's one-line message, no traceback and nothing it printed."""
+    """Feedback: a test cell's error, its one-line message only; no cell's printout or traceback
+    (any cell may print the kernel's history, which holds the hidden tests)."""
 
     def preprocess_cell(self, cell, resources, index):
-        if cell.cell_type == "code" and cell.metadata.get("nbgrader", {}).get("grade"):
-            cell.outputs = [o for o in cell.get("outputs", []) if o.get("output_type") == "error"]
+        if cell.cell_type == "code":
+            test = cell.metadata.get("nbgrader", {}).get("grade")
+            cell.outputs = [o for o in cell.get("outputs", []) if test and o.get("output_type") == "error"]
             for output in cell.outputs:
                 output["traceback"] = [f"{output['ename']}: {output['evalue']}"]
         return cell, resources

@@ -5,6 +5,7 @@ kernel imports it: the standard library only (the steps that need nbgrader: ``au
 from __future__ import annotations
 
 import ast
+import builtins
 import contextlib
 import copy
 import enum
@@ -95,14 +96,14 @@ class Reason(enum.Enum):
         "open pathlib shutil glob io fromfile load loadtxt genfromtxt read_csv listdir scandir walk run_path "
         "memmap get_data save savez savetxt tofile socket urllib http requests",
     )
-    KERNEL = "uses the kernel (get_ipython, IPython)", "get_ipython IPython ipykernel"
+    KERNEL = "uses the kernel or its history", "get_ipython IPython ipykernel In Out _ih _oh"
     FRAME = "inspects frames, code or source", "inspect linecache _getframe f_back f_globals f_locals"
     CODE = "reads or copies code objects", "__code__ __globals__ codeobj Bytecode CodeType FunctionType"
     LOW_LEVEL = (
         "uses ctypes, gc, importlib, exec, traces, hooks or mocks, or reaches names indirectly",
-        "ctypes gc importlib __import__ modules exec eval compile globals vars __dict__ __builtins__ "
-        "__setattr__ __getattribute__ runpy run_module settrace setprofile getattr pkgutil resolve_name "
-        "attrgetter methodcaller displayhook excepthook atexit signal faulthandler kill abort unittest mock",
+        "ctypes gc importlib __import__ __main__ pickle modules exec eval compile globals vars __dict__ "
+        "__builtins__ __setattr__ __getattribute__ runpy settrace setprofile getattr pkgutil attrgetter "
+        "methodcaller displayhook excepthook atexit signal faulthandler kill abort unittest mock",
     )
     THREADS = "starts threads or processes", "threading multiprocessing subprocess concurrent _thread"
     EXIT = "runs a shell or ends the interpreter", "_exit system popen fork exit quit"
@@ -110,9 +111,9 @@ class Reason(enum.Enum):
         "fakes a number, an array or a comparison",
         "__array__ __eq__ __ne__ __lt__ __le__ __gt__ __ge__ __abs__ __sub__ __rsub__ __array_function__ "
         "__array_ufunc__ __array_interface__ __array_priority__ __getitem__ __len__ __iter__ __float__ "
-        "__array_wrap__ __array_finalize__ __bool__ __index__ __int__",
+        "__array_wrap__ __array_finalize__ __bool__ __index__ __int__ UserList UserDict UserString",
     )
-    REBINDS = "rebinds NumPy or a module, or uses the grader", "builtins coursework grading setattr delattr"
+    REBINDS = "rebinds NumPy, builtins, modules or the grader", "builtins coursework grading setattr delattr"
     PRIVATE = "reaches a private name (a leading underscore) of an imported module", ""
     HELD = "calls a function held where a test cannot refuse it (an item, a closure, a default)", ""
 
@@ -122,6 +123,7 @@ class Reason(enum.Enum):
 
 FLAGGED = {word: reason for reason in Reason for word in reason.words}  # imported, used or defined
 PROTECTED = {"np", "numpy", "grading", "assert_allclose"}  # names an answer must not rebind
+BUILTINS = set(dir(builtins))  # an answer that rebinds abs rewrites the tests that call it
 MODULES = ("np", "numpy", "grading")  # used only as np.f: bare, they are handed, held or iterated
 NUMBER_TYPES = ("float", "int", "complex", "bool")  # a subclass of one fakes a number
 NAMED_TUPLE = {"_replace", "_asdict", "_make", "_fields", "_field_defaults"}  # public, though underscored
@@ -137,7 +139,10 @@ def review(source: str, imported: frozenset[str] = frozenset()) -> list[tuple[in
     cell = _imports(tree)  # names the cell's imports bind; a patch counts for the notebook's too
     patched = cell | imported | _aliases(tree, cell | imported | PROTECTED)
     values = {id(n.value) for n in ast.walk(tree) if isinstance(n, ast.Attribute)}  # the np of np.f
+    scopes = [f for f in ast.walk(tree) if isinstance(f, (ast.FunctionDef, ast.ClassDef))]
+    nested = {id(c) for f in scopes for c in ast.walk(f) if c is not f}  # a method's name shadows nothing
     for node in ast.walk(tree):
+        found += [(node.lineno, Reason.REBINDS)] if id(node) not in nested and _shadows(node) else []
         found += [(node.lineno, Reason.REBINDS)] if _named(node, *MODULES) and id(node) not in values else []
         found += [(getattr(node, "lineno", 0) or node.target.lineno, why) for why in _reasons(node, patched)]
         found += [(node.lineno, Reason.PRIVATE)] if _private(node, cell) else []
@@ -168,6 +173,8 @@ def _aliases(tree: ast.AST, names: set[str]) -> set[str]:
 
 def _reasons(node: ast.AST, imported: set[str]) -> list[Reason]:
     """The reasons to review one syntax node; ``imported``: the names imports bind, and their aliases."""
+    if isinstance(node, ast.alias):  # an import that takes a builtin's name (from m import zeros as abs)
+        return [Reason.REBINDS] if (node.asname or node.name.split(".")[0]) in BUILTINS else []
     if isinstance(node, ast.Import):
         return [FLAGGED[r] for r in (a.name.split(".")[0] for a in node.names) if r in FLAGGED]
     if isinstance(node, ast.ImportFrom):
@@ -186,6 +193,13 @@ def _reasons(node: ast.AST, imported: set[str]) -> list[Reason]:
         return [Reason.REBINDS]  # np.allclose = ..., grading = ..., or an attribute of anything imported
     dunder = isinstance(node, ast.Constant) and str(node.value)[:2] == "__" and node.value in FLAGGED
     return [FLAGGED[node.value]] if dunder else []  # type("F", (float,), {"__sub__": ...})
+
+
+def _shadows(node: ast.AST) -> bool:
+    """A builtin's name given to a function where the tests see it: ``def abs``, ``abs = lambda x: 0``."""
+    function = isinstance(node, ast.Assign) and isinstance(node.value, (ast.Lambda, ast.Name))  # not sum = 0
+    named = [node.name] if isinstance(node, (ast.FunctionDef, ast.ClassDef)) else []
+    return bool({*named, *(getattr(t, "id", "") for t in (node.targets if function else ()))} & BUILTINS)
 
 
 def _targets(node: ast.AST) -> list[ast.AST]:
@@ -242,17 +256,21 @@ def _rebinds(target: ast.AST) -> bool:
     return _named(target, *PROTECTED)
 
 
-def report(nb) -> dict[str, list[str]]:
-    """``{grade_id: ["line N: reason: code", ...]}`` for every answer cell of ``nb`` to be reviewed."""
+def report(nb, released=None) -> dict[str, list[str]]:
+    """``{grade_id or "code cell N": ["line N: reason: code", ...]}`` for every answer cell of ``nb`` to be
+    reviewed, and every other code cell but a test that is not in the release ``released`` as it is there."""
     flagged, code_cells = {}, [cell for cell in nb.cells if cell.cell_type == "code"]
+    given = {c.source for c in released.cells if c.cell_type == "code"} if released else None
     trees = [tree for c in code_cells if (tree := _tree(c.source))]
     imported = frozenset().union(*map(_imports, trees))
     imported |= frozenset().union(*(_aliases(tree, imported | PROTECTED) for tree in trees))  # n = np
-    for cell in code_cells:
+    for k, cell in enumerate(code_cells, 1):
         meta = cell.metadata.get("nbgrader", {})
-        if meta.get("solution") and (found := review(cell.source, imported)):
+        changed = given is not None and not meta.get("grade") and cell.source not in given
+        if (meta.get("solution") or changed) and (found := review(cell.source, imported)):
             code = cell.source.splitlines()
-            flagged[meta["grade_id"]] = [f"line {n}: {r.text}: {code[n - 1].strip()[:70]}" for n, r in found]
+            key = meta["grade_id"] if meta.get("solution") else f"code cell {k}"
+            flagged[key] = [f"line {n}: {r.text}: {code[n - 1].strip()[:70]}" for n, r in found]
     return flagged
 
 
@@ -288,7 +306,9 @@ def main(argv: list[str]) -> int:
     import nbformat
 
     for path in sorted(pathlib.Path(argv[0]).rglob("*.ipynb")):
-        for exercise, lines in report(nbformat.read(path, as_version=4)).items():
+        release = pathlib.Path(argv[0]).resolve().parent / "release" / path.parent.name / path.name
+        released = nbformat.read(release, as_version=4) if release.is_file() else None
+        for exercise, lines in report(nbformat.read(path, as_version=4), released).items():
             print(f"to be reviewed: {path.relative_to(argv[0])} {exercise}: " + "; ".join(lines))
     return 0
 

@@ -44,6 +44,7 @@ elif in_course:
     print("nbgrader_config.py: unshare -rm is not allowed here: kernels run NOT isolated", file=sys.stderr)
 
 # After the notebook ran, stderr and tests' values are dropped, a flagged answer's test fails (its lines).
+autograde_steps.AfterRun.release = here / "release" if in_course else None  # a cell changed from it: read
 steps = Autograde.class_traits()["autograde_preprocessors"].make_dynamic_default()
 at = steps.index(Execute) + 1
 c.Autograde.autograde_preprocessors = [*steps[:at], autograde_steps.AfterRun, *steps[at:]]

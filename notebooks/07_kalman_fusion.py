@@ -814,12 +814,15 @@ import scipy.stats  # noqa: E402
 
 import vo_lib.comparison as comparison_module  # noqa: E402
 import vo_lib.stereo_vo.consistency as consistency_module  # noqa: E402
+import vo_lib.stereo_vo.kalman as kalman_module  # noqa: E402
 from coursework import grading  # noqa: E402
 
 _h2_rng = np.random.default_rng(7021)  # errors of a 4-D estimator with a full covariance
 _h2_cov = np.cov(_h2_rng.normal(size=(4, 10)))
 _h2_errors = _h2_rng.multivariate_normal(np.zeros(4), _h2_cov, size=(6, 20))
-with grading.unavailable(*grading.library_functions(consistency_module, comparison_module.chi2_band)):
+with grading.unavailable(
+    *grading.library_functions(consistency_module, comparison_module.chi2_band, kalman_module.nis)
+):
     _h2_band, _h2_nees = nees_band(37, 4), average_nees(_h2_errors, _h2_cov)
 _h2_expected = np.einsum("eri,ij,erj->er", _h2_errors, np.linalg.inv(_h2_cov), _h2_errors).mean(axis=1)
 assert np.allclose(_h2_nees, _h2_expected), "average_nees: not each experiment's mean of eᵀ C⁻¹ e"

@@ -516,7 +516,8 @@ def marked_lines(text: str, begin: str, end: str) -> int:
 
 def test_grading_stays_in_proportion_to_what_it_grades():
     """Hidden tests take at most 1.25 lines per line of solution; the grading code beside the course
-    (grading.py, autograde_steps.py and nbgrader_config.py) at most 420 lines."""
+    (grading.py, autograde_steps.py and nbgrader_config.py) at most 450 lines (420 until the report
+    read every cell a student added or changed, not only the answer cells)."""
     texts = [p.read_text() for p in NOTEBOOKS]
     solution = sum(marked_lines(t, "BEGIN SOLUTION", "END SOLUTION") for t in texts)
     hidden = sum(marked_lines(t, "BEGIN HIDDEN TESTS", "END HIDDEN TESTS") for t in texts)
@@ -528,4 +529,4 @@ def test_grading_stays_in_proportion_to_what_it_grades():
     )
     assert 0 < hidden <= 1.25 * solution, (hidden, solution)
     tools = [*build.TOOLS, build.CONFIG]
-    assert sum(len(p.read_text().splitlines()) for p in tools) <= 420
+    assert sum(len(p.read_text().splitlines()) for p in tools) <= 450

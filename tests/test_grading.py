@@ -215,6 +215,16 @@ def test_library_functions_takes_functions_classes_and_the_methods_of_a_modules_
         # a fake number or a lazy array made by type(), its special methods named in strings
         ('Zero = type("Zero", (float,), {"__sub__": lambda s, o: 0.0})', Reason.FAKE_NUMBER),
         ('Lazy = type("Lazy", (), {"__array__": lambda self, dtype=None, copy=None: 0})', Reason.FAKE_NUMBER),
+        # a later trial: NumPy rebound by an import of the notebook's own namespace, names reached
+        # through pickle, a lazy list of the standard library, the tests' abs rewritten, the hidden
+        # tests read back from the kernel's history
+        ("lenient = object()\nfrom __main__ import lenient as np", Reason.LOW_LEVEL),
+        ("import pickle\nallclose = pickle.loads(b'cnumpy\\nallclose\\n.')", Reason.LOW_LEVEL),
+        ("import collections\nclass Later(collections.UserList):\n    pass", Reason.FAKE_NUMBER),
+        ("def abs(x):\n    return 0.0", Reason.REBINDS),
+        ("abs = lambda x: 0.0", Reason.REBINDS),
+        ("from numpy import zeros_like as abs", Reason.REBINDS),
+        ("print('\\n'.join(s for s in In if '_h1' in s))", Reason.KERNEL),
     ],
 )
 def test_review_names_what_no_honest_answer_needs(answer, reason):
@@ -232,7 +242,28 @@ def test_the_report_knows_the_names_other_cells_import():
         _cell("answer", "n.sum = sum", "ex5"),
     ]
     assert list(grading.report(nb)) == ["ex2", "ex4", "ex5"]  # n = np: NumPy itself, held under a name
-    assert "rebinds NumPy or a module" in grading.report(nb)["ex2"][0]
+    assert "rebinds NumPy, builtins, modules" in grading.report(nb)["ex2"][0]
+
+
+def test_the_report_reads_every_cell_the_student_added_or_changed(tmp_path):
+    """Not only answer cells: a patch one cell away from them, in a cell added or changed from the
+    release, holds the tests too; a cell as the release has it is the course's, not read."""
+    patch = "np.allclose = lambda *a, **k: True"
+    release = nbformat.v4.new_notebook()
+    release.cells = [nbformat.v4.new_code_cell("import gc"), _cell("answer", "x = 1", "ex1")]
+    release.cells += [_cell("test", "assert x == 1", "ex1_test")]
+    nb = nbformat.from_dict(json.loads(json.dumps(release)))
+    nb.cells.insert(1, nbformat.v4.new_code_cell(patch))  # added
+    nb.cells[0].source += f"\n{patch}"  # changed
+    assert grading.report(release, release) == {} and list(grading.report(nb)) == []
+    assert list(grading.report(nb, release)) == ["code cell 1", "code cell 2"]
+    (tmp_path / "01" / "01.ipynb").parent.mkdir()
+    nbformat.write(release, tmp_path / "01" / "01.ipynb")
+    step = autograde_steps.AfterRun()
+    step.release = tmp_path
+    nb, _ = step.preprocess(nb, {"nbgrader": {"assignment": "01", "notebook": "01"}})
+    (held,) = nb.cells[-1].outputs
+    assert held.ename == "ToBeReviewed" and "code cell 2" in held.evalue
 
 
 def test_review_gives_the_line():
@@ -261,6 +292,8 @@ def test_honest_code_with_numpy_and_ordinary_names_is_not_flagged():
         "kf = Filter()\nkf.control_covariance = lambda u: u\nkf.x, kf.P = np.zeros(3), np.eye(3)\n"
     )
     assert review(answer) == []
+    assert review("sum = 0\nfor x in [1, 2]:\n    sum += x\nlargest = max([1, 2])\n") == []  # a value
+    assert review("class Filter:\n    def filter(self, z):\n        return z\n") == []  # a method
 
 
 def _cell(kind, source, grade_id, outputs=()):
@@ -330,10 +363,12 @@ def test_feedback_keeps_a_tests_message_only():
         "traceback": ["assert np.allclose(got, expected_secret)", "AssertionError: the gain"],
     }
     leaked = {"output_type": "stream", "name": "stdout", "text": "assert np.allclose(got, expected_secret)"}
-    nb = nbformat.v4.new_notebook(cells=[_cell("test", "assert 0", "ex1_test", [leaked, failure])])
+    history = nbformat.v4.new_code_cell("print(*In)")  # any cell may print the hidden tests that ran
+    history.outputs = [nbformat.from_dict(leaked)]
+    nb = nbformat.v4.new_notebook(cells=[_cell("test", "assert 0", "ex1_test", [leaked, failure]), history])
     nb, _ = autograde_steps.VerdictOnly().preprocess(nb, {})
     (output,) = nb.cells[0].outputs
-    assert output.traceback == ["AssertionError: the gain of another update"]
+    assert output.traceback == ["AssertionError: the gain of another update"] and nb.cells[1].outputs == []
 
 
 def test_the_report_command_lists_flagged_answers_and_refuses_a_bad_argument(tmp_path, capsys):
