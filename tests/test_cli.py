@@ -95,3 +95,5 @@ def test_step_scale_measures_the_steps_not_the_path():
     noisy = truth.copy()
     noisy[:, :3, 3] += np.random.default_rng(0).normal(0.0, 0.01, (50, 3))
     assert step_scale(noisy, truth) < 0.95 and abs(step_scale(noisy, truth, stride=10) - 1) < 0.01
+    with np.errstate(all="raise"):  # a truth standing still has no scale: undefined, and no warning
+        assert np.isnan(step_scale(np.repeat(np.eye(4)[None], 5, axis=0), truth[:5]))

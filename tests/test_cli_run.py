@@ -327,6 +327,23 @@ def test_bench_real_names_a_realdata_variable_that_holds_no_sequence(tmp_path, m
     )
 
 
+def test_bench_real_refuses_a_sequence_too_short_for_its_errors(tmp_path, monkeypatch, capsys):
+    """A real sequence of two frames: one line and exit 2, as evaluate, not a traceback."""
+    from vo_lib.camera import StereoCamera
+    from vo_lib.cli.main import main
+    from vo_lib.formats.sequence_writer import write_sequence
+
+    images = [np.random.default_rng(k).integers(0, 256, (48, 64), dtype=np.uint8) for k in range(2)]
+    camera = StereoCamera(50.0, 50.0, 31.5, 23.5, 0.12, 64, 48)
+    write_sequence(
+        tmp_path / "real" / "short", camera, images, images, np.arange(2) / 10, np.tile(np.eye(4), (2, 1, 1))
+    )
+    monkeypatch.setenv("VO_LIB_REALDATA", str(tmp_path / "real"))
+    assert main(["bench", "real"]) == 2
+    (line,) = capsys.readouterr().err.strip().splitlines()
+    assert line.endswith("short: 2 frame(s); a benchmark needs at least 3")
+
+
 def test_a_two_frame_run_prints_no_errors_and_says_why(workdir):
     """As ``evaluate`` refuses two poses, ``run`` on two frames prints no errors (its segment
     errors over millimetres were thousands of degrees per 100 m) and says so in one notice."""

@@ -1,6 +1,7 @@
 """The road drive: its geometry, what it writes, and that the command line reads it as a car's."""
 
 import numpy as np
+import pytest
 
 from vo_lib.formats.sequence import read_sequence
 from vo_lib.geometry import relative_planar, wrap_angle
@@ -50,6 +51,11 @@ def test_road_world_has_a_continuous_road_and_traffic_that_moves():
 def test_generated_road_drive_is_read_as_a_car_with_wheel_odometry(tmp_path):
     out = generate("road_drive", tmp_path / "road", frames=4, resolution=(311, 94), progress=False)
     seq = read_sequence(out)
+    # at another shape too, the pixels stay square: the copy of another size reads back
+    square = read_sequence(
+        generate("road_drive", tmp_path / "sq", frames=2, resolution=(64, 64), progress=False)
+    )
+    assert square.camera.fx == square.camera.fy == pytest.approx(road.KITTI_RIG[0] * 64 / 1242)
     vehicle = vehicle_of(seq)
     assert (vehicle.kind, vehicle.motion, vehicle.odometry_source) == ("car", "full", "odometry.txt")
     np.testing.assert_allclose(vehicle.mount[:3, 3], KITTI_CAMERA_IN_IMU)

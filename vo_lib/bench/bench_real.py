@@ -45,10 +45,14 @@ def realdata_folders() -> list[Path]:
 
 def decoded_sequence(folder) -> tuple[object, float]:
     """The sequence in ``folder`` (no odometry) with every stereo pair decoded (and rectified)
-    beforehand, serially, and read from memory; and the median milliseconds one pair took."""
+    beforehand, serially, and read from memory; and the median milliseconds one pair took. Fewer than
+    3 frames raise :class:`UsageError` (as in evaluate: the errors of two poses mean nothing)."""
+    from vo_lib.arguments import UsageError
     from vo_lib.data import load_sequence
 
     seq = load_sequence(folder, odometry=False, progress=False)
+    if len(seq) < 3:
+        raise UsageError(f"{folder}: {len(seq)} frame(s); a benchmark needs at least 3")
     seq.read_ahead = 0
     timed = [timed_ms(seq.pair, k) for k in range(len(seq))]
     seq.pair = [pair for pair, _ in timed].__getitem__
@@ -75,7 +79,8 @@ def step_scale(truth, poses, stride: int = 1) -> float:
     T, E = np.asarray(truth, float), np.asarray(poses, float)
     t_true = (np.linalg.inv(T[:-stride]) @ T[stride:])[:, :3, 3]
     t_est = (np.linalg.inv(E[:-stride]) @ E[stride:])[:, :3, 3]
-    return float(np.sum(t_est * t_true) / np.sum(t_true * t_true))
+    moved = np.sum(t_true * t_true)
+    return float(np.sum(t_est * t_true) / moved) if moved > 0 else float("nan")  # a truth standing still
 
 
 def error_rows(truth, poses) -> dict[str, float]:
@@ -147,6 +152,21 @@ def bench_real(folders=None, repeats: int = REPEATS) -> dict[str, float]:
     return out
 
 
+#: The error table's columns: figure, width, digits.
+COLUMNS = (
+    ("ate_m", 14, 4),
+    ("final_pct", 11, 3),
+    ("final_rotation_deg", 16, 3),
+    ("path_m", 10, 3),
+    ("step_scale", 12, 4),
+)
+
+
+def _figure(value: float, width: int, digits: int) -> str:
+    """``value`` in a column, or "undefined" (a percentage of no path, the scale of no motion)."""
+    return f"{value:{width}.{digits}f}" if np.isfinite(value) else f"{'undefined':>{width}}"
+
+
 def _error_table(name: str, truth, ours, baseline) -> dict[str, float]:
     """Print :func:`error_rows` of both methods' camera poses and the truth's path; returns them
     keyed ``NAME:METHOD:KEY``."""
@@ -157,10 +177,7 @@ def _error_table(name: str, truth, ours, baseline) -> dict[str, float]:
     out = {}
     for method, poses in (("ours", ours), ("PnP baseline", baseline)):
         rows = error_rows(truth, poses)
-        print(
-            f"  {method:<14s}{rows['ate_m']:14.4f}{rows['final_pct']:11.3f}"
-            f"{rows['final_rotation_deg']:16.3f}{rows['path_m']:10.3f}{rows['step_scale']:12.4f}"
-        )
+        print(f"  {method:<14s}" + "".join(_figure(rows[k], width, digits) for k, width, digits in COLUMNS))
         out.update({f"{name}:{method}:{key}": value for key, value in rows.items()})
     print(f"  {'truth':<14s}{'':>41s}{rows['truth_path_m']:10.3f}")
     return out

@@ -21,6 +21,7 @@ from scipy.spatial.transform import Rotation
 from vo_lib.atomic import notice
 from vo_lib.camera import Rectification, rectify_stereo
 from vo_lib.formats.frame_files import (
+    MAX_MOUNT_M,
     MIN_BASELINE_M,
     SequenceError,
     check_metres,
@@ -38,9 +39,10 @@ MAX_BASELINE_TILT_DEG = 20.0
 MIN_VALID_SHARE = 0.25
 #: Largest distortion coefficient taken as a lens's (real ones stay below 1 or so).
 MAX_DISTORTION = 100.0
-#: Bound of each number of a transform: a rotation's are at most 1, and a translation of a million
-#: metres is no rig's (beyond, their products overflow before any check can name the key).
-MAX_TRANSFORM_ENTRY = 1e6
+#: Bound of each number of a transform: a rotation's are at most 1, and a camera a kilometre from its
+#: body is no rig's (the bound of the rectified copy's manifest.json; far beyond, the numbers'
+#: products overflow before any check can name the key).
+MAX_TRANSFORM_ENTRY = MAX_MOUNT_M
 
 
 AslError = SequenceError

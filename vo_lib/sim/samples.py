@@ -266,9 +266,12 @@ class RenderedSample:
 def sample_camera(sample: Sample, resolution=None) -> StereoCamera:
     """The sample's rig at ``resolution`` (default: the sample's own)."""
     width, height = sample.resolution if resolution is None else resolution
-    if sample.rig == "car":
+    if sample.rig == "car":  # KITTI's lens on a sensor of this size: its horizontal view, square pixels
         f, cx, cy, baseline, w0, h0 = road.KITTI_RIG
-        return StereoCamera(f, f, cx, cy, baseline, w0, h0).scaled(width, height)
+        s = width / w0
+        return StereoCamera(
+            f * s, f * s, (cx + 0.5) * s - 0.5, (cy + 0.5) * height / h0 - 0.5, baseline, width, height
+        )
     return StereoCamera.bumblebee2(width, height)
 
 
