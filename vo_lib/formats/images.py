@@ -45,7 +45,7 @@ def _decode(path: Path) -> np.ndarray | None:
     raises, where OpenCV's decoders (libpng, libjpeg) print to stderr, from whichever thread
     decodes. Colour becomes grey by OpenCV's weights; other modes keep their depth."""
     try:
-        with open(path, "rb") as fh, Image.open(fh) as im:
+        with Image.open(path) as im:
             im.load()
             if im.mode == "L" or im.mode.startswith(("I", "F")):  # 8-bit grey; deeper ones are refused
                 return np.asarray(im)

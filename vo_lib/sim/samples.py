@@ -268,10 +268,8 @@ def sample_camera(sample: Sample, resolution=None) -> StereoCamera:
     width, height = sample.resolution if resolution is None else resolution
     if sample.rig == "car":  # KITTI's lens on a sensor of this size: its horizontal view, square pixels
         f, cx, cy, baseline, w0, h0 = road.KITTI_RIG
-        s = width / w0
-        return StereoCamera(
-            f * s, f * s, (cx + 0.5) * s - 0.5, (cy + 0.5) * height / h0 - 0.5, baseline, width, height
-        )
+        camera = StereoCamera(f, f, cx, cy, baseline, w0, h0).scaled(width, height)
+        return replace(camera, fy=camera.fx)
     return StereoCamera.bumblebee2(width, height)
 
 
