@@ -126,10 +126,12 @@ def test_a_scheduler_address_of_another_service_gets_one_line(
     assert len(err.strip().splitlines()) == 1 and list(tmp_path.iterdir()) == []
 
 
-def test_lap_sweep_prints_the_papers_figures_beside_ours(tmp_path, capsys):
-    assert main(["sweep", "lap", "--seeds", "2", "--workers", "1", "--out", str(tmp_path / "l")]) == 0
+@pytest.mark.parametrize("seeds", ["2", "1"])
+def test_lap_sweep_prints_the_papers_figures_beside_ours(seeds, tmp_path, capsys):
+    assert main(["sweep", "lap", "--seeds", seeds, "--workers", "1", "--out", str(tmp_path / "l")]) == 0
     out = capsys.readouterr().out
-    assert "dead reckoning on" in out and "of 2 laps" in out and "paper 54.4412" in out
+    assert ("(95 % interval undefined)" in out) == (seeds == "1") and "nan" not in out.lower(), out
+    assert "dead reckoning on" in out and f"of {seeds} lap" in out and "paper 54.4412" in out
     assert "final error: the feature-point form " in out and " the line form: " in out
     table = pd.read_csv(tmp_path / "l" / "results.csv")
     assert {"nees_above", "slam_closer", "extended_mapped_to", "line_form_error"} <= set(table)
@@ -153,3 +155,7 @@ def test_corridor_report_puts_table3_beside_ours(capsys):
         for paper in methods.values():
             assert all(f"0.500 m (0.500-0.500) [{v:.3f}]" in out for v in paper.values())
     assert "100.0 % of LBPT's updates" in out and "(10 of 10)" in out and "2.0 % of VOAPT's" in out
+    # one seed: no interval, said in words
+    corridor_report(table[:1], sweep.summary(table[:1], ["seed"]).droplevel(0))
+    out = capsys.readouterr().out
+    assert "0.500 m (undefined)" in out and "nan" not in out, out

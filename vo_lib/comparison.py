@@ -55,6 +55,11 @@ def bootstrap_interval(
     return float(low), float(high)
 
 
+def interval_text(low: float, high: float, digits: int) -> str:
+    """``"low-high"`` with ``digits`` decimals, or ``"undefined"`` where there is no spread (one seed)."""
+    return "undefined" if np.isnan(low) or np.isnan(high) else f"{low:.{digits}f}-{high:.{digits}f}"
+
+
 def chi2_band(dof: int, count: int) -> tuple[float, float]:
     """Band of the average of ``count`` independent χ²(``dof``) values (see the module's rule)."""
     low, high = chi2.ppf([(1 - CONFIDENCE) / 2, (1 + CONFIDENCE) / 2], dof * count) / count

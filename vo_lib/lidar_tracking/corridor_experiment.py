@@ -16,6 +16,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from vo_lib.comparison import interval_text
 from vo_lib.evaluation import ErrorStats
 from vo_lib.geometry import compose_planar, planar_from_camera_poses, relative_planar
 from vo_lib.lidar_tracking.likelihood_field import LikelihoodField
@@ -256,7 +257,7 @@ def corridor_report(table, stats) -> None:
         for method, paper in methods.items():
             rows = {k: stats.loc[f"{method.lower()}_{axis.lower()}_{k}"] for k in STATISTICS}
             cells = [
-                f"{k} {r['mean']:.3f} m ({r['low']:.3f}-{r['high']:.3f}) [{paper[k]:.3f}]"
+                f"{k} {r['mean']:.3f} m ({interval_text(r['low'], r['high'], 3)}) [{paper[k]:.3f}]"
                 for k, r in rows.items()
             ]
             print(f"{method:>6s} {axis}: " + ", ".join(cells))

@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from vo_lib.comparison import Comparison, chi2_band
+from vo_lib.comparison import Comparison, chi2_band, interval_text
 from vo_lib.geometry import wrap_angle
 from vo_lib.line_slam.ekf_slam import DROPPED, EkfSlam, diagonal_cov
 from vo_lib.line_slam.line_landmarks import (
@@ -303,8 +303,9 @@ def lap_report(table, stats) -> None:
         f"(one lap's per-step 95 % band ends at {NEES_HIGH:.2f})"
     )
     print(
-        f"extended landmark 3 mapped up to x = {mapped['mean']:.2f} (95 % interval {mapped['low']:.2f}-"
-        f"{mapped['high']:.2f}), visible from the true path up to {visible['mean']:.2f}; "
+        f"extended landmark 3 mapped up to x = {mapped['mean']:.2f} "
+        f"(95 % interval {interval_text(mapped['low'], mapped['high'], 2)}), "
+        f"visible from the true path up to {visible['mean']:.2f}; "
         f"paper {PAPER_EXTENDED_RIGHT_END}"
     )
 
