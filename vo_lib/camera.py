@@ -184,8 +184,7 @@ class StereoCamera:
 class Rectification:
     """The undistort-and-rectify maps of a stereo pair, the rectified cameras' projection matrices
     and image ``size``, the rectified left camera's pose in the body frame (``T_body_rect``), and
-    the share of each rectified image that is valid (of a fisheye lens's, that share times the part
-    of the raw image it spans: :func:`_sampled_share`)."""
+    the share of each raw image that its rectified image shows (:func:`_sampled_share`)."""
 
     left_maps: tuple[np.ndarray, np.ndarray]
     right_maps: tuple[np.ndarray, np.ndarray]
@@ -239,16 +238,15 @@ def rectify_stereo(
         )
         P2 = P1.copy()
         P2[0, 3] = -f * float(np.linalg.norm(t))  # the right camera a baseline along x
-        shares = [
-            _sampled_share(K, dist, R_rect, P, size)
-            for (K, dist), R_rect, P in ((left, R1, P1), (right, R2, P2))
-        ]
     else:
-        R1, R2, P1, P2, _, *valid = cv2.stereoRectify(
+        R1, R2, P1, P2, *_ = cv2.stereoRectify(
             *left, *right, size, R, t, flags=cv2.CALIB_ZERO_DISPARITY, alpha=0.0
         )
-        shares = [w * h / (size[0] * size[1]) for _, _, w, h in valid]
     opencv = cv2.fisheye if fisheye else cv2
+    shares = [
+        _sampled_share(opencv, K, dist, R_rect, P, size)
+        for (K, dist), R_rect, P in ((left, R1, P1), (right, R2, P2))
+    ]
     maps = [
         tuple(opencv.initUndistortRectifyMap(K, dist, R_rect, P, size, cv2.CV_16SC2))
         for (K, dist), R_rect, P in ((left, R1, P1), (right, R2, P2))
@@ -258,11 +256,11 @@ def rectify_stereo(
     return Rectification(*maps, (P1, P2), size, T_body_left @ T_left_rect, tuple(shares))
 
 
-def _sampled_share(K, dist, R_rect, P, size: tuple[int, int]) -> float:
-    """The share of a fisheye image that its rectified image shows: the rectified pixels that fall
+def _sampled_share(opencv, K, dist, R_rect, P, size: tuple[int, int]) -> float:
+    """The share of a raw image that its rectified image shows: the rectified pixels that fall
     inside it, times the part of it their bounding box spans (a sliver when the calibration is
-    not of the images)."""
-    x, y = cv2.fisheye.initUndistortRectifyMap(K, dist, R_rect, P, size, cv2.CV_32FC1)
+    not of the images, or when its principal point sits by a corner)."""
+    x, y = opencv.initUndistortRectifyMap(K, dist, R_rect, P, size, cv2.CV_32FC1)
     inside = (x >= 0) & (x <= size[0] - 1) & (y >= 0) & (y <= size[1] - 1)
     if not inside.any():
         return 0.0

@@ -35,7 +35,8 @@ from vo_lib.formats.poses import rigid_problem
 #: Largest angle between the baseline and cam0's image rows: rectifying a steeper rig turns the
 #: images so far that little of them is left.
 MAX_BASELINE_TILT_DEG = 20.0
-#: Least share of an image valid once rectified: a calibration of other images leaves a sliver.
+#: Least share of a raw image in view once rectified: a calibration of other images, or a principal
+#: point by a corner, leaves a sliver.
 MIN_VALID_SHARE = 0.25
 #: Largest distortion coefficient taken as a lens's (real ones stay below 1 or so).
 MAX_DISTORTION = 100.0
@@ -231,7 +232,8 @@ def read_camera_yaml(path) -> CameraCalibration:
 
 def rectify(left: CameraCalibration, right: CameraCalibration, where: Path) -> Rectification:
     """:func:`~vo_lib.camera.rectify_stereo` of a pair, checked: one image size, a baseline in
-    metres, cam1 to the right of cam0, most of each image valid once rectified."""
+    metres, cam1 to the right of cam0, most of each image in view once rectified, and the rectified
+    principal point inside the images."""
     if left.resolution != right.resolution:
         raise AslError(
             f"{where}: cam0 is {left.resolution[0]}x{left.resolution[1]} but cam1 is "
@@ -257,9 +259,15 @@ def rectify(left: CameraCalibration, right: CameraCalibration, where: Path) -> R
         if share < MIN_VALID_SHARE:
             raise AslError(
                 f"{where / side / 'sensor.yaml'}: keys intrinsics and distortion_coefficients leave "
-                f"{share:.0%} of the image valid once rectified; expected a calibration of these images"
+                f"{share:.0%} of the image in view once rectified; expected a calibration of these images"
             )
     _check_right_of(rect, cam1_in_cam0, where)
+    (cx, cy), (w, h) = (rect.camera.cx, rect.camera.cy), left.resolution
+    if not (0 <= cx <= w and 0 <= cy <= h):  # as the rectified copy's calib.txt is read back
+        raise AslError(
+            f"{where}: the intrinsics of cam0 and cam1 put the rectified principal point at ({cx:.0f}, "
+            f"{cy:.0f}), outside the {w}x{h} images; expected principal points nearer their centres"
+        )
     return rect
 
 
