@@ -507,6 +507,8 @@ CASES = [
         edit("seq/times.txt", "0\n\uff11\n2\n3\n")),
     Case("times-with-a-comment", "RUN --out out", 0, "wrote",
         edit("seq/times.txt", "# t [s]\n0\n1\n2\n3\n"), "out"),
+    Case("times-with-a-pause", "RUN", 2, "times.txt: the frame at 100000000 s comes 1e+08 s after the one",
+        edit("seq/times.txt", "0\n0.1\n100000000\n100000000.1\n")),
     Case("times-in-milliseconds", "RUN", 2, "times.txt: frames 33.3 s apart (median); expected 0.001 to 10 s",
         edit("seq/times.txt", "0\n33.3\n66.6\n99.9\n")),
     Case("calib-baseline-in-millimetres", "RUN", 2, "calib.txt: P1 puts the right camera 120 from the left",

@@ -262,12 +262,7 @@ def rectify(left: CameraCalibration, right: CameraCalibration, where: Path) -> R
                 f"{share:.0%} of the image in view once rectified; expected a calibration of these images"
             )
     _check_right_of(rect, cam1_in_cam0, where)
-    (cx, cy), (w, h) = (rect.camera.cx, rect.camera.cy), left.resolution
-    if not (0 <= cx <= w and 0 <= cy <= h):  # as the rectified copy's calib.txt is read back
-        raise AslError(
-            f"{where}: the intrinsics of cam0 and cam1 put the rectified principal point at ({cx:.0f}, "
-            f"{cy:.0f}), outside the {w}x{h} images; expected principal points nearer their centres"
-        )
+    _check_rectified_centre(rect, where)
     return rect
 
 
@@ -303,6 +298,17 @@ def _check_right_of(rect: Rectification, cam1_in_cam0: np.ndarray, where: Path) 
             "below it; expected cam1 to the right (are the folders swapped, or is T_BS inverted? it "
             "takes the camera's coordinates into the body's)"
         ) from None
+
+
+def _check_rectified_centre(rect: Rectification, where: Path) -> None:
+    """One line when the rectified principal point is outside the images (as a rectified copy's
+    ``calib.txt`` would be refused when read back)."""
+    (cx, cy), (w, h) = (rect.camera.cx, rect.camera.cy), rect.size
+    if not (0 <= cx <= w and 0 <= cy <= h):
+        raise AslError(
+            f"{where}: the intrinsics of cam0 and cam1 put the rectified principal point at ({cx:.0f}, "
+            f"{cy:.0f}), outside the {w}x{h} images; expected principal points nearer their centres"
+        )
 
 
 def truth_extrinsic(truth_path: Path) -> np.ndarray:

@@ -56,12 +56,20 @@ MAX_TRACK_SPEED_M_S = 50.0
 
 
 def check_frame_spacing(path: Path, seconds) -> None:
-    """Refuse frames (of ``path``) closer or farther apart than the bounds above (median)."""
-    spacing = float(np.median(np.diff(seconds))) if len(seconds) > 1 else MIN_FRAME_SPACING_S
+    """Refuse frames (of ``path``) closer or farther apart than the bounds above (median), or one
+    pause longer than the upper bound (nothing tracks, nor integrates odometry, across it)."""
+    steps = np.diff(seconds)
+    spacing = float(np.median(steps)) if len(seconds) > 1 else MIN_FRAME_SPACING_S
     if not MIN_FRAME_SPACING_S <= spacing <= MAX_FRAME_SPACING_S:
         raise SequenceError(
             f"{path}: frames {spacing:.3g} s apart (median); expected {MIN_FRAME_SPACING_S:g} to "
             f"{MAX_FRAME_SPACING_S:g} s ({'microseconds' if spacing < 1 else 'milliseconds or nanoseconds'}?)"
+        )
+    if len(steps) and steps.max() > MAX_FRAME_SPACING_S:
+        k = int(np.argmax(steps))
+        raise SequenceError(
+            f"{path}: the frame at {seconds[k + 1]:.9g} s comes {steps[k]:.3g} s after the one "
+            f"before; expected at most {MAX_FRAME_SPACING_S:g} s between frames"
         )
 
 
