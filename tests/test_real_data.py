@@ -581,7 +581,7 @@ def test_images_in_a_subfolder_of_data_are_read(tmp_path):
         ("truth-last-row", "state_groundtruth_estimate0/sensor.yaml: key T_BS: the last row is not 0 0 0 1"),
         (
             "truth-millimetres",
-            "state_groundtruth_estimate0/sensor.yaml: key T_BS puts the tracked point 141.621 from the body",
+            "state_groundtruth_estimate0/sensor.yaml: key T_BS puts the tracked point 141.6 from the body",
         ),
         ("twice", "cam0/sensor.yaml, line 22: not valid YAML (key 'intrinsics' given twice)"),
         ("empty", "cam1/sensor.yaml: expected YAML keys (T_BS, intrinsics, ...), got an empty file"),

@@ -320,3 +320,18 @@ def test_an_image_larger_than_the_decoder_takes_is_refused_from_its_header(seq_d
     (path / "image_1" / "000001.png").write_bytes(png)
     with pytest.raises(SequenceError, match="000001.png, frame 1: the PNG header claims 10000x9000 pixels; "):
         read_sequence(path)
+
+
+def test_a_value_just_beyond_a_bound_is_not_shown_as_the_bound(tmp_path):
+    """A figure rounded for its message must not read as the bound it broke ("10 m; at most 10")."""
+    from vo_lib.formats.frame_files import check_metres
+    from vo_lib.formats.sequence import check_frame_spacing
+
+    with pytest.raises(SequenceError, match=r"puts cam1 10\.000000000000002 m from cam0; expected metres"):
+        check_metres(tmp_path, "puts cam1 {} m from cam0", 10 + 2e-15)
+    with pytest.raises(SequenceError, match=r"frames 10\.000000000000002 s apart \(median\); expected 0.001"):
+        check_frame_spacing(tmp_path, np.array([0.0, 10 + 2e-15]))
+    with pytest.raises(SequenceError, match=r"frames 0\.000999 s apart \(median\)"):
+        check_frame_spacing(tmp_path, np.array([0.0, 0.000999, 0.001998]))
+    with pytest.raises(SequenceError, match=r"comes 10\.1 s after the one before; expected at most 10 s"):
+        check_frame_spacing(tmp_path, np.array([0.0, 0.1, 10.2]))

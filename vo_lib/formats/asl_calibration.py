@@ -275,7 +275,7 @@ def _check_baseline(T_right_left: np.ndarray, sensor: Path) -> np.ndarray:
             f"{sensor}: key T_BS puts cam1 where cam0 is (baseline {baseline:.3g} m); "
             "expected two cameras apart"
         )
-    check_metres(sensor, f"key T_BS puts cam1 {baseline:.4g} m from cam0", baseline)
+    check_metres(sensor, "key T_BS puts cam1 {} m from cam0", baseline)
     cam1_in_cam0 = np.linalg.inv(T_right_left)[:3, 3]
     x, y, z = np.round(cam1_in_cam0, 3) + 0.0
     if np.degrees(np.arctan2(np.hypot(y, z), abs(x))) > MAX_BASELINE_TILT_DEG:
@@ -320,5 +320,5 @@ def truth_extrinsic(truth_path: Path) -> np.ndarray:
         return np.eye(4)
     T = _transform(sensor, _yaml(sensor), "a 4x4 transform, data: [16 numbers]")
     lever = np.linalg.norm(T[:3, 3])
-    check_metres(sensor, f"key T_BS puts the tracked point {lever:g} from the body", lever)
+    check_metres(sensor, "key T_BS puts the tracked point {} from the body", lever)
     return T

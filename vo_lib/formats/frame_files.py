@@ -27,9 +27,16 @@ MIN_BASELINE_M = 1e-3
 MAX_LINE_BYTES = 1024
 
 
+def beyond(value: float, bound: float, digits: int = 4) -> str:
+    """``value`` in the fewest significant digits, from ``digits``, that tell it from ``bound``."""
+    return next(t for d in range(digits, 18) if float(t := f"{value:.{d}g}") != bound or d == 17)
+
+
 def check_metres(path: Path, claim: str, value: float, most: float = MAX_RIG_M, unit: str = "") -> None:
-    """Refuse a ``value`` beyond ``most`` (``claim`` states it): a file not in metres."""
+    """Refuse a ``value`` beyond ``most``: a file not in metres. ``claim`` states it, the value in
+    place of its ``{}``."""
     if value > most:
+        claim = claim.format(beyond(value, most))
         raise SequenceError(f"{path}: {claim}; expected metres, at most {most:g}{unit} (millimetres?)")
 
 

@@ -53,7 +53,7 @@ def read_oxts(path) -> np.ndarray:
     if not len(rows):
         raise SequenceError(f"{path}: no OXTS packets")
     speed = float(np.median(np.abs(rows[:, VF])))
-    claim = f"the forward speed vf is {speed:g} per second (median)"
+    claim = "the forward speed vf is {} per second (median)"
     check_metres(path, claim, speed, MAX_TRACK_SPEED_M_S, " m/s")
     for column, name, most, unit in (
         (0, "latitude lat", MAX_LATITUDE, "deg"),
@@ -107,7 +107,7 @@ def _rigid(path: Path) -> np.ndarray:
     T[:3, 3] = _calib_values(path, "T", 3)
     with np.errstate(over="ignore"):  # a distance beyond floats is inf, and refused below
         distance = np.linalg.norm(T[:3, 3])
-    check_metres(path, f"T puts one sensor {distance:g} from the other", distance)
+    check_metres(path, "T puts one sensor {} from the other", distance)
     return T
 
 

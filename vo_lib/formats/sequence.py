@@ -29,6 +29,7 @@ from vo_lib.formats.frame_files import (
     MAX_FOCAL_WIDTHS,
     MIN_BASELINE_M,
     SequenceError,
+    beyond,
     check_manifest,
     check_metres,
     focal_problem,
@@ -58,18 +59,20 @@ MAX_TRACK_SPEED_M_S = 50.0
 def check_frame_spacing(path: Path, seconds) -> None:
     """Refuse frames (of ``path``) closer or farther apart than the bounds above (median), or one
     pause longer than the upper bound (nothing tracks, nor integrates odometry, across it)."""
+    low, high = MIN_FRAME_SPACING_S, MAX_FRAME_SPACING_S
     steps = np.diff(seconds)
-    spacing = float(np.median(steps)) if len(seconds) > 1 else MIN_FRAME_SPACING_S
-    if not MIN_FRAME_SPACING_S <= spacing <= MAX_FRAME_SPACING_S:
+    spacing = float(np.median(steps)) if len(seconds) > 1 else low
+    if not low <= spacing <= high:
+        unit = "microseconds" if spacing < 1 else "milliseconds or nanoseconds"
         raise SequenceError(
-            f"{path}: frames {spacing:.3g} s apart (median); expected {MIN_FRAME_SPACING_S:g} to "
-            f"{MAX_FRAME_SPACING_S:g} s ({'microseconds' if spacing < 1 else 'milliseconds or nanoseconds'}?)"
+            f"{path}: frames {beyond(spacing, low if spacing < 1 else high, 3)} s apart (median); "
+            f"expected {low:g} to {high:g} s ({unit}?)"
         )
-    if len(steps) and steps.max() > MAX_FRAME_SPACING_S:
+    if len(steps) and steps.max() > high:
         k = int(np.argmax(steps))
         raise SequenceError(
-            f"{path}: the frame at {seconds[k + 1]:.9g} s comes {steps[k]:.3g} s after the one "
-            f"before; expected at most {MAX_FRAME_SPACING_S:g} s between frames"
+            f"{path}: the frame at {seconds[k + 1]:.9g} s comes {beyond(steps[k], high, 3)} s after the "
+            f"one before; expected at most {high:g} s between frames"
         )
 
 
@@ -168,10 +171,7 @@ def checked_camera(
         camera = StereoCamera.from_projection_matrices(P0, P1, w, h)
     except ValueError as exc:
         raise SequenceError(f"{calib}: {exc}") from None
-    claim = (
-        f"{right} puts the right camera {camera.baseline:g} from the left "
-        f"(baseline = ({left}[0,3] - {right}[0,3]) / fx)"
-    )
+    claim = f"{right} puts the right camera {{}} from the left (baseline = ({left}[0,3] - {right}[0,3]) / fx)"
     check_metres(calib, claim, camera.baseline)
     if not (0 <= camera.cx <= w and 0 <= camera.cy <= h):
         raise SequenceError(
@@ -199,7 +199,10 @@ def _check_rectified(calib: Path, camera: StereoCamera, projections, keys: tuple
             "[[fx 0 cx] [0 fy cy] [0 0 1]] as the first three columns of both"
         )
     if camera.baseline < MIN_BASELINE_M:
-        raise SequenceError(f"{calib}: {claim}; expected a stereo rig, at least {MIN_BASELINE_M:g} m")
+        raise SequenceError(
+            f"{calib}: {claim.format(beyond(camera.baseline, MIN_BASELINE_M))}; expected a stereo rig, "
+            f"at least {MIN_BASELINE_M:g} m"
+        )
     P0, P1 = (np.asarray(P, float).reshape(3, 4) for P in projections)
     offset = np.linalg.solve(camera.K, P0[:, 3] - P1[:, 3])  # the right camera from the left
     if np.hypot(offset[1], offset[2]) > MAX_OFF_ROW * abs(offset[0]):
@@ -230,7 +233,7 @@ def _odometry(path: Path, times: np.ndarray) -> np.ndarray:
     if len(times) > 1:
         speeds = np.abs(odo[1:]).max(axis=1) / np.diff(times)
         median = float(np.median(speeds))
-        claim = f"the tracks move {median:g} per second (median, with times.txt)"
+        claim = "the tracks move {} per second (median, with times.txt)"
         check_metres(path, claim, median, MAX_TRACK_SPEED_M_S, " m/s")
         k = int(np.argmax(speeds))  # one damaged row among good ones
         if speeds[k] > MAX_TRACK_SPEED_M_S:
