@@ -67,25 +67,27 @@ def numbers(path: Path, line_no: int, text: str, count: int, what: str) -> np.nd
     return values
 
 
+def calib_values(path: Path, key: str, count: int, missing: str = "") -> np.ndarray:
+    """The ``count`` numbers of the one line ``key: ...`` of a calibration file; else one line
+    (``missing`` says what the key holds)."""
+    found = [(n, line) for n, line in data_lines(path, f"a line '{key}:'") if line.startswith(key + ":")]
+    if not found:
+        raise SequenceError(
+            f"{path}: no {key} line ({missing})" if missing else f"{path}: no line starting with '{key}:'"
+        )
+    (line_no, line), *others = found
+    if others:
+        raise SequenceError(f"{path}, line {others[0][0]}: a second {key} line (the first is line {line_no})")
+    return numbers(path, line_no, line.split(":", 1)[1], count, key)
+
+
 def read_calib(path: Path) -> tuple[np.ndarray, np.ndarray]:
     """``(P0, P1)`` 3x4 matrices from a KITTI ``calib.txt``; raises :class:`SequenceError`."""
-    found = {}  # key: (line number, matrix)
-    for line_no, text in data_lines(path):
-        key, sep, rest = text.partition(":")
-        if not sep:
-            raise SequenceError(f"{path}, line {line_no}: expected 'NAME: numbers', got {text[:40]!r}")
-        key = key.strip()
-        if key in ("P0", "P1", "P2", "P3"):
-            if key in found:
-                raise SequenceError(
-                    f"{path}, line {line_no}: a second {key} line (the first is line {found[key][0]})"
-                )
-            found[key] = line_no, numbers(path, line_no, rest, 12, key).reshape(3, 4)
-    missing = [(key, side) for key, side in (("P0", "left"), ("P1", "right")) if key not in found]
-    if missing:
-        key, side = missing[0]
-        raise SequenceError(f"{path}: no {key} line ({side} camera projection, 12 numbers)")
-    return found["P0"][1], found["P1"][1]
+    P0, P1 = (
+        calib_values(path, key, 12, f"{side} camera projection, 12 numbers").reshape(3, 4)
+        for key, side in (("P0", "left"), ("P1", "right"))
+    )
+    return P0, P1
 
 
 def read_times(path: Path) -> np.ndarray:

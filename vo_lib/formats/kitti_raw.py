@@ -21,7 +21,14 @@ from pathlib import Path
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from vo_lib.formats.frame_files import SequenceError, check_metres, numbers, read_per_frame, read_rows, shown
+from vo_lib.formats.frame_files import (
+    SequenceError,
+    calib_values,
+    check_metres,
+    read_per_frame,
+    read_rows,
+    shown,
+)
 from vo_lib.formats.images import check_headers
 from vo_lib.formats.poses import data_lines, rotation_problem
 from vo_lib.formats.sequence import (
@@ -82,19 +89,9 @@ def wheel_distances_from_oxts(oxts: np.ndarray, times: np.ndarray, gauge: float)
     return out
 
 
-def _calib_values(path: Path, key: str, count: int) -> np.ndarray:
-    found = [(n, line) for n, line in data_lines(path, f"a line '{key}:'") if line.startswith(key + ":")]
-    if not found:
-        raise SequenceError(f"{path}: no line starting with '{key}:'")
-    (line_no, line), *others = found
-    if others:
-        raise SequenceError(f"{path}, line {others[0][0]}: a second {key} line (the first is line {line_no})")
-    return numbers(path, line_no, line.split(":", 1)[1], count, key)
-
-
 def _rotation(path: Path, key: str) -> np.ndarray:
     """The 3x3 rotation of line ``key``; else :class:`SequenceError`."""
-    R = _calib_values(path, key, 9).reshape(3, 3)
+    R = calib_values(path, key, 9).reshape(3, 3)
     problem = rotation_problem(R)
     if problem:
         raise SequenceError(f"{path}: {key}: {problem.replace('the first three columns are', 'it is')}")
@@ -104,7 +101,7 @@ def _rotation(path: Path, key: str) -> np.ndarray:
 def _rigid(path: Path) -> np.ndarray:
     T = np.eye(4)
     T[:3, :3] = _rotation(path, "R")
-    T[:3, 3] = _calib_values(path, "T", 3)
+    T[:3, 3] = calib_values(path, "T", 3)
     with np.errstate(over="ignore"):  # a distance beyond floats is inf, and refused below
         distance = np.linalg.norm(T[:3, 3])
     check_metres(path, "T puts one sensor {} from the other", distance)
@@ -205,8 +202,8 @@ def read_kitti_raw(path, truth: bool = True) -> Sequence:
     left, right = image_pairs(drive, ("image_00/data", "image_01/data"))
     calib = _raw_calib_folder(drive)
     cam_to_cam = calib / RAW_CALIB_FILES[0]
-    P0, P1 = (_calib_values(cam_to_cam, key, 12).reshape(3, 4) for key in ("P_rect_00", "P_rect_01"))
-    size, rectified = check_headers(left, right), tuple(_calib_values(cam_to_cam, "S_rect_00", 2))
+    P0, P1 = (calib_values(cam_to_cam, key, 12).reshape(3, 4) for key in ("P_rect_00", "P_rect_01"))
+    size, rectified = check_headers(left, right), tuple(calib_values(cam_to_cam, "S_rect_00", 2))
     if size != rectified:  # the raw set's "extract" drives: distorted, not rectified
         raise SequenceError(
             f"{drive / 'image_00' / 'data'}: {size[0]}x{size[1]} images, where the rectified ones are "
