@@ -36,6 +36,7 @@ import argparse
 import concurrent.futures
 import contextlib
 import html as html_module
+import importlib.util
 import json
 import os
 import pathlib
@@ -79,14 +80,9 @@ FLAGGED_KIND = "flagged"  # answers the integrity report must name: optional, an
 TOOLS = tuple(pathlib.Path(__file__).with_name(name) for name in ("grading.py", "autograde_steps.py"))
 # what the autograder's kernels may not read, beside the course folder's own solutions: the
 # notebooks, the trial answers, the mark scheme, the history and the reading edition (its worked
-# solutions are folded away, not left out); listed in the course folder's hidden.txt
-SOLUTION_FILES = (
-    NOTEBOOK_DIR,
-    ROOT / "coursework" / "submissions",
-    ROOT / "coursework" / "answer_key.md",
-    ROOT / ".git",
-    ROOT / "docs" / "_build",
-)
+# solutions are folded away, not left out) of this checkout and of the one the installed vo_lib
+# comes from (an editable install of another); listed in the course folder's hidden.txt
+SOLUTION_FILES = ("notebooks", "coursework/submissions", "coursework/answer_key.md", ".git", "docs/_build")
 HIDDEN_LIST = "hidden.txt"
 # a line that opens a solution, hidden tests or a mark scheme (not a mention of one in prose)
 MARKER_LINE = re.compile(
@@ -185,7 +181,11 @@ def run_nbgrader(course: pathlib.Path, *args: str) -> None:
 def write_course(course: pathlib.Path, paths: list[pathlib.Path]) -> None:
     """Fill ``course`` (an empty folder) with nbgrader's course layout and generate the release."""
     shutil.copy2(CONFIG, course / "nbgrader_config.py")
-    (course / HIDDEN_LIST).write_text("".join(f"{path}\n" for path in SOLUTION_FILES))
+    installed = pathlib.Path(importlib.util.find_spec("vo_lib").origin).resolve().parents[1]
+    roots = dict.fromkeys([ROOT, *([installed] if (installed / "notebooks").is_dir() else [])])
+    (course / HIDDEN_LIST).write_text(
+        "".join(f"{root / path}\n" for root in roots for path in SOLUTION_FILES)
+    )
     (course / "coursework").mkdir()
     for tool in TOOLS:
         shutil.copy2(tool, course / "coursework" / tool.name)

@@ -18,6 +18,12 @@ import sys
 import types
 from collections.abc import Callable, Iterator
 
+#: The modules an answer may import: the course's own, and the libraries of its numbers and figures.
+COURSE_MODULES = set(
+    "numpy scipy sympy math cmath statistics fractions itertools functools dataclasses typing cv2 filterpy "
+    "vo_lib vo_book matplotlib pandas skimage evo".split()
+)
+
 
 class GradingError(AssertionError):
     """A hidden test's answer called a function the exercise asks the student to write."""
@@ -69,6 +75,13 @@ def unavailable(*functions: Callable) -> Iterator[None]:
             shell.user_ns.update({n: v for n, v in copies.items() if shell.user_ns.get(n) is held[n]})
 
 
+def close(got, expected, **tolerance) -> bool:
+    """``numpy.allclose`` of as many numbers as expected (an empty answer broadcasts to any shape)."""
+    import numpy as np
+
+    return np.size(got) == np.size(expected) and bool(np.allclose(got, expected, **tolerance))
+
+
 def _copy(value):  # a deep copy, or the value itself where it has none (a module, a compiled object)
     with contextlib.suppress(Exception):
         return copy.deepcopy(value)
@@ -89,31 +102,19 @@ def library_functions(*owners: types.ModuleType | type | Callable) -> list[Calla
 
 
 class Reason(enum.Enum):
-    """Why an answer is to be reviewed: its text, and the modules or names that show it."""
+    """Why an answer is to be reviewed: its text, and the names that show it."""
 
+    IMPORT = "imports a module no exercise needs (not one of COURSE_MODULES)", ""
+    KERNEL = "uses the kernel or its history", "get_ipython In Out _ih _oh _dh _i _ii _iii __ ___"
+    INDIRECT = (
+        "reaches names, code or objects indirectly (exec, getattr, vars, a __special__ name, type())",
+        "exec eval compile getattr setattr delattr globals locals vars breakpoint memoryview exit quit",
+    )
     FILE = (
-        "opens, lists, writes or runs files, or reaches the network",
-        "open pathlib shutil glob io fromfile load loadtxt genfromtxt read_csv listdir scandir walk run_path "
-        "memmap get_data save savez savetxt tofile socket urllib http requests",
+        "reads, writes or runs files",
+        "open fromfile load loadtxt genfromtxt memmap read_csv run_path tofile",
     )
-    KERNEL = "uses the kernel or its history", "get_ipython IPython ipykernel In Out _ih _oh"
-    FRAME = "inspects frames, code or source", "inspect linecache _getframe f_back f_globals f_locals"
-    CODE = "reads or copies code objects", "__code__ __globals__ codeobj Bytecode CodeType FunctionType"
-    LOW_LEVEL = (
-        "uses ctypes, gc, importlib, exec, traces, hooks or mocks, or reaches names indirectly",
-        "ctypes gc importlib __import__ __main__ pickle modules exec eval compile globals vars __dict__ "
-        "__builtins__ __setattr__ __getattribute__ runpy settrace setprofile getattr pkgutil attrgetter "
-        "methodcaller displayhook excepthook atexit signal faulthandler kill abort unittest mock",
-    )
-    THREADS = "starts threads or processes", "threading multiprocessing subprocess concurrent _thread"
-    EXIT = "runs a shell or ends the interpreter", "_exit system popen fork exit quit"
-    FAKE_NUMBER = (
-        "fakes a number, an array or a comparison",
-        "__array__ __eq__ __ne__ __lt__ __le__ __gt__ __ge__ __abs__ __sub__ __rsub__ __array_function__ "
-        "__array_ufunc__ __array_interface__ __array_priority__ __getitem__ __len__ __iter__ __float__ "
-        "__array_wrap__ __array_finalize__ __bool__ __index__ __int__ UserList UserDict UserString",
-    )
-    REBINDS = "rebinds NumPy, builtins, modules or the grader", "builtins coursework grading setattr delattr"
+    CHANGES = "changes an object it did not make (a module, a class, an argument) or a builtin's name", ""
     PRIVATE = "reaches a private name (a leading underscore) of an imported module", ""
     HELD = "calls a function held where a test cannot refuse it (an item, a closure, a default)", ""
 
@@ -121,32 +122,40 @@ class Reason(enum.Enum):
         self.text, self.words = text, words.split()
 
 
-FLAGGED = {word: reason for reason in Reason for word in reason.words}  # imported, used or defined
+FLAGGED = {word: reason for reason in (Reason.KERNEL, Reason.INDIRECT) for word in reason.words}  # as names
+SPECIAL = {"__init__", "__post_init__", "__repr__", "__str__", "__name__", "__doc__", "__version__"}
 PROTECTED = {"np", "numpy", "grading", "assert_allclose"}  # names an answer must not rebind
 BUILTINS = set(dir(builtins))  # an answer that rebinds abs rewrites the tests that call it
 MODULES = ("np", "numpy", "grading")  # used only as np.f: bare, they are handed, held or iterated
-NUMBER_TYPES = ("float", "int", "complex", "bool")  # a subclass of one fakes a number
 NAMED_TUPLE = {"_replace", "_asdict", "_make", "_fields", "_field_defaults"}  # public, though underscored
 
 
 def review(source: str, imported: frozenset[str] = frozenset()) -> list[tuple[int, Reason]]:
-    """``(line, reason)`` for every construct of ``source`` no honest answer needs, read with :mod:`ast`
-    (nothing runs); ``imported``: what the notebook's other cells import. Magics use the kernel."""
+    """``(line, reason)`` for every construct of ``source`` outside what honest answers use, read with
+    :mod:`ast` (nothing runs): the course's modules, no special names, no changes to objects the cell
+    did not make; ``imported``: what the notebook's other cells import. Magics use the kernel."""
     magic = [n for n, line in enumerate(source.splitlines(), 1) if line.lstrip().startswith(("%", "!"))]
     found = [(n, Reason.KERNEL) for n in magic]
     if (tree := _tree(source)) is None:
         return found
-    cell = _imports(tree)  # names the cell's imports bind; a patch counts for the notebook's too
-    patched = cell | imported | _aliases(tree, cell | imported | PROTECTED)
+    cell = _imports(tree) | imported
     values = {id(n.value) for n in ast.walk(tree) if isinstance(n, ast.Attribute)}  # the np of np.f
+    methods = {id(f) for c in ast.walk(tree) if isinstance(c, ast.ClassDef) for f in c.body}
     scopes = [f for f in ast.walk(tree) if isinstance(f, (ast.FunctionDef, ast.ClassDef))]
     nested = {id(c) for f in scopes for c in ast.walk(f) if c is not f}  # a method's name shadows nothing
+    made = _made(tree)
     for node in ast.walk(tree):
-        found += [(node.lineno, Reason.REBINDS)] if id(node) not in nested and _shadows(node) else []
-        found += [(node.lineno, Reason.REBINDS)] if _named(node, *MODULES) and id(node) not in values else []
-        found += [(getattr(node, "lineno", 0) or node.target.lineno, why) for why in _reasons(node, patched)]
-        found += [(node.lineno, Reason.PRIVATE)] if _private(node, cell) else []
-        found += [(node.lineno, Reason.HELD)] if _held(node, cell) else []
+        line = getattr(node, "lineno", 0) or getattr(getattr(node, "target", None), "lineno", 0)
+        changes = (
+            id(node) not in nested and _shadows(node) or _named(node, *MODULES) and id(node) not in values
+        )
+        changes = changes or any(_changes(t, made) for t in _targets(node))
+        methodless = isinstance(node, ast.FunctionDef) and id(node) not in methods  # def f(self): self.x = 1
+        changes |= methodless and "self" in [a.arg for a in node.args.args]
+        found += [(line, Reason.CHANGES)] if changes else []
+        found += [(line, why) for why in _reasons(node)]
+        found += [(line, Reason.PRIVATE)] if _private(node, cell) else []
+        found += [(line, Reason.HELD)] if _held(node, cell) else []
     return sorted(set(found), key=lambda item: (item[0], item[1].text))
 
 
@@ -163,36 +172,50 @@ def _imports(tree: ast.AST) -> set[str]:
     return {(a.asname or a.name).split(".")[0] for a in imports}
 
 
-def _aliases(tree: ast.AST, names: set[str]) -> set[str]:
-    """Names the cell binds to one of ``names``: ``n = np``, ``n, s = np, sp``."""
-    pairs = [(t, n.value) for n in ast.walk(tree) if isinstance(n, ast.Assign) for t in n.targets]
-    tuples = [(t.elts, v.elts) for t, v in pairs if isinstance(t, ast.Tuple) and isinstance(v, ast.Tuple)]
-    pairs += [p for targets, values in tuples for p in zip(targets, values, strict=False)]
-    return {t.id for t, v in pairs if isinstance(t, ast.Name) and _named(v, *names)}
-
-
-def _reasons(node: ast.AST, imported: set[str]) -> list[Reason]:
-    """The reasons to review one syntax node; ``imported``: the names imports bind, and their aliases."""
+def _reasons(node: ast.AST) -> list[Reason]:
+    """The reasons to review one syntax node, by the module it imports or the name it uses."""
     if isinstance(node, ast.alias):  # an import that takes a builtin's name (from m import zeros as abs)
-        return [Reason.REBINDS] if (node.asname or node.name.split(".")[0]) in BUILTINS else []
-    if isinstance(node, ast.Import):
-        return [FLAGGED[r] for r in (a.name.split(".")[0] for a in node.names) if r in FLAGGED]
-    if isinstance(node, ast.ImportFrom):
-        root = (node.module or "").split(".")[0]
-        dangerous = [FLAGGED[a.name] for a in node.names if a.name in FLAGGED and root in ("numpy", "os")]
-        return [FLAGGED[root]] if root in FLAGGED else dangerous
-    if isinstance(node, ast.Attribute) and node.attr == "system":  # os.system, not platform.system
-        return [Reason.EXIT] if _named(node.value, "os") else []
+        bound = node.asname or node.name.split(".")[0]
+        return [Reason.CHANGES] if bound in BUILTINS or bound in PROTECTED and node.name != "numpy" else []
+    if isinstance(node, (ast.Import, ast.ImportFrom)):
+        roots = [a.name for a in node.names] if isinstance(node, ast.Import) else [node.module or "."]
+        return [Reason.IMPORT] if any(r.split(".")[0] not in COURSE_MODULES for r in roots) else []
     name = getattr(node, "id", None) or getattr(node, "attr", None) or getattr(node, "name", None)
-    if isinstance(node, (ast.Name, ast.Attribute, ast.FunctionDef)) and name in FLAGGED:
-        return [FLAGGED[name]]
-    if isinstance(node, ast.ClassDef) and any(_named(b, *NUMBER_TYPES) for b in node.bases):
-        return [Reason.FAKE_NUMBER]
-    targets = _targets(node)
-    if any(_rebinds(t) or (isinstance(t, ast.Attribute) and _named(_root(t), *imported)) for t in targets):
-        return [Reason.REBINDS]  # np.allclose = ..., grading = ..., or an attribute of anything imported
-    dunder = isinstance(node, ast.Constant) and str(node.value)[:2] == "__" and node.value in FLAGGED
-    return [FLAGGED[node.value]] if dunder else []  # type("F", (float,), {"__sub__": ...})
+    name = node.value if isinstance(node, ast.Constant) else name  # type("F", (), {"__sub__": ...})
+    if isinstance(name, str) and name[:2] == name[-2:] == "__" and len(name) > 4 and name not in SPECIAL:
+        return [Reason.INDIRECT]
+    if isinstance(node, ast.Call) and _named(node.func, "type") and len(node.args) > 1:
+        return [Reason.INDIRECT]  # a class made by type(), its methods named in strings
+    if isinstance(node, ast.Attribute) and name in Reason.FILE.words or _named(node, "open"):
+        return [Reason.FILE]
+    return [FLAGGED[name]] if isinstance(node, ast.Name) and name in FLAGGED else []
+
+
+def _made(tree: ast.AST) -> set[str]:
+    """Names the cell binds to a new object of a class: ``kf = KalmanFilter(2, 1)``, ``f = Filter()``."""
+    calls = [n for n in ast.walk(tree) if isinstance(n, ast.Assign) and isinstance(n.value, ast.Call)]
+    named = [
+        (n.targets, getattr(n.value.func, "attr", None) or getattr(n.value.func, "id", "")) for n in calls
+    ]
+    return {
+        t.id
+        for targets, name in named
+        if name.lstrip("_")[:1].isupper()
+        for t in targets
+        if isinstance(t, ast.Name)
+    }
+
+
+def _changes(target: ast.AST, made: set[str]) -> bool:
+    """A target that changes what the cell did not make: an attribute of anything but ``made`` or ``self``
+    (one level down: ``kf.x = ...``), or a protected name."""
+    if isinstance(target, (ast.Tuple, ast.List, ast.Starred)):
+        return any(_changes(t, made) for t in getattr(target, "elts", [getattr(target, "value", None)]))
+    if isinstance(target, ast.Attribute):
+        return not (_named(target.value, *made) or _named(target.value, "self"))
+    while isinstance(target, ast.Subscript):
+        target = target.value
+    return _named(target, *PROTECTED) or isinstance(target, ast.Attribute) and _changes(target, made)
 
 
 def _shadows(node: ast.AST) -> bool:
@@ -247,15 +270,6 @@ def _named(node: ast.AST, *names: str) -> bool:
     return isinstance(node, ast.Name) and node.id in names
 
 
-def _rebinds(target: ast.AST) -> bool:
-    """A target that is a protected name, or an attribute or item of one."""
-    if isinstance(target, (ast.Tuple, ast.List)):
-        return any(_rebinds(t) for t in target.elts)
-    while isinstance(target, (ast.Attribute, ast.Subscript)):
-        target = target.value
-    return _named(target, *PROTECTED)
-
-
 def report(nb, released=None) -> dict[str, list[str]]:
     """``{grade_id or "code cell N": ["line N: reason: code", ...]}`` for every answer cell of ``nb`` to be
     reviewed, and every other code cell but a test that is not in the release ``released`` as it is there."""
@@ -263,7 +277,6 @@ def report(nb, released=None) -> dict[str, list[str]]:
     given = {c.source for c in released.cells if c.cell_type == "code"} if released else None
     trees = [tree for c in code_cells if (tree := _tree(c.source))]
     imported = frozenset().union(*map(_imports, trees))
-    imported |= frozenset().union(*(_aliases(tree, imported | PROTECTED) for tree in trees))  # n = np
     for k, cell in enumerate(code_cells, 1):
         meta = cell.metadata.get("nbgrader", {})
         changed = given is not None and not meta.get("grade") and cell.source not in given

@@ -410,14 +410,16 @@ assert np.isclose(slip_displacement, np.hypot(*slip_poses[-1, :2])), "the true f
 ### BEGIN HIDDEN TESTS
 import numpy as np
 
+from coursework import grading  # noqa: E402
+
 _h12 = np.random.default_rng(1021)
 _h12_slip, _h12_n = _h12.uniform(0.02, 0.3, 5), _h12.integers(20, 400, 5)
 _h12_got = np.array([slip_drift(float(s), int(n)) for s, n in zip(_h12_slip, _h12_n, strict=True)])
 # the notebook's crawler (gauge 0.6 m): every step is an arc turning (2 - slip) cm / gauge
 _h12_turn = (2 - _h12_slip) * 0.01 / 0.6
 _h12_chord = _h12_slip * 0.01 / _h12_turn * np.abs(np.sin(_h12_n * _h12_turn / 2))
-assert np.allclose(_h12_got[:, 0], _h12_chord, rtol=1e-6, atol=0), "not the true distance from the start"
-assert np.allclose(_h12_got[:, 1], _h12_n * _h12_slip * 0.01 / 0.6), "the missed heading: size or sign?"
+assert grading.close(_h12_got[:, 0], _h12_chord, rtol=1e-6, atol=0), "not the true distance from the start"
+assert grading.close(_h12_got[:, 1], _h12_n * _h12_slip * 0.01 / 0.6), "the missed heading: size or sign?"
 ### END HIDDEN TESTS
 
 # %% [markdown]

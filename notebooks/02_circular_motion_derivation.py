@@ -401,7 +401,7 @@ _h22 = synthetic_matches(_h22_cam, 200, 0.07, -0.15, np.random.default_rng(2021)
 with grading.unavailable(*grading.library_functions(cm_module, ransac_module)):
     _h22_got = theta_sigma(_h22.w_prev, _h22.w_curr, 1.3, _h22_cam)
 _h22_expected = cm_module.theta_standard_deviation(_h22.w_prev, _h22.w_curr, _h22_cam, 1.3)
-assert np.allclose(_h22_got, _h22_expected, rtol=1e-9), "not the standard deviation of θ for another camera"
+assert grading.close(_h22_got, _h22_expected, rtol=1e-9), "not the standard deviation of θ for another camera"
 ### END HIDDEN TESTS
 
 # %% [markdown]
@@ -452,7 +452,7 @@ _h23_eq13 += [cv2.perspectiveTransform, cv2.convertPointsFromHomogeneous]  # the
 with grading.unavailable(*grading.library_functions(ransac_module, *_h23_eq13)):
     _h23_got = height_change(_h23.w_prev, _h23.w_curr, _h23_cam)
 _h23_y = [camera_module.StereoCamera.backproject(_h23_cam, w)[:, 1] for w in (_h23.w_prev, _h23.w_curr)]
-assert np.allclose(_h23_got, _h23_y[1] - _h23_y[0], atol=1e-9), "not y' - y in metres (sign? focal lengths?)"
+assert grading.close(_h23_got, _h23_y[1] - _h23_y[0], atol=1e-9), "not y' - y in metres (sign? focal?)"
 _h23_y = [camera_module.StereoCamera.backproject(camera, w)[:, 1] for w in (mixed.w_prev, mixed.w_curr)]
 assert flagged == np.sum(np.abs(_h23_y[1] - _h23_y[0]) > 0.05), "flagged does not count the matches of mixed"
 ### END HIDDEN TESTS

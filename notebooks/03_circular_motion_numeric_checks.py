@@ -580,7 +580,7 @@ for _ in range(200):
     _h31_w = cm_module.theta_standard_deviation(_h31.w_prev, _h31.w_curr, camera, noise) ** -2.0
     _h31_ref.append([np.average(_h31_th, weights=_h31_w) - theta_true, np.median(_h31_th) - theta_true])
 _h31_rms = np.sqrt(np.mean(np.square(_h31_ref), axis=0))  # 200 draws: each RMS within about 10 %
-assert np.allclose([spread_weighted, spread_median], _h31_rms, rtol=0.3), "spreads unlike these draws'"
+assert grading.close([spread_weighted, spread_median], _h31_rms, rtol=0.3), "spreads unlike these draws'"
 ### END HIDDEN TESTS
 
 # %% [markdown]
@@ -631,7 +631,7 @@ _h32_fits = [camera_module.StereoCamera.project, cv2.findHomography, skimage.tra
 with grading.unavailable(*grading.library_functions(synthetic_module, *_h32_fits)):  # derived, not fitted
     _h32_got = np.asarray(spot_homography(_h32_turn, _h32_cam), float)
 _h32_H = _h32_cam.K @ cm_module.motion_matrices(_h32_turn, 0.0)[0] @ np.linalg.inv(_h32_cam.K)
-assert np.allclose(_h32_got / _h32_got[2, 2], _h32_H / _h32_H[2, 2]), "not K R K⁻¹ (R which way?)"
+assert grading.close(_h32_got / _h32_got[2, 2], _h32_H / _h32_H[2, 2]), "not K R K⁻¹ (R which way?)"
 ### END HIDDEN TESTS
 
 # %% [markdown]
@@ -676,9 +676,11 @@ assert abs(theta_corrected - np.radians(2)) < 0.05 * before, "the correction rem
 ### BEGIN HIDDEN TESTS
 import numpy as np
 
+from coursework import grading  # noqa: E402
+
 _h33_theta, _h33_z = np.random.default_rng(3031).uniform([-0.07, 1.5], [0.07, 15.0], (100, 2)).T
 _h33_got = correct_ahead(_h33_theta.copy(), _h33_z.copy(), 0.17)
-assert np.allclose(_h33_got, _h33_theta / (1 + 0.17 / _h33_z), rtol=0, atol=1e-6), "not θ divided by 1 + a/z"
+assert grading.close(_h33_got, _h33_theta / (1 + 0.17 / _h33_z), rtol=0, atol=1e-6), "not θ / (1 + a/z)"
 _h33_z = camera.depth_from_disparity(ahead.w_prev[usable, 2])  # the median the exercise asks for, not a mean
 assert np.isclose(theta_corrected, np.median(th_ahead / (1 + a_ahead / _h33_z)), rtol=0, atol=1e-9), "median?"
 ### END HIDDEN TESTS

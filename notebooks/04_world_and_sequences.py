@@ -388,10 +388,12 @@ assert np.isclose(depth_error_10m, 100 * first_order, rtol=0.15), "the error gro
 ### BEGIN HIDDEN TESTS
 import numpy as np
 
+from coursework import grading  # noqa: E402
+
 _h41_cam = StereoCamera(fx=650.0, fy=500.0, cx=320.0, cy=240.0, baseline=0.3)  # f_x B = 195 px m
 _h41_z, _h41_dd = np.random.default_rng(4011).uniform([1.0, 0.05], [20.0, 1.0], (10, 2)).T
 _h41_got = [depth_error(z, dd, _h41_cam) for z, dd in zip(_h41_z, _h41_dd, strict=True)]
-assert np.allclose(_h41_got, 195 / (195 / _h41_z - _h41_dd) - _h41_z, rtol=1e-6), "not the exact depth error"
+assert grading.close(_h41_got, 195 / (195 / _h41_z - _h41_dd) - _h41_z, rtol=1e-6), "not the exact error"
 ### END HIDDEN TESTS
 
 # %% [markdown]
@@ -454,9 +456,9 @@ _h42_points, _h42_mount = _h42.uniform(-10, 10, (50, 2)), _h42.uniform([-0.4, -0
 with grading.unavailable(*grading.library_functions(vo_lib)):  # the SLAM's inverse observation too
     _h42_got = to_robot_frame(_h42_points.copy(), tuple(_h42_mount))
 _h42_expected = geometry_module.compose_planar(_h42_mount, np.column_stack([_h42_points, np.zeros(50)]))
-assert np.allclose(_h42_got, _h42_expected[:, :2]), "not the echoes of a turned and shifted scanner"
+assert grading.close(_h42_got, _h42_expected[:, :2]), "not the echoes of a turned and shifted scanner"
 _h42_scan = LaserScanner(range_sigma=0.0, max_range=30.0, mount=(0.3, 0.0, 0.0)).scan(walls, pose)
-assert np.allclose(robot_points, _h42_scan.points() + [0.3, 0.0]), "robot_points: the scanner 0.3 m ahead?"
+assert grading.close(robot_points, _h42_scan.points() + [0.3, 0.0]), "robot_points: the scanner 0.3 m ahead?"
 ### END HIDDEN TESTS
 
 # %% [markdown]
@@ -501,11 +503,13 @@ assert np.allclose(np.percentile(depth_gaps, [25, 50, 75]), _quartiles, atol=1e-
 ### BEGIN HIDDEN TESTS
 import numpy as np
 
+from coursework import grading  # noqa: E402
+
 _h43_cam = StereoCamera(fx=610.0, fy=500.0, cx=290.0, cy=240.0, baseline=0.12)
 _h43_range, _h43_bearing = np.random.default_rng(4031).uniform([0.5, -1.0], [30.0, 1.0], (50, 2)).T
 _h43_z, _h43_u = beam_in_image(_h43_range.copy(), _h43_bearing.copy(), _h43_cam)
-assert np.allclose(_h43_z, _h43_range * np.cos(_h43_bearing)), "not the depth along the optical axis"
-assert np.allclose(_h43_u, 290.0 - 610.0 * np.tan(_h43_bearing)), "not the column of another camera's image"
+assert grading.close(_h43_z, _h43_range * np.cos(_h43_bearing)), "not the depth along the optical axis"
+assert grading.close(_h43_u, 290.0 - 610.0 * np.tan(_h43_bearing)), "not the column of another camera's image"
 ### END HIDDEN TESTS
 
 # %% [markdown]

@@ -1266,7 +1266,7 @@ with grading.unavailable():  # nothing refused; the matches as they were after t
 _h2_found = ransac_module.one_point_ransac(_h2_m.w_prev, _h2_m.w_curr, _h2_cam, rng=1, pixel_sigma=0.8)
 _h2_true, _h2_wrong = _h2_found.inliers & _h2_m.inliers, _h2_found.inliers & ~_h2_m.inliers
 _h2_expected = (_h2_true.sum() / _h2_m.inliers.sum(), _h2_wrong.sum())
-assert np.allclose(_h2_got, _h2_expected), "gate_scores: not the inliers' recall, the outliers kept"
+assert grading.close(_h2_got, _h2_expected), "gate_scores: not the inliers' recall, the outliers kept"
 ### END HIDDEN TESTS
 
 # %% [markdown]
@@ -1418,7 +1418,7 @@ with grading.unavailable(*grading.library_functions(ransac_module)):
     _h4_theta, _h4_in = one_point_theta(_h4_a, _h4_b, _h4_camera, 0.02, 40, _h4_rng)
 _h4_expected = ransac_module.theta_gate_error(_h4_a, _h4_b, 0.07, _h4_camera)
 _h4_message = "theta_gate: not eq. 20 (θ/2 in γ, γ′? f_x in β, f_y in tan α?)"
-assert np.allclose(_h4_gate, _h4_expected, rtol=1e-4), _h4_message  # float32 pixels stay within 1e-4
+assert grading.close(_h4_gate, _h4_expected, rtol=1e-4), _h4_message  # float32 pixels stay within 1e-4
 assert np.isclose(_h4_theta, -0.06), "one_point_theta does not keep the hypothesis with the most inliers"
 _h4_expected = ransac_module.theta_gate_error(_h4_a, _h4_b, _h4_theta, _h4_camera) < 0.02
 assert np.array_equal(_h4_in, _h4_expected), "the inliers: the matches within the threshold under the kept θ"

@@ -760,7 +760,7 @@ with grading.unavailable(*grading.library_functions(filterpy, kalman_module, ekf
     _h1_got = [float(np.squeeze(v)) for v in update_1d(_h1_m, _h1_p, _h1_z, _h1_r)]
 _h1_k = _h1_p / (_h1_p + _h1_r)
 _h1_expected = [_h1_k, _h1_m + _h1_k * (_h1_z - _h1_m), (1 - _h1_k) * _h1_p]
-assert np.allclose(_h1_got, _h1_expected), "update_1d: another update's gain, mean or variance (P / (P + R)?)"
+assert grading.close(_h1_got, _h1_expected), "update_1d: another update's gain, mean or variance (P/(P+R)?)"
 ### END HIDDEN TESTS
 
 # %% [markdown]
@@ -825,9 +825,9 @@ with grading.unavailable(
 ):
     _h2_band, _h2_nees = nees_band(37, 4), average_nees(_h2_errors, _h2_cov)
 _h2_expected = np.einsum("eri,ij,erj->er", _h2_errors, np.linalg.inv(_h2_cov), _h2_errors).mean(axis=1)
-assert np.allclose(_h2_nees, _h2_expected), "average_nees: not each experiment's mean of eᵀ C⁻¹ e"
+assert grading.close(_h2_nees, _h2_expected), "average_nees: not each experiment's mean of eᵀ C⁻¹ e"
 _h2_expected = scipy.stats.chi2.ppf([0.025, 0.975], 4 * 37) / 37
-assert np.allclose(_h2_band, _h2_expected), "nees_band: not the 95 % band (quantiles? degrees of freedom?)"
+assert grading.close(_h2_band, _h2_expected), "nees_band: not the 95 % band (quantiles? degrees of freedom?)"
 _h2_var = np.array([0.04, 0.01, 0.003])  # the experiments of the cell above, drawn again
 _h2_drawn = np.random.default_rng(7).multivariate_normal(np.zeros(3), np.diag(_h2_var), (2000, 50))
 _h2_each = (_h2_drawn**2 / _h2_var).sum(axis=2).mean(axis=1)
@@ -891,7 +891,7 @@ with grading.unavailable(*grading.library_functions(geometry_module, odometry_mo
 _h3c, _h3s, _h3d = math.cos(_h3_poses[2]), math.sin(_h3_poses[2]), _h3_poses[3:5] - _h3_poses[:2]
 _h3R, _h3w = np.array([[_h3c, _h3s], [-_h3s, _h3c]]), np.array([[-_h3s, _h3c], [-_h3c, -_h3s]]) @ _h3d
 _h3_expected = np.block([[-_h3R, _h3w[:, None], _h3R, np.zeros((2, 1))], [np.eye(1, 6, 5) - np.eye(1, 6, 2)]])
-assert np.allclose(_h3_J, _h3_expected, rtol=0, atol=1e-12), "relative_jacobian: not the exact derivative"
+assert grading.close(_h3_J, _h3_expected, rtol=0, atol=1e-12), "relative_jacobian: not the exact derivative"
 ### END HIDDEN TESTS
 
 # %% [markdown]
@@ -972,11 +972,11 @@ for _h4_pose, _h4_step, _h4_turn in _h4_cases:  # measured turns written 2π awa
         _h4_x6, _h4_P6 = ekf_predict(_h4_pose, _h4_P, _h4_step, _h4_Q, _h4_kf.odometry)
         _h4_x6_post, _h4_P6_post = ekf_update(_h4_x6, _h4_P6, _h4_z, _h4_R)
     _h4_kf.predict(_h4_step)  # the library's predict and update, after the answer ran
-    assert np.allclose(_h4_x6, _h4_kf.ekf.x), "ekf_predict: not [moved pose, previous pose]"
-    assert np.allclose(_h4_P6, _h4_kf.ekf.P), "ekf_predict: not the cloned covariance (the cross terms F P?)"
+    assert grading.close(_h4_x6, _h4_kf.ekf.x), "ekf_predict: not [moved pose, previous pose]"
+    assert grading.close(_h4_P6, _h4_kf.ekf.P), "ekf_predict: not the cloned covariance (cross terms F P?)"
     _h4_kf.update(_h4_z[0], _h4_z[1], _h4_R)
-    assert np.allclose(_h4_x6_post, _h4_kf.ekf.x), "ekf_update: not the corrected state (θ, yaw wrapped?)"
-    assert np.allclose(_h4_P6_post, _h4_kf.ekf.P), "ekf_update: not the corrected covariance"
+    assert grading.close(_h4_x6_post, _h4_kf.ekf.x), "ekf_update: not the corrected state (θ, yaw wrapped?)"
+    assert grading.close(_h4_P6_post, _h4_kf.ekf.P), "ekf_update: not the corrected covariance"
 ### END HIDDEN TESTS
 
 # %% [markdown]

@@ -784,7 +784,7 @@ _h3_s, _h3_eps = _h3_rng.uniform(0.005, 0.5, 6), _h3_rng.uniform(0.01, 0.05, 6)
 _h3_n = _h3_rng.integers(10, 200, 6)
 with grading.unavailable(drive_steps, *grading.library_functions(geometry_module)):
     _h3_got = [float(sideways_error(*case)) for case in zip(_h3_s, _h3_eps, _h3_n.tolist(), strict=True)]
-assert np.allclose(_h3_got, _h3_s * _h3_eps * _h3_n * (_h3_n - 1) / 2), "sideways_error: not the first order"
+assert grading.close(_h3_got, _h3_s * _h3_eps * _h3_n * (_h3_n - 1) / 2), "sideways_error: not 1st order"
 ### END HIDDEN TESTS
 
 # %% [markdown]

@@ -1014,7 +1014,7 @@ _h1_walls = np.random.default_rng(9011).uniform(-20, 20, (20, 2, 2))
 with grading.unavailable(*grading.library_functions(landmarks_module, sympy.geometry)):
     _h1_got = [wall_feature_point(a, b) for a, b in _h1_walls]
 _h1_expected = [landmarks_module.feature_point(a, b) for a, b in _h1_walls]
-assert np.allclose(_h1_got, _h1_expected), "wall_feature_point: not the foot of the perpendicular"
+assert grading.close(_h1_got, _h1_expected), "wall_feature_point: not the foot of the perpendicular"
 ### END HIDDEN TESTS
 
 # %% [markdown]
@@ -1092,7 +1092,7 @@ for _h2_pose, _h2_point, _h2_d in _h2_cases:  # section 2's Jacobians at the sen
     _h2_expected.append(np.hstack([_h2_hp, _h2_hl]))
 # exact to rounding (by hand): central differences are a thousandfold off this, a 5-point stencil too
 _h2_message = "differs for other offsets (d of either sign?), or is not exact (derived, not differenced)"
-assert np.allclose(_h2_got, _h2_expected, rtol=1e-12, atol=1e-12), _h2_message
+assert grading.close(_h2_got, _h2_expected, rtol=1e-12, atol=1e-12), _h2_message
 ### END HIDDEN TESTS
 
 # %% [markdown]
@@ -1171,7 +1171,7 @@ def _h3_nis(pose, P, point, L, z, range_sigma, bearing_sigma):  # from the libra
 
 
 _h3_expected = [_h3_nis(*case) for case in _h3_cases]
-assert np.allclose(_h3_got, _h3_expected, rtol=1e-6), "innovation_squared differs (wrapped? variances?)"
+assert grading.close(_h3_got, _h3_expected, rtol=1e-6), "innovation_squared differs (wrapped? variances?)"
 _h3_shown = [_h3_nis(gate_pose, gate_pose_cov, gate_point, gate_point_cov, z, 0.05, 0.02) for z in candidates]
 assert np.array_equal(accepted, np.array(_h3_shown) < 2 * np.log(100)), "accepted: not those within the gate"
 ### END HIDDEN TESTS

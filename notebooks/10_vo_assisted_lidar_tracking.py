@@ -776,7 +776,7 @@ _h1_scores = _h1_rng.normal(_h1_rng.uniform(500, 2000, (5, 1)), _h1_rng.uniform(
 with grading.unavailable(*grading.library_functions(tracking_module, scipy.special)):
     _h1_got = [posterior_of(scores) for scores in _h1_scores]
 _h1_expected = scipy.special.softmax(_h1_scores, axis=1)
-assert np.allclose(_h1_got, _h1_expected, atol=1e-12), "posterior_of: other scores (exp, normalised?)"
+assert grading.close(_h1_got, _h1_expected, atol=1e-12), "posterior_of: other scores (exp, normalised?)"
 ### END HIDDEN TESTS
 
 # %% [markdown]
@@ -835,7 +835,7 @@ with grading.unavailable(*grading.library_functions(tracking_module)):
     _h2_got = [control_limits(lengths) for lengths in _h2_stretches]
 _h2_limits = [tracking_module.ControlLimits.from_corrections(lengths) for lengths in _h2_stretches]
 _h2_expected = [(c.lower, c.centre, c.upper) for c in _h2_limits]
-assert np.allclose(_h2_got, _h2_expected), "control_limits: other stretches (which std? the lower limit?)"
+assert grading.close(_h2_got, _h2_expected), "control_limits: other stretches (which std? the lower limit?)"
 ### END HIDDEN TESTS
 
 # %% [markdown]
@@ -907,10 +907,10 @@ with grading.unavailable(*grading.library_functions(tracking_module)):
     _h3_got = [principal_direction(corrections, scores) for corrections, scores in _h3_cases]
 _h3_expected = [tracking_module.principal_error_direction(*case) for case in _h3_cases]
 _h3_signed = [np.sign(got @ expected) * got for got, expected in zip(_h3_got, _h3_expected, strict=True)]
-assert np.allclose(_h3_signed, _h3_expected), "principal_direction: other samples (eigenvalue? centred?)"
+assert grading.close(_h3_signed, _h3_expected), "principal_direction: other samples (eigenvalue? centred?)"
 _h3_lines = np.r_[(_h3_v := _h3_rng.normal(size=(12, 2))), -_h3_v]  # all quadrants, and opposites
 _h3_folded = np.degrees(np.arctan2(_h3_lines[:, 1], _h3_lines[:, 0])) % 180
-assert np.allclose([line_angle_deg(v) for v in _h3_lines], _h3_folded), "line_angle_deg: in [0°, 180°)?"
+assert grading.close([line_angle_deg(v) for v in _h3_lines], _h3_folded), "line_angle_deg: in [0°, 180°)?"
 ### END HIDDEN TESTS
 
 # %% [markdown]

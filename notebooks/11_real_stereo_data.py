@@ -581,6 +581,7 @@ print(f"cells without a corner: {at_20:.1%} at threshold 20, {at_10:.1%} at thre
 assert 0 <= at_10 < at_20 <= 1, "a lower threshold fills some cells, but the flat ones stay empty"
 ### BEGIN HIDDEN TESTS
 import vo_book.nb11 as nb11_module  # noqa: E402
+from coursework import grading  # noqa: E402
 
 _h1_rng = np.random.default_rng(11011)  # a textured part beside a flat one, 8-bit as FAST needs
 _h1_image = cv2.GaussianBlur(_h1_rng.integers(0, 256, (240, 320), np.uint8), (0, 0), _h1_rng.uniform(0.5, 2))
@@ -588,9 +589,9 @@ _h1_image[:, : _h1_rng.integers(40, 280)] = 128
 _h1_thresholds = sorted(_h1_rng.integers(5, 60, 3).tolist())
 _h1_got = empty_shares(_h1_image.copy(), list(_h1_thresholds))  # its own copies
 _h1_expected = [nb11_module.image_statistics(_h1_image, threshold=t)["empty"] for t in _h1_thresholds]
-assert np.allclose(_h1_got, _h1_expected), "empty_shares differs on another image (empty cells?)"
+assert grading.close(_h1_got, _h1_expected), "empty_shares differs on another image (empty cells?)"
 _h1_first = [nb11_module.image_statistics(real_images[0], threshold=t)["empty"] for t in (20, 10)]
-assert np.allclose([at_20, at_10], _h1_first), "at_20, at_10: not the shares of the first real image"
+assert grading.close([at_20, at_10], _h1_first), "at_20, at_10: not the shares of the first real image"
 ### END HIDDEN TESTS
 
 # %% [markdown]

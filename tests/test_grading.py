@@ -124,61 +124,61 @@ def test_library_functions_takes_functions_classes_and_the_methods_of_a_modules_
     ("answer", "reason"),
     [
         ("text = open('../../source/06/06.ipynb').read()", Reason.FILE),
-        ("import pathlib\nsolution = pathlib.Path('release').glob('*')", Reason.FILE),
+        ("import pathlib\nsolution = pathlib.Path('release').glob('*')", Reason.IMPORT),
         (
             "ip = get_ipython()\nip.input_transformers_post.append(lambda lines: [])",
             Reason.KERNEL,
         ),
-        ("import sys\nexpected = sys._getframe(1).f_globals['expected']", Reason.FRAME),
-        ("import linecache\nprint(linecache.cache)", Reason.FRAME),
-        ("import ctypes", Reason.LOW_LEVEL),
-        ("import threading\nthreading.Thread(target=print).start()", Reason.THREADS),
-        ("import os\nos._exit(0)", Reason.EXIT),
-        ("import os\nos.system('cp ../../source/06/06.ipynb .')", Reason.EXIT),
-        ("f = hypotheses_for.__code__", Reason.CODE),
-        ("class Always(float):\n    def __eq__(self, other):\n        return True", Reason.FAKE_NUMBER),
-        ("class Echo:\n    def __array__(self):\n        return 0", Reason.FAKE_NUMBER),
-        ("import functools\nnp.allclose = functools.partial(lambda *a: True)", Reason.REBINDS),
-        ("grading = None", Reason.REBINDS),
+        ("import sys\nexpected = sys._getframe(1).f_globals['expected']", Reason.IMPORT),
+        ("import linecache\nprint(linecache.cache)", Reason.IMPORT),
+        ("import ctypes", Reason.IMPORT),
+        ("import threading\nthreading.Thread(target=print).start()", Reason.IMPORT),
+        ("import os\nos._exit(0)", Reason.IMPORT),
+        ("import os\nos.system('cp ../../source/06/06.ipynb .')", Reason.IMPORT),
+        ("f = hypotheses_for.__code__", Reason.INDIRECT),
+        ("class Always(float):\n    def __eq__(self, other):\n        return True", Reason.INDIRECT),
+        ("class Echo:\n    def __array__(self):\n        return 0", Reason.INDIRECT),
+        ("import functools\nnp.allclose = functools.partial(lambda *a: True)", Reason.CHANGES),
+        ("grading = None", Reason.CHANGES),
         ("%pip install something", Reason.KERNEL),
         # the routes a trial of cheats took past the report before
         (
             "from IPython import get_ipython as shell\nshell().input_transformers_post.append(str)",
-            Reason.KERNEL,
+            Reason.IMPORT,
         ),
         (
             "import sys\nshell = sys.modules['ipykernel.kernelapp'].IPKernelApp.instance().shell",
-            Reason.LOW_LEVEL,
+            Reason.IMPORT,
         ),
-        ("setattr(np, 'allclose', lambda *a, **k: True)", Reason.REBINDS),
-        ("class Same:\n    def __eq__(self, other):\n        return True", Reason.FAKE_NUMBER),
+        ("setattr(np, 'allclose', lambda *a, **k: True)", Reason.CHANGES),
+        ("class Same:\n    def __eq__(self, other):\n        return True", Reason.INDIRECT),
         ("tests = np.fromfile('../../source/06/06.ipynb', dtype=np.uint8)", Reason.FILE),
-        ("import os\nnames = os.listdir('..')", Reason.FILE),
+        ("import os\nnames = os.listdir('..')", Reason.IMPORT),
         # names built from strings, NumPy patched in place, fake arrays, the grader's own guard
-        ('globals()["get_" + "ipython"]().input_transformers_cleanup.append(str)', Reason.LOW_LEVEL),
-        ("vars(np).update(isclose=lambda *a, **k: True)", Reason.LOW_LEVEL),
-        ("np.__dict__.update(allclose=lambda *a, **k: True)", Reason.LOW_LEVEL),
-        ('vars(__builtins__)["op" + "en"]("grading.py", "a")', Reason.LOW_LEVEL),
-        ("class Zero:\n    def __rsub__(self, other):\n        return 0", Reason.FAKE_NUMBER),
-        ("class Yes:\n    def __array_function__(self, *a):\n        return True", Reason.FAKE_NUMBER),
-        ("import contextlib\ngrading.unavailable = lambda *f: contextlib.nullcontext()", Reason.REBINDS),
+        ('globals()["get_" + "ipython"]().input_transformers_cleanup.append(str)', Reason.INDIRECT),
+        ("vars(np).update(isclose=lambda *a, **k: True)", Reason.INDIRECT),
+        ("np.__dict__.update(allclose=lambda *a, **k: True)", Reason.INDIRECT),
+        ('vars(__builtins__)["op" + "en"]("grading.py", "a")', Reason.INDIRECT),
+        ("class Zero:\n    def __rsub__(self, other):\n        return 0", Reason.INDIRECT),
+        ("class Yes:\n    def __array_function__(self, *a):\n        return True", Reason.INDIRECT),
+        ("import contextlib\ngrading.unavailable = lambda *f: contextlib.nullcontext()", Reason.CHANGES),
         # a fresh copy of a module, a copy of a function's code, the library patched where the
         # test takes its expected value, a result that calls the library after the guard
-        ("import runpy\nns = runpy.run_module('vo_lib.stereo_vo.circular_motion')", Reason.LOW_LEVEL),
+        ("import runpy\nns = runpy.run_module('vo_lib.stereo_vo.circular_motion')", Reason.IMPORT),
         ("ns = runpy.run_path('../notebooks/02_circular_motion_derivation.py')", Reason.FILE),
         ("data = np.genfromtxt('../../source/06/06.ipynb')", Reason.FILE),
-        ("f = types.FunctionType(dis.Bytecode(g).codeobj, g.__globals__)", Reason.CODE),
+        ("f = types.FunctionType(dis.Bytecode(g).codeobj, g.__globals__)", Reason.INDIRECT),
         (
             "from vo_lib.stereo_vo import circular_motion as cm\ncm.theta_standard_deviation = lambda *a: 1",
-            Reason.REBINDS,
+            Reason.CHANGES,
         ),
         (
             "from vo_lib.stereo_vo.kalman import VoKalmanFilter\nVoKalmanFilter.predict = print",
-            Reason.REBINDS,
+            Reason.CHANGES,
         ),
-        ("n = np\nn.allclose = lambda *a, **k: True", Reason.REBINDS),
-        ("n, s = np, sp\ns.simplify = n.sum = lambda *a, **k: 0", Reason.REBINDS),
-        ("class Later:\n    def __getitem__(self, k):\n        return 0", Reason.FAKE_NUMBER),
+        ("n = np\nn.allclose = lambda *a, **k: True", Reason.CHANGES),
+        ("n, s = np, sp\ns.simplify = n.sum = lambda *a, **k: 0", Reason.CHANGES),
+        ("class Later:\n    def __getitem__(self, k):\n        return 0", Reason.INDIRECT),
         # a library's private kernel, held in a default argument where no name swap reaches it
         (
             "from vo_lib.stereo_vo.matching_core import _popcount64\ndef f(a, p=_popcount64):\n    pass",
@@ -201,30 +201,45 @@ def test_library_functions_takes_functions_classes_and_the_methods_of_a_modules_
         # a public name of a private module
         ("from scipy.spatial.transform._rotation_xp import align_vectors", Reason.PRIVATE),
         # NumPy or an imported module rebound however the binding is written ...
-        ("yes = lambda *a, **k: True\nnp.allclose: object = yes", Reason.REBINDS),
-        ("for np.isclose in [lambda *a: True]:\n    pass", Reason.REBINDS),
-        ("import contextlib\nwith contextlib.nullcontext(abs) as np.allclose:\n    pass", Reason.REBINDS),
-        ("[0 for np.array_equal in [min]]", Reason.REBINDS),
-        ("import vo_lib.stereo_vo.ransac as library\nlibrary.theta_gate_error: object = min", Reason.REBINDS),
+        ("yes = lambda *a, **k: True\nnp.allclose: object = yes", Reason.CHANGES),
+        ("for np.isclose in [lambda *a: True]:\n    pass", Reason.CHANGES),
+        ("import contextlib\nwith contextlib.nullcontext(abs) as np.allclose:\n    pass", Reason.CHANGES),
+        ("[0 for np.array_equal in [min]]", Reason.CHANGES),
+        ("import vo_lib.stereo_vo.ransac as library\nlibrary.theta_gate_error: object = min", Reason.CHANGES),
         # ... or NumPy handed to a function that patches it
-        ("def patch(m):\n    m.allclose = min\npatch(np)", Reason.REBINDS),
+        ("def patch(m):\n    m.allclose = min\npatch(np)", Reason.CHANGES),
         # ... or reached through a name no assignment shows: a loop, a walrus, an item
-        ("for m in (np,):\n    m.array_equal = lambda *a, **k: True", Reason.REBINDS),
-        ("(n := np).allclose = min", Reason.REBINDS),
-        ("m = [np][0]\nm.allclose = min", Reason.REBINDS),
+        ("for m in (np,):\n    m.array_equal = lambda *a, **k: True", Reason.CHANGES),
+        ("(n := np).allclose = min", Reason.CHANGES),
+        ("m = [np][0]\nm.allclose = min", Reason.CHANGES),
         # a fake number or a lazy array made by type(), its special methods named in strings
-        ('Zero = type("Zero", (float,), {"__sub__": lambda s, o: 0.0})', Reason.FAKE_NUMBER),
-        ('Lazy = type("Lazy", (), {"__array__": lambda self, dtype=None, copy=None: 0})', Reason.FAKE_NUMBER),
+        ('Zero = type("Zero", (float,), {"__sub__": lambda s, o: 0.0})', Reason.INDIRECT),
+        ('Lazy = type("Lazy", (), {"__array__": lambda self, dtype=None, copy=None: 0})', Reason.INDIRECT),
         # a later trial: NumPy rebound by an import of the notebook's own namespace, names reached
         # through pickle, a lazy list of the standard library, the tests' abs rewritten, the hidden
         # tests read back from the kernel's history
-        ("lenient = object()\nfrom __main__ import lenient as np", Reason.LOW_LEVEL),
-        ("import pickle\nallclose = pickle.loads(b'cnumpy\\nallclose\\n.')", Reason.LOW_LEVEL),
-        ("import collections\nclass Later(collections.UserList):\n    pass", Reason.FAKE_NUMBER),
-        ("def abs(x):\n    return 0.0", Reason.REBINDS),
-        ("abs = lambda x: 0.0", Reason.REBINDS),
-        ("from numpy import zeros_like as abs", Reason.REBINDS),
+        ("lenient = object()\nfrom __main__ import lenient as np", Reason.IMPORT),
+        ("import pickle\nallclose = pickle.loads(b'cnumpy\\nallclose\\n.')", Reason.IMPORT),
+        ("import collections\nclass Later(collections.UserList):\n    pass", Reason.IMPORT),
+        ("def abs(x):\n    return 0.0", Reason.CHANGES),
+        ("abs = lambda x: 0.0", Reason.CHANGES),
+        ("from numpy import zeros_like as abs", Reason.CHANGES),
         ("print('\\n'.join(s for s in In if '_h1' in s))", Reason.KERNEL),
+        # a third trial: NumPy and builtins reached through attributes, modules by a string
+        # (pydoc), code decoded and run, a fresh copy of a module, a class patched through type(),
+        # the solutions read back from the checkout
+        ("m = np.ma.core.np\nm.array_equal = lambda *a, **k: True", Reason.CHANGES),
+        ("b = abs.__self__\nb.abs = lambda x: 0.0", Reason.INDIRECT),
+        ('import pydoc\n_numpy = pydoc.locate("numpy")', Reason.IMPORT),
+        ("import base64, os, pydoc", Reason.IMPORT),
+        (
+            "import filterpy.kalman as fk\nfresh = pydoc.importfile(fk.kalman_filter.__file__)",
+            Reason.INDIRECT,
+        ),
+        ("kind = type(kf)\nkind.predict = print", Reason.CHANGES),
+        ("class Wrap:\n    pass\nw = Wrap()\nw.m = np\nw.m.allclose = min", Reason.CHANGES),
+        ("def f(self):\n    self.allclose = min\nf(numpy)", Reason.CHANGES),
+        ("import fileinput\ntext = ''.join(fileinput.input('../notebooks/01.py'))", Reason.IMPORT),
     ],
 )
 def test_review_names_what_no_honest_answer_needs(answer, reason):
@@ -242,7 +257,7 @@ def test_the_report_knows_the_names_other_cells_import():
         _cell("answer", "n.sum = sum", "ex5"),
     ]
     assert list(grading.report(nb)) == ["ex2", "ex4", "ex5"]  # n = np: NumPy itself, held under a name
-    assert "rebinds NumPy, builtins, modules" in grading.report(nb)["ex2"][0]
+    assert "changes an object it did not make" in grading.report(nb)["ex2"][0]
 
 
 def test_the_report_reads_every_cell_the_student_added_or_changed(tmp_path):
@@ -267,7 +282,7 @@ def test_the_report_reads_every_cell_the_student_added_or_changed(tmp_path):
 
 
 def test_review_gives_the_line():
-    assert review("x = 1\ny = 2\nimport gc\n") == [(3, Reason.LOW_LEVEL)]
+    assert review("x = 1\ny = 2\nimport gc\n") == [(3, Reason.IMPORT)]
 
 
 @pytest.mark.parametrize("path", NOTEBOOKS, ids=lambda p: p.name[:2])
@@ -294,6 +309,10 @@ def test_honest_code_with_numpy_and_ordinary_names_is_not_flagged():
     assert review(answer) == []
     assert review("sum = 0\nfor x in [1, 2]:\n    sum += x\nlargest = max([1, 2])\n") == []  # a value
     assert review("class Filter:\n    def filter(self, z):\n        return z\n") == []  # a method
+    # names that are words of the flagged reasons, as variables; a filter configured as filterpy's are
+    assert review("walk = odo.integrate(u)\nload = np.sum(w)\nsignal = w[1] - w[0]\nmodules = 3\n") == []
+    filterpy = "kf = KalmanFilter(dim_x=2, dim_z=1)\nkf.x = np.zeros(2)\nkf.P *= 10\nkf.R[0, 0] = 2.0\n"
+    assert review("from filterpy.kalman import KalmanFilter\n" + filterpy) == []
 
 
 def _cell(kind, source, grade_id, outputs=()):
