@@ -1888,3 +1888,23 @@ def test_a_mount_point_as_out_is_refused_before_the_run(tmp_path, monkeypatch):
     with pytest.raises(OutputError, match="--out .*disk: is a mount point.*give one inside it"):
         check_target(mounted, written_by="vo_lib run", option="--out")
     assert check_target(mounted / "run", written_by="vo_lib run", option="--out") is None
+
+
+def test_a_default_output_of_another_sequence_of_that_name_is_not_replaced(tmp_path, monkeypatch, capsys):
+    """runs/00 holds the run of one 00; a run of another 00 (KITTI's sequences share names) says so
+    and writes nothing without --force; the same sequence, or --force, replaces it."""
+    from vo_lib.cli.main import main
+
+    monkeypatch.chdir(tmp_path)
+    first, second = make_sequence(tmp_path / "a" / "00"), make_sequence(tmp_path / "b" / "00", seed=1)
+    assert main(["run", "--sequence", str(first)]) == 0
+    written = (tmp_path / "runs" / "00" / "poses.txt").read_bytes()
+    capsys.readouterr()
+    assert main(["run", "--sequence", str(second)]) == 2
+    (line,) = capsys.readouterr().err.strip().splitlines()
+    assert f"runs/00: holds the run of {first.resolve()}, another sequence of this name; give --out" in line
+    assert (tmp_path / "runs" / "00" / "poses.txt").read_bytes() == written
+    assert (
+        main(["run", "--sequence", str(first)]) == 0
+        and main(["run", "--sequence", str(second), "--force"]) == 0
+    )

@@ -23,7 +23,7 @@ from pathlib import Path
 from vo_lib.arguments import UsageError
 from vo_lib.formats.poses import write_kitti_poses, write_tum
 from vo_lib.geometry import camera_poses_from_planar, planar_from_camera_poses, rigid_inverse
-from vo_lib.outputs import OutputError, OutputFolder, check_target, file_sha256, notice, reading
+from vo_lib.outputs import OutputError, OutputFolder, check_target, file_sha256, notice, read_marker, reading
 from vo_lib.sim.samples import SAMPLES, get_sample, is_sample
 from vo_lib.stereo_vo.run_report import (
     error_report,
@@ -186,6 +186,8 @@ def run_command(
     name = sequence or DEFAULT_SEQUENCE
     source, load_frames = input_path(name, frames)
     out_dir = Path(out) if out else Path("runs") / default_name(name, frames)
+    if not out and not force:
+        _refuse_another_sequence(out_dir, source)
 
     keep = kept_data_folder()  # the samples' folder, not runs': nothing inside it
     with (
@@ -205,6 +207,21 @@ def run_command(
         report = _run_into(output, seq, name, frames, no_odometry, seed, motion)
     print(f"\nwrote {out_dir}/: poses.txt trajectory.tum timings.csv diagnostics.csv trajectory.png")
     return report
+
+
+def _refuse_another_sequence(out_dir: Path, source: Path) -> None:
+    """A default ``runs/NAME`` that holds the run of another sequence of that name (KITTI's are all
+    named 00 to 21) is replaced only with ``--force``: the name alone does not make it this one's."""
+
+    def recording(path: Path) -> Path:  # an ASL recording, given as mav0 or the folder holding it
+        return path.parent if path.name == "mav0" else path
+
+    earlier = (read_marker(out_dir) or {}).get("sequence")
+    if isinstance(earlier, str) and recording(Path(earlier)) != recording(source.resolve()):
+        raise OutputError(
+            f"{out_dir}: holds the run of {earlier}, another sequence of this name; give --out, "
+            "or add --force to replace it"
+        )
 
 
 #: A run whose path is this many times the truth's, or this fraction of it, says so: more than drift,
