@@ -1908,3 +1908,20 @@ def test_a_default_output_of_another_sequence_of_that_name_is_not_replaced(tmp_p
         main(["run", "--sequence", str(first)]) == 0
         and main(["run", "--sequence", str(second), "--force"]) == 0
     )
+
+
+def test_a_temporary_that_cannot_be_removed_is_not_said_removed(tmp_path, monkeypatch, capsys):
+    """The previous contents of an output left in a temporary (a read-only folder): the next run
+    beside it says that it cannot remove it, not that it did, while it is there."""
+    import vo_lib.atomic as atomic
+
+    stale_temporary(tmp_path)
+    (stale,) = tmp_path.glob(f".out.vo_lib-*-{HOST}-abcd1234.tmp")
+    monkeypatch.setattr(atomic.shutil, "rmtree", lambda *a, **k: None)  # as a folder one may not empty
+    atomic.clear_abandoned(tmp_path, "out")
+    assert stale.is_dir() and capsys.readouterr().err == (
+        f"notice: cannot remove 1 temporary folder(s) left by earlier runs: {stale.name}\n"
+    )
+    monkeypatch.undo()
+    atomic.clear_abandoned(tmp_path, "out")
+    assert not stale.exists() and "notice: removed 1 temporary folder(s)" in capsys.readouterr().err

@@ -127,9 +127,11 @@ def clear_abandoned(parent: Path, name: str) -> None:
         else:
             with contextlib.suppress(OSError):
                 os.unlink(entry.path)
-    if abandoned:
-        names = ", ".join(entry.name for entry in abandoned)
-        notice(f"removed {len(abandoned)} temporary folder(s) left by interrupted runs: {names}")
+    stay = [entry.name for entry in abandoned if os.path.lexists(entry.path)]  # a read-only folder, say
+    gone = [entry.name for entry in abandoned if entry.name not in stay]
+    for names, said in ((gone, "removed"), (stay, "cannot remove")):
+        if names:
+            notice(f"{said} {len(names)} temporary folder(s) left by earlier runs: {', '.join(names)}")
 
 
 def _exchange(a: Path, b: Path) -> bool:
