@@ -350,3 +350,14 @@ def test_a_two_frame_run_prints_no_errors_and_says_why(workdir):
     proc = cli("run", "--frames", "2", "--out", str(workdir / "two"), cwd=workdir, data=workdir / "data")
     assert proc.returncode == 0 and "Errors" not in proc.stdout and "KITTI" not in proc.stdout
     assert "no errors for 2 frames; an evaluation needs at least 3" in proc.stderr
+
+
+@pytest.mark.parametrize("frames", ["2", "3"])
+def test_a_path_of_millimetres_is_not_judged_against_the_truths(workdir, frames):
+    """The spot turn's first frames move the camera by millimetres: their lengths say nothing of the
+    baseline, and no notice asks about it."""
+    out = str(workdir / f"spot{frames}")
+    proc = cli(
+        "run", "--sequence", "spot_turn", "--frames", frames, "--out", out, cwd=workdir, data=workdir / "data"
+    )
+    assert proc.returncode == 0 and "stereo baseline" not in proc.stderr, proc.stderr

@@ -1916,3 +1916,28 @@ def test_the_docs_narrower_view_of_the_drone(tmp_path):
         figures = error_rows(narrow.poses_4x4(), result.camera_poses)
         assert len(result.flagged) == 5, seed
         assert (round(figures["ate_m"], 3), round(figures["final_rotation_deg"], 1)) == (0.029, 4.9), seed
+
+
+@needs_euroc
+def test_a_tracker_truth_in_millimetres_is_named_by_run(tmp_path, capsys):
+    """Only the laser tracker's positions, written in millimetres: the run ends, and one notice asks
+    whether the ground truth is in millimetres (not whether the stereo baseline is the rig's)."""
+    import shutil
+
+    from vo_lib.cli.main import main
+
+    rig = small_rig(tmp_path, frames=20)
+    shutil.rmtree(rig / "mav0" / "state_groundtruth_estimate0")
+    (rig / "mav0" / "leica0").mkdir()
+    shutil.copy(EUROC / "mav0" / "leica0" / "sensor.yaml", rig / "mav0" / "leica0")
+    rows = (EUROC / "mav0" / "leica0" / "data.csv").read_text().splitlines()
+    scaled = [
+        r
+        if r.startswith("#")
+        else ",".join([r.split(",")[0], *(f"{1000 * float(v):.3f}" for v in r.split(",")[1:])])
+        for r in rows
+    ]
+    (rig / "mav0" / "leica0" / "data.csv").write_text("\n".join(scaled) + "\n")
+    assert main(["run", "--sequence", str(rig), "--out", str(tmp_path / "out")]) == 0
+    notices = [line for line in capsys.readouterr().err.splitlines() if line.startswith("notice:")]
+    assert len(notices) == 1 and "is the ground truth in millimetres? (" in notices[0], notices

@@ -227,6 +227,8 @@ def _refuse_another_sequence(out_dir: Path, source: Path) -> None:
 #: A run whose path is this many times the truth's, or this fraction of it, says so: more than drift,
 #: and a baseline given twice its length still says so on a run that measures its steps a little short.
 PATH_RATIO = 1.5
+#: ... a hundredfold: a truth in millimetres; and no path is judged under ``MIN_PATH_M`` metres.
+UNIT_RATIO, MIN_PATH_M = 100.0, 0.1
 #: A run with this share of its frames flagged says so (the rendered samples, whose tracks slip
 #: and lose contact by design, flag a fifth at most).
 FLAGGED_SHARE = 0.25
@@ -243,7 +245,6 @@ def _say_if_suspect(seq, n: int, diagnostics, poses, motion: str = "auto") -> No
     model not of this body (``motion`` other than ``auto``): ``FLAGGED_SHARE`` of the frames
     without stereo features, or flagged for other reasons (vision not used), or a path the truth's times
     ``PATH_RATIO`` or more (a baseline)."""
-    from vo_lib.evaluation import path_lengths
     from vo_lib.stereo_vo.pipeline import Reason
 
     reasons = Counter(d.reason for d in diagnostics if d.fallback)
@@ -262,14 +263,33 @@ def _say_if_suspect(seq, n: int, diagnostics, poses, motion: str = "auto") -> No
             f"{seq.path}: {reasons.total()} of {n - 1} frames were flagged, their vision not used "
             f"({why});{model} is each camera's calibration, distortion included, that of these images?"
         )
-    elif seq.poses is not None:
-        _say_if_turns_differ(seq, n, poses)
-        truth_m, est_m = (float(path_lengths(p[:n])[-1]) for p in (seq.poses, poses))
-        if min(truth_m, est_m) > 0 and max(truth_m, est_m) >= PATH_RATIO * min(truth_m, est_m):
-            notice(
-                f"{seq.path}: the estimate's path is {est_m:.4g} m long and the truth's {truth_m:.4g} m; "
-                "is the stereo baseline that of the rig? (cam1's T_BS in its sensor.yaml, or P1 in calib.txt)"
-            )
+    else:
+        if seq.poses is not None:
+            _say_if_turns_differ(seq, n, poses)
+        _say_if_path_differs(seq, n, poses)
+
+
+def _say_if_path_differs(seq, n: int, poses) -> None:
+    """A notice where the estimate's path is the truth's (poses, or a tracker's positions) times
+    ``PATH_RATIO`` or more (a baseline), or a hundredth of it (a truth in millimetres); not on a path
+    under ``MIN_PATH_M``, which noise of millimetres makes any length."""
+    import numpy as np
+
+    from vo_lib.stereo_vo.run_report import tracked_truth
+
+    tracked = None if seq.poses is not None else tracked_truth(seq, n)
+    truth = seq.poses[:n, :3, 3] if seq.poses is not None else None if tracked is None else tracked[2]
+    if truth is None:
+        return
+    truth_m, est_m = (
+        float(np.linalg.norm(np.diff(p, axis=0), axis=1).sum()) for p in (truth, poses[:n, :3, 3])
+    )
+    if truth_m < MIN_PATH_M or est_m == 0 or max(truth_m, est_m) < PATH_RATIO * min(truth_m, est_m):
+        return
+    baseline = "is the stereo baseline that of the rig? (cam1's T_BS in its sensor.yaml, or P1 in calib.txt)"
+    unit = f"is the ground truth in millimetres? ({seq.truth_file or 'it'} is read as metres)"
+    ask = unit if truth_m >= UNIT_RATIO * est_m else baseline
+    notice(f"{seq.path}: the estimate's path is {est_m:.4g} m long and the truth's {truth_m:.4g} m; {ask}")
 
 
 def turns_differ(truth, poses) -> tuple[float, float] | None:

@@ -178,7 +178,7 @@ def print_error_table(
     print(_row("frames flagged (VO not used)", [flagged], "{:d}"))
 
 
-def _tracked(seq, n: int):
+def tracked_truth(seq, n: int):
     """The sequence's position-only truth (a laser tracker's prism) at its first ``n`` frames: the
     manifest's entry, the frames and the positions; None where it has fewer than 3 there."""
     positions = seq.manifest.get("positions") if isinstance(seq.manifest, dict) else None
@@ -193,7 +193,7 @@ def tracked_offsets(seq, poses: np.ndarray, n: int) -> tuple[np.ndarray, np.ndar
     first camera's frame ``(K, 3)``; None without such truth."""
     from vo_lib.evaluation import carried_point, umeyama
 
-    found = _tracked(seq, n)
+    found = tracked_truth(seq, n)
     if found is None:
         return None
     positions, frames, xyz = found
@@ -207,7 +207,7 @@ def position_only_errors(seq, poses: np.ndarray, n: int) -> dict:
     returns it for the report (empty where the sequence has no such truth)."""
     from vo_lib.evaluation import Alignment, ate_positions
 
-    found = _tracked(seq, n)
+    found = tracked_truth(seq, n)
     if found is None:
         return {}
     positions, frames, xyz = found
