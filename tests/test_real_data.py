@@ -1941,3 +1941,24 @@ def test_a_tracker_truth_in_millimetres_is_named_by_run(tmp_path, capsys):
     assert main(["run", "--sequence", str(rig), "--out", str(tmp_path / "out")]) == 0
     notices = [line for line in capsys.readouterr().err.splitlines() if line.startswith("notice:")]
     assert len(notices) == 1 and "is the ground truth in millimetres? (" in notices[0], notices
+
+
+@needs_kitti_raw
+def test_a_raw_drive_run_without_odometry_or_truth_reads_no_oxts_packet(tmp_path, capsys):
+    """The OXTS packets of a raw drive are its odometry and its truth: with neither asked for, a
+    damaged packet, or no oxts folder at all, stops nothing."""
+    import shutil
+
+    from vo_lib.cli.main import main
+
+    drive = raw_drive(tmp_path)
+    (drive / "oxts" / "data" / "0000000007.txt").write_text("garbage\n")
+    args = ["run", "--sequence", str(drive), "--frames", "5", "--no-odometry", "--no-truth"]
+    assert main([*args, "--out", str(tmp_path / "a")]) == 0
+    assert (
+        main(["run", "--sequence", str(drive), "--frames", "5", "--no-truth", "--out", str(tmp_path / "b")])
+        == 2
+    )
+    assert "0000000007.txt, line 1: an OXTS packet needs 30 numbers" in capsys.readouterr().err
+    shutil.rmtree(drive / "oxts")
+    assert main([*args, "--out", str(tmp_path / "c")]) == 0

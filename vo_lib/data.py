@@ -87,7 +87,7 @@ def read_folder(path: Path, frames: int | None, odometry: bool, truth: bool) -> 
     if mav0_of(path) is not None:  # a rig as it records (ASL layout): rectified on reading
         return read_asl(path, frames=frames, truth=truth)
     if raw_drive_of(path) is not None:  # a drive of KITTI's raw set, as it is stored
-        return read_kitti_raw(path, truth=truth)
+        return read_kitti_raw(path, truth=truth, odometry=odometry)
     if not (path / "image_0").is_dir() and (why := asl_near_miss(path) or raw_near_miss(path)):
         raise AslError(why)
     return read_sequence(path, odometry=odometry, truth=truth)

@@ -196,8 +196,9 @@ def _raw_packets(drive: Path, images: list[Path]) -> np.ndarray:
     return np.concatenate([read_per_frame(f, 1, "OXTS packets", read_oxts) for f in files])
 
 
-def read_kitti_raw(path, truth: bool = True) -> Sequence:
-    """A drive of KITTI's raw set as the set stores it (module docstring); ``truth=False``: no poses."""
+def read_kitti_raw(path, truth: bool = True, odometry: bool = True) -> Sequence:
+    """A drive of KITTI's raw set as the set stores it (module docstring); ``truth=False``: no poses;
+    neither truth nor ``odometry``: no OXTS packets read (they are both)."""
     drive = Path(path)
     left, right = image_pairs(drive, ("image_00/data", "image_01/data"))
     calib = _raw_calib_folder(drive)
@@ -214,8 +215,12 @@ def read_kitti_raw(path, truth: bool = True) -> Sequence:
     stamps_file = drive / "image_00" / "timestamps.txt"
     stamps = read_per_frame(stamps_file, len(left), "timestamps", read_raw_timestamps)
     check_frame_spacing(stamps_file, stamps)
-    packets = _raw_packets(drive, left)
+    packets = _raw_packets(drive, left) if truth or odometry else None
     poses = poses_from_oxts(packets, camera_in_imu_frame(calib))[:, :3] if truth else None
     manifest = {"layout": "kitti_raw", "time_origin_s": float(stamps[0])}
-    packets_of = {"truth_file": drive / "oxts" / "data", "oxts": packets, "raw_calib": calib}
+    packets_of = {
+        "truth_file": drive / "oxts" / "data" if truth else None,
+        "oxts": packets,
+        "raw_calib": calib,
+    }
     return Sequence(drive, camera, stamps - stamps[0], left, right, poses, None, manifest, **packets_of)
