@@ -1925,3 +1925,20 @@ def test_a_temporary_that_cannot_be_removed_is_not_said_removed(tmp_path, monkey
     monkeypatch.undo()
     atomic.clear_abandoned(tmp_path, "out")
     assert not stale.exists() and "notice: removed 1 temporary folder(s)" in capsys.readouterr().err
+
+
+def test_a_truth_standing_still_leaves_no_blank_figure(tmp_path, capsys):
+    """poses.txt of a camera standing still: no KITTI segment fits, which the table says in words
+    (its two rows were printed blank), and no notice asks about quaternions, which poses.txt has not."""
+    from vo_lib.cli.main import main
+
+    seq = make_sequence(tmp_path / "still", frames=6)
+    (seq / "poses.txt").write_text("1 0 0 0 0 1 0 0 0 0 1 0\n" * 6)
+    assert main(["run", "--sequence", str(seq), "--out", str(tmp_path / "out"), "--no-odometry"]) == 0
+    out, err = capsys.readouterr()
+    assert "KITTI errors: no segment fits the truth's path" in out and "KITTI translation" not in out
+    table = out[out.index("Errors against ground truth") :].split("\n\n")[0].splitlines()[1:]
+    assert all(len(line) > 62 and line[62:].strip() for line in table if not line.startswith("  KITTI")), (
+        table
+    )
+    assert "quaternions" not in err

@@ -310,11 +310,14 @@ def turns_differ(truth, poses) -> tuple[float, float] | None:
 def _say_if_turns_differ(seq, n: int, poses) -> None:
     """A notice where the estimate's turns have little in common with the truth's (:func:`turns_differ`)."""
     found = turns_differ(seq.poses[:n], poses)
+    truth = seq.truth_file or seq.path / "poses.txt"
+    quaternions = truth.is_file() and truth.name != "poses.txt"  # not KITTI's matrices, nor OXTS packets
+    order = f", its quaternions in the order of its format {ORDERS}" if quaternions else ""
     if found:
         notice(
-            f"{seq.truth_file or seq.path / 'poses.txt'}: the estimate's rotations from frame to frame "
-            f"differ from the truth's by {found[0]:.2g} deg (RMS), where the truth turns {found[1]:.2g} "
-            f"deg: is it the truth of these images, its quaternions in the order of its format {ORDERS}?"
+            f"{truth}: the estimate's rotations from frame to frame differ from the truth's by "
+            f"{found[0]:.2g} deg (RMS), where the truth turns {found[1]:.2g} deg: is it the truth of "
+            f"these images{order}?"
         )
 
 

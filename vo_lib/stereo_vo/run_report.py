@@ -142,11 +142,13 @@ def _how_far(report: dict, vo_3d) -> str:
 def _print_rows_3d(errors: dict, cols: list[str], spot_turn: bool) -> None:
     """The 3-D rows of :func:`print_error_table` (no share of the distance after a spot turn), and
     the segment lengths of the KITTI errors."""
-    for label, figure, fmt in ROWS_3D:
-        if not (spot_turn and "of distance" in label):
-            print(_row(label, [None if errors.get(c) is None else figure(errors[c]) for c in cols], fmt))
     kitti = errors["vo"].kitti
-    if kitti is not None:
+    for label, figure, fmt in ROWS_3D:
+        if not (spot_turn and "of distance" in label or kitti is None and label.startswith("KITTI")):
+            print(_row(label, [None if errors.get(c) is None else figure(errors[c]) for c in cols], fmt))
+    if kitti is None:  # a truth standing still, or moving less than any segment
+        print("  KITTI errors: no segment fits the truth's path")
+    else:
         print(f"  (KITTI errors over {kitti.label()}, {kitti.count} segment{'s' * (kitti.count != 1)})")
 
 
