@@ -262,7 +262,8 @@ _quiet_{name} = {name}
 @_functools.wraps(_quiet_{name})
 def {name}(*args, **kwargs):
     _warnings.warn("a correct answer that warns at every call", UserWarning, stacklevel=2)
-    print("progress 100%", file=_sys.stderr)
+    for _ in _tqdm(range(1), desc="progress"):  # a progress bar on stderr
+        pass
     return _quiet_{name}(*args, **kwargs)
 """
 
@@ -278,7 +279,7 @@ def stderr_answer(solution: str) -> str:
         for line in solution.splitlines()
         if line.strip() not in ("### BEGIN SOLUTION", "### END SOLUTION")
     )
-    code += '\nimport sys as _sys\n\nprint("progress 100%", file=_sys.stderr)\n'
+    code += '\nfrom tqdm import tqdm as _tqdm\n\nfor _ in _tqdm(range(1), desc="progress"):\n    pass\n'
     defined = re.search(r"^def (\w+)\(", code, re.M)
     return code + (WARNING_WRAPPER.format(name=defined.group(1)) if defined else "")
 

@@ -20,8 +20,8 @@ from collections.abc import Callable, Iterator
 
 #: The modules an answer may import: the course's own, and the libraries of its numbers and figures.
 COURSE_MODULES = set(
-    "numpy scipy sympy math cmath statistics fractions itertools functools dataclasses typing cv2 filterpy "
-    "vo_lib vo_book matplotlib pandas skimage evo".split()
+    "numpy scipy sympy math cmath statistics fractions itertools functools dataclasses typing warnings cv2 "
+    "filterpy vo_lib vo_book matplotlib pandas skimage evo tqdm".split()
 )
 
 
@@ -130,15 +130,15 @@ MODULES = ("np", "numpy", "grading")  # used only as np.f: bare, they are handed
 NAMED_TUPLE = {"_replace", "_asdict", "_make", "_fields", "_field_defaults"}  # public, though underscored
 
 
-def review(source: str, imported: frozenset[str] = frozenset()) -> list[tuple[int, Reason]]:
+def review(source: str) -> list[tuple[int, Reason]]:
     """``(line, reason)`` for every construct of ``source`` outside what honest answers use, read with
     :mod:`ast` (nothing runs): the course's modules, no special names, no changes to objects the cell
-    did not make; ``imported``: what the notebook's other cells import. Magics use the kernel."""
+    did not make. Magics use the kernel."""
     magic = [n for n, line in enumerate(source.splitlines(), 1) if line.lstrip().startswith(("%", "!"))]
     found = [(n, Reason.KERNEL) for n in magic]
     if (tree := _tree(source)) is None:
         return found
-    cell = _imports(tree) | imported
+    cell = _imports(tree)  # a name another cell imports is refused by the tests where it is held
     values = {id(n.value) for n in ast.walk(tree) if isinstance(n, ast.Attribute)}  # the np of np.f
     methods = {id(f) for c in ast.walk(tree) if isinstance(c, ast.ClassDef) for f in c.body}
     scopes = [f for f in ast.walk(tree) if isinstance(f, (ast.FunctionDef, ast.ClassDef))]
@@ -275,12 +275,10 @@ def report(nb, released=None) -> dict[str, list[str]]:
     reviewed, and every other code cell but a test that is not in the release ``released`` as it is there."""
     flagged, code_cells = {}, [cell for cell in nb.cells if cell.cell_type == "code"]
     given = {c.source for c in released.cells if c.cell_type == "code"} if released else None
-    trees = [tree for c in code_cells if (tree := _tree(c.source))]
-    imported = frozenset().union(*map(_imports, trees))
     for k, cell in enumerate(code_cells, 1):
         meta = cell.metadata.get("nbgrader", {})
         changed = given is not None and not meta.get("grade") and cell.source not in given
-        if (meta.get("solution") or changed) and (found := review(cell.source, imported)):
+        if (meta.get("solution") or changed) and (found := review(cell.source)):
             code = cell.source.splitlines()
             key = meta["grade_id"] if meta.get("solution") else f"code cell {k}"
             flagged[key] = [f"line {n}: {r.text}: {code[n - 1].strip()[:70]}" for n, r in found]

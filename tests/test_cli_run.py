@@ -312,6 +312,12 @@ def test_the_flagged_frames_notice_counts_every_flagged_frame(capsys):
     _say_if_suspect(SimpleNamespace(path="seq", poses=None), 101, diagnostics, None)
     err = capsys.readouterr().err
     assert "30 of 100 frames were flagged" in err and "20 too few inliers, 10 too few stereo features" in err
+    # most frames without stereo features: the notice says so, and counts the others flagged too
+    reasons = [Reason.FEW_FEATURES] * 5 + [Reason.FEW_MATCHES] * 14
+    diagnostics = [FrameDiagnostics(k, fallback=True, reason=r) for k, r in enumerate(reasons)]
+    _say_if_suspect(SimpleNamespace(path="seq", poses=None), 20, diagnostics, None)
+    err = capsys.readouterr().err
+    assert "5 of 19 frames had too few stereo features to be matched (19 flagged in all: 14 too few" in err
 
 
 @pytest.mark.parametrize("where", ["missing", "afile", "empty"])

@@ -248,16 +248,17 @@ def _say_if_suspect(seq, n: int, diagnostics, poses, motion: str = "auto") -> No
     from vo_lib.stereo_vo.pipeline import Reason
 
     reasons = Counter(d.reason for d in diagnostics if d.fallback)
+    why = ", ".join(f"{count} {reason}" for reason, count in reasons.most_common())
     # a frame without a reference follows frames without features
     featureless = reasons[Reason.FEW_FEATURES] + reasons[Reason.NO_REFERENCE]
     if featureless >= FLAGGED_SHARE * (n - 1):  # the motion of these frames is only the prediction's
+        others = f" ({reasons.total()} flagged in all: {why})" if reasons.total() > featureless else ""
         notice(
-            f"{seq.path}: {featureless} of {n - 1} frames had too few stereo features "
-            "to be matched; is each camera's calibration that of these images? (rows the "
-            "rectification does not line up give no stereo matches)"
+            f"{seq.path}: {featureless} of {n - 1} frames had too few stereo features to be matched"
+            f"{others}; is each camera's calibration that of these images? (rows the rectification "
+            "does not line up give no stereo matches)"
         )
     elif reasons.total() >= FLAGGED_SHARE * (n - 1):
-        why = ", ".join(f"{count} {reason}" for reason, count in reasons.most_common())
         model = "" if motion == "auto" else f" is --motion {motion} the model of this body's motion, and"
         notice(
             f"{seq.path}: {reasons.total()} of {n - 1} frames were flagged, their vision not used "
