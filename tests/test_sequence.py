@@ -107,6 +107,14 @@ def test_colour_is_converted_and_16_bit_is_refused(tmp_path):
     cv2.imwrite(str(d / "image_0" / "000000.png"), np.zeros((376, 1241), np.uint16))
     with pytest.raises(SequenceError, match=r"000000.png, frame 0: 16-bit image; expected 8-bit grey"):
         read_sequence(d)
+    from PIL import Image  # a float TIFF is told its own depth, not 16 bits
+
+    for side in ("image_0", "image_1"):  # every image a TIFF, as a sequence is named alike
+        for png in sorted((d / side).glob("*.png")):
+            png.unlink()
+            Image.fromarray(np.zeros((376, 1241), np.float32)).save(png.with_suffix(".tif"))
+    with pytest.raises(SequenceError, match=r"000000.tif, frame 0: 32-bit image; expected 8-bit grey"):
+        read_sequence(d)
 
 
 def test_calib_with_wrong_count_and_missing_p1(tmp_path):

@@ -116,7 +116,7 @@ def _header_other(path: Path, where: str) -> tuple[int, int, int]:
     except Exception:  # whatever Pillow raises on a file it cannot read
         raise SequenceError(f"{where}: cannot read the image (damaged or not an image)") from None
     _check_size(where, im.format or "image", width, height)
-    return width, height, 8 if mode in EIGHT_BIT_MODES else 16
+    return width, height, 8 if mode in EIGHT_BIT_MODES else 16 if mode.startswith("I;16") else 32  # F, I: 32
 
 
 def frame_order(name: str) -> tuple:
