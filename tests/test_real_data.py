@@ -1962,3 +1962,27 @@ def test_a_raw_drive_run_without_odometry_or_truth_reads_no_oxts_packet(tmp_path
     assert "0000000007.txt, line 1: an OXTS packet needs 30 numbers" in capsys.readouterr().err
     shutil.rmtree(drive / "oxts")
     assert main([*args, "--out", str(tmp_path / "c")]) == 0
+
+
+@needs_euroc
+def test_a_motion_capture_truth_under_tum_vis_name_is_read(tmp_path, capsys):
+    """TUM-VI keeps its motion-capture poses in mav0/mocap0/data.csv (EuRoC's CSV): read as vicon0's."""
+    import shutil
+
+    from vo_lib.formats.euroc import read_asl
+
+    rig = small_rig(tmp_path, frames=6)
+    expected = read_asl(rig).poses_4x4()
+    truth = rig / "mav0" / "state_groundtruth_estimate0"
+    rows = [
+        line.split() for line in (truth / "groundtruth.tum").read_text().splitlines() if line[:1].isdigit()
+    ]
+    (rig / "mav0" / "mocap0").mkdir()
+    shutil.copy(truth / "sensor.yaml", rig / "mav0" / "mocap0")
+    csv = [f"{round(float(t) * 1e9)},{x},{y},{z},{qw},{qx},{qy},{qz}" for t, x, y, z, qx, qy, qz, qw in rows]
+    (rig / "mav0" / "mocap0" / "data.csv").write_text(
+        "#timestamp [ns],p_x,p_y,p_z,q_w,q_x,q_y,q_z\n" + "\n".join(csv) + "\n"
+    )
+    shutil.rmtree(truth)
+    seq = read_asl(rig)
+    assert seq.truth_file.parent.name == "mocap0" and np.allclose(seq.poses_4x4(), expected, atol=1e-6)

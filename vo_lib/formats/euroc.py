@@ -25,6 +25,7 @@ GROUND_TRUTH_FILES = (
     "state_groundtruth_estimate0/groundtruth.tum",
     "state_groundtruth_estimate0/data.csv",
     "vicon0/data.csv",
+    "mocap0/data.csv",  # TUM-VI's name
     "leica0/data.csv",
 )
 
