@@ -130,10 +130,10 @@ MODULES = ("np", "numpy", "grading")  # used only as np.f: bare, they are handed
 NAMED_TUPLE = {"_replace", "_asdict", "_make", "_fields", "_field_defaults"}  # public, though underscored
 
 
-def review(source: str) -> list[tuple[int, Reason]]:
+def review(source: str, bound: frozenset[str] = frozenset()) -> list[tuple[int, Reason]]:
     """``(line, reason)`` for every construct of ``source`` outside what honest answers use, read with
     :mod:`ast` (nothing runs): the course's modules, no special names, no changes to objects the cell
-    did not make. Magics use the kernel."""
+    did not make; ``bound``: the notebook's functions and variables (:func:`_made`). Magics use the kernel."""
     magic = [n for n, line in enumerate(source.splitlines(), 1) if line.lstrip().startswith(("%", "!"))]
     found = [(n, Reason.KERNEL) for n in magic]
     if (tree := _tree(source)) is None:
@@ -143,7 +143,7 @@ def review(source: str) -> list[tuple[int, Reason]]:
     methods = {id(f) for c in ast.walk(tree) if isinstance(c, ast.ClassDef) for f in c.body}
     scopes = [f for f in ast.walk(tree) if isinstance(f, (ast.FunctionDef, ast.ClassDef))]
     nested = {id(c) for f in scopes for c in ast.walk(f) if c is not f}  # a method's name shadows nothing
-    made = _made(tree)
+    made = _made(tree, bound | _bound(tree))
     for node in ast.walk(tree):
         line = getattr(node, "lineno", 0) or getattr(getattr(node, "target", None), "lineno", 0)
         changes = (
@@ -191,19 +191,21 @@ def _reasons(node: ast.AST) -> list[Reason]:
     return [FLAGGED[name]] if isinstance(node, ast.Name) and name in FLAGGED else []
 
 
-def _made(tree: ast.AST) -> set[str]:
-    """Names the cell binds to a new object of a class: ``kf = KalmanFilter(2, 1)``, ``f = Filter()``."""
+def _made(tree: ast.AST, bound: set[str]) -> set[str]:
+    """Names the cell binds to a new object of a class (``kf = KalmanFilter(2, 1)``): a callee named
+    like one, not ``bound`` (a function or a variable of the notebook's, which may return a module)."""
     calls = [n for n in ast.walk(tree) if isinstance(n, ast.Assign) and isinstance(n.value, ast.Call)]
     named = [
         (n.targets, getattr(n.value.func, "attr", None) or getattr(n.value.func, "id", "")) for n in calls
     ]
-    return {
-        t.id
-        for targets, name in named
-        if name.lstrip("_")[:1].isupper()
-        for t in targets
-        if isinstance(t, ast.Name)
-    }
+    made = [targets for targets, name in named if name.lstrip("_")[:1].isupper() and name not in bound]
+    return {t.id for targets in made for t in targets if isinstance(t, ast.Name)}
+
+
+def _bound(tree: ast.AST) -> set[str]:
+    """Names a cell binds but by an import or a class: its functions and variables."""
+    stored = {getattr(n, "id", "") for n in ast.walk(tree) if isinstance(getattr(n, "ctx", None), ast.Store)}
+    return stored | {n.name for n in ast.walk(tree) if isinstance(n, ast.FunctionDef)}
 
 
 def _changes(target: ast.AST, made: set[str]) -> bool:
@@ -275,10 +277,11 @@ def report(nb, released=None) -> dict[str, list[str]]:
     reviewed, and every other code cell but a test that is not in the release ``released`` as it is there."""
     flagged, code_cells = {}, [cell for cell in nb.cells if cell.cell_type == "code"]
     given = {c.source for c in released.cells if c.cell_type == "code"} if released else None
+    bound = frozenset().union(*(_bound(tree) for c in code_cells if (tree := _tree(c.source))))
     for k, cell in enumerate(code_cells, 1):
         meta = cell.metadata.get("nbgrader", {})
         changed = given is not None and not meta.get("grade") and cell.source not in given
-        if (meta.get("solution") or changed) and (found := review(cell.source)):
+        if (meta.get("solution") or changed) and (found := review(cell.source, bound)):
             code = cell.source.splitlines()
             key = meta["grade_id"] if meta.get("solution") else f"code cell {k}"
             flagged[key] = [f"line {n}: {r.text}: {code[n - 1].strip()[:70]}" for n, r in found]

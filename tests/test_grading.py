@@ -239,6 +239,9 @@ def test_library_functions_takes_functions_classes_and_the_methods_of_a_modules_
         ("kind = type(kf)\nkind.predict = print", Reason.CHANGES),
         ("class Wrap:\n    pass\nw = Wrap()\nw.m = np\nw.m.allclose = min", Reason.CHANGES),
         ("def f(self):\n    self.allclose = min\nf(numpy)", Reason.CHANGES),
+        # a function named like a class, which returns a module, in this cell or another
+        ("def Make():\n    return cm\nm = Make()\nm.theta_standard_deviation = min", Reason.CHANGES),
+        ("Make = lambda: cm\nm = Make()\nm.theta_standard_deviation = min", Reason.CHANGES),
         ("import fileinput\ntext = ''.join(fileinput.input('../notebooks/01.py'))", Reason.IMPORT),
     ],
 )
@@ -257,6 +260,11 @@ def test_the_report_knows_the_names_other_cells_import():
         _cell("answer", "n.sum = sum", "ex5"),
     ]
     assert list(grading.report(nb)) == ["ex2", "ex4", "ex5"]  # n = np: NumPy itself, held under a name
+    nb.cells += [
+        _cell("answer", "def Module():\n    return cm", "ex6"),
+        _cell("answer", "m = Module()\nm.f = 1", "ex7"),
+    ]
+    assert list(grading.report(nb)) == ["ex2", "ex4", "ex5", "ex7"]  # a function of another cell
     assert "changes an object it did not make" in grading.report(nb)["ex2"][0]
 
 
