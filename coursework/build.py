@@ -262,8 +262,6 @@ _quiet_{name} = {name}
 @_functools.wraps(_quiet_{name})
 def {name}(*args, **kwargs):
     _warnings.warn("a correct answer that warns at every call", UserWarning, stacklevel=2)
-    for _ in _tqdm(range(1), desc="progress"):  # a progress bar on stderr
-        pass
     return _quiet_{name}(*args, **kwargs)
 """
 
@@ -271,15 +269,15 @@ def {name}(*args, **kwargs):
 def stderr_answer(solution: str) -> str:
     """The solution ``solution`` (its markers taken out) writing to stderr, there and in its tests.
 
-    Its first function is wrapped in one that warns and prints a progress line on stderr at every
-    call, so the test cell writes to stderr too; a correct answer must still score full marks.
+    It warns once, and its first function is wrapped in one that warns at every call, so the test
+    cell writes to stderr too; a correct answer must still score full marks.
     """
     code = "\n".join(
         line
         for line in solution.splitlines()
         if line.strip() not in ("### BEGIN SOLUTION", "### END SOLUTION")
     )
-    code += '\nfrom tqdm import tqdm as _tqdm\n\nfor _ in _tqdm(range(1), desc="progress"):\n    pass\n'
+    code += '\nimport warnings as _warnings\n\n_warnings.warn("progress 100%", UserWarning, stacklevel=1)\n'
     defined = re.search(r"^def (\w+)\(", code, re.M)
     return code + (WARNING_WRAPPER.format(name=defined.group(1)) if defined else "")
 

@@ -20,7 +20,7 @@ from collections.abc import Callable, Iterator
 
 #: The modules an answer may import: the course's own, and the libraries of its numbers and figures.
 COURSE_MODULES = set(
-    "numpy scipy sympy math cmath statistics fractions itertools functools dataclasses typing warnings cv2 "
+    "numpy scipy sympy math cmath statistics fractions itertools functools dataclasses typing warnings copy cv2 "
     "filterpy vo_lib vo_book matplotlib pandas skimage evo tqdm".split()
 )
 
@@ -105,10 +105,11 @@ class Reason(enum.Enum):
     """Why an answer is to be reviewed: its text, and the names that show it."""
 
     IMPORT = "imports a module no exercise needs (not one of COURSE_MODULES)", ""
-    KERNEL = "uses the kernel or its history", "get_ipython In Out _ih _oh _dh _i _ii _iii __ ___"
+    KERNEL = "uses the kernel or its history", "get_ipython In Out _ih _oh _dh __ ___"
     INDIRECT = (
-        "reaches names, code or objects indirectly (exec, getattr, vars, a __special__ name, type())",
-        "exec eval compile getattr setattr delattr globals locals vars breakpoint memoryview exit quit",
+        "reaches names, code, frames or modules indirectly (exec, getattr, vars, a __special__ name, type())",
+        "exec eval compile getattr setattr delattr globals locals vars breakpoint memoryview exit quit sys "
+        "builtins gi_frame cr_frame ag_frame tb_frame f_back f_globals f_locals f_builtins",
     )
     FILE = (
         "reads, writes or runs files",
@@ -122,8 +123,12 @@ class Reason(enum.Enum):
         self.text, self.words = text, words.split()
 
 
-FLAGGED = {word: reason for reason in (Reason.KERNEL, Reason.INDIRECT) for word in reason.words}  # as names
-SPECIAL = {"__init__", "__post_init__", "__repr__", "__str__", "__name__", "__doc__", "__version__"}
+FLAGGED = {word: reason for reason in (Reason.KERNEL, Reason.INDIRECT) for word in reason.words}
+#: Special names honest answers use: a class's own, and arithmetic (comparison, subtraction fake closeness).
+SPECIAL = set(
+    "__init__ __post_init__ __repr__ __str__ __name__ __doc__ __version__ __main__ __add__ __radd__ __mul__ "
+    "__rmul__ __matmul__ __truediv__ __neg__".split()
+)
 PROTECTED = {"np", "numpy", "grading", "assert_allclose"}  # names an answer must not rebind
 BUILTINS = set(dir(builtins))  # an answer that rebinds abs rewrites the tests that call it
 MODULES = ("np", "numpy", "grading")  # used only as np.f: bare, they are handed, held or iterated
@@ -140,7 +145,8 @@ def review(source: str, bound: frozenset[str] = frozenset()) -> list[tuple[int, 
         return found
     cell = _imports(tree)  # a name another cell imports is refused by the tests where it is held
     values = {id(n.value) for n in ast.walk(tree) if isinstance(n, ast.Attribute)}  # the np of np.f
-    methods = {id(f) for c in ast.walk(tree) if isinstance(c, ast.ClassDef) for f in c.body}
+    classes = [c for c in ast.walk(tree) if isinstance(c, ast.ClassDef)]
+    methods, names = {id(f) for c in classes for f in c.body}, {c.name for c in classes}
     scopes = [f for f in ast.walk(tree) if isinstance(f, (ast.FunctionDef, ast.ClassDef))]
     nested = {id(c) for f in scopes for c in ast.walk(f) if c is not f}  # a method's name shadows nothing
     made = _made(tree, bound | _bound(tree))
@@ -152,6 +158,8 @@ def review(source: str, bound: frozenset[str] = frozenset()) -> list[tuple[int, 
         changes = changes or any(_changes(t, made) for t in _targets(node))
         methodless = isinstance(node, ast.FunctionDef) and id(node) not in methods  # def f(self): self.x = 1
         changes |= methodless and "self" in [a.arg for a in node.args.args]
+        unbound = isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute)  # Cls.method(module)
+        changes |= unbound and _named(node.func.value, *names)
         found += [(line, Reason.CHANGES)] if changes else []
         found += [(line, why) for why in _reasons(node)]
         found += [(line, Reason.PRIVATE)] if _private(node, cell) else []
@@ -175,8 +183,9 @@ def _imports(tree: ast.AST) -> set[str]:
 def _reasons(node: ast.AST) -> list[Reason]:
     """The reasons to review one syntax node, by the module it imports or the name it uses."""
     if isinstance(node, ast.alias):  # an import that takes a builtin's name (from m import zeros as abs)
-        bound = node.asname or node.name.split(".")[0]
-        return [Reason.CHANGES] if bound in BUILTINS or bound in PROTECTED and node.name != "numpy" else []
+        bound = node.asname or node.name.split(".")[0]  # or NumPy under another name than np
+        numpy = node.name == "numpy"
+        return [Reason.CHANGES] if bound in BUILTINS or (bound in PROTECTED) != numpy else []
     if isinstance(node, (ast.Import, ast.ImportFrom)):
         roots = [a.name for a in node.names] if isinstance(node, ast.Import) else [node.module or "."]
         return [Reason.IMPORT] if any(r.split(".")[0] not in COURSE_MODULES for r in roots) else []
@@ -188,18 +197,19 @@ def _reasons(node: ast.AST) -> list[Reason]:
         return [Reason.INDIRECT]  # a class made by type(), its methods named in strings
     if isinstance(node, ast.Attribute) and name in Reason.FILE.words or _named(node, "open"):
         return [Reason.FILE]
-    return [FLAGGED[name]] if isinstance(node, ast.Name) and name in FLAGGED else []
+    return [FLAGGED[name]] if isinstance(node, (ast.Name, ast.Attribute)) and name in FLAGGED else []
 
 
 def _made(tree: ast.AST, bound: set[str]) -> set[str]:
     """Names the cell binds to a new object of a class (``kf = KalmanFilter(2, 1)``): a callee named
     like one, not ``bound`` (a function or a variable of the notebook's, which may return a module)."""
-    calls = [n for n in ast.walk(tree) if isinstance(n, ast.Assign) and isinstance(n.value, ast.Call)]
-    named = [
-        (n.targets, getattr(n.value.func, "attr", None) or getattr(n.value.func, "id", "")) for n in calls
-    ]
-    made = [targets for targets, name in named if name.lstrip("_")[:1].isupper() and name not in bound]
-    return {t.id for targets in made for t in targets if isinstance(t, ast.Name)}
+    pairs = [(t, n.value) for n in ast.walk(tree) if isinstance(n, ast.Assign) for t in n.targets]
+    pairs += [(n.target, n.value) for n in ast.walk(tree) if isinstance(n, ast.AnnAssign)]
+    tuples = [zip(t.elts, v.elts, strict=False) for t, v in pairs if {type(t), type(v)} == {ast.Tuple}]
+    pairs += [p for z in tuples for p in z]
+    calls = {t.id: v.func for t, v in pairs if isinstance(t, ast.Name) and isinstance(v, ast.Call)}
+    callee = {n: getattr(f, "attr", None) or getattr(f, "id", "") for n, f in calls.items()}
+    return {n for n, c in callee.items() if c.lstrip("_")[:1].isupper() and c not in bound}
 
 
 def _bound(tree: ast.AST) -> set[str]:
@@ -215,9 +225,7 @@ def _changes(target: ast.AST, made: set[str]) -> bool:
         return any(_changes(t, made) for t in getattr(target, "elts", [getattr(target, "value", None)]))
     if isinstance(target, ast.Attribute):
         return not (_named(target.value, *made) or _named(target.value, "self"))
-    while isinstance(target, ast.Subscript):
-        target = target.value
-    return _named(target, *PROTECTED) or isinstance(target, ast.Attribute) and _changes(target, made)
+    return _named(_root(target), *PROTECTED)  # an item of what the cell did not make: plt.rcParams["..."]
 
 
 def _shadows(node: ast.AST) -> bool:
@@ -262,8 +270,8 @@ def _held(node: ast.AST, imported: set[str]) -> bool:
 
 
 def _root(node: ast.AST) -> ast.AST:
-    """``a`` of ``a.b.c``."""
-    while isinstance(node, ast.Attribute):
+    """``a`` of ``a.b.c`` and of ``a[k].b``."""
+    while isinstance(node, (ast.Attribute, ast.Subscript)):
         node = node.value
     return node
 

@@ -242,6 +242,20 @@ def test_library_functions_takes_functions_classes_and_the_methods_of_a_modules_
         # a function named like a class, which returns a module, in this cell or another
         ("def Make():\n    return cm\nm = Make()\nm.theta_standard_deviation = min", Reason.CHANGES),
         ("Make = lambda: cm\nm = Make()\nm.theta_standard_deviation = min", Reason.CHANGES),
+        # a second trial of the allow-list: exec, the shell, frames and builtins reached as attributes
+        # of a module an answer may import, a class's method called on a module, an identity function
+        ("import dataclasses\nrun = dataclasses.builtins.exec", Reason.INDIRECT),
+        ("import typing\nshell = typing.sys.modules['IPython'].get_ipython()", Reason.INDIRECT),
+        ("import tqdm\nloaded = iter(tqdm.tqdm([0])).gi_frame.f_globals", Reason.INDIRECT),
+        (
+            "class Agree:\n    def teach(self, f):\n        self.array_equal = f\nAgree.teach(xp, min)",
+            Reason.CHANGES,
+        ),
+        ("import numpy as xp", Reason.CHANGES),
+        (
+            "def Same(thing):\n    return thing\nFilter = Same(VoKalmanFilter)\nFilter.predict = print",
+            Reason.CHANGES,
+        ),
         ("import fileinput\ntext = ''.join(fileinput.input('../notebooks/01.py'))", Reason.IMPORT),
     ],
 )
@@ -321,6 +335,19 @@ def test_honest_code_with_numpy_and_ordinary_names_is_not_flagged():
     assert review("walk = odo.integrate(u)\nload = np.sum(w)\nsignal = w[1] - w[0]\nmodules = 3\n") == []
     filterpy = "kf = KalmanFilter(dim_x=2, dim_z=1)\nkf.x = np.zeros(2)\nkf.P *= 10\nkf.R[0, 0] = 2.0\n"
     assert review("from filterpy.kalman import KalmanFilter\n" + filterpy) == []
+    # honest code a trial found flagged: a figure's settings, an annotated or unpacked filter, a loop
+    # variable, a script's guard, a copy, a dataclass that adds
+    honest = [
+        "import matplotlib.pyplot as plt\nplt.rcParams['figure.figsize'] = (8, 4)",
+        "from filterpy.kalman import KalmanFilter\nkf: KalmanFilter = KalmanFilter(1, 1)\nkf.x = np.zeros(1)",
+        "kf_a, kf_b = KalmanFilter(1, 1), KalmanFilter(1, 1)\nkf_a.x = np.zeros(1)",
+        "for _i in range(3):\n    print(_i)",
+        "if __name__ == '__main__':\n    pass",
+        "from copy import deepcopy",
+        "from dataclasses import dataclass\n@dataclass\nclass P:\n    x: float\n"
+        "    def __add__(self, o):\n        return P(self.x + o.x)",
+    ]
+    assert [review(answer) for answer in honest] == [[]] * len(honest)
 
 
 def _cell(kind, source, grade_id, outputs=()):
