@@ -185,7 +185,7 @@ def _reasons(node: ast.AST) -> list[Reason]:
     if isinstance(node, ast.alias):  # an import that takes a builtin's name (from m import zeros as abs)
         bound = node.asname or node.name.split(".")[0]  # or NumPy under another name than np
         numpy = node.name == "numpy"
-        return [Reason.CHANGES] if bound in BUILTINS or (bound in PROTECTED) != numpy else []
+        return [Reason.CHANGES] if bound in BUILTINS | {"*"} or (bound in PROTECTED) != numpy else []
     if isinstance(node, (ast.Import, ast.ImportFrom)):
         roots = [a.name for a in node.names] if isinstance(node, ast.Import) else [node.module or "."]
         return [Reason.IMPORT] if any(r.split(".")[0] not in COURSE_MODULES for r in roots) else []
