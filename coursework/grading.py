@@ -20,8 +20,8 @@ from collections.abc import Callable, Iterator
 
 #: The modules an answer may import: the course's own, and the libraries of its numbers and figures.
 COURSE_MODULES = set(
-    "numpy scipy sympy math cmath statistics fractions itertools functools dataclasses typing warnings copy cv2 "
-    "filterpy vo_lib vo_book matplotlib pandas skimage evo tqdm".split()
+    "numpy scipy sympy math cmath statistics fractions itertools functools dataclasses typing warnings copy "
+    "cv2 filterpy vo_lib vo_book matplotlib pandas skimage evo tqdm".split()
 )
 
 
