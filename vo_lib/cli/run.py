@@ -216,7 +216,8 @@ def _refuse_another_sequence(out_dir: Path, source: Path) -> None:
     def recording(path: Path) -> Path:  # an ASL recording, given as mav0 or the folder holding it
         return path.parent if path.name == "mav0" else path
 
-    earlier = (read_marker(out_dir) or {}).get("sequence")
+    marker = read_marker(out_dir) or {}
+    earlier = marker.get("sequence") if marker.get("written_by") == "vo_lib run" else None
     if isinstance(earlier, str) and recording(Path(earlier)) != recording(source.resolve()):
         raise OutputError(
             f"{out_dir}: holds the run of {earlier}, another sequence of this name; give --out, "
