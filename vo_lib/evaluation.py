@@ -151,6 +151,11 @@ def rpe(gt, est, delta: int = 1, rotation: bool = False) -> tuple[ErrorStats, np
     return ErrorStats.of(errors), errors
 
 
+def path_length(xyz) -> float:
+    """Length of the path through positions ``(N, 3)``."""
+    return float(np.linalg.norm(np.diff(np.asarray(xyz, float), axis=0), axis=1).sum())
+
+
 def path_lengths(poses) -> np.ndarray:
     """Cumulative distance travelled at each pose."""
     p = as_homogeneous(poses)[:, :3, 3]

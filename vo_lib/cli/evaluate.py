@@ -150,7 +150,9 @@ def recording_of(gt: str, extrinsic_of: str | None, kitti: bool) -> str | None:
 
 def _say_if_units_differ(truth_xyz: np.ndarray, est_xyz: np.ndarray) -> None:
     """A note where the two paths' lengths differ a hundredfold or more (one in millimetres?)."""
-    truth_m, est_m = (float(np.sum(np.linalg.norm(np.diff(p, axis=0), axis=1))) for p in (truth_xyz, est_xyz))
+    from vo_lib.evaluation import path_length
+
+    truth_m, est_m = path_length(truth_xyz), path_length(est_xyz)
     if min(truth_m, est_m) > 0 and max(truth_m, est_m) >= 100 * min(truth_m, est_m):
         print(
             f"note: the ground truth's path is {truth_m:.4g} m long and the estimate's {est_m:.4g} m: "

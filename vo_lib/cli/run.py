@@ -275,17 +275,14 @@ def _say_if_path_differs(seq, n: int, poses) -> None:
     """A notice where the estimate's path is the truth's (poses, or a tracker's positions) times
     ``PATH_RATIO`` or more (a baseline), or a hundredth of it (a truth in millimetres); not on a path
     under ``MIN_PATH_M``, which noise of millimetres makes any length."""
-    import numpy as np
-
+    from vo_lib.evaluation import path_length
     from vo_lib.stereo_vo.run_report import tracked_truth
 
     tracked = None if seq.poses is not None else tracked_truth(seq, n)
     truth = seq.poses[:n, :3, 3] if seq.poses is not None else None if tracked is None else tracked[2]
     if truth is None:
         return
-    truth_m, est_m = (
-        float(np.linalg.norm(np.diff(p, axis=0), axis=1).sum()) for p in (truth, poses[:n, :3, 3])
-    )
+    truth_m, est_m = path_length(truth), path_length(poses[:n, :3, 3])
     if truth_m < MIN_PATH_M or est_m == 0 or max(truth_m, est_m) < PATH_RATIO * min(truth_m, est_m):
         return
     baseline = "is the stereo baseline that of the rig? (cam1's T_BS in its sensor.yaml, or P1 in calib.txt)"
