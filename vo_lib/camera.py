@@ -30,6 +30,14 @@ def _positive(name: str, value) -> float:
     return value
 
 
+def _positive_rows(values: np.ndarray, message: str) -> np.ndarray:
+    """``values``, once all are > 0; else ValueError, ``message`` formatted with the first bad row."""
+    if np.any(values <= 0):
+        bad = int(np.flatnonzero(values <= 0)[0])
+        raise ValueError(message.format(bad, float(values[bad])))
+    return values
+
+
 @dataclass(frozen=True)
 class StereoCamera:
     """Pinhole intrinsics shared by a rectified stereo pair, and its baseline.
@@ -67,7 +75,6 @@ class StereoCamera:
             if (value := getattr(self, name)) is not None and (int(value) != value or value <= 0):
                 raise ValueError(f"{name} must be a positive whole number of pixels; got {value!r}")
 
-    # ------------------------------------------------------------------ constructors
     @classmethod
     def bumblebee2(cls, width: int = 640, height: int = 480) -> StereoCamera:
         """A rig like the paper's Bumblebee2: 66 degrees horizontal field of view, 12 cm baseline,
@@ -77,14 +84,10 @@ class StereoCamera:
 
     @classmethod
     def from_projection_matrices(cls, P0, P1, width=None, height=None) -> StereoCamera:
-        """Read a rectified pair from its 3x4 projection matrices (KITTI ``calib.txt`` layout).
-
-        ``P1 = K [I | -B e_x]`` up to the translation of ``P0``, so ``B = (P0[0,3] - P1[0,3]) / fx``.
-        """
-        P0 = np.asarray(P0, dtype=float).reshape(3, 4)
-        P1 = np.asarray(P1, dtype=float).reshape(3, 4)
-        fx = P0[0, 0]
-        _positive("P0[0,0] (fx)", fx)
+        """Read a rectified pair from its 3x4 projection matrices (KITTI ``calib.txt`` layout):
+        ``P1 = K [I | -B e_x]`` up to the translation of ``P0``, so ``B = (P0[0,3] - P1[0,3]) / fx``."""
+        P0, P1 = (np.asarray(P, dtype=float).reshape(3, 4) for P in (P0, P1))
+        fx = _positive("P0[0,0] (fx)", P0[0, 0])
         baseline = (P0[0, 3] - P1[0, 3]) / fx
         if not baseline > 0:
             raise ValueError(
@@ -95,20 +98,15 @@ class StereoCamera:
 
     def scaled(self, width: int, height: int) -> StereoCamera:
         """The same optics sampled at another resolution (the paper's Table 1 resolutions)."""
-        if self.width is None or self.height is None:
-            raise ValueError("scaled() needs a camera with width and height")
+        self._require_size("scaled()")
         sx, sy = width / self.width, height / self.height
-        return StereoCamera(
-            self.fx * sx,
-            self.fy * sy,
-            (self.cx + 0.5) * sx - 0.5,
-            (self.cy + 0.5) * sy - 0.5,
-            self.baseline,
-            width,
-            height,
-        )
+        cx, cy = (self.cx + 0.5) * sx - 0.5, (self.cy + 0.5) * sy - 0.5
+        return StereoCamera(self.fx * sx, self.fy * sy, cx, cy, self.baseline, width, height)
 
-    # ------------------------------------------------------------------ matrices
+    def _require_size(self, what: str) -> None:
+        if self.width is None or self.height is None:
+            raise ValueError(f"{what} needs a camera with width and height")
+
     @property
     def K(self) -> np.ndarray:
         """3x3 intrinsic matrix."""
@@ -121,7 +119,6 @@ class StereoCamera:
         P1[0, 3] = -self.fx * self.baseline
         return P0, P1
 
-    # ------------------------------------------------------------------ eq. 13 and its inverse
     def project(self, points) -> np.ndarray:
         """Project left-camera points ``(N, 3)`` to ``w = (u, v, d)`` ``(N, 3)``.
 
@@ -131,12 +128,7 @@ class StereoCamera:
             If a point is not in front of the camera (``z <= 0``).
         """
         P = as_match_array("points", points)
-        z = P[:, 2]
-        if np.any(z <= 0):
-            bad = int(np.flatnonzero(z <= 0)[0])
-            raise ValueError(
-                f"points must lie in front of the camera (z > 0); row {bad} has z={float(z[bad])}"
-            )
+        z = _positive_rows(P[:, 2], "points must lie in front of the camera (z > 0); row {} has z={}")
         u, v = self.cx + self.fx * P[:, 0] / z, self.cy + self.fy * P[:, 1] / z
         return np.column_stack([u, v, self.fx * self.baseline / z])
 
@@ -152,12 +144,7 @@ class StereoCamera:
             If a disparity is not > 0 (a point at infinity or behind the rig has no 3-D position).
         """
         w = as_match_array("w", w)
-        d = w[:, 2]
-        if np.any(d <= 0):
-            bad = int(np.flatnonzero(d <= 0)[0])
-            raise ValueError(
-                f"w[:, 2] (disparity) must be > 0 to back-project; row {bad} has d={float(d[bad])}"
-            )
+        d = _positive_rows(w[:, 2], "w[:, 2] (disparity) must be > 0 to back-project; row {} has d={}")
         scale = self.baseline / d
         x, y = scale * (w[:, 0] - self.cx), scale * (w[:, 1] - self.cy) * (self.fx / self.fy)
         return np.column_stack([x, y, scale * self.fx])
@@ -171,8 +158,7 @@ class StereoCamera:
 
     def in_image(self, w, margin: float = 0.0) -> np.ndarray:
         """Boolean mask of ``w`` rows whose left pixel lies ``margin`` pixels inside the image."""
-        if self.width is None or self.height is None:
-            raise ValueError("in_image() needs a camera with width and height")
+        self._require_size("in_image()")
         w = np.asarray(w, dtype=float)
         u, v = w[:, 0], w[:, 1]
         return (
@@ -242,15 +228,9 @@ def rectify_stereo(
         R1, R2, P1, P2, *_ = cv2.stereoRectify(
             *left, *right, size, R, t, flags=cv2.CALIB_ZERO_DISPARITY, alpha=0.0
         )
-    opencv = cv2.fisheye if fisheye else cv2
-    shares = [
-        _sampled_share(opencv, K, dist, R_rect, P, size)
-        for (K, dist), R_rect, P in ((left, R1, P1), (right, R2, P2))
-    ]
-    maps = [
-        tuple(opencv.initUndistortRectifyMap(K, dist, R_rect, P, size, cv2.CV_16SC2))
-        for (K, dist), R_rect, P in ((left, R1, P1), (right, R2, P2))
-    ]
+    opencv, cameras = cv2.fisheye if fisheye else cv2, ((*left, R1, P1), (*right, R2, P2))
+    shares = [_sampled_share(opencv, *camera, size) for camera in cameras]
+    maps = [tuple(opencv.initUndistortRectifyMap(*camera, size, cv2.CV_16SC2)) for camera in cameras]
     T_left_rect = np.eye(4)
     T_left_rect[:3, :3] = R1.T  # rectified -> raw left camera
     return Rectification(*maps, (P1, P2), size, T_body_left @ T_left_rect, tuple(shares))

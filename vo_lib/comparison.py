@@ -2,17 +2,14 @@
 
 A single random draw never carries a comparative sentence. :func:`over_seeds` runs every method
 on the same draw for each of N seeds (a paired comparison); :class:`Comparison` says in how many
-seeds A beats B, the median difference A − B with its bootstrap interval, whether that interval
-excludes zero, and the sentence with its figures. Where several sentences are drawn from one
-study, each is one of a ``family``: its interval is widened (Bonferroni) so that the whole family
-holds at :data:`CONFIDENCE`, not each sentence alone. Fifteen sentences at 95 % each would state
-a difference that is not there about once in every study, and another set of seeds would state
-another.
+seeds A beats B, the median difference A − B with its bootstrap interval, and the sentence with
+its figures. Sentences drawn from one study form a ``family``: each interval is widened
+(Bonferroni) so that the whole family holds at :data:`CONFIDENCE`.
 
 Consistency uses one χ² rule (:func:`chi2_band`): the average of ``count`` independent χ²(dof)
 values lies in ``chi2.ppf([α/2, 1 − α/2], dof·count) / count``. Independent means across
-Monte-Carlo runs at one time step (NEES), or across the steps of one run only where the values are
-white (the NIS of a consistent filter). A NEES averaged over one run's steps is correlated in time:
+Monte-Carlo runs at one time step (NEES), or across one run's steps only where the values are
+white (the NIS of a consistent filter); a NEES averaged over one run's steps is correlated in time:
 judge it by the seeds' bootstrap interval of its mean against ``dof`` (:func:`bootstrap_interval`).
 """
 
@@ -32,8 +29,7 @@ BOOTSTRAP_SEED = 20240611
 
 
 class Verdict(enum.Enum):
-    """Outcome of a paired comparison of ``a`` against ``b`` (lower figures are better); the value
-    is the relation a sentence states, ``a is <value> b``."""
+    """Outcome of a paired comparison of ``a`` against ``b`` (lower is better): ``a is <value> b``."""
 
     BETTER = "better than"
     WORSE = "worse than"
@@ -79,8 +75,7 @@ class Comparison:
 
     @property
     def confidence(self) -> float:
-        """Each interval's confidence: ``1 - (1 - CONFIDENCE) / family``, so that the family's
-        intervals hold together at :data:`CONFIDENCE`."""
+        """Each interval's confidence, ``1 - (1 - CONFIDENCE) / family`` (Bonferroni)."""
         return 1 - (1 - CONFIDENCE) / self.family
 
     def paired(self, a: str, b: str) -> np.ndarray:
@@ -97,35 +92,25 @@ class Comparison:
         return (float(np.median(d)), *bootstrap_interval(d, confidence=self.confidence))
 
     def varies(self, a: str, b: str) -> bool:
-        """Whether the seeds move ``a − b``: where they do not, the N figures are one result
-        repeated, and an interval of zero width says nothing about other draws. A change below a
-        millionth of the figures' size is arithmetic's (sums in another order, another thread),
-        not the draws'."""
+        """Whether the seeds move ``a − b`` (else the N figures are one result repeated); a change
+        below a millionth of the figures' size is arithmetic's (sums in another order), not the draws'."""
         d = self.paired(a, b)
         size = max(float(np.max(np.abs(self.figures[k]))) for k in (a, b))
         return bool(np.ptp(d) > 1e-6 * size)
 
     def verdict(self, a: str, b: str) -> Verdict:
-        """``BETTER`` when the whole interval of ``a − b`` is below zero, ``WORSE`` above;
-        ``NOT_RELIABLE`` also where the seeds do not move ``a − b`` (:meth:`varies`): an interval
-        of zero width is one result, which says nothing of other draws."""
+        """``BETTER`` when the whole interval of ``a − b`` is below zero, ``WORSE`` above, else
+        ``NOT_RELIABLE``, as also where the seeds do not move ``a − b`` (:meth:`varies`)."""
         if not self.varies(a, b):
             return Verdict.NOT_RELIABLE
         _, low, high = self.difference(a, b)
-        if high < 0:
-            return Verdict.BETTER
-        if low > 0:
-            return Verdict.WORSE
-        return Verdict.NOT_RELIABLE
+        return Verdict.BETTER if high < 0 else Verdict.WORSE if low > 0 else Verdict.NOT_RELIABLE
 
     def sentence(self, a: str, b: str, unit: str = "", scale: float = 1.0, digits: int = 2) -> str:
-        """The comparative sentence with its figures, e.g.
-
-        "fused is better than VO in 17 of 20 seeds (median difference −0.80 cm, 95 % CI
-        −1.10 to −0.50 cm)", or "... not reliably different from ..."; one of a family of 17 says
-        "99.7 % CI, one of 17 comparisons". Where the seeds do not move the difference
-        (:meth:`varies`), the two figures and that they are one result.
-        """
+        """The comparative sentence with its figures, e.g. "fused is better than VO: lower in 17 of
+        20 seeds (median difference -0.80 cm, 95 % CI -1.10 to -0.50 cm)"; one of a family of 17
+        says "99.7 % CI, one of 17 comparisons". Where the seeds do not move the difference
+        (:meth:`varies`), the two figures and that they are one result."""
         u = f" {unit}" if unit else ""
         if not self.varies(a, b):
             va, vb = (scale * float(np.median(self.figures[k])) for k in (a, b))
@@ -146,10 +131,8 @@ class Comparison:
 def over_seeds(
     run: Callable[[int], Mapping[str, float]], seeds: Iterable[int], family: int = 1
 ) -> Comparison:
-    """Run ``run(seed)`` for every seed (e.g. ``range(base, base + 20)``) and collect each
-    method's figure: ``run`` draws once and returns ``{method name: figure}`` for every method on
-    that same draw (lower is better). ``family``: the comparisons that will be judged together on
-    these draws (:class:`Comparison`)."""
+    """Run ``run(seed)`` for every seed, which draws once and returns ``{method name: figure}`` for
+    every method on that draw (lower is better); ``family``: the comparisons judged together."""
     seeds = tuple(int(s) for s in seeds)
     rows = [dict(run(s)) for s in seeds]
     names = list(rows[0])

@@ -33,20 +33,13 @@ class ErrorStats:
     @classmethod
     def of(cls, errors) -> ErrorStats:
         e = np.asarray(errors, dtype=float)
-        return cls(
-            float(np.sqrt(np.mean(e**2))),
-            float(e.mean()),
-            float(np.median(e)),
-            float(e.std()),
-            float(e.max()),
-            int(e.size),
-        )
+        figures = (np.sqrt(np.mean(e**2)), e.mean(), np.median(e), e.std(), e.max())
+        return cls(*(float(x) for x in figures), int(e.size))
 
 
 def rotation_angle(R) -> np.ndarray:
-    """Angle in radians of rotation matrices ``(..., 3, 3)`` (Rodrigues' angle), stable at every
-    angle: SciPy's ``2 atan2(|q_xyz|, |q_w|)`` of the unit quaternion. ``arccos`` of the cosine
-    ``(trace R - 1) / 2`` loses half the digits near 0 (a rounding of ``1e-9`` becomes ``4e-5`` rad)."""
+    """Angle in radians of rotation matrices ``(..., 3, 3)``, as SciPy's ``2 atan2(|q_xyz|, |q_w|)``:
+    stable near 0, where ``arccos((trace R - 1) / 2)`` loses half the digits."""
     return Rotation.from_matrix(R).magnitude()
 
 
@@ -61,9 +54,8 @@ def umeyama(source: np.ndarray, target: np.ndarray, with_scale: bool = False):
         S[-1, -1] = -1.0
     R = U @ S @ Vt
     spread = float(np.mean(np.sum(xs**2, axis=1)))
-    if not with_scale:
-        s = 1.0
-    else:  # no scale unless both move: NaN, not a division by zero or a collapse onto one point
+    s = 1.0
+    if with_scale:  # no scale unless both move: NaN, not a division by zero or a collapse onto one point
         s = float(np.trace(np.diag(d) @ S) / spread) if spread > 0 and xt.any() else float("nan")
     return R, mu_t - s * R @ mu_s, s
 
@@ -116,8 +108,7 @@ def ate(gt, est, alignment: Alignment = Alignment.SE3) -> tuple[ErrorStats, np.n
 
 
 def carried_point(poses: np.ndarray, point) -> np.ndarray:
-    """``(N, 3)`` positions of ``point`` (in the posed frame, e.g. a prism in the camera) carried
-    along ``(N, 4, 4)`` ``poses``."""
+    """``(N, 3)`` positions of ``point`` (in the posed frame: a prism on the camera) along ``poses``."""
     return poses[:, :3, :3] @ np.asarray(point, float) + poses[:, :3, 3]
 
 
@@ -144,8 +135,7 @@ def rpe(gt, est, delta: int = 1, rotation: bool = False) -> tuple[ErrorStats, np
     if not 1 <= delta < len(G):
         raise ValueError(f"delta must lie in 1..{len(G) - 1}; got {delta}")
     first = np.arange(0, len(G) - delta, delta)
-    rel_gt = rigid_inverse(G[first]) @ G[first + delta]
-    rel_est = rigid_inverse(E[first]) @ E[first + delta]
+    rel_gt, rel_est = (rigid_inverse(T[first]) @ T[first + delta] for T in (G, E))
     err = rigid_inverse(rel_gt) @ rel_est
     errors = np.degrees(rotation_angle(err[:, :3, :3])) if rotation else np.linalg.norm(err[:, :3, 3], axis=1)
     return ErrorStats.of(errors), errors
@@ -200,8 +190,8 @@ class FinalError:
 
 
 def final_error(truth_planar, est_planar) -> FinalError:
-    """Final position error (metres, and per cent of the planar distance the truth travels) and
-    final heading error (degrees, wrapped) of planar trajectories ``(N, 3)``."""
+    """Final position (metres, per cent of the truth's planar path) and heading (degrees, wrapped)
+    errors of planar trajectories ``(N, 3)``."""
     g, e = _check_pair(truth_planar, est_planar)
     distance = planar_path_length(g)
     position = float(np.hypot(*(e[-1, :2] - g[-1, :2])))
@@ -212,8 +202,7 @@ def final_error(truth_planar, est_planar) -> FinalError:
 
 @dataclass(frozen=True)
 class FinalError3D:
-    """Where the estimate ends against where the truth ends, in 3-D, both starting at the same
-    pose, and the truth's and the estimate's path lengths."""
+    """Where the estimate ends against the truth, in 3-D from the same start, and both path lengths."""
 
     position_m: float
     percent: float  # of the distance travelled; NaN if the truth does not move
@@ -263,9 +252,7 @@ def segment_lengths(gt) -> tuple[float, ...]:
     :data:`SHORT_FRACTIONS` rounded to two significant digits."""
     total = float(path_lengths(gt)[-1])
     fits = tuple(x for x in KITTI_LENGTHS if x < total)
-    if fits:
-        return fits
-    return tuple(float(f"{f * total:.2g}") for f in SHORT_FRACTIONS if f * total > 0)
+    return fits or tuple(float(f"{f * total:.2g}") for f in SHORT_FRACTIONS if f * total > 0)
 
 
 def segment_pairs(gt, length: float, step: int = KITTI_STEP) -> np.ndarray:
@@ -318,14 +305,10 @@ def kitti_segment_errors(gt, est, lengths=KITTI_LENGTHS, step: int = KITTI_STEP)
 def key_position_errors(gt_planar, est_planar, frames) -> dict:
     """[Zhao]'s statistics: mean and standard deviation of x, y (mm) and heading (deg) errors at
     the key ``frames``, estimate minus truth, in the frame of the start."""
-    g, e = np.asarray(gt_planar, float), np.asarray(est_planar, float)
     idx = np.asarray(frames, dtype=int)
-    dx, dy = 1000 * (e[idx, 0] - g[idx, 0]), 1000 * (e[idx, 1] - g[idx, 1])
-    dth = np.degrees(wrap_angle(e[idx, 2] - g[idx, 2]))
-    return {
-        name: (float(np.mean(v)), float(np.std(v)))
-        for name, v in (("x_mm", dx), ("y_mm", dy), ("theta_deg", dth))
-    }
+    d = np.asarray(est_planar, float)[idx] - np.asarray(gt_planar, float)[idx]
+    errors = {"x_mm": 1000 * d[:, 0], "y_mm": 1000 * d[:, 1], "theta_deg": np.degrees(wrap_angle(d[:, 2]))}
+    return {name: (float(np.mean(v)), float(np.std(v))) for name, v in errors.items()}
 
 
 def shown(value: float, spec: str) -> str:
@@ -349,19 +332,15 @@ class StandardErrors:
     def rows(self) -> list[tuple[str, str]]:
         """``(label, value)`` rows as the run's table and ``evaluate`` print them."""
         f = self.final
+        distances = f"{f.distance_m:.3f} / {f.estimate_distance_m:.3f}"
+        sim3 = f"ATE (Sim(3) alignment, scale {shown(self.sim3_scale, '.4f')}): rmse [m]"
         rows = [
             ("final position error, 3-D [m]", f"{f.position_m:.4f}"),
             ("  of distance travelled [%]", shown(f.percent, ".2f")),
             ("final rotation error [deg]", f"{f.rotation_deg:.3f}"),
-            (
-                "distance travelled, 3-D, truth / estimate [m]",
-                f"{f.distance_m:.3f} / {f.estimate_distance_m:.3f}",
-            ),
+            ("distance travelled, 3-D, truth / estimate [m]", distances),
             ("ATE (SE(3) alignment): rmse [m]", f"{self.ate_se3.rmse:.4f}"),
-            (
-                f"ATE (Sim(3) alignment, scale {shown(self.sim3_scale, '.4f')}): rmse [m]",
-                shown(self.ate_sim3.rmse, ".4f"),
-            ),
+            (sim3, shown(self.ate_sim3.rmse, ".4f")),
             ("RPE RMSE, 1 frame: translation [m]", f"{self.rpe_m.rmse:.5f}"),
             ("RPE RMSE, 1 frame: rotation [deg]", f"{self.rpe_deg.rmse:.4f}"),
         ]

@@ -18,13 +18,7 @@ import numpy as np
 
 #: Rotation taking camera-frame coordinates to robot-frame coordinates for a camera that
 #: looks along the robot's x axis: camera z -> robot x, camera x -> robot -y, camera y -> robot -z.
-R_ROBOT_FROM_CAMERA = np.array(
-    [
-        [0.0, 0.0, 1.0],
-        [-1.0, 0.0, 0.0],
-        [0.0, -1.0, 0.0],
-    ]
-)
+R_ROBOT_FROM_CAMERA = np.array([[0.0, 0.0, 1.0], [-1.0, 0.0, 0.0], [0.0, -1.0, 0.0]])
 
 
 def wrap_angle(angle):
@@ -37,8 +31,7 @@ def wrap_angle(angle):
 
 def yaw_matrix(yaw: float) -> np.ndarray:
     """3x3 rotation about the z axis (up) by ``yaw``, counter-clockwise positive."""
-    c, s = math.cos(yaw), math.sin(yaw)
-    # R_z = [[c, -s, 0], [s, c, 0], [0, 0, 1]] (closed form: on the hot path, no Rotation object)
+    c, s = math.cos(yaw), math.sin(yaw)  # closed form: on the hot path, no Rotation object
     return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
 
 
@@ -62,10 +55,8 @@ def matrix_to_planar(T) -> np.ndarray:
 
 
 def compose_planar(pose, increment) -> np.ndarray:
-    """Apply ``increment`` ``(dx, dy, dyaw)``, expressed in the frame of ``pose``, to ``pose``.
-
-    Both arguments may carry leading batch dimensions; the last axis has length 3.
-    """
+    """Apply ``increment`` ``(dx, dy, dyaw)``, expressed in the frame of ``pose``, to ``pose``
+    (both may carry leading batch dimensions)."""
     pose = np.asarray(pose, dtype=float)
     inc = np.asarray(increment, dtype=float)
     if pose.shape == inc.shape == (3,):  # one pose: the same sums on floats, several times faster
@@ -79,10 +70,8 @@ def compose_planar(pose, increment) -> np.ndarray:
 
 
 def relative_planar(pose_from, pose_to) -> np.ndarray:
-    """Increment ``(dx, dy, dyaw)`` in the frame of ``pose_from`` that leads to ``pose_to``.
-
-    The inverse of :func:`compose_planar`: ``compose_planar(a, relative_planar(a, b)) == b``.
-    """
+    """Increment ``(dx, dy, dyaw)`` in the frame of ``pose_from`` that leads to ``pose_to``: the
+    inverse of :func:`compose_planar`, ``compose_planar(a, relative_planar(a, b)) == b``."""
     a = np.asarray(pose_from, dtype=float)
     b = np.asarray(pose_to, dtype=float)
     if a.shape == b.shape == (3,):  # one pose: the same sums on floats, several times faster
@@ -96,13 +85,7 @@ def relative_planar(pose_from, pose_to) -> np.ndarray:
 
 
 def as_match_array(name: str, w) -> np.ndarray:
-    """Check that ``w`` is a finite float array of shape ``(N, 3)`` and return it.
-
-    Raises
-    ------
-    ValueError
-        Naming ``name``, when the shape is wrong or a value is not finite.
-    """
+    """``w`` as a float array of shape ``(N, 3)``, all finite; else ValueError naming ``name``."""
     arr = np.asarray(w, dtype=float)
     if arr.ndim != 2 or arr.shape[1] != 3:
         raise ValueError(f"{name} must have shape (N, 3) with columns u, v, d; got shape {arr.shape}")
@@ -113,11 +96,9 @@ def as_match_array(name: str, w) -> np.ndarray:
 
 
 def camera_mount(forward: float = 0.0, height: float = 0.5, left: float = 0.0) -> np.ndarray:
-    """4x4 pose of a forward-looking camera in the robot frame (``T_robot_camera``).
-
-    ``forward``, ``left`` and ``height`` place its optical centre; with ``forward = left = 0`` it
-    sits above the turning axis, where the circular-motion model of [Zhao] is exact.
-    """
+    """4x4 pose ``T_robot_camera`` of a forward-looking camera whose optical centre is at
+    ``forward``, ``left``, ``height``; at ``forward = left = 0`` it sits above the turning axis,
+    where the circular-motion model of [Zhao] is exact."""
     return rigid_matrix(R_ROBOT_FROM_CAMERA, (forward, left, height))
 
 
@@ -143,7 +124,6 @@ def rigid_inverse(T) -> np.ndarray:
     R_t = np.swapaxes(T[..., :3, :3], -1, -2)
     inverse = np.zeros_like(T)
     inverse[..., :3, :3] = R_t
-    # -R^T t
     inverse[..., :3, 3] = -np.einsum("...ij,...j->...i", R_t, T[..., :3, 3])
     inverse[..., 3, 3] = 1.0
     return inverse
@@ -157,10 +137,8 @@ def camera_poses_from_planar(planar_poses, T_robot_camera) -> np.ndarray:
 
 
 def planar_from_camera_poses(camera_poses, T_robot_camera) -> np.ndarray:
-    """Planar robot poses ``(N, 3)``, starting at the origin, of KITTI-style camera poses.
-
-    The inverse of :func:`camera_poses_from_planar` for planar motion; for a camera that also
-    pitches and rolls (a car on a real road) it keeps the yaw and the ground-plane position.
-    """
+    """Planar robot poses ``(N, 3)``, starting at the origin, of KITTI-style camera poses: the
+    inverse of :func:`camera_poses_from_planar`; of a camera that also pitches and rolls (a car on
+    a real road) it keeps the yaw and the ground-plane position."""
     robot = T_robot_camera @ as_homogeneous(camera_poses) @ np.linalg.inv(T_robot_camera)
     return np.stack([matrix_to_planar(M) for M in robot])
