@@ -159,10 +159,14 @@ def swap_in(complete: Path, target: Path) -> Path | None:
             raise
     if _exchange(complete, target):
         return complete
-    aside = temporary(target).with_suffix(".old")
-    with _signals_held():  # Ctrl-C or SIGTERM waits for both; a kill between them is undone by restore()
-        os.rename(target, aside)
-        os.rename(complete, target)
+    aside, held = temporary(target).with_suffix(".old"), []
+    try:  # Ctrl-C or SIGTERM waits for both renames; a kill between them is undone by restore()
+        with signals_to(lambda signum, frame: held.append(signum)):
+            os.rename(target, aside)
+            os.rename(complete, target)
+    finally:
+        if held:
+            signal.raise_signal(held[0])
     return aside
 
 
@@ -177,18 +181,6 @@ def signals_to(handler):
     finally:
         for kind, old in previous.items():
             signal.signal(kind, defaults[kind] if old is None else old)
-
-
-@contextlib.contextmanager
-def _signals_held():
-    """SIGINT and SIGTERM held back meanwhile and raised again after (in the main thread only)."""
-    held: list[int] = []
-    try:
-        with signals_to(lambda signum, frame: held.append(signum)):
-            yield
-    finally:
-        if held:
-            signal.raise_signal(held[0])
 
 
 def remove_replaced(replaced: Path | None, target: Path) -> None:

@@ -15,10 +15,9 @@ from functools import cached_property
 import cv2
 import numpy as np
 
-from vo_lib.geometry import as_match_array
+from vo_lib.geometry import as_match_array, rigid_matrix
 
-#: The paper's rig is a Bumblebee2 stereo head: 12 cm baseline and about 66 degrees of
-#: horizontal field of view at 640x480.
+#: The paper's rig, a Bumblebee2 stereo head: 12 cm baseline, about 66 degrees horizontal field of view.
 BUMBLEBEE2_BASELINE = 0.12
 BUMBLEBEE2_HFOV_DEG = 66.0
 
@@ -231,9 +230,8 @@ def rectify_stereo(
     opencv, cameras = cv2.fisheye if fisheye else cv2, ((*left, R1, P1), (*right, R2, P2))
     shares = [_sampled_share(opencv, *camera, size) for camera in cameras]
     maps = [tuple(opencv.initUndistortRectifyMap(*camera, size, cv2.CV_16SC2)) for camera in cameras]
-    T_left_rect = np.eye(4)
-    T_left_rect[:3, :3] = R1.T  # rectified -> raw left camera
-    return Rectification(*maps, (P1, P2), size, T_body_left @ T_left_rect, tuple(shares))
+    T_body_rect = T_body_left @ rigid_matrix(R1.T, 0.0)  # R1.T: rectified -> raw left camera
+    return Rectification(*maps, (P1, P2), size, T_body_rect, tuple(shares))
 
 
 def _sampled_share(opencv, K, dist, R_rect, P, size: tuple[int, int]) -> float:

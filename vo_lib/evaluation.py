@@ -173,10 +173,8 @@ def turned_degrees(poses_planar) -> float:
 def is_spot_turn(poses_planar) -> bool:
     """Does the path turn on the spot (see ``SPOT_TURN_MAX_RADIUS``, ``SPOT_TURN_MIN_DEGREES``)?"""
     turned = turned_degrees(poses_planar)
-    return (
-        planar_path_length(poses_planar) < SPOT_TURN_MAX_RADIUS * np.radians(turned)
-        and turned > SPOT_TURN_MIN_DEGREES
-    )
+    tight = planar_path_length(poses_planar) < SPOT_TURN_MAX_RADIUS * np.radians(turned)
+    return tight and turned > SPOT_TURN_MIN_DEGREES
 
 
 @dataclass(frozen=True)

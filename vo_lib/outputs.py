@@ -1,11 +1,10 @@
 """Output folders that never cost a user a file: checked first, written whole or not at all.
 
-* **A command replaces only what the same command wrote**: a folder this package wrote holds
-  the marker ``.vo_lib_output.json`` (its command, every file and folder it wrote) and nothing
-  else. New or empty folders may be written; any other is :class:`OutputError`, but another
-  command's output, intact, with ``force``. Never replaced, even so: the input, this package or
-  what lies inside them, and folders that are or hold the current folder, the home folder or the
-  repository's ``data/``.
+* **A command replaces only what the same command wrote**: such a folder holds the marker
+  ``.vo_lib_output.json`` (its command, every file and folder it wrote) and nothing else. New or
+  empty folders may be written; any other is :class:`OutputError`, but another command's intact
+  output with ``force``. Never replaced, even so: the input, this package or what lies inside them,
+  and folders that are or hold the current folder, the home folder or the repository's ``data/``.
 * **Atomic**: written into a temporary sibling, marker last, put in place by
   :func:`vo_lib.atomic.swap_in`; a failed or interrupted write deletes the temporary.
 * **Locks**: a reader holds a shared lock (:func:`reading`); a replacement needs it exclusively.
@@ -62,8 +61,7 @@ def _label(target, option: str | None) -> str:
 
 
 def _contains(outer: Path, inner: Path) -> bool:
-    """``outer`` is ``inner`` or one of its parents, by name or by inode (a bind mount, a
-    case-insensitive file system)."""
+    """``outer`` is ``inner`` or one of its parents, by name or by inode (a bind mount, say)."""
     same = (inode(outer) or "none") in {inode(p) for p in (inner, *inner.parents)}
     return outer == inner or outer in inner.parents or same
 
@@ -136,15 +134,14 @@ def foreign_content(folder: Path, written_by: str) -> tuple[str | None, bool]:
 def linked_from(folder) -> tuple[list[Path], str | None]:
     """Where the symbolic links under ``folder`` lead, and those under the folders they lead to, and
     so on; and why not every link could be looked at (else None)."""
-    found, seen, unlisted = [], set(), []
+    found, unlisted = [], []
     to_walk, budget, start = [Path(folder)], MAX_WALKED, real_path(folder)
     while to_walk and budget > 0:  # a link to / is not walked through the whole file system
         walk = itertools.islice(os.walk(to_walk.pop(), onerror=unlisted.append), budget)
         below = [Path(root) / name for root, folders, files in walk for name in folders + files]
         budget -= len(below) + 1
-        new = sorted({real_path(path) for path in below if path.is_symlink()} - seen)
+        new = sorted({real_path(path) for path in below if path.is_symlink()} - set(found))
         found += new
-        seen.update(new)
         # folders to walk in turn, not one that holds the input (/, a parent: found, and guarded
         # whole); os.path.isdir: a target that cannot be looked at (in /proc, say) is not walked
         to_walk += [target for target in new if os.path.isdir(target) and not _contains(target, start)]
