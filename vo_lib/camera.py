@@ -158,11 +158,9 @@ class StereoCamera:
     def in_image(self, w, margin: float = 0.0) -> np.ndarray:
         """Boolean mask of ``w`` rows whose left pixel lies ``margin`` pixels inside the image."""
         self._require_size("in_image()")
-        w = np.asarray(w, dtype=float)
-        u, v = w[:, 0], w[:, 1]
-        return (
-            (u >= margin) & (u <= self.width - 1 - margin) & (v >= margin) & (v <= self.height - 1 - margin)
-        )
+        u, v = np.asarray(w, dtype=float)[:, :2].T
+        across = (u >= margin) & (u <= self.width - 1 - margin)
+        return across & (v >= margin) & (v <= self.height - 1 - margin)
 
 
 @dataclass(frozen=True)
