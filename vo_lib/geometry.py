@@ -57,8 +57,7 @@ def matrix_to_planar(T) -> np.ndarray:
 def compose_planar(pose, increment) -> np.ndarray:
     """Apply ``increment`` ``(dx, dy, dyaw)``, expressed in the frame of ``pose``, to ``pose``
     (both may carry leading batch dimensions)."""
-    pose = np.asarray(pose, dtype=float)
-    inc = np.asarray(increment, dtype=float)
+    pose, inc = np.asarray(pose, dtype=float), np.asarray(increment, dtype=float)
     if pose.shape == inc.shape == (3,):  # one pose: the same sums on floats, several times faster
         (x, y, yaw), (dx, dy, dyaw) = pose.tolist(), inc.tolist()
         c, s = math.cos(yaw), math.sin(yaw)
@@ -72,8 +71,7 @@ def compose_planar(pose, increment) -> np.ndarray:
 def relative_planar(pose_from, pose_to) -> np.ndarray:
     """Increment ``(dx, dy, dyaw)`` in the frame of ``pose_from`` that leads to ``pose_to``: the
     inverse of :func:`compose_planar`, ``compose_planar(a, relative_planar(a, b)) == b``."""
-    a = np.asarray(pose_from, dtype=float)
-    b = np.asarray(pose_to, dtype=float)
+    a, b = np.asarray(pose_from, dtype=float), np.asarray(pose_to, dtype=float)
     if a.shape == b.shape == (3,):  # one pose: the same sums on floats, several times faster
         (ax, ay, ayaw), (bx, by, byaw) = a.tolist(), b.tolist()
         c, s = math.cos(ayaw), math.sin(ayaw)
@@ -105,8 +103,7 @@ def camera_mount(forward: float = 0.0, height: float = 0.5, left: float = 0.0) -
 def camera_motion(pose_prev, pose_curr, T_robot_camera) -> np.ndarray:
     """4x4 ``T_curr_from_prev`` mapping points of the previous camera frame into the current one,
     for a camera mounted at ``T_robot_camera`` on a robot moving between two planar poses."""
-    W0 = planar_to_matrix(pose_prev) @ T_robot_camera
-    W1 = planar_to_matrix(pose_curr) @ T_robot_camera
+    W0, W1 = (planar_to_matrix(pose) @ T_robot_camera for pose in (pose_prev, pose_curr))
     return np.linalg.solve(W1, W0)
 
 
