@@ -166,25 +166,10 @@ def poses_from_oxts(oxts: np.ndarray, camera_in_imu: np.ndarray) -> np.ndarray:
     lat, lon = np.radians(oxts[:, 0]), np.radians(oxts[:, 1])
     imu = np.tile(np.eye(4), (len(oxts), 1, 1))
     scale = EARTH_RADIUS_M * np.cos(lat[0])
-    imu[:, 0, 3], imu[:, 1, 3], imu[:, 2, 3] = (
-        scale * lon,
-        scale * np.log(np.tan(np.pi / 4 + lat / 2)),
-        oxts[:, 2],
-    )
+    imu[:, :3, 3] = np.column_stack([scale * lon, scale * np.log(np.tan(np.pi / 4 + lat / 2)), oxts[:, 2]])
     imu[:, :3, :3] = Rotation.from_euler("ZYX", oxts[:, [5, 4, 3]]).as_matrix()
     camera = imu @ camera_in_imu
     return np.linalg.inv(camera[0]) @ camera
-
-
-def _raw_calib_folder(drive: Path) -> Path:
-    """The folder of the raw calibration files: the drive's own, else the one holding it."""
-    for folder in (drive, drive.parent):
-        if (folder / RAW_CALIB_FILES[0]).is_file():
-            return folder
-    raise SequenceError(
-        f"{drive}: no {RAW_CALIB_FILES[0]} in it or in {drive.parent}; expected KITTI's raw calibration "
-        f"({', '.join(RAW_CALIB_FILES)}) beside the drive's folder, where the raw set keeps it"
-    )
 
 
 def _raw_packets(drive: Path, images: list[Path]) -> np.ndarray:
@@ -201,7 +186,12 @@ def read_kitti_raw(path, truth: bool = True, odometry: bool = True) -> Sequence:
     neither truth nor ``odometry``: no OXTS packets read (they are both)."""
     drive = Path(path)
     left, right = image_pairs(drive, ("image_00/data", "image_01/data"))
-    calib = _raw_calib_folder(drive)
+    calib = next((f for f in (drive, drive.parent) if (f / RAW_CALIB_FILES[0]).is_file()), None)
+    if calib is None:  # the raw calibration: in the drive's folder, else in the one holding it
+        raise SequenceError(
+            f"{drive}: no {RAW_CALIB_FILES[0]} in it or in {drive.parent}; expected KITTI's raw calibration "
+            f"({', '.join(RAW_CALIB_FILES)}) beside the drive's folder, where the raw set keeps it"
+        )
     cam_to_cam = calib / RAW_CALIB_FILES[0]
     P0, P1 = (calib_values(cam_to_cam, key, 12).reshape(3, 4) for key in ("P_rect_00", "P_rect_01"))
     size, rectified = check_headers(left, right), tuple(calib_values(cam_to_cam, "S_rect_00", 2))
@@ -218,9 +208,5 @@ def read_kitti_raw(path, truth: bool = True, odometry: bool = True) -> Sequence:
     packets = _raw_packets(drive, left) if truth or odometry else None
     poses = poses_from_oxts(packets, camera_in_imu_frame(calib))[:, :3] if truth else None
     manifest = {"layout": "kitti_raw", "time_origin_s": float(stamps[0])}
-    packets_of = {
-        "truth_file": drive / "oxts" / "data" if truth else None,
-        "oxts": packets,
-        "raw_calib": calib,
-    }
-    return Sequence(drive, camera, stamps - stamps[0], left, right, poses, None, manifest, **packets_of)
+    found = {"truth_file": drive / "oxts" / "data" if truth else None, "oxts": packets, "raw_calib": calib}
+    return Sequence(drive, camera, stamps - stamps[0], left, right, poses, None, manifest, **found)

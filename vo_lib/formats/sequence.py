@@ -153,19 +153,13 @@ class Sequence:
         return None if self.poses is None else as_homogeneous(self.poses)
 
 
-def _camera(root: Path, left: list[Path], right: list[Path]) -> StereoCamera:
-    """The rig of ``calib.txt``, at the size every image header shares."""
-    calib = root / "calib.txt"
-    check_file(calib, "the calibration, P0 and P1 lines")
-    return checked_camera(calib, *read_calib(calib), check_headers(left, right))
-
-
 def checked_camera(
     calib: Path, P0, P1, size: tuple[int, int], keys: tuple[str, str] = ("P0", "P1")
 ) -> StereoCamera:
     """The rig of the rectified projection matrices ``P0`` and ``P1`` (lines ``keys`` of ``calib``)
     for images of ``size``, refused in one line naming ``calib`` where it cannot be these images'
-    (a baseline not in metres, a principal point outside the image, a focal length in other units)."""
+    (a baseline not in metres or too short, a principal point outside the image, a focal length in
+    other units, two intrinsic matrices, the right camera off the rows)."""
     (w, h), (left, right) = size, keys
     try:
         camera = StereoCamera.from_projection_matrices(P0, P1, w, h)
@@ -183,19 +177,12 @@ def checked_camera(
             f"{calib}: {left}'s focal length {max(camera.fx, camera.fy):g} px is over {MAX_FOCAL_WIDTHS} "
             f"image widths ({w} px): a field of view under 0.6 degrees; expected pixels of these images"
         )
-    _check_rectified(calib, camera, (P0, P1), keys, claim)
-    return camera
-
-
-def _check_rectified(calib: Path, camera: StereoCamera, projections, keys: tuple[str, str], claim: str):
-    """Refuse projection matrices (lines ``keys`` of ``calib``) of no rectified stereo rig: focal
-    lengths of no camera, two intrinsic matrices, or cameras in one place (``claim``: the baseline)."""
     if problem := focal_problem(camera.fx, camera.fy, camera.width):
-        raise SequenceError(f"{calib}: {keys[0]}'s {problem}")
-    intrinsics = (np.asarray(P, float).reshape(3, 4)[:, :3] for P in projections)
-    if not all(np.allclose(K, camera.K, rtol=1e-5, atol=1e-6) for K in intrinsics):
+        raise SequenceError(f"{calib}: {left}'s {problem}")
+    P0, P1 = (np.asarray(P, float).reshape(3, 4) for P in (P0, P1))
+    if not all(np.allclose(P[:, :3], camera.K, rtol=1e-5, atol=1e-6) for P in (P0, P1)):
         raise SequenceError(
-            f"{calib}: {keys[0]} and {keys[1]} are not a rectified pair: expected one intrinsic matrix "
+            f"{calib}: {left} and {right} are not a rectified pair: expected one intrinsic matrix "
             "[[fx 0 cx] [0 fy cy] [0 0 1]] as the first three columns of both"
         )
     if camera.baseline < MIN_BASELINE_M:
@@ -203,13 +190,13 @@ def _check_rectified(calib: Path, camera: StereoCamera, projections, keys: tuple
             f"{calib}: {claim.format(beyond(camera.baseline, MIN_BASELINE_M))}; expected a stereo rig, "
             f"at least {MIN_BASELINE_M:g} m"
         )
-    P0, P1 = (np.asarray(P, float).reshape(3, 4) for P in projections)
     offset = np.linalg.solve(camera.K, P0[:, 3] - P1[:, 3])  # the right camera from the left
     if np.hypot(offset[1], offset[2]) > MAX_OFF_ROW * abs(offset[0]):
         raise SequenceError(
-            f"{calib}: {keys[1]} puts the right camera at ({', '.join(f'{x:g}' for x in offset)}) from "
+            f"{calib}: {right} puts the right camera at ({', '.join(f'{x:g}' for x in offset)}) from "
             f"the left; expected a rectified pair, the right camera along the rows (x)"
         )
+    return camera
 
 
 def image_pairs(root: Path, sides: tuple[str, str] = ("image_0", "image_1")) -> tuple[list[Path], list[Path]]:
@@ -249,7 +236,9 @@ def read_sequence(path, odometry: bool = True, truth: bool = True) -> Sequence:
     ``truth=False``: neither ``poses.txt`` nor the manifest's positions)."""
     root = Path(path)
     left, right = image_pairs(root)
-    camera = _camera(root, left, right)
+    calib = root / "calib.txt"
+    check_file(calib, "the calibration, P0 and P1 lines")
+    camera = checked_camera(calib, *read_calib(calib), check_headers(left, right))
     n = len(left)
     check_file(root / "times.txt", "one timestamp per frame")
     times = read_per_frame(root / "times.txt", n, "timestamps", read_times)
