@@ -45,8 +45,7 @@ VF, WZ = 8, 19  # zero-based columns of forward speed (m/s) and yaw rate (rad/s)
 MAX_OXTS_VALUE = 1e6
 #: Fastest turn of a car in an OXTS packet, rad/s (a car turns at 1 rad/s or less): beyond, damaged.
 MAX_YAW_RATE = 10.0
-#: Latitude and longitude bounds (degrees): the Mercator projection of the positions grows without
-#: bound towards the poles (85 degrees, as web maps stop).
+#: Latitude and longitude bounds (degrees): Mercator's projection grows without bound near the poles.
 MAX_LATITUDE, MAX_LONGITUDE = 85.0, 180.0
 RAW_CALIB_FILES = ("calib_cam_to_cam.txt", "calib_imu_to_velo.txt", "calib_velo_to_cam.txt")
 #: The Earth's equatorial radius (WGS 84), metres, of the Mercator projection of the OXTS positions.
@@ -84,21 +83,20 @@ def wheel_distances_from_oxts(oxts: np.ndarray, times: np.ndarray, gauge: float)
     s = 0.5 * (oxts[1:, VF] + oxts[:-1, VF]) * dt
     dpsi = 0.5 * (oxts[1:, WZ] + oxts[:-1, WZ]) * dt
     out = np.zeros((len(oxts), 2))
-    out[1:, 0] = s - 0.5 * gauge * dpsi
-    out[1:, 1] = s + 0.5 * gauge * dpsi
+    out[1:] = np.column_stack([s - 0.5 * gauge * dpsi, s + 0.5 * gauge * dpsi])
     return out
 
 
 def _rotation(path: Path, key: str) -> np.ndarray:
     """The 3x3 rotation of line ``key``; else :class:`SequenceError`."""
     R = calib_values(path, key, 9).reshape(3, 3)
-    problem = rotation_problem(R)
-    if problem:
+    if problem := rotation_problem(R):
         raise SequenceError(f"{path}: {key}: {problem.replace('the first three columns are', 'it is')}")
     return R
 
 
 def _rigid(path: Path) -> np.ndarray:
+    """The rigid transform of lines ``R`` and ``T`` (metres)."""
     T = np.eye(4)
     T[:3, :3] = _rotation(path, "R")
     T[:3, 3] = calib_values(path, "T", 3)

@@ -46,8 +46,7 @@ from vo_lib.geometry import as_homogeneous
 
 #: Largest wheel distance between two frames in ``odometry.txt``, metres: beyond, the file is damaged.
 MAX_ODOMETRY_M = 1000.0
-#: Median time between frames (seconds), in either layout: outside, times in another unit (or frames
-#: too far apart to track between).
+#: Median time between frames (s): outside, times in another unit (or frames too far apart to track).
 MIN_FRAME_SPACING_S, MAX_FRAME_SPACING_S = 1e-3, 10.0
 #: Largest offset of the right camera off the rows, per metre of baseline, in a rectified pair's
 #: projection matrices (KITTI's colour pair is 0.7 % off).
@@ -109,21 +108,16 @@ class Sequence:
     def pair(self, k: int) -> tuple[np.ndarray, np.ndarray]:
         """Left and right images of frame ``k`` (rectified where needed), the next ``read_ahead``
         decoded meanwhile on a reader thread."""
-        if self.read_ahead > 0:
-            self._read_ahead_of(k)
-        ahead = self._ahead.pop(k, None)
-        decoded = ahead.result() if ahead is not None else None
-        return decoded if decoded is not None else self._decoded(k)
-
-    def _read_ahead_of(self, k: int) -> None:
-        """Frames ``k + 1`` to ``k + read_ahead`` handed to the reader thread, stale ones dropped."""
-        if self._reader is None:
+        if self.read_ahead > 0 and self._reader is None:
             self._reader = ThreadPoolExecutor(max_workers=1, thread_name_prefix="vo_lib-reader")
         for j in range(k + 1, min(k + 1 + self.read_ahead, len(self))):
             if j not in self._ahead:
                 self._ahead[j] = self._reader.submit(self._decoded_ahead, j)
-        for j in [j for j in self._ahead if j < k]:  # the caller went back: drop stale frames
+        for j in [j for j in self._ahead if j < k and self.read_ahead > 0]:  # the caller went back
             self._ahead.pop(j).cancel()
+        ahead = self._ahead.pop(k, None)
+        decoded = ahead.result() if ahead is not None else None
+        return decoded if decoded is not None else self._decoded(k)
 
     def _decoded_ahead(self, k: int) -> tuple[np.ndarray, np.ndarray] | None:
         """Frame ``k``, or None: a bad frame is decoded again, and reported, by the caller's thread."""
