@@ -146,9 +146,9 @@ def _transform(path: Path, data: dict, what: str) -> np.ndarray:
 
 
 def _distortion(path: Path, data: dict) -> tuple[np.ndarray, bool]:
-    """``[k1, k2, p1, p2]`` of a radial-tangential model (zeros for ``distortion_model: none``, none
-    given or an empty list) or ``[k1, k2, k3, k4]`` of an equidistant one, at the ASL key or at
-    Kalibr's (``camchain.yaml``) when only that one is there; and whether the model is equidistant."""
+    """``[k1, k2, p1, p2]`` of a radial-tangential model (zeros for ``distortion_model: none``) or
+    ``[k1, k2, k3, k4]`` of an equidistant one, at the ASL key or at Kalibr's (``camchain.yaml``)
+    when only that one is there; and whether the model is equidistant."""
     model = data.get("distortion_model", "radial-tangential")
     if model not in ("equidistant", "equi", "radial-tangential", "radtan", "none"):
         raise AslError(
@@ -160,8 +160,13 @@ def _distortion(path: Path, data: dict) -> tuple[np.ndarray, bool]:
     key = "distortion_coeffs" if "distortion_coeffs" in data else "distortion_coefficients"
     if model in ("equidistant", "equi"):
         return _numbers(path, data, key, 4, "[k1, k2, k3, k4]", MAX_DISTORTION), True
+    return _radial_tangential(path, data, key, model), False
+
+
+def _radial_tangential(path: Path, data: dict, key: str, model: str) -> np.ndarray:
+    """``[k1, k2, p1, p2]`` at ``key``; zeros for ``model`` none (none given, or an empty list)."""
     if model == "none" and data.get(key) in (None, []):
-        return np.zeros(4), False
+        return np.zeros(4)
     if isinstance(data.get(key), list) and len(data[key]) == 5:
         raise AslError(
             f"{path}: key {key}: expected [k1, k2, p1, p2], got 5 numbers (OpenCV's order, with k3 last?): "
@@ -173,7 +178,18 @@ def _distortion(path: Path, data: dict) -> tuple[np.ndarray, bool]:
             f"{path}: key distortion_model: none, but key {key} is not zero; "
             "expected radial-tangential for these coefficients, or zeros"
         )
-    return dist, False
+    return dist
+
+
+def _image_size(path: Path, data: dict) -> tuple[int, int]:
+    """Key ``resolution``: ``(width, height)``, two positive whole numbers."""
+    width, height = _numbers(path, data, "resolution", 2, "[width, height]")
+    if not (1 <= width <= MAX_IMAGE_SIDE and 1 <= height <= MAX_IMAGE_SIDE) or width % 1 or height % 1:
+        raise AslError(
+            f"{path}: key resolution: expected two whole numbers from 1 to {MAX_IMAGE_SIDE}, "
+            f"got [{width:g}, {height:g}]"
+        )
+    return int(width), int(height)
 
 
 def read_camera_yaml(path) -> CameraCalibration:
@@ -189,13 +205,7 @@ def read_camera_yaml(path) -> CameraCalibration:
     if fu <= 0 or fv <= 0:
         raise AslError(f"{path}: key intrinsics: focal lengths must be > 0, got fu={fu:g}, fv={fv:g}")
     dist, fisheye = _distortion(path, data)
-    width, height = _numbers(path, data, "resolution", 2, "[width, height]")
-    if not (1 <= width <= MAX_IMAGE_SIDE and 1 <= height <= MAX_IMAGE_SIDE) or width % 1 or height % 1:
-        raise AslError(
-            f"{path}: key resolution: expected two whole numbers from 1 to {MAX_IMAGE_SIDE}, "
-            f"got [{width:g}, {height:g}]"
-        )
-    width, height = int(width), int(height)
+    width, height = _image_size(path, data)
     if problem := focal_problem(fu, fv, width):
         raise AslError(f"{path}: key intrinsics: {problem} (key resolution)")
     if not (0 <= cu <= width and 0 <= cv <= height):
@@ -232,6 +242,13 @@ def rectify(left: CameraCalibration, right: CameraCalibration, where: Path) -> R
                 f"{where / side / 'sensor.yaml'}: keys intrinsics and distortion_coefficients leave "
                 f"{share:.0%} of the image in view once rectified; expected a calibration of these images"
             )
+    _check_rectified(rect, cam1_in_cam0, where)
+    return rect
+
+
+def _check_rectified(rect: Rectification, cam1_in_cam0: np.ndarray, where: Path) -> None:
+    """One line when the rectified rig has cam1 on the left of cam0, or its principal point outside
+    the images (as a rectified copy's ``calib.txt`` would be refused when read back)."""
     try:
         (cx, cy), (w, h) = (rect.camera.cx, rect.camera.cy), rect.size  # cam1 on the left of cam0 raises
     except ValueError:
@@ -241,12 +258,11 @@ def rectify(left: CameraCalibration, right: CameraCalibration, where: Path) -> R
             "below it; expected cam1 to the right (are the folders swapped, or is T_BS inverted? it "
             "takes the camera's coordinates into the body's)"
         ) from None
-    if not (0 <= cx <= w and 0 <= cy <= h):  # as a rectified copy's calib.txt would be refused
+    if not (0 <= cx <= w and 0 <= cy <= h):
         raise AslError(
             f"{where}: the intrinsics of cam0 and cam1 put the rectified principal point at ({cx:.0f}, "
             f"{cy:.0f}), outside the {w}x{h} images; expected principal points nearer their centres"
         )
-    return rect
 
 
 def _check_baseline(T_right_left: np.ndarray, sensor: Path) -> np.ndarray:

@@ -50,7 +50,12 @@ def asl_near_miss(path) -> str | None:
     inside = next((p for p in path.parents if p.name == "mav0" and mav0_of(p) is not None), None)
     if inside is not None:  # mav0/cam0/data, or deeper
         return f"{path}: inside the ASL recording {inside.parent}; give that folder, or its mav0"
-    below = []  # the folder above one ASL recording or several
+    return _recordings_below(path)
+
+
+def _recordings_below(path: Path) -> str | None:
+    """Why ``path`` is the folder above one ASL recording or several; else None."""
+    below = []
     with contextlib.suppress(OSError):
         below = sorted(p for p in path.iterdir() if p.is_dir() and mav0_of(p) is not None)
     if len(below) == 1:
@@ -84,10 +89,7 @@ def read_image_list(camera_dir: Path) -> tuple[np.ndarray, list[Path], list[int]
     csv_path = camera_dir / "data.csv"
     stamps, files, lines, listed = [], [], [], {}
     rows = data_lines(csv_path, "one line 'timestamp [ns],filename' per image")
-    with contextlib.suppress(OSError):  # more rows than files (and a header); rows may name files in folders
-        entries = list(os.scandir(camera_dir / "data"))
-        if len(rows) > (count := len(entries)) + 1 and not any(entry.is_dir() for entry in entries):
-            raise AslError(f"{csv_path}: {len(rows)} rows for {count} files in data/; expected one per image")
+    _check_row_count(csv_path, len(rows))
     for n, line in rows:
         if n == 1 and line[0].isalpha():  # a header without '#'
             continue
@@ -99,13 +101,27 @@ def read_image_list(camera_dir: Path) -> tuple[np.ndarray, list[Path], list[int]
         lines.append(n)
     if not stamps:
         raise AslError(f"{csv_path}: no images listed")
+    _check_increasing(csv_path, stamps, lines)
+    return np.array(stamps, dtype=np.int64), files, lines
+
+
+def _check_row_count(csv_path: Path, rows: int) -> None:
+    """More rows than files in ``data/`` (and a header), refused before each row is checked (where
+    ``data/`` holds folders, the rows may name files in them)."""
+    with contextlib.suppress(OSError):
+        entries = list(os.scandir(csv_path.parent / "data"))
+        if rows > (files := len(entries)) + 1 and not any(entry.is_dir() for entry in entries):
+            raise AslError(f"{csv_path}: {rows} rows for {files} files in data/; expected one per image")
+
+
+def _check_increasing(csv_path: Path, stamps: list[int], lines: list[int]) -> None:
+    """One line naming the first timestamp of ``data.csv`` that does not come after the one before."""
     if np.any(np.diff(stamps) <= 0):
         k = int(np.flatnonzero(np.diff(stamps) <= 0)[0]) + 1
         raise AslError(
             f"{csv_path}, line {lines[k]}: timestamp {stamps[k]} does not come after {stamps[k - 1]} "
             f"(line {lines[k - 1]}); expected increasing timestamps"
         )
-    return np.array(stamps, dtype=np.int64), files, lines
 
 
 def pair_by_timestamp(mav0: Path) -> tuple[np.ndarray, list[Path], list[Path]]:
@@ -124,17 +140,21 @@ def pair_by_timestamp(mav0: Path) -> tuple[np.ndarray, list[Path], list[Path]]:
             "triggered together, with equal timestamps"
         )
     for side, files, lines in (("cam0", left, lines0), ("cam1", right, lines1)):
-        csv_path = mav0 / side / "data.csv"
-        for path, line in zip(files, lines, strict=True):
-            if not path.is_file():  # one stat per image; a second only for the one that fails
-                if path.exists():  # a folder, a pipe, a device
-                    what = "a folder" if path.is_dir() else "not a regular file"
-                    raise AslError(f"{csv_path}, line {line}: {path} is {what}; expected an image")
-                raise AslError(
-                    f"{csv_path}, line {line}: {path.name} is missing from {path.parent} "
-                    f"(data.csv names each image by its path inside {csv_path.parent / 'data'})"
-                )
+        _check_images_there(mav0 / side / "data.csv", files, lines)
     return t0, left, right
+
+
+def _check_images_there(csv_path: Path, files: list[Path], lines: list[int]) -> None:
+    """One line naming the first image that ``data.csv`` lists and is not a file."""
+    for path, line in zip(files, lines, strict=True):
+        if not path.is_file():  # one stat per image; a second only for the one that fails
+            if path.exists():  # a folder, a pipe, a device
+                what = "a folder" if path.is_dir() else "not a regular file"
+                raise AslError(f"{csv_path}, line {line}: {path} is {what}; expected an image")
+            raise AslError(
+                f"{csv_path}, line {line}: {path.name} is missing from {path.parent} "
+                f"(data.csv names each image by its path inside {csv_path.parent / 'data'})"
+            )
 
 
 def _cameras(path) -> tuple[Path, list]:

@@ -226,10 +226,16 @@ def check_manifest(path: Path, manifest: dict, frames: int) -> None:
             ("positions.xyz", xyz, (n, 3), f"{n} rows of x y z {far}", (-MAX_POSITION_M, MAX_POSITION_M)),
             ("positions.lever_arm_camera", lever, (3,), f"3 numbers {near}", mount),
         ]
-    found = {row[0]: numbers_at(path, *row) for row in wanted}
+    _check_values(path, positions, {row[0]: numbers_at(path, *row) for row in wanted}, frames)
+
+
+def _check_values(path: Path, positions: dict, found: dict, frames: int) -> None:
+    """What :func:`check_manifest` checks beyond shapes and bounds."""
     numbered = found.get("positions.frames", np.zeros(0))
     if np.any(numbered % 1) or np.any(np.diff(numbered) <= 0):
-        raise SequenceError(f"{path}: key positions.frames: expected increasing frame numbers 0 to {last}")
+        raise SequenceError(
+            f"{path}: key positions.frames: expected increasing frame numbers 0 to {frames - 1}"
+        )
     if not isinstance(positions.get("file", ""), str):
         raise SequenceError(f"{path}: key positions.file: expected a text, got {shown(positions['file'])}")
     if problem := rigid_problem(found["T_body_camera"]):

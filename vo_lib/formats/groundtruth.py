@@ -123,27 +123,32 @@ UNCOVERED_HINT = (
 )
 
 
-def covering(truth: GroundTruth, times, max_diff: float = MAX_TIME_DIFF_S) -> tuple[np.ndarray, np.ndarray]:
-    """:func:`associate` the images at ``times`` (seconds) with ``truth``, which must span them (a
-    6-DoF truth: match every one)."""
-    if truth.times is None:  # KITTI poses, one per image of a sequence without a clock
+def _times_of(truth: GroundTruth) -> np.ndarray:
+    """The truth's times; KITTI poses, one per image of a sequence without a clock, have none."""
+    if truth.times is None:
         raise TrajectoryError(
             f"{truth.path}: KITTI poses (12 numbers a row) carry no times to pair them with the images; "
             "expected TUM (t x y z qx qy qz qw), EuRoC's CSV or positions (t x y z)"
         )
-    times = np.asarray(times, float)
+    return truth.times
+
+
+def covering(truth: GroundTruth, times, max_diff: float = MAX_TIME_DIFF_S) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`associate` the images at ``times`` (seconds) with ``truth``, which must span them (a
+    6-DoF truth: match every one)."""
+    truth_times, times = _times_of(truth), np.asarray(times, float)
     if len(times) < 3:  # --frames 2: the truth is fine, the images too few
         raise TrajectoryError(
             f"{truth.path}: {len(times)} images to compare with it; an evaluation needs at least 3 "
             "(run --frames 3 or more)"
         )
-    t0, t1 = truth.times[0], truth.times[-1]
+    t0, t1 = truth_times[0], truth_times[-1]
     if times[0] < t0 - max_diff or times[-1] > t1 + max_diff:
         raise TrajectoryError(
             f"{truth.path}: covers {t0:.3f} to {t1:.3f} s but the images span {times[0]:.3f} to "
             f"{times[-1]:.3f} s; the ground truth must cover every image{UNCOVERED_HINT}"
         )
-    i_img, i_gt = associate(times, truth.times, max_diff)
+    i_img, i_gt = associate(times, truth_times, max_diff)
     if truth.poses is not None and len(i_img) < len(times):
         missing = int(np.setdiff1d(np.arange(len(times)), i_img)[0])
         raise TrajectoryError(

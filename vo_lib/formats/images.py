@@ -141,9 +141,8 @@ def _is_image(entry: os.DirEntry) -> bool:
 LAYOUTS = "expected image_0/ and image_1/ (KITTI), mav0/ (EuRoC/ASL) or image_00/data/ (a KITTI raw drive)"
 
 
-def image_files(folder: Path) -> list[Path]:
-    """The images of ``folder`` in frame order; a name without a frame number, a dangling link or
-    two names of one frame number raise :class:`SequenceError`."""
+def _check_image_folder(folder: Path) -> None:
+    """One line unless ``folder`` is a folder."""
     if folder.exists() and not folder.is_dir():
         raise SequenceError(f"{folder}: a file where the image folder should be; expected a folder of images")
     if not folder.is_dir():  # image_0/image_0: --sequence named the image folder itself
@@ -151,6 +150,12 @@ def image_files(folder: Path) -> list[Path]:
         if not hint and not (folder.parent / "image_1").exists():  # no sequence there at all
             hint = f"; {folder.parent} holds no sequence: {LAYOUTS}"
         raise SequenceError(f"{folder}: missing image folder{hint}")
+
+
+def image_files(folder: Path) -> list[Path]:
+    """The images of ``folder`` in frame order; a name without a frame number, a dangling link or
+    two names of one frame number raise :class:`SequenceError`."""
+    _check_image_folder(folder)
     try:
         with os.scandir(folder) as entries:
             keyed = sorted((frame_order(e.name), e.name) for e in entries if _is_image(e))

@@ -170,15 +170,6 @@ def poses_from_oxts(oxts: np.ndarray, camera_in_imu: np.ndarray) -> np.ndarray:
     return np.linalg.inv(camera[0]) @ camera
 
 
-def _raw_packets(drive: Path, images: list[Path]) -> np.ndarray:
-    """The OXTS packet of each image: ``oxts/data/NAME.txt`` for image ``NAME.png``."""
-    folder = drive / "oxts" / "data"
-    files = [folder / f"{image.stem}.txt" for image in images]
-    if missing := next((f for f in files if not f.is_file()), None):
-        raise SequenceError(f"{missing}: missing; expected one OXTS packet per image, named as the image")
-    return np.concatenate([read_per_frame(f, 1, "OXTS packets", read_oxts) for f in files])
-
-
 def read_kitti_raw(path, truth: bool = True, odometry: bool = True) -> Sequence:
     """A drive of KITTI's raw set as the set stores it (module docstring); ``truth=False``: no poses;
     neither truth nor ``odometry``: no OXTS packets read (they are both)."""
@@ -203,7 +194,12 @@ def read_kitti_raw(path, truth: bool = True, odometry: bool = True) -> Sequence:
     stamps_file = drive / "image_00" / "timestamps.txt"
     stamps = read_per_frame(stamps_file, len(left), "timestamps", read_raw_timestamps)
     check_frame_spacing(stamps_file, stamps)
-    packets = _raw_packets(drive, left) if truth or odometry else None
+    packets = None
+    if truth or odometry:  # oxts/data/NAME.txt for image NAME.png
+        files = [drive / "oxts" / "data" / f"{image.stem}.txt" for image in left]
+        if missing := next((f for f in files if not f.is_file()), None):
+            raise SequenceError(f"{missing}: missing; expected one OXTS packet per image, named as the image")
+        packets = np.concatenate([read_per_frame(f, 1, "OXTS packets", read_oxts) for f in files])
     poses = poses_from_oxts(packets, camera_in_imu_frame(calib))[:, :3] if truth else None
     manifest = {"layout": "kitti_raw", "time_origin_s": float(stamps[0])}
     found = {"truth_file": drive / "oxts" / "data" if truth else None, "oxts": packets, "raw_calib": calib}

@@ -150,10 +150,9 @@ class Sequence:
 def checked_camera(
     calib: Path, P0, P1, size: tuple[int, int], keys: tuple[str, str] = ("P0", "P1")
 ) -> StereoCamera:
-    """The rig of the rectified projection matrices ``P0`` and ``P1`` (lines ``keys`` of ``calib``)
-    for images of ``size``, refused in one line naming ``calib`` where it cannot be these images'
-    (a baseline not in metres or too short, a principal point outside the image, a focal length in
-    other units, two intrinsic matrices, the right camera off the rows)."""
+    """The rig of the rectified projection matrices ``P0``, ``P1`` (lines ``keys`` of ``calib``) for
+    images of ``size``; one line naming ``calib`` where it cannot be theirs (a baseline not in metres
+    or too short, a principal point outside, a focal length in other units, a pair not rectified)."""
     (w, h), (left, right) = size, keys
     try:
         camera = StereoCamera.from_projection_matrices(P0, P1, w, h)
@@ -171,9 +170,18 @@ def checked_camera(
             f"{calib}: {left}'s focal length {max(camera.fx, camera.fy):g} px is over {MAX_FOCAL_WIDTHS} "
             f"image widths ({w} px): a field of view under 0.6 degrees; expected pixels of these images"
         )
+    _check_rectified(calib, camera, (P0, P1), keys, claim)
+    return camera
+
+
+def _check_rectified(calib: Path, camera: StereoCamera, projections, keys: tuple[str, str], claim: str):
+    """Refuse projection matrices (lines ``keys`` of ``calib``) of no rectified stereo rig: focal
+    lengths of no camera, two intrinsic matrices, cameras in one place (``claim``: the baseline) or
+    off the rows."""
+    left, right = keys
+    P0, P1 = (np.asarray(P, float).reshape(3, 4) for P in projections)
     if problem := focal_problem(camera.fx, camera.fy, camera.width):
         raise SequenceError(f"{calib}: {left}'s {problem}")
-    P0, P1 = (np.asarray(P, float).reshape(3, 4) for P in (P0, P1))
     if not all(np.allclose(P[:, :3], camera.K, rtol=1e-5, atol=1e-6) for P in (P0, P1)):
         raise SequenceError(
             f"{calib}: {left} and {right} are not a rectified pair: expected one intrinsic matrix "
@@ -190,7 +198,6 @@ def checked_camera(
             f"{calib}: {right} puts the right camera at ({', '.join(f'{x:g}' for x in offset)}) from "
             f"the left; expected a rectified pair, the right camera along the rows (x)"
         )
-    return camera
 
 
 def image_pairs(root: Path, sides: tuple[str, str] = ("image_0", "image_1")) -> tuple[list[Path], list[Path]]:
