@@ -2,10 +2,8 @@
 rectification of two (:func:`vo_lib.camera.rectify_stereo`).
 
 ``sensor.yaml`` holds ``T_BS`` (camera to body, 4x4), ``intrinsics`` ``[fu, fv, cu, cv]``,
-``distortion_model: radial-tangential``, ``distortion_coefficients`` ``[k1, k2, p1, p2]`` (or
-Kalibr's name for them, ``distortion_coeffs``) and ``resolution``. A fisheye lens calibrated with
-``distortion_model: equidistant`` (Kalibr's ``pinhole-equi``) has ``[k1, k2, k3, k4]`` instead.
-Every problem raises one :class:`AslError` naming the file and key.
+``distortion_model`` (radial-tangential, or a fisheye's equidistant), ``distortion_coefficients``
+(Kalibr's ``distortion_coeffs``) and ``resolution``. A problem raises one :class:`AslError`.
 """
 
 from __future__ import annotations
@@ -40,9 +38,8 @@ MAX_BASELINE_TILT_DEG = 20.0
 MIN_VALID_SHARE = 0.25
 #: Largest distortion coefficient taken as a lens's (real ones stay below 1 or so).
 MAX_DISTORTION = 100.0
-#: Bound of each number of a transform: a rotation's are at most 1, and a camera a kilometre from its
-#: body is no rig's (the bound of the rectified copy's manifest.json; far beyond, the numbers'
-#: products overflow before any check can name the key).
+#: Bound of each number of a transform (a rotation's are at most 1): a camera a kilometre from its body
+#: is no rig's (the bound of a rectified copy's manifest.json; far beyond, products overflow).
 MAX_TRANSFORM_ENTRY = MAX_MOUNT_M
 
 
@@ -71,12 +68,7 @@ class _UniqueKeys(yaml.SafeLoader):
 
     def compose_node(self, parent, index):
         if self.check_event(yaml.AliasEvent):  # *name repeats a value: a few lines can expand to gigabytes
-            raise yaml.composer.ComposerError(
-                None,
-                None,
-                ALIAS,
-                self.peek_event().start_mark,
-            )
+            raise yaml.composer.ComposerError(None, None, ALIAS, self.peek_event().start_mark)
         return super().compose_node(parent, index)
 
     def construct_mapping(self, node, deep=False):
@@ -158,15 +150,17 @@ def _distortion(path: Path, data: dict) -> tuple[np.ndarray, bool]:
     ``[k1, k2, k3, k4]`` of an equidistant one, at the ASL key or at Kalibr's (``camchain.yaml``)
     when only that one is there; and whether the model is equidistant."""
     model = data.get("distortion_model", "radial-tangential")
-    if model in ("equidistant", "equi"):
-        key = _coefficients_key(path, data)
-        return _numbers(path, data, key, 4, "[k1, k2, k3, k4]", MAX_DISTORTION), True
-    if model not in ("radial-tangential", "radtan", "none"):
+    if model not in ("equidistant", "equi", "radial-tangential", "radtan", "none"):
         raise AslError(
             f"{path}: key distortion_model: {model!r} is not supported; "
             "expected radial-tangential (radtan), equidistant or none"
         )
-    return _radial_tangential(path, data, _coefficients_key(path, data), model), False
+    if "distortion_coeffs" in data and "distortion_coefficients" in data:
+        raise AslError(f"{path}: keys distortion_coefficients and distortion_coeffs both given; expected one")
+    key = "distortion_coeffs" if "distortion_coeffs" in data else "distortion_coefficients"
+    if model in ("equidistant", "equi"):
+        return _numbers(path, data, key, 4, "[k1, k2, k3, k4]", MAX_DISTORTION), True
+    return _radial_tangential(path, data, key, model), False
 
 
 def _radial_tangential(path: Path, data: dict, key: str, model: str) -> np.ndarray:
@@ -185,13 +179,6 @@ def _radial_tangential(path: Path, data: dict, key: str, model: str) -> np.ndarr
             "expected radial-tangential for these coefficients, or zeros"
         )
     return dist
-
-
-def _coefficients_key(path: Path, data: dict) -> str:
-    """The key of the distortion coefficients: the ASL one, or Kalibr's where only that is given."""
-    if "distortion_coeffs" in data and "distortion_coefficients" in data:
-        raise AslError(f"{path}: keys distortion_coefficients and distortion_coeffs both given; expected one")
-    return "distortion_coeffs" if "distortion_coeffs" in data else "distortion_coefficients"
 
 
 def _image_size(path: Path, data: dict) -> tuple[int, int]:
@@ -247,23 +234,35 @@ def rectify(left: CameraCalibration, right: CameraCalibration, where: Path) -> R
         )
     T_right_left = np.linalg.inv(right.T_BS) @ left.T_BS  # left camera -> right camera
     cam1_in_cam0 = _check_baseline(T_right_left, where / "cam1" / "sensor.yaml")
-    rect = rectify_stereo(
-        (left.K, left.distortion),
-        (right.K, right.distortion),
-        left.resolution,
-        T_right_left,
-        left.T_BS,
-        fisheye=left.fisheye,
-    )
+    lenses = (left.K, left.distortion), (right.K, right.distortion)
+    rect = rectify_stereo(*lenses, left.resolution, T_right_left, left.T_BS, fisheye=left.fisheye)
     for side, share in zip(("cam0", "cam1"), rect.valid_shares, strict=True):
         if share < MIN_VALID_SHARE:
             raise AslError(
                 f"{where / side / 'sensor.yaml'}: keys intrinsics and distortion_coefficients leave "
                 f"{share:.0%} of the image in view once rectified; expected a calibration of these images"
             )
-    _check_right_of(rect, cam1_in_cam0, where)
-    _check_rectified_centre(rect, where)
+    _check_rectified(rect, cam1_in_cam0, where)
     return rect
+
+
+def _check_rectified(rect: Rectification, cam1_in_cam0: np.ndarray, where: Path) -> None:
+    """One line when the rectified rig has cam1 on the left of cam0, or its principal point outside
+    the images (as a rectified copy's ``calib.txt`` would be refused when read back)."""
+    try:
+        (cx, cy), (w, h) = (rect.camera.cx, rect.camera.cy), rect.size  # cam1 on the left of cam0 raises
+    except ValueError:
+        x, y, _ = cam1_in_cam0  # x right, y down
+        raise AslError(
+            f"{where}: the T_BS of cam0 and cam1 put cam1 {x:+.3g} m to the right of cam0 and {y:+.3g} m "
+            "below it; expected cam1 to the right (are the folders swapped, or is T_BS inverted? it "
+            "takes the camera's coordinates into the body's)"
+        ) from None
+    if not (0 <= cx <= w and 0 <= cy <= h):
+        raise AslError(
+            f"{where}: the intrinsics of cam0 and cam1 put the rectified principal point at ({cx:.0f}, "
+            f"{cy:.0f}), outside the {w}x{h} images; expected principal points nearer their centres"
+        )
 
 
 def _check_baseline(T_right_left: np.ndarray, sensor: Path) -> np.ndarray:
@@ -285,30 +284,6 @@ def _check_baseline(T_right_left: np.ndarray, sensor: Path) -> np.ndarray:
             f"(within {MAX_BASELINE_TILT_DEG:g}°)"
         )
     return cam1_in_cam0
-
-
-def _check_right_of(rect: Rectification, cam1_in_cam0: np.ndarray, where: Path) -> None:
-    """One line when the rectified rig has cam1 on the left of cam0."""
-    try:
-        _ = rect.camera  # the rectified rig: cam1 on the left of cam0 raises
-    except ValueError:
-        x, y, _ = cam1_in_cam0  # x right, y down
-        raise AslError(
-            f"{where}: the T_BS of cam0 and cam1 put cam1 {x:+.3g} m to the right of cam0 and {y:+.3g} m "
-            "below it; expected cam1 to the right (are the folders swapped, or is T_BS inverted? it "
-            "takes the camera's coordinates into the body's)"
-        ) from None
-
-
-def _check_rectified_centre(rect: Rectification, where: Path) -> None:
-    """One line when the rectified principal point is outside the images (as a rectified copy's
-    ``calib.txt`` would be refused when read back)."""
-    (cx, cy), (w, h) = (rect.camera.cx, rect.camera.cy), rect.size
-    if not (0 <= cx <= w and 0 <= cy <= h):
-        raise AslError(
-            f"{where}: the intrinsics of cam0 and cam1 put the rectified principal point at ({cx:.0f}, "
-            f"{cy:.0f}), outside the {w}x{h} images; expected principal points nearer their centres"
-        )
 
 
 def truth_extrinsic(truth_path: Path) -> np.ndarray:

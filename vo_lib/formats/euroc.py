@@ -106,8 +106,8 @@ def read_image_list(camera_dir: Path) -> tuple[np.ndarray, list[Path], list[int]
 
 
 def _check_row_count(csv_path: Path, rows: int) -> None:
-    """More rows than files in ``data/`` (and a header): refused before each row is checked. (Where
-    ``data/`` holds folders, the rows may name files in them: not checked here.)"""
+    """More rows than files in ``data/`` (and a header), refused before each row is checked (where
+    ``data/`` holds folders, the rows may name files in them)."""
     with contextlib.suppress(OSError):
         entries = list(os.scandir(csv_path.parent / "data"))
         if rows > (files := len(entries)) + 1 and not any(entry.is_dir() for entry in entries):
@@ -116,12 +116,11 @@ def _check_row_count(csv_path: Path, rows: int) -> None:
 
 def _check_increasing(csv_path: Path, stamps: list[int], lines: list[int]) -> None:
     """One line naming the first timestamp of ``data.csv`` that does not come after the one before."""
-    order = np.diff(stamps)
-    if np.any(order <= 0):
-        n = int(np.flatnonzero(order <= 0)[0]) + 1
+    if np.any(np.diff(stamps) <= 0):
+        k = int(np.flatnonzero(np.diff(stamps) <= 0)[0]) + 1
         raise AslError(
-            f"{csv_path}, line {lines[n]}: timestamp {stamps[n]} does not come after {stamps[n - 1]} "
-            f"(line {lines[n - 1]}); expected increasing timestamps"
+            f"{csv_path}, line {lines[k]}: timestamp {stamps[k]} does not come after {stamps[k - 1]} "
+            f"(line {lines[k - 1]}); expected increasing timestamps"
         )
 
 
@@ -188,12 +187,6 @@ def tracked_to_camera(truth_path, T_body_rect, tracker_of=None) -> np.ndarray:
     return np.linalg.inv(truth_extrinsic(truth_path)) @ T_body_rect
 
 
-def _stated(path: Path) -> bool:
-    """Whether ``path`` is there in some form: itself, a link leading nowhere, or a file in the place
-    of its folder."""
-    return path.exists() or path.is_symlink() or path.parent.is_file()
-
-
 def read_asl(path, groundtruth=None, frames: int | None = None, truth: bool = True) -> Sequence:
     """The first ``frames`` pairs of an ASL recording, rectified; the 6-DoF truth (``groundtruth`` or
     the first of :data:`GROUND_TRUTH_FILES`) in ``poses`` (the rectified left camera in its first
@@ -220,7 +213,8 @@ def read_asl(path, groundtruth=None, frames: int | None = None, truth: bool = Tr
         "T_body_camera": rect.T_body_rect.tolist(),
     }
     # a truth there in any form (a folder, a broken link, its folder a file) is named by the reader
-    found = (mav0 / name for name in GROUND_TRUTH_FILES if _stated(mav0 / name))
+    stated = [mav0 / name for name in GROUND_TRUTH_FILES]
+    found = (p for p in stated if p.exists() or p.is_symlink() or p.parent.is_file())
     truth_path = Path(groundtruth) if groundtruth else (next(found, None) if truth else None)
     poses = None
     # as evaluate: errors of two poses mean nothing (and a single pair is refused by its reader)

@@ -33,8 +33,7 @@ def beyond(value: float, bound: float, digits: int = 4) -> str:
 
 
 def check_metres(path: Path, claim: str, value: float, most: float = MAX_RIG_M, unit: str = "") -> None:
-    """Refuse a ``value`` beyond ``most``: a file not in metres. ``claim`` states it, the value in
-    place of its ``{}``."""
+    """Refuse a ``value`` beyond ``most``: a file not in metres (``claim``'s ``{}`` is the value)."""
     if value > most:
         claim = claim.format(beyond(value, most))
         raise SequenceError(f"{path}: {claim}; expected metres, at most {most:g}{unit} (millimetres?)")
@@ -83,11 +82,10 @@ def calib_values(path: Path, key: str, count: int, missing: str = "") -> np.ndar
 
 def read_calib(path: Path) -> tuple[np.ndarray, np.ndarray]:
     """``(P0, P1)`` 3x4 matrices from a KITTI ``calib.txt``; raises :class:`SequenceError`."""
-    P0, P1 = (
+    return tuple(
         calib_values(path, key, 12, f"{side} camera projection, 12 numbers").reshape(3, 4)
         for key, side in (("P0", "left"), ("P1", "right"))
     )
-    return P0, P1
 
 
 def read_times(path: Path) -> np.ndarray:
@@ -189,34 +187,25 @@ MANIFEST_KEYS = {
     "positions.": {"file", "frames", "xyz", "lever_arm_camera"},
     "track_odometry.": {"track_distance", "track_width", "encoder_sigma"},
 }
-#: Bounds of what a run reads from a manifest, beyond which a figure would overflow: metres (a
-#: position-only truth may be in a map's coordinates: UTM's are up to 10,000 km), and the track
-#: odometry's metres and noise per square-root metre.
+#: Bounds of what a run reads from a manifest (beyond, a figure would overflow): metres (a position-only
+#: truth may be in a map's UTM coordinates, up to 10,000 km), track odometry's metres and noise per root m.
 MAX_MOUNT_M, MAX_POSITION_M = 1e3, 1e8
 TRACK_BOUNDS = {"track_distance": (0.0, 1e3), "track_width": (0.0, 1e3), "encoder_sigma": (0.0, 1.0)}
-
-
-def _check_known(path: Path, objects: dict[str, dict]) -> None:
-    """Refuse a key outside :data:`MANIFEST_KEYS` in the manifest's ``objects`` (by key prefix)."""
-    unknown = [
-        (prefix, key) for prefix, keys in objects.items() for key in sorted(set(keys) - MANIFEST_KEYS[prefix])
-    ]
-    if unknown:
-        prefix, key = unknown[0]
-        known = ", ".join(prefix + name for name in sorted(MANIFEST_KEYS[prefix]))
-        raise SequenceError(f"{path}: key {prefix}{key} is not a manifest's; expected some of {known}")
 
 
 def check_manifest(path: Path, manifest: dict, frames: int) -> None:
     """Raise :class:`SequenceError` unless ``manifest.json`` holds only :data:`MANIFEST_KEYS` and its
     (optional) keys that a run reads hold numbers of the shape and range below, ``T_body_camera`` a
     rigid transform."""
-    camera, positions = manifest.get("camera", {}), manifest.get("positions", {})
-    track = manifest.get("track_odometry", {})
+    camera, positions, track = (manifest.get(key, {}) for key in ("camera", "positions", "track_odometry"))
     objects = {"camera": camera, "positions": positions, "track_odometry": track}
     if bad := [key for key, value in objects.items() if not isinstance(value, dict)]:
         raise SequenceError(f"{path}: key {bad[0]}: expected an object {{...}}, got {shown(objects[bad[0]])}")
-    _check_known(path, {"": manifest, **{f"{key}.": value for key, value in objects.items()}})
+    prefixed = {"": manifest, **{f"{key}.": value for key, value in objects.items()}}
+    if unknown := [(p, key) for p, keys in prefixed.items() for key in sorted(set(keys) - MANIFEST_KEYS[p])]:
+        prefix, key = unknown[0]
+        known = ", ".join(prefix + name for name in sorted(MANIFEST_KEYS[prefix]))
+        raise SequenceError(f"{path}: key {prefix}{key} is not a manifest's; expected some of {known}")
     index = positions.get("frames")
     n = len(index) if isinstance(index, list) else -1
     mount, near, last = (-MAX_MOUNT_M, MAX_MOUNT_M), f"within ±{MAX_MOUNT_M:g} m", frames - 1
@@ -237,21 +226,18 @@ def check_manifest(path: Path, manifest: dict, frames: int) -> None:
             ("positions.xyz", xyz, (n, 3), f"{n} rows of x y z {far}", (-MAX_POSITION_M, MAX_POSITION_M)),
             ("positions.lever_arm_camera", lever, (3,), f"3 numbers {near}", mount),
         ]
-    found = {row[0]: numbers_at(path, *row) for row in wanted}
-    _check_values(path, manifest, found, frames)
+    _check_values(path, positions, {row[0]: numbers_at(path, *row) for row in wanted}, frames)
 
 
-def _check_values(path: Path, manifest: dict, found: dict, frames: int) -> None:
+def _check_values(path: Path, positions: dict, found: dict, frames: int) -> None:
     """What :func:`check_manifest` checks beyond shapes and bounds."""
-    if "positions.frames" in found:
-        if np.any(found["positions.frames"] % 1) or np.any(np.diff(found["positions.frames"]) <= 0):
-            raise SequenceError(
-                f"{path}: key positions.frames: expected increasing frame numbers 0 to {frames - 1}"
-            )
-        if not isinstance(manifest["positions"].get("file", ""), str):
-            raise SequenceError(
-                f"{path}: key positions.file: expected a text, got {shown(manifest['positions']['file'])}"
-            )
+    numbered = found.get("positions.frames", np.zeros(0))
+    if np.any(numbered % 1) or np.any(np.diff(numbered) <= 0):
+        raise SequenceError(
+            f"{path}: key positions.frames: expected increasing frame numbers 0 to {frames - 1}"
+        )
+    if not isinstance(positions.get("file", ""), str):
+        raise SequenceError(f"{path}: key positions.file: expected a text, got {shown(positions['file'])}")
     if problem := rigid_problem(found["T_body_camera"]):
         raise SequenceError(f"{path}: key T_body_camera: {problem}; expected a rigid transform")
 

@@ -5,25 +5,25 @@ only): a CSV is EuRoC's (nanoseconds), a text file's times are seconds. Every pr
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+from scipy.spatial.transform import Rotation
 
 from vo_lib.evaluation import MAX_TIME_DIFF_S, associate
-from vo_lib.formats.poses import (
-    TrajectoryError,
-    check_seconds,
-    header_quaternion_order,
-    pose_matrices,
-    read_rows,
-)
+from vo_lib.formats.poses import TrajectoryError, read_rows
 from vo_lib.geometry import as_homogeneous
 
 NANOSECONDS = 1e-9
 #: Smallest median step of a CSV's timestamps (ns): no tracker samples at over 1 MHz.
 MIN_STEP_NS = 1000.0
+#: Latest time a text file's seconds may reach (the year 5138): beyond, they are nanoseconds.
+MAX_SECONDS = 1e11
 TUM_WITH_COMMAS = "; a TUM file? its numbers are separated by spaces, not commas"
+#: A header field naming a quaternion component: ``qw``, ``q_w``, ``q_RS_w []``, ``qx`` ...
+QUATERNION_FIELD = re.compile(r"q(?:_[a-z0-9]+)*?_?([wxyz])(?=$|[\s\[(])")
 
 
 @dataclass(frozen=True)
@@ -38,20 +38,37 @@ class GroundTruth:
     csv: bool = False
 
 
+def header_quaternion_order(path: Path, first_row_line: int) -> tuple[str, int]:
+    """The quaternion's components as the last header line before the first row orders them
+    (``"wxyz"``, ...) and that line's number; ``("", 0)`` where none names all four."""
+    order, found = "", 0
+    with open(path, encoding="utf-8-sig", errors="replace") as fh:
+        for n, line in enumerate(fh, start=1):
+            if n >= first_row_line:
+                break
+            fields = re.split(r"[,\s]+", line.lstrip("#% \t").strip().lower())
+            names = "".join(m.group(1) for f in fields if (m := QUATERNION_FIELD.match(f)))
+            if sorted(names) == list("wxyz"):
+                order, found = names, n
+    return order, found
+
+
 def _check_columns(path: Path, a: np.ndarray, lines: list[int], comma: bool) -> None:
-    """A CSV (EuRoC's, times in ns) or a text file (TUM's) as its header, times and widths say."""
+    """A CSV (EuRoC's, times in ns) or a text file (TUM's, times in s) as its header, times and
+    widths say."""
     width = a.shape[1]
-    expected = "wxyz" if comma else "xyzw"
-    order, line = header_quaternion_order(path, lines[0]) if width >= 8 else ("", 0)
-    if order not in ("", expected):
+    if not comma and width != 12 and np.abs(a[:, 0]).max() > MAX_SECONDS:
+        i = int(np.argmax(np.abs(a[:, 0]) > MAX_SECONDS))
         raise TrajectoryError(
-            f"{path}, line {line}: the header orders the quaternion {' '.join(order)}; "
-            + (
-                "a CSV is read as EuRoC's t[ns], x, y, z, qw, qx, qy, qz"
-                + (TUM_WITH_COMMAS if order == "xyzw" else "")
-                if comma
-                else "a text file is read as TUM's t x y z qx qy qz qw"
-            )
+            f"{path}, line {lines[i]}: time {a[i, 0]:.4g}; a text file's times are read as seconds "
+            "(TUM's t x y z qx qy qz qw), at most 1e11 (nanoseconds?)"
+        )
+    order, line = header_quaternion_order(path, lines[0]) if width >= 8 else ("", 0)
+    if order not in ("", "wxyz" if comma else "xyzw"):
+        csv = "a CSV is read as EuRoC's t[ns], x, y, z, qw, qx, qy, qz" + TUM_WITH_COMMAS * (order == "xyzw")
+        read_as = csv if comma else "a text file is read as TUM's t x y z qx qy qz qw"
+        raise TrajectoryError(
+            f"{path}, line {line}: the header orders the quaternion {' '.join(order)}; {read_as}"
         )
     step = float(np.median(np.diff(a[:, 0]))) if len(a) > 1 else np.inf
     if comma and step < MIN_STEP_NS:
@@ -71,8 +88,6 @@ def read_groundtruth(path, min_poses: int = 2) -> GroundTruth:
     """A KITTI, TUM, EuRoC CSV or position-only ground truth of at least ``min_poses`` rows."""
     path = Path(path)
     a, lines, comma = read_rows(path, min_poses)
-    if not comma and a.shape[1] != 12:  # TUM or positions: times in seconds
-        check_seconds(path, a[:, 0], lines)
     _check_columns(path, a, lines, comma)
     width = a.shape[1]
     if width == 12 and not comma:
@@ -82,7 +97,12 @@ def read_groundtruth(path, min_poses: int = 2) -> GroundTruth:
     if width == 4:
         return GroundTruth(path, times, positions, csv=comma)
     quat_xyzw = a[:, [5, 6, 7, 4]] if comma else a[:, 4:8]  # EuRoC: qw qx qy qz
-    return GroundTruth(path, times, positions, pose_matrices(positions, quat_xyzw), csv=comma)
+    poses = np.tile(np.eye(4), (len(positions), 1, 1))
+    # normalised here, against the rounding of the file's numbers (scaled first: no overflow in the norm)
+    q = quat_xyzw / np.max(np.abs(quat_xyzw), axis=1, keepdims=True)
+    poses[:, :3, :3] = Rotation.from_quat(q).as_matrix()
+    poses[:, :3, 3] = positions
+    return GroundTruth(path, times, positions, poses, csv=comma)
 
 
 def read_trajectory(path, min_poses: int = 1) -> tuple[np.ndarray | None, np.ndarray]:
@@ -116,8 +136,7 @@ def _times_of(truth: GroundTruth) -> np.ndarray:
 def covering(truth: GroundTruth, times, max_diff: float = MAX_TIME_DIFF_S) -> tuple[np.ndarray, np.ndarray]:
     """:func:`associate` the images at ``times`` (seconds) with ``truth``, which must span them (a
     6-DoF truth: match every one)."""
-    truth_times = _times_of(truth)
-    times = np.asarray(times, float)
+    truth_times, times = _times_of(truth), np.asarray(times, float)
     if len(times) < 3:  # --frames 2: the truth is fine, the images too few
         raise TrajectoryError(
             f"{truth.path}: {len(times)} images to compare with it; an evaluation needs at least 3 "

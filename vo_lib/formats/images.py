@@ -1,12 +1,9 @@
 """The image files of a sequence: listed in frame order, checked from their headers, decoded.
 
-* **Frames are paired by file name, in numeric order** (``2.png`` before ``10.png``); two names
-  of one number on one side (``1.png``, ``01.png``) are an error; hidden files are ignored.
-* **Every image header is checked when the sequence is opened**, without decoding (Pillow's lazy
-  open for formats other than PNG): one size, 8 bits per channel, PNG and JPEG end markers present.
-  Damaged compressed data raises when the frame is read.
-
-Every problem raises one :class:`~vo_lib.formats.frame_files.SequenceError` naming the file.
+Frames pair by file name, in numeric order (``2.png`` before ``10.png``); hidden files are ignored.
+Every header is checked when a sequence is opened, without decoding: one size, 8 bits per channel,
+PNG and JPEG end markers present; damaged compressed data raises when the frame is read. Every
+problem raises one :class:`~vo_lib.formats.frame_files.SequenceError` naming the file.
 """
 
 from __future__ import annotations
@@ -31,19 +28,15 @@ JPEG_START, JPEG_END = b"\xff\xd8", b"\xff\xd9"
 PNG_COLOUR_TYPES = (0, 2, 3, 4, 6)
 #: Pillow modes of 8 bits per channel (or fewer, widened to 8 when decoded).
 EIGHT_BIT_MODES = {"1", "L", "P", "LA", "La", "PA", "RGB", "RGBA", "RGBa", "RGBX", "CMYK", "YCbCr"}
-#: Largest image accepted from a header, pixels a side and in all (Pillow's own bound against
-#: decompression bombs, 89 million): larger claims are refused before decoding.
+#: Largest image a header may claim, pixels a side and in all (Pillow's bound against decompression bombs).
 MAX_IMAGE_SIDE, MAX_IMAGE_PIXELS = 16384, 89_478_485
-#: What an image of more than 8 bits per channel is told.
 NOT_8_BIT = "expected 8-bit grey (convert it, e.g. scale 16-bit values to 0-255)"
-#: Bytes searched for an end marker at the end of a file.
-TAIL_BYTES = 65536
+TAIL_BYTES = 65536  # searched for an end marker at the end of a file
 
 
 def _decode(path: Path) -> np.ndarray | None:
-    """The image in a file, or None where it cannot be read. Pillow decodes it: on damaged data it
-    raises, where OpenCV's decoders (libpng, libjpeg) print to stderr, from whichever thread
-    decodes. Colour becomes grey by OpenCV's weights; other modes keep their depth."""
+    """The image in a file, or None where it cannot be read; colour made grey by OpenCV's weights. Pillow
+    decodes (on damaged data it raises, where OpenCV's decoders print to stderr from any thread)."""
     try:
         with Image.open(path) as im:
             im.load()
@@ -78,8 +71,9 @@ def _png_header(head: bytes, where: str) -> tuple[int, int, int]:
 
 def _check_size(where: str, kind: str, width: int, height: int) -> None:
     """One line unless the image is within :data:`MAX_IMAGE_SIDE` a side and :data:`MAX_IMAGE_PIXELS`."""
-    if not (
-        0 < width <= MAX_IMAGE_SIDE and 0 < height <= MAX_IMAGE_SIDE and width * height <= MAX_IMAGE_PIXELS
+    if (
+        not (0 < width <= MAX_IMAGE_SIDE and 0 < height <= MAX_IMAGE_SIDE)
+        or width * height > MAX_IMAGE_PIXELS
     ):
         raise SequenceError(
             f"{where}: the {kind} header claims {width}x{height} pixels; expected each side "

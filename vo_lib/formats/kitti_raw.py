@@ -45,8 +45,7 @@ VF, WZ = 8, 19  # zero-based columns of forward speed (m/s) and yaw rate (rad/s)
 MAX_OXTS_VALUE = 1e6
 #: Fastest turn of a car in an OXTS packet, rad/s (a car turns at 1 rad/s or less): beyond, damaged.
 MAX_YAW_RATE = 10.0
-#: Latitude and longitude bounds (degrees): the Mercator projection of the positions grows without
-#: bound towards the poles (85 degrees, as web maps stop).
+#: Latitude and longitude bounds (degrees): Mercator's projection grows without bound near the poles.
 MAX_LATITUDE, MAX_LONGITUDE = 85.0, 180.0
 RAW_CALIB_FILES = ("calib_cam_to_cam.txt", "calib_imu_to_velo.txt", "calib_velo_to_cam.txt")
 #: The Earth's equatorial radius (WGS 84), metres, of the Mercator projection of the OXTS positions.
@@ -84,21 +83,20 @@ def wheel_distances_from_oxts(oxts: np.ndarray, times: np.ndarray, gauge: float)
     s = 0.5 * (oxts[1:, VF] + oxts[:-1, VF]) * dt
     dpsi = 0.5 * (oxts[1:, WZ] + oxts[:-1, WZ]) * dt
     out = np.zeros((len(oxts), 2))
-    out[1:, 0] = s - 0.5 * gauge * dpsi
-    out[1:, 1] = s + 0.5 * gauge * dpsi
+    out[1:] = np.column_stack([s - 0.5 * gauge * dpsi, s + 0.5 * gauge * dpsi])
     return out
 
 
 def _rotation(path: Path, key: str) -> np.ndarray:
     """The 3x3 rotation of line ``key``; else :class:`SequenceError`."""
     R = calib_values(path, key, 9).reshape(3, 3)
-    problem = rotation_problem(R)
-    if problem:
+    if problem := rotation_problem(R):
         raise SequenceError(f"{path}: {key}: {problem.replace('the first three columns are', 'it is')}")
     return R
 
 
 def _rigid(path: Path) -> np.ndarray:
+    """The rigid transform of lines ``R`` and ``T`` (metres)."""
     T = np.eye(4)
     T[:3, :3] = _rotation(path, "R")
     T[:3, 3] = calib_values(path, "T", 3)
@@ -166,34 +164,10 @@ def poses_from_oxts(oxts: np.ndarray, camera_in_imu: np.ndarray) -> np.ndarray:
     lat, lon = np.radians(oxts[:, 0]), np.radians(oxts[:, 1])
     imu = np.tile(np.eye(4), (len(oxts), 1, 1))
     scale = EARTH_RADIUS_M * np.cos(lat[0])
-    imu[:, 0, 3], imu[:, 1, 3], imu[:, 2, 3] = (
-        scale * lon,
-        scale * np.log(np.tan(np.pi / 4 + lat / 2)),
-        oxts[:, 2],
-    )
+    imu[:, :3, 3] = np.column_stack([scale * lon, scale * np.log(np.tan(np.pi / 4 + lat / 2)), oxts[:, 2]])
     imu[:, :3, :3] = Rotation.from_euler("ZYX", oxts[:, [5, 4, 3]]).as_matrix()
     camera = imu @ camera_in_imu
     return np.linalg.inv(camera[0]) @ camera
-
-
-def _raw_calib_folder(drive: Path) -> Path:
-    """The folder of the raw calibration files: the drive's own, else the one holding it."""
-    for folder in (drive, drive.parent):
-        if (folder / RAW_CALIB_FILES[0]).is_file():
-            return folder
-    raise SequenceError(
-        f"{drive}: no {RAW_CALIB_FILES[0]} in it or in {drive.parent}; expected KITTI's raw calibration "
-        f"({', '.join(RAW_CALIB_FILES)}) beside the drive's folder, where the raw set keeps it"
-    )
-
-
-def _raw_packets(drive: Path, images: list[Path]) -> np.ndarray:
-    """The OXTS packet of each image: ``oxts/data/NAME.txt`` for image ``NAME.png``."""
-    folder = drive / "oxts" / "data"
-    files = [folder / f"{image.stem}.txt" for image in images]
-    if missing := next((f for f in files if not f.is_file()), None):
-        raise SequenceError(f"{missing}: missing; expected one OXTS packet per image, named as the image")
-    return np.concatenate([read_per_frame(f, 1, "OXTS packets", read_oxts) for f in files])
 
 
 def read_kitti_raw(path, truth: bool = True, odometry: bool = True) -> Sequence:
@@ -201,7 +175,12 @@ def read_kitti_raw(path, truth: bool = True, odometry: bool = True) -> Sequence:
     neither truth nor ``odometry``: no OXTS packets read (they are both)."""
     drive = Path(path)
     left, right = image_pairs(drive, ("image_00/data", "image_01/data"))
-    calib = _raw_calib_folder(drive)
+    calib = next((f for f in (drive, drive.parent) if (f / RAW_CALIB_FILES[0]).is_file()), None)
+    if calib is None:  # the raw calibration: in the drive's folder, else in the one holding it
+        raise SequenceError(
+            f"{drive}: no {RAW_CALIB_FILES[0]} in it or in {drive.parent}; expected KITTI's raw calibration "
+            f"({', '.join(RAW_CALIB_FILES)}) beside the drive's folder, where the raw set keeps it"
+        )
     cam_to_cam = calib / RAW_CALIB_FILES[0]
     P0, P1 = (calib_values(cam_to_cam, key, 12).reshape(3, 4) for key in ("P_rect_00", "P_rect_01"))
     size, rectified = check_headers(left, right), tuple(calib_values(cam_to_cam, "S_rect_00", 2))
@@ -215,12 +194,13 @@ def read_kitti_raw(path, truth: bool = True, odometry: bool = True) -> Sequence:
     stamps_file = drive / "image_00" / "timestamps.txt"
     stamps = read_per_frame(stamps_file, len(left), "timestamps", read_raw_timestamps)
     check_frame_spacing(stamps_file, stamps)
-    packets = _raw_packets(drive, left) if truth or odometry else None
+    packets = None
+    if truth or odometry:  # oxts/data/NAME.txt for image NAME.png
+        files = [drive / "oxts" / "data" / f"{image.stem}.txt" for image in left]
+        if missing := next((f for f in files if not f.is_file()), None):
+            raise SequenceError(f"{missing}: missing; expected one OXTS packet per image, named as the image")
+        packets = np.concatenate([read_per_frame(f, 1, "OXTS packets", read_oxts) for f in files])
     poses = poses_from_oxts(packets, camera_in_imu_frame(calib))[:, :3] if truth else None
     manifest = {"layout": "kitti_raw", "time_origin_s": float(stamps[0])}
-    packets_of = {
-        "truth_file": drive / "oxts" / "data" if truth else None,
-        "oxts": packets,
-        "raw_calib": calib,
-    }
-    return Sequence(drive, camera, stamps - stamps[0], left, right, poses, None, manifest, **packets_of)
+    found = {"truth_file": drive / "oxts" / "data" if truth else None, "oxts": packets, "raw_calib": calib}
+    return Sequence(drive, camera, stamps - stamps[0], left, right, poses, None, manifest, **found)

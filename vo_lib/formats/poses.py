@@ -33,8 +33,7 @@ def write_kitti_poses(path, poses) -> None:
 def write_tum(path, times, poses) -> None:
     """TUM trajectory format, as evo reads it: ``timestamp tx ty tz qx qy qz qw`` per line."""
     T, rotations = _rigid(poses)
-    q = rotations.as_quat()  # x, y, z, w
-    rows = np.column_stack([np.asarray(times, float), T[:, :3, 3], q])
+    rows = np.column_stack([np.asarray(times, float), T[:, :3, 3], rotations.as_quat()])  # q: x y z w
     Path(path).write_text("".join(" ".join(f"{v:.9f}" for v in row) + "\n" for row in rows))
 
 
@@ -42,19 +41,15 @@ class TrajectoryError(ValueError):
     """A file of any format here that cannot be read (file and line or key named)."""
 
 
-#: Largest entry of ``R^T R - I`` accepted for the rotation part of a pose (files round numbers).
-ROTATION_TOLERANCE = 1e-2
-#: Largest difference of a quaternion's norm from 1 accepted (files round numbers; beyond this the
-#: file holds something else, and normalising it would give a rotation nobody measured).
-QUATERNION_TOLERANCE = 1e-2
+#: Largest entry of ``R^T R - I``, and difference of a quaternion's norm from 1, accepted (files round
+#: numbers; beyond, a file holds something else).
+ROTATION_TOLERANCE = QUATERNION_TOLERANCE = 1e-2
 #: Largest coordinate accepted (m): beyond it, squared distances overflow in the alignment.
 MAX_POSITION = 1e9
 #: Largest file read (bytes): a 200 Hz EuRoC CSV of an hour is about 70 MB (12 times that in memory).
 MAX_FILE_BYTES = 100_000_000
 #: Widths of a row of a text file: KITTI pose, TUM (``t x y z qx qy qz qw``), position (``t x y z``).
 TEXT_WIDTHS = {12: "12 numbers (KITTI)", 8: "8 (TUM: t x y z qx qy qz qw)", 4: "4 (t x y z)"}
-#: A header field naming a quaternion component: ``qw``, ``q_w``, ``q_RS_w []``, ``qx`` ...
-QUATERNION_FIELD = re.compile(r"q(?:_[a-z0-9]+)*?_?([wxyz])(?=$|[\s\[(])")
 
 
 def rotation_problem(R: np.ndarray) -> str | None:
@@ -145,49 +140,35 @@ def _check(path: Path, a: np.ndarray, rows: list[tuple[int, str]], comma: bool) 
             off = np.abs(np.swapaxes(R, 1, 2) @ R - np.eye(3)).max(axis=(1, 2))
             bad = ~(off <= ROTATION_TOLERANCE) | (np.linalg.det(R) < 0)
             _refuse(path, lines, bad, lambda k: rotation_problem(R[k]))
-        positions = a[:, 3::4]
     else:
-        _check_stamped(path, a, rows, lines, comma)
-        positions = a[:, 1:4]
+        _check_stamped(path, a, rows, comma)
+    positions = a[:, 3::4] if a.shape[1] == 12 and not comma else a[:, 1:4]
     _refuse(
         path, lines, np.abs(positions).max(axis=1) > MAX_POSITION, f"a position beyond {MAX_POSITION:g} m"
     )
 
 
-def _check_stamped(
-    path: Path, a: np.ndarray, rows: list[tuple[int, str]], lines: list[int], comma: bool
-) -> None:
+def _check_stamped(path: Path, a: np.ndarray, rows: list[tuple[int, str]], comma: bool) -> None:
     """Rows with a timestamp first (TUM, EuRoC, positions): increasing times, unit quaternions; the
     first row with either problem is named (its time first: a KITTI file with commas is told so)."""
-    t = a[:, 0]
+    t, lines = a[:, 0], [n for n, _ in rows]
     late = np.concatenate([[False], np.diff(t) <= 0])
     with np.errstate(all="ignore"):  # huge entries overflow: no unit quaternion either
         norm = np.linalg.norm(a[:, 4:8], axis=1) if a.shape[1] >= 8 else np.ones(len(a))
-    off_unit = ~(np.abs(norm - 1.0) <= QUATERNION_TOLERANCE)
-
-    def stamp(k: int) -> str:  # as written: a float would round a time in nanoseconds
-        return re.split(r"[\s,]+", rows[k][1])[0]
-
     kitti = "; 12 numbers a row, as KITTI poses? they are separated by spaces, not commas"
 
     def problem(k: int) -> str:
         if not late[k]:
             tolerance = f"norm 1 within {QUATERNION_TOLERANCE:g}"
             return f"the quaternion's norm is {norm[k]:.4g}; expected a unit quaternion ({tolerance})"
-        order = (
-            "comes before"
-            if t[k] < t[k - 1]
-            else "repeats"
-            if stamp(k) == stamp(k - 1)
-            else "rounds to the time of"
-        )
+        now, before = (re.split(r"[\s,]+", rows[j][1])[0] for j in (k, k - 1))  # as written, not rounded
+        order = "comes before" if t[k] < t[k - 1] else "repeats" if now == before else "rounds to the time of"
         return (
-            f"timestamp {stamp(k)} {order} "
-            f"the one on line {lines[k - 1]} ({stamp(k - 1)}); timestamps must increase"
+            f"timestamp {now} {order} the one on line {lines[k - 1]} ({before}); timestamps must increase"
             + (kitti if comma and a.shape[1] == 12 else "")
         )
 
-    _refuse(path, lines, late | off_unit, problem)
+    _refuse(path, lines, late | ~(np.abs(norm - 1.0) <= QUATERNION_TOLERANCE), problem)
 
 
 def read_rows(path, min_rows: int = 1) -> tuple[np.ndarray, list[int], bool]:
@@ -215,42 +196,3 @@ def read_rows(path, min_rows: int = 1) -> tuple[np.ndarray, list[int], bool]:
         )
     _check(path, a, rows, comma)
     return a, lines, comma
-
-
-def pose_matrices(positions: np.ndarray, quat_xyzw: np.ndarray) -> np.ndarray:
-    """``(N, 4, 4)`` poses of positions and unit quaternions ``x y z w`` (normalised here, against
-    the rounding of the file's numbers)."""
-    T = np.tile(np.eye(4), (len(positions), 1, 1))
-    q = quat_xyzw / np.max(np.abs(quat_xyzw), axis=1, keepdims=True)  # no overflow in the norm
-    T[:, :3, :3] = Rotation.from_quat(q).as_matrix()
-    T[:, :3, 3] = positions
-    return T
-
-
-def header_quaternion_order(path: Path, first_row_line: int) -> tuple[str, int]:
-    """The quaternion's components as the last header line before the first row orders them
-    (``"wxyz"``, ...) and that line's number; ``("", 0)`` where none names all four."""
-    order, found = "", 0
-    with open(path, encoding="utf-8-sig", errors="replace") as fh:
-        for n, line in enumerate(fh, start=1):
-            if n >= first_row_line:
-                break
-            fields = re.split(r"[,\s]+", line.lstrip("#% \t").strip().lower())
-            names = "".join(m.group(1) for f in fields if (m := QUATERNION_FIELD.match(f)))
-            if sorted(names) == list("wxyz"):
-                order, found = names, n
-    return order, found
-
-
-#: Latest time a text file's seconds may reach (the year 5138): beyond, they are nanoseconds.
-MAX_SECONDS = 1e11
-
-
-def check_seconds(path: Path, times: np.ndarray, lines: list[int]) -> None:
-    """Refuse a text file's times that cannot be seconds (``lines``: each row's line number)."""
-    if len(times) and np.abs(times).max() > MAX_SECONDS:
-        i = int(np.argmax(np.abs(times) > MAX_SECONDS))
-        raise TrajectoryError(
-            f"{path}, line {lines[i]}: time {times[i]:.4g}; a text file's times are read as seconds "
-            "(TUM's t x y z qx qy qz qw), at most 1e11 (nanoseconds?)"
-        )

@@ -46,8 +46,7 @@ from vo_lib.geometry import as_homogeneous
 
 #: Largest wheel distance between two frames in ``odometry.txt``, metres: beyond, the file is damaged.
 MAX_ODOMETRY_M = 1000.0
-#: Median time between frames (seconds), in either layout: outside, times in another unit (or frames
-#: too far apart to track between).
+#: Median time between frames (s): outside, times in another unit (or frames too far apart to track).
 MIN_FRAME_SPACING_S, MAX_FRAME_SPACING_S = 1e-3, 10.0
 #: Largest offset of the right camera off the rows, per metre of baseline, in a rectified pair's
 #: projection matrices (KITTI's colour pair is 0.7 % off).
@@ -109,21 +108,16 @@ class Sequence:
     def pair(self, k: int) -> tuple[np.ndarray, np.ndarray]:
         """Left and right images of frame ``k`` (rectified where needed), the next ``read_ahead``
         decoded meanwhile on a reader thread."""
-        if self.read_ahead > 0:
-            self._read_ahead_of(k)
-        ahead = self._ahead.pop(k, None)
-        decoded = ahead.result() if ahead is not None else None
-        return decoded if decoded is not None else self._decoded(k)
-
-    def _read_ahead_of(self, k: int) -> None:
-        """Frames ``k + 1`` to ``k + read_ahead`` handed to the reader thread, stale ones dropped."""
-        if self._reader is None:
+        if self.read_ahead > 0 and self._reader is None:
             self._reader = ThreadPoolExecutor(max_workers=1, thread_name_prefix="vo_lib-reader")
         for j in range(k + 1, min(k + 1 + self.read_ahead, len(self))):
             if j not in self._ahead:
                 self._ahead[j] = self._reader.submit(self._decoded_ahead, j)
-        for j in [j for j in self._ahead if j < k]:  # the caller went back: drop stale frames
+        for j in [j for j in self._ahead if j < k and self.read_ahead > 0]:  # the caller went back
             self._ahead.pop(j).cancel()
+        ahead = self._ahead.pop(k, None)
+        decoded = ahead.result() if ahead is not None else None
+        return decoded if decoded is not None else self._decoded(k)
 
     def _decoded_ahead(self, k: int) -> tuple[np.ndarray, np.ndarray] | None:
         """Frame ``k``, or None: a bad frame is decoded again, and reported, by the caller's thread."""
@@ -153,19 +147,12 @@ class Sequence:
         return None if self.poses is None else as_homogeneous(self.poses)
 
 
-def _camera(root: Path, left: list[Path], right: list[Path]) -> StereoCamera:
-    """The rig of ``calib.txt``, at the size every image header shares."""
-    calib = root / "calib.txt"
-    check_file(calib, "the calibration, P0 and P1 lines")
-    return checked_camera(calib, *read_calib(calib), check_headers(left, right))
-
-
 def checked_camera(
     calib: Path, P0, P1, size: tuple[int, int], keys: tuple[str, str] = ("P0", "P1")
 ) -> StereoCamera:
-    """The rig of the rectified projection matrices ``P0`` and ``P1`` (lines ``keys`` of ``calib``)
-    for images of ``size``, refused in one line naming ``calib`` where it cannot be these images'
-    (a baseline not in metres, a principal point outside the image, a focal length in other units)."""
+    """The rig of the rectified projection matrices ``P0``, ``P1`` (lines ``keys`` of ``calib``) for
+    images of ``size``; one line naming ``calib`` where it cannot be theirs (a baseline not in metres
+    or too short, a principal point outside, a focal length in other units, a pair not rectified)."""
     (w, h), (left, right) = size, keys
     try:
         camera = StereoCamera.from_projection_matrices(P0, P1, w, h)
@@ -189,13 +176,15 @@ def checked_camera(
 
 def _check_rectified(calib: Path, camera: StereoCamera, projections, keys: tuple[str, str], claim: str):
     """Refuse projection matrices (lines ``keys`` of ``calib``) of no rectified stereo rig: focal
-    lengths of no camera, two intrinsic matrices, or cameras in one place (``claim``: the baseline)."""
+    lengths of no camera, two intrinsic matrices, cameras in one place (``claim``: the baseline) or
+    off the rows."""
+    left, right = keys
+    P0, P1 = (np.asarray(P, float).reshape(3, 4) for P in projections)
     if problem := focal_problem(camera.fx, camera.fy, camera.width):
-        raise SequenceError(f"{calib}: {keys[0]}'s {problem}")
-    intrinsics = (np.asarray(P, float).reshape(3, 4)[:, :3] for P in projections)
-    if not all(np.allclose(K, camera.K, rtol=1e-5, atol=1e-6) for K in intrinsics):
+        raise SequenceError(f"{calib}: {left}'s {problem}")
+    if not all(np.allclose(P[:, :3], camera.K, rtol=1e-5, atol=1e-6) for P in (P0, P1)):
         raise SequenceError(
-            f"{calib}: {keys[0]} and {keys[1]} are not a rectified pair: expected one intrinsic matrix "
+            f"{calib}: {left} and {right} are not a rectified pair: expected one intrinsic matrix "
             "[[fx 0 cx] [0 fy cy] [0 0 1]] as the first three columns of both"
         )
     if camera.baseline < MIN_BASELINE_M:
@@ -203,11 +192,10 @@ def _check_rectified(calib: Path, camera: StereoCamera, projections, keys: tuple
             f"{calib}: {claim.format(beyond(camera.baseline, MIN_BASELINE_M))}; expected a stereo rig, "
             f"at least {MIN_BASELINE_M:g} m"
         )
-    P0, P1 = (np.asarray(P, float).reshape(3, 4) for P in projections)
     offset = np.linalg.solve(camera.K, P0[:, 3] - P1[:, 3])  # the right camera from the left
     if np.hypot(offset[1], offset[2]) > MAX_OFF_ROW * abs(offset[0]):
         raise SequenceError(
-            f"{calib}: {keys[1]} puts the right camera at ({', '.join(f'{x:g}' for x in offset)}) from "
+            f"{calib}: {right} puts the right camera at ({', '.join(f'{x:g}' for x in offset)}) from "
             f"the left; expected a rectified pair, the right camera along the rows (x)"
         )
 
@@ -249,7 +237,9 @@ def read_sequence(path, odometry: bool = True, truth: bool = True) -> Sequence:
     ``truth=False``: neither ``poses.txt`` nor the manifest's positions)."""
     root = Path(path)
     left, right = image_pairs(root)
-    camera = _camera(root, left, right)
+    calib = root / "calib.txt"
+    check_file(calib, "the calibration, P0 and P1 lines")
+    camera = checked_camera(calib, *read_calib(calib), check_headers(left, right))
     n = len(left)
     check_file(root / "times.txt", "one timestamp per frame")
     times = read_per_frame(root / "times.txt", n, "timestamps", read_times)

@@ -47,8 +47,8 @@ class SequenceWriter(OutputFolder):
         self.count += 1
 
     def _write(self, path: Path, data: bytes) -> None:
-        """Write one file of the temporary folder; a full disk (or any write failure) raises
-        :class:`~vo_lib.outputs.OutputError` naming the output folder, not the temporary."""
+        """Write one file; a failure (a full disk) raises :class:`~vo_lib.outputs.OutputError` naming the
+        output folder, not the temporary one."""
         try:
             path.write_bytes(data)
         except OSError as exc:
@@ -90,12 +90,9 @@ class SequenceWriter(OutputFolder):
     def close(
         self, times, poses=None, odometry=None, manifest: dict | None = None, camera_from_body=None
     ) -> Path:
-        """Write the text files and move the finished sequence into place; returns its path.
-
-        With ``camera_from_body`` (4x4: a rig's body frame into the left camera), ``calib.txt``
-        holds all of KITTI's keys, as readers of the KITTI layout expect: ``P2`` and ``P3`` repeat
-        ``P0`` and ``P1`` (KITTI's colour cameras; here the same two) and ``Tr`` is the body into
-        the left camera (KITTI's is its laser scanner's)."""
+        """Write the text files and move the finished sequence into place; returns its path. With
+        ``camera_from_body`` (4x4), ``calib.txt`` holds all of KITTI's keys: ``P2`` and ``P3`` repeat
+        ``P0`` and ``P1``, ``Tr`` is the body into the left camera (KITTI's, its laser scanner)."""
         times = np.asarray(times, dtype=float)
         if len(times) != self.count:
             raise ValueError(f"times has {len(times)} entries for {self.count} frames")
