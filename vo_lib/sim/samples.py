@@ -24,14 +24,7 @@ from vo_lib.models.track_odometry import TrackOdometry
 from vo_lib.sim import frame_store, road
 from vo_lib.sim.render import SensorEffects, StereoRenderer
 from vo_lib.sim.textures import TEXTURE_VERSION
-from vo_lib.sim.trajectories import (
-    LAB_FLOOR,
-    ROUGH_GROUND,
-    Leg,
-    SlipModel,
-    TrackGround,
-    simulate_drive,
-)
+from vo_lib.sim.trajectories import LAB_FLOOR, ROUGH_GROUND, Leg, SlipModel, TrackGround, simulate_drive
 from vo_lib.sim.world import WORLDS
 
 #: Height of the camera above the floor; it sits above the crawler's turning axis (notebook 03).
