@@ -289,10 +289,9 @@ def render_sample(name: str, frames: int | None = None, resolution=None, first: 
         )
     camera = sample_camera(sample, resolution)
     car = sample.rig == "car"
+    odometry = road.CAR_ODOMETRY if car else TrackOdometry()
     rng = np.random.default_rng(sample.seed)
-    drive = simulate_drive(
-        sample.legs, sample.rate, sample.start, rng, _odometry(sample), sample.slip, sample.surface
-    )
+    drive = simulate_drive(sample.legs, sample.rate, sample.start, rng, odometry, sample.slip, sample.surface)
     mount = road.camera_in_vehicle() if car else camera_mount(height=CAMERA_HEIGHT)
     rendered = RenderedSample(camera, mount, drive, n, _world_poses(sample, drive), first)
     store = None  # the fingerprint is worked out only for a frame store
@@ -301,10 +300,6 @@ def render_sample(name: str, frames: int | None = None, resolution=None, first: 
         store = Path(frame_store.FOLDER) / key
     effects = _sensor_effects(sample, first + n)
     return rendered, _frames(sample, rendered, effects, np.random.default_rng(sample.seed + 1), store)
-
-
-def _odometry(sample: Sample) -> TrackOdometry:
-    return road.CAR_ODOMETRY if sample.rig == "car" else TrackOdometry()
 
 
 def _frames(sample: Sample, rendered: RenderedSample, effects, image_rng, store: Path | None):
@@ -385,7 +380,7 @@ def generate(
                 **rig,
                 "mount": CAMERA_MOUNTS[car],
             },
-            "track_odometry": asdict(_odometry(sample)),
+            "track_odometry": asdict(road.CAR_ODOMETRY if car else TrackOdometry()),
             "slip": asdict(sample.slip),
             "surface": None if sample.surface is None else asdict(sample.surface),
             "sensor_noise_grey": sample.sensor_noise,
