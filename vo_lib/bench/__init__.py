@@ -1,6 +1,5 @@
-"""Benchmarks, run as ``python -m vo_lib bench NAME``: each prints its times beside a baseline, as
-medians of repeated runs on data drawn once with a fixed seed (measurements, never assertions).
-Each imports what it times when it runs, so listing them stays fast.
+"""Benchmarks, ``python -m vo_lib bench NAME``: each prints the median times of repeated runs beside a
+baseline, on data drawn once with a fixed seed; each imports what it times when it runs.
 """
 
 from __future__ import annotations
@@ -14,8 +13,7 @@ from vo_lib.bench import (
     bench_stereo_vo,
 )
 
-#: What each benchmark times and how long it runs (wall time of one run on the shared 2-core
-#: development machine under load, rounded; ``bench --help`` lists them).
+#: What each benchmark times and how long it runs on the shared 2-core machine (``bench --help``).
 BENCH_HELP: dict[str, tuple[str, str]] = {
     "pipeline": ("[Zhao]'s pipeline, stage by stage, on 200 rendered frames", "about 15 s"),
     "long": ("the paper's 10,000-frame timing run (IV.A.1), rendered in memory", "about 6 min"),

@@ -1,6 +1,5 @@
 """``python -m vo_lib bench real``: our pipeline beside the OpenCV PnP baseline on every sequence
-folder of ``$VO_LIB_REALDATA`` (KITTI or ASL layout), same frames, same process; what it times and
-prints is on the benchmarks page (``docs/benchmarks.md``).
+of ``$VO_LIB_REALDATA`` (KITTI or ASL layout), same frames, same process (``docs/benchmarks.md``).
 """
 
 from __future__ import annotations
@@ -20,9 +19,8 @@ REPEATS = 3
 
 
 def realdata_folders() -> list[Path]:
-    """Sequence folders (holding ``image_0/`` or ``mav0/``, or a raw KITTI drive) in
-    ``$VO_LIB_REALDATA`` (or that one sequence); a variable set to anything but a folder raises
-    :class:`UsageError`."""
+    """Sequence folders (``image_0/``, ``mav0/`` or a raw KITTI drive) in ``$VO_LIB_REALDATA`` (or that
+    one sequence); a variable set to anything but a folder of them raises :class:`UsageError`."""
     from vo_lib.arguments import UsageError
     from vo_lib.formats.euroc import mav0_of
     from vo_lib.formats.kitti_raw import raw_drive_of
@@ -44,9 +42,9 @@ def realdata_folders() -> list[Path]:
 
 
 def decoded_sequence(folder) -> tuple[object, float]:
-    """The sequence in ``folder`` (no odometry) with every stereo pair decoded (and rectified)
-    beforehand, serially, and read from memory; and the median milliseconds one pair took. Fewer than
-    3 frames raise :class:`UsageError` (as in evaluate: the errors of two poses mean nothing)."""
+    """The sequence in ``folder`` (no odometry), every pair decoded (and rectified) beforehand and
+    read from memory, and the median milliseconds a pair took; fewer than 3 frames raise
+    :class:`UsageError` (as in evaluate)."""
     from vo_lib.arguments import UsageError
     from vo_lib.data import load_sequence
 
@@ -61,7 +59,7 @@ def decoded_sequence(folder) -> tuple[object, float]:
 
 def run_ours(seq, repeats: int = REPEATS) -> tuple[object, list[float]]:
     """Our pipeline on ``seq`` (no odometry, seed 0) after an untimed warm-up: :func:`fastest` of
-    ``repeats`` runs by the median milliseconds of the whole frame."""
+    ``repeats`` runs by the median whole frame."""
     from vo_lib.stereo_vo.pipeline import run_sequence, warm_up
 
     warm_up(seq, use_odometry=False)  # compiled kernels ready before the timed run
@@ -71,11 +69,10 @@ def run_ours(seq, repeats: int = REPEATS) -> tuple[object, list[float]]:
 
 
 def step_scale(truth, poses, stride: int = 1) -> float:
-    """The scale of the frame-to-frame motions against the truth's: the least-squares factor ``s``
-    of ``t_est = s t_true`` over every step of ``stride`` frames, each translation in the camera of
-    the step's start (no alignment needed). Below 1: the steps are measured short. A path can be
-    longer than the truth's while its steps are short, by moving sideways from frame to frame; a
-    longer stride leaves less weight to the truth's own noise, which pulls the factor below 1."""
+    """The least-squares factor ``s`` of ``t_est = s t_true`` over every step of ``stride`` frames,
+    each translation in the camera of the step's start (no alignment needed); below 1, the steps are
+    measured short (even on a path longer than the truth's, that moves sideways from frame to frame).
+    The truth's own noise pulls it below 1; a longer stride weighs that less."""
     T, E = np.asarray(truth, float), np.asarray(poses, float)
     t_true = (np.linalg.inv(T[:-stride]) @ T[stride:])[:, :3, 3]
     t_est = (np.linalg.inv(E[:-stride]) @ E[stride:])[:, :3, 3]
@@ -84,8 +81,8 @@ def step_scale(truth, poses, stride: int = 1) -> float:
 
 
 def error_rows(truth, poses) -> dict[str, float]:
-    """ATE (SE(3)), final 3-D position (% of the path) and rotation errors, path lengths, and the
-    scale of the steps (:func:`step_scale`)."""
+    """ATE (SE(3)), final 3-D position (% of the path) and rotation errors, path lengths and
+    :func:`step_scale`."""
     from vo_lib.evaluation import ate, final_error_3d
 
     final = final_error_3d(truth, poses)
@@ -100,8 +97,8 @@ def error_rows(truth, poses) -> dict[str, float]:
 
 
 def fastest(run, median_ms, repeats: int = REPEATS) -> tuple[object, list[float]]:
-    """The fastest of ``repeats`` calls of ``run()`` by ``median_ms(result)``, and every run's
-    figure; the runs must give the same camera poses."""
+    """The fastest of ``repeats`` calls of ``run()`` by ``median_ms(result)``, and every run's figure;
+    the runs must give the same camera poses."""
     runs = [run() for _ in range(repeats)]
     for other in runs[1:]:
         if not np.array_equal(other.camera_poses, runs[0].camera_poses):
@@ -111,8 +108,7 @@ def fastest(run, median_ms, repeats: int = REPEATS) -> tuple[object, list[float]
 
 
 def bench_real(folders=None, repeats: int = REPEATS) -> dict[str, float]:
-    """Time and score our pipeline and the PnP baseline on real sequences (the fastest of
-    ``repeats`` runs each)."""
+    """Time and score our pipeline and the PnP baseline on real sequences (fastest of ``repeats``)."""
     import cv2
 
     from vo_lib.stereo_vo.baselines import run_pnp_baseline
@@ -152,13 +148,13 @@ def bench_real(folders=None, repeats: int = REPEATS) -> dict[str, float]:
     return out
 
 
-#: The error table's columns: figure, width, digits.
+#: The error table's columns: figure, heading, width, digits.
 COLUMNS = (
-    ("ate_m", 14, 4),
-    ("final_pct", 11, 3),
-    ("final_rotation_deg", 16, 3),
-    ("path_m", 10, 3),
-    ("step_scale", 12, 4),
+    ("ate_m", "ATE SE(3) [m]", 14, 4),
+    ("final_pct", "final [%]", 11, 3),
+    ("final_rotation_deg", "rotation [deg]", 16, 3),
+    ("path_m", "path [m]", 10, 3),
+    ("step_scale", "step scale", 12, 4),
 )
 
 
@@ -168,16 +164,15 @@ def _figure(value: float, width: int, digits: int) -> str:
 
 
 def _error_table(name: str, truth, ours, baseline) -> dict[str, float]:
-    """Print :func:`error_rows` of both methods' camera poses and the truth's path; returns them
-    keyed ``NAME:METHOD:KEY``."""
-    print(
-        f"  {'':<14s}{'ATE SE(3) [m]':>14s}{'final [%]':>11s}{'rotation [deg]':>16s}{'path [m]':>10s}"
-        f"{'step scale':>12s}"
-    )
+    """Print :func:`error_rows` of both methods and the truth's path; returns them keyed
+    ``NAME:METHOD:KEY``."""
+    print(f"  {'':<14s}" + "".join(f"{heading:>{width}s}" for _, heading, width, _ in COLUMNS))
     out = {}
     for method, poses in (("ours", ours), ("PnP baseline", baseline)):
         rows = error_rows(truth, poses)
-        print(f"  {method:<14s}" + "".join(_figure(rows[k], width, digits) for k, width, digits in COLUMNS))
+        print(
+            f"  {method:<14s}" + "".join(_figure(rows[k], width, digits) for k, _, width, digits in COLUMNS)
+        )
         out.update({f"{name}:{method}:{key}": value for key, value in rows.items()})
     print(f"  {'truth':<14s}{'':>41s}{rows['truth_path_m']:10.3f}")
     return out

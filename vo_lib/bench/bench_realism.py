@@ -1,6 +1,6 @@
-"""``python -m vo_lib bench realism``: the statistics of :mod:`vo_lib.sim.realism`, averaged over
-:data:`FRAMES` left images, of every KITTI-layout sequence in ``$VO_LIB_REALDATA`` and of every
-named sample (rendered in memory), each sample beside the range it must meet.
+"""``python -m vo_lib bench realism``: the statistics of :mod:`vo_lib.sim.realism` over :data:`FRAMES`
+left images of every KITTI-layout sequence in ``$VO_LIB_REALDATA`` and of every sample (rendered in
+memory), each sample beside the range it must meet.
 """
 
 from __future__ import annotations

@@ -226,8 +226,8 @@ KERNEL_CALLS = (
 
 
 def _kernel_and_numpy(time_it) -> tuple[float, float]:
-    """``time_it()`` (milliseconds) with the compiled kernels, then with their NumPy references
-    put where the kernels are called; the kernels are put back afterwards."""
+    """``time_it()`` (milliseconds) with the compiled kernels, then with their NumPy references in
+    their place (put back afterwards)."""
     from unittest import mock
 
     with_kernels = time_it()
@@ -245,13 +245,10 @@ def _render_ms(renderer, poses) -> float:
 
 
 def bench_kernels(frames: int = 60) -> dict[str, float]:
-    """The whole frame with each remaining compiled kernel and with its NumPy reference, side by
-    side in one process: a kernel stays only where NumPy makes the whole frame > 1.5x slower.
-
-    Matching (``matching_core``) is timed on the pipeline's whole frame, on the real drives of
-    ``$VO_LIB_REALDATA`` when set and on a rendered indoor drive; the renderer's composite on a
-    whole rendered pair.
-    """
+    """The whole frame with each compiled kernel and with its NumPy reference, in one process: a
+    kernel stays only where NumPy makes the whole frame > 1.5x slower. Matching is timed on whole
+    frames of the real drives (``$VO_LIB_REALDATA``) and a rendered indoor drive, the renderer's
+    composite on whole rendered pairs."""
     from vo_lib.bench.bench_real import decoded_sequence, realdata_folders, run_ours
     from vo_lib.sim.render import SensorEffects, StereoRenderer
     from vo_lib.sim.samples import render_sample
@@ -286,12 +283,8 @@ def bench_kernels(frames: int = 60) -> dict[str, float]:
 
 
 def bench_long(frames: int = PAPER_LONG_RUN[0]) -> dict[str, float]:
-    """The paper's 10,000-frame timing run on ``long_run`` (ten laps of an oval in the yard).
-
-    Frames are rendered in memory one at a time, outside the timed stages; the pipeline's own
-    per-frame total is timed. Prints the mean, standard deviation and percentiles beside the
-    paper's, and the final position error of the lap (nothing is written to disk).
-    """
+    """The paper's 10,000-frame timing run on ``long_run``, rendered in memory outside the timed
+    stages: the per-frame totals' statistics beside the paper's, and the final position error."""
     from vo_lib.evaluation import final_error
     from vo_lib.geometry import compose_planar
     from vo_lib.sim.samples import render_sample

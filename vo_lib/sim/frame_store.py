@@ -1,9 +1,8 @@
 """Rendered frames kept on disk, so that processes rendering the same sample render it once.
 
-With :data:`FOLDER` set (the test suite sets it in every process it starts), every frame
-``render_sample`` renders is written there with the noise generator's state after it, and a later
-request for the same frame of the same sample reads it back and goes on rendering from that state:
-the same images as one uninterrupted render. Frames are renamed into place whole.
+With :data:`FOLDER` set (the test suite sets it), ``render_sample`` writes every frame there with
+the noise generator's state after it; a later request reads it back and goes on from that state,
+giving the same images as one uninterrupted render. Frames are renamed into place whole.
 """
 
 from __future__ import annotations

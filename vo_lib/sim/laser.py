@@ -52,10 +52,8 @@ class LaserScanner:
         return (np.arange(n) - (n - 1) / 2) * self.angular_step
 
     def scan(self, segments, robot_pose, rng: np.random.Generator | None = None) -> LaserScan:
-        """Scan ``segments`` (``(M, 4)``: x0, y0, x1, y1, world frame) from ``robot_pose``.
-
-        Noise is added only when an ``rng`` is given.
-        """
+        """Scan ``segments`` (``(M, 4)``: x0, y0, x1, y1, world frame) from ``robot_pose``, with
+        range noise only when an ``rng`` is given."""
         segs = np.asarray(segments, dtype=float).reshape(-1, 4)
         sensor = compose_planar(np.asarray(robot_pose, dtype=float), np.asarray(self.mount, dtype=float))
         bearings = self.bearings

@@ -1,12 +1,10 @@
 """A rectified stereo pair rendered from a :class:`~vo_lib.sim.world.World`.
 
-Every surface of the world is a planar quad with a texture. For a plane, the map from texels to
-pixels is one homography, ``H = K [R^T e1, R^T e2, R^T (O - c)]``, so OpenCV's
-``warpPerspective`` draws a quad over its screen bounding box in one call; the texture level
-(mipmap) is chosen from the quad's texel footprint so that far surfaces do not alias. Visibility
-is a z-buffer of *inverse* depth, which on a plane is affine in the pixel coordinates:
-``1/z = n . K^-1 [u, v, 1] / (n . O_c)`` (the compiled step of :mod:`vo_lib.sim.composite`).
-Ground-truth depth comes from the same buffer.
+Every surface is a textured planar quad. Texels map to pixels by one homography,
+``H = K [R^T e1, R^T e2, R^T (O - c)]``, so ``warpPerspective`` draws a quad over its screen box in
+one call, from the mipmap level of its texel footprint (far surfaces do not alias). Visibility is a
+z-buffer of *inverse* depth, affine in the pixel coordinates on a plane:
+``1/z = n . K^-1 [u, v, 1] / (n . O_c)`` (:mod:`vo_lib.sim.composite`); truth depth comes from it.
 """
 
 from __future__ import annotations
@@ -25,8 +23,8 @@ from vo_lib.sim.world import Patch, Segment, World, box
 
 #: Nearest depth drawn, metres.
 NEAR_PLANE = 0.05
-#: Longest side of a quad, in texels; longer walls and the floor are cut into tiles of this size,
-#: so that each tile gets a texture level suited to its distance.
+#: Longest side of a quad, in texels: longer surfaces are cut into tiles, each textured at the
+#: level of its own distance.
 TILE_TEXELS = 300
 #: Direction the light comes from (world frame) for the flat shading of walls.
 LIGHT_DIRECTION = np.array([0.5, 0.3, 0.8]) / np.linalg.norm([0.5, 0.3, 0.8])
@@ -56,7 +54,7 @@ class _Quads:
 
 @dataclass
 class SensorEffects:
-    """Optional imperfections of a real camera, applied after rendering."""
+    """Imperfections of a real camera, applied after rendering."""
 
     noise_sigma: float = 0.0  #: standard deviation of additive Gaussian noise, grey levels
     exposure_gain: float = 1.0  #: multiplies every grey level (auto-exposure)
@@ -105,8 +103,8 @@ def build_quads(world: World) -> _Quads:
 
 
 def _patch_quads(patch, texel: float, shade: float | None = None, split_across: bool = True) -> _Quads:
-    """Quads of a :class:`~vo_lib.sim.world.Patch`, cut into tiles of at most TILE_TEXELS (along
-    only, for a wall); ``shade`` overrides the flat shading of its normal."""
+    """Quads of a :class:`~vo_lib.sim.world.Patch` in tiles of at most TILE_TEXELS (along only, for
+    a wall); ``shade`` overrides the flat shading of its normal."""
     along, across, origin = (np.asarray(v, float) for v in (patch.along, patch.across, patch.origin))
     total = max(patch.texture_length, patch.offset + patch.length)
     cols, rows = int(np.ceil(total / texel)) + 1, int(np.ceil(patch.width / texel)) + 1
@@ -141,8 +139,8 @@ def _wall_quads(seg: Segment, texel: float, seed: int) -> _Quads:
 
 
 def _mover_quads(mover) -> _Quads:
-    """Four sides and the top of a :class:`~vo_lib.sim.world.Mover`, in its body frame
-    (x forward, y left, z up, origin at the bottom centre)."""
+    """Four sides and the top of a :class:`~vo_lib.sim.world.Mover` in its body frame (x forward,
+    y left, z up, origin at the bottom centre)."""
     sides = box((0.0, 0.0), mover.size, 0.0, mover.height, mover.texture_seed, style=mover.style)
     hl, hw, h = mover.size[0] / 2, mover.size[1] / 2, mover.height
     top = Patch(
@@ -194,8 +192,8 @@ def _draw(image, inv_depth, order, boxes, H, level, textures, shades, pts4, clip
 
 
 class StereoRenderer:
-    """Render rectified stereo pairs of a world (by a camera with ``width`` and ``height``), with
-    ground-truth depth on request."""
+    """Render rectified stereo pairs of a world (camera with ``width`` and ``height``), with truth
+    depth on request."""
 
     def __init__(self, world: World, camera: StereoCamera, effects: SensorEffects | None = None):
         if camera.width is None or camera.height is None:
@@ -215,11 +213,9 @@ class StereoRenderer:
         )
 
     def render(self, T_world_camera, with_depth: bool = False, time: float = 0.0):
-        """Grey image (uint8) seen by a camera at ``T_world_camera`` (4x4, camera to world).
-
-        ``time`` (seconds) places the world's movers. Returns ``image`` or ``(image, depth)`` with
-        depth in metres (``inf`` where nothing is).
-        """
+        """Grey image (uint8) seen by a camera at ``T_world_camera`` (4x4, camera to world), the
+        movers where they are at ``time`` (seconds); or ``(image, depth)``, depth in metres (``inf``
+        where nothing is)."""
         T = np.asarray(T_world_camera, dtype=float)
         R, c = T[:3, :3], T[:3, 3]
         cam = self.camera
@@ -232,8 +228,7 @@ class StereoRenderer:
         outside = (corners_c @ self._frustum.T < 0).all(axis=1).any(axis=1)
         outside |= corners_c[..., 2].max(axis=1) <= NEAR_PLANE
         todo = np.flatnonzero(~outside)
-        # Everything per quad that is a few numbers is computed for all quads at once; the loop
-        # below only draws. Quads crossing the near plane are clipped one by one (there are few).
+        # all per-quad numbers at once; only drawing loops. Quads crossing the near plane: one by one
         cc = corners_c[todo]
         f, pp = np.array([cam.fx, cam.fy]), np.array([cam.cx, cam.cy])
         with np.errstate(divide="ignore", invalid="ignore"):

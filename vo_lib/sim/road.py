@@ -1,15 +1,11 @@
 """The road drive: a car at KITTI's rig, two sharp turns, a climb, a banked bend and traffic.
 
-The road is laid along the car's planned drive (the drive has no lateral slip, so the true path
-is the plan): the car keeps to the right lane, :data:`LANE_OFFSET` to the right of the road's
-centre line. Along the path's arc length ``s`` the road surface has an elevation (a climb of
-:data:`CLIMB_GRADE` with smooth vertical curves) and a crossfall (a bank, left side up, through the
-second bend). The car's 6-DoF pose follows the surface: its height is the surface's under the
-car plus :data:`VEHICLE_ORIGIN_HEIGHT`, its pitch the grade and its roll the crossfall.
-
-The car's frame is x forward, y left, z up with its origin above the rear axle, where the IMU of
-KITTI's car sits; the camera is mounted as in KITTI's calibration (:data:`CAMERA_IN_VEHICLE`),
-1.65 m above the road.
+The road is laid along the car's planned drive (no lateral slip: the true path is the plan), the
+car :data:`LANE_OFFSET` right of its centre line. Along the arc length ``s`` the surface has an
+elevation (a climb of :data:`CLIMB_GRADE`) and a crossfall (a bank, left side up, through the second
+bend); the car's height is the surface's plus :data:`VEHICLE_ORIGIN_HEIGHT`, its pitch the grade,
+its roll the crossfall. The car's frame is x forward, y left, z up, origin above the rear axle
+(KITTI's IMU); the camera sits as in KITTI's calibration (:data:`CAMERA_IN_VEHICLE`), 1.65 m up.
 """
 
 from __future__ import annotations
@@ -26,16 +22,8 @@ RATE = 10.0
 #: 11 m/s up the climb, brake, a right bend (90 deg, banked), away at 12 m/s.
 TURN_RATE = np.radians(90.0) / 3.0
 LEGS = (
-    Leg(50, 12.0),
-    Leg(10, 9.0),
-    Leg(10, 6.0),
-    Leg(30, 5.5, TURN_RATE),
-    Leg(10, 8.0),
-    Leg(40, 11.0),
-    Leg(10, 7.0),
-    Leg(30, 5.5, -TURN_RATE),
-    Leg(10, 8.0),
-    Leg(40, 12.0),
+    *(Leg(50, 12.0), Leg(10, 9.0), Leg(10, 6.0), Leg(30, 5.5, TURN_RATE), Leg(10, 8.0), Leg(40, 11.0)),
+    *(Leg(10, 7.0), Leg(30, 5.5, -TURN_RATE), Leg(10, 8.0), Leg(40, 12.0)),
 )
 START = (0.0, 0.0, 0.0)
 #: The car's path lies this far to the right of the road's centre line, metres.
@@ -44,19 +32,18 @@ LANE_OFFSET = 1.9
 RUN_IN, RUN_OUT = 30.0, 100.0
 #: The road surface sits this high above the verge ground (z = 0) where it is flat, metres.
 ROAD_RAISE = 0.1
-#: Climb: grade and the arc lengths (metres along the car's path) where it starts and ends;
-#: the grade changes over :data:`VERTICAL_CURVE` metres at either end.
+#: Climb: grade, and the arc lengths where it starts and ends; the grade changes over
+#: :data:`VERTICAL_CURVE` metres at either end.
 CLIMB_GRADE = 0.04
 CLIMB = (95.0, 150.0)
 VERTICAL_CURVE = 15.0
-#: Bank: crossfall (rise per metre to the left) through the second bend, reached over
-#: :data:`VERTICAL_CURVE` metres.
+#: Bank: crossfall (rise per metre to the left) through the second bend.
 BANK_CROSSFALL = 0.05
 BANK = (140.0, 180.0)
 #: Height of the car's origin (rear axle, IMU) above the road, metres: puts the camera 1.65 m up.
 VEHICLE_ORIGIN_HEIGHT = 0.92
-#: Camera (left) in the car's frame, forward, left, up, metres: KITTI's calibration rounded to
-#: centimetres, as the car pipeline assumes for a sequence without ``raw_calib/``.
+#: Left camera in the car's frame (forward, left, up, metres): KITTI's calibration to the centimetre,
+#: as the car pipeline assumes for a sequence without ``raw_calib/``.
 CAMERA_IN_VEHICLE = (1.08, -0.31, 0.73)
 #: Wheel odometry: two wheels 1.6 m apart, 0.02 of noise per square-root metre (the car gauge).
 CAR_ODOMETRY = TrackOdometry(track_distance=1.6, track_width=0.0, encoder_sigma=0.02)
@@ -65,8 +52,8 @@ KITTI_RIG = (718.856, 607.1928, 185.2157, 0.5371657, 1242, 375)
 
 
 def planned_path() -> np.ndarray:
-    """The car's planar poses ``(N, 3)`` at :data:`RATE`, exactly as the drive simulation
-    integrates them (:func:`vo_lib.sim.trajectories.simulate_drive` without slip)."""
+    """The car's planar poses ``(N, 3)`` at :data:`RATE`, as
+    :func:`vo_lib.sim.trajectories.simulate_drive` integrates them."""
     speed, turn = command_profile(LEGS, RATE)
     ground = CAR_ODOMETRY.controls_for(speed / RATE, turn / RATE)
     return CAR_ODOMETRY.integrate(ground, start=START, exact=True)
@@ -102,8 +89,8 @@ def elevation(s) -> np.ndarray:
 
 
 def centre_line(step: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
-    """Arc lengths ``(M,)`` and planar poses ``(M, 3)`` of the car's lane from RUN_IN before the
-    start to RUN_OUT beyond the end, every ``step`` metres."""
+    """Arc lengths ``(M,)`` and planar poses ``(M, 3)`` of the car's lane every ``step`` metres, from
+    RUN_IN before the start to RUN_OUT beyond the end."""
     path = planned_path()
     s = arc_length(path)
     keep = np.concatenate([[True], np.diff(s) > 1e-9])  # drop standing frames

@@ -1,8 +1,7 @@
 """Named sample sequences that mirror the experiments of [Zhao] (and the corridor of [Yuan]).
 
-Each sample is a world, a rig, a drive and a rate. :func:`generate` renders it in the KITTI layout
-with ground truth (``poses.txt``), track odometry (``odometry.txt``) and a ``manifest.json`` that
-states everything needed to make it again.
+Each is a world, a rig, a drive and a rate; :func:`generate` renders one in the KITTI layout with
+truth, track odometry and a ``manifest.json`` that states everything needed to make it again.
 """
 
 from __future__ import annotations
@@ -25,14 +24,7 @@ from vo_lib.models.track_odometry import TrackOdometry
 from vo_lib.sim import frame_store, road
 from vo_lib.sim.render import SensorEffects, StereoRenderer
 from vo_lib.sim.textures import TEXTURE_VERSION
-from vo_lib.sim.trajectories import (
-    LAB_FLOOR,
-    ROUGH_GROUND,
-    Leg,
-    SlipModel,
-    TrackGround,
-    simulate_drive,
-)
+from vo_lib.sim.trajectories import LAB_FLOOR, ROUGH_GROUND, Leg, SlipModel, TrackGround, simulate_drive
 from vo_lib.sim.world import WORLDS
 
 #: Height of the camera above the floor; it sits above the crawler's turning axis (notebook 03).
@@ -45,7 +37,7 @@ SENSOR_NOISE = 1.2
 #: back to 0 (AR(1) with this stationary deviation and :data:`EXPOSURE_FRAMES` correlation).
 EXPOSURE_SIGMA = 0.04
 EXPOSURE_FRAMES = 20.0
-#: Seconds between progress lines while a sample renders and the output is not a terminal.
+#: Seconds between progress lines when ``progress="lines"``.
 PROGRESS_EVERY_S = 10.0
 #: Wheel slip of a car on dry asphalt: small and nearly equal on both sides.
 CAR_SLIP = SlipModel(mean=0.003, difference=0.001, sigma=0.002, spot_turn_mean=0.0, spot_turn_difference=0.0)
@@ -60,7 +52,7 @@ def exposure_gains(n: int, sigma: float, rng: np.random.Generator) -> np.ndarray
 
 
 def _sensor_effects(sample, n: int) -> list[SensorEffects]:
-    """The sample's sensor noise and auto-exposure gain for each of its first ``n`` frames."""
+    """Sensor noise and auto-exposure gain of each of the sample's first ``n`` frames."""
     gains = exposure_gains(n, sample.exposure_sigma, np.random.default_rng(sample.seed + 3))
     return [SensorEffects(noise_sigma=sample.sensor_noise, exposure_gain=float(g)) for g in gains]
 
@@ -224,13 +216,13 @@ SAMPLES: dict[str, Sample] = {
 
 
 def is_sample(name: str) -> bool:
-    """Whether ``name`` is a sample's (and no folder of that name is there to read instead)."""
+    """Whether ``name`` is a sample's (and no folder of that name is there instead)."""
     return name in SAMPLES and not Path(name).exists()
 
 
 def fingerprint(name: str) -> str:
     """A short hash of everything that shapes a sample's images (its definition but its prose, its
-    world): a cached sample whose manifest carries another is out of date."""
+    world, the texture version): a cached sample whose manifest carries another is out of date."""
     sample = replace(get_sample(name), purpose="", mirrors="")
     text = repr(sample) + repr(WORLDS[sample.world]()) + f"textures {TEXTURE_VERSION}"
     return hashlib.sha1(text.encode()).hexdigest()[:16]
@@ -244,8 +236,8 @@ def get_sample(name: str) -> Sample:
 
 @dataclass(frozen=True)
 class RenderedSample:
-    """A sample's rig and truth: ``vehicle_poses`` ``(N, 4, 4)`` in the world (a crawler's tilted
-    about its contact point on rough ground, a car's on the road), ``mount`` the left camera on it."""
+    """A sample's rig and truth: ``vehicle_poses`` ``(N, 4, 4)`` in the world (tilted on rough
+    ground, a car's on the road), ``mount`` the left camera on the vehicle."""
 
     camera: StereoCamera
     mount: np.ndarray
@@ -274,11 +266,12 @@ def sample_camera(sample: Sample, resolution=None) -> StereoCamera:
 
 
 def _world_poses(sample: Sample, drive) -> np.ndarray:
+    """Vehicle poses ``(N, 4, 4)``: a car's on the road, a crawler's pitched and rolled about its
+    contact point."""
     if sample.rig == "car":
         return road.vehicle_poses(drive.poses)
     poses = np.stack([planar_to_matrix(p) for p in drive.poses])
     if drive.attitude is not None:
-        # the body's pitch and roll, about its contact point on the ground
         poses[:, :3, :3] = poses[:, :3, :3] @ Rotation.from_euler("YX", drive.attitude).as_matrix()
     return poses
 
@@ -300,28 +293,25 @@ def render_sample(name: str, frames: int | None = None, resolution=None, first: 
     rng = np.random.default_rng(sample.seed)
     drive = simulate_drive(sample.legs, sample.rate, sample.start, rng, odometry, sample.slip, sample.surface)
     mount = road.camera_in_vehicle() if car else camera_mount(height=CAMERA_HEIGHT)
-    poses = _world_poses(sample, drive)
-    image_rng = np.random.default_rng(sample.seed + 1)
-    effects = _sensor_effects(sample, first + n)
-
-    store = None  # this rendering's folder of the frame store (the fingerprint is worked out only for one)
+    rendered = RenderedSample(camera, mount, drive, n, _world_poses(sample, drive), first)
+    store = None  # the fingerprint is worked out only for a frame store
     if frame_store.FOLDER:
         key = f"{name}-{fingerprint(name)}-{camera.width}x{camera.height}-from{first}"
         store = Path(frame_store.FOLDER) / key
-    rendered = RenderedSample(camera, mount, drive, n, poses, first)
-    return rendered, _frames(sample, rendered, effects, image_rng, store)
+    effects = _sensor_effects(sample, first + n)
+    return rendered, _frames(sample, rendered, effects, np.random.default_rng(sample.seed + 1), store)
 
 
 def _frames(sample: Sample, rendered: RenderedSample, effects, image_rng, store: Path | None):
-    """``(left, right, odometry or None)`` of each frame of ``rendered``: from the frame store where
-    it holds them, else rendered (and stored); ``image_rng`` as if every frame had been rendered."""
+    """``(left, right, odometry or None)`` of each frame: from the frame store where it holds them,
+    else rendered (and stored); ``image_rng`` as if every frame had been rendered."""
     renderer = None  # built at the first frame the store does not hold (textures take a second)
     first = rendered.first
     for k in range(first, first + rendered.frames):
         stored = frame_store.get(store, k) if store else None
         if stored:
             left, right, state = stored
-            image_rng.bit_generator.state = state  # as if this frame had been rendered here
+            image_rng.bit_generator.state = state
         else:
             renderer = renderer or StereoRenderer(WORLDS[sample.world](), rendered.camera)
             renderer.effects = effects[k]
@@ -339,7 +329,7 @@ def is_indoor(name: str) -> bool:
 
 
 def render_left_images(name: str, indices, resolution=None) -> list[np.ndarray]:
-    """Left images of frames ``indices`` of a sample, rendered in memory, their sensor noise drawn
+    """Left images of frames ``indices`` of a sample, rendered in memory with their sensor noise drawn
     afresh (seeded): they differ from the written sample's by the noise only."""
     sample = get_sample(name)
     rendered, _ = render_sample(name, None, resolution)
@@ -360,8 +350,8 @@ def generate(
     progress: bool = True,
     force: bool = False,
 ) -> Path:
-    """Render the first ``frames`` of sample ``name`` at ``(width, height)`` into ``out`` (and
-    ``force`` as :class:`~vo_lib.formats.sequence_writer.SequenceWriter` takes them); returns it.
+    """Render the first ``frames`` of sample ``name`` at ``(width, height)`` into ``out`` (``force``
+    as :class:`~vo_lib.formats.sequence_writer.SequenceWriter` takes it); returns it.
     ``progress``: a tqdm bar (True), a line every :data:`PROGRESS_EVERY_S` seconds (``"lines"``),
     or nothing (False)."""
     sample = get_sample(name)
@@ -370,8 +360,7 @@ def generate(
     with SequenceWriter(out, camera, force=force) as writer:
         for left, right, _ in _with_progress(frame_iter, n, f"rendering {name}", progress):
             writer.add(left, right)
-        # a crawler's camera states its height (the pipeline reads it as the crawler's); a car's
-        # states where it sits in the car, without height_m (read as a car)
+        # a crawler's camera states its height; a car's where it sits in the car (no height_m)
         car = sample.rig == "car"
         rig = {"in_vehicle_m": list(road.CAMERA_IN_VEHICLE)} if car else {"height_m": CAMERA_HEIGHT}
         manifest = {
@@ -405,7 +394,7 @@ def generate(
 
 
 def _with_progress(frames, total: int, label: str, progress):
-    """Yield ``frames``, showing progress as :func:`generate` describes it."""
+    """Yield ``frames``, showing progress as :func:`generate` describes."""
     if progress is True or not progress:  # a bar, or nothing
         yield from tqdm(frames, total=total, desc=label, unit="frame", disable=not progress)
         return

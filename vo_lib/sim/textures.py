@@ -1,11 +1,10 @@
 """Grey-level textures, deterministic by seed: procedural corner-rich ones, photographs, paint.
 
-The corner texture is blocky noise at several scales (random grids upsampled nearest-neighbour,
-each shifted at random so that block corners do not line up across scales), which gives FAST
-corners at every viewing distance, plus filled polygons and discs for corners at any angle. Real
-surfaces are mostly poorer in corners: :func:`surface_texture` makes each named style of
-:data:`_DRAW` (photographs are scikit-image's, tiled mirrored at a physical scale). Mipmaps
-(Gaussian pyramids) let the renderer sample far surfaces without aliasing.
+The corner texture is blocky noise at several scales (grids upsampled nearest-neighbour, shifted at
+random so that block corners do not line up across scales: FAST corners at every distance) plus
+filled polygons and discs. Real surfaces are poorer in corners: :func:`surface_texture` draws each
+style of :data:`_DRAW` (photographs are scikit-image's, tiled mirrored at a physical scale).
+Mipmaps (Gaussian pyramids) let the renderer sample far surfaces without aliasing.
 """
 
 from __future__ import annotations
@@ -57,13 +56,12 @@ def corner_texture(height: int, width: int, seed: int) -> np.ndarray:
     return np.clip(img, 0, 255).astype(np.uint8)
 
 
-#: Changed whenever a texture's texels change for the same arguments: it enters the samples'
-#: fingerprints, so that cached samples are rendered again.
+#: Changed whenever a texture's texels change for the same arguments (it enters the samples'
+#: fingerprints).
 TEXTURE_VERSION = 4
-#: Metres covered by the 512 pixels of each photograph (a pebble of the gravel is a few
-#: centimetres across; asphalt is the gravel photograph, finer and flatter).
+#: Metres covered by the 512 pixels of each photograph (asphalt is the gravel, finer and flatter).
 PHOTO_METRES = {"grass": 1.0, "gravel": 2.0, "asphalt": 0.5}
-#: Grey level and contrast (multiplies the photograph's deviation from its mean) of each style.
+#: Grey level and contrast (times the photograph's deviation from its mean) of each style.
 PHOTO_TONE = {"grass": (95.0, 1.2), "gravel": (130.0, 1.5), "asphalt": (105.0, 0.4)}
 #: A brick's face and the mortar joint, metres (a common metric brick, 215 x 65 mm, 10 mm joints).
 BRICK_SIZE, MORTAR = (0.215, 0.065), 0.010
@@ -80,10 +78,8 @@ def photograph(name: str) -> np.ndarray:
 
 
 def mirrored_tiling(tile: np.ndarray, height: int, width: int, rng: np.random.Generator) -> np.ndarray:
-    """``tile`` repeated over ``(height, width)``, every other copy mirrored, from a random offset.
-
-    A mirrored copy meets its neighbour in the same pixels, so the tiling has no seams.
-    """
+    """``tile`` repeated over ``(height, width)``, every other copy mirrored (no seams), from a
+    random offset."""
     h, w = tile.shape
     oy, ox = rng.integers(0, 2 * h), rng.integers(0, 2 * w)  # within the period, 2h x 2w
     tiled = np.pad(tile, ((0, oy + height), (0, ox + width)), mode="symmetric")
@@ -126,12 +122,9 @@ def _joint_share(centre: np.ndarray, texel: float, period: float) -> np.ndarray:
 
 
 def brick_wall(height: int, width: int, texel: float, seed: int) -> np.ndarray:
-    """Bricks in running bond (each its own grey, odd courses shifted by half a brick) in light
-    mortar, with the gravel photograph's fine grain and framed windows on every storey.
-
-    Joints are thinner than a texel: each texel gets the share of its area that joints cover (a box
-    filter, exact for the joints) and the grey of the brick at its centre. Row 0 is the floor line.
-    """
+    """Bricks in running bond (each its own grey) in light mortar, with fine grain and framed windows
+    on every storey. Joints are thinner than a texel: each texel gets the share of its area joints
+    cover (an exact box filter) and the grey of the brick at its centre. Row 0 is the floor line."""
     rng = np.random.default_rng(seed)
     pitch, course = BRICK_SIZE[0] + MORTAR, BRICK_SIZE[1] + MORTAR  # brick plus one joint
     y = (np.arange(height) + 0.5) * texel
@@ -159,10 +152,8 @@ def brick_wall(height: int, width: int, texel: float, seed: int) -> np.ndarray:
 
 
 def painted_wall(height: int, width: int, texel: float, seed: int) -> np.ndarray:
-    """Plain paint with a door and posters (pictures of corner texture) at eye height.
-
-    Row 0 of a wall texture is the floor line; doors stand on it, posters hang 1.2-1.9 m high.
-    """
+    """Plain paint with doors (standing on row 0, the floor line) and posters of corner texture
+    hanging 1.2-1.9 m high."""
     rng = np.random.default_rng(seed)
     grey = rng.uniform(150, 200)
     img = grey + smooth_wash(height, width, texel, rng, 3.0)
@@ -235,18 +226,9 @@ def far_structure(height: int, width: int, texel: float, seed: int) -> np.ndarra
 
 
 #: Cross-section of the ``"road"`` texture from its left edge, metres: verge, kerb, edge line,
-#: lane, centre line, lane, edge line, kerb, verge (10 m in all).
-ROAD_BANDS = (
-    ("gravel", 0.8),
-    ("kerb", 0.2),
-    ("line", 0.15),
-    ("asphalt", 3.7),
-    ("dashes", 0.3),
-    ("asphalt", 3.7),
-    ("line", 0.15),
-    ("kerb", 0.2),
-    ("gravel", 0.8),
-)
+#: lane, centre line, and the same mirrored (10 m in all).
+_HALF_ROAD = (("gravel", 0.8), ("kerb", 0.2), ("line", 0.15), ("asphalt", 3.7))
+ROAD_BANDS = (*_HALF_ROAD, ("dashes", 0.3), *_HALF_ROAD[::-1])
 ROAD_WIDTH = sum(w for _, w in ROAD_BANDS)
 #: Centre-line dashes: painted length and period along the road, metres.
 DASH = (3.0, 9.0)
@@ -317,10 +299,8 @@ _DRAW = {
 
 
 def surface_texture(style: str, height: int, width: int, texel: float, seed: int) -> np.ndarray:
-    """A ``(height, width)`` uint8 texture of ``style`` with texels of ``texel`` metres.
-
-    Row 0 is the floor line of a wall (z = 0) and the ``xmin, ymin`` corner of a floor.
-    """
+    """A ``(height, width)`` uint8 texture of ``style`` with texels of ``texel`` metres; row 0 is the
+    floor line of a wall (z = 0) and the ``xmin, ymin`` corner of a floor."""
     if height <= 0 or width <= 0:
         raise ValueError(f"texture size must be positive; got {height}x{width}")
     if style not in _DRAW:
@@ -333,8 +313,8 @@ STYLES = tuple(_DRAW)
 
 @functools.lru_cache(maxsize=256)
 def cached_surface(style: str, height: int, width: int, texel: float, seed: int) -> tuple[np.ndarray, ...]:
-    """Mipmaps of :func:`surface_texture` (a Gaussian pyramid: level L has ``2**L`` texels of level 0
-    per texel), computed once per process for each argument set."""
+    """Mipmaps of :func:`surface_texture` (level L has ``2**L`` texels of level 0 per texel), computed
+    once per process for each argument set."""
     levels = [surface_texture(style, height, width, texel, seed)]
     while min(levels[-1].shape) >= 2 * MIN_MIP_SIDE:
         levels.append(cv2.pyrDown(levels[-1]))

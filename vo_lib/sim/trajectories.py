@@ -1,14 +1,11 @@
 """Crawler drives with slipping tracks: ground truth and what the track encoders report.
 
-A drive is a list of legs (frames, speed, turn rate) that the robot follows over the ground, as a
-driver steering to a plan would. To move a track by ``g`` over the ground when it slips by ``s``,
-the motor turns it by ``g / (1 - s)``; the encoders count that turning, with random-walk noise.
-Slip is small and nearly equal on both tracks when driving, strong and unequal in spot turns,
-where the tracks scrub sideways (the cause [Zhao] gives for its spot-turn heading errors).
-
-Slip alone changes only what the encoders read; how the tracks meet the ground (:class:`TrackGround`)
-also moves the body: it skids sideways about a wandering turning centre, and pitches, rolls and swings
-round when a track loses contact. Truth integrates the body's motion, odometry the encoders.
+A drive is a list of legs (frames, speed, turn rate) followed over the ground as a driver steering
+to a plan would. To move a track by ``g`` when it slips by ``s``, the motor turns it by
+``g / (1 - s)``; the encoders count that, with random-walk noise. Slip is small and nearly equal
+when driving, strong and unequal in spot turns (the cause [Zhao] gives for its spot-turn heading
+errors). Slip changes only what the encoders read; :class:`TrackGround` also moves the body (skid,
+a wandering turning centre, pitch and roll on losses of contact).
 """
 
 from __future__ import annotations
@@ -36,10 +33,8 @@ class Leg:
 
 @dataclass(frozen=True)
 class SlipModel:
-    """Per-track slip: a mean, a left/right difference and a slowly varying random part.
-
-    In a spot turn (track speeds of opposite sign) the spot-turn values apply instead.
-    """
+    """Per-track slip: a mean, a left/right difference and a slowly varying random part (in a spot
+    turn, track speeds of opposite sign, the spot-turn values)."""
 
     mean: float = 0.01
     difference: float = 0.004
@@ -70,20 +65,17 @@ class TrackGround:
     """How the tracks meet the ground: skid, a wandering turning centre and brief losses of contact.
 
     Skid-steer kinematics after Martínez et al. (2005), "Approximating kinematics for tracked mobile
-    robots", Int. J. Robotics Research 24(10), 867-878: in the body frame the vehicle turns about an
-    ICR at ``(x_icr, v_x / omega)``, so its centre moves sideways with ``v_y = -x_icr * omega``
-    (outward of the turn when the ICR lies ahead). The tracks' own ICRs, outside the tracks (the
-    body turns less than their travel says), are the slip of :class:`SlipModel`. Mandow et al.
-    (2007), "Experimental kinematics for wheeled skid-steer mobile robots", IROS, 1222-1227,
-    measured the ICR moving with the turn rate: here ``x_icr`` grows linearly with ``|omega|`` and
-    wanders slowly around that (AR(1)) as the grip changes.
+    robots", Int. J. Robotics Research 24(10), 867-878: the body turns about an ICR at
+    ``(x_icr, v_x / omega)``, so its centre moves sideways with ``v_y = -x_icr * omega``; the tracks'
+    own ICRs are the slip of :class:`SlipModel`. After Mandow et al. (2007), "Experimental
+    kinematics for wheeled skid-steer mobile robots", IROS, 1222-1227, ``x_icr`` grows linearly with
+    ``|omega|`` and wanders slowly around that (AR(1)).
 
-    On rough ground a track loses contact at random (Poisson, per metre it travels) for
-    ``contact_frames`` frames, keeping ``contact_grip`` of its traction while its encoder counts on;
-    the body rolls towards that side and pitches by an angle drawn in ``tilt_deg`` (a half-sine
-    bump). ``roughness_deg`` adds the slow pitch and roll of uneven ground. The body turns about its
-    contact point, so a camera above it moves sideways and up and down: [Zhao]'s planar model no
-    longer holds exactly.
+    A track loses contact at random (Poisson, per metre it travels) for ``contact_frames`` frames,
+    keeping ``contact_grip`` of its traction while its encoder counts on; the body rolls towards
+    that side and pitches by an angle drawn in ``tilt_deg`` (a half-sine bump). ``roughness_deg``
+    adds the slow pitch and roll of uneven ground: a camera above the contact point moves sideways
+    and up and down, so [Zhao]'s planar model no longer holds exactly.
     """
 
     icr_offset: float = 0.02  #: ``x_icr`` at zero turn rate, metres ahead of the track centre
@@ -189,12 +181,9 @@ def simulate_drive(
     slip: SlipModel | None = None,
     surface: TrackGround | None = None,
 ) -> Drive:
-    """Drive ``legs`` at ``rate`` frames per second from ``start`` (x, y, yaw).
-
-    Returns ``sum(leg.frames) + 1`` frames: the start and one per step. Without ``surface`` the
-    tracks hold the ground exactly and the truth follows the plan's arcs; with ``surface`` the body skids,
-    its turning centre wanders and it pitches and rolls (:class:`TrackGround`).
-    """
+    """Drive ``legs`` at ``rate`` frames per second from ``start`` (x, y, yaw): ``sum(leg.frames) + 1``
+    frames. Without ``surface`` the truth follows the plan's arcs exactly; with it the body skids,
+    its turning centre wanders and it pitches and rolls (:class:`TrackGround`)."""
     if rate <= 0:
         raise ValueError(f"rate must be > 0 frames per second; got {rate!r}")
     odometry = odometry or TrackOdometry()
@@ -206,20 +195,14 @@ def simulate_drive(
     noise_sd = odometry.encoder_sigma * np.sqrt(np.abs(turned))
     readings = turned + rng.normal(size=turned.shape) * noise_sd
     zero = np.zeros((1, 2))
+    measured = [np.vstack([zero, x]) for x in (readings, slips)]
     if surface is None:
-        poses = odometry.integrate(ground, start=start, exact=True)
-        return Drive(rate, poses, *(np.vstack([zero, x]) for x in (readings, slips)))
+        return Drive(rate, odometry.integrate(ground, start=start, exact=True), *measured)
     # the tracks move the ground by what they planned, less what they lose in contact; the body
     # turns by their difference over the gauge and skids sideways about the shifted ICR
     grip, attitude = surface.contact(ground, rng)
     forward, turn = odometry.increment(ground * grip)
     x_icr = surface.icr(turn * rate, rng)
     poses = integrate_body(np.column_stack([forward, -x_icr * turn, turn]), start)
-    return Drive(
-        rate,
-        poses,
-        *(np.vstack([zero, x]) for x in (readings, slips)),
-        attitude=np.vstack([zero, attitude]),
-        icr=np.concatenate([[surface.icr_offset], x_icr]),
-        grip=np.vstack([np.ones((1, 2)), grip]),
-    )
+    icr = np.concatenate([[surface.icr_offset], x_icr])
+    return Drive(rate, poses, *measured, np.vstack([zero, attitude]), icr, np.vstack([np.ones((1, 2)), grip]))

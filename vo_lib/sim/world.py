@@ -1,10 +1,10 @@
 """One world for every sensor: a 2-D floor plan of line segments extruded to textured planes.
 
-The same :class:`World` feeds the stereo renderer, the laser scanner, the line landmarks of the
-EKF-SLAM notebook and the pose-tracking corridor. A segment is a vertical textured rectangle on the
-floor (z = 0) between two plan points; ``mapped=False`` marks an obstacle the robot's map does not
-know (the umbrella of [Yuan]). Only the camera sees *patches*, flat textured quads in any orientation
-(a road that climbs and banks), and *movers*, textured boxes driving along a path (traffic, a cart).
+A :class:`World` feeds the stereo renderer, the laser scanner, the EKF-SLAM landmarks and the
+pose-tracking corridor. A segment is a vertical textured rectangle standing on the floor (z = 0);
+``mapped=False`` marks an obstacle the robot's map does not know (the umbrella of [Yuan]). Only the
+camera sees *patches* (flat textured quads in any orientation: a road) and *movers* (textured boxes
+driving along a path: traffic, a cart).
 """
 
 from __future__ import annotations
@@ -46,13 +46,10 @@ class Segment:
 
 @dataclass(frozen=True)
 class Patch:
-    """A flat textured quad: the points ``origin + a * along + b * across`` for ``a`` in
-    ``[0, length]`` and ``b`` in ``[0, width]`` (metres; ``along`` and ``across`` unit vectors).
-
-    Texture columns run along ``along`` and rows along ``across``; column 0 lies ``offset`` metres
-    before ``origin``, so that consecutive patches of one ribbon (a road) continue one texture of
-    ``texture_length`` metres.
-    """
+    """A flat textured quad: ``origin + a * along + b * across`` for ``a`` in ``[0, length]``, ``b``
+    in ``[0, width]`` (metres; unit vectors). Texture columns run along ``along``, column 0 lying
+    ``offset`` metres before ``origin``, so that the patches of one ribbon (a road) continue one
+    texture of ``texture_length`` metres."""
 
     origin: tuple[float, float, float]
     along: tuple[float, float, float]
@@ -72,11 +69,9 @@ class Patch:
 
 @dataclass(frozen=True)
 class Mover:
-    """A textured box (four sides and a top) driving at ``speed`` along a 3-D ``path``.
-
-    At time ``t`` (seconds) its bottom centre is ``start + speed * t`` metres along the path
-    (held at the path's end after it), facing along the path.
-    """
+    """A textured box (four sides and a top) driving at ``speed`` along a 3-D ``path``: at time ``t``
+    (seconds) its bottom centre is ``start + speed * t`` metres along it (held at its end), facing
+    along it."""
 
     path: tuple[tuple[float, float, float], ...]
     speed: float
@@ -101,8 +96,8 @@ class Mover:
 
 @dataclass(frozen=True)
 class World:
-    """Segments, a textured floor over ``floor_extent`` and an optional ceiling; patches and movers
-    are seen by the camera only."""
+    """Segments, a textured floor over ``floor_extent`` and an optional ceiling (patches and movers:
+    camera only)."""
 
     name: str
     segments: tuple[Segment, ...]
@@ -152,44 +147,30 @@ def box(
 
 
 # ---------------------------------------------------------------------- ready-made worlds
+#: The textures of an indoor world's floor and ceiling.
+_INDOOR = {"floor_style": "tiles", "ceiling_style": "panels"}
+
+
 def indoor_lab(seed: int = 10) -> World:
-    """A 14 m x 9 m lab: painted walls 2.6 m high with doors and posters, two plain pillars,
-    boxes (corner-rich clutter) and a plain cabinet, a tiled floor and a ceiling of panels."""
+    """A 14 m x 9 m lab: painted walls 2.6 m high, two plain pillars, boxes, a cabinet, shelves of
+    clutter, a tiled floor and a panelled ceiling."""
     segs = polyline([(-7, -4.5), (7, -4.5), (7, 4.5), (-7, 4.5)], 2.6, seed, closed=True, style="wall")
     segs += box((2.5, 2.0), (0.5, 0.5), 0.0, 2.6, seed + 10, "pillar", style="plain")
     segs += box((-2.0, -2.2), (0.5, 0.5), 0.0, 2.6, seed + 20, "pillar", style="plain")
     segs += box((4.8, -1.8), (1.2, 0.8), 0.3, 0.9, seed + 30)
     segs += box((-4.5, 2.6), (1.0, 1.4), -0.2, 1.2, seed + 40)
     segs += box((0.5, -3.6), (2.0, 0.6), 0.0, 1.8, seed + 50, "cabinet", style="plain")
-    # shelves of equipment and clutter along the walls: the lab's corner-rich parts
-    for i, (x, y, yaw, w) in enumerate(
-        [
-            (-5.5, -4.2, 0.0, 2.0),
-            (4.0, 4.2, 0.0, 2.5),
-            (6.7, 1.5, 1.5708, 2.0),
-            (-6.7, -1.0, 1.5708, 2.5),
-            (-1.5, 4.2, 0.0, 1.8),
-            (3.5, -4.2, 0.0, 1.6),
-        ]
-    ):
+    # shelves of equipment along the walls (x, y, yaw, width): the lab's corner-rich parts
+    shelves = [(-5.5, -4.2, 0.0, 2.0), (4.0, 4.2, 0.0, 2.5), (6.7, 1.5, 1.5708, 2.0)]
+    shelves += [(-6.7, -1.0, 1.5708, 2.5), (-1.5, 4.2, 0.0, 1.8), (3.5, -4.2, 0.0, 1.6)]
+    for i, (x, y, yaw, w) in enumerate(shelves):
         segs += box((x, y), (w, 0.5), yaw, 1.9, seed + 60 + 4 * i, "shelf")
-    return World(
-        "indoor_lab",
-        tuple(segs),
-        (-7.0, 7.0, -4.5, 4.5),
-        seed,
-        ceiling_height=2.6,
-        floor_style="tiles",
-        ceiling_style="panels",
-    )
+    return World("indoor_lab", tuple(segs), (-7.0, 7.0, -4.5, 4.5), seed, ceiling_height=2.6, **_INDOOR)
 
 
 def outdoor_yard(seed: int = 20) -> World:
-    """An open 80 m x 80 m yard: far building fronts 8 m high, a few crates; no ceiling.
-
-    Most structure is 15-40 m away: low parallax for a 12 cm baseline, as in the paper's
-    outdoor experiments.
-    """
+    """An open 80 m x 80 m yard: building fronts 8 m high, fences, a shed and crates; no ceiling.
+    Most structure is 15-40 m away: low parallax for a 12 cm baseline, as outdoors in the paper."""
     square = [(-40, -40), (40, -40), (40, 40), (-40, 40)]
     segs = polyline(square, 8.0, seed, "building", closed=True, style="brick")
     segs += polyline([(18, -12), (18, 12)], 6.0, seed + 10, "building", style="brick")
@@ -205,15 +186,12 @@ def outdoor_yard(seed: int = 20) -> World:
 
 def corridor(seed: int = 30) -> World:
     """The corridor of [Yuan], 30 m long and 3 m wide along +x from x = 0 (axis y = 0): two long walls,
-    two pillars, two cross walls, a fire hydrant and an unmapped umbrella.
+    two pillars, two cross walls, a fire hydrant and an unmapped umbrella; most of the view is plain.
 
-    Painted walls with doors and posters, plain pillars, a tiled floor and a panelled ceiling leave
-    most of the view without a corner, as in a real corridor (hydrant and umbrella are busy).
     Pillars, hydrant and cross walls are the "radial" features that fix the position along the
     axis. A 10 m laser seeing 135 degrees to either side sees, from the axis, the first pillar and
     the hydrant up to x = 6.4 and the cross walls from x = 12; in between only the second pillar
-    (x = 15) could fix it, and the umbrella (x = 13.7, open, 1 m wide, against the wall) hides it up
-    to x = 12.8.
+    (x = 15) could, and the umbrella (x = 13.7, 1 m wide, against the wall) hides it up to x = 12.8.
     """
     h, half, length = 2.8, 1.5, 30.0
     segs = polyline([(0, -half), (length, -half)], h, seed, "wall", style="wall")
@@ -225,20 +203,13 @@ def corridor(seed: int = 30) -> World:
     segs += box((15.0, half - 0.2), (0.5, 0.4), 0.0, h, seed + 40, "pillar", style="plain")
     segs += polyline([(22.0, half), (22.0, half - 0.6)], h, seed + 30, "cross wall", style="wall")
     segs += polyline([(24.5, -half), (24.5, -half + 0.6)], h, seed + 31, "cross wall", style="wall")
-    # An open umbrella standing against the wall: at the laser's height its canopy is a half
-    # circle of radius 0.55 m facing the robot's side of the corridor.
+    # an open umbrella against the wall: at the laser's height, a half circle of radius 0.55 m
     angles = np.radians(np.linspace(90.0, 270.0, 7))
     canopy = [(13.9 + 0.55 * np.cos(a), half - 0.55 + 0.55 * np.sin(a)) for a in angles]
     segs += polyline(canopy, 1.6, seed + 50, "umbrella", mapped=False)
+    notes = {"length": length, "width": 2 * half}
     return World(
-        "corridor",
-        tuple(segs),
-        (0.0, length, -half, half),
-        seed,
-        ceiling_height=h,
-        notes={"length": length, "width": 2 * half},
-        floor_style="tiles",
-        ceiling_style="panels",
+        "corridor", tuple(segs), (0.0, length, -half, half), seed, ceiling_height=h, notes=notes, **_INDOOR
     )
 
 
@@ -276,23 +247,11 @@ def road_ribbon(seed: int) -> tuple[Patch, ...]:
         length = float(np.linalg.norm(step))
         mid = left[i] + left[j]
         along, across = tuple(step / length), tuple(-mid / np.linalg.norm(mid))
-        # corners: left edge at i and j, right edge at j and i
-        ends = ((i, 1), (j, 1), (j, -1), (i, -1))
+        ends = ((i, 1), (j, 1), (j, -1), (i, -1))  # left edge at i and j, right edge at j and i
         outline = tuple(tuple(centre[k] + side * half * left[k]) for k, side in ends)
         offset = float(s[i] - s[0])
         patches.append(
-            Patch(
-                outline[0],
-                along,
-                across,
-                length,
-                ROAD_WIDTH,
-                "road",
-                seed,
-                offset=offset,
-                texture_length=total,
-                outline=outline,
-            )
+            Patch(outline[0], along, across, length, ROAD_WIDTH, "road", seed, offset, total, outline)
         )
     return tuple(patches)
 
@@ -307,7 +266,7 @@ def _lane(offset: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray
 
 
 def road_traffic(seed: int) -> tuple[Mover, ...]:
-    """Two oncoming cars that pass the driven car on the first and last straights, one ahead."""
+    """Two oncoming cars that pass the driven car on the first and last straights, and one ahead."""
     ego_s = road.arc_length(road.planned_path())
     movers = []
     s, _, _, points = _lane(2 * road.LANE_OFFSET)
@@ -355,9 +314,8 @@ def road_side(seed: int) -> list[Segment]:
 
 
 def road_world(seed: int = 40) -> World:
-    """A road drive's world (:mod:`vo_lib.sim.road`): a two-lane road along the car's path that
-    climbs and banks, on rough ground; buildings, trees, fences and parked cars beside it; far structure
-    of low contrast beyond (:data:`FAR_DISTANCE`); the sky; and traffic."""
+    """A road drive's world (:mod:`vo_lib.sim.road`): the road along the car's path, what stands beside
+    it (:func:`road_side`), rough ground up to the far structure, the sky and traffic."""
     segs = road_side(seed)
     _, poses = road.centre_line(5.0)
     # grass up to the far structure (whose ring is measured from the road's edge points)
@@ -375,8 +333,8 @@ def road_world(seed: int = 40) -> World:
 
 
 def indoor_lab_cart(seed: int = 10) -> World:
-    """The lab with a trolley of boxes (1.0 m x 0.6 m, 1.1 m high) pushed back and forth along
-    its north side at walking pace: an independently moving object."""
+    """The lab with a trolley of boxes (1.0 m x 0.6 m, 1.1 m high) pushed back and forth along its
+    north side at walking pace: an independently moving object."""
     path = ((-5.0, 3.0, 0.0), (5.0, 3.0, 0.0)) * 3
     cart = Mover(path, 0.7, (1.0, 0.6), 1.1, "corners", seed + 90, kind="cart")
     return replace(indoor_lab(seed), name="indoor_lab_cart", movers=(cart,))

@@ -1,11 +1,9 @@
 """The figure ``python -m vo_lib run`` writes: what the run did, against the truth where known.
 
-Left, the run itself: the plan view of the path (ground truth drawn wide and pale underneath, the
-estimate dashed on top, odometry beside them, start and end marked; a straight drive has the axis
-across it stretched to the paths' spread, so that drift of a few centimetres shows), or, for a drive
-that turns on the spot, the heading against time, since its centimetres of wander say nothing.
-Right, with ground truth, the errors over time: position (centimetres) and heading (degrees); for a
-body with no ground plane (a drone), 3-D position and the angle of the rotation error.
+Left, the plan view of the paths (truth wide and pale underneath, the estimate dashed on top; a
+straight drive's narrow axis stretched so that centimetres of drift show), or a spot turn's heading
+against time. Right, with truth, the position and heading errors over time (for a body with no
+ground plane, a drone: 3-D position and rotation angle).
 """
 
 from __future__ import annotations
@@ -22,14 +20,13 @@ ESTIMATE_STYLE = {"color": "C0", "lw": 1.3, "ls": "--", "zorder": 3}
 ODOMETRY_STYLE = {"color": "C1", "lw": 1.0, "zorder": 2}
 
 
-#: A path whose narrow side is below this share of its long side is drawn with the narrow axis
-#: stretched to the spread of the paths (a straight drive: the drift across it is the point).
+#: A path whose narrow side is below this share of its long side has the narrow axis stretched
+#: to the paths' spread (a straight drive: the drift across it is the point).
 THIN_PATH = 0.15
 
 
 def _paths(estimate, truth, odometry, odometry_label, tracked=None):
-    """``(label, poses, style)`` of each path given: truth (or tracked positions), odometry, then the
-    estimate (drawn last)."""
+    """``(label, poses, style)`` of each path given: truth, tracked positions, odometry, estimate."""
     fused = "visual odometry (fused with odometry)" if odometry is not None else "visual odometry"
     paths = [
         ("ground truth", truth, TRUTH_STYLE),
@@ -59,7 +56,6 @@ def _plan_view(ax, paths, title):
     spans = np.ptp(ends[:, :2], axis=0)
     narrow = int(np.argmin(spans))
     if spans[narrow] < THIN_PATH * spans[1 - narrow]:
-        # A straight drive: the narrow axis is scaled to how far the paths stray across it.
         values = np.concatenate([poses[:, narrow] for _, poses, _ in paths])
         low, high = values.min(), values.max()
         pad = max(0.15 * (high - low), 0.005)
@@ -89,15 +85,13 @@ def plot_run(
     camera_poses=None,
     tracked=None,
 ) -> dict:
-    """Draw a run's figure on the matplotlib figure ``fig``: ``times`` (K,) in seconds, planar
-    poses ``(x, y, yaw)`` (K, 3), ``truth`` and ``odometry`` optional; ``odometry_label`` says what
-    the odometry is (track odometry on the crawler, wheel or OXTS odometry on a car).
-    ``camera_poses``, the estimate's and the truth's 4x4 camera poses (a body with no ground plane,
-    such as a drone): the errors drawn are then in 3-D, position and rotation angle. ``tracked``,
-    position-only truth ``(K, 2)`` in the plan of ``estimate`` (aligned to it), drawn as points.
+    """Draw a run's figure on the matplotlib figure ``fig``: ``times`` (K,) in seconds, planar poses
+    ``(x, y, yaw)`` (K, 3), ``truth`` and ``odometry`` optional (``odometry_label`` says which).
+    ``camera_poses``: the estimate's and the truth's 4x4 camera poses, for errors in 3-D (a drone).
+    ``tracked``: position-only truth ``(K, 2)`` aligned to ``estimate``, drawn as points.
 
-    Returns ``main`` (the path or heading axes), ``errors`` (the list of error axes, empty without
-    truth) and ``spot_turn`` (whether the heading view was drawn).
+    Returns ``main`` (the path or heading axes), ``errors`` (the error axes, empty without truth)
+    and ``spot_turn`` (whether the heading view was drawn).
     """
     times, estimate = np.asarray(times, float), np.asarray(estimate, float)
     truth, odometry, tracked = (
@@ -126,8 +120,7 @@ def plot_run(
 
 
 def _error_views(errors, times, paths) -> None:
-    """Position and heading errors against the truth (``paths[0]``) of every other path, on the
-    two axes ``errors``."""
+    """Position and heading errors of every path against the truth (``paths[0]``)."""
     truth = paths[0][1]
     for label, poses, style in paths[1:]:
         line = {k: v for k, v in style.items() if k != "zorder"}
