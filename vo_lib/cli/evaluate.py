@@ -127,10 +127,11 @@ def recording_of(gt: str, extrinsic_of: str | None, kitti: bool) -> str | None:
     from vo_lib.formats.euroc import mav0_of
 
     path = Path(os.path.abspath(gt))  # symbolic links not followed
-    if extrinsic_of is not None and (path.parent / MARKER).is_file():
+    if extrinsic_of is not None and (kitti or (path.parent / MARKER).is_file()):
+        held = "holds KITTI poses, which are" if kitti else "was written by this package, as"
         raise UsageError(
-            f"--extrinsic-of {extrinsic_of}: --gt {gt} was written by this package, as a camera's poses "
-            "already; expected a body-frame truth (TUM, EuRoC CSV or positions)"
+            f"--extrinsic-of {extrinsic_of}: --gt {gt} {held} a camera's poses already; expected a "
+            "body-frame truth (TUM, EuRoC CSV or positions)"
         )
     if extrinsic_of is not None or kitti:
         return extrinsic_of
@@ -147,11 +148,6 @@ def _to_camera(truth, gt: str, extrinsic_of: str | None) -> np.ndarray:
     """The rectified left camera in the frame ``--gt`` tracks (:func:`recording_of`), or the identity."""
     from vo_lib.formats.euroc import body_to_rectified_camera, tracked_to_camera
 
-    if truth.times is None and extrinsic_of is not None:
-        raise UsageError(
-            f"--extrinsic-of {extrinsic_of}: --gt {gt} holds KITTI poses, which are a camera's already; "
-            "expected a body-frame truth (TUM, EuRoC CSV or positions)"
-        )
     recording = recording_of(gt, extrinsic_of, kitti=truth.times is None)
     if recording is not None:
         tracker = recording if truth.poses is None else None  # a prism's lever arm
@@ -164,19 +160,6 @@ def _to_camera(truth, gt: str, extrinsic_of: str | None) -> np.ndarray:
             "--extrinsic-of RECORDING moves them into its rectified left camera)"
         )
     return np.eye(4)
-
-
-def _print_position_errors(positions: np.ndarray, E: np.ndarray, lever: np.ndarray) -> None:
-    """ATE of the point ``lever`` (in the camera) carried along ``E`` against ``positions``."""
-    from vo_lib.evaluation import Alignment, ate_positions, carried_point, shown, umeyama
-
-    tracked = carried_point(E, lever)
-    for alignment in (Alignment.SE3, Alignment.SIM3):
-        a, _ = ate_positions(positions, E, lever, alignment)
-        rmse, worst = shown(a.rmse, ".4f"), shown(a.max, ".4f")  # undefined: a scale of nothing moving
-        scale = umeyama(tracked, positions, with_scale=True)[2] if alignment is Alignment.SIM3 else None
-        named = "" if scale is None else f", scale {shown(scale, '.4f')}"
-        print(f"ATE ({alignment} alignment{named}, positions only): rmse {rmse} m, max {worst}")
 
 
 def _print_pose_errors(G: np.ndarray, E: np.ndarray, lengths) -> None:
@@ -216,6 +199,8 @@ def evaluate_command(
     ``time_offset``: seconds added to the estimate's timestamps before they are paired with the truth's,
     at most ``max_time_diff`` apart.
     """
+    from vo_lib.evaluation import Alignment, ate_positions, carried_point, shown, umeyama
+
     limits = (("--time-offset", time_offset, -60.0), ("--max-time-diff", max_time_diff, 0.0))
     for option, seconds, low in limits:
         if not low <= seconds <= 60.0:  # NaN too
@@ -245,4 +230,12 @@ def evaluate_command(
         return
     if segments is not None:
         print(f"--segments: --gt {gt} holds positions only, which give the ATE alone")
-    _print_position_errors(truth.positions[i_gt], E[i_est], np.linalg.inv(to_camera)[:3, 3])
+    # the ATE of the point lever (in the camera) carried along the estimate
+    positions, E, lever = truth.positions[i_gt], E[i_est], np.linalg.inv(to_camera)[:3, 3]
+    tracked = carried_point(E, lever)
+    for alignment in (Alignment.SE3, Alignment.SIM3):
+        a, _ = ate_positions(positions, E, lever, alignment)
+        rmse, worst = shown(a.rmse, ".4f"), shown(a.max, ".4f")  # undefined: a scale of nothing moving
+        scale = umeyama(tracked, positions, with_scale=True)[2] if alignment is Alignment.SIM3 else None
+        named = "" if scale is None else f", scale {shown(scale, '.4f')}"
+        print(f"ATE ({alignment} alignment{named}, positions only): rmse {rmse} m, max {worst}")

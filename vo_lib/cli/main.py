@@ -286,13 +286,8 @@ class _Stdout:
         self.stream = stream
 
     def __getattr__(self, name: str):
-        return getattr(self.stream, name)
-
-    def write(self, text: str) -> int:
-        return self._named(self.stream.write, text)
-
-    def flush(self) -> None:
-        self._named(self.stream.flush)
+        value = getattr(self.stream, name)
+        return functools.partial(self._named, value) if name in ("write", "flush") else value
 
     @staticmethod
     def _named(call, *args):

@@ -1,7 +1,7 @@
 """``python -m vo_lib run``, ``convert`` and ``generate``: the pipeline as a command, and the
 sequences it reads written (a recording rectified, a sample rendered).
 
-The pipeline and the metrics (SciPy, Numba) are imported where they are used, so that a run says
+The pipeline, the data folder and Matplotlib are imported where they are used, so that a run says
 what it is about to do within a second or two.
 """
 
@@ -18,11 +18,14 @@ from collections import Counter
 from dataclasses import asdict, fields
 from pathlib import Path
 
+import numpy as np
+
 from vo_lib.arguments import UsageError
+from vo_lib.evaluation import path_length, rotation_angle, rpe
 from vo_lib.formats.poses import write_kitti_poses, write_tum
-from vo_lib.geometry import camera_poses_from_planar, planar_from_camera_poses, rigid_inverse
+from vo_lib.geometry import as_homogeneous, camera_poses_from_planar, planar_from_camera_poses, rigid_inverse
 from vo_lib.outputs import OutputError, OutputFolder, check_target, file_sha256, notice, read_marker, reading
-from vo_lib.sim.samples import SAMPLES, get_sample, is_sample
+from vo_lib.sim.samples import SAMPLES, generate, get_sample, is_sample
 from vo_lib.stereo_vo.run_report import (
     error_report,
     errors_3d,
@@ -31,6 +34,7 @@ from vo_lib.stereo_vo.run_report import (
     print_error_table,
     print_timing_table,
     tracked_offsets,
+    tracked_truth,
     truth_and_odometry,
 )
 
@@ -106,8 +110,6 @@ def _write_csv(path: Path, rows, cls) -> None:
 def calibration_digest(sequence: Path, truth_file: Path) -> str | None:
     """sha256 of the numbers of an ASL recording's ``sensor.yaml`` files that move its truth into its
     rectified left camera (a comment changes none); None for another layout."""
-    import numpy as np
-
     from vo_lib.formats.asl_calibration import read_camera_yaml, truth_extrinsic
     from vo_lib.formats.euroc import mav0_of
 
@@ -243,17 +245,13 @@ def _say_if_suspect(seq, n: int, diagnostics, poses, motion: str = "auto") -> No
             f"({why});{model} is each camera's calibration, distortion included, that of these images?"
         )
     else:
-        if seq.poses is not None:
-            _say_if_turns_differ(seq, n, poses)
+        _say_if_turns_differ(seq, n, poses)
         _say_if_path_differs(seq, n, poses)
 
 
 def _say_if_path_differs(seq, n: int, poses) -> None:
     """A notice where the estimate's path is the truth's (poses, or a tracker's positions) times
     ``PATH_RATIO`` or more, or a hundredth of it; not on a path under ``MIN_PATH_M``."""
-    from vo_lib.evaluation import path_length
-    from vo_lib.stereo_vo.run_report import tracked_truth
-
     tracked = None if seq.poses is not None else tracked_truth(seq, n)
     truth = seq.poses[:n, :3, 3] if seq.poses is not None else None if tracked is None else tracked[2]
     if truth is None:
@@ -271,11 +269,6 @@ def turns_differ(truth, poses) -> tuple[float, float] | None:
     """``(differ, turns)``, degrees (RMS): how far the estimate's rotations from pose to pose are
     from the truth's, and how far the truth's turn, where the first is ``TURNS_DIFFER`` of the
     second or more; else None."""
-    import numpy as np
-
-    from vo_lib.evaluation import rotation_angle, rpe
-    from vo_lib.geometry import as_homogeneous
-
     truth = as_homogeneous(truth)
     turned = np.degrees(rotation_angle(np.swapaxes(truth[:-1, :3, :3], 1, 2) @ truth[1:, :3, :3]))
     differ, turns = rpe(truth, poses, rotation=True)[0].rmse, float(np.sqrt(np.mean(turned**2)))
@@ -284,16 +277,16 @@ def turns_differ(truth, poses) -> tuple[float, float] | None:
 
 def _say_if_turns_differ(seq, n: int, poses) -> None:
     """A notice where the estimate's turns have little in common with the truth's (:func:`turns_differ`)."""
-    found = turns_differ(seq.poses[:n], poses)
+    if seq.poses is None or not (found := turns_differ(seq.poses[:n], poses)):
+        return
     truth = seq.truth_file or seq.path / "poses.txt"
     quaternions = truth.is_file() and truth.name != "poses.txt"  # not KITTI's matrices, nor OXTS packets
     order = f", its quaternions in the order of its format {ORDERS}" if quaternions else ""
-    if found:
-        notice(
-            f"{truth}: the estimate's rotations from frame to frame differ from the truth's by "
-            f"{found[0]:.2g} deg (RMS), where the truth turns {found[1]:.2g} deg: is it the truth of "
-            f"these images{order}?"
-        )
+    notice(
+        f"{truth}: the estimate's rotations from frame to frame differ from the truth's by "
+        f"{found[0]:.2g} deg (RMS), where the truth turns {found[1]:.2g} deg: is it the truth of "
+        f"these images{order}?"
+    )
 
 
 def _warm_up_saying_so(seq, **options) -> None:
@@ -427,7 +420,6 @@ def convert_command(sequence: str, to: str, out: str, force: bool = False, no_tr
 def generate_command(name: str, out: str | None, frames: int | None, resolution, force: bool = False) -> None:
     """Render sample ``name`` into ``out`` (default: its folder in the data folder) in the KITTI layout."""
     from vo_lib.data import kept_data_folder, sample_path
-    from vo_lib.sim.samples import generate
 
     most = get_sample(name).frames
     if frames is not None and frames > most:

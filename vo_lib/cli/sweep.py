@@ -70,13 +70,14 @@ def _call(function, kwargs: dict) -> dict:
     return {**kwargs, **{k: float(v) for k, v in function(**kwargs).items()}}
 
 
-def _no_answer(signum, frame):
-    raise TimeoutError(f"no answer as a Dask scheduler within {SCHEDULER_SECONDS} s")
-
-
 @contextlib.contextmanager
 def _alarm():
-    previous = signal.signal(signal.SIGALRM, _no_answer)
+    """A TimeoutError after ``SCHEDULER_SECONDS``."""
+
+    def no_answer(signum, frame):
+        raise TimeoutError(f"no answer as a Dask scheduler within {SCHEDULER_SECONDS} s")
+
+    previous = signal.signal(signal.SIGALRM, no_answer)
     signal.alarm(SCHEDULER_SECONDS)
     try:
         yield
@@ -169,9 +170,8 @@ def sweep_command(name: str, seeds: int, workers=None, scheduler=None, out=None,
         table = pd.DataFrame(run_tasks(function_of(name), tasks, workers, scheduler))
         table.to_csv(folder.path / "results.csv", index=False, lineterminator="\n")
         path = folder.commit(seeds=seeds)
-    where = (
-        "in this process" if workers == 1 and scheduler is None else scheduler or f"{workers} Dask workers"
-    )
+    where = scheduler or f"{workers} Dask workers"
+    where = "in this process" if workers == 1 and scheduler is None else where
     print(f"{describe}: {len(tasks)} tasks ({where}); wrote {path / 'results.csv'}")
     stats = summary(table, list(tasks[0]))
     with pd.option_context("display.max_rows", None, "display.width", 120):
