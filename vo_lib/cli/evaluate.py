@@ -1,6 +1,4 @@
-"""``python -m vo_lib evaluate``: an estimated trajectory against ground truth in any common format
-(figures of :mod:`vo_lib.evaluation`, files read by :mod:`vo_lib.formats`).
-"""
+"""``python -m vo_lib evaluate``: an estimated trajectory against ground truth in any common format."""
 
 from __future__ import annotations
 
@@ -21,8 +19,7 @@ from vo_lib.outputs import MARKER, file_sha256, read_marker
 
 
 def read_whole(option: str, path: str, read):
-    """``read(path)`` and the sha256 of the file it read, refused if it changed meanwhile (another
-    command writing it)."""
+    """``read(path)`` and the sha256 of the file it read, refused if it changed meanwhile."""
 
     def sha256() -> str | None:  # of a regular file that read() would read; else None (it says why)
         with contextlib.suppress(OSError):
@@ -76,8 +73,7 @@ def check_against_its_run(gt: str, gt_sha256: str, est: str, marker: dict) -> No
 
 
 def _check_one_to_one(truth, gt: str, est: str, count: int, marker: dict) -> None:
-    """Poses without timestamps pair one to one: equal counts, or ``--est`` a run of the first
-    frames of ``--gt``'s sequence."""
+    """Poses without timestamps: equal counts, or ``--est`` a run of the first frames of ``--gt``'s."""
     sequence = Path(str(marker.get("sequence")))  # of the run that wrote --est: its first frames?
     first = marker.get("frames") == count and Path(gt).resolve() == (sequence / "poses.txt").resolve()
     if len(truth.positions) > count and first:
@@ -87,8 +83,7 @@ def _check_one_to_one(truth, gt: str, est: str, count: int, marker: dict) -> Non
         hint = f": --est {stamped} has them" if truth.times is not None and stamped.is_file() else ""
         raise UsageError(
             f"--gt {gt} has {len(truth.positions)} {'poses' if truth.poses is not None else 'positions'} "
-            f"but --est {est} has {count} poses; "
-            f"expected equal counts (or timestamps in both{hint})"
+            f"but --est {est} has {count} poses; expected equal counts (or timestamps in both{hint})"
         )
 
 

@@ -279,8 +279,7 @@ STDOUT = "standard output"
 
 
 class _Stdout:
-    """``sys.stdout``, whose failures (a full disk under ``> file``) name it, not ``--out``; a
-    BrokenPipeError stays one."""
+    """``sys.stdout``, whose failures (a full disk under ``> file``) name it, not ``--out``."""
 
     def __init__(self, stream) -> None:
         self.stream = stream
@@ -321,8 +320,7 @@ def _dispatch(args) -> None:
 
 
 def _run_parsed(args, command: str) -> int:
-    """Run the parsed command; a failure the user can act on is one line on stderr and status 2 (141
-    for a closed pipe)."""
+    """Run the parsed command: 0, or a line on stderr and 2 for what the user can fix (141: closed pipe)."""
     from vo_lib.formats.poses import TrajectoryError
     from vo_lib.outputs import OutputError
 
@@ -353,8 +351,7 @@ def _run_parsed(args, command: str) -> int:
 
 @contextlib.contextmanager
 def _signals():
-    """SIGTERM and SIGINT handled by :func:`_stop` meanwhile, unraisable ones (a callback from compiled
-    code) kept quiet; all put back after."""
+    """SIGTERM and SIGINT handled by :func:`_stop` meanwhile, unraisable ones kept quiet."""
     from vo_lib.atomic import signals_to
     from vo_lib.outputs import INTERRUPTED
 

@@ -266,9 +266,8 @@ def _say_if_path_differs(seq, n: int, poses) -> None:
 
 
 def turns_differ(truth, poses) -> tuple[float, float] | None:
-    """``(differ, turns)``, degrees (RMS): how far the estimate's rotations from pose to pose are
-    from the truth's, and how far the truth's turn, where the first is ``TURNS_DIFFER`` of the
-    second or more; else None."""
+    """``(differ, turns)``, degrees (RMS): how far the estimate's rotations from pose to pose are from
+    the truth's, and how far the truth turns, where the first is ``TURNS_DIFFER`` of it or more; else None."""
     truth = as_homogeneous(truth)
     turned = np.degrees(rotation_angle(np.swapaxes(truth[:-1, :3, :3], 1, 2) @ truth[1:, :3, :3]))
     differ, turns = rpe(truth, poses, rotation=True)[0].rmse, float(np.sqrt(np.mean(turned**2)))
@@ -370,12 +369,9 @@ def _run_into(
             planar=vehicle.kind is not VehicleKind.DRONE,
             fused=vehicle.odometry is not None,
         )
+    fused = seq.odometry is not None and not no_odometry
     output.commit(
-        sequence=str(seq.path.resolve()),
-        frames=n,
-        seed=seed,
-        odometry=seq.odometry is not None and not no_odometry,  # whether odometry was fused
-        truth=_truth_record(seq),
+        sequence=str(seq.path.resolve()), frames=n, seed=seed, odometry=fused, truth=_truth_record(seq)
     )
     return report
 
@@ -406,12 +402,8 @@ def convert_command(sequence: str, to: str, out: str, force: bool = False, no_tr
                 writer.add(left, right)
             writer.carry(seq.path, seq.oxts, seq.raw_calib)  # a raw KITTI drive's packets and calibration
             body = manifest.get("T_body_camera")  # an ASL rig's; KITTI's Tr is the body's into the camera
-            path = writer.close(
-                seq.times,
-                seq.poses,
-                manifest=manifest or None,
-                camera_from_body=None if body is None else rigid_inverse(body),
-            )
+            from_body = None if body is None else rigid_inverse(body)
+            path = writer.close(seq.times, seq.poses, manifest=manifest or None, camera_from_body=from_body)
     truth = "ground truth in poses.txt" if seq.poses is not None else "no ground truth"
     truth = "position-only ground truth in manifest.json" if "positions" in manifest else truth
     print(f"wrote {path}: {len(seq)} rectified pairs in the KITTI layout, {truth}")
