@@ -102,14 +102,9 @@ def dask_client(workers: int, scheduler: str | None):
             with _alarm():  # bounds the handshake too, which a silent server never ends
                 client = Client(scheduler.strip(), timeout=10)
         except (ValueError, TypeError, OSError, AssertionError, MemoryError) as exc:  # TimeoutError too
-            # a MemoryError: another service's greeting read as the length of a message
-            why = (
-                "no event loop"
-                if isinstance(exc, AssertionError)
-                else "it answered, but not as a Dask scheduler"
-                if isinstance(exc, MemoryError)  # numpy's _ArrayMemoryError too
-                else one_line(exc)
-            )
+            why = "no event loop" if isinstance(exc, AssertionError) else one_line(exc)
+            # a MemoryError (numpy's too): another service's greeting read as the length of a message
+            why = "it answered, but not as a Dask scheduler" if isinstance(exc, MemoryError) else why
             raise UsageError(f"--scheduler {scheduler}: cannot reach a scheduler ({why})") from None
         with client:
             yield client
