@@ -1,6 +1,4 @@
-"""``python -m vo_lib evaluate``: an estimated trajectory against ground truth in any common format
-(figures of :mod:`vo_lib.evaluation`, files read by :mod:`vo_lib.formats`).
-"""
+"""``python -m vo_lib evaluate``: an estimated trajectory against ground truth in any common format."""
 
 from __future__ import annotations
 
@@ -14,16 +12,14 @@ import numpy as np
 
 from vo_lib.arguments import UsageError
 from vo_lib.cli.run import ORDERS, calibration_digest, turns_differ
-from vo_lib.evaluation import MAX_TIME_DIFF_S, associate
+from vo_lib.evaluation import MAX_TIME_DIFF_S, associate, path_length
 from vo_lib.formats.groundtruth import read_groundtruth, read_trajectory
 from vo_lib.formats.poses import MAX_FILE_BYTES, TrajectoryError
 from vo_lib.outputs import MARKER, file_sha256, read_marker
 
 
 def read_whole(option: str, path: str, read):
-    """``read(path)`` and the sha256 of the file it read: hashed before and after, and refused if it
-    changed meanwhile (another command writing it), so that the figures and the checks below are
-    of one file."""
+    """``read(path)`` and the sha256 of the file it read, refused if it changed meanwhile."""
 
     def sha256() -> str | None:  # of a regular file that read() would read; else None (it says why)
         with contextlib.suppress(OSError):
@@ -44,16 +40,15 @@ def read_whole(option: str, path: str, read):
 
 
 def run_marker(est: str, est_sha256: str) -> dict:
-    """The marker of the ``run`` output holding ``est`` if ``est`` (of checksum ``est_sha256``) is as
-    that run wrote it; else {}."""
+    """The marker of the ``run`` output holding ``est`` if ``est`` is as that run wrote it; else {}."""
     marker = read_marker(Path(est).parent) or {}
     files = marker.get("files") if marker.get("written_by") == "vo_lib run" else None
     return marker if isinstance(files, dict) and files.get(Path(est).name) == est_sha256 else {}
 
 
 def check_against_its_run(gt: str, gt_sha256: str, est: str, marker: dict) -> None:
-    """Refuse a ``--gt`` or a calibration changed since the run that wrote ``--est`` (``marker``)
-    used them; say when ``--gt`` is another file than that run's truth."""
+    """Refuse a ``--gt`` or a calibration changed since the run of ``marker`` used them; say when
+    ``--gt`` is another file than that run's truth."""
     truth = marker.get("truth")
     if not isinstance(truth, dict):
         return
@@ -78,8 +73,7 @@ def check_against_its_run(gt: str, gt_sha256: str, est: str, marker: dict) -> No
 
 
 def _check_one_to_one(truth, gt: str, est: str, count: int, marker: dict) -> None:
-    """Poses without timestamps pair one to one: equal counts, or ``--est`` a run of the first
-    frames of ``--gt``'s sequence (said in one line)."""
+    """Poses without timestamps: equal counts, or ``--est`` a run of the first frames of ``--gt``'s."""
     sequence = Path(str(marker.get("sequence")))  # of the run that wrote --est: its first frames?
     first = marker.get("frames") == count and Path(gt).resolve() == (sequence / "poses.txt").resolve()
     if len(truth.positions) > count and first:
@@ -89,8 +83,7 @@ def _check_one_to_one(truth, gt: str, est: str, count: int, marker: dict) -> Non
         hint = f": --est {stamped} has them" if truth.times is not None and stamped.is_file() else ""
         raise UsageError(
             f"--gt {gt} has {len(truth.positions)} {'poses' if truth.poses is not None else 'positions'} "
-            f"but --est {est} has {count} poses; "
-            f"expected equal counts (or timestamps in both{hint})"
+            f"but --est {est} has {count} poses; expected equal counts (or timestamps in both{hint})"
         )
 
 
@@ -124,18 +117,16 @@ def _associated(
 
 def recording_of(gt: str, extrinsic_of: str | None, kitti: bool) -> str | None:
     """The ASL recording whose calibration moves ``--gt`` into its rectified left camera:
-    ``extrinsic_of``, else the ``mav0`` folder holding the ``--gt`` file among its sensors' (said in
-    one line), else None (taken as given). KITTI poses and files this package wrote are a camera's
-    already: never moved (``extrinsic_of`` with one is refused). The folders are those of the path
-    as given: a truth linked into a recording from elsewhere is that recording's, as ``run`` reads it.
-    """
+    ``extrinsic_of``, else the ``mav0`` folder holding ``--gt`` among its sensors' (links not
+    followed), else None. KITTI poses and files this package wrote are never moved."""
     from vo_lib.formats.euroc import mav0_of
 
     path = Path(os.path.abspath(gt))  # symbolic links not followed
-    if extrinsic_of is not None and (path.parent / MARKER).is_file():
+    if extrinsic_of is not None and (kitti or (path.parent / MARKER).is_file()):
+        held = "holds KITTI poses, which are" if kitti else "was written by this package, as"
         raise UsageError(
-            f"--extrinsic-of {extrinsic_of}: --gt {gt} was written by this package, as a camera's poses "
-            "already; expected a body-frame truth (TUM, EuRoC CSV or positions)"
+            f"--extrinsic-of {extrinsic_of}: --gt {gt} {held} a camera's poses already; expected a "
+            "body-frame truth (TUM, EuRoC CSV or positions)"
         )
     if extrinsic_of is not None or kitti:
         return extrinsic_of
@@ -148,40 +139,10 @@ def recording_of(gt: str, extrinsic_of: str | None, kitti: bool) -> str | None:
     return str(found)
 
 
-def _say_if_units_differ(truth_xyz: np.ndarray, est_xyz: np.ndarray) -> None:
-    """A note where the two paths' lengths differ a hundredfold or more (one in millimetres?)."""
-    from vo_lib.evaluation import path_length
-
-    truth_m, est_m = path_length(truth_xyz), path_length(est_xyz)
-    if min(truth_m, est_m) > 0 and max(truth_m, est_m) >= 100 * min(truth_m, est_m):
-        print(
-            f"note: the ground truth's path is {truth_m:.4g} m long and the estimate's {est_m:.4g} m: "
-            "is one of them in millimetres? Both files are read as metres"
-        )
-
-
-def _say_if_turns_differ(G: np.ndarray, E: np.ndarray) -> None:
-    """A note where the estimate's turns have little in common with the truth's (quaternions of
-    another order in one file?)."""
-    found = turns_differ(G, E)
-    if found:
-        print(
-            f"note: the estimate's rotations from pose to pose differ from the ground truth's by "
-            f"{found[0]:.2g} deg (RMS), where the truth turns {found[1]:.2g} deg: are they of one "
-            f"recording, each file's quaternions in the order of its format {ORDERS}?"
-        )
-
-
 def _to_camera(truth, gt: str, extrinsic_of: str | None) -> np.ndarray:
-    """``X``, the rectified left camera in the frame ``--gt`` tracks (:func:`recording_of`), or the
-    identity (said when the truth may be a body's)."""
+    """The rectified left camera in the frame ``--gt`` tracks (:func:`recording_of`), or the identity."""
     from vo_lib.formats.euroc import body_to_rectified_camera, tracked_to_camera
 
-    if truth.times is None and extrinsic_of is not None:
-        raise UsageError(
-            f"--extrinsic-of {extrinsic_of}: --gt {gt} holds KITTI poses, which are a camera's already; "
-            "expected a body-frame truth (TUM, EuRoC CSV or positions)"
-        )
     recording = recording_of(gt, extrinsic_of, kitti=truth.times is None)
     if recording is not None:
         tracker = recording if truth.poses is None else None  # a prism's lever arm
@@ -196,23 +157,17 @@ def _to_camera(truth, gt: str, extrinsic_of: str | None) -> np.ndarray:
     return np.eye(4)
 
 
-def _print_position_errors(positions: np.ndarray, E: np.ndarray, lever: np.ndarray) -> None:
-    """ATE of the point ``lever`` (in the camera) carried along ``E`` against ``positions``."""
-    from vo_lib.evaluation import Alignment, ate_positions, carried_point, shown, umeyama
-
-    tracked = carried_point(E, lever)
-    for alignment in (Alignment.SE3, Alignment.SIM3):
-        a, _ = ate_positions(positions, E, lever, alignment)
-        rmse, worst = shown(a.rmse, ".4f"), shown(a.max, ".4f")  # undefined: a scale of nothing moving
-        scale = umeyama(tracked, positions, with_scale=True)[2] if alignment is Alignment.SIM3 else None
-        named = "" if scale is None else f", scale {shown(scale, '.4f')}"
-        print(f"ATE ({alignment} alignment{named}, positions only): rmse {rmse} m, max {worst}")
-
-
 def _print_pose_errors(G: np.ndarray, E: np.ndarray, lengths) -> None:
-    """The standard errors of ``E`` against ``G``, and KITTI's errors of each segment length."""
+    """The standard errors of ``E`` against ``G`` and KITTI's of each segment length, after a note where
+    their turns differ (quaternions of another order in one file?)."""
     from vo_lib.evaluation import kitti_segment_errors, standard_errors
 
+    if found := turns_differ(G, E):
+        print(
+            f"note: the estimate's rotations from pose to pose differ from the ground truth's by "
+            f"{found[0]:.2g} deg (RMS), where the truth turns {found[1]:.2g} deg: are they of one "
+            f"recording, each file's quaternions in the order of its format {ORDERS}?"
+        )
     for label, value in standard_errors(G, E, lengths).rows():
         print(f"{label:<62s}{value:>16s}")
     segments = kitti_segment_errors(G, E, lengths) if lengths and len(lengths) > 1 else {}
@@ -234,12 +189,13 @@ def evaluate_command(
     """Print the 3-D errors of an estimate (KITTI or TUM) against ground truth in any format of
     :mod:`vo_lib.formats.groundtruth`: final error, ATE (SE(3), Sim(3)), RPE and KITTI's errors.
 
-    ``segments``: a tuple of lengths in metres (default: those the sequence allows). A truth of an ASL
-    recording's body (:func:`recording_of`) is moved into its rectified left camera, through the
-    ``sensor.yaml`` beside ``--gt``; for positions only, as a lever arm carried along the estimate.
+    ``segments``: lengths in metres (default: those the sequence allows). A truth of an ASL recording's
+    body (:func:`recording_of`) is moved into its rectified left camera; positions only, as a lever arm.
     ``time_offset``: seconds added to the estimate's timestamps before they are paired with the truth's,
     at most ``max_time_diff`` apart.
     """
+    from vo_lib.evaluation import Alignment, ate_positions, carried_point, shown, umeyama
+
     limits = (("--time-offset", time_offset, -60.0), ("--max-time-diff", max_time_diff, 0.0))
     for option, seconds, low in limits:
         if not low <= seconds <= 60.0:  # NaN too
@@ -258,12 +214,23 @@ def evaluate_command(
         to_camera = _to_camera(truth, gt, extrinsic_of)  # the rectified left camera in the tracked frame
     print(notes.getvalue(), end="")
     truth_xyz = truth.positions[i_gt] if truth.poses is None else truth.poses[i_gt][:, :3, 3]
-    _say_if_units_differ(truth_xyz, E[i_est][:, :3, 3])
+    truth_m, est_m = path_length(truth_xyz), path_length(E[i_est][:, :3, 3])
+    if min(truth_m, est_m) > 0 and max(truth_m, est_m) >= 100 * min(truth_m, est_m):
+        print(
+            f"note: the ground truth's path is {truth_m:.4g} m long and the estimate's {est_m:.4g} m: "
+            "is one of them in millimetres? Both files are read as metres"
+        )
     if truth.poses is not None:
-        G = truth.poses[i_gt] @ to_camera  # the truth's camera poses
-        _say_if_turns_differ(G, E[i_est])
-        _print_pose_errors(G, E[i_est], segments)
+        _print_pose_errors(truth.poses[i_gt] @ to_camera, E[i_est], segments)  # the truth's camera poses
         return
     if segments is not None:
         print(f"--segments: --gt {gt} holds positions only, which give the ATE alone")
-    _print_position_errors(truth.positions[i_gt], E[i_est], np.linalg.inv(to_camera)[:3, 3])
+    # the ATE of the point lever (in the camera) carried along the estimate
+    positions, E, lever = truth.positions[i_gt], E[i_est], np.linalg.inv(to_camera)[:3, 3]
+    tracked = carried_point(E, lever)
+    for alignment in (Alignment.SE3, Alignment.SIM3):
+        a, _ = ate_positions(positions, E, lever, alignment)
+        rmse, worst = shown(a.rmse, ".4f"), shown(a.max, ".4f")  # undefined: a scale of nothing moving
+        scale = umeyama(tracked, positions, with_scale=True)[2] if alignment is Alignment.SIM3 else None
+        named = "" if scale is None else f", scale {shown(scale, '.4f')}"
+        print(f"ATE ({alignment} alignment{named}, positions only): rmse {rmse} m, max {worst}")

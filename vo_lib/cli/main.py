@@ -1,9 +1,7 @@
-"""Command line of the collection: ``python -m vo_lib COMMAND`` (run, evaluate, convert, generate,
-bench, sweep; each has its own ``--help``).
+"""``python -m vo_lib COMMAND``: run, evaluate, convert, generate, bench, sweep.
 
-A bad input or argument prints one line on stderr and exits with status 2; Ctrl-C (SIGINT) or
-SIGTERM removes what was half-written, prints one line and exits with 130 or 143. Output folders
-follow :mod:`vo_lib.outputs` (``--out``, ``--force``).
+Bad input prints one line on stderr and exits with 2; SIGINT or SIGTERM removes what was
+half-written, prints one line and exits with 130 or 143. Output folders follow :mod:`vo_lib.outputs`.
 """
 
 from __future__ import annotations
@@ -23,8 +21,7 @@ from pathlib import Path
 
 from vo_lib.arguments import OneLineParser, UsageError, count_at_least, non_empty, one_line
 
-#: Bounds of ``generate --resolution`` (each side, pixels): 32 keeps a few FAST corners in view,
-#: 4096 keeps a rendered frame pair and its buffers within a few hundred MB.
+#: Bounds of ``generate --resolution`` (each side, pixels): a few FAST corners, a few hundred MB.
 MIN_SIDE, MAX_SIDE = 32, 4096
 
 
@@ -60,45 +57,35 @@ def _recording(text: str) -> str:
     return text
 
 
-def _no_truth(parser: argparse.ArgumentParser, what: str) -> None:
-    parser.add_argument(
-        "--no-truth",
-        action="store_true",
-        help=f"read no ground truth (one that does not cover every image stops the {what})",
-    )
-
-
 def build_parser() -> argparse.ArgumentParser:
     from vo_lib.bench import BENCH_HELP, BENCHES
     from vo_lib.cli.sweep import SWEEPS
     from vo_lib.sim.samples import SAMPLES
 
-    # named as it was started: the ``vo-lib`` script or ``python -m vo_lib``
     prog = "vo-lib" if Path(sys.argv[0]).name == "vo-lib" else "python -m vo_lib"
 
     def example(*lines: str) -> str:
         return "example" + ("s" if len(lines) > 1 else "") + ":\n" + "\n".join(f"  {prog} {x}" for x in lines)
 
-    def wrap(text: str) -> str:
-        return textwrap.fill(text, 88)
-
-    # every parser's description wrapped by wrap(), its examples kept as written
+    # descriptions are wrapped here, examples kept as written
     plain = functools.partial(OneLineParser, formatter_class=argparse.RawDescriptionHelpFormatter)
 
     def output(p, what: str, **kwargs) -> None:
         p.add_argument("--out", type=non_empty("a folder"), help=f"output folder ({what})", **kwargs)
-        p.add_argument(
-            "--force",
-            action="store_true",
-            help="replace --out where another command of this program wrote it, as it wrote it",
-        )
+        force = "replace --out where another command of this program wrote it, as it wrote it"
+        p.add_argument("--force", action="store_true", help=force)
+
+    def no_truth(p, what: str) -> None:
+        why = f"read no ground truth (one that does not cover every image stops the {what})"
+        p.add_argument("--no-truth", action="store_true", help=why)
 
     parser = plain(
         prog=prog,
-        description=wrap(
-            "Stereo visual odometry for a crawler robot [Zhao], line-feature EKF-SLAM [Yan 2020] "
-            "and VO-assisted laser pose tracking [Yuan], run from the command line. Each command has "
-            "its own --help."
+        description=textwrap.fill(
+            "Stereo visual odometry for a crawler robot [Zhao], line-feature EKF-SLAM [Yan 2020] and "
+            "VO-assisted laser pose tracking [Yuan], run from the command line. Each command has its own "
+            "--help.",
+            88,
         ),
         epilog=example(
             "run                          # the default sample, indoor_linear",
@@ -114,10 +101,8 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND", parser_class=plain)
 
     def command(name: str, help: str, description: str, *examples: str, listing: str = ""):
-        """A subcommand, its description wrapped by wrap() and then ``listing``, its examples as written."""
-        return sub.add_parser(
-            name, help=help, description=wrap(description) + listing, epilog=example(*examples)
-        )
+        description = textwrap.fill(description, 88) + listing
+        return sub.add_parser(name, help=help, description=description, epilog=example(*examples))
 
     run = command(
         "run",
@@ -141,7 +126,7 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument(
         "--no-odometry", action="store_true", help="ignore odometry.txt (constant-velocity prediction)"
     )
-    _no_truth(run, "run")
+    no_truth(run, "run")
     run.add_argument(
         "--seed", type=count_at_least(0, "seed"), default=0, help="seed of the RANSAC draws (>= 0)"
     )
@@ -181,21 +166,18 @@ def build_parser() -> argparse.ArgumentParser:
         type=_segments,
         help="comma-separated segment lengths in metres (default: KITTI's 100..800)",
     )
-    ev.add_argument(
-        "--time-offset",
-        metavar="SECONDS",
-        type=float,
-        default=argparse.SUPPRESS,
-        help="added to --est's timestamps before they are paired with --gt's: the lag of a clock not "
-        "synchronised with the cameras, as evo's --t_offset (default: 0)",
-    )
-    ev.add_argument(
-        "--max-time-diff",
-        metavar="SECONDS",
-        type=float,
-        default=argparse.SUPPRESS,
-        help="largest difference of two paired timestamps, as evo's --t_max_diff (default: 0.01)",
-    )
+    for flag, help in (
+        (
+            "--time-offset",
+            "added to --est's timestamps before they are paired with --gt's: the lag of a clock not "
+            "synchronised with the cameras, as evo's --t_offset (default: 0)",
+        ),
+        (
+            "--max-time-diff",
+            "largest difference of two paired timestamps, as evo's --t_max_diff (default: 0.01)",
+        ),
+    ):
+        ev.add_argument(flag, metavar="SECONDS", type=float, default=argparse.SUPPRESS, help=help)
     conv = command(
         "convert",
         "write a KITTI-layout copy of a recording (ASL layout, rectified; or a raw KITTI drive)",
@@ -210,7 +192,7 @@ def build_parser() -> argparse.ArgumentParser:
         help="the recording (ASL layout) or any sequence folder",
     )
     conv.add_argument("--to", choices=("kitti",), default="kitti", help="layout to write (kitti)")
-    _no_truth(conv, "copy")
+    no_truth(conv, "copy")
     output(conv, "new, empty, or written by a convert", required=True)
     gen = command(
         "generate",
@@ -266,11 +248,11 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 class _Stopped(BaseException):
-    """Raised by the SIGTERM handler (its argument the signal): ``finally`` blocks clean up."""
+    """Raised by the SIGTERM handler (its argument the signal), so that ``finally`` blocks run."""
 
 
 def _stop(signum, frame):
-    """Ctrl-C or SIGTERM: remember it (it may land where it is dropped: ``outputs.INTERRUPTED``), raise it."""
+    """Ctrl-C or SIGTERM: raise it, remembered in ``outputs.INTERRUPTED`` where it may be dropped."""
     from vo_lib.outputs import INTERRUPTED
 
     INTERRUPTED.append(stop := KeyboardInterrupt() if signum == signal.SIGINT else _Stopped(signum))
@@ -278,9 +260,8 @@ def _stop(signum, frame):
 
 
 def _signal_inside(exc: BaseException) -> BaseException | None:
-    """Our interrupt or stop, if ``exc`` wraps one: a signal that lands inside a callback from
-    compiled code (Numba loading its cache) comes out as a SystemError caused by it, and one inside
-    a compiled module's import (NumPy's) as an ImportError of its own, the stop only remembered."""
+    """Our interrupt or stop, if ``exc`` wraps one: a SystemError caused by it (a callback from
+    compiled code), or an ImportError of a compiled module (the stop only remembered)."""
     from vo_lib.outputs import INTERRUPTED
 
     if isinstance(exc, ImportError) and INTERRUPTED:
@@ -298,20 +279,14 @@ STDOUT = "standard output"
 
 
 class _Stdout:
-    """``sys.stdout``, whose failures (a full disk under ``> file``) name it, not ``--out``; a closed
-    pipe stays a BrokenPipeError, which has its own line."""
+    """``sys.stdout``, whose failures (a full disk under ``> file``) name it, not ``--out``."""
 
     def __init__(self, stream) -> None:
         self.stream = stream
 
     def __getattr__(self, name: str):
-        return getattr(self.stream, name)
-
-    def write(self, text: str) -> int:
-        return self._named(self.stream.write, text)
-
-    def flush(self) -> None:
-        self._named(self.stream.flush)
+        value = getattr(self.stream, name)
+        return functools.partial(self._named, value) if name in ("write", "flush") else value
 
     @staticmethod
     def _named(call, *args):
@@ -323,15 +298,8 @@ class _Stdout:
             raise OSError(exc.errno, exc.strerror, STDOUT) from None
 
 
-def _drop_if_stdout(exc: BaseException, stdout) -> None:
-    """Where writing ``stdout`` failed, what it still holds goes nowhere at exit (not a second error)."""
-    if isinstance(exc, OSError) and exc.filename == STDOUT:
-        with contextlib.suppress(OSError, ValueError):
-            os.dup2(os.open(os.devnull, os.O_WRONLY), stdout.fileno())
-
-
 def _os_error(exc: OSError, out) -> str:
-    """What went wrong, named by what the user gave (``--out`` for a file of a temporary output folder)."""
+    """What went wrong, named by what the user gave (``--out`` for a temporary output folder's file)."""
     why = "no space left on device" if exc.errno == errno.ENOSPC else (exc.strerror or str(exc))
     if exc.filename and ".vo_lib-" not in str(exc.filename):
         return f"{exc.filename}: {why}"
@@ -341,20 +309,18 @@ def _os_error(exc: OSError, out) -> str:
 
 
 def _dispatch(args) -> None:
-    """Run the parsed command (its module is imported only now, so that parsing stays fast)."""
+    """Call ``COMMAND_command`` of ``vo_lib.cli.COMMAND`` (or of ``run``), imported only now."""
     if args.command == "bench":
         from vo_lib.bench import BENCHES
 
         return BENCHES[args.name]()
-    # the others call COMMAND_command of vo_lib.cli.COMMAND, or of run (convert, generate), with keywords
     module = "run" if args.command in ("convert", "generate") else args.command
     kwargs = {k: v for k, v in vars(args).items() if k != "command"}
     return getattr(importlib.import_module(f"vo_lib.cli.{module}"), f"{args.command}_command")(**kwargs)
 
 
 def _run_parsed(args, command: str) -> int:
-    """Run the parsed command; a failure the user can act on is one line on stderr and status 2 (141
-    when whatever read the output closed the pipe)."""
+    """Run the parsed command: 0, or a line on stderr and 2 for what the user can fix (141: closed pipe)."""
     from vo_lib.formats.poses import TrajectoryError
     from vo_lib.outputs import OutputError
 
@@ -362,10 +328,8 @@ def _run_parsed(args, command: str) -> int:
     try:
         _dispatch(args)
         sys.stdout.flush()  # what is still buffered fails here, if it fails, not at exit
-    except BrokenPipeError:  # e.g. piped into `head`: the reader left, not a fault of the output
-        # Python's advice: point stdout at devnull so the interpreter's own flush at exit is quiet;
-        # stderr too once the line is out, as it may be the same closed pipe (2>&1) and keep the
-        # line buffered, which the flush at exit would fail to write (exit status 120)
+    except BrokenPipeError:  # e.g. piped into `head`
+        # stdout, then stderr (2>&1: the same pipe) at devnull: the flush at exit would fail (status 120)
         devnull = os.open(os.devnull, os.O_WRONLY)
         os.dup2(devnull, sys.stdout.fileno())
         with contextlib.suppress(OSError):
@@ -374,10 +338,11 @@ def _run_parsed(args, command: str) -> int:
         os.dup2(devnull, sys.stderr.fileno())
         return 128 + signal.SIGPIPE
     except (UsageError, OutputError, TrajectoryError, OSError) as exc:  # SequenceError too
-        # an OSError: e.g. a full disk while writing; the output was not put in place
         why = _os_error(exc, getattr(args, "out", None)) if isinstance(exc, OSError) else exc
         print(f"{command}: error: {one_line(why)}", file=sys.stderr)
-        _drop_if_stdout(exc, stdout)
+        if isinstance(exc, OSError) and exc.filename == STDOUT:  # what it still holds goes nowhere
+            with contextlib.suppress(OSError, ValueError):
+                os.dup2(os.open(os.devnull, os.O_WRONLY), stdout.fileno())
         return 2
     finally:
         sys.stdout = stdout
@@ -386,13 +351,11 @@ def _run_parsed(args, command: str) -> int:
 
 @contextlib.contextmanager
 def _signals():
-    """SIGTERM and SIGINT handled by :func:`_stop` meanwhile (:func:`vo_lib.atomic.signals_to`),
-    unraisable signals kept quiet; all put back after."""
+    """SIGTERM and SIGINT handled by :func:`_stop` meanwhile, unraisable ones kept quiet."""
     from vo_lib.atomic import signals_to
     from vo_lib.outputs import INTERRUPTED
 
     INTERRUPTED.clear()
-    # our interrupts, where a callback from compiled code reports them instead of raising: dropped
     previous_hook = sys.unraisablehook
     sys.unraisablehook = lambda info: (
         isinstance(info.exc_value, (KeyboardInterrupt, _Stopped)) or previous_hook(info)
@@ -431,14 +394,13 @@ def main(argv: list[str] | None = None) -> int:
 
 
 def _early_stop(signum, frame) -> None:
-    """A signal before the command has begun, while its modules load: one line, nothing to undo."""
+    """A signal while the command's modules load: one line, nothing to undo."""
     os.write(2, f"vo_lib: {signal.Signals(signum).name} while starting; nothing was done\n".encode())
     os._exit(128 + signum)
 
 
 def _late_stop(signum, frame) -> None:
-    """A signal once the command has finished, while the interpreter shuts down: one line, not a
-    silent end."""
+    """A signal once the command has finished, while the interpreter shuts down: one line."""
     with contextlib.suppress(OSError, ValueError):  # stdout or stderr closed by then
         sys.stdout.flush()
         os.write(
@@ -449,31 +411,27 @@ def _late_stop(signum, frame) -> None:
 
 @atexit.register  # registered on import, before any library's: it runs after all of theirs
 def _ignore_signals_in_teardown() -> None:
-    """Signals ignored after the last exit function: in the teardown Python runs no handler, and a
-    signal would end a finished command silently, as killed."""
+    """Signals ignored after the last exit function: in the teardown Python runs no handler."""
     if signal.getsignal(signal.SIGINT) is _late_stop:  # a command that finished (see entry)
         for kind in (signal.SIGINT, signal.SIGTERM):
             signal.signal(kind, signal.SIG_IGN)
 
 
 def entry() -> int:
-    """The ``vo-lib`` script and ``python -m vo_lib``: :func:`main`, then :func:`_late_stop` for
-    SIGINT and SIGTERM while the interpreter joins threads and runs exit functions (a local Dask
-    cluster's take seconds), and the signals ignored in the teardown after them. A command the
-    signal stopped ends at once. Before :func:`main` installs its own handler, :func:`_early_stop`;
-    a path that is not UTF-8 prints as its bytes, whatever the locale."""
+    """The ``vo-lib`` script: :func:`_early_stop` until :func:`main` handles signals itself, then
+    :func:`_late_stop` while the interpreter joins threads and runs exit functions (seconds for a
+    Dask cluster). A command a signal stopped ends at once; a path not UTF-8 prints as its bytes."""
     for kind in (signal.SIGINT, signal.SIGTERM):
         signal.signal(kind, _early_stop)
     with contextlib.suppress(AttributeError, ValueError):  # a stream replaced by one without it
         sys.stdout.reconfigure(errors="surrogateescape")
     status = main()
-    if status in (128 + signal.SIGINT, 128 + signal.SIGTERM):  # cleaned up and said so: end here,
-        # as the signal may have caught a worker thread starting, unknown to the join at exit
+    if status in (128 + signal.SIGINT, 128 + signal.SIGTERM):  # end here: a thread may be half-started
         with contextlib.suppress(OSError, ValueError):
             sys.stdout.flush()
             sys.stderr.flush()
         os._exit(status)
-    if status < 128:  # not stopped by a signal already (that one said so, in its line)
+    if status < 128:  # not stopped by a signal already
         for kind in (signal.SIGINT, signal.SIGTERM):
             signal.signal(kind, _late_stop)
     return status

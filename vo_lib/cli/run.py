@@ -1,10 +1,8 @@
 """``python -m vo_lib run``, ``convert`` and ``generate``: the pipeline as a command, and the
 sequences it reads written (a recording rectified, a sample rendered).
 
-``run`` writes into ``--out`` (default ``runs/NAME``, under the rules of :mod:`vo_lib.outputs`):
-``poses.txt`` (KITTI), ``trajectory.tum`` (TUM), ``timings.csv``, ``diagnostics.csv``,
-``trajectory.png`` and the marker (how the run was made), and prints a timing table like the
-paper's Table 1 and, where the sequence has ground truth, the errors.
+The pipeline, the data folder and Matplotlib are imported where they are used, so that a run says
+what it is about to do within a second or two.
 """
 
 from __future__ import annotations
@@ -20,11 +18,14 @@ from collections import Counter
 from dataclasses import asdict, fields
 from pathlib import Path
 
+import numpy as np
+
 from vo_lib.arguments import UsageError
+from vo_lib.evaluation import path_length, rotation_angle, rpe
 from vo_lib.formats.poses import write_kitti_poses, write_tum
-from vo_lib.geometry import camera_poses_from_planar, planar_from_camera_poses, rigid_inverse
+from vo_lib.geometry import as_homogeneous, camera_poses_from_planar, planar_from_camera_poses, rigid_inverse
 from vo_lib.outputs import OutputError, OutputFolder, check_target, file_sha256, notice, read_marker, reading
-from vo_lib.sim.samples import SAMPLES, get_sample, is_sample
+from vo_lib.sim.samples import SAMPLES, generate, get_sample, is_sample
 from vo_lib.stereo_vo.run_report import (
     error_report,
     errors_3d,
@@ -33,11 +34,10 @@ from vo_lib.stereo_vo.run_report import (
     print_error_table,
     print_timing_table,
     tracked_offsets,
+    tracked_truth,
     truth_and_odometry,
 )
 
-# The pipeline and the metrics (SciPy, Numba) are imported where they are used, so that a run
-# says what it is about to do before they load: its first line comes within a second or two.
 DEFAULT_SEQUENCE = "indoor_linear"
 
 
@@ -61,24 +61,26 @@ def input_path(name_or_path: str, frames: int | None) -> tuple[Path, int | None]
     return Path(name_or_path), frames
 
 
+def _recording(path: Path) -> Path:
+    """An ASL recording, given as ``mav0`` or the folder holding it; any other folder as it is."""
+    return path.parent if path.name == "mav0" else path
+
+
 def default_name(name_or_path: str, frames: int | None = None) -> str:
-    """The NAME of a run's default ``runs/NAME``: the sample's, or the sequence folder's (not ``mav0``),
-    with ``_Nf`` for the first ``frames`` N (a short run does not replace the whole one's output)."""
+    """The NAME of a run's default ``runs/NAME``: the sample's, or the sequence folder's, with ``_Nf``
+    for the first ``frames`` N (a short run does not replace the whole one's output)."""
     path = Path(name_or_path) if is_sample(name_or_path) else Path(name_or_path).resolve()
-    return (path.parent.name if path.name == "mav0" else path.name) + (f"_{frames}f" if frames else "")
+    return _recording(path).name + (f"_{frames}f" if frames else "")
 
 
 #: A step that takes longer than this (seconds) says what it is doing.
 SLOW_S = 2.0
-#: Seconds to render and write one frame pair of a crawler sample, for the first line's estimate:
-#: the 401 frames of indoor_linear took 6 s on the 2-core machine when it was quiet, 26 s at a load
-#: average of 9, so this range (the road's 1242x375 frames take longer).
+#: Seconds to render and write one frame pair of a crawler sample (2 cores, quiet to a load of 9).
 RENDER_S_PER_FRAME = (0.015, 0.1)
 
 
 def announce_run(name: str, source: Path, frames: int | None, out_dir: Path) -> None:
-    """The first line of a run: what it reads, what comes first, where it writes (on stdout, with the
-    other progress lines and the results; stderr is for an error or a notice)."""
+    """The first line of a run, on stdout: what it reads, what comes first, where it writes."""
     from vo_lib.data import is_rendered
 
     if not is_sample(name):
@@ -106,11 +108,8 @@ def _write_csv(path: Path, rows, cls) -> None:
 
 
 def calibration_digest(sequence: Path, truth_file: Path) -> str | None:
-    """sha256 of the calibration that moves an ASL recording's truth into its rectified left camera,
-    the numbers as read from its ``sensor.yaml`` files (a comment changes none); None for another
-    layout."""
-    import numpy as np
-
+    """sha256 of the numbers of an ASL recording's ``sensor.yaml`` files that move its truth into its
+    rectified left camera (a comment changes none); None for another layout."""
     from vo_lib.formats.asl_calibration import read_camera_yaml, truth_extrinsic
     from vo_lib.formats.euroc import mav0_of
 
@@ -127,8 +126,7 @@ def calibration_digest(sequence: Path, truth_file: Path) -> str | None:
 
 
 def _truth_record(seq) -> dict | None:
-    """The truth file of a run's errors, with the sha256 of it and of its calibration (``evaluate``
-    refuses them once changed)."""
+    """The truth file of a run's errors and the sha256 of it and of its calibration, for ``evaluate``."""
     truth_file = seq.truth_file or (seq.path / "poses.txt" if seq.poses is not None else None)
     if truth_file is None or not Path(truth_file).is_file():  # none, or a folder of packets (raw KITTI)
         return None
@@ -179,16 +177,20 @@ def run_command(
     no_truth: bool = False,
 ) -> dict:
     """Run the pipeline and write its outputs; returns the error report (empty without truth).
-    ``motion``: the model (``auto``: planar for the crawler, 6-DoF for a car; planar poses are
-    written carried to the camera through its mount)."""
+    ``motion``: the model (``auto``: planar for the crawler, 6-DoF for a car)."""
     from vo_lib.data import is_rendered, kept_data_folder, load_sequence
 
     name = sequence or DEFAULT_SEQUENCE
     source, load_frames = input_path(name, frames)
     out_dir = Path(out) if out else Path("runs") / default_name(name, frames)
-    if not out and not force:
-        _refuse_another_sequence(out_dir, source)
-
+    # a default runs/NAME holding the run of another sequence of that name (KITTI's 00 to 21): --force
+    marker = {} if out or force else read_marker(out_dir) or {}
+    earlier = marker.get("sequence") if marker.get("written_by") == "vo_lib run" else None
+    if isinstance(earlier, str) and _recording(Path(earlier)) != _recording(source.resolve()):
+        raise OutputError(
+            f"{out_dir}: holds the run of {earlier}, another sequence of this name; give --out, "
+            "or add --force to replace it"
+        )
     keep = kept_data_folder()  # the samples' folder, not runs': nothing inside it
     with (
         OutputFolder(
@@ -209,43 +211,20 @@ def run_command(
     return report
 
 
-def _refuse_another_sequence(out_dir: Path, source: Path) -> None:
-    """A default ``runs/NAME`` that holds the run of another sequence of that name (KITTI's are all
-    named 00 to 21) is replaced only with ``--force``: the name alone does not make it this one's."""
-
-    def recording(path: Path) -> Path:  # an ASL recording, given as mav0 or the folder holding it
-        return path.parent if path.name == "mav0" else path
-
-    marker = read_marker(out_dir) or {}
-    earlier = marker.get("sequence") if marker.get("written_by") == "vo_lib run" else None
-    if isinstance(earlier, str) and recording(Path(earlier)) != recording(source.resolve()):
-        raise OutputError(
-            f"{out_dir}: holds the run of {earlier}, another sequence of this name; give --out, "
-            "or add --force to replace it"
-        )
-
-
-#: A run whose path is this many times the truth's, or this fraction of it, says so: more than drift,
-#: and a baseline given twice its length still says so on a run that measures its steps a little short.
-PATH_RATIO = 1.5
-#: ... a hundredfold: a truth in millimetres; and no path is judged under ``MIN_PATH_M`` metres.
-UNIT_RATIO, MIN_PATH_M = 100.0, 0.1
-#: A run with this share of its frames flagged says so (the rendered samples, whose tracks slip
-#: and lose contact by design, flag a fifth at most).
+#: Notices: a path this many times the truth's or this fraction of it (a baseline: more than drift),
+#: a hundredfold (a truth in millimetres), no path judged under ``MIN_PATH_M`` metres.
+PATH_RATIO, UNIT_RATIO, MIN_PATH_M = 1.5, 100.0, 0.1
+#: ... this share of the frames flagged (the rendered samples flag a fifth at most).
 FLAGGED_SHARE = 0.25
-#: A run whose frame-to-frame rotations differ from the truth's by this share of the truth's own
-#: (RMS, and by at least ``TURNS_DIFFER_DEG``) says so: the development runs differ by 2-13 % of it,
-#: a TUM file whose quaternions are written w first by 160 %.
-TURNS_DIFFER = 0.5
-TURNS_DIFFER_DEG = 0.2
+#: ... rotations from frame to frame that differ from the truth's by this share of its own turns (RMS,
+#: and by ``TURNS_DIFFER_DEG``): runs differ by 2-13 %, quaternions written w first by 160 %.
+TURNS_DIFFER, TURNS_DIFFER_DEG = 0.5, 0.2
 ORDERS = "(TUM: qx qy qz qw; EuRoC CSV: qw qx qy qz)"  # of the quaternions in a trajectory's rows
 
 
 def _say_if_suspect(seq, n: int, diagnostics, poses, motion: str = "auto") -> None:
     """A notice where a run looks like that of a calibration not of these images, or of a motion
-    model not of this body (``motion`` other than ``auto``): ``FLAGGED_SHARE`` of the frames
-    without stereo features, or flagged for other reasons (vision not used), or a path the truth's times
-    ``PATH_RATIO`` or more (a baseline)."""
+    model not of this body: ``FLAGGED_SHARE`` of the frames flagged, turns or a path unlike the truth's."""
     from vo_lib.stereo_vo.pipeline import Reason
 
     reasons = Counter(d.reason for d in diagnostics if d.fallback)
@@ -266,18 +245,13 @@ def _say_if_suspect(seq, n: int, diagnostics, poses, motion: str = "auto") -> No
             f"({why});{model} is each camera's calibration, distortion included, that of these images?"
         )
     else:
-        if seq.poses is not None:
-            _say_if_turns_differ(seq, n, poses)
+        _say_if_turns_differ(seq, n, poses)
         _say_if_path_differs(seq, n, poses)
 
 
 def _say_if_path_differs(seq, n: int, poses) -> None:
     """A notice where the estimate's path is the truth's (poses, or a tracker's positions) times
-    ``PATH_RATIO`` or more (a baseline), or a hundredth of it (a truth in millimetres); not on a path
-    under ``MIN_PATH_M``, which noise of millimetres makes any length."""
-    from vo_lib.evaluation import path_length
-    from vo_lib.stereo_vo.run_report import tracked_truth
-
+    ``PATH_RATIO`` or more, or a hundredth of it; not on a path under ``MIN_PATH_M``."""
     tracked = None if seq.poses is not None else tracked_truth(seq, n)
     truth = seq.poses[:n, :3, 3] if seq.poses is not None else None if tracked is None else tracked[2]
     if truth is None:
@@ -292,14 +266,8 @@ def _say_if_path_differs(seq, n: int, poses) -> None:
 
 
 def turns_differ(truth, poses) -> tuple[float, float] | None:
-    """``(differ, turns)``, degrees (RMS): how far the estimate's rotations from pose to pose are
-    from the truth's, and how far the truth's turn, where the first is ``TURNS_DIFFER`` of the
-    second or more (a truth of another recording, or of another quaternion order); else None."""
-    import numpy as np
-
-    from vo_lib.evaluation import rotation_angle, rpe
-    from vo_lib.geometry import as_homogeneous
-
+    """``(differ, turns)``, degrees (RMS): how far the estimate's rotations from pose to pose are from
+    the truth's, and how far the truth turns, where the first is ``TURNS_DIFFER`` of it or more; else None."""
     truth = as_homogeneous(truth)
     turned = np.degrees(rotation_angle(np.swapaxes(truth[:-1, :3, :3], 1, 2) @ truth[1:, :3, :3]))
     differ, turns = rpe(truth, poses, rotation=True)[0].rmse, float(np.sqrt(np.mean(turned**2)))
@@ -308,32 +276,32 @@ def turns_differ(truth, poses) -> tuple[float, float] | None:
 
 def _say_if_turns_differ(seq, n: int, poses) -> None:
     """A notice where the estimate's turns have little in common with the truth's (:func:`turns_differ`)."""
-    found = turns_differ(seq.poses[:n], poses)
+    if seq.poses is None or not (found := turns_differ(seq.poses[:n], poses)):
+        return
     truth = seq.truth_file or seq.path / "poses.txt"
     quaternions = truth.is_file() and truth.name != "poses.txt"  # not KITTI's matrices, nor OXTS packets
     order = f", its quaternions in the order of its format {ORDERS}" if quaternions else ""
-    if found:
-        notice(
-            f"{truth}: the estimate's rotations from frame to frame differ from the truth's by "
-            f"{found[0]:.2g} deg (RMS), where the truth turns {found[1]:.2g} deg: is it the truth of "
-            f"these images{order}?"
-        )
+    notice(
+        f"{truth}: the estimate's rotations from frame to frame differ from the truth's by "
+        f"{found[0]:.2g} deg (RMS), where the truth turns {found[1]:.2g} deg: is it the truth of "
+        f"these images{order}?"
+    )
 
 
-def _warm_up_saying_so(seq, no_odometry: bool, seed: int, motion: str, vehicle) -> None:
-    """The untimed warm-up (:func:`~vo_lib.stereo_vo.pipeline.warm_up`); once it has taken
-    ``SLOW_S``, a line says that the kernels are compiling, and another when they are done."""
+def _warm_up_saying_so(seq, **options) -> None:
+    """The untimed :func:`~vo_lib.stereo_vo.pipeline.warm_up`; once it has taken ``SLOW_S``, a line
+    says that the kernels are compiling, and another when they are done."""
     from vo_lib.stereo_vo.pipeline import WARM_UP_FRAMES, warm_up
 
     compiling = (
         f"compiling the Numba kernels on the first {WARM_UP_FRAMES} frames (once per environment and "
         "motion model: they are cached; up to a minute on 2 cores) ..."
     )
-    said = []  # the notice, once SLOW_S have passed; then its end is said too
+    said = []
     slow = threading.Timer(SLOW_S, lambda: said.append(print(compiling, flush=True)))
     slow.start()
     try:
-        seconds = warm_up(seq, use_odometry=not no_odometry, seed=seed, motion=motion, vehicle=vehicle)
+        seconds = warm_up(seq, **options)
     finally:
         slow.cancel()
         slow.join()
@@ -348,13 +316,6 @@ _AUTO_BECAUSE = {
     " (--motion hover: a drone or a hand-held rig)",
     "drone": "a recording's own calibration: a drone or a hand-held rig",
 }
-
-
-def _motion_said(vehicle, motion: str) -> str:
-    """The motion model a run uses, and why."""
-    if motion != "auto":
-        return f"{motion} (--motion {motion})"
-    return f"{vehicle.motion} ({_AUTO_BECAUSE[str(vehicle.kind)]})"
 
 
 def _run_into(
@@ -372,18 +333,12 @@ def _run_into(
         raise UsageError(f"{seq.path}: has {n} frame; a run needs at least 2 frames")
     vehicle = vehicle_of(seq, use_odometry=not no_odometry, motion=motion)
     mount = vehicle.mount
-    print(f"motion model: {_motion_said(vehicle, motion)}", flush=True)
-    _warm_up_saying_so(seq, no_odometry, seed, motion, vehicle)
+    why = f"--motion {motion}" if motion != "auto" else _AUTO_BECAUSE[str(vehicle.kind)]
+    print(f"motion model: {vehicle.motion if motion == 'auto' else motion} ({why})", flush=True)
+    options = {"use_odometry": not no_odometry, "seed": seed, "motion": motion, "vehicle": vehicle}
+    _warm_up_saying_so(seq, **options)
     print(f"visual odometry on {n} frames ...", flush=True)
-    result = run_sequence(
-        seq,
-        frames=n,
-        use_odometry=not no_odometry,
-        seed=seed,
-        progress=sys.stderr.isatty(),
-        motion=motion,
-        vehicle=vehicle,
-    )
+    result = run_sequence(seq, frames=n, progress=sys.stderr.isatty(), **options)
     poses = result.camera_poses
     poses = camera_poses_from_planar(result.poses, mount) if poses is None else poses
     _say_if_suspect(seq, n, result.diagnostics, poses, motion)
@@ -414,30 +369,26 @@ def _run_into(
             planar=vehicle.kind is not VehicleKind.DRONE,
             fused=vehicle.odometry is not None,
         )
+    fused = seq.odometry is not None and not no_odometry
     output.commit(
-        sequence=str(seq.path.resolve()),
-        frames=n,
-        seed=seed,
-        odometry=seq.odometry is not None and not no_odometry,  # whether odometry was fused
-        truth=_truth_record(seq),
+        sequence=str(seq.path.resolve()), frames=n, seed=seed, odometry=fused, truth=_truth_record(seq)
     )
     return report
 
 
 def convert_command(sequence: str, to: str, out: str, force: bool = False, no_truth: bool = False) -> None:
-    """Write a rectified copy of a sequence (an ASL rig, or any readable one) in the KITTI layout,
-    with the source's manifest (an ASL rig's camera in the body, its position-only truth) and its
+    """Write a rectified copy of a sequence in the KITTI layout, with the source's manifest and its
     odometry files (:data:`~vo_lib.formats.sequence_writer.CARRIED`)."""
     from vo_lib.data import kept_data_folder, load_sequence
     from vo_lib.formats.sequence_writer import SequenceWriter
 
     with contextlib.ExitStack() as locks:  # no command replaces the sequence while it is read
         locks.enter_context(reading(sequence))
-        # read before --out is touched: a bad input changes nothing (the odometry files it carries too)
+        # read before --out is touched: a bad input changes nothing
         seq = load_sequence(Path(sequence), odometry=True, progress=False, truth=not no_truth)
         locks.enter_context(reading(seq.path))
         manifest = {k: v for k, v in seq.manifest.items() if k != "layout"}
-        writer = SequenceWriter(
+        with SequenceWriter(
             out,
             seq.camera,
             force=force,
@@ -446,18 +397,13 @@ def convert_command(sequence: str, to: str, out: str, force: bool = False, no_tr
             inputs=[seq.path],
             keep=kept_data_folder(),
             keep_inside=True,
-        )
-        with writer:
+        ) as writer:
             for left, right in seq:
                 writer.add(left, right)
             writer.carry(seq.path, seq.oxts, seq.raw_calib)  # a raw KITTI drive's packets and calibration
             body = manifest.get("T_body_camera")  # an ASL rig's; KITTI's Tr is the body's into the camera
-            path = writer.close(
-                seq.times,
-                seq.poses,
-                manifest=manifest or None,
-                camera_from_body=None if body is None else rigid_inverse(body),
-            )
+            from_body = None if body is None else rigid_inverse(body)
+            path = writer.close(seq.times, seq.poses, manifest=manifest or None, camera_from_body=from_body)
     truth = "ground truth in poses.txt" if seq.poses is not None else "no ground truth"
     truth = "position-only ground truth in manifest.json" if "positions" in manifest else truth
     print(f"wrote {path}: {len(seq)} rectified pairs in the KITTI layout, {truth}")
@@ -466,7 +412,6 @@ def convert_command(sequence: str, to: str, out: str, force: bool = False, no_tr
 def generate_command(name: str, out: str | None, frames: int | None, resolution, force: bool = False) -> None:
     """Render sample ``name`` into ``out`` (default: its folder in the data folder) in the KITTI layout."""
     from vo_lib.data import kept_data_folder, sample_path
-    from vo_lib.sim.samples import generate
 
     most = get_sample(name).frames
     if frames is not None and frames > most:

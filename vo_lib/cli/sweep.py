@@ -1,14 +1,8 @@
 """``python -m vo_lib sweep NAME``: a paper's statistic over many seeds, on Dask or in this process.
 
-Each task calls one function of its paper's package with keyword arguments (``seed`` among them,
-its only source of randomness: the figures are the same on any cluster) and gets a dict of numbers.
-
-1. Make the grid of tasks (:data:`SWEEPS`).
-2. Run them here (``--workers 1``), on a Dask LocalCluster or on a running scheduler.
-3. Write ``results.csv`` (one row per task, arguments then figures) into an
-   :class:`vo_lib.outputs.OutputFolder`.
-4. Print each figure's mean, standard deviation and 95 % interval of the mean over the seeds, per
-   setting of the other arguments, then the paper's package's report (:data:`REPORTS`).
+Each task calls one function of its paper's package with keyword arguments (``seed`` its only source
+of randomness: the figures are the same on any cluster) and gets a dict of numbers; ``results.csv``
+holds one row per task, and each figure's mean, spread and 95 % interval over the seeds are printed.
 """
 
 from __future__ import annotations
@@ -26,8 +20,7 @@ from vo_lib.arguments import UsageError, one_line
 from vo_lib.outputs import OutputFolder
 from vo_lib.stereo_vo.paper_tables import PAPER_TABLE1  # its resolutions, largest first
 
-#: Each sweep: the function one task calls (``module.name``), the tasks for a number of seeds,
-#: and what it measures.
+#: Each sweep: the function one task calls, the tasks for a number of seeds, and what it measures.
 SWEEPS = {
     "corridor": (
         "vo_lib.lidar_tracking.corridor_experiment.corridor_figures",
@@ -50,19 +43,17 @@ SWEEPS = {
         "[Zhao], Table 1: milliseconds per stage at five resolutions",
     ),
 }
-#: The function (``module.name``) that prints, below a sweep's summary, what its paper's package
-#: says of the figures; called with the table (one row per task) and the summary (one row per figure).
+#: What prints, below a sweep's summary, what its paper's package says of the figures: called with
+#: the table (one row per task) and the summary (one row per figure).
 REPORTS = {
     "corridor": "vo_lib.lidar_tracking.corridor_experiment.corridor_report",
     "lap": "vo_lib.line_slam.lap.lap_report",
     "nees": "vo_lib.stereo_vo.consistency.nees_report",
 }
-#: Local worker processes allowed per core: more only share the cores and multiply the memory.
-WORKERS_PER_CORE = 4
-#: Seconds a --scheduler has to answer, its handshake included.
-SCHEDULER_SECONDS = 20
-#: Dask settings of the local cluster: glibc keeps freed memory for the next large temporary (Dask's
-#: default trim threshold doubles a corridor task's time in page faults); no statistical profiler.
+#: Local worker processes allowed per core; seconds a --scheduler has to answer, handshake included.
+WORKERS_PER_CORE, SCHEDULER_SECONDS = 4, 20
+#: Dask settings of the local cluster: glibc keeps freed memory (Dask's trim threshold doubles a
+#: corridor task's time in page faults); no statistical profiler.
 LOCAL_CLUSTER_CONFIG = {
     "distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": None,
     "distributed.nanny.pre-spawn-environ.MALLOC_TOP_PAD_": str(64 * 2**20),
@@ -79,14 +70,14 @@ def _call(function, kwargs: dict) -> dict:
     return {**kwargs, **{k: float(v) for k, v in function(**kwargs).items()}}
 
 
-def _no_answer(signum, frame):
-    raise TimeoutError(f"no answer as a Dask scheduler within {SCHEDULER_SECONDS} s")
-
-
 @contextlib.contextmanager
 def _alarm():
-    """:func:`_no_answer` after ``SCHEDULER_SECONDS``."""
-    previous = signal.signal(signal.SIGALRM, _no_answer)
+    """A TimeoutError after ``SCHEDULER_SECONDS``."""
+
+    def no_answer(signum, frame):
+        raise TimeoutError(f"no answer as a Dask scheduler within {SCHEDULER_SECONDS} s")
+
+    previous = signal.signal(signal.SIGALRM, no_answer)
     signal.alarm(SCHEDULER_SECONDS)
     try:
         yield
@@ -111,15 +102,9 @@ def dask_client(workers: int, scheduler: str | None):
             with _alarm():  # bounds the handshake too, which a silent server never ends
                 client = Client(scheduler.strip(), timeout=10)
         except (ValueError, TypeError, OSError, AssertionError, MemoryError) as exc:  # TimeoutError too
-            # an AssertionError: distributed's own event loop did not start within its 10 s; a
-            # MemoryError: another service's greeting read as the length of a message
-            why = (
-                "no event loop"
-                if isinstance(exc, AssertionError)
-                else "it answered, but not as a Dask scheduler"
-                if isinstance(exc, MemoryError)  # numpy's _ArrayMemoryError too
-                else one_line(exc)
-            )
+            why = "no event loop" if isinstance(exc, AssertionError) else one_line(exc)
+            # a MemoryError (numpy's too): another service's greeting read as the length of a message
+            why = "it answered, but not as a Dask scheduler" if isinstance(exc, MemoryError) else why
             raise UsageError(f"--scheduler {scheduler}: cannot reach a scheduler ({why})") from None
         with client:
             yield client
@@ -173,20 +158,15 @@ def sweep_command(name: str, seeds: int, workers=None, scheduler=None, out=None,
         raise UsageError(f"--workers {workers}: at most {WORKERS_PER_CORE * cores} on {cores} core(s)")
     _, make_tasks, describe = SWEEPS[name]
     tasks = make_tasks(seeds)
+    target, keep = Path(out or f"sweeps/{name}"), kept_data_folder()
     with OutputFolder(
-        Path(out or f"sweeps/{name}"),
-        f"vo_lib sweep {name}",
-        force=force,
-        option="--out",
-        keep=kept_data_folder(),
-        keep_inside=True,
+        target, f"vo_lib sweep {name}", force=force, option="--out", keep=keep, keep_inside=True
     ) as folder:
         table = pd.DataFrame(run_tasks(function_of(name), tasks, workers, scheduler))
         table.to_csv(folder.path / "results.csv", index=False, lineterminator="\n")
         path = folder.commit(seeds=seeds)
-    where = (
-        "in this process" if workers == 1 and scheduler is None else scheduler or f"{workers} Dask workers"
-    )
+    where = scheduler or f"{workers} Dask workers"
+    where = "in this process" if workers == 1 and scheduler is None else where
     print(f"{describe}: {len(tasks)} tasks ({where}); wrote {path / 'results.csv'}")
     stats = summary(table, list(tasks[0]))
     with pd.option_context("display.max_rows", None, "display.width", 120):
