@@ -23,10 +23,8 @@ DEFAULT_TOLERANCE = 0.01
 
 
 def visible_segment(a, b, centre, max_range: float, tolerance: float | None = None):
-    """Exact visible part: solve ``|A + t (B - A) - G|^2 = D^2`` for ``t`` and clip to [0, 1].
-
-    ``tolerance`` is accepted, and ignored, so that the three observers share one signature.
-    """
+    """Exact visible part: solve ``|A + t (B - A) - G|^2 = D^2`` for ``t``, clipped to [0, 1]
+    (``tolerance``, ignored, gives the three observers one signature)."""
     dx, dy = b[0] - a[0], b[1] - a[1]
     fx, fy = a[0] - centre[0], a[1] - centre[1]
     qa = dx * dx + dy * dy
