@@ -11,9 +11,8 @@ and predicts it from the wall's feature point ``p`` (section 1.3) in the filter'
 
     c = |p|,  n = p / c,  rho = c - n . (x_v, y_v),  psi = atan2(p_y, p_x) - phi.
 
-A line has two descriptions, ``(rho, psi)`` and ``(-rho, psi + pi)``; :func:`align_line` picks
-the one nearest a prediction. :data:`LINE` is the observation model for
-:class:`~vo_lib.line_slam.ekf_slam.EkfSlam`.
+A line has two descriptions, ``(rho, psi)`` and ``(-rho, psi + pi)``: :func:`align_line` picks
+the one nearest a prediction. :data:`LINE` is the observation model for ``EkfSlam``.
 """
 
 from __future__ import annotations

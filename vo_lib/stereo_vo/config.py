@@ -24,18 +24,15 @@ MOTIONS = ("planar", "full")
 class PipelineConfig:
     """Every choice of :class:`~vo_lib.stereo_vo.pipeline.StereoOdometry` that is a number or a name."""
 
-    #: ``"fast"``: single-scale FAST corners (``features``); ``"pyramid"``: two scales
-    #: (``pyramid_features``), for the large image motion of a car.
+    #: ``"fast"``: single-scale FAST corners; ``"pyramid"``: two scales, for a car's large image motion.
     front_end: str = "fast"
-    #: ``"planar"``: the circular-motion model (eq. 12-17) with its 1-point RANSAC; ``"full"``:
-    #: 1-point RANSAC as the outlier filter, then a 6-DoF refinement (``six_dof``).
+    #: ``"planar"``: circular motion (eq. 12-17); ``"full"``: then a 6-DoF refinement (``six_dof``).
     motion: str = "planar"
     ransac: RansacParams = field(default_factory=RansacParams)
     #: track the matched corners to sub-pixel positions in the current image (6-DoF motion only)
     subpixel_tracking: bool = False
-    #: 6-DoF motion: 1-point RANSAC's planar motion first (a vehicle turning on the ground), a general
-    #: 3-point RANSAC only where it keeps too few matches; False: the general one alone (a body free
-    #: in six degrees of freedom, of which the planar model's inliers would be a chance subset).
+    #: 6-DoF motion: 1-point RANSAC's planar hypotheses first, a general 3-point RANSAC where they
+    #: keep too few matches; False: the general one alone (a body free in six degrees of freedom).
     planar_hypotheses: bool = True
     min_features: int = 20  #: stereo features a frame needs to be matched
     min_inliers: int = 15
@@ -44,16 +41,14 @@ class PipelineConfig:
     #: The same on a frame's last attempt, matched without windows (None: ``min_inlier_ratio``).
     last_attempt_ratio: float | None = None
     prior_gate: float = float(chi2.ppf(0.9999, 2))  #: VO motion against the prediction (Mahalanobis^2)
-    #: Consecutive frames the prior gate may reject before the vision is believed over the
-    #: prediction (wheels slipping, a speed that lags when braking); the crawler always rejects.
+    #: Consecutive frames the prior gate may reject before the vision is believed over the prediction.
     max_contradictions: float = math.inf
     recent_frames: int = 15  #: good frames whose match and inlier counts make the recent medians
-    #: Guided matching that finds fewer than this fraction of the recent median is retried in a
-    #: window ``retry_widening`` times wider.
+    #: Guided matching below this fraction of the recent median is retried ``retry_widening`` wider.
     retry_fraction: float = 0.8
     retry_widening: float = 4.0
-    #: Keyframes: frames are measured against a reference frame until the motion since it is large
-    #: enough (metres of chord, radians), so that sub-pixel errors are small against the motion.
+    #: Keyframes: frames are measured against a reference until the motion since it is this large
+    #: (metres of chord, radians), so that sub-pixel errors are small against it ...
     key_distance: float = 0.04
     key_angle: float = math.radians(1.5)
     #: ... or the inliers fall below this fraction of the first frame's against the reference.
@@ -64,7 +59,7 @@ class PipelineConfig:
     #: least-squares figure on the rendered indoor samples (notebook 08); the diagonal only.
     vo_covariance_scale: tuple = ((1.5**2, 0.0), (0.0, 3.0**2))
     #: A frame whose inliers fall below this fraction of the recent median has lost part of its
-    #: view to something that does not move with the world (0: not checked) ...
+    #: view to something moving (0: not checked) ...
     lost_view_fraction: float = 0.6
     #: ... unless the drop lasts this many frames: then it is the new normal (a changed scene).
     lost_view_patience: int = 15

@@ -110,39 +110,38 @@ def vehicle_of(sequence, use_odometry: bool = True, motion: str = "auto") -> Veh
     ``use_odometry=False`` reads no odometry. With ``motion="hover"`` a sequence that names no free
     body turns about its camera (a hand-held rig, or a drone whose body is not known).
     """
-    vehicle = _vehicle(sequence, use_odometry)
-    if motion == Motion.HOVER and vehicle.kind is not VehicleKind.DRONE:
-        return replace(vehicle, kind=VehicleKind.DRONE, mount=drone_mount(np.eye(4)), motion=Motion.HOVER)
-    return vehicle
-
-
-def _vehicle(sequence, use_odometry: bool) -> Vehicle:
     camera = sequence.manifest.get("camera", {}) if isinstance(sequence.manifest, dict) else {}
     if "T_body_camera" in sequence.manifest:
         mount = drone_mount(np.asarray(sequence.manifest["T_body_camera"], float))  # no odometry
         return Vehicle(VehicleKind.DRONE, mount, car_odometry_model(), None, "none", Motion.HOVER)
     if "height_m" in camera:  # a rendered sample: the crawler of [Zhao]
-        return _crawler(sequence, camera, use_odometry)
-    return _car(sequence, use_odometry)
+        vehicle = _crawler(sequence, camera, use_odometry)
+    else:
+        vehicle = _car(sequence, use_odometry)
+    if motion == Motion.HOVER:
+        return replace(vehicle, kind=VehicleKind.DRONE, mount=drone_mount(np.eye(4)), motion=Motion.HOVER)
+    return vehicle
 
 
 def _crawler(sequence, camera: dict, use_odometry: bool) -> Vehicle:
     """A rendered sample's crawler: its mount and track odometry as the manifest states them."""
     mount = camera_mount(forward=float(camera.get("forward_m", 0.0)), height=float(camera["height_m"]))
+    manifest = sequence.path / "manifest.json"
     try:
         model = TrackOdometry(**sequence.manifest.get("track_odometry", {}))
     except (TypeError, ValueError) as exc:  # an unknown key, a value that is not a length
-        where = f"{sequence.path / 'manifest.json'}: key track_odometry"
-        raise SequenceError(f"{where}: expected track_distance, track_width, encoder_sigma ({exc})") from None
+        raise SequenceError(
+            f"{manifest}: key track_odometry: expected track_distance, track_width, encoder_sigma ({exc})"
+        ) from None
     if model.gauge < MIN_GAUGE_M:  # the turn is the tracks' difference over the gauge: no gauge, no turn
         raise SequenceError(
-            f"{sequence.path / 'manifest.json'}: key track_odometry: track_distance + 2 track_width is "
+            f"{manifest}: key track_odometry: track_distance + 2 track_width is "
             f"{model.gauge:g} m; expected at least {MIN_GAUGE_M:g} m"
         )
     mount_text = camera.get("mount", CAMERA_MOUNTS[0])
     if mount_text not in CAMERA_MOUNTS:  # a misspelt crawler's mount is not taken for another
         raise SequenceError(
-            f"{sequence.path / 'manifest.json'}: key camera.mount: expected "
+            f"{manifest}: key camera.mount: expected "
             f"{' or '.join(map(repr, CAMERA_MOUNTS))}, got {json.dumps(mount_text)[:40]}"
         )
     odometry = sequence.odometry if use_odometry else None
