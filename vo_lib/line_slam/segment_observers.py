@@ -1,9 +1,9 @@
 """Which part of a line segment lies within a laser's range: three observers ([Yan 2020], section 2).
 
-Each returns the part of the segment ``A -> B`` within range ``D`` of the robot position ``G`` as
-parameters ``(t_start, t_end)`` of ``P(t) = A + t (B - A)``, or ``None`` when none is in range.
-The distance is convex in ``t``, so the visible part is one interval; the approximate observers
-return points inside it, within ``tolerance`` metres of its ends.
+Each returns the part of the segment ``A -> B`` within range ``D`` of the robot at ``G`` as
+``(t_start, t_end)`` of ``P(t) = A + t (B - A)``, or ``None``: one interval (the distance is
+convex in ``t``); the approximate observers return points inside it within ``tolerance`` metres
+of its ends.
 
 * :func:`visible_segment_point_by_point`: samples every ``tolerance`` metres (the paper's baseline).
 * :func:`visible_segment_bisection`: the paper's observer, by where the foot ``O`` of the
