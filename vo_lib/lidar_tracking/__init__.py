@@ -8,7 +8,6 @@
 ``corridor_experiment``   the occluded corridor, LBPT against VOAPT (Table III); start here;
                           ``python -m vo_lib sweep corridor`` runs it over many seeds
 
-The one exception to the independence of the wings: this paper builds on a stereo visual
-odometer, so this wing may import ``vo_lib.stereo_vo`` (``pnp_odometry`` detects and matches with
-[Zhao]'s stereo front end). The independence contract in ``pyproject.toml`` states the same.
+The one wing that may import ``vo_lib.stereo_vo`` (``pnp_odometry`` uses [Zhao]'s stereo front
+end), as the contract in ``pyproject.toml`` states.
 """

@@ -1,12 +1,9 @@
 """[Yuan]'s corridor experiment: LBPT alone against VOAPT along the occluded corridor.
 
-The robot drives the ``corridor`` sample's path (1 m to 28 m along the axis at 0.5 m/s). Each
-seed draws its own encoder noise and slip (the odometry), laser noise and pose samples; the
-visual odometer's increments come from a VO run on the rendered corridor (or any other source of
-per-frame increments). The laser tracker updates every :data:`EVERY` frames.
-``python -m vo_lib sweep corridor --seeds 20`` prints the README's Table III beside the paper's
-(:func:`corridor_figures` per seed, :func:`corridor_report` over them); ``python -m vo_lib bench
-odometers`` times the PnP visual odometer per frame.
+The robot drives the ``corridor`` sample's path (1 m to 28 m at 0.5 m/s); each seed draws its own
+odometry noise and slip, laser noise and pose samples; the visual odometer's increments come from
+a VO run on the rendered corridor. ``python -m vo_lib sweep corridor`` prints Table III
+(:func:`corridor_figures` per seed, :func:`corridor_report` over them).
 """
 
 from __future__ import annotations
@@ -42,8 +39,7 @@ STATISTICS = ("max", "mean", "median", "std")
 
 
 def corridor_drive(seed: int):
-    """``(truth, odometry)`` planar poses per frame of the corridor sample, the odometry
-    integrated from encoder readings drawn with ``seed``."""
+    """``(truth, odometry)`` planar poses per frame of the corridor sample, encoders drawn with ``seed``."""
     sample = get_sample("corridor")
     odo = TrackOdometry()
     drive = simulate_drive(
@@ -54,8 +50,8 @@ def corridor_drive(seed: int):
 
 @functools.lru_cache(maxsize=1)
 def corridor_visual_odometry() -> tuple[np.ndarray, np.ndarray]:
-    """[Yuan]'s PnP visual odometer on the corridor sample rendered in memory at 640x480:
-    ``(planar robot poses in the world frame (K, 3), seconds per frame)``, the renderer not timed."""
+    """[Yuan]'s PnP visual odometer on the corridor rendered at 640x480: ``(planar robot poses in
+    the world frame (K, 3), seconds per frame)``."""
     rendered, frame_iter = render_sample("corridor", None, (640, 480))
     poses, seconds, _ = run_pnp_odometry(rendered.camera, frame_iter)
     planar = planar_from_camera_poses(poses, rendered.mount)
@@ -92,9 +88,9 @@ def run_tracking(
     compensate: bool = True,
     field: LikelihoodField | None = None,
 ) -> TrackingRun:
-    """Track ``truth`` from the odometry's and the visual odometer's poses (``(K, 3)`` each, any
-    frame; only their increments are used): VOAPT with a calibration, LBPT with
-    ``compensate=False`` (then the calibration only judges) or without a calibration."""
+    """Track ``truth`` from the increments of the odometry's and the visual odometer's poses
+    (``(K, 3)`` each): VOAPT with a calibration, LBPT with ``compensate=False`` (the calibration
+    only judges) or without one."""
     field = field or LikelihoodField.from_world(world)
     segments = world.segments_array()
     tracker = PoseTracker(field, truth[0], calibration, compensate, rng=np.random.default_rng(seed))
@@ -111,9 +107,8 @@ def run_tracking(
 
 
 def calibrate(world: World, truth, odometry, vo, seed: int) -> Calibration:
-    """Thresholds and control limits from a normal run (the corridor without its obstacle): each
-    threshold of eq. 13 is its indicator's 1 per cent point over the run, the control limits
-    (eq. 14-15) come from the corrections of the frames where ``C_s`` holds."""
+    """Thresholds and control limits from a normal run (no obstacle): each threshold of eq. 13 is
+    its indicator's 1 per cent point, the limits (eq. 14-15) come from the frames where ``C_s`` holds."""
     run = run_tracking(without_umbrella(world), truth, odometry, vo, seed)
     stats = [s.stats for s in run.steps]
     thresholds = Thresholds(
@@ -128,7 +123,7 @@ def calibrate(world: World, truth, odometry, vo, seed: int) -> Calibration:
 
 
 def statistics_table(errors: np.ndarray) -> dict[str, float]:
-    """Table III's statistics of absolute errors: maximum, mean, median, standard deviation."""
+    """Table III's statistics (:data:`STATISTICS`) of absolute errors."""
     stats = ErrorStats.of(np.abs(errors))
     return {k: getattr(stats, k) for k in STATISTICS}
 
@@ -136,6 +131,11 @@ def statistics_table(errors: np.ndarray) -> dict[str, float]:
 def unoccluded(x: np.ndarray) -> np.ndarray:
     """Mask of positions along the corridor where radial features are in the laser's view."""
     return np.any([(x >= lo) & (x <= hi) for lo, hi in UNOCCLUDED], axis=0)
+
+
+def _flags(run: TrackingRun, where) -> list[bool]:
+    """Whether T_s flags each update of ``run`` selected by the mask ``where``."""
+    return [not s.credible for s, w in zip(run.steps, where, strict=True) if w]
 
 
 @dataclass
@@ -163,7 +163,7 @@ class CorridorExperiment:
     @staticmethod
     def _flagged(runs, where) -> float:
         """Share of the updates of ``runs`` selected by ``where(run)`` (a mask) that T_s flags."""
-        flags = [not s.credible for r in runs for s, w in zip(r.steps, where(r), strict=True) if w]
+        flags = [f for r in runs for f in _flags(r, where(r))]
         return float(np.mean(flags)) if flags else float("nan")
 
     def flagged_when_lost(self) -> float:
@@ -180,8 +180,7 @@ class CorridorExperiment:
 
 
 def _table3(vo: np.ndarray) -> tuple[World, LikelihoodField, Calibration]:
-    """The corridor, its likelihood field and Table III's calibration (:func:`calibrate` on the
-    normal run of :data:`CALIBRATION_SEED`)."""
+    """The corridor, its likelihood field and the calibration on :data:`CALIBRATION_SEED`'s run."""
     world = corridor()
     truth, odometry = corridor_drive(CALIBRATION_SEED)
     return world, LikelihoodField.from_world(world), calibrate(world, truth, odometry, vo, CALIBRATION_SEED)
@@ -194,9 +193,8 @@ def track_seed(seed: int, vo: np.ndarray, calibration: Calibration, world, field
 
 
 def seed_figures(lbpt: TrackingRun, voapt: TrackingRun) -> dict[str, float]:
-    """One seed's row of Table III (the sweep's figures): each method's statistics of the x and y
-    errors (m), LBPT's lost updates (error above :data:`LOST_ERROR`) and how many T_s flags,
-    VOAPT's updates in the unoccluded stretches and how many T_s flags (false alarms)."""
+    """One seed's row of Table III: each method's statistics of the x and y errors (m), LBPT's
+    lost updates (above :data:`LOST_ERROR`) and VOAPT's unoccluded ones, each with T_s's flags."""
     out = {
         f"{method}_{axis}_{stat}": value
         for method, run in (("lbpt", lbpt), ("voapt", voapt))
@@ -204,24 +202,21 @@ def seed_figures(lbpt: TrackingRun, voapt: TrackingRun) -> dict[str, float]:
         for stat, value in statistics_table(run.errors[:, i]).items()
     }
     lost = np.abs(lbpt.errors[:, 0]) > LOST_ERROR
-    out["lbpt_lost"] = int(lost.sum())
-    out["lbpt_lost_flagged"] = sum(not s.credible for s, x in zip(lbpt.steps, lost, strict=True) if x)
     clear = unoccluded(voapt.truth[:, 0])
-    out["voapt_unoccluded"] = int(clear.sum())
-    out["voapt_false_alarms"] = sum(not s.credible for s, x in zip(voapt.steps, clear, strict=True) if x)
+    out["lbpt_lost"], out["lbpt_lost_flagged"] = int(lost.sum()), sum(_flags(lbpt, lost))
+    out["voapt_unoccluded"], out["voapt_false_alarms"] = int(clear.sum()), sum(_flags(voapt, clear))
     return out
 
 
 @functools.lru_cache(maxsize=1)
 def _shared():
-    """What every seed of Table III shares: the visual odometer's poses and :func:`_table3`
-    (computed once per process)."""
+    """The visual odometer's poses and :func:`_table3`, shared by every seed of a process."""
     vo, _ = corridor_visual_odometry()
     return vo, *_table3(vo)
 
 
 def corridor_figures(seed: int) -> dict[str, float]:
-    """Table III's row of ``seed`` (a task of ``python -m vo_lib sweep corridor``): :func:`seed_figures`."""
+    """Table III's row of ``seed`` (a task of ``sweep corridor``): :func:`seed_figures`."""
     vo, world, field, calibration = _shared()
     return seed_figures(*track_seed(seed, vo, calibration, world, field))
 
@@ -233,8 +228,7 @@ def run_experiment(seeds, vo: np.ndarray) -> CorridorExperiment:
     return CorridorExperiment(list(seeds), cal, [r[0] for r in runs], [r[1] for r in runs])
 
 
-#: [Yuan], Table III: max, mean, median and std of the absolute error in metres, per axis (X along
-#: the corridor) and method.
+#: [Yuan], Table III: statistics of the absolute error (m) per axis (X along the corridor) and method.
 PAPER_TABLE3 = {
     "X": {
         "LBPT": {"max": 1.060, "mean": 0.332, "median": 0.153, "std": 0.357},
@@ -248,10 +242,9 @@ PAPER_TABLE3 = {
 
 
 def corridor_report(table, stats) -> None:
-    """What ``sweep corridor`` prints below its summary: Table III, each statistic's mean over the
-    seeds with its 95 % interval beside the paper's value (:data:`PAPER_TABLE3`), and the shares
-    of LBPT's lost updates and of VOAPT's unoccluded ones that T_s flags, pooled over the seeds.
-    ``table``: one row per seed; ``stats``: the summary, one row per figure."""
+    """What ``sweep corridor`` prints below its summary (``table``: a row per seed; ``stats``: a
+    row per figure): Table III's means over the seeds with 95 % intervals beside the paper's, and
+    the shares of LBPT's lost and VOAPT's unoccluded updates that T_s flags."""
     print(f"Table III over {len(table)} seeds: mean over seeds (95 % interval) [paper]")
     for axis, methods in PAPER_TABLE3.items():
         for method, paper in methods.items():
@@ -265,7 +258,6 @@ def corridor_report(table, stats) -> None:
     clear, alarms = (int(table[c].sum()) for c in ("voapt_unoccluded", "voapt_false_alarms"))
     print(
         f"T_s flags {100 * flagged / max(lost, 1):.1f} % of LBPT's updates whose error exceeds "
-        f"{LOST_ERROR} m "
-        f"({flagged} of {lost}) and {100 * alarms / max(clear, 1):.1f} % of VOAPT's updates in the "
-        f"unoccluded stretches ({alarms} of {clear}), pooled over the {len(table)} seeds"
+        f"{LOST_ERROR} m ({flagged} of {lost}) and {100 * alarms / max(clear, 1):.1f} % of VOAPT's "
+        f"updates in the unoccluded stretches ({alarms} of {clear}), pooled over the {len(table)} seeds"
     )

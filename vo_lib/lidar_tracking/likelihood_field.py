@@ -1,10 +1,8 @@
-"""Occupancy grid and likelihood field of a world's mapped segments, and the scoring of many
-candidate poses against one laser scan ([Yuan], section III.A).
+"""Likelihood field of a world's mapped segments, and the scores of candidate poses against one
+laser scan ([Yuan], section III.A).
 
-The grid marks the cells crossed by mapped segments; the likelihood field holds, per cell,
-``exp(-d^2 / (2 sigma^2))`` with ``d`` the distance to the nearest occupied cell (OpenCV's
-distance transform). A pose's score is the sum of the field at the scan's end points placed
-with that pose: between 0 and the number of beams.
+Each cell holds ``exp(-d^2 / (2 sigma^2))``, ``d`` its distance to the nearest occupied cell; a
+pose's score is the sum of the field at the scan's end points: between 0 and the number of beams.
 """
 
 from __future__ import annotations
@@ -53,9 +51,8 @@ class LikelihoodField:
         return np.pad(self.field, 1).ravel()
 
     def score(self, poses: np.ndarray, scan_points: np.ndarray) -> np.ndarray:
-        """Score of each pose ``(n, 3)`` for end points ``(K, 2)`` in the sensor frame:
-        the sum over beams of the field at the end point placed with that pose, read at the
-        nearest cell through a zero border (0 off the grid)."""
+        """Score of each pose ``(n, 3)`` for sensor-frame end points ``(K, 2)``: the field summed
+        at the nearest cells (0 off the grid)."""
         poses = np.atleast_2d(np.asarray(poses, dtype=float))
         c, s = np.cos(poses[:, 2:3]), np.sin(poses[:, 2:3])
         px, py = scan_points[:, 0], scan_points[:, 1]

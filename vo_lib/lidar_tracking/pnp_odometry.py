@@ -1,16 +1,13 @@
 """[Yuan]'s visual odometer (section II): ORB landmarks, motion-model matching, PnP with
 RANSAC, and a local map of key frames.
 
-* Landmarks are ORB features with a 3-D position from our stereo pair (the paper's Kinect);
-  similarity is the Hamming distance (eq. 1).
-* Matching: brute force at the start and after a loss; otherwise the velocity
-  ``T_vel = T_prev^-1 T_curr`` (eq. 2) predicts the pose (eq. 3) and each map landmark, projected
-  with it (eq. 4-5), is matched to features within ``SEARCH_RADIUS`` pixels.
-* The pose: OpenCV ``solvePnPRansac`` started from the prediction.
-* The local map holds at most ``MAX_KEYFRAMES`` key frames; one is dropped when fewer than
-  ``MIN_SEEN_RATIO`` of its landmarks project inside the image (eq. 6) and are seen within
-  ``VIEW_LIMIT`` of the key frame's viewing ray (eq. 7, which as printed compares a world-frame
-  vector with a camera-frame one).
+* Landmarks: ORB features placed in 3-D by our stereo pair (the paper's Kinect), compared by
+  Hamming distance (eq. 1).
+* Matching: brute force at the start and after a loss; else the velocity (eq. 2) predicts the
+  pose (eq. 3) and each projected map landmark (eq. 4-5) is matched within ``SEARCH_RADIUS``.
+* The local map drops a key frame when fewer than ``MIN_SEEN_RATIO`` of its landmarks project
+  into the image (eq. 6) within ``VIEW_LIMIT`` of its viewing ray (eq. 7, which as printed
+  compares a world-frame vector with a camera-frame one).
 
 Poses are camera-to-world 4x4 matrices in the first camera's frame (KITTI convention).
 """
@@ -36,8 +33,8 @@ MIN_INLIERS = 20
 REPROJECTION_THRESHOLD = 2.0  # pixels
 NEW_KEYFRAME_TRACKED = 0.6  # add a key frame when fewer than this share of features is tracked
 NEW_KEYFRAME_DISTANCE = 0.5  # ... or when the camera moved this far from the newest key frame, metres
-#: [Yuan], Table I: the paper's visual odometer (a Kinect on a real robot) against the truth: its
-#: deviation per axis, metres (mean, median, std, max), and its time per frame, ms (mean, median, std).
+#: [Yuan], Table I: the paper's visual odometer's deviation per axis, metres (mean, median, std,
+#: max), and its time per frame, ms (mean, median, std).
 PAPER_TABLE1 = {"X": (0.050, 0.041, 0.042, 0.149), "Y": (0.045, 0.035, 0.036, 0.130), "ms": (40.3, 41, 6.2)}
 
 
@@ -110,8 +107,8 @@ class PnpVisualOdometry:
 
     # ------------------------------------------------------------------ matching
     def _match_guided(self, points_w, desc_w, feats, prediction):
-        """Motion-model matching: map landmarks projected with the prediction, features within
-        ``SEARCH_RADIUS`` pixels (eq. 4-5), nearest by Hamming distance with ratio and mutual tests."""
+        """Motion-model matching (eq. 4-5): each landmark projected with the prediction, to the
+        nearest feature by Hamming distance within ``SEARCH_RADIUS`` pixels (ratio, mutual tests)."""
         u, v, z = self._project(points_w, prediction)
         r = SEARCH_RADIUS
         du = feats.w[None, :, 0] - u[:, None]
@@ -123,9 +120,8 @@ class PnpVisualOdometry:
 
     # ------------------------------------------------------------------ one frame
     def predicted_pose(self) -> np.ndarray:
-        """Eq. 2-3: the last motion repeated. The paper's world-frame velocity
-        ``T_curr T_prev^-1`` composed on the left of ``T_curr`` is the same matrix as our
-        body-frame velocity ``T_prev^-1 T_curr`` composed on the right."""
+        """Eq. 2-3: the last motion repeated (the paper's ``T_curr T_prev^-1`` on the left is our
+        ``T_prev^-1 T_curr`` on the right)."""
         return self.pose @ self.velocity
 
     def process(self, left: np.ndarray, right: np.ndarray) -> np.ndarray:
@@ -182,8 +178,8 @@ class PnpVisualOdometry:
 
 
 def run_pnp_odometry(camera, frames):
-    """Run over ``(left, right, ...)`` frames: ``(camera poses (N, 4, 4), seconds per frame (N,),
-    odometer)``, only :meth:`PnpVisualOdometry.process` timed."""
+    """Run over ``(left, right, ...)`` frames: ``(camera poses (N, 4, 4), seconds of each
+    :meth:`PnpVisualOdometry.process`, odometer)``."""
     vo = PnpVisualOdometry(camera)
     poses, seconds = [], []
     for f in frames:

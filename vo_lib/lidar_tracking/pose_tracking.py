@@ -1,30 +1,24 @@
 """Laser-based pose tracking (LBPT) and its visual-odometry-assisted form (VOAPT), [Yuan]
 section III.
 
-LBPT: around the odometry's prediction ``P_odom`` draw ``n`` sample poses, score each against
-the likelihood field (eq. 8-10) and take the best. VOAPT watches the samples' scores: box-plot
-values, the range-median difference ``D_s`` (eq. 11), the range-quantile ratio ``R_s``
-(eq. 12), the composite indicator ``C_s`` (eq. 13), the corrections' control limits (eq. 14-15)
-and the credibility ``T_s`` (eq. 16). When the result is not credible it finds the direction of
-largest error by PCA of the best quarter of the samples (eq. 17-20) and replaces the laser's
-correction along that direction by the visual odometer's (eq. 21-23).
+LBPT: sample poses around the odometry's prediction ``P_odom``, score each against the likelihood
+field (eq. 8-10), take the best. VOAPT judges the scores (``D_s``, ``R_s``, ``C_s``, eq. 11-13)
+and the corrections (control limits, eq. 14-15) into the credibility ``T_s`` (eq. 16); when not
+credible, it replaces the laser's correction along the direction of largest error (PCA of the
+best quarter of the samples, eq. 17-20) by the visual odometer's (eq. 21-23).
 
-Readings of printed forms that look garbled (docs/errata.md; tested in
-``tests/test_pose_tracking.py``, shown in notebook 10):
+Readings of garbled printed forms (docs/errata.md, notebook 10):
 
-* eq. 11: ``D_s = V_max - V_med``, how far the best sample stands above the typical one, as its
-  name "range-median difference" says (printed ``V_max - V_lq - V_med``).
+* eq. 11: ``D_s = V_max - V_med``, as its name "range-median difference" says (printed
+  ``V_max - V_lq - V_med``).
 * eq. 12 as printed is at least 1 for any sample set (the paper's threshold 0.7 never fails); we
-  keep it and calibrate its threshold on our scores.
+  keep it and calibrate its threshold.
 * eq. 14 swaps two names; with eq. 15 and Table II: ``UCL = mu + 3 sigma``, ``CL = mu``,
   ``LCL = max(0, mu - 3 sigma)``.
-* eq. 16 joins the control-limit tests with "or", which never flags a jump of the laser pose while
-  the visual correction is normal: we require ``C_s`` and both. The visual odometer's pose is
-  carried from the last credible update, and both limits widen with the square root of the
-  updates since then (independent errors add up so), so a laser that finds radial features again
-  can be believed.
-* eq. 22: the corrected displacement moves only along ``v_s`` and projects onto it as the visual
-  odometer's does.
+* eq. 16 joins the limit tests with "or", which never flags a jump of the laser pose while the
+  visual correction is normal: we require ``C_s`` and both. The visual odometer's pose is carried
+  from the last credible update and both limits widen with the square root of the updates since.
+* eq. 22: the corrected displacement moves only along ``v_s``.
 """
 
 from __future__ import annotations
@@ -36,8 +30,7 @@ import numpy as np
 
 from vo_lib.geometry import compose_planar, wrap_angle
 
-#: Samples per update and their spread around the odometry's prediction, in the robot frame:
-#: odometry errs most along the direction of travel.
+#: Samples per update and their spread in the robot frame (odometry errs most along the travel).
 DEFAULT_SAMPLES = 500
 SAMPLE_SIGMA = (0.10, 0.03, math.radians(0.5))
 #: Heading gate of eq. 18: the top-quartile samples' RMS heading difference to the best.
@@ -45,9 +38,8 @@ THETA_LIMIT = math.radians(1.0)
 
 
 def posterior(scores) -> np.ndarray:
-    """Eq. 8-10: normalised scores as posterior probabilities of the samples,
-    ``exp(S_i) / sum_j exp(S_j)``: a score (the sum of the field over beams) read as a
-    log-likelihood, bounded so that an unmapped obstacle cannot veto a pose."""
+    """Eq. 8-10: the samples' posterior probabilities ``exp(S_i) / sum_j exp(S_j)``, a score
+    (bounded, so an unmapped obstacle cannot veto a pose) read as a log-likelihood."""
     s = np.asarray(scores, dtype=float)
     p = np.exp(s - s.max())
     return p / p.sum()
@@ -55,8 +47,7 @@ def posterior(scores) -> np.ndarray:
 
 @dataclass(frozen=True)
 class ScoreStatistics:
-    """Box-plot values of the normalised scores (eq. 10, scaled so that their mean is 1) and the
-    two indicators built on them."""
+    """Box-plot values of the normalised scores (eq. 10, scaled to mean 1) and their indicators."""
 
     v_max: float
     v_uq: float
@@ -89,7 +80,7 @@ class ScoreStatistics:
 
 @dataclass(frozen=True)
 class Thresholds:
-    """``V_th1, V_th2, V_th3`` of eq. 13 on our normalised scores (calibrated in notebook 10)."""
+    """``V_th1, V_th2, V_th3`` of eq. 13 on our normalised scores."""
 
     v_max: float
     d_s: float
@@ -127,8 +118,8 @@ class ControlLimits:
         return max(0.0, self.mean - 3 * self.std)
 
     def contains(self, value: float, updates: int = 1) -> bool:
-        """Within the limits; for a correction accumulated over ``updates`` independent updates
-        the band about the centre line widens by ``sqrt(updates)``."""
+        """Within the limits, widened by ``sqrt(updates)`` for a correction accumulated over as
+        many independent updates."""
         half = 3 * self.std * math.sqrt(updates)
         return max(0.0, self.mean - half) <= value <= self.mean + half
 
@@ -143,8 +134,7 @@ class Calibration:
 
 
 def sample_poses(prediction, n: int, rng: np.random.Generator):
-    """``n`` poses around ``prediction``, spread :data:`SAMPLE_SIGMA` in the robot's frame (the
-    first sample is the prediction itself)."""
+    """``n`` poses around ``prediction`` (the first is the prediction itself)."""
     noise = rng.standard_normal((n, 3)) * SAMPLE_SIGMA
     noise[0] = 0.0
     return compose_planar(prediction, noise)
@@ -189,10 +179,8 @@ class TrackingStep:
 
 
 class PoseTracker:
-    """LBPT (the best of :data:`DEFAULT_SAMPLES` samples from ``rng`` wins), and VOAPT when given
-    a calibration; with ``compensate_errors=False`` LBPT whose every update is judged by ``T_s``.
-    The visual odometer's pose ``P_vo`` is the last credible pose carried forward by the visual
-    increments."""
+    """LBPT, and VOAPT when given a calibration (``compensate_errors=False``: LBPT judged by
+    ``T_s``). The visual odometer's pose is the last credible one carried by the visual increments."""
 
     def __init__(self, field, start, calibration: Calibration | None, compensate_errors: bool, rng):
         self.field = field

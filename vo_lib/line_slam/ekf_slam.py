@@ -2,13 +2,12 @@
 updates, Mahalanobis data association and state augmentation.
 
 The state ``X = [x_v, y_v, phi, x_1, y_1, ..., x_N, y_N]`` (eq. 1-3) holds the vehicle pose and
-one feature point per line landmark, and grows as landmarks are found (hence NumPy rather than
-filterpy's fixed-size filters). A wall is observed through its feature point's range and bearing
-(``range_bearing.POINT``, eq. 10, the paper's filter) or as the line seen from the robot
-(``line_observation.LINE``). Eq. 13's ``V`` is taken as the innovation covariance
-``S = H P H^T + R``: the paper calls it "the variance caused by the observation", but the
-difference between a mapped and an observed feature point is also uncertain through the pose and
-the map, and ``S`` is its covariance.
+one feature point per line landmark, and grows as landmarks are found. A wall is observed through
+its feature point's range and bearing (``range_bearing.POINT``, eq. 10, the paper's filter) or as
+the line seen from the robot (``line_observation.LINE``). Eq. 13's ``V`` is taken as the
+innovation covariance ``S = H P H^T + R``: the paper calls it "the variance caused by the
+observation", but the difference between a mapped and an observed feature point is also
+uncertain through the pose and the map.
 """
 
 from __future__ import annotations

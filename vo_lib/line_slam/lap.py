@@ -1,11 +1,9 @@
-"""[Yan 2020]'s simulation: a car-like robot laps four line landmarks, observed by a simulated
-laser whose visible part of each segment comes from one of the three observers, mapped and
-localised by EKF-SLAM.
+"""[Yan 2020]'s simulation: a car-like robot laps four line landmarks, seen by a simulated laser
+through one of the three segment observers, mapped and localised by EKF-SLAM.
 
 Parameters are the paper's (section 3); what it does not print is stated in
-:class:`LineSlamScenario`. ``python -m vo_lib sweep lap --seeds 20`` prints the README's figures
-(:func:`lap_figures` per seed, :func:`lap_report` over them); ``python -m vo_lib bench observers``
-times one lap with each observer.
+:class:`LineSlamScenario`. ``python -m vo_lib sweep lap`` prints the README's figures
+(:func:`lap_figures` per seed, :func:`lap_report` over them).
 """
 
 from __future__ import annotations
@@ -49,15 +47,11 @@ NEES_HIGH = chi2_band(3, 1)[1]
 class LineSlamScenario:
     """[Yan 2020]'s simulation settings.
 
-    Printed in the paper: speed, its noise, steering limits and noise, the control period, the
-    laser's range and noise, landmarks and waypoints. Our choices: the wheelbase (4 m), an
-    observation every 8 control periods (0.2 s), a waypoint is reached within 1 m, the start
-    heading points at the first waypoint, the laser sees all round.
-
-    ``observation``: ``"feature_point"`` (the paper's filter, section 1.3: range and bearing of the
-    wall's feature point, eq. 10) or ``"line"`` (the line through the visible part's two measured
-    end points, ``line_observation.LINE``; lines whose direction is more uncertain than
-    ``max_line_direction_sigma`` are not used).
+    Not printed in the paper, so ours: the wheelbase, an observation every 8 control periods, a
+    waypoint reached within 1 m, the start heading towards the first waypoint, an all-round laser.
+    ``observation``: ``"feature_point"`` (the paper's, range and bearing of the wall's feature
+    point, eq. 10) or ``"line"`` (``line_observation.LINE`` through the visible part's measured
+    end points; unused when its direction's sigma exceeds ``max_line_direction_sigma``).
     """
 
     speed: float = PAPER_SPEED
@@ -80,8 +74,8 @@ class LineSlamScenario:
     max_line_direction_sigma: float = math.radians(2.0)
 
     def filter(self, pose, **options) -> EkfSlam:
-        """EKF-SLAM from ``pose`` with this scenario's noise, period and wheelbase; ``options`` are
-        :class:`EkfSlam`'s ``pose_cov`` and ``model``."""
+        """EKF-SLAM from ``pose`` with this scenario's noise, period and wheelbase (``options``:
+        :class:`EkfSlam`'s ``pose_cov`` and ``model``)."""
         Q = diagonal_cov(self.speed_sigma, self.steer_sigma)  # speed and steering angle
         R = diagonal_cov(self.range_sigma, self.bearing_sigma)  # range and bearing
         return EkfSlam(pose, Q, R, self.period, self.wheelbase, **options)
@@ -125,8 +119,7 @@ class LineSlamRun:
 
 
 def true_visible_extent(world, poses) -> dict:
-    """For each segment, the extreme x reached by its visible part from any of ``poses`` (exact
-    observer, the scenario's laser range)."""
+    """For each segment, the extreme x of its visible part from any of ``poses`` (exact observer)."""
     out = {}
     for i, seg in enumerate(world.segments):
         xs = []
@@ -139,8 +132,8 @@ def true_visible_extent(world, poses) -> dict:
 
 
 def _observe(segs, features, pose, sc, observe_part, rng):
-    """Noisy observations of every segment with a visible part from ``pose``: ``(measurements,
-    their covariances (line form), segment indices, end-point observations, observer seconds)``."""
+    """Noisy observations of the segments visible from ``pose``: ``(measurements, covariances
+    (line form), segment indices, end-point observations, observer seconds)``."""
     obs_sigma = np.array([sc.range_sigma, sc.bearing_sigma])
     zs, obs_covs, which, ends = [], [], [], []
     seconds = 0.0
@@ -171,10 +164,9 @@ def simulate_lap(
 ) -> LineSlamRun:
     """Drive one lap of the waypoints and run EKF-SLAM on it.
 
-    The filter and dead reckoning receive the commanded speed and steering with Gaussian noise
-    (eq. 4's ``w``). Every ``observe_every`` control periods ``observer`` finds each segment's
-    visible part, whose two end points are observed in range and bearing (for drawing and the line
-    observation), and in the feature-point form its feature point too (eq. 10).
+    The filter and dead reckoning get the commanded controls with Gaussian noise (eq. 4's ``w``).
+    Every ``observe_every`` periods ``observer`` finds each segment's visible part, whose end
+    points are observed in range and bearing (and, in the feature-point form, its feature point).
     """
     if observer not in OBSERVERS:
         raise ValueError(f"observer must be one of {sorted(OBSERVERS)}; got {observer!r}")
@@ -253,12 +245,9 @@ def heading_errors(run: LineSlamRun) -> np.ndarray:
 
 
 def lap_row(run: LineSlamRun, extended: LineSlamRun, line: LineSlamRun) -> dict[str, float]:
-    """One seed's figures from its lap ``run``, its lap with landmark 3 ``extended`` and its lap
-    observing lines (``line``): final errors of EKF-SLAM, of dead reckoning and of the line form
-    (m) and whether EKF-SLAM ends closer than dead reckoning (1 or 0), mean and final pose NEES and
-    the share of steps above :data:`NEES_HIGH`, landmarks mapped, observations dropped by data
-    association, and the x up to which the extended landmark 3 is mapped and is visible from the
-    true path (NaN if it was never mapped)."""
+    """One seed's figures from its lap, its lap with landmark 3 ``extended`` and its ``line`` lap:
+    final errors (m), pose NEES, landmarks, dropped observations, and how far the extended landmark
+    3 is mapped (NaN if never) and visible."""
     nees = np.asarray(run.nees, float)
     mapped = 2 in extended.landmark_of_segment
     return {
@@ -277,17 +266,14 @@ def lap_row(run: LineSlamRun, extended: LineSlamRun, line: LineSlamRun) -> dict[
 
 
 def lap_figures(seed: int, observer: str = "closed_form") -> dict:
-    """One seed's figures (a task of ``python -m vo_lib sweep lap``): :func:`lap_row` of the lap,
-    the lap with landmark 3 extended and the lap observing lines, all drawn with ``seed``."""
+    """One seed's :func:`lap_row` (a task of ``sweep lap``), its three laps drawn with ``seed``."""
     scenarios = (LineSlamScenario(), LineSlamScenario(extended=True), LineSlamScenario(observation="line"))
     return lap_row(*(simulate_lap(int(seed), observer, sc) for sc in scenarios))
 
 
 def lap_report(table, stats) -> None:
-    """What ``sweep lap`` prints below its summary: how often and by how much EKF-SLAM ends
-    closer than dead reckoning, what a consistent filter's NEES figures are, and the extended
-    landmark 3 beside the paper's value. ``table``: one row per seed; ``stats``: the summary, one
-    row per figure."""
+    """What ``sweep lap`` prints below its summary (``table``: a row per seed; ``stats``: a row per
+    figure): EKF-SLAM against dead reckoning, the NEES, the extended landmark 3 beside the paper's."""
     closer, laps = int(table["slam_closer"].sum()), len(table)
     ratio = stats.loc["dead_reckoning_error", "mean"] / stats.loc["final_error", "mean"]
     mapped, visible = stats.loc["extended_mapped_to"], stats.loc["extended_visible_to"]
@@ -313,11 +299,10 @@ def lap_report(table, stats) -> None:
 def association_example():
     """A case where the nearest landmark in metres is the wrong one: ``(ekf, z, true_index)``.
 
-    The robot believes it is at the origin facing +x, with 5 degrees of heading doubt; feature
-    points A (20 m, 4 degrees to the left) and B (20.9 m straight ahead). A is observed at 20 m,
-    bearing 0 (the robot in fact faces 4 degrees left): 1.4 m from A, 0.9 m from B. Euclidean
-    distance picks B, but the error lies along the uncertain bearing, not the precise range, and
-    the Mahalanobis distance (eq. 13) picks A.
+    The robot believes it faces +x at the origin (5 degrees of heading doubt); A is 20 m away 4
+    degrees left, B 20.9 m ahead. A seen at 20 m, bearing 0, is 1.4 m from A and 0.9 m from B:
+    Euclidean distance picks B, the Mahalanobis distance (eq. 13) A, as the error lies along the
+    uncertain bearing.
     """
     ekf = LineSlamScenario().filter(np.zeros(3), pose_cov=np.diag([0.05**2, 0.05**2, math.radians(5.0) ** 2]))
     a = 20.0 * np.array([math.cos(math.radians(4.0)), math.sin(math.radians(4.0))])

@@ -1,9 +1,7 @@
 """Line-segment landmarks of [Yan 2020] and their "landmark feature point".
 
-A landmark is a wall segment of the shared :class:`~vo_lib.sim.world.World`. The filter does not carry
-the segment itself: it carries the foot of the perpendicular from the world origin to the
-segment's line ([Yan 2020], section 1.3), a point that fixes the infinite line. For drawing, the
-segment's visible end points are projected onto the line through that point.
+A landmark is a wall segment of the shared :class:`~vo_lib.sim.world.World`; the filter carries
+the foot of the perpendicular from the world origin to its line ([Yan 2020], section 1.3).
 """
 
 from __future__ import annotations
@@ -14,18 +12,16 @@ import numpy as np
 
 from vo_lib.sim.world import Segment, World
 
-#: [Yan 2020]'s four landmarks: (left x, right x, slope, intercept). The parameter list of section 3
-#: prints landmark 3 as (0, 60, 7/9, -35); its text on the out-of-range case says that case moves
-#: landmark 3's right end "from 45 to 60". We read the list as giving the extended landmark and
-#: take x = 45 for the normal case, as the text implies (the paper's Fig. 6 is not available to
-#: settle it). The other three rows are as printed.
+#: [Yan 2020]'s four landmarks: (left x, right x, slope, intercept). Section 3 lists landmark 3 as
+#: (0, 60, 7/9, -35), but its out-of-range case moves the right end "from 45 to 60": we read the
+#: list as the extended landmark and take x = 45 for the normal case.
 PAPER_LANDMARKS = (
     (-30.0, 0.0, 2.0 / 3.0, 30.0),
     (0.0, 20.0, -1.0, 20.0),
     (0.0, 45.0, 7.0 / 9.0, -35.0),
     (-60.0, 0.0, -0.7, -35.0),
 )
-#: The out-of-range case: landmark 3's right end moved from x = 45 to x = 60 (the printed list's 60).
+#: The out-of-range case: landmark 3's right end moved from x = 45 to x = 60.
 EXTENDED_RIGHT_X = 60.0
 #: The paper's observed right end of the extended landmark 3.
 PAPER_EXTENDED_RIGHT_END = 54.4412
@@ -59,8 +55,7 @@ def feature_point(a, b) -> np.ndarray:
 
 
 def line_direction(point) -> np.ndarray:
-    """Unit direction of the line whose feature point is ``point`` (perpendicular to it, turned
-    counter-clockwise)."""
+    """Unit direction of the line of feature point ``point`` (``point`` turned counter-clockwise)."""
     return np.array([-point[1], point[0]]) / math.hypot(point[0], point[1])
 
 

@@ -1,10 +1,9 @@
 """[Yan 2020]'s observation of a line segment, and the line measurement a filter can use.
 
-Section 1 of the paper describes a line seen by the laser by "the distance from the robot to the
-line and the start and end angles of the observed segment" (:func:`paper_line_triple`). That
-triple does not fix the line (every line tangent to the circle of radius ``d`` that crosses both
-rays fits it; notebook 09 builds two); the two end points' measured ranges do. From them this
-module builds the line in the robot's frame,
+The paper's triple, distance to the line and the segment's start and end angles
+(:func:`paper_line_triple`), does not fix the line (any tangent to the circle of radius ``d``
+crossing both rays fits; notebook 09 builds two); the end points' measured ranges do. From them
+this module builds the line in the robot's frame,
 
     z = (rho, psi):  the line is {q : (cos psi, sin psi) . q = rho} in robot coordinates,
 
@@ -12,9 +11,8 @@ and predicts it from the wall's feature point ``p`` (section 1.3) in the filter'
 
     c = |p|,  n = p / c,  rho = c - n . (x_v, y_v),  psi = atan2(p_y, p_x) - phi.
 
-A line has two descriptions, ``(rho, psi)`` and ``(-rho, psi + pi)``; :func:`align_line` picks
-the one nearest a prediction. :data:`LINE` is the observation model for
-:class:`~vo_lib.line_slam.ekf_slam.EkfSlam`.
+A line has two descriptions, ``(rho, psi)`` and ``(-rho, psi + pi)``: :func:`align_line` picks
+the one nearest a prediction. :data:`LINE` is the observation model for ``EkfSlam``.
 """
 
 from __future__ import annotations
@@ -28,8 +26,8 @@ from vo_lib.line_slam.range_bearing import ObservationModel
 
 
 def paper_line_triple(end_points_robot) -> np.ndarray:
-    """``(d, a_s, a_e)``: distance from the robot to the line through two points given in the
-    robot's frame (2 x 2, one point a row), and the bearings of the two points."""
+    """``(d, a_s, a_e)``: distance to the line through two robot-frame points (2 x 2, a point a
+    row) and their bearings."""
     q = np.asarray(end_points_robot, dtype=float).reshape(2, 2)
     e = q[1] - q[0]
     d = abs(q[0, 0] * e[1] - q[0, 1] * e[0]) / math.hypot(*e)
@@ -55,9 +53,8 @@ def line_from_range_bearing(z_ends) -> np.ndarray:
 
 
 def measure_line(z_ends, range_sigma: float, bearing_sigma: float, eps: float = 1e-6):
-    """The line measurement ``(rho, psi)`` from the two measured end points ``(r, b)`` of the
-    visible part, and its covariance: the end points' noise (``range_sigma``,
-    ``bearing_sigma``, independent) propagated to first order."""
+    """The line ``(rho, psi)`` from the visible part's two measured end points ``(r, b)``, and its
+    covariance: the end points' independent noise propagated to first order."""
     z = np.asarray(z_ends, dtype=float).reshape(4)
     line = line_from_range_bearing(z)
     # central differences, one row per end-point component
@@ -78,8 +75,7 @@ def predict_line(pose, point) -> np.ndarray:
 
 
 def line_jacobians(pose, point) -> tuple[np.ndarray, np.ndarray]:
-    """``(H_pose, H_point)``: :func:`predict_line` differentiated by the pose (2x3) and by the
-    feature point (2x2)."""
+    """``(H_pose, H_point)``: :func:`predict_line` differentiated by the pose (2x3) and the point (2x2)."""
     p = np.asarray(point, dtype=float)
     pos = np.asarray(pose[:2], dtype=float)
     c = math.hypot(*p)

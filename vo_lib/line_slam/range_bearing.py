@@ -29,10 +29,8 @@ def observe_point(pose, point) -> np.ndarray:
 
 
 def observation_jacobians(pose, point) -> tuple[np.ndarray, np.ndarray]:
-    """``(H_pose, H_point)``: eq. 10 differentiated by the pose (2x3) and by the point (2x2).
-
-    Together they are the two non-zero blocks of the paper's ``H_k`` (eq. 11), corrected.
-    """
+    """``(H_pose, H_point)``: eq. 10 differentiated by the pose (2x3) and by the point (2x2), the
+    non-zero blocks of the paper's ``H_k`` (eq. 11), corrected."""
     dx, dy = point[0] - pose[0], point[1] - pose[1]
     q = dx * dx + dy * dy
     r = math.sqrt(q)

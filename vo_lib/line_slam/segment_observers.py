@@ -1,9 +1,9 @@
 """Which part of a line segment lies within a laser's range: three observers ([Yan 2020], section 2).
 
-Each returns the part of the segment ``A -> B`` within range ``D`` of the robot position ``G`` as
-parameters ``(t_start, t_end)`` of ``P(t) = A + t (B - A)``, or ``None`` when none is in range.
-The distance is convex in ``t``, so the visible part is one interval; the approximate observers
-return points inside it, within ``tolerance`` metres of its ends.
+Each returns the part of the segment ``A -> B`` within range ``D`` of the robot at ``G`` as
+``(t_start, t_end)`` of ``P(t) = A + t (B - A)``, or ``None``: one interval (the distance is
+convex in ``t``); the approximate observers return points inside it within ``tolerance`` metres
+of its ends.
 
 * :func:`visible_segment_point_by_point`: samples every ``tolerance`` metres (the paper's baseline).
 * :func:`visible_segment_bisection`: the paper's observer, by where the foot ``O`` of the
@@ -23,10 +23,8 @@ DEFAULT_TOLERANCE = 0.01
 
 
 def visible_segment(a, b, centre, max_range: float, tolerance: float | None = None):
-    """Exact visible part: solve ``|A + t (B - A) - G|^2 = D^2`` for ``t`` and clip to [0, 1].
-
-    ``tolerance`` is accepted, and ignored, so that the three observers share one signature.
-    """
+    """Exact visible part: solve ``|A + t (B - A) - G|^2 = D^2`` for ``t``, clipped to [0, 1]
+    (``tolerance``, ignored, gives the three observers one signature)."""
     dx, dy = b[0] - a[0], b[1] - a[1]
     fx, fy = a[0] - centre[0], a[1] - centre[1]
     qa = dx * dx + dy * dy

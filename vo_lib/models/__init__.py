@@ -4,7 +4,4 @@
                      :class:`~vo_lib.models.track_odometry.TrackOdometry`
 ``bicycle``          the front-wheel-steered car of [Yan 2020] (eq. 4-5, Jacobians eq. 6-7) and
                      its waypoint-following steering
-
-Start with ``track_odometry``: the simulator drives the crawler with it (``vo_lib.sim``) and
-the Kalman filter of ``vo_lib.stereo_vo`` predicts with it.
 """

@@ -1,5 +1,4 @@
-"""The bicycle (front-wheel-steered) vehicle of [Yan 2020]: motion model eq. 4-5, Jacobians eq. 6-7,
-and a waypoint-following steering controller.
+"""The bicycle (front-wheel-steered) vehicle of [Yan 2020] (eq. 4-7) and its steering controller.
 
 With speed ``V``, steering angle ``a`` of the front wheel, wheelbase ``L`` and period ``T``, the
 pose ``(x, y, phi)`` advances as
@@ -25,8 +24,7 @@ from vo_lib.geometry import wrap_angle
 PAPER_SPEED = 3.0
 PAPER_MAX_STEER = math.radians(30.0)
 PAPER_MAX_STEER_RATE = math.pi / 9
-#: Not printed in [Yan 2020]; 4 m is the wheelbase of the widely used EKF-SLAM simulator whose other
-#: settings the paper repeats exactly.
+#: Not printed in [Yan 2020]: that of the EKF-SLAM simulator whose other settings the paper repeats.
 DEFAULT_WHEELBASE = 4.0
 
 
@@ -44,10 +42,7 @@ def bicycle_step(pose, speed: float, steer: float, period: float, wheelbase: flo
 
 
 def bicycle_jacobians(pose, speed: float, steer: float, period: float, wheelbase: float = DEFAULT_WHEELBASE):
-    """``(F_x, F_u)``: the Jacobians of eq. 5 with respect to the pose and to ``u = (V, a)``.
-
-    Eq. 6 and 7 as derived (notebook 09); the printed forms differ in two signs, see the module text.
-    """
+    """``(F_x, F_u)``: the Jacobians of eq. 5 by the pose and by ``u = (V, a)`` (eq. 6-7, corrected)."""
     phi = pose[2]
     c, s = math.cos(phi + steer), math.sin(phi + steer)
     tv = period * speed

@@ -53,13 +53,10 @@ class TrackOdometry:
 
     Parameters
     ----------
-    track_distance : float
-        ``D``, distance between the two tracks in metres.
-    track_width : float
-        ``b``, width of one track in metres.
+    track_distance, track_width : float
+        ``D``, distance between the two tracks, and ``b``, width of one track, in metres.
     encoder_sigma : float
-        Standard deviation of a track's measured distance per square-root metre it travels
-        (random-walk encoder noise), used by :meth:`control_covariance`.
+        Standard deviation of a track's measured distance per square-root metre it travels.
     """
 
     track_distance: float = DEFAULT_TRACK_DISTANCE
@@ -104,12 +101,9 @@ class TrackOdometry:
 
     # ------------------------------------------------------------------ linearisation
     def jacobians(self, state, u) -> tuple[np.ndarray, np.ndarray]:
-        """``(F_x, F_u)``: derivatives of :meth:`predict` with respect to the state and the controls.
-
-        ``F_x`` differs from eq. 9's identity in its last column (heading error moves the position),
-        and ``F_u`` differs from eq. 10's ``B_k`` by ``+-du sin/cos(theta + phi) / (2 (D + 2b))``,
-        because ``phi_k`` depends on the controls.
-        """
+        """``(F_x, F_u)``: derivatives of :meth:`predict` by the state and the controls; ``F_x``
+        differs from eq. 9's identity in its last column, ``F_u`` from eq. 10's ``B_k`` by
+        ``+-du sin/cos(theta + phi) / (2 (D + 2b))``, as ``phi_k`` depends on the controls."""
         state = _states(state)
         du, dtheta = self.increment(u)
         a = state[..., 2] + 0.5 * dtheta
@@ -129,8 +123,7 @@ class TrackOdometry:
         return F_x, F_u
 
     def step(self, state, u) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """One pose, one control pair: ``(predicted state, F_x, F_u)``, as :meth:`predict` and
-        :meth:`jacobians` give them, in scalar arithmetic (a Kalman filter's hot path)."""
+        """:meth:`predict` and :meth:`jacobians` of one pose and control pair, in scalar arithmetic."""
         x, y, theta = (float(v) for v in state)
         du_left, du_right = float(u[0]), float(u[1])
         g = self.gauge
@@ -163,12 +156,9 @@ class TrackOdometry:
 
     # ------------------------------------------------------------------ whole paths
     def integrate(self, controls, start=(0.0, 0.0, 0.0), exact: bool = False) -> np.ndarray:
-        """Dead-reckoned poses ``(K + 1, 3)`` from ``K`` control pairs, vectorised over time.
-
-        Headings are cumulative sums of eq. 4; positions are cumulative sums of eq. 2-3, or, when
-        ``exact``, of the circular arc's chord ``du * sin(dtheta/2) / (dtheta/2)`` (eq. 2-3 take the
-        arc length ``du`` for it: a relative error of about ``dtheta**2 / 24`` per step).
-        """
+        """Dead-reckoned poses ``(K + 1, 3)`` from ``K`` control pairs: cumulative sums of eq. 4 and
+        eq. 2-3, or, when ``exact``, of the arc's chord ``du * sin(dtheta/2) / (dtheta/2)`` (eq. 2-3
+        take the arc ``du`` for it: a relative error of about ``dtheta**2 / 24`` per step)."""
         controls = np.asarray(controls, dtype=float)
         if controls.ndim != 2 or controls.shape[1] != 2:
             raise ValueError(f"controls must have shape (K, 2); got {controls.shape}")
@@ -183,7 +173,6 @@ class TrackOdometry:
 
 def apply_slip(u, slip_left: float = 0.0, slip_right: float = 0.0) -> np.ndarray:
     """Ground distances of tracks that slip: each travels ``(1 - slip)`` of what its encoder reads
-    (a positive slip spins the track faster than the ground moves: the paper's cause of its
-    spot-turn heading errors)."""
+    (the paper's cause of its spot-turn heading errors)."""
     u = np.asarray(u, dtype=float)
     return u * np.array([1.0 - slip_left, 1.0 - slip_right])

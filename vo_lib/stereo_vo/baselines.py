@@ -3,17 +3,12 @@ plain OpenCV stereo odometry that is the yardstick on real images.
 
 * :func:`rigid_ransac`: 3-point RANSAC on 3-D to 3-D matches (Kabsch/Umeyama fit, 6 DoF).
 * :func:`pnp_ransac`: OpenCV ``solvePnPRansac``, previous 3-D points to current pixels (6 DoF).
-* :func:`essential_ransac`: OpenCV's 5-point essential-matrix RANSAC (monocular: rotation and the
-  direction of translation, no scale).
+* :func:`essential_ransac`: OpenCV's 5-point essential-matrix RANSAC (no scale).
 
-Each returns a :class:`MotionEstimate` whose ``theta`` and ``rho`` are those of the closest planar
-circular motion, so all estimators compare on one footing.
-
-:class:`PnpStereoOdometry` (run by :func:`run_pnp_baseline`) is the usual first stereo odometry
-written with OpenCV: ORB in both images, brute-force Hamming matches with cross-check (on the same
-rows for stereo, to the next left image in time) and the motion from ``cv2.solvePnPRansac``
-(iterative PnP on left-image reprojection errors). The benchmark and notebook 12 run it on the
-same frames as our pipeline, in the same process.
+Each returns a :class:`MotionEstimate` with the ``theta`` and ``rho`` of the closest planar
+circular motion. :class:`PnpStereoOdometry` is the usual first OpenCV stereo odometry: ORB in both
+images, cross-checked Hamming matches (on the same rows for stereo, to the next left image in
+time) and ``cv2.solvePnPRansac``.
 """
 
 from __future__ import annotations
@@ -32,7 +27,7 @@ from vo_lib.stereo_vo.ransac import DEFAULT_PARAMS, hypotheses_needed
 #: Pixels, in (u, v, d) for the rigid fit and (u, v) for PnP: ~99 % of two noisy views.
 REPROJECTION_THRESHOLD = 3.0
 MAX_ITERATIONS = 1000
-#: The PnP stereo odometry: ORB features per image, stereo row tolerance (pixels), and its
+#: The PnP stereo odometry: ORB features per image, stereo row tolerance (pixels), and
 #: ``solvePnPRansac``'s inlier threshold (pixels) and hypotheses.
 PNP_FEATURES = 3000
 PNP_ROW_TOLERANCE = 1.5
@@ -63,10 +58,8 @@ class MotionEstimate:
 
 
 def kabsch(P: np.ndarray, Q: np.ndarray, weights=None) -> tuple[np.ndarray, np.ndarray]:
-    """Least-squares rotation and translation with ``Q ~ R P + t``; batched over leading axes.
-
-    ``weights`` (one per point) weigh the squared residuals, e.g. by inverse depth variance.
-    """
+    """Least-squares rotation and translation with ``Q ~ R P + t``, batched over leading axes;
+    ``weights`` (one per point) weigh the squared residuals."""
     wts = np.ones(P.shape[:-1]) if weights is None else np.broadcast_to(weights, P.shape[:-1])
     wn = (wts / wts.sum(axis=-1, keepdims=True))[..., None]
     mp, mq = (wn * P).sum(axis=-2, keepdims=True), (wn * Q).sum(axis=-2, keepdims=True)
@@ -119,8 +112,7 @@ def rigid_ransac(w_prev, w_curr, camera: StereoCamera, rng=None) -> MotionEstima
 
 
 def pnp_ransac(w_prev, w_curr, camera: StereoCamera, seed: int = 0) -> MotionEstimate:
-    """OpenCV ``solvePnPRansac`` from previous 3-D points to current pixels (EPnP hypotheses,
-    iterative refinement on the inliers)."""
+    """OpenCV ``solvePnPRansac`` (EPnP), previous 3-D points to current pixels, refined on the inliers."""
     a, b = np.asarray(w_prev, float), np.asarray(w_curr, float)
     P = camera.backproject(a)
     cv2.setRNGSeed(seed)
@@ -143,8 +135,8 @@ def pnp_ransac(w_prev, w_curr, camera: StereoCamera, seed: int = 0) -> MotionEst
 
 
 def essential_ransac(w_prev, w_curr, camera: StereoCamera, seed: int = 0) -> MotionEstimate:
-    """OpenCV 5-point essential-matrix RANSAC (1 pixel) and ``recoverPose``: rotation, and
-    translation of unit length (a monocular camera cannot see scale)."""
+    """OpenCV 5-point essential-matrix RANSAC (1 pixel) and ``recoverPose``: rotation and a unit
+    translation."""
     a, b = np.asarray(w_prev, float), np.asarray(w_curr, float)
     cv2.setRNGSeed(seed)
     E, mask = cv2.findEssentialMat(a[:, :2], b[:, :2], camera.K, cv2.RANSAC, DEFAULT_PARAMS.confidence, 1.0)
@@ -166,8 +158,7 @@ class PnpRun:
 
 
 def cross_checked_matches(des_a: np.ndarray, des_b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Index pairs ``(i, j)`` of OpenCV's brute-force Hamming matcher with cross-check: ``des_b[j]``
-    is ``des_a[i]``'s nearest and the other way round."""
+    """Index pairs ``(i, j)`` of OpenCV's cross-checked brute-force Hamming matcher."""
     matches = cv2.BFMatcher(cv2.NORM_HAMMING, crossCheck=True).match(des_a, des_b)
     return np.array([m.queryIdx for m in matches], int), np.array([m.trainIdx for m in matches], int)
 

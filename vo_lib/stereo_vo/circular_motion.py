@@ -17,9 +17,8 @@ What we derived (``notebooks/02_circular_motion_derivation.py``) and use here:
   ``rho = [-sin phi, 0, cos phi] P - [sin phi, 0, cos phi] P'``. For straight motion the printed
   form gives ``z + z'`` instead of the distance travelled ``z - z'``.
 
-Frames: ``theta > 0`` turns the optical axis towards the camera's -x, which is the robot's +y
-(left), so the robot's yaw increment equals ``theta`` (:func:`yaw_increment`), and a camera on
-the robot's turning axis moves by ``(rho cos phi, rho sin phi)`` in the previous robot frame.
+Frames: the robot's yaw increment equals ``theta`` (:func:`yaw_increment`); a camera on the
+turning axis moves by ``(rho cos phi, rho sin phi)`` in the previous robot frame.
 """
 
 from __future__ import annotations
@@ -29,8 +28,7 @@ import numpy as np
 from vo_lib.camera import StereoCamera
 from vo_lib.geometry import as_match_array, rigid_matrix
 
-#: A match whose rows satisfy ``|v + v' - 2 v0|`` below this many pixels is treated as lying at
-#: the camera's height, where eq. 14 is 0/0.
+#: ``|v + v' - 2 v0|`` below this many pixels: a match at the camera's height, where eq. 14 is 0/0.
 DEGENERATE_ROW_PIXELS = 1e-9
 
 
@@ -61,9 +59,8 @@ def theta_from_pixels(w_prev, w_curr, camera: StereoCamera) -> np.ndarray:
 
     ``tan(theta / 2) = ((u'-u0)(v-v0) - (u-u0)(v'-v0)) / (fx (v + v' - 2 v0))``
 
-    Disparities are not used, so matches at infinity (``d = 0``) are fine. Returns ``theta`` in
-    radians, in ``(-pi, pi)``, per match; NaN for a match exactly at the camera's height
-    (``v + v' = 2 v0``, see :func:`degenerate_theta_mask`), which has no defined theta.
+    Radians in ``(-pi, pi)``; matches at infinity (``d = 0``) are fine; NaN at the camera's height
+    (``v + v' = 2 v0``, :func:`degenerate_theta_mask`).
     """
     a, b = match_pair(w_prev, w_curr)
     num, den, _ = _eq14_terms(a, b, camera)
@@ -76,16 +73,14 @@ def theta_from_pixels(w_prev, w_curr, camera: StereoCamera) -> np.ndarray:
 
 def theta_standard_deviation(w_prev, w_curr, camera: StereoCamera, sigma_px: float) -> np.ndarray:
     """First-order standard deviation of eq. 14's theta when u, v, u', v' carry noise ``sigma_px``
-    (:func:`theta_and_variance`). The error grows as ``1 / |D|`` near the camera's height and with the
-    distance of the match from the image centre."""
+    (:func:`theta_and_variance`)."""
     return np.sqrt(theta_and_variance(*match_pair(w_prev, w_curr), camera, sigma_px)[1])
 
 
 def theta_and_variance(
     a: np.ndarray, b: np.ndarray, camera: StereoCamera, sigma_px: float
 ) -> tuple[np.ndarray, np.ndarray]:
-    """eq. 14's theta and its first-order variance for matches ``a -> b`` already checked (none at
-    the camera's height).
+    """eq. 14's theta and its first-order variance for checked matches ``a -> b``.
 
     With ``tan phi = N / (fx D)``, ``N = (u'-u0)(v-v0) - (u-u0)(v'-v0)``, ``D = v + v' - 2 v0``:
     ``dphi = (fx D dN - fx N dD) / (fx^2 D^2 + N^2)`` with ``dN/d(u, u', v, v') = (-dv', dv, du', -du)``
@@ -103,9 +98,8 @@ def rho_from_pixels(w_prev, w_curr, theta, camera: StereoCamera) -> np.ndarray:
     """Chord length ``rho`` of every match given ``theta`` ([Zhao], eq. 16-17, sign corrected).
 
     ``rho = B/d [-sin phi, 0, cos phi](u-u0, ., fx) - B/d' [sin phi, 0, cos phi](u'-u0, ., fx)``
-    with ``phi = theta / 2``; the paper prints ``+`` before the second term. ``theta`` is one for
-    all matches or one per match; both disparities must be > 0. ``rho`` is negative when the
-    camera moves backwards.
+    with ``phi = theta / 2`` (the paper prints ``+``). ``theta``: one, or one per match; both
+    disparities must be > 0; ``rho`` is negative backwards.
     """
     a, b = match_pair(w_prev, w_curr)
     for name, arr in (("w_prev", a), ("w_curr", b)):
@@ -150,11 +144,8 @@ def apply_motion(points, theta: float, rho: float) -> np.ndarray:
 
 # ---------------------------------------------------------------------- camera <-> robot
 def yaw_increment(theta):
-    """The robot's yaw increment (counter-clockwise positive, z up) for a deflection ``theta``.
-
-    The camera's y axis points down, so a positive rotation about it in eq. 15 maps a point ahead
-    to +x (right) in the new image: the camera turned left. Yaw increment and theta are equal.
-    """
+    """The robot's yaw increment (counter-clockwise positive, z up) for a deflection ``theta``:
+    equal, as the camera's y axis points down (a positive ``theta`` turns the camera left)."""
     return np.asarray(theta, dtype=float) * 1.0
 
 
@@ -166,11 +157,8 @@ def robot_increment(theta, rho) -> np.ndarray:
 
 
 def circular_motion_from_increment(increment) -> tuple[np.ndarray, np.ndarray]:
-    """``(theta, rho)`` closest to a planar robot increment ``(dx, dy, dyaw)``.
-
-    ``theta`` is the yaw increment; ``rho`` is the increment's projection on the chord direction
-    ``phi = theta / 2``, which is its length, signed, when the motion is exactly circular.
-    """
+    """``(theta, rho)`` closest to a planar robot increment ``(dx, dy, dyaw)``: the yaw, and the
+    projection on the chord direction ``phi = theta / 2`` (the signed chord of a circular motion)."""
     inc = np.asarray(increment, dtype=float)
     theta = inc[..., 2]
     phi = 0.5 * theta

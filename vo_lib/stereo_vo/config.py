@@ -1,10 +1,8 @@
-"""The settings of the stereo VO pipeline, as one frozen structure, and its two presets.
+"""The settings of the stereo VO pipeline, as one frozen structure, and its presets.
 
-:data:`CRAWLER` is the paper's robot [Zhao]: single-scale FAST corners, the planar
-circular-motion model, track odometry. :data:`CAR` is a car on a real road (KITTI): a two-scale
-front end, the 1-point RANSAC seen from a virtual camera on the turning axis, a 6-DoF refinement
-and the camera's mount. Where the two differ, the field says why; a researcher sweeps a setting
-with ``dataclasses.replace(CRAWLER, key_distance=0.08)``.
+:data:`CRAWLER` is the paper's robot [Zhao], :data:`CAR` a car on a real road (KITTI),
+:data:`HOVER` a drone or hand-held rig. Sweep a setting with
+``dataclasses.replace(CRAWLER, key_distance=0.08)``.
 """
 
 from __future__ import annotations
@@ -26,18 +24,15 @@ MOTIONS = ("planar", "full")
 class PipelineConfig:
     """Every choice of :class:`~vo_lib.stereo_vo.pipeline.StereoOdometry` that is a number or a name."""
 
-    #: ``"fast"``: single-scale FAST corners (``features``); ``"pyramid"``: two scales
-    #: (``pyramid_features``), for the large image motion of a car.
+    #: ``"fast"``: single-scale FAST corners; ``"pyramid"``: two scales, for a car's large image motion.
     front_end: str = "fast"
-    #: ``"planar"``: the circular-motion model (eq. 12-17) with its 1-point RANSAC; ``"full"``:
-    #: 1-point RANSAC as the outlier filter, then a 6-DoF refinement (``six_dof``).
+    #: ``"planar"``: circular motion (eq. 12-17); ``"full"``: then a 6-DoF refinement (``six_dof``).
     motion: str = "planar"
     ransac: RansacParams = field(default_factory=RansacParams)
     #: track the matched corners to sub-pixel positions in the current image (6-DoF motion only)
     subpixel_tracking: bool = False
-    #: 6-DoF motion: 1-point RANSAC's planar motion first (a vehicle turning on the ground), a general
-    #: 3-point RANSAC only where it keeps too few matches; False: the general one alone (a body free
-    #: in six degrees of freedom, of which the planar model's inliers would be a chance subset).
+    #: 6-DoF motion: 1-point RANSAC's planar hypotheses first, a general 3-point RANSAC where they
+    #: keep too few matches; False: the general one alone (a body free in six degrees of freedom).
     planar_hypotheses: bool = True
     min_features: int = 20  #: stereo features a frame needs to be matched
     min_inliers: int = 15
@@ -46,34 +41,30 @@ class PipelineConfig:
     #: The same on a frame's last attempt, matched without windows (None: ``min_inlier_ratio``).
     last_attempt_ratio: float | None = None
     prior_gate: float = float(chi2.ppf(0.9999, 2))  #: VO motion against the prediction (Mahalanobis^2)
-    #: Consecutive frames the prior gate may reject before the vision is believed over the
-    #: prediction (wheels slipping, a speed that lags when braking); the crawler always rejects.
+    #: Consecutive frames the prior gate may reject before the vision is believed over the prediction.
     max_contradictions: float = math.inf
     recent_frames: int = 15  #: good frames whose match and inlier counts make the recent medians
-    #: Guided matching that finds fewer than this fraction of the recent median is retried in a
-    #: window ``retry_widening`` times wider.
+    #: Guided matching below this fraction of the recent median is retried ``retry_widening`` wider.
     retry_fraction: float = 0.8
     retry_widening: float = 4.0
-    #: Keyframes: frames are measured against a reference frame until the motion since it is large
-    #: enough (metres of chord, radians), so that sub-pixel errors are small against the motion.
+    #: Keyframes: frames are measured against a reference until the motion since it is this large
+    #: (metres of chord, radians), so that sub-pixel errors are small against it ...
     key_distance: float = 0.04
     key_angle: float = math.radians(1.5)
     #: ... or the inliers fall below this fraction of the first frame's against the reference.
     key_inlier_fraction: float = 0.75
     key_max_gap: int = 12  #: frame intervals (frames, unless frames were dropped)
-    #: Factors applied element by element to the estimator's covariance before it enters the
-    #: filter. The least-squares covariance assumes independent pixel noise, but corners sit on
-    #: whole pixels and motion between frames is often below a pixel: on the rendered indoor
-    #: samples theta's spread is about 1.2x and rho's about 2.7x the least-squares figure
-    #: (notebook 08); the crawler's keeps the diagonal only.
+    #: Factors applied element by element to the estimator's covariance before the filter: corners
+    #: on whole pixels and sub-pixel motion make theta's spread about 1.2x and rho's 2.7x the
+    #: least-squares figure on the rendered indoor samples (notebook 08); the diagonal only.
     vo_covariance_scale: tuple = ((1.5**2, 0.0), (0.0, 3.0**2))
     #: A frame whose inliers fall below this fraction of the recent median has lost part of its
-    #: view to something that does not move with the world (0: not checked) ...
+    #: view to something moving (0: not checked) ...
     lost_view_fraction: float = 0.6
     #: ... unless the drop lasts this many frames: then it is the new normal (a changed scene).
     lost_view_patience: int = 15
     #: After this many frame intervals without a good frame (for one of ``restart_reasons``, or any
-    #: reason when empty), the current frame becomes the reference: the view may have left the old one.
+    #: when empty), the current frame becomes the reference.
     restart_gap: int = 90
     restart_reasons: frozenset[Reason] = frozenset()
     #: Counts measured right after frames without vision are not typical of the next ones.
@@ -81,7 +72,7 @@ class PipelineConfig:
     #: Sideways motion per metre travelled that the odometry cannot see (``kalman``).
     lateral_sigma: float = 0.0
     #: Uncertainty (x, y metres; yaw radians) added to the prediction while nothing predicts the
-    #: motion (no odometry, no motion measured yet); empty: none.
+    #: motion; empty: none.
     unknown_motion_sigma: tuple = ()
 
     def __post_init__(self):
@@ -127,15 +118,12 @@ CAR = PipelineConfig(
     unknown_motion_sigma=(10.0, 10.0, 1.0),
 )
 
-#: A camera that moves in six degrees of freedom with nothing to predict its motion (a drone or a
-#: hand-held rig, no odometry): the car's settings, except that the constant-velocity prediction
-#: (only the last motion repeated) never vetoes the vision, since a hovering body's turns and stops
-#: break it every few frames; the hypotheses are general (3-point): the body does not turn on a
-#: ground plane; a keyframe is also taken at the crawler's inlier fraction, as pitch and roll turn
-#: the view away without the yaw or chord that key the car's frames; and a motion counts on as few
-#: inliers as the refinement accepts (``rigid_motion.MIN_INLIERS``), with no inlier ratio on the
-#: last attempt (every pair matched, most wrongly in a blurred turn): in a fast turn a motion
-#: measured on few matches beats the last one repeated, which a reversing turn makes worse than none.
+#: A camera free in six degrees of freedom without odometry (a drone, a hand-held rig): the car's
+#: settings, but the constant-velocity prediction never vetoes the vision (a hovering body's turns
+#: and stops break it), general 3-point hypotheses, a keyframe also at the crawler's inlier
+#: fraction (pitch and roll turn the view away without yaw or chord), and a motion counts on as
+#: few inliers as the refinement accepts, with no inlier ratio on the last attempt: in a fast
+#: turn a motion measured on few matches beats the last one repeated.
 HOVER = replace(
     CAR,
     prior_gate=math.inf,

@@ -1,10 +1,8 @@
 """Is the fused filter consistent? Monte Carlo runs drawn from exactly the noise it assumes.
 
-One run of :func:`monte_carlo_run` drives the crawler along a gentle S, draws the truth's start
-from the filter's initial covariance, the measured track controls from the filter's control
-covariance and the VO increments from :data:`R_VO`, and records the pose NEES and the VO update's
-NIS at every step. Notebook 07 (section 6) averages 50 runs; ``python -m vo_lib sweep nees``
-runs one task per seed.
+One run of :func:`monte_carlo_run` drives the crawler along a gentle S, draws the start, the
+measured controls and the VO increments from the filter's own covariances, and records the pose
+NEES and the VO update's NIS at every step; ``python -m vo_lib sweep nees`` runs one per seed.
 """
 
 from __future__ import annotations
@@ -25,10 +23,8 @@ P0 = np.diag([0.01**2, 0.01**2, math.radians(0.5) ** 2])
 
 
 def monte_carlo_run(seed: int, steps: int = 150) -> tuple[np.ndarray, np.ndarray]:
-    """Pose NEES and VO NIS at each of ``steps`` steps of one run drawn with ``seed``.
-
-    A consistent filter gives a NEES following χ²(3) and a NIS following χ²(2) ([Zhao], eq. 1-11
-    is the filter judged)."""
+    """Pose NEES and VO NIS at each of ``steps`` steps of one run drawn with ``seed``: χ²(3) and
+    χ²(2) for a consistent filter ([Zhao], eq. 1-11)."""
     r = np.random.default_rng(seed)
     odometry = TrackOdometry()
     f = VoKalmanFilter(odometry, covariance=P0)
@@ -48,8 +44,8 @@ def monte_carlo_run(seed: int, steps: int = 150) -> tuple[np.ndarray, np.ndarray
 
 
 def nees_figures(seed: int) -> dict[str, float]:
-    """One run's figures (a task of ``python -m vo_lib sweep nees``): the mean and final pose NEES
-    and the share of steps inside χ²(3)'s 95 % interval."""
+    """One run's mean and final pose NEES and share of steps inside χ²(3)'s 95 % interval (a task
+    of ``sweep nees``)."""
     nees, _ = monte_carlo_run(seed)
     low, high = chi2.ppf([0.025, 0.975], 3)
     return {
@@ -60,8 +56,7 @@ def nees_figures(seed: int) -> dict[str, float]:
 
 
 def nees_report(table, stats) -> None:
-    """What ``sweep nees`` prints below its summary: the NEES averaged over the runs beside the
-    band consistent runs give (``table``: one row per run; ``stats``: the summary)."""
+    """What ``sweep nees`` prints below its summary: the mean NEES beside a consistent band."""
     low, high = chi2_band(3, len(table))
     mean = stats.loc["nees_mean", "mean"]
     print(

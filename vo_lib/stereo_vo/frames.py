@@ -13,8 +13,7 @@ import numpy as np
 
 
 class Reason(str, enum.Enum):
-    """Why a frame's VO motion was not used; :attr:`NONE` when it was. The value is the sentence
-    the diagnostics print."""
+    """Why a frame's VO motion was not used (:attr:`NONE`: it was), as the diagnostics print it."""
 
     NONE = ""
     NO_REFERENCE = "no reference frame with features"
@@ -51,7 +50,6 @@ class Stopwatch:
             self.ms[stage] = self.ms.get(stage, 0.0) + (time.perf_counter() - t0) * 1e3
 
     def total(self) -> float:
-        """Milliseconds since the watch was made."""
         return (time.perf_counter() - self._start) * 1e3
 
 

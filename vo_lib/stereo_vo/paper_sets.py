@@ -1,15 +1,11 @@
-"""[Zhao]'s experiments at the paper's length: the two spot-turn sets (IV.B.2, Fig. 10), the
-three free-motion sets of Table 2 (IV.B.3), outdoor linear motion (IV.B.1) and indoor free motion
-(IV.A.3), run through the full pipeline and reported the way the paper reports them, as the
-average (AVG) and standard deviation (S.D.) of the errors at key positions.
+"""[Zhao]'s experiments at the paper's length (:data:`PAPER`), run through the full pipeline and
+reported as the paper does: the average (AVG) and standard deviation (S.D.) of the errors at key
+positions.
 
-A full run renders and processes about 12,700 frames, more than a notebook can afford;
-:func:`main` runs them once and stores the figures in ``paper_sets.json`` beside
-this module (package data: an installed wheel has it too), each set with the code version and
-the sample fingerprint that made it. Notebook 08 reads them (:func:`load`); a ``samples``-marked
-test runs them again and compares. ``python -m vo_lib.stereo_vo.paper_sets [SET ...]`` recomputes
-the named sets (default: all) and stores them beside the others; ``... paper_sets contradictions``
-recomputes :func:`contradiction_study` (vision rejected after a lost track contact, over seeds).
+The about 12,700 frames are more than a notebook can afford: ``python -m
+vo_lib.stereo_vo.paper_sets [SET ...]`` (default: all; ``contradictions``:
+:func:`contradiction_study`) stores the figures in :data:`RESULTS`, each set with the code version
+and sample fingerprint that made it; notebook 08 reads them (:func:`load`).
 """
 
 from __future__ import annotations
@@ -30,10 +26,9 @@ from vo_lib.sim.samples import SAMPLES, fingerprint, render_sample
 from vo_lib.stereo_vo.config import CRAWLER
 from vo_lib.stereo_vo.pipeline import StereoOdometry, run_frames
 
-#: The stored results, beside this module (package data, so an installed wheel has them too).
+#: The stored results, beside this module (package data).
 RESULTS = Path(__file__).resolve().with_name("paper_sets.json")
-#: Key positions: every this many frames (the paper marks its key positions on the path, Fig. 11,
-#: without stating their spacing; ours is a choice).
+#: Key positions every this many frames (the paper, Fig. 11, does not state their spacing).
 KEY_EVERY = 50
 #: The pipeline's seed for these runs (notebook 08's).
 SEED = 8
@@ -54,8 +49,8 @@ SETS = tuple(PAPER)
 
 
 def code_version() -> str:
-    """The repository's commit (with ``+changes`` when the package's code differs from it; the
-    stored results themselves do not count)."""
+    """The repository's commit, with ``+changes`` when the package's code (not the stored results)
+    differs from it."""
     root = Path(__file__).resolve().parents[2]
 
     def git(*args) -> str:
@@ -73,12 +68,9 @@ def code_version() -> str:
 
 
 def run_set(name: str) -> dict:
-    """Run one set, whole, and return its statistics.
-
-    Errors are estimate minus truth in the frame of the start, at frames ``KEY_EVERY``,
-    ``2 KEY_EVERY``, ... (:func:`vo_lib.evaluation.key_position_errors`), for the fused pipeline
-    and for track odometry alone; plus the mean absolute heading error over every frame.
-    """
+    """Run one set, whole, and return its statistics: the errors (estimate minus truth in the
+    start's frame) at every ``KEY_EVERY`` frames of the fused pipeline and of odometry alone
+    (:func:`vo_lib.evaluation.key_position_errors`), and the heading errors over every frame."""
     rendered, frame_iter = render_sample(name)
     n = rendered.frames
     result = run_frames(frame_iter, rendered.camera, seed=SEED)
@@ -101,10 +93,9 @@ def run_set(name: str) -> dict:
     }
 
 
-#: The study of vision rejected after a lost track contact: the sample, its first frames, the
-#: drives (the sample's own seed and the next ones: each draws the slip, the losses of contact
-#: and the image noise anew), and the number of consecutive contradicting frames after which the
-#: vision is believed (the crawler's preset never believes it: math.inf).
+#: The study of vision rejected after a lost track contact: the sample, its first frames, the drives
+#: (the sample's seed and the next ones), and the consecutive contradicting frames after which the
+#: vision is believed (the crawler's preset never does).
 CONTRADICTION_SET = "outdoor_free_3"
 CONTRADICTION_FRAMES = 600
 CONTRADICTION_DRIVES = 10
@@ -113,10 +104,7 @@ CONTRADICTION_LIMIT = 2
 
 def contradiction_study() -> dict:
     """The crawler's pipeline as preset and with ``max_contradictions = CONTRADICTION_LIMIT`` on
-    the first frames of the drives of the study (above): the sample itself and copies whose seed
-    is the next ones. Per drive, the frames flagged and the RMS heading error (degrees)
-    of each setting. (The pipeline's own seed draws only RANSAC's hypotheses and changes these
-    figures in their seventh digit; the drive is the draw that matters.)
+    the study's drives: per drive, each setting's flagged frames and RMS heading error (degrees).
     """
     base = SAMPLES[CONTRADICTION_SET]
     seeds = [base.seed + k for k in range(CONTRADICTION_DRIVES)]

@@ -1,9 +1,8 @@
 """The small interfaces between the pipeline's parts, and what passes through them.
 
 A frame goes through a **front end** (stereo features ``w = (u, v, d)``), a **motion model**
-(prediction, matching against the reference frame, the motion of the matches) and the **filter**
-([Zhao], Fig. 3); ``pipeline.StereoOdometry`` strings them together and decides which frames to
-trust. A researcher swaps a part by passing another object with the same methods.
+(prediction, matching, the motion of the matches) and the **filter** ([Zhao], Fig. 3), strung
+together by ``pipeline.StereoOdometry``; any object with the same methods replaces a part.
 """
 
 from __future__ import annotations
@@ -20,12 +19,9 @@ from vo_lib.stereo_vo.temporal import MotionPrior, TemporalMatches
 
 @dataclass
 class Prediction:
-    """The filter's predicted motion since the reference frame.
-
-    ``prior`` is ``(theta, rho)`` and its covariance; ``informative`` is False while nothing
-    predicts the motion (no odometry, no motion measured yet); ``motion`` is the predicted 4x4
-    camera motion ``T_curr_from_prev`` of a 6-DoF model (None otherwise, or when uninformative).
-    """
+    """The filter's predicted motion since the reference frame: ``(theta, rho)`` with its
+    covariance (``prior``), False while nothing predicts the motion (``informative``), and a 6-DoF
+    model's 4x4 ``T_curr_from_prev`` (``motion``, else None)."""
 
     prior: MotionPrior
     informative: bool
@@ -34,12 +30,9 @@ class Prediction:
 
 @dataclass
 class Estimate:
-    """A measured motion since the reference frame, ready for the filter.
-
-    ``z`` is ``(theta, rho)``, or ``(theta, rho, sideways)`` when the model measures the motion's
-    deviation from its chord; ``covariance`` matches it. ``inlier_ratio`` is what the pipeline
-    gates on; ``timings`` are milliseconds of ``estimation`` and ``refinement``.
-    """
+    """A measured motion since the reference frame, ready for the filter: ``z`` is ``(theta,
+    rho)``, or ``(theta, rho, sideways)`` where the model measures the deviation from the chord;
+    ``timings`` are milliseconds of ``estimation`` and ``refinement``."""
 
     success: bool
     z: np.ndarray

@@ -1,9 +1,6 @@
-"""The paper's motion model as a pipeline part: circular motion, guided matching, 1-point RANSAC.
-
-Prediction is the filter's ``(theta, rho)`` prior (eq. 15); matching searches each previous
-feature's predicted window, ``N_SIGMA`` standard deviations of the prior carried through the
-prediction (``temporal``); estimation is 1-point RANSAC with the prior as one more hypothesis
-(``ransac``, eq. 14-21).
+"""The paper's motion model as a pipeline part: the filter's ``(theta, rho)`` prior (eq. 15),
+matching in each feature's predicted window (``temporal``), and 1-point RANSAC with the prior as
+one more hypothesis (``ransac``, eq. 14-21).
 """
 
 from __future__ import annotations

@@ -17,30 +17,29 @@ if TYPE_CHECKING:
 
 #: Width of a row's label and of each column in the error table.
 LABEL, COLUMN = 46, 18
+#: The timing table's stages (the refinement's only where it ran).
+STAGES = (
+    ("stereo", "binocular stereo vision processing"),
+    ("matching", "guided temporal matching"),
+    ("estimation", "parameter estimation (RANSAC)"),
+    ("refinement", "6-DoF refinement"),
+    ("kalman", "Kalman filtering (prediction + update)"),
+)
 
 
 def timing_rows(result: PipelineResult) -> list[tuple[str, str, np.ndarray]]:
-    """Per-frame milliseconds of each stage, as the timing table lists them: ``(key, label,
-    values)``. The stages and "between the stages" add up to the whole frame, frame by frame."""
+    """Per-frame milliseconds of each stage: ``(key, label, values)``; with "between the stages"
+    they add up to the whole frame, frame by frame."""
     rows = result.timings[1:] or result.timings  # the first frame only detects: no motion yet
     column = {f.name: np.array([getattr(r, f.name) for r in rows]) for f in fields(FrameTimings)}
-    stages = [
-        ("stereo", "binocular stereo vision processing", column["stereo"]),
-        ("matching", "guided temporal matching", column["matching"]),
-        ("estimation", "parameter estimation (RANSAC)", column["estimation"]),
-        ("refinement", "6-DoF refinement", column["refinement"]),
-        ("kalman", "Kalman filtering (prediction + update)", column["kalman"]),
-    ]
-    stages = [s for s in stages if s[0] != "refinement" or s[2].any()]
+    stages = [(k, label, column[k]) for k, label in STAGES if k != "refinement" or column[k].any()]
     between = column["total"] - sum(values for _, _, values in stages)
     return [*stages, ("between", "between the stages (keyframes, bookkeeping)", between)]
 
 
 def print_timing_table(result: PipelineResult, camera, frames: int, decoding_ms=None) -> None:
-    """The timing table like the paper's Table 1: median and mean milliseconds per stage, and the
-    paper's figure (a mean) where the paper has one for this resolution. ``decoding_ms``: the
-    milliseconds each frame's images took to decode, on the reader thread (a line of its own,
-    outside the whole frame, which the reader thread overlaps)."""
+    """The timing table like the paper's Table 1: median and mean milliseconds per stage beside the
+    paper's mean at this resolution; ``decoding_ms``: each frame's decoding on the reader thread."""
     rows = timing_rows(result)
     whole = sum(values for _, _, values in rows)
     paper = PAPER_TABLE1.get((camera.width, camera.height), {})
@@ -64,8 +63,8 @@ def print_timing_table(result: PipelineResult, camera, frames: int, decoding_ms=
 
 
 def truth_and_odometry(seq, vehicle, frames: int):
-    """Planar vehicle poses of the ground truth and of odometry alone over the first ``frames``
-    frames (each None where the sequence has none): what :func:`error_report` compares."""
+    """Planar vehicle poses of the truth and of odometry alone over the first ``frames`` frames
+    (each None where the sequence has none)."""
     truth = None if seq.poses is None else planar_from_camera_poses(seq.poses[:frames], vehicle.mount)
     odometry = None
     if vehicle.odometry is not None:
@@ -74,8 +73,8 @@ def truth_and_odometry(seq, vehicle, frames: int):
 
 
 def error_report(result: PipelineResult, truth_planar: np.ndarray, odometry_planar=None) -> dict:
-    """Planar errors of the estimate (and of odometry alone) against the ground truth: final
-    position error (m, % of the distance travelled), planar ATE, heading errors."""
+    """Planar errors of the estimate (and of odometry alone) against the truth: final position
+    error (m, % of the distance), planar ATE, heading errors."""
     from vo_lib.evaluation import ate_planar, final_error, is_spot_turn, turned_degrees
 
     trajectories = {"vo": result.poses, "odometry": odometry_planar}
@@ -124,8 +123,7 @@ ROWS_PLANAR = (
 
 
 def _row(label: str, values, fmt: str) -> str:
-    # no figure for this column (None), or one that has no value (an alignment's scale when a
-    # trajectory stands still)
+    # None: no figure for this column; not finite: no value (the scale of a standing trajectory)
     cells = ["" if v is None else fmt.format(v) if np.isfinite(v) else "undefined" for v in values]
     return f"  {label:<{LABEL}s}" + "".join(f"{c:>{COLUMN}s}" for c in cells)
 
@@ -140,8 +138,7 @@ def _how_far(report: dict, vo_3d) -> str:
 
 
 def _print_rows_3d(errors: dict, cols: list[str], spot_turn: bool) -> None:
-    """The 3-D rows of :func:`print_error_table` (no share of the distance after a spot turn), and
-    the segment lengths of the KITTI errors."""
+    """The 3-D rows of :func:`print_error_table`, and the segment lengths of the KITTI errors."""
     kitti = errors["vo"].kitti
     for label, figure, fmt in ROWS_3D:
         if not (spot_turn and "of distance" in label or kitti is None and label.startswith("KITTI")):
@@ -161,10 +158,9 @@ def print_error_table(
     planar: bool = True,
     fused: bool = False,
 ) -> None:
-    """One table of errors against ground truth, a column for visual odometry (``fused`` with the
-    odometry, so headed) and one for odometry alone: the rows of ``errors`` (3-D,
-    :func:`vo_lib.evaluation.standard_errors` of each column's camera poses) and, with ``planar`` (a
-    vehicle on the ground), the planar rows of ``report`` (:func:`error_report`)."""
+    """Errors against ground truth, a column for visual odometry (``fused`` with the odometry) and
+    one for odometry alone: the 3-D rows of ``errors`` (:func:`vo_lib.evaluation.standard_errors`)
+    and, with ``planar``, the planar rows of ``report`` (:func:`error_report`)."""
     errors = errors or {}
     vo_3d = errors.get("vo")
     source = f"{truth_file}, " if truth_file else ""  # a recording's, of the several it may hold
@@ -181,8 +177,8 @@ def print_error_table(
 
 
 def tracked_truth(seq, n: int):
-    """The sequence's position-only truth (a laser tracker's prism) at its first ``n`` frames: the
-    manifest's entry, the frames and the positions; None where it has fewer than 3 there."""
+    """Position-only truth (a laser tracker's prism) in the first ``n`` frames: ``(the manifest's
+    entry, frames, positions)``; None with fewer than 3."""
     positions = seq.manifest.get("positions") if isinstance(seq.manifest, dict) else None
     frames = np.asarray(positions["frames"], int) if positions else np.zeros(0, int)
     keep = frames < n
@@ -190,9 +186,8 @@ def tracked_truth(seq, n: int):
 
 
 def tracked_offsets(seq, poses: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray] | None:
-    """Position-only truth against the estimate: the frames it has and, at each, the truth's
-    position of the tracked point minus the estimate's, after the ATE's SE(3) alignment, in the
-    first camera's frame ``(K, 3)``; None without such truth."""
+    """The frames of position-only truth and, at each, its tracked point minus the estimate's
+    after SE(3) alignment, in the first camera's frame ``(K, 3)``; None without such truth."""
     from vo_lib.evaluation import carried_point, umeyama
 
     found = tracked_truth(seq, n)
@@ -205,8 +200,7 @@ def tracked_offsets(seq, poses: np.ndarray, n: int) -> tuple[np.ndarray, np.ndar
 
 
 def position_only_errors(seq, poses: np.ndarray, n: int) -> dict:
-    """The ATE of the tracked point against position-only truth (a laser tracker's prism), printed;
-    returns it for the report (empty where the sequence has no such truth)."""
+    """Print and return the tracked point's ATE against position-only truth (empty without)."""
     from vo_lib.evaluation import Alignment, ate_positions
 
     found = tracked_truth(seq, n)
@@ -232,9 +226,8 @@ def odometry_name(vehicle) -> str:
 
 
 def errors_3d(truth: np.ndarray, estimates: dict, mount: np.ndarray) -> dict:
-    """:func:`vo_lib.evaluation.standard_errors` of each estimate (camera poses, or planar poses
-    carried to the camera through ``mount``) against the camera's 6-DoF truth; None for a
-    missing estimate."""
+    """:func:`vo_lib.evaluation.standard_errors` of each estimate (camera poses, or planar ones
+    carried through ``mount``) against the 6-DoF truth; None for a missing estimate."""
     from vo_lib.evaluation import standard_errors
 
     errors = {}

@@ -1,12 +1,9 @@
 """Synthetic stereo matches under a known circular motion, for checks that need exact truth.
 
-The points belong to a physically possible scene (:class:`Scene`): the stereo rig stands
-``camera_height`` above a flat floor, possibly pitched down; a share of the points is texture on
-the floor and the rest lies on upright surfaces (walls, boxes) between the floor and ``top``, at
-horizontal ranges drawn uniformly in inverse range. No point is below the floor, and the image
-rows fill as in a room: far surfaces crowd near the principal row, the floor fills the lower
-half. The camera moves by eq. 15 of [Zhao] on the floor (or by any rigid motion), and a point is
-kept only when both views see it; pixel noise and gross outliers are optional.
+The points lie in a possible room (:class:`Scene`): on the floor below the (possibly pitched)
+rig, or on upright surfaces up to ``top``, uniform in inverse range, so the image rows fill as in
+a room. The camera moves by eq. 15 of [Zhao] (or any rigid motion); a point is kept only when
+both views see it; pixel noise and gross outliers are optional.
 """
 
 from __future__ import annotations
@@ -78,12 +75,9 @@ def synthetic_matches(
     outlier_ratio: float = 0.0,
     scene: Scene | None = None,
 ) -> SyntheticMatches:
-    """Draw ``n`` matches of points seen before and after the circular motion ``(theta, rho)``.
-
-    The robot moves by eq. 15 of [Zhao] on the floor; with a pitched camera (``scene.pitch``) the
-    camera's own motion is eq. 15 seen from the pitched frame, which the planar model does not
-    describe exactly. ``theta`` and ``rho`` of the result are the robot's. See
-    :func:`matches_under_transform` for the other parameters.
+    """Draw ``n`` matches of points seen before and after the robot's circular motion ``(theta,
+    rho)`` (eq. 15), which a pitched camera sees as a motion off the planar model; the other
+    parameters are :func:`matches_under_transform`'s.
     """
     scene = Scene() if scene is None else scene
     R, T = motion_matrices(theta, rho)
@@ -105,13 +99,11 @@ def matches_under_transform(
 ) -> SyntheticMatches:
     """Draw ``n`` matches of points seen before and after any rigid camera motion.
 
-    ``T_curr_from_prev`` maps a point of the previous camera frame into the current one (the
-    ``scene``, default :class:`Scene`, is fixed to the previous camera); ``theta`` and ``rho`` of
-    the result are those of :func:`~vo_lib.stereo_vo.circular_motion.circular_motion_from_transform`.
-    ``depth_range``: horizontal ranges of the points from the previous camera, metres, drawn
-    uniformly in inverse range; ``noise_px``: standard deviation of Gaussian noise on u, v and d of
-    both views; ``outlier_ratio``: the share of matches whose second view is an unrelated pixel and
-    disparity.
+    ``T_curr_from_prev`` maps the previous camera frame (where ``scene`` is fixed) into the current
+    one; the result's ``theta`` and ``rho`` are :func:`circular_motion_from_transform`'s.
+    ``depth_range``: horizontal ranges from the previous camera, metres; ``noise_px``: Gaussian
+    noise on u, v and d of both views; ``outlier_ratio``: the share of second views replaced by an
+    unrelated pixel and disparity.
     """
     scene = Scene() if scene is None else scene
     if camera.width is None or camera.height is None:
@@ -148,10 +140,9 @@ def matches_under_transform(
 def _scene_points(
     camera: StereoCamera, m: int, rng: np.random.Generator, depth_range: tuple[float, float], scene: Scene
 ) -> np.ndarray:
-    """``m`` points of the scene in the previous camera frame, ``(m, 3)``: a column of the image
-    (uniform), a horizontal range (uniform in inverse range) and a height above the floor (0 for
-    floor texture, else uniform up to ``scene.top``). Floor texture starts at the rig's own
-    height in front of it (nearer than ``depth_range``), where a pitched camera sees the floor."""
+    """``m`` points of the scene in the previous camera frame, ``(m, 3)``: image column uniform,
+    range uniform in inverse range, height 0 or uniform up to ``scene.top``. Floor texture starts
+    at the rig's height ahead (nearer than ``depth_range``), where a pitched camera sees it."""
     near, far = depth_range
     on_floor = rng.uniform(0, 1, m) < scene.floor_share
     nearest = np.where(on_floor, min(near, scene.camera_height), near)

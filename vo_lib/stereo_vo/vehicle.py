@@ -1,20 +1,14 @@
 """What carries the camera: where it is mounted, which odometry it has, which motion model fits.
 
-Two kinds of vehicle reach the pipeline:
+* **The crawler** of the rendered samples [Zhao]: the camera above the turning axis on a flat
+  floor, so the planar circular-motion model (eq. 12-17) is exact; track odometry.
+* **A car** (KITTI): the camera 1.6 m up and about a metre ahead of the turning axis on a road
+  that climbs and banks: a 6-DoF motion. Odometry from ``odometry.txt``, else from the OXTS
+  packets' speed and yaw rate, turned into the distances of two wheels :data:`CAR_GAUGE` apart.
+* **A drone** or hand-held rig (ASL layout), turning about its own origin, without odometry.
 
-* **the crawler** of the rendered samples [Zhao]: the camera sits above the turning axis and
-  the floor is flat, so the planar circular-motion model (eq. 12-17) is exact; track distances
-  come from ``odometry.txt``.
-* **a car** (KITTI): the camera is 1.6 m above the road and about a metre ahead of the axis it
-  turns about, the road climbs and banks. The motion is refined with six degrees of freedom
-  (:mod:`vo_lib.stereo_vo.rigid_motion`). Odometry comes from ``odometry.txt`` if there is one,
-  else from the GPS/IMU packets of a KITTI raw recording (``oxts.txt``: forward speed and yaw
-  rate, turned into the distances of two wheels :data:`CAR_GAUGE` apart).
-
-The vehicle's frame is x forward, y left, z up (as in ``vo_lib.geometry``); for a KITTI raw recording its
-origin is the IMU, which sits near the rear axle, and ``raw_calib/`` places the camera in it.
-Without ``raw_calib/`` (KITTI's odometry set) :data:`KITTI_CAMERA_IN_IMU` is used: the same
-rig's calibration rounded to centimetres.
+The vehicle's frame is x forward, y left, z up; a KITTI car's origin is the IMU, near the rear
+axle, where ``raw_calib/`` places the camera (else :data:`KITTI_CAMERA_IN_IMU`).
 """
 
 from __future__ import annotations
@@ -31,21 +25,19 @@ from vo_lib.formats.poses import check_file
 from vo_lib.geometry import camera_mount
 from vo_lib.models.track_odometry import TrackOdometry
 
-#: Distance between the two wheels that turn speed and yaw rate into wheel distances, metres. It
-#: sets only the modelled noise of the yaw increment, ``2 CAR_DISTANCE_SIGMA**2 s / gauge**2`` over
-#: ``s`` metres, which is made the measured one: on KITTI raw drive 0001 the increment integrated
-#: from the OXTS yaw rate differs from that of the OXTS heading by 0.0092 deg rms per 1.0 m frame
-#: (bias included), which :func:`gauge_for_yaw_noise` turns into 176 m. A car's real track (about
-#: 1.6 m) would model a gyro a hundred times noisier than it is.
+#: Gauge of the two wheels that turn OXTS speed and yaw rate into wheel distances, metres. It sets
+#: only the modelled yaw noise, ``2 CAR_DISTANCE_SIGMA**2 s / gauge**2`` over ``s`` metres, made the
+#: measured one: on KITTI raw drive 0001 the yaw-rate increment differs from the heading's by
+#: 0.0092 deg rms per 1.0 m frame, which :func:`gauge_for_yaw_noise` turns into 176 m (a real
+#: 1.6 m track would model a gyro a hundred times noisier than it is).
 CAR_GAUGE = 176.0
 #: The rendered road car's wheel gauge (``vo_lib.sim.road``), metres, which models its ``odometry.txt``.
 ROAD_CAR_GAUGE = 1.6
-#: Noise of a wheel distance derived from the GPS/IMU speed, per square-root metre. On KITTI raw
-#: drive 0001 the OXTS distance per frame differs from the stereo vision's by 1.4 % rms (up to
-#: 3.7 cm in a 1.3 m frame, mostly when braking: the speed lags), 0.019 per wheel and square-root
-#: metre; a tighter figure lets the filter reject good vision for a lagging speed.
+#: Noise of a wheel distance from the OXTS speed, per square-root metre: on KITTI raw drive 0001 the
+#: distance per frame differs from the vision's by 1.4 % rms (the speed lags when braking), 0.019
+#: per wheel; a tighter figure lets the filter reject good vision for a lagging speed.
 CAR_DISTANCE_SIGMA = 0.02
-#: The narrowest gauge a manifest's track odometry may state, metres (a turn divides by it).
+#: The narrowest gauge a manifest's track odometry may state, metres.
 MIN_GAUGE_M = 0.01
 #: Camera position in the vehicle frame (forward, left, up), metres, for KITTI without raw_calib.
 KITTI_CAMERA_IN_IMU = (1.08, -0.31, 0.73)
@@ -88,10 +80,9 @@ class Vehicle:
 def gauge_for_yaw_noise(distances: np.ndarray, yaw_errors: np.ndarray, distance_sigma: float) -> float:
     """The gauge at which the track-odometry model's yaw noise is the measured one.
 
-    From the metres ``s`` travelled in each frame, the error ``e`` of each frame's yaw increment
-    (radians) and a wheel distance's noise per square-root metre: ``distance_sigma * sqrt(2 sum(s)
-    / sum(e^2))``, whose modelled variance ``2 distance_sigma^2 s / gauge^2`` per frame sums to
-    ``sum(e^2)`` ([Zhao], eq. 4-11, with ``b = 0``).
+    From the metres ``s`` of each frame and its yaw increment's error ``e`` (radians):
+    ``distance_sigma * sqrt(2 sum(s) / sum(e^2))``, whose modelled variance
+    ``2 distance_sigma^2 s / gauge^2`` per frame sums to ``sum(e^2)`` ([Zhao], eq. 4-11, ``b = 0``).
     """
     s, e = np.abs(np.asarray(distances, float)), np.asarray(yaw_errors, float)
     if s.shape != e.shape or len(s) == 0 or not np.any(e):
@@ -105,13 +96,9 @@ def car_odometry_model(gauge: float = ROAD_CAR_GAUGE) -> TrackOdometry:
 
 
 def drone_mount(T_body_camera: np.ndarray) -> np.ndarray:
-    """The mount of a camera on a body that turns about its own origin (a drone's IMU, a
-    hand-held rig): the camera level, looking forward, offset from the origin as calibrated.
-
-    The vehicle frame's axes are the camera's (forward = optical axis, up = the image's up);
-    only its origin is the body's. Where the camera is tilted the offset is then approximate,
-    but it is a few centimetres on a compact rig.
-    """
+    """The mount of a camera on a body that turns about its own origin (a drone's IMU, a hand-held
+    rig): the vehicle frame's axes are the camera's, only its origin the body's (the offset is
+    approximate for a tilted camera, but a few centimetres on a compact rig)."""
     origin_in_camera = np.linalg.inv(T_body_camera)[:3, 3]
     right, down, forward = -origin_in_camera  # the camera seen from the body origin
     return camera_mount(forward=forward, height=-down, left=-right)
@@ -120,43 +107,41 @@ def drone_mount(T_body_camera: np.ndarray) -> np.ndarray:
 def vehicle_of(sequence, use_odometry: bool = True, motion: str = "auto") -> Vehicle:
     """The vehicle of a :class:`~vo_lib.formats.sequence.Sequence`, from its manifest and files.
 
-    With ``use_odometry=False`` no odometry file is read (``odometry`` is None). With ``motion =
-    "hover"`` a sequence that names no free body (a KITTI-layout folder without a manifest) is one
-    that turns about its camera: a hand-held rig, or a drone whose body is not known.
+    ``use_odometry=False`` reads no odometry. With ``motion="hover"`` a sequence that names no free
+    body turns about its camera (a hand-held rig, or a drone whose body is not known).
     """
-    vehicle = _vehicle(sequence, use_odometry)
-    if motion == Motion.HOVER and vehicle.kind is not VehicleKind.DRONE:
-        return replace(vehicle, kind=VehicleKind.DRONE, mount=drone_mount(np.eye(4)), motion=Motion.HOVER)
-    return vehicle
-
-
-def _vehicle(sequence, use_odometry: bool) -> Vehicle:
     camera = sequence.manifest.get("camera", {}) if isinstance(sequence.manifest, dict) else {}
     if "T_body_camera" in sequence.manifest:
         mount = drone_mount(np.asarray(sequence.manifest["T_body_camera"], float))  # no odometry
         return Vehicle(VehicleKind.DRONE, mount, car_odometry_model(), None, "none", Motion.HOVER)
     if "height_m" in camera:  # a rendered sample: the crawler of [Zhao]
-        return _crawler(sequence, camera, use_odometry)
-    return _car(sequence, use_odometry)
+        vehicle = _crawler(sequence, camera, use_odometry)
+    else:
+        vehicle = _car(sequence, use_odometry)
+    if motion == Motion.HOVER:
+        return replace(vehicle, kind=VehicleKind.DRONE, mount=drone_mount(np.eye(4)), motion=Motion.HOVER)
+    return vehicle
 
 
 def _crawler(sequence, camera: dict, use_odometry: bool) -> Vehicle:
     """A rendered sample's crawler: its mount and track odometry as the manifest states them."""
     mount = camera_mount(forward=float(camera.get("forward_m", 0.0)), height=float(camera["height_m"]))
+    manifest = sequence.path / "manifest.json"
     try:
         model = TrackOdometry(**sequence.manifest.get("track_odometry", {}))
     except (TypeError, ValueError) as exc:  # an unknown key, a value that is not a length
-        where = f"{sequence.path / 'manifest.json'}: key track_odometry"
-        raise SequenceError(f"{where}: expected track_distance, track_width, encoder_sigma ({exc})") from None
+        raise SequenceError(
+            f"{manifest}: key track_odometry: expected track_distance, track_width, encoder_sigma ({exc})"
+        ) from None
     if model.gauge < MIN_GAUGE_M:  # the turn is the tracks' difference over the gauge: no gauge, no turn
         raise SequenceError(
-            f"{sequence.path / 'manifest.json'}: key track_odometry: track_distance + 2 track_width is "
+            f"{manifest}: key track_odometry: track_distance + 2 track_width is "
             f"{model.gauge:g} m; expected at least {MIN_GAUGE_M:g} m"
         )
     mount_text = camera.get("mount", CAMERA_MOUNTS[0])
     if mount_text not in CAMERA_MOUNTS:  # a misspelt crawler's mount is not taken for another
         raise SequenceError(
-            f"{sequence.path / 'manifest.json'}: key camera.mount: expected "
+            f"{manifest}: key camera.mount: expected "
             f"{' or '.join(map(repr, CAMERA_MOUNTS))}, got {json.dumps(mount_text)[:40]}"
         )
     odometry = sequence.odometry if use_odometry else None
@@ -166,8 +151,8 @@ def _crawler(sequence, camera: dict, use_odometry: bool) -> Vehicle:
 
 
 def _car(sequence, use_odometry: bool) -> Vehicle:
-    """A car in the KITTI layout: the camera in its IMU frame (``raw_calib``, else KITTI's rig), and
-    wheel distances from ``odometry.txt`` or from the OXTS packets' speed and yaw rate."""
+    """A car in the KITTI layout: the camera in its IMU frame, wheel distances from
+    ``odometry.txt`` or the OXTS packets."""
     root = sequence.path
     raw_calib = sequence.raw_calib or root / "raw_calib"  # a raw drive's, else a KITTI-layout folder's
     if raw_calib.exists() or raw_calib.is_symlink():  # a file or a broken link: named by the reader
@@ -188,8 +173,8 @@ def _car(sequence, use_odometry: bool) -> Vehicle:
 
 
 def _oxts_packets(sequence) -> tuple[np.ndarray | None, str]:
-    """A car's OXTS packets, one per frame, and the file they are in: a raw drive's (read with its
-    images), else those of ``oxts.txt``; ``(None, "")`` where there are none."""
+    """A car's OXTS packets, one per frame, and their file (a raw drive's, else ``oxts.txt``);
+    ``(None, "")`` where there are none."""
     if sequence.oxts is not None:
         return sequence.oxts, "oxts/data"
     oxts = sequence.path / "oxts.txt"
