@@ -74,15 +74,20 @@ def load_sequence(
     pairs (a KITTI-layout folder is read whole); ``odometry=False``: ``odometry.txt`` is not read;
     ``truth=False``: no ground truth is read."""
     key = str(name_or_path)
-    path = Path(key)
     if is_sample(key):
         path = sample_path(key, frames, resolution)
         if not is_rendered(key, path):
             generate(key, path, frames, None if resolution is None else tuple(resolution), progress)
-    elif mav0_of(path) is not None:  # a rig as it records (ASL layout): rectified on reading
+        return read_sequence(path, odometry=odometry, truth=truth)
+    return read_folder(Path(key), frames, odometry, truth)
+
+
+def read_folder(path: Path, frames: int | None, odometry: bool, truth: bool) -> Sequence:
+    """The sequence in ``path``, in whichever layout it is (:func:`load_sequence`)."""
+    if mav0_of(path) is not None:  # a rig as it records (ASL layout): rectified on reading
         return read_asl(path, frames=frames, truth=truth)
-    elif raw_drive_of(path) is not None:  # a drive of KITTI's raw set, as it is stored
+    if raw_drive_of(path) is not None:  # a drive of KITTI's raw set, as it is stored
         return read_kitti_raw(path, truth=truth, odometry=odometry)
-    elif not (path / "image_0").is_dir() and (why := asl_near_miss(path) or raw_near_miss(path)):
+    if not (path / "image_0").is_dir() and (why := asl_near_miss(path) or raw_near_miss(path)):
         raise AslError(why)
     return read_sequence(path, odometry=odometry, truth=truth)

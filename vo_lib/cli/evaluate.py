@@ -178,6 +178,29 @@ def _print_pose_errors(G: np.ndarray, E: np.ndarray, lengths) -> None:
         )
 
 
+def _say_if_units_differ(truth_xyz: np.ndarray, est_xyz: np.ndarray) -> None:
+    """A note where the two paths' lengths differ a hundredfold or more (one in millimetres?)."""
+    truth_m, est_m = path_length(truth_xyz), path_length(est_xyz)
+    if min(truth_m, est_m) > 0 and max(truth_m, est_m) >= 100 * min(truth_m, est_m):
+        print(
+            f"note: the ground truth's path is {truth_m:.4g} m long and the estimate's {est_m:.4g} m: "
+            "is one of them in millimetres? Both files are read as metres"
+        )
+
+
+def _print_position_errors(positions: np.ndarray, E: np.ndarray, lever: np.ndarray) -> None:
+    """ATE of the point ``lever`` (in the camera) carried along ``E`` against ``positions``."""
+    from vo_lib.evaluation import Alignment, ate_positions, carried_point, shown, umeyama
+
+    tracked = carried_point(E, lever)
+    for alignment in (Alignment.SE3, Alignment.SIM3):
+        a, _ = ate_positions(positions, E, lever, alignment)
+        rmse, worst = shown(a.rmse, ".4f"), shown(a.max, ".4f")  # undefined: a scale of nothing moving
+        scale = umeyama(tracked, positions, with_scale=True)[2] if alignment is Alignment.SIM3 else None
+        named = "" if scale is None else f", scale {shown(scale, '.4f')}"
+        print(f"ATE ({alignment} alignment{named}, positions only): rmse {rmse} m, max {worst}")
+
+
 def evaluate_command(
     gt: str,
     est: str,
@@ -194,8 +217,6 @@ def evaluate_command(
     ``time_offset``: seconds added to the estimate's timestamps before they are paired with the truth's,
     at most ``max_time_diff`` apart.
     """
-    from vo_lib.evaluation import Alignment, ate_positions, carried_point, shown, umeyama
-
     limits = (("--time-offset", time_offset, -60.0), ("--max-time-diff", max_time_diff, 0.0))
     for option, seconds, low in limits:
         if not low <= seconds <= 60.0:  # NaN too
@@ -214,23 +235,10 @@ def evaluate_command(
         to_camera = _to_camera(truth, gt, extrinsic_of)  # the rectified left camera in the tracked frame
     print(notes.getvalue(), end="")
     truth_xyz = truth.positions[i_gt] if truth.poses is None else truth.poses[i_gt][:, :3, 3]
-    truth_m, est_m = path_length(truth_xyz), path_length(E[i_est][:, :3, 3])
-    if min(truth_m, est_m) > 0 and max(truth_m, est_m) >= 100 * min(truth_m, est_m):
-        print(
-            f"note: the ground truth's path is {truth_m:.4g} m long and the estimate's {est_m:.4g} m: "
-            "is one of them in millimetres? Both files are read as metres"
-        )
+    _say_if_units_differ(truth_xyz, E[i_est][:, :3, 3])
     if truth.poses is not None:
         _print_pose_errors(truth.poses[i_gt] @ to_camera, E[i_est], segments)  # the truth's camera poses
         return
     if segments is not None:
         print(f"--segments: --gt {gt} holds positions only, which give the ATE alone")
-    # the ATE of the point lever (in the camera) carried along the estimate
-    positions, E, lever = truth.positions[i_gt], E[i_est], np.linalg.inv(to_camera)[:3, 3]
-    tracked = carried_point(E, lever)
-    for alignment in (Alignment.SE3, Alignment.SIM3):
-        a, _ = ate_positions(positions, E, lever, alignment)
-        rmse, worst = shown(a.rmse, ".4f"), shown(a.max, ".4f")  # undefined: a scale of nothing moving
-        scale = umeyama(tracked, positions, with_scale=True)[2] if alignment is Alignment.SIM3 else None
-        named = "" if scale is None else f", scale {shown(scale, '.4f')}"
-        print(f"ATE ({alignment} alignment{named}, positions only): rmse {rmse} m, max {worst}")
+    _print_position_errors(truth.positions[i_gt], E[i_est], np.linalg.inv(to_camera)[:3, 3])

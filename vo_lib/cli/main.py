@@ -57,6 +57,11 @@ def _recording(text: str) -> str:
     return text
 
 
+def _no_truth(parser: argparse.ArgumentParser, what: str) -> None:
+    why = f"read no ground truth (one that does not cover every image stops the {what})"
+    parser.add_argument("--no-truth", action="store_true", help=why)
+
+
 def build_parser() -> argparse.ArgumentParser:
     from vo_lib.bench import BENCH_HELP, BENCHES
     from vo_lib.cli.sweep import SWEEPS
@@ -74,10 +79,6 @@ def build_parser() -> argparse.ArgumentParser:
         p.add_argument("--out", type=non_empty("a folder"), help=f"output folder ({what})", **kwargs)
         force = "replace --out where another command of this program wrote it, as it wrote it"
         p.add_argument("--force", action="store_true", help=force)
-
-    def no_truth(p, what: str) -> None:
-        why = f"read no ground truth (one that does not cover every image stops the {what})"
-        p.add_argument("--no-truth", action="store_true", help=why)
 
     parser = plain(
         prog=prog,
@@ -126,7 +127,7 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument(
         "--no-odometry", action="store_true", help="ignore odometry.txt (constant-velocity prediction)"
     )
-    no_truth(run, "run")
+    _no_truth(run, "run")
     run.add_argument(
         "--seed", type=count_at_least(0, "seed"), default=0, help="seed of the RANSAC draws (>= 0)"
     )
@@ -166,18 +167,21 @@ def build_parser() -> argparse.ArgumentParser:
         type=_segments,
         help="comma-separated segment lengths in metres (default: KITTI's 100..800)",
     )
-    for flag, help in (
-        (
-            "--time-offset",
-            "added to --est's timestamps before they are paired with --gt's: the lag of a clock not "
-            "synchronised with the cameras, as evo's --t_offset (default: 0)",
-        ),
-        (
-            "--max-time-diff",
-            "largest difference of two paired timestamps, as evo's --t_max_diff (default: 0.01)",
-        ),
-    ):
-        ev.add_argument(flag, metavar="SECONDS", type=float, default=argparse.SUPPRESS, help=help)
+    ev.add_argument(
+        "--time-offset",
+        metavar="SECONDS",
+        type=float,
+        default=argparse.SUPPRESS,
+        help="added to --est's timestamps before they are paired with --gt's: the lag of a clock not "
+        "synchronised with the cameras, as evo's --t_offset (default: 0)",
+    )
+    ev.add_argument(
+        "--max-time-diff",
+        metavar="SECONDS",
+        type=float,
+        default=argparse.SUPPRESS,
+        help="largest difference of two paired timestamps, as evo's --t_max_diff (default: 0.01)",
+    )
     conv = command(
         "convert",
         "write a KITTI-layout copy of a recording (ASL layout, rectified; or a raw KITTI drive)",
@@ -192,7 +196,7 @@ def build_parser() -> argparse.ArgumentParser:
         help="the recording (ASL layout) or any sequence folder",
     )
     conv.add_argument("--to", choices=("kitti",), default="kitti", help="layout to write (kitti)")
-    no_truth(conv, "copy")
+    _no_truth(conv, "copy")
     output(conv, "new, empty, or written by a convert", required=True)
     gen = command(
         "generate",
