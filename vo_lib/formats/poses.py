@@ -41,9 +41,10 @@ class TrajectoryError(ValueError):
     """A file of any format here that cannot be read (file and line or key named)."""
 
 
-#: Largest entry of ``R^T R - I``, and difference of a quaternion's norm from 1, accepted (files round
-#: numbers; beyond, a file holds something else).
-ROTATION_TOLERANCE = QUATERNION_TOLERANCE = 1e-2
+#: Largest entry of ``R^T R - I`` accepted, and largest difference of a quaternion's norm from 1
+#: (files round numbers; beyond, a file holds something else).
+ROTATION_TOLERANCE = 1e-2
+QUATERNION_TOLERANCE = 1e-2
 #: Largest coordinate accepted (m): beyond it, squared distances overflow in the alignment.
 MAX_POSITION = 1e9
 #: Largest file read (bytes): a 200 Hz EuRoC CSV of an hour is about 70 MB (12 times that in memory).
