@@ -1649,6 +1649,24 @@ def test_a_path_that_is_not_utf8_is_read(template, tmp_path):
     assert b"Warning" not in proc.stderr, proc.stderr.decode(errors="replace")
 
 
+def test_a_closed_standard_output_is_one_line(tmp_path):
+    """Started with standard output closed (``>&-``): one line and status 2, nothing written."""
+    proc = subprocess.run(
+        [sys.executable, "-m", "vo_lib", *GEN, "--out", str(tmp_path / "gen")],
+        cwd=tmp_path,
+        env=cli_env(MPLCONFIGDIR=str(tmp_path / "mpl")),
+        stdin=subprocess.DEVNULL,
+        stderr=subprocess.PIPE,
+        text=True,
+        timeout=300,
+        preexec_fn=lambda: os.close(1),
+    )
+    assert proc.returncode == 2 and proc.stderr.splitlines() == [
+        "python -m vo_lib: error: standard output is closed; expected it open (e.g. >/dev/null)"
+    ], proc.stderr
+    assert not (tmp_path / "gen").exists()
+
+
 @pytest.mark.skipif(not Path("/dev/full").exists(), reason="no /dev/full here to stand for a full disk")
 def test_a_full_standard_output_is_named_not_the_output_folder(tmp_path):
     """Standard output on a full disk (``> /dev/full``): one line names it; the output folder, put

@@ -1295,7 +1295,11 @@ def test_evaluate_refuses_a_truth_it_would_misread(tmp_path, capsys):
             [],
             "a CSV's times are read as nanoseconds",
         ),
-        (tmp_path / "kitti.txt", ["--extrinsic-of", str(EUROC)], "holds KITTI poses, which are a camera's"),
+        (
+            tmp_path / "kitti.txt",
+            ["--extrinsic-of", str(EUROC)],
+            "holds KITTI poses, which are a camera's already; expected a body-frame truth",
+        ),
     ]
     np.savetxt(tmp_path / "kitti.txt", truth.poses[::10, :3, :].reshape(-1, 12))
     for gt, extra, expected in cases:

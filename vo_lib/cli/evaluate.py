@@ -123,9 +123,13 @@ def recording_of(gt: str, extrinsic_of: str | None, kitti: bool) -> str | None:
 
     path = Path(os.path.abspath(gt))  # symbolic links not followed
     if extrinsic_of is not None and (kitti or (path.parent / MARKER).is_file()):
-        held = "holds KITTI poses, which are" if kitti else "was written by this package, as"
+        held = (
+            "holds KITTI poses, which are a camera's"
+            if kitti
+            else "was written by this package, as a camera's poses"
+        )
         raise UsageError(
-            f"--extrinsic-of {extrinsic_of}: --gt {gt} {held} a camera's poses already; expected a "
+            f"--extrinsic-of {extrinsic_of}: --gt {gt} {held} already; expected a "
             "body-frame truth (TUM, EuRoC CSV or positions)"
         )
     if extrinsic_of is not None or kitti:

@@ -374,6 +374,9 @@ def _signals():
 def main(argv: list[str] | None = None) -> int:
     """Parse ``argv`` and run the command; returns the exit status (argparse exits with 2 itself)."""
     command = "python -m vo_lib"
+    if sys.stdout is None:  # started with it closed (>&-): Python gives None, and results go nowhere
+        print(f"{command}: error: {STDOUT} is closed; expected it open (e.g. >/dev/null)", file=sys.stderr)
+        return 2
     with _signals(), warnings.catch_warnings():
         # Pillow's notes on an image it still decodes (an APNG chunk it passes over) are not errors
         warnings.filterwarnings("ignore", module=r"PIL\.")
