@@ -97,3 +97,28 @@ def test_step_scale_measures_the_steps_not_the_path():
     assert step_scale(noisy, truth) < 0.95 and abs(step_scale(noisy, truth, stride=10) - 1) < 0.01
     with np.errstate(all="raise"):  # a truth standing still has no scale: undefined, and no warning
         assert np.isnan(step_scale(np.repeat(np.eye(4)[None], 5, axis=0), truth[:5]))
+
+
+def test_a_folder_that_refuses_to_be_searched_is_named(tmp_path, monkeypatch):
+    """A file in a folder without search permission is reported by that folder, not as the file."""
+    import os
+    from pathlib import Path
+
+    from vo_lib.cli.main import _os_error, closed_folder
+
+    folder = tmp_path / "rig" / "cam1"
+    folder.mkdir(parents=True)
+    real_stat = os.stat
+
+    def stat(path, *args, **kwargs):
+        if Path(path).parent == folder:
+            raise PermissionError(13, "Permission denied", str(path))
+        return real_stat(path, *args, **kwargs)
+
+    monkeypatch.setattr(os, "stat", stat)
+    inside = folder / "sensor.yaml"
+    assert closed_folder(inside) == folder
+    assert closed_folder(tmp_path / "rig" / "other.yaml") is None
+    assert _os_error(PermissionError(13, "Permission denied", str(inside)), None) == (
+        f"{folder}: cannot read (Permission denied)"
+    )

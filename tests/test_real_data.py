@@ -441,7 +441,7 @@ def test_numbers_are_read_as_yaml_1_2_writes_them(tmp_path):
     assert read_camera_yaml(path).resolution == (752, 480)
     for written in ("7:38", "4_58"):
         path.write_text(text.replace("[+4.58654e2,", f"[{written},"))
-        with pytest.raises(SequenceError, match=f'key intrinsics: .*got \\["{written}"'):
+        with pytest.raises(SequenceError, match=f'key intrinsics: .*got entry 1 of 4: "{written}"'):
             read_camera_yaml(path)
 
 
@@ -502,6 +502,10 @@ def test_images_in_a_subfolder_of_data_are_read(tmp_path):
     assert len(read_asl(rig)) == 6
 
 
+#: The damages of :func:`test_a_bad_rig_gets_one_line_and_exit_2` done to line 3 of cam0's data.csv.
+CSV_ROW_DAMAGE = set("latin-1 superscript overflow negative decimal outside absolute columns 2^63".split())
+
+
 @needs_euroc
 @pytest.mark.parametrize(
     "damage, expected",
@@ -540,7 +544,7 @@ def test_images_in_a_subfolder_of_data_are_read(tmp_path):
         (
             "distortion",
             "cam1/sensor.yaml: key distortion_coefficients: expected [k1, k2, p1, p2] (4 finite numbers, "
-            "each within ±100), got 4 values, [1e+30, ",
+            "each within ±100), got entry 1 of 4: 1e+30",
         ),
         ("distortion-negative", "cam1/sensor.yaml: key distortion_coefficients: expected [k1, k2,"),
         ("camera", "cam1: missing camera folder"),
@@ -568,7 +572,7 @@ def test_images_in_a_subfolder_of_data_are_read(tmp_path):
             "cam1/sensor.yaml: key distortion_model: cam0's is equidistant but cam1's is not; "
             "expected one model for both cameras",
         ),
-        ("2^63", "cam0/data.csv, line 3: timestamp 9300000000000000000 is 2^63 ns or more"),
+        ("2^63", "cam0/data.csv, line 3: timestamp '9300000000000000000'; expected whole nanoseconds from 0"),
         (
             "timestamps",
             "line 4: timestamp 1403636584863555584 has no image of the same timestamp on the other",
@@ -588,8 +592,16 @@ def test_images_in_a_subfolder_of_data_are_read(tmp_path):
         ("folder", "cam1/sensor.yaml: a folder, where the sensor's calibration"),
         ("latin-1", "cam0/data.csv: not a text file (byte 3 is not UTF-8)"),
         ("superscript", "cam0/data.csv, line 3: expected 'timestamp [ns],filename', got '14036365848"),
-        ("overflow", "cam0/data.csv, line 3: expected 'timestamp [ns],filename', got '99999999999"),
+        ("overflow", "cam0/data.csv, line 3: timestamp '99999999999999999999'; expected whole nanoseconds"),
+        ("negative", "cam0/data.csv, line 3: timestamp '-1403636584813555456'; expected whole nanoseconds"),
+        ("decimal", "cam0/data.csv, line 3: timestamp '1403636584.8135555'; expected whole nanoseconds"),
         ("outside", "cam0/data.csv, line 3: '../../cam1/data/1403636584813555456.png'; expected a file name"),
+        ("absolute", f"cam0/data.csv, line 3: '/{'x' * 49}'...; expected a file name inside data/"),
+        (
+            "unclosed",
+            "cam0/sensor.yaml, line 19: not valid YAML (expected ',' or ']', but got '<scalar>', "
+            "while parsing a flow sequence begun on line 18)",
+        ),
         ("listed-twice", "cam0/data.csv, line 4: '1403636584813555456.png' listed again (line 3)"),
         ("rows", "cam0/data.csv: 106 rows for 6 files in data/; expected one per image"),
         ("deep", "cam0/sensor.yaml: not valid YAML (maximum recursion depth exceeded"),
@@ -598,9 +610,14 @@ def test_images_in_a_subfolder_of_data_are_read(tmp_path):
         ("image-fifo", "cam1/data/1403636584963555584.png is not a regular file; expected an image"),
         (
             "true",
-            "cam0/sensor.yaml: key intrinsics: expected [fu, fv, cu, cv] (4 finite numbers), got [true, ",
+            "cam0/sensor.yaml: key intrinsics: expected [fu, fv, cu, cv] (4 finite numbers), "
+            "got entry 1 of 4: true",
         ),
-        ("text", 'cam0/sensor.yaml: key intrinsics: expected [fu, fv, cu, cv] (4 finite numbers), got ["458'),
+        (
+            "text",
+            "cam0/sensor.yaml: key intrinsics: expected [fu, fv, cu, cv] (4 finite numbers), "
+            'got entry 1 of 4: "458',
+        ),
         ("image-folder", "cam1/data/1403636584963555584.png is a folder; expected an image"),
         ("gt-folder", "state_groundtruth_estimate0/groundtruth.tum: a folder, where"),
         ("gt-link", "state_groundtruth_estimate0/groundtruth.tum: "),
@@ -660,10 +677,13 @@ def test_a_bad_rig_gets_one_line_and_exit_2(tmp_path, capsys, damage, expected):
     elif damage == "kalibr-key":
         path = mav0 / "cam0" / "sensor.yaml"
         path.write_text(path.read_text().replace("T_BS:", "T_cam_imu:"))
+    elif damage == "unclosed":  # a flow sequence left open: YAML finds it on the next line
+        path = mav0 / "cam0" / "sensor.yaml"
+        path.write_text(path.read_text().replace("248.375]", "248.375"))
     elif damage == "k3":  # OpenCV's five coefficients
         path = mav0 / "cam1" / "sensor.yaml"
         path.write_text(path.read_text().replace("[-0.28368365,", "[-0.28368365, 0.01,"))
-    elif damage in ("latin-1", "superscript", "overflow", "outside", "columns", "2^63"):
+    elif damage in CSV_ROW_DAMAGE:
         path = mav0 / "cam0" / "data.csv"
         lines = path.read_text().splitlines()
         stamp, name = lines[2].split(",")
@@ -672,7 +692,10 @@ def test_a_bad_rig_gets_one_line_and_exit_2(tmp_path, capsys, damage, expected):
             "superscript": f"{stamp}\u00b2,{name}",
             "overflow": f"99999999999999999999,{name}",
             "2^63": f"9300000000000000000,{name}",
+            "negative": f"-{stamp},{name}",
+            "decimal": f"{int(stamp) / 1e9:.7f},{name}",
             "outside": f"{stamp},../../cam1/data/{name}",
+            "absolute": f"{stamp},/{'x' * 60}/{name}",
             "columns": f"{stamp},{name},",  # a trailing comma
         }[damage]
         text = "\n".join(lines) + "\n"

@@ -115,7 +115,10 @@ def bench_real(folders=None, repeats: int = REPEATS) -> dict[str, float]:
 
     folders = [Path(f) for f in folders] if folders else realdata_folders()
     if not folders:
-        print("no real sequences found: set VO_LIB_REALDATA to a folder of KITTI-layout or ASL sequences")
+        print(
+            f"no real sequences found ({DEFAULT_REALDATA} is not a folder): "
+            "set VO_LIB_REALDATA to a folder of KITTI-layout or ASL sequences"
+        )
         return {}
     cv2.setRNGSeed(0)
     out = {}

@@ -125,7 +125,9 @@ def build_parser() -> argparse.ArgumentParser:
     output(run, "default: runs/NAME, or runs/NAME_Nf with --frames N; new, empty, or written by a run")
     run.add_argument("--frames", type=count_at_least(2, "frames"), help="process only the first N frames")
     run.add_argument(
-        "--no-odometry", action="store_true", help="ignore odometry.txt (constant-velocity prediction)"
+        "--no-odometry",
+        action="store_true",
+        help="ignore the odometry (odometry.txt, or a raw drive's OXTS): constant-velocity prediction",
     )
     _no_truth(run, "run")
     run.add_argument(
@@ -302,9 +304,24 @@ class _Stdout:
             raise OSError(exc.errno, exc.strerror, STDOUT) from None
 
 
+def closed_folder(path) -> Path | None:
+    """The first folder on ``path`` that refuses to be searched (so nothing in it can be read)."""
+    path = Path(os.fsdecode(path))
+    for inner in [*reversed(path.parents), path][1:]:
+        try:
+            os.stat(inner)
+        except PermissionError:
+            return inner.parent
+        except OSError:
+            return None
+    return None
+
+
 def _os_error(exc: OSError, out) -> str:
     """What went wrong, named by what the user gave (``--out`` for a temporary output folder's file)."""
     why = "no space left on device" if exc.errno == errno.ENOSPC else (exc.strerror or str(exc))
+    if exc.errno == errno.EACCES and exc.filename and (folder := closed_folder(exc.filename)):
+        return f"{folder}: cannot read ({why})"
     if exc.filename and ".vo_lib-" not in str(exc.filename):
         return f"{exc.filename}: {why}"
     if out:

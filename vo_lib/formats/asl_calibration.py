@@ -105,6 +105,9 @@ def _yaml(path: Path) -> dict:
         mark = getattr(exc, "problem_mark", None)
         where = f", line {mark.line + 1}" if mark is not None else ""
         problem = getattr(exc, "problem", None) or exc
+        context, begun = getattr(exc, "context", None), getattr(exc, "context_mark", None)
+        if context and begun is not None and mark is not None and begun.line != mark.line:
+            problem = f"{problem}, {context} begun on line {begun.line + 1}"  # an unclosed [ or "
         raise AslError(
             f"{path}{where}: {problem}" if problem == ALIAS else f"{path}{where}: not valid YAML ({problem})"
         ) from None

@@ -72,16 +72,20 @@ def _image_row(csv_path: Path, n: int, line: str) -> tuple[int, str]:
     if "," in name:  # a third column, or a trailing comma: not part of the file name
         columns = len(line.split(","))
         raise AslError(f"{csv_path}, line {n}: {columns} columns; expected 2, 'timestamp [ns],filename'")
-    # a time in ns fits 19 digits (int64); a name stays inside data/
-    if not sep or not re.fullmatch(r"[0-9]{1,19}", stamp) or not name:
-        raise AslError(f"{csv_path}, line {n}: expected 'timestamp [ns],filename', got {line[:50]!r}")
-    if int(stamp) >= 2**63:
+    if not sep or not name or not re.fullmatch(r"[-+]?[0-9]*\.?[0-9]+([eE][-+]?[0-9]+)?", stamp):
+        raise AslError(f"{csv_path}, line {n}: expected 'timestamp [ns],filename', got {cut(line)}")
+    if not re.fullmatch(r"[0-9]{1,19}", stamp) or int(stamp) >= 2**63:  # a number, but not an int64 of ns
         raise AslError(
-            f"{csv_path}, line {n}: timestamp {stamp} is 2^63 ns or more; expected a signed 64-bit one"
+            f"{csv_path}, line {n}: timestamp {cut(stamp)}; expected whole nanoseconds from 0 to 2^63 - 1"
         )
-    if Path(name).is_absolute() or ".." in Path(name).parts:
-        raise AslError(f"{csv_path}, line {n}: {name[:50]!r}; expected a file name inside data/")
+    if Path(name).is_absolute() or ".." in Path(name).parts:  # a name stays inside data/
+        raise AslError(f"{csv_path}, line {n}: {cut(name)}; expected a file name inside data/")
     return int(stamp), name
+
+
+def cut(text: str, width: int = 50) -> str:
+    """``text`` quoted for an error message, its first ``width`` characters and "..." if longer."""
+    return repr(text) if len(text) <= width else f"{text[:width]!r}..."
 
 
 def read_image_list(camera_dir: Path) -> tuple[np.ndarray, list[Path], list[int]]:
@@ -95,7 +99,7 @@ def read_image_list(camera_dir: Path) -> tuple[np.ndarray, list[Path], list[int]
             continue
         stamp, name = _image_row(csv_path, n, line)
         if listed.setdefault(name, n) != n:  # two frames of one image: the pairs would mix frames
-            raise AslError(f"{csv_path}, line {n}: {name[:50]!r} listed again (line {listed[name]})")
+            raise AslError(f"{csv_path}, line {n}: {cut(name)} listed again (line {listed[name]})")
         stamps.append(stamp)
         files.append(camera_dir / "data" / name)
         lines.append(n)

@@ -166,8 +166,19 @@ def numbers_at(path: Path, key: str, value, shape: tuple, what=None, bounds=(-np
         a = np.array([])
     within = np.all(np.isfinite(a) & (bounds[0] <= a) & (a <= bounds[1]))
     if a.shape != shape or not within or not _plain_numbers(value):  # of a known shape: a shallow walk
-        raise SequenceError(f"{path}: key {key}: expected {what}, got {shown(value)}")
+        raise SequenceError(f"{path}: key {key}: expected {what}, got {_first_bad(value, shape, bounds)}")
     return a
+
+
+def _first_bad(value, shape: tuple, bounds) -> str:
+    """``value`` as :func:`shown` gives it; for a flat list of the expected length, its first entry
+    that is not a number within ``bounds``, by its place (a long list is cut before it)."""
+    if not isinstance(value, list) or len(shape) != 1 or len(value) != shape[0]:
+        return shown(value)
+    for k, x in enumerate(value, 1):
+        if not (_plain_numbers(x) and np.isfinite(x) and bounds[0] <= x <= bounds[1]):
+            return f"entry {k} of {len(value)}: {shown(x)}"
+    return shown(value)
 
 
 #: The camera mounts a manifest may state (a crawler's, planar; a car's); any other is refused.

@@ -115,6 +115,8 @@ ROWS_3D = (
 )
 #: The planar rows: label, key of :func:`error_report`'s column, format.
 ROWS_PLANAR = (
+    ("final position error, planar [m]", "final_position_error_m", "{:.4f}"),
+    ("  of distance travelled, planar [%]", "final_position_error_pct", "{:.2f}"),
     ("ATE RMSE, planar alignment [m]", "ate_rmse_m", "{:.4f}"),
     ("planar heading error, mean [deg]", "heading_error_mean_deg", "{:.3f}"),
     ("planar heading error, max [deg]", "heading_error_max_deg", "{:.3f}"),
@@ -172,7 +174,8 @@ def print_error_table(
         _print_rows_3d(errors, cols, report["spot_turn"])
     if planar or vo_3d is None:  # without 3-D rows, the planar ones are all there is
         for label, key, fmt in ROWS_PLANAR:
-            print(_row(label, [report[c][key] for c in cols], fmt))
+            if not (report["spot_turn"] and "of distance" in label):
+                print(_row(label, [report[c][key] for c in cols], fmt))
     print(_row("frames flagged (VO not used)", [flagged], "{:d}"))
 
 
