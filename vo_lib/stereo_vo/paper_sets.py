@@ -4,8 +4,8 @@ positions.
 
 The about 12,700 frames are more than a notebook can afford: ``python -m
 vo_lib.stereo_vo.paper_sets [SET ...]`` (default: all; ``contradictions``:
-:func:`contradiction_study`) stores the figures in :data:`RESULTS`, each set with the code version
-and sample fingerprint that made it; notebook 08 reads them (:func:`load`).
+:func:`contradiction_study`; ``fusion``: :func:`fusion_study`) stores the figures in :data:`RESULTS`,
+each set with the code version and sample fingerprint that made it; notebook 08 reads them (:func:`load`).
 """
 
 from __future__ import annotations
@@ -102,23 +102,29 @@ CONTRADICTION_DRIVES = 10
 CONTRADICTION_LIMIT = 2
 
 
+def drive(name: str, seed: int, frames: int):
+    """A draw of sample ``name``'s drive plan with ``seed`` (slip, losses of contact and image noise
+    drawn anew), its first ``frames`` frames: ``(rendered, [(left, right, odometry), ...], truth)``
+    with the planar truth in the start's frame."""
+    variant = f"{name}@{seed}"
+    SAMPLES[variant] = replace(SAMPLES[name], name=variant, seed=seed)
+    try:
+        rendered, frame_iter = render_sample(variant, frames)
+        images = list(frame_iter)
+    finally:
+        del SAMPLES[variant]
+    return rendered, images, relative_planar(rendered.truth()[0], rendered.truth())
+
+
 def contradiction_study() -> dict:
     """The crawler's pipeline as preset and with ``max_contradictions = CONTRADICTION_LIMIT`` on
     the study's drives: per drive, each setting's flagged frames and RMS heading error (degrees).
     """
-    base = SAMPLES[CONTRADICTION_SET]
-    seeds = [base.seed + k for k in range(CONTRADICTION_DRIVES)]
+    seeds = [SAMPLES[CONTRADICTION_SET].seed + k for k in range(CONTRADICTION_DRIVES)]
     settings = {"preset": CRAWLER, "believed": replace(CRAWLER, max_contradictions=CONTRADICTION_LIMIT)}
     rows = {label: {"flagged": [], "heading_rms_deg": []} for label in settings}
     for seed in seeds:
-        variant = f"{CONTRADICTION_SET}@{seed}"
-        SAMPLES[variant] = replace(base, name=variant, seed=seed)  # a draw of the same drive plan
-        try:
-            rendered, frame_iter = render_sample(variant, CONTRADICTION_FRAMES)
-            images = list(frame_iter)
-        finally:
-            del SAMPLES[variant]
-        truth = relative_planar(rendered.truth()[0], rendered.truth())
+        rendered, images, truth = drive(CONTRADICTION_SET, seed, CONTRADICTION_FRAMES)
         for label, config in settings.items():
             odometer = StereoOdometry(rendered.camera, config, TrackOdometry(), seed=SEED)
             result = run_frames(iter(images), rendered.camera, odometer=odometer)
@@ -136,6 +142,40 @@ def contradiction_study() -> dict:
     }
 
 
+#: The study of fusion on rendered drives: the samples (a flat floor without skid, one with skid in
+#: tight turns, rough ground with losses of contact), their first frames and the drives of each.
+FUSION_SETS = ("indoor_linear", "indoor_free", "outdoor_free")
+FUSION_FRAMES = 400
+FUSION_DRIVES = 10
+#: The three estimates of each drive: the pipeline fused with track odometry, the same pipeline
+#: without odometry (constant-velocity prediction), and track odometry alone (eq. 1-4).
+FUSION_ESTIMATES = ("fused", "vision", "odometry")
+
+
+def fusion_study() -> dict:
+    """Per set of :data:`FUSION_SETS` and per drive (the sample's seed and the next ones): the final
+    position error (m) and the RMS heading error (degrees) of each of :data:`FUSION_ESTIMATES`,
+    and the frames each pipeline run flagged."""
+    sets = {}
+    for name in FUSION_SETS:
+        seeds = [SAMPLES[name].seed + k for k in range(FUSION_DRIVES)]
+        rows = {label: {"final_m": [], "heading_rms_deg": [], "flagged": []} for label in FUSION_ESTIMATES}
+        for seed in seeds:
+            rendered, images, truth = drive(name, seed, FUSION_FRAMES)
+            estimates = {"odometry": (TrackOdometry().integrate([u for *_, u in images[1:]]), 0)}
+            for label, frames in (("fused", images), ("vision", [(a, b, None) for a, b, _ in images])):
+                odometer = StereoOdometry(rendered.camera, CRAWLER, TrackOdometry(), seed=SEED)
+                result = run_frames(iter(frames), rendered.camera, odometer=odometer)
+                estimates[label] = result.poses, len(result.flagged)
+            for label, (poses, flagged) in estimates.items():
+                heading = np.degrees(wrap_angle(poses[:, 2] - truth[:, 2]))
+                rows[label]["final_m"].append(float(np.hypot(*(poses[-1, :2] - truth[-1, :2]))))
+                rows[label]["heading_rms_deg"].append(float(np.sqrt(np.mean(heading**2))))
+                rows[label]["flagged"].append(int(flagged))
+        sets[name] = {"seeds": seeds, "fingerprint": fingerprint(name), **rows}
+    return {"frames": FUSION_FRAMES, "code_version": code_version(), "sets": sets}
+
+
 def load(path=RESULTS) -> dict:
     """The stored results; ``ValueError`` when a set's sample has changed since they were made."""
     results = json.loads(Path(path).read_text())
@@ -150,17 +190,19 @@ def load(path=RESULTS) -> dict:
 
 def main(argv=None) -> int:
     names = (sys.argv[1:] if argv is None else list(argv)) or list(SETS)
-    study = names == ["contradictions"]
+    studies = {"contradictions": contradiction_study, "fusion": fusion_study}
+    study = names[0] if len(names) == 1 and names[0] in studies else None
     unknown = [n for n in names if n not in SETS]
     if unknown and not study:
         print(
-            f"error: unknown set {unknown[0]!r}; the sets are {', '.join(SETS)} (or 'contradictions' alone)",
+            f"error: unknown set {unknown[0]!r}; the sets are {', '.join(SETS)} "
+            "(or 'contradictions' or 'fusion' alone)",
             file=sys.stderr,
         )
         return 2
     empty = {"key_every": KEY_EVERY, "seed": SEED, "sets": {}}
     stored = json.loads(RESULTS.read_text()) if RESULTS.exists() else empty
-    stored.update({"contradictions": contradiction_study()} if study else {})
+    stored.update({study: studies[study]()} if study else {})
     for name in [] if study else names:  # the sets, printed as each is done
         stored["sets"][name] = run_set(name)
         print(f"{name}: {stored['sets'][name]}", flush=True)
