@@ -354,8 +354,8 @@ display(
         "Per degree of turn, "
         f"{offset_cmp.sentence('the spot turn', 'the arc', unit='% of the turn', scale=100)}: "
         f"a difference of at most {largest_difference:.1%} of the turn, against the {shared:.0%} both "
-        "share. The spot-turn sample collects the most heading error "
-        f"{'mainly' if largest_difference < 0.25 * shared else 'partly'} because it turns the most."
+        "share: per degree, the camera's offset from the turning axis accounts for "
+        f"{'little' if largest_difference < 0.25 * shared else 'a part'} of a spot turn's heading error."
     )
 )
 

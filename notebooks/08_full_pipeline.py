@@ -563,7 +563,8 @@ display(
 # turn: a mechanism that can put the indoor free-motion figures
 # above the paper's and that differs between the two spot-turn sets (one run each, so a mechanism,
 # not a measured cause). Where our figures lie below
-# the paper's, our world is kinder than a real one in other ways: images rendered from an exact
+# the paper's, our world may be kinder than a real one in other ways, none of them measured here as a
+# cause: images rendered from an exact
 # pinhole model with a known
 # calibration, no lens distortion, perfectly rectified pairs, a turning centre that wanders by
 # centimetres only (`TrackGround`; notebook 03 shows what an offset costs), static rich texture,

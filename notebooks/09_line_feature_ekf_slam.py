@@ -908,8 +908,7 @@ display(
     Markdown(
         f"Final error over the same {len(laps)} seeds: "
         f"{forms.sentence('the feature-point form', 'the line form', unit='m', digits=3)}. "
-        f"Per step, the line form's {len(laps)}-seed NEES stays inside its band at {in_band['line']:.0%} of "
-        f"the steps, the feature point's at {in_band['feature point']:.0%}. Exactly the four walls "
+        "Exactly the four walls "
         f"are mapped in {four_walls['feature point']} of {len(laps)} laps with the feature point, "
         f"{four_walls['line']} with the line. Per seed, the distance of "
         "the lap NEES from 3: "

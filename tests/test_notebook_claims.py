@@ -164,7 +164,7 @@ def test_rate_sentence_states_the_verdict_the_interval_gives():
         return demo_corridor.rate_sentence("laser", {"laser": (mean, low, high)}, nominal)
 
     assert "not reliably different" in words(0.01, 0.0, 0.02)
-    assert "7 times it" in words(0.07, 0.05, 0.09)
+    assert "5.0 to 9.0 times it" in words(0.07, 0.05, 0.09)
     assert "below the nominal" in words(0.001, 0.0, 0.005)
 
 

@@ -83,7 +83,10 @@ def rate_sentence(name: str, alarm: dict, nominal: dict) -> str:
     """A held-out false-alarm rate with its seed interval, against the nominal rate, in words."""
     mean_, low_, high_ = alarm[name]
     if low_ > nominal[name]:
-        verdict_ = f"above the nominal {nominal[name]:.2%}, {mean_ / nominal[name]:.0f} times it"
+        verdict_ = (
+            f"above the nominal {nominal[name]:.2%}: {low_ / nominal[name]:.1f} to "
+            f"{high_ / nominal[name]:.1f} times it, by the interval's ends"
+        )
     elif high_ < nominal[name]:
         verdict_ = f"below the nominal {nominal[name]:.2%}"
     else:

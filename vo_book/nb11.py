@@ -119,6 +119,11 @@ def image_statistics(image: np.ndarray, threshold: int = 20, low_gradient: float
     }
 
 
+def flat_share(images, low_gradient: float) -> float:
+    """The mean share of pixels below ``low_gradient`` grey levels per pixel (:func:`image_statistics`)."""
+    return float(np.mean([image_statistics(img, low_gradient=low_gradient)["flat"] for img in images]))
+
+
 def plot_coverage(images: dict[str, np.ndarray]) -> None:
     """Images ``{title: image}`` side by side, each at its own aspect ratio, with its FAST corners
     and, shaded, the :data:`CELL`-pixel cells that have none (as :func:`image_statistics` finds

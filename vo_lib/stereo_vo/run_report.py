@@ -87,10 +87,12 @@ def error_report(result: PipelineResult, truth_planar: np.ndarray, odometry_plan
     }
     for label, final in finals.items():
         traj = trajectories[label]
+        # a spot turn has no distance to divide by (None: no row); a standstill's is undefined (NaN)
+        percent = None if report["spot_turn"] else final.percent if dist > 0 else np.nan
         heading = np.degrees(np.abs(wrap_angle(traj[:, 2] - truth_planar[:, 2])))
         report[label] = {
             "final_position_error_m": final.position_m,
-            "final_position_error_pct": final.percent if not report["spot_turn"] and dist > 0 else None,
+            "final_position_error_pct": percent,
             "ate_rmse_m": ate_planar(truth_planar, traj)[0].rmse,
             "heading_error_mean_deg": float(heading.mean()),
             "heading_error_max_deg": float(heading.max()),
