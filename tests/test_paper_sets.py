@@ -74,6 +74,29 @@ def test_stored_contradiction_study_is_what_the_code_computes():
         assert fresh[label]["heading_rms_deg"] == expected, label
 
 
+def test_stored_study_of_fusion_on_rendered_drives_is_present_and_current():
+    study = json.loads(paper_sets.RESULTS.read_text())["fusion"]
+    assert study["frames"] == paper_sets.FUSION_FRAMES and list(study["sets"]) == list(paper_sets.FUSION_SETS)
+    for name, rows in study["sets"].items():
+        assert rows["fingerprint"] == fingerprint(name), name
+        assert rows["seeds"] == [SAMPLES[name].seed + k for k in range(paper_sets.FUSION_DRIVES)]
+        for estimate in paper_sets.FUSION_ESTIMATES:
+            assert all(len(v) == paper_sets.FUSION_DRIVES for v in rows[estimate].values()), (name, estimate)
+        assert rows["odometry"]["flagged"] == [0] * paper_sets.FUSION_DRIVES  # odometry flags nothing
+
+
+@pytest.mark.samples
+def test_stored_study_of_fusion_on_rendered_drives_is_what_the_code_computes():
+    stored = json.loads(paper_sets.RESULTS.read_text())["fusion"]
+    fresh = paper_sets.fusion_study()
+    for name, rows in stored["sets"].items():
+        for estimate in paper_sets.FUSION_ESTIMATES:
+            assert fresh["sets"][name][estimate]["flagged"] == rows[estimate]["flagged"], (name, estimate)
+            for key in ("final_m", "heading_rms_deg"):
+                expected = pytest.approx(rows[estimate][key], rel=1e-9, abs=1e-12)
+                assert fresh["sets"][name][estimate][key] == expected, (name, estimate, key)
+
+
 def test_stored_fusion_study_covers_the_notebooks_seeds_from_the_present_samples():
     stored = json.loads(demo_fusion.STORED.read_text())
     seeds = list(range(demo_fusion.SEED, demo_fusion.SEED + demo_fusion.STUDY_SEEDS))
