@@ -486,47 +486,32 @@ fusion_cmp = {
     for name, rows in fusion["sets"].items()
     for key in FUSION_FIGURES
 }
-drives = {len(rows["seeds"]) for rows in fusion["sets"].values()}
-print(f" medians over {max(drives)} draws of the first {fusion['frames']} frames")
+print(f" medians over the draws of the first {fusion['frames']} frames")
+sentences = []
 for name, rows in fusion["sets"].items():
+    flagged = {e: np.median(rows[e]["flagged"]) for e in ("fused", "vision")}
     cells = [
         f"{label} {np.median(rows[e]['final_m']) * 100:5.1f} cm {np.median(rows[e]['heading_rms_deg']):5.2f}°"
         for e, label in ESTIMATES.items()
     ]
     print(
-        f" {name:14s} "
-        + " | ".join(cells)
-        + f" | frames flagged {np.median(rows['fused']['flagged']):.0f} fused, "
-        f"{np.median(rows['vision']['flagged']):.0f} without odometry"
+        f" {name:14s} " + " | ".join(cells) + f" | frames flagged {flagged['fused']:.0f} fused, "
+        f"{flagged['vision']:.0f} without odometry"
     )
-display(
-    Markdown(
-        " ".join(
-            f"`{name}`, {label}: "
-            + "; ".join(
-                fusion_cmp[(name, key)].sentence(
-                    "fused", ESTIMATES[other], unit=unit, scale=scale, digits=digits
-                )
-                for other in ("odometry", "vision")
-            )
-            + "."
-            for name in fusion["sets"]
-            for key, (label, unit, scale, digits) in FUSION_FIGURES.items()
+    for key, (label, unit, scale, digits) in FUSION_FIGURES.items():
+        verdicts = [
+            fusion_cmp[(name, key)].sentence("fused", ESTIMATES[other], unit=unit, scale=scale, digits=digits)
+            for other in ("odometry", "vision")
+        ]
+        sentences.append(f"`{name}`, {label}: " + "; ".join(verdicts) + ".")
+    if any(fusion_cmp[(name, k)].verdict("fused", "vision alone") is Verdict.WORSE for k in FUSION_FIGURES):
+        sentences.append(
+            f"On `{name}`, where fusing is worse than vision alone, the fused runs flag a median "
+            f"{flagged['fused']:.0f} frames against {flagged['vision']:.0f} without odometry, the "
+            "mechanism of the study above: the odometry's prediction misses a body swing, the vision "
+            "that contradicts it is rejected, and the flagged frames move on the odometry's slip."
         )
-        + "".join(
-            f" On `{name}`, where fusing is worse than vision alone, the fused runs flag a median "
-            f"{np.median(rows['fused']['flagged']):.0f} frames against "
-            f"{np.median(rows['vision']['flagged']):.0f} without odometry, the mechanism of the study "
-            "above: the odometry's prediction misses a body swing, the vision that contradicts it is "
-            "rejected, and the flagged frames move on the odometry's slip."
-            for name, rows in fusion["sets"].items()
-            if any(
-                fusion_cmp[(name, k)].verdict("fused", "vision alone") is Verdict.WORSE
-                for k in FUSION_FIGURES
-            )
-        )
-    )
-)
+display(Markdown(" ".join(sentences)))
 
 # %% [markdown]
 # ### Does the pipeline's covariance tell the truth? NEES on the rendered sequences

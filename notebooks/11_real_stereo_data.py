@@ -70,7 +70,7 @@ from vo_book.nb11 import (
     disparity_errors,
     errors_against,
     find_repo,
-    flat_share,
+    flat_shares,
     image_statistics,
     pixel_gap,
     plot_attitude,
@@ -162,7 +162,10 @@ similar_empty = abs(empty_real - empty_rendered) < 0.1  # "about as many": withi
 GRADIENT_THRESHOLDS = (2.0, 4.0, 8.0, 16.0)  # grey levels per pixel
 
 tried = f"{GRADIENT_THRESHOLDS[0]:g} to {GRADIENT_THRESHOLDS[-1]:g} grey levels per pixel"
-real_flatter = [t for t in GRADIENT_THRESHOLDS if flat_share(real_images, t) > flat_share(rendered_images, t)]
+real_flat, rendered_flat = (
+    flat_shares(images, GRADIENT_THRESHOLDS) for images in (real_images, rendered_images)
+)
+real_flatter = [t for t, a, b in zip(GRADIENT_THRESHOLDS, real_flat, rendered_flat, strict=True) if a > b]
 if len(real_flatter) == len(GRADIENT_THRESHOLDS):
     flat_verdict = f"more of the real frames at every threshold from {tried}"
 elif not real_flatter:

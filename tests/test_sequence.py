@@ -261,6 +261,15 @@ def test_a_long_value_in_an_error_says_how_many_values_it_holds():
     assert shown([1, 2]) == "[1, 2]" and shown("a" * 50) == '"' + "a" * 39 + "..."
 
 
+def test_a_bad_entry_of_a_list_is_named_by_its_place_a_nested_one_too():
+    """The first entry that is not a number within the bounds, a list in its place included."""
+    from vo_lib.formats.frame_files import numbers_at
+
+    for value, named in (([1, 2, 3, "x"], 'entry 4 of 4: "x"'), ([[1, 2], 3, 4, 5], "entry 1 of 4: [1, 2]")):
+        with pytest.raises(SequenceError, match=re.escape(f"key intrinsics: expected four, got {named}")):
+            numbers_at(Path("sensor.yaml"), "intrinsics", value, (4,), "four")
+
+
 @pytest.mark.parametrize(
     "column, value, expected",
     [

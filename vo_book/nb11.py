@@ -16,6 +16,7 @@ import numpy as np
 
 from vo_book.plotting import new_axes, plot_paths
 from vo_lib.geometry import wrap_angle
+from vo_lib.sim.realism import gradient_magnitude
 
 #: Where a reprojection error is clipped in the histogram of RANSAC's inliers [px].
 REPROJECTION_CLIP = 4.0
@@ -119,9 +120,11 @@ def image_statistics(image: np.ndarray, threshold: int = 20, low_gradient: float
     }
 
 
-def flat_share(images, low_gradient: float) -> float:
-    """The mean share of pixels below ``low_gradient`` grey levels per pixel (:func:`image_statistics`)."""
-    return float(np.mean([image_statistics(img, low_gradient=low_gradient)["flat"] for img in images]))
+def flat_shares(images, thresholds) -> np.ndarray:
+    """The mean share of pixels below each of ``thresholds`` grey levels per pixel (Sobel / 8, as in
+    :func:`image_statistics`), each image's gradient computed once."""
+    gradients = [gradient_magnitude(img) / 8 for img in images]
+    return np.array([np.mean([np.mean(g < t) for g in gradients]) for t in thresholds])
 
 
 def plot_coverage(images: dict[str, np.ndarray]) -> None:

@@ -176,7 +176,9 @@ def _first_bad(value, shape: tuple, bounds) -> str:
     if not isinstance(value, list) or len(shape) != 1 or len(value) != shape[0]:
         return shown(value)
     for k, x in enumerate(value, 1):
-        if not (_plain_numbers(x) and np.isfinite(x) and bounds[0] <= x <= bounds[1]):
+        if isinstance(x, (list, tuple)) or not (
+            _plain_numbers(x) and np.isfinite(x) and bounds[0] <= x <= bounds[1]
+        ):
             return f"entry {k} of {len(value)}: {shown(x)}"
     return shown(value)
 
