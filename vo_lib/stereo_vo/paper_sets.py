@@ -147,9 +147,10 @@ def contradiction_study() -> dict:
 FUSION_SETS = ("indoor_linear", "indoor_free", "outdoor_free")
 FUSION_FRAMES = 400
 FUSION_DRIVES = 10
-#: The three estimates of each drive: the pipeline fused with track odometry, the same pipeline
-#: without odometry (constant-velocity prediction), and track odometry alone (eq. 1-4).
-FUSION_ESTIMATES = ("fused", "vision", "odometry")
+#: The estimates of each drive: the pipeline fused with track odometry, the same pipeline without
+#: odometry (constant-velocity prediction), track odometry alone (eq. 1-4), and the fused pipeline
+#: that never believes the vision over the prediction (the setting the contradiction study rejected).
+FUSION_ESTIMATES = ("fused", "vision", "odometry", "never")
 
 
 def fusion_study() -> dict:
@@ -163,8 +164,12 @@ def fusion_study() -> dict:
         for seed in seeds:
             rendered, images, truth = drive(name, seed, FUSION_FRAMES)
             estimates = {"odometry": (TrackOdometry().integrate([u for *_, u in images[1:]]), 0)}
-            for label, frames in (("fused", images), ("vision", [(a, b, None) for a, b, _ in images])):
-                odometer = StereoOdometry(rendered.camera, CRAWLER, TrackOdometry(), seed=SEED)
+            for label, frames, config in (
+                ("fused", images, CRAWLER),
+                ("vision", [(a, b, None) for a, b, _ in images], CRAWLER),
+                ("never", images, replace(CRAWLER, max_contradictions=math.inf)),
+            ):
+                odometer = StereoOdometry(rendered.camera, config, TrackOdometry(), seed=SEED)
                 result = run_frames(iter(frames), rendered.camera, odometer=odometer)
                 estimates[label] = result.poses, len(result.flagged)
             for label, (poses, flagged) in estimates.items():
