@@ -60,7 +60,7 @@ def test_stored_contradiction_study_is_present_and_current():
     assert study["fingerprint"] == fingerprint(study["set"])
     assert len(study["seeds"]) == paper_sets.CONTRADICTION_DRIVES >= 10
     assert study["seeds"][0] == SAMPLES[study["set"]].seed  # the sample's own drive, then new ones
-    for label in ("preset", "believed"):
+    for label in ("never", "believed"):
         assert len(study[label]["flagged"]) == len(study["seeds"]) == len(study[label]["heading_rms_deg"])
 
 
@@ -68,7 +68,7 @@ def test_stored_contradiction_study_is_present_and_current():
 def test_stored_contradiction_study_is_what_the_code_computes():
     stored = json.loads(paper_sets.RESULTS.read_text())["contradictions"]
     fresh = paper_sets.contradiction_study()
-    for label in ("preset", "believed"):
+    for label in ("never", "believed"):
         assert fresh[label]["flagged"] == stored[label]["flagged"], label
         expected = pytest.approx(stored[label]["heading_rms_deg"], rel=1e-9)
         assert fresh[label]["heading_rms_deg"] == expected, label
