@@ -34,7 +34,7 @@
 # samples, the only crawler data the project has: every figure below is what those settings give
 # on the data they were chosen on, not a held-out test of them. The one exception is the number of
 # contradicting frames after which the vision is believed: section 5 chooses it on draws of
-# `outdoor_free_3` and judges it on draws of three other samples.
+# `outdoor_free_3` and judges it on draws of five other samples.
 
 # %% [markdown]
 # **References**
@@ -428,7 +428,7 @@ display(
 # believes the vision on the first frames of ten draws of `outdoor_free_3`'s drive (the sample's
 # seed and the next nine: slip, losses of contact and image noise drawn anew) and stored the
 # figures, which `pytest -m samples` re-checks. These are the development drives of the choice;
-# the study of ten draws of three other drives below judges it on drives it was not chosen on.
+# the study of ten draws of five other drives below judges it on drives it was not chosen on.
 
 # %%
 study = paper_sets.load()["contradictions"]
@@ -462,18 +462,19 @@ display(
 )
 
 # %% [markdown]
-# ### Does fusing the odometry help on these drives? Ten draws of three
+# ### Does fusing the odometry help on these drives? Ten draws of five
 #
 # The sets above are one run each, which ranks neither the fused pipeline nor its parts. Notebook 07
 # measures over seeds when fusing helps, but on synthetic matches and on drives whose tracks slip
 # without skidding. `python -m vo_lib.stereo_vo.paper_sets fusion` ran three estimates on the first
-# frames of ten draws of three rendered drives (each sample's seed and the next nine): the pipeline
+# frames of ten draws of five rendered drives (each sample's seed and the next nine): the pipeline
 # fused with track odometry, the same pipeline without odometry, and odometry alone; and, to judge
 # the setting chosen above on drives it was not chosen on, the fused pipeline that never believes
 # the vision over the prediction. The drives are the flat floor without skid (`indoor_linear`),
-# the floor with skid in tight turns (`indoor_free`) and rough ground with losses of contact
-# (`outdoor_free`). The figures are stored, and `pytest -m samples` re-checks them. The fused
-# estimate is compared with each of the other three, draw by draw, in both figures: eighteen
+# the floor with skid in tight turns (`indoor_free`), and rough ground with losses of contact,
+# driven freely (`outdoor_free`), straight (`outdoor_linear`) and turning on the spot
+# (`spot_turn`). The figures are stored, and `pytest -m samples` re-checks them. The fused
+# estimate is compared with each of the other three, draw by draw, in both figures: thirty
 # comparisons judged together.
 
 # %%
@@ -668,13 +669,13 @@ display(
 #   on rough ground leave the filter to odometry, which drifts by the slip. On the flat lab floor
 #   section 5 prints that one stored run's RMS fused and with odometry alone, which ranks neither.
 #   Notebook 07 measures over seeds when fusing helps, on drives without skid; section 5's study
-#   of ten draws of three rendered drives sets the fused pipeline beside vision alone and odometry
+#   of ten draws of five rendered drives sets the fused pipeline beside vision alone and odometry
 #   alone, draw by draw, and says on which drives and in which figure fusing helps or hurts.
 # - The pipeline's NEES on the rendered sequences, with its χ² band, shows how far its covariance
 #   can be trusted: it counts noise, not the slip's mean, the skid's bias or a lost contact.
 # - After a lost track contact the prediction misses the body's swing and rejects the vision; the
 #   crawler's preset believes the vision after two contradicting frames, a setting chosen on ten
-#   draws of one drive (stored) and judged on ten draws of three others.
+#   draws of one drive (stored) and judged on ten draws of five others.
 
 # %% [markdown]
 # ## Exercises

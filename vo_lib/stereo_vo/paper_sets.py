@@ -143,8 +143,9 @@ def contradiction_study() -> dict:
 
 
 #: The study of fusion on rendered drives: the samples (a flat floor without skid, one with skid in
-#: tight turns, rough ground with losses of contact), their first frames and the drives of each.
-FUSION_SETS = ("indoor_linear", "indoor_free", "outdoor_free")
+#: tight turns, rough ground with losses of contact, driven freely, straight, and turning on the
+#: spot), their first frames and the drives of each.
+FUSION_SETS = ("indoor_linear", "indoor_free", "outdoor_free", "outdoor_linear", "spot_turn")
 FUSION_FRAMES = 400
 FUSION_DRIVES = 10
 #: The estimates of each drive: the pipeline fused with track odometry, the same pipeline without
