@@ -59,6 +59,15 @@ def test_figures_the_seeds_do_not_move_are_one_result_not_a_ranking():
     )
 
 
+def test_figures_that_move_by_one_difference_say_so():
+    c = over_seeds(lambda s: {"A": 0.01 * s, "B": 0.01 * s, "C": 0.01 * s + 0.002}, range(10))
+    assert not c.varies("A", "B") and c.verdict("A", "B") is Verdict.NOT_RELIABLE
+    assert c.sentence("A", "B", unit="m", digits=3) == (
+        "A against B: equal in every one of the 10 seeds (median 0.045 m)"
+    )
+    assert "A minus C is -0.002 m" in c.sentence("A", "C", unit="m", digits=3)
+
+
 def test_same_seeds_same_figures():
     a = over_seeds(lambda s: _draws(s, gap=0.05), range(10))
     b = over_seeds(lambda s: _draws(s, gap=0.05), range(10))

@@ -94,9 +94,11 @@ class Comparison:
     def varies(self, a: str, b: str) -> bool:
         """Whether the seeds move ``a − b`` (else the N figures are one result repeated); a change
         below a millionth of the figures' size is arithmetic's (sums in another order), not the draws'."""
-        d = self.paired(a, b)
+        return self._moves(self.paired(a, b), a, b)
+
+    def _moves(self, values: np.ndarray, a: str, b: str) -> bool:
         size = max(float(np.max(np.abs(self.figures[k]))) for k in (a, b))
-        return bool(np.ptp(d) > 1e-6 * size)
+        return bool(np.ptp(values) > 1e-6 * size)
 
     def verdict(self, a: str, b: str) -> Verdict:
         """``BETTER`` when the whole interval of ``a − b`` is below zero, ``WORSE`` above, else
@@ -110,14 +112,11 @@ class Comparison:
         """The comparative sentence with its figures, e.g. "fused is better than VO: lower in 17 of
         20 seeds (median difference -0.80 cm, 95 % CI -1.10 to -0.50 cm)"; one of a family of 17
         says "99.7 % CI, one of 17 comparisons". Where the seeds do not move the difference
-        (:meth:`varies`), the two figures and that they are one result."""
+        (:meth:`varies`): the two figures and that they are one result, or, where the figures
+        themselves move, the one difference every seed gives."""
         u = f" {unit}" if unit else ""
         if not self.varies(a, b):
-            va, vb = (scale * float(np.median(self.figures[k])) for k in (a, b))
-            return (
-                f"{a} against {b}: {va:.{digits}f} against {vb:.{digits}f}{u} in every one of the "
-                f"{len(self)} seeds, so this is one result, which the seeds do not test"
-            )
+            return self._one_result(a, b, u, scale, digits)
         median, low, high = (scale * v for v in self.difference(a, b))
         level = f"{100 * CONFIDENCE:.0f} %" if self.family == 1 else f"{100 * self.confidence:.1f} %"
         among = "" if self.family == 1 else f", one of {self.family} comparisons"
@@ -125,6 +124,23 @@ class Comparison:
             f"{a} is {self.verdict(a, b).value} {b}: lower in {self.share(a, b)} of {len(self)} seeds "
             f"(median difference {median:+.{digits}f}{u}, {level} CI "
             f"{low:+.{digits}f} to {high:+.{digits}f}{u}{among})"
+        )
+
+    def _one_result(self, a: str, b: str, u: str, scale: float, digits: int) -> str:
+        """The sentence where the seeds do not move ``a − b``: the two figures, one result; or, where
+        the figures themselves move, that every seed gives them equal or one difference apart."""
+        n, (va, vb) = len(self), (scale * float(np.median(self.figures[k])) for k in (a, b))
+        if not any(self._moves(np.asarray(self.figures[k], float), a, b) for k in (a, b)):
+            return (
+                f"{a} against {b}: {va:.{digits}f} against {vb:.{digits}f}{u} in every one of the "
+                f"{n} seeds, so this is one result, which the seeds do not test"
+            )
+        d = scale * float(np.median(self.paired(a, b)))
+        if d == 0:
+            return f"{a} against {b}: equal in every one of the {n} seeds (median {va:.{digits}f}{u})"
+        return (
+            f"{a} against {b}: {a} minus {b} is {d:+.{digits}f}{u} in every one of the {n} seeds "
+            f"(medians {va:.{digits}f} and {vb:.{digits}f}{u}), one result, which the seeds do not test"
         )
 
 

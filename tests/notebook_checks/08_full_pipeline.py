@@ -44,7 +44,7 @@ assert all(ratio[("indoor_free", q)] > 1 for q in QUANTITIES)
 # after: study = paper_sets.load()["contradictions"]
 from vo_lib.comparison import Verdict
 
-assert study_cmp["flagged"].verdict(believed, "never") is Verdict.BETTER  # the setting's reason
+assert heading_cmp.verdict(believed, "never believes") is Verdict.BETTER  # the setting's reason
 
 # after: fusion = paper_sets.load()["fusion"]
 # the held-out verdict on the setting names every drive once, and the preset is the setting judged
