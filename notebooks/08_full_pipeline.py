@@ -437,23 +437,24 @@ display(
 # %%
 study = paper_sets.load()["contradictions"]
 believed = f"believes after {study['limit']} contradictions"
-flagged = {key: np.array(study[key]["flagged"]) for key in ("believed", "never")}
+study_flags = {key: np.array(study[key]["flagged"]) for key in ("believed", "never")}
 heading_cmp = Comparison(
     tuple(study["seeds"]),
     {
         believed: np.array(study["believed"]["heading_rms_deg"]),
-        "never believes": study["never"]["heading_rms_deg"],
+        "never believes": np.array(study["never"]["heading_rms_deg"]),
     },
 )
+fewer_flags = int(np.sum(study_flags["believed"] < study_flags["never"]))
 for label, key in (("never believes", "never"), (believed, "believed")):
     print(
-        f" {label}: frames flagged, median {np.median(flagged[key]):.0f} of {study['frames']}; "
+        f" {label}: frames flagged, median {np.median(study_flags[key]):.0f} of {study['frames']}; "
         f"RMS heading error, median {np.median(study[key]['heading_rms_deg']):.2f}°"
     )
 display(
     Markdown(
         f"On the first {study['frames']} frames of {len(study['seeds'])} drives of `{study['set']}`, "
-        f"believing the vision flags fewer frames in {np.sum(flagged['believed'] < flagged['never'])} "
+        f"believing the vision flags fewer frames in {fewer_flags} "
         f"of the {len(study['seeds'])} drives (which is what it is for); RMS heading error: "
         + heading_cmp.sentence(believed, "never believes", unit="°", digits=2)
         + ". "

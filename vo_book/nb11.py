@@ -110,7 +110,7 @@ def image_statistics(image: np.ndarray, threshold: int = 20, low_gradient: float
     col, row = (corners // CELL).astype(int).T
     inside = (row < occupied.shape[0]) & (col < occupied.shape[1])
     occupied[row[inside], col[inside]] = True
-    gradient = np.hypot(cv2.Sobel(image, cv2.CV_32F, 1, 0), cv2.Sobel(image, cv2.CV_32F, 0, 1)) / 8
+    gradient = gradient_magnitude(image) / 8
     return {
         "empty": 1 - occupied.mean(),
         "per_vga": len(corners) * 640 * 480 / (h * w),

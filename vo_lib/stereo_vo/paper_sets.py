@@ -100,6 +100,8 @@ def run_set(name: str) -> dict:
 CONTRADICTION_SET = "outdoor_free_3"
 CONTRADICTION_FRAMES = 600
 CONTRADICTION_DRIVES = 10
+#: The crawler's pipeline that never believes the vision over the prediction, set beside the preset.
+NEVER_BELIEVES = replace(CRAWLER, max_contradictions=math.inf)
 
 
 def drive(name: str, seed: int, frames: int):
@@ -121,7 +123,7 @@ def contradiction_study() -> dict:
     (``max_contradictions = inf``) on the study's drives: per drive, each setting's flagged frames
     and RMS heading error (degrees)."""
     seeds = [SAMPLES[CONTRADICTION_SET].seed + k for k in range(CONTRADICTION_DRIVES)]
-    settings = {"never": replace(CRAWLER, max_contradictions=math.inf), "believed": CRAWLER}
+    settings = {"never": NEVER_BELIEVES, "believed": CRAWLER}
     rows = {label: {"flagged": [], "heading_rms_deg": []} for label in settings}
     for seed in seeds:
         rendered, images, truth = drive(CONTRADICTION_SET, seed, CONTRADICTION_FRAMES)
@@ -168,7 +170,7 @@ def fusion_study() -> dict:
             for label, frames, config in (
                 ("fused", images, CRAWLER),
                 ("vision", [(a, b, None) for a, b, _ in images], CRAWLER),
-                ("never", images, replace(CRAWLER, max_contradictions=math.inf)),
+                ("never", images, NEVER_BELIEVES),
             ):
                 odometer = StereoOdometry(rendered.camera, config, TrackOdometry(), seed=SEED)
                 result = run_frames(iter(frames), rendered.camera, odometer=odometer)
