@@ -535,6 +535,9 @@ CSV_ROW_DAMAGE = set("latin-1 superscript overflow negative decimal outside abso
         ("centre", "cam1/sensor.yaml: key intrinsics: principal point (-379.999, 255.238) outside"),
         ("corner", "cam0/sensor.yaml: keys intrinsics and distortion_coefficients leave 2% of the image in"),
         ("k2", "cam0/sensor.yaml: keys intrinsics and distortion_coefficients leave 1% of the image in"),
+        # a bad cam1 shrinks both rectified views: the camera whose own calibration fails is named
+        ("focal-tenth-cam1", "cam1/sensor.yaml: keys intrinsics and distortion_coefficients leave 0%"),
+        ("intrinsics-order-cam1", "cam1/sensor.yaml: keys intrinsics and distortion_coefficients leave 5%"),
         (
             "off-centre",
             "mav0: the intrinsics of cam0 and cam1 put the rectified principal point at (789, 450)",
@@ -717,6 +720,11 @@ def test_a_bad_rig_gets_one_line_and_exit_2(tmp_path, capsys, damage, expected):
             path.write_text(text.replace(", 379.999,", ", -379.999,"))
         else:  # a coefficient that no lens has: once one that fooled the valid share
             path.write_text(text.replace("[-0.28368365,", "[1e30," if damage == "distortion" else "[-1e30,"))
+    elif damage in ("focal-tenth-cam1", "intrinsics-order-cam1"):  # cam1's focal lengths a tenth; in
+        path = mav0 / "cam1" / "sensor.yaml"  # the order cu, cv, fu, fv
+        tenth, order = "[45.7587, 45.6134, 379.999, 255.238]", "[379.999, 255.238, 457.587, 456.134]"
+        edit = tenth if "tenth" in damage else order
+        path.write_text(re.sub(r"intrinsics: \[[^\]]+\]", f"intrinsics: {edit}", path.read_text()))
     elif damage == "k2":  # cam0's k2 a hundredfold: it rectifies to a sliver of the image
         path = mav0 / "cam0" / "sensor.yaml"
         path.write_text(path.read_text().replace("0.07395907", "7.395907"))

@@ -232,6 +232,19 @@ def rectify_stereo(
     return Rectification(*maps, (P1, P2), size, T_body_rect, tuple(shares))
 
 
+def undistorted_share(K, dist, size: tuple[int, int], fisheye: bool = False) -> float:
+    """The share of a raw image that one camera shows once undistorted alone to a centred pinhole
+    view of valid pixels only (as :func:`_sampled_share`, and as rectification would): low for a
+    calibration that is not of its images."""
+    K, dist, R = np.asarray(K, float), np.asarray(dist, float), np.eye(3)
+    if fisheye:
+        new = cv2.fisheye.estimateNewCameraMatrixForUndistortRectify(K, dist, size, R, balance=0.0)
+    else:
+        new, _ = cv2.getOptimalNewCameraMatrix(K, dist, size, 0.0, size, centerPrincipalPoint=True)
+    P = np.hstack([new, np.zeros((3, 1))])
+    return _sampled_share(cv2.fisheye if fisheye else cv2, K, dist, R, P, size)
+
+
 def _sampled_share(opencv, K, dist, R_rect, P, size: tuple[int, int]) -> float:
     """The share of a raw image that its rectified image shows: the rectified pixels that fall
     inside it, times the part of it their bounding box spans (a sliver when the calibration is

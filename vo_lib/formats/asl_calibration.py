@@ -17,7 +17,7 @@ import yaml
 from scipy.spatial.transform import Rotation
 
 from vo_lib.atomic import notice
-from vo_lib.camera import Rectification, rectify_stereo
+from vo_lib.camera import Rectification, rectify_stereo, undistorted_share
 from vo_lib.formats.frame_files import (
     MAX_MOUNT_M,
     MIN_BASELINE_M,
@@ -239,14 +239,29 @@ def rectify(left: CameraCalibration, right: CameraCalibration, where: Path) -> R
     cam1_in_cam0 = _check_baseline(T_right_left, where / "cam1" / "sensor.yaml")
     lenses = (left.K, left.distortion), (right.K, right.distortion)
     rect = rectify_stereo(*lenses, left.resolution, T_right_left, left.T_BS, fisheye=left.fisheye)
-    for side, share in zip(("cam0", "cam1"), rect.valid_shares, strict=True):
-        if share < MIN_VALID_SHARE:
-            raise AslError(
-                f"{where / side / 'sensor.yaml'}: keys intrinsics and distortion_coefficients leave "
-                f"{share:.0%} of the image in view once rectified; expected a calibration of these images"
-            )
+    if min(rect.valid_shares) < MIN_VALID_SHARE:
+        raise AslError(_share_problem(left, right, min(rect.valid_shares), where))
     _check_rectified(rect, cam1_in_cam0, where)
     return rect
+
+
+def _share_problem(left: CameraCalibration, right: CameraCalibration, share: float, where: Path) -> str:
+    """The line for a pair that rectifies to a sliver of its images: it names the camera whose own
+    calibration leaves little of its image once undistorted alone (a bad cam1 shrinks both views, as
+    the two are rectified to one camera), or both where each alone is fine."""
+    cameras = {"cam0": left, "cam1": right}
+    alone = {s: undistorted_share(c.K, c.distortion, c.resolution, c.fisheye) for s, c in cameras.items()}
+    bad = [s for s in cameras if alone[s] < MIN_VALID_SHARE]
+    if bad:
+        return (
+            f"{where / min(bad, key=alone.get) / 'sensor.yaml'}: keys intrinsics and distortion_coefficients "
+            f"leave {share:.0%} of the image in view once rectified; expected a calibration of these images"
+        )
+    return (
+        f"{where / 'cam0' / 'sensor.yaml'} and {where / 'cam1' / 'sensor.yaml'}: keys intrinsics leave "
+        f"{share:.0%} of the images in view once rectified together, though each camera alone keeps "
+        f"{min(alone.values()):.0%}; expected one rig's intrinsics (focal lengths and principal points alike)"
+    )
 
 
 def _check_rectified(rect: Rectification, cam1_in_cam0: np.ndarray, where: Path) -> None:
