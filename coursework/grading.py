@@ -305,8 +305,8 @@ def can_isolate() -> bool:
 
 def isolated_kernel(hidden: list[str], read_only: list[str] = ()) -> list[str]:
     """A kernel spec's ``argv``: an IPython kernel in its own user and mount namespace (``unshare -rm``),
-    with an empty tmpfs over each hidden folder, ``/dev/null`` over each hidden file, and each path of
-    ``read_only`` (the grader's own files) bound over itself read-only."""
+    with an empty tmpfs over each hidden folder, ``/dev/null`` over each hidden file, each path of
+    ``read_only`` (the grader's own files) bound over itself read-only, and its history in memory."""
     mounts = [
         f"mount {'-t tmpfs none' if os.path.isdir(p) else '--bind /dev/null'} {shlex.quote(p)}"
         for p in hidden
@@ -316,8 +316,11 @@ def isolated_kernel(hidden: list[str], read_only: list[str] = ()) -> list[str]:
         f"mount --bind {q} {q} && mount -o remount,bind,ro {q}"
         for q in map(shlex.quote, filter(os.path.exists, read_only))
     ]
-    kernel = shlex.join([sys.executable, "-m", "ipykernel_launcher"]) + " -f '{connection_file}'"
-    return ["unshare", "-rm", "--", "sh", "-c", " && ".join([*mounts, f"exec {kernel}"])]
+    # no history on disk (graded cells hold solutions and hidden tests), and the client's own
+    # arguments passed on ("$@"): sh takes the first word after the script as $0, hence "sh"
+    kernel = shlex.join([sys.executable, "-m", "ipykernel_launcher", "--HistoryManager.enabled=False"])
+    script = " && ".join([*mounts, f"exec {kernel} -f '{{connection_file}}' \"$@\""])
+    return ["unshare", "-rm", "--", "sh", "-c", script, "sh"]
 
 
 def main(argv: list[str]) -> int:

@@ -7,6 +7,7 @@ import pathlib
 import sys
 import tempfile
 
+from IPython.paths import get_ipython_dir
 from nbconvert.preprocessors import CSSHTMLHeaderPreprocessor as StyleSheet
 from nbgrader.converters import Autograde
 from nbgrader.plugins.export import CsvExportPlugin
@@ -35,6 +36,7 @@ if in_course and grading.can_isolate():
     hidden = [str(here / n) for n in "source release submitted autograded feedback gradebook.db".split()]
     listed = (here / "hidden.txt").read_text().splitlines() if (here / "hidden.txt").is_file() else []
     hidden += [p for p in [*listed, *os.environ.get("VO_HIDDEN", "").split(os.pathsep)] if p]
+    hidden.append(get_ipython_dir())  # IPython's history of the teacher's sessions: solutions too
     argv = grading.isolated_kernel(hidden, [str(here / "coursework"), str(here / "nbgrader_config.py")])
     spec = {"argv": argv, "display_name": "Python 3", "language": "python"}
     (kernel_folder := pathlib.Path(sockets) / "kernels" / "python3").mkdir(parents=True)

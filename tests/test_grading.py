@@ -457,10 +457,13 @@ def test_the_isolated_kernel_finds_the_hidden_solutions_empty(tmp_path, monkeypa
     probe = f"import os\nprint(os.listdir({source!r}), open({book!r}).read())"
     target = str(tools / "grading.py")
     poison = f"try:\n    open({target!r}, 'a').write('x')\nexcept OSError as e:\n    print(e.strerror)"
-    nb = nbformat.v4.new_notebook(cells=[nbformat.v4.new_code_cell(probe), nbformat.v4.new_code_cell(poison)])
+    history = "h = get_ipython().history_manager\nprint(h.enabled, h.hist_file)"  # cells hold hidden tests
+    cells = [nbformat.v4.new_code_cell(code) for code in (probe, poison, history)]
+    nb = nbformat.v4.new_notebook(cells=cells)
     nbclient.NotebookClient(nb, kernel_name="python3", timeout=60).execute()
     assert nb.cells[0].outputs[0]["text"] == "[] \n"
     assert nb.cells[1].outputs[0]["text"] == "Read-only file system\n"  # the grader's files: read-only
+    assert nb.cells[2].outputs[0]["text"] == "False :memory:\n"  # none on disk; the client's flag passed
     assert (tools / "grading.py").read_text() == "the guard"
     assert (
         tmp_path / "source" / "01" / "01.ipynb"
