@@ -177,7 +177,7 @@ def test_evaluate_prints_no_rotation_error_for_a_run_against_its_own_files(tmp_p
     outputs[0] = "\n".join(outputs[0])
     rows = {line[:62].strip(): line[62:].strip() for line in outputs[0].splitlines()}
     assert rows["RPE RMSE, 1 frame: rotation [deg]"] == "0.0000"
-    assert rows["final rotation error [deg]"] == "0.000"
+    assert rows["final rotation error, 3-D [deg]"] == "0.000"
     assert rows["KITTI rotation (5 m, 5 segments) [deg/100 m]"] == "0.000"
 
 

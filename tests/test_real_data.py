@@ -1131,7 +1131,7 @@ def test_evaluate_moves_a_truth_of_the_recording_into_its_rectified_camera(tmp_p
     out = capsys.readouterr().out
     rows = {line[:62].strip(): line[62:].strip() for line in out.splitlines()}
     assert "moved into its rectified left camera" in out
-    assert rows["final rotation error [deg]"] == "0.000"
+    assert rows["final rotation error, 3-D [deg]"] == "0.000"
     assert rows["ATE (SE(3) alignment): rmse [m]"] == "0.0000"
     leica_path = EUROC / "mav0" / "leica0" / "data.csv"
     assert main(["evaluate", "--gt", str(leica_path), "--est", str(est)]) == 0
@@ -1248,7 +1248,7 @@ def test_evaluate_reads_tum_euroc_csv_and_positions(tmp_path, capsys):
     lever = (7.48903e-02, -1.84772e-02, -1.20209e-01)
     with_arm = ate_positions(leica.positions[i_leica], truth.poses[i_truth], lever)[0].rmse
     without = ate_positions(leica.positions[i_leica], truth.poses[i_truth])[0].rmse
-    # the raw tracker's clock runs 0.136 s behind the truth's (about 4 cm here); --time-offset says so
+    # the raw tracker stamps its rows 0.136 s late (about 4 cm here); --time-offset 0.136 says so
     # (the body's poses stand for the camera's here: the lever arm is not the prism's, about 1 cm)
     assert with_arm < 0.05 and with_arm < without - 0.003
     late = ["--time-offset", "0.136", "--max-time-diff", "0.025"]
@@ -1414,7 +1414,7 @@ def test_a_rig_with_positions_only_is_scored_by_its_aligned_prism(tmp_path, caps
     assert "Errors against position-only ground truth" in out and "Errors in 3-D" not in out
     line = next(x for x in out.splitlines() if "ATE RMSE of the tracked point" in x)
     assert 0 < float(line.split()[-1]) < 0.05
-    assert "evaluate --time-offset takes it out" in out  # the tracker's clock is not the cameras'
+    assert "evaluate --time-offset SECONDS takes it out" in out  # the tracker's clock is not the cameras'
     # the run's marker records the positions it was scored against: evaluate refuses them once changed
     est, gt = tmp_path / "out" / "trajectory.tum", rig / "mav0" / "leica0" / "data.csv"
     assert main(["evaluate", "--gt", str(gt), "--est", str(est)]) == 0
@@ -2021,3 +2021,17 @@ def test_a_motion_capture_truth_under_tum_vis_name_is_read(tmp_path, capsys):
     shutil.rmtree(truth)
     seq = read_asl(rig)
     assert seq.truth_file.parent.name == "mocap0" and np.allclose(seq.poses_4x4(), expected, atol=1e-6)
+
+
+@needs_euroc
+def test_a_truth_under_another_name_is_named_as_not_read(tmp_path, capsys):
+    """A file in a ground truth's folder that the reader does not look for gets a notice saying what
+    it looks for (the run goes on without truth, as it would with none)."""
+    from vo_lib.formats.euroc import read_asl
+
+    truth = small_rig(tmp_path) / "mav0" / "state_groundtruth_estimate0"
+    (truth / "groundtruth.tum").rename(truth / "groundtruth.csv")
+    assert read_asl(truth.parent.parent).poses is None
+    err = capsys.readouterr().err
+    assert "groundtruth.csv not read as ground truth; expected groundtruth.tum or data.csv" in err
+    assert err.count("\n") == 1

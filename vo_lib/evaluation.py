@@ -335,7 +335,7 @@ class StandardErrors:
         rows = [
             ("final position error, 3-D [m]", f"{f.position_m:.4f}"),
             ("  of distance travelled [%]", shown(f.percent, ".2f")),
-            ("final rotation error [deg]", f"{f.rotation_deg:.3f}"),
+            ("final rotation error, 3-D [deg]", f"{f.rotation_deg:.3f}"),
             ("distance travelled, 3-D, truth / estimate [m]", distances),
             ("ATE (SE(3) alignment): rmse [m]", f"{self.ate_se3.rmse:.4f}"),
             (sim3, shown(self.ate_sim3.rmse, ".4f")),

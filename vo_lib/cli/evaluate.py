@@ -170,7 +170,8 @@ def _print_pose_errors(G: np.ndarray, E: np.ndarray, lengths) -> None:
         print(
             f"note: the estimate's rotations from pose to pose differ from the ground truth's by "
             f"{found[0]:.2g} deg (RMS), where the truth turns {found[1]:.2g} deg: are they of one "
-            f"recording, each file's quaternions in the order of its format {ORDERS}?"
+            "recording and of one frame (a body's truth is the camera's only through --extrinsic-of), "
+            f"each file's quaternions in the order of its format {ORDERS}?"
         )
     for label, value in standard_errors(G, E, lengths).rows():
         print(f"{label:<62s}{value:>16s}")

@@ -220,6 +220,8 @@ def read_asl(path, groundtruth=None, frames: int | None = None, truth: bool = Tr
     stated = [mav0 / name for name in GROUND_TRUTH_FILES]
     found = (p for p in stated if p.exists() or p.is_symlink() or p.parent.is_file())
     truth_path = Path(groundtruth) if groundtruth else (next(found, None) if truth else None)
+    if truth_path is None and truth and not groundtruth:
+        _unread_truth(mav0)
     poses = None
     # as evaluate: errors of two poses mean nothing (and a single pair is refused by its reader)
     if truth_path is not None and len(seconds) == 2:
@@ -228,6 +230,17 @@ def read_asl(path, groundtruth=None, frames: int | None = None, truth: bool = Tr
         poses = _truth_into_camera(truth_path, seconds, rect.T_body_rect, manifest)
     since_first = (stamps - stamps[0]) * NANOSECONDS  # from whole nanoseconds: exact to 1 ns
     return Sequence(root, rect.camera, since_first, left, right, poses, None, manifest, rect, truth_path)
+
+
+def _unread_truth(mav0: Path) -> None:
+    """A notice for files in a ground truth's folder that are none of :data:`GROUND_TRUTH_FILES`."""
+    for folder in dict.fromkeys(name.split("/")[0] for name in GROUND_TRUTH_FILES):
+        if files := sorted(p.name for p in (mav0 / folder).glob("*") if p.name != "sensor.yaml"):
+            expected = " or ".join(n.split("/")[1] for n in GROUND_TRUTH_FILES if n.startswith(folder + "/"))
+            notice(
+                f"{mav0 / folder}: {', '.join(files)} not read as ground truth; expected {expected} "
+                "(evaluate --gt FILE --extrinsic-of RECORDING reads any name)"
+            )
 
 
 def _truth_into_camera(truth_path: Path, seconds, T_body_rect, manifest: dict):

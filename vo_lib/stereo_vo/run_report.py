@@ -110,8 +110,8 @@ ROWS_3D = (
     ("ATE RMSE, SE(3) alignment [m]", lambda e: e.ate_se3.rmse, "{:.4f}"),
     ("ATE RMSE, Sim(3) alignment [m]", lambda e: e.ate_sim3.rmse, "{:.4f}"),
     ("  scale of the Sim(3) alignment", lambda e: e.sim3_scale, "{:.4f}"),
-    ("RPE RMSE, 1 frame, translation [m]", lambda e: e.rpe_m.rmse, "{:.5f}"),
-    ("RPE RMSE, 1 frame, rotation [deg]", lambda e: e.rpe_deg.rmse, "{:.4f}"),
+    ("RPE RMSE, 1 frame: translation [m]", lambda e: e.rpe_m.rmse, "{:.5f}"),
+    ("RPE RMSE, 1 frame: rotation [deg]", lambda e: e.rpe_deg.rmse, "{:.4f}"),
     ("KITTI translation error [%]", lambda e: e.kitti and e.kitti.translation_pct, "{:.3f}"),
     ("KITTI rotation error [deg/100 m]", lambda e: e.kitti and e.kitti.rotation_deg_per_100m, "{:.3f}"),
 )
@@ -218,7 +218,8 @@ def position_only_errors(seq, poses: np.ndarray, n: int) -> dict:
     print(f"  {'ATE RMSE of the tracked point, SE(3) alignment [m]':<62s}{ate.rmse:>16.4f}")
     print(
         "  paired at the images' times: a tracker's clock not synchronised with the cameras adds its\n"
-        "  offset to this figure (evaluate --time-offset takes it out)"
+        "  offset to this figure; evaluate --time-offset SECONDS takes it out (seconds added to the\n"
+        "  estimate's times: the tracker's lag behind the images)"
     )
     return {"ate_positions_m": ate.rmse}
 
