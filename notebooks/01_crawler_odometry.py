@@ -362,9 +362,11 @@ assert spot_translation < 1e-12, "eq. 2-3: a spot turn does not translate"
 ### BEGIN HIDDEN TESTS
 import numpy as np
 
+from coursework import grading  # noqa: E402
+
 _h11 = np.random.default_rng(1011).uniform([0.3, 0.002], [1.5, 0.03], (20, 2))  # gauges and steps
 _h11_got = np.vectorize(full_turn_steps)(_h11[:, 0], _h11[:, 1])
-assert np.array_equal(_h11_got, np.ceil(np.pi * _h11[:, 0] / _h11[:, 1])), "not the smallest count for 360°"
+assert grading.equal(_h11_got, np.ceil(np.pi * _h11[:, 0] / _h11[:, 1])), "not the smallest count for 360°"
 ### END HIDDEN TESTS
 
 # %% [markdown]
@@ -474,10 +476,13 @@ assert abs(np.degrees(final_turn - true_turn)) < 0.1, "calibrated misses the rec
 ### BEGIN HIDDEN TESTS
 import numpy as np
 
+from coursework import grading  # noqa: E402
+
 _h13 = np.random.default_rng(1031)  # another crawler: 720° in 1,500 noisy steps (its own turn per step)
 _h13_steps = np.tile([-1.0, 1.0], (1500, 1)) * _h13.uniform(0.2, 0.6) * 4 * np.pi / 1500
 _h13_got = fit_gauge(_h13_steps + _h13.normal(scale=1e-5, size=(1500, 2)), 4 * np.pi)
-assert abs(_h13_got - 2 * np.random.default_rng(1031).uniform(0.2, 0.6)) < 1e-3, "not another crawler's gauge"
+_h13_expected = 2 * np.random.default_rng(1031).uniform(0.2, 0.6)
+assert grading.close(_h13_got, _h13_expected, rtol=0, atol=1e-3), "not another crawler's gauge"
 ### END HIDDEN TESTS
 
 # %% [markdown]

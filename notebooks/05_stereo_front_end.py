@@ -423,7 +423,7 @@ _h51_no = grading.library_functions(
 _h51_no += [getattr(cv2.DescriptorMatcher, m) for m in ("match", "knnMatch", "radiusMatch")]
 with grading.unavailable(*_h51_no):
     _h51_got = hamming_distance(_h51_a, _h51_b)
-assert np.array_equal(_h51_got, features_module.hamming(_h51_a, _h51_b)), "not each pair's differing bits"
+assert grading.equal(_h51_got, features_module.hamming(_h51_a, _h51_b)), "not each pair's differing bits"
 ### END HIDDEN TESTS
 
 # %% [markdown]
@@ -474,7 +474,9 @@ _h52_got = quadratic_offset(*(c.copy() for c in _h52_costs))
 _h52_a, _h52_b, _h52_c = np.polyfit([-1.0, 0.0, 1.0], np.array(_h52_costs), 2)
 assert grading.close(_h52_got, -_h52_b / (2 * _h52_a)), "not the vertex of other parabolas (which side?)"
 _h52_costs = [np.abs(x - true_minima) for x in (-1.0, 0.0, 1.0)]
-assert np.isclose(parabola_worst, np.abs(quadratic_offset(*_h52_costs) - true_minima).max()), "parabola_worst"
+assert grading.close(parabola_worst, np.abs(quadratic_offset(*_h52_costs) - true_minima).max()), (
+    "parabola_worst"
+)
 ### END HIDDEN TESTS
 
 # %% [markdown]
@@ -527,7 +529,7 @@ _h53_points, _h53_response = _h53.uniform(0, [900, 700], (800, 2)), _h53.integer
 with grading.unavailable(features_module.bucket):
     _h53_got = strongest_per_cell(_h53_points.copy(), _h53_response.copy(), 900, 700, (7, 5), 3)
 _h53_expected = features_module.bucket(_h53_points, _h53_response, 900, 700, (7, 5), 3 * 7 * 5)
-assert np.array_equal(_h53_got, _h53_expected), "not the strongest few of every cell (per cell? ties?)"
+assert grading.equal(_h53_got, _h53_expected), "not the strongest few of every cell (per cell? ties?)"
 ### END HIDDEN TESTS
 
 # %% [markdown]

@@ -1317,13 +1317,17 @@ assert fixed_errors == wrong_fixed, "fixed_errors: the matches the threshold cla
 gated_visible = one_point_ransac(half_px.w_prev, half_px.w_curr, ex_camera, rng=1).inliers
 assert gate_errors == np.sum(gated_visible != half_px.inliers), "gate_errors: the gates' wrong matches"
 ### BEGIN HIDDEN TESTS
+from coursework import grading  # noqa: E402
+
 _h3_rng = np.random.default_rng(6031)  # each θ: inliers near the turn (a long tail), outliers anywhere
 _h3_inliers = _h3_rng.random(300) < 0.7
 _h3_each = 0.05 + np.where(_h3_inliers, _h3_rng.standard_t(2, 300) * 0.003, _h3_rng.uniform(-0.2, 0.2, 300))
 _h3_grid = np.arange(1, 1001) * 0.01
 _h3_got = best_fixed_threshold(_h3_each.copy(), 0.05, _h3_inliers.copy(), _h3_grid.copy())  # its own copies
 _h3_correct = [np.sum((np.abs(_h3_each - 0.05) < np.radians(t)) == _h3_inliers) for t in _h3_grid]
-assert np.isclose(_h3_got, _h3_grid[np.argmax(_h3_correct)]), "best_fixed_threshold: not the best threshold"
+assert grading.close(_h3_got, _h3_grid[np.argmax(_h3_correct)]), (
+    "best_fixed_threshold: not the best threshold"
+)
 ### END HIDDEN TESTS
 
 # %% [markdown]
@@ -1419,9 +1423,9 @@ with grading.unavailable(*grading.library_functions(ransac_module)):
 _h4_expected = ransac_module.theta_gate_error(_h4_a, _h4_b, 0.07, _h4_camera)
 _h4_message = "theta_gate: not eq. 20 (θ/2 in γ, γ′? f_x in β, f_y in tan α?)"
 assert grading.close(_h4_gate, _h4_expected, rtol=1e-4), _h4_message  # float32 pixels stay within 1e-4
-assert np.isclose(_h4_theta, -0.06), "one_point_theta does not keep the hypothesis with the most inliers"
+assert grading.close(_h4_theta, -0.06), "one_point_theta does not keep the hypothesis with the most inliers"
 _h4_expected = ransac_module.theta_gate_error(_h4_a, _h4_b, _h4_theta, _h4_camera) < 0.02
-assert np.array_equal(_h4_in, _h4_expected), "the inliers: the matches within the threshold under the kept θ"
+assert grading.equal(_h4_in, _h4_expected), "the inliers: the matches within the threshold under the kept θ"
 _h4_rng = np.random.default_rng(6045)  # 0.3 px noise, half outliers, a wide gate: six θ tie for most inliers
 _h4_m = synthetic_module.synthetic_matches(ex_camera, 300, 0.04, 0.2, _h4_rng, (1.5, 15.0), 0.3, 0.5)
 _h4_a, _h4_b = _h4_m.w_prev, _h4_m.w_curr
@@ -1429,7 +1433,9 @@ with grading.unavailable(*grading.library_functions(ransac_module)):
     _h4_theta = one_point_theta(_h4_a, _h4_b, ex_camera, 0.1, 30, np.random.default_rng(6042))[0]
 _h4_drawn = cm.theta_from_pixels(_h4_a, _h4_b, ex_camera)[np.random.default_rng(6042).integers(300, size=30)]
 _h4_counts = [np.sum(ransac_module.theta_gate_error(_h4_a, _h4_b, h, ex_camera) < 0.1) for h in _h4_drawn]
-assert np.isclose(_h4_theta, _h4_drawn[np.argmax(_h4_counts)]), "of hypotheses that tie, keep the first drawn"
+assert grading.close(_h4_theta, _h4_drawn[np.argmax(_h4_counts)]), (
+    "of hypotheses that tie, keep the first drawn"
+)
 ### END HIDDEN TESTS
 
 # %% [markdown]

@@ -762,7 +762,9 @@ _h1_estimate = _h1_truth + np.random.default_rng(8012).normal(size=(60, 3))
 with grading.unavailable(*grading.library_functions(*_h1_refused)):
     _h1_got = final_error_percent(_h1_estimate, _h1_truth)
 _h1_expected = evaluation_module.final_error(_h1_truth, _h1_estimate).percent
-assert np.isclose(_h1_got, _h1_expected), "final_error_percent differs on another path (the path's length?)"
+assert grading.close(_h1_got, _h1_expected), (
+    "final_error_percent differs on another path (the path's length?)"
+)
 ### END HIDDEN TESTS
 
 # %% [markdown]
@@ -827,7 +829,7 @@ _h2_estimate = _h2_estimate + _h2_rng.normal(0, 0.3, (80, 3))
 with grading.unavailable(*grading.library_functions(*_h2_refused)):
     _h2_got = ate_rmse_of(_h2_truth, _h2_estimate)
 _h2_expected = evaluation_module.ate_planar(_h2_truth, _h2_estimate)[0].rmse
-assert np.isclose(_h2_got, _h2_expected, rtol=1e-6), "ate_rmse_of differs (a mirror image is no rotation)"
+assert grading.close(_h2_got, _h2_expected, rtol=1e-6), "ate_rmse_of differs (a mirror image is no rotation)"
 ### END HIDDEN TESTS
 
 # %% [markdown]

@@ -647,12 +647,13 @@ assert abs(shift - pitch_shift(math.radians(0.1), 200.0, cam)) < 1e-9, "the same
 assert 0.1 < shift < 5.0, "not the pixels a point 20 m ahead moves by (degrees or radians?)"
 ### BEGIN HIDDEN TESTS
 import vo_lib.camera as camera_module  # noqa: E402
+from coursework import grading  # noqa: E402
 
 _h2_draws = np.random.default_rng(11021).uniform([300, 300, -0.2, 0.5], [900, 900, 0.2, 8], (5, 4))
 for _h2_fx, _h2_fy, _h2_pitch, _h2_depth in _h2_draws:  # cameras, pitches and depths
     _h2_camera = camera_module.StereoCamera(fx=_h2_fx, fy=_h2_fy, cx=320.0, cy=240.0, baseline=1.0)
     _h2_got = pitch_shift(_h2_pitch, _h2_depth, _h2_camera)
-    assert np.isclose(_h2_got, _h2_fy * abs(np.tan(_h2_pitch))), "pitch_shift differs (radians? which f?)"
+    assert grading.close(_h2_got, _h2_fy * abs(np.tan(_h2_pitch))), "pitch_shift differs (radians? which f?)"
 ### END HIDDEN TESTS
 
 # %% [markdown]
@@ -683,6 +684,7 @@ assert np.abs(R_id - R_ours).max() < 1e-8 and np.abs(t_id - t_ours).max() < 1e-8
 assert steps_id >= steps, "from farther away, not fewer steps"
 ### BEGIN HIDDEN TESTS
 import vo_lib.stereo_vo.rigid_motion as rigid_motion_module  # noqa: E402
+from coursework import grading  # noqa: E402
 
 _h3_moves = np.random.default_rng(11031).normal(0, np.outer([0.01, 0.05, 0.1], [1, 1, 1, 10, 10, 10]))
 _h3_starts = [(rigid_motion_module.rotation_matrix(m[:3]) @ R0, t0 + m[3:]) for m in _h3_moves]
@@ -698,9 +700,10 @@ def _h3_refine(R, t, steps=0):  # section 5's Gauss-Newton on the library's norm
 
 
 _h3_expected = [_h3_refine(R, t) for R, t in _h3_starts]
+assert grading.plain(_h3_got), "refine_from: not (R, t, steps) of numbers"
 _h3_apart = [np.vstack(g[:2]) - np.vstack(e[:2]) for g, e in zip(_h3_got, _h3_expected, strict=True)]
 assert np.abs(_h3_apart).max() < 1e-8, "refine_from: not the motion from other starting points"
-assert [g[2] for g in _h3_got] == [e[2] for e in _h3_expected], "refine_from: not the steps from others"
+assert grading.equal([g[2] for g in _h3_got], [e[2] for e in _h3_expected]), "refine_from: not the steps"
 ### END HIDDEN TESTS
 
 # %% [markdown]
@@ -779,5 +782,6 @@ def _h4_residuals(x):  # the left image's (u, v) residuals of R turned by x[:3],
 
 _h4_x = scipy.optimize.least_squares(_h4_residuals, np.zeros(6), xtol=1e-15, ftol=1e-15, gtol=1e-15).x
 _h4_expected = np.vstack([rigid_motion_module.rotation_matrix(_h4_x[:3]) @ _h4_R, _h4_x[3:]])
+assert grading.plain(_h4_got), "left_only_refine: not (R, t) of numbers"
 assert np.abs(np.vstack(_h4_got) - _h4_expected).max() < 1e-7, "left_only_refine: the left image's rows only?"
 ### END HIDDEN TESTS

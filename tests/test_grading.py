@@ -468,3 +468,30 @@ def test_the_isolated_kernel_finds_the_hidden_solutions_empty(tmp_path, monkeypa
     assert (
         tmp_path / "source" / "01" / "01.ipynb"
     ).read_text() == "the teacher's solution"  # outside: as it was
+
+
+def test_answers_compare_only_as_plain_numbers():
+    """An object of the answer's own class (one that equals anything, or that calls the library only
+    when NumPy reads it, after the refusal ended) fails grading.close and grading.equal; numbers as
+    Python and NumPy make them, in lists and tuples, pass."""
+
+    class Anything(float):
+        def __eq__(self, other):
+            return True
+
+        def __array_function__(self, *args, **kwargs):
+            return self
+
+    class Lazy:
+        def __array__(self, dtype=None, copy=None):
+            return np.zeros(3)
+
+    honest = [np.zeros(3), [0.0, np.float64(0.0), 0], (np.zeros(2), np.float32(0.0)), np.False_, 0]
+    for value in honest:
+        assert grading.plain(value)
+    assert grading.close(honest[1], [0, 0, 0]) and grading.equal(np.zeros(3), [0, 0, 0])
+    cheats = [Anything(1.0), Lazy(), [Lazy()] * 3, np.array([Lazy()] * 3, dtype=object)]
+    for cheat in [*cheats, np.zeros(3).view(np.matrix)]:
+        assert not grading.plain(cheat)
+        assert not grading.close(cheat, np.zeros(3)) and not grading.equal(cheat, np.zeros(3))
+    assert not grading.close(Anything(1.0), 1.0)
