@@ -76,16 +76,14 @@ def unavailable(*functions: Callable) -> Iterator[None]:
 
 
 def plain(value) -> bool:
-    """Whether an answer holds only numbers as Python and NumPy make them, in lists and tuples: no
-    object of a class of its own, which could equal anything, or call the library when first read
-    (after the test's refusal has ended)."""
+    """Numbers as Python and NumPy make them, in arrays, lists and tuples: no object of the answer's own
+    class (one that equals anything, or calls the library when NumPy reads it, after the refusal)."""
     import numpy as np
 
     if type(value) in (list, tuple):
         return all(map(plain, value))
-    if type(value) is np.ndarray:
-        return value.dtype.kind in "biufc"
-    return type(value) in (bool, int, float, complex) or type(value) in set(np.sctypeDict.values())
+    numbers = (bool, int, float, complex, *np.sctypeDict.values())
+    return type(value) in numbers or type(value) is np.ndarray and value.dtype.kind in "biufc"
 
 
 def close(got, expected, **tolerance) -> bool:
@@ -337,8 +335,7 @@ def isolated_kernel(hidden: list[str], read_only: list[str] = ()) -> list[str]:
         f"mount --bind {q} {q} && mount -o remount,bind,ro {q}"
         for q in map(shlex.quote, filter(os.path.exists, read_only))
     ]
-    # no history on disk (graded cells hold solutions and hidden tests), and the client's own
-    # arguments passed on ("$@"): sh takes the first word after the script as $0, hence "sh"
+    # no history on disk (cells hold solutions, hidden tests); the client's arguments as "$@" ($0: "sh")
     kernel = shlex.join([sys.executable, "-m", "ipykernel_launcher", "--HistoryManager.enabled=False"])
     script = " && ".join([*mounts, f"exec {kernel} -f '{{connection_file}}' \"$@\""])
     return ["unshare", "-rm", "--", "sh", "-c", script, "sh"]

@@ -454,9 +454,7 @@ with grading.unavailable(*grading.library_functions(ransac_module, *_h23_eq13)):
 _h23_y = [camera_module.StereoCamera.backproject(_h23_cam, w)[:, 1] for w in (_h23.w_prev, _h23.w_curr)]
 assert grading.close(_h23_got, _h23_y[1] - _h23_y[0], atol=1e-9), "not y' - y in metres (sign? focal?)"
 _h23_y = [camera_module.StereoCamera.backproject(camera, w)[:, 1] for w in (mixed.w_prev, mixed.w_curr)]
-assert grading.equal(flagged, np.sum(np.abs(_h23_y[1] - _h23_y[0]) > 0.05)), (
-    "flagged does not count the matches of mixed"
-)
+assert grading.equal(flagged, np.sum(np.abs(_h23_y[1] - _h23_y[0]) > 0.05)), "flagged: not the count of mixed"
 ### END HIDDEN TESTS
 
 # %% [markdown]

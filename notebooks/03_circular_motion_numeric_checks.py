@@ -571,12 +571,8 @@ _h31_w = cm_module.theta_standard_deviation(_h31.w_prev, _h31.w_curr, _h31_cam, 
 _h31_th = cm_module.theta_from_pixels(_h31.w_prev, _h31.w_curr, _h31_cam)
 assert grading.close(_h31_got, np.average(_h31_th, weights=_h31_w), rtol=0, atol=1e-10), "not 1/σ²_θ weights"
 for _h31_errors, _h31_spread in ((errors_weighted, spread_weighted), (errors_median, spread_median)):
-    assert grading.plain(_h31_errors) and len(set(np.ravel(_h31_errors))) == 200, (
-        "the errors of 200 different draws"
-    )
-    assert grading.close(_h31_spread, np.sqrt(np.mean(np.square(_h31_errors)))), (
-        "a spread is not the RMS error"
-    )
+    assert grading.plain(_h31_errors) and len(set(np.ravel(_h31_errors))) == 200, "200 draws' errors"
+    assert grading.close(_h31_spread, np.sqrt(np.mean(np.square(_h31_errors)))), "a spread: not the RMS"
 _h31_rng, _h31_ref = np.random.default_rng(3012), []  # the same experiment on other draws
 for _ in range(200):
     _h31 = synthetic_matches(camera, 300, theta_true, rho_true, _h31_rng, noise_px=noise)
@@ -686,9 +682,7 @@ _h33_theta, _h33_z = np.random.default_rng(3031).uniform([-0.07, 1.5], [0.07, 15
 _h33_got = correct_ahead(_h33_theta.copy(), _h33_z.copy(), 0.17)
 assert grading.close(_h33_got, _h33_theta / (1 + 0.17 / _h33_z), rtol=0, atol=1e-6), "not θ / (1 + a/z)"
 _h33_z = camera.depth_from_disparity(ahead.w_prev[usable, 2])  # the median the exercise asks for, not a mean
-assert grading.close(theta_corrected, np.median(th_ahead / (1 + a_ahead / _h33_z)), rtol=0, atol=1e-9), (
-    "median?"
-)
+assert grading.close(theta_corrected, np.median(th_ahead / (1 + a_ahead / _h33_z)), atol=1e-9), "median?"
 ### END HIDDEN TESTS
 
 # %% [markdown]

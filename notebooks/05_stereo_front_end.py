@@ -474,9 +474,7 @@ _h52_got = quadratic_offset(*(c.copy() for c in _h52_costs))
 _h52_a, _h52_b, _h52_c = np.polyfit([-1.0, 0.0, 1.0], np.array(_h52_costs), 2)
 assert grading.close(_h52_got, -_h52_b / (2 * _h52_a)), "not the vertex of other parabolas (which side?)"
 _h52_costs = [np.abs(x - true_minima) for x in (-1.0, 0.0, 1.0)]
-assert grading.close(parabola_worst, np.abs(quadratic_offset(*_h52_costs) - true_minima).max()), (
-    "parabola_worst"
-)
+assert grading.close(parabola_worst, np.abs(quadratic_offset(*_h52_costs) - true_minima).max()), "worst"
 ### END HIDDEN TESTS
 
 # %% [markdown]

@@ -1325,9 +1325,7 @@ _h3_each = 0.05 + np.where(_h3_inliers, _h3_rng.standard_t(2, 300) * 0.003, _h3_
 _h3_grid = np.arange(1, 1001) * 0.01
 _h3_got = best_fixed_threshold(_h3_each.copy(), 0.05, _h3_inliers.copy(), _h3_grid.copy())  # its own copies
 _h3_correct = [np.sum((np.abs(_h3_each - 0.05) < np.radians(t)) == _h3_inliers) for t in _h3_grid]
-assert grading.close(_h3_got, _h3_grid[np.argmax(_h3_correct)]), (
-    "best_fixed_threshold: not the best threshold"
-)
+assert grading.close(_h3_got, _h3_grid[np.argmax(_h3_correct)]), "best_fixed_threshold: not the best"
 ### END HIDDEN TESTS
 
 # %% [markdown]
@@ -1433,9 +1431,7 @@ with grading.unavailable(*grading.library_functions(ransac_module)):
     _h4_theta = one_point_theta(_h4_a, _h4_b, ex_camera, 0.1, 30, np.random.default_rng(6042))[0]
 _h4_drawn = cm.theta_from_pixels(_h4_a, _h4_b, ex_camera)[np.random.default_rng(6042).integers(300, size=30)]
 _h4_counts = [np.sum(ransac_module.theta_gate_error(_h4_a, _h4_b, h, ex_camera) < 0.1) for h in _h4_drawn]
-assert grading.close(_h4_theta, _h4_drawn[np.argmax(_h4_counts)]), (
-    "of hypotheses that tie, keep the first drawn"
-)
+assert grading.close(_h4_theta, _h4_drawn[np.argmax(_h4_counts)]), "ties: keep the first drawn"
 ### END HIDDEN TESTS
 
 # %% [markdown]

@@ -832,9 +832,7 @@ _h2_var = np.array([0.04, 0.01, 0.003])  # the experiments of the cell above, dr
 _h2_drawn = np.random.default_rng(7).multivariate_normal(np.zeros(3), np.diag(_h2_var), (2000, 50))
 _h2_each = (_h2_drawn**2 / _h2_var).sum(axis=2).mean(axis=1)
 _h2_low, _h2_high = scipy.stats.chi2.ppf([0.025, 0.975], 150) / 50
-assert grading.equal(share_inside, np.mean((_h2_each > _h2_low) & (_h2_each < _h2_high))), (
-    "share_inside: not the share"
-)
+assert grading.equal(share_inside, np.mean((_h2_each > _h2_low) & (_h2_each < _h2_high))), "share_inside"
 ### END HIDDEN TESTS
 
 # %% [markdown]

@@ -16,7 +16,7 @@ assert np.all((50 < rights_true) & (rights_true < 60))
 assert 0.7 < metre_on - on_waypoint < 1.3
 assert max(abs(v - right_true) for v in by_wheelbase.values()) < 0.05
 
-# after: paper_bisection = [8.871066, 8.612084, 9.639981, 9.142181, 8.560958, 8.760142]
+# after: table1_bisection = [8.871066, 8.612084, 9.639981, 9.142181, 8.560958, 8.760142]
 assert lap_ratio < 0.5 * paper_ratio  # outside the paper's range, as the text after this cell says
 
 # after: LAP_SEEDS = range(SEED, SEED + 20)

@@ -220,8 +220,7 @@ def read_asl(path, groundtruth=None, frames: int | None = None, truth: bool = Tr
     stated = [mav0 / name for name in GROUND_TRUTH_FILES]
     found = (p for p in stated if p.exists() or p.is_symlink() or p.parent.is_file())
     truth_path = Path(groundtruth) if groundtruth else (next(found, None) if truth else None)
-    if truth_path is None and truth and not groundtruth:
-        _unread_truth(mav0)
+    _unread_truth(mav0, looked=truth_path is None and truth)
     poses = None
     # as evaluate: errors of two poses mean nothing (and a single pair is refused by its reader)
     if truth_path is not None and len(seconds) == 2:
@@ -232,8 +231,11 @@ def read_asl(path, groundtruth=None, frames: int | None = None, truth: bool = Tr
     return Sequence(root, rect.camera, since_first, left, right, poses, None, manifest, rect, truth_path)
 
 
-def _unread_truth(mav0: Path) -> None:
-    """A notice for files in a ground truth's folder that are none of :data:`GROUND_TRUTH_FILES`."""
+def _unread_truth(mav0: Path, looked: bool) -> None:
+    """Where a truth was ``looked`` for and none found: a notice for the files of a ground truth's
+    folder, none of :data:`GROUND_TRUTH_FILES`."""
+    if not looked:
+        return
     for folder in dict.fromkeys(name.split("/")[0] for name in GROUND_TRUTH_FILES):
         if files := sorted(p.name for p in (mav0 / folder).glob("*") if p.name != "sensor.yaml"):
             expected = " or ".join(n.split("/")[1] for n in GROUND_TRUTH_FILES if n.startswith(folder + "/"))
