@@ -58,9 +58,9 @@ def unavailable(*functions: Callable) -> Iterator[None]:
     put = {True: dict.__setitem__, False: setattr}
     for owner, name, _ in swapped:
         put[isinstance(owner, dict)](owner, name, _refused)
-    plain = [getattr(f, "__func__", f) for f in functions]  # a static or class method: its function
+    bare = [getattr(f, "__func__", f) for f in functions]  # a static or class method: its function
     codes = [
-        (f, f.__code__) for f in plain if isinstance(f, types.FunctionType) and not f.__code__.co_freevars
+        (f, f.__code__) for f in bare if isinstance(f, types.FunctionType) and not f.__code__.co_freevars
     ]
     for f, _ in codes:
         f.__code__ = _refused.__code__
@@ -325,7 +325,7 @@ def can_isolate() -> bool:
 def isolated_kernel(hidden: list[str], read_only: list[str] = ()) -> list[str]:
     """A kernel spec's ``argv``: an IPython kernel in its own user and mount namespace (``unshare -rm``),
     with an empty tmpfs over each hidden folder, ``/dev/null`` over each hidden file, each path of
-    ``read_only`` (the grader's own files) bound over itself read-only, and its history in memory."""
+    ``read_only`` (the grader's own files) bound over itself read-only, and no history on disk."""
     mounts = [
         f"mount {'-t tmpfs none' if os.path.isdir(p) else '--bind /dev/null'} {shlex.quote(p)}"
         for p in hidden
