@@ -35,7 +35,7 @@
 #
 # **Prerequisites**: notebooks 02 and 03 (θ and ρ from pixels, and their noise).
 #
-# **Run time**: about 20 seconds.
+# **Run time**: about 10 seconds.
 
 # %% [markdown]
 # **References**

@@ -26,7 +26,7 @@
 #
 # **Prerequisites**: notebooks 04–07.
 #
-# **Run time**: about 50 seconds in quick mode (the default). Set the environment variable
+# **Run time**: about 35 seconds in quick mode (the default). Set the environment variable
 # `VO_NOTEBOOKS_FULL=1` to run the illustrations on the full sequences (several minutes); the
 # comparisons with the paper use the stored full-length results either way.
 #

@@ -32,7 +32,7 @@
 # **Prerequisites**: notebook 07 (a Kalman filter, NEES). Notebook 04 shows the shared world and
 # laser scanner used here.
 #
-# **Run time**: about 80 seconds.
+# **Run time**: about 40 seconds.
 
 # %% [markdown]
 # **References**

@@ -29,7 +29,7 @@
 #
 # **Prerequisites**: notebooks 03, 05, 06 and 08.
 #
-# **Run time**: about 10 seconds.
+# **Run time**: about 5 seconds.
 # The real recording is KITTI raw drive 2011_09_26_drive_0001 in the KITTI odometry layout with
 # its `oxts.txt` and `raw_calib/` (see the README's "Real data"); it is not part of the repository:
 # set `VO_LIB_REALDATA` to the folder that holds it. Without it the notebook says so and runs the

@@ -37,7 +37,7 @@
 #
 # **Prerequisites**: notebooks 07, 08 and 11.
 #
-# **Run time**: about 100 seconds with the real drive, most of it the OpenCV PnP baseline of
+# **Run time**: about 40 seconds with the real drive, most of it the OpenCV PnP baseline of
 # section 5.
 # The real recording is not part of the repository: set `VO_LIB_REALDATA` to the folder that
 # holds `kitti_raw_2011_09_26_drive_0001` (see the README's "Real data"). Without it the notebook
