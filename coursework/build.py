@@ -19,11 +19,11 @@ submissions copied into ``grading/`` or notebooks a student edited in ``student/
 overwritten.
 
 ``--check`` then autogrades, in a temporary copy of the course folder, the solutions (every test
-must pass), the unanswered student edition and the adversarial answers of ``submissions/``
-(every exercise must score zero, while every cell outside the exercises runs without error;
-a correct answer that writes to stderr must score full marks; an answer of kind ``flagged`` must
-be named "to be reviewed" by the integrity report of ``coursework/grading.py``, which reads it
-without running it, and no other answer may be). It prints the integrity report, the score table
+must pass, with every answer also writing to stderr), the unanswered student edition and the
+adversarial answers of ``submissions/`` (every exercise must score zero, while every cell outside
+the exercises runs without error; an answer of kind ``flagged`` must be named "to be reviewed" by
+the integrity report of ``coursework/grading.py``, which reads it without running it, and no
+other answer may be). It prints the integrity report, the score table
 and the seconds each submission took, and fails if one took longer than its notebook's own run
 time (its solutions, graded in the same run) plus 30 s; ``--repeat N`` grades the whole set N
 times over. Two notebooks are graded at a time, and the kernels share one store of rendered sample
@@ -437,7 +437,7 @@ def grade_once(
 #: Notebooks graded side by side (two cores: one kernel each), and the notebooks that take longest
 #: to run (seconds of a solutions run, roughly), started first so that none is left alone at the end.
 GRADERS = 2
-GRADING_WEIGHT = {"08": 100, "10": 60, "09": 45, "07": 15, "12": 15, "04": 13, "06": 12}
+GRADING_WEIGHT = {"08": 100, "09": 45, "10": 35, "07": 15, "12": 15, "04": 13, "06": 12}
 
 
 def grade_notebook(
@@ -462,18 +462,16 @@ def grade_notebook(
         source = nbformat.read(work / "source" / path.stem / name, as_version=4)
         release = nbformat.read(work / "release" / path.stem / name, as_version=4)
         ids = answer_ids(source)
-        subs = [(SOLUTIONS_STUDENT, source, dict.fromkeys(ids, "correct"))]
+        # the solutions, every answer also writing to stderr (a warning where it runs and at each
+        # call of its function, its tests' calls included): they must still score every point
+        solutions = nbformat.from_dict(json.loads(json.dumps(source)))
+        for cell in solutions.cells:
+            if cell.cell_type == "code" and cell.metadata.get("nbgrader", {}).get("grade_id") in ids:
+                cell.source = stderr_answer(cell.source)
+        subs = [(SOLUTIONS_STUDENT, solutions, dict.fromkeys(ids, "correct"))]
         subs.append((UNANSWERED_STUDENT, release, dict.fromkeys(ids, "unanswered")))
         answers = read_submissions(path, ids)
         table: dict[str, dict[str, list]] = {exercise: {} for exercise in ids}
-        # every exercise answered correctly, writing to stderr: one submission of its own, as a
-        # later exercise's correct answer may build on an earlier one's
-        noisy = {
-            cell.metadata["nbgrader"]["grade_id"]: {"correct_stderr": stderr_answer(cell.source)}
-            for cell in source.cells
-            if cell.metadata.get("nbgrader", {}).get("grade_id") in answers and cell.cell_type == "code"
-        }
-        subs += adversarial_notebooks(release, noisy, "stderr")
         kinds_of = {  # flagged answers apart: they are read, not run (below)
             flagged: {
                 exercise: {k: a for k, a in kinds.items() if k.startswith(FLAGGED_KIND) == flagged}

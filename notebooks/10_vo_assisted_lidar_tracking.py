@@ -31,7 +31,7 @@
 #
 # **Prerequisites**: notebooks 04 (world, laser), 05 (stereo front end), 08 (the 1-point pipeline).
 #
-# **Run time**: about 70 seconds (rendering the corridor and 20 seeds of both trackers).
+# **Run time**: about 40 seconds (rendering the corridor and 20 seeds of both trackers).
 
 # %% [markdown]
 # **References**

@@ -1,8 +1,8 @@
 """Every compiled kernel sits beside its NumPy reference and gives the same result on random inputs.
 
 Kernels are kept only where the NumPy version makes the whole frame more than 1.5x slower (the
-stereo and temporal matching on real frames, the renderer's composite; ``bench kernels`` times the
-two). Each property test below draws
+stereo and temporal matching on real frames, the renderer's composite, the laser trackers' reading
+of the likelihood field; ``bench kernels`` times the three). Each property test below draws
 inputs with hypothesis and holds the kernel to its twin: exactly where the result is discrete
 (inlier masks, counts), and to a stated tolerance where the two sum in different orders.
 """
@@ -18,6 +18,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import vo_lib
+from vo_lib.lidar_tracking import likelihood_field
 from vo_lib.sim import composite, composite_plain
 from vo_lib.stereo_vo import matching_core, matching_plain
 
@@ -117,6 +118,20 @@ def test_draw_nearer_equals_its_twin(seed, shade):
     assert np.array_equal(images[0], images[1]) and np.array_equal(depths[0], depths[1])
 
 
+@settings(max_examples=40, deadline=None)
+@given(SEEDS, st.integers(1, 60), st.integers(1, 80))
+def test_field_at_equals_its_twin(seed, n, k):
+    rng = _rng(seed)
+    rows, cols = int(rng.integers(1, 50)), int(rng.integers(1, 50))
+    padded = np.pad(rng.random((rows, cols), dtype=np.float32), 1).ravel()
+    heading = rng.uniform(-np.pi, np.pi, n)
+    grid = (padded, rows, cols, *rng.normal(0, 1, 2), float(rng.choice([0.05, 0.1, 0.3])))
+    poses = (rng.uniform(-1, 4, n), rng.uniform(-1, 4, n), np.cos(heading), np.sin(heading))
+    points = (rng.normal(0, 2, k), rng.normal(0, 2, k))  # some off the grid
+    kernel = likelihood_field.field_at(*grid, *poses, *points)
+    assert np.array_equal(kernel, likelihood_field.field_at_plain(*grid, *poses, *points))
+
+
 #: Kernel -> the property test holding it to its twin.
 PROPERTY_TESTS = {
     "vo_lib.stereo_vo.matching_core.best_matches_core": test_best_matches_equal_their_twin,
@@ -124,6 +139,7 @@ PROPERTY_TESTS = {
     "vo_lib.stereo_vo.matching_core.row_candidates": test_row_candidates_equal_their_twin,
     "vo_lib.stereo_vo.matching_core.sad_costs": test_sad_costs_equal_their_twin,
     "vo_lib.sim.composite.draw_nearer": test_draw_nearer_equals_its_twin,
+    "vo_lib.lidar_tracking.likelihood_field.field_at": test_field_at_equals_its_twin,
 }
 
 

@@ -215,13 +215,17 @@ def bench_pipeline(frames: int = 200) -> dict[str, float]:
     return {"frame": table["total"] / 1e3}
 
 
-#: Each compiled kernel where the pipeline and the renderer look it up, and its NumPy reference.
+#: Each compiled kernel where the pipeline, the renderer and the trackers look it up, and its NumPy reference.
 KERNEL_CALLS = (
     ("vo_lib.stereo_vo.matching_core.best_matches_core", "vo_lib.stereo_vo.matching_plain.best_matches"),
     ("vo_lib.stereo_vo.matching_core.sad_costs", "vo_lib.stereo_vo.matching_plain.sad_costs"),
     ("vo_lib.stereo_vo.matching_core.window_candidates", "vo_lib.stereo_vo.matching_plain.window_candidates"),
     ("vo_lib.stereo_vo.matching_core.row_candidates", "vo_lib.stereo_vo.matching_plain.row_candidates"),
     ("vo_lib.sim.render.draw_nearer", "vo_lib.sim.composite_plain.draw_nearer"),
+    (
+        "vo_lib.lidar_tracking.likelihood_field.field_at",
+        "vo_lib.lidar_tracking.likelihood_field.field_at_plain",
+    ),
 )
 
 
@@ -248,8 +252,9 @@ def bench_kernels(frames: int = 60) -> dict[str, float]:
     """The whole frame with each compiled kernel and with its NumPy reference, in one process: a
     kernel stays only where NumPy makes the whole frame > 1.5x slower. Matching is timed on whole
     frames of the real drives (``$VO_LIB_REALDATA``) and a rendered indoor drive, the renderer's
-    composite on whole rendered pairs."""
+    composite on whole rendered pairs, the likelihood field on both laser trackers' whole drive."""
     from vo_lib.bench.bench_real import decoded_sequence, realdata_folders, run_ours
+    from vo_lib.lidar_tracking import corridor_experiment
     from vo_lib.sim.render import SensorEffects, StereoRenderer
     from vo_lib.sim.samples import render_sample
     from vo_lib.sim.world import WORLDS
@@ -272,6 +277,10 @@ def bench_kernels(frames: int = 60) -> dict[str, float]:
     poses = rendered.vehicle_poses[100:120] @ rendered.mount
     rows["composite: whole rendered pair, indoor_lab"] = _kernel_and_numpy(
         lambda: _render_ms(renderer, poses)
+    )
+    vo, world, field, calibration = corridor_experiment.corridor_setup()
+    rows["likelihood field: both trackers, corridor drive"] = _kernel_and_numpy(
+        lambda: timed_ms(corridor_experiment.track_seed, BENCH_SEED, vo, calibration, world, field)[1]
     )
     print("compiled kernels against their NumPy references (median ms; NumPy / kernel; keep if > 1.5)")
     print(f"  {'case':<46s}{'kernel':>10s}{'NumPy':>10s}{'ratio':>8s}  verdict")

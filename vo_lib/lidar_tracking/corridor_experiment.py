@@ -209,7 +209,7 @@ def seed_figures(lbpt: TrackingRun, voapt: TrackingRun) -> dict[str, float]:
 
 
 @functools.lru_cache(maxsize=1)
-def _shared():
+def corridor_setup():
     """The visual odometer's poses and :func:`_table3`, shared by every seed of a process."""
     vo, _ = corridor_visual_odometry()
     return vo, *_table3(vo)
@@ -217,7 +217,7 @@ def _shared():
 
 def corridor_figures(seed: int) -> dict[str, float]:
     """Table III's row of ``seed`` (a task of ``sweep corridor``): :func:`seed_figures`."""
-    vo, world, field, calibration = _shared()
+    vo, world, field, calibration = corridor_setup()
     return seed_figures(*track_seed(seed, vo, calibration, world, field))
 
 

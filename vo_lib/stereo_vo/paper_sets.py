@@ -118,11 +118,11 @@ def drive(name: str, seed: int, frames: int):
     return rendered, images, relative_planar(rendered.truth()[0], rendered.truth())
 
 
-def contradiction_study() -> dict:
+def contradiction_study(drives=range(CONTRADICTION_DRIVES)) -> dict:
     """The crawler's pipeline as preset and with the vision never believed over the prediction
-    (``max_contradictions = inf``) on the study's drives: per drive, each setting's flagged frames
-    and RMS heading error (degrees)."""
-    seeds = [SAMPLES[CONTRADICTION_SET].seed + k for k in range(CONTRADICTION_DRIVES)]
+    (``max_contradictions = inf``) on the study's drives (``drives``: their numbers, all by
+    default): per drive, each setting's flagged frames and RMS heading error (degrees)."""
+    seeds = [SAMPLES[CONTRADICTION_SET].seed + k for k in drives]
     settings = {"never": NEVER_BELIEVES, "believed": CRAWLER}
     rows = {label: {"flagged": [], "heading_rms_deg": []} for label in settings}
     for seed in seeds:
@@ -156,13 +156,13 @@ FUSION_DRIVES = 10
 FUSION_ESTIMATES = ("fused", "vision", "odometry", "never")
 
 
-def fusion_study() -> dict:
-    """Per set of :data:`FUSION_SETS` and per drive (the sample's seed and the next ones): the final
-    position error (m) and the RMS heading error (degrees) of each of :data:`FUSION_ESTIMATES`,
-    and the frames each pipeline run flagged."""
+def fusion_study(drives=range(FUSION_DRIVES)) -> dict:
+    """Per set of :data:`FUSION_SETS` and per drive (the sample's seed and the next ones; ``drives``:
+    their numbers, all by default): the final position error (m) and the RMS heading error
+    (degrees) of each of :data:`FUSION_ESTIMATES`, and the frames each pipeline run flagged."""
     sets = {}
     for name in FUSION_SETS:
-        seeds = [SAMPLES[name].seed + k for k in range(FUSION_DRIVES)]
+        seeds = [SAMPLES[name].seed + k for k in drives]
         rows = {label: {"final_m": [], "heading_rms_deg": [], "flagged": []} for label in FUSION_ESTIMATES}
         for seed in seeds:
             rendered, images, truth = drive(name, seed, FUSION_FRAMES)
