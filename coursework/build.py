@@ -162,15 +162,25 @@ def leftover_solution_text(source: nbformat.NotebookNode, student: nbformat.Note
     return sorted(solution_lines(source) & released)
 
 
+#: What nbgrader may fail on that says nothing of the notebooks: a kernel's message garbled on its
+#: way (jupyter_client's check of its signature). The command is run once more, saying so.
+TRANSPORT_FAILURES = ("Invalid Signature",)
+
+
 def run_nbgrader(course: pathlib.Path, *args: str) -> None:
     """Run one nbgrader command in the course folder ``course``; raise BuildError if it fails."""
-    proc = subprocess.run(
-        [sys.executable, "-m", "nbgrader", *args],
-        cwd=course,
-        capture_output=True,
-        text=True,
-        env=dict(os.environ, MPLBACKEND="Agg"),
-    )
+    for attempt in (1, 2):
+        proc = subprocess.run(
+            [sys.executable, "-m", "nbgrader", *args],
+            cwd=course,
+            capture_output=True,
+            text=True,
+            env=dict(os.environ, MPLBACKEND="Agg"),
+        )
+        garbled = [f for f in TRANSPORT_FAILURES if f in proc.stderr]
+        if proc.returncode == 0 or not garbled or attempt == 2:
+            break
+        print(f"nbgrader {args[0]}: {garbled[0]} (a kernel's message garbled): run again", file=sys.stderr)
     errors = [line for line in proc.stderr.splitlines() if "| ERROR]" in line or "Error" in line]
     if "Exception while loading config file" in proc.stderr:  # nbgrader goes on without it
         raise BuildError(f"nbgrader {args[0]}: the course's nbgrader_config.py does not load: {errors[-1:]}")

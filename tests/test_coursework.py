@@ -243,6 +243,32 @@ def test_adversarial_answers_fill_the_release_one_kind_per_exercise():
     assert release.cells[0].source == "raise NotImplementedError()", "the release itself is left alone"
 
 
+@pytest.mark.parametrize(
+    ("failures", "calls", "raises"),
+    [
+        (["Invalid Signature: b'f12a'"], 2, False),  # garbled once: run again, and it holds
+        (["Invalid Signature: b'f12a'"] * 2, 2, True),  # garbled twice: the failure stands
+        (["AssertionError: a test failed"], 1, True),  # anything else: never run again
+    ],
+)
+def test_nbgrader_is_run_again_only_when_a_kernel_message_was_garbled(monkeypatch, failures, calls, raises):
+    ran = []
+
+    def fake_run(argv, **kwargs):
+        ran.append(argv)
+        failed = len(ran) <= len(failures)
+        stderr = f"[AutogradeApp | ERROR] {failures[len(ran) - 1]}" if failed else ""
+        return subprocess.CompletedProcess(argv, int(failed), "", stderr)
+
+    monkeypatch.setattr(build.subprocess, "run", fake_run)
+    if raises:
+        with pytest.raises(build.BuildError, match="autograde failed"):
+            build.run_nbgrader(ROOT, "autograde", "03")
+    else:
+        build.run_nbgrader(ROOT, "autograde", "03")
+    assert len(ran) == calls
+
+
 @pytest.mark.notebook
 @pytest.mark.course
 def test_autograder_scores_only_correct_answers_and_a_regrade_gives_identical_marks(built):
