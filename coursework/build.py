@@ -23,11 +23,11 @@ must pass, with every answer also writing to stderr), the unanswered student edi
 adversarial answers of ``submissions/`` (every exercise must score zero, while every cell outside
 the exercises runs without error; an answer of kind ``flagged`` must be named "to be reviewed" by
 the integrity report of ``coursework/grading.py``, which reads it without running it, and no
-other answer may be). It prints the integrity report, the score table
-and the seconds each submission took, and fails if one took longer than its notebook's own run
-time (its solutions, graded in the same run) plus 30 s; ``--repeat N`` grades the whole set N
-times over. Two notebooks are graded at a time, and the kernels share one store of rendered sample
-frames (see :func:`shared_frame_store`).
+other answer may be). It prints the integrity report, the score table and the seconds each
+submission took, and fails if one took longer than 1.5 times its notebook's own run time (its
+solutions, graded in the same run) plus 30 s; ``--repeat N`` grades the whole set N times over.
+Two notebooks are graded at a time, and the kernels share one store of rendered sample frames
+(see :func:`shared_frame_store`).
 """
 
 from __future__ import annotations
