@@ -61,7 +61,7 @@ class LikelihoodField:
         x, y, heading = (np.ascontiguousarray(poses[:, i]) for i in range(3))
         px, py = (np.ascontiguousarray(scan_points[:, i], dtype=float) for i in range(2))
         grid = (self._padded, *self.field.shape, *self.origin, self.resolution)
-        return field_at(*grid, x, y, np.cos(heading), np.sin(heading), px, py).sum(axis=1, dtype=np.float64)
+        return field_at(*grid, x, y, np.cos(heading), np.sin(heading), px, py).sum(axis=1)
 
 
 @jit
