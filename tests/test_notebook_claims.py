@@ -83,11 +83,13 @@ def test_draws_to_first_good_is_one_over_the_good_share():
     assert abs(demo_one_point.draws_to_first_good(np.arange(1000), good, rng) - 4.0) < 0.4
 
 
-def test_side_of_band_names_each_side():
+def test_side_of_band_names_a_side_only_for_a_whole_interval():
     band = (2.0, 4.0)
-    assert nb06.side_of_band(3.0, band) == "inside the band"
-    assert nb06.side_of_band(1.0, band).startswith("below")
-    assert "over-confident" in nb06.side_of_band(9.0, band)
+    assert nb06.side_of_band(3.0, 2.5, 3.5, band) == "inside the band"
+    assert nb06.side_of_band(1.0, 0.5, 1.5, band).startswith("below")
+    assert "over-confident" in nb06.side_of_band(9.0, 8.0, 10.0, band)
+    for low, high in ((3.0, 5.0), (1.0, 3.0), (1.0, 5.0)):  # the interval overlaps the band
+        assert nb06.side_of_band(3.5, low, high, band).startswith("at the band's edge")
 
 
 def test_notebook_06_constants_are_the_library_defaults():

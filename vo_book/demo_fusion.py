@@ -5,7 +5,7 @@ the fused filter and the slip-calibrated filter; the figures the notebook compar
 and the interactive ``fuse`` widget. The filters themselves are :mod:`vo_lib.stereo_vo.kalman`.
 
 The seed study of section 4 (five conditions and the sideways study, :data:`STUDY_SEEDS` seeds
-each: about 276,000 frames, four to five minutes) is run once and stored beside this module
+each: about 276,000 frames, about eight minutes on two cores) is run once and stored beside this module
 (``demo_fusion.json``, package data). :func:`seed_figures` reads it when it holds the seeds asked
 for and was made from the present samples, and runs the study otherwise. ``python -m vo_book.demo_fusion``
 stores it again; ``pytest -m samples`` runs it again and must find the same figures.

@@ -119,8 +119,13 @@ def print_nees(
         print(f" {name:26s}{mean:9.2f} ({low:.2f}–{high:.2f}){'':8s}{band[0]:.2f}–{band[1]:.2f}{miss:18.0%}")
 
 
-def side_of_band(value: float, band: tuple[float, float]) -> str:
-    """Where a mean z² lies against the χ² band ``(low, high)``, in words."""
-    if value > band[1]:
-        return f"above the band, over-confident by a factor of about {value:.1f} in variance"
-    return "inside the band" if value >= band[0] else "below the band, under-confident"
+def side_of_band(mean: float, low: float, high: float, band: tuple[float, float]) -> str:
+    """Where a mean z² and its seed interval ``low``-``high`` lie against the χ² band, in words: a
+    side only when the whole interval is beyond the band."""
+    if low > band[1]:
+        return f"above the band, over-confident by a factor of about {mean:.1f} in variance"
+    if high < band[0]:
+        return "below the band, under-confident"
+    if band[0] <= low and high <= band[1]:
+        return "inside the band"
+    return "at the band's edge (its interval overlaps the band)"
