@@ -280,6 +280,30 @@ def raw_drive(tmp_path: Path) -> Path:
 
 
 @needs_kitti_raw
+def test_hover_reads_no_odometry_and_says_so(tmp_path, capsys):
+    """``--motion hover`` models a body without odometry: a car's OXTS is not fused, the run says so
+    in one notice, and its marker records a run without odometry (the default run records one with)."""
+    import json
+
+    from vo_lib.cli.main import main
+    from vo_lib.data import load_sequence
+
+    seq = load_sequence(KITTI_RAW)
+    assert vehicle_of(seq).odometry is not None and vehicle_of(seq, motion="hover").odometry is None
+    for motion, fused in (("hover", False), ("auto", True)):
+        out = tmp_path / motion
+        assert (
+            main(
+                ["run", "--sequence", str(KITTI_RAW), "--frames", "5", "--motion", motion, "--out", str(out)]
+            )
+            == 0
+        )
+        said = [line for line in capsys.readouterr().err.splitlines() if "odometry is not read" in line]
+        assert len(said) == (0 if fused else 1)
+        assert json.loads((out / ".vo_lib_output.json").read_text())["odometry"] is fused
+
+
+@needs_kitti_raw
 def test_a_drive_of_kittis_raw_set_runs_as_stored(tmp_path, capsys):
     """A raw drive reads as its KITTI-layout copy: the same rig, the camera's poses from the OXTS
     packets as KITTI's kit computes them (the copy's poses.txt), the same mount and odometry; its
@@ -556,6 +580,7 @@ CSV_ROW_DAMAGE = set("latin-1 superscript overflow negative decimal outside abso
             "cam1/sensor.yaml: key distortion_model: none, but key distortion_coefficients is not",
         ),
         ("swapped", "mav0: the T_BS of cam0 and cam1 put cam1 -0.11 m to the right of cam0 and +0.000399 m"),
+        ("turned", "cam1/sensor.yaml: key T_BS turns cam1 178° from cam0; expected two cameras that look"),
         (
             "diagonal",
             "cam1/sensor.yaml: key T_BS puts cam1 +0.080 m to the right of cam0, +0.080 m below and +0.000 m "
@@ -743,6 +768,14 @@ def test_a_bad_rig_gets_one_line_and_exit_2(tmp_path, capsys, damage, expected):
         (mav0 / "left").rename(mav0 / "cam1")
     elif damage == "camera":
         shutil.rmtree(mav0 / "cam1")
+    elif damage == "turned":  # cam1's rotation inverted (transposed), its position kept
+        from vo_lib.formats.asl_calibration import read_camera_yaml
+
+        path = mav0 / "cam1" / "sensor.yaml"
+        T1 = read_camera_yaml(path).T_BS
+        T1[:3, :3] = T1[:3, :3].T.copy()
+        numbers = ", ".join(repr(float(v)) for v in T1.ravel())
+        path.write_text(re.sub(r"data: \[[^\]]*\]", f"data: [{numbers}]", path.read_text(), count=1))
     elif damage == "diagonal":  # cam1 as far below cam0 as to its right
         from vo_lib.formats.asl_calibration import read_camera_yaml
 

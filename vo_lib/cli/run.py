@@ -284,8 +284,17 @@ def _say_if_turns_differ(seq, n: int, poses) -> None:
     notice(
         f"{truth}: the estimate's rotations from frame to frame differ from the truth's by "
         f"{found[0]:.2g} deg (RMS), where the truth turns {found[1]:.2g} deg: is it the truth of "
-        f"these images{order}?"
+        f"these images{order}, and is each camera's calibration that of these images (a rotation "
+        "between the cameras that is not the rig's turns every estimate)?"
     )
+
+
+def _say_if_odometry_unread(seq, motion: str, no_odometry: bool) -> None:
+    """A notice where ``--motion hover`` leaves a sequence's odometry unread (a body without it)."""
+    from vo_lib.stereo_vo.vehicle import vehicle_of
+
+    if motion == "hover" and not no_odometry and vehicle_of(seq, motion="auto").odometry is not None:
+        notice(f"{seq.path}: its odometry is not read: --motion hover models a body without odometry")
 
 
 def _warm_up_saying_so(seq, **options) -> None:
@@ -335,6 +344,7 @@ def _run_into(
     mount = vehicle.mount
     why = f"--motion {motion}" if motion != "auto" else _AUTO_BECAUSE[str(vehicle.kind)]
     print(f"motion model: {vehicle.motion if motion == 'auto' else motion} ({why})", flush=True)
+    _say_if_odometry_unread(seq, motion, no_odometry)
     options = {"use_odometry": not no_odometry, "seed": seed, "motion": motion, "vehicle": vehicle}
     _warm_up_saying_so(seq, **options)
     print(f"visual odometry on {n} frames ...", flush=True)
@@ -369,7 +379,7 @@ def _run_into(
             planar=vehicle.kind is not VehicleKind.DRONE,
             fused=vehicle.odometry is not None,
         )
-    fused = seq.odometry is not None and not no_odometry
+    fused = vehicle.odometry is not None
     output.commit(
         sequence=str(seq.path.resolve()), frames=n, seed=seed, odometry=fused, truth=_truth_record(seq)
     )

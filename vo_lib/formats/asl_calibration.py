@@ -33,6 +33,8 @@ from vo_lib.formats.poses import rigid_problem
 #: Largest angle between the baseline and cam0's image rows: rectifying a steeper rig turns the
 #: images so far that little of them is left.
 MAX_BASELINE_TILT_DEG = 20.0
+#: Largest angle between the two cameras' axes: a stereo rig's cameras look the same way.
+MAX_CAMERA_TURN_DEG = 30.0
 #: Least share of a raw image in view once rectified: a calibration of other images, or a principal
 #: point by a corner, leaves a sliver.
 MIN_VALID_SHARE = 0.25
@@ -285,7 +287,7 @@ def _check_rectified(rect: Rectification, cam1_in_cam0: np.ndarray, where: Path)
 
 def _check_baseline(T_right_left: np.ndarray, sensor: Path) -> np.ndarray:
     """cam1's position in cam0's frame (x right, y down, z ahead), checked: in metres, apart from
-    cam0 and beside it along the image rows."""
+    cam0, looking the same way and beside it along the image rows."""
     baseline = float(np.linalg.norm(T_right_left[:3, 3]))
     if baseline < MIN_BASELINE_M:
         raise AslError(
@@ -293,6 +295,7 @@ def _check_baseline(T_right_left: np.ndarray, sensor: Path) -> np.ndarray:
             "expected two cameras apart"
         )
     check_metres(sensor, "key T_BS puts cam1 {} m from cam0", baseline)
+    _check_turn(T_right_left, sensor)
     cam1_in_cam0 = np.linalg.inv(T_right_left)[:3, 3]
     x, y, z = np.round(cam1_in_cam0, 3) + 0.0
     if np.degrees(np.arctan2(np.hypot(y, z), abs(x))) > MAX_BASELINE_TILT_DEG:
@@ -302,6 +305,16 @@ def _check_baseline(T_right_left: np.ndarray, sensor: Path) -> np.ndarray:
             f"(within {MAX_BASELINE_TILT_DEG:g}°)"
         )
     return cam1_in_cam0
+
+
+def _check_turn(T_right_left: np.ndarray, sensor: Path) -> None:
+    """One line when the two cameras do not look the same way (within :data:`MAX_CAMERA_TURN_DEG`)."""
+    turn = float(np.degrees(Rotation.from_matrix(T_right_left[:3, :3]).magnitude()))
+    if turn > MAX_CAMERA_TURN_DEG:
+        raise AslError(
+            f"{sensor}: key T_BS turns cam1 {turn:.0f}° from cam0; expected two cameras that look the "
+            f"same way (within {MAX_CAMERA_TURN_DEG:g}°; is its rotation inverted?)"
+        )
 
 
 def truth_extrinsic(truth_path: Path) -> np.ndarray:

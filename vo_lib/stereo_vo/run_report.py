@@ -43,7 +43,9 @@ def print_timing_table(result: PipelineResult, camera, frames: int, decoding_ms=
     rows = timing_rows(result)
     whole = sum(values for _, _, values in rows)
     paper = PAPER_TABLE1.get((camera.width, camera.height), {})
-    print(f"\nTime per frame at {camera.width}x{camera.height} over {frames} frames, in ms")
+    timed = len(rows[0][2])  # the frames the figures are of
+    first = f" (the first of the {frames} only detects: left out)" if timed < frames else ""
+    print(f"\nTime per frame at {camera.width}x{camera.height} over {timed} frames{first}, in ms")
     title = f"   paper's mean (Table 1, {camera.width}x{camera.height})" if paper else ""
     print(f"  {'stage':<46s}{'median':>8s}{'mean':>9s}{title}")
     rows += [("whole", "whole frame", whole)]

@@ -108,7 +108,8 @@ def vehicle_of(sequence, use_odometry: bool = True, motion: str = "auto") -> Veh
     """The vehicle of a :class:`~vo_lib.formats.sequence.Sequence`, from its manifest and files.
 
     ``use_odometry=False`` reads no odometry. With ``motion="hover"`` a sequence that names no free
-    body turns about its camera (a hand-held rig, or a drone whose body is not known).
+    body turns about its camera (a hand-held rig, or a drone whose body is not known), and no
+    odometry is read: the model is of a body without it.
     """
     camera = sequence.manifest.get("camera", {}) if isinstance(sequence.manifest, dict) else {}
     if "T_body_camera" in sequence.manifest:
@@ -119,7 +120,8 @@ def vehicle_of(sequence, use_odometry: bool = True, motion: str = "auto") -> Veh
     else:
         vehicle = _car(sequence, use_odometry)
     if motion == Motion.HOVER:
-        return replace(vehicle, kind=VehicleKind.DRONE, mount=drone_mount(np.eye(4)), motion=Motion.HOVER)
+        free = {"kind": VehicleKind.DRONE, "mount": drone_mount(np.eye(4)), "motion": Motion.HOVER}
+        return replace(vehicle, odometry=None, odometry_source="none", **free)
     return vehicle
 
 
