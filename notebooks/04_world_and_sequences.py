@@ -95,8 +95,9 @@ for world in worlds.values():
 # %% [markdown]
 # ## 2 · The rig and a stereo pair
 #
-# The camera is like the paper's Bumblebee2: 640×480, 66° horizontal field of view, a 12 cm
-# baseline. It is mounted 0.5 m up, looking forward, above the turning axis. The renderer maps
+# The camera is like the paper's Bumblebee2: 640×480, as the paper gives it; a 66° horizontal field
+# of view and a 12 cm baseline, which the paper does not give, are our choice, those of a common
+# Bumblebee2 model. It is mounted 0.5 m up, looking forward, above the turning axis. The renderer maps
 # each textured plane into the image with one homography and keeps the nearest surface per pixel
 # in an inverse-depth buffer, which doubles as ground truth.
 
@@ -127,7 +128,8 @@ print(
 #
 # ## 3 · The laser scanner sees the same world
 #
-# The scanner (270°, 1/3° steps, 10 m, like the SICK TIM551 of [Yuan]) casts 811 rays against
+# The scanner (270°, 1/3° steps, 10 m: the field and range of the SICK TIM551 that [Yuan] names,
+# at a finer step than the TIM551's 1°, which notebook 10 uses) casts 811 rays against
 # the same segments. Straight ahead, the beam leaves from the point below the camera; at the
 # image row of the camera's own height, the rendered depth of that column is the same distance.
 

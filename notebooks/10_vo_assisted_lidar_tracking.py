@@ -101,7 +101,8 @@ np.set_printoptions(precision=4, suppress=True)
 # The shared corridor world: 30 m long, 3 m wide; the first pillar (x = 3.5) and the fire hydrant
 # (x = 5) near the start, the second pillar at x = 15, two cross walls at x = 22 and 24.5, and an
 # open umbrella (dashed: it is not in the map) standing in front of the second pillar. The laser
-# is a SICK TIM551 like the paper's: 270°, one beam per degree (271 beams), 10 m.
+# is a SICK TIM551, the scanner the paper names, modelled as that scanner scans: 270°, one beam per
+# degree (271 beams), 10 m.
 
 # %%
 world = corridor()

@@ -549,9 +549,9 @@ assert angle_cv < 0.05 and shift_cv < 0.005
 # %% [markdown]
 # ## Summary
 #
-# - Real frames leave many of their cells without a corner (section 1 prints the share beside the
-#   rendered frames') and large flat regions; a front end with a fixed threshold or a fixed grid
-#   either starves or crowds. The pyramid front
+# - Real frames leave some of their cells without a corner and have flat regions (section 1 prints
+#   both beside the rendered frames' and says where they differ); a front end with a fixed
+#   threshold or a fixed grid either starves or crowds. The pyramid front
 #   end adapts its threshold and finds corners at each level of a small pyramid (section 2 prints
 #   how many); section 2 also sets its sub-pixel disparities on the Motorcycle pair beside OpenCV's
 #   semi-global matcher at the same pixels, a description of that one pair that ranks neither.

@@ -193,7 +193,7 @@ if REAL:
             "circular heading": abs(mo[2]),
         }
 
-    readings = over_seeds(_readings, RANSAC_SEEDS)
+    readings = over_seeds(_readings, RANSAC_SEEDS, 3)  # the three sentences below: one family
     compared = [
         ("circular through the mount", "circular on the axis"),
         ("6-DoF heading", "circular heading"),
@@ -430,8 +430,8 @@ display(Markdown(across_story))
 # error measured on this drive: were it far above the odometry's actual error, the filter would
 # take the heading from vision almost alone.
 # The distance it takes from both, so on the real drive the fused distance moves from the vision's
-# towards the odometry's, past the truth to the odometry's side (the tests check the side): fusion
-# is only as sound as each sensor's error model.
+# towards the odometry's, on the odometry's side of the truth and further from it than the
+# vision's own (the tests check both): fusion is only as sound as each sensor's error model.
 #
 # **A check without the truth: NIS.** Notebook 07's normalised innovation squared needs only the
 # filter's own numbers. Per frame, the innovation of the yaw is the vision's yaw increment minus

@@ -12,7 +12,7 @@ if REAL:
 else:
     assert final_errors(runs["planar"].poses)[1] <= 1.0  # where its assumptions hold, the paper's model works
 
-# after: readings = over_seeds(_readings, RANSAC_SEEDS)
+# after: readings = over_seeds(_readings, RANSAC_SEEDS, 3)
 from vo_lib.comparison import Verdict
 
 if REAL:  # the offset costs position; pitch, slope and bank cost heading. Over the seeds where

@@ -31,7 +31,8 @@ class LaserScan:
 
 @dataclass(frozen=True)
 class LaserScanner:
-    """A planar scanner like the SICK TIM551 of [Yuan] (270 degrees, 1/3 degree, 10 m)."""
+    """A planar scanner: by default 270 degrees in 1/3 degree steps, 10 m (the SICK TIM551 of [Yuan]
+    steps 1 degree: ``corridor_experiment.TIM551``)."""
 
     fov: float = np.radians(270.0)  #: field of view, radians, centred on the sensor's x axis
     angular_step: float = np.radians(1.0 / 3.0)  #: between beams, radians
