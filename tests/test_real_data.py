@@ -292,12 +292,8 @@ def test_hover_reads_no_odometry_and_says_so(tmp_path, capsys):
     assert vehicle_of(seq).odometry is not None and vehicle_of(seq, motion="hover").odometry is None
     for motion, fused in (("hover", False), ("auto", True)):
         out = tmp_path / motion
-        assert (
-            main(
-                ["run", "--sequence", str(KITTI_RAW), "--frames", "5", "--motion", motion, "--out", str(out)]
-            )
-            == 0
-        )
+        args = ["run", "--sequence", str(KITTI_RAW), "--frames", "5", "--motion", motion, "--out", str(out)]
+        assert main(args) == 0
         said = [line for line in capsys.readouterr().err.splitlines() if "odometry is not read" in line]
         assert len(said) == (0 if fused else 1)
         assert json.loads((out / ".vo_lib_output.json").read_text())["odometry"] is fused

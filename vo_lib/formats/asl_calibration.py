@@ -223,9 +223,9 @@ def read_camera_yaml(path) -> CameraCalibration:
 
 
 def rectify(left: CameraCalibration, right: CameraCalibration, where: Path) -> Rectification:
-    """:func:`~vo_lib.camera.rectify_stereo` of a pair, checked: one image size, a baseline in
-    metres, cam1 to the right of cam0, most of each image in view once rectified, and the rectified
-    principal point inside the images."""
+    """:func:`~vo_lib.camera.rectify_stereo` of a pair, checked: one image size, two cameras that
+    look the same way, a baseline in metres, cam1 to the right of cam0, most of each image in view
+    once rectified, and the rectified principal point inside the images."""
     if left.resolution != right.resolution:
         raise AslError(
             f"{where}: cam0 is {left.resolution[0]}x{left.resolution[1]} but cam1 is "
@@ -238,6 +238,7 @@ def rectify(left: CameraCalibration, right: CameraCalibration, where: Path) -> R
             f"{other}'s is not; expected one model for both cameras"
         )
     T_right_left = np.linalg.inv(right.T_BS) @ left.T_BS  # left camera -> right camera
+    _check_turn(T_right_left, where / "cam1" / "sensor.yaml")
     cam1_in_cam0 = _check_baseline(T_right_left, where / "cam1" / "sensor.yaml")
     lenses = (left.K, left.distortion), (right.K, right.distortion)
     rect = rectify_stereo(*lenses, left.resolution, T_right_left, left.T_BS, fisheye=left.fisheye)
@@ -287,7 +288,7 @@ def _check_rectified(rect: Rectification, cam1_in_cam0: np.ndarray, where: Path)
 
 def _check_baseline(T_right_left: np.ndarray, sensor: Path) -> np.ndarray:
     """cam1's position in cam0's frame (x right, y down, z ahead), checked: in metres, apart from
-    cam0, looking the same way and beside it along the image rows."""
+    cam0 and beside it along the image rows."""
     baseline = float(np.linalg.norm(T_right_left[:3, 3]))
     if baseline < MIN_BASELINE_M:
         raise AslError(
@@ -295,7 +296,6 @@ def _check_baseline(T_right_left: np.ndarray, sensor: Path) -> np.ndarray:
             "expected two cameras apart"
         )
     check_metres(sensor, "key T_BS puts cam1 {} m from cam0", baseline)
-    _check_turn(T_right_left, sensor)
     cam1_in_cam0 = np.linalg.inv(T_right_left)[:3, 3]
     x, y, z = np.round(cam1_in_cam0, 3) + 0.0
     if np.degrees(np.arctan2(np.hypot(y, z), abs(x))) > MAX_BASELINE_TILT_DEG:

@@ -120,8 +120,14 @@ def vehicle_of(sequence, use_odometry: bool = True, motion: str = "auto") -> Veh
     else:
         vehicle = _car(sequence, use_odometry)
     if motion == Motion.HOVER:
-        free = {"kind": VehicleKind.DRONE, "mount": drone_mount(np.eye(4)), "motion": Motion.HOVER}
-        return replace(vehicle, odometry=None, odometry_source="none", **free)
+        return replace(
+            vehicle,
+            kind=VehicleKind.DRONE,
+            mount=drone_mount(np.eye(4)),
+            odometry=None,
+            odometry_source="none",
+            motion=Motion.HOVER,
+        )
     return vehicle
 
 
