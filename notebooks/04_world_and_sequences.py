@@ -95,9 +95,9 @@ for world in worlds.values():
 # %% [markdown]
 # ## 2 · The rig and a stereo pair
 #
-# The camera is like the paper's Bumblebee2: 640×480, as the paper gives it; a 66° horizontal field
-# of view and a 12 cm baseline, which the paper does not give, are our choice, those of a common
-# Bumblebee2 model. It is mounted 0.5 m up, looking forward, above the turning axis. The renderer maps
+# The camera is like the paper's Bumblebee2: 640×480, the largest of the resolutions the paper
+# times (Table 1; it states no native resolution); a 66° horizontal field of view and a 12 cm
+# baseline, which the paper does not give, are our choice, those of a common Bumblebee2 model. It is mounted 0.5 m up, looking forward, above the turning axis. The renderer maps
 # each textured plane into the image with one homography and keeps the nearest surface per pixel
 # in an inverse-depth buffer, which doubles as ground truth.
 
@@ -160,6 +160,11 @@ plot_scan(worlds["indoor_lab"], pose, world_pts)
 # section 5 prints what it does to the odometry). The crawler also skids sideways in its
 # turns and, on the yard's rough ground, briefly loses track contact while its body pitches and
 # rolls (`vo_lib.sim.trajectories.TrackGround`); the encoders see none of that.
+#
+# The paper gives neither the rate at which its camera recorded nor the speeds and turn rates of
+# its runs (its thirty frames per second is how fast it processed them). The rate, speeds and turn
+# rates of every drive below are our choices, so where notebook 08 runs the paper's numbers of
+# frames, the distances and turns they cover are ours too.
 
 # %%
 odometry = TrackOdometry()

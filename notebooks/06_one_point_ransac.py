@@ -573,7 +573,8 @@ print(
 # fixed, back-project every match (eq. 13), P = B/d·(u − u₀, (v − v₀)f_x/f_y, f_x), and each θ
 # inlier gives its own chord ρ_j = [−sin φ, 0, cos φ]·P − [sin φ, 0, cos φ]·P′. Its gate is eq. 21,
 # ‖P′ − (RP + T)‖², against k² times the residual's variance: to first order a back-projected
-# point has variance σ²(B/d)²(‖ray‖²/d² + 2) in each view, ‖ray‖ = ‖(u − u₀, (v − v₀)f_x/f_y, f_x)‖.
+# point has variance σ²(B/d)²(‖ray‖²/d² + 1 + (f_x/f_y)²) in each view (the terms of d, u and v),
+# ‖ray‖ = ‖(u − u₀, (v − v₀)f_x/f_y, f_x)‖.
 # The same adaptive search picks ρ, and the weighted mean re-estimates it.
 
 
@@ -585,8 +586,9 @@ def rho_per_match(wa, wb, theta):
     rho = (-sp * P[:, 0] + cp * P[:, 2]) - (sp * Q[:, 0] + cp * Q[:, 2])
     ray2_a = np.sum(((wa - [u0, v0, 0]) * [1, fx / fy, 0] + [0, 0, fx]) ** 2, axis=1) / wa[:, 2] ** 2
     ray2_b = np.sum(((wb - [u0, v0, 0]) * [1, fx / fy, 0] + [0, 0, fx]) ** 2, axis=1) / wb[:, 2] ** 2
+    across = 1 + (fx / fy) ** 2  # the u and v terms: 2 for square pixels
     var = PIXEL_SIGMA**2 * (
-        (baseline / wa[:, 2]) ** 2 * (ray2_a + 2) + (baseline / wb[:, 2]) ** 2 * (ray2_b + 2)
+        (baseline / wa[:, 2]) ** 2 * (ray2_a + across) + (baseline / wb[:, 2]) ** 2 * (ray2_b + across)
     )
     return P, Q, rho, var
 
@@ -718,13 +720,14 @@ def theta_phase(w_prev, w_curr, draws, pool_fraction, adaptive):
 
 # %% [markdown]
 # **The paper's estimator, as printed.** [Zhao] (§III.A.3) gates each match against a θ hypothesis
-# with eq. 20 below a fixed threshold `th_yaw_angle`, then each θ inlier against a ρ hypothesis
-# with eq. 21 below a fixed threshold `th_polar_radius` (metres), inside the filter's prediction
-# step, and prints neither threshold's value nor a re-estimation or refinement: the winning
-# hypotheses are the motion. We write it as printed. The paper prints no count of hypotheses
-# either; ours is N_h = 10 per phase, enough for half the matches inliers at 99.9 % confidence.
-# We give it the best thresholds of a grid, chosen on 20 tuning sets drawn apart from the sets it
-# is judged on (a robot gets no such choice).
+# with eq. 20 below a fixed threshold `th_yaw_angle`, then against a ρ hypothesis with eq. 21 below
+# a fixed threshold `th_polar_radius` (metres; one transcription names the error of eq. 20 in that
+# sentence, the other eq. 21's), as a step of its own between the filter's prediction and its
+# update. That only the θ inliers meet the ρ test is our reading. It prints neither threshold's
+# value nor a re-estimation or refinement: the winning hypotheses are the motion. We write it as
+# printed. The paper prints no count of hypotheses either; ours is N_h = 10 per phase, enough for
+# half the matches inliers at 99.9 % confidence. We give it the best thresholds of a grid, chosen on
+# 20 tuning sets drawn apart from the sets it is judged on (a robot gets no such choice).
 
 
 # %%
@@ -834,7 +837,7 @@ display(
 # %% [markdown]
 # The gates above assume 0.5 px of pixel noise, and the synthetic matches carry exactly that: the
 # ladder tells the estimators the truth about the noise (the paper's thresholds were picked on sets
-# of that noise too, section 4). The same seeds with the matches' noise doubled, the gates'
+# of that noise too, section 7). The same seeds with the matches' noise doubled, the gates'
 # assumption left as it is:
 
 # %%
@@ -1159,8 +1162,10 @@ trial_widget = offer(
 # - One match gives a full hypothesis; 8 hypotheses reach 99.9 % confidence at 60 % inliers,
 #   where 3-point RANSAC needs 29 and 5-point 86 — if every inlier gave a good hypothesis. Near
 #   the principal row it does not, so the effective inlier ratio is lower (section 5).
-# - Fig. 5's angles are the ray's depression (α) and its angle to the chord (γ); then eq. 18–20
-#   hold exactly. Each match's gate gets its own threshold from first-order noise propagation.
+# - Fig. 5 is missing from the paper; reading its angles as the ray's depression (α) and its
+#   angle to the chord (γ), and its d as the horizontal range (not the disparity of eq. 13; the
+#   errata call eq. 18 ambiguous), eq. 18–20 hold exactly. That reading is ours. Each match's
+#   gate gets its own threshold from first-order noise propagation.
 # - The paper's estimator uses two fixed thresholds, `th_yaw_angle` and `th_polar_radius`, and no
 #   refinement. Section 7 runs it, and each piece we add, over 200 seeds, the same for each;
 #   the sentences there say which pieces reliably help, with their share of seeds and interval.

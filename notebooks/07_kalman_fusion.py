@@ -157,8 +157,9 @@ assert abs(P_hat - steady) < 1e-6 * steady
 #   pseudo-measurement, variance σ²_side). Then S = HPHᵀ + R, K = PHᵀS⁻¹, x = x⁻ + K(z − h(x⁻))
 #   with the θ residual wrapped to (−π, π], and the Joseph form for P.
 #
-# The paper describes its filter in words (§III.A.2: the odometry predicts, the VO motion
-# corrects, the prediction guides matching). The cloned state and the sideways
+# The paper describes its filter in words: the odometry update predicts the pose (§II, eq. 6),
+# and matching happens "in the observation prediction period" of the filter (§III.A.2). That the
+# VO motion is the measurement which corrects it is our reading. The cloned state and the sideways
 # pseudo-measurement are **this notebook's design**, one way to make a relative measurement
 # update an absolute pose; the paper does not say how it does it.
 
@@ -297,9 +298,9 @@ assert worst_x <= 1e-12 and worst_P <= 1e-12
 #
 # The same step through the library's filter, built on filterpy. For each frame it (1) copies the
 # pose, (2) moves the copy with the track odometry of eq. 6–11 — using the full Jacobians of
-# notebook 01, with encoder noise plus 1 % slip per metre as process noise — and (3) corrects it
-# with the VO measurement (θ, ρ) of the motion between the two copies. The 6×6 covariance keeps
-# the two copies tied.
+# notebook 01, with encoder noise plus a slip whose standard deviation is 1 % of each step's length
+# as process noise — and (3) corrects it with the VO measurement (θ, ρ) of the motion between the
+# two copies. The 6×6 covariance keeps the two copies tied.
 
 # %%
 kf = VoKalmanFilter(odometry)

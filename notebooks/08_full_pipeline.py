@@ -17,7 +17,8 @@
 # (Table 1), linear motion, free motion, spot turns with slip, outdoor free motion (Table 2) — on a
 # crawler whose tracks slip and skid and, outdoors, lose contact on rough ground, and put the
 # paper's figures beside ours: at the paper's lengths, from results stored with the code that made
-# them.
+# them. The lengths are the paper's numbers of frames; the paper gives no capture rate, speed or
+# turn rate, so the distances and turns those frames cover are ours (notebook 04, section 4).
 #
 # **You will learn**
 # - what the pipeline does per frame, and what it does with a frame it cannot trust;
@@ -157,7 +158,7 @@ plt.show()
 # The paper times its sub-procedures on 640×480 down to 256×192 images. We render the same drive
 # at each resolution (same field of view) and time ours. Our "stereo processing" starts from
 # rendered, rectified grey images; the paper's includes grabbing, colour conversion, smoothing,
-# rectification and edge detection on its robot's computer.
+# rectification, feature extraction and matching on its robot's computer.
 
 # %%
 n_table = frames_for("indoor_linear", 40, FULL)
@@ -189,11 +190,11 @@ print(
 )
 
 # %% [markdown]
-# The paper's Fig. 6 shows fewer stereo features at lower resolutions, and so do ours. Our front
-# end keeps the strongest few corners per cell of a grid and caps their number. The lab's
-# painted walls, tiled floor and plain ceiling leave many cells without a corner, so the cap is
-# not reached and each smaller image loses the corners that fall below FAST's threshold as they
-# shrink.
+# The paper plots the average number of stereo features at each resolution (its Fig. 6, whose
+# values the text does not give); ours fall as the resolution falls. Our front end keeps the
+# strongest few corners per cell of a grid and caps their number. The lab's painted walls, tiled
+# floor and plain ceiling leave many cells without a corner, so the cap is not reached and each
+# smaller image loses the corners that fall below FAST's threshold as they shrink.
 #
 # The ratios of the paper's times to ours are printed above (different work, different computer,
 # and our images need no rectification); our Kalman column, with a 6-dimensional state for the

@@ -605,9 +605,10 @@ plot_line_triple((a_, b_), f"wall {i_ex + 1}", ends_world, pose_ex, foot_robot, 
 #
 # ## 7. The paper's simulation (section 3)
 #
-# The paper prints: $V$ = 3 m/s (σ 0.3 m/s), steering ≤ 30° (σ 3°), a largest "wheel turning
+# The paper prints: $V$ = 3 m/s (error 0.3 m/s), steering ≤ 30° (error 3°), a largest "wheel turning
 # rate" of π/9 rad/s (车轮最大转速, which we read as the rate at which the steering turns), control period
-# 0.025 s, laser range 30 m (σ 0.1 m, 1°), the four walls, the waypoints. Not printed, our
+# 0.025 s, laser range 30 m (errors 0.1 m, 1°), the four walls, the waypoints; we read its "errors"
+# (误差) as standard deviations. Not printed, our
 # choices: wheelbase 4 m (the widely used EKF-SLAM simulator whose other settings the paper
 # repeats uses 4 m), an observation every 8 control periods, a waypoint reached within 1 m, the
 # start heading towards the first waypoint. The true car follows the commanded speed and

@@ -139,11 +139,13 @@ print(f"flat along the corridor from x = {flat_here.min():.1f} to {flat_here.max
 #
 # `vo_lib.lidar_tracking.pnp_odometry` follows section II: ORB landmarks (Hamming distance, eq. 1),
 # brute-force matching at the start and after a loss, motion-model matching afterwards (the velocity of
-# eq. 2–3 predicts the pose; landmarks are projected with it and matched within 15 px,
-# eq. 4–5), `solvePnPRansac`, and a local map of up to five key frames, culled by the share of
+# eq. 2–3 predicts the pose; landmarks are projected with it and matched within a search radius,
+# eq. 4–5), `solvePnPRansac`, and a local map of key frames, culled by the share of
 # their landmarks still properly observed (eq. 6–7). Eq. 7 as printed takes the angle between a
 # world-frame and a camera-frame vector; we read it as the angle between the landmark's current
-# viewing ray and the key frame's, which must stay below 45°. Depth comes from our stereo pair.
+# viewing ray and the key frame's, which must stay below 45°. The paper names the search radius
+# and the number of key frames without values: our 15 px and five key frames, like the 45°, are our
+# choices. Depth comes from our stereo pair.
 # On the first 200 frames of the corridor, without wheel odometry:
 
 # %%

@@ -308,14 +308,16 @@ def points_and_variances(
 ) -> tuple[np.ndarray, np.ndarray]:
     """Points ``P = B/d (u - u0, (v - v0) fx/fy, fx)`` ([Zhao], eq. 13) of both frames, as
     homogeneous rows ``x, y, z, 1`` (shape (2, 4, N): ``P`` then ``Q``), and the first-order
-    variance of each pair: ``sigma^2 (B/d)^2 (|ray|^2 / d^2 + 2)`` per view."""
+    variance of each pair: ``sigma^2 (B/d)^2 (|ray|^2 / d^2 + 1 + (fx/fy)^2)`` per view (u, v, d in
+    turn), 2 for square pixels."""
     w = np.array([a, b])  # (2, N, 3)
     du, dv, d = w[..., 0] - camera.cx, (w[..., 1] - camera.cy) * (camera.fx / camera.fy), w[..., 2]
     scale = camera.baseline / d
     points = np.ones((2, 4, len(a)))
     points[:, 0], points[:, 1], points[:, 2] = scale * du, scale * dv, scale * camera.fx
     ray2 = (du * du + dv * dv + camera.fx**2) / (d * d)
-    return points, pixel_sigma**2 * (scale * scale * (ray2 + 2.0)).sum(axis=0)
+    across = 1.0 + (camera.fx / camera.fy) ** 2  # the u and v terms
+    return points, pixel_sigma**2 * (scale * scale * (ray2 + across)).sum(axis=0)
 
 
 # ---------------------------------------------------------------------- the estimator
