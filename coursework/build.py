@@ -36,7 +36,6 @@ import argparse
 import concurrent.futures
 import contextlib
 import html as html_module
-import importlib.util
 import json
 import os
 import pathlib
@@ -188,11 +187,19 @@ def run_nbgrader(course: pathlib.Path, *args: str) -> None:
         raise BuildError(f"nbgrader {args[0]} failed: " + " / ".join(errors[-3:] or [proc.stderr[-500:]]))
 
 
+def kernels_checkout(course: pathlib.Path) -> pathlib.Path | None:
+    """The folder holding the ``vo_lib`` that the graded kernels import, as a fresh interpreter in
+    ``course`` finds it (this process finds this checkout's first); None where none is installed."""
+    ask = [sys.executable, "-c", "import vo_lib; print(vo_lib.__file__)"]
+    proc = subprocess.run(ask, cwd=course, capture_output=True, text=True, check=False)
+    return pathlib.Path(proc.stdout.strip()).resolve().parents[1] if proc.returncode == 0 else None
+
+
 def write_course(course: pathlib.Path, paths: list[pathlib.Path]) -> None:
     """Fill ``course`` (an empty folder) with nbgrader's course layout and generate the release."""
     shutil.copy2(CONFIG, course / "nbgrader_config.py")
-    installed = pathlib.Path(importlib.util.find_spec("vo_lib").origin).resolve().parents[1]
-    roots = dict.fromkeys([ROOT, *([installed] if (installed / "notebooks").is_dir() else [])])
+    installed = kernels_checkout(course)
+    roots = dict.fromkeys([ROOT, *([installed] if installed and (installed / "notebooks").is_dir() else [])])
     (course / HIDDEN_LIST).write_text(
         "".join(f"{root / path}\n" for root in roots for path in SOLUTION_FILES)
     )

@@ -82,8 +82,14 @@ def plain(value) -> bool:
 
     if type(value) in (list, tuple):
         return all(map(plain, value))
-    numbers = (bool, int, float, complex, *np.sctypeDict.values())
-    return type(value) in numbers or type(value) is np.ndarray and value.dtype.kind in "biufc"
+    if type(value) is np.ndarray:
+        return value.dtype.kind in "biufc"
+    # a Python number, or a NumPy scalar of NumPy's own types (not a subclass registered as one)
+    return (
+        type(value) in (bool, int, float, complex)
+        or isinstance(value, np.generic)
+        and type(value).__module__ == "numpy"
+    )
 
 
 def close(got, expected, **tolerance) -> bool:
@@ -126,13 +132,16 @@ class Reason(enum.Enum):
     IMPORT = "imports a module no exercise needs (not one of COURSE_MODULES)", ""
     KERNEL = "uses the kernel or its history", "get_ipython In Out _ih _oh _dh __ ___"
     INDIRECT = (
-        "reaches names, code, frames or modules indirectly (exec, getattr, vars, a __special__ name, type())",
+        "reaches names, code, frames, modules or the grader indirectly (exec, getattr, vars, a __special__ "
+        "name, type(), update_wrapper)",
         "exec eval compile getattr setattr delattr globals locals vars breakpoint memoryview exit quit sys "
-        "builtins gi_frame cr_frame ag_frame tb_frame f_back f_globals f_locals f_builtins",
+        "builtins gi_frame cr_frame ag_frame tb_frame f_back f_globals f_locals f_builtins update_wrapper "
+        "grading coursework",
     )
     FILE = (
         "reads, writes or runs files",
-        "open fromfile load loadtxt genfromtxt memmap read_csv run_path tofile",
+        "open fromfile fromregex load loadtxt genfromtxt memmap read_csv read_fwf read_table read_json "
+        "read_pickle run_path tofile",
     )
     CHANGES = "changes an object it did not make (a module, a class, an argument) or a builtin's name", ""
     PRIVATE = "reaches a private name (a leading underscore) of an imported module", ""

@@ -95,11 +95,12 @@ for world in worlds.values():
 # %% [markdown]
 # ## 2 · The rig and a stereo pair
 #
-# The camera is like the paper's Bumblebee2: 640×480, the largest of the resolutions the paper
-# times (Table 1; it states no native resolution); a 66° horizontal field of view and a 12 cm
-# baseline, which the paper does not give, are our choice, those of a common Bumblebee2 model. It is mounted 0.5 m up, looking forward, above the turning axis. The renderer maps
-# each textured plane into the image with one homography and keeps the nearest surface per pixel
-# in an inverse-depth buffer, which doubles as ground truth.
+# The camera is like the paper's Bumblebee2: 640×480, the largest of the resolutions the paper times
+# (Table 1; it states no native resolution); a 66° horizontal field of view and a 12 cm baseline,
+# which the paper does not give, are our choice, those of a common Bumblebee2 model. It is mounted
+# 0.5 m up, looking forward, above the turning axis. The renderer maps each textured plane into the
+# image with one homography and keeps the nearest surface per pixel in an inverse-depth buffer,
+# which doubles as ground truth.
 
 # %%
 camera = StereoCamera.bumblebee2()

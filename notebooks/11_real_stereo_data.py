@@ -277,7 +277,8 @@ for name, c in counts.items():
 # ## 3 · What the circular-motion model gets wrong on a car
 #
 # [Zhao]'s model (eq. 12–17) describes a camera that moves on a flat floor along an arc about a
-# vertical axis through its instantaneous centre of rotation: one angle θ, one chord ρ. A car breaks it three ways:
+# vertical axis through its instantaneous centre of rotation: one angle θ, one chord ρ. A car
+# breaks it three ways:
 #
 # - **offset**: the camera sits ahead of (and above) the axis the car turns about, so a turn also
 #   moves the camera sideways (notebook 03 measured the bias this causes);

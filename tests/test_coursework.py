@@ -124,13 +124,14 @@ def test_student_edition_holds_no_solution_text(built):
         )
 
 
-def test_the_course_folder_lists_the_checkouts_solutions_for_the_kernels_to_find_empty(built):
+def test_the_course_folder_lists_the_checkouts_solutions_for_the_kernels_to_find_empty(built, tmp_path):
     """This checkout's, and those of the checkout the kernels' vo_lib is installed from (an editable
-    install of another checkout left its worked solutions readable)."""
-    import vo_lib
-
+    install of another checkout left its worked solutions readable). The kernels import it from
+    outside this checkout, so it is asked of an interpreter started elsewhere, not of this one."""
+    ask = [sys.executable, "-c", "import vo_lib; print(vo_lib.__file__)"]
+    found = subprocess.run(ask, cwd=tmp_path, capture_output=True, text=True, check=True).stdout.strip()
     listed = (built / "grading" / "hidden.txt").read_text().splitlines()
-    installed = pathlib.Path(vo_lib.__file__).resolve().parents[1]
+    installed = pathlib.Path(found).resolve().parents[1]
     roots = {ROOT, installed} if (installed / "notebooks").is_dir() else {ROOT}
     assert set(listed) == {str(root / p) for root in roots for p in build.SOLUTION_FILES}
     assert {str(ROOT / "notebooks"), str(ROOT / ".git"), str(ROOT / "docs" / "_build")} <= set(listed)

@@ -181,6 +181,20 @@ def test_evaluate_prints_no_rotation_error_for_a_run_against_its_own_files(tmp_p
     assert rows["KITTI rotation (5 m, 5 segments) [deg/100 m]"] == "0.000"
 
 
+def test_evaluate_says_when_the_rpe_steps_span_unpaired_poses(tmp_path, rng, capsys):
+    """A truth at half the estimate's rate pairs every second pose: the RPE's steps then span two."""
+    from vo_lib.cli.main import main
+
+    T = drifted(rng, random_trajectory(rng, 60))
+    times = np.arange(len(T)) / 10
+    write_tum(tmp_path / "est.tum", times, T)
+    for name, every, note in (("full.tum", 1, False), ("half.tum", 2, True)):
+        write_tum(tmp_path / name, times[::every], T[::every])
+        assert main(["evaluate", "--gt", str(tmp_path / name), "--est", str(tmp_path / "est.tum")]) == 0
+        out = capsys.readouterr().out
+        assert ("29 of 29 span more than one estimated pose" in out) is note, out
+
+
 def test_final_error_is_the_planar_end_point_against_the_planar_distance():
     from vo_lib.evaluation import final_error
 

@@ -258,6 +258,9 @@ def test_library_functions_takes_functions_classes_and_the_methods_of_a_modules_
             Reason.CHANGES,
         ),
         ("import fileinput\ntext = ''.join(fileinput.input('../notebooks/01.py'))", Reason.IMPORT),
+        # the grader's own functions given another's code, and files read by a pattern
+        ("import functools\nfunctools.update_wrapper(grading.close, f, assigned=('x',))", Reason.INDIRECT),
+        ("text = np.fromregex('../notebooks/06.py', '(.*)', [('line', 'U200')])", Reason.FILE),
     ],
 )
 def test_review_names_what_no_honest_answer_needs(answer, reason):
@@ -491,7 +494,19 @@ def test_answers_compare_only_as_plain_numbers():
         assert grading.plain(value)
     assert grading.close(honest[1], [0, 0, 0]) and grading.equal(np.zeros(3), [0, 0, 0])
     cheats = [Anything(1.0), Lazy(), [Lazy()] * 3, np.array([Lazy()] * 3, dtype=object)]
-    for cheat in [*cheats, np.zeros(3).view(np.matrix)]:
-        assert not grading.plain(cheat)
-        assert not grading.close(cheat, np.zeros(3)) and not grading.equal(cheat, np.zeros(3))
+    class Agrees(np.ndarray):  # registered as a NumPy type name: still the answer's own class
+        def all(self, *args, **kwargs):
+            return True
+
+    class Scalar(np.float64):
+        pass
+
+    np.sctypeDict["agrees"] = Agrees
+    try:
+        own = [np.zeros(3).view(Agrees), Scalar(0.0)]
+        for cheat in [*cheats, *own, np.zeros(3).view(np.matrix)]:
+            assert not grading.plain(cheat)
+            assert not grading.close(cheat, np.zeros(3)) and not grading.equal(cheat, np.zeros(3))
+    finally:
+        del np.sctypeDict["agrees"]
     assert not grading.close(Anything(1.0), 1.0)

@@ -580,7 +580,7 @@ CSV_ROW_DAMAGE = set("latin-1 superscript overflow negative decimal outside abso
         (
             "diagonal",
             "cam1/sensor.yaml: key T_BS puts cam1 +0.080 m to the right of cam0, +0.080 m below and +0.000 m "
-            "ahead; expected cam1 beside cam0 along its image rows (within 20°)",
+            "ahead; expected cam1 beside cam0 along its image rows (within 20°; is T_BS inverted?",
         ),
         (
             "both-distortion",

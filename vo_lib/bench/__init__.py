@@ -25,7 +25,11 @@ BENCH_HELP: dict[str, tuple[str, str]] = {
     "observers": ("[Yan 2020]'s segment observers: point by point, bisection, closed form", "about 10 s"),
     "tracking": ("[Yuan]'s likelihood-field scoring, vectorised against pose by pose", "about 5 s"),
     "odometers": ("[Yuan]'s PnP odometer beside [Zhao]'s on the rendered corridor", "about 50 s"),
-    "real": ("our pipeline (car or drone) and OpenCV's PnP baseline on real sequences", "1-2 minutes"),
+    "real": (
+        "our pipeline (car or drone) and OpenCV's PnP baseline on real sequences: those in "
+        "$VO_LIB_REALDATA (a folder of them, or one; default ../shared/realdata)",
+        "1-2 minutes",
+    ),
     "realism": ("how real the samples' images look: empty cells, corners, noise", "about 10 s"),
 }
 

@@ -206,6 +206,16 @@ def _print_position_errors(positions: np.ndarray, E: np.ndarray, lever: np.ndarr
         print(f"ATE ({alignment} alignment{named}, positions only): rmse {rmse} m, max {worst}")
 
 
+def _say_if_steps_skip(i_est: np.ndarray) -> None:
+    """A note when the RPE's "1 frame" steps join poses the truth left unpaired between them."""
+    longer = int(np.count_nonzero(np.diff(i_est) > 1))
+    if longer:
+        print(
+            f"(RPE's steps join consecutive paired poses: {longer} of {len(i_est) - 1} span more than one "
+            "estimated pose, where the truth has no pose between them)"
+        )
+
+
 def evaluate_command(
     gt: str,
     est: str,
@@ -243,6 +253,7 @@ def evaluate_command(
     _say_if_units_differ(truth_xyz, E[i_est][:, :3, 3])
     if truth.poses is not None:
         _print_pose_errors(truth.poses[i_gt] @ to_camera, E[i_est], segments)  # the truth's camera poses
+        _say_if_steps_skip(i_est)
         return
     if segments is not None:
         print(f"--segments: --gt {gt} holds positions only, which give the ATE alone")

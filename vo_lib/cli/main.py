@@ -228,7 +228,15 @@ def build_parser() -> argparse.ArgumentParser:
         "with how long each runs on a 2-core machine:",
         "bench geometry",
         listing="\n\n"
-        + "\n".join(f"  {name:<{width}}  {what} ({how})" for name, (what, how) in BENCH_HELP.items()),
+        + "\n".join(
+            textwrap.fill(
+                f"{what} ({how})",
+                100,
+                initial_indent=f"  {name:<{width}}  ",
+                subsequent_indent=" " * (width + 4),
+            )
+            for name, (what, how) in BENCH_HELP.items()
+        ),
     )
     bench.add_argument("name", choices=sorted(BENCHES), metavar="NAME", help="which benchmark (listed above)")
     sweep = command(

@@ -302,7 +302,8 @@ def _check_baseline(T_right_left: np.ndarray, sensor: Path) -> np.ndarray:
         raise AslError(
             f"{sensor}: key T_BS puts cam1 {x:+.3f} m to the right of cam0, {y:+.3f} m below and "
             f"{z:+.3f} m ahead; expected cam1 beside cam0 along its image rows "
-            f"(within {MAX_BASELINE_TILT_DEG:g}°)"
+            f"(within {MAX_BASELINE_TILT_DEG:g}°; is T_BS inverted? it takes the camera's coordinates "
+            "into the body's)"
         )
     return cam1_in_cam0
 
