@@ -82,14 +82,8 @@ def plain(value) -> bool:
 
     if type(value) in (list, tuple):
         return all(map(plain, value))
-    if type(value) is np.ndarray:
-        return value.dtype.kind in "biufc"
-    # a Python number, or a NumPy scalar of NumPy's own types (not a subclass registered as one)
-    return (
-        type(value) in (bool, int, float, complex)
-        or isinstance(value, np.generic)
-        and type(value).__module__ == "numpy"
-    )
+    numbers = (bool, int, float, complex, *(t for t in np.sctypeDict.values() if t.__module__ == "numpy"))
+    return type(value) in numbers or type(value) is np.ndarray and value.dtype.kind in "biufc"
 
 
 def close(got, expected, **tolerance) -> bool:
@@ -132,11 +126,9 @@ class Reason(enum.Enum):
     IMPORT = "imports a module no exercise needs (not one of COURSE_MODULES)", ""
     KERNEL = "uses the kernel or its history", "get_ipython In Out _ih _oh _dh __ ___"
     INDIRECT = (
-        "reaches names, code, frames, modules or the grader indirectly (exec, getattr, vars, a __special__ "
-        "name, type(), update_wrapper)",
+        "reaches names, code, frames or modules indirectly (exec, getattr, vars, a __special__ name, type())",
         "exec eval compile getattr setattr delattr globals locals vars breakpoint memoryview exit quit sys "
-        "builtins gi_frame cr_frame ag_frame tb_frame f_back f_globals f_locals f_builtins update_wrapper "
-        "grading coursework",
+        "builtins gi_frame cr_frame ag_frame tb_frame f_back f_globals f_locals f_builtins update_wrapper",
     )
     FILE = (
         "reads, writes or runs files",

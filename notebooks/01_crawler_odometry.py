@@ -482,7 +482,7 @@ from coursework import grading  # noqa: E402
 _h13 = np.random.default_rng(1031)  # another crawler: 720° in 1,500 noisy steps (its own turn per step)
 _h13_steps = np.tile([-1.0, 1.0], (1500, 1)) * _h13.uniform(0.2, 0.6) * 4 * np.pi / 1500
 _h13_got = fit_gauge(_h13_steps + _h13.normal(scale=1e-5, size=(1500, 2)), 4 * np.pi)
-assert grading.close(_h13_got, 2 * np.random.default_rng(1031).uniform(0.2, 0.6), atol=1e-3), "another gauge?"
+assert grading.close(_h13_got, 2 * np.random.default_rng(1031).uniform(0.2, 0.6), atol=1e-3), "turn in rad?"
 ### END HIDDEN TESTS
 
 # %% [markdown]
