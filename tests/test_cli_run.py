@@ -169,18 +169,24 @@ def test_convert_carries_the_odometry_files_of_a_kitti_folder(tmp_path):
     (source / "oxts.txt").write_text("".join(" ".join(["0.5"] * 30) + "\n" for _ in range(3)))
     (source / "odometry.txt").write_text("0 0\n0.01 0.01\n0.02 0.02\n")
     (source / "raw_calib").mkdir()
-    (source / "raw_calib" / "calib_imu_to_velo.txt").write_text("R: 1 0 0 0 1 0 0 0 1\nT: 0 0 0\n")
+    calibration = {  # what a run reads of them: the copy holds no calibration a run would refuse
+        "calib_imu_to_velo.txt": "R: 1 0 0 0 1 0 0 0 1\nT: 0 0 0\n",
+        "calib_velo_to_cam.txt": "R: 0 -1 0 0 0 -1 1 0 0\nT: 0 -0.08 -0.27\n",
+        "calib_cam_to_cam.txt": "R_rect_00: 1 0 0 0 1 0 0 0 1\n",
+    }
+    for name, text in calibration.items():
+        (source / "raw_calib" / name).write_text(text)
     (tmp_path / "manual").mkdir()
     (tmp_path / "manual" / "calib_cam_to_cam.txt").write_text("not read\n")
     (source / "raw_calib" / "docs").symlink_to(tmp_path / "manual")  # not read: not copied
     (source / "raw_calib" / "loop").symlink_to("loop")
     (source / "raw_calib" / "env").symlink_to("/proc/self/environ")  # a file, but not one that is read
     assert main(["convert", str(source), "--to", "kitti", "--out", str(tmp_path / "copy")]) == 0
-    assert sorted(p.name for p in (tmp_path / "copy" / "raw_calib").iterdir()) == ["calib_imu_to_velo.txt"]
-    for name in ("oxts.txt", "odometry.txt", "raw_calib/calib_imu_to_velo.txt"):
+    assert sorted(p.name for p in (tmp_path / "copy" / "raw_calib").iterdir()) == sorted(calibration)
+    for name in ("oxts.txt", "odometry.txt", *(f"raw_calib/{name}" for name in calibration)):
         assert (tmp_path / "copy" / name).read_bytes() == (source / name).read_bytes(), name
     # a read-only source (a dataset kept safe) gives a copy that can be replaced: new files' modes
-    for path in (source / "raw_calib" / "calib_imu_to_velo.txt", source / "raw_calib"):
+    for path in (*(source / "raw_calib" / name for name in calibration), source / "raw_calib"):
         path.chmod(0o555 if path.is_dir() else 0o444)
     try:
         for _ in range(2):

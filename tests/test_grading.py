@@ -494,6 +494,7 @@ def test_answers_compare_only_as_plain_numbers():
         assert grading.plain(value)
     assert grading.close(honest[1], [0, 0, 0]) and grading.equal(np.zeros(3), [0, 0, 0])
     cheats = [Anything(1.0), Lazy(), [Lazy()] * 3, np.array([Lazy()] * 3, dtype=object)]
+
     class Agrees(np.ndarray):  # registered as a NumPy type name: still the answer's own class
         def all(self, *args, **kwargs):
             return True

@@ -151,7 +151,7 @@ def test_pose_count_differs_from_images(tmp_path):
             "0 0\n0.01\n0.01 0.01\n",
             r"odometry.txt, line 2: delta_u_left delta_u_right needs 2 numbers, got 1",
         ),
-        ("0 0\n0.01 0.01\n", r"odometry.txt has 2 lines but there are 3 images"),
+        ("0 0\n0.01 0.01\n", r"odometry.txt has 2 rows but there are 3 images"),
     ],
 )
 def test_bad_odometry(tmp_path, content, message):

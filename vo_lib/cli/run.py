@@ -391,11 +391,13 @@ def convert_command(sequence: str, to: str, out: str, force: bool = False, no_tr
     odometry files (:data:`~vo_lib.formats.sequence_writer.CARRIED`)."""
     from vo_lib.data import kept_data_folder, load_sequence
     from vo_lib.formats.sequence_writer import SequenceWriter
+    from vo_lib.stereo_vo.vehicle import vehicle_of
 
     with contextlib.ExitStack() as locks:  # no command replaces the sequence while it is read
         locks.enter_context(reading(sequence))
         # read before --out is touched: a bad input changes nothing
         seq = load_sequence(Path(sequence), odometry=True, progress=False, truth=not no_truth)
+        vehicle_of(seq)  # its mount and odometry as run reads them: no copy that run would refuse
         locks.enter_context(reading(seq.path))
         manifest = {k: v for k, v in seq.manifest.items() if k != "layout"}
         with SequenceWriter(

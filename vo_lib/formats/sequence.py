@@ -216,7 +216,7 @@ def image_pairs(root: Path, sides: tuple[str, str] = ("image_0", "image_1")) -> 
 def _odometry(path: Path, times: np.ndarray) -> np.ndarray:
     """``odometry.txt``: a row of track distances per frame, at a speed a vehicle reaches."""
     odo = read_per_frame(
-        path, len(times), "lines", lambda p: read_rows(p, 2, "delta_u_left delta_u_right", MAX_ODOMETRY_M)
+        path, len(times), "rows", lambda p: read_rows(p, 2, "delta_u_left delta_u_right", MAX_ODOMETRY_M)
     )
     if len(times) > 1:
         speeds = np.abs(odo[1:]).max(axis=1) / np.diff(times)
