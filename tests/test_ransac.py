@@ -233,3 +233,23 @@ def test_reestimate_without_supporters_gives_no_estimate():
     value, variance = reestimate(Model(), np.zeros(2, bool))
     assert math.isnan(value) and variance == math.inf
     assert reestimate(Model(), np.array([True, True])) == pytest.approx((0.15, 5e-5))
+
+
+def test_point_variances_follow_eq_13s_jacobian_for_pixels_that_are_not_square():
+    """The first-order variance of a back-projected pair is J J^T sigma^2 summed over both views, J
+    the derivative of eq. 13 in (u, v, d): by finite differences, on a camera with fy != fx."""
+    from vo_lib.camera import StereoCamera
+    from vo_lib.stereo_vo.ransac import points_and_variances
+
+    camera = StereoCamera(fx=500.0, fy=350.0, cx=320.0, cy=240.0, baseline=0.12)
+    w = np.array([[100.0, 50.0, 8.0], [400.0, 300.0, 20.0], [320.0, 240.0, 3.0]])
+    points, variances = points_and_variances(w, w[::-1], camera, pixel_sigma=0.5)
+    np.testing.assert_allclose(points[0, :3].T, camera.backproject(w), rtol=1e-12)
+    h, expected = 1e-6, np.zeros(len(w))
+    for view in (w, w[::-1]):
+        for axis in range(3):
+            step = np.zeros(3)
+            step[axis] = h
+            J = (camera.backproject(view + step) - camera.backproject(view - step)) / (2 * h)
+            expected += 0.5**2 * np.sum(J * J, axis=1)
+    np.testing.assert_allclose(variances, expected, rtol=1e-6)

@@ -109,8 +109,8 @@ def dask_client(workers: int, scheduler: str | None):
         with client:
             yield client
         return
-    # the semaphore tracker the workers start outlives a sweep stopped by Ctrl-C and cleans up after
-    # it, then warns that it did, after the sweep's one line: its command line takes these options
+    # the semaphore tracker that the cluster starts outlives a sweep stopped by Ctrl-C, cleans up after
+    # it, then warns that it did, after the sweep's one line; it runs with this process's -W options
     sys.warnoptions[:] = [*dict.fromkeys([*sys.warnoptions, "ignore:resource_tracker:UserWarning"])]
     previous = signal.signal(signal.SIGINT, signal.SIG_IGN)  # inherited by the workers
     try:

@@ -308,8 +308,8 @@ def points_and_variances(
 ) -> tuple[np.ndarray, np.ndarray]:
     """Points ``P = B/d (u - u0, (v - v0) fx/fy, fx)`` ([Zhao], eq. 13) of both frames, as
     homogeneous rows ``x, y, z, 1`` (shape (2, 4, N): ``P`` then ``Q``), and the first-order
-    variance of each pair: ``sigma^2 (B/d)^2 (|ray|^2 / d^2 + 1 + (fx/fy)^2)`` per view (u, v, d in
-    turn), 2 for square pixels."""
+    variance of each pair: ``sigma^2 (B/d)^2 (1 + (fx/fy)^2 + |ray|^2 / d^2)`` per view, the terms of
+    u, v and d in turn."""
     w = np.array([a, b])  # (2, N, 3)
     du, dv, d = w[..., 0] - camera.cx, (w[..., 1] - camera.cy) * (camera.fx / camera.fy), w[..., 2]
     scale = camera.baseline / d
