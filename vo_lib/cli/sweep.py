@@ -86,6 +86,10 @@ def _alarm():
         signal.signal(signal.SIGALRM, previous)
 
 
+#: The -W option that silences the semaphore tracker as it cleans up after a sweep stopped by Ctrl-C.
+TRACKER_WARNING = "ignore:resource_tracker:UserWarning"
+
+
 @contextlib.contextmanager
 def dask_client(workers: int, scheduler: str | None):
     """A ``distributed.Client`` of ``scheduler``, else of a new LocalCluster of ``workers`` processes
@@ -111,7 +115,8 @@ def dask_client(workers: int, scheduler: str | None):
         return
     # the semaphore tracker that the cluster starts outlives a sweep stopped by Ctrl-C, cleans up after
     # it, then warns that it did, after the sweep's one line; it runs with this process's -W options
-    sys.warnoptions[:] = [*dict.fromkeys([*sys.warnoptions, "ignore:resource_tracker:UserWarning"])]
+    if TRACKER_WARNING not in sys.warnoptions:
+        sys.warnoptions.append(TRACKER_WARNING)
     previous = signal.signal(signal.SIGINT, signal.SIG_IGN)  # inherited by the workers
     try:
         with dask.config.set(LOCAL_CLUSTER_CONFIG):
