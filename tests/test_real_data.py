@@ -310,7 +310,7 @@ def test_a_drive_of_kittis_raw_set_runs_as_stored(tmp_path, capsys):
     drive, ref = raw_drive(tmp_path), load_sequence(KITTI_RAW)
     raw = load_sequence(drive)
     assert raw.camera == ref.camera and len(raw) == len(ref)
-    np.testing.assert_allclose(raw.times, ref.times, atol=1e-6)
+    np.testing.assert_allclose(raw.times, ref.times, atol=1e-9)  # times since the first, to the ns
     np.testing.assert_allclose(raw.poses_4x4(), ref.poses_4x4(), atol=1e-4)  # poses.txt's digits
     cars = [vehicle_of(seq) for seq in (raw, ref)]
     np.testing.assert_allclose(cars[0].mount, cars[1].mount)

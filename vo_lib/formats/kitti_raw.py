@@ -138,7 +138,7 @@ def raw_near_miss(path) -> str | None:
 
 
 def read_raw_timestamps(path: Path) -> np.ndarray:
-    """Seconds since 1970 of each line ``YYYY-MM-DD HH:MM:SS.fffffffff`` (the raw set's clock)."""
+    """Nanoseconds since 1970 of each line ``YYYY-MM-DD HH:MM:SS.fffffffff`` (the raw set's clock)."""
     stamps = []
     for n, line in data_lines(path, "a date and time per image"):
         try:
@@ -153,7 +153,7 @@ def read_raw_timestamps(path: Path) -> np.ndarray:
             raise SequenceError(
                 f"{path}, line {n}: {stamps[-1]} is not after {stamps[-2]} on the line before"
             )
-    return np.array(stamps, "datetime64[ns]").astype(np.int64) * 1e-9
+    return np.array(stamps, "datetime64[ns]").astype(np.int64)
 
 
 def poses_from_oxts(oxts: np.ndarray, camera_in_imu: np.ndarray) -> np.ndarray:
@@ -193,7 +193,8 @@ def read_kitti_raw(path, truth: bool = True, odometry: bool = True) -> Sequence:
     camera = checked_camera(cam_to_cam, P0, P1, size, ("P_rect_00", "P_rect_01"))
     stamps_file = drive / "image_00" / "timestamps.txt"
     stamps = read_per_frame(stamps_file, len(left), "timestamps", read_raw_timestamps)
-    check_frame_spacing(stamps_file, stamps)
+    seconds = (stamps - stamps[0]) * 1e-9  # from whole nanoseconds: exact to 1 ns
+    check_frame_spacing(stamps_file, seconds)
     packets = None
     if truth or odometry:  # oxts/data/NAME.txt for image NAME.png
         files = [drive / "oxts" / "data" / f"{image.stem}.txt" for image in left]
@@ -201,6 +202,6 @@ def read_kitti_raw(path, truth: bool = True, odometry: bool = True) -> Sequence:
             raise SequenceError(f"{missing}: missing; expected one OXTS packet per image, named as the image")
         packets = np.concatenate([read_per_frame(f, 1, "OXTS packets", read_oxts) for f in files])
     poses = poses_from_oxts(packets, camera_in_imu_frame(calib))[:, :3] if truth else None
-    manifest = {"layout": "kitti_raw", "time_origin_s": float(stamps[0])}
+    manifest = {"layout": "kitti_raw", "time_origin_s": float(stamps[0] * 1e-9)}
     found = {"truth_file": drive / "oxts" / "data" if truth else None, "oxts": packets, "raw_calib": calib}
-    return Sequence(drive, camera, stamps - stamps[0], left, right, poses, None, manifest, **found)
+    return Sequence(drive, camera, seconds, left, right, poses, None, manifest, **found)
