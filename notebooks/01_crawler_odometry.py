@@ -111,6 +111,10 @@ F_x = f.jacobian([x, y, th])
 F_u = f.jacobian([uL, uR])
 show_math(r"F_x - F_k", sp.simplify(F_x - sp.eye(3)))
 show_math(r"F_u - B_k", sp.simplify(F_u - B_k))
+s_k, c_k = du * sp.sin(th + phi_k), du * sp.cos(th + phi_k)  # the terms the next cell names
+assert sp.simplify(F_x - sp.eye(3) - sp.Matrix([[0, 0, -s_k], [0, 0, c_k], [0, 0, 0]])) == sp.zeros(3, 3)
+extra = sp.Matrix([[s_k, -s_k], [-c_k, c_k], [0, 0]]) / (2 * g)
+assert sp.simplify(F_u - B_k - extra) == sp.zeros(3, 2)
 
 # %% [markdown]
 # * **F_x ≠ I**: its last column carries −Δu sin(θ + φ) and Δu cos(θ + φ). A heading error at the

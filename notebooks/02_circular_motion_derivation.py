@@ -88,7 +88,11 @@ T = -rho * sp.Matrix([sp.sin(phi), 0, sp.cos(phi)])
 P = sp.Matrix([x, y, z])
 xp, yp, zp = R * P + T  # P' = (x', y', z'), eq. 15
 show_math("P'", sp.Matrix([xp, yp, zp]))
-assert sp.simplify(yp - y) == 0  # planar motion: a point keeps its height, y' = y
+# the library's eq. 15 is this one: its R and T at a turn of 0.3 rad over 0.7 m
+R_lib, T_lib = cm.motion_matrices(0.3, 0.7)
+at = {phi: 0.15, rho: 0.7}
+assert np.allclose(np.array(R.subs(at), float), R_lib)
+assert np.allclose(np.array(T.subs(at), float).ravel(), T_lib)
 
 # %% [markdown]
 # The paper's Fig. 2 draws this geometry; the figure is not in our copy of the paper, so we draw

@@ -85,7 +85,8 @@ true_disparity = camera.fx * camera.baseline / depth
 # **Triangulation.** Two pinhole cameras with the same intrinsics (focal lengths f_x, f_y,
 # principal point (u₀, v₀)) look the same way, the right one B metres to the right of the left.
 # A point at depth Z appears in the right image shifted left by the *disparity*
-# d = u − u_r = f_x B / Z, so from (u, v, d) the point is ([Zhao], eq. 13)
+# d = u − u_r = f_x B / Z, so from (u, v, d) the point is ([Zhao], eq. 13, which has one focal
+# length f; here generalised to f_x ≠ f_y)
 #
 #   X = B (u − u₀)/d,   Y = B (v − v₀)/d · f_x/f_y,   Z = f_x B / d.
 #
@@ -180,8 +181,9 @@ assert 80 < measured_sd[3] / measured_sd[0] < 120  # quadratic: 10² = 100
 #
 # FAST calls a pixel a corner when a contiguous arc of at least 9 of the 16 pixels on a circle of
 # radius 3 around it is brighter, or darker, than it by a threshold. It is fast because most
-# pixels fail on four test pixels. A textured scene gives a thousand corners or more, clustered where
-# contrast is high; motion estimation prefers fewer corners spread over the whole image, so we
+# pixels fail on four test pixels. A textured scene gives many corners (this image's count is
+# printed below), clustered where contrast is high; motion estimation prefers fewer corners spread
+# over the whole image, so we
 # keep the strongest few per cell of an 8×6 grid.
 
 # %%

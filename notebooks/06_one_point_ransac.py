@@ -313,7 +313,8 @@ display(
 # (section 2: the raw gate spans decades), so a fixed τ is too tight for some matches and too
 # loose for others. Over 40 realistic match sets of random motions, the naive estimator's error
 # and the share of true inliers it keeps (recall) and of its supporters that are true
-# (precision), for several τ, against the library's estimator:
+# (precision), for several τ, against the library's estimator; the naive estimator's best τ is
+# picked on 20 other sets, drawn the same way:
 
 # %%
 naive_sets = []
@@ -342,7 +343,25 @@ for tau, e, rc, pr in naive_rows:
     print(f" {tau:8.2f}{e:22.4f}{rc:8.0%}{pr:11.0%}")
 print(f" {'vo_lib':>8s}{library_err:22.4f}")
 naive_rows = np.array(naive_rows)
-best_naive = naive_rows[np.argmin(naive_rows[:, 1])]
+
+
+def naive_median_error(tau_deg, sets):
+    """The naive estimator's median |θ error| over ``sets`` at threshold ``tau_deg``."""
+    tau = math.radians(tau_deg)
+    return np.median(
+        [
+            abs(naive_one_point_ransac(a, b, tau, NAIVE_HYPOTHESES, np.random.default_rng(k))[0] - th)
+            for k, (th, _, a, b, _) in enumerate(sets)
+        ]
+    )
+
+
+dev_sets = []  # development sets: they choose τ, the 40 above judge it
+for seed in range(SEED + 950, SEED + 970):
+    r = np.random.default_rng(seed)
+    th, rh = math.radians(r.uniform(-5, 5)), r.uniform(0.03, 0.12)
+    dev_sets.append((th, rh, *realistic_matches(300, th, rh, r)))
+best_naive = naive_rows[np.argmin([naive_median_error(tau, dev_sets) for tau in thresholds_deg])]
 naive_seeds = range(len(naive_sets))
 tau_best, DEG = math.radians(best_naive[0]), 180 / math.pi
 naive_best_errors = [
@@ -356,7 +375,7 @@ display(
     Markdown(
         f"The tightest τ keeps {naive_rows[0, 2]:.0%} of the true inliers; the loosest lets in so "
         f"many outliers that only {naive_rows[-1, 3]:.0%} of its supporters are true. Even at the "
-        f"best τ of the grid, {best_naive[0]:.2f}° (picked on these very sets), "
+        f"τ of the grid best on the 20 development sets, {best_naive[0]:.2f}°, "
         f"{naive_cmp.sentence('the full estimator', 'the naive one', unit='°', scale=DEG, digits=4)}"
         " "
         "in θ; and the best τ is a property of this noise and this scene, not something a robot can "
@@ -1348,7 +1367,8 @@ assert grading.close(_h3_got, _h3_grid[np.argmax(_h3_correct)]), "best_fixed_thr
 # %% [markdown] nbgrader={"grade": true, "grade_id": "ex3_why", "locked": false, "points": 1, "schema_version": 3, "solution": true}
 # === BEGIN MARK SCHEME ===
 #
-# A match's θ is noisy in proportion to 1/|v − v₀| (notebook 03): one threshold is a compromise,
+# A match's θ is noisy about in proportion to 1/|v − v₀| near the camera's height, levelling off far
+# from it (notebook 03): one threshold is a compromise,
 # too wide for matches far from the camera's height (it lets in outliers there) and too narrow for
 # those near it (it drops inliers there). Chosen with the truth of one draw it can misclassify
 # as few matches as the gates or fewer (a fair answer says so where the printed counts show it),

@@ -17,8 +17,9 @@
 # (Table 1), linear motion, free motion, spot turns with slip, outdoor free motion (Table 2) — on a
 # crawler whose tracks slip and skid and, outdoors, lose contact on rough ground, and put the
 # paper's figures beside ours: at the paper's lengths, from results stored with the code that made
-# them. The lengths are the paper's numbers of frames; the paper gives no capture rate, speed or
-# turn rate, so the distances and turns those frames cover are ours (notebook 04, section 4).
+# them. The lengths are the paper's numbers of frames, to within two frames; the paper gives no
+# capture rate, speed or turn rate, so the distances and turns those frames cover are ours
+# (notebook 04, section 4).
 #
 # **You will learn**
 # - what the pipeline does per frame, and what it does with a frame it cannot trust;
@@ -34,7 +35,7 @@
 # **Development data.** The crawler's settings (`CRAWLER`) were chosen on these same rendered
 # samples, the only crawler data the project has: every figure below is what those settings give
 # on the data they were chosen on, not a held-out test of them. The one exception is whether the
-# vision is ever believed over the prediction (after the car's two contradicting frames): section 5
+# vision is ever believed over the prediction (after `max_contradictions` contradicting frames): section 5
 # decides it on draws of `outdoor_free_3` and tests it on draws of five other samples, which are
 # themselves the data the other settings were chosen on.
 
@@ -325,8 +326,9 @@ display(
 # %% [markdown]
 # One run each cannot rank our crawler against the paper's, but it can say what differs between
 # them. Our losses of contact are brief and come per metre a track travels, and a track turning on
-# the spot travels little, so the motion leaves the planar model only now and then; by the paper's
-# account its Voyager-II turned with a track that stayed out of full contact. And even in contact
+# the spot travels little, so the motion leaves the planar model only now and then; the paper
+# reports of its Voyager-II that "the track on either side has a different grounding length, that
+# is, the tracks ... were not well contacted with the ground". And even in contact
 # our crawler skids, turning about a centre ahead of its track centre, so the camera moves
 # sideways on a small circle; eq. 14 assumes it moves along the chord at θ/2 to its axis and reads
 # part of that sideways motion as rotation, with a sign that follows the turning direction
@@ -654,7 +656,8 @@ display(
 # calibration, no lens distortion, perfectly rectified pairs, a turning centre that wanders by
 # centimetres only (`TrackGround`; notebook 03 shows what an offset costs), static rich texture,
 # no lighting change, and
-# losses of contact that are brief and random rather than a track that keeps poor contact.
+# losses of contact that are brief and random rather than tracks of different grounding lengths,
+# not well in contact with the ground, as the paper reports of its robot.
 # Every one of those is a source of error on a real robot.
 #
 # ### Scaling up
@@ -681,8 +684,8 @@ display(
 #   can be trusted: it counts noise, not the slip's mean, the skid's bias or a lost contact.
 # - After a lost track contact the prediction misses the body's swing, so the vision, which
 #   measures it, contradicts the prediction and is rejected; the crawler's preset believes it after
-#   two consecutive contradicting frames, a choice made on ten draws of one drive (stored) and
-#   tested on ten draws each of five others.
+#   `max_contradictions` consecutive contradicting frames, a choice made on ten draws of one drive
+#   (stored) and tested on ten draws each of five others.
 
 # %% [markdown]
 # ## Exercises

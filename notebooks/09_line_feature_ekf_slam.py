@@ -194,8 +194,10 @@ assert np.allclose(np.hstack(observation_jacobians(pose1, point1)), num_H, atol=
 # because the bearing depends on the point and the position only through their difference.
 # These two are not flipped signs: each printed entry has the wrong variable ($\Delta x$ where
 # $\Delta y$ belongs and the reverse), as if the range row's pattern had been copied. So [Yan 2020]
-# prints **four wrong entries**: two signs in eq. 6 and 7, two variables in eq. 11. A filter with
-# the printed row would pull each wall's feature point the wrong way after every observation.
+# prints **four wrong entries**: two signs in eq. 6 and 7, two variables in eq. 11. The printed
+# landmark columns point along the line of sight, the derived ones across it (their dot product is
+# zero): a filter with the printed row would move each wall's feature point along the line of sight
+# to correct a bearing, which no move along that line can change.
 #
 # ## 3. Walls as landmarks: the feature point
 #
@@ -606,8 +608,9 @@ plot_line_triple((a_, b_), f"wall {i_ex + 1}", ends_world, pose_ex, foot_robot, 
 # ## 7. The paper's simulation (section 3)
 #
 # The paper prints: $V$ = 3 m/s (error 0.3 m/s), steering ≤ 30° (error 3°), a largest "wheel turning
-# rate" of π/9 rad/s (车轮最大转速, which we read as the rate at which the steering turns), control period
-# 0.025 s, laser range 30 m (errors 0.1 m, 1°), the four walls, the waypoints; we read its "errors"
+# rate" of π/9 rad/s (车轮最大转速, which we read as the rate at which the steering turns), sampling
+# period (采样周期) 0.025 s, which we use as the control period, laser range 30 m (errors 0.1 m,
+# 1°), the four walls, the waypoints; we read its "errors"
 # (误差) as standard deviations. Not printed, our
 # choices: wheelbase 4 m (the widely used EKF-SLAM simulator whose other settings the paper
 # repeats uses 4 m), an observation every 8 control periods, a waypoint reached within 1 m, the
@@ -630,7 +633,9 @@ print(
 #
 # Wall 3's right end moves from x = 45 to x = 60; from the lap's closest approach (just past
 # waypoint 1 at (25, 0)) the laser does not reach x = 60. The paper reports the observed right
-# end at x = 54.4412.
+# end at x = 54.4412. Our verdict on it is over 60 seeds: over 20, the interval of the excess
+# ended at zero on some base seeds and above it on others, so the count was raised until the
+# verdict held on three base seeds.
 
 # %%
 world_x = paper_world(extended=True)

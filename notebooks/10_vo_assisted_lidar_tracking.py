@@ -218,7 +218,8 @@ display(
 # Eq. 8–10 make the normalised score of a sample its *posterior probability*. We read the score
 # (a sum over beams) as a log-likelihood, so the posterior is $e^{S_i}/\sum_j e^{S_j}$, and scale
 # it by $n$ so that its mean is 1 whatever the number of samples. The box plots of the posterior
-# in a normal frame and in the occluded stretch (the paper's Fig. 1 and 5):
+# in a normal frame and in the occluded stretch (the paper's Fig. 1, and Fig. 5 as its text on
+# the thresholds describes it; Fig. 5's caption calls it the corrections, as section 4 uses it):
 
 
 # %%
@@ -352,6 +353,11 @@ print(
     f"{printed10['occluded']:.3f}; "
     f"posterior {posterior_vmax['normal']:.1f} / {posterior_vmax['occluded']:.1f}"
 )
+print(
+    f"the printed eq. 10 puts the median best sample {printed10['normal'] - 1:.0%} (normal) and "
+    f"{printed10['occluded'] - 1:.0%} (occluded) above 1/n; the posterior's medians stand "
+    f"{posterior_vmax['normal'] / posterior_vmax['occluded']:.1f} times apart"
+)
 
 # %% [markdown]
 # Three findings, each of which could have come out otherwise:
@@ -366,17 +372,21 @@ print(
 #   that the printed $V_{max} - V_{lq} - V_{med}$ stays below one half, ranking occluded frames
 #   above normal ones more often than not, and that $V_{max} - V_{med}$ stays near one). That
 #   describes this one run and ranks the readings for no other (the printed form's AUC over twenty
-#   more scans is printed as well, with how many of them stay below one half); the reading we keep
-#   rests on the wording of eq. 12, not on this run. (The printed form is not a slip: eq. 12 calls
-#   $V_{max} - V_{lq}$ the "range", and range minus median is what eq. 11 prints.)
+#   more scans is printed as well, with how many of them stay below one half). The choice between
+#   the readings is a reading of the paper, not a derivation, and this run does not make it.
+#   [Yuan] never defines "range". Taking eq. 12's name, "range-quantile difference ratio" for
+#   $(V_{max} - V_{lq})/(V_{uq} - V_{lq})$, as a range over a quartile difference makes the range
+#   $V_{max} - V_{lq}$, and then the printed eq. 11 is range minus median, as its name says. We
+#   keep $V_{max} - V_{med}$, the range of a box plot's upper half, for the purpose eq. 11 states:
+#   how far the best sample stands out from the typical one.
 # * **The printed eq. 10 is a normalisation, not a posterior, for a score like ours.**
 #   $S_i / \sum_j S_j$ would be the posterior if $S_i$ were proportional to the likelihood (and the
 #   samples drawn from the prior); a grid-map score adds one term per beam, a log-likelihood.
 #   $S_i / \sum_j S_j$ does satisfy eq. 9 and keeps the samples' order (its $V_{max}$ AUC is
-#   high), but it squeezes the frames' best samples to barely above $1/n$, by about a tenth at the
-#   median, in normal and occluded frames alike (the medians are printed). Any threshold on it
-#   would sit on a knife's edge. Reading the score as a log-likelihood, $e^{S_i}/\sum_j e^{S_j}$,
-#   spreads the normal and the occluded frames several-fold apart.
+#   high), but it squeezes the frames' best samples to barely above $1/n$, in normal and occluded
+#   frames (by how much is printed above). Any threshold on it would sit on a knife's edge.
+#   Reading the score as a log-likelihood, $e^{S_i}/\sum_j e^{S_j}$, spreads the normal and the
+#   occluded frames apart (by the factor printed above).
 #
 # **The temperature of that reading.** $e^{S_i}$ assumes that one unit of score (one beam ending
 # exactly on a mapped wall) multiplies the likelihood by $e$: a likelihood ratio of $e$ per beam,

@@ -429,9 +429,11 @@ display(Markdown(across_story))
 # per wheel distance, which over the gauge becomes the yaw sigma printed above, set to the yaw
 # error measured on this drive: were it far above the odometry's actual error, the filter would
 # take the heading from vision almost alone.
-# The distance it takes from both, so on the real drive the fused distance moves from the vision's
-# towards the odometry's, on the odometry's side of the truth and further from it than the
-# vision's own (the tests check both): fusion is only as sound as each sensor's error model.
+# The distance it takes from both: the filter pulls the fused distance from the vision's towards
+# the odometry's, as far as their covariances say, so a distance error of the odometry that its
+# model does not expect passes into the fused path (the along-track figures above give where each
+# path ends on this one drive, at one RANSAC seed). Fusion is only as sound as each sensor's error
+# model.
 #
 # **A check without the truth: NIS.** Notebook 07's normalised innovation squared needs only the
 # filter's own numbers. Per frame, the innovation of the yaw is the vision's yaw increment minus

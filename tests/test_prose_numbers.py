@@ -466,7 +466,7 @@ NOT_RANDOM: dict[str, dict[str, str]] = {
 
 NOT_RANDOM["10_vo_assisted_lidar_tracking"] = {
     "judge a tracker's output once the score is read": "describes section 3's one run and says so; the "
-    "reading kept rests on eq. 12's wording",
+    "reading kept is a reading of the paper, which the run does not decide",
 }
 
 

@@ -16,6 +16,18 @@ for motion in ("arc 2°, 8 cm", "spot turn 2°"):
     # and is the same share of the turn for an arc and a spot turn
     assert abs(results[(0.3, motion)] / results[(0.3, "arc 2°, 8 cm")] - 1) < 0.1
 
+
+# after: sigma_mc, sigma_model = theta_spread()
+# "vary the depth: the spread of θ hardly moves": the first-order σθ (checked against the draws in
+# the cell) of the same pixel and turn at 2 m and at 30 m
+def _sigma_at(depth):
+    w = np.array([[camera.cx + 100, camera.cy + 60, camera.fx * camera.baseline / depth]])
+    w2 = camera.project(cm.apply_motion(camera.backproject(w), np.radians(2.0), 0.08))
+    return cm.theta_standard_deviation(w, w2, camera, 0.5)[0]
+
+
+assert abs(_sigma_at(30.0) / _sigma_at(2.0) - 1) < 0.1
+
 # after: depth_ranges = [(1.0, 3.0), (1.5, 15.0), (5.0, 15.0), (20.0, 60.0)]
 assert fraction[(0.3, 1.0)] > 4 * fraction[(0.3, 5.0)] > 4 * fraction[(0.3, 20.0)]
 assert all(value > 0 for value in signed.values())  # over-estimated, never lost

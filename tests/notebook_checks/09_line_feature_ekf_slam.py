@@ -1,5 +1,10 @@
 """This notebook's measured claims, checked in its kernel after the cells named (tests/test_notebooks.py)."""
 
+# after: gaps = judge("H", num_H, H, printed_H, subs_h)
+# the printed landmark columns of the bearing row lie along the line of sight, the derived ones across it
+assert sp.simplify(H[1, 3] * printed_H[1, 3] + H[1, 4] * printed_H[1, 4]) == 0
+assert sp.simplify(H[1, 3] ** 2 + H[1, 4] ** 2) != 0
+
 # after: ekf, z, true_index = association_example()
 from vo_lib.line_slam.ekf_slam import GATE_ASSOCIATE, GATE_AUGMENT
 
