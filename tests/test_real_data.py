@@ -300,6 +300,31 @@ def test_hover_reads_no_odometry_and_says_so(tmp_path, capsys):
 
 
 @needs_kitti_raw
+def test_a_sequence_of_kittis_odometry_set_finds_its_poses_as_downloaded(tmp_path, capsys):
+    """KITTI's odometry set keeps sequence NN's poses apart, in ``dataset/poses/NN.txt``: a run of its
+    ``dataset/sequences/NN`` takes its errors from there, and ``evaluate`` compares a run of the first
+    frames with the first poses of that file."""
+    from vo_lib.cli.main import main
+    from vo_lib.data import load_sequence
+
+    sequence = tmp_path / "dataset" / "sequences" / "01"
+    sequence.mkdir(parents=True)
+    for name in ("image_0", "image_1", "calib.txt", "times.txt"):
+        (sequence / name).symlink_to(KITTI_RAW / name)
+    (tmp_path / "dataset" / "poses").mkdir()
+    poses = tmp_path / "dataset" / "poses" / "01.txt"
+    shutil.copy(KITTI_RAW / "poses.txt", poses)
+    seq = load_sequence(sequence, odometry=False)
+    assert seq.truth_file == poses
+    np.testing.assert_array_equal(seq.poses_4x4(), load_sequence(KITTI_RAW, odometry=False).poses_4x4())
+    out = tmp_path / "run"
+    assert main(["run", "--sequence", str(sequence), "--frames", "5", "--out", str(out)]) == 0
+    assert f"Errors against ground truth ({poses}" in capsys.readouterr().out
+    assert main(["evaluate", "--gt", str(poses), "--est", str(out / "poses.txt")]) == 0
+    assert "is a run of the first 5 frames of --gt's sequence" in capsys.readouterr().out
+
+
+@needs_kitti_raw
 def test_a_drive_of_kittis_raw_set_runs_as_stored(tmp_path, capsys):
     """A raw drive reads as its KITTI-layout copy: the same rig, the camera's poses from the OXTS
     packets as KITTI's kit computes them (the copy's poses.txt), the same mount and odometry; its
@@ -1027,7 +1052,7 @@ def test_frames_within_the_truth_run_and_the_refusal_says_how_to_run_the_rest(tm
     )
     assert main(["run", "--sequence", str(rig), "--out", str(tmp_path / "all")]) == 2
     err = capsys.readouterr().err
-    assert "must cover every image (run --frames runs fewer; run or convert --no-truth reads none" in err
+    assert "must cover every image (run --frames N runs only the first N images; run or convert" in err
     assert main(["run", "--sequence", str(rig), "--frames", "9", "--out", str(tmp_path / "nine")]) == 0
     assert len((tmp_path / "nine" / "poses.txt").read_text().splitlines()) == 9
     out = capsys.readouterr().out  # and names the one of the recording's truths it used
@@ -1179,6 +1204,39 @@ def test_evaluate_moves_a_truth_of_the_recording_into_its_rectified_camera(tmp_p
     copied = re.search(r"SE\(3\) alignment, positions only\): rmse ([0-9.]+)", captured.out)
     assert copied.group(1) == printed.group(1)
     assert f"prism.csv: positions of the prism of {EUROC / 'mav0' / 'leica0' / 'sensor.yaml'}" in captured.err
+
+
+@needs_euroc
+def test_evaluate_moves_the_truth_into_the_body_for_an_estimate_of_the_body(tmp_path, capsys):
+    """``--est-frame body``: an estimate of the recording's body (a visual-inertial system's IMU) is
+    compared with the truth in the body frame, not in the camera; the truth against itself agrees
+    exactly, where read as the camera's it would not; a prism's lever arm is its ``T_BS``."""
+    from vo_lib.cli.main import main
+    from vo_lib.evaluation import associate, ate_positions
+    from vo_lib.formats.asl_calibration import truth_extrinsic
+    from vo_lib.formats.groundtruth import read_groundtruth
+
+    gt = EUROC / "mav0" / "state_groundtruth_estimate0" / "groundtruth.tum"
+    truth = read_groundtruth(gt)
+    body = tmp_path / "body.tum"  # the truth itself at 20 Hz, as another system's body estimate
+    write_tum(body, truth.times[::10], truth.poses[::10])
+    rows = {}
+    for frame in ("camera", "body"):
+        assert main(["evaluate", "--gt", str(gt), "--est", str(body), "--est-frame", frame]) == 0
+        out = capsys.readouterr().out
+        rows[frame] = {line[:62].strip(): line[62:].strip() for line in out.splitlines()}
+    assert "moved into its body frame (--est-frame body)" in out
+    assert rows["body"]["final rotation error, 3-D [deg]"] == "0.000"
+    assert rows["body"]["ATE (SE(3) alignment): rmse [m]"] == "0.0000"
+    assert float(rows["camera"]["final rotation error, 3-D [deg]"]) > 1  # read as the camera's: wrong
+    leica_path = EUROC / "mav0" / "leica0" / "data.csv"
+    assert main(["evaluate", "--gt", str(leica_path), "--est", str(body), "--est-frame", "body"]) == 0
+    printed = re.search(r"SE\(3\) alignment, positions only\): rmse ([0-9.]+)", capsys.readouterr().out)
+    leica = read_groundtruth(leica_path)
+    i_est, i_leica = associate(truth.times[::10], leica.times)
+    lever = truth_extrinsic(leica_path)[:3, 3]  # the prism in the body
+    expected = ate_positions(leica.positions[i_leica], truth.poses[::10][i_est], lever)[0].rmse
+    assert printed.group(1) == f"{expected:.4f}"
 
 
 @needs_euroc

@@ -74,8 +74,9 @@ def check_against_its_run(gt: str, gt_sha256: str, est: str, marker: dict) -> No
 
 def _check_one_to_one(truth, gt: str, est: str, count: int, marker: dict) -> None:
     """Poses without timestamps: equal counts, or ``--est`` a run of the first frames of ``--gt``'s."""
-    sequence = Path(str(marker.get("sequence")))  # of the run that wrote --est: its first frames?
-    first = marker.get("frames") == count and Path(gt).resolve() == (sequence / "poses.txt").resolve()
+    record = marker.get("truth") if isinstance(marker.get("truth"), dict) else {}
+    its_truth = Path(str(record.get("path", Path(str(marker.get("sequence"))) / "poses.txt")))
+    first = marker.get("frames") == count and Path(gt).resolve() == its_truth.resolve()  # its first frames?
     if len(truth.positions) > count and first:
         print(f"--est {est} is a run of the first {count} frames of --gt's sequence: compared with those")
     elif len(truth.positions) != count:
@@ -115,10 +116,12 @@ def _associated(
     return i_est, i_gt
 
 
-def recording_of(gt: str, extrinsic_of: str | None, kitti: bool) -> str | None:
-    """The ASL recording whose calibration moves ``--gt`` into its rectified left camera:
-    ``extrinsic_of``, else the ``mav0`` folder holding ``--gt`` among its sensors' (links not
-    followed), else None. KITTI poses and files this package wrote are never moved."""
+def recording_of(
+    gt: str, extrinsic_of: str | None, kitti: bool, into: str = "its rectified left camera"
+) -> str | None:
+    """The ASL recording whose calibration moves ``--gt`` ``into`` a frame of it (its rectified left
+    camera, or its body): ``extrinsic_of``, else the ``mav0`` folder holding ``--gt`` among its
+    sensors' (links not followed), else None. KITTI poses and files this package wrote are never moved."""
     from vo_lib.formats.euroc import mav0_of
 
     path = Path(os.path.abspath(gt))  # symbolic links not followed
@@ -139,18 +142,21 @@ def recording_of(gt: str, extrinsic_of: str | None, kitti: bool) -> str | None:
     written = [f for f in path.parents[:3] if found in f.parents and (f / MARKER).is_file()]
     if found is None or written:
         return None
-    print(f"--gt lies in the ASL recording {found}: moved into its rectified left camera")
+    print(f"--gt lies in the ASL recording {found}: moved into {into}")
     return str(found)
 
 
-def _to_camera(truth, gt: str, extrinsic_of: str | None) -> np.ndarray:
-    """The rectified left camera in the frame ``--gt`` tracks (:func:`recording_of`), or the identity."""
+def _to_camera(truth, gt: str, extrinsic_of: str | None, est_frame: str = "camera") -> np.ndarray:
+    """The frame ``--est`` tracks (``est_frame``: the rectified left camera, or the body) in the frame
+    ``--gt`` tracks (:func:`recording_of`), or the identity."""
     from vo_lib.formats.euroc import body_to_rectified_camera, tracked_to_camera
 
-    recording = recording_of(gt, extrinsic_of, kitti=truth.times is None)
+    into = "its body frame (--est-frame body)" if est_frame == "body" else "its rectified left camera"
+    recording = recording_of(gt, extrinsic_of, kitti=truth.times is None, into=into)
     if recording is not None:
         tracker = recording if truth.poses is None else None  # a prism's lever arm
-        return tracked_to_camera(gt, body_to_rectified_camera(recording), tracker)
+        body_to_est = np.eye(4) if est_frame == "body" else body_to_rectified_camera(recording)
+        return tracked_to_camera(gt, body_to_est, tracker)
     if truth.times is not None and read_marker(Path(gt).parent) is None:
         held = "poses are of the body" if truth.poses is not None else "positions are of a tracked point"
         what = f"an EuRoC CSV, whose {held}" if truth.csv else "not in a recording"
@@ -161,7 +167,7 @@ def _to_camera(truth, gt: str, extrinsic_of: str | None) -> np.ndarray:
     return np.eye(4)
 
 
-def _print_pose_errors(G: np.ndarray, E: np.ndarray, lengths) -> None:
+def _print_pose_errors(G: np.ndarray, E: np.ndarray, lengths, timed: bool = False) -> None:
     """The standard errors of ``E`` against ``G`` and KITTI's of each segment length, after a note where
     their turns differ (quaternions of another order in one file?)."""
     from vo_lib.evaluation import kitti_segment_errors, standard_errors
@@ -170,8 +176,10 @@ def _print_pose_errors(G: np.ndarray, E: np.ndarray, lengths) -> None:
         print(
             f"note: the estimate's rotations from pose to pose differ from the ground truth's by "
             f"{found[0]:.2g} deg (RMS), where the truth turns {found[1]:.2g} deg: are they of one "
-            "recording and of one frame (a body's truth is the camera's only through --extrinsic-of), "
-            f"each file's quaternions in the order of its format {ORDERS}?"
+            "recording and of one frame (a body's truth is the camera's only through --extrinsic-of; an "
+            "estimate of the body needs --est-frame body), "
+            f"each file's quaternions in the order of its format {ORDERS}"
+            + (", and paired at the right times (--time-offset: the lag of one clock)?" if timed else "?")
         )
     for label, value in standard_errors(G, E, lengths).rows():
         print(f"{label:<62s}{value:>16s}")
@@ -223,6 +231,7 @@ def evaluate_command(
     extrinsic_of: str | None = None,
     time_offset: float = 0.0,
     max_time_diff: float = MAX_TIME_DIFF_S,
+    est_frame: str = "camera",
 ) -> None:
     """Print the 3-D errors of an estimate (KITTI or TUM) against ground truth in any format of
     :mod:`vo_lib.formats.groundtruth`: final error, ATE (SE(3), Sim(3)), RPE and KITTI's errors.
@@ -230,7 +239,8 @@ def evaluate_command(
     ``segments``: lengths in metres (default: those the sequence allows). A truth of an ASL recording's
     body (:func:`recording_of`) is moved into its rectified left camera; positions only, as a lever arm.
     ``time_offset``: seconds added to the estimate's timestamps before they are paired with the truth's,
-    at most ``max_time_diff`` apart.
+    at most ``max_time_diff`` apart. ``est_frame``: ``"body"`` for an estimate of the recording's body
+    (a visual-inertial system's IMU), into which its truth is moved instead.
     """
     limits = (("--time-offset", time_offset, -60.0), ("--max-time-diff", max_time_diff, 0.0))
     for option, seconds, low in limits:
@@ -247,12 +257,13 @@ def evaluate_command(
         marker = run_marker(est, est_sha256)  # of the run that wrote --est, if one did
         check_against_its_run(gt, gt_sha256, est, marker)
         i_est, i_gt = _associated(truth, gt, est, times, E, marker, max_time_diff)
-        to_camera = _to_camera(truth, gt, extrinsic_of)  # the rectified left camera in the tracked frame
+        to_camera = _to_camera(truth, gt, extrinsic_of, est_frame)  # the estimate's frame in the tracked one
     print(notes.getvalue(), end="")
     truth_xyz = truth.positions[i_gt] if truth.poses is None else truth.poses[i_gt][:, :3, 3]
     _say_if_units_differ(truth_xyz, E[i_est][:, :3, 3])
     if truth.poses is not None:
-        _print_pose_errors(truth.poses[i_gt] @ to_camera, E[i_est], segments)  # the truth's camera poses
+        timed = times is not None and truth.times is not None  # paired by timestamp
+        _print_pose_errors(truth.poses[i_gt] @ to_camera, E[i_est], segments, timed)  # truth: camera poses
         _say_if_steps_skip(i_est)
         return
     if segments is not None:

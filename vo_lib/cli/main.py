@@ -165,6 +165,13 @@ def build_parser() -> argparse.ArgumentParser:
         "rectified left camera (positions: from its laser tracker's prism)",
     )
     ev.add_argument(
+        "--est-frame",
+        choices=("camera", "body"),
+        default="camera",
+        help="the frame --est's poses are of: the rectified left camera (default; what run writes), or "
+        "the body of --gt's recording (a visual-inertial system's IMU), into which its truth is then moved",
+    )
+    ev.add_argument(
         "--segments",
         type=_segments,
         help="comma-separated segment lengths in metres (default: KITTI's 100..800)",

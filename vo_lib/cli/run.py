@@ -279,7 +279,7 @@ def _say_if_turns_differ(seq, n: int, poses) -> None:
     if seq.poses is None or not (found := turns_differ(seq.poses[:n], poses)):
         return
     truth = seq.truth_file or seq.path / "poses.txt"
-    quaternions = truth.is_file() and truth.name != "poses.txt"  # not KITTI's matrices, nor OXTS packets
+    quaternions = truth.is_file() and seq.rectify is not None  # an ASL recording's: not KITTI's, nor OXTS
     order = f", its quaternions in the order of its format {ORDERS}" if quaternions else ""
     notice(
         f"{truth}: the estimate's rotations from frame to frame differ from the truth's by "

@@ -118,8 +118,8 @@ def read_trajectory(path, min_poses: int = 1) -> tuple[np.ndarray | None, np.nda
 
 #: What to do about a recording's ground truth that does not cover its images.
 UNCOVERED_HINT = (
-    " (run --frames runs fewer; run or convert --no-truth reads none, and evaluate --gt ... "
-    "--extrinsic-of RECORDING then scores the frames it covers)"
+    " (run --frames N runs only the first N images; run or convert --no-truth reads none, and "
+    "evaluate --gt ... --extrinsic-of RECORDING then scores the frames it covers)"
 )
 
 

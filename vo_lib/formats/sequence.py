@@ -7,6 +7,7 @@
     SEQ/calib.txt               "P0: 12 numbers" and "P1: 12 numbers" (other lines are ignored)
     SEQ/times.txt               one timestamp in seconds per frame
     SEQ/poses.txt               optional: 12 numbers per frame, 3x4 pose of camera 0 in frame 0
+                                (KITTI's odometry set keeps them apart: sequences/NN -> poses/NN.txt)
     SEQ/odometry.txt            optional: "delta_u_left delta_u_right" per frame, metres
     SEQ/manifest.json           optional: how a sample was made (rate, speeds, rig, world)
 
@@ -232,6 +233,14 @@ def _odometry(path: Path, times: np.ndarray) -> np.ndarray:
     return odo
 
 
+def truth_path(root: Path) -> Path:
+    """A sequence's ``poses.txt``; where it has none and sits in KITTI's odometry set as that set is
+    downloaded (``dataset/sequences/NN``), that sequence's ``dataset/poses/NN.txt``, if there."""
+    kitti = root.parent.parent / "poses" / f"{root.name}.txt"
+    here = root / "poses.txt"
+    return kitti if not here.exists() and root.parent.name == "sequences" and kitti.is_file() else here
+
+
 def read_sequence(path, odometry: bool = True, truth: bool = True) -> Sequence:
     """Read and check a sequence folder (``odometry=False``: ``odometry.txt`` is not read;
     ``truth=False``: neither ``poses.txt`` nor the manifest's positions)."""
@@ -245,8 +254,9 @@ def read_sequence(path, odometry: bool = True, truth: bool = True) -> Sequence:
     times = read_per_frame(root / "times.txt", n, "timestamps", read_times)
     check_frame_spacing(root / "times.txt", times)
     poses = odo = None
-    if truth and check_file(root / "poses.txt", "the ground-truth poses", optional=True):
-        poses = read_per_frame(root / "poses.txt", n, "poses", read_poses)
+    truth_file = truth_path(root)
+    if truth and check_file(truth_file, "the ground-truth poses", optional=True):
+        poses = read_per_frame(truth_file, n, "poses", read_poses)
     if odometry and check_file(root / "odometry.txt", "the odometry", optional=True):
         odo = _odometry(root / "odometry.txt", times)
     manifest_path = root / "manifest.json"
@@ -256,4 +266,5 @@ def read_sequence(path, odometry: bool = True, truth: bool = True) -> Sequence:
     if not truth:
         manifest.pop("positions", None)
     check_manifest(manifest_path, manifest, n)
-    return Sequence(root, camera, times, left, right, poses, odo, manifest)
+    kept_apart = truth_file if poses is not None and truth_file.parent != root else None
+    return Sequence(root, camera, times, left, right, poses, odo, manifest, truth_file=kept_apart)
