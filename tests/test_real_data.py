@@ -1240,6 +1240,27 @@ def test_evaluate_moves_the_truth_into_the_body_for_an_estimate_of_the_body(tmp_
 
 
 @needs_euroc
+def test_a_truth_slower_than_the_cameras_is_said_to_be_paired_apart(tmp_path, capsys):
+    """A 6-DoF truth at 50 Hz beside 20 Hz images: half the images are paired with a pose 10 ms
+    away, and run and evaluate say so (the errors count the motion meanwhile); the sample's own
+    200 Hz truth, stamped with the images, is paired without a word."""
+    from vo_lib.cli.main import main
+
+    rig = small_rig(tmp_path, frames=8)
+    gt = rig / "mav0" / "state_groundtruth_estimate0" / "groundtruth.tum"
+    assert main(["run", "--sequence", str(rig), "--out", str(tmp_path / "fast")]) == 0
+    assert "paired with the images" not in capsys.readouterr().err
+    lines = gt.read_text().splitlines()
+    rows = [line for line in lines if not line.startswith("#")]
+    gt.write_text("\n".join([*(line for line in lines if line.startswith("#")), *rows[::4]]) + "\n")
+    assert main(["run", "--sequence", str(rig), "--out", str(tmp_path / "slow")]) == 0
+    said = [line for line in capsys.readouterr().err.splitlines() if "paired with the images" in line]
+    assert len(said) == 1 and "5.0 ms apart at the median (at most 10.0 ms)" in said[0], said
+    assert main(["evaluate", "--gt", str(gt), "--est", str(tmp_path / "slow" / "trajectory.tum")]) == 0
+    assert "note: " in (out := capsys.readouterr().out) and "paired with the images" in out
+
+
+@needs_euroc
 def test_a_truth_linked_into_a_recording_is_that_recordings(tmp_path, capsys):
     """A ground truth kept elsewhere and linked into a recording is read as run reads it: moved by
     that recording's calibration (not by the one beside the link's target), and evaluate accepts

@@ -13,7 +13,7 @@ import numpy as np
 from vo_lib.arguments import UsageError
 from vo_lib.cli.run import ORDERS, calibration_digest, turns_differ
 from vo_lib.evaluation import MAX_TIME_DIFF_S, associate, path_length
-from vo_lib.formats.groundtruth import read_groundtruth, read_trajectory
+from vo_lib.formats.groundtruth import paired_apart, read_groundtruth, read_trajectory
 from vo_lib.formats.poses import MAX_FILE_BYTES, TrajectoryError
 from vo_lib.outputs import MARKER, file_sha256, read_marker
 
@@ -113,6 +113,8 @@ def _associated(
             f"as nanoseconds, a text file's as seconds); {cause}"
         )
     print(f"associated {len(i_est)} of {len(E)} poses by timestamp (within {max_diff:g} s)")
+    if said := paired_apart(truth, times[i_est] - truth.times[i_gt]):
+        print(f"note: {said}")
     return i_est, i_gt
 
 

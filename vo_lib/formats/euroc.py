@@ -15,7 +15,7 @@ import numpy as np
 from vo_lib.atomic import notice
 from vo_lib.evaluation import to_camera
 from vo_lib.formats.asl_calibration import AslError, read_camera_yaml, rectify, truth_extrinsic
-from vo_lib.formats.groundtruth import NANOSECONDS, covering, read_groundtruth
+from vo_lib.formats.groundtruth import NANOSECONDS, covering, paired_apart, read_groundtruth
 from vo_lib.formats.images import check_headers
 from vo_lib.formats.poses import data_lines
 from vo_lib.formats.sequence import Sequence, check_frame_spacing
@@ -250,6 +250,8 @@ def _truth_into_camera(truth_path: Path, seconds, T_body_rect, manifest: dict):
     put into ``manifest``."""
     truth = read_groundtruth(truth_path)
     i_img, i_gt = covering(truth, seconds)
+    if said := paired_apart(truth, seconds[i_img] - truth.times[i_gt]):
+        notice(said)
     X = tracked_to_camera(truth_path, T_body_rect)
     if truth.poses is not None:
         return to_camera(truth.poses[i_gt], X)

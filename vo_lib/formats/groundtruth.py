@@ -133,6 +133,24 @@ def _times_of(truth: GroundTruth) -> np.ndarray:
     return truth.times
 
 
+#: Median seconds between images and the 6-DoF truth's poses paired with them from which a note says
+#: so: the body moves meanwhile (a truth slower than the cameras, or on another clock).
+PAIRED_APART_S = 1e-3
+
+
+def paired_apart(truth: GroundTruth, gaps) -> str:
+    """What to say of a 6-DoF truth whose poses are paired with the images ``gaps`` seconds apart, a
+    median of :data:`PAIRED_APART_S` or more; else ''."""
+    gaps = np.abs(np.asarray(gaps, float))
+    if truth.poses is None or len(gaps) == 0 or np.median(gaps) < PAIRED_APART_S:
+        return ""
+    return (
+        f"{truth.path}: its poses are paired with the images {1e3 * np.median(gaps):.1f} ms apart at the "
+        f"median (at most {1e3 * gaps.max():.1f} ms): the body moves meanwhile, and the errors (RPE most) "
+        "count that motion; a truth at the images' times, or sampled faster, has none of it"
+    )
+
+
 def covering(truth: GroundTruth, times, max_diff: float = MAX_TIME_DIFF_S) -> tuple[np.ndarray, np.ndarray]:
     """:func:`associate` the images at ``times`` (seconds) with ``truth``, which must span them (a
     6-DoF truth: match every one)."""
