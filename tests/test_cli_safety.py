@@ -550,6 +550,8 @@ CASES = [
         edit("seq/odometry.txt", b"\xff garbage"), "out"),
     Case("no-right-folder", "RUN", 2, "image_1: missing image folder",
         lambda ws: shutil.rmtree(ws / "seq" / "image_1")),
+    Case("kitti-colour-pair-only", "RUN", 2, "colour pair image_2, image_3 is there: the grey pair",
+        lambda ws: [(ws / "seq" / f"image_{k}").rename(ws / "seq" / f"image_{k + 2}") for k in (0, 1)]),
     Case("right-folder-a-file", "RUN", 2, "image_1: a file where the image folder should be",
         lambda ws: (shutil.rmtree(ws / "seq" / "image_1"), (ws / "seq" / "image_1").write_text(""))),
     Case("sequence-a-file-out-ours", "run --sequence important.txt --out out", 2,

@@ -147,6 +147,9 @@ def _check_image_folder(folder: Path) -> None:
         raise SequenceError(f"{folder}: a file where the image folder should be; expected a folder of images")
     if not folder.is_dir():  # image_0/image_0: --sequence named the image folder itself
         hint = f"; give the folder holding {folder.name}" if folder.parent.name == folder.name else ""
+        colour = folder.name == "image_0" and (folder.parent / "image_2").is_dir()  # KITTI's colour set
+        if not hint and colour:
+            hint = "; KITTI's colour pair image_2, image_3 is there: the grey pair image_0, image_1 is read"
         if not hint and not (folder.parent / "image_1").exists():  # no sequence there at all
             hint = f"; {folder.parent} holds no sequence: {LAYOUTS}"
         raise SequenceError(f"{folder}: missing image folder{hint}")
