@@ -1240,6 +1240,31 @@ def test_evaluate_moves_the_truth_into_the_body_for_an_estimate_of_the_body(tmp_
 
 
 @needs_euroc
+def test_a_tum_file_in_nanoseconds_is_read_so(tmp_path, capsys):
+    """A TUM file whose every time is beyond any second (nanoseconds, as ORB-SLAM3 writes EuRoC's)
+    is read as nanoseconds, and says so; one whose times mix the two is refused in one line."""
+    from vo_lib.cli.main import main
+    from vo_lib.formats.groundtruth import read_groundtruth
+
+    gt = EUROC / "mav0" / "state_groundtruth_estimate0" / "groundtruth.tum"
+    rows = [line.split() for line in gt.read_text().splitlines() if not line.startswith("#")][::10]
+    ns = tmp_path / "orbslam3.txt"
+    ns.write_text("".join(f"{round(float(r[0]) * 1e9)} {' '.join(r[1:])}\n" for r in rows))
+    truth = read_groundtruth(gt)
+    np.testing.assert_allclose(read_groundtruth(ns).times, truth.times[::10], atol=1e-6)
+    assert "every time is beyond 1e+11 s (the year 5138): read as nanoseconds" in capsys.readouterr().err
+    assert main(["evaluate", "--gt", str(gt), "--est", str(ns), "--est-frame", "body"]) == 0
+    out = capsys.readouterr().out
+    assert f"associated {len(rows)} of {len(rows)} poses" in out and "0.0000" in out
+    mixed = tmp_path / "mixed.txt"
+    lines = ns.read_text().splitlines()
+    mixed.write_text("\n".join([" ".join(rows[0]), *lines[1:]]) + "\n")  # line 1 in seconds
+    assert main(["evaluate", "--gt", str(gt), "--est", str(mixed)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "or as nanoseconds where every one is beyond" in err[0], err
+
+
+@needs_euroc
 def test_a_truth_slower_than_the_cameras_is_said_to_be_paired_apart(tmp_path, capsys):
     """A 6-DoF truth at 50 Hz beside 20 Hz images: half the images are paired with a pose 10 ms
     away, and run and evaluate say so (the errors count the motion meanwhile); the sample's own

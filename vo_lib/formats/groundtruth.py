@@ -12,6 +12,7 @@ from pathlib import Path
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+from vo_lib.atomic import notice
 from vo_lib.evaluation import MAX_TIME_DIFF_S, associate
 from vo_lib.formats.poses import TrajectoryError, read_rows
 from vo_lib.geometry import as_homogeneous
@@ -53,15 +54,18 @@ def header_quaternion_order(path: Path, first_row_line: int) -> tuple[str, int]:
     return order, found
 
 
-def _check_columns(path: Path, a: np.ndarray, lines: list[int], comma: bool) -> None:
+def _check_columns(path: Path, a: np.ndarray, lines: list[int], comma: bool) -> bool:
     """A CSV (EuRoC's, times in ns) or a text file (TUM's, times in s) as its header, times and
-    widths say."""
+    widths say; True where the times are nanoseconds (a CSV's, or a text file's beyond any second)."""
     width = a.shape[1]
     if not comma and width != 12 and np.abs(a[:, 0]).max() > MAX_SECONDS:
+        if a[:, 0].min() > MAX_SECONDS:  # every one: nanoseconds (as ORB-SLAM3 writes EuRoC's)
+            notice(f"{path}: every time is beyond {MAX_SECONDS:g} s (the year 5138): read as nanoseconds")
+            return True
         i = int(np.argmax(np.abs(a[:, 0]) > MAX_SECONDS))
         raise TrajectoryError(
             f"{path}, line {lines[i]}: time {a[i, 0]:.4g}; a text file's times are read as seconds "
-            "(TUM's t x y z qx qy qz qw), at most 1e11 (nanoseconds?)"
+            "(TUM's t x y z qx qy qz qw), at most 1e11, or as nanoseconds where every one is beyond"
         )
     order, line = header_quaternion_order(path, lines[0]) if width >= 8 else ("", 0)
     if order not in ("", "wxyz" if comma else "xyzw"):
@@ -82,18 +86,19 @@ def _check_columns(path: Path, a: np.ndarray, lines: list[int], comma: bool) -> 
             f"{path}, line {lines[0]}: {width} numbers; expected t[ns], x, y, z (positions) "
             "or t[ns], x, y, z, qw, qx, qy, qz (EuRoC)"
         )
+    return comma
 
 
 def read_groundtruth(path, min_poses: int = 2) -> GroundTruth:
     """A KITTI, TUM, EuRoC CSV or position-only ground truth of at least ``min_poses`` rows."""
     path = Path(path)
     a, lines, comma = read_rows(path, min_poses)
-    _check_columns(path, a, lines, comma)
+    nanoseconds = _check_columns(path, a, lines, comma)
     width = a.shape[1]
     if width == 12 and not comma:
         poses = as_homogeneous(a.reshape(-1, 3, 4))
         return GroundTruth(path, None, poses[:, :3, 3].copy(), poses)
-    times, positions = a[:, 0] * (NANOSECONDS if comma else 1.0), a[:, 1:4]
+    times, positions = a[:, 0] * (NANOSECONDS if nanoseconds else 1.0), a[:, 1:4]
     if width == 4:
         return GroundTruth(path, times, positions, csv=comma)
     quat_xyzw = a[:, [5, 6, 7, 4]] if comma else a[:, 4:8]  # EuRoC: qw qx qy qz
