@@ -1256,6 +1256,13 @@ def test_a_tum_file_in_nanoseconds_is_read_so(tmp_path, capsys):
     assert main(["evaluate", "--gt", str(gt), "--est", str(ns), "--est-frame", "body"]) == 0
     out = capsys.readouterr().out
     assert f"associated {len(rows)} of {len(rows)} poses" in out and "0.0000" in out
+    csv = tmp_path / "estimate.csv"  # EuRoC's CSV: nanoseconds, qw first
+    lines = [f"{round(float(r[0]) * 1e9)},{','.join(r[1:4])},{r[7]},{','.join(r[4:7])}" for r in rows]
+    csv.write_text("#timestamp,p_x,p_y,p_z,q_w,q_x,q_y,q_z\n" + "\n".join(lines) + "\n")
+    assert main(["evaluate", "--gt", str(gt), "--est", str(csv), "--est-frame", "body"]) == 0
+    rows_printed = {line[:62].strip(): line[62:].strip() for line in capsys.readouterr().out.splitlines()}
+    assert rows_printed["ATE (SE(3) alignment): rmse [m]"] == "0.0000"
+    assert rows_printed["final rotation error, 3-D [deg]"] == "0.000"
     mixed = tmp_path / "mixed.txt"
     lines = ns.read_text().splitlines()
     mixed.write_text("\n".join([" ".join(rows[0]), *lines[1:]]) + "\n")  # line 1 in seconds

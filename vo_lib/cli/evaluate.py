@@ -235,7 +235,7 @@ def evaluate_command(
     max_time_diff: float = MAX_TIME_DIFF_S,
     est_frame: str = "camera",
 ) -> None:
-    """Print the 3-D errors of an estimate (KITTI or TUM) against ground truth in any format of
+    """Print the 3-D errors of an estimate (KITTI, TUM or EuRoC CSV) against ground truth in any format of
     :mod:`vo_lib.formats.groundtruth`: final error, ATE (SE(3), Sim(3)), RPE and KITTI's errors.
 
     ``segments``: lengths in metres (default: those the sequence allows). A truth of an ASL recording's

@@ -155,7 +155,10 @@ def build_parser() -> argparse.ArgumentParser:
         help="ground truth: KITTI poses, TUM, EuRoC CSV, or positions (t x y z)",
     )
     ev.add_argument(
-        "--est", required=True, type=non_empty("a pose file"), help="estimated poses (KITTI or TUM)"
+        "--est",
+        required=True,
+        type=non_empty("a pose file"),
+        help="estimated poses (KITTI, TUM or EuRoC CSV)",
     )
     ev.add_argument(
         "--extrinsic-of",

@@ -111,12 +111,12 @@ def read_groundtruth(path, min_poses: int = 2) -> GroundTruth:
 
 
 def read_trajectory(path, min_poses: int = 1) -> tuple[np.ndarray | None, np.ndarray]:
-    """A KITTI (12 numbers a line) or TUM (8) pose file: ``(times or None, (N, 4, 4) poses)``."""
+    """A KITTI (12 numbers a line), TUM (8) or EuRoC CSV pose file: ``(times or None, (N, 4, 4) poses)``."""
     truth = read_groundtruth(path, min_poses)
-    if truth.csv or truth.poses is None:
+    if truth.poses is None:
         raise TrajectoryError(
-            f"{path}: {'a CSV' if truth.csv else 'positions only'}; expected poses, 12 numbers (KITTI) "
-            "or 8 (TUM), separated by spaces"
+            f"{path}: positions only; expected poses, 12 numbers (KITTI) or 8 (TUM) separated by spaces, "
+            "or EuRoC's CSV (t[ns], x, y, z, qw, qx, qy, qz)"
         )
     return truth.times, truth.poses
 
