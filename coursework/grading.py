@@ -128,12 +128,16 @@ class Reason(enum.Enum):
     INDIRECT = (
         "reaches names, code, frames or modules indirectly (exec, getattr, vars, a __special__ name, type())",
         "exec eval compile getattr setattr delattr globals locals vars breakpoint memoryview exit quit sys "
-        "builtins gi_frame cr_frame ag_frame tb_frame f_back f_globals f_locals f_builtins update_wrapper",
+        "builtins gi_frame cr_frame ag_frame tb_frame f_back f_globals f_locals f_builtins update_wrapper "
+        # modules no exercise imports, reached as another module's attribute (vo_lib.importlib), and the
+        # shell's hooks that rewrite or skip the cells after the answer (the hidden tests among them)
+        "os importlib import_module subprocess ctypes IPython ipykernel InteractiveShell run_cell user_ns "
+        "input_transformers_cleanup input_transformers_post ast_transformers",
     )
     FILE = (
         "reads, writes or runs files",
         "open fromfile fromregex load loadtxt genfromtxt memmap read_csv read_fwf read_table read_json "
-        "read_pickle run_path tofile",
+        "read_pickle run_path tofile glob rglob iterdir read_text read_bytes write_text write_bytes",
     )
     CHANGES = "changes an object it did not make (a module, a class, an argument) or a builtin's name", ""
     PRIVATE = "reaches a private name (a leading underscore) of an imported module", ""
@@ -155,10 +159,10 @@ MODULES = ("np", "numpy", "grading")  # used only as np.f: bare, they are handed
 NAMED_TUPLE = {"_replace", "_asdict", "_make", "_fields", "_field_defaults"}  # public, though underscored
 
 
-def review(source: str, bound: frozenset[str] = frozenset()) -> list[tuple[int, Reason]]:
+def review(source: str, bound=frozenset(), imported=frozenset()) -> list[tuple[int, Reason]]:
     """``(line, reason)`` for every construct of ``source`` outside what honest answers use, read with
-    :mod:`ast` (nothing runs): the course's modules, no special names, no changes to objects the cell
-    did not make; ``bound``: the notebook's functions and variables (:func:`_made`). Magics use the kernel."""
+    :mod:`ast` (nothing runs): the course's modules, no special names, no changes to objects the cell did
+    not make; the notebook's functions and variables ``bound`` (:func:`_made`), names ``imported``."""
     magic = [n for n, line in enumerate(source.splitlines(), 1) if line.lstrip().startswith(("%", "!"))]
     found = [(n, Reason.KERNEL) for n in magic]
     if (tree := _tree(source)) is None:
@@ -167,6 +171,10 @@ def review(source: str, bound: frozenset[str] = frozenset()) -> list[tuple[int, 
     values = {id(n.value) for n in ast.walk(tree) if isinstance(n, ast.Attribute)}  # the np of np.f
     classes = [c for c in ast.walk(tree) if isinstance(c, ast.ClassDef)]
     methods, names = {id(f) for c in classes for f in c.body}, {c.name for c in classes}
+    plain_methods = {  # called through their class, not an object of it, they take any first argument
+        f.name for c in classes for f in c.body if isinstance(f, ast.FunctionDef) and not f.decorator_list
+    }
+    held = _held_values(tree, cell | imported)
     scopes = [f for f in ast.walk(tree) if isinstance(f, (ast.FunctionDef, ast.ClassDef))]
     nested = {id(c) for f in scopes for c in ast.walk(f) if c is not f}  # a method's name shadows nothing
     made = _made(tree, bound | _bound(tree))
@@ -178,12 +186,14 @@ def review(source: str, bound: frozenset[str] = frozenset()) -> list[tuple[int, 
         changes = changes or any(_changes(t, made) for t in _targets(node))
         methodless = isinstance(node, ast.FunctionDef) and id(node) not in methods  # def f(self): self.x = 1
         changes |= methodless and "self" in [a.arg for a in node.args.args]
-        unbound = isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute)  # Cls.method(module)
-        changes |= unbound and _named(node.func.value, *names)
+        through_class = isinstance(node, ast.Attribute) and node.attr in plain_methods  # Cls.method, as a
+        kind = getattr(node, "value", None)  # value or called on a module: self is then that module
+        through_class &= _named(kind, *names) or isinstance(kind, ast.Call) and _named(kind.func, "type")
+        changes |= through_class
         found += [(line, Reason.CHANGES)] if changes else []
         found += [(line, why) for why in _reasons(node)]
         found += [(line, Reason.PRIVATE)] if _private(node, cell) else []
-        found += [(line, Reason.HELD)] if _held(node, cell) else []
+        found += [(line, Reason.HELD)] if _held(node, cell) or id(node) in held else []
     return sorted(set(found), key=lambda item: (item[0], item[1].text))
 
 
@@ -204,7 +214,9 @@ def _reasons(node: ast.AST) -> list[Reason]:
     """The reasons to review one syntax node, by the module it imports or the name it uses."""
     if isinstance(node, ast.alias):  # an import that takes a builtin's name (from m import zeros as abs)
         bound = node.asname or node.name.split(".")[0]  # or NumPy under another name than np
-        numpy = node.name == "numpy"
+        numpy, name = node.name == "numpy", node.name.split(".")[-1]  # from vo_lib import importlib
+        if name in FLAGGED:
+            return [FLAGGED[name]]
         return [Reason.CHANGES] if bound in BUILTINS | {"*"} or (bound in PROTECTED) != numpy else []
     if isinstance(node, (ast.Import, ast.ImportFrom)):
         roots = [a.name for a in node.names] if isinstance(node, ast.Import) else [node.module or "."]
@@ -289,6 +301,18 @@ def _held(node: ast.AST, imported: set[str]) -> bool:
     return bool(nested) or any(isinstance(c, ast.Call) and _named(c.func, *held) for c in ast.walk(node))
 
 
+def _held_values(tree: ast.AST, imported: set[str]) -> set[int]:
+    """Ids of imported modules' attributes (``cv2.norm``; no test refuses NumPy's or math's) kept as values in
+    a list, a tuple, a set, a dict or an object's attribute or item, where no test's refusal reaches them."""
+    kept = [e for n in ast.walk(tree) if isinstance(n, (ast.List, ast.Tuple, ast.Set)) for e in n.elts]
+    kept += [v for n in ast.walk(tree) if isinstance(n, ast.Dict) for v in n.values]
+    pairs = [(t, n.value) for n in ast.walk(tree) if isinstance(n, ast.Assign) for t in n.targets]
+    pairs += [(n.target, n.value) for n in ast.walk(tree) if isinstance(n, ast.AnnAssign)]
+    kept += [v for t, v in pairs if isinstance(t, ast.Attribute | ast.Subscript)]  # x.f = cv2.f
+    modules = imported - {"np", "numpy", "math"}
+    return {id(v) for v in kept if isinstance(v, ast.Attribute) and _named(_root(v), *modules)}
+
+
 def _root(node: ast.AST) -> ast.AST:
     """``a`` of ``a.b.c`` and of ``a[k].b``."""
     while isinstance(node, (ast.Attribute, ast.Subscript)):
@@ -305,11 +329,12 @@ def report(nb, released=None) -> dict[str, list[str]]:
     reviewed, and every other code cell but a test that is not in the release ``released`` as it is there."""
     flagged, code_cells = {}, [cell for cell in nb.cells if cell.cell_type == "code"]
     given = {c.source for c in released.cells if c.cell_type == "code"} if released else None
-    bound = frozenset().union(*(_bound(tree) for c in code_cells if (tree := _tree(c.source))))
+    trees = [tree for c in code_cells if (tree := _tree(c.source))]
+    bound, imported = (frozenset().union(*map(f, trees)) for f in (_bound, _imports))
     for k, cell in enumerate(code_cells, 1):
         meta = cell.metadata.get("nbgrader", {})
         changed = given is not None and not meta.get("grade") and cell.source not in given
-        if (meta.get("solution") or changed) and (found := review(cell.source, bound)):
+        if (meta.get("solution") or changed) and (found := review(cell.source, bound, imported)):
             code = cell.source.splitlines()
             key = meta["grade_id"] if meta.get("solution") else f"code cell {k}"
             flagged[key] = [f"line {n}: {r.text}: {code[n - 1].strip()[:70]}" for n, r in found]

@@ -261,6 +261,29 @@ def test_library_functions_takes_functions_classes_and_the_methods_of_a_modules_
         # the grader's own functions given another's code, and files read by a pattern
         ("import functools\nfunctools.update_wrapper(grading.close, f, assigned=('x',))", Reason.INDIRECT),
         ("text = np.fromregex('../notebooks/06.py', '(.*)', [('line', 'U200')])", Reason.FILE),
+        # a fifth trial: the shell's input transformers reached through a module's attribute (every
+        # later cell, the hidden tests too, run as "pass"), modules a library imports, a class's
+        # method taken as a value to patch a module, compiled functions kept in an object or a dict,
+        # files found by a pattern through a library's Path
+        (
+            "import vo_lib\nshell = vo_lib.importlib.import_module('IPython').InteractiveShell.instance()\n"
+            "shell.input_transformers_cleanup.append(lambda lines: ['pass'])",
+            Reason.INDIRECT,
+        ),
+        ("from vo_lib import importlib, os", Reason.INDIRECT),
+        ("import vo_lib\nvo_lib.outputs.os.system('ls')", Reason.INDIRECT),
+        (
+            "class Settings:\n    def relax(self):\n        self.close = min\nrelax = Settings.relax\n"
+            "relax(grading)",
+            Reason.CHANGES,
+        ),
+        ("class S:\n    def relax(self):\n        self.allclose = min\ntype(S()).relax(np)", Reason.CHANGES),
+        (
+            "import cv2\nclass Toolkit:\n    def __init__(self):\n        self.refine = cv2.solvePnPRefineLM",
+            Reason.HELD,
+        ),
+        ("import cv2\ntools = {'norm': cv2.norm}\nd = tools.get('norm')(a, b)", Reason.HELD),
+        ("from vo_lib import outputs\nfound = outputs.Path('/work').glob('*/notebooks/*.py')", Reason.FILE),
     ],
 )
 def test_review_names_what_no_honest_answer_needs(answer, reason):
