@@ -54,19 +54,26 @@ def header_quaternion_order(path: Path, first_row_line: int) -> tuple[str, int]:
     return order, found
 
 
+def _in_nanoseconds(path: Path, a: np.ndarray, lines: list[int]) -> bool:
+    """Whether a text file's times are nanoseconds: every one beyond any second (as ORB-SLAM3 writes
+    EuRoC's), said in a notice; some beyond and some not are refused."""
+    if np.abs(a[:, 0]).max() <= MAX_SECONDS:
+        return False
+    if a[:, 0].min() > MAX_SECONDS:
+        notice(f"{path}: every time is beyond {MAX_SECONDS:g} s (the year 5138): read as nanoseconds")
+        return True
+    i = int(np.argmax(np.abs(a[:, 0]) > MAX_SECONDS))
+    raise TrajectoryError(
+        f"{path}, line {lines[i]}: time {a[i, 0]:.4g}; a text file's times are read as seconds "
+        "(TUM's t x y z qx qy qz qw), at most 1e11, or as nanoseconds where every one is beyond"
+    )
+
+
 def _check_columns(path: Path, a: np.ndarray, lines: list[int], comma: bool) -> bool:
     """A CSV (EuRoC's, times in ns) or a text file (TUM's, times in s) as its header, times and
     widths say; True where the times are nanoseconds (a CSV's, or a text file's beyond any second)."""
     width = a.shape[1]
-    if not comma and width != 12 and np.abs(a[:, 0]).max() > MAX_SECONDS:
-        if a[:, 0].min() > MAX_SECONDS:  # every one: nanoseconds (as ORB-SLAM3 writes EuRoC's)
-            notice(f"{path}: every time is beyond {MAX_SECONDS:g} s (the year 5138): read as nanoseconds")
-            return True
-        i = int(np.argmax(np.abs(a[:, 0]) > MAX_SECONDS))
-        raise TrajectoryError(
-            f"{path}, line {lines[i]}: time {a[i, 0]:.4g}; a text file's times are read as seconds "
-            "(TUM's t x y z qx qy qz qw), at most 1e11, or as nanoseconds where every one is beyond"
-        )
+    nanoseconds = comma or (width != 12 and _in_nanoseconds(path, a, lines))
     order, line = header_quaternion_order(path, lines[0]) if width >= 8 else ("", 0)
     if order not in ("", "wxyz" if comma else "xyzw"):
         csv = "a CSV is read as EuRoC's t[ns], x, y, z, qw, qx, qy, qz" + TUM_WITH_COMMAS * (order == "xyzw")
@@ -86,7 +93,7 @@ def _check_columns(path: Path, a: np.ndarray, lines: list[int], comma: bool) -> 
             f"{path}, line {lines[0]}: {width} numbers; expected t[ns], x, y, z (positions) "
             "or t[ns], x, y, z, qw, qx, qy, qz (EuRoC)"
         )
-    return comma
+    return nanoseconds
 
 
 def read_groundtruth(path, min_poses: int = 2) -> GroundTruth:
