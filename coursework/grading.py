@@ -186,10 +186,10 @@ def review(source: str, bound=frozenset(), imported=frozenset()) -> list[tuple[i
         changes = changes or any(_changes(t, made) for t in _targets(node))
         methodless = isinstance(node, ast.FunctionDef) and id(node) not in methods  # def f(self): self.x = 1
         changes |= methodless and "self" in [a.arg for a in node.args.args]
-        through_class = isinstance(node, ast.Attribute) and node.attr in plain_methods  # Cls.method, as a
-        kind = getattr(node, "value", None)  # value or called on a module: self is then that module
-        through_class &= _named(kind, *names) or isinstance(kind, ast.Call) and _named(kind.func, "type")
-        changes |= through_class
+        # Cls.m or type(x).m, a method of the cell's class taken from the class: its self is any object
+        kind = getattr(node, "value", None)
+        taken = _named(kind, *names) or isinstance(kind, ast.Call) and _named(kind.func, "type")
+        changes |= isinstance(node, ast.Attribute) and node.attr in plain_methods and taken
         found += [(line, Reason.CHANGES)] if changes else []
         found += [(line, why) for why in _reasons(node)]
         found += [(line, Reason.PRIVATE)] if _private(node, cell) else []
