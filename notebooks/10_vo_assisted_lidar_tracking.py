@@ -741,8 +741,8 @@ display(
 #   corridor, which is what VOAPT needs.
 # - The sample scores' box-plot statistics judge a tracker's output once the score is read as a
 #   log-likelihood (eq. 10 as a posterior); the printed eq. 11 separates normal from occluded
-#   frames worse than chance where the quartiles matter (on the raw scores, in every one of the
-#   scans section 3 repeats over seeds), and on the posterior
+#   frames worse than chance where the quartiles matter (on the raw scores, in the share of the
+#   scans that section 3 prints over seeds), and on the posterior
 #   scale $D_s$ adds nothing to $V_{max}$. Eq. 12's threshold cannot fail as
 #   printed, eq. 14 swaps two names, eq. 16's "or" cannot flag a jumping laser: each is read and
 #   tested.

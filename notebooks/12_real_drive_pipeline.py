@@ -549,8 +549,8 @@ display(
 # - 1-point RANSAC remains the outlier filter (cheap, one match per hypothesis); the 6-DoF fit then
 #   keeps a share of its inliers and measures the motion the model cannot.
 # - On this one drive, section 4 prints how far the odometry alone, vision alone and their
-#   fusion end from the truth; whether the fusion ends closer than vision alone, it prints with
-#   a second RANSAC seed, and one drive ranks nothing in general. The odometry is the truth's
+#   fusion end from the truth, and with a second RANSAC seed whether the draws move those ends;
+#   one drive ranks none of them. The odometry is the truth's
 #   own GPS/IMU with a noise chosen on this drive; NIS judges such a noise model without the
 #   truth, though not on the drive it was chosen on.
 # - The OpenCV PnP baseline is the yardstick for accuracy and speed (the printed ratio is one

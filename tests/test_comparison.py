@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 from scipy.stats import chi2
 
-from vo_lib.comparison import Verdict, bootstrap_interval, chi2_band, over_seeds
+from vo_lib.comparison import Verdict, bootstrap_interval, chi2_band, median_interval, over_seeds
 
 
 def _draws(seed: int, gap: float) -> dict[str, float]:
@@ -97,3 +97,23 @@ def test_the_bootstrap_gives_the_same_interval_with_or_without_an_axis_argument(
     values = np.random.default_rng(3).normal(size=15)
     one_at_a_time = bootstrap_interval(values, statistic=lambda v: float(np.median(v)))
     assert bootstrap_interval(values) == one_at_a_time
+
+
+def test_the_median_interval_is_two_order_statistics_chosen_by_the_binomial_law():
+    """20 values at 95 %: P(B <= 5) = 0.021 <= 0.025 < P(B <= 6) for B ~ Binomial(20, 1/2), so the
+    6th lowest and the 6th highest; shuffled, the same."""
+    values = np.random.default_rng(0).permutation(np.arange(1.0, 21.0))
+    assert median_interval(values) == (6.0, 15.0)
+    assert np.mean(values) == pytest.approx(10.5)  # not changed in place
+
+
+def test_ten_seeds_carry_no_verdict_in_a_family_of_thirty():
+    """Even 10 of 10 lower is a 2-in-1,024 chance of a fair coin: beyond the 0.05 / 30 a family of
+    thirty allows on each comparison. The sentence says the seeds are too few; the same seeds alone
+    give a verdict."""
+    draws = range(10)
+    family = over_seeds(lambda s: _draws(s, gap=0.5), draws, family=30)
+    assert family.share("A", "B") == 10 and family.verdict("A", "B") is Verdict.NOT_RELIABLE
+    assert np.isnan(median_interval(family.paired("A", "B"), family.confidence)).all()
+    assert "too few seeds for a 99.8 % CI" in family.sentence("A", "B")
+    assert over_seeds(lambda s: _draws(s, gap=0.5), draws).verdict("A", "B") is Verdict.BETTER

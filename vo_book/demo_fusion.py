@@ -59,6 +59,9 @@ STUDY_SEEDS = 120
 #: Each interval is one of this family's (:mod:`vo_lib.comparison`): judged each at 95 %, the
 #: borderline ones among seventeen read one way at base seed 7 and the other way at 1007.
 STUDY_COMPARISONS = 17
+#: The verdicts the section draws from the same study: those comparisons and the four time-averaged
+#: NEES against 3 (two filters, two conditions). Every interval is widened for all of them.
+STUDY_FAMILY = STUDY_COMPARISONS + 4
 #: The comparisons :func:`said` has stated, ``(id of the comparison, a, b)``: the notebook's
 #: checks hold their number to :data:`STUDY_COMPARISONS`.
 STATED: set[tuple[int, str, str]] = set()

@@ -2,9 +2,12 @@
 
 A single random draw never carries a comparative sentence. :func:`over_seeds` runs every method
 on the same draw for each of N seeds (a paired comparison); :class:`Comparison` says in how many
-seeds A beats B, the median difference A − B with its bootstrap interval, and the sentence with
-its figures. Sentences drawn from one study form a ``family``: each interval is widened
-(Bonferroni) so that the whole family holds at :data:`CONFIDENCE`.
+seeds A beats B, the median difference A − B with its interval, and the sentence with its
+figures. The median's interval is distribution-free (:func:`median_interval`): two of the sorted
+differences, chosen by the binomial law of how many fall below the true median, so that ten seeds
+cannot carry more confidence than ten seeds hold. Sentences drawn from one study form a
+``family``: each interval is widened (Bonferroni) so that the whole family holds at
+:data:`CONFIDENCE`.
 
 Consistency uses one χ² rule (:func:`chi2_band`): the average of ``count`` independent χ²(dof)
 values lies in ``chi2.ppf([α/2, 1 − α/2], dof·count) / count``. Independent means across
@@ -20,7 +23,7 @@ from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.stats import chi2
+from scipy.stats import binom, chi2
 
 #: Confidence of every interval and band, and bootstrap resamples (fixed seed: same figures).
 CONFIDENCE = 0.95
@@ -49,6 +52,17 @@ def bootstrap_interval(
         stats = np.apply_along_axis(statistic, 1, x[draws])
     low, high = np.quantile(stats, [(1 - confidence) / 2, (1 + confidence) / 2])
     return float(low), float(high)
+
+
+def median_interval(values: Iterable[float], confidence: float = CONFIDENCE) -> tuple[float, float]:
+    """Distribution-free interval of the median of ``values`` (one per seed): the ``k``-th lowest
+    and the ``k``-th highest, ``k`` the largest with ``P(B < k) <= (1 - confidence) / 2`` for
+    ``B ~ Binomial(n, 1/2)``, the count of values below the true median. ``(nan, nan)`` where ``n``
+    is too few for ``confidence`` (``2 / 2**n`` is the least risk ``n`` values can give)."""
+    x = np.sort(np.asarray(list(values), dtype=float))
+    # P(B <= j) for j = 0..n; k - 1 is the last j within the risk allowed on each side
+    below = int(np.sum(binom.cdf(np.arange(len(x) + 1), len(x), 0.5) <= (1 - confidence) / 2))
+    return (float("nan"),) * 2 if below == 0 else (float(x[below - 1]), float(x[len(x) - below]))
 
 
 def interval_text(low: float, high: float, digits: int) -> str:
@@ -87,9 +101,9 @@ class Comparison:
         return int(np.sum(self.paired(a, b) < 0))
 
     def difference(self, a: str, b: str) -> tuple[float, float, float]:
-        """Median of ``a − b`` over seeds, and its bootstrap interval (low, high)."""
+        """Median of ``a − b`` over seeds, and its :func:`median_interval` (low, high)."""
         d = self.paired(a, b)
-        return (float(np.median(d)), *bootstrap_interval(d, confidence=self.confidence))
+        return (float(np.median(d)), *median_interval(d, self.confidence))
 
     def varies(self, a: str, b: str) -> bool:
         """Whether the seeds move ``a − b`` (else the N figures are one result repeated); a change
@@ -102,7 +116,8 @@ class Comparison:
 
     def verdict(self, a: str, b: str) -> Verdict:
         """``BETTER`` when the whole interval of ``a − b`` is below zero, ``WORSE`` above, else
-        ``NOT_RELIABLE``, as also where the seeds do not move ``a − b`` (:meth:`varies`)."""
+        ``NOT_RELIABLE``, as also where the seeds do not move ``a − b`` (:meth:`varies`) and where they
+        are too few for an interval at the family's confidence."""
         if not self.varies(a, b):
             return Verdict.NOT_RELIABLE
         _, low, high = self.difference(a, b)
@@ -120,10 +135,14 @@ class Comparison:
         median, low, high = (scale * v for v in self.difference(a, b))
         level = f"{100 * CONFIDENCE:.0f} %" if self.family == 1 else f"{100 * self.confidence:.1f} %"
         among = "" if self.family == 1 else f", one of {self.family} comparisons"
+        interval = (
+            f"{level} CI {low:+.{digits}f} to {high:+.{digits}f}{u}"
+            if np.isfinite(low)
+            else f"too few seeds for a {level} CI"
+        )
         return (
             f"{a} is {self.verdict(a, b).value} {b}: lower in {self.share(a, b)} of {len(self)} seeds "
-            f"(median difference {median:+.{digits}f}{u}, {level} CI "
-            f"{low:+.{digits}f} to {high:+.{digits}f}{u}{among})"
+            f"(median difference {median:+.{digits}f}{u}, {interval}{among})"
         )
 
     def _one_result(self, a: str, b: str, u: str, scale: float, digits: int) -> str:

@@ -43,7 +43,8 @@ assert len(flagged) == 61 and yaw_sigma[260] > 5 * yaw_sigma[199]
 assert yaw_sigma[300] - yaw_sigma[260] < 0.1 * (yaw_sigma[260] - yaw_sigma[199])
 
 # after: "constant velocity without the sideways row",
-from vo_book.demo_fusion import STATED
+from vo_book.demo_fusion import STATED, STUDY_COMPARISONS
 
-# every comparison section 4 states is one of the family its intervals were widened for
-assert len(STATED) == STUDY_COMPARISONS
+# every comparison section 4 states, and every NEES verdict, is one of the family its intervals
+# were widened for
+assert len(STATED) == STUDY_COMPARISONS and len(nees_rows) == STUDY_FAMILY - STUDY_COMPARISONS
