@@ -413,7 +413,7 @@ display(
         "vision that the filter trusts far more can carry the skid's bias on eq. 14 in tight "
         "turns (section 6), which the fused pose would follow. Notebook 07 measures over seeds when "
         "fusing helps and when the odometry's slip leaks in, on drives whose tracks slip but do not "
-        "skid, so it does not test this; the study of ten draws below does, on the first frames."
+        "skid, so it does not test this; the study of forty draws below does, on the first frames."
     )
 )
 
@@ -435,7 +435,7 @@ display(
 # believes the vision on the first frames of ten draws of `outdoor_free_3`'s drive (the sample's
 # seed and the next nine: slip, losses of contact and image noise drawn anew) and stored the
 # figures, which `pytest -m samples` re-checks. These are the development drives of the choice;
-# the study of ten draws of five other drives below tests it on drives it was not chosen on.
+# the study of forty draws of five other drives below tests it on drives it was not chosen on.
 
 # %%
 study = paper_sets.load()["contradictions"]
@@ -470,12 +470,12 @@ display(
 )
 
 # %% [markdown]
-# ### Does fusing the odometry help, and does believing the vision? Ten draws each of five drives
+# ### Does fusing the odometry help, and does believing the vision? Forty draws each of five drives
 #
 # The sets above are one run each, which ranks neither the fused pipeline nor its parts. Notebook 07
 # measures over seeds when fusing helps, but on synthetic matches and on drives whose tracks slip
 # without skidding. `python -m vo_lib.stereo_vo.paper_sets fusion` ran four estimates on the first
-# frames of ten draws of five rendered drives (each sample's seed and the next nine): the pipeline
+# frames of forty draws of five rendered drives (each sample's seed and the next 39): the pipeline
 # fused with track odometry, the same pipeline without odometry, and odometry alone; and, to judge
 # the setting chosen above on drives it was not chosen on, the fused pipeline that never believes
 # the vision over the prediction. The drives are the flat floor without skid (`indoor_linear`),
@@ -647,9 +647,8 @@ display(
 # %% [markdown]
 # Every keyframe of a turn adds that bias, and the filter cannot remove it, since vision
 # dominates the heading. So the skid that real tracks have biases the planar method in every
-# turn: a mechanism that can put the indoor free-motion figures
-# above the paper's and that differs between the two spot-turn sets (one run each, so a mechanism,
-# not a measured cause). Where our figures lie below
+# turn: a mechanism that can put figures above the paper's (one run each, so a mechanism, not a
+# measured cause). Where our figures lie below
 # the paper's, our world may be kinder than a real one in other ways, none of them measured here as a
 # cause: images rendered from an exact
 # pinhole model with a known
@@ -678,14 +677,14 @@ display(
 #   on rough ground leave the filter to odometry, which drifts by the slip. On the flat lab floor
 #   section 5 prints that one stored run's RMS fused and with odometry alone, which ranks neither.
 #   Notebook 07 measures over seeds when fusing helps, on drives without skid; section 5's study
-#   of ten draws of five rendered drives sets the fused pipeline beside vision alone and odometry
+#   of forty draws of five rendered drives sets the fused pipeline beside vision alone and odometry
 #   alone, draw by draw, and says on which drives and in which figure fusing helps or hurts.
 # - The pipeline's NEES on the rendered sequences, with its χ² band, shows how far its covariance
 #   can be trusted: it counts noise, not the slip's mean, the skid's bias or a lost contact.
 # - After a lost track contact the prediction misses the body's swing, so the vision, which
 #   measures it, contradicts the prediction and is rejected; the crawler's preset believes it after
 #   `max_contradictions` consecutive contradicting frames, a choice made on ten draws of one drive
-#   (stored) and tested on ten draws each of five others.
+#   (stored) and tested on forty draws each of five others.
 
 # %% [markdown]
 # ## Exercises

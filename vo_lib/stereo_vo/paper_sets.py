@@ -149,7 +149,7 @@ def contradiction_study(drives=range(CONTRADICTION_DRIVES)) -> dict:
 #: spot), their first frames and the drives of each.
 FUSION_SETS = ("indoor_linear", "indoor_free", "outdoor_free", "outdoor_linear", "spot_turn")
 FUSION_FRAMES = 400
-FUSION_DRIVES = 10
+FUSION_DRIVES = 40
 #: The estimates of each drive: the pipeline fused with track odometry, the same pipeline without
 #: odometry (constant-velocity prediction), track odometry alone (eq. 1-4), and the fused pipeline
 #: that never believes the vision over the prediction (the setting the contradiction study rejected).
