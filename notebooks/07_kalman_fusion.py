@@ -514,8 +514,8 @@ for c in ("spot turn", "indoor"):
         low_, high_ = bootstrap_interval(per_seed, np.mean, NEES_CONFIDENCE)
         nees_rows[(c, label)] = (float(np.mean(per_seed)), low_, high_)
         print(
-            f"{c:10s} {label:11s} time-averaged NEES {np.mean(per_seed):7.2f}  "
-            f"{100 * NEES_CONFIDENCE:.2f} % interval over {len(SEEDS)} seeds {low_:.2f}–{high_:.2f}  (3 if consistent)"
+            f"{c:10s} {label:11s} time-averaged NEES {np.mean(per_seed):7.2f}  {100 * NEES_CONFIDENCE:.2f} % "
+            f"interval over {len(SEEDS)} seeds {low_:.2f}–{high_:.2f}  (3 if consistent)"
         )
 
 
