@@ -117,3 +117,12 @@ def test_ten_seeds_carry_no_verdict_in_a_family_of_thirty():
     assert np.isnan(median_interval(family.paired("A", "B"), family.confidence)).all()
     assert "too few seeds for a 99.8 % CI" in family.sentence("A", "B")
     assert over_seeds(lambda s: _draws(s, gap=0.5), draws).verdict("A", "B") is Verdict.BETTER
+
+
+def test_a_small_reliable_difference_prints_its_interval_clear_of_zero():
+    """Differences of a few thousandths, all below zero: with two decimals the interval would read
+    "-0.00 to -0.00"; the sentence takes the decimals that show it."""
+    c = over_seeds(lambda s: {"A": 1.0 - 0.004 - 0.001 * (s % 3), "B": 1.0}, range(20))
+    sentence = c.sentence("A", "B", unit="°")
+    assert c.verdict("A", "B") is Verdict.BETTER
+    assert "95 % CI -0.006 to -0.004 °" in sentence and "-0.00 to" not in sentence

@@ -65,6 +65,13 @@ def median_interval(values: Iterable[float], confidence: float = CONFIDENCE) -> 
     return (float("nan"),) * 2 if below == 0 else (float(x[below - 1]), float(x[len(x) - below]))
 
 
+def shown_digits(values: Iterable[float], digits: int, most: int = 4) -> int:
+    """Decimals, from ``digits`` up to ``most``, that print no figure of ``values`` other than zero
+    as zero (an interval "-0.00 to -0.00" that lies below zero reads as if it touched it)."""
+    small = [abs(v) for v in values if np.isfinite(v) and v != 0]
+    return digits if not small else max(digits, min(most, -int(np.floor(np.log10(min(small))))))
+
+
 def interval_text(low: float, high: float, digits: int) -> str:
     """``"low-high"`` with ``digits`` decimals, or ``"undefined"`` where there is no spread (one seed)."""
     return "undefined" if np.isnan(low) or np.isnan(high) else f"{low:.{digits}f}-{high:.{digits}f}"
@@ -133,6 +140,7 @@ class Comparison:
         if not self.varies(a, b):
             return self._one_result(a, b, u, scale, digits)
         median, low, high = (scale * v for v in self.difference(a, b))
+        digits = shown_digits((median, low, high), digits)
         level = f"{100 * CONFIDENCE:.0f} %" if self.family == 1 else f"{100 * self.confidence:.1f} %"
         among = "" if self.family == 1 else f", one of {self.family} comparisons"
         interval = (
