@@ -109,7 +109,7 @@ def bench_ransac(sets: int = 15, n: int = 300) -> dict[str, float]:
     print(f"{sets} sets of {n} matches, 40 % outliers, 0.5 px noise (median over sets, same matches)")
     _print_ransac_rows(results, base)
     # accuracy compared set by set (the same matches for every method), never by medians alone
-    paired = Comparison(tuple(range(sets)), theta_errors)
+    paired = Comparison(tuple(range(sets)), theta_errors, family=len(methods) - 1)  # judged together
     for other in list(methods)[1:]:
         print(f"  |dθ|: {paired.sentence('1-point RANSAC + refinement', other, unit='°', digits=4)}")
     ratio = results["OpenCV solvePnPRansac (6 DoF)"][0] / base
