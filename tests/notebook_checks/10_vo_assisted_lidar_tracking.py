@@ -30,7 +30,7 @@ assert ours["v_max"] == ours["d_s"] == ours["d_s_printed"]
 every_printed10 = [s["v_max"] for g in (normal_stats, occluded_stats) for s in g["printed eq. 10 × n"]]
 assert max(every_printed10) < 1.25 and printed10["normal"] / printed10["occluded"] < 1.1
 assert posterior_vmax["normal"] / posterior_vmax["occluded"] > 3
-assert np.all(eq11_aucs < 0.5)  # the summary's "worse than chance", in every one of the scans
+assert np.all(eq11_aucs < 0.5)  # the summary's "worse than chance": in every scan of these seeds
 
 # after: temperature_rows = {}
 assert np.isclose(temperature_rows[1.0][0], posterior_vmax["normal"])  # T = 1: the reading above
