@@ -69,7 +69,7 @@ from vo_book.nb07 import plot_heading_errors, plot_nees, plot_outage
 from vo_book.prose import Markdown
 from vo_book.widgets import offer, slider
 from vo_lib.camera import StereoCamera
-from vo_lib.comparison import bootstrap_interval, over_seeds
+from vo_lib.comparison import CONFIDENCE, bootstrap_interval, over_seeds
 from vo_lib.geometry import relative_planar, wrap_angle
 from vo_lib.models.track_odometry import TrackOdometry
 from vo_lib.sim.samples import SAMPLES
@@ -506,7 +506,7 @@ display(
 # their mean, at the confidence of the study's family, is set against 3.
 
 # %%
-NEES_CONFIDENCE = 1 - 0.05 / STUDY_FAMILY  # four of the study's family of verdicts
+NEES_CONFIDENCE = 1 - (1 - CONFIDENCE) / STUDY_FAMILY  # four of the study's family of verdicts
 nees_rows = {}
 for c in ("spot turn", "indoor"):
     for key, label in (("nees", "fused"), ("nees_calibrated", "calibrated")):
